@@ -1,0 +1,107 @@
+# Octo-SIL: one Makefile for the whole project.
+#
+#   make          bootstrap .venv (pinned requirements.txt), generate MAVLink and LCM code,
+#                 build build/octo-sim, build/octo-fw, the unit tests and octo-gcs
+#   make test     C unit tests (float, Q16.16 and sanitizer builds), then pytest over tests/
+#   make run      the main job: octo-gcs mission with the paper's vehicle, output in out/
+#   make bench    performance figures (build/bench.json)
+#   make arm      cross-build the core and run its unit tests on emulated Cortex-M4F and M0
+#   make clean    remove build/ (keeps .venv); make distclean removes .venv too
+#
+# Each part keeps its own rules in a fragment included below:
+#   firmware/firmware.mk, sim/sim.mk, tests/tests.mk, host_tools/host_tools.mk
+# No root is needed, except by `make arm` when the ARM toolchain is missing.
+
+SHELL       := /bin/bash
+.DEFAULT_GOAL := all
+.DELETE_ON_ERROR:
+.SUFFIXES:
+
+PYTHON      ?= python3
+VENV        := .venv
+VPY         := $(VENV)/bin/python
+B           := build
+GEN         := $(B)/gen
+VENV_STAMP  := $(VENV)/.requirements-stamp
+
+# Warning flags (issue 2): firmware C11, simulator C++17; generated and
+# third-party headers always through -isystem.
+FW_WARN     := -Wall -Wextra -Werror -Wconversion -Wdouble-promotion -Wshadow -Wvla
+OPT         ?= -O2 -g
+CC          ?= cc
+CXX         ?= c++
+CFLAGS_FW   := -std=c11 $(OPT) $(FW_WARN) -fno-math-errno -MMD -MP
+CXXFLAGS_SIM := -std=c++17 $(OPT) -Wall -Wextra -Werror -MMD -MP
+SAN         := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+
+# ---------------------------------------------------------------- bootstrap
+$(VENV_STAMP): requirements.txt
+	@echo "== creating $(VENV) with pinned requirements"
+	@test -x $(VPY) || $(PYTHON) -m venv $(VENV) || \
+	  { echo "error: '$(PYTHON) -m venv' failed: install python3-venv"; exit 1; }
+	$(VENV)/bin/pip install --disable-pip-version-check -q -r requirements.txt
+	@touch $@
+
+# Paths inside the venv (site-packages differs by Python version): computed once
+# into build/config.mk, which make includes and, if stale, rebuilds and restarts.
+$(B)/config.mk: $(VENV_STAMP) Makefile
+	@mkdir -p $(B)
+	@sp=$$($(VPY) -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])'); \
+	{ echo "SP := $$sp"; \
+	  echo "EIGEN_INC := $$sp/cmeel.prefix/include/eigen3"; \
+	  echo "LCM_INC := $$sp/include"; \
+	  echo "LCM_LIB := $$sp/lib"; \
+	  echo "LCM_GEN := $$sp/bin/lcm-gen"; \
+	  echo "MAVLINK_XML := $$sp/pymavlink/dialects/v20/common.xml"; } > $@.tmp && mv $@.tmp $@
+
+NO_CONFIG_GOALS := clean distclean help
+ifeq ($(filter $(NO_CONFIG_GOALS),$(MAKECMDGOALS)),)
+-include $(B)/config.mk
+endif
+
+LCM_LDFLAGS := -L$(LCM_LIB) -Wl,-rpath,$(LCM_LIB) -llcm
+
+# ---------------------------------------------------------------- generated code
+MAVLINK_STAMP := $(GEN)/mavlink/.stamp
+$(MAVLINK_STAMP): $(VENV_STAMP) $(B)/config.mk
+	@echo "== mavgen: MAVLink 2 C headers from pymavlink's common.xml"
+	@rm -rf $(GEN)/mavlink && mkdir -p $(GEN)/mavlink
+	$(VPY) -m pymavlink.tools.mavgen --lang=C --wire-protocol=2.0 -o $(GEN)/mavlink $(MAVLINK_XML) >/dev/null
+	@touch $@
+
+LCM_TYPES := $(sort $(wildcard firmware/lcm/*.lcm))
+LCM_STAMP := $(GEN)/lcm/.stamp
+$(LCM_STAMP): $(LCM_TYPES) $(VENV_STAMP) $(B)/config.mk
+	@echo "== lcm-gen: C, C++ and Python types"
+	@rm -rf $(GEN)/lcm $(GEN)/python && mkdir -p $(GEN)/lcm $(GEN)/python
+	$(if $(LCM_TYPES),$(LCM_GEN) -c --c-cpath $(GEN)/lcm --c-hpath $(GEN)/lcm $(LCM_TYPES))
+	$(if $(LCM_TYPES),$(LCM_GEN) -x --cpp-std c++11 --cpp-hpath $(GEN)/lcm $(LCM_TYPES))
+	$(if $(LCM_TYPES),$(LCM_GEN) -p --ppath $(GEN)/python $(LCM_TYPES))
+	@touch $@
+
+# ---------------------------------------------------------------- parts
+include firmware/firmware.mk
+include sim/sim.mk
+include host_tools/host_tools.mk
+include tests/tests.mk
+
+# ---------------------------------------------------------------- top-level goals
+.PHONY: all test run bench arm clean distclean help
+all: $(ALL_TARGETS)
+
+test: all
+	@$(MAKE) --no-print-directory test-unit test-py
+
+run: all
+	$(VENV)/bin/octo-gcs mission --out out
+
+help:
+	@sed -n '2,13p' Makefile | sed 's/^# \{0,1\}//'
+
+clean:
+	rm -rf $(B)
+
+distclean: clean
+	rm -rf $(VENV)
+
+-include $(shell find $(B) -name '*.d' 2>/dev/null)

@@ -1,0 +1,11 @@
+# host_tools/: the octo_gcs Python package behind the `octo-gcs` command,
+# installed into .venv in editable mode; the generated LCM Python types in
+# build/gen/python are put on the venv's path by a .pth file.
+
+GCS_STAMP := $(VENV)/.octo-gcs-stamp
+$(GCS_STAMP): host_tools/pyproject.toml $(VENV_STAMP) $(B)/config.mk $(LCM_STAMP)
+	$(VENV)/bin/pip install --disable-pip-version-check -q --no-build-isolation --no-deps -e host_tools
+	@echo "$(abspath $(GEN)/python)" > $(SP)/octo_sil_lcmtypes.pth
+	@touch $@
+
+ALL_TARGETS += $(GCS_STAMP)

@@ -1,0 +1,83 @@
+/* Tests of firmware/core/scalar.h in whichever build (float or Q16.16) this is. */
+#include "scalar.h"
+#include "unit.h"
+
+#include <math.h>
+
+#if OCTO_FIXED
+#define LSB (1.0 / 65536.0)
+#else
+#define LSB 1e-7
+#endif
+
+/* exact value of a scalar as double (not rounded through float) */
+static double d(scalar_t a)
+{
+#if OCTO_FIXED
+	return (double)a / 65536.0;
+#else
+	return (double)a;
+#endif
+}
+
+UNIT_TEST(scalar_arithmetic_matches_double)
+{
+	struct unit_rng r = { 0x5ca1ab1eULL };
+	for (int i = 0; i < 2000; i++) {
+		double a = unit_rand_uniform(&r, -150.0, 150.0), b = unit_rand_uniform(&r, -150.0, 150.0);
+		scalar_t sa = sc_from_float((float)a), sb = sc_from_float((float)b);
+		double qa = d(sa), qb = d(sb); /* the values actually represented */
+		CHECK_NEAR(d(sc_add(sa, sb)), qa + qb, OCTO_FIXED ? 0 : 1e-7 * (1 + fabs(qa + qb)));
+		CHECK_NEAR(d(sc_sub(sa, sb)), qa - qb, OCTO_FIXED ? 0 : 1e-7 * (1 + fabs(qa - qb)));
+		CHECK_NEAR(d(sc_mul(sa, sb)), qa * qb, OCTO_FIXED ? 0.5 * LSB : 1e-7 * (1 + fabs(qa * qb)));
+		if (qb > 0.5 || qb < -0.5)
+			CHECK_NEAR(d(sc_div(sa, sb)), qa / qb, OCTO_FIXED ? 0.5 * LSB : 1e-7 * (1 + fabs(qa / qb)));
+		if (qa >= 0)
+			CHECK_NEAR(d(sc_sqrt(sa)), sqrt(qa), OCTO_FIXED ? LSB : 1e-7 * (1 + sqrt(qa)));
+	}
+}
+
+UNIT_TEST(scalar_saturates_and_guards)
+{
+	/* division by zero saturates by the sign of the dividend, never NaN */
+	CHECK(sc_div(SC(1), SC(0)) == SC_MAX);
+	CHECK(sc_div(SC(-1), SC(0)) == SC_MAX_NEG);
+	CHECK(sc_div(SC(0), SC(0)) == SC(0));
+	CHECK(sc_sqrt(SC(-4)) == SC(0));
+	CHECK(sc_clamp(SC(3), SC(-1), SC(2)) == SC(2));
+	CHECK(sc_clamp(SC(-3), SC(-1), SC(2)) == SC(-1));
+	CHECK(sc_min(SC(1), SC(2)) == SC(1) && sc_max(SC(1), SC(2)) == SC(2));
+#if OCTO_FIXED
+	/* Q16.16 saturates instead of wrapping */
+	CHECK(sc_add(SC(30000), SC(30000)) == SC_MAX);
+	CHECK(sc_sub(SC(-30000), SC(30000)) == SC_MAX_NEG);
+	CHECK(sc_mul(SC(300), SC(300)) == SC_MAX);
+	CHECK(sc_mul(SC(-300), SC(300)) == SC_MAX_NEG);
+	CHECK(sc_from_float(1e9f) == SC_MAX);
+	CHECK(sc_from_float(-1e9f) == SC_MAX_NEG);
+	CHECK(sc_from_float(__builtin_nanf("")) == 0);
+	CHECK(sc_neg(INT32_MIN) == SC_MAX);
+	/* rounding to nearest: 1.5 * 2^-16 * 1.0 stays, 3 LSB / 2 rounds away from zero */
+	CHECK(sc_mul(3, SC(0.5)) == 2);
+	CHECK(sc_mul(-3, SC(0.5)) == -2);
+	CHECK(sc_div(SC(1), SC(3)) == 21845);
+	CHECK(sc_div(SC(2), SC(3)) == 43691);
+	CHECK(SC(0.5) == 32768 && SC(-0.25) == -16384);
+#else
+	CHECK(sc_isfinite(SC(1)));
+	CHECK(!sc_isfinite(sc_from_float(__builtin_inff())));
+#endif
+}
+
+UNIT_TEST(scalar_trigonometry)
+{
+	for (int i = -30; i <= 30; i++) {
+		double x = i * 0.1;
+		scalar_t s = sc_from_float((float)x);
+		double tol = OCTO_FIXED ? 4 * LSB : 1e-6;
+		CHECK_NEAR(d(sc_sin(s)), sin(d(s)), tol);
+		CHECK_NEAR(d(sc_cos(s)), cos(d(s)), tol);
+		CHECK_NEAR(d(sc_atan2(s, SC(1))), atan2(d(s), 1.0), tol);
+	}
+	CHECK_NEAR(d(sc_asin(SC(0.5))), 0.5235987755982988, OCTO_FIXED ? 4 * LSB : 1e-6);
+}

@@ -1,0 +1,135 @@
+"""Shared pytest fixtures: the project's binaries on free ports, always stopped.
+
+`launch` starts a built program (``launch("octo-sim", "--lockstep", ...)``), keeps
+its stdout/stderr in the test's tmp_path and stops it at the end of the test
+(SIGTERM, then SIGKILL), whatever happens. `free_port()` hands out UDP ports the
+kernel reports free and never hands out the same port twice in one session, so
+test files can run in parallel (pytest -n) without fixed ports.
+"""
+
+import os
+import signal
+import socket
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+BUILD = Path(os.environ.get("OCTO_BUILD", REPO / "build"))
+
+_given_ports = set()
+_live = []  # every Process started in this session, for a last sweep
+
+
+def free_port(kind=socket.SOCK_DGRAM) -> int:
+    """A port on 127.0.0.1 that is free now (UDP by default)."""
+    for _ in range(100):
+        with socket.socket(socket.AF_INET, kind) as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        if port not in _given_ports:
+            _given_ports.add(port)
+            return port
+    raise RuntimeError("no free port found")
+
+
+class Process:
+    """A running project binary whose output goes to files in the test's directory."""
+
+    def __init__(self, argv, logdir: Path, name: str, env=None):
+        self.argv = [str(a) for a in argv]
+        self.name = name
+        self.stdout_path = logdir / f"{name}.stdout"
+        self.stderr_path = logdir / f"{name}.stderr"
+        self._out = open(self.stdout_path, "wb")
+        self._err = open(self.stderr_path, "wb")
+        self.popen = subprocess.Popen(
+            self.argv, stdout=self._out, stderr=self._err, stdin=subprocess.DEVNULL,
+            env=env, start_new_session=True)
+        _live.append(self)
+
+    @property
+    def pid(self):
+        return self.popen.pid
+
+    def alive(self) -> bool:
+        return self.popen.poll() is None
+
+    def wait(self, timeout=None) -> int:
+        return self.popen.wait(timeout=timeout)
+
+    def stop(self, grace=3.0):
+        """SIGTERM, then SIGKILL after `grace` seconds. Returns the exit status."""
+        if self.popen.poll() is None:
+            try:
+                os.killpg(self.popen.pid, signal.SIGTERM)
+            except ProcessLookupError:
+                pass
+            try:
+                self.popen.wait(timeout=grace)
+            except subprocess.TimeoutExpired:
+                try:
+                    os.killpg(self.popen.pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+                self.popen.wait(timeout=5)
+        for f in (self._out, self._err):
+            if not f.closed:
+                f.close()
+        return self.popen.returncode
+
+    def stdout(self) -> str:
+        self._out.flush()
+        return self.stdout_path.read_text(errors="replace")
+
+    def stderr(self) -> str:
+        self._err.flush()
+        return self.stderr_path.read_text(errors="replace")
+
+
+def binary(name: str) -> Path:
+    path = BUILD / name
+    if not path.exists():
+        pytest.fail(f"{path} is not built: run `make` first")
+    return path
+
+
+@pytest.fixture
+def launch(tmp_path):
+    """Start a built binary: launch("octo-sim", "--lockstep", ...) -> Process."""
+    started = []
+    counts = {}
+
+    def _launch(name, *args, env=None):
+        counts[name] = counts.get(name, 0) + 1
+        tag = name if counts[name] == 1 else f"{name}.{counts[name]}"
+        p = Process([binary(name), *args], tmp_path, tag, env=env)
+        started.append(p)
+        return p
+
+    yield _launch
+    for p in reversed(started):
+        p.stop()
+
+
+@pytest.fixture
+def port():
+    """Factory of free UDP ports: port() -> int."""
+    return free_port
+
+
+def wait_until(pred, timeout=5.0, step=0.01):
+    """Poll pred() until it is true or `timeout` s pass; returns its last value."""
+    deadline = time.monotonic() + timeout
+    while True:
+        v = pred()
+        if v or time.monotonic() > deadline:
+            return v
+        time.sleep(step)
+
+
+def pytest_sessionfinish(session, exitstatus):
+    for p in _live:
+        p.stop(grace=1.0)
