@@ -84,6 +84,7 @@ include firmware/firmware.mk
 include sim/sim.mk
 include host_tools/host_tools.mk
 include tests/tests.mk
+include tests/arm/arm.mk
 
 # ---------------------------------------------------------------- top-level goals
 .PHONY: all test run bench arm clean distclean help
