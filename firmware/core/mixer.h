@@ -1,0 +1,169 @@
+/*
+ * mixer.h - Gamma_o mixer, eqs. (11)-(15): [f; tau] <-> rotor thrusts f_j (N).
+ *
+ * Geometry, eq. (14), rows [f; tau_x; tau_y; tau_z], columns rotors 1..8 (index 0..7),
+ * s = sqrt(2)/2, k = k_tau / k_f:
+ *     f     [  1     1     1     1     1     1     1     1  ]
+ *     tau_x [  0   -s l   -l   -s l    0    s l    l    s l ]
+ *     tau_y [ -l   -s l    0    s l    l    s l    0   -s l ]
+ *     tau_z [  k    -k     k    -k     k    -k     k    -k  ]
+ * A rotor cleared in `rotor_mask` is a zero column (rotor removed); `custom_gamma` replaces
+ * the whole matrix for a different layout (then arm_l_m and the mask's columns are ignored /
+ * applied on top respectively).
+ *
+ * Set-up (mixer_init / mixer_set_params; NOT the 90 Hz path, runs in float32 in both builds):
+ *   - Moore-Penrose pseudo-inverse Gamma^+ (8x4) by a one-sided Jacobi SVD (general: any
+ *     layout, rank deficiency handled by a relative singular-value threshold), and an
+ *     orthonormal basis of the null space of Gamma (8 x (8 - rank)).
+ *   - For the box-constrained allocator: Gamma scaled per row to entries in [-1, 1], the
+ *     facet normals of the attainable set (the zonotope Gamma [f_lo, f_hi]^8) and of the
+ *     sub-zonotopes used by the exact preimage construction.
+ *   mixer_set_params() recomputes only when l, k_f, k_tau, limits, mask or layout changed.
+ *
+ * Update (mixer_update, 90 Hz): scalar_t arithmetic only (add, mul, div; no sqrt, no trig).
+ *   1. Unconstrained allocation, eq. (15): f = Gamma^+ [f; tau].
+ *   2. If every f_j is inside [f_lo, f_hi] (f_lo = k_f t_min, f_hi = k_f t_max, throttle 1 = k_f
+ *      by eqs. (16)-(17)): done, achieved = demanded.
+ *   3. Otherwise, by mode:
+ *      MIXER_MODE_CLIP     the baseline: clip each f_j to the box.
+ *      MIXER_MODE_PRIORITY exact box-constrained allocation with priority
+ *                          roll/pitch > total thrust > yaw:
+ *        a. the demand is attainable (inside the zonotope, exact facet test) -> reproduced
+ *           exactly;
+ *        b. else roll/pitch: largest alpha in [0, 1] such that (F, alpha tau_x, alpha tau_y, 0)
+ *           is attainable for some thrust F (alpha = 1 is tested exactly first, then
+ *           MIXER_ALPHA_ITERS bisection steps, the direction of [tau_x, tau_y] is kept);
+ *        c. thrust: the attainable F nearest to the demanded f on that zero-yaw slice
+ *           (exact interval from the facets);
+ *        d. yaw: largest beta in [0, 1] such that (F, alpha tau_xy, beta tau_z) is attainable
+ *           (exact; beta >= 0, so the achieved yaw never has the opposite sign of the demand);
+ *        e. rotor thrusts reproducing that target: an exact preimage in the box built in at
+ *           most MIXER_N_ROTORS - 4 closed-form steps (each fixes one rotor inside the interval
+ *           that keeps the rest attainable, nearest to the pseudo-inverse solution), then a
+ *           4x4 solve; finally the result is moved along the null space of Gamma towards the
+ *           pseudo-inverse solution as far as the box allows.
+ *      Total work is bounded: no loop depends on data except through these fixed bounds.
+ *      If the allocator is unavailable (rank(Gamma) < 4 or fewer than 4 rotors), PRIORITY
+ *      behaves as CLIP and MIXER_LIMIT_NO_ALLOC is reported.
+ *
+ * Q16.16: the demand is converted to the row-scaled space by division (wrench entries of
+ * order 1..8); achieved wrenches are accurate to about 1e-3 N / 1e-3 N m, rotor thrusts to
+ * about 1e-3 N (see tests/core/test_mixer.c for the stated tolerances).
+ */
+#ifndef OCTO_MIXER_H
+#define OCTO_MIXER_H
+
+#include "scalar.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#define MIXER_N_ROTORS 8
+#define MIXER_N_AXES   4   /* [f, tau_x, tau_y, tau_z] */
+#define MIXER_AXIS_F   0
+#define MIXER_AXIS_TX  1
+#define MIXER_AXIS_TY  2
+#define MIXER_AXIS_TZ  3
+
+/* bisection steps for the roll/pitch scale when even full roll/pitch is unattainable */
+#define MIXER_ALPHA_ITERS 16
+/* facets: C(8,3) for the full set + C(7,3)+C(6,3)+C(5,3)+C(4,3) for the preimage steps */
+#define MIXER_MAX_FACETS 56
+#define MIXER_MAX_SUB_FACETS 69
+
+enum mixer_mode {
+	MIXER_MODE_CLIP = 0,     /* pseudo-inverse plus clipping (baseline) */
+	MIXER_MODE_PRIORITY = 1, /* exact box-constrained allocation, roll/pitch > f > yaw */
+};
+
+/* Limit flags (mixer_output.limits) */
+#define MIXER_LIMIT_ROTOR_MIN  (1u << 0)  /* some rotor at its lower bound */
+#define MIXER_LIMIT_ROTOR_MAX  (1u << 1)  /* some rotor at its upper bound */
+#define MIXER_LIMIT_F          (1u << 2)  /* total thrust not as demanded */
+#define MIXER_LIMIT_TX         (1u << 3)  /* roll torque reduced */
+#define MIXER_LIMIT_TY         (1u << 4)  /* pitch torque reduced */
+#define MIXER_LIMIT_TZ         (1u << 5)  /* yaw torque reduced */
+#define MIXER_LIMIT_NO_ALLOC   (1u << 6)  /* priority allocator unavailable: clipped */
+#define MIXER_LIMIT_BAD_INPUT  (1u << 7)  /* non-finite demand (float build): zero output */
+
+struct mixer_params {
+	scalar_t arm_l_m;   /* l, m (> 0) */
+	scalar_t k_f_n;     /* k_f, thrust at throttle 1, N (> 0) */
+	scalar_t k_tau_nm;  /* k_tau, reaction torque at throttle 1, N m */
+	scalar_t t_min;     /* lower throttle bound of every rotor, usually 0 */
+	scalar_t t_max;     /* upper throttle bound, usually 1: f_hi = k_f t_max */
+	uint8_t rotor_mask; /* bit j set: rotor j+1 present; 0xFF = all eight */
+	enum mixer_mode mode;
+	/* optional: NULL = eq. (14); else a row-major 4x8 Gamma in physical units (N, N m per N)
+	 * for a different layout; it is copied, not kept */
+	const float *custom_gamma;
+};
+
+struct mixer_facet {
+	scalar_t n[MIXER_N_AXES]; /* unit normal in the row-scaled space */
+	scalar_t nc;              /* n . centre of its zonotope */
+	scalar_t h;               /* half-width: 1/2 sum |n . g_j| over its generators */
+};
+
+struct mixer {
+	struct mixer_params p;         /* copy (custom_gamma set to NULL after copying) */
+	float gamma_f[MIXER_N_AXES][MIXER_N_ROTORS];  /* Gamma, physical, float */
+	float pinv_f[MIXER_N_ROTORS][MIXER_N_AXES];   /* Gamma^+, physical, float */
+	float null_f[MIXER_N_ROTORS][MIXER_N_ROTORS]; /* null-space basis: columns 0..n_null-1 */
+	float sigma_f[MIXER_N_AXES];                  /* singular values of Gamma, descending */
+	uint8_t rank;
+	uint8_t n_null;
+
+	/* hot-path data, scalar_t */
+	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES];  /* Gamma^+ (physical) */
+	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma, entries in [-1, 1] */
+	scalar_t pinv_n[MIXER_N_ROTORS][MIXER_N_AXES];/* pseudo-inverse in the scaled space */
+	scalar_t null_n[MIXER_N_ROTORS][4];           /* 4 null-space columns (scaled space) */
+	scalar_t row_scale[MIXER_N_AXES];  /* physical wrench per unit of scaled wrench */
+	scalar_t w_lo[MIXER_N_AXES];       /* physical wrench with every present rotor at f_lo */
+	scalar_t f_lo, f_hi;               /* rotor thrust box, N */
+	uint8_t n_active;
+	uint8_t order[MIXER_N_ROTORS];     /* present rotors; the last 4 are independent */
+	bool alloc_ok;
+	uint8_t n_facets;
+	struct mixer_facet facet[MIXER_MAX_FACETS];
+	uint8_t sub_n[MIXER_N_ROTORS];     /* facets of the suffix set after step i */
+	uint8_t sub_first[MIXER_N_ROTORS];
+	struct mixer_facet sub[MIXER_MAX_SUB_FACETS];
+	scalar_t tail_inv[4][MIXER_N_AXES]; /* inverse of the last 4 scaled columns */
+};
+
+struct mixer_output {
+	scalar_t f_n[MIXER_N_ROTORS];           /* rotor thrust commands, N, in [f_lo, f_hi] (0 if absent) */
+	scalar_t demanded[MIXER_N_AXES];        /* [f, tau_x, tau_y, tau_z] as given */
+	scalar_t achieved[MIXER_N_AXES];        /* Gamma * f_n */
+	uint32_t limits;                        /* MIXER_LIMIT_* */
+	uint8_t rotor_at_min;                   /* bit j: rotor j+1 at f_lo */
+	uint8_t rotor_at_max;                   /* bit j: rotor j+1 at f_hi */
+	uint8_t steps;                          /* preimage steps + bisection steps used */
+};
+
+/* Defaults: the paper's vehicle (l = 0.35 m, k_f = 28.0269 N, k_tau = 0.3869 N m), throttle
+ * [0, 1], all rotors, PRIORITY. */
+void mixer_default_params(struct mixer_params *p);
+
+/* Builds Gamma, the pseudo-inverse, null space and allocator data. Returns true when Gamma
+ * has full row rank 4 (false: the pseudo-inverse is still the Moore-Penrose one of the
+ * rank-deficient Gamma; the priority allocator is disabled). */
+bool mixer_init(struct mixer *m, const struct mixer_params *p);
+
+/* Recomputes (mixer_init) only if a parameter that enters Gamma or the box changed;
+ * a mode change alone is applied without recomputation. Returns the rank-4 status. */
+bool mixer_set_params(struct mixer *m, const struct mixer_params *p);
+
+/* demand = [f (N), tau_x, tau_y, tau_z (N m)] -> out. Never fails. */
+void mixer_update(const struct mixer *m, const scalar_t demand[MIXER_N_AXES], struct mixer_output *out);
+
+/* wrench[i] = sum_j Gamma[i][j] f_n[j] (physical units, scalar_t) */
+void mixer_wrench(const struct mixer *m, const scalar_t f_n[MIXER_N_ROTORS], scalar_t wrench[MIXER_N_AXES]);
+
+/* Exact attainability test of a physical wrench (facet test, tolerance tol in scaled units;
+ * false if the allocator is unavailable). */
+bool mixer_attainable(const struct mixer *m, const scalar_t wrench[MIXER_N_AXES], scalar_t tol);
+
+#endif /* OCTO_MIXER_H */
