@@ -15,7 +15,7 @@
  *   - sc_div by zero returns +/-SC_MAX by the sign of the dividend (0/0 = 0).
  *   - sc_from_float saturates, and maps NaN to 0.
  *   - sc_sqrt of a negative number is 0; the result is exact to 1 LSB.
- *   - Trigonometry (sc_sin, sc_cos, sc_atan2, sc_asin) is used only off the
+ *   - Trigonometry (sc_sin, sc_cos, sc_atan2, sc_asin) and sc_exp are used only off the
  *     90 Hz hot path (Euler conversions for setpoints and telemetry); in the
  *     fixed build it goes through float. The hot path (control, mixer,
  *     throttle map) uses only add, mul, div and sqrt.
@@ -130,6 +130,8 @@ static inline scalar_t sc_atan2(scalar_t y, scalar_t x)
 {
 	return sc_from_float(atan2f(sc_to_float(y), sc_to_float(x)));
 }
+/* e^a, off the hot path only (filter and forgetting coefficients at init); saturates */
+static inline scalar_t sc_exp(scalar_t a) { return sc_from_float(expf(sc_to_float(a))); }
 
 #else
 /* ------------------------------------------------------------ float32 */
@@ -163,6 +165,8 @@ static inline scalar_t sc_sin(scalar_t a) { return sinf(a); }
 static inline scalar_t sc_cos(scalar_t a) { return cosf(a); }
 static inline scalar_t sc_asin(scalar_t a) { return asinf(a); }
 static inline scalar_t sc_atan2(scalar_t y, scalar_t x) { return atan2f(y, x); }
+/* e^a, off the hot path only (filter and forgetting coefficients at init) */
+static inline scalar_t sc_exp(scalar_t a) { return expf(a); }
 #endif
 
 /* ------------------------------------------------------------ both builds */

@@ -81,3 +81,18 @@ UNIT_TEST(scalar_trigonometry)
 	}
 	CHECK_NEAR(d(sc_asin(SC(0.5))), 0.5235987755982988, OCTO_FIXED ? 4 * LSB : 1e-6);
 }
+
+UNIT_TEST(scalar_exp)
+{
+	for (int i = -40; i <= 20; i++) {
+		double x = i * 0.25;
+		scalar_t s = sc_from_float((float)x);
+		double ref = exp(d(s));
+		/* Q16.16: through float, rounded to 1 LSB plus float's relative error */
+		double tol = OCTO_FIXED ? LSB + 2e-7 * ref : 2e-7 * ref;
+		CHECK_NEAR(d(sc_exp(s)), ref, tol);
+	}
+#if OCTO_FIXED
+	CHECK(sc_exp(SC(20)) == SC_MAX); /* e^20 > 32768 saturates */
+#endif
+}

@@ -1,0 +1,97 @@
+/* att_ctrl.c - see att_ctrl.h for the law, units and frames. */
+#include "att_ctrl.h"
+
+struct att_ctrl_params att_ctrl_params_default(void)
+{
+	struct att_ctrl_params p;
+	p.wn_rps = vec3_make(SC(7.0), SC(7.0), SC(3.5));
+	p.zeta = vec3_make(SC(1.0), SC(1.0), SC(1.0));
+	p.ki_rps = vec3_make(SC(0.3), SC(0.3), SC(0.3));
+	p.rate_max_rps = vec3_make(SC(3.0), SC(3.0), SC(1.5));
+	p.tau_max_nm = vec3_make(SC(3.0), SC(3.0), SC(0.4));
+	p.int_tau_max_nm = vec3_make(SC(0.5), SC(0.5), SC(0.1));
+	p.int_err_max_rad = SC(0.2);
+	p.gyro_comp = true;
+	return p;
+}
+
+void att_ctrl_reset(struct att_ctrl *s)
+{
+	s->int_e_rad_s = vec3_zero();
+}
+
+void att_ctrl_init(struct att_ctrl *s, const struct att_ctrl_params *params)
+{
+	s->p = *params;
+	s->int_e_rad_s = vec3_zero();
+	s->err_b_rad = vec3_zero();
+	s->rate_cmd_b = vec3_zero();
+	s->flags = 0;
+}
+
+/* component i (0 x, 1 y, 2 z) of a vec3 */
+static scalar_t *comp(struct vec3 *v, int i)
+{
+	return i == 0 ? &v->x : (i == 1 ? &v->y : &v->z);
+}
+
+static scalar_t get(struct vec3 v, int i)
+{
+	return *comp(&v, i);
+}
+
+uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, struct vec3 *tau_b_nm)
+{
+	const struct att_ctrl_params *p = &s->p;
+	struct vec3 e = quat_error_b(in->q_sp_b2i, in->q_b2i);
+	struct vec3 w = in->rate_b_rps;
+	struct vec3 inertia = in->inertia_kgm2;
+	struct vec3 gyro = vec3_zero();
+	if (p->gyro_comp)
+		gyro = vec3_cross(w, vec3_mul(inertia, w));
+	scalar_t dt = sc_max(in->dt_s, SC_ZERO);
+	uint32_t flags = 0;
+	struct vec3 tau_out = vec3_zero();
+
+	for (int i = 0; i < 3; i++) {
+		scalar_t ei = get(e, i), wn = get(p->wn_rps, i), zeta = get(p->zeta, i);
+		scalar_t ki = get(p->ki_rps, i), rate_max = get(p->rate_max_rps, i);
+		scalar_t tau_max = get(p->tau_max_nm, i), int_tau_max = get(p->int_tau_max_nm, i);
+		scalar_t ii = get(inertia, i);
+		scalar_t *int_e = comp(&s->int_e_rad_s, i);
+
+		scalar_t kd = sc_mul(sc_add(zeta, zeta), wn); /* 2 zeta wn, 1/s */
+		scalar_t kp = sc_div(sc_mul(wn, wn), kd);     /* wn / (2 zeta), 1/s */
+		scalar_t rc = sc_mul(kp, ei);
+		if (rc > rate_max || rc < sc_neg(rate_max)) {
+			rc = sc_clamp(rc, sc_neg(rate_max), rate_max);
+			flags |= ATT_CTRL_RATE_LIM_X << i;
+		}
+		rc = sc_add(rc, get(in->rate_ff_b, i));
+		*comp(&s->rate_cmd_b, i) = rc;
+
+		/* integral torque I ki wn^2 int(e), clamped */
+		scalar_t kint = sc_mul(sc_mul(ii, ki), sc_mul(wn, wn)); /* N m / (rad s) */
+		scalar_t tau_i = sc_clamp(sc_mul(kint, *int_e), sc_neg(int_tau_max), int_tau_max);
+
+		scalar_t tau = sc_add(sc_add(sc_mul(sc_mul(ii, kd), sc_sub(rc, get(w, i))), tau_i), get(gyro, i));
+		bool sat = tau > tau_max || tau < sc_neg(tau_max);
+		if (sat) {
+			flags |= ATT_CTRL_SAT_X << i;
+			tau = sc_clamp(tau, sc_neg(tau_max), tau_max);
+		}
+		*comp(&tau_out, i) = tau;
+
+		/* conditional integration: small error, torque not saturated */
+		if (kint > SC_ZERO && !sat && sc_abs(ei) < p->int_err_max_rad) {
+			scalar_t lim = sc_div(int_tau_max, kint); /* keeps the state bounded too */
+			*int_e = sc_clamp(sc_add(*int_e, sc_mul(ei, dt)), sc_neg(lim), lim);
+		} else if (kint <= SC_ZERO) {
+			*int_e = SC_ZERO;
+		}
+	}
+	s->err_b_rad = e;
+	*tau_b_nm = tau_out;
+	s->flags = flags;
+	return flags;
+}

@@ -1,0 +1,172 @@
+/* excite.c - see excite.h. */
+#include "excite.h"
+
+/* Galois LFSR masks (right shift) of maximum length for orders 2..16 */
+static const uint32_t excite_taps[17] = {
+	0, 0, 0x3, 0x6, 0xC, 0x14, 0x30, 0x60, 0xB8, 0x110, 0x240, 0x500, 0xE08, 0x1C80, 0x3802, 0x6000, 0xB400,
+};
+
+#define EXCITE_SEED_DEFAULT 0x2545F491u
+
+struct excite_params excite_params_default(void)
+{
+	struct excite_params p;
+	p.kind = EXCITE_UNIFORM;
+	p.amplitude = SC(0.05);
+	p.clock_div = 1;
+	p.seed = 1;
+	p.prbs_order = 9;
+	p.ms_period_frames = 180;
+	p.ms_count = 8;
+	p.ms_k_first = 1;
+	return p;
+}
+
+static uint32_t xorshift32(uint32_t *s)
+{
+	uint32_t x = *s;
+	x ^= x << 13;
+	x ^= x >> 17;
+	x ^= x << 5;
+	*s = x;
+	return x;
+}
+
+/* sin(2 pi phase / 2^32): quarter-wave symmetry, then the odd Taylor polynomial of
+ * sin(pi/2 x) to x^9 (error < 4e-6) on x in [0, 1] with 15-bit resolution of x. */
+static scalar_t excite_sin(uint32_t phase)
+{
+	uint32_t quadrant = phase >> 30;
+	int32_t v = (int32_t)((phase & 0x3FFFFFFFu) >> 15); /* [0, 32767] */
+	scalar_t x = sc_mul(sc_from_int(v), SC(1.0 / 32768.0));
+	if (quadrant & 1u)
+		x = sc_sub(SC(1), x);
+	scalar_t x2 = sc_mul(x, x);
+	scalar_t p = sc_sub(SC(0.0046817541), sc_mul(x2, SC(0.0001604411)));
+	p = sc_sub(SC(0.0796926262), sc_mul(x2, p));
+	p = sc_sub(SC(0.6459640975), sc_mul(x2, p));
+	p = sc_sub(SC(1.5707963268), sc_mul(x2, p));
+	scalar_t s = sc_clamp(sc_mul(x, p), SC_ZERO, SC(1));
+	return (quadrant & 2u) ? sc_neg(s) : s;
+}
+
+/* normalised multisine sum(sin(phase_k)) / N at the current phases */
+static scalar_t excite_ms_raw(const struct excite *e)
+{
+	scalar_t sum = SC_ZERO;
+	for (uint32_t k = 0; k < e->p.ms_count; k++)
+		sum = sc_add(sum, excite_sin(e->phase[k]));
+	return sc_div(sum, sc_from_int((int32_t)e->p.ms_count));
+}
+
+static void excite_ms_step(struct excite *e)
+{
+	for (uint32_t k = 0; k < e->p.ms_count; k++)
+		e->phase[k] += e->dphase[k];
+}
+
+static void excite_ms_start(struct excite *e)
+{
+	uint32_t n = e->p.ms_count;
+	uint32_t d1 = (uint32_t)((((uint64_t)1 << 32) + e->p.ms_period_frames / 2) / e->p.ms_period_frames);
+	for (uint32_t k = 0; k < EXCITE_MS_MAX; k++) {
+		e->phase[k] = 0;
+		e->dphase[k] = 0;
+	}
+	for (uint32_t k = 1; k <= n; k++) {
+		/* Schroeder: -k (k - 1) / (2 N) turn */
+		uint64_t turns = ((uint64_t)k * (k - 1u) << 31) / n;
+		e->phase[k - 1] = 0u - (uint32_t)turns;
+		e->dphase[k - 1] = d1 * (e->p.ms_k_first + k - 1u);
+	}
+}
+
+void excite_init(struct excite *e, const struct excite_params *params)
+{
+	e->p = *params;
+	struct excite_params *p = &e->p;
+	p->amplitude = sc_max(p->amplitude, SC_ZERO);
+	if (p->clock_div == 0)
+		p->clock_div = 1;
+	if (p->seed == 0)
+		p->seed = EXCITE_SEED_DEFAULT;
+	p->prbs_order = p->prbs_order < 2 ? 2 : (p->prbs_order > 16 ? 16 : p->prbs_order);
+	if (p->ms_period_frames < 4)
+		p->ms_period_frames = 4;
+	p->ms_count = p->ms_count < 1 ? 1 : (p->ms_count > EXCITE_MS_MAX ? EXCITE_MS_MAX : p->ms_count);
+	if (p->ms_k_first < 1)
+		p->ms_k_first = 1;
+
+	e->rng = p->seed;
+	uint32_t len = ((uint32_t)1 << p->prbs_order) - 1u;
+	e->lfsr = p->seed % len + 1u;
+	e->lfsr_taps = excite_taps[p->prbs_order];
+	e->count = 0;
+	e->value = SC_ZERO;
+	e->frames = 0;
+	e->ms_scale = SC_ZERO;
+
+	/* multisine: scan one period for the peak of the normalised sum */
+	excite_ms_start(e);
+	if (p->kind == EXCITE_MULTISINE) {
+		scalar_t peak = SC_ZERO;
+		uint32_t scan = p->ms_period_frames < EXCITE_MS_PEAK_SCAN ? p->ms_period_frames : EXCITE_MS_PEAK_SCAN;
+		for (uint32_t i = 0; i < scan; i++) {
+			peak = sc_max(peak, sc_abs(excite_ms_raw(e)));
+			excite_ms_step(e);
+		}
+		e->ms_scale = peak > SC_ZERO ? sc_div(p->amplitude, peak) : SC_ZERO;
+		excite_ms_start(e);
+	}
+}
+
+scalar_t excite_update(struct excite *e)
+{
+	const struct excite_params *p = &e->p;
+	scalar_t a = p->amplitude;
+	scalar_t y = SC_ZERO;
+	e->frames++;
+	switch (p->kind) {
+	case EXCITE_UNIFORM:
+		if (e->count == 0) {
+			int32_t v = (int32_t)(xorshift32(&e->rng) >> 17); /* [0, 32767] */
+			scalar_t u = sc_div(sc_from_int(2 * v - 32767), sc_from_int(32767));
+			e->value = sc_mul(a, u);
+		}
+		e->count = (e->count + 1u) % p->clock_div;
+		y = e->value;
+		break;
+	case EXCITE_PRBS:
+		if (e->count == 0) {
+			uint32_t bit = e->lfsr & 1u;
+			e->lfsr >>= 1;
+			if (bit)
+				e->lfsr ^= e->lfsr_taps;
+			e->value = bit ? a : sc_neg(a);
+		}
+		e->count = (e->count + 1u) % p->clock_div;
+		y = e->value;
+		break;
+	case EXCITE_MULTISINE:
+		y = sc_mul(e->ms_scale, excite_ms_raw(e));
+		excite_ms_step(e);
+		break;
+	case EXCITE_OFF:
+	default:
+		y = SC_ZERO;
+		break;
+	}
+	return sc_clamp(y, sc_neg(a), a);
+}
+
+uint32_t excite_period_frames(const struct excite *e)
+{
+	switch (e->p.kind) {
+	case EXCITE_PRBS:
+		return (((uint32_t)1 << e->p.prbs_order) - 1u) * e->p.clock_div;
+	case EXCITE_MULTISINE:
+		return e->p.ms_period_frames;
+	default:
+		return 0;
+	}
+}

@@ -1,0 +1,76 @@
+/*
+ * excite.h - seeded, deterministic excitation signals for identification.
+ *
+ *   EXCITE_UNIFORM    uniform random in [-A, A] (the paper's delta_1 and mu_1), a new
+ *                     value every clock_div frames (xorshift32, 15-bit resolution)
+ *   EXCITE_PRBS       maximum-length LFSR of order n (2..16, period 2^n - 1 bits),
+ *                     +/-A, one bit every clock_div frames
+ *   EXCITE_MULTISINE  sum of N (<= EXCITE_MS_MAX) equal-amplitude sines at harmonics
+ *                     k_first .. k_first + N - 1 of f0 = frame rate / ms_period_frames,
+ *                     Schroeder phases phi_k = -pi k (k - 1) / N (k = 1..N), scaled so
+ *                     that its peak over one period (found at init, sampled at the
+ *                     frame rate, at most EXCITE_MS_PEAK_SCAN frames) is A
+ *
+ * Same params and seed give the same sequence in both builds (uniform and PRBS
+ * exactly, up to the last bit of the A scaling; multisine within ~1e-4 A). The output
+ * is always within [-A, A]. The generator is a pure function of its state and the
+ * number of update calls; call excite_update once per frame.
+ * Hot path: integer operations, add and mul (the multisine uses an integer phase
+ * accumulator and a polynomial sine, so its period is exact).
+ */
+#ifndef OCTO_EXCITE_H
+#define OCTO_EXCITE_H
+
+#include "scalar.h"
+
+#include <stdint.h>
+
+#define EXCITE_MS_MAX 16
+#define EXCITE_MS_PEAK_SCAN 8192
+
+enum excite_kind {
+	EXCITE_OFF = 0,
+	EXCITE_UNIFORM = 1,
+	EXCITE_PRBS = 2,
+	EXCITE_MULTISINE = 3,
+};
+
+struct excite_params {
+	enum excite_kind kind;
+	scalar_t amplitude;  /* A >= 0 (negative is taken as 0) */
+	uint32_t clock_div;  /* frames per value / bit (>= 1; 0 is taken as 1) */
+	uint32_t seed;       /* any value; 0 is replaced by a fixed nonzero seed */
+	uint32_t prbs_order; /* n in [2, 16] (clamped) */
+	uint32_t ms_period_frames; /* multisine period P in frames (>= 4; f0 = frame rate / P) */
+	uint32_t ms_count;   /* N sines, 1..EXCITE_MS_MAX (clamped) */
+	uint32_t ms_k_first; /* first harmonic index (>= 1) */
+};
+
+struct excite {
+	struct excite_params p;
+	uint32_t rng;        /* xorshift32 state (uniform) */
+	uint32_t lfsr;       /* LFSR state (PRBS) */
+	uint32_t lfsr_taps;
+	uint32_t count;      /* frames since the current value was drawn */
+	scalar_t value;      /* current held value (uniform, PRBS) */
+	uint32_t phase[EXCITE_MS_MAX]; /* multisine phases, 2^32 = one turn */
+	uint32_t dphase[EXCITE_MS_MAX];
+	scalar_t ms_scale;   /* A / (N * peak of the normalised sum) */
+	uint64_t frames;     /* update calls since init */
+};
+
+/* Sensible defaults: uniform, A = 0.05, clock_div 1, seed 1, PRBS order 9,
+ * multisine period 180 frames (f0 = 0.5 Hz at 90 Hz), 8 sines from k = 1. */
+struct excite_params excite_params_default(void);
+
+/* Copies (and clamps) params, seeds the generators, computes the multisine scale. */
+void excite_init(struct excite *e, const struct excite_params *params);
+
+/* Next sample, in [-A, A] (0 for EXCITE_OFF). */
+scalar_t excite_update(struct excite *e);
+
+/* Period of the sequence in frames: PRBS (2^n - 1) clock_div, multisine P (exact to
+ * P / 2^33 of a turn per period), 0 for uniform (not periodic) and off. */
+uint32_t excite_period_frames(const struct excite *e);
+
+#endif /* OCTO_EXCITE_H */

@@ -1,0 +1,53 @@
+/* thrmap.c - see thrmap.h. */
+#include "thrmap.h"
+
+void thrmap_init(struct thrmap *m, const struct thrmap_params *params)
+{
+	m->p = *params;
+	m->p.k_f_n = sc_max(m->p.k_f_n, SC(1e-3));
+	m->p.curve = sc_clamp(m->p.curve, SC_ZERO, SC(0.99));
+	m->one_minus_a = sc_sub(SC(1), m->p.curve);
+}
+
+scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped)
+{
+	scalar_t u = sc_div(f_n, m->p.k_f_n);
+	bool c = false;
+	if (u <= SC_ZERO) {
+		c = u < SC_ZERO;
+		u = SC_ZERO;
+	} else if (u >= SC(1)) {
+		c = u > SC(1);
+		u = SC(1);
+	}
+	scalar_t t = u;
+	if (m->p.curve > SC_ZERO) {
+		/* T = 2u / ((1-a) + sqrt((1-a)^2 + 4 a u)); u in [0, 1] gives T in [0, 1] */
+		scalar_t b = m->one_minus_a;
+		scalar_t disc = sc_add(sc_mul(b, b), sc_mul(sc_mul(SC(4), m->p.curve), u));
+		t = sc_div(sc_add(u, u), sc_add(b, sc_sqrt(disc)));
+		t = sc_clamp(t, SC_ZERO, SC(1));
+	}
+	if (clamped)
+		*clamped = c;
+	return t;
+}
+
+scalar_t thrmap_thrust(const struct thrmap *m, scalar_t throttle)
+{
+	scalar_t t = sc_clamp(throttle, SC_ZERO, SC(1));
+	/* k_f T ((1 - a) + a T) */
+	return sc_mul(m->p.k_f_n, sc_mul(t, sc_add(m->one_minus_a, sc_mul(m->p.curve, t))));
+}
+
+uint32_t thrmap_update(const struct thrmap *m, const scalar_t *f_n, scalar_t *throttle_out, size_t n)
+{
+	uint32_t mask = 0;
+	for (size_t j = 0; j < n; j++) {
+		bool c = false;
+		throttle_out[j] = thrmap_throttle(m, f_n[j], &c);
+		if (c && j < 32)
+			mask |= (uint32_t)1 << j;
+	}
+	return mask;
+}
