@@ -1,4 +1,178 @@
-# tests/arm/: cross-build of the core and its unit tests for Cortex-M4F and M0 under QEMU.
+# tests/arm/: the core and its C unit tests on emulated Cortex-M, and instruction counts.
+#
+#   make arm         cross-compile firmware/core/*.c for each target below with the host
+#                    firmware flags (CFLAGS_FW: FW_WARN, -fno-math-errno), link the unit tests
+#                    (tests/core) with the start-up code here, run them under QEMU with
+#                    semihosting, print the core's .text/.data/.bss per target, and check the
+#                    instruction-counting plugin on its demo. Fails if any test fails.
+#                    ARM_FILTER="mixer rls" runs only tests whose names contain a word.
+#   make arm-size    the same sizes, per core module
+#   make arm-count   build the counting plugin and print the demo's counts (4x8 float
+#                    matrix-vector product: about 190 instructions on M4F, 5,700 on M0)
+#
+# Targets (ARM_VARIANTS):
+#   m4f        Cortex-M4F, hard float (fpv4-sp-d16), float build    QEMU mps2-an386
+#   m0         Cortex-M0, soft float, float build                   QEMU microbit (16 KB RAM)
+#   m0-fixed   Cortex-M0, Q16.16 build (OCTO_FIXED=1)               QEMU microbit
+#
+# Image exit status (QEMU's, through semihosting SYS_EXIT_EXTENDED): the number of
+# failed tests; 124 timeout (ARM_TIMEOUT s); 125 stack exhausted; 126 fault (a stack
+# overflow faults: the stack sits at the bottom of RAM). Each image prints
+# "octo-arm: stack N of M bytes, heap N of M bytes", its high-water marks.
+#
+# Files: startup.c (vector table, reset, faults), semihost.c/.h (newlib system calls,
+# exit), sections.ld + m4f.ld/m0.ld (memory), bench_mark.c/.h (markers),
+# insn_count.c (QEMU plugin), insn-count.sh (runs it), bench_demo.c (its reference).
+#
+# Instruction counts for `make bench`: put bench_mark_begin()/bench_mark_end() from
+# tests/arm/bench_mark.h around the one call to measure, build an image with
+#     $(eval $(call arm_program,m4f,$(B)/bench/step-m4f.elf,bench/step.c,EXTRA_CFLAGS))
+# (compiled with CFLAGS_FW for the target, linked with the start-up code, the markers
+# and the target's core library), make it depend on $(ARM_COUNT_PLUGIN), then run
+#     tests/arm/insn-count.sh mps2-an386 $(B)/bench/step-m4f.elf
+# which prints the image's output and "octo-count: region N: M instructions" for each
+# begin/end pair (the count includes the `bl bench_mark_end`, one instruction).
+#
+# The toolchain is Debian's: if it is missing, root installs it with apt-get; anyone
+# else is told the command.
+
+ARM_PKGS    := gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm
+ARM_B       := $(B)/arm
+ARM_CC      := arm-none-eabi-gcc
+ARM_AR      := arm-none-eabi-ar
+ARM_SIZE    := arm-none-eabi-size
+ARM_QEMU    := qemu-system-arm
+ARM_TIMEOUT ?= 300
+ARM_FILTER  ?=
+
+ARM_VARIANTS      := m4f m0 m0-fixed
+ARM_ARCH_m4f      := -mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16
+ARM_ARCH_m0       := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
+ARM_ARCH_m0-fixed := $(ARM_ARCH_m0)
+ARM_DEFS_m0-fixed := -DOCTO_FIXED=1
+ARM_LD_m4f        := tests/arm/m4f.ld
+ARM_LD_m0         := tests/arm/m0.ld
+ARM_LD_m0-fixed   := tests/arm/m0.ld
+ARM_MACHINE_m4f      := mps2-an386
+ARM_MACHINE_m0       := microbit
+ARM_MACHINE_m0-fixed := microbit
+
+ARM_SECTIONS := -ffunction-sections -fdata-sections
+ARM_LDFLAGS  := -nostartfiles --specs=nano.specs --specs=nosys.specs -u _printf_float \
+                -Wl,--gc-sections -Ltests/arm
+ARM_QEMU_FLAGS := -nographic -monitor none -serial none
+ARM_RT_SRC   := tests/arm/startup.c tests/arm/semihost.c
+ARM_COUNT_PLUGIN := $(ARM_B)/insn-count.so
+
+# ---------------------------------------------------------------- toolchain
+.PHONY: arm-toolchain
+arm-toolchain:
+	@if command -v $(ARM_CC) >/dev/null && command -v $(ARM_QEMU) >/dev/null && \
+	    [ -e "$$($(ARM_CC) -print-file-name=libc_nano.a)" ]; then exit 0; fi; \
+	if [ "$$(id -u)" != 0 ]; then \
+	  echo "make arm: the ARM cross toolchain or QEMU is missing. Install it (as root) with:"; \
+	  echo "  apt-get install -y --no-install-recommends $(ARM_PKGS)"; exit 1; fi; \
+	echo "== installing $(ARM_PKGS)"; mkdir -p $(ARM_B); \
+	if apt-cache policy $(ARM_PKGS) 2>/dev/null | grep -q 'Candidate: (none)' || \
+	   [ "$$(apt-cache policy $(ARM_PKGS) 2>/dev/null | grep -c 'Candidate:')" != 3 ]; then \
+	  apt-get update -q >$(ARM_B)/apt.log 2>&1 || { cat $(ARM_B)/apt.log; exit 1; }; fi; \
+	DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends $(ARM_PKGS) \
+	  >>$(ARM_B)/apt.log 2>&1 || { cat $(ARM_B)/apt.log; exit 1; }
+
+# ---------------------------------------------------------------- per target
+# $(1) = variant. Objects: build/arm/<v>/{core,unit,rt}/; library build/arm/<v>/libcore.a.
+define arm_variant
+ARM_CORE_OBJ_$(1) := $$(CORE_SRC:firmware/core/%.c=$(ARM_B)/$(1)/core/%.o)
+ARM_UNIT_OBJ_$(1) := $$(UNIT_ALL_SRC:tests/core/%.c=$(ARM_B)/$(1)/unit/%.o)
+ARM_RT_OBJ_$(1)   := $$(ARM_RT_SRC:tests/arm/%.c=$(ARM_B)/$(1)/rt/%.o)
+ARM_MARK_OBJ_$(1) := $(ARM_B)/$(1)/rt/bench_mark.o
+ARM_CFLAGS_$(1)   := $$(ARM_ARCH_$(1)) $$(ARM_DEFS_$(1)) $$(ARM_SECTIONS)
+
+$(ARM_B)/$(1)/core/%.o: firmware/core/%.c | arm-toolchain
+	@mkdir -p $$(@D)
+	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(CFLAGS_FW) $$(CORE_INC) -c $$< -o $$@
+$(ARM_B)/$(1)/unit/%.o: tests/core/%.c | arm-toolchain
+	@mkdir -p $$(@D)
+	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(UNIT_CFLAGS) -fno-math-errno -c $$< -o $$@
+$(ARM_B)/$(1)/unit/unit.o: $$(UNIT_LIST)
+$(ARM_B)/$(1)/rt/%.o: tests/arm/%.c | arm-toolchain
+	@mkdir -p $$(@D)
+	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(CFLAGS_FW) -Itests/arm -c $$< -o $$@
+
+$(ARM_B)/$(1)/libcore.a: $$(ARM_CORE_OBJ_$(1)) | arm-toolchain
+	@rm -f $$@; $$(ARM_AR) rcs $$@ $$(ARM_CORE_OBJ_$(1))
+
+$(ARM_B)/$(1)/unit-tests.elf: $$(ARM_RT_OBJ_$(1)) $$(ARM_UNIT_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a \
+                              $$(ARM_LD_$(1)) tests/arm/sections.ld
+	$$(ARM_CC) $$(ARM_ARCH_$(1)) $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -Wl,-Map,$$@.map -o $$@ \
+	  $$(ARM_RT_OBJ_$(1)) $$(ARM_UNIT_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a -lm
+endef
+$(foreach v,$(ARM_VARIANTS),$(eval $(call arm_variant,$(v))))
+
+# $(call arm_program,VARIANT,ELF,SOURCES[,EXTRA_CFLAGS]): a rule for an image of
+# SOURCES (firmware flags, -Ifirmware/core -Itests/arm) with the start-up code, the
+# bench markers and the variant's core library; for instruction counts.
+define arm_program
+$(2): $(3) $$(ARM_RT_OBJ_$(1)) $$(ARM_MARK_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a $$(ARM_LD_$(1)) tests/arm/sections.ld
+	@mkdir -p $$(@D)
+	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(filter-out -MMD -MP,$$(CFLAGS_FW)) $(4) $$(CORE_INC) -Itests/arm \
+	  $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -o $$@ $(3) $$(ARM_RT_OBJ_$(1)) $$(ARM_MARK_OBJ_$(1)) \
+	  $(ARM_B)/$(1)/libcore.a -lm
+endef
+
+# ---------------------------------------------------------------- instruction counting
+$(ARM_COUNT_PLUGIN): tests/arm/insn_count.c
+	@mkdir -p $(@D)
+	$(CC) -shared -fPIC -O2 -Wall -Wextra -Werror -fvisibility=hidden -o $@ $<
+
+# The demo: m4f as the firmware is built (-std=c11 implies -ffp-contract=off),
+# m4f with fused multiply-add allowed, and m0.
+$(eval $(call arm_program,m4f,$(ARM_B)/demo/matvec-m4f.elf,tests/arm/bench_demo.c))
+$(eval $(call arm_program,m4f,$(ARM_B)/demo/matvec-m4f-fma.elf,tests/arm/bench_demo.c,-ffp-contract=fast))
+$(eval $(call arm_program,m0,$(ARM_B)/demo/matvec-m0.elf,tests/arm/bench_demo.c))
+ARM_DEMO := m4f:mps2-an386 m4f-fma:mps2-an386 m0:microbit
+
+ARM_DEMO_ELFS := $(foreach d,$(ARM_DEMO),$(ARM_B)/demo/matvec-$(firstword $(subst :, ,$(d))).elf)
+arm_count_demo = echo "== instruction counts, 4x8 float matrix-vector product (reference: ~190 M4F, ~5,700 M0)"; \
+  for d in $(ARM_DEMO); do n=$${d%%:*}; m=$${d\#*:}; \
+    out=$$(tests/arm/insn-count.sh $$m $(ARM_B)/demo/matvec-$$n.elf $(ARM_COUNT_PLUGIN)) || rc=1; \
+    c=$$(echo "$$out" | sed -n 's/^octo-count: region 1: \([0-9]*\) instructions$$/\1/p'); \
+    printf '   %-9s %-11s %s instructions\n' $$n $$m "$${c:-?}"; \
+    [ -n "$$c" ] || { echo "$$out"; rc=1; failed="$$failed insn-count($$n)"; }; \
+  done;
+
+.PHONY: arm-count
+arm-count: $(ARM_COUNT_PLUGIN) $(ARM_DEMO_ELFS)
+	@rc=0; $(arm_count_demo) exit $$rc
+
+# ---------------------------------------------------------------- sizes and tests
+ARM_ELFS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/unit-tests.elf)
+ARM_LIBS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/libcore.a)
+
+# text includes .rodata; flash = text + data, RAM = data + bss (no heap, no stack).
+.PHONY: arm-size-total arm-size
+arm-size-total: $(ARM_LIBS)
+	@echo "== firmware/core size per target, bytes (bench targets: flash < 24 KB, RAM < 4 KB)"
+	@for v in $(ARM_VARIANTS); do \
+	  $(ARM_SIZE) -t $(ARM_B)/$$v/libcore.a 2>/dev/null | awk -v v=$$v \
+	    '$$NF == "(TOTALS)" { t = $$1; d = $$2; b = $$3 } \
+	     END { printf "   %-9s .text %6d  .data %5d  .bss %5d   flash %6d  RAM %5d\n", v, t, d, b, t + d, d + b }'; \
+	done
+
+arm-size: $(ARM_LIBS)
+	@for v in $(ARM_VARIANTS); do echo "== $$v"; $(ARM_SIZE) -t $(ARM_B)/$$v/libcore.a; done
+
+# Runs every image even when one fails; the summary says which failed and why.
+arm_run = echo "== unit tests: $(1) on QEMU $(ARM_MACHINE_$(1))"; \
+  timeout $(ARM_TIMEOUT) $(ARM_QEMU) -M $(ARM_MACHINE_$(1)) $(ARM_QEMU_FLAGS) \
+    -semihosting-config enable=on,target=native,arg=unit-tests$(foreach f,$(ARM_FILTER),,arg=$(f)) \
+    -kernel $(ARM_B)/$(1)/unit-tests.elf </dev/null; \
+  s=$$?; if [ $$s != 0 ]; then rc=1; case $$s in 124) why="timed out after $(ARM_TIMEOUT) s";; \
+    125) why="stack exhausted";; 126) why="fault";; *) why="$$s failed tests";; esac; \
+    failed="$$failed $(1) ($$why)"; fi;
+
 .PHONY: arm
-arm:
-	@echo "make arm: not built yet"; exit 1
+arm: arm-size-total $(ARM_ELFS) $(ARM_COUNT_PLUGIN) $(ARM_DEMO_ELFS)
+	@rc=0; failed=; $(foreach v,$(ARM_VARIANTS),$(call arm_run,$(v))) $(arm_count_demo) \
+	if [ $$rc = 0 ]; then echo "== make arm: all passed on $(ARM_VARIANTS)"; \
+	else echo "== make arm: FAILED:$$failed"; fi; exit $$rc
