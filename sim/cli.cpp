@@ -1,0 +1,191 @@
+// cli: flag parsing with clear errors (exit 2 naming the flag or the JSON key).
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include "net.hpp"
+#include "options.hpp"
+
+namespace sim {
+
+static const char kUsage[] =
+"usage: octo-sim [options]\n"
+"\n"
+"The paper's octocopter behind X-Plane 11/12's UDP protocol: receives DSEL/USEL,\n"
+"DATA (row 25), DREF, RREF, CMND and ISE4 on --xp-port and sends DATA* frames to\n"
+"the Data Output target at --rate, like X-Plane.\n"
+"\n"
+"network:\n"
+"  --xp-port N            UDP port X-Plane messages are received on (49000)\n"
+"  --bind ADDR            local IPv4 address to bind (127.0.0.1; 0.0.0.0 for all)\n"
+"  --data-out HOST:PORT   Data Output target (127.0.0.1:49005; ISE4 index 64 changes it)\n"
+"  --rate HZ              Data Output rate, frames per simulated second (90)\n"
+"  --xplane-version 11|12 protocol personality: row 16 order/units, version dataref (12)\n"
+"  --rows LIST            preselect Data Output rows, e.g. 1,16,17,20,21,25 (none)\n"
+"\n"
+"simulation:\n"
+"  --vehicle FILE.json    truth, actuator and noise model; absent keys keep defaults\n"
+"  --ideal                no noise, no motor lag, no delay (the paper's ideal set-up)\n"
+"  --seed N               seed of the noise and of the fault injection (1)\n"
+"  --duration S           simulated seconds to run, then exit 0 (0: until stopped)\n"
+"  --lockstep             advance one frame when all 8 throttles are commanded (DATA\n"
+"                         row 25 or DREFs ENGN_thro_use[0..7]) or on timeout; before the\n"
+"                         first command time stands still and frame 0 is re-sent at --rate\n"
+"  --lockstep-timeout S   wall-clock seconds to wait for the throttles (0.5)\n"
+"  --step S               RK4 step (0.002)\n"
+"  --lcm URL              ground truth on channel OCTO_TRUTH (octo.truth_t); file://PATH\n"
+"                         writes an LCM log stamped with simulated time\n"
+"\n"
+"fault injection on the DATA stream (seeded):\n"
+"  --drop P               lose each frame with probability P\n"
+"  --burst N              lose N consecutive frames at random times\n"
+"  --burst-prob P         probability per frame that a burst starts (0.005)\n"
+"  --delay-frames K       send every frame K frames late\n"
+"  --duplicate P          send a frame twice with probability P\n"
+"  --reorder P            swap a frame with the next one with probability P\n"
+"\n"
+"  --verbose              one status line per second on stderr\n"
+"  --help                 this text\n"
+"\n"
+"vehicle keys: mass, g, arm_length, kf, ktau, inertia [3], motor_tau, delay,\n"
+"thrust_curve, rotor_scale [8], kf_drift_per_min, noise {thrust, torque, gyro,\n"
+"attitude_deg, position}, origin [lat, lon, alt_m].\n"
+"On exit (SIGINT/SIGTERM or --duration) the counters of dropped inputs go to stderr.\n";
+
+namespace {
+
+std::string fmt(double d)
+{
+	char b[32];
+	std::snprintf(b, sizeof b, "%g", d);
+	return b;
+}
+
+struct Bad {
+	std::string flag, msg;
+};
+
+double num(const std::string &flag, const char *v, double lo, double hi)
+{
+	char *end = nullptr;
+	errno = 0;
+	double d = std::strtod(v, &end);
+	if (!*v || *end || errno || !std::isfinite(d) || d < lo || d > hi)
+		throw Bad{flag, "expected a number in [" + fmt(lo) + ", " + fmt(hi) +
+		                    "], got '" + v + "'"};
+	return d;
+}
+
+long integer(const std::string &flag, const char *v, long lo, long hi)
+{
+	char *end = nullptr;
+	errno = 0;
+	long d = std::strtol(v, &end, 10);
+	if (!*v || *end || errno || d < lo || d > hi)
+		throw Bad{flag, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+		                    "], got '" + v + "'"};
+	return d;
+}
+
+} // namespace
+
+int parse_options(int argc, char **argv, Options &o)
+{
+	try {
+		for (int i = 1; i < argc; i++) {
+			const std::string a = argv[i];
+			auto val = [&]() -> const char * {
+				if (i + 1 >= argc)
+					throw Bad{a, "needs a value"};
+				return argv[++i];
+			};
+			if (a == "--help" || a == "-h") {
+				std::fputs(kUsage, stdout);
+				return 0;
+			} else if (a == "--xp-port") {
+				o.xp_port = static_cast<uint16_t>(integer(a, val(), 1, 65535));
+			} else if (a == "--bind") {
+				o.bind_ip = val();
+			} else if (a == "--data-out") {
+				o.data_out = val();
+			} else if (a == "--rate") {
+				o.rate = num(a, val(), 1.0, 10000.0);
+			} else if (a == "--xplane-version") {
+				long v = integer(a, val(), 11, 12);
+				o.xplane_version = static_cast<int>(v);
+			} else if (a == "--rows") {
+				std::string s = val();
+				o.rows.clear();
+				size_t p = 0;
+				while (p <= s.size()) {
+					size_t c = s.find(',', p);
+					std::string t = s.substr(p, c == std::string::npos ? std::string::npos : c - p);
+					o.rows.push_back(static_cast<int>(integer(a, t.c_str(), 1, 255)));
+					if (c == std::string::npos)
+						break;
+					p = c + 1;
+				}
+			} else if (a == "--vehicle") {
+				o.vehicle_file = val();
+			} else if (a == "--ideal") {
+				o.ideal = true;
+			} else if (a == "--seed") {
+				const char *v = val();
+				char *end = nullptr;
+				errno = 0;
+				unsigned long long s = std::strtoull(v, &end, 10);
+				if (!*v || *end || errno || *v == '-')
+					throw Bad{a, std::string("expected a non-negative integer, got '") + v + "'"};
+				o.seed = s;
+			} else if (a == "--duration") {
+				o.duration = num(a, val(), 0.0, 1e9);
+			} else if (a == "--lcm") {
+				o.lcm_url = val();
+			} else if (a == "--lockstep") {
+				o.lockstep = true;
+			} else if (a == "--lockstep-timeout") {
+				o.lockstep_timeout = num(a, val(), 0.001, 3600.0);
+			} else if (a == "--step") {
+				o.step = num(a, val(), 1e-5, 0.1);
+			} else if (a == "--drop") {
+				o.faults.drop = num(a, val(), 0.0, 1.0);
+			} else if (a == "--burst") {
+				o.faults.burst = static_cast<int>(integer(a, val(), 0, 1000000));
+			} else if (a == "--burst-prob") {
+				o.faults.burst_prob = num(a, val(), 0.0, 1.0);
+			} else if (a == "--delay-frames") {
+				o.faults.delay_frames = static_cast<int>(integer(a, val(), 0, 100000));
+			} else if (a == "--duplicate") {
+				o.faults.duplicate = num(a, val(), 0.0, 1.0);
+			} else if (a == "--reorder") {
+				o.faults.reorder = num(a, val(), 0.0, 1.0);
+			} else if (a == "--verbose" || a == "-v") {
+				o.verbose = true;
+			} else {
+				throw Bad{a, "unknown option (see --help)"};
+			}
+		}
+		std::string err;
+		if (!parse_hostport(o.data_out, o.data_out_addr, err))
+			throw Bad{"--data-out", err};
+		if (!o.vehicle_file.empty()) {
+			try {
+				vehicle_load(o.vehicle_file, o.vehicle);
+			} catch (const VehicleError &e) {
+				std::fprintf(stderr, "octo-sim: --vehicle %s: %s\n", o.vehicle_file.c_str(), e.what());
+				return 2;
+			}
+		}
+		if (o.ideal)
+			o.vehicle.make_ideal();
+	} catch (const Bad &b) {
+		std::fprintf(stderr, "octo-sim: %s: %s\n", b.flag.c_str(), b.msg.c_str());
+		return 2;
+	}
+	return -1;
+}
+
+} // namespace sim

@@ -1,0 +1,40 @@
+// options: octo-sim's command line (see usage() in cli.cpp for the text).
+#pragma once
+
+#include <netinet/in.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "faults.hpp"
+#include "vehicle.hpp"
+
+namespace sim {
+
+struct Options {
+	uint16_t xp_port = 49000;
+	std::string bind_ip = "127.0.0.1";
+	std::string data_out = "127.0.0.1:49005";
+	sockaddr_in data_out_addr{};
+	double rate = 90.0;
+	int xplane_version = 12;
+	std::string vehicle_file;
+	VehicleParams vehicle;
+	bool ideal = false;
+	uint64_t seed = 1;
+	double duration = 0;          // simulated s; 0 = run until stopped
+	std::string lcm_url;
+	bool lockstep = false;
+	double lockstep_timeout = 0.5; // wall s to wait for the 8 throttles
+	std::vector<int> rows;        // preselected Data Output rows
+	FaultParams faults;
+	double step = 0.002;          // RK4 step, s
+	bool verbose = false;
+};
+
+// Parses argv. Returns -1 to run, or an exit status (0 after --help, 2 on a
+// bad flag or a bad --vehicle file, with the message on stderr).
+int parse_options(int argc, char **argv, Options &o);
+
+} // namespace sim

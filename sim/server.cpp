@@ -1,0 +1,239 @@
+// server: sockets, pacing, lockstep, RREF scheduling, truth, status.
+#include "server.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "counters.hpp"
+#include "faults.hpp"
+#include "model.hpp"
+#include "net.hpp"
+#include "truth.hpp"
+#include "xplane_emit.hpp"
+#include "xplane_input.hpp"
+#include "xplane_proto.hpp"
+
+namespace sim {
+
+namespace {
+
+double wall_now()
+{
+	using namespace std::chrono;
+	return duration<double>(steady_clock::now().time_since_epoch()).count();
+}
+
+class Server {
+public:
+	Server(const Options &o, const std::atomic<bool> &stop)
+	    : o_(o), stop_(stop), model_(o.vehicle), input_(c_), faults_(o.faults, o.seed, c_)
+	{
+		model_.set_h_max(o.step);
+		input_.target = o.data_out_addr;
+		for (int r : o.rows)
+			if (r >= 0 && r <= XpInput::kMaxRow)
+				input_.selected[static_cast<size_t>(r)] = true;
+	}
+
+	int run();
+
+private:
+	void send_frame(bool faults);
+	void rref_tick();
+	// Processes inputs until `deadline` (wall) or, when until_full, until the 8
+	// throttles are commanded. Returns true when they are.
+	bool pump(double deadline, bool until_full);
+	void advance();
+	void status(double now);
+
+	const Options &o_;
+	const std::atomic<bool> &stop_;
+	Counters c_;
+	Model model_;
+	XpInput input_;
+	FaultChannel faults_;
+	UdpSocket sock_;
+	TruthPublisher truth_;
+	XpFrame frame_;
+	uint64_t n_ = 0;
+	double last_status_ = 0;
+	double wall_start_ = 0;
+	uint8_t buf_[2048];
+};
+
+void Server::send_frame(bool with_faults)
+{
+	if (!input_.target_enabled)
+		return;
+	std::vector<xp::DataRow> rows;
+	for (int r : xp_supported_rows())
+		if (input_.selected[static_cast<size_t>(r)])
+			rows.push_back(xp_row(frame_, r, o_.xplane_version));
+	if (rows.empty())
+		return; // X-Plane sends nothing while no row is selected
+	xp::Bytes d = xp::encode_data(rows);
+	std::vector<xp::Bytes> out;
+	if (with_faults && o_.faults.any())
+		out = faults_.submit(n_, std::move(d));
+	else
+		out.push_back(std::move(d));
+	for (const auto &b : out) {
+		if (sock_.send(b.data(), b.size(), input_.target))
+			c_.inc(Counters::TxData);
+		else
+			c_.inc(Counters::TxError);
+	}
+}
+
+void Server::rref_tick()
+{
+	if (input_.subs.empty())
+		return;
+	// group due records per destination, in subscription order
+	std::vector<std::pair<sockaddr_in, std::vector<std::pair<int32_t, float>>>> groups;
+	for (auto &s : input_.subs) {
+		s.phase += s.freq / o_.rate;
+		if (s.phase < 1.0)
+			continue;
+		s.phase -= std::floor(s.phase);
+		float v = 0.0f;
+		if (!xp_dataref(frame_, s.path, o_.xplane_version, input_.override_on, input_.thro_use,
+		                input_.thro, v))
+			c_.inc(Counters::RrefUnknown);
+		size_t g = 0;
+		while (g < groups.size() && !same_addr(groups[g].first, s.to))
+			g++;
+		if (g == groups.size())
+			groups.push_back({s.to, {}});
+		groups[g].second.push_back({s.index, v});
+	}
+	for (const auto &g : groups)
+		for (const auto &b : xp::encode_rref_replies(g.second)) {
+			if (sock_.send(b.data(), b.size(), g.first))
+				c_.inc(Counters::TxRref);
+			else
+				c_.inc(Counters::TxError);
+		}
+}
+
+bool Server::pump(double deadline, bool until_full)
+{
+	for (;;) {
+		sockaddr_in from{};
+		size_t len = 0;
+		while (sock_.recv(buf_, sizeof buf_, from, len)) {
+			if (len > sizeof buf_) { // truncated: no X-Plane request is this long
+				c_.inc(Counters::RxDatagrams);
+				c_.inc(Counters::RxBadSize);
+				continue;
+			}
+			input_.handle(buf_, len, from);
+			if (until_full && (input_.cmd_mask & 0xFFu) == 0xFFu)
+				return true;
+		}
+		if (stop_)
+			return false;
+		const double now = wall_now();
+		if (o_.verbose)
+			status(now);
+		if (now >= deadline)
+			return (input_.cmd_mask & 0xFFu) == 0xFFu;
+		sock_.wait_readable(std::min(deadline - now, 0.25));
+	}
+}
+
+void Server::advance()
+{
+	std::array<double, kRotors> u = input_.effective_throttle();
+	model_.command(u);
+	input_.cmd_mask = 0;
+	n_++;
+	model_.advance_to(static_cast<double>(n_) / o_.rate);
+	frame_ = xp_measure(model_, u, o_.seed, n_);
+	truth_.publish(model_, n_);
+}
+
+void Server::status(double now)
+{
+	if (now - last_status_ < 1.0)
+		return;
+	last_status_ = now;
+	const BodyState &x = model_.state();
+	const double wall = now - wall_start_;
+	std::fprintf(stderr,
+	             "octo-sim: t=%.2fs frame=%llu x%.1f pos=(%.2f %.2f %.2f)m roll=%.1f pitch=%.1f hdg=%.1f "
+	             "rx=%llu tx=%llu%s\n",
+	             model_.t(), static_cast<unsigned long long>(n_), wall > 0 ? model_.t() / wall : 0.0, x.r.x(),
+	             x.r.y(), x.r.z(), frame_.roll, frame_.pitch, frame_.heading,
+	             static_cast<unsigned long long>(c_[Counters::RxDatagrams]),
+	             static_cast<unsigned long long>(c_[Counters::TxData]), model_.on_ground() ? " landed" : "");
+}
+
+int Server::run()
+{
+	std::string err;
+	if (!sock_.open(o_.bind_ip, o_.xp_port, err)) {
+		std::fprintf(stderr, "octo-sim: --xp-port %u: %s\n", o_.xp_port, err.c_str());
+		return 1;
+	}
+	if (!o_.lcm_url.empty() && !truth_.open(o_.lcm_url, err)) {
+		std::fprintf(stderr, "octo-sim: --lcm: %s\n", err.c_str());
+		return 1;
+	}
+	std::fprintf(stderr, "octo-sim: X-Plane %d on %s:%u, Data Output to %s at %g Hz%s\n", o_.xplane_version,
+	             o_.bind_ip.c_str(), o_.xp_port, addr_str(input_.target).c_str(), o_.rate,
+	             o_.lockstep ? ", lockstep" : "");
+
+	frame_ = xp_measure(model_, input_.effective_throttle(), o_.seed, 0);
+	truth_.publish(model_, 0);
+	wall_start_ = wall_now();
+	const double period = 1.0 / o_.rate;
+	double tick = wall_start_;
+	bool started = !o_.lockstep;
+	while (!stop_) {
+		send_frame(started);
+		rref_tick();
+		if (o_.duration > 0 && model_.t() >= o_.duration - 1e-9)
+			break;
+		if (o_.lockstep) {
+			if (!started) {
+				tick += period;
+				const double now = wall_now();
+				if (tick < now - 1.0)
+					tick = now;
+				if (!pump(tick, true))
+					continue; // still waiting: re-send frame 0
+				started = true;
+			} else if (!pump(wall_now() + o_.lockstep_timeout, true)) {
+				if (stop_)
+					break;
+				c_.inc(Counters::LockstepTimeouts);
+			}
+		} else {
+			tick += period;
+			const double now = wall_now();
+			if (tick < now - 1.0)
+				tick = now; // fell far behind (suspended): resynchronise
+			pump(tick, false);
+			if (stop_)
+				break;
+		}
+		advance();
+	}
+	std::fprintf(stderr, "octo-sim: stopped at t=%.3fs after %llu frames; counters %s\n", model_.t(),
+	             static_cast<unsigned long long>(n_), c_.json().c_str());
+	return 0;
+}
+
+} // namespace
+
+int run_server(const Options &o, const std::atomic<bool> &stop)
+{
+	Server s(o, stop);
+	return s.run();
+}
+
+} // namespace sim

@@ -1,0 +1,125 @@
+// vehicle: defaults and the --vehicle JSON loader (strict: unknown keys and
+// impossible values are errors naming the key).
+#include "vehicle.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "json.hpp"
+
+namespace sim {
+
+void VehicleParams::make_ideal()
+{
+	motor_tau = 0.0;
+	delay = 0.0;
+	noise.thrust = noise.torque = 0.0;
+	noise.gyro = noise.attitude_deg = noise.position = 0.0;
+}
+
+namespace {
+
+enum class Rule { Positive, NonNegative, Any, Unit };
+
+double num(const json::Value &v, const std::string &key, Rule r)
+{
+	if (v.kind != json::Value::Kind::Number)
+		throw VehicleError(key, "key '" + key + "' must be a number, not " + v.kind_name());
+	double d = v.num;
+	if (!std::isfinite(d))
+		throw VehicleError(key, "key '" + key + "' must be finite");
+	switch (r) {
+	case Rule::Positive:
+		if (!(d > 0))
+			throw VehicleError(key, "key '" + key + "' must be positive");
+		break;
+	case Rule::NonNegative:
+		if (!(d >= 0))
+			throw VehicleError(key, "key '" + key + "' must not be negative");
+		break;
+	case Rule::Unit:
+		if (!(d >= 0 && d <= 1))
+			throw VehicleError(key, "key '" + key + "' must be in [0, 1]");
+		break;
+	case Rule::Any:
+		break;
+	}
+	return d;
+}
+
+template <size_t N>
+void vec(const json::Value &v, const std::string &key, Rule r, std::array<double, N> &out)
+{
+	if (v.kind != json::Value::Kind::Array || v.arr.size() != N)
+		throw VehicleError(key, "key '" + key + "' must be an array of " + std::to_string(N) + " numbers");
+	for (size_t i = 0; i < N; i++)
+		out[i] = num(v.arr[i], key, r);
+}
+
+} // namespace
+
+void vehicle_from_json(const std::string &text, VehicleParams &p)
+{
+	json::Value root;
+	try {
+		root = json::parse(text);
+	} catch (const json::ParseError &e) {
+		throw VehicleError("", std::string("not valid JSON: ") + e.what());
+	}
+	if (root.kind != json::Value::Kind::Object)
+		throw VehicleError("", "the vehicle file must hold one JSON object");
+	VehicleParams q = p;
+	for (const auto &kv : root.obj) {
+		const std::string &k = kv.first;
+		const json::Value &v = kv.second;
+		if (k == "mass") q.mass = num(v, k, Rule::Positive);
+		else if (k == "g") q.g = num(v, k, Rule::NonNegative);
+		else if (k == "arm_length") q.arm_length = num(v, k, Rule::Positive);
+		else if (k == "kf") q.kf = num(v, k, Rule::Positive);
+		else if (k == "ktau") q.ktau = num(v, k, Rule::Positive);
+		else if (k == "inertia") vec(v, k, Rule::Positive, q.inertia);
+		else if (k == "motor_tau") q.motor_tau = num(v, k, Rule::NonNegative);
+		else if (k == "delay") {
+			q.delay = num(v, k, Rule::NonNegative);
+			if (q.delay > 10.0)
+				throw VehicleError(k, "key 'delay' must be at most 10 s");
+		}
+		else if (k == "thrust_curve") q.thrust_curve = num(v, k, Rule::Unit);
+		else if (k == "rotor_scale") vec(v, k, Rule::NonNegative, q.rotor_scale);
+		else if (k == "kf_drift_per_min") q.kf_drift_per_min = num(v, k, Rule::Any);
+		else if (k == "origin") {
+			vec(v, k, Rule::Any, q.origin);
+			if (std::fabs(q.origin[0]) > 89.0 || std::fabs(q.origin[1]) > 180.0)
+				throw VehicleError(k, "key 'origin' must be [lat (|lat| <= 89), lon (|lon| <= 180), alt_m]");
+		}
+		else if (k == "noise") {
+			if (v.kind != json::Value::Kind::Object)
+				throw VehicleError(k, "key 'noise' must be an object");
+			for (const auto &nk : v.obj) {
+				std::string key = "noise." + nk.first;
+				double d = num(nk.second, key, Rule::NonNegative);
+				if (nk.first == "thrust") q.noise.thrust = d;
+				else if (nk.first == "torque") q.noise.torque = d;
+				else if (nk.first == "gyro") q.noise.gyro = d;
+				else if (nk.first == "attitude_deg") q.noise.attitude_deg = d;
+				else if (nk.first == "position") q.noise.position = d;
+				else throw VehicleError(key, "unknown key '" + key + "'");
+			}
+		}
+		else throw VehicleError(k, "unknown key '" + k + "'");
+	}
+	p = q;
+}
+
+void vehicle_load(const std::string &path, VehicleParams &p)
+{
+	std::ifstream f(path, std::ios::binary);
+	if (!f)
+		throw VehicleError("", "cannot read '" + path + "'");
+	std::ostringstream ss;
+	ss << f.rdbuf();
+	vehicle_from_json(ss.str(), p);
+}
+
+} // namespace sim

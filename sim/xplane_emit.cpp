@@ -1,0 +1,279 @@
+// xplane_emit: frames, units and Data Output rows as X-Plane 11/12 emit them.
+#include "xplane_emit.hpp"
+
+#include <cmath>
+
+#include "rng.hpp"
+
+namespace sim {
+
+namespace {
+
+constexpr double kDeg = 180.0 / M_PI;
+constexpr double kLbPerN = 1.0 / 4.4482216152605;
+constexpr double kFtLbPerNm = 1.0 / 1.3558179483314;
+constexpr double kFtPerM = 1.0 / 0.3048;
+constexpr double kKnPerMps = 3600.0 / 1852.0;
+constexpr double kMphPerMps = 3600.0 / 1609.344;
+constexpr double kHpPerW = 1.0 / 745.69987158227;
+constexpr double kEarthR = 6371008.8;   // m, mean radius (flat-earth offsets)
+constexpr double kRpmMax = 9000.0;      // rotor rpm at full throttle (thrust ~ rpm^2)
+constexpr double kSoundMps = 340.29;
+
+float f32(double v) { return static_cast<float>(v); }
+
+void euler_from_rotation(const Eigen::Matrix3d &Rnf, double &roll, double &pitch, double &yaw)
+{
+	// R maps FRD to NED; Z-Y-X sequence
+	pitch = std::asin(std::max(-1.0, std::min(1.0, -Rnf(2, 0))));
+	roll = std::atan2(Rnf(2, 1), Rnf(2, 2));
+	yaw = std::atan2(Rnf(1, 0), Rnf(0, 0));
+}
+
+} // namespace
+
+XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame)
+{
+	const VehicleParams &p = m.params();
+	const BodyState &x = m.state();
+	Rng rng(seed, Stream::Noise, frame);
+	XpFrame f;
+	f.t = m.t();
+
+	// body rates: FLU -> FRD, gyro noise
+	const double sg = p.noise.gyro;
+	f.P = x.w.x() + sg * rng.gauss();
+	f.Q = -x.w.y() + sg * rng.gauss();
+	f.R = -x.w.z() + sg * rng.gauss();
+
+	// attitude: R_ned<-frd = D R_i<-b D with D = diag(1, -1, -1)
+	const Eigen::Matrix3d D = Eigen::Vector3d(1, -1, -1).asDiagonal();
+	const Eigen::Matrix3d Rnf = D * x.q.normalized().toRotationMatrix() * D;
+	double roll, pitch, yaw;
+	euler_from_rotation(Rnf, roll, pitch, yaw);
+	const double sa = p.noise.attitude_deg / kDeg;
+	roll += sa * rng.gauss();
+	pitch += sa * rng.gauss();
+	yaw += sa * rng.gauss();
+	f.roll = roll * kDeg;
+	f.pitch = pitch * kDeg;
+	double hdg = std::fmod(yaw * kDeg, 360.0);
+	if (hdg < 0)
+		hdg += 360.0;
+	if (hdg >= 360.0)
+		hdg -= 360.0;
+	f.heading = hdg;
+	{
+		const double cr = std::cos(roll / 2), sr = std::sin(roll / 2);
+		const double cp = std::cos(pitch / 2), sp = std::sin(pitch / 2);
+		const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2);
+		f.quat[0] = cr * cp * cy + sr * sp * sy;
+		f.quat[1] = sr * cp * cy - cr * sp * sy;
+		f.quat[2] = cr * sp * cy + sr * cp * sy;
+		f.quat[3] = cr * cp * sy - sr * sp * cy;
+	}
+
+	// position (noise), velocity (true)
+	const double sp_ = p.noise.position;
+	f.north = x.r.x() + sp_ * rng.gauss();
+	f.east = -x.r.y() + sp_ * rng.gauss();
+	f.up = x.r.z() + sp_ * rng.gauss();
+	f.vn = x.v.x();
+	f.ve = -x.v.y();
+	f.vd = -x.v.z();
+	const double lat0 = p.origin[0] / kDeg;
+	f.lat = p.origin[0] + f.north / kEarthR * kDeg;
+	f.lon = p.origin[1] + f.east / (kEarthR * std::cos(lat0)) * kDeg;
+	f.alt_msl_m = p.origin[2] + f.up;
+	f.agl_m = f.up;
+
+	// load factors: specific force in the body (FLU), over g
+	const Eigen::Vector3d acc = m.acceleration();
+	const Eigen::Vector3d sf_i = acc + Eigen::Vector3d(0, 0, p.g);
+	const Eigen::Vector3d sf_b = x.q.normalized().conjugate() * sf_i;
+	const double g = p.g > 0 ? p.g : 9.80665;
+	f.g_nrml = sf_b.z() / g;   // up along the body: +1 when level at rest
+	f.g_axil = sf_b.x() / g;   // forward positive
+	f.g_side = -sf_b.y() / g;  // right positive
+
+	// rotors: true outputs plus noise on thrust and torque
+	const RotorOutputs o = m.rotor_outputs(x, m.t());
+	const double st = p.sigma_thrust(), sq = p.sigma_torque();
+	for (int j = 0; j < kRotors; j++) {
+		f.thro_cmd[j] = thro_cmd[j];
+		f.thro_act[j] = x.s[j];
+		f.thrust_n[j] = o.thrust[j] + st * rng.gauss();
+		f.torque_nm[j] = std::fabs(o.torque[j]) + sq * rng.gauss();
+		const double gs = thrust_curve(p.thrust_curve, x.s[j]);
+		f.rpm[j] = kRpmMax * std::sqrt(gs);
+		f.power_w[j] = std::fabs(o.torque[j]) * f.rpm[j] * (2 * M_PI / 60.0);
+	}
+	return f;
+}
+
+const std::vector<int> &xp_supported_rows()
+{
+	static const std::vector<int> rows = {1, 3, 4, 16, 17, 20, 21, 25, 26, 34, 35, 36, 37, 38};
+	return rows;
+}
+
+bool xp_row_supported(int row)
+{
+	for (int r : xp_supported_rows())
+		if (r == row)
+			return true;
+	return false;
+}
+
+xp::DataRow xp_row(const XpFrame &f, int row, int version)
+{
+	xp::DataRow r;
+	r.index = row;
+	for (float &c : r.col)
+		c = xp::kNoData;
+	const double vh = std::hypot(f.vn, f.ve);
+	const double v = std::sqrt(f.vn * f.vn + f.ve * f.ve + f.vd * f.vd);
+	switch (row) {
+	case 1: { // times: real, total, mission, timer, -, zulu h, local h
+		const double hours = std::fmod(12.0 + f.t / 3600.0, 24.0);
+		r.col[0] = r.col[1] = r.col[2] = r.col[3] = f32(f.t);
+		r.col[5] = r.col[6] = f32(hours);
+		break;
+	}
+	case 3: // speeds (no wind: air = ground)
+		r.col[0] = r.col[1] = r.col[2] = f32(v * kKnPerMps);
+		r.col[3] = f32(vh * kKnPerMps);
+		r.col[5] = r.col[6] = f32(v * kMphPerMps);
+		r.col[7] = f32(vh * kMphPerMps);
+		break;
+	case 4: // Mach, VVI ft/min, g normal, g axial, g side
+		r.col[0] = f32(v / kSoundMps);
+		r.col[2] = f32(-f.vd * kFtPerM * 60.0);
+		r.col[4] = f32(f.g_nrml);
+		r.col[5] = f32(f.g_axil);
+		r.col[6] = f32(f.g_side);
+		break;
+	case 16: // angular velocities
+		if (version >= 12) {
+			r.col[0] = f32(f.P * 180.0 / M_PI);
+			r.col[1] = f32(f.Q * 180.0 / M_PI);
+			r.col[2] = f32(f.R * 180.0 / M_PI);
+		} else {
+			r.col[0] = f32(f.Q);
+			r.col[1] = f32(f.P);
+			r.col[2] = f32(f.R);
+		}
+		break;
+	case 17: // pitch, roll, true heading, magnetic heading (no variation)
+		r.col[0] = f32(f.pitch);
+		r.col[1] = f32(f.roll);
+		r.col[2] = f32(f.heading);
+		r.col[3] = f32(f.heading);
+		break;
+	case 20: // lat, lon, alt ft MSL, alt ft AGL
+		r.col[0] = f32(f.lat);
+		r.col[1] = f32(f.lon);
+		r.col[2] = f32(f.alt_msl_m * kFtPerM);
+		r.col[3] = f32(f.agl_m * kFtPerM);
+		break;
+	case 21: { // OpenGL local position and velocity, distance from the origin
+		r.col[0] = f32(f.east);
+		r.col[1] = f32(f.up);
+		r.col[2] = f32(-f.north);
+		r.col[3] = f32(f.ve);
+		r.col[4] = f32(-f.vd);
+		r.col[5] = f32(-f.vn);
+		const double d = std::hypot(f.north, f.east);
+		r.col[6] = f32(d * kFtPerM);
+		r.col[7] = f32(d / 1852.0);
+		break;
+	}
+	case 25:
+	case 26:
+	case 34:
+	case 35:
+	case 36:
+	case 37:
+	case 38:
+		for (int j = 0; j < kRotors; j++) {
+			double val = 0;
+			switch (row) {
+			case 25: val = f.thro_cmd[j]; break;
+			case 26: val = f.thro_act[j]; break;
+			case 34: val = f.power_w[j] * kHpPerW; break;
+			case 35: val = f.thrust_n[j] * kLbPerN; break;
+			case 36: val = f.torque_nm[j] * kFtLbPerNm; break;
+			default: val = f.rpm[j]; break;
+			}
+			r.col[j] = f32(val);
+		}
+		break;
+	default:
+		break;
+	}
+	return r;
+}
+
+bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool override_on,
+                const std::array<float, 16> &thro_use, const std::array<float, 16> &thro, float &out)
+{
+	std::string base;
+	int idx = -1;
+	if (!xp::split_index(path, base, idx))
+		return false;
+	const int i = idx < 0 ? 0 : idx;
+	static const std::string pos = "sim/flightmodel/position/";
+	static const std::string eng = "sim/flightmodel/engine/";
+	if (base == "sim/version/xplane_internal_version") {
+		out = version >= 12 ? 120100.0f : 115500.0f;
+		return true;
+	}
+	if (base == "sim/operation/override/override_throttles") {
+		out = override_on ? 1.0f : 0.0f;
+		return true;
+	}
+	if (base.compare(0, eng.size(), eng) == 0) {
+		const std::string n = base.substr(eng.size());
+		if (i >= 16)
+			return false;
+		if (n == "ENGN_thro_use") { out = thro_use[static_cast<size_t>(i)]; return true; }
+		if (n == "ENGN_thro") { out = thro[static_cast<size_t>(i)]; return true; }
+		if (n == "POINT_thrust") { out = i < kRotors ? f32(f.thrust_n[static_cast<size_t>(i)]) : 0.0f; return true; }
+		if (n == "ENGN_TRQ") { out = i < kRotors ? f32(f.torque_nm[static_cast<size_t>(i)]) : 0.0f; return true; }
+		return false;
+	}
+	if (base.compare(0, pos.size(), pos) != 0)
+		return false;
+	const std::string n = base.substr(pos.size());
+	const double rd = 180.0 / M_PI;
+	double v;
+	if (n == "Prad") v = f.P;
+	else if (n == "Qrad") v = f.Q;
+	else if (n == "Rrad") v = f.R;
+	else if (n == "P") v = f.P * rd;
+	else if (n == "Q") v = f.Q * rd;
+	else if (n == "R") v = f.R * rd;
+	else if (n == "theta") v = f.pitch;
+	else if (n == "phi") v = f.roll;
+	else if (n == "psi") v = f.heading;
+	else if (n == "q") {
+		if (i > 3)
+			return false;
+		v = f.quat[i];
+	}
+	else if (n == "local_x") v = f.east;
+	else if (n == "local_y") v = f.up;
+	else if (n == "local_z") v = -f.north;
+	else if (n == "local_vx") v = f.ve;
+	else if (n == "local_vy") v = -f.vd;
+	else if (n == "local_vz") v = -f.vn;
+	else if (n == "latitude") v = f.lat;
+	else if (n == "longitude") v = f.lon;
+	else if (n == "elevation") v = f.alt_msl_m;
+	else if (n == "y_agl") v = f.agl_m;
+	else return false;
+	out = f32(v);
+	return true;
+}
+
+} // namespace sim

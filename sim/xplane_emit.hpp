@@ -1,0 +1,56 @@
+// xplane_emit: the ONLY place where the paper's frames become X-Plane's.
+//
+// Conventions (see sim/README.md):
+//   S_I (Z up) is placed on NED as X_I = north, Y_I = west, Z_I = up, with the
+//   origin at the take-off point: N = x, E = -y, D = -z. Paper yaw 0 (nose along
+//   X_I) is therefore heading 0 (north); a positive paper yaw (counter-clockwise
+//   seen from above) lowers the heading.
+//   Body FLU -> FRD: (x, y, z) -> (x, -y, -z), so P = w_x, Q = -w_y, R = -w_z.
+//   OpenGL local frame (+X east, +Y up, +Z south): X = -y_I, Y = z_I, Z = -x_I,
+//   origin at the take-off point on the ground.
+//   Euler angles: Z-Y-X (heading, pitch, roll) from NED to FRD, in degrees.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "model.hpp"
+#include "xplane_proto.hpp"
+
+namespace sim {
+
+// One measured frame in X-Plane's frames and SI units (noise included).
+struct XpFrame {
+	double t = 0;                      // simulated time, s
+	double P = 0, Q = 0, R = 0;        // body rates about forward-right-down, rad/s
+	double roll = 0, pitch = 0, heading = 0; // deg (heading in [0, 360))
+	double quat[4] = {1, 0, 0, 0};     // X-Plane's q: [w x y z] from the half angles
+	double north = 0, east = 0, up = 0;      // m from the origin
+	double vn = 0, ve = 0, vd = 0;     // m/s (true, no noise)
+	double lat = 0, lon = 0, alt_msl_m = 0, agl_m = 0;
+	double g_nrml = 1, g_axil = 0, g_side = 0; // load factors (+1 level, at rest)
+	RotorArray thro_cmd{};             // throttle driving each engine
+	RotorArray thro_act{};             // actuator output s_j
+	RotorArray thrust_n{};             // measured thrust, N
+	RotorArray torque_nm{};            // measured engine torque (magnitude), N m
+	RotorArray rpm{};                  // rotor speed, rpm
+	RotorArray power_w{};              // shaft power, W
+};
+
+// Builds the measured frame for the model's current state; noise is drawn from
+// Rng(seed, Noise, frame) in a fixed order (independent of the selected rows).
+XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame);
+
+// Rows this emitter fills (ascending). Other selected rows are not sent.
+const std::vector<int> &xp_supported_rows();
+bool xp_row_supported(int row);
+
+// One Data Output row in X-Plane units; unused columns -999. version: 11 or 12.
+xp::DataRow xp_row(const XpFrame &f, int row, int version);
+
+// Value of a dataref for an RREF reply; false for an unknown path.
+bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool override_on,
+                const std::array<float, 16> &thro_use, const std::array<float, 16> &thro, float &out);
+
+} // namespace sim

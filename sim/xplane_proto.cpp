@@ -1,0 +1,129 @@
+// xplane_proto: byte-level encoding and framing checks.
+#include "xplane_proto.hpp"
+
+#include <cstring>
+
+namespace xp {
+
+void put_i32(Bytes &b, int32_t v)
+{
+	uint32_t u;
+	std::memcpy(&u, &v, 4);
+	for (int k = 0; k < 4; k++)
+		b.push_back(static_cast<uint8_t>(u >> (8 * k)));
+}
+
+void put_f32(Bytes &b, float v)
+{
+	uint32_t u;
+	std::memcpy(&u, &v, 4);
+	for (int k = 0; k < 4; k++)
+		b.push_back(static_cast<uint8_t>(u >> (8 * k)));
+}
+
+int32_t get_i32(const uint8_t *p)
+{
+	uint32_t u = static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) |
+	             (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
+	int32_t v;
+	std::memcpy(&v, &u, 4);
+	return v;
+}
+
+float get_f32(const uint8_t *p)
+{
+	uint32_t u = static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) |
+	             (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
+	float v;
+	std::memcpy(&v, &u, 4);
+	return v;
+}
+
+static void put_tag(Bytes &b, const char *tag, uint8_t byte4)
+{
+	b.insert(b.end(), tag, tag + 4);
+	b.push_back(byte4);
+}
+
+Bytes encode_data(const std::vector<DataRow> &rows, uint8_t byte4)
+{
+	Bytes b;
+	b.reserve(kHeader + kDataRecord * rows.size());
+	put_tag(b, "DATA", byte4);
+	for (const auto &r : rows) {
+		put_i32(b, r.index);
+		for (float c : r.col)
+			put_f32(b, c);
+	}
+	return b;
+}
+
+std::vector<Bytes> encode_rref_replies(const std::vector<std::pair<int32_t, float>> &recs, uint8_t byte4)
+{
+	std::vector<Bytes> out;
+	for (size_t i = 0; i < recs.size(); i += kRrefMaxRecords) {
+		Bytes b;
+		put_tag(b, "RREF", byte4);
+		for (size_t k = i; k < recs.size() && k < i + kRrefMaxRecords; k++) {
+			put_i32(b, recs[k].first);
+			put_f32(b, recs[k].second);
+		}
+		out.push_back(std::move(b));
+	}
+	return out;
+}
+
+Msg message_type(const uint8_t *p, size_t len)
+{
+	if (len < kHeader)
+		return Msg::Unknown;
+	if (!std::memcmp(p, "DATA", 4)) return Msg::Data;
+	if (!std::memcmp(p, "DREF", 4)) return Msg::Dref;
+	if (!std::memcmp(p, "RREF", 4)) return Msg::Rref;
+	if (!std::memcmp(p, "DSEL", 4)) return Msg::Dsel;
+	if (!std::memcmp(p, "USEL", 4)) return Msg::Usel;
+	if (!std::memcmp(p, "CMND", 4)) return Msg::Cmnd;
+	if (!std::memcmp(p, "ISE4", 4)) return Msg::Ise4;
+	return Msg::Unknown;
+}
+
+bool field_path(const uint8_t *field, size_t n, std::string &out)
+{
+	const void *nul = std::memchr(field, 0, n);
+	if (!nul)
+		return false;
+	size_t len = static_cast<size_t>(static_cast<const uint8_t *>(nul) - field);
+	if (len == 0)
+		return false;
+	for (size_t k = 0; k < len; k++)
+		if (field[k] < 0x21 || field[k] > 0x7e)
+			return false;
+	out.assign(reinterpret_cast<const char *>(field), len);
+	return true;
+}
+
+bool split_index(const std::string &path, std::string &base, int &index)
+{
+	size_t lb = path.find('[');
+	if (lb == std::string::npos) {
+		if (path.find(']') != std::string::npos)
+			return false;
+		base = path;
+		index = -1;
+		return true;
+	}
+	if (path.back() != ']' || lb + 2 > path.size() - 1 || path.size() - lb > 6)
+		return false;
+	int v = 0;
+	for (size_t k = lb + 1; k + 1 < path.size(); k++) {
+		char c = path[k];
+		if (c < '0' || c > '9')
+			return false;
+		v = v * 10 + (c - '0');
+	}
+	base = path.substr(0, lb);
+	index = v;
+	return true;
+}
+
+} // namespace xp
