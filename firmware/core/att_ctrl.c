@@ -4,9 +4,9 @@
 struct att_ctrl_params att_ctrl_params_default(void)
 {
 	struct att_ctrl_params p;
-	p.wn_rps = vec3_make(SC(7.0), SC(7.0), SC(3.5));
-	p.zeta = vec3_make(SC(1.0), SC(1.0), SC(1.0));
-	p.ki_rps = vec3_make(SC(0.3), SC(0.3), SC(0.3));
+	p.wn_rps = vec3_make(SC(7.0), SC(7.0), SC(5.0));
+	p.zeta = vec3_make(SC(1.0), SC(1.0), SC(1.1));
+	p.ki_rps = vec3_make(SC(0.5), SC(0.5), SC(0.5));
 	p.rate_max_rps = vec3_make(SC(3.0), SC(3.0), SC(1.5));
 	p.tau_max_nm = vec3_make(SC(3.0), SC(3.0), SC(0.4));
 	p.int_tau_max_nm = vec3_make(SC(0.5), SC(0.5), SC(0.1));
@@ -17,13 +17,13 @@ struct att_ctrl_params att_ctrl_params_default(void)
 
 void att_ctrl_reset(struct att_ctrl *s)
 {
-	s->int_e_rad_s = vec3_zero();
+	s->int_r_rad = vec3_zero();
 }
 
 void att_ctrl_init(struct att_ctrl *s, const struct att_ctrl_params *params)
 {
 	s->p = *params;
-	s->int_e_rad_s = vec3_zero();
+	s->int_r_rad = vec3_zero();
 	s->err_b_rad = vec3_zero();
 	s->rate_cmd_b = vec3_zero();
 	s->flags = 0;
@@ -58,7 +58,7 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		scalar_t ki = get(p->ki_rps, i), rate_max = get(p->rate_max_rps, i);
 		scalar_t tau_max = get(p->tau_max_nm, i), int_tau_max = get(p->int_tau_max_nm, i);
 		scalar_t ii = get(inertia, i);
-		scalar_t *int_e = comp(&s->int_e_rad_s, i);
+		scalar_t *int_r = comp(&s->int_r_rad, i);
 
 		scalar_t kd = sc_mul(sc_add(zeta, zeta), wn); /* 2 zeta wn, 1/s */
 		scalar_t kp = sc_div(sc_mul(wn, wn), kd);     /* wn / (2 zeta), 1/s */
@@ -70,11 +70,13 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		rc = sc_add(rc, get(in->rate_ff_b, i));
 		*comp(&s->rate_cmd_b, i) = rc;
 
-		/* integral torque I ki wn^2 int(e), clamped */
-		scalar_t kint = sc_mul(sc_mul(ii, ki), sc_mul(wn, wn)); /* N m / (rad s) */
-		scalar_t tau_i = sc_clamp(sc_mul(kint, *int_e), sc_neg(int_tau_max), int_tau_max);
+		/* integral torque I 2 zeta wn ki int(r), clamped */
+		scalar_t ikd = sc_mul(ii, kd);  /* N m / (rad/s) */
+		scalar_t kint = sc_mul(ikd, ki); /* N m / rad */
+		scalar_t tau_i = sc_clamp(sc_mul(kint, *int_r), sc_neg(int_tau_max), int_tau_max);
+		scalar_t r = sc_sub(rc, get(w, i));
 
-		scalar_t tau = sc_add(sc_add(sc_mul(sc_mul(ii, kd), sc_sub(rc, get(w, i))), tau_i), get(gyro, i));
+		scalar_t tau = sc_add(sc_add(sc_mul(ikd, r), tau_i), get(gyro, i));
 		bool sat = tau > tau_max || tau < sc_neg(tau_max);
 		if (sat) {
 			flags |= ATT_CTRL_SAT_X << i;
@@ -85,9 +87,9 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		/* conditional integration: small error, torque not saturated */
 		if (kint > SC_ZERO && !sat && sc_abs(ei) < p->int_err_max_rad) {
 			scalar_t lim = sc_div(int_tau_max, kint); /* keeps the state bounded too */
-			*int_e = sc_clamp(sc_add(*int_e, sc_mul(ei, dt)), sc_neg(lim), lim);
+			*int_r = sc_clamp(sc_add(*int_r, sc_mul(r, dt)), sc_neg(lim), lim);
 		} else if (kint <= SC_ZERO) {
-			*int_e = SC_ZERO;
+			*int_r = SC_ZERO;
 		}
 	}
 	s->err_b_rad = e;

@@ -4,7 +4,8 @@
  * Law (per body axis a in {x, y, z}; I = diagonal inertia passed on every call):
  *   e_b      = quat_error_b(q_sp_b2i, q_b2i)             shortest rotation, rad
  *   rate_cmd = clamp(wn^2 / (2 zeta wn) * e_b, +/-rate_max) + rate_ff_b
- *   tau_b    = I * (2 zeta wn * (rate_cmd - rate_b) + ki * wn^2 * integral(e_b dt))
+ *   r        = rate_cmd - rate_b                          rate error, rad/s
+ *   tau_b    = I * 2 zeta wn * (r + ki * integral(r dt))  PI on the rate error
  *              + rate_b x (I rate_b)                      gyroscopic compensation
  *   tau_b    = clamp(tau_b, +/-tau_max)
  * Unsaturated, this is tau = I (wn^2 e - 2 zeta wn omega) + omega x I omega: with the
@@ -12,8 +13,11 @@
  * zero (the damping acts on the measured rate, so a setpoint step does not overshoot
  * for zeta >= 1). A wrong inertia I_nom = c I_true scales wn by sqrt(c) and zeta by
  * sqrt(c). The rate limit turns large steps into ramps without overshoot.
- * The integral (ki in 1/s, slow pole near -ki) only accumulates while |e| < int_err_max
- * and the axis is not saturated, and its torque is clamped to +/-int_tau_max.
+ * The integral acts on the rate error, so over a setpoint step it returns to about zero
+ * (its slow pole near -ki nearly cancels its zero at -ki: little overshoot) while a
+ * constant disturbance torque is removed with time constant ~1/ki. It accumulates only
+ * while |e| < int_err_max and the axis is not saturated; its torque is clamped to
+ * +/-int_tau_max.
  *
  * Units: rad, rad/s, kg m^2, N m, s. Frames: q_*_b2i map body to inertial (quat.h);
  * rates and torques in body axes (X forward, Y left, Z up).
@@ -59,7 +63,7 @@ struct att_ctrl_input {
 
 struct att_ctrl {
 	struct att_ctrl_params p;
-	struct vec3 int_e_rad_s;  /* integral of e_b, rad s */
+	struct vec3 int_r_rad;    /* integral of the rate error, rad */
 	struct vec3 err_b_rad;    /* last attitude error (telemetry) */
 	struct vec3 rate_cmd_b;   /* last rate command (telemetry) */
 	uint32_t flags;           /* ATT_CTRL_* of the last update */
