@@ -41,6 +41,9 @@ ARM_B       := $(B)/arm
 ARM_CC      := arm-none-eabi-gcc
 ARM_AR      := arm-none-eabi-ar
 ARM_SIZE    := arm-none-eabi-size
+ARM_NM      := arm-none-eabi-nm
+ARM_COMMA   := ,
+ARM_SPACE   := $(ARM_COMMA:,=) $(ARM_COMMA:,=)
 ARM_QEMU    := qemu-system-arm
 ARM_TIMEOUT ?= 300
 ARM_FILTER  ?=
@@ -93,7 +96,7 @@ $(ARM_B)/$(1)/core/%.o: firmware/core/%.c | arm-toolchain
 	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(CFLAGS_FW) $$(CORE_INC) -c $$< -o $$@
 $(ARM_B)/$(1)/unit/%.o: tests/core/%.c | arm-toolchain
 	@mkdir -p $$(@D)
-	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(UNIT_CFLAGS) -fno-math-errno -c $$< -o $$@
+	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(UNIT_CFLAGS) -c $$< -o $$@
 $(ARM_B)/$(1)/unit/unit.o: $$(UNIT_LIST)
 $(ARM_B)/$(1)/rt/%.o: tests/arm/%.c | arm-toolchain
 	@mkdir -p $$(@D)
@@ -101,6 +104,14 @@ $(ARM_B)/$(1)/rt/%.o: tests/arm/%.c | arm-toolchain
 
 $(ARM_B)/$(1)/libcore.a: $$(ARM_CORE_OBJ_$(1)) | arm-toolchain
 	@rm -f $$@; $$(ARM_AR) rcs $$@ $$(ARM_CORE_OBJ_$(1))
+
+# the empty program alone and with every global core function kept (see size_main.c)
+$(ARM_B)/$(1)/size-base.elf: $(ARM_B)/$(1)/rt/size_main.o $$(ARM_RT_OBJ_$(1)) $$(ARM_LD_$(1)) tests/arm/sections.ld
+	$$(ARM_CC) $$(ARM_ARCH_$(1)) $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -o $$@ $$(filter %.o,$$^) -lm
+$(ARM_B)/$(1)/size-core.elf: $(ARM_B)/$(1)/size-base.elf $(ARM_B)/$(1)/libcore.a
+	$$(ARM_CC) $$(ARM_ARCH_$(1)) $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -o $$@ \
+	  $$(addprefix -Wl$$(ARM_COMMA)--undefined=,$$(shell $$(ARM_NM) -g --defined-only $(ARM_B)/$(1)/libcore.a | awk '$$$$2 == "T" { print $$$$3 }')) \
+	  $(ARM_B)/$(1)/rt/size_main.o $$(ARM_RT_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a -lm
 
 $(ARM_B)/$(1)/unit-tests.elf: $$(ARM_RT_OBJ_$(1)) $$(ARM_UNIT_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a \
                               $$(ARM_LD_$(1)) tests/arm/sections.ld
@@ -150,13 +161,20 @@ ARM_ELFS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/unit-tests.elf)
 ARM_LIBS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/libcore.a)
 
 # text includes .rodata; flash = text + data, RAM = data + bss (no heap, no stack).
+# "core objects": the core's own code and data (all of libcore.a); "linked": what an
+# image grows by when it keeps every global core function, libgcc and libm included.
+ARM_SIZE_ELFS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/size-base.elf $(ARM_B)/$(v)/size-core.elf)
 .PHONY: arm-size-total arm-size
-arm-size-total: $(ARM_LIBS)
+arm-size-total: $(ARM_LIBS) $(ARM_SIZE_ELFS)
 	@echo "== firmware/core size per target, bytes (bench targets: flash < 24 KB, RAM < 4 KB)"
+	@echo "   (core objects: all of libcore.a; linked: + libgcc/libm, see size_main.c)"
+	@printf '   %-9s %6s %6s %6s %7s %6s   %14s %6s\n' target .text .data .bss flash RAM "linked: flash" RAM
 	@for v in $(ARM_VARIANTS); do \
-	  $(ARM_SIZE) -t $(ARM_B)/$$v/libcore.a 2>/dev/null | awk -v v=$$v \
-	    '$$NF == "(TOTALS)" { t = $$1; d = $$2; b = $$3 } \
-	     END { printf "   %-9s .text %6d  .data %5d  .bss %5d   flash %6d  RAM %5d\n", v, t, d, b, t + d, d + b }'; \
+	  lib=$$($(ARM_SIZE) -t $(ARM_B)/$$v/libcore.a 2>/dev/null | awk '$$NF == "(TOTALS)" { print $$1, $$2, $$3 }'); \
+	  base=$$($(ARM_SIZE) $(ARM_B)/$$v/size-base.elf | awk 'NR == 2 { print $$1, $$2, $$3 }'); \
+	  core=$$($(ARM_SIZE) $(ARM_B)/$$v/size-core.elf | awk 'NR == 2 { print $$1, $$2, $$3 }'); \
+	  echo $$v $${lib:-0 0 0} $$base $$core | awk '{ printf "   %-9s %6d %6d %6d %7d %6d   %14d %6d\n", \
+	    $$1, $$2, $$3, $$4, $$2 + $$3, $$3 + $$4, ($$8 + $$9) - ($$5 + $$6), ($$9 + $$10) - ($$6 + $$7) }'; \
 	done
 
 arm-size: $(ARM_LIBS)
@@ -165,7 +183,7 @@ arm-size: $(ARM_LIBS)
 # Runs every image even when one fails; the summary says which failed and why.
 arm_run = echo "== unit tests: $(1) on QEMU $(ARM_MACHINE_$(1))"; \
   timeout $(ARM_TIMEOUT) $(ARM_QEMU) -M $(ARM_MACHINE_$(1)) $(ARM_QEMU_FLAGS) \
-    -semihosting-config enable=on,target=native,arg=unit-tests$(foreach f,$(ARM_FILTER),,arg=$(f)) \
+    -semihosting-config enable=on,target=native,arg=unit-tests$(subst $(ARM_SPACE),,$(foreach f,$(ARM_FILTER),$(ARM_COMMA)arg=$(f))) \
     -kernel $(ARM_B)/$(1)/unit-tests.elf </dev/null; \
   s=$$?; if [ $$s != 0 ]; then rc=1; case $$s in 124) why="timed out after $(ARM_TIMEOUT) s";; \
     125) why="stack exhausted";; 126) why="fault";; *) why="$$s failed tests";; esac; \
