@@ -118,11 +118,13 @@ struct mixer {
 	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES];  /* Gamma^+ (physical) */
 	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma, entries in [-1, 1] */
 	scalar_t pinv_n[MIXER_N_ROTORS][MIXER_N_AXES];/* pseudo-inverse in the scaled space */
-	scalar_t null_n[MIXER_N_ROTORS][4];           /* 4 null-space columns (scaled space) */
+	scalar_t row_div[MIXER_N_AXES];    /* 1 / max_j |Gamma_ij| */
 	scalar_t row_scale[MIXER_N_AXES];  /* physical wrench per unit of scaled wrench */
+	scalar_t width;                    /* f_hi - f_lo */
 	scalar_t w_lo[MIXER_N_AXES];       /* physical wrench with every present rotor at f_lo */
 	scalar_t f_lo, f_hi;               /* rotor thrust box, N */
 	uint8_t n_active;
+	uint8_t present;                   /* bit j: rotor j+1 has a nonzero column */
 	uint8_t order[MIXER_N_ROTORS];     /* present rotors; the last 4 are independent */
 	bool alloc_ok;
 	uint8_t n_facets;
