@@ -1,0 +1,630 @@
+/* app.c - the autopilot's step, modes and commands (see app.h). */
+#include "app.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <common/mavlink.h>
+
+#define DEG_F 0.017453292519943295f
+#define FIRST_DT_S (1.0f / 90.0f)
+#define MAX_DT_S 0.2f              /* longer gaps are integrated as 200 ms */
+#define HOVER_Z_TOL_M 0.3f
+#define HOVER_TILT_DEG 5.0f
+#define TOUCHDOWN_S 1.0f
+#define POS_VEL_MAX 2.0f
+
+static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
+
+const char *app_mode_name(enum app_mode m)
+{
+	static const char *const names[] = {"DISARMED", "IDLE", "TAKEOFF", "HOLD", "EXPERIMENT", "LAND"};
+	return (unsigned)m < sizeof names / sizeof names[0] ? names[m] : "?";
+}
+
+bool app_flying(const struct app *a)
+{
+	return a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_EXPERIMENT ||
+	       a->mode == APP_LAND;
+}
+
+static struct quat frame_q(const struct hal_sensor_frame *f)
+{
+	struct quat q = {sc_from_float(f->q_ib[0]), sc_from_float(f->q_ib[1]),
+			 sc_from_float(f->q_ib[2]), sc_from_float(f->q_ib[3])};
+	return quat_normalize(q);
+}
+
+static float tilt_deg(const struct hal_sensor_frame *f)
+{
+	float c = sc_to_float(quat_body_z_up(frame_q(f)));
+	return acosf(clampf(c, -1.0f, 1.0f)) / DEG_F;
+}
+
+static float frame_yaw(const struct hal_sensor_frame *f)
+{
+	return sc_to_float(quat_to_euler(frame_q(f)).z);
+}
+
+bool app_hovering(const struct app *a)
+{
+	return a->mode == APP_HOLD && a->have_step && a->link_ok &&
+	       fabsf(a->fr.pos_i_m[2] - a->z_target) < HOVER_Z_TOL_M &&
+	       fabsf(a->fr.vel_i_mps[2]) < 0.3f && tilt_deg(&a->fr) < HOVER_TILT_DEG;
+}
+
+void app_status(struct app *a, int severity, const char *fmt, ...)
+{
+	char text[96];
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(text, sizeof text, fmt, ap);
+	va_end(ap);
+	hal_report("%s", text);
+	hal_log_event(a->fr.t_s, severity, text);
+	mav_statustext(a, severity, text);
+}
+
+static void set_mode(struct app *a, enum app_mode m)
+{
+	if (a->mode == m)
+		return;
+	a->mode = m;
+	app_status(a, MAV_SEVERITY_INFO, "Mode %s", app_mode_name(m));
+}
+
+/* ---------------------------------------------------------------- parameters -> modules */
+
+static void sync_params(struct app *a)
+{
+	const struct app_params *p = &a->p;
+	struct att_ctrl_params ap = att_ctrl_params_default();
+	ap.wn_rps = vec3_make(sc_from_float(p->att_wn_rp), sc_from_float(p->att_wn_rp),
+			      sc_from_float(p->att_wn_yaw));
+	ap.zeta = vec3_make(sc_from_float(p->att_zeta), sc_from_float(p->att_zeta),
+			    sc_from_float(p->att_zeta));
+	ap.ki_rps = vec3_make(sc_from_float(p->att_ki), sc_from_float(p->att_ki), sc_from_float(p->att_ki));
+	a->att.p = ap;   /* not att_ctrl_init: that would drop the integral */
+
+	struct alt_ctrl_params lp = alt_ctrl_params_default();
+	lp.wn_rps = sc_from_float(p->alt_wn);
+	lp.zeta = sc_from_float(p->alt_zeta);
+	lp.ki_rps = sc_from_float(p->alt_ki);
+	lp.g_mps2 = sc_from_float(p->veh_grav);
+	lp.vz_max_up_mps = sc_from_float(fmaxf(sc_to_float(lp.vz_max_up_mps), p->nav_tko_vel));
+	lp.vz_max_down_mps = sc_from_float(fmaxf(sc_to_float(lp.vz_max_down_mps), p->nav_land_vel));
+	lp.f_max_n = sc_from_float(8.0f * p->veh_kf * p->mot_thr_max);
+	a->alt.p = lp;
+
+	struct mixer_params mp;
+	mixer_default_params(&mp);
+	mp.arm_l_m = sc_from_float(p->veh_arm_l);
+	mp.k_f_n = sc_from_float(p->veh_kf);
+	mp.k_tau_nm = sc_from_float(p->veh_ktau);
+	mp.t_min = SC(0.0);
+	mp.t_max = sc_from_float(p->mot_thr_max);
+	mp.mode = p->mix_mode >= 0.5f ? MIXER_MODE_PRIORITY : MIXER_MODE_CLIP;
+	mixer_set_params(&a->mix, &mp);   /* recomputes only when something changed */
+
+	struct thrmap_params tp = {sc_from_float(p->veh_kf), sc_from_float(p->mot_curve)};
+	thrmap_init(&a->map, &tp);
+}
+
+static void reset_control(struct app *a)
+{
+	att_ctrl_reset(&a->att);
+	alt_ctrl_reset(&a->alt, SC_ZERO);
+}
+
+void app_init(struct app *a)
+{
+	memset(a, 0, sizeof *a);
+	params_defaults(&a->p);
+	uint64_t now = hal_wall_us();
+	mav_init(&a->mav, now);
+	struct att_ctrl_params ap = att_ctrl_params_default();
+	att_ctrl_init(&a->att, &ap);
+	struct alt_ctrl_params lp = alt_ctrl_params_default();
+	alt_ctrl_init(&a->alt, &lp);
+	struct mixer_params mp;
+	mixer_default_params(&mp);
+	mixer_init(&a->mix, &mp);
+	char why[64];
+	if (app_params_load(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
+		hal_report("params: %s (defaults in use)", why);
+	sync_params(a);
+	a->mode = APP_DISARMED;
+	a->q_sp[0] = 1.0f;
+}
+
+/* ---------------------------------------------------------------- parameters: storage */
+
+static void report_line(void *ctx, unsigned line, const char *why)
+{
+	struct app *a = ctx;
+	app_status(a, MAV_SEVERITY_WARNING, "params line %u: %s, default kept", line, why);
+}
+
+int app_params_load(struct app *a, char *why, size_t cap)
+{
+	static char text[8192];   /* one load at a time; kept off the stack */
+	long n = hal_param_fetch(text, sizeof text);
+	if (n < 0) {
+		snprintf(why, cap, "no parameter file");
+		return MAV_RESULT_FAILED;
+	}
+	struct app_params p = a->p;
+	unsigned bad = params_parse(&p, text, (size_t)n, report_line, a);
+	a->p = p;
+	if (bad)
+		hal_report("params: %u damaged line(s) ignored", bad);
+	return MAV_RESULT_ACCEPTED;
+}
+
+int app_params_save(struct app *a, char *why, size_t cap)
+{
+	static char text[8192];
+	size_t n = params_format(&a->p, text, sizeof text);
+	if (!n || hal_param_store(text, n) != 0) {
+		snprintf(why, cap, "Parameter save failed");
+		return MAV_RESULT_FAILED;
+	}
+	return MAV_RESULT_ACCEPTED;
+}
+
+static bool locked_in_experiment(size_t index)
+{
+	const char *n = param_defs[index].name;
+	return !strncmp(n, "VEH_", 4) || !strncmp(n, "MIX_", 4) || !strncmp(n, "MOT_", 4);
+}
+
+const char *app_param_write(struct app *a, size_t index, float value)
+{
+	if (index >= param_count)
+		return "unknown parameter";
+	if (a->mode == APP_EXPERIMENT && locked_in_experiment(index))
+		return "locked while an experiment runs";
+	enum param_set_result r = params_set(&a->p, index, value);
+	return r == PARAM_OK ? NULL : params_set_result_text(r);
+}
+
+/* ---------------------------------------------------------------- commands */
+
+int app_cmd_arm(struct app *a, bool arm, bool force, char *why, size_t cap)
+{
+	if (arm) {
+		if (a->mode != APP_DISARMED)
+			return MAV_RESULT_ACCEPTED;
+		if (!a->have_step || !a->link_ok) {
+			snprintf(why, cap, "Arm refused: no complete X-Plane frames");
+			return MAV_RESULT_TEMPORARILY_REJECTED;
+		}
+		if (tilt_deg(&a->fr) > 30.0f && !force) {
+			snprintf(why, cap, "Arm refused: tilted %.0f deg", (double)tilt_deg(&a->fr));
+			return MAV_RESULT_TEMPORARILY_REJECTED;
+		}
+		a->actuating = true;
+		a->z_ground = a->fr.pos_i_m[2];
+		a->pos_sp[0] = a->fr.pos_i_m[0];
+		a->pos_sp[1] = a->fr.pos_i_m[1];
+		a->yaw_sp = frame_yaw(&a->fr);
+		reset_control(a);
+		set_mode(a, APP_IDLE);
+		return MAV_RESULT_ACCEPTED;
+	}
+	if (a->mode == APP_DISARMED)
+		return MAV_RESULT_ACCEPTED;
+	if (app_flying(a) && !force) {
+		snprintf(why, cap, "Disarm refused: flying (land first, or force)");
+		return MAV_RESULT_TEMPORARILY_REJECTED;
+	}
+	if (a->mode == APP_EXPERIMENT)
+		exp_abort(&a->exp, "disarmed");
+	memset(a->thr, 0, sizeof a->thr);
+	set_mode(a, APP_DISARMED);
+	return MAV_RESULT_ACCEPTED;
+}
+
+int app_cmd_takeoff(struct app *a, float height_m, char *why, size_t cap)
+{
+	if (!isfinite(height_m) || height_m <= 0.0f)
+		height_m = a->p.nav_tko_alt;
+	if (height_m < 0.5f || height_m > 100.0f) {
+		snprintf(why, cap, "Takeoff refused: height %.1f m not in [0.5, 100]", (double)height_m);
+		return MAV_RESULT_DENIED;
+	}
+	float target = a->z_ground + height_m;
+	switch (a->mode) {
+	case APP_DISARMED:
+		snprintf(why, cap, "Takeoff refused: not armed");
+		return MAV_RESULT_TEMPORARILY_REJECTED;
+	case APP_EXPERIMENT:
+		snprintf(why, cap, "Takeoff refused: experiment running");
+		return MAV_RESULT_TEMPORARILY_REJECTED;
+	case APP_IDLE:
+		a->z_sp = a->fr.pos_i_m[2];
+		a->pos_sp[0] = a->fr.pos_i_m[0];
+		a->pos_sp[1] = a->fr.pos_i_m[1];
+		a->yaw_sp = frame_yaw(&a->fr);
+		reset_control(a);
+		break;
+	case APP_LAND:
+		a->z_sp = a->fr.pos_i_m[2];
+		break;
+	case APP_TAKEOFF:
+	case APP_HOLD:
+		if (fabsf(target - a->z_target) < 0.01f)
+			return MAV_RESULT_ACCEPTED;   /* a retry: nothing changes */
+		a->z_sp = a->mode == APP_HOLD ? a->z_target : a->z_sp;
+		break;
+	}
+	a->z_target = target;
+	a->on_ground_s = 0.0f;
+	app_status(a, MAV_SEVERITY_INFO, "Takeoff to %.2f m", (double)height_m);
+	a->mode = APP_HOLD;   /* so that set_mode reports the change even from HOLD */
+	set_mode(a, APP_TAKEOFF);
+	return MAV_RESULT_ACCEPTED;
+}
+
+int app_cmd_land(struct app *a, char *why, size_t cap)
+{
+	(void)why;
+	(void)cap;
+	switch (a->mode) {
+	case APP_DISARMED:
+	case APP_LAND:
+		return MAV_RESULT_ACCEPTED;
+	case APP_IDLE:
+		memset(a->thr, 0, sizeof a->thr);
+		set_mode(a, APP_DISARMED);
+		return MAV_RESULT_ACCEPTED;
+	case APP_EXPERIMENT:
+		exp_abort(&a->exp, "landing");
+		/* fall through */
+	case APP_TAKEOFF:
+	case APP_HOLD:
+		a->z_sp = fminf(a->z_sp, a->fr.pos_i_m[2]);
+		a->on_ground_s = 0.0f;
+		set_mode(a, APP_LAND);
+		return MAV_RESULT_ACCEPTED;
+	}
+	return MAV_RESULT_FAILED;
+}
+
+int app_cmd_experiment(struct app *a, float id_f, char *why, size_t cap)
+{
+	if (!isfinite(id_f) || id_f != floorf(id_f) || id_f < 0.0f || id_f > 6.0f) {
+		snprintf(why, cap, "Experiment %g unknown (1..6, 0 = stop)", (double)id_f);
+		return MAV_RESULT_DENIED;
+	}
+	int id = (int)id_f;
+	if (id == 0) {
+		if (a->mode == APP_EXPERIMENT) {
+			exp_abort(&a->exp, "stopped by command");
+			set_mode(a, APP_HOLD);
+		}
+		return MAV_RESULT_ACCEPTED;
+	}
+	if (a->mode == APP_EXPERIMENT) {
+		if (a->exp.id == id)
+			return MAV_RESULT_ACCEPTED;   /* a retry */
+		snprintf(why, cap, "Experiment %d running", a->exp.id);
+		return MAV_RESULT_TEMPORARILY_REJECTED;
+	}
+	if (!app_hovering(a)) {
+		snprintf(why, cap, "Experiment %d refused: not hovering", id);
+		return MAV_RESULT_DENIED;
+	}
+	int r = exp_start(&a->exp, id, &a->p, why, cap);
+	if (r == MAV_RESULT_ACCEPTED) {
+		a->exp.id = id;
+		a->exp.state = EXP_RUNNING;
+		set_mode(a, APP_EXPERIMENT);
+	}
+	return r;
+}
+
+/* ---------------------------------------------------------------- the control step */
+
+static void experiment_step(struct app *a, float dt)
+{
+	struct exp_input in = {&a->fr, dt, &a->p, a->wrench_dem, a->rotor_f, a->thr};
+	enum exp_state st = exp_step(&a->exp, &in, &a->exp_out);
+	if (st == EXP_FINISHED) {
+		for (int i = 0; i < a->exp.n_results && i < EXP_MAX_RESULTS; i++) {
+			int idx = a->exp.results[i].param_index;
+			if (idx < 0 || (size_t)idx >= param_count)
+				continue;
+			enum param_set_result r = params_set(&a->p, (size_t)idx, a->exp.results[i].value);
+			if (r != PARAM_OK)
+				app_status(a, MAV_SEVERITY_WARNING, "%s not applied: %s", param_defs[idx].name,
+					   params_set_result_text(r));
+			mav_param_value(a, (size_t)idx);
+		}
+		if (a->exp.n_results) {
+			char why[64];
+			if (app_params_save(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
+				app_status(a, MAV_SEVERITY_ERROR, "%s", why);
+		}
+	}
+	if (st != EXP_RUNNING) {
+		memset(&a->exp_out, 0, sizeof a->exp_out);
+		a->exp.state = EXP_IDLE;
+		set_mode(a, APP_HOLD);
+	}
+}
+
+static void control_step(struct app *a, float dt)
+{
+	const struct hal_sensor_frame *f = &a->fr;
+	const struct app_params *p = &a->p;
+	sync_params(a);
+	struct quat q = frame_q(f);
+	float z = f->pos_i_m[2], vz = f->vel_i_mps[2];
+
+	memset(&a->exp_out, 0, sizeof a->exp_out);
+	if (a->mode == APP_DISARMED || a->mode == APP_IDLE) {
+		float t = a->mode == APP_IDLE ? p->mot_thr_idle : 0.0f;
+		for (int j = 0; j < HAL_ROTORS; j++)
+			a->thr[j] = t;
+		reset_control(a);
+		if (a->mode == APP_IDLE)
+			a->z_ground = z;
+		a->z_sp = z;
+		a->vz_ff = 0.0f;
+		memset(a->wrench_dem, 0, sizeof a->wrench_dem);
+		memset(a->rotor_f, 0, sizeof a->rotor_f);
+		return;
+	}
+
+	/* guidance: height setpoint ramps and mode transitions */
+	switch (a->mode) {
+	case APP_TAKEOFF: {
+		float step = p->nav_tko_vel * dt;
+		if (a->z_sp < a->z_target - step) {
+			a->z_sp += step;
+			a->vz_ff = p->nav_tko_vel;
+		} else if (a->z_sp > a->z_target + step) {
+			a->z_sp -= step;
+			a->vz_ff = -p->nav_tko_vel;
+		} else {
+			a->z_sp = a->z_target;
+			a->vz_ff = 0.0f;
+			if (fabsf(z - a->z_target) < 0.1f)
+				set_mode(a, APP_HOLD);
+		}
+		break;
+	}
+	case APP_HOLD:
+	case APP_EXPERIMENT:
+		a->z_sp = a->z_target;
+		a->vz_ff = 0.0f;
+		break;
+	case APP_LAND:
+		a->z_sp = fmaxf(a->z_sp - p->nav_land_vel * dt, a->z_ground - 1.0f);
+		a->vz_ff = -p->nav_land_vel;
+		if (z - a->z_ground < 0.2f && fabsf(vz) < 0.25f)
+			a->on_ground_s += dt;
+		else
+			a->on_ground_s = 0.0f;
+		if (a->on_ground_s > TOUCHDOWN_S) {
+			memset(a->thr, 0, sizeof a->thr);
+			app_status(a, MAV_SEVERITY_INFO, "Landed");
+			set_mode(a, APP_DISARMED);
+			return;
+		}
+		break;
+	default:
+		break;
+	}
+
+	/* horizontal: hold the position of the take-off through small tilts */
+	float yaw = frame_yaw(f);
+	float vn = clampf(p->pos_gain * (a->pos_sp[0] - f->pos_i_m[0]), -POS_VEL_MAX, POS_VEL_MAX);
+	float vw = clampf(p->pos_gain * (a->pos_sp[1] - f->pos_i_m[1]), -POS_VEL_MAX, POS_VEL_MAX);
+	float an = p->pos_vel_gain * (vn - f->vel_i_mps[0]);
+	float aw = p->pos_vel_gain * (vw - f->vel_i_mps[1]);
+	float fwd = cosf(yaw) * an + sinf(yaw) * aw;
+	float left = -sinf(yaw) * an + cosf(yaw) * aw;
+	float tmax = p->att_tilt_max * DEG_F;
+	bool on_ground = a->mode == APP_TAKEOFF && z - a->z_ground < 0.3f;
+	float pitch_sp = on_ground ? 0.0f : clampf(fwd, -tmax, tmax);
+	float roll_sp = on_ground ? 0.0f : clampf(-left, -tmax, tmax);
+	struct quat q_sp = quat_from_euler(sc_from_float(roll_sp), sc_from_float(pitch_sp),
+					   sc_from_float(a->yaw_sp));
+	a->q_sp[0] = sc_to_float(q_sp.w);
+	a->q_sp[1] = sc_to_float(q_sp.x);
+	a->q_sp[2] = sc_to_float(q_sp.y);
+	a->q_sp[3] = sc_to_float(q_sp.z);
+
+	/* attitude and height control */
+	struct att_ctrl_input ai = {
+		.q_sp_b2i = q_sp,
+		.rate_ff_b = vec3_zero(),
+		.q_b2i = q,
+		.rate_b_rps = vec3_make(sc_from_float(f->rate_b_rps[0]), sc_from_float(f->rate_b_rps[1]),
+					sc_from_float(f->rate_b_rps[2])),
+		.inertia_kgm2 = vec3_make(sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy),
+					  sc_from_float(p->veh_izz)),
+		.dt_s = sc_from_float(dt),
+	};
+	struct vec3 tau;
+	att_ctrl_update(&a->att, &ai, &tau);
+	struct alt_ctrl_input li = {
+		.z_sp_m = sc_from_float(a->z_sp),
+		.vz_ff_mps = sc_from_float(a->vz_ff),
+		.z_m = sc_from_float(z),
+		.vz_mps = sc_from_float(vz),
+		.q_b2i = q,
+		.mass_kg = sc_from_float(p->veh_mass),
+		.dt_s = sc_from_float(dt),
+	};
+	scalar_t fz = alt_ctrl_update(&a->alt, &li);
+	a->wrench_dem[0] = sc_to_float(fz);
+	a->wrench_dem[1] = sc_to_float(tau.x);
+	a->wrench_dem[2] = sc_to_float(tau.y);
+	a->wrench_dem[3] = sc_to_float(tau.z);
+
+	/* experiment: excitation on top of the hover control */
+	if (a->mode == APP_EXPERIMENT) {
+		if (tilt_deg(f) > EXP_TILT_ABORT_DEG) {
+			exp_abort(&a->exp, "attitude limit");
+		}
+		experiment_step(a, dt);
+	}
+
+	/* allocation and throttle map */
+	scalar_t demand[MIXER_N_AXES] = {
+		sc_from_float(a->wrench_dem[0] + a->exp_out.f_delta),
+		sc_from_float(a->wrench_dem[1] + a->exp_out.tau_delta[0]),
+		sc_from_float(a->wrench_dem[2] + a->exp_out.tau_delta[1]),
+		sc_from_float(a->wrench_dem[3] + a->exp_out.tau_delta[2]),
+	};
+	mixer_update(&a->mix, demand, &a->mix_out);
+	scalar_t thr[HAL_ROTORS];
+	a->thr_clamped = thrmap_update(&a->map, a->mix_out.f_n, thr, HAL_ROTORS);
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		a->rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
+		float t = sc_to_float(thr[j]) + a->exp_out.thr_delta[j];
+		a->thr[j] = clampf(isfinite(t) ? t : 0.0f, 0.0f, p->mot_thr_max);
+	}
+}
+
+/* ---------------------------------------------------------------- per frame */
+
+static void fill_log(struct app *a, bool stepped, float dt)
+{
+	struct app_log_frame *l = &a->log;
+	const struct hal_sensor_frame *f = &a->fr;
+	memset(l, 0, sizeof *l);
+	l->seq = f->seq;
+	l->t = f->t_s;
+	l->dt = stepped ? dt : 0.0f;
+	l->stepped = stepped;
+	l->armed = a->mode != APP_DISARMED;
+	l->link_ok = a->link_ok;
+	l->mode = (int8_t)a->mode;
+	l->valid = (int32_t)f->valid;
+	memcpy(l->q, f->q_ib, sizeof l->q);
+	memcpy(l->rate_b, f->rate_b_rps, sizeof l->rate_b);
+	memcpy(l->pos_i, f->pos_i_m, sizeof l->pos_i);
+	memcpy(l->vel_i, f->vel_i_mps, sizeof l->vel_i);
+	memcpy(l->rotor_thrust, f->rotor_thrust_n, sizeof l->rotor_thrust);
+	memcpy(l->rotor_torque, f->rotor_torque_nm, sizeof l->rotor_torque);
+	memcpy(l->q_sp, a->q_sp, sizeof l->q_sp);
+	l->z_sp = a->z_sp;
+	l->vz_ff = a->vz_ff;
+	l->pos_sp[0] = a->pos_sp[0];
+	l->pos_sp[1] = a->pos_sp[1];
+	l->f_dem = a->wrench_dem[0];
+	for (int i = 0; i < 3; i++)
+		l->tau_dem[i] = a->wrench_dem[i + 1];
+	l->f_alloc = sc_to_float(a->mix_out.achieved[0]);
+	for (int i = 0; i < 3; i++)
+		l->tau_alloc[i] = sc_to_float(a->mix_out.achieved[i + 1]);
+	memcpy(l->rotor_f, a->rotor_f, sizeof l->rotor_f);
+	memcpy(l->excitation, a->exp_out.thr_delta, sizeof l->excitation);
+	memcpy(l->throttle, a->thr, sizeof l->throttle);
+	l->att_flags = (int32_t)a->att.flags;
+	l->alt_flags = (int32_t)a->alt.flags;
+	l->mix_flags = (int32_t)a->mix_out.limits;
+	l->thr_clamped = (int32_t)a->thr_clamped;
+	l->exp_id = (int8_t)(a->mode == APP_EXPERIMENT ? a->exp.id : 0);
+	l->exp_phase = (int8_t)a->exp.phase;
+	l->exp_progress = a->exp.progress;
+	memcpy(l->est, a->exp.est, sizeof l->est);
+	memcpy(l->est_sd, a->exp.est_sd, sizeof l->est_sd);
+	l->kf = a->p.veh_kf;
+	l->ktau = a->p.veh_ktau;
+	l->inertia[0] = a->p.veh_ixx;
+	l->inertia[1] = a->p.veh_iyy;
+	l->inertia[2] = a->p.veh_izz;
+	l->mass = a->p.veh_mass;
+}
+
+static void link_back(struct app *a, float gap_s)
+{
+	a->link_ok = true;
+	if (!a->link_ever) {
+		a->link_ever = true;
+		app_status(a, MAV_SEVERITY_INFO, "X-Plane link up");
+		return;
+	}
+	app_status(a, MAV_SEVERITY_WARNING, "X-Plane link back after %.2f s", (double)gap_s);
+	if (gap_s > a->p.fs_land_after && app_flying(a) && a->mode != APP_LAND) {
+		app_status(a, MAV_SEVERITY_CRITICAL, "Link was lost for more than %.1f s: landing",
+			   (double)a->p.fs_land_after);
+		char why[8];
+		app_cmd_land(a, why, sizeof why);
+	}
+}
+
+static void link_lost(struct app *a, const char *what)
+{
+	a->link_ok = false;
+	app_status(a, MAV_SEVERITY_CRITICAL, "X-Plane link lost (%s)", what);
+	if (a->mode == APP_EXPERIMENT) {
+		exp_abort(&a->exp, "X-Plane link lost");
+		a->exp.state = EXP_IDLE;
+		set_mode(a, APP_HOLD);
+	}
+}
+
+void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
+{
+	uint64_t now = hal_wall_us();
+	a->fr = *f;
+	a->have_frame = true;
+	if (!a->link_ok)
+		link_back(a, a->link_ever ? (float)(now - a->link_lost_at_us) * 1e-6f : 0.0f);
+	a->wall_last_frame_us = now;
+
+	bool complete = (f->valid & HAL_FRAME_NEEDED) == HAL_FRAME_NEEDED;
+	float dt = 0.0f;
+	bool stepped = false;
+	if (complete) {
+		double gap = a->have_step ? f->t_s - a->t_prev : (double)FIRST_DT_S;
+		if (gap > 0.0) {
+			if (a->have_step && gap > (double)a->p.fs_link_to) {
+				/* frames missing in plant time (lockstep bursts, reload) */
+				app_status(a, MAV_SEVERITY_WARNING, "X-Plane frames missing for %.2f s", gap);
+				if (gap > (double)a->p.fs_land_after && app_flying(a) && a->mode != APP_LAND) {
+					char why[8];
+					app_cmd_land(a, why, sizeof why);
+				}
+			}
+			dt = gap > (double)MAX_DT_S ? MAX_DT_S : (float)gap;
+			a->t_prev = f->t_s;
+			a->have_step = true;
+			control_step(a, dt);
+			a->steps++;
+			stepped = true;
+		}
+	}
+	if (a->actuating)
+		hal_actuate(a->thr);
+	fill_log(a, stepped, dt);
+	hal_log_frame(&a->log);
+}
+
+void app_on_mavlink(struct app *a, const uint8_t *buf, size_t len)
+{
+	mav_receive(a, buf, len);
+}
+
+void app_tick(struct app *a)
+{
+	uint64_t now = hal_wall_us();
+	uint64_t to = (uint64_t)(a->p.fs_link_to * 1e6f);
+	if (a->link_ok && a->have_frame && now - a->wall_last_frame_us > to) {
+		a->link_lost_at_us = a->wall_last_frame_us;
+		link_lost(a, "no frames");
+	}
+	if (a->exp.msg[0]) {
+		app_status(a, a->exp.msg_severity, "%s", a->exp.msg);
+		a->exp.msg[0] = 0;
+	}
+	mav_tick(a, now);
+}

@@ -1,0 +1,109 @@
+/*
+ * app.h - the autopilot: one control step per received frame, modes,
+ * parameters, commands. Platform-independent: it talks to the world only
+ * through hal.h. The platform owns one struct app and calls:
+ *
+ *   app_init(a)              defaults, then the stored parameters
+ *   app_on_frame(a, frame)   each sensor frame (the app actuates once per frame
+ *                            after it has taken control of the throttles: from
+ *                            the first arming on)
+ *   app_on_mavlink(a, b, n)  bytes from the ground station
+ *   app_tick(a)              often (main loop): telemetry, link supervision
+ *
+ * Modes: DISARMED -> (arm) IDLE -> (NAV_TAKEOFF) TAKEOFF -> HOLD
+ *        HOLD <-> EXPERIMENT (MAV_CMD_USER_1, only while hovering)
+ *        any flying mode -> (NAV_LAND or failsafe) LAND -> (touch-down) DISARMED
+ * Link to the plant silent for FS_LINK_TO s: reported (and an experiment
+ * aborted); silent for more than FS_LAND_AFTER s: the vehicle lands when the
+ * link comes back.
+ */
+#ifndef OCTO_APP_H
+#define OCTO_APP_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "alt_ctrl.h"
+#include "att_ctrl.h"
+#include "experiment.h"
+#include "hal.h"
+#include "log.h"
+#include "mav.h"
+#include "mixer.h"
+#include "params.h"
+#include "thrmap.h"
+
+enum app_mode {
+	APP_DISARMED = 0,
+	APP_IDLE = 1,        /* armed on the ground, rotors at MOT_THR_IDLE */
+	APP_TAKEOFF = 2,
+	APP_HOLD = 3,        /* level, height and position held */
+	APP_EXPERIMENT = 4,  /* hold + identification experiment */
+	APP_LAND = 5,
+};
+
+struct app {
+	struct app_params p;
+	enum app_mode mode;
+
+	/* plant link */
+	struct hal_sensor_frame fr;
+	bool have_frame, have_step;
+	double t_prev;
+	uint64_t wall_last_frame_us;
+	bool link_ok, link_ever;
+	uint64_t link_lost_at_us;
+	bool actuating;               /* throttles are ours (from the first arming) */
+	float thr[HAL_ROTORS];
+
+	/* guidance */
+	float z_ground, z_target, z_sp, vz_ff;
+	float pos_sp[2], yaw_sp;
+	float on_ground_s;            /* landing: time spent touched down */
+	float q_sp[4];
+
+	/* control */
+	struct att_ctrl att;
+	struct alt_ctrl alt;
+	struct mixer mix;
+	struct thrmap map;
+	struct mixer_output mix_out;
+	float wrench_dem[4];
+	float rotor_f[HAL_ROTORS];
+	uint32_t thr_clamped;
+
+	/* identification */
+	struct experiment exp;
+	struct exp_output exp_out;
+
+	struct mav mav;
+	struct app_log_frame log;
+	uint32_t steps;
+};
+
+void app_init(struct app *a);
+void app_on_frame(struct app *a, const struct hal_sensor_frame *f);
+void app_on_mavlink(struct app *a, const uint8_t *buf, size_t len);
+void app_tick(struct app *a);
+
+const char *app_mode_name(enum app_mode m);
+bool app_hovering(const struct app *a);
+bool app_flying(const struct app *a);
+
+/* Commands (called by the MAVLink handler). Each returns a MAV_RESULT and, on
+ * refusal, a reason in `why`. All are idempotent: a retry gets the same answer. */
+int app_cmd_arm(struct app *a, bool arm, bool force, char *why, size_t cap);
+int app_cmd_takeoff(struct app *a, float height_m, char *why, size_t cap);
+int app_cmd_land(struct app *a, char *why, size_t cap);
+int app_cmd_experiment(struct app *a, float id, char *why, size_t cap);
+int app_params_save(struct app *a, char *why, size_t cap);
+int app_params_load(struct app *a, char *why, size_t cap);
+
+/* Parameter write from outside (PARAM_SET); refuses vehicle-model and mixer
+ * parameters while an experiment runs. Returns 0 or a reason. */
+const char *app_param_write(struct app *a, size_t index, float value);
+
+/* STATUSTEXT to the ground station + event in the log + console. */
+void app_status(struct app *a, int severity, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+
+#endif /* OCTO_APP_H */

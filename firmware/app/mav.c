@@ -1,0 +1,486 @@
+/* mav.c - MAVLink 2 endpoint: telemetry table, parameters, commands (see mav.h). */
+#include "mav.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <common/mavlink.h>
+
+#include "app.h"
+
+#define CHAN MAVLINK_COMM_0
+#define PARAM_PACE_US 2000u        /* list streaming: one PARAM_VALUE per 2 ms */
+#define PARAM_PER_TICK 4
+#define TEXT_BURST 20.0f           /* STATUSTEXT: burst of 20, then 10 per second */
+#define TEXT_RATE 10.0f
+#define FW_VERSION 0x00050000u     /* 0.5.0 (issue 5) */
+
+static void send_msg(const mavlink_message_t *msg)
+{
+	uint8_t buf[MAVLINK_MAX_PACKET_LEN];
+	uint16_t n = mavlink_msg_to_send_buffer(buf, msg);
+	hal_mav_send(buf, n);
+}
+
+static uint32_t boot_ms(const struct app *a)
+{
+	return (uint32_t)((hal_wall_us() - a->mav.boot_us) / 1000u);
+}
+
+/* ---------------------------------------------------------------- telemetry table */
+
+static void pack_heartbeat(struct app *a, mavlink_message_t *msg)
+{
+	uint8_t base = MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
+	if (a->mode != APP_DISARMED)
+		base |= MAV_MODE_FLAG_SAFETY_ARMED;
+	uint8_t status = MAV_STATE_STANDBY;
+	if (app_flying(a))
+		status = a->link_ok ? MAV_STATE_ACTIVE : MAV_STATE_CRITICAL;
+	mavlink_msg_heartbeat_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, MAV_TYPE_OCTOROTOR,
+					MAV_AUTOPILOT_GENERIC, base, (uint32_t)a->mode, status);
+}
+
+/* Telemetry leaves in MAVLink's NED / forward-right-down conventions. */
+static void pack_attitude_q(struct app *a, mavlink_message_t *msg)
+{
+	const struct hal_sensor_frame *f = &a->fr;
+	const float zero[4] = {0, 0, 0, 0};
+	mavlink_msg_attitude_quaternion_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, boot_ms(a),
+						  f->q_ib[0], f->q_ib[1], -f->q_ib[2], -f->q_ib[3],
+						  f->rate_b_rps[0], -f->rate_b_rps[1],
+						  -f->rate_b_rps[2], zero);
+}
+
+static void pack_local_pos(struct app *a, mavlink_message_t *msg)
+{
+	const struct hal_sensor_frame *f = &a->fr;
+	mavlink_msg_local_position_ned_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, boot_ms(a),
+						 f->pos_i_m[0], -f->pos_i_m[1], -f->pos_i_m[2],
+						 f->vel_i_mps[0], -f->vel_i_mps[1], -f->vel_i_mps[2]);
+}
+
+static void pack_actuator(struct app *a, mavlink_message_t *msg)
+{
+	float act[32] = {0};
+	for (int j = 0; j < HAL_ROTORS; j++)
+		act[j] = a->thr[j];
+	mavlink_msg_actuator_output_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg,
+						     (uint64_t)boot_ms(a) * 1000u, 0xFFu, act);
+}
+
+static uint16_t pwm(float t)
+{
+	t = t < 0.0f ? 0.0f : (t > 1.0f ? 1.0f : t);
+	return (uint16_t)(1000.0f + 1000.0f * t + 0.5f);
+}
+
+static void pack_servo(struct app *a, mavlink_message_t *msg)
+{
+	const float *t = a->thr;
+	mavlink_msg_servo_output_raw_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, boot_ms(a) * 1000u, 0,
+					       pwm(t[0]), pwm(t[1]), pwm(t[2]), pwm(t[3]), pwm(t[4]),
+					       pwm(t[5]), pwm(t[6]), pwm(t[7]), 0, 0, 0, 0, 0, 0, 0, 0);
+}
+
+static void pack_sys_status(struct app *a, mavlink_message_t *msg)
+{
+	struct hal_link_stats ls;
+	hal_link_stats(&ls);
+	uint16_t drops = (uint16_t)(ls.dropped > 65535u ? 65535u : ls.dropped);
+	mavlink_msg_sys_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, 0, 0, 0, 0, UINT16_MAX, -1, -1, 0,
+					 (uint16_t)(a->mav.rx_dropped > 65535u ? 65535u : a->mav.rx_dropped),
+					 drops, (uint16_t)(ls.foreign > 65535u ? 65535u : ls.foreign),
+					 (uint16_t)(a->mav.text_dropped > 65535u ? 65535u : a->mav.text_dropped),
+					 0, 0, 0, 0);
+}
+
+/* NAMED_VALUE_FLOAT of the live estimates: packs nothing itself (several
+ * messages), sends them directly; returns false so the table sends nothing. */
+static void pack_estimates(struct app *a, mavlink_message_t *msg)
+{
+	(void)msg;
+	if (a->mode != APP_EXPERIMENT)
+		return;
+	for (int i = 0; i < a->exp.n_est && i < EXP_MAX_EST; i++)
+		mav_named_float(a, a->exp.est_name[i], a->exp.est[i]);
+}
+
+struct mav_stream {
+	uint32_t msgid;
+	uint32_t default_interval_us;
+	void (*pack)(struct app *a, mavlink_message_t *msg);
+	bool direct;   /* pack sends itself (zero or several messages) */
+};
+
+static const struct mav_stream streams[MAV_N_STREAMS] = {
+	{MAVLINK_MSG_ID_HEARTBEAT, 1000000u, pack_heartbeat, false},
+	{MAVLINK_MSG_ID_SYS_STATUS, 1000000u, pack_sys_status, false},
+	{MAVLINK_MSG_ID_ATTITUDE_QUATERNION, 100000u, pack_attitude_q, false},
+	{MAVLINK_MSG_ID_LOCAL_POSITION_NED, 100000u, pack_local_pos, false},
+	{MAVLINK_MSG_ID_ACTUATOR_OUTPUT_STATUS, 200000u, pack_actuator, false},
+	{MAVLINK_MSG_ID_SERVO_OUTPUT_RAW, 200000u, pack_servo, false},
+	{MAVLINK_MSG_ID_NAMED_VALUE_FLOAT, 500000u, pack_estimates, true},
+};
+
+static int stream_index(uint32_t msgid)
+{
+	for (int i = 0; i < MAV_N_STREAMS; i++)
+		if (streams[i].msgid == msgid)
+			return i;
+	return -1;
+}
+
+static void send_stream(struct app *a, int i)
+{
+	mavlink_message_t msg;
+	streams[i].pack(a, &msg);
+	if (!streams[i].direct)
+		send_msg(&msg);
+}
+
+void mav_init(struct mav *m, uint64_t now_us)
+{
+	memset(m, 0, sizeof *m);
+	for (int i = 0; i < MAV_N_STREAMS; i++)
+		m->interval_us[i] = streams[i].default_interval_us;
+	m->param_next = -1;
+	m->boot_us = now_us;
+	m->text_tokens = TEXT_BURST;
+	m->text_last_us = now_us;
+}
+
+/* ---------------------------------------------------------------- outgoing helpers */
+
+void mav_statustext(struct app *a, int severity, const char *text)
+{
+	struct mav *m = &a->mav;
+	uint64_t now = hal_wall_us();
+	m->text_tokens += (float)(now - m->text_last_us) * 1e-6f * TEXT_RATE;
+	if (m->text_tokens > TEXT_BURST)
+		m->text_tokens = TEXT_BURST;
+	m->text_last_us = now;
+	if (m->text_tokens < 1.0f) {
+		m->text_dropped++;
+		return;
+	}
+	m->text_tokens -= 1.0f;
+	char buf[MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN];   /* zero-filled, full size */
+	memset(buf, 0, sizeof buf);
+	size_t n = strlen(text);
+	memcpy(buf, text, n < sizeof buf ? n : sizeof buf);
+	mavlink_message_t msg;
+	mavlink_msg_statustext_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg,
+					 (uint8_t)(severity < 0 ? 0 : (severity > 7 ? 7 : severity)), buf, 0, 0);
+	send_msg(&msg);
+}
+
+void mav_named_float(struct app *a, const char *name, float value)
+{
+	char buf[MAVLINK_MSG_NAMED_VALUE_FLOAT_FIELD_NAME_LEN];
+	memset(buf, 0, sizeof buf);
+	size_t n = strlen(name);
+	memcpy(buf, name, n < sizeof buf ? n : sizeof buf);
+	mavlink_message_t msg;
+	mavlink_msg_named_value_float_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, boot_ms(a), buf, value);
+	send_msg(&msg);
+}
+
+void mav_param_value(struct app *a, size_t index)
+{
+	if (index >= param_count)
+		return;
+	char id[MAVLINK_MSG_PARAM_VALUE_FIELD_PARAM_ID_LEN];   /* 16, no NUL when full */
+	memset(id, 0, sizeof id);
+	size_t n = strlen(param_defs[index].name);
+	memcpy(id, param_defs[index].name, n < sizeof id ? n : sizeof id);
+	mavlink_message_t msg;
+	mavlink_msg_param_value_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, id, params_get(&a->p, index),
+					  MAV_PARAM_TYPE_REAL32, (uint16_t)param_count, (uint16_t)index);
+	send_msg(&msg);
+}
+
+static void send_ack(uint16_t cmd, uint8_t result, const mavlink_message_t *req)
+{
+	mavlink_message_t msg;
+	mavlink_msg_command_ack_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, cmd, result, 0, 0, req->sysid,
+					  req->compid);
+	send_msg(&msg);
+}
+
+static void send_autopilot_version(void)
+{
+	uint8_t custom[8] = {0}, uid2[18] = {0};
+	memcpy(custom, "octofw05", 8);
+	mavlink_message_t msg;
+	mavlink_msg_autopilot_version_pack_chan(
+		MAV_SYSID, MAV_COMPID, CHAN, &msg,
+		MAV_PROTOCOL_CAPABILITY_MAVLINK2 | MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE |
+			MAV_PROTOCOL_CAPABILITY_COMMAND_INT,
+		FW_VERSION, 0, 0, 0, custom, custom, custom, 0, 0, 1, uid2);
+	send_msg(&msg);
+}
+
+/* ---------------------------------------------------------------- parameters */
+
+static bool for_us(uint8_t tsys, uint8_t tcomp)
+{
+	return (tsys == 0 || tsys == MAV_SYSID) && (tcomp == 0 || tcomp == MAV_COMPID);
+}
+
+static void unknown_param(struct app *a, const char *id, int index)
+{
+	char name[PARAM_ID_LEN + 1] = {0};
+	memcpy(name, id, PARAM_ID_LEN);
+	for (char *c = name; *c; c++)
+		if (*c < 32 || *c > 126)
+			*c = '?';
+	if (name[0])
+		app_status(a, MAV_SEVERITY_WARNING, "Unknown parameter %s", name);
+	else
+		app_status(a, MAV_SEVERITY_WARNING, "Unknown parameter index %d", index);
+}
+
+static void handle_param_set(struct app *a, const mavlink_message_t *msg)
+{
+	mavlink_param_set_t ps;
+	mavlink_msg_param_set_decode(msg, &ps);
+	if (!for_us(ps.target_system, ps.target_component))
+		return;
+	int idx = params_find(ps.param_id, sizeof ps.param_id);
+	if (idx < 0) {
+		unknown_param(a, ps.param_id, -1);
+		return;
+	}
+	const char *why = app_param_write(a, (size_t)idx, ps.param_value);
+	if (why)
+		app_status(a, MAV_SEVERITY_WARNING, "%s: %g refused (%s)", param_defs[idx].name,
+			   (double)ps.param_value, why);
+	mav_param_value(a, (size_t)idx);   /* always: the current value */
+}
+
+static void handle_param_read(struct app *a, const mavlink_message_t *msg)
+{
+	mavlink_param_request_read_t pr;
+	mavlink_msg_param_request_read_decode(msg, &pr);
+	if (!for_us(pr.target_system, pr.target_component))
+		return;
+	int idx;
+	if (pr.param_index < 0)
+		idx = params_find(pr.param_id, sizeof pr.param_id);
+	else
+		idx = (size_t)pr.param_index < param_count ? pr.param_index : -1;
+	if (idx < 0) {
+		unknown_param(a, pr.param_index < 0 ? pr.param_id : "", pr.param_index);
+		return;
+	}
+	mav_param_value(a, (size_t)idx);
+}
+
+/* ---------------------------------------------------------------- commands */
+
+static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t cmd,
+			   const float prm[7])
+{
+	char why[64] = {0};
+	int r = MAV_RESULT_UNSUPPORTED;
+	switch (cmd) {
+	case MAV_CMD_COMPONENT_ARM_DISARM:
+		if (prm[0] == 1.0f || prm[0] == 0.0f)
+			r = app_cmd_arm(a, prm[0] == 1.0f, prm[1] == 21196.0f, why, sizeof why);
+		else {
+			r = MAV_RESULT_DENIED;
+			snprintf(why, sizeof why, "Arm/disarm: param1 must be 0 or 1");
+		}
+		break;
+	case MAV_CMD_NAV_TAKEOFF:
+		r = app_cmd_takeoff(a, prm[6], why, sizeof why);
+		break;
+	case MAV_CMD_NAV_LAND:
+		r = app_cmd_land(a, why, sizeof why);
+		break;
+	case MAV_CMD_USER_1:
+		r = app_cmd_experiment(a, prm[0], why, sizeof why);
+		break;
+	case MAV_CMD_PREFLIGHT_STORAGE:
+		if (prm[0] == 0.0f) {
+			if (a->mode == APP_EXPERIMENT) {
+				r = MAV_RESULT_TEMPORARILY_REJECTED;
+				snprintf(why, sizeof why, "Parameter load refused: experiment running");
+			} else {
+				r = app_params_load(a, why, sizeof why);
+				if (r == MAV_RESULT_ACCEPTED)
+					app_status(a, MAV_SEVERITY_INFO, "Parameters loaded");
+			}
+		} else if (prm[0] == 1.0f) {
+			r = app_params_save(a, why, sizeof why);
+			if (r == MAV_RESULT_ACCEPTED)
+				app_status(a, MAV_SEVERITY_INFO, "Parameters saved");
+		} else {
+			r = MAV_RESULT_DENIED;
+			snprintf(why, sizeof why, "Storage: param1 must be 0 (read) or 1 (write)");
+		}
+		break;
+	case MAV_CMD_REQUEST_MESSAGE:
+	case MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES: {
+		float id = cmd == MAV_CMD_REQUEST_MESSAGE ? prm[0] : (float)MAVLINK_MSG_ID_AUTOPILOT_VERSION;
+		if (id == (float)MAVLINK_MSG_ID_AUTOPILOT_VERSION) {
+			r = MAV_RESULT_ACCEPTED;
+			send_ack(cmd, (uint8_t)r, req);
+			send_autopilot_version();
+			return;
+		}
+		int s = id >= 0.0f && id < 65536.0f ? stream_index((uint32_t)id) : -1;
+		if (s >= 0 && !streams[s].direct) {
+			send_ack(cmd, MAV_RESULT_ACCEPTED, req);
+			send_stream(a, s);
+			return;
+		}
+		r = MAV_RESULT_UNSUPPORTED;
+		break;
+	}
+	case MAV_CMD_SET_MESSAGE_INTERVAL: {
+		int s = prm[0] >= 0.0f && prm[0] < 65536.0f ? stream_index((uint32_t)prm[0]) : -1;
+		if (s < 0) {
+			r = MAV_RESULT_UNSUPPORTED;
+		} else if (!isfinite(prm[1])) {
+			r = MAV_RESULT_DENIED;
+		} else {
+			if (prm[1] < 0.0f)
+				a->mav.interval_us[s] = -1;
+			else if (prm[1] == 0.0f)
+				a->mav.interval_us[s] = streams[s].default_interval_us;
+			else
+				a->mav.interval_us[s] = prm[1] < 10000.0f ? 10000 : (int64_t)prm[1];
+			r = MAV_RESULT_ACCEPTED;
+		}
+		break;
+	}
+	default:
+		r = MAV_RESULT_UNSUPPORTED;   /* including GET_HOME_POSITION: no home here */
+		break;
+	}
+	send_ack(cmd, (uint8_t)r, req);
+	if (why[0])
+		app_status(a, r == MAV_RESULT_ACCEPTED ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "%s", why);
+}
+
+static void handle_ftp(struct app *a, const mavlink_message_t *msg)
+{
+	(void)a;
+	mavlink_file_transfer_protocol_t ftp;
+	mavlink_msg_file_transfer_protocol_decode(msg, &ftp);
+	if (!for_us(ftp.target_system, ftp.target_component))
+		return;
+	uint8_t p[MAVLINK_MSG_FILE_TRANSFER_PROTOCOL_FIELD_PAYLOAD_LEN];
+	memset(p, 0, sizeof p);
+	uint16_t seq = (uint16_t)(ftp.payload[0] | ftp.payload[1] << 8);
+	seq = (uint16_t)(seq + 1);
+	p[0] = (uint8_t)seq;
+	p[1] = (uint8_t)(seq >> 8);
+	p[2] = ftp.payload[2];     /* session */
+	p[3] = 129;                /* opcode: NAK */
+	p[4] = 1;                  /* size: one error byte */
+	p[5] = ftp.payload[3];     /* req_opcode */
+	p[12] = 10;                /* error: FileNotFound */
+	mavlink_message_t out;
+	mavlink_msg_file_transfer_protocol_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &out, 0, msg->sysid,
+						     msg->compid, p);
+	send_msg(&out);
+}
+
+static void handle(struct app *a, const mavlink_message_t *msg)
+{
+	struct mav *m = &a->mav;
+	m->rx_msgs++;
+	if (msg->sysid == MAV_SYSID && msg->compid == MAV_COMPID)
+		return;   /* our own echo */
+	switch (msg->msgid) {
+	case MAVLINK_MSG_ID_HEARTBEAT:
+		m->gcs_sysid = msg->sysid;
+		m->gcs_compid = msg->compid;
+		break;
+	case MAVLINK_MSG_ID_PARAM_REQUEST_LIST: {
+		mavlink_param_request_list_t pl;
+		mavlink_msg_param_request_list_decode(msg, &pl);
+		if (for_us(pl.target_system, pl.target_component))
+			m->param_next = 0;   /* (re)start the paced stream */
+		break;
+	}
+	case MAVLINK_MSG_ID_PARAM_REQUEST_READ:
+		handle_param_read(a, msg);
+		break;
+	case MAVLINK_MSG_ID_PARAM_SET:
+		handle_param_set(a, msg);
+		break;
+	case MAVLINK_MSG_ID_COMMAND_LONG: {
+		mavlink_command_long_t c;
+		mavlink_msg_command_long_decode(msg, &c);
+		if (!for_us(c.target_system, c.target_component))
+			break;
+		const float prm[7] = {c.param1, c.param2, c.param3, c.param4, c.param5, c.param6, c.param7};
+		handle_command(a, msg, c.command, prm);
+		break;
+	}
+	case MAVLINK_MSG_ID_COMMAND_INT: {
+		mavlink_command_int_t c;
+		mavlink_msg_command_int_decode(msg, &c);
+		if (!for_us(c.target_system, c.target_component))
+			break;
+		const float prm[7] = {c.param1, c.param2, c.param3, c.param4, (float)c.x, (float)c.y, c.z};
+		handle_command(a, msg, c.command, prm);
+		break;
+	}
+	case MAVLINK_MSG_ID_MISSION_REQUEST_LIST: {
+		mavlink_mission_request_list_t r;
+		mavlink_msg_mission_request_list_decode(msg, &r);
+		if (!for_us(r.target_system, r.target_component))
+			break;
+		mavlink_message_t out;
+		mavlink_msg_mission_count_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &out, msg->sysid, msg->compid, 0,
+						    r.mission_type);
+		send_msg(&out);
+		break;
+	}
+	case MAVLINK_MSG_ID_FILE_TRANSFER_PROTOCOL:
+		handle_ftp(a, msg);
+		break;
+	default:
+		break;
+	}
+}
+
+void mav_receive(struct app *a, const uint8_t *buf, size_t len)
+{
+	mavlink_message_t msg;
+	mavlink_status_t st;
+	for (size_t i = 0; i < len; i++) {
+		uint8_t r = mavlink_parse_char(CHAN, buf[i], &msg, &st);
+		if (r == MAVLINK_FRAMING_OK)
+			handle(a, &msg);
+		else if (r == MAVLINK_FRAMING_BAD_CRC || r == MAVLINK_FRAMING_BAD_SIGNATURE)
+			a->mav.rx_dropped++;
+	}
+}
+
+void mav_tick(struct app *a, uint64_t now_us)
+{
+	struct mav *m = &a->mav;
+	for (int i = 0; i < MAV_N_STREAMS; i++) {
+		if (m->interval_us[i] < 0)
+			continue;
+		if (m->last_us[i] && now_us - m->last_us[i] < (uint64_t)m->interval_us[i])
+			continue;
+		m->last_us[i] = now_us;
+		send_stream(a, i);
+	}
+	for (int k = 0; k < PARAM_PER_TICK && m->param_next >= 0; k++) {
+		if (m->param_last_us && now_us - m->param_last_us < PARAM_PACE_US)
+			break;
+		mav_param_value(a, (size_t)m->param_next);
+		m->param_last_us = now_us;
+		if (++m->param_next >= (long)param_count)
+			m->param_next = -1;
+	}
+}

@@ -1,0 +1,49 @@
+/*
+ * mav.h - MAVLink 2 endpoint of the autopilot: system 1, component 1,
+ * MAV_TYPE_OCTOROTOR, MAV_AUTOPILOT_GENERIC; generated common.xml headers.
+ *
+ * - telemetry: one table of streams (message id, default interval, pack
+ *   function), intervals in wall-clock time, changed by SET_MESSAGE_INTERVAL;
+ * - the parameter protocol (mavlink-notes.md): paced PARAM_REQUEST_LIST,
+ *   reads by name and by index, PARAM_SET always answered with the current
+ *   value, refusals and unknown names as STATUSTEXT;
+ * - COMMAND_LONG / COMMAND_INT, always acknowledged;
+ * - FTP NAKed (FileNotFound), MISSION_REQUEST_LIST -> MISSION_COUNT 0.
+ */
+#ifndef OCTO_MAV_H
+#define OCTO_MAV_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define MAV_SYSID 1
+#define MAV_COMPID 1
+#define MAV_N_STREAMS 7
+
+struct app;
+
+struct mav {
+	int64_t interval_us[MAV_N_STREAMS];   /* < 0: off */
+	uint64_t last_us[MAV_N_STREAMS];
+	long param_next;                       /* next index of a list stream, -1 = none */
+	uint64_t param_last_us;
+	uint64_t boot_us;
+	uint8_t gcs_sysid, gcs_compid;
+	float text_tokens;                     /* STATUSTEXT rate limit */
+	uint64_t text_last_us;
+	uint32_t rx_msgs, rx_dropped, text_dropped;
+	uint16_t text_id;
+};
+
+void mav_init(struct mav *m, uint64_t now_us);
+/* Parses bytes from the ground station and handles complete messages. */
+void mav_receive(struct app *a, const uint8_t *buf, size_t len);
+/* Streams due telemetry and parameters. */
+void mav_tick(struct app *a, uint64_t now_us);
+void mav_statustext(struct app *a, int severity, const char *text);
+/* PARAM_VALUE of parameter `index` (after a change). */
+void mav_param_value(struct app *a, size_t index);
+void mav_named_float(struct app *a, const char *name, float value);
+
+#endif /* OCTO_MAV_H */

@@ -1,0 +1,57 @@
+/*
+ * params.h - the parameter table (params_table.h) as data: defaults, ranges,
+ * get/set with checks, and the text format of the parameter file.
+ */
+#ifndef OCTO_PARAMS_H
+#define OCTO_PARAMS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define PARAM_ID_LEN 16
+
+struct app_params {
+#define PARAM(name, field, def, min, max, unit, desc) float field;
+#include "params_table.h"
+#undef PARAM
+};
+
+struct param_def {
+	const char *name;
+	size_t offset;
+	float def, min, max;
+	const char *unit, *desc;
+};
+
+extern const struct param_def param_defs[];
+extern const size_t param_count;
+
+enum param_set_result { PARAM_OK = 0, PARAM_NOT_FINITE, PARAM_OUT_OF_RANGE };
+
+void params_defaults(struct app_params *p);
+/* Index of the parameter called `id` (at most 16 characters, NUL-terminated or
+ * not, as in MAVLink's param_id), or -1. */
+int params_find(const char *id, size_t id_len);
+float params_get(const struct app_params *p, size_t index);
+/* Writes the value if finite and within [min, max]; otherwise leaves it. */
+enum param_set_result params_set(struct app_params *p, size_t index, float value);
+const char *params_set_result_text(enum param_set_result r);
+
+/* Shortest decimal text of v that reads back as exactly v (like "0.3"). */
+int params_fmt_float(char *buf, size_t cap, float v);
+
+/* The parameter file: one "NAME VALUE" line per parameter (MAVProxy's format;
+ * '#' starts a comment). Returns the length written (without the NUL) or 0 if
+ * cap is too small. */
+size_t params_format(const struct app_params *p, char *buf, size_t cap);
+
+/* Called for each damaged line: 1-based line number and the reason. */
+typedef void (*params_report_fn)(void *ctx, unsigned line, const char *why);
+/* Applies the lines of `text` to *p. A damaged line (unknown name, no number,
+ * not finite, out of range, too long) is reported and changes nothing: the
+ * value it meant keeps its previous (default) value. Returns the number of
+ * damaged lines. */
+unsigned params_parse(struct app_params *p, const char *text, size_t len, params_report_fn report,
+		      void *ctx);
+
+#endif /* OCTO_PARAMS_H */

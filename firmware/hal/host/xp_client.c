@@ -1,0 +1,323 @@
+/* xp_client.c - X-Plane client: rows, version, conventions, actuation (see xp_client.h). */
+#include "xp_client.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+static const int32_t wanted_rows[] = {XP_ROW_TIMES, XP_ROW_RATES, XP_ROW_ATT, XP_ROW_LOCAL,
+				      XP_ROW_THRUST, XP_ROW_TORQUE};
+#define N_WANTED (sizeof wanted_rows / sizeof wanted_rows[0])
+static const uint32_t wanted_bits[N_WANTED] = {HAL_FRAME_TIME, HAL_FRAME_RATES, HAL_FRAME_ATT,
+					       HAL_FRAME_POS, HAL_FRAME_THRUST, HAL_FRAME_TORQUE};
+
+#define LB_TO_N 4.4482216152605
+#define FTLB_TO_NM 1.3558179483314
+#define DEG_TO_RAD 0.017453292519943295
+#define ROW_FRESH_US 1000000u     /* a row not seen for 1 s is selected again */
+#define DSEL_PERIOD_US 1000000u
+#define RREF_PERIOD_US 5000000u
+#define OVERRIDE_PERIOD_US 1000000u
+
+static const char VERSION_REF[] = "sim/version/xplane_internal_version";
+static const char OVERRIDE_REF[] = "sim/operation/override/override_throttles";
+
+static void send_to_xp(struct xp_client *c, const uint8_t *buf, size_t len)
+{
+	if (!len)
+		return;
+	/* UDP: a full socket buffer or an ICMP error from an absent X-Plane must
+	 * not stop the loop; the next frame sends again. */
+	(void)sendto(c->fd, buf, len, 0, (const struct sockaddr *)&c->xp, sizeof c->xp);
+}
+
+int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct sockaddr_in *xplane,
+		   enum xp_actuation act)
+{
+	memset(c, 0, sizeof *c);
+	c->xp = *xplane;
+	c->act = act;
+	c->fd = socket(AF_INET, SOCK_DGRAM, 0);
+	if (c->fd < 0) {
+		perror("octo-fw: X-Plane socket");
+		return -1;
+	}
+	int one = 1;
+	(void)setsockopt(c->fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+	struct sockaddr_in a;
+	memset(&a, 0, sizeof a);
+	a.sin_family = AF_INET;
+	a.sin_addr.s_addr = htonl(INADDR_ANY);
+	a.sin_port = htons(listen_port);
+	if (bind(c->fd, (struct sockaddr *)&a, sizeof a) < 0) {
+		fprintf(stderr, "octo-fw: cannot bind X-Plane port %u: %s\n", listen_port, strerror(errno));
+		close(c->fd);
+		c->fd = -1;
+		return -1;
+	}
+	(void)fcntl(c->fd, F_SETFL, fcntl(c->fd, F_GETFL) | O_NONBLOCK);
+	c->stats.rows_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_POS |
+				HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
+	return 0;
+}
+
+static void quat_of_euler_ned(float phi_deg, float theta_deg, float psi_deg, double q[4])
+{
+	double hp = 0.5 * (double)phi_deg * DEG_TO_RAD, ht = 0.5 * (double)theta_deg * DEG_TO_RAD,
+	       hs = 0.5 * (double)psi_deg * DEG_TO_RAD;
+	double cp = cos(hp), sp = sin(hp), ct = cos(ht), st = sin(ht), cs = cos(hs), ss = sin(hs);
+	q[0] = cp * ct * cs + sp * st * ss;
+	q[1] = sp * ct * cs - cp * st * ss;
+	q[2] = cp * st * cs + sp * ct * ss;
+	q[3] = cp * ct * ss - sp * st * cs;
+}
+
+/*
+ * The one place where X-Plane's conventions become the paper's frames.
+ *   X-Plane: Euler Z-Y-X from NED to body FRD (row 17: c1 pitch, c2 roll,
+ *            c3 true heading, degrees); rates P, Q, R about FRD (row 16: XP 10/11
+ *            c1 Q, c2 P, c3 R in rad/s; XP 12 c1 P, c2 Q, c3 R in deg/s);
+ *            OpenGL local frame +X east, +Y up, +Z south (row 21).
+ *   Paper:   S_I = (north, west, up) ("NWU"), S_B = (forward, left, up) ("FLU").
+ *   NWU = F * NED and FLU = F * FRD with F = diag(1, -1, -1), a half turn about
+ *   X, so the attitude quaternion is conjugated by that half turn:
+ *   q_ib = [w, x, -y, -z] of X-Plane's q_ned_frd; omega_B = [P, -Q, -R];
+ *   r_I = [north, west, up] = [-Z, -X, Y] of OpenGL, likewise for velocity.
+ */
+uint32_t xp_frame_convert(const struct xp_data_rec *recs, size_t n, uint32_t xp_version,
+			  struct hal_sensor_frame *f, float *raw_time_s)
+{
+	uint32_t bits = 0;
+	for (size_t r = 0; r < n; r++) {
+		const float *c = recs[r].col;
+		switch (recs[r].row) {
+		case XP_ROW_TIMES:
+			if (!isfinite(c[2]))
+				break;
+			*raw_time_s = c[2];
+			bits |= HAL_FRAME_TIME;
+			break;
+		case XP_ROW_RATES: {
+			if (!xp_version)
+				break;   /* column order and units unknown until the version is */
+			double p, q, rr;
+			if (xp_version >= XP_VERSION_12) {
+				p = (double)c[0] * DEG_TO_RAD;
+				q = (double)c[1] * DEG_TO_RAD;
+				rr = (double)c[2] * DEG_TO_RAD;
+			} else {
+				q = (double)c[0];
+				p = (double)c[1];
+				rr = (double)c[2];
+			}
+			if (!isfinite(p) || !isfinite(q) || !isfinite(rr))
+				break;
+			f->rate_b_rps[0] = (float)p;
+			f->rate_b_rps[1] = (float)-q;
+			f->rate_b_rps[2] = (float)-rr;
+			bits |= HAL_FRAME_RATES;
+			break;
+		}
+		case XP_ROW_ATT: {
+			if (!isfinite(c[0]) || !isfinite(c[1]) || !isfinite(c[2]))
+				break;
+			double q[4];
+			quat_of_euler_ned(c[1], c[0], c[2], q);
+			f->q_ib[0] = (float)q[0];
+			f->q_ib[1] = (float)q[1];
+			f->q_ib[2] = (float)-q[2];
+			f->q_ib[3] = (float)-q[3];
+			bits |= HAL_FRAME_ATT;
+			break;
+		}
+		case XP_ROW_LOCAL: {
+			bool ok = true;
+			for (int i = 0; i < 6; i++)
+				ok = ok && isfinite(c[i]);
+			if (!ok)
+				break;
+			f->pos_i_m[0] = -c[2];
+			f->pos_i_m[1] = -c[0];
+			f->pos_i_m[2] = c[1];
+			f->vel_i_mps[0] = -c[5];
+			f->vel_i_mps[1] = -c[3];
+			f->vel_i_mps[2] = c[4];
+			bits |= HAL_FRAME_POS;
+			break;
+		}
+		case XP_ROW_THRUST:
+			for (int i = 0; i < HAL_ROTORS; i++)
+				f->rotor_thrust_n[i] = isfinite(c[i]) ? (float)((double)c[i] * LB_TO_N) : 0.0f;
+			bits |= HAL_FRAME_THRUST;
+			break;
+		case XP_ROW_TORQUE:
+			for (int i = 0; i < HAL_ROTORS; i++)
+				f->rotor_torque_nm[i] = isfinite(c[i]) ? (float)((double)c[i] * FTLB_TO_NM) : 0.0f;
+			bits |= HAL_FRAME_TORQUE;
+			break;
+		case XP_ROW_THR_CMD:
+			for (int i = 0; i < HAL_ROTORS; i++)
+				f->thr_cmd_echo[i] = isfinite(c[i]) ? c[i] : 0.0f;
+			bits |= HAL_FRAME_THR_CMD;
+			break;
+		default:
+			break;
+		}
+	}
+	return bits;
+}
+
+static void note_rows(struct xp_client *c, const struct xp_msg_in *m, uint64_t now_us)
+{
+	int32_t unsel[XP_MAX_DATA_RECS];
+	size_t nu = 0;
+	for (size_t r = 0; r < m->n; r++) {
+		int32_t row = m->data[r].row;
+		bool found = false;
+		for (size_t i = 0; i < N_WANTED; i++)
+			if (wanted_rows[i] == row) {
+				c->row_seen_us[i] = now_us;
+				found = true;
+			}
+		if (!found && row >= 0 && row < 256 && row != XP_ROW_THR_CMD &&
+		    !(c->unselected[row / 8] & (1u << (row % 8)))) {
+			unsel[nu++] = row;
+		}
+	}
+	if (nu && now_us - c->last_usel_us >= 200000u) {
+		uint8_t buf[5 + 4 * XP_MAX_DATA_RECS];
+		send_to_xp(c, buf, xp_encode_dsel(buf, sizeof buf, 1, unsel, nu));
+		for (size_t i = 0; i < nu; i++)
+			c->unselected[unsel[i] / 8] |= (uint8_t)(1u << (unsel[i] % 8));
+		c->last_usel_us = now_us;
+	}
+	uint32_t missing = 0;
+	for (size_t i = 0; i < N_WANTED; i++)
+		if (!c->row_seen_us[i] || now_us - c->row_seen_us[i] > ROW_FRESH_US)
+			missing |= wanted_bits[i];
+	c->stats.rows_missing = missing;
+}
+
+int xp_client_receive(struct xp_client *c, struct hal_sensor_frame *frame, uint64_t now_us)
+{
+	uint8_t buf[2048];
+	struct sockaddr_in from;
+	socklen_t fl = sizeof from;
+	ssize_t n = recvfrom(c->fd, buf, sizeof buf, 0, (struct sockaddr *)&from, &fl);
+	if (n < 0)
+		return -1;
+	if (fl < sizeof from || from.sin_family != AF_INET ||
+	    from.sin_addr.s_addr != c->xp.sin_addr.s_addr) {
+		c->stats.dropped++;
+		c->stats.foreign++;
+		return 0;
+	}
+	if ((size_t)n >= sizeof buf) {   /* truncated: larger than any X-Plane message we take */
+		c->stats.dropped++;
+		return 0;
+	}
+	switch (xp_decode(buf, (size_t)n, &c->msg)) {
+	case XP_MSG_RREF:
+		for (size_t r = 0; r < c->msg.n; r++)
+			if (c->msg.rref[r].index == XP_RREF_VERSION_INDEX) {
+				float v = c->msg.rref[r].value;
+				if (isfinite(v) && v >= 1.0f && v < 1.0e7f)
+					c->stats.xp_version = (uint32_t)v;
+			}
+		return 0;
+	case XP_MSG_DATA:
+		break;
+	default:
+		c->stats.dropped++;
+		return 0;
+	}
+	note_rows(c, &c->msg, now_us);
+	struct hal_sensor_frame f = *frame;   /* keeps the previous values of absent rows */
+	float raw_t = 0.0f;
+	uint32_t bits = xp_frame_convert(c->msg.data, c->msg.n, c->stats.xp_version, &f, &raw_t);
+	if (!(bits & HAL_FRAME_TIME)) {
+		c->stats.dropped++;   /* a frame without time cannot be placed */
+		return 0;
+	}
+	/* Re-base time so that it never runs backwards (X-Plane reload, simulator
+	 * restart, reordered datagrams): continue one nominal frame after the last. */
+	double t = (double)raw_t + c->t_offset;
+	if (!c->have_t) {
+		c->have_t = true;
+	} else if (t < c->t_last) {
+		c->t_offset = c->t_last + 1.0 / 90.0 - (double)raw_t;
+		t = c->t_last + 1.0 / 90.0;
+	}
+	c->t_last = t;
+	f.t_s = t;
+	f.valid = bits;
+	f.seq = ++c->seq;
+	*frame = f;
+	c->stats.frames++;
+	return 1;
+}
+
+void xp_client_poll(struct xp_client *c, uint64_t now_us)
+{
+	uint8_t buf[XP_DREF_LEN];
+	bool stale = false;
+	for (size_t i = 0; i < N_WANTED; i++)
+		if (!c->row_seen_us[i] || now_us - c->row_seen_us[i] > ROW_FRESH_US)
+			stale = true;
+	if (stale && (!c->last_dsel_us || now_us - c->last_dsel_us >= DSEL_PERIOD_US)) {
+		send_to_xp(c, buf, xp_encode_dsel(buf, sizeof buf, 0, wanted_rows, N_WANTED));
+		c->last_dsel_us = now_us;
+		/* rows USEL'd before may be wanted by nobody still; forget them so a
+		 * restarted X-Plane that shows them again gets them unselected again */
+		memset(c->unselected, 0, sizeof c->unselected);
+	}
+	if (!c->last_rref_us || now_us - c->last_rref_us >= RREF_PERIOD_US) {
+		send_to_xp(c, buf, xp_encode_rref(buf, sizeof buf, 1, XP_RREF_VERSION_INDEX, VERSION_REF));
+		c->last_rref_us = now_us;
+	}
+	if (stale) {
+		uint32_t missing = 0;
+		for (size_t i = 0; i < N_WANTED; i++)
+			if (!c->row_seen_us[i] || now_us - c->row_seen_us[i] > ROW_FRESH_US)
+				missing |= wanted_bits[i];
+		c->stats.rows_missing = missing;
+	}
+}
+
+void xp_client_actuate(struct xp_client *c, const float thr[HAL_ROTORS], uint64_t now_us)
+{
+	float t[HAL_ROTORS];
+	for (int i = 0; i < HAL_ROTORS; i++) {
+		float v = thr[i];
+		t[i] = !(v > 0.0f) ? 0.0f : (v > 1.0f ? 1.0f : v);   /* NaN -> 0 */
+	}
+	if (c->act == XP_ACT_DATA25) {
+		struct xp_data_rec r = {.row = XP_ROW_THR_CMD};
+		memcpy(r.col, t, sizeof t);
+		uint8_t buf[5 + XP_DATA_REC_LEN];
+		send_to_xp(c, buf, xp_encode_data(buf, sizeof buf, &r, 1));
+		return;
+	}
+	uint8_t buf[XP_DREF_LEN];
+	if (!c->last_override_us || now_us - c->last_override_us >= OVERRIDE_PERIOD_US) {
+		send_to_xp(c, buf, xp_encode_dref(buf, sizeof buf, 1.0f, OVERRIDE_REF));
+		c->last_override_us = now_us;
+	}
+	for (int i = 0; i < HAL_ROTORS; i++) {
+		char path[64];
+		snprintf(path, sizeof path, "sim/flightmodel/engine/ENGN_thro_use[%d]", i);
+		send_to_xp(c, buf, xp_encode_dref(buf, sizeof buf, t[i], path));
+	}
+}
+
+void xp_client_release(struct xp_client *c)
+{
+	if (c->fd < 0 || c->act != XP_ACT_DREF || !c->last_override_us)
+		return;
+	uint8_t buf[XP_DREF_LEN];
+	send_to_xp(c, buf, xp_encode_dref(buf, sizeof buf, 0.0f, OVERRIDE_REF));
+}

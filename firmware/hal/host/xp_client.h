@@ -1,0 +1,76 @@
+/*
+ * xp_client.h - octo-fw's X-Plane 11/12 client (host platform).
+ *
+ * One UDP socket bound to --xp-listen: DATA output arrives there (the user or
+ * the simulator points X-Plane's Data Output at it), RREF replies too (they go
+ * to the source port of the request, which is this socket). The client:
+ *   - DSELs the rows it needs, re-sending every second until each row has been
+ *     seen recently, and USELs rows it did not ask for;
+ *   - detects X-Plane 11 vs 12 by RREF of sim/version/xplane_internal_version
+ *     at 1 Hz, re-requested every 5 s (>= 120000: X-Plane 12);
+ *   - accepts datagrams only from the configured X-Plane host IP (any port:
+ *     X-Plane sends from another port than it receives on); malformed or
+ *     foreign datagrams are dropped and counted;
+ *   - converts X-Plane's conventions to the paper's frames (xp_frame_convert,
+ *     the one place where that happens in octo-fw);
+ *   - actuates with 8 DREFs ENGN_thro_use[i] plus override_throttles, or one
+ *     DATA row 25 datagram.
+ */
+#ifndef OCTO_XP_CLIENT_H
+#define OCTO_XP_CLIENT_H
+
+#include <netinet/in.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "hal.h"
+#include "xp_proto.h"
+
+enum xp_actuation { XP_ACT_DREF = 0, XP_ACT_DATA25 = 1 };
+
+#define XP_VERSION_12 120000u
+#define XP_RREF_VERSION_INDEX 1
+
+/* Row numbers the client needs and the HAL_FRAME_* bit each one fills. */
+#define XP_ROW_TIMES 1
+#define XP_ROW_RATES 16
+#define XP_ROW_ATT 17
+#define XP_ROW_LOCAL 21
+#define XP_ROW_THR_CMD 25
+#define XP_ROW_THRUST 35
+#define XP_ROW_TORQUE 36
+
+struct xp_client {
+	int fd;
+	struct sockaddr_in xp;            /* where X-Plane receives (requests go there) */
+	enum xp_actuation act;
+	struct hal_link_stats stats;
+	uint64_t row_seen_us[8];          /* per wanted row, wall time last seen */
+	uint64_t last_dsel_us, last_rref_us, last_override_us, last_usel_us;
+	uint8_t unselected[256 / 8];      /* rows already USEL'd */
+	bool have_t;
+	double t_offset, t_last;          /* time re-basing */
+	uint32_t seq;
+	struct xp_msg_in msg;             /* decode buffer (large: kept off the stack) */
+};
+
+/* Opens the socket; returns 0 or -1 (reason on stderr). */
+int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct sockaddr_in *xplane,
+		   enum xp_actuation act);
+/* Reads one datagram (non-blocking). Returns 1 when it was a DATA frame turned
+ * into *frame (absent rows keep their previous values), 0 for any other
+ * datagram (RREF, dropped), -1 when there was nothing to read. */
+int xp_client_receive(struct xp_client *c, struct hal_sensor_frame *frame, uint64_t now_us);
+/* Periodic duties: DSEL/USEL re-sends, RREF re-requests. */
+void xp_client_poll(struct xp_client *c, uint64_t now_us);
+void xp_client_actuate(struct xp_client *c, const float thr[HAL_ROTORS], uint64_t now_us);
+/* Hands the throttles back to X-Plane (override_throttles = 0). */
+void xp_client_release(struct xp_client *c);
+
+/* Pure conversion of decoded DATA records into the paper's frames: fills the
+ * fields of *f for the rows present and returns their HAL_FRAME_* bits. Rates
+ * need the version (0 = unknown: rates left out). Time is not re-based here. */
+uint32_t xp_frame_convert(const struct xp_data_rec *recs, size_t n, uint32_t xp_version,
+			  struct hal_sensor_frame *f, float *raw_time_s);
+
+#endif /* OCTO_XP_CLIENT_H */
