@@ -1,0 +1,439 @@
+// Unit tests of octo-sim's model, actuator, JSON reader and byte encoders.
+// Run by `make test-sim` and by tests/py/test_sim_model.py; exit status 0 when
+// every test passes. Physics checks use the model class directly (no sockets).
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "actuator.hpp"
+#include "json.hpp"
+#include "model.hpp"
+#include "vehicle.hpp"
+#include "xplane_emit.hpp"
+#include "xplane_proto.hpp"
+
+using namespace sim;
+
+static int g_failed = 0, g_checks = 0;
+static const char *g_test = "";
+
+#define CHECK(cond, ...)                                                               \
+	do {                                                                           \
+		g_checks++;                                                            \
+		if (!(cond)) {                                                         \
+			g_failed++;                                                    \
+			std::printf("FAIL %s (%s:%d): %s: ", g_test, __FILE__, __LINE__, #cond); \
+			std::printf(__VA_ARGS__);                                      \
+			std::printf("\n");                                             \
+		}                                                                      \
+	} while (0)
+
+struct TestCase {
+	const char *name;
+	std::function<void()> fn;
+};
+static std::vector<TestCase> &registry()
+{
+	static std::vector<TestCase> r;
+	return r;
+}
+struct Reg {
+	Reg(const char *n, std::function<void()> f) { registry().push_back({n, f}); }
+};
+#define TEST(name)                                  \
+	static void name();                         \
+	static Reg reg_##name(#name, name);         \
+	static void name()
+
+static VehicleParams ideal()
+{
+	VehicleParams p;
+	p.make_ideal();
+	return p;
+}
+
+static RotorArray all(double v)
+{
+	RotorArray u;
+	u.fill(v);
+	return u;
+}
+
+static std::string hex(const xp::Bytes &b)
+{
+	std::string s;
+	char t[3];
+	for (uint8_t c : b) {
+		std::snprintf(t, sizeof t, "%02x", c);
+		s += t;
+	}
+	return s;
+}
+
+// ------------------------------------------------------------------ physics
+
+TEST(hover_holds_altitude_1mm_10s)
+{
+	VehicleParams p = ideal();
+	Model m(p);
+	BodyState x;
+	x.r.z() = 10.0;
+	m.set_state(x, 0.0);
+	m.command(all(p.mass * p.g / (8 * p.kf)));
+	double worst = 0;
+	for (int n = 1; n <= 900; n++) {
+		m.advance_to(n / 90.0);
+		worst = std::max(worst, std::fabs(m.state().r.z() - 10.0));
+	}
+	std::printf("  hover: worst altitude error over 10 s %.3g m\n", worst);
+	CHECK(worst < 1e-3, "worst altitude error %g m", worst);
+	CHECK(std::fabs(m.t() - 10.0) < 1e-12, "t = %.15g", m.t());
+	CHECK(m.state().w.norm() < 1e-12, "rates %g", m.state().w.norm());
+}
+
+TEST(hover_from_ground_stays_landed_below_weight)
+{
+	VehicleParams p = ideal();
+	Model m(p);
+	m.command(all(0.5 * p.hover_throttle()));
+	m.advance_to(2.0);
+	CHECK(m.on_ground(), "should rest on the ground");
+	CHECK(m.state().r.z() == 0.0, "z = %g", m.state().r.z());
+	m.command(all(1.2 * p.hover_throttle()));
+	m.advance_to(3.0);
+	CHECK(!m.on_ground() && m.state().r.z() > 0.1, "should climb: z = %g", m.state().r.z());
+}
+
+TEST(free_fall_matches_half_g_t2)
+{
+	VehicleParams p = ideal();
+	Model m(p);
+	BodyState x;
+	x.r.z() = 100.0;
+	m.set_state(x, 0.0);
+	m.command(all(0.0));
+	double worst = 0;
+	for (int n = 1; n <= 270; n++) { // 3 s
+		m.advance_to(n / 90.0);
+		const double t = m.t();
+		worst = std::max(worst, std::fabs(m.state().r.z() - (100.0 - 0.5 * p.g * t * t)));
+	}
+	std::printf("  free fall: worst error over 3 s %.3g m\n", worst);
+	CHECK(worst < 1e-9, "free-fall error %g m", worst);
+	// and the ground stops it
+	m.advance_to(10.0);
+	CHECK(m.state().r.z() == 0.0 && m.on_ground(), "z = %g", m.state().r.z());
+}
+
+TEST(torque_free_tumble_conserves_momentum_and_energy)
+{
+	VehicleParams p = ideal();
+	Model m(p);
+	m.set_ground(false);
+	BodyState x;
+	x.r.z() = 1000;
+	x.w = Eigen::Vector3d(0.6, -0.4, 0.9);
+	m.set_state(x, 0.0);
+	m.command(all(0.0));
+	const Eigen::Vector3d I(p.inertia[0], p.inertia[1], p.inertia[2]);
+	auto h_inertial = [&]() { return Eigen::Vector3d(m.state().q * I.cwiseProduct(m.state().w)); };
+	const Eigen::Vector3d h0 = h_inertial();
+	const double e0 = m.kinetic_energy_rot();
+	double worst_h = 0, worst_e = 0;
+	for (int n = 1; n <= 900; n++) {
+		m.advance_to(n / 90.0);
+		worst_h = std::max(worst_h, (h_inertial() - h0).norm() / h0.norm());
+		worst_e = std::max(worst_e, std::fabs(m.kinetic_energy_rot() - e0) / e0);
+	}
+	std::printf("  tumble: relative error momentum %.3g, energy %.3g\n", worst_h, worst_e);
+	CHECK(worst_h < 1e-9, "angular momentum relative error %g", worst_h);
+	CHECK(worst_e < 1e-9, "kinetic energy relative error %g", worst_e);
+	CHECK((m.state().w - x.w).norm() > 0.1, "the body should actually tumble");
+}
+
+// A nonlinear manoeuvre (rotors uneven, lag on) integrated with steps h, h/2 and a
+// fine reference: RK4's error ratio must be about 2^4 = 16.
+TEST(rk4_order_error_ratio_16)
+{
+	VehicleParams p = ideal();
+	p.motor_tau = 0.05;
+	auto run = [&](double h) {
+		Model m(p);
+		m.set_ground(false);
+		m.set_h_max(h);
+		BodyState x;
+		x.r.z() = 50;
+		x.w = Eigen::Vector3d(1.0, -0.5, 0.7);
+		m.set_state(x, 0.0);
+		RotorArray u{{0.2, 0.05, 0.15, 0.08, 0.12, 0.1, 0.02, 0.18}};
+		m.command(u);
+		m.advance_to(2.0);
+		Eigen::Matrix<double, 13, 1> v;
+		v << m.state().r, m.state().v, m.state().q.w(), m.state().q.x(), m.state().q.y(), m.state().q.z(),
+		    m.state().w;
+		return v;
+	};
+	const auto ref = run(0.02 / 64);
+	const double e1 = (run(0.02) - ref).norm();
+	const double e2 = (run(0.01) - ref).norm();
+	const double ratio = e1 / e2;
+	std::printf("  rk4: error(h=20ms) %.3g, error(h=10ms) %.3g, ratio %.2f\n", e1, e2, ratio);
+	CHECK(ratio > 13 && ratio < 19, "ratio %g", ratio);
+}
+
+// Gamma_o of eq. (14): [f; tau] = Gamma_o f for any rotor forces.
+TEST(geometry_matches_gamma_o)
+{
+	VehicleParams p = ideal();
+	Model m(p);
+	const double l = p.arm_length, r2 = std::sqrt(2.0) / 2 * l, k = p.ktau / p.kf;
+	const double G[4][8] = {
+		{1, 1, 1, 1, 1, 1, 1, 1},
+		{0, -r2, -l, -r2, 0, r2, l, r2},
+		{-l, -r2, 0, r2, l, r2, 0, -r2},
+		{k, -k, k, -k, k, -k, k, -k},
+	};
+	BodyState x;
+	RotorArray s{{0.11, 0.32, 0.05, 0.27, 0.19, 0.08, 0.41, 0.14}};
+	x.s = s;
+	RotorOutputs o = m.rotor_outputs(x, 0.0);
+	double want[4] = {0, 0, 0, 0};
+	for (int i = 0; i < 4; i++)
+		for (int j = 0; j < 8; j++)
+			want[i] += G[i][j] * p.kf * s[j];
+	CHECK(std::fabs(o.force - want[0]) < 1e-12, "f %g vs %g", o.force, want[0]);
+	for (int i = 0; i < 3; i++)
+		CHECK(std::fabs(o.torque_b(i) - want[i + 1]) < 1e-12, "tau[%d] %g vs %g", i, o.torque_b(i), want[i + 1]);
+}
+
+// ------------------------------------------------------------------ actuator
+
+TEST(lag_reaches_63_percent_at_tau)
+{
+	VehicleParams p = ideal();
+	p.motor_tau = 0.03;
+	Model m(p);
+	m.command(all(0.5));
+	m.advance_to(0.03);
+	CHECK(std::fabs(m.state().s[0] - 0.5 * (1 - std::exp(-1.0))) < 1e-7, "s = %.9f", m.state().s[0]);
+}
+
+TEST(transport_delay_shifts_the_step)
+{
+	VehicleParams p = ideal();
+	p.delay = 0.005;
+	Model m(p);
+	m.command(all(0.3));
+	m.advance_to(0.004);
+	CHECK(m.state().s[2] == 0.0, "before the delay s = %g", m.state().s[2]);
+	m.advance_to(0.006);
+	CHECK(m.state().s[2] == 0.3, "after the delay s = %g", m.state().s[2]);
+}
+
+TEST(rotor_scale_curve_and_drift)
+{
+	VehicleParams p = ideal();
+	p.rotor_scale[3] = 0.5;
+	p.thrust_curve = 0.4;
+	p.kf_drift_per_min = -0.06;
+	Model m(p);
+	BodyState x;
+	x.s = all(0.5);
+	RotorOutputs o = m.rotor_outputs(x, 30.0); // half a minute: factor 0.97
+	const double g = 0.6 * 0.5 + 0.4 * 0.25;
+	CHECK(std::fabs(o.thrust[0] - p.kf * 0.97 * g) < 1e-12, "thrust %g", o.thrust[0]);
+	CHECK(std::fabs(o.thrust[3] - 0.5 * p.kf * 0.97 * g) < 1e-12, "thrust %g", o.thrust[3]);
+	CHECK(std::fabs(o.torque[1] + p.ktau * 0.97 * g) < 1e-12, "torque %g", o.torque[1]);
+}
+
+TEST(command_clamps_and_rejects_nan)
+{
+	VehicleParams p = ideal();
+	Model m(p);
+	RotorArray u{{-1, 2, NAN, 0.5, INFINITY, 0, 1, 0.25}};
+	m.command(u);
+	const RotorArray &c = m.last_command();
+	CHECK(c[0] == 0 && c[1] == 1 && c[2] == 0 && c[3] == 0.5 && c[4] == 0 && c[7] == 0.25, "clamped");
+}
+
+// ------------------------------------------------------------------ X-Plane frames
+
+TEST(emitter_conventions)
+{
+	VehicleParams p = ideal();
+	Model m(p);
+	BodyState x;
+	x.r = Eigen::Vector3d(3, 4, 5); // 3 m north, 4 m west, 5 m up
+	x.v = Eigen::Vector3d(1, 2, 3);
+	x.w = Eigen::Vector3d(0.1, 0.2, 0.3);
+	// paper yaw +30 deg (counter-clockwise from above) -> heading 330
+	x.q = Eigen::Quaterniond(Eigen::AngleAxisd(30 * M_PI / 180, Eigen::Vector3d::UnitZ()));
+	m.set_state(x, 0.0);
+	XpFrame f = xp_measure(m, all(0), 1, 0);
+	CHECK(std::fabs(f.heading - 330) < 1e-9, "heading %g", f.heading);
+	CHECK(std::fabs(f.P - 0.1) < 1e-12 && std::fabs(f.Q + 0.2) < 1e-12 && std::fabs(f.R + 0.3) < 1e-12, "PQR");
+	xp::DataRow r21 = xp_row(f, 21, 12);
+	CHECK(r21.col[0] == -4.0f && r21.col[1] == 5.0f && r21.col[2] == -3.0f, "local xyz %g %g %g", r21.col[0],
+	      r21.col[1], r21.col[2]);
+	CHECK(r21.col[3] == -2.0f && r21.col[4] == 3.0f && r21.col[5] == -1.0f, "local v");
+	xp::DataRow r16_12 = xp_row(f, 16, 12), r16_11 = xp_row(f, 16, 11);
+	CHECK(std::fabs(r16_12.col[0] - 0.1 * 180 / M_PI) < 1e-4, "v12 c1 = P deg/s");
+	CHECK(r16_11.col[0] == -0.2f && r16_11.col[1] == 0.1f && r16_11.col[2] == -0.3f, "v11 Q P R rad/s");
+	CHECK(r16_12.col[3] == xp::kNoData && r16_12.col[7] == xp::kNoData, "unused columns -999");
+	// roll right (paper: negative rotation about X_B... i.e. positive about forward in FRD)
+	x.q = Eigen::Quaterniond(Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitX()));
+	m.set_state(x, 0.0);
+	f = xp_measure(m, all(0), 1, 0);
+	CHECK(f.roll < -11 && f.roll > -12, "a left-side-down FLU rotation is a negative roll: %g", f.roll);
+	x.q = Eigen::Quaterniond(Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitY()));
+	m.set_state(x, 0.0);
+	f = xp_measure(m, all(0), 1, 0);
+	CHECK(f.pitch > 11 && f.pitch < 12, "a negative rotation about Y_B (left) is nose up: %g", f.pitch);
+	// X-Plane q from the half angles equals the rotation NED <- FRD
+	const double n = std::sqrt(f.quat[0] * f.quat[0] + f.quat[1] * f.quat[1] + f.quat[2] * f.quat[2] +
+	                           f.quat[3] * f.quat[3]);
+	CHECK(std::fabs(n - 1) < 1e-12, "|q| = %g", n);
+	CHECK(std::fabs(f.quat[2] - std::sin(0.1)) < 1e-12, "q.y = %g", f.quat[2]);
+}
+
+TEST(noise_depends_on_seed_and_frame_only)
+{
+	VehicleParams p; // default noise
+	Model m(p);
+	XpFrame a = xp_measure(m, all(0), 7, 3), b = xp_measure(m, all(0), 7, 3), c = xp_measure(m, all(0), 8, 3);
+	CHECK(a.P == b.P && a.thrust_n[5] == b.thrust_n[5], "same seed and frame, same noise");
+	CHECK(a.P != c.P, "another seed, other noise");
+	// sigma of thrust noise: 1 % of hover thrust
+	double s2 = 0;
+	const int N = 4000;
+	for (int k = 0; k < N; k++) {
+		XpFrame f = xp_measure(m, all(0), 11, static_cast<uint64_t>(k));
+		s2 += f.thrust_n[0] * f.thrust_n[0];
+	}
+	const double sigma = std::sqrt(s2 / N), want = 0.01 * p.mass * p.g / 8;
+	CHECK(std::fabs(sigma / want - 1) < 0.05, "thrust sigma %g, want %g", sigma, want);
+}
+
+// ------------------------------------------------------------------ byte vectors (xplane-udp.md)
+
+TEST(data_out_vector_rows_16_17)
+{
+	xp::DataRow a{16, {1.5f, -2.25f, 10.0f, xp::kNoData, xp::kNoData, xp::kNoData, xp::kNoData, xp::kNoData}};
+	xp::DataRow b{17, {2.0f, -4.5f, 237.75f, 259.25f, xp::kNoData, xp::kNoData, xp::kNoData, xp::kNoData}};
+	const std::string want =
+	    "444154412a100000000000c03f000010c00000204100c079c400c079c400c079c400c079c400c079c4"
+	    "110000000000004000009" "0c000c06d4300a0814300c079c400c079c400c079c400c079c4";
+	xp::Bytes d = xp::encode_data({a, b});
+	CHECK(d.size() == 77, "size %zu", d.size());
+	CHECK(hex(d) == want, "%s", hex(d).c_str());
+}
+
+TEST(data_row25_vector_bytes)
+{
+	xp::DataRow r{25, {0, .125f, .25f, .375f, .5f, .625f, .75f, 1.0f}};
+	CHECK(hex(xp::encode_data({r}, 0)) ==
+	          "444154410019000000000000000000003e0000803e0000c03e0000003f0000203f0000403f0000803f",
+	      "%s", hex(xp::encode_data({r}, 0)).c_str());
+}
+
+TEST(rref_reply_vectors)
+{
+	auto one = xp::encode_rref_replies({{7, 0.25f}});
+	CHECK(one.size() == 1 && hex(one[0]) == "525245462c070000000000803e", "%s", hex(one[0]).c_str());
+	auto three = xp::encode_rref_replies({{1, 120100.0f}, {7, 0.25f}, {8, -1.5f}});
+	CHECK(three.size() == 1 &&
+	          hex(three[0]) == "525245462c010000000092ea47070000000000803e080000000000c0bf",
+	      "%s", hex(three[0]).c_str());
+	std::vector<std::pair<int32_t, float>> many;
+	for (int i = 0; i < 400; i++)
+		many.push_back({i, static_cast<float>(i)});
+	auto split = xp::encode_rref_replies(many);
+	CHECK(split.size() == 3 && split[0].size() == 5 + 8 * 183 && split[2].size() == 5 + 8 * 34, "split %zu",
+	      split.size());
+}
+
+TEST(path_fields_and_indices)
+{
+	uint8_t f[8] = {'a', 'b', 0, ' ', ' ', ' ', ' ', ' '};
+	std::string s;
+	CHECK(xp::field_path(f, 8, s) && s == "ab", "NUL then spaces");
+	uint8_t g[4] = {'a', 'b', 'c', 'd'};
+	CHECK(!xp::field_path(g, 4, s), "unterminated");
+	std::string base;
+	int i;
+	CHECK(xp::split_index("x/ENGN_thro_use[7]", base, i) && base == "x/ENGN_thro_use" && i == 7, "index");
+	CHECK(!xp::split_index("x[]", base, i) && !xp::split_index("x[a]", base, i) &&
+	          !xp::split_index("x[99999]", base, i) && !xp::split_index("x]", base, i),
+	      "malformed subscripts");
+}
+
+// ------------------------------------------------------------------ JSON and vehicle files
+
+TEST(json_reader)
+{
+	json::Value v = json::parse(R"({"a": [1, -2.5e1, true, null], "b": {"c": "x\u00e9\n"}})");
+	CHECK(v.kind == json::Value::Kind::Object && v.obj.size() == 2, "object");
+	CHECK(v.obj[0].second.arr[1].num == -25.0, "number");
+	CHECK(v.obj[1].second.obj[0].second.str == "x\xc3\xa9\n", "string escapes");
+	const char *bad[] = {"", "{", "{\"a\":}", "[1,]", "01", "{\"a\":1,\"a\":2}", "\"abc", "nul", "[1] x", "1e999"};
+	for (const char *b : bad) {
+		bool threw = false;
+		try {
+			json::parse(b);
+		} catch (const json::ParseError &) {
+			threw = true;
+		}
+		CHECK(threw, "'%s' must be rejected", b);
+	}
+	std::string deep(200, '[');
+	bool threw = false;
+	try {
+		json::parse(deep);
+	} catch (const json::ParseError &) {
+		threw = true;
+	}
+	CHECK(threw, "deep nesting rejected");
+}
+
+TEST(vehicle_keys)
+{
+	VehicleParams p;
+	vehicle_from_json(R"({"mass": 3, "inertia": [0.1, 0.2, 0.3], "noise": {"gyro": 0.01},
+	                      "rotor_scale": [1,1,1,1,1,1,1,0], "origin": [10, 20, 30]})", p);
+	CHECK(p.mass == 3 && p.inertia[2] == 0.3 && p.noise.gyro == 0.01 && p.rotor_scale[7] == 0, "applied");
+	CHECK(p.kf == 28.0269, "absent keys keep defaults");
+	struct {
+		const char *text, *key;
+	} bad[] = {
+		{R"({"mass": 0})", "mass"},           {R"({"mass": -2})", "mass"},
+		{R"({"inertia": [1, 0, 1]})", "inertia"}, {R"({"inertia": [1, 1]})", "inertia"},
+		{R"({"bogus": 1})", "bogus"},         {R"({"noise": {"gyr": 1}})", "noise.gyr"},
+		{R"({"kf": "x"})", "kf"},             {R"({"thrust_curve": 2})", "thrust_curve"},
+		{R"({"rotor_scale": [1]})", "rotor_scale"}, {R"({"motor_tau": -1})", "motor_tau"},
+	};
+	for (const auto &b : bad) {
+		std::string key = "?";
+		try {
+			VehicleParams q;
+			vehicle_from_json(b.text, q);
+		} catch (const VehicleError &e) {
+			key = e.key;
+		}
+		CHECK(key == b.key, "%s: key '%s'", b.text, key.c_str());
+	}
+}
+
+int main()
+{
+	for (const auto &t : registry()) {
+		g_test = t.name;
+		int before = g_failed;
+		t.fn();
+		std::printf("%s %s\n", g_failed == before ? "ok  " : "FAIL", t.name);
+	}
+	std::printf("%zu tests, %d checks, %d failed\n", registry().size(), g_checks, g_failed);
+	return g_failed ? 1 : 0;
+}
