@@ -414,10 +414,16 @@ bool mixer_set_params(struct mixer *m, const struct mixer_params *p)
 #define TOL_ATT ((scalar_t)16)      /* 2.4e-4 in scaled units */
 #define EPS_S   ((scalar_t)64)      /* 1e-3: slopes below are treated as zero */
 #define TOL_FLAG_REL SC(0.001)
+#define EPS_GS  ((scalar_t)16)      /* squared residual norm below which a row is dependent */
+#define EPS_P   ((scalar_t)8)
+#define EPS_MU  ((scalar_t)32)
 #else
 #define TOL_ATT SC(2e-5)
 #define EPS_S   SC(1e-6)
 #define TOL_FLAG_REL SC(1e-5)
+#define EPS_GS  SC(1e-8)
+#define EPS_P   SC(1e-7)
+#define EPS_MU  SC(1e-6)
 #endif
 
 static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
@@ -512,6 +518,162 @@ static void narrow(scalar_t q, scalar_t s, scalar_t hw, scalar_t *lo, scalar_t *
 	*hi = sc_min(*hi, b);
 }
 
+/* Orthonormal basis (rows q[0..r-1], length nf) of the row space of G_F (the 4 rows of gn
+ * restricted to the free rotors fr[0..nf-1]) by modified Gram-Schmidt; lt[k][m] = q_m . row_k,
+ * piv[m] = row that produced q_m. Returns r. */
+static int row_basis(const struct mixer *m, const int *fr, int nf, scalar_t q[NA][NR],
+		     scalar_t lt[NA][NA], int piv[NA])
+{
+	int r = 0;
+	for (int k = 0; k < NA; k++) {
+		scalar_t v[NR];
+		for (int t = 0; t < nf; t++)
+			v[t] = m->gn[k][fr[t]];
+		for (int i = 0; i < NA; i++)
+			lt[k][i] = SC_ZERO;
+		for (int pass = 0; pass < 2; pass++)
+			for (int i = 0; i < r; i++) {
+				scalar_t d = SC_ZERO;
+				for (int t = 0; t < nf; t++)
+					d = sc_mac(q[i][t], v[t], d);
+				lt[k][i] = sc_add(lt[k][i], d);
+				for (int t = 0; t < nf; t++)
+					v[t] = sc_sub(v[t], sc_mul(d, q[i][t]));
+			}
+		scalar_t n2 = SC_ZERO;
+		for (int t = 0; t < nf; t++)
+			n2 = sc_mac(v[t], v[t], n2);
+		if (n2 <= EPS_GS)
+			continue;
+		scalar_t nrm = sc_sqrt(n2);
+		for (int t = 0; t < nf; t++)
+			q[r][t] = sc_div(v[t], nrm);
+		lt[k][r] = nrm;
+		piv[r] = k;
+		r++;
+	}
+	return r;
+}
+
+/* Active-set refinement (at most MIXER_QP_ITERS iterations) from the feasible u towards the
+ * unique minimiser of |u - uref| subject to gn u = w, 0 <= u <= 1: every iterate stays in the
+ * box and moves only in the null space of the free columns, so gn u = w is kept; a last
+ * minimum-norm correction on the free rotors removes rounding drift. */
+static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t uref[NR], scalar_t u[NR])
+{
+	const int na = m->n_active;
+	int8_t bnd[NR]; /* 0 free, -1 at 0, +1 at 1 */
+	for (int t = 0; t < na; t++) {
+		int j = m->order[t];
+		bnd[j] = u[j] <= SC_ZERO ? -1 : (u[j] >= SC(1) ? 1 : 0);
+	}
+	scalar_t q[NA][NR], lt[NA][NA];
+	int piv[NA], fr[NR], nf = 0, r = 0, it;
+	for (it = 0; it < MIXER_QP_ITERS; it++) {
+		nf = 0;
+		for (int t = 0; t < na; t++)
+			if (bnd[m->order[t]] == 0)
+				fr[nf++] = m->order[t];
+		r = row_basis(m, fr, nf, q, lt, piv);
+		/* p = projection of (uref - u)_F onto null(G_F) */
+		scalar_t p[NR], c[NA], pmax = SC_ZERO;
+		for (int t = 0; t < nf; t++)
+			p[t] = sc_sub(uref[fr[t]], u[fr[t]]);
+		for (int i = 0; i < r; i++) {
+			c[i] = SC_ZERO;
+			for (int t = 0; t < nf; t++)
+				c[i] = sc_mac(q[i][t], p[t], c[i]);
+		}
+		for (int i = 0; i < r; i++)
+			for (int t = 0; t < nf; t++)
+				p[t] = sc_sub(p[t], sc_mul(c[i], q[i][t]));
+		for (int t = 0; t < nf; t++)
+			pmax = sc_max(pmax, sc_abs(p[t]));
+		if (pmax > EPS_P) {
+			scalar_t step = SC(1);
+			int blk = -1;
+			for (int t = 0; t < nf; t++) {
+				scalar_t lim;
+				if (p[t] < -EPS_P)
+					lim = sc_div(sc_neg(u[fr[t]]), p[t]);
+				else if (p[t] > EPS_P)
+					lim = sc_div(sc_sub(SC(1), u[fr[t]]), p[t]);
+				else
+					continue;
+				if (lim < step) {
+					step = sc_max(lim, SC_ZERO);
+					blk = t;
+				}
+			}
+			for (int t = 0; t < nf; t++)
+				u[fr[t]] = sc_clamp(sc_add(u[fr[t]], sc_mul(step, p[t])), SC_ZERO, SC(1));
+			if (blk >= 0) {
+				int j = fr[blk];
+				bnd[j] = p[blk] < 0 ? -1 : 1;
+				u[j] = bnd[j] < 0 ? SC_ZERO : SC(1);
+			}
+			continue;
+		}
+		/* stationary on this face: multipliers lambda from G_F^T lambda = g_F (g = u - uref),
+		 * i.e. L^T lambda = Q g_F, back substitution over the basis rows */
+		scalar_t lam[NA] = { SC_ZERO, SC_ZERO, SC_ZERO, SC_ZERO };
+		for (int i = 0; i < r; i++) {
+			c[i] = SC_ZERO;
+			for (int t = 0; t < nf; t++)
+				c[i] = sc_mac(q[i][t], sc_sub(u[fr[t]], uref[fr[t]]), c[i]);
+		}
+		for (int i = r - 1; i >= 0; i--) {
+			scalar_t acc = c[i];
+			for (int k = piv[i] + 1; k < NA; k++)
+				acc = sc_sub(acc, sc_mul(lt[k][i], lam[k]));
+			lam[piv[i]] = sc_div(acc, lt[piv[i]][i]);
+		}
+		int rel = -1;
+		scalar_t worst = EPS_MU;
+		for (int t = 0; t < na; t++) {
+			int j = m->order[t];
+			if (bnd[j] == 0)
+				continue;
+			scalar_t mu = sc_sub(u[j], uref[j]);
+			for (int k = 0; k < NA; k++)
+				mu = sc_sub(mu, sc_mul(m->gn[k][j], lam[k]));
+			scalar_t viol = bnd[j] < 0 ? sc_neg(mu) : mu;
+			if (viol > worst) {
+				worst = viol;
+				rel = j;
+			}
+		}
+		if (rel < 0)
+			break; /* KKT point: the unique optimum */
+		bnd[rel] = 0;
+	}
+	/* minimum-norm correction of the residual on the free rotors: d = Q^T y, L y = w - gn u */
+	nf = 0;
+	for (int t = 0; t < na; t++)
+		if (bnd[m->order[t]] == 0)
+			fr[nf++] = m->order[t];
+	r = row_basis(m, fr, nf, q, lt, piv);
+	scalar_t res[NA], y[NA];
+	for (int k = 0; k < NA; k++) {
+		res[k] = w[k];
+		for (int t = 0; t < na; t++)
+			res[k] = sc_sub(res[k], sc_mul(m->gn[k][m->order[t]], u[m->order[t]]));
+	}
+	for (int i = 0; i < r; i++) {
+		scalar_t acc = res[piv[i]];
+		for (int k = 0; k < i; k++)
+			acc = sc_sub(acc, sc_mul(lt[piv[i]][k], y[k]));
+		y[i] = sc_div(acc, lt[piv[i]][i]);
+	}
+	for (int t = 0; t < nf; t++) {
+		scalar_t d = SC_ZERO;
+		for (int i = 0; i < r; i++)
+			d = sc_mac(q[i][t], y[i], d);
+		u[fr[t]] = sc_clamp(sc_add(u[fr[t]], d), SC_ZERO, SC(1));
+	}
+	return it;
+}
+
 /* Exact preimage: u in [0,1]^8 with gn u = w (w attainable), see mixer.h step e. */
 static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 {
@@ -571,7 +733,7 @@ static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 			u[j] = sc_clamp(sc_add(uref[j], sc_mul(theta, d)), SC_ZERO, SC(1));
 		}
 	}
-	return steps;
+	return steps + refine(m, w, uref, u);
 }
 
 static void finish(const struct mixer *m, struct mixer_output *out)

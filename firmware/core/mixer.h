@@ -67,6 +67,8 @@
 
 /* bisection steps for the roll/pitch scale when even full roll/pitch is unattainable */
 #define MIXER_ALPHA_ITERS 16
+/* active-set iterations of the refinement towards the minimum-norm feasible allocation */
+#define MIXER_QP_ITERS 16
 /* facets: C(8,3) for the full set + C(7,3)+C(6,3)+C(5,3)+C(4,3) for the preimage steps */
 #define MIXER_MAX_FACETS 56
 #define MIXER_MAX_SUB_FACETS 69
