@@ -53,6 +53,9 @@ ARM_ARCH_m4f      := -mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16
 ARM_ARCH_m0       := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
 ARM_ARCH_m0-fixed := $(ARM_ARCH_m0)
 ARM_DEFS_m0-fixed := -DOCTO_FIXED=1
+# The test code (not the core) is built with -Os on M0: microbit has 256 KB of flash.
+ARM_UNIT_OPT_m0       := -Os
+ARM_UNIT_OPT_m0-fixed := -Os
 ARM_LD_m4f        := tests/arm/m4f.ld
 ARM_LD_m0         := tests/arm/m0.ld
 ARM_LD_m0-fixed   := tests/arm/m0.ld
@@ -96,7 +99,7 @@ $(ARM_B)/$(1)/core/%.o: firmware/core/%.c | arm-toolchain
 	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(CFLAGS_FW) $$(CORE_INC) -c $$< -o $$@
 $(ARM_B)/$(1)/unit/%.o: tests/core/%.c | arm-toolchain
 	@mkdir -p $$(@D)
-	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(UNIT_CFLAGS) -c $$< -o $$@
+	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(UNIT_CFLAGS) $$(ARM_UNIT_OPT_$(1)) -c $$< -o $$@
 $(ARM_B)/$(1)/unit/unit.o: $$(UNIT_LIST)
 $(ARM_B)/$(1)/rt/%.o: tests/arm/%.c | arm-toolchain
 	@mkdir -p $$(@D)
@@ -124,7 +127,8 @@ $(foreach v,$(ARM_VARIANTS),$(eval $(call arm_variant,$(v))))
 # SOURCES (firmware flags, -Ifirmware/core -Itests/arm) with the start-up code, the
 # bench markers and the variant's core library; for instruction counts.
 define arm_program
-$(2): $(3) $$(ARM_RT_OBJ_$(1)) $$(ARM_MARK_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a $$(ARM_LD_$(1)) tests/arm/sections.ld
+$(2): $(3) $$(ARM_RT_OBJ_$(1)) $$(ARM_MARK_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a $$(ARM_LD_$(1)) tests/arm/sections.ld \
+      $$(wildcard firmware/core/*.h) tests/arm/bench_mark.h
 	@mkdir -p $$(@D)
 	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(filter-out -MMD -MP,$$(CFLAGS_FW)) $(4) $$(CORE_INC) -Itests/arm \
 	  $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -o $$@ $(3) $$(ARM_RT_OBJ_$(1)) $$(ARM_MARK_OBJ_$(1)) \
