@@ -228,6 +228,10 @@ bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool ove
 		out = version >= 12 ? 120100.0f : 115500.0f;
 		return true;
 	}
+	if (base == "sim/time/total_running_time_sec" || base == "sim/time/total_flight_time_sec") {
+		out = f32(f.t);
+		return true;
+	}
 	if (base == "sim/operation/override/override_throttles") {
 		out = override_on ? 1.0f : 0.0f;
 		return true;
