@@ -15,6 +15,9 @@
 #define HOVER_TILT_DEG 5.0f
 #define TOUCHDOWN_S 1.0f
 #define POS_VEL_MAX 2.0f
+#define PROFILE_ACC 0.5f           /* m/s^2, take-off height profile */
+#define HOLD_ENTRY_M 0.05f         /* take-off ends (HOLD) within this of the target */
+#define HOLD_ENTRY_MPS 0.1f
 
 static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
@@ -252,6 +255,7 @@ int app_cmd_takeoff(struct app *a, float height_m, char *why, size_t cap)
 		break;
 	case APP_LAND:
 		a->z_sp = a->fr.pos_i_m[2];
+		a->vz_ff = 0.0f;
 		break;
 	case APP_TAKEOFF:
 	case APP_HOLD:
@@ -286,6 +290,7 @@ int app_cmd_land(struct app *a, char *why, size_t cap)
 	case APP_TAKEOFF:
 	case APP_HOLD:
 		a->z_sp = fminf(a->z_sp, a->fr.pos_i_m[2]);
+		a->vz_ff = 0.0f;
 		a->on_ground_s = 0.0f;
 		set_mode(a, APP_LAND);
 		return MAV_RESULT_ACCEPTED;
@@ -382,18 +387,19 @@ static void control_step(struct app *a, float dt)
 	/* guidance: height setpoint ramps and mode transitions */
 	switch (a->mode) {
 	case APP_TAKEOFF: {
-		float step = p->nav_tko_vel * dt;
-		if (a->z_sp < a->z_target - step) {
-			a->z_sp += step;
-			a->vz_ff = p->nav_tko_vel;
-		} else if (a->z_sp > a->z_target + step) {
-			a->z_sp -= step;
-			a->vz_ff = -p->nav_tko_vel;
-		} else {
+		/* trapezoidal height profile: accelerate and brake at PROFILE_ACC, cruise at
+		 * NAV_TKO_VEL, so the setpoint (and its feedforward) never jumps */
+		float d = a->z_target - a->z_sp, ad = fabsf(d);
+		float v = fminf(fminf(p->nav_tko_vel, sqrtf(2.0f * PROFILE_ACC * ad)),
+				fabsf(a->vz_ff) + PROFILE_ACC * dt);
+		if (ad <= v * dt || ad < 1e-3f) {
 			a->z_sp = a->z_target;
 			a->vz_ff = 0.0f;
-			if (fabsf(z - a->z_target) < 0.1f)
+			if (fabsf(z - a->z_target) < HOLD_ENTRY_M && fabsf(vz) < HOLD_ENTRY_MPS)
 				set_mode(a, APP_HOLD);
+		} else {
+			a->vz_ff = d > 0.0f ? v : -v;
+			a->z_sp += a->vz_ff * dt;
 		}
 		break;
 	}
