@@ -62,8 +62,11 @@ struct alt_ctrl {
 };
 
 /* Defaults for the paper's octocopter at 90 Hz (m = 2.132 kg, 8 x 28 N rotors):
- * wn 2.5 rad/s, zeta 1.0, ki 0.4 1/s, vz limits +2 / -1.5 m/s, a_int_max 4 m/s^2,
- * cos_tilt_min 0.5, f in [2, 200] N, g 9.796 m/s^2. */
+ * wn 2.5 rad/s, zeta 1.0, ki 0.8 1/s, vz limits +2 / -1.5 m/s, a_int_max 4 m/s^2,
+ * cos_tilt_min 0.5, f in [2, 200] N, g 9.796 m/s^2. Measured in tests/core/test_alt_ctrl.c
+ * (1 frame delay + 30 ms thrust lag): 1 m step 0 % overshoot, 5 % settling 2.0 s; 10 m
+ * step rides the 2 m/s limit, 0 % overshoot, 4.9 s; mass or thrust scale wrong by
+ * -20 ... +27 %: hover sag <= 0.23 m recovered (2 cm) in <= 4.7 s, converged steps 0 %. */
 struct alt_ctrl_params alt_ctrl_params_default(void);
 
 /* Copies params, zeroes the integral and flags. */
