@@ -1,0 +1,79 @@
+/* Tests of firmware/core/thrmap.h, eqs. (16)-(17), in whichever build this is.
+ * Tolerances: float 1e-6 relative; Q16.16 a few LSB of T (1.5e-5) and of f (k_f * LSB). */
+#include "thrmap.h"
+#include "unit.h"
+
+#include <math.h>
+
+static double d(scalar_t a) { return (double)sc_to_float(a); }
+static scalar_t s(double x) { return sc_from_float((float)x); }
+
+UNIT_TEST(thrmap_linear_round_trip_and_clamp)
+{
+	struct thrmap_params p = { SC(28.0269), SC(0) };
+	struct thrmap m;
+	thrmap_init(&m, &p);
+	/* hover: 2.132 * 9.796 / 8 = 2.6106 N per rotor -> T = 0.0931 */
+	bool c = true;
+	scalar_t t = thrmap_throttle(&m, s(2.132 * 9.796 / 8), &c);
+	CHECK(!c);
+	CHECK_NEAR(d(t), 2.132 * 9.796 / 8 / 28.0269, OCTO_FIXED ? 2e-5 : 1e-7);
+	for (int i = 0; i <= 100; i++) {
+		double T = i / 100.0;
+		scalar_t f = thrmap_thrust(&m, s(T));
+		CHECK_NEAR(d(f), 28.0269 * T, OCTO_FIXED ? 28 * 2e-5 : 1e-5);
+		CHECK_NEAR(d(thrmap_throttle(&m, f, NULL)), d(s(T)), OCTO_FIXED ? 2e-5 : 1e-6);
+	}
+	/* clamping and flags */
+	CHECK(thrmap_throttle(&m, SC(-1), &c) == SC_ZERO && c);
+	CHECK(thrmap_throttle(&m, SC(30), &c) == SC(1) && c);
+	CHECK(thrmap_throttle(&m, SC(0), &c) == SC_ZERO && !c);
+	CHECK(thrmap_thrust(&m, SC(1.5)) == thrmap_thrust(&m, SC(1)));
+	CHECK(thrmap_thrust(&m, SC(-0.5)) == SC_ZERO);
+}
+
+UNIT_TEST(thrmap_update_mask)
+{
+	struct thrmap_params p = { SC(28), SC(0) };
+	struct thrmap m;
+	thrmap_init(&m, &p);
+	scalar_t f[8] = { SC(2.6), SC(-0.1), SC(2.6), SC(40), SC(0), SC(28), SC(14), SC(2.6) };
+	scalar_t t[8];
+	uint32_t mask = thrmap_update(&m, f, t, 8);
+	CHECK(mask == ((1u << 1) | (1u << 3)));
+	CHECK(t[1] == SC_ZERO && t[3] == SC(1) && t[5] == SC(1));
+	CHECK_NEAR(d(t[6]), 0.5, OCTO_FIXED ? 2e-5 : 1e-7);
+}
+
+/* Thrust curve f = k_f ((1 - a) T + a T^2): closed-form inverse against double. */
+UNIT_TEST(thrmap_curve_inverse)
+{
+	const double kf = 28.0269;
+	const double as[4] = { 0.1, 0.3, 0.6, 0.95 };
+	for (int j = 0; j < 4; j++) {
+		struct thrmap_params p = { s(kf), s(as[j]) };
+		struct thrmap m;
+		thrmap_init(&m, &p);
+		double a = d(p.curve);
+		for (int i = 0; i <= 200; i++) {
+			double T = i / 200.0;
+			scalar_t f = thrmap_thrust(&m, s(T));
+			double Tq = d(s(T));
+			CHECK_NEAR(d(f), d(p.k_f_n) * ((1 - a) * Tq + a * Tq * Tq), OCTO_FIXED ? 5e-4 : 2e-5);
+			/* round trip: Q16.16 loses up to ~2 LSB in f, i.e. 2 LSB / (df/dT) in T */
+			double slope = (1 - a) + 2 * a * T;
+			CHECK_NEAR(d(thrmap_throttle(&m, f, NULL)), Tq, OCTO_FIXED ? 2e-5 + 4e-5 / slope : 2e-6);
+			/* against the double inverse of an arbitrary thrust */
+			double fx = kf * T * 0.97;
+			double uu = d(s(fx)) / d(p.k_f_n);
+			double Tref = 2 * uu / ((1 - a) + sqrt((1 - a) * (1 - a) + 4 * a * uu));
+			CHECK_NEAR(d(thrmap_throttle(&m, s(fx), NULL)), Tref, OCTO_FIXED ? 2e-5 + 4e-5 / slope : 2e-6);
+		}
+	}
+	/* bad parameters are clamped, never divide by zero */
+	struct thrmap_params bad = { SC(0), SC(2) };
+	struct thrmap m;
+	thrmap_init(&m, &bad);
+	CHECK(d(m.p.k_f_n) > 0 && d(m.p.curve) <= 0.99 + 1e-4);
+	CHECK(thrmap_throttle(&m, SC(1), NULL) == SC(1));
+}
