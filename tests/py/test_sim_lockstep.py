@@ -128,3 +128,15 @@ def test_truth_on_lcm(launch, port, tmp_path):
     assert list(m.s) == pytest.approx(u) and m.thrust[0] == pytest.approx(28.0269 * u[0])
     assert m.torque[0] > 0 and m.torque[1] < 0
     assert m.pos_i[2] > 0 and m.q_i2b[0] == pytest.approx(1.0) and not m.on_ground
+
+
+def test_real_time_is_paced_like_xplane(launch, port):
+    s = SimUnderTest(launch, port, "--rate", "90", "--rows", "1")
+    s.next_data()
+    t0 = time.monotonic()
+    times = []
+    while time.monotonic() - t0 < 1.0:
+        times.append(s.next_data()[1][2])
+    assert 75 <= len(times) <= 105
+    steps = {round((b - a) * RATE, 3) for a, b in zip(times, times[1:])}
+    assert steps == {1.0}                                     # one frame = 1/90 s of simulated time
