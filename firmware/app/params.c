@@ -2,6 +2,7 @@
 #include "params.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -113,8 +114,16 @@ unsigned params_parse(struct app_params *p, const char *text, size_t len, params
 		char line[128];
 		size_t ll = end - pos;
 		const char *why = NULL;
+		bool binary = false;
+		for (size_t k = pos; k < end; k++) {
+			unsigned char ch = (unsigned char)text[k];
+			if ((ch < 32 && ch != '\t' && ch != '\r') || ch > 126)
+				binary = true;
+		}
 		if (ll >= sizeof line) {
 			why = "line too long";
+		} else if (binary) {
+			why = "not a text line";
 		} else {
 			memcpy(line, text + pos, ll);
 			line[ll] = 0;

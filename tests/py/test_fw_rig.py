@@ -33,6 +33,7 @@ class Rig:
         self.fw_log = tmp_path / "fw.lcm"
         self.sim = self.fw = self.m = None
         self.texts = []
+        self.backlog = []   # messages read while waiting for something else
 
     # ------------------------------------------------------------ processes
     def start_sim(self, *args, lockstep=True):
@@ -71,6 +72,9 @@ class Rig:
 
     # ------------------------------------------------------------ MAVLink
     def recv(self, types, timeout=2.0):
+        for i, msg in enumerate(self.backlog):
+            if msg.get_type() in types:
+                return self.backlog.pop(i)
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             msg = self.m.recv_match(blocking=True, timeout=0.05)
@@ -81,6 +85,9 @@ class Rig:
                 self.texts.append(msg.text)
             if t in types:
                 return msg
+            if t in ("AUTOPILOT_VERSION", "PARAM_VALUE", "MISSION_COUNT", "FILE_TRANSFER_PROTOCOL"):
+                self.backlog.append(msg)
+                del self.backlog[:-50]
         return None
 
     def cmd(self, command, *params, timeout=3.0, confirmation=0, target_component=1):
