@@ -80,9 +80,12 @@ void filt_svf_reset(struct filt_svf *f, scalar_t y0)
 
 scalar_t filt_svf_update(struct filt_svf *f, scalar_t y)
 {
-	scalar_t us = sc_add(y, f->u_prev);
-	scalar_t y1 = sc_add(sc_add(sc_mul(f->a11, f->y), sc_mul(f->a12, f->ydot)), sc_mul(f->b1, us));
-	scalar_t y2 = sc_add(sc_add(sc_mul(f->a21, f->y), sc_mul(f->a22, f->ydot)), sc_mul(f->b2, us));
+	/* increment form: x1 += a12 x2 + b1 (u_k + u_(k-1) - 2 x1), and
+	 * x2 += (a22 - 1) x2 + b2 (u_k + u_(k-1) - 2 x1); equal to the matrix form with
+	 * a11 = 1 - 2 b1, a21 = -2 b2, but the rounding vanishes at rest (exact DC in Q16.16) */
+	scalar_t err = sc_sub(sc_add(y, f->u_prev), sc_add(f->y, f->y));
+	scalar_t y1 = sc_add(f->y, sc_add(sc_mul(f->a12, f->ydot), sc_mul(f->b1, err)));
+	scalar_t y2 = sc_add(f->ydot, sc_add(sc_mul(sc_sub(f->a22, SC(1)), f->ydot), sc_mul(f->b2, err)));
 	f->y = y1;
 	f->ydot = y2;
 	f->u_prev = y;
