@@ -137,8 +137,6 @@ bool Server::pump(double deadline, bool until_full)
 		if (stop_)
 			return false;
 		const double now = wall_now();
-		if (o_.verbose)
-			status(now);
 		if (now >= deadline)
 			return (input_.cmd_mask & 0xFFu) == 0xFFu;
 		sock_.wait_readable(std::min(deadline - now, 0.25));
@@ -196,6 +194,8 @@ int Server::run()
 	while (!stop_) {
 		send_frame(started);
 		rref_tick();
+		if (o_.verbose)
+			status(wall_now());
 		if (o_.duration > 0 && model_.t() >= o_.duration - 1e-9)
 			break;
 		if (o_.lockstep) {
