@@ -3,6 +3,7 @@ directions: vectors the sim receives are sent and their effect observed; what th
 sim emits is decoded with the independent codec in xplane_proto.py."""
 
 import hashlib
+import math
 import random
 import struct
 import time
@@ -330,3 +331,54 @@ def test_random_datagrams_never_crash(launch, port):
     assert s.link.recv_type("DATA", 2.0) is not None
     c = s.counters()
     assert c["rx_datagrams"] >= 3000
+
+
+RREF_PATHS = {
+    10: "sim/flightmodel/position/Prad", 11: "sim/flightmodel/position/Qrad",
+    12: "sim/flightmodel/position/Rrad", 13: "sim/flightmodel/position/theta",
+    14: "sim/flightmodel/position/phi", 15: "sim/flightmodel/position/psi",
+    16: "sim/flightmodel/position/q[0]", 17: "sim/flightmodel/position/q[1]",
+    18: "sim/flightmodel/position/q[2]", 19: "sim/flightmodel/position/q[3]",
+    20: "sim/flightmodel/position/local_x", 21: "sim/flightmodel/position/local_y",
+    22: "sim/flightmodel/position/local_z", 23: "sim/flightmodel/position/local_vx",
+    24: "sim/flightmodel/position/local_vy", 25: "sim/flightmodel/position/local_vz",
+    26: "sim/flightmodel/engine/POINT_thrust[2]", 27: "sim/flightmodel/engine/ENGN_TRQ[2]",
+    28: "sim/flightmodel/engine/ENGN_thro_use[2]", 29: "sim/time/total_running_time_sec",
+    30: "sim/flightmodel/position/P", 31: "sim/operation/override/override_throttles",
+}
+
+
+def test_rref_values_agree_with_the_data_rows(launch, port):
+    """Same frame, two channels: every subscribed dataref equals its DATA row value."""
+    s = SimUnderTest(launch, port, "--lockstep", "--rows", "1,16,17,21,25,35,36")
+    for idx, path in RREF_PATHS.items():
+        s.send(xp.encode_rref(90, idx, path))
+    s.next_data()
+    s.link.drain()
+    u = [HOVER * 1.2 + (0.01 if j in (0, 1, 7) else 0.0) for j in range(8)]
+    s.command(u)
+    checked = 0
+    while checked < 40:
+        d = s.link.recv_type("DATA")
+        r = s.link.recv_type("RREF")
+        f, v = xp.decode_data(d), dict(xp.decode_rref(r))
+        if v[29] == 0.0:
+            continue                                          # pre-start repetition
+        assert v[29] == f[1][2]
+        P, Q, R = xp.row16_pqr(f[16], 12)
+        assert (v[10], v[11], v[12]) == pytest.approx((P, Q, R), rel=1e-5, abs=1e-6)
+        assert v[30] == pytest.approx(f[16][0], rel=1e-5, abs=1e-5)
+        assert (v[13], v[14], v[15]) == (f[17][0], f[17][1], f[17][2])
+        assert (v[20], v[21], v[22], v[23], v[24], v[25]) == f[21][:6]
+        assert v[26] == pytest.approx(f[35][2] * xp.N_PER_LB, rel=1e-5)
+        assert v[27] == pytest.approx(f[36][2] * xp.NM_PER_FTLB, rel=1e-5)
+        assert v[28] == f[25][2] == f32(u[2]) and v[31] == 0.0
+        # q from the half angles of (heading, pitch, roll)
+        ps, th, ph = (math.radians(a) / 2 for a in (f[17][2], f[17][0], f[17][1]))
+        qw = math.cos(ph) * math.cos(th) * math.cos(ps) + math.sin(ph) * math.sin(th) * math.sin(ps)
+        qx = math.sin(ph) * math.cos(th) * math.cos(ps) - math.cos(ph) * math.sin(th) * math.sin(ps)
+        sign = 1.0 if qw * v[16] >= 0 else -1.0                # q and -q: the same rotation
+        assert (v[16], v[17]) == pytest.approx((sign * qw, sign * qx), abs=1e-5)
+        assert v[16] ** 2 + v[17] ** 2 + v[18] ** 2 + v[19] ** 2 == pytest.approx(1.0, abs=1e-5)
+        s.command(u)
+        checked += 1
