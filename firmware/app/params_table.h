@@ -29,7 +29,7 @@ PARAM(ATT_KI,       att_ki,       0.3f,    0.0f,    10.0f,   "1/s",    "Attitude
 PARAM(ATT_TILT_MAX, att_tilt_max, 20.0f,   2.0f,    45.0f,   "deg",    "Largest tilt the position loop may ask for")
 PARAM(ALT_WN,       alt_wn,       2.5f,    0.2f,    10.0f,   "rad/s",  "Height loop natural frequency")
 PARAM(ALT_ZETA,     alt_zeta,     1.0f,    0.3f,    3.0f,    "",       "Height loop damping ratio")
-PARAM(ALT_KI,       alt_ki,       0.4f,    0.0f,    10.0f,   "1/s",    "Height integral pole (removes thrust-scale errors)")
+PARAM(ALT_KI,       alt_ki,       0.8f,    0.0f,    10.0f,   "1/s",    "Height integral pole (removes thrust-scale errors)")
 PARAM(POS_VEL_GAIN, pos_vel_gain, 0.15f,   0.0f,    2.0f,    "rad s/m","Horizontal velocity damping: tilt per m/s")
 PARAM(POS_GAIN,     pos_gain,     0.3f,    0.0f,    5.0f,    "1/s",    "Horizontal position hold: velocity per metre")
 PARAM(NAV_TKO_ALT,  nav_tko_alt,  10.0f,   0.5f,    100.0f,  "m",      "Take-off height when the command gives none")
