@@ -149,7 +149,14 @@ scalar_t excite_update(struct excite *e)
 		break;
 	case EXCITE_MULTISINE:
 		y = sc_mul(e->ms_scale, excite_ms_raw(e));
-		excite_ms_step(e);
+		/* restart the phases every period: exactly periodic, the phase jump at the
+		 * restart is below P / 2^33 of a turn */
+		if (++e->count >= p->ms_period_frames) {
+			e->count = 0;
+			excite_ms_start(e);
+		} else {
+			excite_ms_step(e);
+		}
 		break;
 	case EXCITE_OFF:
 	default:

@@ -51,7 +51,7 @@ struct excite {
 	uint32_t rng;        /* xorshift32 state (uniform) */
 	uint32_t lfsr;       /* LFSR state (PRBS) */
 	uint32_t lfsr_taps;
-	uint32_t count;      /* frames since the current value was drawn */
+	uint32_t count;      /* frames since the value was drawn (multisine: frame in period) */
 	scalar_t value;      /* current held value (uniform, PRBS) */
 	uint32_t phase[EXCITE_MS_MAX]; /* multisine phases, 2^32 = one turn */
 	uint32_t dphase[EXCITE_MS_MAX];
@@ -69,8 +69,8 @@ void excite_init(struct excite *e, const struct excite_params *params);
 /* Next sample, in [-A, A] (0 for EXCITE_OFF). */
 scalar_t excite_update(struct excite *e);
 
-/* Period of the sequence in frames: PRBS (2^n - 1) clock_div, multisine P (exact to
- * P / 2^33 of a turn per period), 0 for uniform (not periodic) and off. */
+/* Period of the sequence in frames: PRBS (2^n - 1) clock_div, multisine P (exactly
+ * periodic), 0 for uniform (not periodic) and off. */
 uint32_t excite_period_frames(const struct excite *e);
 
 #endif /* OCTO_EXCITE_H */
