@@ -4,6 +4,25 @@
 #define NR MIXER_N_ROTORS
 #define NA MIXER_N_AXES
 
+/* tolerances of the allocator, in scaled units (1 = one rotor's full thrust range) */
+#if OCTO_FIXED
+#define TOL_ATT ((scalar_t)16)      /* 2.4e-4 in scaled units */
+#define TOL_IN  ((scalar_t)24)      /* inner margin of the priority steps: 3.7e-4 */
+#define EPS_S   ((scalar_t)64)      /* 1e-3: slopes below are treated as zero */
+#define TOL_FLAG_REL SC(0.001)
+#define EPS_GS  ((scalar_t)16)      /* squared residual norm below which a row is dependent */
+#define EPS_P   ((scalar_t)8)
+#define EPS_MU  ((scalar_t)32)
+#else
+#define TOL_ATT SC(3e-6)
+#define TOL_IN  SC(3e-6)
+#define EPS_S   SC(1e-6)
+#define TOL_FLAG_REL SC(1e-5)
+#define EPS_GS  SC(1e-8)
+#define EPS_P   SC(1e-7)
+#define EPS_MU  SC(1e-6)
+#endif
+
 /* ================================================================ set-up (float32) */
 
 static float absf(float x) { return x < 0.0f ? -x : x; }
@@ -242,6 +261,28 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 		}
 	}
 	m->rank = (uint8_t)rank;
+	/* two Newton-Schulz steps P <- 2P - P Gamma P (converge to the Moore-Penrose inverse,
+	 * also when rank-deficient) polish the float32 SVD result */
+	for (int it = 0; it < 2; it++) {
+		float gp[NA][NA], np[NR][NA];
+		for (int i = 0; i < NA; i++)
+			for (int k = 0; k < NA; k++) {
+				float acc = 0.0f;
+				for (int j = 0; j < NR; j++)
+					acc += m->gamma_f[i][j] * m->pinv_f[j][k];
+				gp[i][k] = acc;
+			}
+		for (int j = 0; j < NR; j++)
+			for (int k = 0; k < NA; k++) {
+				float acc = 0.0f; /* (P (I - Gamma P))_jk, then P + that */
+				for (int i = 0; i < NA; i++)
+					acc += m->pinv_f[j][i] * ((i == k ? 1.0f : 0.0f) - gp[i][k]);
+				np[j][k] = m->pinv_f[j][k] + acc;
+			}
+		for (int j = 0; j < NR; j++)
+			for (int k = 0; k < NA; k++)
+				m->pinv_f[j][k] = np[j][k];
+	}
 
 	/* ---- null space: complete the row space of Gamma (ucol) with unit vectors, Gram-Schmidt */
 	float basis[NR][NR];
@@ -321,6 +362,8 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 		}
 	}
 	m->width = sc_from_float(width);
+	/* a rotor within 4 inner margins of a bound counts as at the bound */
+	m->at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
 	for (int j = 0; j < NR; j++)
 		for (int i = 0; i < NA; i++)
 			m->pinv_n[j][i] = sc_from_float(m->pinv_f[j][i] * rowmax[i]);
@@ -410,21 +453,6 @@ bool mixer_set_params(struct mixer *m, const struct mixer_params *p)
 
 /* ================================================================ 90 Hz path (scalar_t) */
 
-#if OCTO_FIXED
-#define TOL_ATT ((scalar_t)16)      /* 2.4e-4 in scaled units */
-#define EPS_S   ((scalar_t)64)      /* 1e-3: slopes below are treated as zero */
-#define TOL_FLAG_REL SC(0.001)
-#define EPS_GS  ((scalar_t)16)      /* squared residual norm below which a row is dependent */
-#define EPS_P   ((scalar_t)8)
-#define EPS_MU  ((scalar_t)32)
-#else
-#define TOL_ATT SC(2e-5)
-#define EPS_S   SC(1e-6)
-#define TOL_FLAG_REL SC(1e-5)
-#define EPS_GS  SC(1e-8)
-#define EPS_P   SC(1e-7)
-#define EPS_MU  SC(1e-6)
-#endif
 
 static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
 {
@@ -482,13 +510,42 @@ static bool thrust_interval(const struct mixer *m, const scalar_t w[NA], scalar_
 		q = sc_mac(fc->n[2], w[2], q);
 		q = sc_mac(fc->n[3], w[3], q);
 		q = sc_sub(q, fc->nc);
-		scalar_t s = fc->n[0], hw = sc_add(fc->h, TOL_ATT);
+		scalar_t s = fc->n[0], hw = sc_sub(fc->h, TOL_IN);
 		if (sc_abs(s) <= EPS_S) {
 			if (sc_abs(q) > hw)
 				return false;
 			continue;
 		}
 		/* -hw <= s F + q <= hw */
+		scalar_t a = sc_div(sc_sub(sc_neg(hw), q), s), b = sc_div(sc_sub(hw, q), s);
+		if (s < 0) {
+			scalar_t t = a;
+			a = b;
+			b = t;
+		}
+		l = sc_max(l, a);
+		h = sc_min(h, b);
+	}
+	*lo = l;
+	*hi = h;
+	return l <= h;
+}
+
+/* With w[3] = the scaled zero yaw, the interval of beta in [0, 1] such that
+ * w + beta dy e_3 is attainable; false if empty. */
+static bool yaw_interval(const struct mixer *m, const scalar_t w[NA], scalar_t dy, scalar_t *lo, scalar_t *hi)
+{
+	scalar_t l = SC_ZERO, h = SC(1);
+	for (int k = 0; k < m->n_facets; k++) {
+		const struct mixer_facet *fc = &m->facet[k];
+		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
+		scalar_t s = sc_mul(fc->n[3], dy), hw = sc_sub(fc->h, TOL_IN);
+		if (sc_abs(s) <= EPS_S) {
+			if (sc_abs(q) > hw)
+				return false;
+			continue;
+		}
+		/* -hw <= q + beta s <= hw */
 		scalar_t a = sc_div(sc_sub(sc_neg(hw), q), s), b = sc_div(sc_sub(hw, q), s);
 		if (s < 0) {
 			scalar_t t = a;
@@ -744,9 +801,9 @@ static void finish(const struct mixer *m, struct mixer_output *out)
 	for (int j = 0; j < NR; j++) {
 		if (!(m->present & (1u << j)))
 			continue;
-		if (out->f_n[j] <= m->f_lo)
+		if (out->f_n[j] <= sc_add(m->f_lo, m->at_tol))
 			out->rotor_at_min |= (uint8_t)(1u << j);
-		if (out->f_n[j] >= m->f_hi)
+		if (out->f_n[j] >= sc_sub(m->f_hi, m->at_tol))
 			out->rotor_at_max |= (uint8_t)(1u << j);
 	}
 	if (out->rotor_at_min)
@@ -859,22 +916,37 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 			if (demand[2] != SC_ZERO)
 				out->limits |= MIXER_LIMIT_TY;
 		}
-		/* c. thrust nearest to the demand on the zero-yaw slice */
-		w[0] = sc_clamp(wd[0], lo, hi);
-		if (w[0] != wd[0])
-			out->limits |= MIXER_LIMIT_F;
-		/* d. yaw: largest beta in [0, 1] along the demanded yaw */
-		scalar_t dy = sc_sub(wd[3], yaw0), beta = SC(1);
-		for (int k = 0; k < m->n_facets; k++) {
-			const struct mixer_facet *fc = &m->facet[k];
-			scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
-			scalar_t s = sc_mul(fc->n[3], dy), hw = fc->h;
-			if (s > EPS_S)
-				beta = sc_min(beta, sc_div(sc_sub(hw, q), s));
-			else if (s < -EPS_S)
-				beta = sc_min(beta, sc_div(sc_sub(sc_neg(hw), q), s));
+		/* c. thrust nearest to the demand for which some yaw beta tau_z, beta in [0, 1],
+		 * is attainable: exact when the demanded thrust itself or the zero-yaw slice
+		 * allows it, else MIXER_ALPHA_ITERS bisection steps towards the demand */
+		scalar_t dy = sc_sub(wd[3], yaw0), blo, bhi;
+		w[0] = sc_clamp(wd[0], lo, hi); /* attainable with beta = 0 */
+		if (alpha < SC(1)) {
+			/* roll/pitch saturated: no room is left for yaw; thrust from the zero-yaw slice */
+			dy = SC_ZERO;
+			if (w[0] != wd[0])
+				out->limits |= MIXER_LIMIT_F;
+		} else if (w[0] != wd[0]) {
+			scalar_t ok_f = w[0];
+			w[0] = wd[0];
+			if (!yaw_interval(m, w, dy, &blo, &bhi)) {
+				scalar_t bad_f = wd[0];
+				for (int it = 0; it < MIXER_ALPHA_ITERS; it++) {
+					w[0] = sc_add(sc_mul(ok_f, SC(0.5)), sc_mul(bad_f, SC(0.5)));
+					if (yaw_interval(m, w, dy, &blo, &bhi))
+						ok_f = w[0];
+					else
+						bad_f = w[0];
+					steps++;
+				}
+				w[0] = ok_f;
+				out->limits |= MIXER_LIMIT_F;
+			}
 		}
-		beta = sc_clamp(beta, SC_ZERO, SC(1));
+		/* d. yaw: largest beta in [0, 1] at that thrust (beta >= 0: no yaw reversal) */
+		scalar_t beta = SC_ZERO;
+		if (dy != SC_ZERO && yaw_interval(m, w, dy, &blo, &bhi))
+			beta = sc_clamp(bhi, SC_ZERO, SC(1));
 		if (beta < SC(1) && demand[3] != SC_ZERO)
 			out->limits |= MIXER_LIMIT_TZ;
 		w[3] = sc_add(yaw0, sc_mul(beta, dy));

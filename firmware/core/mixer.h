@@ -66,7 +66,7 @@
 #define MIXER_AXIS_TZ  3
 
 /* bisection steps for the roll/pitch scale when even full roll/pitch is unattainable */
-#define MIXER_ALPHA_ITERS 16
+#define MIXER_ALPHA_ITERS 20
 /* active-set iterations of the refinement towards the minimum-norm feasible allocation */
 #define MIXER_QP_ITERS 16
 /* facets: C(8,3) for the full set + C(7,3)+C(6,3)+C(5,3)+C(4,3) for the preimage steps */
@@ -123,6 +123,7 @@ struct mixer {
 	scalar_t row_div[MIXER_N_AXES];    /* 1 / max_j |Gamma_ij| */
 	scalar_t row_scale[MIXER_N_AXES];  /* physical wrench per unit of scaled wrench */
 	scalar_t width;                    /* f_hi - f_lo */
+	scalar_t at_tol;                   /* rotor_at_min/max tolerance, N */
 	scalar_t w_lo[MIXER_N_AXES];       /* physical wrench with every present rotor at f_lo */
 	scalar_t f_lo, f_hi;               /* rotor thrust box, N */
 	uint8_t n_active;
