@@ -84,3 +84,31 @@ def test_land_disarms_on_touchdown(launch, port, tmp_path):
     assert "Landed" in rig.texts and "Mode DISARMED" in rig.texts, "|".join(rig.texts)
     hb = rig.recv({"HEARTBEAT"}, timeout=2)
     assert hb is not None and not (hb.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED)
+
+
+def test_link_loss_is_reported_and_long_loss_lands_on_recovery(launch, port, tmp_path):
+    import time
+    rig = Rig(launch, port, tmp_path)
+    rig.start()
+    rig.arm_when_ready()
+    assert rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, 3.0)[0] == mavlink.MAV_RESULT_ACCEPTED
+    deadline = time.monotonic() + 10
+    while "Mode HOLD" not in rig.texts and time.monotonic() < deadline:
+        rig.recv(set(), timeout=0.05)
+    assert "Mode HOLD" in rig.texts
+    rig.sim.stop()                      # X-Plane gone
+    t_kill = time.monotonic()
+    while not any("link lost" in t for t in rig.texts) and time.monotonic() - t_kill < 3:
+        rig.recv(set(), timeout=0.05)
+    lost_after = time.monotonic() - t_kill
+    assert any("link lost" in t for t in rig.texts), rig.texts
+    assert lost_after < 1.0
+    hb = rig.recv({"HEARTBEAT"}, timeout=2)
+    assert hb.system_status == mavlink.MAV_STATE_CRITICAL
+    rig.recv(set(), timeout=max(0.0, 2.5 - (time.monotonic() - t_kill)))
+    rig.start_sim()                     # X-Plane back (a fresh one: rows and version again)
+    deadline = time.monotonic() + 15
+    while "Mode DISARMED" not in rig.texts and time.monotonic() < deadline:
+        rig.recv(set(), timeout=0.05)
+    assert any("link back" in t for t in rig.texts), rig.texts
+    assert "Mode LAND" in rig.texts and "Mode DISARMED" in rig.texts, "|".join(rig.texts)
