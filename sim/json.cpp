@@ -1,4 +1,4 @@
-// json: recursive-descent reader, strict RFC 8259 grammar, depth-limited.
+// json: recursive-descent reader, RFC 8259 grammar (plus NaN/Infinity), depth-limited.
 #include "json.hpp"
 
 #include <cmath>
@@ -152,6 +152,21 @@ private:
 		}
 		if (lit("null"))
 			return v;
+		// Not JSON, but what Python's json.dumps writes for non-finite floats:
+		// read them so that the vehicle loader can name the offending key.
+		v.kind = Value::Kind::Number;
+		if (lit("NaN")) {
+			v.num = std::nan("");
+			return v;
+		}
+		if (lit("Infinity")) {
+			v.num = HUGE_VAL;
+			return v;
+		}
+		if (lit("-Infinity")) {
+			v.num = -HUGE_VAL;
+			return v;
+		}
 		if (c == '-' || (c >= '0' && c <= '9')) {
 			v.kind = Value::Kind::Number;
 			v.num = number();

@@ -1,5 +1,6 @@
 // json: a small JSON reader for --vehicle files (objects, arrays, numbers,
-// strings, true/false/null). No dependencies; errors carry line and column.
+// strings, true/false/null; also NaN and [-]Infinity as Python writes them,
+// so that callers can reject them by name). No dependencies; errors carry line and column.
 #pragma once
 
 #include <stdexcept>

@@ -12,7 +12,9 @@
 #include "json.hpp"
 #include "model.hpp"
 #include "vehicle.hpp"
+#include "rng.hpp"
 #include "xplane_emit.hpp"
+#include "xplane_input.hpp"
 #include "xplane_proto.hpp"
 
 using namespace sim;
@@ -378,6 +380,9 @@ TEST(json_reader)
 	CHECK(v.kind == json::Value::Kind::Object && v.obj.size() == 2, "object");
 	CHECK(v.obj[0].second.arr[1].num == -25.0, "number");
 	CHECK(v.obj[1].second.obj[0].second.str == "x\xc3\xa9\n", "string escapes");
+	CHECK(std::isinf(json::parse("Infinity").num) && std::isnan(json::parse("NaN").num) &&
+	          json::parse("-Infinity").num < 0,
+	      "non-finite numbers as Python writes them");
 	const char *bad[] = {"", "{", "{\"a\":}", "[1,]", "01", "{\"a\":1,\"a\":2}", "\"abc", "nul", "[1] x", "1e999"};
 	for (const char *b : bad) {
 		bool threw = false;
@@ -413,6 +418,8 @@ TEST(vehicle_keys)
 		{R"({"bogus": 1})", "bogus"},         {R"({"noise": {"gyr": 1}})", "noise.gyr"},
 		{R"({"kf": "x"})", "kf"},             {R"({"thrust_curve": 2})", "thrust_curve"},
 		{R"({"rotor_scale": [1]})", "rotor_scale"}, {R"({"motor_tau": -1})", "motor_tau"},
+		{R"({"g": NaN})", "g"},               {R"({"inertia": [1, Infinity, 1]})", "inertia"},
+		{R"({"noise": {"gyro": -Infinity}})", "noise.gyro"},
 	};
 	for (const auto &b : bad) {
 		std::string key = "?";
@@ -424,6 +431,64 @@ TEST(vehicle_keys)
 		}
 		CHECK(key == b.key, "%s: key '%s'", b.text, key.c_str());
 	}
+}
+
+// ------------------------------------------------------------------ fuzz (most useful under make sim-asan)
+
+TEST(fuzz_json_and_vehicle_never_crash)
+{
+	Rng r(1, Stream::Noise, 0);
+	const std::string alphabet = "{}[]\",:.-+eE0123456789 \n\\truefalsnNaIinfy\"massgkfinertia";
+	const std::string seed = R"({"mass": 2, "inertia": [0.1, 0.2, 0.3], "noise": {"gyro": 0.01}})";
+	int parsed = 0;
+	for (int k = 0; k < 20000; k++) {
+		std::string t = seed;
+		const int edits = 1 + static_cast<int>(r.next() % 6);
+		for (int e = 0; e < edits; e++) {
+			const size_t pos = r.next() % (t.size() + 1);
+			const char c = alphabet[r.next() % alphabet.size()];
+			switch (r.next() % 3) {
+			case 0: t.insert(pos, 1, c); break;
+			case 1: if (pos < t.size()) t.erase(pos, 1); break;
+			default: if (pos < t.size()) t[pos] = c; break;
+			}
+		}
+		try {
+			VehicleParams p;
+			vehicle_from_json(t, p);
+			parsed++;
+			if (!(p.mass > 0 && p.inertia[0] > 0 && p.inertia[1] > 0 && p.inertia[2] > 0 && std::isfinite(p.g)))
+				CHECK(false, "accepted an impossible vehicle: %s", t.c_str());
+		} catch (const VehicleError &) {
+		}
+	}
+	CHECK(parsed > 0, "some mutations stay valid");
+}
+
+TEST(fuzz_xplane_input_never_crashes)
+{
+	Counters c;
+	XpInput in(c);
+	Rng r(2, Stream::Noise, 0);
+	sockaddr_in from{};
+	std::vector<uint8_t> b;
+	bool in_range = true;
+	const char *tags[] = {"DATA", "DREF", "RREF", "DSEL", "USEL", "CMND", "ISE4", "XXXX"};
+	for (int k = 0; k < 50000; k++) {
+		const size_t sizes[] = {0, 3, 5, 9, 13, 37, 41, 77, 412, 413, 414, 508, 509, 510, 1500};
+		size_t n = sizes[r.next() % 15];
+		b.resize(n);
+		for (auto &x : b)
+			x = static_cast<uint8_t>(r.next() % 4 ? r.next() : 0);
+		if (n >= 4)
+			std::memcpy(b.data(), tags[r.next() % 8], 4);
+		in.handle(b.data(), b.size(), from);
+		for (size_t j = 0; j < 16; j++)
+			in_range = in_range && in.thro[j] >= 0 && in.thro[j] <= 1 && in.thro_use[j] >= 0 && in.thro_use[j] <= 1;
+	}
+	CHECK(in_range, "throttles stay in [0, 1]");
+	CHECK(c[Counters::RxDatagrams] == 50000, "all counted");
+	CHECK(in.subs.size() <= XpInput::kMaxSubs, "subscriptions bounded");
 }
 
 int main()

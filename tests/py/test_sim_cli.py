@@ -60,7 +60,9 @@ def test_bad_flags_exit_2_naming_the_flag(args, flag):
     ('{"rotor_scale": [1, 1, 1]}', "rotor_scale"),
     ('{"thrust_curve": 1.5}', "thrust_curve"),
     ('{"origin": [95, 0, 0]}', "origin"),
-    ('{"g": NaN}', "JSON"),
+    ('{"g": NaN}', "'g'"),
+    ('{"kf": Infinity}', "'kf'"),
+    ('{"mass": 2.0 x}', "JSON"),
     ('{"mass": 2.0,}', "JSON"),
     ('[1, 2]', "object"),
 ])
