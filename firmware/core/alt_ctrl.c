@@ -36,6 +36,13 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 {
 	const struct alt_ctrl_params *p = &s->p;
 	uint32_t flags = 0;
+	if (!sc_isfinite(in->z_sp_m) || !sc_isfinite(in->vz_ff_mps) || !sc_isfinite(in->z_m) ||
+	    !sc_isfinite(in->vz_mps) || !sc_isfinite(in->mass_kg) || !sc_isfinite(in->dt_s) ||
+	    !sc_isfinite(in->q_b2i.w) || !sc_isfinite(in->q_b2i.x) || !sc_isfinite(in->q_b2i.y) ||
+	    !sc_isfinite(in->q_b2i.z)) {
+		s->flags = ALT_CTRL_BAD_INPUT;
+		return s->f_n;
+	}
 	scalar_t kv = sc_mul(sc_add(p->zeta, p->zeta), p->wn_rps); /* 2 zeta wn */
 	scalar_t kz = sc_div(sc_mul(p->wn_rps, p->wn_rps), kv);     /* wn / (2 zeta) */
 

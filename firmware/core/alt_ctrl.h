@@ -29,6 +29,7 @@
 #define ALT_CTRL_VZ_LIM   (1u << 2) /* height part of vz_cmd clamped */
 #define ALT_CTRL_TILT_LIM (1u << 3) /* cos_tilt below cos_tilt_min */
 #define ALT_CTRL_INT_LIM  (1u << 4) /* a_int at +/-a_int_max */
+#define ALT_CTRL_BAD_INPUT (1u << 5) /* a non-finite input (float build): last f kept */
 
 struct alt_ctrl_params {
 	scalar_t wn_rps;         /* closed-loop natural frequency, rad/s (> 0) */

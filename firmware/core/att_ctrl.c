@@ -40,9 +40,25 @@ static scalar_t get(struct vec3 v, int i)
 	return *comp(&v, i);
 }
 
+static bool vec3_finite(struct vec3 v)
+{
+	return sc_isfinite(v.x) && sc_isfinite(v.y) && sc_isfinite(v.z);
+}
+
+static bool quat_finite(struct quat q)
+{
+	return sc_isfinite(q.w) && sc_isfinite(q.x) && sc_isfinite(q.y) && sc_isfinite(q.z);
+}
+
 uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, struct vec3 *tau_b_nm)
 {
 	const struct att_ctrl_params *p = &s->p;
+	if (!quat_finite(in->q_sp_b2i) || !quat_finite(in->q_b2i) || !vec3_finite(in->rate_ff_b) ||
+	    !vec3_finite(in->rate_b_rps) || !vec3_finite(in->inertia_kgm2) || !sc_isfinite(in->dt_s)) {
+		*tau_b_nm = vec3_zero();
+		s->flags = ATT_CTRL_BAD_INPUT;
+		return s->flags;
+	}
 	struct vec3 e = quat_error_b(in->q_sp_b2i, in->q_b2i);
 	struct vec3 w = in->rate_b_rps;
 	struct vec3 inertia = in->inertia_kgm2;

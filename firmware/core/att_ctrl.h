@@ -40,6 +40,7 @@
 #define ATT_CTRL_RATE_LIM_X (1u << 3) /* attitude part of rate_cmd.x clamped to rate_max.x */
 #define ATT_CTRL_RATE_LIM_Y (1u << 4)
 #define ATT_CTRL_RATE_LIM_Z (1u << 5)
+#define ATT_CTRL_BAD_INPUT  (1u << 6) /* a non-finite input (float build): tau = 0, state kept */
 
 struct att_ctrl_params {
 	struct vec3 wn_rps;         /* closed-loop natural frequency per axis, rad/s (> 0) */

@@ -18,6 +18,8 @@ void filt_lag_reset(struct filt_lag *f, scalar_t y0)
 
 scalar_t filt_lag_update(struct filt_lag *f, scalar_t x)
 {
+	if (!sc_isfinite(x))
+		return f->y;
 	f->y = sc_add(f->y, sc_mul(f->alpha, sc_sub(x, f->y)));
 	return f->y;
 }
@@ -80,6 +82,8 @@ void filt_svf_reset(struct filt_svf *f, scalar_t y0)
 
 scalar_t filt_svf_update(struct filt_svf *f, scalar_t y)
 {
+	if (!sc_isfinite(y))
+		return f->y;
 	/* increment form: x1 += a12 x2 + b1 (u_k + u_(k-1) - 2 x1), and
 	 * x2 += (a22 - 1) x2 + b2 (u_k + u_(k-1) - 2 x1); equal to the matrix form with
 	 * a11 = 1 - 2 b1, a21 = -2 b2, but the rounding vanishes at rest (exact DC in Q16.16) */

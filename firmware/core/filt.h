@@ -6,7 +6,8 @@
  *
  * All coefficients are computed at init (init may use exp/trig via scalar.h); the
  * update functions use only add and mul. Caller-owned state, no failure: out-of-range
- * arguments are clamped as documented.
+ * arguments are clamped as documented; a non-finite input sample (float build) is
+ * ignored by the lag and the SVF (the state and output stay as they were).
  */
 #ifndef OCTO_FILT_H
 #define OCTO_FILT_H

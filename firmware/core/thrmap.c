@@ -13,7 +13,10 @@ scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped)
 {
 	scalar_t u = sc_div(f_n, m->p.k_f_n);
 	bool c = false;
-	if (u <= SC_ZERO) {
+	if (!sc_isfinite(u)) { /* float build: NaN gives no thrust, +/-Inf the limits */
+		c = true;
+		u = u > SC_ZERO ? SC(1) : SC_ZERO;
+	} else if (u <= SC_ZERO) {
 		c = u < SC_ZERO;
 		u = SC_ZERO;
 	} else if (u >= SC(1)) {

@@ -28,7 +28,8 @@ struct thrmap {
 /* Copies and clamps params (k_f >= 1e-3 N, 0 <= a <= 0.99). */
 void thrmap_init(struct thrmap *m, const struct thrmap_params *params);
 
-/* T = inverse map of f_n, clamped to [0, 1]; *clamped (may be NULL) set when it was. */
+/* T = inverse map of f_n, clamped to [0, 1]; *clamped (may be NULL) set when it was
+ * (a NaN thrust in the float build gives T = 0, clamped). */
 scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped);
 
 /* f = k_f ((1 - a) T + a T^2) with T first clamped to [0, 1] */

@@ -268,3 +268,26 @@ UNIT_TEST(alt_ctrl_law_matches_double_reference)
 		CHECK_NEAR(d(f), ref, OCTO_FIXED ? 5e-3 : 1e-4);
 	}
 }
+
+/* Float build: a NaN input keeps the last thrust and flags it; the integral stays finite. */
+UNIT_TEST(alt_ctrl_nan_guard)
+{
+#if OCTO_FIXED
+	(void)u; /* Q16.16 has no NaN */
+#else
+	struct alt_ctrl_params p = alt_ctrl_params_default();
+	struct alt_ctrl ac;
+	alt_ctrl_init(&ac, &p);
+	struct alt_ctrl_input in;
+	memset(&in, 0, sizeof in);
+	in.z_sp_m = SC(1);
+	in.q_b2i = quat_identity();
+	in.mass_kg = s(M_TRUE);
+	in.dt_s = s(FRAME_S);
+	scalar_t f0 = alt_ctrl_update(&ac, &in);
+	in.vz_mps = __builtin_nanf("");
+	CHECK(alt_ctrl_update(&ac, &in) == f0);
+	CHECK(ac.flags == ALT_CTRL_BAD_INPUT);
+	CHECK(sc_isfinite(ac.a_int_mps2));
+#endif
+}

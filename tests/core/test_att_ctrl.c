@@ -375,3 +375,30 @@ UNIT_TEST(att_ctrl_dither_excursion)
 	CHECK(r.max_err < 3.5 * 3.14159265 / 180.0);
 	CHECK(r.max_rate < 1.0);
 }
+
+/* Float build: a NaN input gives zero torque and a flag, and leaves the state usable. */
+UNIT_TEST(att_ctrl_nan_guard)
+{
+#if OCTO_FIXED
+	(void)u; /* Q16.16 has no NaN */
+#else
+	struct att_ctrl_params p = att_ctrl_params_default();
+	struct att_ctrl ac;
+	att_ctrl_init(&ac, &p);
+	struct att_ctrl_input in;
+	memset(&in, 0, sizeof in);
+	in.q_b2i = quat_identity();
+	in.q_sp_b2i = quat_from_euler(SC(0.05), SC(0), SC(0));
+	in.inertia_kgm2 = vec3_make(SC(0.05), SC(0.05), SC(0.05));
+	in.dt_s = s(FRAME_S);
+	struct vec3 tau;
+	att_ctrl_update(&ac, &in, &tau);
+	in.rate_b_rps.y = __builtin_nanf("");
+	CHECK(att_ctrl_update(&ac, &in, &tau) == ATT_CTRL_BAD_INPUT);
+	CHECK(tau.x == 0 && tau.y == 0 && tau.z == 0);
+	in.rate_b_rps.y = 0;
+	att_ctrl_update(&ac, &in, &tau);
+	CHECK(sc_isfinite(tau.x) && d(tau.x) > 0);
+	CHECK(sc_isfinite(ac.int_r_rad.x) && sc_isfinite(ac.int_r_rad.y));
+#endif
+}

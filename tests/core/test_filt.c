@@ -136,3 +136,21 @@ UNIT_TEST(filt_svf_linearity)
 	}
 	CHECK_NEAR(worst, 0, OCTO_FIXED ? 5e-3 : 1e-4);
 }
+
+/* Float build: a NaN sample is ignored by the lag and the SVF. */
+UNIT_TEST(filt_nan_ignored)
+{
+#if OCTO_FIXED
+	(void)u; /* Q16.16 has no NaN */
+#else
+	struct filt_lag l;
+	filt_lag_init(&l, SC(0.1), s(FRAME_S), SC(1));
+	CHECK(filt_lag_update(&l, __builtin_nanf("")) == 1.0f);
+	struct filt_svf f;
+	filt_svf_init(&f, SC(20), SC(1), s(FRAME_S), SC(1));
+	filt_svf_update(&f, __builtin_nanf(""));
+	CHECK(f.y == 1.0f && f.ydot == 0.0f && f.u_prev == 1.0f);
+	filt_svf_update(&f, SC(1));
+	CHECK(sc_isfinite(f.y) && sc_isfinite(f.ydot));
+#endif
+}

@@ -30,6 +30,10 @@ UNIT_TEST(thrmap_linear_round_trip_and_clamp)
 	CHECK(thrmap_throttle(&m, SC(0), &c) == SC_ZERO && !c);
 	CHECK(thrmap_thrust(&m, SC(1.5)) == thrmap_thrust(&m, SC(1)));
 	CHECK(thrmap_thrust(&m, SC(-0.5)) == SC_ZERO);
+#if !OCTO_FIXED
+	CHECK(thrmap_throttle(&m, __builtin_nanf(""), &c) == 0.0f && c); /* NaN: no thrust */
+	CHECK(thrmap_throttle(&m, __builtin_inff(), &c) == 1.0f && c);
+#endif
 }
 
 UNIT_TEST(thrmap_update_mask)
