@@ -13,7 +13,6 @@
 #define MAX_DT_S 0.2f              /* longer gaps are integrated as 200 ms */
 #define HOVER_Z_TOL_M 0.3f
 #define HOVER_TILT_DEG 5.0f
-#define TOUCHDOWN_S 1.0f
 #define POS_VEL_MAX 2.0f
 #define PROFILE_ACC 0.5f           /* m/s^2, take-off height profile */
 #define HOLD_ENTRY_M 0.05f         /* take-off ends (HOLD) within this of the target */
@@ -415,7 +414,7 @@ static void control_step(struct app *a, float dt)
 			a->on_ground_s += dt;
 		else
 			a->on_ground_s = 0.0f;
-		if (a->on_ground_s > TOUCHDOWN_S) {
+		if (a->on_ground_s > p->nav_touch_down_s) {
 			memset(a->thr, 0, sizeof a->thr);
 			app_status(a, MAV_SEVERITY_INFO, "Landed");
 			set_mode(a, APP_DISARMED);

@@ -41,3 +41,4 @@ PARAM(MOT_CURVE,    mot_curve,    0.0f,    0.0f,    0.99f,   "",       "Thrust c
 PARAM(MIX_MODE,     mix_mode,     1.0f,    0.0f,    1.0f,    "",       "Allocation: 0 pseudo-inverse and clip, 1 box-constrained priority")
 PARAM(FS_LINK_TO,   fs_link_to,   0.3f,    0.05f,   5.0f,    "s",      "X-Plane link declared lost after this silence")
 PARAM(FS_LAND_AFTER,fs_land_after,2.0f,    0.1f,    60.0f,   "s",      "A link loss longer than this lands on recovery")
+PARAM(NAV_TOUCH_DOWN_S,nav_touch_down_s,1.0f, 0.2f,    10.0f,   "s",      "Landing: time on the ground before the motors stop")

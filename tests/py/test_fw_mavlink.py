@@ -110,6 +110,10 @@ def test_param_set_accepted_refused_and_unknown(launch, port, tmp_path):
     # an exactly 16-character unknown id (no NUL on the wire) is handled too
     msg, texts = rig.param_set("ABCDEFGHIJKLMNOP", 1.0)
     assert msg is None and any("ABCDEFGHIJKLMNOP" in t for t in texts), texts
+    # a name of exactly 16 characters travels without NUL and is matched whole
+    msg, texts = rig.param_set("NAV_TOUCH_DOWN_S", 1.5)
+    assert msg is not None and msg.param_id == "NAV_TOUCH_DOWN_S" and msg.param_value == 1.5, texts
+    assert rig.param_get("NAV_TOUCH_DOWN_S").param_value == 1.5
     # messages for another system are ignored
     rig.m.mav.param_set_send(7, 1, b"VEH_KF", 30.0, mavlink.MAV_PARAM_TYPE_REAL32)
     assert rig.recv({"PARAM_VALUE"}, timeout=0.4) is None
@@ -231,9 +235,14 @@ def test_mission_ftp_and_gcs_learning(launch, port, tmp_path):
     rig.start_fw()
     from pymavlink import mavutil
     m = mavutil.mavlink_connection(f"udpout:127.0.0.1:{rig.mav_port}", source_system=255)
-    m.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
     rig.m = m
-    assert rig.recv({"HEARTBEAT"}, timeout=3) is not None
+    hb = None
+    for _ in range(30):   # octo-fw may not have bound its port yet: repeat, as a GCS does
+        m.mav.heartbeat_send(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        hb = rig.recv({"HEARTBEAT"}, timeout=0.3)
+        if hb is not None:
+            break
+    assert hb is not None
     m.mav.mission_request_list_send(1, 0)
     mc = rig.recv({"MISSION_COUNT"}, timeout=2)
     assert mc is not None and mc.count == 0
