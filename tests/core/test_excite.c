@@ -1,11 +1,14 @@
 /* Tests of firmware/core/excite.h in whichever build this is: bounds, determinism,
  * PRBS period and balance, multisine peak and period, and the same sequences as a
  * double reference of each generator (uniform and PRBS to the last bit of the A
- * scaling, multisine within 3e-4 A). */
+ * scaling, multisine within 1.5e-4 A). */
 #include "excite.h"
 #include "unit.h"
 
 #include <math.h>
+#ifdef TEST_VERBOSE
+#include <stdio.h>
+#endif
 
 #define PI 3.14159265358979323846
 
@@ -189,6 +192,10 @@ UNIT_TEST(excite_multisine_peak_period_reference)
 		CHECK(sqrt(sum2 / P) > 0.5);
 		/* same sequence as the double reference: polynomial sine (4e-6), 15-bit phase
 		 * (5e-5 per sine), Q16.16 rounding (~N LSB) */
-		CHECK_NEAR(worst, 0, 3e-4);
+		CHECK_NEAR(worst, 0, 1.5e-4); /* measured <= 7e-5 */
+#ifdef TEST_VERBOSE
+		printf("multisine N %d k1 %d P %d: worst vs double %.2e A, peak %.7f\n", cases[j][0], cases[j][1], P,
+		       worst, peak);
+#endif
 	}
 }
