@@ -15,8 +15,9 @@
  * exactly, up to the last bit of the A scaling; multisine within ~1e-4 A). The output
  * is always within [-A, A]. The generator is a pure function of its state and the
  * number of update calls; call excite_update once per frame.
- * Hot path: integer operations, add and mul (the multisine uses an integer phase
- * accumulator and a polynomial sine, so its period is exact).
+ * Hot path: integer operations, add and mul (plus one div per uniform draw); the
+ * multisine uses integer phase accumulators and a polynomial sine (no trig), and
+ * restarts its phases every period, so it is exactly periodic.
  */
 #ifndef OCTO_EXCITE_H
 #define OCTO_EXCITE_H
