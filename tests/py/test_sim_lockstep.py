@@ -137,6 +137,6 @@ def test_real_time_is_paced_like_xplane(launch, port):
     times = []
     while time.monotonic() - t0 < 1.0:
         times.append(s.next_data()[1][2])
-    assert 75 <= len(times) <= 105
+    assert 65 <= len(times) <= 115                            # ~90 (loaded CI machines jitter)
     steps = {round((b - a) * RATE, 3) for a, b in zip(times, times[1:])}
     assert steps == {1.0}                                     # one frame = 1/90 s of simulated time
