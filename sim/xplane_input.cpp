@@ -217,7 +217,6 @@ void XpInput::ise4(const uint8_t *p, size_t len)
 	a.sin_port = htons(static_cast<uint16_t>(pn));
 	target = a;
 	target_enabled = enable != 0;
-	target_set_by_ise4 = true;
 }
 
 } // namespace sim

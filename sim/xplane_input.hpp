@@ -43,7 +43,6 @@ public:
 	std::array<float, 16> thro_use{};  // sim/flightmodel/engine/ENGN_thro_use
 	bool override_on = false;
 	uint32_t cmd_mask = 0;             // engines 0..7 commanded since the last clear
-	bool target_set_by_ise4 = false;
 	bool target_enabled = true;
 	sockaddr_in target{};
 	std::vector<RrefSub> subs;
