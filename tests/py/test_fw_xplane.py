@@ -83,12 +83,14 @@ def test_requests_dsel_and_version_rref(launch, port, tmp_path):
     assert len(dsel) >= 2, "DSEL must be re-sent while its rows are not seen"
     for d in dsel:
         assert d[4] == 0
-        rows = set(struct.unpack(f"<{(len(d) - 5) // 4}i", d[5:]))
-        assert {1, 16, 17, 21, 35, 36} <= rows
+        rows = struct.unpack(f"<{(len(d) - 5) // 4}i", d[5:])
+        assert {1, 16, 17, 21, 35, 36} <= set(rows)
+        assert d == xp.encode_dsel(rows)
     rref = fake.of_type(b"RREF")
     assert rref and all(len(d) == xp.RREF_REQUEST_SIZE for d in rref)
     freq, index, path = xp.decode_rref_request(rref[0])
     assert (freq, path) == (1, xp.VERSION_DATAREF)
+    assert rref[0] == xp.encode_rref(1, index, xp.VERSION_DATAREF)
     fake.close()
 
 
@@ -157,6 +159,7 @@ def feed_until_armed(rig, fake, version=120100):
 
 def test_actuation_drefs_once_per_frame(launch, port, tmp_path):
     rig, fake = start(launch, port, tmp_path)
+    assert rig.param_set("MOT_THR_IDLE", 0.25)[0].param_value == 0.25
     t = feed_until_armed(rig, fake)
     for _ in range(5):
         fake.send(frame(t, 12))
@@ -167,7 +170,9 @@ def test_actuation_drefs_once_per_frame(launch, port, tmp_path):
     thro = [p for p, v in drefs if p.startswith(xp.THRO_USE)]
     assert len(thro) == 5 * 8
     assert sorted(set(thro)) == [f"{xp.THRO_USE}[{i}]" for i in range(8)]
-    assert all(0.0 <= v <= 1.0 for _, v in drefs)
+    assert all(v == 0.25 for p, v in drefs if p.startswith(xp.THRO_USE))
+    # byte for byte what the reference codec (xplane-udp.md vectors) encodes
+    assert all(d == xp.encode_dref(*xp.decode_dref(d)) for d in fake.of_type(b"DREF"))
     rig.fw.stop()   # hands the throttles back
     fake.pump(0.2)
     assert any(p == xp.OVERRIDE_THROTTLES for p, _ in (xp.decode_dref(d) for d in fake.of_type(b"DREF")))
@@ -175,6 +180,7 @@ def test_actuation_drefs_once_per_frame(launch, port, tmp_path):
 
 def test_actuation_data25_once_per_frame(launch, port, tmp_path):
     rig, fake = start(launch, port, tmp_path, actuation="data25")
+    assert rig.param_set("MOT_THR_IDLE", 0.125)[0].param_value == 0.125
     t = feed_until_armed(rig, fake)
     for _ in range(5):
         fake.send(frame(t, 12))
@@ -185,7 +191,8 @@ def test_actuation_data25_once_per_frame(launch, port, tmp_path):
     for d in data:
         assert len(d) == 41 and d[4] == 0
         rows = xp.decode_data(d)
-        assert list(rows) == [25] and all(0.0 <= v <= 1.0 for v in rows[25])
+        assert list(rows) == [25] and rows[25] == (0.125,) * 8
+        assert d == xp.encode_data({25: [0.125] * 8})
 
 
 def test_foreign_and_malformed_datagrams_are_dropped_and_counted(launch, port, tmp_path):

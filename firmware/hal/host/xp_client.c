@@ -183,7 +183,7 @@ static void note_rows(struct xp_client *c, const struct xp_msg_in *m, uint64_t n
 				c->row_seen_us[i] = now_us;
 				found = true;
 			}
-		if (!found && row >= 0 && row < 256 && row != XP_ROW_THR_CMD &&
+		if (!found && row >= 0 && row < 256 &&
 		    !(c->unselected[row / 8] & (1u << (row % 8)))) {
 			unsel[nu++] = row;
 		}
