@@ -8,17 +8,38 @@
 #include <math.h>
 #include <string.h>
 
-/* batch least squares, eq. (20): theta = (X^T X)^-1 X^T Y, in double (Gauss-Jordan) */
-static void batch_ls(int n, int p, int no, const double *x, const double *y, double theta[][4])
+/* batch least squares, eq. (20): theta = (X^T X)^-1 X^T Y in double, from the accumulated
+ * normal equations (no sample storage: the tests also run in 16 KB of RAM on Cortex-M0) */
+struct batch {
+	int p, no;
+	double xx[4][4], xy[4][3], yy[3];
+	long n;
+};
+
+static void batch_add(struct batch *b, const float *phi, const float *y)
 {
-	double a[4][4 + 3] = { { 0 } };
-	for (int k = 0; k < n; k++)
-		for (int i = 0; i < p; i++) {
-			for (int j = 0; j < p; j++)
-				a[i][j] += x[k * p + i] * x[k * p + j];
-			for (int o = 0; o < no; o++)
-				a[i][p + o] += x[k * p + i] * y[k * no + o];
-		}
+	for (int i = 0; i < b->p; i++) {
+		for (int j = 0; j < b->p; j++)
+			b->xx[i][j] += (double)phi[i] * (double)phi[j];
+		for (int o = 0; o < b->no; o++)
+			b->xy[i][o] += (double)phi[i] * (double)y[o];
+	}
+	for (int o = 0; o < b->no; o++)
+		b->yy[o] += (double)y[o] * (double)y[o];
+	b->n++;
+}
+
+/* theta[o][i]; returns nothing, ssr[o] = Y^T Y - theta^T X^T Y */
+static void batch_solve(const struct batch *b, double theta[][4], double *ssr)
+{
+	const int p = b->p, no = b->no;
+	double a[4][4 + 3];
+	for (int i = 0; i < p; i++) {
+		for (int j = 0; j < p; j++)
+			a[i][j] = b->xx[i][j];
+		for (int o = 0; o < no; o++)
+			a[i][p + o] = b->xy[i][o];
+	}
 	for (int c = 0; c < p; c++) {
 		int piv = c;
 		for (int r = c + 1; r < p; r++)
@@ -39,9 +60,13 @@ static void batch_ls(int n, int p, int no, const double *x, const double *y, dou
 					a[r][j] -= f * a[c][j];
 			}
 	}
-	for (int o = 0; o < no; o++)
-		for (int i = 0; i < p; i++)
+	for (int o = 0; o < no; o++) {
+		ssr[o] = b->yy[o];
+		for (int i = 0; i < p; i++) {
 			theta[o][i] = a[i][p + o];
+			ssr[o] -= theta[o][i] * b->xy[i][o];
+		}
+	}
 }
 
 static bool pos_def(const struct rls *r)
@@ -57,7 +82,6 @@ static bool pos_def(const struct rls *r)
 }
 
 #define N_LS 600
-static double xs[N_LS * 4], ys[N_LS * 3];
 
 UNIT_TEST(rls_equals_batch_ls)
 {
@@ -72,6 +96,10 @@ UNIT_TEST(rls_equals_batch_ls)
 		c.p0 = 1e8f;
 		struct rls r;
 		rls_init(&r, &c);
+		struct batch b;
+		memset(&b, 0, sizeof b);
+		b.p = p;
+		b.no = no;
 		struct unit_rng g = { 0x1000ULL + (unsigned)p };
 		for (int k = 0; k < N_LS; k++) {
 			float phi[4], y[3];
@@ -79,34 +107,25 @@ UNIT_TEST(rls_equals_batch_ls)
 				phi[i] = (float)unit_rand_uniform(&g, -1.0, 1.0);
 				if (i == 0)
 					phi[i] = (float)(0.093 + 0.05 * unit_rand_uniform(&g, -1, 1)); /* like T_1 */
-				xs[k * p + i] = phi[i];
 			}
 			for (int o = 0; o < no; o++) {
 				double v = 0;
 				for (int i = 0; i < p; i++)
 					v += truth[o][i] * phi[i];
 				y[o] = (float)(v + 0.05 * unit_rand_normal(&g));
-				ys[k * no + o] = y[o];
 			}
+			batch_add(&b, phi, y);
 			CHECK(rls_update_f(&r, phi, y, true) == RLS_UPDATED);
 		}
-		double th[3][4];
-		batch_ls(N_LS, p, no, xs, ys, th);
+		double th[3][4], ssr[3];
+		batch_solve(&b, th, ssr);
 		for (int o = 0; o < no; o++)
 			for (int i = 0; i < p; i++)
 				CHECK_REL(rls_estimate_f(&r, (unsigned)o, (unsigned)i), th[o][i], 1e-5);
 		CHECK(r.n_updates == N_LS);
 		/* residual variance = batch SSR / (n - p) */
-		for (int o = 0; o < no; o++) {
-			double ssr = 0;
-			for (int k = 0; k < N_LS; k++) {
-				double e = ys[k * no + o];
-				for (int i = 0; i < p; i++)
-					e -= th[o][i] * xs[k * p + i];
-				ssr += e * e;
-			}
-			CHECK_REL(rls_residual_var(&r, (unsigned)o), ssr / (N_LS - p), 1e-3);
-		}
+		for (int o = 0; o < no; o++)
+			CHECK_REL(rls_residual_var(&r, (unsigned)o), ssr[o] / (N_LS - p), 1e-3);
 	}
 }
 
