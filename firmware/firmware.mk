@@ -52,3 +52,15 @@ $(B)/octo-fw: $(FW_OBJ) $(B)/libcore.a $(B)/liblcmtypes.a
 	$(CC) $(OPT) -o $@ $(FW_OBJ) $(B)/libcore.a $(B)/liblcmtypes.a $(LCM_LDFLAGS) -lm
 
 ALL_TARGETS += $(B)/octo-fw
+
+# ---- octo-fw-asan: the same program under AddressSanitizer and UBSan (not part of `all`):
+#   make build/octo-fw-asan, then e.g. copy it as octo-fw into a directory with octo-sim
+#   and run the pytest suite with OCTO_BUILD pointing there.
+FW_ASAN_OBJ := $(FW_SRC:firmware/%.c=$(B)/fw-asan/%.o)
+
+$(B)/fw-asan/%.o: firmware/%.c $(B)/config.mk | $(MAVLINK_STAMP) $(LCM_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_FW) $(SAN) -D_POSIX_C_SOURCE=200809L $(FW_INC) -c $< -o $@
+
+$(B)/octo-fw-asan: $(FW_ASAN_OBJ) $(B)/libcore-asan.a $(B)/liblcmtypes.a
+	$(CC) $(OPT) $(SAN) -o $@ $(FW_ASAN_OBJ) $(B)/libcore-asan.a $(B)/liblcmtypes.a $(LCM_LDFLAGS) -lm

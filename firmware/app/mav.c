@@ -232,7 +232,10 @@ static bool for_us(uint8_t tsys, uint8_t tcomp)
 static void unknown_param(struct app *a, const char *id, int index)
 {
 	char name[PARAM_ID_LEN + 1] = {0};
-	memcpy(name, id, PARAM_ID_LEN);
+	size_t n = 0;
+	while (n < PARAM_ID_LEN && id[n])
+		n++;
+	memcpy(name, id, n);
 	for (char *c = name; *c; c++)
 		if (*c < 32 || *c > 126)
 			*c = '?';
