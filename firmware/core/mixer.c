@@ -149,16 +149,32 @@ static bool normal3(const float g[NA][NR], int a, int b, int c, float n[NA])
 	return true;
 }
 
-/* facets of the zonotope of the generators set[0..cnt-1] (scaled space), appended to out */
+/* Facets of the zonotope of the generators set[0..cnt-1] (scaled space), written to out:
+ * one per distinct normal (triples spanning the same hyperplane give one facet). Returns the
+ * count, or -1 if more than cap distinct facets exist. */
 static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct mixer_facet *out, int cap)
 {
 	int nf = 0;
+	float seen[MIXER_MAX_SUB_FACETS > MIXER_MAX_FACETS ? MIXER_MAX_SUB_FACETS : MIXER_MAX_FACETS][NA];
 	for (int a = 0; a < cnt; a++)
 		for (int b = a + 1; b < cnt; b++)
 			for (int c = b + 1; c < cnt; c++) {
 				float n[NA];
-				if (nf >= cap || !normal3(g, set[a], set[b], set[c], n))
+				if (!normal3(g, set[a], set[b], set[c], n))
 					continue;
+				bool dup = false;
+				for (int k = 0; k < nf && !dup; k++) {
+					float dp = 0.0f, dm = 0.0f;
+					for (int i = 0; i < NA; i++) {
+						dp = absf(n[i] - seen[k][i]) > dp ? absf(n[i] - seen[k][i]) : dp;
+						dm = absf(n[i] + seen[k][i]) > dm ? absf(n[i] + seen[k][i]) : dm;
+					}
+					dup = dp < 1e-4f || dm < 1e-4f;
+				}
+				if (dup)
+					continue;
+				if (nf >= cap)
+					return -1;
 				float nc = 0.0f, h = 0.0f;
 				for (int t = 0; t < cnt; t++) {
 					float d = 0.0f;
@@ -167,8 +183,10 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 					nc += 0.5f * d;
 					h += 0.5f * absf(d);
 				}
-				for (int i = 0; i < NA; i++)
+				for (int i = 0; i < NA; i++) {
+					seen[nf][i] = n[i];
 					out[nf].n[i] = sc_from_float(n[i]);
+				}
 				out[nf].nc = sc_from_float(nc);
 				out[nf].h = sc_from_float(h);
 				nf++;
@@ -416,7 +434,9 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 			for (int c = 0; c < 4; c++)
 				for (int i = 0; i < NA; i++)
 					m->tail_inv[c][i] = sc_from_float(inv[c][i]);
-			m->n_facets = (uint8_t)facets_of(gsc, act, na, m->facet, MIXER_MAX_FACETS);
+			int nfull = facets_of(gsc, act, na, m->facet, MIXER_MAX_FACETS);
+			bool fits = nfull > 0;
+			m->n_facets = (uint8_t)(nfull > 0 ? nfull : 0);
 			int used = 0;
 			for (int st = 0; st + 5 <= na; st++) {
 				int cnt = na - st - 1; /* generators left after fixing order[st] */
@@ -425,11 +445,15 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 				if (cnt > 4) {
 					int k = facets_of(gsc, &m->order[st + 1], cnt, &m->sub[used],
 							  MIXER_MAX_SUB_FACETS - used);
+					if (k < 0) {
+						fits = false;
+						break;
+					}
 					m->sub_n[st] = (uint8_t)k;
 					used += k;
 				}
 			}
-			m->alloc_ok = m->n_facets > 0;
+			m->alloc_ok = fits;
 		}
 	}
 	return rank == NA;

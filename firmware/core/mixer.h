@@ -69,9 +69,12 @@
 #define MIXER_ALPHA_ITERS 20
 /* active-set iterations of the refinement towards the minimum-norm feasible allocation */
 #define MIXER_QP_ITERS 16
-/* facets: C(8,3) for the full set + C(7,3)+C(6,3)+C(5,3)+C(4,3) for the preimage steps */
-#define MIXER_MAX_FACETS 56
-#define MIXER_MAX_SUB_FACETS 69
+/* Distinct facet normals kept for the attainable set and for the preimage steps. Eq. (14)
+ * needs 26 and 44 (also with one or two rotors removed); a layout in general position needs
+ * up to C(8,3) = 56 and 35+20+10 = 65: if they do not fit, the priority allocator is
+ * disabled for that layout (MIXER_LIMIT_NO_ALLOC, clipping) */
+#define MIXER_MAX_FACETS 32
+#define MIXER_MAX_SUB_FACETS 48
 
 enum mixer_mode {
 	MIXER_MODE_CLIP = 0,     /* pseudo-inverse plus clipping (baseline) */

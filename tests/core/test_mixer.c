@@ -632,3 +632,35 @@ UNIT_TEST(mixer_non_finite_demand)
 	(void)u; /* Q16.16 cannot hold a non-finite value */
 #endif
 }
+
+/* a layout whose attainable set has more facets than MIXER_MAX_FACETS: the pseudo-inverse is
+ * still exact, the priority allocator is disabled and saturation is clipped and flagged */
+UNIT_TEST(mixer_too_many_facets_falls_back)
+{
+	float g[4 * 8];
+	struct unit_rng r = { 0x1a2b3cULL };
+	for (int j = 0; j < 8; j++) {
+		g[0 * 8 + j] = 1.0f;
+		g[1 * 8 + j] = (float)unit_rand_uniform(&r, -0.4, 0.4);
+		g[2 * 8 + j] = (float)unit_rand_uniform(&r, -0.4, 0.4);
+		g[3 * 8 + j] = (float)unit_rand_uniform(&r, -0.02, 0.02);
+	}
+	struct mixer_params p;
+	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
+	p.custom_gamma = g;
+	CHECK(mixer_init(&mix, &p));
+	CHECK(!mix.alloc_ok);
+	for (int i = 0; i < 4; i++)
+		for (int k = 0; k < 4; k++) {
+			double s = 0;
+			for (int j = 0; j < 8; j++)
+				s += (double)mix.gamma_f[i][j] * (double)mix.pinv_f[j][k];
+			CHECK_NEAR(s, i == k ? 1.0 : 0.0, 1e-5);
+		}
+	scalar_t dem[4] = { SC(300), SC(0), SC(0), SC(0) };
+	struct mixer_output o;
+	mixer_update(&mix, dem, &o);
+	CHECK((o.limits & MIXER_LIMIT_NO_ALLOC) && (o.limits & MIXER_LIMIT_F));
+	for (int j = 0; j < 8; j++)
+		CHECK(o.f_n[j] >= mix.f_lo && o.f_n[j] <= mix.f_hi);
+}
