@@ -246,6 +246,7 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 		raw[b] = 0;
 	m->p = *p;
 	m->p.custom_gamma = NULL;
+	m->custom = p->custom_gamma != NULL;
 	build_gamma(m, p);
 
 	/* ---- pseudo-inverse by one-sided Jacobi SVD of Gamma^T */
@@ -459,16 +460,17 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 	return rank == NA;
 }
 
-static bool same_geometry(const struct mixer_params *a, const struct mixer_params *b)
+static bool same_geometry(const struct mixer *m, const struct mixer_params *b)
 {
+	const struct mixer_params *a = &m->p;
 	return a->arm_l_m == b->arm_l_m && a->k_f_n == b->k_f_n && a->k_tau_nm == b->k_tau_nm &&
 	       a->t_min == b->t_min && a->t_max == b->t_max && a->rotor_mask == b->rotor_mask &&
-	       b->custom_gamma == NULL;
+	       !m->custom && b->custom_gamma == NULL;
 }
 
 bool mixer_set_params(struct mixer *m, const struct mixer_params *p)
 {
-	if (same_geometry(&m->p, p)) {
+	if (same_geometry(m, p)) {
 		m->p.mode = p->mode;
 		return m->rank == NA;
 	}

@@ -11,44 +11,54 @@
  * the whole matrix for a different layout (then arm_l_m and the mask's columns are ignored /
  * applied on top respectively).
  *
- * Set-up (mixer_init / mixer_set_params; NOT the 90 Hz path, runs in float32 in both builds):
- *   - Moore-Penrose pseudo-inverse Gamma^+ (8x4) by a one-sided Jacobi SVD (general: any
- *     layout, rank deficiency handled by a relative singular-value threshold), and an
- *     orthonormal basis of the null space of Gamma (8 x (8 - rank)).
- *   - For the box-constrained allocator: Gamma scaled per row to entries in [-1, 1], the
- *     facet normals of the attainable set (the zonotope Gamma [f_lo, f_hi]^8) and of the
- *     sub-zonotopes used by the exact preimage construction.
- *   mixer_set_params() recomputes only when l, k_f, k_tau, limits, mask or layout changed.
+ * Set-up (mixer_init / mixer_set_params; NOT the 90 Hz path; float32 in both builds, results
+ * stored as scalar_t for the hot path):
+ *   - Moore-Penrose pseudo-inverse Gamma^+ (8x4) by a one-sided Jacobi SVD of Gamma^T (at
+ *     most 40 sweeps; general: any layout, rank deficiency handled by a singular-value
+ *     threshold of 1e-5 sigma_max), polished by two Newton-Schulz steps; an orthonormal basis
+ *     of the null space of Gamma (8 x (8 - rank), 4 columns at full rank).
+ *   - For the box-constrained allocator, in a "scaled space" (each row of Gamma divided by its
+ *     largest |entry|, rotor thrust u = (f - f_lo) / (f_hi - f_lo) in [0, 1]): the facets of
+ *     the attainable set (the zonotope Gamma [f_lo, f_hi]^8: one normal per 3 columns that
+ *     span a hyperplane, duplicates merged) and of the sub-zonotopes of the preimage steps.
+ *   mixer_set_params() recomputes only when l, k_f, k_tau, t_min/t_max, mask or layout changed.
  *
- * Update (mixer_update, 90 Hz): scalar_t arithmetic only (add, mul, div; no sqrt, no trig).
- *   1. Unconstrained allocation, eq. (15): f = Gamma^+ [f; tau].
- *   2. If every f_j is inside [f_lo, f_hi] (f_lo = k_f t_min, f_hi = k_f t_max, throttle 1 = k_f
- *      by eqs. (16)-(17)): done, achieved = demanded.
+ * Update (mixer_update, 90 Hz): scalar_t arithmetic only (add, mul, div, one sqrt per
+ * Gram-Schmidt row in the refinement; no trig, no float in the Q16.16 build).
+ *   1. Unconstrained allocation, eq. (15): f = Gamma^+ [f; tau] (removed rotors: 0).
+ *   2. If every present f_j is inside [f_lo, f_hi] (f_lo = k_f t_min, f_hi = k_f t_max;
+ *      throttle 1 = k_f by eqs. (16)-(17)): done (limits = 0, steps = 0).
  *   3. Otherwise, by mode:
- *      MIXER_MODE_CLIP     the baseline: clip each f_j to the box.
- *      MIXER_MODE_PRIORITY exact box-constrained allocation with priority
- *                          roll/pitch > total thrust > yaw:
- *        a. the demand is attainable (inside the zonotope, exact facet test) -> reproduced
- *           exactly;
- *        b. else roll/pitch: largest alpha in [0, 1] such that (F, alpha tau_x, alpha tau_y, 0)
- *           is attainable for some thrust F (alpha = 1 is tested exactly first, then
- *           MIXER_ALPHA_ITERS bisection steps, the direction of [tau_x, tau_y] is kept);
- *        c. thrust: the attainable F nearest to the demanded f on that zero-yaw slice
- *           (exact interval from the facets);
- *        d. yaw: largest beta in [0, 1] such that (F, alpha tau_xy, beta tau_z) is attainable
- *           (exact; beta >= 0, so the achieved yaw never has the opposite sign of the demand);
- *        e. rotor thrusts reproducing that target: an exact preimage in the box built in at
- *           most MIXER_N_ROTORS - 4 closed-form steps (each fixes one rotor inside the interval
- *           that keeps the rest attainable, nearest to the pseudo-inverse solution), then a
- *           4x4 solve; finally the result is moved along the null space of Gamma towards the
- *           pseudo-inverse solution as far as the box allows.
- *      Total work is bounded: no loop depends on data except through these fixed bounds.
- *      If the allocator is unavailable (rank(Gamma) < 4 or fewer than 4 rotors), PRIORITY
- *      behaves as CLIP and MIXER_LIMIT_NO_ALLOC is reported.
+ *      MIXER_MODE_CLIP     the baseline: clip each f_j to the box; flags by comparison.
+ *      MIXER_MODE_PRIORITY box-constrained allocation, priority roll/pitch > thrust > yaw:
+ *        a. attainable demand (exact facet test) -> target = demand, reproduced exactly;
+ *        b. roll/pitch: if (F, tau_x, tau_y, 0) is attainable for some F, kept exactly; else
+ *           scaled by the largest alpha in [0, 1] (direction kept) for which it is, found by
+ *           MIXER_ALPHA_ITERS bisection steps; then no room is left for yaw (yaw target 0) and
+ *           the thrust is the attainable one nearest to the demand;
+ *        c. thrust (alpha = 1): the demanded f if attainable with some yaw beta tau_z,
+ *           beta in [0, 1]; else the nearest such thrust (exact when the zero-yaw slice
+ *           reaches it, otherwise MIXER_ALPHA_ITERS bisection steps towards the demand);
+ *        d. yaw: the largest beta in [0, 1] attainable at that thrust (exact). beta >= 0:
+ *           achieved yaw never has the opposite sign of the demanded yaw;
+ *        e. rotor thrusts for the target: an exact preimage in the box in n_active - 4
+ *           closed-form steps (each fixes one rotor inside the interval that keeps the rest
+ *           attainable, nearest to the pseudo-inverse solution; then a 4x4 solve), a move along
+ *           the null space back towards the pseudo-inverse solution, then at most
+ *           MIXER_QP_ITERS active-set iterations towards the unique minimiser of
+ *           |f - Gamma^+ target| over the box (every iterate feasible and exact; at the
+ *           optimum mirrored demands give mirrored rotor outputs).
+ *        Steps b-d keep an inner margin (3e-6 of a rotor's range in float, 3.7e-4 in Q16.16)
+ *        so that the target is attainable despite rounding.
+ *      Work is bounded: out->steps <= 2 MIXER_ALPHA_ITERS + (n_active - 4) + MIXER_QP_ITERS;
+ *      worst case roughly 2 x 20 x 26 facet tests + 16 active-set iterations (tens of
+ *      thousands of instructions on Cortex-M4F, only when a rotor saturates).
+ *      If the allocator is unavailable (rank(Gamma) < 4, fewer than 4 rotors, more facets than
+ *      MIXER_MAX_FACETS / MIXER_MAX_SUB_FACETS), PRIORITY clips and sets MIXER_LIMIT_NO_ALLOC.
  *
- * Q16.16: the demand is converted to the row-scaled space by division (wrench entries of
- * order 1..8); achieved wrenches are accurate to about 1e-3 N / 1e-3 N m, rotor thrusts to
- * about 1e-3 N (see tests/core/test_mixer.c for the stated tolerances).
+ * Accuracy (tests/core/test_mixer.c): float build: Gamma Gamma^+ = I4 to 1e-6; attainable
+ * demands reproduced to 2e-4 N thrust, 1e-4 N m roll/pitch, 3e-5 N m yaw. Q16.16 build:
+ * 6e-3 N, 2e-3 N m, 2e-4 N m; its Gamma^+ copy times Gamma = I4 to 2e-4.
  */
 #ifndef OCTO_MIXER_H
 #define OCTO_MIXER_H
@@ -89,7 +99,7 @@ enum mixer_mode {
 #define MIXER_LIMIT_TY         (1u << 4)  /* pitch torque reduced */
 #define MIXER_LIMIT_TZ         (1u << 5)  /* yaw torque reduced */
 #define MIXER_LIMIT_NO_ALLOC   (1u << 6)  /* priority allocator unavailable: clipped */
-#define MIXER_LIMIT_BAD_INPUT  (1u << 7)  /* non-finite demand (float build): zero output */
+#define MIXER_LIMIT_BAD_INPUT  (1u << 7)  /* non-finite demand (float build): all rotors 0 */
 
 struct mixer_params {
 	scalar_t arm_l_m;   /* l, m (> 0) */
@@ -133,6 +143,7 @@ struct mixer {
 	uint8_t present;                   /* bit j: rotor j+1 has a nonzero column */
 	uint8_t order[MIXER_N_ROTORS];     /* present rotors; the last 4 are independent */
 	bool alloc_ok;
+	bool custom;                       /* built from custom_gamma */
 	uint8_t n_facets;
 	struct mixer_facet facet[MIXER_MAX_FACETS];
 	uint8_t sub_n[MIXER_N_ROTORS];     /* facets of the suffix set after step i */
@@ -148,7 +159,7 @@ struct mixer_output {
 	uint32_t limits;                        /* MIXER_LIMIT_* */
 	uint8_t rotor_at_min;                   /* bit j: rotor j+1 at f_lo */
 	uint8_t rotor_at_max;                   /* bit j: rotor j+1 at f_hi */
-	uint8_t steps;                          /* preimage steps + bisection steps used */
+	uint8_t steps;                          /* bisection + preimage + active-set steps used */
 };
 
 /* Defaults: the paper's vehicle (l = 0.35 m, k_f = 28.0269 N, k_tau = 0.3869 N m), throttle
@@ -160,8 +171,9 @@ void mixer_default_params(struct mixer_params *p);
  * rank-deficient Gamma; the priority allocator is disabled). */
 bool mixer_init(struct mixer *m, const struct mixer_params *p);
 
-/* Recomputes (mixer_init) only if a parameter that enters Gamma or the box changed;
- * a mode change alone is applied without recomputation. Returns the rank-4 status. */
+/* Recomputes (mixer_init) only if a parameter that enters Gamma or the box changed (always
+ * with custom_gamma); a mode change alone is applied without recomputation. Call it whenever
+ * VEH_ARM_L, VEH_KF or VEH_KTAU change; cheap when nothing did. Returns the rank-4 status. */
 bool mixer_set_params(struct mixer *m, const struct mixer_params *p);
 
 /* demand = [f (N), tau_x, tau_y, tau_z (N m)] -> out. Never fails. */
