@@ -37,6 +37,26 @@ def fly_and_hold(rig, sim_args=(), duration=60.0):
     return t_hold - takeoffs[0], dz, tilt
 
 
+def check_fw_log(rig):
+    """The firmware log: one record per frame, stamped with plant time, consistent."""
+    frames = read_log(rig.fw_log, "OCTO_FW_FRAME")
+    assert len(frames) > 1000
+    ts = [f.t for f in frames]
+    assert all(b >= a for a, b in zip(ts, ts[1:]))
+    assert all(f.utime == round(f.t * 1e6) for f in frames)
+    flying = [f for f in frames if f.stepped and f.mode in (2, 3)]
+    assert flying
+    for f in flying:
+        assert all(0.0 <= t <= 1.0 for t in f.throttle)
+        assert abs(sum(f.rotor_f) - f.f_alloc) < 1e-2 * max(1.0, f.f_alloc)
+        assert abs(f.f_alloc - f.f_dem) < 1e-2 * f.f_dem        # nothing saturated in a hover
+        assert 0.0 < f.dt < 0.25
+        assert f.kf == pytest.approx(20.0) and f.inertia[0] == pytest.approx(0.05)
+    # the allocation is the paper's open loop: T_j = f_j / k_f
+    f = flying[-1]
+    assert all(abs(t - fj / f.kf) < 1e-4 for t, fj in zip(f.throttle, f.rotor_f))
+
+
 @pytest.mark.parametrize("version", [11, 12])
 @pytest.mark.parametrize("actuation", ["dref", "data25"])
 def test_takeoff_and_hold_with_wrong_nominal_parameters(launch, port, tmp_path, version, actuation):
@@ -45,6 +65,7 @@ def test_takeoff_and_hold_with_wrong_nominal_parameters(launch, port, tmp_path, 
     assert t_hold < 20.0, f"took {t_hold:.1f} s from take-off to the hold"
     assert max(abs(d) for d in dz) <= 0.1, f"height error up to {max(dz, key=abs):+.3f} m"
     assert max(tilt) <= 1.0, f"tilt up to {max(tilt):.2f} deg"
+    check_fw_log(rig)
 
 
 def test_hold_with_20_percent_frames_dropped(launch, port, tmp_path):
@@ -78,7 +99,7 @@ def test_land_disarms_on_touchdown(launch, port, tmp_path):
     r, _ = rig.cmd(mavlink.MAV_CMD_NAV_LAND)
     assert r == mavlink.MAV_RESULT_ACCEPTED
     for _ in range(200):
-        if "Landed" in rig.texts:
+        if "Mode DISARMED" in rig.texts:
             break
         rig.recv({"NONE"}, timeout=0.05)
     assert "Landed" in rig.texts and "Mode DISARMED" in rig.texts, "|".join(rig.texts)
