@@ -85,6 +85,7 @@ include sim/sim.mk
 include host_tools/host_tools.mk
 include tests/tests.mk
 include tests/arm/arm.mk
+include tests/bench/bench.mk
 
 # ---------------------------------------------------------------- top-level goals
 .PHONY: all test run bench arm clean distclean help
