@@ -557,21 +557,22 @@ static bool thrust_interval(const struct mixer *m, const scalar_t w[NA], scalar_
 	return l <= h;
 }
 
-/* With w[3] = the scaled zero yaw, the interval of beta in [0, 1] such that
- * w + beta dy e_3 is attainable; false if empty. */
+/* With w[3] = the scaled zero yaw, the interval [lo, hi] of yaw offsets t between 0 and dy
+ * (the scaled demanded yaw offset) such that w + t e_3 is attainable; false if empty. Works
+ * on t directly (not on t / dy) so that huge demands lose no resolution. */
 static bool yaw_interval(const struct mixer *m, const scalar_t w[NA], scalar_t dy, scalar_t *lo, scalar_t *hi)
 {
-	scalar_t l = SC_ZERO, h = SC(1);
+	scalar_t l = sc_min(SC_ZERO, dy), h = sc_max(SC_ZERO, dy);
 	for (int k = 0; k < m->n_facets; k++) {
 		const struct mixer_facet *fc = &m->facet[k];
 		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
-		scalar_t s = sc_mul(fc->n[3], dy), hw = sc_sub(fc->h, TOL_IN);
+		scalar_t s = fc->n[3], hw = sc_sub(fc->h, TOL_IN);
 		if (sc_abs(s) <= EPS_S) {
 			if (sc_abs(q) > hw)
 				return false;
 			continue;
 		}
-		/* -hw <= q + beta s <= hw */
+		/* -hw <= q + t s <= hw */
 		scalar_t a = sc_div(sc_sub(sc_neg(hw), q), s), b = sc_div(sc_sub(hw, q), s);
 		if (s < 0) {
 			scalar_t t = a;
@@ -969,13 +970,14 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 				out->limits |= MIXER_LIMIT_F;
 			}
 		}
-		/* d. yaw: largest beta in [0, 1] at that thrust (beta >= 0: no yaw reversal) */
-		scalar_t beta = SC_ZERO;
+		/* d. yaw: the largest part of the demanded yaw attainable at that thrust (between
+		 * zero and the demand: no yaw reversal) */
+		scalar_t ty = SC_ZERO;
 		if (dy != SC_ZERO && yaw_interval(m, w, dy, &blo, &bhi))
-			beta = sc_clamp(bhi, SC_ZERO, SC(1));
-		if (beta < SC(1) && demand[3] != SC_ZERO)
+			ty = dy > 0 ? bhi : blo;
+		if (ty != dy && demand[3] != SC_ZERO)
 			out->limits |= MIXER_LIMIT_TZ;
-		w[3] = sc_add(yaw0, sc_mul(beta, dy));
+		w[3] = sc_add(yaw0, ty);
 	}
 	scalar_t u[NR];
 	steps += preimage(m, w, u);

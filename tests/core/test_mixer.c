@@ -664,3 +664,36 @@ UNIT_TEST(mixer_too_many_facets_falls_back)
 	for (int j = 0; j < 8; j++)
 		CHECK(o.f_n[j] >= mix.f_lo && o.f_n[j] <= mix.f_hi);
 }
+
+/* extreme demands (saturating Q16.16, 1e30 in float): always a finite allocation in the box */
+UNIT_TEST(mixer_extreme_demands)
+{
+	struct mixer_params p;
+	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
+	struct unit_rng r = { 0xe7ULL };
+	for (int mode = 0; mode < 2; mode++) {
+		p.mode = mode ? MIXER_MODE_PRIORITY : MIXER_MODE_CLIP;
+		mixer_init(&mix, &p);
+		for (int n = 0; n < SWEEP(2000); n++) {
+			scalar_t dem[4];
+			for (int i = 0; i < 4; i++) {
+				double pick = unit_rand_uniform(&r, 0, 1);
+				double big = OCTO_FIXED ? 32767.0 : 1e30;
+				double v = pick < 0.25 ? big : pick < 0.5 ? -big : pick < 0.6 ? 0.0
+					 : unit_rand_uniform(&r, -300, 300);
+				dem[i] = sc_from_float((float)v);
+			}
+			struct mixer_output o;
+			mixer_update(&mix, dem, &o);
+			for (int j = 0; j < 8; j++)
+				CHECK(sc_isfinite(o.f_n[j]) && o.f_n[j] >= mix.f_lo && o.f_n[j] <= mix.f_hi);
+			for (int i = 0; i < 4; i++)
+				CHECK(sc_isfinite(o.achieved[i]));
+			/* yaw never reversed, even here */
+			if (mode && d(o.achieved[3]) * (d(dem[3]) >= 0 ? 1 : -1) < -TOL_TZ)
+				unit_fail(u, __FILE__, __LINE__, "yaw reversed: %g %g %g %g -> %g %g %g %g",
+					  d(dem[0]), d(dem[1]), d(dem[2]), d(dem[3]), d(o.achieved[0]),
+					  d(o.achieved[1]), d(o.achieved[2]), d(o.achieved[3]));
+		}
+	}
+}
