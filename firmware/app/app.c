@@ -608,8 +608,15 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 			stepped = true;
 		}
 	}
-	if (a->actuating)
+	/* One actuation per frame that brings a time not answered yet: a duplicate
+	 * or a reordered (older) frame is not answered again. Free-running X-Plane
+	 * keeps the last command anyway; a lockstep simulator would otherwise take
+	 * the extra command for its next frame and run one frame ahead of us. */
+	if (a->actuating && (!a->have_actuated || f->t_s > a->t_actuated)) {
 		hal_actuate(a->thr);
+		a->have_actuated = true;
+		a->t_actuated = f->t_s;
+	}
 	fill_log(a, stepped, dt);
 	hal_log_frame(&a->log);
 }

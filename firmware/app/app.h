@@ -5,8 +5,8 @@
  *
  *   app_init(a)              defaults, then the stored parameters
  *   app_on_frame(a, frame)   each sensor frame (the app actuates once per frame
- *                            after it has taken control of the throttles: from
- *                            the first arming on)
+ *                            that brings a new time stamp, from the first arming
+ *                            on: duplicates and reordered frames are not answered)
  *   app_on_mavlink(a, b, n)  bytes from the ground station
  *   app_tick(a)              often (main loop): telemetry, link supervision
  *
@@ -54,6 +54,8 @@ struct app {
 	bool link_ok, link_ever;
 	uint64_t link_lost_at_us;
 	bool actuating;               /* throttles are ours (from the first arming) */
+	bool have_actuated;
+	double t_actuated;            /* plant time of the last frame answered */
 	float thr[HAL_ROTORS];
 
 	/* guidance */

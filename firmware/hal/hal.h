@@ -66,6 +66,7 @@ struct hal_link_stats {
 	uint32_t frames;          /* DATA frames accepted */
 	uint32_t dropped;         /* datagrams dropped: malformed, foreign host, unknown */
 	uint32_t foreign;         /* of which from a host other than the configured one */
+	uint32_t stale;           /* frames older than the newest (reordered, delayed) */
 	uint32_t xp_version;      /* sim/version/xplane_internal_version, 0 = unknown yet */
 	uint32_t rows_missing;    /* HAL_FRAME_* bits of wanted rows not seen yet */
 };

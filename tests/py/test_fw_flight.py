@@ -133,3 +133,13 @@ def test_link_loss_is_reported_and_long_loss_lands_on_recovery(launch, port, tmp
         rig.recv(set(), timeout=0.05)
     assert any("link back" in t for t in rig.texts), rig.texts
     assert "Mode LAND" in rig.texts and "Mode DISARMED" in rig.texts, "|".join(rig.texts)
+
+
+FAULTS = "--duplicate 0.1 --reorder 0.1 --delay-frames 2 --lockstep-timeout 0.005"
+
+
+def test_hold_with_duplicated_reordered_and_delayed_frames(launch, port, tmp_path):
+    rig = Rig(launch, port, tmp_path)
+    t_hold, dz, tilt = fly_and_hold(rig, sim_args=FAULTS.split())
+    assert max(abs(d) for d in dz) <= 0.5, f"height error up to {max(dz, key=abs):+.3f} m"
+    assert max(tilt) <= 5.0

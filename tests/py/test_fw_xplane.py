@@ -225,10 +225,19 @@ def test_foreign_and_malformed_datagrams_are_dropped_and_counted(launch, port, t
 def test_time_is_rebased_never_backwards(launch, port, tmp_path):
     rig, fake = start(launch, port, tmp_path)
     t = feed_until_armed(rig, fake)
-    for tt in (t, t + 1 / 90, 0.5, 0.5 + 1 / 90, 0.5 + 2 / 90):
+    # a reordered frame (older by one frame) carries no news; a reload (time back
+    # to 0.5 s) is re-based to continue one frame after the last
+    sent = (t, t + 2 / 90, t + 1 / 90, t + 3 / 90, 0.5, 0.5 + 1 / 90, 0.5 + 2 / 90)
+    for tt in sent:
         fake.send(frame(tt, 12))
         fake.pump(0.02)
+    # every frame with a new time is answered once; the reordered one is not
+    assert len([d for d in fake.of_type(b"DREF") if xp.THRO_USE.encode() in d]) == 8 * (len(sent) - 1)
     rig.fw.stop()
-    ts = [r.t for r in read_log(rig.fw_log, "OCTO_FW_FRAME")]
+    log = read_log(rig.fw_log, "OCTO_FW_FRAME")
+    ts = [r.t for r in log]
     assert all(b >= a for a, b in zip(ts, ts[1:])), ts
-    assert abs(ts[-1] - ts[-2] - 1 / 90) < 1e-4
+    last = ts[-len(sent):]
+    expect = [t, t + 2 / 90, t + 2 / 90, t + 3 / 90, t + 4 / 90, t + 5 / 90, t + 6 / 90]
+    assert all(abs(a - b) < 1e-4 for a, b in zip(last, expect)), (last, expect)
+    assert [r.stepped for r in log[-len(sent):]] == [True, True, False, True, True, True, True]

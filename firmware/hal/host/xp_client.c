@@ -22,6 +22,7 @@ static const uint32_t wanted_bits[N_WANTED] = {HAL_FRAME_TIME, HAL_FRAME_RATES, 
 #define DSEL_PERIOD_US 1000000u
 #define RREF_PERIOD_US 5000000u
 #define OVERRIDE_PERIOD_US 1000000u
+#define XP_STALE_S 0.25             /* older by less than this: a reordered frame */
 
 static const char VERSION_REF[] = "sim/version/xplane_internal_version";
 static const char OVERRIDE_REF[] = "sim/operation/override/override_throttles";
@@ -243,12 +244,21 @@ int xp_client_receive(struct xp_client *c, struct hal_sensor_frame *frame, uint6
 		c->stats.dropped++;   /* a frame without time cannot be placed */
 		return 0;
 	}
-	/* Re-base time so that it never runs backwards (X-Plane reload, simulator
-	 * restart, reordered datagrams): continue one nominal frame after the last. */
+	/* Time never runs backwards. A frame older than the last one by less than
+	 * XP_STALE_S was reordered or delayed: the newest state stands, the frame
+	 * still counts (it is answered with one actuation) but carries no news.
+	 * A larger step back is an X-Plane reload or a restarted simulator: time
+	 * is re-based to continue one nominal frame after the last. */
 	double t = (double)raw_t + c->t_offset;
 	if (!c->have_t) {
 		c->have_t = true;
 	} else if (t < c->t_last) {
+		if (c->t_last - t < XP_STALE_S) {
+			c->stats.stale++;
+			frame->seq = ++c->seq;
+			c->stats.frames++;
+			return 1;
+		}
 		c->t_offset = c->t_last + 1.0 / 90.0 - (double)raw_t;
 		t = c->t_last + 1.0 / 90.0;
 	}
