@@ -2,36 +2,52 @@
 #
 #   make arm         cross-compile firmware/core/*.c for each target below with the host
 #                    firmware flags (CFLAGS_FW: FW_WARN, -fno-math-errno), link the unit tests
-#                    (tests/core) with the start-up code here, run them under QEMU with
-#                    semihosting, print the core's .text/.data/.bss per target, and check the
-#                    instruction-counting plugin on its demo. Fails if any test fails.
+#                    (tests/core, UNIT_CFLAGS) with the start-up code here, run them under QEMU
+#                    with semihosting (the images in parallel), print the core's sizes per
+#                    target and check the instruction-counting plugin on its demo.
+#                    Fails if any test fails on any target.
 #                    ARM_FILTER="mixer rls" runs only tests whose names contain a word.
-#   make arm-size    the same sizes, per core module
+#   make arm-size    .text/.data/.bss per core module and target
 #   make arm-count   build the counting plugin and print the demo's counts (4x8 float
 #                    matrix-vector product: about 190 instructions on M4F, 5,700 on M0)
 #
 # Targets (ARM_VARIANTS):
 #   m4f        Cortex-M4F, hard float (fpv4-sp-d16), float build    QEMU mps2-an386
-#   m0         Cortex-M0, soft float, float build                   QEMU microbit (16 KB RAM)
+#   m0         Cortex-M0, soft float, float build                   QEMU microbit
 #   m0-fixed   Cortex-M0, Q16.16 build (OCTO_FIXED=1)               QEMU microbit
+# The core is built with $(OPT) everywhere; on M0 the test code (not the core) is built
+# with -Os to leave room in microbit's 256 KB of flash.
+#
+# Memory (sections.ld): the stack sits at the bottom of RAM (64 KB on m4f, 8 KB of
+# microbit's 16 KB on M0: __stack_size in m4f.ld, m0.ld), then .data and
+# .bss, then the heap (newlib's stdio) up to the end of RAM. An overflow runs off the
+# start of RAM and faults. Each image ends with its high-water marks:
+# "octo-arm: stack N of M bytes, heap N of M bytes".
 #
 # Image exit status (QEMU's, through semihosting SYS_EXIT_EXTENDED): the number of
-# failed tests; 124 timeout (ARM_TIMEOUT s); 125 stack exhausted; 126 fault (a stack
-# overflow faults: the stack sits at the bottom of RAM). Each image prints
-# "octo-arm: stack N of M bytes, heap N of M bytes", its high-water marks.
+# failed tests; 124 timeout (ARM_TIMEOUT s); 125 stack exhausted; 126 fault.
+#
+# Sizes: "core objects" is all of libcore.a (text includes .rodata); "linked" is what
+# an image grows by when it keeps every global core function, with what they pull
+# from libgcc and libm (soft float, sinf...); the core has no globals, so its RAM is
+# the caller-owned structs, whose sizeof is printed per target.
 #
 # Files: startup.c (vector table, reset, faults), semihost.c/.h (newlib system calls,
 # exit), sections.ld + m4f.ld/m0.ld (memory), bench_mark.c/.h (markers),
-# insn_count.c (QEMU plugin), insn-count.sh (runs it), bench_demo.c (its reference).
+# insn_count.c (QEMU plugin), insn-count.sh (runs it), bench_demo.c (its reference),
+# size_main.c (the empty program behind the "linked" sizes).
 #
 # Instruction counts for `make bench`: put bench_mark_begin()/bench_mark_end() from
-# tests/arm/bench_mark.h around the one call to measure, build an image with
+# tests/arm/bench_mark.h around the one call to measure (several pairs are fine: one
+# count each), build an image with
 #     $(eval $(call arm_program,m4f,$(B)/bench/step-m4f.elf,bench/step.c,EXTRA_CFLAGS))
 # (compiled with CFLAGS_FW for the target, linked with the start-up code, the markers
-# and the target's core library), make it depend on $(ARM_COUNT_PLUGIN), then run
+# and the target's core library), depend on $(ARM_COUNT_PLUGIN), then run
 #     tests/arm/insn-count.sh mps2-an386 $(B)/bench/step-m4f.elf
-# which prints the image's output and "octo-count: region N: M instructions" for each
-# begin/end pair (the count includes the `bl bench_mark_end`, one instruction).
+# which prints the image's output, then "octo-count: region N: M instructions" for each
+# begin/end pair (exact guest instructions; one of them is the `bl bench_mark_end`).
+# Note: -std=c11 implies -ffp-contract=off, so GCC emits no fused multiply-add; the demo
+# shows the cost on M4F (226 instructions, 194 with -ffp-contract=fast).
 #
 # The toolchain is Debian's: if it is missing, root installs it with apt-get; anyone
 # else is told the command.
@@ -59,9 +75,14 @@ ARM_UNIT_OPT_m0-fixed := -Os
 ARM_LD_m4f        := tests/arm/m4f.ld
 ARM_LD_m0         := tests/arm/m0.ld
 ARM_LD_m0-fixed   := tests/arm/m0.ld
+# ARM_M0_MACHINE="lm3s6965evb -cpu cortex-m0" runs the M0 images on the same QEMU
+# Cortex-M0 CPU model on another board (256 KB flash, 64 KB RAM; the images still use
+# only microbit's 16 KB), which ignores accesses to unmapped addresses that microbit
+# faults on.
+ARM_M0_MACHINE ?= microbit
 ARM_MACHINE_m4f      := mps2-an386
-ARM_MACHINE_m0       := microbit
-ARM_MACHINE_m0-fixed := microbit
+ARM_MACHINE_m0       := $(ARM_M0_MACHINE)
+ARM_MACHINE_m0-fixed := $(ARM_M0_MACHINE)
 
 ARM_SECTIONS := -ffunction-sections -fdata-sections
 ARM_LDFLAGS  := -nostartfiles --specs=nano.specs --specs=nosys.specs -u _printf_float \
@@ -205,17 +226,21 @@ arm-size-total: $(ARM_LIBS) $(ARM_SIZE_ELFS)
 arm-size: $(ARM_LIBS)
 	@for v in $(ARM_VARIANTS); do echo "== $$v"; $(ARM_SIZE) -t $(ARM_B)/$$v/libcore.a; done
 
-# Runs every image even when one fails; the summary says which failed and why.
-arm_run = echo "== unit tests: $(1) on QEMU $(ARM_MACHINE_$(1))"; \
-  timeout $(ARM_TIMEOUT) $(ARM_QEMU) -M $(ARM_MACHINE_$(1)) $(ARM_QEMU_FLAGS) \
+# The images run in parallel (logs in build/arm/<v>/test.log), every one even when
+# another fails; their output is then printed in order with a summary of failures.
+arm_start = (timeout $(ARM_TIMEOUT) $(ARM_QEMU) -M $(ARM_MACHINE_$(1)) $(ARM_QEMU_FLAGS) \
     -semihosting-config enable=on,target=native,arg=unit-tests$(subst $(ARM_SPACE),,$(foreach f,$(ARM_FILTER),$(ARM_COMMA)arg=$(f))) \
-    -kernel $(ARM_B)/$(1)/unit-tests.elf </dev/null; \
-  s=$$?; if [ $$s != 0 ]; then rc=1; case $$s in 124) why="timed out after $(ARM_TIMEOUT) s";; \
-    125) why="stack exhausted";; 126) why="fault";; *) why="$$s failed tests";; esac; \
-    failed="$$failed $(1) ($$why)"; fi;
+    -kernel $(ARM_B)/$(1)/unit-tests.elf </dev/null >$(ARM_B)/$(1)/test.log 2>&1; \
+  echo $$? >$(ARM_B)/$(1)/test.status) &
+arm_report = echo "== unit tests: $(1) on QEMU $(ARM_MACHINE_$(1))"; cat $(ARM_B)/$(1)/test.log; \
+  s=$$(cat $(ARM_B)/$(1)/test.status); if [ "$$s" != 0 ]; then rc=1; case $$s in \
+    124) why="timed out after $(ARM_TIMEOUT) s";; 125) why="stack exhausted";; 126) why="fault";; \
+    *) why="$$s failed tests";; esac; failed="$$failed $(1) ($$why)"; fi;
 
 .PHONY: arm
 arm: arm-size-total $(ARM_ELFS) $(ARM_COUNT_PLUGIN) $(ARM_DEMO_ELFS)
-	@rc=0; failed=; $(foreach v,$(ARM_VARIANTS),$(call arm_run,$(v))) $(arm_count_demo) \
+	@rc=0; failed=; rm -f $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/test.status); \
+	$(foreach v,$(ARM_VARIANTS),$(call arm_start,$(v))) wait; \
+	$(foreach v,$(ARM_VARIANTS),$(call arm_report,$(v))) $(arm_count_demo) \
 	if [ $$rc = 0 ]; then echo "== make arm: all passed on $(ARM_VARIANTS)"; \
 	else echo "== make arm: FAILED:$$failed"; fi; exit $$rc
