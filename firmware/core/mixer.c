@@ -189,6 +189,10 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 				}
 				out[nf].nc = sc_from_float(nc);
 				out[nf].h = sc_from_float(h);
+				/* reciprocals of the thrust and yaw components (0: treated as zero) */
+				scalar_t n0 = out[nf].n[0], n3 = out[nf].n[3];
+				out[nf].inv0 = sc_abs(n0) > EPS_S ? sc_from_float(1.0f / sc_to_float(n0)) : SC_ZERO;
+				out[nf].inv3 = sc_abs(n3) > EPS_S ? sc_from_float(1.0f / sc_to_float(n3)) : SC_ZERO;
 				nf++;
 			}
 	return nf;
@@ -537,13 +541,13 @@ static bool thrust_interval(const struct mixer *m, const scalar_t w[NA], scalar_
 		q = sc_mac(fc->n[3], w[3], q);
 		q = sc_sub(q, fc->nc);
 		scalar_t s = fc->n[0], hw = sc_sub(fc->h, TOL_IN);
-		if (sc_abs(s) <= EPS_S) {
+		if (fc->inv0 == SC_ZERO) { /* |n_0| <= EPS_S: independent of F */
 			if (sc_abs(q) > hw)
 				return false;
 			continue;
 		}
 		/* -hw <= s F + q <= hw */
-		scalar_t a = sc_div(sc_sub(sc_neg(hw), q), s), b = sc_div(sc_sub(hw, q), s);
+		scalar_t a = sc_mul(sc_sub(sc_neg(hw), q), fc->inv0), b = sc_mul(sc_sub(hw, q), fc->inv0);
 		if (s < 0) {
 			scalar_t t = a;
 			a = b;
@@ -551,6 +555,8 @@ static bool thrust_interval(const struct mixer *m, const scalar_t w[NA], scalar_
 		}
 		l = sc_max(l, a);
 		h = sc_min(h, b);
+		if (l > h)
+			return false;
 	}
 	*lo = l;
 	*hi = h;
@@ -563,17 +569,21 @@ static bool thrust_interval(const struct mixer *m, const scalar_t w[NA], scalar_
 static bool yaw_interval(const struct mixer *m, const scalar_t w[NA], scalar_t dy, scalar_t *lo, scalar_t *hi)
 {
 	scalar_t l = sc_min(SC_ZERO, dy), h = sc_max(SC_ZERO, dy);
+	*lo = l;
+	*hi = h;
+	if (dy == SC_ZERO) /* no yaw demanded: is w itself attainable (inner margin)? */
+		return attainable_scaled(m, w, sc_neg(TOL_IN));
 	for (int k = 0; k < m->n_facets; k++) {
 		const struct mixer_facet *fc = &m->facet[k];
 		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
 		scalar_t s = fc->n[3], hw = sc_sub(fc->h, TOL_IN);
-		if (sc_abs(s) <= EPS_S) {
+		if (fc->inv3 == SC_ZERO) { /* |n_3| <= EPS_S: independent of t */
 			if (sc_abs(q) > hw)
 				return false;
 			continue;
 		}
 		/* -hw <= q + t s <= hw */
-		scalar_t a = sc_div(sc_sub(sc_neg(hw), q), s), b = sc_div(sc_sub(hw, q), s);
+		scalar_t a = sc_mul(sc_sub(sc_neg(hw), q), fc->inv3), b = sc_mul(sc_sub(hw, q), fc->inv3);
 		if (s < 0) {
 			scalar_t t = a;
 			a = b;
@@ -581,6 +591,8 @@ static bool yaw_interval(const struct mixer *m, const scalar_t w[NA], scalar_t d
 		}
 		l = sc_max(l, a);
 		h = sc_min(h, b);
+		if (l > h)
+			return false;
 	}
 	*lo = l;
 	*hi = h;
@@ -629,9 +641,9 @@ static int row_basis(const struct mixer *m, const int *fr, int nf, scalar_t q[NA
 			n2 = sc_mac(v[t], v[t], n2);
 		if (n2 <= EPS_GS)
 			continue;
-		scalar_t nrm = sc_sqrt(n2);
+		scalar_t nrm = sc_sqrt(n2), inv = sc_div(SC(1), nrm);
 		for (int t = 0; t < nf; t++)
-			q[r][t] = sc_div(v[t], nrm);
+			q[r][t] = sc_mul(v[t], inv);
 		lt[k][r] = nrm;
 		piv[r] = k;
 		r++;
@@ -946,7 +958,7 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		/* c. thrust nearest to the demand for which some yaw beta tau_z, beta in [0, 1],
 		 * is attainable: exact when the demanded thrust itself or the zero-yaw slice
 		 * allows it, else MIXER_ALPHA_ITERS bisection steps towards the demand */
-		scalar_t dy = sc_sub(wd[3], yaw0), blo, bhi;
+		scalar_t dy = sc_sub(wd[3], yaw0), dy_dem = dy, blo, bhi;
 		w[0] = sc_clamp(wd[0], lo, hi); /* attainable with beta = 0 */
 		if (alpha < SC(1)) {
 			/* roll/pitch saturated: no room is left for yaw; thrust from the zero-yaw slice */
@@ -975,7 +987,7 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		scalar_t ty = SC_ZERO;
 		if (dy != SC_ZERO && yaw_interval(m, w, dy, &blo, &bhi))
 			ty = dy > 0 ? bhi : blo;
-		if (ty != dy && demand[3] != SC_ZERO)
+		if (ty != dy_dem && demand[3] != SC_ZERO)
 			out->limits |= MIXER_LIMIT_TZ;
 		w[3] = sc_add(yaw0, ty);
 	}

@@ -118,6 +118,7 @@ struct mixer_facet {
 	scalar_t n[MIXER_N_AXES]; /* unit normal in the row-scaled space */
 	scalar_t nc;              /* n . centre of its zonotope */
 	scalar_t h;               /* half-width: 1/2 sum |n . g_j| over its generators */
+	scalar_t inv0, inv3;      /* 1 / n[0], 1 / n[3] (0 when that component is ~0) */
 };
 
 struct mixer {

@@ -590,6 +590,13 @@ UNIT_TEST(mixer_golden_vectors)
 		{ 214.173, 3.0, 0.0, 0.0 },
 		{ 112.1075, 23.68198, 7.893991, 0.0 },
 	};
+	static const uint32_t golden_limits[] = {
+		0, 0, 0,
+		MIXER_LIMIT_ROTOR_MIN | MIXER_LIMIT_TZ,
+		MIXER_LIMIT_ROTOR_MAX | MIXER_LIMIT_F,
+		MIXER_LIMIT_ROTOR_MIN | MIXER_LIMIT_ROTOR_MAX | MIXER_LIMIT_F | MIXER_LIMIT_TX |
+			MIXER_LIMIT_TY | MIXER_LIMIT_TZ,
+	};
 	for (size_t n = 0; n < sizeof dem / sizeof dem[0]; n++) {
 		scalar_t v[4];
 		for (int i = 0; i < 4; i++)
@@ -598,6 +605,7 @@ UNIT_TEST(mixer_golden_vectors)
 		mixer_update(&mix, v, &o);
 		for (int i = 0; i < 4; i++)
 			CHECK_NEAR(d(o.achieved[i]), ach[n][i], 5 * tol_axis[i]);
+		CHECK(o.limits == golden_limits[n]);
 	}
 }
 
