@@ -8,6 +8,7 @@
 #                    Fails if any test fails on any target.
 #                    ARM_FILTER="mixer rls" runs only tests whose names contain a word.
 #   make arm-size    .text/.data/.bss per core module and target
+#   make arm-stack   stack high-water mark of each test alone on M0
 #   make arm-count   build the counting plugin and print the demo's counts (4x8 float
 #                    matrix-vector product: about 190 instructions on M4F, 5,700 on M0)
 #
@@ -225,6 +226,17 @@ arm-size-total: $(ARM_LIBS) $(ARM_SIZE_ELFS)
 
 arm-size: $(ARM_LIBS)
 	@for v in $(ARM_VARIANTS); do echo "== $$v"; $(ARM_SIZE) -t $(ARM_B)/$$v/libcore.a; done
+
+# Stack high-water mark of each test alone on M0 (one QEMU run per test name; a name
+# also selects the tests whose names contain it), largest first.
+.PHONY: arm-stack
+arm-stack: $(ARM_B)/m0/unit-tests.elf
+	@echo "== stack used per test on m0 ($(ARM_MACHINE_m0)), bytes of $$(($$($(ARM_NM) $< | \
+	   awk '$$3 == "__stack_top" { t = $$1 } $$3 == "__stack_bottom" { b = $$1 } END { print "0x" t " - 0x" b }')))"
+	@for t in $$(sed -n 's/^UNIT_ENTRY(\(.*\))$$/\1/p' $(UNIT_LIST)); do \
+	  timeout $(ARM_TIMEOUT) $(ARM_QEMU) -M $(ARM_MACHINE_m0) $(ARM_QEMU_FLAGS) \
+	    -semihosting-config enable=on,target=native,arg=unit-tests,arg=$$t -kernel $< </dev/null 2>&1 | \
+	  sed -n "s/^octo-arm: stack \([0-9]*\) of.*/\1 $$t/p"; done | sort -rn | awk '{ printf "   %6d  %s\n", $$1, $$2 }'
 
 # The images run in parallel (logs in build/arm/<v>/test.log), every one even when
 # another fails; their output is then printed in order with a summary of failures.
