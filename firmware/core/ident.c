@@ -1,0 +1,215 @@
+/* ident.c - in-flight identification estimators; see ident.h. */
+#include "ident.h"
+
+static bool finite_f(float x) { return isfinite(x); }
+
+static float or_default(float v, float def) { return v > 0.0f ? v : def; }
+
+/* ---------------------------------------------------------------- rotor coefficients */
+
+void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
+{
+	r->cfg = *cfg;
+	filt_delay_init(&r->delay, cfg->delay_frames, cfg->thr0);
+	filt_lag_init(&r->lag, cfg->mot_tau_s, cfg->dt_s, cfg->thr0);
+	struct rls_config c;
+	rls_default_config(&c);
+	c.n_params = 1;
+	c.n_outputs = 2;
+	c.lambda = 1.0f;
+	c.p0 = or_default(cfg->p0, 1e6f);
+	c.theta0[0][0] = cfg->kf0;
+	c.theta0[1][0] = cfg->ktau0;
+	rls_init(&r->lagaware, &c);
+	rls_init(&r->plain, &c);
+	r->phi = cfg->thr0;
+	r->y_prev[0] = r->y_prev[1] = SC_ZERO;
+	r->have_prev = false;
+	r->n = 0;
+}
+
+/* g(s) = (1 - c) s + c s^2 */
+static scalar_t curve_g(scalar_t c, scalar_t s)
+{
+	return sc_add(sc_mul(sc_sub(SC(1.0), c), s), sc_mul(c, sc_mul(s, s)));
+}
+
+void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t f_meas,
+			scalar_t tau_meas, bool excited)
+{
+	/* lag-aware: the previous frame's throttle, delayed and lagged, for this measurement */
+	scalar_t s = filt_lag_update(&r->lag, filt_delay_update(&r->delay, thr_sent_prev));
+	r->phi = curve_g(r->cfg.curve, s);
+	scalar_t y[2] = {f_meas, tau_meas};
+	rls_update(&r->lagaware, &r->phi, y, excited);
+
+	/* plain (eq. 18-20): the previous measurement against the command of its own frame,
+	 * which is the throttle sent on the previous frame */
+	if (r->have_prev) {
+		scalar_t phi_raw = curve_g(r->cfg.curve, thr_sent_prev);
+		rls_update(&r->plain, &phi_raw, r->y_prev, excited);
+	}
+	r->y_prev[0] = f_meas;
+	r->y_prev[1] = tau_meas;
+	r->have_prev = true;
+	r->n++;
+}
+
+float ident_rotor_est(const struct ident_rotor *r, unsigned which)
+{
+	return rls_estimate_f(&r->lagaware, which, 0);
+}
+
+float ident_rotor_sd(const struct ident_rotor *r, unsigned which)
+{
+	return rls_std(&r->lagaware, which, 0);
+}
+
+float ident_rotor_plain(const struct ident_rotor *r, unsigned which)
+{
+	return rls_estimate_f(&r->plain, which, 0);
+}
+
+float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which)
+{
+	return rls_std(&r->plain, which, 0);
+}
+
+float ident_plain_bias(float e_d2, float e_d_dlag, float t_hover)
+{
+	float den = t_hover * t_hover + e_d2;
+	return den > 0.0f ? -(e_d2 - e_d_dlag) / den : 0.0f;
+}
+
+/* ---------------------------------------------------------------- body torque */
+
+void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS],
+		       const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3])
+{
+	/* eq. (14) in units of l: tau_x row [0 -s -1 -s 0 s 1 s], tau_y row [-1 -s 0 s 1 s 0 -s] */
+	const scalar_t s = SC(0.70710678118654752);
+	scalar_t tx = sc_add(sc_mul(s, sc_sub(sc_add(f[5], f[7]), sc_add(f[1], f[3]))),
+			     sc_sub(f[6], f[2]));
+	scalar_t ty = sc_add(sc_mul(s, sc_sub(sc_add(f[3], f[5]), sc_add(f[1], f[7]))),
+			     sc_sub(f[4], f[0]));
+	scalar_t tz = SC_ZERO;
+	for (int j = 0; j < IDENT_ROTORS; j += 2)
+		tz = sc_add(tz, sc_sub(tm[j], tm[j + 1]));
+	tau_out[0] = sc_mul(arm_l_m, tx);
+	tau_out[1] = sc_mul(arm_l_m, ty);
+	tau_out[2] = tz;
+}
+
+/* ---------------------------------------------------------------- inertia */
+
+static void other_axes(unsigned i, unsigned *j, unsigned *k)
+{
+	*j = (i + 1u) % 3u;
+	*k = (i + 2u) % 3u;
+}
+
+void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps, scalar_t zeta,
+			scalar_t dt_s, const scalar_t inertia[3], const scalar_t w0[3],
+			const scalar_t tau0[3])
+{
+	unsigned i = axis > 2u ? 2u : axis, j, k;
+	other_axes(i, &j, &k);
+	e->axis = i;
+	/* tau_i = I_i w_dot_i + (I_k - I_j) w_j w_k */
+	e->coupling = sc_sub(inertia[k], inertia[j]);
+	filt_svf_init(&e->svf_tau, wc_rps, zeta, dt_s, tau0[i]);
+	filt_svf_init(&e->svf_w, wc_rps, zeta, dt_s, w0[i]);
+	filt_svf_init(&e->svf_ww, wc_rps, zeta, dt_s, sc_mul(w0[j], w0[k]));
+	struct rls_config c;
+	rls_default_config(&c);
+	c.n_params = 1;
+	c.n_outputs = 1;
+	c.lambda = 1.0f;
+	c.p0 = 1e4f;
+	c.theta0[0][0] = sc_to_float(inertia[i]);
+	rls_init(&e->rls, &c);
+	e->n = 0;
+}
+
+void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3],
+			  bool excited)
+{
+	unsigned i = e->axis, j, k;
+	other_axes(i, &j, &k);
+	filt_svf_update(&e->svf_tau, tau_b[i]);
+	filt_svf_update(&e->svf_w, w_b[i]);
+	filt_svf_update(&e->svf_ww, sc_mul(w_b[j], w_b[k]));
+	scalar_t y = sc_sub(e->svf_tau.y, sc_mul(e->coupling, e->svf_ww.y));
+	scalar_t phi = e->svf_w.ydot;
+	rls_update(&e->rls, &phi, &y, excited);
+	e->n++;
+}
+
+float ident_inertia_est(const struct ident_inertia *e) { return rls_estimate_f(&e->rls, 0, 0); }
+
+float ident_inertia_sd(const struct ident_inertia *e) { return rls_std(&e->rls, 0, 0); }
+
+/* ---------------------------------------------------------------- validation */
+
+void ident_fit_init(struct ident_fit *v)
+{
+	v->n = v->mean = v->m2 = v->sse = v->syy = 0.0f;
+}
+
+void ident_fit_add(struct ident_fit *v, scalar_t y_s, scalar_t y_hat_s)
+{
+	float y = sc_to_float(y_s), yh = sc_to_float(y_hat_s);
+	if (!finite_f(y) || !finite_f(yh))
+		return;
+	v->n += 1.0f;
+	float d = y - v->mean;
+	v->mean += d / v->n;
+	v->m2 += d * (y - v->mean);
+	v->sse += (y - yh) * (y - yh);
+	v->syy += y * y;
+}
+
+float ident_fit_ne(const struct ident_fit *v)
+{
+	return v->syy > 0.0f ? sqrtf(v->sse / v->syy) : 0.0f;
+}
+
+float ident_fit_pct(const struct ident_fit *v)
+{
+	return v->m2 > 0.0f ? 100.0f * (1.0f - sqrtf(v->sse / v->m2)) : 0.0f;
+}
+
+/* ---------------------------------------------------------------- acceptance */
+
+enum ident_verdict ident_accept(float est, float sd, float nominal, float rsd_max)
+{
+	if (!finite_f(est) || !finite_f(sd))
+		return IDENT_NOT_FINITE;
+	float lo = IDENT_RANGE_LO * nominal, hi = IDENT_RANGE_HI * nominal;
+	if (lo > hi) {
+		float t = lo;
+		lo = hi;
+		hi = t;
+	}
+	if (!(est >= lo && est <= hi) || est == 0.0f)
+		return IDENT_OUT_OF_RANGE;
+	float rsd = sd / (est > 0.0f ? est : -est);
+	if (sd < 0.0f || !(rsd < rsd_max))
+		return IDENT_UNCERTAIN;
+	return IDENT_ACCEPT;
+}
+
+const char *ident_verdict_text(enum ident_verdict v)
+{
+	switch (v) {
+	case IDENT_ACCEPT:
+		return "accepted";
+	case IDENT_NOT_FINITE:
+		return "not finite";
+	case IDENT_OUT_OF_RANGE:
+		return "outside 0.25..4 x nominal";
+	case IDENT_UNCERTAIN:
+		return "std too large";
+	}
+	return "?";
+}

@@ -1,0 +1,145 @@
+/*
+ * ident.h - in-flight identification estimators (issue 6): rotor coefficients k_f, k_tau
+ * (lag-aware and the paper's plain estimator side by side), inertia about one body axis,
+ * validation statistics (NE, fit %), and the acceptance rule.
+ *
+ * ---------------------------------------------------------------- rotor coefficients
+ * Plant (octo-sim, X-Plane): the throttle T_k computed from frame k is applied over
+ * [t_k, t_(k+1)] (the UDP loop's one unavoidable frame), after a transport delay of D more
+ * frames, through a first-order lag tau: s_(k+1) = a s_k + (1 - a) T_(k-D), a = exp(-dt/tau);
+ * frame k+1 then reports f_1 = k_f g(s_(k+1)), tau_1 = k_tau g(s_(k+1)), g(s) = (1-c) s + c s^2.
+ *
+ * Lag-aware estimator: at frame k (measurement y_k = [f_1, tau_1]) the regressor is
+ *     phi_k = g(s_hat_k),  s_hat_k = lag_tau(delay_D(T_(k-1)))
+ * i.e. the throttle sent on the previous frame (the only one that can have acted), passed
+ * through the modelled transport delay (D = ID_DELAY_FR frames) and the exact ZOH
+ * discretisation of the modelled lag (tau = ID_MOT_TAU, a parameter, not estimated).
+ * One RLS, 1 parameter, 2 outputs (k_f and k_tau share the regressor and P), no intercept,
+ * lambda = 1. With the model right this is the plain least-squares problem with white
+ * measurement noise: unbiased and efficient (var/CRLB ~ 1).
+ *
+ * Plain estimator (the paper's eq. 18-20): y_k regressed on the raw command T_k of the same
+ * frame (no intercept), what Simulink does in the paper. It is biased whenever thrust lags:
+ *     bias = -(E[d^2] - E[d d_lag]) / (T_h^2 + E[d^2])
+ * with d the dither and d_lag what the plant's thrust sees of it at the same sample.
+ * The update for frame k runs at frame k+1 (T_k is only known after the mixer), so the plain
+ * estimator keeps the previous measurement.
+ *
+ * ---------------------------------------------------------------- inertia, one axis
+ * Euler: tau = I w_dot + w x (I w), diagonal I: tau_i = I_i w_dot_i + (I_k - I_j) w_j w_k
+ * (i, j, k cyclic). tau from the MEASURED rotor forces through Gamma_o (ident_body_torque);
+ * the gyroscopic term with the current values of the two other inertias. Torque, rate and
+ * the product w_j w_k pass through the SAME state-variable filter (filt_svf), so that
+ *     y = svf(tau_i) - (I_k - I_j) svf(w_j w_k),  phi = d/dt svf(w_i)   (no raw differencing)
+ * and y = I_i phi holds exactly for the filtered continuous signals; RLS, 1 parameter.
+ *
+ * Core rules: scalar_t interfaces, no heap/globals/I/O; the RLS and the validation sums are
+ * float32 inside (as rls.h); the delay, lag and SVF run in scalar_t (Q16.16 in the fixed
+ * build: resolution 1.5e-5 of throttle, which costs ~1e-4 relative in k_f).
+ */
+#ifndef OCTO_IDENT_H
+#define OCTO_IDENT_H
+
+#include "filt.h"
+#include "rls.h"
+#include "scalar.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#define IDENT_ROTORS 8
+
+/* ---------------------------------------------------------------- rotor coefficients */
+struct ident_rotor_cfg {
+	scalar_t dt_s;          /* frame period (90 Hz: 1/90) */
+	scalar_t mot_tau_s;     /* modelled first-order lag (0 = none) */
+	uint32_t delay_frames;  /* modelled transport delay beyond the loop's one frame */
+	scalar_t curve;         /* thrust curve c of g(s) (MOT_CURVE; 0 = linear) */
+	scalar_t thr0;          /* throttle before the start (initial state of delay and lag) */
+	float kf0, ktau0;       /* initial estimates (nominal values) */
+	float p0;               /* initial covariance (0 = 1e6) */
+};
+
+struct ident_rotor {
+	struct ident_rotor_cfg cfg;
+	struct filt_delay delay;
+	struct filt_lag lag;
+	struct rls lagaware;    /* theta[0][0] = k_f, theta[1][0] = k_tau */
+	struct rls plain;
+	scalar_t phi;           /* last lag-aware regressor */
+	scalar_t y_prev[2];     /* measurement of the previous frame (for the plain update) */
+	bool have_prev;
+	uint32_t n;
+};
+
+void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg);
+
+/* One frame: thr_sent_prev = throttle of the rotor sent on the previous frame; f_meas, tau_meas
+ * = measured thrust (N) and reaction-torque magnitude (N m) of this frame. `excited` gates
+ * both RLS (false: the filters run, the estimates do not move). */
+void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t f_meas,
+			scalar_t tau_meas, bool excited);
+
+/* estimates and standard deviations: which 0 = k_f, 1 = k_tau */
+float ident_rotor_est(const struct ident_rotor *r, unsigned which);
+float ident_rotor_sd(const struct ident_rotor *r, unsigned which);
+float ident_rotor_plain(const struct ident_rotor *r, unsigned which);
+float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which);
+
+/* The closed form of the plain estimator's relative bias (estimation-notes.md). */
+float ident_plain_bias(float e_d2, float e_d_dlag, float t_hover);
+
+/* ---------------------------------------------------------------- body torque */
+/* Torque about S_B from measured rotor thrusts f[8] (N) through Gamma_o rows 2-3 (eq. 14,
+ * arm l) and yaw from the measured reaction-torque magnitudes tm[8] (odd rotors +, even -). */
+void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS],
+		       const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3]);
+
+/* ---------------------------------------------------------------- inertia */
+struct ident_inertia {
+	unsigned axis;                  /* 0 x, 1 y, 2 z */
+	scalar_t coupling;              /* I_k - I_j of the gyroscopic term */
+	struct filt_svf svf_tau, svf_w, svf_ww;
+	struct rls rls;
+	uint32_t n;
+};
+
+/* wc, zeta: the SVF; inertia[3]: current values (the two others enter the gyroscopic term;
+ * the axis' own is the initial estimate). */
+void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps, scalar_t zeta,
+			scalar_t dt_s, const scalar_t inertia[3], const scalar_t w0[3],
+			const scalar_t tau0[3]);
+/* One frame: body torque (ident_body_torque) and body rates of the same frame. */
+void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3],
+			  bool excited);
+float ident_inertia_est(const struct ident_inertia *e);
+float ident_inertia_sd(const struct ident_inertia *e);
+
+/* ---------------------------------------------------------------- validation */
+/* y (measured) against y_hat (model): NE = RMS(y - y_hat) / RMS(y),
+ * fit % = 100 (1 - ||y - y_hat|| / ||y - mean(y)||). float inside (Welford for the mean). */
+struct ident_fit {
+	float n, mean, m2;     /* running mean and sum of squared deviations of y */
+	float sse, syy;        /* sum (y - y_hat)^2, sum y^2 */
+};
+
+void ident_fit_init(struct ident_fit *v);
+void ident_fit_add(struct ident_fit *v, scalar_t y, scalar_t y_hat);
+float ident_fit_ne(const struct ident_fit *v);
+float ident_fit_pct(const struct ident_fit *v);
+
+/* ---------------------------------------------------------------- acceptance */
+enum ident_verdict {
+	IDENT_ACCEPT = 0,
+	IDENT_NOT_FINITE,   /* estimate or std not finite */
+	IDENT_OUT_OF_RANGE, /* outside [0.25, 4] x nominal */
+	IDENT_UNCERTAIN,    /* relative std >= rsd_max (or no data) */
+};
+
+#define IDENT_RANGE_LO 0.25f
+#define IDENT_RANGE_HI 4.0f
+
+enum ident_verdict ident_accept(float est, float sd, float nominal, float rsd_max);
+const char *ident_verdict_text(enum ident_verdict v);
+
+#endif /* OCTO_IDENT_H */
