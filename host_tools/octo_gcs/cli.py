@@ -43,6 +43,60 @@ def build_parser() -> argparse.ArgumentParser:
     ld.add_argument("file")
     df = psub.add_parser("diff", help="show parameters that differ between the vehicle and FILE")
     df.add_argument("file")
+
+    ip = sub.add_parser(
+        "identify", help="run identification experiments on a hovering vehicle and check the results",
+        description="Starts identification experiments (MAV_CMD_USER_1) on a vehicle that hovers, "
+        "shows their progress (phase, time, live estimates +/- std), reads the results from the ID_* "
+        "parameters and checks them: present, accepted, relative std within ID_RSD_MAX, applied to "
+        "VEH_*, physically plausible; with --expect also the error against the truth. "
+        "Exit status 0 = pass, 1 = fail.",
+        epilog="experiments: 1 rotor coefficients (k_f, k_tau), 2 validation, 3 Ix, 4 Iy, 5 Iz, "
+        "6 the full sequence (validation, rotor, validation, Ix, Iy, Iz)")
+    add_connection_args(ip)
+    ip.add_argument("--experiments", default="6", metavar="LIST",
+                    help="experiment numbers, comma-separated, run in order (default 6)")
+    ip.add_argument("--expect", metavar="VEHICLE.json",
+                    help="the true vehicle (octo-sim's --vehicle format; absent keys = the paper's values)")
+    ip.add_argument("--tol-rotor", type=float, default=0.3, metavar="PCT",
+                    help="with --expect: largest error of k_f and k_tau, percent (default 0.3)")
+    ip.add_argument("--tol-inertia", type=float, default=2.0, metavar="PCT",
+                    help="with --expect: largest error of Ix, Iy, Iz, percent (default 2)")
+    ip.add_argument("--time-factor", type=float, default=2.0, metavar="X",
+                    help="wall seconds allowed per planned experiment second, plus 30 s (default 2)")
+
+    mp = sub.add_parser(
+        "mission", help="the whole job: start octo-sim and octo-fw, fly, identify, report",
+        description="Starts octo-sim (lockstep unless --realtime) and octo-fw on free ports, both logging "
+        "to LCM files; sets VEH_MASS and VEH_ARM_L from the vehicle file; arms, takes off to 10 m, runs "
+        "the identification, collects every parameter over MAVLink, lands and stops both programs (also "
+        "on errors and Ctrl-C). Writes DIR: report.md, report.json, params.parm, truth.lcm and fw.lcm, "
+        "octo-sim.log and octo-fw.log, fig5_excitation.png, fig6_validation.png, fig7_rates.png, "
+        "convergence.png. Exit status 0 when every check passes.")
+    mp.add_argument("--vehicle", metavar="FILE",
+                    help="the simulated vehicle, octo-sim's JSON format (default: the paper's vehicle)")
+    mp.add_argument("--seed", type=int, default=1, metavar="N", help="seed of the noise and excitation (1)")
+    mp.add_argument("--out", default="out", metavar="DIR", help="output directory (default out)")
+    mp.add_argument("--realtime", action="store_true",
+                    help="run octo-sim in real time like X-Plane (default: lockstep, as fast as possible)")
+    mp.add_argument("--xplane-version", type=int, choices=(11, 12), default=12,
+                    help="X-Plane protocol personality of octo-sim (default 12)")
+    mp.add_argument("--experiments", default="6", metavar="LIST",
+                    help="experiments to run (default 6, the full sequence; 'none' only flies)")
+    mp.add_argument("--build-dir", metavar="DIR",
+                    help="where octo-sim and octo-fw are (default $OCTO_BUILD, else the repository's build/)")
+    mp.add_argument("--no-plots", dest="plots", action="store_false", help="skip the figures")
+    mp.add_argument("--timeout", type=float, default=5.0, metavar="S",
+                    help="seconds to wait for the vehicle's answers (default 5)")
+
+    pl = sub.add_parser(
+        "plot", help="the report's figures from existing LCM logs",
+        description="Draws fig5_excitation.png, fig6_validation.png, fig7_rates.png and convergence.png "
+        "from LCM logs of octo-fw (OCTO_FW_FRAME/EVENT) and, if given, octo-sim (OCTO_TRUTH). The model "
+        "of Fig. 7 uses the parameters in use at the end of the firmware log, or those of --params.")
+    pl.add_argument("logs", nargs="+", metavar="LOG", help="LCM log files, or directories holding *.lcm")
+    pl.add_argument("--out", default=".", metavar="DIR", help="where the figures go (default .)")
+    pl.add_argument("--params", metavar="FILE", help="parameter file (params.parm of a mission)")
     return p
 
 
@@ -53,10 +107,20 @@ def main(argv=None) -> int:
         parser.print_help()
         return 2
     from .link import GcsError
+    from .procs import Terminated
 
     try:
         if args.command == "params":
             from .params_cmd import run
+            return run(args)
+        if args.command == "identify":
+            from .identify import run
+            return run(args)
+        if args.command == "mission":
+            from .mission import run
+            return run(args)
+        if args.command == "plot":
+            from .plot_cmd import run
             return run(args)
     except GcsError as e:
         print(f"octo-gcs: {e}", file=sys.stderr)
@@ -64,6 +128,9 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("octo-gcs: interrupted", file=sys.stderr)
         return 130
+    except Terminated as e:
+        print(f"octo-gcs: stopped by {e}", file=sys.stderr)
+        return 143
     return 0
 
 

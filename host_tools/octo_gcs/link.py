@@ -17,6 +17,10 @@ mavlink = mavutil.mavlink
 
 DEFAULT_URL = "udpin:0.0.0.0:14550"
 
+# octo-fw's modes: HEARTBEAT.custom_mode, and the STATUSTEXT "Mode <NAME>" on each change
+MODES = {0: "DISARMED", 1: "IDLE", 2: "TAKEOFF", 3: "HOLD", 4: "EXPERIMENT", 5: "LAND"}
+MODE_NUMBERS = {v: k for k, v in MODES.items()}
+
 
 class GcsError(RuntimeError):
     """A failure the user should read (no vehicle, no answer, refused write...)."""
@@ -68,6 +72,8 @@ class Vehicle:
         self.statustexts = []      # (wall time, severity, text)
         self.named_values = {}     # name -> (time_boot_ms, value)
         self.heartbeat = None
+        self.mode = None           # octo-fw's mode (HEARTBEAT.custom_mode / "Mode X" texts)
+        self.listeners = []        # callables(msg) that see every message received
 
     # ------------------------------------------------------------ plumbing
     def close(self):
@@ -83,10 +89,16 @@ class Vehicle:
         t = msg.get_type()
         if t == "STATUSTEXT":
             self.statustexts.append((time.time(), msg.severity, msg.text))
+            if msg.text.startswith("Mode ") and msg.text[5:] in MODE_NUMBERS:
+                self.mode = MODE_NUMBERS[msg.text[5:]]
         elif t == "NAMED_VALUE_FLOAT":
             self.named_values[msg.name] = (msg.time_boot_ms, msg.value)
-        elif t == "HEARTBEAT" and msg.get_srcComponent() == self.target_component:
+        elif t == "HEARTBEAT" and msg.get_srcComponent() == self.target_component \
+                and msg.type != mavlink.MAV_TYPE_GCS:
             self.heartbeat = msg
+            self.mode = msg.custom_mode
+        for f in self.listeners:
+            f(msg)
 
     def recv(self, types=None, timeout=1.0, cond=None):
         """Next message of one of `types` (and satisfying cond) within `timeout` s, else None.
@@ -118,6 +130,7 @@ class Vehicle:
         self.target_system = msg.get_srcSystem()
         self.target_component = msg.get_srcComponent()
         self.heartbeat = msg
+        self.mode = msg.custom_mode
         return msg
 
     # ------------------------------------------------------------ parameters

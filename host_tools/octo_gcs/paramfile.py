@@ -80,6 +80,9 @@ def save(path, params):
             f.write(format_params(params))
             f.flush()
             os.fsync(f.fileno())
+        um = os.umask(0)
+        os.umask(um)
+        os.chmod(tmp, 0o666 & ~um)   # as open() would (mkstemp makes 0600)
         os.replace(tmp, path)
     except BaseException:
         try:

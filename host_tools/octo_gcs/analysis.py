@@ -1,0 +1,164 @@
+"""What the report and the figures compute from the logs.
+
+- Phases of the identification (from the firmware's "ID k/n: name" events).
+- Validation (Fig. 6): commanded rotor-1 thrust f_bar_1 (the allocation) against the
+  measured f_1 (X-Plane's row 35), normalised error and fit.
+- Fig. 7: the body rates of the simulator against the paper's analytical model,
+  eqs. (1)-(10) integrated with RK4 (model.py) from the same throttle inputs with the
+  ESTIMATED parameters, over each inertia experiment.
+
+Fit % = 100 (1 - ||y - y_hat|| / ||y - mean(y)||); NE = RMS(y - y_hat) / RMS(y).
+"""
+
+import math
+import re
+
+import numpy as np
+
+from .model import Model, Params, State
+
+FRAME_DT = 1.0 / 90.0
+RK4_STEP = 0.002   # the paper's T
+
+
+def fit_pct(y, yhat):
+    y, yhat = np.asarray(y, float), np.asarray(yhat, float)
+    den = np.linalg.norm(y - y.mean())
+    if len(y) < 2 or den == 0:
+        return float("nan")
+    return float(100.0 * (1.0 - np.linalg.norm(y - yhat) / den))
+
+
+def ne(y, yhat):
+    y, yhat = np.asarray(y, float), np.asarray(yhat, float)
+    den = math.sqrt(float(np.mean(y ** 2))) if len(y) else 0.0
+    if den == 0:
+        return float("nan")
+    return float(math.sqrt(float(np.mean((y - yhat) ** 2))) / den)
+
+
+# ---------------------------------------------------------------- phases
+def classify(name):
+    """'validation' | 'rotor' | 'ixx' | 'iyy' | 'izz' | None for a phase name."""
+    n = name.lower()
+    if "valid" in n:
+        return "validation"
+    m = re.search(r"\bi[_ ]?(x|y|z)\1?\b", n) or re.search(r"\b(x|y|z)[- ]axis\b", n) \
+        or re.search(r"\b(roll|pitch|yaw)\b", n)
+    if m:
+        axis = {"roll": "x", "pitch": "y", "yaw": "z"}.get(m.group(1), m.group(1))
+        return "i" + axis * 2
+    if "inertia" in n:
+        return None
+    if any(w in n for w in ("rotor", "k_f", "kf", "thrust", "coefficient")):
+        return "rotor"
+    return None
+
+
+def phases(logs):
+    """{'validation': [(t0, t1), ...], 'rotor': [...], 'ixx': [...], ...} from the events."""
+    out = {}
+    for name, t0, t1, _k in logs.phases():
+        kind = classify(name)
+        if kind:
+            out.setdefault(kind, []).append((t0, t1))
+    return out
+
+
+def window(series, t0, t1, stepped=True):
+    m = (series.t >= t0) & (series.t < t1)
+    if stepped and series.has("stepped"):
+        m &= series.stepped.astype(bool)
+    return series.select(m)
+
+
+# ---------------------------------------------------------------- validation (Fig. 6)
+def validation(logs):
+    """[(label, t, f_cmd, f_meas, ne, fit)] for the validation windows (before, after)."""
+    out = []
+    fw = logs.fw
+    if fw is None:
+        return out
+    wins = phases(logs).get("validation", [])
+    labels = ["before identification", "after identification"] + \
+        [f"validation {i + 3}" for i in range(max(0, len(wins) - 2))]
+    for label, (t0, t1) in zip(labels, wins):
+        w = window(fw, t0, t1)
+        if len(w) < 10:
+            continue
+        f_cmd, f_meas = w.rotor_f[:, 0], w.rotor_thrust[:, 0]
+        out.append((label, w.t, f_cmd, f_meas, ne(f_meas, f_cmd), fit_pct(f_meas, f_cmd)))
+    return out
+
+
+# ---------------------------------------------------------------- rates vs model (Fig. 7)
+def model_params(params):
+    """model.Params from vehicle parameters (identified ones where present)."""
+    def get(name, default):
+        v = params.get(name)
+        return float(v) if v is not None and math.isfinite(v) and v > 0 else default
+    p = Params()
+    return Params(mass=get("VEH_MASS", p.mass), g=get("VEH_GRAV", p.g), arm_length=get("VEH_ARM_L", p.arm_length),
+                  kf=get("ID_KF_EST", get("VEH_KF", p.kf)), ktau=get("ID_KTAU_EST", get("VEH_KTAU", p.ktau)),
+                  inertia=(get("ID_IXX_EST", get("VEH_IXX", p.inertia[0])),
+                           get("ID_IYY_EST", get("VEH_IYY", p.inertia[1])),
+                           get("ID_IZZ_EST", get("VEH_IZZ", p.inertia[2]))))
+
+
+def simulate_rates(t, q0, w0, throttles, s0, p, motor_tau=0.0, delay_frames=0):
+    """Integrates eqs. (1)-(9) from attitude q0 and rates w0 through the throttle
+    sequence (row k acts from t[k] to t[k+1]) with the model's actuator: a transport
+    delay of `delay_frames` frames and a first-order lag `motor_tau` from s0.
+    Returns the rates at t (n x 3)."""
+    m = Model(p)
+    x = State(q=np.asarray(q0, float), w=np.asarray(w0, float)).vector()
+    thr = np.asarray(throttles, float)
+    if delay_frames > 0:
+        thr = np.vstack([np.repeat(thr[:1], delay_frames, axis=0), thr[:-delay_frames]])
+    s = np.asarray(s0, float).copy()
+    out = np.empty((len(t), 3))
+    out[0] = x[10:13]
+    for k in range(len(t) - 1):
+        dt = t[k + 1] - t[k]
+        n = max(1, int(math.ceil(dt / RK4_STEP - 1e-9)))
+        h = dt / n
+        for _ in range(n):
+            if motor_tau > 0:
+                a = math.exp(-h / motor_tau)
+                s_mid = thr[k] + (s - thr[k]) * math.sqrt(a)
+                s = thr[k] + (s - thr[k]) * a
+            else:
+                s_mid = s = thr[k]
+            x = m.step(x, m.wrench_of_throttles(s_mid), h)
+        out[k + 1] = x[10:13]
+    return out
+
+
+def rate_comparison(logs, params):
+    """[(axis kind, t, rates_sim (n x 3), rates_model (n x 3), fit per axis [3])] over
+    each inertia experiment, with the estimated parameters in `params`."""
+    p = model_params(params)
+    tau = float(params.get("ID_MOT_TAU", 0.0) or 0.0)
+    delay = int(round(params.get("ID_DELAY_FR", 0.0) or 0.0))
+    ph = phases(logs)
+    out = []
+    for kind in ("ixx", "iyy", "izz"):
+        for (t0, t1) in ph.get(kind, [])[:1]:
+            if logs.truth is not None:
+                tr = window(logs.truth, t0, t1, stepped=False)
+                if len(tr) < 10:
+                    continue
+                # record k carries the command that drove the plant from t[k-1] to t[k]
+                t, w, q = tr.t, tr.rate_b, tr.q_i2b
+                thr = np.vstack([tr.throttle_cmd[1:], tr.throttle_cmd[-1:]])
+                s0 = tr.s[0]
+                wm = simulate_rates(t, q[0], w[0], thr, s0, p, tau, 0)
+            else:
+                fw = window(logs.fw, t0, t1)
+                if len(fw) < 10:
+                    continue
+                t, w, q = fw.t, fw.rate_b, fw.q
+                wm = simulate_rates(t, q[0], w[0], fw.throttle, fw.throttle[0], p, tau, delay)
+            fits = [fit_pct(w[:, i], wm[:, i]) for i in range(3)]
+            out.append((kind, t, w, wm, fits))
+    return out

@@ -1,0 +1,322 @@
+"""In-flight identification over MAVLink (the interface of firmware/app/experiment.h).
+
+Start: COMMAND_LONG MAV_CMD_USER_1, param1 = experiment (1 rotor coefficients,
+2 validation, 3 Ix, 4 Iy, 5 Iz, 6 the full sequence). The vehicle answers
+IN_PROGRESS (or ACCEPTED) when it starts, then a final COMMAND_ACK ACCEPTED or
+FAILED; STATUSTEXTs "ID k/n: <phase>", one per result, and "ID done" or
+"ID aborted: <why>"; live estimates as NAMED_VALUE_FLOAT. The results are read
+back from the ID_* parameters; accepted ones are also in VEH_*.
+"""
+
+import math
+import re
+import time
+
+from .link import MODE_NUMBERS, MODES, GcsError, mavlink, result_name
+
+EXPERIMENTS = {1: "rotor coefficients", 2: "validation", 3: "Ix", 4: "Iy", 5: "Iz",
+               6: "full sequence"}
+
+
+class Quantity:
+    def __init__(self, key, label, unit, est, sd, plain, veh, bit, exp):
+        self.key, self.label, self.unit = key, label, unit
+        self.est, self.sd, self.plain, self.veh = est, sd, plain, veh
+        self.bit, self.exp = bit, exp
+
+
+QUANTITIES = [
+    Quantity("kf", "k_f", "N", "ID_KF_EST", "ID_KF_SD", "ID_KF_PLAIN", "VEH_KF", 1, 1),
+    Quantity("ktau", "k_tau", "N m", "ID_KTAU_EST", "ID_KTAU_SD", "ID_KTAU_PLAIN", "VEH_KTAU", 1, 1),
+    Quantity("ixx", "I_x", "kg m^2", "ID_IXX_EST", "ID_IXX_SD", None, "VEH_IXX", 2, 3),
+    Quantity("iyy", "I_y", "kg m^2", "ID_IYY_EST", "ID_IYY_SD", None, "VEH_IYY", 4, 4),
+    Quantity("izz", "I_z", "kg m^2", "ID_IZZ_EST", "ID_IZZ_SD", None, "VEH_IZZ", 8, 5),
+]
+BY_KEY = {q.key: q for q in QUANTITIES}
+
+# live estimates (NAMED_VALUE_FLOAT) shown on the progress line, in this order
+LIVE = [("KF", "KF_SD", "{:.4f}"), ("KTAU", "KTAU_SD", "{:.5f}"), ("IXX", "IXX_SD", "{:.5f}"),
+        ("IYY", "IYY_SD", "{:.5f}"), ("IZZ", "IZZ_SD", "{:.5f}")]
+
+PHASE_RE = re.compile(r"^ID (\d+)/(\d+): (.*)$")
+RESULT_RE = re.compile(r"^ID (\S+) .*\b(accepted|rejected)\b")
+
+
+def quantities_of(experiments):
+    """The quantities experiments identify (6 = all; 2 = none)."""
+    exps = set(experiments)
+    if 6 in exps:
+        return list(QUANTITIES)
+    return [q for q in QUANTITIES if q.exp in exps]
+
+
+def parse_experiments(text):
+    """'6' or '1,3,4' -> [6] / [1, 3, 4] (checked)."""
+    out = []
+    for part in str(text).replace(" ", ",").split(","):
+        if not part:
+            continue
+        try:
+            n = int(part)
+        except ValueError:
+            raise GcsError(f"experiment {part!r} is not a number (1..6)") from None
+        if n not in EXPERIMENTS:
+            raise GcsError(f"experiment {n} unknown: " +
+                           ", ".join(f"{k} {v}" for k, v in EXPERIMENTS.items()))
+        out.append(n)
+    if not out:
+        raise GcsError("no experiment given")
+    return out
+
+
+def planned_sim_seconds(params, experiment):
+    """Simulated seconds an experiment should last, from the ID_* parameters (an estimate
+    for the time-outs; the firmware may add settling time)."""
+    exc = params.get("ID_EXC_TIME", 10.0)
+    val = params.get("ID_VAL_TIME", 10.0)
+    inr = params.get("ID_INR_TIME", 10.0)
+    return {1: exc, 2: val, 3: inr, 4: inr, 5: inr, 6: 2 * val + exc + 3 * inr}[experiment]
+
+
+class Live:
+    """What the vehicle says while an experiment runs: phase, progress, estimates."""
+
+    def __init__(self):
+        self.phase = ""
+        self.phase_k = self.phase_n = 0
+        self.progress = None
+        self.results = []       # result STATUSTEXTs
+        self.done = None        # "done" | "aborted: why" | "failed"
+        self.texts = []
+
+    def on_text(self, text):
+        if not text.startswith("ID"):
+            return
+        self.texts.append(text)
+        m = PHASE_RE.match(text)
+        if m:
+            self.phase_k, self.phase_n, self.phase = int(m.group(1)), int(m.group(2)), m.group(3)
+        elif text == "ID done":
+            self.done = "done"
+        elif text.startswith("ID aborted"):
+            self.done = "aborted" + text[len("ID aborted"):]
+        elif RESULT_RE.match(text):
+            self.results.append(text)
+
+
+def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_timeout=10.0):
+    """Runs one experiment on a hovering vehicle (link.Vehicle `v`); returns Live.
+
+    progress: a progress.Progress. sim_time(): the vehicle's simulated time if the
+    caller knows it (e.g. from the log it asked for), else None (wall time is shown).
+    Raises GcsError if the vehicle refuses, aborts or goes silent."""
+    live = Live()
+    cmd = mavlink.MAV_CMD_USER_1
+    final = {}
+
+    def listen(msg):
+        t = msg.get_type()
+        if t == "STATUSTEXT":
+            live.on_text(msg.text)
+            if msg.text.startswith("ID") and not PHASE_RE.match(msg.text):
+                progress.say("  " + msg.text)
+        elif t == "COMMAND_ACK" and msg.command == cmd and "started" in final:
+            if msg.result == mavlink.MAV_RESULT_IN_PROGRESS:
+                live.progress = msg.progress
+            else:
+                final["result"] = msg.result
+
+    name = EXPERIMENTS[experiment]
+    # start it: the vehicle may still be settling after a take-off (DENIED: not hovering)
+    deadline = time.monotonic() + start_timeout
+    while True:
+        t_cmd = time.time()
+        r = v.command(cmd, experiment, timeout=2.0)
+        if r in (mavlink.MAV_RESULT_IN_PROGRESS, mavlink.MAV_RESULT_ACCEPTED):
+            break
+        v.recv(types=(), timeout=0.02)
+        why = v._last_text(since=t_cmd)
+        if r in (mavlink.MAV_RESULT_DENIED, mavlink.MAV_RESULT_TEMPORARILY_REJECTED) \
+                and "hover" in why and time.monotonic() < deadline:
+            v.recv(types=(), timeout=0.2)
+            continue
+        raise GcsError(f"experiment {experiment} ({name}) refused: {result_name(r)}"
+                       + (f": {why}" if why else ""))
+    final["started"] = True
+    t_wall0 = time.monotonic()
+    t_sim0 = sim_time() if sim_time else None
+    v.listeners.append(listen)
+    key = None
+    try:
+        # texts that arrived with the start ACK
+        for _, _, text in [s for s in v.statustexts if s[0] >= t_cmd]:
+            live.on_text(text)
+        while True:
+            if live.done is not None:
+                break
+            if "result" in final:
+                live.done = "done" if final["result"] == mavlink.MAV_RESULT_ACCEPTED else \
+                    f"failed ({result_name(final['result'])})"
+                break
+            if v.mode is not None and v.mode != MODE_NUMBERS["EXPERIMENT"] \
+                    and time.monotonic() - t_wall0 > 1.0:
+                # back in hold (or worse) without the final texts: the mode says it ended
+                v.recv(types=(), timeout=0.3)
+                if live.done is None and "result" not in final:
+                    live.done = "done" if v.mode == MODE_NUMBERS["HOLD"] else \
+                        f"ended in mode {v.mode}"
+                continue
+            if time.monotonic() - t_wall0 > timeout:
+                raise GcsError(f"experiment {experiment} ({name}) still running after {timeout:g} s")
+            v.recv(types=(), timeout=0.1)
+            if sim_time is not None and t_sim0 is not None:
+                ts = sim_time()
+                tlabel = f"t={ts:7.2f} s" if ts is not None else ""
+            else:
+                tlabel = f"wall {time.monotonic() - t_wall0:6.1f} s"
+            ph = f"{live.phase_k}/{live.phase_n} {live.phase}" if live.phase else name
+            pct = f" {live.progress:3d}%" if live.progress is not None else ""
+            key = (live.phase_k, live.phase)
+            progress.update(f"ID {ph}{pct}  {tlabel}  {live_estimates(v)}", key=key)
+    finally:
+        v.listeners.remove(listen)
+        progress.done()
+    # the last result texts may trail the final ACK
+    v.recv(types=(), timeout=0.1)
+    if live.done != "done":
+        raise GcsError(f"experiment {experiment} ({name}) {live.done}")
+    return live
+
+
+def live_estimates(v):
+    parts = []
+    for name, sd, fmt in LIVE:
+        if name in v.named_values:
+            s = fmt.format(v.named_values[name][1])
+            if sd in v.named_values:
+                s += " +/- " + fmt.format(v.named_values[sd][1])
+            parts.append(f"{name} {s}")
+    return "  ".join(parts)
+
+
+# ---------------------------------------------------------------- checks
+class Check:
+    def __init__(self, name, ok, detail, warning=False):
+        self.name, self.ok, self.detail, self.warning = name, bool(ok), detail, warning
+
+    def as_dict(self):
+        return {"check": self.name, "ok": self.ok, "warning_only": self.warning, "detail": self.detail}
+
+    def line(self):
+        tag = "ok  " if self.ok else ("warn" if self.warning else "FAIL")
+        return f"  [{tag}] {self.name}: {self.detail}"
+
+
+def _finite_pos(x):
+    return x is not None and math.isfinite(x) and x > 0
+
+
+def plausibility(params, experiments):
+    """Checks that need no truth: estimates present, finite, positive, accepted, their
+    relative std within ID_RSD_MAX, applied to VEH_*, physically sensible; validation
+    improved. Returns [Check]."""
+    checks = []
+    rsd_max = params.get("ID_RSD_MAX")
+    result_bits = int(params.get("ID_RESULT", 0))
+    mass = params.get("VEH_MASS", 2.132)
+    g = params.get("VEH_GRAV", 9.796)
+    for q in quantities_of(experiments):
+        est, sd = params.get(q.est), params.get(q.sd)
+        if not _finite_pos(est):
+            checks.append(Check(f"{q.label} estimated", False, f"{q.est} = {est}"))
+            continue
+        detail = f"{est:.6g} +/- {sd:.3g} {q.unit}" if sd is not None else f"{est:.6g} {q.unit}"
+        checks.append(Check(f"{q.label} estimated", _finite_pos(sd), detail))
+        if rsd_max is not None and _finite_pos(sd):
+            checks.append(Check(f"{q.label} relative std", sd / est <= rsd_max,
+                                f"{100 * sd / est:.3f} % (limit {100 * rsd_max:.3g} %)"))
+        checks.append(Check(f"{q.label} accepted", result_bits & q.bit, f"ID_RESULT = {result_bits}"))
+        if result_bits & q.bit and q.veh in params:
+            same = abs(params[q.veh] - est) <= 1e-6 * abs(est)
+            checks.append(Check(f"{q.label} applied", same, f"{q.veh} = {params[q.veh]:.6g}"))
+    kf, ktau = params.get("ID_KF_EST"), params.get("ID_KTAU_EST")
+    if any(q.key == "kf" for q in quantities_of(experiments)) and _finite_pos(kf):
+        th = mass * g / (8 * kf)
+        checks.append(Check("hover throttle m g / (8 k_f)", 0.02 <= th <= 0.9, f"{th:.4f} (0.02 .. 0.9)"))
+        if _finite_pos(ktau):
+            k = ktau / kf
+            checks.append(Check("yaw coefficient k = k_tau / k_f", 0.001 <= k <= 0.1,
+                                f"{k:.5f} m (0.001 .. 0.1)"))
+    ixx, iyy, izz = (params.get(n) for n in ("ID_IXX_EST", "ID_IYY_EST", "ID_IZZ_EST"))
+    if 6 in experiments and all(_finite_pos(x) for x in (ixx, iyy, izz)):
+        checks.append(Check("inertia triangle inequality I_z <= I_x + I_y", izz <= ixx + iyy,
+                            f"{izz:.5f} vs {ixx + iyy:.5f}", warning=True))
+    if 6 in experiments or 2 in experiments:
+        pre, post = params.get("ID_VAL_NE_PRE"), params.get("ID_VAL_NE_POST")
+        if 6 in experiments and pre is not None and post is not None:
+            checks.append(Check("validation error after < before", post < pre,
+                                f"NE {pre:.4f} -> {post:.4f}; fit {params.get('ID_VAL_FIT_PRE', float('nan')):.1f} % "
+                                f"-> {params.get('ID_VAL_FIT_POST', float('nan')):.1f} %"))
+    return checks
+
+
+def against_truth(params, experiments, truth, tol_rotor_pct, tol_inertia_pct):
+    """Error of each estimate against the truth {kf, ktau, ixx, iyy, izz}. Returns [Check]."""
+    checks = []
+    for q in quantities_of(experiments):
+        est, true = params.get(q.est), truth[q.key]
+        tol = tol_rotor_pct if q.key in ("kf", "ktau") else tol_inertia_pct
+        if not _finite_pos(est):
+            checks.append(Check(f"{q.label} vs truth", False, "no estimate"))
+            continue
+        err = 100.0 * (est - true) / true
+        checks.append(Check(f"{q.label} vs truth", abs(err) <= tol,
+                            f"{est:.6g} vs {true:.6g}: {err:+.3f} % (limit {tol:g} %)"))
+    return checks
+
+
+# ---------------------------------------------------------------- command
+def run(args):
+    from . import vehiclefile
+    from .link import Vehicle
+    from .progress import Progress
+
+    experiments = parse_experiments(args.experiments)
+    truth = None
+    if args.expect:
+        try:
+            truth = vehiclefile.truth_of(vehiclefile.load(args.expect))
+        except vehiclefile.VehicleFileError as e:
+            raise GcsError(str(e)) from None
+    prog = Progress()
+    with Vehicle(args.connect, timeout=args.timeout, signing_key=args.signing_key) as v:
+        v.wait_heartbeat()
+        params = v.fetch_params()
+        for e in experiments:
+            if v.mode != MODE_NUMBERS["HOLD"]:
+                raise GcsError(f"vehicle is in mode {MODES.get(v.mode, v.mode)}, not HOLD: "
+                               "experiments need a hovering vehicle (take off first)")
+            prog.say(f"experiment {e}: {EXPERIMENTS[e]}")
+            wall = planned_sim_seconds(params, e) * args.time_factor + 30.0
+            run_experiment(v, e, prog, timeout=wall)
+        params = v.fetch_params()
+    return report_checks(params, experiments, truth, args.tol_rotor, args.tol_inertia)
+
+
+def report_checks(params, experiments, truth, tol_rotor, tol_inertia, out=print):
+    out("results:")
+    for q in quantities_of(experiments):
+        est, sd, plain = params.get(q.est), params.get(q.sd), params.get(q.plain) if q.plain else None
+        line = f"  {q.label:<6} {est:.6g} +/- {sd:.3g} {q.unit}" if est is not None else f"  {q.label:<6} -"
+        if plain is not None:
+            line += f"   (plain LS {plain:.6g})"
+        out(line)
+    checks = plausibility(params, experiments)
+    if truth is not None:
+        checks += against_truth(params, experiments, truth, tol_rotor, tol_inertia)
+    out("checks:")
+    for c in checks:
+        out(c.line())
+    ok = all(c.ok or c.warning for c in checks)
+    out("PASS" if ok else "FAIL")
+    return 0 if ok else 1

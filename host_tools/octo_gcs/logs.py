@@ -1,0 +1,183 @@
+"""Reading the LCM logs of octo-sim (OCTO_TRUTH) and octo-fw (OCTO_FW_FRAME, OCTO_FW_EVENT).
+
+Both programs write LCM event logs stamped with plant (simulated) time when given
+``--lcm file://PATH``. A log is recognised by its channels, not by its name.
+Records become a `Series`: one numpy array per field (arrays of shape (n, k) for
+array fields), so ``fw.throttle[:, 0]`` is T_1 over time.
+"""
+
+import os
+import re
+import struct
+
+import numpy as np
+
+from .link import GcsError
+
+SYNC = 0xEDA1DA01
+_HDR = struct.Struct(">IqqII")
+
+CHANNELS = ("OCTO_TRUTH", "OCTO_FW_FRAME", "OCTO_FW_EVENT")
+
+
+def _types():
+    try:
+        from octo import fw_event_t, fw_frame_t, truth_t
+    except ImportError:
+        raise GcsError("the LCM Python types (package 'octo') are missing: run `make`") from None
+    return {"OCTO_TRUTH": truth_t, "OCTO_FW_FRAME": fw_frame_t, "OCTO_FW_EVENT": fw_event_t}
+
+
+def read_events(path):
+    """[(channel, utime, data bytes)] of an LCM event log (a torn last event is ignored)."""
+    out = []
+    try:
+        f = open(path, "rb")
+    except OSError as e:
+        raise GcsError(f"cannot read log {path}: {e.strerror}") from None
+    with f:
+        buf = f.read()
+    off, n = 0, len(buf)
+    while off + _HDR.size <= n:
+        sync, _num, utime, clen, dlen = _HDR.unpack_from(buf, off)
+        if sync != SYNC:
+            raise GcsError(f"{path}: not an LCM event log (bad sync word at byte {off})")
+        start = off + _HDR.size
+        end = start + clen + dlen
+        if end > n:
+            break
+        channel = buf[start:start + clen].decode("ascii", errors="replace")
+        out.append((channel, utime, buf[start + clen:end]))
+        off = end
+    return out
+
+
+class Series:
+    """Fields of a list of LCM messages as numpy arrays (attribute access)."""
+
+    def __init__(self, msgs):
+        self.n = len(msgs)
+        self._fields = {}
+        if msgs:
+            for name in msgs[0].__slots__:
+                vals = [getattr(m, name) for m in msgs]
+                if isinstance(vals[0], (str, bytes)):
+                    self._fields[name] = vals
+                else:
+                    self._fields[name] = np.asarray(vals)
+
+    def __getattr__(self, name):
+        try:
+            return self.__dict__["_fields"][name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def has(self, name):
+        return name in self._fields
+
+    def __len__(self):
+        return self.n
+
+    def select(self, mask):
+        s = Series([])
+        s.n = int(np.count_nonzero(mask))
+        s._fields = {k: (v[mask] if isinstance(v, np.ndarray) else [x for x, m in zip(v, mask) if m])
+                     for k, v in self._fields.items()}
+        return s
+
+
+class Logs:
+    """The truth (octo-sim) and firmware (octo-fw) records found in some log files."""
+
+    def __init__(self, paths):
+        types = _types()
+        msgs = {c: [] for c in CHANNELS}
+        self.paths = [str(p) for p in paths]
+        for p in paths:
+            for channel, _utime, data in read_events(p):
+                if channel in types:
+                    try:
+                        msgs[channel].append(types[channel].decode(data))
+                    except ValueError as e:
+                        raise GcsError(f"{p}: {channel} record does not decode ({e}): "
+                                       "log from another version of the LCM types?") from None
+        if not any(msgs.values()):
+            raise GcsError("no OCTO_TRUTH or OCTO_FW_* records in " + ", ".join(self.paths))
+        self.truth = Series(msgs["OCTO_TRUTH"]) if msgs["OCTO_TRUTH"] else None
+        self.fw = Series(msgs["OCTO_FW_FRAME"]) if msgs["OCTO_FW_FRAME"] else None
+        self.events = [(e.utime * 1e-6, e.severity, e.text) for e in msgs["OCTO_FW_EVENT"]]
+
+    # ------------------------------------------------------------ experiment phases
+    def phases(self):
+        """[(name, t_start, t_end, k)] of the identification phases, from the firmware's
+        "ID k/n: name" events (a phase ends where the next one, "ID done" or
+        "ID aborted" begins)."""
+        out = []
+        for t, _sev, text in self.events:
+            m = re.match(r"^ID (\d+)/(\d+): (.*)$", text)
+            if m:
+                if out and out[-1][2] is None:
+                    out[-1][2] = t
+                out.append([m.group(3), t, None, int(m.group(1))])
+            elif text == "ID done" or text.startswith("ID aborted") or text.startswith("Mode "):
+                if out and out[-1][2] is None and not text == "Mode EXPERIMENT":
+                    out[-1][2] = t
+        end = self.fw.t[-1] if self.fw is not None else (self.truth.t[-1] if self.truth else 0.0)
+        return [(n, a, b if b is not None else end, k) for n, a, b, k in out]
+
+    def phase_windows(self, *words):
+        """Phases whose name contains any of `words` (case-insensitive)."""
+        words = [w.lower() for w in words]
+        return [p for p in self.phases() if any(w in p[0].lower() for w in words)]
+
+
+def find_logs(paths):
+    """LOG arguments -> files: a directory stands for the *.lcm files in it."""
+    files = []
+    for p in paths:
+        if os.path.isdir(p):
+            found = sorted(os.path.join(p, f) for f in os.listdir(p) if f.endswith(".lcm"))
+            if not found:
+                raise GcsError(f"no .lcm files in {p}")
+            files += found
+        elif os.path.exists(p):
+            files.append(p)
+        else:
+            raise GcsError(f"no such log: {p}")
+    return files
+
+
+class LogTail:
+    """Follows an LCM log being written: the plant time of its last complete record."""
+
+    def __init__(self, path):
+        self.path = path
+        self.off = 0
+        self.t = None
+        self._f = None
+
+    def time(self):
+        if self._f is None:
+            try:
+                self._f = open(self.path, "rb")
+            except OSError:
+                return self.t
+        self._f.seek(self.off)
+        buf = self._f.read()
+        off = 0
+        while off + _HDR.size <= len(buf):
+            sync, _num, utime, clen, dlen = _HDR.unpack_from(buf, off)
+            if sync != SYNC:
+                break
+            end = off + _HDR.size + clen + dlen
+            if end > len(buf):
+                break
+            self.t = utime * 1e-6
+            off = end
+        self.off += off
+        return self.t
+
+    def close(self):
+        if self._f is not None:
+            self._f.close()
+            self._f = None

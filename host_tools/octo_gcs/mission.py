@@ -1,0 +1,221 @@
+"""``octo-gcs mission``: the whole identification flight in one command.
+
+Starts octo-sim (lockstep unless --realtime) and octo-fw on free ports, both
+logging to LCM files; waits for the vehicle; sets VEH_MASS and VEH_ARM_L from the
+vehicle file (what a user measures on the bench); arms, takes off, runs the
+identification (experiment 6: validation, k_f/k_tau, validation, Ix, Iy, Iz),
+collects every parameter over MAVLink, lands, stops both programs (also on
+errors and Ctrl-C) and writes the report, the parameters, the logs and the
+figures into DIR.
+
+Nothing half-written is left in DIR: the run works in DIR/.tmp-<pid>/ and moves
+finished files into DIR at the end (report.md and report.json last). A failed
+run leaves its logs in DIR/failed-run/ instead.
+"""
+
+import os
+import shutil
+import sys
+import time
+from pathlib import Path
+
+from . import paramfile, procs, vehiclefile
+from .identify import EXPERIMENTS, parse_experiments, planned_sim_seconds, run_experiment
+from .link import GcsError, Vehicle
+from .flight import Flight
+from .progress import Progress
+
+TAKEOFF_M = 10.0
+
+
+def _experiments_option(text):
+    if str(text).strip().lower() in ("none", "0", ""):
+        return []
+    return parse_experiments(text)
+
+
+class Mission:
+    def __init__(self, args, out=None):
+        self.args = args
+        self.prog = out or Progress()
+        self.sim = self.fw = None
+        self.vehicle = None
+        self.stage = None
+
+    # ------------------------------------------------------------ processes
+    def _alive(self):
+        for p in (self.sim, self.fw):
+            if p is not None and not p.alive():
+                raise GcsError(f"{p.name} exited with status {p.popen.returncode}:\n{p.tail()}")
+
+    def start(self, build, vehicle_file, ports, stage):
+        a = self.args
+        xp_port, xp_listen, mav_port, gcs_port = ports
+        sim_args = [build / "octo-sim", "--xp-port", xp_port, "--data-out", f"127.0.0.1:{xp_listen}",
+                    "--seed", a.seed, "--xplane-version", a.xplane_version,
+                    "--lcm", f"file://{stage / 'truth.lcm'}", "--duration", a.sim_limit]
+        if not a.realtime:
+            sim_args.append("--lockstep")
+        if vehicle_file:
+            sim_args += ["--vehicle", os.path.abspath(vehicle_file)]
+        self.sim = procs.Proc(sim_args, stage / "octo-sim.log", "octo-sim")
+        fw_args = [build / "octo-fw", "--xplane", f"127.0.0.1:{xp_port}", "--xp-listen", xp_listen,
+                   "--mavlink-listen", mav_port, "--gcs", f"127.0.0.1:{gcs_port}",
+                   "--params", stage / "fw-storage.parm", "--lcm", f"file://{stage / 'fw.lcm'}"]
+        self.fw = procs.Proc(fw_args, stage / "octo-fw.log", "octo-fw")
+
+    def stop(self):
+        procs.stop_all([self.fw, self.sim])
+
+    # ------------------------------------------------------------ the flight
+    def fly(self, veh, experiments, stage):
+        """Everything over MAVLink; returns (params before, params after, texts)."""
+        a, say = self.args, self.prog.say
+        v = self.vehicle
+        t0 = time.monotonic()
+        v.wait_heartbeat(timeout=10.0)
+        self._alive()
+        fl = Flight(v, alive=self._alive)
+        nominal = v.fetch_params()
+        bench = {"VEH_MASS": veh["mass"], "VEH_ARM_L": veh["arm_length"]}
+        if "ID_SEED" in nominal:
+            bench["ID_SEED"] = float(a.seed)
+        for name, value in bench.items():
+            v.set_param(name, value)
+        say(f"vehicle up; set " + ", ".join(f"{k} {val:g}" for k, val in bench.items())
+            + f"  ({time.monotonic() - t0:.1f} s)")
+        nominal.update({k: float(val) for k, val in bench.items()})
+        tail = _tail(stage / "fw.lcm")
+        tlimit = 30.0 if not a.realtime else 120.0
+        fl.arm()
+        fl.takeoff(TAKEOFF_M, timeout=tlimit)
+        say(f"take-off: holding at {TAKEOFF_M:g} m (t={tail.time() or 0:.1f} s simulated, "
+            f"{time.monotonic() - t0:.1f} s wall)")
+        for e in experiments:
+            say(f"experiment {e}: {EXPERIMENTS[e]}")
+            planned = planned_sim_seconds(nominal, e)
+            live = run_experiment(v, e, self.prog, sim_time=tail.time,
+                                  timeout=planned * (1.5 if a.realtime else 0.5) + 60.0)
+            say(f"experiment {e} done at t={tail.time() or 0:.1f} s simulated "
+                f"({len(live.results)} results, {time.monotonic() - t0:.1f} s wall)")
+        after = v.fetch_params()
+        say(f"collected {len(after)} parameters")
+        fl.land(timeout=tlimit)
+        say(f"landed and disarmed at t={tail.time() or 0:.1f} s simulated "
+            f"({time.monotonic() - t0:.1f} s wall)")
+        tail.close()
+        return nominal, after
+
+    def try_land(self):
+        """After an error: bring the vehicle down if it still flies (best effort)."""
+        v = self.vehicle
+        if v is None or self.sim is None or not self.sim.alive() or not self.fw.alive():
+            return
+        from .link import MODE_NUMBERS
+        if v.mode in (None, MODE_NUMBERS["DISARMED"]):
+            return
+        try:
+            Flight(v).land(timeout=15.0 if self.args.realtime else 5.0)
+        except Exception:
+            pass
+
+
+def _tail(path):
+    from .logs import LogTail
+    return LogTail(str(path))
+
+
+def run(args):
+    from .report import build_report, write_outputs
+
+    t_start = time.monotonic()
+    prog = Progress()
+    experiments = _experiments_option(args.experiments)
+    try:
+        veh = vehiclefile.load(args.vehicle)
+    except vehiclefile.VehicleFileError as e:
+        raise GcsError(str(e)) from None
+    build = procs.build_dir(args.build_dir)
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        stage = Path(out / f".tmp-{os.getpid()}")
+        if stage.exists():
+            shutil.rmtree(stage)
+        stage.mkdir()
+    except OSError as e:
+        raise GcsError(f"cannot write {out}: {e.strerror}") from None
+    planned = sum(planned_sim_seconds({}, e) for e in experiments) if experiments else 0.0
+    args.sim_limit = max(300.0, 3 * planned + 200.0)   # bounds the logs if anything hangs
+    m = Mission(args, out=prog)
+    ok = False
+    mode = "real time" if args.realtime else "lockstep"
+    prog.say(f"mission: octo-sim ({mode}, X-Plane {args.xplane_version}, seed {args.seed}"
+             f"{', vehicle ' + str(args.vehicle) if args.vehicle else ', the paper vehicle'}) "
+             f"+ octo-fw from {build}")
+    try:
+        with procs.signals_as_exceptions():
+            try:
+                m.vehicle = Vehicle("udpin:127.0.0.1:0", timeout=args.timeout)
+                gcs_port = m.vehicle.conn.port.getsockname()[1]
+                ports = (procs.free_udp_port(), procs.free_udp_port(), procs.free_udp_port(), gcs_port)
+                m.start(build, args.vehicle, ports, stage)
+                nominal, after = m.fly(veh, experiments, stage)
+            except GcsError:
+                m.try_land()
+                raise
+            finally:
+                m.stop()
+                if m.vehicle is not None:
+                    m.vehicle.close()
+            wall_flight = time.monotonic() - t_start
+            prog.say(f"flight done in {wall_flight:.1f} s; building the report")
+            paramfile.save(stage / "params.parm", after)
+            os.unlink(stage / "fw-storage.parm") if (stage / "fw-storage.parm").exists() else None
+            rep = build_report(stage, veh, args, nominal, after, experiments,
+                               wall_flight_s=wall_flight)
+            write_outputs(stage, rep, args.plots)
+            rep["timing"]["wall_total_s"] = round(time.monotonic() - t_start, 2)
+            files = _publish(stage, out, rep)
+            ok = True
+    finally:
+        if not ok:
+            _keep_failed(stage, out, prog)
+    from .report import table_text
+    print()
+    print(table_text(rep))
+    print()
+    verdict = "PASS" if rep["pass"] else "FAIL"
+    print(f"{verdict}: {len(files)} files in {out}/ ({', '.join(files)}); "
+          f"{rep['timing']['wall_total_s']:.1f} s")
+    for c in rep["checks"]:
+        if not c["ok"]:
+            print(f"  {'warning' if c['warning_only'] else 'failed'}: {c['check']}: {c['detail']}")
+    return 0 if rep["pass"] else 1
+
+
+def _publish(stage, out, rep):
+    """Moves the finished files into DIR, reports last; removes the stage."""
+    from .report import atomic_write, dumps
+    rep["files"] = sorted({p.name for p in stage.iterdir() if p.is_file()} | {"report.json"})
+    atomic_write(stage / "report.json", dumps(rep))
+    names = sorted(p.name for p in stage.iterdir() if p.is_file())
+    last = ["report.json", "report.md"]
+    order = [n for n in names if n not in last] + [n for n in last if n in names]
+    for n in order:
+        os.replace(stage / n, out / n)
+    shutil.rmtree(stage, ignore_errors=True)
+    return order
+
+
+def _keep_failed(stage, out, prog):
+    if stage is None or not stage.exists():
+        return
+    dest = out / "failed-run"
+    try:
+        if dest.exists():
+            shutil.rmtree(dest)
+        os.replace(stage, dest)
+        print(f"octo-gcs: the logs of the failed run are in {dest}/", file=sys.stderr)
+    except OSError:
+        shutil.rmtree(stage, ignore_errors=True)

@@ -1,0 +1,51 @@
+"""``octo-gcs plot LOG...``: the report's figures from existing LCM logs."""
+
+import os
+
+from .link import GcsError
+
+
+def params_from_logs(logs):
+    """Vehicle parameters in use at the end of the firmware log (the applied estimates)."""
+    p = {}
+    fw = logs.fw
+    if fw is not None and len(fw):
+        p.update({"VEH_KF": float(fw.kf[-1]), "VEH_KTAU": float(fw.ktau[-1]),
+                  "VEH_IXX": float(fw.inertia[-1, 0]), "VEH_IYY": float(fw.inertia[-1, 1]),
+                  "VEH_IZZ": float(fw.inertia[-1, 2]), "VEH_MASS": float(fw.mass[-1])})
+    if logs.truth is not None and len(logs.truth):
+        p.setdefault("VEH_ARM_L", float(logs.truth.arm_length[-1]))
+    p.setdefault("ID_MOT_TAU", 0.03)
+    return p
+
+
+def run(args):
+    from . import paramfile
+    from .logs import Logs, find_logs
+    from .plots import make_figures
+    from .report import truth_from_logs
+    from .vehiclefile import load
+
+    logs = Logs(find_logs(args.logs))
+    params = params_from_logs(logs)
+    if args.params:
+        try:
+            params.update(paramfile.load(args.params))
+        except (OSError, paramfile.ParamFileError) as e:
+            raise GcsError(str(e)) from None
+    rep = {"_params": params, "truth": truth_from_logs(logs, load(None)) if logs.truth is not None else {}}
+    try:
+        os.makedirs(args.out, exist_ok=True)
+    except OSError as e:
+        raise GcsError(f"cannot write {args.out}: {e.strerror}") from None
+    from .analysis import rate_comparison, validation
+    rep["_rates"] = rate_comparison(logs, params)
+    rep["_validation"] = validation(logs)
+    names = make_figures(logs, rep, args.out)
+    src = ("truth " if logs.truth is not None else "") + ("firmware" if logs.fw is not None else "")
+    print(f"{len(names)} figures from the {src.strip().replace(' ', ' and ')} log(s) in {args.out}/: "
+          + ", ".join(names))
+    for kind, _t, _w, _wm, fits in rep["_rates"]:
+        print(f"  rates vs model during the {kind} experiment: fit "
+              + ", ".join(f"{ax} {f:.1f} %" for ax, f in zip(("wx", "wy", "wz"), fits)))
+    return 0
