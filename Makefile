@@ -84,6 +84,7 @@ include firmware/firmware.mk
 include sim/sim.mk
 include host_tools/host_tools.mk
 include tests/tests.mk
+include tests/core/probe.mk
 include tests/arm/arm.mk
 include tests/bench/bench.mk
 
