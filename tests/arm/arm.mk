@@ -42,8 +42,9 @@
 # tests/arm/bench_mark.h around the one call to measure (several pairs are fine: one
 # count each), build an image with
 #     $(eval $(call arm_program,m4f,$(B)/bench/step-m4f.elf,bench/step.c,EXTRA_CFLAGS))
-# (compiled with CFLAGS_FW for the target, linked with the start-up code, the markers
-# and the target's core library), depend on $(ARM_COUNT_PLUGIN), then run
+# (in a fragment included after this one; compiled with CFLAGS_FW for the target,
+# linked with the start-up code, the markers and the target's core library), depend
+# on $(ARM_COUNT_PLUGIN), then run
 #     tests/arm/insn-count.sh mps2-an386 $(B)/bench/step-m4f.elf
 # which prints the image's output, then "octo-count: region N: M instructions" for each
 # begin/end pair (exact guest instructions; one of them is the `bl bench_mark_end`).
