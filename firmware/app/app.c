@@ -621,9 +621,9 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	hal_log_frame(&a->log);
 }
 
-void app_on_mavlink(struct app *a, const uint8_t *buf, size_t len)
+size_t app_on_mavlink(struct app *a, const uint8_t *buf, size_t len)
 {
-	mav_receive(a, buf, len);
+	return mav_receive(a, buf, len);
 }
 
 void app_tick(struct app *a)

@@ -85,7 +85,9 @@ struct app {
 
 void app_init(struct app *a);
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f);
-void app_on_mavlink(struct app *a, const uint8_t *buf, size_t len);
+/* Returns the number of MAVLink messages accepted (the platform may learn the
+ * ground station's address from a datagram that had one). */
+size_t app_on_mavlink(struct app *a, const uint8_t *buf, size_t len);
 void app_tick(struct app *a);
 
 const char *app_mode_name(enum app_mode m);

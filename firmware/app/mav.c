@@ -16,6 +16,43 @@
 #define TEXT_RATE 10.0f
 #define FW_VERSION 0x00050000u     /* 0.5.0 (issue 5) */
 
+/* Signing state of the one MAVLink channel (attached to the library's channel
+ * status, which is itself static inside the generated helpers). */
+static mavlink_signing_t signing;
+static mavlink_signing_streams_t signing_streams;
+
+/* With signing on, only RADIO_STATUS may arrive unsigned (common practice). */
+static bool accept_unsigned(const mavlink_status_t *status, uint32_t msgid)
+{
+	(void)status;
+	return msgid == MAVLINK_MSG_ID_RADIO_STATUS;
+}
+
+static void signing_setup(struct mav *m)
+{
+	uint8_t key[32];
+	mavlink_status_t *st = mavlink_get_channel_status(CHAN);
+	if (!hal_signing_key(key)) {
+		st->signing = NULL;
+		st->signing_streams = NULL;
+		return;
+	}
+	memset(&signing, 0, sizeof signing);
+	memset(&signing_streams, 0, sizeof signing_streams);
+	memcpy(signing.secret_key, key, sizeof key);
+	memset(key, 0, sizeof key);
+	signing.link_id = (uint8_t)CHAN;
+	signing.flags = MAVLINK_SIGNING_FLAG_SIGN_OUTGOING;
+	/* 10 us units since 2015-01-01 00:00:00 UTC */
+	uint64_t us = hal_unix_us();
+	const uint64_t epoch2015_us = 1420070400ull * 1000000ull;
+	signing.timestamp = us > epoch2015_us ? (us - epoch2015_us) / 10u : 1u;
+	signing.accept_unsigned_callback = accept_unsigned;
+	st->signing = &signing;
+	st->signing_streams = &signing_streams;
+	m->signing = true;
+}
+
 static void send_msg(const mavlink_message_t *msg)
 {
 	uint8_t buf[MAVLINK_MAX_PACKET_LEN];
@@ -93,7 +130,7 @@ static void pack_sys_status(struct app *a, mavlink_message_t *msg)
 					 (uint16_t)(a->mav.rx_dropped > 65535u ? 65535u : a->mav.rx_dropped),
 					 drops, (uint16_t)(ls.foreign > 65535u ? 65535u : ls.foreign),
 					 (uint16_t)(a->mav.text_dropped > 65535u ? 65535u : a->mav.text_dropped),
-					 0, 0, 0, 0);
+					 (uint16_t)(a->mav.rx_unsigned > 65535u ? 65535u : a->mav.rx_unsigned), 0, 0, 0);
 }
 
 /* NAMED_VALUE_FLOAT of the live estimates: packs nothing itself (several
@@ -149,6 +186,7 @@ void mav_init(struct mav *m, uint64_t now_us)
 	m->boot_us = now_us;
 	m->text_tokens = TEXT_BURST;
 	m->text_last_us = now_us;
+	signing_setup(m);
 }
 
 /* ---------------------------------------------------------------- outgoing helpers */
@@ -454,17 +492,36 @@ static void handle(struct app *a, const mavlink_message_t *msg)
 	}
 }
 
-void mav_receive(struct app *a, const uint8_t *buf, size_t len)
+size_t mav_receive(struct app *a, const uint8_t *buf, size_t len)
 {
 	mavlink_message_t msg;
 	mavlink_status_t st;
+	size_t accepted = 0;
 	for (size_t i = 0; i < len; i++) {
-		uint8_t r = mavlink_parse_char(CHAN, buf[i], &msg, &st);
-		if (r == MAVLINK_FRAMING_OK)
+		/* mavlink_frame_char, not mavlink_parse_char: the latter hides why a
+		 * frame failed, and rejections by signing are counted apart */
+		uint8_t r = mavlink_frame_char(CHAN, buf[i], &msg, &st);
+		if (r == MAVLINK_FRAMING_OK) {
+			accepted++;
 			handle(a, &msg);
-		else if (r == MAVLINK_FRAMING_BAD_CRC || r == MAVLINK_FRAMING_BAD_SIGNATURE)
-			a->mav.rx_dropped++;
+		} else if (r == MAVLINK_FRAMING_BAD_CRC || r == MAVLINK_FRAMING_BAD_SIGNATURE) {
+			if (r == MAVLINK_FRAMING_BAD_CRC)
+				a->mav.rx_dropped++;
+			else
+				a->mav.rx_unsigned++;
+			/* restart the parser as mavlink_parse_char does */
+			mavlink_status_t *status = mavlink_get_channel_status(CHAN);
+			mavlink_message_t *rx = mavlink_get_channel_buffer(CHAN);
+			status->msg_received = MAVLINK_FRAMING_INCOMPLETE;
+			status->parse_state = MAVLINK_PARSE_STATE_IDLE;
+			if (buf[i] == MAVLINK_STX) {
+				status->parse_state = MAVLINK_PARSE_STATE_GOT_STX;
+				rx->len = 0;
+				mavlink_start_checksum(rx);
+			}
+		}
 	}
+	return accepted;
 }
 
 void mav_tick(struct app *a, uint64_t now_us)

@@ -8,7 +8,10 @@
  *   reads by name and by index, PARAM_SET always answered with the current
  *   value, refusals and unknown names as STATUSTEXT;
  * - COMMAND_LONG / COMMAND_INT, always acknowledged;
- * - FTP NAKed (FileNotFound), MISSION_REQUEST_LIST -> MISSION_COUNT 0.
+ * - FTP NAKed (FileNotFound), MISSION_REQUEST_LIST -> MISSION_COUNT 0;
+ * - MAVLink 2 signing when the platform has a key: outgoing signed, incoming
+ *   unsigned / wrongly signed / replayed packets rejected and counted (only
+ *   RADIO_STATUS may come unsigned).
  */
 #ifndef OCTO_MAV_H
 #define OCTO_MAV_H
@@ -33,12 +36,15 @@ struct mav {
 	float text_tokens;                     /* STATUSTEXT rate limit */
 	uint64_t text_last_us;
 	uint32_t rx_msgs, rx_dropped, text_dropped;
+	uint32_t rx_unsigned;                  /* rejected by signing (unsigned, bad, replayed) */
+	bool signing;                          /* MAVLink 2 signing on (hal_signing_key) */
 	uint16_t text_id;
 };
 
 void mav_init(struct mav *m, uint64_t now_us);
-/* Parses bytes from the ground station and handles complete messages. */
-void mav_receive(struct app *a, const uint8_t *buf, size_t len);
+/* Parses bytes from the ground station and handles complete messages; returns
+ * how many were accepted (valid checksum, and signature when signing is on). */
+size_t mav_receive(struct app *a, const uint8_t *buf, size_t len);
 /* Streams due telemetry and parameters. */
 void mav_tick(struct app *a, uint64_t now_us);
 void mav_statustext(struct app *a, int severity, const char *text);

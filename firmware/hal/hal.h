@@ -74,6 +74,11 @@ void hal_link_stats(struct hal_link_stats *out);
 
 /* ---- ground-station link (MAVLink bytes; framing is the app's business) */
 void hal_mav_send(const uint8_t *buf, size_t len);
+/* MAVLink 2 signing: true (and the 32-byte secret in key) when the platform was
+ * configured with a key; then unsigned or badly signed input is rejected. */
+bool hal_signing_key(uint8_t key[32]);
+/* Wall-clock time since the UNIX epoch, microseconds (signing time stamps). */
+uint64_t hal_unix_us(void);
 
 /* ---- parameter storage: text, written atomically (all old or all new) */
 /* Returns 0 on success, -1 on failure (reason reported through hal_report). */

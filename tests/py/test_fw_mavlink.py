@@ -268,9 +268,68 @@ def test_experiment_when_hovering_is_answered(launch, port, tmp_path):
     assert "Mode HOLD" in rig.texts
     rig.recv(set(), timeout=0.3)
     r, texts = rig.cmd(mavlink.MAV_CMD_USER_1, 1)
-    # issue 6 fills the experiments in; until then the answer is an honest UNSUPPORTED
     assert r in (mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_UNSUPPORTED), (r, texts)
-    if r == mavlink.MAV_RESULT_UNSUPPORTED:
+    if r == mavlink.MAV_RESULT_UNSUPPORTED:   # a build without experiments says so
         assert any("not available" in t for t in texts), texts
-    # vehicle-model parameters may change while hovering without an experiment
+    else:
+        # while it runs, vehicle-model parameters are locked: the write echoes the old value
+        msg, texts = rig.param_set("VEH_KF", 22.0)
+        assert msg is not None
+        if msg.param_value != 22.0:
+            assert any("VEH_KF" in t and "refused" in t for t in texts), texts
+        # a retry of the same experiment is idempotent, another one is not started meanwhile
+        assert rig.cmd(mavlink.MAV_CMD_USER_1, 0)[0] == mavlink.MAV_RESULT_ACCEPTED   # stop
+        deadline = time.monotonic() + 5
+        while time.monotonic() < deadline and rig.texts[-1:] != ["Mode HOLD"]:
+            rig.recv(set(), timeout=0.05)
+    # hovering without an experiment, the parameters may change
     assert rig.param_set("VEH_KF", 22.0)[0].param_value == 22.0
+
+
+# ---------------------------------------------------------------- signing
+def test_signing_rejects_unsigned_wrong_and_replayed(launch, port, tmp_path):
+    from pymavlink import mavutil
+    key = bytes(range(1, 33))
+    (tmp_path / "key.hex").write_text(key.hex() + "\n")
+    rig = Rig(launch, port, tmp_path)
+    rig.start_fw("--signing-key", tmp_path / "key.hex")
+    rig.m = mavutil.mavlink_connection(f"udpin:127.0.0.1:{rig.gcs_port}", source_system=255)
+    rig.m.setup_signing(key, sign_outgoing=True)          # unsigned input is refused here too
+    assert rig.m.wait_heartbeat(timeout=5) is not None    # so octo-fw signs what it sends
+    msg, _ = rig.param_set("VEH_KF", 25.0)
+    assert msg is not None and msg.param_value == 25.0
+
+    # unsigned and wrongly signed writes are rejected (and do not steal the GCS address)
+    plain = mavutil.mavlink_connection(f"udpout:127.0.0.1:{rig.mav_port}", source_system=254)
+    plain.mav.param_set_send(1, 1, b"VEH_KF", 30.0, mavlink.MAV_PARAM_TYPE_REAL32)
+    plain.mav.command_long_send(1, 1, mavlink.MAV_CMD_PREFLIGHT_STORAGE, 0, 1, 0, 0, 0, 0, 0, 0)
+    wrong = mavutil.mavlink_connection(f"udpout:127.0.0.1:{rig.mav_port}", source_system=253)
+    wrong.setup_signing(bytes(32), sign_outgoing=True)
+    wrong.mav.param_set_send(1, 1, b"VEH_KF", 31.0, mavlink.MAV_PARAM_TYPE_REAL32)
+    time.sleep(0.3)
+    assert rig.param_get("VEH_KF").param_value == 25.0
+    assert not rig.params.exists()
+
+    # a replayed signed command is rejected: one ACK for two copies
+    mav = mavlink.MAVLink(None, srcSystem=252, srcComponent=1)
+    mav.signing.secret_key = key
+    mav.signing.link_id = 3
+    mav.signing.timestamp = int((time.time() - 1420070400) * 1e5)
+    mav.signing.sign_outgoing = True
+    pkt = mavlink.MAVLink_command_long_message(1, 1, 42424, 0, 0, 0, 0, 0, 0, 0, 0).pack(mav)
+    s = rig.m.port    # from the GCS's own socket: octo-fw answers there
+    s.sendto(pkt, ("127.0.0.1", rig.mav_port))
+    s.sendto(pkt, ("127.0.0.1", rig.mav_port))
+    acks = 0
+    end = time.monotonic() + 1.0
+    while time.monotonic() < end:
+        a = rig.recv({"COMMAND_ACK"}, timeout=end - time.monotonic())
+        if a is not None and a.command == 42424:
+            acks += 1
+    assert acks == 1
+    st = None
+    for _ in range(3):
+        st = rig.recv({"SYS_STATUS"}, timeout=2)
+        if st is not None and st.errors_count4 >= 4:
+            break
+    assert st is not None and st.errors_count4 >= 4     # rejected by signing, counted

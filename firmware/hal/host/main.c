@@ -32,6 +32,8 @@ static struct hal_sensor_frame frame;   /* persistent: absent rows keep their va
 static int mav_fd = -1;
 static struct sockaddr_in gcs;
 static volatile sig_atomic_t stop;
+static bool have_key;
+static uint8_t signing_key[32];
 
 /* ---------------------------------------------------------------- hal.h */
 
@@ -56,6 +58,68 @@ void hal_mav_send(const uint8_t *buf, size_t len)
 {
 	if (mav_fd >= 0)
 		(void)sendto(mav_fd, buf, len, 0, (const struct sockaddr *)&gcs, sizeof gcs);
+}
+
+bool hal_signing_key(uint8_t key[32])
+{
+	if (have_key)
+		memcpy(key, signing_key, sizeof signing_key);
+	return have_key;
+}
+
+uint64_t hal_unix_us(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_REALTIME, &ts);
+	return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
+}
+
+static int hexval(int c)
+{
+	if (c >= '0' && c <= '9')
+		return c - '0';
+	if (c >= 'a' && c <= 'f')
+		return c - 'a' + 10;
+	if (c >= 'A' && c <= 'F')
+		return c - 'A' + 10;
+	return -1;
+}
+
+/* --signing-key FILE: 32 raw bytes, or 64 hex digits (surrounding white space ignored). */
+static int load_signing_key(const char *path)
+{
+	FILE *f = fopen(path, "rb");
+	if (!f) {
+		fprintf(stderr, "octo-fw: --signing-key: cannot open %s: %s\n", path, strerror(errno));
+		return -1;
+	}
+	uint8_t buf[256];
+	size_t n = fread(buf, 1, sizeof buf, f);
+	fclose(f);
+	if (n == 32) {
+		memcpy(signing_key, buf, 32);
+		have_key = true;
+		return 0;
+	}
+	size_t a = 0, b = n;
+	while (a < b && (buf[a] == ' ' || buf[a] == '\n' || buf[a] == '\r' || buf[a] == '\t'))
+		a++;
+	while (b > a && (buf[b - 1] == ' ' || buf[b - 1] == '\n' || buf[b - 1] == '\r' || buf[b - 1] == '\t'))
+		b--;
+	if (b - a == 64) {
+		bool ok = true;
+		for (size_t i = 0; i < 32 && ok; i++) {
+			int hi = hexval(buf[a + 2 * i]), lo = hexval(buf[a + 2 * i + 1]);
+			ok = hi >= 0 && lo >= 0;
+			signing_key[i] = (uint8_t)(hi << 4 | lo);
+		}
+		if (ok) {
+			have_key = true;
+			return 0;
+		}
+	}
+	fprintf(stderr, "octo-fw: --signing-key: %s must hold 32 raw bytes or 64 hex digits\n", path);
+	return -1;
 }
 
 void hal_report(const char *fmt, ...)
@@ -85,7 +149,8 @@ static const char usage[] =
 	"  --lcm URL                LCM log: file://PATH (event log in plant time) or an LCM URL\n"
 	"  --actuation dref|data25  throttles as 8 DREFs ENGN_thro_use[i] + override_throttles\n"
 	"                           (default) or one DATA row 25 datagram\n"
-	"  --signing-key FILE       MAVLink 2 signing (not implemented yet: refused)\n"
+	"  --signing-key FILE       MAVLink 2 signing with the 32-byte key in FILE (raw, or 64 hex\n"
+	"                           digits): unsigned input rejected, output signed\n"
 	"  --dump-params            print the parameter table as JSON and exit\n"
 	"  --help                   this text\n";
 
@@ -194,7 +259,7 @@ int main(int argc, char **argv)
 {
 	struct sockaddr_in xplane;
 	uint16_t xp_listen = 49005, mav_listen = 14580;
-	const char *params_path = NULL, *lcm_url = NULL, *signing_key = NULL;
+	const char *params_path = NULL, *lcm_url = NULL, *signing_key_path = NULL;
 	enum xp_actuation act = XP_ACT_DREF;
 	if (parse_hostport("--xplane", "127.0.0.1:49000", &xplane) ||
 	    parse_hostport("--gcs", "127.0.0.1:14550", &gcs))
@@ -238,7 +303,7 @@ int main(int argc, char **argv)
 		else if (!strcmp(f, "--lcm"))
 			lcm_url = v;
 		else if (!strcmp(f, "--signing-key"))
-			signing_key = v;
+			signing_key_path = v;
 		else if (!strcmp(f, "--actuation")) {
 			if (!strcmp(v, "dref"))
 				act = XP_ACT_DREF;
@@ -252,11 +317,8 @@ int main(int argc, char **argv)
 		if (bad)
 			return 2;
 	}
-	if (signing_key) {
-		fprintf(stderr, "octo-fw: --signing-key: MAVLink signing is not implemented in this "
-				"build; refusing to run unsigned when signing was asked for\n");
+	if (signing_key_path && load_signing_key(signing_key_path))
 		return 2;
-	}
 
 	signal(SIGPIPE, SIG_IGN);
 	struct sigaction sa;
@@ -274,6 +336,8 @@ int main(int argc, char **argv)
 	if (mav_fd < 0)
 		return 1;
 	app_init(&app);
+	if (have_key)
+		hal_report("MAVLink 2 signing on (key from %s)", signing_key_path);
 	hal_report("flying X-Plane at %s:%u (listening on %u, actuation %s), MAVLink on %u -> %s:%u",
 		   inet_ntoa(xplane.sin_addr), ntohs(xplane.sin_port), xp_listen,
 		   act == XP_ACT_DREF ? "dref" : "data25", mav_listen, inet_ntoa(gcs.sin_addr),
@@ -301,11 +365,11 @@ int main(int argc, char **argv)
 				ssize_t n = recvfrom(mav_fd, buf, sizeof buf, 0, (struct sockaddr *)&from, &fl);
 				if (n < 0)
 					break;
-				/* learn the ground station from MAVLink-looking traffic */
-				if (n > 0 && (buf[0] == 0xFD || buf[0] == 0xFE) && fl >= sizeof from &&
+				/* the ground station is whoever sent the last datagram with an
+				 * accepted message (valid checksum, and signature when signing) */
+				if (app_on_mavlink(&app, buf, (size_t)n) > 0 && fl >= sizeof from &&
 				    from.sin_family == AF_INET)
 					gcs = from;
-				app_on_mavlink(&app, buf, (size_t)n);
 			}
 		}
 		xp_client_poll(&xp, hal_wall_us());
