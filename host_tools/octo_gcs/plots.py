@@ -137,7 +137,7 @@ def fig7(logs, rep, path, plt):
             t, w, wm, fits = by_kind[kind]
             ax.plot(t - t[0], w[:, i], lw=0.8, label=src)
             ax.plot(t - t[0], wm[:, i], lw=0.8, ls="--", label="analytical model, eqs. (1)-(10)")
-            ax.set_title(f"({'abc'[i]}) {lab} during the {kind.upper()[0]}{kind[1:]} experiment: fit {fits[i]:.1f} %")
+            ax.set_title(f"({'abc'[i]}) {lab} during the I_{kind[1]} experiment: fit {fits[i]:.1f} %")
             ax.set_ylabel(f"{lab} [rad/s]")
             ax.legend(loc="upper right", fontsize=8)
         else:

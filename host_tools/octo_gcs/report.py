@@ -192,8 +192,9 @@ def _validation_lines(rep):
         lines.append(f"validation {w['window']} (from the log): NE {_f(w['ne'], '{:.4f}')}, "
                      f"fit {_f(w['fit_pct'], '{:.1f}')} %")
     for m in rep.get("model_fit", []):
-        fits = ", ".join(f"{ax} {_f(f, '{:.1f}')} %" for ax, f in m["fit_pct"].items())
-        lines.append(f"rates vs the analytical model ({m['experiment']} experiment): fit {fits}")
+        ax, name = {"ixx": ("wx", "I_x"), "iyy": ("wy", "I_y"), "izz": ("wz", "I_z")}[m["experiment"]]
+        lines.append(f"omega_{ax[1]} vs the analytical model with the estimates ({name} experiment): "
+                     f"fit {_f(m['fit_pct'][ax], '{:.1f}')} %")
     return lines
 
 

@@ -124,3 +124,15 @@ def test_rate_model_helper_matches_truth_log_inputs(launch, port, tmp_path):
     cmd = np.vstack([tr.throttle_cmd[1:181], tr.throttle_cmd[180:181]])
     w = simulate_rates(t, tr.q_i2b[0], tr.rate_b[0], cmd, tr.s[0], p)
     assert np.abs(w - tr.rate_b[:181]).max() < 1e-5
+
+
+def test_rates_integrator_equals_the_full_model():
+    """Model.integrate_rates (eqs. 7-9 alone, used for Fig. 7) gives the full model's rates."""
+    p = Params(inertia=(0.05, 0.09, 0.12))
+    m = Model(p)
+    rng = np.random.default_rng(2)
+    thr = 0.1 + rng.normal(0, 0.004, (300, 8))
+    x0 = State(w=np.array([0.3, -0.2, 0.5])).vector()
+    xs = m.simulate(x0, [m.wrench_of_throttles(u) for u in thr], 1 / 90, substeps=6)
+    w = simulate_rates(np.arange(301) / 90, x0[6:10], x0[10:13], thr, thr[0], p)
+    assert np.abs(xs[:, 10:13] - w).max() < 1e-12
