@@ -1,4 +1,73 @@
-# tests/bench/: `make bench`, the project's performance figures (build/bench.json).
-.PHONY: bench
-bench:
-	@echo "make bench: not built yet"; exit 1
+# tests/bench/: `make bench`, the project's performance figures (issue 8).
+#
+#   make bench        builds the harnesses below, then runs tests/bench/bench.py: one table on
+#                     stdout (each figure: median of repeated runs with min and max, beside its
+#                     reference and target, with the command that produced it) and
+#                     build/bench.json. Takes about two minutes.
+#   make bench-tools  only the harnesses (tests/py/test_bench_smoke.py runs them tiny)
+#   BENCH_ARGS="--repeats 3 --only speed,step"  passed to bench.py (see bench.py --help)
+#
+# Harnesses (build/bench/):
+#   pingpong       bare UDP ping-pong over loopback between two processes with octo-sim's and
+#                  octo-fw's datagram sizes per frame (the design's limit), and the tightest
+#                  X-Plane client of octo-sim --lockstep (the simulator alone)
+#   bench-physics  sim::Model (build/sim/*.o, the simulator's flags) stepped as fast as it goes
+#   bench-step     octo-fw's 90 Hz step (firmware/app + core, stub HAL) under callgrind;
+#                  step-m4f.elf: the same on Cortex-M4F under QEMU with tests/arm's counting
+#                  plugin (needs the ARM toolchain: `make arm` installs it as root)
+#   bench-alloc    allocation quality: priority allocator vs pseudo-inverse + clipping
+#   bench-estim    Monte Carlo of the k_f estimators (lag-aware, paper's plain) vs the CRLB
+# Sizes of the core on Cortex-M4F/M0 come from tests/arm's images (build/arm/<v>/).
+
+BENCH_B      := $(B)/bench
+BENCH_CFLAGS := $(filter-out -MMD -MP,$(CFLAGS_FW))
+BENCH_APP_SRC := $(sort $(wildcard firmware/app/*.c))
+BENCH_APP_INC := -D_POSIX_C_SOURCE=200809L -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal \
+                 -Itests/arm -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common
+BENCH_FW_HDR := $(wildcard firmware/core/*.h firmware/app/*.h firmware/hal/hal.h)
+BENCH_SIM_OBJ := $(addprefix $(B)/sim/,model.o actuator.o vehicle.o json.o)
+
+$(BENCH_B)/pingpong: tests/bench/pingpong.c
+	@mkdir -p $(@D)
+	$(CC) -std=c11 -O2 -Wall -Wextra -Werror -o $@ $<
+
+$(BENCH_B)/bench-physics: tests/bench/physics.cpp $(BENCH_SIM_OBJ) $(wildcard sim/*.hpp)
+	@mkdir -p $(@D)
+	$(CXX) $(filter-out -MMD -MP,$(CXXFLAGS_SIM)) $(SIM_INC) -o $@ $< $(BENCH_SIM_OBJ) -lm
+
+$(BENCH_B)/bench-alloc: tests/bench/alloc.c $(B)/libcore.a $(BENCH_FW_HDR)
+	@mkdir -p $(@D)
+	$(CC) $(BENCH_CFLAGS) $(CORE_INC) -o $@ $< $(B)/libcore.a -lm
+
+$(BENCH_B)/bench-estim: tests/bench/estim.c $(B)/libcore.a $(BENCH_FW_HDR)
+	@mkdir -p $(@D)
+	$(CC) $(BENCH_CFLAGS) $(CORE_INC) -o $@ $< $(B)/libcore.a -lm
+
+# the app step: the firmware's own app sources, compiled here with the firmware's flags
+$(BENCH_B)/bench-step: tests/bench/step.c $(BENCH_APP_SRC) tests/arm/bench_mark.c $(B)/libcore.a \
+                       $(BENCH_FW_HDR) | $(MAVLINK_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(BENCH_CFLAGS) $(BENCH_APP_INC) -o $@ tests/bench/step.c $(BENCH_APP_SRC) \
+	  tests/arm/bench_mark.c $(B)/libcore.a -lm
+$(BENCH_B)/bench-step-quick: tests/bench/step.c $(BENCH_APP_SRC) tests/arm/bench_mark.c $(B)/libcore.a \
+                       $(BENCH_FW_HDR) | $(MAVLINK_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(BENCH_CFLAGS) -DBENCH_QUICK $(BENCH_APP_INC) -o $@ tests/bench/step.c $(BENCH_APP_SRC) \
+	  tests/arm/bench_mark.c $(B)/libcore.a -lm
+
+BENCH_HOST := $(BENCH_B)/pingpong $(BENCH_B)/bench-physics $(BENCH_B)/bench-alloc \
+              $(BENCH_B)/bench-estim $(BENCH_B)/bench-step $(BENCH_B)/bench-step-quick
+
+# ---- Cortex-M (only when the cross toolchain and QEMU are installed; else the table says so)
+BENCH_ARM_OK := $(shell command -v $(ARM_CC) >/dev/null 2>&1 && command -v $(ARM_QEMU) >/dev/null 2>&1 && echo 1)
+ifeq ($(BENCH_ARM_OK),1)
+$(eval $(call arm_program,m4f,$(BENCH_B)/step-m4f.elf,tests/bench/step.c $(BENCH_APP_SRC),$(BENCH_APP_INC)))
+$(BENCH_B)/step-m4f.elf: $(BENCH_FW_HDR) | $(MAVLINK_STAMP)
+BENCH_ARM := $(BENCH_B)/step-m4f.elf $(ARM_COUNT_PLUGIN) $(ARM_LIBS) $(ARM_SIZE_ELFS)
+endif
+
+.PHONY: bench bench-tools
+bench-tools: $(BENCH_HOST) $(BENCH_ARM)
+
+bench: $(B)/octo-sim $(B)/octo-fw bench-tools
+	$(VPY) tests/bench/bench.py $(if $(BENCH_ARM_OK),,--no-arm) $(BENCH_ARGS)

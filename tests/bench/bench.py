@@ -1,0 +1,646 @@
+#!/usr/bin/env python3
+"""make bench: Octo-SIL's performance figures (issue 8), measured side by side.
+
+Run by `make bench` (which builds the harnesses first) as
+    .venv/bin/python tests/bench/bench.py [--repeats N] [--only ITEMS] [--quick] [--no-arm]
+Prints one table (each timed figure: median of N runs with [min, max]; each count: exact,
+deterministic) beside its reference measured in the same run and its target, then the
+machine and the exact command behind each figure, and writes build/bench.json.
+
+Items (issue 8):
+  speed   1. closed loop: octo-sim --lockstep + octo-fw (--actuation dref and data25) + a
+             pymavlink ground station, 120 s simulated: arm, take-off to 10 m, hold,
+             MAV_CMD_USER_1 param1=1 (rotor-coefficient experiment) once hovering if the
+             firmware has it; simulated s per wall s, beside a bare UDP ping-pong between two
+             processes with the same datagrams per frame (build/bench/pingpong pp)
+  step    2. octo-fw's 90 Hz step without I/O (build/bench/bench-step: firmware/app + core,
+             stub HAL): instructions per step on the host (valgrind --tool=callgrind) and on
+             Cortex-M4F (QEMU mps2-an386 + tests/arm's counting plugin); the allocator alone
+  memory  3. the core's .text/.data/.bss on Cortex-M4F and M0 (tests/arm's images), the core
+             state the app owns (sizeof), peak RSS of octo-fw and octo-sim (wait4 of the
+             flights of item 1)
+  alloc   4. build/bench/bench-alloc: priority allocator vs pseudo-inverse + clipping
+  estim   5. build/bench/bench-estim: Monte Carlo of k_f, lag-aware vs CRLB, paper's plain
+  sim     6. physics alone (build/bench/bench-physics) and octo-sim --lockstep driven by the
+             tightest client (build/bench/pingpong client)
+"""
+
+import argparse
+import json
+import math
+import os
+import platform
+import re
+import shlex
+import shutil
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+B = REPO / "build"
+BB = B / "bench"
+ARM = B / "arm"
+HZ = 90.0
+FLIGHT_S = 120.0
+ROWS_OUT = 5 + 6 * 36     # DATA of rows 1 16 17 21 35 36, as octo-fw selects them
+PATTERNS = {"dref": (8, 509), "data25": (1, 41)}   # datagrams back per frame, bytes each
+
+
+def rel(p):
+    try:
+        return str(Path(p).resolve().relative_to(REPO))
+    except ValueError:
+        return str(p)
+
+
+def cmdline(argv):
+    return " ".join(shlex.quote(rel(a) if str(a).startswith(str(REPO)) else str(a)) for a in argv)
+
+
+def free_port():
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def mmm(xs):
+    xs = [x for x in xs if x is not None]
+    if not xs:
+        return None
+    return {"median": statistics.median(xs), "min": min(xs), "max": max(xs), "n": len(xs)}
+
+
+def machine():
+    model = platform.processor() or "?"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {"cpu": model, "cores": os.cpu_count(), "kernel": platform.release(),
+            "python": platform.python_version(), "load_avg_1m": round(os.getloadavg()[0], 2),
+            "date_utc": time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime())}
+
+
+# ====================================================================== table
+class Report:
+    def __init__(self):
+        self.rows = []
+        self.data = {}
+        self.commands = {}
+
+    def row(self, item, figure, value, spread="", ref="", target="", ok=None, cmd=None):
+        self.rows.append({"item": item, "figure": figure, "value": value, "spread": spread,
+                          "reference": ref, "target": target, "ok": ok, "command": cmd})
+
+    def print(self, out=sys.stdout):
+        head = ("#", "figure", "value", "[min, max]", "reference (same run)", "target", "")
+        cols = [[str(r["item"]), r["figure"], r["value"], r["spread"], r["reference"], r["target"],
+                 {True: "ok", False: "MISS", None: ""}[r["ok"]]] for r in self.rows]
+        w = [max(len(head[i]), *(len(c[i]) for c in cols)) if cols else len(head[i]) for i in range(7)]
+        w[4] = min(w[4], 48)
+        line = lambda c: "  ".join(x.ljust(w[i]) if i != 2 else x.rjust(w[i]) for i, x in enumerate(c)).rstrip()
+        print(line(head), file=out)
+        print("  ".join("-" * x for x in w), file=out)
+        last = None
+        for r, c in zip(self.rows, cols):
+            if last is not None and r["item"] != last:
+                print("", file=out)
+            last = r["item"]
+            print(line(c), file=out)
+
+
+def fmt(x, nd=0, unit=""):
+    if x is None:
+        return "n/a"
+    if isinstance(x, float) and nd == 0:
+        return f"{x:,.0f}{unit}"
+    return f"{x:,.{nd}f}{unit}"
+
+
+def spread(s, nd=0, unit=""):
+    return f"[{fmt(s['min'], nd)} .. {fmt(s['max'], nd)}]{unit}" if s else ""
+
+
+# ====================================================================== item 1: closed loop
+class Flight:
+    """octo-sim --lockstep + octo-fw + a pymavlink ground station, one flight."""
+
+    def __init__(self, actuation, duration, workdir):
+        self.act, self.duration, self.dir = actuation, duration, Path(workdir)
+
+    def run(self):
+        os.environ.setdefault("MAVLINK20", "1")
+        from pymavlink import mavutil
+        mav = mavutil.mavlink
+        xp, xl, mp, gp = free_port(), free_port(), free_port(), free_port()
+        self.sim_argv = [B / "octo-sim", "--xp-port", xp, "--data-out", f"127.0.0.1:{xl}", "--lockstep",
+                         "--duration", f"{self.duration:g}", "--lcm", f"file://{self.dir}/truth.lcm"]
+        self.fw_argv = [B / "octo-fw", "--xplane", f"127.0.0.1:{xp}", "--xp-listen", xl,
+                        "--mavlink-listen", mp, "--gcs", f"127.0.0.1:{gp}", "--actuation", self.act,
+                        "--params", self.dir / "params.parm", "--lcm", f"file://{self.dir}/fw.lcm"]
+        gcs = mavutil.mavlink_connection(f"udpin:127.0.0.1:{gp}", source_system=255, source_component=190)
+        sim = subprocess.Popen([str(a) for a in self.sim_argv], stdin=subprocess.DEVNULL,
+                               stdout=subprocess.DEVNULL, stderr=open(self.dir / "sim.stderr", "wb"))
+        fw = subprocess.Popen([str(a) for a in self.fw_argv], stdin=subprocess.DEVNULL,
+                              stdout=subprocess.DEVNULL, stderr=open(self.dir / "fw.stderr", "wb"))
+        done = {}
+        hwm = {"sim": None, "fw": None}
+
+        def reap():
+            _, status, _ = os.wait4(sim.pid, 0)
+            done["t"] = time.monotonic()
+            done["status"] = status
+            sim.returncode = os.waitstatus_to_exitcode(status)
+
+        def watch():
+            # VmHWM of each process (its own peak RSS; wait4's ru_maxrss would include the
+            # size of this Python process, which the child inherits across fork + exec)
+            while "t" not in done:
+                for k, p in (("sim", sim), ("fw", fw)):
+                    v = vm_hwm_kb(p.pid)
+                    if v is not None:
+                        hwm[k] = max(hwm[k] or 0, v)
+                time.sleep(0.01)
+
+        threading.Thread(target=watch, daemon=True).start()
+
+        waiter = threading.Thread(target=reap, daemon=True)
+        waiter.start()
+        texts, res = [], {"actuation": self.act, "experiment": None}
+        try:
+            if gcs.wait_heartbeat(timeout=10) is None:
+                raise RuntimeError("no HEARTBEAT from octo-fw")
+
+            def command(cmd, *p, timeout=2.0):
+                p = list(p) + [0.0] * (7 - len(p))
+                gcs.mav.command_long_send(1, 1, cmd, 0, *p)
+                end = time.monotonic() + timeout
+                while time.monotonic() < end:
+                    m = gcs.recv_match(blocking=True, timeout=0.05)
+                    if m is None:
+                        continue
+                    if m.get_type() == "STATUSTEXT":
+                        texts.append(m.text)
+                    if m.get_type() == "COMMAND_ACK" and m.command == cmd:
+                        return m.result
+                return None
+
+            t_arm = None
+            end = time.monotonic() + 10
+            while time.monotonic() < end:
+                if command(mav.MAV_CMD_COMPONENT_ARM_DISARM, 1, timeout=0.5) == mav.MAV_RESULT_ACCEPTED:
+                    t_arm = time.monotonic()
+                    break
+                time.sleep(0.05)
+            if t_arm is None:
+                raise RuntimeError("could not arm")
+            if command(mav.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, 10.0) != mav.MAV_RESULT_ACCEPTED:
+                raise RuntimeError("take-off refused")
+            asked = False
+            while "t" not in done:
+                m = gcs.recv_match(blocking=True, timeout=0.02)
+                if m is not None and m.get_type() == "STATUSTEXT":
+                    texts.append(m.text)
+                if not asked and "Mode HOLD" in texts:
+                    asked = True
+                    r = command(mav.MAV_CMD_USER_1, 1.0, timeout=1.0)
+                    res["experiment"] = {mav.MAV_RESULT_ACCEPTED: "accepted",
+                                         mav.MAV_RESULT_UNSUPPORTED: "not in this build"}.get(r, f"result {r}")
+            waiter.join(timeout=FLIGHT_S * 2)
+            wall = done["t"] - t_arm
+            res.update(wall_s=wall, sim_s=self.duration, x_realtime=self.duration / wall,
+                       sim_rss_kb=hwm["sim"], sim_exit=sim.returncode,
+                       reached_hold="Mode HOLD" in texts,
+                       experiment_texts=[t for t in texts if "xperiment" in t or "Mode EXPERIMENT" in t])
+        finally:
+            if sim.returncode is None and "t" not in done:
+                sim.kill()
+            waiter.join(timeout=5)
+            if fw.poll() is None:
+                v = vm_hwm_kb(fw.pid)
+                res["fw_rss_kb"] = max(hwm["fw"] or 0, v or 0) or None
+                fw.send_signal(signal.SIGTERM)
+                fw.wait(timeout=10)
+            gcs.close()
+        res["texts"] = texts[:20]
+        return res
+
+
+def vm_hwm_kb(pid):
+    """Peak resident set of a live process (VmHWM, kB), None if gone."""
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1])
+    except OSError:
+        return None
+    return None
+
+
+def pingpong(frames, back_n, back_b):
+    argv = [BB / "pingpong", "pp", frames, ROWS_OUT, back_n, back_b]
+    out = subprocess.run([str(a) for a in argv], capture_output=True, text=True, timeout=120, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1]), cmdline(argv)
+
+
+def sim_alone(act, duration):
+    xp, xl = free_port(), free_port()
+    sim_argv = [B / "octo-sim", "--xp-port", xp, "--data-out", f"127.0.0.1:{xl}", "--lockstep",
+                "--duration", f"{duration:g}"]
+    cl_argv = [BB / "pingpong", "client", xp, xl, act]
+    sim = subprocess.Popen([str(a) for a in sim_argv], stdin=subprocess.DEVNULL,
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        out = subprocess.run([str(a) for a in cl_argv], capture_output=True, text=True, timeout=120)
+    finally:
+        try:
+            sim.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            sim.kill()
+            sim.wait()
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    return r, f"{cmdline(sim_argv)} & {cmdline(cl_argv)}"
+
+
+def item_speed(rep, args):
+    duration = 10.0 if args.quick else FLIGHT_S
+    frames = int(duration * HZ)
+    runs = {a: [] for a in PATTERNS}
+    pp = {a: [] for a in PATTERNS}
+    alone = {a: [] for a in PATTERNS}
+    cmds = {}
+    work = Path(tempfile.mkdtemp(prefix="flight-", dir=BB))
+    try:
+        for i in range(args.repeats):
+            for act, (n, b) in PATTERNS.items():
+                d = work / f"{act}-{i}"
+                d.mkdir()
+                f = Flight(act, duration, d)
+                try:
+                    runs[act].append(f.run())
+                except Exception as e:   # noqa: BLE001 - reported in the table
+                    runs[act].append({"error": str(e)})
+                cmds[f"flight_{act}"] = f"{cmdline(f.sim_argv)} & {cmdline(f.fw_argv)} & (pymavlink GCS: arm, take-off 10 m, MAV_CMD_USER_1 1 in HOLD)"
+                shutil.rmtree(d, ignore_errors=True)
+                r, cmds[f"pingpong_{act}"] = pingpong(frames, n, b)
+                pp[act].append(r["frames_per_s"] / HZ)
+                r, cmds[f"sim_alone_{act}"] = sim_alone(act, duration)
+                alone[act].append(r["frames_per_s"] / HZ)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    res = {}
+    exp_state = set()
+    for act, (n, b) in PATTERNS.items():
+        ok_runs = [r for r in runs[act] if "x_realtime" in r]
+        s = mmm([r["x_realtime"] for r in ok_runs])
+        p = mmm(pp[act])
+        pct = mmm([r["x_realtime"] / q * 100 for r, q in zip(ok_runs, pp[act])])
+        for r in ok_runs:
+            exp_state.add(r.get("experiment") or "not asked (no HOLD)")
+        res[act] = {"closed_loop_x": s, "pingpong_x": p, "pct_of_pingpong": pct, "sim_alone_x": mmm(alone[act]),
+                    "runs": runs[act]}
+        errs = [r["error"] for r in runs[act] if "error" in r]
+        what = f"{act}: DATA {ROWS_OUT} B out, {n} x {b} B back"
+        rep.row(1, f"closed loop, --actuation {act} (x real time)", fmt(s["median"] if s else None, 0, "x"),
+                spread(s) if s else "; ".join(errs)[:60],
+                f"ping-pong bound {fmt(p['median'], 0, 'x')}: {fmt(pct['median'] if pct else None, 0, ' %')} of it",
+                ">= 300x, >= 50 %",
+                None if not s else (s["median"] >= 300 and pct["median"] >= 50), cmds.get(f"flight_{act}"))
+        rep.row(1, f"  UDP ping-pong bound, {what}", fmt(p["median"], 0, "x"), spread(p), "", "", None,
+                cmds.get(f"pingpong_{act}"))
+    flights_with = ", ".join(sorted(exp_state))
+    res["experiment_1"] = flights_with
+    res["flight"] = (f"{duration:g} s simulated: arm, take-off to 10 m, hold; experiment 1 (MAV_CMD_USER_1): "
+                     f"{flights_with}")
+    rep.row(1, "  flight flown", "take-off + hold" if "accepted" not in exp_state else "take-off, hold, exp. 1",
+            "", f"experiment 1: {flights_with}", "", None)
+    rss = {"octo-sim": mmm([r.get("sim_rss_kb") for a in PATTERNS for r in runs[a]]),
+           "octo-fw": mmm([r.get("fw_rss_kb") for a in PATTERNS for r in runs[a]])}
+    res["peak_rss_kb"] = rss
+    rep.data["speed"] = res
+    rep.data["memory_rss"] = rss
+    rep.commands.update(cmds)
+    return res
+
+
+# ====================================================================== item 2: step cost
+def parse_callgrind(path, names):
+    """Inclusive Ir and call counts of the calls to `names` (callgrind, uncompressed names)."""
+    out = {n: {"calls": 0, "ir": 0} for n in names}
+    lines = Path(path).read_text().splitlines()
+    i = 0
+    while i < len(lines):
+        ln = lines[i]
+        if ln.startswith("cfn="):
+            name = ln[4:].strip()
+            if name in out and i + 2 < len(lines) and lines[i + 1].startswith("calls="):
+                calls = int(lines[i + 1].split("=", 1)[1].split()[0])
+                cost = int(lines[i + 2].split()[1])
+                out[name]["calls"] += calls
+                out[name]["ir"] += cost
+                i += 3
+                continue
+        i += 1
+    return out
+
+
+def parse_step_output(text):
+    kv = {}
+    for ln in text.splitlines():
+        m = re.match(r"step: (\S+) (.*)$", ln)
+        if m:
+            kv[m.group(1)] = m.group(2).strip()
+    return kv
+
+
+def item_step(rep, args):
+    exe = BB / ("bench-step-quick" if args.quick else "bench-step")
+    res = {}
+    names = ["bench_hold_step", "bench_exp_step", "bench_alloc_hover", "bench_alloc_call", "bench_alloc_worst"]
+    host = {}
+    with tempfile.TemporaryDirectory(dir=BB) as tmp:
+        cg = Path(tmp) / "callgrind.out"
+        argv = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={cg}", "--compress-strings=no",
+                "--compress-pos=no", str(exe)]
+        if shutil.which("valgrind"):
+            out = subprocess.run(argv, capture_output=True, text=True, timeout=600)
+            kv = parse_step_output(out.stdout)
+            if out.returncode == 0 and cg.exists():
+                host = parse_callgrind(cg, names)
+            res["host_output"] = kv
+        else:
+            kv = parse_step_output(subprocess.run([str(exe)], capture_output=True, text=True).stdout)
+            res["host_output"] = kv
+    host_cmd = cmdline(["valgrind", "--tool=callgrind", "--compress-strings=no", str(exe)])
+    res["host_callgrind"] = host
+    mean = lambda n: (host[n]["ir"] / host[n]["calls"]) if host.get(n, {}).get("calls") else None
+
+    # Cortex-M4F: one count per measured call, in order: hold, experiment, hover allocation,
+    # N_ALLOC allocations, the worst one
+    m4f = {}
+    elf = BB / "step-m4f.elf"
+    m4_cmd = cmdline(["tests/arm/insn-count.sh", "mps2-an386", elf, ARM / "insn-count.so"])
+    if args.no_arm or not elf.exists():
+        res["m4f"] = None
+        res["m4f_missing"] = "ARM toolchain or QEMU missing (make arm installs it as root)"
+    else:
+        out = subprocess.run([str(REPO / "tests/arm/insn-count.sh"), "mps2-an386", str(elf), str(ARM / "insn-count.so")],
+                             capture_output=True, text=True, timeout=600, cwd=REPO)
+        counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
+        kv = parse_step_output(out.stdout)
+        nh, ne = int(kv.get("hold_steps", 0)), int(kv.get("exp_steps", 0))
+        na = int(kv.get("alloc_calls", "0").split()[0])
+        if len(counts) == nh + ne + 1 + na + 1:
+            m4f = {"hold": counts[:nh], "exp": counts[nh:nh + ne], "alloc_hover": counts[nh + ne],
+                   "alloc": counts[nh + ne + 1:nh + ne + 1 + na], "alloc_worst": counts[-1]}
+        res["m4f_output"] = kv
+        res["m4f"] = {k: (mmm(v) if isinstance(v, list) else v) for k, v in m4f.items()}
+        res["m4f"]["exit"] = out.returncode
+    kv = res.get("m4f_output") or res.get("host_output") or {}
+    exp_ok = int(kv.get("exp_steps", 0)) > 0
+    bound = kv.get("alloc_step_bound", "?")
+    worst_steps = kv.get("alloc_worst_steps", "?").split()[0]
+
+    hold = mmm(m4f.get("hold", []))
+    rep.row(2, "step in HOLD, Cortex-M4F (instructions)", fmt(hold["median"] if hold else None),
+            spread(hold) if hold else res.get("m4f_missing", ""),
+            f"host x86-64: {fmt(mean('bench_hold_step'))} Ir/step (mean)", "<= 5,000",
+            None if not hold else hold["max"] <= 5000, m4_cmd)
+    ex = mmm(m4f.get("exp", []))
+    rep.row(2, f"step in experiment 1 ({len(m4f.get('exp', []))} steps), M4F", fmt(ex["median"] if ex else None),
+            spread(ex) if ex else ("" if exp_ok else "experiment 1 not in this build"),
+            f"host x86-64: {fmt(mean('bench_exp_step'))} Ir/step (mean)" if exp_ok else "waits on issue 6",
+            "<= 5,000", None if not ex else ex["max"] <= 5000, m4_cmd)
+    if ex:
+        e = m4f["exp"]
+        q = sorted(e)[int(0.99 * (len(e) - 1))]
+        big = [(i + 1, x) for i, x in enumerate(e) if x > 2 * ex["median"]]
+        res["m4f"]["exp_p99"] = q
+        res["m4f"]["exp_one_off"] = big
+        rep.row(2, "  experiment: 99th percentile; steps over 2x the median", fmt(q),
+                "", ", ".join(f"step {i}: {fmt(float(x))}" for i, x in big[:4]) or "none",
+                "", None, m4_cmd)
+    al = mmm(m4f.get("alloc", []))
+    n_sat = kv.get("alloc_calls", "? saturated ?").split()[-1]
+    rep.row(2, f"  allocator alone, {kv.get('alloc_calls', '?').split()[0]} demands ({n_sat} saturating), M4F",
+            fmt(al["median"] if al else None), spread(al),
+            f"hover demand: {fmt(m4f.get('alloc_hover'))}; host mean {fmt(mean('bench_alloc_call'))} Ir", "", None, m4_cmd)
+    worst = m4f.get("alloc_worst")
+    rep.row(2, f"  allocator worst demand ({worst_steps} of <= {bound} steps), M4F", fmt(worst), "",
+            f"host x86-64: {fmt(mean('bench_alloc_worst'))} Ir", "(reported)", None, m4_cmd)
+    if hold and worst is not None:
+        est = max(hold["max"], ex["max"] if ex else 0) - m4f["alloc_hover"] + worst
+        res["worst_step_estimate_m4f"] = est
+        rep.row(2, "  worst-case step (max step - hover allocation + worst allocation), M4F", fmt(est), "",
+                "", "<= 5,000", est <= 5000, m4_cmd)
+    rep.data["step"] = res
+    rep.commands["step_host"] = host_cmd
+    rep.commands["step_m4f"] = m4_cmd
+    return res
+
+
+# ====================================================================== item 3: memory
+def arm_size(path, total=False):
+    argv = ["arm-none-eabi-size"] + (["-t"] if total else []) + [str(path)]
+    out = subprocess.run(argv, capture_output=True, text=True, check=True).stdout.splitlines()
+    f = (out[-1] if total else out[1]).split()
+    return int(f[0]), int(f[1]), int(f[2])
+
+
+def struct_sizes(obj):
+    out = subprocess.run(["arm-none-eabi-nm", "-S", "-t", "d", str(obj)], capture_output=True, text=True,
+                         check=True).stdout
+    sizes = {}
+    for ln in out.splitlines():
+        f = ln.split()
+        if len(f) == 4 and f[3].startswith("octo_sizeof_"):
+            sizes[f[3][len("octo_sizeof_"):]] = int(f[1])
+    return sizes
+
+
+APP_CORE_STATE = ["att_ctrl", "alt_ctrl", "mixer", "mixer_output", "thrmap"]
+
+
+def item_memory(rep, args):
+    res = {}
+    if args.no_arm or not shutil.which("arm-none-eabi-size"):
+        rep.row(3, "core flash / RAM on Cortex-M4F, M0", "n/a", "ARM toolchain missing", "", "< 24 KB, < 4 KB", None)
+    else:
+        for v in ("m4f", "m0"):
+            lib = ARM / v / "libcore.a"
+            if not lib.exists():
+                continue
+            t, d, b = arm_size(lib, total=True)
+            linked = None
+            base, core = ARM / v / "size-base.elf", ARM / v / "size-core.elf"
+            if base.exists() and core.exists():
+                bt, bd, bb = arm_size(base)
+                ct, cd, cb = arm_size(core)
+                linked = {"flash": (ct + cd) - (bt + bd), "ram": (cd + cb) - (bd + bb)}
+            sizes = struct_sizes(ARM / v / "structs.o") if (ARM / v / "structs.o").exists() else {}
+            state = sum(sizes.get(s, 0) for s in APP_CORE_STATE)
+            res[v] = {"text": t, "data": d, "bss": b, "flash": t + d, "ram": d + b, "linked": linked,
+                      "structs": sizes, "app_core_state": state}
+            rep.row(3, f"core on {'Cortex-M4F' if v == 'm4f' else 'Cortex-M0'}: .text/.data/.bss (bytes)",
+                    f"{t}/{d}/{b}", "",
+                    f"flash {fmt((t + d) / 1024, 1)} KB; linked with libgcc/libm {fmt(linked['flash'] / 1024, 1) if linked else 'n/a'} KB",
+                    "flash < 24 KB", (t + d) < 24 * 1024,
+                    f"arm-none-eabi-size -t build/arm/{v}/libcore.a")
+            rep.row(3, f"  core RAM on {v}: globals + state the app owns (bytes)", f"{d + b} + {state}", "",
+                    f"struct mixer {sizes.get('mixer', '?')}, " + " + ".join(
+                        f"{s} {sizes.get(s, '?')}" for s in APP_CORE_STATE if s != "mixer"),
+                    "RAM < 4 KB", (d + b + state) < 4096, f"arm-none-eabi-nm -S build/arm/{v}/structs.o")
+    rss = rep.data.get("memory_rss") or {}
+    for name in ("octo-fw", "octo-sim"):
+        s = rss.get(name)
+        rep.row(3, f"peak resident memory of {name} (KB)", fmt(s["median"] if s else None), spread(s),
+                "during item 1's flights (VmHWM)", "", None, rep.commands.get("flight_dref"))
+    res["peak_rss_kb"] = rss
+    rep.data["memory"] = res
+    return res
+
+
+# ====================================================================== item 4: allocation
+def item_alloc(rep, args):
+    argv = [BB / "bench-alloc", 2000 if args.quick else 20000, 1]
+    r = json.loads(subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=True).stdout)
+    c = cmdline(argv)
+    p, q = r["priority"], r["clip"]
+    rep.row(4, f"attainable demands reproduced exactly ({r['attainable']} of {r['demands']})",
+            fmt(p["exact_attainable_pct"], 2, " %"), "",
+            f"pinv + clipping: {fmt(q['exact_attainable_pct'], 2, ' %')}", "100 %",
+            p["exact_attainable_pct"] >= 100.0, c)
+    ax = [("f_n", "thrust N", 3), ("tau_x_nm", "roll N m", 3), ("tau_y_nm", "pitch N m", 3), ("tau_z_nm", "yaw N m", 4)]
+    rep.row(4, f"unattainable ({r['unattainable']}): mean |error| " + ", ".join(a[1] for a in ax),
+            " / ".join(fmt(p["unattainable_err_mean"][k], n) for k, _, n in ax), "",
+            "clip: " + " / ".join(fmt(q["unattainable_err_mean"][k], n) for k, _, n in ax), "(reported)", None, c)
+    rep.row(4, "  unattainable: max |error| per axis",
+            " / ".join(fmt(p["unattainable_err_max"][k], n) for k, _, n in ax), "",
+            "clip: " + " / ".join(fmt(q["unattainable_err_max"][k], n) for k, _, n in ax), "", None, c)
+    rep.data["alloc"] = r
+    rep.commands["alloc"] = c
+    return r
+
+
+# ====================================================================== item 5: estimation
+def chi2_interval(n):
+    """95 % interval of var/CRLB for an efficient estimator over n runs (Wilson-Hilferty)."""
+    k = n - 1
+    q = lambda z: k * (1 - 2 / (9 * k) + z * math.sqrt(2 / (9 * k))) ** 3 / k
+    return q(-1.959964), q(1.959964)
+
+
+def item_estim(rep, args):
+    runs = 200 if args.quick else 2000
+    argv = [BB / "bench-estim", runs, 1]
+    r = json.loads(subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=True).stdout)
+    c = cmdline(argv)
+    lo, hi = chi2_interval(runs)
+    r["var_over_crlb_95pct_interval"] = [lo, hi]
+    who = "ident" if r.get("have_ident") else "own"
+    label = "core ident_rotor (lag-aware)" if who == "ident" else "filt.h + rls.h (lag-aware)"
+    for key in ("t5", "t10"):
+        t = r[key]
+        e, o, p = t[who], t["own"], t["plain"]
+        rep.row(5, f"k_f at {t['seconds']:g} s, {label}: bias / std (%)",
+                f"{e['bias_pct']:+.4f} / {e['std_pct']:.4f}", "",
+                f"CRLB std {e['crlb_std_pct']:.4f} %", "|bias| < 0.1 %", abs(e["bias_pct"]) < 0.1, c)
+        rep.row(5, f"  var/CRLB at {t['seconds']:g} s ({runs} runs)", f"{e['var_over_crlb']:.3f}",
+                f"95 % if efficient: [{lo:.2f}, {hi:.2f}]",
+                f"filt+rls here: {o['var_over_crlb']:.3f}" if who == "ident" else "",
+                "[0.85, 1.2]", 0.85 <= e["var_over_crlb"] <= 1.2, c)
+        rep.row(5, f"  paper's plain estimator at {t['seconds']:g} s: bias / std (%)",
+                f"{p['bias_pct']:+.3f} / {p['std_pct']:.3f}", "",
+                f"closed form {r['plain_bias_closed_form_pct']:+.3f} %", "(reference)", None, c)
+    rep.data["estim"] = r
+    rep.commands["estim"] = c
+    return r
+
+
+# ====================================================================== item 6: simulator
+def item_sim(rep, args):
+    secs = 60 if args.quick else 600
+    argv = [BB / "bench-physics", secs]
+    xs = []
+    for _ in range(args.repeats):
+        out = subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=True)
+        xs.append(json.loads(out.stdout))
+    c = cmdline(argv)
+    fps = mmm([x["frames_per_s"] for x in xs])
+    rk = mmm([x["rk4_steps_per_s"] for x in xs])
+    rep.row(6, "physics alone: RK4 steps (2 ms) per second", fmt(rk["median"]), spread(rk),
+            f"{fmt(fps['median'])} frames/s = {fmt(fps['median'] / HZ)}x real time", "", None, c)
+    sp = rep.data.get("speed", {})
+    for act in PATTERNS:
+        s = (sp.get(act) or {}).get("sim_alone_x")
+        rep.row(6, f"  octo-sim --lockstep, tightest client, {act} (x real time)", fmt(s["median"] if s else None, 0, "x"),
+                spread(s), f"ping-pong bound {fmt(sp[act]['pingpong_x']['median'], 0, 'x')}" if s else "",
+                "", None, rep.commands.get(f"sim_alone_{act}"))
+    rep.data["sim"] = {"physics": xs, "frames_per_s": fps, "rk4_steps_per_s": rk}
+    rep.commands["physics"] = c
+    return xs
+
+
+# ====================================================================== main
+ITEMS = {"speed": item_speed, "step": item_step, "memory": item_memory, "alloc": item_alloc,
+         "estim": item_estim, "sim": item_sim}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--repeats", type=int, default=5, help="runs per timed figure (median, min, max)")
+    ap.add_argument("--only", default="", help="comma-separated items: " + ",".join(ITEMS))
+    ap.add_argument("--quick", action="store_true", help="tiny configuration (smoke test), figures meaningless")
+    ap.add_argument("--no-arm", action="store_true", help="skip the Cortex-M figures")
+    ap.add_argument("--out", default=str(B / "bench.json"))
+    args = ap.parse_args()
+    only = [x for x in args.only.split(",") if x] or list(ITEMS)
+    bad = [x for x in only if x not in ITEMS]
+    if bad:
+        ap.error(f"unknown items {bad}")
+    BB.mkdir(parents=True, exist_ok=True)
+    t0 = time.monotonic()
+    rep = Report()
+    mach = machine()
+    errors = {}
+    for name in ITEMS:
+        if name not in only:
+            continue
+        try:
+            ITEMS[name](rep, args)
+        except Exception as e:   # noqa: BLE001 - one broken item must not hide the others
+            errors[name] = f"{type(e).__name__}: {e}"
+            rep.row({"speed": 1, "step": 2, "memory": 3, "alloc": 4, "estim": 5, "sim": 6}[name],
+                    f"{name}: FAILED", "n/a", "", errors[name][:80], "", False)
+    dur = time.monotonic() - t0
+    invoked = "make bench" if os.environ.get("MAKELEVEL") else cmdline([sys.executable, *sys.argv])
+    print(f"== make bench: {mach['cpu']}, {mach['cores']} cores, load {mach['load_avg_1m']}, "
+          f"{mach['date_utc']} UTC; {args.repeats} runs per timed figure (median [min, max])")
+    rep.print()
+    print(f"\n== commands (from the repository root; build/bench/ holds the harnesses, `make bench-tools` builds them)")
+    for k, v in rep.commands.items():
+        print(f"   {k}: {v}")
+    print(f"== {len(rep.rows)} figures in {dur:.0f} s; written to {rel(args.out)}")
+    doc = {"command": invoked, "argv": sys.argv[1:], "machine": mach, "repeats": args.repeats,
+           "quick": args.quick, "duration_s": round(dur, 1), "rows": rep.rows, "items": rep.data,
+           "commands": rep.commands, "errors": errors}
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(args.out).with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(doc, indent=1, default=str) + "\n")
+    tmp.replace(args.out)
+    return 1 if errors else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

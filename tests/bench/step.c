@@ -1,0 +1,286 @@
+/*
+ * step.c - cost of octo-fw's 90 Hz step without I/O, for `make bench` (tests/bench/bench.py).
+ *
+ * Links the real app (every firmware/app C file: modes, guidance, control, allocation, throttle map,
+ * experiment hook, log record) and the core with a stub HAL (no sockets, no LCM, no clock:
+ * hal_wall_us advances 1/90 s per frame). A small synthetic plant closes the loop well enough
+ * to fly the app's own mode logic: the height follows the app's setpoint, the attitude wobbles
+ * by a few tenths of a degree, the measured rotor thrusts are the commanded throttles through
+ * a 30 ms lag times the paper's k_f with 1 % noise. Sequence:
+ *   boot (disarmed frames) -> arm -> take-off to 10 m -> HOLD (measured: N_HOLD steps)
+ *   -> MAV_CMD_USER_1 experiment 1 if the build has it (measured: up to N_EXP steps)
+ *   -> the allocator alone on the app's mixer: the last hover demand (unsaturated), N_ALLOC
+ *      seeded demands (many saturating), then again the one that needed the most allocator
+ *      steps (its worst case).
+ * One measured call = app_on_frame() (or mixer_update()) between bench_mark_begin/end
+ * (tests/arm/bench_mark.h): on Cortex-M the QEMU plugin prints one count per call; on the
+ * host, valgrind's callgrind counts the inclusive cost of the wrappers below (bench.py
+ * reads the call counts and costs of bench_hold_step, bench_exp_step, bench_alloc_hover,
+ * bench_alloc_call and bench_alloc_worst from callgrind's output).
+ *
+ * Prints (semihosting stdout on ARM): "step: KEY VALUE" lines (mode reached, steps measured,
+ * allocator steps of the worst demand, etc.). Argument-free; sizes below, or -DBENCH_QUICK.
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "app.h"
+#include "bench_mark.h"
+#include "hal.h"
+
+#ifdef BENCH_QUICK
+#define N_HOLD 20
+#define N_EXP 20
+#define N_ALLOC 20
+#else
+#define N_HOLD 300
+#define N_EXP 1800
+#define N_ALLOC 300
+#endif
+
+#define RATE_HZ 90.0
+#define KF_TRUE 28.0269f
+#define KTAU_TRUE 0.3869f
+
+/* ---------------------------------------------------------------- stub HAL */
+static uint64_t wall_us = 1000000u;
+static float thr_out[HAL_ROTORS];
+static uint32_t n_actuate;
+static size_t mav_bytes;
+
+uint64_t hal_wall_us(void) { return wall_us; }
+void hal_actuate(const float thr[HAL_ROTORS])
+{
+	memcpy(thr_out, thr, sizeof thr_out);
+	n_actuate++;
+}
+void hal_link_stats(struct hal_link_stats *out) { memset(out, 0, sizeof *out); }
+bool hal_signing_key(uint8_t key[32])
+{
+	(void)key;
+	return false;
+}
+uint64_t hal_unix_us(void) { return wall_us; }
+void hal_mav_send(const uint8_t *buf, size_t len)
+{
+	(void)buf;
+	mav_bytes += len;
+}
+int hal_param_store(const char *text, size_t len)
+{
+	(void)text;
+	(void)len;
+	return 0;
+}
+long hal_param_fetch(char *buf, size_t cap)
+{
+	(void)buf;
+	(void)cap;
+	return -1;
+}
+void hal_log_frame(const struct app_log_frame *f) { (void)f; }
+void hal_log_event(double t_s, int severity, const char *text)
+{
+	(void)t_s;
+	(void)severity;
+	(void)text;
+}
+void hal_report(const char *fmt, ...) { (void)fmt; }
+
+/* ---------------------------------------------------------------- synthetic plant */
+static struct app A;   /* global: the compiler cannot see through it across the markers */
+static struct hal_sensor_frame F;
+static float s_rotor[HAL_ROTORS];
+static uint32_t rng = 12345u;
+static uint32_t n_frame;
+
+static float urand(void)   /* [-1, 1) */
+{
+	rng ^= rng << 13;
+	rng ^= rng >> 17;
+	rng ^= rng << 5;
+	return (float)(rng >> 8) * (2.0f / 16777216.0f) - 1.0f;
+}
+
+static void next_frame(void)
+{
+	n_frame++;
+	wall_us += 11111u;
+	double t = (double)n_frame / RATE_HZ;
+	float tf = (float)t;
+	F.t_s = t;
+	F.seq = n_frame;
+	F.valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
+	/* attitude: roll/pitch wobble of 0.3 deg, heading 0 */
+	float roll = 0.3f * 0.01745f * sinf(2.0f * 3.14159f * 0.7f * tf);
+	float pitch = 0.3f * 0.01745f * cosf(2.0f * 3.14159f * 0.45f * tf);
+	float cr = cosf(0.5f * roll), sr = sinf(0.5f * roll), cp = cosf(0.5f * pitch), sp = sinf(0.5f * pitch);
+	F.q_ib[0] = cr * cp;
+	F.q_ib[1] = sr * cp;
+	F.q_ib[2] = cr * sp;
+	F.q_ib[3] = -sr * sp;
+	F.rate_b_rps[0] = 0.3f * 0.01745f * 2.0f * 3.14159f * 0.7f * cosf(2.0f * 3.14159f * 0.7f * tf) + 0.005f * urand();
+	F.rate_b_rps[1] = -0.3f * 0.01745f * 2.0f * 3.14159f * 0.45f * sinf(2.0f * 3.14159f * 0.45f * tf) + 0.005f * urand();
+	F.rate_b_rps[2] = 0.005f * urand();
+	/* height follows the app's setpoint; horizontal position within a few cm */
+	bool flying = A.mode != APP_DISARMED && A.mode != APP_IDLE;
+	F.pos_i_m[0] = 0.02f * sinf(0.3f * tf);
+	F.pos_i_m[1] = 0.02f * cosf(0.2f * tf);
+	F.pos_i_m[2] = flying ? A.z_sp + 0.01f * sinf(1.3f * tf) : 0.0f;
+	F.vel_i_mps[0] = 0.006f * cosf(0.3f * tf);
+	F.vel_i_mps[1] = -0.004f * sinf(0.2f * tf);
+	F.vel_i_mps[2] = flying ? A.vz_ff + 0.013f * cosf(1.3f * tf) : 0.0f;
+	/* rotors: the last throttles through a 30 ms lag, k_f, 1 % noise */
+	float alpha = 1.0f - expf(-(float)(1.0 / RATE_HZ) / 0.03f);
+	float sigma = 0.01f * 2.132f * 9.796f / 8.0f;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		s_rotor[j] += alpha * (thr_out[j] - s_rotor[j]);
+		F.rotor_thrust_n[j] = KF_TRUE * s_rotor[j] + sigma * 1.732f * urand();
+		F.rotor_torque_nm[j] = (j % 2 ? -KTAU_TRUE : KTAU_TRUE) * s_rotor[j];
+	}
+}
+
+/* ---------------------------------------------------------------- measured calls */
+/* a distinct store in each wrapper, so that the compiler does not merge them (ICF) */
+static volatile int bench_phase;
+
+__attribute__((noinline)) static void bench_hold_step(void)
+{
+	bench_phase = 1;
+	bench_mark_begin();
+	app_on_frame(&A, &F);
+	bench_mark_end();
+}
+
+__attribute__((noinline)) static void bench_exp_step(void)
+{
+	bench_phase = 2;
+	bench_mark_begin();
+	app_on_frame(&A, &F);
+	bench_mark_end();
+}
+
+static scalar_t demand[MIXER_N_AXES];
+static struct mixer_output mix_out;
+
+__attribute__((noinline)) static void bench_alloc_call(void)
+{
+	bench_phase = 3;
+	bench_mark_begin();
+	mixer_update(&A.mix, demand, &mix_out);
+	bench_mark_end();
+}
+
+__attribute__((noinline)) static void bench_alloc_hover(void)
+{
+	bench_phase = 5;
+	bench_mark_begin();
+	mixer_update(&A.mix, demand, &mix_out);
+	bench_mark_end();
+}
+
+__attribute__((noinline)) static void bench_alloc_worst(void)
+{
+	bench_phase = 4;
+	bench_mark_begin();
+	mixer_update(&A.mix, demand, &mix_out);
+	bench_mark_end();
+}
+
+static void frame_unmeasured(void)
+{
+	next_frame();
+	app_on_frame(&A, &F);
+	app_tick(&A);
+}
+
+/* seeded demands around the app's hover: thrust 0..1.6 hover x 8 at random, torques up to
+ * about twice what the box allows (k is the app's yaw moment arm) */
+static void alloc_demand(uint32_t i, scalar_t d[MIXER_N_AXES])
+{
+	uint32_t saved = rng;
+	rng = 0x9E3779B9u * (i + 1u);
+	float kf = A.p.veh_kf, l = A.p.veh_arm_l, k = A.p.veh_ktau / A.p.veh_kf;
+	float hover = A.p.veh_mass * A.p.veh_grav;
+	float fmax = 8.0f * kf * A.p.mot_thr_max;
+	float f = hover * (1.0f + 0.8f * urand());
+	if (i % 4 == 3)
+		f = fmax * (0.5f + 0.5f * urand());   /* some near the top of the box */
+	d[0] = sc_from_float(f);
+	d[1] = sc_from_float(urand() * 0.6f * f * l);
+	d[2] = sc_from_float(urand() * 0.6f * f * l);
+	d[3] = sc_from_float(urand() * 0.6f * f * k);
+	rng = saved;
+}
+
+int main(void)
+{
+	char why[96];
+	app_init(&A);
+	for (int i = 0; i < 20; i++)
+		frame_unmeasured();
+	int r = app_cmd_arm(&A, true, false, why, sizeof why);
+	printf("step: arm %d\n", r);
+	for (int i = 0; i < 10; i++)
+		frame_unmeasured();
+	r = app_cmd_takeoff(&A, 10.0f, why, sizeof why);
+	printf("step: takeoff %d\n", r);
+	int n = 0;
+	while (A.mode != APP_HOLD && n++ < 90 * 60)
+		frame_unmeasured();
+	for (int i = 0; i < 90; i++)   /* settle a second in HOLD */
+		frame_unmeasured();
+	printf("step: mode %s after %d frames\n", app_mode_name(A.mode), n);
+
+	int hold = 0;
+	for (; hold < N_HOLD && A.mode == APP_HOLD; hold++) {
+		next_frame();
+		bench_hold_step();
+		app_tick(&A);
+	}
+	printf("step: hold_steps %d\n", hold);
+
+	int exp = 0;
+	if (exp_available(1)) {
+		r = app_cmd_experiment(&A, 1.0f, why, sizeof why);
+		printf("step: experiment_1 %d %s\n", r, r ? why : "");
+		for (; exp < N_EXP && A.mode == APP_EXPERIMENT; exp++) {
+			next_frame();
+			bench_exp_step();
+			app_tick(&A);
+		}
+		printf("step: experiment_mode_after %s\n", app_mode_name(A.mode));
+	} else {
+		printf("step: experiment_1 unavailable\n");
+	}
+	printf("step: exp_steps %d\n", exp);
+
+	/* the allocator alone: the last hover demand of the app (unsaturated), a seeded set of
+	 * demands, then the one that needed the most allocator steps again */
+	for (int i = 0; i < MIXER_N_AXES; i++)
+		demand[i] = sc_from_float(A.wrench_dem[i]);
+	bench_alloc_hover();
+	printf("step: alloc_hover_steps %u limits %u\n", (unsigned)mix_out.steps, (unsigned)mix_out.limits);
+	unsigned worst_i = 0, worst_steps = 0, n_sat = 0;
+	for (uint32_t i = 0; i < N_ALLOC; i++) {
+		alloc_demand(i, demand);
+		bench_alloc_call();
+		if (mix_out.limits)
+			n_sat++;
+		if (mix_out.steps > worst_steps) {
+			worst_steps = mix_out.steps;
+			worst_i = i;
+		}
+	}
+	alloc_demand(worst_i, demand);
+	bench_alloc_worst();
+	printf("step: alloc_calls %d saturated %u\n", N_ALLOC, n_sat);
+	printf("step: alloc_worst_steps %u demand %u\n", (unsigned)mix_out.steps, worst_i);
+	printf("step: alloc_step_bound %d\n",
+	       2 * MIXER_ALPHA_ITERS + (A.mix.n_active - 4) + MIXER_QP_ITERS);
+	printf("step: mix_mode %d\n", (int)A.mix.p.mode);
+	printf("step: done\n");
+	return 0;
+}
