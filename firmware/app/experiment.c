@@ -1,43 +1,422 @@
 /*
- * experiment.c - identification experiments (placeholder until issue 6).
- *
- * No experiment is built yet: exp_available() is false for every id and
- * exp_start() answers MAV_RESULT_UNSUPPORTED with a reason. Issue 6 replaces
- * this file (same contract, experiment.h).
+ * experiment.c - in-flight identification experiments (issue 6); contract and design in
+ * experiment.h, estimators in firmware/core/ident.h.
  */
 #include "experiment.h"
 
+#include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
 #include <common/mavlink.h>
 
+enum phase_kind {
+	PK_NONE = 0,
+	PK_VAL_PRE,    /* validation before rotor identification (ID_VAL_*_PRE) */
+	PK_ROTOR,      /* k_f, k_tau */
+	PK_VAL_POST,   /* validation after it (ID_VAL_*_POST) */
+	PK_INR_X,
+	PK_INR_Y,
+	PK_INR_Z,
+	PK_VAL,        /* experiment 2 alone: PRE or POST by ID_RESULT bit 1 */
+};
+
+static const char *phase_name(int k)
+{
+	switch (k) {
+	case PK_VAL_PRE:
+	case PK_VAL_POST:
+	case PK_VAL:
+		return "validation";
+	case PK_ROTOR:
+		return "rotor coefficients";
+	case PK_INR_X:
+		return "inertia Ixx";
+	case PK_INR_Y:
+		return "inertia Iyy";
+	case PK_INR_Z:
+		return "inertia Izz";
+	}
+	return "?";
+}
+
+#define SETTLE_S 1.0f         /* no excitation, filters run, before each phase's excitation */
+#define HEIGHT_ABORT_M 1.5f   /* |z - z at start| beyond this aborts */
+#define INR_WC_RPS 12.0f      /* state-variable filter of the inertia regression */
+#define INR_ZETA 0.7f
+#define PRBS_ORDER 9u
+
+static const char *const est_names[EXP_MAX_EST] = {
+	"KF", "KTAU", "KF_PLAIN", "KTAU_PLAIN", "IXX", "IYY", "IZZ", "VAL_NE",
+};
+
+/* ---------------------------------------------------------------- helpers */
+
+static float prm(const struct app_params *p, const char *name, float def)
+{
+	int i = params_find(name, strlen(name));
+	if (i < 0)
+		return def;
+	float v = params_get(p, (size_t)i);
+	return isfinite(v) ? v : def;
+}
+
+static uint32_t prm_u(const struct app_params *p, const char *name, float def, uint32_t lo, uint32_t hi)
+{
+	float v = prm(p, name, def);
+	if (!(v >= (float)lo))
+		return lo;
+	if (v > (float)hi)
+		return hi;
+	return (uint32_t)(v + 0.5f);
+}
+
+static void say(struct experiment *e, int sev, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void say(struct experiment *e, int sev, const char *fmt, ...)
+{
+	if (e->q_n >= EXP_QUEUE)
+		return;
+	int slot = (e->q_head + e->q_n) % EXP_QUEUE;
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(e->queue[slot], sizeof e->queue[slot], fmt, ap);
+	va_end(ap);
+	e->queue_sev[slot] = sev;
+	e->q_n++;
+}
+
+/* one queued line into the app's pending slot when it is free (the app sends it) */
+static void pump_messages(struct experiment *e)
+{
+	if (e->msg[0] || !e->q_n)
+		return;
+	memcpy(e->msg, e->queue[e->q_head], sizeof e->msg);
+	e->msg_severity = e->queue_sev[e->q_head];
+	e->q_head = (e->q_head + 1) % EXP_QUEUE;
+	e->q_n--;
+}
+
+static void result(struct experiment *e, const char *name, float value)
+{
+	int idx = params_find(name, strlen(name));
+	if (idx < 0 || e->n_results >= EXP_MAX_RESULTS)
+		return;
+	e->results[e->n_results].param_index = idx;
+	e->results[e->n_results].value = value;
+	e->n_results++;
+}
+
+static uint32_t result_mask(const struct app_params *p)
+{
+	float v = prm(p, "ID_RESULT", 0.0f);
+	return v >= 0.0f && v < 256.0f ? (uint32_t)v : 0u;
+}
+
+static void set_result_bit(struct experiment *e, const struct app_params *p, uint32_t bit, bool on)
+{
+	/* the pending value, if any, is the latest */
+	uint32_t m = result_mask(p);
+	int idx = params_find("ID_RESULT", 9);
+	for (int i = 0; i < e->n_results; i++)
+		if (e->results[i].param_index == idx)
+			m = (uint32_t)e->results[i].value;
+	m = on ? (m | bit) : (m & ~bit);
+	result(e, "ID_RESULT", (float)m);
+}
+
+/* ---------------------------------------------------------------- contract */
+
 bool exp_available(int id)
 {
-	(void)id;
+	return id >= 1 && id <= 6;
+}
+
+bool exp_param_readonly(const char *name)
+{
+	static const char *const ro[] = {
+		"ID_KF_EST", "ID_KF_SD", "ID_KF_PLAIN", "ID_KTAU_EST", "ID_KTAU_SD", "ID_KTAU_PLAIN",
+		"ID_IXX_EST", "ID_IXX_SD", "ID_IYY_EST", "ID_IYY_SD", "ID_IZZ_EST", "ID_IZZ_SD",
+		"ID_VAL_NE_PRE", "ID_VAL_FIT_PRE", "ID_VAL_NE_POST", "ID_VAL_FIT_POST", "ID_RESULT",
+	};
+	for (size_t i = 0; i < sizeof ro / sizeof ro[0]; i++)
+		if (!strcmp(name, ro[i]))
+			return true;
 	return false;
 }
 
 int exp_start(struct experiment *e, int id, const struct app_params *p, char *why, size_t cap)
 {
-	(void)p;
 	memset(e, 0, sizeof *e);
-	snprintf(why, cap, "Experiment %d not available in this build", id);
-	return MAV_RESULT_UNSUPPORTED;
-}
-
-enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
-{
-	(void)in;
-	(void)out;
-	return e->state;
+	if (!exp_available(id)) {
+		snprintf(why, cap, "Experiment %d unknown (1..6)", id);
+		return MAV_RESULT_DENIED;
+	}
+	float amp = prm(p, "ID_EXC_AMP", 0.04f), t_exc = prm(p, "ID_EXC_TIME", 10.0f);
+	if (!(amp > 0.0f) || !(t_exc > 0.0f)) {
+		snprintf(why, cap, "Experiment %d refused: ID_EXC_AMP/ID_EXC_TIME not > 0", id);
+		return MAV_RESULT_DENIED;
+	}
+	switch (id) {
+	case 1:
+		e->phase_kind[e->n_phases++] = PK_ROTOR;
+		break;
+	case 2:
+		e->phase_kind[e->n_phases++] = PK_VAL;
+		break;
+	case 3:
+	case 4:
+	case 5:
+		e->phase_kind[e->n_phases++] = PK_INR_X + (id - 3);
+		break;
+	case 6: {
+		static const int seq[] = {PK_VAL_PRE, PK_ROTOR, PK_VAL_POST, PK_INR_X, PK_INR_Y, PK_INR_Z};
+		for (int i = 0; i < 6; i++)
+			e->phase_kind[e->n_phases++] = seq[i];
+		break;
+	}
+	}
+	e->id = id;
+	e->phase = 0;
+	e->n_est = EXP_MAX_EST;
+	for (int i = 0; i < EXP_MAX_EST; i++)
+		snprintf(e->est_name[i], sizeof e->est_name[i], "%s", est_names[i]);
+	return MAV_RESULT_ACCEPTED;
 }
 
 void exp_abort(struct experiment *e, const char *reason)
 {
 	if (e->state == EXP_RUNNING) {
 		e->state = EXP_ABORTED;
-		snprintf(e->msg, sizeof e->msg, "Experiment %d aborted: %s", e->id, reason);
+		e->n_results = 0;
+		e->q_n = 0;
+		e->est_live = 0;
+		snprintf(e->msg, sizeof e->msg, "ID aborted: %s", reason);
 		e->msg_severity = MAV_SEVERITY_WARNING;
 	}
+}
+
+/* ---------------------------------------------------------------- phases */
+
+static void phase_begin(struct experiment *e, const struct exp_input *in)
+{
+	const struct app_params *p = in->params;
+	int k = e->phase_kind[e->phase];
+	e->t_phase = 0.0f;
+	e->t_settle = SETTLE_S;
+	e->est_live = 0;
+	say(e, MAV_SEVERITY_INFO, "ID %d/%d: %s", e->phase + 1, e->n_phases, phase_name(k));
+
+	struct excite_params xp = excite_params_default();
+	xp.seed = prm_u(p, "ID_SEED", 1.0f, 0u, 1000000u) * 8u + (uint32_t)e->phase;
+	xp.clock_div = prm_u(p, "ID_EXC_DIV", 9.0f, 1u, 1000u);
+	xp.prbs_order = PRBS_ORDER;
+	scalar_t dt = sc_from_float(e->dt_nom);
+
+	if (k == PK_ROTOR) {
+		e->t_run = prm(p, "ID_EXC_TIME", 10.0f);
+		uint32_t kind = prm_u(p, "ID_EXC_KIND", 1.0f, 0u, 2u);
+		xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
+		xp.amplitude = sc_from_float(prm(p, "ID_EXC_AMP", 0.04f));
+		/* multisine: 8 harmonics of 0.5 Hz (0.5 .. 4 Hz at 90 Hz) */
+		xp.ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
+		struct ident_rotor_cfg c = {
+			.dt_s = dt,
+			.mot_tau_s = sc_from_float(prm(p, "ID_MOT_TAU", 0.03f)),
+			.delay_frames = prm_u(p, "ID_DELAY_FR", 0.0f, 0u, FILT_DELAY_MAX),
+			.curve = sc_from_float(p->mot_curve),
+			.thr0 = sc_from_float(in->thr_prev[0]),
+			.kf0 = p->veh_kf,
+			.ktau0 = p->veh_ktau,
+			.p0 = 1e6f,
+		};
+		ident_rotor_init(&e->rot, &c);
+		e->est_live = 0x0Fu;
+	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
+		unsigned ax = (unsigned)(k - PK_INR_X);
+		e->t_run = prm(p, "ID_INR_TIME", 10.0f);
+		float amp = prm(p, "ID_INR_AMP", 0.25f);
+		xp.kind = EXCITE_PRBS;
+		xp.amplitude = sc_from_float(ax == 2u ? amp / 3.0f : amp);
+		const struct hal_sensor_frame *f = in->frame;
+		scalar_t fm[8], tm[8], tau[3], w[3], inertia[3] = {
+			sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz)};
+		for (int j = 0; j < 8; j++) {
+			fm[j] = sc_from_float(f->rotor_thrust_n[j]);
+			tm[j] = sc_from_float(f->rotor_torque_nm[j]);
+		}
+		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
+		for (int i = 0; i < 3; i++)
+			w[i] = sc_from_float(f->rate_b_rps[i]);
+		ident_inertia_init(&e->inr, ax, SC(INR_WC_RPS), SC(INR_ZETA), dt, inertia, w, tau);
+		e->est_live = 1u << (4u + ax);
+	} else {
+		e->t_run = prm(p, "ID_VAL_TIME", 5.0f);
+		/* mu_1: the paper's uniform random signal, on the yaw torque demand (yaw moves
+		 * single rotor thrusts most for the least attitude change) */
+		xp.kind = EXCITE_UNIFORM;
+		xp.amplitude = sc_from_float(prm(p, "ID_INR_AMP", 0.25f) / 3.0f);
+		filt_delay_init(&e->val_delay, prm_u(p, "ID_DELAY_FR", 0.0f, 0u, FILT_DELAY_MAX),
+				sc_from_float(in->rotor_f_cmd[0]));
+		filt_lag_init(&e->val_lag, sc_from_float(prm(p, "ID_MOT_TAU", 0.03f)), dt,
+			      sc_from_float(in->rotor_f_cmd[0]));
+		ident_fit_init(&e->fit);
+		e->est_live = 1u << 7;
+	}
+	excite_init(&e->exc, &xp);
+}
+
+static void phase_end(struct experiment *e, const struct exp_input *in)
+{
+	const struct app_params *p = in->params;
+	int k = e->phase_kind[e->phase];
+	float rsd = prm(p, "ID_RSD_MAX", 0.02f);
+	if (k == PK_ROTOR) {
+		float kf = ident_rotor_est(&e->rot, 0), kf_sd = ident_rotor_sd(&e->rot, 0);
+		float kt = ident_rotor_est(&e->rot, 1), kt_sd = ident_rotor_sd(&e->rot, 1);
+		float kfp = ident_rotor_plain(&e->rot, 0), ktp = ident_rotor_plain(&e->rot, 1);
+		enum ident_verdict vf = ident_accept(kf, kf_sd, p->veh_kf, rsd);
+		enum ident_verdict vt = ident_accept(kt, kt_sd, p->veh_ktau, rsd);
+		bool ok = vf == IDENT_ACCEPT && vt == IDENT_ACCEPT;
+		result(e, "ID_KF_EST", isfinite(kf) ? kf : 0.0f);
+		result(e, "ID_KF_SD", isfinite(kf_sd) ? kf_sd : 0.0f);
+		result(e, "ID_KF_PLAIN", isfinite(kfp) ? kfp : 0.0f);
+		result(e, "ID_KTAU_EST", isfinite(kt) ? kt : 0.0f);
+		result(e, "ID_KTAU_SD", isfinite(kt_sd) ? kt_sd : 0.0f);
+		result(e, "ID_KTAU_PLAIN", isfinite(ktp) ? ktp : 0.0f);
+		if (ok) {
+			result(e, "VEH_KF", kf);
+			result(e, "VEH_KTAU", kt);
+		}
+		set_result_bit(e, p, 1u, ok);
+		const char *why_f = ok ? "accepted" : (vf != IDENT_ACCEPT ? ident_verdict_text(vf) : "ktau rejected");
+		const char *why_t = ok ? "accepted" : (vt != IDENT_ACCEPT ? ident_verdict_text(vt) : "kf rejected");
+		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID kf %.3f +/- %.3f N %s%s", (double)kf,
+		    (double)kf_sd, ok ? "" : "rejected: ", why_f);
+		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID ktau %.4f +/- %.4f N m %s%s",
+		    (double)kt, (double)kt_sd, ok ? "" : "rejected: ", why_t);
+		say(e, MAV_SEVERITY_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
+	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
+		unsigned ax = (unsigned)(k - PK_INR_X);
+		static const char *const nm[3] = {"Ixx", "Iyy", "Izz"};
+		static const char *const pe[3] = {"ID_IXX_EST", "ID_IYY_EST", "ID_IZZ_EST"};
+		static const char *const ps[3] = {"ID_IXX_SD", "ID_IYY_SD", "ID_IZZ_SD"};
+		static const char *const pv[3] = {"VEH_IXX", "VEH_IYY", "VEH_IZZ"};
+		float nominal[3] = {p->veh_ixx, p->veh_iyy, p->veh_izz};
+		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
+		enum ident_verdict v = ident_accept(est, sd, nominal[ax], rsd);
+		bool ok = v == IDENT_ACCEPT;
+		result(e, pe[ax], isfinite(est) ? est : 0.0f);
+		result(e, ps[ax], isfinite(sd) ? sd : 0.0f);
+		if (ok)
+			result(e, pv[ax], est);
+		set_result_bit(e, p, 2u << ax, ok);
+		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID %s %.5f +/- %.5f kg m^2 %s%s", nm[ax],
+		    (double)est, (double)sd, ok ? "" : "rejected: ", ident_verdict_text(v));
+	} else {
+		bool post = k == PK_VAL_POST || (k == PK_VAL && (result_mask(p) & 1u));
+		float ne = ident_fit_ne(&e->fit), fit = ident_fit_pct(&e->fit);
+		result(e, post ? "ID_VAL_NE_POST" : "ID_VAL_NE_PRE", ne);
+		result(e, post ? "ID_VAL_FIT_POST" : "ID_VAL_FIT_PRE", fit);
+		say(e, MAV_SEVERITY_INFO, "ID validation %s: NE %.4f fit %.1f %%", post ? "after" : "before",
+		    (double)ne, (double)fit);
+	}
+	e->est_live = 0;
+}
+
+static void phase_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
+{
+	const struct app_params *p = in->params;
+	const struct hal_sensor_frame *f = in->frame;
+	int k = e->phase_kind[e->phase];
+	bool running = e->t_phase >= e->t_settle;
+	bool good_dt = in->dt_s > 0.5f * e->dt_nom && in->dt_s < 1.5f * e->dt_nom;
+	bool use = running && good_dt;
+
+	if (k == PK_ROTOR) {
+		ident_rotor_update(&e->rot, sc_from_float(in->thr_prev[0]), sc_from_float(f->rotor_thrust_n[0]),
+				   sc_from_float(f->rotor_torque_nm[0]), use);
+		float d = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
+		out->thr_delta[0] = d;
+		if (prm(p, "ID_EXC_NULL", 1.0f) >= 0.5f) {
+			/* rotors 1, 5 up and 3, 7 down: [1 0 -1 0 1 0 -1 0] is in the null space of
+			 * Gamma_o (thrust, roll, pitch and yaw all cancel), so the vehicle stays still
+			 * whatever k_f and k_tau are */
+			out->thr_delta[2] = -d;
+			out->thr_delta[4] = d;
+			out->thr_delta[6] = -d;
+		}
+		e->est[0] = ident_rotor_est(&e->rot, 0);
+		e->est_sd[0] = ident_rotor_sd(&e->rot, 0);
+		e->est[1] = ident_rotor_est(&e->rot, 1);
+		e->est_sd[1] = ident_rotor_sd(&e->rot, 1);
+		e->est[2] = ident_rotor_plain(&e->rot, 0);
+		e->est_sd[2] = ident_rotor_plain_sd(&e->rot, 0);
+		e->est[3] = ident_rotor_plain(&e->rot, 1);
+		e->est_sd[3] = ident_rotor_plain_sd(&e->rot, 1);
+	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
+		unsigned ax = (unsigned)(k - PK_INR_X);
+		scalar_t fm[8], tm[8], tau[3], w[3];
+		for (int j = 0; j < 8; j++) {
+			fm[j] = sc_from_float(f->rotor_thrust_n[j]);
+			tm[j] = sc_from_float(f->rotor_torque_nm[j]);
+		}
+		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
+		for (int i = 0; i < 3; i++)
+			w[i] = sc_from_float(f->rate_b_rps[i]);
+		ident_inertia_update(&e->inr, tau, w, use);
+		out->tau_delta[ax] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
+		e->est[4 + ax] = ident_inertia_est(&e->inr);
+		e->est_sd[4 + ax] = ident_inertia_sd(&e->inr);
+	} else {
+		/* the model's prediction of rotor 1's thrust: the allocation behind the throttle
+		 * sent on the previous frame, through the modelled delay and lag */
+		scalar_t y_hat = filt_lag_update(&e->val_lag, filt_delay_update(&e->val_delay,
+									  sc_from_float(in->rotor_f_cmd[0])));
+		if (use)
+			ident_fit_add(&e->fit, sc_from_float(f->rotor_thrust_n[0]), y_hat);
+		out->tau_delta[2] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
+		e->est[7] = ident_fit_ne(&e->fit);
+		e->est_sd[7] = ident_fit_pct(&e->fit);
+	}
+}
+
+enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
+{
+	if (e->state != EXP_RUNNING)
+		return e->state;
+	const struct hal_sensor_frame *f = in->frame;
+	if (!e->started) {
+		e->started = true;
+		e->dt_nom = in->dt_s > 0.001f && in->dt_s < 0.1f ? in->dt_s : 1.0f / 90.0f;
+		e->z0 = f->pos_i_m[2];
+		phase_begin(e, in);
+	}
+	if (fabsf(f->pos_i_m[2] - e->z0) > HEIGHT_ABORT_M) {
+		exp_abort(e, "height limit");
+		return e->state;
+	}
+	if (!e->reporting) {
+		phase_step(e, in, out);
+		e->t_phase += in->dt_s;
+		float total = e->t_settle + e->t_run;
+		e->progress = ((float)e->phase + fminf(e->t_phase / total, 1.0f)) / (float)e->n_phases;
+		if (e->t_phase >= total) {
+			phase_end(e, in);
+			e->phase++;
+			if (e->phase >= e->n_phases) {
+				e->phase = e->n_phases - 1;
+				e->progress = 1.0f;
+				e->reporting = true;
+				say(e, MAV_SEVERITY_INFO, "ID done");
+			} else {
+				phase_begin(e, in);
+			}
+		}
+	}
+	pump_messages(e);
+	/* finished once every line has gone out (the app sends e->msg on its tick) */
+	if (e->reporting && !e->q_n && !e->msg[0])
+		e->state = EXP_FINISHED;
+	return e->state;
 }

@@ -28,11 +28,16 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "excite.h"
+#include "filt.h"
 #include "hal.h"
+#include "ident.h"
 #include "params.h"
 
 #define EXP_MAX_EST 8
-#define EXP_MAX_RESULTS 8
+#define EXP_MAX_RESULTS 24
+#define EXP_MAX_PHASES 6
+#define EXP_QUEUE 8
 #define EXP_TILT_ABORT_DEG 15.0f
 
 enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
@@ -69,7 +74,23 @@ struct experiment {
 	int msg_severity;                      /* MAV_SEVERITY */
 	int n_results;
 	struct exp_result results[EXP_MAX_RESULTS];
-	/* implementation state of issue 6 goes here */
+	uint32_t est_live;                     /* bit i: est[i] is being estimated (streamed) */
+
+	/* implementation state (experiment.c) */
+	int n_phases, phase_kind[EXP_MAX_PHASES];
+	float t_phase;                         /* time in the current phase, s */
+	float t_settle, t_run;                 /* of the current phase */
+	bool started, reporting;
+	float dt_nom, z0;
+	struct excite exc;
+	struct ident_rotor rot;
+	struct ident_inertia inr;
+	struct ident_fit fit;
+	struct filt_delay val_delay;
+	struct filt_lag val_lag;
+	char queue[EXP_QUEUE][51];
+	int queue_sev[EXP_QUEUE];
+	int q_head, q_n;
 };
 
 /* Is experiment `id` (1..6) built into this firmware? */
@@ -84,5 +105,8 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 
 /* Stops a running experiment (reason for the log/STATUSTEXT); results dropped. */
 void exp_abort(struct experiment *e, const char *reason);
+
+/* Is parameter `name` a result the firmware writes (a PARAM_SET is refused)? */
+bool exp_param_readonly(const char *name);
 
 #endif /* OCTO_EXPERIMENT_H */

@@ -128,6 +128,8 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	c.p0 = 1e4f;
 	c.theta0[0][0] = sc_to_float(inertia[i]);
 	rls_init(&e->rls, &c);
+	float wdt = sc_to_float(wc_rps) * sc_to_float(dt_s), z4 = 4.0f * sc_to_float(zeta);
+	e->sd_scale = wdt > 0.0f && wdt < z4 ? sqrtf(z4 / wdt) : 1.0f;
 	e->n = 0;
 }
 
@@ -147,7 +149,7 @@ void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], cons
 
 float ident_inertia_est(const struct ident_inertia *e) { return rls_estimate_f(&e->rls, 0, 0); }
 
-float ident_inertia_sd(const struct ident_inertia *e) { return rls_std(&e->rls, 0, 0); }
+float ident_inertia_sd(const struct ident_inertia *e) { return e->sd_scale * rls_std(&e->rls, 0, 0); }
 
 /* ---------------------------------------------------------------- validation */
 

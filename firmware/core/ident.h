@@ -101,10 +101,16 @@ struct ident_inertia {
 	scalar_t coupling;              /* I_k - I_j of the gyroscopic term */
 	struct filt_svf svf_tau, svf_w, svf_ww;
 	struct rls rls;
+	float sd_scale;                 /* coloured-residual correction of the RLS std */
 	uint32_t n;
 };
 
-/* wc, zeta: the SVF; inertia[3]: current values (the two others enter the gyroscopic term;
+/* The std: the RLS std assumes white residuals, but the SVF colours the (white) torque
+ * noise; with a regressor slow compared with wc the estimate's variance is that of the
+ * unfiltered noise, whose power is 4 zeta / (wc dt) times the filtered one. So
+ * ident_inertia_sd = rls_std * sqrt(4 zeta / (wc dt)) (checked by Monte Carlo in
+ * tests/core/test_ident.c and against the spread over simulated flights).
+ * wc, zeta: the SVF; inertia[3]: current values (the two others enter the gyroscopic term;
  * the axis' own is the initial estimate). */
 void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps, scalar_t zeta,
 			scalar_t dt_s, const scalar_t inertia[3], const scalar_t w0[3],

@@ -273,7 +273,50 @@ UNIT_TEST(ident_body_torque_matches_gamma)
 }
 
 /* inertia: a rigid body under a lagged, PRBS-like torque about one axis with a slow spin about
- * the others (gyroscopic coupling), gyro noise 0.005 rad/s, torque noise: within 1 % */
+ * the others (gyroscopic coupling), gyro noise 0.005 rad/s, torque noise as the sim's */
+static void inertia_run(struct unit_rng *g, const double I[3], unsigned ax, double amp, double *est,
+			double *sd)
+{
+	double w[3] = {0, 0, 0}, ang[3] = {0, 0, 0}, tau_lag[3] = {0, 0, 0};
+	scalar_t i_now[3] = {SC(0.05), SC(0.05), SC(0.05)}, z3[3] = {SC(0), SC(0), SC(0)};
+	struct ident_inertia e;
+	ident_inertia_init(&e, ax, ax == 2 ? SC(WCZ) : SC(WCXY), SC(0.7), s(DT), i_now, z3, z3);
+	double a = exp(-DT / 0.03);
+	struct dither d = {0, amp, 9, 0};
+	for (int k = 0; k < 900; k++) {
+		/* measurement at this frame */
+		scalar_t tm[3], wm[3];
+		for (int i = 0; i < 3; i++) {
+			tm[i] = s(tau_lag[i] + (i == 2 ? 0.001 : 0.018) * unit_rand_normal(g));
+			wm[i] = s(w[i] + 0.005 * unit_rand_normal(g));
+		}
+		ident_inertia_update(&e, tm, wm, true);
+		/* command: excitation + a PD hold on every axis + a small bias on the others */
+		double cmd[3];
+		for (int i = 0; i < 3; i++) {
+			double wn = i == 2 ? 3.5 : 7.0;
+			cmd[i] = -0.05 * (wn * wn * ang[i] + 2 * wn * w[i]) + ((unsigned)i == ax ? 0 : 0.002);
+		}
+		cmd[ax] += dither_next(&d, g);
+		/* integrate one frame in 10 substeps; torque lags the command */
+		for (int sub = 0; sub < 10; sub++) {
+			double h = DT / 10, as = pow(a, 0.1);
+			double dw[3];
+			for (int i = 0; i < 3; i++)
+				tau_lag[i] = as * tau_lag[i] + (1 - as) * cmd[i];
+			dw[0] = (tau_lag[0] - (I[2] - I[1]) * w[1] * w[2]) / I[0];
+			dw[1] = (tau_lag[1] - (I[0] - I[2]) * w[2] * w[0]) / I[1];
+			dw[2] = (tau_lag[2] - (I[1] - I[0]) * w[0] * w[1]) / I[2];
+			for (int i = 0; i < 3; i++) {
+				w[i] += h * dw[i];
+				ang[i] += h * w[i];
+			}
+		}
+	}
+	*est = ident_inertia_est(&e);
+	*sd = ident_inertia_sd(&e);
+}
+
 UNIT_TEST(ident_inertia_random_truth)
 {
 	struct unit_rng g = {0x1e27ULL};
@@ -281,52 +324,40 @@ UNIT_TEST(ident_inertia_random_truth)
 		double I[3] = {0.0628 * unit_rand_uniform(&g, 0.7, 1.3), 0.0762 * unit_rand_uniform(&g, 0.7, 1.3),
 			       0.1014 * unit_rand_uniform(&g, 0.7, 1.3)};
 		unsigned ax = (unsigned)(v % 3);
-		double w[3] = {0, 0, 0}, ang[3] = {0, 0, 0}, tau_lag[3] = {0, 0, 0};
-		scalar_t i_now[3] = {SC(0.05), SC(0.05), SC(0.05)}, z3[3] = {SC(0), SC(0), SC(0)};
-		struct ident_inertia e;
-		ident_inertia_init(&e, ax, ax == 2 ? SC(WCZ) : SC(WCXY), SC(0.7), s(DT), i_now, z3, z3);
-		double amp = ax == 2 ? AMPZ : 0.2, a = exp(-DT / 0.03);
-		struct dither d = {0, amp, 9, 0};
-		for (int k = 0; k < 900; k++) {
-			/* measurement at this frame */
-			scalar_t tm[3], wm[3];
-			for (int i = 0; i < 3; i++) {
-				tm[i] = s(tau_lag[i] + (i == 2 ? 0.001 : 0.018) * unit_rand_normal(&g));
-				wm[i] = s(w[i] + 0.005 * unit_rand_normal(&g));
-			}
-			ident_inertia_update(&e, tm, wm, true);
-			/* command: excitation + a PD hold on every axis + a small bias on the others */
-			double cmd[3];
-			for (int i = 0; i < 3; i++) {
-				double wn = i == 2 ? 3.5 : 7.0;
-				cmd[i] = -0.05 * (wn * wn * ang[i] + 2 * wn * w[i]) + ((unsigned)i == ax ? 0 : 0.002);
-			}
-			cmd[ax] += dither_next(&d, &g);
-			/* integrate one frame in 10 substeps; torque lags the command */
-			for (int sub = 0; sub < 10; sub++) {
-				double h = DT / 10, as = pow(a, 0.1);
-				double dw[3];
-				for (int i = 0; i < 3; i++)
-					tau_lag[i] = as * tau_lag[i] + (1 - as) * cmd[i];
-				dw[0] = (tau_lag[0] - (I[2] - I[1]) * w[1] * w[2]) / I[0];
-				dw[1] = (tau_lag[1] - (I[0] - I[2]) * w[2] * w[0]) / I[1];
-				dw[2] = (tau_lag[2] - (I[1] - I[0]) * w[0] * w[1]) / I[2];
-				for (int i = 0; i < 3; i++) {
-					w[i] += h * dw[i];
-					ang[i] += h * w[i];
-				}
-			}
-		}
-		double est = ident_inertia_est(&e), sd = ident_inertia_sd(&e);
+		double est, sd;
+		inertia_run(&g, I, ax, ax == 2 ? AMPZ : 0.25, &est, &sd);
 #ifdef TEST_VERBOSE
 		printf("  axis %u I %.4f est %+.3f %% sd %.3f %%\n", ax, I[ax], 100 * (est / I[ax] - 1),
 		       100 * sd / I[ax]);
 #endif
-		/* residual bias: the trapezoidal SVF against the lagged torque's curvature
-		 * within a frame (~0.5 % here) */
+		/* torque noise 0.018 N m against 0.25 N m of excitation: std ~0.3 % */
 		CHECK_REL(est, I[ax], OCTO_FIXED ? 0.03 : 0.015);
 		CHECK(sd > 0 && sd < 0.01 * I[ax]);
 	}
+}
+
+/* the reported std (RLS std x the coloured-noise factor) against the Monte Carlo spread */
+UNIT_TEST(ident_inertia_std_monte_carlo)
+{
+	enum { RUNS = MC_RUNS / 8 > 8 ? MC_RUNS / 8 : 8 };
+	struct unit_rng g = {0x51dULL};
+	const double I[3] = {0.0628, 0.0762, 0.1014};
+	double sum = 0, sum2 = 0, sdp = 0;
+	for (int r = 0; r < RUNS; r++) {
+		double est, sd;
+		inertia_run(&g, I, 0, 0.25, &est, &sd);
+		sum += est;
+		sum2 += est * est;
+		sdp += sd * sd;
+	}
+	double mean = sum / RUNS, var = (sum2 / RUNS - mean * mean) * RUNS / (RUNS - 1);
+	double ratio = sqrt(var / (sdp / RUNS));
+#ifdef TEST_VERBOSE
+	printf("  inertia MC %d runs: bias %+.3f %%, std %.3f %%, std/predicted %.2f\n", RUNS,
+	       100 * (mean / I[0] - 1), 100 * sqrt(var) / I[0], ratio);
+#endif
+	CHECK(ratio > 0.5 && ratio < 1.6);
+	CHECK(fabs(mean / I[0] - 1) < 0.005);
 }
 
 UNIT_TEST(ident_fit_statistics)

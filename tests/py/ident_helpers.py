@@ -1,0 +1,117 @@
+"""Helpers of the identification tests (issue 6), no tests: fly octo-sim + octo-fw in
+lockstep, run MAV_CMD_USER_1 experiments, read the results from parameters, STATUSTEXT and
+both LCM logs.
+
+    fl = IdentFlight(launch, port, tmp_path, vehicle={...}, seed=3)
+    fl.takeoff()
+    res = fl.experiment(1)          # waits for the final "ID done" / "ID aborted"
+    fl.finish()                     # stops both, reads the logs (fl.truth, fl.frames)
+"""
+
+import json
+import math
+import time
+
+from test_fw_rig import Rig, mavlink, read_log, tilt_deg
+
+PAPER = dict(mass=2.132, kf=28.0269, ktau=0.3869, inertia=[0.0628, 0.0762, 0.1014])
+TAKEOFF_M = 5.0
+MAV_CMD_USER_1 = 31010
+
+
+def random_vehicle(rng):
+    """Truth within +/-30 % of the paper's values (mass kept: it is a known parameter)."""
+    return dict(kf=PAPER["kf"] * rng.uniform(0.7, 1.3), ktau=PAPER["ktau"] * rng.uniform(0.7, 1.3),
+                inertia=[i * rng.uniform(0.7, 1.3) for i in PAPER["inertia"]])
+
+
+class IdentFlight:
+    def __init__(self, launch, port, tmp_path, vehicle=None, seed=1, ideal=False, params=None,
+                 duration=200.0):
+        self.rig = Rig(launch, port, tmp_path)
+        self.tmp = tmp_path
+        self.vehicle = vehicle
+        sim_args = ["--duration", duration, "--seed", seed]
+        if vehicle is not None:
+            vf = tmp_path / "vehicle.json"
+            vf.write_text(json.dumps(vehicle))
+            sim_args += ["--vehicle", vf]
+        if ideal:
+            sim_args.append("--ideal")
+        if params:
+            self.rig.params.write_text("".join(f"{k} {v}\n" for k, v in params.items()))
+        self.rig.start(sim_args=sim_args)
+        self.texts_seen = 0
+
+    def takeoff(self, height=TAKEOFF_M, timeout=60.0):
+        rig = self.rig
+        rig.arm_when_ready()
+        r, texts = rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, height)
+        assert r == mavlink.MAV_RESULT_ACCEPTED, texts
+        self.wait_text(lambda t: t == "Mode HOLD", timeout)
+        time.sleep(0.3)   # settle (lockstep: many simulated seconds)
+
+    def wait_text(self, pred, timeout):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            for t in self.rig.texts[self.texts_seen:]:
+                self.texts_seen += 1
+                if pred(t):
+                    return t
+            self.rig.recv({"STATUSTEXT"}, timeout=0.2)
+        raise AssertionError(f"timed out; texts: {self.rig.texts[-20:]}\nfw: {self.rig.fw.stderr()[-2000:]}")
+
+    def experiment(self, exp_id, timeout=120.0):
+        """Starts experiment exp_id; returns (ack result, texts of the experiment)."""
+        start = len(self.rig.texts)
+        deadline = time.monotonic() + 10
+        while True:
+            r, _ = self.rig.cmd(MAV_CMD_USER_1, exp_id)
+            if r in (mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_IN_PROGRESS):
+                break
+            assert time.monotonic() < deadline, f"experiment {exp_id} refused: {r} {self.rig.texts[-5:]}"
+            time.sleep(0.2)
+        self.texts_seen = start
+        self.wait_text(lambda t: t == "ID done" or t.startswith("ID aborted"), timeout)
+        self.rig.recv(set(), timeout=0.3)
+        return self.rig.texts[start:]
+
+    def param(self, name):
+        m = self.rig.param_get(name)
+        assert m is not None, f"no {name}"
+        return m.param_value
+
+    def finish(self):
+        self.rig.sim.stop()
+        self.rig.fw.stop()
+        self.truth = read_log(self.rig.truth_log, "OCTO_TRUTH")
+        self.frames = read_log(self.rig.fw_log, "OCTO_FW_FRAME")
+        self.events = read_log(self.rig.fw_log, "OCTO_FW_EVENT")
+
+
+def exp_window(frames, exp_id):
+    """Frames of the flight log while experiment exp_id ran (stepped frames)."""
+    return [f for f in frames if f.stepped and f.exp_id == exp_id]
+
+
+def plain_closed_form(frames, truth, kf_true):
+    """The notes' closed form of the plain estimator's bias, evaluated on the flight:
+    d = T_1 - mean(T_1) (commands while excited), d_lag = s_1 - mean(s_1) with s_1 what rotor 1's
+    thrust saw at the same frame (truth thrust / k_f)."""
+    by_t = {round(s.t, 4): s for s in truth}
+    T, S = [], []
+    for f in frames:
+        s = by_t.get(round(f.t, 4))
+        if s is None:
+            continue
+        T.append(f.throttle[0])
+        S.append(s.thrust[0] / kf_true)
+    n = len(T)
+    mt, ms = sum(T) / n, sum(S) / n
+    ed2 = sum((t - mt) ** 2 for t in T) / n
+    eddl = sum((t - mt) * (s - ms) for t, s in zip(T, S)) / n
+    return -(ed2 - eddl) / (mt * mt + ed2), n
+
+
+__all__ = ["IdentFlight", "PAPER", "random_vehicle", "exp_window", "plain_closed_form", "tilt_deg",
+           "mavlink", "math"]
