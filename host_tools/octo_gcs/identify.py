@@ -107,82 +107,104 @@ class Live:
 def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_timeout=10.0):
     """Runs one experiment on a hovering vehicle (link.Vehicle `v`); returns Live.
 
-    progress: a progress.Progress. sim_time(): the vehicle's simulated time if the
-    caller knows it (e.g. from the log it asked for), else None (wall time is shown).
-    Raises GcsError if the vehicle refuses, aborts or goes silent."""
+    progress: a progress.Progress (one line per phase when not a terminal).
+    sim_time(): the vehicle's simulated time if the caller knows it (e.g. from the log
+    it asked for); otherwise the wall time since the start is shown.
+    Raises GcsError if the vehicle refuses, aborts, fails or goes silent."""
     live = Live()
     cmd = mavlink.MAV_CMD_USER_1
-    final = {}
+    name = EXPERIMENTS[experiment]
+    state = {"started": False, "final": None, "ack": None}
+    t_wall0 = [time.monotonic()]
+
+    def show():
+        if sim_time is not None:
+            ts = sim_time()
+            tlabel = f"t={ts:7.2f} s" if ts is not None else ""
+        else:
+            tlabel = f"wall {time.monotonic() - t_wall0[0]:5.1f} s"
+        ph = f"{live.phase_k}/{live.phase_n} {live.phase}" if live.phase else name
+        pct = f" {live.progress:3d}%" if live.progress is not None else ""
+        progress.update(f"ID {ph}{pct}  {tlabel}  {live_estimates(v)}".rstrip(),
+                        key=(live.phase_k, live.phase))
 
     def listen(msg):
         t = msg.get_type()
         if t == "STATUSTEXT":
+            if not msg.text.startswith("ID"):
+                return
             live.on_text(msg.text)
-            if msg.text.startswith("ID") and not PHASE_RE.match(msg.text):
+            if PHASE_RE.match(msg.text):
+                show()
+            else:
                 progress.say("  " + msg.text)
-        elif t == "COMMAND_ACK" and msg.command == cmd and "started" in final:
-            if msg.result == mavlink.MAV_RESULT_IN_PROGRESS:
+        elif t == "COMMAND_ACK" and msg.command == cmd:
+            if not state["started"]:
+                state["ack"] = msg
+            elif msg.result == mavlink.MAV_RESULT_IN_PROGRESS:
                 live.progress = msg.progress
             else:
-                final["result"] = msg.result
+                state["final"] = msg.result
 
-    name = EXPERIMENTS[experiment]
-    # start it: the vehicle may still be settling after a take-off (DENIED: not hovering)
-    deadline = time.monotonic() + start_timeout
-    while True:
-        t_cmd = time.time()
-        r = v.command(cmd, experiment, timeout=2.0)
-        if r in (mavlink.MAV_RESULT_IN_PROGRESS, mavlink.MAV_RESULT_ACCEPTED):
-            break
-        v.recv(types=(), timeout=0.02)
-        why = v._last_text(since=t_cmd)
-        if r in (mavlink.MAV_RESULT_DENIED, mavlink.MAV_RESULT_TEMPORARILY_REJECTED) \
-                and "hover" in why and time.monotonic() < deadline:
-            v.recv(types=(), timeout=0.2)
-            continue
-        raise GcsError(f"experiment {experiment} ({name}) refused: {result_name(r)}"
-                       + (f": {why}" if why else ""))
-    final["started"] = True
-    t_wall0 = time.monotonic()
-    t_sim0 = sim_time() if sim_time else None
     v.listeners.append(listen)
-    key = None
     try:
-        # texts that arrived with the start ACK
-        for _, _, text in [s for s in v.statustexts if s[0] >= t_cmd]:
-            live.on_text(text)
+        # start it; a vehicle still settling after take-off answers DENIED "not hovering"
+        deadline = time.monotonic() + start_timeout
+        confirmation = 0
         while True:
-            if live.done is not None:
+            t_cmd = time.time()
+            state["ack"] = None
+            v.conn.mav.command_long_send(v.target_system, v.target_component, cmd, confirmation,
+                                         experiment, 0, 0, 0, 0, 0, 0)
+            ack = v.recv("COMMAND_ACK", 1.5, cond=lambda a: a.command == cmd)
+            if ack is None:
+                confirmation += 1
+                if confirmation >= 3:
+                    raise GcsError(f"no answer to experiment {experiment} ({name}) after 3 tries")
+                continue
+            r = ack.result
+            if r in (mavlink.MAV_RESULT_IN_PROGRESS, mavlink.MAV_RESULT_ACCEPTED):
+                if r == mavlink.MAV_RESULT_IN_PROGRESS:
+                    live.progress = ack.progress
                 break
-            if "result" in final:
-                live.done = "done" if final["result"] == mavlink.MAV_RESULT_ACCEPTED else \
-                    f"failed ({result_name(final['result'])})"
+            v.recv(types=(), timeout=0.05)   # the reason follows the ACK
+            why = v._last_text(since=t_cmd)
+            if r in (mavlink.MAV_RESULT_DENIED, mavlink.MAV_RESULT_TEMPORARILY_REJECTED) \
+                    and "hover" in why and time.monotonic() < deadline:
+                v.recv(types=(), timeout=0.2)
+                continue
+            raise GcsError(f"experiment {experiment} ({name}) refused: {result_name(r)}"
+                           + (f": {why}" if why else ""))
+        state["started"] = True
+        t_wall0[0] = time.monotonic()
+        show()
+        while live.done is None:
+            if state["final"] is not None:
+                # the final ACK: wait briefly for the closing texts, then decide
+                v.recv(types=(), timeout=0.1)
+                if live.done is None:
+                    live.done = "done" if state["final"] == mavlink.MAV_RESULT_ACCEPTED else \
+                        f"failed ({result_name(state['final'])})"
                 break
             if v.mode is not None and v.mode != MODE_NUMBERS["EXPERIMENT"] \
-                    and time.monotonic() - t_wall0 > 1.0:
-                # back in hold (or worse) without the final texts: the mode says it ended
+                    and time.monotonic() - t_wall0[0] > 2.0:
+                # the vehicle left the experiment mode without the closing messages
                 v.recv(types=(), timeout=0.3)
-                if live.done is None and "result" not in final:
+                if live.done is None and state["final"] is None:
                     live.done = "done" if v.mode == MODE_NUMBERS["HOLD"] else \
-                        f"ended in mode {v.mode}"
+                        f"ended in mode {MODES.get(v.mode, v.mode)}"
                 continue
-            if time.monotonic() - t_wall0 > timeout:
+            if time.monotonic() - t_wall0[0] > timeout:
                 raise GcsError(f"experiment {experiment} ({name}) still running after {timeout:g} s")
             v.recv(types=(), timeout=0.1)
-            if sim_time is not None and t_sim0 is not None:
-                ts = sim_time()
-                tlabel = f"t={ts:7.2f} s" if ts is not None else ""
-            else:
-                tlabel = f"wall {time.monotonic() - t_wall0:6.1f} s"
-            ph = f"{live.phase_k}/{live.phase_n} {live.phase}" if live.phase else name
-            pct = f" {live.progress:3d}%" if live.progress is not None else ""
-            key = (live.phase_k, live.phase)
-            progress.update(f"ID {ph}{pct}  {tlabel}  {live_estimates(v)}", key=key)
+            show()
+        v.recv(types=(), timeout=0.05)   # trailing result texts
+        est = live_estimates(v)
+        progress.say(f"  {live.done} after {time.monotonic() - t_wall0[0]:.1f} s wall"
+                     + (f"; last live estimates: {est}" if est else ""))
     finally:
         v.listeners.remove(listen)
         progress.done()
-    # the last result texts may trail the final ACK
-    v.recv(types=(), timeout=0.1)
     if live.done != "done":
         raise GcsError(f"experiment {experiment} ({name}) {live.done}")
     return live
