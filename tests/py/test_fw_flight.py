@@ -13,7 +13,7 @@ TAKEOFF_M = 10.0
 HOLD_S = 30.0
 
 
-def fly_and_hold(rig, sim_args=(), duration=60.0):
+def fly_and_hold(rig, sim_args=(), duration=100.0):
     rig.start(sim_args=["--duration", duration, *sim_args])
     rig.arm_when_ready()
     r, texts = rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, TAKEOFF_M)
