@@ -4,7 +4,8 @@
 #                     stdout (each figure: median of repeated runs with min and max, beside its
 #                     reference and target, with the command that produced it) and
 #                     build/bench.json. Takes about two minutes.
-#   make bench-tools  only the harnesses (tests/py/test_bench_smoke.py runs them tiny)
+#   make bench-tools  only the harnesses (the host ones are part of `make`;
+#                     tests/py/test_bench_smoke.py runs them tiny)
 #   BENCH_ARGS="--repeats 3 --only speed,step"  passed to bench.py (see bench.py --help)
 #
 # Harnesses (build/bench/):
@@ -57,6 +58,8 @@ $(BENCH_B)/bench-step-quick: tests/bench/step.c $(BENCH_APP_SRC) tests/arm/bench
 
 BENCH_HOST := $(BENCH_B)/pingpong $(BENCH_B)/bench-physics $(BENCH_B)/bench-alloc \
               $(BENCH_B)/bench-estim $(BENCH_B)/bench-step $(BENCH_B)/bench-step-quick
+# built by `make` too (host only, a few seconds): tests/py/test_bench_smoke.py runs them
+ALL_TARGETS += $(BENCH_HOST)
 
 # ---- Cortex-M (only when the cross toolchain and QEMU are installed; else the table says so)
 BENCH_ARM_OK := $(shell command -v $(ARM_CC) >/dev/null 2>&1 && command -v $(ARM_QEMU) >/dev/null 2>&1 && echo 1)

@@ -55,7 +55,7 @@ PATTERNS = {"dref": (8, 509), "data25": (1, 41)}   # datagrams back per frame, b
 
 def rel(p):
     try:
-        return str(Path(p).resolve().relative_to(REPO))
+        return str(Path(os.path.abspath(p)).relative_to(REPO))
     except ValueError:
         return str(p)
 
@@ -101,6 +101,16 @@ class Report:
     def row(self, item, figure, value, spread="", ref="", target="", ok=None, cmd=None):
         self.rows.append({"item": item, "figure": figure, "value": value, "spread": spread,
                           "reference": ref, "target": target, "ok": ok, "command": cmd})
+
+    def markdown(self):
+        esc = lambda x: str(x).replace("|", "\\|")
+        out = ["| # | figure | value | [min .. max] | reference (same run) | target | |",
+               "|---|---|--:|---|---|---|---|"]
+        for r in self.rows:
+            out.append("| " + " | ".join(esc(x) for x in (
+                r["item"], r["figure"].strip(), r["value"], r["spread"], r["reference"], r["target"],
+                {True: "ok", False: "**miss**", None: ""}[r["ok"]])) + " |")
+        return "\n".join(out) + "\n"
 
     def print(self, out=sys.stdout):
         head = ("#", "figure", "value", "[min, max]", "reference (same run)", "target", "")
@@ -631,7 +641,8 @@ def main():
     print(f"\n== commands (from the repository root; build/bench/ holds the harnesses, `make bench-tools` builds them)")
     for k, v in rep.commands.items():
         print(f"   {k}: {v}")
-    print(f"== {len(rep.rows)} figures in {dur:.0f} s; written to {rel(args.out)}")
+    print(f"== {len(rep.rows)} figures in {dur:.0f} s; written to {rel(args.out)} "
+          f"(and the table as markdown: {rel(Path(args.out).with_suffix('.md'))})")
     doc = {"command": invoked, "argv": sys.argv[1:], "machine": mach, "repeats": args.repeats,
            "quick": args.quick, "duration_s": round(dur, 1), "rows": rep.rows, "items": rep.data,
            "commands": rep.commands, "errors": errors}
@@ -639,6 +650,10 @@ def main():
     tmp = Path(args.out).with_suffix(".json.tmp")
     tmp.write_text(json.dumps(doc, indent=1, default=str) + "\n")
     tmp.replace(args.out)
+    md = Path(args.out).with_suffix(".md")
+    md.write_text(f"`{invoked}` on {mach['cpu']}, {mach['cores']} cores (load {mach['load_avg_1m']}), "
+                  f"{mach['date_utc']} UTC, {dur:.0f} s; timed figures: median of {args.repeats} runs "
+                  f"[min .. max].\n\n" + rep.markdown())
     return 1 if errors else 0
 
 
