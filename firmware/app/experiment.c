@@ -191,6 +191,7 @@ void exp_abort(struct experiment *e, const char *reason)
 		e->n_results = 0;
 		e->q_n = 0;
 		e->est_live = 0;
+		e->final_result = MAV_RESULT_FAILED;
 		snprintf(e->msg, sizeof e->msg, "ID aborted: %s", reason);
 		e->msg_severity = MAV_SEVERITY_WARNING;
 	}
@@ -416,7 +417,9 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 	}
 	pump_messages(e);
 	/* finished once every line has gone out (the app sends e->msg on its tick) */
-	if (e->reporting && !e->q_n && !e->msg[0])
+	if (e->reporting && !e->q_n && !e->msg[0]) {
 		e->state = EXP_FINISHED;
+		e->final_result = MAV_RESULT_ACCEPTED;
+	}
 	return e->state;
 }

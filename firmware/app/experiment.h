@@ -11,15 +11,70 @@
  *
  * The experiment reports through its struct: phase, progress, up to 8 live
  * estimates with names and standard deviations (streamed as NAMED_VALUE_FLOAT
- * and logged every frame), a pending status line (STATUSTEXT), and when it
- * finishes, parameter results that the app applies (at the next frame
- * boundary), broadcasts as PARAM_VALUE and saves to the parameter file.
+ * and logged every frame), a pending status line (STATUSTEXT), and parameter
+ * results that the app applies (at the next frame boundary), broadcasts as
+ * PARAM_VALUE and saves to the parameter file.
  *
  * Returning EXP_ABORTED (reason in msg) puts the vehicle back in hold; the app
  * also aborts the experiment itself (exp_abort) when the attitude leaves
  * EXP_TILT_ABORT_DEG or the X-Plane link drops.
  *
- * This file is the contract; experiment.c holds the implementations (issue 6).
+ * This file is the contract; experiment.c holds the implementations (issue 6),
+ * firmware/core/ident.h the estimators.
+ *
+ * ---------------------------------------------------------------- the experiments
+ * MAV_CMD_USER_1 param1: 1 rotor coefficients, 2 validation, 3 Ixx, 4 Iyy, 5 Izz,
+ * 6 the sequence validation -> rotor -> validation -> Ixx -> Iyy -> Izz. Every phase
+ * starts with 1 s without excitation (filters settle), then excites:
+ *   rotor      ID_EXC_TIME s of dither d (ID_EXC_KIND: 0 uniform, 1 PRBS (default,
+ *              order 9), 2 multisine 0.5..4 Hz; amplitude ID_EXC_AMP 0.04, a new value
+ *              every ID_EXC_DIV = 9 frames: 10 Hz) added after the throttle map to
+ *              rotors 1 and 5 (+d) and 3 and 7 (-d): [1 0 -1 0 1 0 -1 0] is in the null
+ *              space of Gamma_o (thrust, roll, pitch AND yaw cancel, whatever k_f and
+ *              k_tau are), so the vehicle stays still (ID_EXC_NULL 0: rotor 1 only, the
+ *              paper's, left to the attitude loop). Lag-aware RLS on rotor 1's measured
+ *              f_1 and tau_1 (rows 35/36, magnitudes: rotor 1 is odd, +): regressor =
+ *              the throttle sent on the previous frame (the loop's one frame) delayed by
+ *              ID_DELAY_FR more frames and lagged by ID_MOT_TAU (a PARAMETER, 0.03 s;
+ *              not estimated), through the thrust curve MOT_CURVE. The paper's plain
+ *              estimator (eq. 18-20) runs alongside (ident.h).
+ *   validation ID_VAL_TIME s of mu_1: uniform random (+/- ID_INR_AMP / 3 N m, new every
+ *              ID_EXC_DIV frames) added to the YAW torque demand (yaw moves single rotor
+ *              thrusts most, ~+/-0.7 N on rotor 1, and tilts nothing). Compared: measured
+ *              f_1 against the model's prediction of it: the thrust the mixer allocated
+ *              to rotor 1 for the throttle that can act (previous frame), through the
+ *              modelled delay and lag. NE = RMS(y - y_hat) / RMS(y), fit % =
+ *              100 (1 - |y - y_hat| / |y - mean y|). Results go to ID_VAL_*_PRE before
+ *              rotor identification, ID_VAL_*_POST after (experiment 2 alone: POST when
+ *              ID_RESULT bit 1 is set).
+ *   inertia    ID_INR_TIME s of PRBS torque +/- ID_INR_AMP N m (0.25; yaw a third)
+ *              about one axis; torque from the measured rotor thrusts through Gamma_o
+ *              (arm VEH_ARM_L) and, for yaw, from the measured rotor torques; torque,
+ *              rate and the gyroscopic product through one SVF (wc 12 rad/s, zeta 0.7);
+ *              RLS (ident.h).
+ * Acceptance (ident_accept): finite, within [0.25, 4] x the current VEH_* value,
+ * relative std < ID_RSD_MAX (0.02); then VEH_* and ID_RESULT bits are among the
+ * results; otherwise a STATUSTEXT says why and VEH_* stay. The experiment aborts
+ * itself ("height limit") if the height leaves +/-1.5 m of its start.
+ *
+ * ---------------------------------------------------------------- live estimates
+ * est[i] / est_sd[i] (also the LCM log's est[8] / est_sd[8]), fixed order:
+ *   0 KF, 1 KTAU (lag-aware), 2 KF_PLAIN, 3 KTAU_PLAIN (paper, eq. 20), 4 IXX, 5 IYY,
+ *   6 IZZ, 7 VAL_NE (est_sd[7] holds the running fit %, not a std).
+ * est_name[i] is the NAMED_VALUE_FLOAT name; est_live bit i says which are being
+ * estimated in the current phase (only those are streamed); a std is streamed as
+ * "<name>_SD" (KF_SD, KTAU_SD, IXX_SD, IYY_SD, IZZ_SD).
+ *
+ * ---------------------------------------------------------------- changes to the
+ * interface of /tmp/octo-ident-interface.md and to this hook (issue 6)
+ *   - results: the app applies e->results[0..n_results) after EVERY exp_step that
+ *     returns with n_results > 0 (not only at the end: sequence 6 validates with the new
+ *     k_f) and then sets n_results = 0; EXP_MAX_RESULTS 24.
+ *   - added: est_live, final_result (MAV_RESULT of the final COMMAND_ACK: ACCEPTED when
+ *     finished, FAILED when aborted), exp_param_readonly() (result parameters refuse a
+ *     PARAM_SET), parameter ID_EXC_NULL (the null-space dither, default 1).
+ *   - the experiment's STATUSTEXT lines are queued and handed out one per frame through
+ *     msg; EXP_FINISHED is returned only when all have gone ("ID done" last).
  */
 #ifndef OCTO_EXPERIMENT_H
 #define OCTO_EXPERIMENT_H
@@ -75,6 +130,7 @@ struct experiment {
 	int n_results;
 	struct exp_result results[EXP_MAX_RESULTS];
 	uint32_t est_live;                     /* bit i: est[i] is being estimated (streamed) */
+	int final_result;                      /* MAV_RESULT of the final COMMAND_ACK */
 
 	/* implementation state (experiment.c) */
 	int n_phases, phase_kind[EXP_MAX_PHASES];
