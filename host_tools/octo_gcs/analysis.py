@@ -20,6 +20,19 @@ from .model import Model, Params, State
 FRAME_DT = 1.0 / 90.0
 RK4_STEP = 0.002   # the paper's T
 
+# the firmware's defaults for the actuator model its estimators use (experiment.c)
+DEFAULT_MOT_TAU = 0.03
+DEFAULT_DELAY_FR = 0
+
+
+def actuator_model(params):
+    """(motor lag time constant s, transport delay frames) from ID_MOT_TAU, ID_DELAY_FR."""
+    tau = params.get("ID_MOT_TAU")
+    delay = params.get("ID_DELAY_FR")
+    tau = float(tau) if tau is not None and math.isfinite(tau) and tau >= 0 else DEFAULT_MOT_TAU
+    delay = int(round(delay)) if delay is not None and math.isfinite(delay) and delay >= 0 else DEFAULT_DELAY_FR
+    return tau, delay
+
 
 def fit_pct(y, yhat):
     y, yhat = np.asarray(y, float), np.asarray(yhat, float)
@@ -73,12 +86,35 @@ def window(series, t0, t1, stepped=True):
 
 
 # ---------------------------------------------------------------- validation (Fig. 6)
-def validation(logs):
-    """[(label, t, f_cmd, f_meas, ne, fit)] for the validation windows (before, after)."""
+def predicted_thrust(f_cmd, dt, tau, delay):
+    """The firmware's validation model of rotor 1's thrust: the allocation behind the
+    throttle sent on the previous frame, through `delay` frames and a first-order lag
+    (alpha = 1 - exp(-dt / tau), as firmware/core/filt.c)."""
+    f_cmd = np.asarray(f_cmd, float)
+    x = np.concatenate([f_cmd[:1], f_cmd[:-1]])
+    if delay > 0:
+        x = np.concatenate([np.repeat(x[:1], delay), x[:-delay]])
+    if tau <= 0:
+        return x
+    a = 1.0 - math.exp(-dt / tau)
+    y = np.empty_like(x)
+    acc = x[0]
+    for i, v in enumerate(x.tolist()):
+        acc += a * (v - acc)
+        y[i] = acc
+    return y
+
+
+def validation(logs, params=None, settle_s=1.0):
+    """[(label, t, f_cmd, f_meas, f_pred, ne, fit)] for the validation windows (before,
+    after): commanded f_bar_1 (the allocation), measured f_1 (row 35) and the command
+    through the motor model; NE and fit of measured vs predicted after `settle_s` of
+    the phase (the firmware's excitation starts after 1 s of settling)."""
     out = []
     fw = logs.fw
     if fw is None:
         return out
+    tau, delay = actuator_model(params or {})
     wins = phases(logs).get("validation", [])
     labels = ["before identification", "after identification"] + \
         [f"validation {i + 3}" for i in range(max(0, len(wins) - 2))]
@@ -87,7 +123,9 @@ def validation(logs):
         if len(w) < 10:
             continue
         f_cmd, f_meas = w.rotor_f[:, 0], w.rotor_thrust[:, 0]
-        out.append((label, w.t, f_cmd, f_meas, ne(f_meas, f_cmd), fit_pct(f_meas, f_cmd)))
+        f_pred = predicted_thrust(f_cmd, FRAME_DT, tau, delay)
+        m = w.t >= t0 + settle_s
+        out.append((label, w.t, f_cmd, f_meas, f_pred, ne(f_meas[m], f_pred[m]), fit_pct(f_meas[m], f_pred[m])))
     return out
 
 
@@ -140,8 +178,7 @@ def rate_comparison(logs, params):
     """[(axis kind, t, rates_sim (n x 3), rates_model (n x 3), fit per axis [3])] over
     each inertia experiment, with the estimated parameters in `params`."""
     p = model_params(params)
-    tau = float(params.get("ID_MOT_TAU", 0.0) or 0.0)
-    delay = int(round(params.get("ID_DELAY_FR", 0.0) or 0.0))
+    tau, delay = actuator_model(params)
     ph = phases(logs)
     out = []
     for kind in ("ixx", "iyy", "izz"):

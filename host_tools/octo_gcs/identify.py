@@ -213,7 +213,7 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
 def live_estimates(v):
     parts = []
     for name, sd, fmt in LIVE:
-        if name in v.named_values:
+        if name in v.named_values and v.named_values[name][1] != 0.0:   # 0: not estimated yet
             s = fmt.format(v.named_values[name][1])
             if sd in v.named_values:
                 s += " +/- " + fmt.format(v.named_values[sd][1])

@@ -15,7 +15,6 @@ def params_from_logs(logs):
                   "VEH_IZZ": float(fw.inertia[-1, 2]), "VEH_MASS": float(fw.mass[-1])})
     if logs.truth is not None and len(logs.truth):
         p.setdefault("VEH_ARM_L", float(logs.truth.arm_length[-1]))
-    p.setdefault("ID_MOT_TAU", 0.03)
     return p
 
 
@@ -40,7 +39,7 @@ def run(args):
         raise GcsError(f"cannot write {args.out}: {e.strerror}") from None
     from .analysis import rate_comparison, validation
     rep["_rates"] = rate_comparison(logs, params)
-    rep["_validation"] = validation(logs)
+    rep["_validation"] = validation(logs, params)
     names = make_figures(logs, rep, args.out)
     src = ("truth " if logs.truth is not None else "") + ("firmware" if logs.fw is not None else "")
     print(f"{len(names)} figures from the {src.strip().replace(' ', ' and ')} log(s) in {args.out}/: "

@@ -21,15 +21,11 @@ from . import analysis
 
 FIGURES = ("fig5_excitation.png", "fig6_validation.png", "fig7_rates.png", "convergence.png")
 
-# est[] slots in OCTO_FW_FRAME while each experiment runs: (slot, key, label)
-# (firmware/app/experiment.h documents the order; mapped by the experiment's name
-# in the events when the slot order differs between experiments)
-EST_SLOTS = {
-    "rotor": [(0, "kf", "k_f [N]"), (1, "ktau", "k_tau [N m]")],
-    "ixx": [(0, "ixx", "I_x [kg m^2]")],
-    "iyy": [(0, "iyy", "I_y [kg m^2]")],
-    "izz": [(0, "izz", "I_z [kg m^2]")],
-}
+# est[] slots of OCTO_FW_FRAME (firmware/app/experiment.c, the same in every experiment):
+# est[i] and est_sd[i]; slot 7 is the validation's NE (its est_sd: the fit %)
+EST_SLOTS = {"kf": 0, "ktau": 1, "kf_plain": 2, "ktau_plain": 3, "ixx": 4, "iyy": 5, "izz": 6}
+EST_PHASE = {"kf": "rotor", "ktau": "rotor", "kf_plain": "rotor", "ktau_plain": "rotor",
+             "ixx": "ixx", "iyy": "iyy", "izz": "izz"}
 
 
 def _plt():
@@ -60,11 +56,14 @@ def _empty(ax, text):
     ax.set_yticks([])
 
 
-def _mu_field(fw):
-    for name in ("mu", "mu_1", "mu1", "tau_exc", "tau_delta"):
-        if fw.has(name):
-            return name
-    return None
+def excitation_torque(w):
+    """The torque the experiment added to the demand (mu_1 in validation, the inertia
+    excitation): what the allocation delivers minus the hover control's demand."""
+    for name in ("mu", "mu_1", "tau_exc", "tau_delta"):
+        if w.has(name):
+            v = np.asarray(getattr(w, name))
+            return v if v.ndim == 2 else np.column_stack([v, 0 * v, 0 * v])
+    return w.tau_alloc - w.tau_dem
 
 
 def fig5(logs, path, plt):
@@ -77,23 +76,20 @@ def fig5(logs, path, plt):
         w = analysis.window(fw, t0, t1)
         a1.plot(w.t - t0, w.excitation[:, 0], lw=0.6, color="C0")
         a1.set_ylabel("delta_1 (throttle)")
-        a1.set_title(f"delta_1: added to T_1 during the rotor experiment (from t = {t0:.1f} s)")
+        a1.set_title(f"delta_1: added to T_1 in the rotor experiment (t = {t0:.1f} .. {t1:.1f} s)",
+                     fontsize=10)
     else:
         _empty(a1, "no rotor-coefficient experiment in the log")
     val = ph.get("validation", [])
     if fw is not None and val:
         t0, t1 = val[0]
         w = analysis.window(fw, t0, t1)
-        name = _mu_field(fw)
-        if name is not None:
-            mu = np.asarray(getattr(w, name))
-            mu = mu[:, 0] if mu.ndim == 2 else mu
-            a2.plot(w.t - t0, mu, lw=0.6, color="C1")
-            a2.set_ylabel("mu_1 [N m]")
-        else:
-            a2.plot(w.t - t0, w.tau_dem[:, 0], lw=0.6, color="C1")
-            a2.set_ylabel("tau_x demand [N m]\n(includes mu_1)")
-        a2.set_title(f"mu_1: added to the torque demand during validation (from t = {t0:.1f} s)")
+        mu = excitation_torque(w)
+        axis = int(np.argmax(np.abs(mu).max(axis=0))) if len(w) else 2
+        a2.plot(w.t - t0, mu[:, axis], lw=0.6, color="C1")
+        a2.set_ylabel(f"mu_1 [N m] ({'xyz'[axis]} torque)")
+        a2.set_title(f"mu_1: added to the torque demand in the validation (t = {t0:.1f} .. {t1:.1f} s)",
+                     fontsize=10)
     else:
         _empty(a2, "no validation experiment in the log")
     a2.set_xlabel("time in the experiment [s]")
@@ -105,19 +101,20 @@ def fig5(logs, path, plt):
 def fig6(logs, rep, path, plt):
     val = rep.get("_validation") if rep else None
     if val is None:
-        val = analysis.validation(logs)
-    fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharey=True)
-    titles = ["(a) before identification (nominal k_f, k_tau)", "(b) after identification (estimates)"]
+        val = analysis.validation(logs, (rep or {}).get("_params"))
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6.5), sharey=True)
+    titles = ["(a) before identification (nominal k_f, k_tau)", "(b) after identification"]
     for i, ax in enumerate(axes):
         if i < len(val):
-            label, t, f_cmd, f_meas, e, fit = val[i]
-            ax.plot(t - t[0], f_cmd, lw=0.8, label="commanded f_bar_1")
-            ax.plot(t - t[0], f_meas, lw=0.6, alpha=0.8, label="measured f_1")
-            ax.set_title(f"{titles[i]}: NE {e:.3f}, fit {fit:.1f} %")
+            label, t, f_cmd, f_meas, f_pred, e, fit = val[i]
+            ax.plot(t - t[0], f_cmd, lw=0.9, color="C0", label="commanded f_bar_1")
+            ax.plot(t - t[0], f_meas, lw=0.6, color="C1", alpha=0.85, label="measured f_1")
+            ax.plot(t - t[0], f_pred, lw=0.6, color="k", ls=":", label="commanded, through the motor lag")
+            ax.set_title(f"{titles[i]}: NE {e:.3f}, fit {fit:.1f} %", fontsize=10)
             ax.set_ylabel("f_1 [N]")
-            ax.legend(loc="upper right", fontsize=8)
+            ax.legend(loc="upper right", fontsize=7)
         else:
-            ax.set_title(titles[i])
+            ax.set_title(titles[i], fontsize=10)
             _empty(ax, "no validation data in the log")
     axes[-1].set_xlabel("time in the validation [s]")
     fig.suptitle("Fig. 6: commanded vs measured thrust of rotor 1")
@@ -150,18 +147,19 @@ def fig7(logs, rep, path, plt):
 
 
 def convergence_series(logs):
-    """{key: (t, est, sd)} of the live estimates in the firmware log."""
+    """{key: (t, est, sd)} of the live estimates in the firmware log, over the phase
+    that estimates each (kf, ktau and their plain versions; ixx, iyy, izz)."""
     fw = logs.fw
     out = {}
     if fw is None or not fw.has("est"):
         return out
-    for kind, wins in analysis.phases(logs).items():
-        for slot, key, _label in EST_SLOTS.get(kind, []):
-            for t0, t1 in wins[:1]:
-                w = analysis.window(fw, t0, t1)
-                ok = (w.est[:, slot] != 0) & np.isfinite(w.est[:, slot])
-                if np.any(ok):
-                    out[key] = (w.t[ok], w.est[ok, slot], w.est_sd[ok, slot])
+    ph = analysis.phases(logs)
+    for key, slot in EST_SLOTS.items():
+        for t0, t1 in ph.get(EST_PHASE[key], [])[:1]:
+            w = analysis.window(fw, t0, t1)
+            ok = (w.est[:, slot] != 0) & np.isfinite(w.est[:, slot]) & np.isfinite(w.est_sd[:, slot])
+            if np.any(ok):
+                out[key] = (w.t[ok], w.est[ok, slot], w.est_sd[ok, slot])
     return out
 
 
@@ -169,17 +167,23 @@ def convergence(logs, rep, path, plt):
     from .identify import QUANTITIES
     series = convergence_series(logs)
     truth = (rep or {}).get("truth", {})
-    fig, axes = plt.subplots(len(QUANTITIES), 1, figsize=(8, 10))
+    fig, axes = plt.subplots(len(QUANTITIES), 1, figsize=(8, 10.5))
     for ax, q in zip(axes, QUANTITIES):
         if q.key in series:
             t, est, sd = series[q.key]
-            ax.plot(t, est, lw=0.9, color="C0", label="estimate")
+            ax.plot(t, est, lw=0.9, color="C0", label="lag-aware estimate")
             ax.fill_between(t, est - 2 * sd, est + 2 * sd, color="C0", alpha=0.25, lw=0, label="+/- 2 sigma")
+            if q.key + "_plain" in series:
+                tp, ep, _ = series[q.key + "_plain"]
+                ax.plot(tp, ep, lw=0.8, color="C3", ls="-.", label="plain LS (eq. 20)")
             tv = truth.get(q.key)
             if tv is not None:
                 ax.axhline(tv, ls="--", color="k", lw=0.8, label="truth")
-                span = max(abs(tv) * 0.05, float(np.nanmax(np.abs(est[len(est) // 3:] - tv))) * 1.5
-                           if len(est) > 3 else abs(tv) * 0.05)
+                tail = est[len(est) // 3:]
+                span = max(abs(tv) * 0.02, 1.5 * float(np.nanmax(np.abs(tail - tv))) if len(tail) else 0.0,
+                           2.5 * float(np.nanmax(2 * sd[len(sd) // 3:])) if len(sd) > 3 else 0.0)
+                if q.key + "_plain" in series:
+                    span = max(span, 1.2 * abs(float(series[q.key + "_plain"][1][-1]) - tv))
                 ax.set_ylim(tv - span, tv + span)
             ax.legend(loc="upper right", fontsize=7)
         else:

@@ -129,10 +129,10 @@ def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=No
             k in (q.est, q.sd, q.plain) for q in QUANTITIES)},
     }
     if logs is not None:
-        val = analysis.validation(logs)
+        val = analysis.validation(logs, after)
         rep["validation"]["from_log"] = [
             {"window": lab, "t_start": _num(t[0], 3), "t_end": _num(t[-1], 3), "ne": _num(n), "fit_pct": _num(f, 3)}
-            for lab, t, _c, _m, n, f in val]
+            for lab, t, _c, _m, _p, n, f in val]
         rates = analysis.rate_comparison(logs, after)
         rep["model_fit"] = [
             {"experiment": kind, "t_start": _num(t[0], 3), "t_end": _num(t[-1], 3),

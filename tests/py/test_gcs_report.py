@@ -81,7 +81,8 @@ def write_synthetic_logs(d, kf_nominal=20.0):
         f.utime, f.seq, f.t, f.dt, f.stepped, f.mode = int(round(t[k] * 1e6)), k + 1, t[k], 1 / RATE, True, 3
         kf_used = kf_nominal if t[k] < 25 else TRUTH["kf"]
         mu = 0.05 * math.sin(2 * math.pi * 0.8 * t[k]) if (10 <= t[k] < 15 or 25 <= t[k] < 30) else 0.0
-        f.tau_dem = [mu, 0.0, 0.0]
+        f.tau_dem = [0.0, 0.0, 0.0]
+        f.tau_alloc = [0.0, 0.0, mu]      # the experiment's mu_1 rides on the yaw demand
         f_cmd = 2.61 + 8 * mu
         f.rotor_f = [f_cmd] + [2.61] * 7
         f.throttle = [f_cmd / kf_used] + list(thr[k, 1:])
@@ -91,8 +92,9 @@ def write_synthetic_logs(d, kf_nominal=20.0):
         for name, a, b in PHASES:
             if a <= t[k] < b and name != "validation":
                 x = (t[k] - a + 0.1) / (b - a)
-                keys = ("kf", "ktau") if name.startswith("rotor") else (name.lower(),)
-                for slot, key in enumerate(keys):
+                keys = ((0, "kf"), (1, "ktau")) if name.startswith("rotor") else \
+                    (({"Ixx": 4, "Iyy": 5, "Izz": 6}[name], name.lower()),)
+                for slot, key in keys:
                     sd[slot] = TRUTH[key] * 0.01 / math.sqrt(x * 90)
                     est[slot] = TRUTH[key] * (1 + 0.05 * math.exp(-8 * x))
         f.est, f.est_sd = est, sd
