@@ -141,7 +141,8 @@ static void pack_estimates(struct app *a, mavlink_message_t *msg)
 	if (a->mode != APP_EXPERIMENT)
 		return;
 	for (int i = 0; i < a->exp.n_est && i < EXP_MAX_EST; i++)
-		mav_named_float(a, a->exp.est_name[i], a->exp.est[i]);
+		if (a->exp.est_live & (1u << i))
+			mav_named_float(a, a->exp.est_name[i], a->exp.est[i]);
 }
 
 struct mav_stream {

@@ -110,6 +110,10 @@ def test_param_set_accepted_refused_and_unknown(launch, port, tmp_path):
     # an exactly 16-character unknown id (no NUL on the wire) is handled too
     msg, texts = rig.param_set("ABCDEFGHIJKLMNOP", 1.0)
     assert msg is None and any("ABCDEFGHIJKLMNOP" in t for t in texts), texts
+    # identification results are read-only
+    msg, texts = rig.param_set("ID_KF_EST", 5.0)
+    assert msg is not None and msg.param_value == 0.0
+    assert any("ID_KF_EST" in t and "read-only" in t for t in texts), texts
     # a name of exactly 16 characters travels without NUL and is matched whole
     msg, texts = rig.param_set("NAV_TOUCH_DOWN_S", 1.5)
     assert msg is not None and msg.param_id == "NAV_TOUCH_DOWN_S" and msg.param_value == 1.5, texts
