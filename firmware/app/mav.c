@@ -352,8 +352,10 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 				snprintf(why, sizeof why, "Parameter load refused: experiment running");
 			} else {
 				r = app_params_load(a, why, sizeof why);
-				if (r == MAV_RESULT_ACCEPTED)
+				if (r == MAV_RESULT_ACCEPTED) {
 					app_status(a, MAV_SEVERITY_INFO, "Parameters loaded");
+					a->mav.param_next = 0;   /* the ground station's copy is stale */
+				}
 			}
 		} else if (prm[0] == 1.0f) {
 			r = app_params_save(a, why, sizeof why);

@@ -143,6 +143,14 @@ def test_params_persist_across_restart(launch, port, tmp_path):
     rig.param_set("VEH_IXX", 0.07)
     r, _ = rig.cmd(mavlink.MAV_CMD_PREFLIGHT_STORAGE, 0)
     assert r == mavlink.MAV_RESULT_ACCEPTED
+    # the loaded values are streamed to the ground station (its copy was stale)
+    pushed = None
+    end = time.monotonic() + 3
+    while pushed is None and time.monotonic() < end:
+        m = rig.recv({"PARAM_VALUE"}, timeout=0.5)
+        if m is not None and m.param_id == "VEH_IXX":
+            pushed = m
+    assert pushed is not None and math.isclose(pushed.param_value, 0.0628, rel_tol=1e-6)
     assert math.isclose(rig.param_get("VEH_IXX").param_value, 0.0628, rel_tol=1e-6)
 
 
