@@ -569,15 +569,21 @@ static void link_back(struct app *a, float gap_s)
 	}
 }
 
+static void abort_experiment(struct app *a, const char *reason)
+{
+	if (a->mode != APP_EXPERIMENT)
+		return;
+	exp_abort(&a->exp, reason);
+	a->exp.state = EXP_IDLE;
+	memset(&a->exp_out, 0, sizeof a->exp_out);
+	set_mode(a, APP_HOLD);
+}
+
 static void link_lost(struct app *a, const char *what)
 {
 	a->link_ok = false;
 	app_status(a, MAV_SEVERITY_CRITICAL, "X-Plane link lost (%s)", what);
-	if (a->mode == APP_EXPERIMENT) {
-		exp_abort(&a->exp, "X-Plane link lost");
-		a->exp.state = EXP_IDLE;
-		set_mode(a, APP_HOLD);
-	}
+	abort_experiment(a, "X-Plane link lost");
 }
 
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
@@ -598,6 +604,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 			if (a->have_step && gap > (double)a->p.fs_link_to) {
 				/* frames missing in plant time (lockstep bursts, reload) */
 				app_status(a, MAV_SEVERITY_WARNING, "X-Plane frames missing for %.2f s", gap);
+				abort_experiment(a, "X-Plane frames missing");
 				if (gap > (double)a->p.fs_land_after && app_flying(a) && a->mode != APP_LAND) {
 					char why[8];
 					app_cmd_land(a, why, sizeof why);
