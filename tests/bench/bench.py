@@ -479,7 +479,29 @@ def struct_sizes(obj):
     return sizes
 
 
-APP_CORE_STATE = ["att_ctrl", "alt_ctrl", "mixer", "mixer_output", "thrmap"]
+def app_core_state(sizes):
+    """Core structs the app keeps (members `struct NAME x;` or `x[N]` of the structs in
+    firmware/app/app.h and experiment.h whose type is a core struct): {header: [(type, n)]}."""
+    out = {}
+    for h in ("app.h", "experiment.h"):
+        try:
+            text = (REPO / "firmware/app" / h).read_text()
+        except OSError:
+            continue
+        for m in re.finditer(r"^\s+struct (\w+) \w+(?:\[(\d+)\])?;", text, re.M):
+            if m.group(1) in sizes:
+                out.setdefault(h, []).append((m.group(1), int(m.group(2) or 1)))
+    return out
+
+
+def module_sizes(lib):
+    out = subprocess.run(["arm-none-eabi-size", str(lib)], capture_output=True, text=True, check=True).stdout
+    mods = {}
+    for ln in out.splitlines()[1:]:
+        f = ln.split()
+        if len(f) >= 6:
+            mods[f[5]] = int(f[0]) + int(f[1])
+    return mods
 
 
 def item_memory(rep, args):
@@ -499,18 +521,25 @@ def item_memory(rep, args):
                 ct, cd, cb = arm_size(core)
                 linked = {"flash": (ct + cd) - (bt + bd), "ram": (cd + cb) - (bd + bb)}
             sizes = struct_sizes(ARM / v / "structs.o") if (ARM / v / "structs.o").exists() else {}
-            state = sum(sizes.get(s, 0) for s in APP_CORE_STATE)
+            owned = app_core_state(sizes)
+            ctl = sum(sizes[t_] * n for t_, n in owned.get("app.h", []))
+            idn = sum(sizes[t_] * n for t_, n in owned.get("experiment.h", []))
+            mods = module_sizes(lib)
+            big = sorted(mods.items(), key=lambda kv: -kv[1])[:2]
             res[v] = {"text": t, "data": d, "bss": b, "flash": t + d, "ram": d + b, "linked": linked,
-                      "structs": sizes, "app_core_state": state}
-            rep.row(3, f"core on {'Cortex-M4F' if v == 'm4f' else 'Cortex-M0'}: .text/.data/.bss (bytes)",
-                    f"{t}/{d}/{b}", "",
-                    f"flash {fmt((t + d) / 1024, 1)} KB; linked with libgcc/libm {fmt(linked['flash'] / 1024, 1) if linked else 'n/a'} KB",
+                      "modules": mods, "structs": sizes, "app_owned": owned,
+                      "state_control": ctl, "state_identification": idn}
+            cpu = "Cortex-M4F" if v == "m4f" else "Cortex-M0"
+            rep.row(3, f"core on {cpu}: .text/.data/.bss (bytes)", f"{t}/{d}/{b}", "",
+                    f"{fmt((t + d) / 1024, 1)} KB: " + ", ".join(f"{k} {fmt(x / 1024, 1)}" for k, x in big)
+                    + (f"; linked + libgcc/libm {fmt(linked['flash'] / 1024, 1)} KB" if linked else ""),
                     "flash < 24 KB", (t + d) < 24 * 1024,
                     f"arm-none-eabi-size -t build/arm/{v}/libcore.a")
-            rep.row(3, f"  core RAM on {v}: globals + state the app owns (bytes)", f"{d + b} + {state}", "",
-                    f"struct mixer {sizes.get('mixer', '?')}, " + " + ".join(
-                        f"{s} {sizes.get(s, '?')}" for s in APP_CORE_STATE if s != "mixer"),
-                    "RAM < 4 KB", (d + b + state) < 4096, f"arm-none-eabi-nm -S build/arm/{v}/structs.o")
+            rep.row(3, f"  core RAM on {v}: globals + core state in app + in experiment (B)",
+                    f"{d + b} + {ctl} + {idn}", "",
+                    "largest: " + ", ".join(f"{t_} {x}" for t_, x in sorted(
+                        {t_: sizes[t_] * n for h in owned for t_, n in owned[h]}.items(), key=lambda kv: -kv[1])[:3]),
+                    "RAM < 4 KB", (d + b + ctl + idn) < 4096, f"arm-none-eabi-nm -S build/arm/{v}/structs.o")
     rss = rep.data.get("memory_rss") or {}
     for name in ("octo-fw", "octo-sim"):
         s = rss.get(name)
@@ -551,31 +580,56 @@ def chi2_interval(n):
     return q(-1.959964), q(1.959964)
 
 
+def fw_excitation():
+    """octo-fw's experiment 1 excitation defaults (ID_EXC_KIND/AMP/DIV), from --dump-params."""
+    d = {"ID_EXC_KIND": 1.0, "ID_EXC_AMP": 0.04, "ID_EXC_DIV": 9.0}
+    try:
+        out = subprocess.run([str(B / "octo-fw"), "--dump-params"], capture_output=True, text=True, timeout=10)
+        for p in json.loads(out.stdout)["params"]:
+            if p["name"] in d:
+                d[p["name"]] = float(p["default"])
+    except (OSError, ValueError, KeyError, subprocess.SubprocessError):
+        pass
+    return int(d["ID_EXC_KIND"]), d["ID_EXC_AMP"], int(d["ID_EXC_DIV"])
+
+
 def item_estim(rep, args):
-    runs = 200 if args.quick else 2000
-    argv = [BB / "bench-estim", runs, 1]
-    r = json.loads(subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=True).stdout)
-    c = cmdline(argv)
+    runs = 200 if args.quick else 5000
     lo, hi = chi2_interval(runs)
-    r["var_over_crlb_95pct_interval"] = [lo, hi]
-    who = "ident" if r.get("have_ident") else "own"
-    label = "core ident_rotor (lag-aware)" if who == "ident" else "filt.h + rls.h (lag-aware)"
-    for key in ("t5", "t10"):
-        t = r[key]
-        e, o, p = t[who], t["own"], t["plain"]
-        rep.row(5, f"k_f at {t['seconds']:g} s, {label}: bias / std (%)",
-                f"{e['bias_pct']:+.4f} / {e['std_pct']:.4f}", "",
-                f"CRLB std {e['crlb_std_pct']:.4f} %", "|bias| < 0.1 %", abs(e["bias_pct"]) < 0.1, c)
-        rep.row(5, f"  var/CRLB at {t['seconds']:g} s ({runs} runs)", f"{e['var_over_crlb']:.3f}",
-                f"95 % if efficient: [{lo:.2f}, {hi:.2f}]",
-                f"filt+rls here: {o['var_over_crlb']:.3f}" if who == "ident" else "",
-                "[0.85, 1.2]", 0.85 <= e["var_over_crlb"] <= 1.2, c)
-        rep.row(5, f"  paper's plain estimator at {t['seconds']:g} s: bias / std (%)",
-                f"{p['bias_pct']:+.3f} / {p['std_pct']:.3f}", "",
-                f"closed form {r['plain_bias_closed_form_pct']:+.3f} %", "(reference)", None, c)
-    rep.data["estim"] = r
-    rep.commands["estim"] = c
-    return r
+    kind, amp, div = fw_excitation()
+    kinds = {0: "uniform", 1: "PRBS", 2: "multisine"}
+    cases = [("octo-fw exp. 1", [kind, amp, div],
+              f"{kinds.get(kind, kind)} +/-{amp:g} every {div} frames ({HZ / div:g} Hz)"),
+             ("paper's dither", [0, 0.05, 1], "uniform +/-0.05 every frame (the paper's delta_1)")]
+    res = {"var_over_crlb_95pct_interval": [lo, hi], "cases": {}}
+    for name, exc, desc in cases:
+        argv = [BB / "bench-estim", runs, 1, *exc]
+        r = json.loads(subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=True).stdout)
+        c = cmdline(argv)
+        rep.commands[f"estim ({name})"] = c
+        r["description"] = desc
+        res["cases"][name] = r
+        who = "ident" if r.get("have_ident") else "own"
+        label = "ident_rotor" if who == "ident" else "filt+rls"
+        for key in ("t5", "t10"):
+            t = r[key]
+            e, o = t[who], t["own"]
+            first = key == "t5"
+            if first:
+                rep.row(5, f"k_f, {name}: {desc}; {runs} runs", "", "", "", "", None, c)
+            rep.row(5, f"  lag-aware ({label}) at {t['seconds']:g} s: bias / std (%)",
+                    f"{e['bias_pct']:+.4f} / {e['std_pct']:.4f}", "",
+                    f"CRLB std {e['crlb_std_pct']:.4f} %", "|bias| < 0.1 %", abs(e["bias_pct"]) < 0.1, c)
+            rep.row(5, f"    var/CRLB at {t['seconds']:g} s", f"{e['var_over_crlb']:.3f}",
+                    f"95 % if efficient: [{lo:.2f} .. {hi:.2f}]",
+                    f"filt.h + rls.h here: {o['var_over_crlb']:.3f}" if who == "ident" else "",
+                    "[0.85, 1.2]", 0.85 <= e["var_over_crlb"] <= 1.2, c)
+        p5, p10 = r["t5"]["plain"], r["t10"]["plain"]
+        rep.row(5, "  paper's plain estimator (eq. 18-20): bias at 5 s / 10 s (%)",
+                f"{p5['bias_pct']:+.2f} / {p10['bias_pct']:+.2f}", "",
+                f"closed form {r['plain_bias_closed_form_pct']:+.2f} %", "(reference)", None, c)
+    rep.data["estim"] = res
+    return res
 
 
 # ====================================================================== item 6: simulator

@@ -1,11 +1,14 @@
 /*
  * estim.c - Monte Carlo of the core's k_f estimator on simulated data, for `make bench`.
  *
- *   bench-estim [RUNS [SEED]]     (default 1000 runs, seed 1)
+ *   bench-estim [RUNS [SEED [KIND AMP DIV]]]     (default 1000 runs, seed 1, excite.h's default)
+ *       KIND 0 uniform, 1 PRBS (order 9, as experiment.c), 2 multisine; AMP throttle; DIV frames
+ *       per value / bit. octo-fw's experiment 1 default: 1 0.04 9 (ID_EXC_KIND/AMP/DIV), in the
+ *       mixer's null space, so that rotor 1 sees T_h + d exactly as here.
  *
  * Data (per run, 90 Hz, 10 s), as octo-sim and the 90 Hz UDP loop produce it with the
  * default vehicle: rotor 1's command T_k = T_h + d_k (T_h = m g / (8 k_f) = 0.0932, d = the
- * core's excitation: excite.h's default, uniform +/-0.05 every frame, the paper's dither;
+ * core's excitation (excite.h), by default uniform +/-0.05 every frame, the paper's dither;
  * seed per run), applied from frame k to k+1 (the loop's one frame) after a transport delay
  * of DELAY_FR more frames, through the 30 ms first-order lag (exact ZOH discretisation,
  * double precision): s_(k+1) = s_k + a (T_(k-D) - s_k), a = 1 - exp(-dt/tau); frame k
@@ -110,6 +113,14 @@ int main(int argc, char **argv)
 	double e_d2 = 0, e_ddlag = 0;
 	long n_samples = 0;
 	struct excite_params ep = excite_params_default();
+	if (argc > 5) {
+		int kind = atoi(argv[3]);
+		ep.kind = kind == 0 ? EXCITE_UNIFORM : (kind == 1 ? EXCITE_PRBS : EXCITE_MULTISINE);
+		ep.amplitude = sc_from_float((float)atof(argv[4]));
+		ep.clock_div = (uint32_t)atol(argv[5]);
+		ep.prbs_order = 9u;
+	}
+	static const char *const kind_name[] = {"off", "uniform", "PRBS", "multisine"};
 
 	for (long run = 0; run < runs; run++) {
 		sm_state = seed * 0x100000001B3ull + (uint64_t)run;
@@ -200,8 +211,8 @@ int main(int argc, char **argv)
 
 	printf("{\n  \"runs\": %ld, \"seed\": %llu, \"rate_hz\": %.0f, \"t_hover\": %.5f, \"sigma_f_n\": %.5f,\n",
 	       runs, (unsigned long long)seed, RATE_HZ, t_h, sigma);
-	printf("  \"mot_tau_s\": %.3f, \"delay_frames\": %d, \"excitation\": \"excite.h default: uniform +/-%.3f, clock_div %u\",\n",
-	       MOT_TAU, DELAY_FR, (double)sc_to_float(ep.amplitude), (unsigned)ep.clock_div);
+	printf("  \"mot_tau_s\": %.3f, \"delay_frames\": %d, \"excitation\": \"%s +/-%.3f, clock_div %u\",\n",
+	       MOT_TAU, DELAY_FR, kind_name[ep.kind], (double)sc_to_float(ep.amplitude), (unsigned)ep.clock_div);
 	printf("  \"have_ident\": %s,\n", HAVE_IDENT ? "true" : "false");
 	printf("  \"plain_bias_closed_form_pct\": %.4f, \"e_d2\": %.6g, \"e_d_dlag\": %.6g,\n", 100.0 * closed,
 	       e_d2, e_ddlag);
