@@ -249,7 +249,8 @@ static void phase_begin(struct experiment *e, const struct exp_input *in)
 		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		for (int i = 0; i < 3; i++)
 			w[i] = sc_from_float(f->rate_b_rps[i]);
-		ident_inertia_init(&e->inr, ax, SC(INR_WC_RPS), SC(INR_ZETA), dt, inertia, w, tau);
+		scalar_t alpha = ident_torque_weight(sc_from_float(prm(p, "ID_MOT_TAU", 0.03f)), dt);
+		ident_inertia_init(&e->inr, ax, SC(INR_WC_RPS), SC(INR_ZETA), dt, alpha, inertia, w, tau);
 		e->est_live = 1u << (4u + ax);
 	} else {
 		e->t_run = prm(p, "ID_VAL_TIME", 5.0f);

@@ -108,8 +108,19 @@ static void other_axes(unsigned i, unsigned *j, unsigned *k)
 	*k = (i + 2u) % 3u;
 }
 
+scalar_t ident_torque_weight(scalar_t tau_m_s, scalar_t dt_s)
+{
+	float tm = sc_to_float(tau_m_s), dt = sc_to_float(dt_s);
+	if (!(tm > 0.0f) || !(dt > 0.0f))
+		return SC(1.0);
+	/* alpha = 1 / (1 - exp(-x)) - 1 / x, x = dt / tau_m; series for small x (cancellation) */
+	float x = dt / tm;
+	float w = x < 0.1f ? 0.5f + x / 12.0f - x * x * x / 720.0f : 1.0f / (1.0f - expf(-x)) - 1.0f / x;
+	return sc_from_float(w);
+}
+
 void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps, scalar_t zeta,
-			scalar_t dt_s, const scalar_t inertia[3], const scalar_t w0[3],
+			scalar_t dt_s, scalar_t alpha, const scalar_t inertia[3], const scalar_t w0[3],
 			const scalar_t tau0[3])
 {
 	unsigned i = axis > 2u ? 2u : axis, j, k;
@@ -117,9 +128,14 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	e->axis = i;
 	/* tau_i = I_i w_dot_i + (I_k - I_j) w_j w_k */
 	e->coupling = sc_sub(inertia[k], inertia[j]);
+	e->alpha = sc_clamp(alpha, SC(0.0), SC(1.0));
+	e->inv_dt = sc_div(SC(1.0), sc_max(dt_s, SC(1e-4)));
+	e->tau_prev = tau0[i];
+	e->ww_prev = sc_mul(w0[j], w0[k]);
+	e->wf_prev = w0[i];
 	filt_svf_init(&e->svf_tau, wc_rps, zeta, dt_s, tau0[i]);
 	filt_svf_init(&e->svf_w, wc_rps, zeta, dt_s, w0[i]);
-	filt_svf_init(&e->svf_ww, wc_rps, zeta, dt_s, sc_mul(w0[j], w0[k]));
+	filt_svf_init(&e->svf_ww, wc_rps, zeta, dt_s, e->ww_prev);
 	struct rls_config c;
 	rls_default_config(&c);
 	c.n_params = 1;
@@ -133,16 +149,27 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	e->n = 0;
 }
 
+/* alpha x + (1 - alpha) x_prev */
+static scalar_t weigh(scalar_t alpha, scalar_t x, scalar_t x_prev)
+{
+	return sc_add(x_prev, sc_mul(alpha, sc_sub(x, x_prev)));
+}
+
 void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3],
 			  bool excited)
 {
 	unsigned i = e->axis, j, k;
 	other_axes(i, &j, &k);
-	filt_svf_update(&e->svf_tau, tau_b[i]);
+	scalar_t ww = sc_mul(w_b[j], w_b[k]);
+	filt_svf_update(&e->svf_tau, weigh(e->alpha, tau_b[i], e->tau_prev));
+	/* the gyroscopic product is smooth: its frame mean is the trapezoid's */
+	filt_svf_update(&e->svf_ww, weigh(SC(0.5), ww, e->ww_prev));
 	filt_svf_update(&e->svf_w, w_b[i]);
-	filt_svf_update(&e->svf_ww, sc_mul(w_b[j], w_b[k]));
+	e->tau_prev = tau_b[i];
+	e->ww_prev = ww;
 	scalar_t y = sc_sub(e->svf_tau.y, sc_mul(e->coupling, e->svf_ww.y));
-	scalar_t phi = e->svf_w.ydot;
+	scalar_t phi = sc_mul(sc_sub(e->svf_w.y, e->wf_prev), e->inv_dt);
+	e->wf_prev = e->svf_w.y;
 	rls_update(&e->rls, &phi, &y, excited);
 	e->n++;
 }

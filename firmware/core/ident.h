@@ -28,10 +28,16 @@
  * ---------------------------------------------------------------- inertia, one axis
  * Euler: tau = I w_dot + w x (I w), diagonal I: tau_i = I_i w_dot_i + (I_k - I_j) w_j w_k
  * (i, j, k cyclic). tau from the MEASURED rotor forces through Gamma_o (ident_body_torque);
- * the gyroscopic term with the current values of the two other inertias. Torque, rate and
- * the product w_j w_k pass through the SAME state-variable filter (filt_svf), so that
- *     y = svf(tau_i) - (I_k - I_j) svf(w_j w_k),  phi = d/dt svf(w_i)   (no raw differencing)
- * and y = I_i phi holds exactly for the filtered continuous signals; RLS, 1 parameter.
+ * the gyroscopic term with the current values of the two other inertias.
+ * Sampled exactly: over one frame I_i (w_k - w_(k-1)) = integral of tau. Rotor thrusts are
+ * first-order lags (tau_m) of throttles held over each frame, so that integral is exactly
+ * dt (alpha tau_k + (1 - alpha) tau_(k-1)) with alpha = ident_torque_weight(tau_m, dt)
+ * (1 without lag: the torque measured at frame k acted over the whole previous frame;
+ * 0.53 for 30 ms at 90 Hz, near the trapezoid's 0.5). Torque (so weighted), rate and the
+ * product w_j w_k pass through the SAME state-variable filter H (filt_svf) and
+ *     y = H(tau~)_k - (I_k - I_j) H(w_j w_k)_k,  phi = (H(w)_k - H(w)_(k-1)) / dt
+ * (the backward difference of the FILTERED rate: no raw differencing), y = I_i phi; RLS,
+ * 1 parameter. Without noise this is exact for any H (tested to 1e-4 with the plant's lag).
  *
  * Core rules: scalar_t interfaces, no heap/globals/I/O; the RLS and the validation sums are
  * float32 inside (as rls.h); the delay, lag and SVF run in scalar_t (Q16.16 in the fixed
@@ -99,6 +105,9 @@ void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS],
 struct ident_inertia {
 	unsigned axis;                  /* 0 x, 1 y, 2 z */
 	scalar_t coupling;              /* I_k - I_j of the gyroscopic term */
+	scalar_t alpha;                 /* torque weight (ident_torque_weight) */
+	scalar_t inv_dt;
+	scalar_t tau_prev, ww_prev, wf_prev;
 	struct filt_svf svf_tau, svf_w, svf_ww;
 	struct rls rls;
 	float sd_scale;                 /* coloured-residual correction of the RLS std */
@@ -113,8 +122,12 @@ struct ident_inertia {
  * wc, zeta: the SVF; inertia[3]: current values (the two others enter the gyroscopic term;
  * the axis' own is the initial estimate). */
 void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps, scalar_t zeta,
-			scalar_t dt_s, const scalar_t inertia[3], const scalar_t w0[3],
+			scalar_t dt_s, scalar_t alpha, const scalar_t inertia[3], const scalar_t w0[3],
 			const scalar_t tau0[3]);
+/* Weight of the torque measured at the end of a frame in the frame's mean torque when every
+ * rotor thrust is a first-order lag tau_m of a throttle held over the frame (exact):
+ *     alpha = (1 - c) / (1 - a), a = exp(-dt / tau_m), c = (tau_m / dt) (1 - a); 1 if tau_m <= 0 */
+scalar_t ident_torque_weight(scalar_t tau_m_s, scalar_t dt_s);
 /* One frame: body torque (ident_body_torque) and body rates of the same frame. */
 void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3],
 			  bool excited);

@@ -274,21 +274,23 @@ UNIT_TEST(ident_body_torque_matches_gamma)
 
 /* inertia: a rigid body under a lagged, PRBS-like torque about one axis with a slow spin about
  * the others (gyroscopic coupling), gyro noise 0.005 rad/s, torque noise as the sim's */
-static void inertia_run(struct unit_rng *g, const double I[3], unsigned ax, double amp, double *est,
-			double *sd)
+static void inertia_run(struct unit_rng *g, const double I[3], unsigned ax, double amp, double tau_m,
+			double sig_t, double sig_g, double *est, double *sd)
 {
 	double w[3] = {0, 0, 0}, ang[3] = {0, 0, 0}, tau_lag[3] = {0, 0, 0};
-	scalar_t i_now[3] = {SC(0.05), SC(0.05), SC(0.05)}, z3[3] = {SC(0), SC(0), SC(0)};
+	/* the other two inertias right (the gyroscopic term), this axis' initial estimate off */
+	scalar_t i_now[3] = {s(I[0]), s(I[1]), s(I[2])}, z3[3] = {SC(0), SC(0), SC(0)};
+	i_now[ax] = SC(0.05);
 	struct ident_inertia e;
-	ident_inertia_init(&e, ax, ax == 2 ? SC(WCZ) : SC(WCXY), SC(0.7), s(DT), i_now, z3, z3);
-	double a = exp(-DT / 0.03);
+	ident_inertia_init(&e, ax, ax == 2 ? SC(WCZ) : SC(WCXY), SC(0.7), s(DT),
+			   ident_torque_weight(s(tau_m), s(DT)), i_now, z3, z3);
 	struct dither d = {0, amp, 9, 0};
 	for (int k = 0; k < 900; k++) {
 		/* measurement at this frame */
 		scalar_t tm[3], wm[3];
 		for (int i = 0; i < 3; i++) {
-			tm[i] = s(tau_lag[i] + (i == 2 ? 0.001 : 0.018) * unit_rand_normal(g));
-			wm[i] = s(w[i] + 0.005 * unit_rand_normal(g));
+			tm[i] = s(tau_lag[i] + (i == 2 ? sig_t / 18 : sig_t) * unit_rand_normal(g));
+			wm[i] = s(w[i] + sig_g * unit_rand_normal(g));
 		}
 		ident_inertia_update(&e, tm, wm, true);
 		/* command: excitation + a PD hold on every axis + a small bias on the others */
@@ -298,18 +300,26 @@ static void inertia_run(struct unit_rng *g, const double I[3], unsigned ax, doub
 			cmd[i] = -0.05 * (wn * wn * ang[i] + 2 * wn * w[i]) + ((unsigned)i == ax ? 0 : 0.002);
 		}
 		cmd[ax] += dither_next(&d, g);
-		/* integrate one frame in 10 substeps; torque lags the command */
-		for (int sub = 0; sub < 10; sub++) {
-			double h = DT / 10, as = pow(a, 0.1);
-			double dw[3];
-			for (int i = 0; i < 3; i++)
-				tau_lag[i] = as * tau_lag[i] + (1 - as) * cmd[i];
-			dw[0] = (tau_lag[0] - (I[2] - I[1]) * w[1] * w[2]) / I[0];
-			dw[1] = (tau_lag[1] - (I[0] - I[2]) * w[2] * w[0]) / I[1];
-			dw[2] = (tau_lag[2] - (I[1] - I[0]) * w[0] * w[1]) / I[2];
+		/* integrate one frame in 20 substeps; torque lags the command (its integral over
+		 * each substep exact), the gyroscopic term by midpoint */
+		for (int sub = 0; sub < 20; sub++) {
+			double h = DT / 20, as = tau_m > 0 ? exp(-h / tau_m) : 0.0;
+			double it[3], dw[3], wm2[3];
 			for (int i = 0; i < 3; i++) {
-				w[i] += h * dw[i];
-				ang[i] += h * w[i];
+				it[i] = cmd[i] * h + (tau_lag[i] - cmd[i]) * (tau_m > 0 ? tau_m * (1 - as) : 0.0);
+				tau_lag[i] = cmd[i] + (tau_lag[i] - cmd[i]) * as;
+			}
+			for (int pass = 0; pass < 2; pass++) {
+				const double *ww = pass == 0 ? w : wm2;
+				dw[0] = (it[0] - h * (I[2] - I[1]) * ww[1] * ww[2]) / I[0];
+				dw[1] = (it[1] - h * (I[0] - I[2]) * ww[2] * ww[0]) / I[1];
+				dw[2] = (it[2] - h * (I[1] - I[0]) * ww[0] * ww[1]) / I[2];
+				for (int i = 0; i < 3; i++)
+					wm2[i] = w[i] + 0.5 * dw[i];
+			}
+			for (int i = 0; i < 3; i++) {
+				ang[i] += h * (w[i] + 0.5 * dw[i]);
+				w[i] += dw[i];
 			}
 		}
 	}
@@ -325,7 +335,7 @@ UNIT_TEST(ident_inertia_random_truth)
 			       0.1014 * unit_rand_uniform(&g, 0.7, 1.3)};
 		unsigned ax = (unsigned)(v % 3);
 		double est, sd;
-		inertia_run(&g, I, ax, ax == 2 ? AMPZ : 0.25, &est, &sd);
+		inertia_run(&g, I, ax, ax == 2 ? AMPZ : 0.25, 0.03, 0.018, 0.005, &est, &sd);
 #ifdef TEST_VERBOSE
 		printf("  axis %u I %.4f est %+.3f %% sd %.3f %%\n", ax, I[ax], 100 * (est / I[ax] - 1),
 		       100 * sd / I[ax]);
@@ -345,7 +355,7 @@ UNIT_TEST(ident_inertia_std_monte_carlo)
 	double sum = 0, sum2 = 0, sdp = 0;
 	for (int r = 0; r < RUNS; r++) {
 		double est, sd;
-		inertia_run(&g, I, 0, 0.25, &est, &sd);
+		inertia_run(&g, I, 0, 0.25, 0.03, 0.018, 0.005, &est, &sd);
 		sum += est;
 		sum2 += est * est;
 		sdp += sd * sd;
@@ -358,6 +368,27 @@ UNIT_TEST(ident_inertia_std_monte_carlo)
 #endif
 	CHECK(ratio > 0.5 && ratio < 1.6);
 	CHECK(fabs(mean / I[0] - 1) < 0.005);
+}
+
+/* noise-free: the sampled-data model is exact, with the plant's lag and without (ZOH torque),
+ * and with a spin about the other axes (gyroscopic term with the right other inertias) */
+UNIT_TEST(ident_inertia_exact_without_noise)
+{
+	struct unit_rng g = {0xe1ULL};
+	const double I[3] = {0.0628, 0.0762, 0.1014};
+	const double taus[2] = {0.03, 0.0};
+	for (int t = 0; t < 2; t++)
+		for (unsigned ax = 0; ax < 3; ax++) {
+			double est, sd;
+			inertia_run(&g, I, ax, ax == 2 ? 0.08 : 0.25, taus[t], 0.0, 0.0, &est, &sd);
+#ifdef TEST_VERBOSE
+			printf("  exact: tau_m %.2f axis %u est %+.5f %%\n", taus[t], ax, 100 * (est / I[ax] - 1));
+#endif
+			CHECK_REL(est, I[ax], OCTO_FIXED ? 0.01 : 3e-4);
+		}
+	CHECK_NEAR(sc_to_float(ident_torque_weight(SC(0.0), s(DT))), 1.0, 1e-6);
+	CHECK_NEAR(sc_to_float(ident_torque_weight(s(0.03), s(DT))), 0.5308, 0.0005);
+	CHECK_NEAR(sc_to_float(ident_torque_weight(s(10.0), s(DT))), 0.5, 0.002);
 }
 
 UNIT_TEST(ident_fit_statistics)
