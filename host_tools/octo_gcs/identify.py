@@ -135,6 +135,10 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
                 return
             live.on_text(msg.text)
             if PHASE_RE.match(msg.text):
+                # a new phase streams its own estimates: forget the previous phase's
+                for n, sd, _fmt in LIVE:
+                    v.named_values.pop(n, None)
+                    v.named_values.pop(sd, None)
                 show()
             else:
                 progress.say("  " + msg.text)
@@ -178,17 +182,25 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
         state["started"] = True
         t_wall0[0] = time.monotonic()
         show()
-        while live.done is None:
+        t_text_done = None
+        while True:
             if state["final"] is not None:
-                # the final ACK: wait briefly for the closing texts, then decide
-                v.recv(types=(), timeout=0.1)
-                if live.done is None:
+                # the final ACK comes last (after the results are applied)
+                v.recv(types=(), timeout=0.05)
+                if live.done is None or state["final"] != mavlink.MAV_RESULT_ACCEPTED:
                     live.done = "done" if state["final"] == mavlink.MAV_RESULT_ACCEPTED else \
-                        f"failed ({result_name(state['final'])})"
+                        (live.done if live.done and live.done != "done"
+                         else f"failed ({result_name(state['final'])})")
                 break
-            if v.mode is not None and v.mode != MODE_NUMBERS["EXPERIMENT"] \
-                    and time.monotonic() - t_wall0[0] > 2.0:
-                # the vehicle left the experiment mode without the closing messages
+            in_exp = v.mode == MODE_NUMBERS["EXPERIMENT"]
+            if live.done is not None:
+                # "ID done"/"ID aborted": the results are applied when the vehicle is back
+                # in hold (or with the final ACK); don't wait forever for either
+                t_text_done = t_text_done or time.monotonic()
+                if not in_exp or time.monotonic() - t_text_done > 3.0:
+                    break
+            elif not in_exp and v.mode is not None and time.monotonic() - t_wall0[0] > 2.0:
+                # the vehicle left the experiment without the closing messages
                 v.recv(types=(), timeout=0.3)
                 if live.done is None and state["final"] is None:
                     live.done = "done" if v.mode == MODE_NUMBERS["HOLD"] else \
@@ -196,7 +208,7 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
                 continue
             if time.monotonic() - t_wall0[0] > timeout:
                 raise GcsError(f"experiment {experiment} ({name}) still running after {timeout:g} s")
-            v.recv(types=(), timeout=0.1)
+            v.recv(types=(), timeout=0.05 if live.done else 0.1)
             show()
         v.recv(types=(), timeout=0.05)   # trailing result texts
         est = live_estimates(v)
@@ -221,6 +233,52 @@ def live_estimates(v):
     return "  ".join(parts)
 
 
+_NUM = r"([-+0-9.eE]+|nan|inf)"
+_TEXT_RESULTS = [
+    (re.compile(rf"^ID kf {_NUM} \+/- {_NUM} N (accepted|rejected)"), ("ID_KF_EST", "ID_KF_SD"), 1),
+    (re.compile(rf"^ID ktau {_NUM} \+/- {_NUM} N m (accepted|rejected)"), ("ID_KTAU_EST", "ID_KTAU_SD"), 1),
+    (re.compile(rf"^ID Ixx {_NUM} \+/- {_NUM} kg m\^2 (accepted|rejected)"), ("ID_IXX_EST", "ID_IXX_SD"), 2),
+    (re.compile(rf"^ID Iyy {_NUM} \+/- {_NUM} kg m\^2 (accepted|rejected)"), ("ID_IYY_EST", "ID_IYY_SD"), 4),
+    (re.compile(rf"^ID Izz {_NUM} \+/- {_NUM} kg m\^2 (accepted|rejected)"), ("ID_IZZ_EST", "ID_IZZ_SD"), 8),
+]
+_TEXT_PLAIN = re.compile(rf"^ID plain \(eq\. 20\) kf {_NUM} N ktau {_NUM} N m")
+_TEXT_VAL = re.compile(rf"^ID validation (before|after): NE {_NUM} fit {_NUM} %")
+
+
+def results_from_texts(texts):
+    """ID_* values as the vehicle's result STATUSTEXTs state them (rounded as printed):
+    the fallback for a vehicle whose parameter table lacks them."""
+    out, bits, seen_bits = {}, 0, 0
+    for text in texts:
+        for rx, (est, sd), bit in _TEXT_RESULTS:
+            m = rx.match(text)
+            if m:
+                out[est], out[sd] = float(m.group(1)), float(m.group(2))
+                seen_bits |= bit
+                if m.group(3) == "accepted":
+                    bits |= bit
+                elif bit == 1:
+                    bits &= ~1
+        m = _TEXT_PLAIN.match(text)
+        if m:
+            out["ID_KF_PLAIN"], out["ID_KTAU_PLAIN"] = float(m.group(1)), float(m.group(2))
+        m = _TEXT_VAL.match(text)
+        if m:
+            tag = "PRE" if m.group(1) == "before" else "POST"
+            out[f"ID_VAL_NE_{tag}"], out[f"ID_VAL_FIT_{tag}"] = float(m.group(2)), float(m.group(3))
+    if seen_bits:
+        out["ID_RESULT"] = float(bits)
+    return out
+
+
+def merge_text_results(params, texts):
+    """params plus the ID_* values only the status texts carry; returns (merged, names filled in)."""
+    extra = {k: v for k, v in results_from_texts(texts).items() if k not in params}
+    merged = dict(params)
+    merged.update(extra)
+    return merged, sorted(extra)
+
+
 # ---------------------------------------------------------------- checks
 class Check:
     def __init__(self, name, ok, detail, warning=False):
@@ -238,10 +296,11 @@ def _finite_pos(x):
     return x is not None and math.isfinite(x) and x > 0
 
 
-def plausibility(params, experiments):
+def plausibility(params, experiments, rounded=()):
     """Checks that need no truth: estimates present, finite, positive, accepted, their
     relative std within ID_RSD_MAX, applied to VEH_*, physically sensible; validation
-    improved. Returns [Check]."""
+    improved. `rounded`: names whose values came from status texts (rounded as printed).
+    Returns [Check]."""
     checks = []
     rsd_max = params.get("ID_RSD_MAX")
     result_bits = int(params.get("ID_RESULT", 0))
@@ -259,7 +318,8 @@ def plausibility(params, experiments):
                                 f"{100 * sd / est:.3f} % (limit {100 * rsd_max:.3g} %)"))
         checks.append(Check(f"{q.label} accepted", result_bits & q.bit, f"ID_RESULT = {result_bits}"))
         if result_bits & q.bit and q.veh in params:
-            same = abs(params[q.veh] - est) <= 1e-6 * abs(est)
+            tol = 2e-3 if q.est in rounded else 1e-6
+            same = abs(params[q.veh] - est) <= tol * abs(est)
             checks.append(Check(f"{q.label} applied", same, f"{q.veh} = {params[q.veh]:.6g}"))
     kf, ktau = params.get("ID_KF_EST"), params.get("ID_KTAU_EST")
     if any(q.key == "kf" for q in quantities_of(experiments)) and _finite_pos(kf):
@@ -314,18 +374,21 @@ def run(args):
     with Vehicle(args.connect, timeout=args.timeout, signing_key=args.signing_key) as v:
         v.wait_heartbeat()
         params = v.fetch_params()
+        texts = []
         for e in experiments:
             if v.mode != MODE_NUMBERS["HOLD"]:
                 raise GcsError(f"vehicle is in mode {MODES.get(v.mode, v.mode)}, not HOLD: "
                                "experiments need a hovering vehicle (take off first)")
             prog.say(f"experiment {e}: {EXPERIMENTS[e]}")
             wall = planned_sim_seconds(params, e) * args.time_factor + 30.0
-            run_experiment(v, e, prog, timeout=wall)
-        params = v.fetch_params()
-    return report_checks(params, experiments, truth, args.tol_rotor, args.tol_inertia)
+            texts += run_experiment(v, e, prog, timeout=wall).texts
+        params, filled = merge_text_results(v.fetch_params(), texts)
+        if filled:
+            print(f"note: the vehicle has no parameters {', '.join(filled)}: taken from its status texts")
+    return report_checks(params, experiments, truth, args.tol_rotor, args.tol_inertia, rounded=filled)
 
 
-def report_checks(params, experiments, truth, tol_rotor, tol_inertia, out=print):
+def report_checks(params, experiments, truth, tol_rotor, tol_inertia, out=print, rounded=()):
     out("results:")
     for q in quantities_of(experiments):
         est, sd, plain = params.get(q.est), params.get(q.sd), params.get(q.plain) if q.plain else None
@@ -333,7 +396,7 @@ def report_checks(params, experiments, truth, tol_rotor, tol_inertia, out=print)
         if plain is not None:
             line += f"   (plain LS {plain:.6g})"
         out(line)
-    checks = plausibility(params, experiments)
+    checks = plausibility(params, experiments, rounded)
     if truth is not None:
         checks += against_truth(params, experiments, truth, tol_rotor, tol_inertia)
     out("checks:")

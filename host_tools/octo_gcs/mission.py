@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 from . import paramfile, procs, vehiclefile
-from .identify import EXPERIMENTS, parse_experiments, planned_sim_seconds, run_experiment
+from .identify import EXPERIMENTS, merge_text_results, parse_experiments, planned_sim_seconds, run_experiment
 from .link import GcsError, Vehicle
 from .flight import Flight
 from .progress import Progress
@@ -41,6 +41,8 @@ class Mission:
         self.sim = self.fw = None
         self.vehicle = None
         self.stage = None
+        self.from_texts = []
+        self.params_only = {}
 
     # ------------------------------------------------------------ processes
     def _alive(self):
@@ -91,15 +93,22 @@ class Mission:
         fl.takeoff(TAKEOFF_M, timeout=tlimit)
         say(f"take-off: holding at {TAKEOFF_M:g} m (t={tail.time() or 0:.1f} s simulated, "
             f"{time.monotonic() - t0:.1f} s wall)")
+        texts = []
         for e in experiments:
             say(f"experiment {e}: {EXPERIMENTS[e]}")
             planned = planned_sim_seconds(nominal, e)
             live = run_experiment(v, e, self.prog, sim_time=tail.time,
                                   timeout=planned * (1.5 if a.realtime else 0.5) + 60.0)
+            texts += live.texts
             say(f"experiment {e} done at t={tail.time() or 0:.1f} s simulated "
                 f"({len(live.results)} results, {time.monotonic() - t0:.1f} s wall)")
         after = v.fetch_params()
         say(f"collected {len(after)} parameters")
+        after, self.from_texts = merge_text_results(after, texts)
+        if self.from_texts:
+            say(f"note: the vehicle has no parameters {', '.join(self.from_texts)}: "
+                "taken from its status texts")
+        self.params_only = {k: after[k] for k in after if k not in self.from_texts}
         fl.land(timeout=tlimit)
         say(f"landed and disarmed at t={tail.time() or 0:.1f} s simulated "
             f"({time.monotonic() - t0:.1f} s wall)")
@@ -170,10 +179,10 @@ def run(args):
                     m.vehicle.close()
             wall_flight = time.monotonic() - t_start
             prog.say(f"flight done in {wall_flight:.1f} s; building the report")
-            paramfile.save(stage / "params.parm", after)
+            paramfile.save(stage / "params.parm", m.params_only)
             os.unlink(stage / "fw-storage.parm") if (stage / "fw-storage.parm").exists() else None
             rep = build_report(stage, veh, args, nominal, after, experiments,
-                               wall_flight_s=wall_flight)
+                               wall_flight_s=wall_flight, from_texts=m.from_texts)
             write_outputs(stage, rep, args.plots)
             rep["timing"]["wall_total_s"] = round(time.monotonic() - t_start, 2)
             files = _publish(stage, out, rep)

@@ -100,7 +100,8 @@ def parameter_rows(nominal, after, truth, experiments):
     return rows
 
 
-def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=None, logs=None):
+def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=None, logs=None,
+                 from_texts=()):
     """The report dict of a mission whose files are in `stage`."""
     from . import analysis
     from .logs import Logs
@@ -144,7 +145,8 @@ def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=No
         t_end = logs.truth.t[-1] if logs.truth is not None else (logs.fw.t[-1] if logs.fw is not None else None)
     else:
         t_end = None
-    checks = plausibility(after, experiments) if experiments else []
+    rep["results_from_status_texts"] = list(from_texts)
+    checks = plausibility(after, experiments, set(from_texts)) if experiments else []
     checks += against_truth(after, experiments, truth, TOL_ROTOR_PCT, TOL_INERTIA_PCT)
     rep["checks"] = [c.as_dict() for c in checks]
     rep["tolerances_pct"] = {"kf_ktau": TOL_ROTOR_PCT, "inertia": TOL_INERTIA_PCT}
