@@ -6,14 +6,17 @@ import sys
 from . import __version__
 
 
-def add_connection_args(p):
+def add_connection_args(p, again=False):
+    """--connect, --signing-key, --timeout. again=True: the same options once more on a
+    sub-action (``params get NAME --connect URL``), not overriding the parent's values."""
     from .link import DEFAULT_URL
 
-    p.add_argument("--connect", default=DEFAULT_URL, metavar="URL",
+    kw = {"default": argparse.SUPPRESS} if again else {}
+    p.add_argument("--connect", metavar="URL", **(kw or {"default": DEFAULT_URL}),
                    help=f"MAVLink connection, pymavlink syntax (default {DEFAULT_URL})")
-    p.add_argument("--signing-key", metavar="FILE",
+    p.add_argument("--signing-key", metavar="FILE", **(kw or {"default": None}),
                    help="MAVLink 2 signing key: 64 hex digits, or a passphrase (key = its sha256)")
-    p.add_argument("--timeout", type=float, default=5.0, metavar="S",
+    p.add_argument("--timeout", type=float, metavar="S", **(kw or {"default": 5.0}),
                    help="seconds to wait for the vehicle's answers (default 5)")
 
 
@@ -31,7 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "'NAME VALUE' format.")
     add_connection_args(pp)
     psub = pp.add_subparsers(dest="action", metavar="ACTION", required=True)
-    psub.add_parser("list", help="print every parameter")
+    ls = psub.add_parser("list", help="print every parameter")
     g = psub.add_parser("get", help="print one parameter")
     g.add_argument("name")
     s = psub.add_parser("set", help="set one parameter and check the vehicle's echo")
@@ -43,6 +46,21 @@ def build_parser() -> argparse.ArgumentParser:
     ld.add_argument("file")
     df = psub.add_parser("diff", help="show parameters that differ between the vehicle and FILE")
     df.add_argument("file")
+    for action in (ls, g, s, sv, ld, df):
+        add_connection_args(action, again=True)
+
+    tp = sub.add_parser("takeoff", help="arm, take off and wait for the hold",
+                        description="Arms the vehicle (retrying while it waits for X-Plane frames), "
+                        "takes off to --height and waits until it holds there.")
+    add_connection_args(tp)
+    tp.add_argument("--height", type=float, default=10.0, metavar="M", help="take-off height (default 10)")
+    tp.add_argument("--wait", type=float, default=60.0, metavar="S",
+                    help="longest wait for the arming and the hold (default 60)")
+    lp = sub.add_parser("land", help="land and wait for the disarm after touch-down",
+                        description="Lands the vehicle and waits until it disarms on the ground.")
+    add_connection_args(lp)
+    lp.add_argument("--wait", type=float, default=60.0, metavar="S",
+                    help="longest wait for the touch-down (default 60)")
 
     ip = sub.add_parser(
         "identify", help="run identification experiments on a hovering vehicle and check the results",
@@ -112,6 +130,9 @@ def main(argv=None) -> int:
     try:
         if args.command == "params":
             from .params_cmd import run
+            return run(args)
+        if args.command in ("takeoff", "land"):
+            from .flight import run
             return run(args)
         if args.command == "identify":
             from .identify import run

@@ -336,7 +336,8 @@ def plausibility(params, experiments, rounded=()):
     if 6 in experiments or 2 in experiments:
         pre, post = params.get("ID_VAL_NE_PRE"), params.get("ID_VAL_NE_POST")
         if 6 in experiments and pre is not None and post is not None:
-            checks.append(Check("validation error after < before", post < pre,
+            checks.append(Check("validation error after identification: NE halved or < 0.05",
+                                post < 0.5 * pre or post < 0.05,
                                 f"NE {pre:.4f} -> {post:.4f}; fit {params.get('ID_VAL_FIT_PRE', float('nan')):.1f} % "
                                 f"-> {params.get('ID_VAL_FIT_POST', float('nan')):.1f} %"))
     return checks

@@ -236,7 +236,8 @@ def test_plausibility_and_truth_checks():
     assert all(c.ok for c in ok), [c.line() for c in ok if not c.ok]
     bad = identify.plausibility(params_after(ID_KF_SD=1.0, ID_RESULT=14.0, ID_VAL_NE_POST=0.5), [6])
     failed = {c.name for c in bad if not c.ok}
-    assert failed == {"k_f relative std", "k_f accepted", "k_tau accepted", "validation error after < before"}
+    assert failed == {"k_f relative std", "k_f accepted", "k_tau accepted",
+                      "validation error after identification: NE halved or < 0.05"}
     assert {c.name for c in identify.plausibility(params_after(ID_KF_EST=float("nan")), [1]) if not c.ok} \
         == {"k_f estimated"}
     tr = identify.against_truth(params_after(), [1, 3], TRUTH, 0.3, 2.0)
