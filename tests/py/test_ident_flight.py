@@ -109,3 +109,49 @@ def test_experiment_aborts_when_the_plant_link_drops(launch, port, tmp_path):
     t = fl.wait_text(lambda t: t.startswith("ID aborted"), 10)
     assert "link" in t, fl.rig.texts[start:]
     fl.rig.fw.stop()
+
+
+def test_ideal_plant_gives_table_1(launch, port, tmp_path):
+    """--ideal (no noise, lag or delay) and the paper's truth: the estimates equal Table 1
+    within 0.05 % (the lag-aware regressor told there is no lag: ID_MOT_TAU 0)."""
+    fl = IdentFlight(launch, port, tmp_path, seed=9, ideal=True, params={"ID_MOT_TAU": 0})
+    fl.takeoff()
+    texts = fl.experiment(6)
+    assert "ID done" in texts, texts
+    got = {n: fl.param(n) for n in ("ID_KF_EST", "ID_KTAU_EST", "ID_IXX_EST", "ID_IYY_EST",
+                                    "ID_IZZ_EST", "VEH_KF", "VEH_KTAU", "VEH_IXX", "VEH_IYY",
+                                    "VEH_IZZ", "ID_RESULT", "ID_KF_PLAIN")}
+    fl.finish()
+    print(got)
+    table1 = {"KF": PAPER["kf"], "KTAU": PAPER["ktau"], "IXX": PAPER["inertia"][0],
+              "IYY": PAPER["inertia"][1], "IZZ": PAPER["inertia"][2]}
+    for k, v in table1.items():
+        assert got[f"ID_{k}_EST"] == pytest.approx(v, rel=5e-4), k
+        assert got[f"VEH_{k}"] == pytest.approx(got[f"ID_{k}_EST"], rel=1e-6), k
+    assert got["ID_RESULT"] == 15
+
+
+@pytest.mark.parametrize("kind", [0, 1, 2])
+def test_excitation_kinds(launch, port, tmp_path, kind):
+    """Every ID_EXC_KIND gives an accurate lag-aware k_f; kind 0 as the paper (uniform random
+    +/-0.05 every frame on rotor 1 alone) gives the notes' plain bias, about -8.8 %."""
+    params = {"ID_EXC_KIND": kind}
+    if kind == 0:
+        params.update(ID_EXC_AMP=0.05, ID_EXC_DIV=1, ID_EXC_NULL=0)
+    fl = IdentFlight(launch, port, tmp_path, seed=20 + kind, params=params)
+    fl.takeoff()
+    texts = fl.experiment(1)
+    assert "ID done" in texts, texts
+    kf, kf_plain, sd = fl.param("ID_KF_EST"), fl.param("ID_KF_PLAIN"), fl.param("ID_KF_SD")
+    fl.finish()
+    rot = excited(exp_window(fl.frames, 1))
+    cf, _ = plain_closed_form(rot, fl.truth, PAPER["kf"])
+    z = [s.pos_i[2] for s in truth_at(fl.truth, exp_window(fl.frames, 1))]
+    e, b = kf / PAPER["kf"] - 1, kf_plain / PAPER["kf"] - 1
+    print(f"kind {kind}: kf {100 * e:+.3f} % (sd {100 * sd / kf:.3f} %), plain {100 * b:+.2f} %, "
+          f"closed form {100 * cf:+.2f} %, height range {max(z) - min(z):.3f} m")
+    assert abs(e) < 0.003
+    assert abs(b - cf) < 0.01
+    assert max(z) - min(z) < 1.0
+    if kind == 0:
+        assert b == pytest.approx(-0.088, abs=0.01)
