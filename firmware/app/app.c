@@ -335,27 +335,38 @@ int app_cmd_experiment(struct app *a, float id_f, char *why, size_t cap)
 
 /* ---------------------------------------------------------------- the control step */
 
+/* Results are applied as soon as the experiment posts them (at the frame
+ * boundary after its step), not only when it finishes: in the full sequence
+ * (experiment 6) the validation after identification and the inertia phases
+ * must already fly with the new VEH_* values. Applied results are broadcast
+ * as PARAM_VALUE, saved to the parameter file, and removed from the list. */
+static void apply_results(struct app *a)
+{
+	int n = a->exp.n_results < EXP_MAX_RESULTS ? a->exp.n_results : EXP_MAX_RESULTS;
+	if (n <= 0)
+		return;
+	for (int i = 0; i < n; i++) {
+		int idx = a->exp.results[i].param_index;
+		if (idx < 0 || (size_t)idx >= param_count)
+			continue;
+		enum param_set_result r = params_set(&a->p, (size_t)idx, a->exp.results[i].value);
+		if (r != PARAM_OK)
+			app_status(a, MAV_SEVERITY_WARNING, "%s not applied: %s", param_defs[idx].name,
+				   params_set_result_text(r));
+		mav_param_value(a, (size_t)idx);
+	}
+	a->exp.n_results = 0;
+	char why[64];
+	if (app_params_save(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
+		app_status(a, MAV_SEVERITY_ERROR, "%s", why);
+}
+
 static void experiment_step(struct app *a, float dt)
 {
 	struct exp_input in = {&a->fr, dt, &a->p, a->wrench_dem, a->rotor_f, a->thr};
 	enum exp_state st = exp_step(&a->exp, &in, &a->exp_out);
-	if (st == EXP_FINISHED) {
-		for (int i = 0; i < a->exp.n_results && i < EXP_MAX_RESULTS; i++) {
-			int idx = a->exp.results[i].param_index;
-			if (idx < 0 || (size_t)idx >= param_count)
-				continue;
-			enum param_set_result r = params_set(&a->p, (size_t)idx, a->exp.results[i].value);
-			if (r != PARAM_OK)
-				app_status(a, MAV_SEVERITY_WARNING, "%s not applied: %s", param_defs[idx].name,
-					   params_set_result_text(r));
-			mav_param_value(a, (size_t)idx);
-		}
-		if (a->exp.n_results) {
-			char why[64];
-			if (app_params_save(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
-				app_status(a, MAV_SEVERITY_ERROR, "%s", why);
-		}
-	}
+	if (st == EXP_RUNNING || st == EXP_FINISHED)
+		apply_results(a);
 	if (st != EXP_RUNNING) {
 		memset(&a->exp_out, 0, sizeof a->exp_out);
 		a->exp.state = EXP_IDLE;
