@@ -38,8 +38,10 @@ class IdentFlight:
             sim_args += ["--vehicle", vf]
         if ideal:
             sim_args.append("--ideal")
-        if params:
-            self.rig.params.write_text("".join(f"{k} {v}\n" for k, v in params.items()))
+        # a loaded test machine can stall a lockstep pair for a few hundred ms of wall time:
+        # a link timeout of 1 s keeps that from aborting experiments
+        params = {"FS_LINK_TO": 1.0, **(params or {})}
+        self.rig.params.write_text("".join(f"{k} {v}\n" for k, v in params.items()))
         self.rig.start(sim_args=sim_args)
         self.texts_seen = 0
 
@@ -77,6 +79,8 @@ class IdentFlight:
         return self.rig.texts[start:]
 
     def param(self, name):
+        # PARAM_VALUEs broadcast earlier wait in the rig's backlog: ask for the current value
+        self.rig.backlog = [m for m in self.rig.backlog if m.get_type() != "PARAM_VALUE"]
         m = self.rig.param_get(name)
         assert m is not None, f"no {name}"
         return m.param_value

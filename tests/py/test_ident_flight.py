@@ -40,6 +40,8 @@ def test_full_sequence_accuracy_on_random_vehicles(launch, port, tmp_path):
         fl.takeoff()
         texts = fl.experiment(6)
         assert "ID done" in texts, texts
+        val = {n: fl.param(n) for n in ("ID_VAL_NE_PRE", "ID_VAL_FIT_PRE", "ID_VAL_NE_POST",
+                                         "ID_VAL_FIT_POST", "ID_RESULT")}
         fl.finish()
         fr = fl.frames
         # phases of experiment 6: 0 val, 1 rotor, 2 val, 3 Ixx, 4 Iyy, 5 Izz
@@ -58,18 +60,24 @@ def test_full_sequence_accuracy_on_random_vehicles(launch, port, tmp_path):
         dz = max(abs(v - z0) for v in z)
         tilt = max(tilt_deg(s.q_i2b) for a in range(3)
                    for s in truth_at(fl.truth, phase_frames(fr, 6, 3 + a)))
-        rows.append((i, e_kf, e_kt, e_in, b_plain, b_plain_t, cf, dz, tilt))
+        rows.append((i, e_kf, e_kt, e_in, b_plain, b_plain_t, cf, dz, tilt, val))
         print(f"vehicle {i}: kf {100 * e_kf:+.3f} % ktau {100 * e_kt:+.3f} % "
               f"I {' '.join(f'{100 * e:+.2f}' for e in e_in)} % | plain kf {100 * b_plain:+.2f} % "
               f"ktau {100 * b_plain_t:+.2f} % closed form {100 * cf:+.2f} % ({n} frames) | "
-              f"|dz| {dz:.3f} m, tilt {tilt:.1f} deg")
-    for i, e_kf, e_kt, e_in, b, bt, cf, dz, tilt in rows:
+              f"|dz| {dz:.3f} m, tilt {tilt:.1f} deg | validation NE {val['ID_VAL_NE_PRE']:.3f} -> "
+              f"{val['ID_VAL_NE_POST']:.4f}, fit {val['ID_VAL_FIT_PRE']:.0f} -> "
+              f"{val['ID_VAL_FIT_POST']:.1f} %")
+    for i, e_kf, e_kt, e_in, b, bt, cf, dz, tilt, val in rows:
         assert abs(e_kf) < 0.003 and abs(e_kt) < 0.003, (i, e_kf, e_kt)
         assert all(abs(e) < 0.02 for e in e_in), (i, e_in)
         assert b < -0.01, (i, b)   # the plain estimator is visibly biased ...
         assert abs(b - cf) < 0.01 and abs(bt - cf) < 0.01, (i, b, bt, cf)   # ... as predicted
         assert dz < 0.5, (i, dz)
         assert tilt < 10.0, (i, tilt)
+        assert val["ID_RESULT"] == 15, (i, val)
+        # nominal k_f 20 N against 21-36 N: visibly off before, agreeing after
+        assert val["ID_VAL_NE_POST"] < 0.02 and val["ID_VAL_FIT_POST"] > 80, (i, val)
+        assert val["ID_VAL_NE_PRE"] > 5 * val["ID_VAL_NE_POST"], (i, val)
 
 
 def test_validation_before_and_after_rotor_identification(launch, port, tmp_path):
@@ -117,7 +125,7 @@ def test_ideal_plant_gives_table_1(launch, port, tmp_path):
     fl = IdentFlight(launch, port, tmp_path, seed=9, ideal=True, params={"ID_MOT_TAU": 0})
     fl.takeoff()
     texts = fl.experiment(6)
-    assert "ID done" in texts, texts
+    assert "ID done" in texts, [t for t in texts if "abort" in t or "link" in t]
     got = {n: fl.param(n) for n in ("ID_KF_EST", "ID_KTAU_EST", "ID_IXX_EST", "ID_IYY_EST",
                                     "ID_IZZ_EST", "VEH_KF", "VEH_KTAU", "VEH_IXX", "VEH_IYY",
                                     "VEH_IZZ", "ID_RESULT", "ID_KF_PLAIN")}
