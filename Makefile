@@ -95,8 +95,10 @@ all: $(ALL_TARGETS)
 test: all
 	@$(MAKE) --no-print-directory test-unit test-py
 
+# MISSION_ARGS: more options for octo-gcs mission, e.g. MISSION_ARGS="--seed 7 --vehicle v.json"
+MISSION_ARGS ?=
 run: all
-	$(VENV)/bin/octo-gcs mission --out out
+	$(VENV)/bin/octo-gcs mission --out out $(MISSION_ARGS)
 
 help:
 	@sed -n '2,13p' Makefile | sed 's/^# \{0,1\}//'

@@ -168,8 +168,6 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
                 continue
             r = ack.result
             if r in (mavlink.MAV_RESULT_IN_PROGRESS, mavlink.MAV_RESULT_ACCEPTED):
-                if r == mavlink.MAV_RESULT_IN_PROGRESS:
-                    live.progress = ack.progress
                 break
             v.recv(types=(), timeout=0.05)   # the reason follows the ACK
             why = v._last_text(since=t_cmd)
