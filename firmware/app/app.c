@@ -73,6 +73,16 @@ static void set_mode(struct app *a, enum app_mode m)
 {
 	if (a->mode == m)
 		return;
+	if (a->mode == APP_EXPERIMENT && a->exp_ack_pending) {
+		/* the final answer to MAV_CMD_USER_1: ACCEPTED when it finished,
+		 * FAILED when it was aborted (the experiment sets final_result) */
+		int r = a->exp.final_result;
+		if (r != MAV_RESULT_ACCEPTED)
+			r = MAV_RESULT_FAILED;
+		mav_command_ack(a, MAV_CMD_USER_1, (uint8_t)r, r == MAV_RESULT_ACCEPTED ? 100 : 0,
+				a->exp_ack_sysid, a->exp_ack_compid);
+		a->exp_ack_pending = false;
+	}
 	a->mode = m;
 	app_status(a, MAV_SEVERITY_INFO, "Mode %s", app_mode_name(m));
 }
@@ -316,7 +326,7 @@ int app_cmd_experiment(struct app *a, float id_f, char *why, size_t cap)
 	}
 	if (a->mode == APP_EXPERIMENT) {
 		if (a->exp.id == id)
-			return MAV_RESULT_ACCEPTED;   /* a retry */
+			return MAV_RESULT_IN_PROGRESS;   /* a retry: still running */
 		snprintf(why, cap, "Experiment %d running", a->exp.id);
 		return MAV_RESULT_TEMPORARILY_REJECTED;
 	}
@@ -325,10 +335,14 @@ int app_cmd_experiment(struct app *a, float id_f, char *why, size_t cap)
 		return MAV_RESULT_DENIED;
 	}
 	int r = exp_start(&a->exp, id, &a->p, why, cap);
-	if (r == MAV_RESULT_ACCEPTED) {
+	if (r == MAV_RESULT_ACCEPTED || r == MAV_RESULT_IN_PROGRESS) {
 		a->exp.id = id;
 		a->exp.state = EXP_RUNNING;
 		set_mode(a, APP_EXPERIMENT);
+		a->exp_ack_pending = true;
+		a->exp_ack_sysid = a->mav.cmd_sysid;
+		a->exp_ack_compid = a->mav.cmd_compid;
+		r = MAV_RESULT_IN_PROGRESS;
 	}
 	return r;
 }

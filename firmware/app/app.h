@@ -77,6 +77,8 @@ struct app {
 	/* identification */
 	struct experiment exp;
 	struct exp_output exp_out;
+	bool exp_ack_pending;         /* a final COMMAND_ACK of MAV_CMD_USER_1 is owed */
+	uint8_t exp_ack_sysid, exp_ack_compid;
 
 	struct mav mav;
 	struct app_log_frame log;

@@ -140,9 +140,18 @@ static void pack_estimates(struct app *a, mavlink_message_t *msg)
 	(void)msg;
 	if (a->mode != APP_EXPERIMENT)
 		return;
-	for (int i = 0; i < a->exp.n_est && i < EXP_MAX_EST; i++)
-		if (a->exp.est_live & (1u << i))
-			mav_named_float(a, a->exp.est_name[i], a->exp.est[i]);
+	static const char *const with_sd[] = {"KF", "KTAU", "IXX", "IYY", "IZZ"};
+	for (int i = 0; i < a->exp.n_est && i < EXP_MAX_EST; i++) {
+		if (!(a->exp.est_live & (1u << i)))
+			continue;
+		mav_named_float(a, a->exp.est_name[i], a->exp.est[i]);
+		for (size_t k = 0; k < sizeof with_sd / sizeof with_sd[0]; k++)
+			if (!strcmp(a->exp.est_name[i], with_sd[k])) {
+				char name[16];
+				snprintf(name, sizeof name, "%s_SD", with_sd[k]);
+				mav_named_float(a, name, a->exp.est_sd[i]);
+			}
+	}
 }
 
 struct mav_stream {
@@ -240,12 +249,19 @@ void mav_param_value(struct app *a, size_t index)
 	send_msg(&msg);
 }
 
+void mav_command_ack(struct app *a, uint16_t cmd, uint8_t result, uint8_t progress, uint8_t sysid,
+		     uint8_t compid)
+{
+	(void)a;
+	mavlink_message_t msg;
+	mavlink_msg_command_ack_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, cmd, result, progress, 0, sysid,
+					  compid);
+	send_msg(&msg);
+}
+
 static void send_ack(uint16_t cmd, uint8_t result, const mavlink_message_t *req)
 {
-	mavlink_message_t msg;
-	mavlink_msg_command_ack_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, cmd, result, 0, 0, req->sysid,
-					  req->compid);
-	send_msg(&msg);
+	mav_command_ack(NULL, cmd, result, 0, req->sysid, req->compid);
 }
 
 static void send_autopilot_version(void)
@@ -343,7 +359,21 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 		r = app_cmd_land(a, why, sizeof why);
 		break;
 	case MAV_CMD_USER_1:
+		/* long-running: IN_PROGRESS (with progress) now and on retries, the
+		 * final ACCEPTED / FAILED when the experiment ends (app.c) */
+		a->mav.cmd_sysid = req->sysid;
+		a->mav.cmd_compid = req->compid;
 		r = app_cmd_experiment(a, prm[0], why, sizeof why);
+		if (r == MAV_RESULT_IN_PROGRESS) {
+			/* progress in percent, rounded up (a started experiment shows >= 1),
+			 * at most 99 until the final ACK */
+			float pr = ceilf(a->exp.progress * 100.0f);
+			mav_command_ack(a, cmd, (uint8_t)r, (uint8_t)(pr < 0.0f ? 0.0f : (pr > 99.0f ? 99.0f : pr)),
+					req->sysid, req->compid);
+			if (why[0])
+				app_status(a, MAV_SEVERITY_INFO, "%s", why);
+			return;
+		}
 		break;
 	case MAV_CMD_PREFLIGHT_STORAGE:
 		if (prm[0] == 0.0f) {

@@ -137,7 +137,14 @@ class Rig:
                 return msg
         return None
 
+    def drain(self, seconds=0.05):
+        """Reads what is queued (into the backlog), so that old answers are not taken for new."""
+        self.recv(set(), timeout=seconds)
+
     def param_set(self, name, value, timeout=2.0):
+        self.drain()
+        self.backlog = [m for m in self.backlog
+                        if not (m.get_type() == "PARAM_VALUE" and m.param_id == name)]
         start = len(self.texts)
         self.m.mav.param_set_send(1, 1, name.encode(), float(value), mavlink.MAV_PARAM_TYPE_REAL32)
         deadline = time.monotonic() + timeout
