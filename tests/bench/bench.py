@@ -224,7 +224,9 @@ class Flight:
                 if not asked and "Mode HOLD" in texts:
                     asked = True
                     r = command(mav.MAV_CMD_USER_1, 1.0, timeout=1.0)
+                    # octo-fw answers IN_PROGRESS when the experiment starts (ACCEPTED when it ends)
                     res["experiment"] = {mav.MAV_RESULT_ACCEPTED: "accepted",
+                                         mav.MAV_RESULT_IN_PROGRESS: "accepted",
                                          mav.MAV_RESULT_UNSUPPORTED: "not in this build"}.get(r, f"result {r}")
             waiter.join(timeout=FLIGHT_S * 2)
             wall = done["t"] - t_arm
@@ -303,8 +305,12 @@ def item_speed(rep, args):
                     runs[act].append({"error": str(e)})
                 cmds[f"flight_{act}"] = f"{cmdline(f.sim_argv)} & {cmdline(f.fw_argv)} & (pymavlink GCS: arm, take-off 10 m, MAV_CMD_USER_1 1 in HOLD)"
                 shutil.rmtree(d, ignore_errors=True)
-                r, cmds[f"pingpong_{act}"] = pingpong(frames, n, b)
-                pp[act].append(r["frames_per_s"] / HZ)
+                # the bound: the best of 3 ping-pongs (a limit, so the least disturbed run)
+                best = 0.0
+                for _ in range(3):
+                    r, cmds[f"pingpong_{act}"] = pingpong(frames, n, b)
+                    best = max(best, r["frames_per_s"] / HZ)
+                pp[act].append(best)
                 r, cmds[f"sim_alone_{act}"] = sim_alone(act, duration)
                 alone[act].append(r["frames_per_s"] / HZ)
     finally:
@@ -327,7 +333,7 @@ def item_speed(rep, args):
                 f"ping-pong bound {fmt(p['median'], 0, 'x')}: {fmt(pct['median'] if pct else None, 0, ' %')} of it",
                 ">= 300x, >= 50 %",
                 None if not s else (s["median"] >= 300 and pct["median"] >= 50), cmds.get(f"flight_{act}"))
-        rep.row(1, f"  UDP ping-pong bound, {what}", fmt(p["median"], 0, "x"), spread(p), "", "", None,
+        rep.row(1, f"  UDP ping-pong bound (best of 3 per run), {what}", fmt(p["median"], 0, "x"), spread(p), "", "", None,
                 cmds.get(f"pingpong_{act}"))
     flights_with = ", ".join(sorted(exp_state))
     res["experiment_1"] = flights_with
@@ -450,10 +456,12 @@ def item_step(rep, args):
     rep.row(2, f"  allocator worst demand ({worst_steps} of <= {bound} steps), M4F", fmt(worst), "",
             f"host x86-64: {fmt(mean('bench_alloc_worst'))} Ir", "(reported)", None, m4_cmd)
     if hold and worst is not None:
+        ctl = hold["max"] - m4f["alloc_hover"] + worst
         est = max(hold["max"], ex["max"] if ex else 0) - m4f["alloc_hover"] + worst
+        res["worst_step_hold_saturated_m4f"] = ctl
         res["worst_step_estimate_m4f"] = est
-        rep.row(2, "  worst-case step (max step - hover allocation + worst allocation), M4F", fmt(est), "",
-                "", "<= 5,000", est <= 5000, m4_cmd)
+        rep.row(2, "  worst case: HOLD step with the worst allocation (max - hover alloc. + worst)", fmt(ctl), "",
+                f"any step so: {fmt(est)}", "<= 5,000", ctl <= 5000 and est <= 5000, m4_cmd)
     rep.data["step"] = res
     rep.commands["step_host"] = host_cmd
     rep.commands["step_m4f"] = m4_cmd
@@ -594,7 +602,7 @@ def fw_excitation():
 
 
 def item_estim(rep, args):
-    runs = 200 if args.quick else 5000
+    runs = 200 if args.quick else 20000
     lo, hi = chi2_interval(runs)
     kind, amp, div = fw_excitation()
     kinds = {0: "uniform", 1: "PRBS", 2: "multisine"}
@@ -668,6 +676,8 @@ def main():
     ap.add_argument("--quick", action="store_true", help="tiny configuration (smoke test), figures meaningless")
     ap.add_argument("--no-arm", action="store_true", help="skip the Cortex-M figures")
     ap.add_argument("--out", default=str(B / "bench.json"))
+    ap.add_argument("--readme", action="store_true",
+                    help="also replace the table between the bench markers of README.md's Performance section")
     args = ap.parse_args()
     only = [x for x in args.only.split(",") if x] or list(ITEMS)
     bad = [x for x in only if x not in ITEMS]
@@ -708,6 +718,15 @@ def main():
     md.write_text(f"`{invoked}` on {mach['cpu']}, {mach['cores']} cores (load {mach['load_avg_1m']}), "
                   f"{mach['date_utc']} UTC, {dur:.0f} s; timed figures: median of {args.repeats} runs "
                   f"[min .. max].\n\n" + rep.markdown())
+    if args.readme:
+        readme = REPO / "README.md"
+        text = readme.read_text()
+        m = re.search(r"(<!-- bench:begin[^>]*-->\n).*?(<!-- bench:end -->)", text, re.S)
+        if m:
+            readme.write_text(text[:m.end(1)] + md.read_text() + text[m.start(2):])
+            print("== README.md: Performance table replaced")
+        else:
+            print("== README.md: no <!-- bench:begin --> ... <!-- bench:end --> markers: not changed")
     return 1 if errors else 0
 
 
