@@ -43,7 +43,16 @@ static const char *phase_name(int k)
 
 #define SETTLE_S 1.0f         /* no excitation, filters run, before each phase's excitation */
 #define HEIGHT_ABORT_M 1.5f   /* |z - z at start| beyond this aborts */
-#define INR_WC_RPS 12.0f      /* state-variable filter of the inertia regression */
+/* inertia: roll/pitch by a multisine (harmonics 4..15 of 0.5 Hz: 2..7.5 Hz, above the
+ * attitude loop, where torque turns into acceleration rather than tilt) of peak ID_INR_AMP,
+ * SVF corner 25 rad/s; yaw (weak torque, so the gyro noise matters more) by a PRBS at the
+ * ID_EXC_DIV clock, peak ID_INR_AMP / 10, SVF corner 12 rad/s */
+#define INR_WC_RP_RPS 25.0f
+#define INR_WC_YAW_RPS 12.0f
+#define INR_MS_K_FIRST 4u
+#define INR_MS_COUNT 12u
+#define INR_YAW_DIV 10.0f     /* yaw (and validation mu_1) amplitude: ID_INR_AMP / 10 */
+#define INR_AMP_DEF 0.8f
 #define INR_ZETA 0.7f
 #define PRBS_ORDER 9u
 
@@ -236,9 +245,12 @@ static void phase_begin(struct experiment *e, const struct exp_input *in)
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
 		e->t_run = prm(p, "ID_INR_TIME", 10.0f);
-		float amp = prm(p, "ID_INR_AMP", 0.25f);
-		xp.kind = EXCITE_PRBS;
-		xp.amplitude = sc_from_float(ax == 2u ? amp / 3.0f : amp);
+		float amp = prm(p, "ID_INR_AMP", INR_AMP_DEF);
+		xp.kind = ax == 2u ? EXCITE_PRBS : EXCITE_MULTISINE;
+		xp.ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
+		xp.ms_k_first = INR_MS_K_FIRST;
+		xp.ms_count = INR_MS_COUNT;
+		xp.amplitude = sc_from_float(ax == 2u ? amp / INR_YAW_DIV : amp);
 		const struct hal_sensor_frame *f = in->frame;
 		scalar_t fm[8], tm[8], tau[3], w[3], inertia[3] = {
 			sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz)};
@@ -250,14 +262,15 @@ static void phase_begin(struct experiment *e, const struct exp_input *in)
 		for (int i = 0; i < 3; i++)
 			w[i] = sc_from_float(f->rate_b_rps[i]);
 		scalar_t alpha = ident_torque_weight(sc_from_float(prm(p, "ID_MOT_TAU", 0.03f)), dt);
-		ident_inertia_init(&e->inr, ax, SC(INR_WC_RPS), SC(INR_ZETA), dt, alpha, inertia, w, tau);
+		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS),
+				   SC(INR_ZETA), dt, alpha, inertia, w, tau);
 		e->est_live = 1u << (4u + ax);
 	} else {
 		e->t_run = prm(p, "ID_VAL_TIME", 5.0f);
 		/* mu_1: the paper's uniform random signal, on the yaw torque demand (yaw moves
 		 * single rotor thrusts most for the least attitude change) */
 		xp.kind = EXCITE_UNIFORM;
-		xp.amplitude = sc_from_float(prm(p, "ID_INR_AMP", 0.25f) / 3.0f);
+		xp.amplitude = sc_from_float(prm(p, "ID_INR_AMP", INR_AMP_DEF) / INR_YAW_DIV);
 		filt_delay_init(&e->val_delay, prm_u(p, "ID_DELAY_FR", 0.0f, 0u, FILT_DELAY_MAX),
 				sc_from_float(in->rotor_f_cmd[0]));
 		filt_lag_init(&e->val_lag, sc_from_float(prm(p, "ID_MOT_TAU", 0.03f)), dt,

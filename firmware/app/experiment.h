@@ -38,7 +38,7 @@
  *              ID_DELAY_FR more frames and lagged by ID_MOT_TAU (a PARAMETER, 0.03 s;
  *              not estimated), through the thrust curve MOT_CURVE. The paper's plain
  *              estimator (eq. 18-20) runs alongside (ident.h).
- *   validation ID_VAL_TIME s of mu_1: uniform random (+/- ID_INR_AMP / 3 N m, new every
+ *   validation ID_VAL_TIME s of mu_1: uniform random (+/- ID_INR_AMP / 10 N m, new every
  *              ID_EXC_DIV frames) added to the YAW torque demand (yaw moves single rotor
  *              thrusts most, ~+/-0.7 N on rotor 1, and tilts nothing). Compared: measured
  *              f_1 against the model's prediction of it: the thrust the mixer allocated
@@ -47,11 +47,16 @@
  *              100 (1 - |y - y_hat| / |y - mean y|). Results go to ID_VAL_*_PRE before
  *              rotor identification, ID_VAL_*_POST after (experiment 2 alone: POST when
  *              ID_RESULT bit 1 is set).
- *   inertia    ID_INR_TIME s of PRBS torque +/- ID_INR_AMP N m (0.25; yaw a third)
- *              about one axis; torque from the measured rotor thrusts through Gamma_o
- *              (arm VEH_ARM_L) and, for yaw, from the measured rotor torques; torque,
- *              rate and the gyroscopic product through one SVF (wc 12 rad/s, zeta 0.7);
- *              RLS (ident.h).
+ *   inertia    ID_INR_TIME s of torque excitation about one axis. Roll/pitch: a multisine
+ *              (harmonics 4..15 of 0.5 Hz = 2..7.5 Hz, Schroeder phases) of peak
+ *              ID_INR_AMP (0.8 N m): above the attitude loop's bandwidth torque becomes
+ *              acceleration rather than tilt (~3 deg), which is what the estimate feeds
+ *              on; SVF corner 25 rad/s. Yaw: PRBS at the ID_EXC_DIV clock, peak
+ *              ID_INR_AMP / 10 (rotor thrusts move ~9 N per N m of yaw), SVF corner
+ *              12 rad/s (gyro noise). Torque from the measured rotor thrusts through
+ *              Gamma_o (arm VEH_ARM_L) and, for yaw, from the measured rotor torques;
+ *              torque, rate and the gyroscopic product through one SVF (zeta 0.7); the
+ *              sampled-data regression of ident.h (torque weight from ID_MOT_TAU); RLS.
  * Acceptance (ident_accept): finite, within [0.25, 4] x the current VEH_* value,
  * relative std < ID_RSD_MAX (0.02); then VEH_* and ID_RESULT bits are among the
  * results; otherwise a STATUSTEXT says why and VEH_* stay. The experiment aborts
