@@ -233,7 +233,8 @@ class Flight:
             res.update(wall_s=wall, sim_s=self.duration, x_realtime=self.duration / wall,
                        sim_rss_kb=hwm["sim"], sim_exit=sim.returncode,
                        reached_hold="Mode HOLD" in texts,
-                       experiment_texts=[t for t in texts if "xperiment" in t or "Mode EXPERIMENT" in t])
+                       experiment_done="ID done" in texts,
+                       experiment_texts=[t for t in texts if "xperiment" in t or t.startswith("ID ")])
         finally:
             if sim.returncode is None and "t" not in done:
                 sim.kill()
@@ -339,8 +340,10 @@ def item_speed(rep, args):
     res["experiment_1"] = flights_with
     res["flight"] = (f"{duration:g} s simulated: arm, take-off to 10 m, hold; experiment 1 (MAV_CMD_USER_1): "
                      f"{flights_with}")
+    n_done = sum(1 for a in PATTERNS for r in runs[a] if r.get("experiment_done"))
+    n_all = sum(len(runs[a]) for a in PATTERNS)
     rep.row(1, "  flight flown", "take-off + hold" if "accepted" not in exp_state else "take-off, hold, exp. 1",
-            "", f"experiment 1: {flights_with}", "", None)
+            "", f"experiment 1: {flights_with}; finished ('ID done') in {n_done} of {n_all} flights", "", None)
     rss = {"octo-sim": mmm([r.get("sim_rss_kb") for a in PATTERNS for r in runs[a]]),
            "octo-fw": mmm([r.get("fw_rss_kb") for a in PATTERNS for r in runs[a]])}
     res["peak_rss_kb"] = rss
@@ -575,6 +578,8 @@ def item_alloc(rep, args):
     rep.row(4, "  unattainable: max |error| per axis",
             " / ".join(fmt(p["unattainable_err_max"][k], n) for k, _, n in ax), "",
             "clip: " + " / ".join(fmt(q["unattainable_err_max"][k], n) for k, _, n in ax), "", None, c)
+    rep.row(4, "  allocator steps used, max over all demands", str(r["priority_max_steps"]), "",
+            f"iteration bound (mixer.h): {r['step_bound']}", "(reported)", None, c)
     rep.data["alloc"] = r
     rep.commands["alloc"] = c
     return r
