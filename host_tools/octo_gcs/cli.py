@@ -101,6 +101,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="X-Plane protocol personality of octo-sim (default 12)")
     mp.add_argument("--experiments", default="6", metavar="LIST",
                     help="experiments to run (default 6, the full sequence; 'none' only flies)")
+    mp.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                    help="set a vehicle parameter before the flight, e.g. ID_INR_TIME=20 (repeatable)")
     mp.add_argument("--build-dir", metavar="DIR",
                     help="where octo-sim and octo-fw are (default $OCTO_BUILD, else the repository's build/)")
     mp.add_argument("--no-plots", dest="plots", action="store_false", help="skip the figures")

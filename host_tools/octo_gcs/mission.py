@@ -34,6 +34,19 @@ def _experiments_option(text):
     return parse_experiments(text)
 
 
+def _param_options(items):
+    out = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        try:
+            if not sep or not name.strip():
+                raise ValueError
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise GcsError(f"--param {item!r}: expected NAME=VALUE, e.g. ID_INR_TIME=20") from None
+    return out
+
+
 class Mission:
     def __init__(self, args, out=None):
         self.args = args
@@ -82,6 +95,10 @@ class Mission:
         bench = {"VEH_MASS": veh["mass"], "VEH_ARM_L": veh["arm_length"]}
         if "ID_SEED" in nominal:
             bench["ID_SEED"] = float(a.seed)
+        for name, value in a.param_values.items():
+            if name not in nominal:
+                raise GcsError(f"--param {name}: the vehicle has no such parameter")
+            bench[name] = value
         for name, value in bench.items():
             v.set_param(name, value)
         say(f"vehicle up; set " + ", ".join(f"{k} {val:g}" for k, val in bench.items())
@@ -140,6 +157,7 @@ def run(args):
     t_start = time.monotonic()
     prog = Progress()
     experiments = _experiments_option(args.experiments)
+    args.param_values = _param_options(args.param)
     try:
         veh = vehiclefile.load(args.vehicle)
     except vehiclefile.VehicleFileError as e:
@@ -154,7 +172,7 @@ def run(args):
         stage.mkdir()
     except OSError as e:
         raise GcsError(f"cannot write {out}: {e.strerror}") from None
-    planned = sum(planned_sim_seconds({}, e) for e in experiments) if experiments else 0.0
+    planned = sum(planned_sim_seconds(args.param_values, e) for e in experiments) if experiments else 0.0
     args.sim_limit = max(300.0, 3 * planned + 200.0)   # bounds the logs if anything hangs
     m = Mission(args, out=prog)
     ok = False
