@@ -163,3 +163,23 @@ def test_excitation_kinds(launch, port, tmp_path, kind):
     assert max(z) - min(z) < 1.0
     if kind == 0:
         assert b == pytest.approx(-0.088, abs=0.01)
+
+
+def test_transport_delay_and_slower_motors_modelled(launch, port, tmp_path):
+    """A plant with 2 frames of transport delay and a 50 ms motor lag, told to the regressor
+    (ID_DELAY_FR 2, ID_MOT_TAU 0.05): k_f, k_tau and the inertia stay accurate."""
+    veh = random_vehicle(random.Random(77))
+    veh.update(delay=2.0 / 90.0, motor_tau=0.05)
+    fl = IdentFlight(launch, port, tmp_path, vehicle=veh, seed=77,
+                     params={"ID_DELAY_FR": 2, "ID_MOT_TAU": 0.05})
+    fl.takeoff()
+    texts = fl.experiment(6)
+    assert "ID done" in texts, texts
+    got = [fl.param(n) for n in ("ID_KF_EST", "ID_KTAU_EST", "ID_IXX_EST", "ID_IYY_EST",
+                                 "ID_IZZ_EST")]
+    fl.finish()
+    truth = [veh["kf"], veh["ktau"], *veh["inertia"]]
+    err = [g / t - 1 for g, t in zip(got, truth)]
+    print("errors %:", " ".join(f"{100 * e:+.3f}" for e in err))
+    assert abs(err[0]) < 0.003 and abs(err[1]) < 0.003
+    assert all(abs(e) < 0.02 for e in err[2:])
