@@ -85,13 +85,16 @@ class Rig:
                 self.texts.append(msg.text)
             if t in types:
                 return msg
-            if t in ("AUTOPILOT_VERSION", "PARAM_VALUE", "MISSION_COUNT", "FILE_TRANSFER_PROTOCOL"):
+            if t in ("AUTOPILOT_VERSION", "PARAM_VALUE", "MISSION_COUNT", "FILE_TRANSFER_PROTOCOL",
+                     "COMMAND_ACK"):
                 self.backlog.append(msg)
                 del self.backlog[:-50]
         return None
 
     def cmd(self, command, *params, timeout=3.0, confirmation=0, target_component=1):
         p = list(params) + [0.0] * (7 - len(params))
+        self.backlog = [m for m in self.backlog
+                        if not (m.get_type() == "COMMAND_ACK" and m.command == command)]
         start = len(self.texts)
         self.m.mav.command_long_send(1, target_component, command, confirmation, *p)
         deadline = time.monotonic() + timeout
