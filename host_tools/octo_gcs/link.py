@@ -174,7 +174,10 @@ class Vehicle:
             m = self.recv("PARAM_VALUE", 1.0, cond=lambda m: m.param_id == name)
             if m is not None:
                 return m.param_value
-        raise GcsError(f"no parameter {name} on the vehicle ({self._last_text()})")
+        why = self._last_text()
+        raise GcsError(f"no parameter {name} on the vehicle"
+                       + (f" ({why})" if why else " (no answer: unknown name, or the vehicle wants "
+                          "signed messages: --signing-key)"))
 
     def set_param(self, name, value, retries=3):
         """PARAM_SET with the echo check ground stations make. Returns the echoed value;

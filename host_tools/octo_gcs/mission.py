@@ -88,8 +88,15 @@ class Mission:
         a, say = self.args, self.prog.say
         v = self.vehicle
         t0 = time.monotonic()
-        v.wait_heartbeat(timeout=10.0)
-        self._alive()
+        deadline = time.monotonic() + 10.0
+        while True:   # a program that dies at start is reported at once, with its output
+            self._alive()
+            try:
+                v.wait_heartbeat(timeout=0.2)
+                break
+            except GcsError:
+                if time.monotonic() > deadline:
+                    raise GcsError("no heartbeat from octo-fw after 10 s:\n" + self.fw.tail()) from None
         fl = Flight(v, alive=self._alive)
         nominal = v.fetch_params()
         bench = {"VEH_MASS": veh["mass"], "VEH_ARM_L": veh["arm_length"]}
@@ -205,9 +212,14 @@ def run(args):
             rep["timing"]["wall_total_s"] = round(time.monotonic() - t_start, 2)
             files = _publish(stage, out, rep)
             ok = True
+    except GcsError as e:
+        dest = _keep_failed(stage, out)
+        raise GcsError(f"{e}" + (f"\n(the logs of the failed run are in {dest}/)" if dest else "")) from None
     finally:
         if not ok:
-            _keep_failed(stage, out, prog)
+            dest = _keep_failed(stage, out)
+            if dest:
+                print(f"octo-gcs: the logs of the failed run are in {dest}/", file=sys.stderr)
     from .report import table_text
     print()
     print(table_text(rep))
@@ -235,14 +247,16 @@ def _publish(stage, out, rep):
     return order
 
 
-def _keep_failed(stage, out, prog):
+def _keep_failed(stage, out):
+    """Moves a failed run's stage to DIR/failed-run (replacing an older one); returns it."""
     if stage is None or not stage.exists():
-        return
+        return None
     dest = out / "failed-run"
     try:
         if dest.exists():
             shutil.rmtree(dest)
         os.replace(stage, dest)
-        print(f"octo-gcs: the logs of the failed run are in {dest}/", file=sys.stderr)
+        return dest
     except OSError:
         shutil.rmtree(stage, ignore_errors=True)
+        return None
