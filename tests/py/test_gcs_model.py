@@ -57,7 +57,7 @@ def test_model_matches_octo_sim_ideal(launch, port, tmp_path, version):
     p = Params()
     log = tmp_path / "truth.lcm"
     sim = SimUnderTest(launch, port, "--ideal", "--lockstep", "--xplane-version", version,
-                       "--lcm", f"file://{log}", rows=[16, 17, 20, 21])
+                       "--lcm", f"file://{log}", rows=[1, 16, 17, 20, 21])
     thr = throttle_sequence(p, N_FRAMES)
     frames = [sim.start_lockstep(thr[0])]
     for k in range(1, N_FRAMES):
@@ -96,6 +96,7 @@ def test_model_matches_octo_sim_ideal(launch, port, tmp_path, version):
 
     # 2. X-Plane Data Output (float32, degrees, FRD/NED conventions)
     for k, f in enumerate(frames):
+        assert f[1][2] == pytest.approx((k + 1) / RATE, abs=1e-4), "DATA frames out of step"
         s = states[k + 1]
         P, Q, R = xp.row16_pqr(f[16], version)
         wx, wy, wz = s[10:13]
