@@ -127,12 +127,17 @@ def test_link_loss_is_reported_and_long_loss_lands_on_recovery(launch, port, tmp
     hb = rig.recv({"HEARTBEAT"}, timeout=2)
     assert hb.system_status == mavlink.MAV_STATE_CRITICAL
     rig.recv(set(), timeout=max(0.0, 2.5 - (time.monotonic() - t_kill)))
-    rig.start_sim()                     # X-Plane back (a fresh one: rows and version again)
+    rig.version = 11                    # X-Plane back: a fresh one, another version even
+    rig.truth_log = tmp_path / "truth2.lcm"
+    rig.start_sim()
     deadline = time.monotonic() + 15
     while "Mode DISARMED" not in rig.texts and time.monotonic() < deadline:
         rig.recv(set(), timeout=0.05)
     assert any("link back" in t for t in rig.texts), rig.texts
     assert "Mode LAND" in rig.texts and "Mode DISARMED" in rig.texts, "|".join(rig.texts)
+    rig.sim.stop()
+    truth = read_log(rig.truth_log, "OCTO_TRUTH")
+    assert truth and max(tilt_deg(s.q_i2b) for s in truth) < 5.0
 
 
 FAULTS = "--duplicate 0.1 --reorder 0.1 --delay-frames 2 --lockstep-timeout 0.005"

@@ -22,6 +22,7 @@ static const uint32_t wanted_bits[N_WANTED] = {HAL_FRAME_TIME, HAL_FRAME_RATES, 
 #define DSEL_PERIOD_US 1000000u
 #define RREF_PERIOD_US 5000000u
 #define OVERRIDE_PERIOD_US 1000000u
+#define XP_SILENCE_US 1000000u    /* DATA silent this long: re-detect the version */
 #define XP_STALE_S 0.25             /* older by less than this: a reordered frame */
 
 static const char VERSION_REF[] = "sim/version/xplane_internal_version";
@@ -236,6 +237,14 @@ int xp_client_receive(struct xp_client *c, struct hal_sensor_frame *frame, uint6
 		c->stats.dropped++;
 		return 0;
 	}
+	/* DATA again after a silence: X-Plane may have been restarted (another
+	 * version): ask for the version now instead of at the next 5 s re-request */
+	if (c->last_data_us && now_us - c->last_data_us > XP_SILENCE_US) {
+		uint8_t req[XP_RREF_REQ_LEN];
+		send_to_xp(c, req, xp_encode_rref(req, sizeof req, 1, XP_RREF_VERSION_INDEX, VERSION_REF));
+		c->last_rref_us = now_us;
+	}
+	c->last_data_us = now_us;
 	note_rows(c, &c->msg, now_us);
 	struct hal_sensor_frame f = *frame;   /* keeps the previous values of absent rows */
 	float raw_t = 0.0f;

@@ -47,6 +47,7 @@ struct xp_client {
 	struct hal_link_stats stats;
 	uint64_t row_seen_us[8];          /* per wanted row, wall time last seen */
 	uint64_t last_dsel_us, last_rref_us, last_override_us, last_usel_us;
+	uint64_t last_data_us;            /* wall time of the last DATA datagram */
 	uint8_t unselected[256 / 8];      /* rows already USEL'd */
 	bool have_t;
 	double t_offset, t_last;          /* time re-basing */
