@@ -12,8 +12,8 @@
 #define CHAN MAVLINK_COMM_0
 #define PARAM_PACE_US 2000u        /* list streaming: one PARAM_VALUE per 2 ms */
 #define PARAM_PER_TICK 4
-#define TEXT_BURST 20.0f           /* STATUSTEXT: burst of 20, then 10 per second */
-#define TEXT_RATE 10.0f
+#define TEXT_BURST 50.0f           /* STATUSTEXT: burst of 50, then 20 per second */
+#define TEXT_RATE 20.0f
 #define FW_VERSION 0x00050000u     /* 0.5.0 (issue 5) */
 
 /* Signing state of the one MAVLink channel (attached to the library's channel
