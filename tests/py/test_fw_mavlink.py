@@ -351,3 +351,33 @@ def test_signing_rejects_unsigned_wrong_and_replayed(launch, port, tmp_path):
         if st is not None and st.errors_count4 >= 4:
             break
     assert st is not None and st.errors_count4 >= 4     # rejected by signing, counted
+
+
+def test_floods_and_garbage_are_limited_and_counted(launch, port, tmp_path):
+    import os
+    import socket
+    rig = fw_alone(launch, port, tmp_path)
+    for _ in range(300):
+        rig.m.mav.param_request_read_send(1, 1, b"NOPE", -1)
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    rnd = __import__("random").Random(5)
+    for _ in range(200):   # garbage, and MAVLink-looking frames with bad checksums
+        b = bytearray(os.urandom(rnd.randrange(1, 300)))
+        if rnd.random() < 0.5:
+            b[0] = 0xFD
+        s.sendto(bytes(b), ("127.0.0.1", rig.mav_port))
+    s.close()
+    texts = 0
+    end = time.monotonic() + 1.0
+    while time.monotonic() < end:
+        if rig.recv({"STATUSTEXT"}, timeout=end - time.monotonic()) is not None:
+            texts += 1
+    assert 10 <= texts <= 80, texts             # a burst, then a rate: never 300
+    st = None
+    for _ in range(3):
+        st = rig.recv({"SYS_STATUS"}, timeout=2)
+        if st is not None and st.errors_count3 > 0:
+            break
+    assert st.errors_count3 >= 200              # STATUSTEXTs not sent, counted
+    assert rig.fw.alive()
+    assert rig.param_get("VEH_KF") is not None  # still answering
