@@ -116,7 +116,8 @@ def build_parser() -> argparse.ArgumentParser:
         "of Fig. 7 uses the parameters in use at the end of the firmware log, or those of --params.")
     pl.add_argument("logs", nargs="+", metavar="LOG", help="LCM log files, or directories holding *.lcm")
     pl.add_argument("--out", default=".", metavar="DIR", help="where the figures go (default .)")
-    pl.add_argument("--params", metavar="FILE", help="parameter file (params.parm of a mission)")
+    pl.add_argument("--params", metavar="FILE",
+                    help="parameter file (default: params.parm in a LOG directory, if there)")
     return p
 
 

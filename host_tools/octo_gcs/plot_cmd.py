@@ -27,9 +27,13 @@ def run(args):
 
     logs = Logs(find_logs(args.logs))
     params = params_from_logs(logs)
-    if args.params:
+    pfile = args.params
+    if pfile is None:   # a mission's directory: its params.parm
+        dirs = [d for d in args.logs if os.path.isdir(d) and os.path.exists(os.path.join(d, "params.parm"))]
+        pfile = os.path.join(dirs[0], "params.parm") if dirs else None
+    if pfile:
         try:
-            params.update(paramfile.load(args.params))
+            params.update(paramfile.load(pfile))
         except (OSError, paramfile.ParamFileError) as e:
             raise GcsError(str(e)) from None
     rep = {"_params": params, "truth": truth_from_logs(logs, load(None)) if logs.truth is not None else {}}
