@@ -26,6 +26,8 @@ from .flight import Flight
 from .progress import Progress
 
 TAKEOFF_M = 10.0
+OUTPUTS = ("report.md", "report.json", "params.parm", "truth.lcm", "fw.lcm", "octo-sim.log", "octo-fw.log",
+           "fig5_excitation.png", "fig6_validation.png", "fig7_rates.png", "convergence.png")
 
 
 def _experiments_option(text):
@@ -184,8 +186,8 @@ def run(args):
     m = Mission(args, out=prog)
     ok = False
     mode = "real time" if args.realtime else "lockstep"
-    prog.say(f"mission: octo-sim ({mode}, X-Plane {args.xplane_version}, seed {args.seed}"
-             f"{', vehicle ' + str(args.vehicle) if args.vehicle else ', the paper vehicle'}) "
+    vname = f"vehicle {args.vehicle}" if args.vehicle else "the paper's vehicle"
+    prog.say(f"mission: octo-sim ({mode}, X-Plane {args.xplane_version}, seed {args.seed}, {vname}) "
              f"+ octo-fw from {build}")
     try:
         with procs.signals_as_exceptions():
@@ -205,7 +207,8 @@ def run(args):
             wall_flight = time.monotonic() - t_start
             prog.say(f"flight done in {wall_flight:.1f} s; building the report")
             paramfile.save(stage / "params.parm", m.params_only)
-            os.unlink(stage / "fw-storage.parm") if (stage / "fw-storage.parm").exists() else None
+            if (stage / "fw-storage.parm").exists():
+                os.unlink(stage / "fw-storage.parm")   # octo-fw's own storage: params.parm says it
             rep = build_report(stage, veh, args, nominal, after, experiments,
                                wall_flight_s=wall_flight, from_texts=m.from_texts)
             write_outputs(stage, rep, args.plots)
@@ -244,6 +247,11 @@ def _publish(stage, out, rep):
     for n in order:
         os.replace(stage / n, out / n)
     shutil.rmtree(stage, ignore_errors=True)
+    # what an earlier run left and this one did not write would not belong to this report
+    for n in OUTPUTS:
+        if n not in order and (out / n).exists():
+            os.unlink(out / n)
+    shutil.rmtree(out / "failed-run", ignore_errors=True)
     return order
 
 

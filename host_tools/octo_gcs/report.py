@@ -213,10 +213,11 @@ def table_text(rep):
 def markdown(rep, figures=()):
     head, rows = table_rows(rep)
     run = rep["run"]
+    vname = run["vehicle_file"] or "the paper's (defaults)"
     lines = [
         "# Octo-SIL identification report", "",
         f"{rep['tool']}, {rep['created_utc']}. Plant: {run['plant']} (X-Plane {run['xplane_version']} "
-        f"protocol), seed {run['seed']}, vehicle {run['vehicle_file'] or 'the paper vehicle (defaults)'}; "
+        f"protocol), seed {run['seed']}, vehicle {vname}; "
         f"bench values given to the firmware: mass {rep['bench']['mass_kg']:g} kg, "
         f"arm length {rep['bench']['arm_length_m']:g} m.", "",
         "## Table 1 beside the truth and the estimates", "",
