@@ -100,6 +100,15 @@ def parameter_rows(nominal, after, truth, experiments):
     return rows
 
 
+def _validation_params(after, tag):
+    """The firmware's validation result (ID_VAL_*_PRE/POST); None when not run (0)."""
+    suffix = "PRE" if tag == "before" else "POST"
+    ne_, fit = after.get(f"ID_VAL_NE_{suffix}"), after.get(f"ID_VAL_FIT_{suffix}")
+    if not ne_:
+        return {"ne": None, "fit_pct": None}
+    return {"ne": _num(ne_), "fit_pct": _num(fit, 3)}
+
+
 def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=None, logs=None,
                  from_texts=()):
     """The report dict of a mission whose files are in `stage`."""
@@ -122,10 +131,7 @@ def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=No
         "bench": {"mass_kg": veh["mass"], "arm_length_m": veh["arm_length"]},
         "truth": {k: _num(v) for k, v in truth.items()},
         "parameters": parameter_rows(nominal, after, truth, experiments),
-        "validation": {
-            "before": {"ne": _num(after.get("ID_VAL_NE_PRE")), "fit_pct": _num(after.get("ID_VAL_FIT_PRE"), 3)},
-            "after": {"ne": _num(after.get("ID_VAL_NE_POST")), "fit_pct": _num(after.get("ID_VAL_FIT_POST"), 3)},
-        },
+        "validation": {tag: _validation_params(after, tag) for tag in ("before", "after")},
         "estimator": {k: _num(after.get(k)) for k in sorted(after) if k.startswith("ID_") and not any(
             k in (q.est, q.sd, q.plain) for q in QUANTITIES)},
     }

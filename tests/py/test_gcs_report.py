@@ -216,6 +216,31 @@ def test_plot_command_from_logs(synthetic, tmp_path, capsys):
     assert "4 figures" in out and "fit" in out
     assert main(["plot", str(tmp_path / "nope.lcm")]) == 1
     assert "no such log" in capsys.readouterr().err
+    # a real X-Plane gives no truth log: the figures come from the firmware log alone
+    only_fw = tmp_path / "fw-only"
+    assert main(["plot", str(synthetic / "fw.lcm"), "--out", str(only_fw)]) == 0
+    assert "from the firmware log" in capsys.readouterr().out
+    assert len(list(only_fw.glob("*.png"))) == 4
+    (tmp_path / "junk.lcm").write_bytes(b"not a log at all, not at all")
+    assert main(["plot", str(tmp_path / "junk.lcm")]) == 1
+    assert "not an LCM event log" in capsys.readouterr().err
+
+
+def test_progress_one_updating_line_on_a_tty_plain_lines_otherwise():
+    import io
+    from octo_gcs.progress import Progress
+    tty = io.StringIO()
+    p = Progress(stream=tty, tty=True)
+    p.update("ID 1/6 validation  t=  1.00 s", key=1)
+    p.update("ID 1/6 validation  t=  2.00 s", key=1)
+    p.say("  ID validation before: NE 0.2866")
+    assert tty.getvalue().count("\r") >= 3 and tty.getvalue().count("\n") == 1
+    plain = io.StringIO()
+    p = Progress(stream=plain, tty=False, every=60)
+    p.update("ID 1/6 validation", key=1)
+    p.update("ID 1/6 validation again", key=1)      # same phase, too soon: no line
+    p.update("ID 2/6 rotor coefficients", key=2)
+    assert plain.getvalue() == "ID 1/6 validation\nID 2/6 rotor coefficients\n" and "\r" not in plain.getvalue()
 
 
 # ---------------------------------------------------------------- identification checks
