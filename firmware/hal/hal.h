@@ -6,8 +6,10 @@
  * through the three entry points declared in app.h:
  *
  *   app_on_frame(app, frame)   once per sensor frame received from the plant;
- *                              the app answers with exactly one hal_actuate()
- *                              (once it has taken control of the throttles)
+ *                              the app answers each frame that brings a new
+ *                              time stamp with exactly one hal_actuate() (from
+ *                              the first arming on; duplicates and reordered
+ *                              frames get none)
  *   app_on_mavlink(app, b, n)  bytes received from the ground station
  *   app_tick(app)              often (>= 50 Hz wall clock): telemetry, link
  *                              supervision, paced parameter streaming
