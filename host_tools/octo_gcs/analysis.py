@@ -15,7 +15,7 @@ import re
 
 import numpy as np
 
-from .model import Model, Params, State
+from .model import Model, Params
 
 FRAME_DT = 1.0 / 90.0
 RK4_STEP = 0.002   # the paper's T
