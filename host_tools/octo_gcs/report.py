@@ -145,6 +145,13 @@ def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=No
             {"experiment": kind, "t_start": _num(t[0], 3), "t_end": _num(t[-1], 3),
              "fit_pct": {ax: _num(f, 2) for ax, f in zip(("wx", "wy", "wz"), fits)}}
             for kind, t, _w, _wm, fits in rates]
+        # the plain estimator's std is only in the log (est_sd[2], est_sd[3]): last value
+        from .plots import convergence_series
+        conv = convergence_series(logs)
+        for key in ("kf", "ktau"):
+            row = rep["parameters"][key]
+            if row["plain"] is not None and key + "_plain" in conv:
+                row["plain_sd"] = _num(float(conv[key + "_plain"][2][-1]), 8)
         rep["_rates"] = rates   # for the figures; removed before writing JSON
         rep["_validation"] = val
         rep["_logs"] = logs
@@ -177,13 +184,16 @@ def _pct(x):
 
 def table_rows(rep):
     """Header and rows of Table 1 beside truth and estimates (strings)."""
-    head = ["parameter", "paper (Tab. 1)", "truth", "nominal", "plain LS", "err", "lag-aware +/- sd",
+    head = ["parameter", "paper (Tab. 1)", "truth", "nominal", "plain LS +/- sd", "err", "lag-aware +/- sd",
             "err", "accepted"]
     rows = []
     for key, r in rep["parameters"].items():
         est = "-" if r["estimate"] is None else f"{r['estimate']:.6g} +/- {r['sd']:.2g}"
+        plain = _f(r["plain"])
+        if r["plain"] is not None and r.get("plain_sd") is not None:
+            plain += f" +/- {r['plain_sd']:.2g}"
         rows.append([f"{r['label']} [{r['unit']}]", _f(r["paper"]), _f(r["truth"]), _f(r["nominal"]),
-                     _f(r["plain"]), _pct(r["plain_error_pct"]), est, _pct(r["error_pct"]),
+                     plain, _pct(r["plain_error_pct"]), est, _pct(r["error_pct"]),
                      "yes" if r["accepted"] else "no"])
     return head, rows
 
