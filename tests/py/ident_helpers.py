@@ -40,7 +40,7 @@ class IdentFlight:
             sim_args.append("--ideal")
         # a loaded test machine can stall a lockstep pair for a few hundred ms of wall time:
         # a link timeout of 1 s keeps that from aborting experiments
-        params = {"FS_LINK_TO": 1.0, "ID_INR_AMP": 0.8, **(params or {})}
+        params = {"FS_LINK_TO": 1.0, **(params or {})}
         self.rig.params.write_text("".join(f"{k} {v}\n" for k, v in params.items()))
         self.rig.start(sim_args=sim_args)
         self.texts_seen = 0
