@@ -530,6 +530,11 @@ size_t mav_receive(struct app *a, const uint8_t *buf, size_t len)
 	mavlink_message_t msg;
 	mavlink_status_t st;
 	size_t accepted = 0;
+	/* One datagram holds whole packets: a truncated packet at the end of the
+	 * previous one must not swallow the start of this one. */
+	mavlink_status_t *ch = mavlink_get_channel_status(CHAN);
+	ch->parse_state = MAVLINK_PARSE_STATE_IDLE;
+	ch->msg_received = MAVLINK_FRAMING_INCOMPLETE;
 	for (size_t i = 0; i < len; i++) {
 		/* mavlink_frame_char, not mavlink_parse_char: the latter hides why a
 		 * frame failed, and rejections by signing are counted apart */

@@ -43,8 +43,9 @@ struct mav {
 };
 
 void mav_init(struct mav *m, uint64_t now_us);
-/* Parses bytes from the ground station and handles complete messages; returns
- * how many were accepted (valid checksum, and signature when signing is on). */
+/* Parses one datagram from the ground station (whole packets: the parser
+ * restarts at its first byte) and handles complete messages; returns how many
+ * were accepted (valid checksum, and signature when signing is on). */
 size_t mav_receive(struct app *a, const uint8_t *buf, size_t len);
 /* Streams due telemetry and parameters. */
 void mav_tick(struct app *a, uint64_t now_us);

@@ -381,3 +381,15 @@ def test_floods_and_garbage_are_limited_and_counted(launch, port, tmp_path):
     assert st.errors_count3 >= 200              # STATUSTEXTs not sent, counted
     assert rig.fw.alive()
     assert rig.param_get("VEH_KF") is not None  # still answering
+
+
+def test_truncated_packet_does_not_swallow_the_next_datagram(launch, port, tmp_path):
+    import socket
+    rig = fw_alone(launch, port, tmp_path)
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    for _ in range(5):
+        # a MAVLink 2 header announcing 255 bytes of payload, then nothing
+        s.sendto(bytes([0xFD, 0xFF, 0, 0, 7, 255, 190, 22, 0, 0]), ("127.0.0.1", rig.mav_port))
+        msg = rig.param_get("VEH_MASS", timeout=1.0)
+        assert msg is not None and math.isclose(msg.param_value, 2.132, rel_tol=1e-6)
+    s.close()
