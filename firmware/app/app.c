@@ -359,6 +359,7 @@ static void apply_results(struct app *a)
 	int n = a->exp.n_results < EXP_MAX_RESULTS ? a->exp.n_results : EXP_MAX_RESULTS;
 	if (n <= 0)
 		return;
+	float kf_old = a->p.veh_kf;
 	for (int i = 0; i < n; i++) {
 		int idx = a->exp.results[i].param_index;
 		if (idx < 0 || (size_t)idx >= param_count)
@@ -370,6 +371,13 @@ static void apply_results(struct app *a)
 		mav_param_value(a, (size_t)idx);
 	}
 	a->exp.n_results = 0;
+	if (a->p.veh_kf != kf_old && kf_old > 0.0f) {
+		/* bumpless: the throttles (what the plant sees) stay where they were, so the
+		 * height integrator takes the thrust demand to the new k_f's scale:
+		 * (g + a_int) -> (g + a_int) k_f new / k_f old (issue 6) */
+		float g = a->p.veh_grav, r = a->p.veh_kf / kf_old;
+		alt_ctrl_reset(&a->alt, sc_from_float((g + sc_to_float(a->alt.a_int_mps2)) * r - g));
+	}
 	char why[64];
 	if (app_params_save(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
 		app_status(a, MAV_SEVERITY_ERROR, "%s", why);
