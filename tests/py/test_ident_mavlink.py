@@ -6,6 +6,8 @@ broadcast and saved."""
 import struct
 import time
 
+import pytest
+
 from ident_helpers import MAV_CMD_USER_1, IdentFlight, mavlink
 
 
@@ -69,4 +71,38 @@ def test_rotor_experiment_over_mavlink(launch, port, tmp_path):
     assert m is not None and m.param_value == kf and texts
     m, _ = rig.param_set("ID_EXC_TIME", 5.0)
     assert m is not None and m.param_value == 5.0
+    fl.finish()
+
+
+def test_rejection_and_attitude_abort(launch, port, tmp_path):
+    """An estimate whose relative std exceeds ID_RSD_MAX is reported but not applied; an
+    excitation that tilts the vehicle beyond the limit aborts (FAILED, back to hold, nothing
+    applied)."""
+    fl = IdentFlight(launch, port, tmp_path, seed=41, params={"ID_RSD_MAX": 0.0001})
+    rig = fl.rig
+    fl.takeoff()
+    texts = fl.experiment(1)
+    assert any(t.startswith("ID kf ") and "rejected: std too large" in t for t in texts), texts
+    assert fl.param("VEH_KF") == 20.0
+    assert abs(fl.param("ID_KF_EST") / 28.0269 - 1) < 3e-3
+    assert fl.param("ID_RESULT") == 0.0
+    # 5 N m of roll torque: far beyond the attitude limit
+    m, _ = rig.param_set("ID_INR_AMP", 5.0)
+    assert m is not None and m.param_value == 5.0
+    start = len(rig.texts)
+    r, _ = rig.cmd(MAV_CMD_USER_1, 3)
+    assert r == mavlink.MAV_RESULT_IN_PROGRESS
+    final = None
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline and final is None:
+        a = rig.recv({"COMMAND_ACK"}, timeout=0.2)
+        if a is not None and a.command == MAV_CMD_USER_1 and a.result != mavlink.MAV_RESULT_IN_PROGRESS:
+            final = a.result
+    rig.recv(set(), timeout=0.3)
+    texts = rig.texts[start:]
+    print(texts)
+    assert final == mavlink.MAV_RESULT_FAILED
+    assert any(t.startswith("ID aborted") and "attitude" in t for t in texts), texts
+    assert "Mode HOLD" in texts
+    assert fl.param("VEH_IXX") == pytest.approx(0.05)
     fl.finish()
