@@ -306,10 +306,11 @@ static void phase_end(struct experiment *e, const struct exp_input *in)
 		set_result_bit(e, p, 1u, ok);
 		const char *why_f = ok ? "accepted" : (vf != IDENT_ACCEPT ? ident_verdict_text(vf) : "ktau rejected");
 		const char *why_t = ok ? "accepted" : (vt != IDENT_ACCEPT ? ident_verdict_text(vt) : "kf rejected");
-		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID kf %.3f +/- %.3f N %s%s", (double)kf,
-		    (double)kf_sd, ok ? "" : "rejected: ", why_f);
-		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID ktau %.4f +/- %.4f N m %s%s",
-		    (double)kt, (double)kt_sd, ok ? "" : "rejected: ", why_t);
+		/* STATUSTEXT holds 50 characters: the unit goes when a reason has to fit */
+		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID kf %.3f +/- %.3f %s%s", (double)kf,
+		    (double)kf_sd, ok ? "N " : "rejected: ", why_f);
+		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID ktau %.4f +/- %.4f %s%s",
+		    (double)kt, (double)kt_sd, ok ? "N m " : "rejected: ", why_t);
 		say(e, MAV_SEVERITY_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
@@ -326,8 +327,8 @@ static void phase_end(struct experiment *e, const struct exp_input *in)
 		if (ok)
 			result(e, pv[ax], est);
 		set_result_bit(e, p, 2u << ax, ok);
-		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID %s %.5f +/- %.5f kg m^2 %s%s", nm[ax],
-		    (double)est, (double)sd, ok ? "" : "rejected: ", ident_verdict_text(v));
+		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID %s %.5f +/- %.5f %s%s", nm[ax],
+		    (double)est, (double)sd, ok ? "kg m^2 " : "rejected: ", ident_verdict_text(v));
 	} else {
 		bool post = k == PK_VAL_POST || (k == PK_VAL && (result_mask(p) & 1u));
 		float ne = ident_fit_ne(&e->fit), fit = ident_fit_pct(&e->fit);

@@ -236,7 +236,7 @@ const char *ident_verdict_text(enum ident_verdict v)
 	case IDENT_NOT_FINITE:
 		return "not finite";
 	case IDENT_OUT_OF_RANGE:
-		return "outside 0.25..4 x nominal";
+		return "out of range";
 	case IDENT_UNCERTAIN:
 		return "std too large";
 	}

@@ -150,7 +150,7 @@ float ident_fit_pct(const struct ident_fit *v);
 /* ---------------------------------------------------------------- acceptance */
 enum ident_verdict {
 	IDENT_ACCEPT = 0,
-	IDENT_NOT_FINITE,   /* estimate or std not finite */
+	IDENT_NOT_FINITE,   /* estimate or std not finite (texts: short, for STATUSTEXT) */
 	IDENT_OUT_OF_RANGE, /* outside [0.25, 4] x nominal */
 	IDENT_UNCERTAIN,    /* relative std >= rsd_max (or no data) */
 };
