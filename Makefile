@@ -87,6 +87,7 @@ include tests/tests.mk
 include tests/core/probe.mk
 include tests/arm/arm.mk
 include tests/bench/bench.mk
+include tests/fuzz/fuzz.mk
 
 # ---------------------------------------------------------------- top-level goals
 .PHONY: all test run bench arm clean distclean help

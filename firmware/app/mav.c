@@ -425,8 +425,9 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 				a->mav.interval_us[s] = -1;
 			else if (prm[1] == 0.0f)
 				a->mav.interval_us[s] = streams[s].default_interval_us;
-			else
-				a->mav.interval_us[s] = prm[1] < 10000.0f ? 10000 : (int64_t)prm[1];
+			else   /* 10 ms .. 1000 s: a huge float must not reach the integer cast */
+				a->mav.interval_us[s] = prm[1] < 10000.0f ? 10000
+							: (prm[1] > 1.0e9f ? 1000000000 : (int64_t)prm[1]);
 			r = MAV_RESULT_ACCEPTED;
 		}
 		break;

@@ -1,0 +1,97 @@
+# tests/fuzz/: libFuzzer harnesses under AddressSanitizer + UBSan (clang).
+#
+#   make fuzz         each harness for FUZZ_SECONDS (60) with the committed seed
+#                     corpus tests/fuzz/corpus/NAME; new inputs go to
+#                     build/fuzz/corpus/NAME (never into git), crashes to
+#                     build/fuzz/artifacts/; figures in build/fuzz/summary.txt
+#   make fuzz-smoke   the same for FUZZ_SMOKE_SECONDS (10) each (CI)
+#   make fuzz-build   the four harnesses only
+# Both first replay tests/fuzz/regress/NAME/* (inputs that once failed).
+# clang and its runtime come from Debian's packages: installed with apt-get when
+# missing and running as root, otherwise the command is printed and make fails.
+
+FUZZ_CC       ?= clang
+FUZZ_CXX      ?= clang++
+FUZZ_SECONDS  ?= 60
+FUZZ_SMOKE_SECONDS ?= 10
+FUZZ_APT      := clang libclang-rt-14-dev
+FZ            := $(B)/fuzz
+FUZZ_SAN      := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
+                 -fno-omit-frame-pointer
+# params.c checks its table with _Static_assert on float comparisons, which GCC
+# folds and clang refuses in C: the GCC builds keep those checks, the fuzz
+# builds drop them.
+FUZZ_CFLAGS   := -std=c11 $(FUZZ_SAN) -Wall -Wextra -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE \
+                 '-D_Static_assert(c,m)=struct fuzz_static_assert_dropped'
+FUZZ_NAMES    := xp_client sim_input mavlink params
+FUZZ_BINS     := $(FUZZ_NAMES:%=$(FZ)/fuzz-%)
+FUZZ_TC_STAMP := $(FZ)/.toolchain
+
+# clang with a working libFuzzer + sanitizer runtime, or install it (root only).
+$(FUZZ_TC_STAMP):
+	@mkdir -p $(@D)
+	@probe() { echo 'int LLVMFuzzerTestOneInput(const char *d, unsigned long n){(void)d;(void)n;return 0;}' \
+	    | $(FUZZ_CC) -x c $(FUZZ_SAN) -o $(FZ)/.probe - >/dev/null 2>&1; }; \
+	if ! probe; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    echo "== installing $(FUZZ_APT) (Debian packages) for libFuzzer"; \
+	    { DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends $(FUZZ_APT) || \
+	      { apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends $(FUZZ_APT); }; } \
+	      >$(FZ)/apt.log 2>&1 || { tail -20 $(FZ)/apt.log; exit 1; }; \
+	  else \
+	    echo "error: '$(FUZZ_CC)' cannot build libFuzzer harnesses. Install clang as root:"; \
+	    echo "  apt-get install -y --no-install-recommends $(FUZZ_APT)"; exit 1; \
+	  fi; \
+	  probe || { echo "error: $(FUZZ_CC) still cannot link -fsanitize=fuzzer"; exit 1; }; \
+	fi
+	@rm -f $(FZ)/.probe; touch $@
+
+FUZZ_FW_INC := -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal -Ifirmware/hal/host -Itests/fuzz \
+               -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common
+FUZZ_APP_SRC := $(sort $(wildcard firmware/app/*.c firmware/core/*.c)) tests/fuzz/fuzz_hal.c
+
+$(FZ)/fuzz-xp_client: tests/fuzz/fuzz_xp_client.c firmware/hal/host/xp_client.c firmware/hal/host/xp_proto.c \
+		firmware/hal/host/xp_client.h firmware/hal/host/xp_proto.h firmware/hal/hal.h | $(FUZZ_TC_STAMP)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -Drecvfrom=fuzz_recvfrom -Dsendto=fuzz_sendto $(FUZZ_FW_INC) \
+	  -o $@ tests/fuzz/fuzz_xp_client.c firmware/hal/host/xp_client.c firmware/hal/host/xp_proto.c -lm
+
+$(FZ)/fuzz-params: tests/fuzz/fuzz_params.c firmware/app/params.c $(wildcard firmware/app/*.h) | $(FUZZ_TC_STAMP)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_FW_INC) -o $@ tests/fuzz/fuzz_params.c firmware/app/params.c -lm
+
+$(FZ)/fuzz-mavlink: tests/fuzz/fuzz_mavlink.c tests/fuzz/fuzz_hal.h $(FUZZ_APP_SRC) $(wildcard firmware/app/*.h firmware/core/*.h) \
+		| $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_FW_INC) -o $@ tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_SRC) -lm
+
+FUZZ_SIM_SRC := sim/xplane_input.cpp sim/xplane_proto.cpp sim/counters.cpp
+$(FZ)/fuzz-sim_input: tests/fuzz/fuzz_sim_input.cpp $(FUZZ_SIM_SRC) $(wildcard sim/*.hpp) | $(FUZZ_TC_STAMP)
+	$(FUZZ_CXX) -std=c++17 $(FUZZ_SAN) -Wall -Wextra -Isim -o $@ tests/fuzz/fuzz_sim_input.cpp $(FUZZ_SIM_SRC)
+
+# $(call fuzz_run,SECONDS): regressions, then every harness for SECONDS; a
+# summary line per harness (executions, executions per second) in summary.txt.
+define fuzz_run
+	@mkdir -p $(FZ)/artifacts; rm -f $(FZ)/summary.txt; rc=0; \
+	for h in $(FUZZ_NAMES); do \
+	  bin=$(FZ)/fuzz-$$h; reg=tests/fuzz/regress/$$h; \
+	  if [ -d $$reg ] && [ -n "$$(ls -A $$reg)" ]; then \
+	    echo "== fuzz-$$h: replaying $$(ls $$reg | wc -l) regression input(s)"; \
+	    $$bin $$reg/* >$(FZ)/$$h.regress.log 2>&1 || { tail -30 $(FZ)/$$h.regress.log; rc=1; continue; }; \
+	  fi; \
+	  mkdir -p $(FZ)/corpus/$$h; \
+	  echo "== fuzz-$$h: $(1) s"; \
+	  $$bin -max_total_time=$(1) -print_final_stats=1 -max_len=4096 -timeout=10 -rss_limit_mb=2048 \
+	    -artifact_prefix=$(FZ)/artifacts/$$h- $(FZ)/corpus/$$h tests/fuzz/corpus/$$h \
+	    >$(FZ)/$$h.log 2>&1 || { tail -40 $(FZ)/$$h.log; echo "FAIL: fuzz-$$h (input in $(FZ)/artifacts/)"; rc=1; }; \
+	  execs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $(FZ)/$$h.log); \
+	  eps=$$(sed -n 's/^stat::average_exec_per_sec: *//p' $(FZ)/$$h.log); \
+	  cov=$$(grep -o 'cov: [0-9]*' $(FZ)/$$h.log | tail -1); \
+	  printf '%-10s %4s s  %10s execs  %7s execs/s  %s  corpus %s\n' $$h $(1) "$$execs" "$$eps" "$$cov" \
+	    "$$(ls $(FZ)/corpus/$$h | wc -l)" | tee -a $(FZ)/summary.txt; \
+	done; exit $$rc
+endef
+
+.PHONY: fuzz fuzz-smoke fuzz-build
+fuzz-build: $(FUZZ_BINS)
+fuzz: $(FUZZ_BINS)
+	$(call fuzz_run,$(FUZZ_SECONDS))
+fuzz-smoke: $(FUZZ_BINS)
+	$(call fuzz_run,$(FUZZ_SMOKE_SECONDS))

@@ -1,0 +1,160 @@
+/*
+ * fuzz_mavlink.c - libFuzzer harness of octo-fw's MAVLink receive path:
+ * app_on_mavlink -> mav_receive (framing, CRC, signing) -> dispatch ->
+ * parameter and command handlers -> app (modes, experiments, storage).
+ *
+ * So that the fuzzer gets past the checksum, the input is a sequence of
+ * records and the harness frames messages itself with valid CRCs (and valid
+ * signatures when signing is on):
+ *   byte 0       bit 0: signing on (the firmware and the harness share a key)
+ *   then records [kind][len][len bytes]
+ *     kind % 16 < 10: one message of the table below, payload = the bytes
+ *                     (a MAVLink 2 payload: shorter ones are zero-extended),
+ *                     sender sysid/compid from kind's high bits;
+ *                     kind bit 7 set: the framed bytes are cut or extended
+ *                     with garbage before delivery (truncated / oversized)
+ *     10..11: the bytes as a raw datagram (no framing)
+ *     12..13: a sensor frame (hovering vehicle, the bytes perturb it)
+ *     14..15: app_tick after a wall-clock step
+ * Checks: parameters stay finite and inside their ranges.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <common/mavlink.h>
+
+#include "app.h"
+#include "fuzz_hal.h"
+
+static const uint32_t ids[10] = {
+	MAVLINK_MSG_ID_PARAM_SET,           MAVLINK_MSG_ID_COMMAND_LONG,
+	MAVLINK_MSG_ID_COMMAND_INT,         MAVLINK_MSG_ID_PARAM_REQUEST_READ,
+	MAVLINK_MSG_ID_PARAM_REQUEST_LIST,  MAVLINK_MSG_ID_HEARTBEAT,
+	MAVLINK_MSG_ID_MISSION_REQUEST_LIST, MAVLINK_MSG_ID_FILE_TRANSFER_PROTOCOL,
+	MAVLINK_MSG_ID_RADIO_STATUS,        MAVLINK_MSG_ID_STATUSTEXT,
+};
+
+static struct app app;
+static mavlink_signing_t tx_signing;
+static mavlink_signing_streams_t tx_streams;
+static double t_plant;
+
+static void frame(const uint8_t *b, size_t n)
+{
+	struct hal_sensor_frame f;
+	memset(&f, 0, sizeof f);
+	t_plant += 1.0 / 90.0;
+	f.t_s = t_plant;
+	f.seq = app.fr.seq + 1;
+	f.valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
+	f.q_ib[0] = 1.0f;
+	f.pos_i_m[2] = app.mode == APP_DISARMED || app.mode == APP_IDLE ? 0.0f : app.z_target;
+	for (int j = 0; j < HAL_ROTORS; j++)
+		f.rotor_thrust_n[j] = 2.6f;
+	/* the payload overwrites the frame's floats from q_ib on */
+	size_t off = offsetof(struct hal_sensor_frame, q_ib);
+	size_t room = sizeof f - off;
+	memcpy((uint8_t *)&f + off, b, n < room ? n : room);
+	fuzz_now_us += 11111u;
+	app_on_frame(&app, &f);
+}
+
+static void message(uint8_t kind, const uint8_t *b, size_t n)
+{
+	uint32_t id = ids[(kind & 15) % 10];
+	const mavlink_msg_entry_t *e = mavlink_get_msg_entry(id);
+	if (!e)
+		abort();
+	mavlink_message_t msg;
+	memset(&msg, 0, sizeof msg);
+	msg.msgid = id;
+	size_t len = n < e->max_msg_len ? n : e->max_msg_len;
+	memcpy(_MAV_PAYLOAD_NON_CONST(&msg), b, len);
+	/* sender: the ground station, another system, or our own id (an echo) */
+	static const uint8_t sys[4] = {255, 1, 42, 0};
+	uint8_t sysid = sys[(kind >> 4) & 3], compid = (kind & 0x40) ? 1 : 190;
+	mavlink_finalize_message_chan(&msg, sysid, compid, MAVLINK_COMM_1, e->min_msg_len, (uint8_t)len,
+				      e->crc_extra);
+	uint8_t buf[MAVLINK_MAX_PACKET_LEN + 64];
+	size_t k = mavlink_msg_to_send_buffer(buf, &msg);
+	if (kind & 0x80) {   /* truncated or oversized */
+		size_t cut = n ? b[0] : 0;
+		if (cut < k) {
+			k = cut;
+		} else {
+			for (size_t i = 0; i < 64 && k < sizeof buf; i++)
+				buf[k++] = (uint8_t)(i * 37u + cut);
+		}
+	}
+	app_on_mavlink(&app, buf, k);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	if (size < 1)
+		return 0;
+	fuzz_hal_reset();
+	fuzz_now_us = 1000000u;
+	t_plant = 0.0;
+	fuzz_have_key = data[0] & 1;
+	for (int i = 0; i < 32; i++)
+		fuzz_key[i] = (uint8_t)(i * 7 + 1);
+	/* app_init costs ~1 ms under the sanitizers: done once per key mode, then
+	 * the initialised state is copied; mav_init resets the MAVLink side
+	 * (signing streams included) so that no run sees the previous one. */
+	static struct app snap[2];
+	static bool have_snap[2];
+	if (!have_snap[fuzz_have_key]) {
+		app_init(&snap[fuzz_have_key]);
+		have_snap[fuzz_have_key] = true;
+	}
+	app = snap[fuzz_have_key];
+	mav_init(&app.mav, fuzz_now_us);
+	mavlink_status_t *st = mavlink_get_channel_status(MAVLINK_COMM_1);
+	if (fuzz_have_key) {
+		memset(&tx_signing, 0, sizeof tx_signing);
+		memset(&tx_streams, 0, sizeof tx_streams);
+		memcpy(tx_signing.secret_key, fuzz_key, 32);
+		tx_signing.flags = MAVLINK_SIGNING_FLAG_SIGN_OUTGOING;
+		tx_signing.link_id = 3;
+		tx_signing.timestamp = (hal_unix_us() - 1420070400ull * 1000000ull) / 10u + 1000u;
+		st->signing = &tx_signing;
+		st->signing_streams = &tx_streams;
+	} else {
+		st->signing = NULL;
+		st->signing_streams = NULL;
+	}
+	size_t pos = 1;
+	while (pos + 2 <= size) {
+		uint8_t kind = data[pos], n = data[pos + 1];
+		pos += 2;
+		size_t len = n < size - pos ? n : size - pos;
+		const uint8_t *b = data + pos;
+		pos += len;
+		switch (kind & 15) {
+		case 10:
+		case 11:
+			app_on_mavlink(&app, b, len);
+			break;
+		case 12:
+		case 13:
+			frame(b, len);
+			break;
+		case 14:
+		case 15:
+			fuzz_now_us += (uint64_t)(len ? b[0] : 1) * 10000u;
+			app_tick(&app);
+			break;
+		default:
+			message(kind, b, len);
+			break;
+		}
+	}
+	for (size_t i = 0; i < param_count; i++) {
+		float v = params_get(&app.p, i);
+		if (!isfinite(v) || v < param_defs[i].min || v > param_defs[i].max)
+			abort();
+	}
+	return 0;
+}
