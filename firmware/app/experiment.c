@@ -147,6 +147,7 @@ bool exp_param_readonly(const char *name)
 		"ID_KF_EST", "ID_KF_SD", "ID_KF_PLAIN", "ID_KTAU_EST", "ID_KTAU_SD", "ID_KTAU_PLAIN",
 		"ID_IXX_EST", "ID_IXX_SD", "ID_IYY_EST", "ID_IYY_SD", "ID_IZZ_EST", "ID_IZZ_SD",
 		"ID_VAL_NE_PRE", "ID_VAL_FIT_PRE", "ID_VAL_NE_POST", "ID_VAL_FIT_POST", "ID_RESULT",
+		"ID_TAU_CHECK",
 	};
 	for (size_t i = 0; i < sizeof ro / sizeof ro[0]; i++)
 		if (!strcmp(name, ro[i]))
@@ -312,6 +313,14 @@ static void phase_end(struct experiment *e, const struct exp_input *in)
 		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID ktau %.4f +/- %.4f %s%s",
 		    (double)kt, (double)kt_sd, ok ? "N m " : "rejected: ", why_t);
 		say(e, MAV_SEVERITY_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
+		/* the lag model, checked by a Gauss-Newton step (ident.h); far off: say so */
+		float tau_m = prm(p, "ID_MOT_TAU", 0.03f), tau_c = ident_rotor_tau_check(&e->rot);
+		result(e, "ID_TAU_CHECK", isfinite(tau_c) ? tau_c : -1.0f);
+		if (tau_c >= 0.0f && isfinite(tau_c)) {
+			bool off = fabsf(tau_c - tau_m) > 0.2f * tau_m;
+			say(e, off ? MAV_SEVERITY_WARNING : MAV_SEVERITY_INFO, "ID motor lag %.4f s%s (ID_MOT_TAU %.4f)",
+			    (double)tau_c, off ? " DIFFERS" : "", (double)tau_m);
+		}
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
 		static const char *const nm[3] = {"Ixx", "Iyy", "Izz"};

@@ -37,3 +37,4 @@ PARAM(ID_VAL_FIT_PRE,id_val_fit_pre,0.0f,    -1e9f,   1e9f,    "%",      "Result
 PARAM(ID_VAL_NE_POST,id_val_ne_post,0.0f,    -1e9f,   1e9f,    "",       "Result (read-only): validation normalised error after identification")
 PARAM(ID_VAL_FIT_POST,id_val_fit_post,0.0f,    -1e9f,   1e9f,    "%",      "Result (read-only): validation fit after identification")
 PARAM(ID_RESULT,    id_result,    0.0f,    0.0f,    255.0f,  "",       "Result (read-only): bit mask of accepted results (experiment.c)")
+PARAM(ID_TAU_CHECK, id_tau_check, 0.0f,    -1e9f,   1e9f,    "s",      "Result (read-only): motor lag seen by the rotor experiment (check of ID_MOT_TAU; -1 none)")

@@ -22,6 +22,15 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	c.theta0[1][0] = cfg->ktau0;
 	rls_init(&r->lagaware, &c);
 	rls_init(&r->plain, &c);
+	struct rls_config cs = c;
+	cs.n_params = 2;
+	cs.n_outputs = 1;
+	cs.theta0[0][0] = cfg->kf0;
+	cs.theta0[0][1] = 0.0f;
+	rls_init(&r->sens, &cs);
+	r->dphi_dtau = SC_ZERO;
+	float tm = sc_to_float(cfg->mot_tau_s), dt = sc_to_float(cfg->dt_s);
+	r->dalpha_dtau = tm > 0.0f && dt > 0.0f ? sc_from_float(-(dt / (tm * tm)) * expf(-dt / tm)) : SC_ZERO;
 	r->phi = cfg->thr0;
 	r->y_prev[0] = r->y_prev[1] = SC_ZERO;
 	r->have_prev = false;
@@ -38,10 +47,20 @@ void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t 
 			scalar_t tau_meas, bool excited)
 {
 	/* lag-aware: the previous frame's throttle, delayed and lagged, for this measurement */
-	scalar_t s = filt_lag_update(&r->lag, filt_delay_update(&r->delay, thr_sent_prev));
+	scalar_t u = filt_delay_update(&r->delay, thr_sent_prev);
+	scalar_t s_prev = r->lag.y;
+	scalar_t s = filt_lag_update(&r->lag, u);
 	r->phi = curve_g(r->cfg.curve, s);
 	scalar_t y[2] = {f_meas, tau_meas};
 	rls_update(&r->lagaware, &r->phi, y, excited);
+
+	/* the lag check: sensitivity of s (and g(s): g'(s) = 1 - c + 2 c s) to tau_m */
+	r->dphi_dtau = sc_add(sc_mul(sc_sub(SC(1.0), r->lag.alpha), r->dphi_dtau),
+			      sc_mul(r->dalpha_dtau, sc_sub(u, s_prev)));
+	scalar_t gp = sc_add(sc_sub(SC(1.0), r->cfg.curve), sc_mul(sc_add(r->cfg.curve, r->cfg.curve), s));
+	scalar_t phi2[2] = {r->phi, sc_mul(gp, r->dphi_dtau)};
+	if (r->dalpha_dtau != SC_ZERO)
+		rls_update(&r->sens, phi2, y, excited);
 
 	/* plain (eq. 18-20): the previous measurement against the command of its own frame,
 	 * which is the throttle sent on the previous frame */
@@ -73,6 +92,17 @@ float ident_rotor_plain(const struct ident_rotor *r, unsigned which)
 float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which)
 {
 	return rls_std(&r->plain, which, 0);
+}
+
+float ident_rotor_tau_check(const struct ident_rotor *r)
+{
+	if (r->dalpha_dtau == SC_ZERO || r->sens.n_updates < 2u)
+		return -1.0f;
+	float k = rls_estimate_f(&r->sens, 0, 0), kd = rls_estimate_f(&r->sens, 0, 1);
+	if (!(k > 0.0f) || !finite_f(kd))
+		return -1.0f;
+	float t = sc_to_float(r->cfg.mot_tau_s) + kd / k;
+	return t > 0.0f ? t : 0.0f;
 }
 
 float ident_plain_bias(float e_d2, float e_d_dlag, float t_hover)

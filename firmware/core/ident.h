@@ -72,6 +72,9 @@ struct ident_rotor {
 	struct filt_lag lag;
 	struct rls lagaware;    /* theta[0][0] = k_f, theta[1][0] = k_tau */
 	struct rls plain;
+	struct rls sens;        /* lag check: f_1 on [phi, d phi / d tau_m] (2 parameters) */
+	scalar_t dphi_dtau;     /* sensitivity of the lagged throttle to tau_m, 1/s */
+	scalar_t dalpha_dtau;   /* d alpha / d tau_m of the lag's coefficient, 1/s */
 	scalar_t phi;           /* last lag-aware regressor */
 	scalar_t y_prev[2];     /* measurement of the previous frame (for the plain update) */
 	bool have_prev;
@@ -91,6 +94,14 @@ float ident_rotor_est(const struct ident_rotor *r, unsigned which);
 float ident_rotor_sd(const struct ident_rotor *r, unsigned which);
 float ident_rotor_plain(const struct ident_rotor *r, unsigned which);
 float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which);
+
+/* Check of the modelled motor lag (a Gauss-Newton step, not used by the estimates above):
+ * f_1 regressed on [phi(tau), d phi / d tau] at the modelled tau gives
+ * [k_f, k_f (tau_true - tau)] to first order, so tau_hat = tau + theta_2 / theta_1. The
+ * sensitivity runs beside the lag: sigma_k = (1 - alpha) sigma_(k-1) + alpha' (u_k - s_(k-1)),
+ * alpha' = d alpha / d tau = -(dt / tau^2) exp(-dt / tau). Returns tau_hat (s), or -1 when
+ * the model has no lag (tau = 0: no sensitivity) or no data. */
+float ident_rotor_tau_check(const struct ident_rotor *r);
 
 /* The closed form of the plain estimator's relative bias (estimation-notes.md). */
 float ident_plain_bias(float e_d2, float e_d_dlag, float t_hover);

@@ -80,7 +80,7 @@ static double dither_next(struct dither *d, struct unit_rng *g)
 }
 
 struct rotor_run {
-	double kf, ktau, kf_sd, ktau_sd, kf_plain, ktau_plain, bias_cf, crlb_kf;
+	double kf, ktau, kf_sd, ktau_sd, kf_plain, ktau_plain, bias_cf, crlb_kf, tau_check;
 };
 
 /* one experiment: n frames of dither `amp` clocked at `div`, thrust noise sig (N), the
@@ -123,6 +123,7 @@ static void rotor_run(struct unit_rng *g, double kf, double ktau, double tau_tru
 	out->bias_cf = ident_plain_bias((float)(sum_t2 / n - mt * mt), (float)(sum_ts / n - mt * ms),
 					(float)mt);
 	out->crlb_kf = sig_f * sig_f / sphi2;
+	out->tau_check = ident_rotor_tau_check(&r);
 }
 
 /* random truth within +/-30 % of the paper's values, default noise and lag: unbiased to 0.15 % */
@@ -145,7 +146,9 @@ UNIT_TEST(ident_rotor_lag_aware_random_truth)
 		CHECK(b < -0.01);
 		CHECK_NEAR(b, o.bias_cf, 0.004);
 		CHECK_NEAR(bt, o.bias_cf, 0.004);
+		CHECK_NEAR(o.tau_check, 0.03, 0.004);   /* the lag model checked out */
 #ifdef TEST_VERBOSE
+		printf("  tau check %.4f s\n", o.tau_check);
 		printf("  kf %.4f (%+.4f %%, sd %.4f %%) ktau %+.4f %% plain %+.3f %% cf %+.3f %%\n", kf,
 		       100 * (o.kf / kf - 1), 100 * o.kf_sd / kf, 100 * (o.ktau / ktau - 1), 100 * b,
 		       100 * o.bias_cf);
@@ -223,8 +226,19 @@ UNIT_TEST(ident_rotor_wrong_tau_bounded)
 	struct rotor_run o;
 	rotor_run(&g, 28.0269, 0.3869, 0.03, 0, 0.036, 900, 0.04, 9, 0.0, 0.0, &o);
 	CHECK(fabs(o.kf / 28.0269 - 1.0) < 0.01);
+	CHECK_NEAR(o.tau_check, 0.03, 0.002);   /* ... and the lag check sees it */
 	rotor_run(&g, 28.0269, 0.3869, 0.03, 0, 0.024, 900, 0.04, 9, 0.0, 0.0, &o);
 	CHECK(fabs(o.kf / 28.0269 - 1.0) < 0.01);
+	CHECK_NEAR(o.tau_check, 0.03, 0.002);
+	rotor_run(&g, 28.0269, 0.3869, 0.05, 0, 0.03, 900, 0.04, 9, 0.0261, 0.00036, &o);
+#ifdef TEST_VERBOSE
+	printf("  wrong tau: check %.4f s for 0.05 (model 0.03), kf %+.3f %%\n", o.tau_check,
+	       100 * (o.kf / 28.0269 - 1));
+#endif
+	CHECK_NEAR(o.tau_check, 0.05, 0.008);
+	/* no lag modelled: no check */
+	rotor_run(&g, 28.0269, 0.3869, 0.0, 0, 0.0, 300, 0.04, 9, 0.0, 0.0, &o);
+	CHECK(o.tau_check == -1.0);
 }
 
 /* the plant's thrust curve g(s) in the regressor */

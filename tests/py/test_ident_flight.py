@@ -180,9 +180,26 @@ def test_transport_delay_and_slower_motors_modelled(launch, port, tmp_path):
     assert "ID done" in texts, texts
     got = [fl.param(n) for n in ("ID_KF_EST", "ID_KTAU_EST", "ID_IXX_EST", "ID_IYY_EST",
                                  "ID_IZZ_EST")]
+    tau_check = fl.param("ID_TAU_CHECK")
     fl.finish()
+    assert tau_check == pytest.approx(0.05, abs=0.003)
     truth = [veh["kf"], veh["ktau"], *veh["inertia"]]
     err = [g / t - 1 for g, t in zip(got, truth)]
     print("errors %:", " ".join(f"{100 * e:+.3f}" for e in err))
     assert abs(err[0]) < 0.003 and abs(err[1]) < 0.003
     assert all(abs(e) < 0.02 for e in err[2:])
+
+
+def test_wrong_motor_lag_is_detected(launch, port, tmp_path):
+    """Motors slower than ID_MOT_TAU says (45 ms for 30 ms): the lag check reports the real
+    time constant and warns; the k_f estimate is off by the notes' few tenths of a percent."""
+    veh = dict(motor_tau=0.045)
+    fl = IdentFlight(launch, port, tmp_path, vehicle=veh, seed=78)
+    fl.takeoff()
+    texts = fl.experiment(1)
+    tau_check, kf = fl.param("ID_TAU_CHECK"), fl.param("ID_KF_EST")
+    fl.finish()
+    print(texts, tau_check, kf / PAPER["kf"] - 1)
+    assert tau_check == pytest.approx(0.045, abs=0.005)
+    assert any("motor lag" in t and "DIFFERS" in t for t in texts), texts
+    assert abs(kf / PAPER["kf"] - 1) < 0.02
