@@ -77,7 +77,12 @@
  *     k_f) and then sets n_results = 0; EXP_MAX_RESULTS 24.
  *   - added: est_live, final_result (MAV_RESULT of the final COMMAND_ACK: ACCEPTED when
  *     finished, FAILED when aborted), exp_param_readonly() (result parameters refuse a
- *     PARAM_SET), parameter ID_EXC_NULL (the null-space dither, default 1).
+ *     PARAM_SET), parameter ID_EXC_NULL (the null-space dither, default 1), result
+ *     parameter ID_TAU_CHECK (the motor lag the rotor experiment's data show, a
+ *     Gauss-Newton step from ID_MOT_TAU; -1 when ID_MOT_TAU is 0) with a STATUSTEXT
+ *     "ID motor lag 0.0301 s (ID_MOT_TAU 0.0300)", "... DIFFERS ..." (warning) when the
+ *     two differ by more than 20 % (estimates then biased by tenths of a percent or more).
+ *   - the app switches to an identified k_f bumplessly (height integrator rescaled).
  *   - the experiment's STATUSTEXT lines are queued and handed out one per frame through
  *     msg; EXP_FINISHED is returned only when all have gone ("ID done" last).
  */
