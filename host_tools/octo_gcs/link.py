@@ -32,16 +32,17 @@ def f32(x):
 
 
 def read_signing_key(path):
-    """32-byte key from FILE: 64 hex digits, else sha256 of the stripped text (MAVProxy's passphrase rule)."""
+    """32-byte key from FILE: its text with surrounding white space stripped is either
+    exactly 64 hex digits (the key) or a passphrase (key = its sha256, MAVProxy's rule).
+    octo-fw --signing-key applies the same rule, so one file serves both."""
     import hashlib
+    import string
 
     raw = open(path, "rb").read().strip()
-    try:
-        text = raw.decode("ascii")
-        if len(text) == 64:
-            return bytes.fromhex(text)
-    except (UnicodeDecodeError, ValueError):
-        pass
+    # all 64 characters hex digits: bytes.fromhex alone would also take "ab cd ..."
+    # (spaces inside) and give a key shorter than 32 bytes
+    if len(raw) == 64 and all(chr(c) in string.hexdigits for c in raw):
+        return bytes.fromhex(raw.decode("ascii"))
     if not raw:
         raise GcsError(f"signing key file {path} is empty")
     return hashlib.sha256(raw).digest()

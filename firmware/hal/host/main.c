@@ -20,6 +20,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <common/mavlink.h>
+
 #include "app.h"
 #include "hal.h"
 #include "host.h"
@@ -85,7 +87,15 @@ static int hexval(int c)
 	return -1;
 }
 
-/* --signing-key FILE: 32 raw bytes, or 64 hex digits (surrounding white space ignored). */
+/* --signing-key FILE, the rule of octo-gcs (and MAVProxy's passphrase): the
+ * file's text with surrounding white space stripped (as Python's bytes.strip:
+ * space, \t \n \v \f \r); exactly 64 hex digits are the key itself, anything
+ * else is a passphrase and the key is its sha256. An empty file is an error. */
+static bool key_space(uint8_t c)
+{
+	return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f';
+}
+
 static int load_signing_key(const char *path)
 {
 	FILE *f = fopen(path, "rb");
@@ -93,33 +103,43 @@ static int load_signing_key(const char *path)
 		fprintf(stderr, "octo-fw: --signing-key: cannot open %s: %s\n", path, strerror(errno));
 		return -1;
 	}
-	uint8_t buf[256];
+	static uint8_t buf[65536];
 	size_t n = fread(buf, 1, sizeof buf, f);
+	bool more = fgetc(f) != EOF;
 	fclose(f);
-	if (n == 32) {
-		memcpy(signing_key, buf, 32);
-		have_key = true;
-		return 0;
+	if (more) {
+		fprintf(stderr, "octo-fw: --signing-key: %s is longer than %zu bytes\n", path, sizeof buf);
+		return -1;
 	}
 	size_t a = 0, b = n;
-	while (a < b && (buf[a] == ' ' || buf[a] == '\n' || buf[a] == '\r' || buf[a] == '\t'))
+	while (a < b && key_space(buf[a]))
 		a++;
-	while (b > a && (buf[b - 1] == ' ' || buf[b - 1] == '\n' || buf[b - 1] == '\r' || buf[b - 1] == '\t'))
+	while (b > a && key_space(buf[b - 1]))
 		b--;
-	if (b - a == 64) {
-		bool ok = true;
-		for (size_t i = 0; i < 32 && ok; i++) {
-			int hi = hexval(buf[a + 2 * i]), lo = hexval(buf[a + 2 * i + 1]);
-			ok = hi >= 0 && lo >= 0;
-			signing_key[i] = (uint8_t)(hi << 4 | lo);
-		}
-		if (ok) {
-			have_key = true;
-			return 0;
-		}
+	if (a == b) {
+		fprintf(stderr, "octo-fw: --signing-key: %s is empty\n", path);
+		return -1;
 	}
-	fprintf(stderr, "octo-fw: --signing-key: %s must hold 32 raw bytes or 64 hex digits\n", path);
-	return -1;
+	bool hex = b - a == 64;
+	for (size_t i = a; i < b && hex; i++)
+		hex = hexval(buf[i]) >= 0;
+	if (hex) {
+		for (size_t i = 0; i < 32; i++)
+			signing_key[i] = (uint8_t)(hexval(buf[a + 2 * i]) << 4 | hexval(buf[a + 2 * i + 1]));
+	} else {
+		/* sha256 with MAVLink's own implementation: after final_48 the whole
+		 * digest is in the counters (big-endian words) */
+		mavlink_sha256_ctx ctx;
+		uint8_t first6[6];
+		mavlink_sha256_init(&ctx);
+		mavlink_sha256_update(&ctx, buf + a, (uint32_t)(b - a));
+		mavlink_sha256_final_48(&ctx, first6);
+		for (int w = 0; w < 8; w++)
+			for (int k = 0; k < 4; k++)
+				signing_key[4 * w + k] = (uint8_t)(ctx.counter[w] >> (24 - 8 * k));
+	}
+	have_key = true;
+	return 0;
 }
 
 void hal_report(const char *fmt, ...)
@@ -149,8 +169,10 @@ static const char usage[] =
 	"  --lcm URL                LCM log: file://PATH (event log in plant time) or an LCM URL\n"
 	"  --actuation dref|data25  throttles as 8 DREFs ENGN_thro_use[i] + override_throttles\n"
 	"                           (default) or one DATA row 25 datagram\n"
-	"  --signing-key FILE       MAVLink 2 signing with the 32-byte key in FILE (raw, or 64 hex\n"
-	"                           digits): unsigned input rejected, output signed\n"
+	"  --signing-key FILE       MAVLink 2 signing: unsigned input rejected, output signed.\n"
+	"                           FILE (surrounding white space stripped) holds 64 hex digits\n"
+	"                           (the key) or a passphrase (key = its sha256): the rule of\n"
+	"                           octo-gcs --signing-key and MAVProxy, so one file serves both\n"
 	"  --dump-params            print the parameter table as JSON and exit\n"
 	"  --help                   this text\n";
 
