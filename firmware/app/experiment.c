@@ -43,6 +43,7 @@ static const char *phase_name(int k)
 
 #define SETTLE_S 1.0f         /* no excitation, filters run, before each phase's excitation */
 #define HEIGHT_ABORT_M 1.5f   /* |z - z at start| beyond this aborts */
+#define GAP_HOLD 10           /* frames without inertia updates after a lost frame */
 /* inertia: roll/pitch by a multisine (harmonics 4..15 of 0.5 Hz: 2..7.5 Hz, above the
  * attitude loop, where torque turns into acceleration rather than tilt) of peak ID_INR_AMP,
  * SVF corner 25 rad/s; yaw (weak torque, so the gyro noise matters more) by a PRBS at the
@@ -355,10 +356,20 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	const struct hal_sensor_frame *f = in->frame;
 	int k = e->phase_kind[e->phase];
 	bool running = e->t_phase >= e->t_settle;
-	bool good_dt = in->dt_s > 0.5f * e->dt_nom && in->dt_s < 1.5f * e->dt_nom;
-	bool use = running && good_dt;
+	/* frames since the last step: more than one when frames were lost on the link (the
+	 * plant then held the last throttles); the rotor and validation models advance through
+	 * the gap, the inertia filters (uniform sampling) are left GAP_HOLD frames to settle */
+	float fr = in->dt_s / e->dt_nom;
+	int n = fr > 0.5f && fr < (float)FILT_DELAY_MAX + 0.5f ? (int)(fr + 0.5f) : 0;
+	if (n != 1)
+		e->gap_hold = GAP_HOLD;
+	else if (e->gap_hold > 0)
+		e->gap_hold--;
+	bool use = running && n >= 1;
 
 	if (k == PK_ROTOR) {
+		for (int i = 1; i < n; i++)
+			ident_rotor_hold(&e->rot, sc_from_float(in->thr_prev[0]));
 		ident_rotor_update(&e->rot, sc_from_float(in->thr_prev[0]), sc_from_float(f->rotor_thrust_n[0]),
 				   sc_from_float(f->rotor_torque_nm[0]), use);
 		float d = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
@@ -389,15 +400,16 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		for (int i = 0; i < 3; i++)
 			w[i] = sc_from_float(f->rate_b_rps[i]);
-		ident_inertia_update(&e->inr, tau, w, use);
+		ident_inertia_update(&e->inr, tau, w, use && n == 1 && e->gap_hold == 0);
 		out->tau_delta[ax] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
 		e->est[4 + ax] = ident_inertia_est(&e->inr);
 		e->est_sd[4 + ax] = ident_inertia_sd(&e->inr);
 	} else {
 		/* the model's prediction of rotor 1's thrust: the allocation behind the throttle
 		 * sent on the previous frame, through the modelled delay and lag */
-		scalar_t y_hat = filt_lag_update(&e->val_lag, filt_delay_update(&e->val_delay,
-									  sc_from_float(in->rotor_f_cmd[0])));
+		scalar_t fc = sc_from_float(in->rotor_f_cmd[0]), y_hat = SC_ZERO;
+		for (int i = 0; i < (n > 1 ? n : 1); i++)
+			y_hat = filt_lag_update(&e->val_lag, filt_delay_update(&e->val_delay, fc));
 		if (use)
 			ident_fit_add(&e->fit, sc_from_float(f->rotor_thrust_n[0]), y_hat);
 		out->tau_delta[2] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;

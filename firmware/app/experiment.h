@@ -148,6 +148,7 @@ struct experiment {
 	float t_settle, t_run;                 /* of the current phase */
 	bool started, reporting;
 	float dt_nom, z0;
+	int gap_hold;                          /* frames left without inertia updates after a gap */
 	struct excite exc;
 	struct ident_rotor rot;
 	struct ident_inertia inr;

@@ -43,20 +43,34 @@ static scalar_t curve_g(scalar_t c, scalar_t s)
 	return sc_add(sc_mul(sc_sub(SC(1.0), c), s), sc_mul(c, sc_mul(s, s)));
 }
 
+/* delay, lag and sensitivity one frame on; returns the lagged throttle s */
+static scalar_t rotor_advance(struct ident_rotor *r, scalar_t thr_sent_prev)
+{
+	scalar_t u = filt_delay_update(&r->delay, thr_sent_prev);
+	scalar_t s_prev = r->lag.y;
+	scalar_t s = filt_lag_update(&r->lag, u);
+	/* sensitivity of s to tau_m (the lag check) */
+	r->dphi_dtau = sc_add(sc_mul(sc_sub(SC(1.0), r->lag.alpha), r->dphi_dtau),
+			      sc_mul(r->dalpha_dtau, sc_sub(u, s_prev)));
+	return s;
+}
+
+void ident_rotor_hold(struct ident_rotor *r, scalar_t thr_sent_prev)
+{
+	rotor_advance(r, thr_sent_prev);
+	r->have_prev = false;
+}
+
 void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t f_meas,
 			scalar_t tau_meas, bool excited)
 {
 	/* lag-aware: the previous frame's throttle, delayed and lagged, for this measurement */
-	scalar_t u = filt_delay_update(&r->delay, thr_sent_prev);
-	scalar_t s_prev = r->lag.y;
-	scalar_t s = filt_lag_update(&r->lag, u);
+	scalar_t s = rotor_advance(r, thr_sent_prev);
 	r->phi = curve_g(r->cfg.curve, s);
 	scalar_t y[2] = {f_meas, tau_meas};
 	rls_update(&r->lagaware, &r->phi, y, excited);
 
-	/* the lag check: sensitivity of s (and g(s): g'(s) = 1 - c + 2 c s) to tau_m */
-	r->dphi_dtau = sc_add(sc_mul(sc_sub(SC(1.0), r->lag.alpha), r->dphi_dtau),
-			      sc_mul(r->dalpha_dtau, sc_sub(u, s_prev)));
+	/* the lag check: g'(s) = 1 - c + 2 c s times the sensitivity of s */
 	scalar_t gp = sc_add(sc_sub(SC(1.0), r->cfg.curve), sc_mul(sc_add(r->cfg.curve, r->cfg.curve), s));
 	scalar_t phi2[2] = {r->phi, sc_mul(gp, r->dphi_dtau)};
 	if (r->dalpha_dtau != SC_ZERO)

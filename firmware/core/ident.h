@@ -89,6 +89,11 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg);
 void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t f_meas,
 			scalar_t tau_meas, bool excited);
 
+/* A frame without measurement (lost on the link): the plant held thr_sent_prev for one more
+ * frame; the delay, lag and sensitivity advance, nothing is estimated, and the plain
+ * estimator's pairing restarts. */
+void ident_rotor_hold(struct ident_rotor *r, scalar_t thr_sent_prev);
+
 /* estimates and standard deviations: which 0 = k_f, 1 = k_tau */
 float ident_rotor_est(const struct ident_rotor *r, unsigned which);
 float ident_rotor_sd(const struct ident_rotor *r, unsigned which);

@@ -450,3 +450,35 @@ UNIT_TEST(ident_acceptance_rule)
 	CHECK(ident_accept(-28.0f, 0.01f, 20.0f, 0.01f) == IDENT_OUT_OF_RANGE);
 	CHECK(ident_verdict_text(IDENT_UNCERTAIN)[0] != 0);
 }
+
+/* frames lost on the link: the plant holds the last throttle, the estimator advances its
+ * model through the gap (ident_rotor_hold) and stays exact */
+UNIT_TEST(ident_rotor_lost_frames)
+{
+	struct unit_rng g = {0x1057ULL};
+	const double kf = 31.0, th = 0.084;
+	struct rotor_plant p;
+	plant_init(&p, kf, 0.4, 0.03, 1, th);
+	struct ident_rotor_cfg c = {s(DT), s(0.03), 1, SC(0.0), s(th), 20.0f, 0.3f, 0.0f};
+	struct ident_rotor r;
+	ident_rotor_init(&r, &c);
+	struct dither d = {0, 0.04, 9, 0};
+	double t_sent = th;
+	int lost = 0;
+	for (int k = 0; k < 1200; k++) {
+		bool arrives = unit_rand_uniform(&g, 0, 1) > 0.2;
+		if (arrives) {
+			for (int i = 0; i < lost; i++)
+				ident_rotor_hold(&r, s(t_sent));
+			ident_rotor_update(&r, s(t_sent), s(kf * p.s), s(0.4 * p.s), true);
+			lost = 0;
+			t_sent = th + dither_next(&d, &g);
+		} else {
+			lost++;
+		}
+		plant_step(&p, t_sent);   /* the plant holds the last command it got */
+	}
+	CHECK_REL(ident_rotor_est(&r, 0), kf, OCTO_FIXED ? 2e-3 : 2e-5);
+	CHECK_REL(ident_rotor_est(&r, 1), 0.4, OCTO_FIXED ? 2e-3 : 2e-5);
+	CHECK_NEAR(ident_rotor_tau_check(&r), 0.03, 1e-3);
+}

@@ -27,7 +27,7 @@ def random_vehicle(rng):
 
 class IdentFlight:
     def __init__(self, launch, port, tmp_path, vehicle=None, seed=1, ideal=False, params=None,
-                 duration=200.0):
+                 duration=200.0, extra_sim_args=()):
         self.rig = Rig(launch, port, tmp_path)
         self.tmp = tmp_path
         self.vehicle = vehicle
@@ -38,6 +38,7 @@ class IdentFlight:
             sim_args += ["--vehicle", vf]
         if ideal:
             sim_args.append("--ideal")
+        sim_args += list(extra_sim_args)
         # a loaded test machine can stall a lockstep pair for a few hundred ms of wall time:
         # a link timeout of 1 s keeps that from aborting experiments
         params = {"FS_LINK_TO": 1.0, **(params or {})}
