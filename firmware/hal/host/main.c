@@ -400,6 +400,8 @@ int main(int argc, char **argv)
 	xp_client_release(&xp);
 	lcm_log_close();
 	struct hal_link_stats ls = xp.stats;
-	hal_report("exit: %u frames, %u datagrams dropped (%u foreign)", ls.frames, ls.dropped, ls.foreign);
+	hal_report("exit: %u frames, %u datagrams dropped (%u foreign); MAVLink %u messages, %u bad checksum, "
+		   "%u rejected by signing", ls.frames, ls.dropped, ls.foreign, app.mav.rx_msgs, app.mav.rx_dropped,
+		   app.mav.rx_unsigned);
 	return 0;
 }

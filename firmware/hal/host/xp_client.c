@@ -227,8 +227,12 @@ int xp_client_receive(struct xp_client *c, struct hal_sensor_frame *frame, uint6
 		for (size_t r = 0; r < c->msg.n; r++)
 			if (c->msg.rref[r].index == XP_RREF_VERSION_INDEX) {
 				float v = c->msg.rref[r].value;
-				if (isfinite(v) && v >= 1.0f && v < 1.0e7f)
+				if (isfinite(v) && v >= 1.0f && v < 1.0e7f && (uint32_t)v != c->stats.xp_version) {
 					c->stats.xp_version = (uint32_t)v;
+					hal_report("X-Plane version %u (row 16 as X-Plane %s)", c->stats.xp_version,
+						   c->stats.xp_version >= XP_VERSION_12 ? "12: P,Q,R deg/s"
+											: "10/11: Q,P,R rad/s");
+				}
 			}
 		return 0;
 	case XP_MSG_DATA:
