@@ -27,7 +27,7 @@ def random_vehicle(rng):
 
 class IdentFlight:
     def __init__(self, launch, port, tmp_path, vehicle=None, seed=1, ideal=False, params=None,
-                 duration=200.0, extra_sim_args=()):
+                 duration=200.0, extra_sim_args=(), lockstep=True):
         self.rig = Rig(launch, port, tmp_path)
         self.tmp = tmp_path
         self.vehicle = vehicle
@@ -43,7 +43,9 @@ class IdentFlight:
         # a link timeout of 1 s keeps that from aborting experiments
         params = {"FS_LINK_TO": 1.0, **(params or {})}
         self.rig.params.write_text("".join(f"{k} {v}\n" for k, v in params.items()))
-        self.rig.start(sim_args=sim_args)
+        self.rig.start_sim(*sim_args, lockstep=lockstep)
+        self.rig.start_fw()
+        self.rig.connect()
         self.texts_seen = 0
 
     def takeoff(self, height=TAKEOFF_M, timeout=60.0):
