@@ -83,15 +83,17 @@ void XpInput::data(const uint8_t *p, size_t len)
 		}
 		for (int j = 0; j < kRotors; j++) {
 			float v = xp::get_f32(p + o + 4 + 4 * static_cast<size_t>(j));
-			if (v == xp::kNoData)
-				continue; // leave alone
+			if (v == xp::kNoData) {
+				cmd_mask |= 1u << j; // leave alone: commanded to keep its value
+				continue;
+			}
 			float t;
 			if (!throttle_value(v, t))
-				continue;
+				continue; // NaN/Inf: dropped, and not a command (lockstep waits on)
 			thro[static_cast<size_t>(j)] = t;
 			thro_use[static_cast<size_t>(j)] = t;
+			cmd_mask |= 1u << j;
 		}
-		cmd_mask |= 0xFFu;
 	}
 }
 
