@@ -1,0 +1,74 @@
+"""Issue 9, faults survived with identification running: frame loss (20 % random; 0.5 s
+bursts), duplicated + reordered + delayed frames. The height holds within +/-0.5 m from the
+hover through the experiment, and rotor identification (experiment 1 over MAVLink USER_1
+param1=1) is either within its accuracy (k_f within 0.3 % of truth) or aborted with a clear
+reason. The plain hovers under the same faults are in test_fw_flight.py."""
+
+import pytest
+
+from ident_helpers import PAPER, IdentFlight, read_log
+
+# Findings (issue 9, reported; experiment.c is not this file's to change): under 20 % random
+# loss the rotor experiment applies k_f about 0.8-1 % low (2 standard deviations, no warning);
+# under duplicated + reordered + 2-frame-delayed frames 1-3 % low, accepted although its own
+# lag check says "ID motor lag ... DIFFERS". Neither within 0.3 % nor aborted: xfail until fixed.
+BIASED = pytest.mark.xfail(reason="rotor experiment accepts a biased k_f under this fault (issue 9 finding)",
+                           strict=False)
+
+FAULTS = {
+    # (octo-sim fault options, octo-fw parameters)
+    "drop20": (["--drop", "0.2"], {}),
+    # 45 frames = 0.5 s at 90 Hz, seeded so that bursts hit the hover and the excitation; the
+    # firmware's own link timeout (FS_LINK_TO 0.3 s) judges the gap in plant time
+    "burst0.5s": (["--burst", "45", "--burst-prob", "0.01"], {"FS_LINK_TO": 0.3}),
+    "dup_reorder_delay": (["--duplicate", "0.1", "--reorder", "0.1", "--delay-frames", "2"], {}),
+}
+CASES = [pytest.param("drop20", marks=BIASED), "burst0.5s", pytest.param("dup_reorder_delay", marks=BIASED)]
+
+
+@pytest.mark.parametrize("fault", CASES)
+def test_identification_under_frame_faults(launch, port, tmp_path, fault):
+    # a dropped frame is not answered: octo-sim's lockstep waits its timeout, keep it short
+    args, params = FAULTS[fault]
+    fl = IdentFlight(launch, port, tmp_path, seed=4, duration=600, params=params,
+                     extra_sim_args=[*args, "--lockstep-timeout", "0.003"])
+    fl.takeoff()
+    texts = fl.experiment(1, timeout=60)
+    done = "ID done" in texts
+    aborted = [t for t in texts if t.startswith("ID aborted")]
+    kf = fl.param("ID_KF_EST") if done else None
+    veh_kf = fl.param("VEH_KF")
+    import time
+    time.sleep(0.5)                         # hover on (lockstep: many simulated seconds)
+    fl.finish()
+
+    # the sim's counters: the fault really happened
+    import json
+    import re
+    err = fl.rig.sim.stderr_path.read_text()
+    c = json.loads(re.search(r"counters (\{.*\})", err).group(1))
+    if fault != "dup_reorder_delay":
+        assert c["fault_dropped"] >= (45 if fault.startswith("burst") else 100), c
+    else:
+        assert c["fault_duplicated"] > 0 and c["fault_reordered"] > 0, c
+
+    # height: from 2 s into the hover to the end of the experiment
+    events = fl.events
+    t_hold = min(e.utime * 1e-6 for e in events if e.text == "Mode HOLD")
+    t_end = fl.truth[-1].t                  # the experiment, then the hover until octo-sim stops
+    z0 = fl.truth[0].pos_i[2]
+    window = [s for s in fl.truth if t_hold + 2.0 <= s.t <= t_end]
+    dz = [s.pos_i[2] - z0 - 5.0 for s in window]
+    print(f"{fault}: hover {window[0].t:.1f}..{window[-1].t:.1f} s, |dz| <= {max(map(abs, dz)):.3f} m, "
+          f"k_f {kf} (truth {PAPER['kf']}), VEH_KF {veh_kf}, aborted {aborted}, sim {c}\n{texts}")
+    assert window[-1].t - window[0].t > 5.0
+    assert max(abs(d) for d in dz) <= 0.5, f"height error up to {max(dz, key=abs):+.3f} m"
+    if done:
+        assert abs(kf / PAPER["kf"] - 1) <= 3e-3, f"k_f {kf} vs {PAPER['kf']}"
+        assert abs(veh_kf / PAPER["kf"] - 1) <= 3e-3
+    else:
+        # aborted: a reason a user can act on, and the vehicle model left as it was
+        assert aborted and len(aborted[0]) > len("ID aborted: "), texts
+        if fault.startswith("burst"):
+            assert aborted[0] == "ID aborted: X-Plane frames missing", aborted
+        assert veh_kf == 20.0
