@@ -184,3 +184,33 @@ def test_sim_killed_and_restarted_as_another_version(launch, port, tmp_path):
     assert c["tx_data"] > 0
     truth = read_log(rig.truth_log, "OCTO_TRUTH")
     assert truth and max(tilt_deg(s.q_i2b) for s in truth) < 5.0
+
+
+def test_gcs_vanishes_during_an_experiment(launch, port, tmp_path):
+    """The ground station starts rotor identification and disappears: the experiment
+    runs to its end, its results are applied and saved, the vehicle keeps hovering; a
+    ground station that comes back later reads them."""
+    from ident_helpers import MAV_CMD_USER_1, IdentFlight
+    fl = IdentFlight(launch, port, tmp_path, seed=5, duration=3000)
+    fl.takeoff()
+    rig = fl.rig
+    r, texts = rig.cmd(MAV_CMD_USER_1, 1)
+    assert r == mavlink.MAV_RESULT_IN_PROGRESS, texts
+    rig.close_gcs()
+    time.sleep(1.0)                          # lockstep: most of the 10 s excitation
+    assert rig.fw.alive() and rig.sim.alive()
+    rig.connect()                            # a ground station again (same port)
+    deadline = time.monotonic() + 20
+    while fl.param("ID_RESULT") < 1.0 and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert fl.param("ID_RESULT") >= 1.0
+    kf = fl.param("VEH_KF")
+    assert kf != 20.0 and fl.param("ID_KF_EST") == kf
+    saved = dict(ln.split() for ln in rig.params.read_text().splitlines()
+                 if ln.strip() and not ln.startswith("#"))
+    assert abs(float(saved["VEH_KF"]) - kf) < 1e-4 * kf
+    hb = rig.recv({"HEARTBEAT"}, timeout=2)
+    assert hb is not None and hb.custom_mode == 3          # HOLD
+    fl.finish()
+    modes = [e.text for e in fl.events if e.text.startswith("Mode ")]
+    assert modes == ["Mode IDLE", "Mode TAKEOFF", "Mode HOLD", "Mode EXPERIMENT", "Mode HOLD"], modes
