@@ -7,6 +7,9 @@
 #   make fuzz-smoke   the same for FUZZ_SMOKE_SECONDS (10) each (CI)
 #   make fuzz-build   the four harnesses only
 # Both first replay tests/fuzz/regress/NAME/* (inputs that once failed).
+# fuzz-mavlink compiles many sources in one command: if a firmware header changes
+# meanwhile (another editor), its translation units could disagree on struct
+# layouts and report false errors, so the build is refused and must be rerun.
 # clang and its runtime come from Debian's packages: installed with apt-get when
 # missing and running as root, otherwise the command is printed and make fails.
 
@@ -60,7 +63,11 @@ $(FZ)/fuzz-params: tests/fuzz/fuzz_params.c firmware/app/params.c $(wildcard fir
 
 $(FZ)/fuzz-mavlink: tests/fuzz/fuzz_mavlink.c tests/fuzz/fuzz_hal.h $(FUZZ_APP_SRC) $(wildcard firmware/app/*.h firmware/core/*.h) \
 		| $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
-	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_FW_INC) -o $@ tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_SRC) -lm
+	@sum() { cat firmware/app/*.h firmware/core/*.h | cksum; }; before=$$(sum); \
+	echo "$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_FW_INC) -o $@ tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_SRC) -lm"; \
+	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_FW_INC) -o $@ tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_SRC) -lm && \
+	if [ "$$(sum)" != "$$before" ]; then rm -f $@; \
+	  echo "error: firmware headers changed during the build (struct layouts may differ): run again"; exit 1; fi
 
 FUZZ_SIM_SRC := sim/xplane_input.cpp sim/xplane_proto.cpp sim/counters.cpp
 $(FZ)/fuzz-sim_input: tests/fuzz/fuzz_sim_input.cpp $(FUZZ_SIM_SRC) $(wildcard sim/*.hpp) | $(FUZZ_TC_STAMP)
