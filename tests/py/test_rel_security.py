@@ -125,3 +125,49 @@ def test_octo_gcs_signed_link_end_to_end(launch, port, tmp_path):
     r_, _ = rig.cmd(mavlink.MAV_CMD_PREFLIGHT_STORAGE, 1)
     assert r_ == mavlink.MAV_RESULT_ACCEPTED and rig.params.exists()
     wrong.close()
+
+
+def test_model_and_mixer_parameters_locked_while_an_experiment_runs(launch, port, tmp_path):
+    """Every VEH_*, MIX_*, MOT_* and ID_* write during an experiment is refused with the
+    current value echoed and a reason; so is a parameter load; other groups stay writable;
+    after the experiment the same writes go through."""
+    import struct
+    from ident_helpers import MAV_CMD_USER_1, IdentFlight
+    fl = IdentFlight(launch, port, tmp_path, seed=6, duration=3000, params={"ID_EXC_TIME": 300})
+    fl.takeoff()
+    rig = fl.rig
+    _, table = rig.param_list()
+    values = {m.param_id: m.param_value for m in table.values()}
+    # every model and mixer parameter, and a sample of the identification group (each write
+    # costs a round trip while the lockstep experiment runs on)
+    locked = [n for n in values if n.split("_")[0] in ("VEH", "MIX", "MOT")]
+    locked += ["ID_EXC_AMP", "ID_MOT_TAU", "ID_KF_EST"]
+    assert {"VEH_KF", "VEH_KTAU", "VEH_IXX", "VEH_MASS", "MIX_MODE", "MOT_THR_MAX"} <= set(locked)
+    r, texts = rig.cmd(MAV_CMD_USER_1, 1)
+    assert r == mavlink.MAV_RESULT_IN_PROGRESS, texts
+    t0 = time.monotonic()
+    r, texts = rig.cmd(mavlink.MAV_CMD_PREFLIGHT_STORAGE, 0)          # load: would overwrite them
+    assert r == mavlink.MAV_RESULT_TEMPORARILY_REJECTED, texts
+    for name in locked:
+        v = values[name]
+        new = min(v * 1.01 + 0.001, 0.99) if name.startswith(("MOT_", "MIX_")) else v * 1.01 + 0.001
+        msg, texts = rig.param_set(name, new)
+        assert msg is not None, name
+        if any(name in t and "read-only" in t for t in texts):
+            # an identification result: written by the experiment itself, never by us
+            assert struct.pack("<f", msg.param_value) != struct.pack("<f", new), name
+            continue
+        assert struct.pack("<f", msg.param_value) == struct.pack("<f", v), (name, v, msg.param_value)
+        assert any(name in t and "locked" in t for t in texts), (name, texts)
+    msg, _ = rig.param_set("NAV_LAND_VEL", 0.8)                      # not a model parameter
+    assert msg is not None and abs(msg.param_value - 0.8) < 1e-6
+    hb = rig.recv({"HEARTBEAT"}, timeout=2)
+    assert hb.custom_mode == 4, "the experiment ended before the checks did"   # still EXPERIMENT
+    print(f"{len(locked)} locked writes refused in {time.monotonic() - t0:.2f} s")
+    # stopped: the model is writable again
+    r, _ = rig.cmd(MAV_CMD_USER_1, 0)
+    # the first ACK may be the stopped experiment's own final one (FAILED), then ours
+    assert r in (mavlink.MAV_RESULT_ACCEPTED, mavlink.MAV_RESULT_FAILED)
+    fl.wait_text(lambda t: t == "Mode HOLD", 5)
+    msg, _ = rig.param_set("VEH_KF", 27.0)
+    assert msg is not None and msg.param_value == 27.0
