@@ -1,8 +1,12 @@
 """The build foundation: binaries exist, answer --help, and the fixtures clean up."""
 
+import os
 import subprocess
+import time
 
-from conftest import BUILD, REPO, binary
+import pytest
+
+from conftest import BUILD, REPO, binary, wait_until
 
 
 def test_binaries_answer_help():
@@ -33,8 +37,14 @@ def test_generated_code_lives_in_build_only():
 
 
 def test_launch_fixture_stops_processes(launch, port):
-    p = launch("octo-sim", "--help")
-    p.wait(timeout=5)
-    q = launch("octo-fw", "--help")
-    q.wait(timeout=5)
-    assert port() != port()
+    """A long-running program is stopped for good, and ports are never handed out twice."""
+    p = launch("octo-sim", "--xp-port", port(), "--data-out", f"127.0.0.1:{port()}")
+    assert wait_until(lambda: p.alive(), timeout=2)
+    time.sleep(0.2)
+    assert p.alive(), p.stderr()
+    p.stop()
+    assert not p.alive()
+    with pytest.raises(ProcessLookupError):
+        os.killpg(p.pid, 0)          # nothing of its process group is left
+    ports = {port() for _ in range(50)}
+    assert len(ports) == 50
