@@ -45,9 +45,10 @@ def sim_counters(proc):
 def fw_exit_counters(proc):
     err = proc.stderr_path.read_text(errors="replace")
     m = re.search(r"exit: (\d+) frames, (\d+) datagrams dropped \((\d+) foreign\); MAVLink (\d+) messages, "
-                  r"(\d+) bad checksum", err)
+                  r"(\d+) bad checksum, (\d+) rejected by signing, (\d+) datagrams without a valid message", err)
     assert m, err
-    return dict(zip(("frames", "dropped", "foreign", "mav_msgs", "mav_bad_crc"), map(int, m.groups())))
+    return dict(zip(("frames", "dropped", "foreign", "mav_msgs", "mav_bad_crc", "mav_unsigned", "mav_empty"),
+                    map(int, m.groups())))
 
 
 def height_after_hold(rig, settle_s=2.0):
@@ -153,7 +154,7 @@ def test_hover_survives_floods_foreign_frames_and_a_vanished_gcs(launch, port, t
     # kernel's socket buffer before octo-fw sees it: those cannot be counted)
     assert f["foreign"] >= sent["fw_foreign"] // 4
     assert f["dropped"] >= f["foreign"] + sent["fw_xp"] // 4
-    assert f["mav_bad_crc"] > 0
+    assert f["mav_bad_crc"] > 0 and f["mav_empty"] >= sent["fw_mav"] // 4
 
 
 def test_sim_killed_and_restarted_as_another_version(launch, port, tmp_path):

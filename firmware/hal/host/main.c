@@ -36,6 +36,7 @@ static struct sockaddr_in gcs;
 static volatile sig_atomic_t stop;
 static bool have_key;
 static uint8_t signing_key[32];
+static uint32_t mav_empty;   /* MAVLink datagrams without one accepted message */
 
 /* ---------------------------------------------------------------- hal.h */
 
@@ -389,8 +390,9 @@ int main(int argc, char **argv)
 					break;
 				/* the ground station is whoever sent the last datagram with an
 				 * accepted message (valid checksum, and signature when signing) */
-				if (app_on_mavlink(&app, buf, (size_t)n) > 0 && fl >= sizeof from &&
-				    from.sin_family == AF_INET)
+				if (app_on_mavlink(&app, buf, (size_t)n) == 0)
+					mav_empty++;   /* not one valid message in it */
+				else if (fl >= sizeof from && from.sin_family == AF_INET)
 					gcs = from;
 			}
 		}
@@ -401,7 +403,7 @@ int main(int argc, char **argv)
 	lcm_log_close();
 	struct hal_link_stats ls = xp.stats;
 	hal_report("exit: %u frames, %u datagrams dropped (%u foreign); MAVLink %u messages, %u bad checksum, "
-		   "%u rejected by signing", ls.frames, ls.dropped, ls.foreign, app.mav.rx_msgs, app.mav.rx_dropped,
-		   app.mav.rx_unsigned);
+		   "%u rejected by signing, %u datagrams without a valid message", ls.frames, ls.dropped, ls.foreign,
+		   app.mav.rx_msgs, app.mav.rx_dropped, app.mav.rx_unsigned, mav_empty);
 	return 0;
 }
