@@ -85,7 +85,8 @@ define fuzz_run
 	  fi; \
 	  mkdir -p $(FZ)/corpus/$$h; \
 	  echo "== fuzz-$$h: $(1) s"; \
-	  $$bin -max_total_time=$(1) -print_final_stats=1 -max_len=4096 -timeout=10 -rss_limit_mb=2048 \
+	  dict=; [ -f tests/fuzz/$$h.dict ] && dict=-dict=tests/fuzz/$$h.dict; \
+	  $$bin -max_total_time=$(1) -print_final_stats=1 -max_len=4096 -timeout=10 -rss_limit_mb=2048 $$dict \
 	    -artifact_prefix=$(FZ)/artifacts/$$h- $(FZ)/corpus/$$h tests/fuzz/corpus/$$h \
 	    >$(FZ)/$$h.log 2>&1 || { tail -40 $(FZ)/$$h.log; echo "FAIL: fuzz-$$h (input in $(FZ)/artifacts/)"; rc=1; }; \
 	  execs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $(FZ)/$$h.log); \
