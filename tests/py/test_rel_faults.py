@@ -4,9 +4,13 @@ hover through the experiment, and rotor identification (experiment 1 over MAVLin
 param1=1) is either within its accuracy (k_f within 0.3 % of truth) or aborted with a clear
 reason. The plain hovers under the same faults are in test_fw_flight.py."""
 
+import json
+import re
+import time
+
 import pytest
 
-from ident_helpers import PAPER, IdentFlight, read_log
+from ident_helpers import PAPER, IdentFlight
 
 # Findings (issue 9, reported; experiment.c is not this file's to change): under 20 % random
 # loss the rotor experiment applies k_f about 0.8-1 % low (2 standard deviations, no warning);
@@ -38,13 +42,10 @@ def test_identification_under_frame_faults(launch, port, tmp_path, fault):
     aborted = [t for t in texts if t.startswith("ID aborted")]
     kf = fl.param("ID_KF_EST") if done else None
     veh_kf = fl.param("VEH_KF")
-    import time
     time.sleep(0.5)                         # hover on (lockstep: many simulated seconds)
     fl.finish()
 
     # the sim's counters: the fault really happened
-    import json
-    import re
     err = fl.rig.sim.stderr_path.read_text()
     c = json.loads(re.search(r"counters (\{.*\})", err).group(1))
     if fault != "dup_reorder_delay":
