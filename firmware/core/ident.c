@@ -108,6 +108,24 @@ float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which)
 	return rls_std(&r->plain, which, 0);
 }
 
+/* estimates of one 1-parameter RLS with two outputs and their std: rls_std's arithmetic
+ * with P_00 and the degrees of freedom computed once */
+static void read_1x2(const struct rls *q, float est[2], float sd[2])
+{
+	float p = rls_cov_diag(q, 0);
+	for (unsigned o = 0; o < 2u; o++) {
+		est[o] = rls_estimate_f(q, o, 0);
+		float v = p * rls_residual_var(q, o);
+		sd[o] = v > 0.0f ? sqrtf(v) : 0.0f;
+	}
+}
+
+void ident_rotor_read(const struct ident_rotor *r, float est[4], float sd[4])
+{
+	read_1x2(&r->lagaware, est, sd);
+	read_1x2(&r->plain, est + 2, sd + 2);
+}
+
 float ident_rotor_tau_check(const struct ident_rotor *r)
 {
 	if (r->dalpha_dtau == SC_ZERO || r->sens.n_updates < 2u)

@@ -97,6 +97,9 @@ void ident_rotor_hold(struct ident_rotor *r, scalar_t thr_sent_prev);
 /* estimates and standard deviations: which 0 = k_f, 1 = k_tau */
 float ident_rotor_est(const struct ident_rotor *r, unsigned which);
 float ident_rotor_sd(const struct ident_rotor *r, unsigned which);
+/* All four at once, as ident_rotor_est/sd/plain/plain_sd give them (the same values):
+ * est = {k_f, k_tau, k_f plain, k_tau plain}, sd = their standard deviations. */
+void ident_rotor_read(const struct ident_rotor *r, float est[4], float sd[4]);
 float ident_rotor_plain(const struct ident_rotor *r, unsigned which);
 float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which);
 

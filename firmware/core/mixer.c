@@ -152,7 +152,8 @@ static bool normal3(const float g[NA][NR], int a, int b, int c, float n[NA])
 /* Facets of the zonotope of the generators set[0..cnt-1] (scaled space), written to out:
  * one per distinct normal (triples spanning the same hyperplane give one facet). Returns the
  * count, or -1 if more than cap distinct facets exist. */
-static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct mixer_facet *out, int cap)
+static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct mixer_facet *out,
+		     struct mixer_subfacet *out_sub, int cap)
 {
 	int nf = 0;
 	float seen[MIXER_MAX_SUB_FACETS > MIXER_MAX_FACETS ? MIXER_MAX_SUB_FACETS : MIXER_MAX_FACETS][NA];
@@ -183,10 +184,18 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 					nc += 0.5f * d;
 					h += 0.5f * absf(d);
 				}
-				for (int i = 0; i < NA; i++) {
+				for (int i = 0; i < NA; i++)
 					seen[nf][i] = n[i];
-					out[nf].n[i] = sc_from_float(n[i]);
+				if (out_sub) { /* a preimage step's facet: no reciprocals */
+					for (int i = 0; i < NA; i++)
+						out_sub[nf].n[i] = sc_from_float(n[i]);
+					out_sub[nf].nc = sc_from_float(nc);
+					out_sub[nf].h = sc_from_float(h);
+					nf++;
+					continue;
 				}
+				for (int i = 0; i < NA; i++)
+					out[nf].n[i] = sc_from_float(n[i]);
 				out[nf].nc = sc_from_float(nc);
 				out[nf].h = sc_from_float(h);
 				/* reciprocals of the thrust and yaw components (0: treated as zero) */
@@ -212,7 +221,7 @@ void mixer_default_params(struct mixer_params *p)
 	*p = d;
 }
 
-static void build_gamma(struct mixer *m, const struct mixer_params *p)
+static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 {
 	if (p->custom_gamma) {
 		for (int i = 0; i < NA; i++)
@@ -245,19 +254,28 @@ static void build_gamma(struct mixer *m, const struct mixer_params *p)
 
 bool mixer_init(struct mixer *m, const struct mixer_params *p)
 {
-	unsigned char *raw = (unsigned char *)m; /* zero the caller's struct without a template */
+	struct mixer_design d; /* scratch, dropped on return */
+	return mixer_init_design(m, p, &d);
+}
+
+bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mixer_design *dz)
+{
+	unsigned char *raw = (unsigned char *)m; /* zero the caller's structs without a template */
 	for (size_t b = 0; b < sizeof *m; b++)
+		raw[b] = 0;
+	raw = (unsigned char *)dz;
+	for (size_t b = 0; b < sizeof *dz; b++)
 		raw[b] = 0;
 	m->p = *p;
 	m->p.custom_gamma = NULL;
 	m->custom = p->custom_gamma != NULL;
-	build_gamma(m, p);
+	build_gamma(dz, p);
 
 	/* ---- pseudo-inverse by one-sided Jacobi SVD of Gamma^T */
 	float a[NR][NA], v[NA][NA], s[NA];
 	for (int j = 0; j < NR; j++)
 		for (int i = 0; i < NA; i++)
-			a[j][i] = m->gamma_f[i][j];
+			a[j][i] = dz->gamma_f[i][j];
 	jacobi_svd(a, v, s);
 	int idx[NA] = { 0, 1, 2, 3 };
 	for (int i = 0; i < NA; i++) /* sort by singular value, descending */
@@ -272,18 +290,19 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 	int rank = 0;
 	for (int k = 0; k < NA; k++) {
 		int c = idx[k];
-		m->sigma_f[k] = s[c];
+		dz->sigma_f[k] = s[c];
 		if (smax > 0.0f && s[c] > 1e-5f * smax) {
 			for (int j = 0; j < NR; j++)
 				ucol[j][rank] = a[j][c] / s[c];
 			/* pinv += u_k (1/s_k) v_k^T */
 			for (int j = 0; j < NR; j++)
 				for (int i = 0; i < NA; i++)
-					m->pinv_f[j][i] += ucol[j][rank] / s[c] * v[i][c];
+					dz->pinv_f[j][i] += ucol[j][rank] / s[c] * v[i][c];
 			rank++;
 		}
 	}
 	m->rank = (uint8_t)rank;
+	dz->rank = (uint8_t)rank;
 	/* two Newton-Schulz steps P <- 2P - P Gamma P (converge to the Moore-Penrose inverse,
 	 * also when rank-deficient) polish the float32 SVD result */
 	for (int it = 0; it < 2; it++) {
@@ -292,19 +311,19 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 			for (int k = 0; k < NA; k++) {
 				float acc = 0.0f;
 				for (int j = 0; j < NR; j++)
-					acc += m->gamma_f[i][j] * m->pinv_f[j][k];
+					acc += dz->gamma_f[i][j] * dz->pinv_f[j][k];
 				gp[i][k] = acc;
 			}
 		for (int j = 0; j < NR; j++)
 			for (int k = 0; k < NA; k++) {
 				float acc = 0.0f; /* (P (I - Gamma P))_jk, then P + that */
 				for (int i = 0; i < NA; i++)
-					acc += m->pinv_f[j][i] * ((i == k ? 1.0f : 0.0f) - gp[i][k]);
-				np[j][k] = m->pinv_f[j][k] + acc;
+					acc += dz->pinv_f[j][i] * ((i == k ? 1.0f : 0.0f) - gp[i][k]);
+				np[j][k] = dz->pinv_f[j][k] + acc;
 			}
 		for (int j = 0; j < NR; j++)
 			for (int k = 0; k < NA; k++)
-				m->pinv_f[j][k] = np[j][k];
+				dz->pinv_f[j][k] = np[j][k];
 	}
 
 	/* ---- null space: complete the row space of Gamma (ucol) with unit vectors, Gram-Schmidt */
@@ -340,15 +359,15 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 		float inv = 1.0f / sqrtf(bestn);
 		for (int j = 0; j < NR; j++) {
 			basis[j][nb] = best[j] * inv;
-			m->null_f[j][nb - rank] = basis[j][nb];
+			dz->null_f[j][nb - rank] = basis[j][nb];
 		}
 		nb++;
 	}
-	m->n_null = (uint8_t)(NR - rank);
+	dz->n_null = (uint8_t)(NR - rank);
 
 	for (int j = 0; j < NR; j++)
 		for (int i = 0; i < NA; i++)
-			m->pinv[j][i] = sc_from_float(m->pinv_f[j][i]);
+			m->pinv[j][i] = sc_from_float(dz->pinv_f[j][i]);
 
 	/* ---- box and row scaling */
 	float kf = sc_to_float(p->k_f_n);
@@ -367,10 +386,10 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 		rowmax[i] = 0.0f;
 		float wl = 0.0f;
 		for (int j = 0; j < NR; j++) {
-			rowmax[i] = absf(m->gamma_f[i][j]) > rowmax[i] ? absf(m->gamma_f[i][j]) : rowmax[i];
-			if (m->gamma_f[0][j] != 0.0f || m->gamma_f[1][j] != 0.0f ||
-			    m->gamma_f[2][j] != 0.0f || m->gamma_f[3][j] != 0.0f)
-				wl += m->gamma_f[i][j] * flo;
+			rowmax[i] = absf(dz->gamma_f[i][j]) > rowmax[i] ? absf(dz->gamma_f[i][j]) : rowmax[i];
+			if (dz->gamma_f[0][j] != 0.0f || dz->gamma_f[1][j] != 0.0f ||
+			    dz->gamma_f[2][j] != 0.0f || dz->gamma_f[3][j] != 0.0f)
+				wl += dz->gamma_f[i][j] * flo;
 		}
 		m->w_lo[i] = sc_from_float(wl);
 		if (!(rowmax[i] > 0.0f)) {
@@ -380,7 +399,7 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 		m->row_div[i] = sc_from_float(1.0f / rowmax[i]);
 		m->row_scale[i] = sc_from_float(width * rowmax[i]);
 		for (int j = 0; j < NR; j++) {
-			gsc[i][j] = m->gamma_f[i][j] / rowmax[i];
+			gsc[i][j] = dz->gamma_f[i][j] / rowmax[i];
 			m->gn[i][j] = sc_from_float(gsc[i][j]);
 		}
 	}
@@ -389,7 +408,7 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 	m->at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
 	for (int j = 0; j < NR; j++)
 		for (int i = 0; i < NA; i++)
-			m->pinv_n[j][i] = sc_from_float(m->pinv_f[j][i] * rowmax[i]);
+			m->pinv_n[j][i] = sc_from_float(dz->pinv_f[j][i] * rowmax[i]);
 
 	/* ---- allocator: present rotors, the best-conditioned 4 of them last */
 	uint8_t act[NR];
@@ -397,7 +416,7 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 	for (int j = 0; j < NR; j++) {
 		float n2 = 0.0f;
 		for (int i = 0; i < NA; i++)
-			n2 += m->gamma_f[i][j] * m->gamma_f[i][j];
+			n2 += dz->gamma_f[i][j] * dz->gamma_f[i][j];
 		if (n2 > 0.0f) {
 			act[na++] = (uint8_t)j;
 			m->present |= (uint8_t)(1u << j);
@@ -439,7 +458,7 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 			for (int c = 0; c < 4; c++)
 				for (int i = 0; i < NA; i++)
 					m->tail_inv[c][i] = sc_from_float(inv[c][i]);
-			int nfull = facets_of(gsc, act, na, m->facet, MIXER_MAX_FACETS);
+			int nfull = facets_of(gsc, act, na, m->facet, NULL, MIXER_MAX_FACETS);
 			bool fits = nfull > 0;
 			m->n_facets = (uint8_t)(nfull > 0 ? nfull : 0);
 			int used = 0;
@@ -448,7 +467,7 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 				m->sub_first[st] = (uint8_t)used;
 				m->sub_n[st] = 0;
 				if (cnt > 4) {
-					int k = facets_of(gsc, &m->order[st + 1], cnt, &m->sub[used],
+					int k = facets_of(gsc, &m->order[st + 1], cnt, NULL, &m->sub[used],
 							  MIXER_MAX_SUB_FACETS - used);
 					if (k < 0) {
 						fits = false;
@@ -795,7 +814,7 @@ static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 			}
 		} else {
 			for (int k = 0; k < m->sub_n[st]; k++) {
-				const struct mixer_facet *fc = &m->sub[m->sub_first[st] + k];
+				const struct mixer_subfacet *fc = &m->sub[m->sub_first[st] + k];
 				narrow(sc_sub(dot4(fc->n, r), fc->nc), dot4(fc->n, g), fc->h, &lo, &hi);
 			}
 		}

@@ -122,14 +122,28 @@ struct mixer_facet {
 	scalar_t inv0, inv3;      /* 1 / n[0], 1 / n[3] (0 when that component is ~0) */
 };
 
-struct mixer {
-	struct mixer_params p;         /* copy (custom_gamma set to NULL after copying) */
+/* a facet of a preimage step's sub-zonotope: what the step needs, no reciprocals */
+struct mixer_subfacet {
+	scalar_t n[MIXER_N_AXES];
+	scalar_t nc, h;
+};
+
+/* The float32 results of the set-up that the 90 Hz path does not use: mixer_init computes
+ * them in a scratch on its stack and drops them; mixer_init_design hands them to the caller
+ * (tests, tools). */
+struct mixer_design {
 	float gamma_f[MIXER_N_AXES][MIXER_N_ROTORS];  /* Gamma, physical, float */
 	float pinv_f[MIXER_N_ROTORS][MIXER_N_AXES];   /* Gamma^+, physical, float */
 	float null_f[MIXER_N_ROTORS][MIXER_N_ROTORS]; /* null-space basis: columns 0..n_null-1 */
 	float sigma_f[MIXER_N_AXES];                  /* singular values of Gamma, descending */
 	uint8_t rank;
 	uint8_t n_null;
+};
+
+/* What the 90 Hz path reads (and the parameters, to see what changed): the caller keeps it. */
+struct mixer {
+	struct mixer_params p;         /* copy (custom_gamma set to NULL after copying) */
+	uint8_t rank;
 
 	/* hot-path data, scalar_t */
 	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES];  /* Gamma^+ (physical) */
@@ -150,7 +164,7 @@ struct mixer {
 	struct mixer_facet facet[MIXER_MAX_FACETS];
 	uint8_t sub_n[MIXER_N_ROTORS];     /* facets of the suffix set after step i */
 	uint8_t sub_first[MIXER_N_ROTORS];
-	struct mixer_facet sub[MIXER_MAX_SUB_FACETS];
+	struct mixer_subfacet sub[MIXER_MAX_SUB_FACETS];
 	scalar_t tail_inv[4][MIXER_N_AXES]; /* inverse of the last 4 scaled columns */
 };
 
@@ -172,6 +186,10 @@ void mixer_default_params(struct mixer_params *p);
  * has full row rank 4 (false: the pseudo-inverse is still the Moore-Penrose one of the
  * rank-deficient Gamma; the priority allocator is disabled). */
 bool mixer_init(struct mixer *m, const struct mixer_params *p);
+
+/* mixer_init, also writing the float32 design (Gamma, Gamma^+, null space, singular values)
+ * to *d. */
+bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mixer_design *d);
 
 /* Recomputes (mixer_init) only if a parameter that enters Gamma or the box changed (always
  * with custom_gamma); a mode change alone is applied without recomputation. Call it whenever

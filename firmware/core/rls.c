@@ -71,6 +71,47 @@ static float pdiag(const struct rls *r, unsigned i)
 	return s;
 }
 
+/* rls_update_f's Bierman step for one parameter (the identification's common case): the
+ * same operations in the same order as the general loops with n = 1 (bit-identical
+ * results), without their loop and copy overhead. */
+static enum rls_result update_1(struct rls *r, float phi, const float *y, float lambda)
+{
+	const unsigned no = r->cfg.n_outputs;
+	float f = 0.0f + r->u[0][0] * phi;
+	float v = r->d[0] * f;
+	float alpha = lambda + f * v;
+	float d = r->d[0] * lambda / (alpha * lambda);
+	bool ok = d > 0.0f && finite_f(d);
+	float th[RLS_MAX_OUTPUTS], e[RLS_MAX_OUTPUTS];
+	for (unsigned o = 0; o < no; o++) {
+		float yhat = 0.0f + phi * r->theta[o][0];
+		e[o] = y[o] - yhat;
+		th[o] = r->theta[o][0] + v / alpha * e[o];
+		if (!finite_f(th[o]))
+			ok = false;
+	}
+	if (!ok || !finite_f(alpha) || !(alpha > 0.0f)) {
+		rls_reset_covariance(r);
+		r->n_resets++;
+		return RLS_RESET;
+	}
+	float innov = alpha / lambda;
+	r->d[0] = d;
+	for (unsigned o = 0; o < no; o++) {
+		r->theta[o][0] = th[o];
+		float s = lambda * r->ssr[o] + e[o] * e[o] / innov;
+		r->ssr[o] = finite_f(s) ? s : 0.0f;
+	}
+	r->n_eff = lambda * r->n_eff + 1.0f;
+	if (r->cfg.p_min > 0.0f) {
+		float p = pdiag(r, 0);
+		if (p < r->cfg.p_min)
+			r->d[0] += r->cfg.p_min - p;
+	}
+	r->n_updates++;
+	return RLS_UPDATED;
+}
+
 enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bool excited)
 {
 	const unsigned n = r->cfg.n_params, no = r->cfg.n_outputs;
@@ -105,6 +146,9 @@ enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bo
 		if (lmin > lambda)
 			lambda = lmin < 1.0f ? lmin : 1.0f;
 	}
+
+	if (n == 1)
+		return update_1(r, phi[0], y, lambda);
 
 	/* Bierman: f = U^T phi, v = D f */
 	float f[RLS_MAX_PARAMS], v[RLS_MAX_PARAMS], b[RLS_MAX_PARAMS];
@@ -185,12 +229,16 @@ enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bo
 
 enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y, bool excited)
 {
+#if !OCTO_FIXED
+	return rls_update_f(r, phi, y, excited); /* scalar_t is float: nothing to convert */
+#else
 	float pf[RLS_MAX_PARAMS], yf[RLS_MAX_OUTPUTS];
 	for (unsigned i = 0; i < r->cfg.n_params; i++)
 		pf[i] = sc_to_float(phi[i]);
 	for (unsigned o = 0; o < r->cfg.n_outputs; o++)
 		yf[o] = sc_to_float(y[o]);
 	return rls_update_f(r, pf, yf, excited);
+#endif
 }
 
 float rls_estimate_f(const struct rls *r, unsigned out, unsigned param)

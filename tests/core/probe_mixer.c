@@ -14,6 +14,7 @@
 #include <string.h>
 
 static struct mixer mix;
+static struct mixer_design des; /* the float32 set-up results (not kept by struct mixer) */
 
 static double d(scalar_t a) { return (double)sc_to_float(a); }
 
@@ -22,7 +23,7 @@ int main(void)
 	char line[512];
 	struct mixer_params p;
 	mixer_default_params(&p);
-	mixer_init(&mix, &p);
+	mixer_init_design(&mix, &p, &des);
 	while (fgets(line, sizeof line, stdin)) {
 		double a[8];
 		unsigned mask;
@@ -36,7 +37,7 @@ int main(void)
 			p.t_min = sc_from_float((float)a[3]);
 			p.t_max = sc_from_float((float)a[4]);
 			p.mode = mode ? MIXER_MODE_PRIORITY : MIXER_MODE_CLIP;
-			int ok = mixer_init(&mix, &p);
+			int ok = mixer_init_design(&mix, &p, &des);
 			printf("{\"ok\":%d,\"l\":%.9g,\"kf\":%.9g,\"ktau\":%.9g,\"f_lo\":%.9g,\"f_hi\":%.9g}\n", ok,
 			       d(p.arm_l_m), d(p.k_f_n), d(p.k_tau_nm), d(mix.f_lo), d(mix.f_hi));
 		} else if (strncmp(line, "gamma", 5) == 0) {
@@ -44,14 +45,14 @@ int main(void)
 			for (int i = 0; i < 4; i++) {
 				printf("%s[", i ? "," : "");
 				for (int j = 0; j < 8; j++)
-					printf("%s%.9g", j ? "," : "", (double)mix.gamma_f[i][j]);
+					printf("%s%.9g", j ? "," : "", (double)des.gamma_f[i][j]);
 				printf("]");
 			}
 			printf("],\"pinv\":[");
 			for (int j = 0; j < 8; j++) {
 				printf("%s[", j ? "," : "");
 				for (int i = 0; i < 4; i++)
-					printf("%s%.9g", i ? "," : "", (double)mix.pinv_f[j][i]);
+					printf("%s%.9g", i ? "," : "", (double)des.pinv_f[j][i]);
 				printf("]");
 			}
 			printf("],\"pinv_scalar\":[");
@@ -64,8 +65,8 @@ int main(void)
 			printf("],\"null\":[");
 			for (int j = 0; j < 8; j++) {
 				printf("%s[", j ? "," : "");
-				for (int k = 0; k < mix.n_null; k++)
-					printf("%s%.9g", k ? "," : "", (double)mix.null_f[j][k]);
+				for (int k = 0; k < des.n_null; k++)
+					printf("%s%.9g", k ? "," : "", (double)des.null_f[j][k]);
 				printf("]");
 			}
 			printf("]}\n");

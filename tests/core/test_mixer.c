@@ -52,7 +52,8 @@ static double d(scalar_t a)
 
 static const double tol_axis[4] = { TOL_F, TOL_TXY, TOL_TXY, TOL_TZ };
 
-static struct mixer mix; /* 4 KB: not on the test's stack */
+static struct mixer mix;
+static struct mixer_design des; /* the float32 set-up results (not kept by struct mixer) */ /* 4 KB: not on the test's stack */
 
 static void params(struct mixer_params *p, double l, double kf, double kt, unsigned mask)
 {
@@ -132,7 +133,7 @@ UNIT_TEST(mixer_gamma_is_eq14)
 {
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
-	CHECK(mixer_init(&mix, &p));
+	CHECK(mixer_init_design(&mix, &p, &des));
 	double l = d(p.arm_l_m), k = d(p.k_tau_nm) / d(p.k_f_n), s = sqrt(2.0) / 2;
 	const double g[4][8] = {
 		{ 1, 1, 1, 1, 1, 1, 1, 1 },
@@ -142,14 +143,14 @@ UNIT_TEST(mixer_gamma_is_eq14)
 	};
 	for (int i = 0; i < 4; i++)
 		for (int j = 0; j < 8; j++)
-			CHECK_NEAR(mix.gamma_f[i][j], g[i][j], 1e-7);
-	CHECK(mix.rank == 4 && mix.n_null == 4 && mix.n_active == 8 && mix.alloc_ok);
+			CHECK_NEAR(des.gamma_f[i][j], g[i][j], 1e-7);
+	CHECK(mix.rank == 4 && des.n_null == 4 && mix.n_active == 8 && mix.alloc_ok);
 	/* a removed rotor is a zero column */
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF & ~(1u << 2));
-	CHECK(mixer_init(&mix, &p));
+	CHECK(mixer_init_design(&mix, &p, &des));
 	for (int i = 0; i < 4; i++)
-		CHECK(mix.gamma_f[i][2] == 0.0f);
-	CHECK(mix.n_active == 7 && mix.n_null == 4 && mix.rank == 4);
+		CHECK(des.gamma_f[i][2] == 0.0f);
+	CHECK(mix.n_active == 7 && des.n_null == 4 && mix.rank == 4);
 }
 
 UNIT_TEST(mixer_pinv_identity_and_reference)
@@ -158,7 +159,7 @@ UNIT_TEST(mixer_pinv_identity_and_reference)
 		const struct pinv_ref *r = &pinv_refs[c];
 		struct mixer_params p;
 		params(&p, r->l, r->kf, r->kt, r->mask);
-		CHECK(mixer_init(&mix, &p));
+		CHECK(mixer_init_design(&mix, &p, &des));
 		double pmax = 0;
 		for (int j = 0; j < 8; j++)
 			for (int i = 0; i < 4; i++)
@@ -167,15 +168,15 @@ UNIT_TEST(mixer_pinv_identity_and_reference)
 			for (int k = 0; k < 4; k++) {
 				double s = 0, sq = 0;
 				for (int j = 0; j < 8; j++) {
-					s += (double)mix.gamma_f[i][j] * (double)mix.pinv_f[j][k];
-					sq += (double)mix.gamma_f[i][j] * d(mix.pinv[j][k]);
+					s += (double)des.gamma_f[i][j] * (double)des.pinv_f[j][k];
+					sq += (double)des.gamma_f[i][j] * d(mix.pinv[j][k]);
 				}
 				CHECK_NEAR(s, i == k ? 1.0 : 0.0, 1e-6);
 				CHECK_NEAR(sq, i == k ? 1.0 : 0.0, OCTO_FIXED ? 2e-4 : 1e-6);
 			}
 		for (int j = 0; j < 8; j++)
 			for (int i = 0; i < 4; i++)
-				CHECK_NEAR(mix.pinv_f[j][i], r->p[j][i], TOL_PINV_REL * pmax);
+				CHECK_NEAR(des.pinv_f[j][i], r->p[j][i], TOL_PINV_REL * pmax);
 	}
 }
 
@@ -184,19 +185,19 @@ UNIT_TEST(mixer_pinv_rank_deficient)
 {
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.0, 0xFF); /* k = 0: no yaw authority, rank 3 */
-	CHECK(!mixer_init(&mix, &p));
-	CHECK(mix.rank == 3 && mix.n_null == 5 && !mix.alloc_ok);
+	CHECK(!mixer_init_design(&mix, &p, &des));
+	CHECK(mix.rank == 3 && des.n_null == 5 && !mix.alloc_ok);
 	double gp[4][4] = { { 0 } };
 	for (int i = 0; i < 4; i++)
 		for (int k = 0; k < 4; k++)
 			for (int j = 0; j < 8; j++)
-				gp[i][k] += (double)mix.gamma_f[i][j] * (double)mix.pinv_f[j][k];
+				gp[i][k] += (double)des.gamma_f[i][j] * (double)des.pinv_f[j][k];
 	for (int i = 0; i < 4; i++)
 		for (int j = 0; j < 8; j++) {
 			double gpg = 0; /* Gamma P Gamma = Gamma */
 			for (int k = 0; k < 4; k++)
-				gpg += gp[i][k] * (double)mix.gamma_f[k][j];
-			CHECK_NEAR(gpg, mix.gamma_f[i][j], 1e-6);
+				gpg += gp[i][k] * (double)des.gamma_f[k][j];
+			CHECK_NEAR(gpg, des.gamma_f[i][j], 1e-6);
 		}
 	for (int i = 0; i < 4; i++) /* Gamma P symmetric */
 		for (int k = 0; k < 4; k++)
@@ -217,19 +218,19 @@ UNIT_TEST(mixer_null_space)
 	for (int c = 0; c < 2; c++) {
 		struct mixer_params p;
 		params(&p, 0.35, 28.0269, 0.3869, masks[c]);
-		mixer_init(&mix, &p);
-		CHECK(mix.n_null == 8 - 4);
-		for (int a = 0; a < mix.n_null; a++) {
+		mixer_init_design(&mix, &p, &des);
+		CHECK(des.n_null == 8 - 4);
+		for (int a = 0; a < des.n_null; a++) {
 			for (int i = 0; i < 4; i++) {
 				double s = 0;
 				for (int j = 0; j < 8; j++)
-					s += (double)mix.gamma_f[i][j] * (double)mix.null_f[j][a];
+					s += (double)des.gamma_f[i][j] * (double)des.null_f[j][a];
 				CHECK_NEAR(s, 0.0, 1e-6);
 			}
-			for (int b = 0; b < mix.n_null; b++) {
+			for (int b = 0; b < des.n_null; b++) {
 				double s = 0;
 				for (int j = 0; j < 8; j++)
-					s += (double)mix.null_f[j][a] * (double)mix.null_f[j][b];
+					s += (double)des.null_f[j][a] * (double)des.null_f[j][b];
 				CHECK_NEAR(s, a == b ? 1.0 : 0.0, 1e-6);
 			}
 		}
@@ -241,7 +242,7 @@ UNIT_TEST(mixer_unconstrained_is_eq15)
 {
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
-	mixer_init(&mix, &p);
+	mixer_init_design(&mix, &p, &des);
 	struct unit_rng r = { 0x1234ULL };
 	for (int n = 0; n < SWEEP(500); n++) {
 		double v[4] = { unit_rand_uniform(&r, 40, 180), unit_rand_uniform(&r, -2, 2),
@@ -270,7 +271,7 @@ UNIT_TEST(mixer_unconstrained_is_eq15)
 /* every attainable demand (Gamma f, f in the box, many on its boundary) is reproduced */
 static void check_attainable(struct unit_ctx *u, const struct mixer_params *p, unsigned seed)
 {
-	mixer_init(&mix, p);
+	mixer_init_design(&mix, p, &des);
 	struct unit_rng r = { 0x9e3779b97f4a7c15ULL ^ seed };
 	double flo = d(mix.f_lo), fhi = d(mix.f_hi);
 	int maxsteps = 0;
@@ -338,13 +339,13 @@ UNIT_TEST(mixer_custom_layout)
 	struct mixer_params p;
 	params(&p, 0.3, 10.0, 0.2, 0xFF);
 	p.custom_gamma = g;
-	CHECK(mixer_init(&mix, &p));
+	CHECK(mixer_init_design(&mix, &p, &des));
 	CHECK(mix.n_active == 6 && mix.alloc_ok && mix.p.custom_gamma == NULL);
 	for (int i = 0; i < 4; i++)
 		for (int kk = 0; kk < 4; kk++) {
 			double s = 0;
 			for (int j = 0; j < 8; j++)
-				s += (double)mix.gamma_f[i][j] * (double)mix.pinv_f[j][kk];
+				s += (double)des.gamma_f[i][j] * (double)des.pinv_f[j][kk];
 			CHECK_NEAR(s, i == kk ? 1.0 : 0.0, 1e-6);
 		}
 	check_attainable(u, &p, 6);
@@ -358,7 +359,7 @@ UNIT_TEST(mixer_symmetry)
 	static const int mirx[8] = { 4, 3, 2, 1, 0, 7, 6, 5 };
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
-	mixer_init(&mix, &p);
+	mixer_init_design(&mix, &p, &des);
 	struct unit_rng r = { 0xabcdefULL };
 	for (int n = 0; n < SWEEP(2000); n++) {
 		/* half in the box, half far outside */
@@ -389,7 +390,7 @@ UNIT_TEST(mixer_monotonic_thrust)
 {
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
-	mixer_init(&mix, &p);
+	mixer_init_design(&mix, &p, &des);
 	struct unit_rng r = { 0x77ULL };
 	for (int n = 0; n < SWEEP(100); n++) {
 		double tx = unit_rand_uniform(&r, -3, 3), ty = unit_rand_uniform(&r, -3, 3),
@@ -416,7 +417,7 @@ UNIT_TEST(mixer_no_yaw_reversal)
 {
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
-	mixer_init(&mix, &p);
+	mixer_init_design(&mix, &p, &des);
 	struct unit_rng r = { 0x5eedULL };
 	for (int n = 0; n < SWEEP(5000); n++) {
 		double tz = unit_rand_uniform(&r, -3, 3);
@@ -437,7 +438,7 @@ UNIT_TEST(mixer_priority_order)
 {
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
-	mixer_init(&mix, &p);
+	mixer_init_design(&mix, &p, &des);
 	struct unit_rng r = { 0xfeedULL };
 	int n_rp_exact = 0, n_f_exact = 0, n_alpha = 0;
 	for (int n = 0; n < SWEEP(1500); n++) {
@@ -518,7 +519,7 @@ UNIT_TEST(mixer_priority_cases)
 {
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
-	mixer_init(&mix, &p);
+	mixer_init_design(&mix, &p, &des);
 	struct mixer_output o;
 	/* hover with a huge yaw demand: f, tau_x, tau_y kept, yaw reduced, same sign */
 	scalar_t a[4] = { SC(20.9), SC(0.5), SC(-0.3), SC(5.0) };
@@ -572,7 +573,7 @@ UNIT_TEST(mixer_golden_vectors)
 {
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
-	mixer_init(&mix, &p);
+	mixer_init_design(&mix, &p, &des);
 	static const float dem[][4] = {
 		{ 20.9f, 0.0f, 0.0f, 0.0f },
 		{ 20.9f, 1.0f, -0.5f, 0.1f },
@@ -614,14 +615,18 @@ UNIT_TEST(mixer_set_params_recomputes_only_on_change)
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
 	mixer_init(&mix, &p);
-	mix.pinv_f[0][0] = 123.0f; /* marker: survives when nothing relevant changed */
+	mix.pinv[0][0] = SC(123); /* marker: survives when nothing relevant changed */
 	p.mode = MIXER_MODE_CLIP;
 	mixer_set_params(&mix, &p);
-	CHECK(mix.pinv_f[0][0] == 123.0f && mix.p.mode == MIXER_MODE_CLIP);
+	CHECK(mix.pinv[0][0] == SC(123) && mix.p.mode == MIXER_MODE_CLIP);
 	p.k_tau_nm = SC(0.40);
 	mixer_set_params(&mix, &p);
-	CHECK(mix.pinv_f[0][0] != 123.0f);
-	CHECK_NEAR(mix.gamma_f[3][0], d(SC(0.40)) / d(p.k_f_n), 1e-6);
+	CHECK(mix.pinv[0][0] != SC(123));
+	/* recomputed from the new parameters: the same as a fresh set-up with them */
+	static struct mixer fresh;
+	mixer_init_design(&fresh, &p, &des);
+	CHECK(!memcmp(mix.pinv, fresh.pinv, sizeof mix.pinv) && !memcmp(mix.gn, fresh.gn, sizeof mix.gn));
+	CHECK_NEAR(des.gamma_f[3][0], d(SC(0.40)) / d(p.k_f_n), 1e-6);
 }
 
 UNIT_TEST(mixer_non_finite_demand)
@@ -629,7 +634,7 @@ UNIT_TEST(mixer_non_finite_demand)
 #if !OCTO_FIXED
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
-	mixer_init(&mix, &p);
+	mixer_init_design(&mix, &p, &des);
 	scalar_t v[4] = { 20.0f, __builtin_nanf(""), 0.0f, 0.0f };
 	struct mixer_output o;
 	mixer_update(&mix, v, &o);
@@ -656,13 +661,13 @@ UNIT_TEST(mixer_too_many_facets_falls_back)
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
 	p.custom_gamma = g;
-	CHECK(mixer_init(&mix, &p));
+	CHECK(mixer_init_design(&mix, &p, &des));
 	CHECK(!mix.alloc_ok);
 	for (int i = 0; i < 4; i++)
 		for (int k = 0; k < 4; k++) {
 			double s = 0;
 			for (int j = 0; j < 8; j++)
-				s += (double)mix.gamma_f[i][j] * (double)mix.pinv_f[j][k];
+				s += (double)des.gamma_f[i][j] * (double)des.pinv_f[j][k];
 			CHECK_NEAR(s, i == k ? 1.0 : 0.0, 1e-5);
 		}
 	scalar_t dem[4] = { SC(300), SC(0), SC(0), SC(0) };
@@ -681,7 +686,7 @@ UNIT_TEST(mixer_extreme_demands)
 	struct unit_rng r = { 0xe7ULL };
 	for (int mode = 0; mode < 2; mode++) {
 		p.mode = mode ? MIXER_MODE_PRIORITY : MIXER_MODE_CLIP;
-		mixer_init(&mix, &p);
+		mixer_init_design(&mix, &p, &des);
 		for (int n = 0; n < SWEEP(2000); n++) {
 			scalar_t dem[4];
 			for (int i = 0; i < 4; i++) {
