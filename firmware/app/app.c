@@ -45,9 +45,18 @@ static float tilt_deg(const struct hal_sensor_frame *f)
 	return acosf(clampf(c, -1.0f, 1.0f)) / DEG_F;
 }
 
+/* yaw of a normalised quaternion: quat_to_euler's yaw alone (same expression, same value) */
+static float quat_yaw(struct quat q)
+{
+	scalar_t two = SC(2);
+	scalar_t yn = sc_mul(two, sc_add(sc_mul(q.w, q.z), sc_mul(q.x, q.y)));
+	scalar_t yd = sc_sub(SC(1), sc_mul(two, sc_add(sc_mul(q.y, q.y), sc_mul(q.z, q.z))));
+	return sc_to_float(sc_atan2(yn, yd));
+}
+
 static float frame_yaw(const struct hal_sensor_frame *f)
 {
-	return sc_to_float(quat_to_euler(frame_q(f)).z);
+	return quat_yaw(frame_q(f));
 }
 
 bool app_hovering(const struct app *a)
@@ -89,6 +98,9 @@ static void set_mode(struct app *a, enum app_mode m)
 
 /* ---------------------------------------------------------------- parameters -> modules */
 
+/* Parameters -> controllers, mixer and throttle map. Not in the 90 Hz step: a parameter
+ * change (PARAM_SET, a parameter load, identification results) sets params_dirty and
+ * app_settle() runs this between frames (see "between frames" below). */
 static void sync_params(struct app *a)
 {
 	const struct app_params *p = &a->p;
@@ -147,6 +159,7 @@ void app_init(struct app *a)
 	if (app_params_load(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
 		hal_report("params: %s (defaults in use)", why);
 	sync_params(a);
+	a->params_dirty = false;
 	a->mode = APP_DISARMED;
 	a->q_sp[0] = 1.0f;
 }
@@ -170,6 +183,7 @@ int app_params_load(struct app *a, char *why, size_t cap)
 	struct app_params p = a->p;
 	unsigned bad = params_parse(&p, text, (size_t)n, report_line, a);
 	a->p = p;
+	a->params_dirty = true;
 	if (bad)
 		hal_report("params: %u damaged line(s) ignored", bad);
 	return MAV_RESULT_ACCEPTED;
@@ -202,7 +216,10 @@ const char *app_param_write(struct app *a, size_t index, float value)
 	if (a->mode == APP_EXPERIMENT && locked_in_experiment(index))
 		return "locked while an experiment runs";
 	enum param_set_result r = params_set(&a->p, index, value);
-	return r == PARAM_OK ? NULL : params_set_result_text(r);
+	if (r != PARAM_OK)
+		return params_set_result_text(r);
+	a->params_dirty = true;
+	return NULL;
 }
 
 /* ---------------------------------------------------------------- commands */
@@ -350,10 +367,11 @@ int app_cmd_experiment(struct app *a, float id_f, char *why, size_t cap)
 /* ---------------------------------------------------------------- the control step */
 
 /* Results are applied as soon as the experiment posts them (at the frame
- * boundary after its step), not only when it finishes: in the full sequence
- * (experiment 6) the validation after identification and the inertia phases
- * must already fly with the new VEH_* values. Applied results are broadcast
- * as PARAM_VALUE, saved to the parameter file, and removed from the list. */
+ * boundary after its step: app_settle), not only when it finishes: in the full
+ * sequence (experiment 6) the validation after identification and the inertia
+ * phases must already fly with the new VEH_* values. Applied results are
+ * broadcast as PARAM_VALUE, removed from the list, and saved to the parameter
+ * file by app_tick (save_pending). */
 static void apply_results(struct app *a)
 {
 	int n = a->exp.n_results < EXP_MAX_RESULTS ? a->exp.n_results : EXP_MAX_RESULTS;
@@ -378,17 +396,47 @@ static void apply_results(struct app *a)
 		float g = a->p.veh_grav, r = a->p.veh_kf / kf_old;
 		alt_ctrl_reset(&a->alt, sc_from_float((g + sc_to_float(a->alt.a_int_mps2)) * r - g));
 	}
-	char why[64];
-	if (app_params_save(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
-		app_status(a, MAV_SEVERITY_ERROR, "%s", why);
+	a->params_dirty = true;
+	a->save_pending = true;
+}
+
+/* ---------------------------------------------------------------- between frames
+ *
+ * The 90 Hz step (control_step) only reads what the parameters imply: gains, mixer
+ * (pseudo-inverse, facets) and throttle map. Whatever changes them runs between
+ * frames, after the frame's actuation has gone out and before the next frame's step:
+ *   app_settle()  applies results the experiment posted (PARAM_VALUE for each) and,
+ *                 when a parameter changed (params_dirty), rebuilds gains, mixer and
+ *                 throttle map (sync_params; the mixer's set-up is ~370,000
+ *                 instructions on Cortex-M4F, 40 90 Hz steps' worth). It runs first
+ *                 in app_tick (the main loop's pass after the frame), and as a
+ *                 fallback at the start of app_on_frame and app_on_mavlink, so that no
+ *                 step, command or PARAM_SET ever sees a result half applied or the
+ *                 old mixer beside new parameters ("the mixer and throttle map are
+ *                 rebuilt at a frame boundary", issue 6);
+ *   app_tick()    then writes the parameter file when results were applied
+ *                 (save_pending).
+ * On an MCU the step runs in the frame interrupt (or a high-priority task) and this in a
+ * low-priority task: it would build a shadow struct mixer / struct thrmap from a copy
+ * of the parameters and swap a pointer at a frame boundary (the step reads the pointer
+ * once at its start), so that the step is never delayed by the set-up and never reads a
+ * half-built mixer. That double buffer costs a second struct mixer (2.2 KB) and is not
+ * implemented here: the host runs both paths in one thread, so a rebuild between frames
+ * is already atomic for the step. */
+static void app_settle(struct app *a)
+{
+	if (a->exp.n_results > 0)
+		apply_results(a);
+	if (a->params_dirty) {
+		a->params_dirty = false;
+		sync_params(a);
+	}
 }
 
 static void experiment_step(struct app *a, float dt)
 {
 	struct exp_input in = {&a->fr, dt, &a->p, a->wrench_dem, a->rotor_f, a->thr};
 	enum exp_state st = exp_step(&a->exp, &in, &a->exp_out);
-	if (st == EXP_RUNNING || st == EXP_FINISHED)
-		apply_results(a);
 	if (st != EXP_RUNNING) {
 		memset(&a->exp_out, 0, sizeof a->exp_out);
 		a->exp.state = EXP_IDLE;
@@ -400,7 +448,6 @@ static void control_step(struct app *a, float dt)
 {
 	const struct hal_sensor_frame *f = &a->fr;
 	const struct app_params *p = &a->p;
-	sync_params(a);
 	struct quat q = frame_q(f);
 	float z = f->pos_i_m[2], vz = f->vel_i_mps[2];
 
@@ -462,7 +509,7 @@ static void control_step(struct app *a, float dt)
 	}
 
 	/* horizontal: hold the position of the take-off through small tilts */
-	float yaw = frame_yaw(f);
+	float yaw = quat_yaw(q);
 	float vn = clampf(p->pos_gain * (a->pos_sp[0] - f->pos_i_m[0]), -POS_VEL_MAX, POS_VEL_MAX);
 	float vw = clampf(p->pos_gain * (a->pos_sp[1] - f->pos_i_m[1]), -POS_VEL_MAX, POS_VEL_MAX);
 	float an = p->pos_vel_gain * (vn - f->vel_i_mps[0]);
@@ -510,7 +557,8 @@ static void control_step(struct app *a, float dt)
 
 	/* experiment: excitation on top of the hover control */
 	if (a->mode == APP_EXPERIMENT) {
-		if (tilt_deg(f) > EXP_TILT_ABORT_DEG) {
+		/* tilt > EXP_TILT_ABORT_DEG, without acosf: the body's z axis vs cos(limit) */
+		if (sc_to_float(quat_body_z_up(q)) < cosf(EXP_TILT_ABORT_DEG * DEG_F)) {
 			exp_abort(&a->exp, "attitude limit");
 		}
 		experiment_step(a, dt);
@@ -621,6 +669,7 @@ static void link_lost(struct app *a, const char *what)
 
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
+	app_settle(a);   /* normally done by app_tick already (nothing left here) */
 	uint64_t now = hal_wall_us();
 	a->fr = *f;
 	a->have_frame = true;
@@ -666,17 +715,26 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 
 size_t app_on_mavlink(struct app *a, const uint8_t *buf, size_t len)
 {
+	app_settle(a);   /* commands see the results of the last step applied */
 	return mav_receive(a, buf, len);
 }
 
 void app_tick(struct app *a)
 {
+	app_settle(a);
+	if (a->save_pending) {
+		a->save_pending = false;
+		char why[64];
+		if (app_params_save(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
+			app_status(a, MAV_SEVERITY_ERROR, "%s", why);
+	}
 	uint64_t now = hal_wall_us();
 	uint64_t to = (uint64_t)(a->p.fs_link_to * 1e6f);
 	if (a->link_ok && a->have_frame && now - a->wall_last_frame_us > to) {
 		a->link_lost_at_us = a->wall_last_frame_us;
 		link_lost(a, "no frames");
 	}
+	exp_pump(&a->exp);   /* the experiment's next status line, formatted here */
 	if (a->exp.msg[0]) {
 		app_status(a, a->exp.msg_severity, "%s", a->exp.msg);
 		a->exp.msg[0] = 0;

@@ -8,7 +8,11 @@
  *                            that brings a new time stamp, from the first arming
  *                            on: duplicates and reordered frames are not answered)
  *   app_on_mavlink(a, b, n)  bytes from the ground station
- *   app_tick(a)              often (main loop): telemetry, link supervision
+ *   app_tick(a)              often (main loop), and between frames: applies
+ *                            identification results, rebuilds the mixer after
+ *                            a parameter change, saves the parameter file,
+ *                            telemetry, link supervision (app.c: "between
+ *                            frames")
  *
  * Modes: DISARMED -> (arm) IDLE -> (NAV_TAKEOFF) TAKEOFF -> HOLD
  *        HOLD <-> EXPERIMENT (MAV_CMD_USER_1, only while hovering)
@@ -79,6 +83,10 @@ struct app {
 	struct exp_output exp_out;
 	bool exp_ack_pending;         /* a final COMMAND_ACK of MAV_CMD_USER_1 is owed */
 	uint8_t exp_ack_sysid, exp_ack_compid;
+
+	/* between frames (app.c): work the 90 Hz step does not do */
+	bool params_dirty;            /* a parameter changed: rebuild gains, mixer, map */
+	bool save_pending;            /* results applied: write the parameter file */
 
 	struct mav mav;
 	struct app_log_frame log;

@@ -63,18 +63,20 @@ static const char *const est_names[EXP_MAX_EST] = {
 
 /* ---------------------------------------------------------------- helpers */
 
-static float prm(const struct app_params *p, const char *name, float def)
-{
-	int i = params_find(name, strlen(name));
-	if (i < 0)
-		return def;
-	float v = params_get(p, (size_t)i);
-	return isfinite(v) ? v : def;
-}
+/* Parameter indices (the MAVLink index: the order of params_table.h), resolved at compile
+ * time: no parameter is looked up by name while an experiment runs. */
+enum {
+#define PARAM(name, field, def, min, max, unit, desc) PX_##name,
+#include "params_table.h"
+#undef PARAM
+	PX_COUNT
+};
 
-static uint32_t prm_u(const struct app_params *p, const char *name, float def, uint32_t lo, uint32_t hi)
+/* a parameter's value, or def if not finite */
+static float cfg_f(float v, float def) { return isfinite(v) ? v : def; }
+
+static uint32_t cfg_u(float v, uint32_t lo, uint32_t hi)
 {
-	float v = prm(p, name, def);
 	if (!(v >= (float)lo))
 		return lo;
 	if (v > (float)hi)
@@ -82,44 +84,119 @@ static uint32_t prm_u(const struct app_params *p, const char *name, float def, u
 	return (uint32_t)(v + 0.5f);
 }
 
+/* The experiment's configuration, read once at exp_start: the ID_* parameters are locked
+ * while it runs (app_param_write refuses them, and no result writes these). */
+static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
+{
+	c->exc_amp = cfg_f(p->id_exc_amp, 0.04f);
+	c->exc_time = cfg_f(p->id_exc_time, 10.0f);
+	c->exc_kind = cfg_u(cfg_f(p->id_exc_kind, 1.0f), 0u, 2u);
+	c->exc_div = cfg_u(cfg_f(p->id_exc_div, 9.0f), 1u, 1000u);
+	c->exc_null = cfg_f(p->id_exc_null, 1.0f) >= 0.5f;
+	c->seed = cfg_u(cfg_f(p->id_seed, 1.0f), 0u, 1000000u);
+	c->mot_tau = cfg_f(p->id_mot_tau, 0.03f);
+	c->delay_fr = cfg_u(cfg_f(p->id_delay_fr, 0.0f), 0u, FILT_DELAY_MAX);
+	c->inr_amp = cfg_f(p->id_inr_amp, INR_AMP_DEF);
+	c->inr_time = cfg_f(p->id_inr_time, 10.0f);
+	c->val_time = cfg_f(p->id_val_time, 5.0f);
+	c->rsd_max = cfg_f(p->id_rsd_max, 0.02f);
+}
+
+/* Status lines are queued with their arguments and formatted (vsnprintf with %f: thousands
+ * of instructions each) by exp_pump, between frames, not in the 90 Hz step. say() records the
+ * arguments by the conversions of fmt (%d int, %s a string that outlives the experiment:
+ * literals only, %f double; the formats below use no others). */
 static void say(struct experiment *e, int sev, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static void say(struct experiment *e, int sev, const char *fmt, ...)
 {
 	if (e->q_n >= EXP_QUEUE)
 		return;
-	int slot = (e->q_head + e->q_n) % EXP_QUEUE;
+	struct exp_line *l = &e->queue[(e->q_head + e->q_n) % EXP_QUEUE];
+	memset(l, 0, sizeof *l);
+	l->fmt = fmt;
+	l->sev = sev;
 	va_list ap;
 	va_start(ap, fmt);
-	vsnprintf(e->queue[slot], sizeof e->queue[slot], fmt, ap);
+	unsigned n = 0;
+	for (const char *c = fmt; *c && n < EXP_LINE_ARGS; c++) {
+		if (*c != '%')
+			continue;
+		c++;
+		while (*c == '.' || (*c >= '0' && *c <= '9'))
+			c++;
+		if (*c == 'd') {
+			l->kind[n] = 'd';
+			l->arg[n++].i = va_arg(ap, int);
+		} else if (*c == 's') {
+			l->kind[n] = 's';
+			l->arg[n++].s = va_arg(ap, const char *);
+		} else if (*c == 'f') {
+			l->kind[n] = 'f';
+			l->arg[n++].f = va_arg(ap, double);
+		} else if (!*c) {
+			break;
+		}
+	}
 	va_end(ap);
-	e->queue_sev[slot] = sev;
 	e->q_n++;
 }
 
-/* one queued line into the app's pending slot when it is free (the app sends it) */
-static void pump_messages(struct experiment *e)
+#define ARG_D(k) (l->arg[k].i)
+#define ARG_S(k) (l->arg[k].s)
+#define ARG_F(k) (l->arg[k].f)
+
+/* the line's text, with the arguments say() recorded (one case per argument pattern) */
+static void format_line(const struct exp_line *l, char *out, size_t cap)
 {
-	if (e->msg[0] || !e->q_n)
-		return;
-	memcpy(e->msg, e->queue[e->q_head], sizeof e->msg);
-	e->msg_severity = e->queue_sev[e->q_head];
-	e->q_head = (e->q_head + 1) % EXP_QUEUE;
-	e->q_n--;
+	const char *k = l->kind;
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wformat-nonliteral"
+	if (!strcmp(k, ""))
+		snprintf(out, cap, "%s", l->fmt);
+	else if (!strcmp(k, "dds"))
+		snprintf(out, cap, l->fmt, ARG_D(0), ARG_D(1), ARG_S(2));
+	else if (!strcmp(k, "ffss"))
+		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_S(2), ARG_S(3));
+	else if (!strcmp(k, "ff"))
+		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1));
+	else if (!strcmp(k, "fsf"))
+		snprintf(out, cap, l->fmt, ARG_F(0), ARG_S(1), ARG_F(2));
+	else if (!strcmp(k, "sffss"))
+		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2), ARG_S(3), ARG_S(4));
+	else if (!strcmp(k, "sff"))
+		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2));
+	else
+		snprintf(out, cap, "ID: line with arguments %s", k);   /* a new pattern: add a case */
+#pragma GCC diagnostic pop
 }
 
-static void result(struct experiment *e, const char *name, float value)
+/* one queued line into the app's pending slot when it is free and a step ran since the last
+ * one (one line per frame, as before: the app sends it on its tick) */
+void exp_pump(struct experiment *e)
 {
-	int idx = params_find(name, strlen(name));
-	if (idx < 0 || e->n_results >= EXP_MAX_RESULTS)
+	if (!e->pump_ready || e->msg[0] || !e->q_n)
+		return;
+	const struct exp_line *l = &e->queue[e->q_head];
+	format_line(l, e->msg, sizeof e->msg);
+	e->msg_severity = l->sev;
+	e->q_head = (e->q_head + 1) % EXP_QUEUE;
+	e->q_n--;
+	e->pump_ready = false;
+}
+
+static void result(struct experiment *e, int idx, float value)
+{
+	if (idx < 0 || (size_t)idx >= param_count || e->n_results >= EXP_MAX_RESULTS)
 		return;
 	e->results[e->n_results].param_index = idx;
 	e->results[e->n_results].value = value;
 	e->n_results++;
 }
 
+/* ID_RESULT is read live: the results of earlier phases change it during the experiment */
 static uint32_t result_mask(const struct app_params *p)
 {
-	float v = prm(p, "ID_RESULT", 0.0f);
+	float v = cfg_f(p->id_result, 0.0f);
 	return v >= 0.0f && v < 256.0f ? (uint32_t)v : 0u;
 }
 
@@ -127,12 +204,11 @@ static void set_result_bit(struct experiment *e, const struct app_params *p, uin
 {
 	/* the pending value, if any, is the latest */
 	uint32_t m = result_mask(p);
-	int idx = params_find("ID_RESULT", 9);
 	for (int i = 0; i < e->n_results; i++)
-		if (e->results[i].param_index == idx)
+		if (e->results[i].param_index == PX_ID_RESULT)
 			m = (uint32_t)e->results[i].value;
 	m = on ? (m | bit) : (m & ~bit);
-	result(e, "ID_RESULT", (float)m);
+	result(e, PX_ID_RESULT, (float)m);
 }
 
 /* ---------------------------------------------------------------- contract */
@@ -163,8 +239,8 @@ int exp_start(struct experiment *e, int id, const struct app_params *p, char *wh
 		snprintf(why, cap, "Experiment %d unknown (1..6)", id);
 		return MAV_RESULT_DENIED;
 	}
-	float amp = prm(p, "ID_EXC_AMP", 0.04f), t_exc = prm(p, "ID_EXC_TIME", 10.0f);
-	if (!(amp > 0.0f) || !(t_exc > 0.0f)) {
+	cfg_resolve(&e->cfg, p);
+	if (!(e->cfg.exc_amp > 0.0f) || !(e->cfg.exc_time > 0.0f)) {
 		snprintf(why, cap, "Experiment %d refused: ID_EXC_AMP/ID_EXC_TIME not > 0", id);
 		return MAV_RESULT_DENIED;
 	}
@@ -213,6 +289,7 @@ void exp_abort(struct experiment *e, const char *reason)
 static void phase_begin(struct experiment *e, const struct exp_input *in)
 {
 	const struct app_params *p = in->params;
+	const struct exp_cfg *cf = &e->cfg;
 	int k = e->phase_kind[e->phase];
 	e->t_phase = 0.0f;
 	e->t_settle = SETTLE_S;
@@ -220,22 +297,22 @@ static void phase_begin(struct experiment *e, const struct exp_input *in)
 	say(e, MAV_SEVERITY_INFO, "ID %d/%d: %s", e->phase + 1, e->n_phases, phase_name(k));
 
 	struct excite_params xp = excite_params_default();
-	xp.seed = prm_u(p, "ID_SEED", 1.0f, 0u, 1000000u) * 8u + (uint32_t)e->phase;
-	xp.clock_div = prm_u(p, "ID_EXC_DIV", 9.0f, 1u, 1000u);
+	xp.seed = cf->seed * 8u + (uint32_t)e->phase;
+	xp.clock_div = cf->exc_div;
 	xp.prbs_order = PRBS_ORDER;
 	scalar_t dt = sc_from_float(e->dt_nom);
 
 	if (k == PK_ROTOR) {
-		e->t_run = prm(p, "ID_EXC_TIME", 10.0f);
-		uint32_t kind = prm_u(p, "ID_EXC_KIND", 1.0f, 0u, 2u);
+		e->t_run = cf->exc_time;
+		uint32_t kind = cf->exc_kind;
 		xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
-		xp.amplitude = sc_from_float(prm(p, "ID_EXC_AMP", 0.04f));
+		xp.amplitude = sc_from_float(cf->exc_amp);
 		/* multisine: 8 harmonics of 0.5 Hz (0.5 .. 4 Hz at 90 Hz) */
 		xp.ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
 		struct ident_rotor_cfg c = {
 			.dt_s = dt,
-			.mot_tau_s = sc_from_float(prm(p, "ID_MOT_TAU", 0.03f)),
-			.delay_frames = prm_u(p, "ID_DELAY_FR", 0.0f, 0u, FILT_DELAY_MAX),
+			.mot_tau_s = sc_from_float(cf->mot_tau),
+			.delay_frames = cf->delay_fr,
 			.curve = sc_from_float(p->mot_curve),
 			.thr0 = sc_from_float(in->thr_prev[0]),
 			.kf0 = p->veh_kf,
@@ -246,8 +323,8 @@ static void phase_begin(struct experiment *e, const struct exp_input *in)
 		e->est_live = 0x0Fu;
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
-		e->t_run = prm(p, "ID_INR_TIME", 10.0f);
-		float amp = prm(p, "ID_INR_AMP", INR_AMP_DEF);
+		e->t_run = cf->inr_time;
+		float amp = cf->inr_amp;
 		xp.kind = ax == 2u ? EXCITE_PRBS : EXCITE_MULTISINE;
 		xp.ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
 		xp.ms_k_first = INR_MS_K_FIRST;
@@ -263,19 +340,19 @@ static void phase_begin(struct experiment *e, const struct exp_input *in)
 		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		for (int i = 0; i < 3; i++)
 			w[i] = sc_from_float(f->rate_b_rps[i]);
-		scalar_t alpha = ident_torque_weight(sc_from_float(prm(p, "ID_MOT_TAU", 0.03f)), dt);
+		scalar_t alpha = ident_torque_weight(sc_from_float(cf->mot_tau), dt);
 		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS),
 				   SC(INR_ZETA), dt, alpha, inertia, w, tau);
 		e->est_live = 1u << (4u + ax);
 	} else {
-		e->t_run = prm(p, "ID_VAL_TIME", 5.0f);
+		e->t_run = cf->val_time;
 		/* mu_1: the paper's uniform random signal, on the yaw torque demand (yaw moves
 		 * single rotor thrusts most for the least attitude change) */
 		xp.kind = EXCITE_UNIFORM;
-		xp.amplitude = sc_from_float(prm(p, "ID_INR_AMP", INR_AMP_DEF) / INR_YAW_DIV);
-		filt_delay_init(&e->val_delay, prm_u(p, "ID_DELAY_FR", 0.0f, 0u, FILT_DELAY_MAX),
+		xp.amplitude = sc_from_float(cf->inr_amp / INR_YAW_DIV);
+		filt_delay_init(&e->val_delay, cf->delay_fr,
 				sc_from_float(in->rotor_f_cmd[0]));
-		filt_lag_init(&e->val_lag, sc_from_float(prm(p, "ID_MOT_TAU", 0.03f)), dt,
+		filt_lag_init(&e->val_lag, sc_from_float(cf->mot_tau), dt,
 			      sc_from_float(in->rotor_f_cmd[0]));
 		ident_fit_init(&e->fit);
 		e->est_live = 1u << 7;
@@ -287,7 +364,7 @@ static void phase_end(struct experiment *e, const struct exp_input *in)
 {
 	const struct app_params *p = in->params;
 	int k = e->phase_kind[e->phase];
-	float rsd = prm(p, "ID_RSD_MAX", 0.02f);
+	float rsd = e->cfg.rsd_max;
 	if (k == PK_ROTOR) {
 		float kf = ident_rotor_est(&e->rot, 0), kf_sd = ident_rotor_sd(&e->rot, 0);
 		float kt = ident_rotor_est(&e->rot, 1), kt_sd = ident_rotor_sd(&e->rot, 1);
@@ -295,15 +372,15 @@ static void phase_end(struct experiment *e, const struct exp_input *in)
 		enum ident_verdict vf = ident_accept(kf, kf_sd, p->veh_kf, rsd);
 		enum ident_verdict vt = ident_accept(kt, kt_sd, p->veh_ktau, rsd);
 		bool ok = vf == IDENT_ACCEPT && vt == IDENT_ACCEPT;
-		result(e, "ID_KF_EST", isfinite(kf) ? kf : 0.0f);
-		result(e, "ID_KF_SD", isfinite(kf_sd) ? kf_sd : 0.0f);
-		result(e, "ID_KF_PLAIN", isfinite(kfp) ? kfp : 0.0f);
-		result(e, "ID_KTAU_EST", isfinite(kt) ? kt : 0.0f);
-		result(e, "ID_KTAU_SD", isfinite(kt_sd) ? kt_sd : 0.0f);
-		result(e, "ID_KTAU_PLAIN", isfinite(ktp) ? ktp : 0.0f);
+		result(e, PX_ID_KF_EST, isfinite(kf) ? kf : 0.0f);
+		result(e, PX_ID_KF_SD, isfinite(kf_sd) ? kf_sd : 0.0f);
+		result(e, PX_ID_KF_PLAIN, isfinite(kfp) ? kfp : 0.0f);
+		result(e, PX_ID_KTAU_EST, isfinite(kt) ? kt : 0.0f);
+		result(e, PX_ID_KTAU_SD, isfinite(kt_sd) ? kt_sd : 0.0f);
+		result(e, PX_ID_KTAU_PLAIN, isfinite(ktp) ? ktp : 0.0f);
 		if (ok) {
-			result(e, "VEH_KF", kf);
-			result(e, "VEH_KTAU", kt);
+			result(e, PX_VEH_KF, kf);
+			result(e, PX_VEH_KTAU, kt);
 		}
 		set_result_bit(e, p, 1u, ok);
 		const char *why_f = ok ? "accepted" : (vf != IDENT_ACCEPT ? ident_verdict_text(vf) : "ktau rejected");
@@ -315,8 +392,8 @@ static void phase_end(struct experiment *e, const struct exp_input *in)
 		    (double)kt, (double)kt_sd, ok ? "N m " : "rejected: ", why_t);
 		say(e, MAV_SEVERITY_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
 		/* the lag model, checked by a Gauss-Newton step (ident.h); far off: say so */
-		float tau_m = prm(p, "ID_MOT_TAU", 0.03f), tau_c = ident_rotor_tau_check(&e->rot);
-		result(e, "ID_TAU_CHECK", isfinite(tau_c) ? tau_c : -1.0f);
+		float tau_m = e->cfg.mot_tau, tau_c = ident_rotor_tau_check(&e->rot);
+		result(e, PX_ID_TAU_CHECK, isfinite(tau_c) ? tau_c : -1.0f);
 		if (tau_c >= 0.0f && isfinite(tau_c)) {
 			bool off = fabsf(tau_c - tau_m) > 0.2f * tau_m;
 			say(e, off ? MAV_SEVERITY_WARNING : MAV_SEVERITY_INFO, "ID motor lag %.4f s%s (ID_MOT_TAU %.4f)",
@@ -325,9 +402,9 @@ static void phase_end(struct experiment *e, const struct exp_input *in)
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
 		static const char *const nm[3] = {"Ixx", "Iyy", "Izz"};
-		static const char *const pe[3] = {"ID_IXX_EST", "ID_IYY_EST", "ID_IZZ_EST"};
-		static const char *const ps[3] = {"ID_IXX_SD", "ID_IYY_SD", "ID_IZZ_SD"};
-		static const char *const pv[3] = {"VEH_IXX", "VEH_IYY", "VEH_IZZ"};
+		static const int pe[3] = {PX_ID_IXX_EST, PX_ID_IYY_EST, PX_ID_IZZ_EST};
+		static const int ps[3] = {PX_ID_IXX_SD, PX_ID_IYY_SD, PX_ID_IZZ_SD};
+		static const int pv[3] = {PX_VEH_IXX, PX_VEH_IYY, PX_VEH_IZZ};
 		float nominal[3] = {p->veh_ixx, p->veh_iyy, p->veh_izz};
 		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
 		enum ident_verdict v = ident_accept(est, sd, nominal[ax], rsd);
@@ -342,8 +419,8 @@ static void phase_end(struct experiment *e, const struct exp_input *in)
 	} else {
 		bool post = k == PK_VAL_POST || (k == PK_VAL && (result_mask(p) & 1u));
 		float ne = ident_fit_ne(&e->fit), fit = ident_fit_pct(&e->fit);
-		result(e, post ? "ID_VAL_NE_POST" : "ID_VAL_NE_PRE", ne);
-		result(e, post ? "ID_VAL_FIT_POST" : "ID_VAL_FIT_PRE", fit);
+		result(e, post ? PX_ID_VAL_NE_POST : PX_ID_VAL_NE_PRE, ne);
+		result(e, post ? PX_ID_VAL_FIT_POST : PX_ID_VAL_FIT_PRE, fit);
 		say(e, MAV_SEVERITY_INFO, "ID validation %s: NE %.4f fit %.1f %%", post ? "after" : "before",
 		    (double)ne, (double)fit);
 	}
@@ -374,7 +451,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 				   sc_from_float(f->rotor_torque_nm[0]), use);
 		float d = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
 		out->thr_delta[0] = d;
-		if (prm(p, "ID_EXC_NULL", 1.0f) >= 0.5f) {
+		if (e->cfg.exc_null) {
 			/* rotors 1, 5 up and 3, 7 down: [1 0 -1 0 1 0 -1 0] is in the null space of
 			 * Gamma_o (thrust, roll, pitch and yaw all cancel), so the vehicle stays still
 			 * whatever k_f and k_tau are */
@@ -382,14 +459,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			out->thr_delta[4] = d;
 			out->thr_delta[6] = -d;
 		}
-		e->est[0] = ident_rotor_est(&e->rot, 0);
-		e->est_sd[0] = ident_rotor_sd(&e->rot, 0);
-		e->est[1] = ident_rotor_est(&e->rot, 1);
-		e->est_sd[1] = ident_rotor_sd(&e->rot, 1);
-		e->est[2] = ident_rotor_plain(&e->rot, 0);
-		e->est_sd[2] = ident_rotor_plain_sd(&e->rot, 0);
-		e->est[3] = ident_rotor_plain(&e->rot, 1);
-		e->est_sd[3] = ident_rotor_plain_sd(&e->rot, 1);
+		ident_rotor_read(&e->rot, e->est, e->est_sd);   /* est[0..3], est_sd[0..3] */
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
 		scalar_t fm[8], tm[8], tau[3], w[3];
@@ -451,8 +521,8 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 			}
 		}
 	}
-	pump_messages(e);
-	/* finished once every line has gone out (the app sends e->msg on its tick) */
+	e->pump_ready = true;   /* exp_pump may hand out the next line (between frames) */
+	/* finished once every line has gone out (exp_pump and the app's tick send them) */
 	if (e->reporting && !e->q_n && !e->msg[0]) {
 		e->state = EXP_FINISHED;
 		e->final_result = MAV_RESULT_ACCEPTED;

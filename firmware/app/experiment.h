@@ -86,7 +86,8 @@
  *     e.g. 0.030 -> 0.0424 -> ~0.045 s for motors of 45 ms).
  *   - the app switches to an identified k_f bumplessly (height integrator rescaled).
  *   - the experiment's STATUSTEXT lines are queued and handed out one per frame through
- *     msg; EXP_FINISHED is returned only when all have gone ("ID done" last).
+ *     msg; EXP_FINISHED is returned only when all have gone ("ID done" last). They are
+ *     formatted between frames (exp_pump, called by the app's tick), not in the step.
  */
 #ifndef OCTO_EXPERIMENT_H
 #define OCTO_EXPERIMENT_H
@@ -129,6 +130,26 @@ struct exp_result {
 	float value;
 };
 
+/* a status line waiting to be formatted: the format and its arguments (experiment.c) */
+#define EXP_LINE_ARGS 5
+struct exp_line {
+	const char *fmt;
+	int sev;                               /* MAV_SEVERITY */
+	char kind[EXP_LINE_ARGS + 1];          /* 'd' int, 's' string, 'f' double per argument */
+	union {
+		int i;
+		const char *s;
+		double f;
+	} arg[EXP_LINE_ARGS];
+};
+
+/* the experiment's configuration (ID_* parameters), read once at exp_start */
+struct exp_cfg {
+	float exc_amp, exc_time, mot_tau, inr_amp, inr_time, val_time, rsd_max;
+	uint32_t exc_kind, exc_div, seed, delay_fr;
+	bool exc_null;
+};
+
 struct experiment {
 	int id;                                /* MAV_CMD_USER_1 param1; 0 = none */
 	enum exp_state state;
@@ -151,15 +172,22 @@ struct experiment {
 	bool started, reporting;
 	float dt_nom, z0;
 	int gap_hold;                          /* frames left without inertia updates after a gap */
+	struct exp_cfg cfg;
 	struct excite exc;
-	struct ident_rotor rot;
-	struct ident_inertia inr;
-	struct ident_fit fit;
-	struct filt_delay val_delay;
-	struct filt_lag val_lag;
-	char queue[EXP_QUEUE][51];
-	int queue_sev[EXP_QUEUE];
+	/* the estimator of the current phase: phases never overlap, so they share the memory
+	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */
+	union {
+		struct ident_rotor rot;            /* rotor coefficients */
+		struct ident_inertia inr;          /* inertia Ixx, Iyy or Izz */
+		struct {                           /* validation */
+			struct ident_fit fit;
+			struct filt_delay val_delay;
+			struct filt_lag val_lag;
+		};
+	};
+	struct exp_line queue[EXP_QUEUE];      /* status lines, formatted by exp_pump */
 	int q_head, q_n;
+	bool pump_ready;                       /* a step ran since the last line was handed out */
 };
 
 /* Is experiment `id` (1..6) built into this firmware? */
@@ -171,6 +199,10 @@ int exp_start(struct experiment *e, int id, const struct app_params *p, char *wh
 
 /* One control step while running; fills *out (zeroed by the caller). */
 enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct exp_output *out);
+
+/* Between frames (the app's tick, before it sends msg): formats the next queued status line
+ * into msg when msg is free, at most one per exp_step. */
+void exp_pump(struct experiment *e);
 
 /* Stops a running experiment (reason for the log/STATUSTEXT); results dropped. */
 void exp_abort(struct experiment *e, const char *reason);
