@@ -386,7 +386,8 @@ def parse_step_output(text):
 def item_step(rep, args):
     exe = BB / ("bench-step-quick" if args.quick else "bench-step")
     res = {}
-    names = ["bench_hold_step", "bench_exp_step", "bench_alloc_hover", "bench_alloc_call", "bench_alloc_worst"]
+    names = ["bench_hold_step", "bench_exp_step", "bench_exp_tick", "bench_alloc_hover", "bench_alloc_call",
+             "bench_alloc_worst"]
     host = {}
     with tempfile.TemporaryDirectory(dir=BB) as tmp:
         cg = Path(tmp) / "callgrind.out"
@@ -419,10 +420,14 @@ def item_step(rep, args):
         counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
         kv = parse_step_output(out.stdout)
         nh, ne = int(kv.get("hold_steps", 0)), int(kv.get("exp_steps", 0))
+        nt = int(kv.get("exp_ticks", 0))   # 0 or ne: each experiment step followed by its app_tick
         na = int(kv.get("alloc_calls", "0").split()[0])
-        if len(counts) == nh + ne + 1 + na + 1:
-            m4f = {"hold": counts[:nh], "exp": counts[nh:nh + ne], "alloc_hover": counts[nh + ne],
-                   "alloc": counts[nh + ne + 1:nh + ne + 1 + na], "alloc_worst": counts[-1]}
+        if len(counts) == nh + ne + nt + 1 + na + 1:
+            ex = counts[nh:nh + ne + nt]
+            m4f = {"hold": counts[:nh], "exp": ex[0::2] if nt else ex, "alloc_hover": counts[nh + ne + nt],
+                   "alloc": counts[nh + ne + nt + 1:nh + ne + nt + 1 + na], "alloc_worst": counts[-1]}
+            if nt:
+                m4f["exp_tick"] = ex[1::2]
         res["m4f_output"] = kv
         res["m4f"] = {k: (mmm(v) if isinstance(v, list) else v) for k, v in m4f.items()}
         res["m4f"]["exit"] = out.returncode
@@ -450,6 +455,14 @@ def item_step(rep, args):
         rep.row(2, "  experiment: 99th percentile; steps over 2x the median", fmt(q),
                 "", ", ".join(f"step {i}: {fmt(float(x))}" for i, x in big[:4]) or "none",
                 "", None, m4_cmd)
+    tk = m4f.get("exp_tick")
+    if tk:
+        big_t = sorted(((x, i + 1) for i, x in enumerate(tk)), reverse=True)[:2]
+        rep.row(2, "  between frames: app_tick after each experiment step (not in the step), M4F",
+                fmt(mmm(tk)["median"]), spread(mmm(tk)),
+                "results applied, mixer rebuilt, file saved, status lines formatted: "
+                + ", ".join(f"after step {i}: {fmt(float(x))}" for x, i in big_t)
+                + f"; host mean {fmt(mean('bench_exp_tick'))} Ir", "(reported)", None, m4_cmd)
     al = mmm(m4f.get("alloc", []))
     n_sat = kv.get("alloc_calls", "? saturated ?").split()[-1]
     rep.row(2, f"  allocator alone, {kv.get('alloc_calls', '?').split()[0]} demands ({n_sat} saturating), M4F",
@@ -492,16 +505,50 @@ def struct_sizes(obj):
 
 def app_core_state(sizes):
     """Core structs the app keeps (members `struct NAME x;` or `x[N]` of the structs in
-    firmware/app/app.h and experiment.h whose type is a core struct): {header: [(type, n)]}."""
+    firmware/app/app.h and experiment.h whose type is a core struct), as {header: [(label,
+    bytes)]}. Members of a `union { ... };` share their memory: the union counts as its
+    largest member (an anonymous `struct { ... };` inside it as the sum of its members)."""
     out = {}
+    member = re.compile(r"^\s+struct (\w+) \w+(?:\[(\d+)\])?;")
     for h in ("app.h", "experiment.h"):
         try:
             text = (REPO / "firmware/app" / h).read_text()
         except OSError:
             continue
-        for m in re.finditer(r"^\s+struct (\w+) \w+(?:\[(\d+)\])?;", text, re.M):
-            if m.group(1) in sizes:
-                out.setdefault(h, []).append((m.group(1), int(m.group(2) or 1)))
+        union = None      # list of [label, bytes] alternatives while inside a union
+        group = None      # [label, bytes] of an anonymous struct inside the union
+        for ln in text.splitlines():
+            code = ln.split("/*")[0]
+            if re.match(r"^\s+union\s*\{", code):
+                union, group = [], None
+                continue
+            if union is not None:
+                if re.match(r"^\s+struct\s*\{", code):
+                    group = ["", 0]
+                    continue
+                if re.match(r"^\s+\}\s*;", code):
+                    if group is not None:
+                        union.append(group)
+                        group = None
+                    else:
+                        if union:
+                            big = max(union, key=lambda g: g[1])
+                            names = "|".join(g[0] for g in union)
+                            out.setdefault(h, []).append((f"union({names})", big[1]))
+                        union = None
+                    continue
+                m = member.match(code)
+                if m and m.group(1) in sizes:
+                    b_ = sizes[m.group(1)] * int(m.group(2) or 1)
+                    if group is not None:
+                        group[0] = f"{group[0]}+{m.group(1)}" if group[0] else m.group(1)
+                        group[1] += b_
+                    else:
+                        union.append([m.group(1), b_])
+                continue
+            m = member.match(code)
+            if m and m.group(1) in sizes:
+                out.setdefault(h, []).append((m.group(1), sizes[m.group(1)] * int(m.group(2) or 1)))
     return out
 
 
@@ -533,8 +580,8 @@ def item_memory(rep, args):
                 linked = {"flash": (ct + cd) - (bt + bd), "ram": (cd + cb) - (bd + bb)}
             sizes = struct_sizes(ARM / v / "structs.o") if (ARM / v / "structs.o").exists() else {}
             owned = app_core_state(sizes)
-            ctl = sum(sizes[t_] * n for t_, n in owned.get("app.h", []))
-            idn = sum(sizes[t_] * n for t_, n in owned.get("experiment.h", []))
+            ctl = sum(n for _, n in owned.get("app.h", []))
+            idn = sum(n for _, n in owned.get("experiment.h", []))
             mods = module_sizes(lib)
             big = sorted(mods.items(), key=lambda kv: -kv[1])[:2]
             res[v] = {"text": t, "data": d, "bss": b, "flash": t + d, "ram": d + b, "linked": linked,
@@ -549,7 +596,7 @@ def item_memory(rep, args):
             rep.row(3, f"  core RAM on {v}: globals + core state in app + in experiment (B)",
                     f"{d + b} + {ctl} + {idn}", "",
                     "largest: " + ", ".join(f"{t_} {x}" for t_, x in sorted(
-                        {t_: sizes[t_] * n for h in owned for t_, n in owned[h]}.items(), key=lambda kv: -kv[1])[:3]),
+                        {t_: n for h in owned for t_, n in owned[h]}.items(), key=lambda kv: -kv[1])[:3]),
                     "RAM < 4 KB", (d + b + ctl + idn) < 4096, f"arm-none-eabi-nm -S build/arm/{v}/structs.o")
     rss = rep.data.get("memory_rss") or {}
     for name in ("octo-fw", "octo-sim"):

@@ -8,15 +8,16 @@
  * by a few tenths of a degree, the measured rotor thrusts are the commanded throttles through
  * a 30 ms lag times the paper's k_f with 1 % noise. Sequence:
  *   boot (disarmed frames) -> arm -> take-off to 10 m -> HOLD (measured: N_HOLD steps)
- *   -> MAV_CMD_USER_1 experiment 1 if the build has it (measured: up to N_EXP steps)
+ *   -> MAV_CMD_USER_1 experiment 1 if the build has it (measured: up to N_EXP steps, and the
+ *      app_tick after each: the between-frames work, counted apart)
  *   -> the allocator alone on the app's mixer: the last hover demand (unsaturated), N_ALLOC
  *      seeded demands (many saturating), then again the one that needed the most allocator
  *      steps (its worst case).
  * One measured call = app_on_frame() (or mixer_update()) between bench_mark_begin/end
  * (tests/arm/bench_mark.h): on Cortex-M the QEMU plugin prints one count per call; on the
  * host, valgrind's callgrind counts the inclusive cost of the wrappers below (bench.py
- * reads the call counts and costs of bench_hold_step, bench_exp_step, bench_alloc_hover,
- * bench_alloc_call and bench_alloc_worst from callgrind's output).
+ * reads the call counts and costs of bench_hold_step, bench_exp_step, bench_exp_tick,
+ * bench_alloc_hover, bench_alloc_call and bench_alloc_worst from callgrind's output).
  *
  * Prints (semihosting stdout on ARM): "step: KEY VALUE" lines (mode reached, steps measured,
  * allocator steps of the worst demand, etc.). Argument-free; sizes below, or -DBENCH_QUICK.
@@ -162,6 +163,17 @@ __attribute__((noinline)) static void bench_exp_step(void)
 	bench_mark_end();
 }
 
+/* the app's between-frames work after each experiment step (app_tick: results applied,
+ * mixer rebuilt, parameter file saved, status lines formatted, telemetry): not part of the
+ * step, measured to show where that work went */
+__attribute__((noinline)) static void bench_exp_tick(void)
+{
+	bench_phase = 6;
+	bench_mark_begin();
+	app_tick(&A);
+	bench_mark_end();
+}
+
 static scalar_t demand[MIXER_N_AXES];
 static struct mixer_output mix_out;
 
@@ -249,13 +261,14 @@ int main(void)
 		for (; exp < N_EXP && A.mode == APP_EXPERIMENT; exp++) {
 			next_frame();
 			bench_exp_step();
-			app_tick(&A);
+			bench_exp_tick();
 		}
 		printf("step: experiment_mode_after %s\n", app_mode_name(A.mode));
 	} else {
 		printf("step: experiment_1 unavailable\n");
 	}
 	printf("step: exp_steps %d\n", exp);
+	printf("step: exp_ticks %d\n", exp);   /* one measured app_tick after each experiment step */
 
 	/* the allocator alone: the last hover demand of the app (unsaturated), a seeded set of
 	 * demands, then the one that needed the most allocator steps again */
