@@ -405,10 +405,12 @@ static void apply_results(struct app *a)
  * The 90 Hz step (control_step) only reads what the parameters imply: gains, mixer
  * (pseudo-inverse, facets) and throttle map. Whatever changes them runs between
  * frames, after the frame's actuation has gone out and before the next frame's step:
- *   app_settle()  applies results the experiment posted (PARAM_VALUE for each) and,
+ *   app_settle()  ends an experiment phase that ended in the last step and starts the
+ *                 next (exp_turn: estimates, verdicts, status lines), applies results the
+ *                 experiment posted (PARAM_VALUE for each) and,
  *                 when a parameter changed (params_dirty), rebuilds gains, mixer and
  *                 throttle map (sync_params; the mixer's set-up is ~370,000
- *                 instructions on Cortex-M4F, 40 90 Hz steps' worth). It runs first
+ *                 instructions on Cortex-M4F, ~75 steps' worth). It runs first
  *                 in app_tick (the main loop's pass after the frame), and as a
  *                 fallback at the start of app_on_frame and app_on_mavlink, so that no
  *                 step, command or PARAM_SET ever sees a result half applied or the
@@ -420,11 +422,15 @@ static void apply_results(struct app *a)
  * low-priority task: it would build a shadow struct mixer / struct thrmap from a copy
  * of the parameters and swap a pointer at a frame boundary (the step reads the pointer
  * once at its start), so that the step is never delayed by the set-up and never reads a
- * half-built mixer. That double buffer costs a second struct mixer (2.2 KB) and is not
- * implemented here: the host runs both paths in one thread, so a rebuild between frames
- * is already atomic for the step. */
+ * half-built mixer. That double buffer costs a second struct mixer (2.7 KB, more than the
+ * 4 KB core RAM budget leaves) and is not implemented here: the host runs both paths in
+ * one thread, so a rebuild between frames is already atomic for the step. If the
+ * low-priority work has not finished when the next frame comes (or, on the host, several
+ * frames arrive in one pass of the main loop), the step starts with app_settle and waits
+ * for it: a late step, never an inconsistent one. */
 static void app_settle(struct app *a)
 {
+	exp_turn(&a->exp, &a->p);   /* a phase that ended in the last step: close it, start the next */
 	if (a->exp.n_results > 0)
 		apply_results(a);
 	if (a->params_dirty) {

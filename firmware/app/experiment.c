@@ -286,9 +286,19 @@ void exp_abort(struct experiment *e, const char *reason)
 
 /* ---------------------------------------------------------------- phases */
 
-static void phase_begin(struct experiment *e, const struct exp_input *in)
+/* what a phase's start needs of the step that started it (exp_input: the step's frame and
+ * the throttle / thrust commands before the step's own) */
+static void snapshot(struct exp_turn *t, const struct exp_input *in)
 {
-	const struct app_params *p = in->params;
+	t->thr_prev0 = in->thr_prev[0];
+	t->rotor_f_cmd0 = in->rotor_f_cmd[0];
+	memcpy(t->thrust_n, in->frame->rotor_thrust_n, sizeof t->thrust_n);
+	memcpy(t->torque_nm, in->frame->rotor_torque_nm, sizeof t->torque_nm);
+	memcpy(t->rate_b_rps, in->frame->rate_b_rps, sizeof t->rate_b_rps);
+}
+
+static void phase_begin(struct experiment *e, const struct app_params *p, const struct exp_turn *in)
+{
 	const struct exp_cfg *cf = &e->cfg;
 	int k = e->phase_kind[e->phase];
 	e->t_phase = 0.0f;
@@ -314,7 +324,7 @@ static void phase_begin(struct experiment *e, const struct exp_input *in)
 			.mot_tau_s = sc_from_float(cf->mot_tau),
 			.delay_frames = cf->delay_fr,
 			.curve = sc_from_float(p->mot_curve),
-			.thr0 = sc_from_float(in->thr_prev[0]),
+			.thr0 = sc_from_float(in->thr_prev0),
 			.kf0 = p->veh_kf,
 			.ktau0 = p->veh_ktau,
 			.p0 = 1e6f,
@@ -330,16 +340,15 @@ static void phase_begin(struct experiment *e, const struct exp_input *in)
 		xp.ms_k_first = INR_MS_K_FIRST;
 		xp.ms_count = INR_MS_COUNT;
 		xp.amplitude = sc_from_float(ax == 2u ? amp / INR_YAW_DIV : amp);
-		const struct hal_sensor_frame *f = in->frame;
 		scalar_t fm[8], tm[8], tau[3], w[3], inertia[3] = {
 			sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz)};
 		for (int j = 0; j < 8; j++) {
-			fm[j] = sc_from_float(f->rotor_thrust_n[j]);
-			tm[j] = sc_from_float(f->rotor_torque_nm[j]);
+			fm[j] = sc_from_float(in->thrust_n[j]);
+			tm[j] = sc_from_float(in->torque_nm[j]);
 		}
 		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		for (int i = 0; i < 3; i++)
-			w[i] = sc_from_float(f->rate_b_rps[i]);
+			w[i] = sc_from_float(in->rate_b_rps[i]);
 		scalar_t alpha = ident_torque_weight(sc_from_float(cf->mot_tau), dt);
 		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS),
 				   SC(INR_ZETA), dt, alpha, inertia, w, tau);
@@ -351,18 +360,17 @@ static void phase_begin(struct experiment *e, const struct exp_input *in)
 		xp.kind = EXCITE_UNIFORM;
 		xp.amplitude = sc_from_float(cf->inr_amp / INR_YAW_DIV);
 		filt_delay_init(&e->val_delay, cf->delay_fr,
-				sc_from_float(in->rotor_f_cmd[0]));
+				sc_from_float(in->rotor_f_cmd0));
 		filt_lag_init(&e->val_lag, sc_from_float(cf->mot_tau), dt,
-			      sc_from_float(in->rotor_f_cmd[0]));
+			      sc_from_float(in->rotor_f_cmd0));
 		ident_fit_init(&e->fit);
 		e->est_live = 1u << 7;
 	}
 	excite_init(&e->exc, &xp);
 }
 
-static void phase_end(struct experiment *e, const struct exp_input *in)
+static void phase_end(struct experiment *e, const struct app_params *p)
 {
-	const struct app_params *p = in->params;
 	int k = e->phase_kind[e->phase];
 	float rsd = e->cfg.rsd_max;
 	if (k == PK_ROTOR) {
@@ -488,16 +496,37 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	}
 }
 
+void exp_turn(struct experiment *e, const struct app_params *p)
+{
+	if (!e->turn_pending)
+		return;
+	e->turn_pending = false;
+	if (e->state != EXP_RUNNING)
+		return;
+	phase_end(e, p);
+	e->phase++;
+	if (e->phase >= e->n_phases) {
+		e->phase = e->n_phases - 1;
+		e->progress = 1.0f;
+		e->reporting = true;
+		say(e, MAV_SEVERITY_INFO, "ID done");
+	} else {
+		phase_begin(e, p, &e->turn);
+	}
+}
+
 enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
 {
 	if (e->state != EXP_RUNNING)
 		return e->state;
+	exp_turn(e, in->params);   /* normally done between frames already (nothing left here) */
 	const struct hal_sensor_frame *f = in->frame;
 	if (!e->started) {
 		e->started = true;
 		e->dt_nom = in->dt_s > 0.001f && in->dt_s < 0.1f ? in->dt_s : 1.0f / 90.0f;
 		e->z0 = f->pos_i_m[2];
-		phase_begin(e, in);
+		snapshot(&e->turn, in);
+		phase_begin(e, in->params, &e->turn);
 	}
 	if (fabsf(f->pos_i_m[2] - e->z0) > HEIGHT_ABORT_M) {
 		exp_abort(e, "height limit");
@@ -509,16 +538,10 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 		float total = e->t_settle + e->t_run;
 		e->progress = ((float)e->phase + fminf(e->t_phase / total, 1.0f)) / (float)e->n_phases;
 		if (e->t_phase >= total) {
-			phase_end(e, in);
-			e->phase++;
-			if (e->phase >= e->n_phases) {
-				e->phase = e->n_phases - 1;
-				e->progress = 1.0f;
-				e->reporting = true;
-				say(e, MAV_SEVERITY_INFO, "ID done");
-			} else {
-				phase_begin(e, in);
-			}
+			/* the phase is over: its end (estimates, results, verdicts) and the next one's
+			 * start run between frames (exp_turn), from what this step saw */
+			snapshot(&e->turn, in);
+			e->turn_pending = true;
 		}
 	}
 	e->pump_ready = true;   /* exp_pump may hand out the next line (between frames) */

@@ -88,6 +88,9 @@
  *   - the experiment's STATUSTEXT lines are queued and handed out one per frame through
  *     msg; EXP_FINISHED is returned only when all have gone ("ID done" last). They are
  *     formatted between frames (exp_pump, called by the app's tick), not in the step.
+ *   - a phase that ends in a step is closed (results posted) and the next started between
+ *     frames (exp_turn, called by the app before it applies results), from a copy of that
+ *     step's inputs: the next step sees exactly what it saw when this ran in the step.
  */
 #ifndef OCTO_EXPERIMENT_H
 #define OCTO_EXPERIMENT_H
@@ -143,6 +146,14 @@ struct exp_line {
 	} arg[EXP_LINE_ARGS];
 };
 
+/* what the start of a phase needs of the step that ended the previous one (a copy: the
+ * frame is gone by the time the turn runs between frames) */
+struct exp_turn {
+	float thr_prev0;                       /* rotor 1's throttle sent before that step */
+	float rotor_f_cmd0;                    /* rotor 1's thrust allocated before that step */
+	float thrust_n[HAL_ROTORS], torque_nm[HAL_ROTORS], rate_b_rps[3];   /* of its frame */
+};
+
 /* the experiment's configuration (ID_* parameters), read once at exp_start */
 struct exp_cfg {
 	float exc_amp, exc_time, mot_tau, inr_amp, inr_time, val_time, rsd_max;
@@ -185,6 +196,8 @@ struct experiment {
 			struct filt_lag val_lag;
 		};
 	};
+	bool turn_pending;                     /* a phase ended: exp_turn ends it, starts the next */
+	struct exp_turn turn;
 	struct exp_line queue[EXP_QUEUE];      /* status lines, formatted by exp_pump */
 	int q_head, q_n;
 	bool pump_ready;                       /* a step ran since the last line was handed out */
@@ -199,6 +212,11 @@ int exp_start(struct experiment *e, int id, const struct app_params *p, char *wh
 
 /* One control step while running; fills *out (zeroed by the caller). */
 enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct exp_output *out);
+
+/* Between frames, before results are applied: when the last exp_step ended a phase, ends it
+ * (estimates, verdicts, results, status lines) and starts the next one from what that step
+ * saw, so that the step itself stays a step (exp_step does it first if the app did not). */
+void exp_turn(struct experiment *e, const struct app_params *p);
 
 /* Between frames (the app's tick, before it sends msg): formats the next queued status line
  * into msg when msg is free, at most one per exp_step. */

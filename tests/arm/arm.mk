@@ -16,13 +16,14 @@
 #   m4f        Cortex-M4F, hard float (fpv4-sp-d16), float build    QEMU mps2-an386
 #   m0         Cortex-M0, soft float, float build                   QEMU microbit
 #   m0-fixed   Cortex-M0, Q16.16 build (OCTO_FIXED=1)               QEMU microbit
-# Optimisation of the core per target (ARM_CORE_OPT_<v>, after $(OPT)):
-#   m4f        $(OPT) (-O2): 23.4 KB of flash, under the 24 KB target; -Os would give 19.1 KB
-#              but cost 3-5 % more instructions per 90 Hz step (hold 3,482 -> 3,602,
-#              experiment 4,917 -> ~5,250) and 15 % in the allocator's worst case
-#              (35,647 -> 41,030), measured with `make bench` item 2 (2026-11-21)
-#   m0, m0-fixed  -Os: flash-limited parts (the M0 float core is 28.6 KB at -O2, 22.1 KB
-#              at -Os; Cortex-M0 firmware is commonly built -Os)
+# Optimisation of the core per target (ARM_CORE_OPT_<v>, after $(OPT)), measured with
+# `make bench` items 2 and 3 (2026-11-21):
+#   m4f        $(OPT) (-O2): 23,920 B of flash, under the 24 KB target. -Os would give
+#              19,557 B but 3-4 % more instructions per 90 Hz step (hold 3,491 -> 3,611,
+#              experiment 1 median 4,917 -> 5,118: over the 5,000 target) and 15 % more in
+#              the allocator's worst case (35,647 -> 41,030).
+#   m0, m0-fixed  -Os: flash-limited parts, as Cortex-M0 firmware is commonly built (the
+#              M0 float core: 30,548 B at -O2, 23,275 B at -Os).
 # On M0 the test code (not the core) is built with -Os too, to leave room in microbit's
 # 256 KB of flash.
 #

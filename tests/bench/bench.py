@@ -526,7 +526,7 @@ def app_core_state(sizes):
                 if re.match(r"^\s+struct\s*\{", code):
                     group = ["", 0]
                     continue
-                if re.match(r"^\s+\}\s*;", code):
+                if re.match(r"^\s+\}\s*(?:\w+(?:\[\w+\])?)?\s*;", code):
                     if group is not None:
                         union.append(group)
                         group = None
@@ -562,6 +562,17 @@ def module_sizes(lib):
     return mods
 
 
+def core_opt(variant):
+    """The core's optimisation on an ARM target: ARM_CORE_OPT_<v> of tests/arm/arm.mk, else
+    the Makefile's OPT (-O2)."""
+    try:
+        m = re.search(rf"^ARM_CORE_OPT_{re.escape(variant)}\s*\??=[ \t]*(\S*)",
+                      (REPO / "tests/arm/arm.mk").read_text(), re.M)
+    except OSError:
+        m = None
+    return (m.group(1) if m and m.group(1) else "-O2") + " (tests/arm/arm.mk)"
+
+
 def item_memory(rep, args):
     res = {}
     if args.no_arm or not shutil.which("arm-none-eabi-size"):
@@ -588,7 +599,8 @@ def item_memory(rep, args):
                       "modules": mods, "structs": sizes, "app_owned": owned,
                       "state_control": ctl, "state_identification": idn}
             cpu = "Cortex-M4F" if v == "m4f" else "Cortex-M0"
-            rep.row(3, f"core on {cpu}: .text/.data/.bss (bytes)", f"{t}/{d}/{b}", "",
+            res[v]["opt"] = opt = core_opt(v)
+            rep.row(3, f"core on {cpu}, built {opt}: .text/.data/.bss (bytes)", f"{t}/{d}/{b}", "",
                     f"{fmt((t + d) / 1024, 1)} KB: " + ", ".join(f"{k} {fmt(x / 1024, 1)}" for k, x in big)
                     + (f"; linked + libgcc/libm {fmt(linked['flash'] / 1024, 1)} KB" if linked else ""),
                     "flash < 24 KB", (t + d) < 24 * 1024,

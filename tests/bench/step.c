@@ -229,7 +229,7 @@ static void alloc_demand(uint32_t i, scalar_t d[MIXER_N_AXES])
 
 int main(void)
 {
-	char why[96];
+	char why[96] = "";
 	app_init(&A);
 	for (int i = 0; i < 20; i++)
 		frame_unmeasured();
