@@ -1,5 +1,5 @@
 """Issue 9, faults survived with identification running: frame loss (20 % random; 0.5 s
-bursts), duplicated + reordered + delayed frames. The height holds within +/-0.5 m from the
+bursts), duplicated, reordered, delayed frames (each alone, and together). The height holds within +/-0.5 m from the
 hover through the experiment, and rotor identification (experiment 1 over MAVLink USER_1
 param1=1) is either within its accuracy (k_f within 0.3 % of truth) or aborted with a clear
 reason. The plain hovers under the same faults are in test_fw_flight.py."""
@@ -12,10 +12,12 @@ import pytest
 
 from ident_helpers import PAPER, IdentFlight
 
-# Findings (issue 9, reported; experiment.c is not this file's to change): under 20 % random
-# loss the rotor experiment applies k_f about 0.8-1 % low (2 standard deviations, no warning);
-# under duplicated + reordered + 2-frame-delayed frames 1-3 % low, accepted although its own
-# lag check says "ID motor lag ... DIFFERS". Neither within 0.3 % nor aborted: xfail until fixed.
+# Findings (issue 9, reported; experiment.c is not this file's to change). In lockstep, every
+# frame lost (10 or 20 % random) or reordered (10 %), and a 2-frame delay the regressor is not
+# told about (ID_DELAY_FR 0), give k_f 1-1.5 % low, 2-10 standard deviations off, and the
+# experiment still accepts and applies it, although its own lag check reports
+# "ID motor lag ... DIFFERS". Neither within 0.3 % nor aborted: xfail until fixed. Duplicates,
+# and a delay declared in ID_DELAY_FR, are exact (28.03 +/- 0.01 N).
 BIASED = pytest.mark.xfail(reason="rotor experiment accepts a biased k_f under this fault (issue 9 finding)",
                            strict=False)
 
@@ -25,9 +27,15 @@ FAULTS = {
     # 45 frames = 0.5 s at 90 Hz, seeded so that bursts hit the hover and the excitation; the
     # firmware's own link timeout (FS_LINK_TO 0.3 s) judges the gap in plant time
     "burst0.5s": (["--burst", "45", "--burst-prob", "0.01"], {"FS_LINK_TO": 0.3}),
+    "duplicate": (["--duplicate", "0.1"], {}),
+    "reorder": (["--reorder", "0.1"], {}),
+    "delay2_declared": (["--delay-frames", "2"], {"ID_DELAY_FR": 2}),
+    "delay2_undeclared": (["--delay-frames", "2"], {}),
     "dup_reorder_delay": (["--duplicate", "0.1", "--reorder", "0.1", "--delay-frames", "2"], {}),
 }
-CASES = [pytest.param("drop20", marks=BIASED), "burst0.5s", pytest.param("dup_reorder_delay", marks=BIASED)]
+CASES = [pytest.param("drop20", marks=BIASED), "burst0.5s", "duplicate", pytest.param("reorder", marks=BIASED),
+         "delay2_declared", pytest.param("delay2_undeclared", marks=BIASED),
+         pytest.param("dup_reorder_delay", marks=BIASED)]
 
 
 @pytest.mark.parametrize("fault", CASES)
@@ -48,10 +56,12 @@ def test_identification_under_frame_faults(launch, port, tmp_path, fault):
     # the sim's counters: the fault really happened
     err = fl.rig.sim.stderr_path.read_text()
     c = json.loads(re.search(r"counters (\{.*\})", err).group(1))
-    if fault != "dup_reorder_delay":
+    if fault.startswith(("drop", "burst")):
         assert c["fault_dropped"] >= (45 if fault.startswith("burst") else 100), c
-    else:
-        assert c["fault_duplicated"] > 0 and c["fault_reordered"] > 0, c
+    if "dup" in fault:
+        assert c["fault_duplicated"] > 0, c
+    if "reorder" in fault:
+        assert c["fault_reordered"] > 0, c
 
     # height: from 2 s into the hover to the end of the experiment
     events = fl.events
