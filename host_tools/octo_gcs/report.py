@@ -48,12 +48,16 @@ def atomic_write(path, text, mode="w"):
         raise
 
 
-def _num(x, nd=6):
-    """JSON-safe number (None for NaN/missing)."""
+def _num(x, nd=None):
+    """JSON-safe number (None for NaN/missing): rounded to `nd` decimals, or by default to
+    9 significant digits, which keeps every float32 parameter exact (6 decimals would cost
+    an inertia of 0.047 kg m^2 two thousandths of a percent)."""
     if x is None:
         return None
     x = float(x)
-    return round(x, nd) if math.isfinite(x) else None
+    if not math.isfinite(x):
+        return None
+    return round(x, nd) if nd is not None else float(f"{x:.9g}")
 
 
 def _err(est, true):
