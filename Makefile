@@ -6,11 +6,12 @@
 #   make run      the main job: octo-gcs mission with the paper's vehicle, output in out/
 #   make bench    performance figures (build/bench.json)
 #   make arm      cross-build the core and run its unit tests on emulated Cortex-M4F and M0
+#   make fuzz     libFuzzer on every parser (make fuzz-smoke: a few seconds each, for CI)
 #   make clean    remove build/ (keeps .venv); make distclean removes .venv too
 #
-# Each part keeps its own rules in a fragment included below:
-#   firmware/firmware.mk, sim/sim.mk, tests/tests.mk, host_tools/host_tools.mk
-# No root is needed, except by `make arm` when the ARM toolchain is missing.
+# Each part keeps its own rules in a fragment included below (firmware/firmware.mk,
+# sim/sim.mk, host_tools/host_tools.mk, tests/*.mk, tests/*/*.mk).
+# No root is needed, except by `make arm` / `make fuzz` when their toolchain is missing.
 
 SHELL       := /bin/bash
 .DEFAULT_GOAL := all
@@ -102,7 +103,7 @@ run: all
 	$(VENV)/bin/octo-gcs mission --out out $(MISSION_ARGS)
 
 help:
-	@sed -n '2,13p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,14p' Makefile | sed 's/^# \{0,1\}//'
 
 clean:
 	rm -rf $(B)
