@@ -441,7 +441,7 @@ static void app_settle(struct app *a)
 
 static void experiment_step(struct app *a, float dt)
 {
-	struct exp_input in = {&a->fr, dt, &a->p, a->wrench_dem, a->rotor_f, a->thr};
+	struct exp_input in = {&a->fr, dt, &a->p, a->wrench_dem, a->rotor_f, a->thr, a->dt_frame};
 	enum exp_state st = exp_step(&a->exp, &in, &a->exp_out);
 	if (st != EXP_RUNNING) {
 		memset(&a->exp_out, 0, sizeof a->exp_out);
@@ -699,6 +699,12 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 				}
 			}
 			dt = gap > (double)MAX_DT_S ? MAX_DT_S : (float)gap;
+			/* the frame period, for the experiments (a step after lost frames is a
+			 * multiple of it): a shorter step replaces it, a near one refines it */
+			if (a->have_step && (!(a->dt_frame > 0.0f) || dt < 0.75f * a->dt_frame))
+				a->dt_frame = dt;
+			else if (a->have_step && dt < 1.25f * a->dt_frame)
+				a->dt_frame += 0.02f * (dt - a->dt_frame);
 			a->t_prev = f->t_s;
 			a->have_step = true;
 			control_step(a, dt);

@@ -54,6 +54,7 @@ struct app {
 	struct hal_sensor_frame fr;
 	bool have_frame, have_step;
 	double t_prev;
+	float dt_frame;               /* frame period: the shortest recent step, smoothed */
 	uint64_t wall_last_frame_us;
 	bool link_ok, link_ever;
 	uint64_t link_lost_at_us;

@@ -528,7 +528,10 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 	const struct hal_sensor_frame *f = in->frame;
 	if (!e->started) {
 		e->started = true;
-		e->dt_nom = in->dt_s > 0.001f && in->dt_s < 0.1f ? in->dt_s : 1.0f / 90.0f;
+		/* the frame period: the app's (not this step's dt, which after a lost frame is
+		 * two periods: the models then ran at half rate and k_f came out 1.5 % low) */
+		float dtn = in->dt_frame_s > 0.0f ? in->dt_frame_s : in->dt_s;
+		e->dt_nom = dtn > 0.001f && dtn < 0.1f ? dtn : 1.0f / 90.0f;
 		e->z0 = f->pos_i_m[2];
 		snapshot(&e->turn, in);
 		phase_begin(e, in->params, &e->turn);

@@ -120,6 +120,8 @@ struct exp_input {
 	const float *wrench_dem;               /* [f, tau_x, tau_y, tau_z] of the hover control */
 	const float *rotor_f_cmd;              /* 8 rotor thrusts allocated last step, N */
 	const float *thr_prev;                 /* 8 throttles sent on the previous frame */
+	float dt_frame_s;                      /* the plant's frame period (0: unknown, the
+						* first step's dt_s is taken) */
 };
 
 struct exp_output {

@@ -482,3 +482,51 @@ UNIT_TEST(ident_rotor_lost_frames)
 	CHECK_REL(ident_rotor_est(&r, 1), 0.4, OCTO_FIXED ? 2e-3 : 2e-5);
 	CHECK_NEAR(ident_rotor_tau_check(&r), 0.03, 1e-3);
 }
+
+/* The lag check as the rotor experiment's acceptance rule (experiment.c, LAG_TOL 10 %): random
+ * truth (k_f, k_tau within +/-30 %, motor lag 20-60 ms, 1 % thrust noise, 10 s), a transport
+ * delay of 0-3 frames in the plant and 0-3 frames told to the model. Told right, the check
+ * is within 10 % of the lag and k_f within 0.3 %; told wrong (an undeclared delay, or a
+ * lockstep loop that slipped a frame), the check is off by more than 10 % and the estimate
+ * is rejected. */
+UNIT_TEST(ident_rotor_lag_check_flags_wrong_delay)
+{
+	struct unit_rng g = {0xde1a7ULL};
+	const int runs = MC_RUNS / 6;
+	int wrong = 0;
+	for (int run = 0; run < runs; run++) {
+		double kf = 28.0 * unit_rand_uniform(&g, 0.7, 1.3), ktau = 0.387 * unit_rand_uniform(&g, 0.7, 1.3);
+		double tau = unit_rand_uniform(&g, 0.02, 0.06);
+		unsigned d_true = (unsigned)unit_rand_uniform(&g, 0, 4), d_model = d_true;
+		if (run % 2)   /* every other run told a wrong delay */
+			d_model = (d_true + 1u + (unsigned)unit_rand_uniform(&g, 0, 3)) % 4u;
+		double th = 2.132 * 9.796 / 8.0 / kf, sig_f = 0.01 * kf * th, sig_t = 0.01 * ktau * th;
+		struct rotor_plant p;
+		plant_init(&p, kf, ktau, tau, d_true, th);
+		struct ident_rotor_cfg c = {s(DT), s(tau), d_model, SC(0.0), s(th), 20.0f, 0.3f, 0.0f};
+		struct ident_rotor r;
+		ident_rotor_init(&r, &c);
+		struct dither d = {0, 0.04, 9, 0};
+		double t_prev = th;
+		for (int k = 0; k < 900; k++) {
+			ident_rotor_update(&r, s(t_prev), s(kf * p.s + sig_f * unit_rand_normal(&g)),
+					   s(ktau * p.s + sig_t * unit_rand_normal(&g)), true);
+			t_prev = th + dither_next(&d, &g);
+			plant_step(&p, t_prev);
+		}
+		double tc = ident_rotor_tau_check(&r), kf_err = ident_rotor_est(&r, 0) / kf - 1.0;
+		bool off = fabs(tc - tau) > 0.1 * tau;
+#ifdef TEST_VERBOSE
+		printf("  delay %u told %u, tau %.4f check %.4f (%+.1f %%), kf %+.3f %%\n", d_true, d_model,
+		       tau, tc, 100.0 * (tc / tau - 1.0), 100.0 * kf_err);
+#endif
+		if (d_model == d_true) {
+			CHECK(!off);
+			CHECK(fabs(kf_err) < 3e-3);
+		} else {
+			CHECK(off);
+			wrong++;
+		}
+	}
+	CHECK(wrong > 0);
+}
