@@ -81,9 +81,18 @@
  *     parameter ID_TAU_CHECK (the motor lag the rotor experiment's data show, a
  *     Gauss-Newton step from ID_MOT_TAU; -1 when ID_MOT_TAU is 0) with a STATUSTEXT
  *     "ID motor lag 0.0301 s (ID_MOT_TAU 0.0300)", "... DIFFERS ..." (warning) when the
- *     two differ by more than 20 % (estimates then biased by tenths of a percent or more:
- *     set ID_MOT_TAU to ID_TAU_CHECK and run again: each run is one Gauss-Newton step,
- *     e.g. 0.030 -> 0.0424 -> ~0.045 s for motors of 45 ms).
+ *     two differ by more than 10 % (LAG_TOL). The lag check is also the rotor experiment's
+ *     acceptance rule: beyond 10 % k_f and k_tau are biased by about 0.03 % per % of lag
+ *     and are rejected ("ID kf 27.670 +/- 0.143 rejected: motor lag off", VEH_KF and
+ *     VEH_KTAU unchanged). Causes: a wrong ID_MOT_TAU (set it to ID_TAU_CHECK and run
+ *     again: each run is one Gauss-Newton step, e.g. 0.030 -> 0.0424 -> ~0.045 s for
+ *     motors of 45 ms), a transport delay not declared in ID_DELAY_FR (one frame reads as
+ *     ~+13 ms of lag), or a lockstep loop that slipped a frame (the simulator timed out on
+ *     a late answer and took it for the next frame: every throttle then acts one frame late).
+ *   - lost frames (issue 9): a step after a gap has dt_s a multiple of the frame period
+ *     (dt_frame_s, the app's: the shortest recent step); the rotor and validation models
+ *     advance through the gap with the held throttle, the inertia updates wait GAP_HOLD
+ *     frames. Stale (reordered, duplicated) frames are not stepped.
  *   - the app switches to an identified k_f bumplessly (height integrator rescaled).
  *   - the experiment's STATUSTEXT lines are queued and handed out one per frame through
  *     msg; EXP_FINISHED is returned only when all have gone ("ID done" last). They are
