@@ -9,7 +9,7 @@ const char *Counters::name(Id id)
 		"rx_datagrams", "rx_short", "rx_unknown_type", "rx_bad_size", "rx_unterminated",
 		"rx_bad_value", "rx_clamped", "rx_bad_row", "rx_ignored_row", "rx_ignored_dref",
 		"rx_cmnd", "rx_bad_ise4", "rx_rref_limit", "rref_unknown", "tx_data", "tx_rref",
-		"tx_error", "fault_dropped", "fault_duplicated", "fault_reordered", "lockstep_timeouts",
+		"tx_error", "fault_dropped", "fault_duplicated", "fault_reordered", "lockstep_timeouts", "lockstep_withheld",
 	};
 	return names[id];
 }

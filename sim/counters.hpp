@@ -29,6 +29,7 @@ struct Counters {
 		FaultDuplicated,
 		FaultReordered,
 		LockstepTimeouts,
+		LockstepWithheld, // lockstep ticks not waited for: the fault injector withheld the frame
 		Count
 	};
 	uint64_t v[Count] = {};

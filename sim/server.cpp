@@ -41,7 +41,9 @@ public:
 	int run();
 
 private:
-	void send_frame(bool faults);
+	// Sends this tick's DATA; returns false when the fault injector withheld it
+	// (dropped, or held back for reordering or delay): no client can answer it.
+	bool send_frame(bool faults);
 	void rref_tick();
 	// Processes inputs until `deadline` (wall) or, when until_full, until the 8
 	// throttles are commanded. Returns true when they are.
@@ -64,16 +66,16 @@ private:
 	uint8_t buf_[2048];
 };
 
-void Server::send_frame(bool with_faults)
+bool Server::send_frame(bool with_faults)
 {
 	if (!input_.target_enabled)
-		return;
+		return true;
 	std::vector<xp::DataRow> rows;
 	for (int r : xp_supported_rows())
 		if (input_.selected[static_cast<size_t>(r)])
 			rows.push_back(xp_row(frame_, r, o_.xplane_version));
 	if (rows.empty())
-		return; // X-Plane sends nothing while no row is selected
+		return true; // X-Plane sends nothing while no row is selected
 	xp::Bytes d = xp::encode_data(rows);
 	std::vector<xp::Bytes> out;
 	if (with_faults && o_.faults.any())
@@ -86,6 +88,7 @@ void Server::send_frame(bool with_faults)
 		else
 			c_.inc(Counters::TxError);
 	}
+	return !out.empty();
 }
 
 void Server::rref_tick()
@@ -192,7 +195,7 @@ int Server::run()
 	double tick = wall_start_;
 	bool started = !o_.lockstep;
 	while (!stop_) {
-		send_frame(started);
+		const bool delivered = send_frame(started);
 		rref_tick();
 		if (o_.verbose)
 			status(wall_now());
@@ -207,6 +210,12 @@ int Server::run()
 				if (!pump(tick, true))
 					continue; // still waiting: re-send frame 0
 				started = true;
+			} else if (!delivered) {
+				// A frame the fault injector withheld gets no answer: waiting for one would
+				// only let a late answer to an earlier frame count for this one (and every
+				// later answer then act a frame late). Advance with the throttles held, as
+				// X-Plane does when a client misses a frame.
+				c_.inc(Counters::LockstepWithheld);
 			} else if (!pump(wall_now() + o_.lockstep_timeout, true)) {
 				if (stop_)
 					break;

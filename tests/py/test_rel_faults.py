@@ -12,15 +12,13 @@ import pytest
 
 from ident_helpers import PAPER, IdentFlight
 
-# In lockstep, a lost or reordered frame makes octo-sim wait --lockstep-timeout (3 ms here) and
-# then advance holding the last throttles, which the rotor model follows exactly. But an answer
-# that happens to take longer than those 3 ms is taken for the NEXT frame: from then on every
-# throttle acts one frame late (an extra frame of transport delay nobody declared) until the
-# next lost frame puts the loop back in step. Such slips, and an undeclared --delay-frames 2,
-# bias k_f low (1-1.5 % for a whole run); the rotor experiment then sees it in its lag check
-# and rejects k_f and k_tau ("ID kf ... rejected: motor lag off"), the vehicle model unchanged.
-# Short slips bias less and are accepted within 0.3 %. Duplicates, and a delay declared in
-# ID_DELAY_FR, are exact (28.03 +/- 0.01 N).
+# In lockstep, octo-sim does not wait for an answer to a frame its fault injector withheld (lost,
+# or held back to be reordered or delayed): it advances holding the last throttles, which the
+# rotor model follows exactly; every delivered frame is waited for with the default 0.5 s
+# --lockstep-timeout, so a merely late answer is never taken for a later frame. An undeclared
+# --delay-frames 2 biases k_f low (1-1.5 %); the rotor experiment sees it in its lag check and
+# rejects k_f and k_tau ("ID kf ... rejected: motor lag off"), the vehicle model unchanged.
+# Duplicates, and a delay declared in ID_DELAY_FR, are exact (28.03 +/- 0.01 N).
 FAULTS = {
     # (octo-sim fault options, octo-fw parameters)
     "drop20": (["--drop", "0.2"], {}),
@@ -38,10 +36,8 @@ CASES = list(FAULTS)
 
 @pytest.mark.parametrize("fault", CASES)
 def test_identification_under_frame_faults(launch, port, tmp_path, fault):
-    # a dropped frame is not answered: octo-sim's lockstep waits its timeout, keep it short
     args, params = FAULTS[fault]
-    fl = IdentFlight(launch, port, tmp_path, seed=4, duration=600, params=params,
-                     extra_sim_args=[*args, "--lockstep-timeout", "0.003"])
+    fl = IdentFlight(launch, port, tmp_path, seed=4, duration=600, params=params, extra_sim_args=args)
     fl.takeoff()
     texts = fl.experiment(1, timeout=60)
     done = "ID done" in texts
