@@ -238,7 +238,8 @@ def run(args):
 
 def _publish(stage, out, rep):
     """Moves the finished files into DIR, reports last; removes the stage."""
-    from .report import atomic_write, dumps
+    from .atomicfile import atomic_write
+    from .report import dumps
     rep["files"] = sorted({p.name for p in stage.iterdir() if p.is_file()} | {"report.json"})
     atomic_write(stage / "report.json", dumps(rep))
     names = sorted(p.name for p in stage.iterdir() if p.is_file())

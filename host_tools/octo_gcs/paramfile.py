@@ -8,9 +8,9 @@ either the complete old or the complete new version.
 """
 
 import math
-import os
 import re
-import tempfile
+
+from .atomicfile import atomic_write
 
 NAME_RE = re.compile(r"^[A-Za-z0-9_]{1,16}$")
 
@@ -71,27 +71,5 @@ def format_params(params):
 
 
 def save(path, params):
-    """Write atomically: temporary file in the same directory, fsync, rename, fsync dir."""
-    path = os.fspath(path)
-    d = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".params-", dir=d)
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(format_params(params))
-            f.flush()
-            os.fsync(f.fileno())
-        um = os.umask(0)
-        os.umask(um)
-        os.chmod(tmp, 0o666 & ~um)   # as open() would (mkstemp makes 0600)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-    dfd = os.open(d, os.O_RDONLY)
-    try:
-        os.fsync(dfd)
-    finally:
-        os.close(dfd)
+    """Write atomically (see atomicfile): the complete old or the complete new file."""
+    atomic_write(path, format_params(params))

@@ -41,7 +41,7 @@ def _save(fig, path):
     os.close(fd)
     try:
         fig.savefig(tmp, dpi=110)
-        from .report import file_mode
+        from .atomicfile import file_mode
         os.chmod(tmp, file_mode())
         os.replace(tmp, path)
     except BaseException:

@@ -11,9 +11,9 @@ import datetime
 import json
 import math
 import os
-import tempfile
 
 from . import __version__
+from .atomicfile import atomic_write
 from .identify import QUANTITIES, against_truth, plausibility, quantities_of
 from .vehiclefile import PAPER, truth_of
 
@@ -22,30 +22,6 @@ PAPER_VALUES = {"kf": PAPER["kf"], "ktau": PAPER["ktau"], "ixx": PAPER["inertia"
 
 TOL_ROTOR_PCT = 0.3
 TOL_INERTIA_PCT = 2.0
-
-
-def file_mode():
-    """0666 minus the umask: what open() would give (mkstemp makes 0600 files)."""
-    um = os.umask(0)
-    os.umask(um)
-    return 0o666 & ~um
-
-
-def atomic_write(path, text, mode="w"):
-    path = os.fspath(path)
-    d = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", dir=d)
-    try:
-        with os.fdopen(fd, mode) as f:
-            f.write(text)
-        os.chmod(tmp, file_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
 
 
 def _num(x, nd=None):
