@@ -548,25 +548,23 @@ bool mixer_attainable(const struct mixer *m, const scalar_t wrench[NA], scalar_t
 	return attainable_scaled(m, w, tol);
 }
 
-/* Interval of the scaled thrust w[0] such that w is attainable, other components fixed.
- * Returns false if empty. */
-static bool thrust_interval(const struct mixer *m, const scalar_t w[NA], scalar_t *lo, scalar_t *hi)
+/* Interval [lo, hi] of the offset t along axis ax (0 thrust, 3 yaw), within [l, h], such that
+ * w + t e_ax is attainable with the inner margin; false if empty (lo, hi untouched then).
+ * Works on t directly (not on t / demand) so that huge demands lose no resolution. */
+static bool axis_interval(const struct mixer *m, const scalar_t w[NA], int ax, scalar_t l, scalar_t h,
+			  scalar_t *lo, scalar_t *hi)
 {
-	scalar_t l = SC_MAX_NEG, h = SC_MAX;
 	for (int k = 0; k < m->n_facets; k++) {
 		const struct mixer_facet *fc = &m->facet[k];
-		scalar_t q = sc_mul(fc->n[1], w[1]);
-		q = sc_mac(fc->n[2], w[2], q);
-		q = sc_mac(fc->n[3], w[3], q);
-		q = sc_sub(q, fc->nc);
-		scalar_t s = fc->n[0], hw = sc_sub(fc->h, TOL_IN);
-		if (fc->inv0 == SC_ZERO) { /* |n_0| <= EPS_S: independent of F */
+		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
+		scalar_t s = fc->n[ax], inv = ax == 0 ? fc->inv0 : fc->inv3, hw = sc_sub(fc->h, TOL_IN);
+		if (inv == SC_ZERO) { /* |n_ax| <= EPS_S: independent of t */
 			if (sc_abs(q) > hw)
 				return false;
 			continue;
 		}
-		/* -hw <= s F + q <= hw */
-		scalar_t a = sc_mul(sc_sub(sc_neg(hw), q), fc->inv0), b = sc_mul(sc_sub(hw, q), fc->inv0);
+		/* -hw <= q + t s <= hw */
+		scalar_t a = sc_mul(sc_sub(sc_neg(hw), q), inv), b = sc_mul(sc_sub(hw, q), inv);
 		if (s < 0) {
 			scalar_t t = a;
 			a = b;
@@ -582,9 +580,16 @@ static bool thrust_interval(const struct mixer *m, const scalar_t w[NA], scalar_
 	return l <= h;
 }
 
+/* Interval of the scaled thrust w[0] such that w is attainable, other components fixed.
+ * Returns false if empty. */
+static bool thrust_interval(const struct mixer *m, const scalar_t w[NA], scalar_t *lo, scalar_t *hi)
+{
+	const scalar_t w0[NA] = {SC_ZERO, w[1], w[2], w[3]};
+	return axis_interval(m, w0, 0, SC_MAX_NEG, SC_MAX, lo, hi);
+}
+
 /* With w[3] = the scaled zero yaw, the interval [lo, hi] of yaw offsets t between 0 and dy
- * (the scaled demanded yaw offset) such that w + t e_3 is attainable; false if empty. Works
- * on t directly (not on t / dy) so that huge demands lose no resolution. */
+ * (the scaled demanded yaw offset) such that w + t e_3 is attainable; false if empty. */
 static bool yaw_interval(const struct mixer *m, const scalar_t w[NA], scalar_t dy, scalar_t *lo, scalar_t *hi)
 {
 	scalar_t l = sc_min(SC_ZERO, dy), h = sc_max(SC_ZERO, dy);
@@ -592,30 +597,7 @@ static bool yaw_interval(const struct mixer *m, const scalar_t w[NA], scalar_t d
 	*hi = h;
 	if (dy == SC_ZERO) /* no yaw demanded: is w itself attainable (inner margin)? */
 		return attainable_scaled(m, w, sc_neg(TOL_IN));
-	for (int k = 0; k < m->n_facets; k++) {
-		const struct mixer_facet *fc = &m->facet[k];
-		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
-		scalar_t s = fc->n[3], hw = sc_sub(fc->h, TOL_IN);
-		if (fc->inv3 == SC_ZERO) { /* |n_3| <= EPS_S: independent of t */
-			if (sc_abs(q) > hw)
-				return false;
-			continue;
-		}
-		/* -hw <= q + t s <= hw */
-		scalar_t a = sc_mul(sc_sub(sc_neg(hw), q), fc->inv3), b = sc_mul(sc_sub(hw, q), fc->inv3);
-		if (s < 0) {
-			scalar_t t = a;
-			a = b;
-			b = t;
-		}
-		l = sc_max(l, a);
-		h = sc_min(h, b);
-		if (l > h)
-			return false;
-	}
-	*lo = l;
-	*hi = h;
-	return l <= h;
+	return axis_interval(m, w, 3, l, h, lo, hi);
 }
 
 /* tighten [lo, hi] with the constraint -hw <= q - u s <= hw (u is the unknown) */
