@@ -8,6 +8,7 @@
  *
  * Built by tests/core/probe.mk as build/probe-mixer (float) and build/probe-mixer-fixed (Q16.16).
  */
+#include "unit_scalar.h"
 #include "mixer.h"
 
 #include <stdio.h>
@@ -16,7 +17,6 @@
 static struct mixer mix;
 static struct mixer_design des; /* the float32 set-up results (not kept by struct mixer) */
 
-static double d(scalar_t a) { return (double)sc_to_float(a); }
 
 int main(void)
 {

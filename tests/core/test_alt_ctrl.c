@@ -2,6 +2,7 @@
  * height steps against the vertical dynamics m z'' = f cos(tilt) - m g (double precision,
  * 10 sub-steps per 90 Hz frame) with a one-frame transport delay and a 30 ms first-order
  * thrust lag, as octo-fw sees the plant. */
+#include "unit_scalar.h"
 #include "alt_ctrl.h"
 #include "unit.h"
 
@@ -16,7 +17,6 @@
 #define G 9.796
 #define M_TRUE 2.132
 
-static double d(scalar_t a) { return (double)sc_to_float(a); }
 static scalar_t s(double x) { return sc_from_float((float)x); }
 
 struct vert {

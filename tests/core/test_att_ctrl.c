@@ -5,6 +5,7 @@
  * Figures (both builds, default gains, 1 frame + 30 ms lag): 0.2 rad roll/pitch steps
  * 0 % overshoot, 5 % settling 0.67 s; 0.3 rad yaw 0 %, 1.34 s (torque-limited at 0.4 N m).
  * Build with -DTEST_VERBOSE to print the figures of every run. */
+#include "unit_scalar.h"
 #include "att_ctrl.h"
 #include "unit.h"
 
@@ -18,7 +19,6 @@
 #define SUBSTEPS 5
 #define MAX_DELAY 4
 
-static double d(scalar_t a) { return (double)sc_to_float(a); }
 static scalar_t s(double x) { return sc_from_float((float)x); }
 
 static const double I_TRUE[3] = { 0.0628, 0.0762, 0.1014 };
@@ -35,15 +35,6 @@ struct rb {
 	double tau_dist[3];          /* disturbance torque, N m */
 };
 
-static void dq_mul(const double a[4], const double b[4], double r[4])
-{
-	double t[4];
-	t[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-	t[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-	t[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
-	t[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
-	memcpy(r, t, sizeof t);
-}
 
 static void rb_init(struct rb *b, int ndelay, double lag_s)
 {

@@ -2,6 +2,7 @@
  * PRBS period and balance, multisine peak and period, and the same sequences as a
  * double reference of each generator (uniform and PRBS to the last bit of the A
  * scaling, multisine within 1.5e-4 A). */
+#include "unit_scalar.h"
 #include "excite.h"
 #include "unit.h"
 
@@ -12,7 +13,6 @@
 
 #define PI 3.14159265358979323846
 
-static double d(scalar_t a) { return (double)sc_to_float(a); }
 
 #if OCTO_FIXED
 #define LSB (1.0 / 65536.0)

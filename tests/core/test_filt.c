@@ -1,5 +1,6 @@
 /* Tests of firmware/core/filt.h in whichever build this is. References in double;
  * tolerances per check (float ~1e-6, Q16.16 a few LSB of 1.5e-5 per step, accumulated). */
+#include "unit_scalar.h"
 #include "filt.h"
 #include "unit.h"
 
@@ -8,7 +9,6 @@
 #define PI 3.14159265358979323846
 #define FRAME_S (1.0 / 90.0)
 
-static double d(scalar_t a) { return (double)sc_to_float(a); }
 static scalar_t s(double x) { return sc_from_float((float)x); }
 
 /* Step response of the ZOH-exact lag equals 1 - exp(-t / tau) at every sample. */

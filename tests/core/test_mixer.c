@@ -10,6 +10,7 @@
  *                 2e-4; attainable demands reproduced to 6e-3 N (thrust), 2e-3 N m (roll, pitch),
  *                 2e-4 N m (yaw); mirrored outputs agree to 0.05 N.
  */
+#include "unit_scalar.h"
 #include "mixer.h"
 #include "unit.h"
 
@@ -41,14 +42,6 @@
 #define SWEEP(n) (n)
 #endif
 
-static double d(scalar_t a)
-{
-#if OCTO_FIXED
-	return (double)a / 65536.0;
-#else
-	return (double)a;
-#endif
-}
 
 static const double tol_axis[4] = { TOL_F, TOL_TXY, TOL_TXY, TOL_TZ };
 

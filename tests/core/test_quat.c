@@ -1,6 +1,7 @@
 /* Tests of firmware/core/quat.h (and vec3.h) in whichever build this is.
  * References are computed in double; tolerances are stated per check:
  * float ~1e-6, Q16.16 a few LSB (1.5e-5) per operation, more where errors accumulate. */
+#include "unit_scalar.h"
 #include "quat.h"
 #include "unit.h"
 
@@ -14,20 +15,8 @@
 #define LSB 1e-7
 #endif
 
-static double d(scalar_t a) { return (double)sc_to_float(a); }
 static scalar_t s(double x) { return sc_from_float((float)x); }
 
-/* reference Hamilton product in double */
-static void dq_mul(const double a[4], const double b[4], double r[4])
-{
-	double t[4];
-	t[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
-	t[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
-	t[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
-	t[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
-	for (int i = 0; i < 4; i++)
-		r[i] = t[i];
-}
 
 /* rotation matrix of q_b2i (body -> inertial), double */
 static void dq_to_R(const double q[4], double R[3][3])

@@ -1,4 +1,5 @@
 /* Tests of firmware/core/scalar.h in whichever build (float or Q16.16) this is. */
+#include "unit_scalar.h"
 #include "scalar.h"
 #include "unit.h"
 
@@ -10,15 +11,6 @@
 #define LSB 1e-7
 #endif
 
-/* exact value of a scalar as double (not rounded through float) */
-static double d(scalar_t a)
-{
-#if OCTO_FIXED
-	return (double)a / 65536.0;
-#else
-	return (double)a;
-#endif
-}
 
 UNIT_TEST(scalar_arithmetic_matches_double)
 {

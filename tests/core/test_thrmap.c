@@ -1,11 +1,11 @@
 /* Tests of firmware/core/thrmap.h, eqs. (16)-(17), in whichever build this is.
  * Tolerances: float 1e-6 relative; Q16.16 a few LSB of T (1.5e-5) and of f (k_f * LSB). */
+#include "unit_scalar.h"
 #include "thrmap.h"
 #include "unit.h"
 
 #include <math.h>
 
-static double d(scalar_t a) { return (double)sc_to_float(a); }
 static scalar_t s(double x) { return sc_from_float((float)x); }
 
 UNIT_TEST(thrmap_linear_round_trip_and_clamp)
