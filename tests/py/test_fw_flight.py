@@ -111,12 +111,7 @@ def test_link_loss_is_reported_and_long_loss_lands_on_recovery(launch, port, tmp
     import time
     rig = Rig(launch, port, tmp_path)
     rig.start()
-    rig.arm_when_ready()
-    assert rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, 3.0)[0] == mavlink.MAV_RESULT_ACCEPTED
-    deadline = time.monotonic() + 10
-    while "Mode HOLD" not in rig.texts and time.monotonic() < deadline:
-        rig.recv(set(), timeout=0.05)
-    assert "Mode HOLD" in rig.texts
+    rig.takeoff_and_hold(3.0)
     rig.sim.stop()                      # X-Plane gone
     t_kill = time.monotonic()
     while not any("link lost" in t for t in rig.texts) and time.monotonic() - t_kill < 3:

@@ -272,12 +272,7 @@ def test_mission_ftp_and_gcs_learning(launch, port, tmp_path):
 def test_experiment_when_hovering_is_answered(launch, port, tmp_path):
     rig = Rig(launch, port, tmp_path)
     rig.start()
-    rig.arm_when_ready()
-    assert rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, 2.0)[0] == mavlink.MAV_RESULT_ACCEPTED
-    deadline = time.monotonic() + 10
-    while "Mode HOLD" not in rig.texts and time.monotonic() < deadline:
-        rig.recv(set(), timeout=0.05)
-    assert "Mode HOLD" in rig.texts
+    rig.takeoff_and_hold(2.0)
     rig.recv(set(), timeout=0.3)
     r, texts = rig.cmd(mavlink.MAV_CMD_USER_1, 1)
     # long-running: IN_PROGRESS now, a final ACK later (or UNSUPPORTED in a build without)

@@ -115,6 +115,16 @@ class Rig:
             time.sleep(0.1)
         raise AssertionError(f"could not arm; fw stderr:\n{self.fw.stderr()}")
 
+    def takeoff_and_hold(self, height_m, timeout=10.0):
+        """Arms when ready, takes off to height_m and waits for "Mode HOLD" (asserted)."""
+        self.arm_when_ready()
+        r, texts = self.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, height_m)
+        assert r == mavlink.MAV_RESULT_ACCEPTED, texts
+        deadline = time.monotonic() + timeout
+        while "Mode HOLD" not in self.texts and time.monotonic() < deadline:
+            self.recv(set(), timeout=0.05)
+        assert "Mode HOLD" in self.texts, self.texts
+
     def param_list(self, timeout=10.0):
         self.m.mav.param_request_list_send(1, 0)
         got, count = {}, None

@@ -27,13 +27,7 @@ TAKEOFF_M = 5.0
 
 def hover(rig, sim_args=(), fw_args=()):
     rig.start(sim_args=["--duration", 3000, *sim_args], fw_args=fw_args)
-    rig.arm_when_ready()
-    r, texts = rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, TAKEOFF_M)
-    assert r == mavlink.MAV_RESULT_ACCEPTED, texts
-    deadline = time.monotonic() + 20
-    while "Mode HOLD" not in rig.texts and time.monotonic() < deadline:
-        rig.recv(set(), timeout=0.05)
-    assert "Mode HOLD" in rig.texts, rig.texts
+    rig.takeoff_and_hold(TAKEOFF_M, timeout=20)
 
 
 def sim_counters(proc):
