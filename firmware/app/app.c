@@ -94,6 +94,7 @@ static void set_mode(struct app *a, enum app_mode m)
 	}
 	a->mode = m;
 	app_status(a, MAV_SEVERITY_INFO, "Mode %s", app_mode_name(m));
+	envelope_on_mode(a);
 }
 
 /* ---------------------------------------------------------------- parameters -> modules */
@@ -158,6 +159,7 @@ void app_init(struct app *a)
 	char why[64];
 	if (app_params_load(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
 		hal_report("params: %s (defaults in use)", why);
+	envelope_init(a);
 	sync_params(a);
 	a->params_dirty = false;
 	a->mode = APP_DISARMED;
@@ -213,6 +215,8 @@ const char *app_param_write(struct app *a, size_t index, float value)
 		return "unknown parameter";
 	if (exp_param_readonly(param_defs[index].name))
 		return "read-only: written by identification";
+	if (!strncmp(param_defs[index].name, "HOV_", 4))
+		return "read-only: learned in flight";
 	if (a->mode == APP_EXPERIMENT && locked_in_experiment(index))
 		return "locked while an experiment runs";
 	enum param_set_result r = params_set(&a->p, index, value);
@@ -351,6 +355,7 @@ int app_cmd_experiment(struct app *a, float id_f, char *why, size_t cap)
 		snprintf(why, cap, "Experiment %d refused: not hovering", id);
 		return MAV_RESULT_DENIED;
 	}
+	envelope_seed_kf(a, id);
 	int r = exp_start(&a->exp, id, &a->p, why, cap);
 	if (r == MAV_RESULT_ACCEPTED || r == MAV_RESULT_IN_PROGRESS) {
 		a->exp.id = id;
@@ -377,7 +382,6 @@ static void apply_results(struct app *a)
 	int n = a->exp.n_results < EXP_MAX_RESULTS ? a->exp.n_results : EXP_MAX_RESULTS;
 	if (n <= 0)
 		return;
-	float kf_old = a->p.veh_kf;
 	for (int i = 0; i < n; i++) {
 		int idx = a->exp.results[i].param_index;
 		if (idx < 0 || (size_t)idx >= param_count)
@@ -389,13 +393,8 @@ static void apply_results(struct app *a)
 		mav_param_value(a, (size_t)idx);
 	}
 	a->exp.n_results = 0;
-	if (a->p.veh_kf != kf_old && kf_old > 0.0f) {
-		/* bumpless: the throttles (what the plant sees) stay where they were, so the
-		 * height integrator takes the thrust demand to the new k_f's scale:
-		 * (g + a_int) -> (g + a_int) k_f new / k_f old (issue 6) */
-		float g = a->p.veh_grav, r = a->p.veh_kf / kf_old;
-		alt_ctrl_reset(&a->alt, sc_from_float((g + sc_to_float(a->alt.a_int_mps2)) * r - g));
-	}
+	/* bumpless without more: the height controller's hover thrust is 8 VEH_KF u_h with
+	 * the learned (physical) u_h, so a new k_f leaves the throttles where they were */
 	a->params_dirty = true;
 	a->save_pending = true;
 }
@@ -472,6 +471,8 @@ static void control_step(struct app *a, float dt)
 		return;
 	}
 
+	envelope_limits(a, dt);   /* take-off and landing time limits */
+
 	/* guidance: height setpoint ramps and mode transitions */
 	switch (a->mode) {
 	case APP_TAKEOFF: {
@@ -483,7 +484,8 @@ static void control_step(struct app *a, float dt)
 		if (ad <= v * dt || ad < 1e-3f) {
 			a->z_sp = a->z_target;
 			a->vz_ff = 0.0f;
-			if (fabsf(z - a->z_target) < HOLD_ENTRY_M && fabsf(vz) < HOLD_ENTRY_MPS)
+			if (fabsf(z - a->z_target) < HOLD_ENTRY_M && fabsf(vz) < HOLD_ENTRY_MPS &&
+			    envelope_hover_ready(a))
 				set_mode(a, APP_HOLD);
 		} else {
 			a->vz_ff = d > 0.0f ? v : -v;
@@ -553,6 +555,7 @@ static void control_step(struct app *a, float dt)
 		.vz_mps = sc_from_float(vz),
 		.q_b2i = q,
 		.mass_kg = sc_from_float(p->veh_mass),
+		.hover_f_n = sc_from_float(envelope_hover_f(a, dt, sc_to_float(quat_body_z_up(q)))),
 		.dt_s = sc_from_float(dt),
 	};
 	scalar_t fz = alt_ctrl_update(&a->alt, &li);

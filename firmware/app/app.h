@@ -29,6 +29,7 @@
 
 #include "alt_ctrl.h"
 #include "att_ctrl.h"
+#include "envelope.h"
 #include "experiment.h"
 #include "hal.h"
 #include "log.h"
@@ -72,6 +73,7 @@ struct app {
 	/* control */
 	struct att_ctrl att;
 	struct alt_ctrl alt;
+	struct envelope env;          /* hover throttle learned in flight, phase limits */
 	struct mixer mix;
 	struct thrmap map;
 	struct mixer_output mix_out;

@@ -343,6 +343,8 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 {
 	char why[64] = {0};
 	int r = MAV_RESULT_UNSUPPORTED;
+	a->mav.cmd_sysid = req->sysid;   /* the requester, for final ACKs of long phases */
+	a->mav.cmd_compid = req->compid;
 	switch (cmd) {
 	case MAV_CMD_COMPONENT_ARM_DISARM:
 		if (prm[0] == 1.0f || prm[0] == 0.0f)

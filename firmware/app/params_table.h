@@ -44,3 +44,11 @@ PARAM(FS_LAND_AFTER,fs_land_after,2.0f,    0.1f,    60.0f,   "s",      "A link l
 PARAM(NAV_TOUCH_DOWN_S,nav_touch_down_s,1.0f, 0.2f,    10.0f,   "s",      "Landing: time on the ground before the motors stop")
 /* identification (issue 6): settings and read-only results, kept beside experiment.c */
 #include "experiment_params.h"
+/* the flight envelope (envelope.c): limits, and the hover throttle learned in flight (HOV_*: read-only) */
+PARAM(NAV_TKO_TO,   nav_tko_to,   60.0f,   1.0f,    600.0f,  "s",      "Take-off must reach HOLD within this, else it fails (and holds where it is)")
+PARAM(NAV_LAND_TO,  nav_land_to,  120.0f,  1.0f,    600.0f,  "s",      "Landing must touch down within this, else it fails (motors stop only on the ground)")
+PARAM(NAV_KF_SEED,  nav_kf_seed,  0.0f,    0.0f,    1.0f,    "",       "1: a rotor experiment starts from the hover-learned k_f when VEH_KF is > 10 % off")
+PARAM(HOV_THR,      hov_thr,      0.0f,    -1e9f,   1e9f,    "",       "Learned (read-only): hover throttle (collective, linearised)")
+PARAM(HOV_THR_SD,   hov_thr_sd,   0.0f,    -1e9f,   1e9f,    "",       "Learned (read-only): standard deviation of HOV_THR")
+PARAM(HOV_KF,       hov_kf,       0.0f,    -1e9f,   1e9f,    "N",      "Learned (read-only): k_f = m g / (8 HOV_THR)")
+PARAM(HOV_KF_SD,    hov_kf_sd,    0.0f,    -1e9f,   1e9f,    "N",      "Learned (read-only): standard deviation of HOV_KF")
