@@ -215,7 +215,7 @@ const char *app_param_write(struct app *a, size_t index, float value)
 		return "unknown parameter";
 	if (exp_param_readonly(param_defs[index].name))
 		return "read-only: written by identification";
-	if (!strncmp(param_defs[index].name, "HOV_", 4))
+	if (envelope_param_readonly(param_defs[index].name))
 		return "read-only: learned in flight";
 	if (a->mode == APP_EXPERIMENT && locked_in_experiment(index))
 		return "locked while an experiment runs";

@@ -3,6 +3,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #include <common/mavlink.h>
 
@@ -19,11 +20,81 @@ static float nominal_u(const struct app_params *p)
 	return p->veh_mass * p->veh_grav / (8.0f * p->veh_kf);
 }
 
+bool envelope_param_readonly(const char *name)
+{
+	return !strncmp(name, "HOV_", 4) || !strcmp(name, "KFT_EST") || !strcmp(name, "KFT_SD") ||
+	       !strcmp(name, "KFT_T") || !strcmp(name, "KFT_MEM");
+}
+
+static void kft_init(struct app *a)
+{
+	struct kf_track_params kp = kf_track_params_default();
+	kp.drift_per_min = sc_from_float(a->p.kft_drift);
+	kp.tau_lag_s = sc_from_float(a->p.id_mot_tau);
+	kp.curve = sc_from_float(a->p.mot_curve);
+	kf_track_init(&a->env.kft, &kp, sc_from_float(a->p.veh_kf));
+	a->env.kft_pub_t = 0.0;
+}
+
 void envelope_init(struct app *a)
 {
+	kft_init(a);
 	struct hover_est_params hp = hover_est_params_default();
 	hp.g_mps2 = sc_from_float(a->p.veh_grav);
 	hover_est_init(&a->env.hov, &hp, sc_from_float(nominal_u(&a->p)));
+}
+
+static void set_result(struct app *a, const char *name, float v);
+
+static void set_veh_kf(struct app *a, float kf, const char *why)
+{
+	int i = params_find("VEH_KF", 16);
+	float old = a->p.veh_kf;
+	if (i < 0 || params_set(&a->p, (size_t)i, kf) != PARAM_OK)
+		return;
+	mav_param_value(a, (size_t)i);
+	a->params_dirty = true;
+	a->save_pending = true;
+	app_status(a, MAV_SEVERITY_INFO, "VEH_KF %.2f -> %.2f N (%s)", (double)old, (double)kf, why);
+}
+
+/* k_f tracking in HOLD: the last step's throttles (what the plant answers now) against
+ * the sum of the measured rotor thrusts of this frame. */
+static void kft_step(struct app *a, float dt, bool up)
+{
+	struct envelope *e = &a->env;
+	struct kf_track *t = &e->kft;
+	scalar_t thr[HAL_ROTORS];
+	float y = 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		thr[j] = sc_from_float(a->thr[j]);
+		y += a->fr.rotor_thrust_n[j];
+	}
+	bool gate = a->mode == APP_HOLD && up && (a->fr.valid & HAL_FRAME_THRUST);
+	kf_track_update(t, thr, HAL_ROTORS, sc_from_float(y), sc_from_float(dt), gate);
+	if (!t->started || a->fr.t_s - e->kft_pub_t < 1.0)
+		return;
+	e->kft_pub_t = a->fr.t_s;
+	float k = sc_to_float(t->k), sd = sc_to_float(kf_track_sd(t));
+	set_result(a, "KFT_EST", k);
+	set_result(a, "KFT_SD", sd);
+	set_result(a, "KFT_T", (float)a->fr.t_s);
+	set_result(a, "KFT_MEM", sc_to_float(t->mem_s));
+	mav_named_float(a, "KFT", k);
+	mav_named_float(a, "KFT_SD", sd);
+	if (a->mode != APP_HOLD)
+		return;
+	if (a->p.kft_apply >= 0.5f) {
+		int i = params_find("KFT_APPLY", 16);
+		if (i >= 0 && params_set(&a->p, (size_t)i, 0.0f) == PARAM_OK)
+			mav_param_value(a, (size_t)i);
+		set_veh_kf(a, k, "tracked, on request");
+		return;
+	}
+	float rel = k / a->p.veh_kf - 1.0f;
+	if (a->p.kft_refresh > 0.0f && a->p.id_kf_est > 0.0f && fabsf(rel) > a->p.kft_refresh &&
+	    3.0f * sd < a->p.kft_refresh * k)
+		set_veh_kf(a, k, rel < 0.0f ? "tracked drift down" : "tracked drift up");
 }
 
 float envelope_hover_f(struct app *a, float dt, float cos_tilt)
@@ -42,6 +113,7 @@ float envelope_hover_f(struct app *a, float dt, float cos_tilt)
 		e->hov_used = hover_est_update(&e->hov, s_vz, s_u, s_c, s_dt);
 	else
 		hover_est_track(&e->hov, s_vz, s_u, s_c, s_dt);
+	kft_step(a, dt, up);
 	/* a climb commanded that has not lifted off: the hover throttle is higher */
 	if (a->mode == APP_TAKEOFF && !up && a->z_sp > z + 0.05f)
 		hover_est_spool(&e->hov, s_dt);

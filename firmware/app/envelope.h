@@ -3,7 +3,11 @@
  * the hover throttle learned in flight (core/hover_est) and fed to the height
  * controller, the first k_f it implies (published as HOV_* parameters and a status
  * line at every HOLD entry, optionally seeding VEH_KF before the rotor experiment),
- * and the time limit of take-off (HOLD entry) and landing with its reason.
+ * k_f tracked in HOLD (core/kf_track: KFT_EST with its sd, the plant time it holds
+ * for and its memory, published each second as parameters and NAMED_VALUE_FLOAT
+ * "KFT"/"KFT_SD"; VEH_KF refreshed from it when it drifts beyond KFT_REFRESH after an
+ * identification, or on request with KFT_APPLY = 1), and the time limits of take-off
+ * (HOLD entry) and landing with their reasons.
  *
  * The app calls these from a few places only (its step, set_mode, the experiment
  * command, the mode timer), so that they survive a reshaping of app.c.
@@ -15,6 +19,7 @@
 #include <stdint.h>
 
 #include "hover_est.h"
+#include "kf_track.h"
 
 struct app;
 
@@ -22,6 +27,8 @@ struct envelope {
 	struct hover_est hov;
 	bool hov_used;      /* a measurement was taken in the last step */
 	float phase_s;      /* time in the current take-off or landing */
+	struct kf_track kft;/* k_f tracked in HOLD */
+	double kft_pub_t;   /* plant time of the last KFT_* publication */
 	uint16_t cmd;       /* the command that started the phase, for its final ACK */
 	uint8_t sysid, compid;
 };
@@ -33,6 +40,9 @@ void envelope_init(struct app *a);
  * (vertical speed, collective throttle of the thrust the mixer achieved, tilt) and
  * returns the hover thrust demand in the mixer's newtons, 8 VEH_KF u_h. */
 float envelope_hover_f(struct app *a, float dt, float cos_tilt);
+
+/* Parameters the ground station may read but not write (HOV_*, KFT_EST/SD/T/MEM). */
+bool envelope_param_readonly(const char *name);
 
 /* Take-off may end (HOLD) once the hover throttle is known to this relative sd. */
 bool envelope_hover_ready(const struct app *a);

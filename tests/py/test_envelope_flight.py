@@ -82,3 +82,40 @@ def test_takeoff_timeout_says_why_and_lands(launch, port, tmp_path):
             acks.append(m)
     assert acks[0].target_system == 255
     assert wait_text(rig, lambda t: t == "Landed", 120), rig.texts
+
+
+@pytest.mark.parametrize("seed", [11, 12])
+def test_kf_tracked_in_hold_against_truth_at_the_same_time(launch, port, tmp_path, seed):
+    """k_f drifting at a random -1 ... -3 %/min: KFT_EST, published with the plant time it
+    holds for (KFT_T), within 0.3 % of the truth at that time (octo-sim's truth log)."""
+    import time
+    rng = random.Random(seed)
+    drift = rng.uniform(-0.03, -0.01)
+    mass, u_h = rng.uniform(1.5, 4.0), rng.uniform(0.08, 0.4)
+    kf = mass * G / (8 * u_h)
+    vf = tmp_path / "vehicle.json"
+    vf.write_text(json.dumps({"mass": mass, "kf": kf, "ktau": 0.3869 * kf / 28.0269, "kf_drift_per_min": drift}))
+    rig = Rig(launch, port, tmp_path)
+    rig.params.write_text(f"VEH_MASS {mass:.6g}\nKFT_DRIFT 0.03\n")
+    rig.start(sim_args=["--duration", 200, "--seed", seed, "--vehicle", vf])
+    rig.arm_when_ready()
+    r, texts = rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, TAKEOFF_M)
+    assert r == mavlink.MAV_RESULT_ACCEPTED, texts
+    assert wait_text(rig, lambda t: t == "Mode HOLD", 120), rig.texts
+    samples = []
+    deadline = time.monotonic() + 60
+    while len(samples) < 6 and time.monotonic() < deadline:
+        rig.recv(set(), timeout=1.0)
+        est, t = rig.param_get("KFT_EST"), rig.param_get("KFT_T")
+        if est is not None and t is not None and t.param_value > 0 and \
+                (not samples or t.param_value > samples[-1][1] + 2):
+            samples.append((est.param_value, t.param_value))
+    rig.fw.stop()
+    rig.sim.stop()
+    truth = read_log(rig.truth_log, "OCTO_TRUTH")
+    assert len(samples) >= 3, samples
+    for est, t in samples:
+        s = min(truth, key=lambda x: abs(x.t - t))
+        err = est / s.kf - 1
+        print(f"t {t:.2f} s: KFT_EST {est:.4f} truth {s.kf:.4f} ({100 * err:+.3f} %)")
+        assert abs(s.t - t) < 0.02 and abs(err) < 0.003
