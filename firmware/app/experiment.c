@@ -418,9 +418,9 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		static const int pe[3] = {PX_ID_IXX_EST, PX_ID_IYY_EST, PX_ID_IZZ_EST};
 		static const int ps[3] = {PX_ID_IXX_SD, PX_ID_IYY_SD, PX_ID_IZZ_SD};
 		static const int pv[3] = {PX_VEH_IXX, PX_VEH_IYY, PX_VEH_IZZ};
-		float nominal[3] = {p->veh_ixx, p->veh_iyy, p->veh_izz};
 		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
-		enum ident_verdict v = ident_accept(est, sd, nominal[ax], rsd);
+		float lo, hi, raise;
+		enum ident_verdict v = ident_inertia_accept(est, sd, p->veh_mass, p->veh_arm_l, rsd, &lo, &hi, &raise);
 		bool ok = v == IDENT_ACCEPT;
 		result(e, pe[ax], isfinite(est) ? est : 0.0f);
 		result(e, ps[ax], isfinite(sd) ? sd : 0.0f);
@@ -429,6 +429,13 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		set_result_bit(e, p, 2u << ax, ok);
 		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID %s %.5f +/- %.5f %s%s", nm[ax],
 		    (double)est, (double)sd, ok ? "kg m^2 " : "rejected: ", ident_verdict_text(v));
+		/* a rejection says what would have been accepted, or what to change */
+		if (v == IDENT_OUT_OF_RANGE)
+			say(e, MAV_SEVERITY_WARNING, "ID %s accepted in [%.4g, %.4g] kg m^2", nm[ax], (double)lo,
+			    (double)hi);
+		else if (v == IDENT_UNCERTAIN && raise > 1.0f)
+			say(e, MAV_SEVERITY_WARNING, "ID %s: ID_INR_AMP x%.2f or ID_INR_TIME x%.1f", nm[ax],
+			    (double)raise, (double)(raise * raise));
 	} else {
 		bool post = k == PK_VAL_POST || (k == PK_VAL && (result_mask(p) & 1u));
 		float ne = ident_fit_ne(&e->fit), fit = ident_fit_pct(&e->fit);

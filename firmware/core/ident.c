@@ -240,6 +240,25 @@ float ident_inertia_est(const struct ident_inertia *e) { return rls_estimate_f(&
 
 float ident_inertia_sd(const struct ident_inertia *e) { return e->sd_scale * rls_std(&e->rls, 0, 0); }
 
+enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max,
+					float *lo, float *hi, float *raise)
+{
+	float ml2 = mass_kg * arm_l_m * arm_l_m;
+	*lo = IDENT_INR_LO * ml2;
+	*hi = IDENT_INR_HI * ml2;
+	*raise = 1.0f;
+	if (!finite_f(est) || !finite_f(sd))
+		return IDENT_NOT_FINITE;
+	if (!(est >= *lo && est <= *hi))
+		return IDENT_OUT_OF_RANGE;
+	float rsd = sd / est;
+	if (sd < 0.0f || !(rsd < rsd_max)) {
+		*raise = rsd_max > 0.0f && finite_f(rsd) ? rsd / rsd_max : 0.0f;
+		return IDENT_UNCERTAIN;
+	}
+	return IDENT_ACCEPT;
+}
+
 /* ---------------------------------------------------------------- validation */
 
 void ident_fit_init(struct ident_fit *v)

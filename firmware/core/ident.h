@@ -153,6 +153,19 @@ void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], cons
 float ident_inertia_est(const struct ident_inertia *e);
 float ident_inertia_sd(const struct ident_inertia *e);
 
+/* Acceptance of an inertia, relative to the vehicle's own scale m l^2 (mass, arm length)
+ * rather than to a nominal inertia that may be far off: a body whose mass sits within the
+ * rotor circle has I <= m l^2 about any axis through its centre, and a multirotor's frame,
+ * battery and rotors keep it above a small fraction of it, so the accepted range is
+ * [IDENT_INR_LO, IDENT_INR_HI] x m l^2 (bounds returned in lo/hi for the message).
+ * When the relative std is too large, *raise is the factor by which the excitation
+ * amplitude must grow to reach rsd_max (the std falls as 1 / amplitude; the time needed
+ * instead is raise^2 as long: std ~ 1 / sqrt(T)); 1 otherwise. */
+#define IDENT_INR_LO 0.01f
+#define IDENT_INR_HI 2.0f
+enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max,
+					float *lo, float *hi, float *raise);
+
 /* ---------------------------------------------------------------- validation */
 /* y (measured) against y_hat (model): NE = RMS(y - y_hat) / RMS(y),
  * fit % = 100 (1 - ||y - y_hat|| / ||y - mean(y)||). float inside (Welford for the mean). */
