@@ -160,6 +160,7 @@ void app_init(struct app *a)
 	if (app_params_load(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
 		hal_report("params: %s (defaults in use)", why);
 	envelope_init(a);
+	a->exp.mix = &a->mix;   /* the inertia phases take the body torque through the mixer's Gamma */
 	sync_params(a);
 	a->params_dirty = false;
 	a->mode = APP_DISARMED;

@@ -235,7 +235,9 @@ bool exp_param_readonly(const char *name)
 
 int exp_start(struct experiment *e, int id, const struct app_params *p, char *why, size_t cap)
 {
+	const struct mixer *mix = e->mix;   /* set once by the app, kept across experiments */
 	memset(e, 0, sizeof *e);
+	e->mix = mix;
 	if (!exp_available(id)) {
 		snprintf(why, cap, "Experiment %d unknown (1..6)", id);
 		return MAV_RESULT_DENIED;
@@ -347,7 +349,10 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 			fm[j] = sc_from_float(in->thrust_n[j]);
 			tm[j] = sc_from_float(in->torque_nm[j]);
 		}
-		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
+		if (e->mix)
+			ident_body_torque_mixer(e->mix, fm, tm, tau);
+		else
+			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		for (int i = 0; i < 3; i++)
 			w[i] = sc_from_float(in->rate_b_rps[i]);
 		scalar_t alpha = ident_torque_weight(sc_from_float(cf->mot_tau), dt);
@@ -487,7 +492,10 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			fm[j] = sc_from_float(f->rotor_thrust_n[j]);
 			tm[j] = sc_from_float(f->rotor_torque_nm[j]);
 		}
-		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
+		if (e->mix)
+			ident_body_torque_mixer(e->mix, fm, tm, tau);
+		else
+			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		for (int i = 0; i < 3; i++)
 			w[i] = sc_from_float(f->rate_b_rps[i]);
 		ident_inertia_update(&e->inr, tau, w, use && n == 1 && e->gap_hold == 0);

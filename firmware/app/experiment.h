@@ -173,6 +173,7 @@ struct exp_cfg {
 };
 
 struct experiment {
+	const struct mixer *mix;               /* the app's mixer: its Gamma gives the inertia phases' torque */
 	int id;                                /* MAV_CMD_USER_1 param1; 0 = none */
 	enum exp_state state;
 	int phase;

@@ -162,6 +162,24 @@ void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS],
 	tau_out[2] = tz;
 }
 
+void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTORS],
+			     const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3])
+{
+	scalar_t w[MIXER_N_AXES];
+	mixer_wrench(m, f, w);
+	scalar_t tz = SC_ZERO;
+	for (int j = 0; j < IDENT_ROTORS; j++) {
+		scalar_t g = m->gn[3][j];   /* row-scaled Gamma: its sign is the yaw sign */
+		if (g > SC_ZERO)
+			tz = sc_add(tz, tm[j]);
+		else if (g < SC_ZERO)
+			tz = sc_sub(tz, tm[j]);
+	}
+	tau_out[0] = w[1];
+	tau_out[1] = w[2];
+	tau_out[2] = tz;
+}
+
 /* ---------------------------------------------------------------- inertia */
 
 static void other_axes(unsigned i, unsigned *j, unsigned *k)

@@ -47,6 +47,7 @@
 #define OCTO_IDENT_H
 
 #include "filt.h"
+#include "mixer.h"
 #include "rls.h"
 #include "scalar.h"
 
@@ -119,6 +120,13 @@ float ident_plain_bias(float e_d2, float e_d_dlag, float t_hover);
  * arm l) and yaw from the measured reaction-torque magnitudes tm[8] (odd rotors +, even -). */
 void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS],
 		       const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3]);
+
+/* The same torque through the mixer's own Gamma (its rotor mask and layout, custom or
+ * eq. (14) with its arm length): roll and pitch are rows 2-3 of Gamma f; yaw is the sum of
+ * the measured reaction torques of the rotors present, signed as Gamma's yaw row (the
+ * measured torques, not k_tau / k_f times the thrusts). */
+void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTORS],
+			     const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3]);
 
 /* ---------------------------------------------------------------- inertia */
 struct ident_inertia {

@@ -29,3 +29,42 @@ UNIT_TEST(ident_inertia_accept_scale_bounds_and_advice)
 	float lo, hi, raise;
 	CHECK(ident_inertia_accept(NAN, 0.0f, 2.0f, 0.35f, 0.02f, &lo, &hi, &raise) == IDENT_NOT_FINITE);
 }
+
+/* ident_body_torque_mixer: the mixer's own Gamma (random arm length, random rotor mask):
+ * roll and pitch equal Gamma f, yaw the signed sum of the measured torques of the rotors
+ * present; with all rotors and eq. (14) it equals ident_body_torque. */
+UNIT_TEST(ident_body_torque_mixer_follows_mask_and_arm)
+{
+	struct unit_rng r = { 0xb0d7ULL };
+	for (int i = 0; i < 50; i++) {
+		struct mixer_params mp;
+		mixer_default_params(&mp);
+		double l = unit_rand_uniform(&r, 0.15, 0.6);
+		mp.arm_l_m = sc_from_float((float)l);
+		mp.rotor_mask = i < 10 ? 0xFFu : (uint8_t)(0xFFu & ~(1u << (i % 8)));
+		static struct mixer m;
+		static struct mixer_design dz;
+		CHECK(mixer_init_design(&m, &mp, &dz));
+		scalar_t f[8], tm[8], tau[3], ref[3];
+		for (int j = 0; j < 8; j++) {
+			f[j] = sc_from_float((float)unit_rand_uniform(&r, 0.5, 8.0));
+			tm[j] = sc_from_float((float)unit_rand_uniform(&r, 0.01, 0.1));
+		}
+		ident_body_torque_mixer(&m, f, tm, tau);
+		double tx = 0, ty = 0, tz = 0;
+		for (int j = 0; j < 8; j++) {
+			tx += (double)dz.gamma_f[1][j] * (double)sc_to_float(f[j]);
+			ty += (double)dz.gamma_f[2][j] * (double)sc_to_float(f[j]);
+			if (mp.rotor_mask & (1u << j))
+				tz += (j & 1 ? -1.0 : 1.0) * (double)sc_to_float(tm[j]);
+		}
+		CHECK_NEAR(sc_to_float(tau[0]), tx, 2e-3 * (1 + fabs(tx)));
+		CHECK_NEAR(sc_to_float(tau[1]), ty, 2e-3 * (1 + fabs(ty)));
+		CHECK_NEAR(sc_to_float(tau[2]), tz, 1e-3);
+		if (mp.rotor_mask == 0xFFu) {
+			ident_body_torque(mp.arm_l_m, f, tm, ref);
+			for (int k = 0; k < 3; k++)
+				CHECK_NEAR(sc_to_float(tau[k]), sc_to_float(ref[k]), 2e-3 * (1 + fabs(sc_to_float(ref[k]))));
+		}
+	}
+}
