@@ -92,7 +92,8 @@ static void kft_step(struct app *a, float dt, bool up)
 		return;
 	}
 	float rel = k / a->p.veh_kf - 1.0f;
-	if (a->p.kft_refresh > 0.0f && a->p.id_kf_est > 0.0f && fabsf(rel) > a->p.kft_refresh &&
+	bool identified = ((unsigned)a->p.id_result & 1u) != 0;   /* k_f accepted by identification */
+	if (a->p.kft_refresh > 0.0f && identified && fabsf(rel) > a->p.kft_refresh &&
 	    3.0f * sd < a->p.kft_refresh * k)
 		set_veh_kf(a, k, rel < 0.0f ? "tracked drift down" : "tracked drift up");
 }

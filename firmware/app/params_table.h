@@ -53,7 +53,7 @@ PARAM(HOV_THR_SD,   hov_thr_sd,   0.0f,    -1e9f,   1e9f,    "",       "Learned 
 PARAM(HOV_KF,       hov_kf,       0.0f,    -1e9f,   1e9f,    "N",      "Learned (read-only): k_f = m g / (8 HOV_THR)")
 PARAM(HOV_KF_SD,    hov_kf_sd,    0.0f,    -1e9f,   1e9f,    "N",      "Learned (read-only): standard deviation of HOV_KF")
 PARAM(KFT_DRIFT,    kft_drift,    0.02f,   0.001f,  0.5f,    "1/min",  "k_f tracking: largest drift to follow (sizes the memory), fraction per minute")
-PARAM(KFT_REFRESH,  kft_refresh,  0.02f,   0.0f,    0.5f,    "",       "VEH_KF := KFT_EST in HOLD when they differ by more than this (after identification; 0 off)")
+PARAM(KFT_REFRESH,  kft_refresh,  0.02f,   0.0f,    0.5f,    "",       "VEH_KF := KFT_EST in HOLD when they differ by more than this (once identification accepted k_f; 0 off)")
 PARAM(KFT_APPLY,    kft_apply,    0.0f,    0.0f,    1.0f,    "",       "Set 1: VEH_KF := KFT_EST now (in HOLD; back to 0 when done)")
 PARAM(KFT_EST,      kft_est,      0.0f,    -1e9f,   1e9f,    "N",      "Tracked (read-only): k_f in hover, updated each second")
 PARAM(KFT_SD,       kft_sd,       0.0f,    -1e9f,   1e9f,    "N",      "Tracked (read-only): standard deviation of KFT_EST")
