@@ -73,8 +73,8 @@ void app_status(struct app *a, int severity, const char *fmt, ...)
 	va_start(ap, fmt);
 	vsnprintf(text, sizeof text, fmt, ap);
 	va_end(ap);
-	hal_report("%s", text);
-	hal_log_event(a->fr.t_s, severity, text);
+	a->hal->report(a->hal->ctx, text);
+	hal_log_event(a->hal, a->fr.t_s, severity, text);
 	mav_statustext(a, severity, text);
 }
 
@@ -142,12 +142,13 @@ static void reset_control(struct app *a)
 	alt_ctrl_reset(&a->alt, SC_ZERO);
 }
 
-void app_init(struct app *a)
+void app_init(struct app *a, const struct hal *hal)
 {
 	memset(a, 0, sizeof *a);
+	a->hal = hal;
 	params_defaults(&a->p);
-	uint64_t now = hal_wall_us();
-	mav_init(&a->mav, now);
+	uint64_t now = hal_wall_us(a->hal);
+	mav_init(&a->mav, hal, now);
 	struct att_ctrl_params ap = att_ctrl_params_default();
 	att_ctrl_init(&a->att, &ap);
 	struct alt_ctrl_params lp = alt_ctrl_params_default();
@@ -157,7 +158,7 @@ void app_init(struct app *a)
 	mixer_init(&a->mix, &mp);
 	char why[64];
 	if (app_params_load(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
-		hal_report("params: %s (defaults in use)", why);
+		hal_reportf(a->hal, "params: %s (defaults in use)", why);
 	sync_params(a);
 	a->params_dirty = false;
 	a->mode = APP_DISARMED;
@@ -175,7 +176,7 @@ static void report_line(void *ctx, unsigned line, const char *why)
 int app_params_load(struct app *a, char *why, size_t cap)
 {
 	static char text[8192];   /* one load at a time; kept off the stack */
-	long n = hal_param_fetch(text, sizeof text);
+	long n = hal_param_fetch(a->hal, text, sizeof text);
 	if (n < 0) {
 		snprintf(why, cap, "no parameter file");
 		return MAV_RESULT_FAILED;
@@ -185,7 +186,7 @@ int app_params_load(struct app *a, char *why, size_t cap)
 	a->p = p;
 	a->params_dirty = true;
 	if (bad)
-		hal_report("params: %u damaged line(s) ignored", bad);
+		hal_reportf(a->hal, "params: %u damaged line(s) ignored", bad);
 	return MAV_RESULT_ACCEPTED;
 }
 
@@ -193,7 +194,7 @@ int app_params_save(struct app *a, char *why, size_t cap)
 {
 	static char text[8192];
 	size_t n = params_format(&a->p, text, sizeof text);
-	if (!n || hal_param_store(text, n) != 0) {
+	if (!n || hal_param_store(a->hal, text, n) != 0) {
 		snprintf(why, cap, "Parameter save failed");
 		return MAV_RESULT_FAILED;
 	}
@@ -412,7 +413,7 @@ static void apply_results(struct app *a)
  *                 throttle map (sync_params; the mixer's set-up is ~370,000
  *                 instructions on Cortex-M4F, ~75 steps' worth). It runs first
  *                 in app_tick (the main loop's pass after the frame), and as a
- *                 fallback at the start of app_on_frame and app_on_mavlink, so that no
+ *                 fallback at the start of app_on_frame and app_on_ground, so that no
  *                 step, command or PARAM_SET ever sees a result half applied or the
  *                 old mixer beside new parameters ("the mixer and throttle map are
  *                 rebuilt at a frame boundary", issue 6);
@@ -676,7 +677,7 @@ static void link_lost(struct app *a, const char *what)
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
 	app_settle(a);   /* normally done by app_tick already (nothing left here) */
-	uint64_t now = hal_wall_us();
+	uint64_t now = hal_wall_us(a->hal);
 	a->fr = *f;
 	a->have_frame = true;
 	if (!a->link_ok)
@@ -717,15 +718,15 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	 * keeps the last command anyway; a lockstep simulator would otherwise take
 	 * the extra command for its next frame and run one frame ahead of us. */
 	if (a->actuating && (!a->have_actuated || f->t_s > a->t_actuated)) {
-		hal_actuate(a->thr);
+		hal_actuate(a->hal, a->thr);
 		a->have_actuated = true;
 		a->t_actuated = f->t_s;
 	}
 	fill_log(a, stepped, dt);
-	hal_log_frame(&a->log);
+	hal_log_frame(a->hal, &a->log);
 }
 
-size_t app_on_mavlink(struct app *a, const uint8_t *buf, size_t len)
+size_t app_on_ground(struct app *a, const uint8_t *buf, size_t len)
 {
 	app_settle(a);   /* commands see the results of the last step applied */
 	return mav_receive(a, buf, len);
@@ -740,7 +741,7 @@ void app_tick(struct app *a)
 		if (app_params_save(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
 			app_status(a, MAV_SEVERITY_ERROR, "%s", why);
 	}
-	uint64_t now = hal_wall_us();
+	uint64_t now = hal_wall_us(a->hal);
 	uint64_t to = (uint64_t)(a->p.fs_link_to * 1e6f);
 	if (a->link_ok && a->have_frame && now - a->wall_last_frame_us > to) {
 		a->link_lost_at_us = a->wall_last_frame_us;

@@ -3,11 +3,11 @@
  * parameters, commands. Platform-independent: it talks to the world only
  * through hal.h. The platform owns one struct app and calls:
  *
- *   app_init(a)              defaults, then the stored parameters
+ *   app_init(a, hal)         defaults, then the stored parameters
  *   app_on_frame(a, frame)   each sensor frame (the app actuates once per frame
  *                            that brings a new time stamp, from the first arming
  *                            on: duplicates and reordered frames are not answered)
- *   app_on_mavlink(a, b, n)  bytes from the ground station
+ *   app_on_ground(a, b, n)   bytes from the ground station (MAVLink)
  *   app_tick(a)              often (main loop), and between frames: applies
  *                            identification results, rebuilds the mixer after
  *                            a parameter change, saves the parameter file,
@@ -47,6 +47,7 @@ enum app_mode {
 };
 
 struct app {
+	const struct hal *hal;    /* the platform (set by app_init) */
 	struct app_params p;
 	enum app_mode mode;
 
@@ -94,11 +95,11 @@ struct app {
 	uint32_t steps;
 };
 
-void app_init(struct app *a);
+void app_init(struct app *a, const struct hal *hal);
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f);
 /* Returns the number of MAVLink messages accepted (the platform may learn the
  * ground station's address from a datagram that had one). */
-size_t app_on_mavlink(struct app *a, const uint8_t *buf, size_t len);
+size_t app_on_ground(struct app *a, const uint8_t *buf, size_t len);
 void app_tick(struct app *a);
 
 const char *app_mode_name(enum app_mode m);

@@ -28,11 +28,11 @@ static bool accept_unsigned(const mavlink_status_t *status, uint32_t msgid)
 	return msgid == MAVLINK_MSG_ID_RADIO_STATUS;
 }
 
-static void signing_setup(struct mav *m)
+static void signing_setup(struct mav *m, const struct hal *hal)
 {
 	uint8_t key[32];
 	mavlink_status_t *st = mavlink_get_channel_status(CHAN);
-	if (!hal_signing_key(key)) {
+	if (!hal_signing_key(hal, key)) {
 		st->signing = NULL;
 		st->signing_streams = NULL;
 		return;
@@ -44,7 +44,7 @@ static void signing_setup(struct mav *m)
 	signing.link_id = (uint8_t)CHAN;
 	signing.flags = MAVLINK_SIGNING_FLAG_SIGN_OUTGOING;
 	/* 10 us units since 2015-01-01 00:00:00 UTC */
-	uint64_t us = hal_unix_us();
+	uint64_t us = hal_unix_us(hal);
 	const uint64_t epoch2015_us = 1420070400ull * 1000000ull;
 	signing.timestamp = us > epoch2015_us ? (us - epoch2015_us) / 10u : 1u;
 	signing.accept_unsigned_callback = accept_unsigned;
@@ -53,16 +53,16 @@ static void signing_setup(struct mav *m)
 	m->signing = true;
 }
 
-static void send_msg(const mavlink_message_t *msg)
+static void send_msg(const struct app *a, const mavlink_message_t *msg)
 {
 	uint8_t buf[MAVLINK_MAX_PACKET_LEN];
 	uint16_t n = mavlink_msg_to_send_buffer(buf, msg);
-	hal_mav_send(buf, n);
+	hal_ground_send(a->hal, buf, n);
 }
 
 static uint32_t boot_ms(const struct app *a)
 {
-	return (uint32_t)((hal_wall_us() - a->mav.boot_us) / 1000u);
+	return (uint32_t)((hal_wall_us(a->hal) - a->mav.boot_us) / 1000u);
 }
 
 /* ---------------------------------------------------------------- telemetry table */
@@ -123,8 +123,8 @@ static void pack_servo(struct app *a, mavlink_message_t *msg)
 
 static void pack_sys_status(struct app *a, mavlink_message_t *msg)
 {
-	struct hal_link_stats ls;
-	hal_link_stats(&ls);
+	struct hal_plant_stats ls;
+	hal_plant_stats(a->hal, &ls);
 	uint16_t drops = (uint16_t)(ls.dropped > 65535u ? 65535u : ls.dropped);
 	mavlink_msg_sys_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, 0, 0, 0, 0, UINT16_MAX, -1, -1, 0,
 					 (uint16_t)(a->mav.rx_dropped > 65535u ? 65535u : a->mav.rx_dropped),
@@ -184,10 +184,10 @@ static void send_stream(struct app *a, int i)
 	mavlink_message_t msg;
 	streams[i].pack(a, &msg);
 	if (!streams[i].direct)
-		send_msg(&msg);
+		send_msg(a, &msg);
 }
 
-void mav_init(struct mav *m, uint64_t now_us)
+void mav_init(struct mav *m, const struct hal *hal, uint64_t now_us)
 {
 	memset(m, 0, sizeof *m);
 	for (int i = 0; i < MAV_N_STREAMS; i++)
@@ -196,7 +196,7 @@ void mav_init(struct mav *m, uint64_t now_us)
 	m->boot_us = now_us;
 	m->text_tokens = TEXT_BURST;
 	m->text_last_us = now_us;
-	signing_setup(m);
+	signing_setup(m, hal);
 }
 
 /* ---------------------------------------------------------------- outgoing helpers */
@@ -204,7 +204,7 @@ void mav_init(struct mav *m, uint64_t now_us)
 void mav_statustext(struct app *a, int severity, const char *text)
 {
 	struct mav *m = &a->mav;
-	uint64_t now = hal_wall_us();
+	uint64_t now = hal_wall_us(a->hal);
 	m->text_tokens += (float)(now - m->text_last_us) * 1e-6f * TEXT_RATE;
 	if (m->text_tokens > TEXT_BURST)
 		m->text_tokens = TEXT_BURST;
@@ -221,7 +221,7 @@ void mav_statustext(struct app *a, int severity, const char *text)
 	mavlink_message_t msg;
 	mavlink_msg_statustext_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg,
 					 (uint8_t)(severity < 0 ? 0 : (severity > 7 ? 7 : severity)), buf, 0, 0);
-	send_msg(&msg);
+	send_msg(a, &msg);
 }
 
 void mav_named_float(struct app *a, const char *name, float value)
@@ -232,7 +232,7 @@ void mav_named_float(struct app *a, const char *name, float value)
 	memcpy(buf, name, n < sizeof buf ? n : sizeof buf);
 	mavlink_message_t msg;
 	mavlink_msg_named_value_float_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, boot_ms(a), buf, value);
-	send_msg(&msg);
+	send_msg(a, &msg);
 }
 
 void mav_param_value(struct app *a, size_t index)
@@ -246,7 +246,7 @@ void mav_param_value(struct app *a, size_t index)
 	mavlink_message_t msg;
 	mavlink_msg_param_value_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, id, params_get(&a->p, index),
 					  MAV_PARAM_TYPE_REAL32, (uint16_t)param_count, (uint16_t)index);
-	send_msg(&msg);
+	send_msg(a, &msg);
 }
 
 void mav_command_ack(struct app *a, uint16_t cmd, uint8_t result, uint8_t progress, uint8_t sysid,
@@ -256,15 +256,15 @@ void mav_command_ack(struct app *a, uint16_t cmd, uint8_t result, uint8_t progre
 	mavlink_message_t msg;
 	mavlink_msg_command_ack_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, cmd, result, progress, 0, sysid,
 					  compid);
-	send_msg(&msg);
+	send_msg(a, &msg);
 }
 
-static void send_ack(uint16_t cmd, uint8_t result, const mavlink_message_t *req)
+static void send_ack(struct app *a, uint16_t cmd, uint8_t result, const mavlink_message_t *req)
 {
-	mav_command_ack(NULL, cmd, result, 0, req->sysid, req->compid);
+	mav_command_ack(a, cmd, result, 0, req->sysid, req->compid);
 }
 
-static void send_autopilot_version(void)
+static void send_autopilot_version(struct app *a)
 {
 	uint8_t custom[8] = {0}, uid2[18] = {0};
 	memcpy(custom, "octofw05", 8);
@@ -274,7 +274,7 @@ static void send_autopilot_version(void)
 		MAV_PROTOCOL_CAPABILITY_MAVLINK2 | MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE |
 			MAV_PROTOCOL_CAPABILITY_COMMAND_INT,
 		FW_VERSION, 0, 0, 0, custom, custom, custom, 0, 0, 1, uid2);
-	send_msg(&msg);
+	send_msg(a, &msg);
 }
 
 /* ---------------------------------------------------------------- parameters */
@@ -401,13 +401,13 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 		float id = cmd == MAV_CMD_REQUEST_MESSAGE ? prm[0] : (float)MAVLINK_MSG_ID_AUTOPILOT_VERSION;
 		if (id == (float)MAVLINK_MSG_ID_AUTOPILOT_VERSION) {
 			r = MAV_RESULT_ACCEPTED;
-			send_ack(cmd, (uint8_t)r, req);
-			send_autopilot_version();
+			send_ack(a, cmd, (uint8_t)r, req);
+			send_autopilot_version(a);
 			return;
 		}
 		int s = id >= 0.0f && id < 65536.0f ? stream_index((uint32_t)id) : -1;
 		if (s >= 0 && !streams[s].direct) {
-			send_ack(cmd, MAV_RESULT_ACCEPTED, req);
+			send_ack(a, cmd, MAV_RESULT_ACCEPTED, req);
 			send_stream(a, s);
 			return;
 		}
@@ -436,7 +436,7 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 		r = MAV_RESULT_UNSUPPORTED;   /* including GET_HOME_POSITION: no home here */
 		break;
 	}
-	send_ack(cmd, (uint8_t)r, req);
+	send_ack(a, cmd, (uint8_t)r, req);
 	if (why[0])
 		app_status(a, r == MAV_RESULT_ACCEPTED ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "%s", why);
 }
@@ -462,7 +462,7 @@ static void handle_ftp(struct app *a, const mavlink_message_t *msg)
 	mavlink_message_t out;
 	mavlink_msg_file_transfer_protocol_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &out, 0, msg->sysid,
 						     msg->compid, p);
-	send_msg(&out);
+	send_msg(a, &out);
 }
 
 static void handle(struct app *a, const mavlink_message_t *msg)
@@ -515,7 +515,7 @@ static void handle(struct app *a, const mavlink_message_t *msg)
 		mavlink_message_t out;
 		mavlink_msg_mission_count_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &out, msg->sysid, msg->compid, 0,
 						    r.mission_type);
-		send_msg(&out);
+		send_msg(a, &out);
 		break;
 	}
 	case MAVLINK_MSG_ID_FILE_TRANSFER_PROTOCOL:

@@ -25,6 +25,7 @@
 #define MAV_N_STREAMS 7
 
 struct app;
+struct hal;
 
 struct mav {
 	int64_t interval_us[MAV_N_STREAMS];   /* < 0: off */
@@ -42,7 +43,7 @@ struct mav {
 	uint8_t cmd_sysid, cmd_compid;         /* sender of the command being handled */
 };
 
-void mav_init(struct mav *m, uint64_t now_us);
+void mav_init(struct mav *m, const struct hal *hal, uint64_t now_us);
 /* Parses one datagram from the ground station (whole packets: the parser
  * restarts at its first byte) and handles complete messages; returns how many
  * were accepted (valid checksum, and signature when signing is on). */

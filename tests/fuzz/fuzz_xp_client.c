@@ -19,10 +19,11 @@
 #include <string.h>
 #include <sys/socket.h>
 
+#include "host.h"
 #include "xp_client.h"
 #include "xp_proto.h"
 
-void hal_report(const char *fmt, ...)
+void host_report(const char *fmt, ...)
 {
 	char text[256];
 	va_list ap;
