@@ -112,6 +112,7 @@
 #include "filt.h"
 #include "hal.h"
 #include "ident.h"
+#include "outbox.h"
 #include "params.h"
 
 #define EXP_MAX_EST 8
@@ -148,7 +149,7 @@ struct exp_result {
 #define EXP_LINE_ARGS 5
 struct exp_line {
 	const char *fmt;
-	int sev;                               /* MAV_SEVERITY */
+	int sev;                               /* enum app_severity */
 	char kind[EXP_LINE_ARGS + 1];          /* 'd' int, 's' string, 'f' double per argument */
 	union {
 		int i;
@@ -181,11 +182,11 @@ struct experiment {
 	char est_name[EXP_MAX_EST][11];        /* NAMED_VALUE_FLOAT names, <= 10 chars */
 	float est[EXP_MAX_EST], est_sd[EXP_MAX_EST];
 	char msg[51];                          /* pending status line ("" = none) */
-	int msg_severity;                      /* MAV_SEVERITY */
+	int msg_severity;                      /* enum app_severity */
 	int n_results;
 	struct exp_result results[EXP_MAX_RESULTS];
 	uint32_t est_live;                     /* bit i: est[i] is being estimated (streamed) */
-	int final_result;                      /* MAV_RESULT of the final COMMAND_ACK */
+	int final_result;                      /* enum app_result of the command's final answer */
 
 	/* implementation state (experiment.c) */
 	int n_phases, phase_kind[EXP_MAX_PHASES];
@@ -218,7 +219,7 @@ struct experiment {
 bool exp_available(int id);
 
 /* Starts experiment `id` (the caller has checked that the vehicle hovers).
- * Returns a MAV_RESULT; on refusal `why` says why (for a STATUSTEXT). */
+ * Returns an app_result; on refusal `why` says why (for a status line). */
 int exp_start(struct experiment *e, int id, const struct app_params *p, char *why, size_t cap);
 
 /* One control step while running; fills *out (zeroed by the caller). */

@@ -40,7 +40,6 @@ struct mav {
 	uint32_t rx_unsigned;                  /* rejected by signing (unsigned, bad, replayed) */
 	bool signing;                          /* MAVLink 2 signing on (hal_signing_key) */
 	uint16_t text_id;
-	uint8_t cmd_sysid, cmd_compid;         /* sender of the command being handled */
 };
 
 void mav_init(struct mav *m, const struct hal *hal, uint64_t now_us);
@@ -48,14 +47,7 @@ void mav_init(struct mav *m, const struct hal *hal, uint64_t now_us);
  * restarts at its first byte) and handles complete messages; returns how many
  * were accepted (valid checksum, and signature when signing is on). */
 size_t mav_receive(struct app *a, const uint8_t *buf, size_t len);
-/* Streams due telemetry and parameters. */
+/* Sends the app's events (outbox), due telemetry and parameters. */
 void mav_tick(struct app *a, uint64_t now_us);
-void mav_statustext(struct app *a, int severity, const char *text);
-/* PARAM_VALUE of parameter `index` (after a change). */
-void mav_param_value(struct app *a, size_t index);
-void mav_named_float(struct app *a, const char *name, float value);
-/* COMMAND_ACK (also the final one of a long-running command). */
-void mav_command_ack(struct app *a, uint16_t cmd, uint8_t result, uint8_t progress, uint8_t sysid,
-		     uint8_t compid);
 
 #endif /* OCTO_MAV_H */

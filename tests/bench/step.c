@@ -214,8 +214,8 @@ int main(void)
 
 	int exp = 0;
 	if (exp_available(1)) {
-		r = app_cmd_experiment(&A, 1.0f, why, sizeof why);
-		printf("step: experiment_1 %d %s\n", r, r ? why : "");
+		r = app_cmd_experiment(&A, 1.0f, 0, why, sizeof why);
+		printf("step: experiment_1 %d %s\n", r, r != APP_IN_PROGRESS ? why : "");
 		for (; exp < N_EXP && A.mode == APP_EXPERIMENT; exp++) {
 			next_frame();
 			bench_exp_step();
