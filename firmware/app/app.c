@@ -200,20 +200,13 @@ enum app_result app_params_save(struct app *a, char *why, size_t cap)
 	return APP_ACCEPTED;
 }
 
-static bool locked_in_experiment(size_t index)
-{
-	const char *n = param_defs[index].name;
-	return !strncmp(n, "VEH_", 4) || !strncmp(n, "MIX_", 4) || !strncmp(n, "MOT_", 4) ||
-	       !strncmp(n, "ID_", 3);
-}
-
 const char *app_param_write(struct app *a, size_t index, float value)
 {
 	if (index >= param_count)
 		return "unknown parameter";
-	if (exp_param_readonly(param_defs[index].name))
+	if (param_defs[index].flags & PARAM_READONLY)
 		return "read-only: written by identification";
-	if (a->mode == APP_EXPERIMENT && locked_in_experiment(index))
+	if (a->mode == APP_EXPERIMENT && (param_defs[index].flags & PARAM_LOCKED))
 		return "locked while an experiment runs";
 	enum param_set_result r = params_set(&a->p, index, value);
 	if (r != PARAM_OK)

@@ -1,5 +1,5 @@
 /*
- * experiment.c - in-flight identification experiments (issue 6); contract and design in
+ * experiment.c - in-flight identification experiments; contract and design in
  * experiment.h, estimators in firmware/core/ident.h.
  */
 #include "experiment.h"
@@ -216,20 +216,6 @@ static void set_result_bit(struct experiment *e, const struct app_params *p, uin
 bool exp_available(int id)
 {
 	return id >= 1 && id <= 6;
-}
-
-bool exp_param_readonly(const char *name)
-{
-	static const char *const ro[] = {
-		"ID_KF_EST", "ID_KF_SD", "ID_KF_PLAIN", "ID_KTAU_EST", "ID_KTAU_SD", "ID_KTAU_PLAIN",
-		"ID_IXX_EST", "ID_IXX_SD", "ID_IYY_EST", "ID_IYY_SD", "ID_IZZ_EST", "ID_IZZ_SD",
-		"ID_VAL_NE_PRE", "ID_VAL_FIT_PRE", "ID_VAL_NE_POST", "ID_VAL_FIT_POST", "ID_RESULT",
-		"ID_TAU_CHECK",
-	};
-	for (size_t i = 0; i < sizeof ro / sizeof ro[0]; i++)
-		if (!strcmp(name, ro[i]))
-			return true;
-	return false;
 }
 
 int exp_start(struct experiment *e, int id, const struct app_params *p, char *why, size_t cap)

@@ -324,3 +324,18 @@ UNIT_TEST(app_outbox_full_drops_newest)
 	}
 	CHECK(!outbox_pop(&o, &e));
 }
+
+/* The table's flags, set per group of rows, against the rule they stand for:
+ * the vehicle model, rotor, mixer and identification rows lock, the results
+ * (described as such) are read-only. */
+UNIT_TEST(app_parameter_flags_follow_their_groups)
+{
+	for (size_t i = 0; i < param_count; i++) {
+		const struct param_def *d = &param_defs[i];
+		bool model = !strncmp(d->name, "VEH_", 4) || !strncmp(d->name, "MOT_", 4) ||
+			     !strncmp(d->name, "MIX_", 4) || !strncmp(d->name, "ID_", 3);
+		bool result = !strncmp(d->desc, "Result (read-only)", 18);
+		if (model != !!(d->flags & PARAM_LOCKED) || result != !!(d->flags & PARAM_READONLY))
+			unit_fail(u, __FILE__, __LINE__, "%s: flags %u", d->name, d->flags);
+	}
+}

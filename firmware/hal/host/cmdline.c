@@ -101,9 +101,13 @@ static void dump_params(void)
 		json_str(d->unit);
 		printf(", \"description\": ");
 		json_str(d->desc);
-		printf("}%s\n", i + 1 < param_count ? "," : "");
+		printf(", \"locked\": %s, \"readonly\": %s}%s\n", d->flags & PARAM_LOCKED ? "true" : "false",
+		       d->flags & PARAM_READONLY ? "true" : "false", i + 1 < param_count ? "," : "");
 	}
-	printf("]}\n");
+	printf("], \"modes\": {");
+	for (int m = APP_DISARMED; m <= APP_LAND; m++)
+		printf("%s\"%s\": %d", m ? ", " : "", app_mode_name((enum app_mode)m), m);
+	printf("}}\n");
 }
 
 int host_parse_args(int argc, char **argv, struct host_config *cfg)
