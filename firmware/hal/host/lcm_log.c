@@ -81,46 +81,14 @@ void lcm_log_frame(struct lcm_log *lg, const struct app_log_frame *l)
 	octo_fw_frame_t m;
 	memset(&m, 0, sizeof m);
 	m.utime = utime_of(l->t);
-	m.seq = l->seq;
-	m.t = l->t;
-	m.dt = l->dt;
-	m.stepped = l->stepped;
-	m.mode = l->mode;
-	m.armed = l->armed;
-	m.link_ok = l->link_ok;
-	m.valid = l->valid;
-#define CP(f) memcpy(m.f, l->f, sizeof m.f)
-	CP(q);
-	CP(rate_b);
-	CP(pos_i);
-	CP(vel_i);
-	CP(rotor_thrust);
-	CP(rotor_torque);
-	CP(q_sp);
-	CP(pos_sp);
-	CP(tau_dem);
-	CP(tau_alloc);
-	CP(rotor_f);
-	CP(excitation);
-	CP(throttle);
-	CP(est);
-	CP(est_sd);
-	CP(inertia);
-#undef CP
-	m.z_sp = l->z_sp;
-	m.vz_ff = l->vz_ff;
-	m.f_dem = l->f_dem;
-	m.f_alloc = l->f_alloc;
-	m.att_flags = l->att_flags;
-	m.alt_flags = l->alt_flags;
-	m.mix_flags = l->mix_flags;
-	m.thr_clamped = l->thr_clamped;
-	m.exp_id = l->exp_id;
-	m.exp_phase = l->exp_phase;
-	m.exp_progress = l->exp_progress;
-	m.kf = l->kf;
-	m.ktau = l->ktau;
-	m.mass = l->mass;
+	/* every field of the record, by the one table (log.h); same sizes, checked */
+#define COPY(c_type, lcm_type, name)                                                        \
+	_Static_assert(sizeof m.name == sizeof l->name, "log field " #name " differs from LCM"); \
+	memcpy(&m.name, &l->name, sizeof m.name);
+#define COPY_ARR(c_type, lcm_type, name, n) COPY(c_type, lcm_type, name)
+	APP_LOG_FIELDS(COPY, COPY_ARR)
+#undef COPY
+#undef COPY_ARR
 	uint8_t buf[1024];
 	int n = octo_fw_frame_t_encoded_size(&m);
 	if (n <= 0 || n > (int)sizeof buf)
