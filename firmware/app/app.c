@@ -385,7 +385,7 @@ static void apply_results(struct app *a)
 	if (a->p.veh_kf != kf_old && kf_old > 0.0f) {
 		/* bumpless: the throttles (what the plant sees) stay where they were, so the
 		 * height integrator takes the thrust demand to the new k_f's scale:
-		 * (g + a_int) -> (g + a_int) k_f new / k_f old (issue 6) */
+		 * (g + a_int) -> (g + a_int) k_f new / k_f old */
 		float g = a->p.veh_grav, r = a->p.veh_kf / kf_old;
 		alt_ctrl_reset(&a->alt, sc_from_float((g + sc_to_float(a->alt.a_int_mps2)) * r - g));
 	}
@@ -407,8 +407,8 @@ static void apply_results(struct app *a)
  *                 in app_tick (the main loop's pass after the frame), and as a
  *                 fallback at the start of app_on_frame and app_on_ground, so that no
  *                 step, command or PARAM_SET ever sees a result half applied or the
- *                 old mixer beside new parameters ("the mixer and throttle map are
- *                 rebuilt at a frame boundary", issue 6);
+ *                 old mixer beside new parameters (the mixer and throttle map are
+ *                 rebuilt at a frame boundary);
  *   app_tick()    then writes the parameter file when results were applied
  *                 (save_pending).
  * On an MCU the step runs in the frame interrupt (or a high-priority task) and this in a

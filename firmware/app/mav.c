@@ -14,7 +14,7 @@
 #define PARAM_PER_TICK 4
 #define TEXT_BURST 50.0f           /* STATUSTEXT: burst of 50, then 20 per second */
 #define TEXT_RATE 20.0f
-#define FW_VERSION 0x00050000u     /* 0.5.0 (issue 5) */
+#define FW_VERSION 0x00050000u     /* 0.5.0 */
 
 /* Signing state of the one MAVLink channel (attached to the library's channel
  * status, which is itself static inside the generated helpers). */

@@ -4,7 +4,7 @@
  *
  * - telemetry: one table of streams (message id, default interval, pack
  *   function), intervals in wall-clock time, changed by SET_MESSAGE_INTERVAL;
- * - the parameter protocol (mavlink-notes.md): paced PARAM_REQUEST_LIST,
+ * - the parameter protocol (docs/mavlink.md): paced PARAM_REQUEST_LIST,
  *   reads by name and by index, PARAM_SET always answered with the current
  *   value, refusals and unknown names as STATUSTEXT;
  * - COMMAND_LONG / COMMAND_INT, always acknowledged;

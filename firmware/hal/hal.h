@@ -22,7 +22,7 @@
  * functions that do nothing). The calls cost one indirect call each; the 90 Hz
  * path makes two (plant_actuate, log_frame).
  *
- * Frames: the sensor frame is already in the paper's frames (docs/architecture.md):
+ * Frames: the sensor frame is already in the paper's frames (docs/xplane-protocol.md):
  *   S_I  inertial, X_I north, Y_I west, Z_I up (gravity [0, 0, -g]);
  *   S_B  body, X_B forward, Y_B left, Z_B up (thrust along +Z_B).
  * q_ib = [w, x, y, z] is the Hamilton quaternion of the body attitude in S_I:

@@ -1,4 +1,4 @@
-# tests/bench/: `make bench`, the project's performance figures (issue 8).
+# tests/bench/: `make bench`, the project's performance figures.
 #
 #   make bench        builds the harnesses below, then runs tests/bench/bench.py: one table on
 #                     stdout (each figure: median of repeated runs with min and max, beside its
