@@ -43,18 +43,9 @@ static float tilt_deg(const struct hal_sensor_frame *f)
 	return acosf(clampf(c, -1.0f, 1.0f)) / DEG_F;
 }
 
-/* yaw of a normalised quaternion: quat_to_euler's yaw alone (same expression, same value) */
-static float quat_yaw(struct quat q)
-{
-	scalar_t two = SC(2);
-	scalar_t yn = sc_mul(two, sc_add(sc_mul(q.w, q.z), sc_mul(q.x, q.y)));
-	scalar_t yd = sc_sub(SC(1), sc_mul(two, sc_add(sc_mul(q.y, q.y), sc_mul(q.z, q.z))));
-	return sc_to_float(sc_atan2(yn, yd));
-}
-
 static float frame_yaw(const struct hal_sensor_frame *f)
 {
-	return quat_yaw(frame_q(f));
+	return sc_to_float(quat_yaw(frame_q(f)));
 }
 
 bool app_hovering(const struct app *a)
@@ -508,7 +499,7 @@ static void control_step(struct app *a, float dt)
 	}
 
 	/* horizontal: hold the position of the take-off through small tilts */
-	float yaw = quat_yaw(q);
+	float yaw = sc_to_float(quat_yaw(q));
 	float vn = clampf(p->pos_gain * (a->pos_sp[0] - f->pos_i_m[0]), -POS_VEL_MAX, POS_VEL_MAX);
 	float vw = clampf(p->pos_gain * (a->pos_sp[1] - f->pos_i_m[1]), -POS_VEL_MAX, POS_VEL_MAX);
 	float an = p->pos_vel_gain * (vn - f->vel_i_mps[0]);
