@@ -379,8 +379,10 @@ def _run(args, spec, out, prog, campaign_report):
     n_new = failures = 0
     n_workers = 0
     failures += sum(1 for r in done_rows if r["status"] not in RAN)
+    t_run = None   # from the first submission: the missions' own rate, without the cluster's start
     if jobs:
         client, cluster, n_workers = _start_cluster(args, spec, prog)
+        t_run = time.monotonic()
         rf = ResultsFile(results, columns)
         futures = []
         try:
@@ -414,7 +416,7 @@ def _run(args, spec, out, prog, campaign_report):
                 n_new += 1
                 if res["status"] not in RAN:
                     failures += 1
-                el = time.monotonic() - t0
+                el = time.monotonic() - t_run
                 rate = n_new / el * 60.0 if el > 0 else 0.0
                 left = (len(jobs) - n_new) / (rate / 60.0) if rate > 0 else None
                 prog.update(f"campaign {spec['name']}: {len(done) + n_new}/{total} done, {failures} failed, "
@@ -433,6 +435,7 @@ def _run(args, spec, out, prog, campaign_report):
                 cluster.close()
         prog.done()
     wall = time.monotonic() - t0
+    run_s = time.monotonic() - t_run if t_run is not None else 0.0
     rows = read_results(results, columns)
     from .procs import build_dir
     try:
@@ -440,8 +443,8 @@ def _run(args, spec, out, prog, campaign_report):
     except Exception:
         build = None
     summary = campaign_report.write(out, spec, rows, columns, {
-        "missions_this_run": n_new, "wall_s": round(wall, 2), "workers": n_workers, "plant": plant,
-        "missions_per_min": round(n_new / wall * 60.0, 3) if n_new and wall > 0 else None},
+        "missions_this_run": n_new, "wall_s": round(wall, 2), "missions_s": round(run_s, 2), "workers": n_workers,
+        "plant": plant, "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None},
         replay=lambda idx, seed: _replay(out, spec, idx, seed, build))
     for line in summary["lines"]:
         print(line)

@@ -264,7 +264,8 @@ def markdown(doc, per):
         L += [f"- {e['key']} = {_g(e['value'])} (must be {e['op']} {e['limit']:g}): {'ok' if e['ok'] else 'NOT MET'}"
               for e in doc["expect"]]
     L += ["", "## Throughput", "",
-          f"{t['missions_this_run']} missions in {t['wall_s']:.1f} s on {t['workers']} workers"
+          f"{t['missions_this_run']} missions in {t['missions_s']:.1f} s on {t['workers']} workers "
+          f"({t['wall_s']:.1f} s with the cluster's start)"
           f" ({_g(t['missions_per_min'], '{:.2f}')} missions/min; a mission {_g(t['mission_wall_s_mean'], '{:.1f}')} s "
           f"on average); plant {t['plant']}.", ""]
     L += [f"![{n}]({n})" for n in doc["figures"]]
