@@ -9,7 +9,7 @@ row with the reason too.
 
 Results reach the client as they finish (``as_completed``); each one is appended to
 DIR/results.csv at once (flush and fsync), its report.json and vehicle file copied to
-DIR/missions/NNNN/. ``--resume`` skips the missions already in results.csv. At the end
+DIR/missions/NNNN/ (with the last lines of a failed run's program logs). ``--resume`` skips the missions already in results.csv. At the end
 campaign_report writes campaign.json, campaign.md and the figures.
 
 octo-sim's fault flags reach the plant through a directory of wrappers given to the mission as
@@ -148,7 +148,13 @@ def run_mission(job):
                 m = REJECTED_RE.search(line)
                 if m:
                     res["rejections"][QKEY[m.group(1)]] = m.group(2)
-            last = next((ln.strip() for ln in reversed(tail) if ln.strip()), "")
+            # the reason: octo-gcs's own error line if it printed one, else the last line of output
+            said = [ln[len("octo-gcs: "):].strip().rstrip(":") for ln in tail if ln.startswith("octo-gcs: ")]
+            last = said[0] if said else next((ln.strip() for ln in reversed(tail) if ln.strip()), "")
+            failed_run = tmp / "out" / "failed-run"
+            if failed_run.is_dir():   # the failed run's program logs (tails): the worker's copy goes away
+                res["failed_logs"] = {p.name: "\n".join(_tail(p, 200)) + "\n"
+                                      for p in sorted(failed_run.glob("*.log"))}
             rp = tmp / "out" / "report.json"
             if timed_out:
                 res["status"] = "timeout"
@@ -289,26 +295,33 @@ def _fmt_minutes(s):
     return f"{s / 3600:.1f} h"
 
 
+def _allowed_failures(dask_scheduler=None):
+    return dask_scheduler.allowed_failures
+
+
 def _start_cluster(args, spec, prog):
     import logging
     import dask
     from dask.distributed import Client, LocalCluster
-    dask.config.set({"distributed.scheduler.allowed-failures": spec["retries"],
-                     "distributed.worker.daemon": False})
+    dask.config.set({"distributed.scheduler.allowed-failures": spec["retries"]})
     if args.scheduler:
         try:
             client = Client(args.scheduler, timeout=30)
         except (OSError, TimeoutError) as e:
             raise CampaignError(f"cannot reach the Dask scheduler {args.scheduler}: {e}") from None
         n = len(client.scheduler_info().get("workers", {}))
+        try:   # the scheduler's own retry count (its configuration, not this client's)
+            retries = int(client.run_on_scheduler(_allowed_failures))
+        except Exception:
+            retries = None
         prog.say(f"campaign: Dask cluster {args.scheduler}, {n} workers")
-        return client, None, n
+        return client, None, n, retries
     n = args.workers or os.cpu_count() or 1
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
                            memory_limit=0, silence_logs=logging.ERROR)
     client = Client(cluster)
     prog.say(f"campaign: local Dask cluster of {n} worker processes")
-    return client, cluster, n
+    return client, cluster, n, spec["retries"]
 
 
 def run(args):
@@ -381,7 +394,7 @@ def _run(args, spec, out, prog, campaign_report):
     failures += sum(1 for r in done_rows if r["status"] not in RAN)
     t_run = None   # from the first submission: the missions' own rate, without the cluster's start
     if jobs:
-        client, cluster, n_workers = _start_cluster(args, spec, prog)
+        client, cluster, n_workers, retries = _start_cluster(args, spec, prog)
         t_run = time.monotonic()
         rf = ResultsFile(results, columns)
         futures = []
@@ -398,8 +411,9 @@ def _run(args, spec, out, prog, campaign_report):
                 if fut.status == "error":
                     exc = fut.exception()
                     if isinstance(exc, KilledWorker):
-                        why = (f"lost: the worker running it died {spec['retries'] + 1} times "
-                               f"(Dask retried it {spec['retries']} times)")
+                        why = (f"lost: the worker running it died {retries + 1} times (Dask retried it "
+                               f"{retries} times)" if retries is not None else
+                               f"lost: the workers running it died: {str(exc).splitlines()[0]}")
                         status = "lost"
                     else:
                         why, status = f"{type(exc).__name__}: {exc}", "error"
@@ -468,3 +482,7 @@ def _keep_mission(out, res, job):
         os.unlink(d / "report.json")
     tail = res.get("output_tail") or []
     atomic_write(d / "mission.log", "\n".join(tail) + ("\n" if tail else ""))
+    if res.get("failed_logs"):
+        (d / "failed-run").mkdir(exist_ok=True)
+        for name, text in res["failed_logs"].items():
+            atomic_write(d / "failed-run" / name, text)

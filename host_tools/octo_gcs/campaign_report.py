@@ -79,10 +79,11 @@ def analyse(spec, rows):
     return ran, per, silently, failures
 
 
-def _score(row, spec):
-    """How far the mission's worst estimate is from its truth, in tolerances."""
+def _score(row, spec, only=None):
+    """How far the mission's worst estimate (of the quantities `only`, default all) is from its
+    truth, in tolerances: (score, quantity)."""
     best = (0.0, None)
-    for q in QUANTITIES:
+    for q in only or QUANTITIES:
         e = _f(row[f"{q}_error_pct"])
         if e is not None:
             s = abs(e) / spec["tolerance_pct"][q]
@@ -180,16 +181,21 @@ def write(out, spec, rows, columns, throughput, replay):
     ran, per, silently, failures = analyse(spec, rows)
     rows_by_index = {int(r["index"]): r for r in rows}
     worst = []
-    ranked = sorted(ran, key=lambda r: -_score(r, spec)[0])
-    wrong_idx = {s["index"] for s in silently}
-    ranked = [r for r in ranked if int(r["index"]) in wrong_idx] + [r for r in ranked if int(r["index"]) not in wrong_idx]
+    wrong_q = {}
+    for s_ in silently:
+        wrong_q.setdefault(s_["index"], []).append(s_["parameter"])
+    wrong_idx = set(wrong_q)
+    # silently wrong missions first (ranked by their silently wrong estimates), then the rest
+    ranked = sorted((r for r in ran if int(r["index"]) in wrong_idx),
+                    key=lambda r: -_score(r, spec, wrong_q[int(r["index"])])[0])
+    ranked += sorted((r for r in ran if int(r["index"]) not in wrong_idx), key=lambda r: -_score(r, spec)[0])
     for r in ranked[:WORST]:
-        s, q = _score(r, spec)
+        s, q = _score(r, spec, wrong_q.get(int(r["index"])))
         if q is None:
             continue
         worst.append({"index": int(r["index"]), "seed": int(r["seed"]), "status": r["status"], "parameter": q,
                       "error_pct": _f(r[f"{q}_error_pct"]), "accepted": r[f"{q}_accepted"] == "1",
-                      "silently_wrong": int(r["index"]) in wrong_idx,
+                      "silently_wrong": q in wrong_q.get(int(r["index"]), ()),
                       "command": replay(int(r["index"]), int(r["seed"]))})
     not_ran = [{"index": int(r["index"]), "seed": int(r["seed"]), "status": r["status"], "reason": r["reason"],
                 "command": replay(int(r["index"]), int(r["seed"]))} for r in rows if r["status"] not in RAN]
