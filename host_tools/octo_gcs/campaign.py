@@ -303,7 +303,10 @@ def _start_cluster(args, spec, prog):
     import logging
     import dask
     from dask.distributed import Client, LocalCluster
-    dask.config.set({"distributed.scheduler.allowed-failures": spec["retries"]})
+    # worker-saturation 1.0: a worker holds only the mission it runs, so a worker that dies takes
+    # no queued mission with it (Dask counts a death against every task the worker held)
+    dask.config.set({"distributed.scheduler.allowed-failures": spec["retries"],
+                     "distributed.scheduler.worker-saturation": 1.0})
     if args.scheduler:
         try:
             client = Client(args.scheduler, timeout=30)
