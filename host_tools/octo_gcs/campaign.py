@@ -401,48 +401,51 @@ def _run(args, spec, out, prog, campaign_report):
         t_run = time.monotonic()
         rf = ResultsFile(results, columns)
         futures = []
+        from .procs import Terminated, signals_as_exceptions
         try:
-            from dask.distributed import as_completed
-            from distributed.scheduler import KilledWorker
-            import uuid
-            tag = uuid.uuid4().hex[:8]
-            futures = [client.submit(run_mission, j, key=f"mission-{j['index']:05d}-{tag}", pure=False)
-                       for j in jobs]
-            by_key = {f.key: j for f, j in zip(futures, jobs)}
-            for fut in as_completed(futures):
-                j = by_key[fut.key]
-                if fut.status == "error":
-                    exc = fut.exception()
-                    if isinstance(exc, KilledWorker):
-                        why = (f"lost: the worker running it died {retries + 1} times (Dask retried it "
-                               f"{retries} times)" if retries is not None else
-                               f"lost: the workers running it died: {str(exc).splitlines()[0]}")
-                        status = "lost"
+            with signals_as_exceptions():
+                from dask.distributed import as_completed
+                from distributed.scheduler import KilledWorker
+                import uuid
+                tag = uuid.uuid4().hex[:8]
+                futures = [client.submit(run_mission, j, key=f"mission-{j['index']:05d}-{tag}", pure=False)
+                           for j in jobs]
+                by_key = {f.key: j for f, j in zip(futures, jobs)}
+                for fut in as_completed(futures):
+                    j = by_key[fut.key]
+                    if fut.status == "error":
+                        exc = fut.exception()
+                        if isinstance(exc, KilledWorker):
+                            why = (f"lost: the worker running it died {retries + 1} times (Dask retried it "
+                                   f"{retries} times)" if retries is not None else
+                                   f"lost: the workers running it died: {str(exc).splitlines()[0]}")
+                            status = "lost"
+                        else:
+                            why, status = f"{type(exc).__name__}: {exc}", "error"
+                        res = {"index": j["index"], "seed": j["seed"], "status": status, "reason": why,
+                               "wall_s": "", "host": ""}
+                    elif fut.status == "cancelled":
+                        res = {"index": j["index"], "seed": j["seed"], "status": "lost",
+                               "reason": "cancelled by the cluster", "wall_s": "", "host": ""}
                     else:
-                        why, status = f"{type(exc).__name__}: {exc}", "error"
-                    res = {"index": j["index"], "seed": j["seed"], "status": status, "reason": why,
-                           "wall_s": "", "host": ""}
-                elif fut.status == "cancelled":
-                    res = {"index": j["index"], "seed": j["seed"], "status": "lost",
-                           "reason": "cancelled by the cluster", "wall_s": "", "host": ""}
-                else:
-                    res = fut.result()
-                fut.release()
-                _keep_mission(out, res, j)
-                rf.append(result_row(res, inputs[j["index"]]))
-                n_new += 1
-                if res["status"] not in RAN:
-                    failures += 1
-                el = time.monotonic() - t_run
-                rate = n_new / el * 60.0 if el > 0 else 0.0
-                left = (len(jobs) - n_new) / (rate / 60.0) if rate > 0 else None
-                prog.update(f"campaign {spec['name']}: {len(done) + n_new}/{total} done, {failures} failed, "
-                            f"{rate:.1f} missions/min, {_fmt_minutes(left)} left", key=n_new)
-        except KeyboardInterrupt:
+                        res = fut.result()
+                    fut.release()
+                    _keep_mission(out, res, j)
+                    rf.append(result_row(res, inputs[j["index"]]))
+                    n_new += 1
+                    if res["status"] not in RAN:
+                        failures += 1
+                    el = time.monotonic() - t_run
+                    rate = n_new / el * 60.0 if el > 0 else 0.0
+                    left = (len(jobs) - n_new) / (rate / 60.0) if rate > 0 else None
+                    prog.update(f"campaign {spec['name']}: {len(done) + n_new}/{total} done, {failures} failed, "
+                                f"{rate:.1f} missions/min, {_fmt_minutes(left)} left", key=n_new)
+        except (KeyboardInterrupt, Terminated) as e:
             prog.done()
-            print(f"octo-gcs campaign: interrupted; {len(done) + n_new} of {total} missions are in {results} "
+            how = "interrupted" if isinstance(e, KeyboardInterrupt) else f"stopped by {e}"
+            print(f"octo-gcs campaign: {how}; {len(done) + n_new} of {total} missions are in {results} "
                   "(--resume goes on)", file=sys.stderr)
-            return 130
+            return 130 if isinstance(e, KeyboardInterrupt) else 143
         finally:
             rf.close()
             for f in futures:

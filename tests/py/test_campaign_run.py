@@ -231,3 +231,37 @@ def test_real_missions_on_an_external_cluster(tmp_path, dask_cluster):
         assert "--build-dir" in w["command"]   # the replay keeps the frame loss
         sim = out / "missions" / f"{w['index']:04d}" / "sim" / "octo-sim"
         assert "--drop 0.01" in sim.read_text()
+
+
+def test_a_stopped_client_loses_no_finished_mission(tmp_path):
+    """SIGTERM to the client while missions run: every finished mission is in results.csv,
+    whole; --resume flies exactly the others."""
+    spec = write_spec(tmp_path, missions=30, faults={}, params={})
+    out = tmp_path / "c"
+    env = dict(os.environ, OCTO_CAMPAIGN_MISSION=fake())
+    p = subprocess.Popen([sys.executable, "-m", "octo_gcs.cli", "campaign", str(spec), "--out", str(out),
+                          "--workers", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                         cwd=REPO)
+    try:
+        def some_rows():
+            f = out / "results.csv"
+            return f.exists() and f.read_text().count("\n") >= 4
+        assert wait_until(some_rows, timeout=120, step=0.05)
+        p.terminate()
+        _, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    assert p.returncode == 143, err
+    assert "stopped by SIGTERM" in err and "--resume goes on" in err
+    first = rows(out)
+    assert 3 <= len(first) < 30
+    assert all(r["status"] == "pass" for r in first)
+    assert not (out / "campaign.json").exists()
+    r = run_campaign(spec, out, "--workers", "2", "--resume", mission=fake())
+    assert r.returncode == 0, r.stderr
+    assert f"{len(first)} already in" in r.stderr
+    allr = rows(out)
+    assert sorted(int(x["index"]) for x in allr) == list(range(30))
+    assert allr[:len(first)] == first
