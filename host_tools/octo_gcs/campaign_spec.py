@@ -190,7 +190,7 @@ def validate(spec):
         _check_value(path, v, rng, integer)
     s.setdefault("experiments", [6])
     e = s["experiments"]
-    if not isinstance(e, list) or not all(isinstance(x, int) and not isinstance(x, bool) and 0 <= x <= 6
+    if not isinstance(e, list) or not all(isinstance(x, int) and not isinstance(x, bool) and 1 <= x <= 6
                                           for x in e):
         raise SpecError(f"experiments: must be a list of experiment numbers 1..6 ([] only flies), not {json.dumps(e)}")
     s.setdefault("plant", "in-process")
