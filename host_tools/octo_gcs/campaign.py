@@ -144,10 +144,14 @@ def run_mission(job):
                     raise
             tail = _tail(log)
             res["output_tail"] = tail
-            for line in _tail(log, 100000):
-                m = REJECTED_RE.search(line)
-                if m:
-                    res["rejections"][QKEY[m.group(1)]] = m.group(2)
+            # the firmware's rejection reasons: its status texts, in the mission's output (UDP plant)
+            # or in the program logs it wrote (octo-sil.log of the in-process plant)
+            logs = [log] + sorted((tmp / "out").glob("*.log")) + sorted((tmp / "out" / "failed-run").glob("*.log"))
+            for path in logs:
+                for line in _tail(path, 100000):
+                    m = REJECTED_RE.search(line)
+                    if m:
+                        res["rejections"][QKEY[m.group(1)]] = m.group(2)
             # the reason: octo-gcs's own error line if it printed one, else the last line of output
             said = [ln[len("octo-gcs: "):].strip().rstrip(":") for ln in tail if ln.startswith("octo-gcs: ")]
             last = said[0] if said else next((ln.strip() for ln in reversed(tail) if ln.strip()), "")

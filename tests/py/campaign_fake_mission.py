@@ -3,7 +3,7 @@
 Takes the mission's options, writes OUT/report.json with estimates near the vehicle file's truth
 (errors and sds from the seed, so they are random but reproducible) and exits 0. Options of its own,
 placed before the mission's: --crash-seed N (exit 3 with a message), --hang-seed N (sleep for
-ever), --reject-seed N (k_f rejected, with the firmware's status text), --in-process-help
+ever), --reject-seed N (k_f rejected, with the firmware's status text on the output, or with --in-process in OUT/octo-sil.log), --in-process-help
 (its --help lists --in-process), --die-seed N (kill the Dask worker process running it).
 """
 import argparse
@@ -58,9 +58,14 @@ for q, t in truth.items():
     acc = not (q == "kf" and a.seed in a.reject_seed)
     params[q] = {"truth": t, "estimate": est, "sd": sd, "error_pct": 100 * (est - t) / t, "accepted": acc}
     checks.append({"check": f"{q} accepted", "ok": acc, "warning_only": False, "detail": ""})
-if a.seed in a.reject_seed:
-    print(f"  ID kf {params['kf']['estimate']:.3f} +/- 0.028 rejected: model does not fit", flush=True)
 os.makedirs(a.out, exist_ok=True)
+if a.seed in a.reject_seed:   # the firmware's status text: on the output, or in-process in octo-sil.log
+    text = f"ID kf {params['kf']['estimate']:.3f} +/- 0.028 rejected: model does not fit"
+    if a.in_process:
+        with open(os.path.join(a.out, "octo-sil.log"), "w") as f:
+            f.write(f"octo-fw: {text}\n")
+    else:
+        print("  " + text, flush=True)
 rep = {"run": {"seed": a.seed, "in_process": a.in_process, "build_dir": a.build_dir,
                "params": a.param}, "parameters": params, "checks": checks,
        "pass": all(c["ok"] for c in checks)}

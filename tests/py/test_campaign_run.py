@@ -196,13 +196,16 @@ def test_expect_decides_the_exit_status(tmp_path):
 
 
 def test_in_process_used_when_the_mission_has_it(tmp_path):
-    spec = write_spec(tmp_path, missions=1, plant="in-process", faults={})
+    spec = write_spec(tmp_path, missions=2, plant="in-process", faults={})
     out = tmp_path / "c"
-    r = run_campaign(spec, out, "--workers", "1", mission=fake("--in-process-help"))
+    r = run_campaign(spec, out, "--workers", "1", mission=fake("--in-process-help", "--reject-seed", 101))
     assert r.returncode == 0, r.stderr
     assert json.loads((out / "missions/0000/report.json").read_text())["run"]["in_process"] is True
     assert "in-process (octo-sil)" in r.stderr
+    # the rejection reason found in the program log the in-process mission wrote
+    assert by_seed(rows(out))[101]["rejection_reasons"] == "kf: model does not fit"
     out2 = tmp_path / "c2"
+    spec = write_spec(tmp_path, missions=1, plant="in-process", faults={})
     r = run_campaign(spec, out2, "--workers", "1", mission=fake())
     assert r.returncode == 0, r.stderr
     assert r.stderr.count("has no --in-process") == 1
