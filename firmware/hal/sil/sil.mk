@@ -1,0 +1,18 @@
+# octo-sil: octo-fw's app on the in-process platform (firmware/hal/sil/) linked with
+# octo-sim's plant (build/libocto-plant.a). From hal/host it reuses the X-Plane
+# client and codec, the parameter file and the LCM log, object for object.
+
+SIL_SRC     := $(sort $(wildcard firmware/hal/sil/*.c))
+SIL_OBJ     := $(SIL_SRC:firmware/hal/sil/%.c=$(B)/sil/%.o)
+SIL_FW_OBJ  := $(filter $(B)/fw/app/%.o,$(FW_OBJ)) \
+               $(addprefix $(B)/fw/hal/host/,xp_client.o xp_proto.o lcm_log.o param_file.o)
+
+$(B)/sil/%.o: firmware/hal/sil/%.c $(B)/config.mk | $(MAVLINK_STAMP) $(LCM_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_FW) -D_POSIX_C_SOURCE=200809L $(FW_INC) -Ifirmware/hal/host -Isim -c $< -o $@
+
+$(B)/octo-sil: $(SIL_OBJ) $(SIL_FW_OBJ) $(B)/libcore.a $(B)/liblcmtypes.a $(B)/libocto-plant.a
+	$(CXX) $(OPT) -o $@ $(SIL_OBJ) $(SIL_FW_OBJ) $(B)/libocto-plant.a $(B)/libcore.a $(B)/liblcmtypes.a \
+	  $(LCM_LDFLAGS) -lm
+
+ALL_TARGETS += $(B)/octo-sil
