@@ -108,6 +108,9 @@ def build_parser() -> argparse.ArgumentParser:
     mp.add_argument("--build-dir", metavar="DIR",
                     help="where octo-sim and octo-fw are (default $OCTO_BUILD, else the repository's build/)")
     mp.add_argument("--no-plots", dest="plots", action="store_false", help="skip the figures")
+    mp.add_argument("--in-process", action="store_true",
+                    help="fly in octo-sil (firmware and plant in one deterministic lockstep process; "
+                    "parameters from its parameter file) instead of octo-sim + octo-fw over UDP")
     mp.add_argument("--timeout", type=float, default=5.0, metavar="S",
                     help="seconds to wait for the vehicle's answers (default 5)")
 

@@ -26,7 +26,7 @@ from .flight import Flight
 from .progress import Progress
 
 TAKEOFF_M = 10.0
-OUTPUTS = ("report.md", "report.json", "params.parm", "truth.lcm", "fw.lcm", "octo-sim.log", "octo-fw.log",
+OUTPUTS = ("report.md", "report.json", "params.parm", "truth.lcm", "fw.lcm", "octo-sim.log", "octo-fw.log", "octo-sil.log",
            "fig5_excitation.png", "fig6_validation.png", "fig7_rates.png", "convergence.png")
 
 
@@ -161,6 +161,9 @@ def _tail(path):
 
 
 def run(args):
+    if getattr(args, "in_process", False):
+        from . import inprocess
+        return inprocess.run(args)
     from .report import build_report, write_outputs
 
     t_start = time.monotonic()
