@@ -14,7 +14,8 @@ import pytest
 
 from conftest import binary
 
-ID_MISSION = ("param VEH_MASS {mass}; param VEH_ARM_L {arm}; arm; takeoff 5; wait hold; "
+# the rotor experiment alone accepts k_f only with the motor lag known (ID_MOT_TAU)
+ID_MISSION = ("param VEH_MASS {mass}; param VEH_ARM_L {arm}; param ID_MOT_TAU {tau}; arm; takeoff 5; wait hold; "
               "experiment 1; wait experiment; land; wait disarmed")
 HOVER_MISSION = "arm; takeoff 5; wait hold; sleep 5; land; wait disarmed"
 
@@ -56,7 +57,7 @@ def vehicle(tmp_path):
 def test_same_flags_same_bytes_other_seed_other_bytes(tmp_path, vehicle):
     v, vpath = vehicle
     seed = random.randrange(1, 10**6)
-    mission = ID_MISSION.format(mass=v["mass"], arm=v["arm_length"])
+    mission = ID_MISSION.format(mass=v["mass"], arm=v["arm_length"], tau=v["motor_tau"])
     runs = {}
     for name, s in (("a", seed), ("b", seed), ("c", seed + 1)):
         r = sil(tmp_path, name, "--vehicle", vpath, "--seed", s, "--mission", mission)

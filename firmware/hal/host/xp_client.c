@@ -348,11 +348,13 @@ void xp_client_actuate(struct xp_client *c, const float thr[HAL_ROTORS], uint64_
 		send_to_xp(c, buf, xp_encode_dref(buf, sizeof buf, 1.0f, OVERRIDE_REF));
 		c->last_override_us = now_us;
 	}
-	for (int i = 0; i < HAL_ROTORS; i++) {
-		char path[64];
-		snprintf(path, sizeof path, "sim/flightmodel/engine/ENGN_thro_use[%d]", i);
-		send_to_xp(c, buf, xp_encode_dref(buf, sizeof buf, t[i], path));
-	}
+	static const char *const thro_use[HAL_ROTORS] = {
+		"sim/flightmodel/engine/ENGN_thro_use[0]", "sim/flightmodel/engine/ENGN_thro_use[1]",
+		"sim/flightmodel/engine/ENGN_thro_use[2]", "sim/flightmodel/engine/ENGN_thro_use[3]",
+		"sim/flightmodel/engine/ENGN_thro_use[4]", "sim/flightmodel/engine/ENGN_thro_use[5]",
+		"sim/flightmodel/engine/ENGN_thro_use[6]", "sim/flightmodel/engine/ENGN_thro_use[7]"};
+	for (int i = 0; i < HAL_ROTORS; i++)
+		send_to_xp(c, buf, xp_encode_dref(buf, sizeof buf, t[i], thro_use[i]));
 }
 
 void xp_client_release(struct xp_client *c)

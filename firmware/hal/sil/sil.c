@@ -73,6 +73,14 @@ void hal_mav_send(const uint8_t *buf, size_t len)
 		(void)sendto(s->mav_fd, buf, len, 0, (const struct sockaddr *)&s->gcs, sizeof s->gcs);
 	if (!s->mission)
 		return;
+	/* The app hands over one message per call: only acknowledgements and parameter
+	 * values concern the mission, the telemetry is skipped by its id (MAVLink 2:
+	 * 0xFD, then the id in bytes 7..9) without running the parser over it. */
+	if (len >= 10 && buf[0] == MAVLINK_STX) {
+		uint32_t id = (uint32_t)buf[7] | (uint32_t)buf[8] << 8 | (uint32_t)buf[9] << 16;
+		if (id != MAVLINK_MSG_ID_COMMAND_ACK && id != MAVLINK_MSG_ID_PARAM_VALUE)
+			return;
+	}
 	mavlink_message_t msg;
 	mavlink_status_t st;
 	for (size_t i = 0; i < len; i++) {
