@@ -9,7 +9,7 @@ from . import __version__
 def add_connection_args(p, again=False):
     """--connect, --signing-key, --timeout. again=True: the same options once more on a
     sub-action (``params get NAME --connect URL``), not overriding the parent's values."""
-    from .link import DEFAULT_URL
+    from .base import DEFAULT_URL
 
     kw = {"default": argparse.SUPPRESS} if again else {}
     p.add_argument("--connect", metavar="URL", **(kw or {"default": DEFAULT_URL}),
@@ -132,7 +132,7 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return 2
-    from .link import GcsError
+    from .base import GcsError
     from .procs import Terminated
 
     try:

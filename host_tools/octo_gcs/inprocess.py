@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 from . import paramfile, procs, vehiclefile
-from .link import GcsError
+from .base import GcsError
 
 TAKEOFF_M = 10.0
 WALL_LIMIT_S = 600.0   # octo-sil flies a mission in well under a second

@@ -12,7 +12,7 @@ import struct
 
 import numpy as np
 
-from .link import GcsError
+from .base import GcsError
 
 SYNC = 0xEDA1DA01
 _HDR = struct.Struct(">IqqII")

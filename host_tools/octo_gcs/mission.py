@@ -21,8 +21,7 @@ from pathlib import Path
 
 from . import paramfile, procs, vehiclefile
 from .identify import EXPERIMENTS, merge_text_results, parse_experiments, planned_sim_seconds, run_experiment
-from .link import GcsError, Vehicle
-from .flight import Flight
+from .base import GcsError
 from .progress import Progress
 
 TAKEOFF_M = 10.0
@@ -99,6 +98,7 @@ class Mission:
             except GcsError:
                 if time.monotonic() > deadline:
                     raise GcsError("no heartbeat from octo-fw after 10 s:\n" + self.fw.tail()) from None
+        from .flight import Flight
         fl = Flight(v, alive=self._alive)
         nominal = v.fetch_params()
         bench = {"VEH_MASS": veh["mass"], "VEH_ARM_L": veh["arm_length"]}
@@ -146,6 +146,7 @@ class Mission:
         v = self.vehicle
         if v is None or self.sim is None or not self.sim.alive() or not self.fw.alive():
             return
+        from .flight import Flight
         from .link import MODE_NUMBERS
         if v.mode in (None, MODE_NUMBERS["DISARMED"]):
             return
@@ -195,6 +196,7 @@ def run(args):
     try:
         with procs.signals_as_exceptions():
             try:
+                from .link import Vehicle
                 m.vehicle = Vehicle("udpin:127.0.0.1:0", timeout=args.timeout)
                 gcs_port = m.vehicle.conn.port.getsockname()[1]
                 ports = (procs.free_udp_port(), procs.free_udp_port(), procs.free_udp_port(), gcs_port)
