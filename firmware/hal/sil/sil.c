@@ -438,8 +438,14 @@ int main(int argc, char **argv)
 			break;
 		pass++;
 		if (!started) {
-			if (!octo_plant_commanded(s->plant))
-				continue;   /* time stands still until the first command */
+			if (!octo_plant_commanded(s->plant)) {
+				/* time stands still until the first command; a watched run waits for
+				 * its ground station at the real-time rate, as octo-sim does */
+				if (s->wall_clock)
+					(void)nanosleep(&(struct timespec){.tv_sec = 0, .tv_nsec = (long)(period_us * 1e3)},
+							NULL);
+				continue;
+			}
 			started = true;
 		} else if (!delivered) {
 			s->withheld++;     /* the fault injector withheld it: nobody can answer */
