@@ -1,7 +1,7 @@
 // plant: octo-sim's plant behind a C interface (plant.h). The per-frame work is
-// the same as octo-sim's lockstep server (server.cpp): the same DATA rows, fault
-// injector, RREF scheduling, command, integration, measurement and truth, in the
-// same order, so the same inputs give the same bytes; only the sockets are gone.
+// frame_out's, as in octo-sim's lockstep server (server.cpp): the same DATA rows,
+// fault injector, RREF scheduling, command, integration, measurement and truth, in
+// the same order, so the same inputs give the same bytes; only the sockets are gone.
 #include "plant.h"
 
 #include <arpa/inet.h>
@@ -16,6 +16,7 @@
 
 #include "counters.hpp"
 #include "faults.hpp"
+#include "frame_out.hpp"
 #include "model.hpp"
 #include "net.hpp"
 #include "options.hpp"
@@ -64,52 +65,23 @@ struct octo_plant {
 
 bool octo_plant::send_frame(bool with_faults)
 {
-	if (!input.target_enabled)
-		return true;
-	std::vector<xp::DataRow> rows;
-	for (int r : sim::xp_supported_rows())
-		if (input.selected[static_cast<size_t>(r)])
-			rows.push_back(sim::xp_row(frame, r, o.xplane_version));
-	if (rows.empty())
-		return true; // X-Plane sends nothing while no row is selected
-	xp::Bytes d = xp::encode_data(rows);
 	std::vector<xp::Bytes> sent;
-	if (with_faults && o.faults.any())
-		sent = faults.submit(n, std::move(d));
-	else
-		sent.push_back(std::move(d));
+	const bool delivered = sim::frame_data(o, input, frame, faults, n, with_faults, sent);
 	for (auto &b : sent) {
 		c.inc(sim::Counters::TxData);
 		send(std::move(b), input.target);
 	}
-	return !sent.empty();
+	return delivered;
 }
 
 void octo_plant::rref_tick()
 {
-	if (input.subs.empty())
-		return;
-	std::vector<std::pair<sockaddr_in, std::vector<std::pair<int32_t, float>>>> groups;
-	for (auto &s : input.subs) {
-		s.phase += s.freq / o.rate;
-		if (s.phase < 1.0)
-			continue;
-		s.phase -= std::floor(s.phase);
-		float v = 0.0f;
-		if (!sim::xp_dataref(frame, s.path, o.xplane_version, input.override_on, input.thro_use, input.thro, v))
-			c.inc(sim::Counters::RrefUnknown);
-		size_t g = 0;
-		while (g < groups.size() && !sim::same_addr(groups[g].first, s.to))
-			g++;
-		if (g == groups.size())
-			groups.push_back({s.to, {}});
-		groups[g].second.push_back({s.index, v});
+	std::vector<std::pair<sockaddr_in, xp::Bytes>> replies;
+	sim::rref_replies(o, input, frame, c, replies);
+	for (auto &r : replies) {
+		c.inc(sim::Counters::TxRref);
+		send(std::move(r.second), r.first);
 	}
-	for (const auto &g : groups)
-		for (auto &b : xp::encode_rref_replies(g.second)) {
-			c.inc(sim::Counters::TxRref);
-			send(std::move(b), g.first);
-		}
 }
 
 extern "C" {
@@ -118,7 +90,8 @@ octo_plant *octo_plant_create(const char *prog, int argc, char **argv, int *stat
 {
 	// Flags that belong to octo-sim's server, not to the plant.
 	static const char *const refused[] = {"--xp-port", "--bind", "--data-out", "--lockstep",
-	                                      "--lockstep-timeout", "--lcm", "--duration", "--verbose", "-v"};
+	                                      "--lockstep-timeout", "--lcm", "--duration", "--verbose", "-v",
+	                                      "--no-beacon", "--computer-name"};
 	for (int i = 1; i < argc; i++)
 		for (const char *r : refused)
 			if (!std::strcmp(argv[i], r)) {
@@ -195,13 +168,7 @@ bool octo_plant_commanded(const octo_plant *p)
 
 void octo_plant_advance(octo_plant *p)
 {
-	std::array<double, sim::kRotors> u = p->input.effective_throttle();
-	p->model.command(u);
-	p->input.cmd_mask = 0;
-	p->n++;
-	p->model.advance_to(static_cast<double>(p->n) / p->o.rate);
-	p->frame = sim::xp_measure(p->model, u, p->o.seed, p->n);
-	p->truth.publish(p->model, p->n);
+	sim::advance_frame(p->o, p->model, p->input, p->n, p->frame, p->truth);
 }
 
 void octo_plant_truth(const octo_plant *p, struct octo_plant_truth *t)
