@@ -144,5 +144,5 @@ def test_simulation_flags_fly(tmp_path, flags):
     assert r.returncode == 0, r.stderr
     assert "step 6 'wait disarmed'" not in r.stderr   # --quiet: no progress lines
     # every frame answered in its own pass (lockstep by construction)
-    assert re.search(r" 0 withheld by faults, 0 unanswered\)", r.stderr), r.stderr
+    assert re.search(r" 0 withheld by faults, 0 unanswered, 0 requests lost", r.stderr), r.stderr
     assert counters(r.stderr)["rx_bad_size"] == 0

@@ -191,13 +191,12 @@ void mission_free(struct mission *m)
 	free(m);
 }
 
-const char *mission_pending(const struct mission *m)
+const char *mission_pending(struct mission *m)
 {
-	static char buf[160];
 	if (m->cur >= m->n)
 		return "all steps completed";
-	snprintf(buf, sizeof buf, "step %zu '%s' still running", m->cur + 1, m->steps[m->cur].text);
-	return buf;
+	snprintf(m->msg, sizeof m->msg, "step %zu '%s' still running", m->cur + 1, m->steps[m->cur].text);
+	return m->msg;
 }
 
 /* ---------------------------------------------------------------- commands */

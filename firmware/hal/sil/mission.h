@@ -33,6 +33,6 @@ void mission_free(struct mission *m);
  * every step completed, -1 when a step failed (message on stderr). */
 int mission_run(struct mission *m, struct sil *s);
 /* The message of the failure or of the step not completed, for the exit line. */
-const char *mission_pending(const struct mission *m);
+const char *mission_pending(struct mission *m);
 
 #endif /* OCTO_SIL_MISSION_H */

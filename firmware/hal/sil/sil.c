@@ -164,11 +164,11 @@ static void flush_to_plant(struct sil *s)
 /* The plant's datagrams through the client's decoder into the app. */
 static void flush_to_fw(struct sil *s)
 {
-	static uint8_t buf[4096];
 	long n;
-	while ((n = octo_plant_pop(s->plant, buf, sizeof buf, NULL, NULL)) >= 0) {
-		size_t len = (size_t)n > sizeof buf ? sizeof buf : (size_t)n;
-		if (xp_client_input(&s->xp, buf, len, &s->xplane, &s->frame, hal_wall_us()) > 0)
+	while ((n = octo_plant_pop(s->plant, s->from_plant, sizeof s->from_plant, NULL, NULL)) >= 0) {
+		/* a longer datagram arrives cut, as from a socket; the client drops it */
+		size_t len = (size_t)n > sizeof s->from_plant ? sizeof s->from_plant : (size_t)n;
+		if (xp_client_input(&s->xp, s->from_plant, len, &s->xplane, &s->frame, hal_wall_us()) > 0)
 			app_on_frame(&s->app, &s->frame);
 	}
 }
@@ -467,9 +467,9 @@ int main(int argc, char **argv)
 	}
 	fprintf(stderr,
 		"octo-sil: stopped at t=%.3f s after %llu frames (%u received by the firmware, %llu withheld by "
-		"faults, %llu unanswered); plant %s\n",
+		"faults, %llu unanswered, %u requests lost to a full queue); plant %s\n",
 		tr.t, (unsigned long long)tr.frame, s->xp.stats.frames, (unsigned long long)s->withheld,
-		(unsigned long long)s->unanswered, octo_plant_counters(s->plant));
+		(unsigned long long)s->unanswered, s->to_plant.overflow, octo_plant_counters(s->plant));
 	if (s->mission)
 		mission_free(s->mission);
 	octo_plant_destroy(s->plant);

@@ -56,6 +56,7 @@ struct sil {
 	struct app app;
 	struct hal_sensor_frame frame; /* persistent: absent rows keep their values */
 	struct sil_queue to_plant;
+	uint8_t from_plant[4096];      /* one plant datagram on its way to the client */
 	uint64_t now_us;               /* the platform clock (see hal_wall_us in sil.c) */
 	bool wall_clock;               /* MAVLink served: telemetry rates in wall time */
 	bool quiet;
