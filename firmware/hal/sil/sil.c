@@ -41,19 +41,29 @@ static uint64_t mono_us(void)
 	return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
 }
 
+/* Each hal.h function takes the platform from sil_ctx in its first line and works on
+ * that struct only: with a context passed in by the app, that line is all that changes. */
+static uint64_t sil_clock(const struct sil *s)
+{
+	return s->wall_clock ? mono_us() : s->now_us;
+}
+
 uint64_t hal_wall_us(void)
 {
-	return sil_ctx->wall_clock ? mono_us() : sil_ctx->now_us;
+	struct sil *s = sil_ctx;
+	return sil_clock(s);
 }
 
 void hal_actuate(const float thr[HAL_ROTORS])
 {
-	xp_client_actuate(&sil_ctx->xp, thr, hal_wall_us());
+	struct sil *s = sil_ctx;
+	xp_client_actuate(&s->xp, thr, sil_clock(s));
 }
 
 void hal_link_stats(struct hal_link_stats *out)
 {
-	*out = sil_ctx->xp.stats;
+	struct sil *s = sil_ctx;
+	*out = s->xp.stats;
 }
 
 static void note_text(struct sil *s, const char *text)
@@ -123,13 +133,14 @@ uint64_t hal_unix_us(void)
 
 void hal_report(const char *fmt, ...)
 {
+	struct sil *s = sil_ctx;
 	char text[256];
 	va_list ap;
 	va_start(ap, fmt);
 	vsnprintf(text, sizeof text, fmt, ap);
 	va_end(ap);
-	note_text(sil_ctx, text);
-	if (!sil_ctx->quiet)
+	note_text(s, text);
+	if (!s->quiet)
 		fprintf(stderr, "octo-fw: %s\n", text);
 }
 
@@ -168,7 +179,7 @@ static void flush_to_fw(struct sil *s)
 	while ((n = octo_plant_pop(s->plant, s->from_plant, sizeof s->from_plant, NULL, NULL)) >= 0) {
 		/* a longer datagram arrives cut, as from a socket; the client drops it */
 		size_t len = (size_t)n > sizeof s->from_plant ? sizeof s->from_plant : (size_t)n;
-		if (xp_client_input(&s->xp, s->from_plant, len, &s->xplane, &s->frame, hal_wall_us()) > 0)
+		if (xp_client_input(&s->xp, s->from_plant, len, &s->xplane, &s->frame, sil_clock(s)) > 0)
 			app_on_frame(&s->app, &s->frame);
 	}
 }
@@ -424,7 +435,7 @@ int main(int argc, char **argv)
 		s->now_us = 1000000u + (uint64_t)((double)pass * period_us + 0.5);
 		bool delivered = octo_plant_emit(s->plant, started);
 		flush_to_fw(s);
-		xp_client_poll(&s->xp, hal_wall_us());
+		xp_client_poll(&s->xp, sil_clock(s));
 		if (s->mav_fd >= 0)
 			mavlink_in(s);
 		app_tick(&s->app);
