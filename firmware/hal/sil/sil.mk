@@ -16,3 +16,17 @@ $(B)/octo-sil: $(SIL_OBJ) $(SIL_FW_OBJ) $(B)/libcore.a $(B)/liblcmtypes.a $(B)/l
 	  $(LCM_LDFLAGS) -lm
 
 ALL_TARGETS += $(B)/octo-sil
+
+# octo-sil-asan: the same under AddressSanitizer and UBSan (not part of `all`), from the
+# sanitizer objects of octo-fw-asan and sim-asan.
+SIL_ASAN_OBJ    := $(SIL_SRC:firmware/hal/sil/%.c=$(B)/sil-asan/%.o)
+SIL_FW_ASAN_OBJ := $(SIL_FW_OBJ:$(B)/fw/%=$(B)/fw-asan/%)
+SIL_SIM_ASAN_OBJ := $(filter-out $(B)/sim-asan/obj/main.o,$(SIM_ASAN_OBJ))
+
+$(B)/sil-asan/%.o: firmware/hal/sil/%.c $(B)/config.mk | $(MAVLINK_STAMP) $(LCM_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_FW) $(SAN) -D_POSIX_C_SOURCE=200809L $(FW_INC) -Ifirmware/hal/host -Isim -c $< -o $@
+
+$(B)/octo-sil-asan: $(SIL_ASAN_OBJ) $(SIL_FW_ASAN_OBJ) $(SIL_SIM_ASAN_OBJ) $(B)/libcore-asan.a $(B)/liblcmtypes.a
+	$(CXX) $(OPT) $(SAN) -o $@ $(SIL_ASAN_OBJ) $(SIL_FW_ASAN_OBJ) $(SIL_SIM_ASAN_OBJ) $(B)/libcore-asan.a \
+	  $(B)/liblcmtypes.a $(LCM_LDFLAGS) -lm
