@@ -15,7 +15,8 @@ from pymavlink import mavutil  # noqa: E402  (MAVLINK20 must be set first)
 mavutil.set_dialect("common")
 mavlink = mavutil.mavlink
 
-from .base import DEFAULT_URL, MODE_NUMBERS, MODES, GcsError  # noqa: E402,F401  (re-exported)
+from .base import (DEFAULT_URL, FW_PARAMS, MODE_NUMBERS, MODES, GcsError,  # noqa: E402,F401
+                   fw_default)  # (re-exported)
 
 
 def f32(x):

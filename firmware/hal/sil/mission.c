@@ -14,7 +14,6 @@
 
 #define GCS_SYSID 255
 #define GCS_COMPID 190
-#define GCS_CHAN MAVLINK_COMM_1
 #define STEP_TEXT 96
 #define MAX_STEPS 512
 
@@ -76,7 +75,8 @@ static int parse_step(char *text, struct step *st)
 {
 	char *w[4] = {0};
 	int n = 0;
-	for (char *tok = strtok(text, " \t"); tok; tok = strtok(NULL, " \t")) {
+	char *save = NULL;
+	for (char *tok = strtok_r(text, " \t", &save); tok; tok = strtok_r(NULL, " \t", &save)) {
 		if (n == 4)
 			return -1;
 		w[n++] = tok;
@@ -205,7 +205,7 @@ static void send_msg(struct sil *s, const mavlink_message_t *msg)
 {
 	uint8_t buf[MAVLINK_MAX_PACKET_LEN];
 	uint16_t n = mavlink_msg_to_send_buffer(buf, msg);
-	(void)app_on_mavlink(&s->app, buf, n);
+	(void)app_on_ground(&s->app, buf, n);
 }
 
 /* COMMAND_LONG to the vehicle; returns the MAV_RESULT of its COMMAND_ACK (-1:
@@ -213,7 +213,7 @@ static void send_msg(struct sil *s, const mavlink_message_t *msg)
 static int command(struct sil *s, uint16_t cmd, float p1, float p7)
 {
 	mavlink_message_t msg;
-	mavlink_msg_command_long_pack_chan(GCS_SYSID, GCS_COMPID, GCS_CHAN, &msg, 1, 1, cmd, 0, p1, 0, 0, 0, 0, 0,
+	mavlink_msg_command_long_pack_status(GCS_SYSID, GCS_COMPID, &s->gcs_tx, &msg, 1, 1, cmd, 0, p1, 0, 0, 0, 0, 0,
 					   p7);
 	s->seen.ack = false;
 	if (cmd == MAV_CMD_USER_1)
@@ -281,7 +281,7 @@ static int step(struct mission *m, struct sil *s, const struct step *st, bool fi
 	switch (st->kind) {
 	case ST_PARAM: {
 		mavlink_message_t msg;
-		mavlink_msg_param_set_pack_chan(GCS_SYSID, GCS_COMPID, GCS_CHAN, &msg, 1, 1, st->name, st->value,
+		mavlink_msg_param_set_pack_status(GCS_SYSID, GCS_COMPID, &s->gcs_tx, &msg, 1, 1, st->name, st->value,
 						MAV_PARAM_TYPE_REAL32);
 		s->seen.param = false;
 		s->seen.text[0] = 0;

@@ -11,7 +11,7 @@
  *   land               MAV_CMD_NAV_LAND
  *   wait disarmed      until the vehicle has landed and disarmed
  *   sleep S            S seconds of simulated time
- * Commands are packed MAVLink 2 messages handed to app_on_mavlink, the path a
+ * Commands are packed MAVLink 2 messages handed to app_on_ground, the path a
  * ground station's bytes take.
  */
 #ifndef OCTO_SIL_MISSION_H

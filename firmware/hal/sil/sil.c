@@ -1,8 +1,8 @@
 /*
- * sil.c - octo-sil: command line, the lockstep loop, and the hal.h functions
- * of the in-process platform (see sil.h).
+ * sil.c - octo-sil: command line, the lockstep loop, and the struct hal of the
+ * in-process platform (see sil.h).
  *
- * Clock: hal_wall_us is the platform clock. Without a ground station it is
+ * Clock: the struct hal's wall_us is the platform clock. Without a ground station it is
  * virtual: it starts at 1 s and advances by one frame period per pass of the
  * loop (also while the plant waits for its first command, when octo-sim would
  * re-send frame 0 at the real-time rate), so everything the app does is a
@@ -29,10 +29,7 @@
 #include "host.h"
 #include "mission.h"
 
-struct sil *sil_ctx;
-static volatile sig_atomic_t stop;
-
-/* ---------------------------------------------------------------- hal.h */
+/* ---------------------------------------------------------------- struct hal */
 
 static uint64_t mono_us(void)
 {
@@ -41,28 +38,36 @@ static uint64_t mono_us(void)
 	return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
 }
 
-/* Each hal.h function takes the platform from sil_ctx in its first line and works on
- * that struct only: with a context passed in by the app, that line is all that changes. */
+/* The platform clock: virtual (one frame period per pass) unless a ground
+ * station is served. */
 static uint64_t sil_clock(const struct sil *s)
 {
 	return s->wall_clock ? mono_us() : s->now_us;
 }
 
-uint64_t hal_wall_us(void)
+static uint64_t wall_us(void *ctx)
 {
-	struct sil *s = sil_ctx;
+	const struct sil *s = ctx;
 	return sil_clock(s);
 }
 
-void hal_actuate(const float thr[HAL_ROTORS])
+static uint64_t unix_us(void *ctx)
 {
-	struct sil *s = sil_ctx;
+	(void)ctx;
+	struct timespec ts;
+	clock_gettime(CLOCK_REALTIME, &ts);
+	return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
+}
+
+static void plant_actuate(void *ctx, const float thr[HAL_ROTORS])
+{
+	struct sil *s = ctx;
 	xp_client_actuate(&s->xp, thr, sil_clock(s));
 }
 
-void hal_link_stats(struct hal_link_stats *out)
+static void plant_stats(void *ctx, struct hal_plant_stats *out)
 {
-	struct sil *s = sil_ctx;
+	const struct sil *s = ctx;
 	*out = s->xp.stats;
 }
 
@@ -74,27 +79,32 @@ static void note_text(struct sil *s, const char *text)
 	s->seen.texts++;
 }
 
-/* The app's MAVLink output: decoded for the mission (acks, parameter values),
- * and sent to the ground station when one is served. */
-void hal_mav_send(const uint8_t *buf, size_t len)
+/* The app's MAVLink output: decoded for the mission (acks, parameter values,
+ * status lines), and sent to the ground station when one is served. */
+static void ground_send(void *ctx, const uint8_t *buf, size_t len)
 {
-	struct sil *s = sil_ctx;
+	struct sil *s = ctx;
 	if (s->mav_fd >= 0)
 		(void)sendto(s->mav_fd, buf, len, 0, (const struct sockaddr *)&s->gcs, sizeof s->gcs);
 	if (!s->mission)
 		return;
-	/* The app hands over one message per call: only acknowledgements and parameter
-	 * values concern the mission, the telemetry is skipped by its id (MAVLink 2:
-	 * 0xFD, then the id in bytes 7..9) without running the parser over it. */
+	/* The app hands over one message per call: only acknowledgements, parameter
+	 * values and status lines concern the mission, the telemetry is skipped by
+	 * its id (MAVLink 2: 0xFD, then the id in bytes 7..9) without running the
+	 * parser over it. */
 	if (len >= 10 && buf[0] == MAVLINK_STX) {
 		uint32_t id = (uint32_t)buf[7] | (uint32_t)buf[8] << 8 | (uint32_t)buf[9] << 16;
-		if (id != MAVLINK_MSG_ID_COMMAND_ACK && id != MAVLINK_MSG_ID_PARAM_VALUE)
+		if (id != MAVLINK_MSG_ID_COMMAND_ACK && id != MAVLINK_MSG_ID_PARAM_VALUE &&
+		    id != MAVLINK_MSG_ID_STATUSTEXT)
 			return;
 	}
 	mavlink_message_t msg;
 	mavlink_status_t st;
 	for (size_t i = 0; i < len; i++) {
-		if (!mavlink_parse_char(s->mav_chan_rx, buf[i], &msg, &st))
+		uint8_t r = mavlink_frame_char_buffer(&s->rx_msg, &s->rx_status, buf[i], &msg, &st);
+		if (r == MAVLINK_FRAMING_BAD_CRC || r == MAVLINK_FRAMING_BAD_SIGNATURE)
+			s->rx_status.parse_state = MAVLINK_PARSE_STATE_IDLE;   /* as mavlink_parse_char does */
+		if (r != MAVLINK_FRAMING_OK)
 			continue;
 		if (msg.msgid == MAVLINK_MSG_ID_COMMAND_ACK) {
 			mavlink_command_ack_t a;
@@ -114,34 +124,85 @@ void hal_mav_send(const uint8_t *buf, size_t len)
 			s->seen.param_id[16] = 0;
 			s->seen.param_value = v.param_value;
 			s->seen.param = true;
+		} else if (msg.msgid == MAVLINK_MSG_ID_STATUSTEXT) {
+			mavlink_statustext_t t;
+			mavlink_msg_statustext_decode(&msg, &t);
+			char text[MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN + 1];
+			memcpy(text, t.text, MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN);   /* no NUL when full */
+			text[MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN] = 0;
+			note_text(s, text);
 		}
 	}
 }
 
-bool hal_signing_key(uint8_t key[32])
+static bool ground_signing_key(void *ctx, uint8_t key[32])
 {
+	(void)ctx;
 	(void)key;
 	return false;
 }
 
-uint64_t hal_unix_us(void)
+static int param_store(void *ctx, const char *text, size_t len)
 {
-	struct timespec ts;
-	clock_gettime(CLOCK_REALTIME, &ts);
-	return (uint64_t)ts.tv_sec * 1000000u + (uint64_t)ts.tv_nsec / 1000u;
+	const struct sil *s = ctx;
+	return param_file_store(&s->params, text, len);
 }
 
-void hal_report(const char *fmt, ...)
+static long param_fetch(void *ctx, char *buf, size_t cap)
 {
-	struct sil *s = sil_ctx;
-	char text[256];
+	const struct sil *s = ctx;
+	return param_file_fetch(&s->params, buf, cap);
+}
+
+static void log_frame(void *ctx, const struct app_log_frame *f)
+{
+	struct sil *s = ctx;
+	lcm_log_frame(&s->log, f);
+}
+
+static void log_event(void *ctx, double t_s, int severity, const char *text)
+{
+	struct sil *s = ctx;
+	lcm_log_event(&s->log, t_s, severity, text);
+}
+
+/* The firmware's console: stderr, unless --quiet. */
+static void report(void *ctx, const char *line)
+{
+	const struct sil *s = ctx;
+	if (!s->quiet)
+		fprintf(stderr, "octo-fw: %s\n", line);
+}
+
+static void sil_hal_bind(struct sil *s)
+{
+	s->hal = (struct hal){
+		.ctx = s,
+		.wall_us = wall_us,
+		.unix_us = unix_us,
+		.plant_actuate = plant_actuate,
+		.plant_stats = plant_stats,
+		.ground_send = ground_send,
+		.ground_signing_key = ground_signing_key,
+		.param_store = param_store,
+		.param_fetch = param_fetch,
+		.log_frame = log_frame,
+		.log_event = log_event,
+		.report = report,
+	};
+}
+
+/* The console of hal/host's parts that octo-sil links (parameter file, X-Plane
+ * client): host.h declares it, host_hal.c defines it for octo-fw, this for octo-sil.
+ * Their lines are errors or once-per-run notes, printed even with --quiet. */
+void host_report(const char *fmt, ...)
+{
+	char line[256];
 	va_list ap;
 	va_start(ap, fmt);
-	vsnprintf(text, sizeof text, fmt, ap);
+	vsnprintf(line, sizeof line, fmt, ap);
 	va_end(ap);
-	note_text(s, text);
-	if (!s->quiet)
-		fprintf(stderr, "octo-fw: %s\n", text);
+	fprintf(stderr, "octo-fw: %s\n", line);
 }
 
 /* ---------------------------------------------------------------- plant link */
@@ -193,7 +254,7 @@ static void mavlink_in(struct sil *s)
 		ssize_t n = recvfrom(s->mav_fd, buf, sizeof buf, 0, (struct sockaddr *)&from, &fl);
 		if (n < 0)
 			break;
-		if (app_on_mavlink(&s->app, buf, (size_t)n) > 0 && fl >= sizeof from && from.sin_family == AF_INET)
+		if (app_on_ground(&s->app, buf, (size_t)n) > 0 && fl >= sizeof from && from.sin_family == AF_INET)
 			s->gcs = from;
 	}
 }
@@ -270,10 +331,12 @@ static int parse_hostport(const char *flag, const char *s, struct sockaddr_in *o
 	return 0;
 }
 
-static void on_signal(int sig)
+/* SIGINT or SIGTERM arrived (they are blocked and taken here, between passes,
+ * so that no handler and no flag outside struct sil are needed). */
+static bool stop_requested(const sigset_t *stop_set)
 {
-	(void)sig;
-	stop = 1;
+	const struct timespec no_wait = {0, 0};
+	return sigtimedwait(stop_set, NULL, &no_wait) >= 0;
 }
 
 static int open_mavlink(uint16_t port)
@@ -308,14 +371,9 @@ static double parse_duration(const char *v)
 	return d;
 }
 
-static struct sil the_sil;
-
-int main(int argc, char **argv)
+static int run(struct sil *s, int argc, char **argv)
 {
-	struct sil *s = &the_sil;
-	sil_ctx = s;
 	s->mav_fd = -1;
-	s->mav_chan_rx = MAVLINK_COMM_2;
 	const char *params = NULL, *lcm_fw = NULL, *lcm_sim = NULL, *mission_spec = NULL;
 	uint16_t mav_listen = 0;
 	double duration = 0.0;
@@ -396,16 +454,17 @@ int main(int argc, char **argv)
 		fprintf(stderr, "octo-sil: neither --mission nor --duration: running until SIGINT/SIGTERM\n");
 
 	signal(SIGPIPE, SIG_IGN);
-	struct sigaction sa;
-	memset(&sa, 0, sizeof sa);
-	sa.sa_handler = on_signal;
-	sigaction(SIGINT, &sa, NULL);
-	sigaction(SIGTERM, &sa, NULL);
+	sigset_t stop_set;
+	sigemptyset(&stop_set);
+	sigaddset(&stop_set, SIGINT);
+	sigaddset(&stop_set, SIGTERM);
+	sigprocmask(SIG_BLOCK, &stop_set, NULL);
 
 	if (lcm_sim && octo_plant_open_truth(s->plant, lcm_sim))
 		return 1;
-	param_file_set_path(params);
-	if (lcm_fw && lcm_log_open(lcm_fw))
+	sil_hal_bind(s);
+	param_file_set_path(&s->params, params);
+	if (lcm_fw && lcm_log_open(&s->log, lcm_fw))
 		return 1;
 	if (mav_listen) {
 		s->mav_fd = open_mavlink(mav_listen);
@@ -426,12 +485,16 @@ int main(int argc, char **argv)
 	const double period_us = 1e6 / rate;
 	uint64_t pass = 0;
 	s->now_us = 1000000u;
-	app_init(&s->app);
+	app_init(&s->app, &s->hal);
 
 	bool started = false;
 	int result = 0;   /* mission: 0 running, 1 done, -1 failed */
 	struct octo_plant_truth tr;
-	while (!stop) {
+	bool stop = false;
+	/* The signal check is a system call: every pass when a ground station sets
+	 * the pace, every 64 passes (well under a wall second) otherwise. */
+	const uint64_t check_every = s->wall_clock ? 1u : 64u;
+	while (!(pass % check_every == 0 && (stop = stop_requested(&stop_set)))) {
 		s->now_us = 1000000u + (uint64_t)((double)pass * period_us + 0.5);
 		bool delivered = octo_plant_emit(s->plant, started);
 		flush_to_fw(s);
@@ -466,7 +529,7 @@ int main(int argc, char **argv)
 		octo_plant_advance(s->plant);
 	}
 	app_tick(&s->app);   /* a pending parameter save */
-	lcm_log_close();
+	lcm_log_close(&s->log);
 	octo_plant_truth(s->plant, &tr);
 	int rc = 0;
 	if (s->mission && result < 0) {
@@ -486,5 +549,17 @@ int main(int argc, char **argv)
 	octo_plant_destroy(s->plant);
 	if (s->mav_fd >= 0)
 		close(s->mav_fd);
+	return rc;
+}
+
+int main(int argc, char **argv)
+{
+	struct sil *s = calloc(1, sizeof *s);
+	if (!s) {
+		fprintf(stderr, "octo-sil: out of memory\n");
+		return 1;
+	}
+	int rc = run(s, argc, argv);
+	free(s);
 	return rc;
 }

@@ -1,8 +1,10 @@
 /*
  * sil.h - octo-sil: the app on an in-process platform beside octo-sim's plant.
  *
- * All the platform's state is one struct sil reached through one pointer. The
- * plant link is X-Plane's protocol as bytes: the plant's datagrams go through
+ * All the platform's state is one struct sil, allocated by main(); its struct
+ * hal (sil.c) has the struct sil as ctx, so no state lives at file scope. The
+ * parameter file and the LCM log are hal/host's (param_file.c, lcm_log.c) with
+ * their contexts kept here. The plant link is X-Plane's protocol as bytes: the plant's datagrams go through
  * octo-fw's X-Plane client (xp_client.c, its decoder and conventions), the
  * client's requests and throttles (its encoder) through the plant's decoder,
  * with no socket in between. Lockstep by construction: each pass of the loop is
@@ -16,8 +18,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include <common/mavlink.h>
+
 #include "app.h"
 #include "hal.h"
+#include "host.h"
 #include "plant.h"
 #include "xp_client.h"
 
@@ -32,7 +37,9 @@ struct sil_queue {
 	uint32_t overflow;
 };
 
-/* What the app last said on MAVLink, decoded (the mission reads it). */
+/* What the app last said on MAVLink, decoded (the mission reads it, as a ground
+ * station would): acknowledgements, parameter values, and the status lines
+ * (STATUSTEXT) that carry the firmware's reasons. */
 struct sil_mav_seen {
 	bool ack;                  /* a COMMAND_ACK since the last clear */
 	uint16_t ack_command;
@@ -43,8 +50,8 @@ struct sil_mav_seen {
 	char param_id[17];
 	float param_value;
 	uint64_t texts;            /* reports seen so far */
-	char text[SIL_TEXT_LEN];   /* the last report (STATUSTEXT or console) */
-	char id_text[SIL_TEXT_LEN];/* the last "ID ..." report */
+	char text[SIL_TEXT_LEN];   /* the last STATUSTEXT */
+	char id_text[SIL_TEXT_LEN];/* the last "ID ..." STATUSTEXT */
 };
 
 struct mission;
@@ -53,7 +60,10 @@ struct sil {
 	octo_plant *plant;
 	struct xp_client xp;
 	struct sockaddr_in xplane;     /* the plant's address as the client sees it */
+	struct hal hal;                /* sil.c's functions, ctx = this struct */
 	struct app app;
+	struct param_file params;      /* --params (hal/host/param_file.c) */
+	struct lcm_log log;            /* --lcm-fw (hal/host/lcm_log.c) */
 	struct hal_sensor_frame frame; /* persistent: absent rows keep their values */
 	struct sil_queue to_plant;
 	uint8_t from_plant[4096];      /* one plant datagram on its way to the client */
@@ -64,15 +74,15 @@ struct sil {
 	/* MAVLink to a ground station (optional) */
 	int mav_fd;
 	struct sockaddr_in gcs;
-	uint8_t mav_chan_rx;           /* parser channel for the app's output */
+	/* MAVLink parser and sender state of the mission (the library's per-channel
+	 * globals are not used): the app's output is parsed here, the mission's
+	 * messages are sequenced here */
+	mavlink_message_t rx_msg;
+	mavlink_status_t rx_status, gcs_tx;
 	struct sil_mav_seen seen;
 
 	struct mission *mission;
 	uint64_t withheld, unanswered;
 };
-
-/* The one instance: hal.h has no context argument, so the hal functions reach
- * the platform through this pointer (set by main before app_init). */
-extern struct sil *sil_ctx;
 
 #endif /* OCTO_SIL_H */

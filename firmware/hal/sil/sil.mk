@@ -1,10 +1,11 @@
 # octo-sil: octo-fw's app on the in-process platform (firmware/hal/sil/) linked with
 # octo-sim's plant (build/libocto-plant.a). From hal/host it reuses the X-Plane
-# client and codec, the parameter file and the LCM log, object for object.
+# client and codec, the parameter file and the LCM log, object for object, and
+# hal/hal.c (hal_reportf).
 
 SIL_SRC     := $(sort $(wildcard firmware/hal/sil/*.c))
 SIL_OBJ     := $(SIL_SRC:firmware/hal/sil/%.c=$(B)/sil/%.o)
-SIL_FW_OBJ  := $(filter $(B)/fw/app/%.o,$(FW_OBJ)) \
+SIL_FW_OBJ  := $(filter $(B)/fw/app/%.o,$(FW_OBJ)) $(B)/fw/hal/hal.o \
                $(addprefix $(B)/fw/hal/host/,xp_client.o xp_proto.o lcm_log.o param_file.o)
 
 $(B)/sil/%.o: firmware/hal/sil/%.c $(B)/config.mk | $(MAVLINK_STAMP) $(LCM_STAMP)
