@@ -3,12 +3,9 @@
 
 #include <math.h>
 #include <stdio.h>
-#include <string.h>
-
-#include <common/mavlink.h>
 
 #include "app.h"
-#include "mav.h"
+#include "outbox.h"
 #include "params.h"
 
 #define HOVER_READY_RSD 0.03f  /* take-off ends once u_h is known to 3 % */
@@ -20,10 +17,19 @@ static float nominal_u(const struct app_params *p)
 	return p->veh_mass * p->veh_grav / (8.0f * p->veh_kf);
 }
 
-bool envelope_param_readonly(const char *name)
+/* A parameter changed by the envelope: the ground station hears of it (PARAM_VALUE). */
+static void post_param(struct app *a, int index)
 {
-	return !strncmp(name, "HOV_", 4) || !strcmp(name, "KFT_EST") || !strcmp(name, "KFT_SD") ||
-	       !strcmp(name, "KFT_T") || !strcmp(name, "KFT_MEM");
+	struct app_event ev = {.kind = APP_EV_PARAM, .param_index = (uint16_t)index};
+	outbox_post(&a->outbox, &ev);
+}
+
+/* A live value for the ground station (NAMED_VALUE_FLOAT). */
+static void post_value(struct app *a, const char *name, float v)
+{
+	struct app_event ev = {.kind = APP_EV_VALUE, .value = v};
+	snprintf(ev.text, sizeof ev.text, "%s", name);
+	outbox_post(&a->outbox, &ev);
 }
 
 static void kft_init(struct app *a)
@@ -52,10 +58,10 @@ static void set_veh_kf(struct app *a, float kf, const char *why)
 	float old = a->p.veh_kf;
 	if (i < 0 || params_set(&a->p, (size_t)i, kf) != PARAM_OK)
 		return;
-	mav_param_value(a, (size_t)i);
+	post_param(a, i);
 	a->params_dirty = true;
 	a->save_pending = true;
-	app_status(a, MAV_SEVERITY_INFO, "VEH_KF %.2f -> %.2f N (%s)", (double)old, (double)kf, why);
+	app_status(a, APP_SEV_INFO, "VEH_KF %.2f -> %.2f N (%s)", (double)old, (double)kf, why);
 }
 
 /* k_f tracking in HOLD: the last step's throttles (what the plant answers now) against
@@ -80,14 +86,14 @@ static void kft_step(struct app *a, float dt, bool up)
 	set_result(a, "KFT_SD", sd);
 	set_result(a, "KFT_T", (float)a->fr.t_s);
 	set_result(a, "KFT_MEM", sc_to_float(t->mem_s));
-	mav_named_float(a, "KFT", k);
-	mav_named_float(a, "KFT_SD", sd);
+	post_value(a, "KFT", k);
+	post_value(a, "KFT_SD", sd);
 	if (a->mode != APP_HOLD)
 		return;
 	if (a->p.kft_apply >= 0.5f) {
 		int i = params_find("KFT_APPLY", 16);
 		if (i >= 0 && params_set(&a->p, (size_t)i, 0.0f) == PARAM_OK)
-			mav_param_value(a, (size_t)i);
+			post_param(a, i);
 		set_veh_kf(a, k, "tracked, on request");
 		return;
 	}
@@ -131,21 +137,21 @@ static void set_result(struct app *a, const char *name, float v)
 	int i = params_find(name, 16);
 	if (i < 0 || params_set(&a->p, (size_t)i, v) != PARAM_OK)
 		return;
-	mav_param_value(a, (size_t)i);
+	post_param(a, i);
+}
+
+void envelope_on_command(struct app *a, enum app_command cmd, app_origin origin)
+{
+	a->env.cmd = (uint8_t)cmd;
+	a->env.origin = origin;
 }
 
 void envelope_on_mode(struct app *a)
 {
 	struct envelope *e = &a->env;
 	e->phase_s = 0.0f;
-	if (a->mode == APP_TAKEOFF || a->mode == APP_LAND) {
-		/* the requester of the phase gets its final ACK if it fails */
-		e->cmd = a->mode == APP_TAKEOFF ? MAV_CMD_NAV_TAKEOFF : MAV_CMD_NAV_LAND;
-		e->sysid = a->mav.cmd_sysid;
-		e->compid = a->mav.cmd_compid;
-		if (a->mode == APP_TAKEOFF && e->hov.updates == 0)
-			envelope_init(a);   /* nothing learned yet: start from the current VEH_* */
-	}
+	if (a->mode == APP_TAKEOFF && e->hov.updates == 0)
+		envelope_init(a);   /* nothing learned yet: start from the current VEH_* */
 	if (a->mode != APP_HOLD)
 		return;
 	float u = sc_to_float(hover_est_u(&a->env.hov)), sd = sc_to_float(hover_est_sd(&a->env.hov));
@@ -154,7 +160,7 @@ void envelope_on_mode(struct app *a)
 	set_result(a, "HOV_THR_SD", sd);
 	set_result(a, "HOV_KF", kf);
 	set_result(a, "HOV_KF_SD", kf_sd);
-	app_status(a, MAV_SEVERITY_INFO, "Hover throttle %.4f+/-%.4f, k_f %.2f+/-%.2f N", (double)u, (double)sd,
+	app_status(a, APP_SEV_INFO, "Hover throttle %.4f+/-%.4f, k_f %.2f+/-%.2f N", (double)u, (double)sd,
 		   (double)kf, (double)kf_sd);
 }
 
@@ -170,9 +176,9 @@ void envelope_seed_kf(struct app *a, int id)
 	int i = params_find("VEH_KF", 16);
 	if (i < 0 || params_set(&a->p, (size_t)i, kf) != PARAM_OK)
 		return;
-	mav_param_value(a, (size_t)i);
+	post_param(a, i);
 	a->params_dirty = true;
-	app_status(a, MAV_SEVERITY_INFO, "VEH_KF %.2f -> %.2f N (hover throttle)", (double)old, (double)kf);
+	app_status(a, APP_SEV_INFO, "VEH_KF %.2f -> %.2f N (hover throttle)", (double)old, (double)kf);
 }
 
 /* Reasons fit one STATUSTEXT (50 characters); a second line says what was missing. */
@@ -206,13 +212,16 @@ void envelope_limits(struct app *a, float dt)
 	char why[64], more[64];
 	if (!phase_timeout(a, dt, why, sizeof why, more, sizeof more))
 		return;
-	app_status(a, MAV_SEVERITY_ERROR, "%s", why);
+	app_status(a, APP_SEV_ERROR, "%s", why);
 	if (more[0])
-		app_status(a, MAV_SEVERITY_ERROR, "%s", more);
-	if (a->env.cmd)
-		mav_command_ack(a, a->env.cmd, MAV_RESULT_FAILED, 0, a->env.sysid, a->env.compid);
+		app_status(a, APP_SEV_ERROR, "%s", more);
+	if (a->env.cmd && a->env.origin != APP_ORIGIN_NONE) {
+		struct app_event ev = {.kind = APP_EV_CMD_DONE, .cmd = a->env.cmd, .result = APP_FAILED,
+				       .origin = a->env.origin};
+		outbox_post(&a->outbox, &ev);
+	}
 	if (a->mode == APP_TAKEOFF) {
 		char w[8];
-		app_cmd_land(a, w, sizeof w);
+		app_cmd_land(a, APP_ORIGIN_NONE, w, sizeof w);   /* the take-off's origin has its answer */
 	}
 }

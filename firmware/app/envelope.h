@@ -5,7 +5,7 @@
  * line at every HOLD entry, optionally seeding VEH_KF before the rotor experiment),
  * k_f tracked in HOLD (core/kf_track: KFT_EST with its sd, the plant time it holds
  * for and its memory, published each second as parameters and NAMED_VALUE_FLOAT
- * "KFT"/"KFT_SD"; VEH_KF refreshed from it when it drifts beyond KFT_REFRESH after an
+ * events "KFT"/"KFT_SD"; VEH_KF refreshed from it when it drifts beyond KFT_REFRESH after an
  * identification, or on request with KFT_APPLY = 1), and the time limits of take-off
  * (HOLD entry) and landing with their reasons.
  *
@@ -20,6 +20,7 @@
 
 #include "hover_est.h"
 #include "kf_track.h"
+#include "outbox.h"
 
 struct app;
 
@@ -29,8 +30,8 @@ struct envelope {
 	float phase_s;      /* time in the current take-off or landing */
 	struct kf_track kft;/* k_f tracked in HOLD */
 	double kft_pub_t;   /* plant time of the last KFT_* publication */
-	uint16_t cmd;       /* the command that started the phase, for its final ACK */
-	uint8_t sysid, compid;
+	uint8_t cmd;        /* enum app_command that started the phase, for its final result */
+	app_origin origin;  /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
 };
 
 /* From the parameters: the estimator starts at m g / (8 VEH_KF). */
@@ -41,11 +42,12 @@ void envelope_init(struct app *a);
  * returns the hover thrust demand in the mixer's newtons, 8 VEH_KF u_h. */
 float envelope_hover_f(struct app *a, float dt, float cos_tilt);
 
-/* Parameters the ground station may read but not write (HOV_*, KFT_EST/SD/T/MEM). */
-bool envelope_param_readonly(const char *name);
-
 /* Take-off may end (HOLD) once the hover throttle is known to this relative sd. */
 bool envelope_hover_ready(const struct app *a);
+
+/* A take-off or landing command about to start its phase (APP_CMD_TAKEOFF or
+ * APP_CMD_LAND): who gets the final result should the phase run out of time. */
+void envelope_on_command(struct app *a, enum app_command cmd, app_origin origin);
 
 /* On every mode change: HOLD publishes HOV_* and says what the hover taught. */
 void envelope_on_mode(struct app *a);
@@ -55,9 +57,9 @@ void envelope_on_mode(struct app *a);
 void envelope_seed_kf(struct app *a, int id);
 
 /* Phase limits, once per control step: when take-off (NAV_TKO_TO) or landing
- * (NAV_LAND_TO) runs out, says why (STATUSTEXT, severity ERROR, naming what was
- * reached and what was missing), sends the final COMMAND_ACK FAILED to whoever
- * asked for the phase, and lands (a take-off) or keeps landing. */
+ * (NAV_LAND_TO) runs out, says why (status lines, severity ERROR, naming what was
+ * reached and what was missing), posts the command's final result APP_FAILED for
+ * whoever asked for the phase, and lands (a take-off) or keeps landing. */
 void envelope_limits(struct app *a, float dt);
 
 #endif /* OCTO_ENVELOPE_H */

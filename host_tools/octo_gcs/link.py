@@ -15,15 +15,8 @@ from pymavlink import mavutil  # noqa: E402  (MAVLINK20 must be set first)
 mavutil.set_dialect("common")
 mavlink = mavutil.mavlink
 
-DEFAULT_URL = "udpin:0.0.0.0:14550"
-
-# octo-fw's modes: HEARTBEAT.custom_mode, and the STATUSTEXT "Mode <NAME>" on each change
-MODES = {0: "DISARMED", 1: "IDLE", 2: "TAKEOFF", 3: "HOLD", 4: "EXPERIMENT", 5: "LAND"}
-MODE_NUMBERS = {v: k for k, v in MODES.items()}
-
-
-class GcsError(RuntimeError):
-    """A failure the user should read (no vehicle, no answer, refused write...)."""
+from .base import (DEFAULT_URL, FW_PARAMS, MODE_NUMBERS, MODES, GcsError,  # noqa: E402,F401
+                   fw_default)  # (re-exported)
 
 
 def f32(x):
