@@ -61,3 +61,20 @@ def test_impossible_vehicle_take_off_fails_with_reason(tmp_path):
     assert "not learned" in r.stderr
     rep, _ = failed_report(out)
     assert rep["failed_phase"] == "take-off"
+
+
+@pytest.mark.parametrize("param,step,reason", [
+    ("NAV_TKO_TO=1", "wait hold", "Take-off failed: NAV_TKO_TO 1 s"),
+    ("NAV_LAND_TO=1", "wait disarmed", "Landing failed: NAV_LAND_TO 1 s"),
+])
+def test_phase_limit_stops_the_in_process_mission_with_its_reason(tmp_path, param, step, reason):
+    """octo-sil: the firmware's final FAILED ends the waiting step at once; octo-sil exits
+    non-zero naming the step and the firmware's reason, and the logs are kept."""
+    out = tmp_path / "out"
+    r = gcs("mission", "--in-process", "--experiments", "none", "--param", param,
+            "--seed", random.randint(1, 999), "--out", out)
+    assert r.returncode != 0, r.stdout
+    assert re.search(rf"step \d+ '{step}' failed at t=[0-9.]+ s: {reason}", r.stderr), r.stderr
+    assert "still in mode" not in r.stderr   # not the step's own time limit
+    assert (out / "failed-run" / "octo-sil.log").exists()
+    assert not (out / "report.json").exists()
