@@ -513,12 +513,12 @@ def struct_sizes(obj):
 
 def app_core_state(sizes):
     """Core structs the app keeps (members `struct NAME x;` or `x[N]` of the structs in
-    firmware/app/app.h and experiment.h whose type is a core struct), as {header: [(label,
+    firmware/app/app.h, experiment.h and envelope.h whose type is a core struct), as {header: [(label,
     bytes)]}. Members of a `union { ... };` share their memory: the union counts as its
     largest member (an anonymous `struct { ... };` inside it as the sum of its members)."""
     out = {}
     member = re.compile(r"^\s+struct (\w+) \w+(?:\[(\d+)\])?;")
-    for h in ("app.h", "experiment.h"):
+    for h in ("app.h", "experiment.h", "envelope.h"):
         try:
             text = (REPO / "firmware/app" / h).read_text()
         except OSError:
@@ -599,7 +599,7 @@ def item_memory(rep, args):
                 linked = {"flash": (ct + cd) - (bt + bd), "ram": (cd + cb) - (bd + bb)}
             sizes = struct_sizes(ARM / v / "structs.o") if (ARM / v / "structs.o").exists() else {}
             owned = app_core_state(sizes)
-            ctl = sum(n for _, n in owned.get("app.h", []))
+            ctl = sum(n for h in ("app.h", "envelope.h") for _, n in owned.get(h, []))   # the app owns env
             idn = sum(n for _, n in owned.get("experiment.h", []))
             mods = module_sizes(lib)
             big = sorted(mods.items(), key=lambda kv: -kv[1])[:2]
