@@ -6,7 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include <common/mavlink.h>
+#include <octo/mavlink.h>
 
 #define DEG_F 0.017453292519943295f
 #define FIRST_DT_S (1.0f / 90.0f)

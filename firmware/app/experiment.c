@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include <common/mavlink.h>
+#include <octo/mavlink.h>
 
 enum phase_kind {
 	PK_NONE = 0,

@@ -5,9 +5,10 @@
 #include <stdio.h>
 #include <string.h>
 
-#include <common/mavlink.h>
+#include <octo/mavlink.h>
 
 #include "app.h"
+#include "mav_telem.h"
 
 #define CHAN MAVLINK_COMM_0
 #define PARAM_PACE_US 2000u        /* list streaming: one PARAM_VALUE per 2 ms */
@@ -20,6 +21,7 @@
  * status, which is itself static inside the generated helpers). */
 static mavlink_signing_t signing;
 static mavlink_signing_streams_t signing_streams;
+static struct mav_telem telem;   /* ground-station telemetry (mav_telem.c) */
 
 /* With signing on, only RADIO_STATUS may arrive unsigned (common practice). */
 static bool accept_unsigned(const mavlink_status_t *status, uint32_t msgid)
@@ -65,13 +67,20 @@ static uint32_t boot_ms(const struct app *a)
 	return (uint32_t)((hal_wall_us() - a->mav.boot_us) / 1000u);
 }
 
+static struct mav_telem_in telem_in(const struct app *a)
+{
+	float thr = 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++)
+		thr += a->thr[j] / (float)HAL_ROTORS;
+	return (struct mav_telem_in){boot_ms(a), &a->fr, a->have_step && a->link_ok, a->mode != APP_DISARMED,
+				     a->have_step && a->link_ok, (uint32_t)a->mode, thr, MAV_SYSID, MAV_COMPID, CHAN};
+}
+
 /* ---------------------------------------------------------------- telemetry table */
 
 static void pack_heartbeat(struct app *a, mavlink_message_t *msg)
 {
-	uint8_t base = MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
-	if (a->mode != APP_DISARMED)
-		base |= MAV_MODE_FLAG_SAFETY_ARMED;
+	uint8_t base = mav_telem_base_mode(a->mode != APP_DISARMED);
 	uint8_t status = MAV_STATE_STANDBY;
 	if (app_flying(a))
 		status = a->link_ok ? MAV_STATE_ACTIVE : MAV_STATE_CRITICAL;
@@ -126,7 +135,11 @@ static void pack_sys_status(struct app *a, mavlink_message_t *msg)
 	struct hal_link_stats ls;
 	hal_link_stats(&ls);
 	uint16_t drops = (uint16_t)(ls.dropped > 65535u ? 65535u : ls.dropped);
-	mavlink_msg_sys_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, 0, 0, 0, 0, UINT16_MAX, -1, -1, 0,
+	uint32_t present, enabled, health;
+	struct mav_telem_in in = telem_in(a);
+	mav_telem_sensors(&in, &present, &enabled, &health);
+	mavlink_msg_sys_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, present, enabled, health, 0, UINT16_MAX,
+					 -1, -1, 0,
 					 (uint16_t)(a->mav.rx_dropped > 65535u ? 65535u : a->mav.rx_dropped),
 					 drops, (uint16_t)(ls.foreign > 65535u ? 65535u : ls.foreign),
 					 (uint16_t)(a->mav.text_dropped > 65535u ? 65535u : a->mav.text_dropped),
@@ -196,6 +209,7 @@ void mav_init(struct mav *m, uint64_t now_us)
 	m->boot_us = now_us;
 	m->text_tokens = TEXT_BURST;
 	m->text_last_us = now_us;
+	mav_telem_init(&telem);
 	signing_setup(m);
 }
 
@@ -411,12 +425,33 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 			send_stream(a, s);
 			return;
 		}
+		r = id >= 0.0f && id < 65536.0f ? mav_telem_request_result(&telem, (uint32_t)id, prm[1]) : -1;
+		if (r >= 0) {
+			send_ack(cmd, (uint8_t)r, req);
+			if (r == MAV_RESULT_ACCEPTED) {
+				struct mav_telem_in in = telem_in(a);
+				mav_telem_request_send(&telem, &in, (uint32_t)id, prm[1], send_msg);
+			}
+			return;
+		}
 		r = MAV_RESULT_UNSUPPORTED;
 		break;
 	}
+	case MAV_CMD_GET_HOME_POSITION:
+		r = mav_telem_request_result(&telem, MAVLINK_MSG_ID_HOME_POSITION, 0.0f);
+		send_ack(cmd, (uint8_t)r, req);
+		if (r == MAV_RESULT_ACCEPTED) {
+			struct mav_telem_in in = telem_in(a);
+			mav_telem_request_send(&telem, &in, MAVLINK_MSG_ID_HOME_POSITION, 0.0f, send_msg);
+		}
+		return;
 	case MAV_CMD_SET_MESSAGE_INTERVAL: {
 		int s = prm[0] >= 0.0f && prm[0] < 65536.0f ? stream_index((uint32_t)prm[0]) : -1;
-		if (s < 0) {
+		int t = s < 0 && prm[0] >= 0.0f && prm[0] < 65536.0f
+				? mav_telem_set_interval(&telem, (uint32_t)prm[0], prm[1]) : -1;
+		if (t >= 0) {
+			r = t;
+		} else if (s < 0) {
 			r = MAV_RESULT_UNSUPPORTED;
 		} else if (!isfinite(prm[1])) {
 			r = MAV_RESULT_DENIED;
@@ -433,7 +468,7 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 		break;
 	}
 	default:
-		r = MAV_RESULT_UNSUPPORTED;   /* including GET_HOME_POSITION: no home here */
+		r = MAV_RESULT_UNSUPPORTED;
 		break;
 	}
 	send_ack(cmd, (uint8_t)r, req);
@@ -566,6 +601,8 @@ size_t mav_receive(struct app *a, const uint8_t *buf, size_t len)
 void mav_tick(struct app *a, uint64_t now_us)
 {
 	struct mav *m = &a->mav;
+	struct mav_telem_in in = telem_in(a);
+	mav_telem_tick(&telem, &in, now_us, send_msg);
 	for (int i = 0; i < MAV_N_STREAMS; i++) {
 		if (m->interval_us[i] < 0)
 			continue;

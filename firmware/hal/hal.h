@@ -39,6 +39,7 @@ enum {
 	HAL_FRAME_THRUST = 1u << 4,   /* row 35 */
 	HAL_FRAME_TORQUE = 1u << 5,   /* row 36 */
 	HAL_FRAME_THR_CMD = 1u << 6,  /* row 25 (echo of the throttle command) */
+	HAL_FRAME_GLOBAL = 1u << 7,   /* row 20 (latitude, longitude, altitude MSL) */
 };
 #define HAL_FRAME_NEEDED (HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_POS)
 
@@ -54,6 +55,8 @@ struct hal_sensor_frame {
 	float rotor_thrust_n[HAL_ROTORS];    /* measured thrust f_j, N (row 35) */
 	float rotor_torque_nm[HAL_ROTORS];   /* measured reaction torque tau_j, N m (row 36) */
 	float thr_cmd_echo[HAL_ROTORS];      /* throttle command as the plant saw it (row 25) */
+	double lat_deg, lon_deg;             /* simulator's position, WGS84 degrees (row 20) */
+	float alt_msl_m;                     /* altitude above mean sea level, m (row 20) */
 };
 
 /* ---- time */

@@ -1,4 +1,4 @@
-"""The ground station's MAVLink link to one vehicle (pymavlink, MAVLink 2, common.xml).
+"""The ground station's MAVLink link to one vehicle (pymavlink, MAVLink 2, dialect octo).
 
 Everything here goes over MAVLink as any ground station would: heartbeat, the
 parameter protocol (with the retries and checks QGroundControl and MAVProxy make),
@@ -9,10 +9,14 @@ import os
 import struct
 import time
 
+# The project's dialect (firmware/mavlink/octo.xml: common.xml plus standard modes and
+# component metadata), installed into pymavlink by `make`; MAVLINK_DIALECT overrides
+# it as it does for pymavlink's own tools (read before the import, which sets it).
+DIALECT = os.environ.get("MAVLINK_DIALECT") or "octo"
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil  # noqa: E402  (MAVLINK20 must be set first)
 
-mavutil.set_dialect("common")
+mavutil.set_dialect(DIALECT)
 mavlink = mavutil.mavlink
 
 DEFAULT_URL = "udpin:0.0.0.0:14550"

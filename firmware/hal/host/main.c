@@ -20,7 +20,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include <common/mavlink.h>
+#include <octo/mavlink.h>
 
 #include "app.h"
 #include "hal.h"
