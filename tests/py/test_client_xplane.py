@@ -162,3 +162,43 @@ def test_pyxpudpserver_reads_data_rref_sets_dref_and_follows_the_beacon(launch, 
     launch("octo-sim", *sim_args, "--vehicle", vehicle(tmp_path, "b", 500.0))
     assert wait_until(lambda: client.XPalive, 5.0), client.statusMsg
     assert wait_until(lambda: abs(client.getData(local_y) - 500.0) < 0.5, 5.0), client.getData(local_y)
+
+
+def test_fw_finds_xplane_by_its_beacon(tmp_path):
+    """octo-fw --xplane auto takes X-Plane's host and port from the first beacon and
+    says which X-Plane it found; then the link works (the version is read back).
+    Run in a private network namespace, where no other simulator's beacon arrives."""
+    import shutil
+    import subprocess
+
+    from conftest import binary
+    unshare = shutil.which("unshare")
+    if not unshare or subprocess.run([unshare, "-n", "true"], capture_output=True).returncode != 0:
+        pytest.skip("needs unshare -n (a private network namespace)")
+    sim, fw, log = binary("octo-sim"), binary("octo-fw"), tmp_path / "fw.stderr"
+    script = (
+        "ip link set lo up && ip route add 224.0.0.0/4 dev lo && "
+        f'{{ "{sim}" --xp-port 47300 --data-out 127.0.0.1:47301 --computer-name beacon-test '
+        "--xplane-version 11 --duration 4 2>/dev/null & } && "
+        f'{{ "{fw}" --xplane auto --xp-listen 47301 --mavlink-listen 47302 --gcs 127.0.0.1:47303 '
+        f'2>"{log}" & }} && FW=$! && wait %1; kill -TERM $FW; wait $FW')
+    r = subprocess.run([unshare, "-n", "sh", "-c", script], capture_output=True, text=True, timeout=30)
+    out = log.read_text() if log.exists() else ""
+    assert r.returncode == 0, (r.stderr, out)
+    assert 'found X-Plane 11.55.0 (beacon 1.1) on "beacon-test" at 127.0.0.1:47300' in out, out
+    assert "X-Plane version 115500" in out, out
+
+
+def test_fw_auto_without_beacon_says_why(tmp_path):
+    import shutil
+    import subprocess
+
+    from conftest import binary
+    unshare = shutil.which("unshare")
+    if not unshare or subprocess.run([unshare, "-n", "true"], capture_output=True).returncode != 0:
+        pytest.skip("needs unshare -n (a private network namespace)")
+    r = subprocess.run([unshare, "-n", "sh", "-c", "ip link set lo up && ip route add 224.0.0.0/4 dev lo && "
+                        f'exec "{binary("octo-fw")}" --xplane auto --xp-listen 47301'],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 1
+    assert "no X-Plane beacon within 30 s" in r.stderr, r.stderr

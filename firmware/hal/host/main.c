@@ -26,6 +26,7 @@
 #include "hal.h"
 #include "host.h"
 #include "params.h"
+#include "xp_beacon.h"
 #include "xp_client.h"
 
 static struct xp_client xp;
@@ -160,8 +161,9 @@ static const char usage[] =
 	"  the autopilot as a software-in-the-loop process: flies X-Plane 11/12 (or octo-sim)\n"
 	"  over X-Plane's UDP protocol, talks MAVLink 2 to a ground station\n"
 	"\n"
-	"  --xplane HOST:PORT       where X-Plane receives (127.0.0.1:49000); only datagrams\n"
-	"                           from HOST are accepted\n"
+	"  --xplane HOST:PORT|auto  where X-Plane receives (127.0.0.1:49000); only datagrams\n"
+	"                           from HOST are accepted. auto: host and port from the first\n"
+	"                           X-Plane beacon (BECN on 239.255.1.1:49707; waits up to 30 s)\n"
 	"  --xp-listen PORT         X-Plane Data Output target port (49005)\n"
 	"  --mavlink-listen PORT    MAVLink UDP port (14580)\n"
 	"  --gcs HOST:PORT          ground station (127.0.0.1:14550); also learned from the\n"
@@ -278,12 +280,26 @@ static int open_mavlink(uint16_t port)
 	return fd;
 }
 
+/* --xplane auto: X-Plane's address from its first beacon, said aloud. */
+static int xp_find(struct sockaddr_in *xplane)
+{
+	struct xp_beacon b;
+	if (xp_beacon_find(30.0, &stop, &b))
+		return -1;
+	hal_report("found X-Plane %d.%d.%d (beacon %u.%u) on \"%s\" at %s:%u", (int)(b.version / 10000),
+		   (int)(b.version / 100 % 100), (int)(b.version % 100), b.major, b.minor, b.name,
+		   inet_ntoa(b.addr.sin_addr), ntohs(b.addr.sin_port));
+	*xplane = b.addr;
+	return 0;
+}
+
 int main(int argc, char **argv)
 {
 	struct sockaddr_in xplane;
 	uint16_t xp_listen = 49005, mav_listen = 14580;
 	const char *params_path = NULL, *lcm_url = NULL, *signing_key_path = NULL;
 	enum xp_actuation act = XP_ACT_DREF;
+	bool xplane_auto = false;
 	if (parse_hostport("--xplane", "127.0.0.1:49000", &xplane) ||
 	    parse_hostport("--gcs", "127.0.0.1:14550", &gcs))
 		return 1;
@@ -313,8 +329,12 @@ int main(int argc, char **argv)
 		}
 		const char *v = argv[++i];
 		int bad = 0;
-		if (!strcmp(f, "--xplane"))
+		if (!strcmp(f, "--xplane") && !strcmp(v, "auto"))
+			xplane_auto = true;
+		else if (!strcmp(f, "--xplane")) {
 			bad = parse_hostport(f, v, &xplane);
+			xplane_auto = false;
+		}
 		else if (!strcmp(f, "--gcs"))
 			bad = parse_hostport(f, v, &gcs);
 		else if (!strcmp(f, "--xp-listen"))
@@ -352,6 +372,8 @@ int main(int argc, char **argv)
 
 	param_file_set_path(params_path);
 	if (lcm_url && lcm_log_open(lcm_url))
+		return 1;
+	if (xplane_auto && xp_find(&xplane))
 		return 1;
 	if (xp_client_open(&xp, xp_listen, &xplane, act))
 		return 1;
