@@ -8,6 +8,7 @@
 #include <octo/mavlink.h>
 
 #include "app.h"
+#include "mav_ftp.h"
 #include "mav_telem.h"
 
 #define CHAN MAVLINK_COMM_0
@@ -210,6 +211,7 @@ void mav_init(struct mav *m, uint64_t now_us)
 	m->text_tokens = TEXT_BURST;
 	m->text_last_us = now_us;
 	mav_telem_init(&telem);
+	(void)mav_ftp_init();   /* without metadata, FTP NAKs everything and 395/397 are UNSUPPORTED */
 	signing_setup(m);
 }
 
@@ -425,6 +427,12 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 			send_stream(a, s);
 			return;
 		}
+		if (id >= 0.0f && id < 65536.0f && mav_ftp_is_metadata_msg((uint32_t)id)) {
+			send_ack(cmd, MAV_RESULT_ACCEPTED, req);
+			struct mav_ftp_link l = {MAV_SYSID, MAV_COMPID, CHAN, req->sysid, req->compid, boot_ms(a)};
+			mav_ftp_send_metadata_msg(&l, (uint32_t)id, send_msg);
+			return;
+		}
 		r = id >= 0.0f && id < 65536.0f ? mav_telem_request_result(&telem, (uint32_t)id, prm[1]) : -1;
 		if (r >= 0) {
 			send_ack(cmd, (uint8_t)r, req);
@@ -478,26 +486,12 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 
 static void handle_ftp(struct app *a, const mavlink_message_t *msg)
 {
-	(void)a;
 	mavlink_file_transfer_protocol_t ftp;
 	mavlink_msg_file_transfer_protocol_decode(msg, &ftp);
 	if (!for_us(ftp.target_system, ftp.target_component))
 		return;
-	uint8_t p[MAVLINK_MSG_FILE_TRANSFER_PROTOCOL_FIELD_PAYLOAD_LEN];
-	memset(p, 0, sizeof p);
-	uint16_t seq = (uint16_t)(ftp.payload[0] | ftp.payload[1] << 8);
-	seq = (uint16_t)(seq + 1);
-	p[0] = (uint8_t)seq;
-	p[1] = (uint8_t)(seq >> 8);
-	p[2] = ftp.payload[2];     /* session */
-	p[3] = 129;                /* opcode: NAK */
-	p[4] = 1;                  /* size: one error byte */
-	p[5] = ftp.payload[3];     /* req_opcode */
-	p[12] = 10;                /* error: FileNotFound */
-	mavlink_message_t out;
-	mavlink_msg_file_transfer_protocol_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &out, 0, msg->sysid,
-						     msg->compid, p);
-	send_msg(&out);
+	struct mav_ftp_link l = {MAV_SYSID, MAV_COMPID, CHAN, msg->sysid, msg->compid, boot_ms(a)};
+	mav_ftp_handle(&l, ftp.payload, send_msg);
 }
 
 static void handle(struct app *a, const mavlink_message_t *msg)
