@@ -21,8 +21,12 @@ def beacon_socket():
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
     s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     s.bind(("", BECN_PORT))
-    s.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP,
-                 socket.inet_aton(GROUP) + socket.inet_aton("0.0.0.0"))
+    try:
+        s.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP,
+                     socket.inet_aton(GROUP) + socket.inet_aton("0.0.0.0"))
+    except OSError as e:   # no route to the group: nothing on this host can hear a beacon
+        s.close()
+        pytest.skip(f"this host cannot join multicast {GROUP}: {e}")
     s.settimeout(0.2)
     return s
 
@@ -124,6 +128,7 @@ def test_pyxpudpserver_reads_data_rref_sets_dref_and_follows_the_beacon(launch, 
     xp_port, data_port, name = port(), port(), unique_name()
     sim_args = ["--xp-port", xp_port, "--data-out", f"127.0.0.1:{data_port}", "--rows", "17,20,21",
                 "--rate", "30", "--xplane-version", "12", "--computer-name", name]
+    beacon_socket().close()   # skips where multicast cannot be joined (the library needs it)
     sim = launch("octo-sim", *sim_args, "--vehicle", vehicle(tmp_path, "a", 300.0))
     client.initialiseUDP(("127.0.0.1", data_port), ("127.0.0.1", xp_port), name)
     client.start()
