@@ -187,7 +187,7 @@ void XpInput::cmnd(const uint8_t *p, size_t len)
 	std::string path;
 	const size_t n = len - xp::kHeader;
 	std::vector<uint8_t> field(p + xp::kHeader, p + len);
-	if (!std::memchr(field.data(), 0, n))
+	if (n == 0 || !std::memchr(field.data(), 0, n))
 		field.push_back(0);
 	if (!xp::field_path(field.data(), field.size(), path)) {
 		c_.inc(Counters::RxUnterminated);
