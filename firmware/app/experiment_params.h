@@ -5,8 +5,9 @@
  *
  * Kept beside experiment.c so that its defaults and these stay one edit apart:
  * a row here overrides the fallback default that experiment.c's prm() uses.
- * Append only (the order is the MAVLink index). Results are read-only
- * (exp_param_readonly) and written by the app when an experiment posts them.
+ * Append only (the order is the MAVLink index). The settings are locked while
+ * an experiment runs; the results, from ID_KF_EST on, are read-only
+ * (PARAM_READONLY) and written by the app when an experiment posts them.
  */
 PARAM(ID_EXC_KIND,  id_exc_kind,  1.0f,    0.0f,    2.0f,    "",       "Rotor excitation: 0 uniform (the paper's delta_1), 1 PRBS, 2 multisine")
 PARAM(ID_EXC_AMP,   id_exc_amp,   0.04f,   0.0f,    0.3f,    "",       "Rotor excitation amplitude (throttle)")
@@ -20,6 +21,8 @@ PARAM(ID_INR_AMP,   id_inr_amp,   0.8f,    0.0f,    5.0f,    "N m",    "Torque e
 PARAM(ID_INR_TIME,  id_inr_time,  10.0f,   1.0f,    300.0f,  "s",      "Duration of each inertia experiment")
 PARAM(ID_VAL_TIME,  id_val_time,  5.0f,    1.0f,    300.0f,  "s",      "Duration of the validation experiment")
 PARAM(ID_RSD_MAX,   id_rsd_max,   0.02f,   0.0001f, 1.0f,    "",       "Acceptance: largest relative standard deviation of an estimate")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS (PARAM_LOCKED | PARAM_READONLY)
 PARAM(ID_KF_EST,    id_kf_est,    0.0f,    -1e9f,   1e9f,    "N",      "Result (read-only): k_f, lag-aware estimator")
 PARAM(ID_KF_SD,     id_kf_sd,     0.0f,    -1e9f,   1e9f,    "N",      "Result (read-only): standard deviation of ID_KF_EST")
 PARAM(ID_KF_PLAIN,  id_kf_plain,  0.0f,    -1e9f,   1e9f,    "N",      "Result (read-only): k_f, the paper's plain estimator (eq. 20)")

@@ -5,6 +5,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include <octo/mavlink.h>
+
 #include "params.h"
 
 /* MAVLink FTP payload layout and codes (MAVLink's FTP protocol) */
@@ -19,11 +21,6 @@ enum { ERR_FAIL = 1, ERR_INVALID_SESSION = 4, ERR_EOF = 6, ERR_UNKNOWN_COMMAND =
 #define PARAM_PATH "octo/param.json"
 #define URI_PREFIX "mftp://"
 
-static char general[1024];
-static char param_json[32768];
-static uint32_t general_len, param_len, general_crc, param_crc;
-static bool session_open;
-static int session_file = -1;   /* 0 general, 1 parameters */
 
 /* CRC-32 (IEEE 802.3, as zlib computes it) */
 static uint32_t crc32_of(const void *data, size_t n)
@@ -75,9 +72,10 @@ static void put_str(struct out *o, const char *s)
 	put(o, "\"");
 }
 
-bool mav_ftp_init(void)
+bool mav_ftp_init(struct mav_ftp *f)
 {
-	struct out p = {param_json, sizeof param_json, 0, false};
+	memset(f, 0, sizeof *f);
+	struct out p = {f->param_json, sizeof f->param_json, 0, false};
 	put(&p, "{\"version\": 1, \"parameters\": [");
 	for (size_t i = 0; i < param_count; i++) {
 		const struct param_def *d = &param_defs[i];
@@ -102,33 +100,33 @@ bool mav_ftp_init(void)
 		put(&p, "}");
 	}
 	put(&p, "\n]}\n");
-	param_len = p.full ? 0 : (uint32_t)p.len;
-	param_crc = crc32_of(param_json, param_len);
+	f->param_len = p.full ? 0 : (uint32_t)p.len;
+	f->param_crc = crc32_of(f->param_json, f->param_len);
 
-	struct out g = {general, sizeof general, 0, false};
+	struct out g = {f->general, sizeof f->general, 0, false};
 	put(&g, "{\"version\": 1, \"vendorName\": \"Octo-SIL\", \"modelName\": \"octo-fw\", "
 		"\"metadataTypes\": [{\"type\": %d, \"uri\": \"" URI_PREFIX PARAM_PATH "\", \"fileCrc\": %lu}]}\n",
-	    COMP_METADATA_TYPE_PARAMETER, (unsigned long)param_crc);
-	general_len = g.full || p.full ? 0 : (uint32_t)g.len;
-	general_crc = crc32_of(general, general_len);
-	session_open = false;
-	session_file = -1;
-	return general_len > 0;
+	    COMP_METADATA_TYPE_PARAMETER, (unsigned long)f->param_crc);
+	f->general_len = g.full || p.full ? 0 : (uint32_t)g.len;
+	f->general_crc = crc32_of(f->general, f->general_len);
+	f->session_open = false;
+	f->session_file = -1;
+	return f->general_len > 0;
 }
 
-const char *mav_ftp_file(const char *path, uint32_t *len, uint32_t *crc)
+const char *mav_ftp_file(const struct mav_ftp *f, const char *path, uint32_t *len, uint32_t *crc)
 {
 	while (*path == '/')
 		path++;
-	if (!strcmp(path, GENERAL_PATH) && general_len) {
-		*len = general_len;
-		*crc = general_crc;
-		return general;
+	if (!strcmp(path, GENERAL_PATH) && f->general_len) {
+		*len = f->general_len;
+		*crc = f->general_crc;
+		return f->general;
 	}
-	if (!strcmp(path, PARAM_PATH) && param_len) {
-		*len = param_len;
-		*crc = param_crc;
-		return param_json;
+	if (!strcmp(path, PARAM_PATH) && f->param_len) {
+		*len = f->param_len;
+		*crc = f->param_crc;
+		return f->param_json;
 	}
 	return NULL;
 }
@@ -154,7 +152,7 @@ static void reply(const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq
 	mavlink_message_t msg;
 	mavlink_msg_file_transfer_protocol_pack_chan(l->sysid, l->compid, l->chan, &msg, 0, l->to_sysid,
 						     l->to_compid, rsp);
-	send(&msg);
+	send(l->ctx, &msg);
 }
 
 static void nak(const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, uint8_t err,
@@ -168,18 +166,18 @@ static void nak(const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, 
 	reply(l, req, seq, rsp, send);
 }
 
-static const char *session_data(uint32_t *len)
+static const char *session_data(const struct mav_ftp *f, uint32_t *len)
 {
 	uint32_t crc;
-	return mav_ftp_file(session_file == 0 ? GENERAL_PATH : PARAM_PATH, len, &crc);
+	return mav_ftp_file(f, f->session_file == 0 ? GENERAL_PATH : PARAM_PATH, len, &crc);
 }
 
 /* One ACK carrying the file's bytes from `offset`; returns how many. */
-static uint32_t send_chunk(const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, uint32_t offset,
+static uint32_t send_chunk(const struct mav_ftp *f, const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, uint32_t offset,
 			   uint32_t want, bool burst, mav_ftp_send_fn send)
 {
 	uint32_t len = 0;
-	const char *data = session_data(&len);
+	const char *data = session_data(f, &len);
 	uint32_t n = len - offset < want ? len - offset : want;
 	uint8_t rsp[MAVLINK_MSG_FILE_TRANSFER_PROTOCOL_FIELD_PAYLOAD_LEN];
 	memset(rsp, 0, sizeof rsp);
@@ -192,7 +190,7 @@ static uint32_t send_chunk(const struct mav_ftp_link *l, const uint8_t *req, uin
 	return n;
 }
 
-void mav_ftp_handle(const struct mav_ftp_link *l, const uint8_t *req, mav_ftp_send_fn send)
+void mav_ftp_handle(struct mav_ftp *f, const struct mav_ftp_link *l, const uint8_t *req, mav_ftp_send_fn send)
 {
 	const uint16_t seq = (uint16_t)((req[P_SEQ] | req[P_SEQ + 1] << 8) + 1);
 	const uint8_t op = req[P_OPCODE];
@@ -205,17 +203,17 @@ void mav_ftp_handle(const struct mav_ftp_link *l, const uint8_t *req, mav_ftp_se
 		memcpy(path, req + P_DATA, n);
 		path[n] = 0;
 		uint32_t len, crc;
-		const char *f = mav_ftp_file(path, &len, &crc);
-		if (!f) {
+		const char *file = mav_ftp_file(f, path, &len, &crc);
+		if (!file) {
 			nak(l, req, seq, ERR_FILE_NOT_FOUND, send);
 			return;
 		}
 		/* one session: a new open replaces it (a ground station that lost the
 		 * previous answer opens again) */
-		session_open = true;
+		f->session_open = true;
 		while (*path == '/')
 			memmove(path, path + 1, strlen(path));
-		session_file = !strcmp(path, GENERAL_PATH) ? 0 : 1;
+		f->session_file = !strcmp(path, GENERAL_PATH) ? 0 : 1;
 		rsp[P_OPCODE] = OP_ACK;
 		rsp[P_SIZE] = 4;
 		set32(rsp + P_DATA, len);
@@ -227,12 +225,12 @@ void mav_ftp_handle(const struct mav_ftp_link *l, const uint8_t *req, mav_ftp_se
 	}
 	case OP_READ:
 	case OP_BURST_READ: {
-		if (!session_open || req[P_SESSION] != 0) {
+		if (!f->session_open || req[P_SESSION] != 0) {
 			nak(l, req, seq, ERR_INVALID_SESSION, send);
 			return;
 		}
 		uint32_t len = 0;
-		(void)session_data(&len);
+		(void)session_data(f, &len);
 		uint32_t offset = get32(req + P_OFFSET);
 		if (offset >= len) {
 			nak(l, req, seq, ERR_EOF, send);
@@ -240,12 +238,12 @@ void mav_ftp_handle(const struct mav_ftp_link *l, const uint8_t *req, mav_ftp_se
 		}
 		if (op == OP_READ) {
 			uint32_t want = req[P_SIZE] && req[P_SIZE] < FTP_DATA_MAX ? req[P_SIZE] : FTP_DATA_MAX;
-			send_chunk(l, req, seq, offset, want, false, send);
+			send_chunk(f, l, req, seq, offset, want, false, send);
 			return;
 		}
 		uint16_t s = seq;
 		while (offset < len)
-			offset += send_chunk(l, req, s++, offset, FTP_DATA_MAX, true, send);
+			offset += send_chunk(f, l, req, s++, offset, FTP_DATA_MAX, true, send);
 		return;
 	}
 	case OP_CRC32: {
@@ -254,7 +252,7 @@ void mav_ftp_handle(const struct mav_ftp_link *l, const uint8_t *req, mav_ftp_se
 		memcpy(path, req + P_DATA, n);
 		path[n] = 0;
 		uint32_t len, crc;
-		if (!mav_ftp_file(path, &len, &crc)) {
+		if (!mav_ftp_file(f, path, &len, &crc)) {
 			nak(l, req, seq, ERR_FILE_NOT_FOUND, send);
 			return;
 		}
@@ -266,12 +264,12 @@ void mav_ftp_handle(const struct mav_ftp_link *l, const uint8_t *req, mav_ftp_se
 	}
 	case OP_TERMINATE:
 	case OP_RESET:
-		if (op == OP_TERMINATE && (!session_open || req[P_SESSION] != 0)) {
+		if (op == OP_TERMINATE && (!f->session_open || req[P_SESSION] != 0)) {
 			nak(l, req, seq, ERR_INVALID_SESSION, send);
 			return;
 		}
-		session_open = false;
-		session_file = -1;
+		f->session_open = false;
+		f->session_file = -1;
 		rsp[P_OPCODE] = OP_ACK;
 		reply(l, req, seq, rsp, send);
 		return;
@@ -292,13 +290,14 @@ void mav_ftp_handle(const struct mav_ftp_link *l, const uint8_t *req, mav_ftp_se
 	}
 }
 
-bool mav_ftp_is_metadata_msg(uint32_t msgid)
+bool mav_ftp_is_metadata_msg(const struct mav_ftp *f, uint32_t msgid)
 {
 	return (msgid == MAVLINK_MSG_ID_COMPONENT_METADATA || msgid == MAVLINK_MSG_ID_COMPONENT_INFORMATION) &&
-	       general_len > 0;
+	       f->general_len > 0;
 }
 
-void mav_ftp_send_metadata_msg(const struct mav_ftp_link *l, uint32_t msgid, mav_ftp_send_fn send)
+void mav_ftp_send_metadata_msg(const struct mav_ftp *f, const struct mav_ftp_link *l, uint32_t msgid,
+			       mav_ftp_send_fn send)
 {
 	char uri[MAVLINK_MSG_COMPONENT_METADATA_FIELD_URI_LEN];   /* zero-filled, full size */
 	memset(uri, 0, sizeof uri);
@@ -306,12 +305,12 @@ void mav_ftp_send_metadata_msg(const struct mav_ftp_link *l, uint32_t msgid, mav
 	mavlink_message_t msg;
 	if (msgid == MAVLINK_MSG_ID_COMPONENT_METADATA) {
 		mavlink_msg_component_metadata_pack_chan(l->sysid, l->compid, l->chan, &msg, l->time_boot_ms,
-							 general_crc, uri);
+							 f->general_crc, uri);
 	} else {
 		char none[MAVLINK_MSG_COMPONENT_INFORMATION_FIELD_PERIPHERALS_METADATA_URI_LEN];
 		memset(none, 0, sizeof none);
 		mavlink_msg_component_information_pack_chan(l->sysid, l->compid, l->chan, &msg, l->time_boot_ms,
-							    general_crc, uri, 0, none);
+							    f->general_crc, uri, 0, none);
 	}
-	send(&msg);
+	send(l->ctx, &msg);
 }

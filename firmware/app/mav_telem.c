@@ -4,6 +4,8 @@
 #include <math.h>
 #include <string.h>
 
+#include <octo/mavlink.h>
+
 #include "app.h"
 
 #define EARTH_R_M 6371008.8          /* mean radius: flat earth around the reference */
@@ -173,7 +175,7 @@ static void send_home(const struct mav_telem *t, const struct mav_telem_in *in, 
 					    t->home_lon_e7, t->home_alt_mm, t->home_ned[0], t->home_ned[1],
 					    t->home_ned[2], q, 0.0f, 0.0f, 0.0f,
 					    (uint64_t)in->time_boot_ms * 1000u);
-	send(&msg);
+	send(in->ctx, &msg);
 }
 
 static void send_current_mode(const struct mav_telem_in *in, mav_telem_send_fn send)
@@ -181,7 +183,7 @@ static void send_current_mode(const struct mav_telem_in *in, mav_telem_send_fn s
 	mavlink_message_t msg;
 	mavlink_msg_current_mode_pack_chan(in->sysid, in->compid, in->chan, &msg, standard_mode(in->mode),
 					   in->mode, in->mode);
-	send(&msg);
+	send(in->ctx, &msg);
 }
 
 static void send_available_mode(const struct mav_telem_in *in, size_t i, mav_telem_send_fn send)
@@ -195,7 +197,7 @@ static void send_available_mode(const struct mav_telem_in *in, size_t i, mav_tel
 	mavlink_msg_available_modes_pack_chan(in->sysid, in->compid, in->chan, &msg, (uint8_t)N_MODES,
 					      (uint8_t)(i + 1), modes[i].standard, modes[i].custom,
 					      modes[i].properties, name);
-	send(&msg);
+	send(in->ctx, &msg);
 }
 
 static bool send_stream(struct mav_telem *t, const struct mav_telem_in *in, int s, mav_telem_send_fn send)
@@ -285,7 +287,7 @@ static bool send_stream(struct mav_telem *t, const struct mav_telem_in *in, int 
 	default:
 		return false;
 	}
-	send(&msg);
+	send(in->ctx, &msg);
 	return true;
 }
 

@@ -5,7 +5,7 @@
  * It reads only what it is given (struct mav_telem_in, rebuilt by the caller
  * for every call) and sends through a callback, so it does not depend on the
  * application's structure. Its own state (the geographic reference, home, the
- * stream intervals) lives in struct mav_telem, owned by the caller.
+ * stream intervals) lives in struct mav_telem, a member of struct mav.
  */
 #ifndef OCTO_MAV_TELEM_H
 #define OCTO_MAV_TELEM_H
@@ -13,13 +13,16 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include <octo/mavlink.h>
-
 #include "hal.h"
 
 #define MAV_TELEM_N_STREAMS 8
 
-typedef void (*mav_telem_send_fn)(const mavlink_message_t *msg);
+/* The generated headers' message type, declared without them: struct mav (and
+ * so app.h) embeds this module's state, and the app does not see MAVLink. */
+typedef struct __mavlink_message mavlink_message_t;
+
+/* Sends one message; ctx is mav_telem_in.ctx. */
+typedef void (*mav_telem_send_fn)(const void *ctx, const mavlink_message_t *msg);
 
 struct mav_telem_in {
 	uint32_t time_boot_ms;
@@ -30,6 +33,7 @@ struct mav_telem_in {
 	uint32_t mode;                      /* enum app_mode, also HEARTBEAT.custom_mode */
 	float throttle;                     /* mean rotor throttle, 0..1 */
 	uint8_t sysid, compid, chan;
+	const void *ctx;                    /* handed back to the send callback */
 };
 
 struct mav_telem {

@@ -5,6 +5,7 @@
 #include <arpa/inet.h>
 #include <errno.h>
 #include <poll.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/socket.h>
@@ -62,6 +63,17 @@ static int is_local(struct in_addr addr)
 	return ok;
 }
 
+static bool stop_pending(const sigset_t *stop_set)
+{
+	sigset_t pending;
+	if (sigpending(&pending))
+		return false;
+	for (int sig = 1; sig < NSIG; sig++)
+		if (sigismember(stop_set, sig) == 1 && sigismember(&pending, sig) == 1)
+			return true;
+	return false;
+}
+
 static double now_s(void)
 {
 	struct timespec ts;
@@ -69,7 +81,7 @@ static double now_s(void)
 	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
-int xp_beacon_find(double timeout_s, volatile sig_atomic_t *stop, struct xp_beacon *out)
+int xp_beacon_find(double timeout_s, const sigset_t *stop_set, struct xp_beacon *out)
 {
 	int fd = socket(AF_INET, SOCK_DGRAM, 0);
 	if (fd < 0) {
@@ -98,7 +110,8 @@ int xp_beacon_find(double timeout_s, volatile sig_atomic_t *stop, struct xp_beac
 		BECN_PORT);
 	const double deadline = now_s() + timeout_s;
 	int found = -1;
-	while (found < 0 && !*stop) {
+	bool stop = false;
+	while (found < 0 && !(stop = stop_pending(stop_set))) {
 		double left = deadline - now_s();
 		if (left <= 0.0)
 			break;
@@ -124,7 +137,7 @@ int xp_beacon_find(double timeout_s, volatile sig_atomic_t *stop, struct xp_beac
 		}
 	}
 	close(fd);
-	if (found < 0 && !*stop)
+	if (found < 0 && !stop)
 		fprintf(stderr, "octo-fw: --xplane auto: no X-Plane beacon within %.0f s (is X-Plane running on "
 				"this network, with multicast reaching this host?)\n", timeout_s);
 	return found;

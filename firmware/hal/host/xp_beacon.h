@@ -25,8 +25,9 @@ struct xp_beacon {
 /* Decodes one datagram: 0 when it is an X-Plane master's beacon, -1 otherwise. */
 int xp_beacon_decode(const uint8_t *p, size_t n, struct xp_beacon *out);
 
-/* Waits up to timeout_s (or until *stop) for the first X-Plane master's beacon.
+/* Waits up to timeout_s for the first X-Plane master's beacon, or until one of
+ * the (blocked) signals in stop_set is pending (it stays pending for the caller).
  * 0 with *out filled, -1 on timeout, stop or a socket error (reason on stderr). */
-int xp_beacon_find(double timeout_s, volatile sig_atomic_t *stop, struct xp_beacon *out);
+int xp_beacon_find(double timeout_s, const sigset_t *stop_set, struct xp_beacon *out);
 
 #endif
