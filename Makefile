@@ -101,6 +101,7 @@ $(LCM_STAMP): $(LCM_TYPES) $(VENV_STAMP) $(B)/config.mk
 # ---------------------------------------------------------------- parts
 include firmware/firmware.mk
 include sim/sim.mk
+include firmware/hal/sil/sil.mk
 include host_tools/host_tools.mk
 include tests/tests.mk
 include tests/core/probe.mk

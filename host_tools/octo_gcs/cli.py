@@ -9,7 +9,7 @@ from . import __version__
 def add_connection_args(p, again=False):
     """--connect, --signing-key, --timeout. again=True: the same options once more on a
     sub-action (``params get NAME --connect URL``), not overriding the parent's values."""
-    from .link import DEFAULT_URL
+    from .base import DEFAULT_URL
 
     kw = {"default": argparse.SUPPRESS} if again else {}
     p.add_argument("--connect", metavar="URL", **(kw or {"default": DEFAULT_URL}),
@@ -108,6 +108,9 @@ def build_parser() -> argparse.ArgumentParser:
     mp.add_argument("--build-dir", metavar="DIR",
                     help="where octo-sim and octo-fw are (default $OCTO_BUILD, else the repository's build/)")
     mp.add_argument("--no-plots", dest="plots", action="store_false", help="skip the figures")
+    mp.add_argument("--in-process", action="store_true",
+                    help="fly in octo-sil (firmware and plant in one deterministic lockstep process; "
+                    "parameters from its parameter file) instead of octo-sim + octo-fw over UDP")
     mp.add_argument("--timeout", type=float, default=5.0, metavar="S",
                     help="seconds to wait for the vehicle's answers (default 5)")
 
@@ -150,7 +153,7 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return 2
-    from .link import GcsError
+    from .base import GcsError
     from .procs import Terminated
 
     try:

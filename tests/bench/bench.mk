@@ -73,5 +73,5 @@ endif
 .PHONY: bench bench-tools
 bench-tools: $(BENCH_HOST) $(BENCH_ARM)
 
-bench: $(B)/octo-sim $(B)/octo-fw bench-tools
+bench: $(B)/octo-sim $(B)/octo-fw $(B)/octo-sil bench-tools
 	$(VPY) tests/bench/bench.py $(if $(BENCH_ARM_OK),,--no-arm) $(BENCH_ARGS)
