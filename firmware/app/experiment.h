@@ -112,12 +112,13 @@
 #include "filt.h"
 #include "hal.h"
 #include "ident.h"
+#include "motor_id.h"
 #include "params.h"
 
 #define EXP_MAX_EST 8
-#define EXP_MAX_RESULTS 24
+#define EXP_MAX_RESULTS 40
 #define EXP_MAX_PHASES 6
-#define EXP_QUEUE 8
+#define EXP_QUEUE 20
 #define EXP_TILT_ABORT_DEG 15.0f
 
 enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
@@ -161,15 +162,16 @@ struct exp_line {
  * frame is gone by the time the turn runs between frames) */
 struct exp_turn {
 	float thr_prev0;                       /* rotor 1's throttle sent before that step */
+	float thr_prev_all[HAL_ROTORS];        /* every rotor's */
 	float rotor_f_cmd0;                    /* rotor 1's thrust allocated before that step */
 	float thrust_n[HAL_ROTORS], torque_nm[HAL_ROTORS], rate_b_rps[3];   /* of its frame */
 };
 
 /* the experiment's configuration (ID_* parameters), read once at exp_start */
 struct exp_cfg {
-	float exc_amp, exc_time, mot_tau, inr_amp, inr_time, val_time, rsd_max;
+	float exc_amp, exc_time, mot_tau, inr_amp, inr_time, val_time, rsd_max, exc_ofs;
 	uint32_t exc_kind, exc_div, seed, delay_fr;
-	bool exc_null;
+	bool exc_null, crv_est;
 };
 
 struct experiment {
@@ -196,10 +198,15 @@ struct experiment {
 	int gap_hold;                          /* frames left without inertia updates after a gap */
 	struct exp_cfg cfg;
 	struct excite exc;
+	struct excite exc2;                    /* rotor experiment: the second pattern's dither */
+	uint32_t rot_k;                        /* rotor experiment: excited frames so far */
 	/* the estimator of the current phase: phases never overlap, so they share the memory
 	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */
 	union {
-		struct ident_rotor rot;            /* rotor coefficients */
+		struct {                           /* rotor coefficients */
+			struct ident_rotor rot;    /* rotor 1, model given (and the paper's plain) */
+			struct motor_id mid;       /* every rotor, the motor model found (motor_id.h) */
+		};
 		struct ident_inertia inr;          /* inertia Ixx, Iyy or Izz */
 		struct {                           /* validation */
 			struct ident_fit fit;
