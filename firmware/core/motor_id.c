@@ -10,13 +10,15 @@ static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f};
 static const float stage_end[MOTOR_ID_STAGES - 1] = {0.30f, 0.55f};
 #define X_MAX 1.5f          /* how far beyond the grid the parabola may place the minimum */
 #define CURVE_CHI2_SIGMAS 5.0f
+#define NO_LAG_FRAC 0.1f   /* a lag below this fraction of a frame is taken as none */
 #define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
 
 static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
+/* 1 - a of a lag; below a tenth of a frame the lag is none (a = 0) */
 static float lag_k1(float tau, float dt)
 {
-	return tau > 0.0f ? 1.0f - expf(-dt / tau) : 1.0f;
+	return tau > NO_LAG_FRAC * dt ? 1.0f - expf(-dt / tau) : 1.0f;
 }
 
 static void set_grid(struct motor_id *m, unsigned d, float centre, float ratio)
@@ -222,7 +224,9 @@ void motor_id_refine(struct motor_id *m)
 		float sv[3], smin, k;
 		delay_crit(m, d, sv);
 		float x = m->n_stat > 0u ? parabola(sv, &smin, &k) : 0.0f;
-		float r = m->lag_r[d], centre = m->lag_c[d] * powf(r, x);
+		float r = m->lag_r[d];
+		/* a minimum below the grid walks twice as far (towards no lag at all) */
+		float centre = m->lag_c[d] * powf(r, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
 		/* the lag states at the new taus: quadratic interpolation in log tau of the old.
 		 * A minimum outside the grid narrows it less (the grid walks towards it) */
 		float nr = stage_ratio[next];
@@ -348,6 +352,14 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float x = xs[best], r = m->lag_r[best];
 	res->tau = m->lag_c[best] * powf(r, x);
 	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(1.0f / (nf * ks[best])) : res->tau;
+	/* the grid's low end without lag and the minimum there: no lag (sd: that bound) */
+	float dtf = sc_to_float(m->cfg.dt_s);
+	bool no_lag = res->tau <= 1.2f * NO_LAG_FRAC * dtf ||
+		      (x <= -X_MAX + 1e-3f && m->lag_c[best] * powf(r, -X_MAX) <= NO_LAG_FRAC * dtf);
+	if (no_lag) {
+		res->tau = 0.0f;
+		res->tau_sd = NO_LAG_FRAC * dtf;
+	}
 
 	/* every rotor at that lag */
 	float l[3];
@@ -395,6 +407,11 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 			}
 		res->curve = sw > 0.0f ? swc / sw : c0;
 		res->curve_sd = sw > 0.0f ? sqrt0(1.0f / sw) : 0.0f;
+		/* c >= 0 (thrust convex in throttle): a negative estimate within 4 sd of 0 is the
+		 * constrained optimum's boundary, c = 0; beyond, it stays (the data contradict the
+		 * model: the caller's range check names the bound) */
+		if (res->curve < 0.0f && res->curve > -4.0f * res->curve_sd)
+			res->curve = 0.0f;
 	} else {
 		res->curve = c0;
 		res->curve_sd = 0.0f;
@@ -460,8 +477,8 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->cause = MOTOR_ID_NOISE_UNKNOWN;
 	else if (!ec && res->curve_chi2 > chi2_lim)
 		res->cause = MOTOR_ID_CURVE;
-	else if (!(ks[best] > 0.0f) || fabsf(x) >= X_MAX - 1e-3f ||
-		 res->tau <= MOTOR_ID_TAU_MIN * 1.01f || res->tau >= MOTOR_ID_TAU_MAX * 0.99f)
+	else if (!no_lag && (!(ks[best] > 0.0f) || fabsf(x) >= X_MAX - 1e-3f ||
+			     res->tau <= MOTOR_ID_TAU_MIN * 1.01f || res->tau >= MOTOR_ID_TAU_MAX * 0.99f))
 		res->cause = MOTOR_ID_LAG_RANGE;
 	else if (best == ND - 1u)
 		res->cause = MOTOR_ID_DELAY_RANGE;
@@ -511,7 +528,7 @@ const char *motor_id_cause_remedy(enum motor_id_cause c)
 	case MOTOR_ID_NOISE_UNKNOWN:
 		return "hover still before the run";
 	case MOTOR_ID_LAG_RANGE:
-		return "lag 2-500 ms only; check motors";
+		return "lag 0.5-500 ms only; check motors";
 	case MOTOR_ID_DELAY_RANGE:
 		return "delay > 3 frames: fix the link";
 	case MOTOR_ID_DELAY_AMBIGUOUS:

@@ -26,7 +26,8 @@
  * curve fitted; -2/n times the log-likelihood with each rotor's noise unknown, so a rotor
  * no lag explains pulls the common lag little) is interpolated by a parabola in log tau
  * over the three lags; each delay's minimum is its lag. The grid is refined around it between frames
- * (motor_id_refine: wide ratio 2.5, then 1.3, then 1.08; the statistics restart, the lag
+ * (motor_id_refine: wide ratio 2.5, then 1.3, then 1.08; a minimum below the grid walks
+ * twice as far and keeps the grid wider; the statistics restart, the lag
  * filters keep running), so the last stage's data give the estimates. The final estimates
  * (motor_id_solve, between frames) take the delay of least interpolated SSR, and the
  * statistics at its lag by quadratic interpolation over the grid (smooth in tau).
@@ -60,7 +61,7 @@
 #define MOTOR_ID_DELAYS 5
 #define MOTOR_ID_LAGS 3
 #define MOTOR_ID_STAGES 3
-#define MOTOR_ID_TAU_MIN 0.002f
+#define MOTOR_ID_TAU_MIN 0.0005f
 #define MOTOR_ID_TAU_MAX 0.5f
 
 struct motor_id_cfg {
@@ -113,6 +114,7 @@ enum motor_id_cause {
 
 struct motor_id_result {
 	uint32_t delay;          /* frames beyond the loop's one */
+	/* tau = 0: no lag (the grid reached a tenth of a frame and the minimum lies below) */
 	float delay_margin;      /* log-likelihood ratio of the best delay over the next best
 				  * (> 12: a clear choice) */
 	float tau, tau_sd;       /* s */

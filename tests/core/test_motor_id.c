@@ -64,7 +64,7 @@ static void run(struct unit_rng *g, const struct truth *t, int n, bool est_curve
 	struct plant p;
 	for (int j = 0; j < NR; j++) {
 		double tau = j == t->odd_rotor ? t->odd_tau : t->tau;
-		p.a[j] = exp(-DT / tau);
+		p.a[j] = tau > 0.0 ? exp(-DT / tau) : 0.0;
 		p.st[j] = L;
 		for (int i = 0; i < 8; i++)
 			p.hist[i][j] = L;
