@@ -10,12 +10,12 @@ static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f};
 static const float stage_end[MOTOR_ID_STAGES - 1] = {0.30f, 0.55f};
 #define X_MAX 1.5f          /* how far beyond the grid the parabola may place the minimum */
 #define CURVE_CHI2_SIGMAS 5.0f
-#define NO_LAG_FRAC 0.1f   /* a lag below this fraction of a frame is taken as none */
+#define NO_LAG_FRAC 0.15f  /* a lag below this fraction of a frame is taken as none (a < 0.0013) */
 #define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
 
 static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
-/* 1 - a of a lag; below a tenth of a frame the lag is none (a = 0) */
+/* 1 - a of a lag; below NO_LAG_FRAC of a frame the lag is none (a = 0) */
 static float lag_k1(float tau, float dt)
 {
 	return tau > NO_LAG_FRAC * dt ? 1.0f - expf(-dt / tau) : 1.0f;
@@ -151,7 +151,7 @@ static float rotor_ssr(const struct motor_id_stat *st, bool est_curve, float c0,
 		}
 		delta[0] = (st->g22 * st->b1 - st->g12 * st->b2) / det;
 		delta[1] = (st->g11 * st->b2 - st->g12 * st->b1) / det;
-		return st->rr - delta[0] * st->b1 - delta[1] * st->b2;
+		return fmaxf(st->rr - delta[0] * st->b1 - delta[1] * st->b2, 0.0f);
 	}
 	float w[2];
 	curve_w(c0, s_c, w);
@@ -160,7 +160,7 @@ static float rotor_ssr(const struct motor_id_stat *st, bool est_curve, float c0,
 	float mu = gw > 0.0f ? bw / gw : 0.0f;
 	delta[0] = mu * w[0];
 	delta[1] = mu * w[1];
-	return st->rr - mu * bw;
+	return fmaxf(st->rr - mu * bw, 0.0f);
 }
 
 /* parabola through (-1, s0), (0, s1), (1, s2): minimum x (clamped to +/-X_MAX), the value

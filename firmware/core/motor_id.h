@@ -114,7 +114,7 @@ enum motor_id_cause {
 
 struct motor_id_result {
 	uint32_t delay;          /* frames beyond the loop's one */
-	/* tau = 0: no lag (the grid reached a tenth of a frame and the minimum lies below) */
+	/* tau = 0: no lag (below 0.18 of a frame: a = exp(-dt / tau) < 0.004, indistinguishable) */
 	float delay_margin;      /* log-likelihood ratio of the best delay over the next best
 				  * (> 12: a clear choice) */
 	float tau, tau_sd;       /* s */

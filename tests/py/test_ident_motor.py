@@ -32,7 +32,8 @@ def motor_vehicle(rng, curve=None):
 
 
 def fly(launch, port, tmp_path, veh, seed, params=None):
-    fl = IdentFlight(launch, port, tmp_path, vehicle=veh, seed=seed, params=params)
+    fl = IdentFlight(launch, port, tmp_path, vehicle=veh, seed=seed,
+                     params={"ID_CRV_EST": 1, **(params or {})})
     fl.takeoff()
     texts = fl.experiment(1)
     got = {n: fl.param(n) for n in RESULTS}
