@@ -214,8 +214,8 @@ UNIT_TEST(excite_null_patterns_in_gamma_null_space)
 			.k_tau_nm = sc_from_float((float)unit_rand_uniform(&g, 0.2, 0.6)),
 			.t_min = SC(0.0), .t_max = SC(1.0), .rotor_mask = 0xFF, .mode = MIXER_MODE_PRIORITY,
 		};
-		static struct mixer mix;
-		static struct mixer_design des;
+		struct mixer mix;   /* on the stack (M0 RAM) */
+		struct mixer_design des;
 		CHECK(mixer_init_design(&mix, &p, &des));
 		for (unsigned k = 0; k < EXCITE_NULL_PATTERNS; k++) {
 			scalar_t pat[EXCITE_ROTORS];

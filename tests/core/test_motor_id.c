@@ -73,7 +73,7 @@ static void run(struct unit_rng *g, const struct truth *t, int n, bool est_curve
 				   .est_curve = est_curve, .n_frames = (uint32_t)n};
 	for (int j = 0; j < NR; j++)
 		cfg.thr0[j] = s(L);
-	static struct motor_id m;
+	struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
 	motor_id_init(&m, &cfg);
 	double tprev[NR], d1 = 0, d2 = 0;
 	for (int j = 0; j < NR; j++)
@@ -225,7 +225,7 @@ UNIT_TEST(motor_id_refusals)
 				   .n_frames = 900};
 	for (int j = 0; j < NR; j++)
 		cfg.thr0[j] = s(0.1);
-	static struct motor_id m;
+	struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
 	motor_id_init(&m, &cfg);
 	struct motor_id_result r;
 	motor_id_solve(&m, 1.3f, &r);
