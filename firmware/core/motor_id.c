@@ -10,6 +10,7 @@ static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f};
 static const float stage_end[MOTOR_ID_STAGES - 1] = {0.30f, 0.55f};
 #define X_MAX 1.5f          /* how far beyond the grid the parabola may place the minimum */
 #define CURVE_CHI2_SIGMAS 5.0f
+#define NE_SIGMAS 5.0f
 #define NO_LAG_FRAC 0.15f  /* a lag below this fraction of a frame is taken as none (a < 0.0013) */
 #define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
 
@@ -473,6 +474,12 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	/* the cause, most specific first */
 	float dof_j = (float)m->n_stat - (float)np;
 	float chi2_lim = (float)NR + CURVE_CHI2_SIGMAS * sqrtf(2.0f * (float)NR);
+	/* the normalised errors' limits: ne_max, or NE_SIGMAS standard deviations of the ratio
+	 * of two variance estimates (the fit's, dof_j; the noise's from first differences,
+	 * about a third of its count effective) when the data are few */
+	float v_nz = m->nz_n > 0.0f ? 6.0f / m->nz_n : 1.0f;
+	float lim_j = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof_j, 1.0f) + v_nz));
+	float lim_all = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof, 1.0f) + v_nz));
 	if (!(m->nz_n >= 16.0f))
 		res->cause = MOTOR_ID_NOISE_UNKNOWN;
 	else if (!ec && res->curve_chi2 > chi2_lim)
@@ -484,10 +491,10 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->cause = MOTOR_ID_DELAY_RANGE;
 	else if (res->delay_margin < MARGIN_MIN)
 		res->cause = MOTOR_ID_DELAY_AMBIGUOUS;
-	else if (ne_hi > ne_max && ne_sorted_mid <= ne_max && dof_j > 0.0f) {
+	else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && dof_j > 0.0f) {
 		res->cause = MOTOR_ID_ROTOR;
 		res->cause_rotor = (int)worst;
-	} else if (res->ne_all > ne_max)
+	} else if (res->ne_all > lim_all)
 		res->cause = MOTOR_ID_MODEL;
 	else
 		res->cause = MOTOR_ID_OK;
