@@ -20,7 +20,8 @@ Items (issue 8):
              state the app owns (sizeof), peak RSS of octo-fw and octo-sim (wait4 of the
              flights of item 1)
   alloc   4. build/bench/bench-alloc: priority allocator vs pseudo-inverse + clipping
-  estim   5. build/bench/bench-estim: Monte Carlo of k_f, lag-aware vs CRLB, paper's plain
+  estim   5. build/bench/bench-estim: Monte Carlo of k_f, lag-aware vs CRLB, paper's plain;
+             build/bench/bench-motor: the joint rotor-model estimator on random vehicles
   sim     6. physics alone (build/bench/bench-physics) and octo-sim --lockstep driven by the
              tightest client (build/bench/pingpong client)
 """
@@ -701,7 +702,29 @@ def item_estim(rep, args):
                 f"{p5['bias_pct']:+.2f} / {p10['bias_pct']:+.2f}", "",
                 f"closed form {r['plain_bias_closed_form_pct']:+.2f} %", "(reference)", None, c)
     rep.data["estim"] = res
+    item_motor(rep, args)
     return res
+
+
+def item_motor(rep, args):
+    """The joint rotor-model estimator (motor_id.h) over random vehicles (bench-motor)."""
+    runs = 100 if args.quick else 1000
+    argv = [BB / "bench-motor", runs, 1]
+    r = json.loads(subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=True).stdout)
+    c = cmdline(argv)
+    rep.commands["motor model"] = c
+    rep.row(5, f"motor model of every rotor (lag 10-100 ms, delay 0-3, curve 0-0.5, one rotor 0.8-1); "
+               f"{runs} runs each", "", "", "", "", None, c)
+    for name, desc in (("curve_estimated", "curve estimated"), ("curve_known_linear", "linear rotors, curve known")):
+        for sec in ("5s", "10s"):
+            t = r[f"{name}_{sec}"]
+            rep.row(5, f"  {desc}, {sec}: k_f bias / std (%), var / reported sd^2",
+                    f"{t['kf_bias_pct']:+.3f} / {t['kf_std_pct']:.3f}, {t['kf_var_over_reported']:.2f}", "",
+                    f"rejected {t['rejected_pct']:.1f} %", "|bias| < 0.1 %", abs(t["kf_bias_pct"]) < 0.1, c)
+            rep.row(5, "    lag bias / std (%), delay chosen right, curve bias / std",
+                    f"{t['lag_bias_pct']:+.3f} / {t['lag_std_pct']:.3f}, {t['delay_right_pct']:.1f} %, "
+                    f"{t['curve_bias']:+.4f} / {t['curve_std']:.4f}", "", "", "(reported)", None, c)
+    rep.data["motor"] = r
 
 
 # ====================================================================== item 6: simulator
