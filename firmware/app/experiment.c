@@ -192,9 +192,10 @@ static void format_line(const struct exp_line *l, char *out, size_t cap)
  * one (one line per frame, as before: the app sends it on its tick) */
 void exp_pump(struct experiment *e)
 {
-	/* the motor model's grid refinement, between frames (the step does it if nobody did) */
+	/* the motor model's bank update and grid refinement, between frames (the step does them
+	 * if nobody did) */
 	if (e->state == EXP_RUNNING && !e->reporting && e->phase_kind[e->phase] == PK_ROTOR && e->cfg.exc_null)
-		motor_id_refine(&e->mid);
+		motor_id_refine(&e->mid);   /* processes the waiting frame first */
 	if (!e->pump_ready || e->msg[0] || !e->q_n)
 		return;
 	const struct exp_line *l = &e->queue[e->q_head];
@@ -415,6 +416,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 static void rotor_end(struct experiment *e, const struct app_params *p)
 {
 	struct motor_id_result mr;
+	motor_id_process(&e->mid);
 	motor_id_solve(&e->mid, MOT_NE_MAX, &mr);
 	float rsd = e->cfg.rsd_max;
 	float kfp = ident_rotor_plain(&e->rot, 0), ktp = ident_rotor_plain(&e->rot, 1);

@@ -72,6 +72,7 @@ static void advance(struct motor_id *m, const scalar_t thr_prev[NR])
 
 void motor_id_hold(struct motor_id *m, const scalar_t thr_prev[NR])
 {
+	motor_id_process(m);
 	advance(m, thr_prev);
 	m->nz_have = false;
 }
@@ -79,8 +80,25 @@ void motor_id_hold(struct motor_id *m, const scalar_t thr_prev[NR])
 void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar_t f[NR],
 		   const scalar_t tq[NR], bool excited)
 {
+	motor_id_process(m);   /* the previous frame's, if nobody did it between frames */
+	for (unsigned j = 0; j < NR; j++) {
+		m->q_thr[j] = thr_prev[j];
+		m->q_f[j] = f[j];
+		m->q_tq[j] = tq[j];
+	}
+	m->q_excited = excited;
+	m->q_pending = true;
+}
+
+void motor_id_process(struct motor_id *m)
+{
+	if (!m->q_pending)
+		return;
+	m->q_pending = false;
 	if (m->refine_due)
 		motor_id_refine(m);
+	const scalar_t *thr_prev = m->q_thr, *f = m->q_f, *tq = m->q_tq;
+	bool excited = m->q_excited;
 	advance(m, thr_prev);
 	float fm[NR];
 	for (unsigned j = 0; j < NR; j++)
@@ -214,6 +232,7 @@ static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
 
 void motor_id_refine(struct motor_id *m)
 {
+	motor_id_process(m);
 	if (!m->refine_due)
 		return;
 	m->refine_due = false;

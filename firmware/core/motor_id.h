@@ -97,6 +97,9 @@ struct motor_id {
 	uint32_t skip;           /* frames not accumulated after a refinement (lag transients) */
 	uint8_t stage;
 	bool refine_due;
+	/* the frame motor_id_step took, waiting for motor_id_process */
+	scalar_t q_thr[MOTOR_ID_ROTORS], q_f[MOTOR_ID_ROTORS], q_tq[MOTOR_ID_ROTORS];
+	bool q_excited, q_pending;
 };
 
 /* why an estimate is not to be applied */
@@ -134,9 +137,16 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg);
 
 /* One frame: thr_prev[8] = throttles sent on the previous frame, f[8] = measured thrusts
  * (N), tq[8] = measured reaction-torque magnitudes (N m) of this frame. excited = false: the
- * filters run and the noise is measured; true: the bank accumulates. */
+ * filters run and the noise is measured; true: the bank accumulates. The step only takes
+ * the frame (a few hundred instructions); the bank update (15 hypotheses x 8 rotors, ~8,000
+ * instructions on M4F) runs in motor_id_process, between frames; a step that finds the
+ * previous frame still waiting processes it first, so nothing is lost or reordered. */
 void motor_id_step(struct motor_id *m, const scalar_t thr_prev[MOTOR_ID_ROTORS],
 		   const scalar_t f[MOTOR_ID_ROTORS], const scalar_t tq[MOTOR_ID_ROTORS], bool excited);
+
+/* Between frames: the bank update of the frame motor_id_step took (no-op if none waits).
+ * motor_id_hold, motor_id_refine and (the caller's duty) motor_id_solve come after it. */
+void motor_id_process(struct motor_id *m);
 
 /* A frame without measurement: the plant held thr_prev one more frame (filters advance). */
 void motor_id_hold(struct motor_id *m, const scalar_t thr_prev[MOTOR_ID_ROTORS]);
@@ -144,7 +154,8 @@ void motor_id_hold(struct motor_id *m, const scalar_t thr_prev[MOTOR_ID_ROTORS])
 /* Between frames: re-centres the lag grids when a stage ended (no-op otherwise). */
 void motor_id_refine(struct motor_id *m);
 
-/* Between frames: the estimates from the data so far, with the acceptance cause.
+/* Between frames: the estimates from the data so far, with the acceptance cause (call
+ * motor_id_process first: a frame still waiting is not in them).
  * ne_max: largest accepted normalised error (residual over noise variance). */
 void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_result *res);
 

@@ -110,6 +110,7 @@ static void one_run(int n_exc, bool est_curve, bool linear, struct acc *kf, stru
 		}
 	}
 	struct motor_id_result r;
+	motor_id_process(&m);
 	motor_id_solve(&m, 1.3f, &r);
 	dly->right += r.delay == delay;
 	dly->n++;

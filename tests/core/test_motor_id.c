@@ -110,6 +110,7 @@ static void run(struct unit_rng *g, const struct truth *t, int n, bool est_curve
 			tprev[j] = cmd;
 		}
 	}
+	motor_id_process(&m);
 	motor_id_solve(&m, 1.3f, res);
 }
 
@@ -228,6 +229,7 @@ UNIT_TEST(motor_id_refusals)
 	struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
 	motor_id_init(&m, &cfg);
 	struct motor_id_result r;
+	motor_id_process(&m);
 	motor_id_solve(&m, 1.3f, &r);
 	CHECK(r.cause == MOTOR_ID_NO_DATA);
 	scalar_t tp[NR], f[NR], tq[NR];
@@ -239,6 +241,7 @@ UNIT_TEST(motor_id_refusals)
 		}
 		motor_id_step(&m, tp, f, tq, true);
 	}
+	motor_id_process(&m);
 	motor_id_solve(&m, 1.3f, &r);
 	CHECK(r.cause == MOTOR_ID_NOISE_UNKNOWN);
 	CHECK(motor_id_cause_text(r.cause)[0] != '\0');
