@@ -119,9 +119,9 @@ void motor_id_process(struct motor_id *m)
 	m->nz_have = false;
 	for (unsigned j = 0; j < NR; j++) {
 		float t = sc_to_float(tq[j]);
-		m->ff[j] += fm[j] * fm[j];
-		m->tf[j] += t * fm[j];
-		m->tt[j] += t * t;
+		m->ff += fm[j] * fm[j];
+		m->tf += t * fm[j];
+		m->tt += t * t;
 	}
 	m->n_exc++;
 	if (m->skip > 0u) {
@@ -474,12 +474,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	res->curve_chi2 = nz > 0.0f ? chi2 / nz : 0.0f;
 
 	/* k_tau = rho k_f, rho from torque on thrust over every rotor (noise-corrected) */
-	float ff = 0.0f, tf = 0.0f, tt = 0.0f;
-	for (unsigned j = 0; j < NR; j++) {
-		ff += m->ff[j];
-		tf += m->tf[j];
-		tt += m->tt[j];
-	}
+	float ff = m->ff, tf = m->tf, tt = m->tt;
 	float nall = (float)(m->n_exc * NR);
 	float sf2 = nz > 0.0f ? nz : ssr_sum / dof;
 	float rho = ff > 0.0f ? tf / ff : 0.0f;

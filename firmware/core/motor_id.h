@@ -88,8 +88,7 @@ struct motor_id {
 	float lag_c[MOTOR_ID_DELAYS], lag_r[MOTOR_ID_DELAYS];   /* grid centre (s) and ratio */
 	struct motor_id_stat st[MOTOR_ID_DELAYS][MOTOR_ID_LAGS][MOTOR_ID_ROTORS];
 	float s_c[MOTOR_ID_ROTORS];
-	float th_a, th_b;        /* reference model on the basis: A_ref, B_ref / (1, ...) */
-	float ff[MOTOR_ID_ROTORS], tf[MOTOR_ID_ROTORS], tt[MOTOR_ID_ROTORS];   /* torque ratio */
+	float ff, tf, tt;        /* torque ratio: sums over every rotor of f^2, t f, t^2 */
 	float nz_prev[MOTOR_ID_ROTORS], nz_ss, nz_n;    /* thrust noise from differences */
 	bool nz_have;
 	uint32_t n_stat;         /* frames in the current stage's statistics */
