@@ -30,7 +30,7 @@ $(B)/libcore-asan.a: $(CORE_ASAN_OBJ)
 	@rm -f $@; $(AR) rcs $@ $^
 
 # ---- octo-fw: app + host HAL + core + generated MAVLink/LCM code
-FW_SRC    := $(sort $(wildcard firmware/app/*.c firmware/hal/host/*.c))
+FW_SRC    := $(sort $(wildcard firmware/app/*.c firmware/hal/*.c firmware/hal/host/*.c))
 FW_OBJ    := $(FW_SRC:firmware/%.c=$(B)/fw/%.o)
 FW_INC    := -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal \
              -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common -isystem $(GEN)/lcm -isystem $(LCM_INC)

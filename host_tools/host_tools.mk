@@ -9,3 +9,10 @@ $(GCS_STAMP): host_tools/pyproject.toml $(VENV_STAMP) $(B)/config.mk $(LCM_STAMP
 	@touch $@
 
 ALL_TARGETS += $(GCS_STAMP)
+
+# octo-fw's parameter table and mode numbers for octo-gcs (import octo_fw_table)
+FW_TABLE_PY := $(GEN)/python/octo_fw_table.py
+$(FW_TABLE_PY): $(B)/octo-fw host_tools/gen_fw_table.py | $(LCM_STAMP)
+	$(B)/octo-fw --dump-params | $(PYTHON) host_tools/gen_fw_table.py $@
+
+ALL_TARGETS += $(FW_TABLE_PY)

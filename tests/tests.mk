@@ -24,7 +24,31 @@ $(B)/unit-tests-fixed: $(UNIT_ALL_SRC) $(UNIT_LIST) $(B)/libcore-fixed.a
 $(B)/unit-tests-asan: $(UNIT_ALL_SRC) $(UNIT_LIST) $(B)/libcore-asan.a
 	$(CC) $(UNIT_CFLAGS) $(SAN) -MF $@.d -o $@ $(UNIT_ALL_SRC) $(B)/libcore-asan.a -lm
 
-UNIT_BINS := $(B)/unit-tests $(B)/unit-tests-fixed $(B)/unit-tests-asan
+# The app's suite (tests/app/test_*.c): the firmware's app sources on the stub HAL,
+# the same runner with its own registry, in the same three builds.
+APP_TEST_SRC  := $(sort $(wildcard tests/app/test_*.c))
+APP_TEST_LIST := $(GEN)/app_tests/unit_list.h
+APP_TEST_ALL  := tests/core/unit.c $(APP_TEST_SRC) tests/app/stub_hal.c firmware/hal/hal.c \
+                 $(sort $(wildcard firmware/app/*.c))
+APP_TEST_CFLAGS := -std=c11 $(OPT) -Wall -Wextra -Werror -D_POSIX_C_SOURCE=200809L -I$(GEN)/app_tests \
+                 -Itests/core -Itests/app -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal \
+                 -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common -MMD -MP
+
+$(APP_TEST_LIST): $(APP_TEST_SRC) tests/tests.mk
+	@mkdir -p $(@D)
+	@{ echo "/* generated from tests/app/test_*.c: do not edit */"; \
+	   for f in $(APP_TEST_SRC); do sed -n 's/^UNIT_TEST(\([A-Za-z0-9_]*\)).*/UNIT_ENTRY(\1)/p' $$f; done; } > $@.tmp
+	@cmp -s $@.tmp $@ && rm $@.tmp || mv $@.tmp $@
+
+$(B)/app-tests: $(APP_TEST_ALL) $(APP_TEST_LIST) $(B)/libcore.a | $(MAVLINK_STAMP)
+	$(CC) $(APP_TEST_CFLAGS) -MF $@.d -o $@ $(APP_TEST_ALL) $(B)/libcore.a -lm
+$(B)/app-tests-fixed: $(APP_TEST_ALL) $(APP_TEST_LIST) $(B)/libcore-fixed.a | $(MAVLINK_STAMP)
+	$(CC) $(APP_TEST_CFLAGS) -DOCTO_FIXED=1 -MF $@.d -o $@ $(APP_TEST_ALL) $(B)/libcore-fixed.a -lm
+$(B)/app-tests-asan: $(APP_TEST_ALL) $(APP_TEST_LIST) $(B)/libcore-asan.a | $(MAVLINK_STAMP)
+	$(CC) $(APP_TEST_CFLAGS) $(SAN) -MF $@.d -o $@ $(APP_TEST_ALL) $(B)/libcore-asan.a -lm
+
+UNIT_BINS := $(B)/unit-tests $(B)/unit-tests-fixed $(B)/unit-tests-asan \
+             $(B)/app-tests $(B)/app-tests-fixed $(B)/app-tests-asan
 ALL_TARGETS += $(UNIT_BINS)
 
 PYTEST_ARGS ?=

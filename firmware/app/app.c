@@ -6,8 +6,6 @@
 #include <stdio.h>
 #include <string.h>
 
-#include <common/mavlink.h>
-
 #define DEG_F 0.017453292519943295f
 #define FIRST_DT_S (1.0f / 90.0f)
 #define MAX_DT_S 0.2f              /* longer gaps are integrated as 200 ms */
@@ -45,18 +43,9 @@ static float tilt_deg(const struct hal_sensor_frame *f)
 	return acosf(clampf(c, -1.0f, 1.0f)) / DEG_F;
 }
 
-/* yaw of a normalised quaternion: quat_to_euler's yaw alone (same expression, same value) */
-static float quat_yaw(struct quat q)
-{
-	scalar_t two = SC(2);
-	scalar_t yn = sc_mul(two, sc_add(sc_mul(q.w, q.z), sc_mul(q.x, q.y)));
-	scalar_t yd = sc_sub(SC(1), sc_mul(two, sc_add(sc_mul(q.y, q.y), sc_mul(q.z, q.z))));
-	return sc_to_float(sc_atan2(yn, yd));
-}
-
 static float frame_yaw(const struct hal_sensor_frame *f)
 {
-	return quat_yaw(frame_q(f));
+	return sc_to_float(quat_yaw(frame_q(f)));
 }
 
 bool app_hovering(const struct app *a)
@@ -66,16 +55,18 @@ bool app_hovering(const struct app *a)
 	       fabsf(a->fr.vel_i_mps[2]) < 0.3f && tilt_deg(&a->fr) < HOVER_TILT_DEG;
 }
 
-void app_status(struct app *a, int severity, const char *fmt, ...)
+void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
 {
-	char text[96];
+	char text[APP_EVENT_TEXT];
 	va_list ap;
 	va_start(ap, fmt);
 	vsnprintf(text, sizeof text, fmt, ap);
 	va_end(ap);
-	hal_report("%s", text);
-	hal_log_event(a->fr.t_s, severity, text);
-	mav_statustext(a, severity, text);
+	a->hal->report(a->hal->ctx, text);
+	hal_log_event(a->hal, a->fr.t_s, (int)severity, text);
+	struct app_event e = {.kind = APP_EV_STATUS, .severity = (uint8_t)severity};
+	memcpy(e.text, text, sizeof e.text);
+	outbox_post(&a->outbox, &e);
 }
 
 static void set_mode(struct app *a, enum app_mode m)
@@ -83,17 +74,16 @@ static void set_mode(struct app *a, enum app_mode m)
 	if (a->mode == m)
 		return;
 	if (a->mode == APP_EXPERIMENT && a->exp_ack_pending) {
-		/* the final answer to MAV_CMD_USER_1: ACCEPTED when it finished,
-		 * FAILED when it was aborted (the experiment sets final_result) */
-		int r = a->exp.final_result;
-		if (r != MAV_RESULT_ACCEPTED)
-			r = MAV_RESULT_FAILED;
-		mav_command_ack(a, MAV_CMD_USER_1, (uint8_t)r, r == MAV_RESULT_ACCEPTED ? 100 : 0,
-				a->exp_ack_sysid, a->exp_ack_compid);
+		/* the final answer to the experiment command: ACCEPTED when it
+		 * finished, FAILED when it was aborted (the experiment sets final_result) */
+		enum app_result r = a->exp.final_result == APP_ACCEPTED ? APP_ACCEPTED : APP_FAILED;
+		struct app_event e = {.kind = APP_EV_CMD_DONE, .cmd = APP_CMD_EXPERIMENT, .result = (uint8_t)r,
+				      .progress = r == APP_ACCEPTED ? 100 : 0, .origin = a->exp_origin};
+		outbox_post(&a->outbox, &e);
 		a->exp_ack_pending = false;
 	}
 	a->mode = m;
-	app_status(a, MAV_SEVERITY_INFO, "Mode %s", app_mode_name(m));
+	app_status(a, APP_SEV_INFO, "Mode %s", app_mode_name(m));
 }
 
 /* ---------------------------------------------------------------- parameters -> modules */
@@ -146,12 +136,13 @@ static void reset_control(struct app *a)
 	alt_ctrl_reset(&a->alt, SC_ZERO);
 }
 
-void app_init(struct app *a)
+void app_init(struct app *a, const struct hal *hal)
 {
 	memset(a, 0, sizeof *a);
+	a->hal = hal;
 	params_defaults(&a->p);
-	uint64_t now = hal_wall_us();
-	mav_init(&a->mav, now);
+	uint64_t now = hal_wall_us(a->hal);
+	mav_init(&a->mav, hal, now);
 	struct att_ctrl_params ap = att_ctrl_params_default();
 	att_ctrl_init(&a->att, &ap);
 	struct alt_ctrl_params lp = alt_ctrl_params_default();
@@ -160,8 +151,8 @@ void app_init(struct app *a)
 	mixer_default_params(&mp);
 	mixer_init(&a->mix, &mp);
 	char why[64];
-	if (app_params_load(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
-		hal_report("params: %s (defaults in use)", why);
+	if (app_params_load(a, why, sizeof why) != APP_ACCEPTED)
+		hal_reportf(a->hal, "params: %s (defaults in use)", why);
 	sync_params(a);
 	a->params_dirty = false;
 	a->mode = APP_DISARMED;
@@ -173,51 +164,44 @@ void app_init(struct app *a)
 static void report_line(void *ctx, unsigned line, const char *why)
 {
 	struct app *a = ctx;
-	app_status(a, MAV_SEVERITY_WARNING, "params line %u: %s, default kept", line, why);
+	app_status(a, APP_SEV_WARNING, "params line %u: %s, default kept", line, why);
 }
 
-int app_params_load(struct app *a, char *why, size_t cap)
+enum app_result app_params_load(struct app *a, char *why, size_t cap)
 {
 	static char text[8192];   /* one load at a time; kept off the stack */
-	long n = hal_param_fetch(text, sizeof text);
+	long n = hal_param_fetch(a->hal, text, sizeof text);
 	if (n < 0) {
 		snprintf(why, cap, "no parameter file");
-		return MAV_RESULT_FAILED;
+		return APP_FAILED;
 	}
 	struct app_params p = a->p;
 	unsigned bad = params_parse(&p, text, (size_t)n, report_line, a);
 	a->p = p;
 	a->params_dirty = true;
 	if (bad)
-		hal_report("params: %u damaged line(s) ignored", bad);
-	return MAV_RESULT_ACCEPTED;
+		hal_reportf(a->hal, "params: %u damaged line(s) ignored", bad);
+	return APP_ACCEPTED;
 }
 
-int app_params_save(struct app *a, char *why, size_t cap)
+enum app_result app_params_save(struct app *a, char *why, size_t cap)
 {
 	static char text[8192];
 	size_t n = params_format(&a->p, text, sizeof text);
-	if (!n || hal_param_store(text, n) != 0) {
+	if (!n || hal_param_store(a->hal, text, n) != 0) {
 		snprintf(why, cap, "Parameter save failed");
-		return MAV_RESULT_FAILED;
+		return APP_FAILED;
 	}
-	return MAV_RESULT_ACCEPTED;
-}
-
-static bool locked_in_experiment(size_t index)
-{
-	const char *n = param_defs[index].name;
-	return !strncmp(n, "VEH_", 4) || !strncmp(n, "MIX_", 4) || !strncmp(n, "MOT_", 4) ||
-	       !strncmp(n, "ID_", 3);
+	return APP_ACCEPTED;
 }
 
 const char *app_param_write(struct app *a, size_t index, float value)
 {
 	if (index >= param_count)
 		return "unknown parameter";
-	if (exp_param_readonly(param_defs[index].name))
+	if (param_defs[index].flags & PARAM_READONLY)
 		return "read-only: written by identification";
-	if (a->mode == APP_EXPERIMENT && locked_in_experiment(index))
+	if (a->mode == APP_EXPERIMENT && (param_defs[index].flags & PARAM_LOCKED))
 		return "locked while an experiment runs";
 	enum param_set_result r = params_set(&a->p, index, value);
 	if (r != PARAM_OK)
@@ -228,18 +212,18 @@ const char *app_param_write(struct app *a, size_t index, float value)
 
 /* ---------------------------------------------------------------- commands */
 
-int app_cmd_arm(struct app *a, bool arm, bool force, char *why, size_t cap)
+enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size_t cap)
 {
 	if (arm) {
 		if (a->mode != APP_DISARMED)
-			return MAV_RESULT_ACCEPTED;
+			return APP_ACCEPTED;
 		if (!a->have_step || !a->link_ok) {
 			snprintf(why, cap, "Arm refused: no complete X-Plane frames");
-			return MAV_RESULT_TEMPORARILY_REJECTED;
+			return APP_BUSY;
 		}
 		if (tilt_deg(&a->fr) > 30.0f && !force) {
 			snprintf(why, cap, "Arm refused: tilted %.0f deg", (double)tilt_deg(&a->fr));
-			return MAV_RESULT_TEMPORARILY_REJECTED;
+			return APP_BUSY;
 		}
 		a->actuating = true;
 		a->z_ground = a->fr.pos_i_m[2];
@@ -248,37 +232,37 @@ int app_cmd_arm(struct app *a, bool arm, bool force, char *why, size_t cap)
 		a->yaw_sp = frame_yaw(&a->fr);
 		reset_control(a);
 		set_mode(a, APP_IDLE);
-		return MAV_RESULT_ACCEPTED;
+		return APP_ACCEPTED;
 	}
 	if (a->mode == APP_DISARMED)
-		return MAV_RESULT_ACCEPTED;
+		return APP_ACCEPTED;
 	if (app_flying(a) && !force) {
 		snprintf(why, cap, "Disarm refused: flying (land first, or force)");
-		return MAV_RESULT_TEMPORARILY_REJECTED;
+		return APP_BUSY;
 	}
 	if (a->mode == APP_EXPERIMENT)
 		exp_abort(&a->exp, "disarmed");
 	memset(a->thr, 0, sizeof a->thr);
 	set_mode(a, APP_DISARMED);
-	return MAV_RESULT_ACCEPTED;
+	return APP_ACCEPTED;
 }
 
-int app_cmd_takeoff(struct app *a, float height_m, char *why, size_t cap)
+enum app_result app_cmd_takeoff(struct app *a, float height_m, char *why, size_t cap)
 {
 	if (!isfinite(height_m) || height_m <= 0.0f)
 		height_m = a->p.nav_tko_alt;
 	if (height_m < 0.5f || height_m > 100.0f) {
 		snprintf(why, cap, "Takeoff refused: height %.1f m not in [0.5, 100]", (double)height_m);
-		return MAV_RESULT_DENIED;
+		return APP_DENIED;
 	}
 	float target = a->z_ground + height_m;
 	switch (a->mode) {
 	case APP_DISARMED:
 		snprintf(why, cap, "Takeoff refused: not armed");
-		return MAV_RESULT_TEMPORARILY_REJECTED;
+		return APP_BUSY;
 	case APP_EXPERIMENT:
 		snprintf(why, cap, "Takeoff refused: experiment running");
-		return MAV_RESULT_TEMPORARILY_REJECTED;
+		return APP_BUSY;
 	case APP_IDLE:
 		a->z_sp = a->fr.pos_i_m[2];
 		a->pos_sp[0] = a->fr.pos_i_m[0];
@@ -293,30 +277,30 @@ int app_cmd_takeoff(struct app *a, float height_m, char *why, size_t cap)
 	case APP_TAKEOFF:
 	case APP_HOLD:
 		if (fabsf(target - a->z_target) < 0.01f)
-			return MAV_RESULT_ACCEPTED;   /* a retry: nothing changes */
+			return APP_ACCEPTED;   /* a retry: nothing changes */
 		a->z_sp = a->mode == APP_HOLD ? a->z_target : a->z_sp;
 		break;
 	}
 	a->z_target = target;
 	a->on_ground_s = 0.0f;
-	app_status(a, MAV_SEVERITY_INFO, "Takeoff to %.2f m", (double)height_m);
+	app_status(a, APP_SEV_INFO, "Takeoff to %.2f m", (double)height_m);
 	a->mode = APP_HOLD;   /* so that set_mode reports the change even from HOLD */
 	set_mode(a, APP_TAKEOFF);
-	return MAV_RESULT_ACCEPTED;
+	return APP_ACCEPTED;
 }
 
-int app_cmd_land(struct app *a, char *why, size_t cap)
+enum app_result app_cmd_land(struct app *a, char *why, size_t cap)
 {
 	(void)why;
 	(void)cap;
 	switch (a->mode) {
 	case APP_DISARMED:
 	case APP_LAND:
-		return MAV_RESULT_ACCEPTED;
+		return APP_ACCEPTED;
 	case APP_IDLE:
 		memset(a->thr, 0, sizeof a->thr);
 		set_mode(a, APP_DISARMED);
-		return MAV_RESULT_ACCEPTED;
+		return APP_ACCEPTED;
 	case APP_EXPERIMENT:
 		exp_abort(&a->exp, "landing");
 		/* fall through */
@@ -326,16 +310,16 @@ int app_cmd_land(struct app *a, char *why, size_t cap)
 		a->vz_ff = 0.0f;
 		a->on_ground_s = 0.0f;
 		set_mode(a, APP_LAND);
-		return MAV_RESULT_ACCEPTED;
+		return APP_ACCEPTED;
 	}
-	return MAV_RESULT_FAILED;
+	return APP_FAILED;
 }
 
-int app_cmd_experiment(struct app *a, float id_f, char *why, size_t cap)
+enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin, char *why, size_t cap)
 {
 	if (!isfinite(id_f) || id_f != floorf(id_f) || id_f < 0.0f || id_f > 6.0f) {
 		snprintf(why, cap, "Experiment %g unknown (1..6, 0 = stop)", (double)id_f);
-		return MAV_RESULT_DENIED;
+		return APP_DENIED;
 	}
 	int id = (int)id_f;
 	if (id == 0) {
@@ -343,27 +327,26 @@ int app_cmd_experiment(struct app *a, float id_f, char *why, size_t cap)
 			exp_abort(&a->exp, "stopped by command");
 			set_mode(a, APP_HOLD);
 		}
-		return MAV_RESULT_ACCEPTED;
+		return APP_ACCEPTED;
 	}
 	if (a->mode == APP_EXPERIMENT) {
 		if (a->exp.id == id)
-			return MAV_RESULT_IN_PROGRESS;   /* a retry: still running */
+			return APP_IN_PROGRESS;   /* a retry: still running */
 		snprintf(why, cap, "Experiment %d running", a->exp.id);
-		return MAV_RESULT_TEMPORARILY_REJECTED;
+		return APP_BUSY;
 	}
 	if (!app_hovering(a)) {
 		snprintf(why, cap, "Experiment %d refused: not hovering", id);
-		return MAV_RESULT_DENIED;
+		return APP_DENIED;
 	}
 	int r = exp_start(&a->exp, id, &a->p, why, cap);
-	if (r == MAV_RESULT_ACCEPTED || r == MAV_RESULT_IN_PROGRESS) {
+	if (r == APP_ACCEPTED || r == APP_IN_PROGRESS) {
 		a->exp.id = id;
 		a->exp.state = EXP_RUNNING;
 		set_mode(a, APP_EXPERIMENT);
 		a->exp_ack_pending = true;
-		a->exp_ack_sysid = a->mav.cmd_sysid;
-		a->exp_ack_compid = a->mav.cmd_compid;
-		r = MAV_RESULT_IN_PROGRESS;
+		a->exp_origin = origin;
+		r = APP_IN_PROGRESS;
 	}
 	return r;
 }
@@ -376,6 +359,9 @@ int app_cmd_experiment(struct app *a, float id_f, char *why, size_t cap)
  * phases must already fly with the new VEH_* values. Applied results are
  * broadcast as PARAM_VALUE, removed from the list, and saved to the parameter
  * file by app_tick (save_pending). */
+_Static_assert(APP_OUTBOX_LEN >= EXP_MAX_RESULTS + 8,
+	       "the outbox holds a turn's results and the status lines of the same pass");
+
 static void apply_results(struct app *a)
 {
 	int n = a->exp.n_results < EXP_MAX_RESULTS ? a->exp.n_results : EXP_MAX_RESULTS;
@@ -388,15 +374,16 @@ static void apply_results(struct app *a)
 			continue;
 		enum param_set_result r = params_set(&a->p, (size_t)idx, a->exp.results[i].value);
 		if (r != PARAM_OK)
-			app_status(a, MAV_SEVERITY_WARNING, "%s not applied: %s", param_defs[idx].name,
+			app_status(a, APP_SEV_WARNING, "%s not applied: %s", param_defs[idx].name,
 				   params_set_result_text(r));
-		mav_param_value(a, (size_t)idx);
+		struct app_event e = {.kind = APP_EV_PARAM, .param_index = (uint16_t)idx};
+		outbox_post(&a->outbox, &e);
 	}
 	a->exp.n_results = 0;
 	if (a->p.veh_kf != kf_old && kf_old > 0.0f) {
 		/* bumpless: the throttles (what the plant sees) stay where they were, so the
 		 * height integrator takes the thrust demand to the new k_f's scale:
-		 * (g + a_int) -> (g + a_int) k_f new / k_f old (issue 6) */
+		 * (g + a_int) -> (g + a_int) k_f new / k_f old */
 		float g = a->p.veh_grav, r = a->p.veh_kf / kf_old;
 		alt_ctrl_reset(&a->alt, sc_from_float((g + sc_to_float(a->alt.a_int_mps2)) * r - g));
 	}
@@ -416,10 +403,10 @@ static void apply_results(struct app *a)
  *                 throttle map (sync_params; the mixer's set-up is ~370,000
  *                 instructions on Cortex-M4F, ~75 steps' worth). It runs first
  *                 in app_tick (the main loop's pass after the frame), and as a
- *                 fallback at the start of app_on_frame and app_on_mavlink, so that no
+ *                 fallback at the start of app_on_frame and app_on_ground, so that no
  *                 step, command or PARAM_SET ever sees a result half applied or the
- *                 old mixer beside new parameters ("the mixer and throttle map are
- *                 rebuilt at a frame boundary", issue 6);
+ *                 old mixer beside new parameters (the mixer and throttle map are
+ *                 rebuilt at a frame boundary);
  *   app_tick()    then writes the parameter file when results were applied
  *                 (save_pending).
  * On an MCU the step runs in the frame interrupt (or a high-priority task) and this in a
@@ -509,7 +496,7 @@ static void control_step(struct app *a, float dt)
 			a->on_ground_s = 0.0f;
 		if (a->on_ground_s > p->nav_touch_down_s) {
 			memset(a->thr, 0, sizeof a->thr);
-			app_status(a, MAV_SEVERITY_INFO, "Landed");
+			app_status(a, APP_SEV_INFO, "Landed");
 			set_mode(a, APP_DISARMED);
 			return;
 		}
@@ -519,7 +506,7 @@ static void control_step(struct app *a, float dt)
 	}
 
 	/* horizontal: hold the position of the take-off through small tilts */
-	float yaw = quat_yaw(q);
+	float yaw = sc_to_float(quat_yaw(q));
 	float vn = clampf(p->pos_gain * (a->pos_sp[0] - f->pos_i_m[0]), -POS_VEL_MAX, POS_VEL_MAX);
 	float vw = clampf(p->pos_gain * (a->pos_sp[1] - f->pos_i_m[1]), -POS_VEL_MAX, POS_VEL_MAX);
 	float an = p->pos_vel_gain * (vn - f->vel_i_mps[0]);
@@ -648,12 +635,12 @@ static void link_back(struct app *a, float gap_s)
 	a->link_ok = true;
 	if (!a->link_ever) {
 		a->link_ever = true;
-		app_status(a, MAV_SEVERITY_INFO, "X-Plane link up");
+		app_status(a, APP_SEV_INFO, "X-Plane link up");
 		return;
 	}
-	app_status(a, MAV_SEVERITY_WARNING, "X-Plane link back after %.2f s", (double)gap_s);
+	app_status(a, APP_SEV_WARNING, "X-Plane link back after %.2f s", (double)gap_s);
 	if (gap_s > a->p.fs_land_after && app_flying(a) && a->mode != APP_LAND) {
-		app_status(a, MAV_SEVERITY_CRITICAL, "Link was lost for more than %.1f s: landing",
+		app_status(a, APP_SEV_CRITICAL, "Link was lost for more than %.1f s: landing",
 			   (double)a->p.fs_land_after);
 		char why[8];
 		app_cmd_land(a, why, sizeof why);
@@ -673,14 +660,14 @@ static void abort_experiment(struct app *a, const char *reason)
 static void link_lost(struct app *a, const char *what)
 {
 	a->link_ok = false;
-	app_status(a, MAV_SEVERITY_CRITICAL, "X-Plane link lost (%s)", what);
+	app_status(a, APP_SEV_CRITICAL, "X-Plane link lost (%s)", what);
 	abort_experiment(a, "X-Plane link lost");
 }
 
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
 	app_settle(a);   /* normally done by app_tick already (nothing left here) */
-	uint64_t now = hal_wall_us();
+	uint64_t now = hal_wall_us(a->hal);
 	a->fr = *f;
 	a->have_frame = true;
 	if (!a->link_ok)
@@ -695,7 +682,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 		if (gap > 0.0) {
 			if (a->have_step && gap > (double)a->p.fs_link_to) {
 				/* frames missing in plant time (lockstep bursts, reload) */
-				app_status(a, MAV_SEVERITY_WARNING, "X-Plane frames missing for %.2f s", gap);
+				app_status(a, APP_SEV_WARNING, "X-Plane frames missing for %.2f s", gap);
 				abort_experiment(a, "X-Plane frames missing");
 				if (gap > (double)a->p.fs_land_after && app_flying(a) && a->mode != APP_LAND) {
 					char why[8];
@@ -721,15 +708,15 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	 * keeps the last command anyway; a lockstep simulator would otherwise take
 	 * the extra command for its next frame and run one frame ahead of us. */
 	if (a->actuating && (!a->have_actuated || f->t_s > a->t_actuated)) {
-		hal_actuate(a->thr);
+		hal_actuate(a->hal, a->thr);
 		a->have_actuated = true;
 		a->t_actuated = f->t_s;
 	}
 	fill_log(a, stepped, dt);
-	hal_log_frame(&a->log);
+	hal_log_frame(a->hal, &a->log);
 }
 
-size_t app_on_mavlink(struct app *a, const uint8_t *buf, size_t len)
+size_t app_on_ground(struct app *a, const uint8_t *buf, size_t len)
 {
 	app_settle(a);   /* commands see the results of the last step applied */
 	return mav_receive(a, buf, len);
@@ -741,10 +728,10 @@ void app_tick(struct app *a)
 	if (a->save_pending) {
 		a->save_pending = false;
 		char why[64];
-		if (app_params_save(a, why, sizeof why) != MAV_RESULT_ACCEPTED)
-			app_status(a, MAV_SEVERITY_ERROR, "%s", why);
+		if (app_params_save(a, why, sizeof why) != APP_ACCEPTED)
+			app_status(a, APP_SEV_ERROR, "%s", why);
 	}
-	uint64_t now = hal_wall_us();
+	uint64_t now = hal_wall_us(a->hal);
 	uint64_t to = (uint64_t)(a->p.fs_link_to * 1e6f);
 	if (a->link_ok && a->have_frame && now - a->wall_last_frame_us > to) {
 		a->link_lost_at_us = a->wall_last_frame_us;

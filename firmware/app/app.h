@@ -3,11 +3,11 @@
  * parameters, commands. Platform-independent: it talks to the world only
  * through hal.h. The platform owns one struct app and calls:
  *
- *   app_init(a)              defaults, then the stored parameters
+ *   app_init(a, hal)         defaults, then the stored parameters
  *   app_on_frame(a, frame)   each sensor frame (the app actuates once per frame
  *                            that brings a new time stamp, from the first arming
  *                            on: duplicates and reordered frames are not answered)
- *   app_on_mavlink(a, b, n)  bytes from the ground station
+ *   app_on_ground(a, b, n)   bytes from the ground station (MAVLink)
  *   app_tick(a)              often (main loop), and between frames: applies
  *                            identification results, rebuilds the mixer after
  *                            a parameter change, saves the parameter file,
@@ -15,7 +15,7 @@
  *                            frames")
  *
  * Modes: DISARMED -> (arm) IDLE -> (NAV_TAKEOFF) TAKEOFF -> HOLD
- *        HOLD <-> EXPERIMENT (MAV_CMD_USER_1, only while hovering)
+ *        HOLD <-> EXPERIMENT (app_cmd_experiment, only while hovering)
  *        any flying mode -> (NAV_LAND or failsafe) LAND -> (touch-down) DISARMED
  * Link to the plant silent for FS_LINK_TO s: reported (and an experiment
  * aborted); silent for more than FS_LAND_AFTER s: the vehicle lands when the
@@ -34,6 +34,7 @@
 #include "log.h"
 #include "mav.h"
 #include "mixer.h"
+#include "outbox.h"
 #include "params.h"
 #include "thrmap.h"
 
@@ -47,6 +48,7 @@ enum app_mode {
 };
 
 struct app {
+	const struct hal *hal;    /* the platform (set by app_init) */
 	struct app_params p;
 	enum app_mode mode;
 
@@ -82,43 +84,46 @@ struct app {
 	/* identification */
 	struct experiment exp;
 	struct exp_output exp_out;
-	bool exp_ack_pending;         /* a final COMMAND_ACK of MAV_CMD_USER_1 is owed */
-	uint8_t exp_ack_sysid, exp_ack_compid;
+	bool exp_ack_pending;         /* a final result of the experiment command is owed */
+	app_origin exp_origin;        /* to whom */
 
 	/* between frames (app.c): work the 90 Hz step does not do */
 	bool params_dirty;            /* a parameter changed: rebuild gains, mixer, map */
 	bool save_pending;            /* results applied: write the parameter file */
 
+	struct app_outbox outbox;     /* events for the ground station (mav.c drains it) */
 	struct mav mav;
 	struct app_log_frame log;
 	uint32_t steps;
 };
 
-void app_init(struct app *a);
+void app_init(struct app *a, const struct hal *hal);
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f);
 /* Returns the number of MAVLink messages accepted (the platform may learn the
  * ground station's address from a datagram that had one). */
-size_t app_on_mavlink(struct app *a, const uint8_t *buf, size_t len);
+size_t app_on_ground(struct app *a, const uint8_t *buf, size_t len);
 void app_tick(struct app *a);
 
 const char *app_mode_name(enum app_mode m);
 bool app_hovering(const struct app *a);
 bool app_flying(const struct app *a);
 
-/* Commands (called by the MAVLink handler). Each returns a MAV_RESULT and, on
+/* Commands (called by the MAVLink module). Each returns an app_result and, on
  * refusal, a reason in `why`. All are idempotent: a retry gets the same answer. */
-int app_cmd_arm(struct app *a, bool arm, bool force, char *why, size_t cap);
-int app_cmd_takeoff(struct app *a, float height_m, char *why, size_t cap);
-int app_cmd_land(struct app *a, char *why, size_t cap);
-int app_cmd_experiment(struct app *a, float id, char *why, size_t cap);
-int app_params_save(struct app *a, char *why, size_t cap);
-int app_params_load(struct app *a, char *why, size_t cap);
+enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size_t cap);
+enum app_result app_cmd_takeoff(struct app *a, float height_m, char *why, size_t cap);
+enum app_result app_cmd_land(struct app *a, char *why, size_t cap);
+/* Long-running: APP_IN_PROGRESS, then an APP_EV_CMD_DONE event for `origin`. */
+enum app_result app_cmd_experiment(struct app *a, float id, app_origin origin, char *why, size_t cap);
+enum app_result app_params_save(struct app *a, char *why, size_t cap);
+enum app_result app_params_load(struct app *a, char *why, size_t cap);
 
 /* Parameter write from outside (PARAM_SET); refuses vehicle-model and mixer
  * parameters while an experiment runs. Returns 0 or a reason. */
 const char *app_param_write(struct app *a, size_t index, float value);
 
-/* STATUSTEXT to the ground station + event in the log + console. */
-void app_status(struct app *a, int severity, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* A status line: console, log event, and an APP_EV_STATUS event in the outbox. */
+void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
+	__attribute__((format(printf, 3, 4)));
 
 #endif /* OCTO_APP_H */

@@ -1,5 +1,5 @@
 /*
- * experiment.c - in-flight identification experiments (issue 6); contract and design in
+ * experiment.c - in-flight identification experiments; contract and design in
  * experiment.h, estimators in firmware/core/ident.h.
  */
 #include "experiment.h"
@@ -9,7 +9,6 @@
 #include <stdio.h>
 #include <string.h>
 
-#include <common/mavlink.h>
 
 enum phase_kind {
 	PK_NONE = 0,
@@ -240,31 +239,17 @@ bool exp_available(int id)
 	return id >= 1 && id <= 6;
 }
 
-bool exp_param_readonly(const char *name)
-{
-	static const char *const ro[] = {
-		"ID_KF_EST", "ID_KF_SD", "ID_KF_PLAIN", "ID_KTAU_EST", "ID_KTAU_SD", "ID_KTAU_PLAIN",
-		"ID_IXX_EST", "ID_IXX_SD", "ID_IYY_EST", "ID_IYY_SD", "ID_IZZ_EST", "ID_IZZ_SD",
-		"ID_VAL_NE_PRE", "ID_VAL_FIT_PRE", "ID_VAL_NE_POST", "ID_VAL_FIT_POST", "ID_RESULT",
-		"ID_TAU_CHECK", "ID_TAU_SD", "ID_CRV_SD", "ID_MOT_NE",
-	};
-	for (size_t i = 0; i < sizeof ro / sizeof ro[0]; i++)
-		if (!strcmp(name, ro[i]))
-			return true;
-	return false;
-}
-
 int exp_start(struct experiment *e, int id, const struct app_params *p, char *why, size_t cap)
 {
 	memset(e, 0, sizeof *e);
 	if (!exp_available(id)) {
 		snprintf(why, cap, "Experiment %d unknown (1..6)", id);
-		return MAV_RESULT_DENIED;
+		return APP_DENIED;
 	}
 	cfg_resolve(&e->cfg, p);
 	if (!(e->cfg.exc_amp > 0.0f) || !(e->cfg.exc_time > 0.0f)) {
 		snprintf(why, cap, "Experiment %d refused: ID_EXC_AMP/ID_EXC_TIME not > 0", id);
-		return MAV_RESULT_DENIED;
+		return APP_DENIED;
 	}
 	switch (id) {
 	case 1:
@@ -290,7 +275,7 @@ int exp_start(struct experiment *e, int id, const struct app_params *p, char *wh
 	e->n_est = EXP_MAX_EST;
 	for (int i = 0; i < EXP_MAX_EST; i++)
 		snprintf(e->est_name[i], sizeof e->est_name[i], "%s", est_names[i]);
-	return MAV_RESULT_ACCEPTED;
+	return APP_ACCEPTED;
 }
 
 void exp_abort(struct experiment *e, const char *reason)
@@ -300,9 +285,9 @@ void exp_abort(struct experiment *e, const char *reason)
 		e->n_results = 0;
 		e->q_n = 0;
 		e->est_live = 0;
-		e->final_result = MAV_RESULT_FAILED;
+		e->final_result = APP_FAILED;
 		snprintf(e->msg, sizeof e->msg, "ID aborted: %s", reason);
-		e->msg_severity = MAV_SEVERITY_WARNING;
+		e->msg_severity = APP_SEV_WARNING;
 	}
 }
 
@@ -327,7 +312,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	e->t_phase = 0.0f;
 	e->t_settle = SETTLE_S;
 	e->est_live = 0;
-	say(e, MAV_SEVERITY_INFO, "ID %d/%d: %s", e->phase + 1, e->n_phases, phase_name(k));
+	say(e, APP_SEV_INFO, "ID %d/%d: %s", e->phase + 1, e->n_phases, phase_name(k));
 
 	struct excite_params xp = excite_params_default();
 	xp.seed = cf->seed * 8u + (uint32_t)e->phase;
@@ -457,32 +442,32 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 	const char *why = !model_ok ? "motor model" : !range_ok ? "out of range" : "";
 	const char *why_f = ok ? "accepted" : vf != IDENT_ACCEPT ? ident_verdict_text(vf) : why[0] ? why : "ktau rejected";
 	const char *why_t = ok ? "accepted" : vt != IDENT_ACCEPT ? ident_verdict_text(vt) : why[0] ? why : "kf rejected";
-	int sev = ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING;
+	int sev = ok ? APP_SEV_INFO : APP_SEV_WARNING;
 	say(e, sev, "ID kf %.3f +/- %.3f %s%s", (double)mr.kf, (double)mr.kf_sd, ok ? "N " : "rejected: ", why_f);
 	say(e, sev, "ID ktau %.4f +/- %.4f %s%s", (double)mr.ktau, (double)mr.ktau_sd, ok ? "N m " : "rejected: ",
 	    why_t);
-	say(e, MAV_SEVERITY_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
+	say(e, APP_SEV_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
 	say(e, sev, "ID motor lag %.4f +/- %.4f s delay %d fr", (double)mr.tau, (double)mr.tau_sd, (int)mr.delay);
 	if (e->cfg.crv_est)
 		say(e, sev, "ID curve %.3f +/- %.3f", (double)mr.curve, (double)mr.curve_sd);
 	else
-		say(e, MAV_SEVERITY_INFO, "ID curve %.3f given (ID_CRV_EST 0)", (double)mr.curve);
+		say(e, APP_SEV_INFO, "ID curve %.3f given (ID_CRV_EST 0)", (double)mr.curve);
 	say(e, sev, "ID scale 1-4 %.4f %.4f %.4f %.4f", (double)mr.scale[0], (double)mr.scale[1],
 	    (double)mr.scale[2], (double)mr.scale[3]);
 	say(e, sev, "ID scale 5-8 %.4f %.4f %.4f %.4f", (double)mr.scale[4], (double)mr.scale[5],
 	    (double)mr.scale[6], (double)mr.scale[7]);
-	say(e, MAV_SEVERITY_INFO, "ID motor model NE %.3f noise %.4f N", (double)mr.ne_all, (double)mr.noise_sd);
+	say(e, APP_SEV_INFO, "ID motor model NE %.3f noise %.4f N", (double)mr.ne_all, (double)mr.noise_sd);
 	if (!model_ok) {
 		if (mr.cause == MOTOR_ID_ROTOR)
-			say(e, MAV_SEVERITY_WARNING, "ID rejected: rotor %d unexplained, NE %.2f", mr.cause_rotor + 1,
+			say(e, APP_SEV_WARNING, "ID rejected: rotor %d unexplained, NE %.2f", mr.cause_rotor + 1,
 			    (double)mr.ne[mr.cause_rotor]);
 		else
-			say(e, MAV_SEVERITY_WARNING, "ID rejected: %s", motor_id_cause_text(mr.cause));
-		say(e, MAV_SEVERITY_WARNING, "ID remedy: %s", motor_id_cause_remedy(mr.cause));
+			say(e, APP_SEV_WARNING, "ID rejected: %s", motor_id_cause_text(mr.cause));
+		say(e, APP_SEV_WARNING, "ID remedy: %s", motor_id_cause_remedy(mr.cause));
 	} else if (curve_bad) {
-		say(e, MAV_SEVERITY_WARNING, "ID rejected: curve %.3f outside 0-0.99", (double)mr.curve);
+		say(e, APP_SEV_WARNING, "ID rejected: curve %.3f outside 0-0.99", (double)mr.curve);
 	} else if (bad_rotor >= 0) {
-		say(e, MAV_SEVERITY_WARNING, "ID rejected: rotor %d scale %.3f outside 0.3-1.5", bad_rotor + 1,
+		say(e, APP_SEV_WARNING, "ID rejected: rotor %d scale %.3f outside 0.3-1.5", bad_rotor + 1,
 		    (double)mr.scale[bad_rotor]);
 	}
 	/* a weak rotor is reported whenever the model holds (applied or not: the data show it) */
@@ -490,7 +475,7 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 	if (model_ok)
 		for (int j = 0; j < HAL_ROTORS; j++)
 			if (mr.scale[j] < smin)
-				say(e, MAV_SEVERITY_WARNING, "ID rotor %d degraded: effectiveness %.3f", j + 1,
+				say(e, APP_SEV_WARNING, "ID rotor %d degraded: effectiveness %.3f", j + 1,
 				    (double)mr.scale[j]);
 }
 
@@ -529,14 +514,14 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		const char *why_t = ok ? "accepted" : vt != IDENT_ACCEPT ? ident_verdict_text(vt)
 					     : lag_off ? "motor lag off" : "kf rejected";
 		/* STATUSTEXT holds 50 characters: the unit goes when a reason has to fit */
-		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID kf %.3f +/- %.3f %s%s", (double)kf,
+		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID kf %.3f +/- %.3f %s%s", (double)kf,
 		    (double)kf_sd, ok ? "N " : "rejected: ", why_f);
-		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID ktau %.4f +/- %.4f %s%s",
+		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID ktau %.4f +/- %.4f %s%s",
 		    (double)kt, (double)kt_sd, ok ? "N m " : "rejected: ", why_t);
-		say(e, MAV_SEVERITY_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
+		say(e, APP_SEV_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
 		result(e, PX_ID_TAU_CHECK, isfinite(tau_c) ? tau_c : -1.0f);
 		if (tau_c >= 0.0f && isfinite(tau_c))
-			say(e, lag_off ? MAV_SEVERITY_WARNING : MAV_SEVERITY_INFO, "ID motor lag %.4f s%s (ID_MOT_TAU %.4f)",
+			say(e, lag_off ? APP_SEV_WARNING : APP_SEV_INFO, "ID motor lag %.4f s%s (ID_MOT_TAU %.4f)",
 			    (double)tau_c, lag_off ? " DIFFERS" : "", (double)tau_m);
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
@@ -553,14 +538,14 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		if (ok)
 			result(e, pv[ax], est);
 		set_result_bit(e, p, 2u << ax, ok);
-		say(e, ok ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "ID %s %.5f +/- %.5f %s%s", nm[ax],
+		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID %s %.5f +/- %.5f %s%s", nm[ax],
 		    (double)est, (double)sd, ok ? "kg m^2 " : "rejected: ", ident_verdict_text(v));
 	} else {
 		bool post = k == PK_VAL_POST || (k == PK_VAL && (result_mask(p) & 1u));
 		float ne = ident_fit_ne(&e->fit), fit = ident_fit_pct(&e->fit);
 		result(e, post ? PX_ID_VAL_NE_POST : PX_ID_VAL_NE_PRE, ne);
 		result(e, post ? PX_ID_VAL_FIT_POST : PX_ID_VAL_FIT_PRE, fit);
-		say(e, MAV_SEVERITY_INFO, "ID validation %s: NE %.4f fit %.1f %%", post ? "after" : "before",
+		say(e, APP_SEV_INFO, "ID validation %s: NE %.4f fit %.1f %%", post ? "after" : "before",
 		    (double)ne, (double)fit);
 	}
 	e->est_live = 0;
@@ -658,7 +643,7 @@ void exp_turn(struct experiment *e, const struct app_params *p)
 		e->phase = e->n_phases - 1;
 		e->progress = 1.0f;
 		e->reporting = true;
-		say(e, MAV_SEVERITY_INFO, "ID done");
+		say(e, APP_SEV_INFO, "ID done");
 	} else {
 		phase_begin(e, p, &e->turn);
 	}
@@ -700,7 +685,7 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 	/* finished once every line has gone out (exp_pump and the app's tick send them) */
 	if (e->reporting && !e->q_n && !e->msg[0]) {
 		e->state = EXP_FINISHED;
-		e->final_result = MAV_RESULT_ACCEPTED;
+		e->final_result = APP_ACCEPTED;
 	}
 	return e->state;
 }

@@ -1,5 +1,5 @@
 /*
- * experiment.h - the hook for in-flight identification experiments (issue 6).
+ * experiment.h - the hook for in-flight identification experiments.
  *
  * The app runs an experiment in mode APP_EXPERIMENT: every control step it first
  * computes the hover control (height and level attitude held), then calls
@@ -19,7 +19,7 @@
  * also aborts the experiment itself (exp_abort) when the attitude leaves
  * EXP_TILT_ABORT_DEG or the X-Plane link drops.
  *
- * This file is the contract; experiment.c holds the implementations (issue 6),
+ * This file is the contract; experiment.c holds the implementations,
  * firmware/core/ident.h the estimators.
  *
  * ---------------------------------------------------------------- the experiments
@@ -92,15 +92,16 @@
  * estimated in the current phase (only those are streamed); a std is streamed as
  * "<name>_SD" (KF_SD, KTAU_SD, IXX_SD, IYY_SD, IZZ_SD).
  *
- * ---------------------------------------------------------------- changes to the
- * interface of /tmp/octo-ident-interface.md and to this hook (issue 6)
+ * ---------------------------------------------------------------- what the app and the
+ * experiments rely on
  *   - results: the app applies e->results[0..n_results) after EVERY exp_step that
  *     returns with n_results > 0 (not only at the end: sequence 6 validates with the new
- *     k_f) and then sets n_results = 0; EXP_MAX_RESULTS 24.
- *   - added: est_live, final_result (MAV_RESULT of the final COMMAND_ACK: ACCEPTED when
- *     finished, FAILED when aborted), exp_param_readonly() (result parameters refuse a
- *     PARAM_SET), parameter ID_EXC_NULL (the null-space dither, default 1), result
- *     parameter ID_TAU_CHECK (the motor lag the rotor experiment's data show, a
+ *     k_f) and then sets n_results = 0; EXP_MAX_RESULTS 32 (the rotor model's phase
+ *     end posts 24).
+ *   - est_live (above); final_result, the app_result of the command's final answer
+ *     (APP_ACCEPTED when finished, APP_FAILED when aborted); result parameters are
+ *     read-only (PARAM_READONLY in experiment_params.h); parameter ID_EXC_NULL (the
+ *     null-space dither, default 1); result parameter ID_TAU_CHECK (the motor lag the rotor experiment's data show, a
  *     Gauss-Newton step from ID_MOT_TAU; -1 when ID_MOT_TAU is 0) with a STATUSTEXT
  *     "ID motor lag 0.0301 s (ID_MOT_TAU 0.0300)", "... DIFFERS ..." (warning) when the
  *     two differ by more than 10 % (LAG_TOL). The lag check is also the rotor experiment's
@@ -111,7 +112,7 @@
  *     motors of 45 ms), a transport delay not declared in ID_DELAY_FR (one frame reads as
  *     ~+13 ms of lag), or a lockstep loop that slipped a frame (the simulator timed out on
  *     a late answer and took it for the next frame: every throttle then acts one frame late).
- *   - lost frames (issue 9): a step after a gap has dt_s a multiple of the frame period
+ *   - lost frames: a step after a gap has dt_s a multiple of the frame period
  *     (dt_frame_s, the app's: the shortest recent step); the rotor and validation models
  *     advance through the gap with the held throttle, the inertia updates wait GAP_HOLD
  *     frames. Stale (reordered, duplicated) frames are not stepped.
@@ -135,10 +136,11 @@
 #include "hal.h"
 #include "ident.h"
 #include "motor_id.h"
+#include "outbox.h"
 #include "params.h"
 
 #define EXP_MAX_EST 8
-#define EXP_MAX_RESULTS 40
+#define EXP_MAX_RESULTS 32
 #define EXP_MAX_PHASES 6
 #define EXP_QUEUE 20
 #define EXP_TILT_ABORT_DEG 15.0f
@@ -171,7 +173,7 @@ struct exp_result {
 #define EXP_LINE_ARGS 5
 struct exp_line {
 	const char *fmt;
-	int sev;                               /* MAV_SEVERITY */
+	int sev;                               /* enum app_severity */
 	char kind[EXP_LINE_ARGS + 1];          /* 'd' int, 's' string, 'f' double per argument */
 	union {
 		int i;
@@ -205,11 +207,11 @@ struct experiment {
 	char est_name[EXP_MAX_EST][11];        /* NAMED_VALUE_FLOAT names, <= 10 chars */
 	float est[EXP_MAX_EST], est_sd[EXP_MAX_EST];
 	char msg[51];                          /* pending status line ("" = none) */
-	int msg_severity;                      /* MAV_SEVERITY */
+	int msg_severity;                      /* enum app_severity */
 	int n_results;
 	struct exp_result results[EXP_MAX_RESULTS];
 	uint32_t est_live;                     /* bit i: est[i] is being estimated (streamed) */
-	int final_result;                      /* MAV_RESULT of the final COMMAND_ACK */
+	int final_result;                      /* enum app_result of the command's final answer */
 
 	/* implementation state (experiment.c) */
 	int n_phases, phase_kind[EXP_MAX_PHASES];
@@ -247,7 +249,7 @@ struct experiment {
 bool exp_available(int id);
 
 /* Starts experiment `id` (the caller has checked that the vehicle hovers).
- * Returns a MAV_RESULT; on refusal `why` says why (for a STATUSTEXT). */
+ * Returns an app_result; on refusal `why` says why (for a status line). */
 int exp_start(struct experiment *e, int id, const struct app_params *p, char *why, size_t cap);
 
 /* One control step while running; fills *out (zeroed by the caller). */
@@ -264,8 +266,5 @@ void exp_pump(struct experiment *e);
 
 /* Stops a running experiment (reason for the log/STATUSTEXT); results dropped. */
 void exp_abort(struct experiment *e, const char *reason);
-
-/* Is parameter `name` a result the firmware writes (a PARAM_SET is refused)? */
-bool exp_param_readonly(const char *name);
 
 #endif /* OCTO_EXPERIMENT_H */

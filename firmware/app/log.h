@@ -1,9 +1,15 @@
 /*
  * log.h - the per-frame record of the autopilot's internal state.
  *
- * The app fills one struct app_log_frame per received frame and hands it to
- * hal_log_frame(); the host platform writes it as LCM type octo.fw_frame_t
- * (firmware/lcm/octo_fw_frame_t.lcm, same fields and meaning).
+ * APP_LOG_FIELDS is the one list of its fields, in the order and with the
+ * types of the LCM message octo.fw_frame_t (firmware/lcm/octo_fw_frame_t.lcm,
+ * whose fields after utime must match it: tests/py/test_contracts.py checks).
+ * It produces struct app_log_frame here and the field-by-field copy into the
+ * LCM message in the host platform (hal/host/lcm_log.c). The app fills one
+ * record per received frame (app.c: fill_log) and hands it to the HAL's log_frame.
+ *
+ *   ONE(c_type, lcm_type, name)          a scalar
+ *   ARR(c_type, lcm_type, name, count)   a fixed-size array
  */
 #ifndef OCTO_APP_LOG_H
 #define OCTO_APP_LOG_H
@@ -11,22 +17,52 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#define APP_LOG_FIELDS(ONE, ARR)                                         \
+	ONE(int64_t, int64_t, seq)                                        \
+	ONE(double, double, t)                                            \
+	ONE(float, float, dt)                                             \
+	ONE(bool, boolean, stepped)                                       \
+	ONE(int8_t, int8_t, mode)                                         \
+	ONE(bool, boolean, armed)                                         \
+	ONE(bool, boolean, link_ok)                                       \
+	ONE(int32_t, int32_t, valid)                                      \
+	ARR(float, float, q, 4)                                           \
+	ARR(float, float, rate_b, 3)                                      \
+	ARR(float, float, pos_i, 3)                                       \
+	ARR(float, float, vel_i, 3)                                       \
+	ARR(float, float, rotor_thrust, 8)                                \
+	ARR(float, float, rotor_torque, 8)                                \
+	ARR(float, float, q_sp, 4)                                        \
+	ONE(float, float, z_sp)                                           \
+	ONE(float, float, vz_ff)                                          \
+	ARR(float, float, pos_sp, 2)                                      \
+	ONE(float, float, f_dem)                                          \
+	ARR(float, float, tau_dem, 3)                                     \
+	ONE(float, float, f_alloc)                                        \
+	ARR(float, float, tau_alloc, 3)                                   \
+	ARR(float, float, rotor_f, 8)                                     \
+	ARR(float, float, excitation, 8)                                  \
+	ARR(float, float, throttle, 8)                                    \
+	ONE(int32_t, int32_t, att_flags)                                  \
+	ONE(int32_t, int32_t, alt_flags)                                  \
+	ONE(int32_t, int32_t, mix_flags)                                  \
+	ONE(int32_t, int32_t, thr_clamped)                                \
+	ONE(int8_t, int8_t, exp_id)                                       \
+	ONE(int8_t, int8_t, exp_phase)                                    \
+	ONE(float, float, exp_progress)                                   \
+	ARR(float, float, est, 8)                                         \
+	ARR(float, float, est_sd, 8)                                      \
+	ONE(float, float, kf)                                             \
+	ONE(float, float, ktau)                                           \
+	ARR(float, float, inertia, 3)                                     \
+	ONE(float, float, mass)
+
 struct app_log_frame {
-	int64_t seq;
-	double t;
-	float dt;
-	bool stepped, armed, link_ok;
-	int8_t mode;
-	int32_t valid;
-	float q[4], rate_b[3], pos_i[3], vel_i[3];
-	float rotor_thrust[8], rotor_torque[8];
-	float q_sp[4], z_sp, vz_ff, pos_sp[2];
-	float f_dem, tau_dem[3], f_alloc, tau_alloc[3];
-	float rotor_f[8], excitation[8], throttle[8];
-	int32_t att_flags, alt_flags, mix_flags, thr_clamped;
-	int8_t exp_id, exp_phase;
-	float exp_progress, est[8], est_sd[8];
-	float kf, ktau, inertia[3], mass;
+#define APP_LOG_ONE(c_type, lcm_type, name) c_type name;
+#define APP_LOG_ARR(c_type, lcm_type, name, n) c_type name[n];
+	APP_LOG_FIELDS(APP_LOG_ONE, APP_LOG_ARR)
+#undef APP_LOG_ONE
+#undef APP_LOG_ARR
 };
 
 #endif /* OCTO_APP_LOG_H */

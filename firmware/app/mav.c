@@ -14,7 +14,7 @@
 #define PARAM_PER_TICK 4
 #define TEXT_BURST 50.0f           /* STATUSTEXT: burst of 50, then 20 per second */
 #define TEXT_RATE 20.0f
-#define FW_VERSION 0x00050000u     /* 0.5.0 (issue 5) */
+#define FW_VERSION 0x00050000u     /* 0.5.0 */
 
 /* Signing state of the one MAVLink channel (attached to the library's channel
  * status, which is itself static inside the generated helpers). */
@@ -28,11 +28,11 @@ static bool accept_unsigned(const mavlink_status_t *status, uint32_t msgid)
 	return msgid == MAVLINK_MSG_ID_RADIO_STATUS;
 }
 
-static void signing_setup(struct mav *m)
+static void signing_setup(struct mav *m, const struct hal *hal)
 {
 	uint8_t key[32];
 	mavlink_status_t *st = mavlink_get_channel_status(CHAN);
-	if (!hal_signing_key(key)) {
+	if (!hal_signing_key(hal, key)) {
 		st->signing = NULL;
 		st->signing_streams = NULL;
 		return;
@@ -44,7 +44,7 @@ static void signing_setup(struct mav *m)
 	signing.link_id = (uint8_t)CHAN;
 	signing.flags = MAVLINK_SIGNING_FLAG_SIGN_OUTGOING;
 	/* 10 us units since 2015-01-01 00:00:00 UTC */
-	uint64_t us = hal_unix_us();
+	uint64_t us = hal_unix_us(hal);
 	const uint64_t epoch2015_us = 1420070400ull * 1000000ull;
 	signing.timestamp = us > epoch2015_us ? (us - epoch2015_us) / 10u : 1u;
 	signing.accept_unsigned_callback = accept_unsigned;
@@ -53,17 +53,19 @@ static void signing_setup(struct mav *m)
 	m->signing = true;
 }
 
-static void send_msg(const mavlink_message_t *msg)
+static void send_msg(const struct app *a, const mavlink_message_t *msg)
 {
 	uint8_t buf[MAVLINK_MAX_PACKET_LEN];
 	uint16_t n = mavlink_msg_to_send_buffer(buf, msg);
-	hal_mav_send(buf, n);
+	hal_ground_send(a->hal, buf, n);
 }
 
 static uint32_t boot_ms(const struct app *a)
 {
-	return (uint32_t)((hal_wall_us() - a->mav.boot_us) / 1000u);
+	return (uint32_t)((hal_wall_us(a->hal) - a->mav.boot_us) / 1000u);
 }
+
+static void send_named_float(struct app *a, const char *name, float value);
 
 /* ---------------------------------------------------------------- telemetry table */
 
@@ -123,8 +125,8 @@ static void pack_servo(struct app *a, mavlink_message_t *msg)
 
 static void pack_sys_status(struct app *a, mavlink_message_t *msg)
 {
-	struct hal_link_stats ls;
-	hal_link_stats(&ls);
+	struct hal_plant_stats ls;
+	hal_plant_stats(a->hal, &ls);
 	uint16_t drops = (uint16_t)(ls.dropped > 65535u ? 65535u : ls.dropped);
 	mavlink_msg_sys_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, 0, 0, 0, 0, UINT16_MAX, -1, -1, 0,
 					 (uint16_t)(a->mav.rx_dropped > 65535u ? 65535u : a->mav.rx_dropped),
@@ -144,12 +146,12 @@ static void pack_estimates(struct app *a, mavlink_message_t *msg)
 	for (int i = 0; i < a->exp.n_est && i < EXP_MAX_EST; i++) {
 		if (!(a->exp.est_live & (1u << i)))
 			continue;
-		mav_named_float(a, a->exp.est_name[i], a->exp.est[i]);
+		send_named_float(a, a->exp.est_name[i], a->exp.est[i]);
 		for (size_t k = 0; k < sizeof with_sd / sizeof with_sd[0]; k++)
 			if (!strcmp(a->exp.est_name[i], with_sd[k])) {
 				char name[16];
 				snprintf(name, sizeof name, "%s_SD", with_sd[k]);
-				mav_named_float(a, name, a->exp.est_sd[i]);
+				send_named_float(a, name, a->exp.est_sd[i]);
 			}
 	}
 }
@@ -184,10 +186,10 @@ static void send_stream(struct app *a, int i)
 	mavlink_message_t msg;
 	streams[i].pack(a, &msg);
 	if (!streams[i].direct)
-		send_msg(&msg);
+		send_msg(a, &msg);
 }
 
-void mav_init(struct mav *m, uint64_t now_us)
+void mav_init(struct mav *m, const struct hal *hal, uint64_t now_us)
 {
 	memset(m, 0, sizeof *m);
 	for (int i = 0; i < MAV_N_STREAMS; i++)
@@ -196,15 +198,15 @@ void mav_init(struct mav *m, uint64_t now_us)
 	m->boot_us = now_us;
 	m->text_tokens = TEXT_BURST;
 	m->text_last_us = now_us;
-	signing_setup(m);
+	signing_setup(m, hal);
 }
 
 /* ---------------------------------------------------------------- outgoing helpers */
 
-void mav_statustext(struct app *a, int severity, const char *text)
+static void send_statustext(struct app *a, int severity, const char *text)
 {
 	struct mav *m = &a->mav;
-	uint64_t now = hal_wall_us();
+	uint64_t now = hal_wall_us(a->hal);
 	m->text_tokens += (float)(now - m->text_last_us) * 1e-6f * TEXT_RATE;
 	if (m->text_tokens > TEXT_BURST)
 		m->text_tokens = TEXT_BURST;
@@ -221,10 +223,10 @@ void mav_statustext(struct app *a, int severity, const char *text)
 	mavlink_message_t msg;
 	mavlink_msg_statustext_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg,
 					 (uint8_t)(severity < 0 ? 0 : (severity > 7 ? 7 : severity)), buf, 0, 0);
-	send_msg(&msg);
+	send_msg(a, &msg);
 }
 
-void mav_named_float(struct app *a, const char *name, float value)
+static void send_named_float(struct app *a, const char *name, float value)
 {
 	char buf[MAVLINK_MSG_NAMED_VALUE_FLOAT_FIELD_NAME_LEN];
 	memset(buf, 0, sizeof buf);
@@ -232,10 +234,10 @@ void mav_named_float(struct app *a, const char *name, float value)
 	memcpy(buf, name, n < sizeof buf ? n : sizeof buf);
 	mavlink_message_t msg;
 	mavlink_msg_named_value_float_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, boot_ms(a), buf, value);
-	send_msg(&msg);
+	send_msg(a, &msg);
 }
 
-void mav_param_value(struct app *a, size_t index)
+static void send_param_value(struct app *a, size_t index)
 {
 	if (index >= param_count)
 		return;
@@ -246,25 +248,29 @@ void mav_param_value(struct app *a, size_t index)
 	mavlink_message_t msg;
 	mavlink_msg_param_value_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, id, params_get(&a->p, index),
 					  MAV_PARAM_TYPE_REAL32, (uint16_t)param_count, (uint16_t)index);
-	send_msg(&msg);
+	send_msg(a, &msg);
 }
 
-void mav_command_ack(struct app *a, uint16_t cmd, uint8_t result, uint8_t progress, uint8_t sysid,
-		     uint8_t compid)
+static void send_command_ack(struct app *a, uint16_t cmd, uint8_t result, uint8_t progress, uint8_t sysid,
+			     uint8_t compid)
 {
 	(void)a;
 	mavlink_message_t msg;
 	mavlink_msg_command_ack_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, cmd, result, progress, 0, sysid,
 					  compid);
-	send_msg(&msg);
+	send_msg(a, &msg);
 }
 
-static void send_ack(uint16_t cmd, uint8_t result, const mavlink_message_t *req)
+static void drain(struct app *a);
+
+/* Every reply first drains the outbox: status lines the request caused go out before its answer. */
+static void send_ack(struct app *a, uint16_t cmd, uint8_t result, const mavlink_message_t *req)
 {
-	mav_command_ack(NULL, cmd, result, 0, req->sysid, req->compid);
+	drain(a);
+	send_command_ack(a, cmd, result, 0, req->sysid, req->compid);
 }
 
-static void send_autopilot_version(void)
+static void send_autopilot_version(struct app *a)
 {
 	uint8_t custom[8] = {0}, uid2[18] = {0};
 	memcpy(custom, "octofw05", 8);
@@ -274,7 +280,7 @@ static void send_autopilot_version(void)
 		MAV_PROTOCOL_CAPABILITY_MAVLINK2 | MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE |
 			MAV_PROTOCOL_CAPABILITY_COMMAND_INT,
 		FW_VERSION, 0, 0, 0, custom, custom, custom, 0, 0, 1, uid2);
-	send_msg(&msg);
+	send_msg(a, &msg);
 }
 
 /* ---------------------------------------------------------------- parameters */
@@ -295,9 +301,9 @@ static void unknown_param(struct app *a, const char *id, int index)
 		if (*c < 32 || *c > 126)
 			*c = '?';
 	if (name[0])
-		app_status(a, MAV_SEVERITY_WARNING, "Unknown parameter %s", name);
+		app_status(a, APP_SEV_WARNING, "Unknown parameter %s", name);
 	else
-		app_status(a, MAV_SEVERITY_WARNING, "Unknown parameter index %d", index);
+		app_status(a, APP_SEV_WARNING, "Unknown parameter index %d", index);
 }
 
 static void handle_param_set(struct app *a, const mavlink_message_t *msg)
@@ -313,9 +319,10 @@ static void handle_param_set(struct app *a, const mavlink_message_t *msg)
 	}
 	const char *why = app_param_write(a, (size_t)idx, ps.param_value);
 	if (why)
-		app_status(a, MAV_SEVERITY_WARNING, "%s: %g refused (%s)", param_defs[idx].name,
+		app_status(a, APP_SEV_WARNING, "%s: %g refused (%s)", param_defs[idx].name,
 			   (double)ps.param_value, why);
-	mav_param_value(a, (size_t)idx);   /* always: the current value */
+	drain(a);
+	send_param_value(a, (size_t)idx);   /* always: the current value */
 }
 
 static void handle_param_read(struct app *a, const mavlink_message_t *msg)
@@ -333,45 +340,69 @@ static void handle_param_read(struct app *a, const mavlink_message_t *msg)
 		unknown_param(a, pr.param_index < 0 ? pr.param_id : "", pr.param_index);
 		return;
 	}
-	mav_param_value(a, (size_t)idx);
+	send_param_value(a, (size_t)idx);
 }
 
 /* ---------------------------------------------------------------- commands */
+
+static uint8_t mav_result(enum app_result r)
+{
+	switch (r) {
+	case APP_ACCEPTED:
+		return MAV_RESULT_ACCEPTED;
+	case APP_IN_PROGRESS:
+		return MAV_RESULT_IN_PROGRESS;
+	case APP_BUSY:
+		return MAV_RESULT_TEMPORARILY_REJECTED;
+	case APP_DENIED:
+		return MAV_RESULT_DENIED;
+	case APP_FAILED:
+		return MAV_RESULT_FAILED;
+	case APP_UNSUPPORTED:
+		break;
+	}
+	return MAV_RESULT_UNSUPPORTED;
+}
+
+/* The sender of a command, as the app keeps it (opaque to it). */
+static app_origin origin_of(const mavlink_message_t *req)
+{
+	return (app_origin)req->sysid << 8 | req->compid;
+}
 
 static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t cmd,
 			   const float prm[7])
 {
 	char why[64] = {0};
-	int r = MAV_RESULT_UNSUPPORTED;
+	uint8_t r = MAV_RESULT_UNSUPPORTED;
 	switch (cmd) {
 	case MAV_CMD_COMPONENT_ARM_DISARM:
 		if (prm[0] == 1.0f || prm[0] == 0.0f)
-			r = app_cmd_arm(a, prm[0] == 1.0f, prm[1] == 21196.0f, why, sizeof why);
+			r = mav_result(app_cmd_arm(a, prm[0] == 1.0f, prm[1] == 21196.0f, why, sizeof why));
 		else {
 			r = MAV_RESULT_DENIED;
 			snprintf(why, sizeof why, "Arm/disarm: param1 must be 0 or 1");
 		}
 		break;
 	case MAV_CMD_NAV_TAKEOFF:
-		r = app_cmd_takeoff(a, prm[6], why, sizeof why);
+		r = mav_result(app_cmd_takeoff(a, prm[6], why, sizeof why));
 		break;
 	case MAV_CMD_NAV_LAND:
-		r = app_cmd_land(a, why, sizeof why);
+		r = mav_result(app_cmd_land(a, why, sizeof why));
 		break;
 	case MAV_CMD_USER_1:
 		/* long-running: IN_PROGRESS (with progress) now and on retries, the
 		 * final ACCEPTED / FAILED when the experiment ends (app.c) */
-		a->mav.cmd_sysid = req->sysid;
-		a->mav.cmd_compid = req->compid;
-		r = app_cmd_experiment(a, prm[0], why, sizeof why);
+		r = mav_result(app_cmd_experiment(a, prm[0], origin_of(req), why, sizeof why));
 		if (r == MAV_RESULT_IN_PROGRESS) {
 			/* progress in percent, rounded up (a started experiment shows >= 1),
 			 * at most 99 until the final ACK */
 			float pr = ceilf(a->exp.progress * 100.0f);
-			mav_command_ack(a, cmd, (uint8_t)r, (uint8_t)(pr < 0.0f ? 0.0f : (pr > 99.0f ? 99.0f : pr)),
+			drain(a);
+			send_command_ack(a, cmd, r, (uint8_t)(pr < 0.0f ? 0.0f : (pr > 99.0f ? 99.0f : pr)),
 					req->sysid, req->compid);
 			if (why[0])
-				app_status(a, MAV_SEVERITY_INFO, "%s", why);
+				app_status(a, APP_SEV_INFO, "%s", why);
 			return;
 		}
 		break;
@@ -381,16 +412,16 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 				r = MAV_RESULT_TEMPORARILY_REJECTED;
 				snprintf(why, sizeof why, "Parameter load refused: experiment running");
 			} else {
-				r = app_params_load(a, why, sizeof why);
+				r = mav_result(app_params_load(a, why, sizeof why));
 				if (r == MAV_RESULT_ACCEPTED) {
-					app_status(a, MAV_SEVERITY_INFO, "Parameters loaded");
+					app_status(a, APP_SEV_INFO, "Parameters loaded");
 					a->mav.param_next = 0;   /* the ground station's copy is stale */
 				}
 			}
 		} else if (prm[0] == 1.0f) {
-			r = app_params_save(a, why, sizeof why);
+			r = mav_result(app_params_save(a, why, sizeof why));
 			if (r == MAV_RESULT_ACCEPTED)
-				app_status(a, MAV_SEVERITY_INFO, "Parameters saved");
+				app_status(a, APP_SEV_INFO, "Parameters saved");
 		} else {
 			r = MAV_RESULT_DENIED;
 			snprintf(why, sizeof why, "Storage: param1 must be 0 (read) or 1 (write)");
@@ -401,13 +432,13 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 		float id = cmd == MAV_CMD_REQUEST_MESSAGE ? prm[0] : (float)MAVLINK_MSG_ID_AUTOPILOT_VERSION;
 		if (id == (float)MAVLINK_MSG_ID_AUTOPILOT_VERSION) {
 			r = MAV_RESULT_ACCEPTED;
-			send_ack(cmd, (uint8_t)r, req);
-			send_autopilot_version();
+			send_ack(a, cmd, r, req);
+			send_autopilot_version(a);
 			return;
 		}
 		int s = id >= 0.0f && id < 65536.0f ? stream_index((uint32_t)id) : -1;
 		if (s >= 0 && !streams[s].direct) {
-			send_ack(cmd, MAV_RESULT_ACCEPTED, req);
+			send_ack(a, cmd, MAV_RESULT_ACCEPTED, req);
 			send_stream(a, s);
 			return;
 		}
@@ -436,9 +467,9 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 		r = MAV_RESULT_UNSUPPORTED;   /* including GET_HOME_POSITION: no home here */
 		break;
 	}
-	send_ack(cmd, (uint8_t)r, req);
+	send_ack(a, cmd, r, req);
 	if (why[0])
-		app_status(a, r == MAV_RESULT_ACCEPTED ? MAV_SEVERITY_INFO : MAV_SEVERITY_WARNING, "%s", why);
+		app_status(a, r == MAV_RESULT_ACCEPTED ? APP_SEV_INFO : APP_SEV_WARNING, "%s", why);
 }
 
 static void handle_ftp(struct app *a, const mavlink_message_t *msg)
@@ -462,7 +493,7 @@ static void handle_ftp(struct app *a, const mavlink_message_t *msg)
 	mavlink_message_t out;
 	mavlink_msg_file_transfer_protocol_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &out, 0, msg->sysid,
 						     msg->compid, p);
-	send_msg(&out);
+	send_msg(a, &out);
 }
 
 static void handle(struct app *a, const mavlink_message_t *msg)
@@ -515,7 +546,7 @@ static void handle(struct app *a, const mavlink_message_t *msg)
 		mavlink_message_t out;
 		mavlink_msg_mission_count_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &out, msg->sysid, msg->compid, 0,
 						    r.mission_type);
-		send_msg(&out);
+		send_msg(a, &out);
 		break;
 	}
 	case MAVLINK_MSG_ID_FILE_TRANSFER_PROTOCOL:
@@ -523,6 +554,29 @@ static void handle(struct app *a, const mavlink_message_t *msg)
 		break;
 	default:
 		break;
+	}
+}
+
+/* The app's events, translated: STATUSTEXT, PARAM_VALUE, the final COMMAND_ACK. */
+static void drain(struct app *a)
+{
+	struct app_event e;
+	while (outbox_pop(&a->outbox, &e)) {
+		switch (e.kind) {
+		case APP_EV_STATUS:
+			send_statustext(a, e.severity, e.text);
+			break;
+		case APP_EV_PARAM:
+			send_param_value(a, e.param_index);
+			break;
+		case APP_EV_CMD_DONE:
+			if (e.cmd == APP_CMD_EXPERIMENT)
+				send_command_ack(a, MAV_CMD_USER_1, mav_result((enum app_result)e.result), e.progress,
+						 (uint8_t)(e.origin >> 8), (uint8_t)e.origin);
+			break;
+		default:
+			break;
+		}
 	}
 }
 
@@ -560,12 +614,14 @@ size_t mav_receive(struct app *a, const uint8_t *buf, size_t len)
 			}
 		}
 	}
+	drain(a);
 	return accepted;
 }
 
 void mav_tick(struct app *a, uint64_t now_us)
 {
 	struct mav *m = &a->mav;
+	drain(a);
 	for (int i = 0; i < MAV_N_STREAMS; i++) {
 		if (m->interval_us[i] < 0)
 			continue;
@@ -577,7 +633,7 @@ void mav_tick(struct app *a, uint64_t now_us)
 	for (int k = 0; k < PARAM_PER_TICK && m->param_next >= 0; k++) {
 		if (m->param_last_us && now_us - m->param_last_us < PARAM_PACE_US)
 			break;
-		mav_param_value(a, (size_t)m->param_next);
+		send_param_value(a, (size_t)m->param_next);
 		m->param_last_us = now_us;
 		if (++m->param_next >= (long)param_count)
 			m->param_next = -1;

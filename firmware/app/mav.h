@@ -4,7 +4,7 @@
  *
  * - telemetry: one table of streams (message id, default interval, pack
  *   function), intervals in wall-clock time, changed by SET_MESSAGE_INTERVAL;
- * - the parameter protocol (mavlink-notes.md): paced PARAM_REQUEST_LIST,
+ * - the parameter protocol (docs/mavlink.md): paced PARAM_REQUEST_LIST,
  *   reads by name and by index, PARAM_SET always answered with the current
  *   value, refusals and unknown names as STATUSTEXT;
  * - COMMAND_LONG / COMMAND_INT, always acknowledged;
@@ -25,6 +25,7 @@
 #define MAV_N_STREAMS 7
 
 struct app;
+struct hal;
 
 struct mav {
 	int64_t interval_us[MAV_N_STREAMS];   /* < 0: off */
@@ -39,22 +40,14 @@ struct mav {
 	uint32_t rx_unsigned;                  /* rejected by signing (unsigned, bad, replayed) */
 	bool signing;                          /* MAVLink 2 signing on (hal_signing_key) */
 	uint16_t text_id;
-	uint8_t cmd_sysid, cmd_compid;         /* sender of the command being handled */
 };
 
-void mav_init(struct mav *m, uint64_t now_us);
+void mav_init(struct mav *m, const struct hal *hal, uint64_t now_us);
 /* Parses one datagram from the ground station (whole packets: the parser
  * restarts at its first byte) and handles complete messages; returns how many
  * were accepted (valid checksum, and signature when signing is on). */
 size_t mav_receive(struct app *a, const uint8_t *buf, size_t len);
-/* Streams due telemetry and parameters. */
+/* Sends the app's events (outbox), due telemetry and parameters. */
 void mav_tick(struct app *a, uint64_t now_us);
-void mav_statustext(struct app *a, int severity, const char *text);
-/* PARAM_VALUE of parameter `index` (after a change). */
-void mav_param_value(struct app *a, size_t index);
-void mav_named_float(struct app *a, const char *name, float value);
-/* COMMAND_ACK (also the final one of a long-running command). */
-void mav_command_ack(struct app *a, uint16_t cmd, uint8_t result, uint8_t progress, uint8_t sysid,
-		     uint8_t compid);
 
 #endif /* OCTO_MAV_H */

@@ -9,7 +9,7 @@
 
 const struct param_def param_defs[] = {
 #define PARAM(name, field, def, min, max, unit, desc) \
-	{#name, offsetof(struct app_params, field), def, min, max, unit, desc},
+	{#name, offsetof(struct app_params, field), def, min, max, unit, desc, PARAM_FLAGS},
 #include "params_table.h"
 #undef PARAM
 };

@@ -16,11 +16,18 @@ struct app_params {
 #undef PARAM
 };
 
+/* Flags of a parameter (params_table.h sets them per group of rows). */
+enum {
+	PARAM_LOCKED = 1u << 0,     /* refused from outside while an experiment runs */
+	PARAM_READONLY = 1u << 1,   /* refused from outside always (identification results) */
+};
+
 struct param_def {
 	const char *name;
 	size_t offset;
 	float def, min, max;
 	const char *unit, *desc;
+	unsigned flags;             /* PARAM_LOCKED, PARAM_READONLY */
 };
 
 extern const struct param_def param_defs[];

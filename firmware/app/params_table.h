@@ -5,14 +5,22 @@
  *   NAME   MAVLink param_id, 16 characters at most, grouped by prefix
  *   field  member of struct app_params (float: every parameter is REAL32)
  *
+ * Each row takes the flags (params.h: PARAM_LOCKED, PARAM_READONLY) that
+ * PARAM_FLAGS has where the row stands: a group of rows begins by redefining
+ * it. The vehicle model, rotor and mixer rows and the identification settings
+ * are locked while an experiment runs (it flies and estimates with them); the
+ * identification results are read-only (only the app writes them).
+ *
  * Walked by the MAVLink parameter handler, the parameter file and
  * `octo-fw --dump-params`. The order is the MAVLink index: append, never
  * reorder, so a ground station's cached table stays valid across versions.
  *
  * The VEH_* defaults are deliberately off from the truth (k_f 28.0269 N,
  * k_tau 0.3869 N m, I = 0.0628/0.0762/0.1014 kg m^2): identification
- * (MAV_CMD_USER_1) is there to find the real values in flight.
+ * (the experiment command) is there to find the real values in flight.
  */
+#undef PARAM_FLAGS
+#define PARAM_FLAGS PARAM_LOCKED
 /*    NAME          field         default  min      max      unit      description */
 PARAM(VEH_KF,       veh_kf,       20.0f,   1.0f,    500.0f,  "N",      "Rotor thrust coefficient k_f: f_j = k_f T_j")
 PARAM(VEH_KTAU,     veh_ktau,     0.3f,    0.001f,  50.0f,   "N m",    "Rotor torque coefficient k_tau: tau_j = k_tau T_j")
@@ -22,6 +30,8 @@ PARAM(VEH_IZZ,      veh_izz,      0.05f,   0.001f,  10.0f,   "kg m^2", "Moment o
 PARAM(VEH_MASS,     veh_mass,     2.132f,  0.1f,    100.0f,  "kg",     "Vehicle mass m")
 PARAM(VEH_ARM_L,    veh_arm_l,    0.35f,   0.05f,   5.0f,    "m",      "Arm length l (centre to rotor axis)")
 PARAM(VEH_GRAV,     veh_grav,     9.796f,  9.0f,    10.5f,   "m/s^2",  "Acceleration of gravity g")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS 0
 PARAM(ATT_WN_RP,    att_wn_rp,    7.0f,    1.0f,    40.0f,   "rad/s",  "Roll/pitch attitude loop natural frequency")
 PARAM(ATT_WN_YAW,   att_wn_yaw,   3.5f,    0.5f,    20.0f,   "rad/s",  "Yaw attitude loop natural frequency")
 PARAM(ATT_ZETA,     att_zeta,     1.0f,    0.3f,    2.0f,    "",       "Attitude loop damping ratio")
@@ -35,12 +45,19 @@ PARAM(POS_GAIN,     pos_gain,     0.3f,    0.0f,    5.0f,    "1/s",    "Horizont
 PARAM(NAV_TKO_ALT,  nav_tko_alt,  10.0f,   0.5f,    100.0f,  "m",      "Take-off height when the command gives none")
 PARAM(NAV_TKO_VEL,  nav_tko_vel,  1.5f,    0.1f,    5.0f,    "m/s",    "Climb rate of take-off")
 PARAM(NAV_LAND_VEL, nav_land_vel, 0.7f,    0.1f,    3.0f,    "m/s",    "Descent rate of landing")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS PARAM_LOCKED
 PARAM(MOT_THR_IDLE, mot_thr_idle, 0.0f,    0.0f,    0.3f,    "",       "Throttle of every rotor when armed on the ground")
 PARAM(MOT_THR_MAX,  mot_thr_max,  1.0f,    0.1f,    1.0f,    "",       "Largest throttle command")
 PARAM(MOT_CURVE,    mot_curve,    0.0f,    0.0f,    0.99f,   "",       "Thrust curve a: f = k_f ((1 - a) T + a T^2)")
 PARAM(MIX_MODE,     mix_mode,     1.0f,    0.0f,    1.0f,    "",       "Allocation: 0 pseudo-inverse and clip, 1 box-constrained priority")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS 0
 PARAM(FS_LINK_TO,   fs_link_to,   0.3f,    0.05f,   5.0f,    "s",      "X-Plane link declared lost after this silence")
 PARAM(FS_LAND_AFTER,fs_land_after,2.0f,    0.1f,    60.0f,   "s",      "A link loss longer than this lands on recovery")
 PARAM(NAV_TOUCH_DOWN_S,nav_touch_down_s,1.0f, 0.2f,    10.0f,   "s",      "Landing: time on the ground before the motors stop")
-/* identification (issue 6): settings and read-only results, kept beside experiment.c */
+/* identification: settings (locked) and results (read-only), kept beside experiment.c */
+#undef PARAM_FLAGS
+#define PARAM_FLAGS PARAM_LOCKED
 #include "experiment_params.h"
+#undef PARAM_FLAGS

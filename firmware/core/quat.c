@@ -112,6 +112,15 @@ struct quat quat_from_euler(scalar_t roll, scalar_t pitch, scalar_t yaw)
 	return quat_normalize(q);
 }
 
+scalar_t quat_yaw(struct quat q)
+{
+	/* yaw = atan2(2 (w z + x y), 1 - 2 (y^2 + z^2)) */
+	scalar_t two = SC(2);
+	scalar_t yn = sc_mul(two, sc_add(sc_mul(q.w, q.z), sc_mul(q.x, q.y)));
+	scalar_t yd = sc_sub(SC(1), sc_mul(two, sc_add(sc_mul(q.y, q.y), sc_mul(q.z, q.z))));
+	return sc_atan2(yn, yd);
+}
+
 struct vec3 quat_to_euler(struct quat q)
 {
 	scalar_t two = SC(2);
@@ -120,10 +129,7 @@ struct vec3 quat_to_euler(struct quat q)
 	scalar_t rd = sc_sub(SC(1), sc_mul(two, sc_add(sc_mul(q.x, q.x), sc_mul(q.y, q.y))));
 	/* pitch = asin(2 (w y - z x)) */
 	scalar_t ps = sc_clamp(sc_mul(two, sc_sub(sc_mul(q.w, q.y), sc_mul(q.z, q.x))), SC(-1), SC(1));
-	/* yaw = atan2(2 (w z + x y), 1 - 2 (y^2 + z^2)) */
-	scalar_t yn = sc_mul(two, sc_add(sc_mul(q.w, q.z), sc_mul(q.x, q.y)));
-	scalar_t yd = sc_sub(SC(1), sc_mul(two, sc_add(sc_mul(q.y, q.y), sc_mul(q.z, q.z))));
-	return vec3_make(sc_atan2(rn, rd), sc_asin(ps), sc_atan2(yn, yd));
+	return vec3_make(sc_atan2(rn, rd), sc_asin(ps), quat_yaw(q));
 }
 
 struct vec3 quat_error_b(struct quat q_sp_b2i, struct quat q_b2i)

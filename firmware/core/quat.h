@@ -72,6 +72,8 @@ struct quat quat_from_euler(scalar_t roll, scalar_t pitch, scalar_t yaw);
 /* q_b2i -> Euler Z-Y-X: e.x = roll in [-pi, pi], e.y = pitch in [-pi/2, pi/2],
  * e.z = yaw in [-pi, pi]; the asin argument is clamped to [-1, 1]; uses trig */
 struct vec3 quat_to_euler(struct quat q_b2i);
+/* quat_to_euler's yaw alone (the same expression, so the same value) */
+scalar_t quat_yaw(struct quat q_b2i);
 
 /* Shortest rotation from q_b2i to q_sp_b2i expressed in body axes, as the vector
  * 2 sign(w_e) [x_e, y_e, z_e] of q_e = conj(q_b2i) (x) q_sp_b2i, i.e.

@@ -12,7 +12,7 @@ import math
 import re
 import time
 
-from .link import MODE_NUMBERS, MODES, GcsError, mavlink, result_name
+from .link import MODE_NUMBERS, MODES, GcsError, fw_default, mavlink, result_name
 
 EXPERIMENTS = {1: "rotor coefficients", 2: "validation", 3: "Ix", 4: "Iy", 5: "Iz",
                6: "full sequence"}
@@ -72,9 +72,9 @@ def parse_experiments(text):
 def planned_sim_seconds(params, experiment):
     """Simulated seconds an experiment should last, from the ID_* parameters (an estimate
     for the time-outs; the firmware may add settling time)."""
-    exc = params.get("ID_EXC_TIME", 10.0)
-    val = params.get("ID_VAL_TIME", 10.0)
-    inr = params.get("ID_INR_TIME", 10.0)
+    exc = params.get("ID_EXC_TIME", fw_default("ID_EXC_TIME"))
+    val = params.get("ID_VAL_TIME", fw_default("ID_VAL_TIME"))
+    inr = params.get("ID_INR_TIME", fw_default("ID_INR_TIME"))
     return {1: exc, 2: val, 3: inr, 4: inr, 5: inr, 6: 2 * val + exc + 3 * inr}[experiment]
 
 
@@ -302,8 +302,8 @@ def plausibility(params, experiments, rounded=()):
     checks = []
     rsd_max = params.get("ID_RSD_MAX")
     result_bits = int(params.get("ID_RESULT", 0))
-    mass = params.get("VEH_MASS", 2.132)
-    g = params.get("VEH_GRAV", 9.796)
+    mass = params.get("VEH_MASS", fw_default("VEH_MASS"))
+    g = params.get("VEH_GRAV", fw_default("VEH_GRAV"))
     for q in quantities_of(experiments):
         est, sd = params.get(q.est), params.get(q.sd)
         if not _finite_pos(est):

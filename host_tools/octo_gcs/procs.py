@@ -53,19 +53,35 @@ def _child_setup():
 
 
 class Proc:
-    """A running program whose stderr and stdout go to one file."""
+    """A running program in its own process group; stdout goes to log_path, stderr to the
+    same file or, when given, to stderr_path. octo-gcs and the pytest fixtures use it."""
 
-    def __init__(self, argv, log_path, name):
+    def __init__(self, argv, log_path, name, stderr_path=None, env=None):
         self.name = name
         self.argv = [str(a) for a in argv]
         self.log_path = Path(log_path)
+        self.stderr_path = Path(stderr_path) if stderr_path else None
         self._log = open(self.log_path, "wb")
+        self._err = open(self.stderr_path, "wb") if self.stderr_path else None
         try:
             self.popen = subprocess.Popen(self.argv, stdin=subprocess.DEVNULL, stdout=self._log,
-                                          stderr=subprocess.STDOUT, preexec_fn=_child_setup)
+                                          stderr=self._err or subprocess.STDOUT, env=env,
+                                          preexec_fn=_child_setup)
         except OSError as e:
-            self._log.close()
+            self._close()
             raise GcsError(f"cannot start {self.argv[0]}: {e}") from None
+
+    @property
+    def pid(self):
+        return self.popen.pid
+
+    def wait(self, timeout=None):
+        return self.popen.wait(timeout=timeout)
+
+    def _close(self):
+        for f in (self._log, self._err):
+            if f is not None and not f.closed:
+                f.close()
 
     def alive(self):
         return self.popen.poll() is None
@@ -79,8 +95,7 @@ class Proc:
             except subprocess.TimeoutExpired:
                 self._signal(signal.SIGKILL)
                 self.popen.wait(timeout=5)
-        if not self._log.closed:
-            self._log.close()
+        self._close()
         return self.popen.returncode
 
     def _signal(self, sig):

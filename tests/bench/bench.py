@@ -24,6 +24,10 @@ Items (issue 8):
              build/bench/bench-motor: the joint rotor-model estimator on random vehicles
   sim     6. physics alone (build/bench/bench-physics) and octo-sim --lockstep driven by the
              tightest client (build/bench/pingpong client)
+  campaign 8. octo-gcs campaign throughput on a local Dask cluster of 1 and of 2 workers (the
+             same missions: the paper's vehicle, random seeds, experiment 6, in-process plant
+             when octo-gcs mission has it): missions per minute and the scaling efficiency
+             rate(2) / (2 rate(1))
 """
 
 import argparse
@@ -751,9 +755,45 @@ def item_sim(rep, args):
     return xs
 
 
+# ====================================================================== item 8: campaign
+def item_campaign(rep, args):
+    n = 2 if args.quick else 8
+    res = {}
+    with tempfile.TemporaryDirectory(prefix="bench-campaign-") as tmp:
+        spec = Path(tmp) / "spec.json"
+        spec.write_text(json.dumps({"name": "bench", "missions": n, "seed": 500, "plant": "in-process",
+                                    "timeout": 600, "experiments": [6]}))
+        for w in (1, 2):
+            out = Path(tmp) / f"w{w}"
+            argv = [B.parent / ".venv" / "bin" / "octo-gcs", "campaign", spec, "--out", out, "--workers", w]
+            subprocess.run([str(a) for a in argv], capture_output=True, text=True, timeout=3600)
+            doc = json.loads((out / "campaign.json").read_text())
+            t = doc["throughput"]
+            res[w] = {"missions_per_min": t["missions_per_min"], "missions": t["missions_this_run"],
+                      "missions_s": t["missions_s"], "wall_s": t["wall_s"], "plant": t["plant"],
+                      "ran": doc["ran"], "mission_wall_s_mean": t["mission_wall_s_mean"]}
+            rep.commands[f"campaign ({w} worker{'s' if w > 1 else ''})"] = cmdline(
+                [".venv/bin/octo-gcs", "campaign", "SPEC", "--out", "DIR", "--workers", w]) + \
+                f"  (SPEC: {n} missions of the paper's vehicle, seeds 500.., experiment 6)"
+    r1, r2 = res[1]["missions_per_min"], res[2]["missions_per_min"]
+    eff = r2 / (2 * r1) if r1 and r2 else None
+    c = rep.commands.get("campaign (2 workers)")
+    for w in (1, 2):
+        r = res[w]
+        rep.row(8, f"campaign, {w} local worker{'s' if w > 1 else ''}: missions per minute ({r['missions']} missions, "
+                f"{r['plant']})", fmt(r["missions_per_min"], 2), "",
+                f"{r['ran']} ran; a mission {fmt(r['mission_wall_s_mean'], 1, ' s')} wall", "", None,
+                rep.commands.get(f"campaign ({w} worker{'s' if w > 1 else ''})"))
+    rep.row(8, "  scaling efficiency 1 -> 2 workers: rate(2) / (2 rate(1))",
+            fmt(100 * eff if eff is not None else None, 0, " %"), "", f"{os.cpu_count()} cores, load "
+            f"{os.getloadavg()[0]:.1f}", ">= 80 %", eff is not None and eff >= 0.8, c)
+    rep.data["campaign"] = {"workers": res, "efficiency": eff}
+    return res
+
+
 # ====================================================================== main
 ITEMS = {"speed": item_speed, "step": item_step, "memory": item_memory, "alloc": item_alloc,
-         "estim": item_estim, "sim": item_sim}
+         "estim": item_estim, "sim": item_sim, "campaign": item_campaign}
 
 
 def main():
@@ -782,7 +822,7 @@ def main():
             ITEMS[name](rep, args)
         except Exception as e:   # noqa: BLE001 - one broken item must not hide the others
             errors[name] = f"{type(e).__name__}: {e}"
-            rep.row({"speed": 1, "step": 2, "memory": 3, "alloc": 4, "estim": 5, "sim": 6}[name],
+            rep.row({"speed": 1, "step": 2, "memory": 3, "alloc": 4, "estim": 5, "sim": 6, "campaign": 8}[name],
                     f"{name}: FAILED", "n/a", "", errors[name][:80], "", False)
     dur = time.monotonic() - t0
     invoked = "make bench" if os.environ.get("MAKELEVEL") else cmdline([sys.executable, *sys.argv])

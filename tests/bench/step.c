@@ -3,7 +3,7 @@
  *
  * Links the real app (every firmware/app C file: modes, guidance, control, allocation, throttle map,
  * experiment hook, log record) and the core with a stub HAL (no sockets, no LCM, no clock:
- * hal_wall_us advances 1/90 s per frame). A small synthetic plant closes the loop well enough
+ * the clock advances 1/90 s per frame). A small synthetic plant closes the loop well enough
  * to fly the app's own mode logic: the height follows the app's setpoint, the attitude wobbles
  * by a few tenths of a degree, the measured rotor thrusts are the commanded throttles through
  * a 30 ms lag times the paper's k_f with 1 % noise. Sequence:
@@ -23,13 +23,12 @@
  * allocator steps of the worst demand, etc.). Argument-free; sizes below, or -DBENCH_QUICK.
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "app.h"
 #include "bench_mark.h"
-#include "hal.h"
+#include "stub_hal.h"
 
 #ifdef BENCH_QUICK
 #define N_HOLD 20
@@ -46,49 +45,7 @@
 #define KTAU_TRUE 0.3869f
 
 /* ---------------------------------------------------------------- stub HAL */
-static uint64_t wall_us = 1000000u;
-static float thr_out[HAL_ROTORS];
-static uint32_t n_actuate;
-static size_t mav_bytes;
-
-uint64_t hal_wall_us(void) { return wall_us; }
-void hal_actuate(const float thr[HAL_ROTORS])
-{
-	memcpy(thr_out, thr, sizeof thr_out);
-	n_actuate++;
-}
-void hal_link_stats(struct hal_link_stats *out) { memset(out, 0, sizeof *out); }
-bool hal_signing_key(uint8_t key[32])
-{
-	(void)key;
-	return false;
-}
-uint64_t hal_unix_us(void) { return wall_us; }
-void hal_mav_send(const uint8_t *buf, size_t len)
-{
-	(void)buf;
-	mav_bytes += len;
-}
-int hal_param_store(const char *text, size_t len)
-{
-	(void)text;
-	(void)len;
-	return 0;
-}
-long hal_param_fetch(char *buf, size_t cap)
-{
-	(void)buf;
-	(void)cap;
-	return -1;
-}
-void hal_log_frame(const struct app_log_frame *f) { (void)f; }
-void hal_log_event(double t_s, int severity, const char *text)
-{
-	(void)t_s;
-	(void)severity;
-	(void)text;
-}
-void hal_report(const char *fmt, ...) { (void)fmt; }
+static struct stub_hal H;   /* tests/app/stub_hal.c: clock advanced 1/90 s per frame */
 
 /* ---------------------------------------------------------------- synthetic plant */
 static struct app A;   /* global: the compiler cannot see through it across the markers */
@@ -108,7 +65,7 @@ static float urand(void)   /* [-1, 1) */
 static void next_frame(void)
 {
 	n_frame++;
-	wall_us += 11111u;
+	H.now_us += 11111u;
 	double t = (double)n_frame / RATE_HZ;
 	float tf = (float)t;
 	F.t_s = t;
@@ -137,7 +94,7 @@ static void next_frame(void)
 	float alpha = 1.0f - expf(-(float)(1.0 / RATE_HZ) / 0.03f);
 	float sigma = 0.01f * 2.132f * 9.796f / 8.0f;
 	for (int j = 0; j < HAL_ROTORS; j++) {
-		s_rotor[j] += alpha * (thr_out[j] - s_rotor[j]);
+		s_rotor[j] += alpha * (H.thr[j] - s_rotor[j]);
 		F.rotor_thrust_n[j] = KF_TRUE * s_rotor[j] + sigma * 1.732f * urand();
 		F.rotor_torque_nm[j] = (j % 2 ? -KTAU_TRUE : KTAU_TRUE) * s_rotor[j];
 	}
@@ -230,7 +187,8 @@ static void alloc_demand(uint32_t i, scalar_t d[MIXER_N_AXES])
 int main(void)
 {
 	char why[96] = "";
-	app_init(&A);
+	stub_hal_init(&H);
+	app_init(&A, &H.hal);
 	for (int i = 0; i < 20; i++)
 		frame_unmeasured();
 	int r = app_cmd_arm(&A, true, false, why, sizeof why);
@@ -256,8 +214,8 @@ int main(void)
 
 	int exp = 0;
 	if (exp_available(1)) {
-		r = app_cmd_experiment(&A, 1.0f, why, sizeof why);
-		printf("step: experiment_1 %d %s\n", r, r ? why : "");
+		r = app_cmd_experiment(&A, 1.0f, 0, why, sizeof why);
+		printf("step: experiment_1 %d %s\n", r, r != APP_IN_PROGRESS ? why : "");
 		for (; exp < N_EXP && A.mode == APP_EXPERIMENT; exp++) {
 			next_frame();
 			bench_exp_step();

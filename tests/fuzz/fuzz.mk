@@ -49,9 +49,9 @@ $(FUZZ_TC_STAMP):
 	fi
 	@rm -f $(FZ)/.probe; touch $@
 
-FUZZ_FW_INC := -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal -Ifirmware/hal/host -Itests/fuzz \
+FUZZ_FW_INC := -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal -Ifirmware/hal/host -Itests/app -Itests/fuzz \
                -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common
-FUZZ_APP_SRC := $(sort $(wildcard firmware/app/*.c firmware/core/*.c)) tests/fuzz/fuzz_hal.c
+FUZZ_APP_SRC := $(sort $(wildcard firmware/app/*.c firmware/core/*.c)) firmware/hal/hal.c tests/app/stub_hal.c
 
 $(FZ)/fuzz-xp_client: tests/fuzz/fuzz_xp_client.c firmware/hal/host/xp_client.c firmware/hal/host/xp_proto.c \
 		firmware/hal/host/xp_client.h firmware/hal/host/xp_proto.h firmware/hal/hal.h | $(FUZZ_TC_STAMP)
@@ -61,7 +61,7 @@ $(FZ)/fuzz-xp_client: tests/fuzz/fuzz_xp_client.c firmware/hal/host/xp_client.c 
 $(FZ)/fuzz-params: tests/fuzz/fuzz_params.c firmware/app/params.c $(wildcard firmware/app/*.h) | $(FUZZ_TC_STAMP)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_FW_INC) -o $@ tests/fuzz/fuzz_params.c firmware/app/params.c -lm
 
-$(FZ)/fuzz-mavlink: tests/fuzz/fuzz_mavlink.c tests/fuzz/fuzz_hal.h $(FUZZ_APP_SRC) $(wildcard firmware/app/*.h firmware/core/*.h) \
+$(FZ)/fuzz-mavlink: tests/fuzz/fuzz_mavlink.c tests/app/stub_hal.h $(FUZZ_APP_SRC) $(wildcard firmware/app/*.h firmware/core/*.h) \
 		| $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
 	@sum() { cat firmware/app/*.h firmware/core/*.h | cksum; }; before=$$(sum); \
 	echo "$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_FW_INC) -o $@ tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_SRC) -lm"; \

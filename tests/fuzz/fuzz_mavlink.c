@@ -1,6 +1,6 @@
 /*
  * fuzz_mavlink.c - libFuzzer harness of octo-fw's MAVLink receive path:
- * app_on_mavlink -> mav_receive (framing, CRC, signing) -> dispatch ->
+ * app_on_ground -> mav_receive (framing, CRC, signing) -> dispatch ->
  * parameter and command handlers -> app (modes, experiments, storage).
  *
  * So that the fuzzer gets past the checksum, the input is a sequence of
@@ -25,7 +25,7 @@
 #include <common/mavlink.h>
 
 #include "app.h"
-#include "fuzz_hal.h"
+#include "stub_hal.h"
 
 static const uint32_t ids[10] = {
 	MAVLINK_MSG_ID_PARAM_SET,           MAVLINK_MSG_ID_COMMAND_LONG,
@@ -36,6 +36,7 @@ static const uint32_t ids[10] = {
 };
 
 static struct app app;
+static struct stub_hal hal;
 static mavlink_signing_t tx_signing;
 static mavlink_signing_streams_t tx_streams;
 static double t_plant;
@@ -56,7 +57,7 @@ static void frame(const uint8_t *b, size_t n)
 	size_t off = offsetof(struct hal_sensor_frame, q_ib);
 	size_t room = sizeof f - off;
 	memcpy((uint8_t *)&f + off, b, n < room ? n : room);
-	fuzz_now_us += 11111u;
+	hal.now_us += 11111u;
 	app_on_frame(&app, &f);
 }
 
@@ -87,38 +88,37 @@ static void message(uint8_t kind, const uint8_t *b, size_t n)
 				buf[k++] = (uint8_t)(i * 37u + cut);
 		}
 	}
-	app_on_mavlink(&app, buf, k);
+	app_on_ground(&app, buf, k);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
 	if (size < 1)
 		return 0;
-	fuzz_hal_reset();
-	fuzz_now_us = 1000000u;
+	stub_hal_init(&hal);
 	t_plant = 0.0;
-	fuzz_have_key = data[0] & 1;
+	hal.have_key = data[0] & 1;
 	for (int i = 0; i < 32; i++)
-		fuzz_key[i] = (uint8_t)(i * 7 + 1);
+		hal.key[i] = (uint8_t)(i * 7 + 1);
 	/* app_init costs ~1 ms under the sanitizers: done once per key mode, then
 	 * the initialised state is copied; mav_init resets the MAVLink side
 	 * (signing streams included) so that no run sees the previous one. */
 	static struct app snap[2];
 	static bool have_snap[2];
-	if (!have_snap[fuzz_have_key]) {
-		app_init(&snap[fuzz_have_key]);
-		have_snap[fuzz_have_key] = true;
+	if (!have_snap[hal.have_key]) {
+		app_init(&snap[hal.have_key], &hal.hal);
+		have_snap[hal.have_key] = true;
 	}
-	app = snap[fuzz_have_key];
-	mav_init(&app.mav, fuzz_now_us);
+	app = snap[hal.have_key];
+	mav_init(&app.mav, &hal.hal, hal.now_us);
 	mavlink_status_t *st = mavlink_get_channel_status(MAVLINK_COMM_1);
-	if (fuzz_have_key) {
+	if (hal.have_key) {
 		memset(&tx_signing, 0, sizeof tx_signing);
 		memset(&tx_streams, 0, sizeof tx_streams);
-		memcpy(tx_signing.secret_key, fuzz_key, 32);
+		memcpy(tx_signing.secret_key, hal.key, 32);
 		tx_signing.flags = MAVLINK_SIGNING_FLAG_SIGN_OUTGOING;
 		tx_signing.link_id = 3;
-		tx_signing.timestamp = (hal_unix_us() - 1420070400ull * 1000000ull) / 10u + 1000u;
+		tx_signing.timestamp = (hal_unix_us(&hal.hal) - 1420070400ull * 1000000ull) / 10u + 1000u;
 		st->signing = &tx_signing;
 		st->signing_streams = &tx_streams;
 	} else {
@@ -135,7 +135,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		switch (kind & 15) {
 		case 10:
 		case 11:
-			app_on_mavlink(&app, b, len);
+			app_on_ground(&app, b, len);
 			break;
 		case 12:
 		case 13:
@@ -143,7 +143,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 			break;
 		case 14:
 		case 15:
-			fuzz_now_us += (uint64_t)(len ? b[0] : 1) * 10000u;
+			hal.now_us += (uint64_t)(len ? b[0] : 1) * 10000u;
 			app_tick(&app);
 			break;
 		default:

@@ -8,13 +8,12 @@ test files can run in parallel (pytest -n) without fixed ports.
 """
 
 import os
-import signal
 import socket
-import subprocess
 import time
 from pathlib import Path
 
 import pytest
+from octo_gcs.procs import Proc
 
 REPO = Path(__file__).resolve().parents[2]
 BUILD = Path(os.environ.get("OCTO_BUILD", REPO / "build"))
@@ -35,53 +34,18 @@ def free_port(kind=socket.SOCK_DGRAM) -> int:
     raise RuntimeError("no free port found")
 
 
-class Process:
-    """A running project binary whose output goes to files in the test's directory."""
+class Process(Proc):
+    """A running project binary (octo-gcs's Proc) whose stdout and stderr go to NAME.stdout
+    and NAME.stderr in the test's directory."""
 
     def __init__(self, argv, logdir: Path, name: str, env=None):
-        self.argv = [str(a) for a in argv]
-        self.name = name
-        self.stdout_path = logdir / f"{name}.stdout"
-        self.stderr_path = logdir / f"{name}.stderr"
-        self._out = open(self.stdout_path, "wb")
-        self._err = open(self.stderr_path, "wb")
-        self.popen = subprocess.Popen(
-            self.argv, stdout=self._out, stderr=self._err, stdin=subprocess.DEVNULL,
-            env=env, start_new_session=True)
+        super().__init__(argv, logdir / f"{name}.stdout", name, stderr_path=logdir / f"{name}.stderr",
+                         env=env)
+        self.stdout_path = self.log_path
         _live.append(self)
 
-    @property
-    def pid(self):
-        return self.popen.pid
-
-    def alive(self) -> bool:
-        return self.popen.poll() is None
-
-    def wait(self, timeout=None) -> int:
-        return self.popen.wait(timeout=timeout)
-
-    def stop(self, grace=3.0):
-        """SIGTERM, then SIGKILL after `grace` seconds. Returns the exit status."""
-        if self.popen.poll() is None:
-            try:
-                os.killpg(self.popen.pid, signal.SIGTERM)
-            except ProcessLookupError:
-                pass
-            try:
-                self.popen.wait(timeout=grace)
-            except subprocess.TimeoutExpired:
-                try:
-                    os.killpg(self.popen.pid, signal.SIGKILL)
-                except ProcessLookupError:
-                    pass
-                self.popen.wait(timeout=5)
-        for f in (self._out, self._err):
-            if not f.closed:
-                f.close()
-        return self.popen.returncode
-
     def stdout(self) -> str:
-        self._out.flush()
+        self._log.flush()
         return self.stdout_path.read_text(errors="replace")
 
     def stderr(self) -> str:

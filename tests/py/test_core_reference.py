@@ -1,4 +1,4 @@
-"""The firmware mixer (firmware/core/mixer.c) against independent numpy references.
+"""The firmware mixer (firmware/core/mixer_setup.c, mixer.c) against independent numpy references.
 
 The C side runs as build/probe-mixer (float) and build/probe-mixer-fixed (Q16.16), see
 tests/core/probe_mixer.c and tests/core/probe.mk; when the Makefile does not build them, they
@@ -45,7 +45,8 @@ def _compile(fixed, out):
         pytest.skip("no C compiler to build the mixer probe")
     core = REPO / "firmware" / "core"
     cmd = [cc, "-std=c11", "-O2", "-I", str(core), "-o", str(out),
-           str(REPO / "tests" / "core" / "probe_mixer.c"), str(core / "mixer.c"), "-lm"]
+           str(REPO / "tests" / "core" / "probe_mixer.c"), str(core / "mixer_setup.c"), str(core / "mixer.c"),
+           "-lm"]
     if fixed:
         cmd.insert(1, "-DOCTO_FIXED=1")
     subprocess.run(cmd, check=True)

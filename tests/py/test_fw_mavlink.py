@@ -3,6 +3,7 @@ telemetry; and its command line. Most tests run octo-fw alone (no plant)."""
 
 import json
 import math
+import struct
 import subprocess
 import time
 
@@ -126,7 +127,8 @@ def test_param_set_accepted_refused_and_unknown(launch, port, tmp_path):
 
 def test_params_persist_across_restart(launch, port, tmp_path):
     rig = fw_alone(launch, port, tmp_path)
-    assert rig.param_set("VEH_KTAU", 0.3869)[0].param_value == float.fromhex((0.3869).hex()) or True
+    # the answer holds the value as float32 stores it
+    assert rig.param_set("VEH_KTAU", 0.3869)[0].param_value == struct.unpack("<f", struct.pack("<f", 0.3869))[0]
     assert rig.param_set("VEH_IXX", 0.0628)[0] is not None
     r, texts = rig.cmd(mavlink.MAV_CMD_PREFLIGHT_STORAGE, 1)
     assert r == mavlink.MAV_RESULT_ACCEPTED, texts

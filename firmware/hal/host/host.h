@@ -1,14 +1,83 @@
-/* host.h - internals shared by the host platform's files (not seen by app/). */
+/*
+ * host.h - the host platform's parts (not seen by app/). One struct host holds
+ * all of its state; main() allocates it and fills host->hal with the functions
+ * of host_hal.c, whose ctx is the struct host itself.
+ *
+ *   cmdline.c      options into struct host_config, --help, --dump-params
+ *   signing_key.c  the --signing-key file rule (hex key or passphrase)
+ *   host_hal.c     the struct hal of the host (clocks, sockets, report)
+ *   param_file.c   parameter storage in a text file, replaced atomically
+ *   lcm_log.c      the firmware log as LCM messages
+ *   xp_client.c    the plant link: X-Plane's UDP protocol
+ *   main.c         the main loop
+ */
 #ifndef OCTO_HOST_H
 #define OCTO_HOST_H
 
+#include <netinet/in.h>
 #include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
 
-void param_file_set_path(const char *path);
+#include "app.h"
+#include "hal.h"
+#include "xp_client.h"
 
-/* LCM log: URL as for lcm_create; file://PATH writes an event log stamped with
- * plant time (reproducible). Returns 0 or -1. */
-int lcm_log_open(const char *url);
-void lcm_log_close(void);
+typedef struct _lcm_t lcm_t;
+typedef struct _lcm_eventlog_t lcm_eventlog_t;
+
+/* ---- cmdline.c */
+struct host_config {
+	struct sockaddr_in xplane;         /* where X-Plane receives */
+	struct sockaddr_in gcs;            /* ground station until one is heard */
+	uint16_t xp_listen, mav_listen;
+	const char *params_path, *lcm_url, *signing_key_path;
+	enum xp_actuation act;
+};
+/* Fills *cfg from argv. Returns -1 to run, or the exit status (0 after --help
+ * or --dump-params, 1 or 2 after an error, reported on stderr). */
+int host_parse_args(int argc, char **argv, struct host_config *cfg);
+
+/* ---- signing_key.c: 0, or -1 with the reason on stderr */
+int signing_key_load(const char *path, uint8_t key[32]);
+
+/* ---- param_file.c */
+struct param_file {
+	char path[4096];                   /* empty: no storage */
+};
+void param_file_set_path(struct param_file *pf, const char *path);
+int param_file_store(const struct param_file *pf, const char *text, size_t len);
+long param_file_fetch(const struct param_file *pf, char *buf, size_t cap);
+
+/* ---- lcm_log.c: URL as for lcm_create; file://PATH writes an event log
+ * stamped with plant time (reproducible). Open returns 0 or -1. */
+struct lcm_log {
+	lcm_t *lcm;
+	lcm_eventlog_t *elog;
+};
+int lcm_log_open(struct lcm_log *lg, const char *url);
+void lcm_log_close(struct lcm_log *lg);
+void lcm_log_frame(struct lcm_log *lg, const struct app_log_frame *f);
+void lcm_log_event(struct lcm_log *lg, double t_s, int severity, const char *text);
+
+/* ---- host_hal.c */
+struct host {
+	struct host_config cfg;
+	struct xp_client xp;
+	struct hal_sensor_frame frame;     /* persistent: absent rows keep their values */
+	int mav_fd;
+	struct sockaddr_in gcs;            /* where the ground link sends */
+	bool have_key;
+	uint8_t signing_key[32];
+	uint32_t mav_empty;                /* ground datagrams without one accepted message */
+	struct param_file params;
+	struct lcm_log log;
+	struct hal hal;
+	struct app app;
+};
+/* Sets h->hal to the host's functions with h as their context. */
+void host_hal_bind(struct host *h);
+/* One line "octo-fw: ..." on stderr. */
+void host_report(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
 #endif /* OCTO_HOST_H */

@@ -1,5 +1,5 @@
 /*
- * lcm_log.c - the firmware log as LCM messages (hal_log_frame / hal_log_event).
+ * lcm_log.c - the firmware log as LCM messages (the host's log_frame / log_event).
  *
  * Channels: OCTO_FW_FRAME (octo.fw_frame_t, every frame), OCTO_FW_EVENT
  * (octo.fw_event_t). With --lcm file://PATH the events are written straight
@@ -18,13 +18,9 @@
 #include <octo_fw_event_t.h>
 #include <octo_fw_frame_t.h>
 
-#include "hal.h"
 #include "log.h"
 
-static lcm_t *lcm;
-static lcm_eventlog_t *elog;
-
-int lcm_log_open(const char *url)
+int lcm_log_open(struct lcm_log *lg, const char *url)
 {
 	if (!strncmp(url, "file://", 7)) {
 		char path[4096];
@@ -32,34 +28,34 @@ int lcm_log_open(const char *url)
 		char *q = strchr(path, '?');
 		if (q)
 			*q = 0;
-		elog = lcm_eventlog_create(path, "w");
-		if (!elog) {
+		lg->elog = lcm_eventlog_create(path, "w");
+		if (!lg->elog) {
 			fprintf(stderr, "octo-fw: --lcm: cannot create log %s\n", path);
 			return -1;
 		}
 		return 0;
 	}
-	lcm = lcm_create(url);
-	if (!lcm) {
+	lg->lcm = lcm_create(url);
+	if (!lg->lcm) {
 		fprintf(stderr, "octo-fw: --lcm: cannot open %s\n", url);
 		return -1;
 	}
 	return 0;
 }
 
-void lcm_log_close(void)
+void lcm_log_close(struct lcm_log *lg)
 {
-	if (elog)
-		lcm_eventlog_destroy(elog);
-	if (lcm)
-		lcm_destroy(lcm);
-	elog = NULL;
-	lcm = NULL;
+	if (lg->elog)
+		lcm_eventlog_destroy(lg->elog);
+	if (lg->lcm)
+		lcm_destroy(lg->lcm);
+	lg->elog = NULL;
+	lg->lcm = NULL;
 }
 
-static void emit(const char *channel, int64_t utime, const void *data, int len)
+static void emit(struct lcm_log *lg, const char *channel, int64_t utime, const void *data, int len)
 {
-	if (elog) {
+	if (lg->elog) {
 		lcm_eventlog_event_t ev;
 		memset(&ev, 0, sizeof ev);
 		ev.timestamp = utime;
@@ -67,9 +63,9 @@ static void emit(const char *channel, int64_t utime, const void *data, int len)
 		ev.channel = (char *)channel;
 		ev.datalen = len;
 		ev.data = (void *)data;
-		(void)lcm_eventlog_write_event(elog, &ev);
-	} else if (lcm) {
-		(void)lcm_publish(lcm, channel, data, (unsigned)len);
+		(void)lcm_eventlog_write_event(lg->elog, &ev);
+	} else if (lg->lcm) {
+		(void)lcm_publish(lg->lcm, channel, data, (unsigned)len);
 	}
 }
 
@@ -78,64 +74,32 @@ static int64_t utime_of(double t_s)
 	return (int64_t)(t_s * 1e6 + (t_s >= 0 ? 0.5 : -0.5));
 }
 
-void hal_log_frame(const struct app_log_frame *l)
+void lcm_log_frame(struct lcm_log *lg, const struct app_log_frame *l)
 {
-	if (!elog && !lcm)
+	if (!lg->elog && !lg->lcm)
 		return;
 	octo_fw_frame_t m;
 	memset(&m, 0, sizeof m);
 	m.utime = utime_of(l->t);
-	m.seq = l->seq;
-	m.t = l->t;
-	m.dt = l->dt;
-	m.stepped = l->stepped;
-	m.mode = l->mode;
-	m.armed = l->armed;
-	m.link_ok = l->link_ok;
-	m.valid = l->valid;
-#define CP(f) memcpy(m.f, l->f, sizeof m.f)
-	CP(q);
-	CP(rate_b);
-	CP(pos_i);
-	CP(vel_i);
-	CP(rotor_thrust);
-	CP(rotor_torque);
-	CP(q_sp);
-	CP(pos_sp);
-	CP(tau_dem);
-	CP(tau_alloc);
-	CP(rotor_f);
-	CP(excitation);
-	CP(throttle);
-	CP(est);
-	CP(est_sd);
-	CP(inertia);
-#undef CP
-	m.z_sp = l->z_sp;
-	m.vz_ff = l->vz_ff;
-	m.f_dem = l->f_dem;
-	m.f_alloc = l->f_alloc;
-	m.att_flags = l->att_flags;
-	m.alt_flags = l->alt_flags;
-	m.mix_flags = l->mix_flags;
-	m.thr_clamped = l->thr_clamped;
-	m.exp_id = l->exp_id;
-	m.exp_phase = l->exp_phase;
-	m.exp_progress = l->exp_progress;
-	m.kf = l->kf;
-	m.ktau = l->ktau;
-	m.mass = l->mass;
+	/* every field of the record, by the one table (log.h); same sizes, checked */
+#define COPY(c_type, lcm_type, name)                                                        \
+	_Static_assert(sizeof m.name == sizeof l->name, "log field " #name " differs from LCM"); \
+	memcpy(&m.name, &l->name, sizeof m.name);
+#define COPY_ARR(c_type, lcm_type, name, n) COPY(c_type, lcm_type, name)
+	APP_LOG_FIELDS(COPY, COPY_ARR)
+#undef COPY
+#undef COPY_ARR
 	uint8_t buf[1024];
 	int n = octo_fw_frame_t_encoded_size(&m);
 	if (n <= 0 || n > (int)sizeof buf)
 		return;
 	if (octo_fw_frame_t_encode(buf, 0, n, &m) == n)
-		emit("OCTO_FW_FRAME", m.utime, buf, n);
+		emit(lg, "OCTO_FW_FRAME", m.utime, buf, n);
 }
 
-void hal_log_event(double t_s, int severity, const char *text)
+void lcm_log_event(struct lcm_log *lg, double t_s, int severity, const char *text)
 {
-	if (!elog && !lcm)
+	if (!lg->elog && !lg->lcm)
 		return;
 	octo_fw_event_t m;
 	m.utime = utime_of(t_s);
@@ -146,5 +110,5 @@ void hal_log_event(double t_s, int severity, const char *text)
 	if (n <= 0 || n > (int)sizeof buf)
 		return;
 	if (octo_fw_event_t_encode(buf, 0, n, &m) == n)
-		emit("OCTO_FW_EVENT", m.utime, buf, n);
+		emit(lg, "OCTO_FW_EVENT", m.utime, buf, n);
 }

@@ -1,5 +1,5 @@
 /*
- * param_file.c - parameter storage in a text file (hal_param_store / _fetch).
+ * param_file.c - parameter storage in a text file (the host's param_store / _fetch).
  *
  * Atomic replacement: the new text goes to FILE.tmp in the same directory,
  * is fsync'ed, renamed over FILE, and the directory is fsync'ed, so a crash at
@@ -15,13 +15,10 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "hal.h"
 
-static char param_path[4096];
-
-void param_file_set_path(const char *path)
+void param_file_set_path(struct param_file *pf, const char *path)
 {
-	snprintf(param_path, sizeof param_path, "%s", path ? path : "");
+	snprintf(pf->path, sizeof pf->path, "%s", path ? path : "");
 }
 
 static int write_all(int fd, const char *p, size_t n)
@@ -39,33 +36,33 @@ static int write_all(int fd, const char *p, size_t n)
 	return 0;
 }
 
-int hal_param_store(const char *text, size_t len)
+int param_file_store(const struct param_file *pf, const char *text, size_t len)
 {
-	if (!param_path[0]) {
-		hal_report("params: not saved (no --params FILE)");
+	if (!pf->path[0]) {
+		host_report("params: not saved (no --params FILE)");
 		return -1;
 	}
-	char tmp[sizeof param_path + 8];
-	snprintf(tmp, sizeof tmp, "%s.tmp", param_path);
+	char tmp[sizeof pf->path + 8];
+	snprintf(tmp, sizeof tmp, "%s.tmp", pf->path);
 	int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
 	if (fd < 0) {
-		hal_report("params: cannot create %s: %s", tmp, strerror(errno));
+		host_report("params: cannot create %s: %s", tmp, strerror(errno));
 		return -1;
 	}
 	static const char head[] = "# octo-fw parameters: NAME VALUE (MAVProxy format)\n";
 	if (write_all(fd, head, sizeof head - 1) || write_all(fd, text, len) || fsync(fd)) {
-		hal_report("params: cannot write %s: %s", tmp, strerror(errno));
+		host_report("params: cannot write %s: %s", tmp, strerror(errno));
 		close(fd);
 		unlink(tmp);
 		return -1;
 	}
-	if (close(fd) || rename(tmp, param_path)) {
-		hal_report("params: cannot replace %s: %s", param_path, strerror(errno));
+	if (close(fd) || rename(tmp, pf->path)) {
+		host_report("params: cannot replace %s: %s", pf->path, strerror(errno));
 		unlink(tmp);
 		return -1;
 	}
-	char dir[sizeof param_path];
-	snprintf(dir, sizeof dir, "%s", param_path);
+	char dir[sizeof pf->path];
+	snprintf(dir, sizeof dir, "%s", pf->path);
 	int dfd = open(dirname(dir), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
 	if (dfd >= 0) {
 		(void)fsync(dfd);
@@ -74,11 +71,11 @@ int hal_param_store(const char *text, size_t len)
 	return 0;
 }
 
-long hal_param_fetch(char *buf, size_t cap)
+long param_file_fetch(const struct param_file *pf, char *buf, size_t cap)
 {
-	if (!param_path[0] || cap == 0)
+	if (!pf->path[0] || cap == 0)
 		return -1;
-	int fd = open(param_path, O_RDONLY | O_CLOEXEC);
+	int fd = open(pf->path, O_RDONLY | O_CLOEXEC);
 	if (fd < 0)
 		return -1;
 	size_t n = 0;
@@ -96,7 +93,7 @@ long hal_param_fetch(char *buf, size_t cap)
 	}
 	close(fd);
 	if (n + 1 >= cap)
-		hal_report("params: %s longer than %zu bytes, rest ignored", param_path, cap - 1);
+		host_report("params: %s longer than %zu bytes, rest ignored", pf->path, cap - 1);
 	buf[n] = 0;
 	return (long)n;
 }

@@ -1,6 +1,8 @@
 /* xp_client.c - X-Plane client: rows, version, conventions, actuation (see xp_client.h). */
 #include "xp_client.h"
 
+#include "host.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -62,7 +64,7 @@ int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct socka
 		return -1;
 	}
 	(void)fcntl(c->fd, F_SETFL, fcntl(c->fd, F_GETFL) | O_NONBLOCK);
-	c->stats.rows_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_POS |
+	c->stats.parts_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_POS |
 				HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	return 0;
 }
@@ -201,7 +203,7 @@ static void note_rows(struct xp_client *c, const struct xp_msg_in *m, uint64_t n
 	for (size_t i = 0; i < N_WANTED; i++)
 		if (!c->row_seen_us[i] || now_us - c->row_seen_us[i] > ROW_FRESH_US)
 			missing |= wanted_bits[i];
-	c->stats.rows_missing = missing;
+	c->stats.parts_missing = missing;
 }
 
 int xp_client_receive(struct xp_client *c, struct hal_sensor_frame *frame, uint64_t now_us)
@@ -227,10 +229,10 @@ int xp_client_receive(struct xp_client *c, struct hal_sensor_frame *frame, uint6
 		for (size_t r = 0; r < c->msg.n; r++)
 			if (c->msg.rref[r].index == XP_RREF_VERSION_INDEX) {
 				float v = c->msg.rref[r].value;
-				if (isfinite(v) && v >= 1.0f && v < 1.0e7f && (uint32_t)v != c->stats.xp_version) {
-					c->stats.xp_version = (uint32_t)v;
-					hal_report("X-Plane version %u (row 16 as X-Plane %s)", c->stats.xp_version,
-						   c->stats.xp_version >= XP_VERSION_12 ? "12: P,Q,R deg/s"
+				if (isfinite(v) && v >= 1.0f && v < 1.0e7f && (uint32_t)v != c->xp_version) {
+					c->xp_version = (uint32_t)v;
+					host_report("X-Plane version %u (row 16 as X-Plane %s)", c->xp_version,
+						   c->xp_version >= XP_VERSION_12 ? "12: P,Q,R deg/s"
 											: "10/11: Q,P,R rad/s");
 				}
 			}
@@ -252,7 +254,7 @@ int xp_client_receive(struct xp_client *c, struct hal_sensor_frame *frame, uint6
 	note_rows(c, &c->msg, now_us);
 	struct hal_sensor_frame f = *frame;   /* keeps the previous values of absent rows */
 	float raw_t = 0.0f;
-	uint32_t bits = xp_frame_convert(c->msg.data, c->msg.n, c->stats.xp_version, &f, &raw_t);
+	uint32_t bits = xp_frame_convert(c->msg.data, c->msg.n, c->xp_version, &f, &raw_t);
 	if (!(bits & HAL_FRAME_TIME)) {
 		c->stats.dropped++;   /* a frame without time cannot be placed */
 		return 0;
@@ -307,7 +309,7 @@ void xp_client_poll(struct xp_client *c, uint64_t now_us)
 		for (size_t i = 0; i < N_WANTED; i++)
 			if (!c->row_seen_us[i] || now_us - c->row_seen_us[i] > ROW_FRESH_US)
 				missing |= wanted_bits[i];
-		c->stats.rows_missing = missing;
+		c->stats.parts_missing = missing;
 	}
 }
 

@@ -44,7 +44,8 @@ struct xp_client {
 	int fd;
 	struct sockaddr_in xp;            /* where X-Plane receives (requests go there) */
 	enum xp_actuation act;
-	struct hal_link_stats stats;
+	struct hal_plant_stats stats;
+	uint32_t xp_version;              /* sim/version/xplane_internal_version, 0 = unknown yet */
 	uint64_t row_seen_us[8];          /* per wanted row, wall time last seen */
 	uint64_t last_dsel_us, last_rref_us, last_override_us, last_usel_us;
 	uint64_t last_data_us;            /* wall time of the last DATA datagram */

@@ -1,7 +1,7 @@
 /*
  * xp_proto.h - X-Plane 11/12 native UDP protocol: octo-fw's own encoder/decoder.
  *
- * Byte layouts follow ../shared/xplane-udp.md (little-endian, one message per
+ * Byte layouts: docs/xplane-protocol.md (little-endian, one message per
  * datagram, 4-letter type + 1 byte that receivers ignore). Pure functions: no
  * sockets, no state; every decoder checks lengths before reading a byte.
  */

@@ -1,0 +1,488 @@
+/* mixer_setup.c - the mixer's set-up, in float32 at a parameter change (not in the 90 Hz
+ * step): Gamma_o from the geometry, its pseudo-inverse by Jacobi SVD, the facets of the
+ * attainable set; see mixer.h. The allocation that uses them is mixer.c. */
+#include "mixer.h"
+
+#include "mixer_tol.h"
+
+#define NR MIXER_N_ROTORS
+#define NA MIXER_N_AXES
+
+/* ================================================================ set-up (float32) */
+
+static float absf(float x) { return x < 0.0f ? -x : x; }
+
+/* One-sided Jacobi SVD of A (8x4, columns orthogonalised in place): A V = U S.
+ * On return a[][k] = U_k s_k, v = V, s = column norms. At most 40 sweeps. */
+static void jacobi_svd(float a[NR][NA], float v[NA][NA], float s[NA])
+{
+	for (int i = 0; i < NA; i++)
+		for (int j = 0; j < NA; j++)
+			v[i][j] = i == j ? 1.0f : 0.0f;
+	for (int sweep = 0; sweep < 40; sweep++) {
+		int rotated = 0;
+		for (int p = 0; p < NA - 1; p++) {
+			for (int q = p + 1; q < NA; q++) {
+				float al = 0.0f, be = 0.0f, ga = 0.0f;
+				for (int i = 0; i < NR; i++) {
+					al += a[i][p] * a[i][p];
+					be += a[i][q] * a[i][q];
+					ga += a[i][p] * a[i][q];
+				}
+				if (al <= 0.0f || be <= 0.0f || absf(ga) <= 1e-7f * sqrtf(al * be))
+					continue;
+				rotated = 1;
+				float zeta = (be - al) / (2.0f * ga);
+				float t = (zeta >= 0.0f ? 1.0f : -1.0f) / (absf(zeta) + sqrtf(1.0f + zeta * zeta));
+				float c = 1.0f / sqrtf(1.0f + t * t), sn = c * t;
+				for (int i = 0; i < NR; i++) {
+					float x = a[i][p], y = a[i][q];
+					a[i][p] = c * x - sn * y;
+					a[i][q] = sn * x + c * y;
+				}
+				for (int i = 0; i < NA; i++) {
+					float x = v[i][p], y = v[i][q];
+					v[i][p] = c * x - sn * y;
+					v[i][q] = sn * x + c * y;
+				}
+			}
+		}
+		if (!rotated)
+			break;
+	}
+	for (int k = 0; k < NA; k++) {
+		float n2 = 0.0f;
+		for (int i = 0; i < NR; i++)
+			n2 += a[i][k] * a[i][k];
+		s[k] = sqrtf(n2);
+	}
+}
+
+/* Inverse of a 4x4 matrix by Gauss-Jordan with partial pivoting; returns |det|. */
+static float inv4(const float m[4][4], float out[4][4])
+{
+	float a[4][8];
+	for (int i = 0; i < 4; i++)
+		for (int j = 0; j < 4; j++) {
+			a[i][j] = m[i][j];
+			a[i][4 + j] = i == j ? 1.0f : 0.0f;
+		}
+	float det = 1.0f;
+	for (int c = 0; c < 4; c++) {
+		int piv = c;
+		for (int r = c + 1; r < 4; r++)
+			if (absf(a[r][c]) > absf(a[piv][c]))
+				piv = r;
+		if (a[piv][c] == 0.0f)
+			return 0.0f;
+		if (piv != c)
+			for (int j = 0; j < 8; j++) {
+				float t = a[c][j];
+				a[c][j] = a[piv][j];
+				a[piv][j] = t;
+			}
+		float pv = a[c][c];
+		det *= pv;
+		for (int j = 0; j < 8; j++)
+			a[c][j] /= pv;
+		for (int r = 0; r < 4; r++) {
+			if (r == c)
+				continue;
+			float f = a[r][c];
+			for (int j = 0; j < 8; j++)
+				a[r][j] -= f * a[c][j];
+		}
+	}
+	for (int i = 0; i < 4; i++)
+		for (int j = 0; j < 4; j++)
+			out[i][j] = a[i][4 + j];
+	return absf(det);
+}
+
+static float det3(float a0, float a1, float a2, float b0, float b1, float b2, float c0, float c1, float c2)
+{
+	return a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0);
+}
+
+/* unit normal to three 4-vectors (generalised cross product); false if they are dependent */
+static bool normal3(const float g[NA][NR], int a, int b, int c, float n[NA])
+{
+	float r[3][NA];
+	for (int i = 0; i < NA; i++) {
+		r[0][i] = g[i][a];
+		r[1][i] = g[i][b];
+		r[2][i] = g[i][c];
+	}
+	float nn = 0.0f;
+	for (int k = 0; k < NA; k++) {
+		int col[3], m = 0;
+		for (int j = 0; j < NA; j++)
+			if (j != k)
+				col[m++] = j;
+		float d = det3(r[0][col[0]], r[0][col[1]], r[0][col[2]],
+			       r[1][col[0]], r[1][col[1]], r[1][col[2]],
+			       r[2][col[0]], r[2][col[1]], r[2][col[2]]);
+		n[k] = (k & 1) ? -d : d;
+		nn += n[k] * n[k];
+	}
+	/* generators have entries in [-1, 1]: a normal below 1e-4 means (near) dependence */
+	if (nn < 1e-8f)
+		return false;
+	float inv = 1.0f / sqrtf(nn);
+	for (int k = 0; k < NA; k++)
+		n[k] *= inv;
+	return true;
+}
+
+/* Facets of the zonotope of the generators set[0..cnt-1] (scaled space), written to out:
+ * one per distinct normal (triples spanning the same hyperplane give one facet). Returns the
+ * count, or -1 if more than cap distinct facets exist. */
+static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct mixer_facet *out,
+		     struct mixer_subfacet *out_sub, int cap)
+{
+	int nf = 0;
+	float seen[MIXER_MAX_SUB_FACETS > MIXER_MAX_FACETS ? MIXER_MAX_SUB_FACETS : MIXER_MAX_FACETS][NA];
+	for (int a = 0; a < cnt; a++)
+		for (int b = a + 1; b < cnt; b++)
+			for (int c = b + 1; c < cnt; c++) {
+				float n[NA];
+				if (!normal3(g, set[a], set[b], set[c], n))
+					continue;
+				bool dup = false;
+				for (int k = 0; k < nf && !dup; k++) {
+					float dp = 0.0f, dm = 0.0f;
+					for (int i = 0; i < NA; i++) {
+						dp = absf(n[i] - seen[k][i]) > dp ? absf(n[i] - seen[k][i]) : dp;
+						dm = absf(n[i] + seen[k][i]) > dm ? absf(n[i] + seen[k][i]) : dm;
+					}
+					dup = dp < 1e-4f || dm < 1e-4f;
+				}
+				if (dup)
+					continue;
+				if (nf >= cap)
+					return -1;
+				float nc = 0.0f, h = 0.0f;
+				for (int t = 0; t < cnt; t++) {
+					float d = 0.0f;
+					for (int i = 0; i < NA; i++)
+						d += n[i] * g[i][set[t]];
+					nc += 0.5f * d;
+					h += 0.5f * absf(d);
+				}
+				for (int i = 0; i < NA; i++)
+					seen[nf][i] = n[i];
+				if (out_sub) { /* a preimage step's facet: no reciprocals */
+					for (int i = 0; i < NA; i++)
+						out_sub[nf].n[i] = sc_from_float(n[i]);
+					out_sub[nf].nc = sc_from_float(nc);
+					out_sub[nf].h = sc_from_float(h);
+					nf++;
+					continue;
+				}
+				for (int i = 0; i < NA; i++)
+					out[nf].n[i] = sc_from_float(n[i]);
+				out[nf].nc = sc_from_float(nc);
+				out[nf].h = sc_from_float(h);
+				/* reciprocals of the thrust and yaw components (0: treated as zero) */
+				scalar_t n0 = out[nf].n[0], n3 = out[nf].n[3];
+				out[nf].inv0 = sc_abs(n0) > EPS_S ? sc_from_float(1.0f / sc_to_float(n0)) : SC_ZERO;
+				out[nf].inv3 = sc_abs(n3) > EPS_S ? sc_from_float(1.0f / sc_to_float(n3)) : SC_ZERO;
+				nf++;
+			}
+	return nf;
+}
+
+void mixer_default_params(struct mixer_params *p)
+{
+	struct mixer_params d = { 0 };
+	d.arm_l_m = SC(0.35);
+	d.k_f_n = SC(28.0269);
+	d.k_tau_nm = SC(0.3869);
+	d.t_min = SC(0);
+	d.t_max = SC(1);
+	d.rotor_mask = 0xFF;
+	d.mode = MIXER_MODE_PRIORITY;
+	d.custom_gamma = NULL;
+	*p = d;
+}
+
+static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
+{
+	if (p->custom_gamma) {
+		for (int i = 0; i < NA; i++)
+			for (int j = 0; j < NR; j++)
+				m->gamma_f[i][j] = p->custom_gamma[i * NR + j];
+	} else {
+		const float s = 0.70710678f;
+		float l = sc_to_float(p->arm_l_m);
+		float kf = sc_to_float(p->k_f_n);
+		float k = kf > 0.0f ? sc_to_float(p->k_tau_nm) / kf : 0.0f;
+		static const float tx[NR] = { 0, -1, -1, -1, 0, 1, 1, 1 };
+		static const float ty[NR] = { -1, -1, 0, 1, 1, 1, 0, -1 };
+		for (int j = 0; j < NR; j++) {
+			float diag = (j & 1) ? s : 1.0f; /* even-numbered rotors 2,4,6,8 at 45 deg */
+			m->gamma_f[0][j] = 1.0f;
+			m->gamma_f[1][j] = tx[j] * diag * l;
+			m->gamma_f[2][j] = ty[j] * diag * l;
+			m->gamma_f[3][j] = (j & 1) ? -k : k;
+		}
+	}
+	for (int j = 0; j < NR; j++)
+		if (!(p->rotor_mask & (1u << j)) || !(m->gamma_f[0][j] == m->gamma_f[0][j]))
+			for (int i = 0; i < NA; i++)
+				m->gamma_f[i][j] = 0.0f;
+	for (int i = 0; i < NA; i++)
+		for (int j = 0; j < NR; j++)
+			if (!isfinite(m->gamma_f[i][j]))
+				m->gamma_f[i][j] = 0.0f;
+}
+
+bool mixer_init(struct mixer *m, const struct mixer_params *p)
+{
+	struct mixer_design d; /* scratch, dropped on return */
+	return mixer_init_design(m, p, &d);
+}
+
+bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mixer_design *dz)
+{
+	unsigned char *raw = (unsigned char *)m; /* zero the caller's structs without a template */
+	for (size_t b = 0; b < sizeof *m; b++)
+		raw[b] = 0;
+	raw = (unsigned char *)dz;
+	for (size_t b = 0; b < sizeof *dz; b++)
+		raw[b] = 0;
+	m->p = *p;
+	m->p.custom_gamma = NULL;
+	m->custom = p->custom_gamma != NULL;
+	build_gamma(dz, p);
+
+	/* ---- pseudo-inverse by one-sided Jacobi SVD of Gamma^T */
+	float a[NR][NA], v[NA][NA], s[NA];
+	for (int j = 0; j < NR; j++)
+		for (int i = 0; i < NA; i++)
+			a[j][i] = dz->gamma_f[i][j];
+	jacobi_svd(a, v, s);
+	int idx[NA] = { 0, 1, 2, 3 };
+	for (int i = 0; i < NA; i++) /* sort by singular value, descending */
+		for (int j = i + 1; j < NA; j++)
+			if (s[idx[j]] > s[idx[i]]) {
+				int t = idx[i];
+				idx[i] = idx[j];
+				idx[j] = t;
+			}
+	float smax = s[idx[0]];
+	float ucol[NR][NA];
+	int rank = 0;
+	for (int k = 0; k < NA; k++) {
+		int c = idx[k];
+		dz->sigma_f[k] = s[c];
+		if (smax > 0.0f && s[c] > 1e-5f * smax) {
+			for (int j = 0; j < NR; j++)
+				ucol[j][rank] = a[j][c] / s[c];
+			/* pinv += u_k (1/s_k) v_k^T */
+			for (int j = 0; j < NR; j++)
+				for (int i = 0; i < NA; i++)
+					dz->pinv_f[j][i] += ucol[j][rank] / s[c] * v[i][c];
+			rank++;
+		}
+	}
+	m->rank = (uint8_t)rank;
+	dz->rank = (uint8_t)rank;
+	/* two Newton-Schulz steps P <- 2P - P Gamma P (converge to the Moore-Penrose inverse,
+	 * also when rank-deficient) polish the float32 SVD result */
+	for (int it = 0; it < 2; it++) {
+		float gp[NA][NA], np[NR][NA];
+		for (int i = 0; i < NA; i++)
+			for (int k = 0; k < NA; k++) {
+				float acc = 0.0f;
+				for (int j = 0; j < NR; j++)
+					acc += dz->gamma_f[i][j] * dz->pinv_f[j][k];
+				gp[i][k] = acc;
+			}
+		for (int j = 0; j < NR; j++)
+			for (int k = 0; k < NA; k++) {
+				float acc = 0.0f; /* (P (I - Gamma P))_jk, then P + that */
+				for (int i = 0; i < NA; i++)
+					acc += dz->pinv_f[j][i] * ((i == k ? 1.0f : 0.0f) - gp[i][k]);
+				np[j][k] = dz->pinv_f[j][k] + acc;
+			}
+		for (int j = 0; j < NR; j++)
+			for (int k = 0; k < NA; k++)
+				dz->pinv_f[j][k] = np[j][k];
+	}
+
+	/* ---- null space: complete the row space of Gamma (ucol) with unit vectors, Gram-Schmidt */
+	float basis[NR][NR];
+	int nb = 0;
+	for (int k = 0; k < rank; k++)
+		for (int j = 0; j < NR; j++)
+			basis[j][k] = ucol[j][k];
+	nb = rank;
+	while (nb < NR) {
+		float best[NR] = { 0 }, bestn = -1.0f;
+		for (int e = 0; e < NR; e++) {
+			float x[NR];
+			for (int j = 0; j < NR; j++)
+				x[j] = j == e ? 1.0f : 0.0f;
+			for (int pass = 0; pass < 2; pass++)
+				for (int k = 0; k < nb; k++) {
+					float d = 0.0f;
+					for (int j = 0; j < NR; j++)
+						d += basis[j][k] * x[j];
+					for (int j = 0; j < NR; j++)
+						x[j] -= d * basis[j][k];
+				}
+			float n2 = 0.0f;
+			for (int j = 0; j < NR; j++)
+				n2 += x[j] * x[j];
+			if (n2 > bestn) {
+				bestn = n2;
+				for (int j = 0; j < NR; j++)
+					best[j] = x[j];
+			}
+		}
+		float inv = 1.0f / sqrtf(bestn);
+		for (int j = 0; j < NR; j++) {
+			basis[j][nb] = best[j] * inv;
+			dz->null_f[j][nb - rank] = basis[j][nb];
+		}
+		nb++;
+	}
+	dz->n_null = (uint8_t)(NR - rank);
+
+	for (int j = 0; j < NR; j++)
+		for (int i = 0; i < NA; i++)
+			m->pinv[j][i] = sc_from_float(dz->pinv_f[j][i]);
+
+	/* ---- box and row scaling */
+	float kf = sc_to_float(p->k_f_n);
+	float tmin = sc_to_float(p->t_min), tmax = sc_to_float(p->t_max);
+	if (!(tmin >= 0.0f))
+		tmin = 0.0f;
+	if (!(tmax > tmin))
+		tmax = tmin + 1e-3f;
+	float flo = kf * tmin, fhi = kf * tmax, width = fhi - flo;
+	m->f_lo = sc_from_float(flo);
+	m->f_hi = sc_from_float(fhi);
+	float gsc[NA][NR];
+	float rowmax[NA];
+	bool rows_ok = width > 0.0f;
+	for (int i = 0; i < NA; i++) {
+		rowmax[i] = 0.0f;
+		float wl = 0.0f;
+		for (int j = 0; j < NR; j++) {
+			rowmax[i] = absf(dz->gamma_f[i][j]) > rowmax[i] ? absf(dz->gamma_f[i][j]) : rowmax[i];
+			if (dz->gamma_f[0][j] != 0.0f || dz->gamma_f[1][j] != 0.0f ||
+			    dz->gamma_f[2][j] != 0.0f || dz->gamma_f[3][j] != 0.0f)
+				wl += dz->gamma_f[i][j] * flo;
+		}
+		m->w_lo[i] = sc_from_float(wl);
+		if (!(rowmax[i] > 0.0f)) {
+			rows_ok = false;
+			rowmax[i] = 1.0f;
+		}
+		m->row_div[i] = sc_from_float(1.0f / rowmax[i]);
+		m->row_scale[i] = sc_from_float(width * rowmax[i]);
+		for (int j = 0; j < NR; j++) {
+			gsc[i][j] = dz->gamma_f[i][j] / rowmax[i];
+			m->gn[i][j] = sc_from_float(gsc[i][j]);
+		}
+	}
+	m->width = sc_from_float(width);
+	/* a rotor within 4 inner margins of a bound counts as at the bound */
+	m->at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
+	for (int j = 0; j < NR; j++)
+		for (int i = 0; i < NA; i++)
+			m->pinv_n[j][i] = sc_from_float(dz->pinv_f[j][i] * rowmax[i]);
+
+	/* ---- allocator: present rotors, the best-conditioned 4 of them last */
+	uint8_t act[NR];
+	int na = 0;
+	for (int j = 0; j < NR; j++) {
+		float n2 = 0.0f;
+		for (int i = 0; i < NA; i++)
+			n2 += dz->gamma_f[i][j] * dz->gamma_f[i][j];
+		if (n2 > 0.0f) {
+			act[na++] = (uint8_t)j;
+			m->present |= (uint8_t)(1u << j);
+		}
+	}
+	m->n_active = (uint8_t)na;
+	m->alloc_ok = false;
+	if (rank == NA && na >= NA && rows_ok) {
+		float bestdet = 0.0f;
+		int bt[4] = { 0, 1, 2, 3 };
+		for (int a0 = 0; a0 < na; a0++)
+			for (int a1 = a0 + 1; a1 < na; a1++)
+				for (int a2 = a1 + 1; a2 < na; a2++)
+					for (int a3 = a2 + 1; a3 < na; a3++) {
+						int t[4] = { a0, a1, a2, a3 };
+						float mm[4][4], inv[4][4];
+						for (int i = 0; i < NA; i++)
+							for (int c = 0; c < 4; c++)
+								mm[i][c] = gsc[i][act[t[c]]];
+						float d = inv4(mm, inv);
+						if (d > bestdet * 1.0001f) {
+							bestdet = d;
+							for (int c = 0; c < 4; c++)
+								bt[c] = t[c];
+						}
+					}
+		if (bestdet > 1e-4f) {
+			int no = 0;
+			for (int t = 0; t < na; t++)
+				if (t != bt[0] && t != bt[1] && t != bt[2] && t != bt[3])
+					m->order[no++] = act[t];
+			for (int c = 0; c < 4; c++)
+				m->order[no++] = act[bt[c]];
+			float mm[4][4], inv[4][4];
+			for (int i = 0; i < NA; i++)
+				for (int c = 0; c < 4; c++)
+					mm[i][c] = gsc[i][m->order[na - 4 + c]];
+			inv4(mm, inv);
+			for (int c = 0; c < 4; c++)
+				for (int i = 0; i < NA; i++)
+					m->tail_inv[c][i] = sc_from_float(inv[c][i]);
+			int nfull = facets_of(gsc, act, na, m->facet, NULL, MIXER_MAX_FACETS);
+			bool fits = nfull > 0;
+			m->n_facets = (uint8_t)(nfull > 0 ? nfull : 0);
+			int used = 0;
+			for (int st = 0; st + 5 <= na; st++) {
+				int cnt = na - st - 1; /* generators left after fixing order[st] */
+				m->sub_first[st] = (uint8_t)used;
+				m->sub_n[st] = 0;
+				if (cnt > 4) {
+					int k = facets_of(gsc, &m->order[st + 1], cnt, NULL, &m->sub[used],
+							  MIXER_MAX_SUB_FACETS - used);
+					if (k < 0) {
+						fits = false;
+						break;
+					}
+					m->sub_n[st] = (uint8_t)k;
+					used += k;
+				}
+			}
+			m->alloc_ok = fits;
+		}
+	}
+	return rank == NA;
+}
+
+static bool same_geometry(const struct mixer *m, const struct mixer_params *b)
+{
+	const struct mixer_params *a = &m->p;
+	return a->arm_l_m == b->arm_l_m && a->k_f_n == b->k_f_n && a->k_tau_nm == b->k_tau_nm &&
+	       a->t_min == b->t_min && a->t_max == b->t_max && a->rotor_mask == b->rotor_mask &&
+	       !m->custom && b->custom_gamma == NULL;
+}
+
+bool mixer_set_params(struct mixer *m, const struct mixer_params *p)
+{
+	if (same_geometry(m, p)) {
+		m->p.mode = p->mode;
+		return m->rank == NA;
+	}
+	return mixer_init(m, p);
+}
+
+/* ================================================================ 90 Hz path (scalar_t) */

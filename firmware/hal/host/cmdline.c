@@ -1,0 +1,176 @@
+/* cmdline.c - octo-fw's options (see --help) and --dump-params. */
+#include "host.h"
+
+#include <arpa/inet.h>
+#include <netdb.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+
+#include "params.h"
+
+static const char usage[] =
+	"usage: octo-fw [options]\n"
+	"  the autopilot as a software-in-the-loop process: flies X-Plane 11/12 (or octo-sim)\n"
+	"  over X-Plane's UDP protocol, talks MAVLink 2 to a ground station\n"
+	"\n"
+	"  --xplane HOST:PORT       where X-Plane receives (127.0.0.1:49000); only datagrams\n"
+	"                           from HOST are accepted\n"
+	"  --xp-listen PORT         X-Plane Data Output target port (49005)\n"
+	"  --mavlink-listen PORT    MAVLink UDP port (14580)\n"
+	"  --gcs HOST:PORT          ground station (127.0.0.1:14550); also learned from the\n"
+	"                           source of incoming MAVLink packets\n"
+	"  --params FILE            parameter storage (loaded at start, saved atomically)\n"
+	"  --lcm URL                LCM log: file://PATH (event log in plant time) or an LCM URL\n"
+	"  --actuation dref|data25  throttles as 8 DREFs ENGN_thro_use[i] + override_throttles\n"
+	"                           (default) or one DATA row 25 datagram\n"
+	"  --signing-key FILE       MAVLink 2 signing: unsigned input rejected, output signed.\n"
+	"                           FILE (surrounding white space stripped) holds 64 hex digits\n"
+	"                           (the key) or a passphrase (key = its sha256): the rule of\n"
+	"                           octo-gcs --signing-key and MAVProxy, so one file serves both\n"
+	"  --dump-params            print the parameter table as JSON and exit\n"
+	"  --help                   this text\n";
+
+static int parse_port(const char *flag, const char *s, uint16_t *out)
+{
+	char *e = NULL;
+	long v = strtol(s, &e, 10);
+	if (!*s || *e || v < 1 || v > 65535) {
+		fprintf(stderr, "octo-fw: %s: '%s' is not a port (1..65535)\n", flag, s);
+		return -1;
+	}
+	*out = (uint16_t)v;
+	return 0;
+}
+
+static int parse_hostport(const char *flag, const char *s, struct sockaddr_in *out)
+{
+	char host[256];
+	const char *colon = strrchr(s, ':');
+	if (!colon || colon == s || (size_t)(colon - s) >= sizeof host) {
+		fprintf(stderr, "octo-fw: %s: '%s' is not HOST:PORT\n", flag, s);
+		return -1;
+	}
+	memcpy(host, s, (size_t)(colon - s));
+	host[colon - s] = 0;
+	uint16_t port;
+	if (parse_port(flag, colon + 1, &port))
+		return -1;
+	struct addrinfo hints, *res = NULL;
+	memset(&hints, 0, sizeof hints);
+	hints.ai_family = AF_INET;
+	hints.ai_socktype = SOCK_DGRAM;
+	if (getaddrinfo(host, NULL, &hints, &res) || !res) {
+		fprintf(stderr, "octo-fw: %s: unknown host '%s'\n", flag, host);
+		return -1;
+	}
+	memcpy(out, res->ai_addr, sizeof *out);
+	freeaddrinfo(res);
+	out->sin_port = htons(port);
+	return 0;
+}
+
+static void json_str(const char *s)
+{
+	putchar('"');
+	for (; *s; s++) {
+		if (*s == '"' || *s == '\\')
+			printf("\\%c", *s);
+		else if ((unsigned char)*s < 32)
+			printf("\\u%04x", *s);
+		else
+			putchar(*s);
+	}
+	putchar('"');
+}
+
+static void dump_params(void)
+{
+	printf("{\"params\": [\n");
+	for (size_t i = 0; i < param_count; i++) {
+		const struct param_def *d = &param_defs[i];
+		printf("  {\"index\": %zu, \"name\": ", i);
+		json_str(d->name);
+		char def[32], min[32], max[32];
+		params_fmt_float(def, sizeof def, d->def);
+		params_fmt_float(min, sizeof min, d->min);
+		params_fmt_float(max, sizeof max, d->max);
+		printf(", \"type\": \"REAL32\", \"default\": %s, \"min\": %s, \"max\": %s, \"unit\": ", def,
+		       min, max);
+		json_str(d->unit);
+		printf(", \"description\": ");
+		json_str(d->desc);
+		printf(", \"locked\": %s, \"readonly\": %s}%s\n", d->flags & PARAM_LOCKED ? "true" : "false",
+		       d->flags & PARAM_READONLY ? "true" : "false", i + 1 < param_count ? "," : "");
+	}
+	printf("], \"modes\": {");
+	for (int m = APP_DISARMED; m <= APP_LAND; m++)
+		printf("%s\"%s\": %d", m ? ", " : "", app_mode_name((enum app_mode)m), m);
+	printf("}}\n");
+}
+
+int host_parse_args(int argc, char **argv, struct host_config *cfg)
+{
+	memset(cfg, 0, sizeof *cfg);
+	cfg->xp_listen = 49005;
+	cfg->mav_listen = 14580;
+	cfg->act = XP_ACT_DREF;
+	if (parse_hostport("--xplane", "127.0.0.1:49000", &cfg->xplane) ||
+	    parse_hostport("--gcs", "127.0.0.1:14550", &cfg->gcs))
+		return 1;
+
+	for (int i = 1; i < argc; i++) {
+		const char *f = argv[i];
+		if (!strcmp(f, "--help") || !strcmp(f, "-h")) {
+			fputs(usage, stdout);
+			return 0;
+		}
+		if (!strcmp(f, "--dump-params")) {
+			dump_params();
+			return 0;
+		}
+		static const char *const with_value[] = {"--xplane", "--xp-listen", "--mavlink-listen", "--gcs",
+							  "--params", "--lcm", "--signing-key", "--actuation"};
+		bool known = false;
+		for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
+			known = known || !strcmp(f, with_value[k]);
+		if (!known) {
+			fprintf(stderr, "octo-fw: unknown option '%s' (see --help)\n", f);
+			return 2;
+		}
+		if (i + 1 >= argc) {
+			fprintf(stderr, "octo-fw: %s needs a value (see --help)\n", f);
+			return 2;
+		}
+		const char *v = argv[++i];
+		int bad = 0;
+		if (!strcmp(f, "--xplane"))
+			bad = parse_hostport(f, v, &cfg->xplane);
+		else if (!strcmp(f, "--gcs"))
+			bad = parse_hostport(f, v, &cfg->gcs);
+		else if (!strcmp(f, "--xp-listen"))
+			bad = parse_port(f, v, &cfg->xp_listen);
+		else if (!strcmp(f, "--mavlink-listen"))
+			bad = parse_port(f, v, &cfg->mav_listen);
+		else if (!strcmp(f, "--params"))
+			cfg->params_path = v;
+		else if (!strcmp(f, "--lcm"))
+			cfg->lcm_url = v;
+		else if (!strcmp(f, "--signing-key"))
+			cfg->signing_key_path = v;
+		else if (!strcmp(f, "--actuation")) {
+			if (!strcmp(v, "dref"))
+				cfg->act = XP_ACT_DREF;
+			else if (!strcmp(v, "data25"))
+				cfg->act = XP_ACT_DATA25;
+			else {
+				fprintf(stderr, "octo-fw: --actuation: '%s' is not dref or data25\n", v);
+				bad = 1;
+			}
+		}
+		if (bad)
+			return 2;
+	}
+	return -1;
+}

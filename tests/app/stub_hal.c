@@ -1,0 +1,123 @@
+/* stub_hal.c - the struct hal of the tests (see stub_hal.h). */
+#include "stub_hal.h"
+
+#include <string.h>
+
+static void copy_text(char *dst, size_t cap, const char *src)
+{
+	size_t n = strlen(src);
+	if (n >= cap)
+		n = cap - 1;
+	memcpy(dst, src, n);
+	dst[n] = 0;
+}
+
+static uint64_t wall_us(void *ctx)
+{
+	const struct stub_hal *s = ctx;
+	return s->now_us;
+}
+
+static uint64_t unix_us(void *ctx)
+{
+	const struct stub_hal *s = ctx;
+	return s->unix_base_us + s->now_us;
+}
+
+static void plant_actuate(void *ctx, const float thr[HAL_ROTORS])
+{
+	struct stub_hal *s = ctx;
+	memcpy(s->thr, thr, sizeof s->thr);
+	s->n_actuate++;
+}
+
+static void plant_stats(void *ctx, struct hal_plant_stats *out)
+{
+	const struct stub_hal *s = ctx;
+	*out = s->plant;
+}
+
+static void ground_send(void *ctx, const uint8_t *buf, size_t len)
+{
+	struct stub_hal *s = ctx;
+	for (size_t i = 0; i < len; i++)
+		s->sent_sum ^= buf[i];
+	s->sent_bytes += len;
+	s->sent_datagrams++;
+}
+
+static bool ground_signing_key(void *ctx, uint8_t key[32])
+{
+	const struct stub_hal *s = ctx;
+	if (s->have_key)
+		memcpy(key, s->key, sizeof s->key);
+	return s->have_key;
+}
+
+static int param_store(void *ctx, const char *text, size_t len)
+{
+	struct stub_hal *s = ctx;
+	if (s->store_fails || len >= sizeof s->store)
+		return -1;
+	memcpy(s->store, text, len);
+	s->store[len] = 0;
+	s->store_len = (long)len;
+	s->n_stores++;
+	return 0;
+}
+
+static long param_fetch(void *ctx, char *buf, size_t cap)
+{
+	const struct stub_hal *s = ctx;
+	if (s->store_len < 0 || cap == 0)
+		return -1;
+	size_t n = (size_t)s->store_len < cap - 1 ? (size_t)s->store_len : cap - 1;
+	memcpy(buf, s->store, n);
+	buf[n] = 0;
+	return (long)n;
+}
+
+static void log_frame(void *ctx, const struct app_log_frame *f)
+{
+	struct stub_hal *s = ctx;
+	(void)f;
+	s->n_log_frames++;
+}
+
+static void log_event(void *ctx, double t_s, int severity, const char *text)
+{
+	struct stub_hal *s = ctx;
+	(void)t_s;
+	s->n_events++;
+	s->last_severity = severity;
+	copy_text(s->last_event, sizeof s->last_event, text);
+}
+
+static void report(void *ctx, const char *line)
+{
+	struct stub_hal *s = ctx;
+	s->n_reports++;
+	copy_text(s->last_report, sizeof s->last_report, line);
+}
+
+void stub_hal_init(struct stub_hal *s)
+{
+	memset(s, 0, sizeof *s);
+	s->now_us = 1000000u;
+	s->unix_base_us = 1700000000ull * 1000000ull;
+	s->store_len = -1;
+	s->hal = (struct hal){
+		.ctx = s,
+		.wall_us = wall_us,
+		.unix_us = unix_us,
+		.plant_actuate = plant_actuate,
+		.plant_stats = plant_stats,
+		.ground_send = ground_send,
+		.ground_signing_key = ground_signing_key,
+		.param_store = param_store,
+		.param_fetch = param_fetch,
+		.log_frame = log_frame,
+		.log_event = log_event,
+		.report = report,
+	};
+}

@@ -1,0 +1,405 @@
+/*
+ * test_app.c - the autopilot (firmware/app) without sockets: modes, command
+ * idempotency, failsafes, parameter locks and storage, the outbox. The app runs
+ * on the stub HAL against a kinematic plant: the height follows the app's own
+ * setpoint (never below the ground), attitude level, rotor thrust k_f times the
+ * throttle. Built and run like the core's tests (float, Q16.16, sanitizers).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "app.h"
+#include "stub_hal.h"
+#include "unit.h"
+
+#define FRAME_US 11111u
+
+struct rig {
+	struct stub_hal h;
+	struct app a;
+	struct hal_sensor_frame f;
+	double t;
+};
+
+static struct rig R;   /* large: kept off the stack */
+
+static struct rig *rig_new(void)
+{
+	memset(&R, 0, sizeof R);
+	stub_hal_init(&R.h);
+	app_init(&R.a, &R.h.hal);
+	R.f.q_ib[0] = 1.0f;
+	return &R;
+}
+
+/* One plant frame at time t (not advanced), without app_tick. */
+static void frame_at(struct rig *r, double t)
+{
+	struct app *a = &r->a;
+	struct hal_sensor_frame *f = &r->f;
+	bool flying = app_flying(a);
+	f->t_s = t;
+	f->seq++;
+	f->valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
+	f->pos_i_m[2] = flying ? fmaxf(a->z_sp, 0.0f) : 0.0f;
+	f->vel_i_mps[2] = flying && f->pos_i_m[2] > 0.0f ? a->vz_ff : 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++)
+		f->rotor_thrust_n[j] = a->p.veh_kf * r->h.thr[j];
+	app_on_frame(a, f);
+}
+
+/* n frames at 90 Hz, each followed by the main loop's app_tick. */
+static void fly(struct rig *r, int n)
+{
+	for (int i = 0; i < n; i++) {
+		r->t += 1.0 / 90.0;
+		r->h.now_us += FRAME_US;
+		frame_at(r, r->t);
+		app_tick(&r->a);
+	}
+}
+
+static void fly_until(struct rig *r, enum app_mode m, int max_frames)
+{
+	for (int i = 0; i < max_frames && r->a.mode != m; i++)
+		fly(r, 1);
+}
+
+static struct rig *rig_hovering(struct unit_ctx *u)
+{
+	struct rig *r = rig_new();
+	char why[64];
+	fly(r, 5);
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, why, sizeof why) == APP_ACCEPTED);
+	fly_until(r, APP_HOLD, 90 * 60);
+	CHECK(r->a.mode == APP_HOLD);
+	fly(r, 30);
+	CHECK(app_hovering(&r->a));
+	return r;
+}
+
+static int param_index(const char *name)
+{
+	return params_find(name, strlen(name));
+}
+
+/* The outbox's events of one kind, drained (a test looks before app_tick does). */
+static int take_events(struct app *a, enum app_event_kind kind, struct app_event *last)
+{
+	struct app_event e;
+	int n = 0;
+	while (outbox_pop(&a->outbox, &e))
+		if (e.kind == kind) {
+			n++;
+			if (last)
+				*last = e;
+		}
+	return n;
+}
+
+UNIT_TEST(app_boots_disarmed_and_arms_only_with_frames)
+{
+	struct rig *r = rig_new();
+	char why[64] = "";
+	CHECK(r->a.mode == APP_DISARMED);
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_BUSY);
+	CHECK(strstr(why, "no complete") != NULL);
+	fly(r, 3);
+	CHECK(r->h.n_actuate == 0);   /* the throttles are not ours before arming */
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
+	CHECK(r->a.mode == APP_IDLE);
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);   /* a retry */
+	CHECK(r->a.mode == APP_IDLE);
+	fly(r, 4);
+	CHECK(r->h.n_actuate == 4);
+}
+
+UNIT_TEST(app_arm_refused_when_tilted_unless_forced)
+{
+	struct rig *r = rig_new();
+	char why[64] = "";
+	r->f.q_ib[0] = cosf(0.5f * 0.7f);   /* 40 deg roll */
+	r->f.q_ib[1] = sinf(0.5f * 0.7f);
+	fly(r, 3);
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_BUSY);
+	CHECK(strstr(why, "tilted") != NULL);
+	CHECK(app_cmd_arm(&r->a, true, true, why, sizeof why) == APP_ACCEPTED);
+	CHECK(r->a.mode == APP_IDLE);
+}
+
+UNIT_TEST(app_answers_each_new_frame_once)
+{
+	struct rig *r = rig_new();
+	char why[64];
+	fly(r, 3);
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
+	fly(r, 1);
+	uint32_t n = r->h.n_actuate;
+	frame_at(r, r->t);                 /* a duplicate */
+	CHECK(r->h.n_actuate == n);
+	frame_at(r, r->t - 1.0 / 90.0);    /* an older frame */
+	CHECK(r->h.n_actuate == n);
+	fly(r, 1);
+	CHECK(r->h.n_actuate == n + 1);
+}
+
+UNIT_TEST(app_takeoff_hold_land_disarm)
+{
+	struct rig *r = rig_new();
+	char why[64] = "";
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, why, sizeof why) == APP_BUSY);   /* not armed */
+	fly(r, 3);
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
+	CHECK(app_cmd_takeoff(&r->a, 200.0f, why, sizeof why) == APP_DENIED);
+	CHECK(r->a.mode == APP_IDLE);
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, why, sizeof why) == APP_ACCEPTED);
+	CHECK(r->a.mode == APP_TAKEOFF);
+	fly(r, 20);
+	float z_sp = r->a.z_sp;
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, why, sizeof why) == APP_ACCEPTED);   /* a retry */
+	CHECK(r->a.mode == APP_TAKEOFF && r->a.z_sp == z_sp);
+	fly_until(r, APP_HOLD, 90 * 60);
+	CHECK(r->a.mode == APP_HOLD);
+	CHECK_NEAR(r->f.pos_i_m[2], 3.0, 0.05);
+	CHECK(app_cmd_arm(&r->a, false, false, why, sizeof why) == APP_BUSY);   /* flying */
+	CHECK(app_cmd_land(&r->a, why, sizeof why) == APP_ACCEPTED);
+	CHECK(r->a.mode == APP_LAND);
+	CHECK(app_cmd_land(&r->a, why, sizeof why) == APP_ACCEPTED);             /* a retry */
+	CHECK(r->a.mode == APP_LAND);
+	fly_until(r, APP_DISARMED, 90 * 60);
+	CHECK(r->a.mode == APP_DISARMED);
+	CHECK(r->f.pos_i_m[2] == 0.0f);
+	for (int j = 0; j < HAL_ROTORS; j++)
+		CHECK(r->a.thr[j] == 0.0f);
+}
+
+UNIT_TEST(app_disarm_forced_while_flying)
+{
+	struct rig *r = rig_hovering(u);
+	char why[64];
+	CHECK(app_cmd_arm(&r->a, false, true, why, sizeof why) == APP_ACCEPTED);
+	CHECK(r->a.mode == APP_DISARMED);
+	CHECK(app_cmd_arm(&r->a, false, false, why, sizeof why) == APP_ACCEPTED);   /* a retry */
+}
+
+UNIT_TEST(app_link_loss_reported_then_lands_on_recovery)
+{
+	struct rig *r = rig_hovering(u);
+	/* silence on the plant link: the main loop keeps ticking on wall time */
+	uint32_t events = r->h.n_events;
+	for (int i = 0; i < 100; i++) {   /* 1.1 s > FS_LINK_TO */
+		r->h.now_us += FRAME_US;
+		app_tick(&r->a);
+	}
+	CHECK(!r->a.link_ok);
+	CHECK(r->h.n_events > events);
+	CHECK(r->a.mode == APP_HOLD);     /* not yet: FS_LAND_AFTER not exceeded */
+	r->h.now_us += (uint64_t)(r->a.p.fs_land_after * 1e6f);
+	fly(r, 1);
+	CHECK(r->a.link_ok);
+	CHECK(r->a.mode == APP_LAND);
+}
+
+UNIT_TEST(app_short_link_loss_keeps_holding)
+{
+	struct rig *r = rig_hovering(u);
+	for (int i = 0; i < 50; i++) {   /* 0.55 s: lost, but shorter than FS_LAND_AFTER */
+		r->h.now_us += FRAME_US;
+		app_tick(&r->a);
+	}
+	CHECK(!r->a.link_ok);
+	fly(r, 1);
+	CHECK(r->a.link_ok);
+	CHECK(r->a.mode == APP_HOLD);
+}
+
+UNIT_TEST(app_plant_time_gap_lands)
+{
+	struct rig *r = rig_hovering(u);
+	r->t += (double)r->a.p.fs_land_after + 0.5;   /* frames missing in plant time */
+	fly(r, 1);
+	CHECK(r->a.mode == APP_LAND);
+	CHECK(!strcmp(r->h.last_event, "Mode LAND"));
+}
+
+UNIT_TEST(app_experiment_command_idempotent_and_locks_parameters)
+{
+	if (!exp_available(1))
+		return;
+	struct rig *r = rig_hovering(u);
+	char why[64] = "";
+	int kf = param_index("VEH_KF"), tko = param_index("NAV_TKO_ALT");
+	CHECK(kf >= 0 && tko >= 0);
+	CHECK(app_cmd_experiment(&r->a, 9.0f, 7, why, sizeof why) == APP_DENIED);
+	CHECK(app_cmd_experiment(&r->a, 1.0f, 0x0102, why, sizeof why) == APP_IN_PROGRESS);
+	CHECK(r->a.mode == APP_EXPERIMENT);
+	CHECK(app_cmd_experiment(&r->a, 1.0f, 0x0102, why, sizeof why) == APP_IN_PROGRESS);   /* a retry */
+	CHECK(app_cmd_experiment(&r->a, 2.0f, 0x0102, why, sizeof why) == APP_BUSY);
+	CHECK(app_cmd_takeoff(&r->a, 4.0f, why, sizeof why) == APP_BUSY);
+	fly(r, 10);
+	CHECK(r->a.mode == APP_EXPERIMENT);
+
+	float kf_before = params_get(&r->a.p, (size_t)kf);
+	const char *no = app_param_write(&r->a, (size_t)kf, kf_before * 1.1f);
+	CHECK(no != NULL && strstr(no, "locked") != NULL);
+	CHECK(params_get(&r->a.p, (size_t)kf) == kf_before);
+	CHECK(app_param_write(&r->a, (size_t)tko, 6.0f) == NULL);   /* not a model parameter */
+
+	take_events(&r->a, APP_EV_CMD_DONE, NULL);
+	CHECK(app_cmd_experiment(&r->a, 0.0f, 0x0304, why, sizeof why) == APP_ACCEPTED);   /* stop */
+	CHECK(r->a.mode == APP_HOLD);
+	struct app_event done = {0};
+	CHECK(take_events(&r->a, APP_EV_CMD_DONE, &done) == 1);
+	CHECK(done.cmd == APP_CMD_EXPERIMENT && done.result == APP_FAILED && done.origin == 0x0102);
+	CHECK(app_cmd_experiment(&r->a, 0.0f, 0x0304, why, sizeof why) == APP_ACCEPTED);   /* a retry */
+	CHECK(app_param_write(&r->a, (size_t)kf, kf_before * 1.1f) == NULL);   /* unlocked */
+}
+
+UNIT_TEST(app_experiment_refused_unless_hovering)
+{
+	struct rig *r = rig_new();
+	char why[64] = "";
+	fly(r, 3);
+	CHECK(app_cmd_experiment(&r->a, 1.0f, 1, why, sizeof why) == APP_DENIED);
+	CHECK(r->a.mode == APP_DISARMED);
+}
+
+UNIT_TEST(app_identification_results_are_read_only)
+{
+	struct rig *r = rig_new();
+	int est = param_index("ID_KF_EST");
+	CHECK(est >= 0);
+	const char *no = app_param_write(&r->a, (size_t)est, 1.0f);
+	CHECK(no != NULL && strstr(no, "read-only") != NULL);
+	CHECK(app_param_write(&r->a, param_count, 1.0f) != NULL);   /* no such index */
+}
+
+/* The rotor model's settings and the priors it refines are settable on the ground and
+ * locked in flight experiments; its results are read-only. */
+UNIT_TEST(app_motor_model_parameters_settable_results_read_only)
+{
+	static const char *const settable[] = {
+		"ID_MOT_TAU", "ID_DELAY_FR", "MOT_CURVE", "ID_CRV_EST", "ID_EXC_OFS", "MOT_SCALE1",
+		"MOT_SCALE2", "MOT_SCALE3", "MOT_SCALE4", "MOT_SCALE5", "MOT_SCALE6", "MOT_SCALE7",
+		"MOT_SCALE8", "MOT_SCALE_MIN",
+	};
+	static const char *const results[] = {"ID_TAU_SD", "ID_CRV_SD", "ID_MOT_NE", "ID_TAU_CHECK"};
+	struct rig *r = rig_new();
+	for (size_t i = 0; i < sizeof settable / sizeof settable[0]; i++) {
+		int k = param_index(settable[i]);
+		CHECK(k >= 0);
+		if (k < 0)
+			continue;
+		const struct param_def *d = &param_defs[k];
+		float v = 0.5f * (d->min + d->max);
+		const char *no = app_param_write(&r->a, (size_t)k, v);
+		if (no != NULL || params_get(&r->a.p, (size_t)k) != v)
+			unit_fail(u, __FILE__, __LINE__, "%s not settable: %s", settable[i], no ? no : "value");
+		CHECK(d->flags & PARAM_LOCKED);
+	}
+	for (size_t i = 0; i < sizeof results / sizeof results[0]; i++) {
+		int k = param_index(results[i]);
+		CHECK(k >= 0);
+		if (k < 0)
+			continue;
+		const char *no = app_param_write(&r->a, (size_t)k, 0.5f);
+		if (no == NULL || strstr(no, "read-only") == NULL)
+			unit_fail(u, __FILE__, __LINE__, "%s writable", results[i]);
+	}
+}
+
+/* A rotor's effectiveness (MOT_SCALEj) reaches the throttle map: in a level hover every
+ * rotor gives the same thrust, so a rotor at half effectiveness gets twice the throttle. */
+UNIT_TEST(app_rotor_scale_reaches_the_throttle_map)
+{
+	struct rig *r = rig_hovering(u);
+	CHECK(fabsf(r->h.thr[2] / r->h.thr[0] - 1.0f) < 0.02f);
+	CHECK(app_param_write(&r->a, (size_t)param_index("MOT_SCALE3"), 0.5f) == NULL);
+	fly(r, 3);
+	CHECK(fabsf(r->h.thr[2] / r->h.thr[0] - 2.0f) < 0.04f);
+	CHECK(fabsf(r->h.thr[6] / r->h.thr[0] - 1.0f) < 0.02f);
+}
+
+UNIT_TEST(app_parameters_saved_and_loaded)
+{
+	struct rig *r = rig_new();
+	char why[64] = "";
+	int tko = param_index("NAV_TKO_ALT");
+	CHECK(app_params_load(&r->a, why, sizeof why) == APP_FAILED);   /* nothing stored */
+	CHECK(app_param_write(&r->a, (size_t)tko, 7.5f) == NULL);
+	CHECK(app_params_save(&r->a, why, sizeof why) == APP_ACCEPTED);
+	CHECK(strstr(r->h.store, "NAV_TKO_ALT") != NULL);
+	CHECK(app_param_write(&r->a, (size_t)tko, 4.0f) == NULL);
+	CHECK(app_params_load(&r->a, why, sizeof why) == APP_ACCEPTED);
+	CHECK(params_get(&r->a.p, (size_t)tko) == 7.5f);
+	r->h.store_fails = true;
+	CHECK(app_params_save(&r->a, why, sizeof why) == APP_FAILED);
+	CHECK(why[0] != 0);
+}
+
+UNIT_TEST(app_status_lines_reach_log_console_and_outbox)
+{
+	struct rig *r = rig_new();
+	char why[64];
+	fly(r, 3);
+	take_events(&r->a, APP_EV_STATUS, NULL);
+	uint32_t events = r->h.n_events, reports = r->h.n_reports;
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
+	struct app_event e;
+	CHECK(take_events(&r->a, APP_EV_STATUS, &e) == 1);
+	CHECK(!strcmp(e.text, "Mode IDLE") && e.severity == APP_SEV_INFO);
+	CHECK(r->h.n_events == events + 1 && r->h.n_reports == reports + 1);
+	CHECK(!strcmp(r->h.last_event, "Mode IDLE"));
+}
+
+UNIT_TEST(app_outbox_full_drops_newest)
+{
+	struct app_outbox o;
+	memset(&o, 0, sizeof o);
+	struct app_event e = {.kind = APP_EV_PARAM};
+	for (int i = 0; i < APP_OUTBOX_LEN + 3; i++) {
+		e.param_index = (uint16_t)i;
+		outbox_post(&o, &e);
+	}
+	CHECK(o.dropped == 3);
+	for (int i = 0; i < APP_OUTBOX_LEN; i++) {
+		CHECK(outbox_pop(&o, &e));
+		CHECK(e.param_index == i);
+	}
+	CHECK(!outbox_pop(&o, &e));
+}
+
+/* An experiment turn that posts the most results it can (the rotor model posts 24 at once)
+ * together with a status line: every event reaches the ground station, none dropped. */
+UNIT_TEST(app_outbox_holds_a_turn_of_results)
+{
+	struct rig *r = rig_hovering(u);
+	int tko = param_index("NAV_TKO_ALT");
+	CHECK(tko >= 0 && r->a.outbox.dropped == 0);
+	for (int i = 0; i < EXP_MAX_RESULTS; i++)
+		r->a.exp.results[i] = (struct exp_result){.param_index = tko, .value = 4.0f + 0.01f * (float)i};
+	r->a.exp.n_results = EXP_MAX_RESULTS;
+	snprintf(r->a.exp.msg, sizeof r->a.exp.msg, "ID test line");
+	r->a.exp.msg_severity = APP_SEV_INFO;
+	app_tick(&r->a);
+	CHECK(r->a.outbox.dropped == 0);
+	CHECK(r->a.exp.n_results == 0 && r->a.exp.msg[0] == 0);
+	CHECK(params_get(&r->a.p, (size_t)tko) == 4.0f + 0.01f * (float)(EXP_MAX_RESULTS - 1));
+}
+
+/* The table's flags, set per group of rows, against the rule they stand for:
+ * the vehicle model, rotor, mixer and identification rows lock, the results
+ * (described as such) are read-only. */
+UNIT_TEST(app_parameter_flags_follow_their_groups)
+{
+	for (size_t i = 0; i < param_count; i++) {
+		const struct param_def *d = &param_defs[i];
+		bool model = !strncmp(d->name, "VEH_", 4) || !strncmp(d->name, "MOT_", 4) ||
+			     !strncmp(d->name, "MIX_", 4) || !strncmp(d->name, "ID_", 3);
+		bool result = !strncmp(d->desc, "Result (read-only)", 18);
+		if (model != !!(d->flags & PARAM_LOCKED) || result != !!(d->flags & PARAM_READONLY))
+			unit_fail(u, __FILE__, __LINE__, "%s: flags %u", d->name, d->flags);
+	}
+}
