@@ -348,9 +348,10 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 			.est_curve = cf->crv_est,
 			.n_frames = (uint32_t)(cf->exc_time / e->dt_nom + 0.5f),
 		};
-		for (int j = 0; j < HAL_ROTORS; j++)
-			mc.thr0[j] = sc_from_float(in->thr_prev_all[j]);
-		motor_id_init(&e->mid, &mc);
+		scalar_t thr0[MOTOR_ID_ROTORS];
+		for (int j = 0; j < MOTOR_ID_ROTORS; j++)
+			thr0[j] = sc_from_float(in->thr_prev_all[j]);
+		motor_id_init(&e->mid, &mc, thr0);
 		struct excite_params xp2 = xp;
 		xp2.seed = xp.seed * 2654435761u + 12345u;
 		excite_init(&e->exc2, &xp2);

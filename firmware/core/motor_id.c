@@ -32,7 +32,7 @@ static void set_grid(struct motor_id *m, unsigned d, float centre, float ratio)
 	m->k1[d][2] = lag_k1(m->lag_c[d] * ratio, dt);
 }
 
-void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg)
+void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const scalar_t thr0[NR])
 {
 	*m = (struct motor_id){0};
 	m->cfg = *cfg;
@@ -42,7 +42,7 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg)
 		m->cfg.kf0 = 1.0f;
 	m->cfg.curve0 = clampf(m->cfg.curve0, 0.0f, 0.99f);
 	for (unsigned j = 0; j < NR; j++) {
-		float t0 = sc_to_float(cfg->thr0[j]);
+		float t0 = sc_to_float(thr0[j]);
 		m->s_c[j] = clampf(t0, 0.02f, 1.0f);
 		for (unsigned d = 0; d < ND; d++) {
 			m->hist[d][j] = t0;
@@ -54,12 +54,19 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg)
 		set_grid(m, d, m->cfg.tau0_s, stage_ratio[0]);
 }
 
-/* commands in, every filter one frame on */
-static void advance(struct motor_id *m, const scalar_t thr_prev[NR])
+/* the commands of the next frame into the ring's next slot (the oldest, which the next
+ * advance no longer reads) */
+static void push(struct motor_id *m, const scalar_t thr_prev[NR])
+{
+	float *h = m->hist[(m->head + 1u) % ND];
+	for (unsigned j = 0; j < NR; j++)
+		h[j] = sc_to_float(thr_prev[j]);
+}
+
+/* every filter one frame on, with the commands push left in the next slot */
+static void advance(struct motor_id *m)
 {
 	m->head = (m->head + 1u) % ND;
-	for (unsigned j = 0; j < NR; j++)
-		m->hist[m->head][j] = sc_to_float(thr_prev[j]);
 	for (unsigned d = 0; d < ND; d++) {
 		const float *u = m->hist[(m->head + ND - d) % ND];
 		for (unsigned i = 0; i < NL; i++) {
@@ -73,7 +80,8 @@ static void advance(struct motor_id *m, const scalar_t thr_prev[NR])
 void motor_id_hold(struct motor_id *m, const scalar_t thr_prev[NR])
 {
 	motor_id_process(m);
-	advance(m, thr_prev);
+	push(m, thr_prev);
+	advance(m);
 	m->nz_have = false;
 }
 
@@ -81,11 +89,26 @@ void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar
 		   const scalar_t tq[NR], bool excited)
 {
 	motor_id_process(m);   /* the previous frame's, if nobody did it between frames */
+	push(m, thr_prev);
+	/* the noise and torque-ratio sums here, while the previous frame's thrust is still in
+	 * q_f (a few operations per rotor; nothing else keeps the frame) */
+	bool nz = !excited && m->nz_have;
 	for (unsigned j = 0; j < NR; j++) {
-		m->q_thr[j] = thr_prev[j];
+		float fj = sc_to_float(f[j]);
+		if (nz) {
+			/* thrust noise from first differences (slow control motion cancels) */
+			float dd = fj - sc_to_float(m->q_f[j]);
+			m->nz_ss += dd * dd;
+			m->nz_n += 2.0f;
+		} else if (excited) {
+			float t = sc_to_float(tq[j]);
+			m->ff += fj * fj;
+			m->tf += t * fj;
+			m->tt += t * t;
+		}
 		m->q_f[j] = f[j];
-		m->q_tq[j] = tq[j];
 	}
+	m->nz_have = !excited;
 	m->q_excited = excited;
 	m->q_pending = true;
 }
@@ -97,32 +120,12 @@ void motor_id_process(struct motor_id *m)
 	m->q_pending = false;
 	if (m->refine_due)
 		motor_id_refine(m);
-	const scalar_t *thr_prev = m->q_thr, *f = m->q_f, *tq = m->q_tq;
-	bool excited = m->q_excited;
-	advance(m, thr_prev);
+	advance(m);
+	if (!m->q_excited)
+		return;
 	float fm[NR];
 	for (unsigned j = 0; j < NR; j++)
-		fm[j] = sc_to_float(f[j]);
-	if (!excited) {
-		/* thrust noise from first differences (slow control motion cancels) */
-		if (m->nz_have)
-			for (unsigned j = 0; j < NR; j++) {
-				float dd = fm[j] - m->nz_prev[j];
-				m->nz_ss += dd * dd;
-				m->nz_n += 2.0f;
-			}
-		for (unsigned j = 0; j < NR; j++)
-			m->nz_prev[j] = fm[j];
-		m->nz_have = true;
-		return;
-	}
-	m->nz_have = false;
-	for (unsigned j = 0; j < NR; j++) {
-		float t = sc_to_float(tq[j]);
-		m->ff += fm[j] * fm[j];
-		m->tf += t * fm[j];
-		m->tt += t * t;
-	}
+		fm[j] = sc_to_float(m->q_f[j]);
 	m->n_exc++;
 	if (m->skip > 0u) {
 		m->skip--;

@@ -71,7 +71,6 @@ struct motor_id_cfg {
 	float curve0;            /* prior curve c (the model when est_curve is false) */
 	bool est_curve;          /* estimate c (else c = curve0) */
 	uint32_t n_frames;       /* excited frames planned: refinements at 30 % and 55 % */
-	scalar_t thr0[MOTOR_ID_ROTORS];   /* throttles before the start */
 };
 
 /* least-squares sums of one rotor under one hypothesis (see above) */
@@ -89,15 +88,16 @@ struct motor_id {
 	struct motor_id_stat st[MOTOR_ID_DELAYS][MOTOR_ID_LAGS][MOTOR_ID_ROTORS];
 	float s_c[MOTOR_ID_ROTORS];
 	float ff, tf, tt;        /* torque ratio: sums over every rotor of f^2, t f, t^2 */
-	float nz_prev[MOTOR_ID_ROTORS], nz_ss, nz_n;    /* thrust noise from differences */
-	bool nz_have;
+	float nz_ss, nz_n;       /* thrust noise from differences */
+	bool nz_have;            /* the last frame taken was not excited (and none was lost since) */
 	uint32_t n_stat;         /* frames in the current stage's statistics */
 	uint32_t n_exc;          /* excited frames so far */
 	uint32_t skip;           /* frames not accumulated after a refinement (lag transients) */
 	uint8_t stage;
 	bool refine_due;
-	/* the frame motor_id_step took, waiting for motor_id_process */
-	scalar_t q_thr[MOTOR_ID_ROTORS], q_f[MOTOR_ID_ROTORS], q_tq[MOTOR_ID_ROTORS];
+	/* the frame motor_id_step took, waiting for motor_id_process: its commands sit in
+	 * hist's next slot, its noise and torque sums are already taken */
+	scalar_t q_f[MOTOR_ID_ROTORS];
 	bool q_excited, q_pending;
 };
 
@@ -132,14 +132,17 @@ struct motor_id_result {
 	int cause_rotor;         /* 0-based, for MOTOR_ID_ROTOR; else -1 */
 };
 
-void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg);
+/* thr0: the throttles before the start (the filters' initial state) */
+void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg,
+		   const scalar_t thr0[MOTOR_ID_ROTORS]);
 
 /* One frame: thr_prev[8] = throttles sent on the previous frame, f[8] = measured thrusts
  * (N), tq[8] = measured reaction-torque magnitudes (N m) of this frame. excited = false: the
  * filters run and the noise is measured; true: the bank accumulates. The step only takes
- * the frame (a few hundred instructions); the bank update (15 hypotheses x 8 rotors, ~8,000
- * instructions on M4F) runs in motor_id_process, between frames; a step that finds the
- * previous frame still waiting processes it first, so nothing is lost or reordered. */
+ * the frame and its noise or torque-ratio sums (a few hundred instructions); the bank update
+ * (15 hypotheses x 8 rotors, ~8,000 instructions on M4F) runs in motor_id_process, between
+ * frames; a step that finds the previous frame still waiting processes it first, so nothing
+ * is lost or reordered. */
 void motor_id_step(struct motor_id *m, const scalar_t thr_prev[MOTOR_ID_ROTORS],
 		   const scalar_t f[MOTOR_ID_ROTORS], const scalar_t tq[MOTOR_ID_ROTORS], bool excited);
 

@@ -69,16 +69,17 @@ static void one_run(int n_exc, bool est_curve, bool linear, struct acc *kf, stru
 	double L = 2.0 * u / ((1.0 - c) + sqrt((1.0 - c) * (1.0 - c) + 4.0 * c * u));
 	double sf = 0.01 * hf, st = 0.01 * hf * kt_t / kf_t, a = exp(-DT / tau);
 	double s[NR], hist[8][NR], tp[NR], d1 = 0, d2 = 0;
+	scalar_t thr0[NR];
 	struct motor_id_cfg cfg = {.dt_s = sc_from_float((float)DT), .tau0_s = 0.03f, .kf0 = 20.0f,
 				   .curve0 = 0.0f, .est_curve = est_curve, .n_frames = (uint32_t)n_exc};
 	for (int j = 0; j < NR; j++) {
 		s[j] = tp[j] = L;
 		for (int i = 0; i < 8; i++)
 			hist[i][j] = L;
-		cfg.thr0[j] = sc_from_float((float)L);
+		thr0[j] = sc_from_float((float)L);
 	}
 	static struct motor_id m;
-	motor_id_init(&m, &cfg);
+	motor_id_init(&m, &cfg, thr0);
 	for (int k = 0; k < 90 + n_exc; k++) {
 		scalar_t tps[NR], f[NR], tq[NR];
 		for (int j = 0; j < NR; j++) {

@@ -71,10 +71,11 @@ static void run(struct unit_rng *g, const struct truth *t, int n, bool est_curve
 	}
 	struct motor_id_cfg cfg = {.dt_s = s(DT), .tau0_s = 0.03f, .kf0 = (float)kf0, .curve0 = 0.0f,
 				   .est_curve = est_curve, .n_frames = (uint32_t)n};
+	scalar_t thr0[NR];
 	for (int j = 0; j < NR; j++)
-		cfg.thr0[j] = s(L);
+		thr0[j] = s(L);
 	struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
-	motor_id_init(&m, &cfg);
+	motor_id_init(&m, &cfg, thr0);
 	double tprev[NR], d1 = 0, d2 = 0;
 	for (int j = 0; j < NR; j++)
 		tprev[j] = L;
@@ -156,6 +157,42 @@ UNIT_TEST(motor_id_random_vehicles)
 			CHECK(fabs(r.scale[j] - t.scale[j]) < 4.0 * r.scale_sd[j] + 2e-4);
 		}
 		CHECK(r.ne_all > 0.8f && r.ne_all < 1.2f);
+		CHECK_REL(r.noise_sd, t.sig_f, 0.15);
+	}
+}
+
+/* The thrust noise comes from first differences of consecutive still frames only: a frame
+ * lost on the link (motor_id_hold) across which the thrust jumped adds no difference. */
+UNIT_TEST(motor_id_noise_not_across_a_lost_frame)
+{
+	struct unit_rng g = {0x5eed0014ULL};
+	for (int v = 0; v < 4; v++) {
+		double sig = unit_rand_uniform(&g, 0.005, 0.05), lvl = unit_rand_uniform(&g, 2.0, 4.0);
+		struct motor_id_cfg cfg = {.dt_s = s(DT), .tau0_s = 0.03f, .kf0 = 20.0f, .est_curve = true,
+					   .n_frames = 160};
+		scalar_t thr0[NR], tp[NR], f[NR], tq[NR];
+		for (int j = 0; j < NR; j++)
+			thr0[j] = tp[j] = s(0.12);
+		struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
+		motor_id_init(&m, &cfg, thr0);
+		for (int k = 0; k < 300; k++) {
+			if (k == 60 || k == 120) {
+				motor_id_hold(&m, tp);   /* lost: the thrust jumps meanwhile */
+				lvl += 0.5;
+			}
+			bool exc = k >= 140;
+			for (int j = 0; j < NR; j++) {
+				f[j] = s(lvl + sig * unit_rand_normal(&g));
+				tq[j] = s(0.02 * lvl);
+			}
+			motor_id_step(&m, tp, f, tq, exc);
+			if (k % 2)
+				motor_id_process(&m);   /* between frames, or by the next step */
+		}
+		motor_id_process(&m);
+		struct motor_id_result r;
+		motor_id_solve(&m, 1.3f, &r);
+		CHECK_REL(r.noise_sd, sig, 0.15);
 	}
 }
 
@@ -224,10 +261,11 @@ UNIT_TEST(motor_id_refusals)
 {
 	struct motor_id_cfg cfg = {.dt_s = s(DT), .tau0_s = 0.03f, .kf0 = 20.0f, .est_curve = true,
 				   .n_frames = 900};
+	scalar_t thr0[NR];
 	for (int j = 0; j < NR; j++)
-		cfg.thr0[j] = s(0.1);
+		thr0[j] = s(0.1);
 	struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
-	motor_id_init(&m, &cfg);
+	motor_id_init(&m, &cfg, thr0);
 	struct motor_id_result r;
 	motor_id_process(&m);
 	motor_id_solve(&m, 1.3f, &r);
