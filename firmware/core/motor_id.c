@@ -90,23 +90,18 @@ void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar
 {
 	motor_id_process(m);   /* the previous frame's, if nobody did it between frames */
 	push(m, thr_prev);
-	/* the noise and torque-ratio sums here, while the previous frame's thrust is still in
-	 * q_f (a few operations per rotor; nothing else keeps the frame) */
-	bool nz = !excited && m->nz_have;
-	for (unsigned j = 0; j < NR; j++) {
-		float fj = sc_to_float(f[j]);
-		if (nz) {
-			/* thrust noise from first differences (slow control motion cancels) */
-			float dd = fj - sc_to_float(m->q_f[j]);
+	/* thrust noise from first differences of still frames (slow control motion cancels),
+	 * taken here while the previous frame's thrust is still in q_f (only in the settling
+	 * second: excited steps just copy the frame) */
+	if (!excited && m->nz_have)
+		for (unsigned j = 0; j < NR; j++) {
+			float dd = sc_to_float(f[j]) - sc_to_float(m->q_f[j]);
 			m->nz_ss += dd * dd;
 			m->nz_n += 2.0f;
-		} else if (excited) {
-			float t = sc_to_float(tq[j]);
-			m->ff += fj * fj;
-			m->tf += t * fj;
-			m->tt += t * t;
 		}
+	for (unsigned j = 0; j < NR; j++) {
 		m->q_f[j] = f[j];
+		m->q_tq[j] = tq[j];
 	}
 	m->nz_have = !excited;
 	m->q_excited = excited;
@@ -124,8 +119,13 @@ void motor_id_process(struct motor_id *m)
 	if (!m->q_excited)
 		return;
 	float fm[NR];
-	for (unsigned j = 0; j < NR; j++)
+	for (unsigned j = 0; j < NR; j++) {
 		fm[j] = sc_to_float(m->q_f[j]);
+		float t = sc_to_float(m->q_tq[j]);
+		m->ff += fm[j] * fm[j];
+		m->tf += t * fm[j];
+		m->tt += t * t;
+	}
 	m->n_exc++;
 	if (m->skip > 0u) {
 		m->skip--;

@@ -95,9 +95,9 @@ struct motor_id {
 	uint32_t skip;           /* frames not accumulated after a refinement (lag transients) */
 	uint8_t stage;
 	bool refine_due;
-	/* the frame motor_id_step took, waiting for motor_id_process: its commands sit in
-	 * hist's next slot, its noise and torque sums are already taken */
-	scalar_t q_f[MOTOR_ID_ROTORS];
+	/* the frame motor_id_step took, waiting for motor_id_process (its commands sit in
+	 * hist's next slot, its noise sums are already taken) */
+	scalar_t q_f[MOTOR_ID_ROTORS], q_tq[MOTOR_ID_ROTORS];
 	bool q_excited, q_pending;
 };
 
@@ -139,7 +139,7 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg,
 /* One frame: thr_prev[8] = throttles sent on the previous frame, f[8] = measured thrusts
  * (N), tq[8] = measured reaction-torque magnitudes (N m) of this frame. excited = false: the
  * filters run and the noise is measured; true: the bank accumulates. The step only takes
- * the frame and its noise or torque-ratio sums (a few hundred instructions); the bank update
+ * the frame (and, when still, its noise sums; a few hundred instructions); the bank update
  * (15 hypotheses x 8 rotors, ~8,000 instructions on M4F) runs in motor_id_process, between
  * frames; a step that finds the previous frame still waiting processes it first, so nothing
  * is lost or reordered. */
