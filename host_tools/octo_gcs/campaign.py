@@ -1,9 +1,12 @@
 """``octo-gcs campaign SPEC.json``: Monte Carlo missions on a Dask cluster.
 
-One Dask task is one mission: ``octo-gcs mission`` run as a subprocess in a temporary directory
-on the worker, with the mission's vehicle file, seed, fault flags and parameters, under a
-timeout. The task never raises for a mission that goes wrong: a crash or a timeout comes back
-as a result with its reason. A worker that dies while running a task has the task retried by
+One Dask task is one mission, in a temporary directory on the worker, with the mission's vehicle
+file, seed, fault flags and parameters, under a timeout. With the in-process plant the task calls
+``octo-gcs mission --in-process`` inside the worker's own Python process (inprocess.mission: no
+Python start-up and imports per mission); octo-sil is still a child process, so a firmware crash
+or hang is isolated, stopped at the timeout and recorded. With the UDP plant the task runs
+``octo-gcs mission`` as a subprocess. The task never raises for a mission that goes wrong: a
+crash or a timeout comes back as a result with its reason. A worker that dies while running a task has the task retried by
 Dask (the scheduler's ``allowed-failures``, the spec's ``retries``); after that the mission is a
 row with the reason too.
 
@@ -19,7 +22,8 @@ worst missions, make their replay command one ``octo-gcs mission`` line.
 
 For tests only: the environment variable OCTO_CAMPAIGN_MISSION, when set, replaces the mission
 command (``python -m octo_gcs.cli mission``) by its words (split like a shell), e.g. a fake
-mission that crashes or hangs; the options given to it are the same.
+mission that crashes or hangs; the options given to it are the same, and it always runs as a
+subprocess.
 """
 
 import csv
@@ -104,6 +108,23 @@ def _tail(path, n=TAIL_LINES):
         return []
 
 
+def _mission_in_worker(argv, log, timeout):
+    """An in-process mission in this (the worker's) Python process, octo-sil its child process
+    stopped after `timeout` s: what ``octo-gcs mission ARGV`` would print goes to `log`, its
+    error line included. Returns (exit status as the command's, timed out)."""
+    from . import inprocess
+    from .base import GcsError
+    with open(log, "w", encoding="utf-8") as out:
+        try:
+            return inprocess.mission(argv, out, wall_limit=timeout), False
+        except inprocess.WallLimit as e:
+            print(f"octo-gcs: {e}", file=out)
+            return 1, True
+        except GcsError as e:
+            print(f"octo-gcs: {e}", file=out)
+            return 1, False
+
+
 def run_mission(job):
     """One mission; returns a dict (never raises for the mission's own failures)."""
     import socket
@@ -129,19 +150,22 @@ def run_mission(job):
                     raise RuntimeError(str(e)) from None
                 cmd += ["--build-dir", str(write_sim_wrappers(tmp / "sim", build, job["faults"]))]
             log = tmp / "mission.log"
-            with open(log, "wb") as out:
-                p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                     cwd=tmp, start_new_session=True)
-                try:
-                    rc = p.wait(timeout=job["timeout"])
-                    timed_out = False
-                except subprocess.TimeoutExpired:
-                    timed_out = True
-                    _stop_group(p)
-                    rc = p.returncode
-                except BaseException:
-                    _stop_group(p)
-                    raise
+            if job.get("in_worker"):
+                rc, timed_out = _mission_in_worker(cmd[len(mission_command()):], log, job["timeout"])
+            else:
+                with open(log, "wb") as out:
+                    p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                         cwd=tmp, start_new_session=True)
+                    try:
+                        rc = p.wait(timeout=job["timeout"])
+                        timed_out = False
+                    except subprocess.TimeoutExpired:
+                        timed_out = True
+                        _stop_group(p)
+                        rc = p.returncode
+                    except BaseException:
+                        _stop_group(p)
+                        raise
             tail = _tail(log)
             res["output_tail"] = tail
             # the firmware's rejection reasons: its status texts, in the mission's output (UDP plant)
@@ -393,7 +417,10 @@ def _run(args, spec, out, prog, campaign_report):
         inputs[i] = d
         jobs.append({"index": i, "seed": seed, "vehicle": vehicle, "faults": faults, "params": params,
                      "experiments": spec["experiments"], "timeout": float(spec["timeout"]),
-                     "in_process": in_process, "mission_cmd": override})
+                     "in_process": in_process, "mission_cmd": override,
+                     # octo-gcs's own in-process mission runs inside the worker's Python process
+                     # (octo-sil its child); a mission command given for tests stays a subprocess
+                     "in_worker": in_process and override is None})
 
     t0 = time.monotonic()
     n_new = failures = 0
