@@ -38,16 +38,22 @@ def read_events(path):
     with f:
         buf = f.read()
     off, n = 0, len(buf)
-    while off + _HDR.size <= n:
-        sync, _num, utime, clen, dlen = _HDR.unpack_from(buf, off)
+    unpack, hsize, names = _HDR.unpack_from, _HDR.size, {}   # names: channel bytes -> str, decoded once
+    append = out.append
+    while off + hsize <= n:
+        sync, _num, utime, clen, dlen = unpack(buf, off)
         if sync != SYNC:
             raise GcsError(f"{path}: not an LCM event log (bad sync word at byte {off})")
-        start = off + _HDR.size
-        end = start + clen + dlen
+        start = off + hsize
+        mid = start + clen
+        end = mid + dlen
         if end > n:
             break
-        channel = buf[start:start + clen].decode("ascii", errors="replace")
-        out.append((channel, utime, buf[start + clen:end]))
+        raw = buf[start:mid]
+        channel = names.get(raw)
+        if channel is None:
+            channel = names[raw] = raw.decode("ascii", errors="replace")
+        append((channel, utime, buf[mid:end]))
         off = end
     return out
 
