@@ -129,6 +129,7 @@ def run_mission(job):
     """One mission; returns a dict (never raises for the mission's own failures)."""
     import socket
     t0 = time.monotonic()
+    cpu0 = _cpu_s()
     res = {"index": job["index"], "seed": job["seed"], "status": "error", "reason": "", "report": None,
            "output_tail": [], "rejections": {}, "host": socket.gethostname(), "wall_s": 0.0}
     with tempfile.TemporaryDirectory(prefix=f"octo-campaign-{job['index']:04d}-") as tmp:
@@ -204,7 +205,22 @@ def run_mission(job):
         except Exception as e:
             res["status"], res["reason"] = "error", f"{type(e).__name__}: {e}"
     res["wall_s"] = round(time.monotonic() - t0, 3)
+    res["cpu_s"] = round(_cpu_s() - cpu0, 3)
     return res
+
+
+def _cpu_s():
+    """CPU seconds of this process (all its threads) and of its children that ended."""
+    import resource
+    return sum(r.ru_utime + r.ru_stime for r in (resource.getrusage(resource.RUSAGE_SELF),
+                                                 resource.getrusage(resource.RUSAGE_CHILDREN)))
+
+
+def warm_up():
+    """Imports what an in-process mission needs (run once on each worker before the missions,
+    so that the missions' rate is not that of the first imports)."""
+    from . import analysis, inprocess, logs, mission, report   # noqa: F401
+    return os.getpid()
 
 
 # ---------------------------------------------------------------- results.csv
@@ -427,8 +443,14 @@ def _run(args, spec, out, prog, campaign_report):
     n_workers = 0
     failures += sum(1 for r in done_rows if r["status"] not in RAN)
     t_run = None   # from the first submission: the missions' own rate, without the cluster's start
+    cpu = []   # CPU seconds of each mission of this run on its worker (its process and children)
     if jobs:
         client, cluster, n_workers, retries = _start_cluster(args, spec, prog)
+        if in_process and override is None:
+            try:
+                client.run(warm_up)
+            except Exception as e:   # a worker without this octo_gcs: the missions will say so
+                prog.say(f"campaign: the workers could not import the mission ({type(e).__name__}: {e})")
         t_run = time.monotonic()
         rf = ResultsFile(results, columns)
         futures = []
@@ -461,6 +483,8 @@ def _run(args, spec, out, prog, campaign_report):
                     else:
                         res = fut.result()
                     fut.release()
+                    if isinstance(res.get("cpu_s"), float):
+                        cpu.append(res["cpu_s"])
                     _keep_mission(out, res, j)
                     rf.append(result_row(res, inputs[j["index"]]))
                     n_new += 1
@@ -495,7 +519,8 @@ def _run(args, spec, out, prog, campaign_report):
         build = None
     summary = campaign_report.write(out, spec, rows, columns, {
         "missions_this_run": n_new, "wall_s": round(wall, 2), "missions_s": round(run_s, 2), "workers": n_workers,
-        "plant": plant, "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None},
+        "plant": plant, "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None,
+        "mission_cpu_s_mean": round(sum(cpu) / len(cpu), 4) if cpu else None},
         replay=lambda idx, seed: _replay(out, spec, idx, seed, build))
     for line in summary["lines"]:
         print(line)
