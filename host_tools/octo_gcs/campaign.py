@@ -113,10 +113,12 @@ def _mission_in_worker(argv, log, timeout):
     stopped after `timeout` s: what ``octo-gcs mission ARGV`` would print goes to `log`, its
     error line included. Returns (exit status as the command's, timed out)."""
     from . import inprocess
+    from .atomicfile import scratch
     from .base import GcsError
     with open(log, "w", encoding="utf-8") as out:
         try:
-            return inprocess.mission(argv, out, wall_limit=timeout), False
+            with scratch():   # the mission's directory goes away after the task
+                return inprocess.mission(argv, out, wall_limit=timeout), False
         except inprocess.WallLimit as e:
             print(f"octo-gcs: {e}", file=out)
             return 1, True

@@ -115,3 +115,16 @@ def test_local_cluster_real_in_process_missions(tmp_path):
     for i in range(2):
         rep = json.loads((out / "missions" / f"{i:04d}" / "report.json").read_text())
         assert rep["run"]["seed"] == seed + i and rep["run"]["plant"] == "octo-sil (in-process, lockstep)"
+
+
+def test_scratch_writes_complete_files_without_fsync(tmp_path, monkeypatch):
+    from octo_gcs import atomicfile
+    calls = []
+    real = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: (calls.append(fd), real(fd)))
+    with atomicfile.scratch():
+        atomicfile.atomic_write(tmp_path / "a.txt", "one\n")
+    assert (tmp_path / "a.txt").read_text() == "one\n" and calls == []
+    assert [p.name for p in tmp_path.iterdir()] == ["a.txt"]   # no temporary file left
+    atomicfile.atomic_write(tmp_path / "a.txt", "two\n")
+    assert (tmp_path / "a.txt").read_text() == "two\n" and len(calls) == 2   # the file and its directory
