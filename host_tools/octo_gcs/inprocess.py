@@ -9,6 +9,7 @@ instead of MAVLink; the report, the checks and the exit status are those of the
 UDP mission (mission.py), and so is the staging of DIR.
 """
 
+import functools
 import json
 import os
 import shutil
@@ -125,13 +126,18 @@ def mission(argv, stream, wall_limit=None):
     process, stopped after `wall_limit` seconds (WallLimit). Returns the exit status the
     command would have (0 pass, 1 fail); raises GcsError where the command exits 1 with a
     message (the files of the failed run are kept in OUT/failed-run/ as by the command)."""
-    from .cli import build_parser
-
-    args = build_parser().parse_args(["mission", *map(str, argv)])
+    args = _parser().parse_args(["mission", *map(str, argv)])
     if not args.in_process:
         raise GcsError("octo_gcs.inprocess.mission flies --in-process missions only")
     args.wall_limit = wall_limit
     return execute(args, stream, stream)
+
+
+@functools.lru_cache(maxsize=1)
+def _parser():
+    """octo-gcs's parser, built once per process (a campaign worker flies many missions)."""
+    from .cli import build_parser
+    return build_parser()
 
 
 def execute(args, stream, err_stream):
