@@ -6,9 +6,9 @@ file, seed, fault flags and parameters, under a timeout. With the in-process pla
 Python start-up and imports per mission); octo-sil is still a child process, so a firmware crash
 or hang is isolated, stopped at the timeout and recorded. With the UDP plant the task runs
 ``octo-gcs mission`` as a subprocess. The task never raises for a mission that goes wrong: a
-crash or a timeout comes back as a result with its reason. A worker that dies while running a task has the task retried by
-Dask (the scheduler's ``allowed-failures``, the spec's ``retries``); after that the mission is a
-row with the reason too.
+crash or a timeout comes back as a result with its reason. A worker that dies while running a
+task has the task retried by Dask (the scheduler's ``allowed-failures``, the spec's
+``retries``); after that the mission is a row with the reason too.
 
 Results reach the client as they finish (``as_completed``); each one is appended to
 DIR/results.csv at once (flush and fsync), its report.json and vehicle file copied to
