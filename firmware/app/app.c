@@ -129,6 +129,7 @@ static void sync_params(struct app *a)
 	for (int j = 0; j < THRMAP_ROTORS; j++)
 		tp.scale[j] = sc_from_float(scale[j]);
 	thrmap_init(&a->map, &tp);
+	envelope_model_sync(a);
 }
 
 static void reset_control(struct app *a)

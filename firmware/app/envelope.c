@@ -32,14 +32,45 @@ static void post_value(struct app *a, const char *name, float v)
 	outbox_post(&a->outbox, &ev);
 }
 
-static void kft_init(struct app *a)
+/* The tracker's model of the rotors: the vehicle's motor lag, thrust curve and per-rotor
+ * effectiveness, as identified (or given). */
+static struct kf_track_params kft_params(const struct app_params *p)
 {
 	struct kf_track_params kp = kf_track_params_default();
-	kp.drift_per_min = sc_from_float(a->p.kft_drift);
-	kp.tau_lag_s = sc_from_float(a->p.id_mot_tau);
-	kp.curve = sc_from_float(a->p.mot_curve);
+	kp.drift_per_min = sc_from_float(p->kft_drift);
+	kp.tau_lag_s = sc_from_float(p->id_mot_tau);
+	kp.curve = sc_from_float(p->mot_curve);
+	const float scale[KF_TRACK_ROTORS] = {p->mot_scale1, p->mot_scale2, p->mot_scale3, p->mot_scale4,
+					      p->mot_scale5, p->mot_scale6, p->mot_scale7, p->mot_scale8};
+	for (int j = 0; j < KF_TRACK_ROTORS; j++)
+		kp.scale[j] = sc_from_float(scale[j]);
+	return kp;
+}
+
+#define KFT_WARM_S 10.0f   /* s of tracker updates before it may refresh VEH_KF */
+#define KFT_VOTES 3u       /* publications in a row that must call for the refresh */
+
+static void kft_init(struct app *a)
+{
+	struct kf_track_params kp = kft_params(&a->p);
 	kf_track_init(&a->env.kft, &kp, sc_from_float(a->p.veh_kf));
 	a->env.kft_pub_t = 0.0;
+	a->env.kft_votes = 0;
+}
+
+void envelope_model_sync(struct app *a)
+{
+	/* An estimate made with another rotor model (before identification found the curve,
+	 * lag or a weak rotor) would be compared with the new VEH_KF and "refresh" it wrongly:
+	 * a changed model restarts the tracker from the current VEH_KF. */
+	struct kf_track_params kp = kft_params(&a->p);
+	const struct kf_track_params *cur = &a->env.kft.p;
+	bool same = kp.tau_lag_s == cur->tau_lag_s && kp.curve == cur->curve &&
+		    kp.drift_per_min == cur->drift_per_min;
+	for (int j = 0; j < KF_TRACK_ROTORS; j++)
+		same = same && kp.scale[j] == cur->scale[j];
+	if (!same)
+		kft_init(a);
 }
 
 void envelope_init(struct app *a)
@@ -99,9 +130,17 @@ static void kft_step(struct app *a, float dt, bool up)
 	}
 	float rel = k / a->p.veh_kf - 1.0f;
 	bool identified = ((unsigned)a->p.id_result & 1u) != 0;   /* k_f accepted by identification */
-	if (a->p.kft_refresh > 0.0f && identified && fabsf(rel) > a->p.kft_refresh &&
-	    3.0f * sd < a->p.kft_refresh * k)
+	/* A refresh needs a warmed-up tracker (KFT_WARM_S of updates since its last start: the
+	 * throttles jump when a new rotor model is applied, and the first memories follow that
+	 * transient) and a drift seen on KFT_VOTES publications in a row (1 s apart): a battery
+	 * sags for minutes, a transient does not last. */
+	bool call = a->p.kft_refresh > 0.0f && identified && fabsf(rel) > a->p.kft_refresh &&
+		    3.0f * sd < a->p.kft_refresh * k && (float)t->updates * a->dt_frame >= KFT_WARM_S;
+	e->kft_votes = call ? e->kft_votes + 1u : 0u;
+	if (e->kft_votes >= KFT_VOTES) {
+		e->kft_votes = 0;
 		set_veh_kf(a, k, rel < 0.0f ? "tracked drift down" : "tracked drift up");
+	}
 }
 
 float envelope_hover_f(struct app *a, float dt, float cos_tilt)

@@ -30,12 +30,16 @@ struct envelope {
 	float phase_s;      /* time in the current take-off or landing */
 	struct kf_track kft;/* k_f tracked in HOLD */
 	double kft_pub_t;   /* plant time of the last KFT_* publication */
+	uint32_t kft_votes; /* consecutive publications that called for a VEH_KF refresh */
 	uint8_t cmd;        /* enum app_command that started the phase, for its final result */
 	app_origin origin;  /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
 };
 
 /* From the parameters: the estimator starts at m g / (8 VEH_KF). */
 void envelope_init(struct app *a);
+/* After a parameter change: restarts the k_f tracker when the rotor model it uses (lag,
+ * curve, per-rotor scales, drift bound) changed. */
+void envelope_model_sync(struct app *a);
 
 /* Once per control step, before the height controller: learns from the last step
  * (vertical speed, collective throttle of the thrust the mixer achieved, tilt) and

@@ -10,6 +10,8 @@ struct kf_track_params kf_track_params_default(void)
 	p.phi_min = SC(0.08);
 	p.tau_lag_s = SC(0.03);
 	p.curve = SC(0.0);
+	for (int j = 0; j < KF_TRACK_ROTORS; j++)
+		p.scale[j] = SC(1.0);
 	p.s_tau_s = SC(5.0);
 	p.s0_pct = SC(1.0);
 	return p;
@@ -48,9 +50,10 @@ static scalar_t cbrt_warm(scalar_t x, scalar_t guess)
 static scalar_t regressor(const struct kf_track *s, const scalar_t *thr, int n)
 {
 	scalar_t c = s->p.curve, sum = SC_ZERO;
-	for (int j = 0; j < n; j++) {
+	for (int j = 0; j < n && j < KF_TRACK_ROTORS; j++) {
 		scalar_t t = sc_clamp(thr[j], SC_ZERO, SC(1.0));
-		sum = sc_add(sum, sc_add(sc_mul(sc_sub(SC(1.0), c), t), sc_mul(c, sc_sq(t))));
+		scalar_t g = sc_add(sc_mul(sc_sub(SC(1.0), c), t), sc_mul(c, sc_sq(t)));
+		sum = sc_add(sum, sc_mul(s->p.scale[j], g));
 	}
 	return sum;
 }

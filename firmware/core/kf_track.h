@@ -31,6 +31,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#define KF_TRACK_ROTORS 8
+
 struct kf_track_params {
 	scalar_t drift_per_min; /* largest drift to follow, fraction per minute (e.g. 0.02) */
 	scalar_t t_min_s;       /* bounds of the memory T*, s */
@@ -38,6 +40,7 @@ struct kf_track_params {
 	scalar_t phi_min;       /* gate: smallest regressor (sum of throttles) */
 	scalar_t tau_lag_s;     /* motor lag of the regressor, s (0: none) */
 	scalar_t curve;         /* thrust curve c: g(T) = (1 - c) T + c T^2 */
+	scalar_t scale[KF_TRACK_ROTORS]; /* per-rotor effectiveness: rotor j gives scale_j k g(T_j) */
 	scalar_t s_tau_s;       /* averaging time of the noise estimate, s */
 	scalar_t s0_pct;        /* noise assumed before any residual, percent of y */
 };
@@ -57,14 +60,14 @@ struct kf_track {
 	uint32_t updates;
 };
 
-/* Defaults: 2 %/min, T* in [0.2, 60] s, phi_min 0.08, tau_lag 0.03 s, curve 0,
+/* Defaults: 2 %/min, T* in [0.2, 60] s, phi_min 0.08, tau_lag 0.03 s, curve 0, scales 1,
  * noise average 5 s, initial noise 1 %. */
 struct kf_track_params kf_track_params_default(void);
 
 /* k0 > 0: the starting estimate (e.g. VEH_KF); the first updates replace it quickly. */
 void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t k0);
 
-/* One frame: throttles thr[0..n-1] as commanded, the sum of the measured rotor thrusts y,
+/* One frame: throttles thr[0..n-1] (n <= KF_TRACK_ROTORS) as commanded, the sum of the measured rotor thrusts y,
  * dt. `gate` false (on the ground, excitation running, a frame without thrust rows) only
  * advances the lag filter. Returns true when the estimate was updated. */
 bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_n, scalar_t dt_s, bool gate);
