@@ -5,6 +5,9 @@
 #ifndef OCTO_PARAMS_H
 #define OCTO_PARAMS_H
 
+#include "alt_ctrl.h" /* ALT_CTRL_DEFAULT_*: defaults of the ALT_* rows */
+#include "att_ctrl.h" /* ATT_CTRL_DEFAULT_*: defaults of the ATT_* rows */
+
 #include <stddef.h>
 #include <stdint.h>
 

@@ -4,9 +4,9 @@
 struct alt_ctrl_params alt_ctrl_params_default(void)
 {
 	struct alt_ctrl_params p;
-	p.wn_rps = SC(2.5);
-	p.zeta = SC(1.0);
-	p.ki_rps = SC(0.8);
+	p.wn_rps = SC(ALT_CTRL_DEFAULT_WN_RPS);
+	p.zeta = SC(ALT_CTRL_DEFAULT_ZETA);
+	p.ki_rps = SC(ALT_CTRL_DEFAULT_KI_RPS);
 	p.vz_max_up_mps = SC(2.0);
 	p.vz_max_down_mps = SC(1.5);
 	p.a_int_max_mps2 = SC(4.0);

@@ -62,8 +62,14 @@ struct alt_ctrl {
 	uint32_t flags;      /* ALT_CTRL_* of the last update */
 };
 
+/* Default gains, the ones octo-fw flies: its parameter table (ALT_WN, ALT_ZETA, ALT_KI)
+ * takes its defaults from these. */
+#define ALT_CTRL_DEFAULT_WN_RPS 2.5f /* natural frequency, rad/s */
+#define ALT_CTRL_DEFAULT_ZETA   1.0f /* damping ratio */
+#define ALT_CTRL_DEFAULT_KI_RPS 0.8f /* integral pole, 1/s */
+
 /* Defaults for the paper's octocopter at 90 Hz (m = 2.132 kg, 8 x 28 N rotors):
- * wn 2.5 rad/s, zeta 1.0, ki 0.8 1/s, vz limits +2 / -1.5 m/s, a_int_max 4 m/s^2,
+ * the gains above (wn 2.5 rad/s, zeta 1.0, ki 0.8 1/s), vz limits +2 / -1.5 m/s, a_int_max 4 m/s^2,
  * cos_tilt_min 0.5, f in [2, 200] N, g 9.796 m/s^2. Measured in tests/core/test_alt_ctrl.c
  * (1 frame delay + 30 ms thrust lag): 1 m step 0 % overshoot, 5 % settling 2.0 s; 10 m
  * step rides the 2 m/s limit, 0 % overshoot, 4.9 s; mass or thrust scale wrong by

@@ -4,9 +4,11 @@
 struct att_ctrl_params att_ctrl_params_default(void)
 {
 	struct att_ctrl_params p;
-	p.wn_rps = vec3_make(SC(7.0), SC(7.0), SC(5.0));
-	p.zeta = vec3_make(SC(1.0), SC(1.0), SC(1.1));
-	p.ki_rps = vec3_make(SC(0.5), SC(0.5), SC(0.5));
+	p.wn_rps = vec3_make(SC(ATT_CTRL_DEFAULT_WN_RP_RPS), SC(ATT_CTRL_DEFAULT_WN_RP_RPS),
+			     SC(ATT_CTRL_DEFAULT_WN_YAW_RPS));
+	p.zeta = vec3_make(SC(ATT_CTRL_DEFAULT_ZETA), SC(ATT_CTRL_DEFAULT_ZETA), SC(ATT_CTRL_DEFAULT_ZETA));
+	p.ki_rps = vec3_make(SC(ATT_CTRL_DEFAULT_KI_RPS), SC(ATT_CTRL_DEFAULT_KI_RPS),
+			     SC(ATT_CTRL_DEFAULT_KI_RPS));
 	p.rate_max_rps = vec3_make(SC(3.0), SC(3.0), SC(1.5));
 	p.tau_max_nm = vec3_make(SC(3.0), SC(3.0), SC(0.4));
 	p.int_tau_max_nm = vec3_make(SC(0.5), SC(0.5), SC(0.1));

@@ -70,13 +70,21 @@ struct att_ctrl {
 	uint32_t flags;           /* ATT_CTRL_* of the last update */
 };
 
+/* Default gains, the ones octo-fw flies: its parameter table (ATT_WN_RP, ATT_WN_YAW,
+ * ATT_ZETA, ATT_KI) takes its defaults from these. */
+#define ATT_CTRL_DEFAULT_WN_RP_RPS  7.0f /* roll and pitch natural frequency, rad/s */
+#define ATT_CTRL_DEFAULT_WN_YAW_RPS 3.5f /* yaw natural frequency, rad/s */
+#define ATT_CTRL_DEFAULT_ZETA       1.0f /* damping ratio, every axis */
+#define ATT_CTRL_DEFAULT_KI_RPS     0.3f /* integral pole, every axis, 1/s */
+
 /* Defaults for the paper's octocopter at 90 Hz with a one-frame delay and a 30 ms
- * motor lag: wn 7 / 7 / 5 rad/s, zeta 1.0 / 1.0 / 1.1, ki 0.5 1/s, rate_max 3 / 3 / 1.5
- * rad/s, tau_max 3 / 3 / 0.4 N m, int_tau_max 0.5 / 0.5 / 0.1 N m, int_err_max 0.2 rad,
- * gyro_comp on. Measured in tests/core/test_att_ctrl.c (0.2 rad steps): correct inertia
- * 0 % overshoot, 5 % settling 0.67 s roll/pitch, 1.34 s yaw (0.3 rad, torque-limited);
- * nominal inertia 0.05 on every axis (before identification) <= 3 % overshoot, <= 0.8 s;
- * inertia overestimated x2 with 50 ms lag + 2 frames: 9 % overshoot, stable. */
+ * motor lag: the gains above, rate_max 3 / 3 / 1.5 rad/s, tau_max 3 / 3 / 0.4 N m,
+ * int_tau_max 0.5 / 0.5 / 0.1 N m, int_err_max 0.2 rad, gyro_comp on.
+ * tests/core/test_att_ctrl.c measures these limits with wn 7 / 7 / 5 rad/s, zeta 1.0 /
+ * 1.0 / 1.1, ki 0.5 1/s (0.2 rad steps): correct inertia 0 % overshoot, 5 % settling
+ * 0.67 s roll/pitch, 1.34 s yaw (0.3 rad, torque-limited); nominal inertia 0.05 on every
+ * axis (before identification) <= 3 % overshoot, <= 0.8 s; inertia overestimated x2 with
+ * 50 ms lag + 2 frames: 9 % overshoot, stable. */
 struct att_ctrl_params att_ctrl_params_default(void);
 
 /* Copies params, zeroes the integral, flags and telemetry. */

@@ -56,10 +56,21 @@ struct alt_cfg {
 	double pre_s; /* seconds of hold at 1 m before the step (lets the integral converge) */
 };
 
+/* The gains these tests measure (the limits are the defaults'): set here, not taken from
+ * alt_ctrl_params_default(), whose gains are the ones octo-fw flies and may be retuned. */
+static struct alt_ctrl_params tested_params(void)
+{
+	struct alt_ctrl_params p = alt_ctrl_params_default();
+	p.wn_rps = SC(2.5);
+	p.zeta = SC(1.0);
+	p.ki_rps = SC(0.8);
+	return p;
+}
+
 static struct alt_cfg alt_cfg_default(void)
 {
 	struct alt_cfg c;
-	c.p = alt_ctrl_params_default();
+	c.p = tested_params();
 	c.m_nom = M_TRUE;
 	c.m_true = M_TRUE;
 	c.thrust_scale = 1;
@@ -173,7 +184,7 @@ UNIT_TEST(alt_ctrl_tilt_compensation)
 	CHECK(!(r.flags_or & ALT_CTRL_TILT_LIM));
 	/* 80 deg: bounded at cos_tilt_min, flagged */
 	struct alt_ctrl ac;
-	struct alt_ctrl_params p = alt_ctrl_params_default();
+	struct alt_ctrl_params p = tested_params();
 	alt_ctrl_init(&ac, &p);
 	struct alt_ctrl_input in;
 	memset(&in, 0, sizeof in);
@@ -190,7 +201,7 @@ UNIT_TEST(alt_ctrl_tilt_compensation)
  * overshoot. Flags report each limit. */
 UNIT_TEST(alt_ctrl_saturation_anti_windup)
 {
-	struct alt_ctrl_params p = alt_ctrl_params_default();
+	struct alt_ctrl_params p = tested_params();
 	p.f_max_n = s(25.0); /* just above m g = 20.9 N */
 	struct alt_ctrl ac;
 	alt_ctrl_init(&ac, &p);
@@ -239,7 +250,7 @@ UNIT_TEST(alt_ctrl_saturation_anti_windup)
  * of the double law (ki = 0, so the output depends on the inputs only). */
 UNIT_TEST(alt_ctrl_law_matches_double_reference)
 {
-	struct alt_ctrl_params p = alt_ctrl_params_default();
+	struct alt_ctrl_params p = tested_params();
 	p.ki_rps = SC_ZERO;
 	struct alt_ctrl ac;
 	alt_ctrl_init(&ac, &p);
@@ -275,7 +286,7 @@ UNIT_TEST(alt_ctrl_nan_guard)
 #if OCTO_FIXED
 	(void)u; /* Q16.16 has no NaN */
 #else
-	struct alt_ctrl_params p = alt_ctrl_params_default();
+	struct alt_ctrl_params p = tested_params();
 	struct alt_ctrl ac;
 	alt_ctrl_init(&ac, &p);
 	struct alt_ctrl_input in;

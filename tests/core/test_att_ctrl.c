@@ -123,11 +123,22 @@ struct loop_cfg {
 	double pitch_dither_nm; /* uniform white torque disturbance on pitch, +/- N m */
 };
 
+/* The gains these tests measure (the limits are the defaults'): set here, not taken from
+ * att_ctrl_params_default(), whose gains are the ones octo-fw flies and may be retuned. */
+static struct att_ctrl_params tested_params(void)
+{
+	struct att_ctrl_params p = att_ctrl_params_default();
+	p.wn_rps = vec3_make(SC(7.0), SC(7.0), SC(5.0));
+	p.zeta = vec3_make(SC(1.0), SC(1.0), SC(1.1));
+	p.ki_rps = vec3_make(SC(0.5), SC(0.5), SC(0.5));
+	return p;
+}
+
 static struct loop_cfg cfg_default(void)
 {
 	struct loop_cfg c;
 	memset(&c, 0, sizeof c);
-	c.p = att_ctrl_params_default();
+	c.p = tested_params();
 	memcpy(c.I_nom, I_TRUE, sizeof c.I_nom);
 	c.ndelay = 1;
 	c.lag_s = 0.030;
@@ -218,7 +229,7 @@ static void ref_law(const struct att_ctrl_params *p, const double e[3], const do
  * 1e-5 N m (float) / 2e-3 N m (Q16.16: inputs quantised to 1.5e-5, gains ~50 N m/rad). */
 UNIT_TEST(att_ctrl_law_matches_double_reference)
 {
-	struct att_ctrl_params p = att_ctrl_params_default();
+	struct att_ctrl_params p = tested_params();
 	p.ki_rps = vec3_zero();
 	struct att_ctrl ac;
 	att_ctrl_init(&ac, &p);
@@ -257,7 +268,7 @@ UNIT_TEST(att_ctrl_law_matches_double_reference)
 
 UNIT_TEST(att_ctrl_limits_and_flags)
 {
-	struct att_ctrl_params p = att_ctrl_params_default();
+	struct att_ctrl_params p = tested_params();
 	struct att_ctrl ac;
 	att_ctrl_init(&ac, &p);
 	struct att_ctrl_input in;
@@ -384,7 +395,7 @@ UNIT_TEST(att_ctrl_nan_guard)
 #if OCTO_FIXED
 	(void)u; /* Q16.16 has no NaN */
 #else
-	struct att_ctrl_params p = att_ctrl_params_default();
+	struct att_ctrl_params p = tested_params();
 	struct att_ctrl ac;
 	att_ctrl_init(&ac, &p);
 	struct att_ctrl_input in;
