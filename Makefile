@@ -5,7 +5,8 @@
 #   make test     C unit tests (float, Q16.16 and sanitizer builds), then pytest over tests/
 #   make run      the main job: octo-gcs mission with the paper's vehicle, output in out/
 #   make bench    performance figures (build/bench.json)
-#   make arm      cross-build the core and run its unit tests on emulated Cortex-M4F and M0
+#   make arm      cross-build the core and run its unit tests on emulated Cortex-M4F and M0,
+#                 and the app's C suite on Cortex-M4F
 #   make fuzz     libFuzzer on every parser (make fuzz-smoke: a few seconds each, for CI)
 #   make clean    remove build/ (keeps .venv); make distclean removes .venv too
 #
@@ -103,7 +104,7 @@ run: all
 	$(VENV)/bin/octo-gcs mission --out out $(MISSION_ARGS)
 
 help:
-	@sed -n '2,14p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,15p' Makefile | sed 's/^# \{0,1\}//'
 
 clean:
 	rm -rf $(B)
