@@ -5,6 +5,8 @@
 #   make test     C unit tests (float, Q16.16 and sanitizer builds), then pytest over tests/
 #   make run      the main job: octo-gcs mission with the paper's vehicle, output in out/
 #   make bench    performance figures (build/bench.json)
+#   make campaign a Monte Carlo campaign of random vehicles and faults on a local Dask cluster
+#                 (host_tools/campaigns/default.json; output in campaign/; goes on where it stopped)
 #   make arm      cross-build the core and run its unit tests on emulated Cortex-M4F and M0,
 #                 and the app's C suite on Cortex-M4F
 #   make fuzz     libFuzzer on every parser (make fuzz-smoke: a few seconds each, for CI)
@@ -84,6 +86,7 @@ $(LCM_STAMP): $(LCM_TYPES) $(VENV_STAMP) $(B)/config.mk
 # ---------------------------------------------------------------- parts
 include firmware/firmware.mk
 include sim/sim.mk
+include firmware/hal/sil/sil.mk
 include host_tools/host_tools.mk
 include tests/tests.mk
 include tests/core/probe.mk
@@ -92,7 +95,7 @@ include tests/bench/bench.mk
 include tests/fuzz/fuzz.mk
 
 # ---------------------------------------------------------------- top-level goals
-.PHONY: all test run bench arm clean distclean help
+.PHONY: all test run campaign bench arm clean distclean help
 all: $(ALL_TARGETS)
 
 test: all
@@ -103,8 +106,16 @@ MISSION_ARGS ?=
 run: all
 	$(VENV)/bin/octo-gcs mission --out out $(MISSION_ARGS)
 
+# CAMPAIGN_SPEC: the spec; CAMPAIGN_ARGS: more options, e.g. CAMPAIGN_ARGS="--workers 1".
+# --resume: a campaign/ started with the same spec goes on (a finished one only gets its report
+# again); one started with another spec is refused (remove campaign/ first).
+CAMPAIGN_SPEC ?= host_tools/campaigns/default.json
+CAMPAIGN_ARGS ?=
+campaign: all
+	$(VENV)/bin/octo-gcs campaign $(CAMPAIGN_SPEC) --out campaign --resume $(CAMPAIGN_ARGS)
+
 help:
-	@sed -n '2,15p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,17p' Makefile | sed 's/^# \{0,1\}//'
 
 clean:
 	rm -rf $(B)

@@ -1,4 +1,4 @@
-// server: sockets, pacing, lockstep, RREF scheduling, truth, status.
+// server: sockets, pacing, lockstep, status; what a frame sends and does is frame_out's.
 #include "server.hpp"
 
 #include <chrono>
@@ -9,6 +9,7 @@
 
 #include "counters.hpp"
 #include "faults.hpp"
+#include "frame_out.hpp"
 #include "model.hpp"
 #include "net.hpp"
 #include "truth.hpp"
@@ -68,58 +69,27 @@ private:
 
 bool Server::send_frame(bool with_faults)
 {
-	if (!input_.target_enabled)
-		return true;
-	std::vector<xp::DataRow> rows;
-	for (int r : xp_supported_rows())
-		if (input_.selected[static_cast<size_t>(r)])
-			rows.push_back(xp_row(frame_, r, o_.xplane_version));
-	if (rows.empty())
-		return true; // X-Plane sends nothing while no row is selected
-	xp::Bytes d = xp::encode_data(rows);
 	std::vector<xp::Bytes> out;
-	if (with_faults && o_.faults.any())
-		out = faults_.submit(n_, std::move(d));
-	else
-		out.push_back(std::move(d));
+	const bool delivered = frame_data(o_, input_, frame_, faults_, n_, with_faults, out);
 	for (const auto &b : out) {
 		if (sock_.send(b.data(), b.size(), input_.target))
 			c_.inc(Counters::TxData);
 		else
 			c_.inc(Counters::TxError);
 	}
-	return !out.empty();
+	return delivered;
 }
 
 void Server::rref_tick()
 {
-	if (input_.subs.empty())
-		return;
-	// group due records per destination, in subscription order
-	std::vector<std::pair<sockaddr_in, std::vector<std::pair<int32_t, float>>>> groups;
-	for (auto &s : input_.subs) {
-		s.phase += s.freq / o_.rate;
-		if (s.phase < 1.0)
-			continue;
-		s.phase -= std::floor(s.phase);
-		float v = 0.0f;
-		if (!xp_dataref(frame_, s.path, o_.xplane_version, input_.override_on, input_.thro_use,
-		                input_.thro, v))
-			c_.inc(Counters::RrefUnknown);
-		size_t g = 0;
-		while (g < groups.size() && !same_addr(groups[g].first, s.to))
-			g++;
-		if (g == groups.size())
-			groups.push_back({s.to, {}});
-		groups[g].second.push_back({s.index, v});
+	std::vector<std::pair<sockaddr_in, xp::Bytes>> out;
+	rref_replies(o_, input_, frame_, c_, out);
+	for (const auto &r : out) {
+		if (sock_.send(r.second.data(), r.second.size(), r.first))
+			c_.inc(Counters::TxRref);
+		else
+			c_.inc(Counters::TxError);
 	}
-	for (const auto &g : groups)
-		for (const auto &b : xp::encode_rref_replies(g.second)) {
-			if (sock_.send(b.data(), b.size(), g.first))
-				c_.inc(Counters::TxRref);
-			else
-				c_.inc(Counters::TxError);
-		}
 }
 
 bool Server::pump(double deadline, bool until_full)
@@ -148,13 +118,7 @@ bool Server::pump(double deadline, bool until_full)
 
 void Server::advance()
 {
-	std::array<double, kRotors> u = input_.effective_throttle();
-	model_.command(u);
-	input_.cmd_mask = 0;
-	n_++;
-	model_.advance_to(static_cast<double>(n_) / o_.rate);
-	frame_ = xp_measure(model_, u, o_.seed, n_);
-	truth_.publish(model_, n_);
+	advance_frame(o_, model_, input_, n_, frame_, truth_);
 }
 
 void Server::status(double now)

@@ -18,8 +18,13 @@ $(B)/sim-test-obj/%.o: sim/tests/%.cpp $(B)/config.mk | $(LCM_STAMP)
 	@mkdir -p $(@D)
 	$(CXX) $(CXXFLAGS_SIM) $(SIM_INC) -c $< -o $@
 
-$(B)/octo-sim: $(SIM_OBJ)
-	$(CXX) $(OPT) -o $@ $(SIM_OBJ) $(LCM_LDFLAGS) -lm
+# libocto-plant.a: everything but main(): the plant with its C interface
+# (plant.h, used by octo-sil) and the UDP server that octo-sim's main() runs.
+$(B)/libocto-plant.a: $(SIM_LIB_OBJ)
+	@rm -f $@; $(AR) rcs $@ $^
+
+$(B)/octo-sim: $(B)/sim/main.o $(B)/libocto-plant.a
+	$(CXX) $(OPT) -o $@ $(B)/sim/main.o $(B)/libocto-plant.a $(LCM_LDFLAGS) -lm
 
 $(B)/sim-tests: $(SIM_LIB_OBJ) $(SIM_TEST_OBJ)
 	$(CXX) $(OPT) -o $@ $(SIM_LIB_OBJ) $(SIM_TEST_OBJ) $(LCM_LDFLAGS) -lm

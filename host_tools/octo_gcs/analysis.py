@@ -156,20 +156,26 @@ def simulate_rates(t, q0, w0, throttles, s0, p, motor_tau=0.0, delay_frames=0):
         thr = np.vstack([np.repeat(thr[:1], delay_frames, axis=0), thr[:-delay_frames]])
     s = np.asarray(s0, float).copy()
     s_mid, steps, ends = [], [], []
+    total = 0
     for k in range(len(t) - 1):
         dt = t[k + 1] - t[k]
         n = max(1, int(math.ceil(dt / RK4_STEP - 1e-9)))
         h = dt / n
         a = math.exp(-h / motor_tau) if motor_tau > 0 else 0.0
-        ah = math.sqrt(a)
-        for _ in range(n):
-            s_mid.append(thr[k] + (s - thr[k]) * ah)
-            s = thr[k] + (s - thr[k]) * a
-            steps.append(h)
-        ends.append(len(steps))
+        # the lag over the frame's n steps at once: after j steps s - thr has shrunk by a^j
+        # (a^0 = 1 also for a = 0: no lag, s jumps to the command within the first step)
+        decay = a ** np.arange(n)
+        e = s - thr[k]
+        s_mid.append(thr[k] + np.outer(decay * math.sqrt(a), e))
+        s = thr[k] + e * (a ** n)
+        steps.append(np.full(n, h))
+        total += n
+        ends.append(total)
     if not steps:
         return np.asarray(w0, float).reshape(1, 3)
-    torques = (m.gamma[1:4] @ (p.kf * np.array(s_mid)).T).T
+    s_mid = np.concatenate(s_mid)
+    steps = np.concatenate(steps)
+    torques = (m.gamma[1:4] @ (p.kf * s_mid).T).T
     w = m.integrate_rates(w0, torques, steps)
     return w[[0] + ends]
 

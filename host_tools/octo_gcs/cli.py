@@ -9,7 +9,7 @@ from . import __version__
 def add_connection_args(p, again=False):
     """--connect, --signing-key, --timeout. again=True: the same options once more on a
     sub-action (``params get NAME --connect URL``), not overriding the parent's values."""
-    from .link import DEFAULT_URL
+    from .base import DEFAULT_URL
 
     kw = {"default": argparse.SUPPRESS} if again else {}
     p.add_argument("--connect", metavar="URL", **(kw or {"default": DEFAULT_URL}),
@@ -108,8 +108,32 @@ def build_parser() -> argparse.ArgumentParser:
     mp.add_argument("--build-dir", metavar="DIR",
                     help="where octo-sim and octo-fw are (default $OCTO_BUILD, else the repository's build/)")
     mp.add_argument("--no-plots", dest="plots", action="store_false", help="skip the figures")
+    mp.add_argument("--in-process", action="store_true",
+                    help="fly in octo-sil (firmware and plant in one deterministic lockstep process; "
+                    "parameters from its parameter file) instead of octo-sim + octo-fw over UDP")
     mp.add_argument("--timeout", type=float, default=5.0, metavar="S",
                     help="seconds to wait for the vehicle's answers (default 5)")
+
+    cp = sub.add_parser(
+        "campaign", help="Monte Carlo missions over vehicles, seeds, faults and parameters, on Dask",
+        description="Runs SPEC.json's missions (octo-gcs mission, one per Dask task) on a local Dask cluster "
+        "or, with --scheduler, on an existing one. Mission i flies with seed S + i and its own draws. "
+        "Writes DIR: results.csv (a row per mission as it ends), missions/NNNN/ (report.json, vehicle.json, "
+        "mission.log), spec.json, and at the end campaign.md, campaign.json and figures. Exit status 0 when "
+        "every mission ran and the spec's expect holds, 1 otherwise, 2 for a bad spec or options.",
+        epilog="SPEC keys: name, missions, seed, vehicle {octo-sim keys}, faults {drop, burst, burst_prob, "
+        "delay_frames, duplicate, reorder}, params {NAME: value}, experiments [6], plant in-process|udp, "
+        "timeout (s per mission, 600), retries (2), tolerance_pct {kf: 0.3, ...}, expect {k_f_error_pct: 0.3, "
+        "silently_wrong: 0, ...}. A value is a number or {\"uniform\": [lo, hi]}, {\"loguniform\": [lo, hi]}, "
+        "{\"normal\": [mean, sd]}, {\"choice\": [...]}.")
+    cp.add_argument("spec", metavar="SPEC.json", help="the campaign specification")
+    cp.add_argument("--out", default="campaign", metavar="DIR", help="output directory (default campaign)")
+    cp.add_argument("--scheduler", metavar="ADDRESS",
+                    help="an existing Dask scheduler, tcp://HOST:PORT (default: a local cluster)")
+    cp.add_argument("--workers", type=int, metavar="N",
+                    help="worker processes of the local cluster (default: the number of cores)")
+    cp.add_argument("--resume", action="store_true",
+                    help="go on with DIR's campaign: skip the missions already in results.csv")
 
     pl = sub.add_parser(
         "plot", help="the report's figures from existing LCM logs",
@@ -129,7 +153,7 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return 2
-    from .link import GcsError
+    from .base import GcsError
     from .procs import Terminated
 
     try:
@@ -144,6 +168,9 @@ def main(argv=None) -> int:
             return run(args)
         if args.command == "mission":
             from .mission import run
+            return run(args)
+        if args.command == "campaign":
+            from .campaign import run
             return run(args)
         if args.command == "plot":
             from .plot_cmd import run

@@ -12,7 +12,7 @@ import math
 import re
 import time
 
-from .link import MODE_NUMBERS, MODES, GcsError, fw_default, mavlink, result_name
+from .base import MODE_NUMBERS, MODES, GcsError, fw_default
 
 EXPERIMENTS = {1: "rotor coefficients", 2: "validation", 3: "Ix", 4: "Iy", 5: "Iz",
                6: "full sequence"}
@@ -111,6 +111,8 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
     sim_time(): the vehicle's simulated time if the caller knows it (e.g. from the log
     it asked for); otherwise the wall time since the start is shown.
     Raises GcsError if the vehicle refuses, aborts, fails or goes silent."""
+    from .link import mavlink, result_name
+
     live = Live()
     cmd = mavlink.MAV_CMD_USER_1
     name = EXPERIMENTS[experiment]

@@ -12,7 +12,7 @@ import struct
 
 import numpy as np
 
-from .link import GcsError
+from .base import GcsError
 
 SYNC = 0xEDA1DA01
 _HDR = struct.Struct(">IqqII")
@@ -52,8 +52,54 @@ def read_events(path):
     return out
 
 
+# numpy's big-endian types of LCM's fixed-size primitives, and the native types the
+# fields become (those of decoding message by message: Python ints, floats and bools)
+_NP = {"int8_t": ("i1", np.int64), "int16_t": (">i2", np.int64), "int32_t": (">i4", np.int64),
+       "int64_t": (">i8", np.int64), "byte": ("u1", np.int64), "boolean": ("i1", np.bool_),
+       "float": (">f4", np.float64), "double": (">f8", np.float64)}
+
+
+def _fixed_dtype(lcm_type):
+    """The numpy record type of an LCM type made of fixed-size primitive fields (with its
+    8-byte fingerprint first), or None when it has strings, nested types or variable
+    arrays (such a type is decoded message by message)."""
+    names = getattr(lcm_type, "__slots__", None)
+    types = getattr(lcm_type, "__typenames__", None)
+    dims = getattr(lcm_type, "__dimensions__", None)
+    if not names or types is None or dims is None:
+        return None
+    fields = [("_fingerprint", ">u8")]
+    for name, t, d in zip(names, types, dims):
+        if t not in _NP or (d is not None and not all(isinstance(k, int) for k in d)):
+            return None
+        fields.append((name, _NP[t][0], tuple(d)) if d else (name, _NP[t][0]))
+    return np.dtype(fields)
+
+
+def _decode_fixed(lcm_type, dtype, datas, path, channel):
+    """{field: array} of many messages of one fixed-size type at once (numpy), checked
+    as LCM's decode checks them (size and fingerprint)."""
+    if any(len(d) != dtype.itemsize for d in datas):
+        raise GcsError(f"{path}: {channel} record does not decode (wrong size): "
+                       "log from another version of the LCM types?")
+    rec = np.frombuffer(b"".join(datas), dtype=dtype)
+    fp = int.from_bytes(lcm_type._get_packed_fingerprint(), "big")
+    if len(rec) and np.any(rec["_fingerprint"] != fp):
+        raise GcsError(f"{path}: {channel} record does not decode (Decode error): "
+                       "log from another version of the LCM types?")
+    natives = dict(zip(lcm_type.__slots__, (_NP[t][1] for t in lcm_type.__typenames__)))
+    return {name: rec[name].astype(natives[name]) for name in lcm_type.__slots__}
+
+
 class Series:
     """Fields of a list of LCM messages as numpy arrays (attribute access)."""
+
+    @classmethod
+    def from_arrays(cls, fields):
+        s = cls([])
+        s._fields = dict(fields)
+        s.n = len(next(iter(fields.values()))) if fields else 0
+        return s
 
     def __init__(self, msgs):
         self.n = len(msgs)
@@ -91,21 +137,41 @@ class Logs:
 
     def __init__(self, paths):
         types = _types()
-        msgs = {c: [] for c in CHANNELS}
+        raw = {c: [] for c in CHANNELS}
         self.paths = [str(p) for p in paths]
         for p in paths:
             for channel, _utime, data in read_events(p):
                 if channel in types:
-                    try:
-                        msgs[channel].append(types[channel].decode(data))
-                    except ValueError as e:
-                        raise GcsError(f"{p}: {channel} record does not decode ({e}): "
-                                       "log from another version of the LCM types?") from None
-        if not any(msgs.values()):
+                    raw[channel].append((p, data))
+        if not any(raw.values()):
             raise GcsError("no OCTO_TRUTH or OCTO_FW_* records in " + ", ".join(self.paths))
-        self.truth = Series(msgs["OCTO_TRUTH"]) if msgs["OCTO_TRUTH"] else None
-        self.fw = Series(msgs["OCTO_FW_FRAME"]) if msgs["OCTO_FW_FRAME"] else None
-        self.events = [(e.utime * 1e-6, e.severity, e.text) for e in msgs["OCTO_FW_EVENT"]]
+        series = {}
+        for channel, items in raw.items():
+            if not items:
+                series[channel] = None
+                continue
+            dtype = _fixed_dtype(types[channel])
+            if dtype is not None and len({p for p, _d in items}) == 1:
+                series[channel] = Series.from_arrays(
+                    _decode_fixed(types[channel], dtype, [d for _p, d in items], items[0][0], channel))
+                continue
+            msgs = []
+            for p, data in items:
+                try:
+                    msgs.append(types[channel].decode(data))
+                except ValueError as e:
+                    raise GcsError(f"{p}: {channel} record does not decode ({e}): "
+                                   "log from another version of the LCM types?") from None
+            series[channel] = msgs
+        self.truth = self._series(series["OCTO_TRUTH"])
+        self.fw = self._series(series["OCTO_FW_FRAME"])
+        self.events = [(e.utime * 1e-6, e.severity, e.text) for e in (series["OCTO_FW_EVENT"] or [])]
+
+    @staticmethod
+    def _series(x):
+        if x is None or isinstance(x, Series):
+            return x
+        return Series(x)
 
     # ------------------------------------------------------------ experiment phases
     def phases(self):

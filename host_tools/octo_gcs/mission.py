@@ -21,12 +21,11 @@ from pathlib import Path
 
 from . import paramfile, procs, vehiclefile
 from .identify import EXPERIMENTS, merge_text_results, parse_experiments, planned_sim_seconds, run_experiment
-from .link import GcsError, Vehicle
-from .flight import Flight
+from .base import GcsError
 from .progress import Progress
 
 TAKEOFF_M = 10.0
-OUTPUTS = ("report.md", "report.json", "params.parm", "truth.lcm", "fw.lcm", "octo-sim.log", "octo-fw.log",
+OUTPUTS = ("report.md", "report.json", "params.parm", "truth.lcm", "fw.lcm", "octo-sim.log", "octo-fw.log", "octo-sil.log",
            "fig5_excitation.png", "fig6_validation.png", "fig7_rates.png", "convergence.png")
 
 
@@ -99,6 +98,7 @@ class Mission:
             except GcsError:
                 if time.monotonic() > deadline:
                     raise GcsError("no heartbeat from octo-fw after 10 s:\n" + self.fw.tail()) from None
+        from .flight import Flight
         fl = Flight(v, alive=self._alive)
         nominal = v.fetch_params()
         bench = {"VEH_MASS": veh["mass"], "VEH_ARM_L": veh["arm_length"]}
@@ -146,6 +146,7 @@ class Mission:
         v = self.vehicle
         if v is None or self.sim is None or not self.sim.alive() or not self.fw.alive():
             return
+        from .flight import Flight
         from .link import MODE_NUMBERS
         if v.mode in (None, MODE_NUMBERS["DISARMED"]):
             return
@@ -161,6 +162,9 @@ def _tail(path):
 
 
 def run(args):
+    if getattr(args, "in_process", False):
+        from . import inprocess
+        return inprocess.run(args)
     from .report import build_report, write_outputs
 
     t_start = time.monotonic()
@@ -192,6 +196,7 @@ def run(args):
     try:
         with procs.signals_as_exceptions():
             try:
+                from .link import Vehicle
                 m.vehicle = Vehicle("udpin:127.0.0.1:0", timeout=args.timeout)
                 gcs_port = m.vehicle.conn.port.getsockname()[1]
                 ports = (procs.free_udp_port(), procs.free_udp_port(), procs.free_udp_port(), gcs_port)

@@ -15,7 +15,7 @@ import subprocess
 import time
 from pathlib import Path
 
-from .link import GcsError
+from .base import GcsError
 
 REPO = Path(__file__).resolve().parents[2]
 

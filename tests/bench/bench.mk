@@ -3,7 +3,7 @@
 #   make bench        builds the harnesses below, then runs tests/bench/bench.py: one table on
 #                     stdout (each figure: median of repeated runs with min and max, beside its
 #                     reference and target, with the command that produced it) and
-#                     build/bench.json. Takes about two minutes.
+#                     build/bench.json. Takes about four minutes (item 8, campaigns, two).
 #   make bench-tools  only the harnesses (the host ones are part of `make`;
 #                     tests/py/test_bench_smoke.py runs them tiny)
 #   BENCH_ARGS="--repeats 3 --only speed,step"  passed to bench.py (see bench.py --help)
@@ -73,5 +73,5 @@ endif
 .PHONY: bench bench-tools
 bench-tools: $(BENCH_HOST) $(BENCH_ARM)
 
-bench: $(B)/octo-sim $(B)/octo-fw bench-tools
+bench: $(B)/octo-sim $(B)/octo-fw $(B)/octo-sil bench-tools
 	$(VPY) tests/bench/bench.py $(if $(BENCH_ARM_OK),,--no-arm) $(BENCH_ARGS)

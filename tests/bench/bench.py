@@ -23,6 +23,14 @@ Items (issue 8):
   estim   5. build/bench/bench-estim: Monte Carlo of k_f, lag-aware vs CRLB, paper's plain
   sim     6. physics alone (build/bench/bench-physics) and octo-sim --lockstep driven by the
              tightest client (build/bench/pingpong client)
+  sil     7. octo-sil (app + plant in one process): simulated s per wall s of a hovering
+             flight beside the physics alone in the same run (target >= 2,000x and >= 50 %
+             of it); its peak memory; whole missions: octo-gcs mission --in-process with and
+             without plots against the UDP mission (octo-sim + octo-fw)
+  campaign 8. octo-gcs campaign throughput on a local Dask cluster of 1 and of 2 workers (the
+             same missions: the paper's vehicle, random seeds, experiment 6, in-process plant
+             when octo-gcs mission has it): missions per minute and the scaling efficiency
+             rate(2) / (2 rate(1))
 """
 
 import argparse
@@ -728,9 +736,126 @@ def item_sim(rep, args):
     return xs
 
 
+# ====================================================================== item 7: octo-sil
+SIL_HOVER = "arm; takeoff 10; wait hold; sleep {secs}"
+
+
+def run_rusage(argv, timeout=600):
+    """(wall s, peak RSS kB, stdout, stderr, status) of a child, from wait4."""
+    import resource  # noqa: F401  (wait4's rusage)
+    t0 = time.monotonic()
+    p = subprocess.Popen([str(a) for a in argv], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE)
+    timer = threading.Timer(timeout, p.kill)
+    timer.start()
+    try:
+        out, err = p.stdout.read(), p.stderr.read()
+        _pid, status, ru = os.wait4(p.pid, 0)
+    finally:
+        timer.cancel()
+    p.returncode = os.waitstatus_to_exitcode(status)
+    return time.monotonic() - t0, ru.ru_maxrss, out.decode(errors="replace"), err.decode(errors="replace"), \
+        p.returncode, ru.ru_utime + ru.ru_stime
+
+
+def item_sil(rep, args):
+    secs = 30 if args.quick else 300
+    sil_argv = [B / "octo-sil", "--quiet", "--mission", SIL_HOVER.format(secs=secs)]
+    phys_argv = [BB / "bench-physics", secs]
+    sil_x, phys_x, ratio, rss, cpu_x = [], [], [], [], []
+    for _ in range(args.repeats):
+        # interleaved, so that both see the same machine
+        out = subprocess.run([str(a) for a in phys_argv], capture_output=True, text=True, check=True)
+        px = json.loads(out.stdout)["sim_s_per_wall_s"]
+        wall, kb, _o, err, rc, cpu = run_rusage(sil_argv)
+        m = re.search(r"stopped at t=([0-9.]+) s", err)
+        if rc != 0 or not m:
+            raise RuntimeError(f"octo-sil failed ({rc}): {err[-300:]}")
+        sx = float(m.group(1)) / wall
+        cpu_x.append(float(m.group(1)) / max(cpu, 1e-6))
+        sil_x.append(sx)
+        phys_x.append(px)
+        ratio.append(100.0 * sx / px)
+        rss.append(kb)
+    sx, px, rt, mem = mmm(sil_x), mmm(phys_x), mmm(ratio), mmm(rss)
+    rep.row(7, "octo-sil: simulated s per wall s (hover, app + plant + X-Plane codecs)",
+            fmt(sx["median"], 0, "x"), spread(sx, 0, "x"), f"physics alone {fmt(px['median'], 0, 'x')}",
+            ">= 2,000x", sx["median"] >= 2000, cmdline(sil_argv))
+    cx = mmm(cpu_x)
+    rep.row(7, "  octo-sil: simulated s per CPU s (user + sys; less sensitive to load)",
+            fmt(cx["median"], 0, "x"), spread(cx, 0, "x"), "", "", None)
+    rep.row(7, "  octo-sil / physics alone (%)", fmt(rt["median"], 0, " %"), spread(rt, 0, " %"),
+            "same run, interleaved", ">= 50 %", rt["median"] >= 50)
+    rep.row(7, "  octo-sil peak RSS (kB)", fmt(mem["median"]), spread(mem), "", "", None, cmdline(sil_argv))
+    rep.commands["sil"] = cmdline(sil_argv)
+    rep.commands["sil_physics"] = cmdline(phys_argv)
+
+    # whole missions, start-up to report, as a user runs them
+    gcs = REPO / ".venv" / "bin" / "octo-gcs"
+    n = 1 if args.quick else max(1, min(args.repeats, 3))
+    variants = [("in-process, no plots", ["--in-process", "--no-plots"]), ("in-process, plots", ["--in-process"]),
+                ("UDP, no plots", ["--no-plots"]), ("UDP, plots", [])]
+    missions = {}
+    with tempfile.TemporaryDirectory(prefix="octo-bench-") as tmp:
+        for label, extra in variants:
+            xs = []
+            for i in range(n):
+                argv = [gcs, "mission", "--out", Path(tmp) / f"m{i}", *extra]
+                t0 = time.monotonic()
+                r = subprocess.run([str(a) for a in argv], capture_output=True, text=True, timeout=600,
+                                   env=dict(os.environ, OCTO_BUILD=str(B)))
+                xs.append(time.monotonic() - t0 if r.returncode in (0, 1) else None)
+            missions[label] = mmm(xs)
+    ref = missions.get("UDP, no plots")
+    for label, _extra in variants:
+        x = missions[label]
+        rep.row(7, f"  whole mission (octo-gcs mission), {label} (s)", fmt(x["median"] if x else None, 2),
+                spread(x, 2) if x else "", f"UDP no plots {fmt(ref['median'], 2)} s" if ref else "",
+                "< 1 s" if label == "in-process, no plots" else "",
+                (x["median"] < 1.0) if (x and label == "in-process, no plots") else None,
+                cmdline([gcs, "mission", "--out", "DIR", *dict(variants)[label]]))
+    rep.data["sil"] = {"sil_x": sx, "sil_cpu_x": cx, "physics_x": px, "ratio_pct": rt, "peak_rss_kb": mem, "missions_s": missions}
+    return rep.data["sil"]
+
+# ====================================================================== item 8: campaign
+def item_campaign(rep, args):
+    n = 2 if args.quick else 8
+    res = {}
+    with tempfile.TemporaryDirectory(prefix="bench-campaign-") as tmp:
+        spec = Path(tmp) / "spec.json"
+        spec.write_text(json.dumps({"name": "bench", "missions": n, "seed": 500, "plant": "in-process",
+                                    "timeout": 600, "experiments": [6]}))
+        for w in (1, 2):
+            out = Path(tmp) / f"w{w}"
+            argv = [B.parent / ".venv" / "bin" / "octo-gcs", "campaign", spec, "--out", out, "--workers", w]
+            subprocess.run([str(a) for a in argv], capture_output=True, text=True, timeout=3600)
+            doc = json.loads((out / "campaign.json").read_text())
+            t = doc["throughput"]
+            res[w] = {"missions_per_min": t["missions_per_min"], "missions": t["missions_this_run"],
+                      "missions_s": t["missions_s"], "wall_s": t["wall_s"], "plant": t["plant"],
+                      "ran": doc["ran"], "mission_wall_s_mean": t["mission_wall_s_mean"]}
+            rep.commands[f"campaign ({w} worker{'s' if w > 1 else ''})"] = cmdline(
+                [".venv/bin/octo-gcs", "campaign", "SPEC", "--out", "DIR", "--workers", w]) + \
+                f"  (SPEC: {n} missions of the paper's vehicle, seeds 500.., experiment 6)"
+    r1, r2 = res[1]["missions_per_min"], res[2]["missions_per_min"]
+    eff = r2 / (2 * r1) if r1 and r2 else None
+    c = rep.commands.get("campaign (2 workers)")
+    for w in (1, 2):
+        r = res[w]
+        rep.row(8, f"campaign, {w} local worker{'s' if w > 1 else ''}: missions per minute ({r['missions']} missions, "
+                f"{r['plant']})", fmt(r["missions_per_min"], 2), "",
+                f"{r['ran']} ran; a mission {fmt(r['mission_wall_s_mean'], 1, ' s')} wall", "", None,
+                rep.commands.get(f"campaign ({w} worker{'s' if w > 1 else ''})"))
+    rep.row(8, "  scaling efficiency 1 -> 2 workers: rate(2) / (2 rate(1))",
+            fmt(100 * eff if eff is not None else None, 0, " %"), "", f"{os.cpu_count()} cores, load "
+            f"{os.getloadavg()[0]:.1f}", ">= 80 %", eff is not None and eff >= 0.8, c)
+    rep.data["campaign"] = {"workers": res, "efficiency": eff}
+    return res
+
+
 # ====================================================================== main
 ITEMS = {"speed": item_speed, "step": item_step, "memory": item_memory, "alloc": item_alloc,
-         "estim": item_estim, "sim": item_sim}
+         "estim": item_estim, "sim": item_sim, "sil": item_sil, "campaign": item_campaign}
 
 
 def main():
@@ -759,7 +884,7 @@ def main():
             ITEMS[name](rep, args)
         except Exception as e:   # noqa: BLE001 - one broken item must not hide the others
             errors[name] = f"{type(e).__name__}: {e}"
-            rep.row({"speed": 1, "step": 2, "memory": 3, "alloc": 4, "estim": 5, "sim": 6}[name],
+            rep.row({"speed": 1, "step": 2, "memory": 3, "alloc": 4, "estim": 5, "sim": 6, "sil": 7, "campaign": 8}[name],
                     f"{name}: FAILED", "n/a", "", errors[name][:80], "", False)
     dur = time.monotonic() - t0
     invoked = "make bench" if os.environ.get("MAKELEVEL") else cmdline([sys.executable, *sys.argv])

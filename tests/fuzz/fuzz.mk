@@ -5,7 +5,7 @@
 #                     build/fuzz/corpus/NAME (never into git), crashes to
 #                     build/fuzz/artifacts/; figures in build/fuzz/summary.txt
 #   make fuzz-smoke   the same for FUZZ_SMOKE_SECONDS (10) each (CI)
-#   make fuzz-build   the four harnesses only
+#   make fuzz-build   the harnesses only
 # Both first replay tests/fuzz/regress/NAME/* (inputs that once failed).
 # fuzz-mavlink compiles many sources in one command: if a firmware header changes
 # meanwhile (another editor), its translation units could disagree on struct
@@ -26,7 +26,7 @@ FUZZ_SAN      := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recove
 # builds drop them.
 FUZZ_CFLAGS   := -std=c11 $(FUZZ_SAN) -Wall -Wextra -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE \
                  '-D_Static_assert(c,m)=struct fuzz_static_assert_dropped'
-FUZZ_NAMES    := xp_client sim_input mavlink params
+FUZZ_NAMES    := xp_client sim_input mavlink params plant
 FUZZ_BINS     := $(FUZZ_NAMES:%=$(FZ)/fuzz-%)
 FUZZ_TC_STAMP := $(FZ)/.toolchain
 
@@ -72,6 +72,15 @@ $(FZ)/fuzz-mavlink: tests/fuzz/fuzz_mavlink.c tests/app/stub_hal.h $(FUZZ_APP_SR
 FUZZ_SIM_SRC := sim/xplane_input.cpp sim/xplane_proto.cpp sim/counters.cpp
 $(FZ)/fuzz-sim_input: tests/fuzz/fuzz_sim_input.cpp $(FUZZ_SIM_SRC) $(wildcard sim/*.hpp) | $(FUZZ_TC_STAMP)
 	$(FUZZ_CXX) -std=c++17 $(FUZZ_SAN) -Wall -Wextra -Isim -o $@ tests/fuzz/fuzz_sim_input.cpp $(FUZZ_SIM_SRC)
+
+# the plant as octo-sil links it (sim/plant.h): everything of sim/ but main() and the server
+FUZZ_PLANT_SRC := $(filter-out sim/main.cpp sim/server.cpp,$(sort $(wildcard sim/*.cpp)))
+$(FZ)/fuzz-plant: tests/fuzz/fuzz_plant.cpp $(FUZZ_PLANT_SRC) firmware/hal/host/xp_proto.c $(wildcard sim/*.hpp sim/*.h) \
+		| $(FUZZ_TC_STAMP) $(LCM_STAMP)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -Ifirmware/hal/host -c firmware/hal/host/xp_proto.c -o $(FZ)/plant_xp_proto.o
+	$(FUZZ_CXX) -std=c++17 $(FUZZ_SAN) -Wall -Wextra -Isim -Ifirmware/hal/host -isystem $(EIGEN_INC) \
+	  -isystem $(GEN)/lcm -isystem $(LCM_INC) -o $@ tests/fuzz/fuzz_plant.cpp $(FUZZ_PLANT_SRC) \
+	  $(FZ)/plant_xp_proto.o $(LCM_LDFLAGS) -lm
 
 # $(call fuzz_run,SECONDS): regressions, then every harness for SECONDS; a
 # summary line per harness (executions, executions per second) in summary.txt.

@@ -77,7 +77,8 @@ struct host {
 };
 /* Sets h->hal to the host's functions with h as their context. */
 void host_hal_bind(struct host *h);
-/* One line "octo-fw: ..." on stderr. */
+/* One line "octo-fw: ..." on stderr: the console of param_file.c and xp_client.c.
+ * Defined by the program that links them (host_hal.c here, hal/sil/sil.c for octo-sil). */
 void host_report(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
 #endif /* OCTO_HOST_H */

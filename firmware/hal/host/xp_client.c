@@ -34,17 +34,29 @@ static void send_to_xp(struct xp_client *c, const uint8_t *buf, size_t len)
 {
 	if (!len)
 		return;
+	if (c->send) {
+		c->send(c->send_ctx, buf, len);
+		return;
+	}
 	/* UDP: a full socket buffer or an ICMP error from an absent X-Plane must
 	 * not stop the loop; the next frame sends again. */
 	(void)sendto(c->fd, buf, len, 0, (const struct sockaddr *)&c->xp, sizeof c->xp);
 }
 
+void xp_client_init(struct xp_client *c, const struct sockaddr_in *xplane, enum xp_actuation act)
+{
+	memset(c, 0, sizeof *c);
+	c->fd = -1;
+	c->xp = *xplane;
+	c->act = act;
+	c->stats.parts_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_POS |
+				HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
+}
+
 int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct sockaddr_in *xplane,
 		   enum xp_actuation act)
 {
-	memset(c, 0, sizeof *c);
-	c->xp = *xplane;
-	c->act = act;
+	xp_client_init(c, xplane, act);
 	c->fd = socket(AF_INET, SOCK_DGRAM, 0);
 	if (c->fd < 0) {
 		perror("octo-fw: X-Plane socket");
@@ -64,8 +76,6 @@ int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct socka
 		return -1;
 	}
 	(void)fcntl(c->fd, F_SETFL, fcntl(c->fd, F_GETFL) | O_NONBLOCK);
-	c->stats.parts_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_POS |
-				HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	return 0;
 }
 
@@ -211,20 +221,28 @@ int xp_client_receive(struct xp_client *c, struct hal_sensor_frame *frame, uint6
 	uint8_t buf[2048];
 	struct sockaddr_in from;
 	socklen_t fl = sizeof from;
+	memset(&from, 0, sizeof from);
 	ssize_t n = recvfrom(c->fd, buf, sizeof buf, 0, (struct sockaddr *)&from, &fl);
 	if (n < 0)
 		return -1;
-	if (fl < sizeof from || from.sin_family != AF_INET ||
-	    from.sin_addr.s_addr != c->xp.sin_addr.s_addr) {
+	if (fl < sizeof from)
+		from.sin_family = AF_UNSPEC;   /* not an IPv4 sender: foreign */
+	return xp_client_input(c, buf, (size_t)n, &from, frame, now_us);
+}
+
+int xp_client_input(struct xp_client *c, const uint8_t *buf, size_t n, const struct sockaddr_in *from,
+		    struct hal_sensor_frame *frame, uint64_t now_us)
+{
+	if (from->sin_family != AF_INET || from->sin_addr.s_addr != c->xp.sin_addr.s_addr) {
 		c->stats.dropped++;
 		c->stats.foreign++;
 		return 0;
 	}
-	if ((size_t)n >= sizeof buf) {   /* truncated: larger than any X-Plane message we take */
+	if (n >= 2048) {   /* truncated: larger than any X-Plane message we take */
 		c->stats.dropped++;
 		return 0;
 	}
-	switch (xp_decode(buf, (size_t)n, &c->msg)) {
+	switch (xp_decode(buf, n, &c->msg)) {
 	case XP_MSG_RREF:
 		for (size_t r = 0; r < c->msg.n; r++)
 			if (c->msg.rref[r].index == XP_RREF_VERSION_INDEX) {
@@ -332,11 +350,13 @@ void xp_client_actuate(struct xp_client *c, const float thr[HAL_ROTORS], uint64_
 		send_to_xp(c, buf, xp_encode_dref(buf, sizeof buf, 1.0f, OVERRIDE_REF));
 		c->last_override_us = now_us;
 	}
-	for (int i = 0; i < HAL_ROTORS; i++) {
-		char path[64];
-		snprintf(path, sizeof path, "sim/flightmodel/engine/ENGN_thro_use[%d]", i);
-		send_to_xp(c, buf, xp_encode_dref(buf, sizeof buf, t[i], path));
-	}
+	static const char *const thro_use[HAL_ROTORS] = {
+		"sim/flightmodel/engine/ENGN_thro_use[0]", "sim/flightmodel/engine/ENGN_thro_use[1]",
+		"sim/flightmodel/engine/ENGN_thro_use[2]", "sim/flightmodel/engine/ENGN_thro_use[3]",
+		"sim/flightmodel/engine/ENGN_thro_use[4]", "sim/flightmodel/engine/ENGN_thro_use[5]",
+		"sim/flightmodel/engine/ENGN_thro_use[6]", "sim/flightmodel/engine/ENGN_thro_use[7]"};
+	for (int i = 0; i < HAL_ROTORS; i++)
+		send_to_xp(c, buf, xp_encode_dref(buf, sizeof buf, t[i], thro_use[i]));
 }
 
 void xp_client_release(struct xp_client *c)

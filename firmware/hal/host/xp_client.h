@@ -41,7 +41,10 @@ enum xp_actuation { XP_ACT_DREF = 0, XP_ACT_DATA25 = 1 };
 #define XP_ROW_TORQUE 36
 
 struct xp_client {
-	int fd;
+	int fd;                           /* -1 without a socket (see send) */
+	/* Where requests go when set (in-process platforms); otherwise sendto(fd). */
+	void (*send)(void *ctx, const uint8_t *buf, size_t len);
+	void *send_ctx;
 	struct sockaddr_in xp;            /* where X-Plane receives (requests go there) */
 	enum xp_actuation act;
 	struct hal_plant_stats stats;
@@ -56,6 +59,8 @@ struct xp_client {
 	struct xp_msg_in msg;             /* decode buffer (large: kept off the stack) */
 };
 
+/* Sets the client up without a socket: requests go to c->send (set it after). */
+void xp_client_init(struct xp_client *c, const struct sockaddr_in *xplane, enum xp_actuation act);
 /* Opens the socket; returns 0 or -1 (reason on stderr). */
 int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct sockaddr_in *xplane,
 		   enum xp_actuation act);
@@ -63,6 +68,10 @@ int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct socka
  * into *frame (absent rows keep their previous values), 0 for any other
  * datagram (RREF, dropped), -1 when there was nothing to read. */
 int xp_client_receive(struct xp_client *c, struct hal_sensor_frame *frame, uint64_t now_us);
+/* The same for one datagram already received (n bytes from `from`): 1 for a DATA
+ * frame, 0 otherwise. n larger than any X-Plane message counts as dropped. */
+int xp_client_input(struct xp_client *c, const uint8_t *buf, size_t n, const struct sockaddr_in *from,
+		    struct hal_sensor_frame *frame, uint64_t now_us);
 /* Periodic duties: DSEL/USEL re-sends, RREF re-requests. */
 void xp_client_poll(struct xp_client *c, uint64_t now_us);
 void xp_client_actuate(struct xp_client *c, const float thr[HAL_ROTORS], uint64_t now_us);

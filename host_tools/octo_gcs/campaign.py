@@ -1,0 +1,498 @@
+"""``octo-gcs campaign SPEC.json``: Monte Carlo missions on a Dask cluster.
+
+One Dask task is one mission: ``octo-gcs mission`` run as a subprocess in a temporary directory
+on the worker, with the mission's vehicle file, seed, fault flags and parameters, under a
+timeout. The task never raises for a mission that goes wrong: a crash or a timeout comes back
+as a result with its reason. A worker that dies while running a task has the task retried by
+Dask (the scheduler's ``allowed-failures``, the spec's ``retries``); after that the mission is a
+row with the reason too.
+
+Results reach the client as they finish (``as_completed``); each one is appended to
+DIR/results.csv at once (flush and fsync), its report.json and vehicle file copied to
+DIR/missions/NNNN/ (with the last lines of a failed run's program logs). ``--resume`` skips the missions already in results.csv. At the end
+campaign_report writes campaign.json, campaign.md and the figures.
+
+octo-sim's fault flags reach the plant through a directory of wrappers given to the mission as
+``--build-dir``: octo-sim (and octo-sil) there run the real program with the fault flags added,
+octo-fw is a link to the real one. The same wrappers, written into missions/NNNN/sim/ for the
+worst missions, make their replay command one ``octo-gcs mission`` line.
+
+For tests only: the environment variable OCTO_CAMPAIGN_MISSION, when set, replaces the mission
+command (``python -m octo_gcs.cli mission``) by its words (split like a shell), e.g. a fake
+mission that crashes or hangs; the options given to it are the same.
+"""
+
+import csv
+import json
+import os
+import re
+import shlex
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from . import campaign_spec
+from .atomicfile import atomic_write
+from .campaign_spec import QUANTITIES, SpecError
+from .progress import Progress
+
+MISSION_ENV = "OCTO_CAMPAIGN_MISSION"
+STATUSES = ("pass", "fail", "crash", "timeout", "lost", "error")
+RAN = ("pass", "fail")   # the mission ran to its report (its checks passed or not)
+REJECTED_RE = re.compile(r"\bID (kf|ktau|Ixx|Iyy|Izz) .*\brejected: (.+?)\s*$")
+QKEY = {"kf": "kf", "ktau": "ktau", "Ixx": "ixx", "Iyy": "iyy", "Izz": "izz"}
+TAIL_LINES = 40
+
+
+class CampaignError(Exception):
+    def __init__(self, msg, status=1):
+        super().__init__(msg)
+        self.status = status
+
+
+# ---------------------------------------------------------------- the task (runs on a worker)
+def mission_command(override=None):
+    """The words that start a mission on this machine."""
+    if override:
+        return shlex.split(override)
+    return [sys.executable, "-m", "octo_gcs.cli", "mission"]
+
+
+def write_sim_wrappers(dest, build, fault_flags):
+    """dest/: octo-sim and octo-sil that run build's with `fault_flags` added; octo-fw a link."""
+    dest = Path(dest)
+    dest.mkdir(parents=True, exist_ok=True)
+    flags = " ".join(shlex.quote(f) for f in fault_flags)
+    for name in ("octo-sim", "octo-sil", "octo-fw"):
+        real = Path(build).resolve() / name
+        if not os.access(real, os.X_OK):
+            continue
+        target = dest / name
+        if target.exists() or target.is_symlink():
+            target.unlink()
+        if name == "octo-fw":
+            target.symlink_to(real)
+            continue
+        target.write_text(f"#!/bin/sh\n# {name} with the campaign's fault flags\n"
+                          f"exec {shlex.quote(str(real))} \"$@\" {flags}\n")
+        target.chmod(0o755)
+    return dest
+
+
+def _stop_group(p):
+    """SIGTERM to the mission's process group (it stops its programs), SIGKILL after 10 s."""
+    for sig, wait in ((signal.SIGTERM, 10.0), (signal.SIGKILL, 5.0)):
+        try:
+            os.killpg(p.pid, sig)
+        except ProcessLookupError:
+            return
+        try:
+            p.wait(timeout=wait)
+            return
+        except subprocess.TimeoutExpired:
+            continue
+
+
+def _tail(path, n=TAIL_LINES):
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            return f.read().splitlines()[-n:]
+    except OSError:
+        return []
+
+
+def run_mission(job):
+    """One mission; returns a dict (never raises for the mission's own failures)."""
+    import socket
+    t0 = time.monotonic()
+    res = {"index": job["index"], "seed": job["seed"], "status": "error", "reason": "", "report": None,
+           "output_tail": [], "rejections": {}, "host": socket.gethostname(), "wall_s": 0.0}
+    with tempfile.TemporaryDirectory(prefix=f"octo-campaign-{job['index']:04d}-") as tmp:
+        tmp = Path(tmp)
+        try:
+            (tmp / "vehicle.json").write_text(json.dumps(job["vehicle"], indent=1))
+            cmd = mission_command(job.get("mission_cmd"))
+            cmd += ["--vehicle", str(tmp / "vehicle.json"), "--seed", str(job["seed"]), "--out", str(tmp / "out"),
+                    "--no-plots", "--experiments", ",".join(map(str, job["experiments"])) or "none"]
+            for name, value in sorted(job["params"].items()):
+                cmd += ["--param", f"{name}={value!r}"]
+            if job["in_process"]:
+                cmd.append("--in-process")
+            if job["faults"]:
+                from .procs import build_dir
+                try:
+                    build = build_dir(None)
+                except Exception as e:   # GcsError: no build here
+                    raise RuntimeError(str(e)) from None
+                cmd += ["--build-dir", str(write_sim_wrappers(tmp / "sim", build, job["faults"]))]
+            log = tmp / "mission.log"
+            with open(log, "wb") as out:
+                p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                     cwd=tmp, start_new_session=True)
+                try:
+                    rc = p.wait(timeout=job["timeout"])
+                    timed_out = False
+                except subprocess.TimeoutExpired:
+                    timed_out = True
+                    _stop_group(p)
+                    rc = p.returncode
+                except BaseException:
+                    _stop_group(p)
+                    raise
+            tail = _tail(log)
+            res["output_tail"] = tail
+            # the firmware's rejection reasons: its status texts, in the mission's output (UDP plant)
+            # or in the program logs it wrote (octo-sil.log of the in-process plant)
+            logs = [log] + sorted((tmp / "out").glob("*.log")) + sorted((tmp / "out" / "failed-run").glob("*.log"))
+            for path in logs:
+                for line in _tail(path, 100000):
+                    m = REJECTED_RE.search(line)
+                    if m:
+                        res["rejections"][QKEY[m.group(1)]] = m.group(2)
+            # the reason: octo-gcs's own error line if it printed one, else the last line of output
+            said = [ln[len("octo-gcs: "):].strip().rstrip(":") for ln in tail if ln.startswith("octo-gcs: ")]
+            last = said[0] if said else next((ln.strip() for ln in reversed(tail) if ln.strip()), "")
+            failed_run = tmp / "out" / "failed-run"
+            if failed_run.is_dir():   # the failed run's program logs (tails): the worker's copy goes away
+                res["failed_logs"] = {p.name: "\n".join(_tail(p, 200)) + "\n"
+                                      for p in sorted(failed_run.glob("*.log"))}
+            rp = tmp / "out" / "report.json"
+            if timed_out:
+                res["status"] = "timeout"
+                res["reason"] = f"no end after {job['timeout']:g} s" + (f" (last output: {last})" if last else "")
+            elif rp.exists() and rc in (0, 1):
+                try:
+                    res["report"] = json.loads(rp.read_text())
+                    res["status"] = "pass" if rc == 0 else "fail"
+                    if rc == 1:
+                        failed = [c["check"] for c in res["report"].get("checks", [])
+                                  if not c.get("ok") and not c.get("warning_only")]
+                        res["reason"] = "failed checks: " + "; ".join(failed) if failed else "exit status 1"
+                except (ValueError, OSError) as e:
+                    res["status"], res["reason"] = "crash", f"unreadable report.json: {e}"
+            else:
+                res["status"] = "crash"
+                why = f"killed by signal {-rc}" if rc < 0 else f"exit status {rc}"
+                res["reason"] = why + (f": {last}" if last else "")
+        except Exception as e:
+            res["status"], res["reason"] = "error", f"{type(e).__name__}: {e}"
+    res["wall_s"] = round(time.monotonic() - t0, 3)
+    return res
+
+
+# ---------------------------------------------------------------- results.csv
+def csv_columns(spec):
+    draw_cols = [path for path, *_ in campaign_spec._walk(spec)]
+    cols = ["index", "seed", "status", "reason", "wall_s", "host"] + draw_cols
+    for q in QUANTITIES:
+        cols += [f"{q}_truth", f"{q}_estimate", f"{q}_sd", f"{q}_error_pct", f"{q}_accepted"]
+    return cols + ["rejection_reasons", "failed_checks"]
+
+
+def result_row(res, draws):
+    row = {"index": res["index"], "seed": res["seed"], "status": res["status"], "reason": res["reason"],
+           "wall_s": res["wall_s"], "host": res.get("host", "")}
+    row.update({k: repr(v) if isinstance(v, float) else v for k, v in draws.items()})
+    rep = res.get("report") or {}
+    params = rep.get("parameters", {})
+    for q in QUANTITIES:
+        r = params.get(q) or {}
+        for field in ("truth", "estimate", "sd", "error_pct"):
+            v = r.get(field)
+            row[f"{q}_{field}"] = "" if v is None else repr(float(v))
+        row[f"{q}_accepted"] = "" if not r or r.get("estimate") is None else int(bool(r.get("accepted")))
+    row["rejection_reasons"] = "; ".join(f"{q}: {why}" for q, why in sorted(res.get("rejections", {}).items()))
+    row["failed_checks"] = "; ".join(c["check"] for c in rep.get("checks", [])
+                                     if not c.get("ok") and not c.get("warning_only"))
+    return row
+
+
+def read_results(path, columns):
+    """Complete rows of results.csv (a last line cut short by a crash is dropped and the file
+    rewritten without it). Raises CampaignError if its columns are not `columns`."""
+    if not path.exists():
+        return []
+    with open(path, newline="", encoding="utf-8") as f:
+        text = f.read()
+    rows = list(csv.reader(text.splitlines(keepends=True)))
+    if not rows:
+        return []
+    if rows[0] != columns:
+        raise CampaignError(f"{path}: its columns are not this spec's (another campaign?): choose another --out",
+                            status=2)
+    good = [r for r in rows[1:] if len(r) == len(columns)]
+    complete = text.endswith("\n")
+    if not complete and good and len(good) == len(rows) - 1:
+        good = good[:-1]   # the last row has all its fields but no line end: it may be cut short
+    if len(good) != len(rows) - 1 or not complete:
+        _rewrite(path, columns, good)
+    return [dict(zip(columns, r)) for r in good]
+
+
+def _rewrite(path, columns, rows):
+    import io
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(columns)
+    w.writerows(rows)
+    atomic_write(path, buf.getvalue())
+
+
+class ResultsFile:
+    """results.csv opened for appending; every row is flushed and fsynced at once."""
+
+    def __init__(self, path, columns):
+        new = not path.exists() or path.stat().st_size == 0
+        self.f = open(path, "a", newline="", encoding="utf-8")
+        self.w = csv.DictWriter(self.f, fieldnames=columns, lineterminator="\n")
+        if new:
+            self.w.writeheader()
+            self._sync()
+
+    def _sync(self):
+        self.f.flush()
+        os.fsync(self.f.fileno())
+
+    def append(self, row):
+        self.w.writerow(row)
+        self._sync()
+
+    def close(self):
+        self.f.close()
+
+
+# ---------------------------------------------------------------- the client
+def mission_has_in_process(cmd):
+    """True when this `octo-gcs mission` takes --in-process (asks its --help)."""
+    try:
+        p = subprocess.run(cmd + ["--help"], capture_output=True, text=True, timeout=60)
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return "--in-process" in p.stdout
+
+
+def replay_command(out, res_index, seed, spec, draws_, faults, params, build=None):
+    """The one `octo-gcs mission` line that flies mission `res_index` again (its files are in
+    DIR/missions/NNNN/; with faults, the wrappers there carry the fault flags)."""
+    d = Path(out) / "missions" / f"{res_index:04d}"
+    cmd = ["octo-gcs", "mission", "--vehicle", str(d / "vehicle.json"), "--seed", str(seed)]
+    if spec["experiments"] != [6]:
+        cmd += ["--experiments", ",".join(map(str, spec["experiments"])) or "none"]
+    for name, value in sorted(params.items()):
+        cmd += ["--param", f"{name}={value!r}"]
+    if faults and build is not None:
+        write_sim_wrappers(d / "sim", build, faults)
+        cmd += ["--build-dir", str(d / "sim")]
+    return " ".join(shlex.quote(c) for c in cmd)
+
+
+def _fmt_minutes(s):
+    if s is None:
+        return "?"
+    if s < 90:
+        return f"{s:.0f} s"
+    if s < 5400:
+        return f"{s / 60:.0f} min"
+    return f"{s / 3600:.1f} h"
+
+
+def _allowed_failures(dask_scheduler=None):
+    return dask_scheduler.allowed_failures
+
+
+def _start_cluster(args, spec, prog):
+    import logging
+    import dask
+    from dask.distributed import Client, LocalCluster
+    # worker-saturation 1.0: a worker holds only the mission it runs, so a worker that dies takes
+    # no queued mission with it (Dask counts a death against every task the worker held)
+    dask.config.set({"distributed.scheduler.allowed-failures": spec["retries"],
+                     "distributed.scheduler.worker-saturation": 1.0})
+    if args.scheduler:
+        try:
+            client = Client(args.scheduler, timeout=30)
+        except (OSError, TimeoutError) as e:
+            raise CampaignError(f"cannot reach the Dask scheduler {args.scheduler}: {e}") from None
+        n = len(client.scheduler_info().get("workers", {}))
+        try:   # the scheduler's own retry count (its configuration, not this client's)
+            retries = int(client.run_on_scheduler(_allowed_failures))
+        except Exception:
+            retries = None
+        prog.say(f"campaign: Dask cluster {args.scheduler}, {n} workers")
+        return client, None, n, retries
+    n = args.workers or os.cpu_count() or 1
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                           memory_limit=0, silence_logs=logging.ERROR)
+    client = Client(cluster)
+    prog.say(f"campaign: local Dask cluster of {n} worker processes")
+    return client, cluster, n, spec["retries"]
+
+
+def run(args):
+    """The command; returns the exit status."""
+    from . import campaign_report
+    prog = Progress(stream=sys.stderr)
+    try:
+        spec = campaign_spec.load(args.spec)
+        campaign_spec.check_all_draws(spec)
+    except SpecError as e:
+        print(f"octo-gcs campaign: {e}", file=sys.stderr)
+        return 2
+    if args.workers is not None and args.workers < 1:
+        print("octo-gcs campaign: --workers must be >= 1", file=sys.stderr)
+        return 2
+    out = Path(args.out)
+    try:
+        return _run(args, spec, out, prog, campaign_report)
+    except CampaignError as e:
+        prog.done()
+        print(f"octo-gcs campaign: {e}", file=sys.stderr)
+        return e.status
+
+
+def _run(args, spec, out, prog, campaign_report):
+    columns = csv_columns(spec)
+    results = out / "results.csv"
+    spec_copy = out / "spec.json"
+    spec_text = json.dumps(spec, indent=1, sort_keys=True) + "\n"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "missions").mkdir(exist_ok=True)
+    except OSError as e:
+        raise CampaignError(f"cannot write {out}: {e.strerror}", status=2) from None
+    if results.exists() and not args.resume:
+        raise CampaignError(f"{results} exists: add --resume to go on with that campaign, or choose another --out",
+                            status=2)
+    if args.resume and spec_copy.exists() and spec_copy.read_text() != spec_text:
+        raise CampaignError(f"--resume: {args.spec} is not the spec {out} was started with ({spec_copy})", status=2)
+    atomic_write(spec_copy, spec_text)
+    done_rows = read_results(results, columns) if args.resume else []
+    done = {int(r["index"]) for r in done_rows}
+    todo = [i for i in range(spec["missions"]) if i not in done]
+    total = spec["missions"]
+
+    override = os.environ.get(MISSION_ENV) or None
+    cmd = mission_command(override)
+    in_process = False
+    if spec["plant"] == "in-process" and todo:
+        in_process = mission_has_in_process(cmd)
+        if not in_process:
+            prog.say("campaign: the spec asks for the in-process plant, but this octo-gcs mission has no "
+                     "--in-process: missions use the UDP plant (octo-sim + octo-fw)")
+    plant = "in-process (octo-sil)" if in_process else "udp (octo-sim + octo-fw)"
+    prog.say(f"campaign {spec['name']}: {total} missions, seeds {spec['seed']}..{spec['seed'] + total - 1}, "
+             f"{len(done)} already in {results}, plant {plant}")
+
+    inputs = {}
+    jobs = []
+    for i in todo:
+        seed, d, vehicle, faults, params = campaign_spec.mission_inputs(spec, i)
+        inputs[i] = d
+        jobs.append({"index": i, "seed": seed, "vehicle": vehicle, "faults": faults, "params": params,
+                     "experiments": spec["experiments"], "timeout": float(spec["timeout"]),
+                     "in_process": in_process, "mission_cmd": override})
+
+    t0 = time.monotonic()
+    n_new = failures = 0
+    n_workers = 0
+    failures += sum(1 for r in done_rows if r["status"] not in RAN)
+    t_run = None   # from the first submission: the missions' own rate, without the cluster's start
+    if jobs:
+        client, cluster, n_workers, retries = _start_cluster(args, spec, prog)
+        t_run = time.monotonic()
+        rf = ResultsFile(results, columns)
+        futures = []
+        from .procs import Terminated, signals_as_exceptions
+        try:
+            with signals_as_exceptions():
+                from dask.distributed import as_completed
+                from distributed.scheduler import KilledWorker
+                import uuid
+                tag = uuid.uuid4().hex[:8]
+                futures = [client.submit(run_mission, j, key=f"mission-{j['index']:05d}-{tag}", pure=False)
+                           for j in jobs]
+                by_key = {f.key: j for f, j in zip(futures, jobs)}
+                for fut in as_completed(futures):
+                    j = by_key[fut.key]
+                    if fut.status == "error":
+                        exc = fut.exception()
+                        if isinstance(exc, KilledWorker):
+                            why = (f"lost: the worker running it died {retries + 1} times (Dask retried it "
+                                   f"{retries} times)" if retries is not None else
+                                   f"lost: the workers running it died: {str(exc).splitlines()[0]}")
+                            status = "lost"
+                        else:
+                            why, status = f"{type(exc).__name__}: {exc}", "error"
+                        res = {"index": j["index"], "seed": j["seed"], "status": status, "reason": why,
+                               "wall_s": "", "host": ""}
+                    elif fut.status == "cancelled":
+                        res = {"index": j["index"], "seed": j["seed"], "status": "lost",
+                               "reason": "cancelled by the cluster", "wall_s": "", "host": ""}
+                    else:
+                        res = fut.result()
+                    fut.release()
+                    _keep_mission(out, res, j)
+                    rf.append(result_row(res, inputs[j["index"]]))
+                    n_new += 1
+                    if res["status"] not in RAN:
+                        failures += 1
+                    el = time.monotonic() - t_run
+                    rate = n_new / el * 60.0 if el > 0 else 0.0
+                    left = (len(jobs) - n_new) / (rate / 60.0) if rate > 0 else None
+                    prog.update(f"campaign {spec['name']}: {len(done) + n_new}/{total} done, {failures} failed, "
+                                f"{rate:.1f} missions/min, {_fmt_minutes(left)} left", key=n_new)
+        except (KeyboardInterrupt, Terminated) as e:
+            prog.done()
+            how = "interrupted" if isinstance(e, KeyboardInterrupt) else f"stopped by {e}"
+            print(f"octo-gcs campaign: {how}; {len(done) + n_new} of {total} missions are in {results} "
+                  "(--resume goes on)", file=sys.stderr)
+            return 130 if isinstance(e, KeyboardInterrupt) else 143
+        finally:
+            rf.close()
+            for f in futures:
+                f.cancel()
+            client.close()
+            if cluster is not None:
+                cluster.close()
+        prog.done()
+    wall = time.monotonic() - t0
+    run_s = time.monotonic() - t_run if t_run is not None else 0.0
+    rows = read_results(results, columns)
+    from .procs import build_dir
+    try:
+        build = build_dir(None)
+    except Exception:
+        build = None
+    summary = campaign_report.write(out, spec, rows, columns, {
+        "missions_this_run": n_new, "wall_s": round(wall, 2), "missions_s": round(run_s, 2), "workers": n_workers,
+        "plant": plant, "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None},
+        replay=lambda idx, seed: _replay(out, spec, idx, seed, build))
+    for line in summary["lines"]:
+        print(line)
+    return 0 if summary["ok"] else 1
+
+
+def _replay(out, spec, idx, seed, build):
+    _seed, d, _vehicle, faults, params = campaign_spec.mission_inputs(spec, idx)
+    return replay_command(out, idx, seed, spec, d, faults, params, build)
+
+
+def _keep_mission(out, res, job):
+    """DIR/missions/NNNN/: vehicle.json, report.json (when the mission wrote one), mission.log (its
+    last lines of output)."""
+    d = out / "missions" / f"{job['index']:04d}"
+    d.mkdir(parents=True, exist_ok=True)
+    atomic_write(d / "vehicle.json", json.dumps(job["vehicle"], indent=1) + "\n")
+    if res.get("report") is not None:
+        atomic_write(d / "report.json", json.dumps(res["report"], indent=1) + "\n")
+    elif (d / "report.json").exists():
+        os.unlink(d / "report.json")
+    tail = res.get("output_tail") or []
+    atomic_write(d / "mission.log", "\n".join(tail) + ("\n" if tail else ""))
+    if res.get("failed_logs"):
+        (d / "failed-run").mkdir(exist_ok=True)
+        for name, text in res["failed_logs"].items():
+            atomic_write(d / "failed-run" / name, text)

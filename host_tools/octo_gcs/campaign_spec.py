@@ -1,0 +1,312 @@
+"""Campaign specifications (``octo-gcs campaign SPEC.json``): validation and draws.
+
+A spec is one JSON object::
+
+    {"name": "default", "missions": 100, "seed": 1,
+     "vehicle": {"kf": {"uniform": [16.8, 39.2]}, "inertia": [{"normal": [0.0628, 0.005]}, 0.0762, 0.1014],
+                 "noise": {"gyro": {"uniform": [0.005, 0.025]}}},
+     "faults": {"drop": {"choice": [0, 0.02]}},
+     "params": {"ID_INR_TIME": 20},
+     "experiments": [6], "plant": "in-process", "timeout": 600, "retries": 2,
+     "tolerance_pct": {"kf": 0.3}, "expect": {"k_f_error_pct": 0.3, "silently_wrong": 0}}
+
+A value is a number or a draw: ``{"uniform": [lo, hi]}``, ``{"loguniform": [lo, hi]}`` (0 < lo),
+``{"normal": [mean, sd]}`` or ``{"choice": [v1, v2, ...]}``. Mission i (0-based) flies with seed
+``seed + i``; every drawn value comes from its own generator seeded by (seed, i, the value's path),
+so a mission's draws depend on the spec alone, not on the order in which missions run, nor on
+which other keys the spec draws.
+
+Validation happens before anything runs; every error names the key (``vehicle.inertia[1]``).
+"""
+
+import json
+import math
+import re
+import zlib
+
+import numpy as np
+
+from .vehiclefile import DEFAULTS as VEHICLE_DEFAULTS
+
+DISTRIBUTIONS = ("uniform", "loguniform", "normal", "choice")
+
+# octo-sim's vehicle keys: scalars, per-element lists (their length) and the noise object
+VEHICLE_SCALARS = ("mass", "g", "arm_length", "kf", "ktau", "motor_tau", "delay", "thrust_curve",
+                   "kf_drift_per_min")
+VEHICLE_LISTS = {"inertia": 3, "rotor_scale": 8, "origin": 3}
+NOISE_KEYS = ("thrust", "torque", "gyro", "attitude_deg", "position")
+# the range octo-sim accepts for a vehicle value (checked on the spec's bounds and on every draw)
+VEHICLE_RANGE = {"mass": (0, None, False), "g": (0, None, False), "arm_length": (0, None, False),
+                 "kf": (0, None, False), "ktau": (0, None, False), "inertia": (0, None, False),
+                 "motor_tau": (0, None, True), "delay": (0, 10, True), "thrust_curve": (0, 1, True),
+                 "rotor_scale": (0, None, True), "kf_drift_per_min": (None, None, True),
+                 "origin": (None, None, True)}
+
+# octo-sim's fault injection flags: key -> (flag, integer, lo, hi)
+FAULTS = {"drop": ("--drop", False, 0.0, 1.0), "burst": ("--burst", True, 0, 1000000),
+          "burst_prob": ("--burst-prob", False, 0.0, 1.0),
+          "delay_frames": ("--delay-frames", True, 0, 100000),
+          "duplicate": ("--duplicate", False, 0.0, 1.0), "reorder": ("--reorder", False, 0.0, 1.0)}
+
+TOP_KEYS = ("name", "missions", "seed", "vehicle", "faults", "params", "experiments", "plant", "timeout",
+            "retries", "tolerance_pct", "expect")
+
+# the identified quantities (report.json's keys), their other names in `expect`, default tolerances
+QUANTITIES = ("kf", "ktau", "ixx", "iyy", "izz")
+ALIASES = {"kf": "kf", "k_f": "kf", "ktau": "ktau", "k_tau": "ktau", "ixx": "ixx", "i_x": "ixx",
+           "iyy": "iyy", "i_y": "iyy", "izz": "izz", "i_z": "izz"}
+DEFAULT_TOL_PCT = {"kf": 0.3, "ktau": 0.3, "ixx": 2.0, "iyy": 2.0, "izz": 2.0}
+EXPECT_SUFFIXES = ("_error_pct", "_acceptance")
+EXPECT_PLAIN = ("silently_wrong", "acceptance", "failures")
+PARAM_NAME = re.compile(r"^[A-Z][A-Z0-9_]{0,15}$")
+
+
+class SpecError(ValueError):
+    """A spec that cannot run; the message names the key."""
+
+
+def _is_num(x):
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _check_range(path, v, rng):
+    lo, hi, zero_ok = rng
+    if lo is not None and (v < lo or (v == lo and not zero_ok)):
+        raise SpecError(f"{path}: {v:g} is out of range (must be {'>=' if zero_ok else '>'} {lo:g})")
+    if hi is not None and v > hi:
+        raise SpecError(f"{path}: {v:g} is out of range (must be <= {hi:g})")
+
+
+def _check_value(path, v, rng=None, integer=False):
+    """A number or a valid draw; bounds of a uniform/loguniform/choice checked against rng."""
+    if _is_num(v):
+        if rng:
+            _check_range(path, v, rng)
+        if integer and v != int(v):
+            raise SpecError(f"{path}: must be a whole number, not {v}")
+        return
+    if not isinstance(v, dict):
+        raise SpecError(f"{path}: must be a number or a draw such as {{\"uniform\": [lo, hi]}}, not {json.dumps(v)}")
+    if len(v) != 1:
+        raise SpecError(f"{path}: a draw has exactly one of {', '.join(DISTRIBUTIONS)}; got {sorted(v)}")
+    (dist, a), = v.items()
+    if dist not in DISTRIBUTIONS:
+        raise SpecError(f"{path}: unknown distribution '{dist}' (known: {', '.join(DISTRIBUTIONS)})")
+    where = f"{path}.{dist}"
+    if dist == "choice":
+        if not isinstance(a, list) or not a:
+            raise SpecError(f"{where}: must be a non-empty list of numbers")
+        for j, x in enumerate(a):
+            if not _is_num(x):
+                raise SpecError(f"{where}[{j}]: must be a number, not {json.dumps(x)}")
+            _check_value(f"{where}[{j}]", x, rng, integer)
+        return
+    if not isinstance(a, list) or len(a) != 2 or not all(_is_num(x) for x in a):
+        raise SpecError(f"{where}: must be [two numbers], not {json.dumps(a)}")
+    lo, hi = a
+    if dist == "normal":
+        if hi < 0:
+            raise SpecError(f"{where}: the standard deviation {hi:g} is negative")
+        if rng and hi == 0:
+            _check_range(path, lo, rng)
+        return   # an unbounded draw: check_all_draws checks every value drawn
+    if hi < lo:
+        raise SpecError(f"{where}: empty range [{lo:g}, {hi:g}] (lo > hi)")
+    if dist == "loguniform" and lo <= 0:
+        raise SpecError(f"{where}: needs 0 < lo, got {lo:g}")
+    if rng:
+        _check_range(path, lo, rng)
+        _check_range(path, hi, rng)
+
+
+def _walk(spec):
+    """(path, value, rng, integer, target) of every value of the spec, in a fixed order.
+    target: ("vehicle", key, index or noise key or None) | ("faults", key) | ("params", name)."""
+    out = []
+    veh = spec.get("vehicle", {})
+    for k in sorted(veh):
+        if k in VEHICLE_LISTS:
+            for j, x in enumerate(veh[k]):
+                out.append((f"vehicle.{k}[{j}]", x, VEHICLE_RANGE[k], False, ("vehicle", k, j)))
+        elif k == "noise":
+            for nk in sorted(veh[k]):
+                out.append((f"vehicle.noise.{nk}", veh[k][nk], (0, None, True), False, ("vehicle", k, nk)))
+        else:
+            out.append((f"vehicle.{k}", veh[k], VEHICLE_RANGE[k], False, ("vehicle", k, None)))
+    for k in sorted(spec.get("faults", {})):
+        _flag, integer, lo, hi = FAULTS[k]
+        out.append((f"faults.{k}", spec["faults"][k], (lo, hi, True), integer, ("faults", k)))
+    for k in sorted(spec.get("params", {})):
+        out.append((f"params.{k}", spec["params"][k], None, False, ("params", k)))
+    return out
+
+
+def validate(spec):
+    """Checks a parsed spec; returns it with defaults filled in. Raises SpecError."""
+    if not isinstance(spec, dict):
+        raise SpecError("the spec must be one JSON object")
+    for k in spec:
+        if k not in TOP_KEYS:
+            raise SpecError(f"unknown key '{k}' (known: {', '.join(TOP_KEYS)})")
+    s = dict(spec)
+    s.setdefault("name", "campaign")
+    if not isinstance(s["name"], str) or not s["name"]:
+        raise SpecError("name: must be a non-empty string")
+    if "missions" not in s:
+        raise SpecError("missions: missing (the number of missions, >= 1)")
+    s.setdefault("seed", 1)
+    for k, lo in (("missions", 1), ("seed", 0)):
+        if not isinstance(s[k], int) or isinstance(s[k], bool) or s[k] < lo:
+            raise SpecError(f"{k}: must be a whole number >= {lo}, not {json.dumps(s[k])}")
+    if s["seed"] + s["missions"] > 2**31 - 1:
+        raise SpecError("seed: seed + missions must stay below 2^31")
+    for k in ("vehicle", "faults", "params", "tolerance_pct", "expect"):
+        s.setdefault(k, {})
+        if not isinstance(s[k], dict):
+            raise SpecError(f"{k}: must be an object")
+    for k, v in s["vehicle"].items():
+        if k == "noise":
+            if not isinstance(v, dict):
+                raise SpecError("vehicle.noise: must be an object of numbers or draws")
+            for nk in v:
+                if nk not in NOISE_KEYS:
+                    raise SpecError(f"vehicle.noise: unknown key '{nk}' (known: {', '.join(NOISE_KEYS)})")
+        elif k in VEHICLE_LISTS:
+            if not isinstance(v, list) or len(v) != VEHICLE_LISTS[k]:
+                raise SpecError(f"vehicle.{k}: must be a list of {VEHICLE_LISTS[k]} numbers or draws")
+        elif k not in VEHICLE_SCALARS:
+            known = sorted(set(VEHICLE_SCALARS) | set(VEHICLE_LISTS) | {"noise"})
+            raise SpecError(f"vehicle: unknown key '{k}' (known: {', '.join(known)})")
+    for k in s["faults"]:
+        if k not in FAULTS:
+            raise SpecError(f"faults: unknown key '{k}' (known: {', '.join(FAULTS)})")
+    for k in s["params"]:
+        if not PARAM_NAME.match(k):
+            raise SpecError(f"params: '{k}' is not a parameter name (capitals, digits, _; 16 characters at most)")
+        if k in ("VEH_MASS", "VEH_ARM_L"):
+            raise SpecError(f"params.{k}: set by the mission from the vehicle's mass and arm length; "
+                            "draw vehicle.mass / vehicle.arm_length instead")
+    for path, v, rng, integer, _t in _walk(s):
+        _check_value(path, v, rng, integer)
+    s.setdefault("experiments", [6])
+    e = s["experiments"]
+    if not isinstance(e, list) or not all(isinstance(x, int) and not isinstance(x, bool) and 1 <= x <= 6
+                                          for x in e):
+        raise SpecError(f"experiments: must be a list of experiment numbers 1..6 ([] only flies), not {json.dumps(e)}")
+    s.setdefault("plant", "in-process")
+    if s["plant"] not in ("in-process", "udp"):
+        raise SpecError(f"plant: must be \"in-process\" or \"udp\", not {json.dumps(s['plant'])}")
+    s.setdefault("timeout", 600)
+    if not _is_num(s["timeout"]) or s["timeout"] <= 0:
+        raise SpecError(f"timeout: must be a positive number of seconds, not {json.dumps(s['timeout'])}")
+    s.setdefault("retries", 2)
+    if not isinstance(s["retries"], int) or isinstance(s["retries"], bool) or s["retries"] < 0:
+        raise SpecError(f"retries: must be a whole number >= 0, not {json.dumps(s['retries'])}")
+    tol = dict(DEFAULT_TOL_PCT)
+    for k, v in s["tolerance_pct"].items():
+        q = ALIASES.get(k.lower())
+        if q is None:
+            raise SpecError(f"tolerance_pct: unknown parameter '{k}' (known: {', '.join(QUANTITIES)})")
+        if not _is_num(v) or v <= 0:
+            raise SpecError(f"tolerance_pct.{k}: must be a positive number")
+        tol[q] = float(v)
+    s["tolerance_pct"] = tol
+    for k, v in s["expect"].items():
+        expect_key(k)
+        if not _is_num(v) or v < 0:
+            raise SpecError(f"expect.{k}: must be a number >= 0")
+    return s
+
+
+def expect_key(k):
+    """(quantity or None, what) of an `expect` key; raises SpecError naming an unknown one."""
+    if k in EXPECT_PLAIN:
+        return None, k
+    for suf in EXPECT_SUFFIXES:
+        if k.endswith(suf):
+            q = ALIASES.get(k[:-len(suf)].lower())
+            if q:
+                return q, suf[1:]
+    raise SpecError(f"expect: unknown key '{k}' (known: PARAM_error_pct, PARAM_acceptance with PARAM one of "
+                    f"{', '.join(QUANTITIES)} or k_f, k_tau, I_x, I_y, I_z; {', '.join(EXPECT_PLAIN)})")
+
+
+def load(path):
+    """The validated spec of FILE. Raises SpecError."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+    except OSError as e:
+        raise SpecError(f"cannot read {path}: {e.strerror}") from None
+    try:
+        spec = json.loads(text)
+    except ValueError as e:
+        raise SpecError(f"{path}: not valid JSON: {e}") from None
+    try:
+        return validate(spec)
+    except SpecError as e:
+        raise SpecError(f"{path}: {e}") from None
+
+
+def _generator(seed, index, path):
+    return np.random.default_rng(np.random.SeedSequence([seed, index, zlib.crc32(path.encode())]))
+
+
+def _draw(path, v, rng_bounds, integer, gen):
+    if _is_num(v):
+        x = float(v)
+    else:
+        (dist, a), = v.items()
+        if dist == "uniform":
+            x = float(gen.uniform(a[0], a[1]))
+        elif dist == "loguniform":
+            x = float(math.exp(gen.uniform(math.log(a[0]), math.log(a[1]))))
+        elif dist == "normal":
+            x = float(gen.normal(a[0], a[1]))
+        else:
+            x = float(a[int(gen.integers(len(a)))])
+    if integer:
+        x = int(round(x))
+    if rng_bounds:
+        try:
+            _check_range(path, x, rng_bounds)
+        except SpecError as e:
+            raise SpecError(f"{e} (a draw of its normal distribution; narrow it)") from None
+    return x
+
+
+def draws(spec, index):
+    """Mission `index`'s values: {path: value} for every value of the spec (drawn or fixed)."""
+    return {path: _draw(path, v, rng, integer, _generator(spec["seed"], index, path))
+            for path, v, rng, integer, _t in _walk(spec)}
+
+
+def mission_inputs(spec, index):
+    """(seed, draws, vehicle dict for octo-sim, fault flags [str], params {NAME: value})."""
+    d = draws(spec, index)
+    vehicle, faults, params = {}, [], {}
+    for path, _v, _rng, _integer, target in _walk(spec):
+        x = d[path]
+        if target[0] == "vehicle":
+            _sec, key, sub = target
+            if key in VEHICLE_LISTS:
+                vehicle.setdefault(key, list(VEHICLE_DEFAULTS.get(key, [0.0] * VEHICLE_LISTS[key])))
+                vehicle[key][sub] = x
+            elif key == "noise":
+                vehicle.setdefault("noise", {})[sub] = x
+            else:
+                vehicle[key] = x
+        elif target[0] == "faults":
+            flag, integer, _lo, _hi = FAULTS[target[1]]
+            if x != 0 or target[1] == "burst_prob":   # 0 is octo-sim's "off" (burst_prob: never)
+                faults += [flag, str(int(x)) if integer else repr(x)]
+        else:
+            params[target[1]] = x
+    return spec["seed"] + index, d, vehicle, faults, params
+
+
+def check_all_draws(spec):
+    """Makes every mission's draws once, so that a normal draw out of its key's range is an error
+    before anything runs (cheap: no mission runs)."""
+    for i in range(spec["missions"]):
+        draws(spec, i)

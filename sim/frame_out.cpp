@@ -1,0 +1,69 @@
+// frame_out: the per-frame output and step of the plant (see frame_out.hpp).
+#include "frame_out.hpp"
+
+#include <cmath>
+
+#include "net.hpp"
+
+namespace sim {
+
+bool frame_data(const Options &o, const XpInput &in, const XpFrame &f, FaultChannel &faults, uint64_t n,
+                bool with_faults, std::vector<xp::Bytes> &out)
+{
+	if (!in.target_enabled)
+		return true;
+	std::vector<xp::DataRow> rows;
+	for (int r : xp_supported_rows())
+		if (in.selected[static_cast<size_t>(r)])
+			rows.push_back(xp_row(f, r, o.xplane_version));
+	if (rows.empty())
+		return true; // X-Plane sends nothing while no row is selected
+	xp::Bytes d = xp::encode_data(rows);
+	if (with_faults && o.faults.any()) {
+		std::vector<xp::Bytes> sent = faults.submit(n, std::move(d));
+		for (auto &b : sent)
+			out.push_back(std::move(b));
+		return !sent.empty();
+	}
+	out.push_back(std::move(d));
+	return true;
+}
+
+void rref_replies(const Options &o, XpInput &in, const XpFrame &f, Counters &c,
+                  std::vector<std::pair<sockaddr_in, xp::Bytes>> &out)
+{
+	if (in.subs.empty())
+		return;
+	std::vector<std::pair<sockaddr_in, std::vector<std::pair<int32_t, float>>>> groups;
+	for (auto &s : in.subs) {
+		s.phase += s.freq / o.rate;
+		if (s.phase < 1.0)
+			continue;
+		s.phase -= std::floor(s.phase);
+		float v = 0.0f;
+		if (!xp_dataref(f, s.path, o.xplane_version, in.override_on, in.thro_use, in.thro, v))
+			c.inc(Counters::RrefUnknown);
+		size_t g = 0;
+		while (g < groups.size() && !same_addr(groups[g].first, s.to))
+			g++;
+		if (g == groups.size())
+			groups.push_back({s.to, {}});
+		groups[g].second.push_back({s.index, v});
+	}
+	for (const auto &g : groups)
+		for (auto &b : xp::encode_rref_replies(g.second))
+			out.push_back({g.first, std::move(b)});
+}
+
+void advance_frame(const Options &o, Model &m, XpInput &in, uint64_t &n, XpFrame &f, TruthPublisher &truth)
+{
+	std::array<double, kRotors> u = in.effective_throttle();
+	m.command(u);
+	in.cmd_mask = 0;
+	n++;
+	m.advance_to(static_cast<double>(n) / o.rate);
+	f = xp_measure(m, u, o.seed, n);
+	truth.publish(m, n);
+}
+
+} // namespace sim

@@ -1,0 +1,160 @@
+"""octo-gcs campaign's spec: validation errors that name the key, reproducible draws, the mission
+inputs made from them (vehicle file, fault flags, parameters), the fault-flag wrappers."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from octo_gcs import campaign, campaign_spec as cs
+
+REPO = Path(__file__).resolve().parents[2]
+DEFAULT = REPO / "host_tools" / "campaigns" / "default.json"
+
+
+def spec(**kw):
+    s = {"missions": 5, "seed": 7, "vehicle": {"kf": {"uniform": [20, 30]}}}
+    s.update(kw)
+    return s
+
+
+@pytest.mark.parametrize("bad, names", [
+    ({"missions": 3, "vehicles": {}}, "'vehicles'"),
+    ({"missions": 3, "vehicle": {"kff": 3}}, "'kff'"),
+    ({"missions": 3, "vehicle": {"kf": {"uniform": [30, 20]}}}, "vehicle.kf.uniform: empty range"),
+    ({"missions": 3, "vehicle": {"kf": {"gauss": [30, 2]}}}, "vehicle.kf: unknown distribution 'gauss'"),
+    ({"missions": 3, "vehicle": {"kf": {"uniform": [1]}}}, "vehicle.kf.uniform"),
+    ({"missions": 3, "vehicle": {"kf": {"uniform": [-1, 3]}}}, "vehicle.kf"),
+    ({"missions": 3, "vehicle": {"mass": {"loguniform": [0, 3]}}}, "vehicle.mass.loguniform: needs 0 < lo"),
+    ({"missions": 3, "vehicle": {"inertia": [0.1, {"normal": [0.07, -1]}, 0.1]}}, "vehicle.inertia[1].normal"),
+    ({"missions": 3, "vehicle": {"inertia": [0.1, 0.1]}}, "vehicle.inertia"),
+    ({"missions": 3, "vehicle": {"rotor_scale": [1] * 7 + [{"choice": []}]}}, "vehicle.rotor_scale[7].choice"),
+    ({"missions": 3, "vehicle": {"noise": {"gyros": 0.1}}}, "'gyros'"),
+    ({"missions": 3, "vehicle": {"thrust_curve": {"uniform": [0, 1.5]}}}, "vehicle.thrust_curve"),
+    ({"missions": 3, "faults": {"loss": 0.1}}, "faults: unknown key 'loss'"),
+    ({"missions": 3, "faults": {"drop": {"uniform": [0, 2]}}}, "faults.drop"),
+    ({"missions": 3, "faults": {"delay_frames": 1.5}}, "faults.delay_frames"),
+    ({"missions": 3, "params": {"id_inr_time": 20}}, "'id_inr_time'"),
+    ({"missions": 3, "params": {"VEH_MASS": 2}}, "params.VEH_MASS"),
+    ({"missions": 0}, "missions"),
+    ({"seed": 3}, "missions: missing"),
+    ({"missions": 3, "plant": "tcp"}, "plant"),
+    ({"missions": 3, "expect": {"kf_error": 0.3}}, "expect: unknown key 'kf_error'"),
+    ({"missions": 3, "tolerance_pct": {"mass": 1}}, "tolerance_pct: unknown parameter 'mass'"),
+    ({"missions": 3, "timeout": -1}, "timeout"),
+])
+def test_spec_errors_name_the_key(bad, names):
+    with pytest.raises(cs.SpecError) as e:
+        cs.validate(bad)
+    assert names in str(e.value)
+
+
+def test_a_normal_draw_out_of_range_is_an_error_before_anything_runs():
+    s = cs.validate({"missions": 200, "vehicle": {"mass": {"normal": [0.5, 1.0]}}})
+    with pytest.raises(cs.SpecError, match=r"vehicle.mass.*narrow it"):
+        cs.check_all_draws(s)
+
+
+def test_cli_bad_spec_exit_status_2_names_the_key(tmp_path):
+    p = tmp_path / "s.json"
+    p.write_text(json.dumps({"missions": 2, "vehicle": {"arm": {"uniform": [0.2, 0.3]}}}))
+    r = subprocess.run([sys.executable, "-m", "octo_gcs.cli", "campaign", str(p), "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2
+    assert "unknown key 'arm'" in r.stderr and str(p) in r.stderr
+    assert not (tmp_path / "o").exists()   # refused before anything was written
+    p.write_text("{not json")
+    r = subprocess.run([sys.executable, "-m", "octo_gcs.cli", "campaign", str(p)], capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 2 and "not valid JSON" in r.stderr
+
+
+def test_same_spec_same_draws_and_missions_differ():
+    s = cs.validate(json.loads(DEFAULT.read_text()))
+    s2 = cs.validate(json.loads(DEFAULT.read_text()))
+    a = [cs.draws(s, i) for i in range(s["missions"])]
+    b = [cs.draws(s2, i) for i in reversed(range(s["missions"]))][::-1]   # order of drawing is irrelevant
+    assert a == b
+    kf = [d["vehicle.kf"] for d in a]
+    assert len(set(kf)) == len(kf)
+    lo, hi = s["vehicle"]["kf"]["uniform"]
+    assert all(lo <= x <= hi for x in kf)
+    # another seed: other draws
+    s3 = cs.validate(dict(json.loads(DEFAULT.read_text()), seed=s["seed"] + 1))
+    assert cs.draws(s3, 0)["vehicle.kf"] != a[0]["vehicle.kf"]
+    # a key added to the spec does not move the draws of the others
+    s4 = cs.validate(dict(json.loads(DEFAULT.read_text()), params={"ID_INR_TIME": {"uniform": [10, 20]}}))
+    d4 = cs.draws(s4, 3)
+    assert {k: v for k, v in d4.items() if not k.startswith("params.")} == a[3]
+
+
+def test_distributions_have_their_shape():
+    n = 4000
+    s = cs.validate({"missions": n, "seed": 3, "vehicle": {
+        "kf": {"normal": [28.0, 1.0]}, "ktau": {"loguniform": [0.1, 1.0]},
+        "mass": {"uniform": [1.0, 4.0]}, "delay": {"choice": [0.0, 0.011, 0.022]}}})
+    d = [cs.draws(s, i) for i in range(n)]
+    kf = np.array([x["vehicle.kf"] for x in d])
+    assert abs(kf.mean() - 28.0) < 0.1 and abs(kf.std() - 1.0) < 0.06
+    lk = np.log10([x["vehicle.ktau"] for x in d])
+    assert lk.min() >= -1 and lk.max() <= 0 and abs(np.mean(lk < -0.5) - 0.5) < 0.04
+    m = np.array([x["vehicle.mass"] for x in d])
+    assert m.min() >= 1 and m.max() <= 4 and abs(m.mean() - 2.5) < 0.06
+    assert {x["vehicle.delay"] for x in d} == {0.0, 0.011, 0.022}
+
+
+def test_mission_inputs_vehicle_faults_params():
+    s = cs.validate({"missions": 3, "seed": 40, "vehicle": {
+        "inertia": [0.05, {"uniform": [0.06, 0.08]}, 0.1], "noise": {"gyro": {"uniform": [0.005, 0.02]}},
+        "rotor_scale": [1, 1, {"uniform": [0.85, 1.0]}, 1, 1, 1, 1, 1]},
+        "faults": {"drop": 0.02, "delay_frames": {"choice": [1, 2]}, "duplicate": 0},
+        "params": {"ID_INR_TIME": {"choice": [15, 25]}}})
+    seed, d, veh, faults, params = cs.mission_inputs(s, 2)
+    assert seed == 42
+    assert veh["inertia"][0] == 0.05 and veh["inertia"][2] == 0.1 and 0.06 <= veh["inertia"][1] <= 0.08
+    assert veh["rotor_scale"][2] == d["vehicle.rotor_scale[2]"] and veh["rotor_scale"][0] == 1.0
+    assert set(veh["noise"]) == {"gyro"}
+    assert faults[:2] == ["--delay-frames", str(int(d["faults.delay_frames"]))]
+    assert faults[2:] == ["--drop", "0.02"]   # duplicate 0: octo-sim's default, no flag
+    assert params == {"ID_INR_TIME": d["params.ID_INR_TIME"]} and params["ID_INR_TIME"] in (15.0, 25.0)
+    # the vehicle file made from the draws is one octo-gcs (and octo-sim) accept
+    from octo_gcs import vehiclefile
+    vehiclefile.parse(json.dumps(veh))
+
+
+def test_fault_wrappers_add_the_flags(tmp_path):
+    build = tmp_path / "build"
+    build.mkdir()
+    for name in ("octo-sim", "octo-fw"):
+        p = build / name
+        p.write_text(f"#!/bin/sh\necho {name} \"$@\"\n")
+        p.chmod(0o755)
+    d = campaign.write_sim_wrappers(tmp_path / "w", build, ["--drop", "0.02", "--delay-frames", "1"])
+    out = subprocess.run([str(d / "octo-sim"), "--seed", "3"], capture_output=True, text=True).stdout
+    assert out.split() == ["octo-sim", "--seed", "3", "--drop", "0.02", "--delay-frames", "1"]
+    out = subprocess.run([str(d / "octo-fw"), "--x"], capture_output=True, text=True).stdout
+    assert out.split() == ["octo-fw", "--x"]
+    assert not (d / "octo-sil").exists()   # only what the build has
+
+
+def test_results_csv_drops_a_row_cut_short(tmp_path):
+    s = cs.validate(spec())
+    cols = campaign.csv_columns(s)
+    path = tmp_path / "results.csv"
+    rf = campaign.ResultsFile(path, cols)
+    for i in range(2):
+        res = {"index": i, "seed": 7 + i, "status": "crash", "reason": "x, \"quoted\"", "wall_s": 1.0, "host": "h"}
+        rf.append(campaign.result_row(res, cs.draws(s, i)))
+    rf.close()
+    assert [r["index"] for r in campaign.read_results(path, cols)] == ["0", "1"]
+    with open(path, "a") as f:
+        f.write("2,9,pass,,1.0")   # a client killed while writing
+    rows = campaign.read_results(path, cols)
+    assert [r["index"] for r in rows] == ["0", "1"] and rows[1]["reason"] == "x, \"quoted\""
+    assert path.read_text().endswith("\n") and path.read_text().count("\n") == 3
+    with pytest.raises(campaign.CampaignError, match="columns"):
+        campaign.read_results(path, cols[:-1])
