@@ -102,8 +102,11 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		}
 		*comp(&tau_out, i) = tau;
 
-		/* conditional integration: small error, torque not saturated */
-		if (kint > SC_ZERO && !sat && sc_abs(ei) < p->int_err_max_rad) {
+		/* conditional integration: small error, torque not saturated here or in the
+		 * allocation in the direction the integral would grow */
+		bool cut = (r > SC_ZERO && (in->alloc_short_pos >> i & 1u)) ||
+			   (r < SC_ZERO && (in->alloc_short_neg >> i & 1u));
+		if (kint > SC_ZERO && !sat && !cut && sc_abs(ei) < p->int_err_max_rad) {
 			scalar_t lim = sc_div(int_tau_max, kint); /* keeps the state bounded too */
 			*int_r = sc_clamp(sc_add(*int_r, sc_mul(r, dt)), sc_neg(lim), lim);
 		} else if (kint <= SC_ZERO) {

@@ -17,7 +17,10 @@
  * (its slow pole near -ki nearly cancels its zero at -ki: little overshoot) while a
  * constant disturbance torque is removed with time constant ~1/ki. It accumulates only
  * while |e| < int_err_max and the axis is not saturated; its torque is clamped to
- * +/-int_tau_max.
+ * +/-int_tau_max. Anti-windup from the allocator (as PX4's rate controller takes its
+ * allocator's saturation): an axis whose torque the allocation could not deliver in one
+ * direction on the previous step (alloc_short_pos / _neg, e.g. from mixer_shortfall) does
+ * not integrate further in that direction; it may unwind.
  *
  * Units: rad, rad/s, kg m^2, N m, s. Frames: q_*_b2i map body to inertial (quat.h);
  * rates and torques in body axes (X forward, Y left, Z up).
@@ -60,6 +63,9 @@ struct att_ctrl_input {
 	struct vec3 rate_b_rps;   /* measured body rate, rad/s */
 	struct vec3 inertia_kgm2; /* current Ixx, Iyy, Izz, kg m^2 (> 0) */
 	scalar_t dt_s;            /* time since the last update, s (for the integral) */
+	uint8_t alloc_short_pos;  /* bit i (0 x, 1 y, 2 z): the allocation delivered less torque
+				   * than demanded on the previous step (0 if unknown) */
+	uint8_t alloc_short_neg;  /* bit i: it delivered more (less negative) than demanded */
 };
 
 struct att_ctrl {
