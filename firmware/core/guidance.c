@@ -3,17 +3,18 @@
 
 struct guid_params guid_params_default(void)
 {
-	struct guid_params p;
-	p.tko_vel_mps = SC(GUID_DEFAULT_TKO_VEL_MPS);
-	p.land_vel_mps = SC(GUID_DEFAULT_LAND_VEL_MPS);
-	p.touch_down_s = SC(GUID_DEFAULT_TOUCH_DOWN_S);
-	p.profile_acc_mps2 = SC(0.5);
-	p.hold_entry_m = SC(0.05);
-	p.hold_entry_mps = SC(0.1);
-	p.landed_h_m = SC(0.2);
-	p.landed_vz_mps = SC(0.25);
-	p.level_h_m = SC(0.3);
-	p.land_floor_m = SC(1.0);
+	const struct guid_params p = {
+		.tko_vel_mps = SC(GUID_DEFAULT_TKO_VEL_MPS),
+		.land_vel_mps = SC(GUID_DEFAULT_LAND_VEL_MPS),
+		.touch_down_s = SC(GUID_DEFAULT_TOUCH_DOWN_S),
+		.profile_acc_mps2 = SC(0.5),
+		.hold_entry_m = SC(0.05),
+		.hold_entry_mps = SC(0.1),
+		.landed_h_m = SC(0.2),
+		.landed_vz_mps = SC(0.25),
+		.level_h_m = SC(0.3),
+		.land_floor_m = SC(1.0),
+	};
 	return p;
 }
 

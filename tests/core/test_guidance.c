@@ -10,25 +10,36 @@
 
 static scalar_t s(double x) { return sc_from_float((float)x); }
 
-static struct guid_params random_params(struct unit_rng *g)
+/* one random case: rates, touch-down time and profile acceleration, the ground's height, a
+ * take-off height in [h_min, 30] m and a time step */
+struct rcase {
+	struct guid_params p;
+	double ground, h, dt;
+};
+
+static struct rcase random_case(struct unit_rng *g, double h_min)
 {
-	struct guid_params p = guid_params_default();
-	p.tko_vel_mps = s(unit_rand_uniform(g, 0.3, 4.0));
-	p.land_vel_mps = s(unit_rand_uniform(g, 0.2, 2.5));
-	p.touch_down_s = s(unit_rand_uniform(g, 0.3, 3.0));
-	p.profile_acc_mps2 = s(unit_rand_uniform(g, 0.3, 2.0));
-	return p;
+	struct rcase c;
+	c.p = guid_params_default();
+	c.p.tko_vel_mps = s(unit_rand_uniform(g, 0.3, 4.0));
+	c.p.land_vel_mps = s(unit_rand_uniform(g, 0.2, 2.5));
+	c.p.touch_down_s = s(unit_rand_uniform(g, 0.3, 3.0));
+	c.p.profile_acc_mps2 = s(unit_rand_uniform(g, 0.3, 2.0));
+	c.ground = unit_rand_uniform(g, -20, 50);
+	c.h = unit_rand_uniform(g, h_min, 30);
+	c.dt = unit_rand_uniform(g, 0.008, 0.014);
+	return c;
 }
 
 UNIT_TEST(guid_takeoff_profile)
 {
 	struct unit_rng g = { 0x7a6eULL };
 	for (int run = 0; run < 40; run++) {
-		struct guid_params p = random_params(&g);
+		struct rcase rc = random_case(&g, 0.5);
+		const struct guid_params p = rc.p;
+		const double ground = rc.ground, h = rc.h, dt = rc.dt;
 		struct guid gd;
 		guid_init(&gd, &p);
-		double ground = unit_rand_uniform(&g, -20, 50), h = unit_rand_uniform(&g, 0.5, 30);
-		double dt = unit_rand_uniform(&g, 0.008, 0.014);
 		scalar_t pos[3] = { s(unit_rand_uniform(&g, -9, 9)), s(unit_rand_uniform(&g, -9, 9)), s(ground) };
 		guid_arm(&gd, pos, s(0.4));
 		guid_ground(&gd, s(ground), true);
@@ -108,11 +119,11 @@ UNIT_TEST(guid_landing)
 {
 	struct unit_rng g = { 0x1a4dULL };
 	for (int run = 0; run < 40; run++) {
-		struct guid_params p = random_params(&g);
+		struct rcase rc = random_case(&g, 1.0);
+		const struct guid_params p = rc.p;
+		const double ground = rc.ground, h = rc.h, dt = rc.dt, vl = d(p.land_vel_mps);
 		struct guid gd;
 		guid_init(&gd, &p);
-		double ground = unit_rand_uniform(&g, -20, 50), h = unit_rand_uniform(&g, 1, 30);
-		double dt = unit_rand_uniform(&g, 0.008, 0.014), vl = d(p.land_vel_mps);
 		double q = OCTO_FIXED ? 2e-4 : 1e-5;
 		scalar_t pos[3] = { SC_ZERO, SC_ZERO, s(ground) };
 		guid_arm(&gd, pos, SC_ZERO);
