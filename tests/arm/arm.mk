@@ -164,13 +164,17 @@ $(ARM_B)/$(1)/size-core.elf: $(ARM_B)/$(1)/size-base.elf $(ARM_B)/$(1)/libcore.a
 	$$(ARM_CC) $$(ARM_ARCH_$(1)) $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -o $$@ \
 	  $$(addprefix -Wl$$(ARM_COMMA)--undefined=,$$(shell $$(ARM_NM) -g --defined-only $(ARM_B)/$(1)/libcore.a | awk '$$$$2 == "T" { print $$$$3 }')) \
 	  $(ARM_B)/$(1)/rt/size_main.o $$(ARM_RT_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a -lm
-
-$(ARM_B)/$(1)/unit-tests.elf: $$(ARM_RT_OBJ_$(1)) $$(ARM_UNIT_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a \
-                              $$(ARM_LD_$(1)) tests/arm/sections.ld
-	$$(ARM_CC) $$(ARM_ARCH_$(1)) $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -Wl,-Map,$$@.map -o $$@ \
-	  $$(ARM_RT_OBJ_$(1)) $$(ARM_UNIT_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a -lm
 endef
 $(foreach v,$(ARM_VARIANTS),$(eval $(call arm_variant,$(v))))
+
+# $(call arm_test_elf,VARIANT,IMAGE,OBJECTS): build/arm/<v>/<image>.elf, a test image of
+# OBJECTS with the start-up code and the variant's core library.
+define arm_test_elf
+$(ARM_B)/$(1)/$(2).elf: $$(ARM_RT_OBJ_$(1)) $(3) $(ARM_B)/$(1)/libcore.a $$(ARM_LD_$(1)) tests/arm/sections.ld
+	$$(ARM_CC) $$(ARM_ARCH_$(1)) $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -Wl,-Map,$$@.map -o $$@ \
+	  $$(ARM_RT_OBJ_$(1)) $(3) $(ARM_B)/$(1)/libcore.a -lm
+endef
+$(foreach v,$(ARM_VARIANTS),$(eval $(call arm_test_elf,$(v),unit-tests,$(ARM_UNIT_OBJ_$(v)))))
 
 # The app's suite: build/arm/<v>/app/{firmware,tests}/ hold its objects.
 ARM_APP_FW_SRC := $(sort $(wildcard firmware/app/*.c)) firmware/hal/hal.c
@@ -187,13 +191,9 @@ $(ARM_B)/$(1)/app/tests/%.o: tests/%.c | arm-toolchain $(MAVLINK_STAMP)
 	@mkdir -p $$(@D)
 	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(APP_TEST_CFLAGS) $$(ARM_UNIT_OPT_$(1)) -c $$< -o $$@
 $(ARM_B)/$(1)/app/tests/core/unit.o: $$(APP_TEST_LIST)
-
-$(ARM_B)/$(1)/app-tests.elf: $$(ARM_RT_OBJ_$(1)) $$(ARM_APP_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a \
-                             $$(ARM_LD_$(1)) tests/arm/sections.ld
-	$$(ARM_CC) $$(ARM_ARCH_$(1)) $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -Wl,-Map,$$@.map -o $$@ \
-	  $$(ARM_RT_OBJ_$(1)) $$(ARM_APP_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a -lm
 endef
 $(foreach v,$(ARM_APP_VARIANTS),$(eval $(call arm_app_variant,$(v))))
+$(foreach v,$(ARM_APP_VARIANTS),$(eval $(call arm_test_elf,$(v),app-tests,$(ARM_APP_OBJ_$(v)))))
 
 # $(call arm_program,VARIANT,ELF,SOURCES[,EXTRA_CFLAGS]): a rule for an image of
 # SOURCES (firmware flags, -Ifirmware/core -Itests/arm) with the start-up code, the
