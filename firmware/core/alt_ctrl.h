@@ -11,7 +11,8 @@
  * mass or thrust-scale error. cos_tilt = quat_body_z_up(q_b2i), the vertical component
  * of the body Z axis (tilt compensation, bounded by cos_tilt_min).
  * Anti-windup: a_int is frozen while f is clamped in the direction the error pushes,
- * and clamped to +/-a_int_max.
+ * or while the allocation could not deliver the thrust in that direction on the previous
+ * step (alloc_short_up / _down, e.g. from mixer_shortfall), and clamped to +/-a_int_max.
  *
  * Units: m, m/s, m/s^2, kg, N, s. Q16.16: heights within +/-1000 m and thrusts below
  * 30000 N keep every intermediate in range.
@@ -52,6 +53,8 @@ struct alt_ctrl_input {
 	struct quat q_b2i;  /* attitude, for the tilt compensation */
 	scalar_t mass_kg;   /* current mass parameter, kg */
 	scalar_t dt_s;      /* time since the last update, s */
+	bool alloc_short_up;   /* the allocation delivered less thrust than demanded (last step) */
+	bool alloc_short_down; /* it delivered more thrust than demanded (last step) */
 };
 
 struct alt_ctrl {
