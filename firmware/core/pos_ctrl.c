@@ -22,18 +22,19 @@ void pos_ctrl_heading(struct quat q, scalar_t *c, scalar_t *s)
 		*s = SC_ZERO;
 		return;
 	}
-	*c = sc_div(hx, n);
-	*s = sc_div(hy, n);
+	scalar_t inv = sc_div(SC(1), n);
+	*c = sc_mul(hx, inv);
+	*s = sc_mul(hy, inv);
 }
 
+/* a NaN or an infinity anywhere makes the sum non-finite (so does a sum beyond the float
+ * range, which no real input reaches); one test instead of ten */
 static bool finite_in(const struct pos_ctrl_input *in)
 {
-	bool ok = sc_isfinite(in->q_b2i.w) && sc_isfinite(in->q_b2i.x) && sc_isfinite(in->q_b2i.y) &&
-		  sc_isfinite(in->q_b2i.z);
+	scalar_t sum = sc_add(sc_add(in->q_b2i.w, in->q_b2i.x), sc_add(in->q_b2i.y, in->q_b2i.z));
 	for (int i = 0; i < 2; i++)
-		ok = ok && sc_isfinite(in->pos_sp_m[i]) && sc_isfinite(in->pos_m[i]) &&
-		     sc_isfinite(in->vel_mps[i]);
-	return ok;
+		sum = sc_add(sum, sc_add(sc_add(in->pos_sp_m[i], in->pos_m[i]), in->vel_mps[i]));
+	return sc_isfinite(sum);
 }
 
 static scalar_t clamp_flag(scalar_t x, scalar_t lim, uint32_t flag, uint32_t *flags)
