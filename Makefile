@@ -27,6 +27,10 @@ VPY         := $(VENV)/bin/python
 B           := build
 GEN         := $(B)/gen
 VENV_STAMP  := $(VENV)/.requirements-stamp
+# MAVProxy, a headless real ground station for the interoperability tests: only
+# its MAVLink core is used, so it is installed without its ~1 GB of GUI and map
+# dependencies (pymavlink and pyserial, pinned in requirements.txt, are enough).
+MAVPROXY_PIN := mavproxy==1.8.75
 
 # Warning flags (issue 2): firmware C11, simulator C++17; generated and
 # third-party headers always through -isystem.
@@ -44,6 +48,7 @@ $(VENV_STAMP): requirements.txt
 	@test -x $(VPY) || $(PYTHON) -m venv $(VENV) || \
 	  { echo "error: '$(PYTHON) -m venv' failed: install python3-venv"; exit 1; }
 	$(VENV)/bin/pip install --disable-pip-version-check -q -r requirements.txt
+	$(VENV)/bin/pip install --disable-pip-version-check -q --no-deps $(MAVPROXY_PIN)
 	@touch $@
 
 # Paths inside the venv (site-packages differs by Python version): computed once
@@ -66,11 +71,22 @@ endif
 LCM_LDFLAGS := -L$(LCM_LIB) -Wl,-rpath,$(LCM_LIB) -llcm
 
 # ---------------------------------------------------------------- generated code
+# The project's dialect firmware/mavlink/octo.xml includes pymavlink's common.xml:
+# both are put side by side, mavgen makes the C headers (build/gen/mavlink/octo/)
+# and the Python module, which goes into the venv's pymavlink as dialect "octo"
+# (octo-gcs, MAVProxy --dialect=octo and MAVLINK_DIALECT=octo load it from there).
+MAVLINK_DIALECT_XML := firmware/mavlink/octo.xml
 MAVLINK_STAMP := $(GEN)/mavlink/.stamp
-$(MAVLINK_STAMP): $(VENV_STAMP) $(B)/config.mk
-	@echo "== mavgen: MAVLink 2 C headers from pymavlink's common.xml"
-	@rm -rf $(GEN)/mavlink && mkdir -p $(GEN)/mavlink
-	$(VPY) -m pymavlink.tools.mavgen --lang=C --wire-protocol=2.0 -o $(GEN)/mavlink $(MAVLINK_XML) >/dev/null
+$(MAVLINK_STAMP): $(MAVLINK_DIALECT_XML) $(VENV_STAMP) $(B)/config.mk
+	@echo "== mavgen: MAVLink 2 C headers and pymavlink dialect from $(MAVLINK_DIALECT_XML)"
+	@rm -rf $(GEN)/mavlink $(GEN)/mavlink-xml && mkdir -p $(GEN)/mavlink $(GEN)/mavlink-xml
+	cp $(dir $(MAVLINK_XML))common.xml $(dir $(MAVLINK_XML))standard.xml $(dir $(MAVLINK_XML))minimal.xml \
+	  $(MAVLINK_DIALECT_XML) $(GEN)/mavlink-xml/
+	$(VPY) -m pymavlink.tools.mavgen --lang=C --wire-protocol=2.0 -o $(GEN)/mavlink $(GEN)/mavlink-xml/octo.xml >/dev/null
+	$(VPY) -m pymavlink.tools.mavgen --lang=Python3 --wire-protocol=2.0 -o $(GEN)/mavlink-xml/octo.py \
+	  $(GEN)/mavlink-xml/octo.xml >/dev/null
+	cp $(GEN)/mavlink-xml/octo.py $(dir $(MAVLINK_XML))octo.py.tmp && mv $(dir $(MAVLINK_XML))octo.py.tmp $(dir $(MAVLINK_XML))octo.py
+	cp $(MAVLINK_DIALECT_XML) $(dir $(MAVLINK_XML))octo.xml
 	@touch $@
 
 LCM_TYPES := $(sort $(wildcard firmware/lcm/*.lcm))

@@ -25,6 +25,9 @@ static const char kUsage[] =
 "  --rate HZ              Data Output rate, frames per simulated second (90)\n"
 "  --xplane-version 11|12 protocol personality: row 16 order/units, version dataref (12)\n"
 "  --rows LIST            preselect Data Output rows, e.g. 1,16,17,20,21,25 (none)\n"
+"  --no-beacon            do not announce X-Plane's BECN beacon (sent once a second to\n"
+"                         239.255.1.1:49707, announcing --xp-port; a failed send is counted)\n"
+"  --computer-name NAME   computer name in the beacon (this machine's host name)\n"
 "\n"
 "simulation:\n"
 "  --vehicle FILE.json    truth, actuator and noise model; absent keys keep defaults\n"
@@ -162,6 +165,13 @@ int parse_options(int argc, char **argv, Options &o)
 				o.faults.duplicate = num(a, val(), 0.0, 1.0);
 			} else if (a == "--reorder") {
 				o.faults.reorder = num(a, val(), 0.0, 1.0);
+			} else if (a == "--no-beacon") {
+				o.beacon = false;
+			} else if (a == "--computer-name") {
+				o.computer_name = val();
+				if (o.computer_name.empty() || o.computer_name.size() > 255 ||
+				    o.computer_name.find('\0') != std::string::npos)
+					throw Bad{a, "expected a name of 1 to 255 characters"};
 			} else if (a == "--verbose" || a == "-v") {
 				o.verbose = true;
 			} else {

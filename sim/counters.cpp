@@ -10,6 +10,7 @@ const char *Counters::name(Id id)
 		"rx_bad_value", "rx_clamped", "rx_bad_row", "rx_ignored_row", "rx_ignored_dref",
 		"rx_cmnd", "rx_bad_ise4", "rx_rref_limit", "rref_unknown", "tx_data", "tx_rref",
 		"tx_error", "fault_dropped", "fault_duplicated", "fault_reordered", "lockstep_timeouts", "lockstep_withheld",
+		"tx_beacon", "tx_beacon_error",
 	};
 	return names[id];
 }

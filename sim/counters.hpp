@@ -30,6 +30,8 @@ struct Counters {
 		FaultReordered,
 		LockstepTimeouts,
 		LockstepWithheld, // lockstep ticks not waited for: the fault injector withheld the frame
+		TxBeacon,       // BECN beacons sent
+		TxBeaconError,  // BECN beacons that could not be sent (no multicast route)
 		Count
 	};
 	uint64_t v[Count] = {};

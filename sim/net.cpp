@@ -115,4 +115,23 @@ bool UdpSocket::send(const uint8_t *p, size_t n, const sockaddr_in &to)
 	return r == static_cast<ssize_t>(n);
 }
 
+bool UdpSocket::open_multicast_sender(const std::string &iface_ip, std::string &err)
+{
+	if (!open("0.0.0.0", 0, err))
+		return false;
+	unsigned char ttl = 1, loop = 1;
+	if (setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_TTL, &ttl, sizeof ttl) != 0 ||
+	    setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_LOOP, &loop, sizeof loop) != 0) {
+		err = std::strerror(errno);
+		return false;
+	}
+	in_addr a{};
+	if (inet_pton(AF_INET, iface_ip.c_str(), &a) == 1 && a.s_addr != htonl(INADDR_ANY) &&
+	    (ntohl(a.s_addr) >> 24) != 127 && setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_IF, &a, sizeof a) != 0) {
+		err = std::strerror(errno);
+		return false;
+	}
+	return true;
+}
+
 } // namespace sim

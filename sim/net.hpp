@@ -28,6 +28,11 @@ public:
 	// real length (may exceed cap: then it was truncated).
 	bool recv(uint8_t *buf, size_t cap, sockaddr_in &from, size_t &len);
 	bool send(const uint8_t *p, size_t n, const sockaddr_in &to);
+	// A sender of multicast datagrams: bound to any address and port, TTL 1,
+	// looped back to this host, out of the interface of `iface_ip` unless that
+	// is a loopback or the any address (then the route to the group decides, so
+	// that receivers that joined the group on the default interface get it).
+	bool open_multicast_sender(const std::string &iface_ip, std::string &err);
 
 private:
 	int fd_ = -1;

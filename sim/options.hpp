@@ -31,6 +31,8 @@ struct Options {
 	FaultParams faults;
 	double step = 0.002;          // RK4 step, s
 	bool verbose = false;
+	bool beacon = true;           // BECN once a second on 239.255.1.1:49707
+	std::string computer_name;    // announced in the beacon; empty: this machine's name
 };
 
 // Parses argv. Returns -1 to run, or an exit status (0 after --help, 2 on a

@@ -1,12 +1,15 @@
 // server: sockets, pacing, lockstep, status; what a frame sends and does is frame_out's.
 #include "server.hpp"
 
+#include <arpa/inet.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
 
+#include "beacon.hpp"
 #include "counters.hpp"
 #include "faults.hpp"
 #include "frame_out.hpp"
@@ -51,6 +54,8 @@ private:
 	bool pump(double deadline, bool until_full);
 	void advance();
 	void status(double now);
+	// Announces X-Plane's BECN beacon once a second (wall time).
+	void beacon(double now);
 
 	const Options &o_;
 	const std::atomic<bool> &stop_;
@@ -63,6 +68,10 @@ private:
 	XpFrame frame_;
 	uint64_t n_ = 0;
 	double last_status_ = 0;
+	double last_beacon_ = -1e9;
+	xp::Bytes becn_;
+	sockaddr_in becn_to_{};
+	UdpSocket becn_sock_;
 	double wall_start_ = 0;
 	uint8_t buf_[2048];
 };
@@ -121,6 +130,17 @@ void Server::advance()
 	advance_frame(o_, model_, input_, n_, frame_, truth_);
 }
 
+void Server::beacon(double now)
+{
+	if (becn_.empty() || now - last_beacon_ < 1.0)
+		return;
+	last_beacon_ = now;
+	if (becn_sock_.send(becn_.data(), becn_.size(), becn_to_))
+		c_.inc(Counters::TxBeacon);
+	else
+		c_.inc(Counters::TxBeaconError);
+}
+
 void Server::status(double now)
 {
 	if (now - last_status_ < 1.0)
@@ -151,6 +171,18 @@ int Server::run()
 	std::fprintf(stderr, "octo-sim: X-Plane %d on %s:%u, Data Output to %s at %g Hz%s\n", o_.xplane_version,
 	             o_.bind_ip.c_str(), o_.xp_port, addr_str(input_.target).c_str(), o_.rate,
 	             o_.lockstep ? ", lockstep" : "");
+	if (o_.beacon) {
+		const std::string name = o_.computer_name.empty() ? default_computer_name() : o_.computer_name;
+		becn_ = encode_becn(o_.xplane_version, o_.xp_port, name);
+		becn_to_.sin_family = AF_INET;
+		becn_to_.sin_port = htons(kBeaconPort);
+		inet_pton(AF_INET, kBeaconGroup, &becn_to_.sin_addr);
+		// without multicast the beacon's sends fail and are counted; the simulator runs on
+		if (!becn_sock_.open_multicast_sender(o_.bind_ip, err))
+			std::fprintf(stderr, "octo-sim: beacon: %s (sends will be counted as failed)\n", err.c_str());
+		std::fprintf(stderr, "octo-sim: beacon as \"%s\" to %s:%u once a second\n", name.c_str(), kBeaconGroup,
+		             kBeaconPort);
+	}
 
 	frame_ = xp_measure(model_, input_.effective_throttle(), o_.seed, 0);
 	truth_.publish(model_, 0);
@@ -161,6 +193,7 @@ int Server::run()
 	while (!stop_) {
 		const bool delivered = send_frame(started);
 		rref_tick();
+		beacon(wall_now());
 		if (o_.verbose)
 			status(wall_now());
 		if (o_.duration > 0 && model_.t() >= o_.duration - 1e-9)

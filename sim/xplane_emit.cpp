@@ -178,7 +178,7 @@ xp::DataRow xp_row(const XpFrame &f, int row, int version)
 		break;
 	case 21: { // OpenGL local position and velocity, distance from the origin
 		r.col[0] = f32(f.east);
-		r.col[1] = f32(f.up);
+		r.col[1] = f32(f.alt_msl_m);
 		r.col[2] = f32(-f.north);
 		r.col[3] = f32(f.ve);
 		r.col[4] = f32(-f.vd);
@@ -266,7 +266,7 @@ bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool ove
 		v = f.quat[i];
 	}
 	else if (n == "local_x") v = f.east;
-	else if (n == "local_y") v = f.up;
+	else if (n == "local_y") v = f.alt_msl_m;
 	else if (n == "local_z") v = -f.north;
 	else if (n == "local_vx") v = f.ve;
 	else if (n == "local_vy") v = -f.vd;

@@ -6,8 +6,9 @@
 //   X_I) is therefore heading 0 (north); a positive paper yaw (counter-clockwise
 //   seen from above) lowers the heading.
 //   Body FLU -> FRD: (x, y, z) -> (x, -y, -z), so P = w_x, Q = -w_y, R = -w_z.
-//   OpenGL local frame (+X east, +Y up, +Z south): X = -y_I, Y = z_I, Z = -x_I,
-//   origin at the take-off point on the ground.
+//   OpenGL local frame (+X east, +Y up, +Z south): X = -y_I, Y = z_I + origin
+//   altitude, Z = -x_I. As in X-Plane its origin lies on the earth's surface at
+//   sea level, below the take-off point, so local_y is the elevation MSL.
 //   Euler angles: Z-Y-X (heading, pitch, roll) from NED to FRD, in degrees.
 #pragma once
 

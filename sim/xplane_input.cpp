@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include "xplane_proto.hpp"
 
@@ -181,8 +182,14 @@ bool XpInput::same_addr_port(const sockaddr_in &a, const sockaddr_in &b)
 
 void XpInput::cmnd(const uint8_t *p, size_t len)
 {
+	// The command path runs to a NUL or to the end of the datagram: X-Plane
+	// accepts both, and client libraries send it without the NUL.
 	std::string path;
-	if (!xp::field_path(p + xp::kHeader, len - xp::kHeader, path)) {
+	const size_t n = len - xp::kHeader;
+	std::vector<uint8_t> field(p + xp::kHeader, p + len);
+	if (n == 0 || !std::memchr(field.data(), 0, n))
+		field.push_back(0);
+	if (!xp::field_path(field.data(), field.size(), path)) {
 		c_.inc(Counters::RxUnterminated);
 		return;
 	}

@@ -5,9 +5,11 @@
 #include <stdio.h>
 #include <string.h>
 
-#include <common/mavlink.h>
+#include <octo/mavlink.h>
 
 #include "app.h"
+#include "mav_ftp.h"
+#include "mav_telem.h"
 
 #define CHAN MAVLINK_COMM_0
 #define PARAM_PACE_US 2000u        /* list streaming: one PARAM_VALUE per 2 ms */
@@ -67,13 +69,32 @@ static uint32_t boot_ms(const struct app *a)
 
 static void send_named_float(struct app *a, const char *name, float value);
 
+/* The sender handed to the telemetry and FTP modules (their context is the app). */
+static void send_cb(const void *ctx, const mavlink_message_t *msg)
+{
+	send_msg(ctx, msg);
+}
+
+static struct mav_telem_in telem_in(const struct app *a)
+{
+	float thr = 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++)
+		thr += a->thr[j] / (float)HAL_ROTORS;
+	return (struct mav_telem_in){boot_ms(a), &a->fr, a->have_step && a->link_ok, a->mode != APP_DISARMED,
+				     a->have_step && a->link_ok, (uint32_t)a->mode, thr, MAV_SYSID, MAV_COMPID, CHAN,
+				     a};
+}
+
+static struct mav_ftp_link ftp_link(const struct app *a, const mavlink_message_t *req)
+{
+	return (struct mav_ftp_link){MAV_SYSID, MAV_COMPID, CHAN, req->sysid, req->compid, boot_ms(a), a};
+}
+
 /* ---------------------------------------------------------------- telemetry table */
 
 static void pack_heartbeat(struct app *a, mavlink_message_t *msg)
 {
-	uint8_t base = MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
-	if (a->mode != APP_DISARMED)
-		base |= MAV_MODE_FLAG_SAFETY_ARMED;
+	uint8_t base = mav_telem_base_mode(a->mode != APP_DISARMED);
 	uint8_t status = MAV_STATE_STANDBY;
 	if (app_flying(a))
 		status = a->link_ok ? MAV_STATE_ACTIVE : MAV_STATE_CRITICAL;
@@ -128,7 +149,11 @@ static void pack_sys_status(struct app *a, mavlink_message_t *msg)
 	struct hal_plant_stats ls;
 	hal_plant_stats(a->hal, &ls);
 	uint16_t drops = (uint16_t)(ls.dropped > 65535u ? 65535u : ls.dropped);
-	mavlink_msg_sys_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, 0, 0, 0, 0, UINT16_MAX, -1, -1, 0,
+	uint32_t present, enabled, health;
+	struct mav_telem_in in = telem_in(a);
+	mav_telem_sensors(&in, &present, &enabled, &health);
+	mavlink_msg_sys_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, present, enabled, health, 0, UINT16_MAX,
+					 -1, -1, 0,
 					 (uint16_t)(a->mav.rx_dropped > 65535u ? 65535u : a->mav.rx_dropped),
 					 drops, (uint16_t)(ls.foreign > 65535u ? 65535u : ls.foreign),
 					 (uint16_t)(a->mav.text_dropped > 65535u ? 65535u : a->mav.text_dropped),
@@ -198,6 +223,8 @@ void mav_init(struct mav *m, const struct hal *hal, uint64_t now_us)
 	m->boot_us = now_us;
 	m->text_tokens = TEXT_BURST;
 	m->text_last_us = now_us;
+	mav_telem_init(&m->telem);
+	(void)mav_ftp_init(&m->ftp);   /* without metadata, FTP NAKs everything and 395/397 are UNSUPPORTED */
 	signing_setup(m, hal);
 }
 
@@ -442,12 +469,40 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 			send_stream(a, s);
 			return;
 		}
+		if (id >= 0.0f && id < 65536.0f && mav_ftp_is_metadata_msg(&a->mav.ftp, (uint32_t)id)) {
+			send_ack(a, cmd, MAV_RESULT_ACCEPTED, req);
+			struct mav_ftp_link l = ftp_link(a, req);
+			mav_ftp_send_metadata_msg(&a->mav.ftp, &l, (uint32_t)id, send_cb);
+			return;
+		}
+		int tr = id >= 0.0f && id < 65536.0f ? mav_telem_request_result(&a->mav.telem, (uint32_t)id, prm[1]) : -1;
+		if (tr >= 0) {
+			send_ack(a, cmd, (uint8_t)tr, req);
+			if (tr == MAV_RESULT_ACCEPTED) {
+				struct mav_telem_in in = telem_in(a);
+				mav_telem_request_send(&a->mav.telem, &in, (uint32_t)id, prm[1], send_cb);
+			}
+			return;
+		}
 		r = MAV_RESULT_UNSUPPORTED;
 		break;
 	}
+	case MAV_CMD_GET_HOME_POSITION: {
+		int tr = mav_telem_request_result(&a->mav.telem, MAVLINK_MSG_ID_HOME_POSITION, 0.0f);
+		send_ack(a, cmd, (uint8_t)tr, req);
+		if (tr == MAV_RESULT_ACCEPTED) {
+			struct mav_telem_in in = telem_in(a);
+			mav_telem_request_send(&a->mav.telem, &in, MAVLINK_MSG_ID_HOME_POSITION, 0.0f, send_cb);
+		}
+		return;
+	}
 	case MAV_CMD_SET_MESSAGE_INTERVAL: {
 		int s = prm[0] >= 0.0f && prm[0] < 65536.0f ? stream_index((uint32_t)prm[0]) : -1;
-		if (s < 0) {
+		int t = s < 0 && prm[0] >= 0.0f && prm[0] < 65536.0f
+				? mav_telem_set_interval(&a->mav.telem, (uint32_t)prm[0], prm[1]) : -1;
+		if (t >= 0) {
+			r = (uint8_t)t;
+		} else if (s < 0) {
 			r = MAV_RESULT_UNSUPPORTED;
 		} else if (!isfinite(prm[1])) {
 			r = MAV_RESULT_DENIED;
@@ -464,7 +519,7 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 		break;
 	}
 	default:
-		r = MAV_RESULT_UNSUPPORTED;   /* including GET_HOME_POSITION: no home here */
+		r = MAV_RESULT_UNSUPPORTED;
 		break;
 	}
 	send_ack(a, cmd, r, req);
@@ -474,26 +529,12 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 
 static void handle_ftp(struct app *a, const mavlink_message_t *msg)
 {
-	(void)a;
 	mavlink_file_transfer_protocol_t ftp;
 	mavlink_msg_file_transfer_protocol_decode(msg, &ftp);
 	if (!for_us(ftp.target_system, ftp.target_component))
 		return;
-	uint8_t p[MAVLINK_MSG_FILE_TRANSFER_PROTOCOL_FIELD_PAYLOAD_LEN];
-	memset(p, 0, sizeof p);
-	uint16_t seq = (uint16_t)(ftp.payload[0] | ftp.payload[1] << 8);
-	seq = (uint16_t)(seq + 1);
-	p[0] = (uint8_t)seq;
-	p[1] = (uint8_t)(seq >> 8);
-	p[2] = ftp.payload[2];     /* session */
-	p[3] = 129;                /* opcode: NAK */
-	p[4] = 1;                  /* size: one error byte */
-	p[5] = ftp.payload[3];     /* req_opcode */
-	p[12] = 10;                /* error: FileNotFound */
-	mavlink_message_t out;
-	mavlink_msg_file_transfer_protocol_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &out, 0, msg->sysid,
-						     msg->compid, p);
-	send_msg(a, &out);
+	struct mav_ftp_link l = ftp_link(a, msg);
+	mav_ftp_handle(&a->mav.ftp, &l, ftp.payload, send_cb);
 }
 
 static void handle(struct app *a, const mavlink_message_t *msg)
@@ -622,6 +663,8 @@ void mav_tick(struct app *a, uint64_t now_us)
 {
 	struct mav *m = &a->mav;
 	drain(a);
+	struct mav_telem_in in = telem_in(a);
+	mav_telem_tick(&m->telem, &in, now_us, send_cb);
 	for (int i = 0; i < MAV_N_STREAMS; i++) {
 		if (m->interval_us[i] < 0)
 			continue;

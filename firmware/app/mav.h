@@ -1,6 +1,7 @@
 /*
  * mav.h - MAVLink 2 endpoint of the autopilot: system 1, component 1,
- * MAV_TYPE_OCTOROTOR, MAV_AUTOPILOT_GENERIC; generated common.xml headers.
+ * MAV_TYPE_OCTOROTOR, MAV_AUTOPILOT_GENERIC; headers generated from the
+ * project's dialect (firmware/mavlink/octo.xml: common.xml and what it adds).
  *
  * - telemetry: one table of streams (message id, default interval, pack
  *   function), intervals in wall-clock time, changed by SET_MESSAGE_INTERVAL;
@@ -8,7 +9,10 @@
  *   reads by name and by index, PARAM_SET always answered with the current
  *   value, refusals and unknown names as STATUSTEXT;
  * - COMMAND_LONG / COMMAND_INT, always acknowledged;
- * - FTP NAKed (FileNotFound), MISSION_REQUEST_LIST -> MISSION_COUNT 0;
+ * - ground-station telemetry (global position, home, landed state, standard
+ *   modes, sensor health: mav_telem.h);
+ * - component metadata over a read-only FTP (mav_ftp.h; every other file
+ *   FileNotFound), MISSION_REQUEST_LIST -> MISSION_COUNT 0;
  * - MAVLink 2 signing when the platform has a key: outgoing signed, incoming
  *   unsigned / wrongly signed / replayed packets rejected and counted (only
  *   RADIO_STATUS may come unsigned).
@@ -19,6 +23,9 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+
+#include "mav_ftp.h"
+#include "mav_telem.h"
 
 #define MAV_SYSID 1
 #define MAV_COMPID 1
@@ -40,6 +47,8 @@ struct mav {
 	uint32_t rx_unsigned;                  /* rejected by signing (unsigned, bad, replayed) */
 	bool signing;                          /* MAVLink 2 signing on (hal_signing_key) */
 	uint16_t text_id;
+	struct mav_telem telem;                /* ground-station telemetry (mav_telem.c) */
+	struct mav_ftp ftp;                    /* component metadata and its FTP (mav_ftp.c) */
 };
 
 void mav_init(struct mav *m, const struct hal *hal, uint64_t now_us);

@@ -47,6 +47,7 @@ enum {
 	HAL_FRAME_THRUST = 1u << 4,   /* measured rotor thrusts */
 	HAL_FRAME_TORQUE = 1u << 5,   /* measured rotor reaction torques */
 	HAL_FRAME_THR_CMD = 1u << 6,  /* echo of the throttle command */
+	HAL_FRAME_GLOBAL = 1u << 7,   /* geodetic position (latitude, longitude, altitude MSL) */
 };
 #define HAL_FRAME_NEEDED (HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_POS)
 
@@ -62,6 +63,8 @@ struct hal_sensor_frame {
 	float rotor_thrust_n[HAL_ROTORS];    /* measured thrust f_j, N */
 	float rotor_torque_nm[HAL_ROTORS];   /* measured reaction torque tau_j, N m */
 	float thr_cmd_echo[HAL_ROTORS];      /* throttle command as the plant saw it */
+	double lat_deg, lon_deg;             /* plant's geodetic position, WGS84 degrees */
+	float alt_msl_m;                     /* altitude above mean sea level, m */
 };
 
 /* Health of the plant link, as the platform counts it. */

@@ -1,4 +1,4 @@
-"""The ground station's MAVLink link to one vehicle (pymavlink, MAVLink 2, common.xml).
+"""The ground station's MAVLink link to one vehicle (pymavlink, MAVLink 2, dialect octo).
 
 Everything here goes over MAVLink as any ground station would: heartbeat, the
 parameter protocol (with the retries and checks QGroundControl and MAVProxy make),
@@ -7,12 +7,21 @@ COMMAND_LONG with acknowledgement, STATUSTEXT and NAMED_VALUE_FLOAT collection.
 
 import os
 import struct
+import sys
 import time
 
+# The project's dialect (firmware/mavlink/octo.xml: common.xml plus standard modes and
+# component metadata), installed into pymavlink by `make`; MAVLINK_DIALECT overrides
+# it as it does for pymavlink's own tools. Importing pymavlink sets MAVLINK_DIALECT=all
+# when it is unset: that default, left by an earlier import, is not a choice.
+_env_dialect = os.environ.get("MAVLINK_DIALECT")
+if _env_dialect == "all" and "pymavlink.mavutil" in sys.modules:
+    _env_dialect = None
+DIALECT = _env_dialect or "octo"
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil  # noqa: E402  (MAVLINK20 must be set first)
 
-mavutil.set_dialect("common")
+mavutil.set_dialect(DIALECT)
 mavlink = mavutil.mavlink
 
 from .base import (DEFAULT_URL, FW_PARAMS, MODE_NUMBERS, MODES, GcsError,  # noqa: E402,F401

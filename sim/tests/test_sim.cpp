@@ -278,7 +278,9 @@ TEST(emitter_conventions)
 	CHECK(std::fabs(f.heading - 330) < 1e-9, "heading %g", f.heading);
 	CHECK(std::fabs(f.P - 0.1) < 1e-12 && std::fabs(f.Q + 0.2) < 1e-12 && std::fabs(f.R + 0.3) < 1e-12, "PQR");
 	xp::DataRow r21 = xp_row(f, 21, 12);
-	CHECK(r21.col[0] == -4.0f && r21.col[1] == 5.0f && r21.col[2] == -3.0f, "local xyz %g %g %g", r21.col[0],
+	// OpenGL's origin is at sea level: y is the field's elevation plus the height
+	const float y21 = static_cast<float>(m.params().origin[2] + 5.0);
+	CHECK(r21.col[0] == -4.0f && r21.col[1] == y21 && r21.col[2] == -3.0f, "local xyz %g %g %g", r21.col[0],
 	      r21.col[1], r21.col[2]);
 	CHECK(r21.col[3] == -2.0f && r21.col[4] == 3.0f && r21.col[5] == -1.0f, "local v");
 	xp::DataRow r16_12 = xp_row(f, 16, 12), r16_11 = xp_row(f, 16, 11);

@@ -22,7 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <common/mavlink.h>
+#include <octo/mavlink.h>
 
 #include "app.h"
 #include "stub_hal.h"

@@ -179,7 +179,8 @@ def test_commands_are_acknowledged_per_the_rules(launch, port, tmp_path):
     C, R = mavlink, mavlink
     # unknown command
     assert rig.cmd(42424)[0] == R.MAV_RESULT_UNSUPPORTED
-    assert rig.cmd(C.MAV_CMD_GET_HOME_POSITION)[0] == R.MAV_RESULT_UNSUPPORTED
+    # no position yet, so no home: not now (MAVProxy and MAVSDK ask again)
+    assert rig.cmd(C.MAV_CMD_GET_HOME_POSITION)[0] == R.MAV_RESULT_TEMPORARILY_REJECTED
     # no plant frames yet: cannot arm (and retries get the same answer)
     r1, texts = rig.cmd(C.MAV_CMD_COMPONENT_ARM_DISARM, 1)
     r2, _ = rig.cmd(C.MAV_CMD_COMPONENT_ARM_DISARM, 1, confirmation=1)

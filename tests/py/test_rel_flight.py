@@ -84,7 +84,7 @@ def malformed_for_sim(rng):
         b"RREF\0" + struct.pack("<ii", -5, 3) + b"sim/x".ljust(400, b"\0"),     # negative rate
         b"DSEL\0" + struct.pack("<3i", 1, 9999, -4),                            # rows out of range
         b"ISE4\0" + bytes(32),
-        b"CMND\0" + b"x" * 40,                                                  # no NUL
+        b"CMND\0" + b"\x01" * 40,                                               # not printable
         b"XXXX\0" + os.urandom(20), b"DA", b"",
     ])
 

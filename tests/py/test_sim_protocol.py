@@ -185,7 +185,7 @@ def test_rref_vector_and_replies(launch, port):
     r3 = wait_until(three, timeout=3)
     assert r3
     recs = dict(xp.decode_rref(r3))
-    assert recs == {7: 0.0, 1: 120100.0, 8: 0.0}
+    assert recs == {7: 0.0, 1: 120100.0, 8: 640.0}      # local_y: the field's elevation MSL
     assert bytes.fromhex("01000000 0092ea47") in r3       # (1, 120100.0) exactly as in the vector
     # rate 0 stops each subscription
     for idx, path in ((7, "sim/flightmodel/position/Prad"), (1, xp.VERSION_DATAREF),
@@ -274,7 +274,9 @@ HOSTILE = [
     (b"DSEL\x00\x01\x00\x00", "rx_bad_size"),
     (xp.encode_dsel([-3, 100000]), "rx_bad_row"),
     (xp.encode_cmnd("sim/none/command"), "rx_cmnd"),
-    (b"CMND\x00no-nul", "rx_unterminated"),
+    (b"CMND\x00no-nul", "rx_cmnd"),             # the path may end with the datagram, as in X-Plane
+    (b"CMND\x00", "rx_unterminated"),           # empty
+    (b"CMND\x00bad\x01path", "rx_unterminated"),  # not printable
     (xp.encode_ise4("127.0.0.1", 49005, index=3), "rx_bad_ise4"),
     (xp.encode_ise4("not-an-ip", 49005), "rx_bad_ise4"),
     (b"ISE4\x00\x40\x00\x00\x00", "rx_bad_size"),

@@ -15,8 +15,9 @@ static const char usage[] =
 	"  the autopilot as a software-in-the-loop process: flies X-Plane 11/12 (or octo-sim)\n"
 	"  over X-Plane's UDP protocol, talks MAVLink 2 to a ground station\n"
 	"\n"
-	"  --xplane HOST:PORT       where X-Plane receives (127.0.0.1:49000); only datagrams\n"
-	"                           from HOST are accepted\n"
+	"  --xplane HOST:PORT|auto  where X-Plane receives (127.0.0.1:49000); only datagrams\n"
+	"                           from HOST are accepted. auto: host and port from the first\n"
+	"                           X-Plane beacon (BECN on 239.255.1.1:49707; waits up to 30 s)\n"
 	"  --xp-listen PORT         X-Plane Data Output target port (49005)\n"
 	"  --mavlink-listen PORT    MAVLink UDP port (14580)\n"
 	"  --gcs HOST:PORT          ground station (127.0.0.1:14550); also learned from the\n"
@@ -145,8 +146,12 @@ int host_parse_args(int argc, char **argv, struct host_config *cfg)
 		}
 		const char *v = argv[++i];
 		int bad = 0;
-		if (!strcmp(f, "--xplane"))
+		if (!strcmp(f, "--xplane") && !strcmp(v, "auto")) {
+			cfg->xplane_auto = true;
+		} else if (!strcmp(f, "--xplane")) {
 			bad = parse_hostport(f, v, &cfg->xplane);
+			cfg->xplane_auto = false;
+		}
 		else if (!strcmp(f, "--gcs"))
 			bad = parse_hostport(f, v, &cfg->gcs);
 		else if (!strcmp(f, "--xp-listen"))

@@ -9,6 +9,7 @@
  *   param_file.c   parameter storage in a text file, replaced atomically
  *   lcm_log.c      the firmware log as LCM messages
  *   xp_client.c    the plant link: X-Plane's UDP protocol
+ *   xp_beacon.c    --xplane auto: X-Plane found by its BECN beacon
  *   main.c         the main loop
  */
 #ifndef OCTO_HOST_H
@@ -28,7 +29,8 @@ typedef struct _lcm_eventlog_t lcm_eventlog_t;
 
 /* ---- cmdline.c */
 struct host_config {
-	struct sockaddr_in xplane;         /* where X-Plane receives */
+	struct sockaddr_in xplane;         /* where X-Plane receives (found when xplane_auto) */
+	bool xplane_auto;                  /* --xplane auto: from X-Plane's beacon */
 	struct sockaddr_in gcs;            /* ground station until one is heard */
 	uint16_t xp_listen, mav_listen;
 	const char *params_path, *lcm_url, *signing_key_path;

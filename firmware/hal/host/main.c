@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "host.h"
+#include "xp_beacon.h"
 
 static int open_ground(uint16_t port)
 {
@@ -40,6 +41,20 @@ static int open_ground(uint16_t port)
 	}
 	(void)fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
 	return fd;
+}
+
+/* --xplane auto: X-Plane's address from its first beacon, said aloud. A
+ * SIGINT/SIGTERM (blocked, pending) ends the wait. */
+static int xp_find(struct host *h, const sigset_t *stop_set)
+{
+	struct xp_beacon b;
+	if (xp_beacon_find(30.0, stop_set, &b))
+		return -1;
+	host_report("found X-Plane %d.%d.%d (beacon %u.%u) on \"%s\" at %s:%u", (int)(b.version / 10000),
+		    (int)(b.version / 100 % 100), (int)(b.version % 100), b.major, b.minor, b.name,
+		    inet_ntoa(b.addr.sin_addr), ntohs(b.addr.sin_port));
+	h->cfg.xplane = b.addr;
+	return 0;
 }
 
 static uint64_t now_us(const struct host *h)
@@ -91,6 +106,8 @@ static int run(struct host *h)
 	host_hal_bind(h);
 	param_file_set_path(&h->params, cfg->params_path);
 	if (cfg->lcm_url && lcm_log_open(&h->log, cfg->lcm_url))
+		return 1;
+	if (cfg->xplane_auto && xp_find(h, &stop_set))
 		return 1;
 	if (xp_client_open(&h->xp, cfg->xp_listen, &cfg->xplane, cfg->act))
 		return 1;

@@ -11,15 +11,17 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-static const int32_t wanted_rows[] = {XP_ROW_TIMES, XP_ROW_RATES, XP_ROW_ATT, XP_ROW_LOCAL,
-				      XP_ROW_THRUST, XP_ROW_TORQUE};
+static const int32_t wanted_rows[] = {XP_ROW_TIMES, XP_ROW_RATES, XP_ROW_ATT, XP_ROW_GLOBAL,
+				      XP_ROW_LOCAL, XP_ROW_THRUST, XP_ROW_TORQUE};
 #define N_WANTED (sizeof wanted_rows / sizeof wanted_rows[0])
 static const uint32_t wanted_bits[N_WANTED] = {HAL_FRAME_TIME, HAL_FRAME_RATES, HAL_FRAME_ATT,
-					       HAL_FRAME_POS, HAL_FRAME_THRUST, HAL_FRAME_TORQUE};
+					       HAL_FRAME_GLOBAL, HAL_FRAME_POS, HAL_FRAME_THRUST,
+					       HAL_FRAME_TORQUE};
 
 #define LB_TO_N 4.4482216152605
 #define FTLB_TO_NM 1.3558179483314
 #define DEG_TO_RAD 0.017453292519943295
+#define FT_TO_M 0.3048
 #define ROW_FRESH_US 1000000u     /* a row not seen for 1 s is selected again */
 #define DSEL_PERIOD_US 1000000u
 #define RREF_PERIOD_US 5000000u
@@ -49,8 +51,8 @@ void xp_client_init(struct xp_client *c, const struct sockaddr_in *xplane, enum 
 	c->fd = -1;
 	c->xp = *xplane;
 	c->act = act;
-	c->stats.parts_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_POS |
-				HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
+	c->stats.parts_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_GLOBAL |
+				 HAL_FRAME_POS | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 }
 
 int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct sockaddr_in *xplane,
@@ -148,6 +150,15 @@ uint32_t xp_frame_convert(const struct xp_data_rec *recs, size_t n, uint32_t xp_
 			bits |= HAL_FRAME_ATT;
 			break;
 		}
+		case XP_ROW_GLOBAL:
+			if (!isfinite(c[0]) || !isfinite(c[1]) || !isfinite(c[2]) || fabsf(c[0]) > 90.0f ||
+			    fabsf(c[1]) > 180.0f)
+				break;
+			f->lat_deg = (double)c[0];
+			f->lon_deg = (double)c[1];
+			f->alt_msl_m = (float)((double)c[2] * FT_TO_M);
+			bits |= HAL_FRAME_GLOBAL;
+			break;
 		case XP_ROW_LOCAL: {
 			bool ok = true;
 			for (int i = 0; i < 6; i++)

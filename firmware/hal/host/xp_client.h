@@ -35,6 +35,7 @@ enum xp_actuation { XP_ACT_DREF = 0, XP_ACT_DATA25 = 1 };
 #define XP_ROW_TIMES 1
 #define XP_ROW_RATES 16
 #define XP_ROW_ATT 17
+#define XP_ROW_GLOBAL 20
 #define XP_ROW_LOCAL 21
 #define XP_ROW_THR_CMD 25
 #define XP_ROW_THRUST 35
