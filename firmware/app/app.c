@@ -122,7 +122,11 @@ static void sync_params(struct app *a)
 	mp.mode = p->mix_mode >= 0.5f ? MIXER_MODE_PRIORITY : MIXER_MODE_CLIP;
 	mixer_set_params(&a->mix, &mp);   /* recomputes only when something changed */
 
-	struct thrmap_params tp = {sc_from_float(p->veh_kf), sc_from_float(p->mot_curve)};
+	struct thrmap_params tp = {sc_from_float(p->veh_kf), sc_from_float(p->mot_curve), {0}};
+	const float scale[THRMAP_ROTORS] = {p->mot_scale1, p->mot_scale2, p->mot_scale3, p->mot_scale4,
+					    p->mot_scale5, p->mot_scale6, p->mot_scale7, p->mot_scale8};
+	for (int j = 0; j < THRMAP_ROTORS; j++)
+		tp.scale[j] = sc_from_float(scale[j]);
 	thrmap_init(&a->map, &tp);
 }
 
@@ -355,6 +359,9 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
  * phases must already fly with the new VEH_* values. Applied results are
  * broadcast as PARAM_VALUE, removed from the list, and saved to the parameter
  * file by app_tick (save_pending). */
+_Static_assert(APP_OUTBOX_LEN >= EXP_MAX_RESULTS + 8,
+	       "the outbox holds a turn's results and the status lines of the same pass");
+
 static void apply_results(struct app *a)
 {
 	int n = a->exp.n_results < EXP_MAX_RESULTS ? a->exp.n_results : EXP_MAX_RESULTS;

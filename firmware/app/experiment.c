@@ -56,6 +56,11 @@ static const char *phase_name(int k)
 #define INR_AMP_DEF 0.8f
 #define INR_ZETA 0.7f
 #define PRBS_ORDER 9u
+#define OFS_SEG_FRAMES 45u    /* rotor experiment: frames per offset level (0.5 s at 90 Hz) */
+#define MOT_NE_MAX 1.3f       /* motor model: largest residual over noise variance */
+#define SCALE_LO 0.3f         /* accepted range of a rotor's effectiveness */
+#define SCALE_HI 1.5f
+#define CURVE_HI 0.99f        /* accepted range of the thrust curve: [0, CURVE_HI] */
 
 static const char *const est_names[EXP_MAX_EST] = {
 	"KF", "KTAU", "KF_PLAIN", "KTAU_PLAIN", "IXX", "IYY", "IZZ", "VAL_NE",
@@ -100,6 +105,8 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	c->inr_time = cfg_f(p->id_inr_time, 10.0f);
 	c->val_time = cfg_f(p->id_val_time, 5.0f);
 	c->rsd_max = cfg_f(p->id_rsd_max, 0.02f);
+	c->exc_ofs = cfg_f(p->id_exc_ofs, 0.03f);
+	c->crv_est = cfg_f(p->id_crv_est, 1.0f) >= 0.5f;
 }
 
 /* Status lines are queued with their arguments and formatted (vsnprintf with %f: thousands
@@ -165,6 +172,16 @@ static void format_line(const struct exp_line *l, char *out, size_t cap)
 		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2), ARG_S(3), ARG_S(4));
 	else if (!strcmp(k, "sff"))
 		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2));
+	else if (!strcmp(k, "ffd"))
+		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_D(2));
+	else if (!strcmp(k, "f"))
+		snprintf(out, cap, l->fmt, ARG_F(0));
+	else if (!strcmp(k, "s"))
+		snprintf(out, cap, l->fmt, ARG_S(0));
+	else if (!strcmp(k, "df"))
+		snprintf(out, cap, l->fmt, ARG_D(0), ARG_F(1));
+	else if (!strcmp(k, "ffff"))
+		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_F(2), ARG_F(3));
 	else
 		snprintf(out, cap, "ID: line with arguments %s", k);   /* a new pattern: add a case */
 #pragma GCC diagnostic pop
@@ -174,6 +191,10 @@ static void format_line(const struct exp_line *l, char *out, size_t cap)
  * one (one line per frame, as before: the app sends it on its tick) */
 void exp_pump(struct experiment *e)
 {
+	/* the motor model's bank update and grid refinement, between frames (the step does them
+	 * if nobody did) */
+	if (e->state == EXP_RUNNING && !e->reporting && e->phase_kind[e->phase] == PK_ROTOR && e->cfg.exc_null)
+		motor_id_refine(&e->mid);   /* processes the waiting frame first */
 	if (!e->pump_ready || e->msg[0] || !e->q_n)
 		return;
 	const struct exp_line *l = &e->queue[e->q_head];
@@ -277,6 +298,7 @@ void exp_abort(struct experiment *e, const char *reason)
 static void snapshot(struct exp_turn *t, const struct exp_input *in)
 {
 	t->thr_prev0 = in->thr_prev[0];
+	memcpy(t->thr_prev_all, in->thr_prev, sizeof t->thr_prev_all);
 	t->rotor_f_cmd0 = in->rotor_f_cmd[0];
 	memcpy(t->thrust_n, in->frame->rotor_thrust_n, sizeof t->thrust_n);
 	memcpy(t->torque_nm, in->frame->rotor_torque_nm, sizeof t->torque_nm);
@@ -316,6 +338,24 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 			.p0 = 1e6f,
 		};
 		ident_rotor_init(&e->rot, &c);
+		/* the motor model of every rotor: delay, lag, curve, k_f, k_tau, scales (priors:
+		 * ID_MOT_TAU centres the first lag grid, VEH_KF and MOT_CURVE the reference model) */
+		struct motor_id_cfg mc = {
+			.dt_s = dt,
+			.tau0_s = cf->mot_tau,
+			.kf0 = p->veh_kf,
+			.curve0 = p->mot_curve,
+			.est_curve = cf->crv_est,
+			.n_frames = (uint32_t)(cf->exc_time / e->dt_nom + 0.5f),
+		};
+		scalar_t thr0[MOTOR_ID_ROTORS];
+		for (int j = 0; j < MOTOR_ID_ROTORS; j++)
+			thr0[j] = sc_from_float(in->thr_prev_all[j]);
+		motor_id_init(&e->mid, &mc, thr0);
+		struct excite_params xp2 = xp;
+		xp2.seed = xp.seed * 2654435761u + 12345u;
+		excite_init(&e->exc2, &xp2);
+		e->rot_k = 0;
 		e->est_live = 0x0Fu;
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
@@ -355,11 +395,98 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	excite_init(&e->exc, &xp);
 }
 
+/* The rotor experiment's end with the null-space dither: the motor model of every rotor
+ * (motor_id.h), its acceptance, results and status lines. Nothing is applied unless the model
+ * explains the data (its cause) and every value is in range; ID_MOT_TAU, ID_DELAY_FR,
+ * MOT_CURVE (when estimated) and MOT_SCALE1..8 are then results like VEH_KF and VEH_KTAU. */
+static void rotor_end(struct experiment *e, const struct app_params *p)
+{
+	struct motor_id_result mr;
+	motor_id_process(&e->mid);
+	motor_id_solve(&e->mid, MOT_NE_MAX, &mr);
+	float rsd = e->cfg.rsd_max;
+	float kfp = ident_rotor_plain(&e->rot, 0), ktp = ident_rotor_plain(&e->rot, 1);
+	enum ident_verdict vf = ident_accept(mr.kf, mr.kf_sd, p->veh_kf, rsd);
+	enum ident_verdict vt = ident_accept(mr.ktau, mr.ktau_sd, p->veh_ktau, rsd);
+	bool model_ok = mr.cause == MOTOR_ID_OK;
+	int bad_rotor = -1;
+	bool curve_bad = !(mr.curve >= 0.0f && mr.curve <= CURVE_HI);
+	for (int j = 0; j < HAL_ROTORS; j++)
+		if (!(mr.scale[j] >= SCALE_LO && mr.scale[j] <= SCALE_HI) && bad_rotor < 0)
+			bad_rotor = j;
+	bool range_ok = !curve_bad && bad_rotor < 0;
+	bool ok = vf == IDENT_ACCEPT && vt == IDENT_ACCEPT && model_ok && range_ok;
+	result(e, PX_ID_KF_EST, isfinite(mr.kf) ? mr.kf : 0.0f);
+	result(e, PX_ID_KF_SD, isfinite(mr.kf_sd) ? mr.kf_sd : 0.0f);
+	result(e, PX_ID_KF_PLAIN, isfinite(kfp) ? kfp : 0.0f);
+	result(e, PX_ID_KTAU_EST, isfinite(mr.ktau) ? mr.ktau : 0.0f);
+	result(e, PX_ID_KTAU_SD, isfinite(mr.ktau_sd) ? mr.ktau_sd : 0.0f);
+	result(e, PX_ID_KTAU_PLAIN, isfinite(ktp) ? ktp : 0.0f);
+	result(e, PX_ID_TAU_CHECK, isfinite(mr.tau) ? mr.tau : -1.0f);
+	result(e, PX_ID_TAU_SD, isfinite(mr.tau_sd) ? mr.tau_sd : 0.0f);
+	result(e, PX_ID_CRV_SD, isfinite(mr.curve_sd) ? mr.curve_sd : 0.0f);
+	result(e, PX_ID_MOT_NE, isfinite(mr.ne_all) ? mr.ne_all : 0.0f);
+	if (ok) {
+		result(e, PX_VEH_KF, mr.kf);
+		result(e, PX_VEH_KTAU, mr.ktau);
+		result(e, PX_ID_MOT_TAU, mr.tau);
+		result(e, PX_ID_DELAY_FR, (float)mr.delay);
+		if (e->cfg.crv_est)
+			result(e, PX_MOT_CURVE, mr.curve);
+		for (int j = 0; j < HAL_ROTORS; j++)
+			result(e, PX_MOT_SCALE1 + j, mr.scale[j]);
+		/* the later phases (validation, inertia) model the rotors with what was found */
+		e->cfg.mot_tau = mr.tau;
+		e->cfg.delay_fr = mr.delay;
+	}
+	set_result_bit(e, p, 1u, ok);
+	const char *why = !model_ok ? "motor model" : !range_ok ? "out of range" : "";
+	const char *why_f = ok ? "accepted" : vf != IDENT_ACCEPT ? ident_verdict_text(vf) : why[0] ? why : "ktau rejected";
+	const char *why_t = ok ? "accepted" : vt != IDENT_ACCEPT ? ident_verdict_text(vt) : why[0] ? why : "kf rejected";
+	int sev = ok ? APP_SEV_INFO : APP_SEV_WARNING;
+	say(e, sev, "ID kf %.3f +/- %.3f %s%s", (double)mr.kf, (double)mr.kf_sd, ok ? "N " : "rejected: ", why_f);
+	say(e, sev, "ID ktau %.4f +/- %.4f %s%s", (double)mr.ktau, (double)mr.ktau_sd, ok ? "N m " : "rejected: ",
+	    why_t);
+	say(e, APP_SEV_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
+	say(e, sev, "ID motor lag %.4f +/- %.4f s delay %d fr", (double)mr.tau, (double)mr.tau_sd, (int)mr.delay);
+	if (e->cfg.crv_est)
+		say(e, sev, "ID curve %.3f +/- %.3f", (double)mr.curve, (double)mr.curve_sd);
+	else
+		say(e, APP_SEV_INFO, "ID curve %.3f given (ID_CRV_EST 0)", (double)mr.curve);
+	say(e, sev, "ID scale 1-4 %.4f %.4f %.4f %.4f", (double)mr.scale[0], (double)mr.scale[1],
+	    (double)mr.scale[2], (double)mr.scale[3]);
+	say(e, sev, "ID scale 5-8 %.4f %.4f %.4f %.4f", (double)mr.scale[4], (double)mr.scale[5],
+	    (double)mr.scale[6], (double)mr.scale[7]);
+	say(e, APP_SEV_INFO, "ID motor model NE %.3f noise %.4f N", (double)mr.ne_all, (double)mr.noise_sd);
+	if (!model_ok) {
+		if (mr.cause == MOTOR_ID_ROTOR)
+			say(e, APP_SEV_WARNING, "ID rejected: rotor %d unexplained, NE %.2f", mr.cause_rotor + 1,
+			    (double)mr.ne[mr.cause_rotor]);
+		else
+			say(e, APP_SEV_WARNING, "ID rejected: %s", motor_id_cause_text(mr.cause));
+		say(e, APP_SEV_WARNING, "ID remedy: %s", motor_id_cause_remedy(mr.cause));
+	} else if (curve_bad) {
+		say(e, APP_SEV_WARNING, "ID rejected: curve %.3f outside 0-0.99", (double)mr.curve);
+	} else if (bad_rotor >= 0) {
+		say(e, APP_SEV_WARNING, "ID rejected: rotor %d scale %.3f outside 0.3-1.5", bad_rotor + 1,
+		    (double)mr.scale[bad_rotor]);
+	}
+	/* a weak rotor is reported whenever the model holds (applied or not: the data show it) */
+	float smin = cfg_f(p->mot_scale_min, 0.8f);
+	if (model_ok)
+		for (int j = 0; j < HAL_ROTORS; j++)
+			if (mr.scale[j] < smin)
+				say(e, APP_SEV_WARNING, "ID rotor %d degraded: effectiveness %.3f", j + 1,
+				    (double)mr.scale[j]);
+}
+
 static void phase_end(struct experiment *e, const struct app_params *p)
 {
 	int k = e->phase_kind[e->phase];
 	float rsd = e->cfg.rsd_max;
-	if (k == PK_ROTOR) {
+	if (k == PK_ROTOR && e->cfg.exc_null) {
+		rotor_end(e, p);
+	} else if (k == PK_ROTOR) {
 		float kf = ident_rotor_est(&e->rot, 0), kf_sd = ident_rotor_sd(&e->rot, 0);
 		float kt = ident_rotor_est(&e->rot, 1), kt_sd = ident_rotor_sd(&e->rot, 1);
 		float kfp = ident_rotor_plain(&e->rot, 0), ktp = ident_rotor_plain(&e->rot, 1);
@@ -443,19 +570,37 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	bool use = running && n >= 1;
 
 	if (k == PK_ROTOR) {
-		for (int i = 1; i < n; i++)
-			ident_rotor_hold(&e->rot, sc_from_float(in->thr_prev[0]));
-		ident_rotor_update(&e->rot, sc_from_float(in->thr_prev[0]), sc_from_float(f->rotor_thrust_n[0]),
-				   sc_from_float(f->rotor_torque_nm[0]), use);
+		scalar_t tp[HAL_ROTORS], fm[HAL_ROTORS], tm[HAL_ROTORS];
+		for (int j = 0; j < HAL_ROTORS; j++) {
+			tp[j] = sc_from_float(in->thr_prev[j]);
+			fm[j] = sc_from_float(f->rotor_thrust_n[j]);
+			tm[j] = sc_from_float(f->rotor_torque_nm[j]);
+		}
+		for (int i = 1; i < n; i++) {
+			ident_rotor_hold(&e->rot, tp[0]);
+			motor_id_hold(&e->mid, tp);
+		}
+		ident_rotor_update(&e->rot, tp[0], fm[0], tm[0], use);
+		/* the motor model needs every rotor excited: the null-space dither only */
+		if (e->cfg.exc_null && n >= 1)
+			motor_id_step(&e->mid, tp, fm, tm, use);
 		float d = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
 		out->thr_delta[0] = d;
 		if (e->cfg.exc_null) {
-			/* rotors 1, 5 up and 3, 7 down: [1 0 -1 0 1 0 -1 0] is in the null space of
-			 * Gamma_o (thrust, roll, pitch and yaw all cancel), so the vehicle stays still
-			 * whatever k_f and k_tau are */
-			out->thr_delta[2] = -d;
-			out->thr_delta[4] = d;
-			out->thr_delta[6] = -d;
+			/* two dithers on the null-space patterns of Gamma_o (excite.h: rotors 1, 5
+			 * against 3, 7 and 2, 6 against 4, 8; thrust, roll, pitch and yaw all cancel
+			 * whatever k_f and k_tau are, so the vehicle stays still), plus an offset on
+			 * their sum cycling +o, 0, -o, 0 every half second: every rotor is excited,
+			 * each over three mean throttles (the curve) */
+			float d2 = running ? sc_to_float(excite_update(&e->exc2)) : 0.0f;
+			float o = running ? e->cfg.exc_ofs * sc_to_float(excite_offset_level(e->rot_k, OFS_SEG_FRAMES)) : 0.0f;
+			if (running)
+				e->rot_k++;
+			scalar_t p1[HAL_ROTORS], p2[HAL_ROTORS];
+			excite_null_pattern(0, p1);
+			excite_null_pattern(1, p2);
+			for (int j = 0; j < HAL_ROTORS; j++)
+				out->thr_delta[j] = (d + o) * sc_to_float(p1[j]) + (d2 + o) * sc_to_float(p2[j]);
 		}
 		ident_rotor_read(&e->rot, e->est, e->est_sd);   /* est[0..3], est_sd[0..3] */
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {

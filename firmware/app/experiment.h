@@ -26,18 +26,40 @@
  * MAV_CMD_USER_1 param1: 1 rotor coefficients, 2 validation, 3 Ixx, 4 Iyy, 5 Izz,
  * 6 the sequence validation -> rotor -> validation -> Ixx -> Iyy -> Izz. Every phase
  * starts with 1 s without excitation (filters settle), then excites:
- *   rotor      ID_EXC_TIME s of dither d (ID_EXC_KIND: 0 uniform, 1 PRBS (default,
- *              order 9), 2 multisine 0.5..4 Hz; amplitude ID_EXC_AMP 0.04, a new value
- *              every ID_EXC_DIV = 9 frames: 10 Hz) added after the throttle map to
- *              rotors 1 and 5 (+d) and 3 and 7 (-d): [1 0 -1 0 1 0 -1 0] is in the null
- *              space of Gamma_o (thrust, roll, pitch AND yaw cancel, whatever k_f and
- *              k_tau are), so the vehicle stays still (ID_EXC_NULL 0: rotor 1 only, the
- *              paper's, left to the attitude loop). Lag-aware RLS on rotor 1's measured
- *              f_1 and tau_1 (rows 35/36, magnitudes: rotor 1 is odd, +): regressor =
- *              the throttle sent on the previous frame (the loop's one frame) delayed by
- *              ID_DELAY_FR more frames and lagged by ID_MOT_TAU (a PARAMETER, 0.03 s;
- *              not estimated), through the thrust curve MOT_CURVE. The paper's plain
- *              estimator (eq. 18-20) runs alongside (ident.h).
+ *   rotor      ID_EXC_TIME s of two independent dithers d1, d2 (ID_EXC_KIND: 0 uniform,
+ *              1 PRBS (default, order 9), 2 multisine 0.5..4 Hz; amplitude ID_EXC_AMP 0.04,
+ *              a new value every ID_EXC_DIV = 9 frames: 10 Hz) added after the throttle map
+ *              on the null-space patterns of Gamma_o (excite.h): d1 on [1 0 -1 0 1 0 -1 0],
+ *              d2 on [0 1 0 -1 0 1 0 -1] (thrust, roll, pitch AND yaw cancel whatever k_f and
+ *              k_tau are, so the vehicle stays still; every rotor is excited), plus an offset
+ *              o = ID_EXC_OFS (0.03) times +1, 0, -1, 0 (half a second each) on their sum,
+ *              which moves each rotor's mean throttle over three levels (the thrust curve).
+ *              The motor model of every rotor (motor_id.h): measured f_j, tau_j (rows 35/36)
+ *              against the throttles sent, a bank of transport delays 0-4 frames, each with
+ *              its lag found by prediction error (grid refined around the best between
+ *              frames; ID_MOT_TAU only centres the first grid), k_f, k_tau, the curve
+ *              (ID_CRV_EST 1; 0: MOT_CURVE taken as known) and the per-rotor effectiveness
+ *              MOT_SCALE1..8 (median 1), each with its std. Beside it rotor 1 alone with the
+ *              model given (ID_MOT_TAU, ID_DELAY_FR, MOT_CURVE: the live KF/KTAU estimates)
+ *              and the paper's plain estimator (eq. 18-20, ident.h). ID_EXC_NULL 0: rotor 1
+ *              alone is dithered (the paper's, left to the attitude loop) and only the
+ *              estimator with the model given runs (its lag check is then the acceptance
+ *              rule, as described under "changes" below).
+ *              Acceptance of the motor model: the thrust noise is measured while hovering
+ *              still (the first second, first differences); the residual variance over it
+ *              (NE, per rotor and overall) must stay below 1.3; the cause of a rejection is
+ *              named with its remedy ("ID rejected: thrust curve not modelled", "ID remedy:
+ *              set ID_CRV_EST 1"; a rotor no lag explains: "ID rejected: rotor 3
+ *              unexplained, NE 9.54"; a lag out of 0.5-500 ms, a delay of 4 frames or more,
+ *              two delays that explain the data alike); ranges: curve 0-0.99, scales 0.3-1.5
+ *              (a rejection names the bound). Only then are VEH_KF, VEH_KTAU, ID_MOT_TAU,
+ *              ID_DELAY_FR, MOT_CURVE (when estimated) and MOT_SCALE1..8 among the results
+ *              (the later phases model the rotors with them); a rotor below MOT_SCALE_MIN
+ *              (0.8) is reported "ID rotor 3 degraded: effectiveness 0.700". Results also:
+ *              ID_TAU_CHECK (the lag found) with ID_TAU_SD, ID_CRV_SD, ID_MOT_NE.
+ *              k_f is the thrust at FULL throttle: with the curve estimated it is an
+ *              extrapolation from hover throttles (d k_f / k_f = d c / (1 - c)), and its std
+ *              (0.2-0.5 % in 10 s) says so; with the curve known it is ~0.03 %.
  *   validation ID_VAL_TIME s of mu_1: uniform random (+/- ID_INR_AMP / 10 N m, new every
  *              ID_EXC_DIV frames) added to the YAW torque demand (yaw moves single rotor
  *              thrusts most, ~+/-0.7 N on rotor 1, and tilts nothing). Compared: measured
@@ -74,7 +96,8 @@
  * experiments rely on
  *   - results: the app applies e->results[0..n_results) after EVERY exp_step that
  *     returns with n_results > 0 (not only at the end: sequence 6 validates with the new
- *     k_f) and then sets n_results = 0; EXP_MAX_RESULTS 24.
+ *     k_f) and then sets n_results = 0; EXP_MAX_RESULTS 32 (the rotor model's phase
+ *     end posts 24).
  *   - est_live (above); final_result, the app_result of the command's final answer
  *     (APP_ACCEPTED when finished, APP_FAILED when aborted); result parameters are
  *     read-only (PARAM_READONLY in experiment_params.h); parameter ID_EXC_NULL (the
@@ -112,13 +135,14 @@
 #include "filt.h"
 #include "hal.h"
 #include "ident.h"
+#include "motor_id.h"
 #include "outbox.h"
 #include "params.h"
 
 #define EXP_MAX_EST 8
-#define EXP_MAX_RESULTS 24
+#define EXP_MAX_RESULTS 32
 #define EXP_MAX_PHASES 6
-#define EXP_QUEUE 8
+#define EXP_QUEUE 20
 #define EXP_TILT_ABORT_DEG 15.0f
 
 enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
@@ -162,15 +186,16 @@ struct exp_line {
  * frame is gone by the time the turn runs between frames) */
 struct exp_turn {
 	float thr_prev0;                       /* rotor 1's throttle sent before that step */
+	float thr_prev_all[HAL_ROTORS];        /* every rotor's */
 	float rotor_f_cmd0;                    /* rotor 1's thrust allocated before that step */
 	float thrust_n[HAL_ROTORS], torque_nm[HAL_ROTORS], rate_b_rps[3];   /* of its frame */
 };
 
 /* the experiment's configuration (ID_* parameters), read once at exp_start */
 struct exp_cfg {
-	float exc_amp, exc_time, mot_tau, inr_amp, inr_time, val_time, rsd_max;
+	float exc_amp, exc_time, mot_tau, inr_amp, inr_time, val_time, rsd_max, exc_ofs;
 	uint32_t exc_kind, exc_div, seed, delay_fr;
-	bool exc_null;
+	bool exc_null, crv_est;
 };
 
 struct experiment {
@@ -197,10 +222,15 @@ struct experiment {
 	int gap_hold;                          /* frames left without inertia updates after a gap */
 	struct exp_cfg cfg;
 	struct excite exc;
+	struct excite exc2;                    /* rotor experiment: the second pattern's dither */
+	uint32_t rot_k;                        /* rotor experiment: excited frames so far */
 	/* the estimator of the current phase: phases never overlap, so they share the memory
 	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */
 	union {
-		struct ident_rotor rot;            /* rotor coefficients */
+		struct {                           /* rotor coefficients */
+			struct ident_rotor rot;    /* rotor 1, model given (and the paper's plain) */
+			struct motor_id mid;       /* every rotor, the motor model found (motor_id.h) */
+		};
 		struct ident_inertia inr;          /* inertia Ixx, Iyy or Izz */
 		struct {                           /* validation */
 			struct ident_fit fit;

@@ -5,9 +5,12 @@
  *
  * Kept beside experiment.c so that its defaults and these stay one edit apart:
  * a row here overrides the fallback default that experiment.c's prm() uses.
- * Append only (the order is the MAVLink index). The settings are locked while
- * an experiment runs; the results, from ID_KF_EST on, are read-only
- * (PARAM_READONLY) and written by the app when an experiment posts them.
+ * Append only (the order is the MAVLink index), so settings and results
+ * alternate in groups, each opened by redefining PARAM_FLAGS: the settings are
+ * locked while an experiment runs (PARAM_LOCKED); the results ("Result
+ * (read-only)") are also read-only (PARAM_READONLY) and written by the app
+ * when an experiment posts them. A row appended at the end takes the flags of
+ * the last group: a new setting opens a settable group of its own.
  */
 PARAM(ID_EXC_KIND,  id_exc_kind,  1.0f,    0.0f,    2.0f,    "",       "Rotor excitation: 0 uniform (the paper's delta_1), 1 PRBS, 2 multisine")
 PARAM(ID_EXC_AMP,   id_exc_amp,   0.04f,   0.0f,    0.3f,    "",       "Rotor excitation amplitude (throttle)")
@@ -41,3 +44,22 @@ PARAM(ID_VAL_NE_POST,id_val_ne_post,0.0f,    -1e9f,   1e9f,    "",       "Result
 PARAM(ID_VAL_FIT_POST,id_val_fit_post,0.0f,    -1e9f,   1e9f,    "%",      "Result (read-only): validation fit after identification")
 PARAM(ID_RESULT,    id_result,    0.0f,    0.0f,    255.0f,  "",       "Result (read-only): bit mask of accepted results (experiment.c)")
 PARAM(ID_TAU_CHECK, id_tau_check, 0.0f,    -1e9f,   1e9f,    "s",      "Result (read-only): motor lag seen by the rotor experiment (check of ID_MOT_TAU; -1 none)")
+/* the rotor model: settings and the priors it refines (locked), then its results */
+#undef PARAM_FLAGS
+#define PARAM_FLAGS PARAM_LOCKED
+PARAM(ID_CRV_EST,   id_crv_est,   1.0f,    0.0f,    1.0f,    "",       "Rotor experiment: 1 estimates the thrust curve MOT_CURVE, 0 takes MOT_CURVE as known")
+PARAM(ID_EXC_OFS,   id_exc_ofs,   0.03f,   0.0f,    0.2f,    "",       "Rotor experiment: null-space throttle offset moving the rotors' mean throttles apart")
+PARAM(MOT_SCALE1,   mot_scale1,   1.0f,    0.1f,    4.0f,    "",       "Effectiveness of rotor 1 (1 nominal; found by the rotor experiment)")
+PARAM(MOT_SCALE2,   mot_scale2,   1.0f,    0.1f,    4.0f,    "",       "Effectiveness of rotor 2 (1 nominal; found by the rotor experiment)")
+PARAM(MOT_SCALE3,   mot_scale3,   1.0f,    0.1f,    4.0f,    "",       "Effectiveness of rotor 3 (1 nominal; found by the rotor experiment)")
+PARAM(MOT_SCALE4,   mot_scale4,   1.0f,    0.1f,    4.0f,    "",       "Effectiveness of rotor 4 (1 nominal; found by the rotor experiment)")
+PARAM(MOT_SCALE5,   mot_scale5,   1.0f,    0.1f,    4.0f,    "",       "Effectiveness of rotor 5 (1 nominal; found by the rotor experiment)")
+PARAM(MOT_SCALE6,   mot_scale6,   1.0f,    0.1f,    4.0f,    "",       "Effectiveness of rotor 6 (1 nominal; found by the rotor experiment)")
+PARAM(MOT_SCALE7,   mot_scale7,   1.0f,    0.1f,    4.0f,    "",       "Effectiveness of rotor 7 (1 nominal; found by the rotor experiment)")
+PARAM(MOT_SCALE8,   mot_scale8,   1.0f,    0.1f,    4.0f,    "",       "Effectiveness of rotor 8 (1 nominal; found by the rotor experiment)")
+PARAM(MOT_SCALE_MIN,mot_scale_min,0.8f,    0.0f,    1.0f,    "",       "A rotor whose effectiveness is below this is reported degraded")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS (PARAM_LOCKED | PARAM_READONLY)
+PARAM(ID_TAU_SD,    id_tau_sd,    0.0f,    -1e9f,   1e9f,    "s",      "Result (read-only): standard deviation of the motor lag found (ID_TAU_CHECK)")
+PARAM(ID_CRV_SD,    id_crv_sd,    0.0f,    -1e9f,   1e9f,    "",       "Result (read-only): standard deviation of the thrust curve found")
+PARAM(ID_MOT_NE,    id_mot_ne,    0.0f,    -1e9f,   1e9f,    "",       "Result (read-only): rotor model residual variance over the measured noise variance")

@@ -54,7 +54,9 @@ struct app_event {
 	char text[APP_EVENT_TEXT];
 };
 
-#define APP_OUTBOX_LEN 24
+/* Room for one experiment turn's results (EXP_MAX_RESULTS parameter events, applied
+ * together) and the status lines of the same pass before mav.c drains (app.c checks). */
+#define APP_OUTBOX_LEN 40
 /* A ring of events; a full outbox drops the newest and counts it. */
 struct app_outbox {
 	struct app_event ev[APP_OUTBOX_LEN];

@@ -177,3 +177,21 @@ uint32_t excite_period_frames(const struct excite *e)
 		return 0;
 	}
 }
+
+void excite_null_pattern(unsigned k, scalar_t out[EXCITE_ROTORS])
+{
+	static const int8_t pat[EXCITE_NULL_PATTERNS][EXCITE_ROTORS] = {
+		{1, 0, -1, 0, 1, 0, -1, 0},
+		{0, 1, 0, -1, 0, 1, 0, -1},
+		{1, 1, -1, -1, 1, 1, -1, -1},
+	};
+	for (unsigned j = 0; j < EXCITE_ROTORS; j++)
+		out[j] = k < EXCITE_NULL_PATTERNS ? sc_from_int(pat[k][j]) : SC_ZERO;
+}
+
+scalar_t excite_offset_level(uint32_t frame, uint32_t seg_frames)
+{
+	static const int8_t lv[4] = {1, 0, -1, 0};
+	uint32_t seg = seg_frames > 0u ? seg_frames : 1u;
+	return sc_from_int(lv[(frame / seg) % 4u]);
+}

@@ -74,4 +74,22 @@ scalar_t excite_update(struct excite *e);
  * periodic), 0 for uniform (not periodic) and off. */
 uint32_t excite_period_frames(const struct excite *e);
 
+/* ---------------------------------------------------------------- null-space patterns
+ * Rotor patterns (8 entries, rotors 1..8) in the null space of Gamma_o, eq. (14) (thrust,
+ * roll, pitch and yaw all cancel, whatever k_f, k_tau and the arm are):
+ *   0: [1 0 -1 0 1 0 -1 0]   rotors 1, 5 against 3, 7 (odd rotors: one spin direction)
+ *   1: [0 1 0 -1 0 1 0 -1]   rotors 2, 6 against 4, 8 (even rotors)
+ *   2: [1 1 -1 -1 1 1 -1 -1] the sum: every rotor moves (offset pattern)
+ * Patterns 0 and 1 together cover every rotor; two independent dithers on them give each
+ * rotor its own excitation. excite_offset_level cycles +1, 0, -1, 0 every seg_frames, so an
+ * offset o times pattern 2 moves each rotor's mean throttle over three levels. */
+#define EXCITE_NULL_PATTERNS 3
+#define EXCITE_ROTORS 8
+
+/* pattern k (k >= EXCITE_NULL_PATTERNS: zeros) */
+void excite_null_pattern(unsigned k, scalar_t out[EXCITE_ROTORS]);
+
+/* +1, 0, -1, 0, ... by blocks of seg_frames (>= 1) frames */
+scalar_t excite_offset_level(uint32_t frame, uint32_t seg_frames);
+
 #endif /* OCTO_EXCITE_H */

@@ -7,6 +7,11 @@ void thrmap_init(struct thrmap *m, const struct thrmap_params *params)
 	m->p.k_f_n = sc_max(m->p.k_f_n, SC(1e-3));
 	m->p.curve = sc_clamp(m->p.curve, SC_ZERO, SC(0.99));
 	m->one_minus_a = sc_sub(SC(1), m->p.curve);
+	for (unsigned j = 0; j < THRMAP_ROTORS; j++) {
+		scalar_t k = m->p.scale[j] == SC_ZERO ? SC(1) : sc_clamp(m->p.scale[j], SC(0.1), SC(4));
+		m->p.scale[j] = k;
+		m->inv_scale[j] = sc_div(SC(1), k);
+	}
 }
 
 scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped)
@@ -48,7 +53,8 @@ uint32_t thrmap_update(const struct thrmap *m, const scalar_t *f_n, scalar_t *th
 	uint32_t mask = 0;
 	for (size_t j = 0; j < n; j++) {
 		bool c = false;
-		throttle_out[j] = thrmap_throttle(m, f_n[j], &c);
+		scalar_t f = j < THRMAP_ROTORS ? sc_mul(f_n[j], m->inv_scale[j]) : f_n[j];
+		throttle_out[j] = thrmap_throttle(m, f, &c);
 		if (c && j < 32)
 			mask |= (uint32_t)1 << j;
 	}

@@ -15,14 +15,21 @@
 
 #include <stdint.h>
 
+#define THRMAP_ROTORS 8
+
 struct thrmap_params {
 	scalar_t k_f_n;  /* thrust at full throttle, N (> 0; smaller values are raised to 1e-3) */
 	scalar_t curve; /* a in [0, 0.99] (clamped) */
+	/* per-rotor effectiveness (MOT_SCALEj): rotor j gives scale[j] times a nominal rotor's
+	 * thrust, so thrmap_update maps f_j / scale[j]; 0 (not given) is taken as 1, other
+	 * values are clamped to [0.1, 4] */
+	scalar_t scale[THRMAP_ROTORS];
 };
 
 struct thrmap {
 	struct thrmap_params p;
 	scalar_t one_minus_a; /* 1 - a */
+	scalar_t inv_scale[THRMAP_ROTORS]; /* 1 / scale */
 };
 
 /* Copies and clamps params (k_f >= 1e-3 N, 0 <= a <= 0.99). */
@@ -35,7 +42,8 @@ scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped);
 /* f = k_f ((1 - a) T + a T^2) with T first clamped to [0, 1] */
 scalar_t thrmap_thrust(const struct thrmap *m, scalar_t throttle);
 
-/* n rotors: throttle_out[j] = thrmap_throttle(f_n[j]); returns a bit mask of the
+/* n rotors: throttle_out[j] = thrmap_throttle(f_n[j] / scale[j]) (rotors beyond
+ * THRMAP_ROTORS: scale 1); returns a bit mask of the
  * rotors j (bit j, j < 32) whose throttle was clamped. */
 uint32_t thrmap_update(const struct thrmap *m, const scalar_t *f_n, scalar_t *throttle_out, size_t n);
 

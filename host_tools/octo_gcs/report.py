@@ -14,7 +14,7 @@ import os
 
 from . import __version__
 from .atomicfile import atomic_write
-from .identify import QUANTITIES, against_truth, plausibility, quantities_of
+from .identify import QUANTITIES, against_truth, motor_model_rows, plausibility, quantities_of
 from .vehiclefile import PAPER, truth_of
 
 PAPER_VALUES = {"kf": PAPER["kf"], "ktau": PAPER["ktau"], "ixx": PAPER["inertia"][0],
@@ -112,6 +112,8 @@ def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=No
         "truth": {k: _num(v) for k, v in truth.items()},
         "parameters": parameter_rows(nominal, after, truth, experiments),
         "validation": {tag: _validation_params(after, tag) for tag in ("before", "after")},
+        "motor_model": [dict(zip(("quantity", "found", "sd", "truth", "error"), r))
+                        for r in motor_model_rows(after, veh)],
         "estimator": {k: _num(after.get(k)) for k in sorted(after) if k.startswith("ID_") and not any(
             k in (q.est, q.sd, q.plain) for q in QUANTITIES)},
     }
@@ -203,7 +205,17 @@ def table_text(rep):
     out = [fmt.format(*head), fmt.format(*["-" * w for w in widths])]
     out += [fmt.format(*r) for r in rows]
     out += [""] + _validation_lines(rep)
+    out += [""] + _motor_lines(rep)
     return "\n".join(out)
+
+
+def _motor_lines(rep):
+    """The motor model found beside the truth, as an aligned text table."""
+    rows = [("motor model", "found", "sd", "truth", "error")] + [
+        (r["quantity"], r["found"], r["sd"], r["truth"], r["error"]) for r in rep.get("motor_model", [])]
+    widths = [max(len(str(x)) for x in col) for col in zip(*rows)]
+    fmt = "  ".join("{:<%d}" % w for w in widths)
+    return [fmt.format(*r) for r in rows]
 
 
 def markdown(rep, figures=()):
@@ -227,6 +239,13 @@ def markdown(rep, figures=()):
               "motor lag. *lag-aware*: regression on the command passed through the motor model, with "
               "its standard deviation. Errors are relative to the truth.", ""]
     lines += ["## Validation", ""] + [f"- {x}" for x in _validation_lines(rep)] + [""]
+    mm = rep.get("motor_model", [])
+    if mm:
+        lines += ["## Motor model found in flight", "", "| quantity | found | sd | truth | error |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {r['quantity']} | {r['found']} | {r['sd']} | {r['truth']} | {r['error']} |" for r in mm]
+        lines += ["", "Found by the rotor experiment (transport delay, motor lag, thrust curve and each "
+                  "rotor's effectiveness, median 1); applied only when accepted.", ""]
     lines += ["## Checks", ""]
     for c in rep["checks"]:
         tag = "ok" if c["ok"] else ("warning" if c["warning_only"] else "**FAILED**")

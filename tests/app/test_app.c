@@ -276,6 +276,52 @@ UNIT_TEST(app_identification_results_are_read_only)
 	CHECK(app_param_write(&r->a, param_count, 1.0f) != NULL);   /* no such index */
 }
 
+/* The rotor model's settings and the priors it refines are settable on the ground and
+ * locked in flight experiments; its results are read-only. */
+UNIT_TEST(app_motor_model_parameters_settable_results_read_only)
+{
+	static const char *const settable[] = {
+		"ID_MOT_TAU", "ID_DELAY_FR", "MOT_CURVE", "ID_CRV_EST", "ID_EXC_OFS", "MOT_SCALE1",
+		"MOT_SCALE2", "MOT_SCALE3", "MOT_SCALE4", "MOT_SCALE5", "MOT_SCALE6", "MOT_SCALE7",
+		"MOT_SCALE8", "MOT_SCALE_MIN",
+	};
+	static const char *const results[] = {"ID_TAU_SD", "ID_CRV_SD", "ID_MOT_NE", "ID_TAU_CHECK"};
+	struct rig *r = rig_new();
+	for (size_t i = 0; i < sizeof settable / sizeof settable[0]; i++) {
+		int k = param_index(settable[i]);
+		CHECK(k >= 0);
+		if (k < 0)
+			continue;
+		const struct param_def *d = &param_defs[k];
+		float v = 0.5f * (d->min + d->max);
+		const char *no = app_param_write(&r->a, (size_t)k, v);
+		if (no != NULL || params_get(&r->a.p, (size_t)k) != v)
+			unit_fail(u, __FILE__, __LINE__, "%s not settable: %s", settable[i], no ? no : "value");
+		CHECK(d->flags & PARAM_LOCKED);
+	}
+	for (size_t i = 0; i < sizeof results / sizeof results[0]; i++) {
+		int k = param_index(results[i]);
+		CHECK(k >= 0);
+		if (k < 0)
+			continue;
+		const char *no = app_param_write(&r->a, (size_t)k, 0.5f);
+		if (no == NULL || strstr(no, "read-only") == NULL)
+			unit_fail(u, __FILE__, __LINE__, "%s writable", results[i]);
+	}
+}
+
+/* A rotor's effectiveness (MOT_SCALEj) reaches the throttle map: in a level hover every
+ * rotor gives the same thrust, so a rotor at half effectiveness gets twice the throttle. */
+UNIT_TEST(app_rotor_scale_reaches_the_throttle_map)
+{
+	struct rig *r = rig_hovering(u);
+	CHECK(fabsf(r->h.thr[2] / r->h.thr[0] - 1.0f) < 0.02f);
+	CHECK(app_param_write(&r->a, (size_t)param_index("MOT_SCALE3"), 0.5f) == NULL);
+	fly(r, 3);
+	CHECK(fabsf(r->h.thr[2] / r->h.thr[0] - 2.0f) < 0.04f);
+	CHECK(fabsf(r->h.thr[6] / r->h.thr[0] - 1.0f) < 0.02f);
+}
+
 UNIT_TEST(app_parameters_saved_and_loaded)
 {
 	struct rig *r = rig_new();
@@ -323,6 +369,24 @@ UNIT_TEST(app_outbox_full_drops_newest)
 		CHECK(e.param_index == i);
 	}
 	CHECK(!outbox_pop(&o, &e));
+}
+
+/* An experiment turn that posts the most results it can (the rotor model posts 24 at once)
+ * together with a status line: every event reaches the ground station, none dropped. */
+UNIT_TEST(app_outbox_holds_a_turn_of_results)
+{
+	struct rig *r = rig_hovering(u);
+	int tko = param_index("NAV_TKO_ALT");
+	CHECK(tko >= 0 && r->a.outbox.dropped == 0);
+	for (int i = 0; i < EXP_MAX_RESULTS; i++)
+		r->a.exp.results[i] = (struct exp_result){.param_index = tko, .value = 4.0f + 0.01f * (float)i};
+	r->a.exp.n_results = EXP_MAX_RESULTS;
+	snprintf(r->a.exp.msg, sizeof r->a.exp.msg, "ID test line");
+	r->a.exp.msg_severity = APP_SEV_INFO;
+	app_tick(&r->a);
+	CHECK(r->a.outbox.dropped == 0);
+	CHECK(r->a.exp.n_results == 0 && r->a.exp.msg[0] == 0);
+	CHECK(params_get(&r->a.p, (size_t)tko) == 4.0f + 0.01f * (float)(EXP_MAX_RESULTS - 1));
 }
 
 /* The table's flags, set per group of rows, against the rule they stand for:

@@ -256,7 +256,7 @@ ARM_LIBS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/libcore.a)
 ARM_SIZE_ELFS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/size-base.elf $(ARM_B)/$(v)/size-core.elf $(ARM_B)/$(v)/structs.o)
 .PHONY: arm-size-total arm-size
 arm-size-total: $(ARM_LIBS) $(ARM_SIZE_ELFS)
-	@echo "== firmware/core size per target, bytes (bench targets: flash < 24 KB, RAM < 4 KB)"
+	@echo "== firmware/core size per target, bytes (bench targets: flash < 32 KB, RAM < 8 KB)"
 	@echo "   (core objects: all of libcore.a; linked: + libgcc/libm, see size_main.c)"
 	@printf '   %-9s %6s %6s %6s %7s %6s   %14s %6s\n' target .text .data .bss flash RAM "linked: flash" RAM
 	@for v in $(ARM_VARIANTS); do \

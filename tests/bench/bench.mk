@@ -18,6 +18,7 @@
 #                  plugin (needs the ARM toolchain: `make arm` installs it as root)
 #   bench-alloc    allocation quality: priority allocator vs pseudo-inverse + clipping
 #   bench-estim    Monte Carlo of the k_f estimators (lag-aware, paper's plain) vs the CRLB
+#   bench-motor    Monte Carlo of the joint rotor-model estimator (motor_id.h) on random vehicles
 # Sizes of the core on Cortex-M4F/M0 come from tests/arm's images (build/arm/<v>/).
 
 BENCH_B      := $(B)/bench
@@ -44,6 +45,10 @@ $(BENCH_B)/bench-estim: tests/bench/estim.c $(B)/libcore.a $(BENCH_FW_HDR)
 	@mkdir -p $(@D)
 	$(CC) $(BENCH_CFLAGS) $(CORE_INC) -o $@ $< $(B)/libcore.a -lm
 
+$(BENCH_B)/bench-motor: tests/bench/motor.c $(B)/libcore.a $(BENCH_FW_HDR)
+	@mkdir -p $(@D)
+	$(CC) $(BENCH_CFLAGS) $(CORE_INC) -o $@ $< $(B)/libcore.a -lm
+
 # the app step: the firmware's own app sources, compiled here with the firmware's flags, and
 # the tests' stub HAL (tests/app/stub_hal.c)
 BENCH_STEP_SRC := tests/bench/step.c $(BENCH_APP_SRC)
@@ -58,7 +63,7 @@ $(BENCH_B)/bench-step-quick: $(BENCH_STEP_SRC) tests/arm/bench_mark.c $(B)/libco
 	  $(B)/libcore.a -lm
 
 BENCH_HOST := $(BENCH_B)/pingpong $(BENCH_B)/bench-physics $(BENCH_B)/bench-alloc \
-              $(BENCH_B)/bench-estim $(BENCH_B)/bench-step $(BENCH_B)/bench-step-quick
+              $(BENCH_B)/bench-estim $(BENCH_B)/bench-motor $(BENCH_B)/bench-step $(BENCH_B)/bench-step-quick
 # built by `make` too (host only, a few seconds): tests/py/test_bench_smoke.py runs them
 ALL_TARGETS += $(BENCH_HOST)
 

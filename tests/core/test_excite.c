@@ -4,6 +4,7 @@
  * scaling, multisine within 1.5e-4 A). */
 #include "unit_scalar.h"
 #include "excite.h"
+#include "mixer.h"
 #include "unit.h"
 
 #include <math.h>
@@ -198,4 +199,53 @@ UNIT_TEST(excite_multisine_peak_period_reference)
 		       worst, peak);
 #endif
 	}
+}
+
+/* Every null-space pattern is in the null space of the mixer's Gamma_o (random arm, k_f,
+ * k_tau: the patterns hold for any vehicle of this layout), patterns 0 and 1 together move
+ * every rotor, and pattern 2 is their sum */
+UNIT_TEST(excite_null_patterns_in_gamma_null_space)
+{
+	struct unit_rng g = {0x9a77e2ULL};
+	for (int v = 0; v < 5; v++) {
+		struct mixer_params p = {
+			.arm_l_m = sc_from_float((float)unit_rand_uniform(&g, 0.2, 0.6)),
+			.k_f_n = sc_from_float((float)unit_rand_uniform(&g, 15.0, 40.0)),
+			.k_tau_nm = sc_from_float((float)unit_rand_uniform(&g, 0.2, 0.6)),
+			.t_min = SC(0.0), .t_max = SC(1.0), .rotor_mask = 0xFF, .mode = MIXER_MODE_PRIORITY,
+		};
+		struct mixer mix;   /* on the stack (M0 RAM) */
+		struct mixer_design des;
+		CHECK(mixer_init_design(&mix, &p, &des));
+		for (unsigned k = 0; k < EXCITE_NULL_PATTERNS; k++) {
+			scalar_t pat[EXCITE_ROTORS];
+			excite_null_pattern(k, pat);
+			for (int i = 0; i < 4; i++) {
+				double w = 0.0, scale = 0.0;
+				for (int j = 0; j < EXCITE_ROTORS; j++) {
+					w += (double)des.gamma_f[i][j] * d(pat[j]);
+					scale += fabs((double)des.gamma_f[i][j]);
+				}
+				CHECK(fabs(w) <= 1e-6 * scale);
+			}
+		}
+	}
+	scalar_t p0[EXCITE_ROTORS], p1[EXCITE_ROTORS], p2[EXCITE_ROTORS], p9[EXCITE_ROTORS];
+	excite_null_pattern(0, p0);
+	excite_null_pattern(1, p1);
+	excite_null_pattern(2, p2);
+	excite_null_pattern(9, p9);
+	for (int j = 0; j < EXCITE_ROTORS; j++) {
+		CHECK((p0[j] != SC_ZERO) != (p1[j] != SC_ZERO));
+		CHECK(p2[j] == sc_add(p0[j], p1[j]));
+		CHECK(p9[j] == SC_ZERO);
+	}
+	/* the offset cycle: +1, 0, -1, 0 by blocks */
+	CHECK(excite_offset_level(0, 45) == SC(1.0));
+	CHECK(excite_offset_level(44, 45) == SC(1.0));
+	CHECK(excite_offset_level(45, 45) == SC(0.0));
+	CHECK(excite_offset_level(90, 45) == SC(-1.0));
+	CHECK(excite_offset_level(179, 45) == SC(0.0));
+	CHECK(excite_offset_level(180, 45) == SC(1.0));
+	CHECK(excite_offset_level(6, 0) == SC(-1.0));   /* seg 0 is taken as 1 */
 }

@@ -10,7 +10,7 @@ static scalar_t s(double x) { return sc_from_float((float)x); }
 
 UNIT_TEST(thrmap_linear_round_trip_and_clamp)
 {
-	struct thrmap_params p = { SC(28.0269), SC(0) };
+	struct thrmap_params p = { SC(28.0269), SC(0), {0} };
 	struct thrmap m;
 	thrmap_init(&m, &p);
 	/* hover: 2.132 * 9.796 / 8 = 2.6106 N per rotor -> T = 0.0931 */
@@ -38,7 +38,7 @@ UNIT_TEST(thrmap_linear_round_trip_and_clamp)
 
 UNIT_TEST(thrmap_update_mask)
 {
-	struct thrmap_params p = { SC(28), SC(0) };
+	struct thrmap_params p = { SC(28), SC(0), {0} };
 	struct thrmap m;
 	thrmap_init(&m, &p);
 	scalar_t f[8] = { SC(2.6), SC(-0.1), SC(2.6), SC(40), SC(0), SC(28), SC(14), SC(2.6) };
@@ -55,7 +55,7 @@ UNIT_TEST(thrmap_curve_inverse)
 	const double kf = 28.0269;
 	const double as[4] = { 0.1, 0.3, 0.6, 0.95 };
 	for (int j = 0; j < 4; j++) {
-		struct thrmap_params p = { s(kf), s(as[j]) };
+		struct thrmap_params p = { s(kf), s(as[j]), {0} };
 		struct thrmap m;
 		thrmap_init(&m, &p);
 		double a = d(p.curve);
@@ -75,9 +75,37 @@ UNIT_TEST(thrmap_curve_inverse)
 		}
 	}
 	/* bad parameters are clamped, never divide by zero */
-	struct thrmap_params bad = { SC(0), SC(2) };
+	struct thrmap_params bad = { SC(0), SC(2), {0} };
 	struct thrmap m;
 	thrmap_init(&m, &bad);
 	CHECK(d(m.p.k_f_n) > 0 && d(m.p.curve) <= 0.99 + 1e-4);
 	CHECK(thrmap_throttle(&m, SC(1), NULL) == SC(1));
+}
+
+/* Per-rotor effectiveness: rotor j's throttle gives scale_j times the nominal thrust, so the
+ * map's throttle for f_j reproduces f_j through scale_j k_f g(T) (random scales and curve);
+ * an unset scale (0) is 1 */
+UNIT_TEST(thrmap_rotor_scale_round_trip)
+{
+	struct unit_rng g = {0x5ca1eULL};
+	for (int v = 0; v < 20; v++) {
+		double kf = unit_rand_uniform(&g, 15, 40), a = unit_rand_uniform(&g, 0, 0.6);
+		struct thrmap_params p = {sc_from_float((float)kf), sc_from_float((float)a), {0}};
+		double sc[THRMAP_ROTORS];
+		for (int j = 0; j < THRMAP_ROTORS; j++) {
+			sc[j] = j == v % THRMAP_ROTORS ? 1.0 : unit_rand_uniform(&g, 0.7, 1.2);
+			p.scale[j] = j == v % THRMAP_ROTORS ? SC(0) : sc_from_float((float)sc[j]);
+		}
+		struct thrmap m;
+		thrmap_init(&m, &p);
+		scalar_t f[THRMAP_ROTORS], t[THRMAP_ROTORS];
+		for (int j = 0; j < THRMAP_ROTORS; j++)
+			f[j] = sc_from_float((float)unit_rand_uniform(&g, 1.0, 0.6 * kf * sc[j]));
+		CHECK(thrmap_update(&m, f, t, THRMAP_ROTORS) == 0u);
+		for (int j = 0; j < THRMAP_ROTORS; j++) {
+			double tt = (double)sc_to_float(t[j]);
+			double back = sc[j] * kf * ((1 - a) * tt + a * tt * tt);
+			CHECK_REL(back, (double)sc_to_float(f[j]), OCTO_FIXED ? 2e-3 : 1e-5);
+		}
+	}
 }

@@ -41,7 +41,10 @@ class IdentFlight:
         sim_args += list(extra_sim_args)
         # a loaded test machine can stall a lockstep pair for a few hundred ms of wall time:
         # a link timeout of 1 s keeps that from aborting experiments
-        params = {"FS_LINK_TO": 1.0, **(params or {})}
+        # the vehicles of these tests have a linear thrust curve unless they say otherwise:
+        # it is declared (ID_CRV_EST 0, MOT_CURVE 0), so k_f is not an extrapolation through
+        # an estimated curve (tests of the curve pass ID_CRV_EST 1)
+        params = {"FS_LINK_TO": 1.0, "ID_CRV_EST": 0, **(params or {})}
         self.rig.params.write_text("".join(f"{k} {v}\n" for k, v in params.items()))
         self.rig.start_sim(*sim_args, lockstep=lockstep)
         self.rig.start_fw()

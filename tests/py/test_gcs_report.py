@@ -180,7 +180,9 @@ def test_report_table_json_and_markdown(synthetic, tmp_path):
     table = report.table_text(rep)
     assert "28.0269" in table and "25.55" in table and "+0.011 %" in table and "-8.838 %" in table
     md = report.markdown(rep, ["fig6_validation.png"])
-    assert md.count("\n| ") == 6 and "lag-aware" in md and "![fig6_validation.png]" in md
+    table1 = md.split("## Validation")[0]
+    assert table1.count("\n| ") == 6 and "lag-aware" in md and "![fig6_validation.png]" in md
+    assert "## Motor model found in flight" in md and "| rotor 8 effectiveness |" in md
     assert "Overall: **PASS**" in md
 
 

@@ -124,22 +124,23 @@ def test_experiment_aborts_when_the_plant_link_drops(launch, port, tmp_path):
 
 def test_ideal_plant_gives_table_1(launch, port, tmp_path):
     """--ideal (no noise, lag or delay) and the paper's truth: the estimates equal Table 1
-    within 0.05 % (the lag-aware regressor told there is no lag: ID_MOT_TAU 0)."""
+    within 0.05 %, and the rotor experiment finds that the motors have no lag."""
     fl = IdentFlight(launch, port, tmp_path, seed=9, ideal=True, params={"ID_MOT_TAU": 0})
     fl.takeoff()
     texts = fl.experiment(6)
     assert "ID done" in texts, [t for t in texts if "abort" in t or "link" in t]
     got = {n: fl.param(n) for n in ("ID_KF_EST", "ID_KTAU_EST", "ID_IXX_EST", "ID_IYY_EST",
                                     "ID_IZZ_EST", "VEH_KF", "VEH_KTAU", "VEH_IXX", "VEH_IYY",
-                                    "VEH_IZZ", "ID_RESULT", "ID_KF_PLAIN")}
+                                    "VEH_IZZ", "ID_RESULT", "ID_KF_PLAIN", "ID_MOT_TAU")}
     fl.finish()
-    print(got)
+    print(got, texts)
     table1 = {"KF": PAPER["kf"], "KTAU": PAPER["ktau"], "IXX": PAPER["inertia"][0],
               "IYY": PAPER["inertia"][1], "IZZ": PAPER["inertia"][2]}
     for k, v in table1.items():
         assert got[f"ID_{k}_EST"] == pytest.approx(v, rel=5e-4), k
         assert got[f"VEH_{k}"] == pytest.approx(got[f"ID_{k}_EST"], rel=1e-6), k
     assert got["ID_RESULT"] == 15
+    assert got["ID_MOT_TAU"] == 0.0   # found: motors without lag
 
 
 @pytest.mark.parametrize("kind", [0, 1, 2])
@@ -190,19 +191,20 @@ def test_transport_delay_and_slower_motors_modelled(launch, port, tmp_path):
     assert all(abs(e) < 0.02 for e in err[2:])
 
 
-def test_wrong_motor_lag_is_detected(launch, port, tmp_path):
-    """Motors slower than ID_MOT_TAU says (45 ms for 30 ms): the lag check reports the real
-    time constant and warns; the k_f estimate is off by the notes' few tenths of a percent."""
+def test_slower_motors_are_found(launch, port, tmp_path):
+    """Motors slower than ID_MOT_TAU's prior (45 ms for 30 ms): the rotor experiment finds the
+    lag (ID_TAU_CHECK, applied to ID_MOT_TAU) and k_f stays accurate."""
     veh = dict(motor_tau=0.045)
     fl = IdentFlight(launch, port, tmp_path, vehicle=veh, seed=78)
     fl.takeoff()
     texts = fl.experiment(1)
-    tau_check, kf = fl.param("ID_TAU_CHECK"), fl.param("ID_KF_EST")
+    tau_check, kf, tau = fl.param("ID_TAU_CHECK"), fl.param("ID_KF_EST"), fl.param("ID_MOT_TAU")
     fl.finish()
     print(texts, tau_check, kf / PAPER["kf"] - 1)
-    assert tau_check == pytest.approx(0.045, abs=0.005)
-    assert any("motor lag" in t and "DIFFERS" in t for t in texts), texts
-    assert abs(kf / PAPER["kf"] - 1) < 0.02
+    assert tau_check == pytest.approx(0.045, rel=0.05)
+    assert tau == tau_check
+    assert any(t.startswith("ID motor lag") for t in texts), texts
+    assert abs(kf / PAPER["kf"] - 1) < 0.003
 
 
 def test_rotor_coefficients_in_real_time_with_lost_frames(launch, port, tmp_path):

@@ -1,0 +1,568 @@
+/* motor_id.c - joint identification of the rotor model; see motor_id.h. */
+#include "motor_id.h"
+
+#define NR MOTOR_ID_ROTORS
+#define ND MOTOR_ID_DELAYS
+#define NL MOTOR_ID_LAGS
+
+/* grid ratio of each stage and where (fraction of the planned frames) a stage ends */
+static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f};
+static const float stage_end[MOTOR_ID_STAGES - 1] = {0.30f, 0.55f};
+#define X_MAX 1.5f          /* how far beyond the grid the parabola may place the minimum */
+#define CURVE_CHI2_SIGMAS 5.0f
+#define NE_SIGMAS 5.0f
+#define NO_LAG_FRAC 0.15f  /* a lag below this fraction of a frame is taken as none (a < 0.0013) */
+#define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
+
+static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
+
+/* 1 - a of a lag; below NO_LAG_FRAC of a frame the lag is none (a = 0) */
+static float lag_k1(float tau, float dt)
+{
+	return tau > NO_LAG_FRAC * dt ? 1.0f - expf(-dt / tau) : 1.0f;
+}
+
+static void set_grid(struct motor_id *m, unsigned d, float centre, float ratio)
+{
+	float dt = sc_to_float(m->cfg.dt_s);
+	m->lag_c[d] = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX);
+	m->lag_r[d] = ratio;
+	m->k1[d][0] = lag_k1(m->lag_c[d] / ratio, dt);
+	m->k1[d][1] = lag_k1(m->lag_c[d], dt);
+	m->k1[d][2] = lag_k1(m->lag_c[d] * ratio, dt);
+}
+
+void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const scalar_t thr0[NR])
+{
+	*m = (struct motor_id){0};
+	m->cfg = *cfg;
+	if (!(m->cfg.tau0_s > 0.0f))
+		m->cfg.tau0_s = 0.03f;
+	if (!(m->cfg.kf0 > 0.0f))
+		m->cfg.kf0 = 1.0f;
+	m->cfg.curve0 = clampf(m->cfg.curve0, 0.0f, 0.99f);
+	for (unsigned j = 0; j < NR; j++) {
+		float t0 = sc_to_float(thr0[j]);
+		m->s_c[j] = clampf(t0, 0.02f, 1.0f);
+		for (unsigned d = 0; d < ND; d++) {
+			m->hist[d][j] = t0;
+			for (unsigned i = 0; i < NL; i++)
+				m->s[d][i][j] = t0;
+		}
+	}
+	for (unsigned d = 0; d < ND; d++)
+		set_grid(m, d, m->cfg.tau0_s, stage_ratio[0]);
+}
+
+/* the commands of the next frame into the ring's next slot (the oldest, which the next
+ * advance no longer reads) */
+static void push(struct motor_id *m, const scalar_t thr_prev[NR])
+{
+	float *h = m->hist[(m->head + 1u) % ND];
+	for (unsigned j = 0; j < NR; j++)
+		h[j] = sc_to_float(thr_prev[j]);
+}
+
+/* every filter one frame on, with the commands push left in the next slot */
+static void advance(struct motor_id *m)
+{
+	m->head = (m->head + 1u) % ND;
+	for (unsigned d = 0; d < ND; d++) {
+		const float *u = m->hist[(m->head + ND - d) % ND];
+		for (unsigned i = 0; i < NL; i++) {
+			float k = m->k1[d][i], *s = m->s[d][i];
+			for (unsigned j = 0; j < NR; j++)
+				s[j] += k * (u[j] - s[j]);
+		}
+	}
+}
+
+void motor_id_hold(struct motor_id *m, const scalar_t thr_prev[NR])
+{
+	motor_id_process(m);
+	push(m, thr_prev);
+	advance(m);
+	m->nz_have = false;
+}
+
+void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar_t f[NR],
+		   const scalar_t tq[NR], bool excited)
+{
+	motor_id_process(m);   /* the previous frame's, if nobody did it between frames */
+	push(m, thr_prev);
+	/* thrust noise from first differences of still frames (slow control motion cancels),
+	 * taken here while the previous frame's thrust is still in q_f (only in the settling
+	 * second: excited steps just copy the frame) */
+	if (!excited && m->nz_have)
+		for (unsigned j = 0; j < NR; j++) {
+			float dd = sc_to_float(f[j]) - sc_to_float(m->q_f[j]);
+			m->nz_ss += dd * dd;
+			m->nz_n += 2.0f;
+		}
+	for (unsigned j = 0; j < NR; j++) {
+		m->q_f[j] = f[j];
+		m->q_tq[j] = tq[j];
+	}
+	m->nz_have = !excited;
+	m->q_excited = excited;
+	m->q_pending = true;
+}
+
+void motor_id_process(struct motor_id *m)
+{
+	if (!m->q_pending)
+		return;
+	m->q_pending = false;
+	if (m->refine_due)
+		motor_id_refine(m);
+	advance(m);
+	if (!m->q_excited)
+		return;
+	float fm[NR];
+	for (unsigned j = 0; j < NR; j++) {
+		fm[j] = sc_to_float(m->q_f[j]);
+		float t = sc_to_float(m->q_tq[j]);
+		m->ff += fm[j] * fm[j];
+		m->tf += t * fm[j];
+		m->tt += t * t;
+	}
+	m->n_exc++;
+	if (m->skip > 0u) {
+		m->skip--;
+	} else {
+		const float kf0 = m->cfg.kf0, c0 = m->cfg.curve0, c1 = 1.0f - c0;
+		for (unsigned d = 0; d < ND; d++)
+			for (unsigned i = 0; i < NL; i++) {
+				const float *s = m->s[d][i];
+				struct motor_id_stat *st = m->st[d][i];
+				for (unsigned j = 0; j < NR; j++) {
+					float x1 = s[j], x2 = s[j] * (s[j] - 2.0f * m->s_c[j]);
+					float r = fm[j] - kf0 * s[j] * (c1 + c0 * s[j]);
+					st[j].g11 += x1 * x1;
+					st[j].g12 += x1 * x2;
+					st[j].g22 += x2 * x2;
+					st[j].b1 += x1 * r;
+					st[j].b2 += x2 * r;
+					st[j].rr += r * r;
+				}
+			}
+		m->n_stat++;
+	}
+	if (m->stage < MOTOR_ID_STAGES - 1 &&
+	    (float)m->n_exc >= stage_end[m->stage] * (float)m->cfg.n_frames)
+		m->refine_due = true;
+}
+
+/* the prior curve's regressor on the basis: g0 = w1 x1 + w2 x2 */
+static void curve_w(float c, float s_c, float w[2])
+{
+	w[0] = (1.0f - c) + 2.0f * c * s_c;
+	w[1] = c;
+}
+
+/* residual sum of squares of one rotor's statistics: 2 parameters (curve estimated) or the
+ * prior curve's 1; delta = the fitted change of theta from the reference (2 values) */
+static float rotor_ssr(const struct motor_id_stat *st, bool est_curve, float c0, float s_c,
+		       float delta[2])
+{
+	if (est_curve) {
+		float det = st->g11 * st->g22 - st->g12 * st->g12;
+		if (!(det > 1e-30f * st->g11 * st->g22) || !(st->g11 > 0.0f)) {
+			delta[0] = delta[1] = 0.0f;
+			return st->rr;
+		}
+		delta[0] = (st->g22 * st->b1 - st->g12 * st->b2) / det;
+		delta[1] = (st->g11 * st->b2 - st->g12 * st->b1) / det;
+		return fmaxf(st->rr - delta[0] * st->b1 - delta[1] * st->b2, 0.0f);
+	}
+	float w[2];
+	curve_w(c0, s_c, w);
+	float gw = w[0] * w[0] * st->g11 + 2.0f * w[0] * w[1] * st->g12 + w[1] * w[1] * st->g22;
+	float bw = w[0] * st->b1 + w[1] * st->b2;
+	float mu = gw > 0.0f ? bw / gw : 0.0f;
+	delta[0] = mu * w[0];
+	delta[1] = mu * w[1];
+	return fmaxf(st->rr - mu * bw, 0.0f);
+}
+
+/* parabola through (-1, s0), (0, s1), (1, s2): minimum x (clamped to +/-X_MAX), the value
+ * there and the curvature k (S = S_min + k (x - x*)^2; 0 when not convex) */
+static float parabola(const float sv[3], float *s_min, float *k)
+{
+	float den = sv[0] - 2.0f * sv[1] + sv[2];
+	float x;
+	if (den > 0.0f)
+		x = clampf((sv[0] - sv[2]) / (2.0f * den), -X_MAX, X_MAX);
+	else
+		x = sv[0] < sv[2] ? -X_MAX : X_MAX;
+	*k = den > 0.0f ? 0.5f * den : 0.0f;
+	*s_min = sv[1] + 0.5f * x * (sv[2] - sv[0]) + 0.5f * x * x * den;
+	return x;
+}
+
+/* Lagrange weights of the three grid points at x */
+static void lagrange3(float x, float l[3])
+{
+	l[0] = 0.5f * x * (x - 1.0f);
+	l[1] = 1.0f - x * x;
+	l[2] = 0.5f * x * (x + 1.0f);
+}
+
+/* The selection criterion of delay d at each lag. The likelihood with each rotor's noise
+ * variance unknown is -(n/2) sum_j log SSR_j (a rotor that no lag explains, another motor,
+ * then pulls the common lag little); log SSR is far from a parabola in the lag, so its
+ * Gauss-Newton form is used: J = sum_j SSR_j / SSR_j(best grid point), quadratic in the
+ * statistics like SSR itself; -(n/2) log-likelihood = (n/2) J + const near the minimum. */
+static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
+{
+	float dl[2], e[NL][NR], tot[NL];
+	unsigned ib = 0;
+	for (unsigned i = 0; i < NL; i++) {
+		tot[i] = 0.0f;
+		for (unsigned j = 0; j < NR; j++) {
+			e[i][j] = rotor_ssr(&m->st[d][i][j], m->cfg.est_curve, m->cfg.curve0, m->s_c[j], dl);
+			tot[i] += e[i][j];
+		}
+		if (tot[i] < tot[ib])
+			ib = i;
+	}
+	for (unsigned i = 0; i < NL; i++) {
+		jv[i] = 0.0f;
+		for (unsigned j = 0; j < NR; j++)
+			jv[i] += e[i][j] / fmaxf(e[ib][j], 1e-30f);
+	}
+}
+
+void motor_id_refine(struct motor_id *m)
+{
+	motor_id_process(m);
+	if (!m->refine_due)
+		return;
+	m->refine_due = false;
+	unsigned next = m->stage + 1u;
+	if (next >= MOTOR_ID_STAGES)
+		return;
+	float dt = sc_to_float(m->cfg.dt_s), tau_hi = 0.0f;
+	for (unsigned d = 0; d < ND; d++) {
+		float sv[3], smin, k;
+		delay_crit(m, d, sv);
+		float x = m->n_stat > 0u ? parabola(sv, &smin, &k) : 0.0f;
+		float r = m->lag_r[d];
+		/* a minimum below the grid walks twice as far (towards no lag at all) */
+		float centre = m->lag_c[d] * powf(r, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
+		/* the lag states at the new taus: quadratic interpolation in log tau of the old.
+		 * A minimum outside the grid narrows it less (the grid walks towards it) */
+		float nr = stage_ratio[next];
+		if (fabsf(x) > 1.0f)
+			nr = fmaxf(nr, sqrtf(r));
+		float xs[3], old[NL][NR];
+		for (unsigned i = 0; i < NL; i++)
+			for (unsigned j = 0; j < NR; j++)
+				old[i][j] = m->s[d][i][j];
+		for (int i = 0; i < (int)NL; i++) {
+			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * powf(nr, (float)(i - 1));
+			xs[i] = clampf(logf(tau_i / m->lag_c[d]) / logf(r), -X_MAX, X_MAX);
+		}
+		for (unsigned i = 0; i < NL; i++) {
+			float l[3];
+			lagrange3(xs[i], l);
+			for (unsigned j = 0; j < NR; j++)
+				m->s[d][i][j] = l[0] * old[0][j] + l[1] * old[1][j] + l[2] * old[2][j];
+		}
+		set_grid(m, d, centre, nr);
+		tau_hi = fmaxf(tau_hi, m->lag_c[d] * nr);
+	}
+	for (unsigned d = 0; d < ND; d++)
+		for (unsigned i = 0; i < NL; i++)
+			for (unsigned j = 0; j < NR; j++)
+				m->st[d][i][j] = (struct motor_id_stat){0};
+	m->n_stat = 0;
+	m->stage = (uint8_t)next;
+	/* what the interpolation left decays with the lag: wait two time constants */
+	float fr = dt > 0.0f ? 2.0f * tau_hi / dt : 0.0f;
+	m->skip = (uint32_t)clampf(fr + 1.0f, 1.0f, 30.0f);
+}
+
+static void interp_stat(const struct motor_id_stat st[3], const float l[3], struct motor_id_stat *o)
+{
+	o->g11 = l[0] * st[0].g11 + l[1] * st[1].g11 + l[2] * st[2].g11;
+	o->g12 = l[0] * st[0].g12 + l[1] * st[1].g12 + l[2] * st[2].g12;
+	o->g22 = l[0] * st[0].g22 + l[1] * st[1].g22 + l[2] * st[2].g22;
+	o->b1 = l[0] * st[0].b1 + l[1] * st[1].b1 + l[2] * st[2].b1;
+	o->b2 = l[0] * st[0].b2 + l[1] * st[1].b2 + l[2] * st[2].b2;
+	o->rr = l[0] * st[0].rr + l[1] * st[1].rr + l[2] * st[2].rr;
+}
+
+/* sum over rotors of log SSR_j of delay d at grid position x (statistics interpolated) */
+static float delay_logssr(const struct motor_id *m, unsigned d, float x)
+{
+	float l[3], dl[2], sum = 0.0f;
+	lagrange3(x, l);
+	for (unsigned j = 0; j < NR; j++) {
+		struct motor_id_stat tri[3] = {m->st[d][0][j], m->st[d][1][j], m->st[d][2][j]}, o;
+		interp_stat(tri, l, &o);
+		sum += logf(fmaxf(rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, m->s_c[j], dl), 1e-30f));
+	}
+	return sum;
+}
+
+/* rotor's m at curve c from its statistics: sum g f / sum g^2 with g = w^T x and
+ * sum x f = b + G theta_ref; *gw = sum g^2 */
+static float rotor_m(const struct motor_id_stat *st, float c, float s_c, const float th_ref[2], float *gw)
+{
+	float w[2];
+	curve_w(c, s_c, w);
+	float xf1 = st->b1 + st->g11 * th_ref[0] + st->g12 * th_ref[1];
+	float xf2 = st->b2 + st->g12 * th_ref[0] + st->g22 * th_ref[1];
+	*gw = w[0] * w[0] * st->g11 + 2.0f * w[0] * w[1] * st->g12 + w[1] * w[1] * st->g22;
+	return *gw > 0.0f ? (w[0] * xf1 + w[1] * xf2) / *gw : 0.0f;
+}
+
+/* median of 8 (mean of the 4th and 5th); their indices in *a, *b */
+static float median8(const float v[NR], unsigned *a, unsigned *b)
+{
+	unsigned idx[NR];
+	for (unsigned j = 0; j < NR; j++)
+		idx[j] = j;
+	for (unsigned i = 1; i < NR; i++)
+		for (unsigned k = i; k > 0 && v[idx[k - 1]] > v[idx[k]]; k--) {
+			unsigned t = idx[k];
+			idx[k] = idx[k - 1];
+			idx[k - 1] = t;
+		}
+	*a = idx[NR / 2 - 1];
+	*b = idx[NR / 2];
+	return 0.5f * (v[*a] + v[*b]);
+}
+
+static float sqrt0(float v) { return v > 0.0f ? sqrtf(v) : 0.0f; }
+
+void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_result *res)
+{
+	*res = (struct motor_id_result){0};
+	res->cause_rotor = -1;
+	const bool ec = m->cfg.est_curve;
+	const float c0 = m->cfg.curve0, kf0 = m->cfg.kf0;
+	const unsigned np = ec ? 2u : 1u;
+	res->n = m->n_stat;
+	if (m->n_stat < 30u) {
+		res->cause = MOTOR_ID_NO_DATA;
+		return;
+	}
+	float dof = (float)(m->n_stat * NR) - (float)(np * NR) - 1.0f;
+
+	/* the delay hypothesis of least criterion at its best lag */
+	float smin[ND], xs[ND], ks[ND];
+	unsigned best = 0;
+	for (unsigned d = 0; d < ND; d++) {
+		float sv[3];
+		delay_crit(m, d, sv);
+		float jmin;
+		xs[d] = parabola(sv, &jmin, &ks[d]);
+		smin[d] = delay_logssr(m, d, xs[d]);
+		if (smin[d] < smin[best])
+			best = d;
+	}
+	float second = -1.0f;
+	for (unsigned d = 0; d < ND; d++)
+		if (d != best && (second < 0.0f || smin[d] < second))
+			second = smin[d];
+	res->delay = best;
+	float nf = (float)m->n_stat;
+	res->delay_margin = 0.5f * nf * (second - smin[best]);
+
+	/* sd of the lag: -log-likelihood = (n / 2) J, J = J_min + k (x - x*)^2, so var x = 1 / (n k) */
+	float x = xs[best], r = m->lag_r[best];
+	res->tau = m->lag_c[best] * powf(r, x);
+	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(1.0f / (nf * ks[best])) : res->tau;
+	/* the grid's low end without lag and the minimum there: no lag (sd: that bound) */
+	float dtf = sc_to_float(m->cfg.dt_s);
+	bool no_lag = res->tau <= 1.2f * NO_LAG_FRAC * dtf ||
+		      (x <= -X_MAX + 1e-3f && m->lag_c[best] * powf(r, -X_MAX) <= NO_LAG_FRAC * dtf);
+	if (no_lag) {
+		res->tau = 0.0f;
+		res->tau_sd = NO_LAG_FRAC * dtf;
+	}
+
+	/* every rotor at that lag */
+	float l[3];
+	lagrange3(x, l);
+	struct motor_id_stat st[NR];
+	float ssr[NR], cj[NR], vcj[NR], s2j[NR], th_ref[NR][2];
+	float ssr_sum = 0.0f, chi2 = 0.0f;
+	for (unsigned j = 0; j < NR; j++) {
+		struct motor_id_stat tri[3] = {m->st[best][0][j], m->st[best][1][j], m->st[best][2][j]};
+		interp_stat(tri, l, &st[j]);
+		float w[2], dl[2];
+		curve_w(c0, m->s_c[j], w);
+		th_ref[j][0] = kf0 * w[0];
+		th_ref[j][1] = kf0 * w[1];
+		ssr[j] = rotor_ssr(&st[j], ec, c0, m->s_c[j], dl);
+		ssr_sum += ssr[j];
+		s2j[j] = ssr[j] / ((float)m->n_stat - (float)np);
+		/* the curve of this rotor alone (2-parameter fit) and its variance */
+		float d2[2];
+		float ssr2 = rotor_ssr(&st[j], true, c0, m->s_c[j], d2);
+		float a = th_ref[j][0] + d2[0], bq = th_ref[j][1] + d2[1];
+		float mj = a + bq * (1.0f - 2.0f * m->s_c[j]);
+		float det = st[j].g11 * st[j].g22 - st[j].g12 * st[j].g12;
+		float s2f = ssr2 / ((float)m->n_stat - 2.0f);
+		if (mj > 0.0f && det > 0.0f) {
+			float ga = -bq / (mj * mj), gb = a / (mj * mj);
+			/* g^T G^-1 g */
+			float q = (ga * ga * st[j].g22 - 2.0f * ga * gb * st[j].g12 + gb * gb * st[j].g11) / det;
+			cj[j] = bq / mj;
+			vcj[j] = s2f * q;
+		} else {
+			cj[j] = 0.0f;
+			vcj[j] = 0.0f;
+		}
+		chi2 += ssr[j] - ssr2;
+	}
+
+	/* the common curve: inverse-variance mean of the rotors' */
+	if (ec) {
+		float sw = 0.0f, swc = 0.0f;
+		for (unsigned j = 0; j < NR; j++)
+			if (vcj[j] > 0.0f) {
+				sw += 1.0f / vcj[j];
+				swc += cj[j] / vcj[j];
+			}
+		res->curve = sw > 0.0f ? swc / sw : c0;
+		res->curve_sd = sw > 0.0f ? sqrt0(1.0f / sw) : 0.0f;
+		/* c >= 0 (thrust convex in throttle): a negative estimate within 4 sd of 0 is the
+		 * constrained optimum's boundary, c = 0; beyond, it stays (the data contradict the
+		 * model: the caller's range check names the bound) */
+		if (res->curve < 0.0f && res->curve > -4.0f * res->curve_sd)
+			res->curve = 0.0f;
+	} else {
+		res->curve = c0;
+		res->curve_sd = 0.0f;
+	}
+
+	/* each rotor's m at that curve, k_f = their median, scales */
+	float mj[NR], vm[NR], mj_e[NR];
+	const float eps = 1e-3f;
+	for (unsigned j = 0; j < NR; j++) {
+		float gw, gw2;
+		mj[j] = rotor_m(&st[j], res->curve, m->s_c[j], th_ref[j], &gw);
+		mj_e[j] = rotor_m(&st[j], res->curve + eps, m->s_c[j], th_ref[j], &gw2);
+		vm[j] = gw > 0.0f ? s2j[j] / gw : 0.0f;
+	}
+	unsigned ia, ib;
+	res->kf = median8(mj, &ia, &ib);
+	float dkdc = (0.5f * (mj_e[ia] + mj_e[ib]) - res->kf) / eps;
+	float vkf = 0.25f * (vm[ia] + vm[ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
+	res->kf_sd = sqrt0(vkf);
+	for (unsigned j = 0; j < NR; j++) {
+		res->scale[j] = res->kf > 0.0f ? mj[j] / res->kf : 0.0f;
+		res->scale_sd[j] = res->kf > 0.0f ? sqrt0(vm[j]) / res->kf : 0.0f;
+	}
+
+	/* noise and the normalised errors */
+	float nz = m->nz_n > 0.0f ? m->nz_ss / m->nz_n : 0.0f;
+	res->noise_sd = sqrt0(nz);
+	float ne_hi = 0.0f, ne_sorted_mid;
+	unsigned worst = 0;
+	for (unsigned j = 0; j < NR; j++) {
+		res->ne[j] = nz > 0.0f ? s2j[j] / nz : 0.0f;
+		if (res->ne[j] > ne_hi) {
+			ne_hi = res->ne[j];
+			worst = j;
+		}
+	}
+	res->ne_all = nz > 0.0f ? ssr_sum / dof / nz : 0.0f;
+	unsigned ma, mb;
+	ne_sorted_mid = median8(res->ne, &ma, &mb);
+	res->curve_chi2 = nz > 0.0f ? chi2 / nz : 0.0f;
+
+	/* k_tau = rho k_f, rho from torque on thrust over every rotor (noise-corrected) */
+	float ff = m->ff, tf = m->tf, tt = m->tt;
+	float nall = (float)(m->n_exc * NR);
+	float sf2 = nz > 0.0f ? nz : ssr_sum / dof;
+	float rho = ff > 0.0f ? tf / ff : 0.0f;
+	float ss_t = tt - 2.0f * rho * tf + rho * rho * ff;
+	float vrho = ff > 0.0f && nall > 1.0f ? ss_t / (nall - 1.0f) / ff : 0.0f;
+	if (ff > nall * sf2)
+		rho *= ff / (ff - nall * sf2);
+	res->ktau = rho * res->kf;
+	res->ktau_sd = sqrt0(rho * rho * vkf + res->kf * res->kf * vrho);
+
+	/* the cause, most specific first */
+	float dof_j = (float)m->n_stat - (float)np;
+	float chi2_lim = (float)NR + CURVE_CHI2_SIGMAS * sqrtf(2.0f * (float)NR);
+	/* the normalised errors' limits: ne_max, or NE_SIGMAS standard deviations of the ratio
+	 * of two variance estimates (the fit's, dof_j; the noise's from first differences,
+	 * about a third of its count effective) when the data are few */
+	float v_nz = m->nz_n > 0.0f ? 6.0f / m->nz_n : 1.0f;
+	float lim_j = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof_j, 1.0f) + v_nz));
+	float lim_all = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof, 1.0f) + v_nz));
+	if (!(m->nz_n >= 16.0f))
+		res->cause = MOTOR_ID_NOISE_UNKNOWN;
+	else if (!ec && res->curve_chi2 > chi2_lim)
+		res->cause = MOTOR_ID_CURVE;
+	else if (!no_lag && (!(ks[best] > 0.0f) || fabsf(x) >= X_MAX - 1e-3f ||
+			     res->tau <= MOTOR_ID_TAU_MIN * 1.01f || res->tau >= MOTOR_ID_TAU_MAX * 0.99f))
+		res->cause = MOTOR_ID_LAG_RANGE;
+	else if (best == ND - 1u)
+		res->cause = MOTOR_ID_DELAY_RANGE;
+	else if (res->delay_margin < MARGIN_MIN)
+		res->cause = MOTOR_ID_DELAY_AMBIGUOUS;
+	else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && dof_j > 0.0f) {
+		res->cause = MOTOR_ID_ROTOR;
+		res->cause_rotor = (int)worst;
+	} else if (res->ne_all > lim_all)
+		res->cause = MOTOR_ID_MODEL;
+	else
+		res->cause = MOTOR_ID_OK;
+}
+
+const char *motor_id_cause_text(enum motor_id_cause c)
+{
+	switch (c) {
+	case MOTOR_ID_OK:
+		return "accepted";
+	case MOTOR_ID_NO_DATA:
+		return "too few frames";
+	case MOTOR_ID_NOISE_UNKNOWN:
+		return "noise not measured";
+	case MOTOR_ID_LAG_RANGE:
+		return "motor lag out of range";
+	case MOTOR_ID_DELAY_RANGE:
+		return "delay out of range";
+	case MOTOR_ID_DELAY_AMBIGUOUS:
+		return "delay ambiguous";
+	case MOTOR_ID_CURVE:
+		return "thrust curve not modelled";
+	case MOTOR_ID_ROTOR:
+		return "a rotor unexplained";
+	case MOTOR_ID_MODEL:
+		return "residuals above noise";
+	}
+	return "?";
+}
+
+const char *motor_id_cause_remedy(enum motor_id_cause c)
+{
+	switch (c) {
+	case MOTOR_ID_OK:
+		return "";
+	case MOTOR_ID_NO_DATA:
+		return "longer ID_EXC_TIME";
+	case MOTOR_ID_NOISE_UNKNOWN:
+		return "hover still before the run";
+	case MOTOR_ID_LAG_RANGE:
+		return "lag 0.5-500 ms only; check motors";
+	case MOTOR_ID_DELAY_RANGE:
+		return "delay > 3 frames: fix the link";
+	case MOTOR_ID_DELAY_AMBIGUOUS:
+		return "raise ID_EXC_AMP or ID_EXC_TIME";
+	case MOTOR_ID_CURVE:
+		return "set ID_CRV_EST 1";
+	case MOTOR_ID_ROTOR:
+		return "inspect that rotor";
+	case MOTOR_ID_MODEL:
+		return "check link timing and rotors";
+	}
+	return "";
+}

@@ -1,0 +1,168 @@
+/*
+ * motor_id.h - joint identification of the rotor model from every rotor's commanded throttle
+ * and its measured thrust and reaction torque: transport delay (whole frames), motor lag,
+ * k_f, k_tau, thrust curve c and a per-rotor effectiveness (scale), each with its standard
+ * deviation.
+ *
+ * ---------------------------------------------------------------- model
+ * Rotor j: the throttle T_k sent at frame k acts after D more frames through a first-order
+ * lag tau (exact ZOH discretisation): s_(k+1) = a s_k + (1 - a) T_(k-D), a = exp(-dt / tau);
+ * frame k+1 reports f_j = m_j g(s), tau_j = rho m_j g(s), g(s) = (1 - c) s + c s^2,
+ * m_j = scale_j k_f, rho = k_tau / k_f. D and tau are common to all rotors (one motor type,
+ * one link); c is common; the scales are normalised to median 1, so k_f = median(m_j).
+ *
+ * ---------------------------------------------------------------- the bank
+ * For every delay hypothesis D = 0..MOTOR_ID_DELAYS-1 and MOTOR_ID_LAGS lag values on a
+ * geometric grid tau_D r^(i-1), i = 0..2, each rotor's command runs through that delay and
+ * lag (s), and the per-rotor least-squares statistics of the thrust on the basis
+ *     x = [s, s (s - 2 s_c)]     (s_c: the rotor's throttle at the start)
+ * are accumulated: G = sum x x^T, b = sum x r, rr = sum r^2 with r = f - x^T theta_ref, the
+ * residual of a fixed reference model (the prior k_f and c), so that the float sums do not
+ * cancel. f = A s + B s (s - 2 s_c) is the curve model exactly: m = A + B (1 - 2 s_c),
+ * c = B / m. The basis keeps G well conditioned at the low throttles of hover.
+ * With curve estimation off the regressor is the prior curve's g (w^T x, one parameter).
+ *
+ * Selection by prediction error: J = sum over rotors of log SSR_j (every rotor's k_f and
+ * curve fitted; -2/n times the log-likelihood with each rotor's noise unknown, so a rotor
+ * no lag explains pulls the common lag little) is interpolated by a parabola in log tau
+ * over the three lags; each delay's minimum is its lag. The grid is refined around it between frames
+ * (motor_id_refine: wide ratio 2.5, then 1.3, then 1.08; a minimum below the grid walks
+ * twice as far and keeps the grid wider; the statistics restart, the lag
+ * filters keep running), so the last stage's data give the estimates. The final estimates
+ * (motor_id_solve, between frames) take the delay of least interpolated SSR, and the
+ * statistics at its lag by quadratic interpolation over the grid (smooth in tau).
+ * sd(tau) from the curvature of the profile criterion (the Fisher information of the lag with
+ * k_f and c profiled out).
+ *
+ * k_tau: rho by regressing every rotor's measured torque on its measured thrust (no
+ * intercept; the thrust noise biases it by -sigma_f^2 / mean(f^2), ~1e-4, corrected), so
+ * k_tau = rho k_f with rho's and k_f's variances combined.
+ *
+ * Noise: while not excited (the experiment's settling second) the thrust noise is measured
+ * from first differences (var(f_k - f_(k-1)) / 2: slow control motion cancels). The
+ * acceptance compares the fit's residual variance with it (normalised error per rotor).
+ *
+ * Identifiability: k_f is thrust at FULL throttle; hovering rotors run near 0.1, so with the
+ * curve estimated k_f is an extrapolation: d k_f / k_f = d c / (1 - c). Its sd includes that.
+ *
+ * Core rules: no heap, globals or I/O; interfaces in scalar_t, internals float32 in both
+ * builds (as rls.h). The per-frame step (motor_id_step) is the bank update; the refinement
+ * and the solve run between frames (the step does a due refinement itself if nobody did).
+ */
+#ifndef OCTO_MOTOR_ID_H
+#define OCTO_MOTOR_ID_H
+
+#include "scalar.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#define MOTOR_ID_ROTORS 8
+#define MOTOR_ID_DELAYS 5
+#define MOTOR_ID_LAGS 3
+#define MOTOR_ID_STAGES 3
+#define MOTOR_ID_TAU_MIN 0.0005f
+#define MOTOR_ID_TAU_MAX 0.5f
+
+struct motor_id_cfg {
+	scalar_t dt_s;           /* frame period */
+	float tau0_s;            /* prior lag: centre of the first grid (<= 0: 0.03 s) */
+	float kf0;               /* prior k_f (reference model), N */
+	float curve0;            /* prior curve c (the model when est_curve is false) */
+	bool est_curve;          /* estimate c (else c = curve0) */
+	uint32_t n_frames;       /* excited frames planned: refinements at 30 % and 55 % */
+};
+
+/* least-squares sums of one rotor under one hypothesis (see above) */
+struct motor_id_stat {
+	float g11, g12, g22, b1, b2, rr;
+};
+
+struct motor_id {
+	struct motor_id_cfg cfg;
+	float hist[MOTOR_ID_DELAYS][MOTOR_ID_ROTORS];   /* commands, ring over frames */
+	uint32_t head;
+	float s[MOTOR_ID_DELAYS][MOTOR_ID_LAGS][MOTOR_ID_ROTORS];
+	float k1[MOTOR_ID_DELAYS][MOTOR_ID_LAGS];       /* 1 - a of each lag */
+	float lag_c[MOTOR_ID_DELAYS], lag_r[MOTOR_ID_DELAYS];   /* grid centre (s) and ratio */
+	struct motor_id_stat st[MOTOR_ID_DELAYS][MOTOR_ID_LAGS][MOTOR_ID_ROTORS];
+	float s_c[MOTOR_ID_ROTORS];
+	float ff, tf, tt;        /* torque ratio: sums over every rotor of f^2, t f, t^2 */
+	float nz_ss, nz_n;       /* thrust noise from differences */
+	bool nz_have;            /* the last frame taken was not excited (and none was lost since) */
+	uint32_t n_stat;         /* frames in the current stage's statistics */
+	uint32_t n_exc;          /* excited frames so far */
+	uint32_t skip;           /* frames not accumulated after a refinement (lag transients) */
+	uint8_t stage;
+	bool refine_due;
+	/* the frame motor_id_step took, waiting for motor_id_process (its commands sit in
+	 * hist's next slot, its noise sums are already taken) */
+	scalar_t q_f[MOTOR_ID_ROTORS], q_tq[MOTOR_ID_ROTORS];
+	bool q_excited, q_pending;
+};
+
+/* why an estimate is not to be applied */
+enum motor_id_cause {
+	MOTOR_ID_OK = 0,
+	MOTOR_ID_NO_DATA,        /* too few frames */
+	MOTOR_ID_NOISE_UNKNOWN,  /* no noise measurement (no frames without excitation) */
+	MOTOR_ID_LAG_RANGE,      /* the lag found sits at the bounds of what the grid can reach */
+	MOTOR_ID_DELAY_RANGE,    /* the best delay is the largest hypothesis */
+	MOTOR_ID_DELAY_AMBIGUOUS,/* two delays explain the data about equally */
+	MOTOR_ID_CURVE,          /* curve estimation off but the data show a curve */
+	MOTOR_ID_ROTOR,          /* one rotor is not explained (rotor index in cause_rotor) */
+	MOTOR_ID_MODEL,          /* residuals above the noise on every rotor */
+};
+
+struct motor_id_result {
+	uint32_t delay;          /* frames beyond the loop's one */
+	/* tau = 0: no lag (below 0.18 of a frame: a = exp(-dt / tau) < 0.004, indistinguishable) */
+	float delay_margin;      /* log-likelihood ratio of the best delay over the next best
+				  * (> 12: a clear choice) */
+	float tau, tau_sd;       /* s */
+	float kf, kf_sd, ktau, ktau_sd, curve, curve_sd;
+	float scale[MOTOR_ID_ROTORS], scale_sd[MOTOR_ID_ROTORS];
+	float ne[MOTOR_ID_ROTORS];   /* residual variance / measured noise variance, per rotor */
+	float ne_all;            /* the same over all rotors */
+	float noise_sd;          /* measured thrust noise, N */
+	float curve_chi2;        /* with est_curve false: the curve's likelihood-ratio statistic
+				  * (chi-square, one degree of freedom per rotor under the model) */
+	uint32_t n;              /* frames used */
+	enum motor_id_cause cause;
+	int cause_rotor;         /* 0-based, for MOTOR_ID_ROTOR; else -1 */
+};
+
+/* thr0: the throttles before the start (the filters' initial state) */
+void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg,
+		   const scalar_t thr0[MOTOR_ID_ROTORS]);
+
+/* One frame: thr_prev[8] = throttles sent on the previous frame, f[8] = measured thrusts
+ * (N), tq[8] = measured reaction-torque magnitudes (N m) of this frame. excited = false: the
+ * filters run and the noise is measured; true: the bank accumulates. The step only takes
+ * the frame (and, when still, its noise sums; a few hundred instructions); the bank update
+ * (15 hypotheses x 8 rotors, ~8,000 instructions on M4F) runs in motor_id_process, between
+ * frames; a step that finds the previous frame still waiting processes it first, so nothing
+ * is lost or reordered. */
+void motor_id_step(struct motor_id *m, const scalar_t thr_prev[MOTOR_ID_ROTORS],
+		   const scalar_t f[MOTOR_ID_ROTORS], const scalar_t tq[MOTOR_ID_ROTORS], bool excited);
+
+/* Between frames: the bank update of the frame motor_id_step took (no-op if none waits).
+ * motor_id_hold, motor_id_refine and (the caller's duty) motor_id_solve come after it. */
+void motor_id_process(struct motor_id *m);
+
+/* A frame without measurement: the plant held thr_prev one more frame (filters advance). */
+void motor_id_hold(struct motor_id *m, const scalar_t thr_prev[MOTOR_ID_ROTORS]);
+
+/* Between frames: re-centres the lag grids when a stage ended (no-op otherwise). */
+void motor_id_refine(struct motor_id *m);
+
+/* Between frames: the estimates from the data so far, with the acceptance cause (call
+ * motor_id_process first: a frame still waiting is not in them).
+ * ne_max: largest accepted normalised error (residual over noise variance). */
+void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_result *res);
+
+const char *motor_id_cause_text(enum motor_id_cause c);
+/* what to do about it (short) */
+const char *motor_id_cause_remedy(enum motor_id_cause c);
+
+#endif /* OCTO_MOTOR_ID_H */

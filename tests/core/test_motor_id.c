@@ -1,0 +1,287 @@
+/* test_motor_id.c - the joint rotor-model estimator (firmware/core/motor_id.h) on a simulated
+ * octocopter's rotors with random truth: delay 0-3 frames, lag 10-100 ms, curve 0-0.5, one
+ * rotor at 0.8-1.0, k_f and k_tau +/-30 %, 1 % noise; every rotor dithered through two
+ * null-space patterns with offsets that move the rotors' mean throttles apart.
+ * Build with -DTEST_VERBOSE to print the figures. */
+#include "motor_id.h"
+#include "unit.h"
+
+#include <math.h>
+#ifdef TEST_VERBOSE
+#include <stdio.h>
+#endif
+
+#define DT (1.0 / 90.0)
+#define NR 8
+
+static scalar_t s(double x) { return sc_from_float((float)x); }
+
+struct truth {
+	double kf, ktau, tau, curve, scale[NR], sig_f, sig_t;
+	unsigned delay;
+	int odd_rotor;       /* a rotor with another lag (-1: none) */
+	double odd_tau;
+};
+
+struct plant {
+	double a[NR], st[NR], hist[8][NR];
+};
+
+static double g_curve(double c, double x) { return (1.0 - c) * x + c * x * x; }
+
+static void random_truth(struct unit_rng *g, struct truth *t)
+{
+	t->kf = 28.0269 * unit_rand_uniform(g, 0.7, 1.3);
+	t->ktau = 0.3869 * unit_rand_uniform(g, 0.7, 1.3);
+	t->tau = unit_rand_uniform(g, 0.010, 0.100);
+	t->delay = (unsigned)unit_rand_uniform(g, 0.0, 3.999);
+	t->curve = unit_rand_uniform(g, 0.0, 0.5);
+	for (int j = 0; j < NR; j++)
+		t->scale[j] = 1.0;
+	t->scale[(int)unit_rand_uniform(g, 0.0, 7.999)] = unit_rand_uniform(g, 0.8, 1.0);
+	double hover_f = 2.132 * 9.796 / 8.0;
+	t->sig_f = 0.01 * hover_f;
+	t->sig_t = 0.01 * hover_f * t->ktau / t->kf;
+	t->odd_rotor = -1;
+	t->odd_tau = t->tau;
+}
+
+/* hover throttle of the truth: g(L) = hover thrust / k_f */
+static double hover_thr(const struct truth *t)
+{
+	double u = 2.132 * 9.796 / 8.0 / t->kf, c = t->curve;
+	return 2.0 * u / ((1.0 - c) + sqrt((1.0 - c) * (1.0 - c) + 4.0 * c * u));
+}
+
+static const double P1[NR] = {1, 0, -1, 0, 1, 0, -1, 0};
+static const double P2[NR] = {0, 1, 0, -1, 0, 1, 0, -1};
+
+/* n_settle frames still, then n frames of excitation; the estimator told est_curve */
+static void run(struct unit_rng *g, const struct truth *t, int n, bool est_curve, double kf0,
+		struct motor_id_result *res)
+{
+	double L = hover_thr(t), amp = 0.04, off = 0.03;
+	struct plant p;
+	for (int j = 0; j < NR; j++) {
+		double tau = j == t->odd_rotor ? t->odd_tau : t->tau;
+		p.a[j] = tau > 0.0 ? exp(-DT / tau) : 0.0;
+		p.st[j] = L;
+		for (int i = 0; i < 8; i++)
+			p.hist[i][j] = L;
+	}
+	struct motor_id_cfg cfg = {.dt_s = s(DT), .tau0_s = 0.03f, .kf0 = (float)kf0, .curve0 = 0.0f,
+				   .est_curve = est_curve, .n_frames = (uint32_t)n};
+	scalar_t thr0[NR];
+	for (int j = 0; j < NR; j++)
+		thr0[j] = s(L);
+	struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
+	motor_id_init(&m, &cfg, thr0);
+	double tprev[NR], d1 = 0, d2 = 0;
+	for (int j = 0; j < NR; j++)
+		tprev[j] = L;
+	const int settle = 90;
+	for (int k = 0; k < settle + n; k++) {
+		scalar_t tp[NR], f[NR], tq[NR];
+		for (int j = 0; j < NR; j++) {
+			double gg = t->scale[j] * g_curve(t->curve, p.st[j]);
+			tp[j] = s(tprev[j]);
+			f[j] = s(t->kf * gg + t->sig_f * unit_rand_normal(g));
+			tq[j] = s(t->ktau * gg + t->sig_t * unit_rand_normal(g));
+		}
+		bool exc = k >= settle;
+		motor_id_step(&m, tp, f, tq, exc);
+		motor_id_refine(&m);
+		int ke = k - settle;
+		double o = 0.0;
+		if (exc) {
+			if (ke % 9 == 0) {
+				d1 = unit_rand_uniform(g, 0, 1) < 0.5 ? -amp : amp;
+				d2 = unit_rand_uniform(g, 0, 1) < 0.5 ? -amp : amp;
+			}
+			static const double lv[4] = {1, 0, -1, 0};
+			o = off * lv[(ke / 45) % 4];
+		}
+		for (int j = 0; j < NR; j++) {
+			double cmd = exc ? L + (d1 + o) * P1[j] + (d2 + o) * P2[j] : L;
+			/* the plant: this command after `delay` more frames, through the lag */
+			for (int i = (int)t->delay; i > 0; i--)
+				p.hist[i][j] = p.hist[i - 1][j];
+			p.hist[0][j] = cmd;
+			p.st[j] = p.a[j] * p.st[j] + (1.0 - p.a[j]) * p.hist[t->delay][j];
+			tprev[j] = cmd;
+		}
+	}
+	motor_id_process(&m);
+	motor_id_solve(&m, 1.3f, res);
+}
+
+#ifdef TEST_VERBOSE
+static void show(const struct truth *t, const struct motor_id_result *r)
+{
+	printf("  truth D %u tau %.4f c %.3f kf %.4f | D %u (margin %.1f) tau %.4f +/- %.4f c %.4f +/- %.4f "
+	       "kf %.4f +/- %.4f (%+.3f %%) ktau %+.3f %% ne %.3f chi2 %.1f cause %s\n",
+	       t->delay, t->tau, t->curve, t->kf, r->delay, (double)r->delay_margin, (double)r->tau,
+	       (double)r->tau_sd, (double)r->curve, (double)r->curve_sd, (double)r->kf, (double)r->kf_sd,
+	       100.0 * (r->kf / t->kf - 1.0), 100.0 * (r->ktau / t->ktau - 1.0), (double)r->ne_all,
+	       (double)r->curve_chi2, motor_id_cause_text(r->cause));
+}
+#endif
+
+/* Random vehicles: delay exact, lag within 5 %, curve within 0.02, scales within 0.5 %;
+ * k_f and k_tau within 0.1 % or, where the curve's extrapolation to full throttle makes that
+ * tighter than the data allow, within 4 of the reported standard deviations (and the sd
+ * itself honest: not larger than 3 %). */
+UNIT_TEST(motor_id_random_vehicles)
+{
+	struct unit_rng g = {0x5eed0013ULL};
+	for (int v = 0; v < 6; v++) {
+		struct truth t;
+		random_truth(&g, &t);
+		struct motor_id_result r;
+		run(&g, &t, 900, true, 20.0, &r);
+#ifdef TEST_VERBOSE
+		show(&t, &r);
+#endif
+		CHECK(r.cause == MOTOR_ID_OK);
+		CHECK(r.delay == t.delay);
+		CHECK_REL(r.tau, t.tau, 0.05);
+		CHECK(fabs(r.tau - t.tau) < 4.0 * r.tau_sd + 1e-4);
+		CHECK_NEAR(r.curve, t.curve, 0.02);
+		CHECK(fabs(r.curve - t.curve) < 4.0 * r.curve_sd);
+		double ekf = fabs(r.kf / t.kf - 1.0), ekt = fabs(r.ktau / t.ktau - 1.0);
+		CHECK(ekf < 1e-3 || fabs(r.kf - t.kf) < 4.0 * r.kf_sd);
+		CHECK(ekt < 1e-3 || fabs(r.ktau - t.ktau) < 4.0 * r.ktau_sd);
+		CHECK(r.kf_sd < 0.03 * t.kf);
+		for (int j = 0; j < NR; j++) {
+			CHECK_REL(r.scale[j], t.scale[j], 0.005);
+			CHECK(fabs(r.scale[j] - t.scale[j]) < 4.0 * r.scale_sd[j] + 2e-4);
+		}
+		CHECK(r.ne_all > 0.8f && r.ne_all < 1.2f);
+		CHECK_REL(r.noise_sd, t.sig_f, 0.15);
+	}
+}
+
+/* The thrust noise comes from first differences of consecutive still frames only: a frame
+ * lost on the link (motor_id_hold) across which the thrust jumped adds no difference. */
+UNIT_TEST(motor_id_noise_not_across_a_lost_frame)
+{
+	struct unit_rng g = {0x5eed0014ULL};
+	for (int v = 0; v < 4; v++) {
+		double sig = unit_rand_uniform(&g, 0.005, 0.05), lvl = unit_rand_uniform(&g, 2.0, 4.0);
+		struct motor_id_cfg cfg = {.dt_s = s(DT), .tau0_s = 0.03f, .kf0 = 20.0f, .est_curve = true,
+					   .n_frames = 160};
+		scalar_t thr0[NR], tp[NR], f[NR], tq[NR];
+		for (int j = 0; j < NR; j++)
+			thr0[j] = tp[j] = s(0.12);
+		struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
+		motor_id_init(&m, &cfg, thr0);
+		for (int k = 0; k < 300; k++) {
+			if (k == 60 || k == 120) {
+				motor_id_hold(&m, tp);   /* lost: the thrust jumps meanwhile */
+				lvl += 0.5;
+			}
+			bool exc = k >= 140;
+			for (int j = 0; j < NR; j++) {
+				f[j] = s(lvl + sig * unit_rand_normal(&g));
+				tq[j] = s(0.02 * lvl);
+			}
+			motor_id_step(&m, tp, f, tq, exc);
+			if (k % 2)
+				motor_id_process(&m);   /* between frames, or by the next step */
+		}
+		motor_id_process(&m);
+		struct motor_id_result r;
+		motor_id_solve(&m, 1.3f, &r);
+		CHECK_REL(r.noise_sd, sig, 0.15);
+	}
+}
+
+/* Linear rotors (curve 0) with the curve known: k_f and k_tau within 0.1 % */
+UNIT_TEST(motor_id_linear_known_curve)
+{
+	struct unit_rng g = {0x11aeaULL};
+	for (int v = 0; v < 4; v++) {
+		struct truth t;
+		random_truth(&g, &t);
+		t.curve = 0.0;
+		struct motor_id_result r;
+		run(&g, &t, 900, false, 20.0, &r);
+#ifdef TEST_VERBOSE
+		show(&t, &r);
+#endif
+		CHECK(r.cause == MOTOR_ID_OK);
+		CHECK(r.delay == t.delay);
+		CHECK_REL(r.tau, t.tau, 0.05);
+		CHECK_REL(r.kf, t.kf, 1e-3);
+		CHECK_REL(r.ktau, t.ktau, 1e-3);
+		for (int j = 0; j < NR; j++)
+			CHECK_REL(r.scale[j], t.scale[j], 0.005);
+	}
+}
+
+/* Curve estimation off while the rotors have a curve: rejected for the curve */
+UNIT_TEST(motor_id_curve_not_modelled_rejected)
+{
+	struct unit_rng g = {0xc0ffeeULL};
+	for (int v = 0; v < 3; v++) {
+		struct truth t;
+		random_truth(&g, &t);
+		t.curve = unit_rand_uniform(&g, 0.2, 0.5);
+		struct motor_id_result r;
+		run(&g, &t, 900, false, 20.0, &r);
+#ifdef TEST_VERBOSE
+		show(&t, &r);
+#endif
+		CHECK(r.cause == MOTOR_ID_CURVE);
+	}
+}
+
+/* One rotor with another motor (its lag three times the others'): that rotor is named */
+UNIT_TEST(motor_id_odd_rotor_named)
+{
+	struct unit_rng g = {0x0dd0ULL};
+	for (int v = 0; v < 3; v++) {
+		struct truth t;
+		random_truth(&g, &t);
+		t.tau = unit_rand_uniform(&g, 0.015, 0.04);
+		t.odd_rotor = (int)unit_rand_uniform(&g, 0.0, 7.999);
+		t.odd_tau = 3.0 * t.tau;
+		struct motor_id_result r;
+		run(&g, &t, 900, true, 20.0, &r);
+#ifdef TEST_VERBOSE
+		show(&t, &r);
+#endif
+		CHECK(r.cause == MOTOR_ID_ROTOR);
+		CHECK(r.cause_rotor == t.odd_rotor);
+	}
+}
+
+/* No data, no noise measurement: refused with those causes */
+UNIT_TEST(motor_id_refusals)
+{
+	struct motor_id_cfg cfg = {.dt_s = s(DT), .tau0_s = 0.03f, .kf0 = 20.0f, .est_curve = true,
+				   .n_frames = 900};
+	scalar_t thr0[NR];
+	for (int j = 0; j < NR; j++)
+		thr0[j] = s(0.1);
+	struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
+	motor_id_init(&m, &cfg, thr0);
+	struct motor_id_result r;
+	motor_id_process(&m);
+	motor_id_solve(&m, 1.3f, &r);
+	CHECK(r.cause == MOTOR_ID_NO_DATA);
+	scalar_t tp[NR], f[NR], tq[NR];
+	for (int k = 0; k < 100; k++) {
+		for (int j = 0; j < NR; j++) {
+			tp[j] = s(0.1 + 0.03 * ((k / 5 + j) % 2));
+			f[j] = s(2.6);
+			tq[j] = s(0.03);
+		}
+		motor_id_step(&m, tp, f, tq, true);
+	}
+	motor_id_process(&m);
+	motor_id_solve(&m, 1.3f, &r);
+	CHECK(r.cause == MOTOR_ID_NOISE_UNKNOWN);
+	CHECK(motor_id_cause_text(r.cause)[0] != '\0');
+	CHECK(motor_id_cause_remedy(r.cause)[0] != '\0');
+}
