@@ -357,8 +357,6 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 	}
 	int r = exp_start(&a->exp, id, &a->p, why, cap);
 	if (r == APP_ACCEPTED || r == APP_IN_PROGRESS) {
-		a->exp.id = id;
-		a->exp.state = EXP_RUNNING;
 		set_mode(a, APP_EXPERIMENT);
 		a->exp_ack_pending = true;
 		a->exp_origin = origin;
@@ -452,7 +450,6 @@ static void experiment_step(struct app *a, float dt)
 	enum exp_state st = exp_step(&a->exp, &in, &a->exp_out);
 	if (st != EXP_RUNNING) {
 		memset(&a->exp_out, 0, sizeof a->exp_out);
-		a->exp.state = EXP_IDLE;
 		set_mode(a, APP_HOLD);
 	}
 }
@@ -641,7 +638,6 @@ static void abort_experiment(struct app *a, const char *reason)
 	if (a->mode != APP_EXPERIMENT)
 		return;
 	exp_abort(&a->exp, reason);
-	a->exp.state = EXP_IDLE;
 	memset(&a->exp_out, 0, sizeof a->exp_out);
 	set_mode(a, APP_HOLD);
 }

@@ -199,6 +199,8 @@ struct exp_cfg {
 };
 
 struct experiment {
+	/* id and state are experiment.c's alone: exp_start sets them, exp_step and exp_abort
+	 * move the state on; the app reads them */
 	int id;                                /* MAV_CMD_USER_1 param1; 0 = none */
 	enum exp_state state;
 	int phase;
