@@ -56,6 +56,10 @@ static const char kUsage[] =
 "vehicle keys: mass, g, arm_length, kf, ktau, inertia [3], motor_tau, delay,\n"
 "thrust_curve, rotor_scale [8], kf_drift_per_min, noise {thrust, torque, gyro,\n"
 "attitude_deg, position}, origin [lat, lon, alt_m].\n"
+"Refused (exit 2, naming key, value and accepted range): mass, inertia or kf <= 0,\n"
+"|kf_drift_per_min| > 0.2, a negative noise, inertia violating the triangle\n"
+"inequality (each moment <= the sum of the other two), hover throttle\n"
+"mass g / (8 kf) above 1.\n"
 "On exit (SIGINT/SIGTERM or --duration) the counters of dropped inputs go to stderr.\n";
 
 namespace {

@@ -3,6 +3,7 @@
 #include "vehicle.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -20,7 +21,23 @@ void VehicleParams::make_ideal()
 
 namespace {
 
+// |kf_drift_per_min| above this (20 %/min) empties a battery within minutes: a typo, not a vehicle.
+constexpr double kMaxDriftPerMin = 0.2;
+
 enum class Rule { Positive, NonNegative, Any, Unit };
+
+std::string fmt(double d)
+{
+	char b[32];
+	std::snprintf(b, sizeof b, "%g", d);
+	return b;
+}
+
+// "key 'k' = v is out of range: accepted <range>" (the key, the value, the range).
+VehicleError out_of_range(const std::string &key, double d, const std::string &range)
+{
+	return VehicleError(key, "key '" + key + "' = " + fmt(d) + " is out of range: accepted " + range);
+}
 
 double num(const json::Value &v, const std::string &key, Rule r)
 {
@@ -32,15 +49,15 @@ double num(const json::Value &v, const std::string &key, Rule r)
 	switch (r) {
 	case Rule::Positive:
 		if (!(d > 0))
-			throw VehicleError(key, "key '" + key + "' must be positive");
+			throw out_of_range(key, d, "> 0");
 		break;
 	case Rule::NonNegative:
 		if (!(d >= 0))
-			throw VehicleError(key, "key '" + key + "' must not be negative");
+			throw out_of_range(key, d, ">= 0");
 		break;
 	case Rule::Unit:
 		if (!(d >= 0 && d <= 1))
-			throw VehicleError(key, "key '" + key + "' must be in [0, 1]");
+			throw out_of_range(key, d, "[0, 1]");
 		break;
 	case Rule::Any:
 		break;
@@ -55,6 +72,27 @@ void vec(const json::Value &v, const std::string &key, Rule r, std::array<double
 		throw VehicleError(key, "key '" + key + "' must be an array of " + std::to_string(N) + " numbers");
 	for (size_t i = 0; i < N; i++)
 		out[i] = num(v.arr[i], key, r);
+}
+
+// Consistency of the keys taken together (each key alone was checked above).
+void check_physics(const VehicleParams &q)
+{
+	// A body's principal moments obey the triangle inequality: each is at most the sum of the other two.
+	static const char *const axis[3] = {"Ix", "Iy", "Iz"};
+	for (int i = 0; i < 3; i++) {
+		const double other = q.inertia[(size_t)(i + 1) % 3] + q.inertia[(size_t)(i + 2) % 3];
+		if (q.inertia[(size_t)i] > other)
+			throw VehicleError("inertia", std::string("key 'inertia' = [") + fmt(q.inertia[0]) + ", " +
+			                   fmt(q.inertia[1]) + ", " + fmt(q.inertia[2]) + "] violates the triangle inequality: " +
+			                   axis[i] + " = " + fmt(q.inertia[(size_t)i]) + " is out of range: accepted <= " +
+			                   fmt(other) + " (the sum of the other two)");
+	}
+	// Eight rotors at full throttle must lift the vehicle: m g / (8 kf) <= 1.
+	const double th = q.hover_throttle();
+	if (th > 1.0)
+		throw VehicleError("kf", "key 'kf' = " + fmt(q.kf) + " N gives a hover throttle m g / (8 kf) = " + fmt(th) +
+		                   " > 1 with mass " + fmt(q.mass) + " kg: accepted kf >= " + fmt(q.mass * q.g / kRotors) +
+		                   " N (or a lower 'mass')");
 }
 
 } // namespace
@@ -83,11 +121,17 @@ void vehicle_from_json(const std::string &text, VehicleParams &p)
 		else if (k == "delay") {
 			q.delay = num(v, k, Rule::NonNegative);
 			if (q.delay > 10.0)
-				throw VehicleError(k, "key 'delay' must be at most 10 s");
+				throw out_of_range(k, q.delay, "[0, 10] s");
 		}
 		else if (k == "thrust_curve") q.thrust_curve = num(v, k, Rule::Unit);
 		else if (k == "rotor_scale") vec(v, k, Rule::NonNegative, q.rotor_scale);
-		else if (k == "kf_drift_per_min") q.kf_drift_per_min = num(v, k, Rule::Any);
+		else if (k == "kf_drift_per_min") {
+			q.kf_drift_per_min = num(v, k, Rule::Any);
+			if (std::fabs(q.kf_drift_per_min) > kMaxDriftPerMin)
+				throw out_of_range(k, q.kf_drift_per_min,
+				                   "[-" + fmt(kMaxDriftPerMin) + ", " + fmt(kMaxDriftPerMin) +
+				                   "] (a fraction per minute: -0.02 is -2 %/min)");
+		}
 		else if (k == "origin") {
 			vec(v, k, Rule::Any, q.origin);
 			if (std::fabs(q.origin[0]) > 89.0 || std::fabs(q.origin[1]) > 180.0)
@@ -109,6 +153,7 @@ void vehicle_from_json(const std::string &text, VehicleParams &p)
 		}
 		else throw VehicleError(k, "unknown key '" + k + "'");
 	}
+	check_physics(q);
 	p = q;
 }
 

@@ -103,6 +103,7 @@ static void set_mode(struct app *a, enum app_mode m)
 	}
 	a->mode = m;
 	app_status(a, APP_SEV_INFO, "Mode %s", app_mode_name(m));
+	envelope_on_mode(a);
 }
 
 /* ---------------------------------------------------------------- parameters -> modules */
@@ -186,6 +187,8 @@ void app_init(struct app *a, const struct hal *hal)
 	char why[64];
 	if (app_params_load(a, why, sizeof why) != APP_ACCEPTED)
 		hal_reportf(a->hal, "params: %s (defaults in use)", why);
+	envelope_init(a);
+	a->exp.mix = &a->mix;   /* the inertia phases take the body torque through the mixer's Gamma */
 	sync_params(a);
 	a->params_dirty = false;
 	a->mode = APP_DISARMED;
@@ -233,7 +236,7 @@ const char *app_param_write(struct app *a, size_t index, float value)
 	if (index >= param_count)
 		return "unknown parameter";
 	if (param_defs[index].flags & PARAM_READONLY)
-		return "read-only: written by identification";
+		return "read-only: written by the autopilot (identification, flight envelope)";
 	if (a->mode == APP_EXPERIMENT && (param_defs[index].flags & PARAM_LOCKED))
 		return "locked while an experiment runs";
 	enum param_set_result r = params_set(&a->p, index, value);
@@ -279,7 +282,7 @@ enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size
 	return APP_ACCEPTED;
 }
 
-enum app_result app_cmd_takeoff(struct app *a, float height_m, char *why, size_t cap)
+enum app_result app_cmd_takeoff(struct app *a, float height_m, app_origin origin, char *why, size_t cap)
 {
 	if (!isfinite(height_m) || height_m <= 0.0f)
 		height_m = a->p.nav_tko_alt;
@@ -302,12 +305,13 @@ enum app_result app_cmd_takeoff(struct app *a, float height_m, char *why, size_t
 	if (a->mode == APP_IDLE)
 		reset_control(a);
 	app_status(a, APP_SEV_INFO, "Takeoff to %.2f m", (double)height_m);
+	envelope_on_command(a, APP_CMD_TAKEOFF, origin);
 	a->mode = APP_HOLD;   /* so that set_mode reports the change even from HOLD */
 	set_mode(a, APP_TAKEOFF);
 	return APP_ACCEPTED;
 }
 
-enum app_result app_cmd_land(struct app *a, char *why, size_t cap)
+enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t cap)
 {
 	(void)why;
 	(void)cap;
@@ -325,6 +329,7 @@ enum app_result app_cmd_land(struct app *a, char *why, size_t cap)
 	case APP_TAKEOFF:
 	case APP_HOLD:
 		guid_land(&a->guid, sc_from_float(a->fr.pos_i_m[2]));
+		envelope_on_command(a, APP_CMD_LAND, origin);
 		set_mode(a, APP_LAND);
 		return APP_ACCEPTED;
 	}
@@ -355,6 +360,7 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 		snprintf(why, cap, "Experiment %d refused: not hovering", id);
 		return APP_DENIED;
 	}
+	envelope_seed_kf(a, id);
 	int r = exp_start(&a->exp, id, &a->p, why, cap);
 	if (r == APP_ACCEPTED || r == APP_IN_PROGRESS) {
 		set_mode(a, APP_EXPERIMENT);
@@ -381,7 +387,6 @@ static void apply_results(struct app *a)
 	int n = a->exp.n_results < EXP_MAX_RESULTS ? a->exp.n_results : EXP_MAX_RESULTS;
 	if (n <= 0)
 		return;
-	float kf_old = a->p.veh_kf;
 	for (int i = 0; i < n; i++) {
 		int idx = a->exp.results[i].param_index;
 		if (idx < 0 || (size_t)idx >= param_count)
@@ -394,13 +399,8 @@ static void apply_results(struct app *a)
 		outbox_post(&a->outbox, &e);
 	}
 	a->exp.n_results = 0;
-	if (a->p.veh_kf != kf_old && kf_old > 0.0f) {
-		/* bumpless: the throttles (what the plant sees) stay where they were, so the
-		 * height integrator takes the thrust demand to the new k_f's scale:
-		 * (g + a_int) -> (g + a_int) k_f new / k_f old */
-		float g = a->p.veh_grav, r = a->p.veh_kf / kf_old;
-		alt_ctrl_reset(&a->alt, sc_from_float((g + sc_to_float(a->alt.a_int_mps2)) * r - g));
-	}
+	/* bumpless without more: the height controller's hover thrust is 8 VEH_KF u_h with
+	 * the learned (physical) u_h, so a new k_f leaves the throttles where they were */
 	a->params_dirty = true;
 	a->save_pending = true;
 }
@@ -462,7 +462,7 @@ static void control_step(struct app *a, float dt)
 	float z = f->pos_i_m[2], vz = f->vel_i_mps[2];
 
 	memset(&a->exp_out, 0, sizeof a->exp_out);
-	struct guid_input gi = {sc_from_float(z), sc_from_float(vz), sc_from_float(dt), true};
+	struct guid_input gi = {sc_from_float(z), sc_from_float(vz), sc_from_float(dt), false};
 	if (a->mode == APP_DISARMED || a->mode == APP_IDLE) {
 		float t = a->mode == APP_IDLE ? p->mot_thr_idle : 0.0f;
 		for (int j = 0; j < HAL_ROTORS; j++)
@@ -475,7 +475,10 @@ static void control_step(struct app *a, float dt)
 		return;
 	}
 
-	/* guidance: set points and mode transitions */
+	envelope_limits(a, dt);   /* take-off and landing time limits */
+
+	/* guidance: set points and mode transitions (take-off ends once the hover is learned) */
+	gi.hold_ready = a->mode == APP_TAKEOFF && envelope_hover_ready(a);
 	uint32_t ev = guid_update(&a->guid, guid_mode_of(a->mode), &gi);
 	if (ev & GUID_HOLD_REACHED)
 		set_mode(a, APP_HOLD);
@@ -529,6 +532,7 @@ static void control_step(struct app *a, float dt)
 		.q_b2i = q,
 		.mass_kg = sc_from_float(p->veh_mass),
 		.dt_s = gi.dt_s,
+		.hover_f_n = sc_from_float(envelope_hover_f(a, dt, sc_to_float(quat_body_z_up(q)))),
 		.alloc_short_up = (short_pos & 1u) != 0,
 		.alloc_short_down = (short_neg & 1u) != 0,
 	};
@@ -629,7 +633,7 @@ static void link_back(struct app *a, float gap_s)
 		app_status(a, APP_SEV_CRITICAL, "Link was lost for more than %.1f s: landing",
 			   (double)a->p.fs_land_after);
 		char why[8];
-		app_cmd_land(a, why, sizeof why);
+		app_cmd_land(a, APP_ORIGIN_NONE, why, sizeof why);
 	}
 }
 
@@ -671,7 +675,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 				abort_experiment(a, "X-Plane frames missing");
 				if (gap > (double)a->p.fs_land_after && app_flying(a) && a->mode != APP_LAND) {
 					char why[8];
-					app_cmd_land(a, why, sizeof why);
+					app_cmd_land(a, APP_ORIGIN_NONE, why, sizeof why);
 				}
 			}
 			dt = gap > (double)MAX_DT_S ? MAX_DT_S : (float)gap;

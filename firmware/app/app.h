@@ -29,6 +29,7 @@
 
 #include "alt_ctrl.h"
 #include "att_ctrl.h"
+#include "envelope.h"
 #include "experiment.h"
 #include "guidance.h"
 #include "hal.h"
@@ -75,6 +76,7 @@ struct app {
 	/* control */
 	struct att_ctrl att;
 	struct alt_ctrl alt;
+	struct envelope env;          /* hover throttle learned in flight, phase limits */
 	struct mixer mix;
 	struct thrmap map;
 	struct mixer_output mix_out;
@@ -112,8 +114,11 @@ bool app_flying(const struct app *a);
 /* Commands (called by the MAVLink module). Each returns an app_result and, on
  * refusal, a reason in `why`. All are idempotent: a retry gets the same answer. */
 enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size_t cap);
-enum app_result app_cmd_takeoff(struct app *a, float height_m, char *why, size_t cap);
-enum app_result app_cmd_land(struct app *a, char *why, size_t cap);
+/* Take-off and landing: ACCEPTED at once; should the phase then run out of its
+ * time limit (envelope.h), an APP_EV_CMD_DONE event FAILED goes to `origin`
+ * (APP_ORIGIN_NONE: to no one). */
+enum app_result app_cmd_takeoff(struct app *a, float height_m, app_origin origin, char *why, size_t cap);
+enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t cap);
 /* Long-running: APP_IN_PROGRESS, then an APP_EV_CMD_DONE event for `origin`. */
 enum app_result app_cmd_experiment(struct app *a, float id, app_origin origin, char *why, size_t cap);
 enum app_result app_params_save(struct app *a, char *why, size_t cap);

@@ -241,7 +241,9 @@ bool exp_available(int id)
 
 int exp_start(struct experiment *e, int id, const struct app_params *p, char *why, size_t cap)
 {
+	const struct mixer *mix = e->mix;   /* set once by the app, kept across experiments */
 	memset(e, 0, sizeof *e);
+	e->mix = mix;
 	if (!exp_available(id)) {
 		snprintf(why, cap, "Experiment %d unknown (1..6)", id);
 		return APP_DENIED;
@@ -373,7 +375,10 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 			fm[j] = sc_from_float(in->thrust_n[j]);
 			tm[j] = sc_from_float(in->torque_nm[j]);
 		}
-		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
+		if (e->mix)
+			ident_body_torque_mixer(e->mix, fm, tm, tau);
+		else
+			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		for (int i = 0; i < 3; i++)
 			w[i] = sc_from_float(in->rate_b_rps[i]);
 		scalar_t alpha = ident_torque_weight(sc_from_float(cf->mot_tau), dt);
@@ -531,9 +536,9 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		static const int pe[3] = {PX_ID_IXX_EST, PX_ID_IYY_EST, PX_ID_IZZ_EST};
 		static const int ps[3] = {PX_ID_IXX_SD, PX_ID_IYY_SD, PX_ID_IZZ_SD};
 		static const int pv[3] = {PX_VEH_IXX, PX_VEH_IYY, PX_VEH_IZZ};
-		float nominal[3] = {p->veh_ixx, p->veh_iyy, p->veh_izz};
 		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
-		enum ident_verdict v = ident_accept(est, sd, nominal[ax], rsd);
+		float lo, hi, raise;
+		enum ident_verdict v = ident_inertia_accept(est, sd, p->veh_mass, p->veh_arm_l, rsd, &lo, &hi, &raise);
 		bool ok = v == IDENT_ACCEPT;
 		result(e, pe[ax], isfinite(est) ? est : 0.0f);
 		result(e, ps[ax], isfinite(sd) ? sd : 0.0f);
@@ -542,6 +547,13 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		set_result_bit(e, p, 2u << ax, ok);
 		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID %s %.5f +/- %.5f %s%s", nm[ax],
 		    (double)est, (double)sd, ok ? "kg m^2 " : "rejected: ", ident_verdict_text(v));
+		/* a rejection says what would have been accepted, or what to change */
+		if (v == IDENT_OUT_OF_RANGE)
+			say(e, APP_SEV_WARNING, "ID %s accepted in [%.4g, %.4g] kg m^2", nm[ax], (double)lo,
+			    (double)hi);
+		else if (v == IDENT_UNCERTAIN && raise > 1.0f)
+			say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP x%.2f or ID_INR_TIME x%.1f", nm[ax],
+			    (double)raise, (double)(raise * raise));
 	} else {
 		bool post = k == PK_VAL_POST || (k == PK_VAL && (result_mask(p) & 1u));
 		float ne = ident_fit_ne(&e->fit), fit = ident_fit_pct(&e->fit);
@@ -611,7 +623,10 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			fm[j] = sc_from_float(f->rotor_thrust_n[j]);
 			tm[j] = sc_from_float(f->rotor_torque_nm[j]);
 		}
-		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
+		if (e->mix)
+			ident_body_torque_mixer(e->mix, fm, tm, tau);
+		else
+			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		for (int i = 0; i < 3; i++)
 			w[i] = sc_from_float(f->rate_b_rps[i]);
 		ident_inertia_update(&e->inr, tau, w, use && n == 1 && e->gap_hold == 0);

@@ -413,10 +413,10 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 		}
 		break;
 	case MAV_CMD_NAV_TAKEOFF:
-		r = mav_result(app_cmd_takeoff(a, prm[6], why, sizeof why));
+		r = mav_result(app_cmd_takeoff(a, prm[6], origin_of(req), why, sizeof why));
 		break;
 	case MAV_CMD_NAV_LAND:
-		r = mav_result(app_cmd_land(a, why, sizeof why));
+		r = mav_result(app_cmd_land(a, origin_of(req), why, sizeof why));
 		break;
 	case MAV_CMD_USER_1:
 		/* long-running: IN_PROGRESS (with progress) now and on retries, the
@@ -612,9 +612,14 @@ static void drain(struct app *a)
 			send_param_value(a, e.param_index);
 			break;
 		case APP_EV_CMD_DONE:
-			if (e.cmd == APP_CMD_EXPERIMENT)
-				send_command_ack(a, MAV_CMD_USER_1, mav_result((enum app_result)e.result), e.progress,
+			if (e.cmd == APP_CMD_EXPERIMENT || e.cmd == APP_CMD_TAKEOFF || e.cmd == APP_CMD_LAND)
+				send_command_ack(a, e.cmd == APP_CMD_EXPERIMENT ? MAV_CMD_USER_1
+						    : (e.cmd == APP_CMD_TAKEOFF ? MAV_CMD_NAV_TAKEOFF : MAV_CMD_NAV_LAND),
+						 mav_result((enum app_result)e.result), e.progress,
 						 (uint8_t)(e.origin >> 8), (uint8_t)e.origin);
+			break;
+		case APP_EV_VALUE:
+			send_named_float(a, e.text, e.value);
 			break;
 		default:
 			break;

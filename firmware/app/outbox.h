@@ -30,16 +30,21 @@ enum app_severity {
 
 /* Who sent a command: opaque to the app, handed back with its final result. */
 typedef uint32_t app_origin;
+/* No one to answer (a command the app gives itself: failsafe landing). */
+#define APP_ORIGIN_NONE 0xFFFFFFFFu
 
 /* Long-running commands whose result comes later as an event. */
 enum app_command {
 	APP_CMD_EXPERIMENT = 1,
+	APP_CMD_TAKEOFF,      /* final result only when it fails (its time limit) */
+	APP_CMD_LAND,         /* likewise */
 };
 
 enum app_event_kind {
 	APP_EV_STATUS = 1,    /* text, severity */
 	APP_EV_PARAM,         /* param_index changed */
 	APP_EV_CMD_DONE,      /* cmd finished with result (progress 0..100) for origin */
+	APP_EV_VALUE,         /* a named live value: text (name, 10 characters at most), value */
 };
 
 #define APP_EVENT_TEXT 96
@@ -51,6 +56,7 @@ struct app_event {
 	uint8_t progress;
 	uint16_t param_index;
 	app_origin origin;
+	float value;
 	char text[APP_EVENT_TEXT];
 };
 

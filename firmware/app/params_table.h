@@ -65,4 +65,28 @@ PARAM(NAV_TOUCH_DOWN_S,nav_touch_down_s,GUID_DEFAULT_TOUCH_DOWN_S, 0.2f,    10.0
 #undef PARAM_FLAGS
 #define PARAM_FLAGS PARAM_LOCKED
 #include "experiment_params.h"
+/* the flight envelope (envelope.c): limits and tracking settings, and what it learns in
+ * flight (HOV_*, KFT_EST/SD/T/MEM: read-only, only the app writes them) */
+#undef PARAM_FLAGS
+#define PARAM_FLAGS 0
+PARAM(NAV_TKO_TO,   nav_tko_to,   60.0f,   1.0f,    600.0f,  "s",      "Take-off must reach HOLD within this, else it fails (and holds where it is)")
+PARAM(NAV_LAND_TO,  nav_land_to,  120.0f,  1.0f,    600.0f,  "s",      "Landing must touch down within this, else it fails (motors stop only on the ground)")
+PARAM(NAV_KF_SEED,  nav_kf_seed,  0.0f,    0.0f,    1.0f,    "",       "1: a rotor experiment starts from the hover-learned k_f when VEH_KF is > 10 % off")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS PARAM_READONLY
+PARAM(HOV_THR,      hov_thr,      0.0f,    -1e9f,   1e9f,    "",       "Learned (read-only): hover throttle (collective, linearised)")
+PARAM(HOV_THR_SD,   hov_thr_sd,   0.0f,    -1e9f,   1e9f,    "",       "Learned (read-only): standard deviation of HOV_THR")
+PARAM(HOV_KF,       hov_kf,       0.0f,    -1e9f,   1e9f,    "N",      "Learned (read-only): k_f = m g / (8 HOV_THR)")
+PARAM(HOV_KF_SD,    hov_kf_sd,    0.0f,    -1e9f,   1e9f,    "N",      "Learned (read-only): standard deviation of HOV_KF")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS 0
+PARAM(KFT_DRIFT,    kft_drift,    0.02f,   0.001f,  0.5f,    "1/min",  "k_f tracking: largest drift to follow (sizes the memory), fraction per minute")
+PARAM(KFT_REFRESH,  kft_refresh,  0.02f,   0.0f,    0.5f,    "",       "VEH_KF := KFT_EST in HOLD when they differ by more than this (once identification accepted k_f; 0 off)")
+PARAM(KFT_APPLY,    kft_apply,    0.0f,    0.0f,    1.0f,    "",       "Set 1: VEH_KF := KFT_EST now (in HOLD; back to 0 when done)")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS PARAM_READONLY
+PARAM(KFT_EST,      kft_est,      0.0f,    -1e9f,   1e9f,    "N",      "Tracked (read-only): k_f in hover, updated each second")
+PARAM(KFT_SD,       kft_sd,       0.0f,    -1e9f,   1e9f,    "N",      "Tracked (read-only): standard deviation of KFT_EST")
+PARAM(KFT_T,        kft_t,        0.0f,    -1e9f,   1e9f,    "s",      "Tracked (read-only): plant time KFT_EST holds for")
+PARAM(KFT_MEM,      kft_mem,      0.0f,    -1e9f,   1e9f,    "s",      "Tracked (read-only): memory of the tracker (its averaging time)")
 #undef PARAM_FLAGS

@@ -60,7 +60,11 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 		cz = p->cos_tilt_min;
 		flags |= ALT_CTRL_TILT_LIM;
 	}
-	scalar_t f = sc_div(sc_mul(in->mass_kg, sc_add(p->g_mps2, a_cmd)), cz);
+	scalar_t f;
+	if (sc_isfinite(in->hover_f_n) && in->hover_f_n > SC_ZERO && p->g_mps2 > SC_ZERO)
+		f = sc_div(sc_mul(sc_div(in->hover_f_n, p->g_mps2), sc_add(p->g_mps2, a_cmd)), cz);
+	else
+		f = sc_div(sc_mul(in->mass_kg, sc_add(p->g_mps2, a_cmd)), cz);
 	if (f > p->f_max_n) {
 		f = p->f_max_n;
 		flags |= ALT_CTRL_SAT_HIGH;

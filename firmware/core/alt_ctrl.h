@@ -4,7 +4,12 @@
  * Law (cascade P on height -> PI on vertical speed, z up, S_I):
  *   vz_cmd = clamp(kz * (z_sp - z), -vz_max_down, +vz_max_up) + vz_ff
  *   a_cmd  = kv * (vz_cmd - vz) + a_int,   a_int += kv * ki * (vz_cmd - vz) * dt
- *   f      = clamp(mass * (g + a_cmd) / max(cos_tilt, cos_tilt_min), f_min, f_max)
+ *   f      = clamp(f_hover * (g + a_cmd) / (g max(cos_tilt, cos_tilt_min)), f_min, f_max)
+ * where f_hover is the thrust demand that holds the vehicle in hover: the learned one
+ * (hover_est: 8 k_f u_h in the mixer's newtons) when the caller gives it, else mass * g.
+ * With a learned f_hover the integrator and its limit +/-a_int_max are relative to the
+ * learned hover (the integrator only removes what the estimate has not yet learned), so
+ * a thrust scale 0.3x ... 3x the nominal needs no more integral than a correct one.
  * with kv = 2 zeta wn and kz = wn / (2 zeta): with the correct mass and ki = 0 the
  * height loop is s^2 + 2 zeta wn s + wn^2 with no zero (no overshoot for zeta >= 1);
  * ki adds a slow pole near -ki, almost cancelled by the zero at -ki, that removes a
@@ -52,6 +57,7 @@ struct alt_ctrl_input {
 	scalar_t vz_mps;    /* measured vertical speed (up), m/s */
 	struct quat q_b2i;  /* attitude, for the tilt compensation */
 	scalar_t mass_kg;   /* current mass parameter, kg */
+	scalar_t hover_f_n; /* learned hover thrust demand, N (0: use mass * g) */
 	scalar_t dt_s;      /* time since the last update, s */
 	bool alloc_short_up;   /* the allocation delivered less thrust than demanded (last step) */
 	bool alloc_short_down; /* it delivered more thrust than demanded (last step) */

@@ -162,6 +162,24 @@ void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS],
 	tau_out[2] = tz;
 }
 
+void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTORS],
+			     const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3])
+{
+	scalar_t w[MIXER_N_AXES];
+	mixer_wrench(m, f, w);
+	scalar_t tz = SC_ZERO;
+	for (int j = 0; j < IDENT_ROTORS; j++) {
+		scalar_t g = m->gn[3][j];   /* row-scaled Gamma: its sign is the yaw sign */
+		if (g > SC_ZERO)
+			tz = sc_add(tz, tm[j]);
+		else if (g < SC_ZERO)
+			tz = sc_sub(tz, tm[j]);
+	}
+	tau_out[0] = w[1];
+	tau_out[1] = w[2];
+	tau_out[2] = tz;
+}
+
 /* ---------------------------------------------------------------- inertia */
 
 static void other_axes(unsigned i, unsigned *j, unsigned *k)
@@ -239,6 +257,25 @@ void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], cons
 float ident_inertia_est(const struct ident_inertia *e) { return rls_estimate_f(&e->rls, 0, 0); }
 
 float ident_inertia_sd(const struct ident_inertia *e) { return e->sd_scale * rls_std(&e->rls, 0, 0); }
+
+enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max,
+					float *lo, float *hi, float *raise)
+{
+	float ml2 = mass_kg * arm_l_m * arm_l_m;
+	*lo = IDENT_INR_LO * ml2;
+	*hi = IDENT_INR_HI * ml2;
+	*raise = 1.0f;
+	if (!finite_f(est) || !finite_f(sd))
+		return IDENT_NOT_FINITE;
+	if (!(est >= *lo && est <= *hi))
+		return IDENT_OUT_OF_RANGE;
+	float rsd = sd / est;
+	if (sd < 0.0f || !(rsd < rsd_max)) {
+		*raise = rsd_max > 0.0f && finite_f(rsd) ? rsd / rsd_max : 0.0f;
+		return IDENT_UNCERTAIN;
+	}
+	return IDENT_ACCEPT;
+}
 
 /* ---------------------------------------------------------------- validation */
 

@@ -47,6 +47,7 @@
 #define OCTO_IDENT_H
 
 #include "filt.h"
+#include "mixer.h"
 #include "rls.h"
 #include "scalar.h"
 
@@ -120,6 +121,13 @@ float ident_plain_bias(float e_d2, float e_d_dlag, float t_hover);
 void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS],
 		       const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3]);
 
+/* The same torque through the mixer's own Gamma (its rotor mask and layout, custom or
+ * eq. (14) with its arm length): roll and pitch are rows 2-3 of Gamma f; yaw is the sum of
+ * the measured reaction torques of the rotors present, signed as Gamma's yaw row (the
+ * measured torques, not k_tau / k_f times the thrusts). */
+void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTORS],
+			     const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3]);
+
 /* ---------------------------------------------------------------- inertia */
 struct ident_inertia {
 	unsigned axis;                  /* 0 x, 1 y, 2 z */
@@ -152,6 +160,19 @@ void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], cons
 			  bool excited);
 float ident_inertia_est(const struct ident_inertia *e);
 float ident_inertia_sd(const struct ident_inertia *e);
+
+/* Acceptance of an inertia, relative to the vehicle's own scale m l^2 (mass, arm length)
+ * rather than to a nominal inertia that may be far off: a body whose mass sits within the
+ * rotor circle has I <= m l^2 about any axis through its centre, and a multirotor's frame,
+ * battery and rotors keep it above a small fraction of it, so the accepted range is
+ * [IDENT_INR_LO, IDENT_INR_HI] x m l^2 (bounds returned in lo/hi for the message).
+ * When the relative std is too large, *raise is the factor by which the excitation
+ * amplitude must grow to reach rsd_max (the std falls as 1 / amplitude; the time needed
+ * instead is raise^2 as long: std ~ 1 / sqrt(T)); 1 otherwise. */
+#define IDENT_INR_LO 0.01f
+#define IDENT_INR_HI 2.0f
+enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max,
+					float *lo, float *hi, float *raise);
 
 /* ---------------------------------------------------------------- validation */
 /* y (measured) against y_hat (model): NE = RMS(y - y_hat) / RMS(y),

@@ -1,7 +1,23 @@
 """Files that appear only complete: the one atomic-write helper of octo_gcs."""
 
+import contextlib
+import contextvars
 import os
 import tempfile
+
+_FSYNC = contextvars.ContextVar("octo_gcs_atomic_fsync", default=True)
+
+
+@contextlib.contextmanager
+def scratch():
+    """Within it, atomic_write still renames only complete files into place but skips the
+    fsyncs: for files in a scratch directory that is deleted afterwards (a campaign mission's
+    directory on its worker), where durability buys nothing and costs milliseconds per file."""
+    token = _FSYNC.set(False)
+    try:
+        yield
+    finally:
+        _FSYNC.reset(token)
 
 
 def file_mode():
@@ -14,15 +30,17 @@ def file_mode():
 def atomic_write(path, text, mode="w"):
     """Write `text` to `path` so that the file is either the complete old or the complete new
     version: a temporary file in the same directory, fsync, the usual permissions, rename,
-    then fsync of the directory."""
+    then fsync of the directory (no fsyncs within scratch())."""
     path = os.fspath(path)
     d = os.path.dirname(os.path.abspath(path))
+    sync = _FSYNC.get()
     fd, tmp = tempfile.mkstemp(prefix=".tmp-", dir=d)
     try:
         with os.fdopen(fd, mode) as f:
             f.write(text)
             f.flush()
-            os.fsync(f.fileno())
+            if sync:
+                os.fsync(f.fileno())
         os.chmod(tmp, file_mode())
         os.replace(tmp, path)
     except BaseException:
@@ -31,6 +49,8 @@ def atomic_write(path, text, mode="w"):
         except FileNotFoundError:
             pass
         raise
+    if not sync:
+        return
     dfd = os.open(d, os.O_RDONLY)
     try:
         os.fsync(dfd)

@@ -1,11 +1,14 @@
 """``octo-gcs campaign SPEC.json``: Monte Carlo missions on a Dask cluster.
 
-One Dask task is one mission: ``octo-gcs mission`` run as a subprocess in a temporary directory
-on the worker, with the mission's vehicle file, seed, fault flags and parameters, under a
-timeout. The task never raises for a mission that goes wrong: a crash or a timeout comes back
-as a result with its reason. A worker that dies while running a task has the task retried by
-Dask (the scheduler's ``allowed-failures``, the spec's ``retries``); after that the mission is a
-row with the reason too.
+One Dask task is one mission, in a temporary directory on the worker, with the mission's vehicle
+file, seed, fault flags and parameters, under a timeout. With the in-process plant the task calls
+``octo-gcs mission --in-process`` inside the worker's own Python process (inprocess.mission: no
+Python start-up and imports per mission); octo-sil is still a child process, so a firmware crash
+or hang is isolated, stopped at the timeout and recorded. With the UDP plant the task runs
+``octo-gcs mission`` as a subprocess. The task never raises for a mission that goes wrong: a
+crash or a timeout comes back as a result with its reason. A worker that dies while running a
+task has the task retried by Dask (the scheduler's ``allowed-failures``, the spec's
+``retries``); after that the mission is a row with the reason too.
 
 Results reach the client as they finish (``as_completed``); each one is appended to
 DIR/results.csv at once (flush and fsync), its report.json and vehicle file copied to
@@ -19,7 +22,8 @@ worst missions, make their replay command one ``octo-gcs mission`` line.
 
 For tests only: the environment variable OCTO_CAMPAIGN_MISSION, when set, replaces the mission
 command (``python -m octo_gcs.cli mission``) by its words (split like a shell), e.g. a fake
-mission that crashes or hangs; the options given to it are the same.
+mission that crashes or hangs; the options given to it are the same, and it always runs as a
+subprocess.
 """
 
 import csv
@@ -104,10 +108,30 @@ def _tail(path, n=TAIL_LINES):
         return []
 
 
+def _mission_in_worker(argv, log, timeout):
+    """An in-process mission in this (the worker's) Python process, octo-sil its child process
+    stopped after `timeout` s: what ``octo-gcs mission ARGV`` would print goes to `log`, its
+    error line included. Returns (exit status as the command's, timed out)."""
+    from . import inprocess
+    from .atomicfile import scratch
+    from .base import GcsError
+    with open(log, "w", encoding="utf-8") as out:
+        try:
+            with scratch():   # the mission's directory goes away after the task
+                return inprocess.mission(argv, out, wall_limit=timeout), False
+        except inprocess.WallLimit as e:
+            print(f"octo-gcs: {e}", file=out)
+            return 1, True
+        except GcsError as e:
+            print(f"octo-gcs: {e}", file=out)
+            return 1, False
+
+
 def run_mission(job):
     """One mission; returns a dict (never raises for the mission's own failures)."""
     import socket
     t0 = time.monotonic()
+    cpu0 = _cpu_s()
     res = {"index": job["index"], "seed": job["seed"], "status": "error", "reason": "", "report": None,
            "output_tail": [], "rejections": {}, "host": socket.gethostname(), "wall_s": 0.0}
     with tempfile.TemporaryDirectory(prefix=f"octo-campaign-{job['index']:04d}-") as tmp:
@@ -129,19 +153,22 @@ def run_mission(job):
                     raise RuntimeError(str(e)) from None
                 cmd += ["--build-dir", str(write_sim_wrappers(tmp / "sim", build, job["faults"]))]
             log = tmp / "mission.log"
-            with open(log, "wb") as out:
-                p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                     cwd=tmp, start_new_session=True)
-                try:
-                    rc = p.wait(timeout=job["timeout"])
-                    timed_out = False
-                except subprocess.TimeoutExpired:
-                    timed_out = True
-                    _stop_group(p)
-                    rc = p.returncode
-                except BaseException:
-                    _stop_group(p)
-                    raise
+            if job.get("in_worker"):
+                rc, timed_out = _mission_in_worker(cmd[len(mission_command()):], log, job["timeout"])
+            else:
+                with open(log, "wb") as out:
+                    p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                         cwd=tmp, start_new_session=True)
+                    try:
+                        rc = p.wait(timeout=job["timeout"])
+                        timed_out = False
+                    except subprocess.TimeoutExpired:
+                        timed_out = True
+                        _stop_group(p)
+                        rc = p.returncode
+                    except BaseException:
+                        _stop_group(p)
+                        raise
             tail = _tail(log)
             res["output_tail"] = tail
             # the firmware's rejection reasons: its status texts, in the mission's output (UDP plant)
@@ -180,7 +207,22 @@ def run_mission(job):
         except Exception as e:
             res["status"], res["reason"] = "error", f"{type(e).__name__}: {e}"
     res["wall_s"] = round(time.monotonic() - t0, 3)
+    res["cpu_s"] = round(_cpu_s() - cpu0, 3)
     return res
+
+
+def _cpu_s():
+    """CPU seconds of this process (all its threads) and of its children that ended."""
+    import resource
+    return sum(r.ru_utime + r.ru_stime for r in (resource.getrusage(resource.RUSAGE_SELF),
+                                                 resource.getrusage(resource.RUSAGE_CHILDREN)))
+
+
+def warm_up():
+    """Imports what an in-process mission needs (run once on each worker before the missions,
+    so that the missions' rate is not that of the first imports)."""
+    from . import analysis, inprocess, logs, mission, report   # noqa: F401
+    return os.getpid()
 
 
 # ---------------------------------------------------------------- results.csv
@@ -393,15 +435,24 @@ def _run(args, spec, out, prog, campaign_report):
         inputs[i] = d
         jobs.append({"index": i, "seed": seed, "vehicle": vehicle, "faults": faults, "params": params,
                      "experiments": spec["experiments"], "timeout": float(spec["timeout"]),
-                     "in_process": in_process, "mission_cmd": override})
+                     "in_process": in_process, "mission_cmd": override,
+                     # octo-gcs's own in-process mission runs inside the worker's Python process
+                     # (octo-sil its child); a mission command given for tests stays a subprocess
+                     "in_worker": in_process and override is None})
 
     t0 = time.monotonic()
     n_new = failures = 0
     n_workers = 0
     failures += sum(1 for r in done_rows if r["status"] not in RAN)
     t_run = None   # from the first submission: the missions' own rate, without the cluster's start
+    cpu = []   # CPU seconds of each mission of this run on its worker (its process and children)
     if jobs:
         client, cluster, n_workers, retries = _start_cluster(args, spec, prog)
+        if in_process and override is None:
+            try:
+                client.run(warm_up)
+            except Exception as e:   # a worker without this octo_gcs: the missions will say so
+                prog.say(f"campaign: the workers could not import the mission ({type(e).__name__}: {e})")
         t_run = time.monotonic()
         rf = ResultsFile(results, columns)
         futures = []
@@ -434,6 +485,8 @@ def _run(args, spec, out, prog, campaign_report):
                     else:
                         res = fut.result()
                     fut.release()
+                    if isinstance(res.get("cpu_s"), float):
+                        cpu.append(res["cpu_s"])
                     _keep_mission(out, res, j)
                     rf.append(result_row(res, inputs[j["index"]]))
                     n_new += 1
@@ -468,7 +521,8 @@ def _run(args, spec, out, prog, campaign_report):
         build = None
     summary = campaign_report.write(out, spec, rows, columns, {
         "missions_this_run": n_new, "wall_s": round(wall, 2), "missions_s": round(run_s, 2), "workers": n_workers,
-        "plant": plant, "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None},
+        "plant": plant, "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None,
+        "mission_cpu_s_mean": round(sum(cpu) / len(cpu), 4) if cpu else None},
         replay=lambda idx, seed: _replay(out, spec, idx, seed, build))
     for line in summary["lines"]:
         print(line)

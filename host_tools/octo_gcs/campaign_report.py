@@ -273,7 +273,7 @@ def markdown(doc, per):
           f"{t['missions_this_run']} missions in {t['missions_s']:.1f} s on {t['workers']} workers "
           f"({t['wall_s']:.1f} s with the cluster's start)"
           f" ({_g(t['missions_per_min'], '{:.2f}')} missions/min; a mission {_g(t['mission_wall_s_mean'], '{:.1f}')} s "
-          f"on average); plant {t['plant']}.", ""]
+          f"wall, {_g(t.get('mission_cpu_s_mean'), '{:.2f}')} s CPU on its worker, on average); plant {t['plant']}.", ""]
     L += [f"![{n}]({n})" for n in doc["figures"]]
     return "\n".join(L) + "\n"
 

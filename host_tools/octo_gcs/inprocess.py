@@ -9,6 +9,7 @@ instead of MAVLink; the report, the checks and the exit status are those of the
 UDP mission (mission.py), and so is the staging of DIR.
 """
 
+import functools
 import json
 import os
 import shutil
@@ -24,6 +25,10 @@ from .base import GcsError
 
 TAKEOFF_M = 10.0
 WALL_LIMIT_S = 600.0   # octo-sil flies a mission in well under a second
+
+
+class WallLimit(GcsError):
+    """octo-sil ran past its wall-clock limit and was stopped."""
 
 
 def f32(x):
@@ -70,6 +75,7 @@ def fly(build, args, veh, experiments, stage, prog):
             "--mission", stage / "mission.txt"]
     if args.vehicle:
         argv += ["--vehicle", os.path.abspath(args.vehicle)]
+    limit = getattr(args, "wall_limit", None) or WALL_LIMIT_S
     t0 = time.monotonic()
     with open(stage / "octo-sil.log", "wb") as log:
         proc = subprocess.Popen([str(a) for a in argv], stdout=log, stderr=subprocess.STDOUT,
@@ -81,7 +87,7 @@ def fly(build, args, veh, experiments, stage, prog):
             expired.set()
             proc.kill()
 
-        timer = threading.Timer(WALL_LIMIT_S, kill)
+        timer = threading.Timer(limit, kill)
         timer.start()
         try:
             rc = proc.wait()
@@ -92,7 +98,7 @@ def fly(build, args, veh, experiments, stage, prog):
         finally:
             timer.cancel()
     if expired.is_set():
-        raise GcsError(f"octo-sil still running after {WALL_LIMIT_S:g} s wall: stopped")
+        raise WallLimit(f"octo-sil still running after {limit:g} s wall: stopped")
     wall = time.monotonic() - t0
     text = (stage / "octo-sil.log").read_text(errors="replace")
     if rc != 0:
@@ -109,6 +115,34 @@ def fly(build, args, veh, experiments, stage, prog):
 
 
 def run(args):
+    """The command (``octo-gcs mission --in-process``): output on stdout, exit status 0 or 1."""
+    return execute(args, sys.stdout, sys.stderr)
+
+
+def mission(argv, stream, wall_limit=None):
+    """One in-process mission inside the calling Python process: `argv` are the words that
+    follow ``octo-gcs mission`` (parsed by the command's own parser, so with its defaults),
+    everything the command would print goes to `stream`. octo-sil still runs as a child
+    process, stopped after `wall_limit` seconds (WallLimit). Returns the exit status the
+    command would have (0 pass, 1 fail); raises GcsError where the command exits 1 with a
+    message (the files of the failed run are kept in OUT/failed-run/ as by the command)."""
+    args = _parser().parse_args(["mission", *map(str, argv)])
+    if not args.in_process:
+        raise GcsError("octo_gcs.inprocess.mission flies --in-process missions only")
+    args.wall_limit = wall_limit
+    return execute(args, stream, stream)
+
+
+@functools.lru_cache(maxsize=1)
+def _parser():
+    """octo-gcs's parser, built once per process (a campaign worker flies many missions)."""
+    from .cli import build_parser
+    return build_parser()
+
+
+def execute(args, stream, err_stream):
+    """The in-process mission of parsed `args`: progress, table and verdict on `stream`;
+    returns 0 (pass) or 1 (failed checks); raises GcsError with the reason otherwise."""
     from .identify import merge_text_results
     from .logs import Logs
     from .mission import _experiments_option, _keep_failed, _param_options, _publish
@@ -116,7 +150,7 @@ def run(args):
     from .report import build_report, table_text, write_outputs
 
     t_start = time.monotonic()
-    prog = Progress()
+    prog = Progress(stream=stream)
     experiments = _experiments_option(args.experiments)
     args.param_values = _param_options(args.param)
     if args.realtime:
@@ -161,19 +195,19 @@ def run(args):
         ok = True
     except GcsError as e:
         dest = _keep_failed(stage, out)
-        raise GcsError(f"{e}" + (f"\n(the logs of the failed run are in {dest}/)" if dest else "")) from None
+        raise type(e)(f"{e}" + (f"\n(the logs of the failed run are in {dest}/)" if dest else "")) from None
     finally:
         if not ok:
             dest = _keep_failed(stage, out)
             if dest:
-                print(f"octo-gcs: the logs of the failed run are in {dest}/", file=sys.stderr)
-    print()
-    print(table_text(rep))
-    print()
+                print(f"octo-gcs: the logs of the failed run are in {dest}/", file=err_stream)
+    print(file=stream)
+    print(table_text(rep), file=stream)
+    print(file=stream)
     verdict = "PASS" if rep["pass"] else "FAIL"
     print(f"{verdict}: {len(files)} files in {out}/ ({', '.join(files)}); "
-          f"{rep['timing']['wall_total_s']:.2f} s")
+          f"{rep['timing']['wall_total_s']:.2f} s", file=stream)
     for c in rep["checks"]:
         if not c["ok"]:
-            print(f"  {'warning' if c['warning_only'] else 'failed'}: {c['check']}: {c['detail']}")
+            print(f"  {'warning' if c['warning_only'] else 'failed'}: {c['check']}: {c['detail']}", file=stream)
     return 0 if rep["pass"] else 1

@@ -38,16 +38,22 @@ def read_events(path):
     with f:
         buf = f.read()
     off, n = 0, len(buf)
-    while off + _HDR.size <= n:
-        sync, _num, utime, clen, dlen = _HDR.unpack_from(buf, off)
+    unpack, hsize, names = _HDR.unpack_from, _HDR.size, {}   # names: channel bytes -> str, decoded once
+    append = out.append
+    while off + hsize <= n:
+        sync, _num, utime, clen, dlen = unpack(buf, off)
         if sync != SYNC:
             raise GcsError(f"{path}: not an LCM event log (bad sync word at byte {off})")
-        start = off + _HDR.size
-        end = start + clen + dlen
+        start = off + hsize
+        mid = start + clen
+        end = mid + dlen
         if end > n:
             break
-        channel = buf[start:start + clen].decode("ascii", errors="replace")
-        out.append((channel, utime, buf[start + clen:end]))
+        raw = buf[start:mid]
+        channel = names.get(raw)
+        if channel is None:
+            channel = names[raw] = raw.decode("ascii", errors="replace")
+        append((channel, utime, buf[mid:end]))
         off = end
     return out
 
@@ -137,31 +143,37 @@ class Logs:
 
     def __init__(self, paths):
         types = _types()
-        raw = {c: [] for c in CHANNELS}
+        raw = {c: {} for c in CHANNELS}   # channel -> {path: [data, ...]} in the files' order
         self.paths = [str(p) for p in paths]
         for p in paths:
+            lists = {c: [] for c in CHANNELS}
             for channel, _utime, data in read_events(p):
-                if channel in types:
-                    raw[channel].append((p, data))
+                got = lists.get(channel)
+                if got is not None:
+                    got.append(data)
+            for c, datas in lists.items():
+                if datas:
+                    raw[c].setdefault(p, []).extend(datas)
         if not any(raw.values()):
             raise GcsError("no OCTO_TRUTH or OCTO_FW_* records in " + ", ".join(self.paths))
         series = {}
-        for channel, items in raw.items():
-            if not items:
+        for channel, by_path in raw.items():
+            if not by_path:
                 series[channel] = None
                 continue
             dtype = _fixed_dtype(types[channel])
-            if dtype is not None and len({p for p, _d in items}) == 1:
-                series[channel] = Series.from_arrays(
-                    _decode_fixed(types[channel], dtype, [d for _p, d in items], items[0][0], channel))
+            if dtype is not None and len(by_path) == 1:
+                (p, datas), = by_path.items()
+                series[channel] = Series.from_arrays(_decode_fixed(types[channel], dtype, datas, p, channel))
                 continue
             msgs = []
-            for p, data in items:
-                try:
-                    msgs.append(types[channel].decode(data))
-                except ValueError as e:
-                    raise GcsError(f"{p}: {channel} record does not decode ({e}): "
-                                   "log from another version of the LCM types?") from None
+            for p, datas in by_path.items():
+                for data in datas:
+                    try:
+                        msgs.append(types[channel].decode(data))
+                    except ValueError as e:
+                        raise GcsError(f"{p}: {channel} record does not decode ({e}): "
+                                       "log from another version of the LCM types?") from None
             series[channel] = msgs
         self.truth = self._series(series["OCTO_TRUTH"])
         self.fw = self._series(series["OCTO_FW_FRAME"])

@@ -10,9 +10,17 @@ figures into DIR.
 
 Nothing half-written is left in DIR: the run works in DIR/.tmp-<pid>/ and moves
 finished files into DIR at the end (report.md and report.json last). A failed
-run leaves its logs in DIR/failed-run/ instead.
+run leaves its logs in DIR/failed-run/ instead, with a report.md / report.json
+that name the phase that failed and why.
+
+Every phase has a limit and a reason: the vehicle's own limits (a STATUSTEXT of
+severity ERROR or worse that says "failed", e.g. "Take-off failed: NAV_TKO_TO ...")
+stop the mission at once with that text; so does a helper program that exits, with
+the phase it was in and the vehicle's last words; and the ground station's own
+waits name the phase and the limit.
 """
 
+import json
 import os
 import shutil
 import sys
@@ -25,6 +33,7 @@ from .base import GcsError
 from .progress import Progress
 
 TAKEOFF_M = 10.0
+SEV_ERROR = 3   # STATUSTEXT severity ERROR (MAV_SEVERITY_ERROR: the syslog levels)
 OUTPUTS = ("report.md", "report.json", "params.parm", "truth.lcm", "fw.lcm", "octo-sim.log", "octo-fw.log", "octo-sil.log",
            "fig5_excitation.png", "fig6_validation.png", "fig7_rates.png", "convergence.png")
 
@@ -57,12 +66,42 @@ class Mission:
         self.stage = None
         self.from_texts = []
         self.params_only = {}
+        self.phase = "start"          # what the mission is doing (named in a failure)
+        self.phase_since = time.time()
+        self.failure = None           # the reason the mission stopped, once it did
+
+    def set_phase(self, name):
+        self.phase, self.phase_since = name, time.time()
+
+    def vehicle_failures(self, since=0.0):
+        """The vehicle's failure reports (severity ERROR or worse, saying "failed")."""
+        if self.vehicle is None:
+            return []
+        return [t for (w, sev, t) in self.vehicle.statustexts
+                if w >= since and sev <= SEV_ERROR and "failed" in t.lower()]
+
+    def vehicle_errors(self, since=0.0):
+        """Every text of severity ERROR or worse (the failure and what it adds)."""
+        if self.vehicle is None:
+            return []
+        return [t for (w, sev, t) in self.vehicle.statustexts if w >= since and sev <= SEV_ERROR]
 
     # ------------------------------------------------------------ processes
     def _alive(self):
+        if self.vehicle is not None and self.vehicle_failures(self.phase_since):
+            self.vehicle.recv(types=(), timeout=0.1)   # the lines that explain it follow
+            why = "; ".join(self.vehicle_errors(self.phase_since))
+            raise GcsError(f"{self.phase} failed: {why}")
         for p in (self.sim, self.fw):
             if p is not None and not p.alive():
-                raise GcsError(f"{p.name} exited with status {p.popen.returncode}:\n{p.tail()}")
+                rc = p.popen.returncode
+                what = f"{p.name} exited with status {rc}"
+                if p is self.sim and rc == 0:
+                    what += f" (its --duration of {self.args.sim_limit:g} s simulated ran out)"
+                last = self.vehicle._last_text() if self.vehicle is not None else ""
+                raise GcsError(f"{self.phase} failed: {what}"
+                               + (f"; last message from the vehicle: {last}" if last else "")
+                               + f":\n{p.tail()}")
 
     def start(self, build, vehicle_file, ports, stage):
         a = self.args
@@ -115,12 +154,15 @@ class Mission:
         nominal.update({k: float(val) for k, val in bench.items()})
         tail = _tail(stage / "fw.lcm")
         tlimit = 30.0 if not a.realtime else 120.0
+        self.set_phase("arming")
         fl.arm()
+        self.set_phase("take-off")
         fl.takeoff(TAKEOFF_M, timeout=tlimit)
         say(f"take-off: holding at {TAKEOFF_M:g} m (t={tail.time() or 0:.1f} s simulated, "
             f"{time.monotonic() - t0:.1f} s wall)")
         texts = []
         for e in experiments:
+            self.set_phase(f"experiment {e}")
             say(f"experiment {e}: {EXPERIMENTS[e]}")
             planned = planned_sim_seconds(nominal, e)
             live = run_experiment(v, e, self.prog, sim_time=tail.time,
@@ -128,6 +170,7 @@ class Mission:
             texts += live.texts
             say(f"experiment {e} done at t={tail.time() or 0:.1f} s simulated "
                 f"({len(live.results)} results, {time.monotonic() - t0:.1f} s wall)")
+        self.set_phase("collecting parameters")
         after = v.fetch_params()
         say(f"collected {len(after)} parameters")
         after, self.from_texts = merge_text_results(after, texts)
@@ -135,6 +178,7 @@ class Mission:
             say(f"note: the vehicle has no parameters {', '.join(self.from_texts)}: "
                 "taken from its status texts")
         self.params_only = {k: after[k] for k in after if k not in self.from_texts}
+        self.set_phase("landing")
         fl.land(timeout=tlimit)
         say(f"landed and disarmed at t={tail.time() or 0:.1f} s simulated "
             f"({time.monotonic() - t0:.1f} s wall)")
@@ -202,7 +246,8 @@ def run(args):
                 ports = (procs.free_udp_port(), procs.free_udp_port(), procs.free_udp_port(), gcs_port)
                 m.start(build, args.vehicle, ports, stage)
                 nominal, after = m.fly(veh, experiments, stage)
-            except GcsError:
+            except GcsError as e:
+                m.failure = str(e)
                 m.try_land()
                 raise
             finally:
@@ -221,6 +266,7 @@ def run(args):
             files = _publish(stage, out, rep)
             ok = True
     except GcsError as e:
+        _failure_report(stage, m, str(e), args)
         dest = _keep_failed(stage, out)
         raise GcsError(f"{e}" + (f"\n(the logs of the failed run are in {dest}/)" if dest else "")) from None
     finally:
@@ -259,6 +305,33 @@ def _publish(stage, out, rep):
             os.unlink(out / n)
     shutil.rmtree(out / "failed-run", ignore_errors=True)
     return order
+
+
+def _failure_report(stage, m, reason, args):
+    """report.md / report.json of a failed run: the phase, the reason, the vehicle's
+    error texts and every status text, the files kept (written atomically)."""
+    if stage is None or not stage.exists():
+        return
+    from .atomicfile import atomic_write
+    texts = [t for (_, _, t) in m.vehicle.statustexts] if m.vehicle is not None else []
+    files = sorted(p.name for p in stage.iterdir() if p.is_file())
+    first = reason.splitlines()[0] if reason else "unknown"
+    rep = {"pass": False, "failed_phase": m.phase, "failure": first, "failure_detail": reason,
+           "vehicle_errors": m.vehicle_errors(), "statustexts": texts, "seed": args.seed,
+           "vehicle_file": str(args.vehicle) if args.vehicle else None,
+           "files": sorted(set(files) | {"report.md", "report.json"})}
+    md = [f"# Mission FAILED in phase: {m.phase}", "", f"**Reason:** {first}", ""]
+    if len(reason.splitlines()) > 1:
+        md += ["```", *reason.splitlines()[1:], "```", ""]
+    if rep["vehicle_errors"]:
+        md += ["## Errors reported by the vehicle", "", *[f"- {t}" for t in rep["vehicle_errors"]], ""]
+    md += ["## Status texts", "", *[f"- {t}" for t in texts], "", "## Files", "",
+           *[f"- {f}" for f in rep["files"]], ""]
+    try:
+        atomic_write(stage / "report.json", json.dumps(rep, indent=2) + "\n")
+        atomic_write(stage / "report.md", "\n".join(md))
+    except OSError:
+        pass
 
 
 def _keep_failed(stage, out):

@@ -123,29 +123,3 @@ class Model:
                 x = self.step(x, np.asarray(u, dtype=float), h)
             out.append(x.copy())
         return np.array(out)
-
-    def integrate_rates(self, w0, torques, steps):
-        """Eqs. (7)-(9) alone (the rates do not depend on attitude or position): RK4
-        from w0 through torques[i] (N m, body) held for steps[i] seconds. The same
-        numbers as simulate()'s rates, many times faster. Returns len(torques) + 1 rows."""
-        Ix, Iy, Iz = (float(v) for v in self.I)
-        ax, ay, az = (Iy - Iz) / Ix, (Iz - Ix) / Iy, (Ix - Iy) / Iz
-        wx, wy, wz = (float(v) for v in w0)
-        out = np.empty((len(torques) + 1, 3))
-        out[0] = wx, wy, wz
-        for i, ((tx, ty, tz), h) in enumerate(zip(np.asarray(torques, float).tolist(),
-                                                   np.asarray(steps, float).tolist())):
-            bx, by, bz = tx / Ix, ty / Iy, tz / Iz
-            k1x, k1y, k1z = ax * wy * wz + bx, ay * wx * wz + by, az * wx * wy + bz
-            x, y, z = wx + 0.5 * h * k1x, wy + 0.5 * h * k1y, wz + 0.5 * h * k1z
-            k2x, k2y, k2z = ax * y * z + bx, ay * x * z + by, az * x * y + bz
-            x, y, z = wx + 0.5 * h * k2x, wy + 0.5 * h * k2y, wz + 0.5 * h * k2z
-            k3x, k3y, k3z = ax * y * z + bx, ay * x * z + by, az * x * y + bz
-            x, y, z = wx + h * k3x, wy + h * k3y, wz + h * k3z
-            k4x, k4y, k4z = ax * y * z + bx, ay * x * z + by, az * x * y + bz
-            wx += h / 6.0 * (k1x + 2 * k2x + 2 * k3x + k4x)
-            wy += h / 6.0 * (k1y + 2 * k2y + 2 * k3y + k4y)
-            wz += h / 6.0 * (k1z + 2 * k2z + 2 * k3z + k4z)
-            out[i + 1] = wx, wy, wz
-        return out
-

@@ -20,6 +20,8 @@ struct rig {
 	struct app a;
 	struct hal_sensor_frame f;
 	double t;
+	bool stuck;      /* the vehicle stays at height z_stuck whatever the app asks */
+	float z_stuck;
 };
 
 static struct rig R;   /* large: kept off the stack */
@@ -44,6 +46,10 @@ static void frame_at(struct rig *r, double t)
 	f->valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	f->pos_i_m[2] = flying ? fmaxf(sc_to_float(a->guid.z_sp_m), 0.0f) : 0.0f;
 	f->vel_i_mps[2] = flying && f->pos_i_m[2] > 0.0f ? sc_to_float(a->guid.vz_ff_mps) : 0.0f;
+	if (r->stuck) {
+		f->pos_i_m[2] = r->z_stuck;
+		f->vel_i_mps[2] = 0.0f;
+	}
 	for (int j = 0; j < HAL_ROTORS; j++)
 		f->rotor_thrust_n[j] = a->p.veh_kf * r->h.thr[j];
 	app_on_frame(a, f);
@@ -72,7 +78,7 @@ static struct rig *rig_hovering(struct unit_ctx *u)
 	char why[64];
 	fly(r, 5);
 	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
-	CHECK(app_cmd_takeoff(&r->a, 3.0f, why, sizeof why) == APP_ACCEPTED);
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_ACCEPTED);
 	fly_until(r, APP_HOLD, 90 * 60);
 	CHECK(r->a.mode == APP_HOLD);
 	fly(r, 30);
@@ -149,24 +155,24 @@ UNIT_TEST(app_takeoff_hold_land_disarm)
 {
 	struct rig *r = rig_new();
 	char why[64] = "";
-	CHECK(app_cmd_takeoff(&r->a, 3.0f, why, sizeof why) == APP_BUSY);   /* not armed */
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_BUSY);   /* not armed */
 	fly(r, 3);
 	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
-	CHECK(app_cmd_takeoff(&r->a, 200.0f, why, sizeof why) == APP_DENIED);
+	CHECK(app_cmd_takeoff(&r->a, 200.0f, 7, why, sizeof why) == APP_DENIED);
 	CHECK(r->a.mode == APP_IDLE);
-	CHECK(app_cmd_takeoff(&r->a, 3.0f, why, sizeof why) == APP_ACCEPTED);
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_ACCEPTED);
 	CHECK(r->a.mode == APP_TAKEOFF);
 	fly(r, 20);
 	scalar_t z_sp = r->a.guid.z_sp_m;
-	CHECK(app_cmd_takeoff(&r->a, 3.0f, why, sizeof why) == APP_ACCEPTED);   /* a retry */
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_ACCEPTED);   /* a retry */
 	CHECK(r->a.mode == APP_TAKEOFF && r->a.guid.z_sp_m == z_sp);
 	fly_until(r, APP_HOLD, 90 * 60);
 	CHECK(r->a.mode == APP_HOLD);
 	CHECK_NEAR(r->f.pos_i_m[2], 3.0, 0.05);
 	CHECK(app_cmd_arm(&r->a, false, false, why, sizeof why) == APP_BUSY);   /* flying */
-	CHECK(app_cmd_land(&r->a, why, sizeof why) == APP_ACCEPTED);
+	CHECK(app_cmd_land(&r->a, 7, why, sizeof why) == APP_ACCEPTED);
 	CHECK(r->a.mode == APP_LAND);
-	CHECK(app_cmd_land(&r->a, why, sizeof why) == APP_ACCEPTED);             /* a retry */
+	CHECK(app_cmd_land(&r->a, 7, why, sizeof why) == APP_ACCEPTED);             /* a retry */
 	CHECK(r->a.mode == APP_LAND);
 	fly_until(r, APP_DISARMED, 90 * 60);
 	CHECK(r->a.mode == APP_DISARMED);
@@ -237,7 +243,7 @@ UNIT_TEST(app_experiment_command_idempotent_and_locks_parameters)
 	CHECK(r->a.mode == APP_EXPERIMENT);
 	CHECK(app_cmd_experiment(&r->a, 1.0f, 0x0102, why, sizeof why) == APP_IN_PROGRESS);   /* a retry */
 	CHECK(app_cmd_experiment(&r->a, 2.0f, 0x0102, why, sizeof why) == APP_BUSY);
-	CHECK(app_cmd_takeoff(&r->a, 4.0f, why, sizeof why) == APP_BUSY);
+	CHECK(app_cmd_takeoff(&r->a, 4.0f, 7, why, sizeof why) == APP_BUSY);
 	fly(r, 10);
 	CHECK(r->a.mode == APP_EXPERIMENT);
 
@@ -390,16 +396,108 @@ UNIT_TEST(app_outbox_holds_a_turn_of_results)
 }
 
 /* The table's flags, set per group of rows, against the rule they stand for:
- * the vehicle model, rotor, mixer and identification rows lock, the results
- * (described as such) are read-only. */
+ * the vehicle model, rotor, mixer and identification rows lock; what the app
+ * writes itself (identification results, the hover throttle learned and the k_f
+ * tracked in flight: described as such) is read-only. */
 UNIT_TEST(app_parameter_flags_follow_their_groups)
 {
 	for (size_t i = 0; i < param_count; i++) {
 		const struct param_def *d = &param_defs[i];
 		bool model = !strncmp(d->name, "VEH_", 4) || !strncmp(d->name, "MOT_", 4) ||
 			     !strncmp(d->name, "MIX_", 4) || !strncmp(d->name, "ID_", 3);
-		bool result = !strncmp(d->desc, "Result (read-only)", 18);
+		bool result = !strncmp(d->desc, "Result (read-only)", 18) ||
+			      !strncmp(d->desc, "Learned (read-only)", 19) ||
+			      !strncmp(d->desc, "Tracked (read-only)", 19);
 		if (model != !!(d->flags & PARAM_LOCKED) || result != !!(d->flags & PARAM_READONLY))
 			unit_fail(u, __FILE__, __LINE__, "%s: flags %u", d->name, d->flags);
 	}
+}
+
+/* Frames for `seconds` without app_tick, the outbox drained after each: the
+ * status lines that start with `prefix` counted (the last kept in `text`), the
+ * final results (APP_EV_CMD_DONE) counted (the last kept in *done). */
+static int fly_collect(struct rig *r, float seconds, const char *prefix, char *text, size_t cap,
+		       int *n_done, struct app_event *done)
+{
+	int n_text = 0;
+	for (int i = 0; i < (int)(seconds * 90.0f); i++) {
+		r->t += 1.0 / 90.0;
+		r->h.now_us += FRAME_US;
+		frame_at(r, r->t);
+		struct app_event e;
+		while (outbox_pop(&r->a.outbox, &e)) {
+			if (e.kind == APP_EV_STATUS && !strncmp(e.text, prefix, strlen(prefix))) {
+				n_text++;
+				snprintf(text, cap, "%s", e.text);
+			}
+			if (e.kind == APP_EV_CMD_DONE) {
+				(*n_done)++;
+				*done = e;
+			}
+		}
+	}
+	return n_text;
+}
+
+/* A vehicle that cannot lift off: take-off runs out of NAV_TKO_TO, says why (what
+ * height it reached of what), gives the take-off's requester its final FAILED
+ * and lands; the learned hover values stay read-only from outside. */
+UNIT_TEST(app_takeoff_time_limit_fails_to_its_origin)
+{
+	struct rig *r = rig_new();
+	char why[64], text[APP_EVENT_TEXT] = "";
+	const float limit = 3.0f;
+	CHECK(app_param_write(&r->a, (size_t)param_index("NAV_TKO_TO"), limit) == NULL);
+	CHECK(app_param_write(&r->a, (size_t)param_index("HOV_THR"), 0.5f) != NULL);
+	CHECK(app_param_write(&r->a, (size_t)param_index("KFT_EST"), 20.0f) != NULL);
+	r->stuck = true;
+	r->z_stuck = 0.0f;
+	fly(r, 5);
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
+	const app_origin origin = 0x0102u;
+	CHECK(app_cmd_takeoff(&r->a, 4.0f, origin, why, sizeof why) == APP_ACCEPTED);
+	int n_done = 0;
+	struct app_event done;
+	memset(&done, 0, sizeof done);
+	int n = fly_collect(r, limit - 0.5f, "Take-off failed", text, sizeof text, &n_done, &done);
+	CHECK(n == 0 && n_done == 0 && r->a.mode == APP_TAKEOFF);   /* not before its limit */
+	n = fly_collect(r, 1.0f, "Take-off failed", text, sizeof text, &n_done, &done);
+	CHECK(n == 1);
+	char want[64];
+	snprintf(want, sizeof want, "Take-off failed: NAV_TKO_TO %.0f s, 0.00/4.00 m", (double)limit);
+	CHECK(!strcmp(text, want));
+	CHECK(n_done == 1);
+	CHECK(done.cmd == APP_CMD_TAKEOFF && done.result == APP_FAILED && done.origin == origin);
+	CHECK(r->a.mode == APP_LAND || r->a.mode == APP_DISARMED);
+	n = fly_collect(r, 3.0f, "Take-off failed", text, sizeof text, &n_done, &done);
+	CHECK(n == 0 && n_done == 1);   /* said once; the landing it became answers no one */
+	CHECK(r->a.mode == APP_DISARMED);
+}
+
+/* A vehicle that cannot come down: landing runs out of NAV_LAND_TO, says so once
+ * with the height, the landing's requester gets FAILED, and it keeps landing. */
+UNIT_TEST(app_landing_time_limit_fails_to_its_origin)
+{
+	struct rig *r = rig_hovering(u);
+	char why[64], text[APP_EVENT_TEXT] = "";
+	CHECK(app_param_write(&r->a, (size_t)param_index("NAV_LAND_TO"), 1.0f) == NULL);
+	r->stuck = true;
+	r->z_stuck = r->f.pos_i_m[2];
+	take_events(&r->a, APP_EV_STATUS, NULL);
+	const app_origin origin = 0x0BEEu;
+	CHECK(app_cmd_land(&r->a, origin, why, sizeof why) == APP_ACCEPTED);
+	int n_done = 0;
+	struct app_event done;
+	memset(&done, 0, sizeof done);
+	int n = fly_collect(r, 3.0f, "Landing failed", text, sizeof text, &n_done, &done);
+	CHECK(n == 1);
+	char want[64];
+	snprintf(want, sizeof want, "Landing failed: NAV_LAND_TO 1 s, %.2f m up", (double)r->z_stuck);
+	CHECK(!strcmp(text, want));
+	CHECK(n_done == 1 && done.cmd == APP_CMD_LAND && done.result == APP_FAILED && done.origin == origin);
+	CHECK(r->a.mode == APP_LAND);
+	/* freed, it lands: the limit did not stop the landing */
+	r->stuck = false;
+	fly_until(r, APP_DISARMED, 90 * 60);
+	CHECK(r->a.mode == APP_DISARMED);
 }

@@ -195,7 +195,7 @@ int main(void)
 	printf("step: arm %d\n", r);
 	for (int i = 0; i < 10; i++)
 		frame_unmeasured();
-	r = app_cmd_takeoff(&A, 10.0f, why, sizeof why);
+	r = app_cmd_takeoff(&A, 10.0f, APP_ORIGIN_NONE, why, sizeof why);
 	printf("step: takeoff %d\n", r);
 	int n = 0;
 	while (A.mode != APP_HOLD && n++ < 90 * 60)

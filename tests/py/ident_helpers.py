@@ -21,8 +21,11 @@ MAV_CMD_USER_1 = 31010
 
 def random_vehicle(rng):
     """Truth within +/-30 % of the paper's values (mass kept: it is a known parameter)."""
-    return dict(kf=PAPER["kf"] * rng.uniform(0.7, 1.3), ktau=PAPER["ktau"] * rng.uniform(0.7, 1.3),
-                inertia=[i * rng.uniform(0.7, 1.3) for i in PAPER["inertia"]])
+    v = dict(kf=PAPER["kf"] * rng.uniform(0.7, 1.3), ktau=PAPER["ktau"] * rng.uniform(0.7, 1.3))
+    while True:  # a body's moments obey the triangle inequality (octo-sim refuses others)
+        inertia = [i * rng.uniform(0.7, 1.3) for i in PAPER["inertia"]]
+        if all(2 * x <= sum(inertia) for x in inertia):
+            return dict(v, inertia=inertia)
 
 
 class IdentFlight:

@@ -129,7 +129,7 @@ def test_rate_model_helper_matches_truth_log_inputs(launch, port, tmp_path):
 
 
 def test_rates_integrator_equals_the_full_model():
-    """Model.integrate_rates (eqs. 7-9 alone, used for Fig. 7) gives the full model's rates."""
+    """analysis.simulate_rates (eqs. 7-9 alone, used for Fig. 7) gives the full model's rates."""
     p = Params(inertia=(0.05, 0.09, 0.12))
     m = Model(p)
     rng = np.random.default_rng(2)

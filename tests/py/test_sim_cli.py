@@ -74,6 +74,36 @@ def test_bad_vehicle_files_exit_2_naming_the_key(tmp_path, text, key):
     assert "--vehicle" in r.stderr and key in r.stderr, r.stderr
 
 
+@pytest.mark.parametrize("text,key,value,accepted", [
+    ('{"kf_drift_per_min": -2}', "kf_drift_per_min", "-2", "[-0.2, 0.2]"),
+    ('{"kf_drift_per_min": 0.25}', "kf_drift_per_min", "0.25", "[-0.2, 0.2]"),
+    ('{"mass": 0}', "mass", "0", "> 0"),
+    ('{"mass": -1.5}', "mass", "-1.5", "> 0"),
+    ('{"inertia": [0.06, -0.07, 0.1]}', "inertia", "-0.07", "> 0"),
+    ('{"inertia": [0.06, 0.07, 0.14]}', "inertia", "Iz = 0.14", "<= 0.13"),
+    ('{"inertia": [0.3, 0.07, 0.1]}', "inertia", "Ix = 0.3", "<= 0.17"),
+    ('{"mass": 5, "kf": 6}', "kf", "kf' = 6", "kf >= 6.1225"),
+    ('{"noise": {"gyro": -0.001}}', "noise.gyro", "-0.001", ">= 0"),
+    ('{"noise": {"thrust": -1}}', "noise.thrust", "-1", ">= 0"),
+])
+def test_implausible_vehicle_files_name_key_value_and_range(tmp_path, text, key, value, accepted):
+    f = tmp_path / "v.json"
+    f.write_text(text)
+    r = run("--vehicle", f)
+    assert r.returncode == 2, r.stderr
+    assert f"'{key}'" in r.stderr and value in r.stderr and accepted in r.stderr, r.stderr
+
+
+def test_plausible_extremes_are_accepted(tmp_path):
+    """The envelope's corners (hover throttle 0.6 at 5 kg, drift -20 %/min, a flat disc
+    Iz = Ix + Iy) pass."""
+    f = tmp_path / "v.json"
+    f.write_text(json.dumps({"mass": 5.0, "kf": 5.0 * 9.796 / (8 * 0.6), "kf_drift_per_min": -0.2,
+                             "inertia": [0.05, 0.07, 0.12], "noise": {"gyro": 0.0}}))
+    r = run("--vehicle", f, "--duration", "0.05")
+    assert r.returncode == 0, r.stderr
+
+
 def test_missing_vehicle_file(tmp_path):
     r = run("--vehicle", tmp_path / "nope.json")
     assert r.returncode == 2 and "cannot read" in r.stderr

@@ -219,6 +219,10 @@ static int command(struct sil *s, uint16_t cmd, float p1, float p7)
 	if (cmd == MAV_CMD_USER_1)
 		s->seen.exp_final = false;
 	s->seen.text[0] = 0;
+	if (cmd == MAV_CMD_NAV_TAKEOFF || cmd == MAV_CMD_NAV_LAND) {
+		s->seen.phase_failed = false;
+		s->seen.fail_text[0] = 0;
+	}
 	send_msg(s, &msg);
 	if (!s->seen.ack || s->seen.ack_command != cmd)
 		return -1;
@@ -266,6 +270,8 @@ static int wait_mode(struct mission *m, struct sil *s, enum app_mode want)
 {
 	if (s->app.mode == want)
 		return 1;
+	if (s->seen.phase_failed)   /* the firmware gave up the phase: its reason, at once */
+		return fail(m, s, "%s", s->seen.fail_text[0] ? s->seen.fail_text : "COMMAND_ACK FAILED, no reason given");
 	if (!waited_too_long(m, s))
 		return 0;
 	char d[400];

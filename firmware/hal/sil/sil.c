@@ -71,9 +71,18 @@ static void plant_stats(void *ctx, struct hal_plant_stats *out)
 	*out = s->xp.stats;
 }
 
-static void note_text(struct sil *s, const char *text)
+static void note_text(struct sil *s, const char *text, int severity)
 {
 	snprintf(s->seen.text, sizeof s->seen.text, "%s", text);
+	if (severity <= MAV_SEVERITY_ERROR) {
+		/* the firmware's reason for a failure: its "... failed: ..." line and what it adds */
+		char *f = s->seen.fail_text;
+		size_t n = strlen(f);
+		if (strstr(text, "failed"))
+			snprintf(f, sizeof s->seen.fail_text, "%s", text);
+		else if (n > 0 && n < sizeof s->seen.fail_text)
+			snprintf(f + n, sizeof s->seen.fail_text - n, "; %s", text);
+	}
 	if (!strncmp(text, "ID", 2))
 		snprintf(s->seen.id_text, sizeof s->seen.id_text, "%s", text);
 	s->seen.texts++;
@@ -114,6 +123,9 @@ static void ground_send(void *ctx, const uint8_t *buf, size_t len)
 				s->seen.exp_final = true;
 				s->seen.exp_result = a.result;
 			}
+			if ((a.command == MAV_CMD_NAV_TAKEOFF || a.command == MAV_CMD_NAV_LAND) &&
+			    a.result == MAV_RESULT_FAILED)
+				s->seen.phase_failed = true;   /* the phase ran out of its time limit */
 			s->seen.ack = true;
 			s->seen.ack_command = a.command;
 			s->seen.ack_result = a.result;
@@ -130,7 +142,7 @@ static void ground_send(void *ctx, const uint8_t *buf, size_t len)
 			char text[MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN + 1];
 			memcpy(text, t.text, MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN);   /* no NUL when full */
 			text[MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN] = 0;
-			note_text(s, text);
+			note_text(s, text, t.severity);
 		}
 	}
 }

@@ -52,6 +52,8 @@ struct sil_mav_seen {
 	uint64_t texts;            /* reports seen so far */
 	char text[SIL_TEXT_LEN];   /* the last STATUSTEXT */
 	char id_text[SIL_TEXT_LEN];/* the last "ID ..." STATUSTEXT */
+	bool phase_failed;         /* a final COMMAND_ACK FAILED of take-off or landing (its time limit) */
+	char fail_text[SIL_TEXT_LEN];/* the last error line saying "failed", and the error lines after it */
 };
 
 struct mission;

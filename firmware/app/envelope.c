@@ -1,0 +1,227 @@
+/* envelope.c - see envelope.h. */
+#include "envelope.h"
+
+#include <math.h>
+#include <stdio.h>
+
+#include "app.h"
+#include "outbox.h"
+#include "params.h"
+
+#define HOVER_READY_RSD 0.03f  /* take-off ends once u_h is known to 3 % */
+#define AIRBORNE_M 0.1f        /* above the take-off ground: the acceleration is free */
+#define KF_SEED_REL 0.10f      /* NAV_KF_SEED: VEH_KF replaced when this far off */
+
+static float nominal_u(const struct app_params *p)
+{
+	return p->veh_mass * p->veh_grav / (8.0f * p->veh_kf);
+}
+
+/* A parameter changed by the envelope: the ground station hears of it (PARAM_VALUE). */
+static void post_param(struct app *a, int index)
+{
+	struct app_event ev = {.kind = APP_EV_PARAM, .param_index = (uint16_t)index};
+	outbox_post(&a->outbox, &ev);
+}
+
+/* A live value for the ground station (NAMED_VALUE_FLOAT). */
+static void post_value(struct app *a, const char *name, float v)
+{
+	struct app_event ev = {.kind = APP_EV_VALUE, .value = v};
+	snprintf(ev.text, sizeof ev.text, "%s", name);
+	outbox_post(&a->outbox, &ev);
+}
+
+static void kft_init(struct app *a)
+{
+	struct kf_track_params kp = kf_track_params_default();
+	kp.drift_per_min = sc_from_float(a->p.kft_drift);
+	kp.tau_lag_s = sc_from_float(a->p.id_mot_tau);
+	kp.curve = sc_from_float(a->p.mot_curve);
+	kf_track_init(&a->env.kft, &kp, sc_from_float(a->p.veh_kf));
+	a->env.kft_pub_t = 0.0;
+}
+
+void envelope_init(struct app *a)
+{
+	kft_init(a);
+	struct hover_est_params hp = hover_est_params_default();
+	hp.g_mps2 = sc_from_float(a->p.veh_grav);
+	hover_est_init(&a->env.hov, &hp, sc_from_float(nominal_u(&a->p)));
+}
+
+static void set_result(struct app *a, const char *name, float v);
+
+static void set_veh_kf(struct app *a, float kf, const char *why)
+{
+	int i = params_find("VEH_KF", 16);
+	float old = a->p.veh_kf;
+	if (i < 0 || params_set(&a->p, (size_t)i, kf) != PARAM_OK)
+		return;
+	post_param(a, i);
+	a->params_dirty = true;
+	a->save_pending = true;
+	app_status(a, APP_SEV_INFO, "VEH_KF %.2f -> %.2f N (%s)", (double)old, (double)kf, why);
+}
+
+/* k_f tracking in HOLD: the last step's throttles (what the plant answers now) against
+ * the sum of the measured rotor thrusts of this frame. */
+static void kft_step(struct app *a, float dt, bool up)
+{
+	struct envelope *e = &a->env;
+	struct kf_track *t = &e->kft;
+	scalar_t thr[HAL_ROTORS];
+	float y = 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		thr[j] = sc_from_float(a->thr[j]);
+		y += a->fr.rotor_thrust_n[j];
+	}
+	bool gate = a->mode == APP_HOLD && up && (a->fr.valid & HAL_FRAME_THRUST);
+	kf_track_update(t, thr, HAL_ROTORS, sc_from_float(y), sc_from_float(dt), gate);
+	if (!t->started || a->fr.t_s - e->kft_pub_t < 1.0)
+		return;
+	e->kft_pub_t = a->fr.t_s;
+	float k = sc_to_float(t->k), sd = sc_to_float(kf_track_sd(t));
+	set_result(a, "KFT_EST", k);
+	set_result(a, "KFT_SD", sd);
+	set_result(a, "KFT_T", (float)a->fr.t_s);
+	set_result(a, "KFT_MEM", sc_to_float(t->mem_s));
+	post_value(a, "KFT", k);
+	post_value(a, "KFT_SD", sd);
+	if (a->mode != APP_HOLD)
+		return;
+	if (a->p.kft_apply >= 0.5f) {
+		int i = params_find("KFT_APPLY", 16);
+		if (i >= 0 && params_set(&a->p, (size_t)i, 0.0f) == PARAM_OK)
+			post_param(a, i);
+		set_veh_kf(a, k, "tracked, on request");
+		return;
+	}
+	float rel = k / a->p.veh_kf - 1.0f;
+	bool identified = ((unsigned)a->p.id_result & 1u) != 0;   /* k_f accepted by identification */
+	if (a->p.kft_refresh > 0.0f && identified && fabsf(rel) > a->p.kft_refresh &&
+	    3.0f * sd < a->p.kft_refresh * k)
+		set_veh_kf(a, k, rel < 0.0f ? "tracked drift down" : "tracked drift up");
+}
+
+float envelope_hover_f(struct app *a, float dt, float cos_tilt)
+{
+	struct envelope *e = &a->env;
+	const struct app_params *p = &a->p;
+	float z = a->fr.pos_i_m[2], vz = a->fr.vel_i_mps[2];
+	/* collective throttle of the last step's achieved thrust (linearised by the map) */
+	float u = sc_to_float(a->mix_out.achieved[0]) / (8.0f * p->veh_kf);
+	bool up = z - sc_to_float(a->guid.z_ground_m) > AIRBORNE_M;
+	bool learn = up && (a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_LAND);
+	scalar_t s_vz = sc_from_float(vz), s_u = sc_from_float(u), s_c = sc_from_float(cos_tilt);
+	scalar_t s_dt = sc_from_float(dt);
+	e->hov_used = false;
+	if (learn)
+		e->hov_used = hover_est_update(&e->hov, s_vz, s_u, s_c, s_dt);
+	else
+		hover_est_track(&e->hov, s_vz, s_u, s_c, s_dt);
+	kft_step(a, dt, up);
+	/* a climb commanded that has not lifted off: the hover throttle is higher */
+	if (a->mode == APP_TAKEOFF && !up && sc_to_float(a->guid.z_sp_m) > z + 0.05f)
+		hover_est_spool(&e->hov, s_dt);
+	return 8.0f * p->veh_kf * sc_to_float(hover_est_u(&e->hov));
+}
+
+bool envelope_hover_ready(const struct app *a)
+{
+	return hover_est_converged(&a->env.hov, sc_from_float(HOVER_READY_RSD));
+}
+
+static void set_result(struct app *a, const char *name, float v)
+{
+	int i = params_find(name, 16);
+	if (i < 0 || params_set(&a->p, (size_t)i, v) != PARAM_OK)
+		return;
+	post_param(a, i);
+}
+
+void envelope_on_command(struct app *a, enum app_command cmd, app_origin origin)
+{
+	a->env.cmd = (uint8_t)cmd;
+	a->env.origin = origin;
+}
+
+void envelope_on_mode(struct app *a)
+{
+	struct envelope *e = &a->env;
+	e->phase_s = 0.0f;
+	if (a->mode == APP_TAKEOFF && e->hov.updates == 0)
+		envelope_init(a);   /* nothing learned yet: start from the current VEH_* */
+	if (a->mode != APP_HOLD)
+		return;
+	float u = sc_to_float(hover_est_u(&a->env.hov)), sd = sc_to_float(hover_est_sd(&a->env.hov));
+	float kf = a->p.veh_mass * a->p.veh_grav / (8.0f * u), kf_sd = kf * sd / u;
+	set_result(a, "HOV_THR", u);
+	set_result(a, "HOV_THR_SD", sd);
+	set_result(a, "HOV_KF", kf);
+	set_result(a, "HOV_KF_SD", kf_sd);
+	app_status(a, APP_SEV_INFO, "Hover throttle %.4f+/-%.4f, k_f %.2f+/-%.2f N", (double)u, (double)sd,
+		   (double)kf, (double)kf_sd);
+}
+
+void envelope_seed_kf(struct app *a, int id)
+{
+	if (a->p.nav_kf_seed < 0.5f || (id != 1 && id != 6) || !envelope_hover_ready(a))
+		return;
+	float u = sc_to_float(hover_est_u(&a->env.hov));
+	float kf = a->p.veh_mass * a->p.veh_grav / (8.0f * u);
+	if (fabsf(kf / a->p.veh_kf - 1.0f) <= KF_SEED_REL)
+		return;
+	float old = a->p.veh_kf;
+	int i = params_find("VEH_KF", 16);
+	if (i < 0 || params_set(&a->p, (size_t)i, kf) != PARAM_OK)
+		return;
+	post_param(a, i);
+	a->params_dirty = true;
+	app_status(a, APP_SEV_INFO, "VEH_KF %.2f -> %.2f N (hover throttle)", (double)old, (double)kf);
+}
+
+/* Reasons fit one STATUSTEXT (50 characters); a second line says what was missing. */
+static bool phase_timeout(struct app *a, float dt, char *why, size_t cap, char *more, size_t more_cap)
+{
+	struct envelope *e = &a->env;
+	more[0] = 0;
+	if (a->mode != APP_TAKEOFF && a->mode != APP_LAND)
+		return false;
+	e->phase_s += dt;
+	float z = a->fr.pos_i_m[2] - sc_to_float(a->guid.z_ground_m);
+	if (a->mode == APP_TAKEOFF && e->phase_s > a->p.nav_tko_to) {
+		snprintf(why, cap, "Take-off failed: NAV_TKO_TO %.0f s, %.2f/%.2f m", (double)a->p.nav_tko_to,
+			 (double)z, (double)(sc_to_float(a->guid.z_target_m) - sc_to_float(a->guid.z_ground_m)));
+		if (!envelope_hover_ready(a))
+			snprintf(more, more_cap, "Hover throttle %.3f+/-%.3f not learned",
+				 (double)sc_to_float(hover_est_u(&e->hov)), (double)sc_to_float(hover_est_sd(&e->hov)));
+		return true;
+	}
+	if (a->mode == APP_LAND && e->phase_s > a->p.nav_land_to) {
+		snprintf(why, cap, "Landing failed: NAV_LAND_TO %.0f s, %.2f m up", (double)a->p.nav_land_to,
+			 (double)z);
+		e->phase_s = -1e30f;   /* said once; the landing goes on */
+		return true;
+	}
+	return false;
+}
+
+void envelope_limits(struct app *a, float dt)
+{
+	char why[64], more[64];
+	if (!phase_timeout(a, dt, why, sizeof why, more, sizeof more))
+		return;
+	app_status(a, APP_SEV_ERROR, "%s", why);
+	if (more[0])
+		app_status(a, APP_SEV_ERROR, "%s", more);
+	if (a->env.cmd && a->env.origin != APP_ORIGIN_NONE) {
+		struct app_event ev = {.kind = APP_EV_CMD_DONE, .cmd = a->env.cmd, .result = APP_FAILED,
+				       .origin = a->env.origin};
+		outbox_post(&a->outbox, &ev);
+	}
+	if (a->mode == APP_TAKEOFF) {
+		char w[8];
+		app_cmd_land(a, APP_ORIGIN_NONE, w, sizeof w);   /* the take-off's origin has its answer */
+	}
+}

@@ -1,0 +1,65 @@
+/*
+ * envelope.h - what lets octo-fw fly a vehicle whose nominal values are far off:
+ * the hover throttle learned in flight (core/hover_est) and fed to the height
+ * controller, the first k_f it implies (published as HOV_* parameters and a status
+ * line at every HOLD entry, optionally seeding VEH_KF before the rotor experiment),
+ * k_f tracked in HOLD (core/kf_track: KFT_EST with its sd, the plant time it holds
+ * for and its memory, published each second as parameters and NAMED_VALUE_FLOAT
+ * events "KFT"/"KFT_SD"; VEH_KF refreshed from it when it drifts beyond KFT_REFRESH after an
+ * identification, or on request with KFT_APPLY = 1), and the time limits of take-off
+ * (HOLD entry) and landing with their reasons.
+ *
+ * The app calls these from a few places only (its step, set_mode, the experiment
+ * command, the mode timer), so that they survive a reshaping of app.c.
+ */
+#ifndef OCTO_ENVELOPE_H
+#define OCTO_ENVELOPE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "hover_est.h"
+#include "kf_track.h"
+#include "outbox.h"
+
+struct app;
+
+struct envelope {
+	struct hover_est hov;
+	bool hov_used;      /* a measurement was taken in the last step */
+	float phase_s;      /* time in the current take-off or landing */
+	struct kf_track kft;/* k_f tracked in HOLD */
+	double kft_pub_t;   /* plant time of the last KFT_* publication */
+	uint8_t cmd;        /* enum app_command that started the phase, for its final result */
+	app_origin origin;  /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
+};
+
+/* From the parameters: the estimator starts at m g / (8 VEH_KF). */
+void envelope_init(struct app *a);
+
+/* Once per control step, before the height controller: learns from the last step
+ * (vertical speed, collective throttle of the thrust the mixer achieved, tilt) and
+ * returns the hover thrust demand in the mixer's newtons, 8 VEH_KF u_h. */
+float envelope_hover_f(struct app *a, float dt, float cos_tilt);
+
+/* Take-off may end (HOLD) once the hover throttle is known to this relative sd. */
+bool envelope_hover_ready(const struct app *a);
+
+/* A take-off or landing command about to start its phase (APP_CMD_TAKEOFF or
+ * APP_CMD_LAND): who gets the final result should the phase run out of time. */
+void envelope_on_command(struct app *a, enum app_command cmd, app_origin origin);
+
+/* On every mode change: HOLD publishes HOV_* and says what the hover taught. */
+void envelope_on_mode(struct app *a);
+
+/* Before experiment `id`: with NAV_KF_SEED = 1 and a converged hover throttle that
+ * disagrees with VEH_KF by more than 10 %, VEH_KF := m g / (8 u_h) (rotor experiments). */
+void envelope_seed_kf(struct app *a, int id);
+
+/* Phase limits, once per control step: when take-off (NAV_TKO_TO) or landing
+ * (NAV_LAND_TO) runs out, says why (status lines, severity ERROR, naming what was
+ * reached and what was missing), posts the command's final result APP_FAILED for
+ * whoever asked for the phase, and lands (a take-off) or keeps landing. */
+void envelope_limits(struct app *a, float dt);
+
+#endif /* OCTO_ENVELOPE_H */

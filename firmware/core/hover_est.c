@@ -1,0 +1,142 @@
+/* hover_est.c - see hover_est.h for the model, the filter and the units. */
+#include "hover_est.h"
+
+#define P_MAX_PCT2 SC(10000.0) /* sd 100 %: what the filter starts from at most */
+
+struct hover_est_params hover_est_params_default(void)
+{
+	struct hover_est_params p;
+	p.u_min = SC(0.02);
+	p.u_max = SC(0.8);
+	p.sigma_u0 = SC(1.0);
+	p.sigma_acc = SC(0.5);
+	p.q_rel = SC(0.003);
+	p.tau_s = SC(0.1);
+	p.gate_sigma = SC(4.0);
+	p.spool_rate = SC(0.6);
+	p.g_mps2 = SC(9.796);
+	return p;
+}
+
+static scalar_t p0_pct2(const struct hover_est_params *p)
+{
+	scalar_t sd = sc_mul(SC(100.0), p->sigma_u0);
+	return sc_min(sc_sq(sd), P_MAX_PCT2);
+}
+
+/* theta within [1/u_max, 1/u_min] */
+static scalar_t clamp_theta(const struct hover_est *s, scalar_t th)
+{
+	return sc_clamp(th, sc_div(SC(1.0), s->p.u_max), sc_div(SC(1.0), s->p.u_min));
+}
+
+void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scalar_t u0)
+{
+	s->p = *p;
+	if (!(s->p.u_min > SC_ZERO))
+		s->p.u_min = SC(0.02);
+	if (!(s->p.u_max > s->p.u_min))
+		s->p.u_max = sc_max(SC(0.8), s->p.u_min);
+	if (!(s->p.tau_s > SC_ZERO))
+		s->p.tau_s = SC(0.1);
+	u0 = sc_isfinite(u0) ? sc_clamp(u0, s->p.u_min, s->p.u_max) : s->p.u_min;
+	s->theta = clamp_theta(s, sc_div(SC(1.0), u0));
+	s->p_pct2 = p0_pct2(&s->p);
+	s->v_f = SC_ZERO;
+	s->uc_f = SC_ZERO;
+	s->primed = false;
+	s->updates = 0;
+	s->rejected = 0;
+}
+
+static bool inputs_ok(scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
+{
+	return sc_isfinite(vz) && sc_isfinite(u) && sc_isfinite(c) && sc_isfinite(dt) && dt > SC_ZERO &&
+	       dt < SC(1.0);
+}
+
+/* Advances the state-variable filter; returns the filtered acceleration. */
+static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
+{
+	scalar_t uc = sc_mul(u, c);
+	if (!s->primed) {
+		s->v_f = vz;
+		s->uc_f = uc;
+		s->primed = true;
+		return SC_ZERO;
+	}
+	/* backward Euler of 1 / (tau s + 1): x += dt / (tau + dt) (in - x) */
+	scalar_t al = sc_div(dt, sc_add(s->p.tau_s, dt));
+	s->v_f = sc_add(s->v_f, sc_mul(al, sc_sub(vz, s->v_f)));
+	s->uc_f = sc_add(s->uc_f, sc_mul(al, sc_sub(uc, s->uc_f)));
+	return sc_div(sc_sub(vz, s->v_f), s->p.tau_s);
+}
+
+void hover_est_track(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t cos_tilt, scalar_t dt_s)
+{
+	if (!inputs_ok(vz_mps, u, cos_tilt, dt_s)) {
+		s->primed = false;
+		return;
+	}
+	(void)filters(s, vz_mps, u, cos_tilt, dt_s);
+}
+
+bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t cos_tilt, scalar_t dt_s)
+{
+	if (!inputs_ok(vz_mps, u, cos_tilt, dt_s)) {
+		s->primed = false;
+		return false;
+	}
+	bool was_primed = s->primed;
+	scalar_t a_f = filters(s, vz_mps, u, cos_tilt, dt_s);
+	/* process noise: a random walk of the relative error */
+	scalar_t q = sc_mul(SC(100.0), s->p.q_rel);
+	s->p_pct2 = sc_min(sc_add(s->p_pct2, sc_mul(sc_sq(q), dt_s)), P_MAX_PCT2);
+	if (!was_primed)
+		return false;
+	scalar_t y_hat = sc_mul(sc_mul(s->p.g_mps2, s->uc_f), s->theta);
+	if (!(y_hat > sc_mul(SC(0.05), s->p.g_mps2)))
+		return false;   /* (almost) no thrust: nothing to learn */
+	scalar_t y = sc_add(a_f, s->p.g_mps2);
+	scalar_t e_pct = sc_mul(SC(100.0), sc_sub(sc_div(y, y_hat), SC(1.0)));
+	scalar_t r_sd = sc_div(sc_mul(SC(100.0), s->p.sigma_acc), y_hat);
+	scalar_t r = sc_sq(r_sd);
+	scalar_t pr = sc_add(s->p_pct2, r);
+	if (sc_sq(e_pct) > sc_mul(sc_sq(s->p.gate_sigma), pr)) {
+		s->rejected++;
+		return false;
+	}
+	scalar_t k = sc_div(s->p_pct2, pr);
+	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), sc_mul(k, sc_div(e_pct, SC(100.0)))));
+	s->theta = clamp_theta(s, th);
+	s->p_pct2 = sc_max(sc_div(sc_mul(s->p_pct2, r), pr), SC_EPS);
+	s->updates++;
+	return true;
+}
+
+void hover_est_spool(struct hover_est *s, scalar_t dt_s)
+{
+	if (!sc_isfinite(dt_s) || !(dt_s > SC_ZERO))
+		return;
+	/* u_h *= 1 + rate dt  <=>  theta /= 1 + rate dt */
+	scalar_t f = sc_add(SC(1.0), sc_mul(s->p.spool_rate, sc_min(dt_s, SC(1.0))));
+	s->theta = clamp_theta(s, sc_div(s->theta, f));
+	s->p_pct2 = sc_max(s->p_pct2, p0_pct2(&s->p));
+}
+
+scalar_t hover_est_u(const struct hover_est *s)
+{
+	return sc_div(SC(1.0), s->theta);
+}
+
+scalar_t hover_est_sd(const struct hover_est *s)
+{
+	/* relative sd of theta = relative sd of u_h (first order) */
+	return sc_mul(hover_est_u(s), sc_div(sc_sqrt(s->p_pct2), SC(100.0)));
+}
+
+bool hover_est_converged(const struct hover_est *s, scalar_t rel_sd)
+{
+	scalar_t lim = sc_mul(SC(100.0), rel_sd);
+	return s->p_pct2 < sc_sq(lim);
+}

@@ -1,0 +1,91 @@
+/*
+ * hover_est.h - hover-throttle estimator: a one-state Kalman filter on the throttle
+ * that holds the vehicle in hover, learned in flight from the vertical acceleration
+ * and the collective throttle (after PX4's hover-thrust estimator).
+ *
+ * Model (z up, S_I): the total thrust is proportional to the collective throttle u (the
+ * mean linearised throttle, sum f_j / (8 k_f,nominal)); at the hover throttle u_h it
+ * carries the weight, so
+ *     a_z + g = g * cos_tilt * u / u_h.
+ * With theta = 1 / u_h the prediction is y^ = g cos_tilt u theta and a measurement
+ * y = a_z + g gives the relative innovation e = y / y^ - 1 of theta: the filter runs on
+ * the relative error of theta (no linearisation about u_h), with its variance P held in
+ * percent squared so that Q16.16 keeps its resolution from 0.1 % to 100 %:
+ *     r = (100 sigma_acc / y^)^2,  k = P / (P + r),  theta *= 1 + k e,  P = P r / (P + r).
+ * Random-walk process noise P += (100 q_rel)^2 dt lets it follow a slow change (battery),
+ * and innovations beyond gate_sigma standard deviations are rejected (gusts, contact).
+
+ * The vertical acceleration is not measured: it is the derivative of the vertical speed
+ * through a first-order state-variable filter of time constant tau_s,
+ *     v_f' = (vz - v_f) / tau_s,   a_f = (vz - v_f) / tau_s,
+ * and u cos_tilt goes through the same filter, so that both sides of the model see the
+ * same lag (a lag on one side only would bias u_h during climbs).
+ *
+ * Ground: on the ground the acceleration is zero whatever the throttle, so no update is
+ * made there. While the caller commands a climb that has not lifted off,
+ * hover_est_spool() raises u_h at a bounded rate (the controller then raises the
+ * throttle with it): take-off works from a nominal k_f far too large.
+ *
+ * Results: u_h and its standard deviation, and the thrust coefficient it implies,
+ * k_f = m g / (n u_h) with sd(k_f) = k_f sd(u_h) / u_h (first order).
+ *
+ * Units: m/s, m/s^2, s, throttle (0..1). No heap, no globals.
+ */
+#ifndef OCTO_HOVER_EST_H
+#define OCTO_HOVER_EST_H
+
+#include "scalar.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+
+struct hover_est_params {
+	scalar_t u_min;        /* accepted hover throttle range, e.g. [0.02, 0.8] */
+	scalar_t u_max;
+	scalar_t sigma_u0;     /* initial standard deviation of u_h as a fraction of u_h (e.g. 1.0) */
+	scalar_t sigma_acc;    /* measurement noise of the filtered acceleration, m/s^2 */
+	scalar_t q_rel;        /* process noise: relative drift of u_h per sqrt(s) */
+	scalar_t tau_s;        /* state-variable filter time constant, s */
+	scalar_t gate_sigma;   /* innovation gate, standard deviations */
+	scalar_t spool_rate;   /* ground spool-up: fraction of u_h per second */
+	scalar_t g_mps2;
+};
+
+struct hover_est {
+	struct hover_est_params p;
+	scalar_t theta;   /* 1 / u_h */
+	scalar_t p_pct2;  /* variance of theta's relative error, percent^2 */
+	scalar_t v_f;     /* filtered vertical speed */
+	scalar_t uc_f;    /* filtered u cos_tilt */
+	bool primed;      /* filters initialised */
+	uint32_t updates; /* accepted measurements */
+	uint32_t rejected;/* gated measurements */
+};
+
+/* Defaults: u_h in [0.02, 0.8], sigma_u0 1.0, sigma_acc 0.5 m/s^2, q_rel 0.003 /sqrt(s),
+ * tau 0.1 s, gate 4 sigma, spool 0.6 /s, g 9.796. */
+struct hover_est_params hover_est_params_default(void);
+
+/* Starts from the nominal hover throttle u0 (clamped to the range), relative sd sigma_u0. */
+void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scalar_t u0);
+
+/* One airborne step: vertical speed vz (up), collective throttle u, cos of the tilt.
+ * Returns true when the measurement was used (false: filters priming, gated or bad input). */
+bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t cos_tilt, scalar_t dt_s);
+
+/* A step on the ground (or not to be used): keeps the filters in step with the signals
+ * without updating the state. */
+void hover_est_track(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t cos_tilt, scalar_t dt_s);
+
+/* Ground spool-up (a climb commanded, no lift-off): u_h *= 1 + spool_rate dt, up to u_max;
+ * the variance is kept at least at the initial one. */
+void hover_est_spool(struct hover_est *s, scalar_t dt_s);
+
+/* Hover throttle and its standard deviation. */
+scalar_t hover_est_u(const struct hover_est *s);
+scalar_t hover_est_sd(const struct hover_est *s);
+
+/* True once the relative standard deviation of u_h is below rel_sd. */
+bool hover_est_converged(const struct hover_est *s, scalar_t rel_sd);
+
+#endif /* OCTO_HOVER_EST_H */

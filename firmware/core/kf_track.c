@@ -1,0 +1,129 @@
+/* kf_track.c - see kf_track.h for the model, the memory and the units. */
+#include "kf_track.h"
+
+struct kf_track_params kf_track_params_default(void)
+{
+	struct kf_track_params p;
+	p.drift_per_min = SC(0.02);
+	p.t_min_s = SC(0.2);
+	p.t_max_s = SC(60.0);
+	p.phi_min = SC(0.08);
+	p.tau_lag_s = SC(0.03);
+	p.curve = SC(0.0);
+	p.s_tau_s = SC(5.0);
+	p.s0_pct = SC(1.0);
+	return p;
+}
+
+void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t k0)
+{
+	s->p = *p;
+	if (!(s->p.t_min_s > SC_ZERO))
+		s->p.t_min_s = SC(0.2);
+	if (!(s->p.t_max_s > s->p.t_min_s))
+		s->p.t_max_s = s->p.t_min_s;
+	s->k = k0 > SC_ZERO ? k0 : SC(1.0);
+	s->P = SC_ZERO;
+	s->s2_pct2 = sc_sq(s->p.s0_pct);
+	s->mem_s = s->p.t_min_s;
+	s->lambda = SC(0.98);
+	s->phi_f = SC_ZERO;
+	s->e_prev_pct = SC_ZERO;
+	s->lag_dt = SC_ZERO;
+	s->lag_al = SC(1.0);
+	s->started = false;
+	s->primed = false;
+	s->updates = 0;
+}
+
+/* x^(1/3) for x > 0 by Newton's iteration from a warm start (the last memory). */
+static scalar_t cbrt_warm(scalar_t x, scalar_t guess)
+{
+	scalar_t r = guess > SC_ZERO ? guess : SC(1.0);
+	for (int i = 0; i < 6; i++)
+		r = sc_div(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), SC(3.0));
+	return r;
+}
+
+static scalar_t regressor(const struct kf_track *s, const scalar_t *thr, int n)
+{
+	scalar_t c = s->p.curve, sum = SC_ZERO;
+	for (int j = 0; j < n; j++) {
+		scalar_t t = sc_clamp(thr[j], SC_ZERO, SC(1.0));
+		sum = sc_add(sum, sc_add(sc_mul(sc_sub(SC(1.0), c), t), sc_mul(c, sc_sq(t))));
+	}
+	return sum;
+}
+
+bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_n, scalar_t dt_s, bool gate)
+{
+	if (!sc_isfinite(y_n) || !sc_isfinite(dt_s) || !(dt_s > SC_ZERO) || dt_s > SC(1.0))
+		return false;
+	for (int j = 0; j < n; j++)
+		if (!sc_isfinite(thr[j]))
+			return false;
+	/* the thrust a throttle produces, as the motor lag delivers it */
+	scalar_t phi = regressor(s, thr, n);
+	if (!s->primed || !(s->p.tau_lag_s > SC_ZERO)) {
+		s->phi_f = phi;
+		s->primed = true;
+	} else {
+		if (dt_s != s->lag_dt) {   /* the exact discrete lag, recomputed when the step changes */
+			s->lag_dt = dt_s;
+			s->lag_al = sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt_s, s->p.tau_lag_s))));
+		}
+		scalar_t al = s->lag_al;
+		s->phi_f = sc_add(s->phi_f, sc_mul(al, sc_sub(phi, s->phi_f)));
+	}
+	phi = s->phi_f;
+	if (!gate || phi < s->p.phi_min || !(y_n > SC_ZERO))
+		return false;
+	if (!s->started) {
+		s->k = sc_div(y_n, phi);
+		s->e_prev_pct = SC_ZERO;
+		s->P = sc_div(sc_div(dt_s, s->p.t_min_s), sc_sq(phi));
+		s->started = true;
+		s->updates++;
+		return true;
+	}
+	scalar_t e = sc_sub(y_n, sc_mul(s->k, phi));
+	/* relative noise, percent^2, averaged over s_tau_s, from the change of the residual
+	 * between samples (var = 2 s^2 for white noise): a slow tracking error or a step does
+	 * not pass for noise, which would lengthen the memory and slow the tracking further */
+	scalar_t e_pct = sc_div(sc_mul(SC(100.0), e), y_n);
+	scalar_t de = sc_sub(e_pct, s->e_prev_pct);
+	s->e_prev_pct = e_pct;
+	scalar_t a_s = sc_div(dt_s, sc_add(s->p.s_tau_s, dt_s));
+	scalar_t s2 = sc_min(sc_div(sc_sq(de), SC(2.0)), SC(10000.0));
+	s->s2_pct2 = sc_add(s->s2_pct2, sc_mul(a_s, sc_sub(s2, s->s2_pct2)));
+	/* memory T* = (s^2 / (4 r^2 f_s))^(1/3) with s and r as fractions: s / (2 r) in seconds is
+	 * (s_pct / 100) / (2 drift_per_min / 60) = 0.3 s_pct / drift_per_min */
+	if (s->p.drift_per_min > SC_ZERO) {
+		scalar_t q = sc_div(sc_mul(SC(0.3), sc_sqrt(s->s2_pct2)), s->p.drift_per_min);
+		scalar_t x = sc_mul(sc_sq(q), dt_s);   /* (s / 2r)^2 / f_s */
+		s->mem_s = sc_clamp(cbrt_warm(x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
+	} else {
+		s->mem_s = s->p.t_max_s;
+	}
+	s->lambda = sc_sub(SC(1.0), sc_div(dt_s, s->mem_s));
+	/* RLS with forgetting */
+	scalar_t pphi = sc_mul(s->P, phi);
+	scalar_t den = sc_add(s->lambda, sc_mul(phi, pphi));
+	scalar_t K = sc_div(pphi, den);
+	s->k = sc_add(s->k, sc_mul(K, e));
+	s->P = sc_div(sc_sub(s->P, sc_mul(K, pphi)), s->lambda);
+	/* no wind-up: P at most its steady state for the shortest memory and this regressor */
+	scalar_t p_max = sc_div(sc_div(dt_s, s->p.t_min_s), sc_sq(phi));
+	s->P = sc_clamp(s->P, SC_EPS, p_max);
+	s->updates++;
+	return true;
+}
+
+scalar_t kf_track_sd(const struct kf_track *s)
+{
+	if (!s->started)
+		return SC_ZERO;
+	/* sigma (N) = s y ~ s k phi; var(k) = sigma^2 P / (1 + lambda) */
+	scalar_t sigma = sc_mul(sc_div(sc_sqrt(s->s2_pct2), SC(100.0)), sc_mul(s->k, s->phi_f));
+	return sc_mul(sigma, sc_sqrt(sc_div(s->P, sc_add(SC(1.0), s->lambda))));
+}

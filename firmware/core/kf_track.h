@@ -1,0 +1,75 @@
+/*
+ * kf_track.h - tracking a drifting thrust coefficient k_f in hover: scalar recursive
+ * least squares with exponential forgetting whose memory is sized to the noise.
+ *
+ * Model: y = k_f phi + e, with y the sum of the measured rotor thrusts (N) and phi the
+ * sum of the rotors' throttles passed through the thrust curve and the motor lag (a
+ * first-order filter of time constant tau_lag), so that a throttle change is compared
+ * with the thrust it produces, not with the thrust before it.
+ *
+ * Memory: with relative noise s (sd of e / y per sample), sample rate f_s and a drift
+ * of r (fraction of k_f per second), the tracking error of a memory T has variance
+ * s^2 / (f_s T) (noise) plus (r T)^2 (lag behind the drift); the best memory is
+ *     T* = (s^2 / (4 r^2 f_s))^(1/3),   lambda = 1 - dt / T*
+ * (the regressor's power is already in s, the noise relative to y). s is learned from
+ * the change of the residual from sample to sample (exponential average over s_tau_s; a
+ * tracking error or a step changes slowly and is not taken for noise), r is the parameter drift_per_min
+ * (the largest drift to follow), T* is bounded to [t_min_s, t_max_s].
+ *
+ * Wind-up: forgetting without excitation makes P grow without bound. Updates are gated
+ * on phi >= phi_min (rotors turning, vehicle flying: the caller's gate), and P is bounded
+ * by its steady state at the shortest memory, so it never winds up.
+ *
+ * Estimate and sd: k = sum lambda^i phi y / sum lambda^i phi^2; with P = 1 / sum lambda^i phi^2,
+ * var(k) = sigma^2 P / (1 + lambda) (sigma = s y). Q16.16: the noise is kept in percent.
+ */
+#ifndef OCTO_KF_TRACK_H
+#define OCTO_KF_TRACK_H
+
+#include "scalar.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+
+struct kf_track_params {
+	scalar_t drift_per_min; /* largest drift to follow, fraction per minute (e.g. 0.02) */
+	scalar_t t_min_s;       /* bounds of the memory T*, s */
+	scalar_t t_max_s;
+	scalar_t phi_min;       /* gate: smallest regressor (sum of throttles) */
+	scalar_t tau_lag_s;     /* motor lag of the regressor, s (0: none) */
+	scalar_t curve;         /* thrust curve c: g(T) = (1 - c) T + c T^2 */
+	scalar_t s_tau_s;       /* averaging time of the noise estimate, s */
+	scalar_t s0_pct;        /* noise assumed before any residual, percent of y */
+};
+
+struct kf_track {
+	struct kf_track_params p;
+	scalar_t k;        /* estimate, N per unit throttle */
+	scalar_t P;        /* 1 / sum lambda^i phi^2 */
+	scalar_t s2_pct2;  /* relative noise variance, percent^2 */
+	scalar_t mem_s;    /* current memory T*, s */
+	scalar_t lambda;
+	scalar_t phi_f;    /* lag-filtered regressor */
+	scalar_t e_prev_pct; /* last residual, percent of y */
+	scalar_t lag_dt, lag_al; /* the lag filter's step and its coefficient 1 - e^(-dt/tau) */
+	bool started;      /* an estimate exists */
+	bool primed;       /* the lag filter holds a value */
+	uint32_t updates;
+};
+
+/* Defaults: 2 %/min, T* in [0.2, 60] s, phi_min 0.08, tau_lag 0.03 s, curve 0,
+ * noise average 5 s, initial noise 1 %. */
+struct kf_track_params kf_track_params_default(void);
+
+/* k0 > 0: the starting estimate (e.g. VEH_KF); the first updates replace it quickly. */
+void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t k0);
+
+/* One frame: throttles thr[0..n-1] as commanded, the sum of the measured rotor thrusts y,
+ * dt. `gate` false (on the ground, excitation running, a frame without thrust rows) only
+ * advances the lag filter. Returns true when the estimate was updated. */
+bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_n, scalar_t dt_s, bool gate);
+
+/* Standard deviation of k (N). */
+scalar_t kf_track_sd(const struct kf_track *s);
+
+#endif /* OCTO_KF_TRACK_H */

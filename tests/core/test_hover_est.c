@@ -1,0 +1,179 @@
+/* Tests of firmware/core/hover_est.h: the hover throttle learned from the vertical speed
+ * and the collective throttle, alone (random throttle, random truth) and in closed loop
+ * with alt_ctrl taking off from the ground with a nominal k_f 0.3x ... 3x the truth.
+ * The plant: m z'' = s f cos(tilt) - m g with s = k_f,true / k_f,nominal, a one-frame
+ * transport delay, a first-order thrust lag, per-rotor thrust noise and the ground
+ * (z >= 0), in double precision with 10 sub-steps per 90 Hz frame. */
+#include "unit_scalar.h"
+#include "alt_ctrl.h"
+#include "hover_est.h"
+#include "unit.h"
+
+#include <math.h>
+#include <string.h>
+#ifdef TEST_VERBOSE
+#include <stdio.h>
+#endif
+
+/* random-truth sweeps are shorter on emulated Cortex-M (make arm) */
+#if defined(__arm__)
+#define TRIALS(n) 2
+#else
+#define TRIALS(n) (n)
+#endif
+
+#define FRAME_S (1.0 / 90.0)
+#define SUBSTEPS 10
+#define G 9.796
+
+static scalar_t s(double x) { return sc_from_float((float)x); }
+
+struct plant {
+	double z, vz, f_a, f_queue;
+	double m, scale, lag_s, sigma_f; /* sigma_f: thrust noise of the total, N */
+	struct unit_rng *rng;
+};
+
+/* One frame with the total thrust demand f_cmd (nominal newtons). */
+static void plant_frame(struct plant *v, double f_cmd)
+{
+	double fin = v->f_queue;
+	v->f_queue = f_cmd;
+	double h = FRAME_S / SUBSTEPS, al = 1 - exp(-h / v->lag_s);
+	double noise = v->sigma_f * unit_rand_normal(v->rng);
+	for (int k = 0; k < SUBSTEPS; k++) {
+		v->f_a += al * (fin * v->scale - v->f_a);
+		double a = (v->f_a + noise) / v->m - G;
+		v->z += h * v->vz + 0.5 * h * h * a;
+		v->vz += h * a;
+		if (v->z <= 0.0 && v->vz <= 0.0) {   /* resting on the ground */
+			v->z = 0.0;
+			v->vz = 0.0;
+		}
+	}
+}
+
+/* Open loop: a random throttle around the true hover (+/-15 %, 2 Hz steps) with the
+ * vehicle free in the air; the estimate starts 0.3x ... 3x off. Within 1 % after 10 s,
+ * its error within 4 reported sd. Random truth u_h in [0.03, 0.6], random mass 1-5 kg. */
+UNIT_TEST(hover_est_learns_random_truth_open_loop)
+{
+	struct unit_rng r = { 0x40e5ULL };
+	for (int trial = 0; trial < TRIALS(30); trial++) {
+		double uh = unit_rand_uniform(&r, 0.03, 0.6), m = unit_rand_uniform(&r, 1.0, 5.0);
+		double off = exp(unit_rand_uniform(&r, log(0.3), log(3.0)));
+		struct hover_est_params hp = hover_est_params_default();
+		struct hover_est he;
+		hover_est_init(&he, &hp, s(uh * off));
+		/* plant in throttle units: thrust = m g u / u_h */
+		struct plant v = { 50.0, 0, m * G, m * G, m, 1.0, unit_rand_uniform(&r, 0.01, 0.05),
+				   0.01 * m * G / sqrt(8.0), &r };
+		double thr = uh;
+		for (int k = 0; k < (int)(10.0 / FRAME_S); k++) {
+			if (k % 45 == 0)
+				thr = uh * unit_rand_uniform(&r, 0.85, 1.15);
+			hover_est_update(&he, s(v.vz), s(thr), SC(1.0), s(FRAME_S));
+			plant_frame(&v, m * G * thr / uh);
+		}
+		double est = d(hover_est_u(&he)), sd = d(hover_est_sd(&he));
+#ifdef TEST_VERBOSE
+		printf("open loop u_h %.4f start %.2fx: est %.4f (%+.2f %%) sd %.3f %%\n", uh, off, est,
+		       100 * (est / uh - 1), 100 * sd / est);
+#endif
+		CHECK_REL(est, uh, 0.01);
+		CHECK(fabs(est - uh) < 4.0 * sd + 1e-4);
+		CHECK(hover_est_converged(&he, SC(0.02)));
+	}
+}
+
+/* On the ground nothing is learned (the acceleration is zero whatever the throttle):
+ * hover_est_track leaves the state alone; spool-up raises u_h at its rate, up to u_max. */
+UNIT_TEST(hover_est_ground_and_spool)
+{
+	struct hover_est_params hp = hover_est_params_default();
+	struct hover_est he;
+	hover_est_init(&he, &hp, SC(0.1));
+	for (int k = 0; k < 200; k++)
+		hover_est_track(&he, SC(0.0), SC(0.05), SC(1.0), s(FRAME_S));
+	CHECK_REL(d(hover_est_u(&he)), 0.1, 1e-3);
+	for (int k = 0; k < 90; k++)
+		hover_est_spool(&he, s(FRAME_S));
+	CHECK_REL(d(hover_est_u(&he)), 0.1 * pow(1 + 0.6 * FRAME_S, 90), 2e-3);
+	CHECK(!hover_est_converged(&he, SC(0.5)));
+	for (int k = 0; k < 2000; k++)
+		hover_est_spool(&he, s(FRAME_S));
+	CHECK_REL(d(hover_est_u(&he)), 0.8, 1e-3);
+	/* bad input: no update, no NaN */
+	CHECK(!hover_est_update(&he, SC(0.0), SC(0.1), SC(1.0), SC(0.0)));
+#if !OCTO_FIXED
+	CHECK(!hover_est_update(&he, s((double)NAN), SC(0.1), SC(1.0), s(FRAME_S)));
+#endif
+	CHECK(sc_isfinite(hover_est_u(&he)));
+}
+
+/* Closed loop, as the firmware flies it: take-off from the ground to 5 m with a nominal
+ * k_f 0.3x ... 3x the truth (random), hover throttle 0.03 ... 0.6 and mass 1 ... 5 kg
+ * (random). The height controller takes its hover thrust from the estimator; on the
+ * ground while a climb is commanded the estimator spools up. Within 30 s: at 5 m
+ * (+/-5 cm, settled), hover throttle within 2 % and converged, k_f = m g / (8 u_h)
+ * within 2 % of the truth; the height never more than 2.5 m above the target. */
+UNIT_TEST(hover_est_takeoff_from_any_nominal)
+{
+	struct unit_rng r = { 0x7a6eULL };
+	for (int trial = 0; trial < TRIALS(24); trial++) {
+		double m = unit_rand_uniform(&r, 1.0, 5.0), uh = unit_rand_uniform(&r, 0.03, 0.6);
+		double kf_true = m * G / (8 * uh);
+		double ratio = trial < 2 ? (trial == 0 ? 0.3 : 3.0) : exp(unit_rand_uniform(&r, log(0.3), log(3.0)));
+		double kf_nom = kf_true * ratio;
+		struct alt_ctrl_params ap = alt_ctrl_params_default();
+		ap.f_max_n = s(8 * kf_nom);
+		ap.f_min_n = s(0.02 * 8 * kf_nom);
+		struct alt_ctrl ac;
+		alt_ctrl_init(&ac, &ap);
+		struct hover_est_params hp = hover_est_params_default();
+		struct hover_est he;
+		hover_est_init(&he, &hp, s(m * G / (8 * kf_nom)));
+		struct plant v = { 0, 0, 0, 0, m, kf_true / kf_nom, unit_rand_uniform(&r, 0.01, 0.05),
+				   0.01 * m * G / sqrt(8.0), &r };
+		struct alt_ctrl_input in;
+		memset(&in, 0, sizeof in);
+		in.q_b2i = quat_from_euler(SC_ZERO, SC_ZERO, SC_ZERO);
+		in.mass_kg = s(m);
+		in.dt_s = s(FRAME_S);
+		double zsp = 0, zmax = 0, settled_err = 0, f = 0;
+		int n = (int)(30.0 / FRAME_S);
+		for (int k = 0; k < n; k++) {
+			double t = k * FRAME_S;
+			zsp = fmin(5.0, t * 1.0);   /* 1 m/s ramp */
+			double thr = f / (8 * kf_nom);
+			if (v.z > 0.1)
+				hover_est_update(&he, s(v.vz), s(thr), SC(1.0), s(FRAME_S));
+			else {
+				hover_est_track(&he, s(v.vz), s(thr), SC(1.0), s(FRAME_S));
+				if (zsp > v.z + 0.05)
+					hover_est_spool(&he, s(FRAME_S));
+			}
+			in.hover_f_n = s(8 * kf_nom * d(hover_est_u(&he)));
+			in.z_sp_m = s(zsp);
+			in.vz_ff_mps = s(t < 5.0 ? 1.0 : 0.0);
+			in.z_m = s(v.z);
+			in.vz_mps = s(v.vz);
+			f = d(alt_ctrl_update(&ac, &in));
+			plant_frame(&v, f);
+			zmax = fmax(zmax, v.z);
+			if (t > 25.0)
+				settled_err = fmax(settled_err, fabs(v.z - 5.0));
+		}
+		double est = d(hover_est_u(&he)), kf_est = m * G / (8 * est);
+#ifdef TEST_VERBOSE
+		printf("takeoff m %.2f u_h %.3f nominal %.2fx: est %+.2f %% sd %.2f %% k_f %+.2f %% zmax %.2f err %.3f\n",
+		       m, uh, ratio, 100 * (est / uh - 1), 100 * d(hover_est_sd(&he)) / est,
+		       100 * (kf_est / kf_true - 1), zmax, settled_err);
+#endif
+		CHECK(settled_err < 0.05);
+		CHECK(zmax < 7.5);
+		CHECK_REL(est, uh, 0.02);
+		CHECK_REL(kf_est, kf_true, 0.02);
+		CHECK(hover_est_converged(&he, SC(0.02)));
+	}
+}

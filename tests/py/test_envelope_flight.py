@@ -1,0 +1,121 @@
+"""The flight envelope in flight: octo-fw takes off and holds with VEH_KF 0.3x and 3x
+the truth (random truth: mass 1-5 kg, hover throttle 0.05-0.5), learns the hover
+throttle and publishes the k_f it implies (HOV_KF, HOV_KF_SD) within 2 % of the truth;
+a take-off that cannot reach HOLD in NAV_TKO_TO fails with its reason and a final
+COMMAND_ACK FAILED, and lands."""
+
+import json
+import random
+
+import pytest
+
+from test_fw_rig import Rig, mavlink, read_log
+
+G = 9.796
+TAKEOFF_M = 5.0
+
+
+def start(launch, port, tmp_path, seed, kf_ratio, params=None, u_range=(0.05, 0.5)):
+    rng = random.Random(seed)
+    mass = rng.uniform(1.0, 5.0)
+    u_h = rng.uniform(*u_range)
+    kf = mass * G / (8 * u_h)
+    veh = {"mass": mass, "kf": kf, "ktau": 0.3869 * kf / 28.0269}
+    vf = tmp_path / "vehicle.json"
+    vf.write_text(json.dumps(veh))
+    rig = Rig(launch, port, tmp_path)
+    lines = [f"VEH_KF {kf * kf_ratio:.6g}", f"VEH_MASS {mass:.6g}", f"VEH_KTAU {veh['ktau']:.6g}"]
+    lines += [f"{k} {v}" for k, v in (params or {}).items()]
+    rig.params.write_text("\n".join(lines) + "\n")
+    rig.start(sim_args=["--duration", 200, "--seed", seed, "--vehicle", vf])
+    return rig, veh
+
+
+def wait_text(rig, pred, timeout):
+    import time
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        hit = [t for t in rig.texts if pred(t)]
+        if hit:
+            return hit[0]
+        rig.recv(set(), timeout=0.05)
+    return None
+
+
+@pytest.mark.parametrize("seed,kf_ratio", [(1, 0.3), (2, 3.0), (3, 0.3), (4, 3.0)])
+def test_takeoff_and_hold_from_far_nominal_kf(launch, port, tmp_path, seed, kf_ratio):
+    rig, veh = start(launch, port, tmp_path, seed, kf_ratio)
+    rig.arm_when_ready()
+    r, texts = rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, TAKEOFF_M)
+    assert r == mavlink.MAV_RESULT_ACCEPTED, texts
+    assert wait_text(rig, lambda t: t == "Mode HOLD", 120), rig.texts
+    hover = wait_text(rig, lambda t: t.startswith("Hover throttle"), 5)
+    kf = rig.param_get("HOV_KF").param_value
+    sd = rig.param_get("HOV_KF_SD").param_value
+    print(f"truth k_f {veh['kf']:.3f} N, mass {veh['mass']:.2f} kg, VEH_KF {kf_ratio}x: {hover}")
+    assert kf == pytest.approx(veh["kf"], rel=0.02)
+    assert 0 < sd < 0.05 * kf
+    r, texts = rig.cmd(mavlink.MAV_CMD_NAV_LAND, 0, 0, 0, 0, 0, 0, 0)
+    assert r == mavlink.MAV_RESULT_ACCEPTED, texts
+    assert wait_text(rig, lambda t: t == "Landed", 120), rig.texts
+    rig.fw.stop()
+    # the hold was at the target height (octo-fw's log, plant time)
+    frames = [f for f in read_log(rig.fw_log, "OCTO_FW_FRAME") if f.mode == 3]
+    assert frames and max(abs(f.pos_i[2] - f.z_sp) for f in frames[-200:]) < 0.1
+
+
+def test_takeoff_timeout_says_why_and_lands(launch, port, tmp_path):
+    """NAV_TKO_TO 1 s cannot be met: the reason (the limit, the height reached), the
+    final COMMAND_ACK FAILED of the take-off, then a landing."""
+    rig, veh = start(launch, port, tmp_path, 5, 1.0, params={"NAV_TKO_TO": 1})
+    rig.arm_when_ready()
+    r, texts = rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, TAKEOFF_M)
+    assert r == mavlink.MAV_RESULT_ACCEPTED, texts
+    why = wait_text(rig, lambda t: t.startswith("Take-off failed"), 60)
+    assert why and "NAV_TKO_TO 1 s" in why and "/5.00 m" in why, rig.texts
+    acks = [m for m in rig.backlog if m.get_type() == "COMMAND_ACK"
+            and m.command == mavlink.MAV_CMD_NAV_TAKEOFF and m.result == mavlink.MAV_RESULT_FAILED]
+    while not acks:
+        m = rig.recv({"COMMAND_ACK"}, timeout=5)
+        assert m is not None, "no final COMMAND_ACK FAILED"
+        if m.command == mavlink.MAV_CMD_NAV_TAKEOFF and m.result == mavlink.MAV_RESULT_FAILED:
+            acks.append(m)
+    assert acks[0].target_system == 255
+    assert wait_text(rig, lambda t: t == "Landed", 120), rig.texts
+
+
+@pytest.mark.parametrize("seed", [11, 12])
+def test_kf_tracked_in_hold_against_truth_at_the_same_time(launch, port, tmp_path, seed):
+    """k_f drifting at a random -1 ... -3 %/min: KFT_EST, published with the plant time it
+    holds for (KFT_T), within 0.3 % of the truth at that time (octo-sim's truth log)."""
+    import time
+    rng = random.Random(seed)
+    drift = rng.uniform(-0.03, -0.01)
+    mass, u_h = rng.uniform(1.5, 4.0), rng.uniform(0.08, 0.4)
+    kf = mass * G / (8 * u_h)
+    vf = tmp_path / "vehicle.json"
+    vf.write_text(json.dumps({"mass": mass, "kf": kf, "ktau": 0.3869 * kf / 28.0269, "kf_drift_per_min": drift}))
+    rig = Rig(launch, port, tmp_path)
+    rig.params.write_text(f"VEH_MASS {mass:.6g}\nKFT_DRIFT 0.03\n")
+    rig.start(sim_args=["--duration", 200, "--seed", seed, "--vehicle", vf])
+    rig.arm_when_ready()
+    r, texts = rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, TAKEOFF_M)
+    assert r == mavlink.MAV_RESULT_ACCEPTED, texts
+    assert wait_text(rig, lambda t: t == "Mode HOLD", 120), rig.texts
+    samples = []
+    deadline = time.monotonic() + 60
+    while len(samples) < 6 and time.monotonic() < deadline:
+        rig.recv(set(), timeout=1.0)
+        est, t = rig.param_get("KFT_EST"), rig.param_get("KFT_T")
+        if est is not None and t is not None and t.param_value > 0 and \
+                (not samples or t.param_value > samples[-1][1] + 2):
+            samples.append((est.param_value, t.param_value))
+    rig.fw.stop()
+    rig.sim.stop()
+    truth = read_log(rig.truth_log, "OCTO_TRUTH")
+    assert len(samples) >= 3, samples
+    for est, t in samples:
+        s = min(truth, key=lambda x: abs(x.t - t))
+        err = est / s.kf - 1
+        print(f"t {t:.2f} s: KFT_EST {est:.4f} truth {s.kf:.4f} ({100 * err:+.3f} %)")
+        assert abs(s.t - t) < 0.02 and abs(err) < 0.003
