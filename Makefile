@@ -7,7 +7,8 @@
 #   make bench    performance figures (build/bench.json)
 #   make campaign a Monte Carlo campaign of random vehicles and faults on a local Dask cluster
 #                 (host_tools/campaigns/default.json; output in campaign/; goes on where it stopped)
-#   make arm      cross-build the core and run its unit tests on emulated Cortex-M4F and M0
+#   make arm      cross-build the core and run its unit tests on emulated Cortex-M4F and M0,
+#                 and the app's C suite on Cortex-M4F
 #   make fuzz     libFuzzer on every parser (make fuzz-smoke: a few seconds each, for CI)
 #   make clean    remove build/ (keeps .venv); make distclean removes .venv too
 #
@@ -130,7 +131,7 @@ campaign: all
 	$(VENV)/bin/octo-gcs campaign $(CAMPAIGN_SPEC) --out campaign --resume $(CAMPAIGN_ARGS)
 
 help:
-	@sed -n '2,16p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,17p' Makefile | sed 's/^# \{0,1\}//'
 
 clean:
 	rm -rf $(B)

@@ -11,10 +11,6 @@
 #define MAX_DT_S 0.2f              /* longer gaps are integrated as 200 ms */
 #define HOVER_Z_TOL_M 0.3f
 #define HOVER_TILT_DEG 5.0f
-#define POS_VEL_MAX 2.0f
-#define PROFILE_ACC 0.5f           /* m/s^2, take-off height profile */
-#define HOLD_ENTRY_M 0.05f         /* take-off ends (HOLD) within this of the target */
-#define HOLD_ENTRY_MPS 0.1f
 
 static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
@@ -43,15 +39,38 @@ static float tilt_deg(const struct hal_sensor_frame *f)
 	return acosf(clampf(c, -1.0f, 1.0f)) / DEG_F;
 }
 
-static float frame_yaw(const struct hal_sensor_frame *f)
+static scalar_t frame_yaw(const struct hal_sensor_frame *f)
 {
-	return sc_to_float(quat_yaw(frame_q(f)));
+	return quat_yaw(frame_q(f));
+}
+
+/* the frame's position as scalars */
+static void frame_pos(const struct hal_sensor_frame *f, scalar_t pos[3])
+{
+	for (int i = 0; i < 3; i++)
+		pos[i] = sc_from_float(f->pos_i_m[i]);
+}
+
+/* what guidance flies in each mode */
+static enum guid_mode guid_mode_of(enum app_mode m)
+{
+	switch (m) {
+	case APP_TAKEOFF:
+		return GUID_TAKEOFF;
+	case APP_HOLD:
+	case APP_EXPERIMENT:
+		return GUID_HOLD;
+	case APP_LAND:
+		return GUID_LAND;
+	default:
+		return GUID_GROUND;
+	}
 }
 
 bool app_hovering(const struct app *a)
 {
 	return a->mode == APP_HOLD && a->have_step && a->link_ok &&
-	       fabsf(a->fr.pos_i_m[2] - a->z_target) < HOVER_Z_TOL_M &&
+	       fabsf(a->fr.pos_i_m[2] - sc_to_float(a->guid.z_target_m)) < HOVER_Z_TOL_M &&
 	       fabsf(a->fr.vel_i_mps[2]) < 0.3f && tilt_deg(&a->fr) < HOVER_TILT_DEG;
 }
 
@@ -103,6 +122,18 @@ static void sync_params(struct app *a)
 	ap.ki_rps = vec3_make(sc_from_float(p->att_ki), sc_from_float(p->att_ki), sc_from_float(p->att_ki));
 	a->att.p = ap;   /* not att_ctrl_init: that would drop the integral */
 
+	struct guid_params gp = guid_params_default();
+	gp.tko_vel_mps = sc_from_float(p->nav_tko_vel);
+	gp.land_vel_mps = sc_from_float(p->nav_land_vel);
+	gp.touch_down_s = sc_from_float(p->nav_touch_down_s);
+	a->guid.p = gp;
+
+	struct pos_ctrl_params pp = pos_ctrl_params_default();
+	pp.pos_gain_rps = sc_from_float(p->pos_gain);
+	pp.vel_gain_rad_mps = sc_from_float(p->pos_vel_gain);
+	pp.tilt_max_rad = sc_from_float(p->att_tilt_max * DEG_F);
+	a->pos = pp;
+
 	struct alt_ctrl_params lp = alt_ctrl_params_default();
 	lp.wn_rps = sc_from_float(p->alt_wn);
 	lp.zeta = sc_from_float(p->alt_zeta);
@@ -147,6 +178,8 @@ void app_init(struct app *a, const struct hal *hal)
 	mav_init(&a->mav, hal, now);
 	struct att_ctrl_params ap = att_ctrl_params_default();
 	att_ctrl_init(&a->att, &ap);
+	struct guid_params gp = guid_params_default();
+	guid_init(&a->guid, &gp);
 	struct alt_ctrl_params lp = alt_ctrl_params_default();
 	alt_ctrl_init(&a->alt, &lp);
 	struct mixer_params mp;
@@ -230,10 +263,9 @@ enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size
 			return APP_BUSY;
 		}
 		a->actuating = true;
-		a->z_ground = a->fr.pos_i_m[2];
-		a->pos_sp[0] = a->fr.pos_i_m[0];
-		a->pos_sp[1] = a->fr.pos_i_m[1];
-		a->yaw_sp = frame_yaw(&a->fr);
+		scalar_t pos[3];
+		frame_pos(&a->fr, pos);
+		guid_arm(&a->guid, pos, frame_yaw(&a->fr));
 		reset_control(a);
 		set_mode(a, APP_IDLE);
 		return APP_ACCEPTED;
@@ -259,34 +291,20 @@ enum app_result app_cmd_takeoff(struct app *a, float height_m, app_origin origin
 		snprintf(why, cap, "Takeoff refused: height %.1f m not in [0.5, 100]", (double)height_m);
 		return APP_DENIED;
 	}
-	float target = a->z_ground + height_m;
-	switch (a->mode) {
-	case APP_DISARMED:
+	if (a->mode == APP_DISARMED) {
 		snprintf(why, cap, "Takeoff refused: not armed");
 		return APP_BUSY;
-	case APP_EXPERIMENT:
+	}
+	if (a->mode == APP_EXPERIMENT) {
 		snprintf(why, cap, "Takeoff refused: experiment running");
 		return APP_BUSY;
-	case APP_IDLE:
-		a->z_sp = a->fr.pos_i_m[2];
-		a->pos_sp[0] = a->fr.pos_i_m[0];
-		a->pos_sp[1] = a->fr.pos_i_m[1];
-		a->yaw_sp = frame_yaw(&a->fr);
-		reset_control(a);
-		break;
-	case APP_LAND:
-		a->z_sp = a->fr.pos_i_m[2];
-		a->vz_ff = 0.0f;
-		break;
-	case APP_TAKEOFF:
-	case APP_HOLD:
-		if (fabsf(target - a->z_target) < 0.01f)
-			return APP_ACCEPTED;   /* a retry: nothing changes */
-		a->z_sp = a->mode == APP_HOLD ? a->z_target : a->z_sp;
-		break;
 	}
-	a->z_target = target;
-	a->on_ground_s = 0.0f;
+	scalar_t pos[3];
+	frame_pos(&a->fr, pos);
+	if (!guid_takeoff(&a->guid, guid_mode_of(a->mode), sc_from_float(height_m), pos, frame_yaw(&a->fr)))
+		return APP_ACCEPTED;   /* a retry: nothing changes */
+	if (a->mode == APP_IDLE)
+		reset_control(a);
 	app_status(a, APP_SEV_INFO, "Takeoff to %.2f m", (double)height_m);
 	envelope_on_command(a, APP_CMD_TAKEOFF, origin);
 	a->mode = APP_HOLD;   /* so that set_mode reports the change even from HOLD */
@@ -311,9 +329,7 @@ enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t
 		/* fall through */
 	case APP_TAKEOFF:
 	case APP_HOLD:
-		a->z_sp = fminf(a->z_sp, a->fr.pos_i_m[2]);
-		a->vz_ff = 0.0f;
-		a->on_ground_s = 0.0f;
+		guid_land(&a->guid, sc_from_float(a->fr.pos_i_m[2]));
 		envelope_on_command(a, APP_CMD_LAND, origin);
 		set_mode(a, APP_LAND);
 		return APP_ACCEPTED;
@@ -348,8 +364,6 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 	envelope_seed_kf(a, id);
 	int r = exp_start(&a->exp, id, &a->p, why, cap);
 	if (r == APP_ACCEPTED || r == APP_IN_PROGRESS) {
-		a->exp.id = id;
-		a->exp.state = EXP_RUNNING;
 		set_mode(a, APP_EXPERIMENT);
 		a->exp_ack_pending = true;
 		a->exp_origin = origin;
@@ -437,7 +451,6 @@ static void experiment_step(struct app *a, float dt)
 	enum exp_state st = exp_step(&a->exp, &in, &a->exp_out);
 	if (st != EXP_RUNNING) {
 		memset(&a->exp_out, 0, sizeof a->exp_out);
-		a->exp.state = EXP_IDLE;
 		set_mode(a, APP_HOLD);
 	}
 }
@@ -450,85 +463,54 @@ static void control_step(struct app *a, float dt)
 	float z = f->pos_i_m[2], vz = f->vel_i_mps[2];
 
 	memset(&a->exp_out, 0, sizeof a->exp_out);
+	struct guid_input gi = {sc_from_float(z), sc_from_float(vz), sc_from_float(dt), false};
 	if (a->mode == APP_DISARMED || a->mode == APP_IDLE) {
 		float t = a->mode == APP_IDLE ? p->mot_thr_idle : 0.0f;
 		for (int j = 0; j < HAL_ROTORS; j++)
 			a->thr[j] = t;
 		reset_control(a);
-		if (a->mode == APP_IDLE)
-			a->z_ground = z;
-		a->z_sp = z;
-		a->vz_ff = 0.0f;
+		guid_ground(&a->guid, gi.z_m, a->mode == APP_IDLE);
 		memset(a->wrench_dem, 0, sizeof a->wrench_dem);
 		memset(a->rotor_f, 0, sizeof a->rotor_f);
+		a->mix_out.limits = 0;
 		return;
 	}
 
 	envelope_limits(a, dt);   /* take-off and landing time limits */
 
-	/* guidance: height setpoint ramps and mode transitions */
-	switch (a->mode) {
-	case APP_TAKEOFF: {
-		/* trapezoidal height profile: accelerate and brake at PROFILE_ACC, cruise at
-		 * NAV_TKO_VEL, so the setpoint (and its feedforward) never jumps */
-		float d = a->z_target - a->z_sp, ad = fabsf(d);
-		float v = fminf(fminf(p->nav_tko_vel, sqrtf(2.0f * PROFILE_ACC * ad)),
-				fabsf(a->vz_ff) + PROFILE_ACC * dt);
-		if (ad <= v * dt || ad < 1e-3f) {
-			a->z_sp = a->z_target;
-			a->vz_ff = 0.0f;
-			if (fabsf(z - a->z_target) < HOLD_ENTRY_M && fabsf(vz) < HOLD_ENTRY_MPS &&
-			    envelope_hover_ready(a))
-				set_mode(a, APP_HOLD);
-		} else {
-			a->vz_ff = d > 0.0f ? v : -v;
-			a->z_sp += a->vz_ff * dt;
-		}
-		break;
-	}
-	case APP_HOLD:
-	case APP_EXPERIMENT:
-		a->z_sp = a->z_target;
-		a->vz_ff = 0.0f;
-		break;
-	case APP_LAND:
-		a->z_sp = fmaxf(a->z_sp - p->nav_land_vel * dt, a->z_ground - 1.0f);
-		a->vz_ff = -p->nav_land_vel;
-		if (z - a->z_ground < 0.2f && fabsf(vz) < 0.25f)
-			a->on_ground_s += dt;
-		else
-			a->on_ground_s = 0.0f;
-		if (a->on_ground_s > p->nav_touch_down_s) {
-			memset(a->thr, 0, sizeof a->thr);
-			app_status(a, APP_SEV_INFO, "Landed");
-			set_mode(a, APP_DISARMED);
-			return;
-		}
-		break;
-	default:
-		break;
+	/* guidance: set points and mode transitions (take-off ends once the hover is learned) */
+	gi.hold_ready = a->mode == APP_TAKEOFF && envelope_hover_ready(a);
+	uint32_t ev = guid_update(&a->guid, guid_mode_of(a->mode), &gi);
+	if (ev & GUID_HOLD_REACHED)
+		set_mode(a, APP_HOLD);
+	if (ev & GUID_LANDED) {
+		memset(a->thr, 0, sizeof a->thr);
+		app_status(a, APP_SEV_INFO, "Landed");
+		set_mode(a, APP_DISARMED);
+		return;
 	}
 
-	/* horizontal: hold the position of the take-off through small tilts */
-	float yaw = sc_to_float(quat_yaw(q));
-	float vn = clampf(p->pos_gain * (a->pos_sp[0] - f->pos_i_m[0]), -POS_VEL_MAX, POS_VEL_MAX);
-	float vw = clampf(p->pos_gain * (a->pos_sp[1] - f->pos_i_m[1]), -POS_VEL_MAX, POS_VEL_MAX);
-	float an = p->pos_vel_gain * (vn - f->vel_i_mps[0]);
-	float aw = p->pos_vel_gain * (vw - f->vel_i_mps[1]);
-	float fwd = cosf(yaw) * an + sinf(yaw) * aw;
-	float left = -sinf(yaw) * an + cosf(yaw) * aw;
-	float tmax = p->att_tilt_max * DEG_F;
-	bool on_ground = a->mode == APP_TAKEOFF && z - a->z_ground < 0.3f;
-	float pitch_sp = on_ground ? 0.0f : clampf(fwd, -tmax, tmax);
-	float roll_sp = on_ground ? 0.0f : clampf(-left, -tmax, tmax);
-	struct quat q_sp = quat_from_euler(sc_from_float(roll_sp), sc_from_float(pitch_sp),
-					   sc_from_float(a->yaw_sp));
+	/* horizontal: hold the position of the take-off through small tilts (level near the
+	 * ground during take-off) */
+	struct pos_ctrl_input pi = {
+		.pos_sp_m = {a->guid.pos_sp_m[0], a->guid.pos_sp_m[1]},
+		.pos_m = {sc_from_float(f->pos_i_m[0]), sc_from_float(f->pos_i_m[1])},
+		.vel_mps = {sc_from_float(f->vel_i_mps[0]), sc_from_float(f->vel_i_mps[1])},
+		.q_b2i = q,
+	};
+	struct pos_ctrl_output po = pos_ctrl_update(&a->pos, &pi);
+	if (guid_level_only(&a->guid, guid_mode_of(a->mode), gi.z_m))
+		po.roll_rad = po.pitch_rad = SC_ZERO;
+	struct quat q_sp = quat_from_euler(po.roll_rad, po.pitch_rad, a->guid.yaw_sp_rad);
 	a->q_sp[0] = sc_to_float(q_sp.w);
 	a->q_sp[1] = sc_to_float(q_sp.x);
 	a->q_sp[2] = sc_to_float(q_sp.y);
 	a->q_sp[3] = sc_to_float(q_sp.z);
 
-	/* attitude and height control */
+	/* attitude and height control; what the allocation cut on the previous step stops
+	 * their integrals from winding further that way */
+	uint8_t short_pos, short_neg;
+	mixer_shortfall(&a->mix_out, &short_pos, &short_neg);
 	struct att_ctrl_input ai = {
 		.q_sp_b2i = q_sp,
 		.rate_ff_b = vec3_zero(),
@@ -538,18 +520,22 @@ static void control_step(struct app *a, float dt)
 		.inertia_kgm2 = vec3_make(sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy),
 					  sc_from_float(p->veh_izz)),
 		.dt_s = sc_from_float(dt),
+		.alloc_short_pos = (uint8_t)(short_pos >> 1),
+		.alloc_short_neg = (uint8_t)(short_neg >> 1),
 	};
 	struct vec3 tau;
 	att_ctrl_update(&a->att, &ai, &tau);
 	struct alt_ctrl_input li = {
-		.z_sp_m = sc_from_float(a->z_sp),
-		.vz_ff_mps = sc_from_float(a->vz_ff),
-		.z_m = sc_from_float(z),
-		.vz_mps = sc_from_float(vz),
+		.z_sp_m = a->guid.z_sp_m,
+		.vz_ff_mps = a->guid.vz_ff_mps,
+		.z_m = gi.z_m,
+		.vz_mps = gi.vz_mps,
 		.q_b2i = q,
 		.mass_kg = sc_from_float(p->veh_mass),
+		.dt_s = gi.dt_s,
 		.hover_f_n = sc_from_float(envelope_hover_f(a, dt, sc_to_float(quat_body_z_up(q)))),
-		.dt_s = sc_from_float(dt),
+		.alloc_short_up = (short_pos & 1u) != 0,
+		.alloc_short_down = (short_neg & 1u) != 0,
 	};
 	scalar_t fz = alt_ctrl_update(&a->alt, &li);
 	a->wrench_dem[0] = sc_to_float(fz);
@@ -605,10 +591,10 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	memcpy(l->rotor_thrust, f->rotor_thrust_n, sizeof l->rotor_thrust);
 	memcpy(l->rotor_torque, f->rotor_torque_nm, sizeof l->rotor_torque);
 	memcpy(l->q_sp, a->q_sp, sizeof l->q_sp);
-	l->z_sp = a->z_sp;
-	l->vz_ff = a->vz_ff;
-	l->pos_sp[0] = a->pos_sp[0];
-	l->pos_sp[1] = a->pos_sp[1];
+	l->z_sp = sc_to_float(a->guid.z_sp_m);
+	l->vz_ff = sc_to_float(a->guid.vz_ff_mps);
+	l->pos_sp[0] = sc_to_float(a->guid.pos_sp_m[0]);
+	l->pos_sp[1] = sc_to_float(a->guid.pos_sp_m[1]);
 	l->f_dem = a->wrench_dem[0];
 	for (int i = 0; i < 3; i++)
 		l->tau_dem[i] = a->wrench_dem[i + 1];
@@ -657,7 +643,6 @@ static void abort_experiment(struct app *a, const char *reason)
 	if (a->mode != APP_EXPERIMENT)
 		return;
 	exp_abort(&a->exp, reason);
-	a->exp.state = EXP_IDLE;
 	memset(&a->exp_out, 0, sizeof a->exp_out);
 	set_mode(a, APP_HOLD);
 }

@@ -31,12 +31,14 @@
 #include "att_ctrl.h"
 #include "envelope.h"
 #include "experiment.h"
+#include "guidance.h"
 #include "hal.h"
 #include "log.h"
 #include "mav.h"
 #include "mixer.h"
 #include "outbox.h"
 #include "params.h"
+#include "pos_ctrl.h"
 #include "thrmap.h"
 
 enum app_mode {
@@ -66,10 +68,9 @@ struct app {
 	double t_actuated;            /* plant time of the last frame answered */
 	float thr[HAL_ROTORS];
 
-	/* guidance */
-	float z_ground, z_target, z_sp, vz_ff;
-	float pos_sp[2], yaw_sp;
-	float on_ground_s;            /* landing: time spent touched down */
+	/* guidance (set points) and the position loop */
+	struct guid guid;
+	struct pos_ctrl_params pos;
 	float q_sp[4];
 
 	/* control */

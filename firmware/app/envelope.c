@@ -150,7 +150,7 @@ float envelope_hover_f(struct app *a, float dt, float cos_tilt)
 	float z = a->fr.pos_i_m[2], vz = a->fr.vel_i_mps[2];
 	/* collective throttle of the last step's achieved thrust (linearised by the map) */
 	float u = sc_to_float(a->mix_out.achieved[0]) / (8.0f * p->veh_kf);
-	bool up = z - a->z_ground > AIRBORNE_M;
+	bool up = z - sc_to_float(a->guid.z_ground_m) > AIRBORNE_M;
 	bool learn = up && (a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_LAND);
 	scalar_t s_vz = sc_from_float(vz), s_u = sc_from_float(u), s_c = sc_from_float(cos_tilt);
 	scalar_t s_dt = sc_from_float(dt);
@@ -161,7 +161,7 @@ float envelope_hover_f(struct app *a, float dt, float cos_tilt)
 		hover_est_track(&e->hov, s_vz, s_u, s_c, s_dt);
 	kft_step(a, dt, up);
 	/* a climb commanded that has not lifted off: the hover throttle is higher */
-	if (a->mode == APP_TAKEOFF && !up && a->z_sp > z + 0.05f)
+	if (a->mode == APP_TAKEOFF && !up && sc_to_float(a->guid.z_sp_m) > z + 0.05f)
 		hover_est_spool(&e->hov, s_dt);
 	return 8.0f * p->veh_kf * sc_to_float(hover_est_u(&e->hov));
 }
@@ -228,10 +228,10 @@ static bool phase_timeout(struct app *a, float dt, char *why, size_t cap, char *
 	if (a->mode != APP_TAKEOFF && a->mode != APP_LAND)
 		return false;
 	e->phase_s += dt;
-	float z = a->fr.pos_i_m[2] - a->z_ground;
+	float z = a->fr.pos_i_m[2] - sc_to_float(a->guid.z_ground_m);
 	if (a->mode == APP_TAKEOFF && e->phase_s > a->p.nav_tko_to) {
 		snprintf(why, cap, "Take-off failed: NAV_TKO_TO %.0f s, %.2f/%.2f m", (double)a->p.nav_tko_to,
-			 (double)z, (double)(a->z_target - a->z_ground));
+			 (double)z, (double)(sc_to_float(a->guid.z_target_m) - sc_to_float(a->guid.z_ground_m)));
 		if (!envelope_hover_ready(a))
 			snprintf(more, more_cap, "Hover throttle %.3f+/-%.3f not learned",
 				 (double)sc_to_float(hover_est_u(&e->hov)), (double)sc_to_float(hover_est_sd(&e->hov)));

@@ -277,6 +277,7 @@ int exp_start(struct experiment *e, int id, const struct app_params *p, char *wh
 	e->n_est = EXP_MAX_EST;
 	for (int i = 0; i < EXP_MAX_EST; i++)
 		snprintf(e->est_name[i], sizeof e->est_name[i], "%s", est_names[i]);
+	e->state = EXP_RUNNING;
 	return APP_ACCEPTED;
 }
 

@@ -200,6 +200,8 @@ struct exp_cfg {
 
 struct experiment {
 	const struct mixer *mix;               /* the app's mixer: its Gamma gives the inertia phases' torque */
+	/* id and state are experiment.c's alone: exp_start sets them, exp_step and exp_abort
+	 * move the state on; the app reads them */
 	int id;                                /* MAV_CMD_USER_1 param1; 0 = none */
 	enum exp_state state;
 	int phase;

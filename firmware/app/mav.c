@@ -67,7 +67,7 @@ static uint32_t boot_ms(const struct app *a)
 	return (uint32_t)((hal_wall_us(a->hal) - a->mav.boot_us) / 1000u);
 }
 
-static void send_named_float(struct app *a, const char *name, float value);
+static void send_named_float(const struct app *a, const char *name, float value);
 
 /* The sender handed to the telemetry and FTP modules (their context is the app). */
 static void send_cb(const void *ctx, const mavlink_message_t *msg)
@@ -90,9 +90,10 @@ static struct mav_ftp_link ftp_link(const struct app *a, const mavlink_message_t
 	return (struct mav_ftp_link){MAV_SYSID, MAV_COMPID, CHAN, req->sysid, req->compid, boot_ms(a), a};
 }
 
-/* ---------------------------------------------------------------- telemetry table */
+/* ---------------------------------------------------------------- telemetry table
+ * The pack functions read the app through a const view: telemetry never changes it. */
 
-static void pack_heartbeat(struct app *a, mavlink_message_t *msg)
+static void pack_heartbeat(const struct app *a, mavlink_message_t *msg)
 {
 	uint8_t base = mav_telem_base_mode(a->mode != APP_DISARMED);
 	uint8_t status = MAV_STATE_STANDBY;
@@ -103,7 +104,7 @@ static void pack_heartbeat(struct app *a, mavlink_message_t *msg)
 }
 
 /* Telemetry leaves in MAVLink's NED / forward-right-down conventions. */
-static void pack_attitude_q(struct app *a, mavlink_message_t *msg)
+static void pack_attitude_q(const struct app *a, mavlink_message_t *msg)
 {
 	const struct hal_sensor_frame *f = &a->fr;
 	const float zero[4] = {0, 0, 0, 0};
@@ -113,7 +114,7 @@ static void pack_attitude_q(struct app *a, mavlink_message_t *msg)
 						  -f->rate_b_rps[2], zero);
 }
 
-static void pack_local_pos(struct app *a, mavlink_message_t *msg)
+static void pack_local_pos(const struct app *a, mavlink_message_t *msg)
 {
 	const struct hal_sensor_frame *f = &a->fr;
 	mavlink_msg_local_position_ned_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, boot_ms(a),
@@ -121,7 +122,7 @@ static void pack_local_pos(struct app *a, mavlink_message_t *msg)
 						 f->vel_i_mps[0], -f->vel_i_mps[1], -f->vel_i_mps[2]);
 }
 
-static void pack_actuator(struct app *a, mavlink_message_t *msg)
+static void pack_actuator(const struct app *a, mavlink_message_t *msg)
 {
 	float act[32] = {0};
 	for (int j = 0; j < HAL_ROTORS; j++)
@@ -136,7 +137,7 @@ static uint16_t pwm(float t)
 	return (uint16_t)(1000.0f + 1000.0f * t + 0.5f);
 }
 
-static void pack_servo(struct app *a, mavlink_message_t *msg)
+static void pack_servo(const struct app *a, mavlink_message_t *msg)
 {
 	const float *t = a->thr;
 	mavlink_msg_servo_output_raw_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, boot_ms(a) * 1000u, 0,
@@ -144,7 +145,7 @@ static void pack_servo(struct app *a, mavlink_message_t *msg)
 					       pwm(t[5]), pwm(t[6]), pwm(t[7]), 0, 0, 0, 0, 0, 0, 0, 0);
 }
 
-static void pack_sys_status(struct app *a, mavlink_message_t *msg)
+static void pack_sys_status(const struct app *a, mavlink_message_t *msg)
 {
 	struct hal_plant_stats ls;
 	hal_plant_stats(a->hal, &ls);
@@ -162,7 +163,7 @@ static void pack_sys_status(struct app *a, mavlink_message_t *msg)
 
 /* NAMED_VALUE_FLOAT of the live estimates: packs nothing itself (several
  * messages), sends them directly; returns false so the table sends nothing. */
-static void pack_estimates(struct app *a, mavlink_message_t *msg)
+static void pack_estimates(const struct app *a, mavlink_message_t *msg)
 {
 	(void)msg;
 	if (a->mode != APP_EXPERIMENT)
@@ -184,7 +185,7 @@ static void pack_estimates(struct app *a, mavlink_message_t *msg)
 struct mav_stream {
 	uint32_t msgid;
 	uint32_t default_interval_us;
-	void (*pack)(struct app *a, mavlink_message_t *msg);
+	void (*pack)(const struct app *a, mavlink_message_t *msg); /* reads a const view of the app */
 	bool direct;   /* pack sends itself (zero or several messages) */
 };
 
@@ -253,7 +254,7 @@ static void send_statustext(struct app *a, int severity, const char *text)
 	send_msg(a, &msg);
 }
 
-static void send_named_float(struct app *a, const char *name, float value)
+static void send_named_float(const struct app *a, const char *name, float value)
 {
 	char buf[MAVLINK_MSG_NAMED_VALUE_FLOAT_FIELD_NAME_LEN];
 	memset(buf, 0, sizeof buf);

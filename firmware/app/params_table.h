@@ -15,6 +15,11 @@
  * `octo-fw --dump-params`. The order is the MAVLink index: append, never
  * reorder, so a ground station's cached table stays valid across versions.
  *
+ * The controllers' gains (ATT_*, ALT_*, POS_*) and the guidance rates (NAV_TKO_VEL,
+ * NAV_LAND_VEL, NAV_TOUCH_DOWN_S) take their defaults from the core's modules
+ * (ATT_CTRL_DEFAULT_*, ALT_CTRL_DEFAULT_*, POS_CTRL_DEFAULT_*, GUID_DEFAULT_*): one
+ * source for both.
+ *
  * The VEH_* defaults are deliberately off from the truth (k_f 28.0269 N,
  * k_tau 0.3869 N m, I = 0.0628/0.0762/0.1014 kg m^2): identification
  * (the experiment command) is there to find the real values in flight.
@@ -32,19 +37,19 @@ PARAM(VEH_ARM_L,    veh_arm_l,    0.35f,   0.05f,   5.0f,    "m",      "Arm leng
 PARAM(VEH_GRAV,     veh_grav,     9.796f,  9.0f,    10.5f,   "m/s^2",  "Acceleration of gravity g")
 #undef PARAM_FLAGS
 #define PARAM_FLAGS 0
-PARAM(ATT_WN_RP,    att_wn_rp,    7.0f,    1.0f,    40.0f,   "rad/s",  "Roll/pitch attitude loop natural frequency")
-PARAM(ATT_WN_YAW,   att_wn_yaw,   3.5f,    0.5f,    20.0f,   "rad/s",  "Yaw attitude loop natural frequency")
-PARAM(ATT_ZETA,     att_zeta,     1.0f,    0.3f,    2.0f,    "",       "Attitude loop damping ratio")
-PARAM(ATT_KI,       att_ki,       0.3f,    0.0f,    10.0f,   "1/s",    "Attitude integral pole")
-PARAM(ATT_TILT_MAX, att_tilt_max, 20.0f,   2.0f,    45.0f,   "deg",    "Largest tilt the position loop may ask for")
-PARAM(ALT_WN,       alt_wn,       2.5f,    0.2f,    10.0f,   "rad/s",  "Height loop natural frequency")
-PARAM(ALT_ZETA,     alt_zeta,     1.0f,    0.3f,    3.0f,    "",       "Height loop damping ratio")
-PARAM(ALT_KI,       alt_ki,       0.8f,    0.0f,    10.0f,   "1/s",    "Height integral pole (removes thrust-scale errors)")
-PARAM(POS_VEL_GAIN, pos_vel_gain, 0.15f,   0.0f,    2.0f,    "rad s/m","Horizontal velocity damping: tilt per m/s")
-PARAM(POS_GAIN,     pos_gain,     0.3f,    0.0f,    5.0f,    "1/s",    "Horizontal position hold: velocity per metre")
+PARAM(ATT_WN_RP,    att_wn_rp,    ATT_CTRL_DEFAULT_WN_RP_RPS,  1.0f,    40.0f,   "rad/s",  "Roll/pitch attitude loop natural frequency")
+PARAM(ATT_WN_YAW,   att_wn_yaw,   ATT_CTRL_DEFAULT_WN_YAW_RPS, 0.5f,    20.0f,   "rad/s",  "Yaw attitude loop natural frequency")
+PARAM(ATT_ZETA,     att_zeta,     ATT_CTRL_DEFAULT_ZETA,       0.3f,    2.0f,    "",       "Attitude loop damping ratio")
+PARAM(ATT_KI,       att_ki,       ATT_CTRL_DEFAULT_KI_RPS,     0.0f,    10.0f,   "1/s",    "Attitude integral pole")
+PARAM(ATT_TILT_MAX, att_tilt_max, POS_CTRL_DEFAULT_TILT_MAX_DEG, 2.0f,    45.0f,   "deg",    "Largest tilt the position loop may ask for")
+PARAM(ALT_WN,       alt_wn,       ALT_CTRL_DEFAULT_WN_RPS,     0.2f,    10.0f,   "rad/s",  "Height loop natural frequency")
+PARAM(ALT_ZETA,     alt_zeta,     ALT_CTRL_DEFAULT_ZETA,       0.3f,    3.0f,    "",       "Height loop damping ratio")
+PARAM(ALT_KI,       alt_ki,       ALT_CTRL_DEFAULT_KI_RPS,     0.0f,    10.0f,   "1/s",    "Height integral pole (removes thrust-scale errors)")
+PARAM(POS_VEL_GAIN, pos_vel_gain, POS_CTRL_DEFAULT_VEL_GAIN_RAD_MPS, 0.0f,    2.0f,    "rad s/m","Horizontal velocity damping: tilt per m/s")
+PARAM(POS_GAIN,     pos_gain,     POS_CTRL_DEFAULT_POS_GAIN_RPS, 0.0f,    5.0f,    "1/s",    "Horizontal position hold: velocity per metre")
 PARAM(NAV_TKO_ALT,  nav_tko_alt,  10.0f,   0.5f,    100.0f,  "m",      "Take-off height when the command gives none")
-PARAM(NAV_TKO_VEL,  nav_tko_vel,  1.5f,    0.1f,    5.0f,    "m/s",    "Climb rate of take-off")
-PARAM(NAV_LAND_VEL, nav_land_vel, 0.7f,    0.1f,    3.0f,    "m/s",    "Descent rate of landing")
+PARAM(NAV_TKO_VEL,  nav_tko_vel,  GUID_DEFAULT_TKO_VEL_MPS,    0.1f,    5.0f,    "m/s",    "Climb rate of take-off")
+PARAM(NAV_LAND_VEL, nav_land_vel, GUID_DEFAULT_LAND_VEL_MPS,   0.1f,    3.0f,    "m/s",    "Descent rate of landing")
 #undef PARAM_FLAGS
 #define PARAM_FLAGS PARAM_LOCKED
 PARAM(MOT_THR_IDLE, mot_thr_idle, 0.0f,    0.0f,    0.3f,    "",       "Throttle of every rotor when armed on the ground")
@@ -55,7 +60,7 @@ PARAM(MIX_MODE,     mix_mode,     1.0f,    0.0f,    1.0f,    "",       "Allocati
 #define PARAM_FLAGS 0
 PARAM(FS_LINK_TO,   fs_link_to,   0.3f,    0.05f,   5.0f,    "s",      "X-Plane link declared lost after this silence")
 PARAM(FS_LAND_AFTER,fs_land_after,2.0f,    0.1f,    60.0f,   "s",      "A link loss longer than this lands on recovery")
-PARAM(NAV_TOUCH_DOWN_S,nav_touch_down_s,1.0f, 0.2f,    10.0f,   "s",      "Landing: time on the ground before the motors stop")
+PARAM(NAV_TOUCH_DOWN_S,nav_touch_down_s,GUID_DEFAULT_TOUCH_DOWN_S, 0.2f,    10.0f,   "s",      "Landing: time on the ground before the motors stop")
 /* identification: settings (locked) and results (read-only), kept beside experiment.c */
 #undef PARAM_FLAGS
 #define PARAM_FLAGS PARAM_LOCKED

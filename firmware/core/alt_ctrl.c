@@ -4,9 +4,9 @@
 struct alt_ctrl_params alt_ctrl_params_default(void)
 {
 	struct alt_ctrl_params p;
-	p.wn_rps = SC(2.5);
-	p.zeta = SC(1.0);
-	p.ki_rps = SC(0.8);
+	p.wn_rps = SC(ALT_CTRL_DEFAULT_WN_RPS);
+	p.zeta = SC(ALT_CTRL_DEFAULT_ZETA);
+	p.ki_rps = SC(ALT_CTRL_DEFAULT_KI_RPS);
 	p.vz_max_up_mps = SC(2.0);
 	p.vz_max_down_mps = SC(1.5);
 	p.a_int_max_mps2 = SC(4.0);
@@ -73,8 +73,11 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 		flags |= ALT_CTRL_SAT_LOW;
 	}
 
-	/* integral with anti-windup: frozen while saturated in the direction of ev */
-	bool frozen = ((flags & ALT_CTRL_SAT_HIGH) && ev > SC_ZERO) || ((flags & ALT_CTRL_SAT_LOW) && ev < SC_ZERO);
+	/* integral with anti-windup: frozen while saturated here or in the allocation in the
+	 * direction of ev */
+	bool up = (flags & ALT_CTRL_SAT_HIGH) || in->alloc_short_up;
+	bool down = (flags & ALT_CTRL_SAT_LOW) || in->alloc_short_down;
+	bool frozen = (up && ev > SC_ZERO) || (down && ev < SC_ZERO);
 	if (!frozen && p->ki_rps > SC_ZERO) {
 		scalar_t dt = sc_max(in->dt_s, SC_ZERO);
 		s->a_int_mps2 = sc_add(s->a_int_mps2, sc_mul(sc_mul(sc_mul(kv, p->ki_rps), ev), dt));

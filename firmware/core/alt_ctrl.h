@@ -16,7 +16,8 @@
  * mass or thrust-scale error. cos_tilt = quat_body_z_up(q_b2i), the vertical component
  * of the body Z axis (tilt compensation, bounded by cos_tilt_min).
  * Anti-windup: a_int is frozen while f is clamped in the direction the error pushes,
- * and clamped to +/-a_int_max.
+ * or while the allocation could not deliver the thrust in that direction on the previous
+ * step (alloc_short_up / _down, e.g. from mixer_shortfall), and clamped to +/-a_int_max.
  *
  * Units: m, m/s, m/s^2, kg, N, s. Q16.16: heights within +/-1000 m and thrusts below
  * 30000 N keep every intermediate in range.
@@ -58,6 +59,8 @@ struct alt_ctrl_input {
 	scalar_t mass_kg;   /* current mass parameter, kg */
 	scalar_t hover_f_n; /* learned hover thrust demand, N (0: use mass * g) */
 	scalar_t dt_s;      /* time since the last update, s */
+	bool alloc_short_up;   /* the allocation delivered less thrust than demanded (last step) */
+	bool alloc_short_down; /* it delivered more thrust than demanded (last step) */
 };
 
 struct alt_ctrl {
@@ -68,8 +71,14 @@ struct alt_ctrl {
 	uint32_t flags;      /* ALT_CTRL_* of the last update */
 };
 
+/* Default gains, the ones octo-fw flies: its parameter table (ALT_WN, ALT_ZETA, ALT_KI)
+ * takes its defaults from these. */
+#define ALT_CTRL_DEFAULT_WN_RPS 2.5f /* natural frequency, rad/s */
+#define ALT_CTRL_DEFAULT_ZETA   1.0f /* damping ratio */
+#define ALT_CTRL_DEFAULT_KI_RPS 0.8f /* integral pole, 1/s */
+
 /* Defaults for the paper's octocopter at 90 Hz (m = 2.132 kg, 8 x 28 N rotors):
- * wn 2.5 rad/s, zeta 1.0, ki 0.8 1/s, vz limits +2 / -1.5 m/s, a_int_max 4 m/s^2,
+ * the gains above (wn 2.5 rad/s, zeta 1.0, ki 0.8 1/s), vz limits +2 / -1.5 m/s, a_int_max 4 m/s^2,
  * cos_tilt_min 0.5, f in [2, 200] N, g 9.796 m/s^2. Measured in tests/core/test_alt_ctrl.c
  * (1 frame delay + 30 ms thrust lag): 1 m step 0 % overshoot, 5 % settling 2.0 s; 10 m
  * step rides the 2 m/s limit, 0 % overshoot, 4.9 s; mass or thrust scale wrong by

@@ -4,9 +4,11 @@
 struct att_ctrl_params att_ctrl_params_default(void)
 {
 	struct att_ctrl_params p;
-	p.wn_rps = vec3_make(SC(7.0), SC(7.0), SC(5.0));
-	p.zeta = vec3_make(SC(1.0), SC(1.0), SC(1.1));
-	p.ki_rps = vec3_make(SC(0.5), SC(0.5), SC(0.5));
+	p.wn_rps = vec3_make(SC(ATT_CTRL_DEFAULT_WN_RP_RPS), SC(ATT_CTRL_DEFAULT_WN_RP_RPS),
+			     SC(ATT_CTRL_DEFAULT_WN_YAW_RPS));
+	p.zeta = vec3_make(SC(ATT_CTRL_DEFAULT_ZETA), SC(ATT_CTRL_DEFAULT_ZETA), SC(ATT_CTRL_DEFAULT_ZETA));
+	p.ki_rps = vec3_make(SC(ATT_CTRL_DEFAULT_KI_RPS), SC(ATT_CTRL_DEFAULT_KI_RPS),
+			     SC(ATT_CTRL_DEFAULT_KI_RPS));
 	p.rate_max_rps = vec3_make(SC(3.0), SC(3.0), SC(1.5));
 	p.tau_max_nm = vec3_make(SC(3.0), SC(3.0), SC(0.4));
 	p.int_tau_max_nm = vec3_make(SC(0.5), SC(0.5), SC(0.1));
@@ -100,8 +102,11 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		}
 		*comp(&tau_out, i) = tau;
 
-		/* conditional integration: small error, torque not saturated */
-		if (kint > SC_ZERO && !sat && sc_abs(ei) < p->int_err_max_rad) {
+		/* conditional integration: small error, torque not saturated here or in the
+		 * allocation in the direction the integral would grow */
+		bool cut = (r > SC_ZERO && (in->alloc_short_pos >> i & 1u)) ||
+			   (r < SC_ZERO && (in->alloc_short_neg >> i & 1u));
+		if (kint > SC_ZERO && !sat && !cut && sc_abs(ei) < p->int_err_max_rad) {
 			scalar_t lim = sc_div(int_tau_max, kint); /* keeps the state bounded too */
 			*int_r = sc_clamp(sc_add(*int_r, sc_mul(r, dt)), sc_neg(lim), lim);
 		} else if (kint <= SC_ZERO) {

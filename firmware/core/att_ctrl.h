@@ -17,7 +17,10 @@
  * (its slow pole near -ki nearly cancels its zero at -ki: little overshoot) while a
  * constant disturbance torque is removed with time constant ~1/ki. It accumulates only
  * while |e| < int_err_max and the axis is not saturated; its torque is clamped to
- * +/-int_tau_max.
+ * +/-int_tau_max. Anti-windup from the allocator (as PX4's rate controller takes its
+ * allocator's saturation): an axis whose torque the allocation could not deliver in one
+ * direction on the previous step (alloc_short_pos / _neg, e.g. from mixer_shortfall) does
+ * not integrate further in that direction; it may unwind.
  *
  * Units: rad, rad/s, kg m^2, N m, s. Frames: q_*_b2i map body to inertial (quat.h);
  * rates and torques in body axes (X forward, Y left, Z up).
@@ -60,6 +63,9 @@ struct att_ctrl_input {
 	struct vec3 rate_b_rps;   /* measured body rate, rad/s */
 	struct vec3 inertia_kgm2; /* current Ixx, Iyy, Izz, kg m^2 (> 0) */
 	scalar_t dt_s;            /* time since the last update, s (for the integral) */
+	uint8_t alloc_short_pos;  /* bit i (0 x, 1 y, 2 z): the allocation delivered less torque
+				   * than demanded on the previous step (0 if unknown) */
+	uint8_t alloc_short_neg;  /* bit i: it delivered more (less negative) than demanded */
 };
 
 struct att_ctrl {
@@ -70,13 +76,21 @@ struct att_ctrl {
 	uint32_t flags;           /* ATT_CTRL_* of the last update */
 };
 
+/* Default gains, the ones octo-fw flies: its parameter table (ATT_WN_RP, ATT_WN_YAW,
+ * ATT_ZETA, ATT_KI) takes its defaults from these. */
+#define ATT_CTRL_DEFAULT_WN_RP_RPS  7.0f /* roll and pitch natural frequency, rad/s */
+#define ATT_CTRL_DEFAULT_WN_YAW_RPS 3.5f /* yaw natural frequency, rad/s */
+#define ATT_CTRL_DEFAULT_ZETA       1.0f /* damping ratio, every axis */
+#define ATT_CTRL_DEFAULT_KI_RPS     0.3f /* integral pole, every axis, 1/s */
+
 /* Defaults for the paper's octocopter at 90 Hz with a one-frame delay and a 30 ms
- * motor lag: wn 7 / 7 / 5 rad/s, zeta 1.0 / 1.0 / 1.1, ki 0.5 1/s, rate_max 3 / 3 / 1.5
- * rad/s, tau_max 3 / 3 / 0.4 N m, int_tau_max 0.5 / 0.5 / 0.1 N m, int_err_max 0.2 rad,
- * gyro_comp on. Measured in tests/core/test_att_ctrl.c (0.2 rad steps): correct inertia
- * 0 % overshoot, 5 % settling 0.67 s roll/pitch, 1.34 s yaw (0.3 rad, torque-limited);
- * nominal inertia 0.05 on every axis (before identification) <= 3 % overshoot, <= 0.8 s;
- * inertia overestimated x2 with 50 ms lag + 2 frames: 9 % overshoot, stable. */
+ * motor lag: the gains above, rate_max 3 / 3 / 1.5 rad/s, tau_max 3 / 3 / 0.4 N m,
+ * int_tau_max 0.5 / 0.5 / 0.1 N m, int_err_max 0.2 rad, gyro_comp on.
+ * tests/core/test_att_ctrl.c measures these limits with wn 7 / 7 / 5 rad/s, zeta 1.0 /
+ * 1.0 / 1.1, ki 0.5 1/s (0.2 rad steps): correct inertia 0 % overshoot, 5 % settling
+ * 0.67 s roll/pitch, 1.34 s yaw (0.3 rad, torque-limited); nominal inertia 0.05 on every
+ * axis (before identification) <= 3 % overshoot, <= 0.8 s; inertia overestimated x2 with
+ * 50 ms lag + 2 frames: 9 % overshoot, stable. */
 struct att_ctrl_params att_ctrl_params_default(void);
 
 /* Copies params, zeroes the integral, flags and telemetry. */

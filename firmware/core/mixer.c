@@ -357,15 +357,17 @@ static void finish(const struct mixer *m, struct mixer_output *out)
 		out->limits |= MIXER_LIMIT_ROTOR_MAX;
 }
 
+/* the limit flag of each axis of [f, tau_x, tau_y, tau_z] */
+static const uint32_t axis_limit[NA] = { MIXER_LIMIT_F, MIXER_LIMIT_TX, MIXER_LIMIT_TY, MIXER_LIMIT_TZ };
+
 /* flags of axes whose achieved value differs from the demand (CLIP mode) */
 static uint32_t axis_flags(const struct mixer *m, const struct mixer_output *out)
 {
-	static const uint32_t bit[NA] = { MIXER_LIMIT_F, MIXER_LIMIT_TX, MIXER_LIMIT_TY, MIXER_LIMIT_TZ };
 	uint32_t f = 0;
 	for (int i = 0; i < NA; i++) {
 		scalar_t tol = sc_mul(m->row_scale[i], TOL_FLAG_REL);
 		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
-			f |= bit[i];
+			f |= axis_limit[i];
 	}
 	return f;
 }
@@ -503,4 +505,19 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		out->f_n[j] = (m->present & (1u << j)) ? sc_add(m->f_lo, sc_mul(u[j], m->width)) : SC_ZERO;
 	out->steps = (uint8_t)steps;
 	finish(m, out);
+}
+
+void mixer_shortfall(const struct mixer_output *out, uint8_t *short_pos, uint8_t *short_neg)
+{
+	unsigned pos = 0, neg = 0;
+	for (unsigned k = 0; k < NA; k++) {
+		if (!(out->limits & axis_limit[k]))
+			continue;
+		if (out->achieved[k] < out->demanded[k])
+			pos |= 1u << k;
+		else if (out->achieved[k] > out->demanded[k])
+			neg |= 1u << k;
+	}
+	*short_pos = (uint8_t)pos;
+	*short_neg = (uint8_t)neg;
 }

@@ -199,6 +199,11 @@ bool mixer_set_params(struct mixer *m, const struct mixer_params *p);
 /* demand = [f (N), tau_x, tau_y, tau_z (N m)] -> out. Never fails. */
 void mixer_update(const struct mixer *m, const scalar_t demand[MIXER_N_AXES], struct mixer_output *out);
 
+/* What the allocation cut, by axis and direction, for the controllers' anti-windup: bit k
+ * (axis k of [f, tau_x, tau_y, tau_z]) of *short_pos when an axis the mixer flagged
+ * (MIXER_LIMIT_F, _TX, _TY, _TZ) got less than its demand, of *short_neg when it got more. */
+void mixer_shortfall(const struct mixer_output *out, uint8_t *short_pos, uint8_t *short_neg);
+
 /* wrench[i] = sum_j Gamma[i][j] f_n[j] (physical units, scalar_t) */
 void mixer_wrench(const struct mixer *m, const scalar_t f_n[MIXER_N_ROTORS], scalar_t wrench[MIXER_N_AXES]);
 

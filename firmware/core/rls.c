@@ -3,6 +3,13 @@
 
 static bool finite_f(float x) { return isfinite(x); }
 
+/* bierman() below is inlined at both of its calls so that the one with n = 1 is specialised */
+#if defined(__GNUC__)
+#define RLS_INLINE static inline __attribute__((always_inline))
+#else
+#define RLS_INLINE static inline
+#endif
+
 void rls_default_config(struct rls_config *cfg)
 {
 	struct rls_config c = { 0 };
@@ -71,86 +78,13 @@ static float pdiag(const struct rls *r, unsigned i)
 	return s;
 }
 
-/* rls_update_f's Bierman step for one parameter (the identification's common case): the
- * same operations in the same order as the general loops with n = 1 (bit-identical
- * results), without their loop and copy overhead. */
-static enum rls_result update_1(struct rls *r, float phi, const float *y, float lambda)
+/* One Bierman step of n = cfg.n_params parameters with the effective forgetting lambda:
+ * f = U^T phi, v = D f, then U, D and theta column by column. On a numerical failure the
+ * estimate is kept and the covariance reset. */
+RLS_INLINE enum rls_result bierman(struct rls *r, const float *phi, const float *y, float lambda,
+				      unsigned n)
 {
 	const unsigned no = r->cfg.n_outputs;
-	float f = 0.0f + r->u[0][0] * phi;
-	float v = r->d[0] * f;
-	float alpha = lambda + f * v;
-	float d = r->d[0] * lambda / (alpha * lambda);
-	bool ok = d > 0.0f && finite_f(d);
-	float th[RLS_MAX_OUTPUTS], e[RLS_MAX_OUTPUTS];
-	for (unsigned o = 0; o < no; o++) {
-		float yhat = 0.0f + phi * r->theta[o][0];
-		e[o] = y[o] - yhat;
-		th[o] = r->theta[o][0] + v / alpha * e[o];
-		if (!finite_f(th[o]))
-			ok = false;
-	}
-	if (!ok || !finite_f(alpha) || !(alpha > 0.0f)) {
-		rls_reset_covariance(r);
-		r->n_resets++;
-		return RLS_RESET;
-	}
-	float innov = alpha / lambda;
-	r->d[0] = d;
-	for (unsigned o = 0; o < no; o++) {
-		r->theta[o][0] = th[o];
-		float s = lambda * r->ssr[o] + e[o] * e[o] / innov;
-		r->ssr[o] = finite_f(s) ? s : 0.0f;
-	}
-	r->n_eff = lambda * r->n_eff + 1.0f;
-	if (r->cfg.p_min > 0.0f) {
-		float p = pdiag(r, 0);
-		if (p < r->cfg.p_min)
-			r->d[0] += r->cfg.p_min - p;
-	}
-	r->n_updates++;
-	return RLS_UPDATED;
-}
-
-enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bool excited)
-{
-	const unsigned n = r->cfg.n_params, no = r->cfg.n_outputs;
-	float nphi = 0.0f;
-	for (unsigned i = 0; i < n; i++) {
-		if (!finite_f(phi[i])) {
-			r->n_rejected++;
-			return RLS_REJECTED;
-		}
-		nphi += phi[i] * phi[i];
-	}
-	for (unsigned o = 0; o < no; o++) {
-		if (!finite_f(y[o])) {
-			r->n_rejected++;
-			return RLS_REJECTED;
-		}
-	}
-	if (!excited || !finite_f(nphi) || nphi < r->cfg.phi_min * r->cfg.phi_min) {
-		r->n_gated++;
-		return RLS_GATED;
-	}
-
-	/* effective forgetting: never wind any P_ii above the ceiling */
-	float lambda = r->cfg.lambda;
-	if (r->cfg.p_max > 0.0f && lambda < 1.0f) {
-		float pmax = 0.0f;
-		for (unsigned i = 0; i < n; i++) {
-			float p = pdiag(r, i);
-			pmax = p > pmax ? p : pmax;
-		}
-		float lmin = pmax / r->cfg.p_max;
-		if (lmin > lambda)
-			lambda = lmin < 1.0f ? lmin : 1.0f;
-	}
-
-	if (n == 1)
-		return update_1(r, phi[0], y, lambda);
-
-	/* Bierman: f = U^T phi, v = D f */
 	float f[RLS_MAX_PARAMS], v[RLS_MAX_PARAMS], b[RLS_MAX_PARAMS];
 	float u[RLS_MAX_PARAMS][RLS_MAX_PARAMS], d[RLS_MAX_PARAMS];
 	for (unsigned j = 0; j < n; j++) {
@@ -225,6 +159,48 @@ enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bo
 	}
 	r->n_updates++;
 	return RLS_UPDATED;
+}
+
+enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bool excited)
+{
+	const unsigned n = r->cfg.n_params, no = r->cfg.n_outputs;
+	float nphi = 0.0f;
+	for (unsigned i = 0; i < n; i++) {
+		if (!finite_f(phi[i])) {
+			r->n_rejected++;
+			return RLS_REJECTED;
+		}
+		nphi += phi[i] * phi[i];
+	}
+	for (unsigned o = 0; o < no; o++) {
+		if (!finite_f(y[o])) {
+			r->n_rejected++;
+			return RLS_REJECTED;
+		}
+	}
+	if (!excited || !finite_f(nphi) || nphi < r->cfg.phi_min * r->cfg.phi_min) {
+		r->n_gated++;
+		return RLS_GATED;
+	}
+
+	/* effective forgetting: never wind any P_ii above the ceiling */
+	float lambda = r->cfg.lambda;
+	if (r->cfg.p_max > 0.0f && lambda < 1.0f) {
+		float pmax = 0.0f;
+		for (unsigned i = 0; i < n; i++) {
+			float p = pdiag(r, i);
+			pmax = p > pmax ? p : pmax;
+		}
+		float lmin = pmax / r->cfg.p_max;
+		if (lmin > lambda)
+			lambda = lmin < 1.0f ? lmin : 1.0f;
+	}
+
+	/* one parameter (the identification's common case) is a call with a constant n, which
+	 * the compiler specialises: no loops, no copies, and the same arithmetic */
+	if (n == 1)
+		return bierman(r, phi, y, lambda, 1);
+	return bierman(r, phi, y, lambda, n);
 }
 
 enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y, bool excited)

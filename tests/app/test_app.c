@@ -44,8 +44,8 @@ static void frame_at(struct rig *r, double t)
 	f->t_s = t;
 	f->seq++;
 	f->valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
-	f->pos_i_m[2] = flying ? fmaxf(a->z_sp, 0.0f) : 0.0f;
-	f->vel_i_mps[2] = flying && f->pos_i_m[2] > 0.0f ? a->vz_ff : 0.0f;
+	f->pos_i_m[2] = flying ? fmaxf(sc_to_float(a->guid.z_sp_m), 0.0f) : 0.0f;
+	f->vel_i_mps[2] = flying && f->pos_i_m[2] > 0.0f ? sc_to_float(a->guid.vz_ff_mps) : 0.0f;
 	if (r->stuck) {
 		f->pos_i_m[2] = r->z_stuck;
 		f->vel_i_mps[2] = 0.0f;
@@ -163,9 +163,9 @@ UNIT_TEST(app_takeoff_hold_land_disarm)
 	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_ACCEPTED);
 	CHECK(r->a.mode == APP_TAKEOFF);
 	fly(r, 20);
-	float z_sp = r->a.z_sp;
+	scalar_t z_sp = r->a.guid.z_sp_m;
 	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_ACCEPTED);   /* a retry */
-	CHECK(r->a.mode == APP_TAKEOFF && r->a.z_sp == z_sp);
+	CHECK(r->a.mode == APP_TAKEOFF && r->a.guid.z_sp_m == z_sp);
 	fly_until(r, APP_HOLD, 90 * 60);
 	CHECK(r->a.mode == APP_HOLD);
 	CHECK_NEAR(r->f.pos_i_m[2], 3.0, 0.05);

@@ -5,6 +5,8 @@
 #                    (tests/core, UNIT_CFLAGS) with the start-up code here, run them under QEMU
 #                    with semihosting (the images in parallel), print the core's sizes per
 #                    target and check the instruction-counting plugin on its demo.
+#                    Then the app's C suite (tests/app: firmware/app on the stub HAL) on the
+#                    targets where it fits (ARM_APP_VARIANTS, below).
 #                    Fails if any test fails on any target.
 #                    ARM_FILTER="mixer rls" runs only tests whose names contain a word.
 #   make arm-size    .text/.data/.bss per core module and target
@@ -26,6 +28,14 @@
 #              M0 float core: 30,548 B at -O2, 23,275 B at -Os).
 # On M0 the test code (not the core) is built with -Os too, to leave room in microbit's
 # 256 KB of flash.
+#
+# The app's suite (ARM_APP_VARIANTS): firmware/app/*.c and firmware/hal/hal.c built like
+# the core for the target (CFLAGS_FW, ARM_CORE_OPT_<v>), the tests and the stub HAL like
+# the core's tests, linked with the target's core library. Only m4f: its test rig holds a
+# struct app (9 KB) and the stub HAL's 8 KB parameter "file", more than microbit's 16 KB
+# of RAM, so the M0 targets run the core's tests only. tests/app/test_mav.c stays on the
+# host (ARM_APP_HOST_ONLY): its two ground-station rigs keep 512 decoded messages each,
+# 300 KB, beyond the 256 KB of RAM the m4f images use.
 #
 # Memory (sections.ld): the stack sits at the bottom of RAM (64 KB on m4f, 8 KB of
 # microbit's 16 KB on M0: __stack_size in m4f.ld, m0.ld), then .data and
@@ -75,6 +85,7 @@ ARM_TIMEOUT ?= 300
 ARM_FILTER  ?=
 
 ARM_VARIANTS      := m4f m0 m0-fixed
+ARM_APP_VARIANTS  := m4f
 ARM_ARCH_m4f      := -mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16
 ARM_ARCH_m0       := -mcpu=cortex-m0 -mthumb -mfloat-abi=soft
 ARM_ARCH_m0-fixed := $(ARM_ARCH_m0)
@@ -155,13 +166,44 @@ $(ARM_B)/$(1)/size-core.elf: $(ARM_B)/$(1)/size-base.elf $(ARM_B)/$(1)/libcore.a
 	$$(ARM_CC) $$(ARM_ARCH_$(1)) $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -o $$@ \
 	  $$(addprefix -Wl$$(ARM_COMMA)--undefined=,$$(shell $$(ARM_NM) -g --defined-only $(ARM_B)/$(1)/libcore.a | awk '$$$$2 == "T" { print $$$$3 }')) \
 	  $(ARM_B)/$(1)/rt/size_main.o $$(ARM_RT_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a -lm
-
-$(ARM_B)/$(1)/unit-tests.elf: $$(ARM_RT_OBJ_$(1)) $$(ARM_UNIT_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a \
-                              $$(ARM_LD_$(1)) tests/arm/sections.ld
-	$$(ARM_CC) $$(ARM_ARCH_$(1)) $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -Wl,-Map,$$@.map -o $$@ \
-	  $$(ARM_RT_OBJ_$(1)) $$(ARM_UNIT_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a -lm
 endef
 $(foreach v,$(ARM_VARIANTS),$(eval $(call arm_variant,$(v))))
+
+# $(call arm_test_elf,VARIANT,IMAGE,OBJECTS): build/arm/<v>/<image>.elf, a test image of
+# OBJECTS with the start-up code and the variant's core library.
+define arm_test_elf
+$(ARM_B)/$(1)/$(2).elf: $$(ARM_RT_OBJ_$(1)) $(3) $(ARM_B)/$(1)/libcore.a $$(ARM_LD_$(1)) tests/arm/sections.ld
+	$$(ARM_CC) $$(ARM_ARCH_$(1)) $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -Wl,-Map,$$@.map -o $$@ \
+	  $$(ARM_RT_OBJ_$(1)) $(3) $(ARM_B)/$(1)/libcore.a -lm
+endef
+$(foreach v,$(ARM_VARIANTS),$(eval $(call arm_test_elf,$(v),unit-tests,$(ARM_UNIT_OBJ_$(v)))))
+
+# The app's suite: build/arm/<v>/app/{firmware,tests}/ hold its objects.
+ARM_APP_FW_SRC := $(sort $(wildcard firmware/app/*.c)) firmware/hal/hal.c
+ARM_APP_HOST_ONLY := tests/app/test_mav.c
+ARM_APP_TEST_SRC := $(filter-out $(ARM_APP_HOST_ONLY),$(APP_TEST_SRC))
+ARM_APP_TEST_ALL := tests/core/unit.c $(ARM_APP_TEST_SRC) tests/app/stub_hal.c
+ARM_APP_LIST := $(ARM_B)/app_tests/unit_list.h
+$(ARM_APP_LIST): $(ARM_APP_TEST_SRC) tests/arm/arm.mk
+	@mkdir -p $(@D)
+	@{ echo "/* generated from the app tests built for Cortex-M: do not edit */"; \
+	   for f in $(ARM_APP_TEST_SRC); do sed -n 's/^UNIT_TEST(\([A-Za-z0-9_]*\)).*/UNIT_ENTRY(\1)/p' $$f; done; } > $@.tmp
+	@cmp -s $@.tmp $@ && rm $@.tmp || mv $@.tmp $@
+ARM_APP_INC := -D_POSIX_C_SOURCE=200809L -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal \
+               -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common
+define arm_app_variant
+ARM_APP_OBJ_$(1) := $$(ARM_APP_FW_SRC:%.c=$(ARM_B)/$(1)/app/%.o) $$(ARM_APP_TEST_ALL:%.c=$(ARM_B)/$(1)/app/%.o)
+
+$(ARM_B)/$(1)/app/firmware/%.o: firmware/%.c | arm-toolchain $(MAVLINK_STAMP)
+	@mkdir -p $$(@D)
+	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(CFLAGS_FW) $$(ARM_CORE_OPT_$(1)) $$(ARM_APP_INC) -c $$< -o $$@
+$(ARM_B)/$(1)/app/tests/%.o: tests/%.c | arm-toolchain $(MAVLINK_STAMP)
+	@mkdir -p $$(@D)
+	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) -I$(ARM_B)/app_tests $$(APP_TEST_CFLAGS) $$(ARM_UNIT_OPT_$(1)) -c $$< -o $$@
+$(ARM_B)/$(1)/app/tests/core/unit.o: $(ARM_APP_LIST)
+endef
+$(foreach v,$(ARM_APP_VARIANTS),$(eval $(call arm_app_variant,$(v))))
+$(foreach v,$(ARM_APP_VARIANTS),$(eval $(call arm_test_elf,$(v),app-tests,$(ARM_APP_OBJ_$(v)))))
 
 # $(call arm_program,VARIANT,ELF,SOURCES[,EXTRA_CFLAGS]): a rule for an image of
 # SOURCES (firmware flags, -Ifirmware/core -Itests/arm) with the start-up code, the
@@ -212,7 +254,10 @@ $(ARM_B)/structs.c: $(wildcard firmware/core/*.h)
 	   sed -n 's/^struct \([a-z0-9_]*\) {.*/\1/p' $^ | sort -u | \
 	     sed 's/.*/char octo_sizeof_&[sizeof(struct &)];/'; } > $@
 
-ARM_ELFS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/unit-tests.elf)
+ARM_ELFS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/unit-tests.elf) \
+            $(foreach v,$(ARM_APP_VARIANTS),$(ARM_B)/$(v)/app-tests.elf)
+# the images `make arm` runs: variant:image (build/arm/<variant>/<image>.elf)
+ARM_RUNS := $(foreach v,$(ARM_VARIANTS),$(v):unit-tests) $(foreach v,$(ARM_APP_VARIANTS),$(v):app-tests)
 ARM_LIBS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/libcore.a)
 
 # text includes .rodata; flash = text + data, RAM = data + bss (no heap, no stack).
@@ -251,22 +296,25 @@ arm-stack: $(ARM_B)/m0/unit-tests.elf
 	    -semihosting-config enable=on,target=native,arg=unit-tests,arg=$$t -kernel $< </dev/null 2>&1 | \
 	  sed -n "s/^octo-arm: stack \([0-9]*\) of.*/\1 $$t/p"; done | sort -rn | awk '{ printf "   %6d  %s\n", $$1, $$2 }'
 
-# The images run in parallel (logs in build/arm/<v>/test.log), every one even when
+# The images run in parallel (logs in build/arm/<v>/<image>.log), every one even when
 # another fails; their output is then printed in order with a summary of failures.
+# $(1) = variant, $(2) = image (unit-tests: the core's tests, app-tests: the app's).
 arm_start = (timeout $(ARM_TIMEOUT) $(ARM_QEMU) -M $(ARM_MACHINE_$(1)) $(ARM_QEMU_FLAGS) \
-    -semihosting-config enable=on,target=native,arg=unit-tests$(subst $(ARM_SPACE),,$(foreach f,$(ARM_FILTER),$(ARM_COMMA)arg=$(f))) \
-    -kernel $(ARM_B)/$(1)/unit-tests.elf </dev/null >$(ARM_B)/$(1)/test.log 2>&1; \
-  echo $$? >$(ARM_B)/$(1)/test.status) &
-arm_report = echo "== unit tests: $(1) on QEMU $(ARM_MACHINE_$(1))"; cat $(ARM_B)/$(1)/test.log; \
-  s=$$(cat $(ARM_B)/$(1)/test.status); if [ "$$s" != 0 ]; then rc=1; case $$s in \
+    -semihosting-config enable=on,target=native,arg=$(2)$(subst $(ARM_SPACE),,$(foreach f,$(ARM_FILTER),$(ARM_COMMA)arg=$(f))) \
+    -kernel $(ARM_B)/$(1)/$(2).elf </dev/null >$(ARM_B)/$(1)/$(2).log 2>&1; \
+  echo $$? >$(ARM_B)/$(1)/$(2).status) &
+arm_report = echo "== $(if $(filter app-tests,$(2)),app tests,unit tests): $(1) on QEMU $(ARM_MACHINE_$(1))"; \
+  cat $(ARM_B)/$(1)/$(2).log; \
+  s=$$(cat $(ARM_B)/$(1)/$(2).status); if [ "$$s" != 0 ]; then rc=1; case $$s in \
     124) why="timed out after $(ARM_TIMEOUT) s";; 125) why="stack exhausted";; 126) why="fault";; \
-    *) why="exit status $$s"; grep -q '^[0-9]* passed, ' $(ARM_B)/$(1)/test.log && why="$$s failed tests";; \
-  esac; failed="$$failed $(1) ($$why)"; fi;
+    *) why="exit status $$s"; grep -q '^[0-9]* passed, ' $(ARM_B)/$(1)/$(2).log && why="$$s failed tests";; \
+  esac; failed="$$failed $(1)/$(2) ($$why)"; fi;
+arm_run_word = $(call $(1),$(word 1,$(subst :, ,$(2))),$(word 2,$(subst :, ,$(2))))
 
 .PHONY: arm
 arm: arm-size-total $(ARM_ELFS) $(ARM_COUNT_PLUGIN) $(ARM_DEMO_ELFS)
-	@rc=0; failed=; rm -f $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/test.status); \
-	$(foreach v,$(ARM_VARIANTS),$(call arm_start,$(v))) wait; \
-	$(foreach v,$(ARM_VARIANTS),$(call arm_report,$(v))) $(arm_count_demo) \
-	if [ $$rc = 0 ]; then echo "== make arm: all passed on $(ARM_VARIANTS)"; \
+	@rc=0; failed=; rm -f $(foreach r,$(ARM_RUNS),$(ARM_B)/$(subst :,/,$(r)).status); \
+	$(foreach r,$(ARM_RUNS),$(call arm_run_word,arm_start,$(r))) wait; \
+	$(foreach r,$(ARM_RUNS),$(call arm_run_word,arm_report,$(r))) $(arm_count_demo) \
+	if [ $$rc = 0 ]; then echo "== make arm: all passed on $(ARM_VARIANTS) (app tests: $(ARM_APP_VARIANTS))"; \
 	else echo "== make arm: FAILED:$$failed"; fi; exit $$rc

@@ -86,10 +86,10 @@ static void next_frame(void)
 	bool flying = A.mode != APP_DISARMED && A.mode != APP_IDLE;
 	F.pos_i_m[0] = 0.02f * sinf(0.3f * tf);
 	F.pos_i_m[1] = 0.02f * cosf(0.2f * tf);
-	F.pos_i_m[2] = flying ? A.z_sp + 0.01f * sinf(1.3f * tf) : 0.0f;
+	F.pos_i_m[2] = flying ? sc_to_float(A.guid.z_sp_m) + 0.01f * sinf(1.3f * tf) : 0.0f;
 	F.vel_i_mps[0] = 0.006f * cosf(0.3f * tf);
 	F.vel_i_mps[1] = -0.004f * sinf(0.2f * tf);
-	F.vel_i_mps[2] = flying ? A.vz_ff + 0.013f * cosf(1.3f * tf) : 0.0f;
+	F.vel_i_mps[2] = flying ? sc_to_float(A.guid.vz_ff_mps) + 0.013f * cosf(1.3f * tf) : 0.0f;
 	/* rotors: the last throttles through a 30 ms lag, k_f, 1 % noise */
 	float alpha = 1.0f - expf(-(float)(1.0 / RATE_HZ) / 0.03f);
 	float sigma = 0.01f * 2.132f * 9.796f / 8.0f;

@@ -48,24 +48,41 @@ struct alt_result {
 	double final_err;  /* |z - z_sp| at the end, m */
 	double max_dev;    /* max |z - z_sp| after 1 s, m */
 	uint32_t flags_or; /* union of all flags */
+	int alloc_frames;  /* frames in which the allocation cut the thrust */
+	double a_int_cut;  /* largest integral (m/s^2) in a frame the allocation cut */
 };
 
 struct alt_cfg {
 	struct alt_ctrl_params p;
 	double m_nom, m_true, thrust_scale, cos_tilt, tilt_rad, seconds;
 	double pre_s; /* seconds of hold at 1 m before the step (lets the integral converge) */
+	double f_alloc_max;  /* the allocation delivers at most this thrust, N (0: all) */
+	bool alloc_feedback; /* tell the controller when it cut */
 };
+
+/* The gains these tests measure (the limits are the defaults'): set here, not taken from
+ * alt_ctrl_params_default(), whose gains are the ones octo-fw flies and may be retuned. */
+static struct alt_ctrl_params tested_params(void)
+{
+	struct alt_ctrl_params p = alt_ctrl_params_default();
+	p.wn_rps = SC(2.5);
+	p.zeta = SC(1.0);
+	p.ki_rps = SC(0.8);
+	return p;
+}
 
 static struct alt_cfg alt_cfg_default(void)
 {
 	struct alt_cfg c;
-	c.p = alt_ctrl_params_default();
+	c.p = tested_params();
 	c.m_nom = M_TRUE;
 	c.m_true = M_TRUE;
 	c.thrust_scale = 1;
 	c.tilt_rad = 0;
 	c.seconds = 8;
 	c.pre_s = 0;
+	c.f_alloc_max = 0;
+	c.alloc_feedback = false;
 	return c;
 }
 
@@ -97,7 +114,16 @@ static void run_alt(const struct alt_cfg *c, double step, struct alt_result *r)
 		in.vz_mps = s(v.vz);
 		scalar_t f = alt_ctrl_update(&ac, &in);
 		r->flags_or |= ac.flags;
-		vert_frame(&v, d(f));
+		double fa = d(f);
+		bool cut = c->f_alloc_max > 0 && fa > c->f_alloc_max;
+		if (cut) {
+			fa = c->f_alloc_max;
+			r->alloc_frames++;
+			r->a_int_cut = fmax(r->a_int_cut, d(ac.a_int_mps2));
+		}
+		if (c->alloc_feedback)
+			in.alloc_short_up = cut;
+		vert_frame(&v, fa);
 		double e = v.z - zsp, t = (k + 1) * FRAME_S;
 		if (step != 0 && e / step > r->overshoot)
 			r->overshoot = e / step;
@@ -173,7 +199,7 @@ UNIT_TEST(alt_ctrl_tilt_compensation)
 	CHECK(!(r.flags_or & ALT_CTRL_TILT_LIM));
 	/* 80 deg: bounded at cos_tilt_min, flagged */
 	struct alt_ctrl ac;
-	struct alt_ctrl_params p = alt_ctrl_params_default();
+	struct alt_ctrl_params p = tested_params();
 	alt_ctrl_init(&ac, &p);
 	struct alt_ctrl_input in;
 	memset(&in, 0, sizeof in);
@@ -190,7 +216,7 @@ UNIT_TEST(alt_ctrl_tilt_compensation)
  * overshoot. Flags report each limit. */
 UNIT_TEST(alt_ctrl_saturation_anti_windup)
 {
-	struct alt_ctrl_params p = alt_ctrl_params_default();
+	struct alt_ctrl_params p = tested_params();
 	p.f_max_n = s(25.0); /* just above m g = 20.9 N */
 	struct alt_ctrl ac;
 	alt_ctrl_init(&ac, &p);
@@ -239,7 +265,7 @@ UNIT_TEST(alt_ctrl_saturation_anti_windup)
  * of the double law (ki = 0, so the output depends on the inputs only). */
 UNIT_TEST(alt_ctrl_law_matches_double_reference)
 {
-	struct alt_ctrl_params p = alt_ctrl_params_default();
+	struct alt_ctrl_params p = tested_params();
 	p.ki_rps = SC_ZERO;
 	struct alt_ctrl ac;
 	alt_ctrl_init(&ac, &p);
@@ -275,7 +301,7 @@ UNIT_TEST(alt_ctrl_nan_guard)
 #if OCTO_FIXED
 	(void)u; /* Q16.16 has no NaN */
 #else
-	struct alt_ctrl_params p = alt_ctrl_params_default();
+	struct alt_ctrl_params p = tested_params();
 	struct alt_ctrl ac;
 	alt_ctrl_init(&ac, &p);
 	struct alt_ctrl_input in;
@@ -290,4 +316,30 @@ UNIT_TEST(alt_ctrl_nan_guard)
 	CHECK(ac.flags == ALT_CTRL_BAD_INPUT);
 	CHECK(sc_isfinite(ac.a_int_mps2));
 #endif
+}
+
+/* Anti-windup from the allocation: the mixer gives at most 4-8 % more than the hover thrust
+ * (far below f_max, so the controller alone sees nothing) and a 5 m climb is slower than the
+ * height loop asks. Not told, the integral winds up while the mixer cuts (to its 4 m/s^2
+ * limit) and the climb overshoots (1.5-2.5 % of the step); told (alloc_short_up, as
+ * mixer_shortfall gives it), the integral stays where it was when the cuts began (0.09
+ * m/s^2) and the climb does not overshoot. Random mass error and limit. */
+UNIT_TEST(alt_ctrl_allocation_limits_stop_windup)
+{
+	struct unit_rng g = { 0xa17ULL };
+	for (int run = 0; run < 4; run++) {
+		struct alt_cfg c = alt_cfg_default();
+		c.m_nom = M_TRUE * unit_rand_uniform(&g, 0.9, 1.1);
+		c.f_alloc_max = M_TRUE * G * unit_rand_uniform(&g, 1.04, 1.08);
+		c.seconds = 25;
+		struct alt_result before, after;
+		run_alt(&c, 5.0, &before);
+		c.alloc_feedback = true;
+		run_alt(&c, 5.0, &after);
+		CHECK(before.alloc_frames > 90 && after.alloc_frames > 90);
+		CHECK(before.a_int_cut > 1.0 && before.overshoot > 0.01);
+		CHECK(after.a_int_cut < 0.2 * before.a_int_cut);
+		CHECK(after.overshoot < 0.5 * before.overshoot);
+		CHECK(before.final_err < 0.02 && after.final_err < 0.02);
+	}
 }

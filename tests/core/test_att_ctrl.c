@@ -2,7 +2,7 @@
  * steps against a small rigid-body model (eqs. (7)-(9) and quaternion kinematics, double
  * precision, 5 sub-steps per 90 Hz frame) with a transport delay of whole frames and a
  * first-order motor lag on the torque (exact for rotors with identical lags).
- * Figures (both builds, default gains, 1 frame + 30 ms lag): 0.2 rad roll/pitch steps
+ * Figures (both builds, the gains of tested_params(), 1 frame + 30 ms lag): 0.2 rad roll/pitch steps
  * 0 % overshoot, 5 % settling 0.67 s; 0.3 rad yaw 0 %, 1.34 s (torque-limited at 0.4 N m).
  * Build with -DTEST_VERBOSE to print the figures of every run. */
 #include "unit_scalar.h"
@@ -111,6 +111,9 @@ struct step_result {
 	double max_err;      /* max |e| after the first second, rad */
 	double max_rate;     /* max |omega|, rad/s */
 	int sat_frames;      /* frames with any torque saturation */
+	int alloc_frames;    /* frames in which the allocation cut a torque */
+	double int_tau_cut[3]; /* largest integral torque (N m) towards a torque the allocation cut */
+	int int_grew_cut;    /* frames in which the integral grew towards a torque the allocation cut */
 };
 
 struct loop_cfg {
@@ -121,18 +124,36 @@ struct loop_cfg {
 	double seconds;
 	double tau_dist[3];
 	double pitch_dither_nm; /* uniform white torque disturbance on pitch, +/- N m */
+	double alloc_max_nm[3]; /* the allocation delivers at most this torque per axis (0: all) */
+	bool alloc_feedback;    /* tell the controller what the allocation cut */
 };
+
+/* The gains these tests measure (the limits are the defaults'): set here, not taken from
+ * att_ctrl_params_default(), whose gains are the ones octo-fw flies and may be retuned. */
+static struct att_ctrl_params tested_params(void)
+{
+	struct att_ctrl_params p = att_ctrl_params_default();
+	p.wn_rps = vec3_make(SC(7.0), SC(7.0), SC(5.0));
+	p.zeta = vec3_make(SC(1.0), SC(1.0), SC(1.1));
+	p.ki_rps = vec3_make(SC(0.5), SC(0.5), SC(0.5));
+	return p;
+}
 
 static struct loop_cfg cfg_default(void)
 {
 	struct loop_cfg c;
 	memset(&c, 0, sizeof c);
-	c.p = att_ctrl_params_default();
+	c.p = tested_params();
 	memcpy(c.I_nom, I_TRUE, sizeof c.I_nom);
 	c.ndelay = 1;
 	c.lag_s = 0.030;
 	c.seconds = 6;
 	return c;
+}
+
+static scalar_t get_axis(struct vec3 v, int i)
+{
+	return i == 0 ? v.x : (i == 1 ? v.y : v.z);
 }
 
 /* From level, step to the setpoint (roll, pitch, yaw); fills r. */
@@ -157,8 +178,10 @@ static void run_step(const struct loop_cfg *c, double roll, double pitch, double
 	rb_error(&b, sp, e0);
 	memset(r, 0, sizeof *r);
 	struct unit_rng rng = { 0xd17eULL };
+	uint8_t prev_pos = 0, prev_neg = 0; /* what the allocation cut on the previous step */
 	int n = (int)(c->seconds / FRAME_S);
 	for (int k = 0; k < n; k++) {
+		struct vec3 int_before = ac.int_r_rad;
 		in.q_b2i.w = s(b.q[0]), in.q_b2i.x = s(b.q[1]), in.q_b2i.y = s(b.q[2]), in.q_b2i.z = s(b.q[3]);
 		in.rate_b_rps = vec3_make(s(b.w[0]), s(b.w[1]), s(b.w[2]));
 		struct vec3 tau;
@@ -166,6 +189,37 @@ static void run_step(const struct loop_cfg *c, double roll, double pitch, double
 		if (f & (ATT_CTRL_SAT_X | ATT_CTRL_SAT_Y | ATT_CTRL_SAT_Z))
 			r->sat_frames++;
 		double tc[3] = { d(tau.x), d(tau.y), d(tau.z) };
+		/* the allocation: torque beyond alloc_max_nm is cut, and said so for the next step */
+		uint8_t cut_pos = 0, cut_neg = 0;
+		for (int i = 0; i < 3; i++) {
+			double m = c->alloc_max_nm[i];
+			if (m > 0 && tc[i] > m)
+				cut_pos |= (uint8_t)(1u << i), tc[i] = m;
+			else if (m > 0 && tc[i] < -m)
+				cut_neg |= (uint8_t)(1u << i), tc[i] = -m;
+		}
+		double ib[3] = { d(int_before.x), d(int_before.y), d(int_before.z) };
+		double ia[3] = { d(ac.int_r_rad.x), d(ac.int_r_rad.y), d(ac.int_r_rad.z) };
+		for (int i = 0; i < 3; i++) {
+			/* the integral this step grew towards the torque the previous step's allocation cut */
+			if (((in.alloc_short_pos | (c->alloc_feedback ? 0 : prev_pos)) >> i & 1u) && ia[i] > ib[i])
+				r->int_grew_cut++;
+			if (((in.alloc_short_neg | (c->alloc_feedback ? 0 : prev_neg)) >> i & 1u) && ia[i] < ib[i])
+				r->int_grew_cut++;
+		}
+		if (cut_pos | cut_neg) {
+			r->alloc_frames++;
+			double kint[3];
+			for (int i = 0; i < 3; i++) {
+				double wn = d(get_axis(c->p.wn_rps, i)), z = d(get_axis(c->p.zeta, i));
+				kint[i] = c->I_nom[i] * 2 * z * wn * d(get_axis(c->p.ki_rps, i));
+				double t = (cut_pos >> i & 1u) ? kint[i] * ia[i] : (cut_neg >> i & 1u) ? -kint[i] * ia[i] : 0;
+				r->int_tau_cut[i] = t > r->int_tau_cut[i] ? t : r->int_tau_cut[i];
+			}
+		}
+		prev_pos = cut_pos, prev_neg = cut_neg;
+		if (c->alloc_feedback)
+			in.alloc_short_pos = cut_pos, in.alloc_short_neg = cut_neg;
 		if (c->pitch_dither_nm > 0)
 			b.tau_dist[1] = c->tau_dist[1] + unit_rand_uniform(&rng, -c->pitch_dither_nm, c->pitch_dither_nm);
 		rb_frame(&b, tc);
@@ -218,7 +272,7 @@ static void ref_law(const struct att_ctrl_params *p, const double e[3], const do
  * 1e-5 N m (float) / 2e-3 N m (Q16.16: inputs quantised to 1.5e-5, gains ~50 N m/rad). */
 UNIT_TEST(att_ctrl_law_matches_double_reference)
 {
-	struct att_ctrl_params p = att_ctrl_params_default();
+	struct att_ctrl_params p = tested_params();
 	p.ki_rps = vec3_zero();
 	struct att_ctrl ac;
 	att_ctrl_init(&ac, &p);
@@ -257,7 +311,7 @@ UNIT_TEST(att_ctrl_law_matches_double_reference)
 
 UNIT_TEST(att_ctrl_limits_and_flags)
 {
-	struct att_ctrl_params p = att_ctrl_params_default();
+	struct att_ctrl_params p = tested_params();
 	struct att_ctrl ac;
 	att_ctrl_init(&ac, &p);
 	struct att_ctrl_input in;
@@ -384,7 +438,7 @@ UNIT_TEST(att_ctrl_nan_guard)
 #if OCTO_FIXED
 	(void)u; /* Q16.16 has no NaN */
 #else
-	struct att_ctrl_params p = att_ctrl_params_default();
+	struct att_ctrl_params p = tested_params();
 	struct att_ctrl ac;
 	att_ctrl_init(&ac, &p);
 	struct att_ctrl_input in;
@@ -403,4 +457,42 @@ UNIT_TEST(att_ctrl_nan_guard)
 	CHECK(sc_isfinite(tau.x) && d(tau.x) > 0);
 	CHECK(sc_isfinite(ac.int_r_rad.x) && sc_isfinite(ac.int_r_rad.y));
 #endif
+}
+
+/* Anti-windup from the allocation: the mixer can deliver only 0.02-0.04 N m of roll torque
+ * (far inside the controller's own 3 N m limit, so the controller alone sees nothing), and a
+ * 0.15 rad roll step (inside int_err_max) slews on that torque. Not told, the integral winds
+ * up while the mixer cuts (to 2-4 times the torque the mixer can give) and the step
+ * overshoots by 30-40 %; told
+ * (alloc_short_pos / _neg, as mixer_shortfall gives them), the integral never grows towards
+ * a cut torque, and what overshoot remains (9-14 %) is the braking the weak allocation
+ * cannot give. Random inertia scale and allocation limit. */
+UNIT_TEST(att_ctrl_allocation_limits_stop_windup)
+{
+	struct unit_rng g = { 0xa11cULL };
+	for (int run = 0; run < 4; run++) {
+		struct loop_cfg c = cfg_default();
+		double sc = unit_rand_uniform(&g, 0.8, 1.25);
+		for (int i = 0; i < 3; i++)
+			c.I_nom[i] = I_TRUE[i] * sc;
+		c.alloc_max_nm[0] = unit_rand_uniform(&g, 0.02, 0.04);
+		c.seconds = 8;
+		struct step_result before, after;
+		run_step(&c, 0.15, 0, 0, &before);
+		c.alloc_feedback = true;
+		run_step(&c, 0.15, 0, 0, &after);
+		double alloc_max = c.alloc_max_nm[0];
+		/* before: the mixer cut for many frames and the integral wound up meanwhile */
+		CHECK(before.alloc_frames > 30);
+		CHECK(before.int_grew_cut > 20);
+		CHECK(before.int_tau_cut[0] > 1.5 * alloc_max); /* the integral alone asks for more than all */
+		CHECK(before.overshoot[0] > 0.25);
+		/* after: never towards a cut torque, no wind-up, small overshoot, same end */
+		CHECK(after.alloc_frames > 30);
+		CHECK(after.int_grew_cut == 0);
+		CHECK(after.int_tau_cut[0] < 0.25 * alloc_max);
+		CHECK(after.overshoot[0] < 0.5 * before.overshoot[0]);
+		CHECK(after.overshoot[0] < 0.2);
+		CHECK(after.final_err < 2e-3 && before.final_err < 2e-3);
+	}
 }

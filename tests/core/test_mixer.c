@@ -703,3 +703,44 @@ UNIT_TEST(mixer_extreme_demands)
 		}
 	}
 }
+
+/* mixer_shortfall: random demands, both modes, random k_f and arm length: a flagged axis
+ * that got less than its demand is "short positive", more is "short negative", an axis
+ * delivered as demanded (unflagged) is neither */
+UNIT_TEST(mixer_shortfall_directions)
+{
+	struct unit_rng g = { 0x5a7ULL };
+	int n_pos = 0, n_neg = 0;
+	for (int k = 0; k < 400; k++) {
+		struct mixer_params p;
+		params(&p, unit_rand_uniform(&g, 0.25, 0.45), unit_rand_uniform(&g, 20, 35), 0.3869, 0xFF);
+		p.mode = k % 2 ? MIXER_MODE_PRIORITY : MIXER_MODE_CLIP;
+		mixer_init(&mix, &p);
+		double kf = (double)sc_to_float(p.k_f_n);
+		scalar_t v[4] = { sc_from_float((float)unit_rand_uniform(&g, 0.0, 10.0 * kf)),
+				  sc_from_float((float)unit_rand_uniform(&g, -8, 8)),
+				  sc_from_float((float)unit_rand_uniform(&g, -8, 8)),
+				  sc_from_float((float)unit_rand_uniform(&g, -1.5, 1.5)) };
+		struct mixer_output o;
+		mixer_update(&mix, v, &o);
+		uint8_t pos, neg;
+		mixer_shortfall(&o, &pos, &neg);
+		CHECK((pos & neg) == 0);
+		CHECK((pos | neg) >> 4 == 0);
+		static const uint32_t flag[4] = { MIXER_LIMIT_F, MIXER_LIMIT_TX, MIXER_LIMIT_TY, MIXER_LIMIT_TZ };
+		for (int a = 0; a < 4; a++) {
+			bool flagged = (o.limits & flag[a]) != 0;
+			if (!flagged)
+				CHECK(!(pos >> a & 1u) && !(neg >> a & 1u));
+			if (pos >> a & 1u) {
+				CHECK(flagged && o.achieved[a] < o.demanded[a]);
+				n_pos++;
+			}
+			if (neg >> a & 1u) {
+				CHECK(flagged && o.achieved[a] > o.demanded[a]);
+				n_neg++;
+			}
+		}
+	}
+	CHECK(n_pos > 50 && n_neg > 50); /* both directions occur in the draw */
+}

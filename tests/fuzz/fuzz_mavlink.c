@@ -50,7 +50,7 @@ static void frame(const uint8_t *b, size_t n)
 	f.seq = app.fr.seq + 1;
 	f.valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	f.q_ib[0] = 1.0f;
-	f.pos_i_m[2] = app.mode == APP_DISARMED || app.mode == APP_IDLE ? 0.0f : app.z_target;
+	f.pos_i_m[2] = app.mode == APP_DISARMED || app.mode == APP_IDLE ? 0.0f : sc_to_float(app.guid.z_target_m);
 	for (int j = 0; j < HAL_ROTORS; j++)
 		f.rotor_thrust_n[j] = 2.6f;
 	/* the payload overwrites the frame's floats from q_ib on */
