@@ -1,5 +1,5 @@
 /*
- * ident.h - in-flight identification estimators (issue 6): rotor coefficients k_f, k_tau
+ * ident.h - in-flight identification estimators: rotor coefficients k_f, k_tau
  * (lag-aware and the paper's plain estimator side by side), inertia about one body axis,
  * validation statistics (NE, fit %), and the acceptance rule.
  *

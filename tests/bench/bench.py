@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""make bench: Octo-SIL's performance figures (issue 8), measured side by side.
+"""make bench: Octo-SIL's performance figures, measured side by side.
 
 Run by `make bench` (which builds the harnesses first) as
     .venv/bin/python tests/bench/bench.py [--repeats N] [--only ITEMS] [--quick] [--no-arm]
@@ -7,7 +7,7 @@ Prints one table (each timed figure: median of N runs with [min, max]; each coun
 deterministic) beside its reference measured in the same run and its target, then the
 machine and the exact command behind each figure, and writes build/bench.json.
 
-Items (issue 8):
+Items:
   speed   1. closed loop: octo-sim --lockstep + octo-fw (--actuation dref and data25) + a
              pymavlink ground station, 120 s simulated: arm, take-off to 10 m, hold,
              MAV_CMD_USER_1 param1=1 (rotor-coefficient experiment) once hovering if the
@@ -454,7 +454,7 @@ def item_step(rep, args):
     ex = mmm(m4f.get("exp", []))
     rep.row(2, f"step in experiment 1 ({len(m4f.get('exp', []))} steps), M4F", fmt(ex["median"] if ex else None),
             spread(ex) if ex else ("" if exp_ok else "experiment 1 not in this build"),
-            f"host x86-64: {fmt(mean('bench_exp_step'))} Ir/step (mean)" if exp_ok else "waits on issue 6",
+            f"host x86-64: {fmt(mean('bench_exp_step'))} Ir/step (mean)" if exp_ok else "no experiment step measured",
             "<= 5,000", None if not ex else ex["max"] <= 5000, m4_cmd)
     if ex:
         e = m4f["exp"]
