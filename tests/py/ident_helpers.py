@@ -1,4 +1,4 @@
-"""Helpers of the identification tests (issue 6), no tests: fly octo-sim + octo-fw in
+"""Helpers of the identification tests, no tests: fly octo-sim + octo-fw in
 lockstep, run MAV_CMD_USER_1 experiments, read the results from parameters, STATUSTEXT and
 both LCM logs.
 

@@ -117,7 +117,7 @@ def test_e2e_mission_on_a_random_vehicle(tmp_path):
         ax = {"ixx": "wx", "iyy": "wy", "izz": "wz"}[m["experiment"]]
         assert m["fit_pct"][ax] > 90, m
 
-    # the accuracy asked of the whole chain (issue 7)
+    # the accuracy asked of the whole chain
     errs = {k: row["error_pct"] for k, row in rep["parameters"].items()}
     print("errors %:", errs)
     # k_f is the thrust at full throttle: the firmware estimates the thrust curve too, so k_f

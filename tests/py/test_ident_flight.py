@@ -1,4 +1,4 @@
-"""In-flight identification (issue 6), lockstep flights of octo-sim + octo-fw.
+"""In-flight identification, lockstep flights of octo-sim + octo-fw.
 
 Accuracy against octo-sim's truth with the default noise and actuator lag, on vehicles drawn at
 random within +/-30 % of the paper's k_f, k_tau and inertia (seeded): k_f, k_tau within 0.3 %,

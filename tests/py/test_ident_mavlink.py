@@ -1,4 +1,4 @@
-"""Identification over MAVLink (issue 6 and the interface shared with octo-gcs): command
+"""Identification over MAVLink (the interface shared with octo-gcs): command
 acknowledgements (DENIED unless hovering, IN_PROGRESS with progress, final ACCEPTED/FAILED),
 STATUSTEXT lines, live NAMED_VALUE_FLOAT, result parameters (read-only) and VEH_* applied,
 broadcast and saved."""
