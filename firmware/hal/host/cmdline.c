@@ -33,45 +33,6 @@ static const char usage[] =
 	"  --dump-params            print the parameter table as JSON and exit\n"
 	"  --help                   this text\n";
 
-static int parse_port(const char *flag, const char *s, uint16_t *out)
-{
-	char *e = NULL;
-	long v = strtol(s, &e, 10);
-	if (!*s || *e || v < 1 || v > 65535) {
-		fprintf(stderr, "octo-fw: %s: '%s' is not a port (1..65535)\n", flag, s);
-		return -1;
-	}
-	*out = (uint16_t)v;
-	return 0;
-}
-
-static int parse_hostport(const char *flag, const char *s, struct sockaddr_in *out)
-{
-	char host[256];
-	const char *colon = strrchr(s, ':');
-	if (!colon || colon == s || (size_t)(colon - s) >= sizeof host) {
-		fprintf(stderr, "octo-fw: %s: '%s' is not HOST:PORT\n", flag, s);
-		return -1;
-	}
-	memcpy(host, s, (size_t)(colon - s));
-	host[colon - s] = 0;
-	uint16_t port;
-	if (parse_port(flag, colon + 1, &port))
-		return -1;
-	struct addrinfo hints, *res = NULL;
-	memset(&hints, 0, sizeof hints);
-	hints.ai_family = AF_INET;
-	hints.ai_socktype = SOCK_DGRAM;
-	if (getaddrinfo(host, NULL, &hints, &res) || !res) {
-		fprintf(stderr, "octo-fw: %s: unknown host '%s'\n", flag, host);
-		return -1;
-	}
-	memcpy(out, res->ai_addr, sizeof *out);
-	freeaddrinfo(res);
-	out->sin_port = htons(port);
-	return 0;
-}
-
 static void json_str(const char *s)
 {
 	putchar('"');
@@ -117,8 +78,8 @@ int host_parse_args(int argc, char **argv, struct host_config *cfg)
 	cfg->xp_listen = 49005;
 	cfg->mav_listen = 14580;
 	cfg->act = XP_ACT_DREF;
-	if (parse_hostport("--xplane", "127.0.0.1:49000", &cfg->xplane) ||
-	    parse_hostport("--gcs", "127.0.0.1:14550", &cfg->gcs))
+	if (udp_parse_hostport("octo-fw", "--xplane", "127.0.0.1:49000", &cfg->xplane) ||
+	    udp_parse_hostport("octo-fw", "--gcs", "127.0.0.1:14550", &cfg->gcs))
 		return 1;
 
 	for (int i = 1; i < argc; i++) {
@@ -149,15 +110,15 @@ int host_parse_args(int argc, char **argv, struct host_config *cfg)
 		if (!strcmp(f, "--xplane") && !strcmp(v, "auto")) {
 			cfg->xplane_auto = true;
 		} else if (!strcmp(f, "--xplane")) {
-			bad = parse_hostport(f, v, &cfg->xplane);
+			bad = udp_parse_hostport("octo-fw", f, v, &cfg->xplane);
 			cfg->xplane_auto = false;
 		}
 		else if (!strcmp(f, "--gcs"))
-			bad = parse_hostport(f, v, &cfg->gcs);
+			bad = udp_parse_hostport("octo-fw", f, v, &cfg->gcs);
 		else if (!strcmp(f, "--xp-listen"))
-			bad = parse_port(f, v, &cfg->xp_listen);
+			bad = udp_parse_port("octo-fw", f, v, &cfg->xp_listen);
 		else if (!strcmp(f, "--mavlink-listen"))
-			bad = parse_port(f, v, &cfg->mav_listen);
+			bad = udp_parse_port("octo-fw", f, v, &cfg->mav_listen);
 		else if (!strcmp(f, "--params"))
 			cfg->params_path = v;
 		else if (!strcmp(f, "--lcm"))

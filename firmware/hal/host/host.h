@@ -83,4 +83,10 @@ void host_hal_bind(struct host *h);
  * Defined by the program that links them (host_hal.c here, hal/sil/sil.c for octo-sil). */
 void host_report(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
+/* udp_addr.c: command-line ports and HOST:PORT (0, or -1 with a message naming prog,
+ * flag and value) and the non-blocking MAVLink socket on all addresses (fd or -1). */
+int udp_parse_port(const char *prog, const char *flag, const char *s, uint16_t *out);
+int udp_parse_hostport(const char *prog, const char *flag, const char *s, struct sockaddr_in *out);
+int udp_open_ground(const char *prog, uint16_t port);
+
 #endif /* OCTO_HOST_H */

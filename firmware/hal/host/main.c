@@ -22,27 +22,6 @@
 #include "host.h"
 #include "xp_beacon.h"
 
-static int open_ground(uint16_t port)
-{
-	int fd = socket(AF_INET, SOCK_DGRAM, 0);
-	if (fd < 0) {
-		perror("octo-fw: MAVLink socket");
-		return -1;
-	}
-	struct sockaddr_in a;
-	memset(&a, 0, sizeof a);
-	a.sin_family = AF_INET;
-	a.sin_addr.s_addr = htonl(INADDR_ANY);
-	a.sin_port = htons(port);
-	if (bind(fd, (struct sockaddr *)&a, sizeof a) < 0) {
-		fprintf(stderr, "octo-fw: cannot bind MAVLink port %u: %s\n", port, strerror(errno));
-		close(fd);
-		return -1;
-	}
-	(void)fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
-	return fd;
-}
-
 /* --xplane auto: X-Plane's address from its first beacon, said aloud. A
  * SIGINT/SIGTERM (blocked, pending) ends the wait. */
 static int xp_find(struct host *h, const sigset_t *stop_set)
@@ -111,7 +90,7 @@ static int run(struct host *h)
 		return 1;
 	if (xp_client_open(&h->xp, cfg->xp_listen, &cfg->xplane, cfg->act))
 		return 1;
-	h->mav_fd = open_ground(cfg->mav_listen);
+	h->mav_fd = udp_open_ground("octo-fw", cfg->mav_listen);
 	if (h->mav_fd < 0)
 		return 1;
 	app_init(&h->app, &h->hal);

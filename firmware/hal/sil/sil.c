@@ -304,72 +304,12 @@ static const char usage[] =
 	"  --help                   this text\n"
 	"exit status: 0 done, 1 a mission step failed or did not complete, 2 bad arguments\n";
 
-static int parse_port(const char *flag, const char *v, uint16_t *out)
-{
-	char *e = NULL;
-	long p = strtol(v, &e, 10);
-	if (!*v || *e || p < 1 || p > 65535) {
-		fprintf(stderr, "octo-sil: %s: '%s' is not a port (1..65535)\n", flag, v);
-		return -1;
-	}
-	*out = (uint16_t)p;
-	return 0;
-}
-
-static int parse_hostport(const char *flag, const char *s, struct sockaddr_in *out)
-{
-	char host[256];
-	const char *colon = strrchr(s, ':');
-	if (!colon || colon == s || (size_t)(colon - s) >= sizeof host) {
-		fprintf(stderr, "octo-sil: %s: '%s' is not HOST:PORT\n", flag, s);
-		return -1;
-	}
-	memcpy(host, s, (size_t)(colon - s));
-	host[colon - s] = 0;
-	uint16_t port;
-	if (parse_port(flag, colon + 1, &port))
-		return -1;
-	struct addrinfo hints, *res = NULL;
-	memset(&hints, 0, sizeof hints);
-	hints.ai_family = AF_INET;
-	hints.ai_socktype = SOCK_DGRAM;
-	if (getaddrinfo(host, NULL, &hints, &res) || !res) {
-		fprintf(stderr, "octo-sil: %s: unknown host '%s'\n", flag, host);
-		return -1;
-	}
-	memcpy(out, res->ai_addr, sizeof *out);
-	freeaddrinfo(res);
-	out->sin_port = htons(port);
-	return 0;
-}
-
 /* SIGINT or SIGTERM arrived (they are blocked and taken here, between passes,
  * so that no handler and no flag outside struct sil are needed). */
 static bool stop_requested(const sigset_t *stop_set)
 {
 	const struct timespec no_wait = {0, 0};
 	return sigtimedwait(stop_set, NULL, &no_wait) >= 0;
-}
-
-static int open_mavlink(uint16_t port)
-{
-	int fd = socket(AF_INET, SOCK_DGRAM, 0);
-	if (fd < 0) {
-		perror("octo-sil: MAVLink socket");
-		return -1;
-	}
-	struct sockaddr_in a;
-	memset(&a, 0, sizeof a);
-	a.sin_family = AF_INET;
-	a.sin_addr.s_addr = htonl(INADDR_ANY);
-	a.sin_port = htons(port);
-	if (bind(fd, (struct sockaddr *)&a, sizeof a) < 0) {
-		fprintf(stderr, "octo-sil: cannot bind MAVLink port %u: %s\n", port, strerror(errno));
-		close(fd);
-		return -1;
-	}
-	(void)fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) | O_NONBLOCK);
-	return fd;
 }
 
 static double parse_duration(const char *v)
@@ -390,7 +330,7 @@ static int run(struct sil *s, int argc, char **argv)
 	uint16_t mav_listen = 0;
 	double duration = 0.0;
 	enum xp_actuation act = XP_ACT_DREF;
-	if (parse_hostport("--gcs", "127.0.0.1:14550", &s->gcs))
+	if (udp_parse_hostport("octo-sil", "--gcs", "127.0.0.1:14550", &s->gcs))
 		return 2;
 
 	/* octo-sil's own flags here; the rest are the plant's */
@@ -436,10 +376,10 @@ static int run(struct sil *s, int argc, char **argv)
 			if (duration < 0.0)
 				return 2;
 		} else if (!strcmp(f, "--mavlink-listen")) {
-			if (parse_port(f, v, &mav_listen))
+			if (udp_parse_port("octo-sil", f, v, &mav_listen))
 				return 2;
 		} else if (!strcmp(f, "--gcs")) {
-			if (parse_hostport(f, v, &s->gcs))
+			if (udp_parse_hostport("octo-sil", f, v, &s->gcs))
 				return 2;
 		} else if (!strcmp(f, "--actuation")) {
 			if (!strcmp(v, "dref"))
@@ -479,7 +419,7 @@ static int run(struct sil *s, int argc, char **argv)
 	if (lcm_fw && lcm_log_open(&s->log, lcm_fw))
 		return 1;
 	if (mav_listen) {
-		s->mav_fd = open_mavlink(mav_listen);
+		s->mav_fd = udp_open_ground("octo-sil", mav_listen);
 		if (s->mav_fd < 0)
 			return 1;
 		s->wall_clock = true;

@@ -6,7 +6,7 @@
 SIL_SRC     := $(sort $(wildcard firmware/hal/sil/*.c))
 SIL_OBJ     := $(SIL_SRC:firmware/hal/sil/%.c=$(B)/sil/%.o)
 SIL_FW_OBJ  := $(filter $(B)/fw/app/%.o,$(FW_OBJ)) $(B)/fw/hal/hal.o \
-               $(addprefix $(B)/fw/hal/host/,xp_client.o xp_proto.o lcm_log.o param_file.o)
+               $(addprefix $(B)/fw/hal/host/,xp_client.o xp_proto.o lcm_log.o param_file.o udp_addr.o)
 
 $(B)/sil/%.o: firmware/hal/sil/%.c $(B)/config.mk | $(MAVLINK_STAMP) $(LCM_STAMP)
 	@mkdir -p $(@D)
