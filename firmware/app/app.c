@@ -206,8 +206,8 @@ static void report_line(void *ctx, unsigned line, const char *why)
 
 enum app_result app_params_load(struct app *a, char *why, size_t cap)
 {
-	static char text[8192];   /* one load at a time; kept off the stack */
-	long n = hal_param_fetch(a->hal, text, sizeof text);
+	char *text = a->param_text;
+	long n = hal_param_fetch(a->hal, text, sizeof a->param_text);
 	if (n < 0) {
 		snprintf(why, cap, "no parameter file");
 		return APP_FAILED;
@@ -223,8 +223,8 @@ enum app_result app_params_load(struct app *a, char *why, size_t cap)
 
 enum app_result app_params_save(struct app *a, char *why, size_t cap)
 {
-	static char text[8192];
-	size_t n = params_format(&a->p, text, sizeof text);
+	char *text = a->param_text;
+	size_t n = params_format(&a->p, text, sizeof a->param_text);
 	if (!n || hal_param_store(a->hal, text, n) != 0) {
 		snprintf(why, cap, "Parameter save failed");
 		return APP_FAILED;

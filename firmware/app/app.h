@@ -93,6 +93,7 @@ struct app {
 	/* between frames (app.c): work the 90 Hz step does not do */
 	bool params_dirty;            /* a parameter changed: rebuild gains, mixer, map */
 	bool save_pending;            /* results applied: write the parameter file */
+	char param_text[8192];        /* the parameter file's text while it is loaded or saved */
 
 	struct app_outbox outbox;     /* events for the ground station (mav.c drains it) */
 	struct mav mav;
