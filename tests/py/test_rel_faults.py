@@ -31,7 +31,7 @@ FAULTS = {
     "delay2_undeclared": (["--delay-frames", "2"], {}),
     "dup_reorder_delay": (["--duplicate", "0.1", "--reorder", "0.1", "--delay-frames", "2"], {}),
 }
-# Open finding: with the rotor experiment's two dithers and its offset cycle (every rotor, several
+# Open finding (cause not yet confirmed; likely the excitation): with the rotor experiment's two dithers and its offset cycle (every rotor, several
 # throttle levels), a 0.5 s blackout in mid-excitation holds the last throttles with the nominal
 # model's offsets, and the height dips 0.53 m, past the 0.5 m bound. The firmware sees the gap
 # only when frames return; the fix belongs in the excitation (smaller offsets until the model
