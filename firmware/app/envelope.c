@@ -83,6 +83,13 @@ void envelope_init(struct app *a)
 
 static void set_result(struct app *a, const char *name, float v);
 
+static void set_kft(struct app *a, const char *name, float v, bool announce)
+{
+	int i = params_find(name, 16);
+	if (i >= 0 && params_set(&a->p, (size_t)i, v) == PARAM_OK && announce)
+		post_param(a, i);
+}
+
 static void set_veh_kf(struct app *a, float kf, const char *why)
 {
 	int i = params_find("VEH_KF", 16);
@@ -109,16 +116,25 @@ static void kft_step(struct app *a, float dt, bool up)
 	}
 	bool gate = a->mode == APP_HOLD && up && (a->fr.valid & HAL_FRAME_THRUST);
 	kf_track_update(t, thr, HAL_ROTORS, sc_from_float(y), sc_from_float(dt), gate);
+	/* The KFT_* parameters once a second of plant time; announced to the ground station
+	 * (PARAM_VALUE, NAMED_VALUE_FLOAT) at most once a second of wall time, whose rates are
+	 * wall-clock: a fast lockstep run must not flood the link. */
 	if (!t->started || a->fr.t_s - e->kft_pub_t < 1.0)
 		return;
 	e->kft_pub_t = a->fr.t_s;
+	uint64_t now_us = hal_wall_us(a->hal);
+	bool announce = now_us - e->kft_pub_wall_us >= 1000000u;
+	if (announce)
+		e->kft_pub_wall_us = now_us;
 	float k = sc_to_float(t->k), sd = sc_to_float(kf_track_sd(t));
-	set_result(a, "KFT_EST", k);
-	set_result(a, "KFT_SD", sd);
-	set_result(a, "KFT_T", (float)a->fr.t_s);
-	set_result(a, "KFT_MEM", sc_to_float(t->mem_s));
-	post_value(a, "KFT", k);
-	post_value(a, "KFT_SD", sd);
+	set_kft(a, "KFT_EST", k, announce);
+	set_kft(a, "KFT_SD", sd, announce);
+	set_kft(a, "KFT_T", (float)a->fr.t_s, announce);
+	set_kft(a, "KFT_MEM", sc_to_float(t->mem_s), announce);
+	if (announce) {
+		post_value(a, "KFT", k);
+		post_value(a, "KFT_SD", sd);
+	}
 	if (a->mode != APP_HOLD)
 		return;
 	if (a->p.kft_apply >= 0.5f) {

@@ -30,6 +30,7 @@ struct envelope {
 	float phase_s;      /* time in the current take-off or landing */
 	struct kf_track kft;/* k_f tracked in HOLD */
 	double kft_pub_t;   /* plant time of the last KFT_* publication */
+	uint64_t kft_pub_wall_us; /* wall time of it: a fast lockstep run must not flood the link */
 	uint32_t kft_votes; /* consecutive publications that called for a VEH_KF refresh */
 	uint8_t cmd;        /* enum app_command that started the phase, for its final result */
 	app_origin origin;  /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
