@@ -31,14 +31,7 @@ FAULTS = {
     "delay2_undeclared": (["--delay-frames", "2"], {}),
     "dup_reorder_delay": (["--duplicate", "0.1", "--reorder", "0.1", "--delay-frames", "2"], {}),
 }
-# Open finding (cause not yet confirmed; likely the excitation): with the rotor experiment's two dithers and its offset cycle (every rotor, several
-# throttle levels), a 0.5 s blackout in mid-excitation holds the last throttles with the nominal
-# model's offsets, and the height dips 0.53 m, past the 0.5 m bound. The firmware sees the gap
-# only when frames return; the fix belongs in the excitation (smaller offsets until the model
-# is known), not in this bound.
-CASES = [pytest.param(f, marks=pytest.mark.xfail(reason="0.5 s blackouts in mid-excitation: height "
-                                                 "dips 0.53 m (open)", strict=False))
-         if f == "burst0.5s" else f for f in FAULTS]
+CASES = list(FAULTS)
 
 
 @pytest.mark.parametrize("fault", CASES)
@@ -77,7 +70,10 @@ def test_identification_under_frame_faults(launch, port, tmp_path, fault):
     print(f"{fault}: hover {window[0].t:.1f}..{window[-1].t:.1f} s, |dz| <= {max(map(abs, dz)):.3f} m, "
           f"k_f {kf} (truth {PAPER['kf']}), VEH_KF {veh_kf}, aborted {aborted}, sim {c}\n{texts}")
     assert window[-1].t - window[0].t > 5.0
-    assert max(abs(d) for d in dz) <= 0.5, f"height error up to {max(dz, key=abs):+.3f} m"
+    # a lockstep timeout (octo-sim advancing without a late answer) is the host's load, not the
+    # firmware's: said beside the height so that a failure names it
+    assert max(abs(d) for d in dz) <= 0.5, (f"height error up to {max(dz, key=abs):+.3f} m "
+                                            f"(lockstep timeouts {c['lockstep_timeouts']})")
     if done:
         assert abs(kf / PAPER["kf"] - 1) <= 3e-3, f"k_f {kf} vs {PAPER['kf']}"
         assert abs(veh_kf / PAPER["kf"] - 1) <= 3e-3
