@@ -18,11 +18,6 @@
 #define TEXT_RATE 20.0f
 #define FW_VERSION 0x00050000u     /* 0.5.0 */
 
-/* Signing state of the one MAVLink channel (attached to the library's channel
- * status, which is itself static inside the generated helpers). */
-static mavlink_signing_t signing;
-static mavlink_signing_streams_t signing_streams;
-
 /* With signing on, only RADIO_STATUS may arrive unsigned (common practice). */
 static bool accept_unsigned(const mavlink_status_t *status, uint32_t msgid)
 {
@@ -39,19 +34,20 @@ static void signing_setup(struct mav *m, const struct hal *hal)
 		st->signing_streams = NULL;
 		return;
 	}
-	memset(&signing, 0, sizeof signing);
-	memset(&signing_streams, 0, sizeof signing_streams);
-	memcpy(signing.secret_key, key, sizeof key);
+	mavlink_signing_t *sg = &m->signing_state;
+	memset(sg, 0, sizeof *sg);
+	memset(&m->signing_streams, 0, sizeof m->signing_streams);
+	memcpy(sg->secret_key, key, sizeof key);
 	memset(key, 0, sizeof key);
-	signing.link_id = (uint8_t)CHAN;
-	signing.flags = MAVLINK_SIGNING_FLAG_SIGN_OUTGOING;
+	sg->link_id = (uint8_t)CHAN;
+	sg->flags = MAVLINK_SIGNING_FLAG_SIGN_OUTGOING;
 	/* 10 us units since 2015-01-01 00:00:00 UTC */
 	uint64_t us = hal_unix_us(hal);
 	const uint64_t epoch2015_us = 1420070400ull * 1000000ull;
-	signing.timestamp = us > epoch2015_us ? (us - epoch2015_us) / 10u : 1u;
-	signing.accept_unsigned_callback = accept_unsigned;
-	st->signing = &signing;
-	st->signing_streams = &signing_streams;
+	sg->timestamp = us > epoch2015_us ? (us - epoch2015_us) / 10u : 1u;
+	sg->accept_unsigned_callback = accept_unsigned;
+	st->signing = sg;
+	st->signing_streams = &m->signing_streams;
 	m->signing = true;
 }
 
