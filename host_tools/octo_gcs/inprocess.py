@@ -12,15 +12,13 @@ UDP mission (mission.py), and so is the staging of DIR.
 import functools
 import json
 import os
-import shutil
 import struct
 import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 
-from . import paramfile, procs, vehiclefile
+from . import paramfile, procs
 from .base import GcsError
 
 TAKEOFF_M = 10.0
@@ -145,32 +143,18 @@ def execute(args, stream, err_stream):
     returns 0 (pass) or 1 (failed checks); raises GcsError with the reason otherwise."""
     from .identify import merge_text_results
     from .logs import Logs
-    from .mission import _experiments_option, _keep_failed, _param_options, _publish
+    from .mission import _keep_failed, _publish, prepare
     from .progress import Progress
     from .report import build_report, table_text, write_outputs
 
     t_start = time.monotonic()
     prog = Progress(stream=stream)
-    experiments = _experiments_option(args.experiments)
-    args.param_values = _param_options(args.param)
     if args.realtime:
         raise GcsError("--in-process runs lockstep only (octo-sil): --realtime needs the UDP mission")
-    try:
-        veh = vehiclefile.load(args.vehicle)
-    except vehiclefile.VehicleFileError as e:
-        raise GcsError(str(e)) from None
     build = procs.build_dir(args.build_dir)
     if not os.access(build / "octo-sil", os.X_OK):
         raise GcsError(f"{build / 'octo-sil'} not found: run `make` first, or give --build-dir")
-    out = Path(args.out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        stage = Path(out / f".tmp-{os.getpid()}")
-        if stage.exists():
-            shutil.rmtree(stage)
-        stage.mkdir()
-    except OSError as e:
-        raise GcsError(f"cannot write {out}: {e.strerror}") from None
+    experiments, veh, build, out, stage = prepare(args)
     vname = f"vehicle {args.vehicle}" if args.vehicle else "the paper's vehicle"
     prog.say(f"mission in-process: octo-sil (X-Plane {args.xplane_version}, seed {args.seed}, {vname}) "
              f"from {build}")

@@ -205,14 +205,10 @@ def _tail(path):
     return LogTail(str(path))
 
 
-def run(args):
-    if getattr(args, "in_process", False):
-        from . import inprocess
-        return inprocess.run(args)
-    from .report import build_report, write_outputs
-
-    t_start = time.monotonic()
-    prog = Progress()
+def prepare(args):
+    """What both mission paths check and set up first: the experiments and parameter options,
+    the vehicle file, the build directory and a fresh staging directory in DIR (published by
+    rename at the end, so DIR never holds half a mission). Raises GcsError naming the input."""
     experiments = _experiments_option(args.experiments)
     args.param_values = _param_options(args.param)
     try:
@@ -229,6 +225,18 @@ def run(args):
         stage.mkdir()
     except OSError as e:
         raise GcsError(f"cannot write {out}: {e.strerror}") from None
+    return experiments, veh, build, out, stage
+
+
+def run(args):
+    if getattr(args, "in_process", False):
+        from . import inprocess
+        return inprocess.run(args)
+    from .report import build_report, write_outputs
+
+    t_start = time.monotonic()
+    prog = Progress()
+    experiments, veh, build, out, stage = prepare(args)
     planned = sum(planned_sim_seconds(args.param_values, e) for e in experiments) if experiments else 0.0
     args.sim_limit = max(300.0, 3 * planned + 200.0)   # bounds the logs if anything hangs
     m = Mission(args, out=prog)
