@@ -15,13 +15,6 @@
 #include <stdio.h>
 #endif
 
-/* random-truth sweeps are shorter on emulated Cortex-M (make arm) */
-#if defined(__arm__)
-#define TRIALS(n) 2
-#else
-#define TRIALS(n) (n)
-#endif
-
 #define FRAME_S (1.0 / 90.0)
 #define SUBSTEPS 10
 #define G 9.796

@@ -12,13 +12,6 @@
 #include <stdio.h>
 #endif
 
-/* random-truth sweeps are shorter on emulated Cortex-M (make arm) */
-#if defined(__arm__)
-#define TRIALS(n) 2
-#else
-#define TRIALS(n) (n)
-#endif
-
 #define FS 90.0
 #define NR 8
 

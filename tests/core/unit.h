@@ -44,6 +44,14 @@ bool unit_near(double a, double b, double tol);
 	     if (!unit_near(a_, b_, r_ * (m_ > 1e-30 ? m_ : 1e-30))) unit_fail(u, __FILE__, __LINE__, \
 	        "CHECK_REL(%s, %s): %.9g vs %.9g, rel %.3g", #a, #b, a_, b_, r_); } while (0)
 
+/* Trials of a random-truth sweep: n on the host, 2 on emulated Cortex-M (make arm), where
+ * each costs seconds. */
+#if defined(__arm__)
+#define TRIALS(n) 2
+#else
+#define TRIALS(n) (n)
+#endif
+
 /* Deterministic test randomness (xorshift64*), seeded per test by the runner. */
 struct unit_rng { unsigned long long s; };
 double unit_rand_uniform(struct unit_rng *r, double lo, double hi);
