@@ -53,7 +53,7 @@ FUZZ_FW_INC := -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal -Ifirmwa
                -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common
 FUZZ_APP_SRC := $(sort $(wildcard firmware/app/*.c firmware/core/*.c)) firmware/hal/hal.c tests/app/stub_hal.c
 
-$(FZ)/fuzz-xp_client: tests/fuzz/fuzz_xp_client.c firmware/hal/host/xp_client.c firmware/hal/host/xp_proto.c \
+$(FZ)/fuzz-xp_client: tests/fuzz/fuzz_xp_client.c tests/fuzz/records.h firmware/hal/host/xp_client.c firmware/hal/host/xp_proto.c \
 		firmware/hal/host/xp_client.h firmware/hal/host/xp_proto.h firmware/hal/hal.h | $(FUZZ_TC_STAMP)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -Drecvfrom=fuzz_recvfrom -Dsendto=fuzz_sendto $(FUZZ_FW_INC) \
 	  -o $@ tests/fuzz/fuzz_xp_client.c firmware/hal/host/xp_client.c firmware/hal/host/xp_proto.c -lm
@@ -70,12 +70,12 @@ $(FZ)/fuzz-mavlink: tests/fuzz/fuzz_mavlink.c tests/app/stub_hal.h $(FUZZ_APP_SR
 	  echo "error: firmware headers changed during the build (struct layouts may differ): run again"; exit 1; fi
 
 FUZZ_SIM_SRC := sim/xplane_input.cpp sim/xplane_proto.cpp sim/counters.cpp
-$(FZ)/fuzz-sim_input: tests/fuzz/fuzz_sim_input.cpp $(FUZZ_SIM_SRC) $(wildcard sim/*.hpp) | $(FUZZ_TC_STAMP)
+$(FZ)/fuzz-sim_input: tests/fuzz/fuzz_sim_input.cpp tests/fuzz/records.h $(FUZZ_SIM_SRC) $(wildcard sim/*.hpp) | $(FUZZ_TC_STAMP)
 	$(FUZZ_CXX) -std=c++17 $(FUZZ_SAN) -Wall -Wextra -Isim -o $@ tests/fuzz/fuzz_sim_input.cpp $(FUZZ_SIM_SRC)
 
 # the plant as octo-sil links it (sim/plant.h): everything of sim/ but main() and the server
 FUZZ_PLANT_SRC := $(filter-out sim/main.cpp sim/server.cpp,$(sort $(wildcard sim/*.cpp)))
-$(FZ)/fuzz-plant: tests/fuzz/fuzz_plant.cpp $(FUZZ_PLANT_SRC) firmware/hal/host/xp_proto.c $(wildcard sim/*.hpp sim/*.h) \
+$(FZ)/fuzz-plant: tests/fuzz/fuzz_plant.cpp tests/fuzz/records.h $(FUZZ_PLANT_SRC) firmware/hal/host/xp_proto.c $(wildcard sim/*.hpp sim/*.h) \
 		| $(FUZZ_TC_STAMP) $(LCM_STAMP)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -Ifirmware/hal/host -c firmware/hal/host/xp_proto.c -o $(FZ)/plant_xp_proto.o
 	$(FUZZ_CXX) -std=c++17 $(FUZZ_SAN) -Wall -Wextra -Isim -Ifirmware/hal/host -isystem $(EIGEN_INC) \

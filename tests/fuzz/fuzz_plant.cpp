@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "plant.h"
+#include "records.h"
 
 extern "C" {
 #include "xp_proto.h"
@@ -44,15 +45,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	size_t pos = 2;
 	bool started = false;
 	int frames = 0;
-	while (pos + 3 <= size && frames < 200) {
-		uint8_t ctrl = data[pos];
-		size_t len = static_cast<size_t>(data[pos + 1]) | static_cast<size_t>(data[pos + 2]) << 8;
-		pos += 3;
-		if (len > size - pos)
-			len = size - pos;
+	uint8_t ctrl;
+	const uint8_t *rec;
+	size_t len;
+	while (frames < 200 && fuzz_next_record(data, size, &pos, &ctrl, &rec, &len)) {
+		// a copy of exactly len bytes, so that ASan sees any read past the datagram
 		uint8_t *d = static_cast<uint8_t *>(std::malloc(len ? len : 1));
-		std::memcpy(d, data + pos, len);
-		pos += len;
+		std::memcpy(d, rec, len);
 		octo_plant_receive(p, d, len, htonl(0x7f000001u), static_cast<uint16_t>(49005 + ((ctrl >> 1) & 7)));
 		std::free(d);
 		if (!(ctrl & 1))

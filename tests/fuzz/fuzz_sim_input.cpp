@@ -12,6 +12,7 @@
 #include <cstring>
 
 #include "counters.hpp"
+#include "records.h"
 #include "xplane_input.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -20,16 +21,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	sim::XpInput in(c);
 	size_t pos = 0;
 	uint64_t n = 0;
-	while (pos + 3 <= size) {
-		uint8_t ctrl = data[pos];
-		size_t len = static_cast<size_t>(data[pos + 1]) | static_cast<size_t>(data[pos + 2]) << 8;
-		pos += 3;
-		if (len > size - pos)
-			len = size - pos;
+	uint8_t ctrl;
+	const uint8_t *rec;
+	size_t len;
+	while (fuzz_next_record(data, size, &pos, &ctrl, &rec, &len)) {
 		// a copy of exactly len bytes, so that ASan sees any read past the datagram
 		uint8_t *d = static_cast<uint8_t *>(std::malloc(len ? len : 1));
-		std::memcpy(d, data + pos, len);
-		pos += len;
+		std::memcpy(d, rec, len);
 		sockaddr_in from{};
 		from.sin_family = AF_INET;
 		from.sin_addr.s_addr = htonl(0x7f000001u);

@@ -21,6 +21,7 @@
 #include "host.h"
 #include "xp_client.h"
 #include "xp_proto.h"
+#include "records.h"
 
 /* The client's console lines: dropped (the compiler checks their formats, host.h). */
 void host_report(const char *fmt, ...)
@@ -84,17 +85,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	uint64_t now = 1000000u;
 	double t_prev = -1e300;
 	size_t pos = 0;
-	while (pos + 3 <= size) {
-		uint8_t ctrl = data[pos];
-		size_t len = (size_t)data[pos + 1] | (size_t)data[pos + 2] << 8;
-		pos += 3;
-		if (len > size - pos)
-			len = size - pos;
-		cur = data + pos;
+	uint8_t ctrl;
+	const uint8_t *rec;
+	size_t len;
+	while (fuzz_next_record(data, size, &pos, &ctrl, &rec, &len)) {
+		cur = rec;
 		cur_len = len;
 		cur_foreign = ctrl & 1;
 		pending = 1;
-		pos += len;
 		now += (uint64_t)(ctrl >> 1) * 1000u;
 		int got = xp_client_receive(&c, &frame, now);
 		if (got > 0) {
