@@ -131,8 +131,10 @@ xp::DataRow xp_row(const XpFrame &f, int row, int version)
 	r.index = row;
 	for (float &c : r.col)
 		c = xp::kNoData;
-	const double vh = std::hypot(f.vn, f.ve);
-	const double v = std::sqrt(f.vn * f.vn + f.ve * f.ve + f.vd * f.vd);
+	// speeds only for the rows that show them (hypot is not cheap, and this runs per row and frame)
+	const bool speeds = row == 3 || row == 4;
+	const double vh = speeds ? std::hypot(f.vn, f.ve) : 0.0;
+	const double v = speeds ? std::sqrt(f.vn * f.vn + f.ve * f.ve + f.vd * f.vd) : 0.0;
 	switch (row) {
 	case 1: { // times: real, total, mission, timer, -, zulu h, local h
 		const double hours = std::fmod(12.0 + f.t / 3600.0, 24.0);

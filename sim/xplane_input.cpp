@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <string_view>
 #include <vector>
 
 #include "xplane_proto.hpp"
@@ -104,7 +105,8 @@ void XpInput::dref(const uint8_t *p, size_t len)
 		c_.inc(Counters::RxBadSize);
 		return;
 	}
-	std::string path;
+	// views into the datagram: a throttle arrives eight times a frame
+	std::string_view path;
 	if (!xp::field_path(p + 9, xp::kDrefPath, path)) {
 		c_.inc(Counters::RxUnterminated);
 		return;
@@ -114,7 +116,7 @@ void XpInput::dref(const uint8_t *p, size_t len)
 		c_.inc(Counters::RxBadValue);
 		return;
 	}
-	std::string base;
+	std::string_view base;
 	int idx;
 	if (!xp::split_index(path, base, idx)) {
 		c_.inc(Counters::RxIgnoredDref);

@@ -5,20 +5,33 @@
 
 namespace xp {
 
-void put_i32(Bytes &b, int32_t v)
+void store_i32(uint8_t *p, int32_t v)
 {
 	uint32_t u;
 	std::memcpy(&u, &v, 4);
 	for (int k = 0; k < 4; k++)
-		b.push_back(static_cast<uint8_t>(u >> (8 * k)));
+		p[k] = static_cast<uint8_t>(u >> (8 * k));
+}
+
+void store_f32(uint8_t *p, float v)
+{
+	int32_t i;
+	std::memcpy(&i, &v, 4);
+	store_i32(p, i);
+}
+
+void put_i32(Bytes &b, int32_t v)
+{
+	const size_t o = b.size();
+	b.resize(o + 4);
+	store_i32(b.data() + o, v);
 }
 
 void put_f32(Bytes &b, float v)
 {
-	uint32_t u;
-	std::memcpy(&u, &v, 4);
-	for (int k = 0; k < 4; k++)
-		b.push_back(static_cast<uint8_t>(u >> (8 * k)));
+	const size_t o = b.size();
+	b.resize(o + 4);
+	store_f32(b.data() + o, v);
 }
 
 int32_t get_i32(const uint8_t *p)
@@ -45,16 +58,24 @@ static void put_tag(Bytes &b, const char *tag, uint8_t byte4)
 	b.push_back(byte4);
 }
 
+void encode_data(const DataRow *rows, size_t n, Bytes &out, uint8_t byte4)
+{
+	out.resize(kHeader + kDataRecord * n);
+	uint8_t *p = out.data();
+	std::memcpy(p, "DATA", 4);
+	p[4] = byte4;
+	p += kHeader;
+	for (size_t r = 0; r < n; r++, p += kDataRecord) {
+		store_i32(p, rows[r].index);
+		for (size_t c = 0; c < 8; c++)
+			store_f32(p + 4 + 4 * c, rows[r].col[c]);
+	}
+}
+
 Bytes encode_data(const std::vector<DataRow> &rows, uint8_t byte4)
 {
 	Bytes b;
-	b.reserve(kHeader + kDataRecord * rows.size());
-	put_tag(b, "DATA", byte4);
-	for (const auto &r : rows) {
-		put_i32(b, r.index);
-		for (float c : r.col)
-			put_f32(b, c);
-	}
+	encode_data(rows.data(), rows.size(), b, byte4);
 	return b;
 }
 
@@ -87,7 +108,7 @@ Msg message_type(const uint8_t *p, size_t len)
 	return Msg::Unknown;
 }
 
-bool field_path(const uint8_t *field, size_t n, std::string &out)
+bool field_path(const uint8_t *field, size_t n, std::string_view &out)
 {
 	const void *nul = std::memchr(field, 0, n);
 	if (!nul)
@@ -98,15 +119,24 @@ bool field_path(const uint8_t *field, size_t n, std::string &out)
 	for (size_t k = 0; k < len; k++)
 		if (field[k] < 0x21 || field[k] > 0x7e)
 			return false;
-	out.assign(reinterpret_cast<const char *>(field), len);
+	out = std::string_view(reinterpret_cast<const char *>(field), len);
 	return true;
 }
 
-bool split_index(const std::string &path, std::string &base, int &index)
+bool field_path(const uint8_t *field, size_t n, std::string &out)
+{
+	std::string_view v;
+	if (!field_path(field, n, v))
+		return false;
+	out.assign(v);
+	return true;
+}
+
+bool split_index(std::string_view path, std::string_view &base, int &index)
 {
 	size_t lb = path.find('[');
-	if (lb == std::string::npos) {
-		if (path.find(']') != std::string::npos)
+	if (lb == std::string_view::npos) {
+		if (path.find(']') != std::string_view::npos)
 			return false;
 		base = path;
 		index = -1;
@@ -123,6 +153,15 @@ bool split_index(const std::string &path, std::string &base, int &index)
 	}
 	base = path.substr(0, lb);
 	index = v;
+	return true;
+}
+
+bool split_index(const std::string &path, std::string &base, int &index)
+{
+	std::string_view b;
+	if (!split_index(std::string_view(path), b, index))
+		return false;
+	base.assign(b);
 	return true;
 }
 
