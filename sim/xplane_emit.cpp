@@ -88,7 +88,8 @@ XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, ui
 	f.agl_m = f.up;
 
 	// load factors: specific force in the body (FLU), over g
-	const Eigen::Vector3d acc = m.acceleration();
+	const RotorOutputs o = m.rotor_outputs(x, m.t());
+	const Eigen::Vector3d acc = m.acceleration(o);
 	const Eigen::Vector3d sf_i = acc + Eigen::Vector3d(0, 0, p.g);
 	const Eigen::Vector3d sf_b = x.q.normalized().conjugate() * sf_i;
 	const double g = p.g > 0 ? p.g : 9.80665;
@@ -97,7 +98,6 @@ XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, ui
 	f.g_side = -sf_b.y() / g;  // right positive
 
 	// rotors: true outputs plus noise on thrust and torque
-	const RotorOutputs o = m.rotor_outputs(x, m.t());
 	const double st = p.sigma_thrust(), sq = p.sigma_torque();
 	for (int j = 0; j < kRotors; j++) {
 		f.thro_cmd[j] = thro_cmd[j];
