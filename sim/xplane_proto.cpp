@@ -9,8 +9,11 @@ void store_i32(uint8_t *p, int32_t v)
 {
 	uint32_t u;
 	std::memcpy(&u, &v, 4);
-	for (int k = 0; k < 4; k++)
-		p[k] = static_cast<uint8_t>(u >> (8 * k));
+	// four stores the compiler merges into one on a little-endian host
+	p[0] = static_cast<uint8_t>(u);
+	p[1] = static_cast<uint8_t>(u >> 8);
+	p[2] = static_cast<uint8_t>(u >> 16);
+	p[3] = static_cast<uint8_t>(u >> 24);
 }
 
 void store_f32(uint8_t *p, float v)
@@ -54,8 +57,10 @@ float get_f32(const uint8_t *p)
 
 static void put_tag(Bytes &b, const char *tag, uint8_t byte4)
 {
-	b.insert(b.end(), tag, tag + 4);
-	b.push_back(byte4);
+	const size_t o = b.size();
+	b.resize(o + kHeader);
+	std::memcpy(b.data() + o, tag, 4);
+	b[o + 4] = byte4;
 }
 
 void encode_data(const DataRow *rows, size_t n, Bytes &out, uint8_t byte4)
@@ -116,7 +121,20 @@ bool field_path(const uint8_t *field, size_t n, std::string_view &out)
 	size_t len = static_cast<size_t>(static_cast<const uint8_t *>(nul) - field);
 	if (len == 0)
 		return false;
-	for (size_t k = 0; k < len; k++)
+	// printable ASCII without space: every byte in 0x21..0x7e, tested eight bytes at a
+	// time: the high bit of a byte of `low` is set iff that byte is < 0x21, of `high`
+	// iff it is > 0x7e (a byte that carries into its neighbour has its own high bit set)
+	constexpr uint64_t ones = 0x0101010101010101ull, highs = 0x8080808080808080ull;
+	size_t k = 0;
+	for (; k + 8 <= len; k += 8) {
+		uint64_t w;
+		std::memcpy(&w, field + k, 8);
+		const uint64_t low = (w - ones * 0x21) & ~w;
+		const uint64_t high = w + ones * (0x7f - 0x7e);
+		if ((low | high | w) & highs)
+			return false;
+	}
+	for (; k < len; k++)
 		if (field[k] < 0x21 || field[k] > 0x7e)
 			return false;
 	out = std::string_view(reinterpret_cast<const char *>(field), len);

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "actuator.hpp"
@@ -372,6 +373,29 @@ TEST(path_fields_and_indices)
 	CHECK(!xp::split_index("x[]", base, i) && !xp::split_index("x[a]", base, i) &&
 	          !xp::split_index("x[99999]", base, i) && !xp::split_index("x]", base, i),
 	      "malformed subscripts");
+}
+
+// Every byte value at every position of paths of 1..24 bytes (the eight-byte test and
+// the tail), against the definition: accepted iff every byte is in 0x21..0x7e.
+TEST(path_field_every_byte_everywhere)
+{
+	int wrong = 0;
+	for (size_t len = 1; len <= 24; len++)
+		for (size_t at = 0; at < len; at++)
+			for (int v = 1; v < 256; v++) {
+				uint8_t f[32];
+				std::memset(f, 'a', sizeof f);
+				f[len] = 0;
+				f[at] = static_cast<uint8_t>(v);
+				if (at > 0)
+					f[at - 1] = (v & 1) ? 0x7e : 0x21;   // neighbours at both edges of the range
+				std::string_view out;
+				const bool ok = xp::field_path(f, sizeof f, out);
+				const bool want = v >= 0x21 && v <= 0x7e;
+				if (ok != want || (ok && out.size() != len))
+					wrong++;
+			}
+	CHECK(wrong == 0, "%d paths judged wrongly", wrong);
 }
 
 // ------------------------------------------------------------------ JSON and vehicle files
