@@ -171,11 +171,6 @@ void Model::advance_to(double t1)
 		x_.s = u_;
 }
 
-Eigen::Vector3d Model::linear_acceleration(const Eigen::Quaterniond &qn, const RotorOutputs &o) const
-{
-	return qn * Eigen::Vector3d(0, 0, o.force / p_.mass) - Eigen::Vector3d(0, 0, p_.g);
-}
-
 Eigen::Vector3d Model::acceleration() const
 {
 	return acceleration(rotor_outputs(x_, t_));

@@ -67,8 +67,12 @@ private:
 	static Vec pack(const BodyState &x);
 	static BodyState unpack(const Vec &v);
 	Vec deriv(double t, const Vec &v) const;
-	// eq. (10): r'' = f n / m + [0 0 -g] for the normalised attitude qn
-	Eigen::Vector3d linear_acceleration(const Eigen::Quaterniond &qn, const RotorOutputs &o) const;
+	// eq. (10): r'' = f n / m + [0 0 -g] for the normalised attitude qn (in the class:
+	// inlined into the integrator's derivative)
+	Eigen::Vector3d linear_acceleration(const Eigen::Quaterniond &qn, const RotorOutputs &o) const
+	{
+		return qn * Eigen::Vector3d(0, 0, o.force / p_.mass) - Eigen::Vector3d(0, 0, p_.g);
+	}
 	void rk4(double h);
 	void ground_contact();
 
