@@ -113,30 +113,49 @@ Msg message_type(const uint8_t *p, size_t len)
 	return Msg::Unknown;
 }
 
+static uint64_t load_le64(const uint8_t *p)
+{
+	uint64_t w = 0;
+	for (int k = 7; k >= 0; k--)
+		w = w << 8 | p[k];
+	return w;
+}
+
 bool field_path(const uint8_t *field, size_t n, std::string_view &out)
 {
-	const void *nul = std::memchr(field, 0, n);
-	if (!nul)
-		return false;
-	size_t len = static_cast<size_t>(static_cast<const uint8_t *>(nul) - field);
-	if (len == 0)
-		return false;
-	// printable ASCII without space: every byte in 0x21..0x7e, tested eight bytes at a
-	// time: the high bit of a byte of `low` is set iff that byte is < 0x21, of `high`
-	// iff it is > 0x7e (a byte that carries into its neighbour has its own high bit set)
+	// One pass, eight bytes at a time: the first NUL ends the path, every byte before it
+	// must be printable ASCII without space (0x21..0x7e). Per word, the lowest byte that
+	// is 0 (is < 0x21, is > 0x7e) always shows as the high bit of its byte in `zero`
+	// (`bad`); a borrow or carry only marks bytes above one that is itself 0 (bad), so a
+	// mark below the first NUL always means a bad byte there.
 	constexpr uint64_t ones = 0x0101010101010101ull, highs = 0x8080808080808080ull;
-	size_t k = 0;
-	for (; k + 8 <= len; k += 8) {
-		uint64_t w;
-		std::memcpy(&w, field + k, 8);
-		const uint64_t low = (w - ones * 0x21) & ~w;
-		const uint64_t high = w + ones * (0x7f - 0x7e);
-		if ((low | high | w) & highs)
+	size_t k = 0, len = 0;
+	bool nul = false;
+	for (; k + 8 <= n; k += 8) {
+		const uint64_t w = load_le64(field + k);
+		const uint64_t zero = (w - ones) & ~w & highs;
+		const uint64_t bad = (((w - ones * 0x21) & ~w) | (w + ones) | w) & highs;
+		if (zero) {
+			const unsigned b = static_cast<unsigned>(__builtin_ctzll(zero)) / 8;   // the NUL's byte
+			if (bad & ((1ull << (8 * b)) - 1))
+				return false;
+			len = k + b;
+			nul = true;
+			break;
+		}
+		if (bad)
 			return false;
 	}
-	for (; k < len; k++)
-		if (field[k] < 0x21 || field[k] > 0x7e)
+	for (; !nul && k < n; k++) {
+		if (field[k] == 0) {
+			len = k;
+			nul = true;
+		} else if (field[k] < 0x21 || field[k] > 0x7e) {
 			return false;
+		}
+	}
+	if (!nul || len == 0)
+		return false;
 	out = std::string_view(reinterpret_cast<const char *>(field), len);
 	return true;
 }

@@ -375,27 +375,61 @@ TEST(path_fields_and_indices)
 	      "malformed subscripts");
 }
 
-// Every byte value at every position of paths of 1..24 bytes (the eight-byte test and
-// the tail), against the definition: accepted iff every byte is in 0x21..0x7e.
+// The definition field_path implements, one byte at a time.
+static bool field_path_reference(const uint8_t *f, size_t n, size_t &len)
+{
+	for (size_t k = 0; k < n; k++) {
+		if (f[k] == 0) {
+			len = k;
+			return k > 0;
+		}
+		if (f[k] < 0x21 || f[k] > 0x7e)
+			return false;
+	}
+	return false;
+}
+
+// Every byte value at every position of paths of 0..24 bytes in fields of 1..40 bytes
+// (the eight-byte words and the tail, the NUL anywhere or absent), and random fields,
+// against the definition.
 TEST(path_field_every_byte_everywhere)
 {
-	int wrong = 0;
-	for (size_t len = 1; len <= 24; len++)
-		for (size_t at = 0; at < len; at++)
-			for (int v = 1; v < 256; v++) {
-				uint8_t f[32];
-				std::memset(f, 'a', sizeof f);
-				f[len] = 0;
-				f[at] = static_cast<uint8_t>(v);
-				if (at > 0)
-					f[at - 1] = (v & 1) ? 0x7e : 0x21;   // neighbours at both edges of the range
-				std::string_view out;
-				const bool ok = xp::field_path(f, sizeof f, out);
-				const bool want = v >= 0x21 && v <= 0x7e;
-				if (ok != want || (ok && out.size() != len))
-					wrong++;
-			}
-	CHECK(wrong == 0, "%d paths judged wrongly", wrong);
+	int wrong = 0, cases = 0;
+	auto check = [&](const uint8_t *f, size_t n) {
+		std::string_view out;
+		size_t len = 0;
+		const bool want = field_path_reference(f, n, len);
+		const bool ok = xp::field_path(f, n, out);
+		cases++;
+		if (ok != want || (ok && (out.size() != len || out.data() != reinterpret_cast<const char *>(f))))
+			wrong++;
+	};
+	for (size_t n = 1; n <= 40; n++)
+		for (size_t nul = 0; nul <= n; nul++)   // nul == n: no NUL in the field
+			for (size_t at = 0; at < n; at++)
+				for (int v = 0; v < 256; v++) {
+					uint8_t f[48];
+					std::memset(f, 'a', sizeof f);
+					for (size_t k = nul + 1; k < n; k++)
+						f[k] = static_cast<uint8_t>(0xff - k);   // after the NUL: anything
+					if (nul < n)
+						f[nul] = 0;
+					f[at] = static_cast<uint8_t>(v);
+					if (at > 0)
+						f[at - 1] = (v & 1) ? 0x7e : 0x21;   // neighbours at both edges of the range
+					check(f, n);
+				}
+	Rng r(5, Stream::Noise, 0);
+	for (int i = 0; i < 200000; i++) {
+		uint8_t f[48];
+		const size_t n = 1 + r.next() % 48;
+		for (size_t k = 0; k < n; k++) {
+			const uint64_t x = r.next();
+			f[k] = static_cast<uint8_t>(x % 16 == 0 ? 0 : x % 16 == 1 ? x >> 8 : 0x21 + (x >> 8) % 0x5e);
+		}
+		check(f, n);
+	}
+	CHECK(wrong == 0, "%d of %d fields judged wrongly", wrong, cases);
 }
 
 // ------------------------------------------------------------------ JSON and vehicle files
