@@ -113,11 +113,14 @@ Msg message_type(const uint8_t *p, size_t len)
 	return Msg::Unknown;
 }
 
+// eight bytes as a little-endian word: p[0] the least significant byte
 static uint64_t load_le64(const uint8_t *p)
 {
-	uint64_t w = 0;
-	for (int k = 7; k >= 0; k--)
-		w = w << 8 | p[k];
+	uint64_t w;
+	std::memcpy(&w, p, 8);
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+	w = __builtin_bswap64(w);
+#endif
 	return w;
 }
 
