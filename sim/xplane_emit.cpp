@@ -63,15 +63,9 @@ XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, ui
 	if (hdg >= 360.0)
 		hdg -= 360.0;
 	f.heading = hdg;
-	{
-		const double cr = std::cos(roll / 2), sr = std::sin(roll / 2);
-		const double cp = std::cos(pitch / 2), sp = std::sin(pitch / 2);
-		const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2);
-		f.quat[0] = cr * cp * cy + sr * sp * sy;
-		f.quat[1] = sr * cp * cy - cr * sp * sy;
-		f.quat[2] = cr * sp * cy + sr * cp * sy;
-		f.quat[3] = cr * cp * sy - sr * sp * cy;
-	}
+	f.roll_rad = roll;
+	f.pitch_rad = pitch;
+	f.yaw_rad = yaw;
 
 	// position (noise), velocity (true)
 	const double sp_ = p.noise.position;
@@ -104,11 +98,33 @@ XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, ui
 		f.thro_act[j] = x.s[j];
 		f.thrust_n[j] = o.thrust[j] + st * rng.gauss();
 		f.torque_nm[j] = std::fabs(o.torque[j]) + sq * rng.gauss();
-		const double gs = thrust_curve(p.thrust_curve, x.s[j]);
-		f.rpm[j] = kRpmMax * std::sqrt(gs);
-		f.power_w[j] = std::fabs(o.torque[j]) * f.rpm[j] * (2 * M_PI / 60.0);
+		f.torque_abs_nm[j] = std::fabs(o.torque[j]);
 	}
+	f.thrust_curve = p.thrust_curve;
 	return f;
+}
+
+void xp_frame_quat(const XpFrame &f, double q[4])
+{
+	const double roll = f.roll_rad, pitch = f.pitch_rad, yaw = f.yaw_rad;
+	const double cr = std::cos(roll / 2), sr = std::sin(roll / 2);
+	const double cp = std::cos(pitch / 2), sp = std::sin(pitch / 2);
+	const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2);
+	q[0] = cr * cp * cy + sr * sp * sy;
+	q[1] = sr * cp * cy - cr * sp * sy;
+	q[2] = cr * sp * cy + sr * cp * sy;
+	q[3] = cr * cp * sy - sr * sp * cy;
+}
+
+double xp_frame_rpm(const XpFrame &f, int j)
+{
+	const double gs = thrust_curve(f.thrust_curve, f.thro_act[static_cast<size_t>(j)]);
+	return kRpmMax * std::sqrt(gs);
+}
+
+double xp_frame_power_w(const XpFrame &f, int j)
+{
+	return f.torque_abs_nm[static_cast<size_t>(j)] * xp_frame_rpm(f, j) * (2 * M_PI / 60.0);
 }
 
 const std::vector<int> &xp_supported_rows()
@@ -202,10 +218,10 @@ xp::DataRow xp_row(const XpFrame &f, int row, int version)
 			switch (row) {
 			case 25: val = f.thro_cmd[j]; break;
 			case 26: val = f.thro_act[j]; break;
-			case 34: val = f.power_w[j] * kHpPerW; break;
+			case 34: val = xp_frame_power_w(f, j) * kHpPerW; break;
 			case 35: val = f.thrust_n[j] * kLbPerN; break;
 			case 36: val = f.torque_nm[j] * kFtLbPerNm; break;
-			default: val = f.rpm[j]; break;
+			default: val = xp_frame_rpm(f, j); break;
 			}
 			r.col[j] = f32(val);
 		}
@@ -265,7 +281,9 @@ bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool ove
 	else if (n == "q") {
 		if (i > 3)
 			return false;
-		v = f.quat[i];
+		double q[4];
+		xp_frame_quat(f, q);
+		v = q[i];
 	}
 	else if (n == "local_x") v = f.east;
 	else if (n == "local_y") v = f.alt_msl_m;

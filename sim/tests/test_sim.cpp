@@ -298,10 +298,11 @@ TEST(emitter_conventions)
 	f = xp_measure(m, all(0), 1, 0);
 	CHECK(f.pitch > 11 && f.pitch < 12, "a negative rotation about Y_B (left) is nose up: %g", f.pitch);
 	// X-Plane q from the half angles equals the rotation NED <- FRD
-	const double n = std::sqrt(f.quat[0] * f.quat[0] + f.quat[1] * f.quat[1] + f.quat[2] * f.quat[2] +
-	                           f.quat[3] * f.quat[3]);
+	double q[4];
+	xp_frame_quat(f, q);
+	const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
 	CHECK(std::fabs(n - 1) < 1e-12, "|q| = %g", n);
-	CHECK(std::fabs(f.quat[2] - std::sin(0.1)) < 1e-12, "q.y = %g", f.quat[2]);
+	CHECK(std::fabs(q[2] - std::sin(0.1)) < 1e-12, "q.y = %g", q[2]);
 }
 
 TEST(noise_depends_on_seed_and_frame_only)
