@@ -66,7 +66,7 @@ void advance_frame(const Options &o, Model &m, XpInput &in, uint64_t &n, XpFrame
 	in.cmd_mask = 0;
 	n++;
 	m.advance_to(static_cast<double>(n) / o.rate);
-	f = xp_measure(m, u, o.seed, n);
+	xp_measure(m, u, o.seed, n, f);
 	truth.publish(m, n);
 }
 

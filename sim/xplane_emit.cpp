@@ -34,10 +34,16 @@ void euler_from_rotation(const Eigen::Matrix3d &Rnf, double &roll, double &pitch
 
 XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame)
 {
+	XpFrame f;
+	xp_measure(m, thro_cmd, seed, frame, f);
+	return f;
+}
+
+void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, XpFrame &f)
+{
 	const VehicleParams &p = m.params();
 	const BodyState &x = m.state();
 	Rng rng(seed, Stream::Noise, frame);
-	XpFrame f;
 	f.t = m.t();
 
 	// body rates: FLU -> FRD, gyro noise
@@ -101,7 +107,6 @@ XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, ui
 		f.torque_abs_nm[j] = std::fabs(o.torque[j]);
 	}
 	f.thrust_curve = p.thrust_curve;
-	return f;
 }
 
 void xp_frame_quat(const XpFrame &f, double q[4])

@@ -49,6 +49,8 @@ double xp_frame_power_w(const XpFrame &f, int j);
 // Builds the measured frame for the model's current state; noise is drawn from
 // Rng(seed, Noise, frame) in a fixed order (independent of the selected rows).
 XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame);
+// The same into f, every field written (the plant's per-frame form: no temporary).
+void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, XpFrame &f);
 
 // Rows this emitter fills (ascending). Other selected rows are not sent.
 const std::vector<int> &xp_supported_rows();

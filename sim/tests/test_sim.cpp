@@ -7,6 +7,7 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "actuator.hpp"
@@ -321,6 +322,21 @@ TEST(noise_depends_on_seed_and_frame_only)
 	}
 	const double sigma = std::sqrt(s2 / N), want = 0.01 * p.mass * p.g / 8;
 	CHECK(std::fabs(sigma / want - 1) < 0.05, "thrust sigma %g, want %g", sigma, want);
+}
+
+// The plant's per-frame form writes every field of the frame it is given: over a frame
+// full of another frame's values it gives the very bytes of a fresh one.
+TEST(measure_into_a_used_frame_writes_every_field)
+{
+	VehicleParams p;
+	Model m(p);
+	m.command(all(0.7));
+	m.advance_to(0.5);
+	static_assert(std::is_trivially_copyable<XpFrame>::value, "compared as bytes");
+	XpFrame used, fresh = xp_measure(m, all(0.7), 3, 45);
+	std::memset(static_cast<void *>(&used), 0x5a, sizeof used);   // all doubles: no padding
+	xp_measure(m, all(0.7), 3, 45, used);
+	CHECK(std::memcmp(&used, &fresh, sizeof used) == 0, "a field keeps the value it had");
 }
 
 // ------------------------------------------------------------------ byte vectors (xplane-udp.md)
