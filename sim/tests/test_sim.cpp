@@ -542,6 +542,65 @@ TEST(fuzz_json_and_vehicle_never_crash)
 	CHECK(parsed > 0, "some mutations stay valid");
 }
 
+static std::vector<uint8_t> dref_bytes(float v, const char *path, size_t path_len)
+{
+	std::vector<uint8_t> b(xp::kDrefSize, 0);
+	std::memcpy(b.data(), "DREF", 4);
+	std::memcpy(b.data() + 5, &v, 4);
+	std::memcpy(b.data() + 9, path, path_len);
+	return b;
+}
+
+// The throttle DREFs taken by their bytes give what the full decoding gives: the same
+// throttle written by "[d]" and by "[0d]" (decoded in full), and the counters of the
+// full decoding for fields that only look like them.
+TEST(dref_throttle_by_bytes_as_in_full)
+{
+	const float values[] = {0.0f, 0.37f, 1.0f, 1.5f, -0.2f, NAN, INFINITY};
+	int differ = 0;
+	for (int d = 0; d < 10; d++)
+		for (float v : values) {
+			Counters ca, cb;
+			XpInput a(ca), b(cb);
+			sockaddr_in from{};
+			char p1[64], p2[64];
+			std::snprintf(p1, sizeof p1, "sim/flightmodel/engine/ENGN_thro_use[%d]", d);
+			std::snprintf(p2, sizeof p2, "sim/flightmodel/engine/ENGN_thro_use[0%d]", d);
+			auto x = dref_bytes(v, p1, std::strlen(p1)), y = dref_bytes(v, p2, std::strlen(p2));
+			x[9 + std::strlen(p1) + 1] = 'z';   // after the NUL: not part of the path
+			a.handle(x.data(), x.size(), from);
+			b.handle(y.data(), y.size(), from);
+			if (a.thro_use != b.thro_use || a.cmd_mask != b.cmd_mask || std::memcmp(ca.v, cb.v, sizeof ca.v))
+				differ++;
+		}
+	CHECK(differ == 0, "%d of 70 throttle DREFs decoded otherwise", differ);
+	struct {
+		const char *path;
+		size_t len;
+		Counters::Id counter;   // Count: a throttle written
+	} near[] = {
+	    {"sim/flightmodel/engine/ENGN_thro_use[7]x", 40, Counters::RxIgnoredDref},
+	    {"sim/flightmodel/engine/ENGN_thro_use[7] ", 40, Counters::RxUnterminated},
+	    {"sim/flightmodel/engine/ENGN_thro_use[a]", 39, Counters::RxIgnoredDref},
+	    {"sim/flightmodel/engine/ENGN_thro_use[7", 38, Counters::RxIgnoredDref},
+	    {"sim/flightmodel/engine/ENGN_thro_use[]", 38, Counters::RxIgnoredDref},
+	    {"sim/flightmodel/engine/ENGN_thro_use[15]", 40, Counters::Count},
+	    {"sim/flightmodel/engine/ENGN_thro_use[16]", 40, Counters::RxIgnoredDref},
+	    {"sim/flightmodel/engine/ENGN_thro[7]", 35, Counters::Count},
+	};
+	for (const auto &n : near) {
+		Counters c;
+		XpInput in(c);
+		sockaddr_in from{};
+		auto x = dref_bytes(0.25f, n.path, n.len);
+		in.handle(x.data(), x.size(), from);
+		const bool wrote = in.thro_use[7] == 0.25f || in.thro_use[15] == 0.25f || in.thro[7] == 0.25f;
+		const bool ok = n.counter == Counters::Count ? wrote && c[Counters::RxIgnoredDref] == 0
+		                                             : !wrote && c[n.counter] == 1;
+		CHECK(ok, "%s", n.path);
+	}
+}
+
 TEST(fuzz_xplane_input_never_crashes)
 {
 	Counters c;
