@@ -60,6 +60,9 @@ void xp_client_init(struct xp_client *c, const struct sockaddr_in *xplane, enum 
 				 HAL_FRAME_POS | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	for (int i = 0; i < HAL_ROTORS; i++)
 		(void)xp_encode_dref(c->thro_dref[i], sizeof c->thro_dref[i], 0.0f, THRO_USE_REF[i]);
+	memset(c->wanted_slot, -1, sizeof c->wanted_slot);
+	for (size_t i = 0; i < N_WANTED; i++)
+		c->wanted_slot[wanted_rows[i]] = (int8_t)i;
 }
 
 int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct sockaddr_in *xplane,
@@ -209,12 +212,10 @@ static void note_rows(struct xp_client *c, const struct xp_msg_in *m, uint64_t n
 	size_t nu = 0;
 	for (size_t r = 0; r < m->n; r++) {
 		int32_t row = m->data[r].row;
-		bool found = false;
-		for (size_t i = 0; i < N_WANTED; i++)
-			if (wanted_rows[i] == row) {
-				c->row_seen_us[i] = now_us;
-				found = true;
-			}
+		int slot = row >= 0 && row < 256 ? c->wanted_slot[row] : -1;
+		bool found = slot >= 0;
+		if (found)
+			c->row_seen_us[slot] = now_us;
 		if (!found && row >= 0 && row < 256 &&
 		    !(c->unselected[row / 8] & (1u << (row % 8)))) {
 			unsel[nu++] = row;
