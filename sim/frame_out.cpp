@@ -1,6 +1,7 @@
 // frame_out: the per-frame output and step of the plant (see frame_out.hpp).
 #include "frame_out.hpp"
 
+#include <array>
 #include <cmath>
 
 #include "net.hpp"
@@ -12,13 +13,16 @@ bool frame_data(const Options &o, const XpInput &in, const XpFrame &f, FaultChan
 {
 	if (!in.target_enabled)
 		return true;
-	std::vector<xp::DataRow> rows;
+	// the rows on the stack: this runs once a frame
+	std::array<xp::DataRow, XpInput::kMaxRow + 1> rows;
+	size_t n_rows = 0;
 	for (int r : xp_supported_rows())
 		if (in.selected[static_cast<size_t>(r)])
-			rows.push_back(xp_row(f, r, o.xplane_version));
-	if (rows.empty())
+			rows[n_rows++] = xp_row(f, r, o.xplane_version);
+	if (n_rows == 0)
 		return true; // X-Plane sends nothing while no row is selected
-	xp::Bytes d = xp::encode_data(rows);
+	xp::Bytes d;
+	xp::encode_data(rows.data(), n_rows, d);
 	if (with_faults && o.faults.any()) {
 		std::vector<xp::Bytes> sent = faults.submit(n, std::move(d));
 		for (auto &b : sent)
@@ -62,7 +66,7 @@ void advance_frame(const Options &o, Model &m, XpInput &in, uint64_t &n, XpFrame
 	in.cmd_mask = 0;
 	n++;
 	m.advance_to(static_cast<double>(n) / o.rate);
-	f = xp_measure(m, u, o.seed, n);
+	xp_measure(m, u, o.seed, n, f);
 	truth.publish(m, n);
 }
 

@@ -94,7 +94,7 @@ Model::Vec Model::deriv(double t, const Vec &v) const
 	Vec d;
 	// eq. (10): r'' = f n / m + [0 0 -g], n = R(q) e_z
 	d.segment<3>(0) = x.v;
-	d.segment<3>(3) = qn * Eigen::Vector3d(0, 0, o.force / p_.mass) - Eigen::Vector3d(0, 0, p_.g);
+	d.segment<3>(3) = linear_acceleration(qn, o);
 	// eqs. (1)-(4): q' = 1/2 q (x) (0, w)
 	const double qw = x.q.w(), qx = x.q.x(), qy = x.q.y(), qz = x.q.z();
 	const double wx = x.w.x(), wy = x.w.y(), wz = x.w.z();
@@ -173,10 +173,14 @@ void Model::advance_to(double t1)
 
 Eigen::Vector3d Model::acceleration() const
 {
+	return acceleration(rotor_outputs(x_, t_));
+}
+
+Eigen::Vector3d Model::acceleration(const RotorOutputs &o) const
+{
 	if (on_ground_)
 		return Eigen::Vector3d::Zero();
-	const Vec d = deriv(t_, pack(x_));
-	return d.segment<3>(3);
+	return linear_acceleration(x_.q.normalized(), o);
 }
 
 double Model::kinetic_energy_rot() const

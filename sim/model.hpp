@@ -58,6 +58,8 @@ public:
 	RotorOutputs rotor_outputs(const BodyState &x, double t) const;
 	// Acceleration in S_I at the current state (0 while resting on the ground).
 	Eigen::Vector3d acceleration() const;
+	// The same from this state's rotor outputs (rotor_outputs(state(), t())).
+	Eigen::Vector3d acceleration(const RotorOutputs &o) const;
 	double kinetic_energy_rot() const;
 
 private:
@@ -65,6 +67,12 @@ private:
 	static Vec pack(const BodyState &x);
 	static BodyState unpack(const Vec &v);
 	Vec deriv(double t, const Vec &v) const;
+	// eq. (10): r'' = f n / m + [0 0 -g] for the normalised attitude qn (in the class:
+	// inlined into the integrator's derivative)
+	Eigen::Vector3d linear_acceleration(const Eigen::Quaterniond &qn, const RotorOutputs &o) const
+	{
+		return qn * Eigen::Vector3d(0, 0, o.force / p_.mass) - Eigen::Vector3d(0, 0, p_.g);
+	}
 	void rk4(double h);
 	void ground_contact();
 

@@ -60,12 +60,13 @@ struct octo_plant {
 	uint64_t n = 0;
 	bool truth0 = false;     // frame 0's truth written
 	std::deque<Out> out;
+	std::vector<xp::Bytes> sent;   // this frame's DATA datagrams (send_frame)
 	std::string counters_json;
 };
 
 bool octo_plant::send_frame(bool with_faults)
 {
-	std::vector<xp::Bytes> sent;
+	sent.clear();   // kept between frames: its storage is allocated once
 	const bool delivered = sim::frame_data(o, input, frame, faults, n, with_faults, sent);
 	for (auto &b : sent) {
 		c.inc(sim::Counters::TxData);

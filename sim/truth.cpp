@@ -72,7 +72,7 @@ void TruthPublisher::publish(const Model &m, uint64_t frame)
 	const VehicleParams &p = m.params();
 	const BodyState &x = m.state();
 	const RotorOutputs o = m.rotor_outputs(x, m.t());
-	const Eigen::Vector3d a = m.acceleration();
+	const Eigen::Vector3d a = m.acceleration(o);
 	octo::truth_t msg;
 	msg.utime = static_cast<int64_t>(std::llround(m.t() * 1e6));
 	msg.frame = static_cast<int64_t>(frame);

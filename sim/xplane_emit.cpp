@@ -34,10 +34,16 @@ void euler_from_rotation(const Eigen::Matrix3d &Rnf, double &roll, double &pitch
 
 XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame)
 {
+	XpFrame f;
+	xp_measure(m, thro_cmd, seed, frame, f);
+	return f;
+}
+
+void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, XpFrame &f)
+{
 	const VehicleParams &p = m.params();
 	const BodyState &x = m.state();
 	Rng rng(seed, Stream::Noise, frame);
-	XpFrame f;
 	f.t = m.t();
 
 	// body rates: FLU -> FRD, gyro noise
@@ -63,15 +69,9 @@ XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, ui
 	if (hdg >= 360.0)
 		hdg -= 360.0;
 	f.heading = hdg;
-	{
-		const double cr = std::cos(roll / 2), sr = std::sin(roll / 2);
-		const double cp = std::cos(pitch / 2), sp = std::sin(pitch / 2);
-		const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2);
-		f.quat[0] = cr * cp * cy + sr * sp * sy;
-		f.quat[1] = sr * cp * cy - cr * sp * sy;
-		f.quat[2] = cr * sp * cy + sr * cp * sy;
-		f.quat[3] = cr * cp * sy - sr * sp * cy;
-	}
+	f.roll_rad = roll;
+	f.pitch_rad = pitch;
+	f.yaw_rad = yaw;
 
 	// position (noise), velocity (true)
 	const double sp_ = p.noise.position;
@@ -88,7 +88,8 @@ XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, ui
 	f.agl_m = f.up;
 
 	// load factors: specific force in the body (FLU), over g
-	const Eigen::Vector3d acc = m.acceleration();
+	const RotorOutputs o = m.rotor_outputs(x, m.t());
+	const Eigen::Vector3d acc = m.acceleration(o);
 	const Eigen::Vector3d sf_i = acc + Eigen::Vector3d(0, 0, p.g);
 	const Eigen::Vector3d sf_b = x.q.normalized().conjugate() * sf_i;
 	const double g = p.g > 0 ? p.g : 9.80665;
@@ -97,18 +98,38 @@ XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, ui
 	f.g_side = -sf_b.y() / g;  // right positive
 
 	// rotors: true outputs plus noise on thrust and torque
-	const RotorOutputs o = m.rotor_outputs(x, m.t());
 	const double st = p.sigma_thrust(), sq = p.sigma_torque();
 	for (int j = 0; j < kRotors; j++) {
 		f.thro_cmd[j] = thro_cmd[j];
 		f.thro_act[j] = x.s[j];
 		f.thrust_n[j] = o.thrust[j] + st * rng.gauss();
 		f.torque_nm[j] = std::fabs(o.torque[j]) + sq * rng.gauss();
-		const double gs = thrust_curve(p.thrust_curve, x.s[j]);
-		f.rpm[j] = kRpmMax * std::sqrt(gs);
-		f.power_w[j] = std::fabs(o.torque[j]) * f.rpm[j] * (2 * M_PI / 60.0);
+		f.torque_abs_nm[j] = std::fabs(o.torque[j]);
 	}
-	return f;
+	f.thrust_curve = p.thrust_curve;
+}
+
+void xp_frame_quat(const XpFrame &f, double q[4])
+{
+	const double roll = f.roll_rad, pitch = f.pitch_rad, yaw = f.yaw_rad;
+	const double cr = std::cos(roll / 2), sr = std::sin(roll / 2);
+	const double cp = std::cos(pitch / 2), sp = std::sin(pitch / 2);
+	const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2);
+	q[0] = cr * cp * cy + sr * sp * sy;
+	q[1] = sr * cp * cy - cr * sp * sy;
+	q[2] = cr * sp * cy + sr * cp * sy;
+	q[3] = cr * cp * sy - sr * sp * cy;
+}
+
+double xp_frame_rpm(const XpFrame &f, int j)
+{
+	const double gs = thrust_curve(f.thrust_curve, f.thro_act[static_cast<size_t>(j)]);
+	return kRpmMax * std::sqrt(gs);
+}
+
+double xp_frame_power_w(const XpFrame &f, int j)
+{
+	return f.torque_abs_nm[static_cast<size_t>(j)] * xp_frame_rpm(f, j) * (2 * M_PI / 60.0);
 }
 
 const std::vector<int> &xp_supported_rows()
@@ -131,8 +152,10 @@ xp::DataRow xp_row(const XpFrame &f, int row, int version)
 	r.index = row;
 	for (float &c : r.col)
 		c = xp::kNoData;
-	const double vh = std::hypot(f.vn, f.ve);
-	const double v = std::sqrt(f.vn * f.vn + f.ve * f.ve + f.vd * f.vd);
+	// speeds only for the rows that show them (hypot is not cheap, and this runs per row and frame)
+	const bool speeds = row == 3 || row == 4;
+	const double vh = speeds ? std::hypot(f.vn, f.ve) : 0.0;
+	const double v = speeds ? std::sqrt(f.vn * f.vn + f.ve * f.ve + f.vd * f.vd) : 0.0;
 	switch (row) {
 	case 1: { // times: real, total, mission, timer, -, zulu h, local h
 		const double hours = std::fmod(12.0 + f.t / 3600.0, 24.0);
@@ -200,10 +223,10 @@ xp::DataRow xp_row(const XpFrame &f, int row, int version)
 			switch (row) {
 			case 25: val = f.thro_cmd[j]; break;
 			case 26: val = f.thro_act[j]; break;
-			case 34: val = f.power_w[j] * kHpPerW; break;
+			case 34: val = xp_frame_power_w(f, j) * kHpPerW; break;
 			case 35: val = f.thrust_n[j] * kLbPerN; break;
 			case 36: val = f.torque_nm[j] * kFtLbPerNm; break;
-			default: val = f.rpm[j]; break;
+			default: val = xp_frame_rpm(f, j); break;
 			}
 			r.col[j] = f32(val);
 		}
@@ -263,7 +286,9 @@ bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool ove
 	else if (n == "q") {
 		if (i > 3)
 			return false;
-		v = f.quat[i];
+		double q[4];
+		xp_frame_quat(f, q);
+		v = q[i];
 	}
 	else if (n == "local_x") v = f.east;
 	else if (n == "local_y") v = f.alt_msl_m;

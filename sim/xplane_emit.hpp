@@ -26,7 +26,7 @@ struct XpFrame {
 	double t = 0;                      // simulated time, s
 	double P = 0, Q = 0, R = 0;        // body rates about forward-right-down, rad/s
 	double roll = 0, pitch = 0, heading = 0; // deg (heading in [0, 360))
-	double quat[4] = {1, 0, 0, 0};     // X-Plane's q: [w x y z] from the half angles
+	double roll_rad = 0, pitch_rad = 0, yaw_rad = 0; // the same angles in radians (yaw not wrapped)
 	double north = 0, east = 0, up = 0;      // m from the origin
 	double vn = 0, ve = 0, vd = 0;     // m/s (true, no noise)
 	double lat = 0, lon = 0, alt_msl_m = 0, agl_m = 0;
@@ -35,13 +35,22 @@ struct XpFrame {
 	RotorArray thro_act{};             // actuator output s_j
 	RotorArray thrust_n{};             // measured thrust, N
 	RotorArray torque_nm{};            // measured engine torque (magnitude), N m
-	RotorArray rpm{};                  // rotor speed, rpm
-	RotorArray power_w{};              // shaft power, W
+	RotorArray torque_abs_nm{};        // true engine torque (magnitude), N m
+	double thrust_curve = 0;           // the vehicle's thrust curve (rotor speed from s_j)
 };
+
+// Quantities few rows and datarefs show, computed when they are asked for (from the
+// frame's fields alone, so the same frame gives the same values whenever that is):
+// X-Plane's q [w x y z] from the half angles; rotor speed (rpm) and shaft power (W).
+void xp_frame_quat(const XpFrame &f, double q[4]);
+double xp_frame_rpm(const XpFrame &f, int j);
+double xp_frame_power_w(const XpFrame &f, int j);
 
 // Builds the measured frame for the model's current state; noise is drawn from
 // Rng(seed, Noise, frame) in a fixed order (independent of the selected rows).
 XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame);
+// The same into f, every field written (the plant's per-frame form: no temporary).
+void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, XpFrame &f);
 
 // Rows this emitter fills (ascending). Other selected rows are not sent.
 const std::vector<int> &xp_supported_rows();

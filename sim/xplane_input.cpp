@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <string_view>
 #include <vector>
 
 #include "xplane_proto.hpp"
@@ -104,8 +105,17 @@ void XpInput::dref(const uint8_t *p, size_t len)
 		c_.inc(Counters::RxBadSize);
 		return;
 	}
-	std::string path;
-	if (!xp::field_path(p + 9, xp::kDrefPath, path)) {
+	// Views into the datagram. The throttles arrive eight times a frame as
+	// "sim/flightmodel/engine/ENGN_thro_use[i]" with one digit and the NUL right after
+	// the bracket: such a field is taken by its bytes (the full decoding below gives the
+	// same path, base and index for it); every other field is decoded in full.
+	static constexpr char kThroUse[] = "sim/flightmodel/engine/ENGN_thro_use[";
+	constexpr size_t kLb = sizeof kThroUse - 2;   // where '[' is
+	const uint8_t *field = p + 9;
+	const bool thro_use_digit = std::memcmp(field, kThroUse, kLb + 1) == 0 && field[kLb + 1] >= '0' &&
+	                            field[kLb + 1] <= '9' && field[kLb + 2] == ']' && field[kLb + 3] == 0;
+	std::string_view path;
+	if (!thro_use_digit && !xp::field_path(field, xp::kDrefPath, path)) {
 		c_.inc(Counters::RxUnterminated);
 		return;
 	}
@@ -114,9 +124,12 @@ void XpInput::dref(const uint8_t *p, size_t len)
 		c_.inc(Counters::RxBadValue);
 		return;
 	}
-	std::string base;
+	std::string_view base;
 	int idx;
-	if (!xp::split_index(path, base, idx)) {
+	if (thro_use_digit) {
+		base = std::string_view(kThroUse, kLb);
+		idx = field[kLb + 1] - '0';
+	} else if (!xp::split_index(path, base, idx)) {
 		c_.inc(Counters::RxIgnoredDref);
 		return;
 	}

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -32,11 +33,16 @@ struct DataRow {
 
 void put_i32(Bytes &b, int32_t v);
 void put_f32(Bytes &b, float v);
+// The same little-endian packing into p[0..3].
+void store_i32(uint8_t *p, int32_t v);
+void store_f32(uint8_t *p, float v);
 int32_t get_i32(const uint8_t *p);
 float get_f32(const uint8_t *p);
 
 // DATA output: "DATA" + byte4 + one record per row, in the order given.
 Bytes encode_data(const std::vector<DataRow> &rows, uint8_t byte4 = kDataOutByte4);
+// The same from n rows at rows, into out (resized to the datagram's length).
+void encode_data(const DataRow *rows, size_t n, Bytes &out, uint8_t byte4 = kDataOutByte4);
 // RREF replies: "RREF" + ',' + (index, value) records, at most 183 per datagram.
 std::vector<Bytes> encode_rref_replies(const std::vector<std::pair<int32_t, float>> &recs,
                                        uint8_t byte4 = kRrefOutByte4);
@@ -48,9 +54,13 @@ Msg message_type(const uint8_t *p, size_t len);
 // A NUL-terminated path inside a fixed field of n bytes: false when there is no
 // NUL in the field, the path is empty or holds bytes outside printable ASCII.
 bool field_path(const uint8_t *field, size_t n, std::string &out);
+// The same, the path as a view into field (no copy).
+bool field_path(const uint8_t *field, size_t n, std::string_view &out);
 
 // "sim/x/name[3]" -> base "sim/x/name", index 3; no brackets -> index -1.
 // False for a malformed subscript.
 bool split_index(const std::string &path, std::string &base, int &index);
+// The same, base as a view into path (no copy).
+bool split_index(std::string_view path, std::string_view &base, int &index);
 
 } // namespace xp

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <functional>
 #include <string>
+#include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "actuator.hpp"
@@ -297,10 +299,11 @@ TEST(emitter_conventions)
 	f = xp_measure(m, all(0), 1, 0);
 	CHECK(f.pitch > 11 && f.pitch < 12, "a negative rotation about Y_B (left) is nose up: %g", f.pitch);
 	// X-Plane q from the half angles equals the rotation NED <- FRD
-	const double n = std::sqrt(f.quat[0] * f.quat[0] + f.quat[1] * f.quat[1] + f.quat[2] * f.quat[2] +
-	                           f.quat[3] * f.quat[3]);
+	double q[4];
+	xp_frame_quat(f, q);
+	const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
 	CHECK(std::fabs(n - 1) < 1e-12, "|q| = %g", n);
-	CHECK(std::fabs(f.quat[2] - std::sin(0.1)) < 1e-12, "q.y = %g", f.quat[2]);
+	CHECK(std::fabs(q[2] - std::sin(0.1)) < 1e-12, "q.y = %g", q[2]);
 }
 
 TEST(noise_depends_on_seed_and_frame_only)
@@ -319,6 +322,21 @@ TEST(noise_depends_on_seed_and_frame_only)
 	}
 	const double sigma = std::sqrt(s2 / N), want = 0.01 * p.mass * p.g / 8;
 	CHECK(std::fabs(sigma / want - 1) < 0.05, "thrust sigma %g, want %g", sigma, want);
+}
+
+// The plant's per-frame form writes every field of the frame it is given: over a frame
+// full of another frame's values it gives the very bytes of a fresh one.
+TEST(measure_into_a_used_frame_writes_every_field)
+{
+	VehicleParams p;
+	Model m(p);
+	m.command(all(0.7));
+	m.advance_to(0.5);
+	static_assert(std::is_trivially_copyable<XpFrame>::value, "compared as bytes");
+	XpFrame used, fresh = xp_measure(m, all(0.7), 3, 45);
+	std::memset(static_cast<void *>(&used), 0x5a, sizeof used);   // all doubles: no padding
+	xp_measure(m, all(0.7), 3, 45, used);
+	CHECK(std::memcmp(&used, &fresh, sizeof used) == 0, "a field keeps the value it had");
 }
 
 // ------------------------------------------------------------------ byte vectors (xplane-udp.md)
@@ -372,6 +390,63 @@ TEST(path_fields_and_indices)
 	CHECK(!xp::split_index("x[]", base, i) && !xp::split_index("x[a]", base, i) &&
 	          !xp::split_index("x[99999]", base, i) && !xp::split_index("x]", base, i),
 	      "malformed subscripts");
+}
+
+// The definition field_path implements, one byte at a time.
+static bool field_path_reference(const uint8_t *f, size_t n, size_t &len)
+{
+	for (size_t k = 0; k < n; k++) {
+		if (f[k] == 0) {
+			len = k;
+			return k > 0;
+		}
+		if (f[k] < 0x21 || f[k] > 0x7e)
+			return false;
+	}
+	return false;
+}
+
+// Every byte value at every position of paths of 0..24 bytes in fields of 1..40 bytes
+// (the eight-byte words and the tail, the NUL anywhere or absent), and random fields,
+// against the definition.
+TEST(path_field_every_byte_everywhere)
+{
+	int wrong = 0, cases = 0;
+	auto check = [&](const uint8_t *f, size_t n) {
+		std::string_view out;
+		size_t len = 0;
+		const bool want = field_path_reference(f, n, len);
+		const bool ok = xp::field_path(f, n, out);
+		cases++;
+		if (ok != want || (ok && (out.size() != len || out.data() != reinterpret_cast<const char *>(f))))
+			wrong++;
+	};
+	for (size_t n = 1; n <= 40; n++)
+		for (size_t nul = 0; nul <= n; nul++)   // nul == n: no NUL in the field
+			for (size_t at = 0; at < n; at++)
+				for (int v = 0; v < 256; v++) {
+					uint8_t f[48];
+					std::memset(f, 'a', sizeof f);
+					for (size_t k = nul + 1; k < n; k++)
+						f[k] = static_cast<uint8_t>(0xff - k);   // after the NUL: anything
+					if (nul < n)
+						f[nul] = 0;
+					f[at] = static_cast<uint8_t>(v);
+					if (at > 0)
+						f[at - 1] = (v & 1) ? 0x7e : 0x21;   // neighbours at both edges of the range
+					check(f, n);
+				}
+	Rng r(5, Stream::Noise, 0);
+	for (int i = 0; i < 200000; i++) {
+		uint8_t f[48];
+		const size_t n = 1 + r.next() % 48;
+		for (size_t k = 0; k < n; k++) {
+			const uint64_t x = r.next();
+			f[k] = static_cast<uint8_t>(x % 16 == 0 ? 0 : x % 16 == 1 ? x >> 8 : 0x21 + (x >> 8) % 0x5e);
+		}
+		check(f, n);
+	}
+	CHECK(wrong == 0, "%d of %d fields judged wrongly", wrong, cases);
 }
 
 // ------------------------------------------------------------------ JSON and vehicle files
@@ -465,6 +540,65 @@ TEST(fuzz_json_and_vehicle_never_crash)
 		}
 	}
 	CHECK(parsed > 0, "some mutations stay valid");
+}
+
+static std::vector<uint8_t> dref_bytes(float v, const char *path, size_t path_len)
+{
+	std::vector<uint8_t> b(xp::kDrefSize, 0);
+	std::memcpy(b.data(), "DREF", 4);
+	std::memcpy(b.data() + 5, &v, 4);
+	std::memcpy(b.data() + 9, path, path_len);
+	return b;
+}
+
+// The throttle DREFs taken by their bytes give what the full decoding gives: the same
+// throttle written by "[d]" and by "[0d]" (decoded in full), and the counters of the
+// full decoding for fields that only look like them.
+TEST(dref_throttle_by_bytes_as_in_full)
+{
+	const float values[] = {0.0f, 0.37f, 1.0f, 1.5f, -0.2f, NAN, INFINITY};
+	int differ = 0;
+	for (int d = 0; d < 10; d++)
+		for (float v : values) {
+			Counters ca, cb;
+			XpInput a(ca), b(cb);
+			sockaddr_in from{};
+			char p1[64], p2[64];
+			std::snprintf(p1, sizeof p1, "sim/flightmodel/engine/ENGN_thro_use[%d]", d);
+			std::snprintf(p2, sizeof p2, "sim/flightmodel/engine/ENGN_thro_use[0%d]", d);
+			auto x = dref_bytes(v, p1, std::strlen(p1)), y = dref_bytes(v, p2, std::strlen(p2));
+			x[9 + std::strlen(p1) + 1] = 'z';   // after the NUL: not part of the path
+			a.handle(x.data(), x.size(), from);
+			b.handle(y.data(), y.size(), from);
+			if (a.thro_use != b.thro_use || a.cmd_mask != b.cmd_mask || std::memcmp(ca.v, cb.v, sizeof ca.v))
+				differ++;
+		}
+	CHECK(differ == 0, "%d of 70 throttle DREFs decoded otherwise", differ);
+	struct {
+		const char *path;
+		size_t len;
+		Counters::Id counter;   // Count: a throttle written
+	} near[] = {
+	    {"sim/flightmodel/engine/ENGN_thro_use[7]x", 40, Counters::RxIgnoredDref},
+	    {"sim/flightmodel/engine/ENGN_thro_use[7] ", 40, Counters::RxUnterminated},
+	    {"sim/flightmodel/engine/ENGN_thro_use[a]", 39, Counters::RxIgnoredDref},
+	    {"sim/flightmodel/engine/ENGN_thro_use[7", 38, Counters::RxIgnoredDref},
+	    {"sim/flightmodel/engine/ENGN_thro_use[]", 38, Counters::RxIgnoredDref},
+	    {"sim/flightmodel/engine/ENGN_thro_use[15]", 40, Counters::Count},
+	    {"sim/flightmodel/engine/ENGN_thro_use[16]", 40, Counters::RxIgnoredDref},
+	    {"sim/flightmodel/engine/ENGN_thro[7]", 35, Counters::Count},
+	};
+	for (const auto &n : near) {
+		Counters c;
+		XpInput in(c);
+		sockaddr_in from{};
+		auto x = dref_bytes(0.25f, n.path, n.len);
+		in.handle(x.data(), x.size(), from);
+		const bool wrote = in.thro_use[7] == 0.25f || in.thro_use[15] == 0.25f || in.thro[7] == 0.25f;
+		const bool ok = n.counter == Counters::Count ? wrote && c[Counters::RxIgnoredDref] == 0
+		                                             : !wrote && c[n.counter] == 1;
+		CHECK(ok, "%s", n.path);
+	}
 }
 
 TEST(fuzz_xplane_input_never_crashes)

@@ -12,6 +12,8 @@
 #   pingpong       bare UDP ping-pong over loopback between two processes with octo-sim's and
 #                  octo-fw's datagram sizes per frame (the design's limit), and the tightest
 #                  X-Plane client of octo-sim --lockstep (the simulator alone)
+#   peakrss        a child's own peak RSS and CPU time (ru_maxrss read from Python includes
+#                  Python's own size)
 #   bench-physics  sim::Model (build/sim/*.o, the simulator's flags) stepped as fast as it goes
 #   bench-step     octo-fw's 90 Hz step (firmware/app + core, stub HAL) under callgrind;
 #                  step-m4f.elf: the same on Cortex-M4F under QEMU with tests/arm's counting
@@ -30,6 +32,10 @@ BENCH_FW_HDR := $(wildcard firmware/core/*.h firmware/app/*.h firmware/hal/hal.h
 BENCH_SIM_OBJ := $(addprefix $(B)/sim/,model.o actuator.o vehicle.o json.o)
 
 $(BENCH_B)/pingpong: tests/bench/pingpong.c
+	@mkdir -p $(@D)
+	$(CC) -std=c11 -O2 -Wall -Wextra -Werror -o $@ $<
+
+$(BENCH_B)/peakrss: tests/bench/peakrss.c
 	@mkdir -p $(@D)
 	$(CC) -std=c11 -O2 -Wall -Wextra -Werror -o $@ $<
 
@@ -62,7 +68,7 @@ $(BENCH_B)/bench-step-quick: $(BENCH_STEP_SRC) tests/arm/bench_mark.c $(B)/libco
 	$(CC) $(BENCH_CFLAGS) -DBENCH_QUICK $(BENCH_APP_INC) -o $@ $(BENCH_STEP_SRC) tests/arm/bench_mark.c \
 	  $(B)/libcore.a -lm
 
-BENCH_HOST := $(BENCH_B)/pingpong $(BENCH_B)/bench-physics $(BENCH_B)/bench-alloc \
+BENCH_HOST := $(BENCH_B)/pingpong $(BENCH_B)/peakrss $(BENCH_B)/bench-physics $(BENCH_B)/bench-alloc \
               $(BENCH_B)/bench-estim $(BENCH_B)/bench-motor $(BENCH_B)/bench-step $(BENCH_B)/bench-step-quick
 # built by `make` too (host only, a few seconds): tests/py/test_bench_smoke.py runs them
 ALL_TARGETS += $(BENCH_HOST)

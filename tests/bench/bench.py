@@ -784,17 +784,21 @@ def run_rusage(argv, timeout=600):
 
 def item_sil(rep, args):
     secs = 30 if args.quick else 300
-    sil_argv = [B / "octo-sil", "--quiet", "--mission", SIL_HOVER.format(secs=secs)]
+    # through build/bench/peakrss: octo-sil's own peak RSS and CPU time (ru_maxrss of a
+    # child of this Python process would include the size of Python)
+    sil_argv = [BB / "peakrss", B / "octo-sil", "--quiet", "--mission", SIL_HOVER.format(secs=secs)]
     phys_argv = [BB / "bench-physics", secs]
     sil_x, phys_x, ratio, rss, cpu_x = [], [], [], [], []
     for _ in range(args.repeats):
         # interleaved, so that both see the same machine
         out = subprocess.run([str(a) for a in phys_argv], capture_output=True, text=True, check=True)
         px = json.loads(out.stdout)["sim_s_per_wall_s"]
-        wall, kb, _o, err, rc, cpu = run_rusage(sil_argv)
+        wall, _kb, _o, err, rc, _cpu = run_rusage(sil_argv)
         m = re.search(r"stopped at t=([0-9.]+) s", err)
-        if rc != 0 or not m:
+        pr = re.search(r"^peakrss: peak_rss_kb (\d+) cpu_s ([0-9.]+) status", err, re.M)
+        if rc != 0 or not m or not pr:
             raise RuntimeError(f"octo-sil failed ({rc}): {err[-300:]}")
+        kb, cpu = int(pr.group(1)), float(pr.group(2))
         sx = float(m.group(1)) / wall
         cpu_x.append(float(m.group(1)) / max(cpu, 1e-6))
         sil_x.append(sx)
@@ -810,7 +814,11 @@ def item_sil(rep, args):
             fmt(cx["median"], 0, "x"), spread(cx, 0, "x"), "", "", None)
     rep.row(7, "  octo-sil / physics alone (%)", fmt(rt["median"], 0, " %"), spread(rt, 0, " %"),
             "same run, interleaved", ">= 50 %", rt["median"] >= 50)
-    rep.row(7, "  octo-sil peak RSS (kB)", fmt(mem["median"]), spread(mem), "", "", None, cmdline(sil_argv))
+    udp = rep.data.get("memory_rss") or {}
+    fw_kb, sim_kb = ((udp.get(k) or {}).get("median") for k in ("octo-fw", "octo-sim"))
+    rep.row(7, "  octo-sil peak RSS (kB)", fmt(mem["median"]), spread(mem),
+            f"octo-fw {fmt(fw_kb)} + octo-sim {fmt(sim_kb)} (item 3)" if fw_kb and sim_kb else "", "", None,
+            cmdline(sil_argv))
     rep.commands["sil"] = cmdline(sil_argv)
     rep.commands["sil_physics"] = cmdline(phys_argv)
 

@@ -42,6 +42,16 @@ def test_physics_runs():
     assert r["frames"] == 180 and r["rk4_steps"] == 6 * 180 and r["rk4_steps_per_s"] > 0
 
 
+def test_peakrss_reports_the_child_and_passes_its_status():
+    out = subprocess.run([tool("peakrss"), tool("bench-physics"), "1"], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0 and json.loads(out.stdout)["frames"] == 90
+    m = re.search(r"^peakrss: peak_rss_kb (\d+) cpu_s ([0-9.]+) status 0$", out.stderr, re.M)
+    assert m and int(m.group(1)) > 0, out.stderr
+    bad = subprocess.run([tool("peakrss"), tool("bench-physics") + "-no-such"], capture_output=True, text=True,
+                         timeout=60)
+    assert bad.returncode == 127 and "cannot run" in bad.stderr
+
+
 def test_alloc_reports_both_modes():
     r = run_json(tool("bench-alloc"), 500, 3)
     assert r["attainable"] + r["unattainable"] + r["boundary_band"] == 500

@@ -31,6 +31,11 @@ static const uint32_t wanted_bits[N_WANTED] = {HAL_FRAME_TIME, HAL_FRAME_RATES, 
 
 static const char VERSION_REF[] = "sim/version/xplane_internal_version";
 static const char OVERRIDE_REF[] = "sim/operation/override/override_throttles";
+static const char *const THRO_USE_REF[HAL_ROTORS] = {
+	"sim/flightmodel/engine/ENGN_thro_use[0]", "sim/flightmodel/engine/ENGN_thro_use[1]",
+	"sim/flightmodel/engine/ENGN_thro_use[2]", "sim/flightmodel/engine/ENGN_thro_use[3]",
+	"sim/flightmodel/engine/ENGN_thro_use[4]", "sim/flightmodel/engine/ENGN_thro_use[5]",
+	"sim/flightmodel/engine/ENGN_thro_use[6]", "sim/flightmodel/engine/ENGN_thro_use[7]"};
 
 static void send_to_xp(struct xp_client *c, const uint8_t *buf, size_t len)
 {
@@ -53,6 +58,11 @@ void xp_client_init(struct xp_client *c, const struct sockaddr_in *xplane, enum 
 	c->act = act;
 	c->stats.parts_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_GLOBAL |
 				 HAL_FRAME_POS | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
+	for (int i = 0; i < HAL_ROTORS; i++)
+		(void)xp_encode_dref(c->thro_dref[i], sizeof c->thro_dref[i], 0.0f, THRO_USE_REF[i]);
+	memset(c->wanted_slot, -1, sizeof c->wanted_slot);
+	for (size_t i = 0; i < N_WANTED; i++)
+		c->wanted_slot[wanted_rows[i]] = (int8_t)i;
 }
 
 int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct sockaddr_in *xplane,
@@ -202,12 +212,10 @@ static void note_rows(struct xp_client *c, const struct xp_msg_in *m, uint64_t n
 	size_t nu = 0;
 	for (size_t r = 0; r < m->n; r++) {
 		int32_t row = m->data[r].row;
-		bool found = false;
-		for (size_t i = 0; i < N_WANTED; i++)
-			if (wanted_rows[i] == row) {
-				c->row_seen_us[i] = now_us;
-				found = true;
-			}
+		int slot = row >= 0 && row < 256 ? c->wanted_slot[row] : -1;
+		bool found = slot >= 0;
+		if (found)
+			c->row_seen_us[slot] = now_us;
 		if (!found && row >= 0 && row < 256 &&
 		    !(c->unselected[row / 8] & (1u << (row % 8)))) {
 			unsel[nu++] = row;
@@ -361,13 +369,10 @@ void xp_client_actuate(struct xp_client *c, const float thr[HAL_ROTORS], uint64_
 		send_to_xp(c, buf, xp_encode_dref(buf, sizeof buf, 1.0f, OVERRIDE_REF));
 		c->last_override_us = now_us;
 	}
-	static const char *const thro_use[HAL_ROTORS] = {
-		"sim/flightmodel/engine/ENGN_thro_use[0]", "sim/flightmodel/engine/ENGN_thro_use[1]",
-		"sim/flightmodel/engine/ENGN_thro_use[2]", "sim/flightmodel/engine/ENGN_thro_use[3]",
-		"sim/flightmodel/engine/ENGN_thro_use[4]", "sim/flightmodel/engine/ENGN_thro_use[5]",
-		"sim/flightmodel/engine/ENGN_thro_use[6]", "sim/flightmodel/engine/ENGN_thro_use[7]"};
-	for (int i = 0; i < HAL_ROTORS; i++)
-		send_to_xp(c, buf, xp_encode_dref(buf, sizeof buf, t[i], thro_use[i]));
+	for (int i = 0; i < HAL_ROTORS; i++) {
+		xp_dref_set_value(c->thro_dref[i], t[i]);
+		send_to_xp(c, c->thro_dref[i], sizeof c->thro_dref[i]);
+	}
 }
 
 void xp_client_release(struct xp_client *c)

@@ -58,6 +58,9 @@ struct xp_client {
 	double t_offset, t_last;          /* time re-basing */
 	uint32_t seq;
 	struct xp_msg_in msg;             /* decode buffer (large: kept off the stack) */
+	/* the throttle DREFs (ENGN_thro_use[i]), encoded once: a frame rewrites their values */
+	uint8_t thro_dref[HAL_ROTORS][XP_DREF_LEN];
+	int8_t wanted_slot[256];          /* row -> its index among the wanted rows, -1: not wanted */
 };
 
 /* Sets the client up without a socket: requests go to c->send (set it after). */

@@ -48,6 +48,8 @@ enum xp_msg xp_decode(const uint8_t *buf, size_t len, struct xp_msg_in *out);
 size_t xp_encode_dsel(uint8_t *buf, size_t cap, int unselect, const int32_t *rows, size_t n);
 size_t xp_encode_rref(uint8_t *buf, size_t cap, int32_t freq_hz, int32_t index, const char *path);
 size_t xp_encode_dref(uint8_t *buf, size_t cap, float value, const char *path);
+/* The value of a DREF encoded by xp_encode_dref, rewritten in place (its path stays). */
+void xp_dref_set_value(uint8_t *dref, float value);
 size_t xp_encode_data(uint8_t *buf, size_t cap, const struct xp_data_rec *recs, size_t n);
 
 #endif /* OCTO_XP_PROTO_H */
