@@ -230,11 +230,15 @@ static bool send_stream(struct mav_telem *t, const struct mav_telem_in *in, int 
 		 * count are unknown (the MAVLink "unknown" values) */
 		double cog = atan2((double)vel[1], (double)vel[0]) * RAD_TO_DEG;
 		cog = cog < 0.0 ? cog + 360.0 : cog;
+		/* course over ground in cdeg, unknown (UINT16_MAX) when hardly moving */
+		uint16_t cog_cdeg = UINT16_MAX;
+		if (gs > 0.2)
+			cog_cdeg = (uint16_t)(lround(cog * 100.0) % 36000);
 		mavlink_msg_gps_raw_int_pack_chan(in->sysid, in->compid, in->chan, &msg,
 						  (uint64_t)in->time_boot_ms * 1000u, GPS_FIX_TYPE_3D_FIX, e7(lat),
 						  e7(lon), mm(alt), UINT16_MAX, UINT16_MAX,
 						  (uint16_t)lround(gs * 100.0),
-						  gs > 0.2 ? (uint16_t)(lround(cog * 100.0) % 36000) : UINT16_MAX,
+						  cog_cdeg,
 						  UINT8_MAX, 0, 0, 0, 0, 0, 0);
 		break;
 	}
