@@ -67,10 +67,16 @@ def test_same_flags_same_bytes_other_seed_other_bytes(tmp_path, vehicle):
         assert len(runs["a"][f]) > 0
         assert runs["a"][f] == runs["b"][f], f"{f} differs between two runs with the same flags"
         assert runs["a"][f] != runs["c"][f], f"{f} identical with another seed"
-    # the experiment ran and its result was saved: k_f near the vehicle's truth
+    # the experiment ran and its result was saved: k_f near the vehicle's truth. With the thrust
+    # curve estimated, k_f (thrust at full throttle, extrapolated from hover) has a reported sd
+    # of about 0.4-0.5 %, so 1 % is only ~2 sd: the error is judged against the reported sd
+    # (4 sd), and the sd itself must stay under 1 %
     parm = dict(line.split() for line in runs["a"]["p.parm"].decode().splitlines()
                 if line and not line.startswith("#"))
-    assert abs(float(parm["VEH_KF"]) / v["kf"] - 1) < 0.01, (parm["VEH_KF"], v["kf"])
+    kf, sd = float(parm["VEH_KF"]), float(parm["ID_KF_SD"])
+    assert float(parm["ID_KF_EST"]) == kf
+    assert sd / v["kf"] < 0.01, (kf, sd, v["kf"])
+    assert abs(kf - v["kf"]) <= 4 * sd, (kf, sd, v["kf"])
 
 
 def test_failing_step_names_step_and_reason(tmp_path):
