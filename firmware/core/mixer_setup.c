@@ -206,6 +206,15 @@ void mixer_default_params(struct mixer_params *p)
 	*p = d;
 }
 
+/* rotor j's effectiveness as used: 0 (not given) is 1, others clamped to [0.1, 4] */
+static float scale_of(const struct mixer_params *p, int j)
+{
+	float s = sc_to_float(p->scale[j]);
+	if (s == 0.0f)
+		return 1.0f;
+	return s < 0.1f ? 0.1f : (s > 4.0f ? 4.0f : s);
+}
+
 static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 {
 	if (p->custom_gamma) {
@@ -226,6 +235,12 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 			m->gamma_f[2][j] = ty[j] * diag * l;
 			m->gamma_f[3][j] = (j & 1) ? -k : k;
 		}
+	}
+	/* effectiveness: columns scaled (the allocation's variable is u_j = f_j / scale_j) */
+	for (int j = 0; j < NR; j++) {
+		float sj = scale_of(p, j);
+		for (int i = 0; i < NA; i++)
+			m->gamma_f[i][j] *= sj;
 	}
 	for (int j = 0; j < NR; j++)
 		if (!(p->rotor_mask & (1u << j)) || !(m->gamma_f[0][j] == m->gamma_f[0][j]))
@@ -255,6 +270,11 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	m->p.custom_gamma = NULL;
 	m->custom = p->custom_gamma != NULL;
 	build_gamma(dz, p);
+	for (int j = 0; j < NR; j++) {
+		float sj = scale_of(p, j);
+		m->scale[j] = sc_from_float(sj);
+		m->inv_scale[j] = sc_from_float(1.0f / sj);
+	}
 
 	/* ---- pseudo-inverse by one-sided Jacobi SVD of Gamma^T */
 	float a[NR][NA], v[NA][NA], s[NA];
@@ -471,9 +491,12 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 static bool same_geometry(const struct mixer *m, const struct mixer_params *b)
 {
 	const struct mixer_params *a = &m->p;
+	bool same_scale = true;
+	for (int j = 0; j < NR; j++)
+		same_scale = same_scale && a->scale[j] == b->scale[j];
 	return a->arm_l_m == b->arm_l_m && a->k_f_n == b->k_f_n && a->k_tau_nm == b->k_tau_nm &&
 	       a->t_min == b->t_min && a->t_max == b->t_max && a->rotor_mask == b->rotor_mask &&
-	       !m->custom && b->custom_gamma == NULL;
+	       same_scale && !m->custom && b->custom_gamma == NULL;
 }
 
 bool mixer_set_params(struct mixer *m, const struct mixer_params *p)
