@@ -10,6 +10,7 @@ the reported standard deviations. A curve the firmware is told not to estimate i
 with that cause and nothing is applied.
 """
 
+import math
 import random
 
 import pytest
@@ -93,3 +94,53 @@ def test_weak_rotor_found_and_reported(launch, port, tmp_path):
     assert float(degraded[0].rsplit(" ", 1)[1]) == pytest.approx(0.7, rel=0.005), texts
     for j in range(8):
         assert got[f"MOT_SCALE{j + 1}"] == pytest.approx(veh["rotor_scale"][j], rel=0.005), j
+
+
+def _tracking(frames, modes):
+    """RMS attitude error (deg, the rotation between attitude and set point) and RMS height
+    error (m) over the stepped frames in the given app modes."""
+    att, hgt = [], []
+    for f in frames:
+        if not f.stepped or f.mode not in modes:
+            continue
+        dot = abs(sum(a * b for a, b in zip(f.q, f.q_sp)))
+        att.append(math.degrees(2.0 * math.acos(min(1.0, dot))))
+        hgt.append(f.pos_i[2] - f.z_sp)
+    rms = lambda v: math.sqrt(sum(x * x for x in v) / len(v))
+    return rms(att), rms(hgt), len(att)
+
+
+@pytest.mark.parametrize("seed", [1331, 1332])
+def test_weak_rotor_allocated_around_tracks_better(launch, port, tmp_path, seed):
+    """A random vehicle with one rotor at 0.8-1.0 effectiveness, everything else told to the
+    firmware (k_f, k_tau, inertia, lag, delay, a linear thrust curve): the same flight (same
+    noise: take-off to 5 m, hold, the validation experiment's yaw-torque excitation) with
+    MOT_SCALE1..8 at 1 and with the weak rotor's true scale. With the scale, mixer and
+    throttle map allocate around the weak rotor: during the take-off (before the attitude
+    and height integrals have learned the weak rotor's torque and thrust deficit) attitude
+    tracks the set point at least twice as well and height better (RMS errors). Hold and
+    experiment are flown and checked to end, their errors printed (there the integrals have
+    absorbed the constant deficit)."""
+    rng = random.Random(seed)
+    veh, weak = motor_vehicle(rng, curve=0.0)
+    known = {"VEH_KF": veh["kf"], "VEH_KTAU": veh["ktau"], "VEH_IXX": veh["inertia"][0],
+             "VEH_IYY": veh["inertia"][1], "VEH_IZZ": veh["inertia"][2],
+             "ID_MOT_TAU": veh["motor_tau"], "ID_DELAY_FR": round(veh["delay"] * 90.0)}
+    got = {}
+    for applied in (False, True):
+        params = dict(known)
+        if applied:
+            params[f"MOT_SCALE{weak + 1}"] = veh["rotor_scale"][weak]
+        d = tmp_path / ("applied" if applied else "nominal")
+        d.mkdir()
+        fl = IdentFlight(launch, port, d, vehicle=veh, seed=seed, params=params)
+        fl.takeoff()
+        texts = fl.experiment(2)
+        fl.finish()
+        assert "ID done" in texts, texts
+        got[applied] = {m: _tracking(fl.frames, (m,)) for m in (2, 3, 4)}
+    print(veh["rotor_scale"], weak, got)
+    (att0, hgt0, n0), (att1, hgt1, n1) = got[False][2], got[True][2]
+    assert n0 == n1 and n0 > 300, got
+    assert att1 < 0.5 * att0, got
+    assert hgt1 < hgt0, got
