@@ -337,6 +337,56 @@ static float median8(const float v[NR], unsigned *a, unsigned *b)
 
 static float sqrt0(float v) { return v > 0.0f ? sqrtf(v) : 0.0f; }
 
+/* The sampling variance of the median of 8 rotors' estimates (the mean of the 4th and 5th),
+ * in units of one rotor's variance: 0.168 for 8 alike, 0.190 with one rotor far off (a weak
+ * one; Monte Carlo of normal errors, 4e5 draws). The larger is taken. */
+#define MEDIAN8_VAR 0.19f
+
+/* k_f, the common curve and the rotors' scales from delay d's statistics at grid position x,
+ * by the same steps as motor_id_solve (curve unclamped): their change with x is the lag's
+ * share of their variances (the lag's error is uncorrelated with theirs at a fixed lag, to
+ * first order: the profile's gradient is orthogonal to their regressors) */
+static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, float *curve, float sc[NR])
+{
+	const float c0 = m->cfg.curve0, kf0 = m->cfg.kf0;
+	float l[3], th[NR][2], mj[NR];
+	struct motor_id_stat st[NR];
+	lagrange3(x, l);
+	float sw = 0.0f, swc = 0.0f;
+	for (unsigned j = 0; j < NR; j++) {
+		struct motor_id_stat tri[3] = {m->st[d][0][j], m->st[d][1][j], m->st[d][2][j]};
+		interp_stat(tri, l, &st[j]);
+		float w[2], d2[2];
+		curve_w(c0, m->s_c[j], w);
+		th[j][0] = kf0 * w[0];
+		th[j][1] = kf0 * w[1];
+		if (!m->cfg.est_curve)
+			continue;
+		float ssr2 = rotor_ssr(&st[j], true, c0, m->s_c[j], d2);
+		float a = th[j][0] + d2[0], bq = th[j][1] + d2[1];
+		float mm = a + bq * (1.0f - 2.0f * m->s_c[j]);
+		float det = st[j].g11 * st[j].g22 - st[j].g12 * st[j].g12;
+		if (mm > 0.0f && det > 0.0f) {
+			float ga = -bq / (mm * mm), gb = a / (mm * mm);
+			float v = ssr2 / ((float)m->n_stat - 2.0f) *
+				  (ga * ga * st[j].g22 - 2.0f * ga * gb * st[j].g12 + gb * gb * st[j].g11) / det;
+			if (v > 0.0f) {
+				sw += 1.0f / v;
+				swc += bq / mm / v;
+			}
+		}
+	}
+	*curve = m->cfg.est_curve && sw > 0.0f ? swc / sw : c0;
+	for (unsigned j = 0; j < NR; j++) {
+		float gw;
+		mj[j] = rotor_m(&st[j], *curve, m->s_c[j], th[j], &gw);
+	}
+	unsigned ia, ib;
+	*kf = median8(mj, &ia, &ib);
+	for (unsigned j = 0; j < NR; j++)
+		sc[j] = *kf > 0.0f ? mj[j] / *kf : 0.0f;
+}
+
 void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_result *res)
 {
 	*res = (struct motor_id_result){0};
@@ -452,12 +502,26 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	unsigned ia, ib;
 	res->kf = median8(mj, &ia, &ib);
 	float dkdc = (0.5f * (mj_e[ia] + mj_e[ib]) - res->kf) / eps;
-	float vkf = 0.25f * (vm[ia] + vm[ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
-	res->kf_sd = sqrt0(vkf);
+	float vkf = MEDIAN8_VAR * 0.5f * (vm[ia] + vm[ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
 	for (unsigned j = 0; j < NR; j++) {
 		res->scale[j] = res->kf > 0.0f ? mj[j] / res->kf : 0.0f;
 		res->scale_sd[j] = res->kf > 0.0f ? sqrt0(vm[j]) / res->kf : 0.0f;
 	}
+	/* the lag's share: k_f, curve and scales move with the lag (central differences) */
+	if (!no_lag && ks[best] > 0.0f) {
+		const float h = 0.25f;
+		float var_x = 1.0f / (nf * ks[best]), kp, km, cp, cm, sp[NR], sm[NR];
+		model_at(m, best, x + h, &kp, &cp, sp);
+		model_at(m, best, x - h, &km, &cm, sm);
+		float dk = (kp - km) / (2.0f * h), dc = (cp - cm) / (2.0f * h);
+		vkf += dk * dk * var_x;
+		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + dc * dc * var_x);
+		for (unsigned j = 0; j < NR; j++) {
+			float ds = (sp[j] - sm[j]) / (2.0f * h);
+			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + ds * ds * var_x);
+		}
+	}
+	res->kf_sd = sqrt0(vkf);
 
 	/* noise and the normalised errors */
 	float nz = m->nz_n > 0.0f ? m->nz_ss / m->nz_n : 0.0f;

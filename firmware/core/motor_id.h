@@ -44,6 +44,9 @@
  *
  * Identifiability: k_f is thrust at FULL throttle; hovering rotors run near 0.1, so with the
  * curve estimated k_f is an extrapolation: d k_f / k_f = d c / (1 - c). Its sd includes that.
+ * The sds of k_f, the curve and the scales also carry the lag's (their change with the lag
+ * times its variance); k_f's part from the rotors is the variance of a median of eight
+ * (0.19 of one rotor's, not the 0.5 of a mean of the two central ones).
  *
  * Core rules: no heap, globals or I/O; interfaces in scalar_t, internals float32 in both
  * builds (as rls.h). The per-frame step (motor_id_step) is the bank update; the refinement
