@@ -17,7 +17,9 @@
  * known (where the reported sd is the least-squares bound of the model); the lag's relative
  * bias and std; how often the delay is chosen right (all runs); the curve's bias and std;
  * how often the run is rejected (cause not OK; the accuracy figures are over the accepted
- * runs, as only those are applied). One JSON object on stdout.
+ * runs, as only those are applied); how often the whiteness test of the one-step prediction
+ * errors fails on these well-modelled vehicles (its false rejections) and its statistic over
+ * its degrees of freedom (1 when white). One JSON object on stdout.
  */
 #include <math.h>
 #include <stdio.h>
@@ -44,7 +46,7 @@ static double gauss(void)
 }
 
 struct acc {
-	double n, s, s2, sd2, right, rej;
+	double n, s, s2, sd2, right, rej, white, wq;
 };
 static void add(struct acc *a, double e, double sd) { a->n++; a->s += e; a->s2 += e * e; a->sd2 += sd * sd; }
 static double mean(const struct acc *a) { return a->n > 0 ? a->s / a->n : 0; }
@@ -116,6 +118,8 @@ static void one_run(int n_exc, bool est_curve, bool linear, struct acc *kf, stru
 	motor_id_solve(&m, 1.3f, &r);
 	dly->right += r.delay == delay;
 	dly->n++;
+	dly->white += r.white_have && !r.white_ok;
+	dly->wq += r.white_have ? (double)(r.white_q / r.white_dof) : 1.0;
 	if (r.cause != MOTOR_ID_OK) {   /* rejected: counted, not in the accuracy figures */
 		dly->rej++;
 		return;
@@ -136,13 +140,13 @@ static void case_json(const char *name, int runs, int n_exc, bool est_curve, boo
 	       "\"kf_var_over_reported\": %.4f, \"lag_bias_pct\": %.4f, \"lag_std_pct\": %.4f, "
 	       "\"lag_var_over_reported\": %.4f, \"delay_right_pct\": %.2f, \"curve_bias\": %.5f, "
 	       "\"curve_std\": %.5f, \"curve_var_over_reported\": %.4f, \"scale_var_over_reported\": %.4f, "
-	       "\"rejected_pct\": %.2f}%s\n",
+	       "\"rejected_pct\": %.2f, \"white_rejected_pct\": %.2f, \"white_q_over_dof\": %.3f}%s\n",
 	       name, n_exc * DT, runs, 100 * mean(&kf), 100 * sdev(&kf), sdev(&kf) * sdev(&kf) / (kf.sd2 / kf.n),
 	       100 * mean(&lag), 100 * sdev(&lag), lag.sd2 > 0 ? sdev(&lag) * sdev(&lag) / (lag.sd2 / lag.n) : 0.0,
 	       100 * dly.right / dly.n, mean(&crv), sdev(&crv),
 	       crv.sd2 > 0 ? sdev(&crv) * sdev(&crv) / (crv.sd2 / crv.n) : 0.0,
 	       scl.sd2 > 0 ? sdev(&scl) * sdev(&scl) / (scl.sd2 / scl.n) : 0.0, 100 * dly.rej / dly.n,
-	       last ? "" : ",");
+	       100 * dly.white / dly.n, dly.wq / dly.n, last ? "" : ",");
 }
 
 int main(int argc, char **argv)
