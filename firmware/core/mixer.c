@@ -37,7 +37,7 @@ void mixer_wrench(const struct mixer *m, const scalar_t f_n[NR], scalar_t wrench
 {
 	scalar_t u[NR];
 	for (int j = 0; j < NR; j++)
-		u[j] = sc_mul(f_n[j], m->inv_scale[j]);
+		u[j] = m->p.scale[j] == SC(1) ? f_n[j] : sc_div(f_n[j], m->p.scale[j]);
 	wrench_u(m, u, wrench);
 }
 
@@ -362,7 +362,7 @@ static void finish(const struct mixer *m, struct mixer_output *out)
 			out->rotor_at_max |= (uint8_t)(1u << j);
 	}
 	for (int j = 0; j < NR; j++)
-		out->f_n[j] = sc_mul(out->f_n[j], m->scale[j]);
+		out->f_n[j] = sc_mul(out->f_n[j], m->p.scale[j]);
 	if (out->rotor_at_min)
 		out->limits |= MIXER_LIMIT_ROTOR_MIN;
 	if (out->rotor_at_max)

@@ -156,14 +156,13 @@ struct mixer_design {
 
 /* What the 90 Hz path reads (and the parameters, to see what changed): the caller keeps it. */
 struct mixer {
-	struct mixer_params p;         /* copy (custom_gamma set to NULL after copying) */
+	struct mixer_params p;         /* copy (custom_gamma set to NULL after copying; scale as
+					* used: 0 replaced by 1, clamped) */
 	uint8_t rank;
 
 	/* hot-path data, scalar_t; everything of the allocation is in u (f_j / scale_j) */
 	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES];  /* (Gamma S)^+ (physical wrench -> u) */
 	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma S, entries in [-1, 1] */
-	scalar_t scale[MIXER_N_ROTORS];               /* effectiveness as used (clamped) */
-	scalar_t inv_scale[MIXER_N_ROTORS];           /* 1 / scale */
 	scalar_t pinv_n[MIXER_N_ROTORS][MIXER_N_AXES];/* pseudo-inverse in the scaled space */
 	scalar_t row_div[MIXER_N_AXES];    /* 1 / max_j |Gamma_ij| */
 	scalar_t row_scale[MIXER_N_AXES];  /* physical wrench per unit of scaled wrench */

@@ -206,13 +206,15 @@ void mixer_default_params(struct mixer_params *p)
 	*p = d;
 }
 
-/* rotor j's effectiveness as used: 0 (not given) is 1, others clamped to [0.1, 4] */
+/* an effectiveness as used: 0 (not given) is 1, others clamped to [0.1, 4] */
+static scalar_t scale_used(scalar_t s)
+{
+	return s == SC_ZERO ? SC(1) : sc_clamp(s, SC(0.1), SC(4));
+}
+
 static float scale_of(const struct mixer_params *p, int j)
 {
-	float s = sc_to_float(p->scale[j]);
-	if (s == 0.0f)
-		return 1.0f;
-	return s < 0.1f ? 0.1f : (s > 4.0f ? 4.0f : s);
+	return sc_to_float(scale_used(p->scale[j]));
 }
 
 static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
@@ -270,11 +272,8 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	m->p.custom_gamma = NULL;
 	m->custom = p->custom_gamma != NULL;
 	build_gamma(dz, p);
-	for (int j = 0; j < NR; j++) {
-		float sj = scale_of(p, j);
-		m->scale[j] = sc_from_float(sj);
-		m->inv_scale[j] = sc_from_float(1.0f / sj);
-	}
+	for (int j = 0; j < NR; j++)
+		m->p.scale[j] = scale_used(p->scale[j]);
 
 	/* ---- pseudo-inverse by one-sided Jacobi SVD of Gamma^T */
 	float a[NR][NA], v[NA][NA], s[NA];
@@ -493,7 +492,7 @@ static bool same_geometry(const struct mixer *m, const struct mixer_params *b)
 	const struct mixer_params *a = &m->p;
 	bool same_scale = true;
 	for (int j = 0; j < NR; j++)
-		same_scale = same_scale && a->scale[j] == b->scale[j];
+		same_scale = same_scale && a->scale[j] == scale_used(b->scale[j]);
 	return a->arm_l_m == b->arm_l_m && a->k_f_n == b->k_f_n && a->k_tau_nm == b->k_tau_nm &&
 	       a->t_min == b->t_min && a->t_max == b->t_max && a->rotor_mask == b->rotor_mask &&
 	       same_scale && !m->custom && b->custom_gamma == NULL;
