@@ -478,6 +478,33 @@ static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, f
 		sc[j] = *kf > 0.0f ? mj[j] / *kf : 0.0f;
 }
 
+/* The lag's grid position x refined from the parabola's by Newton steps on the profile
+ * criterion itself, sum over rotors of log SSR_j with the statistics interpolated at x (the
+ * parabola through three criterion values is coarser than the statistics' interpolation: its
+ * error moved x by a part of a standard deviation that depended on where the truth fell in the
+ * grid); *k becomes that criterion's curvature / 2 (in the units of delay_crit's, so that
+ * var x = 1 / (n k) still holds). Kept within +/- X_MAX; unchanged if not convex there. */
+static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
+{
+	const float h = 0.2f;   /* wide enough that float rounding of the SSRs stays out of d2 */
+	float xi = *x, kk = *k;
+	if (!(kk > 0.0f) || fabsf(xi) >= X_MAX - 1e-3f)
+		return;
+	for (int it = 0; it < 3; it++) {
+		float fm = delay_logssr(m, d, xi - h), f0 = delay_logssr(m, d, xi), fp = delay_logssr(m, d, xi + h);
+		float d2 = (fp - 2.0f * f0 + fm) / (h * h), d1 = (fp - fm) / (2.0f * h);
+		if (!(d2 > 0.0f))
+			return;
+		float step = clampf(-d1 / d2, -0.5f, 0.5f);
+		xi = clampf(xi + step, -X_MAX + 2e-3f, X_MAX - 2e-3f);
+		kk = 0.5f * d2;
+		if (fabsf(step) < 1e-3f)
+			break;
+	}
+	*x = xi;
+	*k = kk;
+}
+
 /* chi-square quantile with k degrees of freedom at z standard normal deviates above the mean
  * (Wilson-Hilferty; within 1 % of the exact one from k = 3 on at these z) */
 static float chi2_quant(float k, float z)
@@ -605,6 +632,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 
 	/* sd of the lag: -log-likelihood = (n / 2) J, J = J_min + k (x - x*)^2, so var x = 1 / (n k) */
 	float x = xs[best], r = m->lag_r[best];
+	lag_newton(m, best, &x, &ks[best]);
 	res->tau = m->lag_c[best] * powf(r, x);
 	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(1.0f / (nf * ks[best])) : res->tau;
 	/* the grid's low end without lag and the minimum there: no lag (sd: that bound) */

@@ -29,8 +29,9 @@
  * (motor_id_refine: wide ratio 2.5, then 1.3, then 1.08; a minimum below the grid walks
  * twice as far and keeps the grid wider; the statistics restart, the lag
  * filters keep running), so the last stage's data give the estimates. The final estimates
- * (motor_id_solve, between frames) take the delay of least interpolated SSR, and the
- * statistics at its lag by quadratic interpolation over the grid (smooth in tau).
+ * (motor_id_solve, between frames) take the delay of least interpolated SSR, its lag refined
+ * by Newton steps on sum_j log SSR_j of the interpolated statistics, and the statistics at
+ * that lag by quadratic interpolation over the grid (smooth in tau).
  * sd(tau) from the curvature of the profile criterion (the Fisher information of the lag with
  * k_f and c profiled out).
  *
