@@ -144,8 +144,14 @@ static void sync_params(struct app *a)
 	lp.f_max_n = sc_from_float(8.0f * p->veh_kf * p->mot_thr_max);
 	a->alt.p = lp;
 
+	/* the rotors' effectiveness: the mixer allocates around a weak rotor (its box), the
+	 * throttle map gives it the throttle for its thrust */
+	const float scale[THRMAP_ROTORS] = {p->mot_scale1, p->mot_scale2, p->mot_scale3, p->mot_scale4,
+					    p->mot_scale5, p->mot_scale6, p->mot_scale7, p->mot_scale8};
 	struct mixer_params mp;
 	mixer_default_params(&mp);
+	for (int j = 0; j < MIXER_N_ROTORS; j++)
+		mp.scale[j] = sc_from_float(scale[j]);
 	mp.arm_l_m = sc_from_float(p->veh_arm_l);
 	mp.k_f_n = sc_from_float(p->veh_kf);
 	mp.k_tau_nm = sc_from_float(p->veh_ktau);
@@ -155,8 +161,6 @@ static void sync_params(struct app *a)
 	mixer_set_params(&a->mix, &mp);   /* recomputes only when something changed */
 
 	struct thrmap_params tp = {sc_from_float(p->veh_kf), sc_from_float(p->mot_curve), {0}};
-	const float scale[THRMAP_ROTORS] = {p->mot_scale1, p->mot_scale2, p->mot_scale3, p->mot_scale4,
-					    p->mot_scale5, p->mot_scale6, p->mot_scale7, p->mot_scale8};
 	for (int j = 0; j < THRMAP_ROTORS; j++)
 		tp.scale[j] = sc_from_float(scale[j]);
 	thrmap_init(&a->map, &tp);

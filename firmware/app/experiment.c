@@ -166,6 +166,8 @@ static void format_line(const struct exp_line *l, char *out, size_t cap)
 		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_S(2), ARG_S(3));
 	else if (!strcmp(k, "ff"))
 		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1));
+	else if (!strcmp(k, "ffs"))
+		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_S(2));
 	else if (!strcmp(k, "fsf"))
 		snprintf(out, cap, l->fmt, ARG_F(0), ARG_S(1), ARG_F(2));
 	else if (!strcmp(k, "sffss"))
@@ -464,6 +466,9 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 	say(e, sev, "ID scale 5-8 %.4f %.4f %.4f %.4f", (double)mr.scale[4], (double)mr.scale[5],
 	    (double)mr.scale[6], (double)mr.scale[7]);
 	say(e, APP_SEV_INFO, "ID motor model NE %.3f noise %.4f N", (double)mr.ne_all, (double)mr.noise_sd);
+	if (mr.white_have)   /* the one-step prediction errors' whiteness (motor_id.h) */
+		say(e, mr.white_ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID whiteness %.0f limit %.0f: %s",
+		    (double)mr.white_q, (double)mr.white_lim, mr.white_ok ? "white" : "coloured");
 	if (!model_ok) {
 		if (mr.cause == MOTOR_ID_ROTOR)
 			say(e, APP_SEV_WARNING, "ID rejected: rotor %d unexplained, NE %.2f", mr.cause_rotor + 1,

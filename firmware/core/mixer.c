@@ -22,14 +22,23 @@ static scalar_t to_scaled(const struct mixer *m, int i, scalar_t v)
 	return sc_div(sc_mul(sc_sub(v, m->w_lo[i]), m->row_div[i]), m->width);
 }
 
-void mixer_wrench(const struct mixer *m, const scalar_t f_n[NR], scalar_t wrench[NA])
+/* the physical wrench of u (Gamma S u) */
+static void wrench_u(const struct mixer *m, const scalar_t u[NR], scalar_t wrench[NA])
 {
 	for (int i = 0; i < NA; i++) {
 		scalar_t s = SC_ZERO;
 		for (int j = 0; j < NR; j++)
-			s = sc_mac(m->gn[i][j], f_n[j], s);
+			s = sc_mac(m->gn[i][j], u[j], s);
 		wrench[i] = sc_div(s, m->row_div[i]);
 	}
+}
+
+void mixer_wrench(const struct mixer *m, const scalar_t f_n[NR], scalar_t wrench[NA])
+{
+	scalar_t u[NR];
+	for (int j = 0; j < NR; j++)
+		u[j] = m->p.scale[j] == SC(1) ? f_n[j] : sc_div(f_n[j], m->p.scale[j]);
+	wrench_u(m, u, wrench);
 }
 
 static bool attainable_scaled(const struct mixer *m, const scalar_t w[NA], scalar_t tol)
@@ -338,9 +347,10 @@ static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 	return steps + refine(m, w, uref, u);
 }
 
+/* out->f_n holds u: the achieved wrench and the bound flags from it, then f_j = scale_j u_j */
 static void finish(const struct mixer *m, struct mixer_output *out)
 {
-	mixer_wrench(m, out->f_n, out->achieved);
+	wrench_u(m, out->f_n, out->achieved);
 	out->rotor_at_min = 0;
 	out->rotor_at_max = 0;
 	for (int j = 0; j < NR; j++) {
@@ -351,6 +361,8 @@ static void finish(const struct mixer *m, struct mixer_output *out)
 		if (out->f_n[j] >= sc_sub(m->f_hi, m->at_tol))
 			out->rotor_at_max |= (uint8_t)(1u << j);
 	}
+	for (int j = 0; j < NR; j++)
+		out->f_n[j] = sc_mul(out->f_n[j], m->p.scale[j]);
 	if (out->rotor_at_min)
 		out->limits |= MIXER_LIMIT_ROTOR_MIN;
 	if (out->rotor_at_max)

@@ -11,6 +11,15 @@
  * the whole matrix for a different layout (then arm_l_m and the mask's columns are ignored /
  * applied on top respectively).
  *
+ * Per-rotor effectiveness (`scale`, MOT_SCALEj): rotor j gives scale_j times a nominal rotor's
+ * thrust and torque at the same throttle. The allocation works on u_j, the thrust a nominal
+ * rotor would give at rotor j's throttle (what the throttle map inverts, u_j = f_j / scale_j),
+ * with the effective matrix Gamma S (S = diag(scale), columns scaled): u = (Gamma S)^+ [f; tau]
+ * is the least-throttle allocation, and every rotor's box is the same in u, [k_f t_min,
+ * k_f t_max], so a weak rotor's smaller thrust range is allocated around exactly (its
+ * physical box is scale_j times that). Everything below (pseudo-inverse, null space, facets,
+ * box) is of Gamma S in u; mixer_update returns the physical thrusts f_j = scale_j u_j.
+ *
  * Set-up (mixer_init / mixer_set_params; NOT the 90 Hz path; float32 in both builds, results
  * stored as scalar_t for the hot path):
  *   - Moore-Penrose pseudo-inverse Gamma^+ (8x4) by a one-sided Jacobi SVD of Gamma^T (at
@@ -25,9 +34,11 @@
  *
  * Update (mixer_update, 90 Hz): scalar_t arithmetic only (add, mul, div, one sqrt per
  * Gram-Schmidt row in the refinement; no trig, no float in the Q16.16 build).
- *   1. Unconstrained allocation, eq. (15): f = Gamma^+ [f; tau] (removed rotors: 0).
- *   2. If every present f_j is inside [f_lo, f_hi] (f_lo = k_f t_min, f_hi = k_f t_max;
+ *   1. Unconstrained allocation, eq. (15) (with Gamma S): u = (Gamma S)^+ [f; tau] (removed
+ *      rotors: 0).
+ *   2. If every present u_j is inside [f_lo, f_hi] (f_lo = k_f t_min, f_hi = k_f t_max;
  *      throttle 1 = k_f by eqs. (16)-(17)): done (limits = 0, steps = 0).
+ *   The steps below work on u likewise; the output is f_j = scale_j u_j.
  *   3. Otherwise, by mode:
  *      MIXER_MODE_CLIP     the baseline: clip each f_j to the box; flags by comparison.
  *      MIXER_MODE_PRIORITY box-constrained allocation, priority roll/pitch > thrust > yaw:
@@ -113,6 +124,9 @@ struct mixer_params {
 	/* optional: NULL = eq. (14); else a row-major 4x8 Gamma in physical units (N, N m per N)
 	 * for a different layout; it is copied, not kept */
 	const float *custom_gamma;
+	/* per-rotor effectiveness (see above): 0 (not given) is taken as 1, other values are
+	 * clamped to [0.1, 4] (as the throttle map does) */
+	scalar_t scale[MIXER_N_ROTORS];
 };
 
 struct mixer_facet {
@@ -132,8 +146,8 @@ struct mixer_subfacet {
  * them in a scratch on its stack and drops them; mixer_init_design hands them to the caller
  * (tests, tools). */
 struct mixer_design {
-	float gamma_f[MIXER_N_AXES][MIXER_N_ROTORS];  /* Gamma, physical, float */
-	float pinv_f[MIXER_N_ROTORS][MIXER_N_AXES];   /* Gamma^+, physical, float */
+	float gamma_f[MIXER_N_AXES][MIXER_N_ROTORS];  /* Gamma S (per unit of u), float */
+	float pinv_f[MIXER_N_ROTORS][MIXER_N_AXES];   /* (Gamma S)^+, float */
 	float null_f[MIXER_N_ROTORS][MIXER_N_ROTORS]; /* null-space basis: columns 0..n_null-1 */
 	float sigma_f[MIXER_N_AXES];                  /* singular values of Gamma, descending */
 	uint8_t rank;
@@ -142,19 +156,20 @@ struct mixer_design {
 
 /* What the 90 Hz path reads (and the parameters, to see what changed): the caller keeps it. */
 struct mixer {
-	struct mixer_params p;         /* copy (custom_gamma set to NULL after copying) */
+	struct mixer_params p;         /* copy (custom_gamma set to NULL after copying; scale as
+					* used: 0 replaced by 1, clamped) */
 	uint8_t rank;
 
-	/* hot-path data, scalar_t */
-	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES];  /* Gamma^+ (physical) */
-	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma, entries in [-1, 1] */
+	/* hot-path data, scalar_t; everything of the allocation is in u (f_j / scale_j) */
+	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES];  /* (Gamma S)^+ (physical wrench -> u) */
+	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma S, entries in [-1, 1] */
 	scalar_t pinv_n[MIXER_N_ROTORS][MIXER_N_AXES];/* pseudo-inverse in the scaled space */
 	scalar_t row_div[MIXER_N_AXES];    /* 1 / max_j |Gamma_ij| */
 	scalar_t row_scale[MIXER_N_AXES];  /* physical wrench per unit of scaled wrench */
 	scalar_t width;                    /* f_hi - f_lo */
 	scalar_t at_tol;                   /* rotor_at_min/max tolerance, N */
-	scalar_t w_lo[MIXER_N_AXES];       /* physical wrench with every present rotor at f_lo */
-	scalar_t f_lo, f_hi;               /* rotor thrust box, N */
+	scalar_t w_lo[MIXER_N_AXES];       /* physical wrench with every present rotor at u = f_lo */
+	scalar_t f_lo, f_hi;               /* box of u, N (rotor j's thrust: scale_j times it) */
 	uint8_t n_active;
 	uint8_t present;                   /* bit j: rotor j+1 has a nonzero column */
 	uint8_t order[MIXER_N_ROTORS];     /* present rotors; the last 4 are independent */
@@ -169,12 +184,12 @@ struct mixer {
 };
 
 struct mixer_output {
-	scalar_t f_n[MIXER_N_ROTORS];           /* rotor thrust commands, N, in [f_lo, f_hi] (0 if absent) */
+	scalar_t f_n[MIXER_N_ROTORS];           /* rotor thrust commands, N, in scale_j [f_lo, f_hi] (0 if absent) */
 	scalar_t demanded[MIXER_N_AXES];        /* [f, tau_x, tau_y, tau_z] as given */
 	scalar_t achieved[MIXER_N_AXES];        /* Gamma * f_n */
 	uint32_t limits;                        /* MIXER_LIMIT_* */
-	uint8_t rotor_at_min;                   /* bit j: rotor j+1 at f_lo */
-	uint8_t rotor_at_max;                   /* bit j: rotor j+1 at f_hi */
+	uint8_t rotor_at_min;                   /* bit j: rotor j+1 at its lower bound */
+	uint8_t rotor_at_max;                   /* bit j: rotor j+1 at its upper bound */
 	uint8_t steps;                          /* bisection + preimage + active-set steps used */
 };
 
@@ -193,7 +208,8 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 
 /* Recomputes (mixer_init) only if a parameter that enters Gamma or the box changed (always
  * with custom_gamma); a mode change alone is applied without recomputation. Call it whenever
- * VEH_ARM_L, VEH_KF or VEH_KTAU change; cheap when nothing did. Returns the rank-4 status. */
+ * VEH_ARM_L, VEH_KF, VEH_KTAU or MOT_SCALEj change; cheap when nothing did. Returns the
+ * rank-4 status. */
 bool mixer_set_params(struct mixer *m, const struct mixer_params *p);
 
 /* demand = [f (N), tau_x, tau_y, tau_z (N m)] -> out. Never fails. */
@@ -204,7 +220,8 @@ void mixer_update(const struct mixer *m, const scalar_t demand[MIXER_N_AXES], st
  * (MIXER_LIMIT_F, _TX, _TY, _TZ) got less than its demand, of *short_neg when it got more. */
 void mixer_shortfall(const struct mixer_output *out, uint8_t *short_pos, uint8_t *short_neg);
 
-/* wrench[i] = sum_j Gamma[i][j] f_n[j] (physical units, scalar_t) */
+/* wrench[i] = sum_j Gamma[i][j] f_n[j]: the geometry's wrench of physical rotor thrusts f_n
+ * (N; e.g. measured ones), physical units, scalar_t */
 void mixer_wrench(const struct mixer *m, const scalar_t f_n[MIXER_N_ROTORS], scalar_t wrench[MIXER_N_AXES]);
 
 /* Exact attainability test of a physical wrench (facet test, tolerance tol in scaled units;

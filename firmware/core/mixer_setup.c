@@ -206,6 +206,17 @@ void mixer_default_params(struct mixer_params *p)
 	*p = d;
 }
 
+/* an effectiveness as used: 0 (not given) is 1, others clamped to [0.1, 4] */
+static scalar_t scale_used(scalar_t s)
+{
+	return s == SC_ZERO ? SC(1) : sc_clamp(s, SC(0.1), SC(4));
+}
+
+static float scale_of(const struct mixer_params *p, int j)
+{
+	return sc_to_float(scale_used(p->scale[j]));
+}
+
 static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 {
 	if (p->custom_gamma) {
@@ -226,6 +237,12 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 			m->gamma_f[2][j] = ty[j] * diag * l;
 			m->gamma_f[3][j] = (j & 1) ? -k : k;
 		}
+	}
+	/* effectiveness: columns scaled (the allocation's variable is u_j = f_j / scale_j) */
+	for (int j = 0; j < NR; j++) {
+		float sj = scale_of(p, j);
+		for (int i = 0; i < NA; i++)
+			m->gamma_f[i][j] *= sj;
 	}
 	for (int j = 0; j < NR; j++)
 		if (!(p->rotor_mask & (1u << j)) || !(m->gamma_f[0][j] == m->gamma_f[0][j]))
@@ -255,6 +272,8 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	m->p.custom_gamma = NULL;
 	m->custom = p->custom_gamma != NULL;
 	build_gamma(dz, p);
+	for (int j = 0; j < NR; j++)
+		m->p.scale[j] = scale_used(p->scale[j]);
 
 	/* ---- pseudo-inverse by one-sided Jacobi SVD of Gamma^T */
 	float a[NR][NA], v[NA][NA], s[NA];
@@ -471,9 +490,12 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 static bool same_geometry(const struct mixer *m, const struct mixer_params *b)
 {
 	const struct mixer_params *a = &m->p;
+	bool same_scale = true;
+	for (int j = 0; j < NR; j++)
+		same_scale = same_scale && a->scale[j] == scale_used(b->scale[j]);
 	return a->arm_l_m == b->arm_l_m && a->k_f_n == b->k_f_n && a->k_tau_nm == b->k_tau_nm &&
 	       a->t_min == b->t_min && a->t_max == b->t_max && a->rotor_mask == b->rotor_mask &&
-	       !m->custom && b->custom_gamma == NULL;
+	       same_scale && !m->custom && b->custom_gamma == NULL;
 }
 
 bool mixer_set_params(struct mixer *m, const struct mixer_params *p)

@@ -75,6 +75,11 @@ static void advance(struct motor_id *m)
 				s[j] += k * (u[j] - s[j]);
 		}
 	}
+	if (m->wh.on) {   /* the whiteness model's own lag */
+		const float *u = m->hist[(m->head + ND - m->wh.delay) % ND];
+		for (unsigned j = 0; j < NR; j++)
+			m->wh.s[j] += m->wh.k1 * (u[j] - m->wh.s[j]);
+	}
 }
 
 void motor_id_hold(struct motor_id *m, const scalar_t thr_prev[NR])
@@ -83,6 +88,7 @@ void motor_id_hold(struct motor_id *m, const scalar_t thr_prev[NR])
 	push(m, thr_prev);
 	advance(m);
 	m->nz_have = false;
+	m->wh.run = 0;   /* no prediction error across a lost frame */
 }
 
 void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar_t f[NR],
@@ -106,6 +112,87 @@ void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar
 	m->nz_have = !excited;
 	m->q_excited = excited;
 	m->q_pending = true;
+}
+
+#define WBIN 0.025f      /* throttle level bins of the whiteness test: s - s_c at +/- this */
+#define WHITE_AT 0.75f   /* the whiteness model is frozen at this fraction of the planned frames */
+
+static void delay_crit(const struct motor_id *m, unsigned d, float jv[3]);
+static float parabola(const float sv[3], float *s_min, float *k);
+static void lagrange3(float x, float l[3]);
+static void interp_stat(const struct motor_id_stat st[3], const float l[3], struct motor_id_stat *o);
+static float delay_logssr(const struct motor_id *m, unsigned d, float x);
+static float rotor_ssr(const struct motor_id_stat *st, bool est_curve, float c0, float s_c, float delta[2]);
+
+/* Freezes the model the whiteness test follows, from the last stage's data so far: the delay
+ * the bank prefers (or the given one), its lag at the criterion's minimum (a filter of its own,
+ * started from the grid's states interpolated there), every rotor's fit at that lag. */
+static void white_begin(struct motor_id *m)
+{
+	struct motor_id_white *w = &m->wh;
+	*w = (struct motor_id_white){0};
+	unsigned d = 0;
+	float x = 0.0f, best = 0.0f;
+	for (unsigned k = 0; k < ND; k++) {
+		float sv[3], jmin, kk;
+		delay_crit(m, k, sv);
+		float xk = parabola(sv, &jmin, &kk);
+		if (m->cfg.fix_delay) {
+			if (k == m->cfg.delay_fr) {
+				d = k;
+				x = xk;
+			}
+			continue;
+		}
+		float v = delay_logssr(m, k, xk);
+		if (k == 0u || v < best) {
+			best = v;
+			d = k;
+			x = xk;
+		}
+	}
+	float l[3], dl[2];
+	lagrange3(x, l);
+	for (unsigned j = 0; j < NR; j++) {
+		struct motor_id_stat tri[3] = {m->st[d][0][j], m->st[d][1][j], m->st[d][2][j]}, o;
+		interp_stat(tri, l, &o);
+		rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, m->s_c[j], dl);
+		w->dl[j][0] = dl[0];
+		w->dl[j][1] = dl[1];
+		w->s[j] = l[0] * m->s[d][0][j] + l[1] * m->s[d][1][j] + l[2] * m->s[d][2][j];
+	}
+	w->k1 = lag_k1(clampf(m->lag_c[d] * powf(m->lag_r[d], x), MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX),
+		       sc_to_float(m->cfg.dt_s));
+	w->delay = (uint8_t)d;
+	w->on = true;
+}
+
+/* the frozen model's one-step prediction error of every rotor at this frame, into the
+ * whiteness sums (its level, lagged products with the ring) */
+static void white_update(struct motor_id *m, const float fm[NR])
+{
+	struct motor_id_white *w = &m->wh;
+	if (!w->on)
+		return;
+	const float kf0 = m->cfg.kf0, c0 = m->cfg.curve0, c1 = 1.0f - c0;
+	const float *s = w->s;
+	for (unsigned j = 0; j < NR; j++) {
+		float x1 = s[j], x2 = s[j] * (s[j] - 2.0f * m->s_c[j]);
+		float e = fm[j] - kf0 * s[j] * (c1 + c0 * s[j]) - w->dl[j][0] * x1 - w->dl[j][1] * x2;
+		float ds = s[j] - m->s_c[j];
+		unsigned b = ds < -WBIN ? 0u : (ds > WBIN ? 2u : 1u);
+		w->n[j][b] += 1.0f;
+		w->se[j][b] += e;
+		w->see[j][b] += e * e;
+		for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++)
+			if (l < w->run)
+				w->sl[j][b][l] += e * w->ring[l][j];
+		for (unsigned l = MOTOR_ID_WLAGS - 1u; l > 0u; l--)
+			w->ring[l][j] = w->ring[l - 1u][j];
+		w->ring[0][j] = e;
+	}
+	if (w->run < MOTOR_ID_WLAGS)
+		w->run++;
 }
 
 void motor_id_process(struct motor_id *m)
@@ -147,10 +234,14 @@ void motor_id_process(struct motor_id *m)
 				}
 			}
 		m->n_stat++;
+		white_update(m, fm);
 	}
 	if (m->stage < MOTOR_ID_STAGES - 1 &&
 	    (float)m->n_exc >= stage_end[m->stage] * (float)m->cfg.n_frames)
 		m->refine_due = true;
+	if (m->stage == MOTOR_ID_STAGES - 1 && !m->wh.on && m->n_stat >= 30u &&
+	    (float)m->n_exc >= WHITE_AT * (float)m->cfg.n_frames)
+		white_begin(m);
 }
 
 /* the prior curve's regressor on the basis: g0 = w1 x1 + w2 x2 */
@@ -337,6 +428,167 @@ static float median8(const float v[NR], unsigned *a, unsigned *b)
 
 static float sqrt0(float v) { return v > 0.0f ? sqrtf(v) : 0.0f; }
 
+/* The sampling variance of the median of 8 rotors' estimates (the mean of the 4th and 5th),
+ * in units of one rotor's variance: 0.168 for 8 alike, 0.190 with one rotor far off (a weak
+ * one; Monte Carlo of normal errors, 4e5 draws). The larger is taken. */
+#define MEDIAN8_VAR 0.19f
+
+/* k_f, the common curve and the rotors' scales from delay d's statistics at grid position x,
+ * by the same steps as motor_id_solve (curve unclamped): their change with x is the lag's
+ * share of their variances (the lag's error is uncorrelated with theirs at a fixed lag, to
+ * first order: the profile's gradient is orthogonal to their regressors) */
+static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, float *curve, float sc[NR])
+{
+	const float c0 = m->cfg.curve0, kf0 = m->cfg.kf0;
+	float l[3], th[NR][2], mj[NR];
+	struct motor_id_stat st[NR];
+	lagrange3(x, l);
+	float sw = 0.0f, swc = 0.0f;
+	for (unsigned j = 0; j < NR; j++) {
+		struct motor_id_stat tri[3] = {m->st[d][0][j], m->st[d][1][j], m->st[d][2][j]};
+		interp_stat(tri, l, &st[j]);
+		float w[2], d2[2];
+		curve_w(c0, m->s_c[j], w);
+		th[j][0] = kf0 * w[0];
+		th[j][1] = kf0 * w[1];
+		if (!m->cfg.est_curve)
+			continue;
+		float ssr2 = rotor_ssr(&st[j], true, c0, m->s_c[j], d2);
+		float a = th[j][0] + d2[0], bq = th[j][1] + d2[1];
+		float mm = a + bq * (1.0f - 2.0f * m->s_c[j]);
+		float det = st[j].g11 * st[j].g22 - st[j].g12 * st[j].g12;
+		if (mm > 0.0f && det > 0.0f) {
+			float ga = -bq / (mm * mm), gb = a / (mm * mm);
+			float v = ssr2 / ((float)m->n_stat - 2.0f) *
+				  (ga * ga * st[j].g22 - 2.0f * ga * gb * st[j].g12 + gb * gb * st[j].g11) / det;
+			if (v > 0.0f) {
+				sw += 1.0f / v;
+				swc += bq / mm / v;
+			}
+		}
+	}
+	*curve = m->cfg.est_curve && sw > 0.0f ? swc / sw : c0;
+	for (unsigned j = 0; j < NR; j++) {
+		float gw;
+		mj[j] = rotor_m(&st[j], *curve, m->s_c[j], th[j], &gw);
+	}
+	unsigned ia, ib;
+	*kf = median8(mj, &ia, &ib);
+	for (unsigned j = 0; j < NR; j++)
+		sc[j] = *kf > 0.0f ? mj[j] / *kf : 0.0f;
+}
+
+/* The lag's grid position x refined from the parabola's by Newton steps on the profile
+ * criterion itself, sum over rotors of log SSR_j with the statistics interpolated at x (the
+ * parabola through three criterion values is coarser than the statistics' interpolation: its
+ * error moved x by a part of a standard deviation that depended on where the truth fell in the
+ * grid); *k becomes that criterion's curvature / 2 (in the units of delay_crit's, so that
+ * var x = 1 / (n k) still holds). Kept within +/- X_MAX; unchanged if not convex there. */
+static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
+{
+	const float h = 0.2f;   /* wide enough that float rounding of the SSRs stays out of d2 */
+	float xi = *x, kk = *k;
+	if (!(kk > 0.0f) || fabsf(xi) >= X_MAX - 1e-3f)
+		return;
+	for (int it = 0; it < 3; it++) {
+		float fm = delay_logssr(m, d, xi - h), f0 = delay_logssr(m, d, xi), fp = delay_logssr(m, d, xi + h);
+		float d2 = (fp - 2.0f * f0 + fm) / (h * h), d1 = (fp - fm) / (2.0f * h);
+		if (!(d2 > 0.0f))
+			return;
+		float step = clampf(-d1 / d2, -0.5f, 0.5f);
+		xi = clampf(xi + step, -X_MAX + 2e-3f, X_MAX - 2e-3f);
+		kk = 0.5f * d2;
+		if (fabsf(step) < 1e-3f)
+			break;
+	}
+	*x = xi;
+	*k = kk;
+}
+
+/* chi-square quantile with k degrees of freedom at z standard normal deviates above the mean
+ * (Wilson-Hilferty; within 1 % of the exact one from k = 3 on at these z) */
+static float chi2_quant(float k, float z)
+{
+	float a = 2.0f / (9.0f * k), t = 1.0f - a + z * sqrtf(a);
+	return k * t * t * t;
+}
+
+/* deviates of the whiteness limits: the sum over everything, each rotor's (8 tests), each
+ * level's (3 tests); about 2e-4 + 8 x 5e-5 + 3 x 1e-4 = 1e-3 false rejections in all */
+#define WZ_ALL 3.5f
+#define WZ_ROTOR 3.9f
+#define WZ_LEVEL 3.7f
+#define WMIN_N 20.0f     /* fewest frames of a (rotor, level) series that enters the test */
+
+/* the whiteness test from its sums (see motor_id.h) */
+static void white_eval(const struct motor_id *m, struct motor_id_result *res)
+{
+	const struct motor_id_white *w = &m->wh;
+	res->white_ok = true;
+	res->white_have = false;
+	if (!w->on)
+		return;
+	float q = 0.0f, dof = 0.0f, qr[NR] = {0}, dr[NR] = {0}, qb[MOTOR_ID_WBINS] = {0}, db[MOTOR_ID_WBINS] = {0};
+	for (unsigned j = 0; j < NR; j++)
+		for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
+			float n = w->n[j][b];
+			if (n < WMIN_N)
+				continue;
+			float mu = w->se[j][b] / n, c0 = w->see[j][b] - n * mu * mu, qq = 0.0f;
+			if (!(c0 > 0.0f))
+				continue;
+			for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++) {
+				float rho = (w->sl[j][b][l] - n * mu * mu) / c0;
+				qq += rho * rho;
+			}
+			qq *= n;
+			q += qq;
+			qr[j] += qq;
+			qb[b] += qq;
+			dof += (float)MOTOR_ID_WLAGS;
+			dr[j] += (float)MOTOR_ID_WLAGS;
+			db[b] += (float)MOTOR_ID_WLAGS;
+		}
+	if (!(dof > 0.0f))
+		return;
+	res->white_have = true;
+	res->white_q = q;
+	res->white_dof = dof;
+	res->white_lim = chi2_quant(dof, WZ_ALL);
+	bool ok = q <= res->white_lim;
+	for (unsigned j = 0; j < NR; j++) {
+		res->white_rotor[j] = dr[j] > 0.0f ? qr[j] / chi2_quant(dr[j], WZ_ROTOR) : 0.0f;
+		ok = ok && res->white_rotor[j] <= 1.0f;
+	}
+	for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
+		res->white_level[b] = db[b] > 0.0f ? qb[b] / chi2_quant(db[b], WZ_LEVEL) : 0.0f;
+		ok = ok && res->white_level[b] <= 1.0f;
+	}
+	res->white_ok = ok;
+}
+
+/* the cause of coloured prediction errors: one rotor alone (the others white) is that rotor;
+ * colour at one throttle level, not the others, is the thrust curve; else the dynamics */
+static enum motor_id_cause white_cause(const struct motor_id_result *res, int *rotor)
+{
+	unsigned nr = 0, nb = 0;
+	int jr = -1;
+	for (unsigned j = 0; j < NR; j++)
+		if (res->white_rotor[j] > 1.0f) {
+			nr++;
+			jr = (int)j;
+		}
+	for (unsigned b = 0; b < MOTOR_ID_WBINS; b++)
+		nb += res->white_level[b] > 1.0f;
+	if (nr == 1u) {
+		*rotor = jr;
+		return MOTOR_ID_ROTOR;
+	}
+	if (nb == 1u)
+		return MOTOR_ID_LEVEL;
+	return MOTOR_ID_COLOURED;
+}
+
 void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_result *res)
 {
 	*res = (struct motor_id_result){0};
@@ -363,16 +615,24 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		if (smin[d] < smin[best])
 			best = d;
 	}
-	float second = -1.0f;
+	res->free_delay = best;
+	if (m->cfg.fix_delay)
+		best = m->cfg.delay_fr < ND ? m->cfg.delay_fr : ND - 1u;
+	/* the next best (smin is a sum of logs: any sign) */
+	float second = 0.0f;
+	bool have2 = false;
 	for (unsigned d = 0; d < ND; d++)
-		if (d != best && (second < 0.0f || smin[d] < second))
+		if (d != best && (!have2 || smin[d] < second)) {
 			second = smin[d];
+			have2 = true;
+		}
 	res->delay = best;
 	float nf = (float)m->n_stat;
 	res->delay_margin = 0.5f * nf * (second - smin[best]);
 
 	/* sd of the lag: -log-likelihood = (n / 2) J, J = J_min + k (x - x*)^2, so var x = 1 / (n k) */
 	float x = xs[best], r = m->lag_r[best];
+	lag_newton(m, best, &x, &ks[best]);
 	res->tau = m->lag_c[best] * powf(r, x);
 	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(1.0f / (nf * ks[best])) : res->tau;
 	/* the grid's low end without lag and the minimum there: no lag (sd: that bound) */
@@ -452,12 +712,26 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	unsigned ia, ib;
 	res->kf = median8(mj, &ia, &ib);
 	float dkdc = (0.5f * (mj_e[ia] + mj_e[ib]) - res->kf) / eps;
-	float vkf = 0.25f * (vm[ia] + vm[ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
-	res->kf_sd = sqrt0(vkf);
+	float vkf = MEDIAN8_VAR * 0.5f * (vm[ia] + vm[ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
 	for (unsigned j = 0; j < NR; j++) {
 		res->scale[j] = res->kf > 0.0f ? mj[j] / res->kf : 0.0f;
 		res->scale_sd[j] = res->kf > 0.0f ? sqrt0(vm[j]) / res->kf : 0.0f;
 	}
+	/* the lag's share: k_f, curve and scales move with the lag (central differences) */
+	if (!no_lag && ks[best] > 0.0f) {
+		const float h = 0.25f;
+		float var_x = 1.0f / (nf * ks[best]), kp, km, cp, cm, sp[NR], sm[NR];
+		model_at(m, best, x + h, &kp, &cp, sp);
+		model_at(m, best, x - h, &km, &cm, sm);
+		float dk = (kp - km) / (2.0f * h), dc = (cp - cm) / (2.0f * h);
+		vkf += dk * dk * var_x;
+		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + dc * dc * var_x);
+		for (unsigned j = 0; j < NR; j++) {
+			float ds = (sp[j] - sm[j]) / (2.0f * h);
+			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + ds * ds * var_x);
+		}
+	}
+	res->kf_sd = sqrt0(vkf);
 
 	/* noise and the normalised errors */
 	float nz = m->nz_n > 0.0f ? m->nz_ss / m->nz_n : 0.0f;
@@ -497,18 +771,26 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float v_nz = m->nz_n > 0.0f ? 6.0f / m->nz_n : 1.0f;
 	float lim_j = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof_j, 1.0f) + v_nz));
 	float lim_all = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof, 1.0f) + v_nz));
+	const bool fixd = m->cfg.fix_delay;
+	white_eval(m, res);
 	if (!(m->nz_n >= 16.0f))
 		res->cause = MOTOR_ID_NOISE_UNKNOWN;
+	else if (fixd && res->free_delay != best && -res->delay_margin >= MARGIN_MIN)
+		res->cause = MOTOR_ID_DELAY_GIVEN;
 	else if (!ec && res->curve_chi2 > chi2_lim)
 		res->cause = MOTOR_ID_CURVE;
 	else if (!no_lag && (!(ks[best] > 0.0f) || fabsf(x) >= X_MAX - 1e-3f ||
 			     res->tau <= MOTOR_ID_TAU_MIN * 1.01f || res->tau >= MOTOR_ID_TAU_MAX * 0.99f))
 		res->cause = MOTOR_ID_LAG_RANGE;
-	else if (best == ND - 1u)
+	else if (!fixd && best == ND - 1u)
 		res->cause = MOTOR_ID_DELAY_RANGE;
-	else if (res->delay_margin < MARGIN_MIN)
+	else if (!fixd && res->delay_margin < MARGIN_MIN)
 		res->cause = MOTOR_ID_DELAY_AMBIGUOUS;
-	else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && dof_j > 0.0f) {
+	else if (!res->white_ok) {
+		res->cause = white_cause(res, &res->cause_rotor);
+		if (res->cause == MOTOR_ID_LEVEL && !ec)
+			res->cause = MOTOR_ID_CURVE;
+	} else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && dof_j > 0.0f) {
 		res->cause = MOTOR_ID_ROTOR;
 		res->cause_rotor = (int)worst;
 	} else if (res->ne_all > lim_all)
@@ -538,6 +820,12 @@ const char *motor_id_cause_text(enum motor_id_cause c)
 		return "a rotor unexplained";
 	case MOTOR_ID_MODEL:
 		return "residuals above noise";
+	case MOTOR_ID_DELAY_GIVEN:
+		return "given delay contradicted";
+	case MOTOR_ID_LEVEL:
+		return "residuals coloured at one throttle level";
+	case MOTOR_ID_COLOURED:
+		return "residuals not white";
 	}
 	return "?";
 }
@@ -563,6 +851,12 @@ const char *motor_id_cause_remedy(enum motor_id_cause c)
 		return "inspect that rotor";
 	case MOTOR_ID_MODEL:
 		return "check link timing and rotors";
+	case MOTOR_ID_DELAY_GIVEN:
+		return "let the delay be found";
+	case MOTOR_ID_LEVEL:
+		return "thrust curve not quadratic: lower ID_EXC_OFS";
+	case MOTOR_ID_COLOURED:
+		return "motor not first-order or link jitter: check both";
 	}
 	return "";
 }

@@ -29,8 +29,9 @@
  * (motor_id_refine: wide ratio 2.5, then 1.3, then 1.08; a minimum below the grid walks
  * twice as far and keeps the grid wider; the statistics restart, the lag
  * filters keep running), so the last stage's data give the estimates. The final estimates
- * (motor_id_solve, between frames) take the delay of least interpolated SSR, and the
- * statistics at its lag by quadratic interpolation over the grid (smooth in tau).
+ * (motor_id_solve, between frames) take the delay of least interpolated SSR, its lag refined
+ * by Newton steps on sum_j log SSR_j of the interpolated statistics, and the statistics at
+ * that lag by quadratic interpolation over the grid (smooth in tau).
  * sd(tau) from the curvature of the profile criterion (the Fisher information of the lag with
  * k_f and c profiled out).
  *
@@ -44,6 +45,28 @@
  *
  * Identifiability: k_f is thrust at FULL throttle; hovering rotors run near 0.1, so with the
  * curve estimated k_f is an extrapolation: d k_f / k_f = d c / (1 - c). Its sd includes that.
+ * The sds of k_f, the curve and the scales also carry the lag's (their change with the lag
+ * times its variance); k_f's part from the rotors is the variance of a median of eight
+ * (0.19 of one rotor's, not the 0.5 of a mean of the two central ones).
+ *
+ * Whiteness (the data cannot fool the acceptance): at 75 % of the planned frames (the last
+ * stage's first 20 %), the model of the hypothesis then best (or of the given delay) is frozen:
+ * its lag (the criterion's minimum, a lag filter of its own started from the grid's states
+ * interpolated there) and every rotor's k_f and curve, from the last stage's data so far. Over
+ * the remaining frames each frame's one-step prediction error of every rotor under that model is taken, split by the rotor's
+ * throttle level (three bins of s - s_c: below -0.025, within, above +0.025), and each
+ * (rotor, level) series' normalised autocorrelation at lags 1..MOTOR_ID_WLAGS (about its own
+ * mean) is accumulated. Under the model the prediction errors are the white measurement noise:
+ * n sum_L rho_L^2 is chi-square with MOTOR_ID_WLAGS degrees of freedom (Box-Pierce), summed over
+ * rotors and levels with their degrees. An error the model leaves (a lag or delay that is not
+ * the plant's, a thrust curve not modelled, a rotor unlike the others) is a smooth function of
+ * the recent commands, so it is correlated from frame to frame, which the test sees whatever
+ * the noise level it is measured against (the normalised error needs that level). The sum over everything,
+ * each rotor's and each level's sum are compared with their chi-square quantiles (Wilson-
+ * Hilferty) at about 1e-3 false rejections in all; the one that fails names the cause (one
+ * rotor: that rotor; one level: the thrust curve; else the dynamics). The frozen model's own
+ * error (an estimate from the frames before) is of the order of its standard deviations: a
+ * coloured error of a few noise variances in all, no measurable colour.
  *
  * Core rules: no heap, globals or I/O; interfaces in scalar_t, internals float32 in both
  * builds (as rls.h). The per-frame step (motor_id_step) is the bank update; the refinement
@@ -63,6 +86,8 @@
 #define MOTOR_ID_STAGES 3
 #define MOTOR_ID_TAU_MIN 0.0005f
 #define MOTOR_ID_TAU_MAX 0.5f
+#define MOTOR_ID_WLAGS 3     /* autocorrelation lags of the whiteness test */
+#define MOTOR_ID_WBINS 3     /* throttle levels of the whiteness test */
 
 struct motor_id_cfg {
 	scalar_t dt_s;           /* frame period */
@@ -71,6 +96,22 @@ struct motor_id_cfg {
 	float curve0;            /* prior curve c (the model when est_curve is false) */
 	bool est_curve;          /* estimate c (else c = curve0) */
 	uint32_t n_frames;       /* excited frames planned: refinements at 30 % and 55 % */
+	bool fix_delay;          /* take delay_fr as known (else the bank chooses) */
+	uint32_t delay_fr;       /* the given delay, frames (< MOTOR_ID_DELAYS) */
+};
+
+/* the whiteness test's sums (see above) */
+struct motor_id_white {
+	bool on;                 /* the last stage's model is frozen and the sums run */
+	uint8_t delay;           /* the hypothesis followed (its lag: grid index 1) */
+	uint8_t run;             /* consecutive frames in the ring (a lost frame restarts it) */
+	float k1;                /* the frozen model: 1 - a of its lag, */
+	float s[MOTOR_ID_ROTORS];       /* its lag filters, */
+	float dl[MOTOR_ID_ROTORS][2];   /* its change of theta from the reference */
+	float ring[MOTOR_ID_WLAGS][MOTOR_ID_ROTORS];   /* last prediction errors, newest first */
+	/* per rotor and level: n, sum e, sum e^2, sum e_k e_(k-L) */
+	float n[MOTOR_ID_ROTORS][MOTOR_ID_WBINS], se[MOTOR_ID_ROTORS][MOTOR_ID_WBINS],
+	      see[MOTOR_ID_ROTORS][MOTOR_ID_WBINS], sl[MOTOR_ID_ROTORS][MOTOR_ID_WBINS][MOTOR_ID_WLAGS];
 };
 
 /* least-squares sums of one rotor under one hypothesis (see above) */
@@ -99,6 +140,7 @@ struct motor_id {
 	 * hist's next slot, its noise sums are already taken) */
 	scalar_t q_f[MOTOR_ID_ROTORS], q_tq[MOTOR_ID_ROTORS];
 	bool q_excited, q_pending;
+	struct motor_id_white wh;
 };
 
 /* why an estimate is not to be applied */
@@ -112,6 +154,9 @@ enum motor_id_cause {
 	MOTOR_ID_CURVE,          /* curve estimation off but the data show a curve */
 	MOTOR_ID_ROTOR,          /* one rotor is not explained (rotor index in cause_rotor) */
 	MOTOR_ID_MODEL,          /* residuals above the noise on every rotor */
+	MOTOR_ID_DELAY_GIVEN,    /* the given delay (fix_delay) is contradicted: another fits better */
+	MOTOR_ID_LEVEL,          /* prediction errors coloured at one throttle level: thrust curve */
+	MOTOR_ID_COLOURED,       /* prediction errors coloured on every rotor: lag or delay dynamics */
 };
 
 struct motor_id_result {
@@ -128,6 +173,12 @@ struct motor_id_result {
 	float curve_chi2;        /* with est_curve false: the curve's likelihood-ratio statistic
 				  * (chi-square, one degree of freedom per rotor under the model) */
 	uint32_t n;              /* frames used */
+	/* whiteness: the statistic over everything, its limit and degrees of freedom; each
+	 * rotor's and each level's statistic over its limit (> 1: fails) */
+	bool white_ok, white_have;   /* the test passed; it ran at all (the last stage's frames) */
+	float white_q, white_lim, white_dof;
+	float white_rotor[MOTOR_ID_ROTORS], white_level[MOTOR_ID_WBINS];
+	uint32_t free_delay;     /* the bank's own choice (differs from delay when one was given) */
 	enum motor_id_cause cause;
 	int cause_rotor;         /* 0-based, for MOTOR_ID_ROTOR; else -1 */
 };

@@ -316,16 +316,32 @@ UNIT_TEST(app_motor_model_parameters_settable_results_read_only)
 	}
 }
 
-/* A rotor's effectiveness (MOT_SCALEj) reaches the throttle map: in a level hover every
- * rotor gives the same thrust, so a rotor at half effectiveness gets twice the throttle. */
-UNIT_TEST(app_rotor_scale_reaches_the_throttle_map)
+/* A rotor's effectiveness (MOT_SCALEj) reaches the mixer and the throttle map: in a level
+ * hover with rotor 3 at half effectiveness, the rotors' real thrusts (scale_j k_f T_j, the
+ * curve being 0) still give the demanded wrench, the allocation is the least-throttle one
+ * (rotor 3 gets less throttle than its neighbours, not twice theirs), and each rotor's thrust
+ * command is what its throttle gives. */
+UNIT_TEST(app_rotor_scale_reaches_the_mixer_and_throttle_map)
 {
 	struct rig *r = rig_hovering(u);
 	CHECK(fabsf(r->h.thr[2] / r->h.thr[0] - 1.0f) < 0.02f);
 	CHECK(app_param_write(&r->a, (size_t)param_index("MOT_SCALE3"), 0.5f) == NULL);
 	fly(r, 3);
-	CHECK(fabsf(r->h.thr[2] / r->h.thr[0] - 2.0f) < 0.04f);
-	CHECK(fabsf(r->h.thr[6] / r->h.thr[0] - 1.0f) < 0.02f);
+	const struct app *a = &r->a;
+	float kf = a->p.veh_kf, l = a->p.veh_arm_l, k = a->p.veh_ktau / a->p.veh_kf, sq = 0.70710678f;
+	static const float tx[8] = {0, -1, -1, -1, 0, 1, 1, 1}, ty[8] = {-1, -1, 0, 1, 1, 1, 0, -1};
+	float w[4] = {0, 0, 0, 0};
+	for (int j = 0; j < 8; j++) {
+		float sc = j == 2 ? 0.5f : 1.0f, f = sc * kf * r->h.thr[j], dg = (j & 1) ? sq : 1.0f;
+		CHECK_NEAR(f, sc_to_float(a->mix_out.f_n[j]), 2e-3f * f + 1e-3f);
+		w[0] += f;
+		w[1] += tx[j] * dg * l * f;
+		w[2] += ty[j] * dg * l * f;
+		w[3] += ((j & 1) ? -k : k) * f;
+	}
+	for (int i = 0; i < 4; i++)
+		CHECK_NEAR(w[i], sc_to_float(a->mix_out.demanded[i]), i == 0 ? 0.02f : 2e-3f);
+	CHECK(r->h.thr[2] < r->h.thr[1] && r->h.thr[2] < r->h.thr[3]);
 }
 
 UNIT_TEST(app_parameters_saved_and_loaded)

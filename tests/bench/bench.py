@@ -733,6 +733,10 @@ def item_motor(rep, args):
             rep.row(5, "    lag bias / std (%), delay chosen right, curve bias / std",
                     f"{t['lag_bias_pct']:+.3f} / {t['lag_std_pct']:.3f}, {t['delay_right_pct']:.1f} %, "
                     f"{t['curve_bias']:+.4f} / {t['curve_std']:.4f}", "", "", "(reported)", None, c)
+            rep.row(5, "    var / reported sd^2 of the lag, curve, scales; whiteness: false rejections, Q / dof",
+                    f"{t['lag_var_over_reported']:.2f}, {t['curve_var_over_reported']:.2f}, "
+                    f"{t['scale_var_over_reported']:.2f}; {t['white_rejected_pct']:.1f} %, "
+                    f"{t['white_q_over_dof']:.2f}", "", "", "(reported)", None, c)
     rep.data["motor"] = r
 
 

@@ -12,11 +12,14 @@
  * their sum; exact ZOH lag and delay in double precision. The estimator runs for 5 s and for
  * 10 s of excitation (separate runs, each planning its own length).
  * Figures: k_f relative bias and std, and the ratio of its variance to the mean reported sd^2
+ * (also of the lag, the curve and the scales)
  * (1 when the sds are honest), with the curve estimated and, on linear rotors, with the curve
  * known (where the reported sd is the least-squares bound of the model); the lag's relative
  * bias and std; how often the delay is chosen right (all runs); the curve's bias and std;
  * how often the run is rejected (cause not OK; the accuracy figures are over the accepted
- * runs, as only those are applied). One JSON object on stdout.
+ * runs, as only those are applied); how often the whiteness test of the one-step prediction
+ * errors fails on these well-modelled vehicles (its false rejections) and its statistic over
+ * its degrees of freedom (1 when white). One JSON object on stdout.
  */
 #include <math.h>
 #include <stdio.h>
@@ -43,7 +46,7 @@ static double gauss(void)
 }
 
 struct acc {
-	double n, s, s2, sd2, right, rej;
+	double n, s, s2, sd2, right, rej, white, wq;
 };
 static void add(struct acc *a, double e, double sd) { a->n++; a->s += e; a->s2 += e * e; a->sd2 += sd * sd; }
 static double mean(const struct acc *a) { return a->n > 0 ? a->s / a->n : 0; }
@@ -57,7 +60,7 @@ static const double P1[NR] = {1, 0, -1, 0, 1, 0, -1, 0};
 static const double P2[NR] = {0, 1, 0, -1, 0, 1, 0, -1};
 
 static void one_run(int n_exc, bool est_curve, bool linear, struct acc *kf, struct acc *lag, struct acc *dly,
-		    struct acc *crv)
+		    struct acc *crv, struct acc *scl)
 {
 	double kf_t = 28.0269 * uni(0.7, 1.3), kt_t = 0.3869 * uni(0.7, 1.3), tau = uni(0.01, 0.1);
 	unsigned delay = (unsigned)uni(0, 3.999);
@@ -115,6 +118,8 @@ static void one_run(int n_exc, bool est_curve, bool linear, struct acc *kf, stru
 	motor_id_solve(&m, 1.3f, &r);
 	dly->right += r.delay == delay;
 	dly->n++;
+	dly->white += r.white_have && !r.white_ok;
+	dly->wq += r.white_have ? (double)(r.white_q / r.white_dof) : 1.0;
 	if (r.cause != MOTOR_ID_OK) {   /* rejected: counted, not in the accuracy figures */
 		dly->rej++;
 		return;
@@ -122,20 +127,26 @@ static void one_run(int n_exc, bool est_curve, bool linear, struct acc *kf, stru
 	add(kf, (double)r.kf / kf_t - 1.0, (double)r.kf_sd / kf_t);
 	add(lag, (double)r.tau / tau - 1.0, (double)r.tau_sd / tau);
 	add(crv, (double)r.curve - c, (double)r.curve_sd);
+	for (int j = 0; j < NR; j++)
+		add(scl, (double)r.scale[j] / sc[j] - 1.0, (double)r.scale_sd[j] / sc[j]);
 }
 
 static void case_json(const char *name, int runs, int n_exc, bool est_curve, bool linear, bool last)
 {
-	struct acc kf = {0}, lag = {0}, dly = {0}, crv = {0};
+	struct acc kf = {0}, lag = {0}, dly = {0}, crv = {0}, scl = {0};
 	for (int i = 0; i < runs; i++)
-		one_run(n_exc, est_curve, linear, &kf, &lag, &dly, &crv);
+		one_run(n_exc, est_curve, linear, &kf, &lag, &dly, &crv, &scl);
 	printf("  \"%s\": {\"seconds\": %g, \"runs\": %d, \"kf_bias_pct\": %.5f, \"kf_std_pct\": %.5f, "
 	       "\"kf_var_over_reported\": %.4f, \"lag_bias_pct\": %.4f, \"lag_std_pct\": %.4f, "
 	       "\"lag_var_over_reported\": %.4f, \"delay_right_pct\": %.2f, \"curve_bias\": %.5f, "
-	       "\"curve_std\": %.5f, \"rejected_pct\": %.2f}%s\n",
+	       "\"curve_std\": %.5f, \"curve_var_over_reported\": %.4f, \"scale_var_over_reported\": %.4f, "
+	       "\"rejected_pct\": %.2f, \"white_rejected_pct\": %.2f, \"white_q_over_dof\": %.3f}%s\n",
 	       name, n_exc * DT, runs, 100 * mean(&kf), 100 * sdev(&kf), sdev(&kf) * sdev(&kf) / (kf.sd2 / kf.n),
 	       100 * mean(&lag), 100 * sdev(&lag), lag.sd2 > 0 ? sdev(&lag) * sdev(&lag) / (lag.sd2 / lag.n) : 0.0,
-	       100 * dly.right / dly.n, mean(&crv), sdev(&crv), 100 * dly.rej / dly.n, last ? "" : ",");
+	       100 * dly.right / dly.n, mean(&crv), sdev(&crv),
+	       crv.sd2 > 0 ? sdev(&crv) * sdev(&crv) / (crv.sd2 / crv.n) : 0.0,
+	       scl.sd2 > 0 ? sdev(&scl) * sdev(&scl) / (scl.sd2 / scl.n) : 0.0, 100 * dly.rej / dly.n,
+	       100 * dly.white / dly.n, dly.wq / dly.n, last ? "" : ",");
 }
 
 int main(int argc, char **argv)

@@ -12,10 +12,14 @@
  */
 #include "unit_scalar.h"
 #include "mixer.h"
+#include "thrmap.h"
 #include "unit.h"
 
 #include <math.h>
 #include <string.h>
+#ifdef TEST_VERBOSE
+#include <stdio.h>
+#endif
 
 #if OCTO_FIXED
 #define TOL_F   6e-3
@@ -743,4 +747,201 @@ UNIT_TEST(mixer_shortfall_directions)
 		}
 	}
 	CHECK(n_pos > 50 && n_neg > 50); /* both directions occur in the draw */
+}
+
+/* ---------------------------------------------------------------- a weak rotor */
+
+/* eq. (14) in double: the geometry, no effectiveness */
+static void gamma_geom(double l, double kf, double kt, double g[4][8])
+{
+	static const double tx[8] = { 0, -1, -1, -1, 0, 1, 1, 1 };
+	static const double ty[8] = { -1, -1, 0, 1, 1, 1, 0, -1 };
+	for (int j = 0; j < 8; j++) {
+		double diag = (j & 1) ? sqrt(2.0) / 2 : 1.0;
+		g[0][j] = 1.0;
+		g[1][j] = tx[j] * diag * l;
+		g[2][j] = ty[j] * diag * l;
+		g[3][j] = (j & 1) ? -kt / kf : kt / kf;
+	}
+}
+
+/* What the rotors really give for a demand: mixer, then the throttle map (both with the
+ * mixer's knowledge of the scales, blind or not), then the plant's rotors (true scales,
+ * true curve) in double; the physical wrench of their thrusts by eq. (14). */
+static void fly_demand(const struct mixer *m, const struct thrmap *map, const double g[4][8], double kf,
+		       double curve, const double scale[8], const double dem[4], double got[4],
+		       struct mixer_output *o)
+{
+	scalar_t w[4], thr[8];
+	for (int i = 0; i < 4; i++)
+		w[i] = sc_from_float((float)dem[i]);
+	mixer_update(m, w, o);
+	thrmap_update(map, o->f_n, thr, 8);
+	for (int i = 0; i < 4; i++)
+		got[i] = 0.0;
+	for (int j = 0; j < 8; j++) {
+		double t = d(thr[j]), f = scale[j] * kf * ((1.0 - curve) * t + curve * t * t);
+		for (int i = 0; i < 4; i++)
+			got[i] += g[i][j] * f;
+	}
+}
+
+/* Random vehicles (l, k_f, k_tau +/-30 %, curve 0-0.5) with one rotor at 0.8-1.0
+ * effectiveness, known to mixer and throttle map: every demand the real rotors can meet
+ * (their thrusts drawn in the TRUE box [0, scale_j k_f], many on its bounds, so the weak
+ * rotor at full throttle) is met by the rotors' real thrusts, to the mixer's tolerances plus
+ * the throttle map's quantisation; each rotor's command stays in its own box. The same
+ * demands through a scale-blind mixer (the throttle map alone compensating the weak rotor)
+ * miss by up to (1 - scale) k_f where that rotor saturates: the test is not vacuous. */
+UNIT_TEST(mixer_weak_rotor_allocated_around)
+{
+	struct unit_rng r = { 0x3eadbeefULL };
+#if OCTO_FIXED
+	const double map_tol = 8 * 2e-3;   /* T resolution 1.5e-5 at up to 37 N per rotor */
+#else
+	const double map_tol = 8 * 1e-5;
+#endif
+	for (int v = 0; v < SWEEP(20) + 2; v++) {
+		double l = 0.35 * unit_rand_uniform(&r, 0.7, 1.3), kf = 28.0269 * unit_rand_uniform(&r, 0.7, 1.3);
+		double kt = 0.3869 * unit_rand_uniform(&r, 0.7, 1.3), curve = unit_rand_uniform(&r, 0.0, 0.5);
+		double scale[8];
+		int weak = (int)unit_rand_uniform(&r, 0.0, 7.999);
+		for (int j = 0; j < 8; j++)
+			scale[j] = 1.0;
+		scale[weak] = unit_rand_uniform(&r, 0.8, 1.0);
+		struct mixer_params p;
+		params(&p, l, kf, kt, 0xFF);
+		struct thrmap_params tp = { p.k_f_n, sc_from_float((float)curve), { 0 } };
+		for (int j = 0; j < 8; j++)
+			tp.scale[j] = p.scale[j] = sc_from_float((float)scale[j]);
+		static struct mixer blind;
+		struct mixer_params pb = p;
+		for (int j = 0; j < 8; j++)
+			pb.scale[j] = SC(1);
+		CHECK(mixer_init(&mix, &p));
+		CHECK(mixer_init(&blind, &pb));
+		struct thrmap map;
+		thrmap_init(&map, &tp);
+		double g[4][8], kfq = d(p.k_f_n), sw = d(tp.scale[weak]);
+		gamma_geom(d(p.arm_l_m), kfq, d(p.k_tau_nm), g);
+		double worst = 0.0, worst_blind = 0.0;
+		for (int n = 0; n < SWEEP(400); n++) {
+			double f[8], dem[4] = { 0, 0, 0, 0 }, got[4];
+			scalar_t fs[8], wm[4];
+			for (int j = 0; j < 8; j++) {
+				double hi = d(tp.scale[j]) * kfq, pick = unit_rand_uniform(&r, 0, 1);
+				f[j] = unit_rand_uniform(&r, 0.0, hi);
+				if (pick < 0.25)
+					f[j] = 0.0;
+				else if (pick < 0.5 || (j == weak && pick < 0.8))
+					f[j] = hi;
+				fs[j] = sc_from_float((float)f[j]);
+				for (int i = 0; i < 4; i++)
+					dem[i] += g[i][j] * f[j];
+			}
+			/* mixer_wrench: the geometry's wrench of physical thrusts (as ident uses it) */
+			mixer_wrench(&mix, fs, wm);
+			for (int i = 0; i < 4; i++)
+				CHECK_NEAR(d(wm[i]), dem[i], tol_axis[i] + 1e-5 * fabs(dem[i]));
+			/* 1e-4 towards the box's centre, so that rounding keeps it attainable */
+			for (int i = 0; i < 4; i++) {
+				double c = 0.0;
+				for (int j = 0; j < 8; j++)
+					c += g[i][j] * 0.5 * d(tp.scale[j]) * kfq;
+				dem[i] += 1e-4 * (c - dem[i]);
+			}
+			struct mixer_output o;
+			fly_demand(&mix, &map, g, kfq, d(tp.curve), scale, dem, got, &o);
+			for (int i = 0; i < 4; i++) {
+				double e = fabs(got[i] - dem[i]);
+				CHECK(e <= tol_axis[i] + map_tol + 1e-5 * fabs(dem[i]));
+				worst = fmax(worst, e);
+			}
+			CHECK(!(o.limits & (MIXER_LIMIT_F | MIXER_LIMIT_TX | MIXER_LIMIT_TY | MIXER_LIMIT_TZ)));
+			for (int j = 0; j < 8; j++) {
+				CHECK(d(o.f_n[j]) >= -1e-4);
+				CHECK(d(o.f_n[j]) <= d(tp.scale[j]) * kfq * (1.0 + 1e-4) + 1e-3);
+			}
+			fly_demand(&blind, &map, g, kfq, d(tp.curve), scale, dem, got, &o);
+			for (int i = 0; i < 4; i++)
+				worst_blind = fmax(worst_blind, fabs(got[i] - dem[i]));
+		}
+#ifdef TEST_VERBOSE
+		printf("  weak rotor %d scale %.3f: worst wrench error %.2e with the scales, %.2e blind\n",
+		       weak + 1, sw, worst, worst_blind);
+#endif
+		if ((1.0 - sw) * kfq > 0.05)
+			CHECK(worst_blind > 0.1 * (1.0 - sw) * kfq);
+	}
+}
+
+/* The unconstrained allocation with a weak rotor is the least-throttle one: u = (Gamma S)^+ w,
+ * i.e. the physical thrusts are f = S (Gamma S)^+ w (checked against the normal equations in
+ * double), and the scales 1 reproduce eq. (15) exactly. */
+UNIT_TEST(mixer_weak_rotor_pinv_is_column_scaled)
+{
+	struct unit_rng r = { 0x5ca1eULL };
+	for (int v = 0; v < 8; v++) {
+		double l = 0.35 * unit_rand_uniform(&r, 0.7, 1.3), kf = 28.0269 * unit_rand_uniform(&r, 0.7, 1.3);
+		double kt = 0.3869 * unit_rand_uniform(&r, 0.7, 1.3), scale[8];
+		int weak = (int)unit_rand_uniform(&r, 0.0, 7.999);
+		struct mixer_params p;
+		params(&p, l, kf, kt, 0xFF);
+		for (int j = 0; j < 8; j++) {
+			scale[j] = j == weak ? unit_rand_uniform(&r, 0.8, 1.0) : 1.0;
+			p.scale[j] = sc_from_float((float)scale[j]);
+			scale[j] = d(p.scale[j]);
+		}
+		CHECK(mixer_init_design(&mix, &p, &des));
+		double g[4][8], gs[4][8];
+		gamma_geom(d(p.arm_l_m), d(p.k_f_n), d(p.k_tau_nm), g);
+		for (int i = 0; i < 4; i++)
+			for (int j = 0; j < 8; j++) {
+				gs[i][j] = g[i][j] * scale[j];
+				CHECK_NEAR(des.gamma_f[i][j], gs[i][j], 1e-6 * (1.0 + fabs(gs[i][j])));
+			}
+		/* a hover-like demand: u = G^T (G G^T)^-1 w, G = Gamma S, solved by Gauss in double */
+		double w[4] = { 8.0 * 0.1 * d(p.k_f_n) * unit_rand_uniform(&r, 0.8, 1.2),
+				unit_rand_uniform(&r, -0.2, 0.2), unit_rand_uniform(&r, -0.2, 0.2),
+				unit_rand_uniform(&r, -0.02, 0.02) };
+		double a[4][5];
+		for (int i = 0; i < 4; i++) {
+			for (int k = 0; k < 4; k++) {
+				a[i][k] = 0.0;
+				for (int j = 0; j < 8; j++)
+					a[i][k] += gs[i][j] * gs[k][j];
+			}
+			a[i][4] = w[i];
+		}
+		for (int c = 0; c < 4; c++)
+			for (int i = 0; i < 4; i++) {
+				if (i == c)
+					continue;
+				double q = a[i][c] / a[c][c];
+				for (int k = 0; k < 5; k++)
+					a[i][k] -= q * a[c][k];
+			}
+		scalar_t ws[4];
+		for (int i = 0; i < 4; i++)
+			ws[i] = sc_from_float((float)w[i]);
+		struct mixer_output o;
+		mixer_update(&mix, ws, &o);
+		CHECK(o.limits == 0);
+		for (int j = 0; j < 8; j++) {
+			double uj = 0.0;
+			for (int i = 0; i < 4; i++)
+				uj += gs[i][j] * a[i][4] / a[i][i];
+			CHECK_NEAR(d(o.f_n[j]), scale[j] * uj, TOL_F + 1e-4 * fabs(uj));
+		}
+	}
+	/* scales 1 (and 0, "not given"): eq. (15) unchanged, bit for bit */
+	struct mixer_params p1, p0;
+	params(&p1, 0.35, 28.0269, 0.3869, 0xFF);
+	p0 = p1;
+	for (int j = 0; j < 8; j++)
+		p1.scale[j] = SC(1);
+	static struct mixer m1;
+	mixer_init(&m1, &p1);
+	mixer_init(&mix, &p0);
+	CHECK(memcmp(m1.pinv, mix.pinv, sizeof mix.pinv) == 0);
 }
