@@ -60,7 +60,6 @@ static const char *phase_name(int k)
 #define MOT_NE_MAX 1.3f       /* motor model: largest residual over noise variance */
 #define SCALE_LO 0.3f         /* accepted range of a rotor's effectiveness */
 #define SCALE_HI 1.5f
-#define CURVE_HI 0.99f        /* accepted range of the thrust curve: [0, CURVE_HI] */
 
 static const char *const est_names[EXP_MAX_EST] = {
 	"KF", "KTAU", "KF_PLAIN", "KTAU_PLAIN", "IXX", "IYY", "IZZ", "VAL_NE",
@@ -418,7 +417,7 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 	enum ident_verdict vt = ident_accept(mr.ktau, mr.ktau_sd, p->veh_ktau, rsd);
 	bool model_ok = mr.cause == MOTOR_ID_OK;
 	int bad_rotor = -1;
-	bool curve_bad = !(mr.curve >= 0.0f && mr.curve <= CURVE_HI);
+	bool curve_bad = !(mr.curve >= THRMAP_CURVE_MIN && mr.curve <= THRMAP_CURVE_MAX);
 	for (int j = 0; j < HAL_ROTORS; j++)
 		if (!(mr.scale[j] >= SCALE_LO && mr.scale[j] <= SCALE_HI) && bad_rotor < 0)
 			bad_rotor = j;
@@ -477,7 +476,8 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 			say(e, APP_SEV_WARNING, "ID rejected: %s", motor_id_cause_text(mr.cause));
 		say(e, APP_SEV_WARNING, "ID remedy: %s", motor_id_cause_remedy(mr.cause));
 	} else if (curve_bad) {
-		say(e, APP_SEV_WARNING, "ID rejected: curve %.3f outside 0-0.99", (double)mr.curve);
+		say(e, APP_SEV_WARNING, "ID rejected: curve %.3f outside %.2f to %.2f", (double)mr.curve,
+		    (double)THRMAP_CURVE_MIN, (double)THRMAP_CURVE_MAX);
 	} else if (bad_rotor >= 0) {
 		say(e, APP_SEV_WARNING, "ID rejected: rotor %d scale %.3f outside 0.3-1.5", bad_rotor + 1,
 		    (double)mr.scale[bad_rotor]);

@@ -9,6 +9,7 @@
 #include "att_ctrl.h" /* ATT_CTRL_DEFAULT_*: defaults of the ATT_* rows */
 #include "guidance.h" /* GUID_DEFAULT_*: defaults of NAV_TKO_VEL, NAV_LAND_VEL, NAV_TOUCH_DOWN_S */
 #include "pos_ctrl.h" /* POS_CTRL_DEFAULT_*: defaults of POS_GAIN, POS_VEL_GAIN, ATT_TILT_MAX */
+#include "thrmap.h" /* THRMAP_CURVE_MIN/MAX: the range of MOT_CURVE */
 
 #include <stddef.h>
 #include <stdint.h>

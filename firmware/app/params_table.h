@@ -54,7 +54,7 @@ PARAM(NAV_LAND_VEL, nav_land_vel, GUID_DEFAULT_LAND_VEL_MPS,   0.1f,    3.0f,   
 #define PARAM_FLAGS PARAM_LOCKED
 PARAM(MOT_THR_IDLE, mot_thr_idle, 0.0f,    0.0f,    0.3f,    "",       "Throttle of every rotor when armed on the ground")
 PARAM(MOT_THR_MAX,  mot_thr_max,  1.0f,    0.1f,    1.0f,    "",       "Largest throttle command")
-PARAM(MOT_CURVE,    mot_curve,    0.0f,    0.0f,    0.99f,   "",       "Thrust curve a: f = k_f ((1 - a) T + a T^2)")
+PARAM(MOT_CURVE,    mot_curve,    0.0f,    THRMAP_CURVE_MIN, THRMAP_CURVE_MAX, "", "Thrust curve a: f = k_f ((1 - a) T + a T^2); a < 0: thrust concave in throttle")
 PARAM(MIX_MODE,     mix_mode,     1.0f,    0.0f,    1.0f,    "",       "Allocation: 0 pseudo-inverse and clip, 1 box-constrained priority")
 #undef PARAM_FLAGS
 #define PARAM_FLAGS 0

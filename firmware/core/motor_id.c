@@ -1,5 +1,6 @@
 /* motor_id.c - joint identification of the rotor model; see motor_id.h. */
 #include "motor_id.h"
+#include "thrmap.h" /* THRMAP_CURVE_*: the curve's range */
 
 #define NR MOTOR_ID_ROTORS
 #define ND MOTOR_ID_DELAYS
@@ -40,7 +41,7 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const sca
 		m->cfg.tau0_s = 0.03f;
 	if (!(m->cfg.kf0 > 0.0f))
 		m->cfg.kf0 = 1.0f;
-	m->cfg.curve0 = clampf(m->cfg.curve0, 0.0f, 0.99f);
+	m->cfg.curve0 = clampf(m->cfg.curve0, THRMAP_CURVE_MIN, THRMAP_CURVE_MAX);
 	for (unsigned j = 0; j < NR; j++) {
 		float t0 = sc_to_float(thr0[j]);
 		m->s_c[j] = clampf(t0, 0.02f, 1.0f);
@@ -690,11 +691,9 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 			}
 		res->curve = sw > 0.0f ? swc / sw : c0;
 		res->curve_sd = sw > 0.0f ? sqrt0(1.0f / sw) : 0.0f;
-		/* c >= 0 (thrust convex in throttle): a negative estimate within 4 sd of 0 is the
-		 * constrained optimum's boundary, c = 0; beyond, it stays (the data contradict the
-		 * model: the caller's range check names the bound) */
-		if (res->curve < 0.0f && res->curve > -4.0f * res->curve_sd)
-			res->curve = 0.0f;
+		/* not cut at 0: a linear rotor's estimate scatters on both sides of it, and a
+		 * boundary there would bias the curve, and with it k_f, high; the caller's range
+		 * check (THRMAP_CURVE_MIN/MAX) names the bounds */
 	} else {
 		res->curve = c0;
 		res->curve_sd = 0.0f;

@@ -5,7 +5,7 @@ void thrmap_init(struct thrmap *m, const struct thrmap_params *params)
 {
 	m->p = *params;
 	m->p.k_f_n = sc_max(m->p.k_f_n, SC(1e-3));
-	m->p.curve = sc_clamp(m->p.curve, SC_ZERO, SC(0.99));
+	m->p.curve = sc_clamp(m->p.curve, SC(THRMAP_CURVE_MIN), SC(THRMAP_CURVE_MAX));
 	m->one_minus_a = sc_sub(SC(1), m->p.curve);
 	for (unsigned j = 0; j < THRMAP_ROTORS; j++) {
 		scalar_t k = m->p.scale[j] == SC_ZERO ? SC(1) : sc_clamp(m->p.scale[j], SC(0.1), SC(4));
@@ -29,8 +29,9 @@ scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped)
 		u = SC(1);
 	}
 	scalar_t t = u;
-	if (m->p.curve > SC_ZERO) {
-		/* T = 2u / ((1-a) + sqrt((1-a)^2 + 4 a u)); u in [0, 1] gives T in [0, 1] */
+	if (m->p.curve != SC_ZERO) {
+		/* T = 2u / ((1-a) + sqrt((1-a)^2 + 4 a u)), the root that stays finite as a -> 0;
+		 * u in [0, 1] gives T in [0, 1], and (1-a)^2 + 4 a u >= (1+a)^2 > 0 for a < 0 */
 		scalar_t b = m->one_minus_a;
 		scalar_t disc = sc_add(sc_mul(b, b), sc_mul(sc_mul(SC(4), m->p.curve), u));
 		t = sc_div(sc_add(u, u), sc_add(b, sc_sqrt(disc)));

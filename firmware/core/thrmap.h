@@ -17,9 +17,15 @@
 
 #define THRMAP_ROTORS 8
 
+/* The thrust curve's range. a < 0 (thrust concave in throttle) is kept: a linear rotor's
+ * estimate scatters on both sides of 0, and cutting it at 0 would bias k_f high. Within the
+ * range, (1 - a) + 2 a T > 0 on [0, 1]: the map stays monotonic and invertible. */
+#define THRMAP_CURVE_MIN (-0.5f)
+#define THRMAP_CURVE_MAX 0.99f
+
 struct thrmap_params {
 	scalar_t k_f_n;  /* thrust at full throttle, N (> 0; smaller values are raised to 1e-3) */
-	scalar_t curve; /* a in [0, 0.99] (clamped) */
+	scalar_t curve; /* a in [THRMAP_CURVE_MIN, THRMAP_CURVE_MAX] (clamped) */
 	/* per-rotor effectiveness (MOT_SCALEj): rotor j gives scale[j] times a nominal rotor's
 	 * thrust, so thrmap_update maps f_j / scale[j]; 0 (not given) is taken as 1, other
 	 * values are clamped to [0.1, 4] */

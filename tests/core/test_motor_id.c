@@ -228,6 +228,39 @@ UNIT_TEST(motor_id_linear_known_curve)
 	}
 }
 
+/* Linear rotors (curve 0) with the curve estimated: the estimates of the curve and of k_f are
+ * unbiased against their reported sds. A curve cut at 0 would give half the runs c = 0 and
+ * the rest c > 0: a mean z of the curve of +0.40 (and k_f high with it). Over 100 runs the
+ * mean z of an unbiased estimator is 0 +/- 0.1: the bound 0.3 is 3 of those sds. */
+UNIT_TEST(motor_id_linear_rotors_curve_estimated_unbiased)
+{
+	struct unit_rng g = {0x11ea5ULL};
+	const int n = TRIALS(100);
+	double zc = 0.0, zk = 0.0;
+	int ok = 0;
+	for (int v = 0; v < n; v++) {
+		struct truth t;
+		random_truth(&g, &t);
+		t.curve = 0.0;
+		struct motor_id_result r;
+		run(&g, &t, 900, true, 20.0, &r);
+		if (r.cause != MOTOR_ID_OK || !(r.curve_sd > 0.0f) || !(r.kf_sd > 0.0f))
+			continue;
+		ok++;
+		zc += r.curve / r.curve_sd;
+		zk += (r.kf - t.kf) / r.kf_sd;
+	}
+#ifdef TEST_VERBOSE
+	printf("  linear rotors, curve estimated: %d of %d accepted, mean z curve %+.3f, k_f %+.3f\n", ok, n,
+	       zc / ok, zk / ok);
+#endif
+	CHECK(ok >= n - 2 - n / 20);
+	if (n >= 50) {   /* the statistic needs the host's 100 runs */
+		CHECK(fabs(zc / ok) < 0.3);
+		CHECK(fabs(zk / ok) < 0.3);
+	}
+}
+
 /* Curve estimation off while the rotors have a curve: rejected for the curve */
 UNIT_TEST(motor_id_curve_not_modelled_rejected)
 {
