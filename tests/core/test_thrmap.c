@@ -49,12 +49,13 @@ UNIT_TEST(thrmap_update_mask)
 	CHECK_NEAR(d(t[6]), 0.5, OCTO_FIXED ? 2e-5 : 1e-7);
 }
 
-/* Thrust curve f = k_f ((1 - a) T + a T^2): closed-form inverse against double. */
+/* Thrust curve f = k_f ((1 - a) T + a T^2): closed-form inverse against double, for convex
+ * (a > 0) and concave (a < 0, down to THRMAP_CURVE_MIN) rotors. */
 UNIT_TEST(thrmap_curve_inverse)
 {
 	const double kf = 28.0269;
-	const double as[4] = { 0.1, 0.3, 0.6, 0.95 };
-	for (int j = 0; j < 4; j++) {
+	const double as[7] = { -0.5, -0.2, -0.01, 0.1, 0.3, 0.6, 0.95 };
+	for (int j = 0; j < 7; j++) {
 		struct thrmap_params p = { s(kf), s(as[j]), {0} };
 		struct thrmap m;
 		thrmap_init(&m, &p);
@@ -80,6 +81,13 @@ UNIT_TEST(thrmap_curve_inverse)
 	thrmap_init(&m, &bad);
 	CHECK(d(m.p.k_f_n) > 0 && d(m.p.curve) <= 0.99 + 1e-4);
 	CHECK(thrmap_throttle(&m, SC(1), NULL) == SC(1));
+	bad.curve = SC(-3);
+	thrmap_init(&m, &bad);
+	CHECK_NEAR(d(m.p.curve), THRMAP_CURVE_MIN, 1e-4);
+	for (int i = 0; i <= 20; i++) {   /* monotonic, within [0, 1] */
+		scalar_t t = thrmap_throttle(&m, sc_mul(m.p.k_f_n, s(i / 20.0)), NULL);
+		CHECK(t >= SC_ZERO && t <= SC(1));
+	}
 }
 
 /* Per-rotor effectiveness: rotor j's throttle gives scale_j times the nominal thrust, so the
