@@ -50,6 +50,8 @@
 static const double tol_axis[4] = { TOL_F, TOL_TXY, TOL_TXY, TOL_TZ };
 
 static struct mixer mix;
+/* a second mixer for comparisons (one for all tests: the M0 image has 16 KB of RAM) */
+static struct mixer mix_b;
 static struct mixer_design des; /* the float32 set-up results (not kept by struct mixer) */ /* 4 KB: not on the test's stack */
 
 static void params(struct mixer_params *p, double l, double kf, double kt, unsigned mask)
@@ -620,9 +622,9 @@ UNIT_TEST(mixer_set_params_recomputes_only_on_change)
 	mixer_set_params(&mix, &p);
 	CHECK(mix.pinv[0][0] != SC(123));
 	/* recomputed from the new parameters: the same as a fresh set-up with them */
-	static struct mixer fresh;
-	mixer_init_design(&fresh, &p, &des);
-	CHECK(!memcmp(mix.pinv, fresh.pinv, sizeof mix.pinv) && !memcmp(mix.gn, fresh.gn, sizeof mix.gn));
+	struct mixer *fresh = &mix_b;
+	mixer_init_design(fresh, &p, &des);
+	CHECK(!memcmp(mix.pinv, fresh->pinv, sizeof mix.pinv) && !memcmp(mix.gn, fresh->gn, sizeof mix.gn));
 	CHECK_NEAR(des.gamma_f[3][0], d(SC(0.40)) / d(p.k_f_n), 1e-6);
 }
 
@@ -814,12 +816,12 @@ UNIT_TEST(mixer_weak_rotor_allocated_around)
 		struct thrmap_params tp = { p.k_f_n, sc_from_float((float)curve), { 0 } };
 		for (int j = 0; j < 8; j++)
 			tp.scale[j] = p.scale[j] = sc_from_float((float)scale[j]);
-		static struct mixer blind;
+		struct mixer *blind = &mix_b;
 		struct mixer_params pb = p;
 		for (int j = 0; j < 8; j++)
 			pb.scale[j] = SC(1);
 		CHECK(mixer_init(&mix, &p));
-		CHECK(mixer_init(&blind, &pb));
+		CHECK(mixer_init(blind, &pb));
 		struct thrmap map;
 		thrmap_init(&map, &tp);
 		double g[4][8], kfq = d(p.k_f_n), sw = d(tp.scale[weak]);
@@ -862,7 +864,7 @@ UNIT_TEST(mixer_weak_rotor_allocated_around)
 				CHECK(d(o.f_n[j]) >= -1e-4);
 				CHECK(d(o.f_n[j]) <= d(tp.scale[j]) * kfq * (1.0 + 1e-4) + 1e-3);
 			}
-			fly_demand(&blind, &map, g, kfq, d(tp.curve), scale, dem, got, &o);
+			fly_demand(blind, &map, g, kfq, d(tp.curve), scale, dem, got, &o);
 			for (int i = 0; i < 4; i++)
 				worst_blind = fmax(worst_blind, fabs(got[i] - dem[i]));
 		}
@@ -940,8 +942,8 @@ UNIT_TEST(mixer_weak_rotor_pinv_is_column_scaled)
 	p0 = p1;
 	for (int j = 0; j < 8; j++)
 		p1.scale[j] = SC(1);
-	static struct mixer m1;
-	mixer_init(&m1, &p1);
+	struct mixer *m1 = &mix_b;
+	mixer_init(m1, &p1);
 	mixer_init(&mix, &p0);
-	CHECK(memcmp(m1.pinv, mix.pinv, sizeof mix.pinv) == 0);
+	CHECK(memcmp(m1->pinv, mix.pinv, sizeof mix.pinv) == 0);
 }
