@@ -658,6 +658,25 @@ static void link_lost(struct app *a, const char *what)
 	abort_experiment(a, "X-Plane link lost");
 }
 
+/* One line per gap, or, within a wall second of the last, a count folded into the next line
+ * (the gap's consequences, an aborted experiment or a landing, are not delayed). */
+static void say_gap(struct app *a, float gap_s, uint64_t now_us)
+{
+	if (a->gap_said_us != 0 && now_us - a->gap_said_us < 1000000u) {
+		a->gaps_unsaid++;
+		a->gap_max_unsaid_s = fmaxf(a->gap_max_unsaid_s, gap_s);
+		return;
+	}
+	if (a->gaps_unsaid > 0)
+		app_status(a, APP_SEV_WARNING, "X-Plane frames missing: %u gaps, longest %.2f s",
+			   (unsigned)a->gaps_unsaid + 1u, (double)fmaxf(gap_s, a->gap_max_unsaid_s));
+	else
+		app_status(a, APP_SEV_WARNING, "X-Plane frames missing for %.2f s", (double)gap_s);
+	a->gap_said_us = now_us > 0u ? now_us : 1u;
+	a->gaps_unsaid = 0;
+	a->gap_max_unsaid_s = 0.0f;
+}
+
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
 	app_settle(a);   /* normally done by app_tick already (nothing left here) */
@@ -674,9 +693,10 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	if (complete) {
 		double gap = a->have_step ? f->t_s - a->t_prev : (double)FIRST_DT_S;
 		if (gap > 0.0) {
-			if (a->have_step && gap > (double)a->p.fs_link_to) {
+			bool missing = a->have_step && gap > (double)a->p.fs_link_to;
+			if (missing) {
 				/* frames missing in plant time (lockstep bursts, reload) */
-				app_status(a, APP_SEV_WARNING, "X-Plane frames missing for %.2f s", gap);
+				say_gap(a, (float)gap, now);
 				abort_experiment(a, "X-Plane frames missing");
 				if (gap > (double)a->p.fs_land_after && app_flying(a) && a->mode != APP_LAND) {
 					char why[8];
@@ -692,7 +712,10 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 				a->dt_frame += 0.02f * (dt - a->dt_frame);
 			a->t_prev = f->t_s;
 			a->have_step = true;
-			control_step(a, dt);
+			/* After frames missing the controllers were out of the loop (their last
+			 * command held): they take one frame period, not the gap, so that their
+			 * integrators do not wind up over time they could not act in. */
+			control_step(a, missing && a->dt_frame > 0.0f ? a->dt_frame : dt);
 			a->steps++;
 			stepped = true;
 		}

@@ -63,6 +63,11 @@ struct app {
 	uint64_t wall_last_frame_us;
 	bool link_ok, link_ever;
 	uint64_t link_lost_at_us;
+	/* "frames missing" lines: at most one a wall second (a fast lockstep run through a burst
+	 * storm would otherwise crowd the ground station's other lines out of its rate) */
+	uint64_t gap_said_us;
+	uint32_t gaps_unsaid;         /* gaps since the last line */
+	float gap_max_unsaid_s;
 	bool actuating;               /* throttles are ours (from the first arming) */
 	bool have_actuated;
 	double t_actuated;            /* plant time of the last frame answered */

@@ -230,6 +230,67 @@ UNIT_TEST(app_plant_time_gap_lands)
 	CHECK(!strcmp(r->h.last_event, "Mode LAND"));
 }
 
+/* After frames missing in plant time (less than FS_LAND_AFTER) the controllers step by one
+ * frame period, not by the gap: their integrators do not wind up over time in which their
+ * last command was only held (integrating a 0.5 s gap as 0.2 s kicked the attitude loop,
+ * whose held corrections then tipped the vehicle in the next blackout). */
+UNIT_TEST(app_plant_time_gap_not_integrated)
+{
+	struct rig *r = rig_hovering(u);
+	r->f.rate_b_rps[0] = 0.1f;   /* a steady roll-rate error for the integral to act on */
+	fly(r, 2);
+	double i0 = (double)sc_to_float(r->a.att.int_r_rad.x);
+	fly(r, 1);
+	double step = (double)sc_to_float(r->a.att.int_r_rad.x) - i0;
+	r->t += 0.5;   /* 0.5 s of frames missing: longer than FS_LINK_TO, shorter than FS_LAND_AFTER */
+	double i1 = (double)sc_to_float(r->a.att.int_r_rad.x);
+	fly(r, 1);
+	double gap_step = (double)sc_to_float(r->a.att.int_r_rad.x) - i1;
+	CHECK(r->a.mode == APP_HOLD);
+	CHECK(fabs(step) > 1e-4);
+	CHECK_NEAR(gap_step, step, 0.25 * fabs(step));
+	r->f.rate_b_rps[0] = 0.0f;
+}
+
+/* A burst storm in a fast lockstep run: one "frames missing" line a wall second, the gaps
+ * between counted into the next line, so that other lines keep their place in the ground
+ * station's STATUSTEXT rate. */
+/* Frames without app_tick (which would hand the outbox to MAVLink); the "frames missing"
+ * lines among the outbox's events counted, the last one kept. */
+static int gap_lines(struct rig *r, int frames, char *last, size_t cap)
+{
+	int n = 0;
+	for (int i = 0; i < frames; i++) {
+		r->t += 1.0 / 90.0;
+		r->h.now_us += FRAME_US;
+		frame_at(r, r->t);
+		struct app_event e;
+		while (outbox_pop(&r->a.outbox, &e))
+			if (e.kind == APP_EV_STATUS && !strncmp(e.text, "X-Plane frames missing", 22)) {
+				n++;
+				snprintf(last, cap, "%s", e.text);
+			}
+	}
+	return n;
+}
+
+UNIT_TEST(app_frames_missing_said_once_a_wall_second)
+{
+	struct rig *r = rig_hovering(u);
+	char last[APP_EVENT_TEXT] = "";
+	int lines = 0;
+	for (int g = 0; g < 12; g++) {   /* 12 gaps of 0.4 s, 3 frames apart: 0.4 s of wall time */
+		r->t += 0.4;
+		lines += gap_lines(r, 3, last, sizeof last);
+	}
+	CHECK(lines == 1);
+	CHECK(r->a.mode == APP_HOLD);
+	r->h.now_us += 1000000u;
+	r->t += 0.45;
+	CHECK(gap_lines(r, 1, last, sizeof last) == 1);
+	CHECK(!strcmp(last, "X-Plane frames missing: 12 gaps, longest 0.46 s"));
+}
+
 UNIT_TEST(app_experiment_command_idempotent_and_locks_parameters)
 {
 	if (!exp_available(1))
