@@ -205,6 +205,7 @@ void envelope_on_mode(struct app *a)
 {
 	struct envelope *e = &a->env;
 	e->phase_s = 0.0f;
+	e->hold_s = 0.0f;
 	if (a->mode == APP_TAKEOFF && e->hov.updates == 0)
 		envelope_init(a);   /* nothing learned yet: start from the current VEH_* */
 	if (a->mode != APP_HOLD)
@@ -253,6 +254,23 @@ static bool phase_timeout(struct app *a, float dt, char *why, size_t cap, char *
 				 (double)sc_to_float(hover_est_u(&e->hov)), (double)sc_to_float(hover_est_sd(&e->hov)));
 		return true;
 	}
+	/* hold entry: the take-off's set point at the target, the vehicle still to settle there
+	 * and the hover throttle to be learned (guidance's GUID_HOLD_REACHED) */
+	if (a->mode == APP_TAKEOFF && a->guid.z_sp_m == a->guid.z_target_m) {
+		e->hold_s += dt;
+		if (e->hold_s > a->p.nav_hold_to) {
+			float dz = z - (sc_to_float(a->guid.z_target_m) - sc_to_float(a->guid.z_ground_m));
+			snprintf(why, cap, "Hold entry failed: NAV_HOLD_TO %g s", (double)a->p.nav_hold_to);
+			if (!envelope_hover_ready(a))
+				snprintf(more, more_cap, "Hover throttle %.3f+/-%.3f not learned",
+					 (double)sc_to_float(hover_est_u(&e->hov)),
+					 (double)sc_to_float(hover_est_sd(&e->hov)));
+			else
+				snprintf(more, more_cap, "Still %+.3f m %+.3f m/s off the target", (double)dz,
+					 (double)a->fr.vel_i_mps[2]);
+			return true;
+		}
+	}
 	if (a->mode == APP_LAND && e->phase_s > a->p.nav_land_to) {
 		snprintf(why, cap, "Landing failed: NAV_LAND_TO %.0f s, %.2f m up", (double)a->p.nav_land_to,
 			 (double)z);
@@ -275,7 +293,7 @@ void envelope_limits(struct app *a, float dt)
 				       .origin = a->env.origin};
 		outbox_post(&a->outbox, &ev);
 	}
-	if (a->mode == APP_TAKEOFF) {
+	if (a->mode == APP_TAKEOFF) {   /* the take-off or its hold entry ran out: land */
 		char w[8];
 		app_cmd_land(a, APP_ORIGIN_NONE, w, sizeof w);   /* the take-off's origin has its answer */
 	}

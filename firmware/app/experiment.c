@@ -107,6 +107,9 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	c->rsd_max = cfg_f(p->id_rsd_max, 0.02f);
 	c->exc_ofs = cfg_f(p->id_exc_ofs, 0.03f);
 	c->crv_est = cfg_f(p->id_crv_est, 1.0f) >= 0.5f;
+	c->rot_to = cfg_f(p->id_rot_to, 0.0f);
+	c->inr_to = cfg_f(p->id_inr_to, 0.0f);
+	c->val_to = cfg_f(p->id_val_to, 0.0f);
 }
 
 /* Status lines are queued with their arguments and formatted (vsnprintf with %f: thousands
@@ -180,6 +183,8 @@ static void format_line(const struct exp_line *l, char *out, size_t cap)
 		snprintf(out, cap, l->fmt, ARG_S(0));
 	else if (!strcmp(k, "df"))
 		snprintf(out, cap, l->fmt, ARG_D(0), ARG_F(1));
+	else if (!strcmp(k, "ssf"))
+		snprintf(out, cap, l->fmt, ARG_S(0), ARG_S(1), ARG_F(2));
 	else if (!strcmp(k, "ffff"))
 		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_F(2), ARG_F(3));
 	else
@@ -666,6 +671,32 @@ void exp_turn(struct experiment *e, const struct app_params *p)
 	}
 }
 
+/* The current phase's time limit (plant time, settling included) and its parameter's name:
+ * ID_ROT_TO, ID_INR_TO or ID_VAL_TO, or with 0 twice the phase's planned time plus 5 s (a
+ * guard: a phase runs its planned time unless something holds it up). */
+static float phase_limit(const struct experiment *e, const char **name)
+{
+	int k = e->phase_kind[e->phase];
+	float lim = k == PK_ROTOR ? e->cfg.rot_to : (k >= PK_INR_X && k <= PK_INR_Z) ? e->cfg.inr_to : e->cfg.val_to;
+	*name = k == PK_ROTOR ? "ID_ROT_TO" : (k >= PK_INR_X && k <= PK_INR_Z) ? "ID_INR_TO" : "ID_VAL_TO";
+	return lim > 0.0f ? lim : 2.0f * (e->t_settle + e->t_run) + 5.0f;
+}
+
+/* A phase over its time limit: the experiment fails with the reason (severity ERROR, the
+ * limit and the phase's planned time) and its final answer FAILED; results not yet applied
+ * are dropped. */
+static void limit_fail(struct experiment *e, const char *name, float lim)
+{
+	int k = e->phase_kind[e->phase];
+	e->q_n = 0;
+	e->n_results = 0;
+	e->est_live = 0;
+	say(e, APP_SEV_ERROR, "ID %s failed: %s %.1f s", phase_name(k), name, (double)lim);
+	say(e, APP_SEV_ERROR, "ID aborted: time limit, phase planned %.1f s", (double)(e->t_settle + e->t_run));
+	e->state = EXP_ABORTED;
+	e->final_result = APP_FAILED;
+}
+
 enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
 {
 	if (e->state != EXP_RUNNING)
@@ -690,6 +721,13 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 		phase_step(e, in, out);
 		e->t_phase += in->dt_s;
 		float total = e->t_settle + e->t_run;
+		const char *lim_name;
+		float lim = phase_limit(e, &lim_name);
+		if (e->t_phase > lim) {
+			memset(out, 0, sizeof *out);
+			limit_fail(e, lim_name, lim);
+			return e->state;
+		}
 		e->progress = ((float)e->phase + fminf(e->t_phase / total, 1.0f)) / (float)e->n_phases;
 		if (e->t_phase >= total) {
 			/* the phase is over: its end (estimates, results, verdicts) and the next one's

@@ -82,7 +82,10 @@
  * Acceptance (ident_accept): finite, within [0.25, 4] x the current VEH_* value,
  * relative std < ID_RSD_MAX (0.02); then VEH_* and ID_RESULT bits are among the
  * results; otherwise a STATUSTEXT says why and VEH_* stay. The experiment aborts
- * itself ("height limit") if the height leaves +/-1.5 m of its start.
+ * itself ("height limit") if the height leaves +/-1.5 m of its start, and fails when a
+ * phase runs past its time limit (plant time, settling included: ID_ROT_TO, ID_INR_TO,
+ * ID_VAL_TO; 0 = twice the planned time + 5 s): "ID inertia Izz failed: ID_INR_TO 3.0 s"
+ * and "ID aborted: time limit, phase planned 11.0 s" (severity ERROR), final FAILED.
  *
  * ---------------------------------------------------------------- live estimates
  * est[i] / est_sd[i] (also the LCM log's est[8] / est_sd[8]), fixed order:
@@ -194,6 +197,7 @@ struct exp_turn {
 /* the experiment's configuration (ID_* parameters), read once at exp_start */
 struct exp_cfg {
 	float exc_amp, exc_time, mot_tau, inr_amp, inr_time, val_time, rsd_max, exc_ofs;
+	float rot_to, inr_to, val_to;          /* phase time limits (0: automatic) */
 	uint32_t exc_kind, exc_div, seed, delay_fr;
 	bool exc_null, crv_est;
 };

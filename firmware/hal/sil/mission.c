@@ -219,7 +219,7 @@ static int command(struct sil *s, uint16_t cmd, float p1, float p7)
 	if (cmd == MAV_CMD_USER_1)
 		s->seen.exp_final = false;
 	s->seen.text[0] = 0;
-	if (cmd == MAV_CMD_NAV_TAKEOFF || cmd == MAV_CMD_NAV_LAND) {
+	if (cmd == MAV_CMD_NAV_TAKEOFF || cmd == MAV_CMD_NAV_LAND || cmd == MAV_CMD_USER_1) {
 		s->seen.phase_failed = false;
 		s->seen.fail_text[0] = 0;
 	}
@@ -333,8 +333,11 @@ static int step(struct mission *m, struct sil *s, const struct step *st, bool fi
 			if (s->seen.exp_result == MAV_RESULT_ACCEPTED)
 				return 1;
 			char d[400];
-			snprintf(d, sizeof d, "experiment ended %s (%s)", result_name(s->seen.exp_result),
-				 s->seen.id_text[0] ? s->seen.id_text : "no reason given");
+			/* a phase over its time limit: the firmware's "ID <phase> failed: ..." and what
+			 * it adds; otherwise its last ID line ("ID aborted: ...") */
+			const char *why = s->seen.fail_text[0] ? s->seen.fail_text
+					  : s->seen.id_text[0] ? s->seen.id_text : "no reason given";
+			snprintf(d, sizeof d, "experiment ended %s (%s)", result_name(s->seen.exp_result), why);
 			return fail(m, s, "%s", d);
 		}
 		if (!waited_too_long(m, s))
