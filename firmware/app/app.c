@@ -637,6 +637,10 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	l->inertia[1] = a->p.veh_iyy;
 	l->inertia[2] = a->p.veh_izz;
 	l->mass = a->p.veh_mass;
+	if (a->env.kft.started) {
+		l->kft = sc_to_float(a->env.kft.k);
+		l->kft_sd = sc_to_float(kf_track_sd(&a->env.kft));
+	}
 }
 
 static void link_back(struct app *a, float gap_s)
