@@ -389,6 +389,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		scalar_t alpha = ident_torque_weight(sc_from_float(cf->mot_tau), dt);
 		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS),
 				   SC(INR_ZETA), dt, alpha, inertia, w, tau);
+		e->inr_u_prev = 0.0f;
 		e->est_live = 1u << (4u + ax);
 	} else {
 		e->t_run = cf->val_time;
@@ -491,6 +492,43 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 				    (double)mr.scale[j]);
 }
 
+/* The inertia excitation's largest useful ID_INR_AMP on axis ax: the amplitude at which the
+ * rotor thrusts it moves swing by half the hover thrust f_h = m g / 8 (beyond, rotors near
+ * idle or saturation distort the torque). Roll/pitch: the multisine's peak torque tau moves
+ * rotor j by tau y_j / sum y^2, at most tau / (4 l) on the octocopter's circle; yaw (peak
+ * ID_INR_AMP / 10): tau / (8 k), k = k_tau / k_f. Bounded by the parameter's own maximum. */
+static float inr_amp_limit(const struct app_params *p, unsigned ax)
+{
+	float fh = p->veh_mass * p->veh_grav / 8.0f, lim;
+	if (ax == 2u)
+		lim = INR_YAW_DIV * 0.5f * fh * 8.0f * (p->veh_kf > 0.0f ? p->veh_ktau / p->veh_kf : 0.0f);
+	else
+		lim = 0.5f * fh * 4.0f * p->veh_arm_l;
+	int i = PX_ID_INR_AMP;
+	float pmax = param_defs[i].max;
+	return isfinite(lim) && lim > 0.0f && lim < pmax ? lim : pmax;
+}
+
+#define INR_ADVICE_MARGIN 1.5f   /* the std is itself an estimate (20 blocks of 0.5 s in 10 s: +/-16 %): aim lower */
+
+/* Asked accuracy (ID_RSD_MAX) not reached: the std falls as 1 / (amplitude sqrt(time)), so
+ * the estimate needs raise x the amplitude or raise^2 x the time (with a margin). The
+ * amplitude goes up to its limit (inr_amp_limit); what it cannot give, the time does. */
+static void inertia_advice(struct experiment *e, const struct app_params *p, unsigned ax, const char *nm,
+			   float raise)
+{
+	float r = raise * INR_ADVICE_MARGIN, amp = e->cfg.inr_amp, t = e->cfg.inr_time;
+	float lim = inr_amp_limit(p, ax);
+	if (amp * r <= lim) {
+		say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f or ID_INR_TIME %.0f s", nm, (double)(amp * r),
+		    (double)(t * r * r));
+		return;
+	}
+	float a = lim > amp ? lim / amp : 1.0f, tr = r / a;
+	say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f and ID_INR_TIME %.0f s", nm, (double)(amp * a),
+	    (double)(t * tr * tr));
+}
+
 static void phase_end(struct experiment *e, const struct app_params *p)
 {
 	int k = e->phase_kind[e->phase];
@@ -557,8 +595,7 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 			say(e, APP_SEV_WARNING, "ID %s accepted in [%.4g, %.4g] kg m^2", nm[ax], (double)lo,
 			    (double)hi);
 		else if (v == IDENT_UNCERTAIN && raise > 1.0f)
-			say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP x%.2f or ID_INR_TIME x%.1f", nm[ax],
-			    (double)raise, (double)(raise * raise));
+			inertia_advice(e, p, ax, nm[ax], raise);
 	} else {
 		bool post = k == PK_VAL_POST || (k == PK_VAL && (result_mask(p) & 1u));
 		float ne = ident_fit_ne(&e->fit), fit = ident_fit_pct(&e->fit);
@@ -634,8 +671,12 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		for (int i = 0; i < 3; i++)
 			w[i] = sc_from_float(f->rate_b_rps[i]);
+		/* the instrument: the excitation sent on the previous step, which acted over the
+		 * frame this update closes */
+		ident_inertia_instrument(&e->inr, sc_from_float(e->inr_u_prev));
 		ident_inertia_update(&e->inr, tau, w, use && n == 1 && e->gap_hold == 0);
 		out->tau_delta[ax] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
+		e->inr_u_prev = out->tau_delta[ax];
 		e->est[4 + ax] = ident_inertia_est(&e->inr);
 		e->est_sd[4 + ax] = ident_inertia_sd(&e->inr);
 	} else {

@@ -21,7 +21,7 @@ PARAM(ID_SEED,      id_seed,      1.0f,    0.0f,    1000000.0f,"",       "Seed o
 PARAM(ID_MOT_TAU,   id_mot_tau,   0.03f,   0.0f,    1.0f,    "s",      "Motor lag time constant of the lag-aware regressor")
 PARAM(ID_DELAY_FR,  id_delay_fr,  0.0f,    0.0f,    16.0f,   "",       "Transport delay of the regressor, frames")
 PARAM(ID_INR_AMP,   id_inr_amp,   0.8f,    0.0f,    5.0f,    "N m",    "Torque excitation amplitude of the inertia experiments")
-PARAM(ID_INR_TIME,  id_inr_time,  10.0f,   1.0f,    300.0f,  "s",      "Duration of each inertia experiment")
+PARAM(ID_INR_TIME,  id_inr_time,  10.0f,   1.0f,    3600.0f, "s",      "Duration of each inertia experiment")
 PARAM(ID_VAL_TIME,  id_val_time,  5.0f,    1.0f,    300.0f,  "s",      "Duration of the validation experiment")
 PARAM(ID_RSD_MAX,   id_rsd_max,   0.02f,   0.0001f, 1.0f,    "",       "Acceptance: largest relative standard deviation of an estimate")
 #undef PARAM_FLAGS

@@ -23,7 +23,7 @@ enum step_kind { ST_PARAM, ST_ARM, ST_TAKEOFF, ST_WAIT_HOLD, ST_EXPERIMENT, ST_W
  * is retried (arm: until the vehicle has frames; experiment: until it hovers). */
 static const double step_timeout_s[] = {
 	[ST_PARAM] = 1.0, [ST_ARM] = 10.0, [ST_TAKEOFF] = 1.0, [ST_WAIT_HOLD] = 60.0, [ST_EXPERIMENT] = 10.0,
-	[ST_WAIT_EXP] = 600.0, [ST_LAND] = 1.0, [ST_WAIT_DISARMED] = 120.0, [ST_SLEEP] = 0.0,
+	[ST_WAIT_EXP] = 30000.0, [ST_LAND] = 1.0, [ST_WAIT_DISARMED] = 120.0, [ST_SLEEP] = 0.0,
 };
 #define RETRY_S 0.5
 
@@ -342,7 +342,7 @@ static int step(struct mission *m, struct sil *s, const struct step *st, bool fi
 		}
 		if (!waited_too_long(m, s))
 			return 0;
-		return fail(m, s, "experiment still running after %s s", "600");
+		return fail(m, s, "experiment still running after %s s", "30000");
 	case ST_LAND: {
 		if (s->app.mode == APP_DISARMED)
 			return 1;
