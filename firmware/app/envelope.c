@@ -102,7 +102,7 @@ static void set_veh_kf(struct app *a, float kf, const char *why)
 	app_status(a, APP_SEV_INFO, "VEH_KF %.2f -> %.2f N (%s)", (double)old, (double)kf, why);
 }
 
-/* k_f tracking in HOLD: the last step's throttles (what the plant answers now) against
+/* k_f tracking in HOLD and experiments: the last step's throttles (what the plant answers now) against
  * the sum of the measured rotor thrusts of this frame. */
 static void kft_step(struct app *a, float dt, bool up)
 {
@@ -114,7 +114,9 @@ static void kft_step(struct app *a, float dt, bool up)
 		thr[j] = sc_from_float(a->thr[j]);
 		y += a->fr.rotor_thrust_n[j];
 	}
-	bool gate = a->mode == APP_HOLD && up && (a->fr.valid & HAL_FRAME_THRUST);
+	/* in HOLD and in the experiments (their excitation only adds information; a rotor model
+	 * found by identification restarts the tracker, envelope_model_sync) */
+	bool gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && (a->fr.valid & HAL_FRAME_THRUST);
 	kf_track_update(t, thr, HAL_ROTORS, sc_from_float(y), sc_from_float(dt), gate);
 	/* The KFT_* parameters once a second of plant time; announced to the ground station
 	 * (PARAM_VALUE, NAMED_VALUE_FLOAT) at most once a second of wall time, whose rates are

@@ -3,8 +3,8 @@
  * the hover throttle learned in flight (core/hover_est) and fed to the height
  * controller, the first k_f it implies (published as HOV_* parameters and a status
  * line at every HOLD entry, optionally seeding VEH_KF before the rotor experiment),
- * k_f tracked in HOLD (core/kf_track: KFT_EST with its sd, the plant time it holds
- * for and its memory, published each second as parameters and NAMED_VALUE_FLOAT
+ * k_f tracked in HOLD and during experiments (core/kf_track: KFT_EST with its sd, the
+ * plant time it holds for and its memory, published each second as parameters and NAMED_VALUE_FLOAT
  * events "KFT"/"KFT_SD"; VEH_KF refreshed from it when it drifts beyond KFT_REFRESH after an
  * identification, or on request with KFT_APPLY = 1), and the time limits of take-off
  * (NAV_TKO_TO, to HOLD), of its hold entry (NAV_HOLD_TO: from the set point's arrival at
@@ -30,7 +30,7 @@ struct envelope {
 	bool hov_used;      /* a measurement was taken in the last step */
 	float phase_s;      /* time in the current take-off or landing */
 	float hold_s;       /* time in the take-off's hold entry (set point at the target) */
-	struct kf_track kft;/* k_f tracked in HOLD */
+	struct kf_track kft;/* k_f tracked in HOLD and experiments */
 	double kft_pub_t;   /* plant time of the last KFT_* publication */
 	uint64_t kft_pub_wall_us; /* wall time of it: a fast lockstep run must not flood the link */
 	uint32_t kft_votes; /* consecutive publications that called for a VEH_KF refresh */
