@@ -509,7 +509,7 @@ static float inr_amp_limit(const struct app_params *p, unsigned ax)
 	return isfinite(lim) && lim > 0.0f && lim < pmax ? lim : pmax;
 }
 
-#define INR_ADVICE_MARGIN 1.5f   /* the std is itself an estimate (20 blocks of 0.5 s in 10 s: +/-16 %): aim lower */
+#define INR_ADVICE_MARGIN 2.0f   /* the std is itself an estimate (20 blocks of 0.5 s in 10 s: +/-16 %, 3 sd covered): aim lower */
 
 /* Asked accuracy (ID_RSD_MAX) not reached: the std falls as 1 / (amplitude sqrt(time)), so
  * the estimate needs raise x the amplitude or raise^2 x the time (with a margin). The

@@ -83,7 +83,7 @@
  *              0.5 s blocks). Not accurate enough for ID_RSD_MAX: a warning says what to
  *              raise ("ID Izz: ID_INR_AMP 1.57 and ID_INR_TIME 320 s": the std falls as
  *              1 / (amplitude sqrt(time)); the amplitude up to the rotors' headroom, half the
- *              hover thrust per rotor, the rest in time; 1.5x margin on the std; "or" when
+ *              hover thrust per rotor, the rest in time; 2x margin on the std; "or" when
  *              either alone suffices).
  * Acceptance (ident_accept): finite, within [0.25, 4] x the current VEH_* value,
  * relative std < ID_RSD_MAX (0.02); then VEH_* and ID_RESULT bits are among the
