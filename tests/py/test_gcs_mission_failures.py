@@ -140,3 +140,16 @@ def test_phase_limit_stops_the_in_process_mission_with_its_reason(tmp_path, para
     assert "still in mode" not in r.stderr   # not the step's own time limit
     assert (out / "failed-run" / "octo-sil.log").exists()
     assert not (out / "report.json").exists()
+
+
+def test_in_process_mission_without_experiments(tmp_path):
+    """Take-off, hold entry and landing alone in octo-sil, with the underpowered vehicle: the
+    firmware stores no result (no experiment), the mission still reports and passes."""
+    rng = random.Random()
+    vf, thr_max = underpowered_vehicle(tmp_path, rng)
+    out = tmp_path / "out"
+    r = gcs("mission", "--in-process", "--vehicle", vf, "--experiments", "none",
+            "--param", f"MOT_THR_MAX={thr_max:.4f}", "--seed", rng.randint(1, 999), "--out", out, "--no-plots")
+    assert r.returncode == 0, r.stdout + r.stderr
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["pass"] and (out / "params.parm").exists() and not (out / "failed-run").exists()
