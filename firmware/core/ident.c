@@ -286,19 +286,22 @@ void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], cons
 	}
 }
 
+/* the IV estimate once a first block is complete (before, least squares: a live value) */
+static bool iv_ready(const struct ident_inertia *e) { return e->iv && e->s_bb > 0.0f && e->s_zp != 0.0f; }
+
 float ident_inertia_est(const struct ident_inertia *e)
 {
-	if (!e->iv)
+	if (!iv_ready(e))
 		return rls_estimate_f(&e->rls, 0, 0);
-	return e->s_zp != 0.0f ? e->s_zy / e->s_zp : NAN;
+	return e->s_zy / e->s_zp;
 }
 
 float ident_inertia_sd(const struct ident_inertia *e)
 {
-	if (!e->iv)
+	if (!iv_ready(e))
 		return e->sd_scale * rls_std(&e->rls, 0, 0);
 	float est = ident_inertia_est(e);
-	if (!(e->s_bb > 0.0f) || !finite_f(est))
+	if (!finite_f(est))
 		return NAN;
 	/* sum over the blocks of (A_b - I B_b)^2, A_b = sum_b z y, B_b = sum_b z phi */
 	float v = e->s_aa - 2.0f * est * e->s_ab + est * est * e->s_bb;

@@ -177,7 +177,8 @@ float ident_inertia_sd(const struct ident_inertia *e);
  * over blocks b of 0.5 s (longer than the residual's correlation, which the SVF colours:
  * the blocks' sums are nearly independent, so the std needs no white-noise assumption).
  * Called before each ident_inertia_update with the excitation that acted over the frame that
- * update closes; from the first call on, est and sd are the IV ones. */
+ * update closes; est and sd are the IV ones from the first complete block on (before it, the
+ * least-squares ones, as live values). */
 void ident_inertia_instrument(struct ident_inertia *e, scalar_t u);
 
 /* Acceptance of an inertia, relative to the vehicle's own scale m l^2 (mass, arm length)
