@@ -115,7 +115,7 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 /* Status lines are queued with their arguments and formatted (vsnprintf with %f: thousands
  * of instructions each) by exp_pump, between frames, not in the 90 Hz step. say() records the
  * arguments by the conversions of fmt (%d int, %s a string that outlives the experiment:
- * literals only, %f double; the formats below use no others). */
+ * literals only, %f %g %e double; the formats below use no others). */
 static void say(struct experiment *e, int sev, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static void say(struct experiment *e, int sev, const char *fmt, ...)
 {
@@ -140,7 +140,7 @@ static void say(struct experiment *e, int sev, const char *fmt, ...)
 		} else if (*c == 's') {
 			l->kind[n] = 's';
 			l->arg[n++].s = va_arg(ap, const char *);
-		} else if (*c == 'f') {
+		} else if (*c == 'f' || *c == 'g' || *c == 'e') {   /* doubles, formatted by fmt */
 			l->kind[n] = 'f';
 			l->arg[n++].f = va_arg(ap, double);
 		} else if (!*c) {

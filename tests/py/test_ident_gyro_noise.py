@@ -6,6 +6,7 @@ instrumental variable. Asked for an accuracy the default experiment cannot give 
 0.003: 3 sd within 1 %), it rejects the estimate and says what to raise and to what
 (ID_INR_AMP up to the rotors' headroom, the rest in ID_INR_TIME). Flown again with that advice,
 every axis is accepted and within 1 % of the truth. OCTO_GYRO_SEED=N repeats a draw.
+Beside it: a range rejection names the bounds it used (the vehicle's m l^2 scale).
 """
 
 import json
@@ -71,3 +72,28 @@ def test_inertia_within_1pct_at_10x_gyro_noise(tmp_path, draw):
               f"({100 * (est / truth[name] - 1):+.3f} %)")
         assert int(prm2["ID_RESULT"]) & bit[name], [l for l in r2.stderr.splitlines() if "ID I" in l]
         assert est == pytest.approx(truth[name], rel=0.01)
+
+
+@pytest.mark.parametrize("axis", [3, 5])
+def test_inertia_range_rejection_names_its_bounds(tmp_path, axis):
+    """The accepted range is [0.01, 2] x m l^2 (the vehicle's own scale, VEH_MASS and VEH_ARM_L),
+    not a nominal inertia: told a mass whose 2 m l^2 lies below the (random) truth, the firmware
+    rejects the right estimate as out of range and says the bounds it used."""
+    seed = random.randint(1, 10**6)
+    rng = random.Random(seed)
+    ix, iy = rng.uniform(0.04, 0.12), rng.uniform(0.04, 0.12)
+    inertia = [ix, iy, rng.uniform(max(ix, iy), 0.95 * (ix + iy))]
+    true = inertia[axis - 3]
+    arm = 0.35
+    mass = true / (2 * arm * arm) * rng.uniform(0.65, 0.8)   # 2 m l^2 = 0.65 ... 0.8 x the truth
+    r, prm = fly(tmp_path, "range", seed, {"inertia": inertia}, {"VEH_MASS": round(mass, 4)}, [axis])
+    name = NAMES[axis]
+    m = re.search(rf"ID {name} ([0-9.]+) \+/- [0-9.]+ rejected: out of range", r.stderr)
+    b = re.search(rf"ID {name} accepted in \[([0-9.e-]+), ([0-9.e-]+)\] kg m\^2", r.stderr)
+    print(f"seed {seed}: {name} truth {true:.5f}, VEH_MASS {mass:.4f}: {m and m.group(0)}; {b and b.group(0)}")
+    assert m and b, r.stderr
+    assert float(m.group(1)) == pytest.approx(true, rel=0.02)   # the estimate was right
+    ml2 = round(mass, 4) * arm * arm
+    assert float(b.group(1)) == pytest.approx(0.01 * ml2, rel=1e-3)
+    assert float(b.group(2)) == pytest.approx(2.0 * ml2, rel=1e-3)
+    assert not int(prm.get("ID_RESULT", 0)) & {3: 2, 5: 8}[axis]
