@@ -397,7 +397,7 @@ UNIT_TEST(ident_inertia_std_monte_carlo)
  * and its std is honest (Monte Carlo spread against the reported std) */
 UNIT_TEST(ident_inertia_iv_unbiased_under_gyro_noise)
 {
-	enum { RUNS = MC_RUNS / 8 > 16 ? MC_RUNS / 8 : 16 };
+	enum { RUNS = MC_RUNS / 8 > 12 ? MC_RUNS / 8 : 12 };   /* 37 on the host, 12 on Cortex-M */
 	struct unit_rng g = {0x1f1ULL};
 	for (unsigned ax = 0; ax < 3; ax += 2) {
 		double I[3] = {0.0628 * unit_rand_uniform(&g, 0.7, 1.3), 0.0762 * unit_rand_uniform(&g, 0.7, 1.3),
