@@ -88,10 +88,28 @@ void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
 	outbox_post(&a->outbox, &e);
 }
 
+/* An aborted experiment's reasons (its message and queued lines) go out at once, before the
+ * command's final FAILED: a ground station that stops on the FAILED has them already. */
+static void exp_flush(struct app *a)
+{
+	for (int i = 0; i <= EXP_QUEUE; i++) {
+		if (!a->exp.msg[0]) {
+			a->exp.pump_ready = true;
+			exp_pump(&a->exp);
+		}
+		if (!a->exp.msg[0])
+			return;
+		app_status(a, a->exp.msg_severity, "%s", a->exp.msg);
+		a->exp.msg[0] = 0;
+	}
+}
+
 static void set_mode(struct app *a, enum app_mode m)
 {
 	if (a->mode == m)
 		return;
+	if (a->mode == APP_EXPERIMENT && a->exp.state == EXP_ABORTED)
+		exp_flush(a);
 	if (a->mode == APP_EXPERIMENT && a->exp_ack_pending) {
 		/* the final answer to the experiment command: ACCEPTED when it
 		 * finished, FAILED when it was aborted (the experiment sets final_result) */
@@ -623,6 +641,10 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	l->inertia[1] = a->p.veh_iyy;
 	l->inertia[2] = a->p.veh_izz;
 	l->mass = a->p.veh_mass;
+	if (a->env.kft.started) {
+		l->kft = sc_to_float(a->env.kft.k);
+		l->kft_sd = sc_to_float(kf_track_sd(&a->env.kft));
+	}
 }
 
 static void link_back(struct app *a, float gap_s)

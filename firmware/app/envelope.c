@@ -102,7 +102,7 @@ static void set_veh_kf(struct app *a, float kf, const char *why)
 	app_status(a, APP_SEV_INFO, "VEH_KF %.2f -> %.2f N (%s)", (double)old, (double)kf, why);
 }
 
-/* k_f tracking in HOLD: the last step's throttles (what the plant answers now) against
+/* k_f tracking in HOLD and experiments: the last step's throttles (what the plant answers now) against
  * the sum of the measured rotor thrusts of this frame. */
 static void kft_step(struct app *a, float dt, bool up)
 {
@@ -114,7 +114,9 @@ static void kft_step(struct app *a, float dt, bool up)
 		thr[j] = sc_from_float(a->thr[j]);
 		y += a->fr.rotor_thrust_n[j];
 	}
-	bool gate = a->mode == APP_HOLD && up && (a->fr.valid & HAL_FRAME_THRUST);
+	/* in HOLD and in the experiments (their excitation only adds information; a rotor model
+	 * found by identification restarts the tracker, envelope_model_sync) */
+	bool gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && (a->fr.valid & HAL_FRAME_THRUST);
 	kf_track_update(t, thr, HAL_ROTORS, sc_from_float(y), sc_from_float(dt), gate);
 	/* The KFT_* parameters once a second of plant time; announced to the ground station
 	 * (PARAM_VALUE, NAMED_VALUE_FLOAT) at most once a second of wall time, whose rates are
@@ -205,6 +207,7 @@ void envelope_on_mode(struct app *a)
 {
 	struct envelope *e = &a->env;
 	e->phase_s = 0.0f;
+	e->hold_s = 0.0f;
 	if (a->mode == APP_TAKEOFF && e->hov.updates == 0)
 		envelope_init(a);   /* nothing learned yet: start from the current VEH_* */
 	if (a->mode != APP_HOLD)
@@ -253,6 +256,23 @@ static bool phase_timeout(struct app *a, float dt, char *why, size_t cap, char *
 				 (double)sc_to_float(hover_est_u(&e->hov)), (double)sc_to_float(hover_est_sd(&e->hov)));
 		return true;
 	}
+	/* hold entry: the take-off's set point at the target, the vehicle still to settle there
+	 * and the hover throttle to be learned (guidance's GUID_HOLD_REACHED) */
+	if (a->mode == APP_TAKEOFF && a->guid.z_sp_m == a->guid.z_target_m) {
+		e->hold_s += dt;
+		if (e->hold_s > a->p.nav_hold_to) {
+			float dz = z - (sc_to_float(a->guid.z_target_m) - sc_to_float(a->guid.z_ground_m));
+			snprintf(why, cap, "Hold entry failed: NAV_HOLD_TO %g s", (double)a->p.nav_hold_to);
+			if (!envelope_hover_ready(a))
+				snprintf(more, more_cap, "Hover throttle %.3f+/-%.3f not learned",
+					 (double)sc_to_float(hover_est_u(&e->hov)),
+					 (double)sc_to_float(hover_est_sd(&e->hov)));
+			else
+				snprintf(more, more_cap, "Still %+.3f m %+.3f m/s off the target", (double)dz,
+					 (double)a->fr.vel_i_mps[2]);
+			return true;
+		}
+	}
 	if (a->mode == APP_LAND && e->phase_s > a->p.nav_land_to) {
 		snprintf(why, cap, "Landing failed: NAV_LAND_TO %.0f s, %.2f m up", (double)a->p.nav_land_to,
 			 (double)z);
@@ -275,7 +295,7 @@ void envelope_limits(struct app *a, float dt)
 				       .origin = a->env.origin};
 		outbox_post(&a->outbox, &ev);
 	}
-	if (a->mode == APP_TAKEOFF) {
+	if (a->mode == APP_TAKEOFF) {   /* the take-off or its hold entry ran out: land */
 		char w[8];
 		app_cmd_land(a, APP_ORIGIN_NONE, w, sizeof w);   /* the take-off's origin has its answer */
 	}

@@ -3,11 +3,12 @@
  * the hover throttle learned in flight (core/hover_est) and fed to the height
  * controller, the first k_f it implies (published as HOV_* parameters and a status
  * line at every HOLD entry, optionally seeding VEH_KF before the rotor experiment),
- * k_f tracked in HOLD (core/kf_track: KFT_EST with its sd, the plant time it holds
- * for and its memory, published each second as parameters and NAMED_VALUE_FLOAT
+ * k_f tracked in HOLD and during experiments (core/kf_track: KFT_EST with its sd, the
+ * plant time it holds for and its memory, published each second as parameters and NAMED_VALUE_FLOAT
  * events "KFT"/"KFT_SD"; VEH_KF refreshed from it when it drifts beyond KFT_REFRESH after an
  * identification, or on request with KFT_APPLY = 1), and the time limits of take-off
- * (HOLD entry) and landing with their reasons.
+ * (NAV_TKO_TO, to HOLD), of its hold entry (NAV_HOLD_TO: from the set point's arrival at
+ * the target height to HOLD) and of landing (NAV_LAND_TO), with their reasons.
  *
  * The app calls these from a few places only (its step, set_mode, the experiment
  * command, the mode timer), so that they survive a reshaping of app.c.
@@ -28,7 +29,8 @@ struct envelope {
 	struct hover_est hov;
 	bool hov_used;      /* a measurement was taken in the last step */
 	float phase_s;      /* time in the current take-off or landing */
-	struct kf_track kft;/* k_f tracked in HOLD */
+	float hold_s;       /* time in the take-off's hold entry (set point at the target) */
+	struct kf_track kft;/* k_f tracked in HOLD and experiments */
 	double kft_pub_t;   /* plant time of the last KFT_* publication */
 	uint64_t kft_pub_wall_us; /* wall time of it: a fast lockstep run must not flood the link */
 	uint32_t kft_votes; /* consecutive publications that called for a VEH_KF refresh */
@@ -61,10 +63,10 @@ void envelope_on_mode(struct app *a);
  * disagrees with VEH_KF by more than 10 %, VEH_KF := m g / (8 u_h) (rotor experiments). */
 void envelope_seed_kf(struct app *a, int id);
 
-/* Phase limits, once per control step: when take-off (NAV_TKO_TO) or landing
- * (NAV_LAND_TO) runs out, says why (status lines, severity ERROR, naming what was
- * reached and what was missing), posts the command's final result APP_FAILED for
- * whoever asked for the phase, and lands (a take-off) or keeps landing. */
+/* Phase limits, once per control step: when take-off (NAV_TKO_TO), its hold entry
+ * (NAV_HOLD_TO) or landing (NAV_LAND_TO) runs out, says why (status lines, severity
+ * ERROR, naming what was reached and what was missing), posts the command's final result
+ * APP_FAILED for whoever asked for the phase, and lands (a take-off) or keeps landing. */
 void envelope_limits(struct app *a, float dt);
 
 #endif /* OCTO_ENVELOPE_H */

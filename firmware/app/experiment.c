@@ -106,12 +106,15 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	c->rsd_max = cfg_f(p->id_rsd_max, 0.02f);
 	c->exc_ofs = cfg_f(p->id_exc_ofs, 0.03f);
 	c->crv_est = cfg_f(p->id_crv_est, 1.0f) >= 0.5f;
+	c->rot_to = cfg_f(p->id_rot_to, 0.0f);
+	c->inr_to = cfg_f(p->id_inr_to, 0.0f);
+	c->val_to = cfg_f(p->id_val_to, 0.0f);
 }
 
 /* Status lines are queued with their arguments and formatted (vsnprintf with %f: thousands
  * of instructions each) by exp_pump, between frames, not in the 90 Hz step. say() records the
  * arguments by the conversions of fmt (%d int, %s a string that outlives the experiment:
- * literals only, %f double; the formats below use no others). */
+ * literals only, %f %g %e double; the formats below use no others). */
 static void say(struct experiment *e, int sev, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static void say(struct experiment *e, int sev, const char *fmt, ...)
 {
@@ -136,7 +139,7 @@ static void say(struct experiment *e, int sev, const char *fmt, ...)
 		} else if (*c == 's') {
 			l->kind[n] = 's';
 			l->arg[n++].s = va_arg(ap, const char *);
-		} else if (*c == 'f') {
+		} else if (*c == 'f' || *c == 'g' || *c == 'e') {   /* doubles, formatted by fmt */
 			l->kind[n] = 'f';
 			l->arg[n++].f = va_arg(ap, double);
 		} else if (!*c) {
@@ -181,6 +184,8 @@ static void format_line(const struct exp_line *l, char *out, size_t cap)
 		snprintf(out, cap, l->fmt, ARG_S(0));
 	else if (!strcmp(k, "df"))
 		snprintf(out, cap, l->fmt, ARG_D(0), ARG_F(1));
+	else if (!strcmp(k, "ssf"))
+		snprintf(out, cap, l->fmt, ARG_S(0), ARG_S(1), ARG_F(2));
 	else if (!strcmp(k, "ffff"))
 		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_F(2), ARG_F(3));
 	else
@@ -385,6 +390,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		scalar_t alpha = ident_torque_weight(sc_from_float(cf->mot_tau), dt);
 		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS),
 				   SC(INR_ZETA), dt, alpha, inertia, w, tau);
+		e->inr_u_prev = 0.0f;
 		e->est_live = 1u << (4u + ax);
 	} else {
 		e->t_run = cf->val_time;
@@ -491,6 +497,43 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 				    (double)mr.scale[j]);
 }
 
+/* The inertia excitation's largest useful ID_INR_AMP on axis ax: the amplitude at which the
+ * rotor thrusts it moves swing by half the hover thrust f_h = m g / 8 (beyond, rotors near
+ * idle or saturation distort the torque). Roll/pitch: the multisine's peak torque tau moves
+ * rotor j by tau y_j / sum y^2, at most tau / (4 l) on the octocopter's circle; yaw (peak
+ * ID_INR_AMP / 10): tau / (8 k), k = k_tau / k_f. Bounded by the parameter's own maximum. */
+static float inr_amp_limit(const struct app_params *p, unsigned ax)
+{
+	float fh = p->veh_mass * p->veh_grav / 8.0f, lim;
+	if (ax == 2u)
+		lim = INR_YAW_DIV * 0.5f * fh * 8.0f * (p->veh_kf > 0.0f ? p->veh_ktau / p->veh_kf : 0.0f);
+	else
+		lim = 0.5f * fh * 4.0f * p->veh_arm_l;
+	int i = PX_ID_INR_AMP;
+	float pmax = param_defs[i].max;
+	return isfinite(lim) && lim > 0.0f && lim < pmax ? lim : pmax;
+}
+
+#define INR_ADVICE_MARGIN 2.0f   /* the std is itself an estimate (20 blocks of 0.5 s in 10 s: +/-16 %, 3 sd covered): aim lower */
+
+/* Asked accuracy (ID_RSD_MAX) not reached: the std falls as 1 / (amplitude sqrt(time)), so
+ * the estimate needs raise x the amplitude or raise^2 x the time (with a margin). The
+ * amplitude goes up to its limit (inr_amp_limit); what it cannot give, the time does. */
+static void inertia_advice(struct experiment *e, const struct app_params *p, unsigned ax, const char *nm,
+			   float raise)
+{
+	float r = raise * INR_ADVICE_MARGIN, amp = e->cfg.inr_amp, t = e->cfg.inr_time;
+	float lim = inr_amp_limit(p, ax);
+	if (amp * r <= lim) {
+		say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f or ID_INR_TIME %.0f s", nm, (double)(amp * r),
+		    (double)(t * r * r));
+		return;
+	}
+	float a = lim > amp ? lim / amp : 1.0f, tr = r / a;
+	say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f and ID_INR_TIME %.0f s", nm, (double)(amp * a),
+	    (double)(t * tr * tr));
+}
+
 static void phase_end(struct experiment *e, const struct app_params *p)
 {
 	int k = e->phase_kind[e->phase];
@@ -557,8 +600,7 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 			say(e, APP_SEV_WARNING, "ID %s accepted in [%.4g, %.4g] kg m^2", nm[ax], (double)lo,
 			    (double)hi);
 		else if (v == IDENT_UNCERTAIN && raise > 1.0f)
-			say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP x%.2f or ID_INR_TIME x%.1f", nm[ax],
-			    (double)raise, (double)(raise * raise));
+			inertia_advice(e, p, ax, nm[ax], raise);
 	} else {
 		bool post = k == PK_VAL_POST || (k == PK_VAL && (result_mask(p) & 1u));
 		float ne = ident_fit_ne(&e->fit), fit = ident_fit_pct(&e->fit);
@@ -634,8 +676,12 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		for (int i = 0; i < 3; i++)
 			w[i] = sc_from_float(f->rate_b_rps[i]);
+		/* the instrument: the excitation sent on the previous step, which acted over the
+		 * frame this update closes */
+		ident_inertia_instrument(&e->inr, sc_from_float(e->inr_u_prev));
 		ident_inertia_update(&e->inr, tau, w, use && n == 1 && e->gap_hold == 0);
 		out->tau_delta[ax] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
+		e->inr_u_prev = out->tau_delta[ax];
 		e->est[4 + ax] = ident_inertia_est(&e->inr);
 		e->est_sd[4 + ax] = ident_inertia_sd(&e->inr);
 	} else {
@@ -671,6 +717,32 @@ void exp_turn(struct experiment *e, const struct app_params *p)
 	}
 }
 
+/* The current phase's time limit (plant time, settling included) and its parameter's name:
+ * ID_ROT_TO, ID_INR_TO or ID_VAL_TO, or with 0 twice the phase's planned time plus 5 s (a
+ * guard: a phase runs its planned time unless something holds it up). */
+static float phase_limit(const struct experiment *e, const char **name)
+{
+	int k = e->phase_kind[e->phase];
+	float lim = k == PK_ROTOR ? e->cfg.rot_to : (k >= PK_INR_X && k <= PK_INR_Z) ? e->cfg.inr_to : e->cfg.val_to;
+	*name = k == PK_ROTOR ? "ID_ROT_TO" : (k >= PK_INR_X && k <= PK_INR_Z) ? "ID_INR_TO" : "ID_VAL_TO";
+	return lim > 0.0f ? lim : 2.0f * (e->t_settle + e->t_run) + 5.0f;
+}
+
+/* A phase over its time limit: the experiment fails with the reason (severity ERROR, the
+ * limit and the phase's planned time) and its final answer FAILED; results not yet applied
+ * are dropped. */
+static void limit_fail(struct experiment *e, const char *name, float lim)
+{
+	int k = e->phase_kind[e->phase];
+	e->q_n = 0;
+	e->n_results = 0;
+	e->est_live = 0;
+	say(e, APP_SEV_ERROR, "ID %s failed: %s %.1f s", phase_name(k), name, (double)lim);
+	say(e, APP_SEV_ERROR, "ID aborted: time limit, phase planned %.1f s", (double)(e->t_settle + e->t_run));
+	e->state = EXP_ABORTED;
+	e->final_result = APP_FAILED;
+}
+
 enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
 {
 	if (e->state != EXP_RUNNING)
@@ -695,6 +767,13 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 		phase_step(e, in, out);
 		e->t_phase += in->dt_s;
 		float total = e->t_settle + e->t_run;
+		const char *lim_name;
+		float lim = phase_limit(e, &lim_name);
+		if (e->t_phase > lim) {
+			memset(out, 0, sizeof *out);
+			limit_fail(e, lim_name, lim);
+			return e->state;
+		}
 		e->progress = ((float)e->phase + fminf(e->t_phase / total, 1.0f)) / (float)e->n_phases;
 		if (e->t_phase >= total) {
 			/* the phase is over: its end (estimates, results, verdicts) and the next one's

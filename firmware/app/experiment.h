@@ -78,11 +78,20 @@
  *              12 rad/s (gyro noise). Torque from the measured rotor thrusts through
  *              Gamma_o (arm VEH_ARM_L) and, for yaw, from the measured rotor torques;
  *              torque, rate and the gyroscopic product through one SVF (zeta 0.7); the
- *              sampled-data regression of ident.h (torque weight from ID_MOT_TAU); RLS.
+ *              sampled-data regression of ident.h (torque weight from ID_MOT_TAU), solved with
+ *              the excitation as instrumental variable (no bias from gyro noise; its std from
+ *              0.5 s blocks). Not accurate enough for ID_RSD_MAX: a warning says what to
+ *              raise ("ID Izz: ID_INR_AMP 1.57 and ID_INR_TIME 320 s": the std falls as
+ *              1 / (amplitude sqrt(time)); the amplitude up to the rotors' headroom, half the
+ *              hover thrust per rotor, the rest in time; 2x margin on the std; "or" when
+ *              either alone suffices).
  * Acceptance (ident_accept): finite, within [0.25, 4] x the current VEH_* value,
  * relative std < ID_RSD_MAX (0.02); then VEH_* and ID_RESULT bits are among the
  * results; otherwise a STATUSTEXT says why and VEH_* stay. The experiment aborts
- * itself ("height limit") if the height leaves +/-1.5 m of its start.
+ * itself ("height limit") if the height leaves +/-1.5 m of its start, and fails when a
+ * phase runs past its time limit (plant time, settling included: ID_ROT_TO, ID_INR_TO,
+ * ID_VAL_TO; 0 = twice the planned time + 5 s): "ID inertia Izz failed: ID_INR_TO 3.0 s"
+ * and "ID aborted: time limit, phase planned 11.0 s" (severity ERROR), final FAILED.
  *
  * ---------------------------------------------------------------- live estimates
  * est[i] / est_sd[i] (also the LCM log's est[8] / est_sd[8]), fixed order:
@@ -194,6 +203,7 @@ struct exp_turn {
 /* the experiment's configuration (ID_* parameters), read once at exp_start */
 struct exp_cfg {
 	float exc_amp, exc_time, mot_tau, inr_amp, inr_time, val_time, rsd_max, exc_ofs;
+	float rot_to, inr_to, val_to;          /* phase time limits (0: automatic) */
 	uint32_t exc_kind, exc_div, seed, delay_fr;
 	bool exc_null, crv_est;
 };
@@ -227,6 +237,7 @@ struct experiment {
 	struct excite exc;
 	struct excite exc2;                    /* rotor experiment: the second pattern's dither */
 	uint32_t rot_k;                        /* rotor experiment: excited frames so far */
+	float inr_u_prev;                      /* inertia: the excitation of the previous step (the instrument) */
 	/* the estimator of the current phase: phases never overlap, so they share the memory
 	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */
 	union {

@@ -21,7 +21,7 @@ PARAM(ID_SEED,      id_seed,      1.0f,    0.0f,    1000000.0f,"",       "Seed o
 PARAM(ID_MOT_TAU,   id_mot_tau,   0.03f,   0.0f,    1.0f,    "s",      "Motor lag time constant of the lag-aware regressor")
 PARAM(ID_DELAY_FR,  id_delay_fr,  0.0f,    0.0f,    16.0f,   "",       "Transport delay of the regressor, frames")
 PARAM(ID_INR_AMP,   id_inr_amp,   0.8f,    0.0f,    5.0f,    "N m",    "Torque excitation amplitude of the inertia experiments")
-PARAM(ID_INR_TIME,  id_inr_time,  10.0f,   1.0f,    300.0f,  "s",      "Duration of each inertia experiment")
+PARAM(ID_INR_TIME,  id_inr_time,  10.0f,   1.0f,    3600.0f, "s",      "Duration of each inertia experiment")
 PARAM(ID_VAL_TIME,  id_val_time,  5.0f,    1.0f,    300.0f,  "s",      "Duration of the validation experiment")
 PARAM(ID_RSD_MAX,   id_rsd_max,   0.02f,   0.0001f, 1.0f,    "",       "Acceptance: largest relative standard deviation of an estimate")
 #undef PARAM_FLAGS
@@ -63,3 +63,8 @@ PARAM(MOT_SCALE_MIN,mot_scale_min,0.8f,    0.0f,    1.0f,    "",       "A rotor 
 PARAM(ID_TAU_SD,    id_tau_sd,    0.0f,    -1e9f,   1e9f,    "s",      "Result (read-only): standard deviation of the motor lag found (ID_TAU_CHECK)")
 PARAM(ID_CRV_SD,    id_crv_sd,    0.0f,    -1e9f,   1e9f,    "",       "Result (read-only): standard deviation of the thrust curve found")
 PARAM(ID_MOT_NE,    id_mot_ne,    0.0f,    -1e9f,   1e9f,    "",       "Result (read-only): rotor model residual variance over the measured noise variance")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS PARAM_LOCKED
+PARAM(ID_ROT_TO,    id_rot_to,    0.0f,    0.0f,    1000.0f, "s",      "Time limit of the rotor experiment (settling included; 0: twice its planned time + 5 s), else it fails")
+PARAM(ID_INR_TO,    id_inr_to,    0.0f,    0.0f,    1000.0f, "s",      "Time limit of each inertia experiment (settling included; 0: twice its planned time + 5 s), else it fails")
+PARAM(ID_VAL_TO,    id_val_to,    0.0f,    0.0f,    1000.0f, "s",      "Time limit of each validation (settling included; 0: twice its planned time + 5 s), else it fails")

@@ -55,7 +55,9 @@
 	ONE(float, float, kf)                                             \
 	ONE(float, float, ktau)                                           \
 	ARR(float, float, inertia, 3)                                     \
-	ONE(float, float, mass)
+	ONE(float, float, mass)                                           \
+	ONE(float, float, kft)                                            \
+	ONE(float, float, kft_sd)
 
 struct app_log_frame {
 #define APP_LOG_ONE(c_type, lcm_type, name) c_type name;

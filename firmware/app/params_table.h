@@ -69,7 +69,7 @@ PARAM(NAV_TOUCH_DOWN_S,nav_touch_down_s,GUID_DEFAULT_TOUCH_DOWN_S, 0.2f,    10.0
  * flight (HOV_*, KFT_EST/SD/T/MEM: read-only, only the app writes them) */
 #undef PARAM_FLAGS
 #define PARAM_FLAGS 0
-PARAM(NAV_TKO_TO,   nav_tko_to,   60.0f,   1.0f,    600.0f,  "s",      "Take-off must reach HOLD within this, else it fails (and holds where it is)")
+PARAM(NAV_TKO_TO,   nav_tko_to,   60.0f,   1.0f,    600.0f,  "s",      "Take-off must reach HOLD within this, else it fails and lands")
 PARAM(NAV_LAND_TO,  nav_land_to,  120.0f,  1.0f,    600.0f,  "s",      "Landing must touch down within this, else it fails (motors stop only on the ground)")
 PARAM(NAV_KF_SEED,  nav_kf_seed,  0.0f,    0.0f,    1.0f,    "",       "1: a rotor experiment starts from the hover-learned k_f when VEH_KF is > 10 % off")
 #undef PARAM_FLAGS
@@ -89,4 +89,7 @@ PARAM(KFT_EST,      kft_est,      0.0f,    -1e9f,   1e9f,    "N",      "Tracked 
 PARAM(KFT_SD,       kft_sd,       0.0f,    -1e9f,   1e9f,    "N",      "Tracked (read-only): standard deviation of KFT_EST")
 PARAM(KFT_T,        kft_t,        0.0f,    -1e9f,   1e9f,    "s",      "Tracked (read-only): plant time KFT_EST holds for")
 PARAM(KFT_MEM,      kft_mem,      0.0f,    -1e9f,   1e9f,    "s",      "Tracked (read-only): memory of the tracker (its averaging time)")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS 0
+PARAM(NAV_HOLD_TO,  nav_hold_to,  30.0f,   0.0f,    600.0f,  "s",      "Hold entry (take-off at its target height: still, hover learned) must reach HOLD within this, else it fails and lands")
 #undef PARAM_FLAGS

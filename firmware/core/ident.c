@@ -227,6 +227,20 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	float wdt = sc_to_float(wc_rps) * sc_to_float(dt_s), z4 = 4.0f * sc_to_float(zeta);
 	e->sd_scale = wdt > 0.0f && wdt < z4 ? sqrtf(z4 / wdt) : 1.0f;
 	e->n = 0;
+	filt_svf_init(&e->svf_z, wc_rps, zeta, dt_s, SC_ZERO);
+	e->z_in = SC_ZERO;
+	e->iv = false;
+	e->s_zy = e->s_zp = e->s_n = 0.0f;
+	e->b_zy = e->b_zp = e->b_n = 0.0f;
+	e->s_aa = e->s_ab = e->s_bb = 0.0f;
+	float dt = sc_to_float(dt_s);
+	e->b_len = dt > 0.0f ? 0.5f / dt : 45.0f;   /* 0.5 s of updates */
+}
+
+void ident_inertia_instrument(struct ident_inertia *e, scalar_t u)
+{
+	e->z_in = u;
+	e->iv = true;
 }
 
 /* alpha x + (1 - alpha) x_prev */
@@ -252,11 +266,47 @@ void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], cons
 	e->wf_prev = e->svf_w.y;
 	rls_update(&e->rls, &phi, &y, excited);
 	e->n++;
+	if (!e->iv)
+		return;
+	float z = sc_to_float(filt_svf_update(&e->svf_z, e->z_in));
+	if (!excited)
+		return;
+	float zy = z * sc_to_float(y), zp = z * sc_to_float(phi);
+	e->s_zy += zy;
+	e->s_zp += zp;
+	e->s_n += 1.0f;
+	e->b_zy += zy;
+	e->b_zp += zp;
+	e->b_n += 1.0f;
+	if (e->b_n >= e->b_len) {
+		e->s_aa += e->b_zy * e->b_zy;
+		e->s_ab += e->b_zy * e->b_zp;
+		e->s_bb += e->b_zp * e->b_zp;
+		e->b_zy = e->b_zp = e->b_n = 0.0f;
+	}
 }
 
-float ident_inertia_est(const struct ident_inertia *e) { return rls_estimate_f(&e->rls, 0, 0); }
+/* the IV estimate once a first block is complete (before, least squares: a live value) */
+static bool iv_ready(const struct ident_inertia *e) { return e->iv && e->s_bb > 0.0f && e->s_zp != 0.0f; }
 
-float ident_inertia_sd(const struct ident_inertia *e) { return e->sd_scale * rls_std(&e->rls, 0, 0); }
+float ident_inertia_est(const struct ident_inertia *e)
+{
+	if (!iv_ready(e))
+		return rls_estimate_f(&e->rls, 0, 0);
+	return e->s_zy / e->s_zp;
+}
+
+float ident_inertia_sd(const struct ident_inertia *e)
+{
+	if (!iv_ready(e))
+		return e->sd_scale * rls_std(&e->rls, 0, 0);
+	float est = ident_inertia_est(e);
+	if (!finite_f(est))
+		return NAN;
+	/* sum over the blocks of (A_b - I B_b)^2, A_b = sum_b z y, B_b = sum_b z phi */
+	float v = e->s_aa - 2.0f * est * e->s_ab + est * est * e->s_bb;
+	return sqrtf(v > 0.0f ? v : 0.0f) / fabsf(e->s_zp);
+}
 
 enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max,
 					float *lo, float *hi, float *raise)

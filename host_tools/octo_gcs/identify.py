@@ -40,6 +40,7 @@ LIVE = [("KF", "KF_SD", "{:.4f}"), ("KTAU", "KTAU_SD", "{:.5f}"), ("IXX", "IXX_S
 
 PHASE_RE = re.compile(r"^ID (\d+)/(\d+): (.*)$")
 RESULT_RE = re.compile(r"^ID (\S+) .*\b(accepted|rejected)\b")
+FAILED_RE = re.compile(r"^ID (.+?) failed: ")
 
 
 def quantities_of(experiments):
@@ -87,6 +88,7 @@ class Live:
         self.progress = None
         self.results = []       # result STATUSTEXTs
         self.done = None        # "done" | "aborted: why" | "failed"
+        self.failure = None     # the vehicle's "ID <phase> failed: <why>" (a phase's time limit)
         self.texts = []
 
     def on_text(self, text):
@@ -100,6 +102,8 @@ class Live:
             self.done = "done"
         elif text.startswith("ID aborted"):
             self.done = "aborted" + text[len("ID aborted"):]
+        elif FAILED_RE.match(text):
+            self.failure = text
         elif RESULT_RE.match(text):
             self.results.append(text)
 
@@ -217,6 +221,8 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
     finally:
         v.listeners.remove(listen)
         progress.done()
+    if live.failure:
+        raise GcsError(f"experiment {experiment} ({name}) failed: {live.failure}; {live.done}")
     if live.done != "done":
         raise GcsError(f"experiment {experiment} ({name}) {live.done}")
     return live

@@ -105,6 +105,10 @@ def fly(build, args, veh, experiments, stage, prog):
         raise GcsError(f"octo-sil exited with status {rc}: "
                        + (why or "\n".join(text.splitlines()[-12:])))
     prog.say(f"flight done in octo-sil: {wall:.2f} s wall")
+    if not experiments and not (stage / "fw-storage.parm").exists():
+        # no experiment, so no result the firmware had to store: its parameters are the
+        # defaults with what the mission set
+        return nominal, dict(nominal), wall
     try:
         after = {k: f32(v) for k, v in paramfile.load(stage / "fw-storage.parm").items()}
     except (OSError, paramfile.ParamFileError) as e:
@@ -168,7 +172,8 @@ def execute(args, stream, err_stream):
         after, from_texts = merge_text_results(after, texts)
         params_only = {k: after[k] for k in after if k not in from_texts}
         paramfile.save(stage / "params.parm", params_only)
-        os.unlink(stage / "fw-storage.parm")   # the firmware's own storage: params.parm says it
+        if (stage / "fw-storage.parm").exists():
+            os.unlink(stage / "fw-storage.parm")   # the firmware's own storage: params.parm says it
         os.unlink(stage / "mission.txt")
         rep = build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=wall_flight, logs=logs,
                            from_texts=from_texts)

@@ -88,9 +88,12 @@ class Mission:
 
     # ------------------------------------------------------------ processes
     def _alive(self):
-        if self.vehicle is not None and self.vehicle_failures(self.phase_since):
+        failures = self.vehicle_failures(self.phase_since) if self.vehicle is not None else []
+        if failures:
             self.vehicle.recv(types=(), timeout=0.1)   # the lines that explain it follow
             why = "; ".join(self.vehicle_errors(self.phase_since))
+            if failures[0].startswith("Hold entry failed"):
+                self.phase = "hold entry"   # the take-off's last part: at the height, settling
             raise GcsError(f"{self.phase} failed: {why}")
         for p in (self.sim, self.fw):
             if p is not None and not p.alive():

@@ -42,18 +42,93 @@ def _err(est, true):
     return 100.0 * (est - true) / true
 
 
-def truth_from_logs(logs, veh):
-    """The truth: the vehicle file, or (with drift) the truth log's values at the end."""
+# the experiment phase whose data each estimate comes from (the firmware's "ID k/n: <phase>")
+ESTIMATE_PHASE = {"kf": "rotor", "ktau": "rotor", "ixx": "inertia ixx", "iyy": "inertia iyy",
+                  "izz": "inertia izz"}
+
+
+def truth_windows(logs):
+    """{quantity: (t_start, t_end)} of the experiment phase each estimate comes from (the last
+    such phase in the log), from the firmware's events."""
+    out = {}
+    if logs is None:
+        return out
+    for key, word in ESTIMATE_PHASE.items():
+        w = logs.phase_windows(word)
+        if w:
+            out[key] = (float(w[-1][1]), float(w[-1][2]))
+    return out
+
+
+def truth_from_logs(logs, veh, windows=None):
+    """The truth each estimate is compared with: the vehicle file, or from the truth log at the
+    same simulated time as the estimate, the mean over the experiment phase its data come from
+    (a drifting k_f: the estimate is a fit over that phase); without a phase, the log's end
+    (the middle when k_f drifts)."""
     t = truth_of(veh)
     if logs is not None and logs.truth is not None and len(logs.truth):
         tr = logs.truth
         t = {"kf": float(tr.kf[-1]), "ktau": float(tr.ktau[-1]), "ixx": float(tr.inertia[-1, 0]),
              "iyy": float(tr.inertia[-1, 1]), "izz": float(tr.inertia[-1, 2])}
-        # drifting k_f: the value in the middle of the log is the fairer truth
         if abs(tr.kf[-1] - tr.kf[0]) > 1e-9 * tr.kf[0]:
             i = len(tr) // 2
             t["kf"], t["ktau"] = float(tr.kf[i]), float(tr.ktau[i])
+        series = {"kf": tr.kf, "ktau": tr.ktau, "ixx": tr.inertia[:, 0], "iyy": tr.inertia[:, 1],
+                  "izz": tr.inertia[:, 2]}
+        for key, (t0, t1) in (windows if windows is not None else truth_windows(logs)).items():
+            sel = (tr.t >= t0) & (tr.t <= t1)
+            if sel.any():
+                t[key] = float(series[key][sel].mean())
     return t
+
+
+KFT_SAMPLE_S = 5.0     # the tracked k_f in the report: one sample every this many seconds
+KFT_WARM_S = 10.0      # ... compared (check) from this long after the rotor model is final
+KFT_TOL_PCT = 0.3
+
+
+def kf_tracked(logs, kf_sd_pct=None):
+    """The k_f the firmware tracked (fw log: kft, kft_sd, while it updates: HOLD and
+    experiments) against the truth log's k_f at the same simulated time: samples every
+    KFT_SAMPLE_S and a summary over those from KFT_WARM_S after the rotor experiment (the
+    rotor model it finds restarts the tracker) or after the tracker's first value. The tracker
+    regresses on the identified rotor model: its k_f (thrust at FULL throttle, extrapolated
+    from hover through the thrust curve) carries the curve's error as the identified k_f does,
+    so the limit is that of the identified k_f (KFT_TOL_PCT or 4 of its sd, kf_sd_pct), and
+    the drift itself is compared apart: the tracked change over the compared window against
+    the truth's."""
+    import numpy as np
+    if logs is None or logs.fw is None or logs.truth is None or not logs.fw.has("kft"):
+        return None
+    fw, tr = logs.fw, logs.truth
+    on = (fw.kft > 0) & ((fw.mode == 3) | (fw.mode == 4)) & fw.stepped
+    if not on.any():
+        return None
+    t = fw.t[on]
+    true = np.interp(t, tr.t, tr.kf)
+    est, sd = fw.kft[on], fw.kft_sd[on]
+    err = 100.0 * (est - true) / true
+    rotor = truth_windows(logs).get("kf")
+    t_from = (rotor[1] if rotor else float(t[0])) + KFT_WARM_S
+    samples, t_next = [], float(t[0])
+    for i in range(len(t)):
+        if t[i] >= t_next:
+            samples.append({"t": _num(t[i], 3), "estimate": _num(est[i]), "sd": _num(sd[i], 8),
+                            "truth": _num(true[i]), "error_pct": _num(err[i], 4),
+                            "compared": bool(t[i] >= t_from)})
+            t_next = float(t[i]) + KFT_SAMPLE_S
+    w = t >= t_from
+    cmp_ = err[w]
+    summary = {"from_t": _num(t_from, 3), "samples": int(len(cmp_)),
+               "max_abs_error_pct": _num(float(np.abs(cmp_).max()), 4) if len(cmp_) else None,
+               "rms_error_pct": _num(float(np.sqrt(np.mean(cmp_ ** 2))), 4) if len(cmp_) else None,
+               "limit_pct": _num(max(KFT_TOL_PCT, 4.0 * kf_sd_pct) if kf_sd_pct else KFT_TOL_PCT, 4),
+               "truth_change_pct": _num(100.0 * (true[-1] / true[0] - 1), 4)}
+    if w.sum() > 1:
+        e, tt = est[w], true[w]
+        summary["drift_tracked_pct"] = _num(100.0 * (e[-1] / e[0] - 1), 4)
+        summary["drift_truth_pct"] = _num(100.0 * (tt[-1] / tt[0] - 1), 4)
+    return {"summary": summary, "samples": samples}
 
 
 def parameter_rows(nominal, after, truth, experiments):
@@ -99,7 +174,8 @@ def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=No
         paths = [p for p in (os.path.join(stage, "truth.lcm"), os.path.join(stage, "fw.lcm"))
                  if os.path.exists(p)]
         logs = Logs(paths) if paths else None
-    truth = truth_from_logs(logs, veh)
+    windows = truth_windows(logs)
+    truth = truth_from_logs(logs, veh, windows)
     rep = {
         "tool": f"octo-gcs {__version__}",
         "created_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
@@ -110,6 +186,7 @@ def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=No
                 "experiments": experiments},
         "bench": {"mass_kg": veh["mass"], "arm_length_m": veh["arm_length"]},
         "truth": {k: _num(v) for k, v in truth.items()},
+        "truth_window_s": {k: [_num(a, 3), _num(b, 3)] for k, (a, b) in windows.items()},
         "parameters": parameter_rows(nominal, after, truth, experiments),
         "validation": {tag: _validation_params(after, tag) for tag in ("before", "after")},
         "motor_model": [dict(zip(("quantity", "found", "sd", "truth", "error"), r))
@@ -143,6 +220,21 @@ def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=No
     rep["results_from_status_texts"] = list(from_texts)
     checks = plausibility(after, experiments, set(from_texts)) if experiments else []
     checks += against_truth(after, experiments, truth, TOL_ROTOR_PCT, TOL_INERTIA_PCT)
+    kft = kf_tracked(logs, rep["parameters"]["kf"]["sd_pct"] if "kf" in rep["parameters"] else None)
+    if kft is not None:
+        rep["kf_tracked"] = kft
+        s_ = kft["summary"]
+        if s_["samples"]:
+            from .identify import Check
+            checks.append(Check("k_f tracked vs truth at the same time", s_["max_abs_error_pct"] <= s_["limit_pct"],
+                                f"max {s_['max_abs_error_pct']:.3f} %, rms {s_['rms_error_pct']:.3f} % over "
+                                f"{s_['samples']} frames from t={s_['from_t']:.1f} s (limit {s_['limit_pct']:.3g} %: "
+                                "the identified k_f's)", warning=True))
+            if s_.get("drift_truth_pct") is not None:
+                d = s_["drift_tracked_pct"] - s_["drift_truth_pct"]
+                checks.append(Check("k_f drift tracked", abs(d) <= KFT_TOL_PCT,
+                                    f"{s_['drift_tracked_pct']:+.3f} % tracked, {s_['drift_truth_pct']:+.3f} % "
+                                    f"true (limit {KFT_TOL_PCT} %)", warning=True))
     rep["checks"] = [c.as_dict() for c in checks]
     rep["tolerances_pct"] = {"kf_ktau": TOL_ROTOR_PCT, "inertia": TOL_INERTIA_PCT}
     rep["pass"] = all(c.ok or c.warning for c in checks)
@@ -237,7 +329,27 @@ def markdown(rep, figures=()):
               "vehicle. *nominal*: the firmware's values before identification. *plain LS*: the paper's "
               "least squares of measured f_1, tau_1 on the commanded T_1 (eqs. 18-20), biased by the "
               "motor lag. *lag-aware*: regression on the command passed through the motor model, with "
-              "its standard deviation. Errors are relative to the truth.", ""]
+              "its standard deviation. Errors are relative to the truth at the same simulated time: "
+              "the truth log's mean over the experiment phase the estimate comes from "
+              + ", ".join(f"{k} {w[0]:.1f}-{w[1]:.1f} s" for k, w in rep.get("truth_window_s", {}).items())
+              + ".", ""]
+    kft = rep.get("kf_tracked")
+    if kft:
+        s_ = kft["summary"]
+        lines += ["## k_f tracked against the truth at the same simulated time", ""]
+        if s_["samples"]:
+            lines += [f"From t = {s_['from_t']:.1f} s ({KFT_WARM_S:g} s after the rotor model is final): "
+                      f"max |error| {s_['max_abs_error_pct']:.3f} %, rms {s_['rms_error_pct']:.3f} % over "
+                      f"{s_['samples']} frames (limit {s_['limit_pct']:.3g} %: the tracker regresses on the "
+                      "identified rotor model, so its k_f at full throttle carries the thrust curve's "
+                      "error as the identified k_f does); drift over that window "
+                      f"{s_.get('drift_tracked_pct', float('nan')):+.3f} % tracked, "
+                      f"{s_.get('drift_truth_pct', float('nan')):+.3f} % true; the truth changed "
+                      f"{s_['truth_change_pct']:+.3f} % over the whole tracking.", ""]
+        lines += ["| t [s] | tracked k_f [N] | sd | truth [N] | error |", "|---|---|---|---|---|"]
+        lines += [f"| {x['t']:.1f} | {x['estimate']:.5g} | {x['sd']:.2g} | {x['truth']:.5g} | "
+                  f"{x['error_pct']:+.3f} %{'' if x['compared'] else ' (warming up)'} |" for x in kft["samples"]]
+        lines += [""]
     lines += ["## Validation", ""] + [f"- {x}" for x in _validation_lines(rep)] + [""]
     mm = rep.get("motor_model", [])
     if mm:

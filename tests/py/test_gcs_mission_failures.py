@@ -63,18 +63,93 @@ def test_impossible_vehicle_take_off_fails_with_reason(tmp_path):
     assert rep["failed_phase"] == "take-off"
 
 
+def underpowered_vehicle(tmp_path, rng):
+    """A vehicle with a random hover throttle and 1-2 % of thrust to spare (MOT_THR_MAX): it
+    climbs more slowly than the take-off's height profile, whose set point reaches the target
+    seconds before the vehicle does (the hold entry then lasts)."""
+    mass, u_h = rng.uniform(1.0, 5.0), rng.uniform(0.15, 0.5)
+    kf = mass * 9.796 / (8 * u_h)
+    vf = tmp_path / "v.json"
+    vf.write_text(json.dumps({"mass": mass, "kf": kf, "ktau": 0.3869 * kf / 28.0269}))
+    return vf, u_h * rng.uniform(1.01, 1.02)
+
+
+def test_hold_entry_limit_stops_the_mission_with_its_reason(tmp_path):
+    """The take-off's set point at 10 m, the underpowered vehicle still climbing: NAV_HOLD_TO
+    runs out; the exit message names the hold entry, the limit and how far off the vehicle is."""
+    rng = random.Random()
+    vf, thr_max = underpowered_vehicle(tmp_path, rng)
+    out = tmp_path / "out"
+    r = gcs("mission", "--vehicle", vf, "--experiments", "none", "--param", "NAV_HOLD_TO=1",
+            "--param", f"MOT_THR_MAX={thr_max:.4f}", "--seed", rng.randint(1, 999), "--out", out)
+    assert r.returncode != 0, r.stdout
+    assert re.search(r"hold entry failed: Hold entry failed: NAV_HOLD_TO 1 s; "
+                     r"Still -\d\.\d{3} m \+\d\.\d{3} m/s off the target", r.stderr), r.stderr
+    rep, md = failed_report(out)
+    assert rep["failed_phase"] == "hold entry" and "NAV_HOLD_TO 1 s" in rep["failure"]
+    assert "phase: hold entry" in md
+
+
+def test_hold_entry_within_its_default_limit(tmp_path):
+    """The same kind of vehicle with the default NAV_HOLD_TO reaches HOLD: the limit above
+    failed on time, not on a vehicle that cannot hold."""
+    rng = random.Random()
+    vf, thr_max = underpowered_vehicle(tmp_path, rng)
+    out = tmp_path / "out"
+    r = gcs("mission", "--vehicle", vf, "--experiments", "none",
+            "--param", f"MOT_THR_MAX={thr_max:.4f}", "--seed", rng.randint(1, 999), "--out", out, "--no-plots")
+    assert r.returncode == 0 and "Hold entry failed" not in r.stderr + r.stdout, r.stdout + r.stderr
+
+
+@pytest.mark.parametrize("experiment,param,phase", [
+    ("1", "ID_ROT_TO", "rotor coefficients"),
+    ("2", "ID_VAL_TO", "validation"),
+    ("5", "ID_INR_TO", "inertia Izz"),
+    ("6", "ID_INR_TO", "inertia Ixx"),   # the sequence: its first inertia phase
+])
+def test_experiment_limit_stops_the_mission_with_its_reason(tmp_path, experiment, param, phase):
+    """A phase limit shorter than the phase (1 s of settling + 5 or 10 s): the experiment fails
+    with the limit and the phase's planned time; the mission stops and names them."""
+    limit = round(random.uniform(1.5, 4.5), 1)
+    out = tmp_path / "out"
+    r = gcs("mission", "--experiments", experiment, "--param", f"{param}={limit}",
+            "--seed", random.randint(1, 999), "--out", out)
+    assert r.returncode != 0, r.stdout
+    planned = 6.0 if param == "ID_VAL_TO" else 11.0
+    why = f"ID {phase} failed: {param} {limit:.1f} s"
+    assert f"experiment {experiment} " in r.stderr and f"failed: {why}; aborted: time limit, " \
+        f"phase planned {planned:.1f} s" in r.stderr, r.stderr
+    rep, md = failed_report(out)
+    assert rep["failed_phase"] == f"experiment {experiment}" and why in rep["failure"]
+    assert why in rep["vehicle_errors"]
+
+
 @pytest.mark.parametrize("param,step,reason", [
     ("NAV_TKO_TO=1", "wait hold", "Take-off failed: NAV_TKO_TO 1 s"),
     ("NAV_LAND_TO=1", "wait disarmed", "Landing failed: NAV_LAND_TO 1 s"),
+    ("ID_ROT_TO=2", "wait experiment", r"experiment ended FAILED \(ID rotor coefficients failed: ID_ROT_TO 2\.0 s"),
 ])
 def test_phase_limit_stops_the_in_process_mission_with_its_reason(tmp_path, param, step, reason):
     """octo-sil: the firmware's final FAILED ends the waiting step at once; octo-sil exits
     non-zero naming the step and the firmware's reason, and the logs are kept."""
     out = tmp_path / "out"
-    r = gcs("mission", "--in-process", "--experiments", "none", "--param", param,
+    r = gcs("mission", "--in-process", "--experiments", "1" if param.startswith("ID_") else "none", "--param", param,
             "--seed", random.randint(1, 999), "--out", out)
     assert r.returncode != 0, r.stdout
     assert re.search(rf"step \d+ '{step}' failed at t=[0-9.]+ s: {reason}", r.stderr), r.stderr
     assert "still in mode" not in r.stderr   # not the step's own time limit
     assert (out / "failed-run" / "octo-sil.log").exists()
     assert not (out / "report.json").exists()
+
+
+def test_in_process_mission_without_experiments(tmp_path):
+    """Take-off, hold entry and landing alone in octo-sil, with the underpowered vehicle: the
+    firmware stores no result (no experiment), the mission still reports and passes."""
+    rng = random.Random()
+    vf, thr_max = underpowered_vehicle(tmp_path, rng)
+    out = tmp_path / "out"
+    r = gcs("mission", "--in-process", "--vehicle", vf, "--experiments", "none",
+            "--param", f"MOT_THR_MAX={thr_max:.4f}", "--seed", rng.randint(1, 999), "--out", out, "--no-plots")
+    assert r.returncode == 0, r.stdout + r.stderr
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["pass"] and (out / "params.parm").exists() and not (out / "failed-run").exists()

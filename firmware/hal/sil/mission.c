@@ -23,7 +23,7 @@ enum step_kind { ST_PARAM, ST_ARM, ST_TAKEOFF, ST_WAIT_HOLD, ST_EXPERIMENT, ST_W
  * is retried (arm: until the vehicle has frames; experiment: until it hovers). */
 static const double step_timeout_s[] = {
 	[ST_PARAM] = 1.0, [ST_ARM] = 10.0, [ST_TAKEOFF] = 1.0, [ST_WAIT_HOLD] = 60.0, [ST_EXPERIMENT] = 10.0,
-	[ST_WAIT_EXP] = 600.0, [ST_LAND] = 1.0, [ST_WAIT_DISARMED] = 120.0, [ST_SLEEP] = 0.0,
+	[ST_WAIT_EXP] = 30000.0, [ST_LAND] = 1.0, [ST_WAIT_DISARMED] = 120.0, [ST_SLEEP] = 0.0,
 };
 #define RETRY_S 0.5
 
@@ -219,7 +219,7 @@ static int command(struct sil *s, uint16_t cmd, float p1, float p7)
 	if (cmd == MAV_CMD_USER_1)
 		s->seen.exp_final = false;
 	s->seen.text[0] = 0;
-	if (cmd == MAV_CMD_NAV_TAKEOFF || cmd == MAV_CMD_NAV_LAND) {
+	if (cmd == MAV_CMD_NAV_TAKEOFF || cmd == MAV_CMD_NAV_LAND || cmd == MAV_CMD_USER_1) {
 		s->seen.phase_failed = false;
 		s->seen.fail_text[0] = 0;
 	}
@@ -333,13 +333,16 @@ static int step(struct mission *m, struct sil *s, const struct step *st, bool fi
 			if (s->seen.exp_result == MAV_RESULT_ACCEPTED)
 				return 1;
 			char d[400];
-			snprintf(d, sizeof d, "experiment ended %s (%s)", result_name(s->seen.exp_result),
-				 s->seen.id_text[0] ? s->seen.id_text : "no reason given");
+			/* a phase over its time limit: the firmware's "ID <phase> failed: ..." and what
+			 * it adds; otherwise its last ID line ("ID aborted: ...") */
+			const char *why = s->seen.fail_text[0] ? s->seen.fail_text
+					  : s->seen.id_text[0] ? s->seen.id_text : "no reason given";
+			snprintf(d, sizeof d, "experiment ended %s (%s)", result_name(s->seen.exp_result), why);
 			return fail(m, s, "%s", d);
 		}
 		if (!waited_too_long(m, s))
 			return 0;
-		return fail(m, s, "experiment still running after %s s", "600");
+		return fail(m, s, "experiment still running after %s s", "30000");
 	case ST_LAND: {
 		if (s->app.mode == APP_DISARMED)
 			return 1;
