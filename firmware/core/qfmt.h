@@ -219,11 +219,11 @@ static inline int32_t q30_ratio_x(int64_t a, int64_t b, int *sh)
 		ub <<= 8;
 		k -= 8;
 	}
-	while ((ua >> 1) > ub && ub < ((int64_t)1 << 61)) {
+	while (ua - ub > ub && ub < ((int64_t)1 << 61)) { /* until a <= 2 b */
 		ub <<= 1;
 		k--;
 	}
-	while ((ua >> 1) > ub) { /* b near 2^62: lower a */
+	while (ua - ub > ub) { /* b near 2^62: lower a */
 		ua >>= 1;
 		k--;
 	}
