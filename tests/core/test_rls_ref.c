@@ -71,6 +71,12 @@ static void ref_update(struct ref *r, const double *phi, const double *y)
 
 static double g_curve(double c, double s) { return (1.0 - c) * s + c * s * s; }
 
+/* the estimators under test are large for Cortex-M0's 16 KB of RAM: one static for both */
+static union {
+	struct ident_rotor rot;
+	struct ident_inertia inr;
+} big;
+
 /* k_f, k_tau and the lag check of ident_rotor on random rotor experiments */
 UNIT_TEST(rls_ref_rotor_experiments)
 {
@@ -91,8 +97,8 @@ UNIT_TEST(rls_ref_rotor_experiments)
 		cfg.thr0 = sc_from_float((float)hover);
 		cfg.kf0 = (float)(kf * unit_rand_uniform(&g, 0.8, 1.25));
 		cfg.ktau0 = (float)(kt * unit_rand_uniform(&g, 0.8, 1.25));
-		static struct ident_rotor r; /* large: off the stack of small targets */
-		ident_rotor_init(&r, &cfg);
+		struct ident_rotor *rp = &big.rot;
+		ident_rotor_init(rp, &cfg);
 		const double th0[2][4] = { { cfg.kf0 }, { cfg.ktau0 } }, th0s[1][4] = { { cfg.kf0, 0.0 } };
 		struct ref lag, sens;
 		ref_init(&lag, 1, 2, 1e6, 1.0, th0);
@@ -114,18 +120,18 @@ UNIT_TEST(rls_ref_rotor_experiments)
 			scalar_t fm = sc_from_float((float)f), tm = sc_from_float((float)tq);
 			/* this frame's measurement with the previous frame's throttle */
 			scalar_t prev = sc_from_float((float)hist[1]);
-			ident_rotor_update(&r, prev, fm, tm, true);
-			double y[2] = { d(fm), d(tm) }, phi = d(r.phi);
+			ident_rotor_update(rp, prev, fm, tm, true);
+			double y[2] = { d(fm), d(tm) }, phi = d(rp->phi);
 			ref_update(&lag, &phi, y);
-			scalar_t s = r.lag.y;
+			scalar_t s = rp->lag.y;
 			scalar_t gp = sc_add(sc_sub(SC(1.0), cfg.curve), sc_mul(sc_add(cfg.curve, cfg.curve), s));
-			double phi2[2] = { phi, d(sc_mul(gp, r.dphi_dtau)) };
+			double phi2[2] = { phi, d(sc_mul(gp, rp->dphi_dtau)) };
 			ref_update(&sens, phi2, y);
 		}
-		double e_kf = fabs(ident_rotor_est(&r, 0) / lag.th[0][0] - 1.0);
-		double e_kt = fabs(ident_rotor_est(&r, 1) / lag.th[1][0] - 1.0);
+		double e_kf = fabs(ident_rotor_est(rp, 0) / lag.th[0][0] - 1.0);
+		double e_kt = fabs(ident_rotor_est(rp, 1) / lag.th[1][0] - 1.0);
 		double t_ref = (double)sc_to_float(cfg.mot_tau_s) + sens.th[0][1] / sens.th[0][0];
-		double e_lag = fabs((double)ident_rotor_tau_check(&r) / t_ref - 1.0);
+		double e_lag = fabs((double)ident_rotor_tau_check(rp) / t_ref - 1.0);
 		worst[0] = fmax(worst[0], e_kf);
 		worst[1] = fmax(worst[1], e_kt);
 		worst[2] = fmax(worst[2], e_lag);
@@ -152,8 +158,8 @@ UNIT_TEST(rls_ref_inertia_experiments)
 		scalar_t inertia[3], w0[3] = { 0, 0, 0 }, tau0[3] = { 0, 0, 0 };
 		for (int i = 0; i < 3; i++)
 			inertia[i] = sc_from_float((float)(in[i] * unit_rand_uniform(&g, 0.8, 1.25)));
-		static struct ident_inertia e;
-		ident_inertia_init(&e, ax, ax == 2u ? SC(12.0) : SC(25.0), SC(0.7), SC(1.0 / 90.0), SC(0.5),
+		struct ident_inertia *ep = &big.inr;
+		ident_inertia_init(ep, ax, ax == 2u ? SC(12.0) : SC(25.0), SC(0.7), SC(1.0 / 90.0), SC(0.5),
 				   inertia, w0, tau0);
 		const double th0[1][4] = { { d(inertia[ax]) } };
 		struct ref rf;
@@ -175,14 +181,14 @@ UNIT_TEST(rls_ref_inertia_experiments)
 				tb[i] = sc_from_float((float)(tq + 0.002 * unit_rand_normal(&g)));
 				wb[i] = sc_from_float((float)(w[i] + 0.005 * unit_rand_normal(&g)));
 			}
-			scalar_t wf_prev = e.wf_prev;
-			ident_inertia_update(&e, tb, wb, true);
+			scalar_t wf_prev = ep->wf_prev;
+			ident_inertia_update(ep, tb, wb, true);
 			/* the regression ident_inertia_update made (same scalar_t operations) */
-			double phi = d(sc_mul(sc_sub(e.svf_w.y, wf_prev), e.inv_dt));
-			double y = d(sc_sub(e.svf_tau.y, sc_mul(e.coupling, e.svf_ww.y)));
+			double phi = d(sc_mul(sc_sub(ep->svf_w.y, wf_prev), ep->inv_dt));
+			double y = d(sc_sub(ep->svf_tau.y, sc_mul(ep->coupling, ep->svf_ww.y)));
 			ref_update(&rf, &phi, &y);
 		}
-		worst = fmax(worst, fabs(ident_inertia_est(&e) / rf.th[0][0] - 1.0));
+		worst = fmax(worst, fabs(ident_inertia_est(ep) / rf.th[0][0] - 1.0));
 		CHECK_REL(rf.th[0][0], in[ax], 0.05);
 	}
 	if (!(worst < REL_BOUND))

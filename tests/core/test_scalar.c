@@ -86,5 +86,15 @@ UNIT_TEST(scalar_exp)
 	}
 #if OCTO_FIXED
 	CHECK(sc_exp(SC(20)) == SC_MAX); /* e^20 > 32768 saturates */
+	CHECK(sc_exp(SC(10.397)) < SC_MAX && sc_exp(SC(10.3973)) == SC_MAX);
+	CHECK(sc_exp(SC_MAX) == SC_MAX && sc_exp(SC_MAX_NEG) == 0 && sc_exp(SC(-13)) == 0);
+	CHECK(sc_exp(0) == SC(1));
+	/* integer in the fixed build: within 0.5 LSB + 1e-8 relative over the whole range */
+	struct unit_rng g = { 0xe4bULL };
+	for (int i = 0; i < 5000; i++) {
+		scalar_t s = (scalar_t)unit_rand_uniform(&g, -13.0 * 65536, 10.39 * 65536);
+		double ref = exp(d(s));
+		CHECK_NEAR(d(sc_exp(s)), ref, 0.5 * LSB + 1e-8 * ref);
+	}
 #endif
 }
