@@ -71,11 +71,6 @@ static void ref_update(struct ref *r, const double *phi, const double *y)
 
 static double g_curve(double c, double s) { return (1.0 - c) * s + c * s * s; }
 
-/* the estimators under test are large for Cortex-M0's 16 KB of RAM: one static for both */
-static union {
-	struct ident_rotor rot;
-	struct ident_inertia inr;
-} big;
 
 /* k_f, k_tau and the lag check of ident_rotor on random rotor experiments */
 UNIT_TEST(rls_ref_rotor_experiments)
@@ -97,7 +92,8 @@ UNIT_TEST(rls_ref_rotor_experiments)
 		cfg.thr0 = sc_from_float((float)hover);
 		cfg.kf0 = (float)(kf * unit_rand_uniform(&g, 0.8, 1.25));
 		cfg.ktau0 = (float)(kt * unit_rand_uniform(&g, 0.8, 1.25));
-		struct ident_rotor *rp = &big.rot;
+		struct ident_rotor rot; /* on the stack: M0's 16 KB of RAM have no room for statics */
+		struct ident_rotor *rp = &rot;
 		ident_rotor_init(rp, &cfg);
 		const double th0[2][4] = { { cfg.kf0 }, { cfg.ktau0 } }, th0s[1][4] = { { cfg.kf0, 0.0 } };
 		struct ref lag, sens;
@@ -158,7 +154,8 @@ UNIT_TEST(rls_ref_inertia_experiments)
 		scalar_t inertia[3], w0[3] = { 0, 0, 0 }, tau0[3] = { 0, 0, 0 };
 		for (int i = 0; i < 3; i++)
 			inertia[i] = sc_from_float((float)(in[i] * unit_rand_uniform(&g, 0.8, 1.25)));
-		struct ident_inertia *ep = &big.inr;
+		struct ident_inertia inr;
+		struct ident_inertia *ep = &inr;
 		ident_inertia_init(ep, ax, ax == 2u ? SC(12.0) : SC(25.0), SC(0.7), SC(1.0 / 90.0), SC(0.5),
 				   inertia, w0, tau0);
 		const double th0[1][4] = { { d(inertia[ax]) } };
