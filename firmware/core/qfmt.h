@@ -20,8 +20,10 @@
  * results saturate to the word's range (int32: [-INT32_MAX, INT32_MAX], int64:
  * [-INT64_MAX, INT64_MAX]); nothing wraps. Products and quotients round to nearest, ties
  * away from zero. Division by zero returns the saturated value with the dividend's sign
- * (0/0 = 0). Only integer arithmetic: no float, no libc; a 64-bit division is the
- * compiler's integer helper on cores without a divider.
+ * (0/0 = 0). Only integer arithmetic: no float, no libc. The ratios (q30_ratio*) multiply
+ * by a reciprocal from Newton's iteration instead of dividing: Cortex-M0 has neither a
+ * divider nor a long multiply, and a 64-bit division there is a slow library loop;
+ * q_div64 and q_muldiv divide (for work off the 90 Hz path).
  *
  * These functions are compiled in both builds (they are plain integer code); the float
  * build's algorithms do not call them.
@@ -62,6 +64,44 @@ static inline int64_t q_add64(int64_t a, int64_t b)
 	return a + b;
 }
 
+/* 32 x 32 -> 64-bit products. Cortex-M0 (ARMv6-M) has no long multiply: a 64-bit product
+ * is a library call there, four 16 x 16 products inline are about three times cheaper. */
+static inline uint64_t q_umul32(uint32_t a, uint32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+	uint32_t al = a & 0xffffu, ah = a >> 16, bl = b & 0xffffu, bh = b >> 16;
+	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl, hh = ah * bh;
+	uint32_t mid = (ll >> 16) + (lh & 0xffffu) + (hl & 0xffffu);
+	return ((uint64_t)(hh + (lh >> 16) + (hl >> 16) + (mid >> 16)) << 32) | ((mid << 16) | (ll & 0xffffu));
+#else
+	return (uint64_t)a * b;
+#endif
+}
+
+static inline int64_t q_smul32(int32_t a, int32_t b)
+{
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint64_t p = q_umul32(ua, ub); /* < 2^64, and <= 2^62 unless an operand is INT32_MIN */
+	if (p > (uint64_t)INT64_MAX)
+		return (a < 0) != (b < 0) ? -INT64_MAX : INT64_MAX;
+	return (a < 0) != (b < 0) ? -(int64_t)p : (int64_t)p;
+}
+
+/* number of leading zero bits of v (64 for 0), by halving */
+static inline int q_clz64(uint64_t v)
+{
+	if (v == 0u)
+		return 64;
+	int n = 0;
+	if (!(v >> 32)) { n += 32; v <<= 32; }
+	if (!(v >> 48)) { n += 16; v <<= 16; }
+	if (!(v >> 56)) { n += 8; v <<= 8; }
+	if (!(v >> 60)) { n += 4; v <<= 4; }
+	if (!(v >> 62)) { n += 2; v <<= 2; }
+	if (!(v >> 63)) { n += 1; }
+	return n;
+}
+
 /* v / 2^s, rounded to nearest (ties away from zero); s in [0, 62] */
 static inline int64_t q_shr64(int64_t v, unsigned s)
 {
@@ -82,7 +122,7 @@ static inline int64_t q_shl64(int64_t v, unsigned s)
 		return INT64_MAX;
 	if (v < -lim)
 		return -INT64_MAX;
-	return v * ((int64_t)1 << s);
+	return v >= 0 ? (int64_t)((uint64_t)v << s) : -(int64_t)((uint64_t)-v << s);
 }
 
 /* v * 2^s for s of either sign: left shifts saturate, right shifts round (beyond 62 bits
@@ -107,13 +147,13 @@ static inline int32_t q16_of_q24(int32_t v) { return q_scale32(v, QF_SC_FRAC - Q
  * Qx.fa and Qy.fb is returned in format Q.(fa + fb - frac); saturates to int32 */
 static inline int32_t q_mul32(int32_t a, int32_t b, unsigned frac)
 {
-	return q_sat32(q_shr64((int64_t)a * b, frac));
+	return q_sat32(q_shr64(q_smul32(a, b), frac));
 }
 
 /* a * b / 2^frac with the int64 result (exact for frac = 0; no saturation needed: |a b| < 2^62) */
 static inline int64_t q_mul64(int32_t a, int32_t b, unsigned frac)
 {
-	return q_shr64((int64_t)a * b, frac);
+	return q_shr64(q_smul32(a, b), frac);
 }
 
 /* a * u / 2^30 for int64 a and a Q1.30 factor u: a keeps its format; saturating.
@@ -122,13 +162,16 @@ static inline int64_t q_mul64_q30(int64_t a, int32_t u)
 {
 	bool neg = (a < 0) != (u < 0);
 	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
-	uint64_t uu = u < 0 ? (uint64_t)0 - (uint64_t)(int64_t)u : (uint64_t)u;
-	uint64_t hi = (ua >> 30) * uu;          /* < 2^34 * 2^31 */
-	uint64_t lo = ((ua & 0x3fffffffu) * uu + ((uint64_t)1 << 29)) >> 30;
-	if (hi > (uint64_t)INT64_MAX - lo)
+	uint32_t uu = u < 0 ? 0u - (uint32_t)u : (uint32_t)u;
+	uint64_t hi = q_umul32((uint32_t)(ua >> 32), uu);         /* a_hi u, < 2^63 */
+	uint64_t lo = q_umul32((uint32_t)ua, uu);                 /* a_lo u, < 2^64 */
+	/* a u / 2^30 = hi 2^2 + lo / 2^30 */
+	if (hi >= ((uint64_t)1 << 61))
 		return neg ? -INT64_MAX : INT64_MAX;
-	int64_t r = (int64_t)(hi + lo);
-	return neg ? -r : r;
+	uint64_t r = (hi << 2) + ((lo + ((uint64_t)1 << 29)) >> 30);
+	if (r > (uint64_t)INT64_MAX)
+		return neg ? -INT64_MAX : INT64_MAX;
+	return neg ? -(int64_t)r : (int64_t)r;
 }
 
 /* a * b / 2^s for int64 a, int32 b, s in [1, 62]: int64, saturating. Two 32 x 32 products
@@ -136,10 +179,13 @@ static inline int64_t q_mul64_q30(int64_t a, int32_t u)
  * under 1 LSB of the result for s >= 32 and under 2^(32 - s) LSB otherwise. */
 static inline int64_t q_mul64_32(int64_t a, int32_t b, unsigned s)
 {
-	int64_t hi = (int64_t)(a >> 32) * b;                              /* |.| < 2^62 */
-	int64_t lo = (int64_t)(uint64_t)(uint32_t)(a & 0xffffffff) * b;   /* |.| < 2^63 */
-	int64_t lo_hi = lo >= 0 ? lo >> 32 : -((-lo) >> 32);
-	int64_t sum = hi + lo_hi;                      /* a b / 2^32, |.| < 2^62 + 2^31 */
+	bool neg = (a < 0) != (b < 0);
+	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
+	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint64_t hi = q_umul32((uint32_t)(ua >> 32), ub);           /* < 2^63 */
+	uint64_t lo = q_umul32((uint32_t)ua, ub) >> 32;             /* < 2^32 */
+	int64_t sum = (int64_t)(hi + lo);                            /* |a b| / 2^32 */
+	sum = neg ? -sum : sum;
 	return s >= 32u ? q_shr64(sum, s - 32u) : q_shl64(sum, 32u - s);
 }
 
@@ -157,79 +203,91 @@ static inline int64_t q_div64(int64_t n, int64_t d)
 		      : (n < -INT64_MAX + half ? -INT64_MAX / d : (n - half) / d);
 }
 
+/* 1 / x = y 2^-e for int64 x > 0: y an integer in (2^30, 2^31] (the mantissa 1 / v in Q30),
+ * e through *e. Newton's
+ * iteration y <- y (2 - v y) on the mantissa v of x in [0.5, 1), from 48/17 - 32/17 v
+ * (error < 1/17), three times: multiplications only (no divider on Cortex-M0), error under
+ * 3e-9 relative. x <= 0 gives y = 0. */
+static inline uint32_t q_recip(int64_t x, int *e)
+{
+	*e = 0;
+	if (x <= 0)
+		return 0;
+	int s = q_clz64((uint64_t)x);
+	uint32_t v = (uint32_t)(((uint64_t)x << s) >> 32);               /* Q32, [0.5, 1) */
+	uint32_t y = 3031741621u - (uint32_t)(q_umul32(2021161081u, v) >> 32); /* Q30 */
+	for (int i = 0; i < 3; i++) {
+		uint32_t t = (uint32_t)(q_umul32(v, y) >> 32);            /* v y in Q30, ~1 */
+		y = (uint32_t)((q_umul32(y, 0x80000000u - t) + ((uint64_t)1 << 29)) >> 30);
+	}
+	*e = 94 - s; /* x = v 2^(64 - s): 1 / x = (1 / v) 2^(s - 64) = y 2^(s - 94) */
+	return y;
+}
+
+/* a / b = r 2^-sh given the reciprocal of b (y, eb from q_recip): r in Q1.30 with |r| in
+ * [0.5, 2) and 29 or more significant bits; a = 0 or y = 0 give 0 (sh 0) */
+static inline int32_t q30_mul_recip(int64_t a, uint32_t y, int eb, int *sh)
+{
+	*sh = 0;
+	if (a == 0 || y == 0u)
+		return 0;
+	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
+	int sa = q_clz64(ua);
+	uint32_t a32 = (uint32_t)((ua << sa) >> 32);          /* a = a32 2^(32 - sa) */
+	uint64_t p = q_umul32(a32, y);                         /* [2^61, 2^63] */
+	uint64_t rr = (p + ((uint64_t)1 << 31)) >> 32;         /* [2^29, 2^31]: Q30 in [0.5, 2] */
+	int32_t r = rr > (uint64_t)INT32_MAX ? INT32_MAX : (int32_t)rr;
+	/* a / b = a32 2^(32 - sa) y 2^-eb = r 2^32 2^(32 - sa - eb) = (r 2^-30) 2^(94 - sa - eb) */
+	*sh = sa + eb - 94;
+	return a < 0 ? -r : r;
+}
+
 /* a / b in Q1.30 for 0 <= a, 0 < b (int64 of one and the same format): the ratio of two
- * values of any size, with 31 significant bits of b; saturates at 2 - 2^-30 (a >= 2 b);
- * b <= 0 gives 0 for a = 0 and the saturated value otherwise */
+ * values of any size; saturates at 2 - 2^-30 (a >= 2 b); b <= 0 gives 0 for a = 0 and the
+ * saturated value otherwise */
 static inline int32_t q30_ratio(int64_t a, int64_t b)
 {
 	if (a <= 0)
 		return 0;
 	if (b <= 0)
 		return INT32_MAX;
-	/* bring b under 2^32 (a then under 2^33 if a < 2 b, which the saturation covers) */
-	while (b >= ((int64_t)1 << 40)) {
-		a >>= 8;
-		b >>= 8;
-	}
-	while (b >= ((int64_t)1 << 32)) {
-		a >>= 1;
-		b >>= 1;
-	}
-	if (a >= 2 * b)
+	int eb, sh;
+	uint32_t y = q_recip(b, &eb);
+	int32_t r = q30_mul_recip(a, y, eb, &sh);
+	if (sh < -1)
 		return INT32_MAX;
-	return q_sat32(((a << 30) + b / 2) / b);
+	return q_sat32(q_scale64(r, -sh));
 }
 
-/* a / b = r 2^-sh for 0 < a, 0 < b: r in Q1.30 (in [0.5, 2) unless a or b is extreme) with
- * 30 significant bits however small a / b is; sh >= 0 is returned through *sh. For ratios
- * that shrink a quantity kept with an exponent (the RLS covariance): the caller applies sh to
- * the exponent instead of losing the bits. a <= 0 gives 0 (sh 0). */
+/* a / b = r 2^-sh for 0 < a, 0 < b: r in Q1.30 with 29 or more significant bits however
+ * small a / b is; sh through *sh. For ratios that shrink a quantity kept with an exponent
+ * (the RLS covariance): the caller applies sh to the exponent instead of losing the bits.
+ * a <= 0 gives 0 (sh 0). */
 static inline int32_t q30_ratio_sh(int64_t a, int64_t b, int *sh)
 {
-	int k = 0;
-	if (a > 0 && b > 0) {
-		while (a <= (b >> 8) && a < ((int64_t)1 << 54)) {
-			a <<= 8;
-			k += 8;
-		}
-		while (a <= (b >> 1) && a < ((int64_t)1 << 61)) {
-			a <<= 1;
-			k++;
-		}
-	}
-	*sh = k;
-	return q30_ratio(a, b);
+	*sh = 0;
+	if (a <= 0 || b <= 0)
+		return a > 0 ? INT32_MAX : 0;
+	int eb;
+	uint32_t y = q_recip(b, &eb);
+	return q30_mul_recip(a, y, eb, sh);
 }
 
-/* a / b = r 2^-sh for int64 a, b (b != 0; signed): r in Q1.30 with |r| in [0.5, 2) and 30
- * significant bits for any a / b; sh of either sign through *sh. a = 0 gives 0 (sh 0); b = 0
- * gives the saturated value with a's sign (sh 0). */
+/* a / b = r 2^-sh for int64 a, b (signed): r in Q1.30 with |r| in [0.5, 2) and 29 or more
+ * significant bits for any a / b; sh of either sign. a = 0 gives 0 (sh 0); b = 0 gives the
+ * saturated value with a's sign (sh 0). */
 static inline int32_t q30_ratio_x(int64_t a, int64_t b, int *sh)
 {
 	*sh = 0;
 	if (a == 0)
 		return 0;
-	bool neg = (a < 0) != (b < 0);
-	int64_t ua = a < 0 ? (a == INT64_MIN ? INT64_MAX : -a) : a;
+	if (b == 0)
+		return a < 0 ? -INT32_MAX : INT32_MAX;
 	int64_t ub = b < 0 ? (b == INT64_MIN ? INT64_MAX : -b) : b;
-	if (ub == 0)
-		return neg ? -INT32_MAX : INT32_MAX;
-	int k = 0;
-	while ((ua >> 9) > ub && ub < ((int64_t)1 << 53)) { /* a >> b: raise b */
-		ub <<= 8;
-		k -= 8;
-	}
-	while (ua - ub > ub && ub < ((int64_t)1 << 61)) { /* until a <= 2 b */
-		ub <<= 1;
-		k--;
-	}
-	while (ua - ub > ub) { /* b near 2^62: lower a */
-		ua >>= 1;
-		k--;
-	}
-	int32_t r = q30_ratio_sh(ua, ub, sh);
-	*sh += k;
-	return neg ? -r : r;
+	int eb;
+	uint32_t y = q_recip(ub, &eb);
+	int32_t r = q30_mul_recip(a, y, eb, sh);
+	return b < 0 ? -r : r;
 }
 
 /* a * b / c for int32 a, b and int64 c > 0, scaled by 2^s (s in [0, 31]): the result of

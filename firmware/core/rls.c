@@ -52,20 +52,59 @@ static inline rls_wide_t wide_add(rls_wide_t a, rls_wide_t b) { return q_add64(a
 /* a / b in Q1.30 (0 <= a, 0 < b; saturates at 2) */
 static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return q30_ratio(a, b); }
 /* d a / b = result 2^-*sh (0 < a <= 2 b, 0 < b): no bits lost however small a / b */
-static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a, rls_inn_t b, int *sh)
-{
-	return q_mul64_q30(d, q30_ratio_sh(a, b, sh));
-}
 /* d 2^e (e <= 0 here: rounds) */
 static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { return q_scale64(d, e); }
 /* x + a c / b in Q15.48 (x Q15.48, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
-static inline rls_par_t par_add_gain(rls_par_t x, rls_inn_t a, rls_inn_t b, rls_sig_t c)
-{
-	int sh;
-	int32_t r = q30_ratio_x(a, b, &sh);
-	return q_add64(x, q_scale64((int64_t)c * r, QF_PAR_FRAC - QF_SIG_FRAC - QF_UNIT_FRAC - sh));
-}
 /* Q15.48 * Q7.24 -> Q7.24 */
+/* the reciprocal of an innovation (y 2^-e) and gains b / alpha as r 2^-sh (qfmt.h) */
+typedef struct { uint32_t y; int e; } rls_rcp_t;
+typedef struct { int32_t r; int sh; } rls_gain_t;
+#define RCP_NONE ((rls_rcp_t){ 0u, 0 })
+static inline rls_rcp_t rcp_of(rls_inn_t a)
+{
+	rls_rcp_t c;
+	c.y = q_recip(a, &c.e);
+	return c;
+}
+static inline rls_gain_t gain_of(rls_inn_t a, rls_rcp_t c)
+{
+	rls_gain_t g;
+	g.r = q30_mul_recip(a, c.y, c.e, &g.sh);
+	return g;
+}
+/* x + g c: Q15.48 + gain * Q7.24 */
+static inline rls_par_t par_add_g(rls_par_t x, rls_gain_t g, rls_sig_t c)
+{
+	return q_add64(x, q_scale64(q_smul32(c, g.r), QF_PAR_FRAC - QF_SIG_FRAC - QF_UNIT_FRAC - g.sh));
+}
+/* U_ij - f_j b_i / a_(j-1) in Q7.24 */
+static inline rls_sig_t u_update(rls_sig_t uij, rls_inn_t b, rls_sig_t f, rls_rcp_t c)
+{
+	rls_gain_t g = gain_of(b, c);
+	return q_sat32((int64_t)uij - q_scale64(q_smul32(f, g.r), -(QF_UNIT_FRAC + g.sh)));
+}
+/* d a_prev / (a lambda) = result 2^-*sh, with the reciprocal c of a (lambda = 1: no other) */
+static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c,
+					  rls_unit_t lambda, int *sh)
+{
+	rls_gain_t g = gain_of(a_prev, lambda == UNIT_ONE ? c : rcp_of(q_mul64_q30(a, lambda)));
+	*sh = g.sh;
+	return q_mul64_q30(d, g.r);
+}
+/* the residual term e^2 / (a 2^fr / lambda) in Q23.40 */
+static inline rls_acc_t acc_res(rls_sig_t e, rls_inn_t a, rls_rcp_t c, rls_unit_t lambda, int fr)
+{
+	(void)a;
+	rls_gain_t g = gain_of(q_smul32(e, e), c); /* E^2 / A = r 2^-30 2^-sh (integers) */
+	/* (E^2 2^-48) / (A 2^-54 2^-fr) in Q40: r 2^(16 - sh + fr) */
+	rls_acc_t t = q_scale64(g.r, 16 - g.sh + fr);
+	return lambda == UNIT_ONE ? t : q_mul64_q30(t, lambda);
+}
+/* a lambda (skipped for lambda = 1) */
+static inline rls_acc_t acc_forget(rls_acc_t a, rls_unit_t lambda)
+{
+	return lambda == UNIT_ONE ? a : q_mul64_q30(a, lambda);
+}
 /* dot products accumulate in Q15.48 (int64) and round once */
 typedef int64_t rls_dot_t;
 #define DOT_ZERO 0
@@ -79,23 +118,8 @@ static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return q_add64(a, -b
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return q_sat32(q_shr64(s, QF_SIG_FRAC)); }
 static inline scalar_t sc_of_par(rls_par_t t, int shift) { return q_sat32(q_scale64(t, QF_SC_FRAC - QF_PAR_FRAC + shift)); }
 /* x + a c / b in Q7.24 (x, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
-static inline rls_sig_t sig_add_gain(rls_sig_t x, rls_inn_t a, rls_inn_t b, rls_sig_t c)
-{
-	int sh;
-	int32_t r = q30_ratio_x(a, b, &sh);
-	return q_sat32((int64_t)x + q_scale64((int64_t)c * r, -(QF_UNIT_FRAC + sh)));
-}
 /* the same; in the float build, x + a (c / b) */
-static inline rls_sig_t sig_add_gain2(rls_sig_t x, rls_inn_t a, rls_inn_t b, rls_sig_t c)
-{
-	return sig_add_gain(x, a, b, c);
-}
 /* a b / c in Q23.40 (a, b Q7.24, c Q23.40 > 0) */
-static inline rls_acc_t acc_muldiv(rls_sig_t a, rls_sig_t b, rls_acc_t c)
-{
-	/* (Q48 / Q40) << 32 would overflow; Q24 then 16 more bits of headroom */
-	return q_shl64(q_muldiv(a, b, c, QF_ACC_FRAC - QF_SIG_FRAC), QF_ACC_FRAC - QF_SIG_FRAC);
-}
 /* Q1.62 * Q7.24 / 2^s -> Q9.54 */
 static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s)
 {
@@ -106,14 +130,12 @@ static inline rls_inn_t inn_mul_sig(rls_inn_t a, rls_sig_t b) { return q_mul64_3
 static inline rls_inn_t inn_add(rls_inn_t a, rls_inn_t b) { return q_add64(a, b); }
 /* Q1.30 2^e -> Q9.54 (e <= 0) */
 static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { return q_scale64((int64_t)m << (QF_INN_FRAC - QF_UNIT_FRAC), e); }
-/* Q9.54 2^e -> Q23.40 */
-static inline rls_acc_t acc_of_inn(rls_inn_t a, int e) { return q_scale64(a, e - (QF_INN_FRAC - QF_ACC_FRAC)); }
 static inline bool wide_ok(rls_wide_t d) { return d > 0; }
 static inline bool sig_ok(rls_sig_t x) { (void)x; return true; }
 static inline bool acc_ok(rls_acc_t x) { (void)x; return true; }
 static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return q_scale32(x, QF_SIG_FRAC - QF_SC_FRAC - shift); }
 static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return q_scale32(x, QF_SC_FRAC - QF_SIG_FRAC + shift); }
-static inline rls_acc_t phi2_of_sc(scalar_t x) { return (int64_t)x * x; } /* Q32 */
+static inline rls_acc_t phi2_of_sc(scalar_t x) { return q_smul32(x, x); } /* Q32 */
 #else
 #define SIG_ZERO 0.0f
 #define ACC_ZERO 0.0f
@@ -146,16 +168,31 @@ static inline rls_acc_t acc_of_wide(rls_wide_t d) { return d; }
 static inline rls_wide_t wide_of_acc(rls_acc_t a) { return a; }
 static inline rls_wide_t wide_add(rls_wide_t a, rls_wide_t b) { return a + b; }
 static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return a / b; }
-static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a, rls_inn_t b, int *sh)
-{
-	*sh = 0;
-	return d * a / b;
-}
 static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { (void)e; return d; } /* e is 0 */
-static inline rls_par_t par_add_gain(rls_par_t x, rls_inn_t a, rls_inn_t b, rls_sig_t c)
+typedef float rls_rcp_t;
+typedef float rls_gain_t;
+#define RCP_NONE 1.0f
+static inline rls_rcp_t rcp_of(rls_inn_t a) { return a; }
+static inline rls_gain_t gain_of(rls_inn_t a, rls_rcp_t c) { return a / c; }
+static inline rls_par_t par_add_g(rls_par_t x, rls_gain_t g, rls_sig_t c) { return x + g * c; }
+static inline rls_sig_t u_update(rls_sig_t uij, rls_inn_t b, rls_sig_t f, rls_rcp_t c)
 {
-	return x + a / b * c;
+	return uij + b * (-f / c);
 }
+static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c,
+					  rls_unit_t lambda, int *sh)
+{
+	(void)c;
+	*sh = 0;
+	return d * a_prev / (a * lambda);
+}
+static inline rls_acc_t acc_res(rls_sig_t e, rls_inn_t a, rls_rcp_t c, rls_unit_t lambda, int fr)
+{
+	(void)c;
+	(void)fr;
+	return e * e / (a / lambda);
+}
+static inline rls_acc_t acc_forget(rls_acc_t a, rls_unit_t lambda) { return a * lambda; }
 typedef float rls_dot_t;
 #define DOT_ZERO 0.0f
 static inline rls_dot_t dot_of_sig(rls_sig_t x) { return x; }
@@ -165,21 +202,11 @@ static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return a - b; }
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return s; }
 static inline scalar_t sc_of_par(rls_par_t t, int shift) { return shift ? t * pow2f(shift) : t; }
 /* x + (a / b) c: the float build's order of operations */
-static inline rls_sig_t sig_add_gain(rls_sig_t x, rls_inn_t a, rls_inn_t b, rls_sig_t c)
-{
-	return x + a / b * c;
-}
 /* x + a (c / b) */
-static inline rls_sig_t sig_add_gain2(rls_sig_t x, rls_inn_t a, rls_inn_t b, rls_sig_t c)
-{
-	return x + a * (c / b);
-}
-static inline rls_acc_t acc_muldiv(rls_sig_t a, rls_sig_t b, rls_acc_t c) { return a * b / c; }
 static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s) { (void)s; return d * f; }
 static inline rls_inn_t inn_mul_sig(rls_inn_t a, rls_sig_t b) { return a * b; }
 static inline rls_inn_t inn_add(rls_inn_t a, rls_inn_t b) { return a + b; }
 static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { (void)e; return m; }
-static inline rls_acc_t acc_of_inn(rls_inn_t a, int e) { (void)e; return a; }
 static inline bool wide_ok(rls_wide_t d) { return d > 0.0f && isfinite(d); }
 static inline bool sig_ok(rls_sig_t x) { return isfinite(x); }
 static inline bool acc_ok(rls_acc_t x) { return isfinite(x); }
@@ -273,17 +300,20 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 	rls_inn_t alpha = inn_of_unit(lambda, fr);
 	bool ok = true;
 	int sh[RLS_MAX_PARAMS], sh_min = 64;
+	/* the reciprocal of each innovation, once (the fixed build multiplies by it) */
+	rls_rcp_t rc = RCP_NONE, rc_prev;
 	for (unsigned j = 0; j < n; j++) {
 		rls_inn_t alpha_prev = alpha;
+		rc_prev = rc;
 		alpha = inn_add(alpha_prev, inn_mul_sig(v[j], f[j]));
+		rc = rcp_of(alpha);
 		/* d_j a_(j-1) / (a_j lambda) = d[j] 2^-sh[j] */
-		d[j] = wide_scale_ratio(r->d[j], alpha_prev, acc_mul_unit(alpha, lambda), &sh[j]);
+		d[j] = wide_scale_ratio(r->d[j], alpha_prev, alpha, rc, lambda, &sh[j]);
 		sh_min = sh[j] < sh_min ? sh[j] : sh_min;
 		b[j] = v[j];
 		for (unsigned i = 0; i < j; i++) {
 			rls_sig_t uij = u[i][j];
-			/* U_ij - f_j b_i / a_(j-1); the float build: U_ij + b_i (-f_j / a_(j-1)) */
-			u[i][j] = sig_add_gain2(uij, b[i], alpha_prev, sig_sub(SIG_ZERO, f[j]));
+			u[i][j] = u_update(uij, b[i], f[j], rc_prev); /* U_ij - f_j b_i / a_(j-1) */
 			b[i] = inn_add(b[i], inn_mul_sig(v[j], uij));
 		}
 		if (!wide_ok(d[j]))
@@ -291,16 +321,20 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 	}
 	if (!(alpha > INN_ZERO))
 		ok = false;
-	/* a priori errors and new estimates: theta += b e / a_n */
+	/* a priori errors and new estimates: theta += K e, K = b / a_n (one gain per parameter,
+	 * shared by the outputs) */
 	rls_par_t th[RLS_MAX_OUTPUTS][RLS_MAX_PARAMS];
 	rls_sig_t e[RLS_MAX_OUTPUTS];
+	rls_gain_t gain[RLS_MAX_PARAMS];
+	for (unsigned i = 0; i < n; i++)
+		gain[i] = gain_of(b[i], rc);
 	for (unsigned o = 0; ok && o < no; o++) {
 		rls_dot_t yhat = DOT_ZERO;
 		for (unsigned i = 0; i < n; i++)
 			yhat = dot_mac_par(yhat, r->theta[o][i], phi[i]);
 		e[o] = sig_of_dot(dot_sub(dot_of_sig(y[o]), yhat));
 		for (unsigned i = 0; i < n; i++) {
-			th[o][i] = par_add_gain(r->theta[o][i], b[i], alpha, e[o]);
+			th[o][i] = par_add_g(r->theta[o][i], gain[i], e[o]);
 			if (!acc_ok(th[o][i]))
 				ok = false;
 		}
@@ -315,8 +349,6 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 		return RLS_RESET;
 	}
 
-	/* residual: e^2 / innov with innov = alpha_n / lambda = a_n sigma / lambda */
-	rls_acc_t innov_l = acc_of_inn(alpha, -fr); /* alpha_n, >= lambda */
 	/* the common part of the shifts goes to the exponent (within its limits), the rest
 	 * into the mantissas (fixed build; all shifts are 0 in the float build) */
 	int e_new = r->d_exp + sh_min;
@@ -331,11 +363,11 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 	for (unsigned o = 0; o < no; o++) {
 		for (unsigned i = 0; i < n; i++)
 			r->theta[o][i] = th[o][i];
-		rls_acc_t s = acc_add(acc_mul_unit(r->ssr[o], lambda),
-				      acc_mul_unit(acc_muldiv(e[o], e[o], innov_l), lambda));
+		/* residual: e^2 / innov, innov = alpha_n / lambda */
+		rls_acc_t s = acc_add(acc_forget(r->ssr[o], lambda), acc_res(e[o], alpha, rc, lambda, fr));
 		r->ssr[o] = acc_ok(s) ? s : ACC_ZERO;
 	}
-	r->n_eff = acc_add(acc_mul_unit(r->n_eff, lambda), acc_of_unit(UNIT_ONE));
+	r->n_eff = acc_add(acc_forget(r->n_eff, lambda), acc_of_unit(UNIT_ONE));
 
 	/* covariance floor, from the last row up (raising D_i changes P_kk for k <= i only) */
 	for (unsigned ii = n; ii-- > 0;) {

@@ -17,6 +17,8 @@
 #                  step-<v>.elf: the same on Cortex-M under QEMU with tests/arm's counting
 #                  plugin, v = m4f, m4f-fixed, m0 (soft float), m0-fixed (needs the ARM
 #                  toolchain: `make arm` installs it as root)
+#                  estim-<v>.elf: the identification's RLS updates and one rotor's
+#                  ident_rotor_update alone (tests/bench/estim_step.c), per build
 #   bench-alloc    allocation quality: priority allocator vs pseudo-inverse + clipping
 #   bench-estim    Monte Carlo of the k_f estimators (lag-aware, paper's plain) vs the CRLB
 #   bench-motor    Monte Carlo of the joint rotor-model estimator (motor_id.h) on random vehicles
@@ -86,7 +88,11 @@ $(foreach v,$(BENCH_STEP_VARIANTS),$(eval $(call arm_program,$(v),$(BENCH_B)/ste
 $(BENCH_STEP_VARIANTS:%=$(BENCH_B)/step-%.elf): $(BENCH_FW_HDR) | $(MAVLINK_STAMP)
 $(BENCH_B)/step-m0.elf: ARM_LD_m0 := tests/arm/m4f.ld
 $(BENCH_B)/step-m0-fixed.elf: ARM_LD_m0-fixed := tests/arm/m4f.ld
-BENCH_ARM := $(BENCH_STEP_VARIANTS:%=$(BENCH_B)/step-%.elf) $(ARM_COUNT_PLUGIN) $(ARM_LIBS) $(ARM_SIZE_ELFS)
+$(foreach v,$(BENCH_STEP_VARIANTS),$(eval $(call arm_program,$(v),$(BENCH_B)/estim-$(v).elf,tests/bench/estim_step.c)))
+$(BENCH_B)/estim-m0.elf: ARM_LD_m0 := tests/arm/m4f.ld
+$(BENCH_B)/estim-m0-fixed.elf: ARM_LD_m0-fixed := tests/arm/m4f.ld
+BENCH_ARM := $(BENCH_STEP_VARIANTS:%=$(BENCH_B)/step-%.elf) $(BENCH_STEP_VARIANTS:%=$(BENCH_B)/estim-%.elf) \
+             $(ARM_COUNT_PLUGIN) $(ARM_LIBS) $(ARM_SIZE_ELFS)
 endif
 
 .PHONY: bench bench-tools

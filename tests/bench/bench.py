@@ -549,6 +549,42 @@ def step_per_build(rep, args, res):
                     "(reported)", None, None)
             res.setdefault("float_over_fixed", {})[cpu] = ratios
     res["per_build"] = builds
+    estim_per_build(rep, args, res)
+
+
+def estim_per_build(rep, args, res):
+    """The identification's estimators alone (tests/bench/estim_step.c): where the fixed build's
+    experiment step goes, and what integer arithmetic saves on M0 against soft float."""
+    per = {}
+    for v, mach in STEP_BUILDS:
+        elf = BB / f"estim-{v}.elf"
+        if args.no_arm or not elf.exists():
+            continue
+        out = subprocess.run([str(REPO / "tests/arm/insn-count.sh"), mach, str(elf), str(ARM / "insn-count.so")],
+                             capture_output=True, text=True, timeout=600, cwd=REPO)
+        counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
+        kv = {m.group(1): m.group(2) for m in re.finditer(r"estim: (\S+) (\S+)", out.stdout)}
+        n1, n2, n3 = (int(kv.get(k, 0)) for k in ("rls_1x2", "rls_2x1", "ident_rotor"))
+        if len(counts) != n1 + n2 + n3 or not n1:
+            per[v] = {"error": f"{len(counts)} counts", "exit": out.returncode}
+            continue
+        per[v] = {"rls_1x2": mmm(counts[:n1]), "rls_2x1": mmm(counts[n1:n1 + n2]),
+                  "ident_rotor": mmm(counts[n1 + n2:]), "exit": out.returncode}
+        cmd = cmdline(["tests/arm/insn-count.sh", mach, elf, ARM / "insn-count.so"])
+        p = per[v]
+        rep.row(2, f"  estimators alone, {v}: rls_update 1 param x 2 outputs / 2 x 1 / ident_rotor_update",
+                f"{fmt(p['rls_1x2']['median'])} / {fmt(p['rls_2x1']['median'])} / {fmt(p['ident_rotor']['median'])}",
+                "", f"max {fmt(p['rls_1x2']['max'])} / {fmt(p['rls_2x1']['max'])} / {fmt(p['ident_rotor']['max'])}; "
+                "the rotor experiment runs ident_rotor_update for 8 rotors per step", "(reported)", None, cmd)
+    for cpu, fl, fx in (("M0", "m0", "m0-fixed"), ("M4F", "m4f", "m4f-fixed")):
+        a, b = per.get(fl, {}), per.get(fx, {})
+        if a.get("rls_1x2") and b.get("rls_1x2"):
+            rat = {k: a[k]["median"] / b[k]["median"] for k in ("rls_1x2", "rls_2x1", "ident_rotor")}
+            rep.row(2, f"  {cpu}: float build / fixed build, estimators alone", f"{rat['rls_1x2']:.2f}x", "",
+                    f"rls 2 x 1 {rat['rls_2x1']:.2f}x, ident_rotor_update {rat['ident_rotor']:.2f}x", "(reported)",
+                    None, None)
+            per.setdefault("float_over_fixed", {})[cpu] = rat
+    res["estimators"] = per
 
 
 # ====================================================================== item 3: memory
