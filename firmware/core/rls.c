@@ -140,16 +140,6 @@ static inline rls_acc_t phi2_of_sc(scalar_t x) { return q_smul32(x, x); } /* Q32
 #define SIG_ZERO 0.0f
 #define ACC_ZERO 0.0f
 #define WIDE_ZERO 0.0f
-/* power-of-two scaling is exact in float (no exponent comes near its limits here) */
-static inline float pow2f(int s)
-{
-	float p = 1.0f;
-	for (; s > 0; s--)
-		p *= 2.0f;
-	for (; s < 0; s++)
-		p *= 0.5f;
-	return p;
-}
 #define INN_ZERO 0.0f
 #define UNIT_SIG 1.0f
 #define UNIT_ONE 1.0f
@@ -200,7 +190,7 @@ static inline rls_dot_t dot_mac(rls_dot_t s, rls_sig_t a, rls_sig_t b) { return 
 static inline rls_dot_t dot_mac_par(rls_dot_t s, rls_par_t t, rls_sig_t x) { return s + x * t; }
 static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return a - b; }
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return s; }
-static inline scalar_t sc_of_par(rls_par_t t, int shift) { return shift ? t * pow2f(shift) : t; }
+static inline scalar_t sc_of_par(rls_par_t t, int shift) { return shift ? t * sc_pow2f(shift) : t; }
 /* x + (a / b) c: the float build's order of operations */
 /* x + a (c / b) */
 static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s) { (void)s; return d * f; }
@@ -210,8 +200,8 @@ static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { (void)e; return m; }
 static inline bool wide_ok(rls_wide_t d) { return d > 0.0f && isfinite(d); }
 static inline bool sig_ok(rls_sig_t x) { return isfinite(x); }
 static inline bool acc_ok(rls_acc_t x) { return isfinite(x); }
-static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return shift ? x * pow2f(-shift) : x; }
-static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return shift ? x * pow2f(shift) : x; }
+static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return shift ? x * sc_pow2f(-shift) : x; }
+static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return shift ? x * sc_pow2f(shift) : x; }
 static inline rls_acc_t phi2_of_sc(scalar_t x) { return x * x; }
 #endif
 

@@ -5,22 +5,12 @@
 
 static bool finite_f(float x) { return isfinite(x); }
 
-/* 2^s, exact */
-static float pow2f(int s)
-{
-	float p = 1.0f;
-	for (; s > 0; s--)
-		p *= 2.0f;
-	for (; s < 0; s++)
-		p *= 0.5f;
-	return p;
-}
 
 /* float to the normalised formats and back (rls.h); the float build keeps float */
 #if OCTO_FIXED
 static int64_t i64_of_f(float x, int frac, int64_t lim)
 {
-	float s = x * pow2f(frac);
+	float s = x * sc_pow2f(frac);
 	if (!(s == s))
 		return 0;
 	if (s >= (float)lim)
@@ -34,8 +24,8 @@ static rls_unit_t unit_of_f(float x) { return (rls_unit_t)i64_of_f(x, QF_UNIT_FR
 static rls_acc_t acc_of_f(float x) { return i64_of_f(x, QF_ACC_FRAC, INT64_MAX >> 1); }
 static rls_wide_t wide_of_f(float x) { return i64_of_f(x, QF_WIDE_FRAC, INT64_MAX >> 1); }
 static rls_par_t par_of_f(float x) { return i64_of_f(x, QF_PAR_FRAC, INT64_MAX >> 1); }
-static float f_of_par(rls_par_t x) { return (float)x * pow2f(-QF_PAR_FRAC); }
-static float f_of_acc(rls_acc_t x) { return (float)x * pow2f(-QF_ACC_FRAC); }
+static float f_of_par(rls_par_t x) { return (float)x * sc_pow2f(-QF_PAR_FRAC); }
+static float f_of_acc(rls_acc_t x) { return (float)x * sc_pow2f(-QF_ACC_FRAC); }
 /* |phi|^2 for the gate, in the form rls_update computes it: Q16.16 squared (Q32) */
 static rls_acc_t phi2_of_f(float x) { return i64_of_f(x, 2 * QF_SC_FRAC, INT64_MAX >> 1); }
 #else
@@ -111,7 +101,7 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 		float m = 0.0f;
 		for (unsigned i = 0; i < n && o < c->n_outputs; i++) {
 			float t = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f;
-			t = (t < 0.0f ? -t : t) * pow2f(c->phi_shift[i]);
+			t = (t < 0.0f ? -t : t) * sc_pow2f(c->phi_shift[i]);
 			m = t > m ? t : m;
 		}
 		r->y_shift[o] = m > 0.0f ? shift_of(m, -20, 20) : 0;
@@ -119,13 +109,13 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 	for (unsigned o = 0; o < RLS_MAX_OUTPUTS; o++)
 		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
 			float t = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f;
-			r->theta[o][i] = par_of_f(t * pow2f(c->phi_shift[i] - r->y_shift[o]));
+			r->theta[o][i] = par_of_f(t * sc_pow2f(c->phi_shift[i] - r->y_shift[o]));
 		}
 	r->lambda = unit_of_f(c->lambda);
 	/* P_n = p0 S^2, S = diag(2^phi_shift): mantissas of the largest in [0.5, 1) */
 	float pn[RLS_MAX_PARAMS], pmax = 0.0f;
 	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
-		pn[i] = c->p0 * pow2f(2 * c->phi_shift[i]);
+		pn[i] = c->p0 * sc_pow2f(2 * c->phi_shift[i]);
 		pmax = i < n && pn[i] > pmax ? pn[i] : pmax;
 	}
 	int e = 0;
@@ -141,8 +131,8 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 #endif
 	r->d0_exp = e;
 	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
-		r->d0[i] = wide_of_f(pn[i] * pow2f(e));
-		float s2 = pow2f(2 * c->phi_shift[i]);
+		r->d0[i] = wide_of_f(pn[i] * sc_pow2f(e));
+		float s2 = sc_pow2f(2 * c->phi_shift[i]);
 		r->p_min_n[i] = acc_of_f(c->p_min * s2);
 		float pmx = c->p_max;
 #if OCTO_FIXED
@@ -163,7 +153,7 @@ void rls_set_estimate(struct rls *r, unsigned out, const float *theta)
 		return;
 	for (unsigned i = 0; i < r->cfg.n_params; i++)
 		if (finite_f(theta[i]))
-			r->theta[out][i] = par_of_f(theta[i] * pow2f(r->cfg.phi_shift[i] - r->y_shift[out]));
+			r->theta[out][i] = par_of_f(theta[i] * sc_pow2f(r->cfg.phi_shift[i] - r->y_shift[out]));
 }
 
 enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bool excited)
@@ -176,7 +166,7 @@ enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bo
 			r->n_rejected++;
 			return RLS_REJECTED;
 		}
-		pn[i] = sig_of_f(phi[i] * pow2f(-r->cfg.phi_shift[i]));
+		pn[i] = sig_of_f(phi[i] * sc_pow2f(-r->cfg.phi_shift[i]));
 		nphi += phi[i] * phi[i];
 	}
 	for (unsigned o = 0; o < r->cfg.n_outputs; o++) {
@@ -184,7 +174,7 @@ enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bo
 			r->n_rejected++;
 			return RLS_REJECTED;
 		}
-		yn[o] = sig_of_f(y[o] * pow2f(-r->y_shift[o]));
+		yn[o] = sig_of_f(y[o] * sc_pow2f(-r->y_shift[o]));
 	}
 	return rls_update_n(r, pn, yn, phi2_of_f(nphi), excited);
 #else
@@ -196,14 +186,14 @@ float rls_estimate_f(const struct rls *r, unsigned out, unsigned param)
 {
 	if (out >= RLS_MAX_OUTPUTS || param >= RLS_MAX_PARAMS)
 		return 0.0f;
-	return f_of_par(r->theta[out][param]) * pow2f(r->y_shift[out] - r->cfg.phi_shift[param]);
+	return f_of_par(r->theta[out][param]) * sc_pow2f(r->y_shift[out] - r->cfg.phi_shift[param]);
 }
 
 float rls_cov_diag(const struct rls *r, unsigned param)
 {
 	if (param >= r->cfg.n_params)
 		return 0.0f;
-	return f_of_acc(rls_cov_diag_n(r, param)) * pow2f(-r->d_exp - 2 * r->cfg.phi_shift[param]);
+	return f_of_acc(rls_cov_diag_n(r, param)) * sc_pow2f(-r->d_exp - 2 * r->cfg.phi_shift[param]);
 }
 
 float rls_residual_var(const struct rls *r, unsigned out)
@@ -213,7 +203,7 @@ float rls_residual_var(const struct rls *r, unsigned out)
 	float dof = f_of_acc(r->n_eff) - (float)r->cfg.n_params;
 	if (dof < 1.0f)
 		dof = 1.0f;
-	return f_of_acc(r->ssr[out]) / dof * pow2f(2 * r->y_shift[out]);
+	return f_of_acc(r->ssr[out]) / dof * sc_pow2f(2 * r->y_shift[out]);
 }
 
 float rls_std(const struct rls *r, unsigned out, unsigned param)
