@@ -97,30 +97,10 @@ static inline scalar_t sc_div(scalar_t a, scalar_t b)
 {
 	if (b == 0)
 		return a > 0 ? SC_MAX : (a < 0 ? SC_MAX_NEG : 0);
-	/* |q| = floor((|a| 2^16 + floor(|b| / 2)) / |b|): round to nearest, ties away from 0.
-	 * No 64-bit division (a slow library loop on Cortex-M0): the quotient from the
-	 * reciprocal of |b| (qfmt.h), then made exact by its remainder. */
-	bool neg = (a < 0) != (b < 0);
-	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-	uint64_t x = ((uint64_t)ua << 16) + (ub >> 1);
-	if ((x >> 31) >= ub) /* quotient >= 2^31 */
-		return neg ? SC_MAX_NEG : SC_MAX;
-	int e;
-	uint32_t y = q_recip((int64_t)ub, &e);        /* 1 / |b| = y 2^-e, e in [31, 63] */
-	uint64_t hi = q_umul32((uint32_t)(x >> 32), y), lo = q_umul32((uint32_t)x, y);
-	/* x y 2^-e, within a few units of the quotient (hi < 2^47) */
-	uint64_t q = e >= 32 ? (hi + (lo >> 32)) >> (e - 32) : (hi << (32 - e)) + (lo >> e);
-	int64_t r = (int64_t)x - (int64_t)q_umul32((uint32_t)q, ub);
-	while (r < 0) {
-		q--;
-		r += ub;
-	}
-	while (r >= (int64_t)ub) {
-		q++;
-		r -= ub;
-	}
-	scalar_t m = (scalar_t)q;
-	return neg ? -m : m;
+	int64_t n = (int64_t)a * 65536;
+	int64_t half = (b > 0 ? (int64_t)b : -(int64_t)b) / 2;
+	n = ((n >= 0) == (b > 0)) ? n + (b > 0 ? half : -half) : n - (b > 0 ? half : -half);
+	return sc_sat64(n / b);
 }
 
 static inline scalar_t sc_sqrt(scalar_t a)
