@@ -1,7 +1,7 @@
-/* rls.c - Bierman UD recursive least squares; see rls.h. float32 internally. */
+/* rls.c - Bierman UD recursive least squares, the update (90 Hz path); see rls.h.
+ * Configuration and the float getters are rls_setup.c. */
 #include "rls.h"
-
-static bool finite_f(float x) { return isfinite(x); }
+#include "qfmt.h"
 
 /* bierman() below is inlined at both of its calls so that the one with n = 1 is specialised */
 #if defined(__GNUC__)
@@ -10,244 +10,425 @@ static bool finite_f(float x) { return isfinite(x); }
 #define RLS_INLINE static inline
 #endif
 
-void rls_default_config(struct rls_config *cfg)
+/* ---------------------------------------------------------------- number operations
+ * The algorithm below is written once against these; names say the formats:
+ * sig Q7.24, unit Q1.30, acc Q23.40, wide Q1.62 (fixed build; all float otherwise). */
+#if OCTO_FIXED
+#define SIG_ZERO 0
+#define ACC_ZERO 0
+#define WIDE_ZERO 0
+#define INN_ZERO 0
+#define UNIT_SIG ((rls_sig_t)1 << QF_SIG_FRAC)
+#define UNIT_ONE ((rls_unit_t)(1 << QF_UNIT_FRAC))
+#define WIDE_HALF ((rls_wide_t)1 << (QF_WIDE_FRAC - 1))
+#define WIDE_ONE ((rls_wide_t)1 << QF_WIDE_FRAC)
+static inline rls_sig_t sig_add(rls_sig_t a, rls_sig_t b) { return q_sat32((int64_t)a + b); }
+static inline rls_sig_t sig_sub(rls_sig_t a, rls_sig_t b) { return q_sat32((int64_t)a - b); }
+/* Q7.24 * Q7.24 -> Q7.24 */
+static inline rls_sig_t sig_mul(rls_sig_t a, rls_sig_t b) { return q_mul32(a, b, QF_SIG_FRAC); }
+/* Q7.24 * Q7.24 -> Q23.40 */
+static inline rls_acc_t acc_of_prod(rls_sig_t a, rls_sig_t b)
 {
-	struct rls_config c = { 0 };
-	c.n_params = 1;
-	c.n_outputs = 1;
-	c.lambda = 1.0f;
-	c.p0 = 1e4f;
-	*cfg = c;
+	return q_mul64(a, b, 2 * QF_SIG_FRAC - QF_ACC_FRAC);
+}
+/* Q23.40 * Q7.24 -> Q23.40 */
+static inline rls_acc_t acc_mul_sig(rls_acc_t a, rls_sig_t b) { return q_mul64_32(a, b, QF_SIG_FRAC); }
+/* Q1.62 * Q7.24 -> Q23.40 */
+static inline rls_acc_t acc_of_wide_sig(rls_wide_t d, rls_sig_t b)
+{
+	return q_mul64_32(d, b, QF_WIDE_FRAC + QF_SIG_FRAC - QF_ACC_FRAC);
+}
+static inline rls_acc_t acc_add(rls_acc_t a, rls_acc_t b) { return q_add64(a, b); }
+static inline rls_acc_t acc_sub(rls_acc_t a, rls_acc_t b) { return q_add64(a, -b); }
+/* Q23.40 * Q1.30 -> Q23.40 */
+static inline rls_acc_t acc_mul_unit(rls_acc_t a, rls_unit_t m) { return q_mul64_q30(a, m); }
+/* a 2^e (left shifts saturate) */
+static inline rls_acc_t acc_ldexp(rls_acc_t a, int32_t e) { return q_scale64(a, (int)e); }
+/* Q1.30 -> Q23.40 */
+static inline rls_acc_t acc_of_unit(rls_unit_t m) { return (rls_acc_t)m * (1 << (QF_ACC_FRAC - QF_UNIT_FRAC)); }
+static inline rls_acc_t acc_of_wide(rls_wide_t d) { return q_shr64(d, QF_WIDE_FRAC - QF_ACC_FRAC); }
+static inline rls_wide_t wide_of_acc(rls_acc_t a) { return q_shl64(a, QF_WIDE_FRAC - QF_ACC_FRAC); }
+static inline rls_wide_t wide_add(rls_wide_t a, rls_wide_t b) { return q_add64(a, b); }
+/* a / b in Q1.30 (0 <= a, 0 < b; saturates at 2) */
+static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return q30_ratio(a, b); }
+/* d a / b = result 2^-*sh (0 < a <= 2 b, 0 < b): no bits lost however small a / b */
+/* d 2^e (e <= 0 here: rounds) */
+static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { return q_scale64(d, e); }
+/* x + a c / b in Q15.48 (x Q15.48, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
+/* Q15.48 * Q7.24 -> Q7.24 */
+/* the reciprocal of an innovation (y 2^-e) and gains b / alpha as r 2^-sh (qfmt.h) */
+typedef struct { uint32_t y; int e; } rls_rcp_t;
+typedef struct { int32_t r; int sh; } rls_gain_t;
+#define RCP_NONE ((rls_rcp_t){ 0u, 0 })
+static inline rls_rcp_t rcp_of(rls_inn_t a)
+{
+	rls_rcp_t c;
+	c.y = q_recip(a, &c.e);
+	return c;
+}
+static inline rls_gain_t gain_of(rls_inn_t a, rls_rcp_t c)
+{
+	rls_gain_t g;
+	g.r = q30_mul_recip(a, c.y, c.e, &g.sh);
+	return g;
+}
+/* x + g c: Q15.48 + gain * Q7.24 */
+static inline rls_par_t par_add_g(rls_par_t x, rls_gain_t g, rls_sig_t c)
+{
+	return q_add64(x, q_scale64(q_smul32(c, g.r), QF_PAR_FRAC - QF_SIG_FRAC - QF_UNIT_FRAC - g.sh));
+}
+/* U_ij - f_j b_i / a_(j-1) in Q7.24 */
+static inline rls_sig_t u_update(rls_sig_t uij, rls_inn_t b, rls_sig_t f, rls_rcp_t c)
+{
+	rls_gain_t g = gain_of(b, c);
+	return q_sat32((int64_t)uij - q_scale64(q_smul32(f, g.r), -(QF_UNIT_FRAC + g.sh)));
+}
+/* d a_prev / (a lambda) = result 2^-*sh, with the reciprocal c of a (lambda = 1: no other) */
+static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c,
+					  rls_unit_t lambda, int *sh)
+{
+	rls_gain_t g = gain_of(a_prev, lambda == UNIT_ONE ? c : rcp_of(q_mul64_q30(a, lambda)));
+	*sh = g.sh;
+	return q_mul64_q30(d, g.r);
+}
+/* the residual term e^2 / (a 2^fr / lambda) in Q23.40 */
+static inline rls_acc_t acc_res(rls_sig_t e, rls_inn_t a, rls_rcp_t c, rls_unit_t lambda, int fr)
+{
+	(void)a;
+	rls_gain_t g = gain_of(q_smul32(e, e), c); /* E^2 / A = r 2^-30 2^-sh (integers) */
+	/* (E^2 2^-48) / (A 2^-54 2^-fr) in Q40: r 2^(16 - sh + fr) */
+	rls_acc_t t = q_scale64(g.r, 16 - g.sh + fr);
+	return lambda == UNIT_ONE ? t : q_mul64_q30(t, lambda);
+}
+/* a lambda (skipped for lambda = 1) */
+static inline rls_acc_t acc_forget(rls_acc_t a, rls_unit_t lambda)
+{
+	return lambda == UNIT_ONE ? a : q_mul64_q30(a, lambda);
+}
+/* dot products accumulate in Q15.48 (int64) and round once */
+typedef int64_t rls_dot_t;
+#define DOT_ZERO 0
+static inline rls_dot_t dot_of_sig(rls_sig_t x) { return (rls_dot_t)x * ((int64_t)1 << QF_SIG_FRAC); }
+static inline rls_dot_t dot_mac(rls_dot_t s, rls_sig_t a, rls_sig_t b) { return q_add64(s, (int64_t)a * b); }
+static inline rls_dot_t dot_mac_par(rls_dot_t s, rls_par_t t, rls_sig_t x)
+{
+	return q_add64(s, q_mul64_32(t, x, QF_PAR_FRAC + QF_SIG_FRAC - 2 * QF_SIG_FRAC));
+}
+static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return q_add64(a, -b); }
+static inline rls_sig_t sig_of_dot(rls_dot_t s) { return q_sat32(q_shr64(s, QF_SIG_FRAC)); }
+static inline scalar_t sc_of_par(rls_par_t t, int shift) { return q_sat32(q_scale64(t, QF_SC_FRAC - QF_PAR_FRAC + shift)); }
+/* x + a c / b in Q7.24 (x, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
+/* the same; in the float build, x + a (c / b) */
+/* a b / c in Q23.40 (a, b Q7.24, c Q23.40 > 0) */
+/* Q1.62 * Q7.24 / 2^s -> Q9.54 */
+static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s)
+{
+	return q_mul64_32(d, f, (unsigned)(QF_WIDE_FRAC + QF_SIG_FRAC - QF_INN_FRAC + s));
+}
+/* Q9.54 * Q7.24 -> Q9.54 */
+static inline rls_inn_t inn_mul_sig(rls_inn_t a, rls_sig_t b) { return q_mul64_32(a, b, QF_SIG_FRAC); }
+static inline rls_inn_t inn_add(rls_inn_t a, rls_inn_t b) { return q_add64(a, b); }
+/* Q1.30 2^e -> Q9.54 (e <= 0) */
+static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { return q_scale64((int64_t)m << (QF_INN_FRAC - QF_UNIT_FRAC), e); }
+static inline bool wide_ok(rls_wide_t d) { return d > 0; }
+static inline bool sig_ok(rls_sig_t x) { (void)x; return true; }
+static inline bool acc_ok(rls_acc_t x) { (void)x; return true; }
+static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return q_scale32(x, QF_SIG_FRAC - QF_SC_FRAC - shift); }
+static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return q_scale32(x, QF_SC_FRAC - QF_SIG_FRAC + shift); }
+static inline rls_acc_t phi2_of_sc(scalar_t x) { return q_smul32(x, x); } /* Q32 */
+#else
+#define SIG_ZERO 0.0f
+#define ACC_ZERO 0.0f
+#define WIDE_ZERO 0.0f
+#define INN_ZERO 0.0f
+#define UNIT_SIG 1.0f
+#define UNIT_ONE 1.0f
+static inline rls_sig_t sig_add(rls_sig_t a, rls_sig_t b) { return a + b; }
+static inline rls_sig_t sig_sub(rls_sig_t a, rls_sig_t b) { return a - b; }
+static inline rls_sig_t sig_mul(rls_sig_t a, rls_sig_t b) { return a * b; }
+static inline rls_acc_t acc_of_prod(rls_sig_t a, rls_sig_t b) { return a * b; }
+static inline rls_acc_t acc_mul_sig(rls_acc_t a, rls_sig_t b) { return a * b; }
+static inline rls_acc_t acc_of_wide_sig(rls_wide_t d, rls_sig_t b) { return d * b; }
+static inline rls_acc_t acc_add(rls_acc_t a, rls_acc_t b) { return a + b; }
+static inline rls_acc_t acc_sub(rls_acc_t a, rls_acc_t b) { return a - b; }
+static inline rls_acc_t acc_mul_unit(rls_acc_t a, rls_unit_t m) { return a * m; }
+static inline rls_acc_t acc_ldexp(rls_acc_t a, int32_t e) { (void)e; return a; } /* e is 0 */
+static inline rls_acc_t acc_of_unit(rls_unit_t m) { return m; }
+static inline rls_acc_t acc_of_wide(rls_wide_t d) { return d; }
+static inline rls_wide_t wide_of_acc(rls_acc_t a) { return a; }
+static inline rls_wide_t wide_add(rls_wide_t a, rls_wide_t b) { return a + b; }
+static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return a / b; }
+static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { (void)e; return d; } /* e is 0 */
+typedef float rls_rcp_t;
+typedef float rls_gain_t;
+#define RCP_NONE 1.0f
+static inline rls_rcp_t rcp_of(rls_inn_t a) { return a; }
+static inline rls_gain_t gain_of(rls_inn_t a, rls_rcp_t c) { return a / c; }
+static inline rls_par_t par_add_g(rls_par_t x, rls_gain_t g, rls_sig_t c) { return x + g * c; }
+static inline rls_sig_t u_update(rls_sig_t uij, rls_inn_t b, rls_sig_t f, rls_rcp_t c)
+{
+	return uij + b * (-f / c);
+}
+static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c,
+					  rls_unit_t lambda, int *sh)
+{
+	(void)c;
+	*sh = 0;
+	return d * a_prev / (a * lambda);
+}
+static inline rls_acc_t acc_res(rls_sig_t e, rls_inn_t a, rls_rcp_t c, rls_unit_t lambda, int fr)
+{
+	(void)c;
+	(void)fr;
+	return e * e / (a / lambda);
+}
+static inline rls_acc_t acc_forget(rls_acc_t a, rls_unit_t lambda) { return a * lambda; }
+typedef float rls_dot_t;
+#define DOT_ZERO 0.0f
+static inline rls_dot_t dot_of_sig(rls_sig_t x) { return x; }
+static inline rls_dot_t dot_mac(rls_dot_t s, rls_sig_t a, rls_sig_t b) { return s + a * b; }
+static inline rls_dot_t dot_mac_par(rls_dot_t s, rls_par_t t, rls_sig_t x) { return s + x * t; }
+static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return a - b; }
+static inline rls_sig_t sig_of_dot(rls_dot_t s) { return s; }
+static inline scalar_t sc_of_par(rls_par_t t, int shift) { return shift ? t * sc_pow2f(shift) : t; }
+/* x + (a / b) c: the float build's order of operations */
+/* x + a (c / b) */
+static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s) { (void)s; return d * f; }
+static inline rls_inn_t inn_mul_sig(rls_inn_t a, rls_sig_t b) { return a * b; }
+static inline rls_inn_t inn_add(rls_inn_t a, rls_inn_t b) { return a + b; }
+static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { (void)e; return m; }
+static inline bool wide_ok(rls_wide_t d) { return d > 0.0f && isfinite(d); }
+static inline bool sig_ok(rls_sig_t x) { return isfinite(x); }
+static inline bool acc_ok(rls_acc_t x) { return isfinite(x); }
+static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return shift ? x * sc_pow2f(-shift) : x; }
+static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return shift ? x * sc_pow2f(shift) : x; }
+static inline rls_acc_t phi2_of_sc(scalar_t x) { return x * x; }
+#endif
+
+/* ---------------------------------------------------------------- the update */
+
+/* P_n_ii 2^d_exp = sum_{k >= i} U_ik^2 d_k */
+static rls_acc_t pdiag_m(const struct rls *r, unsigned i)
+{
+	rls_acc_t s = acc_of_wide(r->d[i]);
+	for (unsigned k = i + 1; k < r->cfg.n_params; k++)
+		s = acc_add(s, acc_of_wide_sig(r->d[k], sig_mul(r->u[i][k], r->u[i][k])));
+	return s;
 }
 
+/* Mantissas back to [0.5, 1) for the largest (fixed build; the float build keeps d_exp 0) */
+static void renormalise(struct rls *r, unsigned n)
+{
+#if OCTO_FIXED
+	rls_wide_t mx = 0;
+	for (unsigned i = 0; i < n; i++)
+		mx = r->d[i] > mx ? r->d[i] : mx;
+	if (mx <= 0)
+		return;
+	int s = 0;
+	while (mx < WIDE_HALF && r->d_exp + s < RLS_EXP_MAX) {
+		mx <<= 1;
+		s++;
+	}
+	while (mx >= WIDE_ONE && r->d_exp + s > RLS_EXP_MIN) {
+		mx >>= 1;
+		s--;
+	}
+	if (s == 0)
+		return;
+	for (unsigned i = 0; i < n; i++)
+		r->d[i] = q_scale64(r->d[i], s);
+	r->d_exp += s;
+#else
+	(void)r;
+	(void)n;
+#endif
+}
+
+/* P = p0 I in the normalised units (the mantissas and exponent rls_init computed) */
 void rls_reset_covariance(struct rls *r)
 {
 	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
 		for (unsigned j = 0; j < RLS_MAX_PARAMS; j++)
-			r->u[i][j] = i == j ? 1.0f : 0.0f;
-		r->d[i] = r->cfg.p0;
+			r->u[i][j] = SIG_ZERO;
+		r->d[i] = r->d0[i];
 	}
+	r->d_exp = r->d0_exp;
 }
 
-void rls_init(struct rls *r, const struct rls_config *cfg)
+rls_acc_t rls_cov_diag_n(const struct rls *r, unsigned param)
 {
-	struct rls z = { 0 };
-	*r = z;
-	r->cfg = *cfg;
-	if (r->cfg.n_params < 1)
-		r->cfg.n_params = 1;
-	if (r->cfg.n_params > RLS_MAX_PARAMS)
-		r->cfg.n_params = RLS_MAX_PARAMS;
-	if (r->cfg.n_outputs < 1)
-		r->cfg.n_outputs = 1;
-	if (r->cfg.n_outputs > RLS_MAX_OUTPUTS)
-		r->cfg.n_outputs = RLS_MAX_OUTPUTS;
-	if (!(r->cfg.lambda >= 0.5f))
-		r->cfg.lambda = 0.5f;
-	if (!(r->cfg.lambda <= 1.0f))
-		r->cfg.lambda = 1.0f;
-	if (!(r->cfg.p0 > 0.0f) || !finite_f(r->cfg.p0))
-		r->cfg.p0 = 1e4f;
-	if (!(r->cfg.p_min >= 0.0f) || !finite_f(r->cfg.p_min))
-		r->cfg.p_min = 0.0f;
-	if (!(r->cfg.p_max >= 0.0f) || !finite_f(r->cfg.p_max))
-		r->cfg.p_max = 0.0f;
-	if (!(r->cfg.phi_min >= 0.0f) || !finite_f(r->cfg.phi_min))
-		r->cfg.phi_min = 0.0f;
-	for (unsigned o = 0; o < RLS_MAX_OUTPUTS; o++)
-		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
-			r->theta[o][i] = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f;
-	rls_reset_covariance(r);
+	return param < r->cfg.n_params ? pdiag_m(r, param) : ACC_ZERO;
 }
 
-void rls_set_estimate(struct rls *r, unsigned out, const float *theta)
-{
-	if (out >= r->cfg.n_outputs)
-		return;
-	for (unsigned i = 0; i < r->cfg.n_params; i++)
-		if (finite_f(theta[i]))
-			r->theta[out][i] = theta[i];
-}
-
-/* P_ii = sum_{k >= i} U_ik^2 D_k */
-static float pdiag(const struct rls *r, unsigned i)
-{
-	float s = 0.0f;
-	for (unsigned k = i; k < r->cfg.n_params; k++)
-		s += r->u[i][k] * r->u[i][k] * r->d[k];
-	return s;
-}
-
-/* One Bierman step of n = cfg.n_params parameters with the effective forgetting lambda:
- * f = U^T phi, v = D f, then U, D and theta column by column. On a numerical failure the
+/* One Bierman step of n = cfg.n_params parameters with the effective forgetting lambda.
+ * With sigma = 2^-d_exp, D = sigma d: f = U^T phi, v = d f (= D f / sigma), and the
+ * innovations alpha_j = lambda + sum_{k <= j} f_k D_k f_k are carried as a_j = alpha_j / sigma,
+ * in which sigma cancels from the gain and the U update; only the new d_j = d_j
+ * a_(j-1) / (a_j lambda) and the residual need alpha itself. On a numerical failure the
  * estimate is kept and the covariance reset. */
-RLS_INLINE enum rls_result bierman(struct rls *r, const float *phi, const float *y, float lambda,
-				      unsigned n)
+RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rls_sig_t *y,
+				      rls_unit_t lambda, unsigned n)
 {
 	const unsigned no = r->cfg.n_outputs;
-	float f[RLS_MAX_PARAMS], v[RLS_MAX_PARAMS], b[RLS_MAX_PARAMS];
-	float u[RLS_MAX_PARAMS][RLS_MAX_PARAMS], d[RLS_MAX_PARAMS];
+	rls_sig_t f[RLS_MAX_PARAMS], u[RLS_MAX_PARAMS][RLS_MAX_PARAMS];
+	rls_inn_t v[RLS_MAX_PARAMS], b[RLS_MAX_PARAMS];
+	rls_wide_t d[RLS_MAX_PARAMS];
+	/* the frame of v, b and the innovation: D 2^-fr, fr = min(d_exp, 0), so that v = D f
+	 * keeps its bits when P is small and stays within |2 f| when P is large */
+	const int fr = r->d_exp < 0 ? (int)r->d_exp : 0;
 	for (unsigned j = 0; j < n; j++) {
-		float s = 0.0f;
-		for (unsigned i = 0; i <= j; i++)
-			s += r->u[i][j] * phi[i];
+		rls_dot_t sd = DOT_ZERO;
+		for (unsigned i = 0; i < j; i++)
+			sd = dot_mac(sd, r->u[i][j], phi[i]);
+		rls_sig_t s = sig_of_dot(j ? dot_mac(sd, phi[j], UNIT_SIG) : dot_of_sig(phi[j])); /* U_jj = 1 */
 		f[j] = s;
-		v[j] = r->d[j] * s;
+		v[j] = inn_of_wide_sig(r->d[j], s, (int)r->d_exp - fr);
 		for (unsigned i = 0; i < n; i++)
 			u[i][j] = r->u[i][j];
 	}
-	float alpha = lambda;
+	rls_inn_t alpha = inn_of_unit(lambda, fr);
 	bool ok = true;
+	int sh[RLS_MAX_PARAMS], sh_min = 64;
+	/* the reciprocal of each innovation, once (the fixed build multiplies by it) */
+	rls_rcp_t rc = RCP_NONE, rc_prev;
 	for (unsigned j = 0; j < n; j++) {
-		float alpha_prev = alpha;
-		alpha = alpha_prev + f[j] * v[j];
-		d[j] = r->d[j] * alpha_prev / (alpha * lambda);
+		rls_inn_t alpha_prev = alpha;
+		rc_prev = rc;
+		alpha = inn_add(alpha_prev, inn_mul_sig(v[j], f[j]));
+		rc = rcp_of(alpha);
+		/* d_j a_(j-1) / (a_j lambda) = d[j] 2^-sh[j] */
+		d[j] = wide_scale_ratio(r->d[j], alpha_prev, alpha, rc, lambda, &sh[j]);
+		sh_min = sh[j] < sh_min ? sh[j] : sh_min;
 		b[j] = v[j];
-		float mu = -f[j] / alpha_prev;
 		for (unsigned i = 0; i < j; i++) {
-			float uij = u[i][j];
-			u[i][j] = uij + b[i] * mu;
-			b[i] += uij * v[j];
+			rls_sig_t uij = u[i][j];
+			u[i][j] = u_update(uij, b[i], f[j], rc_prev); /* U_ij - f_j b_i / a_(j-1) */
+			b[i] = inn_add(b[i], inn_mul_sig(v[j], uij));
 		}
-		if (!(d[j] > 0.0f) || !finite_f(d[j]))
+		if (!wide_ok(d[j]))
 			ok = false;
 	}
-	/* a priori errors and new estimates */
-	float th[RLS_MAX_OUTPUTS][RLS_MAX_PARAMS], e[RLS_MAX_OUTPUTS];
-	float innov = alpha / lambda; /* 1 + phi^T P phi / lambda */
-	for (unsigned o = 0; o < no; o++) {
-		float yhat = 0.0f;
+	if (!(alpha > INN_ZERO))
+		ok = false;
+	/* a priori errors and new estimates: theta += K e, K = b / a_n (one gain per parameter,
+	 * shared by the outputs) */
+	rls_par_t th[RLS_MAX_OUTPUTS][RLS_MAX_PARAMS];
+	rls_sig_t e[RLS_MAX_OUTPUTS];
+	rls_gain_t gain[RLS_MAX_PARAMS];
+	for (unsigned i = 0; i < n; i++)
+		gain[i] = gain_of(b[i], rc);
+	for (unsigned o = 0; ok && o < no; o++) {
+		rls_dot_t yhat = DOT_ZERO;
 		for (unsigned i = 0; i < n; i++)
-			yhat += phi[i] * r->theta[o][i];
-		e[o] = y[o] - yhat;
+			yhat = dot_mac_par(yhat, r->theta[o][i], phi[i]);
+		e[o] = sig_of_dot(dot_sub(dot_of_sig(y[o]), yhat));
 		for (unsigned i = 0; i < n; i++) {
-			th[o][i] = r->theta[o][i] + b[i] / alpha * e[o];
-			if (!finite_f(th[o][i]))
+			th[o][i] = par_add_g(r->theta[o][i], gain[i], e[o]);
+			if (!acc_ok(th[o][i]))
 				ok = false;
 		}
 	}
 	for (unsigned i = 0; ok && i < n; i++)
 		for (unsigned j = i + 1; j < n; j++)
-			if (!finite_f(u[i][j]))
+			if (!sig_ok(u[i][j]))
 				ok = false;
-	if (!ok || !finite_f(alpha) || !(alpha > 0.0f)) {
+	if (!ok) {
 		rls_reset_covariance(r);
 		r->n_resets++;
 		return RLS_RESET;
 	}
 
+	/* the common part of the shifts goes to the exponent (within its limits), the rest
+	 * into the mantissas (fixed build; all shifts are 0 in the float build) */
+	int e_new = r->d_exp + sh_min;
+	if (e_new > RLS_EXP_MAX)
+		e_new = RLS_EXP_MAX;
 	for (unsigned i = 0; i < n; i++) {
-		r->d[i] = d[i];
+		r->d[i] = wide_ldexp(d[i], e_new - r->d_exp - sh[i]);
 		for (unsigned j = i + 1; j < n; j++)
 			r->u[i][j] = u[i][j];
 	}
+	r->d_exp = e_new;
 	for (unsigned o = 0; o < no; o++) {
 		for (unsigned i = 0; i < n; i++)
 			r->theta[o][i] = th[o][i];
-		float s = lambda * r->ssr[o] + e[o] * e[o] / innov;
-		r->ssr[o] = finite_f(s) ? s : 0.0f;
+		/* residual: e^2 / innov, innov = alpha_n / lambda */
+		rls_acc_t s = acc_add(acc_forget(r->ssr[o], lambda), acc_res(e[o], alpha, rc, lambda, fr));
+		r->ssr[o] = acc_ok(s) ? s : ACC_ZERO;
 	}
-	r->n_eff = lambda * r->n_eff + 1.0f;
+	r->n_eff = acc_add(acc_forget(r->n_eff, lambda), acc_of_unit(UNIT_ONE));
 
 	/* covariance floor, from the last row up (raising D_i changes P_kk for k <= i only) */
-	if (r->cfg.p_min > 0.0f) {
-		for (unsigned ii = n; ii-- > 0;) {
-			float p = pdiag(r, ii);
-			if (p < r->cfg.p_min)
-				r->d[ii] += r->cfg.p_min - p;
-		}
+	for (unsigned ii = n; ii-- > 0;) {
+		if (!(r->p_min_n[ii] > ACC_ZERO))
+			continue;
+		rls_acc_t pmin = acc_ldexp(r->p_min_n[ii], r->d_exp), p = pdiag_m(r, ii);
+		if (p < pmin)
+			r->d[ii] = wide_add(r->d[ii], wide_of_acc(acc_sub(pmin, p)));
 	}
+	renormalise(r, n);
 	r->n_updates++;
 	return RLS_UPDATED;
 }
 
-enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bool excited)
+enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_sig_t *y_n,
+			     rls_acc_t phi2, bool excited)
 {
-	const unsigned n = r->cfg.n_params, no = r->cfg.n_outputs;
-	float nphi = 0.0f;
-	for (unsigned i = 0; i < n; i++) {
-		if (!finite_f(phi[i])) {
-			r->n_rejected++;
-			return RLS_REJECTED;
-		}
-		nphi += phi[i] * phi[i];
-	}
-	for (unsigned o = 0; o < no; o++) {
-		if (!finite_f(y[o])) {
-			r->n_rejected++;
-			return RLS_REJECTED;
-		}
-	}
-	if (!excited || !finite_f(nphi) || nphi < r->cfg.phi_min * r->cfg.phi_min) {
+	const unsigned n = r->cfg.n_params;
+	if (!excited || phi2 < r->phi_min2) {
 		r->n_gated++;
 		return RLS_GATED;
 	}
 
 	/* effective forgetting: never wind any P_ii above the ceiling */
-	float lambda = r->cfg.lambda;
-	if (r->cfg.p_max > 0.0f && lambda < 1.0f) {
-		float pmax = 0.0f;
+	rls_unit_t lambda = r->lambda;
+	if (lambda < UNIT_ONE) {
 		for (unsigned i = 0; i < n; i++) {
-			float p = pdiag(r, i);
-			pmax = p > pmax ? p : pmax;
+			if (!(r->p_max_n[i] > ACC_ZERO))
+				continue;
+			rls_unit_t lmin = unit_ratio(pdiag_m(r, i), acc_ldexp(r->p_max_n[i], r->d_exp));
+			if (lmin > lambda)
+				lambda = lmin < UNIT_ONE ? lmin : UNIT_ONE;
 		}
-		float lmin = pmax / r->cfg.p_max;
-		if (lmin > lambda)
-			lambda = lmin < 1.0f ? lmin : 1.0f;
 	}
 
 	/* one parameter (the identification's common case) is a call with a constant n, which
 	 * the compiler specialises: no loops, no copies, and the same arithmetic */
 	if (n == 1)
-		return bierman(r, phi, y, lambda, 1);
-	return bierman(r, phi, y, lambda, n);
+		return bierman(r, phi_n, y_n, lambda, 1);
+	return bierman(r, phi_n, y_n, lambda, n);
 }
 
 enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y, bool excited)
 {
-#if !OCTO_FIXED
-	return rls_update_f(r, phi, y, excited); /* scalar_t is float: nothing to convert */
-#else
-	float pf[RLS_MAX_PARAMS], yf[RLS_MAX_OUTPUTS];
-	for (unsigned i = 0; i < r->cfg.n_params; i++)
-		pf[i] = sc_to_float(phi[i]);
-	for (unsigned o = 0; o < r->cfg.n_outputs; o++)
-		yf[o] = sc_to_float(y[o]);
-	return rls_update_f(r, pf, yf, excited);
-#endif
-}
-
-float rls_estimate_f(const struct rls *r, unsigned out, unsigned param)
-{
-	if (out >= RLS_MAX_OUTPUTS || param >= RLS_MAX_PARAMS)
-		return 0.0f;
-	return r->theta[out][param];
+	rls_sig_t pn[RLS_MAX_PARAMS], yn[RLS_MAX_OUTPUTS];
+	rls_acc_t phi2 = ACC_ZERO;
+	for (unsigned i = 0; i < r->cfg.n_params; i++) {
+		if (!sc_isfinite(phi[i])) {
+			r->n_rejected++;
+			return RLS_REJECTED;
+		}
+		pn[i] = sig_of_sc(phi[i], r->cfg.phi_shift[i]);
+		phi2 = acc_add(phi2, phi2_of_sc(phi[i]));
+	}
+	for (unsigned o = 0; o < r->cfg.n_outputs; o++) {
+		if (!sc_isfinite(y[o])) {
+			r->n_rejected++;
+			return RLS_REJECTED;
+		}
+		yn[o] = sig_of_sc(y[o], r->y_shift[o]);
+	}
+	if (!acc_ok(phi2)) { /* float: |phi|^2 overflowed */
+		r->n_gated++;
+		return RLS_GATED;
+	}
+	return rls_update_n(r, pn, yn, phi2, excited);
 }
 
 scalar_t rls_estimate(const struct rls *r, unsigned out, unsigned param)
 {
-	return sc_from_float(rls_estimate_f(r, out, param));
-}
-
-float rls_cov_diag(const struct rls *r, unsigned param)
-{
-	if (param >= r->cfg.n_params)
-		return 0.0f;
-	return pdiag(r, param);
-}
-
-float rls_residual_var(const struct rls *r, unsigned out)
-{
-	if (out >= r->cfg.n_outputs)
-		return 0.0f;
-	float dof = r->n_eff - (float)r->cfg.n_params;
-	if (dof < 1.0f)
-		dof = 1.0f;
-	return r->ssr[out] / dof;
-}
-
-float rls_std(const struct rls *r, unsigned out, unsigned param)
-{
-	float v = rls_cov_diag(r, param) * rls_residual_var(r, out);
-	return v > 0.0f ? sqrtf(v) : 0.0f;
+	if (out >= RLS_MAX_OUTPUTS || param >= RLS_MAX_PARAMS)
+		return SC_ZERO;
+	return sc_of_par(r->theta[out][param], r->y_shift[out] - r->cfg.phi_shift[param]);
 }

@@ -15,10 +15,11 @@
  *   - sc_div by zero returns +/-SC_MAX by the sign of the dividend (0/0 = 0).
  *   - sc_from_float saturates, and maps NaN to 0.
  *   - sc_sqrt of a negative number is 0; the result is exact to 1 LSB.
- *   - Trigonometry (sc_sin, sc_cos, sc_atan2, sc_asin) and sc_exp are used only off the
- *     90 Hz hot path (Euler conversions for setpoints and telemetry); in the
- *     fixed build it goes through float. The hot path (control, mixer,
- *     throttle map) uses only add, mul, div and sqrt.
+ *   - Trigonometry (sc_sin, sc_cos, sc_atan2, sc_asin) is used only off the 90 Hz hot
+ *     path (Euler conversions for setpoints and telemetry); in the fixed build it goes
+ *     through float. sc_exp is integer in the fixed build (lag coefficients are
+ *     recomputed in the 90 Hz path when the frame period changes). The hot path
+ *     (control, mixer, throttle map, estimators) uses only integer operations.
  *
  * Constants: SC(x) turns a literal into a scalar at compile time, e.g. SC(0.5).
  * Values entering the core from the outside (parameters, sensor frames) go
@@ -26,6 +27,7 @@
  *
  * The float build wraps <math.h> here and nowhere else in the core: this file
  * is the only libc the core uses besides <stdint.h>, <stdbool.h>, <stddef.h>.
+ * Other fixed-point formats and their integer helpers: qfmt.h.
  */
 #ifndef OCTO_SCALAR_H
 #define OCTO_SCALAR_H
@@ -34,6 +36,8 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <math.h>
+
+#include "qfmt.h"
 
 #ifndef OCTO_FIXED
 #define OCTO_FIXED 0
@@ -84,7 +88,7 @@ static inline scalar_t sc_abs(scalar_t a) { return a < 0 ? sc_neg(a) : a; }
 
 static inline scalar_t sc_mul(scalar_t a, scalar_t b)
 {
-	int64_t p = (int64_t)a * (int64_t)b;
+	int64_t p = q_smul32(a, b); /* (int64_t)a * b, without a library call on Cortex-M0 */
 	p = p >= 0 ? p + (1 << 15) : p - (1 << 15);
 	return sc_sat64(p / 65536);
 }
@@ -130,8 +134,32 @@ static inline scalar_t sc_atan2(scalar_t y, scalar_t x)
 {
 	return sc_from_float(atan2f(sc_to_float(y), sc_to_float(x)));
 }
-/* e^a, off the hot path only (filter and forgetting coefficients at init); saturates */
-static inline scalar_t sc_exp(scalar_t a) { return sc_from_float(expf(sc_to_float(a))); }
+/* e^a in integer arithmetic (filter and lag coefficients): a = k ln 2 + r with r in
+ * [0, ln 2) in Q32, e^r by its Taylor series in Q30 (13 terms: error < 1e-9 relative), then
+ * scaled by 2^k and rounded to Q16.16: within 0.5 LSB + 1e-9 relative; saturates to
+ * SC_MAX above ln(32768) and gives 0 below ln(2^-17) */
+static inline scalar_t sc_exp(scalar_t a)
+{
+	if (a >= 681391)        /* 10.3972 = ln(32768) in Q16.16 */
+		return SC_MAX;
+	if (a <= -794978)       /* -12.1301 = ln(2^-17.5) */
+		return 0;
+	const int64_t ln2_q32 = 2977044472LL; /* ln 2 * 2^32, rounded */
+	int64_t x = (int64_t)a * 65536;       /* Q32 */
+	int64_t k = x / ln2_q32;
+	if (k * ln2_q32 > x)
+		k--;                              /* floor */
+	int64_t r = (x - k * ln2_q32) >> 2;   /* Q30, [0, ln 2) */
+	int64_t term = (int64_t)1 << 30, sum = term;
+	for (int i = 1; i <= 13; i++) {
+		term = (term * r >> 30) / i;
+		sum += term;
+	}
+	int sh = 14 - (int)k;                 /* Q30 * 2^k -> Q16 */
+	if (sh <= 0)
+		return sc_sat64(sum << -sh);
+	return sc_sat64((sum + ((int64_t)1 << (sh - 1))) >> sh);
+}
 
 #else
 /* ------------------------------------------------------------ float32 */
@@ -171,6 +199,15 @@ static inline scalar_t sc_exp(scalar_t a) { return expf(a); }
 
 /* ------------------------------------------------------------ both builds */
 #define SC_ZERO SC(0)
+
+/* 2^s as float, exact, from its exponent bits (no loop, no libm): s clamped to [-126, 127] */
+static inline float sc_pow2f(int s)
+{
+	union { uint32_t u; float f; } v;
+	s = s < -126 ? -126 : (s > 127 ? 127 : s);
+	v.u = (uint32_t)(s + 127) << 23;
+	return v.f;
+}
 
 static inline scalar_t sc_min(scalar_t a, scalar_t b) { return a < b ? a : b; }
 static inline scalar_t sc_max(scalar_t a, scalar_t b) { return a > b ? a : b; }

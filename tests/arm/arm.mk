@@ -9,6 +9,10 @@
 #                    targets where it fits (ARM_APP_VARIANTS, below).
 #                    Fails if any test fails on any target.
 #                    ARM_FILTER="mixer rls" runs only tests whose names contain a word.
+#   make arm-nofloat the fixed build's 90 Hz objects (ARM_FIXED_90HZ) call no soft-float or
+#                    float libm routine: `arm-none-eabi-nm -u` of each m0-fixed object
+#                    (part of `make arm`). Work that runs only when parameters change
+#                    lives in *_setup.c and is not listed.
 #   make arm-size    .text/.data/.bss per core module and target
 #   make arm-stack   stack high-water mark of each test alone on M0
 #   make arm-count   build the counting plugin and print the demo's counts (4x8 float
@@ -311,8 +315,23 @@ arm_report = echo "== $(if $(filter app-tests,$(2)),app tests,unit tests): $(1) 
   esac; failed="$$failed $(1)/$(2) ($$why)"; fi;
 arm_run_word = $(call $(1),$(word 1,$(subst :, ,$(2))),$(word 2,$(subst :, ,$(2))))
 
+# The fixed build's objects on the 90 Hz path: no float arithmetic (soft float on M0)
+ARM_FIXED_90HZ := alt_ctrl att_ctrl excite filt guidance hover_est kf_track mixer pos_ctrl rls thrmap
+# __aeabi_f*/d* (float and double arithmetic, compare, convert), *2f/*2d (int to float),
+# libgcc's __*sf*/__*df* names, and libm's functions
+ARM_FLOAT_SYMS := ^(__aeabi_[fd]|__aeabi_[a-z0-9]*2[fd]$$|__[a-z]+[sd]f[0-9]?$$|(sqrt|exp|log|pow|sin|cos|tan|asin|acos|atan|atan2|fmax|fmin|fabs|floor|ceil|round|ldexp|frexp|fmod|cbrt|hypot)f?$$)
+.PHONY: arm-nofloat
+arm-nofloat: $(ARM_FIXED_90HZ:%=$(ARM_B)/m0-fixed/core/%.o)
+	@echo "== soft-float calls in the fixed build's 90 Hz objects (m0-fixed, arm-none-eabi-nm -u)"; \
+	rc=0; for o in $^; do \
+	  bad=$$($(ARM_NM) -u $$o | awk '{ print $$NF }' | grep -E '$(ARM_FLOAT_SYMS)' | tr '\n' ' '); \
+	  if [ -n "$$bad" ]; then echo "   $$(basename $$o): calls $$bad"; rc=1; fi; \
+	done; \
+	if [ $$rc = 0 ]; then echo "   none in: $(ARM_FIXED_90HZ)"; \
+	else echo "== make arm-nofloat: FAILED (float on the 90 Hz path of the fixed build)"; fi; exit $$rc
+
 .PHONY: arm
-arm: arm-size-total $(ARM_ELFS) $(ARM_COUNT_PLUGIN) $(ARM_DEMO_ELFS)
+arm: arm-nofloat arm-size-total $(ARM_ELFS) $(ARM_COUNT_PLUGIN) $(ARM_DEMO_ELFS)
 	@rc=0; failed=; rm -f $(foreach r,$(ARM_RUNS),$(ARM_B)/$(subst :,/,$(r)).status); \
 	$(foreach r,$(ARM_RUNS),$(call arm_run_word,arm_start,$(r))) wait; \
 	$(foreach r,$(ARM_RUNS),$(call arm_run_word,arm_report,$(r))) $(arm_count_demo) \

@@ -9,6 +9,8 @@
 # Prints the image's own output, then one line per begin/end pair:
 #   octo-count: region N: M instructions
 # Exit status: QEMU's, i.e. the image's (2 if the plugin printed no count).
+# INSN_COUNT_ARGS (environment): more plugin arguments, e.g. "profile=FILE,from=301,every=2"
+# (tests/arm/insn-profile.sh uses it).
 set -u
 machine=$1 elf=$2 plugin=${3:-build/arm/insn-count.so}
 sym() { arm-none-eabi-nm "$elf" | awk -v s="$1" '$3 == s { print "0x" $1 }'; }
@@ -21,7 +23,7 @@ log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 timeout "${ARM_TIMEOUT:-300}" qemu-system-arm -M "$machine" -nographic -monitor none -serial none \
 	-semihosting-config enable=on,target=native \
-	-plugin "$plugin,begin=$begin,end=$end,out=$log" -kernel "$elf" </dev/null
+	-plugin "$plugin,begin=$begin,end=$end,out=$log${INSN_COUNT_ARGS:+,$INSN_COUNT_ARGS}" -kernel "$elf" </dev/null
 rc=$?
 cat "$log"
 grep -q 'instructions$' "$log" || { [ "$rc" = 0 ] && rc=2; }

@@ -12,6 +12,11 @@
  *   octo-count: region N: M instructions
  * to QEMU's log (stderr unless -D FILE) or to out=FILE.
  *
+ * Profile (optional): profile=FILE[,from=N][,to=M][,every=K] also writes, at exit, one line
+ * "PC INSNS" (decimal) per translation block with the instructions it executed inside the regions
+ * N, N + K, N + 2K, ... up to M (1-based; default all). tests/arm/insn-profile.sh sums
+ * them per function.
+ *
  * Debian's QEMU 7.2 ships no qemu-plugin.h, so the few v1 API declarations used
  * are written out here (ABI of QEMU_PLUGIN_VERSION 1). Counting is per
  * translation block, so an exception in the middle of a block would over-count
@@ -40,11 +45,13 @@ void qemu_plugin_outs(const char *string);
 EXPORT int qemu_plugin_version = 1;
 
 enum { TB_PLAIN, TB_BEGIN, TB_END };
-struct tb_info { uint64_t n; int kind; };
+struct tb_info { uint64_t n, pc, prof; int kind; struct tb_info *next; };
 
 static uint64_t begin_addr = UINT64_MAX, end_addr = UINT64_MAX, count;
-static int active, regions;
-static FILE *out;
+static int active, regions, prof_on;
+static long prof_from = 1, prof_to = -1, prof_every = 1;
+static FILE *out, *prof;
+static struct tb_info *tbs;
 
 static void report(const char *line)
 {
@@ -66,10 +73,15 @@ static void tb_exec(unsigned int vcpu, void *udata)
 		report(line);
 		active = 0;
 	} else if (t->kind == TB_BEGIN) {
+		long next = regions + 1;
 		active = 1;
 		count = 0;
+		prof_on = prof && next >= prof_from && (prof_to < 0 || next <= prof_to) &&
+			  (next - prof_from) % prof_every == 0;
 	} else if (active) {
 		count += t->n;
+		if (prof_on)
+			((struct tb_info *)udata)->prof += t->n;
 	}
 }
 
@@ -79,7 +91,11 @@ static void tb_trans(qemu_plugin_id_t id, struct qemu_plugin_tb *tb)
 	struct tb_info *t = malloc(sizeof *t); /* lives as long as the block */
 	uint64_t pc = qemu_plugin_tb_vaddr(tb) & ~(uint64_t)1;
 	t->n = qemu_plugin_tb_n_insns(tb);
+	t->pc = pc;
+	t->prof = 0;
 	t->kind = pc == begin_addr ? TB_BEGIN : pc == end_addr ? TB_END : TB_PLAIN;
+	t->next = tbs;
+	tbs = t;
 	qemu_plugin_register_vcpu_tb_exec_cb(tb, tb_exec, QEMU_PLUGIN_CB_NO_REGS, t);
 }
 
@@ -92,6 +108,12 @@ static void at_exit(qemu_plugin_id_t id, void *udata)
 		report("octo-count: no begin/end marker pair executed\n");
 	if (out)
 		fclose(out);
+	if (prof) {
+		for (const struct tb_info *t = tbs; t; t = t->next)
+			if (t->prof)
+				fprintf(prof, "%" PRIu64 " %" PRIu64 "\n", t->pc, t->prof);
+		fclose(prof);
+	}
 }
 
 EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const void *info, int argc, char **argv)
@@ -104,6 +126,14 @@ EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const void *info, int argc, 
 			end_addr = strtoull(argv[i] + 4, NULL, 0) & ~(uint64_t)1;
 		else if (!strncmp(argv[i], "out=", 4) && !(out = fopen(argv[i] + 4, "w")))
 			return -1;
+		else if (!strncmp(argv[i], "profile=", 8) && !(prof = fopen(argv[i] + 8, "w")))
+			return -1;
+		else if (!strncmp(argv[i], "from=", 5))
+			prof_from = strtol(argv[i] + 5, NULL, 0);
+		else if (!strncmp(argv[i], "to=", 3))
+			prof_to = strtol(argv[i] + 3, NULL, 0);
+		else if (!strncmp(argv[i], "every=", 6))
+			prof_every = strtol(argv[i] + 6, NULL, 0) > 0 ? strtol(argv[i] + 6, NULL, 0) : 1;
 	}
 	if (begin_addr == UINT64_MAX || end_addr == UINT64_MAX) {
 		qemu_plugin_outs("octo-count: needs begin=ADDR,end=ADDR\n");

@@ -16,8 +16,11 @@
 #                  Python's own size)
 #   bench-physics  sim::Model (build/sim/*.o, the simulator's flags) stepped as fast as it goes
 #   bench-step     octo-fw's 90 Hz step (firmware/app + core, stub HAL) under callgrind;
-#                  step-m4f.elf: the same on Cortex-M4F under QEMU with tests/arm's counting
-#                  plugin (needs the ARM toolchain: `make arm` installs it as root)
+#                  step-<v>.elf: the same on Cortex-M under QEMU with tests/arm's counting
+#                  plugin, v = m4f, m4f-fixed, m0 (soft float), m0-fixed (needs the ARM
+#                  toolchain: `make arm` installs it as root)
+#                  estim-<v>.elf: the identification's RLS updates and one rotor's
+#                  ident_rotor_update alone (tests/bench/estim_step.c), per build
 #   bench-alloc    allocation quality: priority allocator vs pseudo-inverse + clipping
 #   bench-estim    Monte Carlo of the k_f estimators (lag-aware, paper's plain) vs the CRLB
 #   bench-motor    Monte Carlo of the joint rotor-model estimator (motor_id.h) on random vehicles
@@ -75,10 +78,27 @@ ALL_TARGETS += $(BENCH_HOST)
 
 # ---- Cortex-M (only when the cross toolchain and QEMU are installed; else the table says so)
 BENCH_ARM_OK := $(shell command -v $(ARM_CC) >/dev/null 2>&1 && command -v $(ARM_QEMU) >/dev/null 2>&1 && echo 1)
+# The step per build: m4f (hard float), m4f-fixed, m0 (soft float), m0-fixed. The M0 images
+# hold the whole app (61 KB of static RAM), more than any QEMU Cortex-M0 board has (microbit
+# 16 KB, lm3s6965evb 64 KB): they are Cortex-M0 code (ARMv6-M, soft float) linked with
+# m4f.ld and counted on mps2-an386, whose Cortex-M4 executes the same Thumb instructions;
+# an instruction count depends on the code, not on the core that runs it.
+BENCH_STEP_VARIANTS := m4f m4f-fixed m0 m0-fixed
+ARM_ARCH_m4f-fixed     := $(ARM_ARCH_m4f)
+ARM_DEFS_m4f-fixed     := -DOCTO_FIXED=1
+ARM_CORE_OPT_m4f-fixed ?= $(ARM_CORE_OPT_m4f)
+ARM_LD_m4f-fixed       := tests/arm/m4f.ld
 ifeq ($(BENCH_ARM_OK),1)
-$(eval $(call arm_program,m4f,$(BENCH_B)/step-m4f.elf,$(BENCH_STEP_SRC),$(BENCH_APP_INC)))
-$(BENCH_B)/step-m4f.elf: $(BENCH_FW_HDR) | $(MAVLINK_STAMP)
-BENCH_ARM := $(BENCH_B)/step-m4f.elf $(ARM_COUNT_PLUGIN) $(ARM_LIBS) $(ARM_SIZE_ELFS)
+$(eval $(call arm_variant,m4f-fixed))
+$(foreach v,$(BENCH_STEP_VARIANTS),$(eval $(call arm_program,$(v),$(BENCH_B)/step-$(v).elf,$(BENCH_STEP_SRC),$(BENCH_APP_INC))))
+$(BENCH_STEP_VARIANTS:%=$(BENCH_B)/step-%.elf): $(BENCH_FW_HDR) | $(MAVLINK_STAMP)
+$(BENCH_B)/step-m0.elf: ARM_LD_m0 := tests/arm/m4f.ld
+$(BENCH_B)/step-m0-fixed.elf: ARM_LD_m0-fixed := tests/arm/m4f.ld
+$(foreach v,$(BENCH_STEP_VARIANTS),$(eval $(call arm_program,$(v),$(BENCH_B)/estim-$(v).elf,tests/bench/estim_step.c)))
+$(BENCH_B)/estim-m0.elf: ARM_LD_m0 := tests/arm/m4f.ld
+$(BENCH_B)/estim-m0-fixed.elf: ARM_LD_m0-fixed := tests/arm/m4f.ld
+BENCH_ARM := $(BENCH_STEP_VARIANTS:%=$(BENCH_B)/step-%.elf) $(BENCH_STEP_VARIANTS:%=$(BENCH_B)/estim-%.elf) \
+             $(ARM_COUNT_PLUGIN) $(ARM_LIBS) $(ARM_SIZE_ELFS)
 endif
 
 .PHONY: bench bench-tools

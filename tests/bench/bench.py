@@ -15,8 +15,9 @@ Items:
              processes with the same datagrams per frame (build/bench/pingpong pp)
   step    2. octo-fw's 90 Hz step without I/O (build/bench/bench-step: firmware/app + core,
              stub HAL): instructions per step on the host (valgrind --tool=callgrind) and on
-             Cortex-M4F (QEMU mps2-an386 + tests/arm's counting plugin); the allocator alone
-  memory  3. the core's .text/.data/.bss on Cortex-M4F and M0 (tests/arm's images), the core
+             Cortex-M4F (QEMU mps2-an386 + tests/arm's counting plugin); per build (float,
+             fixed) on M4F and M0 (ARMv6-M code counted on mps2-an386); the allocator alone
+  memory  3. the core's .text/.data/.bss on Cortex-M4F, M0 and M0 fixed (tests/arm's images), the core
              state the app owns (sizeof), peak RSS of octo-fw and octo-sim (wait4 of the
              flights of item 1)
   alloc   4. build/bench/bench-alloc: priority allocator vs pseudo-inverse + clipping
@@ -488,10 +489,102 @@ def item_step(rep, args):
         res["worst_step_estimate_m4f"] = est
         rep.row(2, "  worst case: HOLD step with the worst allocation (max - hover alloc. + worst)", fmt(ctl), "",
                 f"any step so: {fmt(est)}", "<= 5,000", ctl <= 5000 and est <= 5000, m4_cmd)
+    step_per_build(rep, args, res)
     rep.data["step"] = res
     rep.commands["step_host"] = host_cmd
     rep.commands["step_m4f"] = m4_cmd
     return res
+
+
+# The 90 Hz step per build on Cortex-M: float (hard float on M4F, soft float on M0) against
+# the fixed build (OCTO_FIXED, Q formats), the same app and sequence (tests/bench/step.c).
+# The M0 images (ARMv6-M code) are counted on mps2-an386: no QEMU Cortex-M0 board has RAM
+# for the whole app (tests/bench/bench.mk), and the count depends on the code only
+STEP_BUILDS = (("m4f", "mps2-an386"), ("m4f-fixed", "mps2-an386"), ("m0", "mps2-an386"), ("m0-fixed", "mps2-an386"))
+
+
+def run_step_elf(machine_, elf):
+    out = subprocess.run([str(REPO / "tests/arm/insn-count.sh"), machine_, str(elf), str(ARM / "insn-count.so")],
+                         capture_output=True, text=True, timeout=1800, cwd=REPO)
+    counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
+    kv = parse_step_output(out.stdout)
+    nh, ne = int(kv.get("hold_steps", 0)), int(kv.get("exp_steps", 0))
+    nt = int(kv.get("exp_ticks", 0))
+    na = int(kv.get("alloc_calls", "0").split()[0])
+    if len(counts) != nh + ne + nt + 1 + na + 1:
+        return {"exit": out.returncode, "error": f"{len(counts)} counts", "output": kv}
+    ex = counts[nh:nh + ne + nt]
+    return {"exit": out.returncode, "hold": counts[:nh], "exp": ex[0::2] if nt else ex,
+            "exp_tick": ex[1::2] if nt else [], "output": kv}
+
+
+def step_per_build(rep, args, res):
+    builds = {}
+    for v, mach in STEP_BUILDS:
+        elf = BB / f"step-{v}.elf"
+        cmd = cmdline(["tests/arm/insn-count.sh", mach, elf, ARM / "insn-count.so"])
+        if args.no_arm or not elf.exists():
+            rep.row(2, f"step per build, {v}", "n/a", "", "ARM toolchain or QEMU missing", "", None, cmd)
+            continue
+        r = run_step_elf(mach, elf)
+        t, d, b = arm_size(elf)
+        st = {k: mmm(r.get(k, [])) for k in ("hold", "exp", "exp_tick")}
+        builds[v] = {"steps": st, "exit": r["exit"], "flash": t + d, "ram": d + b, "error": r.get("error")}
+        mm = lambda k: f"{fmt(st[k]['median'])} ({fmt(st[k]['max'])})" if st[k] else "n/a"
+        rep.row(2, f"step per build, {v}: HOLD / experiment 1 / between frames, median (max) instr.",
+                f"{mm('hold')} / {mm('exp')} / {mm('exp_tick')}", "",
+                f"image (app + core + libs): flash {fmt((t + d) / 1024, 1)} KB, static RAM {fmt((d + b) / 1024, 1)} KB"
+                + (f"; {r['error']}" if r.get("error") else ""), "(reported)", None, cmd)
+    for cpu, fl, fx in (("M0", "m0", "m0-fixed"), ("M4F", "m4f", "m4f-fixed")):
+        a, b_ = builds.get(fl, {}).get("steps", {}), builds.get(fx, {}).get("steps", {})
+        ratios = {}
+        for k in ("hold", "exp", "exp_tick"):
+            if a.get(k) and b_.get(k):
+                ratios[k] = (a[k]["median"] / b_[k]["median"], a[k]["max"] / b_[k]["max"])
+        if ratios:
+            names = {"hold": "HOLD", "exp": "experiment 1", "exp_tick": "between frames"}
+            rep.row(2, f"  {cpu}: float build / fixed build, instructions (median; max)",
+                    f"{ratios['hold'][0]:.2f}x" if "hold" in ratios else "n/a", "",
+                    "; ".join(f"{names[k]} {m:.2f}x; {x:.2f}x" for k, (m, x) in ratios.items()),
+                    "(reported)", None, None)
+            res.setdefault("float_over_fixed", {})[cpu] = ratios
+    res["per_build"] = builds
+    estim_per_build(rep, args, res)
+
+
+def estim_per_build(rep, args, res):
+    """The identification's estimators alone (tests/bench/estim_step.c): where the fixed build's
+    experiment step goes, and what integer arithmetic saves on M0 against soft float."""
+    per = {}
+    for v, mach in STEP_BUILDS:
+        elf = BB / f"estim-{v}.elf"
+        if args.no_arm or not elf.exists():
+            continue
+        out = subprocess.run([str(REPO / "tests/arm/insn-count.sh"), mach, str(elf), str(ARM / "insn-count.so")],
+                             capture_output=True, text=True, timeout=600, cwd=REPO)
+        counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
+        kv = {m.group(1): m.group(2) for m in re.finditer(r"estim: (\S+) (\S+)", out.stdout)}
+        n1, n2, n3 = (int(kv.get(k, 0)) for k in ("rls_1x2", "rls_2x1", "ident_rotor"))
+        if len(counts) != n1 + n2 + n3 or not n1:
+            per[v] = {"error": f"{len(counts)} counts", "exit": out.returncode}
+            continue
+        per[v] = {"rls_1x2": mmm(counts[:n1]), "rls_2x1": mmm(counts[n1:n1 + n2]),
+                  "ident_rotor": mmm(counts[n1 + n2:]), "exit": out.returncode}
+        cmd = cmdline(["tests/arm/insn-count.sh", mach, elf, ARM / "insn-count.so"])
+        p = per[v]
+        rep.row(2, f"  estimators alone, {v}: rls_update 1 param x 2 outputs / 2 x 1 / ident_rotor_update",
+                f"{fmt(p['rls_1x2']['median'])} / {fmt(p['rls_2x1']['median'])} / {fmt(p['ident_rotor']['median'])}",
+                "", f"max {fmt(p['rls_1x2']['max'])} / {fmt(p['rls_2x1']['max'])} / {fmt(p['ident_rotor']['max'])}; "
+                "the rotor experiment runs ident_rotor_update for 8 rotors per step", "(reported)", None, cmd)
+    for cpu, fl, fx in (("M0", "m0", "m0-fixed"), ("M4F", "m4f", "m4f-fixed")):
+        a, b = per.get(fl, {}), per.get(fx, {})
+        if a.get("rls_1x2") and b.get("rls_1x2"):
+            rat = {k: a[k]["median"] / b[k]["median"] for k in ("rls_1x2", "rls_2x1", "ident_rotor")}
+            rep.row(2, f"  {cpu}: float build / fixed build, estimators alone", f"{rat['rls_1x2']:.2f}x", "",
+                    f"rls 2 x 1 {rat['rls_2x1']:.2f}x, ident_rotor_update {rat['ident_rotor']:.2f}x", "(reported)",
+                    None, None)
+            per.setdefault("float_over_fixed", {})[cpu] = rat
+    res["estimators"] = per
 
 
 # ====================================================================== item 3: memory
@@ -588,7 +681,7 @@ def item_memory(rep, args):
     if args.no_arm or not shutil.which("arm-none-eabi-size"):
         rep.row(3, "core flash / RAM on Cortex-M4F, M0", "n/a", "ARM toolchain missing", "", "< 32 KB, < 8 KB", None)
     else:
-        for v in ("m4f", "m0"):
+        for v in ("m4f", "m0", "m0-fixed"):
             lib = ARM / v / "libcore.a"
             if not lib.exists():
                 continue
@@ -608,7 +701,7 @@ def item_memory(rep, args):
             res[v] = {"text": t, "data": d, "bss": b, "flash": t + d, "ram": d + b, "linked": linked,
                       "modules": mods, "structs": sizes, "app_owned": owned,
                       "state_control": ctl, "state_identification": idn}
-            cpu = "Cortex-M4F" if v == "m4f" else "Cortex-M0"
+            cpu = {"m4f": "Cortex-M4F", "m0": "Cortex-M0", "m0-fixed": "Cortex-M0, fixed build"}[v]
             res[v]["opt"] = opt = core_opt(v)
             rep.row(3, f"core on {cpu}, built {opt}: .text/.data/.bss (bytes)", f"{t}/{d}/{b}", "",
                     f"{fmt((t + d) / 1024, 1)} KB: " + ", ".join(f"{k} {fmt(x / 1024, 1)}" for k, x in big)

@@ -86,5 +86,52 @@ UNIT_TEST(scalar_exp)
 	}
 #if OCTO_FIXED
 	CHECK(sc_exp(SC(20)) == SC_MAX); /* e^20 > 32768 saturates */
+	CHECK(sc_exp(SC(10.397)) < SC_MAX && sc_exp(SC(10.3973)) == SC_MAX);
+	CHECK(sc_exp(SC_MAX) == SC_MAX && sc_exp(SC_MAX_NEG) == 0 && sc_exp(SC(-13)) == 0);
+	CHECK(sc_exp(0) == SC(1));
+	/* integer in the fixed build: within 0.5 LSB + 1e-8 relative over the whole range */
+	struct unit_rng g = { 0xe4bULL };
+	for (int i = 0; i < 5000; i++) {
+		scalar_t s = (scalar_t)unit_rand_uniform(&g, -13.0 * 65536, 10.39 * 65536);
+		double ref = exp(d(s));
+		CHECK_NEAR(d(sc_exp(s)), ref, 0.5 * LSB + 1e-8 * ref);
+	}
+#endif
+}
+
+/* sc_div is exact: the quotient rounded to nearest (ties away from zero), as a 64-bit
+ * division gives it, for divisors and dividends of every size, and saturated beyond */
+UNIT_TEST(scalar_div_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0xd1fULL };
+	for (int i = 0; i < 20000; i++) {
+		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		a >>= (int)unit_rand_uniform(&g, 0, 31);
+		b >>= (int)unit_rand_uniform(&g, 0, 31);
+		if (b == 0)
+			continue;
+		int64_t n = (int64_t)a * 65536, half = (b > 0 ? (int64_t)b : -(int64_t)b) / 2;
+		n += ((n >= 0) == (b > 0)) ? (b > 0 ? half : -half) : -(b > 0 ? half : -half);
+		int64_t q = n / b;
+		scalar_t ref = q > INT32_MAX ? SC_MAX : (q < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)q);
+		if (sc_div(a, b) != ref) {
+			unit_fail(u, __FILE__, __LINE__, "sc_div(%d, %d) = %d, expected %d", (int)a, (int)b,
+				  (int)sc_div(a, b), (int)ref);
+			return;
+		}
+	}
+	CHECK(sc_div(SC_MAX, 1) == SC_MAX && sc_div(SC_MAX_NEG, 1) == SC_MAX_NEG);
+	CHECK(sc_div(SC(1), SC(3)) == 21845 && sc_div(SC(-1), SC(3)) == -21845);
+	CHECK(sc_div(1, 2) == 32768 && sc_div(SC_MAX, SC_MAX) == SC(1));
+#else
+	/* float: the IEEE quotient, and zero divisors saturate */
+	struct unit_rng g = { 0xd1fULL };
+	for (int i = 0; i < 2000; i++) {
+		float a = (float)unit_rand_uniform(&g, -1e4, 1e4), b = (float)unit_rand_uniform(&g, -10, 10);
+		CHECK(b == 0.0f || sc_div(a, b) == a / b);
+	}
+	CHECK(sc_div(1.0f, 0.0f) == SC_MAX && sc_div(-1.0f, 0.0f) == SC_MAX_NEG);
 #endif
 }

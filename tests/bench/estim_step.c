@@ -1,0 +1,94 @@
+/*
+ * estim_step.c - instructions of the identification's estimators alone on Cortex-M, for
+ * `make bench` (tests/bench/bench.py): where the fixed build's experiment step goes.
+ * Counted calls (one bench_mark_begin/end pair each, in this order):
+ *   N_RLS x rls_update of the rotor experiment's RLS (1 parameter, outputs f and tau),
+ *   N_RLS x rls_update of its lag check (2 parameters, 1 output),
+ *   N_ROT x ident_rotor_update (delay, lag and the three RLS of one rotor).
+ * The inputs are a PRBS throttle through a 40 ms lag with 1 % noise (the values do not
+ * change the count much: no data-dependent loops but the fixed build's normalisation).
+ * Prints "estim: KEY VALUE" lines.
+ */
+#include <stdio.h>
+
+#include "bench_mark.h"
+#include "ident.h"
+#include "rls.h"
+
+#define N_RLS 200
+#define N_ROT 200
+
+static uint32_t rng = 777u;
+static float urand(void) /* [-1, 1) */
+{
+	rng ^= rng << 13;
+	rng ^= rng >> 17;
+	rng ^= rng << 5;
+	return (float)(rng >> 8) * (2.0f / 16777216.0f) - 1.0f;
+}
+
+/* global: the compiler cannot see through it across the markers */
+struct rls R1, R2;
+struct ident_rotor ROT;
+
+int main(void)
+{
+	struct rls_config c;
+	rls_default_config(&c);
+	c.n_outputs = 2;
+	c.p0 = 1e6f;
+	c.theta0[0][0] = 25.0f;
+	c.theta0[1][0] = 0.35f;
+	rls_init(&R1, &c);
+	c.n_params = 2;
+	c.n_outputs = 1;
+	c.theta0[0][1] = 0.0f;
+	rls_init(&R2, &c);
+	float s = 0.45f, thr = 0.45f;
+	for (int k = 0; k < N_RLS; k++) {
+		if (k % 9 == 0)
+			thr = 0.45f + (urand() < 0.0f ? -0.06f : 0.06f);
+		s += 0.24f * (thr - s);
+		scalar_t phi[2] = { sc_from_float(s), sc_from_float(0.1f * (thr - s)) };
+		scalar_t y[2] = { sc_from_float(28.0f * s * (1.0f + 0.01f * urand())),
+				  sc_from_float(0.39f * s * (1.0f + 0.01f * urand())) };
+		bench_mark_begin();
+		rls_update(&R1, phi, y, true);
+		bench_mark_end();
+	}
+	for (int k = 0; k < N_RLS; k++) {
+		if (k % 9 == 0)
+			thr = 0.45f + (urand() < 0.0f ? -0.06f : 0.06f);
+		s += 0.24f * (thr - s);
+		scalar_t phi[2] = { sc_from_float(s), sc_from_float(0.1f * (thr - s)) };
+		scalar_t y = sc_from_float(28.0f * s * (1.0f + 0.01f * urand()));
+		bench_mark_begin();
+		rls_update(&R2, phi, &y, true);
+		bench_mark_end();
+	}
+	struct ident_rotor_cfg rc = { 0 };
+	rc.dt_s = SC(1.0 / 90.0);
+	rc.mot_tau_s = SC(0.04);
+	rc.delay_frames = 1;
+	rc.curve = SC(0.3);
+	rc.thr0 = SC(0.45);
+	rc.kf0 = 25.0f;
+	rc.ktau0 = 0.35f;
+	ident_rotor_init(&ROT, &rc);
+	for (int k = 0; k < N_ROT; k++) {
+		if (k % 9 == 0)
+			thr = 0.45f + (urand() < 0.0f ? -0.06f : 0.06f);
+		s += 0.24f * (thr - s);
+		scalar_t f = sc_from_float(28.0f * s * (1.0f + 0.01f * urand()));
+		scalar_t t = sc_from_float(0.39f * s * (1.0f + 0.01f * urand()));
+		bench_mark_begin();
+		ident_rotor_update(&ROT, sc_from_float(thr), f, t, true);
+		bench_mark_end();
+	}
+	printf("estim: rls_1x2 %d\n", N_RLS);
+	printf("estim: rls_2x1 %d\n", N_RLS);
+	printf("estim: ident_rotor %d\n", N_ROT);
+	printf("estim: kf %.4f\n", (double)rls_estimate_f(&R1, 0, 0));
+	printf("estim: done\n");
+	return 0;
+}
