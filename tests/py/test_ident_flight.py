@@ -86,7 +86,9 @@ def test_full_sequence_accuracy_on_random_vehicles(launch, port, tmp_path):
 def test_validation_before_and_after_rotor_identification(launch, port, tmp_path):
     """Experiment 2, then 1, then 2 again: the model's f_1 against the measured one differs
     visibly with the nominal k_f (20 N for 28 N) and agrees after identification."""
-    fl = IdentFlight(launch, port, tmp_path, seed=7)
+    # three experiments and the ground station's waits between them (lockstep: plant time runs
+    # on while it waits): 200 s of plant time ran out in the third now and then
+    fl = IdentFlight(launch, port, tmp_path, seed=7, duration=600)
     fl.takeoff()
     fl.experiment(2)
     fl.experiment(1)
