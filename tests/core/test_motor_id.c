@@ -136,6 +136,16 @@ static void show(const struct truth *t, const struct motor_id_result *r)
 }
 #endif
 
+/* run(), then the result beside the truth in a verbose build */
+static void identify(struct unit_rng *g, const struct truth *t, int n, bool est_curve, double kf0,
+		     struct motor_id_result *res)
+{
+	run(g, t, n, est_curve, kf0, res);
+#ifdef TEST_VERBOSE
+	show(t, res);
+#endif
+}
+
 /* Random vehicles: delay exact, lag within 5 %, curve within 0.02, scales within 0.5 %;
  * k_f and k_tau within 0.1 % or, where the curve's extrapolation to full throttle makes that
  * tighter than the data allow, within 4 of the reported standard deviations (and the sd
@@ -147,10 +157,7 @@ UNIT_TEST(motor_id_random_vehicles)
 		struct truth t;
 		random_truth(&g, &t);
 		struct motor_id_result r;
-		run(&g, &t, 900, true, 20.0, &r);
-#ifdef TEST_VERBOSE
-		show(&t, &r);
-#endif
+		identify(&g, &t, 900, true, 20.0, &r);
 		CHECK(r.cause == MOTOR_ID_OK);
 		CHECK(r.delay == t.delay);
 		CHECK_REL(r.tau, t.tau, 0.05);
@@ -214,10 +221,7 @@ UNIT_TEST(motor_id_linear_known_curve)
 		random_truth(&g, &t);
 		t.curve = 0.0;
 		struct motor_id_result r;
-		run(&g, &t, 900, false, 20.0, &r);
-#ifdef TEST_VERBOSE
-		show(&t, &r);
-#endif
+		identify(&g, &t, 900, false, 20.0, &r);
 		CHECK(r.cause == MOTOR_ID_OK);
 		CHECK(r.delay == t.delay);
 		CHECK_REL(r.tau, t.tau, 0.05);
@@ -270,10 +274,7 @@ UNIT_TEST(motor_id_curve_not_modelled_rejected)
 		random_truth(&g, &t);
 		t.curve = unit_rand_uniform(&g, 0.2, 0.5);
 		struct motor_id_result r;
-		run(&g, &t, 900, false, 20.0, &r);
-#ifdef TEST_VERBOSE
-		show(&t, &r);
-#endif
+		identify(&g, &t, 900, false, 20.0, &r);
 		CHECK(r.cause == MOTOR_ID_CURVE);
 		CHECK(r.white_have && !r.white_ok);   /* the prediction errors are coloured too */
 	}
@@ -289,10 +290,7 @@ UNIT_TEST(motor_id_whiteness_passes_modelled_vehicles)
 		struct truth t;
 		random_truth(&g, &t);
 		struct motor_id_result r;
-		run(&g, &t, 900, true, 20.0, &r);
-#ifdef TEST_VERBOSE
-		show(&t, &r);
-#endif
+		identify(&g, &t, 900, true, 20.0, &r);
 		CHECK(r.white_have);
 		CHECK(r.white_dof >= 60.0f);
 		fail += !r.white_ok;
@@ -312,18 +310,12 @@ UNIT_TEST(motor_id_given_delay_wrong_rejected)
 		random_truth(&g, &t);
 		t.given_delay = t.delay == 0u ? 1 : (v % 2 ? (int)t.delay - 1 : (int)t.delay + 1);
 		struct motor_id_result r;
-		run(&g, &t, 900, true, 20.0, &r);
-#ifdef TEST_VERBOSE
-		show(&t, &r);
-#endif
+		identify(&g, &t, 900, true, 20.0, &r);
 		CHECK(r.cause == MOTOR_ID_DELAY_GIVEN);
 		CHECK(r.free_delay == t.delay);
 		CHECK(r.white_have && !r.white_ok);
 		t.given_delay = (int)t.delay;
-		run(&g, &t, 900, true, 20.0, &r);
-#ifdef TEST_VERBOSE
-		show(&t, &r);
-#endif
+		identify(&g, &t, 900, true, 20.0, &r);
 		CHECK(r.cause == MOTOR_ID_OK);
 		CHECK(r.white_ok);
 	}
@@ -341,10 +333,7 @@ UNIT_TEST(motor_id_second_order_motor_rejected)
 		t.tau = unit_rand_uniform(&g, 0.03, 0.1);
 		t.tau2 = t.tau * unit_rand_uniform(&g, 0.3, 0.6);
 		struct motor_id_result r;
-		run(&g, &t, 900, true, 20.0, &r);
-#ifdef TEST_VERBOSE
-		show(&t, &r);
-#endif
+		identify(&g, &t, 900, true, 20.0, &r);
 		CHECK(r.cause != MOTOR_ID_OK);
 		CHECK(r.white_have && !r.white_ok);
 	}
@@ -362,10 +351,7 @@ UNIT_TEST(motor_id_mild_odd_rotor_named_by_whiteness)
 		t.odd_rotor = (int)unit_rand_uniform(&g, 0.0, 7.999);
 		t.odd_tau = t.tau * unit_rand_uniform(&g, 1.1, 1.2);
 		struct motor_id_result r;
-		run(&g, &t, 900, true, 20.0, &r);
-#ifdef TEST_VERBOSE
-		show(&t, &r);
-#endif
+		identify(&g, &t, 900, true, 20.0, &r);
 		CHECK(r.cause == MOTOR_ID_ROTOR);
 		CHECK(r.cause_rotor == t.odd_rotor);
 		CHECK(!r.white_ok && r.white_rotor[t.odd_rotor] > 1.0f);
@@ -383,10 +369,7 @@ UNIT_TEST(motor_id_odd_rotor_named)
 		t.odd_rotor = (int)unit_rand_uniform(&g, 0.0, 7.999);
 		t.odd_tau = 3.0 * t.tau;
 		struct motor_id_result r;
-		run(&g, &t, 900, true, 20.0, &r);
-#ifdef TEST_VERBOSE
-		show(&t, &r);
-#endif
+		identify(&g, &t, 900, true, 20.0, &r);
 		CHECK(r.cause == MOTOR_ID_ROTOR);
 		CHECK(r.cause_rotor == t.odd_rotor);
 	}
