@@ -104,7 +104,17 @@ bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t
 	scalar_t pr = sc_add(s->p_pct2, r);
 	if (sc_sq(e_pct) > sc_mul(sc_sq(s->p.gate_sigma), pr)) {
 		s->rejected++;
-		return false;
+		int8_t sign = e_pct > SC_ZERO ? 1 : -1;
+		s->gated_s = sign == s->gated_sign ? sc_add(s->gated_s, dt_s) : dt_s;
+		s->gated_sign = sign;
+		if (s->gated_s < SC(HOVER_EST_GATED_S))
+			return false;
+		/* persistently contradicted: let the innovation in */
+		s->p_pct2 = sc_min(sc_max(s->p_pct2, sc_sq(e_pct)), P_MAX_PCT2);
+		s->gated_s = SC_ZERO;
+		pr = sc_add(s->p_pct2, r);
+	} else {
+		s->gated_s = SC_ZERO;
 	}
 	scalar_t k = sc_div(s->p_pct2, pr);
 	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), sc_mul(k, sc_div(e_pct, SC(100.0)))));

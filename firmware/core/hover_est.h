@@ -14,6 +14,10 @@
  *     r = (100 sigma_acc / y^)^2,  k = P / (P + r),  theta *= 1 + k e,  P = P r / (P + r).
  * Random-walk process noise P += (100 q_rel)^2 dt lets it follow a slow change (battery),
  * and innovations beyond gate_sigma standard deviations are rejected (gusts, contact).
+ * A run of rejected innovations of one sign lasting HOVER_EST_GATED_S is no gust: the
+ * estimate is wrong and its variance too small (it converged during a fast throttle change
+ * through an unmodelled motor lag); the variance is raised to the innovation's square, so
+ * that the filter can move again (as PX4's estimator does after repeated rejections).
 
  * The vertical acceleration is not measured: it is the derivative of the vertical speed
  * through a first-order state-variable filter of time constant tau_s,
@@ -39,6 +43,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#define HOVER_EST_GATED_S 1.0f
+
 struct hover_est_params {
 	scalar_t u_min;        /* accepted hover throttle range, e.g. [0.02, 0.8] */
 	scalar_t u_max;
@@ -60,6 +66,8 @@ struct hover_est {
 	bool primed;      /* filters initialised */
 	uint32_t updates; /* accepted measurements */
 	uint32_t rejected;/* gated measurements */
+	scalar_t gated_s; /* time of the current run of gated innovations of one sign, s */
+	int8_t gated_sign;
 };
 
 /* Defaults: u_h in [0.02, 0.8], sigma_u0 1.0, sigma_acc 0.5 m/s^2, q_rel 0.003 /sqrt(s),
