@@ -122,6 +122,7 @@ static void delay_crit(const struct motor_id *m, unsigned d, float jv[3]);
 static float parabola(const float sv[3], float *s_min, float *k);
 static void lagrange3(float x, float l[3]);
 static void interp_stat(const struct motor_id_stat st[3], const float l[3], struct motor_id_stat *o);
+static void stat_at(const struct motor_id *m, unsigned d, const float l[3], unsigned j, struct motor_id_stat *o);
 static float delay_logssr(const struct motor_id *m, unsigned d, float x);
 static float rotor_ssr(const struct motor_id_stat *st, bool est_curve, float c0, float s_c, float delta[2]);
 
@@ -155,8 +156,8 @@ static void white_begin(struct motor_id *m)
 	float l[3], dl[2];
 	lagrange3(x, l);
 	for (unsigned j = 0; j < NR; j++) {
-		struct motor_id_stat tri[3] = {m->st[d][0][j], m->st[d][1][j], m->st[d][2][j]}, o;
-		interp_stat(tri, l, &o);
+		struct motor_id_stat o;
+		stat_at(m, d, l, j, &o);
 		rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, m->s_c[j], dl);
 		w->dl[j][0] = dl[0];
 		w->dl[j][1] = dl[1];
@@ -385,14 +386,21 @@ static void interp_stat(const struct motor_id_stat st[3], const float l[3], stru
 	o->rr = l[0] * st[0].rr + l[1] * st[1].rr + l[2] * st[2].rr;
 }
 
+/* rotor j's statistics of delay d at the grid weights l */
+static void stat_at(const struct motor_id *m, unsigned d, const float l[3], unsigned j, struct motor_id_stat *o)
+{
+	const struct motor_id_stat tri[3] = {m->st[d][0][j], m->st[d][1][j], m->st[d][2][j]};
+	interp_stat(tri, l, o);
+}
+
 /* sum over rotors of log SSR_j of delay d at grid position x (statistics interpolated) */
 static float delay_logssr(const struct motor_id *m, unsigned d, float x)
 {
 	float l[3], dl[2], sum = 0.0f;
 	lagrange3(x, l);
 	for (unsigned j = 0; j < NR; j++) {
-		struct motor_id_stat tri[3] = {m->st[d][0][j], m->st[d][1][j], m->st[d][2][j]}, o;
-		interp_stat(tri, l, &o);
+		struct motor_id_stat o;
+		stat_at(m, d, l, j, &o);
 		sum += logf(fmaxf(rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, m->s_c[j], dl), 1e-30f));
 	}
 	return sum;
@@ -434,38 +442,55 @@ static float sqrt0(float v) { return v > 0.0f ? sqrtf(v) : 0.0f; }
  * one; Monte Carlo of normal errors, 4e5 draws). The larger is taken. */
 #define MEDIAN8_VAR 0.19f
 
+/* rotor j's reference parameters: the prior (k_f0, curve0) on its basis */
+static void ref_theta(const struct motor_id *m, unsigned j, float th[2])
+{
+	float w[2];
+	curve_w(m->cfg.curve0, m->s_c[j], w);
+	th[0] = m->cfg.kf0 * w[0];
+	th[1] = m->cfg.kf0 * w[1];
+}
+
+/* Rotor j's own curve: the 2-parameter fit about the prior's reference th, c_j = B / m_j,
+ * with its variance (0: not determined) and the fit's residual sum of squares *ssr2. */
+static float rotor_curve(const struct motor_id *m, const struct motor_id_stat *st, unsigned j,
+			 const float th[2], float *ssr2, float *var)
+{
+	float d2[2];
+	*ssr2 = rotor_ssr(st, true, m->cfg.curve0, m->s_c[j], d2);
+	float a = th[0] + d2[0], bq = th[1] + d2[1];
+	float mj = a + bq * (1.0f - 2.0f * m->s_c[j]);
+	float det = st->g11 * st->g22 - st->g12 * st->g12;
+	*var = 0.0f;
+	if (!(mj > 0.0f && det > 0.0f))
+		return 0.0f;
+	float ga = -bq / (mj * mj), gb = a / (mj * mj);
+	/* g^T G^-1 g */
+	float q = (ga * ga * st->g22 - 2.0f * ga * gb * st->g12 + gb * gb * st->g11) / det;
+	*var = *ssr2 / ((float)m->n_stat - 2.0f) * q;
+	return bq / mj;
+}
+
 /* k_f, the common curve and the rotors' scales from delay d's statistics at grid position x,
  * by the same steps as motor_id_solve (curve unclamped): their change with x is the lag's
  * share of their variances (the lag's error is uncorrelated with theirs at a fixed lag, to
  * first order: the profile's gradient is orthogonal to their regressors) */
 static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, float *curve, float sc[NR])
 {
-	const float c0 = m->cfg.curve0, kf0 = m->cfg.kf0;
+	const float c0 = m->cfg.curve0;
 	float l[3], th[NR][2], mj[NR];
 	struct motor_id_stat st[NR];
 	lagrange3(x, l);
 	float sw = 0.0f, swc = 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
-		struct motor_id_stat tri[3] = {m->st[d][0][j], m->st[d][1][j], m->st[d][2][j]};
-		interp_stat(tri, l, &st[j]);
-		float w[2], d2[2];
-		curve_w(c0, m->s_c[j], w);
-		th[j][0] = kf0 * w[0];
-		th[j][1] = kf0 * w[1];
+		stat_at(m, d, l, j, &st[j]);
+		ref_theta(m, j, th[j]);
 		if (!m->cfg.est_curve)
 			continue;
-		float ssr2 = rotor_ssr(&st[j], true, c0, m->s_c[j], d2);
-		float a = th[j][0] + d2[0], bq = th[j][1] + d2[1];
-		float mm = a + bq * (1.0f - 2.0f * m->s_c[j]);
-		float det = st[j].g11 * st[j].g22 - st[j].g12 * st[j].g12;
-		if (mm > 0.0f && det > 0.0f) {
-			float ga = -bq / (mm * mm), gb = a / (mm * mm);
-			float v = ssr2 / ((float)m->n_stat - 2.0f) *
-				  (ga * ga * st[j].g22 - 2.0f * ga * gb * st[j].g12 + gb * gb * st[j].g11) / det;
-			if (v > 0.0f) {
-				sw += 1.0f / v;
-				swc += bq / mm / v;
-			}
+		float ssr2, v, c = rotor_curve(m, &st[j], j, th[j], &ssr2, &v);
+		if (v > 0.0f) {
+			sw += 1.0f / v;
+			swc += c / v;
 		}
 	}
 	*curve = m->cfg.est_curve && sw > 0.0f ? swc / sw : c0;
@@ -595,7 +620,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	*res = (struct motor_id_result){0};
 	res->cause_rotor = -1;
 	const bool ec = m->cfg.est_curve;
-	const float c0 = m->cfg.curve0, kf0 = m->cfg.kf0;
+	const float c0 = m->cfg.curve0;
 	const unsigned np = ec ? 2u : 1u;
 	res->n = m->n_stat;
 	if (m->n_stat < 30u) {
@@ -652,32 +677,15 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float ssr[NR], cj[NR], vcj[NR], s2j[NR], th_ref[NR][2];
 	float ssr_sum = 0.0f, chi2 = 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
-		struct motor_id_stat tri[3] = {m->st[best][0][j], m->st[best][1][j], m->st[best][2][j]};
-		interp_stat(tri, l, &st[j]);
-		float w[2], dl[2];
-		curve_w(c0, m->s_c[j], w);
-		th_ref[j][0] = kf0 * w[0];
-		th_ref[j][1] = kf0 * w[1];
+		stat_at(m, best, l, j, &st[j]);
+		float dl[2];
+		ref_theta(m, j, th_ref[j]);
 		ssr[j] = rotor_ssr(&st[j], ec, c0, m->s_c[j], dl);
 		ssr_sum += ssr[j];
 		s2j[j] = ssr[j] / ((float)m->n_stat - (float)np);
 		/* the curve of this rotor alone (2-parameter fit) and its variance */
-		float d2[2];
-		float ssr2 = rotor_ssr(&st[j], true, c0, m->s_c[j], d2);
-		float a = th_ref[j][0] + d2[0], bq = th_ref[j][1] + d2[1];
-		float mj = a + bq * (1.0f - 2.0f * m->s_c[j]);
-		float det = st[j].g11 * st[j].g22 - st[j].g12 * st[j].g12;
-		float s2f = ssr2 / ((float)m->n_stat - 2.0f);
-		if (mj > 0.0f && det > 0.0f) {
-			float ga = -bq / (mj * mj), gb = a / (mj * mj);
-			/* g^T G^-1 g */
-			float q = (ga * ga * st[j].g22 - 2.0f * ga * gb * st[j].g12 + gb * gb * st[j].g11) / det;
-			cj[j] = bq / mj;
-			vcj[j] = s2f * q;
-		} else {
-			cj[j] = 0.0f;
-			vcj[j] = 0.0f;
-		}
+		float ssr2;
+		cj[j] = rotor_curve(m, &st[j], j, th_ref[j], &ssr2, &vcj[j]);
 		chi2 += ssr[j] - ssr2;
 	}
 
