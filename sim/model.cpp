@@ -40,6 +40,7 @@ void Model::set_state(const BodyState &x, double t)
 	x_ = x;
 	t_ = t;
 	on_ground_ = false;
+	crashed_ = false;
 }
 
 RotorOutputs Model::rotor_outputs(const BodyState &x, double t) const
@@ -113,6 +114,15 @@ Model::Vec Model::deriv(double t, const Vec &v) const
 	return d;
 }
 
+void Model::rotors_only(double h)
+{
+	if (p_.motor_tau <= 0)
+		return;
+	const double a = std::exp(-h / p_.motor_tau);
+	for (int j = 0; j < kRotors; j++)
+		x_.s[j] = u_[j] + (x_.s[j] - u_[j]) * a;
+}
+
 void Model::rk4(double h)
 {
 	const Vec y = pack(x_);
@@ -128,8 +138,23 @@ void Model::ground_contact()
 {
 	if (!ground_enabled_)
 		return;
+	if (crashed_)
+		return;
 	if (x_.r.z() > 0) {
 		on_ground_ = false;
+		return;
+	}
+	const double up_z = std::max(-1.0, std::min(1.0, (x_.q * Eigen::Vector3d::UnitZ()).z()));
+	const double tilt_deg = std::acos(up_z) * 180.0 / M_PI;
+	const double speed = std::max(0.0, -x_.v.z());
+	if (!on_ground_ && (tilt_deg > kCrashTiltDeg || speed > kCrashSpeed)) {
+		// the body stops where and as it hit (arms and propellers in the ground)
+		crashed_ = true;
+		on_ground_ = true;
+		crash_ = CrashInfo{t_, speed, tilt_deg};
+		x_.r.z() = 0;
+		x_.v.setZero();
+		x_.w.setZero();
 		return;
 	}
 	x_.r.z() = 0;
@@ -161,7 +186,10 @@ void Model::advance_to(double t1)
 			double h = std::min(h_max_, seg_end - t_);
 			if (seg_end - t_ - h < 1e-9)
 				h = seg_end - t_; // absorb a sliver into this (shortened) last step
-			rk4(h);
+			if (crashed_)
+				rotors_only(h);
+			else
+				rk4(h);
 			t_ = (seg_end - t_ - h < 1e-9) ? seg_end : t_ + h;
 			ground_contact();
 		}

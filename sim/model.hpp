@@ -1,7 +1,9 @@
 // model: the paper's octocopter, eqs (1)-(10), in the paper's frames
 // (S_I: Z up; S_B: X forward, Y left, Z up), rotor geometry of Gamma_o (eq. 14),
 // the actuator lag as part of the state, RK4 with steps of at most h_max, and
-// ground contact (the vehicle starts landed at the origin, never sinks below).
+// ground contact (the vehicle starts landed at the origin, never sinks below; a contact
+// tilted beyond kCrashTiltDeg or faster than kCrashSpeed is a crash: the vehicle stays
+// where and as it hit, whatever the rotors do).
 #pragma once
 
 #include <Eigen/Core>
@@ -28,6 +30,17 @@ struct RotorOutputs {
 	Eigen::Vector3d torque_b{0, 0, 0};
 };
 
+// A touch-down the legs cannot take: tilt of the body's Z axis from the vertical, and
+// speed towards the ground, at the contact (a fall from about 5 m reaches 10 m/s).
+constexpr double kCrashTiltDeg = 60.0;
+constexpr double kCrashSpeed = 10.0;
+
+struct CrashInfo {
+	double t = 0;          // simulated time of the contact, s
+	double speed = 0;      // speed towards the ground, m/s
+	double tilt_deg = 0;   // tilt from the vertical, deg
+};
+
 class Model {
 public:
 	explicit Model(const VehicleParams &p);
@@ -48,6 +61,10 @@ public:
 	const BodyState &state() const { return x_; }
 	void set_state(const BodyState &x, double t);
 	bool on_ground() const { return on_ground_; }
+	// true from a crash on (see kCrashTiltDeg): the body no longer moves; the rotors'
+	// states still follow their commands (measured thrust keeps its meaning).
+	bool crashed() const { return crashed_; }
+	const CrashInfo &crash() const { return crash_; }
 	const RotorArray &command_in_force() const { return u_; }
 	const RotorArray &last_command() const { return u_cmd_; }
 	const VehicleParams &params() const { return p_; }
@@ -74,6 +91,8 @@ private:
 		return qn * Eigen::Vector3d(0, 0, o.force / p_.mass) - Eigen::Vector3d(0, 0, p_.g);
 	}
 	void rk4(double h);
+	// after a crash: only the rotors' lags advance, exactly
+	void rotors_only(double h);
 	void ground_contact();
 
 	VehicleParams p_;
@@ -84,6 +103,8 @@ private:
 	double h_max_ = 0.002;
 	bool on_ground_ = true;
 	bool ground_enabled_ = true;
+	bool crashed_ = false;
+	CrashInfo crash_;
 	DelayLine delay_;
 	RotorArray u_{};     // command in force (after the delay)
 	RotorArray u_cmd_{}; // last command given

@@ -187,6 +187,10 @@ void octo_plant_truth(const octo_plant *p, struct octo_plant_truth *t)
 	t->q_ib[2] = x.q.y();
 	t->q_ib[3] = x.q.z();
 	t->on_ground = p->model.on_ground();
+	t->crashed = p->model.crashed();
+	t->crash_t = p->model.crash().t;
+	t->crash_speed = p->model.crash().speed;
+	t->crash_tilt_deg = p->model.crash().tilt_deg;
 }
 
 double octo_plant_rate(const octo_plant *p)

@@ -60,6 +60,8 @@ struct octo_plant_truth {
 	double q_ib[4];          /* [w x y z] */
 	double omega_b[3];       /* rad/s, FLU */
 	bool on_ground;
+	bool crashed;            /* hit the ground too tilted or too fast: the body stays down */
+	double crash_t, crash_speed, crash_tilt_deg;   /* when, m/s towards the ground, deg */
 };
 void octo_plant_truth(const octo_plant *p, struct octo_plant_truth *out);
 double octo_plant_rate(const octo_plant *p);

@@ -127,7 +127,15 @@ bool Server::pump(double deadline, bool until_full)
 
 void Server::advance()
 {
+	const bool was = model_.crashed();
 	advance_frame(o_, model_, input_, n_, frame_, truth_);
+	if (model_.crashed() && !was) {
+		const CrashInfo &c = model_.crash();
+		std::fprintf(stderr,
+		             "octo-sim: crashed at t=%.2fs: hit the ground at %.1f m/s, %.0f deg from level (limits %.0f "
+		             "m/s, %.0f deg); the vehicle stays down until octo-sim restarts\n",
+		             c.t, c.speed, c.tilt_deg, kCrashSpeed, kCrashTiltDeg);
+	}
 }
 
 void Server::beacon(double now)
@@ -154,7 +162,8 @@ void Server::status(double now)
 	             model_.t(), static_cast<unsigned long long>(n_), wall > 0 ? model_.t() / wall : 0.0, x.r.x(),
 	             x.r.y(), x.r.z(), frame_.roll, frame_.pitch, frame_.heading,
 	             static_cast<unsigned long long>(c_[Counters::RxDatagrams]),
-	             static_cast<unsigned long long>(c_[Counters::TxData]), model_.on_ground() ? " landed" : "");
+	             static_cast<unsigned long long>(c_[Counters::TxData]),
+	             model_.crashed() ? " crashed" : model_.on_ground() ? " landed" : "");
 }
 
 int Server::run()

@@ -86,6 +86,7 @@ void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint6
 	f.lon = p.origin[1] + f.east / (kEarthR * std::cos(lat0)) * kDeg;
 	f.alt_msl_m = p.origin[2] + f.up;
 	f.agl_m = f.up;
+	f.crashed = m.crashed() ? 1.0 : 0.0;
 
 	// load factors: specific force in the body (FLU), over g
 	const RotorOutputs o = m.rotor_outputs(x, m.t());
@@ -253,6 +254,10 @@ bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool ove
 	}
 	if (base == "sim/time/total_running_time_sec" || base == "sim/time/total_flight_time_sec") {
 		out = f32(f.t);
+		return true;
+	}
+	if (base == "sim/flightmodel2/misc/has_crashed") {
+		out = f32(f.crashed);
 		return true;
 	}
 	if (base == "sim/operation/override/override_throttles") {

@@ -37,6 +37,7 @@ struct XpFrame {
 	RotorArray torque_nm{};            // measured engine torque (magnitude), N m
 	RotorArray torque_abs_nm{};        // true engine torque (magnitude), N m
 	double thrust_curve = 0;           // the vehicle's thrust curve (rotor speed from s_j)
+	double crashed = 0;                // 1 after a crash (sim/flightmodel2/misc/has_crashed)
 };
 
 // Quantities few rows and datarefs show, computed when they are asked for (from the

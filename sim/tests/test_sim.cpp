@@ -132,6 +132,48 @@ TEST(free_fall_matches_half_g_t2)
 	CHECK(m.state().r.z() == 0.0 && m.on_ground(), "z = %g", m.state().r.z());
 }
 
+// A contact the legs cannot take stops the body where and as it hit, whatever the rotors
+// do after; a gentle one lands level (hover_from_ground_stays_landed_below_weight).
+TEST(crash_tilted_or_fast_contact_stays_down)
+{
+	VehicleParams p = ideal();
+	const struct {
+		double tilt_deg, vz;
+		bool crash;
+	} cases[] = {{80.0, -1.0, true}, {65.0, -0.5, true}, {30.0, -1.0, false}, {0.0, -12.0, true},
+		     {0.0, -3.0, false}};
+	for (const auto &c : cases) {
+		Model m(p);
+		BodyState x;
+		x.r.z() = 0.05;
+		x.v.z() = c.vz;
+		x.q = Eigen::Quaterniond(Eigen::AngleAxisd(c.tilt_deg * M_PI / 180.0, Eigen::Vector3d::UnitX()));
+		m.set_state(x, 0.0);
+		m.command(all(0.0));
+		m.advance_to(0.2);
+		CHECK(m.on_ground() && m.state().r.z() == 0.0, "tilt %g vz %g: z = %g", c.tilt_deg, c.vz,
+		      m.state().r.z());
+		CHECK(m.crashed() == c.crash, "tilt %g vz %g: crashed %d", c.tilt_deg, c.vz, m.crashed());
+		if (!c.crash)
+			continue;
+		CHECK(std::fabs(m.crash().tilt_deg - c.tilt_deg) < 1.0 && m.crash().t < 0.2, "crash tilt %g at %g s",
+		      m.crash().tilt_deg, m.crash().t);
+		// full throttle: the body stays (tipped as it hit), the rotors still spin up
+		const Eigen::Quaterniond q = m.state().q;
+		m.command(all(1.0));
+		m.advance_to(2.0);
+		CHECK(m.state().r.norm() < 1e-12 && m.state().v.norm() == 0.0 && m.state().q.isApprox(q),
+		      "moved after the crash: z %g", m.state().r.z());
+		CHECK(m.acceleration().norm() == 0.0, "acceleration after a crash");
+		CHECK(m.state().s[0] > 0.99, "rotor state %g", m.state().s[0]);
+		const XpFrame f = xp_measure(m, all(1.0), 1, 180);
+		float v = -1;
+		std::array<float, 16> th{};
+		CHECK(xp_dataref(f, "sim/flightmodel2/misc/has_crashed", 12, true, th, th, v) && v == 1.0f,
+		      "has_crashed %g", v);
+	}
+}
+
 TEST(torque_free_tumble_conserves_momentum_and_energy)
 {
 	VehicleParams p = ideal();

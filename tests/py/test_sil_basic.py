@@ -88,6 +88,26 @@ def test_failing_step_names_step_and_reason(tmp_path):
     assert m.group(1) in ("DENIED", "TEMPORARILY_REJECTED") and "hover" in m.group(2)
 
 
+@pytest.mark.parametrize("weak", [(3, 4, 5), (0, 1, 7)])
+def test_crash_ends_the_mission_with_its_cause(tmp_path, weak):
+    # rotors the firmware does not know are nearly dead tip the vehicle at take-off: the
+    # plant's crash (too tilted a contact) ends the mission with when and how it hit
+    scale = [1.0] * 8
+    for j in weak:
+        scale[j] = round(random.uniform(0.0, 0.1), 3)
+    vpath = tmp_path / "tip.json"
+    vpath.write_text(json.dumps({"rotor_scale": scale}))
+    r = sil(tmp_path, "tip", "--vehicle", vpath, "--mission", "arm; takeoff 5; wait hold; sleep 5")
+    assert r.returncode == 1, r.stderr
+    m = re.search(r"mission step \d '[^']+' failed at t=([0-9.]+) s: the vehicle crashed at t=([0-9.]+) s: "
+                  r"hit the ground at ([0-9.]+) m/s, ([0-9]+) deg from level", r.stderr)
+    assert m, r.stderr
+    assert float(m.group(1)) == pytest.approx(float(m.group(2)), abs=0.02)
+    assert float(m.group(3)) > 10 or int(m.group(4)) > 60, m.groups()
+    # the plant's truth log ends on the ground, tipped
+    assert (r.dir / "truth.lcm").stat().st_size > 0
+
+
 def test_unknown_parameter_and_refused_value(tmp_path):
     r = sil(tmp_path, "unknown", "--mission", "param NO_SUCH_PARAM 1")
     assert r.returncode == 1

@@ -253,6 +253,11 @@ static int fail(struct mission *m, struct sil *s, const char *fmt, const char *d
 	return -1;
 }
 
+int mission_abort(struct mission *m, struct sil *s, const char *why)
+{
+	return fail(m, s, "%s", why);
+}
+
 static int refused(struct mission *m, struct sil *s, int r)
 {
 	char d[400];

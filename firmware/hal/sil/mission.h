@@ -32,6 +32,8 @@ void mission_free(struct mission *m);
 /* Runs the current step once (between frames). Returns 0 while running, 1 when
  * every step completed, -1 when a step failed (message on stderr). */
 int mission_run(struct mission *m, struct sil *s);
+/* Fails the current step for a reason outside the mission (the plant crashed): -1. */
+int mission_abort(struct mission *m, struct sil *s, const char *why);
 /* The message of the failure or of the step not completed, for the exit line. */
 const char *mission_pending(struct mission *m);
 

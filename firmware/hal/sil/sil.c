@@ -442,7 +442,7 @@ static int run(struct sil *s, int argc, char **argv)
 	bool started = false;
 	int result = 0;   /* mission: 0 running, 1 done, -1 failed */
 	struct octo_plant_truth tr;
-	bool stop = false;
+	bool stop = false, crash_said = false;
 	/* The signal check is a system call: every pass when a ground station sets
 	 * the pace, every 64 passes (well under a wall second) otherwise. */
 	const uint64_t check_every = s->wall_clock ? 1u : 64u;
@@ -460,6 +460,19 @@ static int run(struct sil *s, int argc, char **argv)
 		if (result != 0)
 			break;
 		octo_plant_truth(s->plant, &tr);
+		if (tr.crashed && !crash_said) {
+			/* the plant's verdict, not the firmware's: a mission cannot go on */
+			char why[200];
+			snprintf(why, sizeof why,
+				 "the vehicle crashed at t=%.2f s: hit the ground at %.1f m/s, %.0f deg from level", tr.crash_t,
+				 tr.crash_speed, tr.crash_tilt_deg);
+			crash_said = true;
+			if (s->mission && result == 0) {
+				result = mission_abort(s->mission, s, why);
+				break;
+			}
+			fprintf(stderr, "octo-sil: %s\n", why);
+		}
 		if (duration > 0.0 && (tr.t >= duration - 1e-9 || (double)(s->now_us - 1000000u) * 1e-6 >= duration))
 			break;
 		pass++;
