@@ -31,6 +31,7 @@ import json
 import os
 import re
 import shlex
+import shutil
 import signal
 import subprocess
 import sys
@@ -49,6 +50,10 @@ RAN = ("pass", "fail")   # the mission ran to its report (its checks passed or n
 REJECTED_RE = re.compile(r"\bID (kf|ktau|Ixx|Iyy|Izz) .*\brejected: (.+?)\s*$")
 QKEY = {"kf": "kf", "ktau": "ktau", "Ixx": "ixx", "Iyy": "iyy", "Izz": "izz"}
 TAIL_LINES = 40
+# A mission's scratch directory on its worker: the worker's pid in the name, so that the
+# directories of a worker that died (SIGKILL runs no clean-up) can be told from live ones.
+TMP_PREFIX = "octo-campaign-"
+TMP_RE = re.compile(rf"^{TMP_PREFIX}(\d+)-\d+-")
 
 
 class CampaignError(Exception):
@@ -127,14 +132,50 @@ def _mission_in_worker(argv, log, timeout):
             return 1, False
 
 
+def _alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:   # EPERM: another user's process
+        return True
+    return True
+
+
+def sweep_stale(root=None):
+    """Removes the mission directories of worker processes that no longer run on this host
+    (in `root`, default the temp dir); a live process's are kept (a reused pid keeps them
+    too: the safe side). Returns how many were removed."""
+    root = Path(root or tempfile.gettempdir())
+    n = 0
+    try:
+        found = list(root.glob(TMP_PREFIX + "*"))
+    except OSError:
+        return 0
+    for d in found:
+        m = TMP_RE.match(d.name)
+        if not m or int(m.group(1)) == os.getpid() or _alive(int(m.group(1))) or not d.is_dir():
+            continue
+        shutil.rmtree(d, ignore_errors=True)
+        n += 1 if not d.exists() else 0
+    return n
+
+
+_swept = False
+
+
 def run_mission(job):
     """One mission; returns a dict (never raises for the mission's own failures)."""
     import socket
+    global _swept
+    if not _swept:   # once per worker process: what a killed predecessor left here
+        _swept = True
+        sweep_stale()
     t0 = time.monotonic()
     cpu0 = _cpu_s()
     res = {"index": job["index"], "seed": job["seed"], "status": "error", "reason": "", "report": None,
            "output_tail": [], "rejections": {}, "host": socket.gethostname(), "wall_s": 0.0}
-    with tempfile.TemporaryDirectory(prefix=f"octo-campaign-{job['index']:04d}-") as tmp:
+    with tempfile.TemporaryDirectory(prefix=f"{TMP_PREFIX}{os.getpid()}-{job['index']:04d}-") as tmp:
         tmp = Path(tmp)
         try:
             (tmp / "vehicle.json").write_text(json.dumps(job["vehicle"], indent=1))
@@ -510,6 +551,7 @@ def _run(args, spec, out, prog, campaign_report):
             client.close()
             if cluster is not None:
                 cluster.close()
+                sweep_stale()   # local workers: what those killed left in this host's temp dir
         prog.done()
     wall = time.monotonic() - t0
     run_s = time.monotonic() - t_run if t_run is not None else 0.0

@@ -176,9 +176,12 @@ def test_resume_runs_only_the_missing_missions_and_spec_change_is_refused(tmp_pa
     assert r.returncode == 2 and "not the spec" in r.stderr
 
 
-def test_a_worker_that_dies_is_retried_then_a_row(tmp_path):
+def test_a_worker_that_dies_is_retried_then_a_row(tmp_path, monkeypatch):
     spec = write_spec(tmp_path, missions=3, retries=1)
     out = tmp_path / "c"
+    scratch = tmp_path / "tmp"   # the workers' temp dir (they inherit TMPDIR)
+    scratch.mkdir()
+    monkeypatch.setenv("TMPDIR", str(scratch))
     r = run_campaign(spec, out, "--workers", "1", mission=fake("--die-seed", 101))
     assert r.returncode == 1, r.stderr
     m = by_seed(rows(out))
@@ -186,6 +189,21 @@ def test_a_worker_that_dies_is_retried_then_a_row(tmp_path):
     assert m[101]["status"] == "lost"
     assert "worker running it died 2 times" in m[101]["reason"]
     assert m[100]["status"] == m[102]["status"] == "pass"
+    # the killed workers' mission directories are swept, none is left behind
+    assert not list(scratch.glob("octo-campaign-*")), list(scratch.iterdir())
+
+
+def test_sweep_keeps_live_workers_directories(tmp_path):
+    from octo_gcs import campaign
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    mine = tmp_path / f"octo-campaign-{os.getpid()}-0003-abc"
+    gone = tmp_path / f"octo-campaign-{dead.pid}-0004-def"
+    other = tmp_path / "octo-campaign-notapid"
+    for d in (mine, gone, other):
+        (d / "out").mkdir(parents=True)
+    assert campaign.sweep_stale(tmp_path) == 1
+    assert mine.is_dir() and other.is_dir() and not gone.exists()
 
 
 def test_expect_decides_the_exit_status(tmp_path):
