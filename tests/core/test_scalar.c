@@ -4,6 +4,7 @@
 #include "unit.h"
 
 #include <math.h>
+#include <string.h>
 
 #if OCTO_FIXED
 #define LSB (1.0 / 65536.0)
@@ -133,5 +134,129 @@ UNIT_TEST(scalar_div_exact)
 		CHECK(b == 0.0f || sc_div(a, b) == a / b);
 	}
 	CHECK(sc_div(1.0f, 0.0f) == SC_MAX && sc_div(-1.0f, 0.0f) == SC_MAX_NEG);
+#endif
+}
+
+/* sc_mul is exact: |a b| / 2^16 rounded to nearest (ties away from zero) as a 64-bit product
+ * gives it, for operands of every size, saturated beyond */
+UNIT_TEST(scalar_mul_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0x3a1ULL };
+	for (int i = 0; i < 50000; i++) {
+		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		a >>= (int)unit_rand_uniform(&g, 0, 31);
+		b >>= (int)unit_rand_uniform(&g, 0, 31);
+		int64_t p = (int64_t)a * b;
+		p = (p >= 0 ? p + 32768 : p - 32768) / 65536;
+		scalar_t ref = p > INT32_MAX ? SC_MAX : (p < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)p);
+		if (sc_mul(a, b) != ref) {
+			unit_fail(u, __FILE__, __LINE__, "sc_mul(%d, %d) = %d, expected %d", (int)a, (int)b,
+				  (int)sc_mul(a, b), (int)ref);
+			return;
+		}
+	}
+	CHECK(sc_mul(INT32_MIN, 1) == -32768 && sc_mul(INT32_MIN, INT32_MIN) == SC_MAX);
+	CHECK(sc_mul(INT32_MIN, SC(1)) == SC_MAX_NEG && sc_mul(SC_MAX, SC(-1)) == SC_MAX_NEG);
+	CHECK(sc_mul(SC(181), SC(181)) == SC(32761) && sc_mul(SC(182), SC(181)) == SC_MAX);
+	CHECK(sc_mul(46340 << 8, 46340 << 8) == (scalar_t)(((int64_t)46340 * 46340 * 65536 + 32768) / 65536));
+	CHECK(sc_mul(SC(0.5), SC(0.5)) == SC(0.25) && sc_mul(1, 32768) == 1 && sc_mul(1, 32767) == 0);
+#else
+	CHECK(sc_mul(3.0f, 0.5f) == 1.5f && sc_mul(-2.0f, 1e30f) == -2e30f);
+#endif
+}
+
+/* sc_div's worst cases: quotients near 2^31 and divisors near powers of two */
+UNIT_TEST(scalar_div_exact_edges)
+{
+#if OCTO_FIXED
+	static const int32_t bs[] = { 1, 2, 3, 65535, 65536, 65537, 0x7fff, 0x8000, 0x8001, 0x40000000,
+				      0x3fffffff, INT32_MAX, 0x55555555, 12345677 };
+	for (size_t i = 0; i < sizeof bs / sizeof bs[0]; i++) {
+		for (int k = -40; k <= 40; k++) {
+			int32_t b = bs[i];
+			int64_t a64 = (int64_t)b / 2 + k * 9973;   /* quotients near 32768 */
+			for (int sh = 0; sh < 2; sh++) {
+				int32_t a = (int32_t)(sh ? (a64 % INT32_MAX) : (int64_t)b * 3 / 4 + k);
+				int64_t n = (int64_t)a * 65536, half = (int64_t)b / 2;
+				n += n >= 0 ? half : -half;
+				int64_t q = n / b;
+				scalar_t ref = q > INT32_MAX ? SC_MAX : (q < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)q);
+				CHECK(sc_div(a, b) == ref && sc_div(-a, -b) == ref);
+			}
+		}
+		/* the largest quotients below saturation */
+		int64_t a = ((int64_t)bs[i] * (INT32_MAX - 3)) >> 16;
+		for (int k = -3; k <= 3; k++) {
+			int64_t aa = a + k;
+			if (aa > INT32_MAX || aa < -INT32_MAX)
+				continue;
+			int64_t n = aa * 65536 + bs[i] / 2, q = n / bs[i];
+			scalar_t ref = q > INT32_MAX ? SC_MAX : (scalar_t)q;
+			CHECK(sc_div((int32_t)aa, bs[i]) == ref);
+		}
+	}
+#else
+	CHECK(sc_div(3.0f, 4.0f) == 0.75f && sc_div(1.0f, 3.0f) == 1.0f / 3.0f);
+#endif
+}
+
+/* float conversions by bit assembly: sc_to_float is (float)a / 65536 bit for bit, and
+ * sc_from_float rounds x 2^16 to nearest (ties away from zero), as double arithmetic does */
+UNIT_TEST(scalar_float_conversions_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0xf10aULL };
+	for (int i = 0; i < 50000; i++) {
+		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		a >>= (int)unit_rand_uniform(&g, 0, 31);
+		float f = sc_to_float(a), ref = (float)a / 65536.0f;
+		if (memcmp(&f, &ref, sizeof f) != 0) {
+			unit_fail(u, __FILE__, __LINE__, "sc_to_float(%d) = %.9g, expected %.9g", (int)a, (double)f,
+				  (double)ref);
+			return;
+		}
+		double x = unit_rand_uniform(&g, -1.0, 1.0) * ldexp(1.0, (int)unit_rand_uniform(&g, -20, 17));
+		float xf = (float)x;
+		double s = (double)xf * 65536.0;
+		double r = s >= 0 ? floor(s + 0.5) : -floor(-s + 0.5);
+		scalar_t want = r >= 2147483647.0 ? SC_MAX : (r <= -2147483647.0 ? SC_MAX_NEG : (scalar_t)r);
+		if (sc_from_float(xf) != want) {
+			unit_fail(u, __FILE__, __LINE__, "sc_from_float(%.9g) = %d, expected %d", (double)xf,
+				  (int)sc_from_float(xf), (int)want);
+			return;
+		}
+	}
+	CHECK(sc_to_float(INT32_MIN) == -32768.0f && sc_to_float(SC_MAX) == 32768.0f);
+	CHECK(sc_to_float(1) == 1.0f / 65536.0f && sc_to_float(-1) == -1.0f / 65536.0f);
+	CHECK(sc_from_float(32767.998046875f) == 2147483520 && sc_from_float(32768.0f) == SC_MAX);
+	CHECK(sc_from_float(-32768.0f) == SC_MAX_NEG && sc_from_float(__builtin_inff()) == SC_MAX);
+	CHECK(sc_from_float(-__builtin_inff()) == SC_MAX_NEG && sc_from_float(-0.0f) == 0);
+	CHECK(sc_from_float(1.5f / 65536.0f) == 2 && sc_from_float(-1.5f / 65536.0f) == -2);
+	CHECK(sc_from_float(0.49999997f / 65536.0f) == 0 && sc_from_float(1e-30f) == 0);
+	CHECK(sc_from_float(128.0f + 3.0f / 65536.0f) == SC(128) + 3);
+#else
+	CHECK(sc_to_float(0.1f) == 0.1f && sc_from_float(-7.25f) == -7.25f);
+#endif
+}
+
+/* integer sine and cosine over the whole Q16.16 range against libm, within 1 LSB (the
+ * radians-to-turns phase is within |a| / 2 + 1 units of 2^-32 turn) */
+UNIT_TEST(scalar_sin_cos_integer)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0x51cULL };
+	for (int i = 0; i < 20000; i++) {
+		scalar_t a = (scalar_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		a >>= (int)unit_rand_uniform(&g, 0, 31);
+		double tol = 0.6 * LSB + (0.5 * fabs(d(a)) + 1.0) * 6.283185307179586 / 4294967296.0;
+		CHECK_NEAR(d(sc_sin(a)), sin(d(a)), tol);
+		CHECK_NEAR(d(sc_cos(a)), cos(d(a)), tol);
+	}
+	CHECK(sc_sin(0) == 0 && sc_cos(0) == SC(1) && sc_sin(SC(1.5707963)) == SC(1));
+	CHECK(sc_cos(SC(3.14159265)) == SC(-1) && sc_sin(SC(-1.5707963)) == SC(-1));
+#else
+	CHECK(sc_sin(0.5f) == sinf(0.5f) && sc_cos(0.5f) == cosf(0.5f));
 #endif
 }
