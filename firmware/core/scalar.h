@@ -112,8 +112,20 @@ static inline float sc_to_float(scalar_t a)
 }
 static inline scalar_t sc_from_int(int32_t i) { return sc_sat64((int64_t)i * 65536); }
 
-static inline scalar_t sc_add(scalar_t a, scalar_t b) { return sc_sat64((int64_t)a + b); }
-static inline scalar_t sc_sub(scalar_t a, scalar_t b) { return sc_sat64((int64_t)a - b); }
+/* saturating sums in 32-bit words (no 64-bit arithmetic on Cortex-M0): the bound is
+ * tested before the operation, and INT32_MIN (outside the range) becomes SC_MAX_NEG */
+static inline scalar_t sc_add(scalar_t a, scalar_t b)
+{
+	if (b >= 0)
+		return a > INT32_MAX - b ? SC_MAX : (a + b < -INT32_MAX ? SC_MAX_NEG : a + b);
+	return a < -INT32_MAX - b ? SC_MAX_NEG : a + b;
+}
+static inline scalar_t sc_sub(scalar_t a, scalar_t b)
+{
+	if (b <= 0)
+		return a > INT32_MAX + b ? SC_MAX : (a - b < -INT32_MAX ? SC_MAX_NEG : a - b);
+	return a < -INT32_MAX + b ? SC_MAX_NEG : a - b;
+}
 static inline scalar_t sc_neg(scalar_t a) { return a == INT32_MIN ? SC_MAX : -a; }
 static inline scalar_t sc_abs(scalar_t a) { return a < 0 ? sc_neg(a) : a; }
 
@@ -139,22 +151,24 @@ static inline scalar_t sc_mul(scalar_t a, scalar_t b)
 	return neg ? -(scalar_t)r : (scalar_t)r;
 }
 
-/* 2^63 / v for v in [2^31, 2^32), within about 2^-27 relative (at most 2^32 - 1): two Newton
- * steps y <- y (2 - v y) in 16-bit words from 48/17 - 32/17 v, one in 32-bit words */
+/* 2^63 / v for v in [2^31, 2^32), within 2^-27 relative (at most 2^32 - 1): two Newton
+ * steps y <- y (2 - v y) in 16-bit words from 48/17 - 32/17 v, then one on 2^47 - v y */
 static inline uint32_t sc_recip_norm(uint32_t v)
 {
 	uint32_t v16 = v >> 16;                               /* Q16, [0.5, 1) */
 	uint32_t y = 92521u - ((61681u * v16) >> 16);         /* 1 / v in Q15 (error < 1/17) */
 	for (int i = 0; i < 2; i++) {
 		uint32_t t = v16 * y;                             /* v y in Q31, about 2^31 */
-		y = (y * ((0u - t) >> 16)) >> 15;                 /* y (2 - v y), Q15 */
+		y = (y * ((0u - t) >> 16)) >> 15;                 /* y (2 - v y), Q15: error < 2^-14 */
 	}
-	uint32_t yy = y >= 0x10000u ? 0xffffffffu : y << 16;  /* Q31 */
-	/* one more step in 32 bits: y + y (2^63 - v y) / 2^63 */
-	int64_t err = (int64_t)(((uint64_t)1 << 63) - q_umul32(v, yy)); /* |err| < 2^50 */
-	uint32_t ue = (uint32_t)((err < 0 ? (uint64_t)0 - (uint64_t)err : (uint64_t)err) >> 35);
-	uint32_t c = ((yy >> 16) * (ue > 0xffffu ? 0xffffu : ue)) >> 12;
-	return err < 0 ? yy - c : (yy > 0xffffffffu - c ? 0xffffffffu : yy + c);
+	/* v y 2^16 with y <= 2^16 is 2^63 (1 - e): e 2^47 = 2^47 - v y, |e| < 2^-14 */
+	uint64_t vy = ((uint64_t)((v >> 16) * y) << 16) + (v & 0xffffu) * y;
+	int64_t err = (int64_t)(((uint64_t)1 << 47) - vy);    /* |err| < 2^33 */
+	uint32_t ue = (uint32_t)((err < 0 ? (uint64_t)0 - (uint64_t)err : (uint64_t)err) >> 18);
+	uint32_t c = (y * (ue > 0xffffu ? 0xffffu : ue)) >> 13; /* y 2^16 |e| */
+	uint64_t r = ((uint64_t)y << 16);
+	r = err < 0 ? r - c : r + c;                          /* y 2^16 (1 + e) */
+	return r > 0xffffffffu ? 0xffffffffu : (uint32_t)r;
 }
 
 /* |q| = floor((|a| 2^16 + floor(|b| / 2)) / |b|): round to nearest, ties away from zero.
@@ -171,9 +185,12 @@ static inline scalar_t sc_div(scalar_t a, scalar_t b)
 		return neg ? SC_MAX_NEG : SC_MAX;
 	int s = q_clz32(ub);
 	uint32_t y = sc_recip_norm(ub << s);                  /* 1 / |b| = y 2^(s - 63) */
-	/* x y 2^(s - 63) = (xh y + xl y 2^-32) 2^(s - 31), a few units below the quotient */
-	uint64_t p = q_umul32((uint32_t)(x >> 32), y) + (q_umul32((uint32_t)x, y) >> 32);
-	uint32_t q = (uint32_t)(p >> (31 - s));
+	/* x's top 32 bits x32 = floor(x / 2^k): dropping the rest lowers the quotient by less
+	 * than 1, as |b| > 2^k when x >= 2^32 (the quotient is below 2^31) */
+	uint32_t xh = (uint32_t)(x >> 32), xl = (uint32_t)x;
+	int k = xh ? 32 - q_clz32(xh) : 0;
+	uint32_t x32 = k ? (xl >> k) | (xh << (32 - k)) : xl;
+	uint32_t q = (uint32_t)(q_umul32(x32, y) >> (63 - s - k)); /* within a few units */
 	int64_t r = (int64_t)x - (int64_t)q_umul32(q, ub);
 	while (r < 0) {
 		q--;

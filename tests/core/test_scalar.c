@@ -6,6 +6,14 @@
 #include <math.h>
 #include <string.h>
 
+/* random cases per exactness test: fewer under QEMU, where each costs thousands of
+ * emulated instructions */
+#ifdef __arm__
+#define N_RAND 3000
+#else
+#define N_RAND 50000
+#endif
+
 #if OCTO_FIXED
 #define LSB (1.0 / 65536.0)
 #else
@@ -143,7 +151,7 @@ UNIT_TEST(scalar_mul_exact)
 {
 #if OCTO_FIXED
 	struct unit_rng g = { 0x3a1ULL };
-	for (int i = 0; i < 50000; i++) {
+	for (int i = 0; i < N_RAND; i++) {
 		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
 		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
 		a >>= (int)unit_rand_uniform(&g, 0, 31);
@@ -208,7 +216,7 @@ UNIT_TEST(scalar_float_conversions_exact)
 {
 #if OCTO_FIXED
 	struct unit_rng g = { 0xf10aULL };
-	for (int i = 0; i < 50000; i++) {
+	for (int i = 0; i < N_RAND; i++) {
 		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
 		a >>= (int)unit_rand_uniform(&g, 0, 31);
 		float f = sc_to_float(a), ref = (float)a / 65536.0f;
@@ -247,7 +255,7 @@ UNIT_TEST(scalar_sin_cos_integer)
 {
 #if OCTO_FIXED
 	struct unit_rng g = { 0x51cULL };
-	for (int i = 0; i < 20000; i++) {
+	for (int i = 0; i < N_RAND; i++) {
 		scalar_t a = (scalar_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
 		a >>= (int)unit_rand_uniform(&g, 0, 31);
 		double tol = 0.6 * LSB + (0.5 * fabs(d(a)) + 1.0) * 6.283185307179586 / 4294967296.0;
@@ -258,5 +266,33 @@ UNIT_TEST(scalar_sin_cos_integer)
 	CHECK(sc_cos(SC(3.14159265)) == SC(-1) && sc_sin(SC(-1.5707963)) == SC(-1));
 #else
 	CHECK(sc_sin(0.5f) == sinf(0.5f) && sc_cos(0.5f) == cosf(0.5f));
+#endif
+}
+
+/* sc_add and sc_sub are exact and saturate to [SC_MAX_NEG, SC_MAX] for operands of every size */
+UNIT_TEST(scalar_add_sub_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0xadd5ULL };
+	for (int i = 0; i < N_RAND; i++) {
+		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483648.0, 2147483647.0);
+		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483648.0, 2147483647.0);
+		a >>= (int)unit_rand_uniform(&g, 0, 3);
+		if (i % 7 == 0)
+			a = i % 2 ? INT32_MIN : INT32_MAX;
+		int64_t s = (int64_t)a + b, d_ = (int64_t)a - b;
+		scalar_t rs = s > INT32_MAX ? SC_MAX : (s < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)s);
+		scalar_t rd = d_ > INT32_MAX ? SC_MAX : (d_ < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)d_);
+		if (sc_add(a, b) != rs || sc_sub(a, b) != rd) {
+			unit_fail(u, __FILE__, __LINE__, "sc_add/sc_sub(%d, %d) = %d/%d, expected %d/%d", (int)a, (int)b,
+				  (int)sc_add(a, b), (int)sc_sub(a, b), (int)rs, (int)rd);
+			return;
+		}
+	}
+	CHECK(sc_add(INT32_MIN, 0) == SC_MAX_NEG && sc_sub(INT32_MIN, 0) == SC_MAX_NEG);
+	CHECK(sc_sub(0, INT32_MIN) == SC_MAX && sc_sub(-1, INT32_MIN) == SC_MAX && sc_sub(-2, INT32_MIN) == INT32_MAX - 1);
+	CHECK(sc_add(SC_MAX, SC_MAX_NEG) == 0 && sc_add(SC_MAX, 1) == SC_MAX && sc_sub(SC_MAX_NEG, 1) == SC_MAX_NEG);
+#else
+	CHECK(sc_add(1.5f, 2.25f) == 3.75f && sc_sub(1.5f, 2.25f) == -0.75f);
 #endif
 }
