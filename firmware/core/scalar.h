@@ -14,11 +14,12 @@
  *     nearest (ties away from zero).
  *   - sc_div by zero returns +/-SC_MAX by the sign of the dividend (0/0 = 0).
  *   - sc_from_float saturates, and maps NaN to 0.
- *   - sc_sqrt of a negative number is 0; the result is exact to 1 LSB.
+ *   - sc_sqrt of a negative number is 0; the result is the root rounded to nearest.
  *   - sc_from_float/sc_to_float assemble the IEEE bits with integer operations (no
  *     soft-float call on a core without FPU); sc_to_float gives (float)a / 65536 exactly.
- *   - sc_sin, sc_cos are integer in the fixed build (the attitude set point, at 90 Hz);
- *     sc_atan2, sc_asin (Euler angles for telemetry and commands) go through float.
+ *   - Trigonometry is integer in the fixed build: sc_sin, sc_cos (the attitude set point,
+ *     at 90 Hz), sc_atan2, sc_asin (Euler angles for telemetry and commands), each within
+ *     0.6 LSB of the exact value.
  *     sc_exp is integer in the fixed build (lag coefficients are recomputed in the 90 Hz
  *     path when the frame period changes). The hot path (control, mixer, throttle map,
  *     estimators) uses only integer operations.
@@ -185,12 +186,13 @@ static inline scalar_t sc_div(scalar_t a, scalar_t b)
 		return neg ? SC_MAX_NEG : SC_MAX;
 	int s = q_clz32(ub);
 	uint32_t y = sc_recip_norm(ub << s);                  /* 1 / |b| = y 2^(s - 63) */
-	/* x's top 32 bits x32 = floor(x / 2^k): dropping the rest lowers the quotient by less
-	 * than 1, as |b| > 2^k when x >= 2^32 (the quotient is below 2^31) */
+	/* x32 = floor(x / 2^k) with 2^k <= |b| < 2^(k + 1): below 2^32 as the quotient is below
+	 * 2^31, and dropping x's low k bits lowers the quotient by less than 1 */
+	int k = 31 - s;
 	uint32_t xh = (uint32_t)(x >> 32), xl = (uint32_t)x;
-	int k = xh ? 32 - q_clz32(xh) : 0;
 	uint32_t x32 = k ? (xl >> k) | (xh << (32 - k)) : xl;
-	uint32_t q = (uint32_t)(q_umul32(x32, y) >> (63 - s - k)); /* within a few units */
+	/* x / |b| = x32 2^k y 2^(s - 63) = x32 y 2^-32, within a few units */
+	uint32_t q = (uint32_t)(q_umul32(x32, y) >> 32);
 	int64_t r = (int64_t)x - (int64_t)q_umul32(q, ub);
 	while (r < 0) {
 		q--;
@@ -203,24 +205,35 @@ static inline scalar_t sc_div(scalar_t a, scalar_t b)
 	return neg ? -(scalar_t)q : (scalar_t)q;
 }
 
+/* step of the digit-by-digit square root: the next two bits of the radicand */
+static inline void sc_sqrt_step(uint32_t *r, uint32_t *rem, uint32_t pair)
+{
+	*rem = (*rem << 2) | pair;
+	uint32_t t = (*r << 2) | 1u;
+	if (*rem >= t) {
+		*rem -= t;
+		*r = (*r << 1) | 1u;
+	} else {
+		*r <<= 1;
+	}
+}
+
+/* sqrt(a 2^16) rounded to nearest, digit by digit in 32-bit words (no 64-bit arithmetic on
+ * Cortex-M0): a's bit pairs from its highest non-zero one, then 8 zero pairs for the 2^16;
+ * the root stays below 2^24 and the remainder, at most twice the root, below 2^26 */
 static inline scalar_t sc_sqrt(scalar_t a)
 {
 	if (a <= 0)
 		return 0;
-	/* integer square root of a * 2^16, bit by bit, then round */
-	uint64_t v = (uint64_t)a << 16, r = 0, bit = (uint64_t)1 << 62;
-	while (bit > v)
-		bit >>= 2;
-	while (bit) {
-		if (v >= r + bit) {
-			v -= r + bit;
-			r = (r >> 1) + bit;
-		} else {
-			r >>= 1;
-		}
-		bit >>= 2;
-	}
-	if (v > r)
+	uint32_t v = (uint32_t)a, r = 0, rem = 0;
+	int sh = 30;
+	while (!(v >> sh))
+		sh -= 2;
+	for (; sh >= 0; sh -= 2)
+		sc_sqrt_step(&r, &rem, (v >> sh) & 3u);
+	for (int i = 0; i < 8; i++)
+		sc_sqrt_step(&r, &rem, 0u);
+	if (rem > r)   /* a 2^16 > r^2 + r: nearer r + 1 */
 		r++;
 	return (scalar_t)r;
 }
@@ -252,10 +265,59 @@ static inline uint32_t sc_turns(scalar_t a)
  * plus 0.04 LSB of the polynomial */
 static inline scalar_t sc_sin(scalar_t a) { return sc_sin_turn(sc_turns(a)); }
 static inline scalar_t sc_cos(scalar_t a) { return sc_sin_turn(sc_turns(a) + 0x40000000u); }
-static inline scalar_t sc_asin(scalar_t a) { return sc_from_float(asinf(sc_to_float(a))); }
+/* atan(n / d) in Q30 for 0 <= n <= d, 0 < d < 2^63 (one scale): the ratio in Q1.30 by
+ * Newton's reciprocal (qfmt.h), then an odd degree-13 minimax polynomial (error 2.5e-7) */
+static inline int32_t sc_atan_q30(uint64_t n, uint64_t d)
+{
+	int32_t t = q30_ratio((int64_t)n, (int64_t)d), z = q_mul32(t, t, 30);
+	int32_t r = 7314099;                     /* coefficients in Q30 */
+	r = -36082232 + q_mul32(r, z, 30);
+	r = 85495239 + q_mul32(r, z, 30);
+	r = -142091914 + q_mul32(r, z, 30);
+	r = 212684797 + q_mul32(r, z, 30);
+	r = -357742515 + q_mul32(r, z, 30);
+	r = 1073737649 + q_mul32(r, z, 30);
+	return q_mul32(r, t, 30);
+}
+/* the angle of (x, y) for magnitudes |x| = ax, |y| = ay of one scale (< 2^63), signs apart:
+ * [0, pi/2] in Q30 */
+static inline int64_t sc_angle_q30(uint64_t ay, uint64_t ax)
+{
+	if (ay == 0u)
+		return 0;
+	if (ay > ax)
+		return 1686629713 - (int64_t)sc_atan_q30(ax, ay); /* pi / 2 in Q30 */
+	return sc_atan_q30(ay, ax);
+}
+/* Integer in the fixed build (Euler angles for telemetry and commands): within 0.52 LSB of
+ * the exact value (rounding, polynomial, ratio); atan2(0, 0) = 0 */
 static inline scalar_t sc_atan2(scalar_t y, scalar_t x)
 {
-	return sc_from_float(atan2f(sc_to_float(y), sc_to_float(x)));
+	uint32_t ay = y < 0 ? 0u - (uint32_t)y : (uint32_t)y, ax = x < 0 ? 0u - (uint32_t)x : (uint32_t)x;
+	int64_t r = sc_angle_q30(ay, ax);
+	if (x < 0)
+		r = 3373259426LL - r;                /* pi in Q30 */
+	return (scalar_t)q_shr64(y < 0 ? -r : r, 30 - SC_FRAC);
+}
+/* asin(a) = atan2(a, sqrt(1 - a^2)) with 1 - a^2 exact in Q32 and its root in Q30; |a| >= 1
+ * gives +/-pi/2; within 0.52 LSB */
+static inline scalar_t sc_asin(scalar_t a)
+{
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+	if (ua >= 65536u)
+		return a < 0 ? -102944 : 102944;     /* pi / 2, rounded */
+	uint64_t v = (((uint64_t)1 << 32) - (uint64_t)ua * ua) << 28, c = 0, bit = (uint64_t)1 << 60;
+	while (bit) {                            /* c = floor(sqrt(v)): sqrt(1 - a^2) in Q30 */
+		if (v >= c + bit) {
+			v -= c + bit;
+			c = (c >> 1) + bit;
+		} else {
+			c >>= 1;
+		}
+		bit >>= 2;
+	}
+	int64_t r = sc_angle_q30((uint64_t)ua << 14, c);
+	return (scalar_t)q_shr64(a < 0 ? -r : r, 30 - SC_FRAC);
 }
 /* e^a in integer arithmetic (filter and lag coefficients): a = k ln 2 + r with r in
  * [0, ln 2) in Q32, e^r by its Taylor series in Q30 (13 terms: error < 1e-9 relative), then

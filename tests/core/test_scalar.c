@@ -296,3 +296,55 @@ UNIT_TEST(scalar_add_sub_exact)
 	CHECK(sc_add(1.5f, 2.25f) == 3.75f && sc_sub(1.5f, 2.25f) == -0.75f);
 #endif
 }
+
+/* integer atan2 and asin against libm over operands of every size: within 0.6 LSB */
+UNIT_TEST(scalar_atan2_asin_integer)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0xa7a2ULL };
+	for (int i = 0; i < N_RAND; i++) {
+		scalar_t y = (scalar_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		scalar_t x = (scalar_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		y >>= (int)unit_rand_uniform(&g, 0, 31);
+		x >>= (int)unit_rand_uniform(&g, 0, 31);
+		CHECK_NEAR(d(sc_atan2(y, x)), atan2(d(y), d(x)), 0.6 * LSB);
+		scalar_t a = (scalar_t)unit_rand_uniform(&g, -65536.0, 65536.0);
+		CHECK_NEAR(d(sc_asin(a)), asin(d(a)), 0.6 * LSB);
+	}
+	CHECK(sc_atan2(0, 0) == 0 && sc_atan2(0, SC(-1)) == SC(3.14159265358979) && sc_atan2(0, 5) == 0);
+	CHECK(sc_atan2(SC(1), 0) == SC(1.5707963267949) && sc_atan2(SC(-1), 0) == -SC(1.5707963267949));
+	CHECK(sc_asin(SC(1)) == SC(1.5707963267949) && sc_asin(SC(-2)) == -SC(1.5707963267949));
+	CHECK(sc_asin(SC(0.5)) == SC(0.5235987755982988) && sc_asin(0) == 0);
+	CHECK(sc_asin(65535) == SC(asin(65535.0 / 65536.0)));
+#else
+	CHECK(sc_atan2(1.0f, 2.0f) == atan2f(1.0f, 2.0f) && sc_asin(0.5f) == asinf(0.5f));
+#endif
+}
+
+/* sc_sqrt is sqrt(a 2^16) rounded to nearest for every a (ties cannot occur) */
+UNIT_TEST(scalar_sqrt_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0x5a27ULL };
+	for (int i = 0; i < N_RAND; i++) {
+		int32_t a = (int32_t)unit_rand_uniform(&g, 0.0, 2147483647.0);
+		a >>= (int)unit_rand_uniform(&g, 0, 31);
+		if (i < 64)
+			a = i < 32 ? i : INT32_MAX - (i - 32);
+		int64_t n = (int64_t)a * 65536, r = (int64_t)floor(sqrt((double)n));
+		while (r * r > n)
+			r--;
+		while ((r + 1) * (r + 1) <= n)
+			r++;
+		if (n - r * r > r)
+			r++;
+		if (a > 0 && sc_sqrt(a) != (scalar_t)r) {
+			unit_fail(u, __FILE__, __LINE__, "sc_sqrt(%d) = %d, expected %d", (int)a, (int)sc_sqrt(a), (int)r);
+			return;
+		}
+	}
+	CHECK(sc_sqrt(0) == 0 && sc_sqrt(-5) == 0 && sc_sqrt(SC(4)) == SC(2) && sc_sqrt(SC(2)) == 92682);
+#else
+	CHECK(sc_sqrt(4.0f) == 2.0f && sc_sqrt(-1.0f) == 0.0f);
+#endif
+}
