@@ -568,26 +568,28 @@ static void control_step(struct app *a, float dt)
 	/* experiment: excitation on top of the hover control */
 	if (a->mode == APP_EXPERIMENT) {
 		/* tilt > EXP_TILT_ABORT_DEG, without acosf: the body's z axis vs cos(limit) */
-		if (sc_to_float(quat_body_z_up(q)) < cosf(EXP_TILT_ABORT_DEG * DEG_F)) {
+		if (quat_body_z_up(q) < sc_from_float(cosf(EXP_TILT_ABORT_DEG * DEG_F))) {
 			exp_abort(&a->exp, "attitude limit");
 		}
 		experiment_step(a, dt);
 	}
 
-	/* allocation and throttle map */
+	/* allocation and throttle map, in scalars (the same float operations in the float
+	 * build; integer ones in the fixed build) */
 	scalar_t demand[MIXER_N_AXES] = {
-		sc_from_float(a->wrench_dem[0] + a->exp_out.f_delta),
-		sc_from_float(a->wrench_dem[1] + a->exp_out.tau_delta[0]),
-		sc_from_float(a->wrench_dem[2] + a->exp_out.tau_delta[1]),
-		sc_from_float(a->wrench_dem[3] + a->exp_out.tau_delta[2]),
+		sc_add(fz, sc_from_float(a->exp_out.f_delta)),
+		sc_add(tau.x, sc_from_float(a->exp_out.tau_delta[0])),
+		sc_add(tau.y, sc_from_float(a->exp_out.tau_delta[1])),
+		sc_add(tau.z, sc_from_float(a->exp_out.tau_delta[2])),
 	};
 	mixer_update(&a->mix, demand, &a->mix_out);
 	scalar_t thr[HAL_ROTORS];
 	a->thr_clamped = thrmap_update(&a->map, a->mix_out.f_n, thr, HAL_ROTORS);
+	scalar_t thr_max = sc_from_float(p->mot_thr_max);
 	for (int j = 0; j < HAL_ROTORS; j++) {
 		a->rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
-		float t = sc_to_float(thr[j]) + a->exp_out.thr_delta[j];
-		a->thr[j] = clampf(isfinite(t) ? t : 0.0f, 0.0f, p->mot_thr_max);
+		scalar_t t = sc_add(thr[j], sc_from_float(a->exp_out.thr_delta[j]));
+		a->thr[j] = sc_to_float(sc_clamp(sc_isfinite(t) ? t : SC_ZERO, SC_ZERO, thr_max));
 	}
 }
 

@@ -109,15 +109,15 @@ static void kft_step(struct app *a, float dt, bool up)
 	struct envelope *e = &a->env;
 	struct kf_track *t = &e->kft;
 	scalar_t thr[HAL_ROTORS];
-	float y = 0.0f;
+	scalar_t y = SC_ZERO;   /* the sum in scalars: float's own sum in the float build */
 	for (int j = 0; j < HAL_ROTORS; j++) {
 		thr[j] = sc_from_float(a->thr[j]);
-		y += a->fr.rotor_thrust_n[j];
+		y = sc_add(y, sc_from_float(a->fr.rotor_thrust_n[j]));
 	}
 	/* in HOLD and in the experiments (their excitation only adds information; a rotor model
 	 * found by identification restarts the tracker, envelope_model_sync) */
 	bool gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && (a->fr.valid & HAL_FRAME_THRUST);
-	kf_track_update(t, thr, HAL_ROTORS, sc_from_float(y), sc_from_float(dt), gate);
+	kf_track_update(t, thr, HAL_ROTORS, y, sc_from_float(dt), gate);
 	/* The KFT_* parameters once a second of plant time; announced to the ground station
 	 * (PARAM_VALUE, NAMED_VALUE_FLOAT) at most once a second of wall time, whose rates are
 	 * wall-clock: a fast lockstep run must not flood the link. */

@@ -87,6 +87,21 @@ static inline int64_t q_smul32(int32_t a, int32_t b)
 	return (a < 0) != (b < 0) ? -(int64_t)p : (int64_t)p;
 }
 
+/* number of leading zero bits of v (32 for 0), by halving: Cortex-M0 has no clz, and
+ * this costs less there than libgcc's __clzsi2 */
+static inline int q_clz32(uint32_t v)
+{
+	if (v == 0u)
+		return 32;
+	int n = 0;
+	if (!(v >> 16)) { n += 16; v <<= 16; }
+	if (!(v >> 24)) { n += 8; v <<= 8; }
+	if (!(v >> 28)) { n += 4; v <<= 4; }
+	if (!(v >> 30)) { n += 2; v <<= 2; }
+	if (!(v >> 31)) { n += 1; }
+	return n;
+}
+
 /* number of leading zero bits of v (64 for 0), by halving */
 static inline int q_clz64(uint64_t v)
 {

@@ -34,6 +34,8 @@ struct quat quat_normalize(struct quat q)
 	if (!(n2 > SC(1e-6)))
 		return quat_identity();
 	scalar_t n = sc_sqrt(n2);
+	if (n == SC(1))   /* already unit (Q16.16: to the LSB): the divisions would change nothing */
+		return q;
 	struct quat r = { sc_div(q.w, n), sc_div(q.x, n), sc_div(q.y, n), sc_div(q.z, n) };
 	return r;
 }

@@ -14,12 +14,15 @@
  *     nearest (ties away from zero).
  *   - sc_div by zero returns +/-SC_MAX by the sign of the dividend (0/0 = 0).
  *   - sc_from_float saturates, and maps NaN to 0.
- *   - sc_sqrt of a negative number is 0; the result is exact to 1 LSB.
- *   - Trigonometry (sc_sin, sc_cos, sc_atan2, sc_asin) is used only off the 90 Hz hot
- *     path (Euler conversions for setpoints and telemetry); in the fixed build it goes
- *     through float. sc_exp is integer in the fixed build (lag coefficients are
- *     recomputed in the 90 Hz path when the frame period changes). The hot path
- *     (control, mixer, throttle map, estimators) uses only integer operations.
+ *   - sc_sqrt of a negative number is 0; the result is the root rounded to nearest.
+ *   - sc_from_float/sc_to_float assemble the IEEE bits with integer operations (no
+ *     soft-float call on a core without FPU); sc_to_float gives (float)a / 65536 exactly.
+ *   - Trigonometry is integer in the fixed build: sc_sin, sc_cos (the attitude set point,
+ *     at 90 Hz), sc_atan2, sc_asin (Euler angles for telemetry and commands), each within
+ *     0.6 LSB of the exact value.
+ *     sc_exp is integer in the fixed build (lag coefficients are recomputed in the 90 Hz
+ *     path when the frame period changes). The hot path (control, mixer, throttle map,
+ *     estimators) uses only integer operations.
  *
  * Constants: SC(x) turns a literal into a scalar at compile time, e.g. SC(0.5).
  * Values entering the core from the outside (parameters, sensor frames) go
@@ -66,73 +69,255 @@ static inline scalar_t sc_sat64(int64_t v)
 	return (scalar_t)v;
 }
 
+/* Conversions to and from IEEE binary32 by integer bit assembly: no soft-float routine on a
+ * core without FPU. sc_from_float rounds x 2^16 to nearest (ties away from zero). */
 static inline scalar_t sc_from_float(float x)
 {
-	if (!(x == x))
+	union { float f; uint32_t u; } v = { x };
+	uint32_t e = (v.u >> 23) & 0xffu, m = (v.u & 0x7fffffu) | 0x800000u;
+	bool neg = (v.u >> 31) != 0u;
+	if (e == 0xffu && (v.u & 0x7fffffu))
+		return 0;                                /* NaN */
+	if (e >= 142u)                               /* |x| >= 2^15, and infinities */
+		return neg ? SC_MAX_NEG : SC_MAX;
+	if (e < 109u)                                /* |x| < 2^-18 (and subnormals): 0 */
 		return 0;
-	if (x >= 32767.99998f)
-		return SC_MAX;
-	if (x <= -32767.99998f)
-		return SC_MAX_NEG;
-	float s = x * 65536.0f;
-	return (scalar_t)(s >= 0.0f ? s + 0.5f : s - 0.5f);
+	/* |x| 2^16 = m 2^(e - 134) */
+	uint32_t r = e >= 134u ? m << (e - 134u) : (m + (1u << (133u - e))) >> (134u - e);
+	return neg ? -(scalar_t)r : (scalar_t)r;
 }
 
-static inline float sc_to_float(scalar_t a) { return (float)a * (1.0f / 65536.0f); }
+/* a 2^-16 as float, rounded to nearest even: the same value as (float)a / 65536 */
+static inline float sc_to_float(scalar_t a)
+{
+	union { float f; uint32_t u; } v = { 0.0f };
+	if (a == 0)
+		return 0.0f;
+	uint32_t m = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+	uint32_t e = 31u - (uint32_t)q_clz32(m);     /* m in [2^e, 2^(e + 1)) */
+	if (e > 23u) {
+		uint32_t sh = e - 23u, rem = m & ((1u << sh) - 1u), half = 1u << (sh - 1u);
+		m >>= sh;
+		if (rem > half || (rem == half && (m & 1u)))
+			m++;
+		if (m >> 24) {                           /* rounded up to the next power of 2 */
+			m >>= 1;
+			e++;
+		}
+	} else {
+		m <<= 23u - e;
+	}
+	/* |a| 2^-16 = (m 2^-23) 2^(e - 16): biased exponent e - 16 + 127 */
+	v.u = (a < 0 ? 0x80000000u : 0u) | ((e + 111u) << 23) | (m & 0x7fffffu);
+	return v.f;
+}
 static inline scalar_t sc_from_int(int32_t i) { return sc_sat64((int64_t)i * 65536); }
 
-static inline scalar_t sc_add(scalar_t a, scalar_t b) { return sc_sat64((int64_t)a + b); }
-static inline scalar_t sc_sub(scalar_t a, scalar_t b) { return sc_sat64((int64_t)a - b); }
+/* saturating sums in 32-bit words (no 64-bit arithmetic on Cortex-M0): the bound is
+ * tested before the operation, and INT32_MIN (outside the range) becomes SC_MAX_NEG */
+static inline scalar_t sc_add(scalar_t a, scalar_t b)
+{
+	if (b >= 0)
+		return a > INT32_MAX - b ? SC_MAX : (a + b < -INT32_MAX ? SC_MAX_NEG : a + b);
+	return a < -INT32_MAX - b ? SC_MAX_NEG : a + b;
+}
+static inline scalar_t sc_sub(scalar_t a, scalar_t b)
+{
+	if (b <= 0)
+		return a > INT32_MAX + b ? SC_MAX : (a - b < -INT32_MAX ? SC_MAX_NEG : a - b);
+	return a < -INT32_MAX + b ? SC_MAX_NEG : a - b;
+}
 static inline scalar_t sc_neg(scalar_t a) { return a == INT32_MIN ? SC_MAX : -a; }
 static inline scalar_t sc_abs(scalar_t a) { return a < 0 ? sc_neg(a) : a; }
 
+/* |a b| 2^-16 rounded from four 16 x 16 products in 32-bit words (Cortex-M0 has no long
+ * multiply): |a b| = hh 2^32 + (lh + hl) 2^16 + ll, so that
+ * round(|a b| / 2^16) = hh 2^16 + lh + hl + floor((ll + 2^15) / 2^16) exactly; each carry
+ * out of 32 bits means saturation */
 static inline scalar_t sc_mul(scalar_t a, scalar_t b)
 {
-	int64_t p = q_smul32(a, b); /* (int64_t)a * b, without a library call on Cortex-M0 */
-	p = p >= 0 ? p + (1 << 15) : p - (1 << 15);
-	return sc_sat64(p / 65536);
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
+	bool neg = (a < 0) != (b < 0);
+	uint32_t hh = ah * bh;
+	if (hh >= 0x8000u)
+		return neg ? SC_MAX_NEG : SC_MAX;
+	uint32_t r = (hh << 16) + ((al * bl + 0x8000u) >> 16), lh = al * bh, hl = ah * bl;
+	r += lh;
+	if (r < lh)
+		return neg ? SC_MAX_NEG : SC_MAX;
+	r += hl;
+	if (r < hl || r > (uint32_t)INT32_MAX)
+		return neg ? SC_MAX_NEG : SC_MAX;
+	return neg ? -(scalar_t)r : (scalar_t)r;
 }
 
+/* 2^63 / v for v in [2^31, 2^32), within 2^-27 relative (at most 2^32 - 1): two Newton
+ * steps y <- y (2 - v y) in 16-bit words from 48/17 - 32/17 v, then one on 2^47 - v y */
+static inline uint32_t sc_recip_norm(uint32_t v)
+{
+	uint32_t v16 = v >> 16;                               /* Q16, [0.5, 1) */
+	uint32_t y = 92521u - ((61681u * v16) >> 16);         /* 1 / v in Q15 (error < 1/17) */
+	for (int i = 0; i < 2; i++) {
+		uint32_t t = v16 * y;                             /* v y in Q31, about 2^31 */
+		y = (y * ((0u - t) >> 16)) >> 15;                 /* y (2 - v y), Q15: error < 2^-14 */
+	}
+	/* v y 2^16 with y <= 2^16 is 2^63 (1 - e): e 2^47 = 2^47 - v y, |e| < 2^-14 */
+	uint64_t vy = ((uint64_t)((v >> 16) * y) << 16) + (v & 0xffffu) * y;
+	int64_t err = (int64_t)(((uint64_t)1 << 47) - vy);    /* |err| < 2^33 */
+	uint32_t ue = (uint32_t)((err < 0 ? (uint64_t)0 - (uint64_t)err : (uint64_t)err) >> 18);
+	uint32_t c = (y * (ue > 0xffffu ? 0xffffu : ue)) >> 13; /* y 2^16 |e| */
+	uint64_t r = ((uint64_t)y << 16);
+	r = err < 0 ? r - c : r + c;                          /* y 2^16 (1 + e) */
+	return r > 0xffffffffu ? 0xffffffffu : (uint32_t)r;
+}
+
+/* |q| = floor((|a| 2^16 + floor(|b| / 2)) / |b|): round to nearest, ties away from zero.
+ * No 64-bit division (a slow library loop on Cortex-M0): the quotient from the reciprocal
+ * of |b| (sc_recip_norm), made exact by its remainder. */
 static inline scalar_t sc_div(scalar_t a, scalar_t b)
 {
 	if (b == 0)
 		return a > 0 ? SC_MAX : (a < 0 ? SC_MAX_NEG : 0);
-	int64_t n = (int64_t)a * 65536;
-	int64_t half = (b > 0 ? (int64_t)b : -(int64_t)b) / 2;
-	n = ((n >= 0) == (b > 0)) ? n + (b > 0 ? half : -half) : n - (b > 0 ? half : -half);
-	return sc_sat64(n / b);
+	bool neg = (a < 0) != (b < 0);
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint64_t x = ((uint64_t)ua << 16) + (ub >> 1);        /* < 2^48 + 2^31 */
+	if ((x >> 31) >= ub)                                  /* quotient >= 2^31 */
+		return neg ? SC_MAX_NEG : SC_MAX;
+	int s = q_clz32(ub);
+	uint32_t y = sc_recip_norm(ub << s);                  /* 1 / |b| = y 2^(s - 63) */
+	/* x32 = floor(x / 2^k) with 2^k <= |b| < 2^(k + 1): below 2^32 as the quotient is below
+	 * 2^31, and dropping x's low k bits lowers the quotient by less than 1 */
+	int k = 31 - s;
+	uint32_t xh = (uint32_t)(x >> 32), xl = (uint32_t)x;
+	uint32_t x32 = k ? (xl >> k) | (xh << (32 - k)) : xl;
+	/* x / |b| = x32 2^k y 2^(s - 63) = x32 y 2^-32, within a few units */
+	uint32_t q = (uint32_t)(q_umul32(x32, y) >> 32);
+	int64_t r = (int64_t)x - (int64_t)q_umul32(q, ub);
+	while (r < 0) {
+		q--;
+		r += ub;
+	}
+	while (r >= (int64_t)ub) {
+		q++;
+		r -= ub;
+	}
+	return neg ? -(scalar_t)q : (scalar_t)q;
 }
 
+/* step of the digit-by-digit square root: the next two bits of the radicand */
+static inline void sc_sqrt_step(uint32_t *r, uint32_t *rem, uint32_t pair)
+{
+	*rem = (*rem << 2) | pair;
+	uint32_t t = (*r << 2) | 1u;
+	if (*rem >= t) {
+		*rem -= t;
+		*r = (*r << 1) | 1u;
+	} else {
+		*r <<= 1;
+	}
+}
+
+/* sqrt(a 2^16) rounded to nearest, digit by digit in 32-bit words (no 64-bit arithmetic on
+ * Cortex-M0): a's bit pairs from its highest non-zero one, then 8 zero pairs for the 2^16;
+ * the root stays below 2^24 and the remainder, at most twice the root, below 2^26 */
 static inline scalar_t sc_sqrt(scalar_t a)
 {
 	if (a <= 0)
 		return 0;
-	/* integer square root of a * 2^16, bit by bit, then round */
-	uint64_t v = (uint64_t)a << 16, r = 0, bit = (uint64_t)1 << 62;
-	while (bit > v)
-		bit >>= 2;
-	while (bit) {
-		if (v >= r + bit) {
-			v -= r + bit;
-			r = (r >> 1) + bit;
-		} else {
-			r >>= 1;
-		}
-		bit >>= 2;
-	}
-	if (v > r)
+	uint32_t v = (uint32_t)a, r = 0, rem = 0;
+	int sh = 30;
+	while (!(v >> sh))
+		sh -= 2;
+	for (; sh >= 0; sh -= 2)
+		sc_sqrt_step(&r, &rem, (v >> sh) & 3u);
+	for (int i = 0; i < 8; i++)
+		sc_sqrt_step(&r, &rem, 0u);
+	if (rem > r)   /* a 2^16 > r^2 + r: nearer r + 1 */
 		r++;
 	return (scalar_t)r;
 }
 
 static inline bool sc_isfinite(scalar_t a) { (void)a; return true; }
 
-static inline scalar_t sc_sin(scalar_t a) { return sc_from_float(sinf(sc_to_float(a))); }
-static inline scalar_t sc_cos(scalar_t a) { return sc_from_float(cosf(sc_to_float(a))); }
-static inline scalar_t sc_asin(scalar_t a) { return sc_from_float(asinf(sc_to_float(a))); }
+/* sin of a phase p in turns (2^32 = one turn): sin(pi x / 2) on the quadrant's x in [0, 1]
+ * (Q30) by an odd degree-7 minimax polynomial (error 6e-7, 0.04 LSB), rounded to Q16.16 */
+static inline scalar_t sc_sin_turn(uint32_t p)
+{
+	uint32_t quad = p >> 30, f = p & 0x3fffffffu;
+	if (quad & 1u)
+		f = 0x40000000u - f;                 /* sin(pi/2 (1 - x)) = sin(pi/2 (1 + x)) */
+	int32_t x = (int32_t)f, z = q_mul32(x, x, 30);
+	int32_t r = -4652625;                    /* coefficients in Q30 */
+	r = 85291977 + q_mul32(r, z, 30);
+	r = -693522166 + q_mul32(r, z, 30);
+	r = 1686624005 + q_mul32(r, z, 30);
+	r = q_mul32(r, x, 44);                   /* Q30 x Q30 -> Q16 */
+	return quad >= 2u ? -r : r;
+}
+/* radians to turns: a 2^16 / (2 pi) in units of 2^-32 turn (K = 2^32 / (2 pi), rounded, in
+ * Q16), modulo one turn; the phase is within |a| 2^-17 units (2e-5 rad at |a| = 32768) */
+static inline uint32_t sc_turns(scalar_t a)
+{
+	return (uint32_t)((uint64_t)q_smul32(a, 683565276) >> 16);
+}
+/* integer in the fixed build (the setpoint's quat_from_euler runs at 90 Hz): within 0.5 LSB
+ * plus 0.04 LSB of the polynomial */
+static inline scalar_t sc_sin(scalar_t a) { return sc_sin_turn(sc_turns(a)); }
+static inline scalar_t sc_cos(scalar_t a) { return sc_sin_turn(sc_turns(a) + 0x40000000u); }
+/* atan(n / d) in Q30 for 0 <= n <= d, 0 < d < 2^63 (one scale): the ratio in Q1.30 by
+ * Newton's reciprocal (qfmt.h), then an odd degree-13 minimax polynomial (error 2.5e-7) */
+static inline int32_t sc_atan_q30(uint64_t n, uint64_t d)
+{
+	int32_t t = q30_ratio((int64_t)n, (int64_t)d), z = q_mul32(t, t, 30);
+	int32_t r = 7314099;                     /* coefficients in Q30 */
+	r = -36082232 + q_mul32(r, z, 30);
+	r = 85495239 + q_mul32(r, z, 30);
+	r = -142091914 + q_mul32(r, z, 30);
+	r = 212684797 + q_mul32(r, z, 30);
+	r = -357742515 + q_mul32(r, z, 30);
+	r = 1073737649 + q_mul32(r, z, 30);
+	return q_mul32(r, t, 30);
+}
+/* the angle of (x, y) for magnitudes |x| = ax, |y| = ay of one scale (< 2^63), signs apart:
+ * [0, pi/2] in Q30 */
+static inline int64_t sc_angle_q30(uint64_t ay, uint64_t ax)
+{
+	if (ay == 0u)
+		return 0;
+	if (ay > ax)
+		return 1686629713 - (int64_t)sc_atan_q30(ax, ay); /* pi / 2 in Q30 */
+	return sc_atan_q30(ay, ax);
+}
+/* Integer in the fixed build (Euler angles for telemetry and commands): within 0.52 LSB of
+ * the exact value (rounding, polynomial, ratio); atan2(0, 0) = 0 */
 static inline scalar_t sc_atan2(scalar_t y, scalar_t x)
 {
-	return sc_from_float(atan2f(sc_to_float(y), sc_to_float(x)));
+	uint32_t ay = y < 0 ? 0u - (uint32_t)y : (uint32_t)y, ax = x < 0 ? 0u - (uint32_t)x : (uint32_t)x;
+	int64_t r = sc_angle_q30(ay, ax);
+	if (x < 0)
+		r = 3373259426LL - r;                /* pi in Q30 */
+	return (scalar_t)q_shr64(y < 0 ? -r : r, 30 - SC_FRAC);
+}
+/* asin(a) = atan2(a, sqrt(1 - a^2)) with 1 - a^2 exact in Q32 and its root in Q30; |a| >= 1
+ * gives +/-pi/2; within 0.52 LSB */
+static inline scalar_t sc_asin(scalar_t a)
+{
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+	if (ua >= 65536u)
+		return a < 0 ? -102944 : 102944;     /* pi / 2, rounded */
+	uint64_t v = (((uint64_t)1 << 32) - (uint64_t)ua * ua) << 28, c = 0, bit = (uint64_t)1 << 60;
+	while (bit) {                            /* c = floor(sqrt(v)): sqrt(1 - a^2) in Q30 */
+		if (v >= c + bit) {
+			v -= c + bit;
+			c = (c >> 1) + bit;
+		} else {
+			c >>= 1;
+		}
+		bit >>= 2;
+	}
+	int64_t r = sc_angle_q30((uint64_t)ua << 14, c);
+	return (scalar_t)q_shr64(a < 0 ? -r : r, 30 - SC_FRAC);
 }
 /* e^a in integer arithmetic (filter and lag coefficients): a = k ln 2 + r with r in
  * [0, ln 2) in Q32, e^r by its Taylor series in Q30 (13 terms: error < 1e-9 relative), then

@@ -16,7 +16,10 @@ Items:
   step    2. octo-fw's 90 Hz step without I/O (build/bench/bench-step: firmware/app + core,
              stub HAL): instructions per step on the host (valgrind --tool=callgrind) and on
              Cortex-M4F (QEMU mps2-an386 + tests/arm's counting plugin); per build (float,
-             fixed) on M4F and M0 (ARMv6-M code counted on mps2-an386); the allocator alone
+             fixed) on M4F and M0 (ARMv6-M code counted on mps2-an386) in HOLD, experiments
+             1 (rotor), 2 (validation), 3 (inertia Ixx) and between frames, median and max,
+             the float/fixed ratio per phase, and where the m0-fixed step's instructions go
+             (tests/arm/insn-profile.sh: top routines); the allocator alone
   memory  3. the core's .text/.data/.bss on Cortex-M4F, M0 and M0 fixed (tests/arm's images), the core
              state the app owns (sizeof), peak RSS of octo-fw and octo-sim (wait4 of the
              flights of item 1)
@@ -394,6 +397,36 @@ def parse_step_output(text):
     return kv
 
 
+EXP_IDS = (1, 2, 3)
+EXP_NAMES = {1: "experiment 1 (rotor)", 2: "experiment 2 (validation)", 3: "experiment 3 (inertia Ixx)"}
+
+
+def split_step_counts(counts, kv):
+    """tests/bench/step.c's regions in order: HOLD steps, then per experiment (1, 2, 3) its
+    steps each followed by its app_tick, the hover allocation, N_ALLOC allocations, the worst
+    one. None if the number of counts does not match what the image printed."""
+    nh, ne = int(kv.get("hold_steps", 0)), int(kv.get("exp_steps", 0))
+    nt = int(kv.get("exp_ticks", 0))   # 0 or ne: each experiment step followed by its app_tick
+    na = int(kv.get("alloc_calls", "0").split()[0])
+    if len(counts) != nh + ne + nt + 1 + na + 1:
+        return None
+    out = {"hold": counts[:nh], "exp_by": {}, "tick_by": {}, "exp": [], "exp_tick": []}
+    i = nh
+    per = [(e, int(kv[f"exp_steps_{e}"])) for e in EXP_IDS if f"exp_steps_{e}" in kv] or [(1, ne)]
+    for e, n in per:
+        blk = counts[i:i + n * (2 if nt else 1)]
+        i += len(blk)
+        out["exp_by"][e] = blk[0::2] if nt else blk
+        out["tick_by"][e] = blk[1::2] if nt else []
+        out["exp"] += out["exp_by"][e]
+        out["exp_tick"] += out["tick_by"][e]
+    out["alloc_hover"] = counts[i]
+    out["alloc"] = counts[i + 1:i + 1 + na]
+    out["alloc_worst"] = counts[-1]
+    out["regions"] = {"hold": (1, nh), "exp_first": nh + 1, "exp_last": nh + ne + nt}
+    return out
+
+
 def item_step(rep, args):
     exe = BB / ("bench-step-quick" if args.quick else "bench-step")
     res = {}
@@ -430,20 +463,17 @@ def item_step(rep, args):
                              capture_output=True, text=True, timeout=600, cwd=REPO)
         counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
         kv = parse_step_output(out.stdout)
-        nh, ne = int(kv.get("hold_steps", 0)), int(kv.get("exp_steps", 0))
-        nt = int(kv.get("exp_ticks", 0))   # 0 or ne: each experiment step followed by its app_tick
-        na = int(kv.get("alloc_calls", "0").split()[0])
-        if len(counts) == nh + ne + nt + 1 + na + 1:
-            ex = counts[nh:nh + ne + nt]
-            m4f = {"hold": counts[:nh], "exp": ex[0::2] if nt else ex, "alloc_hover": counts[nh + ne + nt],
-                   "alloc": counts[nh + ne + nt + 1:nh + ne + nt + 1 + na], "alloc_worst": counts[-1]}
-            if nt:
-                m4f["exp_tick"] = ex[1::2]
+        sp = split_step_counts(counts, kv)
+        if sp:
+            m4f = {"hold": sp["hold"], "exp": sp["exp_by"].get(1, []), "alloc_hover": sp["alloc_hover"],
+                   "alloc": sp["alloc"], "alloc_worst": sp["alloc_worst"]}
+            if sp["exp_tick"]:
+                m4f["exp_tick"] = sp["exp_tick"]
         res["m4f_output"] = kv
         res["m4f"] = {k: (mmm(v) if isinstance(v, list) else v) for k, v in m4f.items()}
         res["m4f"]["exit"] = out.returncode
     kv = res.get("m4f_output") or res.get("host_output") or {}
-    exp_ok = int(kv.get("exp_steps", 0)) > 0
+    exp_ok = int(kv.get("exp_steps_1", kv.get("exp_steps", 0))) > 0
     bound = kv.get("alloc_step_bound", "?")
     worst_steps = kv.get("alloc_worst_steps", "?").split()[0]
 
@@ -469,7 +499,7 @@ def item_step(rep, args):
     tk = m4f.get("exp_tick")
     if tk:
         big_t = sorted(((x, i + 1) for i, x in enumerate(tk)), reverse=True)[:2]
-        rep.row(2, "  between frames: app_tick after each experiment step (not in the step), M4F",
+        rep.row(2, "  between frames: app_tick after each experiment step (experiments 1-3; not in the step), M4F",
                 fmt(mmm(tk)["median"]), spread(mmm(tk)),
                 "results applied, mixer rebuilt, file saved, status lines formatted: "
                 + ", ".join(f"after step {i}: {fmt(float(x))}" for x, i in big_t)
@@ -508,14 +538,23 @@ def run_step_elf(machine_, elf):
                          capture_output=True, text=True, timeout=1800, cwd=REPO)
     counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
     kv = parse_step_output(out.stdout)
-    nh, ne = int(kv.get("hold_steps", 0)), int(kv.get("exp_steps", 0))
-    nt = int(kv.get("exp_ticks", 0))
-    na = int(kv.get("alloc_calls", "0").split()[0])
-    if len(counts) != nh + ne + nt + 1 + na + 1:
+    sp = split_step_counts(counts, kv)
+    if not sp:
         return {"exit": out.returncode, "error": f"{len(counts)} counts", "output": kv}
-    ex = counts[nh:nh + ne + nt]
-    return {"exit": out.returncode, "hold": counts[:nh], "exp": ex[0::2] if nt else ex,
-            "exp_tick": ex[1::2] if nt else [], "output": kv}
+    r = {"exit": out.returncode, "hold": sp["hold"], "exp": sp["exp"], "exp_tick": sp["exp_tick"], "output": kv,
+         "regions": sp["regions"]}
+    for e, v in sp["exp_by"].items():
+        r[f"exp{e}"] = v
+    return r
+
+
+def profile_top(machine_, elf, first, every, last, top=6):
+    """tests/arm/insn-profile.sh: the top routines of the measured regions first, first + every, ...
+    last, as [(share %, name)], and the command"""
+    argv = ["tests/arm/insn-profile.sh", machine_, str(elf), str(first), str(every), str(last), str(top)]
+    out = subprocess.run([str(REPO / argv[0])] + argv[1:], capture_output=True, text=True, timeout=1800, cwd=REPO)
+    rows = re.findall(r"^\s*\d+\s+([\d.]+) %\s+(\S+)$", out.stdout, re.M)
+    return [(float(p), n) for p, n in rows], cmdline(argv)
 
 
 def step_per_build(rep, args, res):
@@ -528,26 +567,42 @@ def step_per_build(rep, args, res):
             continue
         r = run_step_elf(mach, elf)
         t, d, b = arm_size(elf)
-        st = {k: mmm(r.get(k, [])) for k in ("hold", "exp", "exp_tick")}
-        builds[v] = {"steps": st, "exit": r["exit"], "flash": t + d, "ram": d + b, "error": r.get("error")}
+        phases = ("hold",) + tuple(f"exp{e}" for e in EXP_IDS) + ("exp_tick",)
+        st = {k: mmm(r.get(k, [])) for k in phases}
+        builds[v] = {"steps": st, "exit": r["exit"], "flash": t + d, "ram": d + b, "error": r.get("error"),
+                     "regions": r.get("regions")}
         mm = lambda k: f"{fmt(st[k]['median'])} ({fmt(st[k]['max'])})" if st[k] else "n/a"
-        rep.row(2, f"step per build, {v}: HOLD / experiment 1 / between frames, median (max) instr.",
-                f"{mm('hold')} / {mm('exp')} / {mm('exp_tick')}", "",
+        rep.row(2, f"step per build, {v}: HOLD / exp. 1 rotor / exp. 2 validation / exp. 3 inertia / "
+                "between frames, median (max) instr.",
+                " / ".join(mm(k) for k in phases), "",
                 f"image (app + core + libs): flash {fmt((t + d) / 1024, 1)} KB, static RAM {fmt((d + b) / 1024, 1)} KB"
                 + (f"; {r['error']}" if r.get("error") else ""), "(reported)", None, cmd)
     for cpu, fl, fx in (("M0", "m0", "m0-fixed"), ("M4F", "m4f", "m4f-fixed")):
         a, b_ = builds.get(fl, {}).get("steps", {}), builds.get(fx, {}).get("steps", {})
         ratios = {}
-        for k in ("hold", "exp", "exp_tick"):
+        for k in ("hold",) + tuple(f"exp{e}" for e in EXP_IDS) + ("exp_tick",):
             if a.get(k) and b_.get(k):
                 ratios[k] = (a[k]["median"] / b_[k]["median"], a[k]["max"] / b_[k]["max"])
         if ratios:
-            names = {"hold": "HOLD", "exp": "experiment 1", "exp_tick": "between frames"}
+            names = {"hold": "HOLD", "exp1": "exp. 1", "exp2": "exp. 2", "exp3": "exp. 3",
+                     "exp_tick": "between frames"}
             rep.row(2, f"  {cpu}: float build / fixed build, instructions (median; max)",
                     f"{ratios['hold'][0]:.2f}x" if "hold" in ratios else "n/a", "",
                     "; ".join(f"{names[k]} {m:.2f}x; {x:.2f}x" for k, (m, x) in ratios.items()),
                     "(reported)", None, None)
             res.setdefault("float_over_fixed", {})[cpu] = ratios
+    # where the fixed M0 step's instructions go: the top routines of its HOLD steps and of its
+    # experiment steps (every other region: each step is followed by its app_tick)
+    rg = builds.get("m0-fixed", {}).get("regions")
+    if rg and not args.quick:
+        elf = BB / "step-m0-fixed.elf"
+        top_h, cmd_h = profile_top("mps2-an386", elf, rg["hold"][0], 1, rg["hold"][1])
+        top_e, _ = profile_top("mps2-an386", elf, rg["exp_first"], 2, rg["exp_last"])
+        line = lambda t: ", ".join(f"{n} {p:.0f} %" for p, n in t) or "n/a"
+        rep.row(2, "  where the m0-fixed step's instructions go (top routines, share of the phase)",
+                f"HOLD: {line(top_h)}", "", f"experiments 1-3: {line(top_e)}", "(reported)", None,
+                cmd_h + " (HOLD; experiments: FROM " + str(rg["exp_first"]) + " EVERY 2)")
+        res["m0_fixed_profile"] = {"hold": top_h, "experiments": top_e}
     res["per_build"] = builds
     estim_per_build(rep, args, res)
 

@@ -8,8 +8,9 @@
  * by a few tenths of a degree, the measured rotor thrusts are the commanded throttles through
  * a 30 ms lag times the paper's k_f with 1 % noise. Sequence:
  *   boot (disarmed frames) -> arm -> take-off to 10 m -> HOLD (measured: N_HOLD steps)
- *   -> MAV_CMD_USER_1 experiment 1 if the build has it (measured: up to N_EXP steps, and the
- *      app_tick after each: the between-frames work, counted apart)
+ *   -> experiments 1 (rotor coefficients), 2 (validation), 3 (inertia Ixx), each started
+ *      from HOLD as MAV_CMD_USER_1 does (measured: up to N_EXP steps each, and the app_tick
+ *      after each: the between-frames work, counted apart; "step: exp_steps_N" per experiment)
  *   -> the allocator alone on the app's mixer: the last hover demand (unsaturated), N_ALLOC
  *      seeded demands (many saturating), then again the one that needed the most allocator
  *      steps (its worst case).
@@ -212,21 +213,38 @@ int main(void)
 	}
 	printf("step: hold_steps %d\n", hold);
 
-	int exp = 0;
-	if (exp_available(1)) {
-		r = app_cmd_experiment(&A, 1.0f, 0, why, sizeof why);
-		printf("step: experiment_1 %d %s\n", r, r != APP_IN_PROGRESS ? why : "");
-		for (; exp < N_EXP && A.mode == APP_EXPERIMENT; exp++) {
-			next_frame();
-			bench_exp_step();
-			bench_exp_tick();
+	/* experiments 1 (rotor coefficients), 2 (validation), 3 (inertia Ixx), one after the
+	 * other, each from a settled HOLD: up to N_EXP measured steps each */
+	static const int exp_ids[] = {1, 2, 3};
+	int exp_total = 0;
+	for (size_t k = 0; k < sizeof exp_ids / sizeof exp_ids[0]; k++) {
+		int id = exp_ids[k], exp = 0;
+		if (k > 0) {
+			for (int i = 0; i < 90 && A.mode == APP_HOLD; i++)   /* a second of HOLD between */
+				frame_unmeasured();
 		}
-		printf("step: experiment_mode_after %s\n", app_mode_name(A.mode));
-	} else {
-		printf("step: experiment_1 unavailable\n");
+		if (exp_available(id) && A.mode == APP_HOLD) {
+			r = app_cmd_experiment(&A, (float)id, 0, why, sizeof why);
+			printf("step: experiment_%d %d %s\n", id, r, r != APP_IN_PROGRESS ? why : "");
+			for (; exp < N_EXP && A.mode == APP_EXPERIMENT; exp++) {
+				next_frame();
+				bench_exp_step();
+				bench_exp_tick();
+			}
+			if (A.mode == APP_EXPERIMENT) {   /* cut at N_EXP: stop it, unmeasured */
+				app_cmd_experiment(&A, 0.0f, 0, why, sizeof why);
+				frame_unmeasured();
+			}
+			printf("step: experiment_%d_mode_after %s\n", id, app_mode_name(A.mode));
+		} else {
+			printf("step: experiment_%d unavailable\n", id);
+		}
+		/* one measured app_tick after each experiment step: 2 regions per step */
+		printf("step: exp_steps_%d %d\n", id, exp);
+		exp_total += exp;
 	}
-	printf("step: exp_steps %d\n", exp);
-	printf("step: exp_ticks %d\n", exp);   /* one measured app_tick after each experiment step */
+	printf("step: exp_steps %d\n", exp_total);
+	printf("step: exp_ticks %d\n", exp_total);
 
 	/* the allocator alone: the last hover demand of the app (unsaturated), a seeded set of
 	 * demands, then the one that needed the most allocator steps again */

@@ -4,6 +4,15 @@
 #include "unit.h"
 
 #include <math.h>
+#include <string.h>
+
+/* random cases per exactness test: fewer under QEMU, where each costs thousands of
+ * emulated instructions */
+#ifdef __arm__
+#define N_RAND 3000
+#else
+#define N_RAND 50000
+#endif
 
 #if OCTO_FIXED
 #define LSB (1.0 / 65536.0)
@@ -133,5 +142,209 @@ UNIT_TEST(scalar_div_exact)
 		CHECK(b == 0.0f || sc_div(a, b) == a / b);
 	}
 	CHECK(sc_div(1.0f, 0.0f) == SC_MAX && sc_div(-1.0f, 0.0f) == SC_MAX_NEG);
+#endif
+}
+
+/* sc_mul is exact: |a b| / 2^16 rounded to nearest (ties away from zero) as a 64-bit product
+ * gives it, for operands of every size, saturated beyond */
+UNIT_TEST(scalar_mul_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0x3a1ULL };
+	for (int i = 0; i < N_RAND; i++) {
+		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		a >>= (int)unit_rand_uniform(&g, 0, 31);
+		b >>= (int)unit_rand_uniform(&g, 0, 31);
+		int64_t p = (int64_t)a * b;
+		p = (p >= 0 ? p + 32768 : p - 32768) / 65536;
+		scalar_t ref = p > INT32_MAX ? SC_MAX : (p < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)p);
+		if (sc_mul(a, b) != ref) {
+			unit_fail(u, __FILE__, __LINE__, "sc_mul(%d, %d) = %d, expected %d", (int)a, (int)b,
+				  (int)sc_mul(a, b), (int)ref);
+			return;
+		}
+	}
+	CHECK(sc_mul(INT32_MIN, 1) == -32768 && sc_mul(INT32_MIN, INT32_MIN) == SC_MAX);
+	CHECK(sc_mul(INT32_MIN, SC(1)) == SC_MAX_NEG && sc_mul(SC_MAX, SC(-1)) == SC_MAX_NEG);
+	CHECK(sc_mul(SC(181), SC(181)) == SC(32761) && sc_mul(SC(182), SC(181)) == SC_MAX);
+	CHECK(sc_mul(46340 << 8, 46340 << 8) == (scalar_t)(((int64_t)46340 * 46340 * 65536 + 32768) / 65536));
+	CHECK(sc_mul(SC(0.5), SC(0.5)) == SC(0.25) && sc_mul(1, 32768) == 1 && sc_mul(1, 32767) == 0);
+#else
+	CHECK(sc_mul(3.0f, 0.5f) == 1.5f && sc_mul(-2.0f, 1e30f) == -2e30f);
+#endif
+}
+
+/* sc_div's worst cases: quotients near 2^31 and divisors near powers of two */
+UNIT_TEST(scalar_div_exact_edges)
+{
+#if OCTO_FIXED
+	static const int32_t bs[] = { 1, 2, 3, 65535, 65536, 65537, 0x7fff, 0x8000, 0x8001, 0x40000000,
+				      0x3fffffff, INT32_MAX, 0x55555555, 12345677 };
+	for (size_t i = 0; i < sizeof bs / sizeof bs[0]; i++) {
+		for (int k = -40; k <= 40; k++) {
+			int32_t b = bs[i];
+			int64_t a64 = (int64_t)b / 2 + k * 9973;   /* quotients near 32768 */
+			for (int sh = 0; sh < 2; sh++) {
+				int32_t a = (int32_t)(sh ? (a64 % INT32_MAX) : (int64_t)b * 3 / 4 + k);
+				int64_t n = (int64_t)a * 65536, half = (int64_t)b / 2;
+				n += n >= 0 ? half : -half;
+				int64_t q = n / b;
+				scalar_t ref = q > INT32_MAX ? SC_MAX : (q < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)q);
+				CHECK(sc_div(a, b) == ref && sc_div(-a, -b) == ref);
+			}
+		}
+		/* the largest quotients below saturation */
+		int64_t a = ((int64_t)bs[i] * (INT32_MAX - 3)) >> 16;
+		for (int k = -3; k <= 3; k++) {
+			int64_t aa = a + k;
+			if (aa > INT32_MAX || aa < -INT32_MAX)
+				continue;
+			int64_t n = aa * 65536 + bs[i] / 2, q = n / bs[i];
+			scalar_t ref = q > INT32_MAX ? SC_MAX : (scalar_t)q;
+			CHECK(sc_div((int32_t)aa, bs[i]) == ref);
+		}
+	}
+#else
+	CHECK(sc_div(3.0f, 4.0f) == 0.75f && sc_div(1.0f, 3.0f) == 1.0f / 3.0f);
+#endif
+}
+
+/* float conversions by bit assembly: sc_to_float is (float)a / 65536 bit for bit, and
+ * sc_from_float rounds x 2^16 to nearest (ties away from zero), as double arithmetic does */
+UNIT_TEST(scalar_float_conversions_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0xf10aULL };
+	for (int i = 0; i < N_RAND; i++) {
+		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		a >>= (int)unit_rand_uniform(&g, 0, 31);
+		float f = sc_to_float(a), ref = (float)a / 65536.0f;
+		if (memcmp(&f, &ref, sizeof f) != 0) {
+			unit_fail(u, __FILE__, __LINE__, "sc_to_float(%d) = %.9g, expected %.9g", (int)a, (double)f,
+				  (double)ref);
+			return;
+		}
+		double x = unit_rand_uniform(&g, -1.0, 1.0) * ldexp(1.0, (int)unit_rand_uniform(&g, -20, 17));
+		float xf = (float)x;
+		double s = (double)xf * 65536.0;
+		double r = s >= 0 ? floor(s + 0.5) : -floor(-s + 0.5);
+		scalar_t want = r >= 2147483647.0 ? SC_MAX : (r <= -2147483647.0 ? SC_MAX_NEG : (scalar_t)r);
+		if (sc_from_float(xf) != want) {
+			unit_fail(u, __FILE__, __LINE__, "sc_from_float(%.9g) = %d, expected %d", (double)xf,
+				  (int)sc_from_float(xf), (int)want);
+			return;
+		}
+	}
+	CHECK(sc_to_float(INT32_MIN) == -32768.0f && sc_to_float(SC_MAX) == 32768.0f);
+	CHECK(sc_to_float(1) == 1.0f / 65536.0f && sc_to_float(-1) == -1.0f / 65536.0f);
+	CHECK(sc_from_float(32767.998046875f) == 2147483520 && sc_from_float(32768.0f) == SC_MAX);
+	CHECK(sc_from_float(-32768.0f) == SC_MAX_NEG && sc_from_float(__builtin_inff()) == SC_MAX);
+	CHECK(sc_from_float(-__builtin_inff()) == SC_MAX_NEG && sc_from_float(-0.0f) == 0);
+	CHECK(sc_from_float(1.5f / 65536.0f) == 2 && sc_from_float(-1.5f / 65536.0f) == -2);
+	CHECK(sc_from_float(0.49999997f / 65536.0f) == 0 && sc_from_float(1e-30f) == 0);
+	CHECK(sc_from_float(128.0f + 3.0f / 65536.0f) == SC(128) + 3);
+#else
+	CHECK(sc_to_float(0.1f) == 0.1f && sc_from_float(-7.25f) == -7.25f);
+#endif
+}
+
+/* integer sine and cosine over the whole Q16.16 range against libm, within 1 LSB (the
+ * radians-to-turns phase is within |a| / 2 + 1 units of 2^-32 turn) */
+UNIT_TEST(scalar_sin_cos_integer)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0x51cULL };
+	for (int i = 0; i < N_RAND; i++) {
+		scalar_t a = (scalar_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		a >>= (int)unit_rand_uniform(&g, 0, 31);
+		double tol = 0.6 * LSB + (0.5 * fabs(d(a)) + 1.0) * 6.283185307179586 / 4294967296.0;
+		CHECK_NEAR(d(sc_sin(a)), sin(d(a)), tol);
+		CHECK_NEAR(d(sc_cos(a)), cos(d(a)), tol);
+	}
+	CHECK(sc_sin(0) == 0 && sc_cos(0) == SC(1) && sc_sin(SC(1.5707963)) == SC(1));
+	CHECK(sc_cos(SC(3.14159265)) == SC(-1) && sc_sin(SC(-1.5707963)) == SC(-1));
+#else
+	CHECK(sc_sin(0.5f) == sinf(0.5f) && sc_cos(0.5f) == cosf(0.5f));
+#endif
+}
+
+/* sc_add and sc_sub are exact and saturate to [SC_MAX_NEG, SC_MAX] for operands of every size */
+UNIT_TEST(scalar_add_sub_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0xadd5ULL };
+	for (int i = 0; i < N_RAND; i++) {
+		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483648.0, 2147483647.0);
+		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483648.0, 2147483647.0);
+		a >>= (int)unit_rand_uniform(&g, 0, 3);
+		if (i % 7 == 0)
+			a = i % 2 ? INT32_MIN : INT32_MAX;
+		int64_t s = (int64_t)a + b, d_ = (int64_t)a - b;
+		scalar_t rs = s > INT32_MAX ? SC_MAX : (s < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)s);
+		scalar_t rd = d_ > INT32_MAX ? SC_MAX : (d_ < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)d_);
+		if (sc_add(a, b) != rs || sc_sub(a, b) != rd) {
+			unit_fail(u, __FILE__, __LINE__, "sc_add/sc_sub(%d, %d) = %d/%d, expected %d/%d", (int)a, (int)b,
+				  (int)sc_add(a, b), (int)sc_sub(a, b), (int)rs, (int)rd);
+			return;
+		}
+	}
+	CHECK(sc_add(INT32_MIN, 0) == SC_MAX_NEG && sc_sub(INT32_MIN, 0) == SC_MAX_NEG);
+	CHECK(sc_sub(0, INT32_MIN) == SC_MAX && sc_sub(-1, INT32_MIN) == SC_MAX && sc_sub(-2, INT32_MIN) == INT32_MAX - 1);
+	CHECK(sc_add(SC_MAX, SC_MAX_NEG) == 0 && sc_add(SC_MAX, 1) == SC_MAX && sc_sub(SC_MAX_NEG, 1) == SC_MAX_NEG);
+#else
+	CHECK(sc_add(1.5f, 2.25f) == 3.75f && sc_sub(1.5f, 2.25f) == -0.75f);
+#endif
+}
+
+/* integer atan2 and asin against libm over operands of every size: within 0.6 LSB */
+UNIT_TEST(scalar_atan2_asin_integer)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0xa7a2ULL };
+	for (int i = 0; i < N_RAND; i++) {
+		scalar_t y = (scalar_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		scalar_t x = (scalar_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		y >>= (int)unit_rand_uniform(&g, 0, 31);
+		x >>= (int)unit_rand_uniform(&g, 0, 31);
+		CHECK_NEAR(d(sc_atan2(y, x)), atan2(d(y), d(x)), 0.6 * LSB);
+		scalar_t a = (scalar_t)unit_rand_uniform(&g, -65536.0, 65536.0);
+		CHECK_NEAR(d(sc_asin(a)), asin(d(a)), 0.6 * LSB);
+	}
+	CHECK(sc_atan2(0, 0) == 0 && sc_atan2(0, SC(-1)) == SC(3.14159265358979) && sc_atan2(0, 5) == 0);
+	CHECK(sc_atan2(SC(1), 0) == SC(1.5707963267949) && sc_atan2(SC(-1), 0) == -SC(1.5707963267949));
+	CHECK(sc_asin(SC(1)) == SC(1.5707963267949) && sc_asin(SC(-2)) == -SC(1.5707963267949));
+	CHECK(sc_asin(SC(0.5)) == SC(0.5235987755982988) && sc_asin(0) == 0);
+	CHECK(sc_asin(65535) == SC(asin(65535.0 / 65536.0)));
+#else
+	CHECK(sc_atan2(1.0f, 2.0f) == atan2f(1.0f, 2.0f) && sc_asin(0.5f) == asinf(0.5f));
+#endif
+}
+
+/* sc_sqrt is sqrt(a 2^16) rounded to nearest for every a (ties cannot occur) */
+UNIT_TEST(scalar_sqrt_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0x5a27ULL };
+	for (int i = 0; i < N_RAND; i++) {
+		int32_t a = (int32_t)unit_rand_uniform(&g, 0.0, 2147483647.0);
+		a >>= (int)unit_rand_uniform(&g, 0, 31);
+		if (i < 64)
+			a = i < 32 ? i : INT32_MAX - (i - 32);
+		int64_t n = (int64_t)a * 65536, r = (int64_t)floor(sqrt((double)n));
+		while (r * r > n)
+			r--;
+		while ((r + 1) * (r + 1) <= n)
+			r++;
+		if (n - r * r > r)
+			r++;
+		if (a > 0 && sc_sqrt(a) != (scalar_t)r) {
+			unit_fail(u, __FILE__, __LINE__, "sc_sqrt(%d) = %d, expected %d", (int)a, (int)sc_sqrt(a), (int)r);
+			return;
+		}
+	}
+	CHECK(sc_sqrt(0) == 0 && sc_sqrt(-5) == 0 && sc_sqrt(SC(4)) == SC(2) && sc_sqrt(SC(2)) == 92682);
+#else
+	CHECK(sc_sqrt(4.0f) == 2.0f && sc_sqrt(-1.0f) == 0.0f);
 #endif
 }
