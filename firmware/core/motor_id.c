@@ -18,7 +18,7 @@
 #define SH_UF (QF_UNIT_FRAC + QF_MOTN_FRAC - QF_MSUM_FRAC)
 #define SH_FF (2 * QF_MOTN_FRAC - QF_MSUM_FRAC)
 #define SUM_HI_BIT 29   /* a kind is halved when one of its sums reaches 2^29 */
-#define E_MAX 100       /* exponent ceiling (2^70 frames away): beyond it terms round to 0 */
+#define E_MAX 100       /* exponent ceiling (2^70 frames away): beyond it terms are dropped */
 #define WBIN_U ((motor_id_u_t)(0.025 * (1 << QF_UNIT_FRAC) + 0.5))
 typedef uint32_t big_t;
 static inline motor_id_u_t u_of_sc(scalar_t v) { return q_scale32(v, QF_UNIT_FRAC - QF_SC_FRAC); }
@@ -42,20 +42,40 @@ static inline motor_id_f_t f_ref(const struct motor_id *m, motor_id_u_t s)
 }
 /* Q2.29 x Q1.30 -> Q2.29 */
 static inline motor_id_f_t f_mul_u(motor_id_f_t f, motor_id_u_t u) { return q_mul32(f, u, QF_UNIT_FRAC); }
-/* a product rounded into a sum's mantissa at exponent e (sh: SH_*) */
-static inline motor_id_sum_t term(int32_t a, int32_t b, int sh, motor_id_e_t e)
+#define SUM_LIM ((int64_t)1 << SUM_HI_BIT)
+typedef int64_t term_t;
+/* a product rounded to a sum's mantissa at exponent e (sh: SH_*) */
+static inline term_t term(int32_t a, int32_t b, int sh, motor_id_e_t e)
 {
-	return q_sat32(q_scale64(q_smul32(a, b), -(sh + e)));
-}
-/* s + t, noting its size in *big (a sum and a term are below 2^29 in magnitude: no wrap) */
-static inline motor_id_sum_t sum_add(motor_id_sum_t s, motor_id_sum_t t, big_t *big)
-{
-	s += t;
-	*big |= (big_t)(s < 0 ? -s : s);
-	return s;
+	return q_scale64(q_smul32(a, b), -(sh + (int)e));
 }
 static inline motor_id_sum_t sum_half(motor_id_sum_t v) { return (motor_id_sum_t)q_shr64(v, 1); }
 static inline bool big_over(big_t b) { return (b >> SUM_HI_BIT) != 0u; }
+static void sums_halve(struct motor_id *m, unsigned mask);
+static inline bool sum_big(int64_t v) { return v >= SUM_LIM || v <= -SUM_LIM; }
+/* a term or a sum of 2^29 or more (a sum that takes several terms a frame): the kind is
+ * halved (its exponent raised) until both are below */
+static void sum_fit(struct motor_id *m, unsigned k, const motor_id_sum_t *s, term_t *t, big_t *big)
+{
+	while (sum_big(*t) || sum_big(*s)) {
+		if (m->e[k] >= E_MAX) {   /* unreachable: 2^70 frames of the largest terms */
+			*t = 0;
+			return;
+		}
+		sums_halve(m, 1u << k);
+		*t = q_shr64(*t, 1);
+	}
+	*big = 0;   /* every sum of the kind is below 2^29 now */
+}
+/* *s + t for a sum of kind k, noting its size in *big: a sum and a term below 2^29 in
+ * magnitude cannot wrap */
+static inline void sum_add(struct motor_id *m, unsigned k, motor_id_sum_t *s, term_t t, big_t *big)
+{
+	if (sum_big(t) || sum_big(*s))
+		sum_fit(m, k, s, &t, big);
+	*s += (motor_id_sum_t)t;
+	*big |= (big_t)(*s < 0 ? -*s : *s);
+}
 #else
 typedef int big_t;
 #define WBIN_U 0.025f
@@ -72,16 +92,19 @@ static inline motor_id_f_t f_mul_u(motor_id_f_t f, motor_id_u_t u) { return f * 
 #define SH_UU 0
 #define SH_UF 0
 #define SH_FF 0
-static inline motor_id_sum_t term(float a, float b, int sh, motor_id_e_t e)
+typedef float term_t;
+static inline term_t term(float a, float b, int sh, motor_id_e_t e)
 {
 	(void)sh;
 	(void)e;
 	return a * b;
 }
-static inline motor_id_sum_t sum_add(motor_id_sum_t s, motor_id_sum_t t, big_t *big)
+static inline void sum_add(struct motor_id *m, unsigned k, motor_id_sum_t *s, term_t t, big_t *big)
 {
+	(void)m;
+	(void)k;
 	(void)big;
-	return s + t;
+	*s += t;
 }
 static inline bool big_over(big_t b) { (void)b; return false; }
 #endif
@@ -185,7 +208,7 @@ void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar
 		big_t big = 0;
 		for (unsigned j = 0; j < NR; j++) {
 			motor_id_f_t dd = sub32(f_of_sc(f[j], m->kexp), f_of_sc(m->q_f[j], m->kexp));
-			m->nz_ss = sum_add(m->nz_ss, term(dd, dd, SH_FF, m->e[MID_E_NZ]), &big);
+			sum_add(m, MID_E_NZ, &m->nz_ss, term(dd, dd, SH_FF, m->e[MID_E_NZ]), &big);
 			m->nz_n += 2u;
 		}
 		sums_halve(m, over_mask(&big, MID_E_NZ, 1));
@@ -207,7 +230,6 @@ static void white_update(struct motor_id *m, const motor_id_f_t fm[NR])
 	if (!w->on)
 		return;
 	const motor_id_u_t *s = w->s;
-	const motor_id_e_t e1 = m->e[MID_E_WSE], e2 = m->e[MID_E_WSEE];
 	big_t big[2] = {0, 0};
 	for (unsigned j = 0; j < NR; j++) {
 		motor_id_u_t x1 = s[j], x2 = u_x2(s[j], m->s_c[j]);
@@ -218,15 +240,15 @@ static void white_update(struct motor_id *m, const motor_id_f_t fm[NR])
 		if (w->n[j][b] < UINT16_MAX) {   /* a full series keeps what it has */
 			w->n[j][b]++;
 #if OCTO_FIXED
-			w->se[j][b] = sum_add(w->se[j][b], q_sat32(q_scale64(e, QF_MSUM_FRAC - QF_MOTN_FRAC - e1)), &big[0]);
+			sum_add(m, MID_E_WSE, &w->se[j][b], q_scale64(e, QF_MSUM_FRAC - QF_MOTN_FRAC - m->e[MID_E_WSE]), &big[0]);
 #else
-			(void)e1;
-			w->se[j][b] = sum_add(w->se[j][b], e, &big[0]);
+			sum_add(m, MID_E_WSE, &w->se[j][b], e, &big[0]);
 #endif
-			w->see[j][b] = sum_add(w->see[j][b], term(e, e, SH_FF, e2), &big[1]);
+			sum_add(m, MID_E_WSEE, &w->see[j][b], term(e, e, SH_FF, m->e[MID_E_WSEE]), &big[1]);
 			for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++)
 				if (l < w->run)
-					w->sl[j][b][l] = sum_add(w->sl[j][b][l], term(e, w->ring[l][j], SH_FF, e2), &big[1]);
+					sum_add(m, MID_E_WSEE, &w->sl[j][b][l], term(e, w->ring[l][j], SH_FF, m->e[MID_E_WSEE]),
+						&big[1]);
 		}
 		for (unsigned l = MOTOR_ID_WLAGS - 1u; l > 0u; l--)
 			w->ring[l][j] = w->ring[l - 1u][j];
@@ -242,7 +264,7 @@ void motor_id_process(struct motor_id *m)
 	if (!m->q_pending)
 		return;
 	m->q_pending = false;
-	if (m->refine_due || m->white_due)
+	if (m->refine_due || m->white_due || m->reref_due)
 		motor_id_refine(m);
 	advance(m);
 	if (!m->q_excited)
@@ -252,9 +274,9 @@ void motor_id_process(struct motor_id *m)
 	for (unsigned j = 0; j < NR; j++) {
 		fm[j] = f_of_sc(m->q_f[j], m->kexp);
 		motor_id_f_t t = f_of_sc(m->q_tq[j], m->kexp);
-		m->ff = sum_add(m->ff, term(fm[j], fm[j], SH_FF, m->e[MID_E_FF]), &bt[0]);
-		m->tf = sum_add(m->tf, term(t, fm[j], SH_FF, m->e[MID_E_TF]), &bt[1]);
-		m->tt = sum_add(m->tt, term(t, t, SH_FF, m->e[MID_E_TT]), &bt[2]);
+		sum_add(m, MID_E_FF, &m->ff, term(fm[j], fm[j], SH_FF, m->e[MID_E_FF]), &bt[0]);
+		sum_add(m, MID_E_TF, &m->tf, term(t, fm[j], SH_FF, m->e[MID_E_TF]), &bt[1]);
+		sum_add(m, MID_E_TT, &m->tt, term(t, t, SH_FF, m->e[MID_E_TT]), &bt[2]);
 	}
 	sums_halve(m, over_mask(bt, MID_E_FF, 3));
 	m->n_exc++;
@@ -270,19 +292,22 @@ void motor_id_process(struct motor_id *m)
 				for (unsigned j = 0; j < NR; j++) {
 					motor_id_u_t x1 = s[j], x2 = u_x2(s[j], m->s_c[j]);
 					motor_id_f_t r = sub32(fm[j], f_ref(m, s[j]));
-					st[j].g11 = sum_add(st[j].g11, term(x1, x1, SH_UU, e[MID_E_G11]), &big[0]);
-					st[j].g12 = sum_add(st[j].g12, term(x1, x2, SH_UU, e[MID_E_G12]), &big[1]);
-					st[j].g22 = sum_add(st[j].g22, term(x2, x2, SH_UU, e[MID_E_G22]), &big[2]);
-					st[j].b1 = sum_add(st[j].b1, term(x1, r, SH_UF, e[MID_E_B1]), &big[3]);
-					st[j].b2 = sum_add(st[j].b2, term(x2, r, SH_UF, e[MID_E_B2]), &big[4]);
-					st[j].rr = sum_add(st[j].rr, term(r, r, SH_FF, e[MID_E_RR]), &big[5]);
+					sum_add(m, MID_E_G11, &st[j].g11, term(x1, x1, SH_UU, e[MID_E_G11]), &big[0]);
+					sum_add(m, MID_E_G12, &st[j].g12, term(x1, x2, SH_UU, e[MID_E_G12]), &big[1]);
+					sum_add(m, MID_E_G22, &st[j].g22, term(x2, x2, SH_UU, e[MID_E_G22]), &big[2]);
+					sum_add(m, MID_E_B1, &st[j].b1, term(x1, r, SH_UF, e[MID_E_B1]), &big[3]);
+					sum_add(m, MID_E_B2, &st[j].b2, term(x2, r, SH_UF, e[MID_E_B2]), &big[4]);
+					sum_add(m, MID_E_RR, &st[j].rr, term(r, r, SH_FF, e[MID_E_RR]), &big[5]);
 				}
 			}
 		sums_halve(m, over_mask(big, MID_E_G11, 6));
 		m->n_stat++;
 		white_update(m, fm);
 	}
-	/* the stage's end, or in the last stage the whiteness model's freezing: between frames */
+	/* the first stage's re-referencing, the stage's end, or in the last stage the whiteness
+	 * model's freezing: between frames */
+	if (m->stage == 0 && !m->reref_done && m->n_stat >= MOTOR_ID_NREF)
+		m->reref_due = true;
 	if (m->n_exc >= m->n_next) {
 		if (m->stage < MOTOR_ID_STAGES - 1)
 			m->refine_due = true;

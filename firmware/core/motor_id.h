@@ -17,8 +17,11 @@
  * lag (s), and the per-rotor least-squares statistics of the thrust on the basis
  *     x = [s, s (s - 2 s_c)]     (s_c: the rotor's throttle at the start)
  * are accumulated: G = sum x x^T, b = sum x r, rr = sum r^2 with r = f - x^T theta_ref, the
- * residual of a fixed reference model (the prior k_f and c), so that the float sums do not
- * cancel. f = A s + B s (s - 2 s_c) is the curve model exactly: m = A + B (1 - 2 s_c),
+ * residual of a reference model (common k_f and c), so that the sums do not cancel: the
+ * prior at first; after MOTOR_ID_NREF frames of the first stage the fit so far, and at every
+ * refinement the fit of the stage that ends (the statistics restart then, so nothing is
+ * transformed). With the reference near the data SSR is not a small difference of large
+ * sums, and its rounding (float or integer) stays far below the differences between lags. f = A s + B s (s - 2 s_c) is the curve model exactly: m = A + B (1 - 2 s_c),
  * c = B / m. The basis keeps G well conditioned at the low throttles of hover.
  * With curve estimation off the regressor is the prior curve's g (w^T x, one parameter).
  *
@@ -91,6 +94,7 @@
 #define MOTOR_ID_TAU_MAX 0.5f
 #define MOTOR_ID_WLAGS 3     /* autocorrelation lags of the whiteness test */
 #define MOTOR_ID_WBINS 3     /* throttle levels of the whiteness test */
+#define MOTOR_ID_NREF 30     /* first-stage frames before the reference is re-fitted */
 
 struct motor_id_cfg {
 	scalar_t dt_s;           /* frame period */
@@ -116,11 +120,12 @@ struct motor_id_cfg {
  *                   saturates (a thrust beyond 4 k_f0 is not a hovering rotor's).
  *   motor_id_sum_t  block floating point, int32 mantissa m with an exponent e shared by
  *                   every sum of one kind (motor_id_e_t): value = m 2^(e - QF_MSUM_FRAC) in
- *                   the normalised units. Each term is rounded to the current exponent; when
- *                   a sum of the kind reaches 2^29 the whole kind is halved (rounded) and e
- *                   grows by one, so no sum can overflow or wrap however long the run (a term
- *                   is below 2^29 at e = 0: |products| < 16). Resolution 2^-29 to 2^-30 of the
- *                   kind's largest sum.
+ *                   the normalised units. Each term is rounded to the current exponent; a
+ *                   term of 2^29 or more first halves the whole kind (rounded) and raises e
+ *                   until it fits, and a kind whose largest sum reached 2^29 is halved after
+ *                   the frame, so sum and term stay below 2^29 and their sum below 2^30: no
+ *                   overflow or wrap however long the run. e starts at MOTOR_ID_E0 at each
+ *                   restart. Resolution 2^-28 to 2^-29 of the kind's largest sum.
  * Counts (frames, noise terms) are integers in both builds. */
 #if OCTO_FIXED
 typedef int32_t motor_id_u_t;
@@ -132,6 +137,9 @@ typedef float motor_id_f_t;
 typedef float motor_id_sum_t;
 #endif
 typedef int8_t motor_id_e_t;
+/* every kind starts at this exponent (fine resolution, 2^-41 in normalised units): its first
+ * terms raise it as far as they need */
+#define MOTOR_ID_E0 (-16)
 
 /* the kinds of sums, each with its exponent */
 enum {
@@ -174,7 +182,7 @@ struct motor_id {
 	motor_id_sum_t ff, tf, tt;   /* torque ratio: sums over every rotor of f^2, t f, t^2 */
 	motor_id_sum_t nz_ss;        /* thrust noise from differences: sum of squares, */
 	uint32_t nz_n;               /* and its count */
-	motor_id_u_t kf0n, c0;       /* the reference model: k_f0 2^-kexp, curve0 */
+	motor_id_u_t kf0n, c0;       /* the reference model: its k_f 2^-kexp, its curve */
 	uint32_t n_stat;         /* frames in the current stage's statistics */
 	uint32_t n_exc;          /* excited frames so far */
 	uint32_t n_next;         /* n_exc at which the stage ends (or the whiteness model freezes) */
@@ -186,6 +194,7 @@ struct motor_id {
 	bool nz_have;            /* the last frame taken was not excited (and none was lost since) */
 	bool refine_due;
 	bool white_due;          /* the whiteness model is to be frozen (between frames) */
+	bool reref_due, reref_done;   /* the first stage's early re-referencing (see above) */
 	/* the frame motor_id_step took, waiting for motor_id_process (its commands sit in
 	 * hist's next slot, its noise sums are already taken) */
 	bool q_excited, q_pending;

@@ -10,10 +10,30 @@
 #define ND MOTOR_ID_DELAYS
 #define NL MOTOR_ID_LAGS
 
-/* a rotor's least-squares sums under one hypothesis, as float (SI units) */
+/* The least-squares arithmetic on the sums (interpolation, solutions, residual sums of
+ * squares: differences of nearly equal products) in ls_t: float in the float build; double
+ * in the fixed build, whose integer sums carry 30 significant bits, more than float holds
+ * (on Cortex-M0 both are soft float; this runs between frames). Plain arithmetic only. */
+#if OCTO_FIXED
+typedef double ls_t;
+#else
+typedef float ls_t;
+#endif
+
+/* a rotor's least-squares sums under one hypothesis (SI units) */
 struct stat_f {
-	float g11, g12, g22, b1, b2, rr;
+	ls_t g11, g12, g22, b1, b2, rr;
 };
+
+/* a sum of kind ev to ls_t (see mid_sum_to_float) */
+static ls_t sum_ls(motor_id_sum_t v, int ev, int p, int kexp)
+{
+#if OCTO_FIXED
+	return (ls_t)v * (ls_t)sc_pow2f(ev - QF_MSUM_FRAC + p * kexp);
+#else
+	return mid_sum_to_float(v, ev, p, kexp);
+#endif
+}
 
 /* rotor j's throttle at the start, as float */
 #define SC_J(m, j) mid_u_to_float((m)->s_c[j])
@@ -23,17 +43,28 @@ static void stat_get(const struct motor_id *m, unsigned d, unsigned i, unsigned 
 {
 	const struct motor_id_stat *s = &m->st[d][i][j];
 	const int k = m->kexp;
-	o->g11 = mid_sum_to_float(s->g11, m->e[MID_E_G11], 0, k);
-	o->g12 = mid_sum_to_float(s->g12, m->e[MID_E_G12], 0, k);
-	o->g22 = mid_sum_to_float(s->g22, m->e[MID_E_G22], 0, k);
-	o->b1 = mid_sum_to_float(s->b1, m->e[MID_E_B1], 1, k);
-	o->b2 = mid_sum_to_float(s->b2, m->e[MID_E_B2], 1, k);
-	o->rr = mid_sum_to_float(s->rr, m->e[MID_E_RR], 2, k);
+	o->g11 = sum_ls(s->g11, m->e[MID_E_G11], 0, k);
+	o->g12 = sum_ls(s->g12, m->e[MID_E_G12], 0, k);
+	o->g22 = sum_ls(s->g22, m->e[MID_E_G22], 0, k);
+	o->b1 = sum_ls(s->b1, m->e[MID_E_B1], 1, k);
+	o->b2 = sum_ls(s->b2, m->e[MID_E_B2], 1, k);
+	o->rr = sum_ls(s->rr, m->e[MID_E_RR], 2, k);
 }
+
+/* the reference model's k_f and curve (exactly the per-frame part's) */
+static float ref_kf(const struct motor_id *m)
+{
+#if OCTO_FIXED
+	return mid_u_to_float(m->kf0n) * sc_pow2f(m->kexp);
+#else
+	return m->kf0n;
+#endif
+}
+static float ref_c(const struct motor_id *m) { return mid_u_to_float(m->c0); }
 
 /* grid ratio of each stage and where (fraction of the planned frames) a stage ends */
 static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f};
-static const float stage_end[MOTOR_ID_STAGES - 1] = {0.30f, 0.55f};
+static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u};
 #define X_MAX 1.5f          /* how far beyond the grid the parabola may place the minimum */
 #define CURVE_CHI2_SIGMAS 5.0f
 #define NE_SIGMAS 5.0f
@@ -48,24 +79,19 @@ static float lag_k1(float tau, float dt)
 	return tau > NO_LAG_FRAC * dt ? 1.0f - expf(-dt / tau) : 1.0f;
 }
 
-#define WHITE_AT 0.75f   /* the whiteness model is frozen at this fraction of the planned frames */
+#define WHITE_AT_PCT 75u   /* the whiteness model is frozen at this share of the planned frames */
 
-/* the least n with (float)n >= frac n_frames (the float comparison, exact below 2^24) */
-static uint32_t frames_at(const struct motor_id *m, float frac)
+/* the least n >= pct % of the planned frames (integers: the same in every precision) */
+static uint32_t frames_at(const struct motor_id *m, uint32_t pct)
 {
-	float x = frac * (float)m->cfg.n_frames;
-	if (!(x > 0.0f))
-		return 0u;
-	if (x >= 4294967040.0f)
-		return UINT32_MAX;
-	uint32_t n = (uint32_t)x;
-	return (float)n < x ? n + 1u : n;
+	uint64_t n = ((uint64_t)m->cfg.n_frames * pct + 99u) / 100u;
+	return n > UINT32_MAX ? UINT32_MAX : (uint32_t)n;
 }
 
 /* n_exc at which the current stage ends, or (last stage) the whiteness model freezes */
 static uint32_t next_due(const struct motor_id *m)
 {
-	return frames_at(m, m->stage < MOTOR_ID_STAGES - 1 ? stage_end[m->stage] : WHITE_AT);
+	return frames_at(m, m->stage < MOTOR_ID_STAGES - 1 ? stage_end_pct[m->stage] : WHITE_AT_PCT);
 }
 
 static void set_grid(struct motor_id *m, unsigned d, float centre, float ratio)
@@ -104,6 +130,8 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const sca
 	m->kf0n = kf0n;
 #endif
 	m->c0 = mid_u_of_float(m->cfg.curve0);
+	for (unsigned k = 0; k < MID_E_N; k++)
+		m->e[k] = MOTOR_ID_E0;
 	m->n_next = next_due(m);
 	for (unsigned j = 0; j < NR; j++) {
 		float t0 = sc_to_float(thr0[j]);
@@ -122,19 +150,18 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const sca
 static void delay_crit(const struct motor_id *m, unsigned d, float jv[3]);
 static float parabola(const float sv[3], float *s_min, float *k);
 static void lagrange3(float x, float l[3]);
-static void interp_stat(const struct stat_f st[3], const float l[3], struct stat_f *o);
-static void stat_at(const struct motor_id *m, unsigned d, const float l[3], unsigned j, struct stat_f *o);
+static void lagrange3_ls(float x, ls_t l[3]);
+static void interp_stat(const struct stat_f st[3], const ls_t l[3], struct stat_f *o);
+static void stat_at(const struct motor_id *m, unsigned d, const ls_t l[3], unsigned j, struct stat_f *o);
 static float delay_logssr(const struct motor_id *m, unsigned d, float x);
 static float rotor_ssr(const struct stat_f *st, bool est_curve, float c0, float s_c, float delta[2]);
 
 /* Freezes the model the whiteness test follows, from the last stage's data so far: the delay
  * the bank prefers (or the given one), its lag at the criterion's minimum (a filter of its own,
  * started from the grid's states interpolated there), every rotor's fit at that lag. */
-static void white_begin(struct motor_id *m)
+/* the hypothesis the data so far prefer (or the given delay) and its lag's grid position */
+static void best_hyp(const struct motor_id *m, unsigned *d_best, float *x_best)
 {
-	struct motor_id_white *w = &m->wh;
-	*w = (struct motor_id_white){0};
-	m->e[MID_E_WSE] = m->e[MID_E_WSEE] = 0;
 	unsigned d = 0;
 	float x = 0.0f, best = 0.0f;
 	for (unsigned k = 0; k < ND; k++) {
@@ -155,11 +182,72 @@ static void white_begin(struct motor_id *m)
 			x = xk;
 		}
 	}
+	*d_best = d;
+	*x_best = x;
+}
+
+static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, float *curve, float sc[NR]);
+
+/* A new reference model: common k_f and curve (the curve only when estimated); kept within
+ * a quarter to four times the prior and the throttle map's curve range (and, fixed build,
+ * what Q1.30 holds of k_f 2^-kexp), else unchanged. */
+static void set_reference(struct motor_id *m, float kf, float c)
+{
+	if (!m->cfg.est_curve)
+		c = m->cfg.curve0;
+	if (!(kf >= 0.25f * m->cfg.kf0 && kf <= 4.0f * m->cfg.kf0 && c >= THRMAP_CURVE_MIN && c <= THRMAP_CURVE_MAX))
+		return;
+#if OCTO_FIXED
+	float kn = kf * sc_pow2f(-m->kexp);
+	if (!(kn < 1.9f))
+		return;
+	m->kf0n = mid_u_of_float(kn);
+#else
+	m->kf0n = kf;
+#endif
+	m->c0 = mid_u_of_float(c);
+}
+
+/* the statistics restart (the lag filters run on) */
+static void stats_restart(struct motor_id *m)
+{
+	for (unsigned d = 0; d < ND; d++)
+		for (unsigned i = 0; i < NL; i++)
+			for (unsigned j = 0; j < NR; j++)
+				m->st[d][i][j] = (struct motor_id_stat){0};
+	for (unsigned k = MID_E_G11; k <= MID_E_RR; k++)
+		m->e[k] = MOTOR_ID_E0;
+	m->n_stat = 0;
+}
+
+/* the data so far's fit for a reference: the preferred hypothesis' k_f and curve (false:
+ * too few frames) */
+static bool reference_fit(const struct motor_id *m, float *kf, float *c)
+{
+	if (m->n_stat < 10u)
+		return false;
+	unsigned d;
+	float x, sc[NR];
+	best_hyp(m, &d, &x);
+	model_at(m, d, x, kf, c, sc);
+	return true;
+}
+
+static void white_begin(struct motor_id *m)
+{
+	struct motor_id_white *w = &m->wh;
+	*w = (struct motor_id_white){0};
+	m->e[MID_E_WSE] = m->e[MID_E_WSEE] = MOTOR_ID_E0;
+	unsigned d;
+	float x;
+	best_hyp(m, &d, &x);
 	float l[3], dl[2];
+	ls_t ll[3];
 	lagrange3(x, l);
+	lagrange3_ls(x, ll);
 	for (unsigned j = 0; j < NR; j++) {
 		struct stat_f o;
-		stat_at(m, d, l, j, &o);
+		stat_at(m, d, ll, j, &o);
 		rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, SC_J(m, j), dl);
 		w->dl[j][0] = mid_f_of_float(dl[0], m->kexp);
 		w->dl[j][1] = mid_f_of_float(dl[1], m->kexp);
@@ -185,23 +273,28 @@ static float rotor_ssr(const struct stat_f *st, bool est_curve, float c0, float 
 		       float delta[2])
 {
 	if (est_curve) {
-		float det = st->g11 * st->g22 - st->g12 * st->g12;
-		if (!(det > 1e-30f * st->g11 * st->g22) || !(st->g11 > 0.0f)) {
+		ls_t det = st->g11 * st->g22 - st->g12 * st->g12;
+		if (!(det > (ls_t)1e-30f * st->g11 * st->g22) || !(st->g11 > 0)) {
 			delta[0] = delta[1] = 0.0f;
-			return st->rr;
+			return (float)st->rr;
 		}
-		delta[0] = (st->g22 * st->b1 - st->g12 * st->b2) / det;
-		delta[1] = (st->g11 * st->b2 - st->g12 * st->b1) / det;
-		return fmaxf(st->rr - delta[0] * st->b1 - delta[1] * st->b2, 0.0f);
+		ls_t d0 = (st->g22 * st->b1 - st->g12 * st->b2) / det;
+		ls_t d1 = (st->g11 * st->b2 - st->g12 * st->b1) / det;
+		delta[0] = (float)d0;
+		delta[1] = (float)d1;
+		ls_t ssr = st->rr - d0 * st->b1 - d1 * st->b2;
+		return ssr > 0 ? (float)ssr : 0.0f;
 	}
 	float w[2];
 	curve_w(c0, s_c, w);
-	float gw = w[0] * w[0] * st->g11 + 2.0f * w[0] * w[1] * st->g12 + w[1] * w[1] * st->g22;
-	float bw = w[0] * st->b1 + w[1] * st->b2;
-	float mu = gw > 0.0f ? bw / gw : 0.0f;
-	delta[0] = mu * w[0];
-	delta[1] = mu * w[1];
-	return fmaxf(st->rr - mu * bw, 0.0f);
+	ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1];
+	ls_t gw = w0 * w0 * st->g11 + (ls_t)2.0f * w0 * w1 * st->g12 + w1 * w1 * st->g22;
+	ls_t bw = w0 * st->b1 + w1 * st->b2;
+	ls_t mu = gw > 0 ? bw / gw : 0;
+	delta[0] = (float)(mu * w0);
+	delta[1] = (float)(mu * w1);
+	ls_t ssr = st->rr - mu * bw;
+	return ssr > 0 ? (float)ssr : 0.0f;
 }
 
 /* parabola through (-1, s0), (0, s1), (1, s2): minimum x (clamped to +/-X_MAX), the value
@@ -220,6 +313,16 @@ static float parabola(const float sv[3], float *s_min, float *k)
 }
 
 /* Lagrange weights of the three grid points at x */
+/* the same in ls_t (the weights of the statistics: their rounding would perturb sums that
+ * the solutions difference) */
+static void lagrange3_ls(float x, ls_t l[3])
+{
+	const ls_t xl = (ls_t)x;
+	l[0] = (ls_t)0.5f * xl * (xl - (ls_t)1.0f);
+	l[1] = (ls_t)1.0f - xl * xl;
+	l[2] = (ls_t)0.5f * xl * (xl + (ls_t)1.0f);
+}
+
 static void lagrange3(float x, float l[3])
 {
 	l[0] = 0.5f * x * (x - 1.0f);
@@ -261,6 +364,15 @@ void motor_id_refine(struct motor_id *m)
 		m->white_due = false;
 		white_begin(m);
 	}
+	if (m->reref_due) {   /* early in the first stage: re-fit the reference, restart */
+		m->reref_due = false;
+		m->reref_done = true;
+		float kf, c;
+		if (!m->refine_due && reference_fit(m, &kf, &c)) {
+			stats_restart(m);
+			set_reference(m, kf, c);
+		}
+	}
 	if (!m->refine_due)
 		return;
 	m->refine_due = false;
@@ -268,6 +380,9 @@ void motor_id_refine(struct motor_id *m)
 	if (next >= MOTOR_ID_STAGES)
 		return;
 	float dt = sc_to_float(m->cfg.dt_s), tau_hi = 0.0f;
+	/* the next stage's reference: this one's fit (relative to this reference) */
+	float kf_ref, c_ref;
+	bool have_ref = reference_fit(m, &kf_ref, &c_ref);
 	for (unsigned d = 0; d < ND; d++) {
 		float sv[3], smin, k;
 		delay_crit(m, d, sv);
@@ -297,13 +412,9 @@ void motor_id_refine(struct motor_id *m)
 		set_grid(m, d, centre, nr);
 		tau_hi = fmaxf(tau_hi, m->lag_c[d] * nr);
 	}
-	for (unsigned d = 0; d < ND; d++)
-		for (unsigned i = 0; i < NL; i++)
-			for (unsigned j = 0; j < NR; j++)
-				m->st[d][i][j] = (struct motor_id_stat){0};
-	for (unsigned k = MID_E_G11; k <= MID_E_RR; k++)
-		m->e[k] = 0;
-	m->n_stat = 0;
+	stats_restart(m);
+	if (have_ref)
+		set_reference(m, kf_ref, c_ref);
 	m->stage = (uint8_t)next;
 	m->n_next = next_due(m);
 	/* what the interpolation left decays with the lag: wait two time constants */
@@ -311,18 +422,19 @@ void motor_id_refine(struct motor_id *m)
 	m->skip = (uint8_t)clampf(fr + 1.0f, 1.0f, 30.0f);
 }
 
-static void interp_stat(const struct stat_f st[3], const float l[3], struct stat_f *o)
+static void interp_stat(const struct stat_f st[3], const ls_t l[3], struct stat_f *o)
 {
-	o->g11 = l[0] * st[0].g11 + l[1] * st[1].g11 + l[2] * st[2].g11;
-	o->g12 = l[0] * st[0].g12 + l[1] * st[1].g12 + l[2] * st[2].g12;
-	o->g22 = l[0] * st[0].g22 + l[1] * st[1].g22 + l[2] * st[2].g22;
-	o->b1 = l[0] * st[0].b1 + l[1] * st[1].b1 + l[2] * st[2].b1;
-	o->b2 = l[0] * st[0].b2 + l[1] * st[1].b2 + l[2] * st[2].b2;
-	o->rr = l[0] * st[0].rr + l[1] * st[1].rr + l[2] * st[2].rr;
+	const ls_t l0 = l[0], l1 = l[1], l2 = l[2];
+	o->g11 = l0 * st[0].g11 + l1 * st[1].g11 + l2 * st[2].g11;
+	o->g12 = l0 * st[0].g12 + l1 * st[1].g12 + l2 * st[2].g12;
+	o->g22 = l0 * st[0].g22 + l1 * st[1].g22 + l2 * st[2].g22;
+	o->b1 = l0 * st[0].b1 + l1 * st[1].b1 + l2 * st[2].b1;
+	o->b2 = l0 * st[0].b2 + l1 * st[1].b2 + l2 * st[2].b2;
+	o->rr = l0 * st[0].rr + l1 * st[1].rr + l2 * st[2].rr;
 }
 
 /* rotor j's statistics of delay d at the grid weights l */
-static void stat_at(const struct motor_id *m, unsigned d, const float l[3], unsigned j, struct stat_f *o)
+static void stat_at(const struct motor_id *m, unsigned d, const ls_t l[3], unsigned j, struct stat_f *o)
 {
 	struct stat_f tri[3];
 	for (unsigned i = 0; i < NL; i++)
@@ -333,8 +445,9 @@ static void stat_at(const struct motor_id *m, unsigned d, const float l[3], unsi
 /* sum over rotors of log SSR_j of delay d at grid position x (statistics interpolated) */
 static float delay_logssr(const struct motor_id *m, unsigned d, float x)
 {
-	float l[3], dl[2], sum = 0.0f;
-	lagrange3(x, l);
+	float dl[2], sum = 0.0f;
+	ls_t l[3];
+	lagrange3_ls(x, l);
 	for (unsigned j = 0; j < NR; j++) {
 		struct stat_f o;
 		stat_at(m, d, l, j, &o);
@@ -349,10 +462,12 @@ static float rotor_m(const struct stat_f *st, float c, float s_c, const float th
 {
 	float w[2];
 	curve_w(c, s_c, w);
-	float xf1 = st->b1 + st->g11 * th_ref[0] + st->g12 * th_ref[1];
-	float xf2 = st->b2 + st->g12 * th_ref[0] + st->g22 * th_ref[1];
-	*gw = w[0] * w[0] * st->g11 + 2.0f * w[0] * w[1] * st->g12 + w[1] * w[1] * st->g22;
-	return *gw > 0.0f ? (w[0] * xf1 + w[1] * xf2) / *gw : 0.0f;
+	const ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1], t0 = (ls_t)th_ref[0], t1 = (ls_t)th_ref[1];
+	ls_t xf1 = st->b1 + st->g11 * t0 + st->g12 * t1;
+	ls_t xf2 = st->b2 + st->g12 * t0 + st->g22 * t1;
+	ls_t g = w0 * w0 * st->g11 + (ls_t)2.0f * w0 * w1 * st->g12 + w1 * w1 * st->g22;
+	*gw = (float)g;
+	return g > 0 ? (float)((w0 * xf1 + w1 * xf2) / g) : 0.0f;
 }
 
 /* median of 8 (mean of the 4th and 5th); their indices in *a, *b */
@@ -383,9 +498,10 @@ static float sqrt0(float v) { return v > 0.0f ? sqrtf(v) : 0.0f; }
 static void ref_theta(const struct motor_id *m, unsigned j, float th[2])
 {
 	float w[2];
-	curve_w(m->cfg.curve0, SC_J(m, j), w);
-	th[0] = m->cfg.kf0 * w[0];
-	th[1] = m->cfg.kf0 * w[1];
+	curve_w(ref_c(m), SC_J(m, j), w);
+	float kf = ref_kf(m);
+	th[0] = kf * w[0];
+	th[1] = kf * w[1];
 }
 
 /* Rotor j's own curve: the 2-parameter fit about the prior's reference th, c_j = B / m_j,
@@ -397,13 +513,13 @@ static float rotor_curve(const struct motor_id *m, const struct stat_f *st, unsi
 	*ssr2 = rotor_ssr(st, true, m->cfg.curve0, SC_J(m, j), d2);
 	float a = th[0] + d2[0], bq = th[1] + d2[1];
 	float mj = a + bq * (1.0f - 2.0f * SC_J(m, j));
-	float det = st->g11 * st->g22 - st->g12 * st->g12;
+	ls_t det = st->g11 * st->g22 - st->g12 * st->g12;
 	*var = 0.0f;
-	if (!(mj > 0.0f && det > 0.0f))
+	if (!(mj > 0.0f && det > 0))
 		return 0.0f;
-	float ga = -bq / (mj * mj), gb = a / (mj * mj);
+	const ls_t ga = (ls_t)(-bq / (mj * mj)), gb = (ls_t)(a / (mj * mj));
 	/* g^T G^-1 g */
-	float q = (ga * ga * st->g22 - 2.0f * ga * gb * st->g12 + gb * gb * st->g11) / det;
+	float q = (float)((ga * ga * st->g22 - (ls_t)2.0f * ga * gb * st->g12 + gb * gb * st->g11) / det);
 	*var = *ssr2 / ((float)m->n_stat - 2.0f) * q;
 	return bq / mj;
 }
@@ -415,9 +531,10 @@ static float rotor_curve(const struct motor_id *m, const struct stat_f *st, unsi
 static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, float *curve, float sc[NR])
 {
 	const float c0 = m->cfg.curve0;
-	float l[3], th[NR][2], mj[NR];
+	float th[NR][2], mj[NR];
+	ls_t l[3];
 	struct stat_f st[NR];
-	lagrange3(x, l);
+	lagrange3_ls(x, l);
 	float sw = 0.0f, swc = 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
 		stat_at(m, d, l, j, &st[j]);
@@ -609,8 +726,8 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	}
 
 	/* every rotor at that lag */
-	float l[3];
-	lagrange3(x, l);
+	ls_t l[3];
+	lagrange3_ls(x, l);
 	struct stat_f st[NR];
 	float ssr[NR], cj[NR], vcj[NR], s2j[NR], th_ref[NR][2];
 	float ssr_sum = 0.0f, chi2 = 0.0f;
