@@ -533,15 +533,15 @@ static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, f
 	const float c0 = m->cfg.curve0;
 	float th[NR][2], mj[NR];
 	ls_t l[3];
-	struct stat_f st[NR];
+	struct stat_f st;   /* one rotor's at a time (interpolated again below): stack on M0 */
 	lagrange3_ls(x, l);
 	float sw = 0.0f, swc = 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
-		stat_at(m, d, l, j, &st[j]);
 		ref_theta(m, j, th[j]);
 		if (!m->cfg.est_curve)
 			continue;
-		float ssr2, v, c = rotor_curve(m, &st[j], j, th[j], &ssr2, &v);
+		stat_at(m, d, l, j, &st);
+		float ssr2, v, c = rotor_curve(m, &st, j, th[j], &ssr2, &v);
 		if (v > 0.0f) {
 			sw += 1.0f / v;
 			swc += c / v;
@@ -550,7 +550,8 @@ static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, f
 	*curve = m->cfg.est_curve && sw > 0.0f ? swc / sw : c0;
 	for (unsigned j = 0; j < NR; j++) {
 		float gw;
-		mj[j] = rotor_m(&st[j], *curve, SC_J(m, j), th[j], &gw);
+		stat_at(m, d, l, j, &st);
+		mj[j] = rotor_m(&st, *curve, SC_J(m, j), th[j], &gw);
 	}
 	unsigned ia, ib;
 	*kf = median8(mj, &ia, &ib);
@@ -728,19 +729,19 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	/* every rotor at that lag */
 	ls_t l[3];
 	lagrange3_ls(x, l);
-	struct stat_f st[NR];
+	struct stat_f st;   /* one rotor's at a time (interpolated again below): stack on M0 */
 	float ssr[NR], cj[NR], vcj[NR], s2j[NR], th_ref[NR][2];
 	float ssr_sum = 0.0f, chi2 = 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
-		stat_at(m, best, l, j, &st[j]);
+		stat_at(m, best, l, j, &st);
 		float dl[2];
 		ref_theta(m, j, th_ref[j]);
-		ssr[j] = rotor_ssr(&st[j], ec, c0, SC_J(m, j), dl);
+		ssr[j] = rotor_ssr(&st, ec, c0, SC_J(m, j), dl);
 		ssr_sum += ssr[j];
 		s2j[j] = ssr[j] / ((float)m->n_stat - (float)np);
 		/* the curve of this rotor alone (2-parameter fit) and its variance */
 		float ssr2;
-		cj[j] = rotor_curve(m, &st[j], j, th_ref[j], &ssr2, &vcj[j]);
+		cj[j] = rotor_curve(m, &st, j, th_ref[j], &ssr2, &vcj[j]);
 		chi2 += ssr[j] - ssr2;
 	}
 
@@ -767,8 +768,9 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	const float eps = 1e-3f;
 	for (unsigned j = 0; j < NR; j++) {
 		float gw, gw2;
-		mj[j] = rotor_m(&st[j], res->curve, SC_J(m, j), th_ref[j], &gw);
-		mj_e[j] = rotor_m(&st[j], res->curve + eps, SC_J(m, j), th_ref[j], &gw2);
+		stat_at(m, best, l, j, &st);
+		mj[j] = rotor_m(&st, res->curve, SC_J(m, j), th_ref[j], &gw);
+		mj_e[j] = rotor_m(&st, res->curve + eps, SC_J(m, j), th_ref[j], &gw2);
 		vm[j] = gw > 0.0f ? s2j[j] / gw : 0.0f;
 	}
 	unsigned ia, ib;

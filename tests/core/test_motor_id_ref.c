@@ -30,7 +30,7 @@ struct vehicle {
 	unsigned delay;
 };
 
-static void random_vehicle(struct unit_rng *g, struct vehicle *v)
+static inline void random_vehicle(struct unit_rng *g, struct vehicle *v)
 {
 	v->kf = 28.0269 * unit_rand_uniform(g, 0.7, 1.3);
 	v->ktau = 0.3869 * unit_rand_uniform(g, 0.7, 1.3);
@@ -48,7 +48,7 @@ static void random_vehicle(struct unit_rng *g, struct vehicle *v)
 
 /* One experiment (settle frames still, then n excited frames) fed to this build's estimator m
  * and, if ref, to the float64 one (the same scalar_t inputs, as double) */
-static void experiment(struct unit_rng *g, const struct vehicle *v, int settle, int n, double kf0, bool ref,
+static inline void experiment(struct unit_rng *g, const struct vehicle *v, int settle, int n, double kf0, bool ref,
 		       struct motor_id *m, struct motor_id_result *res, struct mid64_res *r64)
 {
 	double a = exp(-DT / v->tau), st[NR], hist[8][NR], tprev[NR], d1 = 0, d2 = 0;
@@ -128,7 +128,7 @@ static void experiment(struct unit_rng *g, const struct vehicle *v, int settle, 
 #endif
 }
 
-static double rel(double a, double b) { return fabs(a / b - 1.0); }
+static inline double rel(double a, double b) { return fabs(a / b - 1.0); }
 
 /* this build against float64 over random vehicles, 5 s and 10 s of excitation */
 UNIT_TEST(motor_id_ref_float64_random_vehicles)
