@@ -21,33 +21,64 @@
 #define E_MAX 100       /* exponent ceiling (2^70 frames away): beyond it terms are dropped */
 #define WBIN_U ((motor_id_u_t)(0.025 * (1 << QF_UNIT_FRAC) + 0.5))
 typedef uint32_t big_t;
+#if defined(__GNUC__)
+#define MID_INLINE static inline __attribute__((always_inline))
+#else
+#define MID_INLINE static inline
+#endif
+/* a b / 2^s rounded to nearest (ties away from zero), s in [1, 62]: qfmt.h's
+ * q_shr64(q_smul32(a, b), s) for |a|, |b| < 2^31, in 32-bit operations (Cortex-M0 has
+ * neither a long multiply nor 64-bit shifts: those are library calls) */
+MID_INLINE int64_t mid_mul_rnd(int32_t a, int32_t b, unsigned s)
+{
+	bool neg = (a < 0) != (b < 0);
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
+	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl, hh = ah * bh;
+	uint32_t mid = (ll >> 16) + (lh & 0xffffu) + (hl & 0xffffu);
+	uint32_t hi = hh + (lh >> 16) + (hl >> 16) + (mid >> 16), lo = (mid << 16) | (ll & 0xffffu);
+	uint64_t r;
+	if (s >= 32u) {   /* |a b| < 2^62: hi < 2^30, the sum below 2^31 */
+		hi += s > 32u ? 1u << (s - 33u) : (lo >> 31);
+		r = hi >> (s - 32u);
+	} else {
+		uint32_t l2 = lo + (1u << (s - 1u));
+		hi += l2 < lo;
+		r = ((uint64_t)(hi >> s) << 32) | (uint32_t)((hi << (32u - s)) | (l2 >> s));
+	}
+	return neg ? -(int64_t)r : (int64_t)r;
+}
 static inline motor_id_u_t u_of_sc(scalar_t v) { return q_scale32(v, QF_UNIT_FRAC - QF_SC_FRAC); }
 static inline motor_id_f_t f_of_sc(scalar_t v, int kexp) { return q_scale32(v, QF_MOTN_FRAC - QF_SC_FRAC - kexp); }
 static inline int32_t sub32(int32_t a, int32_t b) { return q_sat32((int64_t)a - b); }
 /* s + k (u - s) */
-static inline motor_id_u_t u_lag(motor_id_u_t s, motor_id_u_t k, motor_id_u_t u)
+MID_INLINE motor_id_u_t u_lag(motor_id_u_t s, motor_id_u_t k, motor_id_u_t u)
 {
-	return q_sat32((int64_t)s + q_mul64(k, sub32(u, s), QF_UNIT_FRAC));
+	return q_sat32((int64_t)s + mid_mul_rnd(k, sub32(u, s), QF_UNIT_FRAC));
 }
 /* x2 = s (s - 2 s_c) */
-static inline motor_id_u_t u_x2(motor_id_u_t s, motor_id_u_t sc)
+MID_INLINE motor_id_u_t u_x2(motor_id_u_t s, motor_id_u_t sc)
 {
-	return q_mul32(s, q_sat32((int64_t)s - 2 * (int64_t)sc), QF_UNIT_FRAC);
+	return q_sat32(mid_mul_rnd(s, q_sat32((int64_t)s - 2 * (int64_t)sc), QF_UNIT_FRAC));
 }
 /* the reference model's thrust k_f0 s (c1 + c0 s), normalised */
-static inline motor_id_f_t f_ref(const struct motor_id *m, motor_id_u_t s)
+MID_INLINE motor_id_f_t f_ref(const struct motor_id *m, motor_id_u_t s)
 {
-	motor_id_u_t g = q_mul32(s, q_sat32(((int64_t)1 << QF_UNIT_FRAC) - m->c0 + q_mul32(m->c0, s, QF_UNIT_FRAC)), QF_UNIT_FRAC);
-	return q_mul32(m->kf0n, g, 2 * QF_UNIT_FRAC - QF_MOTN_FRAC);
+	int64_t cs = mid_mul_rnd(m->c0, s, QF_UNIT_FRAC);
+	motor_id_u_t g = q_sat32(mid_mul_rnd(s, q_sat32(((int64_t)1 << QF_UNIT_FRAC) - m->c0 + cs), QF_UNIT_FRAC));
+	return q_sat32(mid_mul_rnd(m->kf0n, g, 2 * QF_UNIT_FRAC - QF_MOTN_FRAC));
 }
 /* Q2.29 x Q1.30 -> Q2.29 */
-static inline motor_id_f_t f_mul_u(motor_id_f_t f, motor_id_u_t u) { return q_mul32(f, u, QF_UNIT_FRAC); }
+MID_INLINE motor_id_f_t f_mul_u(motor_id_f_t f, motor_id_u_t u) { return q_sat32(mid_mul_rnd(f, u, QF_UNIT_FRAC)); }
 #define SUM_LIM ((int64_t)1 << SUM_HI_BIT)
 typedef int64_t term_t;
 /* a product rounded to a sum's mantissa at exponent e (sh: SH_*) */
-static inline term_t term(int32_t a, int32_t b, int sh, motor_id_e_t e)
+MID_INLINE term_t term(int32_t a, int32_t b, int sh, motor_id_e_t e)
 {
-	return q_scale64(q_smul32(a, b), -(sh + (int)e));
+	int s = sh + (int)e;
+	if (s >= 1 && s <= 62)
+		return mid_mul_rnd(a, b, (unsigned)s);
+	return q_scale64(q_smul32(a, b), -s);   /* beyond: left shifts (saturating) or 0 */
 }
 static inline motor_id_sum_t sum_half(motor_id_sum_t v) { return (motor_id_sum_t)q_shr64(v, 1); }
 static inline bool big_over(big_t b) { return (b >> SUM_HI_BIT) != 0u; }
@@ -69,7 +100,7 @@ static void sum_fit(struct motor_id *m, unsigned k, const motor_id_sum_t *s, ter
 }
 /* *s + t for a sum of kind k, noting its size in *big: a sum and a term below 2^29 in
  * magnitude cannot wrap */
-static inline void sum_add(struct motor_id *m, unsigned k, motor_id_sum_t *s, term_t t, big_t *big)
+MID_INLINE void sum_add(struct motor_id *m, unsigned k, motor_id_sum_t *s, term_t t, big_t *big)
 {
 	if (sum_big(t) || sum_big(*s))
 		sum_fit(m, k, s, &t, big);
