@@ -180,6 +180,34 @@ static void sums_halve(struct motor_id *m, unsigned mask)
 #endif
 }
 
+/* The bank's exponents at a restart (every sum zero), from the first hypothesis' terms of
+ * this frame: below 2^27 there, so that the first frame does not halve the 120 sums of each
+ * kind many times over (the other hypotheses' terms are alike; a larger one halves as usual) */
+static void bank_exponents(struct motor_id *m, const motor_id_f_t fm[NR])
+{
+#if OCTO_FIXED
+	static const int sh[6] = {SH_UU, SH_UU, SH_UU, SH_UF, SH_UF, SH_FF};
+	int bits[6] = {0, 0, 0, 0, 0, 0};
+	const motor_id_u_t *s = m->s[0][0];
+	for (unsigned j = 0; j < NR; j++) {
+		motor_id_u_t x1 = s[j], x2 = u_x2(s[j], m->s_c[j]);
+		motor_id_f_t r = sub32(fm[j], f_ref(m, s[j]));
+		const int32_t a[6] = {x1, x1, x2, x1, x2, r}, b[6] = {x1, x2, x2, r, r, r};
+		for (unsigned k = 0; k < 6; k++) {
+			int64_t t = term(a[k], b[k], sh[k], MOTOR_ID_E0);
+			int nb = 64 - q_clz64((uint64_t)(t < 0 ? -t : t));
+			if (nb > bits[k])
+				bits[k] = nb;
+		}
+	}
+	for (unsigned k = 0; k < 6; k++)
+		m->e[MID_E_G11 + k] = (motor_id_e_t)(MOTOR_ID_E0 + (bits[k] > 27 ? bits[k] - 27 : 0));
+#else
+	(void)m;
+	(void)fm;
+#endif
+}
+
 /* the mask of kinds whose largest sum grew past the limit (big[k]: their sizes) */
 static unsigned over_mask(const big_t *big, unsigned k0, unsigned n)
 {
@@ -314,6 +342,8 @@ void motor_id_process(struct motor_id *m)
 	if (m->skip > 0u) {
 		m->skip--;
 	} else {
+		if (m->n_stat == 0u)
+			bank_exponents(m, fm);
 		const motor_id_e_t *e = m->e;
 		big_t big[6] = {0, 0, 0, 0, 0, 0};
 		for (unsigned d = 0; d < ND; d++)
