@@ -1,85 +1,250 @@
-/* motor_id.c - joint identification of the rotor model; see motor_id.h. */
+/* motor_id.c - joint identification of the rotor model, the per-frame part (90 Hz path): the
+ * command ring, the lag filters of every hypothesis, the least-squares, torque, noise and
+ * whiteness sums; see motor_id.h. The set-up, refinement and solve are motor_id_solve.c. */
 #include "motor_id.h"
-#include "thrmap.h" /* THRMAP_CURVE_*: the curve's range */
+#include "motor_id_q.h"
 
 #define NR MOTOR_ID_ROTORS
 #define ND MOTOR_ID_DELAYS
 #define NL MOTOR_ID_LAGS
 
-/* grid ratio of each stage and where (fraction of the planned frames) a stage ends */
-static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f};
-static const float stage_end[MOTOR_ID_STAGES - 1] = {0.30f, 0.55f};
-#define X_MAX 1.5f          /* how far beyond the grid the parabola may place the minimum */
-#define CURVE_CHI2_SIGMAS 5.0f
-#define NE_SIGMAS 5.0f
-#define NO_LAG_FRAC 0.15f  /* a lag below this fraction of a frame is taken as none (a < 0.0013) */
-#define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
-
-static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
-
-/* 1 - a of a lag; below NO_LAG_FRAC of a frame the lag is none (a = 0) */
-static float lag_k1(float tau, float dt)
+/* ---------------------------------------------------------------- number operations
+ * The algorithm below is written once against these; u: Q1.30, f: Q2.29, sum: block floating
+ * point (motor_id.h) in the fixed build; all float otherwise. */
+#if OCTO_FIXED
+/* bits to shift a product into a sum's mantissa at exponent 0: Q1.30 x Q1.30, Q1.30 x Q2.29,
+ * Q2.29 x Q2.29 */
+#define SH_UU (2 * QF_UNIT_FRAC - QF_MSUM_FRAC)
+#define SH_UF (QF_UNIT_FRAC + QF_MOTN_FRAC - QF_MSUM_FRAC)
+#define SH_FF (2 * QF_MOTN_FRAC - QF_MSUM_FRAC)
+#define SUM_HI_BIT 29   /* a kind is halved when one of its sums reaches 2^29 */
+#define E_MAX 100       /* exponent ceiling (2^70 frames away): beyond it terms are dropped */
+#define WBIN_U ((motor_id_u_t)(0.025 * (1 << QF_UNIT_FRAC) + 0.5))
+typedef uint32_t big_t;
+#if defined(__GNUC__)
+#define MID_INLINE static inline __attribute__((always_inline))
+#else
+#define MID_INLINE static inline
+#endif
+/* a b / 2^s rounded to nearest (ties away from zero), s in [1, 62]: qfmt.h's
+ * q_shr64(q_smul32(a, b), s) for |a|, |b| < 2^31, in 32-bit operations (Cortex-M0 has
+ * neither a long multiply nor 64-bit shifts: those are library calls) */
+MID_INLINE int64_t mid_mul_rnd_in(int32_t a, int32_t b, unsigned s)
 {
-	return tau > NO_LAG_FRAC * dt ? 1.0f - expf(-dt / tau) : 1.0f;
+	bool neg = (a < 0) != (b < 0);
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
+	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl, hh = ah * bh;
+	uint32_t mid = (ll >> 16) + (lh & 0xffffu) + (hl & 0xffffu);
+	uint32_t hi = hh + (lh >> 16) + (hl >> 16) + (mid >> 16), lo = (mid << 16) | (ll & 0xffffu);
+	uint64_t r;
+	if (s >= 32u) {   /* |a b| < 2^62: hi < 2^30, the sum below 2^31 */
+		hi += s > 32u ? 1u << (s - 33u) : (lo >> 31);
+		r = hi >> (s - 32u);
+	} else {
+		uint32_t l2 = lo + (1u << (s - 1u));
+		hi += l2 < lo;
+		r = ((uint64_t)(hi >> s) << 32) | (uint32_t)((hi << (32u - s)) | (l2 >> s));
+	}
+	return neg ? -(int64_t)r : (int64_t)r;
 }
-
-static void set_grid(struct motor_id *m, unsigned d, float centre, float ratio)
+/* the same, called (flash: inlined only in the sums' terms, the hottest) */
+static int64_t mid_mul_rnd(int32_t a, int32_t b, unsigned s) { return mid_mul_rnd_in(a, b, s); }
+static inline motor_id_u_t u_of_sc(scalar_t v) { return q_scale32(v, QF_UNIT_FRAC - QF_SC_FRAC); }
+static inline motor_id_f_t f_of_sc(scalar_t v, int kexp) { return q_scale32(v, QF_MOTN_FRAC - QF_SC_FRAC - kexp); }
+static inline int32_t sub32(int32_t a, int32_t b) { return q_sat32((int64_t)a - b); }
+/* s + k (u - s) */
+MID_INLINE motor_id_u_t u_lag(motor_id_u_t s, motor_id_u_t k, motor_id_u_t u)
 {
-	float dt = sc_to_float(m->cfg.dt_s);
-	m->lag_c[d] = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX);
-	m->lag_r[d] = ratio;
-	m->k1[d][0] = lag_k1(m->lag_c[d] / ratio, dt);
-	m->k1[d][1] = lag_k1(m->lag_c[d], dt);
-	m->k1[d][2] = lag_k1(m->lag_c[d] * ratio, dt);
+	return q_sat32((int64_t)s + mid_mul_rnd(k, sub32(u, s), QF_UNIT_FRAC));
 }
-
-void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const scalar_t thr0[NR])
+/* x2 = s (s - 2 s_c) */
+MID_INLINE motor_id_u_t u_x2(motor_id_u_t s, motor_id_u_t sc)
 {
-	*m = (struct motor_id){0};
-	m->cfg = *cfg;
-	if (!(m->cfg.tau0_s > 0.0f))
-		m->cfg.tau0_s = 0.03f;
-	if (!(m->cfg.kf0 > 0.0f))
-		m->cfg.kf0 = 1.0f;
-	m->cfg.curve0 = clampf(m->cfg.curve0, THRMAP_CURVE_MIN, THRMAP_CURVE_MAX);
-	for (unsigned j = 0; j < NR; j++) {
-		float t0 = sc_to_float(thr0[j]);
-		m->s_c[j] = clampf(t0, 0.02f, 1.0f);
-		for (unsigned d = 0; d < ND; d++) {
-			m->hist[d][j] = t0;
-			for (unsigned i = 0; i < NL; i++)
-				m->s[d][i][j] = t0;
+	return q_sat32(mid_mul_rnd(s, q_sat32((int64_t)s - 2 * (int64_t)sc), QF_UNIT_FRAC));
+}
+/* the reference model's thrust k_f0 s (c1 + c0 s), normalised */
+MID_INLINE motor_id_f_t f_ref(const struct motor_id *m, motor_id_u_t s)
+{
+	int64_t cs = mid_mul_rnd(m->c0, s, QF_UNIT_FRAC);
+	motor_id_u_t g = q_sat32(mid_mul_rnd(s, q_sat32(((int64_t)1 << QF_UNIT_FRAC) - m->c0 + cs), QF_UNIT_FRAC));
+	return q_sat32(mid_mul_rnd(m->kf0n, g, 2 * QF_UNIT_FRAC - QF_MOTN_FRAC));
+}
+/* Q2.29 x Q1.30 -> Q2.29 */
+MID_INLINE motor_id_f_t f_mul_u(motor_id_f_t f, motor_id_u_t u) { return q_sat32(mid_mul_rnd(f, u, QF_UNIT_FRAC)); }
+#define SUM_LIM ((int64_t)1 << SUM_HI_BIT)
+typedef int64_t term_t;
+/* a product rounded to a sum's mantissa at exponent e (sh: SH_*) */
+MID_INLINE term_t term(int32_t a, int32_t b, int sh, motor_id_e_t e)
+{
+	int s = sh + (int)e;
+	if (s >= 1 && s <= 62)
+		return mid_mul_rnd_in(a, b, (unsigned)s);
+	return q_scale64(q_smul32(a, b), -s);   /* beyond: left shifts (saturating) or 0 */
+}
+static inline motor_id_sum_t sum_half(motor_id_sum_t v) { return (motor_id_sum_t)q_shr64(v, 1); }
+static inline bool big_over(big_t b) { return (b >> SUM_HI_BIT) != 0u; }
+static void sums_halve(struct motor_id *m, unsigned mask);
+static inline bool sum_big(int64_t v) { return v >= SUM_LIM || v <= -SUM_LIM; }
+/* a term or a sum of 2^29 or more (a sum that takes several terms a frame): the kind is
+ * halved (its exponent raised) until both are below */
+static void sum_fit(struct motor_id *m, unsigned k, const motor_id_sum_t *s, term_t *t, big_t *big)
+{
+	while (sum_big(*t) || sum_big(*s)) {
+		if (m->e[k] >= E_MAX) {   /* unreachable: 2^70 frames of the largest terms */
+			*t = 0;
+			return;
+		}
+		sums_halve(m, 1u << k);
+		*t = q_shr64(*t, 1);
+	}
+	*big = 0;   /* every sum of the kind is below 2^29 now */
+}
+/* *s + t for a sum of kind k, noting its size in *big: a sum and a term below 2^29 in
+ * magnitude cannot wrap */
+MID_INLINE void sum_add(struct motor_id *m, unsigned k, motor_id_sum_t *s, term_t t, big_t *big)
+{
+	if (sum_big(t) || sum_big(*s))
+		sum_fit(m, k, s, &t, big);
+	*s += (motor_id_sum_t)t;
+	*big |= (big_t)(*s < 0 ? -*s : *s);
+}
+#else
+typedef int big_t;
+#define WBIN_U 0.025f
+static inline motor_id_u_t u_of_sc(scalar_t v) { return sc_to_float(v); }
+static inline motor_id_f_t f_of_sc(scalar_t v, int kexp) { (void)kexp; return sc_to_float(v); }
+static inline float sub32(float a, float b) { return a - b; }
+static inline motor_id_u_t u_lag(motor_id_u_t s, motor_id_u_t k, motor_id_u_t u) { return s + k * (u - s); }
+static inline motor_id_u_t u_x2(motor_id_u_t s, motor_id_u_t sc) { return s * (s - 2.0f * sc); }
+static inline motor_id_f_t f_ref(const struct motor_id *m, motor_id_u_t s)
+{
+	return m->kf0n * s * ((1.0f - m->c0) + m->c0 * s);
+}
+static inline motor_id_f_t f_mul_u(motor_id_f_t f, motor_id_u_t u) { return f * u; }
+#define SH_UU 0
+#define SH_UF 0
+#define SH_FF 0
+typedef float term_t;
+static inline term_t term(float a, float b, int sh, motor_id_e_t e)
+{
+	(void)sh;
+	(void)e;
+	return a * b;
+}
+static inline void sum_add(struct motor_id *m, unsigned k, motor_id_sum_t *s, term_t t, big_t *big)
+{
+	(void)m;
+	(void)k;
+	(void)big;
+	*s += t;
+}
+static inline bool big_over(big_t b) { (void)b; return false; }
+#endif
+
+/* Halves every sum of the kinds in mask (bits MID_E_*) and raises their exponents: the
+ * fixed build's block floating point keeps each below 2^29 (see motor_id.h) */
+static void sums_halve(struct motor_id *m, unsigned mask)
+{
+#if OCTO_FIXED
+	if (mask & 0x3fu) {
+		struct motor_id_stat *st = &m->st[0][0][0];
+		for (unsigned n = 0; n < ND * NL * NR; n++) {
+			if (mask & (1u << MID_E_G11)) st[n].g11 = sum_half(st[n].g11);
+			if (mask & (1u << MID_E_G12)) st[n].g12 = sum_half(st[n].g12);
+			if (mask & (1u << MID_E_G22)) st[n].g22 = sum_half(st[n].g22);
+			if (mask & (1u << MID_E_B1)) st[n].b1 = sum_half(st[n].b1);
+			if (mask & (1u << MID_E_B2)) st[n].b2 = sum_half(st[n].b2);
+			if (mask & (1u << MID_E_RR)) st[n].rr = sum_half(st[n].rr);
 		}
 	}
-	for (unsigned d = 0; d < ND; d++)
-		set_grid(m, d, m->cfg.tau0_s, stage_ratio[0]);
+	if (mask & (1u << MID_E_FF)) m->ff = sum_half(m->ff);
+	if (mask & (1u << MID_E_TF)) m->tf = sum_half(m->tf);
+	if (mask & (1u << MID_E_TT)) m->tt = sum_half(m->tt);
+	if (mask & (1u << MID_E_NZ)) m->nz_ss = sum_half(m->nz_ss);
+	struct motor_id_white *w = &m->wh;
+	for (unsigned j = 0; j < NR; j++)
+		for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
+			if (mask & (1u << MID_E_WSE))
+				w->se[j][b] = sum_half(w->se[j][b]);
+			if (mask & (1u << MID_E_WSEE)) {
+				w->see[j][b] = sum_half(w->see[j][b]);
+				for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++)
+					w->sl[j][b][l] = sum_half(w->sl[j][b][l]);
+			}
+		}
+	for (unsigned k = 0; k < MID_E_N; k++)
+		if ((mask & (1u << k)) && m->e[k] < E_MAX)
+			m->e[k]++;
+#else
+	(void)m;
+	(void)mask;
+#endif
+}
+
+/* The bank's exponents at a restart (every sum zero), from the first hypothesis' terms of
+ * this frame: below 2^27 there, so that the first frame does not halve the 120 sums of each
+ * kind many times over (the other hypotheses' terms are alike; a larger one halves as usual) */
+static void bank_exponents(struct motor_id *m, const motor_id_f_t fm[NR])
+{
+#if OCTO_FIXED
+	static const int sh[6] = {SH_UU, SH_UU, SH_UU, SH_UF, SH_UF, SH_FF};
+	int bits[6] = {0, 0, 0, 0, 0, 0};
+	const motor_id_u_t *s = m->s[0][0];
+	for (unsigned j = 0; j < NR; j++) {
+		motor_id_u_t x1 = s[j], x2 = u_x2(s[j], m->s_c[j]);
+		motor_id_f_t r = sub32(fm[j], f_ref(m, s[j]));
+		const int32_t a[6] = {x1, x1, x2, x1, x2, r}, b[6] = {x1, x2, x2, r, r, r};
+		for (unsigned k = 0; k < 6; k++) {
+			int64_t t = term(a[k], b[k], sh[k], MOTOR_ID_E0);
+			int nb = 64 - q_clz64((uint64_t)(t < 0 ? -t : t));
+			if (nb > bits[k])
+				bits[k] = nb;
+		}
+	}
+	for (unsigned k = 0; k < 6; k++)
+		m->e[MID_E_G11 + k] = (motor_id_e_t)(MOTOR_ID_E0 + (bits[k] > 27 ? bits[k] - 27 : 0));
+#else
+	(void)m;
+	(void)fm;
+#endif
+}
+
+/* the mask of kinds whose largest sum grew past the limit (big[k]: their sizes) */
+static unsigned over_mask(const big_t *big, unsigned k0, unsigned n)
+{
+	unsigned mask = 0;
+	for (unsigned k = 0; k < n; k++)
+		if (big_over(big[k]))
+			mask |= 1u << (k0 + k);
+	return mask;
 }
 
 /* the commands of the next frame into the ring's next slot (the oldest, which the next
  * advance no longer reads) */
 static void push(struct motor_id *m, const scalar_t thr_prev[NR])
 {
-	float *h = m->hist[(m->head + 1u) % ND];
+	motor_id_u_t *h = m->hist[(m->head + 1u) % ND];
 	for (unsigned j = 0; j < NR; j++)
-		h[j] = sc_to_float(thr_prev[j]);
+		h[j] = u_of_sc(thr_prev[j]);
 }
 
 /* every filter one frame on, with the commands push left in the next slot */
 static void advance(struct motor_id *m)
 {
-	m->head = (m->head + 1u) % ND;
+	m->head = (uint8_t)((m->head + 1u) % ND);
 	for (unsigned d = 0; d < ND; d++) {
-		const float *u = m->hist[(m->head + ND - d) % ND];
+		const motor_id_u_t *u = m->hist[(m->head + ND - d) % ND];
 		for (unsigned i = 0; i < NL; i++) {
-			float k = m->k1[d][i], *s = m->s[d][i];
+			motor_id_u_t k = m->k1[d][i], *s = m->s[d][i];
 			for (unsigned j = 0; j < NR; j++)
-				s[j] += k * (u[j] - s[j]);
+				s[j] = u_lag(s[j], k, u[j]);
 		}
 	}
 	if (m->wh.on) {   /* the whiteness model's own lag */
-		const float *u = m->hist[(m->head + ND - m->wh.delay) % ND];
+		const motor_id_u_t *u = m->hist[(m->head + ND - m->wh.delay) % ND];
 		for (unsigned j = 0; j < NR; j++)
-			m->wh.s[j] += m->wh.k1 * (u[j] - m->wh.s[j]);
+			m->wh.s[j] = u_lag(m->wh.s[j], m->wh.k1, u[j]);
 	}
 }
 
@@ -100,12 +265,15 @@ void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar
 	/* thrust noise from first differences of still frames (slow control motion cancels),
 	 * taken here while the previous frame's thrust is still in q_f (only in the settling
 	 * second: excited steps just copy the frame) */
-	if (!excited && m->nz_have)
+	if (!excited && m->nz_have) {
+		big_t big = 0;
 		for (unsigned j = 0; j < NR; j++) {
-			float dd = sc_to_float(f[j]) - sc_to_float(m->q_f[j]);
-			m->nz_ss += dd * dd;
-			m->nz_n += 2.0f;
+			motor_id_f_t dd = sub32(f_of_sc(f[j], m->kexp), f_of_sc(m->q_f[j], m->kexp));
+			sum_add(m, MID_E_NZ, &m->nz_ss, term(dd, dd, SH_FF, m->e[MID_E_NZ]), &big);
+			m->nz_n += 2u;
 		}
+		sums_halve(m, over_mask(&big, MID_E_NZ, 1));
+	}
 	for (unsigned j = 0; j < NR; j++) {
 		m->q_f[j] = f[j];
 		m->q_tq[j] = tq[j];
@@ -115,86 +283,41 @@ void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar
 	m->q_pending = true;
 }
 
-#define WBIN 0.025f      /* throttle level bins of the whiteness test: s - s_c at +/- this */
-#define WHITE_AT 0.75f   /* the whiteness model is frozen at this fraction of the planned frames */
-
-static void delay_crit(const struct motor_id *m, unsigned d, float jv[3]);
-static float parabola(const float sv[3], float *s_min, float *k);
-static void lagrange3(float x, float l[3]);
-static void interp_stat(const struct motor_id_stat st[3], const float l[3], struct motor_id_stat *o);
-static void stat_at(const struct motor_id *m, unsigned d, const float l[3], unsigned j, struct motor_id_stat *o);
-static float delay_logssr(const struct motor_id *m, unsigned d, float x);
-static float rotor_ssr(const struct motor_id_stat *st, bool est_curve, float c0, float s_c, float delta[2]);
-
-/* Freezes the model the whiteness test follows, from the last stage's data so far: the delay
- * the bank prefers (or the given one), its lag at the criterion's minimum (a filter of its own,
- * started from the grid's states interpolated there), every rotor's fit at that lag. */
-static void white_begin(struct motor_id *m)
-{
-	struct motor_id_white *w = &m->wh;
-	*w = (struct motor_id_white){0};
-	unsigned d = 0;
-	float x = 0.0f, best = 0.0f;
-	for (unsigned k = 0; k < ND; k++) {
-		float sv[3], jmin, kk;
-		delay_crit(m, k, sv);
-		float xk = parabola(sv, &jmin, &kk);
-		if (m->cfg.fix_delay) {
-			if (k == m->cfg.delay_fr) {
-				d = k;
-				x = xk;
-			}
-			continue;
-		}
-		float v = delay_logssr(m, k, xk);
-		if (k == 0u || v < best) {
-			best = v;
-			d = k;
-			x = xk;
-		}
-	}
-	float l[3], dl[2];
-	lagrange3(x, l);
-	for (unsigned j = 0; j < NR; j++) {
-		struct motor_id_stat o;
-		stat_at(m, d, l, j, &o);
-		rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, m->s_c[j], dl);
-		w->dl[j][0] = dl[0];
-		w->dl[j][1] = dl[1];
-		w->s[j] = l[0] * m->s[d][0][j] + l[1] * m->s[d][1][j] + l[2] * m->s[d][2][j];
-	}
-	w->k1 = lag_k1(clampf(m->lag_c[d] * powf(m->lag_r[d], x), MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX),
-		       sc_to_float(m->cfg.dt_s));
-	w->delay = (uint8_t)d;
-	w->on = true;
-}
-
 /* the frozen model's one-step prediction error of every rotor at this frame, into the
  * whiteness sums (its level, lagged products with the ring) */
-static void white_update(struct motor_id *m, const float fm[NR])
+static void white_update(struct motor_id *m, const motor_id_f_t fm[NR])
 {
 	struct motor_id_white *w = &m->wh;
 	if (!w->on)
 		return;
-	const float kf0 = m->cfg.kf0, c0 = m->cfg.curve0, c1 = 1.0f - c0;
-	const float *s = w->s;
+	const motor_id_u_t *s = w->s;
+	big_t big[2] = {0, 0};
 	for (unsigned j = 0; j < NR; j++) {
-		float x1 = s[j], x2 = s[j] * (s[j] - 2.0f * m->s_c[j]);
-		float e = fm[j] - kf0 * s[j] * (c1 + c0 * s[j]) - w->dl[j][0] * x1 - w->dl[j][1] * x2;
-		float ds = s[j] - m->s_c[j];
-		unsigned b = ds < -WBIN ? 0u : (ds > WBIN ? 2u : 1u);
-		w->n[j][b] += 1.0f;
-		w->se[j][b] += e;
-		w->see[j][b] += e * e;
-		for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++)
-			if (l < w->run)
-				w->sl[j][b][l] += e * w->ring[l][j];
+		motor_id_u_t x1 = s[j], x2 = u_x2(s[j], m->s_c[j]);
+		motor_id_f_t e = sub32(sub32(sub32(fm[j], f_ref(m, s[j])), f_mul_u(w->dl[j][0], x1)),
+				       f_mul_u(w->dl[j][1], x2));
+		motor_id_u_t ds = sub32(s[j], m->s_c[j]);
+		unsigned b = ds < -WBIN_U ? 0u : (ds > WBIN_U ? 2u : 1u);
+		if (w->n[j][b] < UINT16_MAX) {   /* a full series keeps what it has */
+			w->n[j][b]++;
+#if OCTO_FIXED
+			sum_add(m, MID_E_WSE, &w->se[j][b], q_scale64(e, QF_MSUM_FRAC - QF_MOTN_FRAC - m->e[MID_E_WSE]), &big[0]);
+#else
+			sum_add(m, MID_E_WSE, &w->se[j][b], e, &big[0]);
+#endif
+			sum_add(m, MID_E_WSEE, &w->see[j][b], term(e, e, SH_FF, m->e[MID_E_WSEE]), &big[1]);
+			for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++)
+				if (l < w->run)
+					sum_add(m, MID_E_WSEE, &w->sl[j][b][l], term(e, w->ring[l][j], SH_FF, m->e[MID_E_WSEE]),
+						&big[1]);
+		}
 		for (unsigned l = MOTOR_ID_WLAGS - 1u; l > 0u; l--)
 			w->ring[l][j] = w->ring[l - 1u][j];
 		w->ring[0][j] = e;
 	}
 	if (w->run < MOTOR_ID_WLAGS)
 		w->run++;
+	sums_halve(m, over_mask(big, MID_E_WSE, 2));
 }
 
 void motor_id_process(struct motor_id *m)
@@ -202,668 +325,56 @@ void motor_id_process(struct motor_id *m)
 	if (!m->q_pending)
 		return;
 	m->q_pending = false;
-	if (m->refine_due)
+	if (m->refine_due || m->white_due || m->reref_due)
 		motor_id_refine(m);
 	advance(m);
 	if (!m->q_excited)
 		return;
-	float fm[NR];
+	motor_id_f_t fm[NR];
+	big_t bt[3] = {0, 0, 0};
 	for (unsigned j = 0; j < NR; j++) {
-		fm[j] = sc_to_float(m->q_f[j]);
-		float t = sc_to_float(m->q_tq[j]);
-		m->ff += fm[j] * fm[j];
-		m->tf += t * fm[j];
-		m->tt += t * t;
+		fm[j] = f_of_sc(m->q_f[j], m->kexp);
+		motor_id_f_t t = f_of_sc(m->q_tq[j], m->kexp);
+		sum_add(m, MID_E_FF, &m->ff, term(fm[j], fm[j], SH_FF, m->e[MID_E_FF]), &bt[0]);
+		sum_add(m, MID_E_TF, &m->tf, term(t, fm[j], SH_FF, m->e[MID_E_TF]), &bt[1]);
+		sum_add(m, MID_E_TT, &m->tt, term(t, t, SH_FF, m->e[MID_E_TT]), &bt[2]);
 	}
+	sums_halve(m, over_mask(bt, MID_E_FF, 3));
 	m->n_exc++;
 	if (m->skip > 0u) {
 		m->skip--;
 	} else {
-		const float kf0 = m->cfg.kf0, c0 = m->cfg.curve0, c1 = 1.0f - c0;
+		if (m->n_stat == 0u)
+			bank_exponents(m, fm);
+		const motor_id_e_t *e = m->e;
+		big_t big[6] = {0, 0, 0, 0, 0, 0};
 		for (unsigned d = 0; d < ND; d++)
 			for (unsigned i = 0; i < NL; i++) {
-				const float *s = m->s[d][i];
+				const motor_id_u_t *s = m->s[d][i];
 				struct motor_id_stat *st = m->st[d][i];
 				for (unsigned j = 0; j < NR; j++) {
-					float x1 = s[j], x2 = s[j] * (s[j] - 2.0f * m->s_c[j]);
-					float r = fm[j] - kf0 * s[j] * (c1 + c0 * s[j]);
-					st[j].g11 += x1 * x1;
-					st[j].g12 += x1 * x2;
-					st[j].g22 += x2 * x2;
-					st[j].b1 += x1 * r;
-					st[j].b2 += x2 * r;
-					st[j].rr += r * r;
+					motor_id_u_t x1 = s[j], x2 = u_x2(s[j], m->s_c[j]);
+					motor_id_f_t r = sub32(fm[j], f_ref(m, s[j]));
+					sum_add(m, MID_E_G11, &st[j].g11, term(x1, x1, SH_UU, e[MID_E_G11]), &big[0]);
+					sum_add(m, MID_E_G12, &st[j].g12, term(x1, x2, SH_UU, e[MID_E_G12]), &big[1]);
+					sum_add(m, MID_E_G22, &st[j].g22, term(x2, x2, SH_UU, e[MID_E_G22]), &big[2]);
+					sum_add(m, MID_E_B1, &st[j].b1, term(x1, r, SH_UF, e[MID_E_B1]), &big[3]);
+					sum_add(m, MID_E_B2, &st[j].b2, term(x2, r, SH_UF, e[MID_E_B2]), &big[4]);
+					sum_add(m, MID_E_RR, &st[j].rr, term(r, r, SH_FF, e[MID_E_RR]), &big[5]);
 				}
 			}
+		sums_halve(m, over_mask(big, MID_E_G11, 6));
 		m->n_stat++;
 		white_update(m, fm);
 	}
-	if (m->stage < MOTOR_ID_STAGES - 1 &&
-	    (float)m->n_exc >= stage_end[m->stage] * (float)m->cfg.n_frames)
-		m->refine_due = true;
-	if (m->stage == MOTOR_ID_STAGES - 1 && !m->wh.on && m->n_stat >= 30u &&
-	    (float)m->n_exc >= WHITE_AT * (float)m->cfg.n_frames)
-		white_begin(m);
-}
-
-/* the prior curve's regressor on the basis: g0 = w1 x1 + w2 x2 */
-static void curve_w(float c, float s_c, float w[2])
-{
-	w[0] = (1.0f - c) + 2.0f * c * s_c;
-	w[1] = c;
-}
-
-/* residual sum of squares of one rotor's statistics: 2 parameters (curve estimated) or the
- * prior curve's 1; delta = the fitted change of theta from the reference (2 values) */
-static float rotor_ssr(const struct motor_id_stat *st, bool est_curve, float c0, float s_c,
-		       float delta[2])
-{
-	if (est_curve) {
-		float det = st->g11 * st->g22 - st->g12 * st->g12;
-		if (!(det > 1e-30f * st->g11 * st->g22) || !(st->g11 > 0.0f)) {
-			delta[0] = delta[1] = 0.0f;
-			return st->rr;
-		}
-		delta[0] = (st->g22 * st->b1 - st->g12 * st->b2) / det;
-		delta[1] = (st->g11 * st->b2 - st->g12 * st->b1) / det;
-		return fmaxf(st->rr - delta[0] * st->b1 - delta[1] * st->b2, 0.0f);
+	/* the first stage's re-referencing, the stage's end, or in the last stage the whiteness
+	 * model's freezing: between frames */
+	if (m->stage == 0 && !m->reref_done && m->n_stat >= MOTOR_ID_NREF)
+		m->reref_due = true;
+	if (m->n_exc >= m->n_next) {
+		if (m->stage < MOTOR_ID_STAGES - 1)
+			m->refine_due = true;
+		else if (!m->wh.on && m->n_stat >= 30u)
+			m->white_due = true;
 	}
-	float w[2];
-	curve_w(c0, s_c, w);
-	float gw = w[0] * w[0] * st->g11 + 2.0f * w[0] * w[1] * st->g12 + w[1] * w[1] * st->g22;
-	float bw = w[0] * st->b1 + w[1] * st->b2;
-	float mu = gw > 0.0f ? bw / gw : 0.0f;
-	delta[0] = mu * w[0];
-	delta[1] = mu * w[1];
-	return fmaxf(st->rr - mu * bw, 0.0f);
-}
-
-/* parabola through (-1, s0), (0, s1), (1, s2): minimum x (clamped to +/-X_MAX), the value
- * there and the curvature k (S = S_min + k (x - x*)^2; 0 when not convex) */
-static float parabola(const float sv[3], float *s_min, float *k)
-{
-	float den = sv[0] - 2.0f * sv[1] + sv[2];
-	float x;
-	if (den > 0.0f)
-		x = clampf((sv[0] - sv[2]) / (2.0f * den), -X_MAX, X_MAX);
-	else
-		x = sv[0] < sv[2] ? -X_MAX : X_MAX;
-	*k = den > 0.0f ? 0.5f * den : 0.0f;
-	*s_min = sv[1] + 0.5f * x * (sv[2] - sv[0]) + 0.5f * x * x * den;
-	return x;
-}
-
-/* Lagrange weights of the three grid points at x */
-static void lagrange3(float x, float l[3])
-{
-	l[0] = 0.5f * x * (x - 1.0f);
-	l[1] = 1.0f - x * x;
-	l[2] = 0.5f * x * (x + 1.0f);
-}
-
-/* The selection criterion of delay d at each lag. The likelihood with each rotor's noise
- * variance unknown is -(n/2) sum_j log SSR_j (a rotor that no lag explains, another motor,
- * then pulls the common lag little); log SSR is far from a parabola in the lag, so its
- * Gauss-Newton form is used: J = sum_j SSR_j / SSR_j(best grid point), quadratic in the
- * statistics like SSR itself; -(n/2) log-likelihood = (n/2) J + const near the minimum. */
-static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
-{
-	float dl[2], e[NL][NR], tot[NL];
-	unsigned ib = 0;
-	for (unsigned i = 0; i < NL; i++) {
-		tot[i] = 0.0f;
-		for (unsigned j = 0; j < NR; j++) {
-			e[i][j] = rotor_ssr(&m->st[d][i][j], m->cfg.est_curve, m->cfg.curve0, m->s_c[j], dl);
-			tot[i] += e[i][j];
-		}
-		if (tot[i] < tot[ib])
-			ib = i;
-	}
-	for (unsigned i = 0; i < NL; i++) {
-		jv[i] = 0.0f;
-		for (unsigned j = 0; j < NR; j++)
-			jv[i] += e[i][j] / fmaxf(e[ib][j], 1e-30f);
-	}
-}
-
-void motor_id_refine(struct motor_id *m)
-{
-	motor_id_process(m);
-	if (!m->refine_due)
-		return;
-	m->refine_due = false;
-	unsigned next = m->stage + 1u;
-	if (next >= MOTOR_ID_STAGES)
-		return;
-	float dt = sc_to_float(m->cfg.dt_s), tau_hi = 0.0f;
-	for (unsigned d = 0; d < ND; d++) {
-		float sv[3], smin, k;
-		delay_crit(m, d, sv);
-		float x = m->n_stat > 0u ? parabola(sv, &smin, &k) : 0.0f;
-		float r = m->lag_r[d];
-		/* a minimum below the grid walks twice as far (towards no lag at all) */
-		float centre = m->lag_c[d] * powf(r, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
-		/* the lag states at the new taus: quadratic interpolation in log tau of the old.
-		 * A minimum outside the grid narrows it less (the grid walks towards it) */
-		float nr = stage_ratio[next];
-		if (fabsf(x) > 1.0f)
-			nr = fmaxf(nr, sqrtf(r));
-		float xs[3], old[NL][NR];
-		for (unsigned i = 0; i < NL; i++)
-			for (unsigned j = 0; j < NR; j++)
-				old[i][j] = m->s[d][i][j];
-		for (int i = 0; i < (int)NL; i++) {
-			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * powf(nr, (float)(i - 1));
-			xs[i] = clampf(logf(tau_i / m->lag_c[d]) / logf(r), -X_MAX, X_MAX);
-		}
-		for (unsigned i = 0; i < NL; i++) {
-			float l[3];
-			lagrange3(xs[i], l);
-			for (unsigned j = 0; j < NR; j++)
-				m->s[d][i][j] = l[0] * old[0][j] + l[1] * old[1][j] + l[2] * old[2][j];
-		}
-		set_grid(m, d, centre, nr);
-		tau_hi = fmaxf(tau_hi, m->lag_c[d] * nr);
-	}
-	for (unsigned d = 0; d < ND; d++)
-		for (unsigned i = 0; i < NL; i++)
-			for (unsigned j = 0; j < NR; j++)
-				m->st[d][i][j] = (struct motor_id_stat){0};
-	m->n_stat = 0;
-	m->stage = (uint8_t)next;
-	/* what the interpolation left decays with the lag: wait two time constants */
-	float fr = dt > 0.0f ? 2.0f * tau_hi / dt : 0.0f;
-	m->skip = (uint32_t)clampf(fr + 1.0f, 1.0f, 30.0f);
-}
-
-static void interp_stat(const struct motor_id_stat st[3], const float l[3], struct motor_id_stat *o)
-{
-	o->g11 = l[0] * st[0].g11 + l[1] * st[1].g11 + l[2] * st[2].g11;
-	o->g12 = l[0] * st[0].g12 + l[1] * st[1].g12 + l[2] * st[2].g12;
-	o->g22 = l[0] * st[0].g22 + l[1] * st[1].g22 + l[2] * st[2].g22;
-	o->b1 = l[0] * st[0].b1 + l[1] * st[1].b1 + l[2] * st[2].b1;
-	o->b2 = l[0] * st[0].b2 + l[1] * st[1].b2 + l[2] * st[2].b2;
-	o->rr = l[0] * st[0].rr + l[1] * st[1].rr + l[2] * st[2].rr;
-}
-
-/* rotor j's statistics of delay d at the grid weights l */
-static void stat_at(const struct motor_id *m, unsigned d, const float l[3], unsigned j, struct motor_id_stat *o)
-{
-	const struct motor_id_stat tri[3] = {m->st[d][0][j], m->st[d][1][j], m->st[d][2][j]};
-	interp_stat(tri, l, o);
-}
-
-/* sum over rotors of log SSR_j of delay d at grid position x (statistics interpolated) */
-static float delay_logssr(const struct motor_id *m, unsigned d, float x)
-{
-	float l[3], dl[2], sum = 0.0f;
-	lagrange3(x, l);
-	for (unsigned j = 0; j < NR; j++) {
-		struct motor_id_stat o;
-		stat_at(m, d, l, j, &o);
-		sum += logf(fmaxf(rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, m->s_c[j], dl), 1e-30f));
-	}
-	return sum;
-}
-
-/* rotor's m at curve c from its statistics: sum g f / sum g^2 with g = w^T x and
- * sum x f = b + G theta_ref; *gw = sum g^2 */
-static float rotor_m(const struct motor_id_stat *st, float c, float s_c, const float th_ref[2], float *gw)
-{
-	float w[2];
-	curve_w(c, s_c, w);
-	float xf1 = st->b1 + st->g11 * th_ref[0] + st->g12 * th_ref[1];
-	float xf2 = st->b2 + st->g12 * th_ref[0] + st->g22 * th_ref[1];
-	*gw = w[0] * w[0] * st->g11 + 2.0f * w[0] * w[1] * st->g12 + w[1] * w[1] * st->g22;
-	return *gw > 0.0f ? (w[0] * xf1 + w[1] * xf2) / *gw : 0.0f;
-}
-
-/* median of 8 (mean of the 4th and 5th); their indices in *a, *b */
-static float median8(const float v[NR], unsigned *a, unsigned *b)
-{
-	unsigned idx[NR];
-	for (unsigned j = 0; j < NR; j++)
-		idx[j] = j;
-	for (unsigned i = 1; i < NR; i++)
-		for (unsigned k = i; k > 0 && v[idx[k - 1]] > v[idx[k]]; k--) {
-			unsigned t = idx[k];
-			idx[k] = idx[k - 1];
-			idx[k - 1] = t;
-		}
-	*a = idx[NR / 2 - 1];
-	*b = idx[NR / 2];
-	return 0.5f * (v[*a] + v[*b]);
-}
-
-static float sqrt0(float v) { return v > 0.0f ? sqrtf(v) : 0.0f; }
-
-/* The sampling variance of the median of 8 rotors' estimates (the mean of the 4th and 5th),
- * in units of one rotor's variance: 0.168 for 8 alike, 0.190 with one rotor far off (a weak
- * one; Monte Carlo of normal errors, 4e5 draws). The larger is taken. */
-#define MEDIAN8_VAR 0.19f
-
-/* rotor j's reference parameters: the prior (k_f0, curve0) on its basis */
-static void ref_theta(const struct motor_id *m, unsigned j, float th[2])
-{
-	float w[2];
-	curve_w(m->cfg.curve0, m->s_c[j], w);
-	th[0] = m->cfg.kf0 * w[0];
-	th[1] = m->cfg.kf0 * w[1];
-}
-
-/* Rotor j's own curve: the 2-parameter fit about the prior's reference th, c_j = B / m_j,
- * with its variance (0: not determined) and the fit's residual sum of squares *ssr2. */
-static float rotor_curve(const struct motor_id *m, const struct motor_id_stat *st, unsigned j,
-			 const float th[2], float *ssr2, float *var)
-{
-	float d2[2];
-	*ssr2 = rotor_ssr(st, true, m->cfg.curve0, m->s_c[j], d2);
-	float a = th[0] + d2[0], bq = th[1] + d2[1];
-	float mj = a + bq * (1.0f - 2.0f * m->s_c[j]);
-	float det = st->g11 * st->g22 - st->g12 * st->g12;
-	*var = 0.0f;
-	if (!(mj > 0.0f && det > 0.0f))
-		return 0.0f;
-	float ga = -bq / (mj * mj), gb = a / (mj * mj);
-	/* g^T G^-1 g */
-	float q = (ga * ga * st->g22 - 2.0f * ga * gb * st->g12 + gb * gb * st->g11) / det;
-	*var = *ssr2 / ((float)m->n_stat - 2.0f) * q;
-	return bq / mj;
-}
-
-/* k_f, the common curve and the rotors' scales from delay d's statistics at grid position x,
- * by the same steps as motor_id_solve (curve unclamped): their change with x is the lag's
- * share of their variances (the lag's error is uncorrelated with theirs at a fixed lag, to
- * first order: the profile's gradient is orthogonal to their regressors) */
-static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, float *curve, float sc[NR])
-{
-	const float c0 = m->cfg.curve0;
-	float l[3], th[NR][2], mj[NR];
-	struct motor_id_stat st[NR];
-	lagrange3(x, l);
-	float sw = 0.0f, swc = 0.0f;
-	for (unsigned j = 0; j < NR; j++) {
-		stat_at(m, d, l, j, &st[j]);
-		ref_theta(m, j, th[j]);
-		if (!m->cfg.est_curve)
-			continue;
-		float ssr2, v, c = rotor_curve(m, &st[j], j, th[j], &ssr2, &v);
-		if (v > 0.0f) {
-			sw += 1.0f / v;
-			swc += c / v;
-		}
-	}
-	*curve = m->cfg.est_curve && sw > 0.0f ? swc / sw : c0;
-	for (unsigned j = 0; j < NR; j++) {
-		float gw;
-		mj[j] = rotor_m(&st[j], *curve, m->s_c[j], th[j], &gw);
-	}
-	unsigned ia, ib;
-	*kf = median8(mj, &ia, &ib);
-	for (unsigned j = 0; j < NR; j++)
-		sc[j] = *kf > 0.0f ? mj[j] / *kf : 0.0f;
-}
-
-/* The lag's grid position x refined from the parabola's by Newton steps on the profile
- * criterion itself, sum over rotors of log SSR_j with the statistics interpolated at x (the
- * parabola through three criterion values is coarser than the statistics' interpolation: its
- * error moved x by a part of a standard deviation that depended on where the truth fell in the
- * grid); *k becomes that criterion's curvature / 2 (in the units of delay_crit's, so that
- * var x = 1 / (n k) still holds). Kept within +/- X_MAX; unchanged if not convex there. */
-static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
-{
-	const float h = 0.2f;   /* wide enough that float rounding of the SSRs stays out of d2 */
-	float xi = *x, kk = *k;
-	if (!(kk > 0.0f) || fabsf(xi) >= X_MAX - 1e-3f)
-		return;
-	for (int it = 0; it < 3; it++) {
-		float fm = delay_logssr(m, d, xi - h), f0 = delay_logssr(m, d, xi), fp = delay_logssr(m, d, xi + h);
-		float d2 = (fp - 2.0f * f0 + fm) / (h * h), d1 = (fp - fm) / (2.0f * h);
-		if (!(d2 > 0.0f))
-			return;
-		float step = clampf(-d1 / d2, -0.5f, 0.5f);
-		xi = clampf(xi + step, -X_MAX + 2e-3f, X_MAX - 2e-3f);
-		kk = 0.5f * d2;
-		if (fabsf(step) < 1e-3f)
-			break;
-	}
-	*x = xi;
-	*k = kk;
-}
-
-/* chi-square quantile with k degrees of freedom at z standard normal deviates above the mean
- * (Wilson-Hilferty; within 1 % of the exact one from k = 3 on at these z) */
-static float chi2_quant(float k, float z)
-{
-	float a = 2.0f / (9.0f * k), t = 1.0f - a + z * sqrtf(a);
-	return k * t * t * t;
-}
-
-/* deviates of the whiteness limits: the sum over everything, each rotor's (8 tests), each
- * level's (3 tests); about 2e-4 + 8 x 5e-5 + 3 x 1e-4 = 1e-3 false rejections in all */
-#define WZ_ALL 3.5f
-#define WZ_ROTOR 3.9f
-#define WZ_LEVEL 3.7f
-#define WMIN_N 20.0f     /* fewest frames of a (rotor, level) series that enters the test */
-
-/* the whiteness test from its sums (see motor_id.h) */
-static void white_eval(const struct motor_id *m, struct motor_id_result *res)
-{
-	const struct motor_id_white *w = &m->wh;
-	res->white_ok = true;
-	res->white_have = false;
-	if (!w->on)
-		return;
-	float q = 0.0f, dof = 0.0f, qr[NR] = {0}, dr[NR] = {0}, qb[MOTOR_ID_WBINS] = {0}, db[MOTOR_ID_WBINS] = {0};
-	for (unsigned j = 0; j < NR; j++)
-		for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
-			float n = w->n[j][b];
-			if (n < WMIN_N)
-				continue;
-			float mu = w->se[j][b] / n, c0 = w->see[j][b] - n * mu * mu, qq = 0.0f;
-			if (!(c0 > 0.0f))
-				continue;
-			for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++) {
-				float rho = (w->sl[j][b][l] - n * mu * mu) / c0;
-				qq += rho * rho;
-			}
-			qq *= n;
-			q += qq;
-			qr[j] += qq;
-			qb[b] += qq;
-			dof += (float)MOTOR_ID_WLAGS;
-			dr[j] += (float)MOTOR_ID_WLAGS;
-			db[b] += (float)MOTOR_ID_WLAGS;
-		}
-	if (!(dof > 0.0f))
-		return;
-	res->white_have = true;
-	res->white_q = q;
-	res->white_dof = dof;
-	res->white_lim = chi2_quant(dof, WZ_ALL);
-	bool ok = q <= res->white_lim;
-	for (unsigned j = 0; j < NR; j++) {
-		res->white_rotor[j] = dr[j] > 0.0f ? qr[j] / chi2_quant(dr[j], WZ_ROTOR) : 0.0f;
-		ok = ok && res->white_rotor[j] <= 1.0f;
-	}
-	for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
-		res->white_level[b] = db[b] > 0.0f ? qb[b] / chi2_quant(db[b], WZ_LEVEL) : 0.0f;
-		ok = ok && res->white_level[b] <= 1.0f;
-	}
-	res->white_ok = ok;
-}
-
-/* the cause of coloured prediction errors: one rotor alone (the others white) is that rotor;
- * colour at one throttle level, not the others, is the thrust curve; else the dynamics */
-static enum motor_id_cause white_cause(const struct motor_id_result *res, int *rotor)
-{
-	unsigned nr = 0, nb = 0;
-	int jr = -1;
-	for (unsigned j = 0; j < NR; j++)
-		if (res->white_rotor[j] > 1.0f) {
-			nr++;
-			jr = (int)j;
-		}
-	for (unsigned b = 0; b < MOTOR_ID_WBINS; b++)
-		nb += res->white_level[b] > 1.0f;
-	if (nr == 1u) {
-		*rotor = jr;
-		return MOTOR_ID_ROTOR;
-	}
-	if (nb == 1u)
-		return MOTOR_ID_LEVEL;
-	return MOTOR_ID_COLOURED;
-}
-
-void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_result *res)
-{
-	*res = (struct motor_id_result){0};
-	res->cause_rotor = -1;
-	const bool ec = m->cfg.est_curve;
-	const float c0 = m->cfg.curve0;
-	const unsigned np = ec ? 2u : 1u;
-	res->n = m->n_stat;
-	if (m->n_stat < 30u) {
-		res->cause = MOTOR_ID_NO_DATA;
-		return;
-	}
-	float dof = (float)(m->n_stat * NR) - (float)(np * NR) - 1.0f;
-
-	/* the delay hypothesis of least criterion at its best lag */
-	float smin[ND], xs[ND], ks[ND];
-	unsigned best = 0;
-	for (unsigned d = 0; d < ND; d++) {
-		float sv[3];
-		delay_crit(m, d, sv);
-		float jmin;
-		xs[d] = parabola(sv, &jmin, &ks[d]);
-		smin[d] = delay_logssr(m, d, xs[d]);
-		if (smin[d] < smin[best])
-			best = d;
-	}
-	res->free_delay = best;
-	if (m->cfg.fix_delay)
-		best = m->cfg.delay_fr < ND ? m->cfg.delay_fr : ND - 1u;
-	/* the next best (smin is a sum of logs: any sign) */
-	float second = 0.0f;
-	bool have2 = false;
-	for (unsigned d = 0; d < ND; d++)
-		if (d != best && (!have2 || smin[d] < second)) {
-			second = smin[d];
-			have2 = true;
-		}
-	res->delay = best;
-	float nf = (float)m->n_stat;
-	res->delay_margin = 0.5f * nf * (second - smin[best]);
-
-	/* sd of the lag: -log-likelihood = (n / 2) J, J = J_min + k (x - x*)^2, so var x = 1 / (n k) */
-	float x = xs[best], r = m->lag_r[best];
-	lag_newton(m, best, &x, &ks[best]);
-	res->tau = m->lag_c[best] * powf(r, x);
-	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(1.0f / (nf * ks[best])) : res->tau;
-	/* the grid's low end without lag and the minimum there: no lag (sd: that bound) */
-	float dtf = sc_to_float(m->cfg.dt_s);
-	bool no_lag = res->tau <= 1.2f * NO_LAG_FRAC * dtf ||
-		      (x <= -X_MAX + 1e-3f && m->lag_c[best] * powf(r, -X_MAX) <= NO_LAG_FRAC * dtf);
-	if (no_lag) {
-		res->tau = 0.0f;
-		res->tau_sd = NO_LAG_FRAC * dtf;
-	}
-
-	/* every rotor at that lag */
-	float l[3];
-	lagrange3(x, l);
-	struct motor_id_stat st[NR];
-	float ssr[NR], cj[NR], vcj[NR], s2j[NR], th_ref[NR][2];
-	float ssr_sum = 0.0f, chi2 = 0.0f;
-	for (unsigned j = 0; j < NR; j++) {
-		stat_at(m, best, l, j, &st[j]);
-		float dl[2];
-		ref_theta(m, j, th_ref[j]);
-		ssr[j] = rotor_ssr(&st[j], ec, c0, m->s_c[j], dl);
-		ssr_sum += ssr[j];
-		s2j[j] = ssr[j] / ((float)m->n_stat - (float)np);
-		/* the curve of this rotor alone (2-parameter fit) and its variance */
-		float ssr2;
-		cj[j] = rotor_curve(m, &st[j], j, th_ref[j], &ssr2, &vcj[j]);
-		chi2 += ssr[j] - ssr2;
-	}
-
-	/* the common curve: inverse-variance mean of the rotors' */
-	if (ec) {
-		float sw = 0.0f, swc = 0.0f;
-		for (unsigned j = 0; j < NR; j++)
-			if (vcj[j] > 0.0f) {
-				sw += 1.0f / vcj[j];
-				swc += cj[j] / vcj[j];
-			}
-		res->curve = sw > 0.0f ? swc / sw : c0;
-		res->curve_sd = sw > 0.0f ? sqrt0(1.0f / sw) : 0.0f;
-		/* not cut at 0: a linear rotor's estimate scatters on both sides of it, and a
-		 * boundary there would bias the curve, and with it k_f, high; the caller's range
-		 * check (THRMAP_CURVE_MIN/MAX) names the bounds */
-	} else {
-		res->curve = c0;
-		res->curve_sd = 0.0f;
-	}
-
-	/* each rotor's m at that curve, k_f = their median, scales */
-	float mj[NR], vm[NR], mj_e[NR];
-	const float eps = 1e-3f;
-	for (unsigned j = 0; j < NR; j++) {
-		float gw, gw2;
-		mj[j] = rotor_m(&st[j], res->curve, m->s_c[j], th_ref[j], &gw);
-		mj_e[j] = rotor_m(&st[j], res->curve + eps, m->s_c[j], th_ref[j], &gw2);
-		vm[j] = gw > 0.0f ? s2j[j] / gw : 0.0f;
-	}
-	unsigned ia, ib;
-	res->kf = median8(mj, &ia, &ib);
-	float dkdc = (0.5f * (mj_e[ia] + mj_e[ib]) - res->kf) / eps;
-	float vkf = MEDIAN8_VAR * 0.5f * (vm[ia] + vm[ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
-	for (unsigned j = 0; j < NR; j++) {
-		res->scale[j] = res->kf > 0.0f ? mj[j] / res->kf : 0.0f;
-		res->scale_sd[j] = res->kf > 0.0f ? sqrt0(vm[j]) / res->kf : 0.0f;
-	}
-	/* the lag's share: k_f, curve and scales move with the lag (central differences) */
-	if (!no_lag && ks[best] > 0.0f) {
-		const float h = 0.25f;
-		float var_x = 1.0f / (nf * ks[best]), kp, km, cp, cm, sp[NR], sm[NR];
-		model_at(m, best, x + h, &kp, &cp, sp);
-		model_at(m, best, x - h, &km, &cm, sm);
-		float dk = (kp - km) / (2.0f * h), dc = (cp - cm) / (2.0f * h);
-		vkf += dk * dk * var_x;
-		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + dc * dc * var_x);
-		for (unsigned j = 0; j < NR; j++) {
-			float ds = (sp[j] - sm[j]) / (2.0f * h);
-			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + ds * ds * var_x);
-		}
-	}
-	res->kf_sd = sqrt0(vkf);
-
-	/* noise and the normalised errors */
-	float nz = m->nz_n > 0.0f ? m->nz_ss / m->nz_n : 0.0f;
-	res->noise_sd = sqrt0(nz);
-	float ne_hi = 0.0f, ne_sorted_mid;
-	unsigned worst = 0;
-	for (unsigned j = 0; j < NR; j++) {
-		res->ne[j] = nz > 0.0f ? s2j[j] / nz : 0.0f;
-		if (res->ne[j] > ne_hi) {
-			ne_hi = res->ne[j];
-			worst = j;
-		}
-	}
-	res->ne_all = nz > 0.0f ? ssr_sum / dof / nz : 0.0f;
-	unsigned ma, mb;
-	ne_sorted_mid = median8(res->ne, &ma, &mb);
-	res->curve_chi2 = nz > 0.0f ? chi2 / nz : 0.0f;
-
-	/* k_tau = rho k_f, rho from torque on thrust over every rotor (noise-corrected) */
-	float ff = m->ff, tf = m->tf, tt = m->tt;
-	float nall = (float)(m->n_exc * NR);
-	float sf2 = nz > 0.0f ? nz : ssr_sum / dof;
-	float rho = ff > 0.0f ? tf / ff : 0.0f;
-	float ss_t = tt - 2.0f * rho * tf + rho * rho * ff;
-	float vrho = ff > 0.0f && nall > 1.0f ? ss_t / (nall - 1.0f) / ff : 0.0f;
-	if (ff > nall * sf2)
-		rho *= ff / (ff - nall * sf2);
-	res->ktau = rho * res->kf;
-	res->ktau_sd = sqrt0(rho * rho * vkf + res->kf * res->kf * vrho);
-
-	/* the cause, most specific first */
-	float dof_j = (float)m->n_stat - (float)np;
-	float chi2_lim = (float)NR + CURVE_CHI2_SIGMAS * sqrtf(2.0f * (float)NR);
-	/* the normalised errors' limits: ne_max, or NE_SIGMAS standard deviations of the ratio
-	 * of two variance estimates (the fit's, dof_j; the noise's from first differences,
-	 * about a third of its count effective) when the data are few */
-	float v_nz = m->nz_n > 0.0f ? 6.0f / m->nz_n : 1.0f;
-	float lim_j = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof_j, 1.0f) + v_nz));
-	float lim_all = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof, 1.0f) + v_nz));
-	const bool fixd = m->cfg.fix_delay;
-	white_eval(m, res);
-	if (!(m->nz_n >= 16.0f))
-		res->cause = MOTOR_ID_NOISE_UNKNOWN;
-	else if (fixd && res->free_delay != best && -res->delay_margin >= MARGIN_MIN)
-		res->cause = MOTOR_ID_DELAY_GIVEN;
-	else if (!ec && res->curve_chi2 > chi2_lim)
-		res->cause = MOTOR_ID_CURVE;
-	else if (!no_lag && (!(ks[best] > 0.0f) || fabsf(x) >= X_MAX - 1e-3f ||
-			     res->tau <= MOTOR_ID_TAU_MIN * 1.01f || res->tau >= MOTOR_ID_TAU_MAX * 0.99f))
-		res->cause = MOTOR_ID_LAG_RANGE;
-	else if (!fixd && best == ND - 1u)
-		res->cause = MOTOR_ID_DELAY_RANGE;
-	else if (!fixd && res->delay_margin < MARGIN_MIN)
-		res->cause = MOTOR_ID_DELAY_AMBIGUOUS;
-	else if (!res->white_ok) {
-		res->cause = white_cause(res, &res->cause_rotor);
-		if (res->cause == MOTOR_ID_LEVEL && !ec)
-			res->cause = MOTOR_ID_CURVE;
-	} else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && dof_j > 0.0f) {
-		res->cause = MOTOR_ID_ROTOR;
-		res->cause_rotor = (int)worst;
-	} else if (res->ne_all > lim_all)
-		res->cause = MOTOR_ID_MODEL;
-	else
-		res->cause = MOTOR_ID_OK;
-}
-
-const char *motor_id_cause_text(enum motor_id_cause c)
-{
-	switch (c) {
-	case MOTOR_ID_OK:
-		return "accepted";
-	case MOTOR_ID_NO_DATA:
-		return "too few frames";
-	case MOTOR_ID_NOISE_UNKNOWN:
-		return "noise not measured";
-	case MOTOR_ID_LAG_RANGE:
-		return "motor lag out of range";
-	case MOTOR_ID_DELAY_RANGE:
-		return "delay out of range";
-	case MOTOR_ID_DELAY_AMBIGUOUS:
-		return "delay ambiguous";
-	case MOTOR_ID_CURVE:
-		return "thrust curve not modelled";
-	case MOTOR_ID_ROTOR:
-		return "a rotor unexplained";
-	case MOTOR_ID_MODEL:
-		return "residuals above noise";
-	case MOTOR_ID_DELAY_GIVEN:
-		return "given delay contradicted";
-	case MOTOR_ID_LEVEL:
-		return "residuals coloured at one throttle level";
-	case MOTOR_ID_COLOURED:
-		return "residuals not white";
-	}
-	return "?";
-}
-
-const char *motor_id_cause_remedy(enum motor_id_cause c)
-{
-	switch (c) {
-	case MOTOR_ID_OK:
-		return "";
-	case MOTOR_ID_NO_DATA:
-		return "longer ID_EXC_TIME";
-	case MOTOR_ID_NOISE_UNKNOWN:
-		return "hover still before the run";
-	case MOTOR_ID_LAG_RANGE:
-		return "lag 0.5-500 ms only; check motors";
-	case MOTOR_ID_DELAY_RANGE:
-		return "delay > 3 frames: fix the link";
-	case MOTOR_ID_DELAY_AMBIGUOUS:
-		return "raise ID_EXC_AMP or ID_EXC_TIME";
-	case MOTOR_ID_CURVE:
-		return "set ID_CRV_EST 1";
-	case MOTOR_ID_ROTOR:
-		return "inspect that rotor";
-	case MOTOR_ID_MODEL:
-		return "check link timing and rotors";
-	case MOTOR_ID_DELAY_GIVEN:
-		return "let the delay be found";
-	case MOTOR_ID_LEVEL:
-		return "thrust curve not quadratic: lower ID_EXC_OFS";
-	case MOTOR_ID_COLOURED:
-		return "motor not first-order or link jitter: check both";
-	}
-	return "";
 }

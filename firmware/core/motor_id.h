@@ -17,8 +17,11 @@
  * lag (s), and the per-rotor least-squares statistics of the thrust on the basis
  *     x = [s, s (s - 2 s_c)]     (s_c: the rotor's throttle at the start)
  * are accumulated: G = sum x x^T, b = sum x r, rr = sum r^2 with r = f - x^T theta_ref, the
- * residual of a fixed reference model (the prior k_f and c), so that the float sums do not
- * cancel. f = A s + B s (s - 2 s_c) is the curve model exactly: m = A + B (1 - 2 s_c),
+ * residual of a reference model (common k_f and c), so that the sums do not cancel: the
+ * prior at first; after MOTOR_ID_NREF frames of the first stage the fit so far, and at every
+ * refinement the fit of the stage that ends (the statistics restart then, so nothing is
+ * transformed). With the reference near the data SSR is not a small difference of large
+ * sums, and its rounding (float or integer) stays far below the differences between lags. f = A s + B s (s - 2 s_c) is the curve model exactly: m = A + B (1 - 2 s_c),
  * c = B / m. The basis keeps G well conditioned at the low throttles of hover.
  * With curve estimation off the regressor is the prior curve's g (w^T x, one parameter).
  *
@@ -68,9 +71,12 @@
  * error (an estimate from the frames before) is of the order of its standard deviations: a
  * coloured error of a few noise variances in all, no measurable colour.
  *
- * Core rules: no heap, globals or I/O; interfaces in scalar_t, internals float32 in both
- * builds (as rls.h). The per-frame step (motor_id_step) is the bank update; the refinement
- * and the solve run between frames (the step does a due refinement itself if nobody did).
+ * Core rules: no heap, globals or I/O; interfaces in scalar_t. The per-frame part (motor_id.c:
+ * motor_id_step, motor_id_process, motor_id_hold: the command ring, the lag filters, the sums)
+ * computes in the types below: float in the float build, integers in the fixed build (no
+ * soft float on Cortex-M0). The set-up, the refinement, the freezing of the whiteness model
+ * and the solve (motor_id_solve.c) run between frames, in float in both builds (the step
+ * does a due refinement itself if nobody did).
  */
 #ifndef OCTO_MOTOR_ID_H
 #define OCTO_MOTOR_ID_H
@@ -88,6 +94,7 @@
 #define MOTOR_ID_TAU_MAX 0.5f
 #define MOTOR_ID_WLAGS 3     /* autocorrelation lags of the whiteness test */
 #define MOTOR_ID_WBINS 3     /* throttle levels of the whiteness test */
+#define MOTOR_ID_NREF 30     /* first-stage frames before the reference is re-fitted */
 
 struct motor_id_cfg {
 	scalar_t dt_s;           /* frame period */
@@ -100,46 +107,98 @@ struct motor_id_cfg {
 	uint32_t delay_fr;       /* the given delay, frames (< MOTOR_ID_DELAYS) */
 };
 
+/* ---------------------------------------------------------------- number formats
+ * The per-frame part (motor_id.c) is written once against these types; the float build keeps
+ * float (the values in SI units), the fixed build (OCTO_FIXED) integers (qfmt.h, docs/number-formats.md):
+ *   motor_id_u_t    Q1.30 (QF_UNIT_FRAC) int32: throttles, lag states s, regressors
+ *                   x1 = s and x2 = s (s - 2 s_c) (in [-2, 1]), 1 - a of a lag, the curve
+ *                   (c in [-0.5, 0.99], 1 - c); range [-2, 2), resolution 9.3e-10; saturates.
+ *   motor_id_f_t    Q2.29 (QF_MOTN_FRAC) int32: thrusts and torques normalised by 2^kexp (the
+ *                   power of two that brings the prior k_f into [0.5, 1)), residuals of the
+ *                   reference model, prediction errors, the frozen model's changes of theta;
+ *                   range [-4, 4) of the prior k_f (about 4 k_f0), resolution 1.9e-9 of it;
+ *                   saturates (a thrust beyond 4 k_f0 is not a hovering rotor's).
+ *   motor_id_sum_t  block floating point, int32 mantissa m with an exponent e shared by
+ *                   every sum of one kind (motor_id_e_t): value = m 2^(e - QF_MSUM_FRAC) in
+ *                   the normalised units. Each term is rounded to the current exponent; a
+ *                   term of 2^29 or more first halves the whole kind (rounded) and raises e
+ *                   until it fits, and a kind whose largest sum reached 2^29 is halved after
+ *                   the frame, so sum and term stay below 2^29 and their sum below 2^30: no
+ *                   overflow or wrap however long the run. e starts at MOTOR_ID_E0 at each
+ *                   restart. Resolution 2^-28 to 2^-29 of the kind's largest sum.
+ * Counts (frames, noise terms) are integers in both builds. */
+#if OCTO_FIXED
+typedef int32_t motor_id_u_t;
+typedef int32_t motor_id_f_t;
+typedef int32_t motor_id_sum_t;
+#else
+typedef float motor_id_u_t;
+typedef float motor_id_f_t;
+typedef float motor_id_sum_t;
+#endif
+typedef int8_t motor_id_e_t;
+/* every kind starts at this exponent (fine resolution, 2^-41 in normalised units): its first
+ * terms raise it as far as they need */
+#define MOTOR_ID_E0 (-16)
+
+/* the kinds of sums, each with its exponent */
+enum {
+	MID_E_G11, MID_E_G12, MID_E_G22, MID_E_B1, MID_E_B2, MID_E_RR,   /* the bank */
+	MID_E_FF, MID_E_TF, MID_E_TT,    /* torque ratio */
+	MID_E_NZ,                        /* noise from differences */
+	MID_E_WSE, MID_E_WSEE,           /* whiteness: sum e; sums e^2 and e_k e_(k-L) */
+	MID_E_N
+};
+
 /* the whiteness test's sums (see above) */
 struct motor_id_white {
 	bool on;                 /* the last stage's model is frozen and the sums run */
 	uint8_t delay;           /* the hypothesis followed (its lag: grid index 1) */
 	uint8_t run;             /* consecutive frames in the ring (a lost frame restarts it) */
-	float k1;                /* the frozen model: 1 - a of its lag, */
-	float s[MOTOR_ID_ROTORS];       /* its lag filters, */
-	float dl[MOTOR_ID_ROTORS][2];   /* its change of theta from the reference */
-	float ring[MOTOR_ID_WLAGS][MOTOR_ID_ROTORS];   /* last prediction errors, newest first */
-	/* per rotor and level: n, sum e, sum e^2, sum e_k e_(k-L) */
-	float n[MOTOR_ID_ROTORS][MOTOR_ID_WBINS], se[MOTOR_ID_ROTORS][MOTOR_ID_WBINS],
-	      see[MOTOR_ID_ROTORS][MOTOR_ID_WBINS], sl[MOTOR_ID_ROTORS][MOTOR_ID_WBINS][MOTOR_ID_WLAGS];
+	motor_id_u_t k1;         /* the frozen model: 1 - a of its lag, */
+	motor_id_u_t s[MOTOR_ID_ROTORS];       /* its lag filters, */
+	motor_id_f_t dl[MOTOR_ID_ROTORS][2];   /* its change of theta from the reference */
+	motor_id_f_t ring[MOTOR_ID_WLAGS][MOTOR_ID_ROTORS];   /* last prediction errors, newest first */
+	/* per rotor and level: n, sum e, sum e^2, sum e_k e_(k-L); a series stops taking
+	 * frames at n = 65535 (12 min of excitation at 90 Hz) */
+	uint16_t n[MOTOR_ID_ROTORS][MOTOR_ID_WBINS];
+	motor_id_sum_t se[MOTOR_ID_ROTORS][MOTOR_ID_WBINS], see[MOTOR_ID_ROTORS][MOTOR_ID_WBINS],
+	      sl[MOTOR_ID_ROTORS][MOTOR_ID_WBINS][MOTOR_ID_WLAGS];
 };
 
 /* least-squares sums of one rotor under one hypothesis (see above) */
 struct motor_id_stat {
-	float g11, g12, g22, b1, b2, rr;
+	motor_id_sum_t g11, g12, g22, b1, b2, rr;
 };
 
 struct motor_id {
 	struct motor_id_cfg cfg;
-	float hist[MOTOR_ID_DELAYS][MOTOR_ID_ROTORS];   /* commands, ring over frames */
-	uint32_t head;
-	float s[MOTOR_ID_DELAYS][MOTOR_ID_LAGS][MOTOR_ID_ROTORS];
-	float k1[MOTOR_ID_DELAYS][MOTOR_ID_LAGS];       /* 1 - a of each lag */
+	motor_id_u_t hist[MOTOR_ID_DELAYS][MOTOR_ID_ROTORS];   /* commands, ring over frames */
+	motor_id_u_t s[MOTOR_ID_DELAYS][MOTOR_ID_LAGS][MOTOR_ID_ROTORS];
+	motor_id_u_t k1[MOTOR_ID_DELAYS][MOTOR_ID_LAGS];       /* 1 - a of each lag */
 	float lag_c[MOTOR_ID_DELAYS], lag_r[MOTOR_ID_DELAYS];   /* grid centre (s) and ratio */
 	struct motor_id_stat st[MOTOR_ID_DELAYS][MOTOR_ID_LAGS][MOTOR_ID_ROTORS];
-	float s_c[MOTOR_ID_ROTORS];
-	float ff, tf, tt;        /* torque ratio: sums over every rotor of f^2, t f, t^2 */
-	float nz_ss, nz_n;       /* thrust noise from differences */
-	bool nz_have;            /* the last frame taken was not excited (and none was lost since) */
+	motor_id_u_t s_c[MOTOR_ID_ROTORS];
+	motor_id_sum_t ff, tf, tt;   /* torque ratio: sums over every rotor of f^2, t f, t^2 */
+	motor_id_sum_t nz_ss;        /* thrust noise from differences: sum of squares, */
+	uint32_t nz_n;               /* and its count */
+	motor_id_u_t kf0n, c0;       /* the reference model: its k_f 2^-kexp, its curve */
 	uint32_t n_stat;         /* frames in the current stage's statistics */
 	uint32_t n_exc;          /* excited frames so far */
-	uint32_t skip;           /* frames not accumulated after a refinement (lag transients) */
+	uint32_t n_next;         /* n_exc at which the stage ends (or the whiteness model freezes) */
+	motor_id_e_t e[MID_E_N]; /* exponents of the sums (fixed build; 0 in the float build) */
+	int8_t kexp;             /* thrusts and torques are taken as value 2^-kexp (fixed build) */
+	uint8_t head;            /* the ring's newest slot */
+	uint8_t skip;            /* frames not accumulated after a refinement (lag transients) */
 	uint8_t stage;
+	bool nz_have;            /* the last frame taken was not excited (and none was lost since) */
 	bool refine_due;
+	bool white_due;          /* the whiteness model is to be frozen (between frames) */
+	bool reref_due, reref_done;   /* the first stage's early re-referencing (see above) */
 	/* the frame motor_id_step took, waiting for motor_id_process (its commands sit in
 	 * hist's next slot, its noise sums are already taken) */
-	scalar_t q_f[MOTOR_ID_ROTORS], q_tq[MOTOR_ID_ROTORS];
 	bool q_excited, q_pending;
+	scalar_t q_f[MOTOR_ID_ROTORS], q_tq[MOTOR_ID_ROTORS];
 	struct motor_id_white wh;
 };
 

@@ -324,4 +324,13 @@ static inline int64_t q_muldiv(int32_t a, int32_t b, int64_t c, unsigned s)
 	return q_div64(n, cc);
 }
 
+/* ---------------------------------------------------------------- motor_id (motor_id.h)
+ * Formats of the joint rotor-model estimator's per-frame part:
+ *   Q2.29        QF_MOTN_FRAC 29   int32    [-4, 4)             1.9e-9   thrusts, torques,
+ *                residuals normalised by a power of two near the prior k_f
+ *   block float  QF_MSUM_FRAC 25   int32    m 2^(e - 25)        2^-29 of the largest sum
+ *                of a kind: least-squares, noise and whiteness sums (motor_id.h) */
+#define QF_MOTN_FRAC 29 /* Q2.29: motor_id's normalised thrusts, torques and residuals */
+#define QF_MSUM_FRAC 25 /* block floating point sums: fractional bits at exponent 0 */
+
 #endif /* OCTO_QFMT_H */

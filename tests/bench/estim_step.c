@@ -4,7 +4,10 @@
  * Counted calls (one bench_mark_begin/end pair each, in this order):
  *   N_RLS x rls_update of the rotor experiment's RLS (1 parameter, outputs f and tau),
  *   N_RLS x rls_update of its lag check (2 parameters, 1 output),
- *   N_ROT x ident_rotor_update (delay, lag and the three RLS of one rotor).
+ *   N_ROT x ident_rotor_update (delay, lag and the three RLS of one rotor),
+ *   N_MID x motor_id_step + motor_id_process (the joint rotor-model estimator's frame: every
+ *           rotor, 15 hypotheses; its refinements between frames are not counted),
+ *   1 x motor_id_solve (between frames, at the end).
  * The inputs are a PRBS throttle through a 40 ms lag with 1 % noise (the values do not
  * change the count much: no data-dependent loops but the fixed build's normalisation).
  * Prints "estim: KEY VALUE" lines.
@@ -13,10 +16,12 @@
 
 #include "bench_mark.h"
 #include "ident.h"
+#include "motor_id.h"
 #include "rls.h"
 
 #define N_RLS 200
 #define N_ROT 200
+#define N_MID 200
 
 static uint32_t rng = 777u;
 static float urand(void) /* [-1, 1) */
@@ -30,6 +35,8 @@ static float urand(void) /* [-1, 1) */
 /* global: the compiler cannot see through it across the markers */
 struct rls R1, R2;
 struct ident_rotor ROT;
+struct motor_id MID;
+struct motor_id_result MRES;
 
 int main(void)
 {
@@ -85,9 +92,50 @@ int main(void)
 		ident_rotor_update(&ROT, sc_from_float(thr), f, t, true);
 		bench_mark_end();
 	}
+	/* the motor model: 8 rotors dithered on the null-space patterns through a 40 ms lag,
+	 * 1 s still first (not counted) */
+	struct motor_id_cfg mc = { .dt_s = SC(1.0 / 90.0), .tau0_s = 0.03f, .kf0 = 25.0f, .curve0 = 0.0f,
+				   .est_curve = true, .n_frames = N_MID };
+	scalar_t thr0[MOTOR_ID_ROTORS];
+	float sj[MOTOR_ID_ROTORS], cmd[MOTOR_ID_ROTORS];
+	for (int j = 0; j < MOTOR_ID_ROTORS; j++) {
+		thr0[j] = SC(0.45);
+		sj[j] = cmd[j] = 0.45f;
+	}
+	motor_id_init(&MID, &mc, thr0);
+	static const float p1[8] = { 1, 0, -1, 0, 1, 0, -1, 0 }, p2[8] = { 0, 1, 0, -1, 0, 1, 0, -1 };
+	float d1 = 0.0f, d2 = 0.0f;
+	for (int k = 0; k < 90 + N_MID; k++) {
+		bool exc = k >= 90;
+		if (exc && k % 9 == 0) {
+			d1 = urand() < 0.0f ? -0.04f : 0.04f;
+			d2 = urand() < 0.0f ? -0.04f : 0.04f;
+		}
+		scalar_t tp[MOTOR_ID_ROTORS], f[MOTOR_ID_ROTORS], t[MOTOR_ID_ROTORS];
+		for (int j = 0; j < MOTOR_ID_ROTORS; j++) {
+			tp[j] = sc_from_float(cmd[j]);
+			f[j] = sc_from_float(28.0f * sj[j] * (1.0f + 0.01f * urand()));
+			t[j] = sc_from_float(0.39f * sj[j] * (1.0f + 0.01f * urand()));
+			sj[j] += 0.24f * (cmd[j] - sj[j]);
+			cmd[j] = exc ? 0.45f + d1 * p1[j] + d2 * p2[j] : 0.45f;
+		}
+		if (exc)
+			bench_mark_begin();
+		motor_id_step(&MID, tp, f, t, exc);
+		motor_id_process(&MID);
+		if (exc)
+			bench_mark_end();
+		motor_id_refine(&MID);
+	}
+	bench_mark_begin();
+	motor_id_solve(&MID, 1.3f, &MRES);
+	bench_mark_end();
 	printf("estim: rls_1x2 %d\n", N_RLS);
 	printf("estim: rls_2x1 %d\n", N_RLS);
 	printf("estim: ident_rotor %d\n", N_ROT);
+	printf("estim: motor_id %d\n", N_MID);
+	printf("estim: motor_id_solve 1\n");
+	printf("estim: motor_id_kf %.4f\n", (double)MRES.kf);
 	printf("estim: kf %.4f\n", (double)rls_estimate_f(&R1, 0, 0));
 	printf("estim: done\n");
 	return 0;
