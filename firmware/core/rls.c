@@ -393,11 +393,12 @@ enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_si
 		}
 	}
 
-	/* one parameter (the identification's common case) is a call with a constant n, which
+	/* each n (rls_init clamps it to 1..RLS_MAX_PARAMS = 2) is a call with a constant, which
 	 * the compiler specialises: no loops, no copies, and the same arithmetic */
+	_Static_assert(RLS_MAX_PARAMS == 2, "rls_update_n specialises n = 1 and n = 2");
 	if (n == 1)
 		return bierman(r, phi_n, y_n, lambda, 1);
-	return bierman(r, phi_n, y_n, lambda, n);
+	return bierman(r, phi_n, y_n, lambda, 2);
 }
 
 enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y, bool excited)

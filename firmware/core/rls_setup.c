@@ -67,8 +67,8 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 {
 	struct rls z = { 0 };
 	*r = z;
-	r->cfg = *cfg;
-	struct rls_config *c = &r->cfg;
+	struct rls_config cc = *cfg; /* clamped below; r keeps its shape (rls_shape) */
+	struct rls_config *c = &cc;
 	if (c->n_params < 1)
 		c->n_params = 1;
 	if (c->n_params > RLS_MAX_PARAMS)
@@ -95,6 +95,10 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 		if (c->phi_shift[i] < -16)
 			c->phi_shift[i] = -16;
 	}
+	r->cfg.n_params = c->n_params;
+	r->cfg.n_outputs = c->n_outputs;
+	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
+		r->cfg.phi_shift[i] = c->phi_shift[i];
 	const unsigned n = c->n_params;
 	/* outputs: theta0 (k_f by its nominal) sets each output's scale */
 	for (unsigned o = 0; o < RLS_MAX_OUTPUTS; o++) {
