@@ -91,12 +91,15 @@
 #define MIXER_ALPHA_ITERS 20
 /* active-set iterations of the refinement towards the minimum-norm feasible allocation */
 #define MIXER_QP_ITERS 16
-/* Distinct facet normals kept for the attainable set and for the preimage steps. Eq. (14)
- * needs 26 and 44 (also with one or two rotors removed); a layout in general position needs
- * up to C(8,3) = 56 and 35+20+10 = 65: if they do not fit, the priority allocator is
- * disabled for that layout (MIXER_LIMIT_NO_ALLOC, clipping) */
-#define MIXER_MAX_FACETS 32
-#define MIXER_MAX_SUB_FACETS 48
+/* Distinct facet normals kept for the attainable set and for the preimage steps: what eq. (14)
+ * needs, 26 and 44, also with one or two rotors removed, any arm length, k_tau / k_f and
+ * per-rotor scale (the counts depend on which columns are coplanar and, for the preimage
+ * steps, on which four rotors come last: 44 is the most over every choice). A layout in general
+ * position needs up to C(8,3) = 56 and 35+20+10 = 65: if they do not fit, the priority
+ * allocator is disabled for that layout (MIXER_LIMIT_NO_ALLOC, clipping). Each facet costs
+ * 32 B of the caller's struct mixer, each sub-facet 24 B in the float build. */
+#define MIXER_MAX_FACETS 26
+#define MIXER_MAX_SUB_FACETS 44
 
 enum mixer_mode {
 	MIXER_MODE_CLIP = 0,     /* pseudo-inverse plus clipping (baseline) */
