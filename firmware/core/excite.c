@@ -62,22 +62,20 @@ static scalar_t excite_ms_raw(const struct excite *e)
 static void excite_ms_step(struct excite *e)
 {
 	for (uint32_t k = 0; k < e->p.ms_count; k++)
-		e->phase[k] += e->dphase[k];
+		e->phase[k] += e->dphase1 * (e->p.ms_k_first + k);
 }
 
 static void excite_ms_start(struct excite *e)
 {
 	uint32_t n = e->p.ms_count;
 	uint32_t d1 = (uint32_t)((((uint64_t)1 << 32) + e->p.ms_period_frames / 2) / e->p.ms_period_frames);
-	for (uint32_t k = 0; k < EXCITE_MS_MAX; k++) {
+	for (uint32_t k = 0; k < EXCITE_MS_MAX; k++)
 		e->phase[k] = 0;
-		e->dphase[k] = 0;
-	}
+	e->dphase1 = d1;
 	for (uint32_t k = 1; k <= n; k++) {
 		/* Schroeder: -k (k - 1) / (2 N) turn */
 		uint64_t turns = ((uint64_t)k * (k - 1u) << 31) / n;
 		e->phase[k - 1] = 0u - (uint32_t)turns;
-		e->dphase[k - 1] = d1 * (e->p.ms_k_first + k - 1u);
 	}
 }
 

@@ -290,7 +290,10 @@ static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 {
 	scalar_t uref[NR], r[NA];
 	for (int j = 0; j < NR; j++) {
-		uref[j] = dot4(m->pinv_n[j], w);
+		/* row j of the pseudo-inverse in the scaled space */
+		const scalar_t pn[NA] = { sc_mul(m->pinv[j][0], m->row_max[0]), sc_mul(m->pinv[j][1], m->row_max[1]),
+					  sc_mul(m->pinv[j][2], m->row_max[2]), sc_mul(m->pinv[j][3], m->row_max[3]) };
+		uref[j] = dot4(pn, w);
 		u[j] = SC_ZERO;
 	}
 	for (int i = 0; i < NA; i++)

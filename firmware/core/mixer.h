@@ -166,7 +166,8 @@ struct mixer {
 	/* hot-path data, scalar_t; everything of the allocation is in u (f_j / scale_j) */
 	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES];  /* (Gamma S)^+ (physical wrench -> u) */
 	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma S, entries in [-1, 1] */
-	scalar_t pinv_n[MIXER_N_ROTORS][MIXER_N_AXES];/* pseudo-inverse in the scaled space */
+	scalar_t row_max[MIXER_N_AXES];    /* max_j |Gamma_ij|: pinv times it (column i) is the
+					    * pseudo-inverse in the scaled space */
 	scalar_t row_div[MIXER_N_AXES];    /* 1 / max_j |Gamma_ij| */
 	scalar_t row_scale[MIXER_N_AXES];  /* physical wrench per unit of scaled wrench */
 	scalar_t width;                    /* f_hi - f_lo */

@@ -400,6 +400,7 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 			rows_ok = false;
 			rowmax[i] = 1.0f;
 		}
+		m->row_max[i] = sc_from_float(rowmax[i]);
 		m->row_div[i] = sc_from_float(1.0f / rowmax[i]);
 		m->row_scale[i] = sc_from_float(width * rowmax[i]);
 		for (int j = 0; j < NR; j++) {
@@ -410,9 +411,6 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	m->width = sc_from_float(width);
 	/* a rotor within 4 inner margins of a bound counts as at the bound */
 	m->at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
-	for (int j = 0; j < NR; j++)
-		for (int i = 0; i < NA; i++)
-			m->pinv_n[j][i] = sc_from_float(dz->pinv_f[j][i] * rowmax[i]);
 
 	/* ---- allocator: present rotors, the best-conditioned 4 of them last */
 	uint8_t act[NR];
