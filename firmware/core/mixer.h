@@ -96,8 +96,8 @@
  * per-rotor scale (the counts depend on which columns are coplanar and, for the preimage
  * steps, on which four rotors come last: 44 is the most over every choice). A layout in general
  * position needs up to C(8,3) = 56 and 35+20+10 = 65: if they do not fit, the priority
- * allocator is disabled for that layout (MIXER_LIMIT_NO_ALLOC, clipping). Each facet costs
- * 32 B of the caller's struct mixer, each sub-facet 24 B in the float build. */
+ * allocator is disabled for that layout (MIXER_LIMIT_NO_ALLOC, clipping). Each costs 24 B of
+ * the caller's struct mixer. */
 #define MIXER_MAX_FACETS 26
 #define MIXER_MAX_SUB_FACETS 44
 
@@ -136,10 +136,9 @@ struct mixer_facet {
 	scalar_t n[MIXER_N_AXES]; /* unit normal in the row-scaled space */
 	scalar_t nc;              /* n . centre of its zonotope */
 	scalar_t h;               /* half-width: 1/2 sum |n . g_j| over its generators */
-	scalar_t inv0, inv3;      /* 1 / n[0], 1 / n[3] (0 when that component is ~0) */
 };
 
-/* a facet of a preimage step's sub-zonotope: what the step needs, no reciprocals */
+/* a facet of a preimage step's sub-zonotope */
 struct mixer_subfacet {
 	scalar_t n[MIXER_N_AXES];
 	scalar_t nc, h;

@@ -183,10 +183,6 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 					out[nf].n[i] = sc_from_float(n[i]);
 				out[nf].nc = sc_from_float(nc);
 				out[nf].h = sc_from_float(h);
-				/* reciprocals of the thrust and yaw components (0: treated as zero) */
-				scalar_t n0 = out[nf].n[0], n3 = out[nf].n[3];
-				out[nf].inv0 = sc_abs(n0) > EPS_S ? sc_from_float(1.0f / sc_to_float(n0)) : SC_ZERO;
-				out[nf].inv3 = sc_abs(n3) > EPS_S ? sc_from_float(1.0f / sc_to_float(n3)) : SC_ZERO;
 				nf++;
 			}
 	return nf;
