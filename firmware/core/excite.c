@@ -101,7 +101,6 @@ void excite_init(struct excite *e, const struct excite_params *params)
 	e->lfsr_taps = excite_taps[p->prbs_order];
 	e->count = 0;
 	e->value = SC_ZERO;
-	e->frames = 0;
 	e->ms_scale = SC_ZERO;
 
 	/* multisine: scan one period for the peak of the normalised sum */
@@ -123,7 +122,6 @@ scalar_t excite_update(struct excite *e)
 	const struct excite_params *p = &e->p;
 	scalar_t a = p->amplitude;
 	scalar_t y = SC_ZERO;
-	e->frames++;
 	switch (p->kind) {
 	case EXCITE_UNIFORM:
 		if (e->count == 0) {

@@ -375,12 +375,14 @@ static void finish(const struct mixer *m, struct mixer_output *out)
 	wrench_u(m, out->f_n, out->achieved);
 	out->rotor_at_min = 0;
 	out->rotor_at_max = 0;
+	/* a rotor within 4 inner margins of a bound counts as at the bound */
+	const scalar_t at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
 	for (int j = 0; j < NR; j++) {
 		if (!(m->present & (1u << j)))
 			continue;
-		if (out->f_n[j] <= sc_add(m->f_lo, m->at_tol))
+		if (out->f_n[j] <= sc_add(m->f_lo, at_tol))
 			out->rotor_at_min |= (uint8_t)(1u << j);
-		if (out->f_n[j] >= sc_sub(m->f_hi, m->at_tol))
+		if (out->f_n[j] >= sc_sub(m->f_hi, at_tol))
 			out->rotor_at_max |= (uint8_t)(1u << j);
 	}
 	for (int j = 0; j < NR; j++)
@@ -399,7 +401,7 @@ static uint32_t axis_flags(const struct mixer *m, const struct mixer_output *out
 {
 	uint32_t f = 0;
 	for (int i = 0; i < NA; i++) {
-		scalar_t tol = sc_mul(m->row_scale[i], TOL_FLAG_REL);
+		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL); /* physical per scaled wrench, times the margin */
 		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
 			f |= axis_limit[i];
 	}

@@ -398,15 +398,12 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		}
 		m->row_max[i] = sc_from_float(rowmax[i]);
 		m->row_div[i] = sc_from_float(1.0f / rowmax[i]);
-		m->row_scale[i] = sc_from_float(width * rowmax[i]);
 		for (int j = 0; j < NR; j++) {
 			gsc[i][j] = dz->gamma_f[i][j] / rowmax[i];
 			m->gn[i][j] = sc_from_float(gsc[i][j]);
 		}
 	}
 	m->width = sc_from_float(width);
-	/* a rotor within 4 inner margins of a bound counts as at the bound */
-	m->at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
 
 	/* ---- allocator: present rotors, the best-conditioned 4 of them last */
 	uint8_t act[NR];

@@ -668,7 +668,7 @@ UNIT_TEST(mixer_facet_caps_fit_eq14)
 		CHECK(mixer_init(&mix, &p));
 		CHECK(mix.alloc_ok);
 		int subs = 0;
-		for (int st = 0; st < 8; st++)
+		for (int st = 0; st < MIXER_N_ROTORS - 4; st++)
 			subs += mix.sub_n[st];
 		CHECK(mix.n_facets <= MIXER_MAX_FACETS && subs <= MIXER_MAX_SUB_FACETS);
 		if (mask == 0xFF)
@@ -680,7 +680,7 @@ UNIT_TEST(mixer_facet_caps_fit_eq14)
 	mixer_default_params(&p);
 	CHECK(mixer_init(&mix, &p) && mix.alloc_ok);
 	int subs = 0;
-	for (int st = 0; st < 8; st++)
+	for (int st = 0; st < MIXER_N_ROTORS - 4; st++)
 		subs += mix.sub_n[st];
 	CHECK(mix.n_facets == MIXER_MAX_FACETS && subs == MIXER_MAX_SUB_FACETS);
 }
