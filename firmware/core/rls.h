@@ -127,8 +127,9 @@ struct rls {
 	rls_unit_t lambda;                        /* cfg.lambda */
 	rls_acc_t ssr[RLS_MAX_OUTPUTS];           /* forgotten sum of normalised residuals^2 (y_n) */
 	rls_acc_t n_eff;                          /* forgotten sample count */
-	rls_acc_t p_min_n[RLS_MAX_PARAMS];        /* floor and ceiling on P_n_ii (d_exp = 0) */
-	rls_acc_t p_max_n[RLS_MAX_PARAMS];
+	rls_acc_t p_min_n, p_max_n;               /* floor and ceiling on P_n_ii (d_exp = 0) of a
+						   * parameter with phi_shift 0: 2^(2 phi_shift_i) times
+						   * them for parameter i */
 	rls_acc_t phi_min2;                       /* phi_min^2: Q16.16 squared (Q32) when fixed */
 	uint32_t n_updates, n_gated, n_rejected, n_resets;
 };

@@ -134,19 +134,17 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 	}
 #endif
 	r->d0_exp = e;
-	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
+	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
 		r->d0[i] = wide_of_f(pn[i] * sc_pow2f(e));
-		float s2 = sc_pow2f(2 * c->phi_shift[i]);
-		r->p_min_n[i] = acc_of_f(c->p_min * s2);
-		float pmx = c->p_max;
+	r->p_min_n = acc_of_f(c->p_min);
+	float pmx = c->p_max;
 #if OCTO_FIXED
-		/* the fixed build always keeps P under RLS_FIXED_P_CEIL p0: beyond that, an
-		 * unexcited direction's gain is the difference of numbers 2^31 times larger */
-		if (!(pmx > 0.0f) || pmx > c->p0 * RLS_FIXED_P_CEIL)
-			pmx = c->p0 * RLS_FIXED_P_CEIL;
+	/* the fixed build always keeps P under RLS_FIXED_P_CEIL p0: beyond that, an
+	 * unexcited direction's gain is the difference of numbers 2^31 times larger */
+	if (!(pmx > 0.0f) || pmx > c->p0 * RLS_FIXED_P_CEIL)
+		pmx = c->p0 * RLS_FIXED_P_CEIL;
 #endif
-		r->p_max_n[i] = acc_of_f(pmx * s2);
-	}
+	r->p_max_n = acc_of_f(pmx);
 	r->phi_min2 = phi2_of_f(c->phi_min * c->phi_min);
 	rls_reset_covariance(r);
 }
