@@ -56,7 +56,7 @@ struct excite {
 	uint32_t count;      /* frames since the value was drawn (multisine: frame in period) */
 	scalar_t value;      /* current held value (uniform, PRBS) */
 	uint32_t phase[EXCITE_MS_MAX]; /* multisine phases, 2^32 = one turn */
-	uint32_t dphase1;    /* phase step per frame of harmonic 1; sine k steps (ms_k_first + k) times it */
+	uint32_t dphase1;    /* phase step per frame of harmonic 1 (sine k: ms_k_first + k times it) */
 	scalar_t ms_scale;   /* A / (N * peak of the normalised sum) */
 };
 

@@ -310,8 +310,10 @@ static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 	scalar_t uref[NR], r[NA];
 	for (int j = 0; j < NR; j++) {
 		/* row j of the pseudo-inverse in the scaled space */
-		const scalar_t pn[NA] = { sc_mul(m->pinv[j][0], m->row_max[0]), sc_mul(m->pinv[j][1], m->row_max[1]),
-					  sc_mul(m->pinv[j][2], m->row_max[2]), sc_mul(m->pinv[j][3], m->row_max[3]) };
+		const scalar_t pn[NA] = {
+			sc_mul(m->pinv[j][0], m->row_max[0]), sc_mul(m->pinv[j][1], m->row_max[1]),
+			sc_mul(m->pinv[j][2], m->row_max[2]), sc_mul(m->pinv[j][3], m->row_max[3]),
+		};
 		uref[j] = dot4(pn, w);
 		u[j] = SC_ZERO;
 	}
@@ -401,7 +403,8 @@ static uint32_t axis_flags(const struct mixer *m, const struct mixer_output *out
 {
 	uint32_t f = 0;
 	for (int i = 0; i < NA; i++) {
-		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL); /* physical per scaled wrench, times the margin */
+		/* the margin times the physical wrench per unit of scaled wrench */
+		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
 		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
 			f |= axis_limit[i];
 	}

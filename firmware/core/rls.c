@@ -366,7 +366,8 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 	for (unsigned ii = n; ii-- > 0;) {
 		if (!(r->p_min_n > ACC_ZERO))
 			continue;
-		rls_acc_t pmin = acc_ldexp(acc_pow4(r->p_min_n, r->cfg.phi_shift[ii]), r->d_exp), p = pdiag_m(r, ii);
+		rls_acc_t pmin = acc_ldexp(acc_pow4(r->p_min_n, r->cfg.phi_shift[ii]), r->d_exp);
+		rls_acc_t p = pdiag_m(r, ii);
 		if (p < pmin)
 			r->d[ii] = wide_add(r->d[ii], wide_of_acc(acc_sub(pmin, p)));
 	}

@@ -2,9 +2,10 @@
  * rls.h - recursive least squares, Bierman UD form, several outputs sharing one regressor.
  *
  * Model: y_o = phi^T theta_o + e_o, o = 0..n_outputs-1, phi in R^n_params (n_params <= 2,
- * n_outputs <= 2: what the identification uses, see RLS_MAX_PARAMS). All outputs share one regressor, hence one covariance P and one gain K:
- * e.g. the paper's eq. (18) with phi = [T_1], y = [f_1, tau_1], theta = [k_f, k_tau] is two
- * scalar problems sharing P (one gain updates k_f and k_tau).
+ * n_outputs <= 2: what the identification uses, see RLS_MAX_PARAMS). All outputs share one
+ * regressor, hence one covariance P and one gain K: e.g. the paper's eq. (18) with phi = [T_1],
+ * y = [f_1, tau_1], theta = [k_f, k_tau] is two scalar problems sharing P (one gain updates k_f
+ * and k_tau).
  *
  * P = U D U^T with U unit upper triangular, updated by Bierman's algorithm with forgetting
  * factor lambda:
