@@ -176,13 +176,14 @@ uint32_t excite_period_frames(const struct excite *e)
 
 void excite_null_pattern(unsigned k, scalar_t out[EXCITE_ROTORS])
 {
-	static const int8_t pat[EXCITE_NULL_PATTERNS][EXCITE_ROTORS] = {
-		{1, 0, -1, 0, 1, 0, -1, 0},
-		{0, 1, 0, -1, 0, 1, 0, -1},
-		{1, 1, -1, -1, 1, 1, -1, -1},
+	/* as scalar_t already: the rotor experiment asks for two patterns every step */
+	static const scalar_t pat[EXCITE_NULL_PATTERNS][EXCITE_ROTORS] = {
+		{SC(1), SC(0), SC(-1), SC(0), SC(1), SC(0), SC(-1), SC(0)},
+		{SC(0), SC(1), SC(0), SC(-1), SC(0), SC(1), SC(0), SC(-1)},
+		{SC(1), SC(1), SC(-1), SC(-1), SC(1), SC(1), SC(-1), SC(-1)},
 	};
 	for (unsigned j = 0; j < EXCITE_ROTORS; j++)
-		out[j] = k < EXCITE_NULL_PATTERNS ? sc_from_int(pat[k][j]) : SC_ZERO;
+		out[j] = k < EXCITE_NULL_PATTERNS ? pat[k][j] : SC_ZERO;
 }
 
 scalar_t excite_offset_level(uint32_t frame, uint32_t seg_frames)
