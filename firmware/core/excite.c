@@ -62,22 +62,20 @@ static scalar_t excite_ms_raw(const struct excite *e)
 static void excite_ms_step(struct excite *e)
 {
 	for (uint32_t k = 0; k < e->p.ms_count; k++)
-		e->phase[k] += e->dphase[k];
+		e->phase[k] += e->dphase1 * (e->p.ms_k_first + k);
 }
 
 static void excite_ms_start(struct excite *e)
 {
 	uint32_t n = e->p.ms_count;
 	uint32_t d1 = (uint32_t)((((uint64_t)1 << 32) + e->p.ms_period_frames / 2) / e->p.ms_period_frames);
-	for (uint32_t k = 0; k < EXCITE_MS_MAX; k++) {
+	for (uint32_t k = 0; k < EXCITE_MS_MAX; k++)
 		e->phase[k] = 0;
-		e->dphase[k] = 0;
-	}
+	e->dphase1 = d1;
 	for (uint32_t k = 1; k <= n; k++) {
 		/* Schroeder: -k (k - 1) / (2 N) turn */
 		uint64_t turns = ((uint64_t)k * (k - 1u) << 31) / n;
 		e->phase[k - 1] = 0u - (uint32_t)turns;
-		e->dphase[k - 1] = d1 * (e->p.ms_k_first + k - 1u);
 	}
 }
 
@@ -103,7 +101,6 @@ void excite_init(struct excite *e, const struct excite_params *params)
 	e->lfsr_taps = excite_taps[p->prbs_order];
 	e->count = 0;
 	e->value = SC_ZERO;
-	e->frames = 0;
 	e->ms_scale = SC_ZERO;
 
 	/* multisine: scan one period for the peak of the normalised sum */
@@ -125,7 +122,6 @@ scalar_t excite_update(struct excite *e)
 	const struct excite_params *p = &e->p;
 	scalar_t a = p->amplitude;
 	scalar_t y = SC_ZERO;
-	e->frames++;
 	switch (p->kind) {
 	case EXCITE_UNIFORM:
 		if (e->count == 0) {
@@ -180,13 +176,14 @@ uint32_t excite_period_frames(const struct excite *e)
 
 void excite_null_pattern(unsigned k, scalar_t out[EXCITE_ROTORS])
 {
-	static const int8_t pat[EXCITE_NULL_PATTERNS][EXCITE_ROTORS] = {
-		{1, 0, -1, 0, 1, 0, -1, 0},
-		{0, 1, 0, -1, 0, 1, 0, -1},
-		{1, 1, -1, -1, 1, 1, -1, -1},
+	/* as scalar_t already: the rotor experiment asks for two patterns every step */
+	static const scalar_t pat[EXCITE_NULL_PATTERNS][EXCITE_ROTORS] = {
+		{SC(1), SC(0), SC(-1), SC(0), SC(1), SC(0), SC(-1), SC(0)},
+		{SC(0), SC(1), SC(0), SC(-1), SC(0), SC(1), SC(0), SC(-1)},
+		{SC(1), SC(1), SC(-1), SC(-1), SC(1), SC(1), SC(-1), SC(-1)},
 	};
 	for (unsigned j = 0; j < EXCITE_ROTORS; j++)
-		out[j] = k < EXCITE_NULL_PATTERNS ? sc_from_int(pat[k][j]) : SC_ZERO;
+		out[j] = k < EXCITE_NULL_PATTERNS ? pat[k][j] : SC_ZERO;
 }
 
 scalar_t excite_offset_level(uint32_t frame, uint32_t seg_frames)

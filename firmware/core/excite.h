@@ -26,7 +26,8 @@
 
 #include <stdint.h>
 
-#define EXCITE_MS_MAX 16
+/* the most sines a multisine holds: what the experiments use (inertia: harmonics 4..15, 12) */
+#define EXCITE_MS_MAX 12
 #define EXCITE_MS_PEAK_SCAN 8192
 
 enum excite_kind {
@@ -55,9 +56,8 @@ struct excite {
 	uint32_t count;      /* frames since the value was drawn (multisine: frame in period) */
 	scalar_t value;      /* current held value (uniform, PRBS) */
 	uint32_t phase[EXCITE_MS_MAX]; /* multisine phases, 2^32 = one turn */
-	uint32_t dphase[EXCITE_MS_MAX];
+	uint32_t dphase1;    /* phase step per frame of harmonic 1 (sine k: ms_k_first + k times it) */
 	scalar_t ms_scale;   /* A / (N * peak of the normalised sum) */
-	uint64_t frames;     /* update calls since init */
 };
 
 /* Sensible defaults: uniform, A = 0.05, clock_div 1, seed 1, PRBS order 9,

@@ -62,16 +62,33 @@ bool mixer_attainable(const struct mixer *m, const scalar_t wrench[NA], scalar_t
 	return attainable_scaled(m, w, tol);
 }
 
+/* 1 / n[0] and 1 / n[3] of each facet (0 where |n| <= EPS_S: independent of that axis) for the
+ * interval searches of one saturated allocation: formed once per saturated step (2 divisions
+ * per facet, on its stack) rather than kept in the caller's struct mixer */
+struct facet_recips {
+	scalar_t inv[2][MIXER_MAX_FACETS]; /* [0] thrust, [1] yaw */
+};
+
+static void facet_recips(const struct mixer *m, struct facet_recips *rc)
+{
+	for (int k = 0; k < m->n_facets; k++)
+		for (int a = 0; a < 2; a++) {
+			scalar_t s = m->facet[k].n[a ? 3 : 0];
+			rc->inv[a][k] = sc_abs(s) > EPS_S ? sc_div(SC(1), s) : SC_ZERO;
+		}
+}
+
 /* Interval [lo, hi] of the offset t along axis ax (0 thrust, 3 yaw), within [l, h], such that
  * w + t e_ax is attainable with the inner margin; false if empty (lo, hi untouched then).
  * Works on t directly (not on t / demand) so that huge demands lose no resolution. */
-static bool axis_interval(const struct mixer *m, const scalar_t w[NA], int ax, scalar_t l, scalar_t h,
-			  scalar_t *lo, scalar_t *hi)
+static bool axis_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA], int ax,
+			  scalar_t l, scalar_t h, scalar_t *lo, scalar_t *hi)
 {
+	const scalar_t *invs = rc->inv[ax == 0 ? 0 : 1];
 	for (int k = 0; k < m->n_facets; k++) {
 		const struct mixer_facet *fc = &m->facet[k];
 		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
-		scalar_t s = fc->n[ax], inv = ax == 0 ? fc->inv0 : fc->inv3, hw = sc_sub(fc->h, TOL_IN);
+		scalar_t s = fc->n[ax], inv = invs[k], hw = sc_sub(fc->h, TOL_IN);
 		if (inv == SC_ZERO) { /* |n_ax| <= EPS_S: independent of t */
 			if (sc_abs(q) > hw)
 				return false;
@@ -96,22 +113,24 @@ static bool axis_interval(const struct mixer *m, const scalar_t w[NA], int ax, s
 
 /* Interval of the scaled thrust w[0] such that w is attainable, other components fixed.
  * Returns false if empty. */
-static bool thrust_interval(const struct mixer *m, const scalar_t w[NA], scalar_t *lo, scalar_t *hi)
+static bool thrust_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA],
+			    scalar_t *lo, scalar_t *hi)
 {
 	const scalar_t w0[NA] = {SC_ZERO, w[1], w[2], w[3]};
-	return axis_interval(m, w0, 0, SC_MAX_NEG, SC_MAX, lo, hi);
+	return axis_interval(m, rc, w0, 0, SC_MAX_NEG, SC_MAX, lo, hi);
 }
 
 /* With w[3] = the scaled zero yaw, the interval [lo, hi] of yaw offsets t between 0 and dy
  * (the scaled demanded yaw offset) such that w + t e_3 is attainable; false if empty. */
-static bool yaw_interval(const struct mixer *m, const scalar_t w[NA], scalar_t dy, scalar_t *lo, scalar_t *hi)
+static bool yaw_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA], scalar_t dy,
+			 scalar_t *lo, scalar_t *hi)
 {
 	scalar_t l = sc_min(SC_ZERO, dy), h = sc_max(SC_ZERO, dy);
 	*lo = l;
 	*hi = h;
 	if (dy == SC_ZERO) /* no yaw demanded: is w itself attainable (inner margin)? */
 		return attainable_scaled(m, w, sc_neg(TOL_IN));
-	return axis_interval(m, w, 3, l, h, lo, hi);
+	return axis_interval(m, rc, w, 3, l, h, lo, hi);
 }
 
 /* tighten [lo, hi] with the constraint -hw <= q - u s <= hw (u is the unknown) */
@@ -290,7 +309,12 @@ static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 {
 	scalar_t uref[NR], r[NA];
 	for (int j = 0; j < NR; j++) {
-		uref[j] = dot4(m->pinv_n[j], w);
+		/* row j of the pseudo-inverse in the scaled space */
+		const scalar_t pn[NA] = {
+			sc_mul(m->pinv[j][0], m->row_max[0]), sc_mul(m->pinv[j][1], m->row_max[1]),
+			sc_mul(m->pinv[j][2], m->row_max[2]), sc_mul(m->pinv[j][3], m->row_max[3]),
+		};
+		uref[j] = dot4(pn, w);
 		u[j] = SC_ZERO;
 	}
 	for (int i = 0; i < NA; i++)
@@ -353,12 +377,14 @@ static void finish(const struct mixer *m, struct mixer_output *out)
 	wrench_u(m, out->f_n, out->achieved);
 	out->rotor_at_min = 0;
 	out->rotor_at_max = 0;
+	/* a rotor within 4 inner margins of a bound counts as at the bound */
+	const scalar_t at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
 	for (int j = 0; j < NR; j++) {
 		if (!(m->present & (1u << j)))
 			continue;
-		if (out->f_n[j] <= sc_add(m->f_lo, m->at_tol))
+		if (out->f_n[j] <= sc_add(m->f_lo, at_tol))
 			out->rotor_at_min |= (uint8_t)(1u << j);
-		if (out->f_n[j] >= sc_sub(m->f_hi, m->at_tol))
+		if (out->f_n[j] >= sc_sub(m->f_hi, at_tol))
 			out->rotor_at_max |= (uint8_t)(1u << j);
 	}
 	for (int j = 0; j < NR; j++)
@@ -377,7 +403,8 @@ static uint32_t axis_flags(const struct mixer *m, const struct mixer_output *out
 {
 	uint32_t f = 0;
 	for (int i = 0; i < NA; i++) {
-		scalar_t tol = sc_mul(m->row_scale[i], TOL_FLAG_REL);
+		/* the margin times the physical wrench per unit of scaled wrench */
+		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
 		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
 			f |= axis_limit[i];
 	}
@@ -436,17 +463,19 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		for (int i = 0; i < NA; i++)
 			w[i] = wd[i];
 	} else {
+		struct facet_recips rc;
+		facet_recips(m, &rc);
 		/* b. roll/pitch scale alpha with zero yaw, thrust free */
 		scalar_t yaw0 = to_scaled(m, 3, SC_ZERO);
 		scalar_t lo, hi, alpha = SC(1);
 		w[3] = yaw0;
 		w[1] = wd[1];
 		w[2] = wd[2];
-		if (!thrust_interval(m, w, &lo, &hi)) {
+		if (!thrust_interval(m, &rc, w, &lo, &hi)) {
 			scalar_t a_lo = SC_ZERO, a_hi = SC(1);
 			w[1] = to_scaled(m, 1, SC_ZERO);
 			w[2] = to_scaled(m, 2, SC_ZERO);
-			if (!thrust_interval(m, w, &lo, &hi)) {
+			if (!thrust_interval(m, &rc, w, &lo, &hi)) {
 				/* zero torque unattainable: not a usable layout; fall back to clipping */
 				for (int j = 0; j < NR; j++)
 					if (m->present & (1u << j))
@@ -460,7 +489,7 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 				scalar_t t[NA] = { SC_ZERO, to_scaled(m, 1, sc_mul(mid, demand[1])),
 						   to_scaled(m, 2, sc_mul(mid, demand[2])), yaw0 };
 				scalar_t l2, h2;
-				if (thrust_interval(m, t, &l2, &h2))
+				if (thrust_interval(m, &rc, t, &l2, &h2))
 					a_lo = mid;
 				else
 					a_hi = mid;
@@ -469,7 +498,7 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 			alpha = a_lo;
 			w[1] = to_scaled(m, 1, sc_mul(alpha, demand[1]));
 			w[2] = to_scaled(m, 2, sc_mul(alpha, demand[2]));
-			thrust_interval(m, w, &lo, &hi);
+			thrust_interval(m, &rc, w, &lo, &hi);
 			if (demand[1] != SC_ZERO)
 				out->limits |= MIXER_LIMIT_TX;
 			if (demand[2] != SC_ZERO)
@@ -488,11 +517,11 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		} else if (w[0] != wd[0]) {
 			scalar_t ok_f = w[0];
 			w[0] = wd[0];
-			if (!yaw_interval(m, w, dy, &blo, &bhi)) {
+			if (!yaw_interval(m, &rc, w, dy, &blo, &bhi)) {
 				scalar_t bad_f = wd[0];
 				for (int it = 0; it < MIXER_ALPHA_ITERS; it++) {
 					w[0] = sc_add(sc_mul(ok_f, SC(0.5)), sc_mul(bad_f, SC(0.5)));
-					if (yaw_interval(m, w, dy, &blo, &bhi))
+					if (yaw_interval(m, &rc, w, dy, &blo, &bhi))
 						ok_f = w[0];
 					else
 						bad_f = w[0];
@@ -505,7 +534,7 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		/* d. yaw: the largest part of the demanded yaw attainable at that thrust (between
 		 * zero and the demand: no yaw reversal) */
 		scalar_t ty = SC_ZERO;
-		if (dy != SC_ZERO && yaw_interval(m, w, dy, &blo, &bhi))
+		if (dy != SC_ZERO && yaw_interval(m, &rc, w, dy, &blo, &bhi))
 			ty = dy > 0 ? bhi : blo;
 		if (ty != dy_dem && demand[3] != SC_ZERO)
 			out->limits |= MIXER_LIMIT_TZ;

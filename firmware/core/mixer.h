@@ -91,12 +91,15 @@
 #define MIXER_ALPHA_ITERS 20
 /* active-set iterations of the refinement towards the minimum-norm feasible allocation */
 #define MIXER_QP_ITERS 16
-/* Distinct facet normals kept for the attainable set and for the preimage steps. Eq. (14)
- * needs 26 and 44 (also with one or two rotors removed); a layout in general position needs
- * up to C(8,3) = 56 and 35+20+10 = 65: if they do not fit, the priority allocator is
- * disabled for that layout (MIXER_LIMIT_NO_ALLOC, clipping) */
-#define MIXER_MAX_FACETS 32
-#define MIXER_MAX_SUB_FACETS 48
+/* Distinct facet normals kept for the attainable set and for the preimage steps: what eq. (14)
+ * needs, 26 and 44, also with one or two rotors removed, any arm length, k_tau / k_f and
+ * per-rotor scale (the counts depend on which columns are coplanar and, for the preimage
+ * steps, on which four rotors come last: 44 is the most over every choice). A layout in general
+ * position needs up to C(8,3) = 56 and 35+20+10 = 65: if they do not fit, the priority
+ * allocator is disabled for that layout (MIXER_LIMIT_NO_ALLOC, clipping). Each costs 24 B of
+ * the caller's struct mixer. */
+#define MIXER_MAX_FACETS 26
+#define MIXER_MAX_SUB_FACETS 44
 
 enum mixer_mode {
 	MIXER_MODE_CLIP = 0,     /* pseudo-inverse plus clipping (baseline) */
@@ -133,10 +136,9 @@ struct mixer_facet {
 	scalar_t n[MIXER_N_AXES]; /* unit normal in the row-scaled space */
 	scalar_t nc;              /* n . centre of its zonotope */
 	scalar_t h;               /* half-width: 1/2 sum |n . g_j| over its generators */
-	scalar_t inv0, inv3;      /* 1 / n[0], 1 / n[3] (0 when that component is ~0) */
 };
 
-/* a facet of a preimage step's sub-zonotope: what the step needs, no reciprocals */
+/* a facet of a preimage step's sub-zonotope */
 struct mixer_subfacet {
 	scalar_t n[MIXER_N_AXES];
 	scalar_t nc, h;
@@ -158,27 +160,28 @@ struct mixer_design {
 struct mixer {
 	struct mixer_params p;         /* copy (custom_gamma set to NULL after copying; scale as
 					* used: 0 replaced by 1, clamped) */
-	uint8_t rank;
 
 	/* hot-path data, scalar_t; everything of the allocation is in u (f_j / scale_j) */
 	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES];  /* (Gamma S)^+ (physical wrench -> u) */
 	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma S, entries in [-1, 1] */
-	scalar_t pinv_n[MIXER_N_ROTORS][MIXER_N_AXES];/* pseudo-inverse in the scaled space */
+	scalar_t row_max[MIXER_N_AXES];    /* max_j |Gamma_ij|: pinv times it (column i) is the
+					    * pseudo-inverse in the scaled space */
 	scalar_t row_div[MIXER_N_AXES];    /* 1 / max_j |Gamma_ij| */
-	scalar_t row_scale[MIXER_N_AXES];  /* physical wrench per unit of scaled wrench */
-	scalar_t width;                    /* f_hi - f_lo */
-	scalar_t at_tol;                   /* rotor_at_min/max tolerance, N */
+	scalar_t width;                    /* f_hi - f_lo (physical wrench per unit of scaled
+					    * wrench: width row_max) */
 	scalar_t w_lo[MIXER_N_AXES];       /* physical wrench with every present rotor at u = f_lo */
 	scalar_t f_lo, f_hi;               /* box of u, N (rotor j's thrust: scale_j times it) */
+	uint8_t rank;
 	uint8_t n_active;
 	uint8_t present;                   /* bit j: rotor j+1 has a nonzero column */
 	uint8_t order[MIXER_N_ROTORS];     /* present rotors; the last 4 are independent */
 	bool alloc_ok;
 	bool custom;                       /* built from custom_gamma */
 	uint8_t n_facets;
+	/* the preimage's steps 0..n_active-5 (at most 4): facets of the suffix set after each */
+	uint8_t sub_n[MIXER_N_ROTORS - 4];
+	uint8_t sub_first[MIXER_N_ROTORS - 4];
 	struct mixer_facet facet[MIXER_MAX_FACETS];
-	uint8_t sub_n[MIXER_N_ROTORS];     /* facets of the suffix set after step i */
-	uint8_t sub_first[MIXER_N_ROTORS];
 	struct mixer_subfacet sub[MIXER_MAX_SUB_FACETS];
 	scalar_t tail_inv[4][MIXER_N_AXES]; /* inverse of the last 4 scaled columns */
 };

@@ -183,10 +183,6 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 					out[nf].n[i] = sc_from_float(n[i]);
 				out[nf].nc = sc_from_float(nc);
 				out[nf].h = sc_from_float(h);
-				/* reciprocals of the thrust and yaw components (0: treated as zero) */
-				scalar_t n0 = out[nf].n[0], n3 = out[nf].n[3];
-				out[nf].inv0 = sc_abs(n0) > EPS_S ? sc_from_float(1.0f / sc_to_float(n0)) : SC_ZERO;
-				out[nf].inv3 = sc_abs(n3) > EPS_S ? sc_from_float(1.0f / sc_to_float(n3)) : SC_ZERO;
 				nf++;
 			}
 	return nf;
@@ -400,19 +396,14 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 			rows_ok = false;
 			rowmax[i] = 1.0f;
 		}
+		m->row_max[i] = sc_from_float(rowmax[i]);
 		m->row_div[i] = sc_from_float(1.0f / rowmax[i]);
-		m->row_scale[i] = sc_from_float(width * rowmax[i]);
 		for (int j = 0; j < NR; j++) {
 			gsc[i][j] = dz->gamma_f[i][j] / rowmax[i];
 			m->gn[i][j] = sc_from_float(gsc[i][j]);
 		}
 	}
 	m->width = sc_from_float(width);
-	/* a rotor within 4 inner margins of a bound counts as at the bound */
-	m->at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
-	for (int j = 0; j < NR; j++)
-		for (int i = 0; i < NA; i++)
-			m->pinv_n[j][i] = sc_from_float(dz->pinv_f[j][i] * rowmax[i]);
 
 	/* ---- allocator: present rotors, the best-conditioned 4 of them last */
 	uint8_t act[NR];

@@ -44,6 +44,8 @@ static inline rls_acc_t acc_sub(rls_acc_t a, rls_acc_t b) { return q_add64(a, -b
 static inline rls_acc_t acc_mul_unit(rls_acc_t a, rls_unit_t m) { return q_mul64_q30(a, m); }
 /* a 2^e (left shifts saturate) */
 static inline rls_acc_t acc_ldexp(rls_acc_t a, int32_t e) { return q_scale64(a, (int)e); }
+/* a 2^(2 s): a covariance bound of a parameter with phi_shift s */
+static inline rls_acc_t acc_pow4(rls_acc_t a, int s) { return q_scale64(a, 2 * s); }
 /* Q1.30 -> Q23.40 */
 static inline rls_acc_t acc_of_unit(rls_unit_t m) { return (rls_acc_t)m * (1 << (QF_ACC_FRAC - QF_UNIT_FRAC)); }
 static inline rls_acc_t acc_of_wide(rls_wide_t d) { return q_shr64(d, QF_WIDE_FRAC - QF_ACC_FRAC); }
@@ -153,6 +155,7 @@ static inline rls_acc_t acc_add(rls_acc_t a, rls_acc_t b) { return a + b; }
 static inline rls_acc_t acc_sub(rls_acc_t a, rls_acc_t b) { return a - b; }
 static inline rls_acc_t acc_mul_unit(rls_acc_t a, rls_unit_t m) { return a * m; }
 static inline rls_acc_t acc_ldexp(rls_acc_t a, int32_t e) { (void)e; return a; } /* e is 0 */
+static inline rls_acc_t acc_pow4(rls_acc_t a, int s) { return s ? a * sc_pow2f(2 * s) : a; }
 static inline rls_acc_t acc_of_unit(rls_unit_t m) { return m; }
 static inline rls_acc_t acc_of_wide(rls_wide_t d) { return d; }
 static inline rls_wide_t wide_of_acc(rls_acc_t a) { return a; }
@@ -361,9 +364,10 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 
 	/* covariance floor, from the last row up (raising D_i changes P_kk for k <= i only) */
 	for (unsigned ii = n; ii-- > 0;) {
-		if (!(r->p_min_n[ii] > ACC_ZERO))
+		if (!(r->p_min_n > ACC_ZERO))
 			continue;
-		rls_acc_t pmin = acc_ldexp(r->p_min_n[ii], r->d_exp), p = pdiag_m(r, ii);
+		rls_acc_t pmin = acc_ldexp(acc_pow4(r->p_min_n, r->cfg.phi_shift[ii]), r->d_exp);
+		rls_acc_t p = pdiag_m(r, ii);
 		if (p < pmin)
 			r->d[ii] = wide_add(r->d[ii], wide_of_acc(acc_sub(pmin, p)));
 	}
@@ -385,19 +389,21 @@ enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_si
 	rls_unit_t lambda = r->lambda;
 	if (lambda < UNIT_ONE) {
 		for (unsigned i = 0; i < n; i++) {
-			if (!(r->p_max_n[i] > ACC_ZERO))
+			if (!(r->p_max_n > ACC_ZERO))
 				continue;
-			rls_unit_t lmin = unit_ratio(pdiag_m(r, i), acc_ldexp(r->p_max_n[i], r->d_exp));
+			rls_unit_t lmin = unit_ratio(pdiag_m(r, i), acc_ldexp(acc_pow4(r->p_max_n, r->cfg.phi_shift[i]),
+									 r->d_exp));
 			if (lmin > lambda)
 				lambda = lmin < UNIT_ONE ? lmin : UNIT_ONE;
 		}
 	}
 
-	/* one parameter (the identification's common case) is a call with a constant n, which
+	/* each n (rls_init clamps it to 1..RLS_MAX_PARAMS = 2) is a call with a constant, which
 	 * the compiler specialises: no loops, no copies, and the same arithmetic */
+	_Static_assert(RLS_MAX_PARAMS == 2, "rls_update_n specialises n = 1 and n = 2");
 	if (n == 1)
 		return bierman(r, phi_n, y_n, lambda, 1);
-	return bierman(r, phi_n, y_n, lambda, n);
+	return bierman(r, phi_n, y_n, lambda, 2);
 }
 
 enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y, bool excited)

@@ -1,10 +1,11 @@
 /*
  * rls.h - recursive least squares, Bierman UD form, several outputs sharing one regressor.
  *
- * Model: y_o = phi^T theta_o + e_o, o = 0..n_outputs-1, phi in R^n_params (n_params <= 4,
- * n_outputs <= 3). All outputs share one regressor, hence one covariance P and one gain K:
- * e.g. the paper's eq. (18) with phi = [T_1], y = [f_1, tau_1], theta = [k_f, k_tau] is two
- * scalar problems sharing P (one gain updates k_f and k_tau).
+ * Model: y_o = phi^T theta_o + e_o, o = 0..n_outputs-1, phi in R^n_params (n_params <= 2,
+ * n_outputs <= 2: what the identification uses, see RLS_MAX_PARAMS). All outputs share one
+ * regressor, hence one covariance P and one gain K: e.g. the paper's eq. (18) with phi = [T_1],
+ * y = [f_1, tau_1], theta = [k_f, k_tau] is two scalar problems sharing P (one gain updates k_f
+ * and k_tau).
  *
  * P = U D U^T with U unit upper triangular, updated by Bierman's algorithm with forgetting
  * factor lambda:
@@ -60,8 +61,11 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#define RLS_MAX_PARAMS  4
-#define RLS_MAX_OUTPUTS 3
+/* The largest problem the firmware solves (ident.h: k_f and k_tau on one regressor, the lag
+ * check's two parameters on one output); every struct rls holds this much, so it is kept to
+ * what is used */
+#define RLS_MAX_PARAMS  2
+#define RLS_MAX_OUTPUTS 2
 /* limits of the shared exponent of D (D = d 2^-d_exp): P in about [2^-22, 2^40] */
 #define RLS_EXP_MIN (-40)
 #define RLS_EXP_MAX 22
@@ -103,9 +107,17 @@ enum rls_result {
 	RLS_RESET = 3,     /* numerical failure: estimate kept, covariance reset to p0 I */
 };
 
+/* What the update and the getters need of the configuration, as rls_init clamped it; the
+ * rest of rls_config is kept below in the normalised form the update uses. */
+struct rls_shape {
+	uint8_t n_params;
+	uint8_t n_outputs;
+	int8_t phi_shift[RLS_MAX_PARAMS];
+};
+
 /* All numbers below are normalised (see above); read them through the functions. */
 struct rls {
-	struct rls_config cfg;
+	struct rls_shape cfg;
 	int8_t y_shift[RLS_MAX_OUTPUTS];          /* y_n_o = y_o 2^-y_shift_o */
 	rls_par_t theta[RLS_MAX_OUTPUTS][RLS_MAX_PARAMS]; /* theta_n */
 	rls_sig_t u[RLS_MAX_PARAMS][RLS_MAX_PARAMS];      /* unit upper triangular (U_n) */
@@ -116,8 +128,9 @@ struct rls {
 	rls_unit_t lambda;                        /* cfg.lambda */
 	rls_acc_t ssr[RLS_MAX_OUTPUTS];           /* forgotten sum of normalised residuals^2 (y_n) */
 	rls_acc_t n_eff;                          /* forgotten sample count */
-	rls_acc_t p_min_n[RLS_MAX_PARAMS];        /* floor and ceiling on P_n_ii (d_exp = 0) */
-	rls_acc_t p_max_n[RLS_MAX_PARAMS];
+	rls_acc_t p_min_n, p_max_n;               /* floor and ceiling on P_n_ii (d_exp = 0) of a
+						   * parameter with phi_shift 0: 2^(2 phi_shift_i) times
+						   * them for parameter i */
 	rls_acc_t phi_min2;                       /* phi_min^2: Q16.16 squared (Q32) when fixed */
 	uint32_t n_updates, n_gated, n_rejected, n_resets;
 };

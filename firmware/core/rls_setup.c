@@ -67,8 +67,8 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 {
 	struct rls z = { 0 };
 	*r = z;
-	r->cfg = *cfg;
-	struct rls_config *c = &r->cfg;
+	struct rls_config cc = *cfg; /* clamped below; r keeps its shape (rls_shape) */
+	struct rls_config *c = &cc;
 	if (c->n_params < 1)
 		c->n_params = 1;
 	if (c->n_params > RLS_MAX_PARAMS)
@@ -95,6 +95,10 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 		if (c->phi_shift[i] < -16)
 			c->phi_shift[i] = -16;
 	}
+	r->cfg.n_params = c->n_params;
+	r->cfg.n_outputs = c->n_outputs;
+	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
+		r->cfg.phi_shift[i] = c->phi_shift[i];
 	const unsigned n = c->n_params;
 	/* outputs: theta0 (k_f by its nominal) sets each output's scale */
 	for (unsigned o = 0; o < RLS_MAX_OUTPUTS; o++) {
@@ -130,19 +134,17 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 	}
 #endif
 	r->d0_exp = e;
-	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
+	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
 		r->d0[i] = wide_of_f(pn[i] * sc_pow2f(e));
-		float s2 = sc_pow2f(2 * c->phi_shift[i]);
-		r->p_min_n[i] = acc_of_f(c->p_min * s2);
-		float pmx = c->p_max;
+	r->p_min_n = acc_of_f(c->p_min);
+	float pmx = c->p_max;
 #if OCTO_FIXED
-		/* the fixed build always keeps P under RLS_FIXED_P_CEIL p0: beyond that, an
-		 * unexcited direction's gain is the difference of numbers 2^31 times larger */
-		if (!(pmx > 0.0f) || pmx > c->p0 * RLS_FIXED_P_CEIL)
-			pmx = c->p0 * RLS_FIXED_P_CEIL;
+	/* the fixed build always keeps P under RLS_FIXED_P_CEIL p0: beyond that, an
+	 * unexcited direction's gain is the difference of numbers 2^31 times larger */
+	if (!(pmx > 0.0f) || pmx > c->p0 * RLS_FIXED_P_CEIL)
+		pmx = c->p0 * RLS_FIXED_P_CEIL;
 #endif
-		r->p_max_n[i] = acc_of_f(pmx * s2);
-	}
+	r->p_max_n = acc_of_f(pmx);
 	r->phi_min2 = phi2_of_f(c->phi_min * c->phi_min);
 	rls_reset_covariance(r);
 }

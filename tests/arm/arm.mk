@@ -24,12 +24,16 @@
 #   m0-fixed   Cortex-M0, Q16.16 build (OCTO_FIXED=1)               QEMU microbit
 # Optimisation of the core per target (ARM_CORE_OPT_<v>, after $(OPT)), measured with
 # `make bench` items 2 and 3 (2026-11-21):
-#   m4f        $(OPT) (-O2): 23,920 B of flash, under the 24 KB target. -Os would give
-#              19,557 B but 3-4 % more instructions per 90 Hz step (hold 3,491 -> 3,611,
-#              experiment 1 median 4,917 -> 5,118: over the 5,000 target) and 15 % more in
+#   m4f        $(OPT) (-O2) for the 90 Hz path. -Os on the whole core would give 18 % less
+#              flash (19,557 of 23,920 B then) but 3-4 % more instructions per 90 Hz step
+#              (hold 3,491 -> 3,611, experiment 1 median 4,917 -> 5,118) and 15 % more in
 #              the allocator's worst case (35,647 -> 41,030).
 #   m0, m0-fixed  -Os: flash-limited parts, as Cortex-M0 firmware is commonly built (the
 #              M0 float core: 30,548 B at -O2, 23,275 B at -Os).
+# Set-up objects (*_setup.o: work that runs only when parameters change, never in the 90 Hz
+# step) are built ARM_SETUP_OPT (-Os) on every target, as firmware builds its cold code:
+# on m4f mixer_setup.o 5,244 -> 4,728 B and rls_setup.o 1,624 -> 1,206 B (2026-11-24), with
+# the same results (the unit tests on every target, and the step's outputs, unchanged).
 # On M0 the test code (not the core) is built with -Os too, to leave room in microbit's
 # 256 KB of flash.
 #
@@ -101,6 +105,8 @@ ARM_UNIT_OPT_m0-fixed := -Os
 ARM_CORE_OPT_m4f      ?=
 ARM_CORE_OPT_m0       ?= -Os
 ARM_CORE_OPT_m0-fixed ?= -Os
+# The set-up objects' optimisation on every target (after ARM_CORE_OPT_<v>, so it wins).
+ARM_SETUP_OPT ?= -Os
 ARM_LD_m4f        := tests/arm/m4f.ld
 ARM_LD_m0         := tests/arm/m0.ld
 ARM_LD_m0-fixed   := tests/arm/m0.ld
@@ -147,7 +153,8 @@ ARM_CFLAGS_$(1)   := $$(ARM_ARCH_$(1)) $$(ARM_DEFS_$(1)) $$(ARM_SECTIONS)
 
 $(ARM_B)/$(1)/core/%.o: firmware/core/%.c | arm-toolchain
 	@mkdir -p $$(@D)
-	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(CFLAGS_FW) $$(ARM_CORE_OPT_$(1)) $$(CORE_INC) -c $$< -o $$@
+	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(CFLAGS_FW) $$(ARM_CORE_OPT_$(1)) $$(ARM_OBJ_OPT) $$(CORE_INC) -c $$< -o $$@
+$(ARM_B)/$(1)/core/%_setup.o: ARM_OBJ_OPT = $$(ARM_SETUP_OPT)
 $(ARM_B)/$(1)/unit/%.o: tests/core/%.c | arm-toolchain
 	@mkdir -p $$(@D)
 	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(UNIT_CFLAGS) $$(ARM_UNIT_OPT_$(1)) -c $$< -o $$@

@@ -732,13 +732,17 @@ def module_sizes(lib):
 
 def core_opt(variant):
     """The core's optimisation on an ARM target: ARM_CORE_OPT_<v> of tests/arm/arm.mk, else
-    the Makefile's OPT (-O2)."""
+    the Makefile's OPT (-O2), and ARM_SETUP_OPT of its set-up objects (*_setup.o) when it
+    differs."""
     try:
-        m = re.search(rf"^ARM_CORE_OPT_{re.escape(variant)}\s*\??=[ \t]*(\S*)",
-                      (REPO / "tests/arm/arm.mk").read_text(), re.M)
+        mk = (REPO / "tests/arm/arm.mk").read_text()
     except OSError:
-        m = None
-    return (m.group(1) if m and m.group(1) else "-O2") + " (tests/arm/arm.mk)"
+        mk = ""
+    m = re.search(rf"^ARM_CORE_OPT_{re.escape(variant)}\s*\??=[ \t]*(\S*)", mk, re.M)
+    s = re.search(r"^ARM_SETUP_OPT\s*\??=[ \t]*(\S*)", mk, re.M)
+    opt = m.group(1) if m and m.group(1) else "-O2"
+    setup = s.group(1) if s and s.group(1) else opt
+    return opt + ("" if setup == opt else f", *_setup.o {setup}") + " (tests/arm/arm.mk)"
 
 
 def item_memory(rep, args):

@@ -160,7 +160,7 @@ static double ms_ref_raw(int n, int k_first, int P, int frame)
 
 UNIT_TEST(excite_multisine_peak_period_reference)
 {
-	const int cases[3][3] = { { 8, 1, 180 }, { 5, 2, 90 }, { 16, 1, 360 } }; /* N, k_first, P */
+	const int cases[3][3] = { { 8, 1, 180 }, { 5, 2, 90 }, { EXCITE_MS_MAX, 1, 360 } }; /* N, k_first, P */
 	for (int j = 0; j < 3; j++) {
 		struct excite_params p = params(EXCITE_MULTISINE, 1.0);
 		p.ms_count = (uint32_t)cases[j][0];

@@ -645,6 +645,46 @@ UNIT_TEST(mixer_non_finite_demand)
 #endif
 }
 
+/* MIXER_MAX_FACETS and MIXER_MAX_SUB_FACETS are exactly what eq. (14) needs: the allocator is
+ * available with every rotor and with any one or two removed, over random arm lengths,
+ * k_tau / k_f and per-rotor scales (all eight rotors: 26 facets; the paper's vehicle also
+ * fills the 44 sub-facets) */
+UNIT_TEST(mixer_facet_caps_fit_eq14)
+{
+	struct unit_rng r = { 0xface7ULL };
+	int n_masks = 0;
+	for (unsigned mask = 0; mask < 256; mask++) {
+		int removed = 0;
+		for (int j = 0; j < 8; j++)
+			removed += !((mask >> j) & 1u);
+		if (removed > 2)
+			continue;
+		n_masks++;
+		struct mixer_params p;
+		double kf = unit_rand_uniform(&r, 5.0, 50.0);
+		params(&p, unit_rand_uniform(&r, 0.1, 1.0), kf, kf * unit_rand_uniform(&r, 0.002, 0.1), mask);
+		for (int j = 0; j < 8; j++)
+			p.scale[j] = sc_from_float((float)unit_rand_uniform(&r, 0.5, 1.3));
+		CHECK(mixer_init(&mix, &p));
+		CHECK(mix.alloc_ok);
+		int subs = 0;
+		for (int st = 0; st < MIXER_N_ROTORS - 4; st++)
+			subs += mix.sub_n[st];
+		CHECK(mix.n_facets <= MIXER_MAX_FACETS && subs <= MIXER_MAX_SUB_FACETS);
+		if (mask == 0xFF)
+			CHECK(mix.n_facets == MIXER_MAX_FACETS);
+	}
+	CHECK(n_masks == 1 + 8 + 28);
+	/* the paper's vehicle fills both */
+	struct mixer_params p;
+	mixer_default_params(&p);
+	CHECK(mixer_init(&mix, &p) && mix.alloc_ok);
+	int subs = 0;
+	for (int st = 0; st < MIXER_N_ROTORS - 4; st++)
+		subs += mix.sub_n[st];
+	CHECK(mix.n_facets == MIXER_MAX_FACETS && subs == MIXER_MAX_SUB_FACETS);
+}
+
 /* a layout whose attainable set has more facets than MIXER_MAX_FACETS: the pseudo-inverse is
  * still exact, the priority allocator is disabled and saturation is clipped and flagged */
 UNIT_TEST(mixer_too_many_facets_falls_back)

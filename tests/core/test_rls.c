@@ -86,8 +86,9 @@ static bool pos_def(const struct rls *r)
 UNIT_TEST(rls_equals_batch_ls)
 {
 	static const double truth[3][4] = { { 28.0, -1.5, 0.7, 3.0 }, { 0.39, 2.0, -4.0, 0.1 }, { -7.0, 0.0, 1.0, 12.0 } };
-	for (int p = 1; p <= 4; p++) {
-		int no = p == 2 ? 2 : 3;
+	/* every shape the firmware's RLS holds (RLS_MAX_PARAMS x RLS_MAX_OUTPUTS) */
+	for (int shape = 0; shape < RLS_MAX_PARAMS * RLS_MAX_OUTPUTS; shape++) {
+		int p = 1 + shape / RLS_MAX_OUTPUTS, no = 1 + shape % RLS_MAX_OUTPUTS;
 		struct rls_config c;
 		rls_default_config(&c);
 		c.n_params = (uint8_t)p;
@@ -100,7 +101,7 @@ UNIT_TEST(rls_equals_batch_ls)
 		memset(&b, 0, sizeof b);
 		b.p = p;
 		b.no = no;
-		struct unit_rng g = { 0x1000ULL + (unsigned)p };
+		struct unit_rng g = { 0x1000ULL + (unsigned)shape };
 		for (int k = 0; k < N_LS; k++) {
 			float phi[4], y[3];
 			for (int i = 0; i < p; i++) {
@@ -121,7 +122,7 @@ UNIT_TEST(rls_equals_batch_ls)
 		batch_solve(&b, th, ssr);
 		/* within 1e-5; the fixed build rounds f = U^T phi to Q7.24 (absolute 2^-24), which
 		 * with p0 = 1e8 leaves up to ~3e-9 of the output's largest parameter on each
-		 * parameter: a near-zero one (-0.001 next to 12 here) gets that floor */
+		 * parameter: a parameter near zero gets that floor */
 		for (int o = 0; o < no; o++) {
 			double big = 0;
 			for (int i = 0; i < p; i++)
