@@ -31,7 +31,8 @@
 #   m0, m0-fixed  -Os: flash-limited parts, as Cortex-M0 firmware is commonly built (the
 #              M0 float core: 30,548 B at -O2, 23,275 B at -Os).
 # Set-up objects (*_setup.o: work that runs only when parameters change, never in the 90 Hz
-# step) are built ARM_SETUP_OPT (-Os) on every target, as firmware builds its cold code:
+# step) and motor_id_solve.o (the rotor-model estimator's work between frames, a few times
+# per experiment) are built ARM_SETUP_OPT (-Os) on every target, as firmware builds its cold code:
 # on m4f mixer_setup.o 5,244 -> 4,728 B and rls_setup.o 1,624 -> 1,206 B (2026-11-24), with
 # the same results (the unit tests on every target, and the step's outputs, unchanged).
 # On M0 the test code (not the core) is built with -Os too, to leave room in microbit's
@@ -155,6 +156,7 @@ $(ARM_B)/$(1)/core/%.o: firmware/core/%.c | arm-toolchain
 	@mkdir -p $$(@D)
 	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(CFLAGS_FW) $$(ARM_CORE_OPT_$(1)) $$(ARM_OBJ_OPT) $$(CORE_INC) -c $$< -o $$@
 $(ARM_B)/$(1)/core/%_setup.o: ARM_OBJ_OPT = $$(ARM_SETUP_OPT)
+$(ARM_B)/$(1)/core/motor_id_solve.o: ARM_OBJ_OPT = $$(ARM_SETUP_OPT)
 $(ARM_B)/$(1)/unit/%.o: tests/core/%.c | arm-toolchain
 	@mkdir -p $$(@D)
 	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(UNIT_CFLAGS) $$(ARM_UNIT_OPT_$(1)) -c $$< -o $$@
