@@ -18,6 +18,22 @@ static float f_of_sum(ident_sum_t s)
 #endif
 }
 
+/* The frame period from dt_s. Q16.16 cannot hold 1/90 s: SC(1/90) is 2.4e-4 short, which
+ * would put the inertia 2.4e-4 low (through 1 / dt) and the lag check 2.4e-4 off (through
+ * the lag's coefficient). A dt_s within half an LSB of the period of a whole frame rate n
+ * is taken as 1 / n exactly. */
+static float frame_period(scalar_t dt_s)
+{
+	float dt = sc_to_float(sc_max(dt_s, SC(1e-4)));
+	float n = (float)(int32_t)(1.0f / dt + 0.5f);
+#if OCTO_FIXED
+	float half_lsb = sc_pow2f(-QF_SC_FRAC - 1);
+#else
+	float half_lsb = dt * sc_pow2f(-24);
+#endif
+	return n >= 1.0f && fabsf(dt - 1.0f / n) <= 1.01f * half_lsb ? 1.0f / n : dt;
+}
+
 /* ---------------------------------------------------------------- rotor coefficients */
 
 void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
@@ -42,7 +58,10 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	cs.theta0[0][1] = 0.0f;
 	rls_init(&r->sens, &cs);
 	r->dphi_dtau = SC_ZERO;
-	float tm = sc_to_float(cfg->mot_tau_s), dt = sc_to_float(cfg->dt_s);
+	float tm = sc_to_float(cfg->mot_tau_s), dt = cfg->dt_s > SC_ZERO ? frame_period(cfg->dt_s) : 0.0f;
+	/* the lag's coefficient from the exact frame period (filt_lag_init's is from dt_s) */
+	if (tm > 0.0f && dt > 0.0f)
+		r->lag.alpha = sc_from_float(1.0f - expf(-dt / tm));
 	r->dalpha_dtau = tm > 0.0f && dt > 0.0f ? sc_from_float(-(dt / (tm * tm)) * expf(-dt / tm)) : SC_ZERO;
 	r->phi = cfg->thr0;
 	r->y_prev[0] = r->y_prev[1] = SC_ZERO;
@@ -128,7 +147,7 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	/* tau_i = I_i w_dot_i + (I_k - I_j) w_j w_k */
 	e->coupling = sc_sub(inertia[k], inertia[j]);
 	e->alpha = sc_clamp(alpha, SC(0.0), SC(1.0));
-	e->inv_dt = sc_div(SC(1.0), sc_max(dt_s, SC(1e-4)));
+	e->inv_dt = sc_from_float(1.0f / frame_period(dt_s));
 	e->tau_prev = tau0[i];
 	e->ww_prev = sc_mul(w0[j], w0[k]);
 	e->wf_prev = w0[i];
@@ -162,6 +181,28 @@ static bool iv_ready(const struct ident_inertia *e)
 	return e->iv && e->s_bb > (ident_sum_t)0 && e->s_zp != (ident_sum_t)0;
 }
 
+/* The sum over the blocks of (A_b - I B_b)^2, A_b = sum_b z y, B_b = sum_b z phi, as
+ * s_aa - 2 I s_ab + I^2 s_bb: the three terms cancel down to the residuals' share (1e-4 of
+ * s_aa for a block residual of 1 %), more than float's 24 bits keep. The fixed build forms
+ * it in Q31.32 with I = s_zy / s_zp as a 30-bit ratio (error ~1e-9 relative, so ~1e-5 of
+ * the result after that cancellation); the float build's float32 sums already carry
+ * rounding of that order (their std is good to a few %). */
+static float iv_resid2(const struct ident_inertia *e, float est)
+{
+#if OCTO_FIXED
+	int sh;
+	int32_t r = q30_ratio_x(e->s_zy, e->s_zp, &sh); /* I = r 2^-(30 + sh) */
+	int s = QF_UNIT_FRAC + sh;
+	if (s >= 1 && s <= 62) {
+		ident_sum_t t1 = q_mul64_32(e->s_ab, r, (unsigned)s);
+		ident_sum_t t2 = q_mul64_32(q_mul64_32(e->s_bb, r, (unsigned)s), r, (unsigned)s);
+		ident_sum_t v = q_add64(q_add64(e->s_aa, -q_add64(t1, t1)), t2);
+		return f_of_sum(v);
+	}
+#endif
+	return f_of_sum(e->s_aa) - 2.0f * est * f_of_sum(e->s_ab) + est * est * f_of_sum(e->s_bb);
+}
+
 float ident_inertia_est(const struct ident_inertia *e)
 {
 	if (!iv_ready(e))
@@ -176,8 +217,7 @@ float ident_inertia_sd(const struct ident_inertia *e)
 	float est = ident_inertia_est(e);
 	if (!finite_f(est))
 		return NAN;
-	/* sum over the blocks of (A_b - I B_b)^2, A_b = sum_b z y, B_b = sum_b z phi */
-	float v = f_of_sum(e->s_aa) - 2.0f * est * f_of_sum(e->s_ab) + est * est * f_of_sum(e->s_bb);
+	float v = iv_resid2(e, est);
 	return sqrtf(v > 0.0f ? v : 0.0f) / fabsf(f_of_sum(e->s_zp));
 }
 
