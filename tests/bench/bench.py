@@ -564,25 +564,29 @@ def estim_per_build(rep, args, res):
                              capture_output=True, text=True, timeout=600, cwd=REPO)
         counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
         kv = {m.group(1): m.group(2) for m in re.finditer(r"estim: (\S+) (\S+)", out.stdout)}
-        n1, n2, n3 = (int(kv.get(k, 0)) for k in ("rls_1x2", "rls_2x1", "ident_rotor"))
-        if len(counts) != n1 + n2 + n3 or not n1:
+        n1, n2, n3, n4 = (int(kv.get(k, 0)) for k in ("rls_1x2", "rls_2x1", "ident_rotor", "ident_inertia"))
+        if len(counts) != n1 + n2 + n3 + n4 or not n1 or not n4:
             per[v] = {"error": f"{len(counts)} counts", "exit": out.returncode}
             continue
         per[v] = {"rls_1x2": mmm(counts[:n1]), "rls_2x1": mmm(counts[n1:n1 + n2]),
-                  "ident_rotor": mmm(counts[n1 + n2:]), "exit": out.returncode}
+                  "ident_rotor": mmm(counts[n1 + n2:n1 + n2 + n3]), "ident_inertia": mmm(counts[n1 + n2 + n3:]),
+                  "exit": out.returncode}
         cmd = cmdline(["tests/arm/insn-count.sh", mach, elf, ARM / "insn-count.so"])
         p = per[v]
-        rep.row(2, f"  estimators alone, {v}: rls_update 1 param x 2 outputs / 2 x 1 / ident_rotor_update",
-                f"{fmt(p['rls_1x2']['median'])} / {fmt(p['rls_2x1']['median'])} / {fmt(p['ident_rotor']['median'])}",
-                "", f"max {fmt(p['rls_1x2']['max'])} / {fmt(p['rls_2x1']['max'])} / {fmt(p['ident_rotor']['max'])}; "
+        rep.row(2, f"  estimators alone, {v}: rls_update 1 param x 2 outputs / 2 x 1 / ident_rotor_update"
+                " / ident_inertia_update",
+                f"{fmt(p['rls_1x2']['median'])} / {fmt(p['rls_2x1']['median'])} / {fmt(p['ident_rotor']['median'])}"
+                f" / {fmt(p['ident_inertia']['median'])}",
+                "", f"max {fmt(p['rls_1x2']['max'])} / {fmt(p['rls_2x1']['max'])} / {fmt(p['ident_rotor']['max'])}"
+                f" / {fmt(p['ident_inertia']['max'])}; "
                 "the rotor experiment runs ident_rotor_update for 8 rotors per step", "(reported)", None, cmd)
     for cpu, fl, fx in (("M0", "m0", "m0-fixed"), ("M4F", "m4f", "m4f-fixed")):
         a, b = per.get(fl, {}), per.get(fx, {})
         if a.get("rls_1x2") and b.get("rls_1x2"):
-            rat = {k: a[k]["median"] / b[k]["median"] for k in ("rls_1x2", "rls_2x1", "ident_rotor")}
+            rat = {k: a[k]["median"] / b[k]["median"] for k in ("rls_1x2", "rls_2x1", "ident_rotor", "ident_inertia")}
             rep.row(2, f"  {cpu}: float build / fixed build, estimators alone", f"{rat['rls_1x2']:.2f}x", "",
-                    f"rls 2 x 1 {rat['rls_2x1']:.2f}x, ident_rotor_update {rat['ident_rotor']:.2f}x", "(reported)",
-                    None, None)
+                    f"rls 2 x 1 {rat['rls_2x1']:.2f}x, ident_rotor_update {rat['ident_rotor']:.2f}x, "
+                    f"ident_inertia_update {rat['ident_inertia']:.2f}x", "(reported)", None, None)
             per.setdefault("float_over_fixed", {})[cpu] = rat
     res["estimators"] = per
 

@@ -4,7 +4,8 @@
  * Counted calls (one bench_mark_begin/end pair each, in this order):
  *   N_RLS x rls_update of the rotor experiment's RLS (1 parameter, outputs f and tau),
  *   N_RLS x rls_update of its lag check (2 parameters, 1 output),
- *   N_ROT x ident_rotor_update (delay, lag and the three RLS of one rotor).
+ *   N_ROT x ident_rotor_update (delay, lag and the three RLS of one rotor),
+ *   N_INR x ident_inertia_update with its instrument (the SVFs, the RLS, the IV sums).
  * The inputs are a PRBS throttle through a 40 ms lag with 1 % noise (the values do not
  * change the count much: no data-dependent loops but the fixed build's normalisation).
  * Prints "estim: KEY VALUE" lines.
@@ -17,6 +18,7 @@
 
 #define N_RLS 200
 #define N_ROT 200
+#define N_INR 200
 
 static uint32_t rng = 777u;
 static float urand(void) /* [-1, 1) */
@@ -30,6 +32,7 @@ static float urand(void) /* [-1, 1) */
 /* global: the compiler cannot see through it across the markers */
 struct rls R1, R2;
 struct ident_rotor ROT;
+struct ident_inertia INR;
 
 int main(void)
 {
@@ -85,9 +88,27 @@ int main(void)
 		ident_rotor_update(&ROT, sc_from_float(thr), f, t, true);
 		bench_mark_end();
 	}
+	/* inertia about x: a PRBS torque on a 0.06 kg m^2 body with a rate damper, 1 % noise */
+	scalar_t in3[3] = { SC(0.06), SC(0.07), SC(0.1) }, zero[3] = { 0, 0, 0 };
+	ident_inertia_init(&INR, 0, SC(25.0), SC(0.7), SC(1.0 / 90.0), SC(0.53), in3, zero, zero);
+	float w = 0.0f, u = 0.0f;
+	for (int k = 0; k < N_INR; k++) {
+		if (k % 9 == 0)
+			u = urand() < 0.0f ? -0.3f : 0.3f;
+		float tq = u - 0.24f * w;
+		w += tq / 0.06f / 90.0f;
+		scalar_t tb[3] = { sc_from_float(tq * (1.0f + 0.01f * urand())), 0, 0 };
+		scalar_t wb[3] = { sc_from_float(w + 0.005f * urand()), sc_from_float(0.01f * urand()),
+				   sc_from_float(0.01f * urand()) };
+		bench_mark_begin();
+		ident_inertia_instrument(&INR, sc_from_float(u));
+		ident_inertia_update(&INR, tb, wb, true);
+		bench_mark_end();
+	}
 	printf("estim: rls_1x2 %d\n", N_RLS);
 	printf("estim: rls_2x1 %d\n", N_RLS);
 	printf("estim: ident_rotor %d\n", N_ROT);
+	printf("estim: ident_inertia %d\n", N_INR);
 	printf("estim: kf %.4f\n", (double)rls_estimate_f(&R1, 0, 0));
 	printf("estim: done\n");
 	return 0;

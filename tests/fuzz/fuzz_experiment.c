@@ -104,7 +104,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	frames = 0;
 	int id = 1 + data[0] % 6;
 	size_t pos = 2;
-	for (unsigned m = data[1] & 7u; m > 0 && pos + 1u + data[pos] + 4u <= size; m--) {
+	for (unsigned m = data[1] & 7u; m > 0 && pos < size && pos + 1u + data[pos] + 4u <= size; m--) {
 		size_t n = data[pos];
 		int idx = params_find((const char *)data + pos + 1, n < 16 ? n : 16);
 		float v;
