@@ -39,9 +39,21 @@
  * (the backward difference of the FILTERED rate: no raw differencing), y = I_i phi; RLS,
  * 1 parameter. Without noise this is exact for any H (tested to 1e-4 with the plant's lag).
  *
- * Core rules: scalar_t interfaces, no heap/globals/I/O; the RLS and the validation sums are
- * float32 inside (as rls.h); the delay, lag and SVF run in scalar_t (Q16.16 in the fixed
- * build: resolution 1.5e-5 of throttle, which costs ~1e-4 relative in k_f).
+ * ---------------------------------------------------------------- number formats
+ * One source, two builds (docs/number-formats.md). What runs every frame (ident.c: the
+ * delay, lag and sensitivity, the regressors, the SVF, the instrumental-variable sums, the
+ * validation sums, the body torque) is scalar_t and integer in the fixed build, with the
+ * RLS's own formats inside (rls.h). Initialisation, the float getters and the acceptance
+ * rules run off the 90 Hz path and are float in both builds (ident_setup.c).
+ *   signals (throttle, N, N m, rad/s, rad/s^2), filter states        scalar_t: Q16.16
+ *   sums of products of two signals (ident_sum_t)                    Q31.32 in int64:
+ *       each product exact; range +/-2.1e9, resolution 2.3e-10; saturate (never wrap).
+ *       An hour at 90 Hz (324,000 frames) of products up to 6,600 (e.g. 1 N m x 6,600
+ *       rad/s^2, or (81 N)^2) fits; larger ones saturate and the estimate stays finite.
+ *   sums of squares of block sums (the IV variance)                  Q31.32 in int64:
+ *       the products of two Q31.32 sums rounded back to Q31.32 (q_mul64_64); saturate.
+ *   counters                                                         uint32_t
+ * Float build: ident_sum_t is float.
  */
 #ifndef OCTO_IDENT_H
 #define OCTO_IDENT_H
@@ -55,6 +67,20 @@
 #include <stdint.h>
 
 #define IDENT_ROTORS 8
+
+/* sums of products of two scalar_t values (see the formats above) */
+#if OCTO_FIXED
+typedef int64_t ident_sum_t; /* Q31.32 (QF_PROD_FRAC) */
+#else
+typedef float ident_sum_t;
+#endif
+
+/* the two other axes (j, k) = (i + 1, i + 2) mod 3 of axis i, cyclic */
+static inline void ident_other_axes(unsigned i, unsigned *j, unsigned *k)
+{
+	*j = i >= 2u ? 0u : i + 1u; /* no division: Cortex-M0 has no divider */
+	*k = i == 0u ? 2u : i - 1u;
+}
 
 /* ---------------------------------------------------------------- rotor coefficients */
 struct ident_rotor_cfg {
@@ -143,9 +169,10 @@ struct ident_inertia {
 	struct filt_svf svf_z;
 	scalar_t z_in;                  /* the instrument's input for the next update */
 	bool iv;                        /* an instrument was given: the estimate is the IV one */
-	float s_zy, s_zp, s_n;          /* sums over the excited updates (float) */
-	float b_zy, b_zp, b_n, b_len;   /* the current block's sums, its length (updates) */
-	float s_aa, s_ab, s_bb;         /* sums of the blocks' products (the variance) */
+	uint32_t s_n, b_n, b_len;       /* excited updates, of them in the current block, block length */
+	ident_sum_t s_zy, s_zp;         /* sums of z y and z phi over the excited updates */
+	ident_sum_t b_zy, b_zp;         /* the same over the current block */
+	ident_sum_t s_aa, s_ab, s_bb;   /* sums of the complete blocks' products (the variance) */
 };
 
 /* The std: the RLS std assumes white residuals, but the SVF colours the (white) torque
@@ -196,10 +223,14 @@ enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, floa
 
 /* ---------------------------------------------------------------- validation */
 /* y (measured) against y_hat (model): NE = RMS(y - y_hat) / RMS(y),
- * fit % = 100 (1 - ||y - y_hat|| / ||y - mean(y)||). float inside (Welford for the mean). */
+ * fit % = 100 (1 - ||y - y_hat|| / ||y - mean(y)||). The sums are of the deviations from
+ * the first sample y0 (shifted data: sum y^2 and the sum of squared deviations from the
+ * mean follow without cancellation), ident_sum_t; no division per sample. */
 struct ident_fit {
-	float n, mean, m2;     /* running mean and sum of squared deviations of y */
-	float sse, syy;        /* sum (y - y_hat)^2, sum y^2 */
+	uint32_t n;            /* samples */
+	scalar_t y0;           /* the first sample */
+	ident_sum_t s1, s2;    /* sum (y - y0), sum (y - y0)^2 */
+	ident_sum_t sse;       /* sum (y - y_hat)^2 */
 };
 
 void ident_fit_init(struct ident_fit *v);

@@ -333,4 +333,36 @@ static inline int64_t q_muldiv(int32_t a, int32_t b, int64_t c, unsigned s)
 #define QF_MOTN_FRAC 29 /* Q2.29: motor_id's normalised thrusts, torques and residuals */
 #define QF_MSUM_FRAC 25 /* block floating point sums: fractional bits at exponent 0 */
 
+/* ---------------------------------------------------------------- sums of products
+ * The identification's running sums (ident.c) keep products of two Q16.16 values exactly:
+ * Q31.32 in int64 (range +/-2.1e9, resolution 2.3e-10), and the squares of such sums
+ * back in Q31.32 through q_mul64_64. */
+#define QF_PROD_FRAC 32 /* Q31.32 in int64: products of two Q16.16 values and their sums */
+
+/* a * b / 2^s for int64 a, b and s in [32, 62], rounded to nearest (ties away from zero):
+ * int64, saturating (never wraps). The 126-bit product is formed from four 32 x 32
+ * products in two 64-bit words (no 128-bit type in C11): exact. */
+static inline int64_t q_mul64_64(int64_t a, int64_t b, unsigned s)
+{
+	bool neg = (a < 0) != (b < 0);
+	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
+	uint64_t ub = b < 0 ? (uint64_t)0 - (uint64_t)b : (uint64_t)b;
+	uint32_t ah = (uint32_t)(ua >> 32), al = (uint32_t)ua, bh = (uint32_t)(ub >> 32), bl = (uint32_t)ub;
+	uint64_t hi = q_umul32(ah, bh), lo = q_umul32(al, bl);
+	uint64_t mid[2] = { q_umul32(ah, bl), q_umul32(al, bh) };
+	for (int i = 0; i < 2; i++) { /* (hi, lo) += mid 2^32 */
+		uint64_t m = mid[i] << 32;
+		lo += m;
+		hi += (mid[i] >> 32) + (lo < m ? 1u : 0u);
+	}
+	/* |a b| / 2^s < 2^63 exactly when hi < 2^(s - 1) */
+	if (hi >= ((uint64_t)1 << (s - 1u)))
+		return neg ? -INT64_MAX : INT64_MAX;
+	uint64_t r = (hi << (64u - s)) | (lo >> s);
+	r += (lo >> (s - 1u)) & 1u;
+	if (r > (uint64_t)INT64_MAX)
+		return neg ? -INT64_MAX : INT64_MAX;
+	return neg ? -(int64_t)r : (int64_t)r;
+}
+
 #endif /* OCTO_QFMT_H */

@@ -619,23 +619,28 @@ def estim_per_build(rep, args, res):
                              capture_output=True, text=True, timeout=600, cwd=REPO)
         counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
         kv = {m.group(1): m.group(2) for m in re.finditer(r"estim: (\S+) (\S+)", out.stdout)}
-        n1, n2, n3, n4, n5 = (int(kv.get(k, 0)) for k in ("rls_1x2", "rls_2x1", "ident_rotor", "motor_id",
-                                                            "motor_id_solve"))
-        if len(counts) != n1 + n2 + n3 + n4 + n5 or not n1:
+        n1, n2, n3, n4, n5, n6 = (int(kv.get(k, 0)) for k in ("rls_1x2", "rls_2x1", "ident_rotor", "ident_inertia",
+                                                                "motor_id", "motor_id_solve"))
+        if len(counts) != n1 + n2 + n3 + n4 + n5 + n6 or not n1 or not n4:
             per[v] = {"error": f"{len(counts)} counts", "exit": out.returncode}
             continue
         n123 = n1 + n2 + n3
         per[v] = {"rls_1x2": mmm(counts[:n1]), "rls_2x1": mmm(counts[n1:n1 + n2]),
-                  "ident_rotor": mmm(counts[n1 + n2:n123]), "exit": out.returncode}
-        if n4:
-            per[v]["motor_id"] = mmm(counts[n123:n123 + n4])
+                  "ident_rotor": mmm(counts[n1 + n2:n123]), "ident_inertia": mmm(counts[n123:n123 + n4]),
+                  "exit": out.returncode}
+        n1234 = n123 + n4
         if n5:
-            per[v]["motor_id_solve"] = mmm(counts[n123 + n4:n123 + n4 + n5])
+            per[v]["motor_id"] = mmm(counts[n1234:n1234 + n5])
+        if n6:
+            per[v]["motor_id_solve"] = mmm(counts[n1234 + n5:n1234 + n5 + n6])
         cmd = cmdline(["tests/arm/insn-count.sh", mach, elf, ARM / "insn-count.so"])
         p = per[v]
-        rep.row(2, f"  estimators alone, {v}: rls_update 1 param x 2 outputs / 2 x 1 / ident_rotor_update",
-                f"{fmt(p['rls_1x2']['median'])} / {fmt(p['rls_2x1']['median'])} / {fmt(p['ident_rotor']['median'])}",
-                "", f"max {fmt(p['rls_1x2']['max'])} / {fmt(p['rls_2x1']['max'])} / {fmt(p['ident_rotor']['max'])}; "
+        rep.row(2, f"  estimators alone, {v}: rls_update 1 param x 2 outputs / 2 x 1 / ident_rotor_update"
+                " / ident_inertia_update",
+                f"{fmt(p['rls_1x2']['median'])} / {fmt(p['rls_2x1']['median'])} / {fmt(p['ident_rotor']['median'])}"
+                f" / {fmt(p['ident_inertia']['median'])}",
+                "", f"max {fmt(p['rls_1x2']['max'])} / {fmt(p['rls_2x1']['max'])} / {fmt(p['ident_rotor']['max'])}"
+                f" / {fmt(p['ident_inertia']['max'])}; "
                 "the rotor experiment runs ident_rotor_update for 8 rotors per step", "(reported)", None, cmd)
         if p.get("motor_id"):
             rep.row(2, f"  motor_id per frame (step + process), {v}", fmt(p["motor_id"]["median"]), "",
@@ -644,10 +649,10 @@ def estim_per_build(rep, args, res):
     for cpu, fl, fx in (("M0", "m0", "m0-fixed"), ("M4F", "m4f", "m4f-fixed")):
         a, b = per.get(fl, {}), per.get(fx, {})
         if a.get("rls_1x2") and b.get("rls_1x2"):
-            rat = {k: a[k]["median"] / b[k]["median"] for k in ("rls_1x2", "rls_2x1", "ident_rotor")}
+            rat = {k: a[k]["median"] / b[k]["median"] for k in ("rls_1x2", "rls_2x1", "ident_rotor", "ident_inertia")}
             rep.row(2, f"  {cpu}: float build / fixed build, estimators alone", f"{rat['rls_1x2']:.2f}x", "",
-                    f"rls 2 x 1 {rat['rls_2x1']:.2f}x, ident_rotor_update {rat['ident_rotor']:.2f}x", "(reported)",
-                    None, None)
+                    f"rls 2 x 1 {rat['rls_2x1']:.2f}x, ident_rotor_update {rat['ident_rotor']:.2f}x, "
+                    f"ident_inertia_update {rat['ident_inertia']:.2f}x", "(reported)", None, None)
             per.setdefault("float_over_fixed", {})[cpu] = rat
     res["estimators"] = per
 

@@ -5,6 +5,7 @@
  *   N_RLS x rls_update of the rotor experiment's RLS (1 parameter, outputs f and tau),
  *   N_RLS x rls_update of its lag check (2 parameters, 1 output),
  *   N_ROT x ident_rotor_update (delay, lag and the three RLS of one rotor),
+ *   N_INR x ident_inertia_update with its instrument (the SVFs, the RLS, the IV sums),
  *   N_MID x motor_id_step + motor_id_process (the joint rotor-model estimator's frame: every
  *           rotor, 15 hypotheses; its refinements between frames are not counted),
  *   1 x motor_id_solve (between frames, at the end).
@@ -22,6 +23,7 @@
 #define N_RLS 200
 #define N_ROT 200
 #define N_MID 200
+#define N_INR 200
 
 static uint32_t rng = 777u;
 static float urand(void) /* [-1, 1) */
@@ -37,6 +39,7 @@ struct rls R1, R2;
 struct ident_rotor ROT;
 struct motor_id MID;
 struct motor_id_result MRES;
+struct ident_inertia INR;
 
 int main(void)
 {
@@ -92,6 +95,23 @@ int main(void)
 		ident_rotor_update(&ROT, sc_from_float(thr), f, t, true);
 		bench_mark_end();
 	}
+	/* inertia about x: a PRBS torque on a 0.06 kg m^2 body with a rate damper, 1 % noise */
+	scalar_t in3[3] = { SC(0.06), SC(0.07), SC(0.1) }, zero[3] = { 0, 0, 0 };
+	ident_inertia_init(&INR, 0, SC(25.0), SC(0.7), SC(1.0 / 90.0), SC(0.53), in3, zero, zero);
+	float w = 0.0f, u = 0.0f;
+	for (int k = 0; k < N_INR; k++) {
+		if (k % 9 == 0)
+			u = urand() < 0.0f ? -0.3f : 0.3f;
+		float tq = u - 0.24f * w;
+		w += tq / 0.06f / 90.0f;
+		scalar_t tb[3] = { sc_from_float(tq * (1.0f + 0.01f * urand())), 0, 0 };
+		scalar_t wb[3] = { sc_from_float(w + 0.005f * urand()), sc_from_float(0.01f * urand()),
+				   sc_from_float(0.01f * urand()) };
+		bench_mark_begin();
+		ident_inertia_instrument(&INR, sc_from_float(u));
+		ident_inertia_update(&INR, tb, wb, true);
+		bench_mark_end();
+	}
 	/* the motor model: 8 rotors dithered on the null-space patterns through a 40 ms lag,
 	 * 1 s still first (not counted) */
 	struct motor_id_cfg mc = { .dt_s = SC(1.0 / 90.0), .tau0_s = 0.03f, .kf0 = 25.0f, .curve0 = 0.0f,
@@ -133,6 +153,7 @@ int main(void)
 	printf("estim: rls_1x2 %d\n", N_RLS);
 	printf("estim: rls_2x1 %d\n", N_RLS);
 	printf("estim: ident_rotor %d\n", N_ROT);
+	printf("estim: ident_inertia %d\n", N_INR);
 	printf("estim: motor_id %d\n", N_MID);
 	printf("estim: motor_id_solve 1\n");
 	printf("estim: motor_id_kf %.4f\n", (double)MRES.kf);

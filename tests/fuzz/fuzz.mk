@@ -26,7 +26,9 @@ FUZZ_SAN      := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recove
 # builds drop them.
 FUZZ_CFLAGS   := -std=c11 $(FUZZ_SAN) -Wall -Wextra -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE \
                  '-D_Static_assert(c,m)=struct fuzz_static_assert_dropped'
-FUZZ_NAMES    := xp_client sim_input mavlink params plant
+# NAME_fixed: the harness NAME built with the core in fixed point (OCTO_FIXED=1); it shares
+# NAME's seed corpus, regression inputs and dictionary
+FUZZ_NAMES    := xp_client sim_input mavlink mavlink_fixed experiment experiment_fixed params plant
 FUZZ_BINS     := $(FUZZ_NAMES:%=$(FZ)/fuzz-%)
 FUZZ_TC_STAMP := $(FZ)/.toolchain
 
@@ -61,13 +63,25 @@ $(FZ)/fuzz-xp_client: tests/fuzz/fuzz_xp_client.c tests/fuzz/records.h firmware/
 $(FZ)/fuzz-params: tests/fuzz/fuzz_params.c firmware/app/params.c $(wildcard firmware/app/*.h) | $(FUZZ_TC_STAMP)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_FW_INC) -o $@ tests/fuzz/fuzz_params.c firmware/app/params.c -lm
 
-$(FZ)/fuzz-mavlink: tests/fuzz/fuzz_mavlink.c tests/app/stub_hal.h $(FUZZ_APP_SRC) $(wildcard firmware/app/*.h firmware/core/*.h) \
-		| $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
+# $(call fuzz_app_build,HARNESS,EXTRA_CFLAGS): a harness linked with the whole app and core
+# (FUZZ_APP_SRC) into $@
+define fuzz_app_build
 	@sum() { cat firmware/app/*.h firmware/core/*.h | cksum; }; before=$$(sum); \
-	echo "$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_FW_INC) -o $@ tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_SRC) -lm"; \
-	$(FUZZ_CC) $(FUZZ_CFLAGS) $(FUZZ_FW_INC) -o $@ tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_SRC) -lm && \
+	echo "$(FUZZ_CC) $(FUZZ_CFLAGS) $(2) $(FUZZ_FW_INC) -o $@ $(1) $(FUZZ_APP_SRC) -lm"; \
+	$(FUZZ_CC) $(FUZZ_CFLAGS) $(2) $(FUZZ_FW_INC) -o $@ $(1) $(FUZZ_APP_SRC) -lm && \
 	if [ "$$(sum)" != "$$before" ]; then rm -f $@; \
 	  echo "error: firmware headers changed during the build (struct layouts may differ): run again"; exit 1; fi
+endef
+FUZZ_APP_DEP := tests/app/stub_hal.h $(FUZZ_APP_SRC) $(wildcard firmware/app/*.h firmware/core/*.h)
+
+$(FZ)/fuzz-mavlink: tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
+	$(call fuzz_app_build,tests/fuzz/fuzz_mavlink.c,)
+$(FZ)/fuzz-mavlink_fixed: tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
+	$(call fuzz_app_build,tests/fuzz/fuzz_mavlink.c,-DOCTO_FIXED=1)
+$(FZ)/fuzz-experiment: tests/fuzz/fuzz_experiment.c $(FUZZ_APP_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
+	$(call fuzz_app_build,tests/fuzz/fuzz_experiment.c,)
+$(FZ)/fuzz-experiment_fixed: tests/fuzz/fuzz_experiment.c $(FUZZ_APP_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
+	$(call fuzz_app_build,tests/fuzz/fuzz_experiment.c,-DOCTO_FIXED=1)
 
 FUZZ_SIM_SRC := sim/xplane_input.cpp sim/xplane_proto.cpp sim/counters.cpp
 $(FZ)/fuzz-sim_input: tests/fuzz/fuzz_sim_input.cpp tests/fuzz/records.h $(FUZZ_SIM_SRC) $(wildcard sim/*.hpp) | $(FUZZ_TC_STAMP)
@@ -87,16 +101,16 @@ $(FZ)/fuzz-plant: tests/fuzz/fuzz_plant.cpp tests/fuzz/records.h $(FUZZ_PLANT_SR
 define fuzz_run
 	@mkdir -p $(FZ)/artifacts; rm -f $(FZ)/summary.txt; rc=0; \
 	for h in $(FUZZ_NAMES); do \
-	  bin=$(FZ)/fuzz-$$h; reg=tests/fuzz/regress/$$h; \
+	  bin=$(FZ)/fuzz-$$h; src=$${h%_fixed}; reg=tests/fuzz/regress/$$src; \
 	  if [ -d $$reg ] && [ -n "$$(ls -A $$reg)" ]; then \
 	    echo "== fuzz-$$h: replaying $$(ls $$reg | wc -l) regression input(s)"; \
 	    $$bin $$reg/* >$(FZ)/$$h.regress.log 2>&1 || { tail -30 $(FZ)/$$h.regress.log; rc=1; continue; }; \
 	  fi; \
 	  mkdir -p $(FZ)/corpus/$$h; \
 	  echo "== fuzz-$$h: $(1) s"; \
-	  dict=; [ -f tests/fuzz/$$h.dict ] && dict=-dict=tests/fuzz/$$h.dict; \
+	  dict=; [ -f tests/fuzz/$$src.dict ] && dict=-dict=tests/fuzz/$$src.dict; \
 	  $$bin -max_total_time=$(1) -print_final_stats=1 -max_len=4096 -timeout=10 -rss_limit_mb=2048 $$dict \
-	    -artifact_prefix=$(FZ)/artifacts/$$h- $(FZ)/corpus/$$h tests/fuzz/corpus/$$h \
+	    -artifact_prefix=$(FZ)/artifacts/$$h- $(FZ)/corpus/$$h tests/fuzz/corpus/$$src \
 	    >$(FZ)/$$h.log 2>&1 || { tail -40 $(FZ)/$$h.log; echo "FAIL: fuzz-$$h (input in $(FZ)/artifacts/)"; rc=1; }; \
 	  execs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $(FZ)/$$h.log); \
 	  eps=$$(sed -n 's/^stat::average_exec_per_sec: *//p' $(FZ)/$$h.log); \

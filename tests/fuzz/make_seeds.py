@@ -127,6 +127,29 @@ write("mavlink", {
     + rec(mavlink.MAVLink_param_set_message(7, 1, b"VEH_KF", 27.0, 9)),
 })
 
+# ------------------------------------------------------------ experiments (fuzz_experiment.c)
+def prm(name, value):
+    return bytes([len(name)]) + name.encode() + struct.pack("<f", value)
+
+
+def run(n=63, scale=128):  # (n + 1) x 64 frames of the simple plant
+    return bytes([3 + 4 * n, 1, scale])
+
+
+def one_frame(*floats):  # a frame whose rates (and what follows) are the floats
+    b = struct.pack("<%df" % len(floats), *floats)
+    return bytes([0, len(b)]) + b
+
+
+write("experiment", {
+    "rotor": bytes([0, 0]) + run() + run(),
+    "rotor_short": bytes([0, 2]) + prm("ID_EXC_TIME", 2.0) + prm("ID_EXC_AMP", 0.08) + run(31, 140),
+    "validation": bytes([1, 0]) + run() + run(),
+    "inertia_x": bytes([2, 0]) + run() + one_frame(0.5, -0.2, 0.1) + run(),
+    "inertia_z": bytes([4, 1]) + prm("ID_INR_TIME", 3.0) + run(31) + one_frame(0.0, 0.0, 3.0, 1e30),
+    "sequence": bytes([5, 0]) + run() * 3,
+})
+
 # ------------------------------------------------------------ parameter file
 write("params", {
     "plain": b"VEH_KF 28.0269\nVEH_KTAU 0.3869\nVEH_IXX 0.0628\n",

@@ -1,0 +1,305 @@
+/* ident_setup.c - the identification's work off the 90 Hz path, float in both builds:
+ * initialisation (coefficients from exp), the float getters (estimates, standard
+ * deviations, validation figures) and the acceptance rules. The per-frame estimators are
+ * ident.c; see ident.h. */
+#include "ident.h"
+
+static bool finite_f(float x) { return isfinite(x); }
+
+static float or_default(float v, float def) { return v > 0.0f ? v : def; }
+
+/* an ident_sum_t as float */
+static float f_of_sum(ident_sum_t s)
+{
+#if OCTO_FIXED
+	return (float)s * sc_pow2f(-QF_PROD_FRAC);
+#else
+	return s;
+#endif
+}
+
+/* The frame period from dt_s. Q16.16 cannot hold 1/90 s: SC(1/90) is 2.4e-4 short, which
+ * would put the inertia 2.4e-4 low (through 1 / dt) and the lag check 2.4e-4 off (through
+ * the lag's coefficient). A dt_s within half an LSB of the period of a whole frame rate n
+ * is taken as 1 / n exactly. */
+static float frame_period(scalar_t dt_s)
+{
+	float dt = sc_to_float(sc_max(dt_s, SC(1e-4)));
+	float n = (float)(int32_t)(1.0f / dt + 0.5f);
+#if OCTO_FIXED
+	float half_lsb = sc_pow2f(-QF_SC_FRAC - 1);
+#else
+	float half_lsb = dt * sc_pow2f(-24);
+#endif
+	return n >= 1.0f && fabsf(dt - 1.0f / n) <= 1.01f * half_lsb ? 1.0f / n : dt;
+}
+
+/* ---------------------------------------------------------------- rotor coefficients */
+
+void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
+{
+	r->cfg = *cfg;
+	filt_delay_init(&r->delay, cfg->delay_frames, cfg->thr0);
+	filt_lag_init(&r->lag, cfg->mot_tau_s, cfg->dt_s, cfg->thr0);
+	struct rls_config c;
+	rls_default_config(&c);
+	c.n_params = 1;
+	c.n_outputs = 2;
+	c.lambda = 1.0f;
+	c.p0 = or_default(cfg->p0, 1e6f);
+	c.theta0[0][0] = cfg->kf0;
+	c.theta0[1][0] = cfg->ktau0;
+	rls_init(&r->lagaware, &c);
+	rls_init(&r->plain, &c);
+	struct rls_config cs = c;
+	cs.n_params = 2;
+	cs.n_outputs = 1;
+	cs.theta0[0][0] = cfg->kf0;
+	cs.theta0[0][1] = 0.0f;
+	rls_init(&r->sens, &cs);
+	r->dphi_dtau = SC_ZERO;
+	float tm = sc_to_float(cfg->mot_tau_s), dt = cfg->dt_s > SC_ZERO ? frame_period(cfg->dt_s) : 0.0f;
+	/* the lag's coefficient from the exact frame period (filt_lag_init's is from dt_s) */
+	if (tm > 0.0f && dt > 0.0f)
+		r->lag.alpha = sc_from_float(1.0f - expf(-dt / tm));
+	r->dalpha_dtau = tm > 0.0f && dt > 0.0f ? sc_from_float(-(dt / (tm * tm)) * expf(-dt / tm)) : SC_ZERO;
+	r->phi = cfg->thr0;
+	r->y_prev[0] = r->y_prev[1] = SC_ZERO;
+	r->have_prev = false;
+	r->n = 0;
+}
+
+float ident_rotor_est(const struct ident_rotor *r, unsigned which)
+{
+	return rls_estimate_f(&r->lagaware, which, 0);
+}
+
+float ident_rotor_sd(const struct ident_rotor *r, unsigned which)
+{
+	return rls_std(&r->lagaware, which, 0);
+}
+
+float ident_rotor_plain(const struct ident_rotor *r, unsigned which)
+{
+	return rls_estimate_f(&r->plain, which, 0);
+}
+
+float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which)
+{
+	return rls_std(&r->plain, which, 0);
+}
+
+/* estimates of one 1-parameter RLS with two outputs and their std: rls_std's arithmetic
+ * with P_00 and the degrees of freedom computed once */
+static void read_1x2(const struct rls *q, float est[2], float sd[2])
+{
+	float p = rls_cov_diag(q, 0);
+	for (unsigned o = 0; o < 2u; o++) {
+		est[o] = rls_estimate_f(q, o, 0);
+		float v = p * rls_residual_var(q, o);
+		sd[o] = v > 0.0f ? sqrtf(v) : 0.0f;
+	}
+}
+
+void ident_rotor_read(const struct ident_rotor *r, float est[4], float sd[4])
+{
+	read_1x2(&r->lagaware, est, sd);
+	read_1x2(&r->plain, est + 2, sd + 2);
+}
+
+float ident_rotor_tau_check(const struct ident_rotor *r)
+{
+	if (r->dalpha_dtau == SC_ZERO || r->sens.n_updates < 2u)
+		return -1.0f;
+	float k = rls_estimate_f(&r->sens, 0, 0), kd = rls_estimate_f(&r->sens, 0, 1);
+	if (!(k > 0.0f) || !finite_f(kd))
+		return -1.0f;
+	float t = sc_to_float(r->cfg.mot_tau_s) + kd / k;
+	return t > 0.0f ? t : 0.0f;
+}
+
+float ident_plain_bias(float e_d2, float e_d_dlag, float t_hover)
+{
+	float den = t_hover * t_hover + e_d2;
+	return den > 0.0f ? -(e_d2 - e_d_dlag) / den : 0.0f;
+}
+
+/* ---------------------------------------------------------------- inertia */
+
+scalar_t ident_torque_weight(scalar_t tau_m_s, scalar_t dt_s)
+{
+	float tm = sc_to_float(tau_m_s), dt = sc_to_float(dt_s);
+	if (!(tm > 0.0f) || !(dt > 0.0f))
+		return SC(1.0);
+	/* alpha = 1 / (1 - exp(-x)) - 1 / x, x = dt / tau_m; series for small x (cancellation) */
+	float x = dt / tm;
+	float w = x < 0.1f ? 0.5f + x / 12.0f - x * x * x / 720.0f : 1.0f / (1.0f - expf(-x)) - 1.0f / x;
+	return sc_from_float(w);
+}
+
+void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps, scalar_t zeta,
+			scalar_t dt_s, scalar_t alpha, const scalar_t inertia[3], const scalar_t w0[3],
+			const scalar_t tau0[3])
+{
+	unsigned i = axis > 2u ? 2u : axis, j, k;
+	ident_other_axes(i, &j, &k);
+	e->axis = i;
+	/* tau_i = I_i w_dot_i + (I_k - I_j) w_j w_k */
+	e->coupling = sc_sub(inertia[k], inertia[j]);
+	e->alpha = sc_clamp(alpha, SC(0.0), SC(1.0));
+	e->inv_dt = sc_from_float(1.0f / frame_period(dt_s));
+	e->tau_prev = tau0[i];
+	e->ww_prev = sc_mul(w0[j], w0[k]);
+	e->wf_prev = w0[i];
+	filt_svf_init(&e->svf_tau, wc_rps, zeta, dt_s, tau0[i]);
+	filt_svf_init(&e->svf_w, wc_rps, zeta, dt_s, w0[i]);
+	filt_svf_init(&e->svf_ww, wc_rps, zeta, dt_s, e->ww_prev);
+	struct rls_config c;
+	rls_default_config(&c);
+	c.n_params = 1;
+	c.n_outputs = 1;
+	c.lambda = 1.0f;
+	c.p0 = 1e4f;
+	c.theta0[0][0] = sc_to_float(inertia[i]);
+	rls_init(&e->rls, &c);
+	float wdt = sc_to_float(wc_rps) * sc_to_float(dt_s), z4 = 4.0f * sc_to_float(zeta);
+	e->sd_scale = wdt > 0.0f && wdt < z4 ? sqrtf(z4 / wdt) : 1.0f;
+	e->n = 0;
+	filt_svf_init(&e->svf_z, wc_rps, zeta, dt_s, SC_ZERO);
+	e->z_in = SC_ZERO;
+	e->iv = false;
+	e->s_zy = e->s_zp = e->b_zy = e->b_zp = e->s_aa = e->s_ab = e->s_bb = (ident_sum_t)0;
+	e->s_n = e->b_n = 0;
+	float dt = sc_to_float(dt_s);
+	float len = dt > 0.0f ? 0.5f / dt + 0.5f : 45.0f; /* 0.5 s of updates */
+	e->b_len = len < 1.0f ? 1u : (len > 1e6f ? 1000000u : (uint32_t)len);
+}
+
+/* the IV estimate once a first block is complete (before, least squares: a live value) */
+static bool iv_ready(const struct ident_inertia *e)
+{
+	return e->iv && e->s_bb > (ident_sum_t)0 && e->s_zp != (ident_sum_t)0;
+}
+
+/* The sum over the blocks of (A_b - I B_b)^2, A_b = sum_b z y, B_b = sum_b z phi, as
+ * s_aa - 2 I s_ab + I^2 s_bb: the three terms cancel down to the residuals' share (1e-4 of
+ * s_aa for a block residual of 1 %), more than float's 24 bits keep. The fixed build forms
+ * it in Q31.32 with I = s_zy / s_zp as a 30-bit ratio (error ~1e-9 relative, so ~1e-5 of
+ * the result after that cancellation); the float build's float32 sums already carry
+ * rounding of that order (their std is good to a few %). */
+static float iv_resid2(const struct ident_inertia *e, float est)
+{
+#if OCTO_FIXED
+	int sh;
+	int32_t r = q30_ratio_x(e->s_zy, e->s_zp, &sh); /* I = r 2^-(30 + sh) */
+	int s = QF_UNIT_FRAC + sh;
+	if (s >= 1 && s <= 62) {
+		ident_sum_t t1 = q_mul64_32(e->s_ab, r, (unsigned)s);
+		ident_sum_t t2 = q_mul64_32(q_mul64_32(e->s_bb, r, (unsigned)s), r, (unsigned)s);
+		ident_sum_t v = q_add64(q_add64(e->s_aa, -q_add64(t1, t1)), t2);
+		return f_of_sum(v);
+	}
+#endif
+	return f_of_sum(e->s_aa) - 2.0f * est * f_of_sum(e->s_ab) + est * est * f_of_sum(e->s_bb);
+}
+
+float ident_inertia_est(const struct ident_inertia *e)
+{
+	if (!iv_ready(e))
+		return rls_estimate_f(&e->rls, 0, 0);
+	return f_of_sum(e->s_zy) / f_of_sum(e->s_zp);
+}
+
+float ident_inertia_sd(const struct ident_inertia *e)
+{
+	if (!iv_ready(e))
+		return e->sd_scale * rls_std(&e->rls, 0, 0);
+	float est = ident_inertia_est(e);
+	if (!finite_f(est))
+		return NAN;
+	float v = iv_resid2(e, est);
+	return sqrtf(v > 0.0f ? v : 0.0f) / fabsf(f_of_sum(e->s_zp));
+}
+
+enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max,
+					float *lo, float *hi, float *raise)
+{
+	float ml2 = mass_kg * arm_l_m * arm_l_m;
+	*lo = IDENT_INR_LO * ml2;
+	*hi = IDENT_INR_HI * ml2;
+	*raise = 1.0f;
+	if (!finite_f(est) || !finite_f(sd))
+		return IDENT_NOT_FINITE;
+	if (!(est >= *lo && est <= *hi))
+		return IDENT_OUT_OF_RANGE;
+	float rsd = sd / est;
+	if (sd < 0.0f || !(rsd < rsd_max)) {
+		*raise = rsd_max > 0.0f && finite_f(rsd) ? rsd / rsd_max : 0.0f;
+		return IDENT_UNCERTAIN;
+	}
+	return IDENT_ACCEPT;
+}
+
+/* ---------------------------------------------------------------- validation */
+
+void ident_fit_init(struct ident_fit *v)
+{
+	v->n = 0;
+	v->y0 = SC_ZERO;
+	v->s1 = v->s2 = v->sse = (ident_sum_t)0;
+}
+
+/* sum (y - mean)^2 = s2 - s1^2 / n and sum y^2 = s2 + 2 y0 s1 + n y0^2 (y - y0 summed) */
+static float fit_m2(const struct ident_fit *v)
+{
+	float s1 = f_of_sum(v->s1);
+	return v->n > 0u ? f_of_sum(v->s2) - s1 * s1 / (float)v->n : 0.0f;
+}
+
+float ident_fit_ne(const struct ident_fit *v)
+{
+	float y0 = sc_to_float(v->y0);
+	float syy = f_of_sum(v->s2) + 2.0f * y0 * f_of_sum(v->s1) + (float)v->n * y0 * y0;
+	return syy > 0.0f ? sqrtf(f_of_sum(v->sse) / syy) : 0.0f;
+}
+
+float ident_fit_pct(const struct ident_fit *v)
+{
+	float m2 = fit_m2(v);
+	return m2 > 0.0f ? 100.0f * (1.0f - sqrtf(f_of_sum(v->sse) / m2)) : 0.0f;
+}
+
+/* ---------------------------------------------------------------- acceptance */
+
+enum ident_verdict ident_accept(float est, float sd, float nominal, float rsd_max)
+{
+	if (!finite_f(est) || !finite_f(sd))
+		return IDENT_NOT_FINITE;
+	float lo = IDENT_RANGE_LO * nominal, hi = IDENT_RANGE_HI * nominal;
+	if (lo > hi) {
+		float t = lo;
+		lo = hi;
+		hi = t;
+	}
+	if (!(est >= lo && est <= hi) || est == 0.0f)
+		return IDENT_OUT_OF_RANGE;
+	float rsd = sd / (est > 0.0f ? est : -est);
+	if (sd < 0.0f || !(rsd < rsd_max))
+		return IDENT_UNCERTAIN;
+	return IDENT_ACCEPT;
+}
+
+const char *ident_verdict_text(enum ident_verdict v)
+{
+	switch (v) {
+	case IDENT_ACCEPT:
+		return "accepted";
+	case IDENT_NOT_FINITE:
+		return "not finite";
+	case IDENT_OUT_OF_RANGE:
+		return "out of range";
+	case IDENT_UNCERTAIN:
+		return "std too large";
+	}
+	return "?";
+}
