@@ -90,7 +90,9 @@ ARM_NM      := arm-none-eabi-nm
 ARM_COMMA   := ,
 ARM_SPACE   := $(ARM_COMMA:,=) $(ARM_COMMA:,=)
 ARM_QEMU    := qemu-system-arm
-ARM_TIMEOUT ?= 300
+# Per image: a hang ends here. The M0 images take about 2 minutes on an idle core (their
+# fixed-vs-float64 and long-run tests); several QEMU images beside other work take longer.
+ARM_TIMEOUT ?= 900
 ARM_FILTER  ?=
 
 ARM_VARIANTS      := m4f m0 m0-fixed
