@@ -2,7 +2,8 @@
 #
 #   make arm         cross-compile firmware/core/*.c for each target below with the host
 #                    firmware flags (CFLAGS_FW: FW_WARN, -fno-math-errno), link the unit tests
-#                    (tests/core, UNIT_CFLAGS) with the start-up code here, run them under QEMU
+#                    (tests/core, UNIT_CFLAGS) with the start-up code here into two images per
+#                    target (ref-tests: ARM_REF_SRC; unit-tests: the rest), run them under QEMU
 #                    with semihosting (the images in parallel), print the core's sizes per
 #                    target and check the instruction-counting plugin on its demo.
 #                    Then the app's C suite (tests/app: firmware/app on the stub HAL) on the
@@ -149,7 +150,6 @@ arm-toolchain:
 # $(1) = variant. Objects: build/arm/<v>/{core,unit,rt}/; library build/arm/<v>/libcore.a.
 define arm_variant
 ARM_CORE_OBJ_$(1) := $$(CORE_SRC:firmware/core/%.c=$(ARM_B)/$(1)/core/%.o)
-ARM_UNIT_OBJ_$(1) := $$(UNIT_ALL_SRC:tests/core/%.c=$(ARM_B)/$(1)/unit/%.o)
 ARM_RT_OBJ_$(1)   := $$(ARM_RT_SRC:tests/arm/%.c=$(ARM_B)/$(1)/rt/%.o)
 ARM_MARK_OBJ_$(1) := $(ARM_B)/$(1)/rt/bench_mark.o
 ARM_CFLAGS_$(1)   := $$(ARM_ARCH_$(1)) $$(ARM_DEFS_$(1)) $$(ARM_SECTIONS)
@@ -162,7 +162,6 @@ $(ARM_B)/$(1)/core/motor_id_solve.o: ARM_OBJ_OPT = $$(ARM_SETUP_OPT)
 $(ARM_B)/$(1)/unit/%.o: tests/core/%.c | arm-toolchain
 	@mkdir -p $$(@D)
 	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(UNIT_CFLAGS) $$(ARM_UNIT_OPT_$(1)) -c $$< -o $$@
-$(ARM_B)/$(1)/unit/unit.o: $$(UNIT_LIST)
 $(ARM_B)/$(1)/rt/%.o: tests/arm/%.c | arm-toolchain
 	@mkdir -p $$(@D)
 	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(CFLAGS_FW) -Itests/arm -c $$< -o $$@
@@ -191,7 +190,27 @@ $(ARM_B)/$(1)/$(2).elf: $$(ARM_RT_OBJ_$(1)) $(3) $(ARM_B)/$(1)/libcore.a $$(ARM_
 	$$(ARM_CC) $$(ARM_ARCH_$(1)) $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -Wl,-Map,$$@.map -o $$@ \
 	  $$(ARM_RT_OBJ_$(1)) $(3) $(ARM_B)/$(1)/libcore.a -lm
 endef
-$(foreach v,$(ARM_VARIANTS),$(eval $(call arm_test_elf,$(v),unit-tests,$(ARM_UNIT_OBJ_$(v)))))
+# The core's tests in two images per target, each with its own registry: microbit's 256 KB
+# of flash no longer hold them all in the M0 builds. ref-tests: the numerics against
+# references (float64 twins of the estimators, exact integer definitions); unit-tests: the rest.
+ARM_REF_SRC  := $(filter $(addprefix tests/core/,test_ident_ref.c test_motor_id_ref.c test_motor_id_ref64.c \
+                  test_rls_ref.c test_scalar.c test_qfmt.c),$(UNIT_SRC))
+ARM_UNIT_IMG_unit-tests := $(filter-out $(ARM_REF_SRC),$(UNIT_SRC))
+ARM_UNIT_IMG_ref-tests  := $(ARM_REF_SRC)
+ARM_UNIT_IMAGES := unit-tests ref-tests
+$(ARM_B)/lists/%/unit_list.h: $(UNIT_SRC) tests/arm/arm.mk
+	@mkdir -p $(@D)
+	@{ echo "/* generated: the core tests of the Cortex-M image $*: do not edit */"; \
+	   for f in $(ARM_UNIT_IMG_$*); do sed -n 's/^UNIT_TEST(\([A-Za-z0-9_]*\)).*/UNIT_ENTRY(\1)/p' $$f; done; } > $@.tmp
+	@cmp -s $@.tmp $@ && rm $@.tmp || mv $@.tmp $@
+# $(call arm_unit_image,VARIANT,IMAGE): its runner (unit.c on the image's registry) and image
+define arm_unit_image
+$(ARM_B)/$(1)/unit/runner-$(2).o: tests/core/unit.c $(ARM_B)/lists/$(2)/unit_list.h | arm-toolchain
+	@mkdir -p $$(@D)
+	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) -I$(ARM_B)/lists/$(2) $$(UNIT_CFLAGS) $$(ARM_UNIT_OPT_$(1)) -c $$< -o $$@
+$(call arm_test_elf,$(1),$(2),$(ARM_B)/$(1)/unit/runner-$(2).o $(ARM_UNIT_IMG_$(2):tests/core/%.c=$(ARM_B)/$(1)/unit/%.o))
+endef
+$(foreach v,$(ARM_VARIANTS),$(foreach i,$(ARM_UNIT_IMAGES),$(eval $(call arm_unit_image,$(v),$(i)))))
 
 # The app's suite: build/arm/<v>/app/{firmware,tests}/ hold its objects.
 ARM_APP_FW_SRC := $(sort $(wildcard firmware/app/*.c)) firmware/hal/hal.c
@@ -269,10 +288,10 @@ $(ARM_B)/structs.c: $(wildcard firmware/core/*.h)
 	   sed -n 's/^struct \([a-z0-9_]*\) {.*/\1/p' $^ | sort -u | \
 	     sed 's/.*/char octo_sizeof_&[sizeof(struct &)];/'; } > $@
 
-ARM_ELFS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/unit-tests.elf) \
+ARM_ELFS := $(foreach v,$(ARM_VARIANTS),$(foreach i,$(ARM_UNIT_IMAGES),$(ARM_B)/$(v)/$(i).elf)) \
             $(foreach v,$(ARM_APP_VARIANTS),$(ARM_B)/$(v)/app-tests.elf)
 # the images `make arm` runs: variant:image (build/arm/<variant>/<image>.elf)
-ARM_RUNS := $(foreach v,$(ARM_VARIANTS),$(v):unit-tests) $(foreach v,$(ARM_APP_VARIANTS),$(v):app-tests)
+ARM_RUNS := $(foreach v,$(ARM_VARIANTS),$(foreach i,$(ARM_UNIT_IMAGES),$(v):$(i))) $(foreach v,$(ARM_APP_VARIANTS),$(v):app-tests)
 ARM_LIBS := $(foreach v,$(ARM_VARIANTS),$(ARM_B)/$(v)/libcore.a)
 
 # text includes .rodata; flash = text + data, RAM = data + bss (no heap, no stack).
@@ -303,22 +322,23 @@ arm-size: $(ARM_LIBS)
 # Stack high-water mark of each test alone on M0 (one QEMU run per test name; a name
 # also selects the tests whose names contain it), largest first.
 .PHONY: arm-stack
-arm-stack: $(ARM_B)/m0/unit-tests.elf
+arm-stack: $(ARM_UNIT_IMAGES:%=$(ARM_B)/m0/%.elf)
 	@echo "== stack used per test on m0 ($(ARM_MACHINE_m0)), bytes of $$(($$($(ARM_NM) $< | \
 	   awk '$$3 == "__stack_top" { t = $$1 } $$3 == "__stack_bottom" { b = $$1 } END { print "0x" t " - 0x" b }')))"
-	@for t in $$(sed -n 's/^UNIT_ENTRY(\(.*\))$$/\1/p' $(UNIT_LIST)); do \
-	  timeout $(ARM_TIMEOUT) $(ARM_QEMU) -M $(ARM_MACHINE_m0) $(ARM_QEMU_FLAGS) \
-	    -semihosting-config enable=on,target=native,arg=unit-tests,arg=$$t -kernel $< </dev/null 2>&1 | \
-	  sed -n "s/^octo-arm: stack \([0-9]*\) of.*/\1 $$t/p"; done | sort -rn | awk '{ printf "   %6d  %s\n", $$1, $$2 }'
+	@for i in $(ARM_UNIT_IMAGES); do \
+	  for t in $$(sed -n 's/^UNIT_ENTRY(\(.*\))$$/\1/p' $(ARM_B)/lists/$$i/unit_list.h); do \
+	    timeout $(ARM_TIMEOUT) $(ARM_QEMU) -M $(ARM_MACHINE_m0) $(ARM_QEMU_FLAGS) \
+	      -semihosting-config enable=on,target=native,arg=$$i,arg=$$t -kernel $(ARM_B)/m0/$$i.elf </dev/null 2>&1 | \
+	    sed -n "s/^octo-arm: stack \([0-9]*\) of.*/\1 $$t/p"; done; done | sort -rn | awk '{ printf "   %6d  %s\n", $$1, $$2 }'
 
 # The images run in parallel (logs in build/arm/<v>/<image>.log), every one even when
 # another fails; their output is then printed in order with a summary of failures.
-# $(1) = variant, $(2) = image (unit-tests: the core's tests, app-tests: the app's).
+# $(1) = variant, $(2) = image (unit-tests, ref-tests: the core's tests; app-tests: the app's).
 arm_start = (timeout $(ARM_TIMEOUT) $(ARM_QEMU) -M $(ARM_MACHINE_$(1)) $(ARM_QEMU_FLAGS) \
     -semihosting-config enable=on,target=native,arg=$(2)$(subst $(ARM_SPACE),,$(foreach f,$(ARM_FILTER),$(ARM_COMMA)arg=$(f))) \
     -kernel $(ARM_B)/$(1)/$(2).elf </dev/null >$(ARM_B)/$(1)/$(2).log 2>&1; \
   echo $$? >$(ARM_B)/$(1)/$(2).status) &
-arm_report = echo "== $(if $(filter app-tests,$(2)),app tests,unit tests): $(1) on QEMU $(ARM_MACHINE_$(1))"; \
+arm_report = echo "== $(if $(filter app-tests,$(2)),app tests,core $(2)): $(1) on QEMU $(ARM_MACHINE_$(1))"; \
   cat $(ARM_B)/$(1)/$(2).log; \
   s=$$(cat $(ARM_B)/$(1)/$(2).status); if [ "$$s" != 0 ]; then rc=1; case $$s in \
     124) why="timed out after $(ARM_TIMEOUT) s";; 125) why="stack exhausted";; 126) why="fault";; \
