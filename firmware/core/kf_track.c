@@ -62,8 +62,10 @@ static scalar_t regressor(const struct kf_track *s, const scalar_t *thr, int n)
 	scalar_t c = s->p.curve, sum = SC_ZERO;
 	for (int j = 0; j < n && j < KF_TRACK_ROTORS; j++) {
 		scalar_t t = sc_clamp(thr[j], SC_ZERO, SC(1.0));
-		scalar_t g = sc_add(sc_mul(sc_sub(SC(1.0), c), t), sc_mul(c, sc_sq(t)));
-		sum = sc_add(sum, sc_mul(s->p.scale[j], g));
+		/* a straight curve and a nominal rotor skip their products (x 1 and + 0 are exact
+		 * in both builds) */
+		scalar_t g = c == SC_ZERO ? t : sc_add(sc_mul(sc_sub(SC(1.0), c), t), sc_mul(c, sc_sq(t)));
+		sum = sc_add(sum, s->p.scale[j] == SC(1.0) ? g : sc_mul(s->p.scale[j], g));
 	}
 	return sum;
 }
