@@ -555,7 +555,7 @@ static void control_step(struct app *a, float dt)
 		.q_b2i = q,
 		.mass_kg = sc_from_float(p->veh_mass),
 		.dt_s = gi.dt_s,
-		.hover_f_n = sc_from_float(envelope_hover_f(a, dt, sc_to_float(quat_body_z_up(q)))),
+		.hover_f_n = envelope_hover_f(a, dt, quat_body_z_up(q)),
 		.alloc_short_up = (short_pos & 1u) != 0,
 		.alloc_short_down = (short_neg & 1u) != 0,
 	};

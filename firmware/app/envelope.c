@@ -161,16 +161,18 @@ static void kft_step(struct app *a, float dt, bool up)
 	}
 }
 
-float envelope_hover_f(struct app *a, float dt, float cos_tilt)
+scalar_t envelope_hover_f(struct app *a, float dt, scalar_t cos_tilt)
 {
 	struct envelope *e = &a->env;
 	const struct app_params *p = &a->p;
 	float z = a->fr.pos_i_m[2], vz = a->fr.vel_i_mps[2];
-	/* collective throttle of the last step's achieved thrust (linearised by the map) */
-	float u = sc_to_float(a->mix_out.achieved[0]) / (8.0f * p->veh_kf);
+	/* collective throttle of the last step's achieved thrust (linearised by the map), in
+	 * scalars: the same float operations in the float build, integer ones in the fixed */
+	scalar_t kf8 = sc_mul(SC(8.0), sc_from_float(p->veh_kf));
+	scalar_t s_u = sc_div(a->mix_out.achieved[0], kf8);
 	bool up = z - sc_to_float(a->guid.z_ground_m) > AIRBORNE_M;
 	bool learn = up && (a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_LAND);
-	scalar_t s_vz = sc_from_float(vz), s_u = sc_from_float(u), s_c = sc_from_float(cos_tilt);
+	scalar_t s_vz = sc_from_float(vz), s_c = cos_tilt;
 	scalar_t s_dt = sc_from_float(dt);
 	e->hov_used = false;
 	if (learn)
@@ -181,7 +183,7 @@ float envelope_hover_f(struct app *a, float dt, float cos_tilt)
 	/* a climb commanded that has not lifted off: the hover throttle is higher */
 	if (a->mode == APP_TAKEOFF && !up && sc_to_float(a->guid.z_sp_m) > z + 0.05f)
 		hover_est_spool(&e->hov, s_dt);
-	return 8.0f * p->veh_kf * sc_to_float(hover_est_u(&e->hov));
+	return sc_mul(kf8, hover_est_u(&e->hov));
 }
 
 bool envelope_hover_ready(const struct app *a)

@@ -47,7 +47,7 @@ void envelope_model_sync(struct app *a);
 /* Once per control step, before the height controller: learns from the last step
  * (vertical speed, collective throttle of the thrust the mixer achieved, tilt) and
  * returns the hover thrust demand in the mixer's newtons, 8 VEH_KF u_h. */
-float envelope_hover_f(struct app *a, float dt, float cos_tilt);
+scalar_t envelope_hover_f(struct app *a, float dt, scalar_t cos_tilt);
 
 /* Take-off may end (HOLD) once the hover throttle is known to this relative sd. */
 bool envelope_hover_ready(const struct app *a);

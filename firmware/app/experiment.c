@@ -57,6 +57,7 @@ static const char *phase_name(int k)
 #define INR_ZETA 0.7f
 #define PRBS_ORDER 9u
 #define OFS_SEG_FRAMES 45u    /* rotor experiment: frames per offset level (0.5 s at 90 Hz) */
+#define EST_READ_FRAMES 9u    /* steps between reads of the live estimates (10 Hz at 90 Hz) */
 #define MOT_NE_MAX 1.3f       /* motor model: largest residual over noise variance */
 #define SCALE_LO 0.3f         /* accepted range of a rotor's effectiveness */
 #define SCALE_HI 1.5f
@@ -321,6 +322,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	e->t_phase = 0.0f;
 	e->t_settle = SETTLE_S;
 	e->est_live = 0;
+	e->est_wait = 0u;
 	say(e, APP_SEV_INFO, "ID %d/%d: %s", e->phase + 1, e->n_phases, phase_name(k));
 
 	struct excite_params xp = excite_params_default();
@@ -644,25 +646,27 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		/* the motor model needs every rotor excited: the null-space dither only */
 		if (e->cfg.exc_null && n >= 1)
 			motor_id_step(&e->mid, tp, fm, tm, use);
-		float d = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
-		out->thr_delta[0] = d;
+		scalar_t d = running ? excite_update(&e->exc) : SC_ZERO;
+		out->thr_delta[0] = sc_to_float(d);
 		if (e->cfg.exc_null) {
 			/* two dithers on the null-space patterns of Gamma_o (excite.h: rotors 1, 5
 			 * against 3, 7 and 2, 6 against 4, 8; thrust, roll, pitch and yaw all cancel
 			 * whatever k_f and k_tau are, so the vehicle stays still), plus an offset on
 			 * their sum cycling +o, 0, -o, 0 every half second: every rotor is excited,
 			 * each over three mean throttles (the curve) */
-			float d2 = running ? sc_to_float(excite_update(&e->exc2)) : 0.0f;
-			float o = running ? e->cfg.exc_ofs * sc_to_float(excite_offset_level(e->rot_k, OFS_SEG_FRAMES)) : 0.0f;
+			scalar_t d2 = running ? excite_update(&e->exc2) : SC_ZERO;
+			scalar_t o = running ? sc_mul(sc_from_float(e->cfg.exc_ofs),
+						      excite_offset_level(e->rot_k, OFS_SEG_FRAMES)) : SC_ZERO;
 			if (running)
 				e->rot_k++;
 			scalar_t p1[HAL_ROTORS], p2[HAL_ROTORS];
 			excite_null_pattern(0, p1);
 			excite_null_pattern(1, p2);
+			/* in scalars: integer in the fixed build, the same float operations in the other */
+			scalar_t a1 = sc_add(d, o), a2 = sc_add(d2, o);
 			for (int j = 0; j < HAL_ROTORS; j++)
-				out->thr_delta[j] = (d + o) * sc_to_float(p1[j]) + (d2 + o) * sc_to_float(p2[j]);
+				out->thr_delta[j] = sc_to_float(sc_add(sc_mul(a1, p1[j]), sc_mul(a2, p2[j])));
 		}
-		ident_rotor_read(&e->rot, e->est, e->est_sd);   /* est[0..3], est_sd[0..3] */
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
 		scalar_t fm[8], tm[8], tau[3], w[3];
@@ -682,8 +686,6 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		ident_inertia_update(&e->inr, tau, w, use && n == 1 && e->gap_hold == 0);
 		out->tau_delta[ax] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
 		e->inr_u_prev = out->tau_delta[ax];
-		e->est[4 + ax] = ident_inertia_est(&e->inr);
-		e->est_sd[4 + ax] = ident_inertia_sd(&e->inr);
 	} else {
 		/* the model's prediction of rotor 1's thrust: the allocation behind the throttle
 		 * sent on the previous frame, through the modelled delay and lag */
@@ -693,6 +695,22 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		if (use)
 			ident_fit_add(&e->fit, sc_from_float(f->rotor_thrust_n[0]), y_hat);
 		out->tau_delta[2] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
+	}
+}
+
+/* The current phase's live estimates into est[] / est_sd[] (telemetry at a few Hz, the log,
+ * the status lines): est[0..3] rotor 1's k_f and k_tau, lag-aware and plain; est[4 + axis]
+ * the inertia; est[7] the validation's NE and fit %. */
+static void read_estimates(struct experiment *e)
+{
+	int k = e->phase_kind[e->phase];
+	if (k == PK_ROTOR) {
+		ident_rotor_read(&e->rot, e->est, e->est_sd);
+	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
+		unsigned ax = (unsigned)(k - PK_INR_X);
+		e->est[4 + ax] = ident_inertia_est(&e->inr);
+		e->est_sd[4 + ax] = ident_inertia_sd(&e->inr);
+	} else {
 		e->est[7] = ident_fit_ne(&e->fit);
 		e->est_sd[7] = ident_fit_pct(&e->fit);
 	}
@@ -775,6 +793,14 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 			return e->state;
 		}
 		e->progress = ((float)e->phase + fminf(e->t_phase / total, 1.0f)) / (float)e->n_phases;
+		/* the estimates (soft float on a core without FPU) every EST_READ_FRAMES steps, on
+		 * the phase's first step and on its last, which the phase's end and the log's last
+		 * frame of the phase see */
+		if (e->est_wait == 0u || e->t_phase >= total) {
+			read_estimates(e);
+			e->est_wait = EST_READ_FRAMES;
+		}
+		e->est_wait--;
 		if (e->t_phase >= total) {
 			/* the phase is over: its end (estimates, results, verdicts) and the next one's
 			 * start run between frames (exp_turn), from what this step saw */

@@ -237,6 +237,7 @@ struct experiment {
 	struct excite exc;
 	struct excite exc2;                    /* rotor experiment: the second pattern's dither */
 	uint32_t rot_k;                        /* rotor experiment: excited frames so far */
+	uint32_t est_wait;                     /* steps until est[] / est_sd[] are read again */
 	float inr_u_prev;                      /* inertia: the excitation of the previous step (the instrument) */
 	/* the estimator of the current phase: phases never overlap, so they share the memory
 	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */

@@ -25,6 +25,8 @@ void alt_ctrl_init(struct alt_ctrl *s, const struct alt_ctrl_params *params)
 	s->vz_cmd_mps = SC_ZERO;
 	s->f_n = SC_ZERO;
 	s->flags = 0;
+	s->m_wn = s->m_zeta = s->m_kz = SC_ZERO;   /* operands 0: sc_div(0, 0) = 0 */
+	s->r_g = sc_recip_of(s->p.g_mps2);
 }
 
 void alt_ctrl_reset(struct alt_ctrl *s, scalar_t a_int_mps2)
@@ -44,7 +46,12 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 		return s->f_n;
 	}
 	scalar_t kv = sc_mul(sc_add(p->zeta, p->zeta), p->wn_rps); /* 2 zeta wn */
-	scalar_t kz = sc_div(sc_mul(p->wn_rps, p->wn_rps), kv);     /* wn / (2 zeta) */
+	if (p->wn_rps != s->m_wn || p->zeta != s->m_zeta) {
+		s->m_wn = p->wn_rps;
+		s->m_zeta = p->zeta;
+		s->m_kz = sc_div(sc_mul(p->wn_rps, p->wn_rps), kv);
+	}
+	scalar_t kz = s->m_kz;                                      /* wn / (2 zeta) */
 
 	scalar_t vz_cmd = sc_mul(kz, sc_sub(in->z_sp_m, in->z_m));
 	if (vz_cmd > p->vz_max_up_mps || vz_cmd < sc_neg(p->vz_max_down_mps)) {
@@ -61,10 +68,13 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 		flags |= ALT_CTRL_TILT_LIM;
 	}
 	scalar_t f;
-	if (sc_isfinite(in->hover_f_n) && in->hover_f_n > SC_ZERO && p->g_mps2 > SC_ZERO)
-		f = sc_div(sc_mul(sc_div(in->hover_f_n, p->g_mps2), sc_add(p->g_mps2, a_cmd)), cz);
-	else
+	if (sc_isfinite(in->hover_f_n) && in->hover_f_n > SC_ZERO && p->g_mps2 > SC_ZERO) {
+		if (s->r_g.b != p->g_mps2)   /* the parameters were set without alt_ctrl_init */
+			s->r_g = sc_recip_of(p->g_mps2);
+		f = sc_div(sc_mul(sc_div_r(in->hover_f_n, &s->r_g), sc_add(p->g_mps2, a_cmd)), cz);
+	} else {
 		f = sc_div(sc_mul(in->mass_kg, sc_add(p->g_mps2, a_cmd)), cz);
+	}
 	if (f > p->f_max_n) {
 		f = p->f_max_n;
 		flags |= ALT_CTRL_SAT_HIGH;

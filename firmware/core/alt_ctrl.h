@@ -26,7 +26,7 @@
 #define OCTO_ALT_CTRL_H
 
 #include "quat.h"
-#include "scalar.h"
+#include "sc_recip.h"
 
 #include <stdint.h>
 
@@ -69,6 +69,10 @@ struct alt_ctrl {
 	scalar_t vz_cmd_mps; /* last vertical-speed command (telemetry) */
 	scalar_t f_n;        /* last thrust output */
 	uint32_t flags;      /* ALT_CTRL_* of the last update */
+	/* the parameters' quotients, kept with their operands and recomputed when one changes
+	 * (the same values as dividing every time) */
+	scalar_t m_wn, m_zeta, m_kz;   /* kz = wn^2 / (2 zeta wn) */
+	struct sc_recip r_g;           /* 1 / g_mps2 */
 };
 
 /* Default gains, the ones octo-fw flies: its parameter table (ALT_WN, ALT_ZETA, ALT_KI)

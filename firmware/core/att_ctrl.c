@@ -29,6 +29,10 @@ void att_ctrl_init(struct att_ctrl *s, const struct att_ctrl_params *params)
 	s->err_b_rad = vec3_zero();
 	s->rate_cmd_b = vec3_zero();
 	s->flags = 0;
+	for (int i = 0; i < 3; i++) {   /* operands 0: the quotients sc_div(0, 0) = 0 */
+		s->m_wn[i] = s->m_zeta[i] = s->m_kp[i] = SC_ZERO;
+		s->m_itm[i] = s->m_kint[i] = s->m_lim[i] = SC_ZERO;
+	}
 }
 
 /* component i (0 x, 1 y, 2 z) of a vec3 */
@@ -79,7 +83,12 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		scalar_t *int_r = comp(&s->int_r_rad, i);
 
 		scalar_t kd = sc_mul(sc_add(zeta, zeta), wn); /* 2 zeta wn, 1/s */
-		scalar_t kp = sc_div(sc_mul(wn, wn), kd);     /* wn / (2 zeta), 1/s */
+		if (wn != s->m_wn[i] || zeta != s->m_zeta[i]) {
+			s->m_wn[i] = wn;
+			s->m_zeta[i] = zeta;
+			s->m_kp[i] = sc_div(sc_mul(wn, wn), kd);
+		}
+		scalar_t kp = s->m_kp[i];                     /* wn / (2 zeta), 1/s */
 		scalar_t rc = sc_mul(kp, ei);
 		if (rc > rate_max || rc < sc_neg(rate_max)) {
 			rc = sc_clamp(rc, sc_neg(rate_max), rate_max);
@@ -107,7 +116,12 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		bool cut = (r > SC_ZERO && (in->alloc_short_pos >> i & 1u)) ||
 			   (r < SC_ZERO && (in->alloc_short_neg >> i & 1u));
 		if (kint > SC_ZERO && !sat && !cut && sc_abs(ei) < p->int_err_max_rad) {
-			scalar_t lim = sc_div(int_tau_max, kint); /* keeps the state bounded too */
+			if (int_tau_max != s->m_itm[i] || kint != s->m_kint[i]) {
+				s->m_itm[i] = int_tau_max;
+				s->m_kint[i] = kint;
+				s->m_lim[i] = sc_div(int_tau_max, kint);
+			}
+			scalar_t lim = s->m_lim[i];   /* int_tau_max / kint: keeps the state bounded too */
 			*int_r = sc_clamp(sc_add(*int_r, sc_mul(r, dt)), sc_neg(lim), lim);
 		} else if (kint <= SC_ZERO) {
 			*int_r = SC_ZERO;

@@ -74,6 +74,11 @@ struct att_ctrl {
 	struct vec3 err_b_rad;    /* last attitude error (telemetry) */
 	struct vec3 rate_cmd_b;   /* last rate command (telemetry) */
 	uint32_t flags;           /* ATT_CTRL_* of the last update */
+	/* per axis, the quotients of parameters and slowly changing inputs, kept with the
+	 * operands they came from and recomputed when one changes (no division in the
+	 * update otherwise; the same values as dividing every time) */
+	scalar_t m_wn[3], m_zeta[3], m_kp[3];       /* kp = wn^2 / (2 zeta wn) */
+	scalar_t m_itm[3], m_kint[3], m_lim[3];     /* lim = int_tau_max / kint */
 };
 
 /* Default gains, the ones octo-fw flies: its parameter table (ATT_WN_RP, ATT_WN_YAW,

@@ -27,7 +27,7 @@ static scalar_t p0_pct2(const struct hover_est_params *p)
 /* theta within [1/u_max, 1/u_min] */
 static scalar_t clamp_theta(const struct hover_est *s, scalar_t th)
 {
-	return sc_clamp(th, sc_div(SC(1.0), s->p.u_max), sc_div(SC(1.0), s->p.u_min));
+	return sc_clamp(th, s->theta_lo, s->theta_hi);
 }
 
 void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scalar_t u0)
@@ -39,6 +39,12 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 		s->p.u_max = sc_max(SC(0.8), s->p.u_min);
 	if (!(s->p.tau_s > SC_ZERO))
 		s->p.tau_s = SC(0.1);
+	s->theta_lo = sc_div(SC(1.0), s->p.u_max);
+	s->theta_hi = sc_div(SC(1.0), s->p.u_min);
+	s->r_tau = sc_recip_of(s->p.tau_s);
+	s->r_100 = sc_recip_of(SC(100.0));
+	s->al_dt = SC_ZERO;
+	s->al = SC_ZERO;
 	u0 = sc_isfinite(u0) ? sc_clamp(u0, s->p.u_min, s->p.u_max) : s->p.u_min;
 	s->theta = clamp_theta(s, sc_div(SC(1.0), u0));
 	s->p_pct2 = p0_pct2(&s->p);
@@ -66,10 +72,14 @@ static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c
 		return SC_ZERO;
 	}
 	/* backward Euler of 1 / (tau s + 1): x += dt / (tau + dt) (in - x) */
-	scalar_t al = sc_div(dt, sc_add(s->p.tau_s, dt));
+	if (dt != s->al_dt) {
+		s->al_dt = dt;
+		s->al = sc_div(dt, sc_add(s->p.tau_s, dt));
+	}
+	scalar_t al = s->al;
 	s->v_f = sc_add(s->v_f, sc_mul(al, sc_sub(vz, s->v_f)));
 	s->uc_f = sc_add(s->uc_f, sc_mul(al, sc_sub(uc, s->uc_f)));
-	return sc_div(sc_sub(vz, s->v_f), s->p.tau_s);
+	return sc_div_r(sc_sub(vz, s->v_f), &s->r_tau);
 }
 
 void hover_est_track(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t cos_tilt, scalar_t dt_s)
@@ -117,7 +127,7 @@ bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t
 		s->gated_s = SC_ZERO;
 	}
 	scalar_t k = sc_div(s->p_pct2, pr);
-	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), sc_mul(k, sc_div(e_pct, SC(100.0)))));
+	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), sc_mul(k, sc_div_r(e_pct, &s->r_100))));
 	s->theta = clamp_theta(s, th);
 	s->p_pct2 = sc_max(sc_div(sc_mul(s->p_pct2, r), pr), SC_EPS);
 	s->updates++;

@@ -38,7 +38,7 @@
 #ifndef OCTO_HOVER_EST_H
 #define OCTO_HOVER_EST_H
 
-#include "scalar.h"
+#include "sc_recip.h"
 
 #include <stdbool.h>
 #include <stdint.h>
@@ -68,6 +68,12 @@ struct hover_est {
 	uint32_t rejected;/* gated measurements */
 	scalar_t gated_s; /* time of the current run of gated innovations of one sign, s */
 	int8_t gated_sign;
+	/* what depends on the parameters and the frame period only, computed at init and when
+	 * the period changes: the update's divisions by them become products, with the same
+	 * quotients */
+	scalar_t theta_lo, theta_hi; /* 1 / u_max, 1 / u_min */
+	struct sc_recip r_tau, r_100; /* 1 / tau_s, 1 / 100 */
+	scalar_t al_dt, al;          /* the filters' coefficient dt / (tau + dt) and its dt (0: none) */
 };
 
 /* Defaults: u_h in [0.02, 0.8], sigma_u0 1.0, sigma_acc 0.5 m/s^2, q_rel 0.003 /sqrt(s),

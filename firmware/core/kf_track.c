@@ -33,17 +33,27 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->e_prev_pct = SC_ZERO;
 	s->lag_dt = SC_ZERO;
 	s->lag_al = SC(1.0);
+	s->c_dt = SC_ZERO;
+	s->a_s = SC_ZERO;
+	s->dt_tmin = SC_ZERO;
+	s->r_drift = sc_recip_of(s->p.drift_per_min);
+	s->r_three = sc_recip_of(SC(3.0));
 	s->started = false;
 	s->primed = false;
 	s->updates = 0;
 }
 
-/* x^(1/3) for x > 0 by Newton's iteration from a warm start (the last memory). */
-static scalar_t cbrt_warm(scalar_t x, scalar_t guess)
+/* x^(1/3) for x > 0 by at most 6 steps of Newton's iteration from a warm start (the last
+ * memory). A step that leaves r unchanged ends it: every further step would repeat it. */
+static scalar_t cbrt_warm(const struct kf_track *s, scalar_t x, scalar_t guess)
 {
 	scalar_t r = guess > SC_ZERO ? guess : SC(1.0);
-	for (int i = 0; i < 6; i++)
-		r = sc_div(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), SC(3.0));
+	for (int i = 0; i < 6; i++) {
+		scalar_t n = sc_div_r(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), &s->r_three);
+		if (n == r)
+			break;
+		r = n;
+	}
 	return r;
 }
 
@@ -52,8 +62,10 @@ static scalar_t regressor(const struct kf_track *s, const scalar_t *thr, int n)
 	scalar_t c = s->p.curve, sum = SC_ZERO;
 	for (int j = 0; j < n && j < KF_TRACK_ROTORS; j++) {
 		scalar_t t = sc_clamp(thr[j], SC_ZERO, SC(1.0));
-		scalar_t g = sc_add(sc_mul(sc_sub(SC(1.0), c), t), sc_mul(c, sc_sq(t)));
-		sum = sc_add(sum, sc_mul(s->p.scale[j], g));
+		/* a straight curve and a nominal rotor skip their products (x 1 and + 0 are exact
+		 * in both builds) */
+		scalar_t g = c == SC_ZERO ? t : sc_add(sc_mul(sc_sub(SC(1.0), c), t), sc_mul(c, sc_sq(t)));
+		sum = sc_add(sum, s->p.scale[j] == SC(1.0) ? g : sc_mul(s->p.scale[j], g));
 	}
 	return sum;
 }
@@ -79,12 +91,17 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		s->phi_f = sc_add(s->phi_f, sc_mul(al, sc_sub(phi, s->phi_f)));
 	}
 	phi = s->phi_f;
+	if (dt_s != s->c_dt) {
+		s->c_dt = dt_s;
+		s->a_s = sc_div(dt_s, sc_add(s->p.s_tau_s, dt_s));
+		s->dt_tmin = sc_div(dt_s, s->p.t_min_s);
+	}
 	if (!gate || phi < s->p.phi_min || !(y_n > SC_ZERO))
 		return false;
 	if (!s->started) {
 		s->k = sc_div(y_n, phi);
 		s->e_prev_pct = SC_ZERO;
-		s->P = sc_div(sc_div(dt_s, s->p.t_min_s), sc_sq(phi));
+		s->P = sc_div(s->dt_tmin, sc_sq(phi));
 		s->started = true;
 		s->updates++;
 		return true;
@@ -96,15 +113,15 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	scalar_t e_pct = sc_div(sc_mul(SC(100.0), e), y_n);
 	scalar_t de = sc_sub(e_pct, s->e_prev_pct);
 	s->e_prev_pct = e_pct;
-	scalar_t a_s = sc_div(dt_s, sc_add(s->p.s_tau_s, dt_s));
-	scalar_t s2 = sc_min(sc_div(sc_sq(de), SC(2.0)), SC(10000.0));
-	s->s2_pct2 = sc_add(s->s2_pct2, sc_mul(a_s, sc_sub(s2, s->s2_pct2)));
+	/* half the square: x 0.5 is x / 2 exactly in both builds */
+	scalar_t s2 = sc_min(sc_mul(sc_sq(de), SC(0.5)), SC(10000.0));
+	s->s2_pct2 = sc_add(s->s2_pct2, sc_mul(s->a_s, sc_sub(s2, s->s2_pct2)));
 	/* memory T* = (s^2 / (4 r^2 f_s))^(1/3) with s and r as fractions: s / (2 r) in seconds is
 	 * (s_pct / 100) / (2 drift_per_min / 60) = 0.3 s_pct / drift_per_min */
 	if (s->p.drift_per_min > SC_ZERO) {
-		scalar_t q = sc_div(sc_mul(SC(0.3), sc_sqrt(s->s2_pct2)), s->p.drift_per_min);
+		scalar_t q = sc_div_r(sc_mul(SC(0.3), sc_sqrt(s->s2_pct2)), &s->r_drift);
 		scalar_t x = sc_mul(sc_sq(q), dt_s);   /* (s / 2r)^2 / f_s */
-		s->mem_s = sc_clamp(cbrt_warm(x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
+		s->mem_s = sc_clamp(cbrt_warm(s, x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
 	} else {
 		s->mem_s = s->p.t_max_s;
 	}
@@ -116,7 +133,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	s->k = sc_add(s->k, sc_mul(K, e));
 	s->P = sc_div(sc_sub(s->P, sc_mul(K, pphi)), s->lambda);
 	/* no wind-up: P at most its steady state for the shortest memory and this regressor */
-	scalar_t p_max = sc_div(sc_div(dt_s, s->p.t_min_s), sc_sq(phi));
+	scalar_t p_max = sc_div(s->dt_tmin, sc_sq(phi));
 	s->P = sc_clamp(s->P, SC_EPS, p_max);
 	s->updates++;
 	return true;

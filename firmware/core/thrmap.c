@@ -7,6 +7,7 @@ void thrmap_init(struct thrmap *m, const struct thrmap_params *params)
 	m->p.k_f_n = sc_max(m->p.k_f_n, SC(1e-3));
 	m->p.curve = sc_clamp(m->p.curve, SC(THRMAP_CURVE_MIN), SC(THRMAP_CURVE_MAX));
 	m->one_minus_a = sc_sub(SC(1), m->p.curve);
+	m->r_kf = sc_recip_of(m->p.k_f_n);
 	for (unsigned j = 0; j < THRMAP_ROTORS; j++) {
 		scalar_t k = m->p.scale[j] == SC_ZERO ? SC(1) : sc_clamp(m->p.scale[j], SC(0.1), SC(4));
 		m->p.scale[j] = k;
@@ -16,7 +17,7 @@ void thrmap_init(struct thrmap *m, const struct thrmap_params *params)
 
 scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped)
 {
-	scalar_t u = sc_div(f_n, m->p.k_f_n);
+	scalar_t u = sc_div_r(f_n, &m->r_kf);
 	bool c = false;
 	if (!sc_isfinite(u)) { /* float build: NaN gives no thrust, +/-Inf the limits */
 		c = true;

@@ -11,7 +11,7 @@
 #ifndef OCTO_THRMAP_H
 #define OCTO_THRMAP_H
 
-#include "scalar.h"
+#include "sc_recip.h"
 
 #include <stdint.h>
 
@@ -36,6 +36,7 @@ struct thrmap {
 	struct thrmap_params p;
 	scalar_t one_minus_a; /* 1 - a */
 	scalar_t inv_scale[THRMAP_ROTORS]; /* 1 / scale */
+	struct sc_recip r_kf; /* 1 / k_f_n (the same quotients as sc_div) */
 };
 
 /* Copies and clamps params (k_f >= 1e-3 N, 0 <= a <= 0.99). */
