@@ -15,6 +15,7 @@
 #include "rls.h"
 #include "unit.h"
 #include "unit_scalar.h"
+#include "bierman64.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -36,58 +37,6 @@
 #else
 #define LONG_S(s) (s)
 #endif
-
-/* ---------------------------------------------------------------- float64 Bierman UD RLS
- * (the textbook form, no safeguards; lambda = 1 as the identification uses) */
-struct ref {
-	int n, no;
-	double u[4][4], d[4], th[3][4];
-};
-
-static void ref_init(struct ref *r, int n, int no, double p0, const double th0[][4])
-{
-	memset(r, 0, sizeof *r);
-	r->n = n;
-	r->no = no;
-	for (int i = 0; i < n; i++) {
-		r->u[i][i] = 1.0;
-		r->d[i] = p0;
-		for (int o = 0; o < no; o++)
-			r->th[o][i] = th0[o][i];
-	}
-}
-
-static void ref_update(struct ref *r, const double *phi, const double *y)
-{
-	int n = r->n;
-	double f[4], v[4], b[4], a = 1.0;
-	for (int j = 0; j < n; j++) {
-		double s = phi[j];
-		for (int i = 0; i < j; i++)
-			s += r->u[i][j] * phi[i];
-		f[j] = s;
-		v[j] = r->d[j] * s;
-	}
-	for (int j = 0; j < n; j++) {
-		double ap = a;
-		a = ap + f[j] * v[j];
-		r->d[j] *= ap / a;
-		b[j] = v[j];
-		double mu = -f[j] / ap;
-		for (int i = 0; i < j; i++) {
-			double uij = r->u[i][j];
-			r->u[i][j] = uij + b[i] * mu;
-			b[i] += uij * v[j];
-		}
-	}
-	for (int o = 0; o < r->no; o++) {
-		double e = y[o];
-		for (int i = 0; i < n; i++)
-			e -= phi[i] * r->th[o][i];
-		for (int i = 0; i < n; i++)
-			r->th[o][i] += b[i] / a * e;
-	}
-}
 
 /* ---------------------------------------------------------------- rotor reference */
 static double g_curve(double c, double s) { return (1.0 - c) * s + c * s * s; }
@@ -114,9 +63,9 @@ static void rotor_ref_init(struct rotor_ref *r, const struct ident_rotor_cfg *cf
 	r->dalpha = r->tau > 0 ? -(DT / (r->tau * r->tau)) * exp(-DT / r->tau) : 0.0;
 	const double th0[2][4] = { { (double)cfg->kf0 }, { (double)cfg->ktau0 } };
 	const double th0s[1][4] = { { (double)cfg->kf0, 0.0 } };
-	ref_init(&r->lag, 1, 2, 1e6, th0);
-	ref_init(&r->plain, 1, 2, 1e6, th0);
-	ref_init(&r->sens, 2, 1, 1e6, th0s);
+	ref_init(&r->lag, 1, 2, 1e6, 1.0, th0);
+	ref_init(&r->plain, 1, 2, 1e6, 1.0, th0);
+	ref_init(&r->sens, 2, 1, 1e6, 1.0, th0s);
 }
 
 static void rotor_ref_advance(struct rotor_ref *r, double thr_prev)
@@ -330,7 +279,7 @@ static void inertia_ref_init(struct inertia_ref *r, int ax, double wc, double ze
 	svf_ref_init(&r->ww, wc, zeta, 0.0);
 	svf_ref_init(&r->z, wc, zeta, 0.0);
 	const double th0[1][4] = { { d(inertia[ax]) } };
-	ref_init(&r->rls, 1, 1, 1e4, th0);
+	ref_init(&r->rls, 1, 1, 1e4, 1.0, th0);
 }
 
 static void inertia_ref_update(struct inertia_ref *r, const double tau[3], const double w[3])

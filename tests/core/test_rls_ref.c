@@ -10,64 +10,13 @@
 #include "rls.h"
 #include "unit.h"
 #include "unit_scalar.h"
+#include "bierman64.h"
 
 #include <math.h>
 #include <string.h>
 
 #define REL_BOUND 2e-4 /* 0.02 % */
 #define PI 3.14159265358979323846
-
-/* float64 Bierman UD RLS with forgetting (the textbook form, no safeguards) */
-struct ref {
-	int n, no;
-	double lambda, u[4][4], d[4], th[3][4];
-};
-
-static void ref_init(struct ref *r, int n, int no, double p0, double lambda, const double th0[][4])
-{
-	memset(r, 0, sizeof *r);
-	r->n = n;
-	r->no = no;
-	r->lambda = lambda;
-	for (int i = 0; i < n; i++) {
-		r->u[i][i] = 1.0;
-		r->d[i] = p0;
-		for (int o = 0; o < no; o++)
-			r->th[o][i] = th0[o][i];
-	}
-}
-
-static void ref_update(struct ref *r, const double *phi, const double *y)
-{
-	int n = r->n;
-	double f[4], v[4], b[4], a = r->lambda;
-	for (int j = 0; j < n; j++) {
-		double s = phi[j];
-		for (int i = 0; i < j; i++)
-			s += r->u[i][j] * phi[i];
-		f[j] = s;
-		v[j] = r->d[j] * s;
-	}
-	for (int j = 0; j < n; j++) {
-		double ap = a;
-		a = ap + f[j] * v[j];
-		r->d[j] *= ap / (a * r->lambda);
-		b[j] = v[j];
-		double mu = -f[j] / ap;
-		for (int i = 0; i < j; i++) {
-			double uij = r->u[i][j];
-			r->u[i][j] = uij + b[i] * mu;
-			b[i] += uij * v[j];
-		}
-	}
-	for (int o = 0; o < r->no; o++) {
-		double e = y[o];
-		for (int i = 0; i < n; i++)
-			e -= phi[i] * r->th[o][i];
-		for (int i = 0; i < n; i++)
-			r->th[o][i] += b[i] / a * e;
-	}
-}
 
 static double g_curve(double c, double s) { return (1.0 - c) * s + c * s * s; }
 
