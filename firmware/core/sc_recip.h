@@ -31,30 +31,10 @@ static inline struct sc_recip sc_recip_of(scalar_t b)
 	return r;
 }
 
-/* sc_div(a, r->b), step for step without the reciprocal */
+/* sc_div(a, r->b) without preparing the reciprocal again */
 static inline scalar_t sc_div_r(scalar_t a, const struct sc_recip *r)
 {
-	if (r->ub == 0u)
-		return a > 0 ? SC_MAX : (a < 0 ? SC_MAX_NEG : 0);
-	bool neg = (a < 0) != (r->b < 0);
-	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = r->ub;
-	uint64_t x = ((uint64_t)ua << 16) + (ub >> 1);
-	if ((x >> 31) >= ub)
-		return neg ? SC_MAX_NEG : SC_MAX;
-	int k = 31 - r->s;
-	uint32_t xh = (uint32_t)(x >> 32), xl = (uint32_t)x;
-	uint32_t x32 = k ? (xl >> k) | (xh << (32 - k)) : xl;
-	uint32_t q = (uint32_t)(q_umul32(x32, r->y) >> 32);
-	int64_t rem = (int64_t)x - (int64_t)q_umul32(q, ub);
-	while (rem < 0) {
-		q--;
-		rem += ub;
-	}
-	while (rem >= (int64_t)ub) {
-		q++;
-		rem -= ub;
-	}
-	return neg ? -(scalar_t)q : (scalar_t)q;
+	return sc_div_prepared(a, r->b, r->ub, r->s, r->y);
 }
 #else
 struct sc_recip {

@@ -172,20 +172,20 @@ static inline uint32_t sc_recip_norm(uint32_t v)
 	return r > 0xffffffffu ? 0xffffffffu : (uint32_t)r;
 }
 
-/* |q| = floor((|a| 2^16 + floor(|b| / 2)) / |b|): round to nearest, ties away from zero.
- * No 64-bit division (a slow library loop on Cortex-M0): the quotient from the reciprocal
- * of |b| (sc_recip_norm), made exact by its remainder. */
-static inline scalar_t sc_div(scalar_t a, scalar_t b)
+/* |q| = floor((|a| 2^16 + floor(|b| / 2)) / |b|): round to nearest, ties away from zero,
+ * saturating, given ub = |b| and its reciprocal 1 / ub = y 2^(s - 63), s = q_clz32(ub),
+ * y = sc_recip_norm(ub << s) (0 when b is 0). The quotient from the reciprocal, made exact
+ * by its remainder. sc_div prepares the reciprocal on every call; sc_recip.h keeps it for a
+ * divisor that changes rarely. */
+static inline scalar_t sc_div_prepared(scalar_t a, scalar_t b, uint32_t ub, int s, uint32_t y)
 {
-	if (b == 0)
+	if (ub == 0u)
 		return a > 0 ? SC_MAX : (a < 0 ? SC_MAX_NEG : 0);
 	bool neg = (a < 0) != (b < 0);
-	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
 	uint64_t x = ((uint64_t)ua << 16) + (ub >> 1);        /* < 2^48 + 2^31 */
 	if ((x >> 31) >= ub)                                  /* quotient >= 2^31 */
 		return neg ? SC_MAX_NEG : SC_MAX;
-	int s = q_clz32(ub);
-	uint32_t y = sc_recip_norm(ub << s);                  /* 1 / |b| = y 2^(s - 63) */
 	/* x32 = floor(x / 2^k) with 2^k <= |b| < 2^(k + 1): below 2^32 as the quotient is below
 	 * 2^31, and dropping x's low k bits lowers the quotient by less than 1 */
 	int k = 31 - s;
@@ -203,6 +203,15 @@ static inline scalar_t sc_div(scalar_t a, scalar_t b)
 		r -= ub;
 	}
 	return neg ? -(scalar_t)q : (scalar_t)q;
+}
+
+/* a / b as sc_div_prepared defines it. No 64-bit division (a slow library loop on
+ * Cortex-M0): the reciprocal of |b| by sc_recip_norm. */
+static inline scalar_t sc_div(scalar_t a, scalar_t b)
+{
+	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	int s = q_clz32(ub);
+	return sc_div_prepared(a, b, ub, s, ub ? sc_recip_norm(ub << s) : 0u);
 }
 
 /* step of the digit-by-digit square root: the next two bits of the radicand */
