@@ -523,7 +523,12 @@ static void control_step(struct app *a, float dt)
 	struct pos_ctrl_output po = pos_ctrl_update(&a->pos, &pi);
 	if (guid_level_only(&a->guid, guid_mode_of(a->mode), gi.z_m))
 		po.roll_rad = po.pitch_rad = SC_ZERO;
-	struct quat q_sp = quat_from_euler(po.roll_rad, po.pitch_rad, a->guid.yaw_sp_rad);
+	if (!a->yaw_half_ok || a->guid.yaw_sp_rad != a->yaw_half_of) {
+		a->yaw_half_of = a->guid.yaw_sp_rad;
+		a->yaw_half = quat_yaw_half(a->yaw_half_of);
+		a->yaw_half_ok = true;
+	}
+	struct quat q_sp = quat_from_euler_yh(po.roll_rad, po.pitch_rad, a->yaw_half);
 	a->q_sp[0] = sc_to_float(q_sp.w);
 	a->q_sp[1] = sc_to_float(q_sp.x);
 	a->q_sp[2] = sc_to_float(q_sp.y);

@@ -77,6 +77,10 @@ struct app {
 	struct guid guid;
 	struct pos_ctrl_params pos;
 	float q_sp[4];
+	/* the set point's yaw and its half-angle trigonometry, kept while the yaw stays */
+	scalar_t yaw_half_of;
+	struct quat_yaw_half yaw_half;
+	bool yaw_half_ok;
 
 	/* control */
 	struct att_ctrl att;

@@ -33,6 +33,12 @@ struct quat quat_normalize(struct quat q)
 	scalar_t n2 = quat_norm2(q);
 	if (!(n2 > SC(1e-6)))
 		return quat_identity();
+#if OCTO_FIXED
+	/* sc_sqrt(n2) == SC(1) exactly when n2 is 1 or 1 + 2^-16 (sqrt(n2 2^16) in
+	 * [65535.5, 65536.5)): a unit quaternion skips the root */
+	if (n2 == SC(1) || n2 == SC(1) + 1)
+		return q;
+#endif
 	scalar_t n = sc_sqrt(n2);
 	if (n == SC(1))   /* already unit (Q16.16: to the LSB): the divisions would change nothing */
 		return q;
@@ -99,19 +105,32 @@ struct quat quat_from_rotvec(struct vec3 rotvec)
 	return quat_exp_half(vec3_scale(rotvec, SC(0.5)));
 }
 
-struct quat quat_from_euler(scalar_t roll, scalar_t pitch, scalar_t yaw)
+struct quat_yaw_half quat_yaw_half(scalar_t yaw)
 {
-	scalar_t hr = sc_mul(roll, SC(0.5)), hp = sc_mul(pitch, SC(0.5)), hy = sc_mul(yaw, SC(0.5));
+	scalar_t hy = sc_mul(yaw, SC(0.5));
+	struct quat_yaw_half yh = { sc_cos(hy), sc_sin(hy) };
+	return yh;
+}
+
+struct quat quat_from_euler_yh(scalar_t roll, scalar_t pitch, struct quat_yaw_half yh)
+{
+	scalar_t hr = sc_mul(roll, SC(0.5)), hp = sc_mul(pitch, SC(0.5));
 	scalar_t cr = sc_cos(hr), sr = sc_sin(hr);
 	scalar_t cp = sc_cos(hp), sp = sc_sin(hp);
-	scalar_t cy = sc_cos(hy), sy = sc_sin(hy);
-	/* Rz(yaw) Ry(pitch) Rx(roll) */
+	/* Rz(yaw) Ry(pitch) Rx(roll); the yaw-pitch products are shared by two components each */
+	scalar_t cycp = sc_mul(yh.c, cp), sysp = sc_mul(yh.s, sp);
+	scalar_t cysp = sc_mul(yh.c, sp), sycp = sc_mul(yh.s, cp);
 	struct quat q;
-	q.w = sc_add(sc_mul(sc_mul(cy, cp), cr), sc_mul(sc_mul(sy, sp), sr));
-	q.x = sc_sub(sc_mul(sc_mul(cy, cp), sr), sc_mul(sc_mul(sy, sp), cr));
-	q.y = sc_add(sc_mul(sc_mul(cy, sp), cr), sc_mul(sc_mul(sy, cp), sr));
-	q.z = sc_sub(sc_mul(sc_mul(sy, cp), cr), sc_mul(sc_mul(cy, sp), sr));
+	q.w = sc_add(sc_mul(cycp, cr), sc_mul(sysp, sr));
+	q.x = sc_sub(sc_mul(cycp, sr), sc_mul(sysp, cr));
+	q.y = sc_add(sc_mul(cysp, cr), sc_mul(sycp, sr));
+	q.z = sc_sub(sc_mul(sycp, cr), sc_mul(cysp, sr));
 	return quat_normalize(q);
+}
+
+struct quat quat_from_euler(scalar_t roll, scalar_t pitch, scalar_t yaw)
+{
+	return quat_from_euler_yh(roll, pitch, quat_yaw_half(yaw));
 }
 
 scalar_t quat_yaw(struct quat q)

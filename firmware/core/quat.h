@@ -69,6 +69,16 @@ struct quat quat_from_rotvec(struct vec3 rotvec);
 /* Euler Z-Y-X (roll, pitch, yaw in rad, see above) -> q_b2i; uses trig */
 struct quat quat_from_euler(scalar_t roll, scalar_t pitch, scalar_t yaw);
 
+/* cos and sin of half a yaw: a set point's yaw changes rarely, so its trigonometry can be
+ * kept between steps (quat_from_euler_yh) */
+struct quat_yaw_half {
+	scalar_t c, s;
+};
+struct quat_yaw_half quat_yaw_half(scalar_t yaw);
+
+/* quat_from_euler(roll, pitch, yaw) with yh = quat_yaw_half(yaw): the same quaternion */
+struct quat quat_from_euler_yh(scalar_t roll, scalar_t pitch, struct quat_yaw_half yh);
+
 /* q_b2i -> Euler Z-Y-X: e.x = roll in [-pi, pi], e.y = pitch in [-pi/2, pi/2],
  * e.z = yaw in [-pi, pi]; the asin argument is clamped to [-1, 1]; uses trig */
 struct vec3 quat_to_euler(struct quat q_b2i);
