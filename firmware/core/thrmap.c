@@ -11,13 +11,13 @@ void thrmap_init(struct thrmap *m, const struct thrmap_params *params)
 	for (unsigned j = 0; j < THRMAP_ROTORS; j++) {
 		scalar_t k = m->p.scale[j] == SC_ZERO ? SC(1) : sc_clamp(m->p.scale[j], SC(0.1), SC(4));
 		m->p.scale[j] = k;
-		m->inv_scale[j] = sc_div(SC(1), k);
+		m->g[j] = sc_gain_recip2(k, m->p.k_f_n);
 	}
 }
 
-scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped)
+/* T of u = f / k_f (the rest of thrmap_throttle) */
+static scalar_t throttle_of_u(const struct thrmap *m, scalar_t u, bool *clamped)
 {
-	scalar_t u = sc_div_r(f_n, &m->r_kf);
 	bool c = false;
 	if (!sc_isfinite(u)) { /* float build: NaN gives no thrust, +/-Inf the limits */
 		c = true;
@@ -43,6 +43,11 @@ scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped)
 	return t;
 }
 
+scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped)
+{
+	return throttle_of_u(m, sc_div_r(f_n, &m->r_kf), clamped);
+}
+
 scalar_t thrmap_thrust(const struct thrmap *m, scalar_t throttle)
 {
 	scalar_t t = sc_clamp(throttle, SC_ZERO, SC(1));
@@ -55,8 +60,9 @@ uint32_t thrmap_update(const struct thrmap *m, const scalar_t *f_n, scalar_t *th
 	uint32_t mask = 0;
 	for (size_t j = 0; j < n; j++) {
 		bool c = false;
-		scalar_t f = j < THRMAP_ROTORS ? sc_mul(f_n[j], m->inv_scale[j]) : f_n[j];
-		throttle_out[j] = thrmap_throttle(m, f, &c);
+		/* u = f / (scale k_f): one product by the prepared factor per rotor */
+		scalar_t u = j < THRMAP_ROTORS ? sc_mul_gain(f_n[j], &m->g[j]) : sc_div_r(f_n[j], &m->r_kf);
+		throttle_out[j] = throttle_of_u(m, u, &c);
 		if (c && j < 32)
 			mask |= (uint32_t)1 << j;
 	}

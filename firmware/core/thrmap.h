@@ -12,6 +12,7 @@
 #define OCTO_THRMAP_H
 
 #include "sc_recip.h"
+#include "scalar_ops.h"
 
 #include <stdint.h>
 
@@ -35,7 +36,7 @@ struct thrmap_params {
 struct thrmap {
 	struct thrmap_params p;
 	scalar_t one_minus_a; /* 1 - a */
-	scalar_t inv_scale[THRMAP_ROTORS]; /* 1 / scale */
+	struct sc_gain g[THRMAP_ROTORS]; /* 1 / (scale k_f): thrmap_update's f -> u, one product */
 	struct sc_recip r_kf; /* 1 / k_f_n (the same quotients as sc_div) */
 };
 
@@ -50,8 +51,10 @@ scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped);
 scalar_t thrmap_thrust(const struct thrmap *m, scalar_t throttle);
 
 /* n rotors: throttle_out[j] = thrmap_throttle(f_n[j] / scale[j]) (rotors beyond
- * THRMAP_ROTORS: scale 1); returns a bit mask of the
- * rotors j (bit j, j < 32) whose throttle was clamped. */
+ * THRMAP_ROTORS: scale 1), with u = f_n[j] / (scale[j] k_f) from one product by a factor
+ * prepared by thrmap_init (scalar_ops.h: rounded once, within 0.5 LSB of u + 2^-26 relative
+ * in the fixed build); returns a bit mask of the rotors j (bit j, j < 32) whose throttle was
+ * clamped. */
 uint32_t thrmap_update(const struct thrmap *m, const scalar_t *f_n, scalar_t *throttle_out, size_t n);
 
 #endif /* OCTO_THRMAP_H */

@@ -1,0 +1,59 @@
+/* scalar_ops.h: a product by a prepared factor 1 / (a b) against the exact quotient, with
+ * its rounding and saturation, in both builds */
+#include "unit.h"
+#include "unit_scalar.h"
+#include "scalar_ops.h"
+
+#include <math.h>
+
+#ifdef __arm__
+#define N_RAND 2000
+#else
+#define N_RAND 50000
+#endif
+
+/* random operands over the ranges of the throttle map (scale 0.1..4, k_f 1e-3..1000 N) and
+ * beyond, random x over the whole format */
+UNIT_TEST(sc_mul_gain_against_exact_quotient)
+{
+	struct unit_rng g = { 0x6a1dULL };
+	for (int i = 0; i < N_RAND; i++) {
+		double ad = exp(unit_rand_uniform(&g, log(0.05), log(8.0)));
+		double bd = exp(unit_rand_uniform(&g, log(1e-3), log(2000.0)));
+		scalar_t a = sc_from_float((float)ad), b = sc_from_float((float)bd);
+		double xd = unit_rand_uniform(&g, -1.0, 1.0) * exp(unit_rand_uniform(&g, log(1e-4), log(32767.0)));
+		scalar_t x = sc_from_float((float)xd);
+		struct sc_gain k = sc_gain_recip2(a, b);
+		double q = d(x) / (d(a) * d(b));   /* the exact quotient of the operands */
+		double r = d(sc_mul_gain(x, &k));
+#if OCTO_FIXED
+		if (fabs(q) >= 32767.0) {          /* saturates, with the sign of x */
+			CHECK(r == (x < 0 ? d(SC_MAX_NEG) : d(SC_MAX)) || fabs(r - q) <= 0.5 / 65536 + 4e-8 * fabs(q));
+			continue;
+		}
+		/* rounded to nearest, the factor within 2^-26 */
+		if (!(fabs(r - q) <= 0.5 / 65536 + 2e-8 * fabs(q))) {
+			unit_fail(u, __FILE__, __LINE__, "x %d a %d b %d: %.9g, exact %.9g", (int)x, (int)a,
+				  (int)b, r, q);
+			return;
+		}
+#else
+		CHECK_REL(r, q, 3e-7);
+#endif
+	}
+#if OCTO_FIXED
+	/* exact cases: x = a b gives 1, 0 gives 0, the extremes saturate with their sign */
+	struct sc_gain k = sc_gain_recip2(SC(1), SC(28));
+	CHECK(sc_mul_gain(SC(28), &k) == SC(1));
+	CHECK(sc_mul_gain(SC(14), &k) == SC(0.5));
+	CHECK(sc_mul_gain(SC(-14), &k) == SC(-0.5));
+	CHECK(sc_mul_gain(0, &k) == 0);
+	struct sc_gain big = sc_gain_recip2(SC(0.01), SC(0.001));   /* 1e5 */
+	CHECK(sc_mul_gain(SC(1), &big) == SC_MAX);
+	CHECK(sc_mul_gain(SC(-1), &big) == SC_MAX_NEG);
+	CHECK(sc_mul_gain(INT32_MIN, &big) == SC_MAX_NEG);
+	/* the largest operand: 2147483647 / 28 = 76695844.54, within 0.5 + 2^-26 of it x 2^31 / 28 */
+	scalar_t top = sc_mul_gain(INT32_MAX, &k);
+	CHECK(top >= 76695843 && top <= 76695846);
+#endif
+}
