@@ -126,15 +126,19 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		s->mem_s = s->p.t_max_s;
 	}
 	s->lambda = sc_sub(SC(1.0), sc_div(dt_s, s->mem_s));
-	/* RLS with forgetting */
-	scalar_t pphi = sc_mul(s->P, phi);
-	scalar_t den = sc_add(s->lambda, sc_mul(phi, pphi));
-	scalar_t K = sc_div(pphi, den);
+	/* RLS with forgetting, scalar: with den = lambda + phi^2 P, the update
+	 * P' = (P - K phi P) / lambda, K = P phi / den is P' = P / den and K = P' phi (one
+	 * quotient) */
+	scalar_t phi2 = sc_sq(phi);
+	scalar_t den = sc_add(s->lambda, sc_mul(phi2, s->P));
+	s->P = sc_div(s->P, den);
+	scalar_t K = sc_mul(s->P, phi);
 	s->k = sc_add(s->k, sc_mul(K, e));
-	s->P = sc_div(sc_sub(s->P, sc_mul(K, pphi)), s->lambda);
-	/* no wind-up: P at most its steady state for the shortest memory and this regressor */
-	scalar_t p_max = sc_div(s->dt_tmin, sc_sq(phi));
-	s->P = sc_clamp(s->P, SC_EPS, p_max);
+	/* no wind-up: P at most its steady state for the shortest memory and this regressor,
+	 * dt_tmin / phi^2 (its quotient only when the bound is reached) */
+	if (sc_mul(s->P, phi2) > s->dt_tmin)
+		s->P = sc_div(s->dt_tmin, phi2);
+	s->P = sc_max(s->P, SC_EPS);
 	s->updates++;
 	return true;
 }
