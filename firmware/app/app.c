@@ -580,20 +580,22 @@ static void control_step(struct app *a, float dt)
 	}
 
 	/* allocation and throttle map, in scalars (the same float operations in the float
-	 * build; integer ones in the fixed build) */
-	scalar_t demand[MIXER_N_AXES] = {
-		sc_add(fz, sc_from_float(a->exp_out.f_delta)),
-		sc_add(tau.x, sc_from_float(a->exp_out.tau_delta[0])),
-		sc_add(tau.y, sc_from_float(a->exp_out.tau_delta[1])),
-		sc_add(tau.z, sc_from_float(a->exp_out.tau_delta[2])),
-	};
+	 * build; integer ones in the fixed build); outside an experiment the excitation is zero
+	 * (cleared above) and adds nothing */
+	bool excited = a->mode == APP_EXPERIMENT;
+	scalar_t demand[MIXER_N_AXES] = {fz, tau.x, tau.y, tau.z};
+	if (excited) {
+		demand[0] = sc_add(demand[0], sc_from_float(a->exp_out.f_delta));
+		for (int i = 0; i < 3; i++)
+			demand[i + 1] = sc_add(demand[i + 1], sc_from_float(a->exp_out.tau_delta[i]));
+	}
 	mixer_update(&a->mix, demand, &a->mix_out);
 	scalar_t thr[HAL_ROTORS];
 	a->thr_clamped = thrmap_update(&a->map, a->mix_out.f_n, thr, HAL_ROTORS);
 	scalar_t thr_max = sc_from_float(p->mot_thr_max);
 	for (int j = 0; j < HAL_ROTORS; j++) {
 		a->rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
-		scalar_t t = sc_add(thr[j], sc_from_float(a->exp_out.thr_delta[j]));
+		scalar_t t = excited ? sc_add(thr[j], sc_from_float(a->exp_out.thr_delta[j])) : thr[j];
 		a->thr[j] = sc_to_float(sc_clamp(sc_isfinite(t) ? t : SC_ZERO, SC_ZERO, thr_max));
 	}
 }
@@ -720,19 +722,21 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	float dt = 0.0f;
 	bool stepped = false;
 	if (complete) {
-		double gap = a->have_step ? f->t_s - a->t_prev : (double)FIRST_DT_S;
-		if (gap > 0.0) {
-			bool missing = a->have_step && gap > (double)a->p.fs_link_to;
+		/* the difference of the plant times in double (they grow large), the rest in
+		 * float: one conversion instead of a double comparison each */
+		float gap = a->have_step ? (float)(f->t_s - a->t_prev) : FIRST_DT_S;
+		if (gap > 0.0f) {
+			bool missing = a->have_step && gap > a->p.fs_link_to;
 			if (missing) {
 				/* frames missing in plant time (lockstep bursts, reload) */
-				say_gap(a, (float)gap, now);
+				say_gap(a, gap, now);
 				abort_experiment(a, "X-Plane frames missing");
-				if (gap > (double)a->p.fs_land_after && app_flying(a) && a->mode != APP_LAND) {
+				if (gap > a->p.fs_land_after && app_flying(a) && a->mode != APP_LAND) {
 					char why[8];
 					app_cmd_land(a, APP_ORIGIN_NONE, why, sizeof why);
 				}
 			}
-			dt = gap > (double)MAX_DT_S ? MAX_DT_S : (float)gap;
+			dt = gap > MAX_DT_S ? MAX_DT_S : gap;
 			/* the frame period, for the experiments (a step after lost frames is a
 			 * multiple of it): a shorter step replaces it, a near one refines it */
 			if (a->have_step && (!(a->dt_frame > 0.0f) || dt < 0.75f * a->dt_frame))

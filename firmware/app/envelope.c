@@ -54,7 +54,7 @@ static void kft_init(struct app *a)
 {
 	struct kf_track_params kp = kft_params(&a->p);
 	kf_track_init(&a->env.kft, &kp, sc_from_float(a->p.veh_kf));
-	a->env.kft_pub_t = 0.0;
+	a->env.kft_pub_next_t = 1.0;
 	a->env.kft_votes = 0;
 }
 
@@ -121,9 +121,9 @@ static void kft_step(struct app *a, float dt, bool up)
 	/* The KFT_* parameters once a second of plant time; announced to the ground station
 	 * (PARAM_VALUE, NAMED_VALUE_FLOAT) at most once a second of wall time, whose rates are
 	 * wall-clock: a fast lockstep run must not flood the link. */
-	if (!t->started || a->fr.t_s - e->kft_pub_t < 1.0)
+	if (!t->started || a->fr.t_s < e->kft_pub_next_t)
 		return;
-	e->kft_pub_t = a->fr.t_s;
+	e->kft_pub_next_t = a->fr.t_s + 1.0;
 	uint64_t now_us = hal_wall_us(a->hal);
 	bool announce = now_us - e->kft_pub_wall_us >= 1000000u;
 	if (announce)
@@ -170,7 +170,8 @@ scalar_t envelope_hover_f(struct app *a, float dt, scalar_t cos_tilt)
 	 * scalars: the same float operations in the float build, integer ones in the fixed */
 	scalar_t kf8 = sc_mul(SC(8.0), sc_from_float(p->veh_kf));
 	scalar_t s_u = sc_div(a->mix_out.achieved[0], kf8);
-	bool up = z - sc_to_float(a->guid.z_ground_m) > AIRBORNE_M;
+	scalar_t s_z = sc_from_float(z);
+	bool up = sc_sub(s_z, a->guid.z_ground_m) > SC(AIRBORNE_M);
 	bool learn = up && (a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_LAND);
 	scalar_t s_vz = sc_from_float(vz), s_c = cos_tilt;
 	scalar_t s_dt = sc_from_float(dt);
@@ -183,7 +184,8 @@ scalar_t envelope_hover_f(struct app *a, float dt, scalar_t cos_tilt)
 	/* a climb commanded that has not lifted off: the hover throttle is higher */
 	if (a->mode == APP_TAKEOFF && !up && sc_to_float(a->guid.z_sp_m) > z + 0.05f)
 		hover_est_spool(&e->hov, s_dt);
-	return sc_mul(kf8, hover_est_u(&e->hov));
+	/* 8 k_f u_h = 8 k_f / theta (hover_est.h): one rounding */
+	return sc_div(kf8, e->hov.theta);
 }
 
 bool envelope_hover_ready(const struct app *a)

@@ -31,7 +31,7 @@ struct envelope {
 	float phase_s;      /* time in the current take-off or landing */
 	float hold_s;       /* time in the take-off's hold entry (set point at the target) */
 	struct kf_track kft;/* k_f tracked in HOLD and experiments */
-	double kft_pub_t;   /* plant time of the last KFT_* publication */
+	double kft_pub_next_t; /* plant time of the next KFT_* publication (1 s after the last) */
 	uint64_t kft_pub_wall_us; /* wall time of it: a fast lockstep run must not flood the link */
 	uint32_t kft_votes; /* consecutive publications that called for a VEH_KF refresh */
 	uint8_t cmd;        /* enum app_command that started the phase, for its final result */
