@@ -1,6 +1,8 @@
 /* kf_track.c - see kf_track.h for the model, the memory and the units. */
 #include "kf_track.h"
 
+#include "scalar_ops.h"
+
 struct kf_track_params kf_track_params_default(void)
 {
 	struct kf_track_params p;
@@ -148,6 +150,6 @@ scalar_t kf_track_sd(const struct kf_track *s)
 	if (!s->started)
 		return SC_ZERO;
 	/* sigma (N) = s y ~ s k phi; var(k) = sigma^2 P / (1 + lambda) */
-	scalar_t sigma = sc_mul(sc_div(sc_sqrt(s->s2_pct2), SC(100.0)), sc_mul(s->k, s->phi_f));
+	scalar_t sigma = sc_mul(sc_div_int(sc_sqrt(s->s2_pct2), 100u), sc_mul(s->k, s->phi_f));
 	return sc_mul(sigma, sc_sqrt(sc_div(s->P, sc_add(SC(1.0), s->lambda))));
 }

@@ -1,6 +1,8 @@
 /* quat.c - see quat.h for the conventions (q_b2i, Hamilton, Z-Y-X Euler). */
 #include "quat.h"
 
+#include "scalar_ops.h"
+
 struct quat quat_identity(void)
 {
 	struct quat q = { SC(1), SC_ZERO, SC_ZERO, SC_ZERO };
@@ -108,15 +110,17 @@ struct quat quat_from_rotvec(struct vec3 rotvec)
 struct quat_yaw_half quat_yaw_half(scalar_t yaw)
 {
 	scalar_t hy = sc_mul(yaw, SC(0.5));
-	struct quat_yaw_half yh = { sc_cos(hy), sc_sin(hy) };
+	struct quat_yaw_half yh;
+	sc_sincos(hy, &yh.s, &yh.c);
 	return yh;
 }
 
 struct quat quat_from_euler_yh(scalar_t roll, scalar_t pitch, struct quat_yaw_half yh)
 {
 	scalar_t hr = sc_mul(roll, SC(0.5)), hp = sc_mul(pitch, SC(0.5));
-	scalar_t cr = sc_cos(hr), sr = sc_sin(hr);
-	scalar_t cp = sc_cos(hp), sp = sc_sin(hp);
+	scalar_t cr, sr, cp, sp;
+	sc_sincos(hr, &sr, &cr);
+	sc_sincos(hp, &sp, &cp);
 	/* Rz(yaw) Ry(pitch) Rx(roll); the yaw-pitch products are shared by two components each */
 	scalar_t cycp = sc_mul(yh.c, cp), sysp = sc_mul(yh.s, sp);
 	scalar_t cysp = sc_mul(yh.c, sp), sycp = sc_mul(yh.s, cp);
@@ -156,6 +160,7 @@ struct vec3 quat_to_euler(struct quat q)
 struct vec3 quat_error_b(struct quat q_sp_b2i, struct quat q_b2i)
 {
 	struct quat e = quat_mul(quat_conj(q_b2i), q_sp_b2i);
-	scalar_t k = e.w < SC_ZERO ? SC(-2) : SC(2);
-	return vec3_make(sc_mul(k, e.x), sc_mul(k, e.y), sc_mul(k, e.z));
+	/* 2 e (or -2 e: the shorter way round) as sums, the same as the products by +/-2 */
+	struct vec3 v = vec3_make(sc_add(e.x, e.x), sc_add(e.y, e.y), sc_add(e.z, e.z));
+	return e.w < SC_ZERO ? vec3_make(sc_neg(v.x), sc_neg(v.y), sc_neg(v.z)) : v;
 }

@@ -2,6 +2,12 @@
  * scalar_ops.h - scalar operations of the 90 Hz path beyond scalar.h: a product by a factor
  * prepared when parameters change, in place of a division on every step.
  *
+ * sc_sincos(a, &s, &c) is sc_sin(a) and sc_cos(a), bit for bit, with the angle reduced once
+ * in the fixed build.
+ *
+ * sc_div_int(a, n) is sc_div(a, SC(n)) bit for bit for a small integer n > 0 (a constant such
+ * as 100), by one integer division in the fixed build instead of a reciprocal.
+ *
  * sc_gain_recip2(a, b) prepares g = 1 / (a b) for a, b > 0; sc_mul_gain(x, &g) returns x g.
  *   - float build: g = 1 / (a b) as a float, x g one product (rounding-level apart from
  *     x / (a b)).
@@ -19,6 +25,26 @@
 #include "scalar.h"
 
 #if OCTO_FIXED
+static inline void sc_sincos(scalar_t a, scalar_t *s, scalar_t *c)
+{
+	uint32_t p = sc_turns(a);
+	*s = sc_sin_turn(p);
+	*c = sc_sin_turn(p + 0x40000000u);
+}
+
+/* sc_div(a, n 2^16) = floor((|a| 2^16 + n 2^15) / (n 2^16)) = floor((2 |a| + n) / (2 n))
+ * = q + (2 r >= n) with |a| = q n + r: one 32-bit division, signed like a, saturating like
+ * sc_div (only INT32_MIN / 1 does); n in [1, 2^15) */
+static inline scalar_t sc_div_int(scalar_t a, uint32_t n)
+{
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+	uint32_t q = ua / n, r = ua - q * n;
+	q += 2u * r >= n ? 1u : 0u;
+	if (q > (uint32_t)INT32_MAX)
+		return a < 0 ? SC_MAX_NEG : SC_MAX;
+	return a < 0 ? -(scalar_t)q : (scalar_t)q;
+}
+
 struct sc_gain {
 	uint32_t y;   /* mantissa: g = y 2^-sh in Q16.16 units */
 	uint32_t sh;  /* in [1, 63] */
@@ -57,6 +83,14 @@ static inline scalar_t sc_mul_gain(scalar_t x, const struct sc_gain *g)
 	return x < 0 ? -(scalar_t)r : (scalar_t)r;
 }
 #else
+static inline void sc_sincos(scalar_t a, scalar_t *s, scalar_t *c)
+{
+	*s = sc_sin(a);
+	*c = sc_cos(a);
+}
+
+static inline scalar_t sc_div_int(scalar_t a, uint32_t n) { return sc_div(a, (scalar_t)n); }
+
 struct sc_gain {
 	scalar_t g;
 };

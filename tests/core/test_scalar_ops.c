@@ -57,3 +57,32 @@ UNIT_TEST(sc_mul_gain_against_exact_quotient)
 	CHECK(top >= 76695843 && top <= 76695846);
 #endif
 }
+
+/* sc_sincos is sc_sin and sc_cos; sc_div_int(a, n) is sc_div(a, SC(n)): bit for bit */
+UNIT_TEST(sc_sincos_and_div_int_bit_for_bit)
+{
+	struct unit_rng g = { 0x51c0ULL };
+	static const uint32_t ns[] = { 1u, 2u, 3u, 7u, 100u, 1000u, 32767u };
+	for (int i = 0; i < N_RAND; i++) {
+		scalar_t a = sc_from_float((float)(unit_rand_uniform(&g, -1.0, 1.0) *
+						   exp(unit_rand_uniform(&g, log(1e-4), log(32767.0)))));
+		scalar_t sn, cs;
+		sc_sincos(a, &sn, &cs);
+		if (sn != sc_sin(a) || cs != sc_cos(a)) {
+			unit_fail(u, __FILE__, __LINE__, "sc_sincos(%.9g)", (double)sc_to_float(a));
+			return;
+		}
+		uint32_t n = ns[i % (int)(sizeof ns / sizeof ns[0])];
+		if (sc_div_int(a, n) != sc_div(a, sc_from_int((int32_t)n))) {
+			unit_fail(u, __FILE__, __LINE__, "sc_div_int(%.9g, %u)", (double)sc_to_float(a), (unsigned)n);
+			return;
+		}
+	}
+#if OCTO_FIXED
+	/* the extremes and the ties (2 r = n) */
+	static const int32_t v[] = { 0, 1, -1, 50, -50, 150, 49, 51, INT32_MAX, -INT32_MAX, INT32_MIN, 65536 };
+	for (size_t i = 0; i < sizeof v / sizeof v[0]; i++)
+		for (size_t j = 0; j < sizeof ns / sizeof ns[0]; j++)
+			CHECK(sc_div_int(v[i], ns[j]) == sc_div(v[i], sc_from_int((int32_t)ns[j])));
+#endif
+}
