@@ -1,6 +1,8 @@
 /* hover_est.c - see hover_est.h for the model, the filter and the units. */
 #include "hover_est.h"
 
+#include "scalar_ops.h"
+
 #define P_MAX_PCT2 SC(10000.0) /* sd 100 %: what the filter starts from at most */
 
 struct hover_est_params hover_est_params_default(void)
@@ -108,8 +110,10 @@ bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t
 	if (!(y_hat > sc_mul(SC(0.05), s->p.g_mps2)))
 		return false;   /* (almost) no thrust: nothing to learn */
 	scalar_t y = sc_add(a_f, s->p.g_mps2);
-	scalar_t e_pct = sc_mul(SC(100.0), sc_sub(sc_div(y, y_hat), SC(1.0)));
-	scalar_t r_sd = sc_div(sc_mul(SC(100.0), s->p.sigma_acc), y_hat);
+	/* two quotients by y^: its reciprocal prepared once (scalar_ops.h) */
+	struct sc_gain inv_y_hat = sc_gain_recip2(y_hat, SC(1.0));
+	scalar_t e_pct = sc_mul(SC(100.0), sc_sub(sc_mul_gain(y, &inv_y_hat), SC(1.0)));
+	scalar_t r_sd = sc_mul_gain(sc_mul(SC(100.0), s->p.sigma_acc), &inv_y_hat);
 	scalar_t r = sc_sq(r_sd);
 	scalar_t pr = sc_add(s->p_pct2, r);
 	if (sc_sq(e_pct) > sc_mul(sc_sq(s->p.gate_sigma), pr)) {
@@ -126,10 +130,12 @@ bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t
 	} else {
 		s->gated_s = SC_ZERO;
 	}
-	scalar_t k = sc_div(s->p_pct2, pr);
+	/* two quotients by P + r: its reciprocal prepared once */
+	struct sc_gain inv_pr = sc_gain_recip2(pr, SC(1.0));
+	scalar_t k = sc_mul_gain(s->p_pct2, &inv_pr);
 	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), sc_mul(k, sc_div_r(e_pct, &s->r_100))));
 	s->theta = clamp_theta(s, th);
-	s->p_pct2 = sc_max(sc_div(sc_mul(s->p_pct2, r), pr), SC_EPS);
+	s->p_pct2 = sc_max(sc_mul_gain(sc_mul(s->p_pct2, r), &inv_pr), SC_EPS);
 	s->updates++;
 	return true;
 }
@@ -152,7 +158,7 @@ scalar_t hover_est_u(const struct hover_est *s)
 scalar_t hover_est_sd(const struct hover_est *s)
 {
 	/* relative sd of theta = relative sd of u_h (first order) */
-	return sc_mul(hover_est_u(s), sc_div(sc_sqrt(s->p_pct2), SC(100.0)));
+	return sc_mul(hover_est_u(s), sc_div_int(sc_sqrt(s->p_pct2), 100u));
 }
 
 bool hover_est_converged(const struct hover_est *s, scalar_t rel_sd)
