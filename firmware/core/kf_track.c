@@ -46,15 +46,18 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 }
 
 /* x^(1/3) for x > 0 by at most 6 steps of Newton's iteration from a warm start (the last
- * memory). A step that leaves r unchanged ends it: every further step would repeat it. */
+ * memory). A step that moves r by at most SC_EPS (1 LSB in the fixed build) ends it: the
+ * iteration has converged to the resolution, and the warm start of a slowly changing
+ * memory needs one step, not a second that would only confirm it. */
 static scalar_t cbrt_warm(const struct kf_track *s, scalar_t x, scalar_t guess)
 {
 	scalar_t r = guess > SC_ZERO ? guess : SC(1.0);
 	for (int i = 0; i < 6; i++) {
 		scalar_t n = sc_div_r(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), &s->r_three);
-		if (n == r)
-			break;
+		bool done = sc_abs(sc_sub(n, r)) <= SC_EPS;
 		r = n;
+		if (done)
+			break;
 	}
 	return r;
 }
