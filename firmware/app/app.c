@@ -606,7 +606,8 @@ static void fill_log(struct app *a, bool stepped, float dt)
 {
 	struct app_log_frame *l = &a->log;
 	const struct hal_sensor_frame *f = &a->fr;
-	memset(l, 0, sizeof *l);
+	/* every field is set below (the platform serialises the record field by field, so
+	 * padding is not cleared on every frame) */
 	l->seq = f->seq;
 	l->t = f->t_s;
 	l->dt = stepped ? dt : 0.0f;
@@ -653,6 +654,8 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	if (a->env.kft.started) {
 		l->kft = sc_to_float(a->env.kft.k);
 		l->kft_sd = sc_to_float(kf_track_sd(&a->env.kft));
+	} else {
+		l->kft = l->kft_sd = 0.0f;
 	}
 }
 
