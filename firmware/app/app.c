@@ -546,7 +546,7 @@ static void control_step(struct app *a, float dt)
 					sc_from_float(f->rate_b_rps[2])),
 		.inertia_kgm2 = vec3_make(sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy),
 					  sc_from_float(p->veh_izz)),
-		.dt_s = sc_from_float(dt),
+		.dt_s = gi.dt_s,
 		.alloc_short_pos = (uint8_t)(short_pos >> 1),
 		.alloc_short_neg = (uint8_t)(short_neg >> 1),
 	};

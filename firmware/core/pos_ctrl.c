@@ -14,8 +14,10 @@ struct pos_ctrl_params pos_ctrl_params_default(void)
 void pos_ctrl_heading(struct quat q, scalar_t *c, scalar_t *s)
 {
 	/* body X axis in S_I: [1 - 2 (y^2 + z^2), 2 (x y + w z), ...] */
-	scalar_t hx = sc_sub(SC(1), sc_mul(SC(2), sc_add(sc_sq(q.y), sc_sq(q.z))));
-	scalar_t hy = sc_mul(SC(2), sc_add(sc_mul(q.x, q.y), sc_mul(q.w, q.z)));
+	/* the factors 2 as sums: the same values as the products */
+	scalar_t yz = sc_add(sc_sq(q.y), sc_sq(q.z)), xy = sc_add(sc_mul(q.x, q.y), sc_mul(q.w, q.z));
+	scalar_t hx = sc_sub(SC(1), sc_add(yz, yz));
+	scalar_t hy = sc_add(xy, xy);
 	scalar_t n = sc_sqrt(sc_add(sc_sq(hx), sc_sq(hy)));
 	if (!(n > SC(1e-3))) {
 		*c = SC(1);
