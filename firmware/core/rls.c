@@ -121,6 +121,12 @@ static inline rls_dot_t dot_mac_par(rls_dot_t s, rls_par_t t, rls_sig_t x)
 {
 	return q_add64(s, est_mul64_32c(t, x, QF_PAR_FRAC + QF_SIG_FRAC - 2 * QF_SIG_FRAC));
 }
+/* dot_mac_par(DOT_ZERO, t, x): the product alone (it is never INT64_MIN, which the add
+ * would have turned into -INT64_MAX) */
+static inline rls_dot_t dot_of_par(rls_par_t t, rls_sig_t x)
+{
+	return est_mul64_32c(t, x, QF_PAR_FRAC + QF_SIG_FRAC - 2 * QF_SIG_FRAC);
+}
 static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return q_add64(a, -b); }
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return est_sat_shr64c(s, QF_SIG_FRAC); }
 static inline scalar_t sc_of_par(rls_par_t t, int shift) { return q_sat32(est_scale64(t, QF_SC_FRAC - QF_PAR_FRAC + shift)); }
@@ -143,6 +149,8 @@ static inline bool acc_ok(rls_acc_t x) { (void)x; return true; }
 static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return est_scale32(x, QF_SIG_FRAC - QF_SC_FRAC - shift); }
 static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return q_scale32(x, QF_SC_FRAC - QF_SIG_FRAC + shift); }
 static inline rls_acc_t phi2_of_sc(scalar_t x) { return q_smul32(x, x); } /* Q32 */
+/* |phi|^2 is needed for the gate only (|phi|^2 >= 0 passes a zero phi_min) */
+static inline bool phi2_needed(const struct rls *r) { return r->phi_min2 > 0; }
 #else
 #define SIG_ZERO 0.0f
 #define ACC_ZERO 0.0f
@@ -196,6 +204,7 @@ typedef float rls_dot_t;
 static inline rls_dot_t dot_of_sig(rls_sig_t x) { return x; }
 static inline rls_dot_t dot_mac(rls_dot_t s, rls_sig_t a, rls_sig_t b) { return s + a * b; }
 static inline rls_dot_t dot_mac_par(rls_dot_t s, rls_par_t t, rls_sig_t x) { return s + x * t; }
+static inline rls_dot_t dot_of_par(rls_par_t t, rls_sig_t x) { return DOT_ZERO + x * t; }
 static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return a - b; }
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return s; }
 static inline scalar_t sc_of_par(rls_par_t t, int shift) { return shift ? t * sc_pow2f(shift) : t; }
@@ -211,6 +220,8 @@ static inline bool acc_ok(rls_acc_t x) { return isfinite(x); }
 static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return shift ? x * sc_pow2f(-shift) : x; }
 static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return shift ? x * sc_pow2f(shift) : x; }
 static inline rls_acc_t phi2_of_sc(scalar_t x) { return x * x; }
+/* also for the overflow check below */
+static inline bool phi2_needed(const struct rls *r) { (void)r; return true; }
 #endif
 
 /* ---------------------------------------------------------------- the update */
@@ -327,8 +338,8 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 	for (unsigned i = 0; i < n; i++)
 		gain[i] = gain_of(b[i], rc);
 	for (unsigned o = 0; ok && o < no; o++) {
-		rls_dot_t yhat = DOT_ZERO;
-		for (unsigned i = 0; i < n; i++)
+		rls_dot_t yhat = dot_of_par(r->theta[o][0], phi[0]);
+		for (unsigned i = 1; i < n; i++)
 			yhat = dot_mac_par(yhat, r->theta[o][i], phi[i]);
 		e[o] = sig_of_dot(dot_sub(dot_of_sig(y[o]), yhat));
 		for (unsigned i = 0; i < n; i++) {
@@ -421,7 +432,8 @@ enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y
 			return RLS_REJECTED;
 		}
 		pn[i] = sig_of_sc(phi[i], r->cfg.phi_shift[i]);
-		phi2 = acc_add(phi2, phi2_of_sc(phi[i]));
+		if (phi2_needed(r))
+			phi2 = acc_add(phi2, phi2_of_sc(phi[i]));
 	}
 	for (unsigned o = 0; o < r->cfg.n_outputs; o++) {
 		if (!sc_isfinite(y[o])) {
