@@ -34,6 +34,57 @@ static uint32_t xorshift32(uint32_t *s)
 
 /* sin(2 pi phase / 2^32): quarter-wave symmetry, then the odd Taylor polynomial of
  * sin(pi/2 x) to x^9 (error < 4e-6) on x in [0, 1] with 15-bit resolution of x. */
+#if OCTO_FIXED
+#if defined(__GNUC__)
+#define EXC_INLINE static inline __attribute__((always_inline))
+#else
+#define EXC_INLINE static inline
+#endif
+/* x y 2^-16 rounded to nearest for 0 <= x <= 2^16 and 0 <= y < 2^17 (Q16.16): what sc_mul
+ * gives for these operands, in a 16 x 16 product and an add (no sign, carry or saturation
+ * case can arise). Every operand of the sine's polynomial is of this kind. */
+EXC_INLINE uint32_t ms_mul(uint32_t x, uint32_t y)
+{
+	if (x >> 16)   /* x = 1 */
+		return y;
+	return ((x * (y & 0xffffu) + 0x8000u) >> 16) + ((y >> 16) ? x : 0u);
+}
+
+/* the polynomial below in unsigned Q16.16: x and x^2 in [0, 1], and each Horner value
+ * c_k - x^2 p positive and below 1.571 (the coefficients fall faster than x^2 can grow
+ * them), so that each sc_mul and sc_sub of the float build's form is ms_mul and a plain
+ * subtraction, bit for bit */
+EXC_INLINE scalar_t excite_sin(uint32_t phase)
+{
+	uint32_t quadrant = phase >> 30;
+	uint32_t x = ((phase & 0x3FFFFFFFu) >> 15) << 1; /* [0, 32767] / 32768 in Q16.16 */
+	if (quadrant & 1u)
+		x = (uint32_t)SC(1) - x;
+	uint32_t x2 = ms_mul(x, x);
+	uint32_t p = (uint32_t)SC(0.0046817541) - ms_mul(x2, (uint32_t)SC(0.0001604411));
+	p = (uint32_t)SC(0.0796926262) - ms_mul(x2, p);
+	p = (uint32_t)SC(0.6459640975) - ms_mul(x2, p);
+	p = (uint32_t)SC(1.5707963268) - ms_mul(x2, p);
+	uint32_t s = ms_mul(x, p);
+	if (s > (uint32_t)SC(1))
+		s = (uint32_t)SC(1);
+	return (quadrant & 2u) ? -(scalar_t)s : (scalar_t)s;
+}
+
+/* normalised multisine sum(sin(phase_k)) / N at the current phases: the sum of N values
+ * within +/-1 cannot saturate, and sc_div's quotient by the integer N, round(|sum| / N) with
+ * ties away from zero, is floor((2 |sum| + N) / (2 N)) with the sum's sign: one integer
+ * division */
+static scalar_t excite_ms_raw(const struct excite *e)
+{
+	int32_t sum = 0;
+	uint32_t n = e->p.ms_count;
+	for (uint32_t k = 0; k < n; k++)
+		sum += excite_sin(e->phase[k]);
+	uint32_t q = (2u * (uint32_t)(sum < 0 ? -sum : sum) + n) / (2u * n);
+	return sum < 0 ? -(scalar_t)q : (scalar_t)q;
+}
+#else
 static scalar_t excite_sin(uint32_t phase)
 {
 	uint32_t quadrant = phase >> 30;
@@ -58,6 +109,7 @@ static scalar_t excite_ms_raw(const struct excite *e)
 		sum = sc_add(sum, excite_sin(e->phase[k]));
 	return sc_div(sum, sc_from_int((int32_t)e->p.ms_count));
 }
+#endif
 
 static void excite_ms_step(struct excite *e)
 {
@@ -129,7 +181,8 @@ scalar_t excite_update(struct excite *e)
 			scalar_t u = sc_div(sc_from_int(2 * v - 32767), sc_from_int(32767));
 			e->value = sc_mul(a, u);
 		}
-		e->count = (e->count + 1u) % p->clock_div;
+		if (++e->count >= p->clock_div)   /* count < clock_div: no division */
+			e->count = 0;
 		y = e->value;
 		break;
 	case EXCITE_PRBS:
@@ -140,7 +193,8 @@ scalar_t excite_update(struct excite *e)
 				e->lfsr ^= e->lfsr_taps;
 			e->value = bit ? a : sc_neg(a);
 		}
-		e->count = (e->count + 1u) % p->clock_div;
+		if (++e->count >= p->clock_div)
+			e->count = 0;
 		y = e->value;
 		break;
 	case EXCITE_MULTISINE:
@@ -182,8 +236,9 @@ void excite_null_pattern(unsigned k, scalar_t out[EXCITE_ROTORS])
 		{SC(0), SC(1), SC(0), SC(-1), SC(0), SC(1), SC(0), SC(-1)},
 		{SC(1), SC(1), SC(-1), SC(-1), SC(1), SC(1), SC(-1), SC(-1)},
 	};
+	const scalar_t *src = k < EXCITE_NULL_PATTERNS ? pat[k] : NULL;
 	for (unsigned j = 0; j < EXCITE_ROTORS; j++)
-		out[j] = k < EXCITE_NULL_PATTERNS ? pat[k][j] : SC_ZERO;
+		out[j] = src ? src[j] : SC_ZERO;
 }
 
 scalar_t excite_offset_level(uint32_t frame, uint32_t seg_frames)

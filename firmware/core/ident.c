@@ -97,8 +97,18 @@ void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS],
 void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTORS],
 			     const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3])
 {
-	scalar_t w[MIXER_N_AXES];
-	mixer_wrench(m, f, w);
+	/* roll and pitch: rows 1 and 2 of mixer_wrench's wrench, by its operations in its order
+	 * (the same values, bit for bit: tests/core/test_ident_inertia_accept.c), without the
+	 * thrust and yaw rows it would form too */
+	scalar_t u[IDENT_ROTORS];
+	for (int j = 0; j < IDENT_ROTORS; j++)
+		u[j] = m->p.scale[j] == SC(1) ? f[j] : sc_div(f[j], m->p.scale[j]);
+	for (int i = 1; i <= 2; i++) {
+		scalar_t s = SC_ZERO;
+		for (int j = 0; j < IDENT_ROTORS; j++)
+			s = sc_mac(m->gn[i][j], u[j], s);
+		tau_out[i - 1] = sc_div(s, m->row_div[i]);
+	}
 	scalar_t tz = SC_ZERO;
 	for (int j = 0; j < IDENT_ROTORS; j++) {
 		scalar_t g = m->gn[3][j];   /* row-scaled Gamma: its sign is the yaw sign */
@@ -107,8 +117,6 @@ void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTOR
 		else if (g < SC_ZERO)
 			tz = sc_sub(tz, tm[j]);
 	}
-	tau_out[0] = w[1];
-	tau_out[1] = w[2];
 	tau_out[2] = tz;
 }
 

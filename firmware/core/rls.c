@@ -2,6 +2,7 @@
  * Configuration and the float getters are rls_setup.c. */
 #include "rls.h"
 #include "qfmt.h"
+#include "est_ops.h"
 
 /* bierman() below is inlined at both of its calls so that the one with n = 1 is specialised */
 #if defined(__GNUC__)
@@ -43,9 +44,9 @@ static inline rls_acc_t acc_sub(rls_acc_t a, rls_acc_t b) { return q_add64(a, -b
 /* Q23.40 * Q1.30 -> Q23.40 */
 static inline rls_acc_t acc_mul_unit(rls_acc_t a, rls_unit_t m) { return q_mul64_q30(a, m); }
 /* a 2^e (left shifts saturate) */
-static inline rls_acc_t acc_ldexp(rls_acc_t a, int32_t e) { return q_scale64(a, (int)e); }
+static inline rls_acc_t acc_ldexp(rls_acc_t a, int32_t e) { return est_scale64(a, (int)e); }
 /* a 2^(2 s): a covariance bound of a parameter with phi_shift s */
-static inline rls_acc_t acc_pow4(rls_acc_t a, int s) { return q_scale64(a, 2 * s); }
+static inline rls_acc_t acc_pow4(rls_acc_t a, int s) { return est_scale64(a, 2 * s); }
 /* Q1.30 -> Q23.40 */
 static inline rls_acc_t acc_of_unit(rls_unit_t m) { return (rls_acc_t)m * (1 << (QF_ACC_FRAC - QF_UNIT_FRAC)); }
 static inline rls_acc_t acc_of_wide(rls_wide_t d) { return q_shr64(d, QF_WIDE_FRAC - QF_ACC_FRAC); }
@@ -55,35 +56,39 @@ static inline rls_wide_t wide_add(rls_wide_t a, rls_wide_t b) { return q_add64(a
 static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return q30_ratio(a, b); }
 /* d a / b = result 2^-*sh (0 < a <= 2 b, 0 < b): no bits lost however small a / b */
 /* d 2^e (e <= 0 here: rounds) */
-static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { return q_scale64(d, e); }
+static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { return est_scale64(d, e); }
 /* x + a c / b in Q15.48 (x Q15.48, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
 /* Q15.48 * Q7.24 -> Q7.24 */
-/* the reciprocal of an innovation (y 2^-e) and gains b / alpha as r 2^-sh (qfmt.h) */
-typedef struct { uint32_t y; int e; } rls_rcp_t;
+/* the reciprocal of an innovation (y 2^-e) and gains b / alpha as r 2^-sh (qfmt.h); the
+ * reciprocal packed in one word, y in the low half, e (in [0, 94]) in the high half, so that
+ * it is copied and selected in registers (an 8-byte struct is copied by memcpy at -Os) */
+typedef uint64_t rls_rcp_t;
 typedef struct { int32_t r; int sh; } rls_gain_t;
-#define RCP_NONE ((rls_rcp_t){ 0u, 0 })
+#define RCP_NONE ((rls_rcp_t)0)
+static inline uint32_t rcp_y(rls_rcp_t c) { return (uint32_t)c; }
+static inline int rcp_e(rls_rcp_t c) { return (int)(uint32_t)(c >> 32); }
 static inline rls_rcp_t rcp_of(rls_inn_t a)
 {
-	rls_rcp_t c;
-	c.y = q_recip(a, &c.e);
-	return c;
+	int e;
+	uint32_t y = q_recip(a, &e);
+	return ((uint64_t)(uint32_t)e << 32) | y;
 }
 static inline rls_gain_t gain_of(rls_inn_t a, rls_rcp_t c)
 {
 	rls_gain_t g;
-	g.r = q30_mul_recip(a, c.y, c.e, &g.sh);
+	g.r = q30_mul_recip(a, rcp_y(c), rcp_e(c), &g.sh);
 	return g;
 }
 /* x + g c: Q15.48 + gain * Q7.24 */
 static inline rls_par_t par_add_g(rls_par_t x, rls_gain_t g, rls_sig_t c)
 {
-	return q_add64(x, q_scale64(q_smul32(c, g.r), QF_PAR_FRAC - QF_SIG_FRAC - QF_UNIT_FRAC - g.sh));
+	return q_add64(x, est_scale64(q_smul32(c, g.r), QF_PAR_FRAC - QF_SIG_FRAC - QF_UNIT_FRAC - g.sh));
 }
 /* U_ij - f_j b_i / a_(j-1) in Q7.24 */
 static inline rls_sig_t u_update(rls_sig_t uij, rls_inn_t b, rls_sig_t f, rls_rcp_t c)
 {
 	rls_gain_t g = gain_of(b, c);
-	return q_sat32((int64_t)uij - q_scale64(q_smul32(f, g.r), -(QF_UNIT_FRAC + g.sh)));
+	return q_sat32((int64_t)uij - est_scale64(q_smul32(f, g.r), -(QF_UNIT_FRAC + g.sh)));
 }
 /* d a_prev / (a lambda) = result 2^-*sh, with the reciprocal c of a (lambda = 1: no other) */
 static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c,
@@ -99,7 +104,7 @@ static inline rls_acc_t acc_res(rls_sig_t e, rls_inn_t a, rls_rcp_t c, rls_unit_
 	(void)a;
 	rls_gain_t g = gain_of(q_smul32(e, e), c); /* E^2 / A = r 2^-30 2^-sh (integers) */
 	/* (E^2 2^-48) / (A 2^-54 2^-fr) in Q40: r 2^(16 - sh + fr) */
-	rls_acc_t t = q_scale64(g.r, 16 - g.sh + fr);
+	rls_acc_t t = est_scale64(g.r, 16 - g.sh + fr);
 	return lambda == UNIT_ONE ? t : q_mul64_q30(t, lambda);
 }
 /* a lambda (skipped for lambda = 1) */
@@ -114,30 +119,38 @@ static inline rls_dot_t dot_of_sig(rls_sig_t x) { return (rls_dot_t)x * ((int64_
 static inline rls_dot_t dot_mac(rls_dot_t s, rls_sig_t a, rls_sig_t b) { return q_add64(s, (int64_t)a * b); }
 static inline rls_dot_t dot_mac_par(rls_dot_t s, rls_par_t t, rls_sig_t x)
 {
-	return q_add64(s, q_mul64_32(t, x, QF_PAR_FRAC + QF_SIG_FRAC - 2 * QF_SIG_FRAC));
+	return q_add64(s, est_mul64_32c(t, x, QF_PAR_FRAC + QF_SIG_FRAC - 2 * QF_SIG_FRAC));
+}
+/* dot_mac_par(DOT_ZERO, t, x): the product alone (it is never INT64_MIN, which the add
+ * would have turned into -INT64_MAX) */
+static inline rls_dot_t dot_of_par(rls_par_t t, rls_sig_t x)
+{
+	return est_mul64_32c(t, x, QF_PAR_FRAC + QF_SIG_FRAC - 2 * QF_SIG_FRAC);
 }
 static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return q_add64(a, -b); }
-static inline rls_sig_t sig_of_dot(rls_dot_t s) { return q_sat32(q_shr64(s, QF_SIG_FRAC)); }
-static inline scalar_t sc_of_par(rls_par_t t, int shift) { return q_sat32(q_scale64(t, QF_SC_FRAC - QF_PAR_FRAC + shift)); }
+static inline rls_sig_t sig_of_dot(rls_dot_t s) { return est_sat_shr64c(s, QF_SIG_FRAC); }
+static inline scalar_t sc_of_par(rls_par_t t, int shift) { return q_sat32(est_scale64(t, QF_SC_FRAC - QF_PAR_FRAC + shift)); }
 /* x + a c / b in Q7.24 (x, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
 /* the same; in the float build, x + a (c / b) */
 /* a b / c in Q23.40 (a, b Q7.24, c Q23.40 > 0) */
 /* Q1.62 * Q7.24 / 2^s -> Q9.54 */
 static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s)
 {
-	return q_mul64_32(d, f, (unsigned)(QF_WIDE_FRAC + QF_SIG_FRAC - QF_INN_FRAC + s));
+	return est_mul64_32(d, f, (unsigned)(QF_WIDE_FRAC + QF_SIG_FRAC - QF_INN_FRAC + s));
 }
 /* Q9.54 * Q7.24 -> Q9.54 */
-static inline rls_inn_t inn_mul_sig(rls_inn_t a, rls_sig_t b) { return q_mul64_32(a, b, QF_SIG_FRAC); }
+static inline rls_inn_t inn_mul_sig(rls_inn_t a, rls_sig_t b) { return est_mul64_32c(a, b, QF_SIG_FRAC); }
 static inline rls_inn_t inn_add(rls_inn_t a, rls_inn_t b) { return q_add64(a, b); }
 /* Q1.30 2^e -> Q9.54 (e <= 0) */
-static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { return q_scale64((int64_t)m << (QF_INN_FRAC - QF_UNIT_FRAC), e); }
+static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { return est_scale64((int64_t)m << (QF_INN_FRAC - QF_UNIT_FRAC), e); }
 static inline bool wide_ok(rls_wide_t d) { return d > 0; }
 static inline bool sig_ok(rls_sig_t x) { (void)x; return true; }
 static inline bool acc_ok(rls_acc_t x) { (void)x; return true; }
-static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return q_scale32(x, QF_SIG_FRAC - QF_SC_FRAC - shift); }
+static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return est_scale32(x, QF_SIG_FRAC - QF_SC_FRAC - shift); }
 static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return q_scale32(x, QF_SC_FRAC - QF_SIG_FRAC + shift); }
 static inline rls_acc_t phi2_of_sc(scalar_t x) { return q_smul32(x, x); } /* Q32 */
+/* |phi|^2 is needed for the gate only (|phi|^2 >= 0 passes a zero phi_min) */
+static inline bool phi2_needed(const struct rls *r) { return r->phi_min2 > 0; }
 #else
 #define SIG_ZERO 0.0f
 #define ACC_ZERO 0.0f
@@ -191,6 +204,7 @@ typedef float rls_dot_t;
 static inline rls_dot_t dot_of_sig(rls_sig_t x) { return x; }
 static inline rls_dot_t dot_mac(rls_dot_t s, rls_sig_t a, rls_sig_t b) { return s + a * b; }
 static inline rls_dot_t dot_mac_par(rls_dot_t s, rls_par_t t, rls_sig_t x) { return s + x * t; }
+static inline rls_dot_t dot_of_par(rls_par_t t, rls_sig_t x) { return DOT_ZERO + x * t; }
 static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return a - b; }
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return s; }
 static inline scalar_t sc_of_par(rls_par_t t, int shift) { return shift ? t * sc_pow2f(shift) : t; }
@@ -206,6 +220,8 @@ static inline bool acc_ok(rls_acc_t x) { return isfinite(x); }
 static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return shift ? x * sc_pow2f(-shift) : x; }
 static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return shift ? x * sc_pow2f(shift) : x; }
 static inline rls_acc_t phi2_of_sc(scalar_t x) { return x * x; }
+/* also for the overflow check below */
+static inline bool phi2_needed(const struct rls *r) { (void)r; return true; }
 #endif
 
 /* ---------------------------------------------------------------- the update */
@@ -240,7 +256,7 @@ static void renormalise(struct rls *r, unsigned n)
 	if (s == 0)
 		return;
 	for (unsigned i = 0; i < n; i++)
-		r->d[i] = q_scale64(r->d[i], s);
+		r->d[i] = est_scale64(r->d[i], s);
 	r->d_exp += s;
 #else
 	(void)r;
@@ -287,7 +303,7 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 		rls_sig_t s = sig_of_dot(j ? dot_mac(sd, phi[j], UNIT_SIG) : dot_of_sig(phi[j])); /* U_jj = 1 */
 		f[j] = s;
 		v[j] = inn_of_wide_sig(r->d[j], s, (int)r->d_exp - fr);
-		for (unsigned i = 0; i < n; i++)
+		for (unsigned i = 0; i < j; i++)   /* the strict upper part: all that is read */
 			u[i][j] = r->u[i][j];
 	}
 	rls_inn_t alpha = inn_of_unit(lambda, fr);
@@ -322,8 +338,8 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 	for (unsigned i = 0; i < n; i++)
 		gain[i] = gain_of(b[i], rc);
 	for (unsigned o = 0; ok && o < no; o++) {
-		rls_dot_t yhat = DOT_ZERO;
-		for (unsigned i = 0; i < n; i++)
+		rls_dot_t yhat = dot_of_par(r->theta[o][0], phi[0]);
+		for (unsigned i = 1; i < n; i++)
 			yhat = dot_mac_par(yhat, r->theta[o][i], phi[i]);
 		e[o] = sig_of_dot(dot_sub(dot_of_sig(y[o]), yhat));
 		for (unsigned i = 0; i < n; i++) {
@@ -416,7 +432,8 @@ enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y
 			return RLS_REJECTED;
 		}
 		pn[i] = sig_of_sc(phi[i], r->cfg.phi_shift[i]);
-		phi2 = acc_add(phi2, phi2_of_sc(phi[i]));
+		if (phi2_needed(r))
+			phi2 = acc_add(phi2, phi2_of_sc(phi[i]));
 	}
 	for (unsigned o = 0; o < r->cfg.n_outputs; o++) {
 		if (!sc_isfinite(y[o])) {

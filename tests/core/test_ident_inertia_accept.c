@@ -30,9 +30,10 @@ UNIT_TEST(ident_inertia_accept_scale_bounds_and_advice)
 	CHECK(ident_inertia_accept(NAN, 0.0f, 2.0f, 0.35f, 0.02f, &lo, &hi, &raise) == IDENT_NOT_FINITE);
 }
 
-/* ident_body_torque_mixer: the mixer's own Gamma (random arm length, random rotor mask):
- * roll and pitch equal Gamma f, yaw the signed sum of the measured torques of the rotors
- * present; with all rotors and eq. (14) it equals ident_body_torque. */
+/* ident_body_torque_mixer: the mixer's own Gamma (random arm length, random rotor mask,
+ * random rotor scales): roll and pitch equal Gamma f and mixer_wrench's rows 1 and 2 bit for
+ * bit, yaw the signed sum of the measured torques of the rotors present; with all rotors and
+ * eq. (14) it equals ident_body_torque. */
 UNIT_TEST(ident_body_torque_mixer_follows_mask_and_arm)
 {
 #if defined(__arm__)
@@ -48,6 +49,10 @@ UNIT_TEST(ident_body_torque_mixer_follows_mask_and_arm)
 		double l = unit_rand_uniform(&r, 0.15, 0.6);
 		mp.arm_l_m = sc_from_float((float)l);
 		mp.rotor_mask = i < 10 ? 0xFFu : (uint8_t)(0xFFu & ~(1u << (i % 8)));
+		bool scaled = i >= 5 && i % 2;
+		if (scaled)
+			for (int j = 0; j < 8; j++)
+				mp.scale[j] = sc_from_float((float)unit_rand_uniform(&r, 0.8, 1.0));
 		static struct mixer m;
 		static struct mixer_design dz;
 		CHECK(mixer_init_design(&m, &mp, &dz));
@@ -57,17 +62,22 @@ UNIT_TEST(ident_body_torque_mixer_follows_mask_and_arm)
 			tm[j] = sc_from_float((float)unit_rand_uniform(&r, 0.01, 0.1));
 		}
 		ident_body_torque_mixer(&m, f, tm, tau);
+		scalar_t w[MIXER_N_AXES];
+		mixer_wrench(&m, f, w);
+		CHECK(tau[0] == w[1]);
+		CHECK(tau[1] == w[2]);
 		double tx = 0, ty = 0, tz = 0;
 		for (int j = 0; j < 8; j++) {
-			tx += (double)dz.gamma_f[1][j] * (double)sc_to_float(f[j]);
-			ty += (double)dz.gamma_f[2][j] * (double)sc_to_float(f[j]);
+			double uj = (double)sc_to_float(f[j]) / (double)sc_to_float(m.p.scale[j]);
+			tx += (double)dz.gamma_f[1][j] * uj;
+			ty += (double)dz.gamma_f[2][j] * uj;
 			if (mp.rotor_mask & (1u << j))
 				tz += (j & 1 ? -1.0 : 1.0) * (double)sc_to_float(tm[j]);
 		}
 		CHECK_NEAR(sc_to_float(tau[0]), tx, 2e-3 * (1 + fabs(tx)));
 		CHECK_NEAR(sc_to_float(tau[1]), ty, 2e-3 * (1 + fabs(ty)));
 		CHECK_NEAR(sc_to_float(tau[2]), tz, 1e-3);
-		if (mp.rotor_mask == 0xFFu) {
+		if (mp.rotor_mask == 0xFFu && !scaled) {
 			ident_body_torque(mp.arm_l_m, f, tm, ref);
 			for (int k = 0; k < 3; k++)
 				CHECK_NEAR(sc_to_float(tau[k]), sc_to_float(ref[k]), 2e-3 * (1 + fabs(sc_to_float(ref[k]))));

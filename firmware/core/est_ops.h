@@ -1,0 +1,150 @@
+/*
+ * est_ops.h - integer operations of the estimators' per-frame updates (rls.c, motor_id.c)
+ * in forms that cost less on Cortex-M0 than their qfmt.h definitions, with the same results.
+ *
+ * Cortex-M0 has no 64-bit shift: a 64-bit shift by a variable count is a library call there
+ * (__ashldi3, __ashrdi3), and at -Os the compiler calls qfmt.h's small functions rather than
+ * inlining them (q_scale32 -> q_scale64 -> q_shr64 -> __ashrdi3 is four calls deep). So
+ *   - est_scale32, est_scale64 and est_mul64_32 do q_scale32's, q_scale64's and q_mul64_32's
+ *     shifts by a variable count on 32-bit words;
+ *   - the est_*c functions are qfmt.h's shifts and products always inlined, for calls whose
+ *     shift count is a constant: a 64-bit shift by a constant is a few 32-bit shifts. They are
+ *     meant for the few hottest calls only (each inlined copy costs flash).
+ * tests/core/test_est_ops.c compares each function here with its qfmt.h definition bit for
+ * bit over every shift count and operands of every size, on the host and under QEMU.
+ */
+#ifndef OCTO_EST_OPS_H
+#define OCTO_EST_OPS_H
+
+#include "qfmt.h"
+
+#if defined(__GNUC__)
+#define EST_INLINE static inline __attribute__((always_inline))
+#else
+#define EST_INLINE static inline
+#endif
+
+/* q_shr64(v, s): v / 2^s rounded to nearest (ties away from zero), s in [0, 62] */
+EST_INLINE int64_t est_shr64c(int64_t v, unsigned s)
+{
+	if (s == 0u)
+		return v;
+	if (v >= 0)
+		return (v >> s) + ((v >> (s - 1u)) & 1);
+	int64_t m = v == INT64_MIN ? INT64_MAX : -v;
+	return -((m >> s) + ((m >> (s - 1u)) & 1));
+}
+
+/* q_shl64(v, s): v 2^s saturating to +/-INT64_MAX, s in [0, 62] */
+EST_INLINE int64_t est_shl64c(int64_t v, unsigned s)
+{
+	int64_t lim = INT64_MAX >> s;
+	if (v > lim)
+		return INT64_MAX;
+	if (v < -lim)
+		return -INT64_MAX;
+	return v >= 0 ? (int64_t)((uint64_t)v << s) : -(int64_t)((uint64_t)-v << s);
+}
+
+/* q_sat32(q_shr64(v, s)), s in [0, 62] */
+EST_INLINE int32_t est_sat_shr64c(int64_t v, unsigned s)
+{
+	int64_t q = est_shr64c(v, s);
+	return q > (int64_t)INT32_MAX ? INT32_MAX : (q < -(int64_t)INT32_MAX ? -INT32_MAX : (int32_t)q);
+}
+
+/* q_mul64_32(a, b, s): a b / 2^s for int64 a, int32 b, s in [1, 62] (its two products are
+ * q_umul32 calls; the shift after them is inlined) */
+EST_INLINE int64_t est_mul64_32c(int64_t a, int32_t b, unsigned s)
+{
+	bool neg = (a < 0) != (b < 0);
+	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
+	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint64_t hi = q_umul32((uint32_t)(ua >> 32), ub);
+	uint64_t lo = q_umul32((uint32_t)ua, ub) >> 32;
+	int64_t sum = (int64_t)(hi + lo);
+	sum = neg ? -sum : sum;
+	return s >= 32u ? est_shr64c(sum, s - 32u) : est_shl64c(sum, 32u - s);
+}
+
+/* q_scale32(v, s) in 32-bit words: v 2^s, left shifts saturating to +/-INT32_MAX, right
+ * shifts rounded to nearest (ties away from zero), INT32_MIN taken as -2^31; any s */
+static inline int32_t est_scale32(int32_t v, int s)
+{
+	if (s >= 0) {
+		if (s > 30)
+			return v > 0 ? INT32_MAX : (v < 0 ? -INT32_MAX : 0);
+		int32_t lim = INT32_MAX >> s;
+		if (v > lim)
+			return INT32_MAX;
+		if (v < -lim)
+			return -INT32_MAX;
+		return v >= 0 ? (int32_t)((uint32_t)v << s) : -(int32_t)((uint32_t)-v << s);
+	}
+	unsigned r = (unsigned)-s;
+	uint32_t m = v < 0 ? 0u - (uint32_t)v : (uint32_t)v; /* |v| <= 2^31 */
+	uint32_t q;
+	if (r > 32u)
+		q = 0u;
+	else if (r == 32u)
+		q = m >> 31; /* 1 only for |v| = 2^31: exactly half, rounded away from zero */
+	else
+		q = (m >> r) + ((m >> (r - 1u)) & 1u); /* at most 2^30 + 1 */
+	return v < 0 ? -(int32_t)q : (int32_t)q;
+}
+
+/* q_scale64(v, s): v 2^s, left shifts saturating to +/-INT64_MAX, right shifts rounded to
+ * nearest (ties away from zero), INT64_MIN taken as -INT64_MAX; any s. Its shifts by the
+ * variable count are done on the two 32-bit halves (a 64-bit one is a library call on
+ * Cortex-M0, two of them in q_shr64). */
+static inline int64_t est_scale64(int64_t v, int s)
+{
+	if (s > 62)
+		return v > 0 ? INT64_MAX : (v < 0 ? -INT64_MAX : 0);
+	if (s < -62)
+		return 0;
+	bool neg = v < 0;
+	uint64_t m = neg ? (v == INT64_MIN ? (uint64_t)INT64_MAX : (uint64_t)0 - (uint64_t)v) : (uint64_t)v;
+	uint32_t hi = (uint32_t)(m >> 32), lo = (uint32_t)m;
+	uint64_t r;
+	if (s >= 0) {
+		unsigned t = (unsigned)s;
+		/* m 2^t fits below 2^63 when m < 2^(63 - t) */
+		bool over = t <= 31u ? (hi >> (31u - t)) != 0u : (hi != 0u || (lo >> (63u - t)) != 0u);
+		if (over)
+			return neg ? -INT64_MAX : INT64_MAX;
+		if (t == 0u)
+			r = m;
+		else if (t >= 32u)
+			r = (uint64_t)(lo << (t - 32u)) << 32;
+		else
+			r = ((uint64_t)((hi << t) | (lo >> (32u - t))) << 32) | (uint32_t)(lo << t);
+	} else {
+		unsigned t = (unsigned)-s - 1u;   /* m / 2^(t + 1), rounded: (m 2^-t + 1) / 2 */
+		uint64_t q;
+		if (t == 0u)
+			q = m;
+		else if (t >= 32u)
+			q = hi >> (t - 32u);
+		else
+			q = ((uint64_t)(hi >> t) << 32) | ((lo >> t) | (hi << (32u - t)));
+		r = (q + 1u) >> 1;
+	}
+	return neg ? -(int64_t)r : (int64_t)r;
+}
+
+/* q_mul64_32(a, b, s) for a variable s in [1, 62]: its two products, then est_scale64 (the
+ * signed sum of the products stays below 2^63 in magnitude: est_scale64 and q_mul64_32's
+ * q_shr64 / q_shl64 agree on it) */
+static inline int64_t est_mul64_32(int64_t a, int32_t b, unsigned s)
+{
+	bool neg = (a < 0) != (b < 0);
+	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
+	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint64_t hi = q_umul32((uint32_t)(ua >> 32), ub);
+	uint64_t lo = q_umul32((uint32_t)ua, ub) >> 32;
+	int64_t sum = (int64_t)(hi + lo);
+	return est_scale64(neg ? -sum : sum, 32 - (int)s);
+}
+
+#endif /* OCTO_EST_OPS_H */

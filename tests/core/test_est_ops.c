@@ -1,0 +1,83 @@
+/* Tests of firmware/core/est_ops.h: each operation against its qfmt.h definition, bit for bit,
+ * over every shift count and operands of every size (the edges, powers of two and their
+ * neighbours, and random words of random magnitude). */
+#include "est_ops.h"
+#include "unit.h"
+
+static uint32_t rng = 2463534242u;
+static uint32_t xr(void)
+{
+	rng ^= rng << 13;
+	rng ^= rng >> 17;
+	rng ^= rng << 5;
+	return rng;
+}
+
+UNIT_TEST(est_scale32_equals_q_scale32)
+{
+	int32_t v[200];
+	unsigned n = 0;
+	const int32_t edge[] = {0, 1, -1, 2, -2, 3, -3, INT32_MAX, -INT32_MAX, INT32_MIN, INT32_MAX - 1, INT32_MIN + 2};
+	for (unsigned i = 0; i < sizeof edge / sizeof edge[0]; i++)
+		v[n++] = edge[i];
+	for (int b = 1; b < 31; b++) {
+		v[n++] = (int32_t)1 << b;
+		v[n++] = ((int32_t)1 << b) + 1;
+		v[n++] = -((int32_t)1 << b) - 1;
+		v[n++] = ((int32_t)1 << b) - 1;
+	}
+	while (n < 200u) {
+		uint32_t w = xr() >> (xr() % 32u);
+		v[n++] = (xr() & 1u) ? -(int32_t)(w >> 1) : (int32_t)(w >> 1);
+	}
+	long bad = 0;
+	for (int s = -70; s <= 70; s++)
+		for (unsigned i = 0; i < n; i++)
+			if (est_scale32(v[i], s) != q_scale32(v[i], s))
+				bad++;
+	for (int k = 0; k < 200000; k++) {
+		int32_t x = (int32_t)xr();
+		int s = (int)(xr() % 141u) - 70;
+		if (est_scale32(x, s) != q_scale32(x, s))
+			bad++;
+	}
+	CHECK(bad == 0);
+}
+
+/* an int64 of random magnitude and sign, often near a power of two or an edge */
+static int64_t r64(void)
+{
+	uint32_t k = xr() % 8u;
+	if (k == 0u)
+		return (xr() & 1u) ? INT64_MAX : ((xr() & 1u) ? INT64_MIN : -INT64_MAX);
+	int b = (int)(xr() % 64u);
+	uint64_t w = ((uint64_t)xr() << 32 | xr()) >> (63 - (b > 62 ? 62 : b));
+	if (k == 1u)
+		w = ((uint64_t)1 << (b > 62 ? 62 : b)) + (xr() % 3u) - 1u;
+	return (xr() & 1u) ? -(int64_t)w : (int64_t)w;
+}
+
+UNIT_TEST(est_shifts_and_products_equal_qfmt)
+{
+	long bad = 0;
+	for (int k = 0; k < 20000; k++) {
+		int64_t v = r64();
+		int32_t b = (int32_t)(r64() >> 32);
+		for (unsigned s = 0; s <= 62u; s++) {
+			if (est_shr64c(v, s) != q_shr64(v, s))
+				bad++;
+			if (est_shl64c(v, s) != q_shl64(v, s))
+				bad++;
+			if (est_sat_shr64c(v, s) != q_sat32(q_shr64(v, s)))
+				bad++;
+			if (s >= 1u && est_mul64_32c(v, b, s) != q_mul64_32(v, b, s))
+				bad++;
+			if (s >= 1u && est_mul64_32(v, b, s) != q_mul64_32(v, b, s))
+				bad++;
+		}
+		for (int s = -70; s <= 70; s++)
+			if (est_scale64(v, s) != q_scale64(v, s))
+				bad++;
+	}
+	CHECK(bad == 0);
+}
