@@ -72,7 +72,7 @@ struct hover_est {
 	 * the period changes: the update's divisions by them become products, with the same
 	 * quotients */
 	scalar_t theta_lo, theta_hi; /* 1 / u_max, 1 / u_min */
-	struct sc_recip r_tau, r_100; /* 1 / tau_s, 1 / 100 */
+	struct sc_recip r_tau;       /* 1 / tau_s */
 	scalar_t al_dt, al;          /* the filters' coefficient dt / (tau + dt) and its dt (0: none) */
 };
 

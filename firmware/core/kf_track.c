@@ -1,6 +1,8 @@
 /* kf_track.c - see kf_track.h for the model, the memory and the units. */
 #include "kf_track.h"
 
+static const struct sc_recip r_three = SC_RECIP_3;
+
 struct kf_track_params kf_track_params_default(void)
 {
 	struct kf_track_params p;
@@ -37,7 +39,6 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->a_s = SC_ZERO;
 	s->dt_tmin = SC_ZERO;
 	s->r_drift = sc_recip_of(s->p.drift_per_min);
-	s->r_three = sc_recip_of(SC(3.0));
 	s->started = false;
 	s->primed = false;
 	s->updates = 0;
@@ -45,11 +46,11 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 
 /* x^(1/3) for x > 0 by at most 6 steps of Newton's iteration from a warm start (the last
  * memory). A step that leaves r unchanged ends it: every further step would repeat it. */
-static scalar_t cbrt_warm(const struct kf_track *s, scalar_t x, scalar_t guess)
+static scalar_t cbrt_warm(scalar_t x, scalar_t guess)
 {
 	scalar_t r = guess > SC_ZERO ? guess : SC(1.0);
 	for (int i = 0; i < 6; i++) {
-		scalar_t n = sc_div_r(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), &s->r_three);
+		scalar_t n = sc_div_r(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), &r_three);
 		if (n == r)
 			break;
 		r = n;
@@ -121,7 +122,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	if (s->p.drift_per_min > SC_ZERO) {
 		scalar_t q = sc_div_r(sc_mul(SC(0.3), sc_sqrt(s->s2_pct2)), &s->r_drift);
 		scalar_t x = sc_mul(sc_sq(q), dt_s);   /* (s / 2r)^2 / f_s */
-		s->mem_s = sc_clamp(cbrt_warm(s, x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
+		s->mem_s = sc_clamp(cbrt_warm(x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
 	} else {
 		s->mem_s = s->p.t_max_s;
 	}

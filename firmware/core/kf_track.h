@@ -60,7 +60,7 @@ struct kf_track {
 	scalar_t c_dt;     /* the frame period they were computed for (0: none yet) */
 	scalar_t a_s;      /* the noise average's coefficient dt / (s_tau_s + dt) */
 	scalar_t dt_tmin;  /* dt / t_min_s */
-	struct sc_recip r_drift, r_three; /* 1 / drift_per_min, 1 / 3 */
+	struct sc_recip r_drift; /* 1 / drift_per_min */
 	bool started;      /* an estimate exists */
 	bool primed;       /* the lag filter holds a value */
 	uint32_t updates;
