@@ -135,26 +135,45 @@ inline scalar_t sc_sub(scalar_t a, scalar_t b)
 static inline scalar_t sc_neg(scalar_t a) { return a == INT32_MIN ? SC_MAX : -a; }
 static inline scalar_t sc_abs(scalar_t a) { return a < 0 ? sc_neg(a) : a; }
 
-/* |a b| 2^-16 rounded from four 16 x 16 products in 32-bit words (Cortex-M0 has no long
- * multiply): |a b| = hh 2^32 + (lh + hl) 2^16 + ll, so that
- * round(|a b| / 2^16) = hh 2^16 + lh + hl + floor((ll + 2^15) / 2^16) exactly; each carry
- * out of 32 bits means saturation */
+/* a b 2^-16 rounded to nearest, ties away from zero, saturating.
+ * With a long multiply (Cortex-M3/M4, hosts): the 64-bit product.
+ * Cortex-M0 has none (a 64-bit product is a library call there): |a b| 2^-16 rounded from
+ * 16 x 16 products in 32-bit words, with b the smaller magnitude:
+ * |a b| = hh 2^32 + (lh + hl) 2^16 + ll, so that round(|a b| / 2^16) = hh 2^16 + lh + hl + floor((ll + 2^15) / 2^16) exactly; each carry
+ * out of 32 bits means saturation. When |b| < 1 (bh = 0, the common case: gains, time
+ * steps, unit quaternions' components) hh = lh = 0 and two products suffice, and
+ * hl = ah bl < 2^31 cannot carry. */
 inline scalar_t sc_mul(scalar_t a, scalar_t b)
 {
+#if !defined(__ARM_ARCH_6M__)
+	int64_t p = (int64_t)a * b;                           /* |p| <= 2^62 */
+	int64_t r = p >= 0 ? (p + 32768) >> 16 : -((32768 - p) >> 16);
+	return r > INT32_MAX ? SC_MAX : (r < -INT32_MAX ? SC_MAX_NEG : (scalar_t)r);
+#else
 	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
 	bool neg = (a < 0) != (b < 0);
-	uint32_t hh = ah * bh;
-	if (hh >= 0x8000u)
-		return neg ? SC_MAX_NEG : SC_MAX;
-	uint32_t r = (hh << 16) + ((al * bl + 0x8000u) >> 16), lh = al * bh, hl = ah * bl;
-	r += lh;
-	if (r < lh)
-		return neg ? SC_MAX_NEG : SC_MAX;
-	r += hl;
-	if (r < hl || r > (uint32_t)INT32_MAX)
+	if (ub > ua) {
+		uint32_t t = ua;
+		ua = ub;
+		ub = t;
+	}
+	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
+	uint32_t r = ah * bl + ((al * bl + 0x8000u) >> 16);  /* < 2^31 + 2^16: no carry */
+	if (bh) {
+		uint32_t hh = ah * bh, lh = al * bh;
+		if (hh >= 0x8000u)
+			return neg ? SC_MAX_NEG : SC_MAX;
+		r += hh << 16;
+		if (r < (hh << 16))
+			return neg ? SC_MAX_NEG : SC_MAX;
+		r += lh;
+		if (r < lh)
+			return neg ? SC_MAX_NEG : SC_MAX;
+	}
+	if (r > (uint32_t)INT32_MAX)
 		return neg ? SC_MAX_NEG : SC_MAX;
 	return neg ? -(scalar_t)r : (scalar_t)r;
+#endif
 }
 
 /* 2^63 / v for v in [2^31, 2^32), within 2^-27 relative (at most 2^32 - 1): two Newton
