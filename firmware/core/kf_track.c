@@ -33,7 +33,6 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->lambda = SC(0.98);
 	s->phi_f = SC_ZERO;
 	s->e_prev_pct = SC_ZERO;
-	s->lag_dt = SC_ZERO;
 	s->lag_al = SC(1.0);
 	s->c_dt = SC_ZERO;
 	s->a_s = SC_ZERO;
@@ -78,25 +77,23 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	for (int j = 0; j < n; j++)
 		if (!sc_isfinite(thr[j]))
 			return false;
+	if (dt_s != s->c_dt) {   /* the step changed: the exact discrete lag, the averages */
+		s->c_dt = dt_s;
+		if (s->p.tau_lag_s > SC_ZERO)
+			s->lag_al = sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt_s, s->p.tau_lag_s))));
+		s->a_s = sc_div(dt_s, sc_add(s->p.s_tau_s, dt_s));
+		s->dt_tmin = sc_div(dt_s, s->p.t_min_s);
+	}
 	/* the thrust a throttle produces, as the motor lag delivers it */
 	scalar_t phi = regressor(s, thr, n);
 	if (!s->primed || !(s->p.tau_lag_s > SC_ZERO)) {
 		s->phi_f = phi;
 		s->primed = true;
 	} else {
-		if (dt_s != s->lag_dt) {   /* the exact discrete lag, recomputed when the step changes */
-			s->lag_dt = dt_s;
-			s->lag_al = sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt_s, s->p.tau_lag_s))));
-		}
 		scalar_t al = s->lag_al;
 		s->phi_f = sc_add(s->phi_f, sc_mul(al, sc_sub(phi, s->phi_f)));
 	}
 	phi = s->phi_f;
-	if (dt_s != s->c_dt) {
-		s->c_dt = dt_s;
-		s->a_s = sc_div(dt_s, sc_add(s->p.s_tau_s, dt_s));
-		s->dt_tmin = sc_div(dt_s, s->p.t_min_s);
-	}
 	if (!gate || phi < s->p.phi_min || !(y_n > SC_ZERO))
 		return false;
 	if (!s->started) {
