@@ -138,7 +138,7 @@ static void sync_params(struct app *a)
 	ap.zeta = vec3_make(sc_from_float(p->att_zeta), sc_from_float(p->att_zeta),
 			    sc_from_float(p->att_zeta));
 	ap.ki_rps = vec3_make(sc_from_float(p->att_ki), sc_from_float(p->att_ki), sc_from_float(p->att_ki));
-	a->att.p = ap;   /* not att_ctrl_init: that would drop the integral */
+	att_ctrl_set_params(&a->att, &ap);   /* not att_ctrl_init: that would drop the integral */
 
 	struct guid_params gp = guid_params_default();
 	gp.tko_vel_mps = sc_from_float(p->nav_tko_vel);
@@ -160,7 +160,7 @@ static void sync_params(struct app *a)
 	lp.vz_max_up_mps = sc_from_float(fmaxf(sc_to_float(lp.vz_max_up_mps), p->nav_tko_vel));
 	lp.vz_max_down_mps = sc_from_float(fmaxf(sc_to_float(lp.vz_max_down_mps), p->nav_land_vel));
 	lp.f_max_n = sc_from_float(8.0f * p->veh_kf * p->mot_thr_max);
-	a->alt.p = lp;
+	alt_ctrl_set_params(&a->alt, &lp);   /* keeps the integral */
 
 	/* the rotors' effectiveness: the mixer allocates around a weak rotor (its box), the
 	 * throttle map gives it the throttle for its thrust */

@@ -17,16 +17,22 @@ struct alt_ctrl_params alt_ctrl_params_default(void)
 	return p;
 }
 
-void alt_ctrl_init(struct alt_ctrl *s, const struct alt_ctrl_params *params)
+void alt_ctrl_set_params(struct alt_ctrl *s, const struct alt_ctrl_params *params)
 {
 	s->p = *params;
 	s->p.cos_tilt_min = sc_clamp(s->p.cos_tilt_min, SC(0.05), SC(1));
+	scalar_t kv = sc_mul(sc_add(s->p.zeta, s->p.zeta), s->p.wn_rps); /* 2 zeta wn */
+	s->m_kz = sc_div(sc_mul(s->p.wn_rps, s->p.wn_rps), kv);
+	s->r_g = sc_recip_of(s->p.g_mps2);
+}
+
+void alt_ctrl_init(struct alt_ctrl *s, const struct alt_ctrl_params *params)
+{
+	alt_ctrl_set_params(s, params);
 	s->a_int_mps2 = SC_ZERO;
 	s->vz_cmd_mps = SC_ZERO;
 	s->f_n = SC_ZERO;
 	s->flags = 0;
-	s->m_wn = s->m_zeta = s->m_kz = SC_ZERO;   /* operands 0: sc_div(0, 0) = 0 */
-	s->r_g = sc_recip_of(s->p.g_mps2);
 }
 
 void alt_ctrl_reset(struct alt_ctrl *s, scalar_t a_int_mps2)
@@ -46,11 +52,6 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 		return s->f_n;
 	}
 	scalar_t kv = sc_mul(sc_add(p->zeta, p->zeta), p->wn_rps); /* 2 zeta wn */
-	if (p->wn_rps != s->m_wn || p->zeta != s->m_zeta) {
-		s->m_wn = p->wn_rps;
-		s->m_zeta = p->zeta;
-		s->m_kz = sc_div(sc_mul(p->wn_rps, p->wn_rps), kv);
-	}
 	scalar_t kz = s->m_kz;                                      /* wn / (2 zeta) */
 
 	scalar_t vz_cmd = sc_mul(kz, sc_sub(in->z_sp_m, in->z_m));
@@ -69,8 +70,6 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 	}
 	scalar_t f;
 	if (sc_isfinite(in->hover_f_n) && in->hover_f_n > SC_ZERO && p->g_mps2 > SC_ZERO) {
-		if (s->r_g.b != p->g_mps2)   /* the parameters were set without alt_ctrl_init */
-			s->r_g = sc_recip_of(p->g_mps2);
 		f = sc_div(sc_mul(sc_div_r(in->hover_f_n, &s->r_g), sc_add(p->g_mps2, a_cmd)), cz);
 	} else {
 		f = sc_div(sc_mul(in->mass_kg, sc_add(p->g_mps2, a_cmd)), cz);

@@ -69,9 +69,9 @@ struct alt_ctrl {
 	scalar_t vz_cmd_mps; /* last vertical-speed command (telemetry) */
 	scalar_t f_n;        /* last thrust output */
 	uint32_t flags;      /* ALT_CTRL_* of the last update */
-	/* the parameters' quotients, kept with their operands and recomputed when one changes
-	 * (the same values as dividing every time) */
-	scalar_t m_wn, m_zeta, m_kz;   /* kz = wn^2 / (2 zeta wn) */
+	/* the parameters' quotients, computed when they are set (alt_ctrl_set_params): no
+	 * division by a parameter in the update */
+	scalar_t m_kz;                 /* kz = wn^2 / (2 zeta wn) */
 	struct sc_recip r_g;           /* 1 / g_mps2 */
 };
 
@@ -89,8 +89,12 @@ struct alt_ctrl {
  * -20 ... +27 %: hover sag <= 0.23 m recovered (2 cm) in <= 4.7 s, converged steps 0 %. */
 struct alt_ctrl_params alt_ctrl_params_default(void);
 
-/* Copies params, zeroes the integral and flags. */
+/* Copies params (alt_ctrl_set_params), zeroes the integral and flags. */
 void alt_ctrl_init(struct alt_ctrl *s, const struct alt_ctrl_params *params);
+
+/* Copies params (cos_tilt_min clamped to [0.05, 1]) and prepares their quotients; keeps the
+ * integral. Parameters change only through this or alt_ctrl_init, never by assigning p. */
+void alt_ctrl_set_params(struct alt_ctrl *s, const struct alt_ctrl_params *params);
 
 /* Sets the integral state (m/s^2, clamped), e.g. 0 before takeoff. */
 void alt_ctrl_reset(struct alt_ctrl *s, scalar_t a_int_mps2);

@@ -24,15 +24,11 @@ void att_ctrl_reset(struct att_ctrl *s)
 
 void att_ctrl_init(struct att_ctrl *s, const struct att_ctrl_params *params)
 {
-	s->p = *params;
+	att_ctrl_set_params(s, params);
 	s->int_r_rad = vec3_zero();
 	s->err_b_rad = vec3_zero();
 	s->rate_cmd_b = vec3_zero();
 	s->flags = 0;
-	for (int i = 0; i < 3; i++) {   /* operands 0: the quotients sc_div(0, 0) = 0 */
-		s->m_wn[i] = s->m_zeta[i] = s->m_kp[i] = SC_ZERO;
-		s->m_itm[i] = s->m_kint[i] = s->m_lim[i] = SC_ZERO;
-	}
 }
 
 /* component i (0 x, 1 y, 2 z) of a vec3 */
@@ -44,6 +40,17 @@ static scalar_t *comp(struct vec3 *v, int i)
 static scalar_t get(struct vec3 v, int i)
 {
 	return *comp(&v, i);
+}
+
+void att_ctrl_set_params(struct att_ctrl *s, const struct att_ctrl_params *params)
+{
+	s->p = *params;
+	for (int i = 0; i < 3; i++) {
+		scalar_t wn = get(s->p.wn_rps, i), zeta = get(s->p.zeta, i);
+		scalar_t kd = sc_mul(sc_add(zeta, zeta), wn); /* 2 zeta wn, as the update has it */
+		s->m_kp[i] = sc_div(sc_mul(wn, wn), kd);
+		s->m_ii[i] = s->m_lim[i] = SC_ZERO;           /* lim: computed at the next update */
+	}
 }
 
 static bool vec3_finite(struct vec3 v)
@@ -83,11 +90,6 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		scalar_t *int_r = comp(&s->int_r_rad, i);
 
 		scalar_t kd = sc_mul(sc_add(zeta, zeta), wn); /* 2 zeta wn, 1/s */
-		if (wn != s->m_wn[i] || zeta != s->m_zeta[i]) {
-			s->m_wn[i] = wn;
-			s->m_zeta[i] = zeta;
-			s->m_kp[i] = sc_div(sc_mul(wn, wn), kd);
-		}
 		scalar_t kp = s->m_kp[i];                     /* wn / (2 zeta), 1/s */
 		scalar_t rc = sc_mul(kp, ei);
 		if (rc > rate_max || rc < sc_neg(rate_max)) {
@@ -116,9 +118,8 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		bool cut = (r > SC_ZERO && (in->alloc_short_pos >> i & 1u)) ||
 			   (r < SC_ZERO && (in->alloc_short_neg >> i & 1u));
 		if (kint > SC_ZERO && !sat && !cut && sc_abs(ei) < p->int_err_max_rad) {
-			if (int_tau_max != s->m_itm[i] || kint != s->m_kint[i]) {
-				s->m_itm[i] = int_tau_max;
-				s->m_kint[i] = kint;
+			if (ii != s->m_ii[i]) {   /* kint > 0: ii is not 0 */
+				s->m_ii[i] = ii;
 				s->m_lim[i] = sc_div(int_tau_max, kint);
 			}
 			scalar_t lim = s->m_lim[i];   /* int_tau_max / kint: keeps the state bounded too */

@@ -74,11 +74,12 @@ struct att_ctrl {
 	struct vec3 err_b_rad;    /* last attitude error (telemetry) */
 	struct vec3 rate_cmd_b;   /* last rate command (telemetry) */
 	uint32_t flags;           /* ATT_CTRL_* of the last update */
-	/* per axis, the quotients of parameters and slowly changing inputs, kept with the
-	 * operands they came from and recomputed when one changes (no division in the
-	 * update otherwise; the same values as dividing every time) */
-	scalar_t m_wn[3], m_zeta[3], m_kp[3];       /* kp = wn^2 / (2 zeta wn) */
-	scalar_t m_itm[3], m_kint[3], m_lim[3];     /* lim = int_tau_max / kint */
+	/* per axis, the quotients of the parameters, computed when they are set
+	 * (att_ctrl_set_params), and of the inertia input, recomputed when it changes: no
+	 * division in the update otherwise, the same values as dividing every time */
+	scalar_t m_kp[3];                /* kp = wn^2 / (2 zeta wn) */
+	scalar_t m_ii[3], m_lim[3];      /* lim = int_tau_max / kint for the inertia m_ii
+					  * (kint = I 2 zeta wn ki; m_ii 0: none yet) */
 };
 
 /* Default gains, the ones octo-fw flies: its parameter table (ATT_WN_RP, ATT_WN_YAW,
@@ -98,8 +99,12 @@ struct att_ctrl {
  * 50 ms lag + 2 frames: 9 % overshoot, stable. */
 struct att_ctrl_params att_ctrl_params_default(void);
 
-/* Copies params, zeroes the integral, flags and telemetry. */
+/* Copies params (att_ctrl_set_params), zeroes the integral, flags and telemetry. */
 void att_ctrl_init(struct att_ctrl *s, const struct att_ctrl_params *params);
+
+/* Copies params and prepares their quotients; keeps the integral. Parameters change only
+ * through this or att_ctrl_init, never by assigning p. */
+void att_ctrl_set_params(struct att_ctrl *s, const struct att_ctrl_params *params);
 
 /* Zeroes the integral (e.g. on the ground, or after a mode change). */
 void att_ctrl_reset(struct att_ctrl *s);

@@ -64,15 +64,15 @@ struct hover_est {
 	scalar_t v_f;     /* filtered vertical speed */
 	scalar_t uc_f;    /* filtered u cos_tilt */
 	bool primed;      /* filters initialised */
+	int8_t gated_sign;/* sign of the current run of gated innovations */
 	uint32_t updates; /* accepted measurements */
 	uint32_t rejected;/* gated measurements */
 	scalar_t gated_s; /* time of the current run of gated innovations of one sign, s */
-	int8_t gated_sign;
 	/* what depends on the parameters and the frame period only, computed at init and when
 	 * the period changes: the update's divisions by them become products, with the same
 	 * quotients */
 	scalar_t theta_lo, theta_hi; /* 1 / u_max, 1 / u_min */
-	struct sc_recip r_tau, r_100; /* 1 / tau_s, 1 / 100 */
+	struct sc_recip r_tau;       /* 1 / tau_s */
 	scalar_t al_dt, al;          /* the filters' coefficient dt / (tau + dt) and its dt (0: none) */
 };
 

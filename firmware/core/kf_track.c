@@ -3,6 +3,8 @@
 
 #include "scalar_ops.h"
 
+static const struct sc_recip r_three = SC_RECIP_3;
+
 struct kf_track_params kf_track_params_default(void)
 {
 	struct kf_track_params p;
@@ -33,13 +35,11 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->lambda = SC(0.98);
 	s->phi_f = SC_ZERO;
 	s->e_prev_pct = SC_ZERO;
-	s->lag_dt = SC_ZERO;
 	s->lag_al = SC(1.0);
 	s->c_dt = SC_ZERO;
 	s->a_s = SC_ZERO;
 	s->dt_tmin = SC_ZERO;
 	s->r_drift = sc_recip_of(s->p.drift_per_min);
-	s->r_three = sc_recip_of(SC(3.0));
 	s->started = false;
 	s->primed = false;
 	s->updates = 0;
@@ -49,11 +49,11 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
  * memory). A step that moves r by at most SC_EPS (1 LSB in the fixed build) ends it: the
  * iteration has converged to the resolution, and the warm start of a slowly changing
  * memory needs one step, not a second that would only confirm it. */
-static scalar_t cbrt_warm(const struct kf_track *s, scalar_t x, scalar_t guess)
+static scalar_t cbrt_warm(scalar_t x, scalar_t guess)
 {
 	scalar_t r = guess > SC_ZERO ? guess : SC(1.0);
 	for (int i = 0; i < 6; i++) {
-		scalar_t n = sc_div_r(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), &s->r_three);
+		scalar_t n = sc_div_r(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), &r_three);
 		bool done = sc_abs(sc_sub(n, r)) <= SC_EPS;
 		r = n;
 		if (done)
@@ -82,25 +82,23 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	for (int j = 0; j < n; j++)
 		if (!sc_isfinite(thr[j]))
 			return false;
+	if (dt_s != s->c_dt) {   /* the step changed: the exact discrete lag, the averages */
+		s->c_dt = dt_s;
+		if (s->p.tau_lag_s > SC_ZERO)
+			s->lag_al = sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt_s, s->p.tau_lag_s))));
+		s->a_s = sc_div(dt_s, sc_add(s->p.s_tau_s, dt_s));
+		s->dt_tmin = sc_div(dt_s, s->p.t_min_s);
+	}
 	/* the thrust a throttle produces, as the motor lag delivers it */
 	scalar_t phi = regressor(s, thr, n);
 	if (!s->primed || !(s->p.tau_lag_s > SC_ZERO)) {
 		s->phi_f = phi;
 		s->primed = true;
 	} else {
-		if (dt_s != s->lag_dt) {   /* the exact discrete lag, recomputed when the step changes */
-			s->lag_dt = dt_s;
-			s->lag_al = sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt_s, s->p.tau_lag_s))));
-		}
 		scalar_t al = s->lag_al;
 		s->phi_f = sc_add(s->phi_f, sc_mul(al, sc_sub(phi, s->phi_f)));
 	}
 	phi = s->phi_f;
-	if (dt_s != s->c_dt) {
-		s->c_dt = dt_s;
-		s->a_s = sc_div(dt_s, sc_add(s->p.s_tau_s, dt_s));
-		s->dt_tmin = sc_div(dt_s, s->p.t_min_s);
-	}
 	if (!gate || phi < s->p.phi_min || !(y_n > SC_ZERO))
 		return false;
 	if (!s->started) {
@@ -126,7 +124,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	if (s->p.drift_per_min > SC_ZERO) {
 		scalar_t q = sc_div_r(sc_mul(SC(0.3), sc_sqrt(s->s2_pct2)), &s->r_drift);
 		scalar_t x = sc_mul(sc_sq(q), dt_s);   /* (s / 2r)^2 / f_s */
-		s->mem_s = sc_clamp(cbrt_warm(s, x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
+		s->mem_s = sc_clamp(cbrt_warm(x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
 	} else {
 		s->mem_s = s->p.t_max_s;
 	}

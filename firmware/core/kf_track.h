@@ -54,13 +54,13 @@ struct kf_track {
 	scalar_t lambda;
 	scalar_t phi_f;    /* lag-filtered regressor */
 	scalar_t e_prev_pct; /* last residual, percent of y */
-	scalar_t lag_dt, lag_al; /* the lag filter's step and its coefficient 1 - e^(-dt/tau) */
 	/* what depends on the frame period and the parameters only, computed when they change
 	 * (the update's divisions by them become products) */
 	scalar_t c_dt;     /* the frame period they were computed for (0: none yet) */
+	scalar_t lag_al;   /* the lag filter's coefficient 1 - e^(-dt/tau_lag) */
 	scalar_t a_s;      /* the noise average's coefficient dt / (s_tau_s + dt) */
 	scalar_t dt_tmin;  /* dt / t_min_s */
-	struct sc_recip r_drift, r_three; /* 1 / drift_per_min, 1 / 3 */
+	struct sc_recip r_drift; /* 1 / drift_per_min */
 	bool started;      /* an estimate exists */
 	bool primed;       /* the lag filter holds a value */
 	uint32_t updates;

@@ -44,6 +44,16 @@
 
 #define QF_ONE(frac) ((int64_t)1 << (frac))
 
+/* The non-trivial functions below have external linkage in the fixed build: C11 inline
+ * definitions, with their one out-of-line copy in scalar.c, so that an object that does not
+ * inline one calls that copy instead of keeping its own. The float build, whose algorithms
+ * do not call them, keeps them static. */
+#if OCTO_FIXED
+#define QF_INLINE inline
+#else
+#define QF_INLINE static inline
+#endif
+
 /* int64 to int32, saturating */
 static inline int32_t q_sat32(int64_t v)
 {
@@ -55,7 +65,7 @@ static inline int32_t q_sat32(int64_t v)
 }
 
 /* a + b in int64, saturating */
-static inline int64_t q_add64(int64_t a, int64_t b)
+QF_INLINE int64_t q_add64(int64_t a, int64_t b)
 {
 	if (b > 0 && a > INT64_MAX - b)
 		return INT64_MAX;
@@ -66,7 +76,7 @@ static inline int64_t q_add64(int64_t a, int64_t b)
 
 /* 32 x 32 -> 64-bit products. Cortex-M0 (ARMv6-M) has no long multiply: a 64-bit product
  * is a library call there, four 16 x 16 products inline are about three times cheaper. */
-static inline uint64_t q_umul32(uint32_t a, uint32_t b)
+QF_INLINE uint64_t q_umul32(uint32_t a, uint32_t b)
 {
 #if defined(__ARM_ARCH_6M__)
 	uint32_t al = a & 0xffffu, ah = a >> 16, bl = b & 0xffffu, bh = b >> 16;
@@ -78,7 +88,7 @@ static inline uint64_t q_umul32(uint32_t a, uint32_t b)
 #endif
 }
 
-static inline int64_t q_smul32(int32_t a, int32_t b)
+QF_INLINE int64_t q_smul32(int32_t a, int32_t b)
 {
 	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
 	uint64_t p = q_umul32(ua, ub); /* < 2^64, and <= 2^62 unless an operand is INT32_MIN */
@@ -89,7 +99,7 @@ static inline int64_t q_smul32(int32_t a, int32_t b)
 
 /* number of leading zero bits of v (32 for 0), by halving: Cortex-M0 has no clz, and
  * this costs less there than libgcc's __clzsi2 */
-static inline int q_clz32(uint32_t v)
+QF_INLINE int q_clz32(uint32_t v)
 {
 	if (v == 0u)
 		return 32;
@@ -103,7 +113,7 @@ static inline int q_clz32(uint32_t v)
 }
 
 /* number of leading zero bits of v (64 for 0), by halving */
-static inline int q_clz64(uint64_t v)
+QF_INLINE int q_clz64(uint64_t v)
 {
 	if (v == 0u)
 		return 64;
@@ -118,7 +128,7 @@ static inline int q_clz64(uint64_t v)
 }
 
 /* v / 2^s, rounded to nearest (ties away from zero); s in [0, 62] */
-static inline int64_t q_shr64(int64_t v, unsigned s)
+QF_INLINE int64_t q_shr64(int64_t v, unsigned s)
 {
 	if (s == 0u)
 		return v;
@@ -130,7 +140,7 @@ static inline int64_t q_shr64(int64_t v, unsigned s)
 }
 
 /* v * 2^s, saturating; s in [0, 62] */
-static inline int64_t q_shl64(int64_t v, unsigned s)
+QF_INLINE int64_t q_shl64(int64_t v, unsigned s)
 {
 	int64_t lim = INT64_MAX >> s;
 	if (v > lim)
@@ -142,7 +152,7 @@ static inline int64_t q_shl64(int64_t v, unsigned s)
 
 /* v * 2^s for s of either sign: left shifts saturate, right shifts round (beyond 62 bits
  * to 0) */
-static inline int64_t q_scale64(int64_t v, int s)
+QF_INLINE int64_t q_scale64(int64_t v, int s)
 {
 	if (s > 62)
 		return v > 0 ? INT64_MAX : (v < 0 ? -INT64_MAX : 0);
@@ -192,7 +202,7 @@ static inline int64_t q_mul64_q30(int64_t a, int32_t u)
 /* a * b / 2^s for int64 a, int32 b, s in [1, 62]: int64, saturating. Two 32 x 32 products
  * (no 128-bit type in C11); the low product's bits below 2^32 are truncated, an error
  * under 1 LSB of the result for s >= 32 and under 2^(32 - s) LSB otherwise. */
-static inline int64_t q_mul64_32(int64_t a, int32_t b, unsigned s)
+QF_INLINE int64_t q_mul64_32(int64_t a, int32_t b, unsigned s)
 {
 	bool neg = (a < 0) != (b < 0);
 	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;

@@ -14,28 +14,36 @@
 #include "scalar.h"
 
 #if OCTO_FIXED
+/* Two words: |b| and q_clz32(|b|) follow from b, and the shift s (< 32) takes the low 5 bits
+ * of the reciprocal y (about 2^31.5, within 2^-27 relative of 2^63 / (|b| << s), so those
+ * bits are below its precision): y without them is within 2^-26, and sc_div_prepared makes
+ * the quotient exact by its remainder all the same (the same quotients as sc_div). */
 struct sc_recip {
 	scalar_t b;   /* the divisor */
-	uint32_t ub;  /* |b| */
-	uint32_t y;   /* 1 / |b| = y 2^(s - 63) (sc_recip_norm of |b| << s); 0 when b is 0 */
-	int s;        /* leading zero bits of |b| */
+	uint32_t ys;  /* 1 / |b| = y 2^(s - 63): y = ys & ~SC_RECIP_SMASK, s = ys & SC_RECIP_SMASK;
+		       * 0 when b is 0 */
 };
+#define SC_RECIP_SMASK 31u
 
 static inline struct sc_recip sc_recip_of(scalar_t b)
 {
-	struct sc_recip r;
-	r.b = b;
-	r.ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-	r.s = q_clz32(r.ub);
-	r.y = r.ub ? sc_recip_norm(r.ub << r.s) : 0u;
+	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	int s = q_clz32(ub);
+	struct sc_recip r = { b, ub ? (sc_recip_norm(ub << s) & ~SC_RECIP_SMASK) | (uint32_t)s : 0u };
 	return r;
 }
 
 /* sc_div(a, r->b) without preparing the reciprocal again */
 static inline scalar_t sc_div_r(scalar_t a, const struct sc_recip *r)
 {
-	return sc_div_prepared(a, r->b, r->ub, r->s, r->y);
+	uint32_t ub = r->b < 0 ? 0u - (uint32_t)r->b : (uint32_t)r->b;
+	return sc_div_prepared(a, r->b, ub, (int)(r->ys & SC_RECIP_SMASK), r->ys & ~SC_RECIP_SMASK);
 }
+
+/* Prepared reciprocals of constants, as initialisers of a const struct sc_recip (sc_recip_of
+ * of the same divisor gives these; tests/core checks it) */
+#define SC_RECIP_3   { SC(3.0), 0xaaaaaaaeu }   /* y 0xaaaaaaa0, s 14 */
+#define SC_RECIP_100 { SC(100.0), 0xa3d70a29u } /* y 0xa3d70a20, s 9 */
 #else
 struct sc_recip {
 	scalar_t b;
@@ -48,6 +56,9 @@ static inline struct sc_recip sc_recip_of(scalar_t b)
 }
 
 static inline scalar_t sc_div_r(scalar_t a, const struct sc_recip *r) { return sc_div(a, r->b); }
+
+#define SC_RECIP_3   { SC(3.0) }
+#define SC_RECIP_100 { SC(100.0) }
 #endif
 
 #endif /* OCTO_SC_RECIP_H */

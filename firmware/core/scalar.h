@@ -31,6 +31,11 @@
  * The float build wraps <math.h> here and nowhere else in the core: this file
  * is the only libc the core uses besides <stdint.h>, <stdbool.h>, <stddef.h>.
  * Other fixed-point formats and their integer helpers: qfmt.h.
+ *
+ * Linkage in the fixed build: the non-trivial primitives (sc_from_float, sc_to_float,
+ * sc_add, sc_sub, sc_mul, sc_recip_norm, sc_div_prepared) are inline definitions with
+ * external linkage and sc_div a plain function, each with its one out-of-line copy in
+ * scalar.c: an object that does not inline one calls that copy (no static copy per object).
  */
 #ifndef OCTO_SCALAR_H
 #define OCTO_SCALAR_H
@@ -71,7 +76,7 @@ static inline scalar_t sc_sat64(int64_t v)
 
 /* Conversions to and from IEEE binary32 by integer bit assembly: no soft-float routine on a
  * core without FPU. sc_from_float rounds x 2^16 to nearest (ties away from zero). */
-static inline scalar_t sc_from_float(float x)
+inline scalar_t sc_from_float(float x)
 {
 	union { float f; uint32_t u; } v = { x };
 	uint32_t e = (v.u >> 23) & 0xffu, m = (v.u & 0x7fffffu) | 0x800000u;
@@ -88,7 +93,7 @@ static inline scalar_t sc_from_float(float x)
 }
 
 /* a 2^-16 as float, rounded to nearest even: the same value as (float)a / 65536 */
-static inline float sc_to_float(scalar_t a)
+inline float sc_to_float(scalar_t a)
 {
 	union { float f; uint32_t u; } v = { 0.0f };
 	if (a == 0)
@@ -115,13 +120,13 @@ static inline scalar_t sc_from_int(int32_t i) { return sc_sat64((int64_t)i * 655
 
 /* saturating sums in 32-bit words (no 64-bit arithmetic on Cortex-M0): the bound is
  * tested before the operation, and INT32_MIN (outside the range) becomes SC_MAX_NEG */
-static inline scalar_t sc_add(scalar_t a, scalar_t b)
+inline scalar_t sc_add(scalar_t a, scalar_t b)
 {
 	if (b >= 0)
 		return a > INT32_MAX - b ? SC_MAX : (a + b < -INT32_MAX ? SC_MAX_NEG : a + b);
 	return a < -INT32_MAX - b ? SC_MAX_NEG : a + b;
 }
-static inline scalar_t sc_sub(scalar_t a, scalar_t b)
+inline scalar_t sc_sub(scalar_t a, scalar_t b)
 {
 	if (b <= 0)
 		return a > INT32_MAX + b ? SC_MAX : (a - b < -INT32_MAX ? SC_MAX_NEG : a - b);
@@ -130,31 +135,50 @@ static inline scalar_t sc_sub(scalar_t a, scalar_t b)
 static inline scalar_t sc_neg(scalar_t a) { return a == INT32_MIN ? SC_MAX : -a; }
 static inline scalar_t sc_abs(scalar_t a) { return a < 0 ? sc_neg(a) : a; }
 
-/* |a b| 2^-16 rounded from four 16 x 16 products in 32-bit words (Cortex-M0 has no long
- * multiply): |a b| = hh 2^32 + (lh + hl) 2^16 + ll, so that
- * round(|a b| / 2^16) = hh 2^16 + lh + hl + floor((ll + 2^15) / 2^16) exactly; each carry
- * out of 32 bits means saturation */
-static inline scalar_t sc_mul(scalar_t a, scalar_t b)
+/* a b 2^-16 rounded to nearest, ties away from zero, saturating.
+ * With a long multiply (Cortex-M3/M4, hosts): the 64-bit product.
+ * Cortex-M0 has none (a 64-bit product is a library call there): |a b| 2^-16 rounded from
+ * 16 x 16 products in 32-bit words, with b the smaller magnitude:
+ * |a b| = hh 2^32 + (lh + hl) 2^16 + ll, so that round(|a b| / 2^16) = hh 2^16 + lh + hl + floor((ll + 2^15) / 2^16) exactly; each carry
+ * out of 32 bits means saturation. When |b| < 1 (bh = 0, the common case: gains, time
+ * steps, unit quaternions' components) hh = lh = 0 and two products suffice, and
+ * hl = ah bl < 2^31 cannot carry. */
+inline scalar_t sc_mul(scalar_t a, scalar_t b)
 {
+#if !defined(__ARM_ARCH_6M__)
+	int64_t p = (int64_t)a * b;                           /* |p| <= 2^62 */
+	int64_t r = p >= 0 ? (p + 32768) >> 16 : -((32768 - p) >> 16);
+	return r > INT32_MAX ? SC_MAX : (r < -INT32_MAX ? SC_MAX_NEG : (scalar_t)r);
+#else
 	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
 	bool neg = (a < 0) != (b < 0);
-	uint32_t hh = ah * bh;
-	if (hh >= 0x8000u)
-		return neg ? SC_MAX_NEG : SC_MAX;
-	uint32_t r = (hh << 16) + ((al * bl + 0x8000u) >> 16), lh = al * bh, hl = ah * bl;
-	r += lh;
-	if (r < lh)
-		return neg ? SC_MAX_NEG : SC_MAX;
-	r += hl;
-	if (r < hl || r > (uint32_t)INT32_MAX)
+	if (ub > ua) {
+		uint32_t t = ua;
+		ua = ub;
+		ub = t;
+	}
+	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
+	uint32_t r = ah * bl + ((al * bl + 0x8000u) >> 16);  /* < 2^31 + 2^16: no carry */
+	if (bh) {
+		uint32_t hh = ah * bh, lh = al * bh;
+		if (hh >= 0x8000u)
+			return neg ? SC_MAX_NEG : SC_MAX;
+		r += hh << 16;
+		if (r < (hh << 16))
+			return neg ? SC_MAX_NEG : SC_MAX;
+		r += lh;
+		if (r < lh)
+			return neg ? SC_MAX_NEG : SC_MAX;
+	}
+	if (r > (uint32_t)INT32_MAX)
 		return neg ? SC_MAX_NEG : SC_MAX;
 	return neg ? -(scalar_t)r : (scalar_t)r;
+#endif
 }
 
 /* 2^63 / v for v in [2^31, 2^32), within 2^-27 relative (at most 2^32 - 1): two Newton
  * steps y <- y (2 - v y) in 16-bit words from 48/17 - 32/17 v, then one on 2^47 - v y */
-static inline uint32_t sc_recip_norm(uint32_t v)
+inline uint32_t sc_recip_norm(uint32_t v)
 {
 	uint32_t v16 = v >> 16;                               /* Q16, [0.5, 1) */
 	uint32_t y = 92521u - ((61681u * v16) >> 16);         /* 1 / v in Q15 (error < 1/17) */
@@ -177,7 +201,7 @@ static inline uint32_t sc_recip_norm(uint32_t v)
  * y = sc_recip_norm(ub << s) (0 when b is 0). The quotient from the reciprocal, made exact
  * by its remainder. sc_div prepares the reciprocal on every call; sc_recip.h keeps it for a
  * divisor that changes rarely. */
-static inline scalar_t sc_div_prepared(scalar_t a, scalar_t b, uint32_t ub, int s, uint32_t y)
+inline scalar_t sc_div_prepared(scalar_t a, scalar_t b, uint32_t ub, int s, uint32_t y)
 {
 	if (ub == 0u)
 		return a > 0 ? SC_MAX : (a < 0 ? SC_MAX_NEG : 0);
@@ -206,13 +230,9 @@ static inline scalar_t sc_div_prepared(scalar_t a, scalar_t b, uint32_t ub, int 
 }
 
 /* a / b as sc_div_prepared defines it. No 64-bit division (a slow library loop on
- * Cortex-M0): the reciprocal of |b| by sc_recip_norm. */
-static inline scalar_t sc_div(scalar_t a, scalar_t b)
-{
-	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-	int s = q_clz32(ub);
-	return sc_div_prepared(a, b, ub, s, ub ? sc_recip_norm(ub << s) : 0u);
-}
+ * Cortex-M0): the reciprocal of |b| by sc_recip_norm. Out of line (scalar.c): the compilers
+ * kept it a call at every optimisation level. */
+scalar_t sc_div(scalar_t a, scalar_t b);
 
 /* step of the digit-by-digit square root: the next two bits of the radicand */
 static inline void sc_sqrt_step(uint32_t *r, uint32_t *rem, uint32_t pair)

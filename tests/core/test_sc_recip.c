@@ -43,3 +43,45 @@ UNIT_TEST(sc_recip_div_equals_sc_div)
 	CHECK(sc_div_r(1.0f, &z) == SC_MAX && sc_div_r(-1.0f, &z) == SC_MAX_NEG && sc_div_r(0.0f, &z) == 0.0f);
 #endif
 }
+
+/* quotients near the saturation bound (2^31 LSB), where the prepared reciprocal's error is
+ * largest in units of the quotient, and just beyond it */
+UNIT_TEST(sc_recip_div_large_quotients)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0x1a59ULL };
+	for (int i = 0; i < N_RAND; i++) {
+		int32_t b = (int32_t)unit_rand_uniform(&g, 1.0, 65536.0);
+		int32_t a = (int32_t)((double)b * unit_rand_uniform(&g, 32760.0, 32768.5));
+		if (unit_rand_uniform(&g, 0, 1) < 0.5)
+			b = -b;
+		struct sc_recip r = sc_recip_of(b);
+		if (sc_div_r(a, &r) != sc_div(a, b) || sc_div_r(-a, &r) != sc_div(-a, b)) {
+			unit_fail(u, __FILE__, __LINE__, "sc_div_r(%d, %d) = %d, sc_div %d", (int)a, (int)b,
+				  (int)sc_div_r(a, &r), (int)sc_div(a, b));
+			return;
+		}
+	}
+#else
+	(void)u;   /* the float build's quotients are the IEEE ones: nothing prepared */
+#endif
+}
+
+/* the constants' prepared reciprocals are sc_recip_of's, and divide as sc_div */
+UNIT_TEST(sc_recip_constants)
+{
+	const struct sc_recip c[2] = { SC_RECIP_3, SC_RECIP_100 };
+	const scalar_t b[2] = { SC(3.0), SC(100.0) };
+	struct unit_rng g = { 0x3100ULL };
+	for (int k = 0; k < 2; k++) {
+		struct sc_recip r = sc_recip_of(b[k]);
+		CHECK(c[k].b == r.b);
+#if OCTO_FIXED
+		CHECK(c[k].ys == r.ys);
+#endif
+		for (int i = 0; i < 2000; i++) {
+			scalar_t a = sc_from_float((float)unit_rand_uniform(&g, -32767.0, 32767.0));
+			CHECK(sc_div_r(a, &c[k]) == sc_div(a, b[k]));
+		}
+	}
+}

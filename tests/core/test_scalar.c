@@ -175,6 +175,52 @@ UNIT_TEST(scalar_mul_exact)
 #endif
 }
 
+/* sc_mul's two paths: the smaller magnitude below 1 (two products) or not (four), at their
+ * boundary (|b| = 2^16 - 1, 2^16, 2^16 + 1), in either operand order and both signs, with
+ * the other operand of every size up to saturation; against the 64-bit definition */
+UNIT_TEST(scalar_mul_paths_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0x5a1ULL };
+	static const int32_t small[] = { 0, 1, 2, 0x7fff, 0x8000, 0x8001, 0xfffe, 0xffff, 0x10000, 0x10001,
+					 0x1ffff, 0x20000 };
+	for (int i = 0; i < N_RAND; i++) {
+		int32_t b = small[i % (int)(sizeof small / sizeof small[0])];
+		double hi = 2147483647.0;
+		if (i % 3 == 0 && b) /* near the saturation bound: |a b| / 2^16 up to about 2^31 */
+			hi = fmin(hi, 2147483647.0 / ((double)b / 65536.0) * 1.001);
+		int32_t a = (int32_t)unit_rand_uniform(&g, 0, hi);
+		if (i % 3 == 1)
+			a >>= (int)unit_rand_uniform(&g, 0, 31);
+		for (int k = 0; k < 8; k++) {
+			int32_t x = k & 1 ? -a : a, y = k & 2 ? -b : b;
+			if (k & 4) {
+				int32_t tmp = x;
+				x = y;
+				y = tmp;
+			}
+			int64_t p = (int64_t)x * y;
+			p = (p >= 0 ? p + 32768 : p - 32768) / 65536;
+			scalar_t ref = p > INT32_MAX ? SC_MAX : (p < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)p);
+			if (sc_mul(x, y) != ref) {
+				unit_fail(u, __FILE__, __LINE__, "sc_mul(%d, %d) = %d, expected %d", (int)x, (int)y,
+					  (int)sc_mul(x, y), (int)ref);
+				return;
+			}
+		}
+	}
+	/* the smaller operand just below 1 with the largest other: the two-product path's
+	 * largest sum (ah bl + rounding), and ties */
+	CHECK(sc_mul(INT32_MAX, 0xffff) == (scalar_t)(((int64_t)INT32_MAX * 0xffff + 32768) / 65536));
+	CHECK(sc_mul(INT32_MIN, 0xffff) == -(scalar_t)(((int64_t)2147483648LL * 0xffff + 32768) / 65536));
+	CHECK(sc_mul(0xffff, INT32_MIN) == sc_mul(INT32_MIN, 0xffff));
+	CHECK(sc_mul(INT32_MIN, 0x10000) == SC_MAX_NEG && sc_mul(INT32_MAX, 0x10000) == INT32_MAX);
+	CHECK(sc_mul(3, 0x8000) == 2 && sc_mul(-3, 0x8000) == -2 && sc_mul(0x8000, 1) == 1);
+#else
+	(void)u;
+#endif
+}
+
 /* sc_div's worst cases: quotients near 2^31 and divisors near powers of two */
 UNIT_TEST(scalar_div_exact_edges)
 {

@@ -1,0 +1,38 @@
+/*
+ * scalar.c - the fixed build's one out-of-line copy of its scalar primitives.
+ *
+ * scalar.h (Q16.16) and qfmt.h define their non-trivial primitives `inline` with external
+ * linkage (C11 6.7.4): a compiler inlines one where it would inline a static function, and
+ * where it does not (Cortex-M0 builds at -Os) the object calls the copy emitted here by the
+ * `extern` declarations below, instead of keeping a static copy of its own. The trivial
+ * primitives (sc_neg, sc_min, q_sat32 ...) stay static inline. sc_div, a call wherever it
+ * is used, is defined here only.
+ */
+#include "scalar.h"
+
+#if OCTO_FIXED
+extern inline int64_t q_add64(int64_t a, int64_t b);
+extern inline uint64_t q_umul32(uint32_t a, uint32_t b);
+extern inline int64_t q_smul32(int32_t a, int32_t b);
+extern inline int q_clz32(uint32_t v);
+extern inline int q_clz64(uint64_t v);
+extern inline int64_t q_shr64(int64_t v, unsigned s);
+extern inline int64_t q_shl64(int64_t v, unsigned s);
+extern inline int64_t q_scale64(int64_t v, int s);
+extern inline int64_t q_mul64_32(int64_t a, int32_t b, unsigned s);
+
+extern inline scalar_t sc_from_float(float x);
+extern inline float sc_to_float(scalar_t a);
+extern inline scalar_t sc_add(scalar_t a, scalar_t b);
+extern inline scalar_t sc_sub(scalar_t a, scalar_t b);
+extern inline scalar_t sc_mul(scalar_t a, scalar_t b);
+extern inline uint32_t sc_recip_norm(uint32_t v);
+extern inline scalar_t sc_div_prepared(scalar_t a, scalar_t b, uint32_t ub, int s, uint32_t y);
+
+scalar_t sc_div(scalar_t a, scalar_t b)
+{
+	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	int s = q_clz32(ub);
+	return sc_div_prepared(a, b, ub, s, ub ? sc_recip_norm(ub << s) : 0u);
+}
+#endif
