@@ -20,10 +20,18 @@ typedef double ls_t;
 typedef float ls_t;
 #endif
 
-/* a rotor's least-squares sums under one hypothesis (SI units) */
-struct stat_f {
-	ls_t g11, g12, g22, b1, b2, rr;
-};
+/* a rotor's least-squares sums under one hypothesis (SI units): ls_t st[S_N], in the order of
+ * struct motor_id_stat's members and of their exponents MID_E_G11..MID_E_RR */
+enum { S_G11, S_G12, S_G22, S_B1, S_B2, S_RR, S_N };
+_Static_assert(sizeof(struct motor_id_stat) == S_N * sizeof(motor_id_sum_t) &&
+		       MID_E_RR - MID_E_G11 == S_RR - S_G11,
+	       "struct motor_id_stat: S_N sums in the order of their exponents");
+
+/* sum k of a struct motor_id_stat (its members are S_N sums, in order, without padding) */
+static motor_id_sum_t stat_sum(const struct motor_id_stat *s, unsigned k)
+{
+	return *(const motor_id_sum_t *)(const void *)((const char *)s + k * sizeof(motor_id_sum_t));
+}
 
 /* a sum of kind ev to ls_t (see mid_sum_to_float) */
 static ls_t sum_ls(motor_id_sum_t v, int ev, int p, int kexp)
@@ -38,17 +46,17 @@ static ls_t sum_ls(motor_id_sum_t v, int ev, int p, int kexp)
 /* rotor j's throttle at the start, as float */
 #define SC_J(m, j) mid_u_to_float((m)->s_c[j])
 
-/* the sums of m->st[d][i][j] in float */
-static void stat_get(const struct motor_id *m, unsigned d, unsigned i, unsigned j, struct stat_f *o)
+/* Rotor j's statistics of delay d: at grid point gi (< NL), or (gi = NL) interpolated over the
+ * grid with the weights l. Sums of kind G (power of thrust 0), B (1), RR (2). */
+static void stat_at(const struct motor_id *m, unsigned d, unsigned gi, const ls_t l[3], unsigned j, ls_t o[S_N])
 {
-	const struct motor_id_stat *s = &m->st[d][i][j];
-	const int k = m->kexp;
-	o->g11 = sum_ls(s->g11, m->e[MID_E_G11], 0, k);
-	o->g12 = sum_ls(s->g12, m->e[MID_E_G12], 0, k);
-	o->g22 = sum_ls(s->g22, m->e[MID_E_G22], 0, k);
-	o->b1 = sum_ls(s->b1, m->e[MID_E_B1], 1, k);
-	o->b2 = sum_ls(s->b2, m->e[MID_E_B2], 1, k);
-	o->rr = sum_ls(s->rr, m->e[MID_E_RR], 2, k);
+	for (unsigned k = 0; k < S_N; k++) {
+		ls_t v[NL];
+		for (unsigned i = 0; i < NL; i++)
+			v[i] = sum_ls(stat_sum(&m->st[d][i][j], k), m->e[MID_E_G11 + k], (int)(k > S_G22) + (int)(k > S_B2),
+				      m->kexp);
+		o[k] = gi < NL ? v[gi] : l[0] * v[0] + l[1] * v[1] + l[2] * v[2];
+	}
 }
 
 /* the reference model's k_f and curve (exactly the per-frame part's) */
@@ -147,119 +155,6 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const sca
 }
 
 
-static void delay_crit(const struct motor_id *m, unsigned d, float jv[3]);
-static float parabola(const float sv[3], float *s_min, float *k);
-static void lagrange3(float x, float l[3]);
-static void lagrange3_ls(float x, ls_t l[3]);
-static void interp_stat(const struct stat_f st[3], const ls_t l[3], struct stat_f *o);
-static void stat_at(const struct motor_id *m, unsigned d, const ls_t l[3], unsigned j, struct stat_f *o);
-static float delay_logssr(const struct motor_id *m, unsigned d, float x);
-static float rotor_ssr(const struct stat_f *st, bool est_curve, float c0, float s_c, float delta[2]);
-
-/* Freezes the model the whiteness test follows, from the last stage's data so far: the delay
- * the bank prefers (or the given one), its lag at the criterion's minimum (a filter of its own,
- * started from the grid's states interpolated there), every rotor's fit at that lag. */
-/* the hypothesis the data so far prefer (or the given delay) and its lag's grid position */
-static void best_hyp(const struct motor_id *m, unsigned *d_best, float *x_best)
-{
-	unsigned d = 0;
-	float x = 0.0f, best = 0.0f;
-	for (unsigned k = 0; k < ND; k++) {
-		float sv[3], jmin, kk;
-		delay_crit(m, k, sv);
-		float xk = parabola(sv, &jmin, &kk);
-		if (m->cfg.fix_delay) {
-			if (k == m->cfg.delay_fr) {
-				d = k;
-				x = xk;
-			}
-			continue;
-		}
-		float v = delay_logssr(m, k, xk);
-		if (k == 0u || v < best) {
-			best = v;
-			d = k;
-			x = xk;
-		}
-	}
-	*d_best = d;
-	*x_best = x;
-}
-
-static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, float *curve, float sc[NR]);
-
-/* A new reference model: common k_f and curve (the curve only when estimated); kept within
- * a quarter to four times the prior and the throttle map's curve range (and, fixed build,
- * what Q1.30 holds of k_f 2^-kexp), else unchanged. */
-static void set_reference(struct motor_id *m, float kf, float c)
-{
-	if (!m->cfg.est_curve)
-		c = m->cfg.curve0;
-	if (!(kf >= 0.25f * m->cfg.kf0 && kf <= 4.0f * m->cfg.kf0 && c >= THRMAP_CURVE_MIN && c <= THRMAP_CURVE_MAX))
-		return;
-#if OCTO_FIXED
-	float kn = kf * sc_pow2f(-m->kexp);
-	if (!(kn < 1.9f))
-		return;
-	m->kf0n = mid_u_of_float(kn);
-#else
-	m->kf0n = kf;
-#endif
-	m->c0 = mid_u_of_float(c);
-}
-
-/* the statistics restart (the lag filters run on) */
-static void stats_restart(struct motor_id *m)
-{
-	for (unsigned d = 0; d < ND; d++)
-		for (unsigned i = 0; i < NL; i++)
-			for (unsigned j = 0; j < NR; j++)
-				m->st[d][i][j] = (struct motor_id_stat){0};
-	for (unsigned k = MID_E_G11; k <= MID_E_RR; k++)
-		m->e[k] = MOTOR_ID_E0;
-	m->n_stat = 0;
-}
-
-/* the data so far's fit for a reference: the preferred hypothesis' k_f and curve (false:
- * too few frames) */
-static bool reference_fit(const struct motor_id *m, float *kf, float *c)
-{
-	if (m->n_stat < 10u)
-		return false;
-	unsigned d;
-	float x, sc[NR];
-	best_hyp(m, &d, &x);
-	model_at(m, d, x, kf, c, sc);
-	return true;
-}
-
-static void white_begin(struct motor_id *m)
-{
-	struct motor_id_white *w = &m->wh;
-	*w = (struct motor_id_white){0};
-	m->e[MID_E_WSE] = m->e[MID_E_WSEE] = MOTOR_ID_E0;
-	unsigned d;
-	float x;
-	best_hyp(m, &d, &x);
-	float l[3], dl[2];
-	ls_t ll[3];
-	lagrange3(x, l);
-	lagrange3_ls(x, ll);
-	for (unsigned j = 0; j < NR; j++) {
-		struct stat_f o;
-		stat_at(m, d, ll, j, &o);
-		rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, SC_J(m, j), dl);
-		w->dl[j][0] = mid_f_of_float(dl[0], m->kexp);
-		w->dl[j][1] = mid_f_of_float(dl[1], m->kexp);
-		w->s[j] = mid_u_of_float(l[0] * mid_u_to_float(m->s[d][0][j]) + l[1] * mid_u_to_float(m->s[d][1][j]) +
-					 l[2] * mid_u_to_float(m->s[d][2][j]));
-	}
-	w->k1 = mid_u_of_float(lag_k1(clampf(m->lag_c[d] * powf(m->lag_r[d], x), MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX),
-				      sc_to_float(m->cfg.dt_s)));
-	w->delay = (uint8_t)d;
-	w->on = true;
-}
-
 /* the prior curve's regressor on the basis: g0 = w1 x1 + w2 x2 */
 static void curve_w(float c, float s_c, float w[2])
 {
@@ -269,37 +164,42 @@ static void curve_w(float c, float s_c, float w[2])
 
 /* residual sum of squares of one rotor's statistics: 2 parameters (curve estimated) or the
  * prior curve's 1; delta = the fitted change of theta from the reference (2 values) */
-static float rotor_ssr(const struct stat_f *st, bool est_curve, float c0, float s_c,
-		       float delta[2])
+static float rotor_ssr(const ls_t st[S_N], bool est_curve, float c0, float s_c, float delta[2])
 {
 	if (est_curve) {
-		ls_t det = st->g11 * st->g22 - st->g12 * st->g12;
-		if (!(det > (ls_t)1e-30f * st->g11 * st->g22) || !(st->g11 > 0)) {
+		ls_t det = st[S_G11] * st[S_G22] - st[S_G12] * st[S_G12];
+		if (!(det > (ls_t)1e-30f * st[S_G11] * st[S_G22]) || !(st[S_G11] > 0)) {
 			delta[0] = delta[1] = 0.0f;
-			return (float)st->rr;
+			return (float)st[S_RR];
 		}
-		ls_t d0 = (st->g22 * st->b1 - st->g12 * st->b2) / det;
-		ls_t d1 = (st->g11 * st->b2 - st->g12 * st->b1) / det;
+		ls_t d0 = (st[S_G22] * st[S_B1] - st[S_G12] * st[S_B2]) / det;
+		ls_t d1 = (st[S_G11] * st[S_B2] - st[S_G12] * st[S_B1]) / det;
 		delta[0] = (float)d0;
 		delta[1] = (float)d1;
-		ls_t ssr = st->rr - d0 * st->b1 - d1 * st->b2;
+		ls_t ssr = st[S_RR] - d0 * st[S_B1] - d1 * st[S_B2];
 		return ssr > 0 ? (float)ssr : 0.0f;
 	}
 	float w[2];
 	curve_w(c0, s_c, w);
 	ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1];
-	ls_t gw = w0 * w0 * st->g11 + (ls_t)2.0f * w0 * w1 * st->g12 + w1 * w1 * st->g22;
-	ls_t bw = w0 * st->b1 + w1 * st->b2;
+	ls_t gw = w0 * w0 * st[S_G11] + (ls_t)2.0f * w0 * w1 * st[S_G12] + w1 * w1 * st[S_G22];
+	ls_t bw = w0 * st[S_B1] + w1 * st[S_B2];
 	ls_t mu = gw > 0 ? bw / gw : 0;
 	delta[0] = (float)(mu * w0);
 	delta[1] = (float)(mu * w1);
-	ls_t ssr = st->rr - mu * bw;
+	ls_t ssr = st[S_RR] - mu * bw;
 	return ssr > 0 ? (float)ssr : 0.0f;
 }
 
-/* parabola through (-1, s0), (0, s1), (1, s2): minimum x (clamped to +/-X_MAX), the value
- * there and the curvature k (S = S_min + k (x - x*)^2; 0 when not convex) */
-static float parabola(const float sv[3], float *s_min, float *k)
+/* rotor j's residual sum of squares under the configured model */
+static float rotor_ssr_m(const struct motor_id *m, const ls_t st[S_N], unsigned j, float delta[2])
+{
+	return rotor_ssr(st, m->cfg.est_curve, m->cfg.curve0, SC_J(m, j), delta);
+}
+
+/* parabola through (-1, s0), (0, s1), (1, s2): minimum x (clamped to +/-X_MAX) and the
+ * curvature k (S = S_min + k (x - x*)^2; 0 when not convex) */
+static float parabola(const float sv[3], float *k)
 {
 	float den = sv[0] - 2.0f * sv[1] + sv[2];
 	float x;
@@ -308,13 +208,11 @@ static float parabola(const float sv[3], float *s_min, float *k)
 	else
 		x = sv[0] < sv[2] ? -X_MAX : X_MAX;
 	*k = den > 0.0f ? 0.5f * den : 0.0f;
-	*s_min = sv[1] + 0.5f * x * (sv[2] - sv[0]) + 0.5f * x * x * den;
 	return x;
 }
 
-/* Lagrange weights of the three grid points at x */
-/* the same in ls_t (the weights of the statistics: their rounding would perturb sums that
- * the solutions difference) */
+/* Lagrange weights of the three grid points at x, in ls_t (the weights of the statistics:
+ * their rounding would perturb sums that the solutions difference) */
 static void lagrange3_ls(float x, ls_t l[3])
 {
 	const ls_t xl = (ls_t)x;
@@ -323,6 +221,7 @@ static void lagrange3_ls(float x, ls_t l[3])
 	l[2] = (ls_t)0.5f * xl * (xl + (ls_t)1.0f);
 }
 
+/* the same in float */
 static void lagrange3(float x, float l[3])
 {
 	l[0] = 0.5f * x * (x - 1.0f);
@@ -342,9 +241,9 @@ static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
 	for (unsigned i = 0; i < NL; i++) {
 		tot[i] = 0.0f;
 		for (unsigned j = 0; j < NR; j++) {
-			struct stat_f o;
-			stat_get(m, d, i, j, &o);
-			e[i][j] = rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, SC_J(m, j), dl);
+			ls_t o[S_N];
+			stat_at(m, d, i, 0, j, o);
+			e[i][j] = rotor_ssr_m(m, o, j, dl);
 			tot[i] += e[i][j];
 		}
 		if (tot[i] < tot[ib])
@@ -357,91 +256,6 @@ static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
 	}
 }
 
-void motor_id_refine(struct motor_id *m)
-{
-	motor_id_process(m);
-	if (m->white_due) {
-		m->white_due = false;
-		white_begin(m);
-	}
-	if (m->reref_due) {   /* early in the first stage: re-fit the reference, restart */
-		m->reref_due = false;
-		m->reref_done = true;
-		float kf, c;
-		if (!m->refine_due && reference_fit(m, &kf, &c)) {
-			stats_restart(m);
-			set_reference(m, kf, c);
-		}
-	}
-	if (!m->refine_due)
-		return;
-	m->refine_due = false;
-	unsigned next = m->stage + 1u;
-	if (next >= MOTOR_ID_STAGES)
-		return;
-	float dt = sc_to_float(m->cfg.dt_s), tau_hi = 0.0f;
-	/* the next stage's reference: this one's fit (relative to this reference) */
-	float kf_ref, c_ref;
-	bool have_ref = reference_fit(m, &kf_ref, &c_ref);
-	for (unsigned d = 0; d < ND; d++) {
-		float sv[3], smin, k;
-		delay_crit(m, d, sv);
-		float x = m->n_stat > 0u ? parabola(sv, &smin, &k) : 0.0f;
-		float r = m->lag_r[d];
-		/* a minimum below the grid walks twice as far (towards no lag at all) */
-		float centre = m->lag_c[d] * powf(r, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
-		/* the lag states at the new taus: quadratic interpolation in log tau of the old.
-		 * A minimum outside the grid narrows it less (the grid walks towards it) */
-		float nr = stage_ratio[next];
-		if (fabsf(x) > 1.0f)
-			nr = fmaxf(nr, sqrtf(r));
-		float xs[3], old[NL][NR];
-		for (unsigned i = 0; i < NL; i++)
-			for (unsigned j = 0; j < NR; j++)
-				old[i][j] = mid_u_to_float(m->s[d][i][j]);
-		for (int i = 0; i < (int)NL; i++) {
-			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * powf(nr, (float)(i - 1));
-			xs[i] = clampf(logf(tau_i / m->lag_c[d]) / logf(r), -X_MAX, X_MAX);
-		}
-		for (unsigned i = 0; i < NL; i++) {
-			float l[3];
-			lagrange3(xs[i], l);
-			for (unsigned j = 0; j < NR; j++)
-				m->s[d][i][j] = mid_u_of_float(l[0] * old[0][j] + l[1] * old[1][j] + l[2] * old[2][j]);
-		}
-		set_grid(m, d, centre, nr);
-		tau_hi = fmaxf(tau_hi, m->lag_c[d] * nr);
-	}
-	stats_restart(m);
-	if (have_ref)
-		set_reference(m, kf_ref, c_ref);
-	m->stage = (uint8_t)next;
-	m->n_next = next_due(m);
-	/* what the interpolation left decays with the lag: wait two time constants */
-	float fr = dt > 0.0f ? 2.0f * tau_hi / dt : 0.0f;
-	m->skip = (uint8_t)clampf(fr + 1.0f, 1.0f, 30.0f);
-}
-
-static void interp_stat(const struct stat_f st[3], const ls_t l[3], struct stat_f *o)
-{
-	const ls_t l0 = l[0], l1 = l[1], l2 = l[2];
-	o->g11 = l0 * st[0].g11 + l1 * st[1].g11 + l2 * st[2].g11;
-	o->g12 = l0 * st[0].g12 + l1 * st[1].g12 + l2 * st[2].g12;
-	o->g22 = l0 * st[0].g22 + l1 * st[1].g22 + l2 * st[2].g22;
-	o->b1 = l0 * st[0].b1 + l1 * st[1].b1 + l2 * st[2].b1;
-	o->b2 = l0 * st[0].b2 + l1 * st[1].b2 + l2 * st[2].b2;
-	o->rr = l0 * st[0].rr + l1 * st[1].rr + l2 * st[2].rr;
-}
-
-/* rotor j's statistics of delay d at the grid weights l */
-static void stat_at(const struct motor_id *m, unsigned d, const ls_t l[3], unsigned j, struct stat_f *o)
-{
-	struct stat_f tri[3];
-	for (unsigned i = 0; i < NL; i++)
-		stat_get(m, d, i, j, &tri[i]);
-	interp_stat(tri, l, o);
-}
-
 /* sum over rotors of log SSR_j of delay d at grid position x (statistics interpolated) */
 static float delay_logssr(const struct motor_id *m, unsigned d, float x)
 {
@@ -449,23 +263,51 @@ static float delay_logssr(const struct motor_id *m, unsigned d, float x)
 	ls_t l[3];
 	lagrange3_ls(x, l);
 	for (unsigned j = 0; j < NR; j++) {
-		struct stat_f o;
-		stat_at(m, d, l, j, &o);
-		sum += logf(fmaxf(rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, SC_J(m, j), dl), 1e-30f));
+		ls_t o[S_N];
+		stat_at(m, d, NL, l, j, o);
+		sum += logf(fmaxf(rotor_ssr_m(m, o, j, dl), 1e-30f));
 	}
 	return sum;
 }
 
+/* Every delay hypothesis at its criterion's minimum: grid position xs, curvature ks (see
+ * parabola), interpolated sum of log SSR smin. Returns the delay of least smin (the first
+ * of equals). */
+static unsigned delay_scan(const struct motor_id *m, float xs[ND], float ks[ND], float smin[ND])
+{
+	unsigned best = 0;
+	for (unsigned d = 0; d < ND; d++) {
+		float sv[3];
+		delay_crit(m, d, sv);
+		xs[d] = parabola(sv, &ks[d]);
+		smin[d] = delay_logssr(m, d, xs[d]);
+		if (smin[d] < smin[best])
+			best = d;
+	}
+	return best;
+}
+
+/* the hypothesis the data so far prefer (or the given delay) and its lag's grid position */
+static void best_hyp(const struct motor_id *m, unsigned *d_best, float *x_best)
+{
+	float xs[ND], ks[ND], smin[ND];
+	unsigned d = delay_scan(m, xs, ks, smin);
+	if (m->cfg.fix_delay)
+		d = m->cfg.delay_fr;
+	*d_best = d < ND ? d : 0u;
+	*x_best = d < ND ? xs[d] : 0.0f;
+}
+
 /* rotor's m at curve c from its statistics: sum g f / sum g^2 with g = w^T x and
  * sum x f = b + G theta_ref; *gw = sum g^2 */
-static float rotor_m(const struct stat_f *st, float c, float s_c, const float th_ref[2], float *gw)
+static float rotor_m(const ls_t st[S_N], float c, float s_c, const float th_ref[2], float *gw)
 {
 	float w[2];
 	curve_w(c, s_c, w);
 	const ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1], t0 = (ls_t)th_ref[0], t1 = (ls_t)th_ref[1];
-	ls_t xf1 = st->b1 + st->g11 * t0 + st->g12 * t1;
-	ls_t xf2 = st->b2 + st->g12 * t0 + st->g22 * t1;
-	ls_t g = w0 * w0 * st->g11 + (ls_t)2.0f * w0 * w1 * st->g12 + w1 * w1 * st->g22;
+	ls_t xf1 = st[S_B1] + st[S_G11] * t0 + st[S_G12] * t1;
+	ls_t xf2 = st[S_B2] + st[S_G12] * t0 + st[S_G22] * t1;
+	ls_t g = w0 * w0 * st[S_G11] + (ls_t)2.0f * w0 * w1 * st[S_G12] + w1 * w1 * st[S_G22];
 	*gw = (float)g;
 	return g > 0 ? (float)((w0 * xf1 + w1 * xf2) / g) : 0.0f;
 }
@@ -506,57 +348,222 @@ static void ref_theta(const struct motor_id *m, unsigned j, float th[2])
 
 /* Rotor j's own curve: the 2-parameter fit about the prior's reference th, c_j = B / m_j,
  * with its variance (0: not determined) and the fit's residual sum of squares *ssr2. */
-static float rotor_curve(const struct motor_id *m, const struct stat_f *st, unsigned j,
-			 const float th[2], float *ssr2, float *var)
+static float rotor_curve(const struct motor_id *m, const ls_t st[S_N], unsigned j, const float th[2], float *ssr2,
+			 float *var)
 {
 	float d2[2];
 	*ssr2 = rotor_ssr(st, true, m->cfg.curve0, SC_J(m, j), d2);
 	float a = th[0] + d2[0], bq = th[1] + d2[1];
 	float mj = a + bq * (1.0f - 2.0f * SC_J(m, j));
-	ls_t det = st->g11 * st->g22 - st->g12 * st->g12;
+	ls_t det = st[S_G11] * st[S_G22] - st[S_G12] * st[S_G12];
 	*var = 0.0f;
 	if (!(mj > 0.0f && det > 0))
 		return 0.0f;
 	const ls_t ga = (ls_t)(-bq / (mj * mj)), gb = (ls_t)(a / (mj * mj));
 	/* g^T G^-1 g */
-	float q = (float)((ga * ga * st->g22 - (ls_t)2.0f * ga * gb * st->g12 + gb * gb * st->g11) / det);
+	float q = (float)((ga * ga * st[S_G22] - (ls_t)2.0f * ga * gb * st[S_G12] + gb * gb * st[S_G11]) / det);
 	*var = *ssr2 / ((float)m->n_stat - 2.0f) * q;
 	return bq / mj;
 }
 
-/* k_f, the common curve and the rotors' scales from delay d's statistics at grid position x,
- * by the same steps as motor_id_solve (curve unclamped): their change with x is the lag's
- * share of their variances (the lag's error is uncorrelated with theirs at a fixed lag, to
- * first order: the profile's gradient is orthogonal to their regressors) */
-static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, float *curve, float sc[NR])
+/* the model of delay d's statistics at grid position x (see fit_at) */
+struct fit {
+	float th[NR][2];         /* each rotor's reference theta */
+	float ssr[NR], s2[NR];   /* residual sum of squares under the configured model, variance */
+	float mj[NR], vm[NR];    /* each rotor's m at the common curve, its variance */
+	float mj_e[NR];          /* m at the common curve + FIT_EPS */
+	float scale[NR];
+	float ssr_sum, chi2;     /* sum of ssr; sum of ssr less the rotors' own curves' SSRs */
+	float curve, curve_sd, kf;
+	unsigned ia, ib;         /* the rotors whose mean is the median */
+};
+#define FIT_EPS 1e-3f
+
+/* Every rotor's fit at delay d's grid position x: its residual sum of squares, its own curve
+ * (2-parameter fit); the common curve (with est_curve: the inverse-variance mean of the
+ * rotors', unclamped: a linear rotor's estimate scatters on both sides of 0, and a boundary
+ * there would bias the curve, and with it k_f, high; the caller's range check names the
+ * bounds); each rotor's m at that curve, k_f = their median, the scales. */
+static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f)
 {
-	const float c0 = m->cfg.curve0;
-	float th[NR][2], mj[NR];
-	ls_t l[3];
-	struct stat_f st;   /* one rotor's at a time (interpolated again below): stack on M0 */
+	const bool ec = m->cfg.est_curve;
+	const float np = ec ? 2.0f : 1.0f;
+	float cj[NR], vcj[NR];
+	ls_t l[3], st[S_N];   /* one rotor's statistics at a time (interpolated again below): stack on M0 */
 	lagrange3_ls(x, l);
-	float sw = 0.0f, swc = 0.0f;
+	f->ssr_sum = f->chi2 = 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
-		ref_theta(m, j, th[j]);
-		if (!m->cfg.est_curve)
-			continue;
-		stat_at(m, d, l, j, &st);
-		float ssr2, v, c = rotor_curve(m, &st, j, th[j], &ssr2, &v);
-		if (v > 0.0f) {
-			sw += 1.0f / v;
-			swc += c / v;
+		float dl[2], ssr2;
+		stat_at(m, d, NL, l, j, st);
+		ref_theta(m, j, f->th[j]);
+		f->ssr[j] = rotor_ssr_m(m, st, j, dl);
+		f->ssr_sum += f->ssr[j];
+		f->s2[j] = f->ssr[j] / ((float)m->n_stat - np);
+		cj[j] = rotor_curve(m, st, j, f->th[j], &ssr2, &vcj[j]);
+		f->chi2 += f->ssr[j] - ssr2;
+	}
+	float sw = 0.0f, swc = 0.0f;
+	for (unsigned j = 0; j < NR; j++)
+		if (vcj[j] > 0.0f) {
+			sw += 1.0f / vcj[j];
+			swc += cj[j] / vcj[j];
+		}
+	const bool have_c = ec && sw > 0.0f;
+	f->curve = have_c ? swc / sw : m->cfg.curve0;
+	f->curve_sd = have_c ? sqrt0(1.0f / sw) : 0.0f;
+	for (unsigned j = 0; j < NR; j++) {
+		float gw, gw2;
+		stat_at(m, d, NL, l, j, st);
+		f->mj[j] = rotor_m(st, f->curve, SC_J(m, j), f->th[j], &gw);
+		f->mj_e[j] = rotor_m(st, f->curve + FIT_EPS, SC_J(m, j), f->th[j], &gw2);
+		f->vm[j] = gw > 0.0f ? f->s2[j] / gw : 0.0f;
+	}
+	f->kf = median8(f->mj, &f->ia, &f->ib);
+	for (unsigned j = 0; j < NR; j++)
+		f->scale[j] = f->kf > 0.0f ? f->mj[j] / f->kf : 0.0f;
+}
+
+/* A new reference model: common k_f and curve (the curve only when estimated); kept within
+ * a quarter to four times the prior and the throttle map's curve range (and, fixed build,
+ * what Q1.30 holds of k_f 2^-kexp), else unchanged. */
+static void set_reference(struct motor_id *m, float kf, float c)
+{
+	if (!m->cfg.est_curve)
+		c = m->cfg.curve0;
+	if (!(kf >= 0.25f * m->cfg.kf0 && kf <= 4.0f * m->cfg.kf0 && c >= THRMAP_CURVE_MIN && c <= THRMAP_CURVE_MAX))
+		return;
+#if OCTO_FIXED
+	float kn = kf * sc_pow2f(-m->kexp);
+	if (!(kn < 1.9f))
+		return;
+	m->kf0n = mid_u_of_float(kn);
+#else
+	m->kf0n = kf;
+#endif
+	m->c0 = mid_u_of_float(c);
+}
+
+/* the statistics restart (the lag filters run on) */
+static void stats_restart(struct motor_id *m)
+{
+	for (unsigned d = 0; d < ND; d++)
+		for (unsigned i = 0; i < NL; i++)
+			for (unsigned j = 0; j < NR; j++)
+				m->st[d][i][j] = (struct motor_id_stat){0};
+	for (unsigned k = MID_E_G11; k <= MID_E_RR; k++)
+		m->e[k] = MOTOR_ID_E0;
+	m->n_stat = 0;
+}
+
+/* the data so far's fit for a reference: the preferred hypothesis' k_f and curve (false:
+ * too few frames) */
+static bool reference_fit(const struct motor_id *m, float *kf, float *c)
+{
+	if (m->n_stat < 10u)
+		return false;
+	unsigned d;
+	float x;
+	struct fit f;
+	best_hyp(m, &d, &x);
+	fit_at(m, d, x, &f);
+	*kf = f.kf;
+	*c = f.curve;
+	return true;
+}
+
+/* Freezes the model the whiteness test follows, from the last stage's data so far: the delay
+ * the bank prefers (or the given one), its lag at the criterion's minimum (a filter of its own,
+ * started from the grid's states interpolated there), every rotor's fit at that lag. */
+static void white_begin(struct motor_id *m)
+{
+	struct motor_id_white *w = &m->wh;
+	*w = (struct motor_id_white){0};
+	m->e[MID_E_WSE] = m->e[MID_E_WSEE] = MOTOR_ID_E0;
+	unsigned d;
+	float x;
+	best_hyp(m, &d, &x);
+	float l[3], dl[2];
+	ls_t ll[3];
+	lagrange3(x, l);
+	lagrange3_ls(x, ll);
+	for (unsigned j = 0; j < NR; j++) {
+		ls_t o[S_N];
+		stat_at(m, d, NL, ll, j, o);
+		rotor_ssr_m(m, o, j, dl);
+		w->dl[j][0] = mid_f_of_float(dl[0], m->kexp);
+		w->dl[j][1] = mid_f_of_float(dl[1], m->kexp);
+		w->s[j] = mid_u_of_float(l[0] * mid_u_to_float(m->s[d][0][j]) + l[1] * mid_u_to_float(m->s[d][1][j]) +
+					 l[2] * mid_u_to_float(m->s[d][2][j]));
+	}
+	w->k1 = mid_u_of_float(lag_k1(clampf(m->lag_c[d] * powf(m->lag_r[d], x), MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX),
+				      sc_to_float(m->cfg.dt_s)));
+	w->delay = (uint8_t)d;
+	w->on = true;
+}
+
+void motor_id_refine(struct motor_id *m)
+{
+	motor_id_process(m);
+	if (m->white_due) {
+		m->white_due = false;
+		white_begin(m);
+	}
+	if (m->reref_due) {   /* early in the first stage: re-fit the reference, restart */
+		m->reref_due = false;
+		m->reref_done = true;
+		float kf, c;
+		if (!m->refine_due && reference_fit(m, &kf, &c)) {
+			stats_restart(m);
+			set_reference(m, kf, c);
 		}
 	}
-	*curve = m->cfg.est_curve && sw > 0.0f ? swc / sw : c0;
-	for (unsigned j = 0; j < NR; j++) {
-		float gw;
-		stat_at(m, d, l, j, &st);
-		mj[j] = rotor_m(&st, *curve, SC_J(m, j), th[j], &gw);
+	if (!m->refine_due)
+		return;
+	m->refine_due = false;
+	unsigned next = m->stage + 1u;
+	if (next >= MOTOR_ID_STAGES)
+		return;
+	float dt = sc_to_float(m->cfg.dt_s), tau_hi = 0.0f;
+	/* the next stage's reference: this one's fit (relative to this reference) */
+	float kf_ref = 0.0f, c_ref = 0.0f;
+	bool have_ref = reference_fit(m, &kf_ref, &c_ref);
+	for (unsigned d = 0; d < ND; d++) {
+		float sv[3], k;
+		delay_crit(m, d, sv);
+		float x = m->n_stat > 0u ? parabola(sv, &k) : 0.0f;
+		float r = m->lag_r[d];
+		/* a minimum below the grid walks twice as far (towards no lag at all) */
+		float centre = m->lag_c[d] * powf(r, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
+		/* the lag states at the new taus: quadratic interpolation in log tau of the old.
+		 * A minimum outside the grid narrows it less (the grid walks towards it) */
+		float nr = stage_ratio[next];
+		if (fabsf(x) > 1.0f)
+			nr = fmaxf(nr, sqrtf(r));
+		float xs[3], old[NL][NR];
+		for (unsigned i = 0; i < NL; i++)
+			for (unsigned j = 0; j < NR; j++)
+				old[i][j] = mid_u_to_float(m->s[d][i][j]);
+		for (int i = 0; i < (int)NL; i++) {
+			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * powf(nr, (float)(i - 1));
+			xs[i] = clampf(logf(tau_i / m->lag_c[d]) / logf(r), -X_MAX, X_MAX);
+		}
+		for (unsigned i = 0; i < NL; i++) {
+			float l[3];
+			lagrange3(xs[i], l);
+			for (unsigned j = 0; j < NR; j++)
+				m->s[d][i][j] = mid_u_of_float(l[0] * old[0][j] + l[1] * old[1][j] + l[2] * old[2][j]);
+		}
+		set_grid(m, d, centre, nr);
+		tau_hi = fmaxf(tau_hi, m->lag_c[d] * nr);
 	}
-	unsigned ia, ib;
-	*kf = median8(mj, &ia, &ib);
-	for (unsigned j = 0; j < NR; j++)
-		sc[j] = *kf > 0.0f ? mj[j] / *kf : 0.0f;
+	stats_restart(m);
+	if (have_ref)
+		set_reference(m, kf_ref, c_ref);
+	m->stage = (uint8_t)next;
+	m->n_next = next_due(m);
+	/* what the interpolation left decays with the lag: wait two time constants */
+	float fr = dt > 0.0f ? 2.0f * tau_hi / dt : 0.0f;
+	m->skip = (uint8_t)clampf(fr + 1.0f, 1.0f, 30.0f);
 }
 
 /* The lag's grid position x refined from the parabola's by Newton steps on the profile
@@ -671,12 +678,19 @@ static enum motor_id_cause white_cause(const struct motor_id_result *res, int *r
 	return MOTOR_ID_COLOURED;
 }
 
+/* the normalised errors' limit: ne_max, or NE_SIGMAS standard deviations of the ratio of two
+ * variance estimates (the fit's, dof degrees of freedom; the noise's, relative variance v_nz)
+ * when the data are few */
+static float ne_limit(float ne_max, float dof, float v_nz)
+{
+	return fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof, 1.0f) + v_nz));
+}
+
 void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_result *res)
 {
 	*res = (struct motor_id_result){0};
 	res->cause_rotor = -1;
 	const bool ec = m->cfg.est_curve;
-	const float c0 = m->cfg.curve0;
 	const unsigned np = ec ? 2u : 1u;
 	res->n = m->n_stat;
 	if (m->n_stat < 30u) {
@@ -687,16 +701,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 
 	/* the delay hypothesis of least criterion at its best lag */
 	float smin[ND], xs[ND], ks[ND];
-	unsigned best = 0;
-	for (unsigned d = 0; d < ND; d++) {
-		float sv[3];
-		delay_crit(m, d, sv);
-		float jmin;
-		xs[d] = parabola(sv, &jmin, &ks[d]);
-		smin[d] = delay_logssr(m, d, xs[d]);
-		if (smin[d] < smin[best])
-			best = d;
-	}
+	unsigned best = delay_scan(m, xs, ks, smin);
 	res->free_delay = best;
 	if (m->cfg.fix_delay)
 		best = m->cfg.delay_fr < ND ? m->cfg.delay_fr : ND - 1u;
@@ -726,72 +731,36 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->tau_sd = NO_LAG_FRAC * dtf;
 	}
 
-	/* every rotor at that lag */
-	ls_t l[3];
-	lagrange3_ls(x, l);
-	struct stat_f st;   /* one rotor's at a time (interpolated again below): stack on M0 */
-	float ssr[NR], cj[NR], vcj[NR], s2j[NR], th_ref[NR][2];
-	float ssr_sum = 0.0f, chi2 = 0.0f;
+	/* every rotor at that lag: the common curve, each rotor's m, k_f = their median, scales */
+	struct fit f;
+	fit_at(m, best, x, &f);
+	res->curve = f.curve;
+	res->curve_sd = f.curve_sd;
+	res->kf = f.kf;
+	float dkdc = (0.5f * (f.mj_e[f.ia] + f.mj_e[f.ib]) - res->kf) / FIT_EPS;
+	float vkf = MEDIAN8_VAR * 0.5f * (f.vm[f.ia] + f.vm[f.ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
 	for (unsigned j = 0; j < NR; j++) {
-		stat_at(m, best, l, j, &st);
-		float dl[2];
-		ref_theta(m, j, th_ref[j]);
-		ssr[j] = rotor_ssr(&st, ec, c0, SC_J(m, j), dl);
-		ssr_sum += ssr[j];
-		s2j[j] = ssr[j] / ((float)m->n_stat - (float)np);
-		/* the curve of this rotor alone (2-parameter fit) and its variance */
-		float ssr2;
-		cj[j] = rotor_curve(m, &st, j, th_ref[j], &ssr2, &vcj[j]);
-		chi2 += ssr[j] - ssr2;
+		res->scale[j] = f.scale[j];
+		res->scale_sd[j] = res->kf > 0.0f ? sqrt0(f.vm[j]) / res->kf : 0.0f;
 	}
-
-	/* the common curve: inverse-variance mean of the rotors' */
-	if (ec) {
-		float sw = 0.0f, swc = 0.0f;
-		for (unsigned j = 0; j < NR; j++)
-			if (vcj[j] > 0.0f) {
-				sw += 1.0f / vcj[j];
-				swc += cj[j] / vcj[j];
-			}
-		res->curve = sw > 0.0f ? swc / sw : c0;
-		res->curve_sd = sw > 0.0f ? sqrt0(1.0f / sw) : 0.0f;
-		/* not cut at 0: a linear rotor's estimate scatters on both sides of it, and a
-		 * boundary there would bias the curve, and with it k_f, high; the caller's range
-		 * check (THRMAP_CURVE_MIN/MAX) names the bounds */
-	} else {
-		res->curve = c0;
-		res->curve_sd = 0.0f;
-	}
-
-	/* each rotor's m at that curve, k_f = their median, scales */
-	float mj[NR], vm[NR], mj_e[NR];
-	const float eps = 1e-3f;
-	for (unsigned j = 0; j < NR; j++) {
-		float gw, gw2;
-		stat_at(m, best, l, j, &st);
-		mj[j] = rotor_m(&st, res->curve, SC_J(m, j), th_ref[j], &gw);
-		mj_e[j] = rotor_m(&st, res->curve + eps, SC_J(m, j), th_ref[j], &gw2);
-		vm[j] = gw > 0.0f ? s2j[j] / gw : 0.0f;
-	}
-	unsigned ia, ib;
-	res->kf = median8(mj, &ia, &ib);
-	float dkdc = (0.5f * (mj_e[ia] + mj_e[ib]) - res->kf) / eps;
-	float vkf = MEDIAN8_VAR * 0.5f * (vm[ia] + vm[ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
-	for (unsigned j = 0; j < NR; j++) {
-		res->scale[j] = res->kf > 0.0f ? mj[j] / res->kf : 0.0f;
-		res->scale_sd[j] = res->kf > 0.0f ? sqrt0(vm[j]) / res->kf : 0.0f;
-	}
-	/* the lag's share: k_f, curve and scales move with the lag (central differences) */
+	/* the lag's share: k_f, curve and scales move with the lag (central differences; the lag's
+	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
+	 * is orthogonal to their regressors) */
 	if (!no_lag && ks[best] > 0.0f) {
 		const float h = 0.25f;
-		float var_x = 1.0f / (nf * ks[best]), kp, km, cp, cm, sp[NR], sm[NR];
-		model_at(m, best, x + h, &kp, &cp, sp);
-		model_at(m, best, x - h, &km, &cm, sm);
-		float dk = (kp - km) / (2.0f * h), dc = (cp - cm) / (2.0f * h);
+		float var_x = 1.0f / (nf * ks[best]), kp, cp, sp[NR];
+		struct fit g;
+		fit_at(m, best, x + h, &g);
+		kp = g.kf;
+		cp = g.curve;
+		for (unsigned j = 0; j < NR; j++)
+			sp[j] = g.scale[j];
+		fit_at(m, best, x - h, &g);
+		float dk = (kp - g.kf) / (2.0f * h), dc = (cp - g.curve) / (2.0f * h);
 		vkf += dk * dk * var_x;
 		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + dc * dc * var_x);
 		for (unsigned j = 0; j < NR; j++) {
-			float ds = (sp[j] - sm[j]) / (2.0f * h);
+			float ds = (sp[j] - g.scale[j]) / (2.0f * h);
 			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + ds * ds * var_x);
 		}
 	}
@@ -804,22 +773,22 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float ne_hi = 0.0f, ne_sorted_mid;
 	unsigned worst = 0;
 	for (unsigned j = 0; j < NR; j++) {
-		res->ne[j] = nz > 0.0f ? s2j[j] / nz : 0.0f;
+		res->ne[j] = nz > 0.0f ? f.s2[j] / nz : 0.0f;
 		if (res->ne[j] > ne_hi) {
 			ne_hi = res->ne[j];
 			worst = j;
 		}
 	}
-	res->ne_all = nz > 0.0f ? ssr_sum / dof / nz : 0.0f;
+	res->ne_all = nz > 0.0f ? f.ssr_sum / dof / nz : 0.0f;
 	unsigned ma, mb;
 	ne_sorted_mid = median8(res->ne, &ma, &mb);
-	res->curve_chi2 = nz > 0.0f ? chi2 / nz : 0.0f;
+	res->curve_chi2 = nz > 0.0f ? f.chi2 / nz : 0.0f;
 
 	/* k_tau = rho k_f, rho from torque on thrust over every rotor (noise-corrected) */
 	float ff = mid_sum_to_float(m->ff, m->e[MID_E_FF], 2, m->kexp), tf = mid_sum_to_float(m->tf, m->e[MID_E_TF], 2, m->kexp),
 	      tt = mid_sum_to_float(m->tt, m->e[MID_E_TT], 2, m->kexp);
 	float nall = (float)(m->n_exc * NR);
-	float sf2 = nz > 0.0f ? nz : ssr_sum / dof;
+	float sf2 = nz > 0.0f ? nz : f.ssr_sum / dof;
 	float rho = ff > 0.0f ? tf / ff : 0.0f;
 	float ss_t = tt - 2.0f * rho * tf + rho * rho * ff;
 	float vrho = ff > 0.0f && nall > 1.0f ? ss_t / (nall - 1.0f) / ff : 0.0f;
@@ -831,12 +800,11 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	/* the cause, most specific first */
 	float dof_j = (float)m->n_stat - (float)np;
 	float chi2_lim = (float)NR + CURVE_CHI2_SIGMAS * sqrtf(2.0f * (float)NR);
-	/* the normalised errors' limits: ne_max, or NE_SIGMAS standard deviations of the ratio
-	 * of two variance estimates (the fit's, dof_j; the noise's from first differences,
-	 * about a third of its count effective) when the data are few */
+	/* the normalised errors' limits (the noise's variance from first differences: about a
+	 * third of its count effective) */
 	float v_nz = nz_n > 0.0f ? 6.0f / nz_n : 1.0f;
-	float lim_j = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof_j, 1.0f) + v_nz));
-	float lim_all = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof, 1.0f) + v_nz));
+	float lim_j = ne_limit(ne_max, dof_j, v_nz);
+	float lim_all = ne_limit(ne_max, dof, v_nz);
 	const bool fixd = m->cfg.fix_delay;
 	white_eval(m, res);
 	if (!(nz_n >= 16.0f))
