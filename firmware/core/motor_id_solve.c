@@ -79,7 +79,11 @@ static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u};
 #define NO_LAG_FRAC 0.15f  /* a lag below this fraction of a frame is taken as none (a < 0.0013) */
 #define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
 
-static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
+/* not inlined: called from a dozen places, each inlined copy costs more than the call */
+__attribute__((noinline)) static float clampf(float x, float lo, float hi)
+{
+	return x < lo ? lo : (x > hi ? hi : x);
+}
 
 /* 1 - a of a lag; below NO_LAG_FRAC of a frame the lag is none (a = 0) */
 static float lag_k1(float tau, float dt)
@@ -89,11 +93,12 @@ static float lag_k1(float tau, float dt)
 
 #define WHITE_AT_PCT 75u   /* the whiteness model is frozen at this share of the planned frames */
 
-/* the least n >= pct % of the planned frames (integers: the same in every precision) */
+/* the least n >= pct % of the planned frames, pct <= 100 (integers: the same in every
+ * precision; N = 100 q + r gives q pct + ceil(r pct / 100), in 32 bits) */
 static uint32_t frames_at(const struct motor_id *m, uint32_t pct)
 {
-	uint64_t n = ((uint64_t)m->cfg.n_frames * pct + 99u) / 100u;
-	return n > UINT32_MAX ? UINT32_MAX : (uint32_t)n;
+	const uint32_t n = m->cfg.n_frames;
+	return n / 100u * pct + (n % 100u * pct + 99u) / 100u;
 }
 
 /* n_exc at which the current stage ends, or (last stage) the whiteness model freezes */
@@ -162,12 +167,24 @@ static void curve_w(float c, float s_c, float w[2])
 	w[1] = c;
 }
 
+/* det G of a rotor's statistics */
+static ls_t stat_det(const ls_t st[S_N])
+{
+	return st[S_G11] * st[S_G22] - st[S_G12] * st[S_G12];
+}
+
+/* w^T G w of a rotor's statistics (sum g^2 of the regressor g = w^T x) */
+static ls_t stat_gww(const ls_t st[S_N], ls_t w0, ls_t w1)
+{
+	return w0 * w0 * st[S_G11] + (ls_t)2.0f * w0 * w1 * st[S_G12] + w1 * w1 * st[S_G22];
+}
+
 /* residual sum of squares of one rotor's statistics: 2 parameters (curve estimated) or the
  * prior curve's 1; delta = the fitted change of theta from the reference (2 values) */
 static float rotor_ssr(const ls_t st[S_N], bool est_curve, float c0, float s_c, float delta[2])
 {
 	if (est_curve) {
-		ls_t det = st[S_G11] * st[S_G22] - st[S_G12] * st[S_G12];
+		ls_t det = stat_det(st);
 		if (!(det > (ls_t)1e-30f * st[S_G11] * st[S_G22]) || !(st[S_G11] > 0)) {
 			delta[0] = delta[1] = 0.0f;
 			return (float)st[S_RR];
@@ -182,7 +199,7 @@ static float rotor_ssr(const ls_t st[S_N], bool est_curve, float c0, float s_c, 
 	float w[2];
 	curve_w(c0, s_c, w);
 	ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1];
-	ls_t gw = w0 * w0 * st[S_G11] + (ls_t)2.0f * w0 * w1 * st[S_G12] + w1 * w1 * st[S_G22];
+	ls_t gw = stat_gww(st, w0, w1);
 	ls_t bw = w0 * st[S_B1] + w1 * st[S_B2];
 	ls_t mu = gw > 0 ? bw / gw : 0;
 	delta[0] = (float)(mu * w0);
@@ -221,13 +238,17 @@ static void lagrange3_ls(float x, ls_t l[3])
 	l[2] = (ls_t)0.5f * xl * (xl + (ls_t)1.0f);
 }
 
-/* the same in float */
+/* the same in float (the float build's ls_t) */
+#if OCTO_FIXED
 static void lagrange3(float x, float l[3])
 {
 	l[0] = 0.5f * x * (x - 1.0f);
 	l[1] = 1.0f - x * x;
 	l[2] = 0.5f * x * (x + 1.0f);
 }
+#else
+#define lagrange3 lagrange3_ls
+#endif
 
 /* The selection criterion of delay d at each lag. The likelihood with each rotor's noise
  * variance unknown is -(n/2) sum_j log SSR_j (a rotor that no lag explains, another motor,
@@ -307,7 +328,7 @@ static float rotor_m(const ls_t st[S_N], float c, float s_c, const float th_ref[
 	const ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1], t0 = (ls_t)th_ref[0], t1 = (ls_t)th_ref[1];
 	ls_t xf1 = st[S_B1] + st[S_G11] * t0 + st[S_G12] * t1;
 	ls_t xf2 = st[S_B2] + st[S_G12] * t0 + st[S_G22] * t1;
-	ls_t g = w0 * w0 * st[S_G11] + (ls_t)2.0f * w0 * w1 * st[S_G12] + w1 * w1 * st[S_G22];
+	ls_t g = stat_gww(st, w0, w1);
 	*gw = (float)g;
 	return g > 0 ? (float)((w0 * xf1 + w1 * xf2) / g) : 0.0f;
 }
@@ -355,7 +376,7 @@ static float rotor_curve(const struct motor_id *m, const ls_t st[S_N], unsigned 
 	*ssr2 = rotor_ssr(st, true, m->cfg.curve0, SC_J(m, j), d2);
 	float a = th[0] + d2[0], bq = th[1] + d2[1];
 	float mj = a + bq * (1.0f - 2.0f * SC_J(m, j));
-	ls_t det = st[S_G11] * st[S_G22] - st[S_G12] * st[S_G12];
+	ls_t det = stat_det(st);
 	*var = 0.0f;
 	if (!(mj > 0.0f && det > 0))
 		return 0.0f;
@@ -372,7 +393,6 @@ struct fit {
 	float ssr[NR], s2[NR];   /* residual sum of squares under the configured model, variance */
 	float mj[NR], vm[NR];    /* each rotor's m at the common curve, its variance */
 	float mj_e[NR];          /* m at the common curve + FIT_EPS */
-	float scale[NR];
 	float ssr_sum, chi2;     /* sum of ssr; sum of ssr less the rotors' own curves' SSRs */
 	float curve, curve_sd, kf;
 	unsigned ia, ib;         /* the rotors whose mean is the median */
@@ -383,8 +403,8 @@ struct fit {
  * (2-parameter fit); the common curve (with est_curve: the inverse-variance mean of the
  * rotors', unclamped: a linear rotor's estimate scatters on both sides of 0, and a boundary
  * there would bias the curve, and with it k_f, high; the caller's range check names the
- * bounds); each rotor's m at that curve, k_f = their median, the scales. */
-static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f)
+ * bounds); each rotor's m at that curve, k_f = their median, the scales (m_j / k_f). */
+static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f, float scale[NR])
 {
 	const bool ec = m->cfg.est_curve;
 	const float np = ec ? 2.0f : 1.0f;
@@ -420,7 +440,7 @@ static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f)
 	}
 	f->kf = median8(f->mj, &f->ia, &f->ib);
 	for (unsigned j = 0; j < NR; j++)
-		f->scale[j] = f->kf > 0.0f ? f->mj[j] / f->kf : 0.0f;
+		scale[j] = f->kf > 0.0f ? f->mj[j] / f->kf : 0.0f;
 }
 
 /* A new reference model: common k_f and curve (the curve only when estimated); kept within
@@ -462,10 +482,10 @@ static bool reference_fit(const struct motor_id *m, float *kf, float *c)
 	if (m->n_stat < 10u)
 		return false;
 	unsigned d;
-	float x;
+	float x, sc[NR];
 	struct fit f;
 	best_hyp(m, &d, &x);
-	fit_at(m, d, x, &f);
+	fit_at(m, d, x, &f, sc);
 	*kf = f.kf;
 	*c = f.curve;
 	return true;
@@ -579,8 +599,10 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 	if (!(kk > 0.0f) || fabsf(xi) >= X_MAX - 1e-3f)
 		return;
 	for (int it = 0; it < 3; it++) {
-		float fm = delay_logssr(m, d, xi - h), f0 = delay_logssr(m, d, xi), fp = delay_logssr(m, d, xi + h);
-		float d2 = (fp - 2.0f * f0 + fm) / (h * h), d1 = (fp - fm) / (2.0f * h);
+		float fv[3];   /* at xi - h, xi, xi + h */
+		for (int i = 0; i < 3; i++)
+			fv[i] = delay_logssr(m, d, xi + (float)(i - 1) * h);
+		float d2 = (fv[2] - 2.0f * fv[1] + fv[0]) / (h * h), d1 = (fv[2] - fv[0]) / (2.0f * h);
 		if (!(d2 > 0.0f))
 			return;
 		float step = clampf(-d1 / d2, -0.5f, 0.5f);
@@ -608,15 +630,18 @@ static float chi2_quant(float k, float z)
 #define WZ_LEVEL 3.7f
 #define WMIN_N 20.0f     /* fewest frames of a (rotor, level) series that enters the test */
 
-/* the whiteness test from its sums (see motor_id.h) */
-static void white_eval(const struct motor_id *m, struct motor_id_result *res)
+/* The whiteness test from its sums (see motor_id.h). Returns the cause of coloured prediction
+ * errors: one rotor alone (the others white) is that rotor (*rotor); colour at one throttle
+ * level, not the others, is the thrust curve; else the dynamics. */
+static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_result *res, int *rotor)
 {
 	const struct motor_id_white *w = &m->wh;
 	res->white_ok = true;
 	res->white_have = false;
 	if (!w->on)
-		return;
-	float q = 0.0f, dof = 0.0f, qr[NR] = {0}, dr[NR] = {0}, qb[MOTOR_ID_WBINS] = {0}, db[MOTOR_ID_WBINS] = {0};
+		return MOTOR_ID_OK;
+	/* each (rotor, level) series' statistic and its degrees of freedom (0: not in the test) */
+	float qs[NR][MOTOR_ID_WBINS] = {0}, ds[NR][MOTOR_ID_WBINS] = {0};
 	for (unsigned j = 0; j < NR; j++)
 		for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
 			float n = (float)w->n[j][b];
@@ -630,52 +655,44 @@ static void white_eval(const struct motor_id *m, struct motor_id_result *res)
 				float rho = (mid_sum_to_float(w->sl[j][b][l], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu) / c0;
 				qq += rho * rho;
 			}
-			qq *= n;
-			q += qq;
-			qr[j] += qq;
-			qb[b] += qq;
-			dof += (float)MOTOR_ID_WLAGS;
-			dr[j] += (float)MOTOR_ID_WLAGS;
-			db[b] += (float)MOTOR_ID_WLAGS;
+			qs[j][b] = qq * n;
+			ds[j][b] = (float)MOTOR_ID_WLAGS;
 		}
-	if (!(dof > 0.0f))
-		return;
-	res->white_have = true;
-	res->white_q = q;
-	res->white_dof = dof;
-	res->white_lim = chi2_quant(dof, WZ_ALL);
-	bool ok = q <= res->white_lim;
-	for (unsigned j = 0; j < NR; j++) {
-		res->white_rotor[j] = dr[j] > 0.0f ? qr[j] / chi2_quant(dr[j], WZ_ROTOR) : 0.0f;
-		ok = ok && res->white_rotor[j] <= 1.0f;
-	}
-	for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
-		res->white_level[b] = db[b] > 0.0f ? qb[b] / chi2_quant(db[b], WZ_LEVEL) : 0.0f;
-		ok = ok && res->white_level[b] <= 1.0f;
+	/* the tests: g = 0 everything, 1..NR one rotor's levels, NR + 1.. one level's rotors;
+	 * n_bad: how many rotors, how many levels fail */
+	bool ok = true;
+	unsigned n_bad[2] = {0, 0};
+	for (unsigned g = 0; g < 1u + NR + MOTOR_ID_WBINS; g++) {
+		float q = 0.0f, dof = 0.0f;
+		for (unsigned j = 0; j < NR; j++)
+			for (unsigned b = 0; b < MOTOR_ID_WBINS; b++)
+				if (g == 0u || g == 1u + j || g == 1u + NR + b) {
+					q += qs[j][b];
+					dof += ds[j][b];
+				}
+		if (g == 0u) {
+			if (!(dof > 0.0f))
+				return MOTOR_ID_OK;
+			res->white_have = true;
+			res->white_q = q;
+			res->white_dof = dof;
+			res->white_lim = chi2_quant(dof, WZ_ALL);
+			ok = q <= res->white_lim;
+			continue;
+		}
+		/* a rotor's or a level's statistic over its limit */
+		const bool is_rotor = g <= NR;
+		float *ratio = is_rotor ? &res->white_rotor[g - 1u] : &res->white_level[g - 1u - NR];
+		*ratio = dof > 0.0f ? q / chi2_quant(dof, is_rotor ? WZ_ROTOR : WZ_LEVEL) : 0.0f;
+		ok = ok && *ratio <= 1.0f;
+		if (*ratio > 1.0f) {
+			n_bad[is_rotor]++;
+			if (is_rotor)
+				*rotor = (int)g - 1;
+		}
 	}
 	res->white_ok = ok;
-}
-
-/* the cause of coloured prediction errors: one rotor alone (the others white) is that rotor;
- * colour at one throttle level, not the others, is the thrust curve; else the dynamics */
-static enum motor_id_cause white_cause(const struct motor_id_result *res, int *rotor)
-{
-	unsigned nr = 0, nb = 0;
-	int jr = -1;
-	for (unsigned j = 0; j < NR; j++)
-		if (res->white_rotor[j] > 1.0f) {
-			nr++;
-			jr = (int)j;
-		}
-	for (unsigned b = 0; b < MOTOR_ID_WBINS; b++)
-		nb += res->white_level[b] > 1.0f;
-	if (nr == 1u) {
-		*rotor = jr;
-		return MOTOR_ID_ROTOR;
-	}
-	if (nb == 1u)
-		return MOTOR_ID_LEVEL;
-	return MOTOR_ID_COLOURED;
+	return n_bad[1] == 1u ? MOTOR_ID_ROTOR : n_bad[0] == 1u ? MOTOR_ID_LEVEL : MOTOR_ID_COLOURED;
 }
 
 /* the normalised errors' limit: ne_max, or NE_SIGMAS standard deviations of the ratio of two
@@ -733,34 +750,30 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 
 	/* every rotor at that lag: the common curve, each rotor's m, k_f = their median, scales */
 	struct fit f;
-	fit_at(m, best, x, &f);
+	fit_at(m, best, x, &f, res->scale);
 	res->curve = f.curve;
 	res->curve_sd = f.curve_sd;
 	res->kf = f.kf;
 	float dkdc = (0.5f * (f.mj_e[f.ia] + f.mj_e[f.ib]) - res->kf) / FIT_EPS;
 	float vkf = MEDIAN8_VAR * 0.5f * (f.vm[f.ia] + f.vm[f.ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
-	for (unsigned j = 0; j < NR; j++) {
-		res->scale[j] = f.scale[j];
+	for (unsigned j = 0; j < NR; j++)
 		res->scale_sd[j] = res->kf > 0.0f ? sqrt0(f.vm[j]) / res->kf : 0.0f;
-	}
 	/* the lag's share: k_f, curve and scales move with the lag (central differences; the lag's
 	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
 	 * is orthogonal to their regressors) */
 	if (!no_lag && ks[best] > 0.0f) {
 		const float h = 0.25f;
-		float var_x = 1.0f / (nf * ks[best]), kp, cp, sp[NR];
+		float var_x = 1.0f / (nf * ks[best]), kp, cp, sp[NR], sm[NR];
 		struct fit g;
-		fit_at(m, best, x + h, &g);
+		fit_at(m, best, x + h, &g, sp);
 		kp = g.kf;
 		cp = g.curve;
-		for (unsigned j = 0; j < NR; j++)
-			sp[j] = g.scale[j];
-		fit_at(m, best, x - h, &g);
+		fit_at(m, best, x - h, &g, sm);
 		float dk = (kp - g.kf) / (2.0f * h), dc = (cp - g.curve) / (2.0f * h);
 		vkf += dk * dk * var_x;
 		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + dc * dc * var_x);
 		for (unsigned j = 0; j < NR; j++) {
-			float ds = (sp[j] - g.scale[j]) / (2.0f * h);
+			float ds = (sp[j] - sm[j]) / (2.0f * h);
 			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + ds * ds * var_x);
 		}
 	}
@@ -806,7 +819,8 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float lim_j = ne_limit(ne_max, dof_j, v_nz);
 	float lim_all = ne_limit(ne_max, dof, v_nz);
 	const bool fixd = m->cfg.fix_delay;
-	white_eval(m, res);
+	int white_rotor = -1;
+	const enum motor_id_cause white_c = white_eval(m, res, &white_rotor);
 	if (!(nz_n >= 16.0f))
 		res->cause = MOTOR_ID_NOISE_UNKNOWN;
 	else if (fixd && res->free_delay != best && -res->delay_margin >= MARGIN_MIN)
@@ -821,9 +835,9 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	else if (!fixd && res->delay_margin < MARGIN_MIN)
 		res->cause = MOTOR_ID_DELAY_AMBIGUOUS;
 	else if (!res->white_ok) {
-		res->cause = white_cause(res, &res->cause_rotor);
-		if (res->cause == MOTOR_ID_LEVEL && !ec)
-			res->cause = MOTOR_ID_CURVE;
+		res->cause = white_c == MOTOR_ID_LEVEL && !ec ? MOTOR_ID_CURVE : white_c;
+		if (white_c == MOTOR_ID_ROTOR)
+			res->cause_rotor = white_rotor;
 	} else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && dof_j > 0.0f) {
 		res->cause = MOTOR_ID_ROTOR;
 		res->cause_rotor = (int)worst;
@@ -833,64 +847,46 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->cause = MOTOR_ID_OK;
 }
 
-const char *motor_id_cause_text(enum motor_id_cause c)
+/* The causes' texts and remedies, in the order of enum motor_id_cause, each ended by a NUL
+ * (one string, no table of pointers). */
+static const char cause_texts[] =
+	"accepted\0"
+	"too few frames\0"
+	"noise not measured\0"
+	"motor lag out of range\0"
+	"delay out of range\0"
+	"delay ambiguous\0"
+	"thrust curve not modelled\0"
+	"a rotor unexplained\0"
+	"residuals above noise\0"
+	"given delay contradicted\0"
+	"residuals coloured at one throttle level\0"
+	"residuals not white";
+static const char cause_remedies[] =
+	"\0"
+	"longer ID_EXC_TIME\0"
+	"hover still before the run\0"
+	"lag 0.5-500 ms only; check motors\0"
+	"delay > 3 frames: fix the link\0"
+	"raise ID_EXC_AMP or ID_EXC_TIME\0"
+	"set ID_CRV_EST 1\0"
+	"inspect that rotor\0"
+	"check link timing and rotors\0"
+	"let the delay be found\0"
+	"thrust curve not quadratic: lower ID_EXC_OFS\0"
+	"motor not first-order or link jitter: check both";
+
+/* the string number c of list (c < MOTOR_ID_COLOURED + 1), else dflt */
+static const char *nth_text(const char *list, enum motor_id_cause c, const char *dflt)
 {
-	switch (c) {
-	case MOTOR_ID_OK:
-		return "accepted";
-	case MOTOR_ID_NO_DATA:
-		return "too few frames";
-	case MOTOR_ID_NOISE_UNKNOWN:
-		return "noise not measured";
-	case MOTOR_ID_LAG_RANGE:
-		return "motor lag out of range";
-	case MOTOR_ID_DELAY_RANGE:
-		return "delay out of range";
-	case MOTOR_ID_DELAY_AMBIGUOUS:
-		return "delay ambiguous";
-	case MOTOR_ID_CURVE:
-		return "thrust curve not modelled";
-	case MOTOR_ID_ROTOR:
-		return "a rotor unexplained";
-	case MOTOR_ID_MODEL:
-		return "residuals above noise";
-	case MOTOR_ID_DELAY_GIVEN:
-		return "given delay contradicted";
-	case MOTOR_ID_LEVEL:
-		return "residuals coloured at one throttle level";
-	case MOTOR_ID_COLOURED:
-		return "residuals not white";
-	}
-	return "?";
+	if ((unsigned)c > (unsigned)MOTOR_ID_COLOURED)
+		return dflt;
+	for (unsigned k = (unsigned)c; k > 0u; k--)
+		while (*list++ != '\0')
+			;
+	return list;
 }
 
-const char *motor_id_cause_remedy(enum motor_id_cause c)
-{
-	switch (c) {
-	case MOTOR_ID_OK:
-		return "";
-	case MOTOR_ID_NO_DATA:
-		return "longer ID_EXC_TIME";
-	case MOTOR_ID_NOISE_UNKNOWN:
-		return "hover still before the run";
-	case MOTOR_ID_LAG_RANGE:
-		return "lag 0.5-500 ms only; check motors";
-	case MOTOR_ID_DELAY_RANGE:
-		return "delay > 3 frames: fix the link";
-	case MOTOR_ID_DELAY_AMBIGUOUS:
-		return "raise ID_EXC_AMP or ID_EXC_TIME";
-	case MOTOR_ID_CURVE:
-		return "set ID_CRV_EST 1";
-	case MOTOR_ID_ROTOR:
-		return "inspect that rotor";
-	case MOTOR_ID_MODEL:
-		return "check link timing and rotors";
-	case MOTOR_ID_DELAY_GIVEN:
-		return "let the delay be found";
-	case MOTOR_ID_LEVEL:
-		return "thrust curve not quadratic: lower ID_EXC_OFS";
-	case MOTOR_ID_COLOURED:
-		return "motor not first-order or link jitter: check both";
-	}
-	return "";
-}
+const char *motor_id_cause_text(enum motor_id_cause c) { return nth_text(cause_texts, c, "?"); }
+
+const char *motor_id_cause_remedy(enum motor_id_cause c) { return nth_text(cause_remedies, c, ""); }
