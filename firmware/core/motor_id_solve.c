@@ -79,8 +79,11 @@ static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u};
 #define NO_LAG_FRAC 0.15f  /* a lag below this fraction of a frame is taken as none (a < 0.0013) */
 #define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
 
-/* not inlined: called from a dozen places, each inlined copy costs more than the call */
-__attribute__((noinline)) static float clampf(float x, float lo, float hi)
+/* NOINLINE: a small function whose inlined copies cost more flash than the calls (the
+ * compiler inlines them at -Os; this code runs between frames) */
+#define NOINLINE __attribute__((noinline))
+
+NOINLINE static float clampf(float x, float lo, float hi)
 {
 	return x < lo ? lo : (x > hi ? hi : x);
 }
@@ -168,7 +171,7 @@ static void curve_w(float c, float s_c, float w[2])
 }
 
 /* det G of a rotor's statistics */
-static ls_t stat_det(const ls_t st[S_N])
+NOINLINE static ls_t stat_det(const ls_t st[S_N])
 {
 	return st[S_G11] * st[S_G22] - st[S_G12] * st[S_G12];
 }
@@ -559,17 +562,14 @@ void motor_id_refine(struct motor_id *m)
 		float nr = stage_ratio[next];
 		if (fabsf(x) > 1.0f)
 			nr = fmaxf(nr, sqrtf(r));
-		float xs[3], old[NL][NR];
+		float old[NL][NR];
 		for (unsigned i = 0; i < NL; i++)
 			for (unsigned j = 0; j < NR; j++)
 				old[i][j] = mid_u_to_float(m->s[d][i][j]);
+		const float lr = logf(r);
 		for (int i = 0; i < (int)NL; i++) {
-			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * powf(nr, (float)(i - 1));
-			xs[i] = clampf(logf(tau_i / m->lag_c[d]) / logf(r), -X_MAX, X_MAX);
-		}
-		for (unsigned i = 0; i < NL; i++) {
-			float l[3];
-			lagrange3(xs[i], l);
+			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * powf(nr, (float)(i - 1)), l[3];
+			lagrange3(clampf(logf(tau_i / m->lag_c[d]) / lr, -X_MAX, X_MAX), l);
 			for (unsigned j = 0; j < NR; j++)
 				m->s[d][i][j] = mid_u_of_float(l[0] * old[0][j] + l[1] * old[1][j] + l[2] * old[2][j]);
 		}
@@ -617,7 +617,7 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 
 /* chi-square quantile with k degrees of freedom at z standard normal deviates above the mean
  * (Wilson-Hilferty; within 1 % of the exact one from k = 3 on at these z) */
-static float chi2_quant(float k, float z)
+NOINLINE static float chi2_quant(float k, float z)
 {
 	float a = 2.0f / (9.0f * k), t = 1.0f - a + z * sqrtf(a);
 	return k * t * t * t;
