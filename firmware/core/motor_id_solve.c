@@ -355,6 +355,9 @@ static float median8(const float v[NR], unsigned *a, unsigned *b)
 
 static float sqrt0(float v) { return v > 0.0f ? sqrtf(v) : 0.0f; }
 
+/* a / b for b > 0, else 0 */
+NOINLINE static float div_pos(float a, float b) { return b > 0.0f ? a / b : 0.0f; }
+
 /* The sampling variance of the median of 8 rotors' estimates (the mean of the 4th and 5th),
  * in units of one rotor's variance: 0.168 for 8 alike, 0.190 with one rotor far off (a weak
  * one; Monte Carlo of normal errors, 4e5 draws). The larger is taken. */
@@ -439,11 +442,11 @@ static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f,
 		stat_at(m, d, NL, l, j, st);
 		f->mj[j] = rotor_m(st, f->curve, SC_J(m, j), f->th[j], &gw);
 		f->mj_e[j] = rotor_m(st, f->curve + FIT_EPS, SC_J(m, j), f->th[j], &gw2);
-		f->vm[j] = gw > 0.0f ? f->s2[j] / gw : 0.0f;
+		f->vm[j] = div_pos(f->s2[j], gw);
 	}
 	f->kf = median8(f->mj, &f->ia, &f->ib);
 	for (unsigned j = 0; j < NR; j++)
-		scale[j] = f->kf > 0.0f ? f->mj[j] / f->kf : 0.0f;
+		scale[j] = div_pos(f->mj[j], f->kf);
 }
 
 /* A new reference model: common k_f and curve (the curve only when estimated); kept within
@@ -568,7 +571,8 @@ void motor_id_refine(struct motor_id *m)
 				old[i][j] = mid_u_to_float(m->s[d][i][j]);
 		const float lr = logf(r);
 		for (int i = 0; i < (int)NL; i++) {
-			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * powf(nr, (float)(i - 1)), l[3];
+			/* nr^(i - 1) */
+			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * (i == 0 ? 1.0f / nr : (i == 1 ? 1.0f : nr)), l[3];
 			lagrange3(clampf(logf(tau_i / m->lag_c[d]) / lr, -X_MAX, X_MAX), l);
 			for (unsigned j = 0; j < NR; j++)
 				m->s[d][i][j] = mid_u_of_float(l[0] * old[0][j] + l[1] * old[1][j] + l[2] * old[2][j]);
@@ -582,7 +586,7 @@ void motor_id_refine(struct motor_id *m)
 	m->stage = (uint8_t)next;
 	m->n_next = next_due(m);
 	/* what the interpolation left decays with the lag: wait two time constants */
-	float fr = dt > 0.0f ? 2.0f * tau_hi / dt : 0.0f;
+	float fr = div_pos(2.0f * tau_hi, dt);
 	m->skip = (uint8_t)clampf(fr + 1.0f, 1.0f, 30.0f);
 }
 
@@ -757,7 +761,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float dkdc = (0.5f * (f.mj_e[f.ia] + f.mj_e[f.ib]) - res->kf) / FIT_EPS;
 	float vkf = MEDIAN8_VAR * 0.5f * (f.vm[f.ia] + f.vm[f.ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
 	for (unsigned j = 0; j < NR; j++)
-		res->scale_sd[j] = res->kf > 0.0f ? sqrt0(f.vm[j]) / res->kf : 0.0f;
+		res->scale_sd[j] = div_pos(sqrt0(f.vm[j]), res->kf);
 	/* the lag's share: k_f, curve and scales move with the lag (central differences; the lag's
 	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
 	 * is orthogonal to their regressors) */
@@ -781,28 +785,28 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 
 	/* noise and the normalised errors */
 	const float nz_n = (float)m->nz_n;
-	float nz = nz_n > 0.0f ? mid_sum_to_float(m->nz_ss, m->e[MID_E_NZ], 2, m->kexp) / nz_n : 0.0f;
+	float nz = div_pos(mid_sum_to_float(m->nz_ss, m->e[MID_E_NZ], 2, m->kexp), nz_n);
 	res->noise_sd = sqrt0(nz);
 	float ne_hi = 0.0f, ne_sorted_mid;
 	unsigned worst = 0;
 	for (unsigned j = 0; j < NR; j++) {
-		res->ne[j] = nz > 0.0f ? f.s2[j] / nz : 0.0f;
+		res->ne[j] = div_pos(f.s2[j], nz);
 		if (res->ne[j] > ne_hi) {
 			ne_hi = res->ne[j];
 			worst = j;
 		}
 	}
-	res->ne_all = nz > 0.0f ? f.ssr_sum / dof / nz : 0.0f;
+	res->ne_all = div_pos(f.ssr_sum / dof, nz);
 	unsigned ma, mb;
 	ne_sorted_mid = median8(res->ne, &ma, &mb);
-	res->curve_chi2 = nz > 0.0f ? f.chi2 / nz : 0.0f;
+	res->curve_chi2 = div_pos(f.chi2, nz);
 
 	/* k_tau = rho k_f, rho from torque on thrust over every rotor (noise-corrected) */
 	float ff = mid_sum_to_float(m->ff, m->e[MID_E_FF], 2, m->kexp), tf = mid_sum_to_float(m->tf, m->e[MID_E_TF], 2, m->kexp),
 	      tt = mid_sum_to_float(m->tt, m->e[MID_E_TT], 2, m->kexp);
 	float nall = (float)(m->n_exc * NR);
 	float sf2 = nz > 0.0f ? nz : f.ssr_sum / dof;
-	float rho = ff > 0.0f ? tf / ff : 0.0f;
+	float rho = div_pos(tf, ff);
 	float ss_t = tt - 2.0f * rho * tf + rho * rho * ff;
 	float vrho = ff > 0.0f && nall > 1.0f ? ss_t / (nall - 1.0f) / ff : 0.0f;
 	if (ff > nall * sf2)
