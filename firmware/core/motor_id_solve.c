@@ -253,6 +253,12 @@ static void lagrange3(float x, float l[3])
 #define lagrange3 lagrange3_ls
 #endif
 
+/* l[0] a + l[1] b + l[2] c: a value interpolated over the grid */
+NOINLINE static float wsum3(const float l[3], float a, float b, float c)
+{
+	return l[0] * a + l[1] * b + l[2] * c;
+}
+
 /* The selection criterion of delay d at each lag. The likelihood with each rotor's noise
  * variance unknown is -(n/2) sum_j log SSR_j (a rotor that no lag explains, another motor,
  * then pulls the common lag little); log SSR is far from a parabola in the lag, so its
@@ -518,8 +524,8 @@ static void white_begin(struct motor_id *m)
 		rotor_ssr_m(m, o, j, dl);
 		w->dl[j][0] = mid_f_of_float(dl[0], m->kexp);
 		w->dl[j][1] = mid_f_of_float(dl[1], m->kexp);
-		w->s[j] = mid_u_of_float(l[0] * mid_u_to_float(m->s[d][0][j]) + l[1] * mid_u_to_float(m->s[d][1][j]) +
-					 l[2] * mid_u_to_float(m->s[d][2][j]));
+		w->s[j] = mid_u_of_float(wsum3(l, mid_u_to_float(m->s[d][0][j]), mid_u_to_float(m->s[d][1][j]),
+					       mid_u_to_float(m->s[d][2][j])));
 	}
 	w->k1 = mid_u_of_float(lag_k1(clampf(m->lag_c[d] * powf(m->lag_r[d], x), MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX),
 				      sc_to_float(m->cfg.dt_s)));
@@ -575,7 +581,7 @@ void motor_id_refine(struct motor_id *m)
 			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * (i == 0 ? 1.0f / nr : (i == 1 ? 1.0f : nr)), l[3];
 			lagrange3(clampf(logf(tau_i / m->lag_c[d]) / lr, -X_MAX, X_MAX), l);
 			for (unsigned j = 0; j < NR; j++)
-				m->s[d][i][j] = mid_u_of_float(l[0] * old[0][j] + l[1] * old[1][j] + l[2] * old[2][j]);
+				m->s[d][i][j] = mid_u_of_float(wsum3(l, old[0][j], old[1][j], old[2][j]));
 		}
 		set_grid(m, d, centre, nr);
 		tau_hi = fmaxf(tau_hi, m->lag_c[d] * nr);
@@ -699,6 +705,15 @@ static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_
 	return n_bad[1] == 1u ? MOTOR_ID_ROTOR : n_bad[0] == 1u ? MOTOR_ID_LEVEL : MOTOR_ID_COLOURED;
 }
 
+/* the lag's share of a variance: the value at x +/- LAG_H (vp, vm), its derivative in x (central
+ * difference) squared times var x */
+#define LAG_H 0.25f
+NOINLINE static float lag_var(float vp, float vm, float var_x)
+{
+	float dv = (vp - vm) / (2.0f * LAG_H);
+	return dv * dv * var_x;
+}
+
 /* the normalised errors' limit: ne_max, or NE_SIGMAS standard deviations of the ratio of two
  * variance estimates (the fit's, dof degrees of freedom; the noise's, relative variance v_nz)
  * when the data are few */
@@ -766,20 +781,16 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
 	 * is orthogonal to their regressors) */
 	if (!no_lag && ks[best] > 0.0f) {
-		const float h = 0.25f;
 		float var_x = 1.0f / (nf * ks[best]), kp, cp, sp[NR], sm[NR];
 		struct fit g;
-		fit_at(m, best, x + h, &g, sp);
+		fit_at(m, best, x + LAG_H, &g, sp);
 		kp = g.kf;
 		cp = g.curve;
-		fit_at(m, best, x - h, &g, sm);
-		float dk = (kp - g.kf) / (2.0f * h), dc = (cp - g.curve) / (2.0f * h);
-		vkf += dk * dk * var_x;
-		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + dc * dc * var_x);
-		for (unsigned j = 0; j < NR; j++) {
-			float ds = (sp[j] - sm[j]) / (2.0f * h);
-			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + ds * ds * var_x);
-		}
+		fit_at(m, best, x - LAG_H, &g, sm);
+		vkf += lag_var(kp, g.kf, var_x);
+		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + lag_var(cp, g.curve, var_x));
+		for (unsigned j = 0; j < NR; j++)
+			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + lag_var(sp[j], sm[j], var_x));
 	}
 	res->kf_sd = sqrt0(vkf);
 
@@ -819,13 +830,13 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float chi2_lim = (float)NR + CURVE_CHI2_SIGMAS * sqrtf(2.0f * (float)NR);
 	/* the normalised errors' limits (the noise's variance from first differences: about a
 	 * third of its count effective) */
-	float v_nz = nz_n > 0.0f ? 6.0f / nz_n : 1.0f;
+	float v_nz = m->nz_n > 0u ? 6.0f / nz_n : 1.0f;
 	float lim_j = ne_limit(ne_max, dof_j, v_nz);
 	float lim_all = ne_limit(ne_max, dof, v_nz);
 	const bool fixd = m->cfg.fix_delay;
 	int white_rotor = -1;
 	const enum motor_id_cause white_c = white_eval(m, res, &white_rotor);
-	if (!(nz_n >= 16.0f))
+	if (m->nz_n < 16u)
 		res->cause = MOTOR_ID_NOISE_UNKNOWN;
 	else if (fixd && res->free_delay != best && -res->delay_margin >= MARGIN_MIN)
 		res->cause = MOTOR_ID_DELAY_GIVEN;
