@@ -777,22 +777,6 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float vkf = MEDIAN8_VAR * 0.5f * (f.vm[f.ia] + f.vm[f.ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
 	for (unsigned j = 0; j < NR; j++)
 		res->scale_sd[j] = div_pos(sqrt0(f.vm[j]), res->kf);
-	/* the lag's share: k_f, curve and scales move with the lag (central differences; the lag's
-	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
-	 * is orthogonal to their regressors) */
-	if (!no_lag && ks[best] > 0.0f) {
-		float var_x = 1.0f / (nf * ks[best]), kp, cp, sp[NR], sm[NR];
-		struct fit g;
-		fit_at(m, best, x + LAG_H, &g, sp);
-		kp = g.kf;
-		cp = g.curve;
-		fit_at(m, best, x - LAG_H, &g, sm);
-		vkf += lag_var(kp, g.kf, var_x);
-		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + lag_var(cp, g.curve, var_x));
-		for (unsigned j = 0; j < NR; j++)
-			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + lag_var(sp[j], sm[j], var_x));
-	}
-	res->kf_sd = sqrt0(vkf);
 
 	/* noise and the normalised errors */
 	const float nz_n = (float)m->nz_n;
@@ -811,12 +795,28 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	unsigned ma, mb;
 	ne_sorted_mid = median8(res->ne, &ma, &mb);
 	res->curve_chi2 = div_pos(f.chi2, nz);
+	const float sf2 = nz > 0.0f ? nz : f.ssr_sum / dof;   /* the thrust noise's variance for k_tau */
+
+	/* the lag's share: k_f, curve and scales move with the lag (central differences; the lag's
+	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
+	 * is orthogonal to their regressors) */
+	if (!no_lag && ks[best] > 0.0f) {
+		float var_x = 1.0f / (nf * ks[best]), kp, cp, sp[NR], sm[NR];
+		fit_at(m, best, x + LAG_H, &f, sp);   /* f's fit at x is no longer needed: stack on M0 */
+		kp = f.kf;
+		cp = f.curve;
+		fit_at(m, best, x - LAG_H, &f, sm);
+		vkf += lag_var(kp, f.kf, var_x);
+		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + lag_var(cp, f.curve, var_x));
+		for (unsigned j = 0; j < NR; j++)
+			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + lag_var(sp[j], sm[j], var_x));
+	}
+	res->kf_sd = sqrt0(vkf);
 
 	/* k_tau = rho k_f, rho from torque on thrust over every rotor (noise-corrected) */
 	float ff = mid_sum_to_float(m->ff, m->e[MID_E_FF], 2, m->kexp), tf = mid_sum_to_float(m->tf, m->e[MID_E_TF], 2, m->kexp),
 	      tt = mid_sum_to_float(m->tt, m->e[MID_E_TT], 2, m->kexp);
 	float nall = (float)(m->n_exc * NR);
-	float sf2 = nz > 0.0f ? nz : f.ssr_sum / dof;
 	float rho = div_pos(tf, ff);
 	float ss_t = tt - 2.0f * rho * tf + rho * rho * ff;
 	float vrho = ff > 0.0f && nall > 1.0f ? ss_t / (nall - 1.0f) / ff : 0.0f;
