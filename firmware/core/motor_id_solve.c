@@ -401,11 +401,10 @@ static float rotor_curve(const struct motor_id *m, const ls_t st[S_N], unsigned 
 
 /* the model of delay d's statistics at grid position x (see fit_at) */
 struct fit {
-	float th[NR][2];         /* each rotor's reference theta */
-	float ssr[NR], s2[NR];   /* residual sum of squares under the configured model, variance */
+	float s2[NR];            /* residual variance under the configured model */
 	float mj[NR], vm[NR];    /* each rotor's m at the common curve, its variance */
 	float mj_e[NR];          /* m at the common curve + FIT_EPS */
-	float ssr_sum, chi2;     /* sum of ssr; sum of ssr less the rotors' own curves' SSRs */
+	float ssr_sum, chi2;     /* residual sum of squares; less the rotors' own curves' SSRs */
 	float curve, curve_sd, kf;
 	unsigned ia, ib;         /* the rotors whose mean is the median */
 };
@@ -420,19 +419,20 @@ static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f,
 {
 	const bool ec = m->cfg.est_curve;
 	const float np = ec ? 2.0f : 1.0f;
-	float cj[NR], vcj[NR];
-	ls_t l[3], st[S_N];   /* one rotor's statistics at a time (interpolated again below): stack on M0 */
+	float cj[NR], vcj[NR], th[2];
+	/* one rotor's statistics and reference theta at a time (computed again below): stack on M0 */
+	ls_t l[3], st[S_N];
 	lagrange3_ls(x, l);
 	f->ssr_sum = f->chi2 = 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
 		float dl[2], ssr2;
 		stat_at(m, d, NL, l, j, st);
-		ref_theta(m, j, f->th[j]);
-		f->ssr[j] = rotor_ssr_m(m, st, j, dl);
-		f->ssr_sum += f->ssr[j];
-		f->s2[j] = f->ssr[j] / ((float)m->n_stat - np);
-		cj[j] = rotor_curve(m, st, j, f->th[j], &ssr2, &vcj[j]);
-		f->chi2 += f->ssr[j] - ssr2;
+		ref_theta(m, j, th);
+		const float ssr = rotor_ssr_m(m, st, j, dl);
+		f->ssr_sum += ssr;
+		f->s2[j] = ssr / ((float)m->n_stat - np);
+		cj[j] = rotor_curve(m, st, j, th, &ssr2, &vcj[j]);
+		f->chi2 += ssr - ssr2;
 	}
 	float sw = 0.0f, swc = 0.0f;
 	for (unsigned j = 0; j < NR; j++)
@@ -446,8 +446,9 @@ static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f,
 	for (unsigned j = 0; j < NR; j++) {
 		float gw, gw2;
 		stat_at(m, d, NL, l, j, st);
-		f->mj[j] = rotor_m(st, f->curve, SC_J(m, j), f->th[j], &gw);
-		f->mj_e[j] = rotor_m(st, f->curve + FIT_EPS, SC_J(m, j), f->th[j], &gw2);
+		ref_theta(m, j, th);
+		f->mj[j] = rotor_m(st, f->curve, SC_J(m, j), th, &gw);
+		f->mj_e[j] = rotor_m(st, f->curve + FIT_EPS, SC_J(m, j), th, &gw2);
 		f->vm[j] = div_pos(f->s2[j], gw);
 	}
 	f->kf = median8(f->mj, &f->ia, &f->ib);
