@@ -20,10 +20,18 @@ typedef double ls_t;
 typedef float ls_t;
 #endif
 
-/* a rotor's least-squares sums under one hypothesis (SI units) */
-struct stat_f {
-	ls_t g11, g12, g22, b1, b2, rr;
-};
+/* a rotor's least-squares sums under one hypothesis (SI units): ls_t st[S_N], in the order of
+ * struct motor_id_stat's members and of their exponents MID_E_G11..MID_E_RR */
+enum { S_G11, S_G12, S_G22, S_B1, S_B2, S_RR, S_N };
+_Static_assert(sizeof(struct motor_id_stat) == S_N * sizeof(motor_id_sum_t) &&
+		       MID_E_RR - MID_E_G11 == S_RR - S_G11,
+	       "struct motor_id_stat: S_N sums in the order of their exponents");
+
+/* sum k of a struct motor_id_stat (its members are S_N sums, in order, without padding) */
+static motor_id_sum_t stat_sum(const struct motor_id_stat *s, unsigned k)
+{
+	return *(const motor_id_sum_t *)(const void *)((const char *)s + k * sizeof(motor_id_sum_t));
+}
 
 /* a sum of kind ev to ls_t (see mid_sum_to_float) */
 static ls_t sum_ls(motor_id_sum_t v, int ev, int p, int kexp)
@@ -38,17 +46,17 @@ static ls_t sum_ls(motor_id_sum_t v, int ev, int p, int kexp)
 /* rotor j's throttle at the start, as float */
 #define SC_J(m, j) mid_u_to_float((m)->s_c[j])
 
-/* the sums of m->st[d][i][j] in float */
-static void stat_get(const struct motor_id *m, unsigned d, unsigned i, unsigned j, struct stat_f *o)
+/* Rotor j's statistics of delay d: at grid point gi (< NL), or (gi = NL) interpolated over the
+ * grid with the weights l. Sums of kind G (power of thrust 0), B (1), RR (2). */
+static void stat_at(const struct motor_id *m, unsigned d, unsigned gi, const ls_t l[3], unsigned j, ls_t o[S_N])
 {
-	const struct motor_id_stat *s = &m->st[d][i][j];
-	const int k = m->kexp;
-	o->g11 = sum_ls(s->g11, m->e[MID_E_G11], 0, k);
-	o->g12 = sum_ls(s->g12, m->e[MID_E_G12], 0, k);
-	o->g22 = sum_ls(s->g22, m->e[MID_E_G22], 0, k);
-	o->b1 = sum_ls(s->b1, m->e[MID_E_B1], 1, k);
-	o->b2 = sum_ls(s->b2, m->e[MID_E_B2], 1, k);
-	o->rr = sum_ls(s->rr, m->e[MID_E_RR], 2, k);
+	for (unsigned k = 0; k < S_N; k++) {
+		ls_t v[NL];
+		for (unsigned i = 0; i < NL; i++)
+			v[i] = sum_ls(stat_sum(&m->st[d][i][j], k), m->e[MID_E_G11 + k], (int)(k > S_G22) + (int)(k > S_B2),
+				      m->kexp);
+		o[k] = gi < NL ? v[gi] : l[0] * v[0] + l[1] * v[1] + l[2] * v[2];
+	}
 }
 
 /* the reference model's k_f and curve (exactly the per-frame part's) */
@@ -71,7 +79,14 @@ static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u};
 #define NO_LAG_FRAC 0.15f  /* a lag below this fraction of a frame is taken as none (a < 0.0013) */
 #define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
 
-static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
+/* NOINLINE: a small function whose inlined copies cost more flash than the calls (the
+ * compiler inlines them at -Os; this code runs between frames) */
+#define NOINLINE __attribute__((noinline))
+
+NOINLINE static float clampf(float x, float lo, float hi)
+{
+	return x < lo ? lo : (x > hi ? hi : x);
+}
 
 /* 1 - a of a lag; below NO_LAG_FRAC of a frame the lag is none (a = 0) */
 static float lag_k1(float tau, float dt)
@@ -81,11 +96,12 @@ static float lag_k1(float tau, float dt)
 
 #define WHITE_AT_PCT 75u   /* the whiteness model is frozen at this share of the planned frames */
 
-/* the least n >= pct % of the planned frames (integers: the same in every precision) */
+/* the least n >= pct % of the planned frames, pct <= 100 (integers: the same in every
+ * precision; N = 100 q + r gives q pct + ceil(r pct / 100), in 32 bits) */
 static uint32_t frames_at(const struct motor_id *m, uint32_t pct)
 {
-	uint64_t n = ((uint64_t)m->cfg.n_frames * pct + 99u) / 100u;
-	return n > UINT32_MAX ? UINT32_MAX : (uint32_t)n;
+	const uint32_t n = m->cfg.n_frames;
+	return n / 100u * pct + (n % 100u * pct + 99u) / 100u;
 }
 
 /* n_exc at which the current stage ends, or (last stage) the whiteness model freezes */
@@ -147,46 +163,298 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const sca
 }
 
 
-static void delay_crit(const struct motor_id *m, unsigned d, float jv[3]);
-static float parabola(const float sv[3], float *s_min, float *k);
-static void lagrange3(float x, float l[3]);
-static void lagrange3_ls(float x, ls_t l[3]);
-static void interp_stat(const struct stat_f st[3], const ls_t l[3], struct stat_f *o);
-static void stat_at(const struct motor_id *m, unsigned d, const ls_t l[3], unsigned j, struct stat_f *o);
-static float delay_logssr(const struct motor_id *m, unsigned d, float x);
-static float rotor_ssr(const struct stat_f *st, bool est_curve, float c0, float s_c, float delta[2]);
+/* the prior curve's regressor on the basis: g0 = w1 x1 + w2 x2 */
+static void curve_w(float c, float s_c, float w[2])
+{
+	w[0] = (1.0f - c) + 2.0f * c * s_c;
+	w[1] = c;
+}
 
-/* Freezes the model the whiteness test follows, from the last stage's data so far: the delay
- * the bank prefers (or the given one), its lag at the criterion's minimum (a filter of its own,
- * started from the grid's states interpolated there), every rotor's fit at that lag. */
+/* det G of a rotor's statistics */
+NOINLINE static ls_t stat_det(const ls_t st[S_N])
+{
+	return st[S_G11] * st[S_G22] - st[S_G12] * st[S_G12];
+}
+
+/* w^T G w of a rotor's statistics (sum g^2 of the regressor g = w^T x) */
+static ls_t stat_gww(const ls_t st[S_N], ls_t w0, ls_t w1)
+{
+	return w0 * w0 * st[S_G11] + (ls_t)2.0f * w0 * w1 * st[S_G12] + w1 * w1 * st[S_G22];
+}
+
+/* residual sum of squares of one rotor's statistics: 2 parameters (curve estimated) or the
+ * prior curve's 1; delta = the fitted change of theta from the reference (2 values) */
+static float rotor_ssr(const ls_t st[S_N], bool est_curve, float c0, float s_c, float delta[2])
+{
+	if (est_curve) {
+		ls_t det = stat_det(st);
+		if (!(det > (ls_t)1e-30f * st[S_G11] * st[S_G22]) || !(st[S_G11] > 0)) {
+			delta[0] = delta[1] = 0.0f;
+			return (float)st[S_RR];
+		}
+		ls_t d0 = (st[S_G22] * st[S_B1] - st[S_G12] * st[S_B2]) / det;
+		ls_t d1 = (st[S_G11] * st[S_B2] - st[S_G12] * st[S_B1]) / det;
+		delta[0] = (float)d0;
+		delta[1] = (float)d1;
+		ls_t ssr = st[S_RR] - d0 * st[S_B1] - d1 * st[S_B2];
+		return ssr > 0 ? (float)ssr : 0.0f;
+	}
+	float w[2];
+	curve_w(c0, s_c, w);
+	ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1];
+	ls_t gw = stat_gww(st, w0, w1);
+	ls_t bw = w0 * st[S_B1] + w1 * st[S_B2];
+	ls_t mu = gw > 0 ? bw / gw : 0;
+	delta[0] = (float)(mu * w0);
+	delta[1] = (float)(mu * w1);
+	ls_t ssr = st[S_RR] - mu * bw;
+	return ssr > 0 ? (float)ssr : 0.0f;
+}
+
+/* rotor j's residual sum of squares under the configured model */
+static float rotor_ssr_m(const struct motor_id *m, const ls_t st[S_N], unsigned j, float delta[2])
+{
+	return rotor_ssr(st, m->cfg.est_curve, m->cfg.curve0, SC_J(m, j), delta);
+}
+
+/* parabola through (-1, s0), (0, s1), (1, s2): minimum x (clamped to +/-X_MAX) and the
+ * curvature k (S = S_min + k (x - x*)^2; 0 when not convex) */
+static float parabola(const float sv[3], float *k)
+{
+	float den = sv[0] - 2.0f * sv[1] + sv[2];
+	float x;
+	if (den > 0.0f)
+		x = clampf((sv[0] - sv[2]) / (2.0f * den), -X_MAX, X_MAX);
+	else
+		x = sv[0] < sv[2] ? -X_MAX : X_MAX;
+	*k = den > 0.0f ? 0.5f * den : 0.0f;
+	return x;
+}
+
+/* Lagrange weights of the three grid points at x, in ls_t (the weights of the statistics:
+ * their rounding would perturb sums that the solutions difference) */
+static void lagrange3_ls(float x, ls_t l[3])
+{
+	const ls_t xl = (ls_t)x;
+	l[0] = (ls_t)0.5f * xl * (xl - (ls_t)1.0f);
+	l[1] = (ls_t)1.0f - xl * xl;
+	l[2] = (ls_t)0.5f * xl * (xl + (ls_t)1.0f);
+}
+
+/* the same in float (the float build's ls_t) */
+#if OCTO_FIXED
+static void lagrange3(float x, float l[3])
+{
+	l[0] = 0.5f * x * (x - 1.0f);
+	l[1] = 1.0f - x * x;
+	l[2] = 0.5f * x * (x + 1.0f);
+}
+#else
+#define lagrange3 lagrange3_ls
+#endif
+
+/* l[0] a + l[1] b + l[2] c: a value interpolated over the grid */
+NOINLINE static float wsum3(const float l[3], float a, float b, float c)
+{
+	return l[0] * a + l[1] * b + l[2] * c;
+}
+
+/* The selection criterion of delay d at each lag. The likelihood with each rotor's noise
+ * variance unknown is -(n/2) sum_j log SSR_j (a rotor that no lag explains, another motor,
+ * then pulls the common lag little); log SSR is far from a parabola in the lag, so its
+ * Gauss-Newton form is used: J = sum_j SSR_j / SSR_j(best grid point), quadratic in the
+ * statistics like SSR itself; -(n/2) log-likelihood = (n/2) J + const near the minimum. */
+static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
+{
+	float dl[2], e[NL][NR], tot[NL];
+	unsigned ib = 0;
+	for (unsigned i = 0; i < NL; i++) {
+		tot[i] = 0.0f;
+		for (unsigned j = 0; j < NR; j++) {
+			ls_t o[S_N];
+			stat_at(m, d, i, 0, j, o);
+			e[i][j] = rotor_ssr_m(m, o, j, dl);
+			tot[i] += e[i][j];
+		}
+		if (tot[i] < tot[ib])
+			ib = i;
+	}
+	for (unsigned i = 0; i < NL; i++) {
+		jv[i] = 0.0f;
+		for (unsigned j = 0; j < NR; j++)
+			jv[i] += e[i][j] / fmaxf(e[ib][j], 1e-30f);
+	}
+}
+
+/* sum over rotors of log SSR_j of delay d at grid position x (statistics interpolated) */
+static float delay_logssr(const struct motor_id *m, unsigned d, float x)
+{
+	float dl[2], sum = 0.0f;
+	ls_t l[3];
+	lagrange3_ls(x, l);
+	for (unsigned j = 0; j < NR; j++) {
+		ls_t o[S_N];
+		stat_at(m, d, NL, l, j, o);
+		sum += logf(fmaxf(rotor_ssr_m(m, o, j, dl), 1e-30f));
+	}
+	return sum;
+}
+
+/* Every delay hypothesis at its criterion's minimum: grid position xs, curvature ks (see
+ * parabola), interpolated sum of log SSR smin. Returns the delay of least smin (the first
+ * of equals). */
+static unsigned delay_scan(const struct motor_id *m, float xs[ND], float ks[ND], float smin[ND])
+{
+	unsigned best = 0;
+	for (unsigned d = 0; d < ND; d++) {
+		float sv[3];
+		delay_crit(m, d, sv);
+		xs[d] = parabola(sv, &ks[d]);
+		smin[d] = delay_logssr(m, d, xs[d]);
+		if (smin[d] < smin[best])
+			best = d;
+	}
+	return best;
+}
+
 /* the hypothesis the data so far prefer (or the given delay) and its lag's grid position */
 static void best_hyp(const struct motor_id *m, unsigned *d_best, float *x_best)
 {
-	unsigned d = 0;
-	float x = 0.0f, best = 0.0f;
-	for (unsigned k = 0; k < ND; k++) {
-		float sv[3], jmin, kk;
-		delay_crit(m, k, sv);
-		float xk = parabola(sv, &jmin, &kk);
-		if (m->cfg.fix_delay) {
-			if (k == m->cfg.delay_fr) {
-				d = k;
-				x = xk;
-			}
-			continue;
-		}
-		float v = delay_logssr(m, k, xk);
-		if (k == 0u || v < best) {
-			best = v;
-			d = k;
-			x = xk;
-		}
-	}
-	*d_best = d;
-	*x_best = x;
+	float xs[ND], ks[ND], smin[ND];
+	unsigned d = delay_scan(m, xs, ks, smin);
+	if (m->cfg.fix_delay)
+		d = m->cfg.delay_fr;
+	*d_best = d < ND ? d : 0u;
+	*x_best = d < ND ? xs[d] : 0.0f;
 }
 
-static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, float *curve, float sc[NR]);
+/* rotor's m at curve c from its statistics: sum g f / sum g^2 with g = w^T x and
+ * sum x f = b + G theta_ref; *gw = sum g^2 */
+static float rotor_m(const ls_t st[S_N], float c, float s_c, const float th_ref[2], float *gw)
+{
+	float w[2];
+	curve_w(c, s_c, w);
+	const ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1], t0 = (ls_t)th_ref[0], t1 = (ls_t)th_ref[1];
+	ls_t xf1 = st[S_B1] + st[S_G11] * t0 + st[S_G12] * t1;
+	ls_t xf2 = st[S_B2] + st[S_G12] * t0 + st[S_G22] * t1;
+	ls_t g = stat_gww(st, w0, w1);
+	*gw = (float)g;
+	return g > 0 ? (float)((w0 * xf1 + w1 * xf2) / g) : 0.0f;
+}
+
+/* median of 8 (mean of the 4th and 5th); their indices in *a, *b */
+static float median8(const float v[NR], unsigned *a, unsigned *b)
+{
+	unsigned idx[NR];
+	for (unsigned j = 0; j < NR; j++)
+		idx[j] = j;
+	for (unsigned i = 1; i < NR; i++)
+		for (unsigned k = i; k > 0 && v[idx[k - 1]] > v[idx[k]]; k--) {
+			unsigned t = idx[k];
+			idx[k] = idx[k - 1];
+			idx[k - 1] = t;
+		}
+	*a = idx[NR / 2 - 1];
+	*b = idx[NR / 2];
+	return 0.5f * (v[*a] + v[*b]);
+}
+
+static float sqrt0(float v) { return v > 0.0f ? sqrtf(v) : 0.0f; }
+
+/* a / b for b > 0, else 0 */
+NOINLINE static float div_pos(float a, float b) { return b > 0.0f ? a / b : 0.0f; }
+
+/* The sampling variance of the median of 8 rotors' estimates (the mean of the 4th and 5th),
+ * in units of one rotor's variance: 0.168 for 8 alike, 0.190 with one rotor far off (a weak
+ * one; Monte Carlo of normal errors, 4e5 draws). The larger is taken. */
+#define MEDIAN8_VAR 0.19f
+
+/* rotor j's reference parameters: the prior (k_f0, curve0) on its basis */
+static void ref_theta(const struct motor_id *m, unsigned j, float th[2])
+{
+	float w[2];
+	curve_w(ref_c(m), SC_J(m, j), w);
+	float kf = ref_kf(m);
+	th[0] = kf * w[0];
+	th[1] = kf * w[1];
+}
+
+/* Rotor j's own curve: the 2-parameter fit about the prior's reference th, c_j = B / m_j,
+ * with its variance (0: not determined) and the fit's residual sum of squares *ssr2. */
+static float rotor_curve(const struct motor_id *m, const ls_t st[S_N], unsigned j, const float th[2], float *ssr2,
+			 float *var)
+{
+	float d2[2];
+	*ssr2 = rotor_ssr(st, true, m->cfg.curve0, SC_J(m, j), d2);
+	float a = th[0] + d2[0], bq = th[1] + d2[1];
+	float mj = a + bq * (1.0f - 2.0f * SC_J(m, j));
+	ls_t det = stat_det(st);
+	*var = 0.0f;
+	if (!(mj > 0.0f && det > 0))
+		return 0.0f;
+	const ls_t ga = (ls_t)(-bq / (mj * mj)), gb = (ls_t)(a / (mj * mj));
+	/* g^T G^-1 g */
+	float q = (float)((ga * ga * st[S_G22] - (ls_t)2.0f * ga * gb * st[S_G12] + gb * gb * st[S_G11]) / det);
+	*var = *ssr2 / ((float)m->n_stat - 2.0f) * q;
+	return bq / mj;
+}
+
+/* the model of delay d's statistics at grid position x (see fit_at) */
+struct fit {
+	float s2[NR];            /* residual variance under the configured model */
+	float mj[NR], vm[NR];    /* each rotor's m at the common curve, its variance */
+	float mj_e[NR];          /* m at the common curve + FIT_EPS */
+	float ssr_sum, chi2;     /* residual sum of squares; less the rotors' own curves' SSRs */
+	float curve, curve_sd, kf;
+	unsigned ia, ib;         /* the rotors whose mean is the median */
+};
+#define FIT_EPS 1e-3f
+
+/* Every rotor's fit at delay d's grid position x: its residual sum of squares, its own curve
+ * (2-parameter fit); the common curve (with est_curve: the inverse-variance mean of the
+ * rotors', unclamped: a linear rotor's estimate scatters on both sides of 0, and a boundary
+ * there would bias the curve, and with it k_f, high; the caller's range check names the
+ * bounds); each rotor's m at that curve, k_f = their median, the scales (m_j / k_f). */
+static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f, float scale[NR])
+{
+	const bool ec = m->cfg.est_curve;
+	const float np = ec ? 2.0f : 1.0f;
+	float cj[NR], vcj[NR], th[2];
+	/* one rotor's statistics and reference theta at a time (computed again below): stack on M0 */
+	ls_t l[3], st[S_N];
+	lagrange3_ls(x, l);
+	f->ssr_sum = f->chi2 = 0.0f;
+	for (unsigned j = 0; j < NR; j++) {
+		float dl[2], ssr2;
+		stat_at(m, d, NL, l, j, st);
+		ref_theta(m, j, th);
+		const float ssr = rotor_ssr_m(m, st, j, dl);
+		f->ssr_sum += ssr;
+		f->s2[j] = ssr / ((float)m->n_stat - np);
+		cj[j] = rotor_curve(m, st, j, th, &ssr2, &vcj[j]);
+		f->chi2 += ssr - ssr2;
+	}
+	float sw = 0.0f, swc = 0.0f;
+	for (unsigned j = 0; j < NR; j++)
+		if (vcj[j] > 0.0f) {
+			sw += 1.0f / vcj[j];
+			swc += cj[j] / vcj[j];
+		}
+	const bool have_c = ec && sw > 0.0f;
+	f->curve = have_c ? swc / sw : m->cfg.curve0;
+	f->curve_sd = have_c ? sqrt0(1.0f / sw) : 0.0f;
+	for (unsigned j = 0; j < NR; j++) {
+		float gw, gw2;
+		stat_at(m, d, NL, l, j, st);
+		ref_theta(m, j, th);
+		f->mj[j] = rotor_m(st, f->curve, SC_J(m, j), th, &gw);
+		f->mj_e[j] = rotor_m(st, f->curve + FIT_EPS, SC_J(m, j), th, &gw2);
+		f->vm[j] = div_pos(f->s2[j], gw);
+	}
+	f->kf = median8(f->mj, &f->ia, &f->ib);
+	for (unsigned j = 0; j < NR; j++)
+		scale[j] = div_pos(f->mj[j], f->kf);
+}
 
 /* A new reference model: common k_f and curve (the curve only when estimated); kept within
  * a quarter to four times the prior and the throttle map's curve range (and, fixed build,
@@ -228,11 +496,17 @@ static bool reference_fit(const struct motor_id *m, float *kf, float *c)
 		return false;
 	unsigned d;
 	float x, sc[NR];
+	struct fit f;
 	best_hyp(m, &d, &x);
-	model_at(m, d, x, kf, c, sc);
+	fit_at(m, d, x, &f, sc);
+	*kf = f.kf;
+	*c = f.curve;
 	return true;
 }
 
+/* Freezes the model the whiteness test follows, from the last stage's data so far: the delay
+ * the bank prefers (or the given one), its lag at the criterion's minimum (a filter of its own,
+ * started from the grid's states interpolated there), every rotor's fit at that lag. */
 static void white_begin(struct motor_id *m)
 {
 	struct motor_id_white *w = &m->wh;
@@ -246,115 +520,18 @@ static void white_begin(struct motor_id *m)
 	lagrange3(x, l);
 	lagrange3_ls(x, ll);
 	for (unsigned j = 0; j < NR; j++) {
-		struct stat_f o;
-		stat_at(m, d, ll, j, &o);
-		rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, SC_J(m, j), dl);
+		ls_t o[S_N];
+		stat_at(m, d, NL, ll, j, o);
+		rotor_ssr_m(m, o, j, dl);
 		w->dl[j][0] = mid_f_of_float(dl[0], m->kexp);
 		w->dl[j][1] = mid_f_of_float(dl[1], m->kexp);
-		w->s[j] = mid_u_of_float(l[0] * mid_u_to_float(m->s[d][0][j]) + l[1] * mid_u_to_float(m->s[d][1][j]) +
-					 l[2] * mid_u_to_float(m->s[d][2][j]));
+		w->s[j] = mid_u_of_float(wsum3(l, mid_u_to_float(m->s[d][0][j]), mid_u_to_float(m->s[d][1][j]),
+					       mid_u_to_float(m->s[d][2][j])));
 	}
 	w->k1 = mid_u_of_float(lag_k1(clampf(m->lag_c[d] * powf(m->lag_r[d], x), MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX),
 				      sc_to_float(m->cfg.dt_s)));
 	w->delay = (uint8_t)d;
 	w->on = true;
-}
-
-/* the prior curve's regressor on the basis: g0 = w1 x1 + w2 x2 */
-static void curve_w(float c, float s_c, float w[2])
-{
-	w[0] = (1.0f - c) + 2.0f * c * s_c;
-	w[1] = c;
-}
-
-/* residual sum of squares of one rotor's statistics: 2 parameters (curve estimated) or the
- * prior curve's 1; delta = the fitted change of theta from the reference (2 values) */
-static float rotor_ssr(const struct stat_f *st, bool est_curve, float c0, float s_c,
-		       float delta[2])
-{
-	if (est_curve) {
-		ls_t det = st->g11 * st->g22 - st->g12 * st->g12;
-		if (!(det > (ls_t)1e-30f * st->g11 * st->g22) || !(st->g11 > 0)) {
-			delta[0] = delta[1] = 0.0f;
-			return (float)st->rr;
-		}
-		ls_t d0 = (st->g22 * st->b1 - st->g12 * st->b2) / det;
-		ls_t d1 = (st->g11 * st->b2 - st->g12 * st->b1) / det;
-		delta[0] = (float)d0;
-		delta[1] = (float)d1;
-		ls_t ssr = st->rr - d0 * st->b1 - d1 * st->b2;
-		return ssr > 0 ? (float)ssr : 0.0f;
-	}
-	float w[2];
-	curve_w(c0, s_c, w);
-	ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1];
-	ls_t gw = w0 * w0 * st->g11 + (ls_t)2.0f * w0 * w1 * st->g12 + w1 * w1 * st->g22;
-	ls_t bw = w0 * st->b1 + w1 * st->b2;
-	ls_t mu = gw > 0 ? bw / gw : 0;
-	delta[0] = (float)(mu * w0);
-	delta[1] = (float)(mu * w1);
-	ls_t ssr = st->rr - mu * bw;
-	return ssr > 0 ? (float)ssr : 0.0f;
-}
-
-/* parabola through (-1, s0), (0, s1), (1, s2): minimum x (clamped to +/-X_MAX), the value
- * there and the curvature k (S = S_min + k (x - x*)^2; 0 when not convex) */
-static float parabola(const float sv[3], float *s_min, float *k)
-{
-	float den = sv[0] - 2.0f * sv[1] + sv[2];
-	float x;
-	if (den > 0.0f)
-		x = clampf((sv[0] - sv[2]) / (2.0f * den), -X_MAX, X_MAX);
-	else
-		x = sv[0] < sv[2] ? -X_MAX : X_MAX;
-	*k = den > 0.0f ? 0.5f * den : 0.0f;
-	*s_min = sv[1] + 0.5f * x * (sv[2] - sv[0]) + 0.5f * x * x * den;
-	return x;
-}
-
-/* Lagrange weights of the three grid points at x */
-/* the same in ls_t (the weights of the statistics: their rounding would perturb sums that
- * the solutions difference) */
-static void lagrange3_ls(float x, ls_t l[3])
-{
-	const ls_t xl = (ls_t)x;
-	l[0] = (ls_t)0.5f * xl * (xl - (ls_t)1.0f);
-	l[1] = (ls_t)1.0f - xl * xl;
-	l[2] = (ls_t)0.5f * xl * (xl + (ls_t)1.0f);
-}
-
-static void lagrange3(float x, float l[3])
-{
-	l[0] = 0.5f * x * (x - 1.0f);
-	l[1] = 1.0f - x * x;
-	l[2] = 0.5f * x * (x + 1.0f);
-}
-
-/* The selection criterion of delay d at each lag. The likelihood with each rotor's noise
- * variance unknown is -(n/2) sum_j log SSR_j (a rotor that no lag explains, another motor,
- * then pulls the common lag little); log SSR is far from a parabola in the lag, so its
- * Gauss-Newton form is used: J = sum_j SSR_j / SSR_j(best grid point), quadratic in the
- * statistics like SSR itself; -(n/2) log-likelihood = (n/2) J + const near the minimum. */
-static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
-{
-	float dl[2], e[NL][NR], tot[NL];
-	unsigned ib = 0;
-	for (unsigned i = 0; i < NL; i++) {
-		tot[i] = 0.0f;
-		for (unsigned j = 0; j < NR; j++) {
-			struct stat_f o;
-			stat_get(m, d, i, j, &o);
-			e[i][j] = rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, SC_J(m, j), dl);
-			tot[i] += e[i][j];
-		}
-		if (tot[i] < tot[ib])
-			ib = i;
-	}
-	for (unsigned i = 0; i < NL; i++) {
-		jv[i] = 0.0f;
-		for (unsigned j = 0; j < NR; j++)
-			jv[i] += e[i][j] / fmaxf(e[ib][j], 1e-30f);
-	}
 }
 
 void motor_id_refine(struct motor_id *m)
@@ -381,12 +558,12 @@ void motor_id_refine(struct motor_id *m)
 		return;
 	float dt = sc_to_float(m->cfg.dt_s), tau_hi = 0.0f;
 	/* the next stage's reference: this one's fit (relative to this reference) */
-	float kf_ref, c_ref;
+	float kf_ref = 0.0f, c_ref = 0.0f;
 	bool have_ref = reference_fit(m, &kf_ref, &c_ref);
 	for (unsigned d = 0; d < ND; d++) {
-		float sv[3], smin, k;
+		float sv[3], k;
 		delay_crit(m, d, sv);
-		float x = m->n_stat > 0u ? parabola(sv, &smin, &k) : 0.0f;
+		float x = m->n_stat > 0u ? parabola(sv, &k) : 0.0f;
 		float r = m->lag_r[d];
 		/* a minimum below the grid walks twice as far (towards no lag at all) */
 		float centre = m->lag_c[d] * powf(r, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
@@ -395,19 +572,17 @@ void motor_id_refine(struct motor_id *m)
 		float nr = stage_ratio[next];
 		if (fabsf(x) > 1.0f)
 			nr = fmaxf(nr, sqrtf(r));
-		float xs[3], old[NL][NR];
+		float old[NL][NR];
 		for (unsigned i = 0; i < NL; i++)
 			for (unsigned j = 0; j < NR; j++)
 				old[i][j] = mid_u_to_float(m->s[d][i][j]);
+		const float lr = logf(r);
 		for (int i = 0; i < (int)NL; i++) {
-			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * powf(nr, (float)(i - 1));
-			xs[i] = clampf(logf(tau_i / m->lag_c[d]) / logf(r), -X_MAX, X_MAX);
-		}
-		for (unsigned i = 0; i < NL; i++) {
-			float l[3];
-			lagrange3(xs[i], l);
+			/* nr^(i - 1) */
+			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * (i == 0 ? 1.0f / nr : (i == 1 ? 1.0f : nr)), l[3];
+			lagrange3(clampf(logf(tau_i / m->lag_c[d]) / lr, -X_MAX, X_MAX), l);
 			for (unsigned j = 0; j < NR; j++)
-				m->s[d][i][j] = mid_u_of_float(l[0] * old[0][j] + l[1] * old[1][j] + l[2] * old[2][j]);
+				m->s[d][i][j] = mid_u_of_float(wsum3(l, old[0][j], old[1][j], old[2][j]));
 		}
 		set_grid(m, d, centre, nr);
 		tau_hi = fmaxf(tau_hi, m->lag_c[d] * nr);
@@ -418,145 +593,8 @@ void motor_id_refine(struct motor_id *m)
 	m->stage = (uint8_t)next;
 	m->n_next = next_due(m);
 	/* what the interpolation left decays with the lag: wait two time constants */
-	float fr = dt > 0.0f ? 2.0f * tau_hi / dt : 0.0f;
+	float fr = div_pos(2.0f * tau_hi, dt);
 	m->skip = (uint8_t)clampf(fr + 1.0f, 1.0f, 30.0f);
-}
-
-static void interp_stat(const struct stat_f st[3], const ls_t l[3], struct stat_f *o)
-{
-	const ls_t l0 = l[0], l1 = l[1], l2 = l[2];
-	o->g11 = l0 * st[0].g11 + l1 * st[1].g11 + l2 * st[2].g11;
-	o->g12 = l0 * st[0].g12 + l1 * st[1].g12 + l2 * st[2].g12;
-	o->g22 = l0 * st[0].g22 + l1 * st[1].g22 + l2 * st[2].g22;
-	o->b1 = l0 * st[0].b1 + l1 * st[1].b1 + l2 * st[2].b1;
-	o->b2 = l0 * st[0].b2 + l1 * st[1].b2 + l2 * st[2].b2;
-	o->rr = l0 * st[0].rr + l1 * st[1].rr + l2 * st[2].rr;
-}
-
-/* rotor j's statistics of delay d at the grid weights l */
-static void stat_at(const struct motor_id *m, unsigned d, const ls_t l[3], unsigned j, struct stat_f *o)
-{
-	struct stat_f tri[3];
-	for (unsigned i = 0; i < NL; i++)
-		stat_get(m, d, i, j, &tri[i]);
-	interp_stat(tri, l, o);
-}
-
-/* sum over rotors of log SSR_j of delay d at grid position x (statistics interpolated) */
-static float delay_logssr(const struct motor_id *m, unsigned d, float x)
-{
-	float dl[2], sum = 0.0f;
-	ls_t l[3];
-	lagrange3_ls(x, l);
-	for (unsigned j = 0; j < NR; j++) {
-		struct stat_f o;
-		stat_at(m, d, l, j, &o);
-		sum += logf(fmaxf(rotor_ssr(&o, m->cfg.est_curve, m->cfg.curve0, SC_J(m, j), dl), 1e-30f));
-	}
-	return sum;
-}
-
-/* rotor's m at curve c from its statistics: sum g f / sum g^2 with g = w^T x and
- * sum x f = b + G theta_ref; *gw = sum g^2 */
-static float rotor_m(const struct stat_f *st, float c, float s_c, const float th_ref[2], float *gw)
-{
-	float w[2];
-	curve_w(c, s_c, w);
-	const ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1], t0 = (ls_t)th_ref[0], t1 = (ls_t)th_ref[1];
-	ls_t xf1 = st->b1 + st->g11 * t0 + st->g12 * t1;
-	ls_t xf2 = st->b2 + st->g12 * t0 + st->g22 * t1;
-	ls_t g = w0 * w0 * st->g11 + (ls_t)2.0f * w0 * w1 * st->g12 + w1 * w1 * st->g22;
-	*gw = (float)g;
-	return g > 0 ? (float)((w0 * xf1 + w1 * xf2) / g) : 0.0f;
-}
-
-/* median of 8 (mean of the 4th and 5th); their indices in *a, *b */
-static float median8(const float v[NR], unsigned *a, unsigned *b)
-{
-	unsigned idx[NR];
-	for (unsigned j = 0; j < NR; j++)
-		idx[j] = j;
-	for (unsigned i = 1; i < NR; i++)
-		for (unsigned k = i; k > 0 && v[idx[k - 1]] > v[idx[k]]; k--) {
-			unsigned t = idx[k];
-			idx[k] = idx[k - 1];
-			idx[k - 1] = t;
-		}
-	*a = idx[NR / 2 - 1];
-	*b = idx[NR / 2];
-	return 0.5f * (v[*a] + v[*b]);
-}
-
-static float sqrt0(float v) { return v > 0.0f ? sqrtf(v) : 0.0f; }
-
-/* The sampling variance of the median of 8 rotors' estimates (the mean of the 4th and 5th),
- * in units of one rotor's variance: 0.168 for 8 alike, 0.190 with one rotor far off (a weak
- * one; Monte Carlo of normal errors, 4e5 draws). The larger is taken. */
-#define MEDIAN8_VAR 0.19f
-
-/* rotor j's reference parameters: the prior (k_f0, curve0) on its basis */
-static void ref_theta(const struct motor_id *m, unsigned j, float th[2])
-{
-	float w[2];
-	curve_w(ref_c(m), SC_J(m, j), w);
-	float kf = ref_kf(m);
-	th[0] = kf * w[0];
-	th[1] = kf * w[1];
-}
-
-/* Rotor j's own curve: the 2-parameter fit about the prior's reference th, c_j = B / m_j,
- * with its variance (0: not determined) and the fit's residual sum of squares *ssr2. */
-static float rotor_curve(const struct motor_id *m, const struct stat_f *st, unsigned j,
-			 const float th[2], float *ssr2, float *var)
-{
-	float d2[2];
-	*ssr2 = rotor_ssr(st, true, m->cfg.curve0, SC_J(m, j), d2);
-	float a = th[0] + d2[0], bq = th[1] + d2[1];
-	float mj = a + bq * (1.0f - 2.0f * SC_J(m, j));
-	ls_t det = st->g11 * st->g22 - st->g12 * st->g12;
-	*var = 0.0f;
-	if (!(mj > 0.0f && det > 0))
-		return 0.0f;
-	const ls_t ga = (ls_t)(-bq / (mj * mj)), gb = (ls_t)(a / (mj * mj));
-	/* g^T G^-1 g */
-	float q = (float)((ga * ga * st->g22 - (ls_t)2.0f * ga * gb * st->g12 + gb * gb * st->g11) / det);
-	*var = *ssr2 / ((float)m->n_stat - 2.0f) * q;
-	return bq / mj;
-}
-
-/* k_f, the common curve and the rotors' scales from delay d's statistics at grid position x,
- * by the same steps as motor_id_solve (curve unclamped): their change with x is the lag's
- * share of their variances (the lag's error is uncorrelated with theirs at a fixed lag, to
- * first order: the profile's gradient is orthogonal to their regressors) */
-static void model_at(const struct motor_id *m, unsigned d, float x, float *kf, float *curve, float sc[NR])
-{
-	const float c0 = m->cfg.curve0;
-	float th[NR][2], mj[NR];
-	ls_t l[3];
-	struct stat_f st;   /* one rotor's at a time (interpolated again below): stack on M0 */
-	lagrange3_ls(x, l);
-	float sw = 0.0f, swc = 0.0f;
-	for (unsigned j = 0; j < NR; j++) {
-		ref_theta(m, j, th[j]);
-		if (!m->cfg.est_curve)
-			continue;
-		stat_at(m, d, l, j, &st);
-		float ssr2, v, c = rotor_curve(m, &st, j, th[j], &ssr2, &v);
-		if (v > 0.0f) {
-			sw += 1.0f / v;
-			swc += c / v;
-		}
-	}
-	*curve = m->cfg.est_curve && sw > 0.0f ? swc / sw : c0;
-	for (unsigned j = 0; j < NR; j++) {
-		float gw;
-		stat_at(m, d, l, j, &st);
-		mj[j] = rotor_m(&st, *curve, SC_J(m, j), th[j], &gw);
-	}
-	unsigned ia, ib;
-	*kf = median8(mj, &ia, &ib);
-	for (unsigned j = 0; j < NR; j++)
-		sc[j] = *kf > 0.0f ? mj[j] / *kf : 0.0f;
 }
 
 /* The lag's grid position x refined from the parabola's by Newton steps on the profile
@@ -572,8 +610,10 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 	if (!(kk > 0.0f) || fabsf(xi) >= X_MAX - 1e-3f)
 		return;
 	for (int it = 0; it < 3; it++) {
-		float fm = delay_logssr(m, d, xi - h), f0 = delay_logssr(m, d, xi), fp = delay_logssr(m, d, xi + h);
-		float d2 = (fp - 2.0f * f0 + fm) / (h * h), d1 = (fp - fm) / (2.0f * h);
+		float fv[3];   /* at xi - h, xi, xi + h */
+		for (int i = 0; i < 3; i++)
+			fv[i] = delay_logssr(m, d, xi + (float)(i - 1) * h);
+		float d2 = (fv[2] - 2.0f * fv[1] + fv[0]) / (h * h), d1 = (fv[2] - fv[0]) / (2.0f * h);
 		if (!(d2 > 0.0f))
 			return;
 		float step = clampf(-d1 / d2, -0.5f, 0.5f);
@@ -588,7 +628,7 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 
 /* chi-square quantile with k degrees of freedom at z standard normal deviates above the mean
  * (Wilson-Hilferty; within 1 % of the exact one from k = 3 on at these z) */
-static float chi2_quant(float k, float z)
+NOINLINE static float chi2_quant(float k, float z)
 {
 	float a = 2.0f / (9.0f * k), t = 1.0f - a + z * sqrtf(a);
 	return k * t * t * t;
@@ -601,15 +641,18 @@ static float chi2_quant(float k, float z)
 #define WZ_LEVEL 3.7f
 #define WMIN_N 20.0f     /* fewest frames of a (rotor, level) series that enters the test */
 
-/* the whiteness test from its sums (see motor_id.h) */
-static void white_eval(const struct motor_id *m, struct motor_id_result *res)
+/* The whiteness test from its sums (see motor_id.h). Returns the cause of coloured prediction
+ * errors: one rotor alone (the others white) is that rotor (*rotor); colour at one throttle
+ * level, not the others, is the thrust curve; else the dynamics. */
+static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_result *res, int *rotor)
 {
 	const struct motor_id_white *w = &m->wh;
 	res->white_ok = true;
 	res->white_have = false;
 	if (!w->on)
-		return;
-	float q = 0.0f, dof = 0.0f, qr[NR] = {0}, dr[NR] = {0}, qb[MOTOR_ID_WBINS] = {0}, db[MOTOR_ID_WBINS] = {0};
+		return MOTOR_ID_OK;
+	/* each (rotor, level) series' statistic and its degrees of freedom (0: not in the test) */
+	float qs[NR][MOTOR_ID_WBINS] = {0}, ds[NR][MOTOR_ID_WBINS] = {0};
 	for (unsigned j = 0; j < NR; j++)
 		for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
 			float n = (float)w->n[j][b];
@@ -623,52 +666,61 @@ static void white_eval(const struct motor_id *m, struct motor_id_result *res)
 				float rho = (mid_sum_to_float(w->sl[j][b][l], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu) / c0;
 				qq += rho * rho;
 			}
-			qq *= n;
-			q += qq;
-			qr[j] += qq;
-			qb[b] += qq;
-			dof += (float)MOTOR_ID_WLAGS;
-			dr[j] += (float)MOTOR_ID_WLAGS;
-			db[b] += (float)MOTOR_ID_WLAGS;
+			qs[j][b] = qq * n;
+			ds[j][b] = (float)MOTOR_ID_WLAGS;
 		}
-	if (!(dof > 0.0f))
-		return;
-	res->white_have = true;
-	res->white_q = q;
-	res->white_dof = dof;
-	res->white_lim = chi2_quant(dof, WZ_ALL);
-	bool ok = q <= res->white_lim;
-	for (unsigned j = 0; j < NR; j++) {
-		res->white_rotor[j] = dr[j] > 0.0f ? qr[j] / chi2_quant(dr[j], WZ_ROTOR) : 0.0f;
-		ok = ok && res->white_rotor[j] <= 1.0f;
-	}
-	for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
-		res->white_level[b] = db[b] > 0.0f ? qb[b] / chi2_quant(db[b], WZ_LEVEL) : 0.0f;
-		ok = ok && res->white_level[b] <= 1.0f;
+	/* the tests: g = 0 everything, 1..NR one rotor's levels, NR + 1.. one level's rotors;
+	 * n_bad: how many rotors, how many levels fail */
+	bool ok = true;
+	unsigned n_bad[2] = {0, 0};
+	for (unsigned g = 0; g < 1u + NR + MOTOR_ID_WBINS; g++) {
+		float q = 0.0f, dof = 0.0f;
+		for (unsigned j = 0; j < NR; j++)
+			for (unsigned b = 0; b < MOTOR_ID_WBINS; b++)
+				if (g == 0u || g == 1u + j || g == 1u + NR + b) {
+					q += qs[j][b];
+					dof += ds[j][b];
+				}
+		if (g == 0u) {
+			if (!(dof > 0.0f))
+				return MOTOR_ID_OK;
+			res->white_have = true;
+			res->white_q = q;
+			res->white_dof = dof;
+			res->white_lim = chi2_quant(dof, WZ_ALL);
+			ok = q <= res->white_lim;
+			continue;
+		}
+		/* a rotor's or a level's statistic over its limit */
+		const bool is_rotor = g <= NR;
+		float *ratio = is_rotor ? &res->white_rotor[g - 1u] : &res->white_level[g - 1u - NR];
+		*ratio = dof > 0.0f ? q / chi2_quant(dof, is_rotor ? WZ_ROTOR : WZ_LEVEL) : 0.0f;
+		ok = ok && *ratio <= 1.0f;
+		if (*ratio > 1.0f) {
+			n_bad[is_rotor]++;
+			if (is_rotor)
+				*rotor = (int)g - 1;
+		}
 	}
 	res->white_ok = ok;
+	return n_bad[1] == 1u ? MOTOR_ID_ROTOR : n_bad[0] == 1u ? MOTOR_ID_LEVEL : MOTOR_ID_COLOURED;
 }
 
-/* the cause of coloured prediction errors: one rotor alone (the others white) is that rotor;
- * colour at one throttle level, not the others, is the thrust curve; else the dynamics */
-static enum motor_id_cause white_cause(const struct motor_id_result *res, int *rotor)
+/* the lag's share of a variance: the value at x +/- LAG_H (vp, vm), its derivative in x (central
+ * difference) squared times var x */
+#define LAG_H 0.25f
+NOINLINE static float lag_var(float vp, float vm, float var_x)
 {
-	unsigned nr = 0, nb = 0;
-	int jr = -1;
-	for (unsigned j = 0; j < NR; j++)
-		if (res->white_rotor[j] > 1.0f) {
-			nr++;
-			jr = (int)j;
-		}
-	for (unsigned b = 0; b < MOTOR_ID_WBINS; b++)
-		nb += res->white_level[b] > 1.0f;
-	if (nr == 1u) {
-		*rotor = jr;
-		return MOTOR_ID_ROTOR;
-	}
-	if (nb == 1u)
-		return MOTOR_ID_LEVEL;
-	return MOTOR_ID_COLOURED;
+	float dv = (vp - vm) / (2.0f * LAG_H);
+	return dv * dv * var_x;
+}
+
+/* the normalised errors' limit: ne_max, or NE_SIGMAS standard deviations of the ratio of two
+ * variance estimates (the fit's, dof degrees of freedom; the noise's, relative variance v_nz)
+ * when the data are few */
+static float ne_limit(float ne_max, float dof, float v_nz)
+{
+	return fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof, 1.0f) + v_nz));
 }
 
 void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_result *res)
@@ -676,7 +728,6 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	*res = (struct motor_id_result){0};
 	res->cause_rotor = -1;
 	const bool ec = m->cfg.est_curve;
-	const float c0 = m->cfg.curve0;
 	const unsigned np = ec ? 2u : 1u;
 	res->n = m->n_stat;
 	if (m->n_stat < 30u) {
@@ -687,16 +738,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 
 	/* the delay hypothesis of least criterion at its best lag */
 	float smin[ND], xs[ND], ks[ND];
-	unsigned best = 0;
-	for (unsigned d = 0; d < ND; d++) {
-		float sv[3];
-		delay_crit(m, d, sv);
-		float jmin;
-		xs[d] = parabola(sv, &jmin, &ks[d]);
-		smin[d] = delay_logssr(m, d, xs[d]);
-		if (smin[d] < smin[best])
-			best = d;
-	}
+	unsigned best = delay_scan(m, xs, ks, smin);
 	res->free_delay = best;
 	if (m->cfg.fix_delay)
 		best = m->cfg.delay_fr < ND ? m->cfg.delay_fr : ND - 1u;
@@ -726,101 +768,57 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->tau_sd = NO_LAG_FRAC * dtf;
 	}
 
-	/* every rotor at that lag */
-	ls_t l[3];
-	lagrange3_ls(x, l);
-	struct stat_f st;   /* one rotor's at a time (interpolated again below): stack on M0 */
-	float ssr[NR], cj[NR], vcj[NR], s2j[NR], th_ref[NR][2];
-	float ssr_sum = 0.0f, chi2 = 0.0f;
-	for (unsigned j = 0; j < NR; j++) {
-		stat_at(m, best, l, j, &st);
-		float dl[2];
-		ref_theta(m, j, th_ref[j]);
-		ssr[j] = rotor_ssr(&st, ec, c0, SC_J(m, j), dl);
-		ssr_sum += ssr[j];
-		s2j[j] = ssr[j] / ((float)m->n_stat - (float)np);
-		/* the curve of this rotor alone (2-parameter fit) and its variance */
-		float ssr2;
-		cj[j] = rotor_curve(m, &st, j, th_ref[j], &ssr2, &vcj[j]);
-		chi2 += ssr[j] - ssr2;
-	}
-
-	/* the common curve: inverse-variance mean of the rotors' */
-	if (ec) {
-		float sw = 0.0f, swc = 0.0f;
-		for (unsigned j = 0; j < NR; j++)
-			if (vcj[j] > 0.0f) {
-				sw += 1.0f / vcj[j];
-				swc += cj[j] / vcj[j];
-			}
-		res->curve = sw > 0.0f ? swc / sw : c0;
-		res->curve_sd = sw > 0.0f ? sqrt0(1.0f / sw) : 0.0f;
-		/* not cut at 0: a linear rotor's estimate scatters on both sides of it, and a
-		 * boundary there would bias the curve, and with it k_f, high; the caller's range
-		 * check (THRMAP_CURVE_MIN/MAX) names the bounds */
-	} else {
-		res->curve = c0;
-		res->curve_sd = 0.0f;
-	}
-
-	/* each rotor's m at that curve, k_f = their median, scales */
-	float mj[NR], vm[NR], mj_e[NR];
-	const float eps = 1e-3f;
-	for (unsigned j = 0; j < NR; j++) {
-		float gw, gw2;
-		stat_at(m, best, l, j, &st);
-		mj[j] = rotor_m(&st, res->curve, SC_J(m, j), th_ref[j], &gw);
-		mj_e[j] = rotor_m(&st, res->curve + eps, SC_J(m, j), th_ref[j], &gw2);
-		vm[j] = gw > 0.0f ? s2j[j] / gw : 0.0f;
-	}
-	unsigned ia, ib;
-	res->kf = median8(mj, &ia, &ib);
-	float dkdc = (0.5f * (mj_e[ia] + mj_e[ib]) - res->kf) / eps;
-	float vkf = MEDIAN8_VAR * 0.5f * (vm[ia] + vm[ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
-	for (unsigned j = 0; j < NR; j++) {
-		res->scale[j] = res->kf > 0.0f ? mj[j] / res->kf : 0.0f;
-		res->scale_sd[j] = res->kf > 0.0f ? sqrt0(vm[j]) / res->kf : 0.0f;
-	}
-	/* the lag's share: k_f, curve and scales move with the lag (central differences) */
-	if (!no_lag && ks[best] > 0.0f) {
-		const float h = 0.25f;
-		float var_x = 1.0f / (nf * ks[best]), kp, km, cp, cm, sp[NR], sm[NR];
-		model_at(m, best, x + h, &kp, &cp, sp);
-		model_at(m, best, x - h, &km, &cm, sm);
-		float dk = (kp - km) / (2.0f * h), dc = (cp - cm) / (2.0f * h);
-		vkf += dk * dk * var_x;
-		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + dc * dc * var_x);
-		for (unsigned j = 0; j < NR; j++) {
-			float ds = (sp[j] - sm[j]) / (2.0f * h);
-			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + ds * ds * var_x);
-		}
-	}
-	res->kf_sd = sqrt0(vkf);
+	/* every rotor at that lag: the common curve, each rotor's m, k_f = their median, scales */
+	struct fit f;
+	fit_at(m, best, x, &f, res->scale);
+	res->curve = f.curve;
+	res->curve_sd = f.curve_sd;
+	res->kf = f.kf;
+	float dkdc = (0.5f * (f.mj_e[f.ia] + f.mj_e[f.ib]) - res->kf) / FIT_EPS;
+	float vkf = MEDIAN8_VAR * 0.5f * (f.vm[f.ia] + f.vm[f.ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
+	for (unsigned j = 0; j < NR; j++)
+		res->scale_sd[j] = div_pos(sqrt0(f.vm[j]), res->kf);
 
 	/* noise and the normalised errors */
 	const float nz_n = (float)m->nz_n;
-	float nz = nz_n > 0.0f ? mid_sum_to_float(m->nz_ss, m->e[MID_E_NZ], 2, m->kexp) / nz_n : 0.0f;
+	float nz = div_pos(mid_sum_to_float(m->nz_ss, m->e[MID_E_NZ], 2, m->kexp), nz_n);
 	res->noise_sd = sqrt0(nz);
 	float ne_hi = 0.0f, ne_sorted_mid;
 	unsigned worst = 0;
 	for (unsigned j = 0; j < NR; j++) {
-		res->ne[j] = nz > 0.0f ? s2j[j] / nz : 0.0f;
+		res->ne[j] = div_pos(f.s2[j], nz);
 		if (res->ne[j] > ne_hi) {
 			ne_hi = res->ne[j];
 			worst = j;
 		}
 	}
-	res->ne_all = nz > 0.0f ? ssr_sum / dof / nz : 0.0f;
+	res->ne_all = div_pos(f.ssr_sum / dof, nz);
 	unsigned ma, mb;
 	ne_sorted_mid = median8(res->ne, &ma, &mb);
-	res->curve_chi2 = nz > 0.0f ? chi2 / nz : 0.0f;
+	res->curve_chi2 = div_pos(f.chi2, nz);
+	const float sf2 = nz > 0.0f ? nz : f.ssr_sum / dof;   /* the thrust noise's variance for k_tau */
+
+	/* the lag's share: k_f, curve and scales move with the lag (central differences; the lag's
+	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
+	 * is orthogonal to their regressors) */
+	if (!no_lag && ks[best] > 0.0f) {
+		float var_x = 1.0f / (nf * ks[best]), kp, cp, sp[NR], sm[NR];
+		fit_at(m, best, x + LAG_H, &f, sp);   /* f's fit at x is no longer needed: stack on M0 */
+		kp = f.kf;
+		cp = f.curve;
+		fit_at(m, best, x - LAG_H, &f, sm);
+		vkf += lag_var(kp, f.kf, var_x);
+		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + lag_var(cp, f.curve, var_x));
+		for (unsigned j = 0; j < NR; j++)
+			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + lag_var(sp[j], sm[j], var_x));
+	}
+	res->kf_sd = sqrt0(vkf);
 
 	/* k_tau = rho k_f, rho from torque on thrust over every rotor (noise-corrected) */
 	float ff = mid_sum_to_float(m->ff, m->e[MID_E_FF], 2, m->kexp), tf = mid_sum_to_float(m->tf, m->e[MID_E_TF], 2, m->kexp),
 	      tt = mid_sum_to_float(m->tt, m->e[MID_E_TT], 2, m->kexp);
 	float nall = (float)(m->n_exc * NR);
-	float sf2 = nz > 0.0f ? nz : ssr_sum / dof;
-	float rho = ff > 0.0f ? tf / ff : 0.0f;
+	float rho = div_pos(tf, ff);
 	float ss_t = tt - 2.0f * rho * tf + rho * rho * ff;
 	float vrho = ff > 0.0f && nall > 1.0f ? ss_t / (nall - 1.0f) / ff : 0.0f;
 	if (ff > nall * sf2)
@@ -831,15 +829,15 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	/* the cause, most specific first */
 	float dof_j = (float)m->n_stat - (float)np;
 	float chi2_lim = (float)NR + CURVE_CHI2_SIGMAS * sqrtf(2.0f * (float)NR);
-	/* the normalised errors' limits: ne_max, or NE_SIGMAS standard deviations of the ratio
-	 * of two variance estimates (the fit's, dof_j; the noise's from first differences,
-	 * about a third of its count effective) when the data are few */
-	float v_nz = nz_n > 0.0f ? 6.0f / nz_n : 1.0f;
-	float lim_j = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof_j, 1.0f) + v_nz));
-	float lim_all = fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof, 1.0f) + v_nz));
+	/* the normalised errors' limits (the noise's variance from first differences: about a
+	 * third of its count effective) */
+	float v_nz = m->nz_n > 0u ? 6.0f / nz_n : 1.0f;
+	float lim_j = ne_limit(ne_max, dof_j, v_nz);
+	float lim_all = ne_limit(ne_max, dof, v_nz);
 	const bool fixd = m->cfg.fix_delay;
-	white_eval(m, res);
-	if (!(nz_n >= 16.0f))
+	int white_rotor = -1;
+	const enum motor_id_cause white_c = white_eval(m, res, &white_rotor);
+	if (m->nz_n < 16u)
 		res->cause = MOTOR_ID_NOISE_UNKNOWN;
 	else if (fixd && res->free_delay != best && -res->delay_margin >= MARGIN_MIN)
 		res->cause = MOTOR_ID_DELAY_GIVEN;
@@ -853,9 +851,9 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	else if (!fixd && res->delay_margin < MARGIN_MIN)
 		res->cause = MOTOR_ID_DELAY_AMBIGUOUS;
 	else if (!res->white_ok) {
-		res->cause = white_cause(res, &res->cause_rotor);
-		if (res->cause == MOTOR_ID_LEVEL && !ec)
-			res->cause = MOTOR_ID_CURVE;
+		res->cause = white_c == MOTOR_ID_LEVEL && !ec ? MOTOR_ID_CURVE : white_c;
+		if (white_c == MOTOR_ID_ROTOR)
+			res->cause_rotor = white_rotor;
 	} else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && dof_j > 0.0f) {
 		res->cause = MOTOR_ID_ROTOR;
 		res->cause_rotor = (int)worst;
@@ -865,64 +863,46 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->cause = MOTOR_ID_OK;
 }
 
-const char *motor_id_cause_text(enum motor_id_cause c)
+/* The causes' texts and remedies, in the order of enum motor_id_cause, each ended by a NUL
+ * (one string, no table of pointers). */
+static const char cause_texts[] =
+	"accepted\0"
+	"too few frames\0"
+	"noise not measured\0"
+	"motor lag out of range\0"
+	"delay out of range\0"
+	"delay ambiguous\0"
+	"thrust curve not modelled\0"
+	"a rotor unexplained\0"
+	"residuals above noise\0"
+	"given delay contradicted\0"
+	"residuals coloured at one throttle level\0"
+	"residuals not white";
+static const char cause_remedies[] =
+	"\0"
+	"longer ID_EXC_TIME\0"
+	"hover still before the run\0"
+	"lag 0.5-500 ms only; check motors\0"
+	"delay > 3 frames: fix the link\0"
+	"raise ID_EXC_AMP or ID_EXC_TIME\0"
+	"set ID_CRV_EST 1\0"
+	"inspect that rotor\0"
+	"check link timing and rotors\0"
+	"let the delay be found\0"
+	"thrust curve not quadratic: lower ID_EXC_OFS\0"
+	"motor not first-order or link jitter: check both";
+
+/* the string number c of list (c < MOTOR_ID_COLOURED + 1), else dflt */
+static const char *nth_text(const char *list, enum motor_id_cause c, const char *dflt)
 {
-	switch (c) {
-	case MOTOR_ID_OK:
-		return "accepted";
-	case MOTOR_ID_NO_DATA:
-		return "too few frames";
-	case MOTOR_ID_NOISE_UNKNOWN:
-		return "noise not measured";
-	case MOTOR_ID_LAG_RANGE:
-		return "motor lag out of range";
-	case MOTOR_ID_DELAY_RANGE:
-		return "delay out of range";
-	case MOTOR_ID_DELAY_AMBIGUOUS:
-		return "delay ambiguous";
-	case MOTOR_ID_CURVE:
-		return "thrust curve not modelled";
-	case MOTOR_ID_ROTOR:
-		return "a rotor unexplained";
-	case MOTOR_ID_MODEL:
-		return "residuals above noise";
-	case MOTOR_ID_DELAY_GIVEN:
-		return "given delay contradicted";
-	case MOTOR_ID_LEVEL:
-		return "residuals coloured at one throttle level";
-	case MOTOR_ID_COLOURED:
-		return "residuals not white";
-	}
-	return "?";
+	if ((unsigned)c > (unsigned)MOTOR_ID_COLOURED)
+		return dflt;
+	for (unsigned k = (unsigned)c; k > 0u; k--)
+		while (*list++ != '\0')
+			;
+	return list;
 }
 
-const char *motor_id_cause_remedy(enum motor_id_cause c)
-{
-	switch (c) {
-	case MOTOR_ID_OK:
-		return "";
-	case MOTOR_ID_NO_DATA:
-		return "longer ID_EXC_TIME";
-	case MOTOR_ID_NOISE_UNKNOWN:
-		return "hover still before the run";
-	case MOTOR_ID_LAG_RANGE:
-		return "lag 0.5-500 ms only; check motors";
-	case MOTOR_ID_DELAY_RANGE:
-		return "delay > 3 frames: fix the link";
-	case MOTOR_ID_DELAY_AMBIGUOUS:
-		return "raise ID_EXC_AMP or ID_EXC_TIME";
-	case MOTOR_ID_CURVE:
-		return "set ID_CRV_EST 1";
-	case MOTOR_ID_ROTOR:
-		return "inspect that rotor";
-	case MOTOR_ID_MODEL:
-		return "check link timing and rotors";
-	case MOTOR_ID_DELAY_GIVEN:
-		return "let the delay be found";
-	case MOTOR_ID_LEVEL:
-		return "thrust curve not quadratic: lower ID_EXC_OFS";
-	case MOTOR_ID_COLOURED:
-		return "motor not first-order or link jitter: check both";
-	}
-	return "";
-}
+const char *motor_id_cause_text(enum motor_id_cause c) { return nth_text(cause_texts, c, "?"); }
+
+const char *motor_id_cause_remedy(enum motor_id_cause c) { return nth_text(cause_remedies, c, ""); }
