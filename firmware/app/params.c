@@ -40,9 +40,17 @@ int params_find(const char *id, size_t id_len)
 		n++;
 	if (n == 0)
 		return -1;
-	for (size_t i = 0; i < param_count; i++)
-		if (strlen(param_defs[i].name) == n && !memcmp(param_defs[i].name, id, n))
+	/* character by character, most names rejected at their first: the app looks names up
+	 * in its 90 Hz step (the tracker's KFT_* once a second), where a strlen per entry cost
+	 * more than the rest of the step */
+	for (size_t i = 0; i < param_count; i++) {
+		const char *s = param_defs[i].name;
+		size_t k = 0;
+		while (k < n && s[k] == id[k])
+			k++;
+		if (k == n && s[n] == '\0')
 			return (int)i;
+	}
 	return -1;
 }
 

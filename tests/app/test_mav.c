@@ -266,3 +266,30 @@ UNIT_TEST(mav_ftp_serves_the_parameter_metadata)
 	ftp(&RA, 9, 4, 0, "etc/passwd");
 	CHECK(ftp_reply(&RA, from, rsp) != NULL && rsp[3] == 129 && rsp[12] == 10);
 }
+
+/* PARAM_SET / PARAM_REQUEST_READ names: every parameter found by its own name, with or
+ * without the NUL (a 16-character id fills the field), and no prefix, extension or empty
+ * name taken for one */
+UNIT_TEST(mav_param_names_found_exactly)
+{
+	for (size_t i = 0; i < param_count; i++) {
+		const char *nm = param_defs[i].name;
+		size_t n = strlen(nm);
+		char id[PARAM_ID_LEN + 2];
+		memset(id, 'X', sizeof id);
+		memcpy(id, nm, n);
+		CHECK(params_find(id, n) == (int)i);                /* the field ends at n */
+		id[n] = '\0';
+		CHECK(params_find(id, PARAM_ID_LEN) == (int)i);     /* NUL-terminated */
+		if (n > 1)
+			CHECK(params_find(id, n - 1) != (int)i);         /* a prefix is another name */
+		if (n < PARAM_ID_LEN) {
+			id[n] = 'Z';
+			id[n + 1] = '\0';
+			CHECK(params_find(id, PARAM_ID_LEN) != (int)i);  /* so is an extension */
+		}
+	}
+	CHECK(params_find("", PARAM_ID_LEN) == -1);
+	CHECK(params_find("VEH_KF", 0) == -1);
+	CHECK(params_find("NO_SUCH_PARAM", PARAM_ID_LEN) == -1);
+}
