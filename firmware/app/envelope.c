@@ -81,22 +81,20 @@ void envelope_init(struct app *a)
 	hover_est_init(&a->env.hov, &hp, sc_from_float(nominal_u(&a->p)));
 }
 
-static void set_result(struct app *a, const char *name, float v);
+static void set_result(struct app *a, int i, float v);
 
-static void set_kft(struct app *a, const char *name, float v, bool announce)
+static void set_kft(struct app *a, int i, float v, bool announce)
 {
-	int i = params_find(name, 16);
-	if (i >= 0 && params_set(&a->p, (size_t)i, v) == PARAM_OK && announce)
+	if (params_set(&a->p, (size_t)i, v) == PARAM_OK && announce)
 		post_param(a, i);
 }
 
 static void set_veh_kf(struct app *a, float kf, const char *why)
 {
-	int i = params_find("VEH_KF", 16);
 	float old = a->p.veh_kf;
-	if (i < 0 || params_set(&a->p, (size_t)i, kf) != PARAM_OK)
+	if (params_set(&a->p, PX_VEH_KF, kf) != PARAM_OK)
 		return;
-	post_param(a, i);
+	post_param(a, PX_VEH_KF);
 	a->params_dirty = true;
 	a->save_pending = true;
 	app_status(a, APP_SEV_INFO, "VEH_KF %.2f -> %.2f N (%s)", (double)old, (double)kf, why);
@@ -129,10 +127,10 @@ static void kft_step(struct app *a, float dt, bool up)
 	if (announce)
 		e->kft_pub_wall_us = now_us;
 	float k = sc_to_float(t->k), sd = sc_to_float(kf_track_sd(t));
-	set_kft(a, "KFT_EST", k, announce);
-	set_kft(a, "KFT_SD", sd, announce);
-	set_kft(a, "KFT_T", (float)a->fr.t_s, announce);
-	set_kft(a, "KFT_MEM", sc_to_float(t->mem_s), announce);
+	set_kft(a, PX_KFT_EST, k, announce);
+	set_kft(a, PX_KFT_SD, sd, announce);
+	set_kft(a, PX_KFT_T, (float)a->fr.t_s, announce);
+	set_kft(a, PX_KFT_MEM, sc_to_float(t->mem_s), announce);
 	if (announce) {
 		post_value(a, "KFT", k);
 		post_value(a, "KFT_SD", sd);
@@ -140,9 +138,8 @@ static void kft_step(struct app *a, float dt, bool up)
 	if (a->mode != APP_HOLD)
 		return;
 	if (a->p.kft_apply >= 0.5f) {
-		int i = params_find("KFT_APPLY", 16);
-		if (i >= 0 && params_set(&a->p, (size_t)i, 0.0f) == PARAM_OK)
-			post_param(a, i);
+		if (params_set(&a->p, PX_KFT_APPLY, 0.0f) == PARAM_OK)
+			post_param(a, PX_KFT_APPLY);
 		set_veh_kf(a, k, "tracked, on request");
 		return;
 	}
@@ -193,12 +190,10 @@ bool envelope_hover_ready(const struct app *a)
 	return hover_est_converged(&a->env.hov, sc_from_float(HOVER_READY_RSD));
 }
 
-static void set_result(struct app *a, const char *name, float v)
+static void set_result(struct app *a, int i, float v)
 {
-	int i = params_find(name, 16);
-	if (i < 0 || params_set(&a->p, (size_t)i, v) != PARAM_OK)
-		return;
-	post_param(a, i);
+	if (params_set(&a->p, (size_t)i, v) == PARAM_OK)
+		post_param(a, i);
 }
 
 void envelope_on_command(struct app *a, enum app_command cmd, app_origin origin)
@@ -218,10 +213,10 @@ void envelope_on_mode(struct app *a)
 		return;
 	float u = sc_to_float(hover_est_u(&a->env.hov)), sd = sc_to_float(hover_est_sd(&a->env.hov));
 	float kf = a->p.veh_mass * a->p.veh_grav / (8.0f * u), kf_sd = kf * sd / u;
-	set_result(a, "HOV_THR", u);
-	set_result(a, "HOV_THR_SD", sd);
-	set_result(a, "HOV_KF", kf);
-	set_result(a, "HOV_KF_SD", kf_sd);
+	set_result(a, PX_HOV_THR, u);
+	set_result(a, PX_HOV_THR_SD, sd);
+	set_result(a, PX_HOV_KF, kf);
+	set_result(a, PX_HOV_KF_SD, kf_sd);
 	app_status(a, APP_SEV_INFO, "Hover throttle %.4f+/-%.4f, k_f %.2f+/-%.2f N", (double)u, (double)sd,
 		   (double)kf, (double)kf_sd);
 }
@@ -235,10 +230,9 @@ void envelope_seed_kf(struct app *a, int id)
 	if (fabsf(kf / a->p.veh_kf - 1.0f) <= KF_SEED_REL)
 		return;
 	float old = a->p.veh_kf;
-	int i = params_find("VEH_KF", 16);
-	if (i < 0 || params_set(&a->p, (size_t)i, kf) != PARAM_OK)
+	if (params_set(&a->p, PX_VEH_KF, kf) != PARAM_OK)
 		return;
-	post_param(a, i);
+	post_param(a, PX_VEH_KF);
 	a->params_dirty = true;
 	app_status(a, APP_SEV_INFO, "VEH_KF %.2f -> %.2f N (hover throttle)", (double)old, (double)kf);
 }

@@ -68,15 +68,6 @@ static const char *const est_names[EXP_MAX_EST] = {
 
 /* ---------------------------------------------------------------- helpers */
 
-/* Parameter indices (the MAVLink index: the order of params_table.h), resolved at compile
- * time: no parameter is looked up by name while an experiment runs. */
-enum {
-#define PARAM(name, field, def, min, max, unit, desc) PX_##name,
-#include "params_table.h"
-#undef PARAM
-	PX_COUNT
-};
-
 /* a parameter's value, or def if not finite */
 static float cfg_f(float v, float def) { return isfinite(v) ? v : def; }
 

@@ -22,6 +22,16 @@ struct app_params {
 #undef PARAM
 };
 
+/* Each parameter's index (the MAVLink index: the order of params_table.h), PX_<NAME>, for
+ * the app's own reads and writes: resolved at compile time, never looked up by name in the
+ * 90 Hz step. */
+enum {
+#define PARAM(name, field, def, min, max, unit, desc) PX_##name,
+#include "params_table.h"
+#undef PARAM
+	PX_COUNT
+};
+
 /* Flags of a parameter (params_table.h sets them per group of rows). */
 enum {
 	PARAM_LOCKED = 1u << 0,     /* refused from outside while an experiment runs */
