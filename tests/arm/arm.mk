@@ -23,14 +23,11 @@
 #   m4f        Cortex-M4F, hard float (fpv4-sp-d16), float build    QEMU mps2-an386
 #   m0         Cortex-M0, soft float, float build                   QEMU microbit
 #   m0-fixed   Cortex-M0, Q16.16 build (OCTO_FIXED=1)               QEMU microbit
-# Optimisation of the core per target (ARM_CORE_OPT_<v>, after $(OPT)), measured with
-# `make bench` items 2 and 3 (2026-11-21):
-#   m4f        $(OPT) (-O2) for the 90 Hz path. -Os on the whole core would give 18 % less
-#              flash (19,557 of 23,920 B then) but 3-4 % more instructions per 90 Hz step
-#              (hold 3,491 -> 3,611, experiment 1 median 4,917 -> 5,118) and 15 % more in
-#              the allocator's worst case (35,647 -> 41,030).
-#   m0, m0-fixed  -Os: flash-limited parts, as Cortex-M0 firmware is commonly built (the
-#              M0 float core: 30,548 B at -O2, 23,275 B at -Os).
+# Optimisation of the core per target (ARM_CORE_OPT_<v>, after $(OPT)): -Os on every target,
+# as flash-bound flight controllers are built (the core's budget is 32 KB of flash). Measured
+# on m4f with `make bench` items 2 and 3 against $(OPT) (-O2), 2026-11-24: flash 39,927 ->
+# 34,937 B before the mixer's reduction; the 90 Hz step 3-5 % more instructions (median HOLD
+# 4,172 -> 4,397, experiment 1 5,714 -> 5,897). `make ARM_CORE_OPT_m4f= ...` builds -O2.
 # Set-up objects (*_setup.o: work that runs only when parameters change, never in the 90 Hz
 # step) and motor_id_solve.o (the rotor-model estimator's work between frames, a few times
 # per experiment) are built ARM_SETUP_OPT (-Os) on every target, as firmware builds its cold code:
@@ -106,7 +103,7 @@ ARM_DEFS_m0-fixed := -DOCTO_FIXED=1
 ARM_UNIT_OPT_m0       := -Os
 ARM_UNIT_OPT_m0-fixed := -Os
 # The core's optimisation per target (after $(OPT), so it wins): ARM_CORE_OPT_<v>.
-ARM_CORE_OPT_m4f      ?=
+ARM_CORE_OPT_m4f      ?= -Os
 ARM_CORE_OPT_m0       ?= -Os
 ARM_CORE_OPT_m0-fixed ?= -Os
 # The set-up objects' optimisation on every target (after ARM_CORE_OPT_<v>, so it wins).
