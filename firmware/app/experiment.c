@@ -399,6 +399,10 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		e->est_live = 1u << 7;
 	}
 	excite_init(&e->exc, &xp);
+	/* the progress over the phase's time: products per step, no division */
+	float total = e->t_settle + e->t_run;
+	e->prog_base = (float)(e->phase + (total > 0.0f ? 0 : 1)) / (float)e->n_phases;
+	e->prog_rate = total > 0.0f ? 1.0f / (total * (float)e->n_phases) : 0.0f;
 }
 
 /* The rotor experiment's end with the null-space dither: the motor model of every rotor
@@ -614,7 +618,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	/* frames since the last step: more than one when frames were lost on the link (the
 	 * plant then held the last throttles); the rotor and validation models advance through
 	 * the gap, the inertia filters (uniform sampling) are left GAP_HOLD frames to settle */
-	float fr = in->dt_s / e->dt_nom;
+	float fr = in->dt_s * e->inv_dt_nom;
 	int n = fr > 0.5f && fr < (float)FILT_DELAY_MAX + 0.5f ? (int)(fr + 0.5f) : 0;
 	if (n != 1)
 		e->gap_hold = GAP_HOLD;
@@ -764,6 +768,7 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 		 * two periods: the models then ran at half rate and k_f came out 1.5 % low) */
 		float dtn = in->dt_frame_s > 0.0f ? in->dt_frame_s : in->dt_s;
 		e->dt_nom = dtn > 0.001f && dtn < 0.1f ? dtn : 1.0f / 90.0f;
+		e->inv_dt_nom = 1.0f / e->dt_nom;
 		e->z0 = f->pos_i_m[2];
 		snapshot(&e->turn, in);
 		phase_begin(e, in->params, &e->turn);
@@ -783,7 +788,7 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 			limit_fail(e, lim_name, lim);
 			return e->state;
 		}
-		e->progress = ((float)e->phase + fminf(e->t_phase / total, 1.0f)) / (float)e->n_phases;
+		e->progress = e->prog_base + fminf(e->t_phase, total) * e->prog_rate;
 		/* the estimates (soft float on a core without FPU) every EST_READ_FRAMES steps, on
 		 * the phase's first step and on its last, which the phase's end and the log's last
 		 * frame of the phase see */

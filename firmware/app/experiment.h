@@ -232,6 +232,8 @@ struct experiment {
 	float t_settle, t_run;                 /* of the current phase */
 	bool started, reporting;
 	float dt_nom, z0;
+	float inv_dt_nom;                      /* 1 / dt_nom: frames in a step's dt */
+	float prog_base, prog_rate;            /* progress = base + min(t_phase, total) rate */
 	int gap_hold;                          /* frames left without inertia updates after a gap */
 	struct exp_cfg cfg;
 	struct excite exc;
