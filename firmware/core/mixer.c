@@ -149,12 +149,16 @@ static void narrow(scalar_t q, scalar_t s, scalar_t hw, scalar_t *lo, scalar_t *
 }
 
 /* Orthonormal basis (rows q[0..r-1], length nf) of the row space of G_F (the 4 rows of gn
- * restricted to the free rotors fr[0..nf-1]) by modified Gram-Schmidt; lt[k][m] = q_m . row_k,
- * piv[m] = row that produced q_m. Returns r. */
-static int row_basis(const struct mixer *m, const int *fr, int nf, scalar_t q[NA][NR],
+ * restricted to the free rotors, bnd 0, which it lists in fr[0..*nf-1]) by modified
+ * Gram-Schmidt; lt[k][m] = q_m . row_k, piv[m] = row that produced q_m. Returns r. */
+static int row_basis(const struct mixer *m, const int8_t bnd[NR], int fr[NR], int *nfp, scalar_t q[NA][NR],
 		     scalar_t lt[NA][NA], int piv[NA])
 {
-	int r = 0;
+	int r = 0, nf = 0;
+	for (int t = 0; t < m->n_active; t++)
+		if (bnd[m->order[t]] == 0)
+			fr[nf++] = m->order[t];
+	*nfp = nf;
 	for (int k = 0; k < NA; k++) {
 		scalar_t v[NR];
 		for (int t = 0; t < nf; t++)
@@ -185,6 +189,12 @@ static int row_basis(const struct mixer *m, const int *fr, int nf, scalar_t q[NA
 	return r;
 }
 
+/* u clamped to the box [0, 1] of the scaled space */
+static scalar_t clamp01(scalar_t u)
+{
+	return sc_clamp(u, SC_ZERO, SC(1));
+}
+
 /* Active-set refinement (at most MIXER_QP_ITERS iterations) from the feasible u towards the
  * unique minimiser of |u - uref| subject to gn u = w, 0 <= u <= 1: every iterate stays in the
  * box and moves only in the null space of the free columns, so gn u = w is kept; a last
@@ -198,13 +208,13 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		bnd[j] = u[j] <= SC_ZERO ? -1 : (u[j] >= SC(1) ? 1 : 0);
 	}
 	scalar_t q[NA][NR], lt[NA][NA];
-	int piv[NA], fr[NR], nf = 0, r = 0, it;
-	for (it = 0; it < MIXER_QP_ITERS; it++) {
-		nf = 0;
-		for (int t = 0; t < na; t++)
-			if (bnd[m->order[t]] == 0)
-				fr[nf++] = m->order[t];
-		r = row_basis(m, fr, nf, q, lt, piv);
+	int piv[NA], fr[NR], nf, r, it = 0;
+	for (;;) {
+		/* the basis of the current face: also what the final correction uses when the
+		 * loop ends here (at the optimum or after MIXER_QP_ITERS iterations) */
+		r = row_basis(m, bnd, fr, &nf, q, lt, piv);
+		if (it == MIXER_QP_ITERS)
+			break;
 		/* p = projection of (uref - u)_F onto null(G_F) */
 		scalar_t p[NR], c[NA], pmax = SC_ZERO;
 		for (int t = 0; t < nf; t++)
@@ -225,35 +235,33 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 			for (int t = 0; t < nf; t++) {
 				scalar_t lim;
 				if (p[t] < -EPS_P)
-					lim = sc_div(sc_neg(u[fr[t]]), p[t]);
+					lim = sc_neg(u[fr[t]]);
 				else if (p[t] > EPS_P)
-					lim = sc_div(sc_sub(SC(1), u[fr[t]]), p[t]);
+					lim = sc_sub(SC(1), u[fr[t]]);
 				else
 					continue;
+				lim = sc_div(lim, p[t]);
 				if (lim < step) {
 					step = sc_max(lim, SC_ZERO);
 					blk = t;
 				}
 			}
 			for (int t = 0; t < nf; t++)
-				u[fr[t]] = sc_clamp(sc_add(u[fr[t]], sc_mul(step, p[t])), SC_ZERO, SC(1));
+				u[fr[t]] = clamp01(sc_add(u[fr[t]], sc_mul(step, p[t])));
 			if (blk >= 0) {
 				int j = fr[blk];
 				bnd[j] = p[blk] < 0 ? -1 : 1;
 				u[j] = bnd[j] < 0 ? SC_ZERO : SC(1);
 			}
+			it++;
 			continue;
 		}
 		/* stationary on this face: multipliers lambda from G_F^T lambda = g_F (g = u - uref),
-		 * i.e. L^T lambda = Q g_F, back substitution over the basis rows */
+		 * i.e. L^T lambda = Q g_F = -c (c = Q (uref - u)_F from above, u unchanged since;
+		 * negation is exact), back substitution over the basis rows */
 		scalar_t lam[NA] = { SC_ZERO, SC_ZERO, SC_ZERO, SC_ZERO };
-		for (int i = 0; i < r; i++) {
-			c[i] = SC_ZERO;
-			for (int t = 0; t < nf; t++)
-				c[i] = sc_mac(q[i][t], sc_sub(u[fr[t]], uref[fr[t]]), c[i]);
-		}
 		for (int i = r - 1; i >= 0; i--) {
-			scalar_t acc = c[i];
+			scalar_t acc = sc_neg(c[i]);
 			for (int k = piv[i] + 1; k < NA; k++)
 				acc = sc_sub(acc, sc_mul(lt[k][i], lam[k]));
 			lam[piv[i]] = sc_div(acc, lt[piv[i]][i]);
@@ -276,13 +284,9 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		if (rel < 0)
 			break; /* KKT point: the unique optimum */
 		bnd[rel] = 0;
+		it++;
 	}
 	/* minimum-norm correction of the residual on the free rotors: d = Q^T y, L y = w - gn u */
-	nf = 0;
-	for (int t = 0; t < na; t++)
-		if (bnd[m->order[t]] == 0)
-			fr[nf++] = m->order[t];
-	r = row_basis(m, fr, nf, q, lt, piv);
 	scalar_t res[NA], y[NA];
 	for (int k = 0; k < NA; k++) {
 		res[k] = w[k];
@@ -299,7 +303,7 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		scalar_t d = SC_ZERO;
 		for (int i = 0; i < r; i++)
 			d = sc_mac(q[i][t], y[i], d);
-		u[fr[t]] = sc_clamp(sc_add(u[fr[t]], d), SC_ZERO, SC(1));
+		u[fr[t]] = clamp01(sc_add(u[fr[t]], d));
 	}
 	return it;
 }
@@ -310,46 +314,49 @@ static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 	scalar_t uref[NR], r[NA];
 	for (int j = 0; j < NR; j++) {
 		/* row j of the pseudo-inverse in the scaled space */
-		const scalar_t pn[NA] = {
-			sc_mul(m->pinv[j][0], m->row_max[0]), sc_mul(m->pinv[j][1], m->row_max[1]),
-			sc_mul(m->pinv[j][2], m->row_max[2]), sc_mul(m->pinv[j][3], m->row_max[3]),
-		};
+		scalar_t pn[NA];
+		for (int i = 0; i < NA; i++)
+			pn[i] = sc_mul(m->pinv[j][i], m->row_max[i]);
 		uref[j] = dot4(pn, w);
 		u[j] = SC_ZERO;
 	}
 	for (int i = 0; i < NA; i++)
 		r[i] = w[i];
 	const int na = m->n_active;
-	int steps = 0;
-	for (int st = 0; st + 4 < na; st++) {
+	int st;
+	for (st = 0; st + 4 < na; st++) {
 		int j = m->order[st];
 		scalar_t g[NA] = { m->gn[0][j], m->gn[1][j], m->gn[2][j], m->gn[3][j] };
 		scalar_t lo = SC_ZERO, hi = SC(1);
-		if (st + 5 == na) {
-			/* the rest is the invertible tail: u_tail = T r - u T g in [0, 1]^4 */
-			for (int c = 0; c < 4; c++) {
-				scalar_t tr = dot4(m->tail_inv[c], r), tg = dot4(m->tail_inv[c], g);
-				/* 0 <= tr - u tg <= 1  <=>  -1/2 <= (tr - 1/2) - u tg <= 1/2 */
-				narrow(sc_sub(tr, SC(0.5)), tg, SC(0.5), &lo, &hi);
-			}
-		} else {
-			for (int k = 0; k < m->sub_n[st]; k++) {
+		/* the last step's rest is the invertible tail: u_tail = T r - u T g in [0, 1]^4,
+		 * i.e. 0 <= tr - u tg <= 1 <=> -1/2 <= (tr - 1/2) - u tg <= 1/2 per row of T: the
+		 * same constraint as a facet with normal T_c, n.c = 1/2, h = 1/2 */
+		const bool tail = st + 5 == na;
+		int cnt = tail ? 4 : m->sub_n[st];
+		for (int k = 0; k < cnt; k++) {
+			const scalar_t *n;
+			scalar_t nc = SC(0.5), h = SC(0.5);
+			if (tail) {
+				n = m->tail_inv[k];
+			} else {
 				const struct mixer_subfacet *fc = &m->sub[m->sub_first[st] + k];
-				narrow(sc_sub(dot4(fc->n, r), fc->nc), dot4(fc->n, g), fc->h, &lo, &hi);
+				n = fc->n;
+				nc = fc->nc;
+				h = fc->h;
 			}
+			narrow(sc_sub(dot4(n, r), nc), dot4(n, g), h, &lo, &hi);
 		}
 		scalar_t x;
 		if (lo <= hi)
 			x = sc_clamp(uref[j], lo, hi);
 		else /* numerically empty: the nearest point of the two bounds */
-			x = sc_clamp(sc_add(sc_mul(lo, SC(0.5)), sc_mul(hi, SC(0.5))), SC_ZERO, SC(1));
+			x = clamp01(sc_add(sc_mul(lo, SC(0.5)), sc_mul(hi, SC(0.5))));
 		u[j] = x;
 		for (int i = 0; i < NA; i++)
 			r[i] = sc_sub(r[i], sc_mul(x, g[i]));
-		steps++;
 	}
 	for (int c = 0; c < 4; c++)
-		u[m->order[na - 4 + c]] = sc_clamp(dot4(m->tail_inv[c], r), SC_ZERO, SC(1));
+		u[m->order[na - 4 + c]] = clamp01(dot4(m->tail_inv[c], r));
 
 	/* move along the null space (u - uref) back towards the pseudo-inverse solution */
 	scalar_t theta = SC_ZERO;
@@ -365,144 +372,62 @@ static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 		for (int t = 0; t < na; t++) {
 			int j = m->order[t];
 			scalar_t d = sc_sub(u[j], uref[j]);
-			u[j] = sc_clamp(sc_add(uref[j], sc_mul(theta, d)), SC_ZERO, SC(1));
+			u[j] = clamp01(sc_add(uref[j], sc_mul(theta, d)));
 		}
 	}
-	return steps + refine(m, w, uref, u);
-}
-
-/* out->f_n holds u: the achieved wrench and the bound flags from it, then f_j = scale_j u_j */
-static void finish(const struct mixer *m, struct mixer_output *out)
-{
-	wrench_u(m, out->f_n, out->achieved);
-	out->rotor_at_min = 0;
-	out->rotor_at_max = 0;
-	/* a rotor within 4 inner margins of a bound counts as at the bound */
-	const scalar_t at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
-	for (int j = 0; j < NR; j++) {
-		if (!(m->present & (1u << j)))
-			continue;
-		if (out->f_n[j] <= sc_add(m->f_lo, at_tol))
-			out->rotor_at_min |= (uint8_t)(1u << j);
-		if (out->f_n[j] >= sc_sub(m->f_hi, at_tol))
-			out->rotor_at_max |= (uint8_t)(1u << j);
-	}
-	for (int j = 0; j < NR; j++)
-		out->f_n[j] = sc_mul(out->f_n[j], m->p.scale[j]);
-	if (out->rotor_at_min)
-		out->limits |= MIXER_LIMIT_ROTOR_MIN;
-	if (out->rotor_at_max)
-		out->limits |= MIXER_LIMIT_ROTOR_MAX;
+	return st + refine(m, w, uref, u);
 }
 
 /* the limit flag of each axis of [f, tau_x, tau_y, tau_z] */
 static const uint32_t axis_limit[NA] = { MIXER_LIMIT_F, MIXER_LIMIT_TX, MIXER_LIMIT_TY, MIXER_LIMIT_TZ };
 
-/* flags of axes whose achieved value differs from the demand (CLIP mode) */
-static uint32_t axis_flags(const struct mixer *m, const struct mixer_output *out)
+/* w[1], w[2]: the scaled roll and pitch of a times the demanded ones */
+static void scaled_rp(const struct mixer *m, const scalar_t demand[NA], scalar_t a, scalar_t w[NA])
 {
-	uint32_t f = 0;
-	for (int i = 0; i < NA; i++) {
-		/* the margin times the physical wrench per unit of scaled wrench */
-		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
-		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
-			f |= axis_limit[i];
-	}
-	return f;
+	w[1] = to_scaled(m, 1, sc_mul(a, demand[1]));
+	w[2] = to_scaled(m, 2, sc_mul(a, demand[2]));
 }
 
-void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
+/* Steps 3a-e (mixer.h) for a demand whose pseudo-inverse allocation leaves the box: the rotors'
+ * u (N) in out->f_n, the axis flags in out->limits, out->steps. False (out untouched) when
+ * zero torque is unattainable: not a usable layout, the caller clips. */
+static bool priority(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
 {
-	out->limits = 0;
-	out->steps = 0;
-	bool finite = true;
-	for (int i = 0; i < NA; i++) {
-		out->demanded[i] = demand[i];
-		finite = finite && sc_isfinite(demand[i]);
-	}
-	if (!finite) {
-		for (int j = 0; j < NR; j++)
-			out->f_n[j] = SC_ZERO;
-		out->limits = MIXER_LIMIT_BAD_INPUT;
-		finish(m, out);
-		return;
-	}
-
-	/* 1. eq. (15) */
-	bool inside = true;
-	for (int j = 0; j < NR; j++) {
-		out->f_n[j] = dot4(m->pinv[j], demand);
-		if (!(m->present & (1u << j))) {
-			out->f_n[j] = SC_ZERO;
-			continue;
-		}
-		if (out->f_n[j] < m->f_lo || out->f_n[j] > m->f_hi)
-			inside = false;
-	}
-	if (inside) {
-		finish(m, out);
-		return;
-	}
-	if (m->p.mode != MIXER_MODE_PRIORITY || !m->alloc_ok) {
-		if (m->p.mode == MIXER_MODE_PRIORITY)
-			out->limits |= MIXER_LIMIT_NO_ALLOC;
-		for (int j = 0; j < NR; j++)
-			if (m->present & (1u << j))
-				out->f_n[j] = sc_clamp(out->f_n[j], m->f_lo, m->f_hi);
-		finish(m, out);
-		out->limits |= axis_flags(m, out);
-		return;
-	}
-
-	/* 3. priority allocation in the scaled space */
 	scalar_t wd[NA], w[NA];
 	for (int i = 0; i < NA; i++)
-		wd[i] = to_scaled(m, i, demand[i]);
+		w[i] = wd[i] = to_scaled(m, i, demand[i]);
 	int steps = 0;
-	if (attainable_scaled(m, wd, TOL_ATT)) {
-		for (int i = 0; i < NA; i++)
-			w[i] = wd[i];
-	} else {
+	uint32_t lim = 0;
+	if (!attainable_scaled(m, wd, TOL_ATT)) {
 		struct facet_recips rc;
 		facet_recips(m, &rc);
 		/* b. roll/pitch scale alpha with zero yaw, thrust free */
 		scalar_t yaw0 = to_scaled(m, 3, SC_ZERO);
 		scalar_t lo, hi, alpha = SC(1);
 		w[3] = yaw0;
-		w[1] = wd[1];
-		w[2] = wd[2];
 		if (!thrust_interval(m, &rc, w, &lo, &hi)) {
 			scalar_t a_lo = SC_ZERO, a_hi = SC(1);
 			w[1] = to_scaled(m, 1, SC_ZERO);
 			w[2] = to_scaled(m, 2, SC_ZERO);
-			if (!thrust_interval(m, &rc, w, &lo, &hi)) {
-				/* zero torque unattainable: not a usable layout; fall back to clipping */
-				for (int j = 0; j < NR; j++)
-					if (m->present & (1u << j))
-						out->f_n[j] = sc_clamp(out->f_n[j], m->f_lo, m->f_hi);
-				finish(m, out);
-				out->limits |= axis_flags(m, out) | MIXER_LIMIT_NO_ALLOC;
-				return;
-			}
+			if (!thrust_interval(m, &rc, w, &lo, &hi))
+				return false;
 			for (int it = 0; it < MIXER_ALPHA_ITERS; it++) {
 				scalar_t mid = sc_mul(sc_add(a_lo, a_hi), SC(0.5));
-				scalar_t t[NA] = { SC_ZERO, to_scaled(m, 1, sc_mul(mid, demand[1])),
-						   to_scaled(m, 2, sc_mul(mid, demand[2])), yaw0 };
 				scalar_t l2, h2;
-				if (thrust_interval(m, &rc, t, &l2, &h2))
+				scaled_rp(m, demand, mid, w);
+				if (thrust_interval(m, &rc, w, &l2, &h2))
 					a_lo = mid;
 				else
 					a_hi = mid;
 				steps++;
 			}
 			alpha = a_lo;
-			w[1] = to_scaled(m, 1, sc_mul(alpha, demand[1]));
-			w[2] = to_scaled(m, 2, sc_mul(alpha, demand[2]));
+			scaled_rp(m, demand, alpha, w);
 			thrust_interval(m, &rc, w, &lo, &hi);
 			if (demand[1] != SC_ZERO)
-				out->limits |= MIXER_LIMIT_TX;
+				lim |= MIXER_LIMIT_TX;
 			if (demand[2] != SC_ZERO)
-				out->limits |= MIXER_LIMIT_TY;
+				lim |= MIXER_LIMIT_TY;
 		}
 		/* c. thrust nearest to the demand for which some yaw beta tau_z, beta in [0, 1],
 		 * is attainable: exact when the demanded thrust itself or the zero-yaw slice
@@ -513,7 +438,7 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 			/* roll/pitch saturated: no room is left for yaw; thrust from the zero-yaw slice */
 			dy = SC_ZERO;
 			if (w[0] != wd[0])
-				out->limits |= MIXER_LIMIT_F;
+				lim |= MIXER_LIMIT_F;
 		} else if (w[0] != wd[0]) {
 			scalar_t ok_f = w[0];
 			w[0] = wd[0];
@@ -528,7 +453,7 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 					steps++;
 				}
 				w[0] = ok_f;
-				out->limits |= MIXER_LIMIT_F;
+				lim |= MIXER_LIMIT_F;
 			}
 		}
 		/* d. yaw: the largest part of the demanded yaw attainable at that thrust (between
@@ -537,15 +462,83 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		if (dy != SC_ZERO && yaw_interval(m, &rc, w, dy, &blo, &bhi))
 			ty = dy > 0 ? bhi : blo;
 		if (ty != dy_dem && demand[3] != SC_ZERO)
-			out->limits |= MIXER_LIMIT_TZ;
+			lim |= MIXER_LIMIT_TZ;
 		w[3] = sc_add(yaw0, ty);
 	}
+	/* e. */
 	scalar_t u[NR];
 	steps += preimage(m, w, u);
 	for (int j = 0; j < NR; j++)
 		out->f_n[j] = (m->present & (1u << j)) ? sc_add(m->f_lo, sc_mul(u[j], m->width)) : SC_ZERO;
+	out->limits |= lim;
 	out->steps = (uint8_t)steps;
-	finish(m, out);
+	return true;
+}
+
+void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
+{
+	out->limits = 0;
+	out->steps = 0;
+	bool finite = true, clip = false;
+	for (int i = 0; i < NA; i++) {
+		out->demanded[i] = demand[i];
+		finite = finite && sc_isfinite(demand[i]);
+	}
+	if (!finite) {
+		for (int j = 0; j < NR; j++)
+			out->f_n[j] = SC_ZERO;
+		out->limits = MIXER_LIMIT_BAD_INPUT;
+	} else {
+		/* 1. eq. (15) */
+		bool inside = true;
+		for (int j = 0; j < NR; j++) {
+			out->f_n[j] = dot4(m->pinv[j], demand);
+			if (!(m->present & (1u << j)))
+				out->f_n[j] = SC_ZERO;
+			else if (out->f_n[j] < m->f_lo || out->f_n[j] > m->f_hi)
+				inside = false;
+		}
+		/* 3. by mode; PRIORITY with the allocator unavailable (or unusable) clips */
+		if (!inside) {
+			clip = m->p.mode != MIXER_MODE_PRIORITY;
+			if (!clip && !(m->alloc_ok && priority(m, demand, out))) {
+				out->limits |= MIXER_LIMIT_NO_ALLOC;
+				clip = true;
+			}
+		}
+		if (clip)
+			for (int j = 0; j < NR; j++)
+				if (m->present & (1u << j))
+					out->f_n[j] = sc_clamp(out->f_n[j], m->f_lo, m->f_hi);
+	}
+
+	/* out->f_n holds u: the achieved wrench and the bound flags from it, then f_j = scale_j u_j */
+	wrench_u(m, out->f_n, out->achieved);
+	unsigned at_min = 0, at_max = 0;
+	/* a rotor within 4 inner margins of a bound counts as at the bound */
+	const scalar_t at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
+	for (int j = 0; j < NR; j++) {
+		if (m->present & (1u << j)) {
+			if (out->f_n[j] <= sc_add(m->f_lo, at_tol))
+				at_min |= 1u << j;
+			if (out->f_n[j] >= sc_sub(m->f_hi, at_tol))
+				at_max |= 1u << j;
+		}
+		out->f_n[j] = sc_mul(out->f_n[j], m->p.scale[j]);
+	}
+	out->rotor_at_min = (uint8_t)at_min;
+	out->rotor_at_max = (uint8_t)at_max;
+	if (at_min)
+		out->limits |= MIXER_LIMIT_ROTOR_MIN;
+	if (at_max)
+		out->limits |= MIXER_LIMIT_ROTOR_MAX;
+	/* clipping: flags of axes whose achieved value differs from the demand by more than the
+	 * margin times the physical wrench per unit of scaled wrench */
+	for (int i = 0; clip && i < NA; i++) {
+		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
+		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
+			out->limits |= axis_limit[i];
+	}
 }
 
 void mixer_shortfall(const struct mixer_output *out, uint8_t *short_pos, uint8_t *short_neg)
