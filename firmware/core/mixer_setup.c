@@ -10,7 +10,8 @@
 
 /* ================================================================ set-up (float32) */
 
-static float absf(float x) { return x < 0.0f ? -x : x; }
+/* |x|: the sign bit cleared (no soft-float compare on cores without FPU) */
+static float absf(float x) { return fabsf(x); }
 
 /* One-sided Jacobi SVD of A (8x4, rows 0..7 of av, columns orthogonalised in place):
  * A V = U S, V in rows 8..11 of av (rotated with A; the caller sets them to I4).
