@@ -41,27 +41,6 @@ void mixer_wrench(const struct mixer *m, const scalar_t f_n[NR], scalar_t wrench
 	wrench_u(m, u, wrench);
 }
 
-static bool attainable_scaled(const struct mixer *m, const scalar_t w[NA], scalar_t tol)
-{
-	for (int k = 0; k < m->n_facets; k++) {
-		const struct mixer_facet *fc = &m->facet[k];
-		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
-		if (sc_abs(q) > sc_add(fc->h, tol))
-			return false;
-	}
-	return true;
-}
-
-bool mixer_attainable(const struct mixer *m, const scalar_t wrench[NA], scalar_t tol)
-{
-	if (!m->alloc_ok)
-		return false;
-	scalar_t w[NA];
-	for (int i = 0; i < NA; i++)
-		w[i] = to_scaled(m, i, wrench[i]);
-	return attainable_scaled(m, w, tol);
-}
-
 /* 1 / n[0] and 1 / n[3] of each facet (0 where |n| <= EPS_S: independent of that axis) for the
  * interval searches of one saturated allocation: formed once per saturated step (2 divisions
  * per facet, on its stack) rather than kept in the caller's struct mixer */
@@ -78,17 +57,18 @@ static void facet_recips(const struct mixer *m, struct facet_recips *rc)
 		}
 }
 
-/* Interval [lo, hi] of the offset t along axis ax (0 thrust, 3 yaw), within [l, h], such that
- * w + t e_ax is attainable with the inner margin; false if empty (lo, hi untouched then).
- * Works on t directly (not on t / demand) so that huge demands lose no resolution. */
-static bool axis_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA], int ax,
-			  scalar_t l, scalar_t h, scalar_t *lo, scalar_t *hi)
+/* The facet test with tolerance tol (scaled units; negative: an inner margin) and, with invs
+ * (1 / n[ax] of each facet as facet_recips forms them), the interval [lo, hi] of the offset t
+ * along axis ax (0 thrust, 3 yaw), within [l, h], such that w + t e_ax passes it; false if
+ * empty (lo, hi untouched then). invs NULL: the test of w alone (l <= h given). Works on t
+ * directly (not on t / demand) so that huge demands lose no resolution. */
+static bool facet_scan(const struct mixer *m, const scalar_t w[NA], const scalar_t *invs, int ax, scalar_t tol,
+		       scalar_t l, scalar_t h, scalar_t *lo, scalar_t *hi)
 {
-	const scalar_t *invs = rc->inv[ax == 0 ? 0 : 1];
 	for (int k = 0; k < m->n_facets; k++) {
 		const struct mixer_facet *fc = &m->facet[k];
 		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
-		scalar_t s = fc->n[ax], inv = invs[k], hw = sc_sub(fc->h, TOL_IN);
+		scalar_t s = fc->n[ax], inv = invs ? invs[k] : SC_ZERO, hw = sc_add(fc->h, tol);
 		if (inv == SC_ZERO) { /* |n_ax| <= EPS_S: independent of t */
 			if (sc_abs(q) > hw)
 				return false;
@@ -111,26 +91,41 @@ static bool axis_interval(const struct mixer *m, const struct facet_recips *rc, 
 	return l <= h;
 }
 
-/* Interval of the scaled thrust w[0] such that w is attainable, other components fixed.
- * Returns false if empty. */
+static bool attainable_scaled(const struct mixer *m, const scalar_t w[NA], scalar_t tol)
+{
+	scalar_t lo, hi;
+	return facet_scan(m, w, NULL, 0, tol, SC_ZERO, SC_ZERO, &lo, &hi);
+}
+
+bool mixer_attainable(const struct mixer *m, const scalar_t wrench[NA], scalar_t tol)
+{
+	if (!m->alloc_ok)
+		return false;
+	scalar_t w[NA];
+	for (int i = 0; i < NA; i++)
+		w[i] = to_scaled(m, i, wrench[i]);
+	return attainable_scaled(m, w, tol);
+}
+
+/* Interval of the scaled thrust w[0] such that w is attainable with the inner margin, other
+ * components fixed. Returns false if empty. */
 static bool thrust_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA],
 			    scalar_t *lo, scalar_t *hi)
 {
 	const scalar_t w0[NA] = {SC_ZERO, w[1], w[2], w[3]};
-	return axis_interval(m, rc, w0, 0, SC_MAX_NEG, SC_MAX, lo, hi);
+	return facet_scan(m, w0, rc->inv[0], 0, sc_neg(TOL_IN), SC_MAX_NEG, SC_MAX, lo, hi);
 }
 
 /* With w[3] = the scaled zero yaw, the interval [lo, hi] of yaw offsets t between 0 and dy
- * (the scaled demanded yaw offset) such that w + t e_3 is attainable; false if empty. */
+ * (the scaled demanded yaw offset) such that w + t e_3 is attainable with the inner margin;
+ * false if empty. No yaw demanded: whether w itself is. */
 static bool yaw_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA], scalar_t dy,
 			 scalar_t *lo, scalar_t *hi)
 {
 	scalar_t l = sc_min(SC_ZERO, dy), h = sc_max(SC_ZERO, dy);
 	*lo = l;
 	*hi = h;
-	if (dy == SC_ZERO) /* no yaw demanded: is w itself attainable (inner margin)? */
-		return attainable_scaled(m, w, sc_neg(TOL_IN));
-	return axis_interval(m, rc, w, 3, l, h, lo, hi);
+	return facet_scan(m, w, dy == SC_ZERO ? NULL : rc->inv[1], 3, sc_neg(TOL_IN), l, h, lo, hi);
 }
 
 /* tighten [lo, hi] with the constraint -hw <= q - u s <= hw (u is the unknown) */
