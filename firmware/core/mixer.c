@@ -8,6 +8,15 @@
 
 #include "mixer_tol.h"
 
+#if defined(__GNUC__)
+#define MIX_NOINLINE static __attribute__((noinline))
+#else
+#define MIX_NOINLINE static
+#endif
+
+MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b) { return sc_div(a, b); }
+MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_clamp(x, lo, hi); }
+
 static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
 {
 	scalar_t s = sc_mul(a[0], b[0]);
@@ -19,7 +28,7 @@ static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
 /* physical wrench component -> scaled space */
 static scalar_t to_scaled(const struct mixer *m, int i, scalar_t v)
 {
-	return sc_div(sc_mul(sc_sub(v, m->w_lo[i]), m->row_div[i]), m->width);
+	return mdiv(sc_mul(sc_sub(v, m->w_lo[i]), m->row_div[i]), m->width);
 }
 
 /* the physical wrench of u (Gamma S u) */
@@ -29,7 +38,7 @@ static void wrench_u(const struct mixer *m, const scalar_t u[NR], scalar_t wrenc
 		scalar_t s = SC_ZERO;
 		for (int j = 0; j < NR; j++)
 			s = sc_mac(m->gn[i][j], u[j], s);
-		wrench[i] = sc_div(s, m->row_div[i]);
+		wrench[i] = mdiv(s, m->row_div[i]);
 	}
 }
 
@@ -37,7 +46,7 @@ void mixer_wrench(const struct mixer *m, const scalar_t f_n[NR], scalar_t wrench
 {
 	scalar_t u[NR];
 	for (int j = 0; j < NR; j++)
-		u[j] = m->p.scale[j] == SC(1) ? f_n[j] : sc_div(f_n[j], m->p.scale[j]);
+		u[j] = m->p.scale[j] == SC(1) ? f_n[j] : mdiv(f_n[j], m->p.scale[j]);
 	wrench_u(m, u, wrench);
 }
 
@@ -53,7 +62,7 @@ static void facet_recips(const struct mixer *m, struct facet_recips *rc)
 	for (int k = 0; k < m->n_facets; k++)
 		for (int a = 0; a < 2; a++) {
 			scalar_t s = m->facet[k].n[a ? 3 : 0];
-			rc->inv[a][k] = sc_abs(s) > EPS_S ? sc_div(SC(1), s) : SC_ZERO;
+			rc->inv[a][k] = sc_abs(s) > EPS_S ? mdiv(SC(1), s) : SC_ZERO;
 		}
 }
 
@@ -133,7 +142,7 @@ static void narrow(scalar_t q, scalar_t s, scalar_t hw, scalar_t *lo, scalar_t *
 {
 	if (sc_abs(s) <= EPS_S)
 		return;
-	scalar_t a = sc_div(sc_sub(q, hw), s), b = sc_div(sc_add(q, hw), s);
+	scalar_t a = mdiv(sc_sub(q, hw), s), b = mdiv(sc_add(q, hw), s);
 	if (s < 0) {
 		scalar_t t = a;
 		a = b;
@@ -174,7 +183,7 @@ static int row_basis(const struct mixer *m, const int8_t bnd[NR], int fr[NR], in
 			n2 = sc_mac(v[t], v[t], n2);
 		if (n2 <= EPS_GS)
 			continue;
-		scalar_t nrm = sc_sqrt(n2), inv = sc_div(SC(1), nrm);
+		scalar_t nrm = sc_sqrt(n2), inv = mdiv(SC(1), nrm);
 		for (int t = 0; t < nf; t++)
 			q[r][t] = sc_mul(v[t], inv);
 		lt[k][r] = nrm;
@@ -187,7 +196,7 @@ static int row_basis(const struct mixer *m, const int8_t bnd[NR], int fr[NR], in
 /* u clamped to the box [0, 1] of the scaled space */
 static scalar_t clamp01(scalar_t u)
 {
-	return sc_clamp(u, SC_ZERO, SC(1));
+	return mclamp(u, SC_ZERO, SC(1));
 }
 
 /* Active-set refinement (at most MIXER_QP_ITERS iterations) from the feasible u towards the
@@ -235,7 +244,7 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 					lim = sc_sub(SC(1), u[fr[t]]);
 				else
 					continue;
-				lim = sc_div(lim, p[t]);
+				lim = mdiv(lim, p[t]);
 				if (lim < step) {
 					step = sc_max(lim, SC_ZERO);
 					blk = t;
@@ -259,7 +268,7 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 			scalar_t acc = sc_neg(c[i]);
 			for (int k = piv[i] + 1; k < NA; k++)
 				acc = sc_sub(acc, sc_mul(lt[k][i], lam[k]));
-			lam[piv[i]] = sc_div(acc, lt[piv[i]][i]);
+			lam[piv[i]] = mdiv(acc, lt[piv[i]][i]);
 		}
 		int rel = -1;
 		scalar_t worst = EPS_MU;
@@ -292,7 +301,7 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		scalar_t acc = res[piv[i]];
 		for (int k = 0; k < i; k++)
 			acc = sc_sub(acc, sc_mul(lt[piv[i]][k], y[k]));
-		y[i] = sc_div(acc, lt[piv[i]][i]);
+		y[i] = mdiv(acc, lt[piv[i]][i]);
 	}
 	for (int t = 0; t < nf; t++) {
 		scalar_t d = SC_ZERO;
@@ -343,7 +352,7 @@ static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 		}
 		scalar_t x;
 		if (lo <= hi)
-			x = sc_clamp(uref[j], lo, hi);
+			x = mclamp(uref[j], lo, hi);
 		else /* numerically empty: the nearest point of the two bounds */
 			x = clamp01(sc_add(sc_mul(lo, SC(0.5)), sc_mul(hi, SC(0.5))));
 		u[j] = x;
@@ -359,9 +368,9 @@ static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 		int j = m->order[t];
 		scalar_t d = sc_sub(u[j], uref[j]);
 		if (uref[j] < SC_ZERO && d > 0)
-			theta = sc_max(theta, sc_div(sc_neg(uref[j]), d));
+			theta = sc_max(theta, mdiv(sc_neg(uref[j]), d));
 		else if (uref[j] > SC(1) && d < 0)
-			theta = sc_max(theta, sc_div(sc_sub(SC(1), uref[j]), d));
+			theta = sc_max(theta, mdiv(sc_sub(SC(1), uref[j]), d));
 	}
 	if (theta < SC(1)) {
 		for (int t = 0; t < na; t++) {
@@ -428,7 +437,7 @@ static bool priority(const struct mixer *m, const scalar_t demand[NA], struct mi
 		 * is attainable: exact when the demanded thrust itself or the zero-yaw slice
 		 * allows it, else MIXER_ALPHA_ITERS bisection steps towards the demand */
 		scalar_t dy = sc_sub(wd[3], yaw0), dy_dem = dy, blo, bhi;
-		w[0] = sc_clamp(wd[0], lo, hi); /* attainable with beta = 0 */
+		w[0] = mclamp(wd[0], lo, hi); /* attainable with beta = 0 */
 		if (alpha < SC(1)) {
 			/* roll/pitch saturated: no room is left for yaw; thrust from the zero-yaw slice */
 			dy = SC_ZERO;
@@ -504,7 +513,7 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		if (clip)
 			for (int j = 0; j < NR; j++)
 				if (m->present & (1u << j))
-					out->f_n[j] = sc_clamp(out->f_n[j], m->f_lo, m->f_hi);
+					out->f_n[j] = mclamp(out->f_n[j], m->f_lo, m->f_hi);
 	}
 
 	/* out->f_n holds u: the achieved wrench and the bound flags from it, then f_j = scale_j u_j */
