@@ -287,24 +287,25 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	/* two Newton-Schulz steps P <- 2P - P Gamma P (converge to the Moore-Penrose inverse,
 	 * also when rank-deficient) polish the float32 SVD result */
 	for (int it = 0; it < 2; it++) {
-		float gp[NA][NA], np[NR][NA];
+		float e[NA][NA]; /* I - Gamma P */
 		for (int i = 0; i < NA; i++)
 			for (int k = 0; k < NA; k++) {
 				float acc = 0.0f;
 				for (int j = 0; j < NR; j++)
 					acc += dz->gamma_f[i][j] * dz->pinv_f[j][k];
-				gp[i][k] = acc;
+				e[i][k] = (i == k ? 1.0f : 0.0f) - acc;
 			}
-		for (int j = 0; j < NR; j++)
+		for (int j = 0; j < NR; j++) { /* row j of P + P (I - Gamma P) reads only row j of P */
+			float np[NA];
 			for (int k = 0; k < NA; k++) {
-				float acc = 0.0f; /* (P (I - Gamma P))_jk, then P + that */
+				float acc = 0.0f;
 				for (int i = 0; i < NA; i++)
-					acc += dz->pinv_f[j][i] * ((i == k ? 1.0f : 0.0f) - gp[i][k]);
-				np[j][k] = dz->pinv_f[j][k] + acc;
+					acc += dz->pinv_f[j][i] * e[i][k];
+				np[k] = dz->pinv_f[j][k] + acc;
 			}
-		for (int j = 0; j < NR; j++)
 			for (int k = 0; k < NA; k++)
-				dz->pinv_f[j][k] = np[j][k];
+				dz->pinv_f[j][k] = np[k];
+		}
 	}
 
 	/* ---- null space: complete the row space of Gamma (basis 0..rank-1) with unit vectors,
