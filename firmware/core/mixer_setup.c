@@ -186,7 +186,11 @@ void mixer_default_params(struct mixer_params *p)
 	*p = d;
 }
 
-/* an effectiveness as used: 0 (not given) is 1, others clamped to [0.1, 4] */
+/* an effectiveness as used: 0 (not given) is 1, others clamped to [0.1, 4]; out of line
+ * (three callers): less flash */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
 static scalar_t scale_used(scalar_t s)
 {
 	return s == SC_ZERO ? SC(1) : sc_clamp(s, SC(0.1), SC(4));
