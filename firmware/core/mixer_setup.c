@@ -56,11 +56,13 @@ static void jacobi_svd(float av[NR + NA][NA], float s[NA])
 static float inv4(const float m[4][4], float out[4][4])
 {
 	float a[4][8];
-	for (int i = 0; i < 4; i++)
+	for (int i = 0; i < 4; i++) {
 		for (int j = 0; j < 4; j++) {
 			a[i][j] = m[i][j];
-			a[i][4 + j] = i == j ? 1.0f : 0.0f;
+			a[i][4 + j] = 0.0f;
 		}
+		a[i][4 + i] = 1.0f;
+	}
 	float det = 1.0f;
 	for (int c = 0; c < 4; c++) {
 		int piv = c;
@@ -260,7 +262,9 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	float a[NR + NA][NA], s[NA]; /* Gamma^T, then I4 for V */
 	for (int j = 0; j < NR + NA; j++)
 		for (int i = 0; i < NA; i++)
-			a[j][i] = j < NR ? dz->gamma_f[i][j] : (j - NR == i ? 1.0f : 0.0f);
+			a[j][i] = j < NR ? dz->gamma_f[i][j] : 0.0f;
+	for (int i = 0; i < NA; i++)
+		a[NR + i][i] = 1.0f;
 	jacobi_svd(a, s);
 	int idx[NA] = { 0, 1, 2, 3 };
 	for (int i = 0; i < NA; i++) /* sort by singular value, descending */
@@ -320,7 +324,8 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		for (int e = 0; e < NR; e++) {
 			float x[NR];
 			for (int j = 0; j < NR; j++)
-				x[j] = j == e ? 1.0f : 0.0f;
+				x[j] = 0.0f;
+			x[e] = 1.0f;
 			for (int pass = 0; pass < 2; pass++)
 				for (int k = 0; k < nb; k++) {
 					float d = 0.0f;
