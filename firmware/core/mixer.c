@@ -396,12 +396,13 @@ static void scaled_rp(const struct mixer *m, const scalar_t demand[NA], scalar_t
 	w[2] = to_scaled(m, 2, sc_mul(a, demand[2]));
 }
 
-/* Steps 3a-e (mixer.h) for a demand whose pseudo-inverse allocation leaves the box: the rotors'
- * u (N) in out->f_n, the axis flags in out->limits, out->steps. False (out untouched) when
- * zero torque is unattainable: not a usable layout, the caller clips. */
-static bool priority(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
+/* Steps 3a-d (mixer.h) for a demand whose pseudo-inverse allocation leaves the box: the
+ * attainable target w (scaled space), the axis flags in *limp; returns the bisection steps,
+ * or -1 when zero torque is unattainable (not a usable layout). Out of line, so that its
+ * stack (the facet reciprocals) and preimage's are not held at the same time. */
+MIX_NOINLINE int target(const struct mixer *m, const scalar_t demand[NA], scalar_t w[NA], uint32_t *limp)
 {
-	scalar_t wd[NA], w[NA];
+	scalar_t wd[NA];
 	for (int i = 0; i < NA; i++)
 		w[i] = wd[i] = to_scaled(m, i, demand[i]);
 	int steps = 0;
@@ -418,7 +419,7 @@ static bool priority(const struct mixer *m, const scalar_t demand[NA], struct mi
 			w[1] = to_scaled(m, 1, SC_ZERO);
 			w[2] = to_scaled(m, 2, SC_ZERO);
 			if (!thrust_interval(m, &rc, w, &lo, &hi))
-				return false;
+				return -1;
 			for (int it = 0; it < MIXER_ALPHA_ITERS; it++) {
 				scalar_t mid = sc_mul(sc_add(a_lo, a_hi), SC(0.5));
 				scalar_t l2, h2;
@@ -473,6 +474,19 @@ static bool priority(const struct mixer *m, const scalar_t demand[NA], struct mi
 			lim |= MIXER_LIMIT_TZ;
 		w[3] = sc_add(yaw0, ty);
 	}
+	*limp = lim;
+	return steps;
+}
+
+/* Steps 3a-e: the rotors' u (N) in out->f_n, the axis flags in out->limits, out->steps.
+ * False (out untouched) when zero torque is unattainable: the caller clips. */
+static bool priority(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
+{
+	scalar_t w[NA];
+	uint32_t lim;
+	int steps = target(m, demand, w, &lim);
+	if (steps < 0)
+		return false;
 	/* e. */
 	scalar_t u[NR];
 	steps += preimage(m, w, u);
