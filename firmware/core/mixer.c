@@ -265,8 +265,9 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 			continue;
 		}
 		/* stationary on this face: multipliers lambda from G_F^T lambda = g_F (g = u - uref),
-		 * i.e. L^T lambda = Q g_F = -c (c = Q (uref - u)_F from above, u unchanged since;
-		 * negation is exact), back substitution over the basis rows */
+		 * i.e. L^T lambda = Q g_F = -c (c = Q (uref - u)_F from above, u unchanged since:
+		 * the same values as summing Q g_F, in float up to the sign of a zero, which the
+		 * test against EPS_MU > 0 below cannot see), back substitution over the basis rows */
 		scalar_t lam[NA] = { SC_ZERO, SC_ZERO, SC_ZERO, SC_ZERO };
 		for (int i = r - 1; i >= 0; i--) {
 			scalar_t acc = sc_neg(c[i]);
