@@ -8,6 +8,19 @@
 
 #include "mixer_tol.h"
 
+/* Kept out of line for flash: the compiler would inline these at every use (sc_div's zero
+ * test and sc_clamp's two compares are calls of their own on a core without FPU), and
+ * preimage's locals would crowd the registers of its caller. A call costs a few
+ * instructions per division or clamp; the allocator measured no slower on Cortex-M4F. */
+#if defined(__GNUC__)
+#define MIX_NOINLINE static __attribute__((noinline))
+#else
+#define MIX_NOINLINE static
+#endif
+
+MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b) { return sc_div(a, b); }
+MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_clamp(x, lo, hi); }
+
 static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
 {
 	scalar_t s = sc_mul(a[0], b[0]);
@@ -19,7 +32,7 @@ static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
 /* physical wrench component -> scaled space */
 static scalar_t to_scaled(const struct mixer *m, int i, scalar_t v)
 {
-	return sc_div(sc_mul(sc_sub(v, m->w_lo[i]), m->row_div[i]), m->width);
+	return mdiv(sc_mul(sc_sub(v, m->w_lo[i]), m->row_div[i]), m->width);
 }
 
 /* the physical wrench of u (Gamma S u) */
@@ -29,7 +42,7 @@ static void wrench_u(const struct mixer *m, const scalar_t u[NR], scalar_t wrenc
 		scalar_t s = SC_ZERO;
 		for (int j = 0; j < NR; j++)
 			s = sc_mac(m->gn[i][j], u[j], s);
-		wrench[i] = sc_div(s, m->row_div[i]);
+		wrench[i] = mdiv(s, m->row_div[i]);
 	}
 }
 
@@ -37,29 +50,8 @@ void mixer_wrench(const struct mixer *m, const scalar_t f_n[NR], scalar_t wrench
 {
 	scalar_t u[NR];
 	for (int j = 0; j < NR; j++)
-		u[j] = m->p.scale[j] == SC(1) ? f_n[j] : sc_div(f_n[j], m->p.scale[j]);
+		u[j] = m->p.scale[j] == SC(1) ? f_n[j] : mdiv(f_n[j], m->p.scale[j]);
 	wrench_u(m, u, wrench);
-}
-
-static bool attainable_scaled(const struct mixer *m, const scalar_t w[NA], scalar_t tol)
-{
-	for (int k = 0; k < m->n_facets; k++) {
-		const struct mixer_facet *fc = &m->facet[k];
-		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
-		if (sc_abs(q) > sc_add(fc->h, tol))
-			return false;
-	}
-	return true;
-}
-
-bool mixer_attainable(const struct mixer *m, const scalar_t wrench[NA], scalar_t tol)
-{
-	if (!m->alloc_ok)
-		return false;
-	scalar_t w[NA];
-	for (int i = 0; i < NA; i++)
-		w[i] = to_scaled(m, i, wrench[i]);
-	return attainable_scaled(m, w, tol);
 }
 
 /* 1 / n[0] and 1 / n[3] of each facet (0 where |n| <= EPS_S: independent of that axis) for the
@@ -74,21 +66,22 @@ static void facet_recips(const struct mixer *m, struct facet_recips *rc)
 	for (int k = 0; k < m->n_facets; k++)
 		for (int a = 0; a < 2; a++) {
 			scalar_t s = m->facet[k].n[a ? 3 : 0];
-			rc->inv[a][k] = sc_abs(s) > EPS_S ? sc_div(SC(1), s) : SC_ZERO;
+			rc->inv[a][k] = sc_abs(s) > EPS_S ? mdiv(SC(1), s) : SC_ZERO;
 		}
 }
 
-/* Interval [lo, hi] of the offset t along axis ax (0 thrust, 3 yaw), within [l, h], such that
- * w + t e_ax is attainable with the inner margin; false if empty (lo, hi untouched then).
- * Works on t directly (not on t / demand) so that huge demands lose no resolution. */
-static bool axis_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA], int ax,
-			  scalar_t l, scalar_t h, scalar_t *lo, scalar_t *hi)
+/* The facet test with tolerance tol (scaled units; negative: an inner margin) and, with invs
+ * (1 / n[ax] of each facet as facet_recips forms them), the interval [lo, hi] of the offset t
+ * along axis ax (0 thrust, 3 yaw), within [l, h], such that w + t e_ax passes it; false if
+ * empty (lo, hi untouched then). invs NULL: the test of w alone (l <= h given). Works on t
+ * directly (not on t / demand) so that huge demands lose no resolution. */
+static bool facet_scan(const struct mixer *m, const scalar_t w[NA], const scalar_t *invs, int ax, scalar_t tol,
+		       scalar_t l, scalar_t h, scalar_t *lo, scalar_t *hi)
 {
-	const scalar_t *invs = rc->inv[ax == 0 ? 0 : 1];
 	for (int k = 0; k < m->n_facets; k++) {
 		const struct mixer_facet *fc = &m->facet[k];
 		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
-		scalar_t s = fc->n[ax], inv = invs[k], hw = sc_sub(fc->h, TOL_IN);
+		scalar_t s = fc->n[ax], inv = invs ? invs[k] : SC_ZERO, hw = sc_add(fc->h, tol);
 		if (inv == SC_ZERO) { /* |n_ax| <= EPS_S: independent of t */
 			if (sc_abs(q) > hw)
 				return false;
@@ -111,26 +104,41 @@ static bool axis_interval(const struct mixer *m, const struct facet_recips *rc, 
 	return l <= h;
 }
 
-/* Interval of the scaled thrust w[0] such that w is attainable, other components fixed.
- * Returns false if empty. */
+static bool attainable_scaled(const struct mixer *m, const scalar_t w[NA], scalar_t tol)
+{
+	scalar_t lo, hi;
+	return facet_scan(m, w, NULL, 0, tol, SC_ZERO, SC_ZERO, &lo, &hi);
+}
+
+bool mixer_attainable(const struct mixer *m, const scalar_t wrench[NA], scalar_t tol)
+{
+	if (!m->alloc_ok)
+		return false;
+	scalar_t w[NA];
+	for (int i = 0; i < NA; i++)
+		w[i] = to_scaled(m, i, wrench[i]);
+	return attainable_scaled(m, w, tol);
+}
+
+/* Interval of the scaled thrust w[0] such that w is attainable with the inner margin, other
+ * components fixed. Returns false if empty. */
 static bool thrust_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA],
 			    scalar_t *lo, scalar_t *hi)
 {
 	const scalar_t w0[NA] = {SC_ZERO, w[1], w[2], w[3]};
-	return axis_interval(m, rc, w0, 0, SC_MAX_NEG, SC_MAX, lo, hi);
+	return facet_scan(m, w0, rc->inv[0], 0, sc_neg(TOL_IN), SC_MAX_NEG, SC_MAX, lo, hi);
 }
 
 /* With w[3] = the scaled zero yaw, the interval [lo, hi] of yaw offsets t between 0 and dy
- * (the scaled demanded yaw offset) such that w + t e_3 is attainable; false if empty. */
+ * (the scaled demanded yaw offset) such that w + t e_3 is attainable with the inner margin;
+ * false if empty. No yaw demanded: whether w itself is. */
 static bool yaw_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA], scalar_t dy,
 			 scalar_t *lo, scalar_t *hi)
 {
 	scalar_t l = sc_min(SC_ZERO, dy), h = sc_max(SC_ZERO, dy);
 	*lo = l;
 	*hi = h;
-	if (dy == SC_ZERO) /* no yaw demanded: is w itself attainable (inner margin)? */
-		return attainable_scaled(m, w, sc_neg(TOL_IN));
-	return axis_interval(m, rc, w, 3, l, h, lo, hi);
+	return facet_scan(m, w, dy == SC_ZERO ? NULL : rc->inv[1], 3, sc_neg(TOL_IN), l, h, lo, hi);
 }
 
 /* tighten [lo, hi] with the constraint -hw <= q - u s <= hw (u is the unknown) */
@@ -138,7 +146,7 @@ static void narrow(scalar_t q, scalar_t s, scalar_t hw, scalar_t *lo, scalar_t *
 {
 	if (sc_abs(s) <= EPS_S)
 		return;
-	scalar_t a = sc_div(sc_sub(q, hw), s), b = sc_div(sc_add(q, hw), s);
+	scalar_t a = mdiv(sc_sub(q, hw), s), b = mdiv(sc_add(q, hw), s);
 	if (s < 0) {
 		scalar_t t = a;
 		a = b;
@@ -149,12 +157,16 @@ static void narrow(scalar_t q, scalar_t s, scalar_t hw, scalar_t *lo, scalar_t *
 }
 
 /* Orthonormal basis (rows q[0..r-1], length nf) of the row space of G_F (the 4 rows of gn
- * restricted to the free rotors fr[0..nf-1]) by modified Gram-Schmidt; lt[k][m] = q_m . row_k,
- * piv[m] = row that produced q_m. Returns r. */
-static int row_basis(const struct mixer *m, const int *fr, int nf, scalar_t q[NA][NR],
+ * restricted to the free rotors, bnd 0, which it lists in fr[0..*nf-1]) by modified
+ * Gram-Schmidt; lt[k][m] = q_m . row_k, piv[m] = row that produced q_m. Returns r. */
+static int row_basis(const struct mixer *m, const int8_t bnd[NR], int fr[NR], int *nfp, scalar_t q[NA][NR],
 		     scalar_t lt[NA][NA], int piv[NA])
 {
-	int r = 0;
+	int r = 0, nf = 0;
+	for (int t = 0; t < m->n_active; t++)
+		if (bnd[m->order[t]] == 0)
+			fr[nf++] = m->order[t];
+	*nfp = nf;
 	for (int k = 0; k < NA; k++) {
 		scalar_t v[NR];
 		for (int t = 0; t < nf; t++)
@@ -175,7 +187,7 @@ static int row_basis(const struct mixer *m, const int *fr, int nf, scalar_t q[NA
 			n2 = sc_mac(v[t], v[t], n2);
 		if (n2 <= EPS_GS)
 			continue;
-		scalar_t nrm = sc_sqrt(n2), inv = sc_div(SC(1), nrm);
+		scalar_t nrm = sc_sqrt(n2), inv = mdiv(SC(1), nrm);
 		for (int t = 0; t < nf; t++)
 			q[r][t] = sc_mul(v[t], inv);
 		lt[k][r] = nrm;
@@ -183,6 +195,12 @@ static int row_basis(const struct mixer *m, const int *fr, int nf, scalar_t q[NA
 		r++;
 	}
 	return r;
+}
+
+/* u clamped to the box [0, 1] of the scaled space */
+static scalar_t clamp01(scalar_t u)
+{
+	return mclamp(u, SC_ZERO, SC(1));
 }
 
 /* Active-set refinement (at most MIXER_QP_ITERS iterations) from the feasible u towards the
@@ -198,13 +216,13 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		bnd[j] = u[j] <= SC_ZERO ? -1 : (u[j] >= SC(1) ? 1 : 0);
 	}
 	scalar_t q[NA][NR], lt[NA][NA];
-	int piv[NA], fr[NR], nf = 0, r = 0, it;
-	for (it = 0; it < MIXER_QP_ITERS; it++) {
-		nf = 0;
-		for (int t = 0; t < na; t++)
-			if (bnd[m->order[t]] == 0)
-				fr[nf++] = m->order[t];
-		r = row_basis(m, fr, nf, q, lt, piv);
+	int piv[NA], fr[NR], nf, r, it = 0;
+	for (;;) {
+		/* the basis of the current face: also what the final correction uses when the
+		 * loop ends here (at the optimum or after MIXER_QP_ITERS iterations) */
+		r = row_basis(m, bnd, fr, &nf, q, lt, piv);
+		if (it == MIXER_QP_ITERS)
+			break;
 		/* p = projection of (uref - u)_F onto null(G_F) */
 		scalar_t p[NR], c[NA], pmax = SC_ZERO;
 		for (int t = 0; t < nf; t++)
@@ -225,38 +243,37 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 			for (int t = 0; t < nf; t++) {
 				scalar_t lim;
 				if (p[t] < -EPS_P)
-					lim = sc_div(sc_neg(u[fr[t]]), p[t]);
+					lim = sc_neg(u[fr[t]]);
 				else if (p[t] > EPS_P)
-					lim = sc_div(sc_sub(SC(1), u[fr[t]]), p[t]);
+					lim = sc_sub(SC(1), u[fr[t]]);
 				else
 					continue;
+				lim = mdiv(lim, p[t]);
 				if (lim < step) {
 					step = sc_max(lim, SC_ZERO);
 					blk = t;
 				}
 			}
 			for (int t = 0; t < nf; t++)
-				u[fr[t]] = sc_clamp(sc_add(u[fr[t]], sc_mul(step, p[t])), SC_ZERO, SC(1));
+				u[fr[t]] = clamp01(sc_add(u[fr[t]], sc_mul(step, p[t])));
 			if (blk >= 0) {
 				int j = fr[blk];
 				bnd[j] = p[blk] < 0 ? -1 : 1;
 				u[j] = bnd[j] < 0 ? SC_ZERO : SC(1);
 			}
+			it++;
 			continue;
 		}
 		/* stationary on this face: multipliers lambda from G_F^T lambda = g_F (g = u - uref),
-		 * i.e. L^T lambda = Q g_F, back substitution over the basis rows */
+		 * i.e. L^T lambda = Q g_F = -c (c = Q (uref - u)_F from above, u unchanged since:
+		 * the same values as summing Q g_F, in float up to the sign of a zero, which the
+		 * test against EPS_MU > 0 below cannot see), back substitution over the basis rows */
 		scalar_t lam[NA] = { SC_ZERO, SC_ZERO, SC_ZERO, SC_ZERO };
-		for (int i = 0; i < r; i++) {
-			c[i] = SC_ZERO;
-			for (int t = 0; t < nf; t++)
-				c[i] = sc_mac(q[i][t], sc_sub(u[fr[t]], uref[fr[t]]), c[i]);
-		}
 		for (int i = r - 1; i >= 0; i--) {
-			scalar_t acc = c[i];
+			scalar_t acc = sc_neg(c[i]);
 			for (int k = piv[i] + 1; k < NA; k++)
 				acc = sc_sub(acc, sc_mul(lt[k][i], lam[k]));
-			lam[piv[i]] = sc_div(acc, lt[piv[i]][i]);
+			lam[piv[i]] = mdiv(acc, lt[piv[i]][i]);
 		}
 		int rel = -1;
 		scalar_t worst = EPS_MU;
@@ -276,13 +293,9 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		if (rel < 0)
 			break; /* KKT point: the unique optimum */
 		bnd[rel] = 0;
+		it++;
 	}
 	/* minimum-norm correction of the residual on the free rotors: d = Q^T y, L y = w - gn u */
-	nf = 0;
-	for (int t = 0; t < na; t++)
-		if (bnd[m->order[t]] == 0)
-			fr[nf++] = m->order[t];
-	r = row_basis(m, fr, nf, q, lt, piv);
 	scalar_t res[NA], y[NA];
 	for (int k = 0; k < NA; k++) {
 		res[k] = w[k];
@@ -293,63 +306,66 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		scalar_t acc = res[piv[i]];
 		for (int k = 0; k < i; k++)
 			acc = sc_sub(acc, sc_mul(lt[piv[i]][k], y[k]));
-		y[i] = sc_div(acc, lt[piv[i]][i]);
+		y[i] = mdiv(acc, lt[piv[i]][i]);
 	}
 	for (int t = 0; t < nf; t++) {
 		scalar_t d = SC_ZERO;
 		for (int i = 0; i < r; i++)
 			d = sc_mac(q[i][t], y[i], d);
-		u[fr[t]] = sc_clamp(sc_add(u[fr[t]], d), SC_ZERO, SC(1));
+		u[fr[t]] = clamp01(sc_add(u[fr[t]], d));
 	}
 	return it;
 }
 
 /* Exact preimage: u in [0,1]^8 with gn u = w (w attainable), see mixer.h step e. */
-static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
+MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 {
 	scalar_t uref[NR], r[NA];
 	for (int j = 0; j < NR; j++) {
 		/* row j of the pseudo-inverse in the scaled space */
-		const scalar_t pn[NA] = {
-			sc_mul(m->pinv[j][0], m->row_max[0]), sc_mul(m->pinv[j][1], m->row_max[1]),
-			sc_mul(m->pinv[j][2], m->row_max[2]), sc_mul(m->pinv[j][3], m->row_max[3]),
-		};
+		scalar_t pn[NA];
+		for (int i = 0; i < NA; i++)
+			pn[i] = sc_mul(m->pinv[j][i], m->row_max[i]);
 		uref[j] = dot4(pn, w);
 		u[j] = SC_ZERO;
 	}
 	for (int i = 0; i < NA; i++)
 		r[i] = w[i];
 	const int na = m->n_active;
-	int steps = 0;
-	for (int st = 0; st + 4 < na; st++) {
+	int st;
+	for (st = 0; st + 4 < na; st++) {
 		int j = m->order[st];
 		scalar_t g[NA] = { m->gn[0][j], m->gn[1][j], m->gn[2][j], m->gn[3][j] };
 		scalar_t lo = SC_ZERO, hi = SC(1);
-		if (st + 5 == na) {
-			/* the rest is the invertible tail: u_tail = T r - u T g in [0, 1]^4 */
-			for (int c = 0; c < 4; c++) {
-				scalar_t tr = dot4(m->tail_inv[c], r), tg = dot4(m->tail_inv[c], g);
-				/* 0 <= tr - u tg <= 1  <=>  -1/2 <= (tr - 1/2) - u tg <= 1/2 */
-				narrow(sc_sub(tr, SC(0.5)), tg, SC(0.5), &lo, &hi);
-			}
-		} else {
-			for (int k = 0; k < m->sub_n[st]; k++) {
+		/* the last step's rest is the invertible tail: u_tail = T r - u T g in [0, 1]^4,
+		 * i.e. 0 <= tr - u tg <= 1 <=> -1/2 <= (tr - 1/2) - u tg <= 1/2 per row of T: the
+		 * same constraint as a facet with normal T_c, n.c = 1/2, h = 1/2 */
+		const bool tail = st + 5 == na;
+		int cnt = tail ? 4 : m->sub_n[st];
+		for (int k = 0; k < cnt; k++) {
+			const scalar_t *n;
+			scalar_t nc = SC(0.5), h = SC(0.5);
+			if (tail) {
+				n = m->tail_inv[k];
+			} else {
 				const struct mixer_subfacet *fc = &m->sub[m->sub_first[st] + k];
-				narrow(sc_sub(dot4(fc->n, r), fc->nc), dot4(fc->n, g), fc->h, &lo, &hi);
+				n = fc->n;
+				nc = fc->nc;
+				h = fc->h;
 			}
+			narrow(sc_sub(dot4(n, r), nc), dot4(n, g), h, &lo, &hi);
 		}
 		scalar_t x;
 		if (lo <= hi)
-			x = sc_clamp(uref[j], lo, hi);
+			x = mclamp(uref[j], lo, hi);
 		else /* numerically empty: the nearest point of the two bounds */
-			x = sc_clamp(sc_add(sc_mul(lo, SC(0.5)), sc_mul(hi, SC(0.5))), SC_ZERO, SC(1));
+			x = clamp01(sc_add(sc_mul(lo, SC(0.5)), sc_mul(hi, SC(0.5))));
 		u[j] = x;
 		for (int i = 0; i < NA; i++)
 			r[i] = sc_sub(r[i], sc_mul(x, g[i]));
-		steps++;
 	}
 	for (int c = 0; c < 4; c++)
-		u[m->order[na - 4 + c]] = sc_clamp(dot4(m->tail_inv[c], r), SC_ZERO, SC(1));
+		u[m->order[na - 4 + c]] = clamp01(dot4(m->tail_inv[c], r));
 
 	/* move along the null space (u - uref) back towards the pseudo-inverse solution */
 	scalar_t theta = SC_ZERO;
@@ -357,163 +373,82 @@ static int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t u[NR])
 		int j = m->order[t];
 		scalar_t d = sc_sub(u[j], uref[j]);
 		if (uref[j] < SC_ZERO && d > 0)
-			theta = sc_max(theta, sc_div(sc_neg(uref[j]), d));
+			theta = sc_max(theta, mdiv(sc_neg(uref[j]), d));
 		else if (uref[j] > SC(1) && d < 0)
-			theta = sc_max(theta, sc_div(sc_sub(SC(1), uref[j]), d));
+			theta = sc_max(theta, mdiv(sc_sub(SC(1), uref[j]), d));
 	}
 	if (theta < SC(1)) {
 		for (int t = 0; t < na; t++) {
 			int j = m->order[t];
 			scalar_t d = sc_sub(u[j], uref[j]);
-			u[j] = sc_clamp(sc_add(uref[j], sc_mul(theta, d)), SC_ZERO, SC(1));
+			u[j] = clamp01(sc_add(uref[j], sc_mul(theta, d)));
 		}
 	}
-	return steps + refine(m, w, uref, u);
-}
-
-/* out->f_n holds u: the achieved wrench and the bound flags from it, then f_j = scale_j u_j */
-static void finish(const struct mixer *m, struct mixer_output *out)
-{
-	wrench_u(m, out->f_n, out->achieved);
-	out->rotor_at_min = 0;
-	out->rotor_at_max = 0;
-	/* a rotor within 4 inner margins of a bound counts as at the bound */
-	const scalar_t at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
-	for (int j = 0; j < NR; j++) {
-		if (!(m->present & (1u << j)))
-			continue;
-		if (out->f_n[j] <= sc_add(m->f_lo, at_tol))
-			out->rotor_at_min |= (uint8_t)(1u << j);
-		if (out->f_n[j] >= sc_sub(m->f_hi, at_tol))
-			out->rotor_at_max |= (uint8_t)(1u << j);
-	}
-	for (int j = 0; j < NR; j++)
-		out->f_n[j] = sc_mul(out->f_n[j], m->p.scale[j]);
-	if (out->rotor_at_min)
-		out->limits |= MIXER_LIMIT_ROTOR_MIN;
-	if (out->rotor_at_max)
-		out->limits |= MIXER_LIMIT_ROTOR_MAX;
+	return st + refine(m, w, uref, u);
 }
 
 /* the limit flag of each axis of [f, tau_x, tau_y, tau_z] */
 static const uint32_t axis_limit[NA] = { MIXER_LIMIT_F, MIXER_LIMIT_TX, MIXER_LIMIT_TY, MIXER_LIMIT_TZ };
 
-/* flags of axes whose achieved value differs from the demand (CLIP mode) */
-static uint32_t axis_flags(const struct mixer *m, const struct mixer_output *out)
+/* w[1], w[2]: the scaled roll and pitch of a times the demanded ones */
+static void scaled_rp(const struct mixer *m, const scalar_t demand[NA], scalar_t a, scalar_t w[NA])
 {
-	uint32_t f = 0;
-	for (int i = 0; i < NA; i++) {
-		/* the margin times the physical wrench per unit of scaled wrench */
-		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
-		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
-			f |= axis_limit[i];
-	}
-	return f;
+	w[1] = to_scaled(m, 1, sc_mul(a, demand[1]));
+	w[2] = to_scaled(m, 2, sc_mul(a, demand[2]));
 }
 
-void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
+/* Steps 3a-d (mixer.h) for a demand whose pseudo-inverse allocation leaves the box: the
+ * attainable target w (scaled space), the axis flags in *limp; returns the bisection steps,
+ * or -1 when zero torque is unattainable (not a usable layout). Out of line, so that its
+ * stack (the facet reciprocals) and preimage's are not held at the same time. */
+MIX_NOINLINE int target(const struct mixer *m, const scalar_t demand[NA], scalar_t w[NA], uint32_t *limp)
 {
-	out->limits = 0;
-	out->steps = 0;
-	bool finite = true;
-	for (int i = 0; i < NA; i++) {
-		out->demanded[i] = demand[i];
-		finite = finite && sc_isfinite(demand[i]);
-	}
-	if (!finite) {
-		for (int j = 0; j < NR; j++)
-			out->f_n[j] = SC_ZERO;
-		out->limits = MIXER_LIMIT_BAD_INPUT;
-		finish(m, out);
-		return;
-	}
-
-	/* 1. eq. (15) */
-	bool inside = true;
-	for (int j = 0; j < NR; j++) {
-		out->f_n[j] = dot4(m->pinv[j], demand);
-		if (!(m->present & (1u << j))) {
-			out->f_n[j] = SC_ZERO;
-			continue;
-		}
-		if (out->f_n[j] < m->f_lo || out->f_n[j] > m->f_hi)
-			inside = false;
-	}
-	if (inside) {
-		finish(m, out);
-		return;
-	}
-	if (m->p.mode != MIXER_MODE_PRIORITY || !m->alloc_ok) {
-		if (m->p.mode == MIXER_MODE_PRIORITY)
-			out->limits |= MIXER_LIMIT_NO_ALLOC;
-		for (int j = 0; j < NR; j++)
-			if (m->present & (1u << j))
-				out->f_n[j] = sc_clamp(out->f_n[j], m->f_lo, m->f_hi);
-		finish(m, out);
-		out->limits |= axis_flags(m, out);
-		return;
-	}
-
-	/* 3. priority allocation in the scaled space */
-	scalar_t wd[NA], w[NA];
+	scalar_t wd[NA];
 	for (int i = 0; i < NA; i++)
-		wd[i] = to_scaled(m, i, demand[i]);
+		w[i] = wd[i] = to_scaled(m, i, demand[i]);
 	int steps = 0;
-	if (attainable_scaled(m, wd, TOL_ATT)) {
-		for (int i = 0; i < NA; i++)
-			w[i] = wd[i];
-	} else {
+	uint32_t lim = 0;
+	if (!attainable_scaled(m, wd, TOL_ATT)) {
 		struct facet_recips rc;
 		facet_recips(m, &rc);
 		/* b. roll/pitch scale alpha with zero yaw, thrust free */
 		scalar_t yaw0 = to_scaled(m, 3, SC_ZERO);
 		scalar_t lo, hi, alpha = SC(1);
 		w[3] = yaw0;
-		w[1] = wd[1];
-		w[2] = wd[2];
 		if (!thrust_interval(m, &rc, w, &lo, &hi)) {
 			scalar_t a_lo = SC_ZERO, a_hi = SC(1);
 			w[1] = to_scaled(m, 1, SC_ZERO);
 			w[2] = to_scaled(m, 2, SC_ZERO);
-			if (!thrust_interval(m, &rc, w, &lo, &hi)) {
-				/* zero torque unattainable: not a usable layout; fall back to clipping */
-				for (int j = 0; j < NR; j++)
-					if (m->present & (1u << j))
-						out->f_n[j] = sc_clamp(out->f_n[j], m->f_lo, m->f_hi);
-				finish(m, out);
-				out->limits |= axis_flags(m, out) | MIXER_LIMIT_NO_ALLOC;
-				return;
-			}
+			if (!thrust_interval(m, &rc, w, &lo, &hi))
+				return -1;
 			for (int it = 0; it < MIXER_ALPHA_ITERS; it++) {
 				scalar_t mid = sc_mul(sc_add(a_lo, a_hi), SC(0.5));
-				scalar_t t[NA] = { SC_ZERO, to_scaled(m, 1, sc_mul(mid, demand[1])),
-						   to_scaled(m, 2, sc_mul(mid, demand[2])), yaw0 };
 				scalar_t l2, h2;
-				if (thrust_interval(m, &rc, t, &l2, &h2))
+				scaled_rp(m, demand, mid, w);
+				if (thrust_interval(m, &rc, w, &l2, &h2))
 					a_lo = mid;
 				else
 					a_hi = mid;
 				steps++;
 			}
 			alpha = a_lo;
-			w[1] = to_scaled(m, 1, sc_mul(alpha, demand[1]));
-			w[2] = to_scaled(m, 2, sc_mul(alpha, demand[2]));
+			scaled_rp(m, demand, alpha, w);
 			thrust_interval(m, &rc, w, &lo, &hi);
 			if (demand[1] != SC_ZERO)
-				out->limits |= MIXER_LIMIT_TX;
+				lim |= MIXER_LIMIT_TX;
 			if (demand[2] != SC_ZERO)
-				out->limits |= MIXER_LIMIT_TY;
+				lim |= MIXER_LIMIT_TY;
 		}
 		/* c. thrust nearest to the demand for which some yaw beta tau_z, beta in [0, 1],
 		 * is attainable: exact when the demanded thrust itself or the zero-yaw slice
 		 * allows it, else MIXER_ALPHA_ITERS bisection steps towards the demand */
 		scalar_t dy = sc_sub(wd[3], yaw0), dy_dem = dy, blo, bhi;
-		w[0] = sc_clamp(wd[0], lo, hi); /* attainable with beta = 0 */
+		w[0] = mclamp(wd[0], lo, hi); /* attainable with beta = 0 */
 		if (alpha < SC(1)) {
 			/* roll/pitch saturated: no room is left for yaw; thrust from the zero-yaw slice */
 			dy = SC_ZERO;
 			if (w[0] != wd[0])
-				out->limits |= MIXER_LIMIT_F;
+				lim |= MIXER_LIMIT_F;
 		} else if (w[0] != wd[0]) {
 			scalar_t ok_f = w[0];
 			w[0] = wd[0];
@@ -528,7 +463,7 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 					steps++;
 				}
 				w[0] = ok_f;
-				out->limits |= MIXER_LIMIT_F;
+				lim |= MIXER_LIMIT_F;
 			}
 		}
 		/* d. yaw: the largest part of the demanded yaw attainable at that thrust (between
@@ -537,15 +472,96 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		if (dy != SC_ZERO && yaw_interval(m, &rc, w, dy, &blo, &bhi))
 			ty = dy > 0 ? bhi : blo;
 		if (ty != dy_dem && demand[3] != SC_ZERO)
-			out->limits |= MIXER_LIMIT_TZ;
+			lim |= MIXER_LIMIT_TZ;
 		w[3] = sc_add(yaw0, ty);
 	}
+	*limp = lim;
+	return steps;
+}
+
+/* Steps 3a-e: the rotors' u (N) in out->f_n, the axis flags in out->limits, out->steps.
+ * False (out untouched) when zero torque is unattainable: the caller clips. */
+static bool priority(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
+{
+	scalar_t w[NA];
+	uint32_t lim;
+	int steps = target(m, demand, w, &lim);
+	if (steps < 0)
+		return false;
+	/* e. */
 	scalar_t u[NR];
 	steps += preimage(m, w, u);
 	for (int j = 0; j < NR; j++)
 		out->f_n[j] = (m->present & (1u << j)) ? sc_add(m->f_lo, sc_mul(u[j], m->width)) : SC_ZERO;
+	out->limits |= lim;
 	out->steps = (uint8_t)steps;
-	finish(m, out);
+	return true;
+}
+
+void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
+{
+	out->limits = 0;
+	out->steps = 0;
+	bool finite = true, clip = false;
+	for (int i = 0; i < NA; i++) {
+		out->demanded[i] = demand[i];
+		finite = finite && sc_isfinite(demand[i]);
+	}
+	if (!finite) {
+		for (int j = 0; j < NR; j++)
+			out->f_n[j] = SC_ZERO;
+		out->limits = MIXER_LIMIT_BAD_INPUT;
+	} else {
+		/* 1. eq. (15) */
+		bool inside = true;
+		for (int j = 0; j < NR; j++) {
+			out->f_n[j] = dot4(m->pinv[j], demand);
+			if (!(m->present & (1u << j)))
+				out->f_n[j] = SC_ZERO;
+			else if (out->f_n[j] < m->f_lo || out->f_n[j] > m->f_hi)
+				inside = false;
+		}
+		/* 3. by mode; PRIORITY with the allocator unavailable (or unusable) clips */
+		if (!inside) {
+			clip = m->p.mode != MIXER_MODE_PRIORITY;
+			if (!clip && !(m->alloc_ok && priority(m, demand, out))) {
+				out->limits |= MIXER_LIMIT_NO_ALLOC;
+				clip = true;
+			}
+		}
+		if (clip)
+			for (int j = 0; j < NR; j++)
+				if (m->present & (1u << j))
+					out->f_n[j] = mclamp(out->f_n[j], m->f_lo, m->f_hi);
+	}
+
+	/* out->f_n holds u: the achieved wrench and the bound flags from it, then f_j = scale_j u_j */
+	wrench_u(m, out->f_n, out->achieved);
+	unsigned at_min = 0, at_max = 0;
+	/* a rotor within 4 inner margins of a bound counts as at the bound */
+	const scalar_t at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
+	for (int j = 0; j < NR; j++) {
+		if (m->present & (1u << j)) {
+			if (out->f_n[j] <= sc_add(m->f_lo, at_tol))
+				at_min |= 1u << j;
+			if (out->f_n[j] >= sc_sub(m->f_hi, at_tol))
+				at_max |= 1u << j;
+		}
+		out->f_n[j] = sc_mul(out->f_n[j], m->p.scale[j]);
+	}
+	out->rotor_at_min = (uint8_t)at_min;
+	out->rotor_at_max = (uint8_t)at_max;
+	if (at_min)
+		out->limits |= MIXER_LIMIT_ROTOR_MIN;
+	if (at_max)
+		out->limits |= MIXER_LIMIT_ROTOR_MAX;
+	/* clipping: flags of axes whose achieved value differs from the demand by more than the
+	 * margin times the physical wrench per unit of scaled wrench */
+	for (int i = 0; clip && i < NA; i++) {
+		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
+		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
+			out->limits |= axis_limit[i];
+	}
 }
 
 void mixer_shortfall(const struct mixer_output *out, uint8_t *short_pos, uint8_t *short_neg)

@@ -156,34 +156,36 @@ struct mixer_design {
 	uint8_t n_null;
 };
 
-/* What the 90 Hz path reads (and the parameters, to see what changed): the caller keeps it. */
+/* What the 90 Hz path reads (and the parameters, to see what changed): the caller keeps it.
+ * The small fields come first: short load offsets on Thumb (bytes within 31, words within
+ * 124 of the start), which keeps the allocator's code small on Cortex-M0. */
 struct mixer {
-	struct mixer_params p;         /* copy (custom_gamma set to NULL after copying; scale as
-					* used: 0 replaced by 1, clamped) */
-
-	/* hot-path data, scalar_t; everything of the allocation is in u (f_j / scale_j) */
-	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES];  /* (Gamma S)^+ (physical wrench -> u) */
-	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma S, entries in [-1, 1] */
-	scalar_t row_max[MIXER_N_AXES];    /* max_j |Gamma_ij|: pinv times it (column i) is the
-					    * pseudo-inverse in the scaled space */
-	scalar_t row_div[MIXER_N_AXES];    /* 1 / max_j |Gamma_ij| */
-	scalar_t width;                    /* f_hi - f_lo (physical wrench per unit of scaled
-					    * wrench: width row_max) */
-	scalar_t w_lo[MIXER_N_AXES];       /* physical wrench with every present rotor at u = f_lo */
-	scalar_t f_lo, f_hi;               /* box of u, N (rotor j's thrust: scale_j times it) */
 	uint8_t rank;
 	uint8_t n_active;
 	uint8_t present;                   /* bit j: rotor j+1 has a nonzero column */
-	uint8_t order[MIXER_N_ROTORS];     /* present rotors; the last 4 are independent */
+	uint8_t n_facets;
 	bool alloc_ok;
 	bool custom;                       /* built from custom_gamma */
-	uint8_t n_facets;
+	uint8_t order[MIXER_N_ROTORS];     /* present rotors; the last 4 are independent */
 	/* the preimage's steps 0..n_active-5 (at most 4): facets of the suffix set after each */
 	uint8_t sub_n[MIXER_N_ROTORS - 4];
 	uint8_t sub_first[MIXER_N_ROTORS - 4];
+
+	/* hot-path data, scalar_t; everything of the allocation is in u (f_j / scale_j) */
+	scalar_t f_lo, f_hi;               /* box of u, N (rotor j's thrust: scale_j times it) */
+	scalar_t width;                    /* f_hi - f_lo (physical wrench per unit of scaled
+					    * wrench: width row_max) */
+	scalar_t row_max[MIXER_N_AXES];    /* max_j |Gamma_ij|: pinv times it (column i) is the
+					    * pseudo-inverse in the scaled space */
+	scalar_t row_div[MIXER_N_AXES];    /* 1 / max_j |Gamma_ij| */
+	scalar_t w_lo[MIXER_N_AXES];       /* physical wrench with every present rotor at u = f_lo */
+	struct mixer_params p;         /* copy (custom_gamma set to NULL after copying; scale as
+					* used: 0 replaced by 1, clamped) */
+	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES];  /* (Gamma S)^+ (physical wrench -> u) */
+	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma S, entries in [-1, 1] */
+	scalar_t tail_inv[4][MIXER_N_AXES]; /* inverse of the last 4 scaled columns */
 	struct mixer_facet facet[MIXER_MAX_FACETS];
 	struct mixer_subfacet sub[MIXER_MAX_SUB_FACETS];
-	scalar_t tail_inv[4][MIXER_N_AXES]; /* inverse of the last 4 scaled columns */
 };
 
 struct mixer_output {

@@ -10,24 +10,23 @@
 
 /* ================================================================ set-up (float32) */
 
-static float absf(float x) { return x < 0.0f ? -x : x; }
+/* |x|: the sign bit cleared (no soft-float compare on cores without FPU) */
+static float absf(float x) { return fabsf(x); }
 
-/* One-sided Jacobi SVD of A (8x4, columns orthogonalised in place): A V = U S.
- * On return a[][k] = U_k s_k, v = V, s = column norms. At most 40 sweeps. */
-static void jacobi_svd(float a[NR][NA], float v[NA][NA], float s[NA])
+/* One-sided Jacobi SVD of A (8x4, rows 0..7 of av, columns orthogonalised in place):
+ * A V = U S, V in rows 8..11 of av (rotated with A; the caller sets them to I4).
+ * On return av[0..7][k] = U_k s_k, av[8..11] = V, s = column norms. At most 40 sweeps. */
+static void jacobi_svd(float av[NR + NA][NA], float s[NA])
 {
-	for (int i = 0; i < NA; i++)
-		for (int j = 0; j < NA; j++)
-			v[i][j] = i == j ? 1.0f : 0.0f;
 	for (int sweep = 0; sweep < 40; sweep++) {
 		int rotated = 0;
 		for (int p = 0; p < NA - 1; p++) {
 			for (int q = p + 1; q < NA; q++) {
 				float al = 0.0f, be = 0.0f, ga = 0.0f;
 				for (int i = 0; i < NR; i++) {
-					al += a[i][p] * a[i][p];
-					be += a[i][q] * a[i][q];
-					ga += a[i][p] * a[i][q];
+					al += av[i][p] * av[i][p];
+					be += av[i][q] * av[i][q];
+					ga += av[i][p] * av[i][q];
 				}
 				if (al <= 0.0f || be <= 0.0f || absf(ga) <= 1e-7f * sqrtf(al * be))
 					continue;
@@ -35,15 +34,10 @@ static void jacobi_svd(float a[NR][NA], float v[NA][NA], float s[NA])
 				float zeta = (be - al) / (2.0f * ga);
 				float t = (zeta >= 0.0f ? 1.0f : -1.0f) / (absf(zeta) + sqrtf(1.0f + zeta * zeta));
 				float c = 1.0f / sqrtf(1.0f + t * t), sn = c * t;
-				for (int i = 0; i < NR; i++) {
-					float x = a[i][p], y = a[i][q];
-					a[i][p] = c * x - sn * y;
-					a[i][q] = sn * x + c * y;
-				}
-				for (int i = 0; i < NA; i++) {
-					float x = v[i][p], y = v[i][q];
-					v[i][p] = c * x - sn * y;
-					v[i][q] = sn * x + c * y;
+				for (int i = 0; i < NR + NA; i++) {
+					float x = av[i][p], y = av[i][q];
+					av[i][p] = c * x - sn * y;
+					av[i][q] = sn * x + c * y;
 				}
 			}
 		}
@@ -53,7 +47,7 @@ static void jacobi_svd(float a[NR][NA], float v[NA][NA], float s[NA])
 	for (int k = 0; k < NA; k++) {
 		float n2 = 0.0f;
 		for (int i = 0; i < NR; i++)
-			n2 += a[i][k] * a[i][k];
+			n2 += av[i][k] * av[i][k];
 		s[k] = sqrtf(n2);
 	}
 }
@@ -62,11 +56,13 @@ static void jacobi_svd(float a[NR][NA], float v[NA][NA], float s[NA])
 static float inv4(const float m[4][4], float out[4][4])
 {
 	float a[4][8];
-	for (int i = 0; i < 4; i++)
+	for (int i = 0; i < 4; i++) {
 		for (int j = 0; j < 4; j++) {
 			a[i][j] = m[i][j];
-			a[i][4 + j] = i == j ? 1.0f : 0.0f;
+			a[i][4 + j] = 0.0f;
 		}
+		a[i][4 + i] = 1.0f;
+	}
 	float det = 1.0f;
 	for (int c = 0; c < 4; c++) {
 		int piv = c;
@@ -99,29 +95,23 @@ static float inv4(const float m[4][4], float out[4][4])
 	return absf(det);
 }
 
-static float det3(float a0, float a1, float a2, float b0, float b1, float b2, float c0, float c1, float c2)
-{
-	return a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0);
-}
-
-/* unit normal to three 4-vectors (generalised cross product); false if they are dependent */
+/* unit normal to three 4-vectors, columns a, b, c of g (generalised cross product: n_k is
+ * (-1)^k times the 3x3 minor without component k, expanded along a's components over the
+ * 2x2 minors of b and c); false if they are dependent */
 static bool normal3(const float g[NA][NR], int a, int b, int c, float n[NA])
 {
-	float r[3][NA];
-	for (int i = 0; i < NA; i++) {
-		r[0][i] = g[i][a];
-		r[1][i] = g[i][b];
-		r[2][i] = g[i][c];
-	}
+	float mnr[NA][NA]; /* mnr[x][y], x < y: b_x c_y - b_y c_x */
+	for (int x = 0; x < NA; x++)
+		for (int y = x + 1; y < NA; y++)
+			mnr[x][y] = g[x][b] * g[y][c] - g[y][b] * g[x][c];
 	float nn = 0.0f;
 	for (int k = 0; k < NA; k++) {
 		int col[3], m = 0;
 		for (int j = 0; j < NA; j++)
 			if (j != k)
 				col[m++] = j;
-		float d = det3(r[0][col[0]], r[0][col[1]], r[0][col[2]],
-			       r[1][col[0]], r[1][col[1]], r[1][col[2]],
-			       r[2][col[0]], r[2][col[1]], r[2][col[2]]);
+		const int x = col[0], y = col[1], z = col[2];
+		float d = g[x][a] * mnr[y][z] - g[y][a] * mnr[x][z] + g[z][a] * mnr[x][y];
 		n[k] = (k & 1) ? -d : d;
 		nn += n[k] * n[k];
 	}
@@ -169,20 +159,16 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 					nc += 0.5f * d;
 					h += 0.5f * absf(d);
 				}
-				for (int i = 0; i < NA; i++)
+				/* to the attainable set's facets or to a preimage step's */
+				scalar_t *on = out ? out[nf].n : out_sub[nf].n;
+				scalar_t *onc = out ? &out[nf].nc : &out_sub[nf].nc;
+				scalar_t *oh = out ? &out[nf].h : &out_sub[nf].h;
+				for (int i = 0; i < NA; i++) {
 					seen[nf][i] = n[i];
-				if (out_sub) { /* a preimage step's facet: no reciprocals */
-					for (int i = 0; i < NA; i++)
-						out_sub[nf].n[i] = sc_from_float(n[i]);
-					out_sub[nf].nc = sc_from_float(nc);
-					out_sub[nf].h = sc_from_float(h);
-					nf++;
-					continue;
+					on[i] = sc_from_float(n[i]);
 				}
-				for (int i = 0; i < NA; i++)
-					out[nf].n[i] = sc_from_float(n[i]);
-				out[nf].nc = sc_from_float(nc);
-				out[nf].h = sc_from_float(h);
+				*onc = sc_from_float(nc);
+				*oh = sc_from_float(h);
 				nf++;
 			}
 	return nf;
@@ -202,7 +188,11 @@ void mixer_default_params(struct mixer_params *p)
 	*p = d;
 }
 
-/* an effectiveness as used: 0 (not given) is 1, others clamped to [0.1, 4] */
+/* an effectiveness as used: 0 (not given) is 1, others clamped to [0.1, 4]; out of line
+ * (three callers): less flash */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
 static scalar_t scale_used(scalar_t s)
 {
 	return s == SC_ZERO ? SC(1) : sc_clamp(s, SC(0.1), SC(4));
@@ -234,20 +224,17 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 			m->gamma_f[3][j] = (j & 1) ? -k : k;
 		}
 	}
-	/* effectiveness: columns scaled (the allocation's variable is u_j = f_j / scale_j) */
+	/* effectiveness: columns scaled (the allocation's variable is u_j = f_j / scale_j); a
+	 * removed rotor (or a NaN thrust entry) is a zero column, other non-finite entries 0 */
 	for (int j = 0; j < NR; j++) {
 		float sj = scale_of(p, j);
 		for (int i = 0; i < NA; i++)
 			m->gamma_f[i][j] *= sj;
+		bool gone = !(p->rotor_mask & (1u << j)) || !(m->gamma_f[0][j] == m->gamma_f[0][j]);
+		for (int i = 0; i < NA; i++)
+			if (gone || !isfinite(m->gamma_f[i][j]))
+				m->gamma_f[i][j] = 0.0f;
 	}
-	for (int j = 0; j < NR; j++)
-		if (!(p->rotor_mask & (1u << j)) || !(m->gamma_f[0][j] == m->gamma_f[0][j]))
-			for (int i = 0; i < NA; i++)
-				m->gamma_f[i][j] = 0.0f;
-	for (int i = 0; i < NA; i++)
-		for (int j = 0; j < NR; j++)
-			if (!isfinite(m->gamma_f[i][j]))
-				m->gamma_f[i][j] = 0.0f;
 }
 
 bool mixer_init(struct mixer *m, const struct mixer_params *p)
@@ -272,11 +259,13 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		m->p.scale[j] = scale_used(p->scale[j]);
 
 	/* ---- pseudo-inverse by one-sided Jacobi SVD of Gamma^T */
-	float a[NR][NA], v[NA][NA], s[NA];
-	for (int j = 0; j < NR; j++)
+	float a[NR + NA][NA], s[NA]; /* Gamma^T, then I4 for V */
+	for (int j = 0; j < NR + NA; j++)
 		for (int i = 0; i < NA; i++)
-			a[j][i] = dz->gamma_f[i][j];
-	jacobi_svd(a, v, s);
+			a[j][i] = j < NR ? dz->gamma_f[i][j] : 0.0f;
+	for (int i = 0; i < NA; i++)
+		a[NR + i][i] = 1.0f;
+	jacobi_svd(a, s);
 	int idx[NA] = { 0, 1, 2, 3 };
 	for (int i = 0; i < NA; i++) /* sort by singular value, descending */
 		for (int j = i + 1; j < NA; j++)
@@ -286,18 +275,18 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 				idx[j] = t;
 			}
 	float smax = s[idx[0]];
-	float ucol[NR][NA];
+	float basis[NR][NR]; /* columns: the left singular vectors, then the null space */
 	int rank = 0;
 	for (int k = 0; k < NA; k++) {
 		int c = idx[k];
 		dz->sigma_f[k] = s[c];
 		if (smax > 0.0f && s[c] > 1e-5f * smax) {
 			for (int j = 0; j < NR; j++)
-				ucol[j][rank] = a[j][c] / s[c];
+				basis[j][rank] = a[j][c] / s[c];
 			/* pinv += u_k (1/s_k) v_k^T */
 			for (int j = 0; j < NR; j++)
 				for (int i = 0; i < NA; i++)
-					dz->pinv_f[j][i] += ucol[j][rank] / s[c] * v[i][c];
+					dz->pinv_f[j][i] += basis[j][rank] / s[c] * a[NR + i][c];
 			rank++;
 		}
 	}
@@ -306,39 +295,37 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	/* two Newton-Schulz steps P <- 2P - P Gamma P (converge to the Moore-Penrose inverse,
 	 * also when rank-deficient) polish the float32 SVD result */
 	for (int it = 0; it < 2; it++) {
-		float gp[NA][NA], np[NR][NA];
+		float e[NA][NA]; /* I - Gamma P */
 		for (int i = 0; i < NA; i++)
 			for (int k = 0; k < NA; k++) {
 				float acc = 0.0f;
 				for (int j = 0; j < NR; j++)
 					acc += dz->gamma_f[i][j] * dz->pinv_f[j][k];
-				gp[i][k] = acc;
+				e[i][k] = (i == k ? 1.0f : 0.0f) - acc;
 			}
-		for (int j = 0; j < NR; j++)
+		for (int j = 0; j < NR; j++) { /* row j of P + P (I - Gamma P) reads only row j of P */
+			float np[NA];
 			for (int k = 0; k < NA; k++) {
-				float acc = 0.0f; /* (P (I - Gamma P))_jk, then P + that */
+				float acc = 0.0f;
 				for (int i = 0; i < NA; i++)
-					acc += dz->pinv_f[j][i] * ((i == k ? 1.0f : 0.0f) - gp[i][k]);
-				np[j][k] = dz->pinv_f[j][k] + acc;
+					acc += dz->pinv_f[j][i] * e[i][k];
+				np[k] = dz->pinv_f[j][k] + acc;
 			}
-		for (int j = 0; j < NR; j++)
 			for (int k = 0; k < NA; k++)
-				dz->pinv_f[j][k] = np[j][k];
+				dz->pinv_f[j][k] = np[k];
+		}
 	}
 
-	/* ---- null space: complete the row space of Gamma (ucol) with unit vectors, Gram-Schmidt */
-	float basis[NR][NR];
-	int nb = 0;
-	for (int k = 0; k < rank; k++)
-		for (int j = 0; j < NR; j++)
-			basis[j][k] = ucol[j][k];
-	nb = rank;
+	/* ---- null space: complete the row space of Gamma (basis 0..rank-1) with unit vectors,
+	 * Gram-Schmidt */
+	int nb = rank;
 	while (nb < NR) {
 		float best[NR] = { 0 }, bestn = -1.0f;
 		for (int e = 0; e < NR; e++) {
 			float x[NR];
 			for (int j = 0; j < NR; j++)
-				x[j] = j == e ? 1.0f : 0.0f;
+				x[j] = 0.0f;
+			x[e] = 1.0f;
 			for (int pass = 0; pass < 2; pass++)
 				for (int k = 0; k < nb; k++) {
 					float d = 0.0f;
