@@ -84,6 +84,15 @@ def port():
     return free_port
 
 
+def draw_inertia(draw):
+    """Principal moments from draw() until they obey the triangle inequality (each at most the
+    sum of the other two): octo-sim and octo-sil refuse a body that does not."""
+    while True:
+        inertia = draw()
+        if all(2 * x <= sum(inertia) for x in inertia):
+            return inertia
+
+
 def wait_until(pred, timeout=5.0, step=0.01):
     """Poll pred() until it is true or `timeout` s pass; returns its last value."""
     deadline = time.monotonic() + timeout

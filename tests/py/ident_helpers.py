@@ -12,6 +12,7 @@ import json
 import math
 import time
 
+from conftest import draw_inertia
 from test_fw_rig import Rig, mavlink, read_log, tilt_deg
 
 PAPER = dict(mass=2.132, kf=28.0269, ktau=0.3869, inertia=[0.0628, 0.0762, 0.1014])
@@ -22,10 +23,7 @@ MAV_CMD_USER_1 = 31010
 def random_vehicle(rng):
     """Truth within +/-30 % of the paper's values (mass kept: it is a known parameter)."""
     v = dict(kf=PAPER["kf"] * rng.uniform(0.7, 1.3), ktau=PAPER["ktau"] * rng.uniform(0.7, 1.3))
-    while True:  # a body's moments obey the triangle inequality (octo-sim refuses others)
-        inertia = [i * rng.uniform(0.7, 1.3) for i in PAPER["inertia"]]
-        if all(2 * x <= sum(inertia) for x in inertia):
-            return dict(v, inertia=inertia)
+    return dict(v, inertia=draw_inertia(lambda: [i * rng.uniform(0.7, 1.3) for i in PAPER["inertia"]]))
 
 
 class IdentFlight:

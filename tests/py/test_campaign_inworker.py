@@ -15,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+from conftest import draw_inertia
 from octo_gcs import campaign
 
 REPO = Path(__file__).resolve().parents[2]
@@ -36,7 +37,8 @@ def test_in_worker_and_subprocess_give_the_same_report():
     rng = random.Random()
     seed = rng.randrange(1, 10_000)
     vehicle = {"kf": rng.uniform(22.0, 34.0), "mass": rng.uniform(1.5, 3.0),
-               "inertia": [rng.uniform(0.05, 0.08), rng.uniform(0.06, 0.09), rng.uniform(0.08, 0.12)]}
+               "inertia": draw_inertia(lambda: [rng.uniform(0.05, 0.08), rng.uniform(0.06, 0.09),
+                                                rng.uniform(0.08, 0.12)])}
     faults = ["--drop", "0.01"] if rng.random() < 0.5 else []
     params = {"ID_INR_TIME": float(rng.choice([15, 20]))}
     info = f"seed {seed}, vehicle {vehicle}, faults {faults}"

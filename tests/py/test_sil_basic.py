@@ -12,7 +12,7 @@ import subprocess
 
 import pytest
 
-from conftest import binary
+from conftest import binary, draw_inertia
 
 # the rotor experiment alone accepts k_f only with the motor lag known (ID_MOT_TAU)
 ID_MISSION = ("param VEH_MASS {mass}; param VEH_ARM_L {arm}; param ID_MOT_TAU {tau}; arm; takeoff 5; wait hold; "
@@ -23,8 +23,8 @@ HOVER_MISSION = "arm; takeoff 5; wait hold; sleep 5; land; wait disarmed"
 def random_vehicle(rng):
     return {"mass": round(rng.uniform(1.6, 2.6), 3), "arm_length": round(rng.uniform(0.3, 0.4), 3),
             "kf": round(rng.uniform(24.0, 32.0), 3), "ktau": round(rng.uniform(0.32, 0.45), 4),
-            "inertia": [round(rng.uniform(0.05, 0.08), 4), round(rng.uniform(0.06, 0.09), 4),
-                        round(rng.uniform(0.08, 0.12), 4)],
+            "inertia": draw_inertia(lambda: [round(rng.uniform(0.05, 0.08), 4), round(rng.uniform(0.06, 0.09), 4),
+                                             round(rng.uniform(0.08, 0.12), 4)]),
             "motor_tau": round(rng.uniform(0.02, 0.05), 3)}
 
 

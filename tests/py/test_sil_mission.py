@@ -16,7 +16,7 @@ import sys
 
 import pytest
 
-from conftest import BUILD, REPO
+from conftest import BUILD, REPO, draw_inertia
 
 GCS = REPO / ".venv" / "bin" / "octo-gcs"
 PAPER = {"mass": 2.132, "arm_length": 0.35, "kf": 28.0269, "ktau": 0.3869}
@@ -26,7 +26,7 @@ ESTIMATES = ("kf", "ktau", "ixx", "iyy", "izz")
 
 def random_vehicle(rng):
     v = {k: round(x * rng.uniform(0.7, 1.3), 6) for k, x in PAPER.items()}
-    v["inertia"] = [round(x * rng.uniform(0.7, 1.3), 6) for x in INERTIA]
+    v["inertia"] = draw_inertia(lambda: [round(x * rng.uniform(0.7, 1.3), 6) for x in INERTIA])
     return v
 
 
