@@ -7,7 +7,7 @@ import struct
 import subprocess
 import time
 
-from conftest import binary
+from conftest import binary, free_port
 from test_fw_rig import Rig, mavlink
 
 
@@ -51,6 +51,25 @@ def test_bad_flags_exit_2_naming_the_flag():
         r = subprocess.run([fw, *argv], capture_output=True, text=True, timeout=10)
         assert r.returncode == 2, (argv, r.stderr)
         assert needle in r.stderr
+
+
+def test_second_fw_on_a_taken_xplane_port_is_refused(tmp_path):
+    # two vehicles must never share the X-Plane port (each would fly on the other's frames)
+    fw, xp, mav = binary("octo-fw"), free_port(), free_port()
+    first = subprocess.Popen([fw, "--xp-listen", str(xp), "--mavlink-listen", str(mav),
+                              "--params", str(tmp_path / "a.parm")],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 10
+        while "flying X-Plane" not in (first.stderr.readline() or "") and time.monotonic() < deadline:
+            assert first.poll() is None
+        r = subprocess.run([fw, "--xp-listen", str(xp), "--mavlink-listen", str(free_port()),
+                            "--params", str(tmp_path / "b.parm")], capture_output=True, text=True, timeout=10)
+        assert r.returncode == 1, r.stderr
+        assert f"cannot bind X-Plane port {xp}" in r.stderr, r.stderr
+    finally:
+        first.terminate()
+        first.wait(timeout=10)
 
 
 # ---------------------------------------------------------------- parameters

@@ -74,8 +74,9 @@ int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct socka
 		perror("octo-fw: X-Plane socket");
 		return -1;
 	}
-	int one = 1;
-	(void)setsockopt(c->fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+	/* no SO_REUSEADDR: with it a second process binds the same UDP port without an error
+	 * and the kernel hands the frames to one of the two, so two vehicles on one port would
+	 * fly on each other's frames; this way the second is refused at start, saying why */
 	struct sockaddr_in a;
 	memset(&a, 0, sizeof a);
 	a.sin_family = AF_INET;
