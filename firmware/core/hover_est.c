@@ -5,8 +5,6 @@
 
 #define P_MAX_PCT2 SC(10000.0) /* sd 100 %: what the filter starts from at most */
 
-static const struct sc_recip r_100 = SC_RECIP_100; /* percent to fraction */
-
 struct hover_est_params hover_est_params_default(void)
 {
 	struct hover_est_params p;
@@ -134,7 +132,7 @@ bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t
 	/* two quotients by P + r: its reciprocal prepared once */
 	struct sc_gain inv_pr = sc_gain_recip2(pr, SC(1.0));
 	scalar_t k = sc_mul_gain(s->p_pct2, &inv_pr);
-	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), sc_mul(k, sc_div_r(e_pct, &r_100))));
+	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), sc_mul(k, sc_div_int(e_pct, 100u))));
 	s->theta = clamp_theta(s, th);
 	s->p_pct2 = sc_max(sc_mul_gain(sc_mul(s->p_pct2, r), &inv_pr), SC_EPS);
 	s->updates++;

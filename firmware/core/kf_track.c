@@ -3,8 +3,6 @@
 
 #include "scalar_ops.h"
 
-static const struct sc_recip r_three = SC_RECIP_3;
-
 struct kf_track_params kf_track_params_default(void)
 {
 	struct kf_track_params p;
@@ -53,7 +51,7 @@ static scalar_t cbrt_warm(scalar_t x, scalar_t guess)
 {
 	scalar_t r = guess > SC_ZERO ? guess : SC(1.0);
 	for (int i = 0; i < 6; i++) {
-		scalar_t n = sc_div_r(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), &r_three);
+		scalar_t n = sc_div_int(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), 3u);
 		bool done = sc_abs(sc_sub(n, r)) <= SC_EPS;
 		r = n;
 		if (done)

@@ -39,11 +39,6 @@ static inline scalar_t sc_div_r(scalar_t a, const struct sc_recip *r)
 	uint32_t ub = r->b < 0 ? 0u - (uint32_t)r->b : (uint32_t)r->b;
 	return sc_div_prepared(a, r->b, ub, (int)(r->ys & SC_RECIP_SMASK), r->ys & ~SC_RECIP_SMASK);
 }
-
-/* Prepared reciprocals of constants, as initialisers of a const struct sc_recip (sc_recip_of
- * of the same divisor gives these; tests/core checks it) */
-#define SC_RECIP_3   { SC(3.0), 0xaaaaaaaeu }   /* y 0xaaaaaaa0, s 14 */
-#define SC_RECIP_100 { SC(100.0), 0xa3d70a29u } /* y 0xa3d70a20, s 9 */
 #else
 struct sc_recip {
 	scalar_t b;
@@ -56,9 +51,6 @@ static inline struct sc_recip sc_recip_of(scalar_t b)
 }
 
 static inline scalar_t sc_div_r(scalar_t a, const struct sc_recip *r) { return sc_div(a, r->b); }
-
-#define SC_RECIP_3   { SC(3.0) }
-#define SC_RECIP_100 { SC(100.0) }
 #endif
 
 #endif /* OCTO_SC_RECIP_H */

@@ -66,22 +66,3 @@ UNIT_TEST(sc_recip_div_large_quotients)
 	(void)u;   /* the float build's quotients are the IEEE ones: nothing prepared */
 #endif
 }
-
-/* the constants' prepared reciprocals are sc_recip_of's, and divide as sc_div */
-UNIT_TEST(sc_recip_constants)
-{
-	const struct sc_recip c[2] = { SC_RECIP_3, SC_RECIP_100 };
-	const scalar_t b[2] = { SC(3.0), SC(100.0) };
-	struct unit_rng g = { 0x3100ULL };
-	for (int k = 0; k < 2; k++) {
-		struct sc_recip r = sc_recip_of(b[k]);
-		CHECK(c[k].b == r.b);
-#if OCTO_FIXED
-		CHECK(c[k].ys == r.ys);
-#endif
-		for (int i = 0; i < 2000; i++) {
-			scalar_t a = sc_from_float((float)unit_rand_uniform(&g, -32767.0, 32767.0));
-			CHECK(sc_div_r(a, &c[k]) == sc_div(a, b[k]));
-		}
-	}
-}
