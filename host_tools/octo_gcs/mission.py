@@ -22,6 +22,7 @@ waits name the phase and the limit.
 
 import json
 import os
+import re
 import shutil
 import sys
 import time
@@ -34,6 +35,9 @@ from .progress import Progress
 
 TAKEOFF_M = 10.0
 SEV_ERROR = 3   # STATUSTEXT severity ERROR (MAV_SEVERITY_ERROR: the syslog levels)
+# octo-fw's and octo-sim's words when a UDP port they were given is bound by another program
+PORT_TAKEN_RE = re.compile(r"cannot bind .*Address already in use")
+PORT_ATTEMPTS = 4
 OUTPUTS = ("report.md", "report.json", "params.parm", "truth.lcm", "fw.lcm", "octo-sim.log", "octo-fw.log", "octo-sil.log",
            "fig5_excitation.png", "fig6_validation.png", "fig7_rates.png", "convergence.png")
 
@@ -55,6 +59,10 @@ def _param_options(items):
         except ValueError:
             raise GcsError(f"--param {item!r}: expected NAME=VALUE, e.g. ID_INR_TIME=20") from None
     return out
+
+
+class PortTaken(GcsError):
+    """octo-sim or octo-fw exited at start: a UDP port it was given was bound meanwhile."""
 
 
 class Mission:
@@ -126,20 +134,50 @@ class Mission:
         procs.stop_all([self.fw, self.sim])
 
     # ------------------------------------------------------------ the flight
-    def fly(self, veh, experiments, stage):
-        """Everything over MAVLink; returns (params before, params after, texts)."""
-        a, say = self.args, self.prog.say
-        v = self.vehicle
-        t0 = time.monotonic()
+    def wait_up(self):
+        """Until octo-fw's first heartbeat. A program that dies at start is reported at once,
+        with its output; one that could not bind its UDP port raises PortTaken."""
         deadline = time.monotonic() + 10.0
-        while True:   # a program that dies at start is reported at once, with its output
-            self._alive()
+        while True:
             try:
-                v.wait_heartbeat(timeout=0.2)
-                break
+                self._alive()
+            except GcsError as e:
+                if PORT_TAKEN_RE.search(str(e)):
+                    raise PortTaken(str(e)) from None
+                raise
+            try:
+                self.vehicle.wait_heartbeat(timeout=0.2)
+                return
             except GcsError:
                 if time.monotonic() > deadline:
                     raise GcsError("no heartbeat from octo-fw after 10 s:\n" + self.fw.tail()) from None
+
+    def start_up(self, build, vehicle_file, stage):
+        """Starts octo-sim and octo-fw on free UDP ports and waits for the vehicle. A port is
+        chosen free, then bound by the child a moment later: another program can take it in
+        between (two missions starting together). Such a start is retried on fresh ports,
+        up to PORT_ATTEMPTS times, and said; any other failure is not retried."""
+        gcs_port = self.vehicle.conn.port.getsockname()[1]
+        for attempt in range(1, PORT_ATTEMPTS + 1):
+            ports = (procs.free_udp_port(), procs.free_udp_port(), procs.free_udp_port(), gcs_port)
+            self.start(build, vehicle_file, ports, stage)
+            try:
+                self.wait_up()
+                return
+            except PortTaken as e:
+                self.stop()
+                if attempt == PORT_ATTEMPTS:
+                    raise GcsError(f"{e}\n(a UDP port was taken at start {PORT_ATTEMPTS} times "
+                                   "in a row: is something binding many ports on 127.0.0.1?)") from None
+                first = str(e).splitlines()[-1].strip()
+                self.prog.say(f"start-up: a UDP port was taken before a program bound it ({first}); "
+                              f"retrying on fresh ports ({attempt + 1} of {PORT_ATTEMPTS})")
+
+    def fly(self, veh, experiments, stage):
+        """Everything over MAVLink after start_up; returns (params before, params after)."""
+        a, say = self.args, self.prog.say
+        v = self.vehicle
+        t0 = time.monotonic()
         from .flight import Flight
         fl = Flight(v, alive=self._alive)
         nominal = v.fetch_params()
@@ -253,9 +291,7 @@ def run(args):
             try:
                 from .link import Vehicle
                 m.vehicle = Vehicle("udpin:127.0.0.1:0", timeout=args.timeout)
-                gcs_port = m.vehicle.conn.port.getsockname()[1]
-                ports = (procs.free_udp_port(), procs.free_udp_port(), procs.free_udp_port(), gcs_port)
-                m.start(build, args.vehicle, ports, stage)
+                m.start_up(build, args.vehicle, stage)
                 nominal, after = m.fly(veh, experiments, stage)
             except GcsError as e:
                 m.failure = str(e)

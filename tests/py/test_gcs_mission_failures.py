@@ -153,3 +153,59 @@ def test_in_process_mission_without_experiments(tmp_path):
     assert r.returncode == 0, r.stdout + r.stderr
     rep = json.loads((out / "report.json").read_text())
     assert rep["pass"] and (out / "params.parm").exists() and not (out / "failed-run").exists()
+
+
+def test_a_port_taken_at_start_is_retried_on_fresh_ports(tmp_path, monkeypatch, capsys):
+    """A port chosen free can be bound by another program before octo-sim or octo-fw binds it
+    (two missions starting together): the mission says so and starts again on fresh ports.
+    The first port handed out here is held by the test, so the first start must fail."""
+    import socket
+
+    from octo_gcs import cli, procs
+
+    monkeypatch.setenv("OCTO_BUILD", str(BUILD))
+    held = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    held.bind(("127.0.0.1", 0))
+    taken = held.getsockname()[1]
+    real, calls = procs.free_udp_port, []
+
+    def first_taken():
+        calls.append(1)
+        return taken if len(calls) == 1 else real()
+
+    monkeypatch.setattr(procs, "free_udp_port", first_taken)
+    out = tmp_path / "out"
+    try:
+        rc = cli.main(["mission", "--experiments", "none", "--seed", str(random.randint(1, 999)),
+                       "--no-plots", "--out", str(out)])
+    finally:
+        held.close()
+    said = capsys.readouterr()
+    assert rc == 0, said.out + said.err
+    assert re.search(rf"a UDP port was taken before a program bound it \(.*{taken}.*\); "
+                     r"retrying on fresh ports \(2 of 4\)", said.out + said.err), said.out + said.err
+    assert len(calls) == 6 and (out / "report.json").exists()
+
+
+def test_a_port_always_taken_at_start_fails_with_the_reason(tmp_path, monkeypatch, capsys):
+    """Every start finds its port taken: after PORT_ATTEMPTS starts the mission fails, naming
+    the port and the program that could not bind it."""
+    import socket
+
+    from octo_gcs import cli, mission, procs
+
+    monkeypatch.setenv("OCTO_BUILD", str(BUILD))
+    held = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    held.bind(("127.0.0.1", 0))
+    taken = held.getsockname()[1]
+    monkeypatch.setattr(procs, "free_udp_port", lambda: taken)
+    try:
+        rc = cli.main(["mission", "--experiments", "none", "--no-plots", "--out", str(tmp_path / "out")])
+    finally:
+        held.close()
+    err = capsys.readouterr().err
+    assert rc != 0
+    assert f"cannot bind 127.0.0.1:{taken}: Address already in use" in err, err
+    assert f"taken at start {mission.PORT_ATTEMPTS} times in a row" in err, err
+    rep = json.loads((tmp_path / "out" / "failed-run" / "report.json").read_text())
+    assert rep["failed_phase"] == "start" and "octo-sim exited with status 1" in rep["failure"]
