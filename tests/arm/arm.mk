@@ -244,7 +244,7 @@ $(2): $(3) $$(ARM_RT_OBJ_$(1)) $$(ARM_MARK_OBJ_$(1)) $(ARM_B)/$(1)/libcore.a $$(
       $$(wildcard firmware/core/*.h) tests/arm/bench_mark.h
 	@mkdir -p $$(@D)
 	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(filter-out -MMD -MP,$$(CFLAGS_FW)) $(4) $$(CORE_INC) -Itests/arm \
-	  $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -o $$@ $(3) $$(ARM_RT_OBJ_$(1)) $$(ARM_MARK_OBJ_$(1)) \
+	  $$(ARM_LDFLAGS) -T$$(ARM_LD_$(1)) -Wl,-Map,$$@.map -o $$@ $(3) $$(ARM_RT_OBJ_$(1)) $$(ARM_MARK_OBJ_$(1)) \
 	  $(ARM_B)/$(1)/libcore.a -lm
 endef
 

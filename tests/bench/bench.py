@@ -735,6 +735,22 @@ def module_sizes(lib):
     return mods
 
 
+def core_in_image(map_path):
+    """Bytes of libcore.a's code and constants that a linked image keeps (its linker map; the
+    images link with --gc-sections, so what no caller reaches is dropped): the core's share of
+    a firmware's flash, as against all of libcore.a."""
+    try:
+        text = map_path.read_text()
+    except OSError:
+        return None
+    i = text.find("Linker script and memory map")
+    if i < 0:
+        return None
+    kept = re.sub(r"^ (\.\S+)\n\s+0x", r" \1 0x", text[i:], flags=re.M)   # long names wrap
+    return sum(int(m.group(1), 16) for m in re.finditer(
+        r"^ \.(?:text|rodata|data)\S*\s+0x[0-9a-f]+\s+0x([0-9a-f]+)\s+\S*libcore\.a\(", kept, re.M))
+
+
 def core_opt(variant):
     """The core's optimisation on an ARM target: ARM_CORE_OPT_<v> of tests/arm/arm.mk, else
     the Makefile's OPT (-O2), and ARM_SETUP_OPT of its set-up objects (*_setup.o) when it
@@ -782,6 +798,12 @@ def item_memory(rep, args):
                     + (f"; linked + libgcc/libm {fmt(linked['flash'] / 1024, 1)} KB" if linked else ""),
                     "flash < 32 KB", (t + d) < 32 * 1024,
                     f"arm-none-eabi-size -t build/arm/{v}/libcore.a")
+            used = core_in_image(BB / f"step-{v}.elf.map")
+            res[v]["in_firmware"] = used
+            rep.row(3, f"  of it in the firmware image on {v} (B)", fmt(used), "",
+                    "the core functions octo-fw's app reaches (the step bench's image: the app on a "
+                    "stub HAL, --gc-sections); the rest is API that only tests call", "", None,
+                    f"linker map build/bench/step-{v}.elf.map")
             rep.row(3, f"  core RAM on {v}: globals + core state in app + in experiment (B)",
                     f"{d + b} + {ctl} + {idn}", "",
                     "largest: " + ", ".join(f"{t_} {x}" for t_, x in sorted(
