@@ -41,6 +41,23 @@
 #include "pos_ctrl.h"
 #include "thrmap.h"
 
+/* The frame's inputs as scalars: in the fixed build converted once per frame (app_on_frame)
+ * and read by the step's every part (control, k_f tracker, experiment); in the float build
+ * scalar_t is float and app_in() gives the frame itself (no copy). Fields named as in
+ * struct hal_sensor_frame, so that either serves. */
+struct app_frame_sc {
+	scalar_t q_ib[4], rate_b_rps[3], pos_i_m[3], vel_i_mps[3];
+	scalar_t rotor_thrust_n[HAL_ROTORS], rotor_torque_nm[HAL_ROTORS];
+};
+
+/* What the step reads of the parameters, as scalars: set by the parameter sync (between
+ * frames, after every parameter change), not converted per frame. */
+struct app_param_sc {
+	struct vec3 inertia_kgm2;     /* VEH_IXX, VEH_IYY, VEH_IZZ */
+	scalar_t mass_kg;             /* VEH_MASS */
+	scalar_t thr_max;             /* MOT_THR_MAX */
+};
+
 enum app_mode {
 	APP_DISARMED = 0,
 	APP_IDLE = 1,        /* armed on the ground, rotors at MOT_THR_IDLE */
@@ -72,10 +89,15 @@ struct app {
 	bool have_actuated;
 	double t_actuated;            /* plant time of the last frame answered */
 	float thr[HAL_ROTORS];
+#if OCTO_FIXED
+	struct app_frame_sc fs;       /* the frame's inputs as scalars (app_in) */
+	scalar_t thr_sc[HAL_ROTORS];  /* thr as scalars (app_thr_sc) */
+#endif
 
 	/* guidance (set points) and the position loop */
 	struct guid guid;
 	struct pos_ctrl_params pos;
+	struct app_param_sc ps;       /* parameters the step reads, as scalars */
 	float q_sp[4];
 	/* the set point's yaw and its half-angle trigonometry, kept while the yaw stays */
 	scalar_t yaw_half_of;
@@ -109,6 +131,16 @@ struct app {
 	struct app_log_frame log;
 	uint32_t steps;
 };
+
+/* The frame's inputs and the throttles sent, as scalars (see struct app_frame_sc): the
+ * converted copies in the fixed build, the floats themselves in the float build. */
+#if OCTO_FIXED
+static inline const struct app_frame_sc *app_in(const struct app *a) { return &a->fs; }
+static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr_sc; }
+#else
+static inline const struct hal_sensor_frame *app_in(const struct app *a) { return &a->fr; }
+static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr; }
+#endif
 
 void app_init(struct app *a, const struct hal *hal);
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f);

@@ -158,11 +158,15 @@ enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
 
 struct exp_input {
 	const struct hal_sensor_frame *frame;  /* this frame (paper's frames) */
+	/* this frame's measurements as scalars (converted once by the app): */
+	const scalar_t *thrust_n;              /* 8 rotor thrusts, N */
+	const scalar_t *torque_nm;             /* 8 rotor reaction torques, N m */
+	const scalar_t *rate_b_rps;            /* 3 body rates, rad/s */
 	float dt_s;                            /* time since the previous step */
 	const struct app_params *params;       /* parameters in use */
 	const float *wrench_dem;               /* [f, tau_x, tau_y, tau_z] of the hover control */
-	const float *rotor_f_cmd;              /* 8 rotor thrusts allocated last step, N */
-	const float *thr_prev;                 /* 8 throttles sent on the previous frame */
+	const scalar_t *rotor_f_cmd;           /* 8 rotor thrusts allocated last step, N */
+	const scalar_t *thr_prev;              /* 8 throttles sent on the previous frame */
 	float dt_frame_s;                      /* the plant's frame period (0: unknown, the
 						* first step's dt_s is taken) */
 };
@@ -194,10 +198,10 @@ struct exp_line {
 /* what the start of a phase needs of the step that ended the previous one (a copy: the
  * frame is gone by the time the turn runs between frames) */
 struct exp_turn {
-	float thr_prev0;                       /* rotor 1's throttle sent before that step */
-	float thr_prev_all[HAL_ROTORS];        /* every rotor's */
-	float rotor_f_cmd0;                    /* rotor 1's thrust allocated before that step */
-	float thrust_n[HAL_ROTORS], torque_nm[HAL_ROTORS], rate_b_rps[3];   /* of its frame */
+	scalar_t thr_prev0;                    /* rotor 1's throttle sent before that step */
+	scalar_t thr_prev_all[HAL_ROTORS];     /* every rotor's */
+	scalar_t rotor_f_cmd0;                 /* rotor 1's thrust allocated before that step */
+	scalar_t thrust_n[HAL_ROTORS], torque_nm[HAL_ROTORS], rate_b_rps[3];   /* of its frame */
 };
 
 /* the experiment's configuration (ID_* parameters), read once at exp_start */
