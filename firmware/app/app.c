@@ -629,17 +629,18 @@ static void control_step(struct app *a, float dt)
 	bool excited = a->mode == APP_EXPERIMENT;
 	scalar_t demand[MIXER_N_AXES] = {fz, tau.x, tau.y, tau.z};
 	if (excited) {
-		demand[0] = sc_add(demand[0], sc_from_float(a->exp_out.f_delta));
+		demand[0] = sc_add(demand[0], a->exp_out.f_delta);
 		for (int i = 0; i < 3; i++)
-			demand[i + 1] = sc_add(demand[i + 1], sc_from_float(a->exp_out.tau_delta[i]));
+			demand[i + 1] = sc_add(demand[i + 1], a->exp_out.tau_delta[i]);
 	}
 	mixer_update(&a->mix, demand, &a->mix_out);
 	scalar_t thr[HAL_ROTORS];
 	a->thr_clamped = thrmap_update(&a->map, a->mix_out.f_n, thr, HAL_ROTORS);
+	const scalar_t thr_max = a->ps.thr_max;   /* read once: the stores below are floats too */
 	for (int j = 0; j < HAL_ROTORS; j++) {
 		a->rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
-		scalar_t t = excited ? sc_add(thr[j], sc_from_float(a->exp_out.thr_delta[j])) : thr[j];
-		t = sc_clamp(sc_isfinite(t) ? t : SC_ZERO, SC_ZERO, a->ps.thr_max);
+		scalar_t t = excited ? sc_add(thr[j], a->exp_out.thr_delta[j]) : thr[j];
+		t = sc_clamp(sc_isfinite(t) ? t : SC_ZERO, SC_ZERO, thr_max);
 		a->thr[j] = sc_to_float(t);
 #if OCTO_FIXED
 		a->thr_sc[j] = t;   /* sc_from_float(thr[j]) exactly: a throttle in [0, 1] is a float */
@@ -681,7 +682,8 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	for (int i = 0; i < 3; i++)
 		l->tau_alloc[i] = sc_to_float(a->mix_out.achieved[i + 1]);
 	memcpy(l->rotor_f, a->rotor_f, sizeof l->rotor_f);
-	memcpy(l->excitation, a->exp_out.thr_delta, sizeof l->excitation);
+	for (int j = 0; j < HAL_ROTORS; j++)
+		l->excitation[j] = sc_to_float(a->exp_out.thr_delta[j]);
 	memcpy(l->throttle, a->thr, sizeof l->throttle);
 	l->att_flags = (int32_t)a->att.flags;
 	l->alt_flags = (int32_t)a->alt.flags;
@@ -788,11 +790,14 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 			}
 			dt = gap > MAX_DT_S ? MAX_DT_S : gap;
 			/* the frame period, for the experiments (a step after lost frames is a
-			 * multiple of it): a shorter step replaces it, a near one refines it */
-			if (a->have_step && (!(a->dt_frame > 0.0f) || dt < 0.75f * a->dt_frame))
-				a->dt_frame = dt;
-			else if (a->have_step && dt < 1.25f * a->dt_frame)
-				a->dt_frame += 0.02f * (dt - a->dt_frame);
+			 * multiple of it): a shorter step replaces it, a near one refines it; a step of
+			 * exactly the period known (the common case) leaves it as it is */
+			if (a->have_step && dt != a->dt_frame) {
+				if (!(a->dt_frame > 0.0f) || dt < 0.75f * a->dt_frame)
+					a->dt_frame = dt;
+				else if (dt < 1.25f * a->dt_frame)
+					a->dt_frame += 0.02f * (dt - a->dt_frame);
+			}
 			a->t_prev = f->t_s;
 			a->have_step = true;
 			/* After frames missing the controllers were out of the loop (their last

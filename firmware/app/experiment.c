@@ -306,6 +306,8 @@ static void snapshot(struct exp_turn *t, const struct exp_input *in)
 	memcpy(t->rate_b_rps, in->rate_b_rps, sizeof t->rate_b_rps);
 }
 
+static float phase_limit(const struct experiment *e, const char **name);
+
 static void phase_begin(struct experiment *e, const struct app_params *p, const struct exp_turn *in)
 {
 	const struct exp_cfg *cf = &e->cfg;
@@ -375,7 +377,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		scalar_t alpha = ident_torque_weight(sc_from_float(cf->mot_tau), dt);
 		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS),
 				   SC(INR_ZETA), dt, alpha, inertia, in->rate_b_rps, tau);
-		e->inr_u_prev = 0.0f;
+		e->inr_u_prev = SC_ZERO;
 		e->est_live = 1u << (4u + ax);
 	} else {
 		e->t_run = cf->val_time;
@@ -391,6 +393,10 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	excite_init(&e->exc, &xp);
 	/* the progress over the phase's time: products per step, no division */
 	float total = e->t_settle + e->t_run;
+	const char *lim_name;
+	e->t_total = total;
+	e->t_limit = phase_limit(e, &lim_name);
+	e->fr_dt = -1.0f;   /* no step yet */
 	e->prog_base = (float)(e->phase + (total > 0.0f ? 0 : 1)) / (float)e->n_phases;
 	e->prog_rate = total > 0.0f ? 1.0f / (total * (float)e->n_phases) : 0.0f;
 }
@@ -607,8 +613,12 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	/* frames since the last step: more than one when frames were lost on the link (the
 	 * plant then held the last throttles); the rotor and validation models advance through
 	 * the gap, the inertia filters (uniform sampling) are left GAP_HOLD frames to settle */
-	float fr = in->dt_s * e->inv_dt_nom;
-	int n = fr > 0.5f && fr < (float)FILT_DELAY_MAX + 0.5f ? (int)(fr + 0.5f) : 0;
+	if (in->dt_s != e->fr_dt) {   /* the same period as the last step: the same count */
+		float fr = in->dt_s * e->inv_dt_nom;
+		e->fr_n = fr > 0.5f && fr < (float)FILT_DELAY_MAX + 0.5f ? (int)(fr + 0.5f) : 0;
+		e->fr_dt = in->dt_s;
+	}
+	int n = e->fr_n;
 	if (n != 1)
 		e->gap_hold = GAP_HOLD;
 	else if (e->gap_hold > 0)
@@ -626,7 +636,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		if (e->cfg.exc_null && n >= 1)
 			motor_id_step(&e->mid, tp, fm, tm, use);
 		scalar_t d = running ? excite_update(&e->exc) : SC_ZERO;
-		out->thr_delta[0] = sc_to_float(d);
+		out->thr_delta[0] = d;
 		if (e->cfg.exc_null) {
 			/* two dithers on the null-space patterns of Gamma_o (excite.h: rotors 1, 5
 			 * against 3, 7 and 2, 6 against 4, 8; thrust, roll, pitch and yaw all cancel
@@ -644,7 +654,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			/* in scalars: integer in the fixed build, the same float operations in the other */
 			scalar_t a1 = sc_add(d, o), a2 = sc_add(d2, o);
 			for (int j = 0; j < HAL_ROTORS; j++)
-				out->thr_delta[j] = sc_to_float(sc_add(sc_mul(a1, p1[j]), sc_mul(a2, p2[j])));
+				out->thr_delta[j] = sc_add(sc_mul(a1, p1[j]), sc_mul(a2, p2[j]));
 		}
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
@@ -655,9 +665,9 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			ident_body_torque(sc_from_float(p->veh_arm_l), in->thrust_n, in->torque_nm, tau);
 		/* the instrument: the excitation sent on the previous step, which acted over the
 		 * frame this update closes */
-		ident_inertia_instrument(&e->inr, sc_from_float(e->inr_u_prev));
+		ident_inertia_instrument(&e->inr, e->inr_u_prev);
 		ident_inertia_update(&e->inr, tau, in->rate_b_rps, use && n == 1 && e->gap_hold == 0);
-		out->tau_delta[ax] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
+		out->tau_delta[ax] = running ? excite_update(&e->exc) : SC_ZERO;
 		e->inr_u_prev = out->tau_delta[ax];
 	} else {
 		/* the model's prediction of rotor 1's thrust: the allocation behind the throttle
@@ -667,7 +677,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			y_hat = filt_lag_update(&e->val_lag, filt_delay_update(&e->val_delay, fc));
 		if (use)
 			ident_fit_add(&e->fit, in->thrust_n[0], y_hat);
-		out->tau_delta[2] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
+		out->tau_delta[2] = running ? excite_update(&e->exc) : SC_ZERO;
 	}
 }
 
@@ -758,15 +768,16 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 	if (!e->reporting) {
 		phase_step(e, in, out);
 		e->t_phase += in->dt_s;
-		float total = e->t_settle + e->t_run;
-		const char *lim_name;
-		float lim = phase_limit(e, &lim_name);
-		if (e->t_phase > lim) {
+		float total = e->t_total;
+		if (e->t_phase > e->t_limit) {
+			const char *lim_name;
+			float lim = phase_limit(e, &lim_name);
 			memset(out, 0, sizeof *out);
 			limit_fail(e, lim_name, lim);
 			return e->state;
 		}
-		e->progress = e->prog_base + fminf(e->t_phase, total) * e->prog_rate;
+		/* min(t_phase, total): t_phase is never NaN, total always finite */
+		e->progress = e->prog_base + (e->t_phase < total ? e->t_phase : total) * e->prog_rate;
 		/* the estimates (soft float on a core without FPU) every EST_READ_FRAMES steps, on
 		 * the phase's first step and on its last, which the phase's end and the log's last
 		 * frame of the phase see */

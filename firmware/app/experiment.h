@@ -171,10 +171,12 @@ struct exp_input {
 						* first step's dt_s is taken) */
 };
 
+/* in scalars: the app adds them to its scalar demands and throttles (the log has thr_delta as
+ * floats); every value is small enough (|x| < 256) to be a float exactly */
 struct exp_output {
-	float f_delta;                         /* added to the demanded thrust, N */
-	float tau_delta[3];                    /* added to the demanded torque, N m (mu_1) */
-	float thr_delta[HAL_ROTORS];           /* added to each throttle after the map (delta_1) */
+	scalar_t f_delta;                      /* added to the demanded thrust, N */
+	scalar_t tau_delta[3];                 /* added to the demanded torque, N m (mu_1) */
+	scalar_t thr_delta[HAL_ROTORS];        /* added to each throttle after the map (delta_1) */
 };
 
 struct exp_result {
@@ -238,13 +240,16 @@ struct experiment {
 	float dt_nom, z0;
 	float inv_dt_nom;                      /* 1 / dt_nom: frames in a step's dt */
 	float prog_base, prog_rate;            /* progress = base + min(t_phase, total) rate */
+	float t_total, t_limit;                /* the phase's planned time and time limit (phase_limit) */
+	float fr_dt;                           /* the last step's dt_s ... */
+	int fr_n;                              /* ... and the frames it spans (phase_step) */
 	int gap_hold;                          /* frames left without inertia updates after a gap */
 	struct exp_cfg cfg;
 	struct excite exc;
 	struct excite exc2;                    /* rotor experiment: the second pattern's dither */
 	uint32_t rot_k;                        /* rotor experiment: excited frames so far */
 	uint32_t est_wait;                     /* steps until est[] / est_sd[] are read again */
-	float inr_u_prev;                      /* inertia: the excitation of the previous step (the instrument) */
+	scalar_t inr_u_prev;                   /* inertia: the excitation of the previous step (the instrument) */
 	/* the estimator of the current phase: phases never overlap, so they share the memory
 	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */
 	union {
