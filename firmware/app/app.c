@@ -650,6 +650,15 @@ static void control_step(struct app *a, float dt)
 
 /* ---------------------------------------------------------------- per frame */
 
+/* three floats by assignment: a library call for 12 bytes copies them byte by byte on a
+ * core that cannot load unaligned words (Cortex-M0) */
+static inline void copy3(float d[3], const float s[3])
+{
+	d[0] = s[0];
+	d[1] = s[1];
+	d[2] = s[2];
+}
+
 static void fill_log(struct app *a, bool stepped, float dt)
 {
 	struct app_log_frame *l = &a->log;
@@ -665,9 +674,9 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	l->mode = (int8_t)a->mode;
 	l->valid = (int32_t)f->valid;
 	memcpy(l->q, f->q_ib, sizeof l->q);
-	memcpy(l->rate_b, f->rate_b_rps, sizeof l->rate_b);
-	memcpy(l->pos_i, f->pos_i_m, sizeof l->pos_i);
-	memcpy(l->vel_i, f->vel_i_mps, sizeof l->vel_i);
+	copy3(l->rate_b, f->rate_b_rps);
+	copy3(l->pos_i, f->pos_i_m);
+	copy3(l->vel_i, f->vel_i_mps);
 	memcpy(l->rotor_thrust, f->rotor_thrust_n, sizeof l->rotor_thrust);
 	memcpy(l->rotor_torque, f->rotor_torque_nm, sizeof l->rotor_torque);
 	memcpy(l->q_sp, a->q_sp, sizeof l->q_sp);
