@@ -358,6 +358,9 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		xp2.seed = xp.seed * 2654435761u + 12345u;
 		excite_init(&e->exc2, &xp2);
 		e->rot_k = 0;
+		excite_null_pattern(0, e->pat[0]);
+		excite_null_pattern(1, e->pat[1]);
+		e->ofs = sc_from_float(cf->exc_ofs);
 		e->est_live = 0x0Fu;
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
@@ -644,17 +647,25 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			 * their sum cycling +o, 0, -o, 0 every half second: every rotor is excited,
 			 * each over three mean throttles (the curve) */
 			scalar_t d2 = running ? excite_update(&e->exc2) : SC_ZERO;
-			scalar_t o = running ? sc_mul(sc_from_float(e->cfg.exc_ofs),
-						      excite_offset_level(e->rot_k, OFS_SEG_FRAMES)) : SC_ZERO;
+			scalar_t o = running ? sc_mul(e->ofs, excite_offset_level(e->rot_k, OFS_SEG_FRAMES)) : SC_ZERO;
 			if (running)
 				e->rot_k++;
-			scalar_t p1[HAL_ROTORS], p2[HAL_ROTORS];
-			excite_null_pattern(0, p1);
-			excite_null_pattern(1, p2);
+			const scalar_t *p1 = e->pat[0], *p2 = e->pat[1];
 			/* in scalars: integer in the fixed build, the same float operations in the other */
 			scalar_t a1 = sc_add(d, o), a2 = sc_add(d2, o);
+#if OCTO_FIXED
+			/* a1 p1 + a2 p2 with every p 1, -1 or 0: in Q16.16 a product by +/-1 rounds
+			 * nothing (and |a| <= INT32_MAX negates without overflow), so the products are
+			 * +/-a or 0 exactly, without the multiplications */
+			for (int j = 0; j < HAL_ROTORS; j++) {
+				scalar_t v1 = p1[j] > 0 ? a1 : (p1[j] < 0 ? -a1 : SC_ZERO);
+				scalar_t v2 = p2[j] > 0 ? a2 : (p2[j] < 0 ? -a2 : SC_ZERO);
+				out->thr_delta[j] = sc_add(v1, v2);
+			}
+#else
 			for (int j = 0; j < HAL_ROTORS; j++)
 				out->thr_delta[j] = sc_add(sc_mul(a1, p1[j]), sc_mul(a2, p2[j]));
+#endif
 		}
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);

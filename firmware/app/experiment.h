@@ -256,6 +256,8 @@ struct experiment {
 		struct {                           /* rotor coefficients */
 			struct ident_rotor rot;    /* rotor 1, model given (and the paper's plain) */
 			struct motor_id mid;       /* every rotor, the motor model found (motor_id.h) */
+			scalar_t pat[2][HAL_ROTORS]; /* the two null-space patterns (excite_null_pattern) */
+			scalar_t ofs;              /* ID_EXC_OFS: the offset's amplitude */
 		};
 		struct ident_inertia inr;          /* inertia Ixx, Iyy or Izz */
 		struct {                           /* validation */
