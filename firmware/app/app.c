@@ -232,7 +232,7 @@ void app_init(struct app *a, const struct hal *hal)
 	sync_params(a);
 	a->params_dirty = false;
 	a->mode = APP_DISARMED;
-	a->q_sp[0] = 1.0f;
+	a->log.q_sp[0] = 1.0f;
 }
 
 /* ---------------------------------------------------------------- parameters: storage */
@@ -491,7 +491,7 @@ static void experiment_step(struct app *a, float dt)
 	for (int j = 0; j < HAL_ROTORS; j++)
 		a->fs.rotor_torque_nm[j] = sc_from_float(a->fr.rotor_torque_nm[j]);
 #endif
-	/* the thrusts allocated last step: the mixer's output, of which rotor_f is the float copy */
+	/* the thrusts allocated last step: the mixer's output (the log's rotor_f in floats) */
 	struct exp_input in = {&a->fr, app_in(a)->rotor_thrust_n, app_in(a)->rotor_torque_nm,
 			       app_in(a)->rate_b_rps, dt, &a->p, a->wrench_dem, a->mix_out.f_n,
 			       app_thr_sc(a), a->dt_frame};
@@ -537,7 +537,7 @@ static void control_step(struct app *a, float dt)
 		reset_control(a);
 		guid_ground(&a->guid, gi.z_m, a->mode == APP_IDLE);
 		memset(a->wrench_dem, 0, sizeof a->wrench_dem);
-		memset(a->rotor_f, 0, sizeof a->rotor_f);
+		memset(a->log.rotor_f, 0, sizeof a->log.rotor_f);
 		a->mix_out.limits = 0;
 		return;
 	}
@@ -573,10 +573,10 @@ static void control_step(struct app *a, float dt)
 		a->yaw_half_ok = true;
 	}
 	struct quat q_sp = quat_from_euler_yh(po.roll_rad, po.pitch_rad, a->yaw_half);
-	a->q_sp[0] = sc_to_float(q_sp.w);
-	a->q_sp[1] = sc_to_float(q_sp.x);
-	a->q_sp[2] = sc_to_float(q_sp.y);
-	a->q_sp[3] = sc_to_float(q_sp.z);
+	a->log.q_sp[0] = sc_to_float(q_sp.w);
+	a->log.q_sp[1] = sc_to_float(q_sp.x);
+	a->log.q_sp[2] = sc_to_float(q_sp.y);
+	a->log.q_sp[3] = sc_to_float(q_sp.z);
 
 	/* attitude and height control; what the allocation cut on the previous step stops
 	 * their integrals from winding further that way */
@@ -638,7 +638,7 @@ static void control_step(struct app *a, float dt)
 	a->thr_clamped = thrmap_update(&a->map, a->mix_out.f_n, thr, HAL_ROTORS);
 	const scalar_t thr_max = a->ps.thr_max;   /* read once: the stores below are floats too */
 	for (int j = 0; j < HAL_ROTORS; j++) {
-		a->rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
+		a->log.rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
 		scalar_t t = excited ? sc_add(thr[j], a->exp_out.thr_delta[j]) : thr[j];
 		t = sc_clamp(sc_isfinite(t) ? t : SC_ZERO, SC_ZERO, thr_max);
 		a->thr[j] = sc_to_float(t);
@@ -663,8 +663,8 @@ static void fill_log(struct app *a, bool stepped, float dt)
 {
 	struct app_log_frame *l = &a->log;
 	const struct hal_sensor_frame *f = &a->fr;
-	/* every field is set below (the platform serialises the record field by field, so
-	 * padding is not cleared on every frame) */
+	/* every field is set below but q_sp and rotor_f, which the step writes (the platform
+	 * serialises the record field by field, so padding is not cleared on every frame) */
 	l->seq = f->seq;
 	l->t = f->t_s;
 	l->dt = stepped ? dt : 0.0f;
@@ -679,7 +679,6 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	copy3(l->vel_i, f->vel_i_mps);
 	memcpy(l->rotor_thrust, f->rotor_thrust_n, sizeof l->rotor_thrust);
 	memcpy(l->rotor_torque, f->rotor_torque_nm, sizeof l->rotor_torque);
-	memcpy(l->q_sp, a->q_sp, sizeof l->q_sp);
 	l->z_sp = sc_to_float(a->guid.z_sp_m);
 	l->vz_ff = sc_to_float(a->guid.vz_ff_mps);
 	l->pos_sp[0] = sc_to_float(a->guid.pos_sp_m[0]);
@@ -690,7 +689,6 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	l->f_alloc = sc_to_float(a->mix_out.achieved[0]);
 	for (int i = 0; i < 3; i++)
 		l->tau_alloc[i] = sc_to_float(a->mix_out.achieved[i + 1]);
-	memcpy(l->rotor_f, a->rotor_f, sizeof l->rotor_f);
 	for (int j = 0; j < HAL_ROTORS; j++)
 		l->excitation[j] = sc_to_float(a->exp_out.thr_delta[j]);
 	memcpy(l->throttle, a->thr, sizeof l->throttle);

@@ -98,7 +98,6 @@ struct app {
 	struct guid guid;
 	struct pos_ctrl_params pos;
 	struct app_param_sc ps;       /* parameters the step reads, as scalars */
-	float q_sp[4];
 	/* the set point's yaw and its half-angle trigonometry, kept while the yaw stays */
 	scalar_t yaw_half_of;
 	struct quat_yaw_half yaw_half;
@@ -112,7 +111,6 @@ struct app {
 	struct thrmap map;
 	struct mixer_output mix_out;
 	float wrench_dem[4];
-	float rotor_f[HAL_ROTORS];
 	uint32_t thr_clamped;
 
 	/* identification */
@@ -128,7 +126,8 @@ struct app {
 
 	struct app_outbox outbox;     /* events for the ground station (mav.c drains it) */
 	struct mav mav;
-	struct app_log_frame log;
+	struct app_log_frame log;     /* this frame's record; the step writes its set point (q_sp)
+				       * and allocated rotor thrusts (rotor_f) here directly */
 	uint32_t steps;
 };
 
