@@ -819,7 +819,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	 * or a reordered (older) frame is not answered again. Free-running X-Plane
 	 * keeps the last command anyway; a lockstep simulator would otherwise take
 	 * the extra command for its next frame and run one frame ahead of us. */
-	if (a->actuating && (!a->have_actuated || f->t_s > a->t_actuated)) {
+	if (a->actuating && (!a->have_actuated || app_t_before(a->t_actuated, f->t_s))) {
 		hal_actuate(a->hal, a->thr);
 		a->have_actuated = true;
 		a->t_actuated = f->t_s;

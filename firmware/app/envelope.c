@@ -118,7 +118,7 @@ static void kft_step(struct app *a, scalar_t s_dt, bool up)
 	/* The KFT_* parameters once a second of plant time; announced to the ground station
 	 * (PARAM_VALUE, NAMED_VALUE_FLOAT) at most once a second of wall time, whose rates are
 	 * wall-clock: a fast lockstep run must not flood the link. */
-	if (!t->started || a->fr.t_s < e->kft_pub_next_t)
+	if (!t->started || app_t_before(a->fr.t_s, e->kft_pub_next_t))
 		return;
 	e->kft_pub_next_t = a->fr.t_s + 1.0;
 	uint64_t now_us = hal_wall_us(a->hal);
