@@ -22,6 +22,7 @@
 #include "hover_est.h"
 #include "kf_track.h"
 #include "outbox.h"
+#include "sc_recip.h"
 
 struct app;
 
@@ -35,6 +36,7 @@ struct envelope {
 	uint64_t kft_pub_wall_us; /* wall time of it: a fast lockstep run must not flood the link */
 	uint32_t kft_votes; /* consecutive publications that called for a VEH_KF refresh */
 	scalar_t kf8;       /* 8 VEH_KF (N at full throttle, all rotors): set by envelope_model_sync */
+	struct sc_recip kf8_r; /* its reciprocal, for the step's division by it */
 	uint8_t cmd;        /* enum app_command that started the phase, for its final result */
 	app_origin origin;  /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
 };
