@@ -44,6 +44,18 @@ static scalar_t frame_yaw(const struct hal_sensor_frame *f)
 	return quat_yaw(frame_q(f));
 }
 
+/* All throttles to t (the float sent and, in the fixed build, its scalar copy). */
+static void set_thr_all(struct app *a, float t)
+{
+	for (int j = 0; j < HAL_ROTORS; j++)
+		a->thr[j] = t;
+#if OCTO_FIXED
+	scalar_t ts = sc_from_float(t);
+	for (int j = 0; j < HAL_ROTORS; j++)
+		a->thr_sc[j] = ts;
+#endif
+}
+
 /* the frame's position as scalars */
 static void frame_pos(const struct hal_sensor_frame *f, scalar_t pos[3])
 {
@@ -162,6 +174,11 @@ static void sync_params(struct app *a)
 	lp.f_max_n = sc_from_float(8.0f * p->veh_kf * p->mot_thr_max);
 	alt_ctrl_set_params(&a->alt, &lp);   /* keeps the integral */
 
+	a->ps.inertia_kgm2 = vec3_make(sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy),
+				       sc_from_float(p->veh_izz));
+	a->ps.mass_kg = sc_from_float(p->veh_mass);
+	a->ps.thr_max = sc_from_float(p->mot_thr_max);
+
 	/* the rotors' effectiveness: the mixer allocates around a weak rotor (its box), the
 	 * throttle map gives it the throttle for its thrust */
 	const float scale[THRMAP_ROTORS] = {p->mot_scale1, p->mot_scale2, p->mot_scale3, p->mot_scale4,
@@ -215,7 +232,7 @@ void app_init(struct app *a, const struct hal *hal)
 	sync_params(a);
 	a->params_dirty = false;
 	a->mode = APP_DISARMED;
-	a->q_sp[0] = 1.0f;
+	a->log.q_sp[0] = 1.0f;
 }
 
 /* ---------------------------------------------------------------- parameters: storage */
@@ -300,7 +317,7 @@ enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size
 	}
 	if (a->mode == APP_EXPERIMENT)
 		exp_abort(&a->exp, "disarmed");
-	memset(a->thr, 0, sizeof a->thr);
+	set_thr_all(a, 0.0f);
 	set_mode(a, APP_DISARMED);
 	return APP_ACCEPTED;
 }
@@ -343,7 +360,7 @@ enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t
 	case APP_LAND:
 		return APP_ACCEPTED;
 	case APP_IDLE:
-		memset(a->thr, 0, sizeof a->thr);
+		set_thr_all(a, 0.0f);
 		set_mode(a, APP_DISARMED);
 		return APP_ACCEPTED;
 	case APP_EXPERIMENT:
@@ -469,7 +486,15 @@ static void app_settle(struct app *a)
 
 static void experiment_step(struct app *a, float dt)
 {
-	struct exp_input in = {&a->fr, dt, &a->p, a->wrench_dem, a->rotor_f, a->thr, a->dt_frame};
+#if OCTO_FIXED
+	/* the rotor torques: only the experiments read them */
+	for (int j = 0; j < HAL_ROTORS; j++)
+		a->fs.rotor_torque_nm[j] = sc_from_float(a->fr.rotor_torque_nm[j]);
+#endif
+	/* the thrusts allocated last step: the mixer's output (the log's rotor_f in floats) */
+	struct exp_input in = {&a->fr, app_in(a)->rotor_thrust_n, app_in(a)->rotor_torque_nm,
+			       app_in(a)->rate_b_rps, dt, &a->p, a->wrench_dem, a->mix_out.f_n,
+			       app_thr_sc(a), a->dt_frame};
 	enum exp_state st = exp_step(&a->exp, &in, &a->exp_out);
 	if (st != EXP_RUNNING) {
 		memset(&a->exp_out, 0, sizeof a->exp_out);
@@ -477,23 +502,42 @@ static void experiment_step(struct app *a, float dt)
 	}
 }
 
+/* The frame's float inputs as scalars, once per step (the fixed build; the rotor torques
+ * only for the experiments: experiment_step). */
+static void frame_to_sc(struct app *a)
+{
+#if OCTO_FIXED
+	const struct hal_sensor_frame *f = &a->fr;
+	struct app_frame_sc *s = &a->fs;
+	for (int i = 0; i < 4; i++)
+		s->q_ib[i] = sc_from_float(f->q_ib[i]);
+	for (int i = 0; i < 3; i++) {
+		s->rate_b_rps[i] = sc_from_float(f->rate_b_rps[i]);
+		s->pos_i_m[i] = sc_from_float(f->pos_i_m[i]);
+		s->vel_i_mps[i] = sc_from_float(f->vel_i_mps[i]);
+	}
+	for (int j = 0; j < HAL_ROTORS; j++)
+		s->rotor_thrust_n[j] = sc_from_float(f->rotor_thrust_n[j]);
+#else
+	(void)a;
+#endif
+}
+
 static void control_step(struct app *a, float dt)
 {
-	const struct hal_sensor_frame *f = &a->fr;
 	const struct app_params *p = &a->p;
-	struct quat q = frame_q(f);
-	float z = f->pos_i_m[2], vz = f->vel_i_mps[2];
+	frame_to_sc(a);
+	const scalar_t *pos = app_in(a)->pos_i_m, *vel = app_in(a)->vel_i_mps, *qf = app_in(a)->q_ib;
+	struct quat q = quat_normalize((struct quat){qf[0], qf[1], qf[2], qf[3]});
 
 	memset(&a->exp_out, 0, sizeof a->exp_out);
-	struct guid_input gi = {sc_from_float(z), sc_from_float(vz), sc_from_float(dt), false};
+	struct guid_input gi = {pos[2], vel[2], sc_from_float(dt), false};
 	if (a->mode == APP_DISARMED || a->mode == APP_IDLE) {
-		float t = a->mode == APP_IDLE ? p->mot_thr_idle : 0.0f;
-		for (int j = 0; j < HAL_ROTORS; j++)
-			a->thr[j] = t;
+		set_thr_all(a, a->mode == APP_IDLE ? p->mot_thr_idle : 0.0f);
 		reset_control(a);
 		guid_ground(&a->guid, gi.z_m, a->mode == APP_IDLE);
 		memset(a->wrench_dem, 0, sizeof a->wrench_dem);
-		memset(a->rotor_f, 0, sizeof a->rotor_f);
+		memset(a->log.rotor_f, 0, sizeof a->log.rotor_f);
 		a->mix_out.limits = 0;
 		return;
 	}
@@ -506,7 +550,7 @@ static void control_step(struct app *a, float dt)
 	if (ev & GUID_HOLD_REACHED)
 		set_mode(a, APP_HOLD);
 	if (ev & GUID_LANDED) {
-		memset(a->thr, 0, sizeof a->thr);
+		set_thr_all(a, 0.0f);
 		app_status(a, APP_SEV_INFO, "Landed");
 		set_mode(a, APP_DISARMED);
 		return;
@@ -516,8 +560,8 @@ static void control_step(struct app *a, float dt)
 	 * ground during take-off) */
 	struct pos_ctrl_input pi = {
 		.pos_sp_m = {a->guid.pos_sp_m[0], a->guid.pos_sp_m[1]},
-		.pos_m = {sc_from_float(f->pos_i_m[0]), sc_from_float(f->pos_i_m[1])},
-		.vel_mps = {sc_from_float(f->vel_i_mps[0]), sc_from_float(f->vel_i_mps[1])},
+		.pos_m = {pos[0], pos[1]},
+		.vel_mps = {vel[0], vel[1]},
 		.q_b2i = q,
 	};
 	struct pos_ctrl_output po = pos_ctrl_update(&a->pos, &pi);
@@ -529,10 +573,10 @@ static void control_step(struct app *a, float dt)
 		a->yaw_half_ok = true;
 	}
 	struct quat q_sp = quat_from_euler_yh(po.roll_rad, po.pitch_rad, a->yaw_half);
-	a->q_sp[0] = sc_to_float(q_sp.w);
-	a->q_sp[1] = sc_to_float(q_sp.x);
-	a->q_sp[2] = sc_to_float(q_sp.y);
-	a->q_sp[3] = sc_to_float(q_sp.z);
+	a->log.q_sp[0] = sc_to_float(q_sp.w);
+	a->log.q_sp[1] = sc_to_float(q_sp.x);
+	a->log.q_sp[2] = sc_to_float(q_sp.y);
+	a->log.q_sp[3] = sc_to_float(q_sp.z);
 
 	/* attitude and height control; what the allocation cut on the previous step stops
 	 * their integrals from winding further that way */
@@ -542,25 +586,25 @@ static void control_step(struct app *a, float dt)
 		.q_sp_b2i = q_sp,
 		.rate_ff_b = vec3_zero(),
 		.q_b2i = q,
-		.rate_b_rps = vec3_make(sc_from_float(f->rate_b_rps[0]), sc_from_float(f->rate_b_rps[1]),
-					sc_from_float(f->rate_b_rps[2])),
-		.inertia_kgm2 = vec3_make(sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy),
-					  sc_from_float(p->veh_izz)),
+		.rate_b_rps = vec3_make(app_in(a)->rate_b_rps[0], app_in(a)->rate_b_rps[1],
+					app_in(a)->rate_b_rps[2]),
+		.inertia_kgm2 = a->ps.inertia_kgm2,
 		.dt_s = gi.dt_s,
 		.alloc_short_pos = (uint8_t)(short_pos >> 1),
 		.alloc_short_neg = (uint8_t)(short_neg >> 1),
 	};
 	struct vec3 tau;
 	att_ctrl_update(&a->att, &ai, &tau);
+	scalar_t cos_tilt = quat_body_z_up(q);
 	struct alt_ctrl_input li = {
 		.z_sp_m = a->guid.z_sp_m,
 		.vz_ff_mps = a->guid.vz_ff_mps,
 		.z_m = gi.z_m,
 		.vz_mps = gi.vz_mps,
 		.q_b2i = q,
-		.mass_kg = sc_from_float(p->veh_mass),
+		.mass_kg = a->ps.mass_kg,
 		.dt_s = gi.dt_s,
-		.hover_f_n = envelope_hover_f(a, dt, quat_body_z_up(q)),
+		.hover_f_n = envelope_hover_f(a, gi.dt_s, cos_tilt),
 		.alloc_short_up = (short_pos & 1u) != 0,
 		.alloc_short_down = (short_neg & 1u) != 0,
 	};
@@ -573,7 +617,7 @@ static void control_step(struct app *a, float dt)
 	/* experiment: excitation on top of the hover control */
 	if (a->mode == APP_EXPERIMENT) {
 		/* tilt > EXP_TILT_ABORT_DEG, without acosf: the body's z axis vs cos(limit) */
-		if (quat_body_z_up(q) < sc_from_float(cosf(EXP_TILT_ABORT_DEG * DEG_F))) {
+		if (cos_tilt < sc_from_float(cosf(EXP_TILT_ABORT_DEG * DEG_F))) {
 			exp_abort(&a->exp, "attitude limit");
 		}
 		experiment_step(a, dt);
@@ -585,29 +629,42 @@ static void control_step(struct app *a, float dt)
 	bool excited = a->mode == APP_EXPERIMENT;
 	scalar_t demand[MIXER_N_AXES] = {fz, tau.x, tau.y, tau.z};
 	if (excited) {
-		demand[0] = sc_add(demand[0], sc_from_float(a->exp_out.f_delta));
+		demand[0] = sc_add(demand[0], a->exp_out.f_delta);
 		for (int i = 0; i < 3; i++)
-			demand[i + 1] = sc_add(demand[i + 1], sc_from_float(a->exp_out.tau_delta[i]));
+			demand[i + 1] = sc_add(demand[i + 1], a->exp_out.tau_delta[i]);
 	}
 	mixer_update(&a->mix, demand, &a->mix_out);
 	scalar_t thr[HAL_ROTORS];
 	a->thr_clamped = thrmap_update(&a->map, a->mix_out.f_n, thr, HAL_ROTORS);
-	scalar_t thr_max = sc_from_float(p->mot_thr_max);
+	const scalar_t thr_max = a->ps.thr_max;   /* read once: the stores below are floats too */
 	for (int j = 0; j < HAL_ROTORS; j++) {
-		a->rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
-		scalar_t t = excited ? sc_add(thr[j], sc_from_float(a->exp_out.thr_delta[j])) : thr[j];
-		a->thr[j] = sc_to_float(sc_clamp(sc_isfinite(t) ? t : SC_ZERO, SC_ZERO, thr_max));
+		a->log.rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
+		scalar_t t = excited ? sc_add(thr[j], a->exp_out.thr_delta[j]) : thr[j];
+		t = sc_clamp(sc_isfinite(t) ? t : SC_ZERO, SC_ZERO, thr_max);
+		a->thr[j] = sc_to_float(t);
+#if OCTO_FIXED
+		a->thr_sc[j] = t;   /* sc_from_float(thr[j]) exactly: a throttle in [0, 1] is a float */
+#endif
 	}
 }
 
 /* ---------------------------------------------------------------- per frame */
 
+/* three floats by assignment: a library call for 12 bytes copies them byte by byte on a
+ * core that cannot load unaligned words (Cortex-M0) */
+static inline void copy3(float d[3], const float s[3])
+{
+	d[0] = s[0];
+	d[1] = s[1];
+	d[2] = s[2];
+}
+
 static void fill_log(struct app *a, bool stepped, float dt)
 {
 	struct app_log_frame *l = &a->log;
 	const struct hal_sensor_frame *f = &a->fr;
-	/* every field is set below (the platform serialises the record field by field, so
-	 * padding is not cleared on every frame) */
+	/* every field is set below but q_sp and rotor_f, which the step writes (the platform
+	 * serialises the record field by field, so padding is not cleared on every frame) */
 	l->seq = f->seq;
 	l->t = f->t_s;
 	l->dt = stepped ? dt : 0.0f;
@@ -617,12 +674,11 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	l->mode = (int8_t)a->mode;
 	l->valid = (int32_t)f->valid;
 	memcpy(l->q, f->q_ib, sizeof l->q);
-	memcpy(l->rate_b, f->rate_b_rps, sizeof l->rate_b);
-	memcpy(l->pos_i, f->pos_i_m, sizeof l->pos_i);
-	memcpy(l->vel_i, f->vel_i_mps, sizeof l->vel_i);
+	copy3(l->rate_b, f->rate_b_rps);
+	copy3(l->pos_i, f->pos_i_m);
+	copy3(l->vel_i, f->vel_i_mps);
 	memcpy(l->rotor_thrust, f->rotor_thrust_n, sizeof l->rotor_thrust);
 	memcpy(l->rotor_torque, f->rotor_torque_nm, sizeof l->rotor_torque);
-	memcpy(l->q_sp, a->q_sp, sizeof l->q_sp);
 	l->z_sp = sc_to_float(a->guid.z_sp_m);
 	l->vz_ff = sc_to_float(a->guid.vz_ff_mps);
 	l->pos_sp[0] = sc_to_float(a->guid.pos_sp_m[0]);
@@ -633,8 +689,8 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	l->f_alloc = sc_to_float(a->mix_out.achieved[0]);
 	for (int i = 0; i < 3; i++)
 		l->tau_alloc[i] = sc_to_float(a->mix_out.achieved[i + 1]);
-	memcpy(l->rotor_f, a->rotor_f, sizeof l->rotor_f);
-	memcpy(l->excitation, a->exp_out.thr_delta, sizeof l->excitation);
+	for (int j = 0; j < HAL_ROTORS; j++)
+		l->excitation[j] = sc_to_float(a->exp_out.thr_delta[j]);
 	memcpy(l->throttle, a->thr, sizeof l->throttle);
 	l->att_flags = (int32_t)a->att.flags;
 	l->alt_flags = (int32_t)a->alt.flags;
@@ -741,11 +797,14 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 			}
 			dt = gap > MAX_DT_S ? MAX_DT_S : gap;
 			/* the frame period, for the experiments (a step after lost frames is a
-			 * multiple of it): a shorter step replaces it, a near one refines it */
-			if (a->have_step && (!(a->dt_frame > 0.0f) || dt < 0.75f * a->dt_frame))
-				a->dt_frame = dt;
-			else if (a->have_step && dt < 1.25f * a->dt_frame)
-				a->dt_frame += 0.02f * (dt - a->dt_frame);
+			 * multiple of it): a shorter step replaces it, a near one refines it; a step of
+			 * exactly the period known (the common case) leaves it as it is */
+			if (a->have_step && dt != a->dt_frame) {
+				if (!(a->dt_frame > 0.0f) || dt < 0.75f * a->dt_frame)
+					a->dt_frame = dt;
+				else if (dt < 1.25f * a->dt_frame)
+					a->dt_frame += 0.02f * (dt - a->dt_frame);
+			}
 			a->t_prev = f->t_s;
 			a->have_step = true;
 			/* After frames missing the controllers were out of the loop (their last
@@ -760,7 +819,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	 * or a reordered (older) frame is not answered again. Free-running X-Plane
 	 * keeps the last command anyway; a lockstep simulator would otherwise take
 	 * the extra command for its next frame and run one frame ahead of us. */
-	if (a->actuating && (!a->have_actuated || f->t_s > a->t_actuated)) {
+	if (a->actuating && (!a->have_actuated || app_t_before(a->t_actuated, f->t_s))) {
 		hal_actuate(a->hal, a->thr);
 		a->have_actuated = true;
 		a->t_actuated = f->t_s;

@@ -41,6 +41,23 @@
 #include "pos_ctrl.h"
 #include "thrmap.h"
 
+/* The frame's inputs as scalars: in the fixed build converted once per frame (app_on_frame)
+ * and read by the step's every part (control, k_f tracker, experiment); in the float build
+ * scalar_t is float and app_in() gives the frame itself (no copy). Fields named as in
+ * struct hal_sensor_frame, so that either serves. */
+struct app_frame_sc {
+	scalar_t q_ib[4], rate_b_rps[3], pos_i_m[3], vel_i_mps[3];
+	scalar_t rotor_thrust_n[HAL_ROTORS], rotor_torque_nm[HAL_ROTORS];
+};
+
+/* What the step reads of the parameters, as scalars: set by the parameter sync (between
+ * frames, after every parameter change), not converted per frame. */
+struct app_param_sc {
+	struct vec3 inertia_kgm2;     /* VEH_IXX, VEH_IYY, VEH_IZZ */
+	scalar_t mass_kg;             /* VEH_MASS */
+	scalar_t thr_max;             /* MOT_THR_MAX */
+};
+
 enum app_mode {
 	APP_DISARMED = 0,
 	APP_IDLE = 1,        /* armed on the ground, rotors at MOT_THR_IDLE */
@@ -72,11 +89,15 @@ struct app {
 	bool have_actuated;
 	double t_actuated;            /* plant time of the last frame answered */
 	float thr[HAL_ROTORS];
+#if OCTO_FIXED
+	struct app_frame_sc fs;       /* the frame's inputs as scalars (app_in) */
+	scalar_t thr_sc[HAL_ROTORS];  /* thr as scalars (app_thr_sc) */
+#endif
 
 	/* guidance (set points) and the position loop */
 	struct guid guid;
 	struct pos_ctrl_params pos;
-	float q_sp[4];
+	struct app_param_sc ps;       /* parameters the step reads, as scalars */
 	/* the set point's yaw and its half-angle trigonometry, kept while the yaw stays */
 	scalar_t yaw_half_of;
 	struct quat_yaw_half yaw_half;
@@ -90,7 +111,6 @@ struct app {
 	struct thrmap map;
 	struct mixer_output mix_out;
 	float wrench_dem[4];
-	float rotor_f[HAL_ROTORS];
 	uint32_t thr_clamped;
 
 	/* identification */
@@ -106,9 +126,36 @@ struct app {
 
 	struct app_outbox outbox;     /* events for the ground station (mav.c drains it) */
 	struct mav mav;
-	struct app_log_frame log;
+	struct app_log_frame log;     /* this frame's record; the step writes its set point (q_sp)
+				       * and allocated rotor thrusts (rotor_f) here directly */
 	uint32_t steps;
 };
+
+/* The frame's inputs and the throttles sent, as scalars (see struct app_frame_sc): the
+ * converted copies in the fixed build, the floats themselves in the float build. */
+#if OCTO_FIXED
+static inline const struct app_frame_sc *app_in(const struct app *a) { return &a->fs; }
+static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr_sc; }
+#else
+static inline const struct hal_sensor_frame *app_in(const struct app *a) { return &a->fr; }
+static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr; }
+#endif
+
+/* a < b for plant times (doubles), by their bits: integer comparisons instead of a
+ * double-precision routine (software on Cortex-M0 and on the M4F's single-precision FPU),
+ * for the per-frame checks. The IEEE answer for every pair: false when either is NaN,
+ * -0 equal to +0. */
+static inline bool app_t_before(double a, double b)
+{
+	union { double d; uint64_t u; } x = {a}, y = {b};
+	const uint64_t mag = 0x7fffffffffffffffu, inf = 0x7ff0000000000000u;
+	uint64_t ma = x.u & mag, mb = y.u & mag;
+	if (ma > inf || mb > inf)
+		return false;
+	/* sign and magnitude to a signed order: -m for negatives (both zeros are 0) */
+	int64_t ka = (x.u >> 63) ? -(int64_t)ma : (int64_t)ma, kb = (y.u >> 63) ? -(int64_t)mb : (int64_t)mb;
+	return ka < kb;
+}
 
 void app_init(struct app *a, const struct hal *hal);
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f);

@@ -71,6 +71,8 @@ void envelope_model_sync(struct app *a)
 		same = same && kp.scale[j] == cur->scale[j];
 	if (!same)
 		kft_init(a);
+	a->env.kf8 = sc_mul(SC(8.0), sc_from_float(a->p.veh_kf));
+	a->env.kf8_r = sc_recip_of(a->env.kf8);
 }
 
 void envelope_init(struct app *a)
@@ -102,24 +104,22 @@ static void set_veh_kf(struct app *a, float kf, const char *why)
 
 /* k_f tracking in HOLD and experiments: the last step's throttles (what the plant answers now) against
  * the sum of the measured rotor thrusts of this frame. */
-static void kft_step(struct app *a, float dt, bool up)
+static void kft_step(struct app *a, scalar_t s_dt, bool up)
 {
 	struct envelope *e = &a->env;
 	struct kf_track *t = &e->kft;
-	scalar_t thr[HAL_ROTORS];
+	const scalar_t *f = app_in(a)->rotor_thrust_n;
 	scalar_t y = SC_ZERO;   /* the sum in scalars: float's own sum in the float build */
-	for (int j = 0; j < HAL_ROTORS; j++) {
-		thr[j] = sc_from_float(a->thr[j]);
-		y = sc_add(y, sc_from_float(a->fr.rotor_thrust_n[j]));
-	}
+	for (int j = 0; j < HAL_ROTORS; j++)
+		y = sc_add(y, f[j]);
 	/* in HOLD and in the experiments (their excitation only adds information; a rotor model
 	 * found by identification restarts the tracker, envelope_model_sync) */
 	bool gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && (a->fr.valid & HAL_FRAME_THRUST);
-	kf_track_update(t, thr, HAL_ROTORS, y, sc_from_float(dt), gate);
+	kf_track_update(t, app_thr_sc(a), HAL_ROTORS, y, s_dt, gate);
 	/* The KFT_* parameters once a second of plant time; announced to the ground station
 	 * (PARAM_VALUE, NAMED_VALUE_FLOAT) at most once a second of wall time, whose rates are
 	 * wall-clock: a fast lockstep run must not flood the link. */
-	if (!t->started || a->fr.t_s < e->kft_pub_next_t)
+	if (!t->started || app_t_before(a->fr.t_s, e->kft_pub_next_t))
 		return;
 	e->kft_pub_next_t = a->fr.t_s + 1.0;
 	uint64_t now_us = hal_wall_us(a->hal);
@@ -158,28 +158,27 @@ static void kft_step(struct app *a, float dt, bool up)
 	}
 }
 
-scalar_t envelope_hover_f(struct app *a, float dt, scalar_t cos_tilt)
+scalar_t envelope_hover_f(struct app *a, scalar_t s_dt, scalar_t cos_tilt)
 {
 	struct envelope *e = &a->env;
-	const struct app_params *p = &a->p;
-	float z = a->fr.pos_i_m[2], vz = a->fr.vel_i_mps[2];
 	/* collective throttle of the last step's achieved thrust (linearised by the map), in
-	 * scalars: the same float operations in the float build, integer ones in the fixed */
-	scalar_t kf8 = sc_mul(SC(8.0), sc_from_float(p->veh_kf));
-	scalar_t s_u = sc_div(a->mix_out.achieved[0], kf8);
-	scalar_t s_z = sc_from_float(z);
+	 * scalars: the same float operations in the float build, integer ones in the fixed.
+	 * kf8 is the one of the step's start (a refresh by kft_step below takes effect with
+	 * the next step, after the parameter sync). */
+	scalar_t kf8 = e->kf8;
+	scalar_t s_u = sc_div_r(a->mix_out.achieved[0], &e->kf8_r);   /* sc_div by kf8 exactly */
+	scalar_t s_z = app_in(a)->pos_i_m[2];
 	bool up = sc_sub(s_z, a->guid.z_ground_m) > SC(AIRBORNE_M);
 	bool learn = up && (a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_LAND);
-	scalar_t s_vz = sc_from_float(vz), s_c = cos_tilt;
-	scalar_t s_dt = sc_from_float(dt);
+	scalar_t s_vz = app_in(a)->vel_i_mps[2], s_c = cos_tilt;
 	e->hov_used = false;
 	if (learn)
 		e->hov_used = hover_est_update(&e->hov, s_vz, s_u, s_c, s_dt);
 	else
 		hover_est_track(&e->hov, s_vz, s_u, s_c, s_dt);
-	kft_step(a, dt, up);
+	kft_step(a, s_dt, up);
 	/* a climb commanded that has not lifted off: the hover throttle is higher */
-	if (a->mode == APP_TAKEOFF && !up && sc_to_float(a->guid.z_sp_m) > z + 0.05f)
+	if (a->mode == APP_TAKEOFF && !up && sc_to_float(a->guid.z_sp_m) > a->fr.pos_i_m[2] + 0.05f)
 		hover_est_spool(&e->hov, s_dt);
 	/* 8 k_f u_h = 8 k_f / theta (hover_est.h): one rounding */
 	return sc_div(kf8, e->hov.theta);

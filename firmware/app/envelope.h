@@ -22,6 +22,7 @@
 #include "hover_est.h"
 #include "kf_track.h"
 #include "outbox.h"
+#include "sc_recip.h"
 
 struct app;
 
@@ -34,6 +35,8 @@ struct envelope {
 	double kft_pub_next_t; /* plant time of the next KFT_* publication (1 s after the last) */
 	uint64_t kft_pub_wall_us; /* wall time of it: a fast lockstep run must not flood the link */
 	uint32_t kft_votes; /* consecutive publications that called for a VEH_KF refresh */
+	scalar_t kf8;       /* 8 VEH_KF (N at full throttle, all rotors): set by envelope_model_sync */
+	struct sc_recip kf8_r; /* its reciprocal, for the step's division by it */
 	uint8_t cmd;        /* enum app_command that started the phase, for its final result */
 	app_origin origin;  /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
 };
@@ -41,13 +44,13 @@ struct envelope {
 /* From the parameters: the estimator starts at m g / (8 VEH_KF). */
 void envelope_init(struct app *a);
 /* After a parameter change: restarts the k_f tracker when the rotor model it uses (lag,
- * curve, per-rotor scales, drift bound) changed. */
+ * curve, per-rotor scales, drift bound) changed, and sets what the step reads of VEH_KF. */
 void envelope_model_sync(struct app *a);
 
 /* Once per control step, before the height controller: learns from the last step
  * (vertical speed, collective throttle of the thrust the mixer achieved, tilt) and
  * returns the hover thrust demand in the mixer's newtons, 8 VEH_KF u_h. */
-scalar_t envelope_hover_f(struct app *a, float dt, scalar_t cos_tilt);
+scalar_t envelope_hover_f(struct app *a, scalar_t dt_s, scalar_t cos_tilt);
 
 /* Take-off may end (HOLD) once the hover throttle is known to this relative sd. */
 bool envelope_hover_ready(const struct app *a);

@@ -301,10 +301,12 @@ static void snapshot(struct exp_turn *t, const struct exp_input *in)
 	t->thr_prev0 = in->thr_prev[0];
 	memcpy(t->thr_prev_all, in->thr_prev, sizeof t->thr_prev_all);
 	t->rotor_f_cmd0 = in->rotor_f_cmd[0];
-	memcpy(t->thrust_n, in->frame->rotor_thrust_n, sizeof t->thrust_n);
-	memcpy(t->torque_nm, in->frame->rotor_torque_nm, sizeof t->torque_nm);
-	memcpy(t->rate_b_rps, in->frame->rate_b_rps, sizeof t->rate_b_rps);
+	memcpy(t->thrust_n, in->thrust_n, sizeof t->thrust_n);
+	memcpy(t->torque_nm, in->torque_nm, sizeof t->torque_nm);
+	memcpy(t->rate_b_rps, in->rate_b_rps, sizeof t->rate_b_rps);
 }
+
+static float phase_limit(const struct experiment *e, const char **name);
 
 static void phase_begin(struct experiment *e, const struct app_params *p, const struct exp_turn *in)
 {
@@ -334,7 +336,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 			.mot_tau_s = sc_from_float(cf->mot_tau),
 			.delay_frames = cf->delay_fr,
 			.curve = sc_from_float(p->mot_curve),
-			.thr0 = sc_from_float(in->thr_prev0),
+			.thr0 = in->thr_prev0,
 			.kf0 = p->veh_kf,
 			.ktau0 = p->veh_ktau,
 			.p0 = 1e6f,
@@ -350,14 +352,15 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 			.est_curve = cf->crv_est,
 			.n_frames = (uint32_t)(cf->exc_time / e->dt_nom + 0.5f),
 		};
-		scalar_t thr0[MOTOR_ID_ROTORS];
-		for (int j = 0; j < MOTOR_ID_ROTORS; j++)
-			thr0[j] = sc_from_float(in->thr_prev_all[j]);
-		motor_id_init(&e->mid, &mc, thr0);
+		_Static_assert(MOTOR_ID_ROTORS == HAL_ROTORS, "the motor model covers every rotor");
+		motor_id_init(&e->mid, &mc, in->thr_prev_all);
 		struct excite_params xp2 = xp;
 		xp2.seed = xp.seed * 2654435761u + 12345u;
 		excite_init(&e->exc2, &xp2);
 		e->rot_k = 0;
+		excite_null_pattern(0, e->pat[0]);
+		excite_null_pattern(1, e->pat[1]);
+		e->ofs = sc_from_float(cf->exc_ofs);
 		e->est_live = 0x0Fu;
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
@@ -368,22 +371,16 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		xp.ms_k_first = INR_MS_K_FIRST;
 		xp.ms_count = INR_MS_COUNT;
 		xp.amplitude = sc_from_float(ax == 2u ? amp / INR_YAW_DIV : amp);
-		scalar_t fm[8], tm[8], tau[3], w[3], inertia[3] = {
+		scalar_t tau[3], inertia[3] = {
 			sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz)};
-		for (int j = 0; j < 8; j++) {
-			fm[j] = sc_from_float(in->thrust_n[j]);
-			tm[j] = sc_from_float(in->torque_nm[j]);
-		}
 		if (e->mix)
-			ident_body_torque_mixer(e->mix, fm, tm, tau);
+			ident_body_torque_mixer(e->mix, in->thrust_n, in->torque_nm, tau);
 		else
-			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
-		for (int i = 0; i < 3; i++)
-			w[i] = sc_from_float(in->rate_b_rps[i]);
+			ident_body_torque(sc_from_float(p->veh_arm_l), in->thrust_n, in->torque_nm, tau);
 		scalar_t alpha = ident_torque_weight(sc_from_float(cf->mot_tau), dt);
 		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS),
-				   SC(INR_ZETA), dt, alpha, inertia, w, tau);
-		e->inr_u_prev = 0.0f;
+				   SC(INR_ZETA), dt, alpha, inertia, in->rate_b_rps, tau);
+		e->inr_u_prev = SC_ZERO;
 		e->est_live = 1u << (4u + ax);
 	} else {
 		e->t_run = cf->val_time;
@@ -391,16 +388,18 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		 * single rotor thrusts most for the least attitude change) */
 		xp.kind = EXCITE_UNIFORM;
 		xp.amplitude = sc_from_float(cf->inr_amp / INR_YAW_DIV);
-		filt_delay_init(&e->val_delay, cf->delay_fr,
-				sc_from_float(in->rotor_f_cmd0));
-		filt_lag_init(&e->val_lag, sc_from_float(cf->mot_tau), dt,
-			      sc_from_float(in->rotor_f_cmd0));
+		filt_delay_init(&e->val_delay, cf->delay_fr, in->rotor_f_cmd0);
+		filt_lag_init(&e->val_lag, sc_from_float(cf->mot_tau), dt, in->rotor_f_cmd0);
 		ident_fit_init(&e->fit);
 		e->est_live = 1u << 7;
 	}
 	excite_init(&e->exc, &xp);
 	/* the progress over the phase's time: products per step, no division */
 	float total = e->t_settle + e->t_run;
+	const char *lim_name;
+	e->t_total = total;
+	e->t_limit = phase_limit(e, &lim_name);
+	e->fr_dt = -1.0f;   /* no step yet */
 	e->prog_base = (float)(e->phase + (total > 0.0f ? 0 : 1)) / (float)e->n_phases;
 	e->prog_rate = total > 0.0f ? 1.0f / (total * (float)e->n_phases) : 0.0f;
 }
@@ -612,14 +611,17 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 static void phase_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
 {
 	const struct app_params *p = in->params;
-	const struct hal_sensor_frame *f = in->frame;
 	int k = e->phase_kind[e->phase];
 	bool running = e->t_phase >= e->t_settle;
 	/* frames since the last step: more than one when frames were lost on the link (the
 	 * plant then held the last throttles); the rotor and validation models advance through
 	 * the gap, the inertia filters (uniform sampling) are left GAP_HOLD frames to settle */
-	float fr = in->dt_s * e->inv_dt_nom;
-	int n = fr > 0.5f && fr < (float)FILT_DELAY_MAX + 0.5f ? (int)(fr + 0.5f) : 0;
+	if (in->dt_s != e->fr_dt) {   /* the same period as the last step: the same count */
+		float fr = in->dt_s * e->inv_dt_nom;
+		e->fr_n = fr > 0.5f && fr < (float)FILT_DELAY_MAX + 0.5f ? (int)(fr + 0.5f) : 0;
+		e->fr_dt = in->dt_s;
+	}
+	int n = e->fr_n;
 	if (n != 1)
 		e->gap_hold = GAP_HOLD;
 	else if (e->gap_hold > 0)
@@ -627,12 +629,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	bool use = running && n >= 1;
 
 	if (k == PK_ROTOR) {
-		scalar_t tp[HAL_ROTORS], fm[HAL_ROTORS], tm[HAL_ROTORS];
-		for (int j = 0; j < HAL_ROTORS; j++) {
-			tp[j] = sc_from_float(in->thr_prev[j]);
-			fm[j] = sc_from_float(f->rotor_thrust_n[j]);
-			tm[j] = sc_from_float(f->rotor_torque_nm[j]);
-		}
+		const scalar_t *tp = in->thr_prev, *fm = in->thrust_n, *tm = in->torque_nm;
 		for (int i = 1; i < n; i++) {
 			ident_rotor_hold(&e->rot, tp[0]);
 			motor_id_hold(&e->mid, tp);
@@ -642,7 +639,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		if (e->cfg.exc_null && n >= 1)
 			motor_id_step(&e->mid, tp, fm, tm, use);
 		scalar_t d = running ? excite_update(&e->exc) : SC_ZERO;
-		out->thr_delta[0] = sc_to_float(d);
+		out->thr_delta[0] = d;
 		if (e->cfg.exc_null) {
 			/* two dithers on the null-space patterns of Gamma_o (excite.h: rotors 1, 5
 			 * against 3, 7 and 2, 6 against 4, 8; thrust, roll, pitch and yaw all cancel
@@ -650,46 +647,48 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			 * their sum cycling +o, 0, -o, 0 every half second: every rotor is excited,
 			 * each over three mean throttles (the curve) */
 			scalar_t d2 = running ? excite_update(&e->exc2) : SC_ZERO;
-			scalar_t o = running ? sc_mul(sc_from_float(e->cfg.exc_ofs),
-						      excite_offset_level(e->rot_k, OFS_SEG_FRAMES)) : SC_ZERO;
+			scalar_t o = running ? sc_mul(e->ofs, excite_offset_level(e->rot_k, OFS_SEG_FRAMES)) : SC_ZERO;
 			if (running)
 				e->rot_k++;
-			scalar_t p1[HAL_ROTORS], p2[HAL_ROTORS];
-			excite_null_pattern(0, p1);
-			excite_null_pattern(1, p2);
+			const scalar_t *p1 = e->pat[0], *p2 = e->pat[1];
 			/* in scalars: integer in the fixed build, the same float operations in the other */
 			scalar_t a1 = sc_add(d, o), a2 = sc_add(d2, o);
+#if OCTO_FIXED
+			/* a1 p1 + a2 p2 with every p 1, -1 or 0: in Q16.16 a product by +/-1 rounds
+			 * nothing (and |a| <= INT32_MAX negates without overflow), so the products are
+			 * +/-a or 0 exactly, without the multiplications */
+			for (int j = 0; j < HAL_ROTORS; j++) {
+				scalar_t v1 = p1[j] > 0 ? a1 : (p1[j] < 0 ? -a1 : SC_ZERO);
+				scalar_t v2 = p2[j] > 0 ? a2 : (p2[j] < 0 ? -a2 : SC_ZERO);
+				out->thr_delta[j] = sc_add(v1, v2);
+			}
+#else
 			for (int j = 0; j < HAL_ROTORS; j++)
-				out->thr_delta[j] = sc_to_float(sc_add(sc_mul(a1, p1[j]), sc_mul(a2, p2[j])));
+				out->thr_delta[j] = sc_add(sc_mul(a1, p1[j]), sc_mul(a2, p2[j]));
+#endif
 		}
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
-		scalar_t fm[8], tm[8], tau[3], w[3];
-		for (int j = 0; j < 8; j++) {
-			fm[j] = sc_from_float(f->rotor_thrust_n[j]);
-			tm[j] = sc_from_float(f->rotor_torque_nm[j]);
-		}
+		scalar_t tau[3];
 		if (e->mix)
-			ident_body_torque_mixer(e->mix, fm, tm, tau);
+			ident_body_torque_mixer(e->mix, in->thrust_n, in->torque_nm, tau);
 		else
-			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
-		for (int i = 0; i < 3; i++)
-			w[i] = sc_from_float(f->rate_b_rps[i]);
+			ident_body_torque(sc_from_float(p->veh_arm_l), in->thrust_n, in->torque_nm, tau);
 		/* the instrument: the excitation sent on the previous step, which acted over the
 		 * frame this update closes */
-		ident_inertia_instrument(&e->inr, sc_from_float(e->inr_u_prev));
-		ident_inertia_update(&e->inr, tau, w, use && n == 1 && e->gap_hold == 0);
-		out->tau_delta[ax] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
+		ident_inertia_instrument(&e->inr, e->inr_u_prev);
+		ident_inertia_update(&e->inr, tau, in->rate_b_rps, use && n == 1 && e->gap_hold == 0);
+		out->tau_delta[ax] = running ? excite_update(&e->exc) : SC_ZERO;
 		e->inr_u_prev = out->tau_delta[ax];
 	} else {
 		/* the model's prediction of rotor 1's thrust: the allocation behind the throttle
 		 * sent on the previous frame, through the modelled delay and lag */
-		scalar_t fc = sc_from_float(in->rotor_f_cmd[0]), y_hat = SC_ZERO;
+		scalar_t fc = in->rotor_f_cmd[0], y_hat = SC_ZERO;
 		for (int i = 0; i < (n > 1 ? n : 1); i++)
 			y_hat = filt_lag_update(&e->val_lag, filt_delay_update(&e->val_delay, fc));
 		if (use)
-			ident_fit_add(&e->fit, sc_from_float(f->rotor_thrust_n[0]), y_hat);
-		out->tau_delta[2] = running ? sc_to_float(excite_update(&e->exc)) : 0.0f;
+			ident_fit_add(&e->fit, in->thrust_n[0], y_hat);
+		out->tau_delta[2] = running ? excite_update(&e->exc) : SC_ZERO;
 	}
 }
 
@@ -780,15 +779,16 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 	if (!e->reporting) {
 		phase_step(e, in, out);
 		e->t_phase += in->dt_s;
-		float total = e->t_settle + e->t_run;
-		const char *lim_name;
-		float lim = phase_limit(e, &lim_name);
-		if (e->t_phase > lim) {
+		float total = e->t_total;
+		if (e->t_phase > e->t_limit) {
+			const char *lim_name;
+			float lim = phase_limit(e, &lim_name);
 			memset(out, 0, sizeof *out);
 			limit_fail(e, lim_name, lim);
 			return e->state;
 		}
-		e->progress = e->prog_base + fminf(e->t_phase, total) * e->prog_rate;
+		/* min(t_phase, total): t_phase is never NaN, total always finite */
+		e->progress = e->prog_base + (e->t_phase < total ? e->t_phase : total) * e->prog_rate;
 		/* the estimates (soft float on a core without FPU) every EST_READ_FRAMES steps, on
 		 * the phase's first step and on its last, which the phase's end and the log's last
 		 * frame of the phase see */

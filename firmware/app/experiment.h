@@ -158,19 +158,25 @@ enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
 
 struct exp_input {
 	const struct hal_sensor_frame *frame;  /* this frame (paper's frames) */
+	/* this frame's measurements as scalars (converted once by the app): */
+	const scalar_t *thrust_n;              /* 8 rotor thrusts, N */
+	const scalar_t *torque_nm;             /* 8 rotor reaction torques, N m */
+	const scalar_t *rate_b_rps;            /* 3 body rates, rad/s */
 	float dt_s;                            /* time since the previous step */
 	const struct app_params *params;       /* parameters in use */
 	const float *wrench_dem;               /* [f, tau_x, tau_y, tau_z] of the hover control */
-	const float *rotor_f_cmd;              /* 8 rotor thrusts allocated last step, N */
-	const float *thr_prev;                 /* 8 throttles sent on the previous frame */
+	const scalar_t *rotor_f_cmd;           /* 8 rotor thrusts allocated last step, N */
+	const scalar_t *thr_prev;              /* 8 throttles sent on the previous frame */
 	float dt_frame_s;                      /* the plant's frame period (0: unknown, the
 						* first step's dt_s is taken) */
 };
 
+/* in scalars: the app adds them to its scalar demands and throttles (the log has thr_delta as
+ * floats); every value is small enough (|x| < 256) to be a float exactly */
 struct exp_output {
-	float f_delta;                         /* added to the demanded thrust, N */
-	float tau_delta[3];                    /* added to the demanded torque, N m (mu_1) */
-	float thr_delta[HAL_ROTORS];           /* added to each throttle after the map (delta_1) */
+	scalar_t f_delta;                      /* added to the demanded thrust, N */
+	scalar_t tau_delta[3];                 /* added to the demanded torque, N m (mu_1) */
+	scalar_t thr_delta[HAL_ROTORS];        /* added to each throttle after the map (delta_1) */
 };
 
 struct exp_result {
@@ -194,10 +200,10 @@ struct exp_line {
 /* what the start of a phase needs of the step that ended the previous one (a copy: the
  * frame is gone by the time the turn runs between frames) */
 struct exp_turn {
-	float thr_prev0;                       /* rotor 1's throttle sent before that step */
-	float thr_prev_all[HAL_ROTORS];        /* every rotor's */
-	float rotor_f_cmd0;                    /* rotor 1's thrust allocated before that step */
-	float thrust_n[HAL_ROTORS], torque_nm[HAL_ROTORS], rate_b_rps[3];   /* of its frame */
+	scalar_t thr_prev0;                    /* rotor 1's throttle sent before that step */
+	scalar_t thr_prev_all[HAL_ROTORS];     /* every rotor's */
+	scalar_t rotor_f_cmd0;                 /* rotor 1's thrust allocated before that step */
+	scalar_t thrust_n[HAL_ROTORS], torque_nm[HAL_ROTORS], rate_b_rps[3];   /* of its frame */
 };
 
 /* the experiment's configuration (ID_* parameters), read once at exp_start */
@@ -234,19 +240,24 @@ struct experiment {
 	float dt_nom, z0;
 	float inv_dt_nom;                      /* 1 / dt_nom: frames in a step's dt */
 	float prog_base, prog_rate;            /* progress = base + min(t_phase, total) rate */
+	float t_total, t_limit;                /* the phase's planned time and time limit (phase_limit) */
+	float fr_dt;                           /* the last step's dt_s ... */
+	int fr_n;                              /* ... and the frames it spans (phase_step) */
 	int gap_hold;                          /* frames left without inertia updates after a gap */
 	struct exp_cfg cfg;
 	struct excite exc;
 	struct excite exc2;                    /* rotor experiment: the second pattern's dither */
 	uint32_t rot_k;                        /* rotor experiment: excited frames so far */
 	uint32_t est_wait;                     /* steps until est[] / est_sd[] are read again */
-	float inr_u_prev;                      /* inertia: the excitation of the previous step (the instrument) */
+	scalar_t inr_u_prev;                   /* inertia: the excitation of the previous step (the instrument) */
 	/* the estimator of the current phase: phases never overlap, so they share the memory
 	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */
 	union {
 		struct {                           /* rotor coefficients */
 			struct ident_rotor rot;    /* rotor 1, model given (and the paper's plain) */
 			struct motor_id mid;       /* every rotor, the motor model found (motor_id.h) */
+			scalar_t pat[2][HAL_ROTORS]; /* the two null-space patterns (excite_null_pattern) */
+			scalar_t ofs;              /* ID_EXC_OFS: the offset's amplitude */
 		};
 		struct ident_inertia inr;          /* inertia Ixx, Iyy or Izz */
 		struct {                           /* validation */

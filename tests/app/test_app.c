@@ -578,3 +578,47 @@ UNIT_TEST(app_landing_time_limit_fails_to_its_origin)
 	fly_until(r, APP_DISARMED, 90 * 60);
 	CHECK(r->a.mode == APP_DISARMED);
 }
+
+/* app_t_before (the per-frame plant-time comparisons by integer operations) gives the IEEE
+ * answer of a < b: special values pairwise (zeros of both signs, subnormals, infinities,
+ * NaNs of both signs) and random pairs (any bit pattern; neighbours one ulp apart; plant
+ * times a frame apart). */
+static uint64_t xs64(uint64_t *s)
+{
+	*s ^= *s << 13;
+	*s ^= *s >> 7;
+	*s ^= *s << 17;
+	return *s;
+}
+
+static double dbl_of_bits(uint64_t u)
+{
+	union { uint64_t u; double d; } v = {u};
+	return v.d;
+}
+
+UNIT_TEST(app_t_before_is_the_ieee_order)
+{
+	const double sp[] = {0.0, -0.0, dbl_of_bits(1u), -dbl_of_bits(1u), 1.0, -1.0, 1e-300, -1e-300,
+			     1.7976931348623157e308, -1.7976931348623157e308, INFINITY, -INFINITY,
+			     dbl_of_bits(0x7ff8000000000000u), dbl_of_bits(0xfff8000000000001u),
+			     dbl_of_bits(0x7ff0000000000001u), 12.345678, 12.345678 + 1.0 / 90.0};
+	const int n_sp = (int)(sizeof sp / sizeof sp[0]);
+	int bad = 0;
+	for (int i = 0; i < n_sp; i++)
+		for (int j = 0; j < n_sp; j++)
+			bad += app_t_before(sp[i], sp[j]) != (sp[i] < sp[j]);
+	CHECK(bad == 0);
+	uint64_t s = 0x9E3779B97F4A7C15u;
+	for (int k = 0; k < 20000; k++) {
+		uint64_t ua = xs64(&s), ub = xs64(&s);
+		double a = dbl_of_bits(ua), b = dbl_of_bits(ub);
+		bad += app_t_before(a, b) != (a < b);
+		double c = dbl_of_bits(ua ^ (ub & 3u));   /* a neighbour of a, or a itself */
+		bad += app_t_before(a, c) != (a < c) || app_t_before(c, a) != (c < a);
+		double t = (double)(ub >> 40) / 90.0, t1 = t + 1.0 / 90.0, tm = -t;
+		bad += app_t_before(t, t1) != (t < t1) || app_t_before(t1, t) != (t1 < t) ||
+		       app_t_before(tm, t) != (tm < t) || app_t_before(t, tm) != (t < tm);
+	}
+	CHECK(bad == 0);
+}

@@ -33,13 +33,14 @@
 static struct experiment ex;
 static struct app_params prm;
 static struct hal_sensor_frame fr;
-static float thr[HAL_ROTORS], rotor_f[HAL_ROTORS], wrench[4];
+static scalar_t thr[HAL_ROTORS], rotor_f[HAL_ROTORS];   /* scalars, as the app keeps them */
+static float wrench[4];
 static long frames;
 
-static void check_finite(const float *v, size_t n)
+static void check_finite(const scalar_t *v, size_t n)
 {
 	for (size_t i = 0; i < n; i++)
-		if (!isfinite(v[i]))
+		if (!isfinite(sc_to_float(v[i])))
 			abort();
 }
 
@@ -56,7 +57,15 @@ static bool step(void)
 	ex.n_results = 0;
 	fr.seq++;
 	fr.t_s += 1.0 / 90.0;
-	struct exp_input in = { &fr, 1.0f / 90.0f, &prm, wrench, rotor_f, thr, 1.0f / 90.0f };
+	/* the frame's measurements as scalars, as the app converts them once per frame */
+	scalar_t f[HAL_ROTORS], tq[HAL_ROTORS], w[3];
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		f[j] = sc_from_float(fr.rotor_thrust_n[j]);
+		tq[j] = sc_from_float(fr.rotor_torque_nm[j]);
+	}
+	for (int i = 0; i < 3; i++)
+		w[i] = sc_from_float(fr.rate_b_rps[i]);
+	struct exp_input in = { &fr, f, tq, w, 1.0f / 90.0f, &prm, wrench, rotor_f, thr, 1.0f / 90.0f };
 	struct exp_output out;
 	memset(&out, 0, sizeof out);
 	enum exp_state st = exp_step(&ex, &in, &out);
@@ -64,7 +73,7 @@ static bool step(void)
 	check_finite(out.tau_delta, 3);
 	check_finite(out.thr_delta, HAL_ROTORS);
 	for (int j = 0; j < HAL_ROTORS; j++)
-		thr[j] = 0.5f + out.thr_delta[j];
+		thr[j] = sc_add(SC(0.5), out.thr_delta[j]);
 	exp_pump(&ex);
 	if (strnlen(ex.msg, sizeof ex.msg) >= sizeof ex.msg) /* a status line is NUL-terminated */
 		abort();
@@ -77,7 +86,7 @@ static bool step(void)
 static void plant_frame(float scale)
 {
 	for (int j = 0; j < HAL_ROTORS; j++) {
-		float t = thr[j];
+		float t = sc_to_float(thr[j]);
 		fr.rotor_thrust_n[j] = scale * prm.veh_kf * t;
 		fr.rotor_torque_nm[j] = scale * prm.veh_ktau * t;
 		fr.thr_cmd_echo[j] = t;
@@ -96,8 +105,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	fr.q_ib[0] = 1.0f;
 	fr.pos_i_m[2] = 10.0f;
 	for (int j = 0; j < HAL_ROTORS; j++) {
-		thr[j] = 0.5f;
-		rotor_f[j] = prm.veh_mass * 9.81f / HAL_ROTORS;
+		thr[j] = SC(0.5);
+		rotor_f[j] = sc_from_float(prm.veh_mass * 9.81f / HAL_ROTORS);
 	}
 	wrench[0] = prm.veh_mass * 9.81f;
 	wrench[1] = wrench[2] = wrench[3] = 0.0f;
