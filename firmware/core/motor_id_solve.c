@@ -198,9 +198,12 @@ static float rotor_ssr(const float st[S_N], bool est_curve, float c0, float s_c,
 	return ssr > 0 ? (float)ssr : 0.0f;
 }
 
-/* rotor j's residual sum of squares under the configured model */
-static float rotor_ssr_m(const struct motor_id *m, const float st[S_N], unsigned j, float delta[2])
+/* rotor j's statistics of delay d (st; gi, l: see stat_at) and its residual sum of squares
+ * under the configured model */
+NOINLINE static float ssr_at(const struct motor_id *m, unsigned d, unsigned gi, const float l[3], unsigned j,
+			     float st[S_N], float delta[2])
 {
+	stat_at(m, d, gi, l, j, st);
 	return rotor_ssr(st, m->cfg.est_curve, m->cfg.curve0, SC_J(m, j), delta);
 }
 
@@ -245,8 +248,7 @@ static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
 		tot[i] = 0.0f;
 		for (unsigned j = 0; j < NR; j++) {
 			float o[S_N];
-			stat_at(m, d, i, 0, j, o);
-			e[i][j] = rotor_ssr_m(m, o, j, dl);
+			e[i][j] = ssr_at(m, d, i, 0, j, o, dl);
 			tot[i] += e[i][j];
 		}
 		if (tot[i] < tot[ib])
@@ -267,8 +269,7 @@ static float delay_logssr(const struct motor_id *m, unsigned d, float x)
 	lagrange3(x, l);
 	for (unsigned j = 0; j < NR; j++) {
 		float o[S_N];
-		stat_at(m, d, NL, l, j, o);
-		sum += logf(fmaxf(rotor_ssr_m(m, o, j, dl), 1e-30f));
+		sum += logf(fmaxf(ssr_at(m, d, NL, l, j, o, dl), 1e-30f));
 	}
 	return sum;
 }
@@ -352,13 +353,12 @@ static void ref_theta(const struct motor_id *m, unsigned j, float th[2])
 	th[1] = kf * w[1];
 }
 
-/* Rotor j's own curve: the 2-parameter fit about the prior's reference th, c_j = B / m_j,
- * with its variance (0: not determined) and the fit's residual sum of squares *ssr2. */
-static float rotor_curve(const struct motor_id *m, const float st[S_N], unsigned j, const float th[2], float *ssr2,
-			 float *var)
+/* Rotor j's own curve c_j = B / m_j from its 2-parameter fit about the prior's reference th
+ * (d2: the fit's change of theta, ssr2: its residual sum of squares), with its variance (0:
+ * not determined). */
+static float rotor_curve(const struct motor_id *m, const float st[S_N], unsigned j, const float th[2],
+			 const float d2[2], float ssr2, float *var)
 {
-	float d2[2];
-	*ssr2 = rotor_ssr(st, true, m->cfg.curve0, SC_J(m, j), d2);
 	float a = th[0] + d2[0], bq = th[1] + d2[1];
 	float mj = a + bq * (1.0f - 2.0f * SC_J(m, j));
 	float det = stat_det(st);
@@ -368,7 +368,7 @@ static float rotor_curve(const struct motor_id *m, const float st[S_N], unsigned
 	const float ga = (-bq / (mj * mj)), gb = (a / (mj * mj));
 	/* g^T G^-1 g */
 	float q = (float)((ga * ga * st[S_G22] - 2.0f * ga * gb * st[S_G12] + gb * gb * st[S_G11]) / det);
-	*var = *ssr2 / ((float)m->n_stat - 2.0f) * q;
+	*var = ssr2 / ((float)m->n_stat - 2.0f) * q;
 	return bq / mj;
 }
 
@@ -398,13 +398,14 @@ static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f,
 	lagrange3(x, l);
 	f->ssr_sum = f->chi2 = 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
-		float dl[2], ssr2;
-		stat_at(m, d, NL, l, j, st);
+		float dl[2];
+		const float ssr = ssr_at(m, d, NL, l, j, st, dl);
+		/* the rotor's own curve's fit: the configured model's when the curve is estimated */
+		const float ssr2 = ec ? ssr : rotor_ssr(st, true, m->cfg.curve0, SC_J(m, j), dl);
 		ref_theta(m, j, th);
-		const float ssr = rotor_ssr_m(m, st, j, dl);
 		f->ssr_sum += ssr;
 		f->s2[j] = ssr / ((float)m->n_stat - np);
-		cj[j] = rotor_curve(m, st, j, th, &ssr2, &vcj[j]);
+		cj[j] = rotor_curve(m, st, j, th, dl, ssr2, &vcj[j]);
 		f->chi2 += ssr - ssr2;
 	}
 	float sw = 0.0f, swc = 0.0f;
@@ -492,8 +493,7 @@ static void white_begin(struct motor_id *m)
 	lagrange3(x, l);
 	for (unsigned j = 0; j < NR; j++) {
 		float o[S_N];
-		stat_at(m, d, NL, l, j, o);
-		rotor_ssr_m(m, o, j, dl);
+		ssr_at(m, d, NL, l, j, o, dl);
 		w->dl[j][0] = mid_f_of_float(dl[0], m->kexp);
 		w->dl[j][1] = mid_f_of_float(dl[1], m->kexp);
 		w->s[j] = mid_u_of_float(wsum3(l, mid_u_to_float(m->s[d][0][j]), mid_u_to_float(m->s[d][1][j]),
