@@ -169,6 +169,18 @@ static float stat_gww(const float st[S_N], float w0, float w1)
 	return w0 * w0 * st[S_G11] + 2.0f * w0 * w1 * st[S_G12] + w1 * w1 * st[S_G22];
 }
 
+/* The one-parameter fit of y (the 2 values sum x f) on the regressor g = w^T x, w the curve
+ * c's weights at s_c (curve_w): the coefficient (w^T y) / (sum g^2), 0 if sum g^2 is not
+ * positive; also w, *wy = w^T y and *gw = sum g^2. */
+NOINLINE static float fit_w(const float st[S_N], float c, float s_c, float y1, float y2, float w[2], float *wy,
+			    float *gw)
+{
+	curve_w(c, s_c, w);
+	*gw = stat_gww(st, w[0], w[1]);
+	*wy = w[0] * y1 + w[1] * y2;
+	return *gw > 0 ? *wy / *gw : 0.0f;
+}
+
 /* residual sum of squares of one rotor's statistics: 2 parameters (curve estimated) or the
  * prior curve's 1; delta = the fitted change of theta from the reference (2 values) */
 static float rotor_ssr(const float st[S_N], bool est_curve, float c0, float s_c, float delta[2])
@@ -186,14 +198,10 @@ static float rotor_ssr(const float st[S_N], bool est_curve, float c0, float s_c,
 		float ssr = st[S_RR] - d0 * st[S_B1] - d1 * st[S_B2];
 		return ssr > 0 ? (float)ssr : 0.0f;
 	}
-	float w[2];
-	curve_w(c0, s_c, w);
-	float w0 = w[0], w1 = w[1];
-	float gw = stat_gww(st, w0, w1);
-	float bw = w0 * st[S_B1] + w1 * st[S_B2];
-	float mu = gw > 0 ? bw / gw : 0;
-	delta[0] = (float)(mu * w0);
-	delta[1] = (float)(mu * w1);
+	float w[2], bw, gw;
+	float mu = fit_w(st, c0, s_c, st[S_B1], st[S_B2], w, &bw, &gw);
+	delta[0] = mu * w[0];
+	delta[1] = mu * w[1];
 	float ssr = st[S_RR] - mu * bw;
 	return ssr > 0 ? (float)ssr : 0.0f;
 }
@@ -306,14 +314,10 @@ static void best_hyp(const struct motor_id *m, unsigned *d_best, float *x_best)
  * sum x f = b + G theta_ref; *gw = sum g^2 */
 static float rotor_m(const float st[S_N], float c, float s_c, const float th_ref[2], float *gw)
 {
-	float w[2];
-	curve_w(c, s_c, w);
-	const float w0 = w[0], w1 = w[1], t0 = th_ref[0], t1 = th_ref[1];
-	float xf1 = st[S_B1] + st[S_G11] * t0 + st[S_G12] * t1;
-	float xf2 = st[S_B2] + st[S_G12] * t0 + st[S_G22] * t1;
-	float g = stat_gww(st, w0, w1);
-	*gw = (float)g;
-	return g > 0 ? (float)((w0 * xf1 + w1 * xf2) / g) : 0.0f;
+	float w[2], wy;
+	const float t0 = th_ref[0], t1 = th_ref[1];
+	return fit_w(st, c, s_c, st[S_B1] + st[S_G11] * t0 + st[S_G12] * t1, st[S_B2] + st[S_G12] * t0 + st[S_G22] * t1,
+		     w, &wy, gw);
 }
 
 /* median of 8 (mean of the 4th and 5th); their indices in *a, *b */
