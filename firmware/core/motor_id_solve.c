@@ -585,15 +585,16 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 	if (!(kk > 0.0f) || fabsf(xi) >= X_MAX - 1e-3f)
 		return;
 	for (int it = 0; it < 3; it++) {
-		float fv[3];   /* at xi - h, xi, xi + h */
+		float fv[3], c;   /* at xi - h, xi, xi + h */
 		for (int i = 0; i < 3; i++)
 			fv[i] = delay_logssr(m, d, xi + (float)(i - 1) * h);
-		float d2 = (fv[2] - 2.0f * fv[1] + fv[0]) / (h * h), d1 = (fv[2] - fv[0]) / (2.0f * h);
-		if (!(d2 > 0.0f))
+		/* the Newton step -f'/f'' of the central differences: the minimum of the parabola
+		 * through the three values (in units of h, at most X_MAX of them) */
+		float step = h * parabola(fv, &c);
+		if (!(c > 0.0f))
 			return;
-		float step = clampf(-d1 / d2, -0.5f, 0.5f);
 		xi = clampf(xi + step, -X_MAX + 2e-3f, X_MAX - 2e-3f);
-		kk = 0.5f * d2;
+		kk = c / (h * h);
 		if (fabsf(step) < 1e-3f)
 			break;
 	}
