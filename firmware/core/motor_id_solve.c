@@ -691,6 +691,12 @@ NOINLINE static float lag_var(float vp, float vm, float var_x)
 	return dv * dv * var_x;
 }
 
+/* a standard deviation sd with the lag's share added (see lag_var) */
+static float sd_with_lag(float sd, float vp, float vm, float var_x)
+{
+	return sqrt0(sd * sd + lag_var(vp, vm, var_x));
+}
+
 /* the normalised errors' limit: ne_max, or NE_SIGMAS standard deviations of the ratio of two
  * variance estimates (the fit's, dof degrees of freedom; the noise's, relative variance v_nz)
  * when the data are few */
@@ -734,7 +740,8 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float x = xs[best], r = m->lag_r[best];
 	lag_newton(m, best, &x, &ks[best]);
 	res->tau = m->lag_c[best] * powf(r, x);
-	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(1.0f / (nf * ks[best])) : res->tau;
+	const float var_x = ks[best] > 0.0f ? 1.0f / (nf * ks[best]) : 0.0f;
+	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(var_x) : res->tau;
 	/* the grid's low end without lag and the minimum there: no lag (sd: that bound) */
 	float dtf = sc_to_float(m->cfg.dt_s);
 	bool no_lag = res->tau <= 1.2f * NO_LAG_FRAC * dtf ||
@@ -778,15 +785,15 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
 	 * is orthogonal to their regressors) */
 	if (!no_lag && ks[best] > 0.0f) {
-		float var_x = 1.0f / (nf * ks[best]), kp, cp, sp[NR], sm[NR];
+		float kp, cp, sp[NR], sm[NR];
 		fit_at(m, best, x + LAG_H, &f, sp);   /* f's fit at x is no longer needed: stack on M0 */
 		kp = f.kf;
 		cp = f.curve;
 		fit_at(m, best, x - LAG_H, &f, sm);
 		vkf += lag_var(kp, f.kf, var_x);
-		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + lag_var(cp, f.curve, var_x));
+		res->curve_sd = sd_with_lag(res->curve_sd, cp, f.curve, var_x);
 		for (unsigned j = 0; j < NR; j++)
-			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + lag_var(sp[j], sm[j], var_x));
+			res->scale_sd[j] = sd_with_lag(res->scale_sd[j], sp[j], sm[j], var_x);
 	}
 	res->kf_sd = sqrt0(vkf);
 
