@@ -38,11 +38,16 @@ static motor_id_sum_t stat_sum(const struct motor_id_stat *s, unsigned k)
 static void stat_at(const struct motor_id *m, unsigned d, unsigned gi, const float l[3], unsigned j, float o[S_N])
 {
 	for (unsigned k = 0; k < S_N; k++) {
-		float v[NL];
-		for (unsigned i = 0; i < NL; i++)
-			v[i] = mid_sum_to_float(stat_sum(&m->st[d][i][j], k), m->e[MID_E_G11 + k], (int)(k > S_G22) + (int)(k > S_B2),
-				      m->kexp);
-		o[k] = gi < NL ? v[gi] : l[0] * v[0] + l[1] * v[1] + l[2] * v[2];
+		/* the kind's scale, a power of two (1 in the float build), applied last: the same
+		 * result as scaling each sum first, and a grid point converts its sum alone */
+		const float sc = mid_sum_to_float(1, m->e[MID_E_G11 + k], (int)(k > S_G22) + (int)(k > S_B2), m->kexp);
+		float v;
+		if (gi < NL)
+			v = (float)stat_sum(&m->st[d][gi][j], k);
+		else
+			v = l[0] * (float)stat_sum(&m->st[d][0][j], k) + l[1] * (float)stat_sum(&m->st[d][1][j], k) +
+			    l[2] * (float)stat_sum(&m->st[d][2][j], k);
+		o[k] = v * sc;
 	}
 }
 
