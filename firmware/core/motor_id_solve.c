@@ -11,16 +11,13 @@
 #define NL MOTOR_ID_LAGS
 
 /* The least-squares arithmetic on the sums (interpolation, solutions, residual sums of
- * squares: differences of nearly equal products) in ls_t: float in the float build; double
- * in the fixed build, whose integer sums carry 30 significant bits, more than float holds
- * (on Cortex-M0 both are soft float; this runs between frames). Plain arithmetic only. */
-#if OCTO_FIXED
-typedef double ls_t;
-#else
-typedef float ls_t;
-#endif
+ * squares) is float in both builds: the sums are taken relative to a reference model near
+ * the data (motor_id.h), so a residual sum of squares is not a small difference of large
+ * products, and float holds the estimates well within 0.02 % of float64 in both builds (the
+ * fixed build's 30-bit integer sums are rounded once to float; double there cost 1.5
+ * times the soft-float instructions on Cortex-M0 for no change of accuracy that matters). */
 
-/* a rotor's least-squares sums under one hypothesis (SI units): ls_t st[S_N], in the order of
+/* a rotor's least-squares sums under one hypothesis (SI units): float st[S_N], in the order of
  * struct motor_id_stat's members and of their exponents MID_E_G11..MID_E_RR */
 enum { S_G11, S_G12, S_G22, S_B1, S_B2, S_RR, S_N };
 _Static_assert(sizeof(struct motor_id_stat) == S_N * sizeof(motor_id_sum_t) &&
@@ -33,29 +30,24 @@ static motor_id_sum_t stat_sum(const struct motor_id_stat *s, unsigned k)
 	return *(const motor_id_sum_t *)(const void *)((const char *)s + k * sizeof(motor_id_sum_t));
 }
 
-/* a sum of kind ev to ls_t (see mid_sum_to_float) */
-static ls_t sum_ls(motor_id_sum_t v, int ev, int p, int kexp)
-{
-#if OCTO_FIXED
-	return (ls_t)v * (ls_t)sc_pow2f(ev - QF_MSUM_FRAC + p * kexp);
-#else
-	return mid_sum_to_float(v, ev, p, kexp);
-#endif
-}
-
 /* rotor j's throttle at the start, as float */
 #define SC_J(m, j) mid_u_to_float((m)->s_c[j])
 
 /* Rotor j's statistics of delay d: at grid point gi (< NL), or (gi = NL) interpolated over the
  * grid with the weights l. Sums of kind G (power of thrust 0), B (1), RR (2). */
-static void stat_at(const struct motor_id *m, unsigned d, unsigned gi, const ls_t l[3], unsigned j, ls_t o[S_N])
+static void stat_at(const struct motor_id *m, unsigned d, unsigned gi, const float l[3], unsigned j, float o[S_N])
 {
 	for (unsigned k = 0; k < S_N; k++) {
-		ls_t v[NL];
-		for (unsigned i = 0; i < NL; i++)
-			v[i] = sum_ls(stat_sum(&m->st[d][i][j], k), m->e[MID_E_G11 + k], (int)(k > S_G22) + (int)(k > S_B2),
-				      m->kexp);
-		o[k] = gi < NL ? v[gi] : l[0] * v[0] + l[1] * v[1] + l[2] * v[2];
+		/* the kind's scale, a power of two (1 in the float build), applied last: the same
+		 * result as scaling each sum first, and a grid point converts its sum alone */
+		const float sc = mid_sum_to_float(1, m->e[MID_E_G11 + k], (int)(k > S_G22) + (int)(k > S_B2), m->kexp);
+		float v;
+		if (gi < NL)
+			v = (float)stat_sum(&m->st[d][gi][j], k);
+		else
+			v = l[0] * (float)stat_sum(&m->st[d][0][j], k) + l[1] * (float)stat_sum(&m->st[d][1][j], k) +
+			    l[2] * (float)stat_sum(&m->st[d][2][j], k);
+		o[k] = v * sc;
 	}
 }
 
@@ -171,49 +163,60 @@ static void curve_w(float c, float s_c, float w[2])
 }
 
 /* det G of a rotor's statistics */
-NOINLINE static ls_t stat_det(const ls_t st[S_N])
+NOINLINE static float stat_det(const float st[S_N])
 {
 	return st[S_G11] * st[S_G22] - st[S_G12] * st[S_G12];
 }
 
 /* w^T G w of a rotor's statistics (sum g^2 of the regressor g = w^T x) */
-static ls_t stat_gww(const ls_t st[S_N], ls_t w0, ls_t w1)
+static float stat_gww(const float st[S_N], float w0, float w1)
 {
-	return w0 * w0 * st[S_G11] + (ls_t)2.0f * w0 * w1 * st[S_G12] + w1 * w1 * st[S_G22];
+	return w0 * w0 * st[S_G11] + 2.0f * w0 * w1 * st[S_G12] + w1 * w1 * st[S_G22];
+}
+
+/* The one-parameter fit of y (the 2 values sum x f) on the regressor g = w^T x, w the curve
+ * c's weights at s_c (curve_w): the coefficient (w^T y) / (sum g^2), 0 if sum g^2 is not
+ * positive; also w, *wy = w^T y and *gw = sum g^2. */
+NOINLINE static float fit_w(const float st[S_N], float c, float s_c, float y1, float y2, float w[2], float *wy,
+			    float *gw)
+{
+	curve_w(c, s_c, w);
+	*gw = stat_gww(st, w[0], w[1]);
+	*wy = w[0] * y1 + w[1] * y2;
+	return *gw > 0 ? *wy / *gw : 0.0f;
 }
 
 /* residual sum of squares of one rotor's statistics: 2 parameters (curve estimated) or the
  * prior curve's 1; delta = the fitted change of theta from the reference (2 values) */
-static float rotor_ssr(const ls_t st[S_N], bool est_curve, float c0, float s_c, float delta[2])
+static float rotor_ssr(const float st[S_N], bool est_curve, float c0, float s_c, float delta[2])
 {
 	if (est_curve) {
-		ls_t det = stat_det(st);
-		if (!(det > (ls_t)1e-30f * st[S_G11] * st[S_G22]) || !(st[S_G11] > 0)) {
+		float det = stat_det(st);
+		if (!(det > 1e-30f * st[S_G11] * st[S_G22]) || !(st[S_G11] > 0)) {
 			delta[0] = delta[1] = 0.0f;
 			return (float)st[S_RR];
 		}
-		ls_t d0 = (st[S_G22] * st[S_B1] - st[S_G12] * st[S_B2]) / det;
-		ls_t d1 = (st[S_G11] * st[S_B2] - st[S_G12] * st[S_B1]) / det;
+		float d0 = (st[S_G22] * st[S_B1] - st[S_G12] * st[S_B2]) / det;
+		float d1 = (st[S_G11] * st[S_B2] - st[S_G12] * st[S_B1]) / det;
 		delta[0] = (float)d0;
 		delta[1] = (float)d1;
-		ls_t ssr = st[S_RR] - d0 * st[S_B1] - d1 * st[S_B2];
+		float ssr = st[S_RR] - d0 * st[S_B1] - d1 * st[S_B2];
 		return ssr > 0 ? (float)ssr : 0.0f;
 	}
-	float w[2];
-	curve_w(c0, s_c, w);
-	ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1];
-	ls_t gw = stat_gww(st, w0, w1);
-	ls_t bw = w0 * st[S_B1] + w1 * st[S_B2];
-	ls_t mu = gw > 0 ? bw / gw : 0;
-	delta[0] = (float)(mu * w0);
-	delta[1] = (float)(mu * w1);
-	ls_t ssr = st[S_RR] - mu * bw;
+	float w[2], bw, gw;
+	float mu = fit_w(st, c0, s_c, st[S_B1], st[S_B2], w, &bw, &gw);
+	delta[0] = mu * w[0];
+	delta[1] = mu * w[1];
+	float ssr = st[S_RR] - mu * bw;
 	return ssr > 0 ? (float)ssr : 0.0f;
 }
 
-/* rotor j's residual sum of squares under the configured model */
-static float rotor_ssr_m(const struct motor_id *m, const ls_t st[S_N], unsigned j, float delta[2])
+/* rotor j's statistics of delay d (st; gi, l: see stat_at) and its residual sum of squares
+ * under the configured model */
+NOINLINE static float ssr_at(const struct motor_id *m, unsigned d, unsigned gi, const float l[3], unsigned j,
+			     float st[S_N], float delta[2])
 {
+	stat_at(m, d, gi, l, j, st);
 	return rotor_ssr(st, m->cfg.est_curve, m->cfg.curve0, SC_J(m, j), delta);
 }
 
@@ -231,27 +234,13 @@ static float parabola(const float sv[3], float *k)
 	return x;
 }
 
-/* Lagrange weights of the three grid points at x, in ls_t (the weights of the statistics:
- * their rounding would perturb sums that the solutions difference) */
-static void lagrange3_ls(float x, ls_t l[3])
-{
-	const ls_t xl = (ls_t)x;
-	l[0] = (ls_t)0.5f * xl * (xl - (ls_t)1.0f);
-	l[1] = (ls_t)1.0f - xl * xl;
-	l[2] = (ls_t)0.5f * xl * (xl + (ls_t)1.0f);
-}
-
-/* the same in float (the float build's ls_t) */
-#if OCTO_FIXED
+/* Lagrange weights of the three grid points at x */
 static void lagrange3(float x, float l[3])
 {
 	l[0] = 0.5f * x * (x - 1.0f);
 	l[1] = 1.0f - x * x;
 	l[2] = 0.5f * x * (x + 1.0f);
 }
-#else
-#define lagrange3 lagrange3_ls
-#endif
 
 /* l[0] a + l[1] b + l[2] c: a value interpolated over the grid */
 NOINLINE static float wsum3(const float l[3], float a, float b, float c)
@@ -271,9 +260,8 @@ static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
 	for (unsigned i = 0; i < NL; i++) {
 		tot[i] = 0.0f;
 		for (unsigned j = 0; j < NR; j++) {
-			ls_t o[S_N];
-			stat_at(m, d, i, 0, j, o);
-			e[i][j] = rotor_ssr_m(m, o, j, dl);
+			float o[S_N];
+			e[i][j] = ssr_at(m, d, i, 0, j, o, dl);
 			tot[i] += e[i][j];
 		}
 		if (tot[i] < tot[ib])
@@ -290,12 +278,11 @@ static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
 static float delay_logssr(const struct motor_id *m, unsigned d, float x)
 {
 	float dl[2], sum = 0.0f;
-	ls_t l[3];
-	lagrange3_ls(x, l);
+	float l[3];
+	lagrange3(x, l);
 	for (unsigned j = 0; j < NR; j++) {
-		ls_t o[S_N];
-		stat_at(m, d, NL, l, j, o);
-		sum += logf(fmaxf(rotor_ssr_m(m, o, j, dl), 1e-30f));
+		float o[S_N];
+		sum += logf(fmaxf(ssr_at(m, d, NL, l, j, o, dl), 1e-30f));
 	}
 	return sum;
 }
@@ -330,16 +317,12 @@ static void best_hyp(const struct motor_id *m, unsigned *d_best, float *x_best)
 
 /* rotor's m at curve c from its statistics: sum g f / sum g^2 with g = w^T x and
  * sum x f = b + G theta_ref; *gw = sum g^2 */
-static float rotor_m(const ls_t st[S_N], float c, float s_c, const float th_ref[2], float *gw)
+static float rotor_m(const float st[S_N], float c, float s_c, const float th_ref[2], float *gw)
 {
-	float w[2];
-	curve_w(c, s_c, w);
-	const ls_t w0 = (ls_t)w[0], w1 = (ls_t)w[1], t0 = (ls_t)th_ref[0], t1 = (ls_t)th_ref[1];
-	ls_t xf1 = st[S_B1] + st[S_G11] * t0 + st[S_G12] * t1;
-	ls_t xf2 = st[S_B2] + st[S_G12] * t0 + st[S_G22] * t1;
-	ls_t g = stat_gww(st, w0, w1);
-	*gw = (float)g;
-	return g > 0 ? (float)((w0 * xf1 + w1 * xf2) / g) : 0.0f;
+	float w[2], wy;
+	const float t0 = th_ref[0], t1 = th_ref[1];
+	return fit_w(st, c, s_c, st[S_B1] + st[S_G11] * t0 + st[S_G12] * t1, st[S_B2] + st[S_G12] * t0 + st[S_G22] * t1,
+		     w, &wy, gw);
 }
 
 /* median of 8 (mean of the 4th and 5th); their indices in *a, *b */
@@ -379,23 +362,22 @@ static void ref_theta(const struct motor_id *m, unsigned j, float th[2])
 	th[1] = kf * w[1];
 }
 
-/* Rotor j's own curve: the 2-parameter fit about the prior's reference th, c_j = B / m_j,
- * with its variance (0: not determined) and the fit's residual sum of squares *ssr2. */
-static float rotor_curve(const struct motor_id *m, const ls_t st[S_N], unsigned j, const float th[2], float *ssr2,
-			 float *var)
+/* Rotor j's own curve c_j = B / m_j from its 2-parameter fit about the prior's reference th
+ * (d2: the fit's change of theta, ssr2: its residual sum of squares), with its variance (0:
+ * not determined). */
+static float rotor_curve(const struct motor_id *m, const float st[S_N], unsigned j, const float th[2],
+			 const float d2[2], float ssr2, float *var)
 {
-	float d2[2];
-	*ssr2 = rotor_ssr(st, true, m->cfg.curve0, SC_J(m, j), d2);
 	float a = th[0] + d2[0], bq = th[1] + d2[1];
 	float mj = a + bq * (1.0f - 2.0f * SC_J(m, j));
-	ls_t det = stat_det(st);
+	float det = stat_det(st);
 	*var = 0.0f;
 	if (!(mj > 0.0f && det > 0))
 		return 0.0f;
-	const ls_t ga = (ls_t)(-bq / (mj * mj)), gb = (ls_t)(a / (mj * mj));
+	const float ga = (-bq / (mj * mj)), gb = (a / (mj * mj));
 	/* g^T G^-1 g */
-	float q = (float)((ga * ga * st[S_G22] - (ls_t)2.0f * ga * gb * st[S_G12] + gb * gb * st[S_G11]) / det);
-	*var = *ssr2 / ((float)m->n_stat - 2.0f) * q;
+	float q = (float)((ga * ga * st[S_G22] - 2.0f * ga * gb * st[S_G12] + gb * gb * st[S_G11]) / det);
+	*var = ssr2 / ((float)m->n_stat - 2.0f) * q;
 	return bq / mj;
 }
 
@@ -421,17 +403,18 @@ static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f,
 	const float np = ec ? 2.0f : 1.0f;
 	float cj[NR], vcj[NR], th[2];
 	/* one rotor's statistics and reference theta at a time (computed again below): stack on M0 */
-	ls_t l[3], st[S_N];
-	lagrange3_ls(x, l);
+	float l[3], st[S_N];
+	lagrange3(x, l);
 	f->ssr_sum = f->chi2 = 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
-		float dl[2], ssr2;
-		stat_at(m, d, NL, l, j, st);
+		float dl[2];
+		const float ssr = ssr_at(m, d, NL, l, j, st, dl);
+		/* the rotor's own curve's fit: the configured model's when the curve is estimated */
+		const float ssr2 = ec ? ssr : rotor_ssr(st, true, m->cfg.curve0, SC_J(m, j), dl);
 		ref_theta(m, j, th);
-		const float ssr = rotor_ssr_m(m, st, j, dl);
 		f->ssr_sum += ssr;
 		f->s2[j] = ssr / ((float)m->n_stat - np);
-		cj[j] = rotor_curve(m, st, j, th, &ssr2, &vcj[j]);
+		cj[j] = rotor_curve(m, st, j, th, dl, ssr2, &vcj[j]);
 		f->chi2 += ssr - ssr2;
 	}
 	float sw = 0.0f, swc = 0.0f;
@@ -516,13 +499,10 @@ static void white_begin(struct motor_id *m)
 	float x;
 	best_hyp(m, &d, &x);
 	float l[3], dl[2];
-	ls_t ll[3];
 	lagrange3(x, l);
-	lagrange3_ls(x, ll);
 	for (unsigned j = 0; j < NR; j++) {
-		ls_t o[S_N];
-		stat_at(m, d, NL, ll, j, o);
-		rotor_ssr_m(m, o, j, dl);
+		float o[S_N];
+		ssr_at(m, d, NL, l, j, o, dl);
 		w->dl[j][0] = mid_f_of_float(dl[0], m->kexp);
 		w->dl[j][1] = mid_f_of_float(dl[1], m->kexp);
 		w->s[j] = mid_u_of_float(wsum3(l, mid_u_to_float(m->s[d][0][j]), mid_u_to_float(m->s[d][1][j]),
@@ -610,15 +590,16 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 	if (!(kk > 0.0f) || fabsf(xi) >= X_MAX - 1e-3f)
 		return;
 	for (int it = 0; it < 3; it++) {
-		float fv[3];   /* at xi - h, xi, xi + h */
+		float fv[3], c;   /* at xi - h, xi, xi + h */
 		for (int i = 0; i < 3; i++)
 			fv[i] = delay_logssr(m, d, xi + (float)(i - 1) * h);
-		float d2 = (fv[2] - 2.0f * fv[1] + fv[0]) / (h * h), d1 = (fv[2] - fv[0]) / (2.0f * h);
-		if (!(d2 > 0.0f))
+		/* the Newton step -f'/f'' of the central differences: the minimum of the parabola
+		 * through the three values (in units of h, at most X_MAX of them) */
+		float step = h * parabola(fv, &c);
+		if (!(c > 0.0f))
 			return;
-		float step = clampf(-d1 / d2, -0.5f, 0.5f);
 		xi = clampf(xi + step, -X_MAX + 2e-3f, X_MAX - 2e-3f);
-		kk = 0.5f * d2;
+		kk = c / (h * h);
 		if (fabsf(step) < 1e-3f)
 			break;
 	}
@@ -715,6 +696,12 @@ NOINLINE static float lag_var(float vp, float vm, float var_x)
 	return dv * dv * var_x;
 }
 
+/* a standard deviation sd with the lag's share added (see lag_var) */
+static float sd_with_lag(float sd, float vp, float vm, float var_x)
+{
+	return sqrt0(sd * sd + lag_var(vp, vm, var_x));
+}
+
 /* the normalised errors' limit: ne_max, or NE_SIGMAS standard deviations of the ratio of two
  * variance estimates (the fit's, dof degrees of freedom; the noise's, relative variance v_nz)
  * when the data are few */
@@ -758,7 +745,8 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float x = xs[best], r = m->lag_r[best];
 	lag_newton(m, best, &x, &ks[best]);
 	res->tau = m->lag_c[best] * powf(r, x);
-	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(1.0f / (nf * ks[best])) : res->tau;
+	const float var_x = ks[best] > 0.0f ? 1.0f / (nf * ks[best]) : 0.0f;
+	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(var_x) : res->tau;
 	/* the grid's low end without lag and the minimum there: no lag (sd: that bound) */
 	float dtf = sc_to_float(m->cfg.dt_s);
 	bool no_lag = res->tau <= 1.2f * NO_LAG_FRAC * dtf ||
@@ -802,15 +790,15 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
 	 * is orthogonal to their regressors) */
 	if (!no_lag && ks[best] > 0.0f) {
-		float var_x = 1.0f / (nf * ks[best]), kp, cp, sp[NR], sm[NR];
+		float kp, cp, sp[NR], sm[NR];
 		fit_at(m, best, x + LAG_H, &f, sp);   /* f's fit at x is no longer needed: stack on M0 */
 		kp = f.kf;
 		cp = f.curve;
 		fit_at(m, best, x - LAG_H, &f, sm);
 		vkf += lag_var(kp, f.kf, var_x);
-		res->curve_sd = sqrt0(res->curve_sd * res->curve_sd + lag_var(cp, f.curve, var_x));
+		res->curve_sd = sd_with_lag(res->curve_sd, cp, f.curve, var_x);
 		for (unsigned j = 0; j < NR; j++)
-			res->scale_sd[j] = sqrt0(res->scale_sd[j] * res->scale_sd[j] + lag_var(sp[j], sm[j], var_x));
+			res->scale_sd[j] = sd_with_lag(res->scale_sd[j], sp[j], sm[j], var_x);
 	}
 	res->kf_sd = sqrt0(vkf);
 

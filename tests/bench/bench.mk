@@ -24,6 +24,7 @@
 #   bench-alloc    allocation quality: priority allocator vs pseudo-inverse + clipping
 #   bench-estim    Monte Carlo of the k_f estimators (lag-aware, paper's plain) vs the CRLB
 #   bench-motor    Monte Carlo of the joint rotor-model estimator (motor_id.h) on random vehicles
+#   bench-motor-fixed  the same, the core built fixed point (OCTO_FIXED=1)
 # Sizes of the core on Cortex-M4F/M0 come from tests/arm's images (build/arm/<v>/).
 
 BENCH_B      := $(B)/bench
@@ -58,6 +59,11 @@ $(BENCH_B)/bench-motor: tests/bench/motor.c $(B)/libcore.a $(BENCH_FW_HDR)
 	@mkdir -p $(@D)
 	$(CC) $(BENCH_CFLAGS) $(CORE_INC) -o $@ $< $(B)/libcore.a -lm
 
+# the same Monte Carlo on the fixed build (OCTO_FIXED=1: integer per-frame part, float solve)
+$(BENCH_B)/bench-motor-fixed: tests/bench/motor.c $(B)/libcore-fixed.a $(BENCH_FW_HDR)
+	@mkdir -p $(@D)
+	$(CC) $(BENCH_CFLAGS) -DOCTO_FIXED=1 $(CORE_INC) -o $@ $< $(B)/libcore-fixed.a -lm
+
 # the app step: the firmware's own app sources, compiled here with the firmware's flags, and
 # the tests' stub HAL (tests/app/stub_hal.c)
 BENCH_STEP_SRC := tests/bench/step.c $(BENCH_APP_SRC)
@@ -72,7 +78,8 @@ $(BENCH_B)/bench-step-quick: $(BENCH_STEP_SRC) tests/arm/bench_mark.c $(B)/libco
 	  $(B)/libcore.a -lm
 
 BENCH_HOST := $(BENCH_B)/pingpong $(BENCH_B)/peakrss $(BENCH_B)/bench-physics $(BENCH_B)/bench-alloc \
-              $(BENCH_B)/bench-estim $(BENCH_B)/bench-motor $(BENCH_B)/bench-step $(BENCH_B)/bench-step-quick
+              $(BENCH_B)/bench-estim $(BENCH_B)/bench-motor $(BENCH_B)/bench-motor-fixed $(BENCH_B)/bench-step \
+              $(BENCH_B)/bench-step-quick
 # built by `make` too (host only, a few seconds): tests/py/test_bench_smoke.py runs them
 ALL_TARGETS += $(BENCH_HOST)
 
