@@ -926,6 +926,22 @@ def item_motor(rep, args):
                     f"{t['lag_var_over_reported']:.2f}, {t['curve_var_over_reported']:.2f}, "
                     f"{t['scale_var_over_reported']:.2f}; {t['white_rejected_pct']:.1f} %, "
                     f"{t['white_q_over_dof']:.2f}", "", "", "(reported)", None, c)
+    # the same runs (same seeds, same vehicles) with the core built fixed point: its per-frame
+    # estimator in integers, the solve between frames in float
+    fargv = [BB / "bench-motor-fixed", runs, 1]
+    fx = json.loads(subprocess.run([str(a) for a in fargv], capture_output=True, text=True, check=True).stdout)
+    fc = cmdline(fargv)
+    rep.commands["motor model, fixed build"] = fc
+    for sec in ("5s", "10s"):
+        t, f_ = r[f"curve_estimated_{sec}"], fx[f"curve_estimated_{sec}"]
+        rep.row(5, f"  fixed build (Q16.16), curve estimated, {sec}: k_f bias / std (%), lag bias / std (%), "
+                   "delay chosen right",
+                f"{f_['kf_bias_pct']:+.3f} / {f_['kf_std_pct']:.3f}, {f_['lag_bias_pct']:+.3f} / "
+                f"{f_['lag_std_pct']:.3f}, {f_['delay_right_pct']:.1f} %", "",
+                f"float build on the same runs: {t['kf_bias_pct']:+.3f} / {t['kf_std_pct']:.3f}, "
+                f"{t['lag_bias_pct']:+.3f} / {t['lag_std_pct']:.3f}, {t['delay_right_pct']:.1f} %",
+                "|bias| < 0.1 %", abs(f_["kf_bias_pct"]) < 0.1, fc)
+    r["fixed"] = fx
     rep.data["motor"] = r
 
 
