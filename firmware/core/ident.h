@@ -94,7 +94,7 @@ struct ident_rotor_cfg {
 };
 
 struct ident_rotor {
-	struct ident_rotor_cfg cfg;
+	scalar_t mot_tau_s, curve;  /* of the configuration: what is read after the init */
 	struct filt_delay delay;
 	struct filt_lag lag;
 	struct rls lagaware;    /* theta[0][0] = k_f, theta[1][0] = k_tau */

@@ -38,7 +38,8 @@ static float frame_period(scalar_t dt_s)
 
 void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 {
-	r->cfg = *cfg;
+	r->mot_tau_s = cfg->mot_tau_s;
+	r->curve = cfg->curve;
 	filt_delay_init(&r->delay, cfg->delay_frames, cfg->thr0);
 	filt_lag_init(&r->lag, cfg->mot_tau_s, cfg->dt_s, cfg->thr0);
 	struct rls_config c;
@@ -114,7 +115,7 @@ float ident_rotor_tau_check(const struct ident_rotor *r)
 	float k = rls_estimate_f(&r->sens, 0, 0), kd = rls_estimate_f(&r->sens, 0, 1);
 	if (!(k > 0.0f) || !finite_f(kd))
 		return -1.0f;
-	float t = sc_to_float(r->cfg.mot_tau_s) + kd / k;
+	float t = sc_to_float(r->mot_tau_s) + kd / k;
 	return t > 0.0f ? t : 0.0f;
 }
 

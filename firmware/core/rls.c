@@ -57,6 +57,8 @@ static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return q30_ratio
 /* d a / b = result 2^-*sh (0 < a <= 2 b, 0 < b): no bits lost however small a / b */
 /* d 2^e (e <= 0 here: rounds) */
 static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { return est_scale64(d, e); }
+/* d 4^s (s <= 0 for the parameters in use: rounds) */
+static inline rls_wide_t wide_pow4(rls_wide_t d, int s) { return est_scale64(d, 2 * s); }
 /* x + a c / b in Q15.48 (x Q15.48, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
 /* Q15.48 * Q7.24 -> Q7.24 */
 /* the reciprocal of an innovation (y 2^-e) and gains b / alpha as r 2^-sh (qfmt.h); the
@@ -175,6 +177,7 @@ static inline rls_wide_t wide_of_acc(rls_acc_t a) { return a; }
 static inline rls_wide_t wide_add(rls_wide_t a, rls_wide_t b) { return a + b; }
 static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return a / b; }
 static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { (void)e; return d; } /* e is 0 */
+static inline rls_wide_t wide_pow4(rls_wide_t d, int s) { return s ? d * sc_pow2f(2 * s) : d; }
 typedef float rls_rcp_t;
 typedef float rls_gain_t;
 #define RCP_NONE 1.0f
@@ -231,7 +234,7 @@ static rls_acc_t pdiag_m(const struct rls *r, unsigned i)
 {
 	rls_acc_t s = acc_of_wide(r->d[i]);
 	for (unsigned k = i + 1; k < r->cfg.n_params; k++)
-		s = acc_add(s, acc_of_wide_sig(r->d[k], sig_mul(r->u[i][k], r->u[i][k])));
+		s = acc_add(s, acc_of_wide_sig(r->d[k], sig_mul(r->u[RLS_U_IDX(i, k)], r->u[RLS_U_IDX(i, k)])));
 	return s;
 }
 
@@ -257,21 +260,24 @@ static void renormalise(struct rls *r, unsigned n)
 		return;
 	for (unsigned i = 0; i < n; i++)
 		r->d[i] = est_scale64(r->d[i], s);
-	r->d_exp += s;
+	r->d_exp = (int8_t)(r->d_exp + s);
 #else
 	(void)r;
 	(void)n;
 #endif
 }
 
-/* P = p0 I in the normalised units (the mantissas and exponent rls_init computed) */
+/* P = p0 I in the normalised units (the mantissa and exponent rls_init computed): D0_n_i =
+ * d0 4^(phi_shift_i - m), m the largest phi_shift of the parameters (d0 is that one's) */
 void rls_reset_covariance(struct rls *r)
 {
-	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
-		for (unsigned j = 0; j < RLS_MAX_PARAMS; j++)
-			r->u[i][j] = SIG_ZERO;
-		r->d[i] = r->d0[i];
-	}
+	int m = r->cfg.phi_shift[0];
+	for (unsigned i = 1; i < r->cfg.n_params; i++)
+		m = r->cfg.phi_shift[i] > m ? r->cfg.phi_shift[i] : m;
+	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
+		r->d[i] = wide_pow4(r->d0, r->cfg.phi_shift[i] - m);
+	for (unsigned k = 0; k < RLS_U_N; k++)
+		r->u[k] = SIG_ZERO;
 	r->d_exp = r->d0_exp;
 }
 
@@ -299,12 +305,12 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 	for (unsigned j = 0; j < n; j++) {
 		rls_dot_t sd = DOT_ZERO;
 		for (unsigned i = 0; i < j; i++)
-			sd = dot_mac(sd, r->u[i][j], phi[i]);
+			sd = dot_mac(sd, r->u[RLS_U_IDX(i, j)], phi[i]);
 		rls_sig_t s = sig_of_dot(j ? dot_mac(sd, phi[j], UNIT_SIG) : dot_of_sig(phi[j])); /* U_jj = 1 */
 		f[j] = s;
 		v[j] = inn_of_wide_sig(r->d[j], s, (int)r->d_exp - fr);
 		for (unsigned i = 0; i < j; i++)   /* the strict upper part: all that is read */
-			u[i][j] = r->u[i][j];
+			u[i][j] = r->u[RLS_U_IDX(i, j)];
 	}
 	rls_inn_t alpha = inn_of_unit(lambda, fr);
 	bool ok = true;
@@ -366,9 +372,9 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 	for (unsigned i = 0; i < n; i++) {
 		r->d[i] = wide_ldexp(d[i], e_new - r->d_exp - sh[i]);
 		for (unsigned j = i + 1; j < n; j++)
-			r->u[i][j] = u[i][j];
+			r->u[RLS_U_IDX(i, j)] = u[i][j];
 	}
-	r->d_exp = e_new;
+	r->d_exp = (int8_t)e_new;
 	for (unsigned o = 0; o < no; o++) {
 		for (unsigned i = 0; i < n; i++)
 			r->theta[o][i] = th[o][i];
