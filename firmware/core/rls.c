@@ -4,11 +4,17 @@
 #include "qfmt.h"
 #include "est_ops.h"
 
-/* bierman() below is inlined at both of its calls so that the one with n = 1 is specialised */
-#if defined(__GNUC__)
+/* The fixed build inlines bierman() below at both of its calls so that the one with n = 1 is
+ * specialised (its 64-bit arithmetic is the step's cost); the float build, where flash is
+ * what is short on Cortex-M0, keeps one copy with n as a variable */
+#if OCTO_FIXED && defined(__GNUC__)
 #define RLS_INLINE static inline __attribute__((always_inline))
-#else
+#elif OCTO_FIXED
 #define RLS_INLINE static inline
+#elif defined(__GNUC__)
+#define RLS_INLINE static __attribute__((noinline))
+#else
+#define RLS_INLINE static
 #endif
 
 /* ---------------------------------------------------------------- number operations
@@ -131,7 +137,6 @@ static inline rls_dot_t dot_of_par(rls_par_t t, rls_sig_t x)
 }
 static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return q_add64(a, -b); }
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return est_sat_shr64c(s, QF_SIG_FRAC); }
-static inline scalar_t sc_of_par(rls_par_t t, int shift) { return q_sat32(est_scale64(t, QF_SC_FRAC - QF_PAR_FRAC + shift)); }
 /* x + a c / b in Q7.24 (x, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
 /* the same; in the float build, x + a (c / b) */
 /* a b / c in Q23.40 (a, b Q7.24, c Q23.40 > 0) */
@@ -177,7 +182,7 @@ static inline rls_wide_t wide_of_acc(rls_acc_t a) { return a; }
 static inline rls_wide_t wide_add(rls_wide_t a, rls_wide_t b) { return a + b; }
 static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return a / b; }
 static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { (void)e; return d; } /* e is 0 */
-static inline rls_wide_t wide_pow4(rls_wide_t d, int s) { return s ? d * sc_pow2f(2 * s) : d; }
+static inline rls_wide_t wide_pow4(rls_wide_t d, int s) { return d * sc_pow2f(2 * s); } /* exact */
 typedef float rls_rcp_t;
 typedef float rls_gain_t;
 #define RCP_NONE 1.0f
@@ -210,7 +215,6 @@ static inline rls_dot_t dot_mac_par(rls_dot_t s, rls_par_t t, rls_sig_t x) { ret
 static inline rls_dot_t dot_of_par(rls_par_t t, rls_sig_t x) { return DOT_ZERO + x * t; }
 static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return a - b; }
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return s; }
-static inline scalar_t sc_of_par(rls_par_t t, int shift) { return shift ? t * sc_pow2f(shift) : t; }
 /* x + (a / b) c: the float build's order of operations */
 /* x + a (c / b) */
 static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s) { (void)s; return d * f; }
@@ -420,12 +424,16 @@ enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_si
 		}
 	}
 
+#if OCTO_FIXED
 	/* each n (rls_init clamps it to 1..RLS_MAX_PARAMS = 2) is a call with a constant, which
 	 * the compiler specialises: no loops, no copies, and the same arithmetic */
 	_Static_assert(RLS_MAX_PARAMS == 2, "rls_update_n specialises n = 1 and n = 2");
 	if (n == 1)
 		return bierman(r, phi_n, y_n, lambda, 1);
 	return bierman(r, phi_n, y_n, lambda, 2);
+#else
+	return bierman(r, phi_n, y_n, lambda, n);
+#endif
 }
 
 enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y, bool excited)
@@ -453,11 +461,4 @@ enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y
 		return RLS_GATED;
 	}
 	return rls_update_n(r, pn, yn, phi2, excited);
-}
-
-scalar_t rls_estimate(const struct rls *r, unsigned out, unsigned param)
-{
-	if (out >= RLS_MAX_OUTPUTS || param >= RLS_MAX_PARAMS)
-		return SC_ZERO;
-	return sc_of_par(r->theta[out][param], r->y_shift[out] - r->cfg.phi_shift[param]);
 }

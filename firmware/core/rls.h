@@ -148,9 +148,6 @@ void rls_init(struct rls *r, const struct rls_config *cfg);
 /* P = p0 I, keeps theta (and the counters); integer in the fixed build (rls.c) */
 void rls_reset_covariance(struct rls *r);
 
-/* Sets theta_o (all outputs, n_params each) without touching P. */
-void rls_set_estimate(struct rls *r, unsigned out, const float *theta);
-
 /* One sample: phi[n_params], y[n_outputs]. rls_update is the 90 Hz path; rls_update_f
  * (rls_setup.c) takes float, which in the fixed build it rounds to the normalised format
  * (Q7.24) directly, rejecting non-finite values. */
@@ -160,10 +157,8 @@ enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bo
 enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_sig_t *y_n,
 			     rls_acc_t phi2, bool excited);
 
-/* theta[out][param]: rls_estimate in rls.c (integer in the fixed build), the rest in
- * rls_setup.c */
+/* theta[out][param] (rls_setup.c) */
 float rls_estimate_f(const struct rls *r, unsigned out, unsigned param);
-scalar_t rls_estimate(const struct rls *r, unsigned out, unsigned param);
 
 /* P_n_ii 2^d_exp (normalised units, the form rls.c computes in) */
 rls_acc_t rls_cov_diag_n(const struct rls *r, unsigned param);

@@ -149,15 +149,6 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 	rls_reset_covariance(r);
 }
 
-void rls_set_estimate(struct rls *r, unsigned out, const float *theta)
-{
-	if (out >= r->cfg.n_outputs)
-		return;
-	for (unsigned i = 0; i < r->cfg.n_params; i++)
-		if (finite_f(theta[i]))
-			r->theta[out][i] = par_of_f(theta[i] * sc_pow2f(r->cfg.phi_shift[i] - r->y_shift[out]));
-}
-
 enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bool excited)
 {
 #if OCTO_FIXED
