@@ -78,13 +78,13 @@ static inline int rcp_e(rls_rcp_t c) { return (int)(uint32_t)(c >> 32); }
 static inline rls_rcp_t rcp_of(rls_inn_t a)
 {
 	int e;
-	uint32_t y = q_recip(a, &e);
+	uint32_t y = est_recip(a, &e);
 	return ((uint64_t)(uint32_t)e << 32) | y;
 }
 static inline rls_gain_t gain_of(rls_inn_t a, rls_rcp_t c)
 {
 	rls_gain_t g;
-	g.r = q30_mul_recip(a, rcp_y(c), rcp_e(c), &g.sh);
+	g.r = est30_mul_recip(a, rcp_y(c), rcp_e(c), &g.sh);
 	return g;
 }
 /* x + g c: Q15.48 + gain * Q7.24 */
