@@ -41,11 +41,35 @@ EST_INLINE uint64_t est_umul32(uint32_t a, uint32_t b)
 #endif
 }
 
-/* q_clz64(v) from q_clz32 of the word that holds the leading one */
+/* q_add64(a, b) always inlined: a + b saturating to +/-INT64_MAX */
+EST_INLINE int64_t est_add64(int64_t a, int64_t b)
+{
+	if (b > 0 && a > INT64_MAX - b)
+		return INT64_MAX;
+	if (b < 0 && a < -INT64_MAX - b)
+		return -INT64_MAX;
+	return a + b;
+}
+
+/* q_clz32(v) always inlined */
+EST_INLINE int est_clz32(uint32_t v)
+{
+	if (v == 0u)
+		return 32;
+	int n = 0;
+	if (!(v >> 16)) { n += 16; v <<= 16; }
+	if (!(v >> 24)) { n += 8; v <<= 8; }
+	if (!(v >> 28)) { n += 4; v <<= 4; }
+	if (!(v >> 30)) { n += 2; v <<= 2; }
+	if (!(v >> 31)) { n += 1; }
+	return n;
+}
+
+/* q_clz64(v) from the clz of the word that holds the leading one */
 EST_INLINE int est_clz64(uint64_t v)
 {
 	uint32_t hi = (uint32_t)(v >> 32);
-	return hi ? q_clz32(hi) : 32 + q_clz32((uint32_t)v);
+	return hi ? est_clz32(hi) : 32 + est_clz32((uint32_t)v);
 }
 
 /* (uint32_t)((v << s) >> 32) for s in [0, 63]: the word below bit 64 - s, on the 32-bit
