@@ -41,16 +41,6 @@ EST_INLINE uint64_t est_umul32(uint32_t a, uint32_t b)
 #endif
 }
 
-/* q_add64(a, b) always inlined: a + b saturating to +/-INT64_MAX */
-EST_INLINE int64_t est_add64(int64_t a, int64_t b)
-{
-	if (b > 0 && a > INT64_MAX - b)
-		return INT64_MAX;
-	if (b < 0 && a < -INT64_MAX - b)
-		return -INT64_MAX;
-	return a + b;
-}
-
 /* q_clz32(v) always inlined */
 EST_INLINE int est_clz32(uint32_t v)
 {

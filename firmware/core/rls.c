@@ -90,7 +90,7 @@ static inline rls_gain_t gain_of(rls_inn_t a, rls_rcp_t c)
 /* x + g c: Q15.48 + gain * Q7.24 */
 static inline rls_par_t par_add_g(rls_par_t x, rls_gain_t g, rls_sig_t c)
 {
-	return est_add64(x, est_scale64(q_smul32(c, g.r), QF_PAR_FRAC - QF_SIG_FRAC - QF_UNIT_FRAC - g.sh));
+	return q_add64(x, est_scale64(q_smul32(c, g.r), QF_PAR_FRAC - QF_SIG_FRAC - QF_UNIT_FRAC - g.sh));
 }
 /* U_ij - f_j b_i / a_(j-1) in Q7.24 */
 static inline rls_sig_t u_update(rls_sig_t uij, rls_inn_t b, rls_sig_t f, rls_rcp_t c)
@@ -124,10 +124,10 @@ static inline rls_acc_t acc_forget(rls_acc_t a, rls_unit_t lambda)
 typedef int64_t rls_dot_t;
 #define DOT_ZERO 0
 static inline rls_dot_t dot_of_sig(rls_sig_t x) { return (rls_dot_t)x * ((int64_t)1 << QF_SIG_FRAC); }
-static inline rls_dot_t dot_mac(rls_dot_t s, rls_sig_t a, rls_sig_t b) { return est_add64(s, (int64_t)a * b); }
+static inline rls_dot_t dot_mac(rls_dot_t s, rls_sig_t a, rls_sig_t b) { return q_add64(s, (int64_t)a * b); }
 static inline rls_dot_t dot_mac_par(rls_dot_t s, rls_par_t t, rls_sig_t x)
 {
-	return est_add64(s, est_mul64_32c(t, x, QF_PAR_FRAC + QF_SIG_FRAC - 2 * QF_SIG_FRAC));
+	return q_add64(s, est_mul64_32c(t, x, QF_PAR_FRAC + QF_SIG_FRAC - 2 * QF_SIG_FRAC));
 }
 /* dot_mac_par(DOT_ZERO, t, x): the product alone (it is never INT64_MIN, which the add
  * would have turned into -INT64_MAX) */
@@ -135,7 +135,7 @@ static inline rls_dot_t dot_of_par(rls_par_t t, rls_sig_t x)
 {
 	return est_mul64_32c(t, x, QF_PAR_FRAC + QF_SIG_FRAC - 2 * QF_SIG_FRAC);
 }
-static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return est_add64(a, -b); }
+static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return q_add64(a, -b); }
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return est_sat_shr64c(s, QF_SIG_FRAC); }
 /* x + a c / b in Q7.24 (x, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
 /* the same; in the float build, x + a (c / b) */
@@ -147,7 +147,7 @@ static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s)
 }
 /* Q9.54 * Q7.24 -> Q9.54 */
 static inline rls_inn_t inn_mul_sig(rls_inn_t a, rls_sig_t b) { return est_mul64_32c(a, b, QF_SIG_FRAC); }
-static inline rls_inn_t inn_add(rls_inn_t a, rls_inn_t b) { return est_add64(a, b); }
+static inline rls_inn_t inn_add(rls_inn_t a, rls_inn_t b) { return q_add64(a, b); }
 /* Q1.30 2^e -> Q9.54 (e <= 0) */
 static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { return est_scale64((int64_t)m << (QF_INN_FRAC - QF_UNIT_FRAC), e); }
 static inline bool wide_ok(rls_wide_t d) { return d > 0; }
