@@ -10,6 +10,9 @@
  *   - the est_*c functions are qfmt.h's shifts and products always inlined, for calls whose
  *     shift count is a constant: a 64-bit shift by a constant is a few 32-bit shifts. They are
  *     meant for the few hottest calls only (each inlined copy costs flash).
+ *   - est_umul32, est_clz64 and est_top32 are q_umul32, q_clz64 and a 64-bit shift always
+ *     inlined or on 32-bit halves, for est_recip and est30_mul_recip (q_recip and
+ *     q30_mul_recip: the RLS update's reciprocals and gains) and the products above.
  * tests/core/test_est_ops.c compares each function here with its qfmt.h definition bit for
  * bit over every shift count and operands of every size, on the host and under QEMU.
  */
@@ -23,6 +26,51 @@
 #else
 #define EST_INLINE static inline
 #endif
+
+/* q_umul32(a, b) always inlined: the products below are the RLS update's most frequent
+ * operation, and a call costs about half as much again as the product on Cortex-M0 */
+EST_INLINE uint64_t est_umul32(uint32_t a, uint32_t b)
+{
+#if defined(__ARM_ARCH_6M__)
+	uint32_t al = a & 0xffffu, ah = a >> 16, bl = b & 0xffffu, bh = b >> 16;
+	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl, hh = ah * bh;
+	uint32_t mid = (ll >> 16) + (lh & 0xffffu) + (hl & 0xffffu);
+	return ((uint64_t)(hh + (lh >> 16) + (hl >> 16) + (mid >> 16)) << 32) | ((mid << 16) | (ll & 0xffffu));
+#else
+	return (uint64_t)a * b;
+#endif
+}
+
+/* q_clz32(v) always inlined */
+EST_INLINE int est_clz32(uint32_t v)
+{
+	if (v == 0u)
+		return 32;
+	int n = 0;
+	if (!(v >> 16)) { n += 16; v <<= 16; }
+	if (!(v >> 24)) { n += 8; v <<= 8; }
+	if (!(v >> 28)) { n += 4; v <<= 4; }
+	if (!(v >> 30)) { n += 2; v <<= 2; }
+	if (!(v >> 31)) { n += 1; }
+	return n;
+}
+
+/* q_clz64(v) from the clz of the word that holds the leading one */
+EST_INLINE int est_clz64(uint64_t v)
+{
+	uint32_t hi = (uint32_t)(v >> 32);
+	return hi ? est_clz32(hi) : 32 + est_clz32((uint32_t)v);
+}
+
+/* (uint32_t)((v << s) >> 32) for s in [0, 63]: the word below bit 64 - s, on the 32-bit
+ * halves (a 64-bit shift by a variable count is a library call on Cortex-M0) */
+EST_INLINE uint32_t est_top32(uint64_t v, int s)
+{
+	uint32_t hi = (uint32_t)(v >> 32), lo = (uint32_t)v;
+	if (s >= 32)
+		return lo << (s - 32);
+	return s == 0 ? hi : (hi << s) | (lo >> (32 - s));
+}
 
 /* q_shr64(v, s): v / 2^s rounded to nearest (ties away from zero), s in [0, 62] */
 EST_INLINE int64_t est_shr64c(int64_t v, unsigned s)
@@ -60,8 +108,8 @@ EST_INLINE int64_t est_mul64_32c(int64_t a, int32_t b, unsigned s)
 	bool neg = (a < 0) != (b < 0);
 	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
 	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-	uint64_t hi = q_umul32((uint32_t)(ua >> 32), ub);
-	uint64_t lo = q_umul32((uint32_t)ua, ub) >> 32;
+	uint64_t hi = est_umul32((uint32_t)(ua >> 32), ub);
+	uint64_t lo = est_umul32((uint32_t)ua, ub) >> 32;
 	int64_t sum = (int64_t)(hi + lo);
 	sum = neg ? -sum : sum;
 	return s >= 32u ? est_shr64c(sum, s - 32u) : est_shl64c(sum, 32u - s);
@@ -141,10 +189,43 @@ static inline int64_t est_mul64_32(int64_t a, int32_t b, unsigned s)
 	bool neg = (a < 0) != (b < 0);
 	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
 	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-	uint64_t hi = q_umul32((uint32_t)(ua >> 32), ub);
-	uint64_t lo = q_umul32((uint32_t)ua, ub) >> 32;
+	uint64_t hi = est_umul32((uint32_t)(ua >> 32), ub);
+	uint64_t lo = est_umul32((uint32_t)ua, ub) >> 32;
 	int64_t sum = (int64_t)(hi + lo);
 	return est_scale64(neg ? -sum : sum, 32 - (int)s);
+}
+
+/* q_recip(x, e): 1 / x = y 2^-e for x > 0 (0 otherwise), its Newton iteration with the
+ * products and shifts above */
+static inline uint32_t est_recip(int64_t x, int *e)
+{
+	*e = 0;
+	if (x <= 0)
+		return 0;
+	int s = est_clz64((uint64_t)x);
+	uint32_t v = est_top32((uint64_t)x, s);                                 /* Q32, [0.5, 1) */
+	uint32_t y = 3031741621u - (uint32_t)(est_umul32(2021161081u, v) >> 32); /* Q30 */
+	for (int i = 0; i < 3; i++) {
+		uint32_t t = (uint32_t)(est_umul32(v, y) >> 32);
+		y = (uint32_t)((est_umul32(y, 0x80000000u - t) + ((uint64_t)1 << 29)) >> 30);
+	}
+	*e = 94 - s;
+	return y;
+}
+
+/* q30_mul_recip(a, y, eb, sh): a / b = r 2^-sh from the reciprocal of b, the same way */
+static inline int32_t est30_mul_recip(int64_t a, uint32_t y, int eb, int *sh)
+{
+	*sh = 0;
+	if (a == 0 || y == 0u)
+		return 0;
+	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
+	int sa = est_clz64(ua);
+	uint64_t p = est_umul32(est_top32(ua, sa), y);
+	uint64_t rr = (p + ((uint64_t)1 << 31)) >> 32;
+	int32_t r = rr > (uint64_t)INT32_MAX ? INT32_MAX : (int32_t)rr;
+	*sh = sa + eb - 94;
+	return a < 0 ? -r : r;
 }
 
 #endif /* OCTO_EST_OPS_H */

@@ -216,18 +216,6 @@ scalar_t excite_update(struct excite *e)
 	return sc_clamp(y, sc_neg(a), a);
 }
 
-uint32_t excite_period_frames(const struct excite *e)
-{
-	switch (e->p.kind) {
-	case EXCITE_PRBS:
-		return (((uint32_t)1 << e->p.prbs_order) - 1u) * e->p.clock_div;
-	case EXCITE_MULTISINE:
-		return e->p.ms_period_frames;
-	default:
-		return 0;
-	}
-}
-
 void excite_null_pattern(unsigned k, scalar_t out[EXCITE_ROTORS])
 {
 	/* as scalar_t already: the rotor experiment asks for two patterns every step */

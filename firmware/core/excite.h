@@ -71,8 +71,14 @@ void excite_init(struct excite *e, const struct excite_params *params);
 scalar_t excite_update(struct excite *e);
 
 /* Period of the sequence in frames: PRBS (2^n - 1) clock_div, multisine P (exactly
- * periodic), 0 for uniform (not periodic) and off. */
-uint32_t excite_period_frames(const struct excite *e);
+ * periodic), 0 for uniform (not periodic) and off. An inline: no flash unless a caller
+ * uses it (the firmware does not, the tests do). */
+static inline uint32_t excite_period_frames(const struct excite *e)
+{
+	if (e->p.kind == EXCITE_PRBS)
+		return (((uint32_t)1 << e->p.prbs_order) - 1u) * e->p.clock_div;
+	return e->p.kind == EXCITE_MULTISINE ? e->p.ms_period_frames : 0u;
+}
 
 /* ---------------------------------------------------------------- null-space patterns
  * Rotor patterns (8 entries, rotors 1..8) in the null space of Gamma_o, eq. (14) (thrust,

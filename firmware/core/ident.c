@@ -53,12 +53,12 @@ void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t 
 {
 	/* lag-aware: the previous frame's throttle, delayed and lagged, for this measurement */
 	scalar_t s = rotor_advance(r, thr_sent_prev);
-	r->phi = curve_g(r->cfg.curve, s);
+	r->phi = curve_g(r->curve, s);
 	scalar_t y[2] = {f_meas, tau_meas};
 	rls_update(&r->lagaware, &r->phi, y, excited);
 
 	/* the lag check: g'(s) = 1 - c + 2 c s times the sensitivity of s */
-	scalar_t gp = sc_add(sc_sub(SC(1.0), r->cfg.curve), sc_mul(sc_add(r->cfg.curve, r->cfg.curve), s));
+	scalar_t gp = sc_add(sc_sub(SC(1.0), r->curve), sc_mul(sc_add(r->curve, r->curve), s));
 	scalar_t phi2[2] = {r->phi, sc_mul(gp, r->dphi_dtau)};
 	if (r->dalpha_dtau != SC_ZERO)
 		rls_update(&r->sens, phi2, y, excited);
@@ -66,7 +66,7 @@ void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t 
 	/* plain (eq. 18-20): the previous measurement against the command of its own frame,
 	 * which is the throttle sent on the previous frame */
 	if (r->have_prev) {
-		scalar_t phi_raw = curve_g(r->cfg.curve, thr_sent_prev);
+		scalar_t phi_raw = curve_g(r->curve, thr_sent_prev);
 		rls_update(&r->plain, &phi_raw, r->y_prev, excited);
 	}
 	r->y_prev[0] = f_meas;

@@ -94,7 +94,7 @@ struct ident_rotor_cfg {
 };
 
 struct ident_rotor {
-	struct ident_rotor_cfg cfg;
+	scalar_t mot_tau_s, curve;  /* of the configuration: what is read after the init */
 	struct filt_delay delay;
 	struct filt_lag lag;
 	struct rls lagaware;    /* theta[0][0] = k_f, theta[1][0] = k_tau */
@@ -128,7 +128,10 @@ float ident_rotor_sd(const struct ident_rotor *r, unsigned which);
  * est = {k_f, k_tau, k_f plain, k_tau plain}, sd = their standard deviations. */
 void ident_rotor_read(const struct ident_rotor *r, float est[4], float sd[4]);
 float ident_rotor_plain(const struct ident_rotor *r, unsigned which);
-float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which);
+static inline float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which)
+{
+	return rls_std(&r->plain, which, 0);
+}
 
 /* Check of the modelled motor lag (a Gauss-Newton step, not used by the estimates above):
  * f_1 regressed on [phi(tau), d phi / d tau] at the modelled tau gives
@@ -138,8 +141,13 @@ float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which);
  * the model has no lag (tau = 0: no sensitivity) or no data. */
 float ident_rotor_tau_check(const struct ident_rotor *r);
 
-/* The closed form of the plain estimator's relative bias (estimation-notes.md). */
-float ident_plain_bias(float e_d2, float e_d_dlag, float t_hover);
+/* The closed form of the plain estimator's relative bias (the formula above); an inline (no
+ * flash unless a caller uses it: the firmware does not, the tests do) */
+static inline float ident_plain_bias(float e_d2, float e_d_dlag, float t_hover)
+{
+	float den = t_hover * t_hover + e_d2;
+	return den > 0.0f ? -(e_d2 - e_d_dlag) / den : 0.0f;
+}
 
 /* ---------------------------------------------------------------- body torque */
 /* Torque about S_B from measured rotor thrusts f[8] (N) through Gamma_o rows 2-3 (eq. 14,

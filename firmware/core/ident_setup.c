@@ -38,7 +38,8 @@ static float frame_period(scalar_t dt_s)
 
 void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 {
-	r->cfg = *cfg;
+	r->mot_tau_s = cfg->mot_tau_s;
+	r->curve = cfg->curve;
 	filt_delay_init(&r->delay, cfg->delay_frames, cfg->thr0);
 	filt_lag_init(&r->lag, cfg->mot_tau_s, cfg->dt_s, cfg->thr0);
 	struct rls_config c;
@@ -84,11 +85,6 @@ float ident_rotor_plain(const struct ident_rotor *r, unsigned which)
 	return rls_estimate_f(&r->plain, which, 0);
 }
 
-float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which)
-{
-	return rls_std(&r->plain, which, 0);
-}
-
 /* estimates of one 1-parameter RLS with two outputs and their std: rls_std's arithmetic
  * with P_00 and the degrees of freedom computed once */
 static void read_1x2(const struct rls *q, float est[2], float sd[2])
@@ -114,14 +110,8 @@ float ident_rotor_tau_check(const struct ident_rotor *r)
 	float k = rls_estimate_f(&r->sens, 0, 0), kd = rls_estimate_f(&r->sens, 0, 1);
 	if (!(k > 0.0f) || !finite_f(kd))
 		return -1.0f;
-	float t = sc_to_float(r->cfg.mot_tau_s) + kd / k;
+	float t = sc_to_float(r->mot_tau_s) + kd / k;
 	return t > 0.0f ? t : 0.0f;
-}
-
-float ident_plain_bias(float e_d2, float e_d_dlag, float t_hover)
-{
-	float den = t_hover * t_hover + e_d2;
-	return den > 0.0f ? -(e_d2 - e_d_dlag) / den : 0.0f;
 }
 
 /* ---------------------------------------------------------------- inertia */

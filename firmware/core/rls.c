@@ -4,11 +4,17 @@
 #include "qfmt.h"
 #include "est_ops.h"
 
-/* bierman() below is inlined at both of its calls so that the one with n = 1 is specialised */
-#if defined(__GNUC__)
+/* The fixed build inlines bierman() below at both of its calls so that the one with n = 1 is
+ * specialised (its 64-bit arithmetic is the step's cost); the float build, where flash is
+ * what is short on Cortex-M0, keeps one copy with n as a variable */
+#if OCTO_FIXED && defined(__GNUC__)
 #define RLS_INLINE static inline __attribute__((always_inline))
-#else
+#elif OCTO_FIXED
 #define RLS_INLINE static inline
+#elif defined(__GNUC__)
+#define RLS_INLINE static __attribute__((noinline))
+#else
+#define RLS_INLINE static
 #endif
 
 /* ---------------------------------------------------------------- number operations
@@ -57,6 +63,8 @@ static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return q30_ratio
 /* d a / b = result 2^-*sh (0 < a <= 2 b, 0 < b): no bits lost however small a / b */
 /* d 2^e (e <= 0 here: rounds) */
 static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { return est_scale64(d, e); }
+/* d 4^s (s <= 0 for the parameters in use: rounds) */
+static inline rls_wide_t wide_pow4(rls_wide_t d, int s) { return est_scale64(d, 2 * s); }
 /* x + a c / b in Q15.48 (x Q15.48, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
 /* Q15.48 * Q7.24 -> Q7.24 */
 /* the reciprocal of an innovation (y 2^-e) and gains b / alpha as r 2^-sh (qfmt.h); the
@@ -70,13 +78,13 @@ static inline int rcp_e(rls_rcp_t c) { return (int)(uint32_t)(c >> 32); }
 static inline rls_rcp_t rcp_of(rls_inn_t a)
 {
 	int e;
-	uint32_t y = q_recip(a, &e);
+	uint32_t y = est_recip(a, &e);
 	return ((uint64_t)(uint32_t)e << 32) | y;
 }
 static inline rls_gain_t gain_of(rls_inn_t a, rls_rcp_t c)
 {
 	rls_gain_t g;
-	g.r = q30_mul_recip(a, rcp_y(c), rcp_e(c), &g.sh);
+	g.r = est30_mul_recip(a, rcp_y(c), rcp_e(c), &g.sh);
 	return g;
 }
 /* x + g c: Q15.48 + gain * Q7.24 */
@@ -129,7 +137,6 @@ static inline rls_dot_t dot_of_par(rls_par_t t, rls_sig_t x)
 }
 static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return q_add64(a, -b); }
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return est_sat_shr64c(s, QF_SIG_FRAC); }
-static inline scalar_t sc_of_par(rls_par_t t, int shift) { return q_sat32(est_scale64(t, QF_SC_FRAC - QF_PAR_FRAC + shift)); }
 /* x + a c / b in Q7.24 (x, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
 /* the same; in the float build, x + a (c / b) */
 /* a b / c in Q23.40 (a, b Q7.24, c Q23.40 > 0) */
@@ -175,6 +182,7 @@ static inline rls_wide_t wide_of_acc(rls_acc_t a) { return a; }
 static inline rls_wide_t wide_add(rls_wide_t a, rls_wide_t b) { return a + b; }
 static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return a / b; }
 static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { (void)e; return d; } /* e is 0 */
+static inline rls_wide_t wide_pow4(rls_wide_t d, int s) { return d * sc_pow2f(2 * s); } /* exact */
 typedef float rls_rcp_t;
 typedef float rls_gain_t;
 #define RCP_NONE 1.0f
@@ -207,7 +215,6 @@ static inline rls_dot_t dot_mac_par(rls_dot_t s, rls_par_t t, rls_sig_t x) { ret
 static inline rls_dot_t dot_of_par(rls_par_t t, rls_sig_t x) { return DOT_ZERO + x * t; }
 static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return a - b; }
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return s; }
-static inline scalar_t sc_of_par(rls_par_t t, int shift) { return shift ? t * sc_pow2f(shift) : t; }
 /* x + (a / b) c: the float build's order of operations */
 /* x + a (c / b) */
 static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s) { (void)s; return d * f; }
@@ -231,7 +238,7 @@ static rls_acc_t pdiag_m(const struct rls *r, unsigned i)
 {
 	rls_acc_t s = acc_of_wide(r->d[i]);
 	for (unsigned k = i + 1; k < r->cfg.n_params; k++)
-		s = acc_add(s, acc_of_wide_sig(r->d[k], sig_mul(r->u[i][k], r->u[i][k])));
+		s = acc_add(s, acc_of_wide_sig(r->d[k], sig_mul(r->u[RLS_U_IDX(i, k)], r->u[RLS_U_IDX(i, k)])));
 	return s;
 }
 
@@ -257,21 +264,24 @@ static void renormalise(struct rls *r, unsigned n)
 		return;
 	for (unsigned i = 0; i < n; i++)
 		r->d[i] = est_scale64(r->d[i], s);
-	r->d_exp += s;
+	r->d_exp = (int8_t)(r->d_exp + s);
 #else
 	(void)r;
 	(void)n;
 #endif
 }
 
-/* P = p0 I in the normalised units (the mantissas and exponent rls_init computed) */
+/* P = p0 I in the normalised units (the mantissa and exponent rls_init computed): D0_n_i =
+ * d0 4^(phi_shift_i - m), m the largest phi_shift of the parameters (d0 is that one's) */
 void rls_reset_covariance(struct rls *r)
 {
-	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
-		for (unsigned j = 0; j < RLS_MAX_PARAMS; j++)
-			r->u[i][j] = SIG_ZERO;
-		r->d[i] = r->d0[i];
-	}
+	int m = r->cfg.phi_shift[0];
+	for (unsigned i = 1; i < r->cfg.n_params; i++)
+		m = r->cfg.phi_shift[i] > m ? r->cfg.phi_shift[i] : m;
+	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
+		r->d[i] = wide_pow4(r->d0, r->cfg.phi_shift[i] - m);
+	for (unsigned k = 0; k < RLS_U_N; k++)
+		r->u[k] = SIG_ZERO;
 	r->d_exp = r->d0_exp;
 }
 
@@ -299,12 +309,12 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 	for (unsigned j = 0; j < n; j++) {
 		rls_dot_t sd = DOT_ZERO;
 		for (unsigned i = 0; i < j; i++)
-			sd = dot_mac(sd, r->u[i][j], phi[i]);
+			sd = dot_mac(sd, r->u[RLS_U_IDX(i, j)], phi[i]);
 		rls_sig_t s = sig_of_dot(j ? dot_mac(sd, phi[j], UNIT_SIG) : dot_of_sig(phi[j])); /* U_jj = 1 */
 		f[j] = s;
 		v[j] = inn_of_wide_sig(r->d[j], s, (int)r->d_exp - fr);
 		for (unsigned i = 0; i < j; i++)   /* the strict upper part: all that is read */
-			u[i][j] = r->u[i][j];
+			u[i][j] = r->u[RLS_U_IDX(i, j)];
 	}
 	rls_inn_t alpha = inn_of_unit(lambda, fr);
 	bool ok = true;
@@ -366,9 +376,9 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 	for (unsigned i = 0; i < n; i++) {
 		r->d[i] = wide_ldexp(d[i], e_new - r->d_exp - sh[i]);
 		for (unsigned j = i + 1; j < n; j++)
-			r->u[i][j] = u[i][j];
+			r->u[RLS_U_IDX(i, j)] = u[i][j];
 	}
-	r->d_exp = e_new;
+	r->d_exp = (int8_t)e_new;
 	for (unsigned o = 0; o < no; o++) {
 		for (unsigned i = 0; i < n; i++)
 			r->theta[o][i] = th[o][i];
@@ -414,12 +424,16 @@ enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_si
 		}
 	}
 
+#if OCTO_FIXED
 	/* each n (rls_init clamps it to 1..RLS_MAX_PARAMS = 2) is a call with a constant, which
 	 * the compiler specialises: no loops, no copies, and the same arithmetic */
 	_Static_assert(RLS_MAX_PARAMS == 2, "rls_update_n specialises n = 1 and n = 2");
 	if (n == 1)
 		return bierman(r, phi_n, y_n, lambda, 1);
 	return bierman(r, phi_n, y_n, lambda, 2);
+#else
+	return bierman(r, phi_n, y_n, lambda, n);
+#endif
 }
 
 enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y, bool excited)
@@ -447,11 +461,4 @@ enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y
 		return RLS_GATED;
 	}
 	return rls_update_n(r, pn, yn, phi2, excited);
-}
-
-scalar_t rls_estimate(const struct rls *r, unsigned out, unsigned param)
-{
-	if (out >= RLS_MAX_OUTPUTS || param >= RLS_MAX_PARAMS)
-		return SC_ZERO;
-	return sc_of_par(r->theta[out][param], r->y_shift[out] - r->cfg.phi_shift[param]);
 }

@@ -115,23 +115,28 @@ struct rls_shape {
 	int8_t phi_shift[RLS_MAX_PARAMS];
 };
 
-/* All numbers below are normalised (see above); read them through the functions. */
+/* All numbers below are normalised (see above); read them through the functions. Members
+ * are ordered by size (no padding), and only what the update reads is kept: U's strict upper
+ * part (u[RLS_U_IDX(i, j)], i < j; the diagonal is 1 and the rest 0) and p0 I as one mantissa. */
+#define RLS_U_N (RLS_MAX_PARAMS * (RLS_MAX_PARAMS - 1) / 2)
+#define RLS_U_IDX(i, j) ((j) * ((j) - 1u) / 2u + (i))
 struct rls {
 	struct rls_shape cfg;
 	int8_t y_shift[RLS_MAX_OUTPUTS];          /* y_n_o = y_o 2^-y_shift_o */
+	int8_t d_exp;                             /* D_n_i = d_i 2^-d_exp, in [RLS_EXP_MIN, RLS_EXP_MAX] */
+	int8_t d0_exp;                            /* p0 I in the same form (resets): */
 	rls_par_t theta[RLS_MAX_OUTPUTS][RLS_MAX_PARAMS]; /* theta_n */
-	rls_sig_t u[RLS_MAX_PARAMS][RLS_MAX_PARAMS];      /* unit upper triangular (U_n) */
-	rls_wide_t d[RLS_MAX_PARAMS];             /* D_n_i = d_i 2^-d_exp */
-	int32_t d_exp;
-	rls_wide_t d0[RLS_MAX_PARAMS];            /* p0 I in the same form (resets) */
-	int32_t d0_exp;
-	rls_unit_t lambda;                        /* cfg.lambda */
+	rls_wide_t d[RLS_MAX_PARAMS];
+	rls_wide_t d0;                            /* D0_n_i = d0 4^(phi_shift_i - m) 2^-d0_exp, m the
+						   * largest phi_shift of the n_params */
 	rls_acc_t ssr[RLS_MAX_OUTPUTS];           /* forgotten sum of normalised residuals^2 (y_n) */
 	rls_acc_t n_eff;                          /* forgotten sample count */
 	rls_acc_t p_min_n, p_max_n;               /* floor and ceiling on P_n_ii (d_exp = 0) of a
 						   * parameter with phi_shift 0: 2^(2 phi_shift_i) times
 						   * them for parameter i */
 	rls_acc_t phi_min2;                       /* phi_min^2: Q16.16 squared (Q32) when fixed */
+	rls_sig_t u[RLS_U_N];                     /* U_n_ij = u[RLS_U_IDX(i, j)], i < j */
+	rls_unit_t lambda;                        /* cfg.lambda */
 	uint32_t n_updates, n_gated, n_rejected, n_resets;
 };
 
@@ -143,9 +148,6 @@ void rls_init(struct rls *r, const struct rls_config *cfg);
 /* P = p0 I, keeps theta (and the counters); integer in the fixed build (rls.c) */
 void rls_reset_covariance(struct rls *r);
 
-/* Sets theta_o (all outputs, n_params each) without touching P. */
-void rls_set_estimate(struct rls *r, unsigned out, const float *theta);
-
 /* One sample: phi[n_params], y[n_outputs]. rls_update is the 90 Hz path; rls_update_f
  * (rls_setup.c) takes float, which in the fixed build it rounds to the normalised format
  * (Q7.24) directly, rejecting non-finite values. */
@@ -155,10 +157,8 @@ enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bo
 enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_sig_t *y_n,
 			     rls_acc_t phi2, bool excited);
 
-/* theta[out][param]: rls_estimate in rls.c (integer in the fixed build), the rest in
- * rls_setup.c */
+/* theta[out][param] (rls_setup.c) */
 float rls_estimate_f(const struct rls *r, unsigned out, unsigned param);
-scalar_t rls_estimate(const struct rls *r, unsigned out, unsigned param);
 
 /* P_n_ii 2^d_exp (normalised units, the form rls.c computes in) */
 rls_acc_t rls_cov_diag_n(const struct rls *r, unsigned param);

@@ -116,14 +116,15 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 			r->theta[o][i] = par_of_f(t * sc_pow2f(c->phi_shift[i] - r->y_shift[o]));
 		}
 	r->lambda = unit_of_f(c->lambda);
-	/* P_n = p0 S^2, S = diag(2^phi_shift): mantissas of the largest in [0.5, 1) */
-	float pn[RLS_MAX_PARAMS], pmax = 0.0f;
-	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
-		pn[i] = c->p0 * sc_pow2f(2 * c->phi_shift[i]);
-		pmax = i < n && pn[i] > pmax ? pn[i] : pmax;
-	}
+	/* P_n = p0 S^2, S = diag(2^phi_shift): the mantissa of the largest in [0.5, 1), the
+	 * others 4^-k times it (rls_reset_covariance) */
+	int m = c->phi_shift[0];
+	for (unsigned i = 1; i < n; i++)
+		m = c->phi_shift[i] > m ? c->phi_shift[i] : m;
+	const float pm = c->p0 * sc_pow2f(2 * m);
 	int e = 0;
 #if OCTO_FIXED
+	float pmax = pm;
 	while (pmax >= 1.0f && e > RLS_EXP_MIN) {
 		pmax *= 0.5f;
 		e--;
@@ -133,9 +134,8 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 		e++;
 	}
 #endif
-	r->d0_exp = e;
-	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
-		r->d0[i] = wide_of_f(pn[i] * sc_pow2f(e));
+	r->d0_exp = (int8_t)e;
+	r->d0 = wide_of_f(pm * sc_pow2f(e));
 	r->p_min_n = acc_of_f(c->p_min);
 	float pmx = c->p_max;
 #if OCTO_FIXED
@@ -147,15 +147,6 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 	r->p_max_n = acc_of_f(pmx);
 	r->phi_min2 = phi2_of_f(c->phi_min * c->phi_min);
 	rls_reset_covariance(r);
-}
-
-void rls_set_estimate(struct rls *r, unsigned out, const float *theta)
-{
-	if (out >= r->cfg.n_outputs)
-		return;
-	for (unsigned i = 0; i < r->cfg.n_params; i++)
-		if (finite_f(theta[i]))
-			r->theta[out][i] = par_of_f(theta[i] * sc_pow2f(r->cfg.phi_shift[i] - r->y_shift[out]));
 }
 
 enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bool excited)

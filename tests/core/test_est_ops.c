@@ -81,3 +81,31 @@ UNIT_TEST(est_shifts_and_products_equal_qfmt)
 	}
 	CHECK(bad == 0);
 }
+
+UNIT_TEST(est_products_and_reciprocals_equal_qfmt)
+{
+	long bad = 0;
+	for (int k = 0; k < 200000; k++) {
+		uint32_t a = xr() >> (xr() % 32u), b = xr() >> (xr() % 32u);
+		if (est_umul32(a, b) != q_umul32(a, b))
+			bad++;
+		int64_t v = r64();
+		uint64_t u = (uint64_t)v;
+		if (est_clz64(u) != q_clz64(u))
+			bad++;
+		int s = (int)(xr() % 64u);
+		if (est_top32(u, s) != (uint32_t)((u << s) >> 32))
+			bad++;
+		int e1, e2, s1, s2;
+		uint32_t y1 = est_recip(v, &e1), y2 = q_recip(v, &e2);
+		if (y1 != y2 || e1 != e2)
+			bad++;
+		/* a quotient by a positive denominator, whose reciprocal the RLS keeps */
+		int64_t d = v < 0 ? (v == INT64_MIN ? INT64_MAX : -v) : (v == 0 ? 1 : v);
+		uint32_t y = q_recip(d, &e2);
+		int64_t n = r64();
+		if (est30_mul_recip(n, y, e2, &s1) != q30_mul_recip(n, y, e2, &s2) || s1 != s2)
+			bad++;
+	}
+	CHECK(bad == 0);
+}
