@@ -22,10 +22,11 @@
  *
  * Set-up (mixer_init / mixer_set_params; NOT the 90 Hz path; float32 in both builds, results
  * stored as scalar_t for the hot path):
- *   - Moore-Penrose pseudo-inverse Gamma^+ (8x4) by a one-sided Jacobi SVD of Gamma^T (at
- *     most 40 sweeps; general: any layout, rank deficiency handled by a singular-value
- *     threshold of 1e-5 sigma_max), polished by two Newton-Schulz steps; an orthonormal basis
- *     of the null space of Gamma (8 x (8 - rank), 4 columns at full rank).
+ *   - Moore-Penrose pseudo-inverse Gamma^+ (8x4) from the Gram-Schmidt QR of Gamma's rows,
+ *     Gamma^+ = Q (R R^T)^-1 R (general: any layout; a row within 1e-5 of its length of the
+ *     span of the rows before it adds nothing to the rank), polished by two Newton-Schulz
+ *     steps; an orthonormal basis of the null space of Gamma (8 x (8 - rank), 4 columns at
+ *     full rank).
  *   - For the box-constrained allocator, in a "scaled space" (each row of Gamma divided by its
  *     largest |entry|, rotor thrust u = (f - f_lo) / (f_hi - f_lo) in [0, 1]): the facets of
  *     the attainable set (the zonotope Gamma [f_lo, f_hi]^8: one normal per 3 columns that
@@ -151,7 +152,6 @@ struct mixer_design {
 	float gamma_f[MIXER_N_AXES][MIXER_N_ROTORS];  /* Gamma S (per unit of u), float */
 	float pinv_f[MIXER_N_ROTORS][MIXER_N_AXES];   /* (Gamma S)^+, float */
 	float null_f[MIXER_N_ROTORS][MIXER_N_ROTORS]; /* null-space basis: columns 0..n_null-1 */
-	float sigma_f[MIXER_N_AXES];                  /* singular values of Gamma, descending */
 	uint8_t rank;
 	uint8_t n_null;
 };
@@ -207,8 +207,7 @@ void mixer_default_params(struct mixer_params *p);
  * rank-deficient Gamma; the priority allocator is disabled). */
 bool mixer_init(struct mixer *m, const struct mixer_params *p);
 
-/* mixer_init, also writing the float32 design (Gamma, Gamma^+, null space, singular values)
- * to *d. */
+/* mixer_init, also writing the float32 design (Gamma, Gamma^+, null space) to *d. */
 bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mixer_design *d);
 
 /* Recomputes (mixer_init) only if a parameter that enters Gamma or the box changed (always

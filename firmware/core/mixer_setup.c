@@ -1,5 +1,5 @@
 /* mixer_setup.c - the mixer's set-up, in float32 at a parameter change (not in the 90 Hz
- * step): Gamma_o from the geometry, its pseudo-inverse by Jacobi SVD, the facets of the
+ * step): Gamma_o from the geometry, its pseudo-inverse by a QR of its rows, the facets of the
  * attainable set; see mixer.h. The allocation that uses them is mixer.c. */
 #include "mixer.h"
 
@@ -13,43 +13,26 @@
 /* |x|: the sign bit cleared (no soft-float compare on cores without FPU) */
 static float absf(float x) { return fabsf(x); }
 
-/* One-sided Jacobi SVD of A (8x4, rows 0..7 of av, columns orthogonalised in place):
- * A V = U S, V in rows 8..11 of av (rotated with A; the caller sets them to I4).
- * On return av[0..7][k] = U_k s_k, av[8..11] = V, s = column norms. At most 40 sweeps. */
-static void jacobi_svd(float av[NR + NA][NA], float s[NA])
+/* Gram-Schmidt step: x (length 8) minus its projection on the orthonormal columns 0..nb-1 of
+ * q, twice (the second pass removes what rounding left); c[k] = the coefficient taken off
+ * along column k. Returns |x|^2 after. */
+static float ortho(const float q[NR][NR], int nb, float x[NR], float c[NR])
 {
-	for (int sweep = 0; sweep < 40; sweep++) {
-		int rotated = 0;
-		for (int p = 0; p < NA - 1; p++) {
-			for (int q = p + 1; q < NA; q++) {
-				float al = 0.0f, be = 0.0f, ga = 0.0f;
-				for (int i = 0; i < NR; i++) {
-					al += av[i][p] * av[i][p];
-					be += av[i][q] * av[i][q];
-					ga += av[i][p] * av[i][q];
-				}
-				if (al <= 0.0f || be <= 0.0f || absf(ga) <= 1e-7f * sqrtf(al * be))
-					continue;
-				rotated = 1;
-				float zeta = (be - al) / (2.0f * ga);
-				float t = (zeta >= 0.0f ? 1.0f : -1.0f) / (absf(zeta) + sqrtf(1.0f + zeta * zeta));
-				float c = 1.0f / sqrtf(1.0f + t * t), sn = c * t;
-				for (int i = 0; i < NR + NA; i++) {
-					float x = av[i][p], y = av[i][q];
-					av[i][p] = c * x - sn * y;
-					av[i][q] = sn * x + c * y;
-				}
-			}
+	for (int k = 0; k < nb; k++)
+		c[k] = 0.0f;
+	for (int pass = 0; pass < 2; pass++)
+		for (int k = 0; k < nb; k++) {
+			float d = 0.0f;
+			for (int j = 0; j < NR; j++)
+				d += q[j][k] * x[j];
+			c[k] += d;
+			for (int j = 0; j < NR; j++)
+				x[j] -= d * q[j][k];
 		}
-		if (!rotated)
-			break;
-	}
-	for (int k = 0; k < NA; k++) {
-		float n2 = 0.0f;
-		for (int i = 0; i < NR; i++)
-			n2 += av[i][k] * av[i][k];
-		s[k] = sqrtf(n2);
-	}
+	float n2 = 0.0f;
+	for (int j = 0; j < NR; j++)
+		n2 += x[j] * x[j];
+	return n2;
 }
 
 /* Inverse of a 4x4 matrix by Gauss-Jordan with partial pivoting; returns |det|. */
@@ -258,42 +241,50 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	for (int j = 0; j < NR; j++)
 		m->p.scale[j] = scale_used(p->scale[j]);
 
-	/* ---- pseudo-inverse by one-sided Jacobi SVD of Gamma^T */
-	float a[NR + NA][NA], s[NA]; /* Gamma^T, then I4 for V */
-	for (int j = 0; j < NR + NA; j++)
-		for (int i = 0; i < NA; i++)
-			a[j][i] = j < NR ? dz->gamma_f[i][j] : 0.0f;
-	for (int i = 0; i < NA; i++)
-		a[NR + i][i] = 1.0f;
-	jacobi_svd(a, s);
-	int idx[NA] = { 0, 1, 2, 3 };
-	for (int i = 0; i < NA; i++) /* sort by singular value, descending */
-		for (int j = i + 1; j < NA; j++)
-			if (s[idx[j]] > s[idx[i]]) {
-				int t = idx[i];
-				idx[i] = idx[j];
-				idx[j] = t;
-			}
-	float smax = s[idx[0]];
-	float basis[NR][NR]; /* columns: the left singular vectors, then the null space */
+	/* ---- pseudo-inverse from the Gram-Schmidt QR of Gamma's rows: Gamma = R^T Q^T with Q
+	 * (8 x rank) orthonormal (the row space, columns 0..rank-1 of basis) and R (rank x 4), so
+	 * that Gamma^+ = Q (R^T)^+ = Q (R R^T)^-1 R. A row whose remainder after the earlier ones
+	 * is below 1e-5 of its own length adds nothing to the rank. */
+	float basis[NR][NR]; /* columns: the row space of Gamma, then the null space */
+	float r[NA][NA] = { { 0 } }, x[NR], cf[NR];
 	int rank = 0;
-	for (int k = 0; k < NA; k++) {
-		int c = idx[k];
-		dz->sigma_f[k] = s[c];
-		if (smax > 0.0f && s[c] > 1e-5f * smax) {
+	for (int i = 0; i < NA; i++) {
+		float n0 = 0.0f;
+		for (int j = 0; j < NR; j++) {
+			x[j] = dz->gamma_f[i][j];
+			n0 += x[j] * x[j];
+		}
+		float n2 = ortho(basis, rank, x, cf);
+		for (int k = 0; k < rank; k++)
+			r[k][i] = cf[k];
+		if (n2 > 1e-10f * n0) {
+			float n = sqrtf(n2);
 			for (int j = 0; j < NR; j++)
-				basis[j][rank] = a[j][c] / s[c];
-			/* pinv += u_k (1/s_k) v_k^T */
-			for (int j = 0; j < NR; j++)
-				for (int i = 0; i < NA; i++)
-					dz->pinv_f[j][i] += basis[j][rank] / s[c] * a[NR + i][c];
-			rank++;
+				basis[j][rank] = x[j] / n;
+			r[rank++][i] = n;
 		}
 	}
+	float g[NA][NA], gi[NA][NA]; /* R R^T, completed by the identity beyond the rank */
+	for (int k = 0; k < NA; k++)
+		for (int l = 0; l < NA; l++) {
+			float acc = k == l && k >= rank ? 1.0f : 0.0f;
+			for (int i = 0; i < NA; i++)
+				acc += r[k][i] * r[l][i];
+			g[k][l] = acc;
+		}
+	inv4(g, gi);
+	for (int j = 0; j < NR; j++)
+		for (int i = 0; i < NA; i++) {
+			float acc = 0.0f;
+			for (int k = 0; k < rank; k++)
+				for (int l = 0; l < rank; l++)
+					acc += basis[j][k] * gi[k][l] * r[l][i];
+			dz->pinv_f[j][i] = acc;
+		}
 	m->rank = (uint8_t)rank;
 	dz->rank = (uint8_t)rank;
 	/* two Newton-Schulz steps P <- 2P - P Gamma P (converge to the Moore-Penrose inverse,
-	 * also when rank-deficient) polish the float32 SVD result */
+	 * also when rank-deficient) polish the float32 result */
 	for (int it = 0; it < 2; it++) {
 		float e[NA][NA]; /* I - Gamma P */
 		for (int i = 0; i < NA; i++)
@@ -322,21 +313,9 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	while (nb < NR) {
 		float best[NR] = { 0 }, bestn = -1.0f;
 		for (int e = 0; e < NR; e++) {
-			float x[NR];
 			for (int j = 0; j < NR; j++)
-				x[j] = 0.0f;
-			x[e] = 1.0f;
-			for (int pass = 0; pass < 2; pass++)
-				for (int k = 0; k < nb; k++) {
-					float d = 0.0f;
-					for (int j = 0; j < NR; j++)
-						d += basis[j][k] * x[j];
-					for (int j = 0; j < NR; j++)
-						x[j] -= d * basis[j][k];
-				}
-			float n2 = 0.0f;
-			for (int j = 0; j < NR; j++)
-				n2 += x[j] * x[j];
+				x[j] = j == e ? 1.0f : 0.0f;
+			float n2 = ortho(basis, nb, x, cf);
 			if (n2 > bestn) {
 				bestn = n2;
 				for (int j = 0; j < NR; j++)
