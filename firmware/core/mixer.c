@@ -348,7 +348,7 @@ MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t 
 			if (tail) {
 				n = m->tail_inv[k];
 			} else {
-				const struct mixer_subfacet *fc = &m->sub[m->sub_first[st] + k];
+				const struct mixer_facet *fc = &m->sub[m->sub_first[st] + k];
 				n = fc->n;
 				nc = fc->nc;
 				h = fc->h;

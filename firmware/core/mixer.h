@@ -133,16 +133,11 @@ struct mixer_params {
 	scalar_t scale[MIXER_N_ROTORS];
 };
 
+/* a facet of the attainable set or of a preimage step's sub-zonotope */
 struct mixer_facet {
 	scalar_t n[MIXER_N_AXES]; /* unit normal in the row-scaled space */
 	scalar_t nc;              /* n . centre of its zonotope */
 	scalar_t h;               /* half-width: 1/2 sum |n . g_j| over its generators */
-};
-
-/* a facet of a preimage step's sub-zonotope */
-struct mixer_subfacet {
-	scalar_t n[MIXER_N_AXES];
-	scalar_t nc, h;
 };
 
 /* The float32 results of the set-up that the 90 Hz path does not use: mixer_init computes
@@ -185,7 +180,7 @@ struct mixer {
 	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma S, entries in [-1, 1] */
 	scalar_t tail_inv[4][MIXER_N_AXES]; /* inverse of the last 4 scaled columns */
 	struct mixer_facet facet[MIXER_MAX_FACETS];
-	struct mixer_subfacet sub[MIXER_MAX_SUB_FACETS];
+	struct mixer_facet sub[MIXER_MAX_SUB_FACETS];
 };
 
 struct mixer_output {

@@ -110,8 +110,7 @@ static bool normal3(const float g[NA][NR], int a, int b, int c, float n[NA])
 /* Facets of the zonotope of the generators set[0..cnt-1] (scaled space), written to out:
  * one per distinct normal (triples spanning the same hyperplane give one facet). Returns the
  * count, or -1 if more than cap distinct facets exist. */
-static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct mixer_facet *out,
-		     struct mixer_subfacet *out_sub, int cap)
+static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct mixer_facet *out, int cap)
 {
 	int nf = 0;
 	float seen[MIXER_MAX_SUB_FACETS > MIXER_MAX_FACETS ? MIXER_MAX_SUB_FACETS : MIXER_MAX_FACETS][NA];
@@ -142,16 +141,12 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 					nc += 0.5f * d;
 					h += 0.5f * absf(d);
 				}
-				/* to the attainable set's facets or to a preimage step's */
-				scalar_t *on = out ? out[nf].n : out_sub[nf].n;
-				scalar_t *onc = out ? &out[nf].nc : &out_sub[nf].nc;
-				scalar_t *oh = out ? &out[nf].h : &out_sub[nf].h;
 				for (int i = 0; i < NA; i++) {
 					seen[nf][i] = n[i];
-					on[i] = sc_from_float(n[i]);
+					out[nf].n[i] = sc_from_float(n[i]);
 				}
-				*onc = sc_from_float(nc);
-				*oh = sc_from_float(h);
+				out[nf].nc = sc_from_float(nc);
+				out[nf].h = sc_from_float(h);
 				nf++;
 			}
 	return nf;
@@ -386,40 +381,40 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	m->n_active = (uint8_t)na;
 	m->alloc_ok = false;
 	if (rank == NA && na >= NA && rows_ok) {
-		float bestdet = 0.0f;
-		int bt[4] = { 0, 1, 2, 3 };
-		for (int a0 = 0; a0 < na; a0++)
-			for (int a1 = a0 + 1; a1 < na; a1++)
-				for (int a2 = a1 + 1; a2 < na; a2++)
-					for (int a3 = a2 + 1; a3 < na; a3++) {
-						int t[4] = { a0, a1, a2, a3 };
-						float mm[4][4], inv[4][4];
-						for (int i = 0; i < NA; i++)
-							for (int c = 0; c < 4; c++)
-								mm[i][c] = gsc[i][act[t[c]]];
-						float d = inv4(mm, inv);
-						if (d > bestdet * 1.0001f) {
-							bestdet = d;
-							for (int c = 0; c < 4; c++)
-								bt[c] = t[c];
-						}
-					}
-		if (bestdet > 1e-4f) {
-			int no = 0;
-			for (int t = 0; t < na; t++)
-				if (t != bt[0] && t != bt[1] && t != bt[2] && t != bt[3])
-					m->order[no++] = act[t];
-			for (int c = 0; c < 4; c++)
-				m->order[no++] = act[bt[c]];
+		/* every 4 of the na present rotors, as a mask over positions t (bit na-1-t): masks
+		 * in descending order visit them lexicographically; the first of the largest
+		 * |det| (within 1e-4) wins, its inverse kept */
+		float bestdet = 0.0f, binv[4][4];
+		unsigned best = 0;
+		for (unsigned mask = (1u << na) - 1u; mask; mask--) {
 			float mm[4][4], inv[4][4];
-			for (int i = 0; i < NA; i++)
-				for (int c = 0; c < 4; c++)
-					mm[i][c] = gsc[i][m->order[na - 4 + c]];
-			inv4(mm, inv);
+			int c = 0;
+			for (int t = 0; t < na; t++)
+				if (mask >> (na - 1 - t) & 1u) {
+					for (int i = 0; i < NA && c < 4; i++)
+						mm[i][c] = gsc[i][act[t]];
+					c++;
+				}
+			if (c != 4)
+				continue;
+			float d = inv4(mm, inv);
+			if (d > bestdet * 1.0001f) {
+				bestdet = d;
+				best = mask;
+				for (int k = 0; k < 16; k++)
+					binv[k / 4][k % 4] = inv[k / 4][k % 4];
+			}
+		}
+		if (bestdet > 1e-4f) {
+			int no = 0; /* the others in order, then the best 4 */
+			for (int pass = 0; pass < 2; pass++)
+				for (int t = 0; t < na; t++)
+					if ((best >> (na - 1 - t) & 1u) == (unsigned)pass)
+						m->order[no++] = act[t];
 			for (int c = 0; c < 4; c++)
 				for (int i = 0; i < NA; i++)
-					m->tail_inv[c][i] = sc_from_float(inv[c][i]);
-			int nfull = facets_of(gsc, act, na, m->facet, NULL, MIXER_MAX_FACETS);
+					m->tail_inv[c][i] = sc_from_float(binv[c][i]);
+			int nfull = facets_of(gsc, act, na, m->facet, MIXER_MAX_FACETS);
 			bool fits = nfull > 0;
 			m->n_facets = (uint8_t)(nfull > 0 ? nfull : 0);
 			int used = 0;
@@ -428,7 +423,7 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 				m->sub_first[st] = (uint8_t)used;
 				m->sub_n[st] = 0;
 				if (cnt > 4) {
-					int k = facets_of(gsc, &m->order[st + 1], cnt, NULL, &m->sub[used],
+					int k = facets_of(gsc, &m->order[st + 1], cnt, &m->sub[used],
 							  MIXER_MAX_SUB_FACETS - used);
 					if (k < 0) {
 						fits = false;
