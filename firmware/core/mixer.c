@@ -18,7 +18,15 @@
 #define MIX_NOINLINE static
 #endif
 
-MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b) { return sc_div(a, b); }
+/* a / b; the fixed build returns a at once for b = 1 (what sc_div gives, exactly) */
+MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b)
+{
+#if OCTO_FIXED
+	if (b == SC(1))
+		return a;
+#endif
+	return sc_div(a, b);
+}
 MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_clamp(x, lo, hi); }
 
 static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
@@ -35,13 +43,32 @@ static scalar_t to_scaled(const struct mixer *m, int i, scalar_t v)
 	return mdiv(sc_mul(sc_sub(v, m->w_lo[i]), m->row_div[i]), m->width);
 }
 
+/* g u for an entry g of the row-scaled Gamma S: the fixed build skips the product where g is
+ * 0 or +-1 (most of eq. (14)'s entries), the same value (sc_mul(+-1, u) = +-u exactly);
+ * inline there, as the test is what it saves */
+#if OCTO_FIXED && defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline scalar_t gmul(scalar_t g, scalar_t u)
+{
+#if OCTO_FIXED
+	if (g == SC_ZERO)
+		return SC_ZERO;
+	if (g == SC(1))
+		return u;
+	if (g == -SC(1))
+		return sc_neg(u);
+#endif
+	return sc_mul(g, u);
+}
+
 /* the physical wrench of u (Gamma S u) */
 static void wrench_u(const struct mixer *m, const scalar_t u[NR], scalar_t wrench[NA])
 {
 	for (int i = 0; i < NA; i++) {
 		scalar_t s = SC_ZERO;
 		for (int j = 0; j < NR; j++)
-			s = sc_mac(m->gn[i][j], u[j], s);
+			s = sc_add(gmul(m->gn[i][j], u[j]), s);
 		wrench[i] = mdiv(s, m->row_div[i]);
 	}
 }
@@ -498,6 +525,34 @@ static bool priority(const struct mixer *m, const scalar_t demand[NA], struct mi
 	return true;
 }
 
+#if OCTO_FIXED
+/* The products pinv[j][i] demand[i] of eq. (15). sc_mul is odd in each argument (it rounds
+ * the magnitude), so rotors whose entry in column i has the same magnitude share one
+ * product up to its sign: a symmetric layout such as eq. (14) has one or two magnitudes per
+ * column. Each column keeps its last two magnitudes and their products. */
+static void pinv_products(const struct mixer *m, const scalar_t demand[NA], scalar_t pin[NR][NA])
+{
+	for (int i = 0; i < NA; i++) {
+		scalar_t mag[2] = { SC_ZERO, SC_ZERO }, prod[2] = { SC_ZERO, SC_ZERO };
+		for (int j = 0; j < NR; j++) {
+			scalar_t p = m->pinv[j][i], a = p < 0 ? -p : p, t; /* p > INT32_MIN */
+			if (a == mag[0]) {
+				t = prod[0];
+			} else if (a == mag[1]) {
+				t = prod[1];
+			} else {
+				t = sc_mul(a, demand[i]);
+				mag[1] = mag[0];
+				prod[1] = prod[0];
+				mag[0] = a;
+				prod[0] = t;
+			}
+			pin[j][i] = p < 0 ? sc_neg(t) : t;
+		}
+	}
+}
+#endif
+
 void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
 {
 	out->limits = 0;
@@ -514,8 +569,19 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 	} else {
 		/* 1. eq. (15) */
 		bool inside = true;
+#if OCTO_FIXED
+		scalar_t pin[NR][NA];
+		pinv_products(m, demand, pin);
+#endif
 		for (int j = 0; j < NR; j++) {
+#if OCTO_FIXED
+			scalar_t f = pin[j][0];
+			for (int i = 1; i < NA; i++)
+				f = sc_add(pin[j][i], f);
+			out->f_n[j] = f;
+#else
 			out->f_n[j] = dot4(m->pinv[j], demand);
+#endif
 			if (!(m->present & (1u << j)))
 				out->f_n[j] = SC_ZERO;
 			else if (out->f_n[j] < m->f_lo || out->f_n[j] > m->f_hi)
@@ -539,15 +605,16 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 	wrench_u(m, out->f_n, out->achieved);
 	unsigned at_min = 0, at_max = 0;
 	/* a rotor within 4 inner margins of a bound counts as at the bound */
-	const scalar_t at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
+	const scalar_t at_tol = sc_mul(m->width, 4 * TOL_IN);
+	const scalar_t at_lo = sc_add(m->f_lo, at_tol), at_hi = sc_sub(m->f_hi, at_tol);
 	for (int j = 0; j < NR; j++) {
 		if (m->present & (1u << j)) {
-			if (out->f_n[j] <= sc_add(m->f_lo, at_tol))
+			if (out->f_n[j] <= at_lo)
 				at_min |= 1u << j;
-			if (out->f_n[j] >= sc_sub(m->f_hi, at_tol))
+			if (out->f_n[j] >= at_hi)
 				at_max |= 1u << j;
 		}
-		out->f_n[j] = sc_mul(out->f_n[j], m->p.scale[j]);
+		out->f_n[j] = gmul(m->p.scale[j], out->f_n[j]);
 	}
 	out->rotor_at_min = (uint8_t)at_min;
 	out->rotor_at_max = (uint8_t)at_max;
