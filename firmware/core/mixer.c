@@ -29,6 +29,17 @@ MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b)
 }
 MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_clamp(x, lo, hi); }
 
+/* acc + sum_k a[k sa] b[k sb] (sub: acc - ...), k = 0..n-1, a product at a time in that
+ * order: the refinement's sums in one routine */
+MIX_NOINLINE scalar_t mdot(scalar_t acc, const scalar_t *a, int sa, const scalar_t *b, int sb, int n, bool sub)
+{
+	for (int k = 0; k < n; k++) {
+		scalar_t p = sc_mul(a[k * sa], b[k * sb]);
+		acc = sub ? sc_sub(acc, p) : sc_add(p, acc);
+	}
+	return acc;
+}
+
 static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
 {
 	scalar_t s = sc_mul(a[0], b[0]);
@@ -202,16 +213,12 @@ static int row_basis(const struct mixer *m, const int8_t bnd[NR], int fr[NR], in
 			lt[k][i] = SC_ZERO;
 		for (int pass = 0; pass < 2; pass++)
 			for (int i = 0; i < r; i++) {
-				scalar_t d = SC_ZERO;
-				for (int t = 0; t < nf; t++)
-					d = sc_mac(q[i][t], v[t], d);
+				scalar_t d = mdot(SC_ZERO, q[i], 1, v, 1, nf, false);
 				lt[k][i] = sc_add(lt[k][i], d);
 				for (int t = 0; t < nf; t++)
 					v[t] = sc_sub(v[t], sc_mul(d, q[i][t]));
 			}
-		scalar_t n2 = SC_ZERO;
-		for (int t = 0; t < nf; t++)
-			n2 = sc_mac(v[t], v[t], n2);
+		scalar_t n2 = mdot(SC_ZERO, v, 1, v, 1, nf, false);
 		if (n2 <= EPS_GS)
 			continue;
 		scalar_t nrm = sc_sqrt(n2), inv = mdiv(SC(1), nrm);
@@ -254,11 +261,8 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		scalar_t p[NR], c[NA], pmax = SC_ZERO;
 		for (int t = 0; t < nf; t++)
 			p[t] = sc_sub(uref[fr[t]], u[fr[t]]);
-		for (int i = 0; i < r; i++) {
-			c[i] = SC_ZERO;
-			for (int t = 0; t < nf; t++)
-				c[i] = sc_mac(q[i][t], p[t], c[i]);
-		}
+		for (int i = 0; i < r; i++)
+			c[i] = mdot(SC_ZERO, q[i], 1, p, 1, nf, false);
 		for (int i = 0; i < r; i++)
 			for (int t = 0; t < nf; t++)
 				p[t] = sc_sub(p[t], sc_mul(c[i], q[i][t]));
@@ -308,9 +312,7 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 			int j = m->order[t];
 			if (bnd[j] == 0)
 				continue;
-			scalar_t mu = sc_sub(u[j], uref[j]);
-			for (int k = 0; k < NA; k++)
-				mu = sc_sub(mu, sc_mul(m->gn[k][j], lam[k]));
+			scalar_t mu = mdot(sc_sub(u[j], uref[j]), &m->gn[0][j], NR, lam, 1, NA, true);
 			scalar_t viol = bnd[j] < 0 ? sc_neg(mu) : mu;
 			if (viol > worst) {
 				worst = viol;
@@ -330,16 +332,10 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 			res[k] = sc_sub(res[k], sc_mul(m->gn[k][m->order[t]], u[m->order[t]]));
 	}
 	for (int i = 0; i < r; i++) {
-		scalar_t acc = res[piv[i]];
-		for (int k = 0; k < i; k++)
-			acc = sc_sub(acc, sc_mul(lt[piv[i]][k], y[k]));
-		y[i] = mdiv(acc, lt[piv[i]][i]);
+		y[i] = mdiv(mdot(res[piv[i]], lt[piv[i]], 1, y, 1, i, true), lt[piv[i]][i]);
 	}
 	for (int t = 0; t < nf; t++) {
-		scalar_t d = SC_ZERO;
-		for (int i = 0; i < r; i++)
-			d = sc_mac(q[i][t], y[i], d);
-		u[fr[t]] = clamp01(sc_add(u[fr[t]], d));
+		u[fr[t]] = clamp01(sc_add(u[fr[t]], mdot(SC_ZERO, &q[0][t], NR, y, 1, r, false)));
 	}
 	return it;
 }

@@ -13,6 +13,19 @@
 /* |x|: the sign bit cleared (no soft-float compare on cores without FPU) */
 static float absf(float x) { return fabsf(x); }
 
+/* sum_k a[k sa] b[k sb], k = 0..n-1, in that order: one routine for the set-up's dot
+ * products (each inline loop is a few soft-float calls more on cores without FPU) */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static float dotf(const float *a, int sa, const float *b, int sb, int n)
+{
+	float acc = 0.0f;
+	for (int k = 0; k < n; k++)
+		acc += a[k * sa] * b[k * sb];
+	return acc;
+}
+
 /* Gram-Schmidt step: x (length 8) minus its projection on the orthonormal columns 0..nb-1 of
  * q, twice (the second pass removes what rounding left); c[k] = the coefficient taken off
  * along column k. Returns |x|^2 after. */
@@ -22,17 +35,12 @@ static float ortho(const float q[NR][NR], int nb, float x[NR], float c[NR])
 		c[k] = 0.0f;
 	for (int pass = 0; pass < 2; pass++)
 		for (int k = 0; k < nb; k++) {
-			float d = 0.0f;
-			for (int j = 0; j < NR; j++)
-				d += q[j][k] * x[j];
+			float d = dotf(&q[0][k], NR, x, 1, NR);
 			c[k] += d;
 			for (int j = 0; j < NR; j++)
 				x[j] -= d * q[j][k];
 		}
-	float n2 = 0.0f;
-	for (int j = 0; j < NR; j++)
-		n2 += x[j] * x[j];
-	return n2;
+	return dotf(x, 1, x, 1, NR);
 }
 
 /* Inverse of a 4x4 matrix by Gauss-Jordan with partial pivoting; returns |det|. */
@@ -87,7 +95,6 @@ static bool normal3(const float g[NA][NR], int a, int b, int c, float n[NA])
 	for (int x = 0; x < NA; x++)
 		for (int y = x + 1; y < NA; y++)
 			mnr[x][y] = g[x][b] * g[y][c] - g[y][b] * g[x][c];
-	float nn = 0.0f;
 	for (int k = 0; k < NA; k++) {
 		int col[3], m = 0;
 		for (int j = 0; j < NA; j++)
@@ -96,8 +103,8 @@ static bool normal3(const float g[NA][NR], int a, int b, int c, float n[NA])
 		const int x = col[0], y = col[1], z = col[2];
 		float d = g[x][a] * mnr[y][z] - g[y][a] * mnr[x][z] + g[z][a] * mnr[x][y];
 		n[k] = (k & 1) ? -d : d;
-		nn += n[k] * n[k];
 	}
+	float nn = dotf(n, 1, n, 1, NA);
 	/* generators have entries in [-1, 1]: a normal below 1e-4 means (near) dependence */
 	if (nn < 1e-8f)
 		return false;
@@ -135,9 +142,7 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 					return -1;
 				float nc = 0.0f, h = 0.0f;
 				for (int t = 0; t < cnt; t++) {
-					float d = 0.0f;
-					for (int i = 0; i < NA; i++)
-						d += n[i] * g[i][set[t]];
+					float d = dotf(n, 1, &g[0][set[t]], NR, NA);
 					nc += 0.5f * d;
 					h += 0.5f * absf(d);
 				}
@@ -244,11 +249,9 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	float r[NA][NA] = { { 0 } }, x[NR], cf[NR];
 	int rank = 0;
 	for (int i = 0; i < NA; i++) {
-		float n0 = 0.0f;
-		for (int j = 0; j < NR; j++) {
+		for (int j = 0; j < NR; j++)
 			x[j] = dz->gamma_f[i][j];
-			n0 += x[j] * x[j];
-		}
+		float n0 = dotf(x, 1, x, 1, NR);
 		float n2 = ortho(basis, rank, x, cf);
 		for (int k = 0; k < rank; k++)
 			r[k][i] = cf[k];
@@ -261,12 +264,8 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	}
 	float g[NA][NA], gi[NA][NA]; /* R R^T, completed by the identity beyond the rank */
 	for (int k = 0; k < NA; k++)
-		for (int l = 0; l < NA; l++) {
-			float acc = k == l && k >= rank ? 1.0f : 0.0f;
-			for (int i = 0; i < NA; i++)
-				acc += r[k][i] * r[l][i];
-			g[k][l] = acc;
-		}
+		for (int l = 0; l < NA; l++) /* rows beyond the rank are 0: 0 + 1 there */
+			g[k][l] = dotf(r[k], 1, r[l], 1, NA) + (k == l && k >= rank ? 1.0f : 0.0f);
 	inv4(g, gi);
 	for (int j = 0; j < NR; j++)
 		for (int i = 0; i < NA; i++) {
@@ -283,20 +282,12 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	for (int it = 0; it < 2; it++) {
 		float e[NA][NA]; /* I - Gamma P */
 		for (int i = 0; i < NA; i++)
-			for (int k = 0; k < NA; k++) {
-				float acc = 0.0f;
-				for (int j = 0; j < NR; j++)
-					acc += dz->gamma_f[i][j] * dz->pinv_f[j][k];
-				e[i][k] = (i == k ? 1.0f : 0.0f) - acc;
-			}
+			for (int k = 0; k < NA; k++)
+				e[i][k] = (i == k ? 1.0f : 0.0f) - dotf(dz->gamma_f[i], 1, &dz->pinv_f[0][k], NA, NR);
 		for (int j = 0; j < NR; j++) { /* row j of P + P (I - Gamma P) reads only row j of P */
 			float np[NA];
-			for (int k = 0; k < NA; k++) {
-				float acc = 0.0f;
-				for (int i = 0; i < NA; i++)
-					acc += dz->pinv_f[j][i] * e[i][k];
-				np[k] = dz->pinv_f[j][k] + acc;
-			}
+			for (int k = 0; k < NA; k++)
+				np[k] = dz->pinv_f[j][k] + dotf(dz->pinv_f[j], 1, &e[0][k], NA, NA);
 			for (int k = 0; k < NA; k++)
 				dz->pinv_f[j][k] = np[k];
 		}
@@ -370,10 +361,7 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	uint8_t act[NR];
 	int na = 0;
 	for (int j = 0; j < NR; j++) {
-		float n2 = 0.0f;
-		for (int i = 0; i < NA; i++)
-			n2 += dz->gamma_f[i][j] * dz->gamma_f[i][j];
-		if (n2 > 0.0f) {
+		if (dotf(&dz->gamma_f[0][j], NR, &dz->gamma_f[0][j], NR, NA) > 0.0f) {
 			act[na++] = (uint8_t)j;
 			m->present |= (uint8_t)(1u << j);
 		}
