@@ -10,7 +10,8 @@
 
 /* Kept out of line for flash: the compiler would inline these at every use (sc_div's zero
  * test and sc_clamp's two compares are calls of their own on a core without FPU), and
- * preimage's locals would crowd the registers of its caller. A call costs a few
+ * preimage's locals would crowd the registers of its caller; scaled_rp and
+ * attainable_scaled have several callers. A call costs a few
  * instructions per division or clamp; the allocator measured no slower on Cortex-M4F. */
 #if defined(__GNUC__)
 #define MIX_NOINLINE static __attribute__((noinline))
@@ -28,6 +29,15 @@ MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b)
 	return sc_div(a, b);
 }
 MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_clamp(x, lo, hi); }
+/* max and min: out of line in the float build (a soft-float compare each on a core without
+ * FPU), inline in the fixed build (an integer compare) */
+#if OCTO_FIXED
+#define MIX_FLOAT_NOINLINE static inline
+#else
+#define MIX_FLOAT_NOINLINE MIX_NOINLINE
+#endif
+MIX_FLOAT_NOINLINE scalar_t mmax(scalar_t a, scalar_t b) { return sc_max(a, b); }
+MIX_FLOAT_NOINLINE scalar_t mmin(scalar_t a, scalar_t b) { return sc_min(a, b); }
 
 /* acc + sum_k a[k sa] b[k sb] (sub: acc - ...), k = 0..n-1, a product at a time in that
  * order: the refinement's sums in one routine */
@@ -132,8 +142,8 @@ static bool facet_scan(const struct mixer *m, const scalar_t w[NA], const scalar
 			a = b;
 			b = t;
 		}
-		l = sc_max(l, a);
-		h = sc_min(h, b);
+		l = mmax(l, a);
+		h = mmin(h, b);
 		if (l > h)
 			return false;
 	}
@@ -142,7 +152,7 @@ static bool facet_scan(const struct mixer *m, const scalar_t w[NA], const scalar
 	return l <= h;
 }
 
-static bool attainable_scaled(const struct mixer *m, const scalar_t w[NA], scalar_t tol)
+MIX_NOINLINE bool attainable_scaled(const struct mixer *m, const scalar_t w[NA], scalar_t tol)
 {
 	scalar_t lo, hi;
 	return facet_scan(m, w, NULL, 0, tol, SC_ZERO, SC_ZERO, &lo, &hi);
@@ -173,7 +183,7 @@ static bool thrust_interval(const struct mixer *m, const struct facet_recips *rc
 static bool yaw_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA], scalar_t dy,
 			 scalar_t *lo, scalar_t *hi)
 {
-	scalar_t l = sc_min(SC_ZERO, dy), h = sc_max(SC_ZERO, dy);
+	scalar_t l = mmin(SC_ZERO, dy), h = mmax(SC_ZERO, dy);
 	*lo = l;
 	*hi = h;
 	return facet_scan(m, w, dy == SC_ZERO ? NULL : rc->inv[1], 3, sc_neg(TOL_IN), l, h, lo, hi);
@@ -190,8 +200,8 @@ static void narrow(scalar_t q, scalar_t s, scalar_t hw, scalar_t *lo, scalar_t *
 		a = b;
 		b = t;
 	}
-	*lo = sc_max(*lo, a);
-	*hi = sc_min(*hi, b);
+	*lo = mmax(*lo, a);
+	*hi = mmin(*hi, b);
 }
 
 /* Orthonormal basis (rows q[0..r-1], length nf) of the row space of G_F (the 4 rows of gn
@@ -267,7 +277,7 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 			for (int t = 0; t < nf; t++)
 				p[t] = sc_sub(p[t], sc_mul(c[i], q[i][t]));
 		for (int t = 0; t < nf; t++)
-			pmax = sc_max(pmax, sc_abs(p[t]));
+			pmax = mmax(pmax, sc_abs(p[t]));
 		if (pmax > EPS_P) {
 			scalar_t step = SC(1);
 			int blk = -1;
@@ -281,7 +291,7 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 					continue;
 				lim = mdiv(lim, p[t]);
 				if (lim < step) {
-					step = sc_max(lim, SC_ZERO);
+					step = mmax(lim, SC_ZERO);
 					blk = t;
 				}
 			}
@@ -396,9 +406,9 @@ MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t 
 		int j = m->order[t];
 		scalar_t d = sc_sub(u[j], uref[j]);
 		if (uref[j] < SC_ZERO && d > 0)
-			theta = sc_max(theta, mdiv(sc_neg(uref[j]), d));
+			theta = mmax(theta, mdiv(sc_neg(uref[j]), d));
 		else if (uref[j] > SC(1) && d < 0)
-			theta = sc_max(theta, mdiv(sc_sub(SC(1), uref[j]), d));
+			theta = mmax(theta, mdiv(sc_sub(SC(1), uref[j]), d));
 	}
 	if (theta < SC(1)) {
 		for (int t = 0; t < na; t++) {
@@ -414,7 +424,7 @@ MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t 
 static const uint32_t axis_limit[NA] = { MIXER_LIMIT_F, MIXER_LIMIT_TX, MIXER_LIMIT_TY, MIXER_LIMIT_TZ };
 
 /* w[1], w[2]: the scaled roll and pitch of a times the demanded ones */
-static void scaled_rp(const struct mixer *m, const scalar_t demand[NA], scalar_t a, scalar_t w[NA])
+MIX_NOINLINE void scaled_rp(const struct mixer *m, const scalar_t demand[NA], scalar_t a, scalar_t w[NA])
 {
 	w[1] = to_scaled(m, 1, sc_mul(a, demand[1]));
 	w[2] = to_scaled(m, 2, sc_mul(a, demand[2]));

@@ -128,13 +128,13 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 				if (!normal3(g, set[a], set[b], set[c], n))
 					continue;
 				bool dup = false;
-				for (int k = 0; k < nf && !dup; k++) {
-					float dp = 0.0f, dm = 0.0f;
+				for (int k = 0; k < 2 * nf && !dup; k++) { /* n = +-seen[k / 2] */
+					float dmax = 0.0f;
 					for (int i = 0; i < NA; i++) {
-						dp = absf(n[i] - seen[k][i]) > dp ? absf(n[i] - seen[k][i]) : dp;
-						dm = absf(n[i] + seen[k][i]) > dm ? absf(n[i] + seen[k][i]) : dm;
+						float e = absf((k & 1) ? n[i] + seen[k / 2][i] : n[i] - seen[k / 2][i]);
+						dmax = e > dmax ? e : dmax;
 					}
-					dup = dp < 1e-4f || dm < 1e-4f;
+					dup = dmax < 1e-4f;
 				}
 				if (dup)
 					continue;
