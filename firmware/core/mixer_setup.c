@@ -197,13 +197,13 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 		float l = sc_to_float(p->arm_l_m);
 		float kf = sc_to_float(p->k_f_n);
 		float k = kf > 0.0f ? sc_to_float(p->k_tau_nm) / kf : 0.0f;
-		static const float tx[NR] = { 0, -1, -1, -1, 0, 1, 1, 1 };
-		static const float ty[NR] = { -1, -1, 0, 1, 1, 1, 0, -1 };
+		/* sign of tau_x per rotor; tau_y's is the same two rotors on */
+		static const signed char sx[NR] = { 0, -1, -1, -1, 0, 1, 1, 1 };
 		for (int j = 0; j < NR; j++) {
 			float diag = (j & 1) ? s : 1.0f; /* even-numbered rotors 2,4,6,8 at 45 deg */
 			m->gamma_f[0][j] = 1.0f;
-			m->gamma_f[1][j] = tx[j] * diag * l;
-			m->gamma_f[2][j] = ty[j] * diag * l;
+			m->gamma_f[1][j] = (float)sx[j] * diag * l;
+			m->gamma_f[2][j] = (float)sx[(j + 2) % NR] * diag * l;
 			m->gamma_f[3][j] = (j & 1) ? -k : k;
 		}
 	}
