@@ -310,12 +310,10 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		 * the same values as summing Q g_F, in float up to the sign of a zero, which the
 		 * test against EPS_MU > 0 below cannot see), back substitution over the basis rows */
 		scalar_t lam[NA] = { SC_ZERO, SC_ZERO, SC_ZERO, SC_ZERO };
-		for (int i = r - 1; i >= 0; i--) {
-			scalar_t acc = sc_neg(c[i]);
-			for (int k = piv[i] + 1; k < NA; k++)
-				acc = sc_sub(acc, sc_mul(lt[k][i], lam[k]));
-			lam[piv[i]] = mdiv(acc, lt[piv[i]][i]);
-		}
+		/* (summed over every k: lam[k] is still 0 for k <= piv[i], as piv rises with i, and
+		 * acc - x 0 is acc, in float up to the sign of a zero, which EPS_MU cannot see) */
+		for (int i = r - 1; i >= 0; i--)
+			lam[piv[i]] = mdiv(mdot(sc_neg(c[i]), &lt[0][i], NA, lam, 1, NA, true), lt[piv[i]][i]);
 		int rel = -1;
 		scalar_t worst = EPS_MU;
 		for (int t = 0; t < na; t++) {
