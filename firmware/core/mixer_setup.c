@@ -62,12 +62,11 @@ static float inv4(const float m[4][4], float out[4][4])
 				piv = r;
 		if (a[piv][c] == 0.0f)
 			return 0.0f;
-		if (piv != c)
-			for (int j = 0; j < 8; j++) {
-				float t = a[c][j];
-				a[c][j] = a[piv][j];
-				a[piv][j] = t;
-			}
+		for (int j = 0; j < 8; j++) { /* rows c and piv swapped (nothing when the same) */
+			float t = a[c][j];
+			a[c][j] = a[piv][j];
+			a[piv][j] = t;
+		}
 		float pv = a[c][c];
 		det *= pv;
 		for (int j = 0; j < 8; j++)
