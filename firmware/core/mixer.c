@@ -29,9 +29,9 @@ MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b)
 	return sc_div(a, b);
 }
 MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_clamp(x, lo, hi); }
-/* max and min: out of line in the float build (a soft-float compare each on a core without
- * FPU), inline in the fixed build (an integer compare) */
-#if OCTO_FIXED
+/* max and min: out of line in the float build on a core without FPU (a soft-float compare
+ * each), inline in the fixed build and with an FPU (a compare instruction) */
+#if OCTO_FIXED || defined(__ARM_FP)
 #define MIX_FLOAT_NOINLINE static inline
 #else
 #define MIX_FLOAT_NOINLINE MIX_NOINLINE
