@@ -63,9 +63,10 @@
  *        Steps b-d keep an inner margin (3e-6 of a rotor's range in float, 3.7e-4 in Q16.16)
  *        so that the target is attainable despite rounding.
  *      Work is bounded: out->steps <= 2 MIXER_ALPHA_ITERS + (n_active - 4) + MIXER_QP_ITERS.
- *      Measured (QEMU instruction counts, paper vehicle): unconstrained 785 instructions on
- *      Cortex-M4F (8,300 on M0 Q16.16); saturated 17,000-33,000 on M4F (240,000-380,000 on
- *      M0 Q16.16), only while a rotor saturates. Set-up: 370,000 on M4F.
+ *      Measured (QEMU instruction counts, paper vehicle, core built -Os): unconstrained 753
+ *      instructions on Cortex-M4F (4,550 on M0 Q16.16); a demand that saturates one rotor
+ *      (5 steps) 17,300 on M4F (108,000 on M0 Q16.16), more with more steps, only while a
+ *      rotor saturates. Set-up: 490,000 on M4F.
  *      If the allocator is unavailable (rank(Gamma) < 4, fewer than 4 rotors, more facets than
  *      MIXER_MAX_FACETS / MIXER_MAX_SUB_FACETS), PRIORITY clips and sets MIXER_LIMIT_NO_ALLOC.
  *
