@@ -10,7 +10,8 @@
 
 /* Kept out of line for flash: the compiler would inline these at every use (sc_div's zero
  * test and sc_clamp's two compares are calls of their own on a core without FPU), and
- * preimage's locals would crowd the registers of its caller. A call costs a few
+ * preimage's locals would crowd the registers of its caller; scaled_rp and
+ * attainable_scaled have several callers. A call costs a few
  * instructions per division or clamp; the allocator measured no slower on Cortex-M4F. */
 #if defined(__GNUC__)
 #define MIX_NOINLINE static __attribute__((noinline))
@@ -18,8 +19,36 @@
 #define MIX_NOINLINE static
 #endif
 
-MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b) { return sc_div(a, b); }
+/* a / b; the fixed build returns a at once for b = 1 (what sc_div gives, exactly) */
+MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b)
+{
+#if OCTO_FIXED
+	if (b == SC(1))
+		return a;
+#endif
+	return sc_div(a, b);
+}
 MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_clamp(x, lo, hi); }
+/* max and min: out of line in the float build on a core without FPU (a soft-float compare
+ * each), inline in the fixed build and with an FPU (a compare instruction) */
+#if OCTO_FIXED || defined(__ARM_FP)
+#define MIX_FLOAT_NOINLINE static inline
+#else
+#define MIX_FLOAT_NOINLINE MIX_NOINLINE
+#endif
+MIX_FLOAT_NOINLINE scalar_t mmax(scalar_t a, scalar_t b) { return sc_max(a, b); }
+MIX_FLOAT_NOINLINE scalar_t mmin(scalar_t a, scalar_t b) { return sc_min(a, b); }
+
+/* acc + sum_k a[k sa] b[k sb] (sub: acc - ...), k = 0..n-1, a product at a time in that
+ * order: the refinement's sums in one routine */
+MIX_NOINLINE scalar_t mdot(scalar_t acc, const scalar_t *a, int sa, const scalar_t *b, int sb, int n, bool sub)
+{
+	for (int k = 0; k < n; k++) {
+		scalar_t p = sc_mul(a[k * sa], b[k * sb]);
+		acc = sub ? sc_sub(acc, p) : sc_add(p, acc);
+	}
+	return acc;
+}
 
 static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
 {
@@ -35,13 +64,32 @@ static scalar_t to_scaled(const struct mixer *m, int i, scalar_t v)
 	return mdiv(sc_mul(sc_sub(v, m->w_lo[i]), m->row_div[i]), m->width);
 }
 
+/* g u for an entry g of the row-scaled Gamma S: the fixed build skips the product where g is
+ * 0 or +-1 (most of eq. (14)'s entries), the same value (sc_mul(+-1, u) = +-u exactly);
+ * inline there, as the test is what it saves */
+#if OCTO_FIXED && defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline scalar_t gmul(scalar_t g, scalar_t u)
+{
+#if OCTO_FIXED
+	if (g == SC_ZERO)
+		return SC_ZERO;
+	if (g == SC(1))
+		return u;
+	if (g == -SC(1))
+		return sc_neg(u);
+#endif
+	return sc_mul(g, u);
+}
+
 /* the physical wrench of u (Gamma S u) */
 static void wrench_u(const struct mixer *m, const scalar_t u[NR], scalar_t wrench[NA])
 {
 	for (int i = 0; i < NA; i++) {
 		scalar_t s = SC_ZERO;
 		for (int j = 0; j < NR; j++)
-			s = sc_mac(m->gn[i][j], u[j], s);
+			s = sc_add(gmul(m->gn[i][j], u[j]), s);
 		wrench[i] = mdiv(s, m->row_div[i]);
 	}
 }
@@ -94,8 +142,8 @@ static bool facet_scan(const struct mixer *m, const scalar_t w[NA], const scalar
 			a = b;
 			b = t;
 		}
-		l = sc_max(l, a);
-		h = sc_min(h, b);
+		l = mmax(l, a);
+		h = mmin(h, b);
 		if (l > h)
 			return false;
 	}
@@ -104,7 +152,7 @@ static bool facet_scan(const struct mixer *m, const scalar_t w[NA], const scalar
 	return l <= h;
 }
 
-static bool attainable_scaled(const struct mixer *m, const scalar_t w[NA], scalar_t tol)
+MIX_NOINLINE bool attainable_scaled(const struct mixer *m, const scalar_t w[NA], scalar_t tol)
 {
 	scalar_t lo, hi;
 	return facet_scan(m, w, NULL, 0, tol, SC_ZERO, SC_ZERO, &lo, &hi);
@@ -135,7 +183,7 @@ static bool thrust_interval(const struct mixer *m, const struct facet_recips *rc
 static bool yaw_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA], scalar_t dy,
 			 scalar_t *lo, scalar_t *hi)
 {
-	scalar_t l = sc_min(SC_ZERO, dy), h = sc_max(SC_ZERO, dy);
+	scalar_t l = mmin(SC_ZERO, dy), h = mmax(SC_ZERO, dy);
 	*lo = l;
 	*hi = h;
 	return facet_scan(m, w, dy == SC_ZERO ? NULL : rc->inv[1], 3, sc_neg(TOL_IN), l, h, lo, hi);
@@ -152,8 +200,8 @@ static void narrow(scalar_t q, scalar_t s, scalar_t hw, scalar_t *lo, scalar_t *
 		a = b;
 		b = t;
 	}
-	*lo = sc_max(*lo, a);
-	*hi = sc_min(*hi, b);
+	*lo = mmax(*lo, a);
+	*hi = mmin(*hi, b);
 }
 
 /* Orthonormal basis (rows q[0..r-1], length nf) of the row space of G_F (the 4 rows of gn
@@ -175,16 +223,12 @@ static int row_basis(const struct mixer *m, const int8_t bnd[NR], int fr[NR], in
 			lt[k][i] = SC_ZERO;
 		for (int pass = 0; pass < 2; pass++)
 			for (int i = 0; i < r; i++) {
-				scalar_t d = SC_ZERO;
-				for (int t = 0; t < nf; t++)
-					d = sc_mac(q[i][t], v[t], d);
+				scalar_t d = mdot(SC_ZERO, q[i], 1, v, 1, nf, false);
 				lt[k][i] = sc_add(lt[k][i], d);
 				for (int t = 0; t < nf; t++)
 					v[t] = sc_sub(v[t], sc_mul(d, q[i][t]));
 			}
-		scalar_t n2 = SC_ZERO;
-		for (int t = 0; t < nf; t++)
-			n2 = sc_mac(v[t], v[t], n2);
+		scalar_t n2 = mdot(SC_ZERO, v, 1, v, 1, nf, false);
 		if (n2 <= EPS_GS)
 			continue;
 		scalar_t nrm = sc_sqrt(n2), inv = mdiv(SC(1), nrm);
@@ -227,16 +271,13 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		scalar_t p[NR], c[NA], pmax = SC_ZERO;
 		for (int t = 0; t < nf; t++)
 			p[t] = sc_sub(uref[fr[t]], u[fr[t]]);
-		for (int i = 0; i < r; i++) {
-			c[i] = SC_ZERO;
-			for (int t = 0; t < nf; t++)
-				c[i] = sc_mac(q[i][t], p[t], c[i]);
-		}
+		for (int i = 0; i < r; i++)
+			c[i] = mdot(SC_ZERO, q[i], 1, p, 1, nf, false);
 		for (int i = 0; i < r; i++)
 			for (int t = 0; t < nf; t++)
 				p[t] = sc_sub(p[t], sc_mul(c[i], q[i][t]));
 		for (int t = 0; t < nf; t++)
-			pmax = sc_max(pmax, sc_abs(p[t]));
+			pmax = mmax(pmax, sc_abs(p[t]));
 		if (pmax > EPS_P) {
 			scalar_t step = SC(1);
 			int blk = -1;
@@ -250,7 +291,7 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 					continue;
 				lim = mdiv(lim, p[t]);
 				if (lim < step) {
-					step = sc_max(lim, SC_ZERO);
+					step = mmax(lim, SC_ZERO);
 					blk = t;
 				}
 			}
@@ -269,21 +310,17 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		 * the same values as summing Q g_F, in float up to the sign of a zero, which the
 		 * test against EPS_MU > 0 below cannot see), back substitution over the basis rows */
 		scalar_t lam[NA] = { SC_ZERO, SC_ZERO, SC_ZERO, SC_ZERO };
-		for (int i = r - 1; i >= 0; i--) {
-			scalar_t acc = sc_neg(c[i]);
-			for (int k = piv[i] + 1; k < NA; k++)
-				acc = sc_sub(acc, sc_mul(lt[k][i], lam[k]));
-			lam[piv[i]] = mdiv(acc, lt[piv[i]][i]);
-		}
+		/* (summed over every k: lam[k] is still 0 for k <= piv[i], as piv rises with i, and
+		 * acc - x 0 is acc, in float up to the sign of a zero, which EPS_MU cannot see) */
+		for (int i = r - 1; i >= 0; i--)
+			lam[piv[i]] = mdiv(mdot(sc_neg(c[i]), &lt[0][i], NA, lam, 1, NA, true), lt[piv[i]][i]);
 		int rel = -1;
 		scalar_t worst = EPS_MU;
 		for (int t = 0; t < na; t++) {
 			int j = m->order[t];
 			if (bnd[j] == 0)
 				continue;
-			scalar_t mu = sc_sub(u[j], uref[j]);
-			for (int k = 0; k < NA; k++)
-				mu = sc_sub(mu, sc_mul(m->gn[k][j], lam[k]));
+			scalar_t mu = mdot(sc_sub(u[j], uref[j]), &m->gn[0][j], NR, lam, 1, NA, true);
 			scalar_t viol = bnd[j] < 0 ? sc_neg(mu) : mu;
 			if (viol > worst) {
 				worst = viol;
@@ -303,16 +340,10 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 			res[k] = sc_sub(res[k], sc_mul(m->gn[k][m->order[t]], u[m->order[t]]));
 	}
 	for (int i = 0; i < r; i++) {
-		scalar_t acc = res[piv[i]];
-		for (int k = 0; k < i; k++)
-			acc = sc_sub(acc, sc_mul(lt[piv[i]][k], y[k]));
-		y[i] = mdiv(acc, lt[piv[i]][i]);
+		y[i] = mdiv(mdot(res[piv[i]], lt[piv[i]], 1, y, 1, i, true), lt[piv[i]][i]);
 	}
 	for (int t = 0; t < nf; t++) {
-		scalar_t d = SC_ZERO;
-		for (int i = 0; i < r; i++)
-			d = sc_mac(q[i][t], y[i], d);
-		u[fr[t]] = clamp01(sc_add(u[fr[t]], d));
+		u[fr[t]] = clamp01(sc_add(u[fr[t]], mdot(SC_ZERO, &q[0][t], NR, y, 1, r, false)));
 	}
 	return it;
 }
@@ -348,7 +379,7 @@ MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t 
 			if (tail) {
 				n = m->tail_inv[k];
 			} else {
-				const struct mixer_subfacet *fc = &m->sub[m->sub_first[st] + k];
+				const struct mixer_facet *fc = &m->sub[m->sub_first[st] + k];
 				n = fc->n;
 				nc = fc->nc;
 				h = fc->h;
@@ -373,9 +404,9 @@ MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t 
 		int j = m->order[t];
 		scalar_t d = sc_sub(u[j], uref[j]);
 		if (uref[j] < SC_ZERO && d > 0)
-			theta = sc_max(theta, mdiv(sc_neg(uref[j]), d));
+			theta = mmax(theta, mdiv(sc_neg(uref[j]), d));
 		else if (uref[j] > SC(1) && d < 0)
-			theta = sc_max(theta, mdiv(sc_sub(SC(1), uref[j]), d));
+			theta = mmax(theta, mdiv(sc_sub(SC(1), uref[j]), d));
 	}
 	if (theta < SC(1)) {
 		for (int t = 0; t < na; t++) {
@@ -391,7 +422,7 @@ MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t 
 static const uint32_t axis_limit[NA] = { MIXER_LIMIT_F, MIXER_LIMIT_TX, MIXER_LIMIT_TY, MIXER_LIMIT_TZ };
 
 /* w[1], w[2]: the scaled roll and pitch of a times the demanded ones */
-static void scaled_rp(const struct mixer *m, const scalar_t demand[NA], scalar_t a, scalar_t w[NA])
+MIX_NOINLINE void scaled_rp(const struct mixer *m, const scalar_t demand[NA], scalar_t a, scalar_t w[NA])
 {
 	w[1] = to_scaled(m, 1, sc_mul(a, demand[1]));
 	w[2] = to_scaled(m, 2, sc_mul(a, demand[2]));
@@ -498,6 +529,34 @@ static bool priority(const struct mixer *m, const scalar_t demand[NA], struct mi
 	return true;
 }
 
+#if OCTO_FIXED
+/* The products pinv[j][i] demand[i] of eq. (15). sc_mul is odd in each argument (it rounds
+ * the magnitude), so rotors whose entry in column i has the same magnitude share one
+ * product up to its sign: a symmetric layout such as eq. (14) has one or two magnitudes per
+ * column. Each column keeps its last two magnitudes and their products. */
+static void pinv_products(const struct mixer *m, const scalar_t demand[NA], scalar_t pin[NR][NA])
+{
+	for (int i = 0; i < NA; i++) {
+		scalar_t mag[2] = { SC_ZERO, SC_ZERO }, prod[2] = { SC_ZERO, SC_ZERO };
+		for (int j = 0; j < NR; j++) {
+			scalar_t p = m->pinv[j][i], a = p < 0 ? -p : p, t; /* p > INT32_MIN */
+			if (a == mag[0]) {
+				t = prod[0];
+			} else if (a == mag[1]) {
+				t = prod[1];
+			} else {
+				t = sc_mul(a, demand[i]);
+				mag[1] = mag[0];
+				prod[1] = prod[0];
+				mag[0] = a;
+				prod[0] = t;
+			}
+			pin[j][i] = p < 0 ? sc_neg(t) : t;
+		}
+	}
+}
+#endif
+
 void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
 {
 	out->limits = 0;
@@ -514,8 +573,19 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 	} else {
 		/* 1. eq. (15) */
 		bool inside = true;
+#if OCTO_FIXED
+		scalar_t pin[NR][NA];
+		pinv_products(m, demand, pin);
+#endif
 		for (int j = 0; j < NR; j++) {
+#if OCTO_FIXED
+			scalar_t f = pin[j][0];
+			for (int i = 1; i < NA; i++)
+				f = sc_add(pin[j][i], f);
+			out->f_n[j] = f;
+#else
 			out->f_n[j] = dot4(m->pinv[j], demand);
+#endif
 			if (!(m->present & (1u << j)))
 				out->f_n[j] = SC_ZERO;
 			else if (out->f_n[j] < m->f_lo || out->f_n[j] > m->f_hi)
@@ -539,15 +609,16 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 	wrench_u(m, out->f_n, out->achieved);
 	unsigned at_min = 0, at_max = 0;
 	/* a rotor within 4 inner margins of a bound counts as at the bound */
-	const scalar_t at_tol = sc_mul(m->width, sc_mul(SC(4), TOL_IN));
+	const scalar_t at_tol = sc_mul(m->width, 4 * TOL_IN);
+	const scalar_t at_lo = sc_add(m->f_lo, at_tol), at_hi = sc_sub(m->f_hi, at_tol);
 	for (int j = 0; j < NR; j++) {
 		if (m->present & (1u << j)) {
-			if (out->f_n[j] <= sc_add(m->f_lo, at_tol))
+			if (out->f_n[j] <= at_lo)
 				at_min |= 1u << j;
-			if (out->f_n[j] >= sc_sub(m->f_hi, at_tol))
+			if (out->f_n[j] >= at_hi)
 				at_max |= 1u << j;
 		}
-		out->f_n[j] = sc_mul(out->f_n[j], m->p.scale[j]);
+		out->f_n[j] = gmul(m->p.scale[j], out->f_n[j]);
 	}
 	out->rotor_at_min = (uint8_t)at_min;
 	out->rotor_at_max = (uint8_t)at_max;

@@ -22,10 +22,11 @@
  *
  * Set-up (mixer_init / mixer_set_params; NOT the 90 Hz path; float32 in both builds, results
  * stored as scalar_t for the hot path):
- *   - Moore-Penrose pseudo-inverse Gamma^+ (8x4) by a one-sided Jacobi SVD of Gamma^T (at
- *     most 40 sweeps; general: any layout, rank deficiency handled by a singular-value
- *     threshold of 1e-5 sigma_max), polished by two Newton-Schulz steps; an orthonormal basis
- *     of the null space of Gamma (8 x (8 - rank), 4 columns at full rank).
+ *   - Moore-Penrose pseudo-inverse Gamma^+ (8x4) from the Gram-Schmidt QR of Gamma's rows,
+ *     Gamma^+ = Q (R R^T)^-1 R (general: any layout; a row within 1e-5 of its length of the
+ *     span of the rows before it adds nothing to the rank), polished by two Newton-Schulz
+ *     steps; an orthonormal basis of the null space of Gamma (8 x (8 - rank), 4 columns at
+ *     full rank).
  *   - For the box-constrained allocator, in a "scaled space" (each row of Gamma divided by its
  *     largest |entry|, rotor thrust u = (f - f_lo) / (f_hi - f_lo) in [0, 1]): the facets of
  *     the attainable set (the zonotope Gamma [f_lo, f_hi]^8: one normal per 3 columns that
@@ -62,9 +63,10 @@
  *        Steps b-d keep an inner margin (3e-6 of a rotor's range in float, 3.7e-4 in Q16.16)
  *        so that the target is attainable despite rounding.
  *      Work is bounded: out->steps <= 2 MIXER_ALPHA_ITERS + (n_active - 4) + MIXER_QP_ITERS.
- *      Measured (QEMU instruction counts, paper vehicle): unconstrained 785 instructions on
- *      Cortex-M4F (8,300 on M0 Q16.16); saturated 17,000-33,000 on M4F (240,000-380,000 on
- *      M0 Q16.16), only while a rotor saturates. Set-up: 370,000 on M4F.
+ *      Measured (QEMU instruction counts, paper vehicle, core built -Os): unconstrained 753
+ *      instructions on Cortex-M4F (4,550 on M0 Q16.16); a demand that saturates one rotor
+ *      (5 steps) 17,300 on M4F (108,000 on M0 Q16.16), more with more steps, only while a
+ *      rotor saturates. Set-up: 490,000 on M4F.
  *      If the allocator is unavailable (rank(Gamma) < 4, fewer than 4 rotors, more facets than
  *      MIXER_MAX_FACETS / MIXER_MAX_SUB_FACETS), PRIORITY clips and sets MIXER_LIMIT_NO_ALLOC.
  *
@@ -132,16 +134,11 @@ struct mixer_params {
 	scalar_t scale[MIXER_N_ROTORS];
 };
 
+/* a facet of the attainable set or of a preimage step's sub-zonotope */
 struct mixer_facet {
 	scalar_t n[MIXER_N_AXES]; /* unit normal in the row-scaled space */
 	scalar_t nc;              /* n . centre of its zonotope */
 	scalar_t h;               /* half-width: 1/2 sum |n . g_j| over its generators */
-};
-
-/* a facet of a preimage step's sub-zonotope */
-struct mixer_subfacet {
-	scalar_t n[MIXER_N_AXES];
-	scalar_t nc, h;
 };
 
 /* The float32 results of the set-up that the 90 Hz path does not use: mixer_init computes
@@ -151,7 +148,6 @@ struct mixer_design {
 	float gamma_f[MIXER_N_AXES][MIXER_N_ROTORS];  /* Gamma S (per unit of u), float */
 	float pinv_f[MIXER_N_ROTORS][MIXER_N_AXES];   /* (Gamma S)^+, float */
 	float null_f[MIXER_N_ROTORS][MIXER_N_ROTORS]; /* null-space basis: columns 0..n_null-1 */
-	float sigma_f[MIXER_N_AXES];                  /* singular values of Gamma, descending */
 	uint8_t rank;
 	uint8_t n_null;
 };
@@ -185,7 +181,7 @@ struct mixer {
 	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma S, entries in [-1, 1] */
 	scalar_t tail_inv[4][MIXER_N_AXES]; /* inverse of the last 4 scaled columns */
 	struct mixer_facet facet[MIXER_MAX_FACETS];
-	struct mixer_subfacet sub[MIXER_MAX_SUB_FACETS];
+	struct mixer_facet sub[MIXER_MAX_SUB_FACETS];
 };
 
 struct mixer_output {
@@ -207,8 +203,7 @@ void mixer_default_params(struct mixer_params *p);
  * rank-deficient Gamma; the priority allocator is disabled). */
 bool mixer_init(struct mixer *m, const struct mixer_params *p);
 
-/* mixer_init, also writing the float32 design (Gamma, Gamma^+, null space, singular values)
- * to *d. */
+/* mixer_init, also writing the float32 design (Gamma, Gamma^+, null space) to *d. */
 bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mixer_design *d);
 
 /* Recomputes (mixer_init) only if a parameter that enters Gamma or the box changed (always

@@ -1,5 +1,5 @@
 /* mixer_setup.c - the mixer's set-up, in float32 at a parameter change (not in the 90 Hz
- * step): Gamma_o from the geometry, its pseudo-inverse by Jacobi SVD, the facets of the
+ * step): Gamma_o from the geometry, its pseudo-inverse by a QR of its rows, the facets of the
  * attainable set; see mixer.h. The allocation that uses them is mixer.c. */
 #include "mixer.h"
 
@@ -13,43 +13,34 @@
 /* |x|: the sign bit cleared (no soft-float compare on cores without FPU) */
 static float absf(float x) { return fabsf(x); }
 
-/* One-sided Jacobi SVD of A (8x4, rows 0..7 of av, columns orthogonalised in place):
- * A V = U S, V in rows 8..11 of av (rotated with A; the caller sets them to I4).
- * On return av[0..7][k] = U_k s_k, av[8..11] = V, s = column norms. At most 40 sweeps. */
-static void jacobi_svd(float av[NR + NA][NA], float s[NA])
+/* sum_k a[k sa] b[k sb], k = 0..n-1, in that order: one routine for the set-up's dot
+ * products (each inline loop is a few soft-float calls more on cores without FPU) */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static float dotf(const float *a, int sa, const float *b, int sb, int n)
 {
-	for (int sweep = 0; sweep < 40; sweep++) {
-		int rotated = 0;
-		for (int p = 0; p < NA - 1; p++) {
-			for (int q = p + 1; q < NA; q++) {
-				float al = 0.0f, be = 0.0f, ga = 0.0f;
-				for (int i = 0; i < NR; i++) {
-					al += av[i][p] * av[i][p];
-					be += av[i][q] * av[i][q];
-					ga += av[i][p] * av[i][q];
-				}
-				if (al <= 0.0f || be <= 0.0f || absf(ga) <= 1e-7f * sqrtf(al * be))
-					continue;
-				rotated = 1;
-				float zeta = (be - al) / (2.0f * ga);
-				float t = (zeta >= 0.0f ? 1.0f : -1.0f) / (absf(zeta) + sqrtf(1.0f + zeta * zeta));
-				float c = 1.0f / sqrtf(1.0f + t * t), sn = c * t;
-				for (int i = 0; i < NR + NA; i++) {
-					float x = av[i][p], y = av[i][q];
-					av[i][p] = c * x - sn * y;
-					av[i][q] = sn * x + c * y;
-				}
-			}
+	float acc = 0.0f;
+	for (int k = 0; k < n; k++)
+		acc += a[k * sa] * b[k * sb];
+	return acc;
+}
+
+/* Gram-Schmidt step: x (length 8) minus its projection on the orthonormal columns 0..nb-1 of
+ * q, twice (the second pass removes what rounding left); c[k] = the coefficient taken off
+ * along column k. Returns |x|^2 after. */
+static float ortho(const float q[NR][NR], int nb, float x[NR], float c[NR])
+{
+	for (int k = 0; k < nb; k++)
+		c[k] = 0.0f;
+	for (int pass = 0; pass < 2; pass++)
+		for (int k = 0; k < nb; k++) {
+			float d = dotf(&q[0][k], NR, x, 1, NR);
+			c[k] += d;
+			for (int j = 0; j < NR; j++)
+				x[j] -= d * q[j][k];
 		}
-		if (!rotated)
-			break;
-	}
-	for (int k = 0; k < NA; k++) {
-		float n2 = 0.0f;
-		for (int i = 0; i < NR; i++)
-			n2 += av[i][k] * av[i][k];
-		s[k] = sqrtf(n2);
-	}
+	return dotf(x, 1, x, 1, NR);
 }
 
 /* Inverse of a 4x4 matrix by Gauss-Jordan with partial pivoting; returns |det|. */
@@ -71,12 +62,11 @@ static float inv4(const float m[4][4], float out[4][4])
 				piv = r;
 		if (a[piv][c] == 0.0f)
 			return 0.0f;
-		if (piv != c)
-			for (int j = 0; j < 8; j++) {
-				float t = a[c][j];
-				a[c][j] = a[piv][j];
-				a[piv][j] = t;
-			}
+		for (int j = 0; j < 8; j++) { /* rows c and piv swapped (nothing when the same) */
+			float t = a[c][j];
+			a[c][j] = a[piv][j];
+			a[piv][j] = t;
+		}
 		float pv = a[c][c];
 		det *= pv;
 		for (int j = 0; j < 8; j++)
@@ -104,7 +94,6 @@ static bool normal3(const float g[NA][NR], int a, int b, int c, float n[NA])
 	for (int x = 0; x < NA; x++)
 		for (int y = x + 1; y < NA; y++)
 			mnr[x][y] = g[x][b] * g[y][c] - g[y][b] * g[x][c];
-	float nn = 0.0f;
 	for (int k = 0; k < NA; k++) {
 		int col[3], m = 0;
 		for (int j = 0; j < NA; j++)
@@ -113,8 +102,8 @@ static bool normal3(const float g[NA][NR], int a, int b, int c, float n[NA])
 		const int x = col[0], y = col[1], z = col[2];
 		float d = g[x][a] * mnr[y][z] - g[y][a] * mnr[x][z] + g[z][a] * mnr[x][y];
 		n[k] = (k & 1) ? -d : d;
-		nn += n[k] * n[k];
 	}
+	float nn = dotf(n, 1, n, 1, NA);
 	/* generators have entries in [-1, 1]: a normal below 1e-4 means (near) dependence */
 	if (nn < 1e-8f)
 		return false;
@@ -127,8 +116,7 @@ static bool normal3(const float g[NA][NR], int a, int b, int c, float n[NA])
 /* Facets of the zonotope of the generators set[0..cnt-1] (scaled space), written to out:
  * one per distinct normal (triples spanning the same hyperplane give one facet). Returns the
  * count, or -1 if more than cap distinct facets exist. */
-static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct mixer_facet *out,
-		     struct mixer_subfacet *out_sub, int cap)
+static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct mixer_facet *out, int cap)
 {
 	int nf = 0;
 	float seen[MIXER_MAX_SUB_FACETS > MIXER_MAX_FACETS ? MIXER_MAX_SUB_FACETS : MIXER_MAX_FACETS][NA];
@@ -139,13 +127,13 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 				if (!normal3(g, set[a], set[b], set[c], n))
 					continue;
 				bool dup = false;
-				for (int k = 0; k < nf && !dup; k++) {
-					float dp = 0.0f, dm = 0.0f;
+				for (int k = 0; k < 2 * nf && !dup; k++) { /* n = +-seen[k / 2] */
+					float dmax = 0.0f;
 					for (int i = 0; i < NA; i++) {
-						dp = absf(n[i] - seen[k][i]) > dp ? absf(n[i] - seen[k][i]) : dp;
-						dm = absf(n[i] + seen[k][i]) > dm ? absf(n[i] + seen[k][i]) : dm;
+						float e = absf((k & 1) ? n[i] + seen[k / 2][i] : n[i] - seen[k / 2][i]);
+						dmax = e > dmax ? e : dmax;
 					}
-					dup = dp < 1e-4f || dm < 1e-4f;
+					dup = dmax < 1e-4f;
 				}
 				if (dup)
 					continue;
@@ -153,22 +141,16 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 					return -1;
 				float nc = 0.0f, h = 0.0f;
 				for (int t = 0; t < cnt; t++) {
-					float d = 0.0f;
-					for (int i = 0; i < NA; i++)
-						d += n[i] * g[i][set[t]];
+					float d = dotf(n, 1, &g[0][set[t]], NR, NA);
 					nc += 0.5f * d;
 					h += 0.5f * absf(d);
 				}
-				/* to the attainable set's facets or to a preimage step's */
-				scalar_t *on = out ? out[nf].n : out_sub[nf].n;
-				scalar_t *onc = out ? &out[nf].nc : &out_sub[nf].nc;
-				scalar_t *oh = out ? &out[nf].h : &out_sub[nf].h;
 				for (int i = 0; i < NA; i++) {
 					seen[nf][i] = n[i];
-					on[i] = sc_from_float(n[i]);
+					out[nf].n[i] = sc_from_float(n[i]);
 				}
-				*onc = sc_from_float(nc);
-				*oh = sc_from_float(h);
+				out[nf].nc = sc_from_float(nc);
+				out[nf].h = sc_from_float(h);
 				nf++;
 			}
 	return nf;
@@ -214,13 +196,13 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 		float l = sc_to_float(p->arm_l_m);
 		float kf = sc_to_float(p->k_f_n);
 		float k = kf > 0.0f ? sc_to_float(p->k_tau_nm) / kf : 0.0f;
-		static const float tx[NR] = { 0, -1, -1, -1, 0, 1, 1, 1 };
-		static const float ty[NR] = { -1, -1, 0, 1, 1, 1, 0, -1 };
+		/* sign of tau_x per rotor; tau_y's is the same two rotors on */
+		static const signed char sx[NR] = { 0, -1, -1, -1, 0, 1, 1, 1 };
 		for (int j = 0; j < NR; j++) {
 			float diag = (j & 1) ? s : 1.0f; /* even-numbered rotors 2,4,6,8 at 45 deg */
 			m->gamma_f[0][j] = 1.0f;
-			m->gamma_f[1][j] = tx[j] * diag * l;
-			m->gamma_f[2][j] = ty[j] * diag * l;
+			m->gamma_f[1][j] = (float)sx[j] * diag * l;
+			m->gamma_f[2][j] = (float)sx[(j + 2) % NR] * diag * l;
 			m->gamma_f[3][j] = (j & 1) ? -k : k;
 		}
 	}
@@ -258,59 +240,53 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	for (int j = 0; j < NR; j++)
 		m->p.scale[j] = scale_used(p->scale[j]);
 
-	/* ---- pseudo-inverse by one-sided Jacobi SVD of Gamma^T */
-	float a[NR + NA][NA], s[NA]; /* Gamma^T, then I4 for V */
-	for (int j = 0; j < NR + NA; j++)
-		for (int i = 0; i < NA; i++)
-			a[j][i] = j < NR ? dz->gamma_f[i][j] : 0.0f;
-	for (int i = 0; i < NA; i++)
-		a[NR + i][i] = 1.0f;
-	jacobi_svd(a, s);
-	int idx[NA] = { 0, 1, 2, 3 };
-	for (int i = 0; i < NA; i++) /* sort by singular value, descending */
-		for (int j = i + 1; j < NA; j++)
-			if (s[idx[j]] > s[idx[i]]) {
-				int t = idx[i];
-				idx[i] = idx[j];
-				idx[j] = t;
-			}
-	float smax = s[idx[0]];
-	float basis[NR][NR]; /* columns: the left singular vectors, then the null space */
+	/* ---- pseudo-inverse from the Gram-Schmidt QR of Gamma's rows: Gamma = R^T Q^T with Q
+	 * (8 x rank) orthonormal (the row space, columns 0..rank-1 of basis) and R (rank x 4), so
+	 * that Gamma^+ = Q (R^T)^+ = Q (R R^T)^-1 R. A row whose remainder after the earlier ones
+	 * is below 1e-5 of its own length adds nothing to the rank. */
+	float basis[NR][NR]; /* columns: the row space of Gamma, then the null space */
+	float r[NA][NA] = { { 0 } }, x[NR], cf[NR];
 	int rank = 0;
-	for (int k = 0; k < NA; k++) {
-		int c = idx[k];
-		dz->sigma_f[k] = s[c];
-		if (smax > 0.0f && s[c] > 1e-5f * smax) {
+	for (int i = 0; i < NA; i++) {
+		for (int j = 0; j < NR; j++)
+			x[j] = dz->gamma_f[i][j];
+		float n0 = dotf(x, 1, x, 1, NR);
+		float n2 = ortho(basis, rank, x, cf);
+		for (int k = 0; k < rank; k++)
+			r[k][i] = cf[k];
+		if (n2 > 1e-10f * n0) {
+			float n = sqrtf(n2);
 			for (int j = 0; j < NR; j++)
-				basis[j][rank] = a[j][c] / s[c];
-			/* pinv += u_k (1/s_k) v_k^T */
-			for (int j = 0; j < NR; j++)
-				for (int i = 0; i < NA; i++)
-					dz->pinv_f[j][i] += basis[j][rank] / s[c] * a[NR + i][c];
-			rank++;
+				basis[j][rank] = x[j] / n;
+			r[rank++][i] = n;
 		}
 	}
+	float g[NA][NA], gi[NA][NA]; /* R R^T, completed by the identity beyond the rank */
+	for (int k = 0; k < NA; k++)
+		for (int l = 0; l < NA; l++) /* rows beyond the rank are 0: 0 + 1 there */
+			g[k][l] = dotf(r[k], 1, r[l], 1, NA) + (k == l && k >= rank ? 1.0f : 0.0f);
+	inv4(g, gi);
+	for (int j = 0; j < NR; j++)
+		for (int i = 0; i < NA; i++) {
+			float acc = 0.0f;
+			for (int k = 0; k < rank; k++)
+				for (int l = 0; l < rank; l++)
+					acc += basis[j][k] * gi[k][l] * r[l][i];
+			dz->pinv_f[j][i] = acc;
+		}
 	m->rank = (uint8_t)rank;
 	dz->rank = (uint8_t)rank;
 	/* two Newton-Schulz steps P <- 2P - P Gamma P (converge to the Moore-Penrose inverse,
-	 * also when rank-deficient) polish the float32 SVD result */
+	 * also when rank-deficient) polish the float32 result */
 	for (int it = 0; it < 2; it++) {
 		float e[NA][NA]; /* I - Gamma P */
 		for (int i = 0; i < NA; i++)
-			for (int k = 0; k < NA; k++) {
-				float acc = 0.0f;
-				for (int j = 0; j < NR; j++)
-					acc += dz->gamma_f[i][j] * dz->pinv_f[j][k];
-				e[i][k] = (i == k ? 1.0f : 0.0f) - acc;
-			}
+			for (int k = 0; k < NA; k++)
+				e[i][k] = (i == k ? 1.0f : 0.0f) - dotf(dz->gamma_f[i], 1, &dz->pinv_f[0][k], NA, NR);
 		for (int j = 0; j < NR; j++) { /* row j of P + P (I - Gamma P) reads only row j of P */
 			float np[NA];
-			for (int k = 0; k < NA; k++) {
-				float acc = 0.0f;
-				for (int i = 0; i < NA; i++)
-					acc += dz->pinv_f[j][i] * e[i][k];
-				np[k] = dz->pinv_f[j][k] + acc;
-			}
+			for (int k = 0; k < NA; k++)
+				np[k] = dz->pinv_f[j][k] + dotf(dz->pinv_f[j], 1, &e[0][k], NA, NA);
 			for (int k = 0; k < NA; k++)
 				dz->pinv_f[j][k] = np[k];
 		}
@@ -322,21 +298,9 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	while (nb < NR) {
 		float best[NR] = { 0 }, bestn = -1.0f;
 		for (int e = 0; e < NR; e++) {
-			float x[NR];
 			for (int j = 0; j < NR; j++)
-				x[j] = 0.0f;
-			x[e] = 1.0f;
-			for (int pass = 0; pass < 2; pass++)
-				for (int k = 0; k < nb; k++) {
-					float d = 0.0f;
-					for (int j = 0; j < NR; j++)
-						d += basis[j][k] * x[j];
-					for (int j = 0; j < NR; j++)
-						x[j] -= d * basis[j][k];
-				}
-			float n2 = 0.0f;
-			for (int j = 0; j < NR; j++)
-				n2 += x[j] * x[j];
+				x[j] = j == e ? 1.0f : 0.0f;
+			float n2 = ortho(basis, nb, x, cf);
 			if (n2 > bestn) {
 				bestn = n2;
 				for (int j = 0; j < NR; j++)
@@ -396,10 +360,7 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	uint8_t act[NR];
 	int na = 0;
 	for (int j = 0; j < NR; j++) {
-		float n2 = 0.0f;
-		for (int i = 0; i < NA; i++)
-			n2 += dz->gamma_f[i][j] * dz->gamma_f[i][j];
-		if (n2 > 0.0f) {
+		if (dotf(&dz->gamma_f[0][j], NR, &dz->gamma_f[0][j], NR, NA) > 0.0f) {
 			act[na++] = (uint8_t)j;
 			m->present |= (uint8_t)(1u << j);
 		}
@@ -407,40 +368,40 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	m->n_active = (uint8_t)na;
 	m->alloc_ok = false;
 	if (rank == NA && na >= NA && rows_ok) {
-		float bestdet = 0.0f;
-		int bt[4] = { 0, 1, 2, 3 };
-		for (int a0 = 0; a0 < na; a0++)
-			for (int a1 = a0 + 1; a1 < na; a1++)
-				for (int a2 = a1 + 1; a2 < na; a2++)
-					for (int a3 = a2 + 1; a3 < na; a3++) {
-						int t[4] = { a0, a1, a2, a3 };
-						float mm[4][4], inv[4][4];
-						for (int i = 0; i < NA; i++)
-							for (int c = 0; c < 4; c++)
-								mm[i][c] = gsc[i][act[t[c]]];
-						float d = inv4(mm, inv);
-						if (d > bestdet * 1.0001f) {
-							bestdet = d;
-							for (int c = 0; c < 4; c++)
-								bt[c] = t[c];
-						}
-					}
-		if (bestdet > 1e-4f) {
-			int no = 0;
-			for (int t = 0; t < na; t++)
-				if (t != bt[0] && t != bt[1] && t != bt[2] && t != bt[3])
-					m->order[no++] = act[t];
-			for (int c = 0; c < 4; c++)
-				m->order[no++] = act[bt[c]];
+		/* every 4 of the na present rotors, as a mask over positions t (bit na-1-t): masks
+		 * in descending order visit them lexicographically; the first of the largest
+		 * |det| (within 1e-4) wins, its inverse kept */
+		float bestdet = 0.0f, binv[4][4];
+		unsigned best = 0;
+		for (unsigned mask = (1u << na) - 1u; mask; mask--) {
 			float mm[4][4], inv[4][4];
-			for (int i = 0; i < NA; i++)
-				for (int c = 0; c < 4; c++)
-					mm[i][c] = gsc[i][m->order[na - 4 + c]];
-			inv4(mm, inv);
+			int c = 0;
+			for (int t = 0; t < na; t++)
+				if (mask >> (na - 1 - t) & 1u) {
+					for (int i = 0; i < NA && c < 4; i++)
+						mm[i][c] = gsc[i][act[t]];
+					c++;
+				}
+			if (c != 4)
+				continue;
+			float d = inv4(mm, inv);
+			if (d > bestdet * 1.0001f) {
+				bestdet = d;
+				best = mask;
+				for (int k = 0; k < 16; k++)
+					binv[k / 4][k % 4] = inv[k / 4][k % 4];
+			}
+		}
+		if (bestdet > 1e-4f) {
+			int no = 0; /* the others in order, then the best 4 */
+			for (int pass = 0; pass < 2; pass++)
+				for (int t = 0; t < na; t++)
+					if ((best >> (na - 1 - t) & 1u) == (unsigned)pass)
+						m->order[no++] = act[t];
 			for (int c = 0; c < 4; c++)
 				for (int i = 0; i < NA; i++)
-					m->tail_inv[c][i] = sc_from_float(inv[c][i]);
-			int nfull = facets_of(gsc, act, na, m->facet, NULL, MIXER_MAX_FACETS);
+					m->tail_inv[c][i] = sc_from_float(binv[c][i]);
+			int nfull = facets_of(gsc, act, na, m->facet, MIXER_MAX_FACETS);
 			bool fits = nfull > 0;
 			m->n_facets = (uint8_t)(nfull > 0 ? nfull : 0);
 			int used = 0;
@@ -449,7 +410,7 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 				m->sub_first[st] = (uint8_t)used;
 				m->sub_n[st] = 0;
 				if (cnt > 4) {
-					int k = facets_of(gsc, &m->order[st + 1], cnt, NULL, &m->sub[used],
+					int k = facets_of(gsc, &m->order[st + 1], cnt, &m->sub[used],
 							  MIXER_MAX_SUB_FACETS - used);
 					if (k < 0) {
 						fits = false;
