@@ -290,8 +290,8 @@ static inline uint32_t sc_turns(scalar_t a)
 {
 	return (uint32_t)((uint64_t)q_smul32(a, 683565276) >> 16);
 }
-/* integer in the fixed build (the setpoint's quat_from_euler runs at 90 Hz): within 0.5 LSB
- * plus 0.04 LSB of the polynomial */
+/* integer in the fixed build (the set point's quat_from_euler_yh runs at 90 Hz): within
+ * 0.5 LSB plus 0.04 LSB of the polynomial */
 static inline scalar_t sc_sin(scalar_t a) { return sc_sin_turn(sc_turns(a)); }
 static inline scalar_t sc_cos(scalar_t a) { return sc_sin_turn(sc_turns(a) + 0x40000000u); }
 /* atan(n / d) in Q30 for 0 <= n <= d, 0 < d < 2^63 (one scale): the ratio in Q1.30 by
