@@ -72,15 +72,21 @@ static inline struct sc_gain sc_gain_recip2(scalar_t a, scalar_t b)
 	return g;
 }
 
-static inline scalar_t sc_mul_gain(scalar_t x, const struct sc_gain *g)
+/* x g for g = y 2^-sh (an sc_gain's two fields, for a caller that keeps them apart) */
+static inline scalar_t sc_mul_gain_ysh(scalar_t x, uint32_t y, uint32_t sh)
 {
 	uint32_t ux = x < 0 ? 0u - (uint32_t)x : (uint32_t)x;
-	uint64_t p = q_umul32(ux, g->y);                       /* < 2^64 */
-	uint64_t r = (p >> (g->sh - 1u)) + 1u;                 /* 2 x g + 1 */
+	uint64_t p = q_umul32(ux, y);                          /* < 2^64 */
+	uint64_t r = (p >> (sh - 1u)) + 1u;                    /* 2 x g + 1 */
 	r >>= 1;                                               /* rounded to nearest */
 	if (r > (uint64_t)INT32_MAX)
 		return x < 0 ? SC_MAX_NEG : SC_MAX;
 	return x < 0 ? -(scalar_t)r : (scalar_t)r;
+}
+
+static inline scalar_t sc_mul_gain(scalar_t x, const struct sc_gain *g)
+{
+	return sc_mul_gain_ysh(x, g->y, g->sh);
 }
 #else
 static inline void sc_sincos(scalar_t a, scalar_t *s, scalar_t *c)
