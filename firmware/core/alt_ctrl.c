@@ -70,7 +70,7 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 	}
 	scalar_t f;
 	if (sc_isfinite(in->hover_f_n) && in->hover_f_n > SC_ZERO && p->g_mps2 > SC_ZERO) {
-		f = sc_div(sc_mul(sc_div_r(in->hover_f_n, &s->r_g), sc_add(p->g_mps2, a_cmd)), cz);
+		f = sc_div(sc_mul(sc_div_r(in->hover_f_n, p->g_mps2, &s->r_g), sc_add(p->g_mps2, a_cmd)), cz);
 	} else {
 		f = sc_div(sc_mul(in->mass_kg, sc_add(p->g_mps2, a_cmd)), cz);
 	}
