@@ -5,8 +5,8 @@
  * linkage (C11 6.7.4): a compiler inlines one where it would inline a static function, and
  * where it does not (Cortex-M0 builds at -Os) the object calls the copy emitted here by the
  * `extern` declarations below, instead of keeping a static copy of its own. The trivial
- * primitives (sc_neg, sc_min, q_sat32 ...) stay static inline. sc_div, a call wherever it
- * is used, is defined here only.
+ * primitives (sc_add, sc_sub, sc_neg, sc_min, q_sat32 ...) stay static inline. sc_div, a
+ * call wherever it is used, is defined here only.
  */
 #include "scalar.h"
 
@@ -23,8 +23,6 @@ extern inline int64_t q_mul64_32(int64_t a, int32_t b, unsigned s);
 
 extern inline scalar_t sc_from_float(float x);
 extern inline float sc_to_float(scalar_t a);
-extern inline scalar_t sc_add(scalar_t a, scalar_t b);
-extern inline scalar_t sc_sub(scalar_t a, scalar_t b);
 extern inline scalar_t sc_mul(scalar_t a, scalar_t b);
 extern inline uint32_t sc_recip_norm(uint32_t v);
 extern inline scalar_t sc_div_prepared(scalar_t a, scalar_t b, uint32_t ub, int s, uint32_t y);

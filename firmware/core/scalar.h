@@ -33,7 +33,7 @@
  * Other fixed-point formats and their integer helpers: qfmt.h.
  *
  * Linkage in the fixed build: the non-trivial primitives (sc_from_float, sc_to_float,
- * sc_add, sc_sub, sc_mul, sc_recip_norm, sc_div_prepared) are inline definitions with
+ * sc_mul, sc_recip_norm, sc_div_prepared) are inline definitions with
  * external linkage and sc_div a plain function, each with its one out-of-line copy in
  * scalar.c: an object that does not inline one calls that copy (no static copy per object).
  */
@@ -52,6 +52,14 @@
 #endif
 
 #define SC_PI_F 3.14159265358979323846f
+
+/* for the few primitives whose call costs more than their body (GCC and Clang; other
+ * compilers inline as they see fit) */
+#if defined(__GNUC__)
+#define SC_ALWAYS_INLINE __attribute__((always_inline))
+#else
+#define SC_ALWAYS_INLINE
+#endif
 
 #if OCTO_FIXED
 /* ------------------------------------------------------------ Q16.16 */
@@ -118,19 +126,23 @@ inline float sc_to_float(scalar_t a)
 }
 static inline scalar_t sc_from_int(int32_t i) { return sc_sat64((int64_t)i * 65536); }
 
-/* saturating sums in 32-bit words (no 64-bit arithmetic on Cortex-M0): the bound is
- * tested before the operation, and INT32_MIN (outside the range) becomes SC_MAX_NEG */
-inline scalar_t sc_add(scalar_t a, scalar_t b)
+/* saturating sums in 32-bit words (no 64-bit arithmetic on Cortex-M0): the wrapped sum,
+ * then overflow (operands of one sign, a result of the other) saturates by the operands'
+ * sign, and INT32_MIN (outside the range) becomes SC_MAX_NEG. A few instructions: always
+ * inline, a call would cost more than the operation (the 90 Hz step makes ~180 of them) */
+static inline SC_ALWAYS_INLINE scalar_t sc_add(scalar_t a, scalar_t b)
 {
-	if (b >= 0)
-		return a > INT32_MAX - b ? SC_MAX : (a + b < -INT32_MAX ? SC_MAX_NEG : a + b);
-	return a < -INT32_MAX - b ? SC_MAX_NEG : a + b;
+	uint32_t r = (uint32_t)a + (uint32_t)b;
+	if ((int32_t)(((uint32_t)a ^ r) & ((uint32_t)b ^ r)) < 0)
+		return a < 0 ? SC_MAX_NEG : SC_MAX;
+	return r == 0x80000000u ? SC_MAX_NEG : (scalar_t)r;
 }
-inline scalar_t sc_sub(scalar_t a, scalar_t b)
+static inline SC_ALWAYS_INLINE scalar_t sc_sub(scalar_t a, scalar_t b)
 {
-	if (b <= 0)
-		return a > INT32_MAX + b ? SC_MAX : (a - b < -INT32_MAX ? SC_MAX_NEG : a - b);
-	return a < -INT32_MAX + b ? SC_MAX_NEG : a - b;
+	uint32_t r = (uint32_t)a - (uint32_t)b;
+	if ((int32_t)(((uint32_t)a ^ (uint32_t)b) & ((uint32_t)a ^ r)) < 0)
+		return a < 0 ? SC_MAX_NEG : SC_MAX;
+	return r == 0x80000000u ? SC_MAX_NEG : (scalar_t)r;
 }
 static inline scalar_t sc_neg(scalar_t a) { return a == INT32_MIN ? SC_MAX : -a; }
 static inline scalar_t sc_abs(scalar_t a) { return a < 0 ? sc_neg(a) : a; }
@@ -477,8 +489,11 @@ static inline scalar_t sc_clamp(scalar_t x, scalar_t lo, scalar_t hi)
 {
 	return x < lo ? lo : (x > hi ? hi : x);
 }
-/* a * b + c */
-static inline scalar_t sc_mac(scalar_t a, scalar_t b, scalar_t c) { return sc_add(sc_mul(a, b), c); }
+/* a * b + c (always inline: a call around sc_mul and sc_add costs a call more) */
+static inline SC_ALWAYS_INLINE scalar_t sc_mac(scalar_t a, scalar_t b, scalar_t c)
+{
+	return sc_add(sc_mul(a, b), c);
+}
 static inline scalar_t sc_sq(scalar_t a) { return sc_mul(a, a); }
 
 #endif /* OCTO_SCALAR_H */
