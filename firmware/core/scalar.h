@@ -461,7 +461,14 @@ static inline scalar_t sc_div(scalar_t a, scalar_t b)
 	return a / b;
 }
 static inline scalar_t sc_sqrt(scalar_t a) { return a > 0.0f ? sqrtf(a) : 0.0f; }
-static inline bool sc_isfinite(scalar_t a) { return isfinite(a); }
+/* isfinite(a) from the exponent bits (all ones: infinity or NaN): one test of a word, not
+ * the two soft-float comparisons (unordered, greater than FLT_MAX) a core without FPU makes
+ * of isfinite */
+static inline bool sc_isfinite(scalar_t a)
+{
+	union { float f; uint32_t u; } v = { a };
+	return (v.u & 0x7f800000u) != 0x7f800000u;
+}
 
 static inline scalar_t sc_sin(scalar_t a) { return sinf(a); }
 static inline scalar_t sc_cos(scalar_t a) { return cosf(a); }
