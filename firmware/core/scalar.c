@@ -1,12 +1,13 @@
 /*
- * scalar.c - the fixed build's one out-of-line copy of its scalar primitives.
+ * scalar.c - the one out-of-line copy of the scalar primitives: sc_div in both builds, the
+ * fixed build's non-trivial primitives.
  *
  * scalar.h (Q16.16) and qfmt.h define their non-trivial primitives `inline` with external
  * linkage (C11 6.7.4): a compiler inlines one where it would inline a static function, and
  * where it does not (Cortex-M0 builds at -Os) the object calls the copy emitted here by the
  * `extern` declarations below, instead of keeping a static copy of its own. The trivial
  * primitives (sc_add, sc_sub, sc_neg, sc_min, q_sat32 ...) stay static inline. sc_div, a
- * call wherever it is used, is defined here only.
+ * call wherever it is used, is defined here only, in both builds.
  */
 #include "scalar.h"
 
@@ -32,5 +33,12 @@ scalar_t sc_div(scalar_t a, scalar_t b)
 	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
 	int s = q_clz32(ub);
 	return sc_div_prepared(a, b, ub, s, ub ? sc_recip_norm(ub << s) : 0u);
+}
+#else
+scalar_t sc_div(scalar_t a, scalar_t b)
+{
+	if (b == 0.0f)
+		return a > 0.0f ? SC_MAX : (a < 0.0f ? SC_MAX_NEG : 0.0f);
+	return a / b;
 }
 #endif

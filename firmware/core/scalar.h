@@ -453,13 +453,9 @@ static inline scalar_t sc_sub(scalar_t a, scalar_t b) { return a - b; }
 static inline scalar_t sc_neg(scalar_t a) { return -a; }
 static inline scalar_t sc_abs(scalar_t a) { return fabsf(a); }
 static inline scalar_t sc_mul(scalar_t a, scalar_t b) { return a * b; }
-/* Division by zero saturates like the fixed build instead of giving Inf/NaN. */
-static inline scalar_t sc_div(scalar_t a, scalar_t b)
-{
-	if (b == 0.0f)
-		return a > 0.0f ? SC_MAX : (a < 0.0f ? SC_MAX_NEG : 0.0f);
-	return a / b;
-}
+/* a / b; division by zero saturates like the fixed build instead of giving Inf/NaN. Out of
+ * line (scalar.c): the test and the soft-float call are not worth a copy per object. */
+scalar_t sc_div(scalar_t a, scalar_t b);
 static inline scalar_t sc_sqrt(scalar_t a) { return a > 0.0f ? sqrtf(a) : 0.0f; }
 /* isfinite(a) from the exponent bits (all ones: infinity or NaN): one test of a word, not
  * the two soft-float comparisons (unordered, greater than FLT_MAX) a core without FPU makes
