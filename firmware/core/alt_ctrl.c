@@ -21,8 +21,8 @@ void alt_ctrl_set_params(struct alt_ctrl *s, const struct alt_ctrl_params *param
 {
 	s->p = *params;
 	s->p.cos_tilt_min = sc_clamp(s->p.cos_tilt_min, SC(0.05), SC(1));
-	scalar_t kv = sc_mul(sc_add(s->p.zeta, s->p.zeta), s->p.wn_rps); /* 2 zeta wn */
-	s->m_kz = sc_div(sc_mul(s->p.wn_rps, s->p.wn_rps), kv);
+	s->m_kv = sc_mul(sc_add(s->p.zeta, s->p.zeta), s->p.wn_rps); /* 2 zeta wn */
+	s->m_kz = sc_div(sc_mul(s->p.wn_rps, s->p.wn_rps), s->m_kv);
 	s->r_g = sc_recip_of(s->p.g_mps2);
 }
 
@@ -30,7 +30,6 @@ void alt_ctrl_init(struct alt_ctrl *s, const struct alt_ctrl_params *params)
 {
 	alt_ctrl_set_params(s, params);
 	s->a_int_mps2 = SC_ZERO;
-	s->vz_cmd_mps = SC_ZERO;
 	s->f_n = SC_ZERO;
 	s->flags = 0;
 }
@@ -51,8 +50,8 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 		s->flags = ALT_CTRL_BAD_INPUT;
 		return s->f_n;
 	}
-	scalar_t kv = sc_mul(sc_add(p->zeta, p->zeta), p->wn_rps); /* 2 zeta wn */
-	scalar_t kz = s->m_kz;                                      /* wn / (2 zeta) */
+	scalar_t kv = s->m_kv;   /* 2 zeta wn */
+	scalar_t kz = s->m_kz;   /* wn / (2 zeta) */
 
 	scalar_t vz_cmd = sc_mul(kz, sc_sub(in->z_sp_m, in->z_m));
 	if (vz_cmd > p->vz_max_up_mps || vz_cmd < sc_neg(p->vz_max_down_mps)) {
@@ -70,7 +69,7 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 	}
 	scalar_t f;
 	if (sc_isfinite(in->hover_f_n) && in->hover_f_n > SC_ZERO && p->g_mps2 > SC_ZERO) {
-		f = sc_div(sc_mul(sc_div_r(in->hover_f_n, &s->r_g), sc_add(p->g_mps2, a_cmd)), cz);
+		f = sc_div(sc_mul(sc_div_r(in->hover_f_n, p->g_mps2, &s->r_g), sc_add(p->g_mps2, a_cmd)), cz);
 	} else {
 		f = sc_div(sc_mul(in->mass_kg, sc_add(p->g_mps2, a_cmd)), cz);
 	}
@@ -95,7 +94,6 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 		s->a_int_mps2 = sc_clamp(s->a_int_mps2, sc_neg(p->a_int_max_mps2), p->a_int_max_mps2);
 		flags |= ALT_CTRL_INT_LIM;
 	}
-	s->vz_cmd_mps = vz_cmd;
 	s->f_n = f;
 	s->flags = flags;
 	return f;

@@ -66,11 +66,11 @@ struct alt_ctrl_input {
 struct alt_ctrl {
 	struct alt_ctrl_params p;
 	scalar_t a_int_mps2; /* integral state (acceleration), m/s^2 */
-	scalar_t vz_cmd_mps; /* last vertical-speed command (telemetry) */
 	scalar_t f_n;        /* last thrust output */
 	uint32_t flags;      /* ALT_CTRL_* of the last update */
-	/* the parameters' quotients, computed when they are set (alt_ctrl_set_params): no
-	 * division by a parameter in the update */
+	/* the parameters' products and quotients, computed when they are set
+	 * (alt_ctrl_set_params): no division by a parameter in the update */
+	scalar_t m_kv;                 /* kv = 2 zeta wn */
 	scalar_t m_kz;                 /* kz = wn^2 / (2 zeta wn) */
 	struct sc_recip r_g;           /* 1 / g_mps2 */
 };

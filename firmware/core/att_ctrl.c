@@ -26,8 +26,6 @@ void att_ctrl_init(struct att_ctrl *s, const struct att_ctrl_params *params)
 {
 	att_ctrl_set_params(s, params);
 	s->int_r_rad = vec3_zero();
-	s->err_b_rad = vec3_zero();
-	s->rate_cmd_b = vec3_zero();
 	s->flags = 0;
 }
 
@@ -44,13 +42,20 @@ static scalar_t get(struct vec3 v, int i)
 
 void att_ctrl_set_params(struct att_ctrl *s, const struct att_ctrl_params *params)
 {
-	s->p = *params;
 	for (int i = 0; i < 3; i++) {
-		scalar_t wn = get(s->p.wn_rps, i), zeta = get(s->p.zeta, i);
-		scalar_t kd = sc_mul(sc_add(zeta, zeta), wn); /* 2 zeta wn, as the update has it */
-		s->m_kp[i] = sc_div(sc_mul(wn, wn), kd);
-		s->m_ii[i] = s->m_lim[i] = SC_ZERO;           /* lim: computed at the next update */
+		scalar_t wn = get(params->wn_rps, i), zeta = get(params->zeta, i);
+		scalar_t kd = sc_mul(sc_add(zeta, zeta), wn); /* 2 zeta wn */
+		s->kd[i] = kd;
+		s->kp[i] = sc_div(sc_mul(wn, wn), kd);
+		s->ki[i] = get(params->ki_rps, i);
+		s->rate_max[i] = get(params->rate_max_rps, i);
+		s->tau_max[i] = get(params->tau_max_nm, i);
+		s->int_tau_max[i] = get(params->int_tau_max_nm, i);
+		/* inertia 0: I kd = 0 (and no limit: kint = 0); the next update's inertia differs */
+		s->m_ii[i] = s->m_ikd[i] = s->m_lim[i] = SC_ZERO;
 	}
+	s->int_err_max_rad = params->int_err_max_rad;
+	s->gyro_comp = params->gyro_comp;
 }
 
 static bool vec3_finite(struct vec3 v)
@@ -65,7 +70,6 @@ static bool quat_finite(struct quat q)
 
 uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, struct vec3 *tau_b_nm)
 {
-	const struct att_ctrl_params *p = &s->p;
 	if (!quat_finite(in->q_sp_b2i) || !quat_finite(in->q_b2i) || !vec3_finite(in->rate_ff_b) ||
 	    !vec3_finite(in->rate_b_rps) || !vec3_finite(in->inertia_kgm2) || !sc_isfinite(in->dt_s)) {
 		*tau_b_nm = vec3_zero();
@@ -76,32 +80,34 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 	struct vec3 w = in->rate_b_rps;
 	struct vec3 inertia = in->inertia_kgm2;
 	struct vec3 gyro = vec3_zero();
-	if (p->gyro_comp)
+	if (s->gyro_comp)
 		gyro = vec3_cross(w, vec3_mul(inertia, w));
 	scalar_t dt = sc_max(in->dt_s, SC_ZERO);
 	uint32_t flags = 0;
 	struct vec3 tau_out = vec3_zero();
 
 	for (int i = 0; i < 3; i++) {
-		scalar_t ei = get(e, i), wn = get(p->wn_rps, i), zeta = get(p->zeta, i);
-		scalar_t ki = get(p->ki_rps, i), rate_max = get(p->rate_max_rps, i);
-		scalar_t tau_max = get(p->tau_max_nm, i), int_tau_max = get(p->int_tau_max_nm, i);
+		scalar_t ei = get(e, i), rate_max = s->rate_max[i], tau_max = s->tau_max[i];
+		scalar_t int_tau_max = s->int_tau_max[i];
 		scalar_t ii = get(inertia, i);
 		scalar_t *int_r = comp(&s->int_r_rad, i);
 
-		scalar_t kd = sc_mul(sc_add(zeta, zeta), wn); /* 2 zeta wn, 1/s */
-		scalar_t kp = s->m_kp[i];                     /* wn / (2 zeta), 1/s */
-		scalar_t rc = sc_mul(kp, ei);
+		if (ii != s->m_ii[i]) {   /* the inertia changed: its products and the limit */
+			s->m_ii[i] = ii;
+			s->m_ikd[i] = sc_mul(ii, s->kd[i]);
+			scalar_t k = sc_mul(s->m_ikd[i], s->ki[i]);
+			s->m_lim[i] = k > SC_ZERO ? sc_div(int_tau_max, k) : SC_ZERO;
+		}
+		scalar_t rc = sc_mul(s->kp[i], ei);
 		if (rc > rate_max || rc < sc_neg(rate_max)) {
 			rc = sc_clamp(rc, sc_neg(rate_max), rate_max);
 			flags |= ATT_CTRL_RATE_LIM_X << i;
 		}
 		rc = sc_add(rc, get(in->rate_ff_b, i));
-		*comp(&s->rate_cmd_b, i) = rc;
 
 		/* integral torque I 2 zeta wn ki int(r), clamped */
-		scalar_t ikd = sc_mul(ii, kd);  /* N m / (rad/s) */
-		scalar_t kint = sc_mul(ikd, ki); /* N m / rad */
+		scalar_t ikd = s->m_ikd[i];          /* N m / (rad/s) */
+		scalar_t kint = sc_mul(ikd, s->ki[i]); /* N m / rad */
 		scalar_t tau_i = sc_clamp(sc_mul(kint, *int_r), sc_neg(int_tau_max), int_tau_max);
 		scalar_t r = sc_sub(rc, get(w, i));
 
@@ -117,18 +123,13 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		 * allocation in the direction the integral would grow */
 		bool cut = (r > SC_ZERO && (in->alloc_short_pos >> i & 1u)) ||
 			   (r < SC_ZERO && (in->alloc_short_neg >> i & 1u));
-		if (kint > SC_ZERO && !sat && !cut && sc_abs(ei) < p->int_err_max_rad) {
-			if (ii != s->m_ii[i]) {   /* kint > 0: ii is not 0 */
-				s->m_ii[i] = ii;
-				s->m_lim[i] = sc_div(int_tau_max, kint);
-			}
+		if (kint > SC_ZERO && !sat && !cut && sc_abs(ei) < s->int_err_max_rad) {
 			scalar_t lim = s->m_lim[i];   /* int_tau_max / kint: keeps the state bounded too */
 			*int_r = sc_clamp(sc_add(*int_r, sc_mul(r, dt)), sc_neg(lim), lim);
 		} else if (kint <= SC_ZERO) {
 			*int_r = SC_ZERO;
 		}
 	}
-	s->err_b_rad = e;
 	*tau_b_nm = tau_out;
 	s->flags = flags;
 	return flags;

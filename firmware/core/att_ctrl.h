@@ -69,17 +69,21 @@ struct att_ctrl_input {
 };
 
 struct att_ctrl {
-	struct att_ctrl_params p;
+	/* the parameters as the update uses them, per axis (0 x, 1 y, 2 z), prepared by
+	 * att_ctrl_set_params: no division and no product of parameters in the update */
+	scalar_t kp[3];           /* wn^2 / (2 zeta wn), 1/s */
+	scalar_t kd[3];           /* 2 zeta wn, 1/s */
+	scalar_t ki[3];           /* integral pole, 1/s */
+	scalar_t rate_max[3], tau_max[3], int_tau_max[3];
+	scalar_t int_err_max_rad;
+	bool gyro_comp;
 	struct vec3 int_r_rad;    /* integral of the rate error, rad */
-	struct vec3 err_b_rad;    /* last attitude error (telemetry) */
-	struct vec3 rate_cmd_b;   /* last rate command (telemetry) */
 	uint32_t flags;           /* ATT_CTRL_* of the last update */
-	/* per axis, the quotients of the parameters, computed when they are set
-	 * (att_ctrl_set_params), and of the inertia input, recomputed when it changes: no
-	 * division in the update otherwise, the same values as dividing every time */
-	scalar_t m_kp[3];                /* kp = wn^2 / (2 zeta wn) */
-	scalar_t m_ii[3], m_lim[3];      /* lim = int_tau_max / kint for the inertia m_ii
-					  * (kint = I 2 zeta wn ki; m_ii 0: none yet) */
+	/* per axis, what depends on the inertia input m_ii as well (0: none yet), recomputed
+	 * when it changes: the same values as computing them on every step */
+	scalar_t m_ii[3];
+	scalar_t m_ikd[3];        /* I 2 zeta wn, N m / (rad/s) */
+	scalar_t m_lim[3];        /* int_tau_max / kint, kint = I 2 zeta wn ki (when kint > 0) */
 };
 
 /* Default gains, the ones octo-fw flies: its parameter table (ATT_WN_RP, ATT_WN_YAW,
@@ -99,11 +103,11 @@ struct att_ctrl {
  * 50 ms lag + 2 frames: 9 % overshoot, stable. */
 struct att_ctrl_params att_ctrl_params_default(void);
 
-/* Copies params (att_ctrl_set_params), zeroes the integral, flags and telemetry. */
+/* Takes params (att_ctrl_set_params), zeroes the integral and flags. */
 void att_ctrl_init(struct att_ctrl *s, const struct att_ctrl_params *params);
 
-/* Copies params and prepares their quotients; keeps the integral. Parameters change only
- * through this or att_ctrl_init, never by assigning p. */
+/* Prepares params (their products and quotients, above); keeps the integral. Parameters
+ * change only through this or att_ctrl_init. */
 void att_ctrl_set_params(struct att_ctrl *s, const struct att_ctrl_params *params);
 
 /* Zeroes the integral (e.g. on the ground, or after a mode change). */

@@ -11,11 +11,6 @@ void filt_lag_init(struct filt_lag *f, scalar_t tau_s, scalar_t dt_s, scalar_t y
 	f->y = y0;
 }
 
-void filt_lag_reset(struct filt_lag *f, scalar_t y0)
-{
-	f->y = y0;
-}
-
 scalar_t filt_lag_update(struct filt_lag *f, scalar_t x)
 {
 	if (!sc_isfinite(x))
@@ -70,11 +65,6 @@ void filt_svf_init(struct filt_svf *f, scalar_t wc_rps, scalar_t zeta, scalar_t 
 	f->a12 = sc_div(sc_add(h, h), det);
 	f->a21 = sc_neg(sc_add(f->b2, f->b2));
 	f->a22 = sc_div(sc_sub(sc_sub(SC(1), zwh2), wh2), det);
-	filt_svf_reset(f, y0);
-}
-
-void filt_svf_reset(struct filt_svf *f, scalar_t y0)
-{
 	f->y = y0;
 	f->ydot = SC_ZERO;
 	f->u_prev = y0;

@@ -26,7 +26,6 @@ struct filt_lag {
 };
 
 void filt_lag_init(struct filt_lag *f, scalar_t tau_s, scalar_t dt_s, scalar_t y0);
-void filt_lag_reset(struct filt_lag *f, scalar_t y0);
 /* returns the new output */
 scalar_t filt_lag_update(struct filt_lag *f, scalar_t x);
 
@@ -63,9 +62,8 @@ struct filt_svf {
 	scalar_t u_prev;
 };
 
+/* coefficients for wc, zeta, dt; the state at rest at y0 (y_f = y0, y_f_dot = 0) */
 void filt_svf_init(struct filt_svf *f, scalar_t wc_rps, scalar_t zeta, scalar_t dt_s, scalar_t y0);
-/* state to rest at y0: y_f = y0, y_f_dot = 0 */
-void filt_svf_reset(struct filt_svf *f, scalar_t y0);
 /* pushes y, updates f->y (y_f) and f->ydot (y_f_dot); returns y_f */
 scalar_t filt_svf_update(struct filt_svf *f, scalar_t y);
 

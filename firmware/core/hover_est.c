@@ -80,7 +80,7 @@ static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c
 	scalar_t al = s->al;
 	s->v_f = sc_add(s->v_f, sc_mul(al, sc_sub(vz, s->v_f)));
 	s->uc_f = sc_add(s->uc_f, sc_mul(al, sc_sub(uc, s->uc_f)));
-	return sc_div_r(sc_sub(vz, s->v_f), &s->r_tau);
+	return sc_div_r(sc_sub(vz, s->v_f), s->p.tau_s, &s->r_tau);
 }
 
 void hover_est_track(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t cos_tilt, scalar_t dt_s)

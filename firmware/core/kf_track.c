@@ -120,7 +120,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	/* memory T* = (s^2 / (4 r^2 f_s))^(1/3) with s and r as fractions: s / (2 r) in seconds is
 	 * (s_pct / 100) / (2 drift_per_min / 60) = 0.3 s_pct / drift_per_min */
 	if (s->p.drift_per_min > SC_ZERO) {
-		scalar_t q = sc_div_r(sc_mul(SC(0.3), sc_sqrt(s->s2_pct2)), &s->r_drift);
+		scalar_t q = sc_div_r(sc_mul(SC(0.3), sc_sqrt(s->s2_pct2)), s->p.drift_per_min, &s->r_drift);
 		scalar_t x = sc_mul(sc_sq(q), dt_s);   /* (s / 2r)^2 / f_s */
 		s->mem_s = sc_clamp(cbrt_warm(x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
 	} else {

@@ -3,12 +3,6 @@
 
 #include "scalar_ops.h"
 
-struct quat quat_identity(void)
-{
-	struct quat q = { SC(1), SC_ZERO, SC_ZERO, SC_ZERO };
-	return q;
-}
-
 struct quat quat_mul(struct quat a, struct quat b)
 {
 	struct quat r;
@@ -16,12 +10,6 @@ struct quat quat_mul(struct quat a, struct quat b)
 	r.x = sc_add(sc_add(sc_mul(a.w, b.x), sc_mul(a.x, b.w)), sc_sub(sc_mul(a.y, b.z), sc_mul(a.z, b.y)));
 	r.y = sc_add(sc_sub(sc_mul(a.w, b.y), sc_mul(a.x, b.z)), sc_add(sc_mul(a.y, b.w), sc_mul(a.z, b.x)));
 	r.z = sc_add(sc_add(sc_mul(a.w, b.z), sc_mul(a.x, b.y)), sc_sub(sc_mul(a.z, b.w), sc_mul(a.y, b.x)));
-	return r;
-}
-
-struct quat quat_conj(struct quat q)
-{
-	struct quat r = { q.w, sc_neg(q.x), sc_neg(q.y), sc_neg(q.z) };
 	return r;
 }
 
@@ -33,8 +21,10 @@ scalar_t quat_norm2(struct quat q)
 struct quat quat_normalize(struct quat q)
 {
 	scalar_t n2 = quat_norm2(q);
-	if (!(n2 > SC(1e-6)))
-		return quat_identity();
+	if (!(n2 > SC(1e-6))) {
+		struct quat one = { SC(1), SC_ZERO, SC_ZERO, SC_ZERO };
+		return one;
+	}
 #if OCTO_FIXED
 	/* sc_sqrt(n2) == SC(1) exactly when n2 is 1 or 1 + 2^-16 (sqrt(n2 2^16) in
 	 * [65535.5, 65536.5)): a unit quaternion skips the root */
@@ -48,63 +38,10 @@ struct quat quat_normalize(struct quat q)
 	return r;
 }
 
-/* v' = v + w t + u x t with u = vector part, t = 2 u x v (unit q) */
-struct vec3 quat_rotate(struct quat q, struct vec3 v)
-{
-	struct vec3 u = vec3_make(q.x, q.y, q.z);
-	struct vec3 t = vec3_cross(u, v);
-	t = vec3_add(t, t);
-	return vec3_add(vec3_add(v, vec3_scale(t, q.w)), vec3_cross(u, t));
-}
-
-struct vec3 quat_rotate_inv(struct quat q, struct vec3 v)
-{
-	return quat_rotate(quat_conj(q), v);
-}
-
 scalar_t quat_body_z_up(struct quat q_b2i)
 {
 	scalar_t s = sc_add(sc_mul(q_b2i.x, q_b2i.x), sc_mul(q_b2i.y, q_b2i.y));
 	return sc_sub(SC(1), sc_add(s, s));
-}
-
-struct quat quat_derivative(struct quat q, struct vec3 omega_b)
-{
-	struct quat wq = { SC_ZERO, omega_b.x, omega_b.y, omega_b.z };
-	struct quat d = quat_mul(q, wq);
-	struct quat r = { sc_mul(d.w, SC(0.5)), sc_mul(d.x, SC(0.5)), sc_mul(d.y, SC(0.5)), sc_mul(d.z, SC(0.5)) };
-	return r;
-}
-
-/* exp([0, h]) for a half-angle vector h: [cos|h|, sin|h| h/|h|] from the series in
- * th2 = |h|^2 (to th^8 in cos and th^8 * h in sin: error < 3e-7 for |h| <= 0.5,
- * < 4e-4 for |h| <= 1.5), then normalised. */
-static struct quat quat_exp_half(struct vec3 h)
-{
-	scalar_t th2 = vec3_dot(h, h);
-	/* cos: 1 - th2/2 (1 - th2/12 (1 - th2/30 (1 - th2/56))) */
-	scalar_t c = sc_sub(SC(1), sc_mul(th2, SC(1.0 / 56.0)));
-	c = sc_sub(SC(1), sc_mul(sc_mul(th2, SC(1.0 / 30.0)), c));
-	c = sc_sub(SC(1), sc_mul(sc_mul(th2, SC(1.0 / 12.0)), c));
-	c = sc_sub(SC(1), sc_mul(sc_mul(th2, SC(0.5)), c));
-	/* sin(th)/th: 1 - th2/6 (1 - th2/20 (1 - th2/42 (1 - th2/72))) */
-	scalar_t s = sc_sub(SC(1), sc_mul(th2, SC(1.0 / 72.0)));
-	s = sc_sub(SC(1), sc_mul(sc_mul(th2, SC(1.0 / 42.0)), s));
-	s = sc_sub(SC(1), sc_mul(sc_mul(th2, SC(1.0 / 20.0)), s));
-	s = sc_sub(SC(1), sc_mul(sc_mul(th2, SC(1.0 / 6.0)), s));
-	struct quat r = { c, sc_mul(h.x, s), sc_mul(h.y, s), sc_mul(h.z, s) };
-	return quat_normalize(r);
-}
-
-struct quat quat_integrate(struct quat q_b2i, struct vec3 omega_b_rps, scalar_t dt_s)
-{
-	struct vec3 h = vec3_scale(omega_b_rps, sc_mul(dt_s, SC(0.5)));
-	return quat_normalize(quat_mul(q_b2i, quat_exp_half(h)));
-}
-
-struct quat quat_from_rotvec(struct vec3 rotvec)
-{
-	return quat_exp_half(vec3_scale(rotvec, SC(0.5)));
 }
 
 struct quat_yaw_half quat_yaw_half(scalar_t yaw)
@@ -132,11 +69,6 @@ struct quat quat_from_euler_yh(scalar_t roll, scalar_t pitch, struct quat_yaw_ha
 	return quat_normalize(q);
 }
 
-struct quat quat_from_euler(scalar_t roll, scalar_t pitch, scalar_t yaw)
-{
-	return quat_from_euler_yh(roll, pitch, quat_yaw_half(yaw));
-}
-
 scalar_t quat_yaw(struct quat q)
 {
 	/* yaw = atan2(2 (w z + x y), 1 - 2 (y^2 + z^2)) */
@@ -146,20 +78,10 @@ scalar_t quat_yaw(struct quat q)
 	return sc_atan2(yn, yd);
 }
 
-struct vec3 quat_to_euler(struct quat q)
-{
-	scalar_t two = SC(2);
-	/* roll = atan2(2 (w x + y z), 1 - 2 (x^2 + y^2)) */
-	scalar_t rn = sc_mul(two, sc_add(sc_mul(q.w, q.x), sc_mul(q.y, q.z)));
-	scalar_t rd = sc_sub(SC(1), sc_mul(two, sc_add(sc_mul(q.x, q.x), sc_mul(q.y, q.y))));
-	/* pitch = asin(2 (w y - z x)) */
-	scalar_t ps = sc_clamp(sc_mul(two, sc_sub(sc_mul(q.w, q.y), sc_mul(q.z, q.x))), SC(-1), SC(1));
-	return vec3_make(sc_atan2(rn, rd), sc_asin(ps), quat_yaw(q));
-}
-
 struct vec3 quat_error_b(struct quat q_sp_b2i, struct quat q_b2i)
 {
-	struct quat e = quat_mul(quat_conj(q_b2i), q_sp_b2i);
+	struct quat c = { q_b2i.w, sc_neg(q_b2i.x), sc_neg(q_b2i.y), sc_neg(q_b2i.z) };
+	struct quat e = quat_mul(c, q_sp_b2i);
 	/* 2 e (or -2 e: the shorter way round) as sums, the same as the products by +/-2 */
 	struct vec3 v = vec3_make(sc_add(e.x, e.x), sc_add(e.y, e.y), sc_add(e.z, e.z));
 	return e.w < SC_ZERO ? vec3_make(sc_neg(v.x), sc_neg(v.y), sc_neg(v.z)) : v;

@@ -33,7 +33,7 @@
  * Other fixed-point formats and their integer helpers: qfmt.h.
  *
  * Linkage in the fixed build: the non-trivial primitives (sc_from_float, sc_to_float,
- * sc_add, sc_sub, sc_mul, sc_recip_norm, sc_div_prepared) are inline definitions with
+ * sc_mul, sc_recip_norm, sc_div_prepared) are inline definitions with
  * external linkage and sc_div a plain function, each with its one out-of-line copy in
  * scalar.c: an object that does not inline one calls that copy (no static copy per object).
  */
@@ -52,6 +52,14 @@
 #endif
 
 #define SC_PI_F 3.14159265358979323846f
+
+/* for the few primitives whose call costs more than their body (GCC and Clang; other
+ * compilers inline as they see fit) */
+#if defined(__GNUC__)
+#define SC_ALWAYS_INLINE __attribute__((always_inline))
+#else
+#define SC_ALWAYS_INLINE
+#endif
 
 #if OCTO_FIXED
 /* ------------------------------------------------------------ Q16.16 */
@@ -118,19 +126,23 @@ inline float sc_to_float(scalar_t a)
 }
 static inline scalar_t sc_from_int(int32_t i) { return sc_sat64((int64_t)i * 65536); }
 
-/* saturating sums in 32-bit words (no 64-bit arithmetic on Cortex-M0): the bound is
- * tested before the operation, and INT32_MIN (outside the range) becomes SC_MAX_NEG */
-inline scalar_t sc_add(scalar_t a, scalar_t b)
+/* saturating sums in 32-bit words (no 64-bit arithmetic on Cortex-M0): the wrapped sum,
+ * then overflow (operands of one sign, a result of the other) saturates by the operands'
+ * sign, and INT32_MIN (outside the range) becomes SC_MAX_NEG. A few instructions: always
+ * inline, a call would cost more than the operation (the 90 Hz step makes ~180 of them) */
+static inline SC_ALWAYS_INLINE scalar_t sc_add(scalar_t a, scalar_t b)
 {
-	if (b >= 0)
-		return a > INT32_MAX - b ? SC_MAX : (a + b < -INT32_MAX ? SC_MAX_NEG : a + b);
-	return a < -INT32_MAX - b ? SC_MAX_NEG : a + b;
+	uint32_t r = (uint32_t)a + (uint32_t)b;
+	if ((int32_t)(((uint32_t)a ^ r) & ((uint32_t)b ^ r)) < 0)
+		return a < 0 ? SC_MAX_NEG : SC_MAX;
+	return r == 0x80000000u ? SC_MAX_NEG : (scalar_t)r;
 }
-inline scalar_t sc_sub(scalar_t a, scalar_t b)
+static inline SC_ALWAYS_INLINE scalar_t sc_sub(scalar_t a, scalar_t b)
 {
-	if (b <= 0)
-		return a > INT32_MAX + b ? SC_MAX : (a - b < -INT32_MAX ? SC_MAX_NEG : a - b);
-	return a < -INT32_MAX + b ? SC_MAX_NEG : a - b;
+	uint32_t r = (uint32_t)a - (uint32_t)b;
+	if ((int32_t)(((uint32_t)a ^ (uint32_t)b) & ((uint32_t)a ^ r)) < 0)
+		return a < 0 ? SC_MAX_NEG : SC_MAX;
+	return r == 0x80000000u ? SC_MAX_NEG : (scalar_t)r;
 }
 static inline scalar_t sc_neg(scalar_t a) { return a == INT32_MIN ? SC_MAX : -a; }
 static inline scalar_t sc_abs(scalar_t a) { return a < 0 ? sc_neg(a) : a; }
@@ -269,6 +281,48 @@ static inline scalar_t sc_sqrt(scalar_t a)
 
 static inline bool sc_isfinite(scalar_t a) { (void)a; return true; }
 
+/* The 64-bit product |a| |b| in two 32-bit words, from 16 x 16 products (as q_umul32 on
+ * Cortex-M0), for the trigonometry below: with constant shifts it stays in 32-bit words
+ * there, where a 64-bit product and a variable 64-bit shift are library calls. */
+static inline void sc_umul32w(uint32_t a, uint32_t b, uint32_t *hi, uint32_t *lo)
+{
+	uint32_t al = a & 0xffffu, ah = a >> 16, bl = b & 0xffffu, bh = b >> 16;
+	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl;
+	uint32_t mid = (ll >> 16) + (lh & 0xffffu) + (hl & 0xffffu);
+	*lo = (mid << 16) | (ll & 0xffffu);
+	*hi = ah * bh + (lh >> 16) + (hl >> 16) + (mid >> 16);
+}
+
+/* q_mul32(a, b, s) (qfmt.h: a b 2^-s rounded to nearest, ties away from zero, saturating to
+ * +/-INT32_MAX) bit for bit, for s in [1, 63], in 32-bit words */
+static inline int32_t sc_qmul32w(int32_t a, int32_t b, unsigned s)
+{
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint32_t hi, lo, q, over;
+	sc_umul32w(ua, ub, &hi, &lo);                /* < 2^62 */
+	if (s <= 32u) {                              /* + 2^(s - 1), then / 2^s */
+		uint32_t add = 1u << (s - 1u);
+		lo += add;
+		hi += lo < add ? 1u : 0u;
+		q = s == 32u ? hi : (lo >> s) | (hi << (32u - s));
+		over = s == 32u ? 0u : hi >> s;
+	} else {
+		hi += 1u << (s - 33u);
+		q = hi >> (s - 32u);
+		over = 0u;
+	}
+	if (over || q > (uint32_t)INT32_MAX)
+		q = (uint32_t)INT32_MAX;
+	return (a < 0) != (b < 0) ? -(int32_t)q : (int32_t)q;
+}
+
+/* the product of two Q formats for the trigonometry: q_mul32, in 32-bit words on Cortex-M0 */
+#if defined(__ARM_ARCH_6M__)
+#define SC_QMUL(a, b, s) sc_qmul32w(a, b, s)
+#else
+#define SC_QMUL(a, b, s) q_mul32(a, b, s)
+#endif
+
 /* sin of a phase p in turns (2^32 = one turn): sin(pi x / 2) on the quadrant's x in [0, 1]
  * (Q30) by an odd degree-7 minimax polynomial (error 6e-7, 0.04 LSB), rounded to Q16.16 */
 static inline scalar_t sc_sin_turn(uint32_t p)
@@ -276,22 +330,28 @@ static inline scalar_t sc_sin_turn(uint32_t p)
 	uint32_t quad = p >> 30, f = p & 0x3fffffffu;
 	if (quad & 1u)
 		f = 0x40000000u - f;                 /* sin(pi/2 (1 - x)) = sin(pi/2 (1 + x)) */
-	int32_t x = (int32_t)f, z = q_mul32(x, x, 30);
+	int32_t x = (int32_t)f, z = SC_QMUL(x, x, 30);
 	int32_t r = -4652625;                    /* coefficients in Q30 */
-	r = 85291977 + q_mul32(r, z, 30);
-	r = -693522166 + q_mul32(r, z, 30);
-	r = 1686624005 + q_mul32(r, z, 30);
-	r = q_mul32(r, x, 44);                   /* Q30 x Q30 -> Q16 */
+	r = 85291977 + SC_QMUL(r, z, 30);
+	r = -693522166 + SC_QMUL(r, z, 30);
+	r = 1686624005 + SC_QMUL(r, z, 30);
+	r = SC_QMUL(r, x, 44);                   /* Q30 x Q30 -> Q16 */
 	return quad >= 2u ? -r : r;
 }
 /* radians to turns: a 2^16 / (2 pi) in units of 2^-32 turn (K = 2^32 / (2 pi), rounded, in
- * Q16), modulo one turn; the phase is within |a| 2^-17 units (2e-5 rad at |a| = 32768) */
+ * Q16), modulo one turn; the phase is within |a| 2^-17 units (2e-5 rad at |a| = 32768).
+ * Bits 16 to 47 of the signed product a K: of the unsigned product of a's two's complement
+ * word and K, less K 2^32 when a < 0 (the same bits as (uint64_t)q_smul32(a, K) >> 16). */
 static inline uint32_t sc_turns(scalar_t a)
 {
-	return (uint32_t)((uint64_t)q_smul32(a, 683565276) >> 16);
+	uint32_t hi, lo;
+	sc_umul32w((uint32_t)a, 683565276u, &hi, &lo);
+	if (a < 0)
+		hi -= 683565276u;
+	return (lo >> 16) | (hi << 16);
 }
-/* integer in the fixed build (the setpoint's quat_from_euler runs at 90 Hz): within 0.5 LSB
- * plus 0.04 LSB of the polynomial */
+/* integer in the fixed build (the set point's quat_from_euler_yh runs at 90 Hz): within
+ * 0.5 LSB plus 0.04 LSB of the polynomial */
 static inline scalar_t sc_sin(scalar_t a) { return sc_sin_turn(sc_turns(a)); }
 static inline scalar_t sc_cos(scalar_t a) { return sc_sin_turn(sc_turns(a) + 0x40000000u); }
 /* atan(n / d) in Q30 for 0 <= n <= d, 0 < d < 2^63 (one scale): the ratio in Q1.30 by
@@ -393,15 +453,18 @@ static inline scalar_t sc_sub(scalar_t a, scalar_t b) { return a - b; }
 static inline scalar_t sc_neg(scalar_t a) { return -a; }
 static inline scalar_t sc_abs(scalar_t a) { return fabsf(a); }
 static inline scalar_t sc_mul(scalar_t a, scalar_t b) { return a * b; }
-/* Division by zero saturates like the fixed build instead of giving Inf/NaN. */
-static inline scalar_t sc_div(scalar_t a, scalar_t b)
-{
-	if (b == 0.0f)
-		return a > 0.0f ? SC_MAX : (a < 0.0f ? SC_MAX_NEG : 0.0f);
-	return a / b;
-}
+/* a / b; division by zero saturates like the fixed build instead of giving Inf/NaN. Out of
+ * line (scalar.c): the test and the soft-float call are not worth a copy per object. */
+scalar_t sc_div(scalar_t a, scalar_t b);
 static inline scalar_t sc_sqrt(scalar_t a) { return a > 0.0f ? sqrtf(a) : 0.0f; }
-static inline bool sc_isfinite(scalar_t a) { return isfinite(a); }
+/* isfinite(a) from the exponent bits (all ones: infinity or NaN): one test of a word, not
+ * the two soft-float comparisons (unordered, greater than FLT_MAX) a core without FPU makes
+ * of isfinite */
+static inline bool sc_isfinite(scalar_t a)
+{
+	union { float f; uint32_t u; } v = { a };
+	return (v.u & 0x7f800000u) != 0x7f800000u;
+}
 
 static inline scalar_t sc_sin(scalar_t a) { return sinf(a); }
 static inline scalar_t sc_cos(scalar_t a) { return cosf(a); }
@@ -429,8 +492,11 @@ static inline scalar_t sc_clamp(scalar_t x, scalar_t lo, scalar_t hi)
 {
 	return x < lo ? lo : (x > hi ? hi : x);
 }
-/* a * b + c */
-static inline scalar_t sc_mac(scalar_t a, scalar_t b, scalar_t c) { return sc_add(sc_mul(a, b), c); }
+/* a * b + c (always inline: a call around sc_mul and sc_add costs a call more) */
+static inline SC_ALWAYS_INLINE scalar_t sc_mac(scalar_t a, scalar_t b, scalar_t c)
+{
+	return sc_add(sc_mul(a, b), c);
+}
 static inline scalar_t sc_sq(scalar_t a) { return sc_mul(a, a); }
 
 #endif /* OCTO_SCALAR_H */

@@ -72,15 +72,30 @@ static inline struct sc_gain sc_gain_recip2(scalar_t a, scalar_t b)
 	return g;
 }
 
-static inline scalar_t sc_mul_gain(scalar_t x, const struct sc_gain *g)
+/* x g for g = y 2^-sh (an sc_gain's two fields, for a caller that keeps them apart) */
+static inline scalar_t sc_mul_gain_ysh(scalar_t x, uint32_t y, uint32_t sh)
 {
 	uint32_t ux = x < 0 ? 0u - (uint32_t)x : (uint32_t)x;
-	uint64_t p = q_umul32(ux, g->y);                       /* < 2^64 */
-	uint64_t r = (p >> (g->sh - 1u)) + 1u;                 /* 2 x g + 1 */
-	r >>= 1;                                               /* rounded to nearest */
-	if (r > (uint64_t)INT32_MAX)
+	/* r = floor(p 2^(1 - sh)) = floor(2 x g), then (r + 1) / 2 rounded to nearest; in 32-bit
+	 * words (sc_umul32w): a variable 64-bit shift is a library call on Cortex-M0 */
+	uint32_t hi, lo, k = sh - 1u, rh, rl;
+	sc_umul32w(ux, y, &hi, &lo);                           /* p = x y < 2^64 */
+	if (k >= 32u) {
+		rh = 0u;
+		rl = hi >> (k - 32u);
+	} else {
+		rh = hi >> k;
+		rl = k ? (lo >> k) | (hi << (32u - k)) : lo;
+	}
+	if (rh || rl == 0xffffffffu)                           /* (r + 1) / 2 > INT32_MAX */
 		return x < 0 ? SC_MAX_NEG : SC_MAX;
-	return x < 0 ? -(scalar_t)r : (scalar_t)r;
+	uint32_t q = (rl >> 1) + (rl & 1u);                    /* (r + 1) / 2 */
+	return x < 0 ? -(scalar_t)q : (scalar_t)q;
+}
+
+static inline scalar_t sc_mul_gain(scalar_t x, const struct sc_gain *g)
+{
+	return sc_mul_gain_ysh(x, g->y, g->sh);
 }
 #else
 static inline void sc_sincos(scalar_t a, scalar_t *s, scalar_t *c)

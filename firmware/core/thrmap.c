@@ -3,19 +3,22 @@
 
 void thrmap_init(struct thrmap *m, const struct thrmap_params *params)
 {
-	m->p = *params;
-	m->p.k_f_n = sc_max(m->p.k_f_n, SC(1e-3));
-	m->p.curve = sc_clamp(m->p.curve, SC(THRMAP_CURVE_MIN), SC(THRMAP_CURVE_MAX));
-	m->one_minus_a = sc_sub(SC(1), m->p.curve);
-	m->r_kf = sc_recip_of(m->p.k_f_n);
+	m->k_f_n = sc_max(params->k_f_n, SC(1e-3));
+	m->curve = sc_clamp(params->curve, SC(THRMAP_CURVE_MIN), SC(THRMAP_CURVE_MAX));
+	m->one_minus_a = sc_sub(SC(1), m->curve);
 	for (unsigned j = 0; j < THRMAP_ROTORS; j++) {
-		scalar_t k = m->p.scale[j] == SC_ZERO ? SC(1) : sc_clamp(m->p.scale[j], SC(0.1), SC(4));
-		m->p.scale[j] = k;
-		m->g[j] = sc_gain_recip2(k, m->p.k_f_n);
+		scalar_t k = params->scale[j] == SC_ZERO ? SC(1) : sc_clamp(params->scale[j], SC(0.1), SC(4));
+		struct sc_gain g = sc_gain_recip2(k, m->k_f_n);
+#if OCTO_FIXED
+		m->g_y[j] = g.y;
+		m->g_sh[j] = (uint8_t)g.sh;
+#else
+		m->g[j] = g;
+#endif
 	}
 }
 
-/* T of u = f / k_f (the rest of thrmap_throttle) */
+/* T of u = f / k_f: the inverse map, clamped (*clamped set when it was) */
 static scalar_t throttle_of_u(const struct thrmap *m, scalar_t u, bool *clamped)
 {
 	bool c = false;
@@ -30,38 +33,33 @@ static scalar_t throttle_of_u(const struct thrmap *m, scalar_t u, bool *clamped)
 		u = SC(1);
 	}
 	scalar_t t = u;
-	if (m->p.curve != SC_ZERO) {
+	if (m->curve != SC_ZERO) {
 		/* T = 2u / ((1-a) + sqrt((1-a)^2 + 4 a u)), the root that stays finite as a -> 0;
 		 * u in [0, 1] gives T in [0, 1], and (1-a)^2 + 4 a u >= (1+a)^2 > 0 for a < 0 */
 		scalar_t b = m->one_minus_a;
-		scalar_t disc = sc_add(sc_mul(b, b), sc_mul(sc_mul(SC(4), m->p.curve), u));
+		scalar_t disc = sc_add(sc_mul(b, b), sc_mul(sc_mul(SC(4), m->curve), u));
 		t = sc_div(sc_add(u, u), sc_add(b, sc_sqrt(disc)));
 		t = sc_clamp(t, SC_ZERO, SC(1));
 	}
-	if (clamped)
-		*clamped = c;
+	*clamped = c;
 	return t;
-}
-
-scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped)
-{
-	return throttle_of_u(m, sc_div_r(f_n, &m->r_kf), clamped);
-}
-
-scalar_t thrmap_thrust(const struct thrmap *m, scalar_t throttle)
-{
-	scalar_t t = sc_clamp(throttle, SC_ZERO, SC(1));
-	/* k_f T ((1 - a) + a T) */
-	return sc_mul(m->p.k_f_n, sc_mul(t, sc_add(m->one_minus_a, sc_mul(m->p.curve, t))));
 }
 
 uint32_t thrmap_update(const struct thrmap *m, const scalar_t *f_n, scalar_t *throttle_out, size_t n)
 {
 	uint32_t mask = 0;
 	for (size_t j = 0; j < n; j++) {
-		bool c = false;
+		bool c;
 		/* u = f / (scale k_f): one product by the prepared factor per rotor */
-		scalar_t u = j < THRMAP_ROTORS ? sc_mul_gain(f_n[j], &m->g[j]) : sc_div_r(f_n[j], &m->r_kf);
+		scalar_t u;
+		if (j >= THRMAP_ROTORS)
+			u = sc_div(f_n[j], m->k_f_n);
+		else
+#if OCTO_FIXED
+			u = sc_mul_gain_ysh(f_n[j], m->g_y[j], m->g_sh[j]);
+#else
+			u = sc_mul_gain(f_n[j], &m->g[j]);
+#endif
 		throttle_out[j] = throttle_of_u(m, u, &c);
 		if (c && j < 32)
 			mask |= (uint32_t)1 << j;

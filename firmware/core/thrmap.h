@@ -1,7 +1,7 @@
 /*
  * thrmap.h - throttle map, eqs. (16)-(17): rotor thrust f_j (N) <-> throttle T_j in [0, 1].
  *
- * Model: f = k_f * ((1 - a) T + a T^2), a in [0, 1) (a = 0 is the paper's f = k_f T).
+ * Model: f = k_f * ((1 - a) T + a T^2), a the curve (a = 0 is the paper's f = k_f T).
  * Inverse (closed form, no division by a): with u = f / k_f,
  *   T = 2 u / ((1 - a) + sqrt((1 - a)^2 + 4 a u)),   clamped to [0, 1].
  * Eq. (17), the reaction torque tau_j = k_tau T_j, is not mapped here: the mixer works
@@ -11,7 +11,6 @@
 #ifndef OCTO_THRMAP_H
 #define OCTO_THRMAP_H
 
-#include "sc_recip.h"
 #include "scalar_ops.h"
 
 #include <stdint.h>
@@ -34,24 +33,27 @@ struct thrmap_params {
 };
 
 struct thrmap {
-	struct thrmap_params p;
+	scalar_t k_f_n;       /* params' k_f_n and curve, clamped */
+	scalar_t curve;
 	scalar_t one_minus_a; /* 1 - a */
-	struct sc_gain g[THRMAP_ROTORS]; /* 1 / (scale k_f): thrmap_update's f -> u, one product */
-	struct sc_recip r_kf; /* 1 / k_f_n (the same quotients as sc_div) */
+	/* 1 / (scale k_f) per rotor: thrmap_update's f -> u, one product (scalar_ops.h's
+	 * sc_gain; in the fixed build its mantissa and shift in two arrays, 5 B a rotor
+	 * instead of 8) */
+#if OCTO_FIXED
+	uint32_t g_y[THRMAP_ROTORS];
+	uint8_t g_sh[THRMAP_ROTORS];
+#else
+	struct sc_gain g[THRMAP_ROTORS];
+#endif
 };
 
-/* Copies and clamps params (k_f >= 1e-3 N, 0 <= a <= 0.99). */
+/* Copies and clamps params (k_f >= 1e-3 N, THRMAP_CURVE_MIN <= a <= THRMAP_CURVE_MAX,
+ * scales as above) and prepares the per-rotor factors; keeps nothing else of params. */
 void thrmap_init(struct thrmap *m, const struct thrmap_params *params);
 
-/* T = inverse map of f_n, clamped to [0, 1]; *clamped (may be NULL) set when it was
- * (a NaN thrust in the float build gives T = 0, clamped). */
-scalar_t thrmap_throttle(const struct thrmap *m, scalar_t f_n, bool *clamped);
-
-/* f = k_f ((1 - a) T + a T^2) with T first clamped to [0, 1] */
-scalar_t thrmap_thrust(const struct thrmap *m, scalar_t throttle);
-
-/* n rotors: throttle_out[j] = thrmap_throttle(f_n[j] / scale[j]) (rotors beyond
- * THRMAP_ROTORS: scale 1), with u = f_n[j] / (scale[j] k_f) from one product by a factor
+/* n rotors: throttle_out[j] = T of f_n[j] / scale[j] (rotors beyond THRMAP_ROTORS:
+ * scale 1) by the inverse map above, clamped to [0, 1] (a NaN thrust in the float build
+ * gives T = 0, clamped), with u = f_n[j] / (scale[j] k_f) from one product by a factor
  * prepared by thrmap_init (scalar_ops.h: rounded once, within 0.5 LSB of u + 2^-26 relative
  * in the fixed build); returns a bit mask of the rotors j (bit j, j < 32) whose throttle was
  * clamped. */

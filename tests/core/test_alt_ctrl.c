@@ -5,6 +5,7 @@
 #include "unit_scalar.h"
 #include "alt_ctrl.h"
 #include "unit.h"
+#include "unit_quat.h"
 
 #include <math.h>
 #include <string.h>
@@ -96,7 +97,7 @@ static void run_alt(const struct alt_cfg *c, double step, struct alt_result *r)
 	struct alt_ctrl_input in;
 	memset(&in, 0, sizeof in);
 	in.z_sp_m = s(1.0 + step);
-	in.q_b2i = quat_from_euler(s(c->tilt_rad), SC_ZERO, SC_ZERO);
+	in.q_b2i = tq_from_euler(s(c->tilt_rad), SC_ZERO, SC_ZERO);
 	in.mass_kg = s(c->m_nom);
 	in.dt_s = s(FRAME_S);
 	memset(r, 0, sizeof *r);
@@ -203,7 +204,7 @@ UNIT_TEST(alt_ctrl_tilt_compensation)
 	alt_ctrl_init(&ac, &p);
 	struct alt_ctrl_input in;
 	memset(&in, 0, sizeof in);
-	in.q_b2i = quat_from_euler(s(80.0 * 3.14159265358979 / 180.0), SC_ZERO, SC_ZERO);
+	in.q_b2i = tq_from_euler(s(80.0 * 3.14159265358979 / 180.0), SC_ZERO, SC_ZERO);
 	in.mass_kg = s(M_TRUE);
 	in.dt_s = s(FRAME_S);
 	scalar_t f = alt_ctrl_update(&ac, &in);
@@ -224,7 +225,7 @@ UNIT_TEST(alt_ctrl_saturation_anti_windup)
 	struct alt_ctrl_input in;
 	memset(&in, 0, sizeof in);
 	in.z_sp_m = s(3.0);
-	in.q_b2i = quat_identity();
+	in.q_b2i = tq_identity();
 	in.mass_kg = s(M_TRUE);
 	in.dt_s = s(FRAME_S);
 	uint32_t fl = 0;
@@ -280,7 +281,7 @@ UNIT_TEST(alt_ctrl_law_matches_double_reference)
 		in.vz_ff_mps = s(unit_rand_uniform(&r, -1, 1));
 		in.mass_kg = s(unit_rand_uniform(&r, 1.5, 3.0));
 		double roll = unit_rand_uniform(&r, -0.5, 0.5), pitch = unit_rand_uniform(&r, -0.5, 0.5);
-		in.q_b2i = quat_from_euler(s(roll), s(pitch), SC(0.3));
+		in.q_b2i = tq_from_euler(s(roll), s(pitch), SC(0.3));
 		in.dt_s = s(FRAME_S);
 		scalar_t f = alt_ctrl_update(&ac, &in);
 		double vc = kz * (d(in.z_sp_m) - d(in.z_m));
@@ -307,7 +308,7 @@ UNIT_TEST(alt_ctrl_nan_guard)
 	struct alt_ctrl_input in;
 	memset(&in, 0, sizeof in);
 	in.z_sp_m = SC(1);
-	in.q_b2i = quat_identity();
+	in.q_b2i = tq_identity();
 	in.mass_kg = s(M_TRUE);
 	in.dt_s = s(FRAME_S);
 	scalar_t f0 = alt_ctrl_update(&ac, &in);

@@ -8,6 +8,7 @@
 #include "alt_ctrl.h"
 #include "hover_est.h"
 #include "unit.h"
+#include "unit_quat.h"
 
 #include <math.h>
 #include <string.h>
@@ -130,7 +131,7 @@ UNIT_TEST(hover_est_takeoff_from_any_nominal)
 				   0.01 * m * G / sqrt(8.0), &r };
 		struct alt_ctrl_input in;
 		memset(&in, 0, sizeof in);
-		in.q_b2i = quat_from_euler(SC_ZERO, SC_ZERO, SC_ZERO);
+		in.q_b2i = tq_from_euler(SC_ZERO, SC_ZERO, SC_ZERO);
 		in.mass_kg = s(m);
 		in.dt_s = s(FRAME_S);
 		double zsp = 0, zmax = 0, settled_err = 0, f = 0;

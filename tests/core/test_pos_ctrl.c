@@ -5,6 +5,7 @@
 #include "unit_scalar.h"
 #include "pos_ctrl.h"
 #include "unit.h"
+#include "unit_quat.h"
 
 #include <math.h>
 
@@ -62,7 +63,7 @@ UNIT_TEST(pos_ctrl_law_matches_double_reference)
 			in.pos_sp_m[i] = s(d(in.pos_m[i]) + unit_rand_uniform(&g, -e, e));
 			in.vel_mps[i] = s(unit_rand_uniform(&g, -3, 3));
 		}
-		in.q_b2i = quat_from_euler(s(unit_rand_uniform(&g, -0.6, 0.6)), s(unit_rand_uniform(&g, -0.6, 0.6)),
+		in.q_b2i = tq_from_euler(s(unit_rand_uniform(&g, -0.6, 0.6)), s(unit_rand_uniform(&g, -0.6, 0.6)),
 					   s(unit_rand_uniform(&g, -3.1, 3.1)));
 		struct pos_ctrl_output o = pos_ctrl_update(&p, &in);
 		double roll, pitch;
@@ -90,7 +91,7 @@ UNIT_TEST(pos_ctrl_heading_is_quat_yaw)
 {
 	struct unit_rng g = { 0x4ead1ULL };
 	for (int k = 0; k < 1000; k++) {
-		struct quat q = quat_from_euler(s(unit_rand_uniform(&g, -1.2, 1.2)), s(unit_rand_uniform(&g, -1.2, 1.2)),
+		struct quat q = tq_from_euler(s(unit_rand_uniform(&g, -1.2, 1.2)), s(unit_rand_uniform(&g, -1.2, 1.2)),
 						s(unit_rand_uniform(&g, -3.14, 3.14)));
 		scalar_t c, sn;
 		pos_ctrl_heading(q, &c, &sn);
@@ -100,9 +101,9 @@ UNIT_TEST(pos_ctrl_heading_is_quat_yaw)
 	}
 	/* nose straight up: no heading, yaw 0 */
 	scalar_t c, sn;
-	pos_ctrl_heading(quat_from_euler(SC(0), SC(-1.5707963), SC(0.7)), &c, &sn);
+	pos_ctrl_heading(tq_from_euler(SC(0), SC(-1.5707963), SC(0.7)), &c, &sn);
 	CHECK(fabs(d(c)) <= 1.0 && fabs(d(sn)) <= 1.0);
-	pos_ctrl_heading(quat_from_euler(SC(0), SC(0), SC(0)), &c, &sn);
+	pos_ctrl_heading(tq_from_euler(SC(0), SC(0), SC(0)), &c, &sn);
 	CHECK_NEAR(d(c), 1.0, 1e-4);
 	CHECK_NEAR(d(sn), 0.0, 1e-4);
 }
@@ -126,7 +127,7 @@ UNIT_TEST(pos_ctrl_closed_loop_holds)
 		double tilt[2] = { 0, 0 }, cmd_prev[2] = { 0, 0 }; /* pitch, roll */
 		struct pos_ctrl_input in;
 		in.pos_sp_m[0] = in.pos_sp_m[1] = SC_ZERO;
-		in.q_b2i = quat_from_euler(SC(0), SC(0), s(yaw));
+		in.q_b2i = tq_from_euler(SC(0), SC(0), s(yaw));
 		double max_tilt = 0, max_speed = 0, max_past = 0;
 		const double lag = 0.15, vmax = d(p.vel_max_mps);
 		int n = (int)(40.0 / FRAME_S);
@@ -167,7 +168,7 @@ UNIT_TEST(pos_ctrl_nan_guard)
 	(void)u; /* Q16.16 has no NaN */
 #else
 	struct pos_ctrl_params p = pos_ctrl_params_default();
-	struct pos_ctrl_input in = { { 0, 0 }, { 1, 2 }, { 0.5f, 0 }, quat_identity() };
+	struct pos_ctrl_input in = { { 0, 0 }, { 1, 2 }, { 0.5f, 0 }, tq_identity() };
 	in.vel_mps[1] = __builtin_nanf("");
 	struct pos_ctrl_output o = pos_ctrl_update(&p, &in);
 	CHECK(o.flags == POS_CTRL_BAD_INPUT && o.roll_rad == 0 && o.pitch_rad == 0);

@@ -394,3 +394,42 @@ UNIT_TEST(scalar_sqrt_exact)
 	CHECK(sc_sqrt(4.0f) == 2.0f && sc_sqrt(-1.0f) == 0.0f);
 #endif
 }
+
+/* The trigonometry's products in 32-bit words (sc_qmul32w, sc_turns) are qfmt.h's q_mul32
+ * and the 64-bit phase product bit for bit: random operands of every size and sign, every
+ * shift the trigonometry uses and the ends of the range (fixed build) */
+UNIT_TEST(scalar_trig_products_in_words_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0x7e1ULL };
+	static const unsigned sh[] = { 1, 14, 16, 30, 31, 32, 33, 44, 62, 63 };
+	static const int32_t edge[] = { 0, 1, -1, 0x40000000, -0x40000000, INT32_MAX, -INT32_MAX, INT32_MIN, 0xffff,
+					0x10000 };
+	for (int i = 0; i < N_RAND; i++) {
+		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		if (i % 4 == 1)
+			a = edge[i / 4 % 10];
+		a >>= (int)unit_rand_uniform(&g, 0, 31);
+		b >>= (int)unit_rand_uniform(&g, 0, 31);
+		unsigned s = sh[i % 10];
+		if (sc_qmul32w(a, b, s) != q_mul32(a, b, s)) {
+			unit_fail(u, __FILE__, __LINE__, "sc_qmul32w(%d, %d, %u) = %d, q_mul32 %d", (int)a, (int)b, s,
+				  (int)sc_qmul32w(a, b, s), (int)q_mul32(a, b, s));
+			return;
+		}
+		if (sc_turns(a) != (uint32_t)((uint64_t)q_smul32(a, 683565276) >> 16)) {
+			unit_fail(u, __FILE__, __LINE__, "sc_turns(%d)", (int)a);
+			return;
+		}
+	}
+	for (int i = 0; i < 10; i++)
+		for (int j = 0; j < 10; j++)
+			for (int k = 0; k < 10; k++)
+				CHECK(sc_qmul32w(edge[i], edge[j], sh[k]) == q_mul32(edge[i], edge[j], sh[k]));
+	for (int i = 0; i < 10; i++)
+		CHECK(sc_turns(edge[i]) == (uint32_t)((uint64_t)q_smul32(edge[i], 683565276) >> 16));
+#else
+	CHECK(sc_sin(0.0f) == 0.0f);   /* float build: libm's trigonometry */
+#endif
+}

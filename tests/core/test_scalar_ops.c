@@ -86,3 +86,33 @@ UNIT_TEST(sc_sincos_and_div_int_bit_for_bit)
 			CHECK(sc_div_int(v[i], ns[j]) == sc_div(v[i], sc_from_int((int32_t)ns[j])));
 #endif
 }
+
+/* sc_mul_gain_ysh in 32-bit words is the 64-bit definition (floor(x y 2^(1 - sh)) + 1) / 2,
+ * saturating, bit for bit: every shift, mantissas and operands of every size and sign */
+UNIT_TEST(sc_mul_gain_words_exact)
+{
+#if OCTO_FIXED
+	struct unit_rng g = { 0x9a3ULL };
+	for (int i = 0; i < N_RAND; i++) {
+		uint32_t y = (uint32_t)unit_rand_uniform(&g, 2147483648.0, 4294967295.0);
+		uint32_t sh = 1u + (uint32_t)i % 63u;
+		int32_t x = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
+		x >>= (int)unit_rand_uniform(&g, 0, 31);
+		if (i % 97 == 0)
+			x = i % 2 ? INT32_MIN : INT32_MAX;
+		uint32_t ux = x < 0 ? 0u - (uint32_t)x : (uint32_t)x;
+		uint64_t r = (((uint64_t)ux * y) >> (sh - 1u)) + 1u;
+		r >>= 1;
+		scalar_t ref = r > (uint64_t)INT32_MAX ? (x < 0 ? SC_MAX_NEG : SC_MAX)
+						       : (x < 0 ? -(scalar_t)r : (scalar_t)r);
+		if (sc_mul_gain_ysh(x, y, sh) != ref) {
+			unit_fail(u, __FILE__, __LINE__, "sc_mul_gain_ysh(%d, %u, %u) = %d, expected %d", (int)x,
+				  (unsigned)y, (unsigned)sh, (int)sc_mul_gain_ysh(x, y, sh), (int)ref);
+			return;
+		}
+	}
+#else
+	struct sc_gain k = sc_gain_recip2(2.0f, 4.0f);
+	CHECK(sc_mul_gain(1.0f, &k) == 0.125f);
+#endif
+}

@@ -8,6 +8,16 @@
 
 static scalar_t s(double x) { return sc_from_float((float)x); }
 
+/* the throttle of one thrust through thrmap_update (rotor 0, scale 1 unless given) */
+static scalar_t throttle_of(const struct thrmap *m, scalar_t f, bool *clamped)
+{
+	scalar_t fs[THRMAP_ROTORS] = { f }, t[THRMAP_ROTORS];
+	uint32_t mask = thrmap_update(m, fs, t, 1);
+	if (clamped)
+		*clamped = (mask & 1u) != 0;
+	return t[0];
+}
+
 UNIT_TEST(thrmap_linear_round_trip_and_clamp)
 {
 	struct thrmap_params p = { SC(28.0269), SC(0), {0} };
@@ -15,25 +25,29 @@ UNIT_TEST(thrmap_linear_round_trip_and_clamp)
 	thrmap_init(&m, &p);
 	/* hover: 2.132 * 9.796 / 8 = 2.6106 N per rotor -> T = 0.0931 */
 	bool c = true;
-	scalar_t t = thrmap_throttle(&m, s(2.132 * 9.796 / 8), &c);
+	scalar_t t = throttle_of(&m, s(2.132 * 9.796 / 8), &c);
 	CHECK(!c);
 	CHECK_NEAR(d(t), 2.132 * 9.796 / 8 / 28.0269, OCTO_FIXED ? 2e-5 : 1e-7);
 	for (int i = 0; i <= 100; i++) {
 		double T = i / 100.0;
-		scalar_t f = thrmap_thrust(&m, s(T));
-		CHECK_NEAR(d(f), 28.0269 * T, OCTO_FIXED ? 28 * 2e-5 : 1e-5);
-		CHECK_NEAR(d(thrmap_throttle(&m, f, NULL)), d(s(T)), OCTO_FIXED ? 2e-5 : 1e-6);
+		scalar_t f = s(d(m.k_f_n) * T);
+		CHECK_NEAR(d(throttle_of(&m, f, NULL)), d(f) / d(m.k_f_n), OCTO_FIXED ? 1e-5 : 1e-7);
 	}
 	/* clamping and flags */
-	CHECK(thrmap_throttle(&m, SC(-1), &c) == SC_ZERO && c);
-	CHECK(thrmap_throttle(&m, SC(30), &c) == SC(1) && c);
-	CHECK(thrmap_throttle(&m, SC(0), &c) == SC_ZERO && !c);
-	CHECK(thrmap_thrust(&m, SC(1.5)) == thrmap_thrust(&m, SC(1)));
-	CHECK(thrmap_thrust(&m, SC(-0.5)) == SC_ZERO);
+	CHECK(throttle_of(&m, SC(-1), &c) == SC_ZERO && c);
+	CHECK(throttle_of(&m, SC(30), &c) == SC(1) && c);
+	CHECK(throttle_of(&m, SC(0), &c) == SC_ZERO && !c);
 #if !OCTO_FIXED
-	CHECK(thrmap_throttle(&m, __builtin_nanf(""), &c) == 0.0f && c); /* NaN: no thrust */
-	CHECK(thrmap_throttle(&m, __builtin_inff(), &c) == 1.0f && c);
+	CHECK(throttle_of(&m, __builtin_nanf(""), &c) == 0.0f && c); /* NaN: no thrust */
+	CHECK(throttle_of(&m, __builtin_inff(), &c) == 1.0f && c);
 #endif
+	/* rotors beyond THRMAP_ROTORS: scale 1, the same map */
+	scalar_t f[THRMAP_ROTORS + 2], tt[THRMAP_ROTORS + 2];
+	for (int j = 0; j < THRMAP_ROTORS + 2; j++)
+		f[j] = s(0.5 + 3.2 * j);   /* the last above k_f */
+	CHECK(thrmap_update(&m, f, tt, THRMAP_ROTORS + 2) == (1u << (THRMAP_ROTORS + 1)));
+	CHECK_NEAR(d(tt[THRMAP_ROTORS]), d(f[THRMAP_ROTORS]) / d(m.k_f_n), OCTO_FIXED ? 1e-5 : 1e-7);
+	CHECK(tt[THRMAP_ROTORS + 1] == SC(1));
 }
 
 UNIT_TEST(thrmap_update_mask)
@@ -62,31 +76,32 @@ UNIT_TEST(thrmap_curve_inverse)
 		double a = d(p.curve);
 		for (int i = 0; i <= 200; i++) {
 			double T = i / 200.0;
-			scalar_t f = thrmap_thrust(&m, s(T));
-			double Tq = d(s(T));
-			CHECK_NEAR(d(f), d(p.k_f_n) * ((1 - a) * Tq + a * Tq * Tq), OCTO_FIXED ? 5e-4 : 2e-5);
-			/* round trip: Q16.16 loses up to ~2 LSB in f, i.e. 2 LSB / (df/dT) in T */
+			/* round trip: the thrust of T, rounded to a scalar, gives T back (Q16.16: within
+			 * the rounding of f and u, 1 LSB each, divided by the slope df/dT) */
 			double slope = (1 - a) + 2 * a * T;
-			CHECK_NEAR(d(thrmap_throttle(&m, f, NULL)), Tq, OCTO_FIXED ? 2e-5 + 4e-5 / slope : 2e-6);
+			scalar_t f = s(d(p.k_f_n) * ((1 - a) * T + a * T * T));
+			CHECK_NEAR(d(throttle_of(&m, f, NULL)), T, OCTO_FIXED ? 2e-5 + 4e-5 / slope : 2e-6);
 			/* against the double inverse of an arbitrary thrust */
 			double fx = kf * T * 0.97;
 			double uu = d(s(fx)) / d(p.k_f_n);
 			double Tref = 2 * uu / ((1 - a) + sqrt((1 - a) * (1 - a) + 4 * a * uu));
-			CHECK_NEAR(d(thrmap_throttle(&m, s(fx), NULL)), Tref, OCTO_FIXED ? 2e-5 + 4e-5 / slope : 2e-6);
+			CHECK_NEAR(d(throttle_of(&m, s(fx), NULL)), Tref, OCTO_FIXED ? 2e-5 + 4e-5 / slope : 2e-6);
 		}
 	}
 	/* bad parameters are clamped, never divide by zero */
 	struct thrmap_params bad = { SC(0), SC(2), {0} };
 	struct thrmap m;
 	thrmap_init(&m, &bad);
-	CHECK(d(m.p.k_f_n) > 0 && d(m.p.curve) <= 0.99 + 1e-4);
-	CHECK(thrmap_throttle(&m, SC(1), NULL) == SC(1));
+	CHECK(d(m.k_f_n) > 0 && d(m.curve) <= 0.99 + 1e-4);
+	CHECK(throttle_of(&m, SC(1), NULL) == SC(1));
 	bad.curve = SC(-3);
 	thrmap_init(&m, &bad);
-	CHECK_NEAR(d(m.p.curve), THRMAP_CURVE_MIN, 1e-4);
+	CHECK_NEAR(d(m.curve), THRMAP_CURVE_MIN, 1e-4);
+	scalar_t last = SC_ZERO;
 	for (int i = 0; i <= 20; i++) {   /* monotonic, within [0, 1] */
-		scalar_t t = thrmap_throttle(&m, sc_mul(m.p.k_f_n, s(i / 20.0)), NULL);
-		CHECK(t >= SC_ZERO && t <= SC(1));
+		scalar_t t = throttle_of(&m, sc_mul(m.k_f_n, s(i / 20.0)), NULL);
+		CHECK(t >= last && t <= SC(1));
+		last = t;
 	}
 }
 
