@@ -166,7 +166,7 @@ scalar_t envelope_hover_f(struct app *a, scalar_t s_dt, scalar_t cos_tilt)
 	 * kf8 is the one of the step's start (a refresh by kft_step below takes effect with
 	 * the next step, after the parameter sync). */
 	scalar_t kf8 = e->kf8;
-	scalar_t s_u = sc_div_r(a->mix_out.achieved[0], &e->kf8_r);   /* sc_div by kf8 exactly */
+	scalar_t s_u = sc_div_r(a->mix_out.achieved[0], kf8, &e->kf8_r);   /* sc_div by kf8 exactly */
 	scalar_t s_z = app_in(a)->pos_i_m[2];
 	bool up = sc_sub(s_z, a->guid.z_ground_m) > SC(AIRBORNE_M);
 	bool learn = up && (a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_LAND);
