@@ -31,28 +31,13 @@
  * operation, and a call costs about half as much again as the product on Cortex-M0 */
 EST_INLINE uint64_t est_umul32(uint32_t a, uint32_t b)
 {
-#if defined(__ARM_ARCH_6M__)
-	uint32_t al = a & 0xffffu, ah = a >> 16, bl = b & 0xffffu, bh = b >> 16;
-	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl, hh = ah * bh;
-	uint32_t mid = (ll >> 16) + (lh & 0xffffu) + (hl & 0xffffu);
-	return ((uint64_t)(hh + (lh >> 16) + (hl >> 16) + (mid >> 16)) << 32) | ((mid << 16) | (ll & 0xffffu));
-#else
-	return (uint64_t)a * b;
-#endif
+	return qa_umul32(a, b);
 }
 
 /* q_clz32(v) always inlined */
 EST_INLINE int est_clz32(uint32_t v)
 {
-	if (v == 0u)
-		return 32;
-	int n = 0;
-	if (!(v >> 16)) { n += 16; v <<= 16; }
-	if (!(v >> 24)) { n += 8; v <<= 8; }
-	if (!(v >> 28)) { n += 4; v <<= 4; }
-	if (!(v >> 30)) { n += 2; v <<= 2; }
-	if (!(v >> 31)) { n += 1; }
-	return n;
+	return qa_clz32(v);
 }
 
 /* q_clz64(v) from the clz of the word that holds the leading one */
@@ -75,23 +60,13 @@ EST_INLINE uint32_t est_top32(uint64_t v, int s)
 /* q_shr64(v, s): v / 2^s rounded to nearest (ties away from zero), s in [0, 62] */
 EST_INLINE int64_t est_shr64c(int64_t v, unsigned s)
 {
-	if (s == 0u)
-		return v;
-	if (v >= 0)
-		return (v >> s) + ((v >> (s - 1u)) & 1);
-	int64_t m = v == INT64_MIN ? INT64_MAX : -v;
-	return -((m >> s) + ((m >> (s - 1u)) & 1));
+	return qa_shr64(v, s);
 }
 
 /* q_shl64(v, s): v 2^s saturating to +/-INT64_MAX, s in [0, 62] */
 EST_INLINE int64_t est_shl64c(int64_t v, unsigned s)
 {
-	int64_t lim = INT64_MAX >> s;
-	if (v > lim)
-		return INT64_MAX;
-	if (v < -lim)
-		return -INT64_MAX;
-	return v >= 0 ? (int64_t)((uint64_t)v << s) : -(int64_t)((uint64_t)-v << s);
+	return qa_shl64(v, s);
 }
 
 /* q_sat32(q_shr64(v, s)), s in [0, 62] */

@@ -53,6 +53,15 @@
 #else
 #define QF_INLINE static inline
 #endif
+/* The same operations always inlined (qa_*): one definition each, which the q_* functions
+ * wrap and est_ops.h uses for the estimators' hottest calls. Their linkage follows
+ * QF_INLINE's (an external inline definition may not use a static function); scalar.c
+ * holds out-of-line copies only for compilers without always_inline. */
+#if defined(__GNUC__)
+#define QF_ALWAYS QF_INLINE __attribute__((always_inline))
+#else
+#define QF_ALWAYS QF_INLINE
+#endif
 
 /* int64 to int32, saturating */
 static inline int32_t q_sat32(int64_t v)
@@ -76,7 +85,7 @@ QF_INLINE int64_t q_add64(int64_t a, int64_t b)
 
 /* 32 x 32 -> 64-bit products. Cortex-M0 (ARMv6-M) has no long multiply: a 64-bit product
  * is a library call there, four 16 x 16 products inline are about three times cheaper. */
-QF_INLINE uint64_t q_umul32(uint32_t a, uint32_t b)
+QF_ALWAYS uint64_t qa_umul32(uint32_t a, uint32_t b)
 {
 #if defined(__ARM_ARCH_6M__)
 	uint32_t al = a & 0xffffu, ah = a >> 16, bl = b & 0xffffu, bh = b >> 16;
@@ -86,6 +95,11 @@ QF_INLINE uint64_t q_umul32(uint32_t a, uint32_t b)
 #else
 	return (uint64_t)a * b;
 #endif
+}
+
+QF_INLINE uint64_t q_umul32(uint32_t a, uint32_t b)
+{
+	return qa_umul32(a, b);
 }
 
 QF_INLINE int64_t q_smul32(int32_t a, int32_t b)
@@ -99,7 +113,7 @@ QF_INLINE int64_t q_smul32(int32_t a, int32_t b)
 
 /* number of leading zero bits of v (32 for 0), by halving: Cortex-M0 has no clz, and
  * this costs less there than libgcc's __clzsi2 */
-QF_INLINE int q_clz32(uint32_t v)
+QF_ALWAYS int qa_clz32(uint32_t v)
 {
 	if (v == 0u)
 		return 32;
@@ -110,6 +124,11 @@ QF_INLINE int q_clz32(uint32_t v)
 	if (!(v >> 30)) { n += 2; v <<= 2; }
 	if (!(v >> 31)) { n += 1; }
 	return n;
+}
+
+QF_INLINE int q_clz32(uint32_t v)
+{
+	return qa_clz32(v);
 }
 
 /* number of leading zero bits of v (64 for 0), by halving */
@@ -128,7 +147,7 @@ QF_INLINE int q_clz64(uint64_t v)
 }
 
 /* v / 2^s, rounded to nearest (ties away from zero); s in [0, 62] */
-QF_INLINE int64_t q_shr64(int64_t v, unsigned s)
+QF_ALWAYS int64_t qa_shr64(int64_t v, unsigned s)
 {
 	if (s == 0u)
 		return v;
@@ -139,8 +158,13 @@ QF_INLINE int64_t q_shr64(int64_t v, unsigned s)
 	return -((m >> s) + ((m >> (s - 1u)) & 1));
 }
 
+QF_INLINE int64_t q_shr64(int64_t v, unsigned s)
+{
+	return qa_shr64(v, s);
+}
+
 /* v * 2^s, saturating; s in [0, 62] */
-QF_INLINE int64_t q_shl64(int64_t v, unsigned s)
+QF_ALWAYS int64_t qa_shl64(int64_t v, unsigned s)
 {
 	int64_t lim = INT64_MAX >> s;
 	if (v > lim)
@@ -148,6 +172,11 @@ QF_INLINE int64_t q_shl64(int64_t v, unsigned s)
 	if (v < -lim)
 		return -INT64_MAX;
 	return v >= 0 ? (int64_t)((uint64_t)v << s) : -(int64_t)((uint64_t)-v << s);
+}
+
+QF_INLINE int64_t q_shl64(int64_t v, unsigned s)
+{
+	return qa_shl64(v, s);
 }
 
 /* v * 2^s for s of either sign: left shifts saturate, right shifts round (beyond 62 bits

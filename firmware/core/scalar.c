@@ -21,6 +21,12 @@ extern inline int64_t q_shr64(int64_t v, unsigned s);
 extern inline int64_t q_shl64(int64_t v, unsigned s);
 extern inline int64_t q_scale64(int64_t v, int s);
 extern inline int64_t q_mul64_32(int64_t a, int32_t b, unsigned s);
+#if !defined(__GNUC__)   /* GCC and Clang always inline qa_* (or fail to compile): no copy */
+extern inline uint64_t qa_umul32(uint32_t a, uint32_t b);
+extern inline int qa_clz32(uint32_t v);
+extern inline int64_t qa_shr64(int64_t v, unsigned s);
+extern inline int64_t qa_shl64(int64_t v, unsigned s);
+#endif
 
 extern inline scalar_t sc_from_float(float x);
 extern inline float sc_to_float(scalar_t a);
