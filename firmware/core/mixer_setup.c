@@ -263,8 +263,10 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	}
 	float g[NA][NA], gi[NA][NA]; /* R R^T, completed by the identity beyond the rank */
 	for (int k = 0; k < NA; k++)
-		for (int l = 0; l < NA; l++) /* rows beyond the rank are 0: 0 + 1 there */
-			g[k][l] = dotf(r[k], 1, r[l], 1, NA) + (k == l && k >= rank ? 1.0f : 0.0f);
+		for (int l = 0; l < NA; l++)
+			g[k][l] = dotf(r[k], 1, r[l], 1, NA);
+	for (int k = rank; k < NA; k++) /* rows beyond the rank are 0: their diagonal 0 + 1 */
+		g[k][k] = 1.0f;
 	inv4(g, gi);
 	for (int j = 0; j < NR; j++)
 		for (int i = 0; i < NA; i++) {
