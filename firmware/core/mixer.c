@@ -53,6 +53,21 @@ MIX_NOINLINE scalar_t mdot(scalar_t acc, const scalar_t *a, int sa, const scalar
 	return acc;
 }
 
+/* v[t] -= d q[t], t = 0..n-1: the Gram-Schmidt updates of the allocation, out of line in the
+ * float builds (less flash), inline in the fixed build (its step would pay a call per row) */
+#if OCTO_FIXED
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void maxpy(scalar_t *v, scalar_t d, const scalar_t *q, int n)
+#else
+MIX_NOINLINE void maxpy(scalar_t *v, scalar_t d, const scalar_t *q, int n)
+#endif
+{
+	for (int t = 0; t < n; t++)
+		v[t] = sc_sub(v[t], sc_mul(d, q[t]));
+}
+
 static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
 {
 	scalar_t s = sc_mul(a[0], b[0]);
@@ -231,8 +246,7 @@ static int row_basis(const struct mixer *m, const int8_t bnd[NR], int fr[NR], in
 			for (int i = 0; i < r; i++) {
 				scalar_t d = mdot(SC_ZERO, q[i], 1, v, nf);
 				lt[k][i] = sc_add(lt[k][i], d);
-				for (int t = 0; t < nf; t++)
-					v[t] = sc_sub(v[t], sc_mul(d, q[i][t]));
+				maxpy(v, d, q[i], nf);
 			}
 		scalar_t n2 = mdot(SC_ZERO, v, 1, v, nf);
 		if (n2 <= EPS_GS)
@@ -280,8 +294,7 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		for (int i = 0; i < r; i++)
 			c[i] = mdot(SC_ZERO, q[i], 1, p, nf);
 		for (int i = 0; i < r; i++)
-			for (int t = 0; t < nf; t++)
-				p[t] = sc_sub(p[t], sc_mul(c[i], q[i][t]));
+			maxpy(p, c[i], q[i], nf);
 		for (int t = 0; t < nf; t++)
 			pmax = mmax(pmax, sc_abs(p[t]));
 		if (pmax > EPS_P) {
@@ -398,8 +411,7 @@ MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t 
 		else /* numerically empty: the nearest point of the two bounds */
 			x = clamp01(sc_add(sc_mul(lo, SC(0.5)), sc_mul(hi, SC(0.5))));
 		u[j] = x;
-		for (int i = 0; i < NA; i++)
-			r[i] = sc_sub(r[i], sc_mul(x, g[i]));
+		maxpy(r, x, g, NA);
 	}
 	for (int c = 0; c < 4; c++)
 		u[m->order[na - 4 + c]] = clamp01(dot4(m->tail_inv[c], r));
