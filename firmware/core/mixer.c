@@ -644,7 +644,7 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		out->limits |= MIXER_LIMIT_ROTOR_MAX;
 	/* clipping: flags of axes whose achieved value differs from the demand by more than the
 	 * margin times the physical wrench per unit of scaled wrench */
-	for (int i = 0; clip && i < NA; i++) {
+	for (int i = 0; i < NA && clip; i++) {
 		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
 		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
 			out->limits |= axis_limit[i];
