@@ -39,15 +39,33 @@ MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_c
 MIX_FLOAT_NOINLINE scalar_t mmax(scalar_t a, scalar_t b) { return sc_max(a, b); }
 MIX_FLOAT_NOINLINE scalar_t mmin(scalar_t a, scalar_t b) { return sc_min(a, b); }
 
-/* acc + sum_k a[k sa] b[k sb] (sub: acc - ...), k = 0..n-1, a product at a time in that
- * order: the refinement's sums in one routine */
-MIX_NOINLINE scalar_t mdot(scalar_t acc, const scalar_t *a, int sa, const scalar_t *b, int sb, int n, bool sub)
+/* acc + sum_k a[k |sa|] b[k], k = 0..n-1 (sa < 0: acc - ...), a product at a time in that
+ * order: the refinement's sums in one routine (the sign of the stride says which, so that
+ * every argument is passed in a register but n) */
+MIX_NOINLINE scalar_t mdot(scalar_t acc, const scalar_t *a, int sa, const scalar_t *b, int n)
 {
+	const bool sub = sa < 0;
+	const int st = sub ? -sa : sa;
 	for (int k = 0; k < n; k++) {
-		scalar_t p = sc_mul(a[k * sa], b[k * sb]);
+		scalar_t p = sc_mul(a[k * st], b[k]);
 		acc = sub ? sc_sub(acc, p) : sc_add(p, acc);
 	}
 	return acc;
+}
+
+/* v[t] -= d q[t], t = 0..n-1: the Gram-Schmidt updates of the allocation, out of line in the
+ * float builds (less flash), inline in the fixed build (its step would pay a call per row) */
+#if OCTO_FIXED
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void maxpy(scalar_t *v, scalar_t d, const scalar_t *q, int n)
+#else
+MIX_NOINLINE void maxpy(scalar_t *v, scalar_t d, const scalar_t *q, int n)
+#endif
+{
+	for (int t = 0; t < n; t++)
+		v[t] = sc_sub(v[t], sc_mul(d, q[t]));
 }
 
 static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
@@ -98,7 +116,7 @@ void mixer_wrench(const struct mixer *m, const scalar_t f_n[NR], scalar_t wrench
 {
 	scalar_t u[NR];
 	for (int j = 0; j < NR; j++)
-		u[j] = m->p.scale[j] == SC(1) ? f_n[j] : mdiv(f_n[j], m->p.scale[j]);
+		u[j] = mdiv(f_n[j], m->p.scale[j]); /* x / 1 = x in both builds */
 	wrench_u(m, u, wrench);
 }
 
@@ -119,13 +137,15 @@ static void facet_recips(const struct mixer *m, struct facet_recips *rc)
 }
 
 /* The facet test with tolerance tol (scaled units; negative: an inner margin) and, with invs
- * (1 / n[ax] of each facet as facet_recips forms them), the interval [lo, hi] of the offset t
- * along axis ax (0 thrust, 3 yaw), within [l, h], such that w + t e_ax passes it; false if
- * empty (lo, hi untouched then). invs NULL: the test of w alone (l <= h given). Works on t
- * directly (not on t / demand) so that huge demands lose no resolution. */
+ * (1 / n[ax] of each facet as facet_recips forms them), the interval iv = [lo, hi] of the
+ * offset t along axis ax (0 thrust, 3 yaw), within the [l, h] given in iv, such that
+ * w + t e_ax passes it; false if empty (iv untouched then). invs NULL: the test of w alone
+ * (l <= h given). Works on t directly (not on t / demand) so that huge demands lose no
+ * resolution. The interval in and out of one array: fewer arguments on the stack. */
 static bool facet_scan(const struct mixer *m, const scalar_t w[NA], const scalar_t *invs, int ax, scalar_t tol,
-		       scalar_t l, scalar_t h, scalar_t *lo, scalar_t *hi)
+		       scalar_t iv[2])
 {
+	scalar_t l = iv[0], h = iv[1];
 	for (int k = 0; k < m->n_facets; k++) {
 		const struct mixer_facet *fc = &m->facet[k];
 		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
@@ -147,15 +167,15 @@ static bool facet_scan(const struct mixer *m, const scalar_t w[NA], const scalar
 		if (l > h)
 			return false;
 	}
-	*lo = l;
-	*hi = h;
+	iv[0] = l;
+	iv[1] = h;
 	return l <= h;
 }
 
 MIX_NOINLINE bool attainable_scaled(const struct mixer *m, const scalar_t w[NA], scalar_t tol)
 {
-	scalar_t lo, hi;
-	return facet_scan(m, w, NULL, 0, tol, SC_ZERO, SC_ZERO, &lo, &hi);
+	scalar_t iv[2] = { SC_ZERO, SC_ZERO };
+	return facet_scan(m, w, NULL, 0, tol, iv);
 }
 
 bool mixer_attainable(const struct mixer *m, const scalar_t wrench[NA], scalar_t tol)
@@ -168,25 +188,26 @@ bool mixer_attainable(const struct mixer *m, const scalar_t wrench[NA], scalar_t
 	return attainable_scaled(m, w, tol);
 }
 
-/* Interval of the scaled thrust w[0] such that w is attainable with the inner margin, other
+/* Interval iv of the scaled thrust w[0] such that w is attainable with the inner margin, other
  * components fixed. Returns false if empty. */
 static bool thrust_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA],
-			    scalar_t *lo, scalar_t *hi)
+			    scalar_t iv[2])
 {
 	const scalar_t w0[NA] = {SC_ZERO, w[1], w[2], w[3]};
-	return facet_scan(m, w0, rc->inv[0], 0, sc_neg(TOL_IN), SC_MAX_NEG, SC_MAX, lo, hi);
+	iv[0] = SC_MAX_NEG;
+	iv[1] = SC_MAX;
+	return facet_scan(m, w0, rc->inv[0], 0, sc_neg(TOL_IN), iv);
 }
 
-/* With w[3] = the scaled zero yaw, the interval [lo, hi] of yaw offsets t between 0 and dy
- * (the scaled demanded yaw offset) such that w + t e_3 is attainable with the inner margin;
+/* With w[3] = the scaled zero yaw, the interval iv of yaw offsets t between 0 and dy (the
+ * scaled demanded yaw offset) such that w + t e_3 is attainable with the inner margin;
  * false if empty. No yaw demanded: whether w itself is. */
 static bool yaw_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA], scalar_t dy,
-			 scalar_t *lo, scalar_t *hi)
+			 scalar_t iv[2])
 {
-	scalar_t l = mmin(SC_ZERO, dy), h = mmax(SC_ZERO, dy);
-	*lo = l;
-	*hi = h;
-	return facet_scan(m, w, dy == SC_ZERO ? NULL : rc->inv[1], 3, sc_neg(TOL_IN), l, h, lo, hi);
+	iv[0] = mmin(SC_ZERO, dy);
+	iv[1] = mmax(SC_ZERO, dy);
+	return facet_scan(m, w, dy == SC_ZERO ? NULL : rc->inv[1], 3, sc_neg(TOL_IN), iv);
 }
 
 /* tighten [lo, hi] with the constraint -hw <= q - u s <= hw (u is the unknown) */
@@ -223,12 +244,11 @@ static int row_basis(const struct mixer *m, const int8_t bnd[NR], int fr[NR], in
 			lt[k][i] = SC_ZERO;
 		for (int pass = 0; pass < 2; pass++)
 			for (int i = 0; i < r; i++) {
-				scalar_t d = mdot(SC_ZERO, q[i], 1, v, 1, nf, false);
+				scalar_t d = mdot(SC_ZERO, q[i], 1, v, nf);
 				lt[k][i] = sc_add(lt[k][i], d);
-				for (int t = 0; t < nf; t++)
-					v[t] = sc_sub(v[t], sc_mul(d, q[i][t]));
+				maxpy(v, d, q[i], nf);
 			}
-		scalar_t n2 = mdot(SC_ZERO, v, 1, v, 1, nf, false);
+		scalar_t n2 = mdot(SC_ZERO, v, 1, v, nf);
 		if (n2 <= EPS_GS)
 			continue;
 		scalar_t nrm = sc_sqrt(n2), inv = mdiv(SC(1), nrm);
@@ -272,10 +292,9 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		for (int t = 0; t < nf; t++)
 			p[t] = sc_sub(uref[fr[t]], u[fr[t]]);
 		for (int i = 0; i < r; i++)
-			c[i] = mdot(SC_ZERO, q[i], 1, p, 1, nf, false);
+			c[i] = mdot(SC_ZERO, q[i], 1, p, nf);
 		for (int i = 0; i < r; i++)
-			for (int t = 0; t < nf; t++)
-				p[t] = sc_sub(p[t], sc_mul(c[i], q[i][t]));
+			maxpy(p, c[i], q[i], nf);
 		for (int t = 0; t < nf; t++)
 			pmax = mmax(pmax, sc_abs(p[t]));
 		if (pmax > EPS_P) {
@@ -313,14 +332,14 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		/* (summed over every k: lam[k] is still 0 for k <= piv[i], as piv rises with i, and
 		 * acc - x 0 is acc, in float up to the sign of a zero, which EPS_MU cannot see) */
 		for (int i = r - 1; i >= 0; i--)
-			lam[piv[i]] = mdiv(mdot(sc_neg(c[i]), &lt[0][i], NA, lam, 1, NA, true), lt[piv[i]][i]);
+			lam[piv[i]] = mdiv(mdot(sc_neg(c[i]), &lt[0][i], -NA, lam, NA), lt[piv[i]][i]);
 		int rel = -1;
 		scalar_t worst = EPS_MU;
 		for (int t = 0; t < na; t++) {
 			int j = m->order[t];
 			if (bnd[j] == 0)
 				continue;
-			scalar_t mu = mdot(sc_sub(u[j], uref[j]), &m->gn[0][j], NR, lam, 1, NA, true);
+			scalar_t mu = mdot(sc_sub(u[j], uref[j]), &m->gn[0][j], -NR, lam, NA);
 			scalar_t viol = bnd[j] < 0 ? sc_neg(mu) : mu;
 			if (viol > worst) {
 				worst = viol;
@@ -340,10 +359,10 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 			res[k] = sc_sub(res[k], sc_mul(m->gn[k][m->order[t]], u[m->order[t]]));
 	}
 	for (int i = 0; i < r; i++) {
-		y[i] = mdiv(mdot(res[piv[i]], lt[piv[i]], 1, y, 1, i, true), lt[piv[i]][i]);
+		y[i] = mdiv(mdot(res[piv[i]], lt[piv[i]], -1, y, i), lt[piv[i]][i]);
 	}
 	for (int t = 0; t < nf; t++) {
-		u[fr[t]] = clamp01(sc_add(u[fr[t]], mdot(SC_ZERO, &q[0][t], NR, y, 1, r, false)));
+		u[fr[t]] = clamp01(sc_add(u[fr[t]], mdot(SC_ZERO, &q[0][t], NR, y, r)));
 	}
 	return it;
 }
@@ -392,8 +411,7 @@ MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t 
 		else /* numerically empty: the nearest point of the two bounds */
 			x = clamp01(sc_add(sc_mul(lo, SC(0.5)), sc_mul(hi, SC(0.5))));
 		u[j] = x;
-		for (int i = 0; i < NA; i++)
-			r[i] = sc_sub(r[i], sc_mul(x, g[i]));
+		maxpy(r, x, g, NA);
 	}
 	for (int c = 0; c < 4; c++)
 		u[m->order[na - 4 + c]] = clamp01(dot4(m->tail_inv[c], r));
@@ -403,10 +421,9 @@ MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t 
 	for (int t = 0; t < na; t++) {
 		int j = m->order[t];
 		scalar_t d = sc_sub(u[j], uref[j]);
-		if (uref[j] < SC_ZERO && d > 0)
-			theta = mmax(theta, mdiv(sc_neg(uref[j]), d));
-		else if (uref[j] > SC(1) && d < 0)
-			theta = mmax(theta, mdiv(sc_sub(SC(1), uref[j]), d));
+		const bool below = uref[j] < SC_ZERO && d > 0;
+		if (below || (uref[j] > SC(1) && d < 0))
+			theta = mmax(theta, mdiv(below ? sc_neg(uref[j]) : sc_sub(SC(1), uref[j]), d));
 	}
 	if (theta < SC(1)) {
 		for (int t = 0; t < na; t++) {
@@ -444,19 +461,18 @@ MIX_NOINLINE int target(const struct mixer *m, const scalar_t demand[NA], scalar
 		facet_recips(m, &rc);
 		/* b. roll/pitch scale alpha with zero yaw, thrust free */
 		scalar_t yaw0 = to_scaled(m, 3, SC_ZERO);
-		scalar_t lo, hi, alpha = SC(1);
+		scalar_t th[2], alpha = SC(1); /* the thrust interval */
 		w[3] = yaw0;
-		if (!thrust_interval(m, &rc, w, &lo, &hi)) {
+		if (!thrust_interval(m, &rc, w, th)) {
 			scalar_t a_lo = SC_ZERO, a_hi = SC(1);
-			w[1] = to_scaled(m, 1, SC_ZERO);
-			w[2] = to_scaled(m, 2, SC_ZERO);
-			if (!thrust_interval(m, &rc, w, &lo, &hi))
+			scaled_rp(m, demand, a_lo, w);
+			if (!thrust_interval(m, &rc, w, th))
 				return -1;
 			for (int it = 0; it < MIXER_ALPHA_ITERS; it++) {
 				scalar_t mid = sc_mul(sc_add(a_lo, a_hi), SC(0.5));
-				scalar_t l2, h2;
+				scalar_t iv[2];
 				scaled_rp(m, demand, mid, w);
-				if (thrust_interval(m, &rc, w, &l2, &h2))
+				if (thrust_interval(m, &rc, w, iv))
 					a_lo = mid;
 				else
 					a_hi = mid;
@@ -464,7 +480,7 @@ MIX_NOINLINE int target(const struct mixer *m, const scalar_t demand[NA], scalar
 			}
 			alpha = a_lo;
 			scaled_rp(m, demand, alpha, w);
-			thrust_interval(m, &rc, w, &lo, &hi);
+			thrust_interval(m, &rc, w, th);
 			if (demand[1] != SC_ZERO)
 				lim |= MIXER_LIMIT_TX;
 			if (demand[2] != SC_ZERO)
@@ -473,8 +489,8 @@ MIX_NOINLINE int target(const struct mixer *m, const scalar_t demand[NA], scalar
 		/* c. thrust nearest to the demand for which some yaw beta tau_z, beta in [0, 1],
 		 * is attainable: exact when the demanded thrust itself or the zero-yaw slice
 		 * allows it, else MIXER_ALPHA_ITERS bisection steps towards the demand */
-		scalar_t dy = sc_sub(wd[3], yaw0), dy_dem = dy, blo, bhi;
-		w[0] = mclamp(wd[0], lo, hi); /* attainable with beta = 0 */
+		scalar_t dy = sc_sub(wd[3], yaw0), dy_dem = dy, yb[2];
+		w[0] = mclamp(wd[0], th[0], th[1]); /* attainable with beta = 0 */
 		if (alpha < SC(1)) {
 			/* roll/pitch saturated: no room is left for yaw; thrust from the zero-yaw slice */
 			dy = SC_ZERO;
@@ -483,11 +499,11 @@ MIX_NOINLINE int target(const struct mixer *m, const scalar_t demand[NA], scalar
 		} else if (w[0] != wd[0]) {
 			scalar_t ok_f = w[0];
 			w[0] = wd[0];
-			if (!yaw_interval(m, &rc, w, dy, &blo, &bhi)) {
+			if (!yaw_interval(m, &rc, w, dy, yb)) {
 				scalar_t bad_f = wd[0];
 				for (int it = 0; it < MIXER_ALPHA_ITERS; it++) {
 					w[0] = sc_add(sc_mul(ok_f, SC(0.5)), sc_mul(bad_f, SC(0.5)));
-					if (yaw_interval(m, &rc, w, dy, &blo, &bhi))
+					if (yaw_interval(m, &rc, w, dy, yb))
 						ok_f = w[0];
 					else
 						bad_f = w[0];
@@ -500,8 +516,8 @@ MIX_NOINLINE int target(const struct mixer *m, const scalar_t demand[NA], scalar
 		/* d. yaw: the largest part of the demanded yaw attainable at that thrust (between
 		 * zero and the demand: no yaw reversal) */
 		scalar_t ty = SC_ZERO;
-		if (dy != SC_ZERO && yaw_interval(m, &rc, w, dy, &blo, &bhi))
-			ty = dy > 0 ? bhi : blo;
+		if (dy != SC_ZERO && yaw_interval(m, &rc, w, dy, yb))
+			ty = dy > 0 ? yb[1] : yb[0];
 		if (ty != dy_dem && demand[3] != SC_ZERO)
 			lim |= MIXER_LIMIT_TZ;
 		w[3] = sc_add(yaw0, ty);
@@ -628,7 +644,7 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		out->limits |= MIXER_LIMIT_ROTOR_MAX;
 	/* clipping: flags of axes whose achieved value differs from the demand by more than the
 	 * margin times the physical wrench per unit of scaled wrench */
-	for (int i = 0; clip && i < NA; i++) {
+	for (int i = 0; i < NA && clip; i++) {
 		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
 		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
 			out->limits |= axis_limit[i];

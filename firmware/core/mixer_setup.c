@@ -158,16 +158,17 @@ static int facets_of(const float g[NA][NR], const uint8_t *set, int cnt, struct 
 
 void mixer_default_params(struct mixer_params *p)
 {
-	struct mixer_params d = { 0 };
-	d.arm_l_m = SC(0.35);
-	d.k_f_n = SC(28.0269);
-	d.k_tau_nm = SC(0.3869);
-	d.t_min = SC(0);
-	d.t_max = SC(1);
-	d.rotor_mask = 0xFF;
-	d.mode = MIXER_MODE_PRIORITY;
-	d.custom_gamma = NULL;
-	*p = d;
+	unsigned char *raw = (unsigned char *)p; /* scale[] 0 (not given), padding too */
+	for (size_t k = 0; k < sizeof *p; k++)
+		raw[k] = 0;
+	p->arm_l_m = SC(0.35);
+	p->k_f_n = SC(28.0269);
+	p->k_tau_nm = SC(0.3869);
+	p->t_min = SC(0);
+	p->t_max = SC(1);
+	p->rotor_mask = 0xFF;
+	p->mode = MIXER_MODE_PRIORITY;
+	p->custom_gamma = NULL;
 }
 
 /* an effectiveness as used: 0 (not given) is 1, others clamped to [0.1, 4]; out of line
@@ -263,8 +264,10 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	}
 	float g[NA][NA], gi[NA][NA]; /* R R^T, completed by the identity beyond the rank */
 	for (int k = 0; k < NA; k++)
-		for (int l = 0; l < NA; l++) /* rows beyond the rank are 0: 0 + 1 there */
-			g[k][l] = dotf(r[k], 1, r[l], 1, NA) + (k == l && k >= rank ? 1.0f : 0.0f);
+		for (int l = 0; l < NA; l++)
+			g[k][l] = dotf(r[k], 1, r[l], 1, NA);
+	for (int k = rank; k < NA; k++) /* rows beyond the rank are 0: their diagonal 0 + 1 */
+		g[k][k] = 1.0f;
 	inv4(g, gi);
 	for (int j = 0; j < NR; j++)
 		for (int i = 0; i < NA; i++) {
@@ -429,12 +432,12 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 static bool same_geometry(const struct mixer *m, const struct mixer_params *b)
 {
 	const struct mixer_params *a = &m->p;
-	bool same_scale = true;
 	for (int j = 0; j < NR; j++)
-		same_scale = same_scale && a->scale[j] == scale_used(b->scale[j]);
+		if (a->scale[j] != scale_used(b->scale[j]))
+			return false;
 	return a->arm_l_m == b->arm_l_m && a->k_f_n == b->k_f_n && a->k_tau_nm == b->k_tau_nm &&
 	       a->t_min == b->t_min && a->t_max == b->t_max && a->rotor_mask == b->rotor_mask &&
-	       same_scale && !m->custom && b->custom_gamma == NULL;
+	       !m->custom && b->custom_gamma == NULL;
 }
 
 bool mixer_set_params(struct mixer *m, const struct mixer_params *p)
