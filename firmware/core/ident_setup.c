@@ -4,7 +4,8 @@
  * ident.c; see ident.h. */
 #include "ident.h"
 
-static bool finite_f(float x) { return isfinite(x); }
+/* out of line: inlined, each isfinite is a soft-float comparison sequence on Cortex-M0 */
+__attribute__((noinline)) static bool finite_f(float x) { return isfinite(x); }
 
 static float or_default(float v, float def) { return v > 0.0f ? v : def; }
 
