@@ -583,7 +583,7 @@ void motor_id_refine(struct motor_id *m)
  * error moved x by a part of a standard deviation that depended on where the truth fell in the
  * grid); *k becomes that criterion's curvature / 2 (in the units of delay_crit's, so that
  * var x = 1 / (n k) still holds). Kept within +/- X_MAX; unchanged if not convex there. */
-NOINLINE static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
+static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 {
 	const float h = 0.2f;   /* wide enough that float rounding of the SSRs stays out of d2 */
 	float xi = *x, kk = *k;
@@ -625,7 +625,7 @@ NOINLINE static float chi2_quant(float k, float z)
 /* The whiteness test from its sums (see motor_id.h). Returns the cause of coloured prediction
  * errors: one rotor alone (the others white) is that rotor (*rotor); colour at one throttle
  * level, not the others, is the thrust curve; else the dynamics. */
-NOINLINE static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_result *res, int *rotor)
+static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_result *res, int *rotor)
 {
 	const struct motor_id_white *w = &m->wh;
 	res->white_ok = true;
