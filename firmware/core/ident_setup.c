@@ -4,7 +4,8 @@
  * ident.c; see ident.h. */
 #include "ident.h"
 
-static bool finite_f(float x) { return isfinite(x); }
+/* out of line: inlined, each isfinite is a soft-float comparison sequence on Cortex-M0 */
+__attribute__((noinline)) static bool finite_f(float x) { return isfinite(x); }
 
 static float or_default(float v, float def) { return v > 0.0f ? v : def; }
 
@@ -43,10 +44,8 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	filt_delay_init(&r->delay, cfg->delay_frames, cfg->thr0);
 	filt_lag_init(&r->lag, cfg->mot_tau_s, cfg->dt_s, cfg->thr0);
 	struct rls_config c;
-	rls_default_config(&c);
-	c.n_params = 1;
+	rls_default_config(&c);   /* one parameter, lambda 1 */
 	c.n_outputs = 2;
-	c.lambda = 1.0f;
 	c.p0 = or_default(cfg->p0, 1e6f);
 	c.theta0[0][0] = cfg->kf0;
 	c.theta0[1][0] = cfg->ktau0;
@@ -61,9 +60,12 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	r->dphi_dtau = SC_ZERO;
 	float tm = sc_to_float(cfg->mot_tau_s), dt = cfg->dt_s > SC_ZERO ? frame_period(cfg->dt_s) : 0.0f;
 	/* the lag's coefficient from the exact frame period (filt_lag_init's is from dt_s) */
-	if (tm > 0.0f && dt > 0.0f)
-		r->lag.alpha = sc_from_float(1.0f - expf(-dt / tm));
-	r->dalpha_dtau = tm > 0.0f && dt > 0.0f ? sc_from_float(-(dt / (tm * tm)) * expf(-dt / tm)) : SC_ZERO;
+	r->dalpha_dtau = SC_ZERO;
+	if (tm > 0.0f && dt > 0.0f) {
+		const float ex = expf(-dt / tm);
+		r->lag.alpha = sc_from_float(1.0f - ex);
+		r->dalpha_dtau = sc_from_float(-(dt / (tm * tm)) * ex);
+	}
 	r->phi = cfg->thr0;
 	r->y_prev[0] = r->y_prev[1] = SC_ZERO;
 	r->have_prev = false;
@@ -145,11 +147,7 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	filt_svf_init(&e->svf_w, wc_rps, zeta, dt_s, w0[i]);
 	filt_svf_init(&e->svf_ww, wc_rps, zeta, dt_s, e->ww_prev);
 	struct rls_config c;
-	rls_default_config(&c);
-	c.n_params = 1;
-	c.n_outputs = 1;
-	c.lambda = 1.0f;
-	c.p0 = 1e4f;
+	rls_default_config(&c);   /* one parameter, one output, lambda 1, p0 1e4 */
 	c.theta0[0][0] = sc_to_float(inertia[i]);
 	rls_init(&e->rls, &c);
 	float wdt = sc_to_float(wc_rps) * sc_to_float(dt_s), z4 = 4.0f * sc_to_float(zeta);

@@ -290,7 +290,7 @@ static float delay_logssr(const struct motor_id *m, unsigned d, float x)
 /* Every delay hypothesis at its criterion's minimum: grid position xs, curvature ks (see
  * parabola), interpolated sum of log SSR smin. Returns the delay of least smin (the first
  * of equals). */
-static unsigned delay_scan(const struct motor_id *m, float xs[ND], float ks[ND], float smin[ND])
+NOINLINE static unsigned delay_scan(const struct motor_id *m, float xs[ND], float ks[ND], float smin[ND])
 {
 	unsigned best = 0;
 	for (unsigned d = 0; d < ND; d++) {
@@ -353,7 +353,7 @@ NOINLINE static float div_pos(float a, float b) { return b > 0.0f ? a / b : 0.0f
 #define MEDIAN8_VAR 0.19f
 
 /* rotor j's reference parameters: the prior (k_f0, curve0) on its basis */
-static void ref_theta(const struct motor_id *m, unsigned j, float th[2])
+NOINLINE static void ref_theta(const struct motor_id *m, unsigned j, float th[2])
 {
 	float w[2];
 	curve_w(ref_c(m), SC_J(m, j), w);
@@ -697,7 +697,7 @@ NOINLINE static float lag_var(float vp, float vm, float var_x)
 }
 
 /* a standard deviation sd with the lag's share added (see lag_var) */
-static float sd_with_lag(float sd, float vp, float vm, float var_x)
+NOINLINE static float sd_with_lag(float sd, float vp, float vm, float var_x)
 {
 	return sqrt0(sd * sd + lag_var(vp, vm, var_x));
 }
@@ -705,7 +705,7 @@ static float sd_with_lag(float sd, float vp, float vm, float var_x)
 /* the normalised errors' limit: ne_max, or NE_SIGMAS standard deviations of the ratio of two
  * variance estimates (the fit's, dof degrees of freedom; the noise's, relative variance v_nz)
  * when the data are few */
-static float ne_limit(float ne_max, float dof, float v_nz)
+NOINLINE static float ne_limit(float ne_max, float dof, float v_nz)
 {
 	return fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof, 1.0f) + v_nz));
 }

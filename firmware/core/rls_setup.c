@@ -3,7 +3,8 @@
 #include "rls.h"
 #include "qfmt.h"
 
-static bool finite_f(float x) { return isfinite(x); }
+/* out of line: inlined, each isfinite is a soft-float comparison sequence on Cortex-M0 */
+__attribute__((noinline)) static bool finite_f(float x) { return isfinite(x); }
 
 
 /* float to the normalised formats and back (rls.h); the float build keeps float */
@@ -63,6 +64,9 @@ static int8_t shift_of(float m, int lo, int hi)
 	return (int8_t)s;
 }
 
+/* x if finite and not negative, else 0 */
+__attribute__((noinline)) static float nonneg_f(float x) { return x >= 0.0f && finite_f(x) ? x : 0.0f; }
+
 void rls_init(struct rls *r, const struct rls_config *cfg)
 {
 	struct rls z = { 0 };
@@ -83,12 +87,9 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 		c->lambda = 1.0f;
 	if (!(c->p0 > 0.0f) || !finite_f(c->p0))
 		c->p0 = 1e4f;
-	if (!(c->p_min >= 0.0f) || !finite_f(c->p_min))
-		c->p_min = 0.0f;
-	if (!(c->p_max >= 0.0f) || !finite_f(c->p_max))
-		c->p_max = 0.0f;
-	if (!(c->phi_min >= 0.0f) || !finite_f(c->phi_min))
-		c->phi_min = 0.0f;
+	c->p_min = nonneg_f(c->p_min);
+	c->p_max = nonneg_f(c->p_max);
+	c->phi_min = nonneg_f(c->phi_min);
 	for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
 		if (c->phi_shift[i] > 16)
 			c->phi_shift[i] = 16;
@@ -109,12 +110,11 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 			m = t > m ? t : m;
 		}
 		r->y_shift[o] = m > 0.0f ? shift_of(m, -20, 20) : 0;
-	}
-	for (unsigned o = 0; o < RLS_MAX_OUTPUTS; o++)
 		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
 			float t = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f;
 			r->theta[o][i] = par_of_f(t * sc_pow2f(c->phi_shift[i] - r->y_shift[o]));
 		}
+	}
 	r->lambda = unit_of_f(c->lambda);
 	/* P_n = p0 S^2, S = diag(2^phi_shift): the mantissa of the largest in [0.5, 1), the
 	 * others 4^-k times it (rls_reset_covariance) */
