@@ -157,8 +157,14 @@ class Mission:
         chosen free, then bound by the child a moment later: another program can take it in
         between (two missions starting together). Such a start is retried on fresh ports,
         up to PORT_ATTEMPTS times, and said; any other failure is not retried."""
-        gcs_port = self.vehicle.conn.port.getsockname()[1]
+        from .link import Vehicle
         for attempt in range(1, PORT_ATTEMPTS + 1):
+            # a fresh ground-station socket per start: the stopped octo-fw of a failed start
+            # may have sent heartbeats to the last one, and the link would answer its address
+            if self.vehicle is not None:
+                self.vehicle.close()
+            self.vehicle = Vehicle("udpin:127.0.0.1:0", timeout=self.args.timeout)
+            gcs_port = self.vehicle.conn.port.getsockname()[1]
             ports = (procs.free_udp_port(), procs.free_udp_port(), procs.free_udp_port(), gcs_port)
             self.start(build, vehicle_file, ports, stage)
             try:
@@ -289,8 +295,6 @@ def run(args):
     try:
         with procs.signals_as_exceptions():
             try:
-                from .link import Vehicle
-                m.vehicle = Vehicle("udpin:127.0.0.1:0", timeout=args.timeout)
                 m.start_up(build, args.vehicle, stage)
                 nominal, after = m.fly(veh, experiments, stage)
             except GcsError as e:
