@@ -622,3 +622,42 @@ UNIT_TEST(app_t_before_is_the_ieee_order)
 	}
 	CHECK(bad == 0);
 }
+
+/* the float comparisons of fcmp.h by integer operations (the form Cortex-M0 runs) give the
+ * IEEE answers of <, <= and ==: special values pairwise and random pairs (any bit pattern;
+ * neighbours; frame periods) */
+static float flt_of_bits(uint32_t u)
+{
+	union { uint32_t u; float f; } v = {u};
+	return v.f;
+}
+
+static int fcmp_wrong(float a, float b)
+{
+	return (app_f_lt_bits(a, b) != (a < b)) + (app_f_le_bits(a, b) != (a <= b)) +
+	       (app_f_eq_bits(a, b) != (a == b)) + (app_f_lt(a, b) != (a < b)) + (app_f_le(a, b) != (a <= b)) +
+	       (app_f_eq(a, b) != (a == b));
+}
+
+UNIT_TEST(app_f_cmp_is_the_ieee_order)
+{
+	const float sp[] = {0.0f, -0.0f, flt_of_bits(1u), -flt_of_bits(1u), 1.0f, -1.0f, 1e-38f, -1e-38f,
+			    3.4028235e38f, -3.4028235e38f, INFINITY, -INFINITY, flt_of_bits(0x7fc00000u),
+			    flt_of_bits(0xffc00001u), flt_of_bits(0x7f800001u), 1.0f / 90.0f, 0.2f, 0.3f};
+	const int n_sp = (int)(sizeof sp / sizeof sp[0]);
+	int bad = 0;
+	for (int i = 0; i < n_sp; i++)
+		for (int j = 0; j < n_sp; j++)
+			bad += fcmp_wrong(sp[i], sp[j]);
+	CHECK(bad == 0);
+	uint64_t s = 0x2545F4914F6CDD1Du;
+	for (int k = 0; k < 50000; k++) {
+		uint64_t r = xs64(&s);
+		uint32_t ua = (uint32_t)r, ub = (uint32_t)(r >> 32);
+		float a = flt_of_bits(ua), b = flt_of_bits(ub), c = flt_of_bits(ua ^ (ub & 3u));
+		float t = (float)(ub >> 8) * 1e-9f, t1 = flt_of_bits(ua & 0x80000000u ? ub : ub + 1u);
+		bad += fcmp_wrong(a, b) + fcmp_wrong(a, c) + fcmp_wrong(c, a) + fcmp_wrong(t, 1.0f / 90.0f) +
+		       fcmp_wrong(b, t1) + fcmp_wrong(t1, b) + fcmp_wrong(-t, t);
+	}
+	CHECK(bad == 0);
+}
