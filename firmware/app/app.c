@@ -56,6 +56,35 @@ static void set_thr_all(struct app *a, float t)
 #endif
 }
 
+#if OCTO_FIXED
+/* sc_to_float(v) and sc_from_float(f) through a kept pair: the conversion runs only when the
+ * value differs from the last one (the zeroed pair is right: 0 converts to +0.0f and +0.0f
+ * to 0). The float is compared by its bits: one float converts to one scalar. */
+static float to_float_kept(struct app_sc_kept *k, scalar_t v)
+{
+	if (v != k->v) {
+		k->v = v;
+		k->f = sc_to_float(v);
+	}
+	return k->f;
+}
+
+static scalar_t from_float_kept(struct app_sc_kept *k, float f)
+{
+	union { float f; uint32_t u; } x = {f}, y = {k->f};
+	if (x.u != y.u) {
+		k->f = f;
+		k->v = sc_from_float(f);
+	}
+	return k->v;
+}
+#define TO_FLOAT_KEPT(a, i, v) to_float_kept(&(a)->log_sp_kept[i], v)
+#define FROM_FLOAT_KEPT(a, k, f) from_float_kept(&(a)->k, f)
+#else
+#define TO_FLOAT_KEPT(a, i, v) ((void)(a), (v))
+#define FROM_FLOAT_KEPT(a, k, f) ((void)(a), (f))
+#endif
+
 /* the frame's position as scalars */
 static void frame_pos(const struct hal_sensor_frame *f, scalar_t pos[3])
 {
@@ -535,7 +564,7 @@ static void control_step(struct app *a, float dt)
 	struct quat q = quat_normalize((struct quat){qf[0], qf[1], qf[2], qf[3]});
 
 	memset(&a->exp_out, 0, sizeof a->exp_out);
-	struct guid_input gi = {pos[2], vel[2], sc_from_float(dt), false};
+	struct guid_input gi = {pos[2], vel[2], FROM_FLOAT_KEPT(a, dt_kept, dt), false};
 	if (a->mode == APP_DISARMED || a->mode == APP_IDLE) {
 		set_thr_all(a, a->mode == APP_IDLE ? p->mot_thr_idle : 0.0f);
 		reset_control(a);
@@ -676,6 +705,41 @@ static inline void copy4n(float *restrict d, const float *restrict s, int n)
 	}
 }
 
+/* The excitation's throttles as floats. A dither gives the rotors a few values and their
+ * negations (the rotor experiment: two magnitudes per step), and a Q16.16 value and its
+ * negation convert to floats of opposite sign: each magnitude is converted once (the last
+ * two kept). */
+static void excitation_to_float(float out[HAL_ROTORS], const scalar_t d[HAL_ROTORS])
+{
+#if OCTO_FIXED
+	uint32_t m0 = 0u, m1 = 0u;
+	float f0 = 0.0f, f1 = 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		scalar_t v = d[j];
+		uint32_t m = v < 0 ? 0u - (uint32_t)v : (uint32_t)v;
+		float f;
+		if (m == m0) {
+			f = f0;
+		} else if (m == m1) {
+			f = f1;
+		} else if (m > (uint32_t)INT32_MAX) {   /* INT32_MIN: no positive twin */
+			out[j] = sc_to_float(v);
+			continue;
+		} else {
+			f = sc_to_float((scalar_t)m);
+			m1 = m0;
+			f1 = f0;
+			m0 = m;
+			f0 = f;
+		}
+		out[j] = v < 0 ? -f : f;
+	}
+#else
+	for (int j = 0; j < HAL_ROTORS; j++)
+		out[j] = d[j];
+#endif
+}
+
 #define LOG_LEN(field) (sizeof ((struct app_log_frame *)0)->field / sizeof(float))
 _Static_assert(LOG_LEN(q) == 4 && LOG_LEN(rotor_thrust) == HAL_ROTORS && LOG_LEN(rotor_torque) == HAL_ROTORS &&
 		       LOG_LEN(throttle) == HAL_ROTORS && LOG_LEN(est) == EXP_MAX_EST && LOG_LEN(est_sd) == EXP_MAX_EST &&
@@ -702,18 +766,17 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	copy3(l->vel_i, f->vel_i_mps);
 	copy4n(l->rotor_thrust, f->rotor_thrust_n, HAL_ROTORS);
 	copy4n(l->rotor_torque, f->rotor_torque_nm, HAL_ROTORS);
-	l->z_sp = sc_to_float(a->guid.z_sp_m);
-	l->vz_ff = sc_to_float(a->guid.vz_ff_mps);
-	l->pos_sp[0] = sc_to_float(a->guid.pos_sp_m[0]);
-	l->pos_sp[1] = sc_to_float(a->guid.pos_sp_m[1]);
+	l->z_sp = TO_FLOAT_KEPT(a, 0, a->guid.z_sp_m);
+	l->vz_ff = TO_FLOAT_KEPT(a, 1, a->guid.vz_ff_mps);
+	l->pos_sp[0] = TO_FLOAT_KEPT(a, 2, a->guid.pos_sp_m[0]);
+	l->pos_sp[1] = TO_FLOAT_KEPT(a, 3, a->guid.pos_sp_m[1]);
 	l->f_dem = a->wrench_dem[0];
 	for (int i = 0; i < 3; i++)
 		l->tau_dem[i] = a->wrench_dem[i + 1];
 	l->f_alloc = sc_to_float(a->mix_out.achieved[0]);
 	for (int i = 0; i < 3; i++)
 		l->tau_alloc[i] = sc_to_float(a->mix_out.achieved[i + 1]);
-	for (int j = 0; j < HAL_ROTORS; j++)
-		l->excitation[j] = sc_to_float(a->exp_out.thr_delta[j]);
+	excitation_to_float(l->excitation, a->exp_out.thr_delta);
 	copy4n(l->throttle, a->thr, HAL_ROTORS);
 	l->att_flags = (int32_t)a->att.flags;
 	l->alt_flags = (int32_t)a->alt.flags;

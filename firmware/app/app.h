@@ -93,6 +93,9 @@ struct app {
 #if OCTO_FIXED
 	struct app_frame_sc fs;       /* the frame's inputs as scalars (app_in) */
 	scalar_t thr_sc[HAL_ROTORS];  /* thr as scalars (app_thr_sc) */
+	/* conversions of values that mostly stay from step to step (a set point held, the frame
+	 * period), redone only when the value changed (app.c: to_float_kept, from_float_kept) */
+	struct app_sc_kept { scalar_t v; float f; } log_sp_kept[4], dt_kept;
 #endif
 
 	/* guidance (set points) and the position loop */

@@ -661,3 +661,27 @@ UNIT_TEST(app_f_cmp_is_the_ieee_order)
 	}
 	CHECK(bad == 0);
 }
+
+/* What the app's conversions of the log rely on (app.c: excitation_to_float, to_float_kept):
+ * a scalar and its negation convert to floats of opposite sign, 0 to +0.0f and +0.0f to 0,
+ * over random scalars of every magnitude. */
+UNIT_TEST(app_sc_to_float_is_odd)
+{
+	int bad = 0;
+	uint64_t s = 0x853C49E6748FEA9Bu;
+	for (int k = 0; k < 100000; k++) {
+		uint64_t r = xs64(&s);
+#if OCTO_FIXED
+		scalar_t v = (scalar_t)((uint32_t)r >> (r >> 59));   /* 0 .. INT32_MAX, any magnitude */
+		if (v < 0)
+			v = -(v + 1);
+		bad += sc_to_float(-v) != -sc_to_float(v) || (signbit(sc_to_float(-v)) != 0) != (v != 0);
+#else
+		float v = flt_of_bits((uint32_t)r & 0x7fffffffu);
+		bad += !isnan(v) && (sc_to_float(-v) != -sc_to_float(v));
+#endif
+	}
+	union { float f; uint32_t u; } z = {sc_to_float(SC_ZERO)};
+	CHECK(z.u == 0u && sc_from_float(0.0f) == SC_ZERO);
+	CHECK(bad == 0);
+}
