@@ -867,9 +867,9 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	float dt = 0.0f;
 	bool stepped = false;
 	if (complete) {
-		/* the difference of the plant times in double (they grow large), the rest in
-		 * float: one conversion instead of a double comparison each */
-		float gap = a->have_step ? (float)(f->t_s - a->t_prev) : FIRST_DT_S;
+		/* the difference of the plant times in double (they grow large; app_t_gap: the
+		 * same float by integer operations), the rest in float */
+		float gap = a->have_step ? app_t_gap(f->t_s, a->t_prev) : FIRST_DT_S;
 		if (app_f_lt(0.0f, gap)) {   /* the frame's comparisons: fcmp.h */
 			bool missing = a->have_step && app_f_lt(a->p.fs_link_to, gap);
 			if (missing) {
