@@ -800,9 +800,10 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 			limit_fail(e, lim_name, lim);
 			return e->state;
 		}
-		/* min(t_phase, total): t_phase is never NaN, total always finite */
+		/* min(t_phase, total): t_phase is never NaN, total always finite (so "not over" is
+		 * t_phase < total) */
 		bool over = app_f_le(total, e->t_phase);
-		e->progress = e->prog_base + (app_f_lt(e->t_phase, total) ? e->t_phase : total) * e->prog_rate;
+		e->progress = e->prog_base + (over ? total : e->t_phase) * e->prog_rate;
 		/* the estimates (soft float on a core without FPU) every EST_READ_FRAMES steps, on
 		 * the phase's first step and on its last, which the phase's end and the log's last
 		 * frame of the phase see */
