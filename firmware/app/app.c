@@ -56,6 +56,35 @@ static void set_thr_all(struct app *a, float t)
 #endif
 }
 
+#if OCTO_FIXED
+/* sc_to_float(v) and sc_from_float(f) through a kept pair: the conversion runs only when the
+ * value differs from the last one (the zeroed pair is right: 0 converts to +0.0f and +0.0f
+ * to 0). The float is compared by its bits: one float converts to one scalar. */
+static float to_float_kept(struct app_sc_kept *k, scalar_t v)
+{
+	if (v != k->v) {
+		k->v = v;
+		k->f = sc_to_float(v);
+	}
+	return k->f;
+}
+
+static scalar_t from_float_kept(struct app_sc_kept *k, float f)
+{
+	union { float f; uint32_t u; } x = {f}, y = {k->f};
+	if (x.u != y.u) {
+		k->f = f;
+		k->v = sc_from_float(f);
+	}
+	return k->v;
+}
+#define TO_FLOAT_KEPT(a, i, v) to_float_kept(&(a)->log_sp_kept[i], v)
+#define FROM_FLOAT_KEPT(a, k, f) from_float_kept(&(a)->k, f)
+#else
+#define TO_FLOAT_KEPT(a, i, v) ((void)(a), (v))
+#define FROM_FLOAT_KEPT(a, k, f) ((void)(a), (f))
+#endif
+
 /* the frame's position as scalars */
 static void frame_pos(const struct hal_sensor_frame *f, scalar_t pos[3])
 {
@@ -486,13 +515,17 @@ static void app_settle(struct app *a)
 
 static void experiment_step(struct app *a, float dt)
 {
+	/* the rotor torques: only the rotor and inertia phases read them */
+	const scalar_t *torque = NULL;
+	if (exp_reads_torque(&a->exp)) {
 #if OCTO_FIXED
-	/* the rotor torques: only the experiments read them */
-	for (int j = 0; j < HAL_ROTORS; j++)
-		a->fs.rotor_torque_nm[j] = sc_from_float(a->fr.rotor_torque_nm[j]);
+		for (int j = 0; j < HAL_ROTORS; j++)
+			a->fs.rotor_torque_nm[j] = sc_from_float(a->fr.rotor_torque_nm[j]);
 #endif
+		torque = app_in(a)->rotor_torque_nm;
+	}
 	/* the thrusts allocated last step: the mixer's output (the log's rotor_f in floats) */
-	struct exp_input in = {&a->fr, app_in(a)->rotor_thrust_n, app_in(a)->rotor_torque_nm,
+	struct exp_input in = {&a->fr, app_in(a)->rotor_thrust_n, torque,
 			       app_in(a)->rate_b_rps, dt, &a->p, a->wrench_dem, a->mix_out.f_n,
 			       app_thr_sc(a), a->dt_frame};
 	enum exp_state st = exp_step(&a->exp, &in, &a->exp_out);
@@ -531,7 +564,7 @@ static void control_step(struct app *a, float dt)
 	struct quat q = quat_normalize((struct quat){qf[0], qf[1], qf[2], qf[3]});
 
 	memset(&a->exp_out, 0, sizeof a->exp_out);
-	struct guid_input gi = {pos[2], vel[2], sc_from_float(dt), false};
+	struct guid_input gi = {pos[2], vel[2], FROM_FLOAT_KEPT(a, dt_kept, dt), false};
 	if (a->mode == APP_DISARMED || a->mode == APP_IDLE) {
 		set_thr_all(a, a->mode == APP_IDLE ? p->mot_thr_idle : 0.0f);
 		reset_control(a);
@@ -650,14 +683,68 @@ static void control_step(struct app *a, float dt)
 
 /* ---------------------------------------------------------------- per frame */
 
-/* three floats by assignment: a library call for 12 bytes copies them byte by byte on a
- * core that cannot load unaligned words (Cortex-M0) */
+/* Float arrays of the log by assignment, not memcpy: the library call costs more than the
+ * copy for these few words on Cortex-M0 (alignment checks, a loop, no inlining). copy4n
+ * loads four words before it stores them, which the compiler keeps as a plain copy (a loop
+ * of single copies it would turn back into a memcpy call). */
 static inline void copy3(float d[3], const float s[3])
 {
 	d[0] = s[0];
 	d[1] = s[1];
 	d[2] = s[2];
 }
+
+static inline void copy4n(float *restrict d, const float *restrict s, int n)
+{
+	for (int i = 0; i < n; i += 4) {
+		float x0 = s[i], x1 = s[i + 1], x2 = s[i + 2], x3 = s[i + 3];
+		d[i] = x0;
+		d[i + 1] = x1;
+		d[i + 2] = x2;
+		d[i + 3] = x3;
+	}
+}
+
+/* The excitation's throttles as floats. A dither gives the rotors a few values and their
+ * negations (the rotor experiment: two magnitudes per step), and a Q16.16 value and its
+ * negation convert to floats of opposite sign: each magnitude is converted once (the last
+ * two kept). */
+static void excitation_to_float(float out[HAL_ROTORS], const scalar_t d[HAL_ROTORS])
+{
+#if OCTO_FIXED
+	uint32_t m0 = 0u, m1 = 0u;
+	float f0 = 0.0f, f1 = 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		scalar_t v = d[j];
+		uint32_t m = v < 0 ? 0u - (uint32_t)v : (uint32_t)v;
+		float f;
+		if (m == m0) {
+			f = f0;
+		} else if (m == m1) {
+			f = f1;
+		} else if (m > (uint32_t)INT32_MAX) {   /* INT32_MIN: no positive twin */
+			out[j] = sc_to_float(v);
+			continue;
+		} else {
+			f = sc_to_float((scalar_t)m);
+			m1 = m0;
+			f1 = f0;
+			m0 = m;
+			f0 = f;
+		}
+		out[j] = v < 0 ? -f : f;
+	}
+#else
+	for (int j = 0; j < HAL_ROTORS; j++)
+		out[j] = d[j];
+#endif
+}
+
+#define LOG_LEN(field) (sizeof ((struct app_log_frame *)0)->field / sizeof(float))
+_Static_assert(LOG_LEN(q) == 4 && LOG_LEN(rotor_thrust) == HAL_ROTORS && LOG_LEN(rotor_torque) == HAL_ROTORS &&
+		       LOG_LEN(throttle) == HAL_ROTORS && LOG_LEN(est) == EXP_MAX_EST && LOG_LEN(est_sd) == EXP_MAX_EST &&
+		       HAL_ROTORS % 4 == 0 && EXP_MAX_EST % 4 == 0,
+	       "the log's arrays are copied whole, four floats at a time");
 
 static void fill_log(struct app *a, bool stepped, float dt)
 {
@@ -673,25 +760,24 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	l->link_ok = a->link_ok;
 	l->mode = (int8_t)a->mode;
 	l->valid = (int32_t)f->valid;
-	memcpy(l->q, f->q_ib, sizeof l->q);
+	copy4n(l->q, f->q_ib, 4);
 	copy3(l->rate_b, f->rate_b_rps);
 	copy3(l->pos_i, f->pos_i_m);
 	copy3(l->vel_i, f->vel_i_mps);
-	memcpy(l->rotor_thrust, f->rotor_thrust_n, sizeof l->rotor_thrust);
-	memcpy(l->rotor_torque, f->rotor_torque_nm, sizeof l->rotor_torque);
-	l->z_sp = sc_to_float(a->guid.z_sp_m);
-	l->vz_ff = sc_to_float(a->guid.vz_ff_mps);
-	l->pos_sp[0] = sc_to_float(a->guid.pos_sp_m[0]);
-	l->pos_sp[1] = sc_to_float(a->guid.pos_sp_m[1]);
+	copy4n(l->rotor_thrust, f->rotor_thrust_n, HAL_ROTORS);
+	copy4n(l->rotor_torque, f->rotor_torque_nm, HAL_ROTORS);
+	l->z_sp = TO_FLOAT_KEPT(a, 0, a->guid.z_sp_m);
+	l->vz_ff = TO_FLOAT_KEPT(a, 1, a->guid.vz_ff_mps);
+	l->pos_sp[0] = TO_FLOAT_KEPT(a, 2, a->guid.pos_sp_m[0]);
+	l->pos_sp[1] = TO_FLOAT_KEPT(a, 3, a->guid.pos_sp_m[1]);
 	l->f_dem = a->wrench_dem[0];
 	for (int i = 0; i < 3; i++)
 		l->tau_dem[i] = a->wrench_dem[i + 1];
 	l->f_alloc = sc_to_float(a->mix_out.achieved[0]);
 	for (int i = 0; i < 3; i++)
 		l->tau_alloc[i] = sc_to_float(a->mix_out.achieved[i + 1]);
-	for (int j = 0; j < HAL_ROTORS; j++)
-		l->excitation[j] = sc_to_float(a->exp_out.thr_delta[j]);
-	memcpy(l->throttle, a->thr, sizeof l->throttle);
+	excitation_to_float(l->excitation, a->exp_out.thr_delta);
+	copy4n(l->throttle, a->thr, HAL_ROTORS);
 	l->att_flags = (int32_t)a->att.flags;
 	l->alt_flags = (int32_t)a->alt.flags;
 	l->mix_flags = (int32_t)a->mix_out.limits;
@@ -699,8 +785,8 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	l->exp_id = (int8_t)(a->mode == APP_EXPERIMENT ? a->exp.id : 0);
 	l->exp_phase = (int8_t)a->exp.phase;
 	l->exp_progress = a->exp.progress;
-	memcpy(l->est, a->exp.est, sizeof l->est);
-	memcpy(l->est_sd, a->exp.est_sd, sizeof l->est_sd);
+	copy4n(l->est, a->exp.est, EXP_MAX_EST);
+	copy4n(l->est_sd, a->exp.est_sd, EXP_MAX_EST);
 	l->kf = a->p.veh_kf;
 	l->ktau = a->p.veh_ktau;
 	l->inertia[0] = a->p.veh_ixx;
@@ -781,11 +867,11 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	float dt = 0.0f;
 	bool stepped = false;
 	if (complete) {
-		/* the difference of the plant times in double (they grow large), the rest in
-		 * float: one conversion instead of a double comparison each */
-		float gap = a->have_step ? (float)(f->t_s - a->t_prev) : FIRST_DT_S;
-		if (gap > 0.0f) {
-			bool missing = a->have_step && gap > a->p.fs_link_to;
+		/* the difference of the plant times in double (they grow large; app_t_gap: the
+		 * same float by integer operations), the rest in float */
+		float gap = a->have_step ? app_t_gap(f->t_s, a->t_prev) : FIRST_DT_S;
+		if (app_f_lt(0.0f, gap)) {   /* the frame's comparisons: fcmp.h */
+			bool missing = a->have_step && app_f_lt(a->p.fs_link_to, gap);
 			if (missing) {
 				/* frames missing in plant time (lockstep bursts, reload) */
 				say_gap(a, gap, now);
@@ -795,11 +881,11 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 					app_cmd_land(a, APP_ORIGIN_NONE, why, sizeof why);
 				}
 			}
-			dt = gap > MAX_DT_S ? MAX_DT_S : gap;
+			dt = app_f_lt(MAX_DT_S, gap) ? MAX_DT_S : gap;
 			/* the frame period, for the experiments (a step after lost frames is a
 			 * multiple of it): a shorter step replaces it, a near one refines it; a step of
 			 * exactly the period known (the common case) leaves it as it is */
-			if (a->have_step && dt != a->dt_frame) {
+			if (a->have_step && !app_f_eq(dt, a->dt_frame)) {
 				if (!(a->dt_frame > 0.0f) || dt < 0.75f * a->dt_frame)
 					a->dt_frame = dt;
 				else if (dt < 1.25f * a->dt_frame)

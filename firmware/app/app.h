@@ -31,6 +31,7 @@
 #include "att_ctrl.h"
 #include "envelope.h"
 #include "experiment.h"
+#include "fcmp.h"
 #include "guidance.h"
 #include "hal.h"
 #include "log.h"
@@ -92,6 +93,9 @@ struct app {
 #if OCTO_FIXED
 	struct app_frame_sc fs;       /* the frame's inputs as scalars (app_in) */
 	scalar_t thr_sc[HAL_ROTORS];  /* thr as scalars (app_thr_sc) */
+	/* conversions of values that mostly stay from step to step (a set point held, the frame
+	 * period), redone only when the value changed (app.c: to_float_kept, from_float_kept) */
+	struct app_sc_kept { scalar_t v; float f; } log_sp_kept[4], dt_kept;
 #endif
 
 	/* guidance (set points) and the position loop */
@@ -140,22 +144,6 @@ static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr_sc
 static inline const struct hal_sensor_frame *app_in(const struct app *a) { return &a->fr; }
 static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr; }
 #endif
-
-/* a < b for plant times (doubles), by their bits: integer comparisons instead of a
- * double-precision routine (software on Cortex-M0 and on the M4F's single-precision FPU),
- * for the per-frame checks. The IEEE answer for every pair: false when either is NaN,
- * -0 equal to +0. */
-static inline bool app_t_before(double a, double b)
-{
-	union { double d; uint64_t u; } x = {a}, y = {b};
-	const uint64_t mag = 0x7fffffffffffffffu, inf = 0x7ff0000000000000u;
-	uint64_t ma = x.u & mag, mb = y.u & mag;
-	if (ma > inf || mb > inf)
-		return false;
-	/* sign and magnitude to a signed order: -m for negatives (both zeros are 0) */
-	int64_t ka = (x.u >> 63) ? -(int64_t)ma : (int64_t)ma, kb = (y.u >> 63) ? -(int64_t)mb : (int64_t)mb;
-	return ka < kb;
-}
 
 void app_init(struct app *a, const struct hal *hal);
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f);

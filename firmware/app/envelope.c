@@ -158,6 +158,14 @@ static void kft_step(struct app *a, scalar_t s_dt, bool up)
 	}
 }
 
+/* the same scalar, by its bits (an integer comparison in both builds: no soft-float call) */
+static bool same_bits(scalar_t a, scalar_t b)
+{
+	_Static_assert(sizeof(scalar_t) == sizeof(uint32_t), "a scalar is one word");
+	union { scalar_t s; uint32_t u; } x = {a}, y = {b};
+	return x.u == y.u;
+}
+
 scalar_t envelope_hover_f(struct app *a, scalar_t s_dt, scalar_t cos_tilt)
 {
 	struct envelope *e = &a->env;
@@ -181,7 +189,13 @@ scalar_t envelope_hover_f(struct app *a, scalar_t s_dt, scalar_t cos_tilt)
 	if (a->mode == APP_TAKEOFF && !up && sc_to_float(a->guid.z_sp_m) > a->fr.pos_i_m[2] + 0.05f)
 		hover_est_spool(&e->hov, s_dt);
 	/* 8 k_f u_h = 8 k_f / theta (hover_est.h): one rounding */
-	return sc_div(kf8, e->hov.theta);
+	if (!e->hf_ok || !same_bits(kf8, e->hf_kf8) || !same_bits(e->hov.theta, e->hf_theta)) {
+		e->hf_kf8 = kf8;
+		e->hf_theta = e->hov.theta;
+		e->hf = sc_div(kf8, e->hf_theta);
+		e->hf_ok = true;
+	}
+	return e->hf;
 }
 
 bool envelope_hover_ready(const struct app *a)

@@ -37,6 +37,10 @@ struct envelope {
 	uint32_t kft_votes; /* consecutive publications that called for a VEH_KF refresh */
 	scalar_t kf8;       /* 8 VEH_KF (N at full throttle, all rotors): set by envelope_model_sync */
 	struct sc_recip kf8_r; /* its reciprocal, for the step's division by it */
+	/* the hover thrust kf8 / theta of the last step and its operands: the division is redone
+	 * only when one changed (theta stays while the estimator only tracks) */
+	scalar_t hf_kf8, hf_theta, hf;
+	bool hf_ok;
 	uint8_t cmd;        /* enum app_command that started the phase, for its final result */
 	app_origin origin;  /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
 };

@@ -9,6 +9,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "fcmp.h"
+
 
 enum phase_kind {
 	PK_NONE = 0,
@@ -302,7 +304,8 @@ static void snapshot(struct exp_turn *t, const struct exp_input *in)
 	memcpy(t->thr_prev_all, in->thr_prev, sizeof t->thr_prev_all);
 	t->rotor_f_cmd0 = in->rotor_f_cmd[0];
 	memcpy(t->thrust_n, in->thrust_n, sizeof t->thrust_n);
-	memcpy(t->torque_nm, in->torque_nm, sizeof t->torque_nm);
+	for (int j = 0; j < HAL_ROTORS; j++)   /* from the frame: exp_input has them only for some phases */
+		t->torque_nm[j] = sc_from_float(in->frame->rotor_torque_nm[j]);
 	memcpy(t->rate_b_rps, in->rate_b_rps, sizeof t->rate_b_rps);
 }
 
@@ -612,11 +615,11 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 {
 	const struct app_params *p = in->params;
 	int k = e->phase_kind[e->phase];
-	bool running = e->t_phase >= e->t_settle;
+	bool running = app_f_le(e->t_settle, e->t_phase);   /* the step's comparisons: fcmp.h */
 	/* frames since the last step: more than one when frames were lost on the link (the
 	 * plant then held the last throttles); the rotor and validation models advance through
 	 * the gap, the inertia filters (uniform sampling) are left GAP_HOLD frames to settle */
-	if (in->dt_s != e->fr_dt) {   /* the same period as the last step: the same count */
+	if (!app_f_eq(in->dt_s, e->fr_dt)) {   /* the same period as the last step: the same count */
 		float fr = in->dt_s * e->inv_dt_nom;
 		e->fr_n = fr > 0.5f && fr < (float)FILT_DELAY_MAX + 0.5f ? (int)(fr + 0.5f) : 0;
 		e->fr_dt = in->dt_s;
@@ -755,6 +758,16 @@ static void limit_fail(struct experiment *e, const char *name, float lim)
 	e->final_result = APP_FAILED;
 }
 
+bool exp_reads_torque(const struct experiment *e)
+{
+	if (e->state != EXP_RUNNING || e->reporting)
+		return false;
+	if (e->turn_pending)   /* the phase may change first (exp_turn in exp_step) */
+		return true;
+	int k = e->phase_kind[e->phase];
+	return k == PK_ROTOR || k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z;
+}
+
 enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
 {
 	if (e->state != EXP_RUNNING)
@@ -772,7 +785,7 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 		snapshot(&e->turn, in);
 		phase_begin(e, in->params, &e->turn);
 	}
-	if (fabsf(f->pos_i_m[2] - e->z0) > HEIGHT_ABORT_M) {
+	if (app_f_lt(HEIGHT_ABORT_M, fabsf(f->pos_i_m[2] - e->z0))) {
 		exp_abort(e, "height limit");
 		return e->state;
 	}
@@ -780,24 +793,26 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 		phase_step(e, in, out);
 		e->t_phase += in->dt_s;
 		float total = e->t_total;
-		if (e->t_phase > e->t_limit) {
+		if (app_f_lt(e->t_limit, e->t_phase)) {
 			const char *lim_name;
 			float lim = phase_limit(e, &lim_name);
 			memset(out, 0, sizeof *out);
 			limit_fail(e, lim_name, lim);
 			return e->state;
 		}
-		/* min(t_phase, total): t_phase is never NaN, total always finite */
-		e->progress = e->prog_base + (e->t_phase < total ? e->t_phase : total) * e->prog_rate;
+		/* min(t_phase, total): t_phase is never NaN, total always finite (so "not over" is
+		 * t_phase < total) */
+		bool over = app_f_le(total, e->t_phase);
+		e->progress = e->prog_base + (over ? total : e->t_phase) * e->prog_rate;
 		/* the estimates (soft float on a core without FPU) every EST_READ_FRAMES steps, on
 		 * the phase's first step and on its last, which the phase's end and the log's last
 		 * frame of the phase see */
-		if (e->est_wait == 0u || e->t_phase >= total) {
+		if (e->est_wait == 0u || over) {
 			read_estimates(e);
 			e->est_wait = EST_READ_FRAMES;
 		}
 		e->est_wait--;
-		if (e->t_phase >= total) {
+		if (over) {
 			/* the phase is over: its end (estimates, results, verdicts) and the next one's
 			 * start run between frames (exp_turn), from what this step saw */
 			snapshot(&e->turn, in);

@@ -160,7 +160,8 @@ struct exp_input {
 	const struct hal_sensor_frame *frame;  /* this frame (paper's frames) */
 	/* this frame's measurements as scalars (converted once by the app): */
 	const scalar_t *thrust_n;              /* 8 rotor thrusts, N */
-	const scalar_t *torque_nm;             /* 8 rotor reaction torques, N m */
+	const scalar_t *torque_nm;             /* 8 rotor reaction torques, N m: read only when
+						* exp_reads_torque() (NULL otherwise) */
 	const scalar_t *rate_b_rps;            /* 3 body rates, rad/s */
 	float dt_s;                            /* time since the previous step */
 	const struct app_params *params;       /* parameters in use */
@@ -279,6 +280,11 @@ bool exp_available(int id);
 /* Starts experiment `id` (the caller has checked that the vehicle hovers).
  * Returns an app_result; on refusal `why` says why (for a status line). */
 int exp_start(struct experiment *e, int id, const struct app_params *p, char *why, size_t cap);
+
+/* Does the next exp_step read exp_input.torque_nm? Only the rotor and inertia phases do (a
+ * phase's start takes its torques from the frame), so the app converts the rotor torques to
+ * scalars only for them. */
+bool exp_reads_torque(const struct experiment *e);
 
 /* One control step while running; fills *out (zeroed by the caller). */
 enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct exp_output *out);

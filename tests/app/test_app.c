@@ -622,3 +622,123 @@ UNIT_TEST(app_t_before_is_the_ieee_order)
 	}
 	CHECK(bad == 0);
 }
+
+/* the float comparisons of fcmp.h by integer operations (the form Cortex-M0 runs) give the
+ * IEEE answers of <, <= and ==: special values pairwise and random pairs (any bit pattern;
+ * neighbours; frame periods) */
+static float flt_of_bits(uint32_t u)
+{
+	union { uint32_t u; float f; } v = {u};
+	return v.f;
+}
+
+static int fcmp_wrong(float a, float b)
+{
+	return (app_f_lt_bits(a, b) != (a < b)) + (app_f_le_bits(a, b) != (a <= b)) +
+	       (app_f_eq_bits(a, b) != (a == b)) + (app_f_lt(a, b) != (a < b)) + (app_f_le(a, b) != (a <= b)) +
+	       (app_f_eq(a, b) != (a == b));
+}
+
+UNIT_TEST(app_f_cmp_is_the_ieee_order)
+{
+	const float sp[] = {0.0f, -0.0f, flt_of_bits(1u), -flt_of_bits(1u), 1.0f, -1.0f, 1e-38f, -1e-38f,
+			    3.4028235e38f, -3.4028235e38f, INFINITY, -INFINITY, flt_of_bits(0x7fc00000u),
+			    flt_of_bits(0xffc00001u), flt_of_bits(0x7f800001u), 1.0f / 90.0f, 0.2f, 0.3f};
+	const int n_sp = (int)(sizeof sp / sizeof sp[0]);
+	int bad = 0;
+	for (int i = 0; i < n_sp; i++)
+		for (int j = 0; j < n_sp; j++)
+			bad += fcmp_wrong(sp[i], sp[j]);
+	CHECK(bad == 0);
+	uint64_t s = 0x2545F4914F6CDD1Du;
+	for (int k = 0; k < 50000; k++) {
+		uint64_t r = xs64(&s);
+		uint32_t ua = (uint32_t)r, ub = (uint32_t)(r >> 32);
+		float a = flt_of_bits(ua), b = flt_of_bits(ub), c = flt_of_bits(ua ^ (ub & 3u));
+		float t = (float)(ub >> 8) * 1e-9f, t1 = flt_of_bits(ua & 0x80000000u ? ub : ub + 1u);
+		bad += fcmp_wrong(a, b) + fcmp_wrong(a, c) + fcmp_wrong(c, a) + fcmp_wrong(t, 1.0f / 90.0f) +
+		       fcmp_wrong(b, t1) + fcmp_wrong(t1, b) + fcmp_wrong(-t, t);
+	}
+	CHECK(bad == 0);
+}
+
+/* What the app's conversions of the log rely on (app.c: excitation_to_float, to_float_kept):
+ * a scalar and its negation convert to floats of opposite sign, 0 to +0.0f and +0.0f to 0,
+ * over random scalars of every magnitude. */
+UNIT_TEST(app_sc_to_float_is_odd)
+{
+	int bad = 0;
+	uint64_t s = 0x853C49E6748FEA9Bu;
+	for (int k = 0; k < 100000; k++) {
+		uint64_t r = xs64(&s);
+#if OCTO_FIXED
+		scalar_t v = (scalar_t)((uint32_t)r >> (r >> 59));   /* 0 .. INT32_MAX, any magnitude */
+		if (v < 0)
+			v = -(v + 1);
+		bad += sc_to_float(-v) != -sc_to_float(v) || (signbit(sc_to_float(-v)) != 0) != (v != 0);
+#else
+		float v = flt_of_bits((uint32_t)r & 0x7fffffffu);
+		bad += !isnan(v) && (sc_to_float(-v) != -sc_to_float(v));
+#endif
+	}
+	union { float f; uint32_t u; } z = {sc_to_float(SC_ZERO)};
+	CHECK(z.u == 0u && sc_from_float(0.0f) == SC_ZERO);
+	CHECK(bad == 0);
+}
+
+/* app_t_gap is (float)(t - t_prev) bit for bit: plant times a frame apart (and jittered,
+ * and many frames apart), neighbours, random bit patterns, special values. */
+static int gap_wrong(double t, double tp)
+{
+	float g = app_t_gap(t, tp), want = (float)(t - tp);
+	union { float f; uint32_t u; } x = {g}, y = {want};
+	return x.u != y.u && !(isnan(g) && isnan(want));
+}
+
+UNIT_TEST(app_t_gap_is_the_float_of_the_difference)
+{
+	const double sp[] = {0.0, -0.0, dbl_of_bits(1u), 1.0, -1.0, 2.0, 1e-300, 1e300, 1.7976931348623157e308,
+			     INFINITY, -INFINITY, dbl_of_bits(0x7ff8000000000000u), 1.0 / 90.0, 3.0, 4.0,
+			     1.5, 0.75, 1e-40, 1e-38};
+	const int n_sp = (int)(sizeof sp / sizeof sp[0]);
+	int bad = 0;
+	for (int i = 0; i < n_sp; i++)
+		for (int j = 0; j < n_sp; j++)
+			bad += gap_wrong(sp[i], sp[j]);
+	CHECK(bad == 0);
+	uint64_t s = 0xD1B54A32D192ED03u;
+	for (int k = 0; k < 200000; k++) {
+		uint64_t r = xs64(&s), r2 = xs64(&s);
+		double t = (double)(r >> 40) / 90.0, t1 = (double)((r >> 40) + 1u + (r2 & 7u)) / 90.0;
+		double j = t1 + (double)((int)(r2 >> 60) - 8) * 1e-5;
+		bad += gap_wrong(t1, t) + gap_wrong(j, t) + gap_wrong(t, j);
+		double a = dbl_of_bits(r), b = dbl_of_bits(r2), c = dbl_of_bits(r ^ (r2 & 0xffffu));
+		double d = dbl_of_bits((r & 0x800fffffffffffffu) | ((r2 & 0x7fe0000000000000u) >> 1));
+		/* in [1, 2) and in [1, 4): exponents equal or one apart */
+		double e2 = dbl_of_bits((r & 0x000fffffffffffffu) + 0x3ff0000000000000u);
+		double f2 = dbl_of_bits((r2 & 0x000fffffffffffffu) + 0x3ff0000000000000u + ((r >> 63) << 52));
+		bad += gap_wrong(a, b) + gap_wrong(a, c) + gap_wrong(c, a) + gap_wrong(d, c) + gap_wrong(e2, f2) +
+		       gap_wrong(f2, e2);
+		/* differences of every length at exponents equal or one apart: the rounding cases */
+		double g2 = dbl_of_bits(0x3ff0000000000000u + (r2 >> (12 + (r & 63u) % 52u)));
+		bad += gap_wrong(f2, g2) + gap_wrong(g2, e2);
+		/* the rounding's edge cases, from a difference D of the mantissas (t_prev = 1 + 2^-52):
+		 * ties and near-ties after the float's 24 bits (q even and odd), a round-up to the next
+		 * power of two, and 54-bit differences whose double subtraction rounds (then the
+		 * float of the rounded double, which can differ from the exact difference's) */
+		uint64_t q = (r & 0xffffffu) | 0x800000u, mb = (1ull << 52) + 1u;
+		unsigned sh = 1u + (unsigned)(r2 % 28u);
+		uint64_t tie = (q << sh) | (1ull << (sh - 1u)), over = (0xffffffull << sh) | (3ull << (sh - 2u + (sh < 2u)));
+		const uint64_t dd[] = {tie, tie + 1u, tie - 1u, over, q << sh, (q << 30) | 0x3fffffffu,
+				       (((q & 0xefffffu) | 1u) << 30) | 0x1fffffffu, ((q & 0xeffffeu) << 30) | 0x1fffffffu};
+		for (int k2 = 0; k2 < 8; k2++) {
+			uint64_t d2 = dd[k2], ma = mb + d2;   /* same exponent while ma < 2^53 */
+			double tp = dbl_of_bits(0x3ff0000000000001u);
+			if (ma < (1ull << 53))
+				bad += gap_wrong(dbl_of_bits((ma - (1ull << 52)) | 0x3ff0000000000000u), tp);
+			else if (!((d2 + mb) & 1u) && (d2 + mb) / 2u < (1ull << 53))   /* t in [2, 4) */
+				bad += gap_wrong(dbl_of_bits(((d2 + mb) / 2u - (1ull << 52)) | 0x4000000000000000u), tp);
+		}
+	}
+	CHECK(bad == 0);
+}
