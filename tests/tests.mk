@@ -8,6 +8,10 @@
 UNIT_SRC   := $(sort $(wildcard tests/core/test_*.c))
 UNIT_LIST  := $(GEN)/unit_list.h
 UNIT_CFLAGS := -std=c11 $(OPT) -Wall -Wextra -Werror -Itests/core -Ifirmware/core -I$(GEN) -MMD -MP
+# Each host suite is one compiler call over many sources, whose dependency file would list
+# only the last source's headers: the suites depend on every header they may include instead.
+UNIT_HDR := $(wildcard firmware/core/*.h tests/core/*.h)
+SUITE_CFLAGS = $(filter-out -MMD -MP,$(1))
 
 $(UNIT_LIST): $(UNIT_SRC) tests/tests.mk
 	@mkdir -p $(@D)
@@ -15,14 +19,14 @@ $(UNIT_LIST): $(UNIT_SRC) tests/tests.mk
 	   for f in $(UNIT_SRC); do sed -n 's/^UNIT_TEST(\([A-Za-z0-9_]*\)).*/UNIT_ENTRY(\1)/p' $$f; done; } > $@.tmp
 	@cmp -s $@.tmp $@ && rm $@.tmp || mv $@.tmp $@
 
-UNIT_ALL_SRC := tests/core/unit.c $(UNIT_SRC)
+UNIT_ALL_SRC := tests/core/unit.c $(UNIT_SRC) $(UNIT_HDR)
 
 $(B)/unit-tests: $(UNIT_ALL_SRC) $(UNIT_LIST) $(B)/libcore.a
-	$(CC) $(UNIT_CFLAGS) -MF $@.d -o $@ $(UNIT_ALL_SRC) $(B)/libcore.a -lm
+	$(CC) $(call SUITE_CFLAGS,$(UNIT_CFLAGS)) -o $@ $(filter %.c,$(UNIT_ALL_SRC)) $(B)/libcore.a -lm
 $(B)/unit-tests-fixed: $(UNIT_ALL_SRC) $(UNIT_LIST) $(B)/libcore-fixed.a
-	$(CC) $(UNIT_CFLAGS) -DOCTO_FIXED=1 -MF $@.d -o $@ $(UNIT_ALL_SRC) $(B)/libcore-fixed.a -lm
+	$(CC) $(call SUITE_CFLAGS,$(UNIT_CFLAGS)) -DOCTO_FIXED=1 -o $@ $(filter %.c,$(UNIT_ALL_SRC)) $(B)/libcore-fixed.a -lm
 $(B)/unit-tests-asan: $(UNIT_ALL_SRC) $(UNIT_LIST) $(B)/libcore-asan.a
-	$(CC) $(UNIT_CFLAGS) $(SAN) -MF $@.d -o $@ $(UNIT_ALL_SRC) $(B)/libcore-asan.a -lm
+	$(CC) $(call SUITE_CFLAGS,$(UNIT_CFLAGS)) $(SAN) -o $@ $(filter %.c,$(UNIT_ALL_SRC)) $(B)/libcore-asan.a -lm
 
 # The app's suite (tests/app/test_*.c): the firmware's app sources on the stub HAL,
 # the same runner with its own registry, in the same three builds.
@@ -33,6 +37,7 @@ APP_TEST_ALL  := tests/core/unit.c $(APP_TEST_SRC) tests/app/stub_hal.c firmware
 APP_TEST_CFLAGS := -std=c11 $(OPT) -Wall -Wextra -Werror -D_POSIX_C_SOURCE=200809L -I$(GEN)/app_tests \
                  -Itests/core -Itests/app -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal \
                  -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common -MMD -MP
+APP_TEST_HDR := $(UNIT_HDR) $(wildcard firmware/app/*.h firmware/hal/*.h tests/app/*.h)
 
 $(APP_TEST_LIST): $(APP_TEST_SRC) tests/tests.mk
 	@mkdir -p $(@D)
@@ -40,12 +45,12 @@ $(APP_TEST_LIST): $(APP_TEST_SRC) tests/tests.mk
 	   for f in $(APP_TEST_SRC); do sed -n 's/^UNIT_TEST(\([A-Za-z0-9_]*\)).*/UNIT_ENTRY(\1)/p' $$f; done; } > $@.tmp
 	@cmp -s $@.tmp $@ && rm $@.tmp || mv $@.tmp $@
 
-$(B)/app-tests: $(APP_TEST_ALL) $(APP_TEST_LIST) $(B)/libcore.a | $(MAVLINK_STAMP)
-	$(CC) $(APP_TEST_CFLAGS) -MF $@.d -o $@ $(APP_TEST_ALL) $(B)/libcore.a -lm
-$(B)/app-tests-fixed: $(APP_TEST_ALL) $(APP_TEST_LIST) $(B)/libcore-fixed.a | $(MAVLINK_STAMP)
-	$(CC) $(APP_TEST_CFLAGS) -DOCTO_FIXED=1 -MF $@.d -o $@ $(APP_TEST_ALL) $(B)/libcore-fixed.a -lm
-$(B)/app-tests-asan: $(APP_TEST_ALL) $(APP_TEST_LIST) $(B)/libcore-asan.a | $(MAVLINK_STAMP)
-	$(CC) $(APP_TEST_CFLAGS) $(SAN) -MF $@.d -o $@ $(APP_TEST_ALL) $(B)/libcore-asan.a -lm
+$(B)/app-tests: $(APP_TEST_ALL) $(APP_TEST_HDR) $(APP_TEST_LIST) $(B)/libcore.a | $(MAVLINK_STAMP)
+	$(CC) $(call SUITE_CFLAGS,$(APP_TEST_CFLAGS)) -o $@ $(APP_TEST_ALL) $(B)/libcore.a -lm
+$(B)/app-tests-fixed: $(APP_TEST_ALL) $(APP_TEST_HDR) $(APP_TEST_LIST) $(B)/libcore-fixed.a | $(MAVLINK_STAMP)
+	$(CC) $(call SUITE_CFLAGS,$(APP_TEST_CFLAGS)) -DOCTO_FIXED=1 -o $@ $(APP_TEST_ALL) $(B)/libcore-fixed.a -lm
+$(B)/app-tests-asan: $(APP_TEST_ALL) $(APP_TEST_HDR) $(APP_TEST_LIST) $(B)/libcore-asan.a | $(MAVLINK_STAMP)
+	$(CC) $(call SUITE_CFLAGS,$(APP_TEST_CFLAGS)) $(SAN) -o $@ $(APP_TEST_ALL) $(B)/libcore-asan.a -lm
 
 UNIT_BINS := $(B)/unit-tests $(B)/unit-tests-fixed $(B)/unit-tests-asan \
              $(B)/app-tests $(B)/app-tests-fixed $(B)/app-tests-asan
