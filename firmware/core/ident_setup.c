@@ -209,6 +209,20 @@ float ident_inertia_sd(const struct ident_inertia *e)
 	return sqrtf(v > 0.0f ? v : 0.0f) / fabsf(f_of_sum(e->s_zp));
 }
 
+/* The verdict on est +/- sd within [lo, hi]: not finite, out of range, relative std sd / |est|
+ * not below rsd_max (negative sd: uncertain), else accepted; shared by both acceptance rules */
+__attribute__((noinline)) static enum ident_verdict verdict(float est, float sd, float lo, float hi, float rsd_max)
+{
+	if (!finite_f(est) || !finite_f(sd))
+		return IDENT_NOT_FINITE;
+	if (!(est >= lo && est <= hi))
+		return IDENT_OUT_OF_RANGE;
+	float rsd = sd / fabsf(est);
+	if (sd < 0.0f || !(rsd < rsd_max))
+		return IDENT_UNCERTAIN;
+	return IDENT_ACCEPT;
+}
+
 enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max,
 					float *lo, float *hi, float *raise)
 {
@@ -216,16 +230,12 @@ enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, floa
 	*lo = IDENT_INR_LO * ml2;
 	*hi = IDENT_INR_HI * ml2;
 	*raise = 1.0f;
-	if (!finite_f(est) || !finite_f(sd))
-		return IDENT_NOT_FINITE;
-	if (!(est >= *lo && est <= *hi))
-		return IDENT_OUT_OF_RANGE;
-	float rsd = sd / est;
-	if (sd < 0.0f || !(rsd < rsd_max)) {
+	const enum ident_verdict v = verdict(est, sd, *lo, *hi, rsd_max);
+	if (v == IDENT_UNCERTAIN) {
+		float rsd = sd / est;
 		*raise = rsd_max > 0.0f && finite_f(rsd) ? rsd / rsd_max : 0.0f;
-		return IDENT_UNCERTAIN;
 	}
-	return IDENT_ACCEPT;
+	return v;
 }
 
 /* ---------------------------------------------------------------- validation */
@@ -261,20 +271,14 @@ float ident_fit_pct(const struct ident_fit *v)
 
 enum ident_verdict ident_accept(float est, float sd, float nominal, float rsd_max)
 {
-	if (!finite_f(est) || !finite_f(sd))
-		return IDENT_NOT_FINITE;
 	float lo = IDENT_RANGE_LO * nominal, hi = IDENT_RANGE_HI * nominal;
 	if (lo > hi) {
 		float t = lo;
 		lo = hi;
 		hi = t;
 	}
-	if (!(est >= lo && est <= hi) || est == 0.0f)
-		return IDENT_OUT_OF_RANGE;
-	float rsd = sd / (est > 0.0f ? est : -est);
-	if (sd < 0.0f || !(rsd < rsd_max))
-		return IDENT_UNCERTAIN;
-	return IDENT_ACCEPT;
+	const enum ident_verdict v = verdict(est, sd, lo, hi, rsd_max);
+	return v != IDENT_NOT_FINITE && est == 0.0f ? IDENT_OUT_OF_RANGE : v;
 }
 
 const char *ident_verdict_text(enum ident_verdict v)

@@ -33,6 +33,16 @@ static motor_id_sum_t stat_sum(const struct motor_id_stat *s, unsigned k)
 /* rotor j's throttle at the start, as float */
 #define SC_J(m, j) mid_u_to_float((m)->s_c[j])
 
+/* NOINLINE: a small function whose inlined copies cost more flash than the calls (the
+ * compiler inlines them at -Os; this code runs between frames) */
+#define NOINLINE __attribute__((noinline))
+
+/* l[0] a + l[1] b + l[2] c: a value interpolated over the grid */
+NOINLINE static float wsum3(const float l[3], float a, float b, float c)
+{
+	return l[0] * a + l[1] * b + l[2] * c;
+}
+
 /* Rotor j's statistics of delay d: at grid point gi (< NL), or (gi = NL) interpolated over the
  * grid with the weights l. Sums of kind G (power of thrust 0), B (1), RR (2). */
 static void stat_at(const struct motor_id *m, unsigned d, unsigned gi, const float l[3], unsigned j, float o[S_N])
@@ -45,8 +55,8 @@ static void stat_at(const struct motor_id *m, unsigned d, unsigned gi, const flo
 		if (gi < NL)
 			v = (float)stat_sum(&m->st[d][gi][j], k);
 		else
-			v = l[0] * (float)stat_sum(&m->st[d][0][j], k) + l[1] * (float)stat_sum(&m->st[d][1][j], k) +
-			    l[2] * (float)stat_sum(&m->st[d][2][j], k);
+			v = wsum3(l, (float)stat_sum(&m->st[d][0][j], k), (float)stat_sum(&m->st[d][1][j], k),
+				  (float)stat_sum(&m->st[d][2][j], k));
 		o[k] = v * sc;
 	}
 }
@@ -71,9 +81,6 @@ static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u};
 #define NO_LAG_FRAC 0.15f  /* a lag below this fraction of a frame is taken as none (a < 0.0013) */
 #define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
 
-/* NOINLINE: a small function whose inlined copies cost more flash than the calls (the
- * compiler inlines them at -Os; this code runs between frames) */
-#define NOINLINE __attribute__((noinline))
 
 NOINLINE static float clampf(float x, float lo, float hi)
 {
@@ -102,10 +109,19 @@ static uint32_t next_due(const struct motor_id *m)
 	return frames_at(m, m->stage < MOTOR_ID_STAGES - 1 ? stage_end_pct[m->stage] : WHITE_AT_PCT);
 }
 
+/* a lag within the grids' range */
+NOINLINE static float clamp_tau(float tau) { return clampf(tau, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX); }
+
+/* the lag at delay d's grid position x (x = -1, 0, 1: the grid's three) */
+NOINLINE static float grid_tau(const struct motor_id *m, unsigned d, float x)
+{
+	return m->lag_c[d] * powf(m->lag_r[d], x);
+}
+
 static void set_grid(struct motor_id *m, unsigned d, float centre, float ratio)
 {
 	float dt = sc_to_float(m->cfg.dt_s);
-	m->lag_c[d] = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX);
+	m->lag_c[d] = clamp_tau(centre);
 	m->lag_r[d] = ratio;
 	m->k1[d][0] = mid_u_of_float(lag_k1(m->lag_c[d] / ratio, dt));
 	m->k1[d][1] = mid_u_of_float(lag_k1(m->lag_c[d], dt));
@@ -242,10 +258,13 @@ static void lagrange3(float x, float l[3])
 	l[2] = 0.5f * x * (x + 1.0f);
 }
 
-/* l[0] a + l[1] b + l[2] c: a value interpolated over the grid */
-NOINLINE static float wsum3(const float l[3], float a, float b, float c)
+
+/* the lag filters' states interpolated over a grid's three (s, weights l) into out */
+NOINLINE static void lag_states(const motor_id_u_t s[NL][NR], const float l[3], motor_id_u_t out[NR])
 {
-	return l[0] * a + l[1] * b + l[2] * c;
+	for (unsigned j = 0; j < NR; j++)
+		out[j] = mid_u_of_float(
+			wsum3(l, mid_u_to_float(s[0][j]), mid_u_to_float(s[1][j]), mid_u_to_float(s[2][j])));
 }
 
 /* The selection criterion of delay d at each lag. The likelihood with each rotor's noise
@@ -505,10 +524,9 @@ static void white_begin(struct motor_id *m)
 		ssr_at(m, d, NL, l, j, o, dl);
 		w->dl[j][0] = mid_f_of_float(dl[0], m->kexp);
 		w->dl[j][1] = mid_f_of_float(dl[1], m->kexp);
-		w->s[j] = mid_u_of_float(wsum3(l, mid_u_to_float(m->s[d][0][j]), mid_u_to_float(m->s[d][1][j]),
-					       mid_u_to_float(m->s[d][2][j])));
 	}
-	w->k1 = mid_u_of_float(lag_k1(clampf(m->lag_c[d] * powf(m->lag_r[d], x), MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX),
+	lag_states(m->s[d], l, w->s);
+	w->k1 = mid_u_of_float(lag_k1(clamp_tau(grid_tau(m, d, x)),
 				      sc_to_float(m->cfg.dt_s)));
 	w->delay = (uint8_t)d;
 	w->on = true;
@@ -546,23 +564,22 @@ void motor_id_refine(struct motor_id *m)
 		float x = m->n_stat > 0u ? parabola(sv, &k) : 0.0f;
 		float r = m->lag_r[d];
 		/* a minimum below the grid walks twice as far (towards no lag at all) */
-		float centre = m->lag_c[d] * powf(r, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
+		float centre = grid_tau(m, d, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
 		/* the lag states at the new taus: quadratic interpolation in log tau of the old.
 		 * A minimum outside the grid narrows it less (the grid walks towards it) */
 		float nr = stage_ratio[next];
 		if (fabsf(x) > 1.0f)
 			nr = fmaxf(nr, sqrtf(r));
-		float old[NL][NR];
+		motor_id_u_t old[NL][NR];
 		for (unsigned i = 0; i < NL; i++)
 			for (unsigned j = 0; j < NR; j++)
-				old[i][j] = mid_u_to_float(m->s[d][i][j]);
+				old[i][j] = m->s[d][i][j];
 		const float lr = logf(r);
 		for (int i = 0; i < (int)NL; i++) {
 			/* nr^(i - 1) */
-			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * (i == 0 ? 1.0f / nr : (i == 1 ? 1.0f : nr)), l[3];
+			float tau_i = clamp_tau(centre) * (i == 0 ? 1.0f / nr : (i == 1 ? 1.0f : nr)), l[3];
 			lagrange3(clampf(logf(tau_i / m->lag_c[d]) / lr, -X_MAX, X_MAX), l);
-			for (unsigned j = 0; j < NR; j++)
-				m->s[d][i][j] = mid_u_of_float(wsum3(l, old[0][j], old[1][j], old[2][j]));
+			lag_states(old, l, m->s[d][i]);
 		}
 		set_grid(m, d, centre, nr);
 		tau_hi = fmaxf(tau_hi, m->lag_c[d] * nr);
@@ -744,13 +761,13 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	/* sd of the lag: -log-likelihood = (n / 2) J, J = J_min + k (x - x*)^2, so var x = 1 / (n k) */
 	float x = xs[best], r = m->lag_r[best];
 	lag_newton(m, best, &x, &ks[best]);
-	res->tau = m->lag_c[best] * powf(r, x);
+	res->tau = grid_tau(m, best, x);
 	const float var_x = ks[best] > 0.0f ? 1.0f / (nf * ks[best]) : 0.0f;
 	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(var_x) : res->tau;
 	/* the grid's low end without lag and the minimum there: no lag (sd: that bound) */
 	float dtf = sc_to_float(m->cfg.dt_s);
 	bool no_lag = res->tau <= 1.2f * NO_LAG_FRAC * dtf ||
-		      (x <= -X_MAX + 1e-3f && m->lag_c[best] * powf(r, -X_MAX) <= NO_LAG_FRAC * dtf);
+		      (x <= -X_MAX + 1e-3f && grid_tau(m, best, -X_MAX) <= NO_LAG_FRAC * dtf);
 	if (no_lag) {
 		res->tau = 0.0f;
 		res->tau_sd = NO_LAG_FRAC * dtf;
