@@ -898,7 +898,7 @@ static const char cause_remedies[] =
 	"motor not first-order or link jitter: check both";
 
 /* the string number c of list (c < MOTOR_ID_COLOURED + 1), else dflt */
-static const char *nth_text(const char *list, enum motor_id_cause c, const char *dflt)
+NOINLINE static const char *nth_text(const char *list, enum motor_id_cause c, const char *dflt)
 {
 	if ((unsigned)c > (unsigned)MOTOR_ID_COLOURED)
 		return dflt;

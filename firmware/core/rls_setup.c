@@ -103,17 +103,17 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 	const unsigned n = c->n_params;
 	/* outputs: theta0 (k_f by its nominal) sets each output's scale */
 	for (unsigned o = 0; o < RLS_MAX_OUTPUTS; o++) {
-		float m = 0.0f;
-		for (unsigned i = 0; i < n && o < c->n_outputs; i++) {
-			float t = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f;
-			t = (t < 0.0f ? -t : t) * sc_pow2f(c->phi_shift[i]);
-			m = t > m ? t : m;
+		float m = 0.0f, th[RLS_MAX_PARAMS];
+		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
+			float t = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f, a;
+			th[i] = t;
+			a = (t < 0.0f ? -t : t) * sc_pow2f(c->phi_shift[i]);
+			if (i < n && o < c->n_outputs)
+				m = a > m ? a : m;
 		}
 		r->y_shift[o] = m > 0.0f ? shift_of(m, -20, 20) : 0;
-		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
-			float t = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f;
-			r->theta[o][i] = par_of_f(t * sc_pow2f(c->phi_shift[i] - r->y_shift[o]));
-		}
+		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
+			r->theta[o][i] = par_of_f(th[i] * sc_pow2f(c->phi_shift[i] - r->y_shift[o]));
 	}
 	r->lambda = unit_of_f(c->lambda);
 	/* P_n = p0 S^2, S = diag(2^phi_shift): the mantissa of the largest in [0.5, 1), the
