@@ -4,8 +4,13 @@
  * ident.c; see ident.h. */
 #include "ident.h"
 
-/* out of line: inlined, each isfinite is a soft-float comparison sequence on Cortex-M0 */
-__attribute__((noinline)) static bool finite_f(float x) { return isfinite(x); }
+/* isfinite(x) from the exponent bits (all ones: infinity or NaN): one test of a word, not
+ * the soft-float comparisons a core without FPU makes of isfinite */
+static bool finite_f(float x)
+{
+	union { float f; uint32_t u; } v = { x };
+	return (v.u & 0x7f800000u) != 0x7f800000u;
+}
 
 static float or_default(float v, float def) { return v > 0.0f ? v : def; }
 

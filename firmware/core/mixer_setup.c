@@ -13,6 +13,14 @@
 /* |x|: the sign bit cleared (no soft-float compare on cores without FPU) */
 static float absf(float x) { return fabsf(x); }
 
+/* the bits of x with the sign cleared: above 0x7f800000 NaN, from it on not finite (word
+ * tests, not the soft-float comparisons a core without FPU makes of isnan and isfinite) */
+static uint32_t abs_bits(float x)
+{
+	union { float f; uint32_t u; } v = { x };
+	return v.u & 0x7fffffffu;
+}
+
 /* sum_k a[k sa] b[k sb], k = 0..n-1, in that order: one routine for the set-up's dot
  * products (each inline loop is a few soft-float calls more on cores without FPU) */
 #if defined(__GNUC__)
@@ -213,9 +221,9 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 		float sj = scale_of(p, j);
 		for (int i = 0; i < NA; i++)
 			m->gamma_f[i][j] *= sj;
-		bool gone = !(p->rotor_mask & (1u << j)) || !(m->gamma_f[0][j] == m->gamma_f[0][j]);
+		bool gone = !(p->rotor_mask & (1u << j)) || abs_bits(m->gamma_f[0][j]) > 0x7f800000u;
 		for (int i = 0; i < NA; i++)
-			if (gone || !isfinite(m->gamma_f[i][j]))
+			if (gone || abs_bits(m->gamma_f[i][j]) >= 0x7f800000u)
 				m->gamma_f[i][j] = 0.0f;
 	}
 }

@@ -3,8 +3,13 @@
 #include "rls.h"
 #include "qfmt.h"
 
-/* out of line: inlined, each isfinite is a soft-float comparison sequence on Cortex-M0 */
-__attribute__((noinline)) static bool finite_f(float x) { return isfinite(x); }
+/* isfinite(x) from the exponent bits (all ones: infinity or NaN): one test of a word, not
+ * the soft-float comparisons a core without FPU makes of isfinite */
+static bool finite_f(float x)
+{
+	union { float f; uint32_t u; } v = { x };
+	return (v.u & 0x7f800000u) != 0x7f800000u;
+}
 
 
 /* float to the normalised formats and back (rls.h); the float build keeps float */
