@@ -649,8 +649,11 @@ static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_
 	res->white_have = false;
 	if (!w->on)
 		return MOTOR_ID_OK;
-	/* each (rotor, level) series' statistic and its degrees of freedom (0: not in the test) */
-	float qs[NR][MOTOR_ID_WBINS] = {0}, ds[NR][MOTOR_ID_WBINS] = {0};
+	/* the tests' statistics and degrees of freedom: g = 0 everything, 1..NR one rotor's levels,
+	 * NR + 1.. one level's rotors. Each (rotor, level) series in the test adds to its three
+	 * (every sum taken over its series in the order of the series) */
+	float qg[1 + NR + MOTOR_ID_WBINS] = {0};
+	unsigned ng[1 + NR + MOTOR_ID_WBINS] = {0};   /* series in each test */
 	for (unsigned j = 0; j < NR; j++)
 		for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
 			float n = (float)w->n[j][b];
@@ -664,21 +667,18 @@ static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_
 				float rho = (mid_sum_to_float(w->sl[j][b][l], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu) / c0;
 				qq += rho * rho;
 			}
-			qs[j][b] = qq * n;
-			ds[j][b] = (float)MOTOR_ID_WLAGS;
+			qq *= n;
+			for (unsigned g = 0; g < 1u + NR + MOTOR_ID_WBINS; g++)
+				if (g == 0u || g == 1u + j || g == 1u + NR + b) {
+					qg[g] += qq;
+					ng[g]++;
+				}
 		}
-	/* the tests: g = 0 everything, 1..NR one rotor's levels, NR + 1.. one level's rotors;
-	 * n_bad: how many rotors, how many levels fail */
+	/* n_bad: how many rotors, how many levels fail */
 	bool ok = true;
 	unsigned n_bad[2] = {0, 0};
 	for (unsigned g = 0; g < 1u + NR + MOTOR_ID_WBINS; g++) {
-		float q = 0.0f, dof = 0.0f;
-		for (unsigned j = 0; j < NR; j++)
-			for (unsigned b = 0; b < MOTOR_ID_WBINS; b++)
-				if (g == 0u || g == 1u + j || g == 1u + NR + b) {
-					q += qs[j][b];
-					dof += ds[j][b];
-				}
+		const float q = qg[g], dof = (float)(ng[g] * MOTOR_ID_WLAGS);
 		if (g == 0u) {
 			if (!(dof > 0.0f))
 				return MOTOR_ID_OK;
