@@ -112,7 +112,7 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
 			float t = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f, a;
 			th[i] = t;
-			a = (t < 0.0f ? -t : t) * sc_pow2f(c->phi_shift[i]);
+			a = fabsf(t) * sc_pow2f(c->phi_shift[i]);
 			if (i < n && o < c->n_outputs)
 				m = a > m ? a : m;
 		}
