@@ -206,25 +206,26 @@ NOINLINE static float fit_w(const float st[S_N], float c, float s_c, float y1, f
  * prior curve's 1; delta = the fitted change of theta from the reference (2 values) */
 static float rotor_ssr(const float st[S_N], bool est_curve, float c0, float s_c, float delta[2])
 {
+	float d0, d1, ssr;
 	if (est_curve) {
 		float det = stat_det(st);
 		if (!(det > 1e-30f * st[S_G11] * st[S_G22]) || !(st[S_G11] > 0)) {
 			delta[0] = delta[1] = 0.0f;
-			return (float)st[S_RR];
+			return st[S_RR];
 		}
-		float d0 = (st[S_G22] * st[S_B1] - st[S_G12] * st[S_B2]) / det;
-		float d1 = (st[S_G11] * st[S_B2] - st[S_G12] * st[S_B1]) / det;
-		delta[0] = (float)d0;
-		delta[1] = (float)d1;
-		float ssr = st[S_RR] - d0 * st[S_B1] - d1 * st[S_B2];
-		return ssr > 0 ? (float)ssr : 0.0f;
+		d0 = (st[S_G22] * st[S_B1] - st[S_G12] * st[S_B2]) / det;
+		d1 = (st[S_G11] * st[S_B2] - st[S_G12] * st[S_B1]) / det;
+		ssr = st[S_RR] - d0 * st[S_B1] - d1 * st[S_B2];
+	} else {
+		float w[2], bw, gw;
+		float mu = fit_w(st, c0, s_c, st[S_B1], st[S_B2], w, &bw, &gw);
+		d0 = mu * w[0];
+		d1 = mu * w[1];
+		ssr = st[S_RR] - mu * bw;
 	}
-	float w[2], bw, gw;
-	float mu = fit_w(st, c0, s_c, st[S_B1], st[S_B2], w, &bw, &gw);
-	delta[0] = mu * w[0];
-	delta[1] = mu * w[1];
-	float ssr = st[S_RR] - mu * bw;
-	return ssr > 0 ? (float)ssr : 0.0f;
+	delta[0] = d0;
+	delta[1] = d1;
+	return ssr > 0 ? ssr : 0.0f;
 }
 
 /* rotor j's statistics of delay d (st; gi, l: see stat_at) and its residual sum of squares
