@@ -168,8 +168,9 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	e->b_len = len < 1.0f ? 1u : (len > 1e6f ? 1000000u : (uint32_t)len);
 }
 
-/* the IV estimate once a first block is complete (before, least squares: a live value) */
-static bool iv_ready(const struct ident_inertia *e)
+/* the IV estimate once a first block is complete (before, least squares: a live value); out
+ * of line: its copies (two 64-bit tests) cost more flash than the calls */
+__attribute__((noinline)) static bool iv_ready(const struct ident_inertia *e)
 {
 	return e->iv && e->s_bb > (ident_sum_t)0 && e->s_zp != (ident_sum_t)0;
 }
