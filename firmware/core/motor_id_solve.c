@@ -642,8 +642,9 @@ NOINLINE static float chi2_quant(float k, float z)
 
 /* The whiteness test from its sums (see motor_id.h). Returns the cause of coloured prediction
  * errors: one rotor alone (the others white) is that rotor (*rotor); colour at one throttle
- * level, not the others, is the thrust curve; else the dynamics. */
-static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_result *res, int *rotor)
+ * level, not the others, is the thrust curve; else the dynamics. Out of line: less flash on
+ * Cortex-M0 (its caller holds many floats). */
+NOINLINE static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_result *res, int *rotor)
 {
 	const struct motor_id_white *w = &m->wh;
 	res->white_ok = true;
