@@ -223,7 +223,7 @@ __attribute__((noinline)) static enum ident_verdict verdict(float est, float sd,
 		return IDENT_NOT_FINITE;
 	if (!(est >= lo && est <= hi))
 		return IDENT_OUT_OF_RANGE;
-	float rsd = sd / fabsf(est);
+	float rsd = sd / (est >= 0.0f ? est : -est);   /* -0 kept: the inertia rule divides by est */
 	if (sd < 0.0f || !(rsd < rsd_max))
 		return IDENT_UNCERTAIN;
 	return IDENT_ACCEPT;

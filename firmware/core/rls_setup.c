@@ -3,13 +3,15 @@
 #include "rls.h"
 #include "qfmt.h"
 
-/* isfinite(x) from the exponent bits (all ones: infinity or NaN): one test of a word, not
- * the soft-float comparisons a core without FPU makes of isfinite */
-static bool finite_f(float x)
+/* the bits of x (tests of a word, not the soft-float comparisons a core without FPU makes) */
+static uint32_t bits_f(float x)
 {
 	union { float f; uint32_t u; } v = { x };
-	return (v.u & 0x7f800000u) != 0x7f800000u;
+	return v.u;
 }
+
+/* isfinite(x): the exponent not all ones (infinity or NaN) */
+static bool finite_f(float x) { return (bits_f(x) & 0x7f800000u) != 0x7f800000u; }
 
 
 /* float to the normalised formats and back (rls.h); the float build keeps float */
@@ -70,7 +72,12 @@ static int8_t shift_of(float m, int lo, int hi)
 }
 
 /* x if finite and not negative, else 0 */
-__attribute__((noinline)) static float nonneg_f(float x) { return x >= 0.0f && finite_f(x) ? x : 0.0f; }
+__attribute__((noinline)) static float nonneg_f(float x)
+{
+	/* x >= 0 and finite: the sign clear and the exponent not all ones, or -0 */
+	const uint32_t u = bits_f(x);
+	return u < 0x7f800000u || u == 0x80000000u ? x : 0.0f;
+}
 
 void rls_init(struct rls *r, const struct rls_config *cfg)
 {
@@ -90,7 +97,7 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 		c->lambda = 0.5f;
 	if (!(c->lambda <= 1.0f))
 		c->lambda = 1.0f;
-	if (!(c->p0 > 0.0f) || !finite_f(c->p0))
+	if (bits_f(c->p0) - 1u >= 0x7f7fffffu)   /* not (positive and finite) */
 		c->p0 = 1e4f;
 	c->p_min = nonneg_f(c->p_min);
 	c->p_max = nonneg_f(c->p_max);
