@@ -82,6 +82,18 @@ static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u};
 #define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
 
 
+/* x > 0: on a core without FPU from its bits (above +0, at most +infinity: not NaN), a test
+ * of a word, not a soft-float comparison */
+static bool pos(float x)
+{
+#if defined(__ARM_FP)
+	return x > 0.0f;
+#else
+	union { float f; uint32_t u; } v = { x };
+	return v.u - 1u < 0x7f800000u;
+#endif
+}
+
 NOINLINE static float clampf(float x, float lo, float hi)
 {
 	return x < lo ? lo : (x > hi ? hi : x);
@@ -132,9 +144,9 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const sca
 {
 	*m = (struct motor_id){0};
 	m->cfg = *cfg;
-	if (!(m->cfg.tau0_s > 0.0f))
+	if (!pos(m->cfg.tau0_s))
 		m->cfg.tau0_s = 0.03f;
-	if (!(m->cfg.kf0 > 0.0f))
+	if (!pos(m->cfg.kf0))
 		m->cfg.kf0 = 1.0f;
 	m->cfg.curve0 = clampf(m->cfg.curve0, THRMAP_CURVE_MIN, THRMAP_CURVE_MAX);
 	/* the reference model; the fixed build takes thrusts and torques as value 2^-kexp, with
@@ -209,7 +221,7 @@ static float rotor_ssr(const float st[S_N], bool est_curve, float c0, float s_c,
 	float d0, d1, ssr;
 	if (est_curve) {
 		float det = stat_det(st);
-		if (!(det > 1e-30f * st[S_G11] * st[S_G22]) || !(st[S_G11] > 0)) {
+		if (!(det > 1e-30f * st[S_G11] * st[S_G22]) || !pos(st[S_G11])) {
 			delta[0] = delta[1] = 0.0f;
 			return st[S_RR];
 		}
@@ -243,11 +255,11 @@ static float parabola(const float sv[3], float *k)
 {
 	float den = sv[0] - 2.0f * sv[1] + sv[2];
 	float x;
-	if (den > 0.0f)
+	if (pos(den))
 		x = clampf((sv[0] - sv[2]) / (2.0f * den), -X_MAX, X_MAX);
 	else
 		x = sv[0] < sv[2] ? -X_MAX : X_MAX;
-	*k = den > 0.0f ? 0.5f * den : 0.0f;
+	*k = pos(den) ? 0.5f * den : 0.0f;
 	return x;
 }
 
@@ -362,10 +374,10 @@ static float median8(const float v[NR], unsigned *a, unsigned *b)
 	return 0.5f * (v[*a] + v[*b]);
 }
 
-static float sqrt0(float v) { return v > 0.0f ? sqrtf(v) : 0.0f; }
+static float sqrt0(float v) { return pos(v) ? sqrtf(v) : 0.0f; }
 
 /* a / b for b > 0, else 0 */
-NOINLINE static float div_pos(float a, float b) { return b > 0.0f ? a / b : 0.0f; }
+NOINLINE static float div_pos(float a, float b) { return pos(b) ? a / b : 0.0f; }
 
 /* The sampling variance of the median of 8 rotors' estimates (the mean of the 4th and 5th),
  * in units of one rotor's variance: 0.168 for 8 alike, 0.190 with one rotor far off (a weak
@@ -392,7 +404,7 @@ static float rotor_curve(const struct motor_id *m, const float st[S_N], unsigned
 	float mj = a + bq * (1.0f - 2.0f * SC_J(m, j));
 	float det = stat_det(st);
 	*var = 0.0f;
-	if (!(mj > 0.0f && det > 0))
+	if (!(pos(mj) && pos(det)))
 		return 0.0f;
 	const float ga = (-bq / (mj * mj)), gb = (a / (mj * mj));
 	/* g^T G^-1 g */
@@ -439,11 +451,11 @@ static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f,
 	}
 	float sw = 0.0f, swc = 0.0f;
 	for (unsigned j = 0; j < NR; j++)
-		if (vcj[j] > 0.0f) {
+		if (pos(vcj[j])) {
 			sw += 1.0f / vcj[j];
 			swc += cj[j] / vcj[j];
 		}
-	const bool have_c = ec && sw > 0.0f;
+	const bool have_c = ec && pos(sw);
 	f->curve = have_c ? swc / sw : m->cfg.curve0;
 	f->curve_sd = have_c ? sqrt0(1.0f / sw) : 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
@@ -605,7 +617,7 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 {
 	const float h = 0.2f;   /* wide enough that float rounding of the SSRs stays out of d2 */
 	float xi = *x, kk = *k;
-	if (!(kk > 0.0f) || fabsf(xi) >= X_MAX - 1e-3f)
+	if (!pos(kk) || fabsf(xi) >= X_MAX - 1e-3f)
 		return;
 	for (int it = 0; it < 3; it++) {
 		float fv[3], c;   /* at xi - h, xi, xi + h */
@@ -614,7 +626,7 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 		/* the Newton step -f'/f'' of the central differences: the minimum of the parabola
 		 * through the three values (in units of h, at most X_MAX of them) */
 		float step = h * parabola(fv, &c);
-		if (!(c > 0.0f))
+		if (!pos(c))
 			return;
 		xi = clampf(xi + step, -X_MAX + 2e-3f, X_MAX - 2e-3f);
 		kk = c / (h * h);
@@ -663,7 +675,7 @@ NOINLINE static enum motor_id_cause white_eval(const struct motor_id *m, struct 
 				continue;
 			float mu = mid_sum_to_float(w->se[j][b], m->e[MID_E_WSE], 1, m->kexp) / n,
 			      c0 = mid_sum_to_float(w->see[j][b], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu, qq = 0.0f;
-			if (!(c0 > 0.0f))
+			if (!pos(c0))
 				continue;
 			for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++) {
 				float rho = (mid_sum_to_float(w->sl[j][b][l], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu) / c0;
@@ -682,7 +694,7 @@ NOINLINE static enum motor_id_cause white_eval(const struct motor_id *m, struct 
 	for (unsigned g = 0; g < 1u + NR + MOTOR_ID_WBINS; g++) {
 		const float q = qg[g], dof = (float)(ng[g] * MOTOR_ID_WLAGS);
 		if (g == 0u) {
-			if (!(dof > 0.0f))
+			if (!pos(dof))
 				return MOTOR_ID_OK;
 			res->white_have = true;
 			res->white_q = q;
@@ -694,7 +706,7 @@ NOINLINE static enum motor_id_cause white_eval(const struct motor_id *m, struct 
 		/* a rotor's or a level's statistic over its limit */
 		const bool is_rotor = g <= NR;
 		float *ratio = is_rotor ? &res->white_rotor[g - 1u] : &res->white_level[g - 1u - NR];
-		*ratio = dof > 0.0f ? q / chi2_quant(dof, is_rotor ? WZ_ROTOR : WZ_LEVEL) : 0.0f;
+		*ratio = pos(dof) ? q / chi2_quant(dof, is_rotor ? WZ_ROTOR : WZ_LEVEL) : 0.0f;
 		ok = ok && *ratio <= 1.0f;
 		if (*ratio > 1.0f) {
 			n_bad[is_rotor]++;
@@ -764,8 +776,8 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float x = xs[best], r = m->lag_r[best];
 	lag_newton(m, best, &x, &ks[best]);
 	res->tau = grid_tau(m, best, x);
-	const float var_x = ks[best] > 0.0f ? 1.0f / (nf * ks[best]) : 0.0f;
-	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(var_x) : res->tau;
+	const float var_x = pos(ks[best]) ? 1.0f / (nf * ks[best]) : 0.0f;
+	res->tau_sd = pos(ks[best]) ? res->tau * logf(r) * sqrt0(var_x) : res->tau;
 	/* the grid's low end without lag and the minimum there: no lag (sd: that bound) */
 	float dtf = sc_to_float(m->cfg.dt_s);
 	bool no_lag = res->tau <= 1.2f * NO_LAG_FRAC * dtf ||
@@ -803,12 +815,12 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	unsigned ma, mb;
 	ne_sorted_mid = median8(res->ne, &ma, &mb);
 	res->curve_chi2 = div_pos(f.chi2, nz);
-	const float sf2 = nz > 0.0f ? nz : f.ssr_sum / dof;   /* the thrust noise's variance for k_tau */
+	const float sf2 = pos(nz) ? nz : f.ssr_sum / dof;   /* the thrust noise's variance for k_tau */
 
 	/* the lag's share: k_f, curve and scales move with the lag (central differences; the lag's
 	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
 	 * is orthogonal to their regressors) */
-	if (!no_lag && ks[best] > 0.0f) {
+	if (!no_lag && pos(ks[best])) {
 		float kp, cp, sp[NR], sm[NR];
 		fit_at(m, best, x + LAG_H, &f, sp);   /* f's fit at x is no longer needed: stack on M0 */
 		kp = f.kf;
@@ -827,7 +839,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float nall = (float)(m->n_exc * NR);
 	float rho = div_pos(tf, ff);
 	float ss_t = tt - 2.0f * rho * tf + rho * rho * ff;
-	float vrho = ff > 0.0f && nall > 1.0f ? ss_t / (nall - 1.0f) / ff : 0.0f;
+	float vrho = pos(ff) && nall > 1.0f ? ss_t / (nall - 1.0f) / ff : 0.0f;
 	if (ff > nall * sf2)
 		rho *= ff / (ff - nall * sf2);
 	res->ktau = rho * res->kf;
@@ -850,7 +862,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->cause = MOTOR_ID_DELAY_GIVEN;
 	else if (!ec && res->curve_chi2 > chi2_lim)
 		res->cause = MOTOR_ID_CURVE;
-	else if (!no_lag && (!(ks[best] > 0.0f) || fabsf(x) >= X_MAX - 1e-3f ||
+	else if (!no_lag && (!pos(ks[best]) || fabsf(x) >= X_MAX - 1e-3f ||
 			     res->tau <= MOTOR_ID_TAU_MIN * 1.01f || res->tau >= MOTOR_ID_TAU_MAX * 0.99f))
 		res->cause = MOTOR_ID_LAG_RANGE;
 	else if (!fixd && best == ND - 1u)
@@ -861,7 +873,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->cause = white_c == MOTOR_ID_LEVEL && !ec ? MOTOR_ID_CURVE : white_c;
 		if (white_c == MOTOR_ID_ROTOR)
 			res->cause_rotor = white_rotor;
-	} else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && dof_j > 0.0f) {
+	} else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && pos(dof_j)) {
 		res->cause = MOTOR_ID_ROTOR;
 		res->cause_rotor = (int)worst;
 	} else if (res->ne_all > lim_all)
