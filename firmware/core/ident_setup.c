@@ -4,15 +4,24 @@
  * ident.c; see ident.h. */
 #include "ident.h"
 
-/* isfinite(x) from the exponent bits (all ones: infinity or NaN): one test of a word, not
- * the soft-float comparisons a core without FPU makes of isfinite */
-static bool finite_f(float x)
+/* Tests of a float from its bits on a core without FPU (a test of a word, not a soft-float
+ * comparison; the same results, NaN included): isfinite(x) (the exponent not all ones: not
+ * infinity or NaN); x > 0 (above +0, at most +infinity); x < 0 (above -0, at most -infinity) */
+static uint32_t bits_f(float x)
 {
 	union { float f; uint32_t u; } v = { x };
-	return (v.u & 0x7f800000u) != 0x7f800000u;
+	return v.u;
 }
+static bool finite_f(float x) { return (bits_f(x) & 0x7f800000u) != 0x7f800000u; }
+#if defined(__ARM_FP)
+static bool pos(float x) { return x > 0.0f; }
+static bool neg(float x) { return x < 0.0f; }
+#else
+static bool pos(float x) { return bits_f(x) - 1u < 0x7f800000u; }
+static bool neg(float x) { return bits_f(x) - 0x80000001u < 0x7f800000u; }
+#endif
 
-static float or_default(float v, float def) { return v > 0.0f ? v : def; }
+static float or_default(float v, float def) { return pos(v) ? v : def; }
 
 /* an ident_sum_t as float */
 static float f_of_sum(ident_sum_t s)
@@ -66,7 +75,7 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	float tm = sc_to_float(cfg->mot_tau_s), dt = cfg->dt_s > SC_ZERO ? frame_period(cfg->dt_s) : 0.0f;
 	/* the lag's coefficient from the exact frame period (filt_lag_init's is from dt_s) */
 	r->dalpha_dtau = SC_ZERO;
-	if (tm > 0.0f && dt > 0.0f) {
+	if (pos(tm) && pos(dt)) {
 		const float ex = expf(-dt / tm);
 		r->lag.alpha = sc_from_float(1.0f - ex);
 		r->dalpha_dtau = sc_from_float(-(dt / (tm * tm)) * ex);
@@ -100,7 +109,7 @@ static void read_1x2(const struct rls *q, float est[2], float sd[2])
 	for (unsigned o = 0; o < 2u; o++) {
 		est[o] = rls_estimate_f(q, o, 0);
 		float v = p * rls_residual_var(q, o);
-		sd[o] = v > 0.0f ? sqrtf(v) : 0.0f;
+		sd[o] = pos(v) ? sqrtf(v) : 0.0f;
 	}
 }
 
@@ -115,10 +124,10 @@ float ident_rotor_tau_check(const struct ident_rotor *r)
 	if (r->dalpha_dtau == SC_ZERO || r->sens.n_updates < 2u)
 		return -1.0f;
 	float k = rls_estimate_f(&r->sens, 0, 0), kd = rls_estimate_f(&r->sens, 0, 1);
-	if (!(k > 0.0f) || !finite_f(kd))
+	if (!pos(k) || !finite_f(kd))
 		return -1.0f;
 	float t = sc_to_float(r->mot_tau_s) + kd / k;
-	return t > 0.0f ? t : 0.0f;
+	return pos(t) ? t : 0.0f;
 }
 
 /* ---------------------------------------------------------------- inertia */
@@ -126,7 +135,7 @@ float ident_rotor_tau_check(const struct ident_rotor *r)
 scalar_t ident_torque_weight(scalar_t tau_m_s, scalar_t dt_s)
 {
 	float tm = sc_to_float(tau_m_s), dt = sc_to_float(dt_s);
-	if (!(tm > 0.0f) || !(dt > 0.0f))
+	if (!pos(tm) || !pos(dt))
 		return SC(1.0);
 	/* alpha = 1 / (1 - exp(-x)) - 1 / x, x = dt / tau_m; series for small x (cancellation) */
 	float x = dt / tm;
@@ -156,7 +165,7 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	c.theta0[0][0] = sc_to_float(inertia[i]);
 	rls_init(&e->rls, &c);
 	float wdt = sc_to_float(wc_rps) * sc_to_float(dt_s), z4 = 4.0f * sc_to_float(zeta);
-	e->sd_scale = wdt > 0.0f && wdt < z4 ? sqrtf(z4 / wdt) : 1.0f;
+	e->sd_scale = pos(wdt) && wdt < z4 ? sqrtf(z4 / wdt) : 1.0f;
 	e->n = 0;
 	filt_svf_init(&e->svf_z, wc_rps, zeta, dt_s, SC_ZERO);
 	e->z_in = SC_ZERO;
@@ -164,7 +173,7 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	e->s_zy = e->s_zp = e->b_zy = e->b_zp = e->s_aa = e->s_ab = e->s_bb = (ident_sum_t)0;
 	e->s_n = e->b_n = 0;
 	float dt = sc_to_float(dt_s);
-	float len = dt > 0.0f ? 0.5f / dt + 0.5f : 45.0f; /* 0.5 s of updates */
+	float len = pos(dt) ? 0.5f / dt + 0.5f : 45.0f; /* 0.5 s of updates */
 	e->b_len = len < 1.0f ? 1u : (len > 1e6f ? 1000000u : (uint32_t)len);
 }
 
@@ -212,7 +221,7 @@ float ident_inertia_sd(const struct ident_inertia *e)
 	if (!finite_f(est))
 		return NAN;
 	float v = iv_resid2(e, est);
-	return sqrtf(v > 0.0f ? v : 0.0f) / fabsf(f_of_sum(e->s_zp));
+	return sqrtf(pos(v) ? v : 0.0f) / fabsf(f_of_sum(e->s_zp));
 }
 
 /* The verdict on est +/- sd within [lo, hi]: not finite, out of range, relative std sd / |est|
@@ -224,7 +233,7 @@ __attribute__((noinline)) static enum ident_verdict verdict(float est, float sd,
 	if (!(est >= lo && est <= hi))
 		return IDENT_OUT_OF_RANGE;
 	float rsd = sd / (est >= 0.0f ? est : -est);   /* -0 kept: the inertia rule divides by est */
-	if (sd < 0.0f || !(rsd < rsd_max))
+	if (neg(sd) || !(rsd < rsd_max))
 		return IDENT_UNCERTAIN;
 	return IDENT_ACCEPT;
 }
@@ -239,7 +248,7 @@ enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, floa
 	const enum ident_verdict v = verdict(est, sd, *lo, *hi, rsd_max);
 	if (v == IDENT_UNCERTAIN) {
 		float rsd = sd / est;
-		*raise = rsd_max > 0.0f && finite_f(rsd) ? rsd / rsd_max : 0.0f;
+		*raise = pos(rsd_max) && finite_f(rsd) ? rsd / rsd_max : 0.0f;
 	}
 	return v;
 }
@@ -264,13 +273,13 @@ float ident_fit_ne(const struct ident_fit *v)
 {
 	float y0 = sc_to_float(v->y0);
 	float syy = f_of_sum(v->s2) + 2.0f * y0 * f_of_sum(v->s1) + (float)v->n * y0 * y0;
-	return syy > 0.0f ? sqrtf(f_of_sum(v->sse) / syy) : 0.0f;
+	return pos(syy) ? sqrtf(f_of_sum(v->sse) / syy) : 0.0f;
 }
 
 float ident_fit_pct(const struct ident_fit *v)
 {
 	float m2 = fit_m2(v);
-	return m2 > 0.0f ? 100.0f * (1.0f - sqrtf(f_of_sum(v->sse) / m2)) : 0.0f;
+	return pos(m2) ? 100.0f * (1.0f - sqrtf(f_of_sum(v->sse) / m2)) : 0.0f;
 }
 
 /* ---------------------------------------------------------------- acceptance */
