@@ -13,6 +13,16 @@ static uint32_t bits_f(float x)
 /* isfinite(x): the exponent not all ones (infinity or NaN) */
 static bool finite_f(float x) { return (bits_f(x) & 0x7f800000u) != 0x7f800000u; }
 
+/* x > 0 (above +0, at most +infinity: not NaN); a compare instruction with an FPU */
+static bool pos(float x)
+{
+#if defined(__ARM_FP)
+	return x > 0.0f;
+#else
+	return bits_f(x) - 1u < 0x7f800000u;
+#endif
+}
+
 
 /* float to the normalised formats and back (rls.h); the float build keeps float */
 #if OCTO_FIXED
@@ -123,7 +133,7 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 			if (i < n && o < c->n_outputs)
 				m = a > m ? a : m;
 		}
-		r->y_shift[o] = m > 0.0f ? shift_of(m, -20, 20) : 0;
+		r->y_shift[o] = pos(m) ? shift_of(m, -20, 20) : 0;
 		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
 			r->theta[o][i] = par_of_f(th[i] * sc_pow2f(c->phi_shift[i] - r->y_shift[o]));
 	}
@@ -153,7 +163,7 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 #if OCTO_FIXED
 	/* the fixed build always keeps P under RLS_FIXED_P_CEIL p0: beyond that, an
 	 * unexcited direction's gain is the difference of numbers 2^31 times larger */
-	if (!(pmx > 0.0f) || pmx > c->p0 * RLS_FIXED_P_CEIL)
+	if (!pos(pmx) || pmx > c->p0 * RLS_FIXED_P_CEIL)
 		pmx = c->p0 * RLS_FIXED_P_CEIL;
 #endif
 	r->p_max_n = acc_of_f(pmx);
@@ -214,5 +224,5 @@ float rls_residual_var(const struct rls *r, unsigned out)
 float rls_std(const struct rls *r, unsigned out, unsigned param)
 {
 	float v = rls_cov_diag(r, param) * rls_residual_var(r, out);
-	return v > 0.0f ? sqrtf(v) : 0.0f;
+	return pos(v) ? sqrtf(v) : 0.0f;
 }
