@@ -211,7 +211,7 @@ NOINLINE static float fit_w(const float st[S_N], float c, float s_c, float y1, f
 	curve_w(c, s_c, w);
 	*gw = stat_gww(st, w[0], w[1]);
 	*wy = w[0] * y1 + w[1] * y2;
-	return *gw > 0 ? *wy / *gw : 0.0f;
+	return pos(*gw) ? *wy / *gw : 0.0f;
 }
 
 /* residual sum of squares of one rotor's statistics: 2 parameters (curve estimated) or the
@@ -237,7 +237,7 @@ static float rotor_ssr(const float st[S_N], bool est_curve, float c0, float s_c,
 	}
 	delta[0] = d0;
 	delta[1] = d1;
-	return ssr > 0 ? ssr : 0.0f;
+	return pos(ssr) ? ssr : 0.0f;
 }
 
 /* rotor j's statistics of delay d (st; gi, l: see stat_at) and its residual sum of squares
@@ -650,7 +650,7 @@ NOINLINE static float chi2_quant(float k, float z)
 #define WZ_ALL 3.5f
 #define WZ_ROTOR 3.9f
 #define WZ_LEVEL 3.7f
-#define WMIN_N 20.0f     /* fewest frames of a (rotor, level) series that enters the test */
+#define WMIN_N 20u       /* fewest frames of a (rotor, level) series that enters the test */
 
 /* The whiteness test from its sums (see motor_id.h). Returns the cause of coloured prediction
  * errors: one rotor alone (the others white) is that rotor (*rotor); colour at one throttle
@@ -671,7 +671,7 @@ NOINLINE static enum motor_id_cause white_eval(const struct motor_id *m, struct 
 	for (unsigned j = 0; j < NR; j++)
 		for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
 			float n = (float)w->n[j][b];
-			if (n < WMIN_N)
+			if (w->n[j][b] < WMIN_N)
 				continue;
 			float mu = mid_sum_to_float(w->se[j][b], m->e[MID_E_WSE], 1, m->kexp) / n,
 			      c0 = mid_sum_to_float(w->see[j][b], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu, qq = 0.0f;
@@ -839,7 +839,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float nall = (float)(m->n_exc * NR);
 	float rho = div_pos(tf, ff);
 	float ss_t = tt - 2.0f * rho * tf + rho * rho * ff;
-	float vrho = pos(ff) && nall > 1.0f ? ss_t / (nall - 1.0f) / ff : 0.0f;
+	float vrho = pos(ff) && m->n_exc * NR > 1u ? ss_t / (nall - 1.0f) / ff : 0.0f;
 	if (ff > nall * sf2)
 		rho *= ff / (ff - nall * sf2);
 	res->ktau = rho * res->kf;
