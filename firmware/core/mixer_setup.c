@@ -13,12 +13,23 @@
 /* |x|: the sign bit cleared (no soft-float compare on cores without FPU) */
 static float absf(float x) { return fabsf(x); }
 
-/* the bits of x with the sign cleared: above 0x7f800000 NaN, from it on not finite (word
- * tests, not the soft-float comparisons a core without FPU makes of isnan and isfinite) */
-static uint32_t abs_bits(float x)
+/* Tests of a float from its bits (tests of a word, not the soft-float comparisons a core
+ * without FPU makes; the same results, NaN included): abs_bits, the bits with the sign
+ * cleared, is above 0x7f800000 for NaN and from it on for what is not finite; x > 0 is
+ * above +0 and at most +infinity */
+static uint32_t bits_f(float x)
 {
 	union { float f; uint32_t u; } v = { x };
-	return v.u & 0x7fffffffu;
+	return v.u;
+}
+static uint32_t abs_bits(float x) { return bits_f(x) & 0x7fffffffu; }
+static bool pos(float x)
+{
+#if defined(__ARM_FP)
+	return x > 0.0f;
+#else
+	return bits_f(x) - 1u < 0x7f800000u;
+#endif
 }
 
 /* sum_k a[k sa] b[k sb], k = 0..n-1, in that order: one routine for the set-up's dot
@@ -204,7 +215,7 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 		const float s = 0.70710678f;
 		float l = sc_to_float(p->arm_l_m);
 		float kf = sc_to_float(p->k_f_n);
-		float k = kf > 0.0f ? sc_to_float(p->k_tau_nm) / kf : 0.0f;
+		float k = pos(kf) ? sc_to_float(p->k_tau_nm) / kf : 0.0f;
 		/* sign of tau_x per rotor; tau_y's is the same two rotors on */
 		static const signed char sx[NR] = { 0, -1, -1, -1, 0, 1, 1, 1 };
 		for (int j = 0; j < NR; j++) {
@@ -354,7 +365,7 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 				wl += dz->gamma_f[i][j] * flo;
 		}
 		m->w_lo[i] = sc_from_float(wl);
-		if (!(rowmax[i] > 0.0f)) {
+		if (!pos(rowmax[i])) {
 			rows_ok = false;
 			rowmax[i] = 1.0f;
 		}
