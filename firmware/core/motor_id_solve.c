@@ -571,10 +571,10 @@ void motor_id_refine(struct motor_id *m)
 	/* the next stage's reference: this one's fit (relative to this reference) */
 	float kf_ref = 0.0f, c_ref = 0.0f;
 	bool have_ref = reference_fit(m, &kf_ref, &c_ref);
+	float xs[ND], ks[ND], smin[ND];   /* each delay's criterion's minimum */
+	delay_scan(m, xs, ks, smin);
 	for (unsigned d = 0; d < ND; d++) {
-		float sv[3], k;
-		delay_crit(m, d, sv);
-		float x = m->n_stat > 0u ? parabola(sv, &k) : 0.0f;
+		float x = m->n_stat > 0u ? xs[d] : 0.0f;
 		float r = m->lag_r[d];
 		/* a minimum below the grid walks twice as far (towards no lag at all) */
 		float centre = grid_tau(m, d, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
