@@ -79,7 +79,7 @@ static float inv4(const float m[4][4], float out[4][4])
 		for (int r = c + 1; r < 4; r++)
 			if (absf(a[r][c]) > absf(a[piv][c]))
 				piv = r;
-		if (a[piv][c] == 0.0f)
+		if (abs_bits(a[piv][c]) == 0u)   /* +-0 */
 			return 0.0f;
 		for (int j = 0; j < 8; j++) { /* rows c and piv swapped (nothing when the same) */
 			float t = a[c][j];
@@ -360,8 +360,8 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		float wl = 0.0f;
 		for (int j = 0; j < NR; j++) {
 			rowmax[i] = absf(dz->gamma_f[i][j]) > rowmax[i] ? absf(dz->gamma_f[i][j]) : rowmax[i];
-			if (dz->gamma_f[0][j] != 0.0f || dz->gamma_f[1][j] != 0.0f ||
-			    dz->gamma_f[2][j] != 0.0f || dz->gamma_f[3][j] != 0.0f)
+			if ((abs_bits(dz->gamma_f[0][j]) | abs_bits(dz->gamma_f[1][j]) | abs_bits(dz->gamma_f[2][j]) |
+			     abs_bits(dz->gamma_f[3][j])) != 0u)   /* an entry not 0 */
 				wl += dz->gamma_f[i][j] * flo;
 		}
 		m->w_lo[i] = sc_from_float(wl);
@@ -397,15 +397,14 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		unsigned best = 0;
 		for (unsigned mask = (1u << na) - 1u; mask; mask--) {
 			float mm[4][4], inv[4][4];
-			int c = 0;
+			int c = 0, col[NR];
 			for (int t = 0; t < na; t++)
-				if (mask >> (na - 1 - t) & 1u) {
-					for (int i = 0; i < NA && c < 4; i++)
-						mm[i][c] = gsc[i][act[t]];
-					c++;
-				}
+				if (mask >> (na - 1 - t) & 1u)
+					col[c++] = act[t];
 			if (c != 4)
 				continue;
+			for (int k = 0; k < 16; k++)
+				mm[k / 4][k % 4] = gsc[k / 4][col[k % 4]];
 			float d = inv4(mm, inv);
 			if (d > bestdet * 1.0001f) {
 				bestdet = d;
