@@ -393,10 +393,11 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		/* every 4 of the na present rotors, as a mask over positions t (bit na-1-t): masks
 		 * in descending order visit them lexicographically; the first of the largest
 		 * |det| (within 1e-4) wins, its inverse kept */
-		float bestdet = 0.0f, binv[4][4];
+		float bestdet = 0.0f, invs[2][4][4]; /* the best inverse so far (invs[bi]), the next */
 		unsigned best = 0;
+		int bi = 0;
 		for (unsigned mask = (1u << na) - 1u; mask; mask--) {
-			float mm[4][4], inv[4][4];
+			float mm[4][4];
 			int c = 0, col[NR];
 			for (int t = 0; t < na; t++)
 				if (mask >> (na - 1 - t) & 1u)
@@ -405,12 +406,11 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 				continue;
 			for (int k = 0; k < 16; k++)
 				mm[k / 4][k % 4] = gsc[k / 4][col[k % 4]];
-			float d = inv4(mm, inv);
+			float d = inv4(mm, invs[1 - bi]);
 			if (d > bestdet * 1.0001f) {
 				bestdet = d;
 				best = mask;
-				for (int k = 0; k < 16; k++)
-					binv[k / 4][k % 4] = inv[k / 4][k % 4];
+				bi = 1 - bi;
 			}
 		}
 		if (bestdet > 1e-4f) {
@@ -421,7 +421,7 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 						m->order[no++] = act[t];
 			for (int c = 0; c < 4; c++)
 				for (int i = 0; i < NA; i++)
-					m->tail_inv[c][i] = sc_from_float(binv[c][i]);
+					m->tail_inv[c][i] = sc_from_float(invs[bi][c][i]);
 			int nfull = facets_of(gsc, act, na, m->facet, MIXER_MAX_FACETS);
 			bool fits = nfull > 0;
 			m->n_facets = (uint8_t)(nfull > 0 ? nfull : 0);
