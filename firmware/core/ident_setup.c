@@ -40,13 +40,14 @@ static float f_of_sum(ident_sum_t s)
 static float frame_period(scalar_t dt_s)
 {
 	float dt = sc_to_float(sc_max(dt_s, SC(1e-4)));
-	float n = (float)(int32_t)(1.0f / dt + 0.5f);
+	const int32_t ni = (int32_t)(1.0f / dt + 0.5f);
+	float n = (float)ni;
 #if OCTO_FIXED
 	float half_lsb = sc_pow2f(-QF_SC_FRAC - 1);
 #else
 	float half_lsb = dt * sc_pow2f(-24);
 #endif
-	return n >= 1.0f && fabsf(dt - 1.0f / n) <= 1.01f * half_lsb ? 1.0f / n : dt;
+	return ni >= 1 && fabsf(dt - 1.0f / n) <= 1.01f * half_lsb ? 1.0f / n : dt;
 }
 
 /* ---------------------------------------------------------------- rotor coefficients */
@@ -139,7 +140,8 @@ scalar_t ident_torque_weight(scalar_t tau_m_s, scalar_t dt_s)
 		return SC(1.0);
 	/* alpha = 1 / (1 - exp(-x)) - 1 / x, x = dt / tau_m; series for small x (cancellation) */
 	float x = dt / tm;
-	float w = x < 0.1f ? 0.5f + x / 12.0f - x * x * x / 720.0f : 1.0f / (1.0f - expf(-x)) - 1.0f / x;
+	/* x < 0.1 by its bits (x is positive, not NaN) */
+	float w = bits_f(x) < bits_f(0.1f) ? 0.5f + x / 12.0f - x * x * x / 720.0f : 1.0f / (1.0f - expf(-x)) - 1.0f / x;
 	return sc_from_float(w);
 }
 
@@ -174,7 +176,9 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	e->s_n = e->b_n = 0;
 	float dt = sc_to_float(dt_s);
 	float len = pos(dt) ? 0.5f / dt + 0.5f : 45.0f; /* 0.5 s of updates */
-	e->b_len = len < 1.0f ? 1u : (len > 1e6f ? 1000000u : (uint32_t)len);
+	/* len is positive, not NaN: compared by its bits */
+	const uint32_t lb = bits_f(len);
+	e->b_len = lb < bits_f(1.0f) ? 1u : (lb > bits_f(1e6f) ? 1000000u : (uint32_t)len);
 }
 
 /* the IV estimate once a first block is complete (before, least squares: a live value); out
