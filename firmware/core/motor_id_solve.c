@@ -774,10 +774,12 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 
 	/* sd of the lag: -log-likelihood = (n / 2) J, J = J_min + k (x - x*)^2, so var x = 1 / (n k) */
 	float x = xs[best], r = m->lag_r[best];
-	lag_newton(m, best, &x, &ks[best]);
+	float kx = ks[best];   /* the criterion's curvature in x there */
+	lag_newton(m, best, &x, &kx);
+	const bool have_k = pos(kx);
 	res->tau = grid_tau(m, best, x);
-	const float var_x = pos(ks[best]) ? 1.0f / (nf * ks[best]) : 0.0f;
-	res->tau_sd = pos(ks[best]) ? res->tau * logf(r) * sqrt0(var_x) : res->tau;
+	const float var_x = have_k ? 1.0f / (nf * kx) : 0.0f;
+	res->tau_sd = have_k ? res->tau * logf(r) * sqrt0(var_x) : res->tau;
 	/* the grid's low end without lag and the minimum there: no lag (sd: that bound) */
 	float dtf = sc_to_float(m->cfg.dt_s);
 	bool no_lag = res->tau <= 1.2f * NO_LAG_FRAC * dtf ||
@@ -820,7 +822,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	/* the lag's share: k_f, curve and scales move with the lag (central differences; the lag's
 	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
 	 * is orthogonal to their regressors) */
-	if (!no_lag && pos(ks[best])) {
+	if (!no_lag && have_k) {
 		float kp, cp, sp[NR], sm[NR];
 		fit_at(m, best, x + LAG_H, &f, sp);   /* f's fit at x is no longer needed: stack on M0 */
 		kp = f.kf;
@@ -862,7 +864,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->cause = MOTOR_ID_DELAY_GIVEN;
 	else if (!ec && res->curve_chi2 > chi2_lim)
 		res->cause = MOTOR_ID_CURVE;
-	else if (!no_lag && (!pos(ks[best]) || fabsf(x) >= X_MAX - 1e-3f ||
+	else if (!no_lag && (!have_k || fabsf(x) >= X_MAX - 1e-3f ||
 			     res->tau <= MOTOR_ID_TAU_MIN * 1.01f || res->tau >= MOTOR_ID_TAU_MAX * 0.99f))
 		res->cause = MOTOR_ID_LAG_RANGE;
 	else if (!fixd && best == ND - 1u)
