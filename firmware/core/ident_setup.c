@@ -16,10 +16,30 @@ static bool finite_f(float x) { return (bits_f(x) & 0x7f800000u) != 0x7f800000u;
 #if defined(__ARM_FP)
 static bool pos(float x) { return x > 0.0f; }
 static bool neg(float x) { return x < 0.0f; }
+static bool zero(float x) { return x == 0.0f; }
 #else
 static bool pos(float x) { return bits_f(x) - 1u < 0x7f800000u; }
 static bool neg(float x) { return bits_f(x) - 0x80000001u < 0x7f800000u; }
+static bool zero(float x) { return bits_f(x) << 1 == 0u; }   /* +-0 */
 #endif
+
+/* x > 0 and x == 0 of a scalar_t (an integer test in the fixed build) */
+static bool scalar_pos(scalar_t x)
+{
+#if OCTO_FIXED
+	return x > SC_ZERO;
+#else
+	return pos(x);
+#endif
+}
+static bool scalar_zero(scalar_t x)
+{
+#if OCTO_FIXED
+	return x == SC_ZERO;
+#else
+	return zero(x);
+#endif
+}
 
 static float or_default(float v, float def) { return pos(v) ? v : def; }
 
@@ -73,7 +93,7 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	cs.theta0[0][1] = 0.0f;
 	rls_init(&r->sens, &cs);
 	r->dphi_dtau = SC_ZERO;
-	float tm = sc_to_float(cfg->mot_tau_s), dt = cfg->dt_s > SC_ZERO ? frame_period(cfg->dt_s) : 0.0f;
+	float tm = sc_to_float(cfg->mot_tau_s), dt = scalar_pos(cfg->dt_s) ? frame_period(cfg->dt_s) : 0.0f;
 	/* the lag's coefficient from the exact frame period (filt_lag_init's is from dt_s) */
 	r->dalpha_dtau = SC_ZERO;
 	if (pos(tm) && pos(dt)) {
@@ -122,7 +142,7 @@ void ident_rotor_read(const struct ident_rotor *r, float est[4], float sd[4])
 
 float ident_rotor_tau_check(const struct ident_rotor *r)
 {
-	if (r->dalpha_dtau == SC_ZERO || r->sens.n_updates < 2u)
+	if (scalar_zero(r->dalpha_dtau) || r->sens.n_updates < 2u)
 		return -1.0f;
 	float k = rls_estimate_f(&r->sens, 0, 0), kd = rls_estimate_f(&r->sens, 0, 1);
 	if (!pos(k) || !finite_f(kd))
@@ -185,7 +205,11 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
  * of line: its copies (two 64-bit tests) cost more flash than the calls */
 __attribute__((noinline)) static bool iv_ready(const struct ident_inertia *e)
 {
-	return e->iv && e->s_bb > (ident_sum_t)0 && e->s_zp != (ident_sum_t)0;
+#if OCTO_FIXED
+	return e->iv && e->s_bb > 0 && e->s_zp != 0;
+#else
+	return e->iv && pos(e->s_bb) && !zero(e->s_zp);
+#endif
 }
 
 /* The sum over the blocks of (A_b - I B_b)^2, A_b = sum_b z y, B_b = sum_b z phi, as
@@ -297,7 +321,7 @@ enum ident_verdict ident_accept(float est, float sd, float nominal, float rsd_ma
 		hi = t;
 	}
 	const enum ident_verdict v = verdict(est, sd, lo, hi, rsd_max);
-	return v != IDENT_NOT_FINITE && est == 0.0f ? IDENT_OUT_OF_RANGE : v;
+	return v != IDENT_NOT_FINITE && zero(est) ? IDENT_OUT_OF_RANGE : v;
 }
 
 const char *ident_verdict_text(enum ident_verdict v)
