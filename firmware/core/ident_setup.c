@@ -260,7 +260,8 @@ __attribute__((noinline)) static enum ident_verdict verdict(float est, float sd,
 		return IDENT_NOT_FINITE;
 	if (!(est >= lo && est <= hi))
 		return IDENT_OUT_OF_RANGE;
-	float rsd = sd / (est >= 0.0f ? est : -est);   /* -0 kept: the inertia rule divides by est */
+	/* |est| with -0 kept (the inertia rule divides by est): est >= 0, finite, by its bits */
+	float rsd = sd / (bits_f(est) <= 0x80000000u ? est : -est);
 	if (neg(sd) || !(rsd < rsd_max))
 		return IDENT_UNCERTAIN;
 	return IDENT_ACCEPT;

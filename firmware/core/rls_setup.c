@@ -70,11 +70,12 @@ void rls_default_config(struct rls_config *cfg)
 static int8_t shift_of(float m, int lo, int hi)
 {
 	int s = 0;
-	while (m >= 1.41421356f && s < hi) {
+	/* m is positive, not NaN: compared by its bits */
+	while (bits_f(m) >= bits_f(1.41421356f) && s < hi) {
 		m *= 0.5f;
 		s++;
 	}
-	while (m < 0.70710678f && s > lo) {
+	while (bits_f(m) < bits_f(0.70710678f) && s > lo) {
 		m *= 2.0f;
 		s--;
 	}
