@@ -86,11 +86,13 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	c.theta0[1][0] = cfg->ktau0;
 	rls_init(&r->lagaware, &c);
 	rls_init(&r->plain, &c);
-	struct rls_config cs = c;
+	/* the sensitivity's: two parameters, one output (theta0[1] as the others') */
+	struct rls_config cs;
+	rls_default_config(&cs);
 	cs.n_params = 2;
-	cs.n_outputs = 1;
+	cs.p0 = c.p0;
 	cs.theta0[0][0] = cfg->kf0;
-	cs.theta0[0][1] = 0.0f;
+	cs.theta0[1][0] = cfg->ktau0;
 	rls_init(&r->sens, &cs);
 	r->dphi_dtau = SC_ZERO;
 	float tm = sc_to_float(cfg->mot_tau_s), dt = scalar_pos(cfg->dt_s) ? frame_period(cfg->dt_s) : 0.0f;
