@@ -83,12 +83,15 @@ static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u};
 
 
 /* x > 0: on a core without FPU from its bits (above +0, at most +infinity: not NaN), a test
- * of a word, not a soft-float comparison */
+ * of a word, not a soft-float comparison; the comparison itself where float is not 32 bits
+ * (the float64 reference build of these sources) */
 static bool pos(float x)
 {
 #if defined(__ARM_FP)
 	return x > 0.0f;
 #else
+	if (sizeof x != sizeof(uint32_t))
+		return x > 0.0f;
 	union { float f; uint32_t u; } v = { x };
 	return v.u - 1u < 0x7f800000u;
 #endif
