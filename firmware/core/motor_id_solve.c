@@ -444,8 +444,9 @@ static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f,
 	for (unsigned j = 0; j < NR; j++) {
 		float dl[2];
 		const float ssr = ssr_at(m, d, NL, l, j, st, dl);
-		/* the rotor's own curve's fit: the configured model's when the curve is estimated */
-		const float ssr2 = ec ? ssr : rotor_ssr(st, true, m->cfg.curve0, SC_J(m, j), dl);
+		/* the rotor's own curve's fit: the configured model's when the curve is estimated
+		 * (the prior curve and throttle are the 1-parameter fit's only) */
+		const float ssr2 = ec ? ssr : rotor_ssr(st, true, 0.0f, 0.0f, dl);
 		ref_theta(m, j, th);
 		f->ssr_sum += ssr;
 		f->s2[j] = ssr / ((float)m->n_stat - np);
