@@ -398,7 +398,8 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		int bi = 0;
 		for (unsigned mask = (1u << na) - 1u; mask; mask--) {
 			float mm[4][4];
-			int c = 0, col[NR];
+			int c = 0;
+			uint8_t col[NR]; /* the mask's rotors */
 			for (int t = 0; t < na; t++)
 				if (mask >> (na - 1 - t) & 1u)
 					col[c++] = act[t];
