@@ -4,10 +4,44 @@
  * ident.c; see ident.h. */
 #include "ident.h"
 
-/* out of line: inlined, each isfinite is a soft-float comparison sequence on Cortex-M0 */
-__attribute__((noinline)) static bool finite_f(float x) { return isfinite(x); }
+/* Tests of a float from its bits on a core without FPU (a test of a word, not a soft-float
+ * comparison; the same results, NaN included): isfinite(x) (the exponent not all ones: not
+ * infinity or NaN); x > 0 (above +0, at most +infinity); x < 0 (above -0, at most -infinity) */
+static uint32_t bits_f(float x)
+{
+	union { float f; uint32_t u; } v = { x };
+	return v.u;
+}
+static bool finite_f(float x) { return (bits_f(x) & 0x7f800000u) != 0x7f800000u; }
+#if defined(__ARM_FP)
+static bool pos(float x) { return x > 0.0f; }
+static bool neg(float x) { return x < 0.0f; }
+static bool zero(float x) { return x == 0.0f; }
+#else
+static bool pos(float x) { return bits_f(x) - 1u < 0x7f800000u; }
+static bool neg(float x) { return bits_f(x) - 0x80000001u < 0x7f800000u; }
+static bool zero(float x) { return bits_f(x) << 1 == 0u; }   /* +-0 */
+#endif
 
-static float or_default(float v, float def) { return v > 0.0f ? v : def; }
+/* x > 0 and x == 0 of a scalar_t (an integer test in the fixed build) */
+static bool scalar_pos(scalar_t x)
+{
+#if OCTO_FIXED
+	return x > SC_ZERO;
+#else
+	return pos(x);
+#endif
+}
+static bool scalar_zero(scalar_t x)
+{
+#if OCTO_FIXED
+	return x == SC_ZERO;
+#else
+	return zero(x);
+#endif
+}
+
+static float or_default(float v, float def) { return pos(v) ? v : def; }
 
 /* an ident_sum_t as float */
 static float f_of_sum(ident_sum_t s)
@@ -26,13 +60,14 @@ static float f_of_sum(ident_sum_t s)
 static float frame_period(scalar_t dt_s)
 {
 	float dt = sc_to_float(sc_max(dt_s, SC(1e-4)));
-	float n = (float)(int32_t)(1.0f / dt + 0.5f);
+	const int32_t ni = (int32_t)(1.0f / dt + 0.5f);
+	float n = (float)ni;
 #if OCTO_FIXED
 	float half_lsb = sc_pow2f(-QF_SC_FRAC - 1);
 #else
 	float half_lsb = dt * sc_pow2f(-24);
 #endif
-	return n >= 1.0f && fabsf(dt - 1.0f / n) <= 1.01f * half_lsb ? 1.0f / n : dt;
+	return ni >= 1 && fabsf(dt - 1.0f / n) <= 1.01f * half_lsb ? 1.0f / n : dt;
 }
 
 /* ---------------------------------------------------------------- rotor coefficients */
@@ -51,17 +86,19 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	c.theta0[1][0] = cfg->ktau0;
 	rls_init(&r->lagaware, &c);
 	rls_init(&r->plain, &c);
-	struct rls_config cs = c;
+	/* the sensitivity's: two parameters, one output (theta0[1] as the others') */
+	struct rls_config cs;
+	rls_default_config(&cs);
 	cs.n_params = 2;
-	cs.n_outputs = 1;
+	cs.p0 = c.p0;
 	cs.theta0[0][0] = cfg->kf0;
-	cs.theta0[0][1] = 0.0f;
+	cs.theta0[1][0] = cfg->ktau0;
 	rls_init(&r->sens, &cs);
 	r->dphi_dtau = SC_ZERO;
-	float tm = sc_to_float(cfg->mot_tau_s), dt = cfg->dt_s > SC_ZERO ? frame_period(cfg->dt_s) : 0.0f;
+	float tm = sc_to_float(cfg->mot_tau_s), dt = scalar_pos(cfg->dt_s) ? frame_period(cfg->dt_s) : 0.0f;
 	/* the lag's coefficient from the exact frame period (filt_lag_init's is from dt_s) */
 	r->dalpha_dtau = SC_ZERO;
-	if (tm > 0.0f && dt > 0.0f) {
+	if (pos(tm) && pos(dt)) {
 		const float ex = expf(-dt / tm);
 		r->lag.alpha = sc_from_float(1.0f - ex);
 		r->dalpha_dtau = sc_from_float(-(dt / (tm * tm)) * ex);
@@ -95,7 +132,7 @@ static void read_1x2(const struct rls *q, float est[2], float sd[2])
 	for (unsigned o = 0; o < 2u; o++) {
 		est[o] = rls_estimate_f(q, o, 0);
 		float v = p * rls_residual_var(q, o);
-		sd[o] = v > 0.0f ? sqrtf(v) : 0.0f;
+		sd[o] = pos(v) ? sqrtf(v) : 0.0f;
 	}
 }
 
@@ -107,13 +144,13 @@ void ident_rotor_read(const struct ident_rotor *r, float est[4], float sd[4])
 
 float ident_rotor_tau_check(const struct ident_rotor *r)
 {
-	if (r->dalpha_dtau == SC_ZERO || r->sens.n_updates < 2u)
+	if (scalar_zero(r->dalpha_dtau) || r->sens.n_updates < 2u)
 		return -1.0f;
 	float k = rls_estimate_f(&r->sens, 0, 0), kd = rls_estimate_f(&r->sens, 0, 1);
-	if (!(k > 0.0f) || !finite_f(kd))
+	if (!pos(k) || !finite_f(kd))
 		return -1.0f;
 	float t = sc_to_float(r->mot_tau_s) + kd / k;
-	return t > 0.0f ? t : 0.0f;
+	return pos(t) ? t : 0.0f;
 }
 
 /* ---------------------------------------------------------------- inertia */
@@ -121,11 +158,12 @@ float ident_rotor_tau_check(const struct ident_rotor *r)
 scalar_t ident_torque_weight(scalar_t tau_m_s, scalar_t dt_s)
 {
 	float tm = sc_to_float(tau_m_s), dt = sc_to_float(dt_s);
-	if (!(tm > 0.0f) || !(dt > 0.0f))
+	if (!pos(tm) || !pos(dt))
 		return SC(1.0);
 	/* alpha = 1 / (1 - exp(-x)) - 1 / x, x = dt / tau_m; series for small x (cancellation) */
 	float x = dt / tm;
-	float w = x < 0.1f ? 0.5f + x / 12.0f - x * x * x / 720.0f : 1.0f / (1.0f - expf(-x)) - 1.0f / x;
+	/* x < 0.1 by its bits (x is positive, not NaN) */
+	float w = bits_f(x) < bits_f(0.1f) ? 0.5f + x / 12.0f - x * x * x / 720.0f : 1.0f / (1.0f - expf(-x)) - 1.0f / x;
 	return sc_from_float(w);
 }
 
@@ -151,7 +189,7 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	c.theta0[0][0] = sc_to_float(inertia[i]);
 	rls_init(&e->rls, &c);
 	float wdt = sc_to_float(wc_rps) * sc_to_float(dt_s), z4 = 4.0f * sc_to_float(zeta);
-	e->sd_scale = wdt > 0.0f && wdt < z4 ? sqrtf(z4 / wdt) : 1.0f;
+	e->sd_scale = pos(wdt) && wdt < z4 ? sqrtf(z4 / wdt) : 1.0f;
 	e->n = 0;
 	filt_svf_init(&e->svf_z, wc_rps, zeta, dt_s, SC_ZERO);
 	e->z_in = SC_ZERO;
@@ -159,14 +197,21 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	e->s_zy = e->s_zp = e->b_zy = e->b_zp = e->s_aa = e->s_ab = e->s_bb = (ident_sum_t)0;
 	e->s_n = e->b_n = 0;
 	float dt = sc_to_float(dt_s);
-	float len = dt > 0.0f ? 0.5f / dt + 0.5f : 45.0f; /* 0.5 s of updates */
-	e->b_len = len < 1.0f ? 1u : (len > 1e6f ? 1000000u : (uint32_t)len);
+	float len = pos(dt) ? 0.5f / dt + 0.5f : 45.0f; /* 0.5 s of updates */
+	/* len is positive, not NaN: compared by its bits */
+	const uint32_t lb = bits_f(len);
+	e->b_len = lb < bits_f(1.0f) ? 1u : (lb > bits_f(1e6f) ? 1000000u : (uint32_t)len);
 }
 
-/* the IV estimate once a first block is complete (before, least squares: a live value) */
-static bool iv_ready(const struct ident_inertia *e)
+/* the IV estimate once a first block is complete (before, least squares: a live value); out
+ * of line: its copies (two 64-bit tests) cost more flash than the calls */
+__attribute__((noinline)) static bool iv_ready(const struct ident_inertia *e)
 {
-	return e->iv && e->s_bb > (ident_sum_t)0 && e->s_zp != (ident_sum_t)0;
+#if OCTO_FIXED
+	return e->iv && e->s_bb > 0 && e->s_zp != 0;
+#else
+	return e->iv && pos(e->s_bb) && !zero(e->s_zp);
+#endif
 }
 
 /* The sum over the blocks of (A_b - I B_b)^2, A_b = sum_b z y, B_b = sum_b z phi, as
@@ -206,7 +251,22 @@ float ident_inertia_sd(const struct ident_inertia *e)
 	if (!finite_f(est))
 		return NAN;
 	float v = iv_resid2(e, est);
-	return sqrtf(v > 0.0f ? v : 0.0f) / fabsf(f_of_sum(e->s_zp));
+	return sqrtf(pos(v) ? v : 0.0f) / fabsf(f_of_sum(e->s_zp));
+}
+
+/* The verdict on est +/- sd within [lo, hi]: not finite, out of range, relative std sd / |est|
+ * not below rsd_max (negative sd: uncertain), else accepted; shared by both acceptance rules */
+__attribute__((noinline)) static enum ident_verdict verdict(float est, float sd, float lo, float hi, float rsd_max)
+{
+	if (!finite_f(est) || !finite_f(sd))
+		return IDENT_NOT_FINITE;
+	if (!(est >= lo && est <= hi))
+		return IDENT_OUT_OF_RANGE;
+	/* |est| with -0 kept (the inertia rule divides by est): est >= 0, finite, by its bits */
+	float rsd = sd / (bits_f(est) <= 0x80000000u ? est : -est);
+	if (neg(sd) || !(rsd < rsd_max))
+		return IDENT_UNCERTAIN;
+	return IDENT_ACCEPT;
 }
 
 enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max,
@@ -216,16 +276,12 @@ enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, floa
 	*lo = IDENT_INR_LO * ml2;
 	*hi = IDENT_INR_HI * ml2;
 	*raise = 1.0f;
-	if (!finite_f(est) || !finite_f(sd))
-		return IDENT_NOT_FINITE;
-	if (!(est >= *lo && est <= *hi))
-		return IDENT_OUT_OF_RANGE;
-	float rsd = sd / est;
-	if (sd < 0.0f || !(rsd < rsd_max)) {
-		*raise = rsd_max > 0.0f && finite_f(rsd) ? rsd / rsd_max : 0.0f;
-		return IDENT_UNCERTAIN;
+	const enum ident_verdict v = verdict(est, sd, *lo, *hi, rsd_max);
+	if (v == IDENT_UNCERTAIN) {
+		float rsd = sd / est;
+		*raise = pos(rsd_max) && finite_f(rsd) ? rsd / rsd_max : 0.0f;
 	}
-	return IDENT_ACCEPT;
+	return v;
 }
 
 /* ---------------------------------------------------------------- validation */
@@ -248,33 +304,27 @@ float ident_fit_ne(const struct ident_fit *v)
 {
 	float y0 = sc_to_float(v->y0);
 	float syy = f_of_sum(v->s2) + 2.0f * y0 * f_of_sum(v->s1) + (float)v->n * y0 * y0;
-	return syy > 0.0f ? sqrtf(f_of_sum(v->sse) / syy) : 0.0f;
+	return pos(syy) ? sqrtf(f_of_sum(v->sse) / syy) : 0.0f;
 }
 
 float ident_fit_pct(const struct ident_fit *v)
 {
 	float m2 = fit_m2(v);
-	return m2 > 0.0f ? 100.0f * (1.0f - sqrtf(f_of_sum(v->sse) / m2)) : 0.0f;
+	return pos(m2) ? 100.0f * (1.0f - sqrtf(f_of_sum(v->sse) / m2)) : 0.0f;
 }
 
 /* ---------------------------------------------------------------- acceptance */
 
 enum ident_verdict ident_accept(float est, float sd, float nominal, float rsd_max)
 {
-	if (!finite_f(est) || !finite_f(sd))
-		return IDENT_NOT_FINITE;
 	float lo = IDENT_RANGE_LO * nominal, hi = IDENT_RANGE_HI * nominal;
 	if (lo > hi) {
 		float t = lo;
 		lo = hi;
 		hi = t;
 	}
-	if (!(est >= lo && est <= hi) || est == 0.0f)
-		return IDENT_OUT_OF_RANGE;
-	float rsd = sd / (est > 0.0f ? est : -est);
-	if (sd < 0.0f || !(rsd < rsd_max))
-		return IDENT_UNCERTAIN;
-	return IDENT_ACCEPT;
+	const enum ident_verdict v = verdict(est, sd, lo, hi, rsd_max);
+	return v != IDENT_NOT_FINITE && zero(est) ? IDENT_OUT_OF_RANGE : v;
 }
 
 const char *ident_verdict_text(enum ident_verdict v)

@@ -39,6 +39,19 @@ MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_c
 MIX_FLOAT_NOINLINE scalar_t mmax(scalar_t a, scalar_t b) { return sc_max(a, b); }
 MIX_FLOAT_NOINLINE scalar_t mmin(scalar_t a, scalar_t b) { return sc_min(a, b); }
 
+/* x == 0 (either sign): a compare in the fixed build and with an FPU; on a core without FPU
+ * the bits of x without its sign all 0, a test of a word, not a soft-float comparison (the
+ * same result, NaN included) */
+static inline bool mzero(scalar_t x)
+{
+#if OCTO_FIXED || defined(__ARM_FP)
+	return x == SC_ZERO;
+#else
+	union { float f; uint32_t u; } v = { x };
+	return (v.u << 1) == 0u;
+#endif
+}
+
 /* acc + sum_k a[k |sa|] b[k], k = 0..n-1 (sa < 0: acc - ...), a product at a time in that
  * order: the refinement's sums in one routine (the sign of the stride says which, so that
  * every argument is passed in a register but n) */
@@ -150,7 +163,7 @@ static bool facet_scan(const struct mixer *m, const scalar_t w[NA], const scalar
 		const struct mixer_facet *fc = &m->facet[k];
 		scalar_t q = sc_sub(dot4(fc->n, w), fc->nc);
 		scalar_t s = fc->n[ax], inv = invs ? invs[k] : SC_ZERO, hw = sc_add(fc->h, tol);
-		if (inv == SC_ZERO) { /* |n_ax| <= EPS_S: independent of t */
+		if (mzero(inv)) { /* |n_ax| <= EPS_S: independent of t */
 			if (sc_abs(q) > hw)
 				return false;
 			continue;
@@ -207,7 +220,7 @@ static bool yaw_interval(const struct mixer *m, const struct facet_recips *rc, c
 {
 	iv[0] = mmin(SC_ZERO, dy);
 	iv[1] = mmax(SC_ZERO, dy);
-	return facet_scan(m, w, dy == SC_ZERO ? NULL : rc->inv[1], 3, sc_neg(TOL_IN), iv);
+	return facet_scan(m, w, mzero(dy) ? NULL : rc->inv[1], 3, sc_neg(TOL_IN), iv);
 }
 
 /* tighten [lo, hi] with the constraint -hw <= q - u s <= hw (u is the unknown) */
@@ -481,9 +494,9 @@ MIX_NOINLINE int target(const struct mixer *m, const scalar_t demand[NA], scalar
 			alpha = a_lo;
 			scaled_rp(m, demand, alpha, w);
 			thrust_interval(m, &rc, w, th);
-			if (demand[1] != SC_ZERO)
+			if (!mzero(demand[1]))
 				lim |= MIXER_LIMIT_TX;
-			if (demand[2] != SC_ZERO)
+			if (!mzero(demand[2]))
 				lim |= MIXER_LIMIT_TY;
 		}
 		/* c. thrust nearest to the demand for which some yaw beta tau_z, beta in [0, 1],
@@ -516,9 +529,9 @@ MIX_NOINLINE int target(const struct mixer *m, const scalar_t demand[NA], scalar
 		/* d. yaw: the largest part of the demanded yaw attainable at that thrust (between
 		 * zero and the demand: no yaw reversal) */
 		scalar_t ty = SC_ZERO;
-		if (dy != SC_ZERO && yaw_interval(m, &rc, w, dy, yb))
+		if (!mzero(dy) && yaw_interval(m, &rc, w, dy, yb))
 			ty = dy > 0 ? yb[1] : yb[0];
-		if (ty != dy_dem && demand[3] != SC_ZERO)
+		if (ty != dy_dem && !mzero(demand[3]))
 			lim |= MIXER_LIMIT_TZ;
 		w[3] = sc_add(yaw0, ty);
 	}

@@ -13,6 +13,25 @@
 /* |x|: the sign bit cleared (no soft-float compare on cores without FPU) */
 static float absf(float x) { return fabsf(x); }
 
+/* Tests of a float from its bits (tests of a word, not the soft-float comparisons a core
+ * without FPU makes; the same results, NaN included): abs_bits, the bits with the sign
+ * cleared, is above 0x7f800000 for NaN and from it on for what is not finite; x > 0 is
+ * above +0 and at most +infinity */
+static uint32_t bits_f(float x)
+{
+	union { float f; uint32_t u; } v = { x };
+	return v.u;
+}
+static uint32_t abs_bits(float x) { return bits_f(x) & 0x7fffffffu; }
+static bool pos(float x)
+{
+#if defined(__ARM_FP)
+	return x > 0.0f;
+#else
+	return bits_f(x) - 1u < 0x7f800000u;
+#endif
+}
+
 /* sum_k a[k sa] b[k sb], k = 0..n-1, in that order: one routine for the set-up's dot
  * products (each inline loop is a few soft-float calls more on cores without FPU) */
 #if defined(__GNUC__)
@@ -60,7 +79,7 @@ static float inv4(const float m[4][4], float out[4][4])
 		for (int r = c + 1; r < 4; r++)
 			if (absf(a[r][c]) > absf(a[piv][c]))
 				piv = r;
-		if (a[piv][c] == 0.0f)
+		if (abs_bits(a[piv][c]) == 0u)   /* +-0 */
 			return 0.0f;
 		for (int j = 0; j < 8; j++) { /* rows c and piv swapped (nothing when the same) */
 			float t = a[c][j];
@@ -196,7 +215,7 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 		const float s = 0.70710678f;
 		float l = sc_to_float(p->arm_l_m);
 		float kf = sc_to_float(p->k_f_n);
-		float k = kf > 0.0f ? sc_to_float(p->k_tau_nm) / kf : 0.0f;
+		float k = pos(kf) ? sc_to_float(p->k_tau_nm) / kf : 0.0f;
 		/* sign of tau_x per rotor; tau_y's is the same two rotors on */
 		static const signed char sx[NR] = { 0, -1, -1, -1, 0, 1, 1, 1 };
 		for (int j = 0; j < NR; j++) {
@@ -213,9 +232,9 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 		float sj = scale_of(p, j);
 		for (int i = 0; i < NA; i++)
 			m->gamma_f[i][j] *= sj;
-		bool gone = !(p->rotor_mask & (1u << j)) || !(m->gamma_f[0][j] == m->gamma_f[0][j]);
+		bool gone = !(p->rotor_mask & (1u << j)) || abs_bits(m->gamma_f[0][j]) > 0x7f800000u;
 		for (int i = 0; i < NA; i++)
-			if (gone || !isfinite(m->gamma_f[i][j]))
+			if (gone || abs_bits(m->gamma_f[i][j]) >= 0x7f800000u)
 				m->gamma_f[i][j] = 0.0f;
 	}
 }
@@ -341,12 +360,12 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		float wl = 0.0f;
 		for (int j = 0; j < NR; j++) {
 			rowmax[i] = absf(dz->gamma_f[i][j]) > rowmax[i] ? absf(dz->gamma_f[i][j]) : rowmax[i];
-			if (dz->gamma_f[0][j] != 0.0f || dz->gamma_f[1][j] != 0.0f ||
-			    dz->gamma_f[2][j] != 0.0f || dz->gamma_f[3][j] != 0.0f)
+			if ((abs_bits(dz->gamma_f[0][j]) | abs_bits(dz->gamma_f[1][j]) | abs_bits(dz->gamma_f[2][j]) |
+			     abs_bits(dz->gamma_f[3][j])) != 0u)   /* an entry not 0 */
 				wl += dz->gamma_f[i][j] * flo;
 		}
 		m->w_lo[i] = sc_from_float(wl);
-		if (!(rowmax[i] > 0.0f)) {
+		if (!pos(rowmax[i])) {
 			rows_ok = false;
 			rowmax[i] = 1.0f;
 		}
@@ -374,25 +393,25 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		/* every 4 of the na present rotors, as a mask over positions t (bit na-1-t): masks
 		 * in descending order visit them lexicographically; the first of the largest
 		 * |det| (within 1e-4) wins, its inverse kept */
-		float bestdet = 0.0f, binv[4][4];
+		float bestdet = 0.0f, invs[2][4][4]; /* the best inverse so far (invs[bi]), the next */
 		unsigned best = 0;
+		int bi = 0;
 		for (unsigned mask = (1u << na) - 1u; mask; mask--) {
-			float mm[4][4], inv[4][4];
+			float mm[4][4];
 			int c = 0;
+			uint8_t col[NR]; /* the mask's rotors */
 			for (int t = 0; t < na; t++)
-				if (mask >> (na - 1 - t) & 1u) {
-					for (int i = 0; i < NA && c < 4; i++)
-						mm[i][c] = gsc[i][act[t]];
-					c++;
-				}
+				if (mask >> (na - 1 - t) & 1u)
+					col[c++] = act[t];
 			if (c != 4)
 				continue;
-			float d = inv4(mm, inv);
+			for (int k = 0; k < 16; k++)
+				mm[k / 4][k % 4] = gsc[k / 4][col[k % 4]];
+			float d = inv4(mm, invs[1 - bi]);
 			if (d > bestdet * 1.0001f) {
 				bestdet = d;
 				best = mask;
-				for (int k = 0; k < 16; k++)
-					binv[k / 4][k % 4] = inv[k / 4][k % 4];
+				bi = 1 - bi;
 			}
 		}
 		if (bestdet > 1e-4f) {
@@ -403,7 +422,7 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 						m->order[no++] = act[t];
 			for (int c = 0; c < 4; c++)
 				for (int i = 0; i < NA; i++)
-					m->tail_inv[c][i] = sc_from_float(binv[c][i]);
+					m->tail_inv[c][i] = sc_from_float(invs[bi][c][i]);
 			int nfull = facets_of(gsc, act, na, m->facet, MIXER_MAX_FACETS);
 			bool fits = nfull > 0;
 			m->n_facets = (uint8_t)(nfull > 0 ? nfull : 0);

@@ -33,6 +33,16 @@ static motor_id_sum_t stat_sum(const struct motor_id_stat *s, unsigned k)
 /* rotor j's throttle at the start, as float */
 #define SC_J(m, j) mid_u_to_float((m)->s_c[j])
 
+/* NOINLINE: a small function whose inlined copies cost more flash than the calls (the
+ * compiler inlines them at -Os; this code runs between frames) */
+#define NOINLINE __attribute__((noinline))
+
+/* l[0] a + l[1] b + l[2] c: a value interpolated over the grid */
+NOINLINE static float wsum3(const float l[3], float a, float b, float c)
+{
+	return l[0] * a + l[1] * b + l[2] * c;
+}
+
 /* Rotor j's statistics of delay d: at grid point gi (< NL), or (gi = NL) interpolated over the
  * grid with the weights l. Sums of kind G (power of thrust 0), B (1), RR (2). */
 static void stat_at(const struct motor_id *m, unsigned d, unsigned gi, const float l[3], unsigned j, float o[S_N])
@@ -45,8 +55,8 @@ static void stat_at(const struct motor_id *m, unsigned d, unsigned gi, const flo
 		if (gi < NL)
 			v = (float)stat_sum(&m->st[d][gi][j], k);
 		else
-			v = l[0] * (float)stat_sum(&m->st[d][0][j], k) + l[1] * (float)stat_sum(&m->st[d][1][j], k) +
-			    l[2] * (float)stat_sum(&m->st[d][2][j], k);
+			v = wsum3(l, (float)stat_sum(&m->st[d][0][j], k), (float)stat_sum(&m->st[d][1][j], k),
+				  (float)stat_sum(&m->st[d][2][j], k));
 		o[k] = v * sc;
 	}
 }
@@ -71,9 +81,21 @@ static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u};
 #define NO_LAG_FRAC 0.15f  /* a lag below this fraction of a frame is taken as none (a < 0.0013) */
 #define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
 
-/* NOINLINE: a small function whose inlined copies cost more flash than the calls (the
- * compiler inlines them at -Os; this code runs between frames) */
-#define NOINLINE __attribute__((noinline))
+
+/* x > 0: on a core without FPU from its bits (above +0, at most +infinity: not NaN), a test
+ * of a word, not a soft-float comparison; the comparison itself where float is not 32 bits
+ * (the float64 reference build of these sources) */
+static bool pos(float x)
+{
+#if defined(__ARM_FP)
+	return x > 0.0f;
+#else
+	if (sizeof x != sizeof(uint32_t))
+		return x > 0.0f;
+	union { float f; uint32_t u; } v = { x };
+	return v.u - 1u < 0x7f800000u;
+#endif
+}
 
 NOINLINE static float clampf(float x, float lo, float hi)
 {
@@ -102,10 +124,19 @@ static uint32_t next_due(const struct motor_id *m)
 	return frames_at(m, m->stage < MOTOR_ID_STAGES - 1 ? stage_end_pct[m->stage] : WHITE_AT_PCT);
 }
 
+/* a lag within the grids' range */
+NOINLINE static float clamp_tau(float tau) { return clampf(tau, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX); }
+
+/* the lag at delay d's grid position x (x = -1, 0, 1: the grid's three) */
+NOINLINE static float grid_tau(const struct motor_id *m, unsigned d, float x)
+{
+	return m->lag_c[d] * powf(m->lag_r[d], x);
+}
+
 static void set_grid(struct motor_id *m, unsigned d, float centre, float ratio)
 {
 	float dt = sc_to_float(m->cfg.dt_s);
-	m->lag_c[d] = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX);
+	m->lag_c[d] = clamp_tau(centre);
 	m->lag_r[d] = ratio;
 	m->k1[d][0] = mid_u_of_float(lag_k1(m->lag_c[d] / ratio, dt));
 	m->k1[d][1] = mid_u_of_float(lag_k1(m->lag_c[d], dt));
@@ -116,9 +147,9 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const sca
 {
 	*m = (struct motor_id){0};
 	m->cfg = *cfg;
-	if (!(m->cfg.tau0_s > 0.0f))
+	if (!pos(m->cfg.tau0_s))
 		m->cfg.tau0_s = 0.03f;
-	if (!(m->cfg.kf0 > 0.0f))
+	if (!pos(m->cfg.kf0))
 		m->cfg.kf0 = 1.0f;
 	m->cfg.curve0 = clampf(m->cfg.curve0, THRMAP_CURVE_MIN, THRMAP_CURVE_MAX);
 	/* the reference model; the fixed build takes thrusts and torques as value 2^-kexp, with
@@ -183,32 +214,33 @@ NOINLINE static float fit_w(const float st[S_N], float c, float s_c, float y1, f
 	curve_w(c, s_c, w);
 	*gw = stat_gww(st, w[0], w[1]);
 	*wy = w[0] * y1 + w[1] * y2;
-	return *gw > 0 ? *wy / *gw : 0.0f;
+	return pos(*gw) ? *wy / *gw : 0.0f;
 }
 
 /* residual sum of squares of one rotor's statistics: 2 parameters (curve estimated) or the
  * prior curve's 1; delta = the fitted change of theta from the reference (2 values) */
 static float rotor_ssr(const float st[S_N], bool est_curve, float c0, float s_c, float delta[2])
 {
+	float d0, d1, ssr;
 	if (est_curve) {
 		float det = stat_det(st);
-		if (!(det > 1e-30f * st[S_G11] * st[S_G22]) || !(st[S_G11] > 0)) {
+		if (!(det > 1e-30f * st[S_G11] * st[S_G22]) || !pos(st[S_G11])) {
 			delta[0] = delta[1] = 0.0f;
-			return (float)st[S_RR];
+			return st[S_RR];
 		}
-		float d0 = (st[S_G22] * st[S_B1] - st[S_G12] * st[S_B2]) / det;
-		float d1 = (st[S_G11] * st[S_B2] - st[S_G12] * st[S_B1]) / det;
-		delta[0] = (float)d0;
-		delta[1] = (float)d1;
-		float ssr = st[S_RR] - d0 * st[S_B1] - d1 * st[S_B2];
-		return ssr > 0 ? (float)ssr : 0.0f;
+		d0 = (st[S_G22] * st[S_B1] - st[S_G12] * st[S_B2]) / det;
+		d1 = (st[S_G11] * st[S_B2] - st[S_G12] * st[S_B1]) / det;
+		ssr = st[S_RR] - d0 * st[S_B1] - d1 * st[S_B2];
+	} else {
+		float w[2], bw, gw;
+		float mu = fit_w(st, c0, s_c, st[S_B1], st[S_B2], w, &bw, &gw);
+		d0 = mu * w[0];
+		d1 = mu * w[1];
+		ssr = st[S_RR] - mu * bw;
 	}
-	float w[2], bw, gw;
-	float mu = fit_w(st, c0, s_c, st[S_B1], st[S_B2], w, &bw, &gw);
-	delta[0] = mu * w[0];
-	delta[1] = mu * w[1];
-	float ssr = st[S_RR] - mu * bw;
-	return ssr > 0 ? (float)ssr : 0.0f;
+	delta[0] = d0;
+	delta[1] = d1;
+	return pos(ssr) ? ssr : 0.0f;
 }
 
 /* rotor j's statistics of delay d (st; gi, l: see stat_at) and its residual sum of squares
@@ -226,11 +258,11 @@ static float parabola(const float sv[3], float *k)
 {
 	float den = sv[0] - 2.0f * sv[1] + sv[2];
 	float x;
-	if (den > 0.0f)
+	if (pos(den))
 		x = clampf((sv[0] - sv[2]) / (2.0f * den), -X_MAX, X_MAX);
 	else
 		x = sv[0] < sv[2] ? -X_MAX : X_MAX;
-	*k = den > 0.0f ? 0.5f * den : 0.0f;
+	*k = pos(den) ? 0.5f * den : 0.0f;
 	return x;
 }
 
@@ -242,10 +274,13 @@ static void lagrange3(float x, float l[3])
 	l[2] = 0.5f * x * (x + 1.0f);
 }
 
-/* l[0] a + l[1] b + l[2] c: a value interpolated over the grid */
-NOINLINE static float wsum3(const float l[3], float a, float b, float c)
+
+/* the lag filters' states interpolated over a grid's three (s, weights l) into out */
+NOINLINE static void lag_states(const motor_id_u_t s[NL][NR], const float l[3], motor_id_u_t out[NR])
 {
-	return l[0] * a + l[1] * b + l[2] * c;
+	for (unsigned j = 0; j < NR; j++)
+		out[j] = mid_u_of_float(
+			wsum3(l, mid_u_to_float(s[0][j]), mid_u_to_float(s[1][j]), mid_u_to_float(s[2][j])));
 }
 
 /* The selection criterion of delay d at each lag. The likelihood with each rotor's noise
@@ -342,10 +377,10 @@ static float median8(const float v[NR], unsigned *a, unsigned *b)
 	return 0.5f * (v[*a] + v[*b]);
 }
 
-static float sqrt0(float v) { return v > 0.0f ? sqrtf(v) : 0.0f; }
+static float sqrt0(float v) { return pos(v) ? sqrtf(v) : 0.0f; }
 
 /* a / b for b > 0, else 0 */
-NOINLINE static float div_pos(float a, float b) { return b > 0.0f ? a / b : 0.0f; }
+NOINLINE static float div_pos(float a, float b) { return pos(b) ? a / b : 0.0f; }
 
 /* The sampling variance of the median of 8 rotors' estimates (the mean of the 4th and 5th),
  * in units of one rotor's variance: 0.168 for 8 alike, 0.190 with one rotor far off (a weak
@@ -372,7 +407,7 @@ static float rotor_curve(const struct motor_id *m, const float st[S_N], unsigned
 	float mj = a + bq * (1.0f - 2.0f * SC_J(m, j));
 	float det = stat_det(st);
 	*var = 0.0f;
-	if (!(mj > 0.0f && det > 0))
+	if (!(pos(mj) && pos(det)))
 		return 0.0f;
 	const float ga = (-bq / (mj * mj)), gb = (a / (mj * mj));
 	/* g^T G^-1 g */
@@ -409,8 +444,9 @@ static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f,
 	for (unsigned j = 0; j < NR; j++) {
 		float dl[2];
 		const float ssr = ssr_at(m, d, NL, l, j, st, dl);
-		/* the rotor's own curve's fit: the configured model's when the curve is estimated */
-		const float ssr2 = ec ? ssr : rotor_ssr(st, true, m->cfg.curve0, SC_J(m, j), dl);
+		/* the rotor's own curve's fit: the configured model's when the curve is estimated
+		 * (the prior curve and throttle are the 1-parameter fit's only) */
+		const float ssr2 = ec ? ssr : rotor_ssr(st, true, 0.0f, 0.0f, dl);
 		ref_theta(m, j, th);
 		f->ssr_sum += ssr;
 		f->s2[j] = ssr / ((float)m->n_stat - np);
@@ -419,11 +455,11 @@ static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f,
 	}
 	float sw = 0.0f, swc = 0.0f;
 	for (unsigned j = 0; j < NR; j++)
-		if (vcj[j] > 0.0f) {
+		if (pos(vcj[j])) {
 			sw += 1.0f / vcj[j];
 			swc += cj[j] / vcj[j];
 		}
-	const bool have_c = ec && sw > 0.0f;
+	const bool have_c = ec && pos(sw);
 	f->curve = have_c ? swc / sw : m->cfg.curve0;
 	f->curve_sd = have_c ? sqrt0(1.0f / sw) : 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
@@ -505,10 +541,9 @@ static void white_begin(struct motor_id *m)
 		ssr_at(m, d, NL, l, j, o, dl);
 		w->dl[j][0] = mid_f_of_float(dl[0], m->kexp);
 		w->dl[j][1] = mid_f_of_float(dl[1], m->kexp);
-		w->s[j] = mid_u_of_float(wsum3(l, mid_u_to_float(m->s[d][0][j]), mid_u_to_float(m->s[d][1][j]),
-					       mid_u_to_float(m->s[d][2][j])));
 	}
-	w->k1 = mid_u_of_float(lag_k1(clampf(m->lag_c[d] * powf(m->lag_r[d], x), MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX),
+	lag_states(m->s[d], l, w->s);
+	w->k1 = mid_u_of_float(lag_k1(clamp_tau(grid_tau(m, d, x)),
 				      sc_to_float(m->cfg.dt_s)));
 	w->delay = (uint8_t)d;
 	w->on = true;
@@ -540,29 +575,28 @@ void motor_id_refine(struct motor_id *m)
 	/* the next stage's reference: this one's fit (relative to this reference) */
 	float kf_ref = 0.0f, c_ref = 0.0f;
 	bool have_ref = reference_fit(m, &kf_ref, &c_ref);
+	float xs[ND], ks[ND], smin[ND];   /* each delay's criterion's minimum */
+	delay_scan(m, xs, ks, smin);
 	for (unsigned d = 0; d < ND; d++) {
-		float sv[3], k;
-		delay_crit(m, d, sv);
-		float x = m->n_stat > 0u ? parabola(sv, &k) : 0.0f;
+		float x = m->n_stat > 0u ? xs[d] : 0.0f;
 		float r = m->lag_r[d];
 		/* a minimum below the grid walks twice as far (towards no lag at all) */
-		float centre = m->lag_c[d] * powf(r, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
+		float centre = grid_tau(m, d, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
 		/* the lag states at the new taus: quadratic interpolation in log tau of the old.
 		 * A minimum outside the grid narrows it less (the grid walks towards it) */
 		float nr = stage_ratio[next];
 		if (fabsf(x) > 1.0f)
 			nr = fmaxf(nr, sqrtf(r));
-		float old[NL][NR];
+		motor_id_u_t old[NL][NR];
 		for (unsigned i = 0; i < NL; i++)
 			for (unsigned j = 0; j < NR; j++)
-				old[i][j] = mid_u_to_float(m->s[d][i][j]);
+				old[i][j] = m->s[d][i][j];
 		const float lr = logf(r);
 		for (int i = 0; i < (int)NL; i++) {
 			/* nr^(i - 1) */
-			float tau_i = clampf(centre, MOTOR_ID_TAU_MIN, MOTOR_ID_TAU_MAX) * (i == 0 ? 1.0f / nr : (i == 1 ? 1.0f : nr)), l[3];
+			float tau_i = clamp_tau(centre) * (i == 0 ? 1.0f / nr : (i == 1 ? 1.0f : nr)), l[3];
 			lagrange3(clampf(logf(tau_i / m->lag_c[d]) / lr, -X_MAX, X_MAX), l);
-			for (unsigned j = 0; j < NR; j++)
-				m->s[d][i][j] = mid_u_of_float(wsum3(l, old[0][j], old[1][j], old[2][j]));
+			lag_states(old, l, m->s[d][i]);
 		}
 		set_grid(m, d, centre, nr);
 		tau_hi = fmaxf(tau_hi, m->lag_c[d] * nr);
@@ -587,7 +621,7 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 {
 	const float h = 0.2f;   /* wide enough that float rounding of the SSRs stays out of d2 */
 	float xi = *x, kk = *k;
-	if (!(kk > 0.0f) || fabsf(xi) >= X_MAX - 1e-3f)
+	if (!pos(kk) || fabsf(xi) >= X_MAX - 1e-3f)
 		return;
 	for (int it = 0; it < 3; it++) {
 		float fv[3], c;   /* at xi - h, xi, xi + h */
@@ -596,7 +630,7 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 		/* the Newton step -f'/f'' of the central differences: the minimum of the parabola
 		 * through the three values (in units of h, at most X_MAX of them) */
 		float step = h * parabola(fv, &c);
-		if (!(c > 0.0f))
+		if (!pos(c))
 			return;
 		xi = clampf(xi + step, -X_MAX + 2e-3f, X_MAX - 2e-3f);
 		kk = c / (h * h);
@@ -620,50 +654,51 @@ NOINLINE static float chi2_quant(float k, float z)
 #define WZ_ALL 3.5f
 #define WZ_ROTOR 3.9f
 #define WZ_LEVEL 3.7f
-#define WMIN_N 20.0f     /* fewest frames of a (rotor, level) series that enters the test */
+#define WMIN_N 20u       /* fewest frames of a (rotor, level) series that enters the test */
 
 /* The whiteness test from its sums (see motor_id.h). Returns the cause of coloured prediction
  * errors: one rotor alone (the others white) is that rotor (*rotor); colour at one throttle
- * level, not the others, is the thrust curve; else the dynamics. */
-static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_result *res, int *rotor)
+ * level, not the others, is the thrust curve; else the dynamics. Out of line: less flash on
+ * Cortex-M0 (its caller holds many floats). */
+NOINLINE static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_result *res, int *rotor)
 {
 	const struct motor_id_white *w = &m->wh;
 	res->white_ok = true;
 	res->white_have = false;
 	if (!w->on)
 		return MOTOR_ID_OK;
-	/* each (rotor, level) series' statistic and its degrees of freedom (0: not in the test) */
-	float qs[NR][MOTOR_ID_WBINS] = {0}, ds[NR][MOTOR_ID_WBINS] = {0};
+	/* the tests' statistics and degrees of freedom: g = 0 everything, 1..NR one rotor's levels,
+	 * NR + 1.. one level's rotors. Each (rotor, level) series in the test adds to its three
+	 * (every sum taken over its series in the order of the series) */
+	float qg[1 + NR + MOTOR_ID_WBINS] = {0};
+	unsigned ng[1 + NR + MOTOR_ID_WBINS] = {0};   /* series in each test */
 	for (unsigned j = 0; j < NR; j++)
 		for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
 			float n = (float)w->n[j][b];
-			if (n < WMIN_N)
+			if (w->n[j][b] < WMIN_N)
 				continue;
 			float mu = mid_sum_to_float(w->se[j][b], m->e[MID_E_WSE], 1, m->kexp) / n,
 			      c0 = mid_sum_to_float(w->see[j][b], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu, qq = 0.0f;
-			if (!(c0 > 0.0f))
+			if (!pos(c0))
 				continue;
 			for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++) {
 				float rho = (mid_sum_to_float(w->sl[j][b][l], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu) / c0;
 				qq += rho * rho;
 			}
-			qs[j][b] = qq * n;
-			ds[j][b] = (float)MOTOR_ID_WLAGS;
+			qq *= n;
+			for (unsigned g = 0; g < 1u + NR + MOTOR_ID_WBINS; g++)
+				if (g == 0u || g == 1u + j || g == 1u + NR + b) {
+					qg[g] += qq;
+					ng[g]++;
+				}
 		}
-	/* the tests: g = 0 everything, 1..NR one rotor's levels, NR + 1.. one level's rotors;
-	 * n_bad: how many rotors, how many levels fail */
+	/* n_bad: how many rotors, how many levels fail */
 	bool ok = true;
 	unsigned n_bad[2] = {0, 0};
 	for (unsigned g = 0; g < 1u + NR + MOTOR_ID_WBINS; g++) {
-		float q = 0.0f, dof = 0.0f;
-		for (unsigned j = 0; j < NR; j++)
-			for (unsigned b = 0; b < MOTOR_ID_WBINS; b++)
-				if (g == 0u || g == 1u + j || g == 1u + NR + b) {
-					q += qs[j][b];
-					dof += ds[j][b];
-				}
+		const float q = qg[g], dof = (float)(ng[g] * MOTOR_ID_WLAGS);
 		if (g == 0u) {
-			if (!(dof > 0.0f))
+			if (!pos(dof))
 				return MOTOR_ID_OK;
 			res->white_have = true;
 			res->white_q = q;
@@ -675,7 +710,7 @@ static enum motor_id_cause white_eval(const struct motor_id *m, struct motor_id_
 		/* a rotor's or a level's statistic over its limit */
 		const bool is_rotor = g <= NR;
 		float *ratio = is_rotor ? &res->white_rotor[g - 1u] : &res->white_level[g - 1u - NR];
-		*ratio = dof > 0.0f ? q / chi2_quant(dof, is_rotor ? WZ_ROTOR : WZ_LEVEL) : 0.0f;
+		*ratio = pos(dof) ? q / chi2_quant(dof, is_rotor ? WZ_ROTOR : WZ_LEVEL) : 0.0f;
 		ok = ok && *ratio <= 1.0f;
 		if (*ratio > 1.0f) {
 			n_bad[is_rotor]++;
@@ -743,14 +778,16 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 
 	/* sd of the lag: -log-likelihood = (n / 2) J, J = J_min + k (x - x*)^2, so var x = 1 / (n k) */
 	float x = xs[best], r = m->lag_r[best];
-	lag_newton(m, best, &x, &ks[best]);
-	res->tau = m->lag_c[best] * powf(r, x);
-	const float var_x = ks[best] > 0.0f ? 1.0f / (nf * ks[best]) : 0.0f;
-	res->tau_sd = ks[best] > 0.0f ? res->tau * logf(r) * sqrt0(var_x) : res->tau;
+	float kx = ks[best];   /* the criterion's curvature in x there */
+	lag_newton(m, best, &x, &kx);
+	const bool have_k = pos(kx);
+	res->tau = grid_tau(m, best, x);
+	const float var_x = have_k ? 1.0f / (nf * kx) : 0.0f;
+	res->tau_sd = have_k ? res->tau * logf(r) * sqrt0(var_x) : res->tau;
 	/* the grid's low end without lag and the minimum there: no lag (sd: that bound) */
 	float dtf = sc_to_float(m->cfg.dt_s);
 	bool no_lag = res->tau <= 1.2f * NO_LAG_FRAC * dtf ||
-		      (x <= -X_MAX + 1e-3f && m->lag_c[best] * powf(r, -X_MAX) <= NO_LAG_FRAC * dtf);
+		      (x <= -X_MAX + 1e-3f && grid_tau(m, best, -X_MAX) <= NO_LAG_FRAC * dtf);
 	if (no_lag) {
 		res->tau = 0.0f;
 		res->tau_sd = NO_LAG_FRAC * dtf;
@@ -784,12 +821,12 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	unsigned ma, mb;
 	ne_sorted_mid = median8(res->ne, &ma, &mb);
 	res->curve_chi2 = div_pos(f.chi2, nz);
-	const float sf2 = nz > 0.0f ? nz : f.ssr_sum / dof;   /* the thrust noise's variance for k_tau */
+	const float sf2 = pos(nz) ? nz : f.ssr_sum / dof;   /* the thrust noise's variance for k_tau */
 
 	/* the lag's share: k_f, curve and scales move with the lag (central differences; the lag's
 	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
 	 * is orthogonal to their regressors) */
-	if (!no_lag && ks[best] > 0.0f) {
+	if (!no_lag && have_k) {
 		float kp, cp, sp[NR], sm[NR];
 		fit_at(m, best, x + LAG_H, &f, sp);   /* f's fit at x is no longer needed: stack on M0 */
 		kp = f.kf;
@@ -808,7 +845,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float nall = (float)(m->n_exc * NR);
 	float rho = div_pos(tf, ff);
 	float ss_t = tt - 2.0f * rho * tf + rho * rho * ff;
-	float vrho = ff > 0.0f && nall > 1.0f ? ss_t / (nall - 1.0f) / ff : 0.0f;
+	float vrho = pos(ff) && m->n_exc * NR > 1u ? ss_t / (nall - 1.0f) / ff : 0.0f;
 	if (ff > nall * sf2)
 		rho *= ff / (ff - nall * sf2);
 	res->ktau = rho * res->kf;
@@ -831,7 +868,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->cause = MOTOR_ID_DELAY_GIVEN;
 	else if (!ec && res->curve_chi2 > chi2_lim)
 		res->cause = MOTOR_ID_CURVE;
-	else if (!no_lag && (!(ks[best] > 0.0f) || fabsf(x) >= X_MAX - 1e-3f ||
+	else if (!no_lag && (!have_k || fabsf(x) >= X_MAX - 1e-3f ||
 			     res->tau <= MOTOR_ID_TAU_MIN * 1.01f || res->tau >= MOTOR_ID_TAU_MAX * 0.99f))
 		res->cause = MOTOR_ID_LAG_RANGE;
 	else if (!fixd && best == ND - 1u)
@@ -842,7 +879,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->cause = white_c == MOTOR_ID_LEVEL && !ec ? MOTOR_ID_CURVE : white_c;
 		if (white_c == MOTOR_ID_ROTOR)
 			res->cause_rotor = white_rotor;
-	} else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && dof_j > 0.0f) {
+	} else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && pos(dof_j)) {
 		res->cause = MOTOR_ID_ROTOR;
 		res->cause_rotor = (int)worst;
 	} else if (res->ne_all > lim_all)
@@ -881,7 +918,7 @@ static const char cause_remedies[] =
 	"motor not first-order or link jitter: check both";
 
 /* the string number c of list (c < MOTOR_ID_COLOURED + 1), else dflt */
-static const char *nth_text(const char *list, enum motor_id_cause c, const char *dflt)
+NOINLINE static const char *nth_text(const char *list, enum motor_id_cause c, const char *dflt)
 {
 	if ((unsigned)c > (unsigned)MOTOR_ID_COLOURED)
 		return dflt;

@@ -3,8 +3,25 @@
 #include "rls.h"
 #include "qfmt.h"
 
-/* out of line: inlined, each isfinite is a soft-float comparison sequence on Cortex-M0 */
-__attribute__((noinline)) static bool finite_f(float x) { return isfinite(x); }
+/* the bits of x (tests of a word, not the soft-float comparisons a core without FPU makes) */
+static uint32_t bits_f(float x)
+{
+	union { float f; uint32_t u; } v = { x };
+	return v.u;
+}
+
+/* isfinite(x): the exponent not all ones (infinity or NaN) */
+static bool finite_f(float x) { return (bits_f(x) & 0x7f800000u) != 0x7f800000u; }
+
+/* x > 0 (above +0, at most +infinity: not NaN); a compare instruction with an FPU */
+static bool pos(float x)
+{
+#if defined(__ARM_FP)
+	return x > 0.0f;
+#else
+	return bits_f(x) - 1u < 0x7f800000u;
+#endif
+}
 
 
 /* float to the normalised formats and back (rls.h); the float build keeps float */
@@ -53,11 +70,12 @@ void rls_default_config(struct rls_config *cfg)
 static int8_t shift_of(float m, int lo, int hi)
 {
 	int s = 0;
-	while (m >= 1.41421356f && s < hi) {
+	/* m is positive, not NaN: compared by its bits */
+	while (bits_f(m) >= bits_f(1.41421356f) && s < hi) {
 		m *= 0.5f;
 		s++;
 	}
-	while (m < 0.70710678f && s > lo) {
+	while (bits_f(m) < bits_f(0.70710678f) && s > lo) {
 		m *= 2.0f;
 		s--;
 	}
@@ -65,7 +83,12 @@ static int8_t shift_of(float m, int lo, int hi)
 }
 
 /* x if finite and not negative, else 0 */
-__attribute__((noinline)) static float nonneg_f(float x) { return x >= 0.0f && finite_f(x) ? x : 0.0f; }
+__attribute__((noinline)) static float nonneg_f(float x)
+{
+	/* x >= 0 and finite: the sign clear and the exponent not all ones, or -0 */
+	const uint32_t u = bits_f(x);
+	return u < 0x7f800000u || u == 0x80000000u ? x : 0.0f;
+}
 
 void rls_init(struct rls *r, const struct rls_config *cfg)
 {
@@ -85,7 +108,7 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 		c->lambda = 0.5f;
 	if (!(c->lambda <= 1.0f))
 		c->lambda = 1.0f;
-	if (!(c->p0 > 0.0f) || !finite_f(c->p0))
+	if (bits_f(c->p0) - 1u >= 0x7f7fffffu)   /* not (positive and finite) */
 		c->p0 = 1e4f;
 	c->p_min = nonneg_f(c->p_min);
 	c->p_max = nonneg_f(c->p_max);
@@ -103,17 +126,17 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 	const unsigned n = c->n_params;
 	/* outputs: theta0 (k_f by its nominal) sets each output's scale */
 	for (unsigned o = 0; o < RLS_MAX_OUTPUTS; o++) {
-		float m = 0.0f;
-		for (unsigned i = 0; i < n && o < c->n_outputs; i++) {
-			float t = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f;
-			t = (t < 0.0f ? -t : t) * sc_pow2f(c->phi_shift[i]);
-			m = t > m ? t : m;
-		}
-		r->y_shift[o] = m > 0.0f ? shift_of(m, -20, 20) : 0;
+		float m = 0.0f, th[RLS_MAX_PARAMS];
 		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
-			float t = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f;
-			r->theta[o][i] = par_of_f(t * sc_pow2f(c->phi_shift[i] - r->y_shift[o]));
+			float t = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f, a;
+			th[i] = t;
+			a = fabsf(t) * sc_pow2f(c->phi_shift[i]);
+			if (i < n && o < c->n_outputs)
+				m = a > m ? a : m;
 		}
+		r->y_shift[o] = pos(m) ? shift_of(m, -20, 20) : 0;
+		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
+			r->theta[o][i] = par_of_f(th[i] * sc_pow2f(c->phi_shift[i] - r->y_shift[o]));
 	}
 	r->lambda = unit_of_f(c->lambda);
 	/* P_n = p0 S^2, S = diag(2^phi_shift): the mantissa of the largest in [0.5, 1), the
@@ -141,7 +164,7 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 #if OCTO_FIXED
 	/* the fixed build always keeps P under RLS_FIXED_P_CEIL p0: beyond that, an
 	 * unexcited direction's gain is the difference of numbers 2^31 times larger */
-	if (!(pmx > 0.0f) || pmx > c->p0 * RLS_FIXED_P_CEIL)
+	if (!pos(pmx) || pmx > c->p0 * RLS_FIXED_P_CEIL)
 		pmx = c->p0 * RLS_FIXED_P_CEIL;
 #endif
 	r->p_max_n = acc_of_f(pmx);
@@ -202,5 +225,5 @@ float rls_residual_var(const struct rls *r, unsigned out)
 float rls_std(const struct rls *r, unsigned out, unsigned param)
 {
 	float v = rls_cov_diag(r, param) * rls_residual_var(r, out);
-	return v > 0.0f ? sqrtf(v) : 0.0f;
+	return pos(v) ? sqrtf(v) : 0.0f;
 }
