@@ -150,11 +150,16 @@ static inline scalar_t sc_abs(scalar_t a) { return a < 0 ? sc_neg(a) : a; }
 /* a b 2^-16 rounded to nearest, ties away from zero, saturating.
  * With a long multiply (Cortex-M3/M4, hosts): the 64-bit product.
  * Cortex-M0 has none (a 64-bit product is a library call there): |a b| 2^-16 rounded from
- * 16 x 16 products in 32-bit words, with b the smaller magnitude:
- * |a b| = hh 2^32 + (lh + hl) 2^16 + ll, so that round(|a b| / 2^16) = hh 2^16 + lh + hl + floor((ll + 2^15) / 2^16) exactly; each carry
- * out of 32 bits means saturation. When |b| < 1 (bh = 0, the common case: gains, time
- * steps, unit quaternions' components) hh = lh = 0 and two products suffice, and
- * hl = ah bl < 2^31 cannot carry. */
+ * 16 x 16 products in 32-bit words, the sign applied last as (m ^ s) - s (s all ones for a
+ * negative product; SC_MAX signed so is SC_MAX_NEG).
+ *   - |b| < 1 (the common case: gains, time steps, unit quaternions' components), or |a| < 1
+ *     with the operands' roles swapped: |a| = ah 2^16 + al gives
+ *     round(|a b| / 2^16) = ah |b| + floor((al |b| + 2^15) / 2^16) exactly, at most
+ *     (2^15 - 1)(2^16 - 1) + 2^16 < 2^31 (2^15 |b| for |a| = 2^31): two products, no
+ *     saturation. floor((x + 2^15) / 2^16) = (floor(x / 2^15) + 1) / 2: no constant to load.
+ *   - both >= 1: |a b| = hh 2^32 + (lh + hl) 2^16 + ll, so that
+ *     round(|a b| / 2^16) = hh 2^16 + lh + hl + floor((ll + 2^15) / 2^16) exactly; each carry
+ *     out of 32 bits, and a sum beyond INT32_MAX, saturates. */
 inline scalar_t sc_mul(scalar_t a, scalar_t b)
 {
 #if !defined(__ARM_ARCH_6M__)
@@ -162,29 +167,24 @@ inline scalar_t sc_mul(scalar_t a, scalar_t b)
 	int64_t r = p >= 0 ? (p + 32768) >> 16 : -((32768 - p) >> 16);
 	return r > INT32_MAX ? SC_MAX : (r < -INT32_MAX ? SC_MAX_NEG : (scalar_t)r);
 #else
+	uint32_t s = 0u - (((uint32_t)a ^ (uint32_t)b) >> 31);
 	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-	bool neg = (a < 0) != (b < 0);
-	if (ub > ua) {
-		uint32_t t = ua;
-		ua = ub;
-		ub = t;
-	}
-	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
-	uint32_t r = ah * bl + ((al * bl + 0x8000u) >> 16);  /* < 2^31 + 2^16: no carry */
-	if (bh) {
+	uint32_t r;
+	/* the two short cases written alike, each with the operands where they are: no moves */
+	if (!(ub >> 16)) {
+		r = (ua >> 16) * ub + (((((ua & 0xffffu) * ub) >> 15) + 1u) >> 1);
+	} else if (!(ua >> 16)) {
+		r = (ub >> 16) * ua + (((((ub & 0xffffu) * ua) >> 15) + 1u) >> 1);
+	} else {
+		uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
 		uint32_t hh = ah * bh, lh = al * bh;
+		r = ah * bl + ((al * bl + 0x8000u) >> 16);        /* < 2^31 + 2^16: no carry */
 		if (hh >= 0x8000u)
-			return neg ? SC_MAX_NEG : SC_MAX;
-		r += hh << 16;
-		if (r < (hh << 16))
-			return neg ? SC_MAX_NEG : SC_MAX;
-		r += lh;
-		if (r < lh)
-			return neg ? SC_MAX_NEG : SC_MAX;
+			r = (uint32_t)INT32_MAX;
+		else if ((r += hh << 16) < (hh << 16) || (r += lh) < lh || r > (uint32_t)INT32_MAX)
+			r = (uint32_t)INT32_MAX;
 	}
-	if (r > (uint32_t)INT32_MAX)
-		return neg ? SC_MAX_NEG : SC_MAX;
-	return neg ? -(scalar_t)r : (scalar_t)r;
+	return (scalar_t)((r ^ s) - s);
 #endif
 }
 
