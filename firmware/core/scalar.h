@@ -268,8 +268,11 @@ static inline bool sc_isfinite(scalar_t a) { (void)a; return true; }
 
 /* The 64-bit product |a| |b| in two 32-bit words, from 16 x 16 products (as q_umul32 on
  * Cortex-M0), for the trigonometry below: with constant shifts it stays in 32-bit words
- * there, where a 64-bit product and a variable 64-bit shift are library calls. */
-static inline void sc_umul32w(uint32_t a, uint32_t b, uint32_t *hi, uint32_t *lo)
+ * there, where a 64-bit product and a variable 64-bit shift are library calls. Always
+ * inline, as sc_qmul32w: the set point's sine and cosine make 16 of these products in every
+ * step, and inline, with their shift a constant, each costs half as much (M0 fixed step
+ * about 720 instructions less for 190 bytes). */
+static inline SC_ALWAYS_INLINE void sc_umul32w(uint32_t a, uint32_t b, uint32_t *hi, uint32_t *lo)
 {
 	uint32_t al = a & 0xffffu, ah = a >> 16, bl = b & 0xffffu, bh = b >> 16;
 	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl;
@@ -280,7 +283,7 @@ static inline void sc_umul32w(uint32_t a, uint32_t b, uint32_t *hi, uint32_t *lo
 
 /* q_mul32(a, b, s) (qfmt.h: a b 2^-s rounded to nearest, ties away from zero, saturating to
  * +/-INT32_MAX) bit for bit, for s in [1, 63], in 32-bit words */
-static inline int32_t sc_qmul32w(int32_t a, int32_t b, unsigned s)
+static inline SC_ALWAYS_INLINE int32_t sc_qmul32w(int32_t a, int32_t b, unsigned s)
 {
 	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
 	uint32_t hi, lo, q, over;
