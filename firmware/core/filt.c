@@ -15,7 +15,8 @@ scalar_t filt_lag_update(struct filt_lag *f, scalar_t x)
 {
 	if (!sc_isfinite(x))
 		return f->y;
-	f->y = sc_add(f->y, sc_mul(f->alpha, sc_sub(x, f->y)));
+	/* sums inline (sca_*): several filters run in every step of the experiments */
+	f->y = sca_add(f->y, sc_mul(f->alpha, sca_sub(x, f->y)));
 	return f->y;
 }
 
@@ -76,10 +77,11 @@ scalar_t filt_svf_update(struct filt_svf *f, scalar_t y)
 		return f->y;
 	/* increment form: x1 += a12 x2 + b1 (u_k + u_(k-1) - 2 x1), and
 	 * x2 += (a22 - 1) x2 + b2 (u_k + u_(k-1) - 2 x1); equal to the matrix form with
-	 * a11 = 1 - 2 b1, a21 = -2 b2, but the rounding vanishes at rest (exact DC in Q16.16) */
-	scalar_t err = sc_sub(sc_add(y, f->u_prev), sc_add(f->y, f->y));
-	scalar_t y1 = sc_add(f->y, sc_add(sc_mul(f->a12, f->ydot), sc_mul(f->b1, err)));
-	scalar_t y2 = sc_add(f->ydot, sc_add(sc_mul(sc_sub(f->a22, SC(1)), f->ydot), sc_mul(f->b2, err)));
+	 * a11 = 1 - 2 b1, a21 = -2 b2, but the rounding vanishes at rest (exact DC in Q16.16).
+	 * Sums inline (sca_*): several filters run in every step of the experiments */
+	scalar_t err = sca_sub(sca_add(y, f->u_prev), sca_add(f->y, f->y));
+	scalar_t y1 = sca_add(f->y, sca_add(sc_mul(f->a12, f->ydot), sc_mul(f->b1, err)));
+	scalar_t y2 = sca_add(f->ydot, sca_add(sc_mul(sca_sub(f->a22, SC(1)), f->ydot), sc_mul(f->b2, err)));
 	f->y = y1;
 	f->ydot = y2;
 	f->u_prev = y;

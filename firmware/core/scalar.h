@@ -33,9 +33,11 @@
  * Other fixed-point formats and their integer helpers: qfmt.h.
  *
  * Linkage in the fixed build: the non-trivial primitives (sc_from_float, sc_to_float,
- * sc_mul, sc_recip_norm, sc_div_prepared) are inline definitions with
+ * sc_add, sc_sub, sc_mul, sc_recip_norm, sc_div_prepared) are inline definitions with
  * external linkage and sc_div a plain function, each with its one out-of-line copy in
  * scalar.c: an object that does not inline one calls that copy (no static copy per object).
+ * sca_add and sca_sub are sc_add and sc_sub always inlined, for the few sums of the 90 Hz
+ * step's loops where the call costs more than the flash its inline copy takes.
  */
 #ifndef OCTO_SCALAR_H
 #define OCTO_SCALAR_H
@@ -60,6 +62,10 @@
 #else
 #define SC_ALWAYS_INLINE
 #endif
+/* an external inline definition (C11 6.7.4) that is always inlined: usable from the external
+ * inline definitions below, which may not call a static function; scalar.c keeps an
+ * out-of-line copy for compilers without always_inline */
+#define SC_ALWAYS_INLINE_EXT inline SC_ALWAYS_INLINE
 
 #if OCTO_FIXED
 /* ------------------------------------------------------------ Q16.16 */
@@ -128,33 +134,45 @@ static inline scalar_t sc_from_int(int32_t i) { return sc_sat64((int64_t)i * 655
 
 /* saturating sums in 32-bit words (no 64-bit arithmetic on Cortex-M0): the wrapped sum,
  * then overflow (operands of one sign, a result of the other) saturates by the operands'
- * sign, and INT32_MIN (outside the range) becomes SC_MAX_NEG. A few instructions: always
- * inline, a call would cost more than the operation (the 90 Hz step makes ~180 of them) */
-static inline SC_ALWAYS_INLINE scalar_t sc_add(scalar_t a, scalar_t b)
+ * sign, and INT32_MIN (outside the range; the one r with r << 1 == 0 but r != 0, tested so
+ * by a shift instead of loading the constant on Cortex-M0) becomes SC_MAX_NEG.
+ * sca_add/sca_sub: always inline, for the hottest loops of the 90 Hz step, where a call
+ * costs more than the operation (a few instructions of register moves and the call itself
+ * on Cortex-M0). sc_add/sc_sub: the same, external inline definitions with their one copy in
+ * scalar.c: a compiler optimising for size calls that copy (about 12 bytes less per use on
+ * Cortex-M0), one optimising for speed inlines them. */
+SC_ALWAYS_INLINE_EXT scalar_t sca_add(scalar_t a, scalar_t b)
 {
 	uint32_t r = (uint32_t)a + (uint32_t)b;
 	if ((int32_t)(((uint32_t)a ^ r) & ((uint32_t)b ^ r)) < 0)
 		return a < 0 ? SC_MAX_NEG : SC_MAX;
-	return r == 0x80000000u ? SC_MAX_NEG : (scalar_t)r;
+	return (r << 1) == 0u && r != 0u ? SC_MAX_NEG : (scalar_t)r;
 }
-static inline SC_ALWAYS_INLINE scalar_t sc_sub(scalar_t a, scalar_t b)
+SC_ALWAYS_INLINE_EXT scalar_t sca_sub(scalar_t a, scalar_t b)
 {
 	uint32_t r = (uint32_t)a - (uint32_t)b;
 	if ((int32_t)(((uint32_t)a ^ (uint32_t)b) & ((uint32_t)a ^ r)) < 0)
 		return a < 0 ? SC_MAX_NEG : SC_MAX;
-	return r == 0x80000000u ? SC_MAX_NEG : (scalar_t)r;
+	return (r << 1) == 0u && r != 0u ? SC_MAX_NEG : (scalar_t)r;
 }
+inline scalar_t sc_add(scalar_t a, scalar_t b) { return sca_add(a, b); }
+inline scalar_t sc_sub(scalar_t a, scalar_t b) { return sca_sub(a, b); }
 static inline scalar_t sc_neg(scalar_t a) { return a == INT32_MIN ? SC_MAX : -a; }
 static inline scalar_t sc_abs(scalar_t a) { return a < 0 ? sc_neg(a) : a; }
 
 /* a b 2^-16 rounded to nearest, ties away from zero, saturating.
  * With a long multiply (Cortex-M3/M4, hosts): the 64-bit product.
  * Cortex-M0 has none (a 64-bit product is a library call there): |a b| 2^-16 rounded from
- * 16 x 16 products in 32-bit words, with b the smaller magnitude:
- * |a b| = hh 2^32 + (lh + hl) 2^16 + ll, so that round(|a b| / 2^16) = hh 2^16 + lh + hl + floor((ll + 2^15) / 2^16) exactly; each carry
- * out of 32 bits means saturation. When |b| < 1 (bh = 0, the common case: gains, time
- * steps, unit quaternions' components) hh = lh = 0 and two products suffice, and
- * hl = ah bl < 2^31 cannot carry. */
+ * 16 x 16 products in 32-bit words, the sign applied last as (m ^ s) - s (s all ones for a
+ * negative product; SC_MAX signed so is SC_MAX_NEG).
+ *   - |b| < 1 (the common case: gains, time steps, unit quaternions' components), or |a| < 1
+ *     with the operands' roles swapped: |a| = ah 2^16 + al gives
+ *     round(|a b| / 2^16) = ah |b| + floor((al |b| + 2^15) / 2^16) exactly, at most
+ *     (2^15 - 1)(2^16 - 1) + 2^16 < 2^31 (2^15 |b| for |a| = 2^31): two products, no
+ *     saturation. floor((x + 2^15) / 2^16) = (floor(x / 2^15) + 1) / 2: no constant to load.
+ *   - both >= 1: |a b| = hh 2^32 + (lh + hl) 2^16 + ll, so that
+ *     round(|a b| / 2^16) = hh 2^16 + lh + hl + floor((ll + 2^15) / 2^16) exactly; each carry
+ *     out of 32 bits, and a sum beyond INT32_MAX, saturates. */
 inline scalar_t sc_mul(scalar_t a, scalar_t b)
 {
 #if !defined(__ARM_ARCH_6M__)
@@ -162,29 +180,24 @@ inline scalar_t sc_mul(scalar_t a, scalar_t b)
 	int64_t r = p >= 0 ? (p + 32768) >> 16 : -((32768 - p) >> 16);
 	return r > INT32_MAX ? SC_MAX : (r < -INT32_MAX ? SC_MAX_NEG : (scalar_t)r);
 #else
+	uint32_t s = 0u - (((uint32_t)a ^ (uint32_t)b) >> 31);
 	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-	bool neg = (a < 0) != (b < 0);
-	if (ub > ua) {
-		uint32_t t = ua;
-		ua = ub;
-		ub = t;
-	}
-	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
-	uint32_t r = ah * bl + ((al * bl + 0x8000u) >> 16);  /* < 2^31 + 2^16: no carry */
-	if (bh) {
+	uint32_t r;
+	/* the two short cases written alike, each with the operands where they are: no moves */
+	if (!(ub >> 16)) {
+		r = (ua >> 16) * ub + (((((ua & 0xffffu) * ub) >> 15) + 1u) >> 1);
+	} else if (!(ua >> 16)) {
+		r = (ub >> 16) * ua + (((((ub & 0xffffu) * ua) >> 15) + 1u) >> 1);
+	} else {
+		uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
 		uint32_t hh = ah * bh, lh = al * bh;
+		r = ah * bl + ((al * bl + 0x8000u) >> 16);        /* < 2^31 + 2^16: no carry */
 		if (hh >= 0x8000u)
-			return neg ? SC_MAX_NEG : SC_MAX;
-		r += hh << 16;
-		if (r < (hh << 16))
-			return neg ? SC_MAX_NEG : SC_MAX;
-		r += lh;
-		if (r < lh)
-			return neg ? SC_MAX_NEG : SC_MAX;
+			r = (uint32_t)INT32_MAX;
+		else if ((r += hh << 16) < (hh << 16) || (r += lh) < lh || r > (uint32_t)INT32_MAX)
+			r = (uint32_t)INT32_MAX;
 	}
-	if (r > (uint32_t)INT32_MAX)
-		return neg ? SC_MAX_NEG : SC_MAX;
-	return neg ? -(scalar_t)r : (scalar_t)r;
+	return (scalar_t)((r ^ s) - s);
 #endif
 }
 
@@ -246,45 +259,20 @@ inline scalar_t sc_div_prepared(scalar_t a, scalar_t b, uint32_t ub, int s, uint
  * kept it a call at every optimisation level. */
 scalar_t sc_div(scalar_t a, scalar_t b);
 
-/* step of the digit-by-digit square root: the next two bits of the radicand */
-static inline void sc_sqrt_step(uint32_t *r, uint32_t *rem, uint32_t pair)
-{
-	*rem = (*rem << 2) | pair;
-	uint32_t t = (*r << 2) | 1u;
-	if (*rem >= t) {
-		*rem -= t;
-		*r = (*r << 1) | 1u;
-	} else {
-		*r <<= 1;
-	}
-}
-
 /* sqrt(a 2^16) rounded to nearest, digit by digit in 32-bit words (no 64-bit arithmetic on
- * Cortex-M0): a's bit pairs from its highest non-zero one, then 8 zero pairs for the 2^16;
- * the root stays below 2^24 and the remainder, at most twice the root, below 2^26 */
-static inline scalar_t sc_sqrt(scalar_t a)
-{
-	if (a <= 0)
-		return 0;
-	uint32_t v = (uint32_t)a, r = 0, rem = 0;
-	int sh = 30;
-	while (!(v >> sh))
-		sh -= 2;
-	for (; sh >= 0; sh -= 2)
-		sc_sqrt_step(&r, &rem, (v >> sh) & 3u);
-	for (int i = 0; i < 8; i++)
-		sc_sqrt_step(&r, &rem, 0u);
-	if (rem > r)   /* a 2^16 > r^2 + r: nearer r + 1 */
-		r++;
-	return (scalar_t)r;
-}
+ * Cortex-M0); 0 for a <= 0. Out of line (scalar.c): a loop of about 200 instructions, whose
+ * call costs little, used by several objects. */
+scalar_t sc_sqrt(scalar_t a);
 
 static inline bool sc_isfinite(scalar_t a) { (void)a; return true; }
 
 /* The 64-bit product |a| |b| in two 32-bit words, from 16 x 16 products (as q_umul32 on
  * Cortex-M0), for the trigonometry below: with constant shifts it stays in 32-bit words
- * there, where a 64-bit product and a variable 64-bit shift are library calls. */
-static inline void sc_umul32w(uint32_t a, uint32_t b, uint32_t *hi, uint32_t *lo)
+ * there, where a 64-bit product and a variable 64-bit shift are library calls. Always
+ * inline, as sc_qmul32w: the set point's sine and cosine make 16 of these products in every
+ * step, and inline, with their shift a constant, each costs half as much (M0 fixed step
+ * about 720 instructions less for 190 bytes). */
+static inline SC_ALWAYS_INLINE void sc_umul32w(uint32_t a, uint32_t b, uint32_t *hi, uint32_t *lo)
 {
 	uint32_t al = a & 0xffffu, ah = a >> 16, bl = b & 0xffffu, bh = b >> 16;
 	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl;
@@ -295,7 +283,7 @@ static inline void sc_umul32w(uint32_t a, uint32_t b, uint32_t *hi, uint32_t *lo
 
 /* q_mul32(a, b, s) (qfmt.h: a b 2^-s rounded to nearest, ties away from zero, saturating to
  * +/-INT32_MAX) bit for bit, for s in [1, 63], in 32-bit words */
-static inline int32_t sc_qmul32w(int32_t a, int32_t b, unsigned s)
+static inline SC_ALWAYS_INLINE int32_t sc_qmul32w(int32_t a, int32_t b, unsigned s)
 {
 	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
 	uint32_t hi, lo, q, over;
@@ -408,32 +396,10 @@ static inline scalar_t sc_asin(scalar_t a)
 	int64_t r = sc_angle_q30((uint64_t)ua << 14, c);
 	return (scalar_t)q_shr64(a < 0 ? -r : r, 30 - SC_FRAC);
 }
-/* e^a in integer arithmetic (filter and lag coefficients): a = k ln 2 + r with r in
- * [0, ln 2) in Q32, e^r by its Taylor series in Q30 (13 terms: error < 1e-9 relative), then
- * scaled by 2^k and rounded to Q16.16: within 0.5 LSB + 1e-9 relative; saturates to
- * SC_MAX above ln(32768) and gives 0 below ln(2^-17) */
-static inline scalar_t sc_exp(scalar_t a)
-{
-	if (a >= 681391)        /* 10.3972 = ln(32768) in Q16.16 */
-		return SC_MAX;
-	if (a <= -794978)       /* -12.1301 = ln(2^-17.5) */
-		return 0;
-	const int64_t ln2_q32 = 2977044472LL; /* ln 2 * 2^32, rounded */
-	int64_t x = (int64_t)a * 65536;       /* Q32 */
-	int64_t k = x / ln2_q32;
-	if (k * ln2_q32 > x)
-		k--;                              /* floor */
-	int64_t r = (x - k * ln2_q32) >> 2;   /* Q30, [0, ln 2) */
-	int64_t term = (int64_t)1 << 30, sum = term;
-	for (int i = 1; i <= 13; i++) {
-		term = (term * r >> 30) / i;
-		sum += term;
-	}
-	int sh = 14 - (int)k;                 /* Q30 * 2^k -> Q16 */
-	if (sh <= 0)
-		return sc_sat64(sum << -sh);
-	return sc_sat64((sum + ((int64_t)1 << (sh - 1))) >> sh);
-}
+/* e^a in integer arithmetic (filter and lag coefficients): within 0.5 LSB + 1e-9 relative;
+ * saturates to SC_MAX above ln(32768) and gives 0 below ln(2^-17). Out of line (scalar.c):
+ * work when a time constant or the frame period changes, with 64-bit divisions. */
+scalar_t sc_exp(scalar_t a);
 
 #else
 /* ------------------------------------------------------------ float32 */
@@ -450,6 +416,8 @@ static inline scalar_t sc_from_int(int32_t i) { return (scalar_t)i; }
 
 static inline scalar_t sc_add(scalar_t a, scalar_t b) { return a + b; }
 static inline scalar_t sc_sub(scalar_t a, scalar_t b) { return a - b; }
+static inline scalar_t sca_add(scalar_t a, scalar_t b) { return a + b; }
+static inline scalar_t sca_sub(scalar_t a, scalar_t b) { return a - b; }
 static inline scalar_t sc_neg(scalar_t a) { return -a; }
 static inline scalar_t sc_abs(scalar_t a) { return fabsf(a); }
 static inline scalar_t sc_mul(scalar_t a, scalar_t b) { return a * b; }

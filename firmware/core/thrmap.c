@@ -35,10 +35,11 @@ static scalar_t throttle_of_u(const struct thrmap *m, scalar_t u, bool *clamped)
 	scalar_t t = u;
 	if (m->curve != SC_ZERO) {
 		/* T = 2u / ((1-a) + sqrt((1-a)^2 + 4 a u)), the root that stays finite as a -> 0;
-		 * u in [0, 1] gives T in [0, 1], and (1-a)^2 + 4 a u >= (1+a)^2 > 0 for a < 0 */
+		 * u in [0, 1] gives T in [0, 1], and (1-a)^2 + 4 a u >= (1+a)^2 > 0 for a < 0;
+		 * sums inline (sca_add): once per rotor and step */
 		scalar_t b = m->one_minus_a;
-		scalar_t disc = sc_add(sc_mul(b, b), sc_mul(sc_mul(SC(4), m->curve), u));
-		t = sc_div(sc_add(u, u), sc_add(b, sc_sqrt(disc)));
+		scalar_t disc = sca_add(sc_mul(b, b), sc_mul(sc_mul(SC(4), m->curve), u));
+		t = sc_div(sca_add(u, u), sca_add(b, sc_sqrt(disc)));
 		t = sc_clamp(t, SC_ZERO, SC(1));
 	}
 	*clamped = c;

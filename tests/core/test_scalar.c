@@ -315,7 +315,8 @@ UNIT_TEST(scalar_sin_cos_integer)
 #endif
 }
 
-/* sc_add and sc_sub are exact and saturate to [SC_MAX_NEG, SC_MAX] for operands of every size */
+/* sc_add and sc_sub (and their always inline forms sca_add, sca_sub) are exact and saturate to
+ * [SC_MAX_NEG, SC_MAX] for operands of every size */
 UNIT_TEST(scalar_add_sub_exact)
 {
 #if OCTO_FIXED
@@ -326,16 +327,23 @@ UNIT_TEST(scalar_add_sub_exact)
 		a >>= (int)unit_rand_uniform(&g, 0, 3);
 		if (i % 7 == 0)
 			a = i % 2 ? INT32_MIN : INT32_MAX;
+		if (i % 11 == 0)
+			b = i % 3 ? INT32_MIN : (i % 2 ? 0 : INT32_MAX);
 		int64_t s = (int64_t)a + b, d_ = (int64_t)a - b;
 		scalar_t rs = s > INT32_MAX ? SC_MAX : (s < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)s);
 		scalar_t rd = d_ > INT32_MAX ? SC_MAX : (d_ < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)d_);
-		if (sc_add(a, b) != rs || sc_sub(a, b) != rd) {
+		if (sc_add(a, b) != rs || sc_sub(a, b) != rd || sca_add(a, b) != rs || sca_sub(a, b) != rd) {
 			unit_fail(u, __FILE__, __LINE__, "sc_add/sc_sub(%d, %d) = %d/%d, expected %d/%d", (int)a, (int)b,
 				  (int)sc_add(a, b), (int)sc_sub(a, b), (int)rs, (int)rd);
 			return;
 		}
 	}
 	CHECK(sc_add(INT32_MIN, 0) == SC_MAX_NEG && sc_sub(INT32_MIN, 0) == SC_MAX_NEG);
+	CHECK(sc_add(0, INT32_MIN) == SC_MAX_NEG && sc_add(-1, INT32_MIN + 1) == SC_MAX_NEG);
+	CHECK(sc_add(INT32_MIN, INT32_MIN) == SC_MAX_NEG && sc_add(SC_MAX_NEG, SC_MAX_NEG) == SC_MAX_NEG);
+	CHECK(sc_sub(-1, INT32_MAX) == SC_MAX_NEG && sc_sub(INT32_MIN, INT32_MIN) == 0);
+	CHECK(sca_add(0, INT32_MIN) == SC_MAX_NEG && sca_sub(-1, INT32_MAX) == SC_MAX_NEG);
+	CHECK(sca_add(SC_MAX, 1) == SC_MAX && sca_sub(0, INT32_MIN) == SC_MAX && sca_add(3, -5) == -2);
 	CHECK(sc_sub(0, INT32_MIN) == SC_MAX && sc_sub(-1, INT32_MIN) == SC_MAX && sc_sub(-2, INT32_MIN) == INT32_MAX - 1);
 	CHECK(sc_add(SC_MAX, SC_MAX_NEG) == 0 && sc_add(SC_MAX, 1) == SC_MAX && sc_sub(SC_MAX_NEG, 1) == SC_MAX_NEG);
 #else
