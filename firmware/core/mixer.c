@@ -61,7 +61,7 @@ MIX_NOINLINE scalar_t mdot(scalar_t acc, const scalar_t *a, int sa, const scalar
 	const int st = sub ? -sa : sa;
 	for (int k = 0; k < n; k++) {
 		scalar_t p = sc_mul(a[k * st], b[k]);
-		acc = sub ? sc_sub(acc, p) : sc_add(p, acc);
+		acc = sub ? sca_sub(acc, p) : sca_add(p, acc);
 	}
 	return acc;
 }
@@ -78,7 +78,7 @@ MIX_NOINLINE void maxpy(scalar_t *v, scalar_t d, const scalar_t *q, int n)
 #endif
 {
 	for (int t = 0; t < n; t++)
-		v[t] = sc_sub(v[t], sc_mul(d, q[t]));
+		v[t] = sca_sub(v[t], sc_mul(d, q[t]));
 }
 
 static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
@@ -120,7 +120,7 @@ static void wrench_u(const struct mixer *m, const scalar_t u[NR], scalar_t wrenc
 	for (int i = 0; i < NA; i++) {
 		scalar_t s = SC_ZERO;
 		for (int j = 0; j < NR; j++)
-			s = sc_add(gmul(m->gn[i][j], u[j]), s);
+			s = sca_add(gmul(m->gn[i][j], u[j]), s);
 		wrench[i] = mdiv(s, m->row_div[i]);
 	}
 }
