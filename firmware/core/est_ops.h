@@ -13,13 +13,17 @@
  *   - est_umul32, est_clz64 and est_top32 are q_umul32, q_clz64 and a 64-bit shift always
  *     inlined or on 32-bit halves, for est_recip and est30_mul_recip (q_recip and
  *     q30_mul_recip: the RLS update's reciprocals and gains) and the products above.
- * tests/core/test_est_ops.c compares each function here with its qfmt.h definition bit for
- * bit over every shift count and operands of every size, on the host and under QEMU.
+ *   - est_mul_unit is sc_mul by a factor in [0, 1] (a throttle, a lag coefficient) in 32-bit
+ *     words and always inlined (the trackers' per-frame products).
+ * tests/core/test_est_ops.c compares each function here with its qfmt.h (or scalar.h)
+ * definition bit for bit over every shift count and operands of every size, on the host and
+ * under QEMU.
  */
 #ifndef OCTO_EST_OPS_H
 #define OCTO_EST_OPS_H
 
 #include "qfmt.h"
+#include "scalar.h"
 
 #if defined(__GNUC__)
 #define EST_INLINE static inline __attribute__((always_inline))
@@ -201,6 +205,26 @@ static inline int32_t est30_mul_recip(int64_t a, uint32_t y, int eb, int *sh)
 	int32_t r = rr > (uint64_t)INT32_MAX ? INT32_MAX : (int32_t)rr;
 	*sh = sa + eb - 94;
 	return a < 0 ? -r : r;
+}
+
+/* sc_mul(a, u), bit for bit, for any a and u; cheapest for u in [0, 1] (raw u <= 2^16 in the
+ * fixed build), where |a| = ah 2^16 + al (ah <= 2^15, al < 2^16) gives
+ * |a| u / 2^16 = ah u + al u / 2^16 with ah u <= 2^31 and al u + 2^15 < 2^32: the product
+ * rounded to nearest (ties away from zero, as sc_mul) in 32-bit words, at most |a| (only
+ * a = INT32_MIN, u = 1 saturates). Other u: sc_mul. Float build: sc_mul. */
+EST_INLINE scalar_t est_mul_unit(scalar_t a, scalar_t u)
+{
+#if OCTO_FIXED
+	if ((uint32_t)u > 65536u)
+		return sc_mul(a, u);
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, uu = (uint32_t)u;
+	uint32_t r = (ua >> 16) * uu + (((ua & 0xffffu) * uu + 0x8000u) >> 16);
+	if (r > (uint32_t)INT32_MAX)
+		return SC_MAX_NEG;
+	return a < 0 ? -(scalar_t)r : (scalar_t)r;
+#else
+	return sc_mul(a, u);
+#endif
 }
 
 #endif /* OCTO_EST_OPS_H */

@@ -52,6 +52,8 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 	s->v_f = SC_ZERO;
 	s->uc_f = SC_ZERO;
 	s->primed = false;
+	s->gated_s = SC_ZERO;
+	s->gated_sign = 0;
 	s->updates = 0;
 	s->rejected = 0;
 }

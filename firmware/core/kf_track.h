@@ -50,6 +50,7 @@ struct kf_track {
 	scalar_t k;        /* estimate, N per unit throttle */
 	scalar_t P;        /* 1 / sum lambda^i phi^2 */
 	scalar_t s2_pct2;  /* relative noise variance, percent^2 */
+	scalar_t s_pct;    /* its square root, set with it (the update and kf_track_sd read it) */
 	scalar_t mem_s;    /* current memory T*, s */
 	scalar_t lambda;
 	scalar_t phi_f;    /* lag-filtered regressor */

@@ -109,3 +109,27 @@ UNIT_TEST(est_products_and_reciprocals_equal_qfmt)
 	}
 	CHECK(bad == 0);
 }
+
+UNIT_TEST(est_mul_unit_equals_sc_mul)
+{
+	long bad = 0;
+	const int32_t edge[] = {0, 1, -1, 32767, 32768, 32769, 65535, 65536, 65537, -65536, INT32_MAX, -INT32_MAX, INT32_MIN};
+	const unsigned ne = sizeof edge / sizeof edge[0];
+	for (int k = 0; k < 400000; k++) {
+		int32_t a = k < (int)(ne * ne) ? edge[k % ne] : (int32_t)(xr() >> (xr() % 32u));
+		int32_t u = k < (int)(ne * ne) ? edge[k / ne] : (int32_t)(xr() % 65537u);
+		if (k >= (int)(ne * ne) && (xr() & 1u))
+			a = -a;
+		if (k % 16 == 0)
+			u = (int32_t)(xr() >> (xr() % 32u)) * ((xr() & 1u) ? 1 : -1);   /* beyond [0, 1] too */
+		scalar_t x = sc_from_float((float)a / 65536.0f), y = sc_from_float((float)u / 65536.0f);
+#if OCTO_FIXED
+		x = a;
+		y = u;
+#endif
+		scalar_t p = est_mul_unit(x, y), q = sc_mul(x, y);
+		if (!(p == q))
+			bad++;
+	}
+	CHECK(bad == 0);
+}
