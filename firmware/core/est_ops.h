@@ -120,6 +120,18 @@ static inline int32_t est_scale32(int32_t v, int s)
 	return v < 0 ? -(int32_t)q : (int32_t)q;
 }
 
+/* est_scale32(v, s) for s in [0, 30], always inlined: for a constant s, a comparison and a
+ * shift (the per-frame conversions of throttles into motor_id's Q1.30) */
+EST_INLINE int32_t est_shl32c(int32_t v, unsigned s)
+{
+	int32_t lim = INT32_MAX >> s;
+	if (v > lim)
+		return INT32_MAX;
+	if (v < -lim)
+		return -INT32_MAX;
+	return v >= 0 ? (int32_t)((uint32_t)v << s) : -(int32_t)((uint32_t)-v << s);
+}
+
 /* q_scale64(v, s): v 2^s, left shifts saturating to +/-INT64_MAX, right shifts rounded to
  * nearest (ties away from zero), INT64_MIN taken as -INT64_MAX; any s. Its shifts by the
  * variable count are done on the two 32-bit halves (a 64-bit one is a library call on

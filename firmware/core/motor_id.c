@@ -51,7 +51,7 @@ MID_INLINE int64_t mid_mul_rnd_in(int32_t a, int32_t b, unsigned s)
 }
 /* the same, called (flash: inlined only in the sums' terms, the hottest) */
 static int64_t mid_mul_rnd(int32_t a, int32_t b, unsigned s) { return mid_mul_rnd_in(a, b, s); }
-static inline motor_id_u_t u_of_sc(scalar_t v) { return est_scale32(v, QF_UNIT_FRAC - QF_SC_FRAC); }
+static inline motor_id_u_t u_of_sc(scalar_t v) { return est_shl32c(v, QF_UNIT_FRAC - QF_SC_FRAC); }
 static inline motor_id_f_t f_of_sc(scalar_t v, int kexp) { return est_scale32(v, QF_MOTN_FRAC - QF_SC_FRAC - kexp); }
 static inline int32_t sub32(int32_t a, int32_t b) { return q_sat32((int64_t)a - b); }
 /* s + k (u - s) */

@@ -310,7 +310,8 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 		rls_dot_t sd = DOT_ZERO;
 		for (unsigned i = 0; i < j; i++)
 			sd = dot_mac(sd, r->u[RLS_U_IDX(i, j)], phi[i]);
-		rls_sig_t s = sig_of_dot(j ? dot_mac(sd, phi[j], UNIT_SIG) : dot_of_sig(phi[j])); /* U_jj = 1 */
+		/* U_jj = 1 (f_0 = phi_0: the round trip through the dot format is exact) */
+		rls_sig_t s = j ? sig_of_dot(dot_mac(sd, phi[j], UNIT_SIG)) : phi[j];
 		f[j] = s;
 		v[j] = inn_of_wide_sig(r->d[j], s, (int)r->d_exp - fr);
 		for (unsigned i = 0; i < j; i++)   /* the strict upper part: all that is read */

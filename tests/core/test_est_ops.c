@@ -13,7 +13,7 @@ static uint32_t xr(void)
 	return rng;
 }
 
-UNIT_TEST(est_scale32_equals_q_scale32)
+UNIT_TEST(est_scale32_and_est_shl32c_equal_q_scale32)
 {
 	int32_t v[200];
 	unsigned n = 0;
@@ -35,10 +35,16 @@ UNIT_TEST(est_scale32_equals_q_scale32)
 		for (unsigned i = 0; i < n; i++)
 			if (est_scale32(v[i], s) != q_scale32(v[i], s))
 				bad++;
+	for (unsigned s = 0; s <= 30u; s++)
+		for (unsigned i = 0; i < n; i++)
+			if (est_shl32c(v[i], s) != q_scale32(v[i], (int)s))
+				bad++;
 	for (int k = 0; k < 200000; k++) {
 		int32_t x = (int32_t)xr();
 		int s = (int)(xr() % 141u) - 70;
 		if (est_scale32(x, s) != q_scale32(x, s))
+			bad++;
+		if (s >= 0 && s <= 30 && est_shl32c(x, (unsigned)s) != q_scale32(x, s))
 			bad++;
 	}
 	CHECK(bad == 0);
