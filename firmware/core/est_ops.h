@@ -14,7 +14,8 @@
  *     inlined or on 32-bit halves, for est_recip and est30_mul_recip (q_recip and
  *     q30_mul_recip: the RLS update's reciprocals and gains) and the products above.
  *   - est_mul_unit is sc_mul by a factor in [0, 1] (a throttle, a lag coefficient) in 32-bit
- *     words and always inlined (the trackers' per-frame products).
+ *     words and always inlined (the trackers' per-frame products); est_div_int is
+ *     sc_div_int by 3 or 100 without a library division.
  * tests/core/test_est_ops.c compares each function here with its qfmt.h (or scalar.h)
  * definition bit for bit over every shift count and operands of every size, on the host and
  * under QEMU.
@@ -24,6 +25,7 @@
 
 #include "qfmt.h"
 #include "scalar.h"
+#include "scalar_ops.h"
 
 #if defined(__GNUC__)
 #define EST_INLINE static inline __attribute__((always_inline))
@@ -236,6 +238,25 @@ EST_INLINE scalar_t est_mul_unit(scalar_t a, scalar_t u)
 	return a < 0 ? -(scalar_t)r : (scalar_t)r;
 #else
 	return sc_mul(a, u);
+#endif
+}
+
+/* sc_div_int(a, n) for a constant n, bit for bit: floor((|a| + floor(n / 2)) / n) with a's
+ * sign. For n = 3 and n = 100 the quotient of the (at most 2^31 + 50) dividend is its product
+ * with a 32-bit reciprocal, the high word shifted (0xAAAAAAAB / 2^33, 0x51EB851F / 2^37:
+ * exact for every 32-bit dividend), in place of a library division on Cortex-M0; other n:
+ * sc_div_int. Float build: sc_div_int. */
+EST_INLINE scalar_t est_div_int(scalar_t a, uint32_t n)
+{
+#if OCTO_FIXED
+	if (n != 3u && n != 100u)
+		return sc_div_int(a, n);
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+	uint64_t p = est_umul32(ua + n / 2u, n == 3u ? 0xAAAAAAABu : 0x51EB851Fu);
+	uint32_t q = (uint32_t)(p >> 32) >> (n == 3u ? 1 : 5);
+	return a < 0 ? -(scalar_t)q : (scalar_t)q;
+#else
+	return sc_div_int(a, n);
 #endif
 }
 

@@ -53,7 +53,7 @@ static scalar_t cbrt_warm(scalar_t x, scalar_t guess)
 {
 	scalar_t r = guess > SC_ZERO ? guess : SC(1.0);
 	for (int i = 0; i < 6; i++) {
-		scalar_t n = sc_div_int(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), 3u);
+		scalar_t n = est_div_int(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), 3u);
 		bool done = sc_abs(sc_sub(n, r)) <= SC_EPS;
 		r = n;
 		if (done)
@@ -152,6 +152,6 @@ scalar_t kf_track_sd(const struct kf_track *s)
 	if (!s->started)
 		return SC_ZERO;
 	/* sigma (N) = s y ~ s k phi; var(k) = sigma^2 P / (1 + lambda) */
-	scalar_t sigma = sc_mul(sc_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_f));
+	scalar_t sigma = sc_mul(est_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_f));
 	return sc_mul(sigma, sc_sqrt(sc_div(s->P, sc_add(SC(1.0), s->lambda))));
 }

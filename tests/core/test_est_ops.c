@@ -139,3 +139,33 @@ UNIT_TEST(est_mul_unit_equals_sc_mul)
 	}
 	CHECK(bad == 0);
 }
+
+UNIT_TEST(est_div_int_equals_sc_div_int)
+{
+	long bad = 0;
+	const int32_t edge[] = {0, 1, -1, 2, -2, 49, 50, 51, -50, 99, 100, 101, INT32_MAX, -INT32_MAX, INT32_MIN,
+				INT32_MAX - 50, -INT32_MAX + 50};
+	const uint32_t ns[] = {3u, 100u, 7u};
+	for (unsigned i = 0; i < sizeof edge / sizeof edge[0]; i++)
+		for (unsigned k = 0; k < 3u; k++) {
+			scalar_t x = sc_from_float((float)edge[i] / 65536.0f);
+#if OCTO_FIXED
+			x = edge[i];
+#endif
+			if (!(est_div_int(x, ns[k]) == sc_div_int(x, ns[k])))
+				bad++;
+		}
+	for (int k = 0; k < 400000; k++) {
+		int32_t a = (int32_t)(xr() >> (xr() % 32u));
+		if (xr() & 1u)
+			a = -a;
+		scalar_t x = sc_from_float((float)a / 65536.0f);
+#if OCTO_FIXED
+		x = a;
+#endif
+		uint32_t n = ns[k % 3];
+		if (!(est_div_int(x, n) == sc_div_int(x, n)))
+			bad++;
+	}
+	CHECK(bad == 0);
+}
