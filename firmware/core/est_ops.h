@@ -15,7 +15,9 @@
  *     q30_mul_recip: the RLS update's reciprocals and gains) and the products above.
  *   - est_mul_unit is sc_mul by a factor in [0, 1] (a throttle, a lag coefficient) in 32-bit
  *     words and always inlined (the trackers' per-frame products); est_div_int is
- *     sc_div_int by 3 or 100 without a library division.
+ *     sc_div_int by 3 or 100 without a library division; est_div_near is sc_div of
+ *     non-negative operands from a close guess of the quotient (kf_track's quotients change
+ *     little from frame to frame), without preparing a reciprocal.
  * tests/core/test_est_ops.c compares each function here with its qfmt.h (or scalar.h)
  * definition bit for bit over every shift count and operands of every size, on the host and
  * under QEMU.
@@ -257,6 +259,38 @@ EST_INLINE scalar_t est_div_int(scalar_t a, uint32_t n)
 	return a < 0 ? -(scalar_t)q : (scalar_t)q;
 #else
 	return sc_div_int(a, n);
+#endif
+}
+
+/* sc_div(a, b), bit for bit, for any a, b and guess q0; cheapest for a >= 0, b > 0 and q0
+ * within a few units of the quotient. sc_div's quotient of such operands is the largest q with
+ * q b <= x = a 2^16 + floor(b / 2) (rounded to nearest, ties up), or SC_MAX from 2^31 on: q0
+ * is corrected by the remainder x - q0 b (below 2^63 in magnitude: x < 2^48, q0 b < 2^62) by
+ * at most EST_DIV_STEPS units; a guess farther off, or a quotient beyond the format, is left to
+ * sc_div. Float build: sc_div. */
+#define EST_DIV_STEPS 8
+static inline scalar_t est_div_near(scalar_t a, scalar_t b, scalar_t q0)
+{
+#if OCTO_FIXED
+	if (a < 0 || b <= 0 || q0 < 0)
+		return sc_div(a, b);
+	int64_t x = ((int64_t)a << 16) + (b >> 1);
+	uint32_t q = (uint32_t)q0;
+	int64_t r = x - (int64_t)est_umul32(q, (uint32_t)b);
+	for (int i = 0; i < EST_DIV_STEPS && r < 0; i++) {
+		q--;
+		r += b;
+	}
+	for (int i = 0; i < EST_DIV_STEPS && r >= b; i++) {
+		q++;
+		r -= b;
+	}
+	if (r < 0 || r >= b || q > (uint32_t)INT32_MAX)
+		return sc_div(a, b);
+	return (scalar_t)q;
+#else
+	(void)q0;
+	return sc_div(a, b);
 #endif
 }
 

@@ -48,12 +48,15 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 /* x^(1/3) for x > 0 by at most 6 steps of Newton's iteration from a warm start (the last
  * memory). A step that moves r by at most SC_EPS (1 LSB in the fixed build) ends it: the
  * iteration has converged to the resolution, and the warm start of a slowly changing
- * memory needs one step, not a second that would only confirm it. */
+ * memory needs one step, not a second that would only confirm it. After the first step r is
+ * near the root, so x / r^2 is near r: the quotient from that guess (est_div_near, the same
+ * quotient). */
 static scalar_t cbrt_warm(scalar_t x, scalar_t guess)
 {
 	scalar_t r = guess > SC_ZERO ? guess : SC(1.0);
 	for (int i = 0; i < 6; i++) {
-		scalar_t n = est_div_int(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), 3u);
+		scalar_t r2 = sc_sq(r);
+		scalar_t n = est_div_int(sc_add(sc_add(r, r), i ? est_div_near(x, r2, r) : sc_div(x, r2)), 3u);
 		bool done = sc_abs(sc_sub(n, r)) <= SC_EPS;
 		r = n;
 		if (done)
@@ -129,13 +132,14 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	} else {
 		s->mem_s = s->p.t_max_s;
 	}
-	s->lambda = sc_sub(SC(1.0), sc_div(dt_s, s->mem_s));
+	/* dt / T* from the last frame's as the guess (the memory changes slowly) */
+	s->lambda = sc_sub(SC(1.0), est_div_near(dt_s, s->mem_s, sc_sub(SC(1.0), s->lambda)));
 	/* RLS with forgetting, scalar: with den = lambda + phi^2 P, the update
 	 * P' = (P - K phi P) / lambda, K = P phi / den is P' = P / den and K = P' phi (one
 	 * quotient) */
 	scalar_t phi2 = sc_sq(phi);
 	scalar_t den = sc_add(s->lambda, sc_mul(phi2, s->P));
-	s->P = sc_div(s->P, den);
+	s->P = est_div_near(s->P, den, s->P);   /* den is about 1 once P has settled */
 	scalar_t K = sc_mul(s->P, phi);
 	s->k = sc_add(s->k, sc_mul(K, e));
 	/* no wind-up: P at most its steady state for the shortest memory and this regressor,
@@ -153,5 +157,7 @@ scalar_t kf_track_sd(const struct kf_track *s)
 		return SC_ZERO;
 	/* sigma (N) = s y ~ s k phi; var(k) = sigma^2 P / (1 + lambda) */
 	scalar_t sigma = sc_mul(est_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_f));
-	return sc_mul(sigma, sc_sqrt(sc_div(s->P, sc_add(SC(1.0), s->lambda))));
+	/* P / (1 + lambda) from the guess P (1/2 + (1 - lambda) / 4), first order in 1 - lambda */
+	scalar_t g = est_mul_unit(s->P, sc_add(SC(0.5), est_mul_unit(sc_sub(SC(1.0), s->lambda), SC(0.25))));
+	return sc_mul(sigma, sc_sqrt(est_div_near(s->P, sc_add(SC(1.0), s->lambda), g)));
 }

@@ -169,3 +169,46 @@ UNIT_TEST(est_div_int_equals_sc_div_int)
 	}
 	CHECK(bad == 0);
 }
+
+UNIT_TEST(est_div_near_equals_sc_div)
+{
+	long bad = 0;
+#if OCTO_FIXED
+	long near = 0;
+#endif
+	for (int k = 0; k < 400000; k++) {
+		int32_t a = (int32_t)(xr() >> (xr() % 32u)), b = (int32_t)(xr() >> (xr() % 32u));
+		if (k % 7 == 0)
+			a = -a;
+		if (k % 11 == 0)
+			b = -b;
+		if (k % 13 == 0)
+			b = 0;
+		scalar_t x = sc_from_float((float)a / 65536.0f), y = sc_from_float((float)b / 65536.0f);
+#if OCTO_FIXED
+		x = a;
+		y = b;
+#endif
+		scalar_t q = sc_div(x, y), g = q;
+		/* guesses: the quotient, a few units off either way, far off, negative */
+		int32_t off = (int32_t)(xr() % 21u) - 10;
+#if OCTO_FIXED
+		if (k % 5 == 4)
+			g = (scalar_t)(xr() >> 1);
+		else if (k % 17 == 3)
+			g = -1;
+		else
+			g = (scalar_t)((int64_t)q + off < 0 ? 0 : ((int64_t)q + off > INT32_MAX ? INT32_MAX : q + off));
+		if (g >= q - EST_DIV_STEPS && g <= q + EST_DIV_STEPS)
+			near++;
+#else
+		(void)off;
+#endif
+		if (!(est_div_near(x, y, g) == q))
+			bad++;
+	}
+	CHECK(bad == 0);
+#if OCTO_FIXED
+	CHECK(near > 100000);   /* the guessing path was taken */
+#endif
+}
