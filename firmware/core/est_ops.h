@@ -14,10 +14,11 @@
  *     inlined or on 32-bit halves, for est_recip and est30_mul_recip (q_recip and
  *     q30_mul_recip: the RLS update's reciprocals and gains) and the products above.
  *   - est_mul_unit is sc_mul by a factor in [0, 1] (a throttle, a lag coefficient) in 32-bit
- *     words and always inlined (the trackers' per-frame products); est_div_int is
+ *     words, one copy per object (the trackers' per-frame products); est_div_int is
  *     sc_div_int by 3 or 100 without a library division; est_div_near is sc_div of
  *     non-negative operands from a close guess of the quotient (kf_track's quotients change
- *     little from frame to frame), without preparing a reciprocal.
+ *     little from frame to frame), without preparing a reciprocal; est_sqrt_near is sc_sqrt
+ *     from a close guess of the root.
  * tests/core/test_est_ops.c compares each function here with its qfmt.h (or scalar.h)
  * definition bit for bit over every shift count and operands of every size, on the host and
  * under QEMU.
@@ -228,7 +229,7 @@ static inline int32_t est30_mul_recip(int64_t a, uint32_t y, int eb, int *sh)
  * |a| u / 2^16 = ah u + al u / 2^16 with ah u <= 2^31 and al u + 2^15 < 2^32: the product
  * rounded to nearest (ties away from zero, as sc_mul) in 32-bit words, at most |a| (only
  * a = INT32_MIN, u = 1 saturates). Other u: sc_mul. Float build: sc_mul. */
-EST_INLINE scalar_t est_mul_unit(scalar_t a, scalar_t u)
+static inline scalar_t est_mul_unit(scalar_t a, scalar_t u)
 {
 #if OCTO_FIXED
 	if ((uint32_t)u > 65536u)
@@ -291,6 +292,34 @@ static inline scalar_t est_div_near(scalar_t a, scalar_t b, scalar_t q0)
 #else
 	(void)q0;
 	return sc_div(a, b);
+#endif
+}
+
+/* sc_sqrt(a), bit for bit, for any a and guess g; cheapest for g within a few units of the
+ * root. sc_sqrt's root of a > 0 is the R with R^2 - R < N <= R^2 + R, N = a 2^16 (the root
+ * of N rounded to nearest): g is corrected by D = N - g^2 (N < 2^47, g^2 < 2^62) by at most
+ * EST_DIV_STEPS units, else sc_sqrt. Float build: sc_sqrt. */
+static inline scalar_t est_sqrt_near(scalar_t a, scalar_t g)
+{
+#if OCTO_FIXED
+	if (a <= 0 || g <= 0)
+		return sc_sqrt(a);
+	uint32_t r = (uint32_t)g;
+	int64_t d = ((int64_t)a << 16) - (int64_t)est_umul32(r, r);
+	for (int i = 0; i < EST_DIV_STEPS && d > (int64_t)r; i++) {
+		d -= 2 * (int64_t)r + 1;
+		r++;
+	}
+	for (int i = 0; i < EST_DIV_STEPS && d <= -(int64_t)r; i++) {
+		r--;
+		d += 2 * (int64_t)r + 1;
+	}
+	if (d > (int64_t)r || d <= -(int64_t)r)
+		return sc_sqrt(a);
+	return (scalar_t)r;
+#else
+	(void)g;
+	return sc_sqrt(a);
 #endif
 }
 

@@ -33,6 +33,7 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->s_pct = sc_sqrt(s->s2_pct2);
 	s->mem_s = s->p.t_min_s;
 	s->lambda = SC(0.98);
+	s->p_rt = SC_ZERO;
 	s->phi_f = SC_ZERO;
 	s->e_prev_pct = SC_ZERO;
 	s->lag_al = SC(1.0);
@@ -43,6 +44,13 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->started = false;
 	s->primed = false;
 	s->updates = 0;
+}
+
+/* sqrt(P / (1 + lambda)) for kf_track_sd, after every change of P or lambda: the quotient and
+ * the root from the last ones as guesses (P and lambda change slowly): the same values */
+static void set_p_rt(struct kf_track *s)
+{
+	s->p_rt = est_sqrt_near(est_div_near(s->P, sc_add(SC(1.0), s->lambda), sc_sq(s->p_rt)), s->p_rt);
 }
 
 /* x^(1/3) for x > 0 by at most 6 steps of Newton's iteration from a warm start (the last
@@ -108,6 +116,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		s->k = sc_div(y_n, phi);
 		s->e_prev_pct = SC_ZERO;
 		s->P = sc_div(s->dt_tmin, sc_sq(phi));
+		set_p_rt(s);
 		s->started = true;
 		s->updates++;
 		return true;
@@ -147,6 +156,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	if (sc_mul(s->P, phi2) > s->dt_tmin)
 		s->P = sc_div(s->dt_tmin, phi2);
 	s->P = sc_max(s->P, SC_EPS);
+	set_p_rt(s);
 	s->updates++;
 	return true;
 }
@@ -157,7 +167,5 @@ scalar_t kf_track_sd(const struct kf_track *s)
 		return SC_ZERO;
 	/* sigma (N) = s y ~ s k phi; var(k) = sigma^2 P / (1 + lambda) */
 	scalar_t sigma = sc_mul(est_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_f));
-	/* P / (1 + lambda) from the guess P (1/2 + (1 - lambda) / 4), first order in 1 - lambda */
-	scalar_t g = est_mul_unit(s->P, sc_add(SC(0.5), est_mul_unit(sc_sub(SC(1.0), s->lambda), SC(0.25))));
-	return sc_mul(sigma, sc_sqrt(est_div_near(s->P, sc_add(SC(1.0), s->lambda), g)));
+	return sc_mul(sigma, s->p_rt);
 }

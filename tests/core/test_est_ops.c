@@ -212,3 +212,42 @@ UNIT_TEST(est_div_near_equals_sc_div)
 	CHECK(near > 100000);   /* the guessing path was taken */
 #endif
 }
+
+UNIT_TEST(est_sqrt_near_equals_sc_sqrt)
+{
+	long bad = 0;
+#if OCTO_FIXED
+	long near = 0;
+#endif
+	for (int k = 0; k < 400000; k++) {
+		int32_t a = (int32_t)(xr() >> (xr() % 32u));
+		if (k % 9 == 0)
+			a = -a;
+		if (k < 64)
+			a = k < 32 ? k : INT32_MAX - (k - 32);
+		scalar_t x = sc_from_float((float)a / 65536.0f);
+#if OCTO_FIXED
+		x = a;
+#endif
+		scalar_t q = sc_sqrt(x), g = q;
+		int32_t off = (int32_t)(xr() % 21u) - 10;
+#if OCTO_FIXED
+		if (k % 5 == 4)
+			g = (scalar_t)(xr() >> 1);
+		else if (k % 17 == 3)
+			g = -1;
+		else
+			g = q + off < 0 ? 0 : q + off;
+		if (g >= q - EST_DIV_STEPS && g <= q + EST_DIV_STEPS)
+			near++;
+#else
+		(void)off;
+#endif
+		if (!(est_sqrt_near(x, g) == q))
+			bad++;
+	}
+	CHECK(bad == 0);
+#if OCTO_FIXED
+	CHECK(near > 100000);
+#endif
+}
