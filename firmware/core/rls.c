@@ -62,7 +62,9 @@ static inline rls_wide_t wide_add(rls_wide_t a, rls_wide_t b) { return q_add64(a
 static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return q30_ratio(a, b); }
 /* d a / b = result 2^-*sh (0 < a <= 2 b, 0 < b): no bits lost however small a / b */
 /* d 2^e (e <= 0 here: rounds) */
-static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { return est_scale64(d, e); }
+/* (e = 0, the common case, and every case of one parameter: d itself, as est_scale64 gives it
+ * for any d but INT64_MIN, which no mantissa is) */
+static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { return e ? est_scale64(d, e) : d; }
 /* d 4^s (s <= 0 for the parameters in use: rounds) */
 static inline rls_wide_t wide_pow4(rls_wide_t d, int s) { return est_scale64(d, 2 * s); }
 /* x + a c / b in Q15.48 (x Q15.48, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
