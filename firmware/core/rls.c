@@ -174,7 +174,12 @@ static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { return est_scale64((i
 static inline bool wide_ok(rls_wide_t d) { return d > 0; }
 static inline bool sig_ok(rls_sig_t x) { (void)x; return true; }
 static inline bool acc_ok(rls_acc_t x) { (void)x; return true; }
-static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return est_scale32(x, QF_SIG_FRAC - QF_SC_FRAC - shift); }
+/* (a left shift, the common case, inlined: est_shl32c is est_scale32 for shifts in [0, 30]) */
+static inline rls_sig_t sig_of_sc(scalar_t x, int shift)
+{
+	int s = QF_SIG_FRAC - QF_SC_FRAC - shift;
+	return s >= 0 && s <= 30 ? est_shl32c(x, (unsigned)s) : est_scale32(x, s);
+}
 static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return q_scale32(x, QF_SC_FRAC - QF_SIG_FRAC + shift); }
 static inline rls_acc_t phi2_of_sc(scalar_t x) { return q_smul32(x, x); } /* Q32 */
 /* |phi|^2 is needed for the gate only (|phi|^2 >= 0 passes a zero phi_min) */
