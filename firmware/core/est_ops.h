@@ -13,13 +13,22 @@
  *   - est_umul32, est_clz64 and est_top32 are q_umul32, q_clz64 and a 64-bit shift always
  *     inlined or on 32-bit halves, for est_recip and est30_mul_recip (q_recip and
  *     q30_mul_recip: the RLS update's reciprocals and gains) and the products above.
- * tests/core/test_est_ops.c compares each function here with its qfmt.h definition bit for
- * bit over every shift count and operands of every size, on the host and under QEMU.
+ *   - est_mul_unit is sc_mul by a factor in [0, 1] (a throttle, a lag coefficient) in 32-bit
+ *     words, one copy per object (the trackers' per-frame products); est_div_int is
+ *     sc_div_int by 3 or 100 without a library division; est_div_near is sc_div of
+ *     non-negative operands from a close guess of the quotient (kf_track's quotients change
+ *     little from frame to frame), without preparing a reciprocal; est_sqrt_near is sc_sqrt
+ *     from a close guess of the root.
+ * tests/core/test_est_ops.c compares each function here with its qfmt.h (or scalar.h)
+ * definition bit for bit over every shift count and operands of every size, on the host and
+ * under QEMU.
  */
 #ifndef OCTO_EST_OPS_H
 #define OCTO_EST_OPS_H
 
 #include "qfmt.h"
+#include "scalar.h"
+#include "scalar_ops.h"
 
 #if defined(__GNUC__)
 #define EST_INLINE static inline __attribute__((always_inline))
@@ -116,6 +125,18 @@ static inline int32_t est_scale32(int32_t v, int s)
 	return v < 0 ? -(int32_t)q : (int32_t)q;
 }
 
+/* est_scale32(v, s) for s in [0, 30], always inlined: for a constant s, a comparison and a
+ * shift (the per-frame conversions of throttles into motor_id's Q1.30) */
+EST_INLINE int32_t est_shl32c(int32_t v, unsigned s)
+{
+	int32_t lim = INT32_MAX >> s;
+	if (v > lim)
+		return INT32_MAX;
+	if (v < -lim)
+		return -INT32_MAX;
+	return v >= 0 ? (int32_t)((uint32_t)v << s) : -(int32_t)((uint32_t)-v << s);
+}
+
 /* q_scale64(v, s): v 2^s, left shifts saturating to +/-INT64_MAX, right shifts rounded to
  * nearest (ties away from zero), INT64_MIN taken as -INT64_MAX; any s. Its shifts by the
  * variable count are done on the two 32-bit halves (a 64-bit one is a library call on
@@ -201,6 +222,105 @@ static inline int32_t est30_mul_recip(int64_t a, uint32_t y, int eb, int *sh)
 	int32_t r = rr > (uint64_t)INT32_MAX ? INT32_MAX : (int32_t)rr;
 	*sh = sa + eb - 94;
 	return a < 0 ? -r : r;
+}
+
+/* sc_mul(a, u), bit for bit, for any a and u; cheapest for u in [0, 1] (raw u <= 2^16 in the
+ * fixed build), where |a| = ah 2^16 + al (ah <= 2^15, al < 2^16) gives
+ * |a| u / 2^16 = ah u + al u / 2^16 with ah u <= 2^31 and al u + 2^15 < 2^32: the product
+ * rounded to nearest (ties away from zero, as sc_mul) in 32-bit words, at most |a| (only
+ * a = INT32_MIN, u = 1 saturates). Other u: sc_mul. Float build: sc_mul. */
+static inline scalar_t est_mul_unit(scalar_t a, scalar_t u)
+{
+#if OCTO_FIXED
+	if ((uint32_t)u > 65536u)
+		return sc_mul(a, u);
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, uu = (uint32_t)u;
+	uint32_t r = (ua >> 16) * uu + (((ua & 0xffffu) * uu + 0x8000u) >> 16);
+	if (r > (uint32_t)INT32_MAX)
+		return SC_MAX_NEG;
+	return a < 0 ? -(scalar_t)r : (scalar_t)r;
+#else
+	return sc_mul(a, u);
+#endif
+}
+
+/* sc_div_int(a, n) for a constant n, bit for bit: floor((|a| + floor(n / 2)) / n) with a's
+ * sign. For n = 3 and n = 100 the quotient of the (at most 2^31 + 50) dividend is its product
+ * with a 32-bit reciprocal, the high word shifted (0xAAAAAAAB / 2^33, 0x51EB851F / 2^37:
+ * exact for every 32-bit dividend), in place of a library division on Cortex-M0; other n:
+ * sc_div_int. Float build: sc_div_int. */
+EST_INLINE scalar_t est_div_int(scalar_t a, uint32_t n)
+{
+#if OCTO_FIXED
+	if (n != 3u && n != 100u)
+		return sc_div_int(a, n);
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+	uint64_t p = est_umul32(ua + n / 2u, n == 3u ? 0xAAAAAAABu : 0x51EB851Fu);
+	uint32_t q = (uint32_t)(p >> 32) >> (n == 3u ? 1 : 5);
+	return a < 0 ? -(scalar_t)q : (scalar_t)q;
+#else
+	return sc_div_int(a, n);
+#endif
+}
+
+/* sc_div(a, b), bit for bit, for any a, b and guess q0; cheapest for a >= 0, b > 0 and q0
+ * within a few units of the quotient. sc_div's quotient of such operands is the largest q with
+ * q b <= x = a 2^16 + floor(b / 2) (rounded to nearest, ties up), or SC_MAX from 2^31 on: q0
+ * is corrected by the remainder x - q0 b (below 2^63 in magnitude: x < 2^48, q0 b < 2^62) by
+ * at most EST_DIV_STEPS units; a guess farther off, or a quotient beyond the format, is left to
+ * sc_div. Float build: sc_div. */
+#define EST_DIV_STEPS 8
+static inline scalar_t est_div_near(scalar_t a, scalar_t b, scalar_t q0)
+{
+#if OCTO_FIXED
+	if (a < 0 || b <= 0 || q0 < 0)
+		return sc_div(a, b);
+	int64_t x = ((int64_t)a << 16) + (b >> 1);
+	uint32_t q = (uint32_t)q0;
+	int64_t r = x - (int64_t)est_umul32(q, (uint32_t)b);
+	for (int i = 0; i < EST_DIV_STEPS && r < 0; i++) {
+		q--;
+		r += b;
+	}
+	for (int i = 0; i < EST_DIV_STEPS && r >= b; i++) {
+		q++;
+		r -= b;
+	}
+	if (r < 0 || r >= b || q > (uint32_t)INT32_MAX)
+		return sc_div(a, b);
+	return (scalar_t)q;
+#else
+	(void)q0;
+	return sc_div(a, b);
+#endif
+}
+
+/* sc_sqrt(a), bit for bit, for any a and guess g; cheapest for g within a few units of the
+ * root. sc_sqrt's root of a > 0 is the R with R^2 - R < N <= R^2 + R, N = a 2^16 (the root
+ * of N rounded to nearest): g is corrected by D = N - g^2 (N < 2^47, g^2 < 2^62) by at most
+ * EST_DIV_STEPS units, else sc_sqrt. Float build: sc_sqrt. */
+static inline scalar_t est_sqrt_near(scalar_t a, scalar_t g)
+{
+#if OCTO_FIXED
+	if (a <= 0 || g <= 0)
+		return sc_sqrt(a);
+	uint32_t r = (uint32_t)g;
+	int64_t d = ((int64_t)a << 16) - (int64_t)est_umul32(r, r);
+	for (int i = 0; i < EST_DIV_STEPS && d > (int64_t)r; i++) {
+		d -= 2 * (int64_t)r + 1;
+		r++;
+	}
+	for (int i = 0; i < EST_DIV_STEPS && d <= -(int64_t)r; i++) {
+		r--;
+		d += 2 * (int64_t)r + 1;
+	}
+	if (d > (int64_t)r || d <= -(int64_t)r)
+		return sc_sqrt(a);
+	return (scalar_t)r;
+#else
+	(void)g;
+	return sc_sqrt(a);
+#endif
 }
 
 #endif /* OCTO_EST_OPS_H */

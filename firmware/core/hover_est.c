@@ -1,6 +1,7 @@
 /* hover_est.c - see hover_est.h for the model, the filter and the units. */
 #include "hover_est.h"
 
+#include "est_ops.h"
 #include "scalar_ops.h"
 
 #define P_MAX_PCT2 SC(10000.0) /* sd 100 %: what the filter starts from at most */
@@ -44,6 +45,10 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 	s->theta_lo = sc_div(SC(1.0), s->p.u_max);
 	s->theta_hi = sc_div(SC(1.0), s->p.u_min);
 	s->r_tau = sc_recip_of(s->p.tau_s);
+	s->q2 = sc_sq(sc_mul(SC(100.0), s->p.q_rel));
+	s->y_min = sc_mul(SC(0.05), s->p.g_mps2);
+	s->r_sd0 = sc_mul(SC(100.0), s->p.sigma_acc);
+	s->gate2 = sc_sq(s->p.gate_sigma);
 	s->al_dt = SC_ZERO;
 	s->al = SC_ZERO;
 	u0 = sc_isfinite(u0) ? sc_clamp(u0, s->p.u_min, s->p.u_max) : s->p.u_min;
@@ -52,6 +57,8 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 	s->v_f = SC_ZERO;
 	s->uc_f = SC_ZERO;
 	s->primed = false;
+	s->gated_s = SC_ZERO;
+	s->gated_sign = 0;
 	s->updates = 0;
 	s->rejected = 0;
 }
@@ -65,7 +72,7 @@ static bool inputs_ok(scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
 /* Advances the state-variable filter; returns the filtered acceleration. */
 static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
 {
-	scalar_t uc = sc_mul(u, c);
+	scalar_t uc = est_mul_unit(u, c);   /* c = cos(tilt) in [0, 1] (est_mul_unit: exact for any) */
 	if (!s->primed) {
 		s->v_f = vz;
 		s->uc_f = uc;
@@ -78,8 +85,8 @@ static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c
 		s->al = sc_div(dt, sc_add(s->p.tau_s, dt));
 	}
 	scalar_t al = s->al;
-	s->v_f = sc_add(s->v_f, sc_mul(al, sc_sub(vz, s->v_f)));
-	s->uc_f = sc_add(s->uc_f, sc_mul(al, sc_sub(uc, s->uc_f)));
+	s->v_f = sc_add(s->v_f, est_mul_unit(sc_sub(vz, s->v_f), al));   /* al in [0, 1] */
+	s->uc_f = sc_add(s->uc_f, est_mul_unit(sc_sub(uc, s->uc_f), al));
 	return sc_div_r(sc_sub(vz, s->v_f), s->p.tau_s, &s->r_tau);
 }
 
@@ -100,22 +107,21 @@ bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t
 	}
 	bool was_primed = s->primed;
 	scalar_t a_f = filters(s, vz_mps, u, cos_tilt, dt_s);
-	/* process noise: a random walk of the relative error */
-	scalar_t q = sc_mul(SC(100.0), s->p.q_rel);
-	s->p_pct2 = sc_min(sc_add(s->p_pct2, sc_mul(sc_sq(q), dt_s)), P_MAX_PCT2);
+	/* process noise: a random walk of the relative error (dt < 1) */
+	s->p_pct2 = sc_min(sc_add(s->p_pct2, est_mul_unit(s->q2, dt_s)), P_MAX_PCT2);
 	if (!was_primed)
 		return false;
 	scalar_t y_hat = sc_mul(sc_mul(s->p.g_mps2, s->uc_f), s->theta);
-	if (!(y_hat > sc_mul(SC(0.05), s->p.g_mps2)))
+	if (!(y_hat > s->y_min))
 		return false;   /* (almost) no thrust: nothing to learn */
 	scalar_t y = sc_add(a_f, s->p.g_mps2);
 	/* two quotients by y^: its reciprocal prepared once (scalar_ops.h) */
 	struct sc_gain inv_y_hat = sc_gain_recip2(y_hat, SC(1.0));
 	scalar_t e_pct = sc_mul(SC(100.0), sc_sub(sc_mul_gain(y, &inv_y_hat), SC(1.0)));
-	scalar_t r_sd = sc_mul_gain(sc_mul(SC(100.0), s->p.sigma_acc), &inv_y_hat);
+	scalar_t r_sd = sc_mul_gain(s->r_sd0, &inv_y_hat);
 	scalar_t r = sc_sq(r_sd);
 	scalar_t pr = sc_add(s->p_pct2, r);
-	if (sc_sq(e_pct) > sc_mul(sc_sq(s->p.gate_sigma), pr)) {
+	if (sc_sq(e_pct) > sc_mul(s->gate2, pr)) {
 		s->rejected++;
 		int8_t sign = e_pct > SC_ZERO ? 1 : -1;
 		s->gated_s = sign == s->gated_sign ? sc_add(s->gated_s, dt_s) : dt_s;
@@ -132,7 +138,8 @@ bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t
 	/* two quotients by P + r: its reciprocal prepared once */
 	struct sc_gain inv_pr = sc_gain_recip2(pr, SC(1.0));
 	scalar_t k = sc_mul_gain(s->p_pct2, &inv_pr);
-	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), sc_mul(k, sc_div_int(e_pct, 100u))));
+	/* k = P / (P + r) in [0, 1] */
+	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), est_mul_unit(est_div_int(e_pct, 100u), k)));
 	s->theta = clamp_theta(s, th);
 	s->p_pct2 = sc_max(sc_mul_gain(sc_mul(s->p_pct2, r), &inv_pr), SC_EPS);
 	s->updates++;
@@ -157,7 +164,7 @@ scalar_t hover_est_u(const struct hover_est *s)
 scalar_t hover_est_sd(const struct hover_est *s)
 {
 	/* relative sd of theta = relative sd of u_h (first order) */
-	return sc_mul(hover_est_u(s), sc_div_int(sc_sqrt(s->p_pct2), 100u));
+	return sc_mul(hover_est_u(s), est_div_int(sc_sqrt(s->p_pct2), 100u));
 }
 
 bool hover_est_converged(const struct hover_est *s, scalar_t rel_sd)

@@ -74,6 +74,10 @@ struct hover_est {
 	scalar_t theta_lo, theta_hi; /* 1 / u_max, 1 / u_min */
 	struct sc_recip r_tau;       /* 1 / tau_s */
 	scalar_t al_dt, al;          /* the filters' coefficient dt / (tau + dt) and its dt (0: none) */
+	scalar_t q2;                 /* (100 q_rel)^2, percent^2 per s */
+	scalar_t y_min;              /* 0.05 g: the least predicted acceleration that is learnt from */
+	scalar_t r_sd0;              /* 100 sigma_acc */
+	scalar_t gate2;              /* gate_sigma^2 */
 };
 
 /* Defaults: u_h in [0.02, 0.8], sigma_u0 1.0, sigma_acc 0.5 m/s^2, q_rel 0.003 /sqrt(s),

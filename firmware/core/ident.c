@@ -2,6 +2,7 @@
  * build); initialisation, the float getters and the acceptance rules are ident_setup.c.
  * See ident.h. */
 #include "ident.h"
+#include "est_ops.h"
 
 /* ---------------------------------------------------------------- sums of products
  * ident_sum_t (ident.h): Q31.32 in int64 in the fixed build, float otherwise. */
@@ -24,10 +25,10 @@ static inline ident_sum_t sum_mul(ident_sum_t a, ident_sum_t b) { return a * b; 
 
 /* ---------------------------------------------------------------- rotor coefficients */
 
-/* g(s) = (1 - c) s + c s^2 */
+/* g(s) = (1 - c) s + c s^2 (s a throttle, s and s^2 in [0, 1]: est_mul_unit, exact for any s) */
 static scalar_t curve_g(scalar_t c, scalar_t s)
 {
-	return sc_add(sc_mul(sc_sub(SC(1.0), c), s), sc_mul(c, sc_mul(s, s)));
+	return sc_add(est_mul_unit(sc_sub(SC(1.0), c), s), est_mul_unit(c, est_mul_unit(s, s)));
 }
 
 /* delay, lag and sensitivity one frame on; returns the lagged throttle s */
@@ -37,7 +38,7 @@ static scalar_t rotor_advance(struct ident_rotor *r, scalar_t thr_sent_prev)
 	scalar_t s_prev = r->lag.y;
 	scalar_t s = filt_lag_update(&r->lag, u);
 	/* sensitivity of s to tau_m (the lag check) */
-	r->dphi_dtau = sc_add(sc_mul(sc_sub(SC(1.0), r->lag.alpha), r->dphi_dtau),
+	r->dphi_dtau = sc_add(est_mul_unit(r->dphi_dtau, sc_sub(SC(1.0), r->lag.alpha)),
 			      sc_mul(r->dalpha_dtau, sc_sub(u, s_prev)));
 	return s;
 }
@@ -58,7 +59,7 @@ void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t 
 	rls_update(&r->lagaware, &r->phi, y, excited);
 
 	/* the lag check: g'(s) = 1 - c + 2 c s times the sensitivity of s */
-	scalar_t gp = sc_add(sc_sub(SC(1.0), r->curve), sc_mul(sc_add(r->curve, r->curve), s));
+	scalar_t gp = sc_add(sc_sub(SC(1.0), r->curve), est_mul_unit(sc_add(r->curve, r->curve), s));
 	scalar_t phi2[2] = {r->phi, sc_mul(gp, r->dphi_dtau)};
 	if (r->dalpha_dtau != SC_ZERO)
 		rls_update(&r->sens, phi2, y, excited);

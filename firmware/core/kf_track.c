@@ -1,6 +1,7 @@
 /* kf_track.c - see kf_track.h for the model, the memory and the units. */
 #include "kf_track.h"
 
+#include "est_ops.h"
 #include "scalar_ops.h"
 
 struct kf_track_params kf_track_params_default(void)
@@ -29,8 +30,10 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->k = k0 > SC_ZERO ? k0 : SC(1.0);
 	s->P = SC_ZERO;
 	s->s2_pct2 = sc_sq(s->p.s0_pct);
+	s->s_pct = sc_sqrt(s->s2_pct2);
 	s->mem_s = s->p.t_min_s;
 	s->lambda = SC(0.98);
+	s->p_rt = SC_ZERO;
 	s->phi_f = SC_ZERO;
 	s->e_prev_pct = SC_ZERO;
 	s->lag_al = SC(1.0);
@@ -43,15 +46,25 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->updates = 0;
 }
 
+/* sqrt(P / (1 + lambda)) for kf_track_sd, after every change of P or lambda: the quotient and
+ * the root from the last ones as guesses (P and lambda change slowly): the same values */
+static void set_p_rt(struct kf_track *s)
+{
+	s->p_rt = est_sqrt_near(est_div_near(s->P, sc_add(SC(1.0), s->lambda), sc_sq(s->p_rt)), s->p_rt);
+}
+
 /* x^(1/3) for x > 0 by at most 6 steps of Newton's iteration from a warm start (the last
  * memory). A step that moves r by at most SC_EPS (1 LSB in the fixed build) ends it: the
  * iteration has converged to the resolution, and the warm start of a slowly changing
- * memory needs one step, not a second that would only confirm it. */
+ * memory needs one step, not a second that would only confirm it. After the first step r is
+ * near the root, so x / r^2 is near r: the quotient from that guess (est_div_near, the same
+ * quotient). */
 static scalar_t cbrt_warm(scalar_t x, scalar_t guess)
 {
 	scalar_t r = guess > SC_ZERO ? guess : SC(1.0);
 	for (int i = 0; i < 6; i++) {
-		scalar_t n = sc_div_int(sc_add(sc_add(r, r), sc_div(x, sc_sq(r))), 3u);
+		scalar_t r2 = sc_sq(r);
+		scalar_t n = est_div_int(sc_add(sc_add(r, r), i ? est_div_near(x, r2, r) : sc_div(x, r2)), 3u);
 		bool done = sc_abs(sc_sub(n, r)) <= SC_EPS;
 		r = n;
 		if (done)
@@ -66,8 +79,8 @@ static scalar_t regressor(const struct kf_track *s, const scalar_t *thr, int n)
 	for (int j = 0; j < n && j < KF_TRACK_ROTORS; j++) {
 		scalar_t t = sc_clamp(thr[j], SC_ZERO, SC(1.0));
 		/* a straight curve and a nominal rotor skip their products (x 1 and + 0 are exact
-		 * in both builds) */
-		scalar_t g = c == SC_ZERO ? t : sc_add(sc_mul(sc_sub(SC(1.0), c), t), sc_mul(c, sc_sq(t)));
+		 * in both builds); t and t^2 are in [0, 1]: est_mul_unit */
+		scalar_t g = c == SC_ZERO ? t : sc_add(est_mul_unit(sc_sub(SC(1.0), c), t), est_mul_unit(c, est_mul_unit(t, t)));
 		sum = sc_add(sum, s->p.scale[j] == SC(1.0) ? g : sc_mul(s->p.scale[j], g));
 	}
 	return sum;
@@ -94,7 +107,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		s->primed = true;
 	} else {
 		scalar_t al = s->lag_al;
-		s->phi_f = sc_add(s->phi_f, sc_mul(al, sc_sub(phi, s->phi_f)));
+		s->phi_f = sc_add(s->phi_f, est_mul_unit(sc_sub(phi, s->phi_f), al));   /* al in [0, 1] */
 	}
 	phi = s->phi_f;
 	if (!gate || phi < s->p.phi_min || !(y_n > SC_ZERO))
@@ -103,6 +116,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		s->k = sc_div(y_n, phi);
 		s->e_prev_pct = SC_ZERO;
 		s->P = sc_div(s->dt_tmin, sc_sq(phi));
+		set_p_rt(s);
 		s->started = true;
 		s->updates++;
 		return true;
@@ -114,25 +128,27 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	scalar_t e_pct = sc_div(sc_mul(SC(100.0), e), y_n);
 	scalar_t de = sc_sub(e_pct, s->e_prev_pct);
 	s->e_prev_pct = e_pct;
-	/* half the square: x 0.5 is x / 2 exactly in both builds */
-	scalar_t s2 = sc_min(sc_mul(sc_sq(de), SC(0.5)), SC(10000.0));
-	s->s2_pct2 = sc_add(s->s2_pct2, sc_mul(s->a_s, sc_sub(s2, s->s2_pct2)));
+	/* half the square: x 0.5 is x / 2 exactly in both builds (factors in [0, 1]: est_mul_unit) */
+	scalar_t s2 = sc_min(est_mul_unit(sc_sq(de), SC(0.5)), SC(10000.0));
+	s->s2_pct2 = sc_add(s->s2_pct2, est_mul_unit(sc_sub(s2, s->s2_pct2), s->a_s));
+	s->s_pct = sc_sqrt(s->s2_pct2);
 	/* memory T* = (s^2 / (4 r^2 f_s))^(1/3) with s and r as fractions: s / (2 r) in seconds is
 	 * (s_pct / 100) / (2 drift_per_min / 60) = 0.3 s_pct / drift_per_min */
 	if (s->p.drift_per_min > SC_ZERO) {
-		scalar_t q = sc_div_r(sc_mul(SC(0.3), sc_sqrt(s->s2_pct2)), s->p.drift_per_min, &s->r_drift);
-		scalar_t x = sc_mul(sc_sq(q), dt_s);   /* (s / 2r)^2 / f_s */
+		scalar_t q = sc_div_r(est_mul_unit(s->s_pct, SC(0.3)), s->p.drift_per_min, &s->r_drift);
+		scalar_t x = est_mul_unit(sc_sq(q), dt_s);   /* (s / 2r)^2 / f_s */
 		s->mem_s = sc_clamp(cbrt_warm(x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
 	} else {
 		s->mem_s = s->p.t_max_s;
 	}
-	s->lambda = sc_sub(SC(1.0), sc_div(dt_s, s->mem_s));
+	/* dt / T* from the last frame's as the guess (the memory changes slowly) */
+	s->lambda = sc_sub(SC(1.0), est_div_near(dt_s, s->mem_s, sc_sub(SC(1.0), s->lambda)));
 	/* RLS with forgetting, scalar: with den = lambda + phi^2 P, the update
 	 * P' = (P - K phi P) / lambda, K = P phi / den is P' = P / den and K = P' phi (one
 	 * quotient) */
 	scalar_t phi2 = sc_sq(phi);
 	scalar_t den = sc_add(s->lambda, sc_mul(phi2, s->P));
-	s->P = sc_div(s->P, den);
+	s->P = est_div_near(s->P, den, s->P);   /* den is about 1 once P has settled */
 	scalar_t K = sc_mul(s->P, phi);
 	s->k = sc_add(s->k, sc_mul(K, e));
 	/* no wind-up: P at most its steady state for the shortest memory and this regressor,
@@ -140,6 +156,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	if (sc_mul(s->P, phi2) > s->dt_tmin)
 		s->P = sc_div(s->dt_tmin, phi2);
 	s->P = sc_max(s->P, SC_EPS);
+	set_p_rt(s);
 	s->updates++;
 	return true;
 }
@@ -149,6 +166,6 @@ scalar_t kf_track_sd(const struct kf_track *s)
 	if (!s->started)
 		return SC_ZERO;
 	/* sigma (N) = s y ~ s k phi; var(k) = sigma^2 P / (1 + lambda) */
-	scalar_t sigma = sc_mul(sc_div_int(sc_sqrt(s->s2_pct2), 100u), sc_mul(s->k, s->phi_f));
-	return sc_mul(sigma, sc_sqrt(sc_div(s->P, sc_add(SC(1.0), s->lambda))));
+	scalar_t sigma = sc_mul(est_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_f));
+	return sc_mul(sigma, s->p_rt);
 }

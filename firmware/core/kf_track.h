@@ -50,8 +50,10 @@ struct kf_track {
 	scalar_t k;        /* estimate, N per unit throttle */
 	scalar_t P;        /* 1 / sum lambda^i phi^2 */
 	scalar_t s2_pct2;  /* relative noise variance, percent^2 */
+	scalar_t s_pct;    /* its square root, set with it (the update and kf_track_sd read it) */
 	scalar_t mem_s;    /* current memory T*, s */
 	scalar_t lambda;
+	scalar_t p_rt;     /* sqrt(P / (1 + lambda)), set with P and lambda (kf_track_sd reads it) */
 	scalar_t phi_f;    /* lag-filtered regressor */
 	scalar_t e_prev_pct; /* last residual, percent of y */
 	/* what depends on the frame period and the parameters only, computed when they change

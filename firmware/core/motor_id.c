@@ -8,6 +8,11 @@
 #define NR MOTOR_ID_ROTORS
 #define ND MOTOR_ID_DELAYS
 #define NL MOTOR_ID_LAGS
+#if defined(__GNUC__)
+#define MID_INLINE static inline __attribute__((always_inline))
+#else
+#define MID_INLINE static inline
+#endif
 
 /* ---------------------------------------------------------------- number operations
  * The algorithm below is written once against these; u: Q1.30, f: Q2.29, sum: block floating
@@ -22,11 +27,6 @@
 #define E_MAX 100       /* exponent ceiling (2^70 frames away): beyond it terms are dropped */
 #define WBIN_U ((motor_id_u_t)(0.025 * (1 << QF_UNIT_FRAC) + 0.5))
 typedef uint32_t big_t;
-#if defined(__GNUC__)
-#define MID_INLINE static inline __attribute__((always_inline))
-#else
-#define MID_INLINE static inline
-#endif
 /* a b / 2^s rounded to nearest (ties away from zero), s in [1, 62]: qfmt.h's
  * q_shr64(q_smul32(a, b), s) for |a|, |b| < 2^31, in 32-bit operations (Cortex-M0 has
  * neither a long multiply nor 64-bit shifts: those are library calls) */
@@ -51,7 +51,7 @@ MID_INLINE int64_t mid_mul_rnd_in(int32_t a, int32_t b, unsigned s)
 }
 /* the same, called (flash: inlined only in the sums' terms, the hottest) */
 static int64_t mid_mul_rnd(int32_t a, int32_t b, unsigned s) { return mid_mul_rnd_in(a, b, s); }
-static inline motor_id_u_t u_of_sc(scalar_t v) { return est_scale32(v, QF_UNIT_FRAC - QF_SC_FRAC); }
+static inline motor_id_u_t u_of_sc(scalar_t v) { return est_shl32c(v, QF_UNIT_FRAC - QF_SC_FRAC); }
 static inline motor_id_f_t f_of_sc(scalar_t v, int kexp) { return est_scale32(v, QF_MOTN_FRAC - QF_SC_FRAC - kexp); }
 static inline int32_t sub32(int32_t a, int32_t b) { return q_sat32((int64_t)a - b); }
 /* s + k (u - s) */
@@ -183,21 +183,40 @@ static void sums_halve(struct motor_id *m, unsigned mask)
 #endif
 }
 
+/* The bank's six sums of a rotor (struct motor_id_stat's members, in the order of their
+ * exponents MID_E_G11..MID_E_RR) are the products a[k] b[k] of its regressors x1, x2 and
+ * residual r; u and f values share one type in each build */
+typedef motor_id_u_t opnd_t;
+_Static_assert(sizeof(motor_id_u_t) == sizeof(motor_id_f_t), "motor_id_u_t and motor_id_f_t are one type");
+_Static_assert(sizeof(struct motor_id_stat) == 6 * sizeof(motor_id_sum_t) && MID_E_RR - MID_E_G11 == 5,
+	       "struct motor_id_stat: six sums in the order of their exponents");
+static const int bank_sh[6] = {SH_UU, SH_UU, SH_UU, SH_UF, SH_UF, SH_FF};
+/* the factors of rotor j's six terms at lag state s and normalised thrust fm */
+MID_INLINE void bank_factors(const struct motor_id *m, motor_id_u_t s, unsigned j, motor_id_f_t fm,
+			     opnd_t a[6], opnd_t b[6])
+{
+	motor_id_u_t x2 = u_x2(s, m->s_c[j]);
+	motor_id_f_t r = sub32(fm, f_ref(m, s));
+	a[0] = a[1] = a[3] = b[0] = s;
+	a[2] = a[4] = b[1] = b[2] = x2;
+	a[5] = b[3] = b[4] = b[5] = r;
+}
+/* the six sums of a struct motor_id_stat as an array (its members, without padding) */
+static inline motor_id_sum_t *stat_sums(struct motor_id_stat *st) { return (motor_id_sum_t *)(void *)st; }
+
 /* The bank's exponents at a restart (every sum zero), from the first hypothesis' terms of
  * this frame: below 2^27 there, so that the first frame does not halve the 120 sums of each
  * kind many times over (the other hypotheses' terms are alike; a larger one halves as usual) */
 static void bank_exponents(struct motor_id *m, const motor_id_f_t fm[NR])
 {
 #if OCTO_FIXED
-	static const int sh[6] = {SH_UU, SH_UU, SH_UU, SH_UF, SH_UF, SH_FF};
 	int bits[6] = {0, 0, 0, 0, 0, 0};
 	const motor_id_u_t *s = m->s[0][0];
 	for (unsigned j = 0; j < NR; j++) {
-		motor_id_u_t x1 = s[j], x2 = u_x2(s[j], m->s_c[j]);
-		motor_id_f_t r = sub32(fm[j], f_ref(m, s[j]));
-		const int32_t a[6] = {x1, x1, x2, x1, x2, r}, b[6] = {x1, x2, x2, r, r, r};
+		opnd_t a[6], b[6];
+		bank_factors(m, s[j], j, fm[j], a, b);
 		for (unsigned k = 0; k < 6; k++) {
-			int64_t t = term(a[k], b[k], sh[k], MOTOR_ID_E0);
+			int64_t t = term(a[k], b[k], bank_sh[k], MOTOR_ID_E0);
 			int nb = 64 - q_clz64((uint64_t)(t < 0 ? -t : t));
 			if (nb > bits[k])
 				bits[k] = nb;
@@ -354,14 +373,13 @@ void motor_id_process(struct motor_id *m)
 				const motor_id_u_t *s = m->s[d][i];
 				struct motor_id_stat *st = m->st[d][i];
 				for (unsigned j = 0; j < NR; j++) {
-					motor_id_u_t x1 = s[j], x2 = u_x2(s[j], m->s_c[j]);
-					motor_id_f_t r = sub32(fm[j], f_ref(m, s[j]));
-					sum_add(m, MID_E_G11, &st[j].g11, term(x1, x1, SH_UU, e[MID_E_G11]), &big[0]);
-					sum_add(m, MID_E_G12, &st[j].g12, term(x1, x2, SH_UU, e[MID_E_G12]), &big[1]);
-					sum_add(m, MID_E_G22, &st[j].g22, term(x2, x2, SH_UU, e[MID_E_G22]), &big[2]);
-					sum_add(m, MID_E_B1, &st[j].b1, term(x1, r, SH_UF, e[MID_E_B1]), &big[3]);
-					sum_add(m, MID_E_B2, &st[j].b2, term(x2, r, SH_UF, e[MID_E_B2]), &big[4]);
-					sum_add(m, MID_E_RR, &st[j].rr, term(r, r, SH_FF, e[MID_E_RR]), &big[5]);
+					opnd_t a[6], b[6];
+					bank_factors(m, s[j], j, fm[j], a, b);
+					motor_id_sum_t *v = stat_sums(&st[j]);
+					/* one copy of the term and the sum for the six kinds */
+					for (unsigned k = 0; k < 6; k++)
+						sum_add(m, MID_E_G11 + k, &v[k], term(a[k], b[k], bank_sh[k], e[MID_E_G11 + k]),
+							&big[k]);
 				}
 			}
 		sums_halve(m, over_mask(big, MID_E_G11, 6));

@@ -62,7 +62,9 @@ static inline rls_wide_t wide_add(rls_wide_t a, rls_wide_t b) { return q_add64(a
 static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return q30_ratio(a, b); }
 /* d a / b = result 2^-*sh (0 < a <= 2 b, 0 < b): no bits lost however small a / b */
 /* d 2^e (e <= 0 here: rounds) */
-static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { return est_scale64(d, e); }
+/* (e = 0, the common case, and every case of one parameter: d itself, as est_scale64 gives it
+ * for any d but INT64_MIN, which no mantissa is) */
+static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { return e ? est_scale64(d, e) : d; }
 /* d 4^s (s <= 0 for the parameters in use: rounds) */
 static inline rls_wide_t wide_pow4(rls_wide_t d, int s) { return est_scale64(d, 2 * s); }
 /* x + a c / b in Q15.48 (x Q15.48, c Q7.24; a, b Q9.54, b > 0): the gain a / b as r 2^-sh */
@@ -98,11 +100,28 @@ static inline rls_sig_t u_update(rls_sig_t uij, rls_inn_t b, rls_sig_t f, rls_rc
 	rls_gain_t g = gain_of(b, c);
 	return q_sat32((int64_t)uij - est_scale64(q_smul32(f, g.r), -(QF_UNIT_FRAC + g.sh)));
 }
-/* d a_prev / (a lambda) = result 2^-*sh, with the reciprocal c of a (lambda = 1: no other) */
-static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c,
-					  rls_unit_t lambda, int *sh)
+/* gain_of(2^k, c) for k in [0, 62]: the mantissa of 2^k is 2^31, so the gain's is y / 2
+ * rounded, (y + 1) / 2 (at most 2^30), and its shift 63 - k + e - 94; a zero reciprocal
+ * gives 0 (shift 0), as gain_of */
+static inline rls_gain_t gain_of_pow2(int k, rls_rcp_t c)
 {
-	rls_gain_t g = gain_of(a_prev, lambda == UNIT_ONE ? c : rcp_of(q_mul64_q30(a, lambda)));
+	rls_gain_t g = {0, 0};
+	if (rcp_y(c) != 0u) {
+		g.r = (int32_t)((rcp_y(c) + 1u) >> 1);
+		g.sh = 63 - k + rcp_e(c) - 94;
+	}
+	return g;
+}
+/* d a_prev / (a lambda) = result 2^-*sh, with the reciprocal c of a (lambda = 1: no other);
+ * k_prev >= 0: a_prev is 2^k_prev (the first innovation with lambda = 1) */
+static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c,
+					  rls_unit_t lambda, int k_prev, int *sh)
+{
+	rls_gain_t g;
+	if (lambda == UNIT_ONE && k_prev >= 0)
+		g = gain_of_pow2(k_prev, c);
+	else
+		g = gain_of(a_prev, lambda == UNIT_ONE ? c : rcp_of(q_mul64_q30(a, lambda)));
 	*sh = g.sh;
 	return q_mul64_q30(d, g.r);
 }
@@ -150,10 +169,17 @@ static inline rls_inn_t inn_mul_sig(rls_inn_t a, rls_sig_t b) { return est_mul64
 static inline rls_inn_t inn_add(rls_inn_t a, rls_inn_t b) { return q_add64(a, b); }
 /* Q1.30 2^e -> Q9.54 (e <= 0) */
 static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { return est_scale64((int64_t)m << (QF_INN_FRAC - QF_UNIT_FRAC), e); }
+/* inn_of_unit(UNIT_ONE, e) is 2^INN_POW2(e) (e >= RLS_EXP_MIN > -QF_INN_FRAC: exact) */
+#define INN_POW2(e) (QF_INN_FRAC + (e))
 static inline bool wide_ok(rls_wide_t d) { return d > 0; }
 static inline bool sig_ok(rls_sig_t x) { (void)x; return true; }
 static inline bool acc_ok(rls_acc_t x) { (void)x; return true; }
-static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return est_scale32(x, QF_SIG_FRAC - QF_SC_FRAC - shift); }
+/* (a left shift, the common case, inlined: est_shl32c is est_scale32 for shifts in [0, 30]) */
+static inline rls_sig_t sig_of_sc(scalar_t x, int shift)
+{
+	int s = QF_SIG_FRAC - QF_SC_FRAC - shift;
+	return s >= 0 && s <= 30 ? est_shl32c(x, (unsigned)s) : est_scale32(x, s);
+}
 static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return q_scale32(x, QF_SC_FRAC - QF_SIG_FRAC + shift); }
 static inline rls_acc_t phi2_of_sc(scalar_t x) { return q_smul32(x, x); } /* Q32 */
 /* |phi|^2 is needed for the gate only (|phi|^2 >= 0 passes a zero phi_min) */
@@ -194,9 +220,10 @@ static inline rls_sig_t u_update(rls_sig_t uij, rls_inn_t b, rls_sig_t f, rls_rc
 	return uij + b * (-f / c);
 }
 static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c,
-					  rls_unit_t lambda, int *sh)
+					  rls_unit_t lambda, int k_prev, int *sh)
 {
 	(void)c;
+	(void)k_prev;
 	*sh = 0;
 	return d * a_prev / (a * lambda);
 }
@@ -221,6 +248,7 @@ static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s) { (voi
 static inline rls_inn_t inn_mul_sig(rls_inn_t a, rls_sig_t b) { return a * b; }
 static inline rls_inn_t inn_add(rls_inn_t a, rls_inn_t b) { return a + b; }
 static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { (void)e; return m; }
+#define INN_POW2(e) (e)
 static inline bool wide_ok(rls_wide_t d) { return d > 0.0f && isfinite(d); }
 static inline bool sig_ok(rls_sig_t x) { return isfinite(x); }
 static inline bool acc_ok(rls_acc_t x) { return isfinite(x); }
@@ -310,7 +338,8 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 		rls_dot_t sd = DOT_ZERO;
 		for (unsigned i = 0; i < j; i++)
 			sd = dot_mac(sd, r->u[RLS_U_IDX(i, j)], phi[i]);
-		rls_sig_t s = sig_of_dot(j ? dot_mac(sd, phi[j], UNIT_SIG) : dot_of_sig(phi[j])); /* U_jj = 1 */
+		/* U_jj = 1 (f_0 = phi_0: the round trip through the dot format is exact) */
+		rls_sig_t s = j ? sig_of_dot(dot_mac(sd, phi[j], UNIT_SIG)) : phi[j];
 		f[j] = s;
 		v[j] = inn_of_wide_sig(r->d[j], s, (int)r->d_exp - fr);
 		for (unsigned i = 0; i < j; i++)   /* the strict upper part: all that is read */
@@ -327,7 +356,7 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 		alpha = inn_add(alpha_prev, inn_mul_sig(v[j], f[j]));
 		rc = rcp_of(alpha);
 		/* d_j a_(j-1) / (a_j lambda) = d[j] 2^-sh[j] */
-		d[j] = wide_scale_ratio(r->d[j], alpha_prev, alpha, rc, lambda, &sh[j]);
+		d[j] = wide_scale_ratio(r->d[j], alpha_prev, alpha, rc, lambda, j ? -1 : INN_POW2(fr), &sh[j]);
 		sh_min = sh[j] < sh_min ? sh[j] : sh_min;
 		b[j] = v[j];
 		for (unsigned i = 0; i < j; i++) {

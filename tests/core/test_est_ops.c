@@ -13,7 +13,7 @@ static uint32_t xr(void)
 	return rng;
 }
 
-UNIT_TEST(est_scale32_equals_q_scale32)
+UNIT_TEST(est_scale32_and_est_shl32c_equal_q_scale32)
 {
 	int32_t v[200];
 	unsigned n = 0;
@@ -35,10 +35,16 @@ UNIT_TEST(est_scale32_equals_q_scale32)
 		for (unsigned i = 0; i < n; i++)
 			if (est_scale32(v[i], s) != q_scale32(v[i], s))
 				bad++;
+	for (unsigned s = 0; s <= 30u; s++)
+		for (unsigned i = 0; i < n; i++)
+			if (est_shl32c(v[i], s) != q_scale32(v[i], (int)s))
+				bad++;
 	for (int k = 0; k < 200000; k++) {
 		int32_t x = (int32_t)xr();
 		int s = (int)(xr() % 141u) - 70;
 		if (est_scale32(x, s) != q_scale32(x, s))
+			bad++;
+		if (s >= 0 && s <= 30 && est_shl32c(x, (unsigned)s) != q_scale32(x, s))
 			bad++;
 	}
 	CHECK(bad == 0);
@@ -108,4 +114,140 @@ UNIT_TEST(est_products_and_reciprocals_equal_qfmt)
 			bad++;
 	}
 	CHECK(bad == 0);
+}
+
+UNIT_TEST(est_mul_unit_equals_sc_mul)
+{
+	long bad = 0;
+	const int32_t edge[] = {0, 1, -1, 32767, 32768, 32769, 65535, 65536, 65537, -65536, INT32_MAX, -INT32_MAX, INT32_MIN};
+	const unsigned ne = sizeof edge / sizeof edge[0];
+	for (int k = 0; k < 400000; k++) {
+		int32_t a = k < (int)(ne * ne) ? edge[k % ne] : (int32_t)(xr() >> (xr() % 32u));
+		int32_t u = k < (int)(ne * ne) ? edge[k / ne] : (int32_t)(xr() % 65537u);
+		if (k >= (int)(ne * ne) && (xr() & 1u))
+			a = -a;
+		if (k % 16 == 0)
+			u = (int32_t)(xr() >> (xr() % 32u)) * ((xr() & 1u) ? 1 : -1);   /* beyond [0, 1] too */
+		scalar_t x = sc_from_float((float)a / 65536.0f), y = sc_from_float((float)u / 65536.0f);
+#if OCTO_FIXED
+		x = a;
+		y = u;
+#endif
+		scalar_t p = est_mul_unit(x, y), q = sc_mul(x, y);
+		if (!(p == q))
+			bad++;
+	}
+	CHECK(bad == 0);
+}
+
+UNIT_TEST(est_div_int_equals_sc_div_int)
+{
+	long bad = 0;
+	const int32_t edge[] = {0, 1, -1, 2, -2, 49, 50, 51, -50, 99, 100, 101, INT32_MAX, -INT32_MAX, INT32_MIN,
+				INT32_MAX - 50, -INT32_MAX + 50};
+	const uint32_t ns[] = {3u, 100u, 7u};
+	for (unsigned i = 0; i < sizeof edge / sizeof edge[0]; i++)
+		for (unsigned k = 0; k < 3u; k++) {
+			scalar_t x = sc_from_float((float)edge[i] / 65536.0f);
+#if OCTO_FIXED
+			x = edge[i];
+#endif
+			if (!(est_div_int(x, ns[k]) == sc_div_int(x, ns[k])))
+				bad++;
+		}
+	for (int k = 0; k < 400000; k++) {
+		int32_t a = (int32_t)(xr() >> (xr() % 32u));
+		if (xr() & 1u)
+			a = -a;
+		scalar_t x = sc_from_float((float)a / 65536.0f);
+#if OCTO_FIXED
+		x = a;
+#endif
+		uint32_t n = ns[k % 3];
+		if (!(est_div_int(x, n) == sc_div_int(x, n)))
+			bad++;
+	}
+	CHECK(bad == 0);
+}
+
+UNIT_TEST(est_div_near_equals_sc_div)
+{
+	long bad = 0;
+#if OCTO_FIXED
+	long near = 0;
+#endif
+	for (int k = 0; k < 400000; k++) {
+		int32_t a = (int32_t)(xr() >> (xr() % 32u)), b = (int32_t)(xr() >> (xr() % 32u));
+		if (k % 7 == 0)
+			a = -a;
+		if (k % 11 == 0)
+			b = -b;
+		if (k % 13 == 0)
+			b = 0;
+		scalar_t x = sc_from_float((float)a / 65536.0f), y = sc_from_float((float)b / 65536.0f);
+#if OCTO_FIXED
+		x = a;
+		y = b;
+#endif
+		scalar_t q = sc_div(x, y), g = q;
+		/* guesses: the quotient, a few units off either way, far off, negative */
+		int32_t off = (int32_t)(xr() % 21u) - 10;
+#if OCTO_FIXED
+		if (k % 5 == 4)
+			g = (scalar_t)(xr() >> 1);
+		else if (k % 17 == 3)
+			g = -1;
+		else
+			g = (scalar_t)((int64_t)q + off < 0 ? 0 : ((int64_t)q + off > INT32_MAX ? INT32_MAX : q + off));
+		if (g >= q - EST_DIV_STEPS && g <= q + EST_DIV_STEPS)
+			near++;
+#else
+		(void)off;
+#endif
+		if (!(est_div_near(x, y, g) == q))
+			bad++;
+	}
+	CHECK(bad == 0);
+#if OCTO_FIXED
+	CHECK(near > 100000);   /* the guessing path was taken */
+#endif
+}
+
+UNIT_TEST(est_sqrt_near_equals_sc_sqrt)
+{
+	long bad = 0;
+#if OCTO_FIXED
+	long near = 0;
+#endif
+	for (int k = 0; k < 400000; k++) {
+		int32_t a = (int32_t)(xr() >> (xr() % 32u));
+		if (k % 9 == 0)
+			a = -a;
+		if (k < 64)
+			a = k < 32 ? k : INT32_MAX - (k - 32);
+		scalar_t x = sc_from_float((float)a / 65536.0f);
+#if OCTO_FIXED
+		x = a;
+#endif
+		scalar_t q = sc_sqrt(x), g = q;
+		int32_t off = (int32_t)(xr() % 21u) - 10;
+#if OCTO_FIXED
+		if (k % 5 == 4)
+			g = (scalar_t)(xr() >> 1);
+		else if (k % 17 == 3)
+			g = -1;
+		else
+			g = q + off < 0 ? 0 : q + off;
+		if (g >= q - EST_DIV_STEPS && g <= q + EST_DIV_STEPS)
+			near++;
+#else
+		(void)off;
+#endif
+		if (!(est_sqrt_near(x, g) == q))
+			bad++;
+	}
+	CHECK(bad == 0);
+#if OCTO_FIXED
+	CHECK(near > 100000);
+#endif
 }
