@@ -110,9 +110,15 @@ MID_INLINE void sum_add(struct motor_id *m, unsigned k, motor_id_sum_t *s, term_
 	*s += (motor_id_sum_t)t;
 	*big |= (big_t)(*s < 0 ? -*s : *s);
 }
+#define MID_UNROLL_SUMS
 #else
 typedef int big_t;
 #define WBIN_U 0.025f
+#if defined(__GNUC__) && !defined(__clang__)
+#define MID_UNROLL_SUMS _Pragma("GCC unroll 6")
+#else
+#define MID_UNROLL_SUMS
+#endif
 static inline motor_id_u_t u_of_sc(scalar_t v) { return sc_to_float(v); }
 static inline motor_id_f_t f_of_sc(scalar_t v, int kexp) { (void)kexp; return sc_to_float(v); }
 static inline float sub32(float a, float b) { return a - b; }
@@ -376,7 +382,9 @@ void motor_id_process(struct motor_id *m)
 					opnd_t a[6], b[6];
 					bank_factors(m, s[j], j, fm[j], a, b);
 					motor_id_sum_t *v = stat_sums(&st[j]);
-					/* one copy of the term and the sum for the six kinds */
+					/* one copy of the term and the sum for the six kinds in the fixed
+					 * build (flash); unrolled in float, where a term is one product */
+					MID_UNROLL_SUMS
 					for (unsigned k = 0; k < 6; k++)
 						sum_add(m, MID_E_G11 + k, &v[k], term(a[k], b[k], bank_sh[k], e[MID_E_G11 + k]),
 							&big[k]);
