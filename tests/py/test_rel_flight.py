@@ -199,10 +199,12 @@ def test_gcs_vanishes_during_an_experiment(launch, port, tmp_path):
     time.sleep(8.0)                          # most of the 10 s excitation
     assert rig.fw.alive() and rig.sim.alive()
     rig.connect()                            # a ground station again (same port)
-    deadline = time.monotonic() + 20
+    # paced in real time: on a loaded machine the experiment's frames come late, so the
+    # wait is generous; a failure shows what the firmware said meanwhile (its stderr)
+    deadline = time.monotonic() + 60
     while fl.param("ID_RESULT") < 1.0 and time.monotonic() < deadline:
         time.sleep(0.2)
-    assert fl.param("ID_RESULT") >= 1.0
+    assert fl.param("ID_RESULT") >= 1.0, f"no result after 60 s; fw: {rig.fw.stderr()[-3000:]}"
     kf = fl.param("VEH_KF")
     assert kf != 20.0 and fl.param("ID_KF_EST") == kf
     saved = dict(ln.split() for ln in rig.params.read_text().splitlines()
