@@ -56,6 +56,7 @@ static void kft_init(struct app *a)
 	kf_track_init(&a->env.kft, &kp, sc_from_float(a->p.veh_kf));
 	a->env.kft_pub_next_t = 1.0;
 	a->env.kft_votes = 0;
+	a->env.kft_pub_due = false;
 }
 
 void envelope_model_sync(struct app *a)
@@ -116,12 +117,25 @@ static void kft_step(struct app *a, scalar_t s_dt, bool up)
 	 * found by identification restarts the tracker, envelope_model_sync) */
 	bool gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && (a->fr.valid & HAL_FRAME_THRUST);
 	kf_track_update(t, app_thr_sc(a), HAL_ROTORS, y, s_dt, gate);
-	/* The KFT_* parameters once a second of plant time; announced to the ground station
-	 * (PARAM_VALUE, NAMED_VALUE_FLOAT) at most once a second of wall time, whose rates are
-	 * wall-clock: a fast lockstep run must not flood the link. */
+	/* The KFT_* parameters once a second of plant time, published between frames
+	 * (envelope_publish): the step only notes that this frame is due and whether it flew in
+	 * HOLD. */
 	if (!t->started || app_t_before(a->fr.t_s, e->kft_pub_next_t))
 		return;
 	e->kft_pub_next_t = a->fr.t_s + 1.0;
+	e->kft_pub_due = true;
+	e->kft_pub_hold = a->mode == APP_HOLD;
+}
+
+void envelope_publish(struct app *a)
+{
+	struct envelope *e = &a->env;
+	const struct kf_track *t = &e->kft;
+	if (!e->kft_pub_due)
+		return;
+	e->kft_pub_due = false;
+	/* announced to the ground station (PARAM_VALUE, NAMED_VALUE_FLOAT) at most once a second
+	 * of wall time, whose rates are wall-clock: a fast lockstep run must not flood the link */
 	uint64_t now_us = hal_wall_us(a->hal);
 	bool announce = now_us - e->kft_pub_wall_us >= 1000000u;
 	if (announce)
@@ -135,7 +149,7 @@ static void kft_step(struct app *a, scalar_t s_dt, bool up)
 		post_value(a, "KFT", k);
 		post_value(a, "KFT_SD", sd);
 	}
-	if (a->mode != APP_HOLD)
+	if (!e->kft_pub_hold)
 		return;
 	if (a->p.kft_apply >= 0.5f) {
 		if (params_set(&a->p, PX_KFT_APPLY, 0.0f) == PARAM_OK)

@@ -4,7 +4,7 @@
  * controller, the first k_f it implies (published as HOV_* parameters and a status
  * line at every HOLD entry, optionally seeding VEH_KF before the rotor experiment),
  * k_f tracked in HOLD and during experiments (core/kf_track: KFT_EST with its sd, the
- * plant time it holds for and its memory, published each second as parameters and NAMED_VALUE_FLOAT
+ * plant time it holds for and its memory, published each second between frames as parameters and NAMED_VALUE_FLOAT
  * events "KFT"/"KFT_SD"; VEH_KF refreshed from it when it drifts beyond KFT_REFRESH after an
  * identification, or on request with KFT_APPLY = 1), and the time limits of take-off
  * (NAV_TKO_TO, to HOLD), of its hold entry (NAV_HOLD_TO: from the set point's arrival at
@@ -35,6 +35,8 @@ struct envelope {
 	double kft_pub_next_t; /* plant time of the next KFT_* publication (1 s after the last) */
 	uint64_t kft_pub_wall_us; /* wall time of it: a fast lockstep run must not flood the link */
 	uint32_t kft_votes; /* consecutive publications that called for a VEH_KF refresh */
+	bool kft_pub_due;   /* the last step reached kft_pub_next_t: envelope_publish's turn */
+	bool kft_pub_hold;  /* and flew in HOLD (where VEH_KF may be refreshed) */
 	scalar_t kf8;       /* 8 VEH_KF (N at full throttle, all rotors): set by envelope_model_sync */
 	struct sc_recip kf8_r; /* its reciprocal, for the step's division by it */
 	/* the hover thrust kf8 / theta of the last step and its operands: the division is redone
@@ -55,6 +57,13 @@ void envelope_model_sync(struct app *a);
  * (vertical speed, collective throttle of the thrust the mixer achieved, tilt) and
  * returns the hover thrust demand in the mixer's newtons, 8 VEH_KF u_h. */
 scalar_t envelope_hover_f(struct app *a, scalar_t dt_s, scalar_t cos_tilt);
+
+/* Between frames, after a step that reached the next second of plant time: the KFT_*
+ * parameters (announced at most once a second of wall time) and, in HOLD, a VEH_KF refresh
+ * from the tracker (KFT_REFRESH, KFT_APPLY): parameter events and a status line, work kept
+ * out of the step. The refreshed VEH_KF reaches the controllers at the parameter sync that
+ * follows, before the next step, as when the step did this itself. */
+void envelope_publish(struct app *a);
 
 /* Take-off may end (HOLD) once the hover throttle is known to this relative sd. */
 bool envelope_hover_ready(const struct app *a);

@@ -551,6 +551,40 @@ UNIT_TEST(app_takeoff_time_limit_fails_to_its_origin)
 	CHECK(r->a.mode == APP_DISARMED);
 }
 
+/* The tracked k_f's publication (KFT_* parameters, their PARAM_VALUE and NAMED_VALUE_FLOAT
+ * events, a VEH_KF refresh) is between-frames work: the step that reaches the next second of
+ * plant time only marks it due; the app_tick after it publishes what that step saw. */
+UNIT_TEST(app_kft_published_between_frames_after_its_step)
+{
+	struct rig *r = rig_hovering(u);
+	fly(r, 3 * 90);   /* the tracker has started and published */
+	const int i_t = param_index("KFT_T"), i_est = param_index("KFT_EST");
+	CHECK(params_get(&r->a.p, (size_t)i_t) > 0.0f);
+	int published = 0;
+	for (int i = 0; i < 3 * 90; i++) {
+		float t_before = params_get(&r->a.p, (size_t)i_t);
+		r->t += 1.0 / 90.0;
+		r->h.now_us += FRAME_US;
+		frame_at(r, r->t);
+		struct app_event e;
+		while (outbox_pop(&r->a.outbox, &e))   /* the step posts no KFT event */
+			CHECK(!(e.kind == APP_EV_VALUE || (e.kind == APP_EV_PARAM &&
+							   (e.param_index == i_t || e.param_index == i_est))));
+		CHECK(params_get(&r->a.p, (size_t)i_t) == t_before);
+		bool due = r->a.env.kft_pub_due;
+		app_tick(&r->a);
+		float t_after = params_get(&r->a.p, (size_t)i_t);
+		if (due) {
+			published++;
+			CHECK(t_after == (float)r->t);   /* the plant time of the step that was due */
+			CHECK(params_get(&r->a.p, (size_t)i_est) == sc_to_float(r->a.env.kft.k));
+		} else {
+			CHECK(t_after == t_before);
+		}
+	}
+	CHECK(published >= 2 && published <= 3);   /* once a second of plant time, in 3 s */
+}
+
 /* A vehicle that cannot come down: landing runs out of NAV_LAND_TO, says so once
  * with the height, the landing's requester gets FAILED, and it keeps landing. */
 UNIT_TEST(app_landing_time_limit_fails_to_its_origin)
