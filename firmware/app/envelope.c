@@ -127,7 +127,17 @@ static void kft_step(struct app *a, scalar_t s_dt, bool up)
 	e->kft_pub_hold = a->mode == APP_HOLD;
 }
 
+static void publish_kft(struct app *a);
+static void publish_hover(struct app *a);
+
 void envelope_publish(struct app *a)
+{
+	publish_hover(a);
+	publish_kft(a);
+}
+
+/* The KFT_* parameters of the last due step and, in HOLD, the VEH_KF refresh. */
+static void publish_kft(struct app *a)
 {
 	struct envelope *e = &a->env;
 	const struct kf_track *t = &e->kft;
@@ -238,7 +248,20 @@ void envelope_on_mode(struct app *a)
 		envelope_init(a);   /* nothing learned yet: start from the current VEH_* */
 	if (a->mode != APP_HOLD)
 		return;
-	float u = sc_to_float(hover_est_u(&a->env.hov)), sd = sc_to_float(hover_est_sd(&a->env.hov));
+	/* what the hover taught, as of this entry; published between frames (envelope_publish) */
+	e->hov_pub_u = hover_est_u(&e->hov);
+	e->hov_pub_sd = hover_est_sd(&e->hov);
+	e->hov_pub_due = true;
+}
+
+/* The HOV_* parameters and the status line of the last HOLD entry. */
+static void publish_hover(struct app *a)
+{
+	struct envelope *e = &a->env;
+	if (!e->hov_pub_due)
+		return;
+	e->hov_pub_due = false;
+	float u = sc_to_float(e->hov_pub_u), sd = sc_to_float(e->hov_pub_sd);
 	float kf = a->p.veh_mass * a->p.veh_grav / (8.0f * u), kf_sd = kf * sd / u;
 	set_result(a, PX_HOV_THR, u);
 	set_result(a, PX_HOV_THR_SD, sd);

@@ -37,6 +37,8 @@ struct envelope {
 	uint32_t kft_votes; /* consecutive publications that called for a VEH_KF refresh */
 	bool kft_pub_due;   /* the last step reached kft_pub_next_t: envelope_publish's turn */
 	bool kft_pub_hold;  /* and flew in HOLD (where VEH_KF may be refreshed) */
+	bool hov_pub_due;   /* a HOLD entry's HOV_* publication waits for envelope_publish */
+	scalar_t hov_pub_u, hov_pub_sd; /* the hover throttle and its sd at that entry */
 	scalar_t kf8;       /* 8 VEH_KF (N at full throttle, all rotors): set by envelope_model_sync */
 	struct sc_recip kf8_r; /* its reciprocal, for the step's division by it */
 	/* the hover thrust kf8 / theta of the last step and its operands: the division is redone
@@ -58,11 +60,12 @@ void envelope_model_sync(struct app *a);
  * returns the hover thrust demand in the mixer's newtons, 8 VEH_KF u_h. */
 scalar_t envelope_hover_f(struct app *a, scalar_t dt_s, scalar_t cos_tilt);
 
-/* Between frames, after a step that reached the next second of plant time: the KFT_*
- * parameters (announced at most once a second of wall time) and, in HOLD, a VEH_KF refresh
- * from the tracker (KFT_REFRESH, KFT_APPLY): parameter events and a status line, work kept
- * out of the step. The refreshed VEH_KF reaches the controllers at the parameter sync that
- * follows, before the next step, as when the step did this itself. */
+/* Between frames: after a HOLD entry, the HOV_* parameters and the "Hover throttle" status
+ * line of what the hover taught by then; after a step that reached the next second of plant
+ * time, the KFT_* parameters (announced at most once a second of wall time) and, in HOLD, a
+ * VEH_KF refresh from the tracker (KFT_REFRESH, KFT_APPLY). Parameter events and formatted
+ * status lines are work kept out of the step. A refreshed VEH_KF reaches the controllers at
+ * the parameter sync that follows, before the next step, as when the step did this itself. */
 void envelope_publish(struct app *a);
 
 /* Take-off may end (HOLD) once the hover throttle is known to this relative sd. */
@@ -72,7 +75,8 @@ bool envelope_hover_ready(const struct app *a);
  * APP_CMD_LAND): who gets the final result should the phase run out of time. */
 void envelope_on_command(struct app *a, enum app_command cmd, app_origin origin);
 
-/* On every mode change: HOLD publishes HOV_* and says what the hover taught. */
+/* On every mode change: a HOLD entry has HOV_* and what the hover taught published by
+ * envelope_publish. */
 void envelope_on_mode(struct app *a);
 
 /* Before experiment `id`: with NAV_KF_SEED = 1 and a converged hover throttle that

@@ -585,6 +585,45 @@ UNIT_TEST(app_kft_published_between_frames_after_its_step)
 	CHECK(published >= 2 && published <= 3);   /* once a second of plant time, in 3 s */
 }
 
+/* The HOLD entry's HOV_* parameters and "Hover throttle" status line are formatted between
+ * frames too: the step that enters HOLD posts neither; the app_tick after it publishes what
+ * the hover had taught at that entry. */
+UNIT_TEST(app_hold_entry_published_between_frames)
+{
+	struct rig *r = rig_new();
+	char why[64];
+	fly(r, 5);
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_ACCEPTED);
+	const int i_thr = param_index("HOV_THR");
+	float thr0 = params_get(&r->a.p, (size_t)i_thr);
+	int i = 0;
+	for (; i < 90 * 60 && r->a.mode != APP_HOLD; i++) {
+		r->t += 1.0 / 90.0;
+		r->h.now_us += FRAME_US;
+		frame_at(r, r->t);
+		if (r->a.mode != APP_HOLD) {
+			app_tick(&r->a);
+			continue;
+		}
+		struct app_event e;
+		int mode_hold = 0;
+		while (outbox_pop(&r->a.outbox, &e)) {
+			CHECK(!(e.kind == APP_EV_STATUS && !strncmp(e.text, "Hover throttle", 14)));
+			CHECK(!(e.kind == APP_EV_PARAM && e.param_index == i_thr));
+			mode_hold += e.kind == APP_EV_STATUS && !strcmp(e.text, "Mode HOLD");
+		}
+		CHECK(mode_hold == 1);
+		CHECK(params_get(&r->a.p, (size_t)i_thr) == thr0);
+		/* as of the entry (set_mode within the step, before this step's hover update) */
+		float at_entry = sc_to_float(r->a.env.hov_pub_u), now = sc_to_float(hover_est_u(&r->a.env.hov));
+		app_tick(&r->a);
+		CHECK(params_get(&r->a.p, (size_t)i_thr) == at_entry);
+		CHECK(at_entry > 0.0f && fabsf(at_entry - now) < 1e-3f * now);
+	}
+	CHECK(r->a.mode == APP_HOLD && i < 90 * 60);
+}
+
 /* A vehicle that cannot come down: landing runs out of NAV_LAND_TO, says so once
  * with the height, the landing's requester gets FAILED, and it keeps landing. */
 UNIT_TEST(app_landing_time_limit_fails_to_its_origin)
