@@ -479,7 +479,9 @@ static void apply_results(struct app *a)
  * The 90 Hz step (control_step) only reads what the parameters imply: gains, mixer
  * (pseudo-inverse, facets) and throttle map. Whatever changes them runs between
  * frames, after the frame's actuation has gone out and before the next frame's step:
- *   app_settle()  ends an experiment phase that ended in the last step and starts the
+ *   app_settle()  publishes what the last step's envelope noted (envelope_publish: a
+ *                 HOLD entry's HOV_* and status line, the tracked k_f's KFT_* each second
+ *                 and a VEH_KF refresh), ends an experiment phase that ended in the last step and starts the
  *                 next (exp_turn: estimates, verdicts, status lines), applies results the
  *                 experiment posted (PARAM_VALUE for each) and,
  *                 when a parameter changed (params_dirty), rebuilds gains, mixer and
