@@ -1,6 +1,6 @@
 /*
- * scalar.c - the one out-of-line copy of the scalar primitives: sc_div in both builds, the
- * fixed build's non-trivial primitives.
+ * scalar.c - the one out-of-line copy of the scalar primitives: sc_div and sc_sqrt in both
+ * builds, the fixed build's non-trivial primitives.
  *
  * scalar.h (Q16.16) and qfmt.h define their non-trivial primitives `inline` with external
  * linkage (C11 6.7.4): a compiler inlines one where it would inline a static function, and
@@ -8,7 +8,8 @@
  * `extern` declarations below, instead of keeping a static copy of its own. So do sc_add and
  * sc_sub: their inline forms sca_add and sca_sub serve the hottest loops. The trivial
  * primitives (sc_neg, sc_min, q_sat32 ...) stay static inline. sc_div, a call wherever it is
- * used, is defined here only, in both builds; the fixed build's sc_sqrt and sc_exp too.
+ * used, is defined here only, in both builds, and so is sc_sqrt (in the float build on cores
+ * without FPU); the fixed build's sc_exp too.
  */
 #include "scalar.h"
 
@@ -112,4 +113,14 @@ scalar_t sc_div(scalar_t a, scalar_t b)
 		return a > 0.0f ? SC_MAX : (a < 0.0f ? SC_MAX_NEG : 0.0f);
 	return a / b;
 }
+
+#if SC_SQRT_CALL
+scalar_t sc_sqrt(scalar_t a)
+{
+	/* a > 0 from its bits (0 < bits <= those of +Inf): one word test, not a soft-float
+	 * comparison on a core without FPU; the same result, NaN and -0 included */
+	union { float f; uint32_t u; } v = { a };
+	return v.u - 1u < 0x7f800000u ? sqrtf(a) : 0.0f;
+}
+#endif
 #endif

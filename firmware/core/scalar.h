@@ -424,7 +424,15 @@ static inline scalar_t sc_mul(scalar_t a, scalar_t b) { return a * b; }
 /* a / b; division by zero saturates like the fixed build instead of giving Inf/NaN. Out of
  * line (scalar.c): the test and the soft-float call are not worth a copy per object. */
 scalar_t sc_div(scalar_t a, scalar_t b);
+/* sqrt(a) for a > 0, else 0 (NaN included). Out of line on an ARM core without FPU
+ * (scalar.c): there the test and the call to sqrtf are not worth a copy per use; inline
+ * where the root is an instruction. */
+#if defined(__arm__) && !defined(__ARM_FP)
+#define SC_SQRT_CALL 1
+scalar_t sc_sqrt(scalar_t a);
+#else
 static inline scalar_t sc_sqrt(scalar_t a) { return a > 0.0f ? sqrtf(a) : 0.0f; }
+#endif
 /* isfinite(a) from the exponent bits (all ones: infinity or NaN): one test of a word, not
  * the two soft-float comparisons (unordered, greater than FLT_MAX) a core without FPU makes
  * of isfinite */
