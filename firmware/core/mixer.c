@@ -28,16 +28,17 @@ MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b)
 #endif
 	return sc_div(a, b);
 }
-MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_clamp(x, lo, hi); }
-/* max and min: out of line in the float build on a core without FPU (a soft-float compare
- * each), inline in the fixed build and with an FPU (a compare instruction) */
-#if OCTO_FIXED || defined(__ARM_FP)
-#define MIX_FLOAT_NOINLINE static inline
+#if SC_SOFT_FLOAT
+/* where float is soft, sc_clamp, sc_max and sc_min are already out of line (scalar.c) */
+#define mclamp sc_clamp
+#define mmax sc_max
+#define mmin sc_min
 #else
-#define MIX_FLOAT_NOINLINE MIX_NOINLINE
+MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_clamp(x, lo, hi); }
+/* max and min inline in the fixed build and with an FPU (a compare instruction) */
+static inline scalar_t mmax(scalar_t a, scalar_t b) { return sc_max(a, b); }
+static inline scalar_t mmin(scalar_t a, scalar_t b) { return sc_min(a, b); }
 #endif
-MIX_FLOAT_NOINLINE scalar_t mmax(scalar_t a, scalar_t b) { return sc_max(a, b); }
-MIX_FLOAT_NOINLINE scalar_t mmin(scalar_t a, scalar_t b) { return sc_min(a, b); }
 
 /* x == 0 (either sign): a compare in the fixed build and with an FPU; on a core without FPU
  * the bits of x without its sign all 0, a test of a word, not a soft-float comparison (the

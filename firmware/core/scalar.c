@@ -1,14 +1,15 @@
 /*
  * scalar.c - the one out-of-line copy of the scalar primitives: sc_div in both builds, the
- * fixed build's non-trivial primitives.
+ * soft-float build's roots and comparisons, the fixed build's non-trivial primitives.
  *
  * scalar.h (Q16.16) and qfmt.h define their non-trivial primitives `inline` with external
  * linkage (C11 6.7.4): a compiler inlines one where it would inline a static function, and
  * where it does not (Cortex-M0 builds at -Os) the object calls the copy emitted here by the
  * `extern` declarations below, instead of keeping a static copy of its own. So do sc_add and
  * sc_sub: their inline forms sca_add and sca_sub serve the hottest loops. The trivial
- * primitives (sc_neg, sc_min, q_sat32 ...) stay static inline. sc_div, a call wherever it is
- * used, is defined here only, in both builds; the fixed build's sc_sqrt and sc_exp too.
+ * primitives (sc_neg, q_sat32 ...) stay static inline. sc_div, a call wherever it is
+ * used, is defined here only, in both builds; so are sc_sqrt, sc_min, sc_max and sc_clamp
+ * where float is soft (SC_SOFT_FLOAT); the fixed build's sc_sqrt and sc_exp too.
  */
 #include "scalar.h"
 
@@ -112,4 +113,21 @@ scalar_t sc_div(scalar_t a, scalar_t b)
 		return a > 0.0f ? SC_MAX : (a < 0.0f ? SC_MAX_NEG : 0.0f);
 	return a / b;
 }
+
+#if SC_SOFT_FLOAT
+scalar_t sc_sqrt(scalar_t a)
+{
+	/* a > 0 from its bits (0 < bits <= those of +Inf): one word test, not a soft-float
+	 * comparison on a core without FPU; the same result, NaN and -0 included */
+	union { float f; uint32_t u; } v = { a };
+	return v.u - 1u < 0x7f800000u ? sqrtf(a) : 0.0f;
+}
+
+scalar_t sc_min(scalar_t a, scalar_t b) { return a < b ? a : b; }
+scalar_t sc_max(scalar_t a, scalar_t b) { return a > b ? a : b; }
+scalar_t sc_clamp(scalar_t x, scalar_t lo, scalar_t hi)
+{
+	return x < lo ? lo : (x > hi ? hi : x);
+}
+#endif
 #endif

@@ -72,6 +72,7 @@
 typedef int32_t scalar_t;
 
 #define SC_FRAC    16
+#define SC_SOFT_FLOAT 0
 #define SC_ONE     ((scalar_t)65536)
 #define SC_MAX     ((scalar_t)INT32_MAX)
 #define SC_MAX_NEG ((scalar_t)(-INT32_MAX))
@@ -405,6 +406,14 @@ scalar_t sc_exp(scalar_t a);
 /* ------------------------------------------------------------ float32 */
 typedef float scalar_t;
 
+/* float in software: an ARM core without FPU (Cortex-M0), where every operation and every
+ * comparison is a library call */
+#if defined(__arm__) && !defined(__ARM_FP)
+#define SC_SOFT_FLOAT 1
+#else
+#define SC_SOFT_FLOAT 0
+#endif
+
 #define SC_MAX     3.0e38f
 #define SC_MAX_NEG (-3.0e38f)
 #define SC_EPS     1.1920929e-7f
@@ -424,7 +433,14 @@ static inline scalar_t sc_mul(scalar_t a, scalar_t b) { return a * b; }
 /* a / b; division by zero saturates like the fixed build instead of giving Inf/NaN. Out of
  * line (scalar.c): the test and the soft-float call are not worth a copy per object. */
 scalar_t sc_div(scalar_t a, scalar_t b);
+/* sqrt(a) for a > 0, else 0 (NaN included). Out of line where float is soft (scalar.c):
+ * there the test and the call to sqrtf are not worth a copy per use; inline where the root
+ * is an instruction. */
+#if SC_SOFT_FLOAT
+scalar_t sc_sqrt(scalar_t a);
+#else
 static inline scalar_t sc_sqrt(scalar_t a) { return a > 0.0f ? sqrtf(a) : 0.0f; }
+#endif
 /* isfinite(a) from the exponent bits (all ones: infinity or NaN): one test of a word, not
  * the two soft-float comparisons (unordered, greater than FLT_MAX) a core without FPU makes
  * of isfinite */
@@ -454,12 +470,20 @@ static inline float sc_pow2f(int s)
 	return v.f;
 }
 
+/* Out of line where float is soft (scalar.c): each comparison is a library call, and the
+ * call of these costs less flash than their copies and little time beside the comparisons */
+#if SC_SOFT_FLOAT
+scalar_t sc_min(scalar_t a, scalar_t b);
+scalar_t sc_max(scalar_t a, scalar_t b);
+scalar_t sc_clamp(scalar_t x, scalar_t lo, scalar_t hi);
+#else
 static inline scalar_t sc_min(scalar_t a, scalar_t b) { return a < b ? a : b; }
 static inline scalar_t sc_max(scalar_t a, scalar_t b) { return a > b ? a : b; }
 static inline scalar_t sc_clamp(scalar_t x, scalar_t lo, scalar_t hi)
 {
 	return x < lo ? lo : (x > hi ? hi : x);
 }
+#endif
 /* a * b + c (always inline: a call around sc_mul and sc_add costs a call more) */
 static inline SC_ALWAYS_INLINE scalar_t sc_mac(scalar_t a, scalar_t b, scalar_t c)
 {
