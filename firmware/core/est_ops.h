@@ -99,6 +99,19 @@ EST_INLINE int64_t est_mul64_32c(int64_t a, int32_t b, unsigned s)
 	return s >= 32u ? est_shr64c(sum, s - 32u) : est_shl64c(sum, 32u - s);
 }
 
+/* v 2^s for s in [0, 30], saturating to +/-INT32_MAX (est_scale32's left shifts), always
+ * inlined: for a constant s, a comparison and a shift (the per-frame conversions of
+ * throttles into motor_id's Q1.30) */
+EST_INLINE int32_t est_shl32c(int32_t v, unsigned s)
+{
+	int32_t lim = INT32_MAX >> s;
+	if (v > lim)
+		return INT32_MAX;
+	if (v < -lim)
+		return -INT32_MAX;
+	return v >= 0 ? (int32_t)((uint32_t)v << s) : -(int32_t)((uint32_t)-v << s);
+}
+
 /* q_scale32(v, s) in 32-bit words: v 2^s, left shifts saturating to +/-INT32_MAX, right
  * shifts rounded to nearest (ties away from zero), INT32_MIN taken as -2^31; any s */
 static inline int32_t est_scale32(int32_t v, int s)
@@ -106,12 +119,7 @@ static inline int32_t est_scale32(int32_t v, int s)
 	if (s >= 0) {
 		if (s > 30)
 			return v > 0 ? INT32_MAX : (v < 0 ? -INT32_MAX : 0);
-		int32_t lim = INT32_MAX >> s;
-		if (v > lim)
-			return INT32_MAX;
-		if (v < -lim)
-			return -INT32_MAX;
-		return v >= 0 ? (int32_t)((uint32_t)v << s) : -(int32_t)((uint32_t)-v << s);
+		return est_shl32c(v, (unsigned)s);
 	}
 	unsigned r = (unsigned)-s;
 	uint32_t m = v < 0 ? 0u - (uint32_t)v : (uint32_t)v; /* |v| <= 2^31 */
@@ -123,18 +131,6 @@ static inline int32_t est_scale32(int32_t v, int s)
 	else
 		q = (m >> r) + ((m >> (r - 1u)) & 1u); /* at most 2^30 + 1 */
 	return v < 0 ? -(int32_t)q : (int32_t)q;
-}
-
-/* est_scale32(v, s) for s in [0, 30], always inlined: for a constant s, a comparison and a
- * shift (the per-frame conversions of throttles into motor_id's Q1.30) */
-EST_INLINE int32_t est_shl32c(int32_t v, unsigned s)
-{
-	int32_t lim = INT32_MAX >> s;
-	if (v > lim)
-		return INT32_MAX;
-	if (v < -lim)
-		return -INT32_MAX;
-	return v >= 0 ? (int32_t)((uint32_t)v << s) : -(int32_t)((uint32_t)-v << s);
 }
 
 /* q_scale64(v, s): v 2^s, left shifts saturating to +/-INT64_MAX, right shifts rounded to

@@ -3,25 +3,7 @@
  * deviations, validation figures) and the acceptance rules. The per-frame estimators are
  * ident.c; see ident.h. */
 #include "ident.h"
-
-/* Tests of a float from its bits on a core without FPU (a test of a word, not a soft-float
- * comparison; the same results, NaN included): isfinite(x) (the exponent not all ones: not
- * infinity or NaN); x > 0 (above +0, at most +infinity); x < 0 (above -0, at most -infinity) */
-static uint32_t bits_f(float x)
-{
-	union { float f; uint32_t u; } v = { x };
-	return v.u;
-}
-static bool finite_f(float x) { return (bits_f(x) & 0x7f800000u) != 0x7f800000u; }
-#if defined(__ARM_FP)
-static bool pos(float x) { return x > 0.0f; }
-static bool neg(float x) { return x < 0.0f; }
-static bool zero(float x) { return x == 0.0f; }
-#else
-static bool pos(float x) { return bits_f(x) - 1u < 0x7f800000u; }
-static bool neg(float x) { return bits_f(x) - 0x80000001u < 0x7f800000u; }
-static bool zero(float x) { return bits_f(x) << 1 == 0u; }   /* +-0 */
-#endif
+#include "fbits.h"
 
 /* x > 0 and x == 0 of a scalar_t (an integer test in the fixed build) */
 static bool scalar_pos(scalar_t x)
@@ -29,7 +11,7 @@ static bool scalar_pos(scalar_t x)
 #if OCTO_FIXED
 	return x > SC_ZERO;
 #else
-	return pos(x);
+	return fb_pos(x);
 #endif
 }
 static bool scalar_zero(scalar_t x)
@@ -37,11 +19,11 @@ static bool scalar_zero(scalar_t x)
 #if OCTO_FIXED
 	return x == SC_ZERO;
 #else
-	return zero(x);
+	return fb_zero(x);
 #endif
 }
 
-static float or_default(float v, float def) { return pos(v) ? v : def; }
+static float or_default(float v, float def) { return fb_pos(v) ? v : def; }
 
 /* an ident_sum_t as float */
 static float f_of_sum(ident_sum_t s)
@@ -98,7 +80,7 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	float tm = sc_to_float(cfg->mot_tau_s), dt = scalar_pos(cfg->dt_s) ? frame_period(cfg->dt_s) : 0.0f;
 	/* the lag's coefficient from the exact frame period (filt_lag_init's is from dt_s) */
 	r->dalpha_dtau = SC_ZERO;
-	if (pos(tm) && pos(dt)) {
+	if (fb_pos(tm) && fb_pos(dt)) {
 		const float ex = expf(-dt / tm);
 		r->lag.alpha = sc_from_float(1.0f - ex);
 		r->dalpha_dtau = sc_from_float(-(dt / (tm * tm)) * ex);
@@ -132,7 +114,7 @@ static void read_1x2(const struct rls *q, float est[2], float sd[2])
 	for (unsigned o = 0; o < 2u; o++) {
 		est[o] = rls_estimate_f(q, o, 0);
 		float v = p * rls_residual_var(q, o);
-		sd[o] = pos(v) ? sqrtf(v) : 0.0f;
+		sd[o] = fb_pos(v) ? sqrtf(v) : 0.0f;
 	}
 }
 
@@ -147,10 +129,10 @@ float ident_rotor_tau_check(const struct ident_rotor *r)
 	if (scalar_zero(r->dalpha_dtau) || r->sens.n_updates < 2u)
 		return -1.0f;
 	float k = rls_estimate_f(&r->sens, 0, 0), kd = rls_estimate_f(&r->sens, 0, 1);
-	if (!pos(k) || !finite_f(kd))
+	if (!fb_pos(k) || !fb_finite(kd))
 		return -1.0f;
 	float t = sc_to_float(r->mot_tau_s) + kd / k;
-	return pos(t) ? t : 0.0f;
+	return fb_pos(t) ? t : 0.0f;
 }
 
 /* ---------------------------------------------------------------- inertia */
@@ -158,12 +140,12 @@ float ident_rotor_tau_check(const struct ident_rotor *r)
 scalar_t ident_torque_weight(scalar_t tau_m_s, scalar_t dt_s)
 {
 	float tm = sc_to_float(tau_m_s), dt = sc_to_float(dt_s);
-	if (!pos(tm) || !pos(dt))
+	if (!fb_pos(tm) || !fb_pos(dt))
 		return SC(1.0);
 	/* alpha = 1 / (1 - exp(-x)) - 1 / x, x = dt / tau_m; series for small x (cancellation) */
 	float x = dt / tm;
 	/* x < 0.1 by its bits (x is positive, not NaN) */
-	float w = bits_f(x) < bits_f(0.1f) ? 0.5f + x / 12.0f - x * x * x / 720.0f : 1.0f / (1.0f - expf(-x)) - 1.0f / x;
+	float w = fb_bits(x) < fb_bits(0.1f) ? 0.5f + x / 12.0f - x * x * x / 720.0f : 1.0f / (1.0f - expf(-x)) - 1.0f / x;
 	return sc_from_float(w);
 }
 
@@ -189,7 +171,7 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	c.theta0[0][0] = sc_to_float(inertia[i]);
 	rls_init(&e->rls, &c);
 	float wdt = sc_to_float(wc_rps) * sc_to_float(dt_s), z4 = 4.0f * sc_to_float(zeta);
-	e->sd_scale = pos(wdt) && wdt < z4 ? sqrtf(z4 / wdt) : 1.0f;
+	e->sd_scale = fb_pos(wdt) && wdt < z4 ? sqrtf(z4 / wdt) : 1.0f;
 	e->n = 0;
 	filt_svf_init(&e->svf_z, wc_rps, zeta, dt_s, SC_ZERO);
 	e->z_in = SC_ZERO;
@@ -197,10 +179,10 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	e->s_zy = e->s_zp = e->b_zy = e->b_zp = e->s_aa = e->s_ab = e->s_bb = (ident_sum_t)0;
 	e->s_n = e->b_n = 0;
 	float dt = sc_to_float(dt_s);
-	float len = pos(dt) ? 0.5f / dt + 0.5f : 45.0f; /* 0.5 s of updates */
+	float len = fb_pos(dt) ? 0.5f / dt + 0.5f : 45.0f; /* 0.5 s of updates */
 	/* len is positive, not NaN: compared by its bits */
-	const uint32_t lb = bits_f(len);
-	e->b_len = lb < bits_f(1.0f) ? 1u : (lb > bits_f(1e6f) ? 1000000u : (uint32_t)len);
+	const uint32_t lb = fb_bits(len);
+	e->b_len = lb < fb_bits(1.0f) ? 1u : (lb > fb_bits(1e6f) ? 1000000u : (uint32_t)len);
 }
 
 /* the IV estimate once a first block is complete (before, least squares: a live value); out
@@ -210,7 +192,7 @@ __attribute__((noinline)) static bool iv_ready(const struct ident_inertia *e)
 #if OCTO_FIXED
 	return e->iv && e->s_bb > 0 && e->s_zp != 0;
 #else
-	return e->iv && pos(e->s_bb) && !zero(e->s_zp);
+	return e->iv && fb_pos(e->s_bb) && !fb_zero(e->s_zp);
 #endif
 }
 
@@ -248,23 +230,23 @@ float ident_inertia_sd(const struct ident_inertia *e)
 	if (!iv_ready(e))
 		return e->sd_scale * rls_std(&e->rls, 0, 0);
 	float est = ident_inertia_est(e);
-	if (!finite_f(est))
+	if (!fb_finite(est))
 		return NAN;
 	float v = iv_resid2(e, est);
-	return sqrtf(pos(v) ? v : 0.0f) / fabsf(f_of_sum(e->s_zp));
+	return sqrtf(fb_pos(v) ? v : 0.0f) / fabsf(f_of_sum(e->s_zp));
 }
 
 /* The verdict on est +/- sd within [lo, hi]: not finite, out of range, relative std sd / |est|
  * not below rsd_max (negative sd: uncertain), else accepted; shared by both acceptance rules */
 __attribute__((noinline)) static enum ident_verdict verdict(float est, float sd, float lo, float hi, float rsd_max)
 {
-	if (!finite_f(est) || !finite_f(sd))
+	if (!fb_finite(est) || !fb_finite(sd))
 		return IDENT_NOT_FINITE;
 	if (!(est >= lo && est <= hi))
 		return IDENT_OUT_OF_RANGE;
 	/* |est| with -0 kept (the inertia rule divides by est): est >= 0, finite, by its bits */
-	float rsd = sd / (bits_f(est) <= 0x80000000u ? est : -est);
-	if (neg(sd) || !(rsd < rsd_max))
+	float rsd = sd / (fb_bits(est) <= 0x80000000u ? est : -est);
+	if (fb_neg(sd) || !(rsd < rsd_max))
 		return IDENT_UNCERTAIN;
 	return IDENT_ACCEPT;
 }
@@ -279,7 +261,7 @@ enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, floa
 	const enum ident_verdict v = verdict(est, sd, *lo, *hi, rsd_max);
 	if (v == IDENT_UNCERTAIN) {
 		float rsd = sd / est;
-		*raise = pos(rsd_max) && finite_f(rsd) ? rsd / rsd_max : 0.0f;
+		*raise = fb_pos(rsd_max) && fb_finite(rsd) ? rsd / rsd_max : 0.0f;
 	}
 	return v;
 }
@@ -304,13 +286,13 @@ float ident_fit_ne(const struct ident_fit *v)
 {
 	float y0 = sc_to_float(v->y0);
 	float syy = f_of_sum(v->s2) + 2.0f * y0 * f_of_sum(v->s1) + (float)v->n * y0 * y0;
-	return pos(syy) ? sqrtf(f_of_sum(v->sse) / syy) : 0.0f;
+	return fb_pos(syy) ? sqrtf(f_of_sum(v->sse) / syy) : 0.0f;
 }
 
 float ident_fit_pct(const struct ident_fit *v)
 {
 	float m2 = fit_m2(v);
-	return pos(m2) ? 100.0f * (1.0f - sqrtf(f_of_sum(v->sse) / m2)) : 0.0f;
+	return fb_pos(m2) ? 100.0f * (1.0f - sqrtf(f_of_sum(v->sse) / m2)) : 0.0f;
 }
 
 /* ---------------------------------------------------------------- acceptance */
@@ -324,7 +306,7 @@ enum ident_verdict ident_accept(float est, float sd, float nominal, float rsd_ma
 		hi = t;
 	}
 	const enum ident_verdict v = verdict(est, sd, lo, hi, rsd_max);
-	return v != IDENT_NOT_FINITE && zero(est) ? IDENT_OUT_OF_RANGE : v;
+	return v != IDENT_NOT_FINITE && fb_zero(est) ? IDENT_OUT_OF_RANGE : v;
 }
 
 const char *ident_verdict_text(enum ident_verdict v)

@@ -2,6 +2,7 @@
  * step): Gamma_o from the geometry, its pseudo-inverse by a QR of its rows, the facets of the
  * attainable set; see mixer.h. The allocation that uses them is mixer.c. */
 #include "mixer.h"
+#include "fbits.h"
 
 #include "mixer_tol.h"
 
@@ -12,25 +13,6 @@
 
 /* |x|: the sign bit cleared (no soft-float compare on cores without FPU) */
 static float absf(float x) { return fabsf(x); }
-
-/* Tests of a float from its bits (tests of a word, not the soft-float comparisons a core
- * without FPU makes; the same results, NaN included): abs_bits, the bits with the sign
- * cleared, is above 0x7f800000 for NaN and from it on for what is not finite; x > 0 is
- * above +0 and at most +infinity */
-static uint32_t bits_f(float x)
-{
-	union { float f; uint32_t u; } v = { x };
-	return v.u;
-}
-static uint32_t abs_bits(float x) { return bits_f(x) & 0x7fffffffu; }
-static bool pos(float x)
-{
-#if defined(__ARM_FP)
-	return x > 0.0f;
-#else
-	return bits_f(x) - 1u < 0x7f800000u;
-#endif
-}
 
 /* sum_k a[k sa] b[k sb], k = 0..n-1, in that order: one routine for the set-up's dot
  * products (each inline loop is a few soft-float calls more on cores without FPU) */
@@ -79,7 +61,7 @@ static float inv4(const float m[4][4], float out[4][4])
 		for (int r = c + 1; r < 4; r++)
 			if (absf(a[r][c]) > absf(a[piv][c]))
 				piv = r;
-		if (abs_bits(a[piv][c]) == 0u)   /* +-0 */
+		if (fb_abs_bits(a[piv][c]) == 0u)   /* +-0 */
 			return 0.0f;
 		for (int j = 0; j < 8; j++) { /* rows c and piv swapped (nothing when the same) */
 			float t = a[c][j];
@@ -215,7 +197,7 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 		const float s = 0.70710678f;
 		float l = sc_to_float(p->arm_l_m);
 		float kf = sc_to_float(p->k_f_n);
-		float k = pos(kf) ? sc_to_float(p->k_tau_nm) / kf : 0.0f;
+		float k = fb_pos(kf) ? sc_to_float(p->k_tau_nm) / kf : 0.0f;
 		/* sign of tau_x per rotor; tau_y's is the same two rotors on */
 		static const signed char sx[NR] = { 0, -1, -1, -1, 0, 1, 1, 1 };
 		for (int j = 0; j < NR; j++) {
@@ -232,9 +214,9 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 		float sj = scale_of(p, j);
 		for (int i = 0; i < NA; i++)
 			m->gamma_f[i][j] *= sj;
-		bool gone = !(p->rotor_mask & (1u << j)) || abs_bits(m->gamma_f[0][j]) > 0x7f800000u;
+		bool gone = !(p->rotor_mask & (1u << j)) || fb_abs_bits(m->gamma_f[0][j]) > 0x7f800000u;
 		for (int i = 0; i < NA; i++)
-			if (gone || abs_bits(m->gamma_f[i][j]) >= 0x7f800000u)
+			if (gone || fb_abs_bits(m->gamma_f[i][j]) >= 0x7f800000u)
 				m->gamma_f[i][j] = 0.0f;
 	}
 }
@@ -360,12 +342,12 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		float wl = 0.0f;
 		for (int j = 0; j < NR; j++) {
 			rowmax[i] = absf(dz->gamma_f[i][j]) > rowmax[i] ? absf(dz->gamma_f[i][j]) : rowmax[i];
-			if ((abs_bits(dz->gamma_f[0][j]) | abs_bits(dz->gamma_f[1][j]) | abs_bits(dz->gamma_f[2][j]) |
-			     abs_bits(dz->gamma_f[3][j])) != 0u)   /* an entry not 0 */
+			if ((fb_abs_bits(dz->gamma_f[0][j]) | fb_abs_bits(dz->gamma_f[1][j]) | fb_abs_bits(dz->gamma_f[2][j]) |
+			     fb_abs_bits(dz->gamma_f[3][j])) != 0u)   /* an entry not 0 */
 				wl += dz->gamma_f[i][j] * flo;
 		}
 		m->w_lo[i] = sc_from_float(wl);
-		if (!pos(rowmax[i])) {
+		if (!fb_pos(rowmax[i])) {
 			rows_ok = false;
 			rowmax[i] = 1.0f;
 		}

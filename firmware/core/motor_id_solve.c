@@ -3,6 +3,7 @@
  * cause texts; see motor_id.h. Float in both builds (a few times per experiment); the
  * per-frame part is motor_id.c. */
 #include "motor_id.h"
+#include "fbits.h"
 #include "motor_id_q.h"
 #include "thrmap.h" /* THRMAP_CURVE_*: the curve's range */
 
@@ -82,21 +83,6 @@ static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u};
 #define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
 
 
-/* x > 0: on a core without FPU from its bits (above +0, at most +infinity: not NaN), a test
- * of a word, not a soft-float comparison; the comparison itself where float is not 32 bits
- * (the float64 reference build of these sources) */
-static bool pos(float x)
-{
-#if defined(__ARM_FP)
-	return x > 0.0f;
-#else
-	if (sizeof x != sizeof(uint32_t))
-		return x > 0.0f;
-	union { float f; uint32_t u; } v = { x };
-	return v.u - 1u < 0x7f800000u;
-#endif
-}
-
 NOINLINE static float clampf(float x, float lo, float hi)
 {
 	return x < lo ? lo : (x > hi ? hi : x);
@@ -147,9 +133,9 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const sca
 {
 	*m = (struct motor_id){0};
 	m->cfg = *cfg;
-	if (!pos(m->cfg.tau0_s))
+	if (!fb_pos(m->cfg.tau0_s))
 		m->cfg.tau0_s = 0.03f;
-	if (!pos(m->cfg.kf0))
+	if (!fb_pos(m->cfg.kf0))
 		m->cfg.kf0 = 1.0f;
 	m->cfg.curve0 = clampf(m->cfg.curve0, THRMAP_CURVE_MIN, THRMAP_CURVE_MAX);
 	/* the reference model; the fixed build takes thrusts and torques as value 2^-kexp, with
@@ -214,7 +200,7 @@ NOINLINE static float fit_w(const float st[S_N], float c, float s_c, float y1, f
 	curve_w(c, s_c, w);
 	*gw = stat_gww(st, w[0], w[1]);
 	*wy = w[0] * y1 + w[1] * y2;
-	return pos(*gw) ? *wy / *gw : 0.0f;
+	return fb_pos(*gw) ? *wy / *gw : 0.0f;
 }
 
 /* residual sum of squares of one rotor's statistics: 2 parameters (curve estimated) or the
@@ -224,7 +210,7 @@ static float rotor_ssr(const float st[S_N], bool est_curve, float c0, float s_c,
 	float d0, d1, ssr;
 	if (est_curve) {
 		float det = stat_det(st);
-		if (!(det > 1e-30f * st[S_G11] * st[S_G22]) || !pos(st[S_G11])) {
+		if (!(det > 1e-30f * st[S_G11] * st[S_G22]) || !fb_pos(st[S_G11])) {
 			delta[0] = delta[1] = 0.0f;
 			return st[S_RR];
 		}
@@ -240,7 +226,7 @@ static float rotor_ssr(const float st[S_N], bool est_curve, float c0, float s_c,
 	}
 	delta[0] = d0;
 	delta[1] = d1;
-	return pos(ssr) ? ssr : 0.0f;
+	return fb_pos(ssr) ? ssr : 0.0f;
 }
 
 /* rotor j's statistics of delay d (st; gi, l: see stat_at) and its residual sum of squares
@@ -258,11 +244,11 @@ static float parabola(const float sv[3], float *k)
 {
 	float den = sv[0] - 2.0f * sv[1] + sv[2];
 	float x;
-	if (pos(den))
+	if (fb_pos(den))
 		x = clampf((sv[0] - sv[2]) / (2.0f * den), -X_MAX, X_MAX);
 	else
 		x = sv[0] < sv[2] ? -X_MAX : X_MAX;
-	*k = pos(den) ? 0.5f * den : 0.0f;
+	*k = fb_pos(den) ? 0.5f * den : 0.0f;
 	return x;
 }
 
@@ -377,10 +363,10 @@ static float median8(const float v[NR], unsigned *a, unsigned *b)
 	return 0.5f * (v[*a] + v[*b]);
 }
 
-static float sqrt0(float v) { return pos(v) ? sqrtf(v) : 0.0f; }
+static float sqrt0(float v) { return fb_pos(v) ? sqrtf(v) : 0.0f; }
 
 /* a / b for b > 0, else 0 */
-NOINLINE static float div_pos(float a, float b) { return pos(b) ? a / b : 0.0f; }
+NOINLINE static float div_pos(float a, float b) { return fb_pos(b) ? a / b : 0.0f; }
 
 /* The sampling variance of the median of 8 rotors' estimates (the mean of the 4th and 5th),
  * in units of one rotor's variance: 0.168 for 8 alike, 0.190 with one rotor far off (a weak
@@ -407,7 +393,7 @@ static float rotor_curve(const struct motor_id *m, const float st[S_N], unsigned
 	float mj = a + bq * (1.0f - 2.0f * SC_J(m, j));
 	float det = stat_det(st);
 	*var = 0.0f;
-	if (!(pos(mj) && pos(det)))
+	if (!(fb_pos(mj) && fb_pos(det)))
 		return 0.0f;
 	const float ga = (-bq / (mj * mj)), gb = (a / (mj * mj));
 	/* g^T G^-1 g */
@@ -455,11 +441,11 @@ static void fit_at(const struct motor_id *m, unsigned d, float x, struct fit *f,
 	}
 	float sw = 0.0f, swc = 0.0f;
 	for (unsigned j = 0; j < NR; j++)
-		if (pos(vcj[j])) {
+		if (fb_pos(vcj[j])) {
 			sw += 1.0f / vcj[j];
 			swc += cj[j] / vcj[j];
 		}
-	const bool have_c = ec && pos(sw);
+	const bool have_c = ec && fb_pos(sw);
 	f->curve = have_c ? swc / sw : m->cfg.curve0;
 	f->curve_sd = have_c ? sqrt0(1.0f / sw) : 0.0f;
 	for (unsigned j = 0; j < NR; j++) {
@@ -621,7 +607,7 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 {
 	const float h = 0.2f;   /* wide enough that float rounding of the SSRs stays out of d2 */
 	float xi = *x, kk = *k;
-	if (!pos(kk) || fabsf(xi) >= X_MAX - 1e-3f)
+	if (!fb_pos(kk) || fabsf(xi) >= X_MAX - 1e-3f)
 		return;
 	for (int it = 0; it < 3; it++) {
 		float fv[3], c;   /* at xi - h, xi, xi + h */
@@ -630,7 +616,7 @@ static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 		/* the Newton step -f'/f'' of the central differences: the minimum of the parabola
 		 * through the three values (in units of h, at most X_MAX of them) */
 		float step = h * parabola(fv, &c);
-		if (!pos(c))
+		if (!fb_pos(c))
 			return;
 		xi = clampf(xi + step, -X_MAX + 2e-3f, X_MAX - 2e-3f);
 		kk = c / (h * h);
@@ -679,7 +665,7 @@ NOINLINE static enum motor_id_cause white_eval(const struct motor_id *m, struct 
 				continue;
 			float mu = mid_sum_to_float(w->se[j][b], m->e[MID_E_WSE], 1, m->kexp) / n,
 			      c0 = mid_sum_to_float(w->see[j][b], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu, qq = 0.0f;
-			if (!pos(c0))
+			if (!fb_pos(c0))
 				continue;
 			for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++) {
 				float rho = (mid_sum_to_float(w->sl[j][b][l], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu) / c0;
@@ -698,7 +684,7 @@ NOINLINE static enum motor_id_cause white_eval(const struct motor_id *m, struct 
 	for (unsigned g = 0; g < 1u + NR + MOTOR_ID_WBINS; g++) {
 		const float q = qg[g], dof = (float)(ng[g] * MOTOR_ID_WLAGS);
 		if (g == 0u) {
-			if (!pos(dof))
+			if (!fb_pos(dof))
 				return MOTOR_ID_OK;
 			res->white_have = true;
 			res->white_q = q;
@@ -710,7 +696,7 @@ NOINLINE static enum motor_id_cause white_eval(const struct motor_id *m, struct 
 		/* a rotor's or a level's statistic over its limit */
 		const bool is_rotor = g <= NR;
 		float *ratio = is_rotor ? &res->white_rotor[g - 1u] : &res->white_level[g - 1u - NR];
-		*ratio = pos(dof) ? q / chi2_quant(dof, is_rotor ? WZ_ROTOR : WZ_LEVEL) : 0.0f;
+		*ratio = fb_pos(dof) ? q / chi2_quant(dof, is_rotor ? WZ_ROTOR : WZ_LEVEL) : 0.0f;
 		ok = ok && *ratio <= 1.0f;
 		if (*ratio > 1.0f) {
 			n_bad[is_rotor]++;
@@ -780,7 +766,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float x = xs[best], r = m->lag_r[best];
 	float kx = ks[best];   /* the criterion's curvature in x there */
 	lag_newton(m, best, &x, &kx);
-	const bool have_k = pos(kx);
+	const bool have_k = fb_pos(kx);
 	res->tau = grid_tau(m, best, x);
 	const float var_x = have_k ? 1.0f / (nf * kx) : 0.0f;
 	res->tau_sd = have_k ? res->tau * logf(r) * sqrt0(var_x) : res->tau;
@@ -821,7 +807,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	unsigned ma, mb;
 	ne_sorted_mid = median8(res->ne, &ma, &mb);
 	res->curve_chi2 = div_pos(f.chi2, nz);
-	const float sf2 = pos(nz) ? nz : f.ssr_sum / dof;   /* the thrust noise's variance for k_tau */
+	const float sf2 = fb_pos(nz) ? nz : f.ssr_sum / dof;   /* the thrust noise's variance for k_tau */
 
 	/* the lag's share: k_f, curve and scales move with the lag (central differences; the lag's
 	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
@@ -845,7 +831,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float nall = (float)(m->n_exc * NR);
 	float rho = div_pos(tf, ff);
 	float ss_t = tt - 2.0f * rho * tf + rho * rho * ff;
-	float vrho = pos(ff) && m->n_exc * NR > 1u ? ss_t / (nall - 1.0f) / ff : 0.0f;
+	float vrho = fb_pos(ff) && m->n_exc * NR > 1u ? ss_t / (nall - 1.0f) / ff : 0.0f;
 	if (ff > nall * sf2)
 		rho *= ff / (ff - nall * sf2);
 	res->ktau = rho * res->kf;
@@ -879,7 +865,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->cause = white_c == MOTOR_ID_LEVEL && !ec ? MOTOR_ID_CURVE : white_c;
 		if (white_c == MOTOR_ID_ROTOR)
 			res->cause_rotor = white_rotor;
-	} else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && pos(dof_j)) {
+	} else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && fb_pos(dof_j)) {
 		res->cause = MOTOR_ID_ROTOR;
 		res->cause_rotor = (int)worst;
 	} else if (res->ne_all > lim_all)

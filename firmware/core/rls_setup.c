@@ -1,27 +1,8 @@
 /* rls_setup.c - recursive least squares: configuration, the float entry point and the float
  * getters (off the 90 Hz path; float in both builds). The update is rls.c; see rls.h. */
 #include "rls.h"
+#include "fbits.h"
 #include "qfmt.h"
-
-/* the bits of x (tests of a word, not the soft-float comparisons a core without FPU makes) */
-static uint32_t bits_f(float x)
-{
-	union { float f; uint32_t u; } v = { x };
-	return v.u;
-}
-
-/* isfinite(x): the exponent not all ones (infinity or NaN) */
-static bool finite_f(float x) { return (bits_f(x) & 0x7f800000u) != 0x7f800000u; }
-
-/* x > 0 (above +0, at most +infinity: not NaN); a compare instruction with an FPU */
-static bool pos(float x)
-{
-#if defined(__ARM_FP)
-	return x > 0.0f;
-#else
-	return bits_f(x) - 1u < 0x7f800000u;
-#endif
-}
 
 
 /* float to the normalised formats and back (rls.h); the float build keeps float */
@@ -71,11 +52,11 @@ static int8_t shift_of(float m, int lo, int hi)
 {
 	int s = 0;
 	/* m is positive, not NaN: compared by its bits */
-	while (bits_f(m) >= bits_f(1.41421356f) && s < hi) {
+	while (fb_bits(m) >= fb_bits(1.41421356f) && s < hi) {
 		m *= 0.5f;
 		s++;
 	}
-	while (bits_f(m) < bits_f(0.70710678f) && s > lo) {
+	while (fb_bits(m) < fb_bits(0.70710678f) && s > lo) {
 		m *= 2.0f;
 		s--;
 	}
@@ -86,7 +67,7 @@ static int8_t shift_of(float m, int lo, int hi)
 __attribute__((noinline)) static float nonneg_f(float x)
 {
 	/* x >= 0 and finite: the sign clear and the exponent not all ones, or -0 */
-	const uint32_t u = bits_f(x);
+	const uint32_t u = fb_bits(x);
 	return u < 0x7f800000u || u == 0x80000000u ? x : 0.0f;
 }
 
@@ -108,7 +89,7 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 		c->lambda = 0.5f;
 	if (!(c->lambda <= 1.0f))
 		c->lambda = 1.0f;
-	if (bits_f(c->p0) - 1u >= 0x7f7fffffu)   /* not (positive and finite) */
+	if (fb_bits(c->p0) - 1u >= 0x7f7fffffu)   /* not (positive and finite) */
 		c->p0 = 1e4f;
 	c->p_min = nonneg_f(c->p_min);
 	c->p_max = nonneg_f(c->p_max);
@@ -128,13 +109,13 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 	for (unsigned o = 0; o < RLS_MAX_OUTPUTS; o++) {
 		float m = 0.0f, th[RLS_MAX_PARAMS];
 		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++) {
-			float t = finite_f(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f, a;
+			float t = fb_finite(cfg->theta0[o][i]) ? cfg->theta0[o][i] : 0.0f, a;
 			th[i] = t;
 			a = fabsf(t) * sc_pow2f(c->phi_shift[i]);
 			if (i < n && o < c->n_outputs)
 				m = a > m ? a : m;
 		}
-		r->y_shift[o] = pos(m) ? shift_of(m, -20, 20) : 0;
+		r->y_shift[o] = fb_pos(m) ? shift_of(m, -20, 20) : 0;
 		for (unsigned i = 0; i < RLS_MAX_PARAMS; i++)
 			r->theta[o][i] = par_of_f(th[i] * sc_pow2f(c->phi_shift[i] - r->y_shift[o]));
 	}
@@ -164,7 +145,7 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 #if OCTO_FIXED
 	/* the fixed build always keeps P under RLS_FIXED_P_CEIL p0: beyond that, an
 	 * unexcited direction's gain is the difference of numbers 2^31 times larger */
-	if (!pos(pmx) || pmx > c->p0 * RLS_FIXED_P_CEIL)
+	if (!fb_pos(pmx) || pmx > c->p0 * RLS_FIXED_P_CEIL)
 		pmx = c->p0 * RLS_FIXED_P_CEIL;
 #endif
 	r->p_max_n = acc_of_f(pmx);
@@ -178,7 +159,7 @@ enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bo
 	rls_sig_t pn[RLS_MAX_PARAMS], yn[RLS_MAX_OUTPUTS];
 	float nphi = 0.0f;
 	for (unsigned i = 0; i < r->cfg.n_params; i++) {
-		if (!finite_f(phi[i])) {
+		if (!fb_finite(phi[i])) {
 			r->n_rejected++;
 			return RLS_REJECTED;
 		}
@@ -186,7 +167,7 @@ enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bo
 		nphi += phi[i] * phi[i];
 	}
 	for (unsigned o = 0; o < r->cfg.n_outputs; o++) {
-		if (!finite_f(y[o])) {
+		if (!fb_finite(y[o])) {
 			r->n_rejected++;
 			return RLS_REJECTED;
 		}
@@ -225,5 +206,5 @@ float rls_residual_var(const struct rls *r, unsigned out)
 float rls_std(const struct rls *r, unsigned out, unsigned param)
 {
 	float v = rls_cov_diag(r, param) * rls_residual_var(r, out);
-	return pos(v) ? sqrtf(v) : 0.0f;
+	return fb_pos(v) ? sqrtf(v) : 0.0f;
 }

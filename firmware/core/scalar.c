@@ -12,6 +12,7 @@
  * where float is soft (SC_SOFT_FLOAT); the fixed build's sc_sqrt and sc_exp too.
  */
 #include "scalar.h"
+#include "fbits.h"
 
 #if OCTO_FIXED
 extern inline int64_t q_add64(int64_t a, int64_t b);
@@ -117,10 +118,8 @@ scalar_t sc_div(scalar_t a, scalar_t b)
 #if SC_SOFT_FLOAT
 scalar_t sc_sqrt(scalar_t a)
 {
-	/* a > 0 from its bits (0 < bits <= those of +Inf): one word test, not a soft-float
-	 * comparison on a core without FPU; the same result, NaN and -0 included */
-	union { float f; uint32_t u; } v = { a };
-	return v.u - 1u < 0x7f800000u ? sqrtf(a) : 0.0f;
+	/* a > 0 from its bits: one word test, not a soft-float comparison */
+	return fb_pos(a) ? sqrtf(a) : 0.0f;
 }
 
 scalar_t sc_min(scalar_t a, scalar_t b) { return a < b ? a : b; }
