@@ -506,7 +506,7 @@ static void apply_results(struct app *a)
  * for it: a late step, never an inconsistent one. */
 static void app_settle(struct app *a)
 {
-	envelope_publish(a);        /* the last step's KFT_* publication and VEH_KF refresh */
+	envelope_publish(a);        /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh */
 	exp_turn(&a->exp, &a->p);   /* a phase that ended in the last step: close it, start the next */
 	if (a->exp.n_results > 0)
 		apply_results(a);

@@ -13,6 +13,30 @@ static uint32_t xr(void)
 	return rng;
 }
 
+/* a Q16.16 raw word as a scalar: the word itself in the fixed build, its value in float */
+static scalar_t sc_of_raw(int32_t a)
+{
+#if OCTO_FIXED
+	return a;
+#else
+	return sc_from_float((float)a / 65536.0f);
+#endif
+}
+
+#if OCTO_FIXED
+/* a guess of the quotient or root q for est_div_near / est_sqrt_near: a few units off
+ * either way (off), anything (every fifth), negative (some), clamped to [0, INT32_MAX] */
+static scalar_t guess_near(int k, scalar_t q, int32_t off)
+{
+	if (k % 5 == 4)
+		return (scalar_t)(xr() >> 1);
+	if (k % 17 == 3)
+		return -1;
+	int64_t g = (int64_t)q + off;
+	return (scalar_t)(g < 0 ? 0 : (g > INT32_MAX ? INT32_MAX : g));
+}
+#endif
+
 UNIT_TEST(est_scale32_and_est_shl32c_equal_q_scale32)
 {
 	int32_t v[200];
@@ -128,11 +152,7 @@ UNIT_TEST(est_mul_unit_equals_sc_mul)
 			a = -a;
 		if (k % 16 == 0)
 			u = (int32_t)(xr() >> (xr() % 32u)) * ((xr() & 1u) ? 1 : -1);   /* beyond [0, 1] too */
-		scalar_t x = sc_from_float((float)a / 65536.0f), y = sc_from_float((float)u / 65536.0f);
-#if OCTO_FIXED
-		x = a;
-		y = u;
-#endif
+		scalar_t x = sc_of_raw(a), y = sc_of_raw(u);
 		scalar_t p = est_mul_unit(x, y), q = sc_mul(x, y);
 		if (!(p == q))
 			bad++;
@@ -148,10 +168,7 @@ UNIT_TEST(est_div_int_equals_sc_div_int)
 	const uint32_t ns[] = {3u, 100u, 7u};
 	for (unsigned i = 0; i < sizeof edge / sizeof edge[0]; i++)
 		for (unsigned k = 0; k < 3u; k++) {
-			scalar_t x = sc_from_float((float)edge[i] / 65536.0f);
-#if OCTO_FIXED
-			x = edge[i];
-#endif
+			scalar_t x = sc_of_raw(edge[i]);
 			if (!(est_div_int(x, ns[k]) == sc_div_int(x, ns[k])))
 				bad++;
 		}
@@ -159,10 +176,7 @@ UNIT_TEST(est_div_int_equals_sc_div_int)
 		int32_t a = (int32_t)(xr() >> (xr() % 32u));
 		if (xr() & 1u)
 			a = -a;
-		scalar_t x = sc_from_float((float)a / 65536.0f);
-#if OCTO_FIXED
-		x = a;
-#endif
+		scalar_t x = sc_of_raw(a);
 		uint32_t n = ns[k % 3];
 		if (!(est_div_int(x, n) == sc_div_int(x, n)))
 			bad++;
@@ -184,21 +198,12 @@ UNIT_TEST(est_div_near_equals_sc_div)
 			b = -b;
 		if (k % 13 == 0)
 			b = 0;
-		scalar_t x = sc_from_float((float)a / 65536.0f), y = sc_from_float((float)b / 65536.0f);
-#if OCTO_FIXED
-		x = a;
-		y = b;
-#endif
+		scalar_t x = sc_of_raw(a), y = sc_of_raw(b);
 		scalar_t q = sc_div(x, y), g = q;
 		/* guesses: the quotient, a few units off either way, far off, negative */
 		int32_t off = (int32_t)(xr() % 21u) - 10;
 #if OCTO_FIXED
-		if (k % 5 == 4)
-			g = (scalar_t)(xr() >> 1);
-		else if (k % 17 == 3)
-			g = -1;
-		else
-			g = (scalar_t)((int64_t)q + off < 0 ? 0 : ((int64_t)q + off > INT32_MAX ? INT32_MAX : q + off));
+		g = guess_near(k, q, off);
 		if (g >= q - EST_DIV_STEPS && g <= q + EST_DIV_STEPS)
 			near++;
 #else
@@ -225,19 +230,11 @@ UNIT_TEST(est_sqrt_near_equals_sc_sqrt)
 			a = -a;
 		if (k < 64)
 			a = k < 32 ? k : INT32_MAX - (k - 32);
-		scalar_t x = sc_from_float((float)a / 65536.0f);
-#if OCTO_FIXED
-		x = a;
-#endif
+		scalar_t x = sc_of_raw(a);
 		scalar_t q = sc_sqrt(x), g = q;
 		int32_t off = (int32_t)(xr() % 21u) - 10;
 #if OCTO_FIXED
-		if (k % 5 == 4)
-			g = (scalar_t)(xr() >> 1);
-		else if (k % 17 == 3)
-			g = -1;
-		else
-			g = q + off < 0 ? 0 : q + off;
+		g = guess_near(k, q, off);
 		if (g >= q - EST_DIV_STEPS && g <= q + EST_DIV_STEPS)
 			near++;
 #else
