@@ -180,6 +180,10 @@ static void format_line(const struct exp_line *l, char *out, size_t cap)
 		snprintf(out, cap, l->fmt, ARG_D(0), ARG_F(1));
 	else if (!strcmp(k, "ssf"))
 		snprintf(out, cap, l->fmt, ARG_S(0), ARG_S(1), ARG_F(2));
+	else if (!strcmp(k, "sfff"))
+		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2), ARG_F(3));
+	else if (!strcmp(k, "sffff"))
+		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2), ARG_F(3), ARG_F(4));
 	else if (!strcmp(k, "ffff"))
 		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_F(2), ARG_F(3));
 	else
@@ -517,20 +521,38 @@ static float inr_amp_limit(const struct app_params *p, unsigned ax)
 
 /* Asked accuracy (ID_RSD_MAX) not reached: the std falls as 1 / (amplitude sqrt(time)), so
  * the estimate needs raise x the amplitude or raise^2 x the time (with a margin). The
- * amplitude goes up to its limit (inr_amp_limit); what it cannot give, the time does. */
+ * amplitude goes up to its limit (inr_amp_limit); what it cannot give, the time does, up to
+ * ID_INR_TIME's maximum. Beyond that the advice is the longest experiment at the largest
+ * amplitude, with the std expected there (no margin): below ID_RSD_MAX it may pass; above, the
+ * asked accuracy is out of reach on this vehicle and the warning says so. Advice never names
+ * a value the parameter would refuse. */
 static void inertia_advice(struct experiment *e, const struct app_params *p, unsigned ax, const char *nm,
 			   float raise)
 {
 	float r = raise * INR_ADVICE_MARGIN, amp = e->cfg.inr_amp, t = e->cfg.inr_time;
-	float lim = inr_amp_limit(p, ax);
+	float lim = inr_amp_limit(p, ax), tmax = param_defs[PX_ID_INR_TIME].max;
 	if (amp * r <= lim) {
-		say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f or ID_INR_TIME %.0f s", nm, (double)(amp * r),
-		    (double)(t * r * r));
+		if (t * r * r <= tmax)
+			say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f or ID_INR_TIME %.0f s", nm,
+			    (double)(amp * r), (double)(t * r * r));
+		else
+			say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f and ID_INR_TIME %.0f s", nm,
+			    (double)(amp * r), (double)t);
 		return;
 	}
 	float a = lim > amp ? lim / amp : 1.0f, tr = r / a;
-	say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f and ID_INR_TIME %.0f s", nm, (double)(amp * a),
-	    (double)(t * tr * tr));
+	if (t * tr * tr <= tmax) {
+		say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f and ID_INR_TIME %.0f s", nm, (double)(amp * a),
+		    (double)(t * tr * tr));
+		return;
+	}
+	float rsd_at = raise * e->cfg.rsd_max / (a * sqrtf(tmax / t));
+	if (rsd_at < e->cfg.rsd_max)
+		say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f and ID_INR_TIME %.0f s (the longest: rsd %.5f expected)",
+		    nm, (double)(amp * a), (double)tmax, (double)rsd_at);
+	else
+		say(e, APP_SEV_WARNING, "ID %s: ID_RSD_MAX %g out of reach: ID_INR_AMP %.2f and ID_INR_TIME %.0f s give rsd %.5f",
+		    nm, (double)e->cfg.rsd_max, (double)(amp * a), (double)tmax, (double)rsd_at);
 }
 
 static void phase_end(struct experiment *e, const struct app_params *p)

@@ -83,8 +83,11 @@
  *              0.5 s blocks). Not accurate enough for ID_RSD_MAX: a warning says what to
  *              raise ("ID Izz: ID_INR_AMP 1.57 and ID_INR_TIME 320 s": the std falls as
  *              1 / (amplitude sqrt(time)); the amplitude up to the rotors' headroom, half the
- *              hover thrust per rotor, the rest in time; 2x margin on the std; "or" when
- *              either alone suffices).
+ *              hover thrust per rotor, the rest in time up to ID_INR_TIME's maximum; 2x margin
+ *              on the std; "or" when either alone suffices). Past that maximum the advice is
+ *              the longest run at the largest amplitude with the std expected there ("(the
+ *              longest: rsd 0.0017 expected)"), or, when even that misses ID_RSD_MAX, "ID_RSD_MAX
+ *              0.0010 out of reach: ... give rsd 0.0017": never a value the parameter refuses.
  * Acceptance (ident_accept): finite, within [0.25, 4] x the current VEH_* value,
  * relative std < ID_RSD_MAX (0.02); then VEH_* and ID_RESULT bits are among the
  * results; otherwise a STATUSTEXT says why and VEH_* stay. The experiment aborts
@@ -226,7 +229,7 @@ struct experiment {
 	int n_est;
 	char est_name[EXP_MAX_EST][11];        /* NAMED_VALUE_FLOAT names, <= 10 chars */
 	float est[EXP_MAX_EST], est_sd[EXP_MAX_EST];
-	char msg[51];                          /* pending status line ("" = none) */
+	char msg[APP_EVENT_TEXT];              /* pending status line ("" = none) */
 	int msg_severity;                      /* enum app_severity */
 	int n_results;
 	struct exp_result results[EXP_MAX_RESULTS];

@@ -227,27 +227,42 @@ void mav_init(struct mav *m, const struct hal *hal, uint64_t now_us)
 
 /* ---------------------------------------------------------------- outgoing helpers */
 
+/* STATUSTEXT carries 50 characters. A longer line goes out as chunks sharing a nonzero id
+ * (MAVLink 2's id and chunk_seq): 50 characters each, then a shorter, NUL-padded one that ends
+ * the line (empty when the length is a multiple of 50). QGroundControl, MAVProxy and the
+ * project's tools join the chunks; a receiver that does not shows them in order. A line of at
+ * most 50 characters is one message with id 0. The rate limit admits a line whole or not at all. */
 static void send_statustext(struct app *a, int severity, const char *text)
 {
+	enum { W = MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN };
 	struct mav *m = &a->mav;
+	size_t n = strlen(text);
+	unsigned chunks = n <= W ? 1u : (unsigned)(n / W) + 1u;
 	uint64_t now = hal_wall_us(a->hal);
 	m->text_tokens += (float)(now - m->text_last_us) * 1e-6f * TEXT_RATE;
 	if (m->text_tokens > TEXT_BURST)
 		m->text_tokens = TEXT_BURST;
 	m->text_last_us = now;
-	if (m->text_tokens < 1.0f) {
+	if (m->text_tokens < (float)chunks) {
 		m->text_dropped++;
 		return;
 	}
-	m->text_tokens -= 1.0f;
-	char buf[MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN];   /* zero-filled, full size */
-	memset(buf, 0, sizeof buf);
-	size_t n = strlen(text);
-	memcpy(buf, text, n < sizeof buf ? n : sizeof buf);
-	mavlink_message_t msg;
-	mavlink_msg_statustext_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg,
-					 (uint8_t)(severity < 0 ? 0 : (severity > 7 ? 7 : severity)), buf, 0, 0);
-	send_msg(a, &msg);
+	m->text_tokens -= (float)chunks;
+	uint16_t id = 0;
+	if (chunks > 1u) {
+		m->text_id = (uint16_t)(m->text_id == UINT16_MAX ? 1u : m->text_id + 1u);
+		id = m->text_id;
+	}
+	uint8_t sev = (uint8_t)(severity < 0 ? 0 : (severity > 7 ? 7 : severity));
+	for (unsigned c = 0; c < chunks; c++) {
+		char buf[W];   /* zero-filled, full size */
+		memset(buf, 0, sizeof buf);
+		size_t at = (size_t)c * W, k = n - at < W ? n - at : W;
+		memcpy(buf, text + at, k);
+		mavlink_message_t msg;
+		mavlink_msg_statustext_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, sev, buf, id, (uint8_t)c);
+		send_msg(a, &msg);
+	}
 }
 
 static void send_named_float(const struct app *a, const char *name, float value)

@@ -45,13 +45,13 @@ struct mav {
 	uint8_t gcs_sysid, gcs_compid;
 	float text_tokens;                     /* STATUSTEXT rate limit */
 	uint64_t text_last_us;
+	uint16_t text_id;                      /* the last long STATUSTEXT's chunk id (0 = none yet) */
 	uint32_t rx_msgs, rx_dropped, text_dropped;
 	uint32_t rx_unsigned;                  /* rejected by signing (unsigned, bad, replayed) */
 	bool signing;                          /* MAVLink 2 signing on (hal_signing_key) */
 	/* the channel's signing state; the library's channel status points here */
 	mavlink_signing_t signing_state;
 	mavlink_signing_streams_t signing_streams;
-	uint16_t text_id;
 	struct mav_telem telem;                /* ground-station telemetry (mav_telem.c) */
 	struct mav_ftp ftp;                    /* component metadata and its FTP (mav_ftp.c) */
 };

@@ -56,6 +56,8 @@ def result_name(result):
     return entry.name.replace("MAV_RESULT_", "") if entry is not None else f"result {result}"
 
 
+STATUSTEXT_LEN = 50   # STATUSTEXT.text: a full chunk has no NUL, so more follow
+
 class Vehicle:
     """A connection to one vehicle. Use as a context manager to close the socket."""
 
@@ -72,7 +74,8 @@ class Vehicle:
             self.conn.setup_signing(read_signing_key(signing_key), sign_outgoing=True)
         self.target_system = 1
         self.target_component = 1
-        self.statustexts = []      # (wall time, severity, text)
+        self.statustexts = []      # (wall time, severity, text), long lines joined
+        self._chunks = {}          # (system, component) -> (id, next chunk_seq, text so far)
         self.named_values = {}     # name -> (time_boot_ms, value)
         self.heartbeat = None
         self.mode = None           # octo-fw's mode (HEARTBEAT.custom_mode / "Mode X" texts)
@@ -88,12 +91,36 @@ class Vehicle:
     def __exit__(self, *exc):
         self.close()
 
+    def _join_chunks(self, msg):
+        """A STATUSTEXT's whole line, or None while a long one's chunks are still coming.
+
+        id 0 is a line by itself; a nonzero id marks chunks of one long line (chunk_seq from
+        0), ended by the chunk shorter than the 50-character field. A lost chunk is marked
+        "[...]" rather than dropped silently; a line whose last chunk never comes is lost with it.
+        """
+        cid = getattr(msg, "id", 0)
+        if not cid:
+            return msg.text
+        key = (msg.get_srcSystem(), msg.get_srcComponent())
+        have = self._chunks.get(key)
+        if have is None or have[0] != cid:
+            have = (cid, 0, "" if msg.chunk_seq == 0 else "[...]")
+        text = have[2] + ("[...]" if msg.chunk_seq > have[1] else "") + msg.text
+        if len(msg.text) < STATUSTEXT_LEN:
+            self._chunks.pop(key, None)
+            return text
+        self._chunks[key] = (cid, msg.chunk_seq + 1, text)
+        return None
+
     def _note(self, msg):
         t = msg.get_type()
         if t == "STATUSTEXT":
-            self.statustexts.append((time.time(), msg.severity, msg.text))
-            if msg.text.startswith("Mode ") and msg.text[5:] in MODE_NUMBERS:
-                self.mode = MODE_NUMBERS[msg.text[5:]]
+            text = self._join_chunks(msg)
+            if text is None:
+                return
+            self.statustexts.append((time.time(), msg.severity, text))
+            if text.startswith("Mode ") and text[5:] in MODE_NUMBERS:
+                self.mode = MODE_NUMBERS[text[5:]]
         elif t == "NAMED_VALUE_FLOAT":
             self.named_values[msg.name] = (msg.time_boot_ms, msg.value)
         elif t == "HEARTBEAT" and msg.get_srcComponent() == self.target_component \

@@ -293,3 +293,78 @@ UNIT_TEST(mav_param_names_found_exactly)
 	CHECK(params_find("VEH_KF", 0) == -1);
 	CHECK(params_find("NO_SUCH_PARAM", PARAM_ID_LEN) == -1);
 }
+
+/* The STATUSTEXTs since `from` joined as a ground station joins them: id 0 alone, a nonzero id
+ * chunk by chunk (chunk_seq 0, 1, ... all the same id) until the chunk that is not full.
+ * -1 when a chunk is out of order or its id changes mid-line. */
+static int statustexts(const struct mrig *r, int from, char out[][128], int cap, int *chunks)
+{
+	int n = 0;
+	*chunks = 0;
+	char line[128] = "";
+	uint16_t id = 0;
+	uint8_t next = 0;
+	for (int i = from; i < r->n_got && n < cap; i++) {
+		if (r->got[i].msgid != MAVLINK_MSG_ID_STATUSTEXT)
+			continue;
+		mavlink_statustext_t t;
+		mavlink_msg_statustext_decode(&r->got[i], &t);
+		char text[MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN + 1];
+		memcpy(text, t.text, sizeof t.text);
+		text[sizeof t.text] = 0;
+		(*chunks)++;
+		if (t.id == 0) {
+			snprintf(out[n++], 128, "%s", text);
+			continue;
+		}
+		if (t.chunk_seq == 0) {
+			line[0] = 0;
+			id = t.id;
+			next = 0;
+		}
+		if (t.id != id || t.chunk_seq != next)
+			return -1;
+		next++;
+		size_t k = strlen(line);
+		snprintf(line + k, sizeof line - k, "%s", text);
+		if (strlen(text) < sizeof t.text)
+			snprintf(out[n++], 128, "%s", line);
+	}
+	return n;
+}
+
+UNIT_TEST(mav_long_statustext_goes_out_in_chunks)
+{
+	struct mrig *r = &RA;
+	mrig_init(r);
+	frames(r, 5, 45.0, 7.0, 300.0f);
+	char want[3][APP_EVENT_TEXT];
+	const size_t len[3] = {50, 51, APP_EVENT_TEXT - 1};   /* one message; two chunks; the longest line */
+	for (int k = 0; k < 3; k++) {
+		for (size_t i = 0; i < len[k]; i++)
+			want[k][i] = (char)('a' + (i * 7u + (size_t)k) % 26u);
+		want[k][len[k]] = 0;
+	}
+	int from = r->n_got;
+	for (int k = 0; k < 3; k++)
+		app_status(&r->a, APP_SEV_WARNING, "%s", want[k]);
+	frames(r, 3, 45.0, 7.0, 300.0f);
+	char got[8][128];
+	int chunks;
+	int n = statustexts(r, from, got, 8, &chunks);
+	CHECK(n == 3);
+	CHECK(chunks == 5);
+	for (int k = 0; k < 3 && k < n; k++)
+		CHECK(!strcmp(got[k], want[k]));
+	/* two long lines carry different ids; the 50-character line is one message, id 0 */
+	uint16_t ids[8];
+	int m = 0;
+	for (int i = from; i < r->n_got && m < 8; i++)
+		if (r->got[i].msgid == MAVLINK_MSG_ID_STATUSTEXT) {
+			mavlink_statustext_t t;   /* decoded: the getters read the payload unaligned */
+			mavlink_msg_statustext_decode(&r->got[i], &t);
+			ids[m++] = t.id;
+		}
+	CHECK(m == 5 && ids[0] == 0 && ids[1] != 0 && ids[1] == ids[2] && ids[3] != 0 && ids[3] == ids[4] &&
+	      ids[3] != ids[1]);
+}

@@ -1,6 +1,6 @@
 """octo-fw seen by MAVProxy (pinned, headless, driven through its command line on
 stdin as a user types): parameter fetch (its FTP attempt NAKed, then the PARAM_*
-protocol), set, save, arm, take-off, land; its mode display does not use
+protocol), set, save, arm, take-off, a status line longer than one STATUSTEXT, land; its mode display does not use
 ArduCopter's names and it reports no fence breach. Every wait has a deadline."""
 
 import os
@@ -101,6 +101,22 @@ def test_mavproxy_parameters_arm_takeoff_land(mavproxy, tmp_path):
     mp.send("takeoff 3")
     mp.expect(r"NAV_TAKEOFF: ACCEPTED", 10)
     mp.expect(r"Mode HOLD", 30)
+    # a status line longer than STATUSTEXT's 50 characters reaches MAVProxy whole (its chunks joined)
+    mp.send("param set ID_EXC_AMP 0")
+    for _ in range(10):      # confirmed by the vehicle's PARAM_VALUE before the command
+        mp.send("param show ID_EXC_AMP")
+        if re.search(r"ID_EXC_AMP\s+0\.0+\b", mp.expect(r"ID_EXC_AMP\s+\d", 5)):
+            break
+        time.sleep(0.5)
+    else:
+        pytest.fail("MAVProxy never showed ID_EXC_AMP 0")
+    for _ in range(10):
+        mp.send("long USER_1 1")
+        line = mp.expect(r"Experiment 1 refused: ", 5)
+        if "not hovering" not in line:
+            break
+        time.sleep(1.0)
+    assert re.search(r"AP: Experiment 1 refused: ID_EXC_AMP/ID_EXC_TIME not > 0$", line), line
     mp.send("long NAV_LAND")
     mp.expect(r"NAV_LAND: ACCEPTED", 10)
     mp.expect(r"Mode DISARMED", 40)

@@ -1,5 +1,5 @@
 """octo-fw seen by MAVSDK (the pinned native `mavsdk` package): telemetry, health,
-parameters and actions, as MAVSDK's own examples use them. octo-sim runs in real
+parameters, actions and status lines (a long one in chunks), as MAVSDK's own examples use them. octo-sim runs in real
 time (not lockstep) so that the flight unfolds at the pace MAVSDK expects. Every
 wait has a deadline."""
 
@@ -15,6 +15,7 @@ from test_fw_rig import Rig
 
 mavsdk = pytest.importorskip("mavsdk")
 from mavsdk.plugins.action import Action  # noqa: E402
+from mavsdk.plugins.mavlink_direct.mavlink_direct import MavlinkDirect, MavlinkMessage  # noqa: E402
 from mavsdk.plugins.param import Param  # noqa: E402
 from mavsdk.plugins.telemetry import LandedState, Telemetry  # noqa: E402
 
@@ -97,6 +98,25 @@ def test_mavsdk_telemetry_health_parameters_and_flight(vehicle):
     poll(tel.in_air, bool, 15.0, "in_air")
     poll(lambda: tel.position().relative_altitude_m, lambda z: z > 2.5, 20.0, "relative altitude 2.5 m")
     poll(tel.landed_state, lambda s: s == LandedState.IN_AIR, 20.0, "landed state in air (holding)")
+
+    # a status line longer than STATUSTEXT's 50 characters reaches MAVSDK whole (its chunks
+    # joined): the refusal of an experiment without excitation, sent as a raw COMMAND_LONG
+    texts = []
+    tel.subscribe_status_text(lambda st, _ud: texts.append(st.text))
+    par.set_param_float("ID_EXC_AMP", 0.0)
+    user_1 = MavlinkMessage(message_name="COMMAND_LONG", system_id=255, component_id=190,
+                            target_system_id=1, target_component_id=1, fields_json=json.dumps(
+                                {"target_system": 1, "target_component": 1, "command": 31010,
+                                 "confirmation": 0, "param1": 1, "param2": 0, "param3": 0,
+                                 "param4": 0, "param5": 0, "param6": 0, "param7": 0}))
+    direct = MavlinkDirect(system)
+
+    def refusal():
+        direct.send_message(user_1)
+        time.sleep(0.5)
+        return [t for t in texts if t.startswith("Experiment 1 refused: ID_EXC")]
+    got = poll(refusal, bool, 15.0, "the experiment's refusal as a STATUSTEXT")
+    assert got[-1] == "Experiment 1 refused: ID_EXC_AMP/ID_EXC_TIME not > 0", texts
     act.land()
     poll(tel.landed_state, lambda s: s in (LandedState.LANDING, LandedState.ON_GROUND), 5.0, "landing")
     poll(tel.landed_state, lambda s: s == LandedState.ON_GROUND, 30.0, "landed")

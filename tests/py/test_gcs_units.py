@@ -97,3 +97,34 @@ def test_rk4_error_falls_sixteen_fold_when_step_halves():
     e2 = np.linalg.norm(m.simulate(x0, u * 400, 0.005)[-1][10:13] - ref[10:13])
     assert 12 < e1 / e2 < 20
     del rng
+
+
+# ------------------------------------------------------------ long status lines
+def test_link_joins_statustext_chunks_and_marks_a_lost_one():
+    """octo-fw sends a line longer than 50 characters as STATUSTEXT chunks (one nonzero id,
+    chunk_seq 0, 1, ..., the last not full); octo-gcs shows it whole, from each sender apart."""
+    from octo_gcs.link import Vehicle, mavlink
+
+    rng = random.Random()
+    line = "".join(rng.choice("abcdefghij ") for _ in range(rng.randint(51, 149)))
+    link = object.__new__(Vehicle)   # no socket: only the joining is under test
+    link._chunks = {}
+
+    def chunk(sysid, text, cid, seq):
+        mav = mavlink.MAVLink(None, srcSystem=sysid, srcComponent=1)
+        m = mav.statustext_encode(4, text.encode(), cid, seq)
+        return mav.decode(bytearray(m.pack(mav)))
+
+    parts = [line[i:i + 50] for i in range(0, len(line), 50)]
+    if len(parts[-1]) == 50:
+        parts.append("")
+    out = []
+    for seq, part in enumerate(parts):
+        out.append(link._join_chunks(chunk(1, part, 7, seq)))
+        out.append(link._join_chunks(chunk(2, "other vehicle, short", 0, 0)))
+    assert out[-2] == line and all(o is None for o in out[:-2:2])
+    assert out[1::2] == ["other vehicle, short"] * len(parts)
+    # chunk 1 of 3 lost: the line still ends, the gap marked
+    text = "x" * 50 + "y" * 50 + "z"
+    assert link._join_chunks(chunk(1, text[:50], 8, 0)) is None
+    assert link._join_chunks(chunk(1, text[100:], 8, 2)) == "x" * 50 + "[...]" + "z"

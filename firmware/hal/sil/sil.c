@@ -88,6 +88,35 @@ static void note_text(struct sil *s, const char *text, int severity)
 	s->seen.texts++;
 }
 
+/* A STATUSTEXT: id 0 is a whole line; a nonzero id is one chunk of a long line, joined until
+ * the chunk that is not full (its NUL ends the line). A chunk out of order restarts the line
+ * from what arrived, marked "[...]" (the link is in-process: only a bug could cause it). */
+static void note_chunk(struct sil *s, const mavlink_statustext_t *t)
+{
+	enum { W = MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN };
+	char text[W + 1];
+	memcpy(text, t->text, W);   /* no NUL when full */
+	text[W] = 0;
+	if (t->id == 0) {
+		note_text(s, text, t->severity);
+		return;
+	}
+	char *c = s->seen.chunks;
+	if (t->id != s->seen.chunk_id || t->chunk_seq != s->seen.chunk_next) {
+		snprintf(c, sizeof s->seen.chunks, "%s", t->chunk_seq == 0 ? "" : "[...]");
+		s->seen.chunk_id = t->id;
+	}
+	size_t n = strlen(c);
+	if (n < sizeof s->seen.chunks)
+		snprintf(c + n, sizeof s->seen.chunks - n, "%s", text);
+	s->seen.chunk_next = (uint8_t)(t->chunk_seq + 1u);
+	if (strlen(text) < W) {
+		note_text(s, c, t->severity);
+		c[0] = 0;
+		s->seen.chunk_id = 0;
+	}
+}
+
 /* The app's MAVLink output: decoded for the mission (acks, parameter values,
  * status lines), and sent to the ground station when one is served. */
 static void ground_send(void *ctx, const uint8_t *buf, size_t len)
@@ -139,10 +168,7 @@ static void ground_send(void *ctx, const uint8_t *buf, size_t len)
 		} else if (msg.msgid == MAVLINK_MSG_ID_STATUSTEXT) {
 			mavlink_statustext_t t;
 			mavlink_msg_statustext_decode(&msg, &t);
-			char text[MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN + 1];
-			memcpy(text, t.text, MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN);   /* no NUL when full */
-			text[MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN] = 0;
-			note_text(s, text, t.severity);
+			note_chunk(s, &t);
 		}
 	}
 }

@@ -54,6 +54,9 @@ struct sil_mav_seen {
 	char id_text[SIL_TEXT_LEN];/* the last "ID ..." STATUSTEXT */
 	bool phase_failed;         /* a final COMMAND_ACK FAILED of take-off or landing (its time limit) */
 	char fail_text[SIL_TEXT_LEN];/* the last error line saying "failed", and the error lines after it */
+	char chunks[SIL_TEXT_LEN]; /* a long STATUSTEXT's chunks so far (id chunk_id, next chunk_next) */
+	uint16_t chunk_id;
+	uint8_t chunk_next;
 };
 
 struct mission;
