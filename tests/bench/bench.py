@@ -921,7 +921,9 @@ def item_motor(rep, args):
                     f"rejected {t['rejected_pct']:.1f} %", "|bias| < 0.1 %", abs(t["kf_bias_pct"]) < 0.1, c)
             rep.row(5, "    lag bias / std (%), delay chosen right, curve bias / std",
                     f"{t['lag_bias_pct']:+.3f} / {t['lag_std_pct']:.3f}, {t['delay_right_pct']:.1f} %, "
-                    f"{t['curve_bias']:+.4f} / {t['curve_std']:.4f}", "", "", "(reported)", None, c)
+                    f"{t['curve_bias']:+.4f} / {t['curve_std']:.4f}", "",
+                    f"accepted with a wrong delay {t['accepted_wrong_delay_pct']:.1f} %, "
+                    f"a lag > 5 % off {t['accepted_lag_off_5pct']:.1f} %", "(reported)", None, c)
             rep.row(5, "    var / reported sd^2 of the lag, curve, scales; whiteness: false rejections, Q / dof",
                     f"{t['lag_var_over_reported']:.2f}, {t['curve_var_over_reported']:.2f}, "
                     f"{t['scale_var_over_reported']:.2f}; {t['white_rejected_pct']:.1f} %, "

@@ -17,7 +17,8 @@
  * known (where the reported sd is the least-squares bound of the model); the lag's relative
  * bias and std; how often the delay is chosen right (all runs); the curve's bias and std;
  * how often the run is rejected (cause not OK; the accuracy figures are over the accepted
- * runs, as only those are applied); how often the whiteness test of the one-step prediction
+ * runs, as only those are applied); how often a run is accepted with a wrong delay or a lag
+ * more than 5 % off (the silent errors: percent of all runs); how often the whiteness test of the one-step prediction
  * errors fails on these well-modelled vehicles (its false rejections) and its statistic over
  * its degrees of freedom (1 when white). One JSON object on stdout.
  */
@@ -46,7 +47,7 @@ static double gauss(void)
 }
 
 struct acc {
-	double n, s, s2, sd2, right, rej, white, wq;
+	double n, s, s2, sd2, right, rej, white, wq, bad_delay, bad_lag;
 };
 static void add(struct acc *a, double e, double sd) { a->n++; a->s += e; a->s2 += e * e; a->sd2 += sd * sd; }
 static double mean(const struct acc *a) { return a->n > 0 ? a->s / a->n : 0; }
@@ -124,6 +125,8 @@ static void one_run(int n_exc, bool est_curve, bool linear, struct acc *kf, stru
 		dly->rej++;
 		return;
 	}
+	dly->bad_delay += r.delay != delay;                          /* accepted, yet wrong: */
+	dly->bad_lag += fabs((double)r.tau / tau - 1.0) > 0.05;      /* the silent errors */
 	add(kf, (double)r.kf / kf_t - 1.0, (double)r.kf_sd / kf_t);
 	add(lag, (double)r.tau / tau - 1.0, (double)r.tau_sd / tau);
 	add(crv, (double)r.curve - c, (double)r.curve_sd);
@@ -140,13 +143,15 @@ static void case_json(const char *name, int runs, int n_exc, bool est_curve, boo
 	       "\"kf_var_over_reported\": %.4f, \"lag_bias_pct\": %.4f, \"lag_std_pct\": %.4f, "
 	       "\"lag_var_over_reported\": %.4f, \"delay_right_pct\": %.2f, \"curve_bias\": %.5f, "
 	       "\"curve_std\": %.5f, \"curve_var_over_reported\": %.4f, \"scale_var_over_reported\": %.4f, "
-	       "\"rejected_pct\": %.2f, \"white_rejected_pct\": %.2f, \"white_q_over_dof\": %.3f}%s\n",
+	       "\"rejected_pct\": %.2f, \"white_rejected_pct\": %.2f, \"white_q_over_dof\": %.3f, "
+	       "\"accepted_wrong_delay_pct\": %.2f, \"accepted_lag_off_5pct\": %.2f}%s\n",
 	       name, n_exc * DT, runs, 100 * mean(&kf), 100 * sdev(&kf), sdev(&kf) * sdev(&kf) / (kf.sd2 / kf.n),
 	       100 * mean(&lag), 100 * sdev(&lag), lag.sd2 > 0 ? sdev(&lag) * sdev(&lag) / (lag.sd2 / lag.n) : 0.0,
 	       100 * dly.right / dly.n, mean(&crv), sdev(&crv),
 	       crv.sd2 > 0 ? sdev(&crv) * sdev(&crv) / (crv.sd2 / crv.n) : 0.0,
 	       scl.sd2 > 0 ? sdev(&scl) * sdev(&scl) / (scl.sd2 / scl.n) : 0.0, 100 * dly.rej / dly.n,
-	       100 * dly.white / dly.n, dly.wq / dly.n, last ? "" : ",");
+	       100 * dly.white / dly.n, dly.wq / dly.n, 100 * dly.bad_delay / dly.n, 100 * dly.bad_lag / dly.n,
+	       last ? "" : ",");
 }
 
 int main(int argc, char **argv)
