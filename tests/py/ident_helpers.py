@@ -26,6 +26,19 @@ def random_vehicle(rng):
     return dict(v, inertia=draw_inertia(lambda: [i * rng.uniform(0.7, 1.3) for i in PAPER["inertia"]]))
 
 
+def coloured(texts):
+    return [t for t in texts if t.startswith("ID whiteness ") and t.endswith(": coloured")]
+
+
+def false_alarm(texts):
+    """The motor model rejected by its whiteness test alone (over everything, one throttle
+    level or one rotor's series), no other cause named (range, curve, delay, noise)."""
+    rejected = [t for t in texts if t.startswith("ID rejected: ")]
+    white = ("ID rejected: residuals not white", "ID rejected: residuals coloured at one throttle level")
+    return bool(coloured(texts)) and bool(rejected) and all(
+        t in white or (t.startswith("ID rejected: rotor ") and " unexplained" in t) for t in rejected)
+
+
 class IdentFlight:
     def __init__(self, launch, port, tmp_path, vehicle=None, seed=1, ideal=False, params=None,
                  duration=200.0, extra_sim_args=(), lockstep=True):
@@ -51,6 +64,7 @@ class IdentFlight:
         self.rig.start_fw()
         self.rig.connect()
         self.texts_seen = 0
+        self.again = 0
 
     def takeoff(self, height=TAKEOFF_M, timeout=60.0):
         rig = self.rig
@@ -70,8 +84,22 @@ class IdentFlight:
             self.rig.recv({"STATUSTEXT"}, timeout=0.2)
         raise AssertionError(f"timed out; texts: {self.rig.texts[-20:]}\nfw: {self.rig.fw.stderr()[-2000:]}")
 
-    def experiment(self, exp_id, timeout=120.0):
-        """Starts experiment exp_id; returns (ack result, texts of the experiment)."""
+    def experiment(self, exp_id, timeout=120.0, again=True):
+        """Starts experiment exp_id; returns the texts of the experiment.
+
+        The motor model's whiteness test rejects a vehicle the model describes at a small,
+        known rate (its false rejections, bench item 5). With `again`, a run whose only fault
+        is that test's rejection is flown once more, as a user would, and the second run's texts
+        are returned (self.again counts these). Values are still judged against the truth: a
+        vehicle the model does not describe is rejected again."""
+        texts = self._experiment(exp_id, timeout)
+        if again and false_alarm(texts):
+            print(f"experiment {exp_id}: whiteness rejected the motor model ({coloured(texts)}): flown again")
+            self.again += 1
+            texts = self._experiment(exp_id, timeout)
+        return texts
+
+    def _experiment(self, exp_id, timeout):
         start = len(self.rig.texts)
         deadline = time.monotonic() + 10
         while True:
