@@ -29,8 +29,8 @@
  * curve fitted; -2/n times the log-likelihood with each rotor's noise unknown, so a rotor
  * no lag explains pulls the common lag little) is interpolated by a parabola in log tau
  * over the three lags; each delay's minimum is its lag. The grid is refined around it between frames
- * (motor_id_refine: wide ratio 2.5, then 1.3, then 1.08; a minimum below the grid walks
- * twice as far and keeps the grid wider; the statistics restart, the lag
+ * (motor_id_refine: wide ratio 2.5, then 1.3, then 1.08; a minimum beyond the grid keeps the
+ * next grid wider, and one below the first grid walks twice as far, towards no lag; the statistics restart, the lag
  * filters keep running), so the last stage's data give the estimates. The final estimates
  * (motor_id_solve, between frames) take the delay of least interpolated SSR, its lag refined
  * by Newton steps on sum_j log SSR_j of the interpolated statistics, and the statistics at

@@ -295,15 +295,26 @@ static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
 	}
 }
 
-/* sum over rotors of log SSR_j of delay d at grid position x (statistics interpolated) */
+/* sum over rotors of log SSR_j of delay d at grid position x (statistics interpolated).
+ * Beyond the grid (|x| > 1) the quadratic extrapolation of the sums can leave an SSR at or
+ * below zero, whose log would make any hypothesis look best: there the grid's edge stands in. */
 static float delay_logssr(const struct motor_id *m, unsigned d, float x)
 {
-	float dl[2], sum = 0.0f;
-	float l[3];
-	lagrange3(x, l);
-	for (unsigned j = 0; j < NR; j++) {
-		float o[S_N];
-		sum += logf(fmaxf(ssr_at(m, d, NL, l, j, o, dl), 1e-30f));
+	float sum = 0.0f;
+	for (int pass = 0; pass < 2; pass++) {   /* the second at the edge, if the first failed */
+		float dl[2], l[3];
+		bool ok = true;
+		lagrange3(x, l);
+		sum = 0.0f;
+		for (unsigned j = 0; j < NR && ok; j++) {
+			float o[S_N];
+			float ssr = ssr_at(m, d, NL, l, j, o, dl);
+			ok = ssr > 1e-30f || fabsf(x) <= 1.0f;
+			sum += logf(fmaxf(ssr, 1e-30f));
+		}
+		if (ok)
+			break;
+		x = x > 0.0f ? 1.0f : -1.0f;
 	}
 	return sum;
 }
@@ -566,8 +577,11 @@ void motor_id_refine(struct motor_id *m)
 	for (unsigned d = 0; d < ND; d++) {
 		float x = m->n_stat > 0u ? xs[d] : 0.0f;
 		float r = m->lag_r[d];
-		/* a minimum below the grid walks twice as far (towards no lag at all) */
-		float centre = grid_tau(m, d, x <= -X_MAX + 1e-3f ? 2.0f * x : x);
+		/* a minimum below the first grid walks twice as far (towards no lag at all); later
+		 * grids walk to the edge's extrapolation only: their minimum is near (the first
+		 * stage's coarse parabola overshoots a long lag by up to a step, and a second double
+		 * walk from there left the lag out of the last grid's reach) */
+		float centre = grid_tau(m, d, x <= -X_MAX + 1e-3f && next == 1u ? 2.0f * x : x);
 		/* the lag states at the new taus: quadratic interpolation in log tau of the old.
 		 * A minimum outside the grid narrows it less (the grid walks towards it) */
 		float nr = stage_ratio[next];

@@ -177,6 +177,27 @@ UNIT_TEST(motor_id_random_vehicles)
 	}
 }
 
+/* Lags of 62-72 ms (the prior 30 ms): the first grid's coarse parabola places the minimum past
+ * the grid's upper edge, a step beyond the lag, and the second grid finds it below its own
+ * edge. Walking twice as far from there left the lag out of the last grid's reach, and a
+ * wrong delay (its lag absorbing the missing frame) won: rejected, but a vehicle of the
+ * tested range unidentified. Every delay is chosen right, every model accepted (seeded: the
+ * same draws each run; before, one of them chose the wrong delay and was rejected). */
+UNIT_TEST(motor_id_long_lag_keeps_its_delay)
+{
+	struct unit_rng g = {0x5eed0066ULL};
+	for (int v = 0; v < 6; v++) {
+		struct truth t;
+		random_truth(&g, &t);
+		t.tau = unit_rand_uniform(&g, 0.062, 0.072);
+		struct motor_id_result r;
+		identify(&g, &t, 450, true, 20.0, &r);
+		CHECK(r.delay == t.delay);
+		CHECK(r.cause == MOTOR_ID_OK);
+		CHECK_REL(r.tau, t.tau, 0.05);
+	}
+}
+
 /* The thrust noise comes from first differences of consecutive still frames only: a frame
  * lost on the link (motor_id_hold) across which the thrust jumped adds no difference. */
 UNIT_TEST(motor_id_noise_not_across_a_lost_frame)
