@@ -3,7 +3,11 @@
 On random vehicles (each of mass, arm length, k_f, k_tau, Ix, Iy, Iz within +/-30 % of
 the paper's) both fly the same mission with the same seed; the in-process run writes
 the same report: the same checks pass, the same estimates are accepted, and each
-estimate lies within 3 combined standard deviations of the other's. Two in-process runs
+estimate lies within 4 combined standard deviations of the other's. Four, not three: a run
+makes ten such comparisons (five estimates, two draws) and each inertia sd is itself estimated
+from 20 blocks of 0.5 s, so the ratio is t-distributed (about 38 degrees of freedom). At 3 the
+run would fail by chance 4.7 % of the time; at 4, 0.28 %: the 3-sigma level for the ten together
+(a failure seen at 3.1 combined sds, both estimates within 2.5 of their own sds of the truth). Two in-process runs
 give the same report (apart from time stamps and wall times). OCTO_SIL_SEED=N repeats a
 draw.
 """
@@ -74,7 +78,7 @@ def test_in_process_agrees_with_udp_on_a_random_vehicle(tmp_path, draw):
         assert a["accepted"] == b["accepted"], key
         assert a["truth"] == b["truth"], key
         sd = (a["sd"] ** 2 + b["sd"] ** 2) ** 0.5
-        assert abs(a["estimate"] - b["estimate"]) <= 3 * sd, (key, a["estimate"], b["estimate"], sd)
+        assert abs(a["estimate"] - b["estimate"]) <= 4 * sd, (key, a["estimate"], b["estimate"], sd)
 
 
 def test_in_process_failure_is_reported(tmp_path):
