@@ -507,6 +507,7 @@ static void apply_results(struct app *a)
 static void app_settle(struct app *a)
 {
 	envelope_publish(a);        /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh */
+	envelope_torque_scale(a);   /* the torque demands' gain, from the hover throttle learned so far */
 	exp_turn(&a->exp, &a->p);   /* a phase that ended in the last step: close it, start the next */
 	if (a->exp.n_results > 0)
 		apply_results(a);
@@ -631,6 +632,7 @@ static void control_step(struct app *a, float dt)
 	};
 	struct vec3 tau;
 	att_ctrl_update(&a->att, &ai, &tau);
+	tau = envelope_torque(a, tau);   /* the throttle map's error at hover taken out */
 	scalar_t cos_tilt = quat_body_z_up(q);
 	struct alt_ctrl_input li = {
 		.z_sp_m = a->guid.z_sp_m,

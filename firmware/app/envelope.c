@@ -82,6 +82,7 @@ void envelope_init(struct app *a)
 	struct hover_est_params hp = hover_est_params_default();
 	hp.g_mps2 = sc_from_float(a->p.veh_grav);
 	hover_est_init(&a->env.hov, &hp, sc_from_float(nominal_u(&a->p)));
+	a->env.tau_k = a->env.tau_k_target = SC(1.0);
 }
 
 static void set_result(struct app *a, int i, float v);
@@ -220,6 +221,26 @@ scalar_t envelope_hover_f(struct app *a, scalar_t s_dt, scalar_t cos_tilt)
 		e->hf_ok = true;
 	}
 	return e->hf;
+}
+
+void envelope_torque_scale(struct app *a)
+{
+	struct envelope *e = &a->env;
+	float k = 1.0f;
+	if (e->hf_ok && envelope_hover_ready(a)) {
+		float mg = a->p.veh_mass * a->p.veh_grav, hf = sc_to_float(e->hf);
+		if (mg > 0.0f && hf > 0.0f)
+			k = fminf(fmaxf(hf / mg, 0.5f), 1.0f);
+	}
+	e->tau_k_target = sc_from_float(k);
+}
+
+struct vec3 envelope_torque(struct app *a, struct vec3 tau)
+{
+	struct envelope *e = &a->env;
+	if (!same_bits(e->tau_k, e->tau_k_target))
+		e->tau_k = sc_add(e->tau_k, sc_mul(sc_sub(e->tau_k_target, e->tau_k), SC(0.02)));
+	return same_bits(e->tau_k, SC(1.0)) ? tau : vec3_scale(tau, e->tau_k);
 }
 
 bool envelope_hover_ready(const struct app *a)

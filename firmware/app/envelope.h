@@ -45,6 +45,9 @@ struct envelope {
 	 * only when one changed (theta stays while the estimator only tracks) */
 	scalar_t hf_kf8, hf_theta, hf;
 	bool hf_ok;
+	/* the torque demands' gain (envelope_torque_scale): the target set between frames, the
+	 * value the step applies, which follows the target over about a second */
+	scalar_t tau_k_target, tau_k;
 	uint8_t cmd;        /* enum app_command that started the phase, for its final result */
 	app_origin origin;  /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
 };
@@ -67,6 +70,22 @@ scalar_t envelope_hover_f(struct app *a, scalar_t dt_s, scalar_t cos_tilt);
  * status lines are work kept out of the step. A refreshed VEH_KF reaches the controllers at
  * the parameter sync that follows, before the next step, as when the step did this itself. */
 void envelope_publish(struct app *a);
+/* Between frames: the gain by which the step multiplies the attitude loop's torque demands.
+ * Torques reach the rotors through the throttle map's VEH_KF (and MOT_CURVE); a map that
+ * gets the rotors' thrust per throttle wrong scales the attitude loop's gain by that error
+ * (1.75 with VEH_KF 20 on a 35 N vehicle: with slow motors and a late link, an oscillation
+ * that grew past the experiments' tilt limit). Once the hover throttle is learned, the
+ * map's thrust there, 8 VEH_KF u_h, against the thrust that holds the vehicle, m g, measures
+ * the error: the gain is their ratio, within 0.5-1 (1 before, and when the map is right).
+ * Only lowered: the ratio is a secant (thrust / throttle), and with a thrust curve the rotors'
+ * slope at hover, which the loop feels, is up to ~25 % steeper; raising the gain by the
+ * secant for rotors weaker than the map overshot (a slow, late vehicle with curve 0.45 that
+ * flew at the map's gain tipped over at 1.13 of it). ArduPilot's motor output scales by its
+ * battery voltage for the same reason. */
+void envelope_torque_scale(struct app *a);
+/* In the step: the torque demand with that gain (which moves 2 % of the way to its target
+ * per step, about 0.5 s at 90 Hz). */
+struct vec3 envelope_torque(struct app *a, struct vec3 tau);
 
 /* Take-off may end (HOLD) once the hover throttle is known to this relative sd. */
 bool envelope_hover_ready(const struct app *a);

@@ -1,0 +1,102 @@
+"""The motor model over many random vehicles, flown in octo-sil (one process, about 30 ms a
+flight): issue 13's ranges (motor lag 10-100 ms, delay 0-3 frames, thrust curve 0-0.5, one
+rotor at 0.8-1.0, k_f, k_tau and inertia +/-30 %), none of it told to the firmware.
+
+Nothing accepted is wrong: every accepted run has the delay exact, the lag within 5 %, the
+curve within 0.02, every rotor's scale within 0.5 %, k_f and k_tau within 0.1 % or 4 of their
+reported sds. And the vehicles are identified: over 3,000 such flights 1 was rejected (its
+whiteness test) and none aborted, so more than 4 rejections or aborts in 200 fail (at a true
+rate of 0.1 % that happens with probability 2e-6; a regression to the 1.1 % measured before
+the lag grid's and the torque gain's fixes would fail it only 7 % of the time). The sharp test
+is the second: the slow, late, strong vehicles that tipped over the experiment's tilt limit
+(the attitude loop's gain 1.6-1.8 times the map's with VEH_KF 20), drawn on their own: 30 %
+of them aborted before, 1.0 % are not identified now (1,000 draws: 10, most of them still at
+the tilt limit). At most 3 of 40: by chance at 1 % with probability 7e-4, and at the old 30 %
+with probability 6e-4. The seeds are new each run and printed; OCTO_MANY_SEED=N repeats a draw.
+"""
+
+import json
+import os
+import random
+import subprocess
+
+import pytest
+
+from conftest import binary
+from test_ident_motor import motor_vehicle
+
+TOL = {"lag": 0.05, "curve": 0.02, "scale": 0.005, "k": 0.001, "k_sds": 4.0}
+
+
+def fly(tmp, veh, seed):
+    """One rotor experiment of a vehicle; the firmware's parameters after it and its stderr."""
+    (tmp / "v.json").write_text(json.dumps(veh))
+    prm = tmp / "p.parm"
+    prm.unlink(missing_ok=True)   # every vehicle from the firmware's defaults
+    r = subprocess.run([str(binary("octo-sil")), "--seed", str(seed), "--vehicle", str(tmp / "v.json"),
+                        "--params", str(prm), "--duration", "600", "--mission",
+                        "param ID_CRV_EST 1; arm; takeoff 5; wait hold; experiment 1; wait experiment"],
+                       capture_output=True, text=True, timeout=60)
+    p = {}
+    for line in prm.read_text().splitlines() if prm.exists() else []:
+        parts = line.split()
+        if len(parts) == 2 and not line.startswith("#"):
+            p[parts[0]] = float(parts[1])
+    return p, r
+
+
+def wrong(p, veh):
+    """The accepted values outside the tolerances, by name."""
+    bad = []
+    if p["ID_DELAY_FR"] != round(veh["delay"] * 90.0):
+        bad.append("delay")
+    if abs(p["ID_MOT_TAU"] / veh["motor_tau"] - 1.0) > TOL["lag"]:
+        bad.append("lag")
+    if abs(p["MOT_CURVE"] - veh["thrust_curve"]) > TOL["curve"]:
+        bad.append("curve")
+    bad += [f"MOT_SCALE{j + 1}" for j in range(8)
+            if abs(p[f"MOT_SCALE{j + 1}"] / veh["rotor_scale"][j] - 1.0) > TOL["scale"]]
+    for name, sd, truth in (("VEH_KF", "ID_KF_SD", veh["kf"]), ("VEH_KTAU", "ID_KTAU_SD", veh["ktau"])):
+        if not (abs(p[name] / truth - 1.0) < TOL["k"] or abs(p[name] - truth) < TOL["k_sds"] * p[sd]):
+            bad.append(name)
+    return bad
+
+
+def campaign(tmp_path, n, draw, what):
+    seed0 = int(os.environ.get("OCTO_MANY_SEED", random.SystemRandom().randrange(1, 10**6)))
+    print(f"OCTO_MANY_SEED={seed0}: {n} {what}")
+    failed, silent = [], []
+    for i in range(n):
+        seed = seed0 + i
+        veh = draw(random.Random(seed))
+        p, r = fly(tmp_path, veh, seed)
+        if not int(p.get("ID_RESULT", 0)) & 1:
+            why = [ln for ln in r.stderr.splitlines() if "rejected" in ln or "aborted" in ln or "failed" in ln]
+            failed.append((seed, why[-2:]))
+            continue
+        bad = wrong(p, veh)
+        if bad:
+            silent.append((seed, bad, veh, {k: p[k] for k in ("VEH_KF", "ID_KF_SD", "ID_MOT_TAU", "ID_DELAY_FR",
+                                                                 "MOT_CURVE")}))
+    print(f"not identified {len(failed)}: {failed}")
+    return failed, silent
+
+
+def test_many_random_vehicles_identified_and_never_wrong(tmp_path):
+    failed, silent = campaign(tmp_path, 200, lambda rng: motor_vehicle(rng)[0], "random vehicles")
+    assert not silent, silent           # accepted and wrong: the worst defect
+    assert len(failed) <= 4, failed
+
+
+def slow_late_strong(rng):
+    veh, _ = motor_vehicle(rng)
+    veh.update(kf=28.0269 * rng.uniform(1.2, 1.3), motor_tau=rng.uniform(0.075, 0.100), delay=3 / 90.0)
+    return veh
+
+
+def test_slow_late_strong_vehicles_do_not_tip_over(tmp_path):
+    """Lag 75-100 ms, 3 frames late, k_f 1.2-1.3 x the paper's: 30 % of these aborted at the
+    tilt limit before the torque demands took the throttle map's error at hover out."""
+    failed, silent = campaign(tmp_path, 40, slow_late_strong, "slow, late, strong vehicles")
+    assert not silent, silent
+    assert len(failed) <= 3, failed
