@@ -6,13 +6,17 @@ Nothing accepted is wrong: every accepted run has the delay exact, the lag withi
 curve within 0.02, every rotor's scale within 0.5 %, k_f and k_tau within 0.1 % or 4 of their
 reported sds. And the vehicles are identified: over 3,000 such flights 1 was rejected (its
 whiteness test) and none aborted, so more than 4 rejections or aborts in 200 fail (at a true
-rate of 0.1 % that happens with probability 2e-6; a regression to the 1.1 % measured before
-the lag grid's and the torque gain's fixes would fail it only 7 % of the time). The sharp test
-is the second: the slow, late, strong vehicles that tipped over the experiment's tilt limit
-(the attitude loop's gain 1.6-1.8 times the map's with VEH_KF 20), drawn on their own: 30 %
-of them aborted before, 1.0 % are not identified now (1,000 draws: 10, most of them still at
-the tilt limit). At most 3 of 40: by chance at 1 % with probability 7e-4, and at the old 30 %
-with probability 6e-4. The seeds are new each run and printed; OCTO_MANY_SEED=N repeats a draw.
+rate of 0.1 % that happens with probability 2e-6; a regression to the 3 % measured before
+this round's two fixes, the lag grid's walk and the torque gain, fails it 71 % of the time, to
+the 1.1 % between them only 7 %). The sharp test is the second: the slow, late, strong
+vehicles that tipped over the experiments' tilt limit (the attitude loop's gain 1.6-1.8 times
+the map's with VEH_KF 20), drawn on their own: 30 % of them aborted before, 1.0 % are not
+identified now (1,000 draws: 10, most of them still at the tilt limit). At most 3 of 40: by
+chance at 1 % with probability 7e-4, and at the old 30 % with probability 6e-4.
+
+The seeds are new each run and printed; OCTO_MANY_SEED=N repeats a draw, OCTO_MANY_N=K flies K
+random vehicles instead of 200 (the figures above: OCTO_MANY_N=1000 with OCTO_MANY_SEED 7000,
+20000 and 40000; the bound is then 1 in 50).
 """
 
 import json
@@ -83,9 +87,10 @@ def campaign(tmp_path, n, draw, what):
 
 
 def test_many_random_vehicles_identified_and_never_wrong(tmp_path):
-    failed, silent = campaign(tmp_path, 200, lambda rng: motor_vehicle(rng)[0], "random vehicles")
+    n = int(os.environ.get("OCTO_MANY_N", 200))
+    failed, silent = campaign(tmp_path, n, lambda rng: motor_vehicle(rng)[0], "random vehicles")
     assert not silent, silent           # accepted and wrong: the worst defect
-    assert len(failed) <= 4, failed
+    assert len(failed) <= max(4, n // 50), failed
 
 
 def slow_late_strong(rng):
