@@ -483,7 +483,11 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 			    (double)mr.ne[mr.cause_rotor]);
 		else
 			say(e, APP_SEV_WARNING, "ID rejected: %s", motor_id_cause_text(mr.cause));
-		say(e, APP_SEV_WARNING, "ID remedy: %s", motor_id_cause_remedy(mr.cause));
+		if (mr.cause == MOTOR_ID_LAG_REACH)   /* the prior, not the data: start from what they say */
+			say(e, APP_SEV_WARNING, "ID remedy: ID_MOT_TAU %.4f (the lag found), fly again",
+			    (double)mr.tau);
+		else
+			say(e, APP_SEV_WARNING, "ID remedy: %s", motor_id_cause_remedy(mr.cause));
 	} else if (curve_bad) {
 		say(e, APP_SEV_WARNING, "ID rejected: curve %.3f outside %.2f to %.2f", (double)mr.curve,
 		    (double)THRMAP_CURVE_MIN, (double)THRMAP_CURVE_MAX);

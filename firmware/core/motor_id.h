@@ -207,7 +207,7 @@ enum motor_id_cause {
 	MOTOR_ID_OK = 0,
 	MOTOR_ID_NO_DATA,        /* too few frames */
 	MOTOR_ID_NOISE_UNKNOWN,  /* no noise measurement (no frames without excitation) */
-	MOTOR_ID_LAG_RANGE,      /* the lag found sits at the bounds of what the grid can reach */
+	MOTOR_ID_LAG_RANGE,      /* the lag at 0.5 or 500 ms, or the criterion not convex inside the grid */
 	MOTOR_ID_DELAY_RANGE,    /* the best delay is the largest hypothesis */
 	MOTOR_ID_DELAY_AMBIGUOUS,/* two delays explain the data about equally */
 	MOTOR_ID_CURVE,          /* curve estimation off but the data show a curve */
@@ -216,6 +216,9 @@ enum motor_id_cause {
 	MOTOR_ID_DELAY_GIVEN,    /* the given delay (fix_delay) is contradicted: another fits better */
 	MOTOR_ID_LEVEL,          /* prediction errors coloured at one throttle level: thrust curve */
 	MOTOR_ID_COLOURED,       /* prediction errors coloured on every rotor: lag or delay dynamics */
+	MOTOR_ID_LAG_REACH,      /* the lag found lies outside the last grid (its statistics
+				  * extrapolated), inside the lag range: the grids, started at the
+				  * prior (ID_MOT_TAU), walked too little */
 };
 
 struct motor_id_result {

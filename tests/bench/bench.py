@@ -923,11 +923,18 @@ def item_motor(rep, args):
                     f"{t['lag_bias_pct']:+.3f} / {t['lag_std_pct']:.3f}, {t['delay_right_pct']:.1f} %, "
                     f"{t['curve_bias']:+.4f} / {t['curve_std']:.4f}", "",
                     f"accepted with a wrong delay {t['accepted_wrong_delay_pct']:.1f} %, "
-                    f"a lag > 5 % off {t['accepted_lag_off_5pct']:.1f} %", "(reported)", None, c)
+                    f"a lag > 5 % off {t['accepted_lag_off_5pct']:.1f} %, "
+                    f"k_f > 4 sd off {t['accepted_kf_over_4sd_pct']:.1f} %", "(reported)", None, c)
             rep.row(5, "    var / reported sd^2 of the lag, curve, scales; whiteness: false rejections, Q / dof",
                     f"{t['lag_var_over_reported']:.2f}, {t['curve_var_over_reported']:.2f}, "
                     f"{t['scale_var_over_reported']:.2f}; {t['white_rejected_pct']:.1f} %, "
                     f"{t['white_q_over_dof']:.2f}", "", "", "(reported)", None, c)
+    t = r["stale_prior_10s"]
+    rep.row(5, "  stale lag prior (85 ms, another vehicle's) on 10-20 ms motors, curve estimated, 10s: "
+               "rejected (past the prior's reach), accepted with k_f > 4 sd off, with the lag > 5 % off",
+            f"{t['rejected_pct']:.1f} %, {t['accepted_kf_over_4sd_pct']:.1f} %, {t['accepted_lag_off_5pct']:.1f} %", "",
+            f"k_f bias / std of the accepted {t['kf_bias_pct']:+.3f} / {t['kf_std_pct']:.3f} %, "
+            f"var / reported sd^2 {t['kf_var_over_reported']:.2f}", "(reported)", None, c)
     # the same runs (same seeds, same vehicles) with the core built fixed point: its per-frame
     # estimator in integers, the solve between frames in float
     fargv = [BB / "bench-motor-fixed", runs, 1]

@@ -22,24 +22,29 @@ random vehicles instead of 200 (the figures above: OCTO_MANY_N=1000 with OCTO_MA
 import json
 import os
 import random
+import re
 import subprocess
 
 import pytest
 
 from conftest import binary
+from ident_helpers import false_alarm
 from test_ident_motor import motor_vehicle
 
 TOL = {"lag": 0.05, "curve": 0.02, "scale": 0.005, "k": 0.001, "k_sds": 4.0}
 
 
-def fly(tmp, veh, seed):
-    """One rotor experiment of a vehicle; the firmware's parameters after it and its stderr."""
+def fly(tmp, veh, seed, keep=False, first=""):
+    """One rotor experiment of a vehicle; the firmware's parameters after it and its stderr.
+    Every vehicle starts from the firmware's defaults, unless `keep` (the parameter file of
+    the flight before); `first`: mission steps before arming."""
     (tmp / "v.json").write_text(json.dumps(veh))
     prm = tmp / "p.parm"
-    prm.unlink(missing_ok=True)   # every vehicle from the firmware's defaults
+    if not keep:
+        prm.unlink(missing_ok=True)
     r = subprocess.run([str(binary("octo-sil")), "--seed", str(seed), "--vehicle", str(tmp / "v.json"),
                         "--params", str(prm), "--duration", "600", "--mission",
-                        "param ID_CRV_EST 1; arm; takeoff 5; wait hold; experiment 1; wait experiment"],
+                        f"param ID_CRV_EST 1; {first}arm; takeoff 5; wait hold; experiment 1; wait experiment"],
                        capture_output=True, text=True, timeout=60)
     p = {}
     for line in prm.read_text().splitlines() if prm.exists() else []:
@@ -49,19 +54,23 @@ def fly(tmp, veh, seed):
     return p, r
 
 
-def wrong(p, veh):
-    """The accepted values outside the tolerances, by name."""
+def wrong(p, veh, k=True):
+    """The accepted values outside the tolerances, by name (k_f and k_tau only with `k`).
+    Where a tolerance sits near 3 sds of the estimate (the curve's 0.02 on a vehicle hovering
+    at low throttle: sd up to 0.007; k_f's 0.1 % when it is extrapolated through the curve), a
+    value within 4 of its reported sds passes too (3,000 flights: one curve at 3.2 sds)."""
     bad = []
     if p["ID_DELAY_FR"] != round(veh["delay"] * 90.0):
         bad.append("delay")
     if abs(p["ID_MOT_TAU"] / veh["motor_tau"] - 1.0) > TOL["lag"]:
         bad.append("lag")
-    if abs(p["MOT_CURVE"] - veh["thrust_curve"]) > TOL["curve"]:
+    e = abs(p["MOT_CURVE"] - veh["thrust_curve"])
+    if e > TOL["curve"] and e > TOL["k_sds"] * p["ID_CRV_SD"]:
         bad.append("curve")
     bad += [f"MOT_SCALE{j + 1}" for j in range(8)
             if abs(p[f"MOT_SCALE{j + 1}"] / veh["rotor_scale"][j] - 1.0) > TOL["scale"]]
     for name, sd, truth in (("VEH_KF", "ID_KF_SD", veh["kf"]), ("VEH_KTAU", "ID_KTAU_SD", veh["ktau"])):
-        if not (abs(p[name] / truth - 1.0) < TOL["k"] or abs(p[name] - truth) < TOL["k_sds"] * p[sd]):
+        if k and not (abs(p[name] / truth - 1.0) < TOL["k"] or abs(p[name] - truth) < TOL["k_sds"] * p[sd]):
             bad.append(name)
     return bad
 
@@ -105,3 +114,46 @@ def test_slow_late_strong_vehicles_do_not_tip_over(tmp_path):
     failed, silent = campaign(tmp_path, 40, slow_late_strong, "slow, late, strong vehicles")
     assert not silent, silent
     assert len(failed) <= 3, failed
+
+
+def said_of(r):
+    """The firmware's "ID ..." lines of a flight."""
+    return [ln[len("octo-fw: "):] for ln in r.stderr.splitlines() if ln.startswith("octo-fw: ID ")]
+
+
+def test_a_stale_lag_prior_is_named_and_its_remedy_works(tmp_path):
+    """A parameter file from another vehicle (a motor swap, a second airframe): vehicle A's
+    identified lag (70-100 ms) is the prior of vehicle B's experiment (10-20 ms). The lag grids
+    start at the prior and walk at most a factor of about 5; B's lag can lie beyond. Then the
+    rejection names that ("motor lag past the prior's reach", not the lag's 0.5-500 ms range,
+    as before) and the remedy gives the lag found: flown again from it, B is identified, within
+    the tolerances. Whatever B accepts at once has its delay, lag, curve and scales within
+    them too; its k_f is not judged here: from a prior 6x off, the last lag grid stays wide,
+    and its interpolation puts k_f up to 2.5 % off with a sd of 0.4 % in about 1 % of such
+    flights (bench item 5's stale-prior row shows it: var / reported sd^2 3.3). A known defect,
+    not a tolerance."""
+    seed0 = int(os.environ.get("OCTO_MANY_SEED", random.SystemRandom().randrange(1, 10**6)))
+    print(f"OCTO_MANY_SEED={seed0}")
+    reached = 0
+    for i in range(12):
+        seed = seed0 + i
+        rng = random.Random(seed)
+        a, b = motor_vehicle(rng)[0], motor_vehicle(rng)[0]
+        a["motor_tau"], b["motor_tau"] = rng.uniform(0.07, 0.1), rng.uniform(0.01, 0.02)
+        fly(tmp_path, a, seed)
+        p, r = fly(tmp_path, b, seed + 1, keep=True)
+        if int(p.get("ID_RESULT", 0)) & 1:
+            assert not wrong(p, b, k=False), (seed, wrong(p, b, k=False))
+            continue
+        said = said_of(r)
+        if "ID rejected: motor lag past the prior's reach" not in said:
+            continue   # rejected for another cause (a rotor's NE, whiteness): nothing applied
+        m = re.search(r"^ID remedy: ID_MOT_TAU ([0-9.]+) \(the lag found\), fly again$", "\n".join(said), re.M)
+        assert m, (seed, said)
+        reached += 1
+        p, r = fly(tmp_path, b, seed + 2, keep=True, first=f"param ID_MOT_TAU {m.group(1)}; ")
+        if not int(p.get("ID_RESULT", 0)) & 1 and false_alarm(said_of(r)):   # its known rate
+            p, r = fly(tmp_path, b, seed + 3, keep=True, first=f"param ID_MOT_TAU {m.group(1)}; ")
+        assert int(p.get("ID_RESULT", 0)) & 1, (seed, said_of(r)[-6:])
+        assert not wrong(p, b), (seed, wrong(p, b))
+    print(f"{reached} of 12 past the prior's reach, identified on the second flight")
