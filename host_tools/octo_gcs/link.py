@@ -58,6 +58,7 @@ def result_name(result):
 
 STATUSTEXT_LEN = 50   # STATUSTEXT.text: a full chunk has no NUL, so more follow
 
+
 class Vehicle:
     """A connection to one vehicle. Use as a context manager to close the socket."""
 
@@ -103,8 +104,8 @@ class Vehicle:
             return msg.text
         key = (msg.get_srcSystem(), msg.get_srcComponent())
         have = self._chunks.get(key)
-        if have is None or have[0] != cid:
-            have = (cid, 0, "" if msg.chunk_seq == 0 else "[...]")
+        if have is None or have[0] != cid:   # a new line: its start lost if this is not chunk 0
+            have = (cid, 0, "")
         text = have[2] + ("[...]" if msg.chunk_seq > have[1] else "") + msg.text
         if len(msg.text) < STATUSTEXT_LEN:
             self._chunks.pop(key, None)

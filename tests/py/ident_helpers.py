@@ -26,6 +26,11 @@ def random_vehicle(rng):
     return dict(v, inertia=draw_inertia(lambda: [i * rng.uniform(0.7, 1.3) for i in PAPER["inertia"]]))
 
 
+def fw_said(text):
+    """The firmware's lines ("octo-fw: ...", its stderr or a log of it) without the prefix."""
+    return [ln.split("octo-fw: ", 1)[1] for ln in text.splitlines() if "octo-fw: " in ln]
+
+
 def coloured(texts):
     return [t for t in texts if t.startswith("ID whiteness ") and t.endswith(": coloured")]
 
@@ -64,7 +69,6 @@ class IdentFlight:
         self.rig.start_fw()
         self.rig.connect()
         self.texts_seen = 0
-        self.again = 0
 
     def takeoff(self, height=TAKEOFF_M, timeout=60.0):
         rig = self.rig
@@ -90,12 +94,11 @@ class IdentFlight:
         The motor model's whiteness test rejects a vehicle the model describes at a small,
         known rate (its false rejections, bench item 5). With `again`, a run whose only fault
         is that test's rejection is flown once more, as a user would, and the second run's texts
-        are returned (self.again counts these). Values are still judged against the truth: a
-        vehicle the model does not describe is rejected again."""
+        are returned. Values are still judged against the truth: a vehicle the model does not
+        describe is rejected again."""
         texts = self._experiment(exp_id, timeout)
         if again and false_alarm(texts):
             print(f"experiment {exp_id}: whiteness rejected the motor model ({coloured(texts)}): flown again")
-            self.again += 1
             texts = self._experiment(exp_id, timeout)
         return texts
 

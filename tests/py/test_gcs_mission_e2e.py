@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from conftest import BUILD, REPO, draw_inertia
-from ident_helpers import false_alarm
+from ident_helpers import false_alarm, fw_said
 
 sys.path.insert(0, str(BUILD / "gen" / "python"))
 
@@ -77,8 +77,7 @@ def test_e2e_mission_on_a_random_vehicle(tmp_path):
         r = gcs("mission", "--vehicle", vfile, "--seed", run_seed, "--out", out)
         wall = time.monotonic() - t0
         log = out / "octo-fw.log"
-        said = [ln.split("octo-fw: ", 1)[1] for ln in (log.read_text().splitlines() if log.exists() else [])
-                if "octo-fw: " in ln]
+        said = fw_said(log.read_text()) if log.exists() else []
         if attempt == 2 or r.returncode == 0 or not false_alarm(said):
             break
         # the whiteness test's known false rejections (ident_helpers.false_alarm): the same

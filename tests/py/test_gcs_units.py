@@ -128,3 +128,6 @@ def test_link_joins_statustext_chunks_and_marks_a_lost_one():
     text = "x" * 50 + "y" * 50 + "z"
     assert link._join_chunks(chunk(1, text[:50], 8, 0)) is None
     assert link._join_chunks(chunk(1, text[100:], 8, 2)) == "x" * 50 + "[...]" + "z"
+    # chunk 0 of a line lost: marked once
+    assert link._join_chunks(chunk(1, text[50:100], 9, 1)) is None
+    assert link._join_chunks(chunk(1, text[100:], 9, 2)) == "[...]" + "y" * 50 + "z"

@@ -28,7 +28,7 @@ import subprocess
 import pytest
 
 from conftest import binary
-from ident_helpers import false_alarm
+from ident_helpers import false_alarm, fw_said
 from test_ident_motor import motor_vehicle
 
 TOL = {"lag": 0.05, "curve": 0.02, "scale": 0.005, "k": 0.001, "k_sds": 4.0}
@@ -118,7 +118,7 @@ def test_slow_late_strong_vehicles_do_not_tip_over(tmp_path):
 
 def said_of(r):
     """The firmware's "ID ..." lines of a flight."""
-    return [ln[len("octo-fw: "):] for ln in r.stderr.splitlines() if ln.startswith("octo-fw: ID ")]
+    return [t for t in fw_said(r.stderr) if t.startswith("ID ")]
 
 
 def test_a_stale_lag_prior_is_named_and_its_remedy_works(tmp_path):

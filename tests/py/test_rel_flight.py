@@ -187,7 +187,7 @@ def test_gcs_vanishes_during_an_experiment(launch, port, tmp_path):
     """The ground station starts rotor identification and disappears: the experiment
     runs to its end, its results are applied and saved, the vehicle keeps hovering; a
     ground station that comes back later reads them."""
-    from ident_helpers import MAV_CMD_USER_1, IdentFlight, false_alarm
+    from ident_helpers import MAV_CMD_USER_1, IdentFlight, false_alarm, fw_said
     # paced like X-Plane: in lockstep the whole experiment can end before the ground station
     # has read its first answer, let alone gone away
     fl = IdentFlight(launch, port, tmp_path, seed=5, duration=3000, lockstep=False)
@@ -202,8 +202,7 @@ def test_gcs_vanishes_during_an_experiment(launch, port, tmp_path):
     # paced in real time: on a loaded machine the experiment's frames come late, so the
     # wait is generous; a failure shows what the firmware said meanwhile (its stderr)
     deadline = time.monotonic() + 60
-    fw_texts = lambda: [ln[len("octo-fw: "):] for ln in rig.fw.stderr().splitlines()   # noqa: E731
-                        if ln.startswith("octo-fw: ")]
+    fw_texts = lambda: fw_said(rig.fw.stderr())   # noqa: E731
     while fl.param("ID_RESULT") < 1.0 and time.monotonic() < deadline and "ID done" not in fw_texts():
         time.sleep(0.2)
     if fl.param("ID_RESULT") < 1.0 and false_alarm(fw_texts()):   # the whiteness test's known rate
