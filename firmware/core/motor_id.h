@@ -31,7 +31,11 @@
  * over the three lags; each delay's minimum is its lag. The grid is refined around it between frames
  * (motor_id_refine: wide ratio 2.5, then 1.3, then 1.08; a minimum beyond the grid keeps the
  * next grid wider, and one below the first grid walks twice as far, towards no lag; the statistics restart, the lag
- * filters keep running), so the last stage's data give the estimates. The final estimates
+ * filters keep running), so the last stage's data give the estimates. A minimum beyond the
+ * second grid (a prior far from the lag) would leave the last grid wide (ratio up to 1.26),
+ * whose interpolation biases the lag by a few % and k_f by several of its sds: then an
+ * interim stage on that wider grid (55-65 % of the planned frames) places the last, 1.08 grid,
+ * which starts at 65 % instead of 55 %. The final estimates
  * (motor_id_solve, between frames) take the delay of least interpolated SSR, its lag refined
  * by Newton steps on sum_j log SSR_j of the interpolated statistics, and the statistics at
  * that lag by quadratic interpolation over the grid (smooth in tau).
@@ -52,8 +56,8 @@
  * times its variance); k_f's part from the rotors is the variance of a median of eight
  * (0.19 of one rotor's, not the 0.5 of a mean of the two central ones).
  *
- * Whiteness (the data cannot fool the acceptance): at 75 % of the planned frames (the last
- * stage's first 20 %), the model of the hypothesis then best (or of the given delay) is frozen:
+ * Whiteness (the data cannot fool the acceptance): at 75 % of the planned frames (85 % after
+ * an interim stage: the last stage's first 20 % either way), the model of the hypothesis then best (or of the given delay) is frozen:
  * its lag (the criterion's minimum, a lag filter of its own started from the grid's states
  * interpolated there) and every rotor's k_f and curve, from the last stage's data so far. Over
  * the remaining frames each frame's one-step prediction error of every rotor under that model is taken, split by the rotor's
@@ -89,7 +93,7 @@
 #define MOTOR_ID_ROTORS 8
 #define MOTOR_ID_DELAYS 5
 #define MOTOR_ID_LAGS 3
-#define MOTOR_ID_STAGES 3
+#define MOTOR_ID_STAGES 4   /* the third only when a grid stays wide (motor_id_refine) */
 #define MOTOR_ID_TAU_MIN 0.0005f
 #define MOTOR_ID_TAU_MAX 0.5f
 #define MOTOR_ID_WLAGS 3     /* autocorrelation lags of the whiteness test */
@@ -191,6 +195,7 @@ struct motor_id {
 	uint8_t head;            /* the ring's newest slot */
 	uint8_t skip;            /* frames not accumulated after a refinement (lag transients) */
 	uint8_t stage;
+	bool interim;            /* the wide interim stage ran (the last stage starts later) */
 	bool nz_have;            /* the last frame taken was not excited (and none was lost since) */
 	bool refine_due;
 	bool white_due;          /* the whiteness model is to be frozen (between frames) */

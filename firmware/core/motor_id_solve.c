@@ -73,9 +73,11 @@ static float ref_kf(const struct motor_id *m)
 }
 static float ref_c(const struct motor_id *m) { return mid_u_to_float(m->c0); }
 
-/* grid ratio of each stage and where (fraction of the planned frames) a stage ends */
-static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f};
-static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u};
+/* grid ratio of each stage and where (% of the planned frames) a stage ends; stage
+ * STAGE_INTERIM runs only when a minimum lies beyond the second grid (motor_id_refine) */
+static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f, 1.08f};
+static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u, 65u};
+#define STAGE_INTERIM 2u
 #define X_MAX 1.5f          /* how far beyond the grid the parabola may place the minimum */
 #define CURVE_CHI2_SIGMAS 5.0f
 #define NE_SIGMAS 5.0f
@@ -94,7 +96,8 @@ static float lag_k1(float tau, float dt)
 	return tau > NO_LAG_FRAC * dt ? 1.0f - expf(-dt / tau) : 1.0f;
 }
 
-#define WHITE_AT_PCT 75u   /* the whiteness model is frozen at this share of the planned frames */
+/* the whiteness model is frozen this share of the planned frames into the last stage */
+#define WHITE_AFTER_PCT 20u
 
 /* the least n >= pct % of the planned frames, pct <= 100 (integers: the same in every
  * precision; N = 100 q + r gives q pct + ceil(r pct / 100), in 32 bits) */
@@ -107,7 +110,9 @@ static uint32_t frames_at(const struct motor_id *m, uint32_t pct)
 /* n_exc at which the current stage ends, or (last stage) the whiteness model freezes */
 static uint32_t next_due(const struct motor_id *m)
 {
-	return frames_at(m, m->stage < MOTOR_ID_STAGES - 1 ? stage_end_pct[m->stage] : WHITE_AT_PCT);
+	if (m->stage < MOTOR_ID_STAGES - 1)
+		return frames_at(m, stage_end_pct[m->stage]);
+	return frames_at(m, stage_end_pct[m->interim ? STAGE_INTERIM : STAGE_INTERIM - 1u] + WHITE_AFTER_PCT);
 }
 
 /* a lag within the grids' range */
@@ -573,7 +578,17 @@ void motor_id_refine(struct motor_id *m)
 	float kf_ref = 0.0f, c_ref = 0.0f;
 	bool have_ref = reference_fit(m, &kf_ref, &c_ref);
 	float xs[ND], ks[ND], smin[ND];   /* each delay's criterion's minimum */
-	delay_scan(m, xs, ks, smin);
+	unsigned bd = delay_scan(m, xs, ks, smin);
+	if (m->cfg.fix_delay)
+		bd = m->cfg.delay_fr < ND ? m->cfg.delay_fr : ND - 1u;
+	/* the interim stage only if the best delay's minimum lies beyond its grid (its next grid
+	 * would stay wide: about 13 % of fresh vehicles, every stale prior); else straight to
+	 * the last. The other delays' grids only rank them, far apart. */
+	if (next == STAGE_INTERIM) {
+		m->interim = m->n_stat > 0u && fabsf(xs[bd]) > 1.0f;
+		if (!m->interim)
+			next++;
+	}
 	for (unsigned d = 0; d < ND; d++) {
 		float x = m->n_stat > 0u ? xs[d] : 0.0f;
 		float r = m->lag_r[d];
@@ -752,6 +767,10 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	const bool ec = m->cfg.est_curve;
 	const unsigned np = ec ? 2u : 1u;
 	res->n = m->n_stat;
+	/* the thrust noise (still frames): reported even when the excitation's data are too few */
+	const float nz_n = (float)m->nz_n;
+	float nz = div_pos(mid_sum_to_float(m->nz_ss, m->e[MID_E_NZ], 2, m->kexp), nz_n);
+	res->noise_sd = sqrt0(nz);
 	if (m->n_stat < 30u) {
 		res->cause = MOTOR_ID_NO_DATA;
 		return;
@@ -804,10 +823,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	for (unsigned j = 0; j < NR; j++)
 		res->scale_sd[j] = div_pos(sqrt0(f.vm[j]), res->kf);
 
-	/* noise and the normalised errors */
-	const float nz_n = (float)m->nz_n;
-	float nz = div_pos(mid_sum_to_float(m->nz_ss, m->e[MID_E_NZ], 2, m->kexp), nz_n);
-	res->noise_sd = sqrt0(nz);
+	/* the normalised errors */
 	float ne_hi = 0.0f, ne_sorted_mid;
 	unsigned worst = 0;
 	for (unsigned j = 0; j < NR; j++) {

@@ -931,7 +931,7 @@ def item_motor(rep, args):
                     f"{t['white_q_over_dof']:.2f}", "", "", "(reported)", None, c)
     t = r["stale_prior_10s"]
     rep.row(5, "  stale lag prior (85 ms, another vehicle's) on 10-20 ms motors, curve estimated, 10s: "
-               "rejected (past the prior's reach), accepted with k_f > 4 sd off, with the lag > 5 % off",
+               "rejected, accepted with k_f > 4 sd off, with the lag > 5 % off",
             f"{t['rejected_pct']:.1f} %, {t['accepted_kf_over_4sd_pct']:.1f} %, {t['accepted_lag_off_5pct']:.1f} %", "",
             f"k_f bias / std of the accepted {t['kf_bias_pct']:+.3f} / {t['kf_std_pct']:.3f} %, "
             f"var / reported sd^2 {t['kf_var_over_reported']:.2f}", "(reported)", None, c)
