@@ -429,6 +429,11 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 		snprintf(why, cap, "Experiment %d refused: not hovering", id);
 		return APP_DENIED;
 	}
+	if (envelope_oscillating(a)) {   /* its excitation would take the tilt past the limit */
+		snprintf(why, cap, "Experiment %d refused: attitude oscillating (%.0f deg/s rms)", id,
+			 (double)envelope_osc_rms_dps(a));
+		return APP_BUSY;
+	}
 	envelope_seed_kf(a, id);
 	int r = exp_start(&a->exp, id, &a->p, why, cap);
 	if (r == APP_ACCEPTED || r == APP_IN_PROGRESS) {
@@ -633,6 +638,7 @@ static void control_step(struct app *a, float dt)
 	struct vec3 tau;
 	att_ctrl_update(&a->att, &ai, &tau);
 	tau = envelope_torque(a, tau);   /* the throttle map's error at hover taken out */
+	envelope_osc_step(a);            /* the rates into the oscillation guard's second */
 	scalar_t cos_tilt = quat_body_z_up(q);
 	struct alt_ctrl_input li = {
 		.z_sp_m = a->guid.z_sp_m,

@@ -11,6 +11,11 @@
 #define HOVER_READY_RSD 0.03f  /* take-off ends once u_h is known to 3 % */
 #define AIRBORNE_M 0.1f        /* above the take-off ground: the acceleration is free */
 #define KF_SEED_REL 0.10f      /* NAV_KF_SEED: VEH_KF replaced when this far off */
+#define ENV_OSC_RATE_DPS 12.0f /* the oscillation guard's rate rms (deg/s) */
+#define ENV_OSC_DETUNE 0.85f   /* its factor on ATT_WN_RP */
+#define ENV_OSC_KEEP 0.8f      /* sustained: the rms of a second at least this share of the one before */
+#define ENV_OSC_MIN_FRAMES 45u /* a second with fewer frames is not judged */
+#define ENV_DEG 0.017453292f   /* rad per degree */
 
 static float nominal_u(const struct app_params *p)
 {
@@ -130,11 +135,69 @@ static void kft_step(struct app *a, scalar_t s_dt, bool up)
 
 static void publish_kft(struct app *a);
 static void publish_hover(struct app *a);
+static void guard_osc(struct app *a);
 
 void envelope_publish(struct app *a)
 {
 	publish_hover(a);
 	publish_kft(a);
+	guard_osc(a);
+}
+
+float envelope_osc_rms_dps(const struct app *a)
+{
+	return sqrtf(a->env.osc_last_ms) / ENV_DEG;
+}
+
+bool envelope_oscillating(const struct app *a)
+{
+	return envelope_osc_rms_dps(a) > ENV_OSC_RATE_DPS;
+}
+
+void envelope_osc_step(struct app *a)
+{
+	struct envelope *e = &a->env;
+	const scalar_t *w = app_in(a)->rate_b_rps;
+	e->osc_ss = sc_add(e->osc_ss, sc_add(sc_mul(w[0], w[0]), sc_mul(w[1], w[1])));   /* saturates */
+	if (e->osc_n < UINT16_MAX)
+		e->osc_n++;
+	if (app_t_before(a->fr.t_s, e->osc_next_t))
+		return;
+	e->osc_next_t = a->fr.t_s + 1.0;
+	e->osc_due_ss = e->osc_ss;
+	e->osc_due_n = e->osc_n;
+	e->osc_due_mode = (uint8_t)a->mode;
+	e->osc_due = true;
+	e->osc_ss = SC_ZERO;
+	e->osc_n = 0;
+}
+
+/* The oscillation guard's judgement of the last whole second (envelope.h). */
+static void guard_osc(struct app *a)
+{
+	struct envelope *e = &a->env;
+	if (!e->osc_due)
+		return;
+	e->osc_due = false;
+	const float lim = ENV_OSC_RATE_DPS * ENV_DEG;
+	bool judged = (e->osc_due_mode == APP_TAKEOFF || e->osc_due_mode == APP_HOLD) &&
+		      e->osc_due_n >= ENV_OSC_MIN_FRAMES;
+	float ms = judged ? sc_to_float(e->osc_due_ss) / (float)e->osc_due_n : 0.0f, prev = e->osc_prev_ms;
+	e->osc_prev_ms = e->osc_last_ms = ms;
+	if (!(ms > lim * lim && prev > lim * lim && ms >= ENV_OSC_KEEP * ENV_OSC_KEEP * prev))
+		return;
+	e->osc_prev_ms = 0.0f;   /* the next detune needs two more seconds of it */
+	float wn = a->p.att_wn_rp, nw = fmaxf(wn * ENV_OSC_DETUNE, param_defs[PX_ATT_WN_RP].min);
+	if (!(nw < wn) || params_set(&a->p, PX_ATT_WN_RP, nw) != PARAM_OK) {
+		app_status(a, APP_SEV_WARNING, "Attitude oscillation %.0f deg/s: ATT_WN_RP at its minimum",
+			   (double)(sqrtf(ms) / ENV_DEG));
+		return;
+	}
+	post_param(a, PX_ATT_WN_RP);
+	a->params_dirty = true;
+	a->save_pending = true;
+	app_status(a, APP_SEV_WARNING, "Attitude oscillation %.0f deg/s: ATT_WN_RP %.2f -> %.2f",
+		   (double)(sqrtf(ms) / ENV_DEG), (double)wn, (double)nw);
 }
 
 /* The KFT_* parameters of the last due step and, in HOLD, the VEH_KF refresh. */

@@ -48,6 +48,17 @@ struct envelope {
 	/* the torque demands' gain (envelope_torque_scale): the target set between frames, the
 	 * value the step applies, which follows the target over about a second */
 	scalar_t tau_k_target, tau_k;
+	/* the oscillation guard (envelope_osc_step, envelope_publish): the roll and pitch rates'
+	 * sum of squares over the current second of plant time and its frames; the last whole
+	 * second's, waiting for the guard, with the mode it flew in; the second before's mean
+	 * square (0: none, or not flown in TAKEOFF or HOLD) */
+	scalar_t osc_ss, osc_due_ss;
+	uint16_t osc_n, osc_due_n;
+	uint8_t osc_due_mode;
+	bool osc_due;
+	double osc_next_t;
+	float osc_prev_ms;
+	float osc_last_ms;  /* the last whole second's mean square (0 outside TAKEOFF and HOLD) */
 	uint8_t cmd;        /* enum app_command that started the phase, for its final result */
 	app_origin origin;  /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
 };
@@ -86,6 +97,21 @@ void envelope_torque_scale(struct app *a);
 /* In the step: the torque demand with that gain (which moves 2 % of the way to its target
  * per step, about 0.5 s at 90 Hz). */
 struct vec3 envelope_torque(struct app *a, struct vec3 tau);
+
+/* In the step (flying modes): the roll and pitch rates into the oscillation guard's second.
+ * Between frames (envelope_publish), each whole second of TAKEOFF or HOLD is judged: an
+ * attitude loop whose margin the vehicle does not have (a slow motor, a late link: 100 ms
+ * and 3 frames at the default ATT_WN_RP) oscillates at a growing amplitude, which the
+ * excitation of an experiment then takes past its tilt limit. Two seconds in a row whose
+ * rate rms exceeds ENV_OSC_RATE_DPS (12 deg/s), the second at least 0.8 of the first (not
+ * decaying), lower ATT_WN_RP by 15 % (within its range), with a warning that names the rms
+ * and the new value; the parameter is saved, so the next flight starts from it. A stable
+ * vehicle's take-off transient decays (a peak of 16 deg/s seen, 6 the second after). */
+void envelope_osc_step(struct app *a);
+/* The last whole second's roll and pitch rate rms (deg/s; 0 outside TAKEOFF and HOLD), and
+ * whether it is over the guard's limit: no experiment starts on an oscillating vehicle. */
+float envelope_osc_rms_dps(const struct app *a);
+bool envelope_oscillating(const struct app *a);
 
 /* Take-off may end (HOLD) once the hover throttle is known to this relative sd. */
 bool envelope_hover_ready(const struct app *a);

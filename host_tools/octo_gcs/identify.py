@@ -158,7 +158,8 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
 
     v.listeners.append(listen)
     try:
-        # start it; a vehicle still settling after take-off answers DENIED "not hovering"
+        # start it; a vehicle still settling after take-off answers DENIED "not hovering", one
+        # whose attitude still oscillates (the firmware lowering its gain) TEMPORARILY_REJECTED
         deadline = time.monotonic() + start_timeout
         confirmation = 0
         while True:
@@ -177,8 +178,8 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
                 break
             v.recv(types=(), timeout=0.05)   # the reason follows the ACK
             why = v._last_text(since=t_cmd)
-            if r in (mavlink.MAV_RESULT_DENIED, mavlink.MAV_RESULT_TEMPORARILY_REJECTED) \
-                    and "hover" in why and time.monotonic() < deadline:
+            if (r == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
+                    or (r == mavlink.MAV_RESULT_DENIED and "hover" in why)) and time.monotonic() < deadline:
                 v.recv(types=(), timeout=0.2)
                 continue
             raise GcsError(f"experiment {experiment} ({name}) refused: {result_name(r)}"

@@ -110,10 +110,57 @@ def slow_late_strong(rng):
 
 def test_slow_late_strong_vehicles_do_not_tip_over(tmp_path):
     """Lag 75-100 ms, 3 frames late, k_f 1.2-1.3 x the paper's: 30 % of these aborted at the
-    tilt limit before the torque demands took the throttle map's error at hover out."""
+    tilt limit before the torque demands took the throttle map's error at hover out, and
+    0.5 % still did (their attitude loop oscillating from the take-off on) before the
+    oscillation guard lowered ATT_WN_RP (0 of 400 since)."""
     failed, silent = campaign(tmp_path, 40, slow_late_strong, "slow, late, strong vehicles")
     assert not silent, silent
-    assert len(failed) <= 3, failed
+    assert len(failed) <= 1, failed
+
+
+OSC_LINE = re.compile(r"^Attitude oscillation (\d+) deg/s: ATT_WN_RP ([0-9.]+) -> ([0-9.]+)$")
+
+
+def test_an_oscillating_attitude_loop_is_detuned_and_identified(tmp_path):
+    """ATT_WN_RP 10 (the default is 7) on a slow, late vehicle: its attitude loop oscillates
+    from the take-off on (up to 200 deg/s rms). The guard lowers ATT_WN_RP by 15 % per
+    detection and says so; the experiment is refused while the rates oscillate (octo-sil's
+    mission retries a TEMPORARILY_REJECTED), then runs, and its values are within the
+    tolerances; the lowered gain is saved with them (40 of 40 such vehicles; at ATT_WN_RP 12,
+    39 of 40)."""
+    seed0 = int(os.environ.get("OCTO_MANY_SEED", random.SystemRandom().randrange(1, 10**6)))
+    print(f"OCTO_MANY_SEED={seed0}")
+    for i in range(4):
+        veh = slow_late_strong(random.Random(seed0 + i))
+        p, r = fly(tmp_path, veh, seed0 + i, first="param ATT_WN_RP 10; ")
+        said = fw_said(r.stderr)
+        steps = [OSC_LINE.match(t) for t in said if t.startswith("Attitude oscillation")]
+        assert steps and all(steps), (seed0 + i, said[-8:])
+        wn = 10.0
+        for m in steps:   # each step 15 % down from the one before
+            assert float(m.group(1)) > 12.0 and float(m.group(2)) == pytest.approx(wn, abs=0.006)
+            wn = float(m.group(3))
+            assert wn == pytest.approx(0.85 * float(m.group(2)), abs=0.006)
+        assert int(p.get("ID_RESULT", 0)) & 1, (seed0 + i, said[-8:])
+        assert not wrong(p, veh), (seed0 + i, wrong(p, veh))
+        assert p["ATT_WN_RP"] == pytest.approx(wn, abs=0.006)   # the line gives 2 decimals
+
+
+def test_a_stable_vehicle_is_never_detuned(tmp_path):
+    """Motors of 10-40 ms, at most one frame late, any k_f, curve and weak rotor of the
+    tested ranges: their take-off transients decay, and the guard never fires."""
+    seed0 = int(os.environ.get("OCTO_MANY_SEED", random.SystemRandom().randrange(1, 10**6)))
+    print(f"OCTO_MANY_SEED={seed0}")
+    fired = []
+    for i in range(40):
+        rng = random.Random(seed0 + i)
+        veh = motor_vehicle(rng)[0]
+        veh.update(motor_tau=rng.uniform(0.01, 0.04), delay=rng.choice((0.0, 1 / 90.0)))
+        p, r = fly(tmp_path, veh, seed0 + i)
+        said = [t for t in fw_said(r.stderr) if t.startswith("Attitude oscillation")]
+        if said or p.get("ATT_WN_RP", 7.0) != 7.0:
+            fired.append((seed0 + i, said))
+    assert not fired, fired
 
 
 def said_of(r):

@@ -20,7 +20,8 @@
 enum step_kind { ST_PARAM, ST_ARM, ST_TAKEOFF, ST_WAIT_HOLD, ST_EXPERIMENT, ST_WAIT_EXP, ST_LAND, ST_WAIT_DISARMED, ST_SLEEP };
 
 /* How long a step may take (platform clock, s) and how often a refused command
- * is retried (arm: until the vehicle has frames; experiment: until it hovers). */
+ * is retried (arm: until the vehicle has frames; experiment: until it hovers, or while it answers
+ * TEMPORARILY_REJECTED). */
 static const double step_timeout_s[] = {
 	[ST_PARAM] = 1.0, [ST_ARM] = 10.0, [ST_TAKEOFF] = 1.0, [ST_WAIT_HOLD] = 60.0, [ST_EXPERIMENT] = 10.0,
 	[ST_WAIT_EXP] = 30000.0, [ST_LAND] = 1.0, [ST_WAIT_DISARMED] = 120.0, [ST_SLEEP] = 0.0,
@@ -327,8 +328,9 @@ static int step(struct mission *m, struct sil *s, const struct step *st, bool fi
 		int r = command(s, MAV_CMD_USER_1, st->value, 0.0f);
 		if (r == MAV_RESULT_IN_PROGRESS || r == MAV_RESULT_ACCEPTED)
 			return 1;
-		/* a vehicle still settling after take-off answers "not hovering" */
-		if ((r == MAV_RESULT_DENIED || r == MAV_RESULT_TEMPORARILY_REJECTED) && strstr(s->seen.text, "hover") &&
+		/* a vehicle still settling after take-off answers "not hovering"; one whose attitude
+		 * still oscillates (the guard lowering its gain), TEMPORARILY_REJECTED */
+		if ((r == MAV_RESULT_TEMPORARILY_REJECTED || (r == MAV_RESULT_DENIED && strstr(s->seen.text, "hover"))) &&
 		    !waited_too_long(m, s))
 			return 0;
 		return refused(m, s, r);
