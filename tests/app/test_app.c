@@ -333,6 +333,48 @@ UNIT_TEST(app_experiment_refused_unless_hovering)
 	CHECK(r->a.mode == APP_DISARMED);
 }
 
+/* seconds of frames whose roll rate is a 2 Hz sine of rms rms_dps times decay^t; the
+ * status lines that start with "Attitude oscillation" counted, the last kept */
+static int fly_rolling(struct rig *r, float seconds, double rms_dps, double decay, char *text, size_t cap)
+{
+	int n = 0;
+	double t0 = r->t;
+	for (int i = 0; i < (int)(seconds * 90.0f); i++) {
+		r->t += 1.0 / 90.0;
+		r->h.now_us += FRAME_US;
+		double amp = rms_dps * sqrt(2.0) * pow(decay, r->t - t0) * 0.017453292519943295;
+		r->f.rate_b_rps[0] = (float)(amp * sin(2.0 * 3.141592653589793 * 2.0 * r->t));
+		frame_at(r, r->t);
+		struct app_event e;
+		while (outbox_pop(&r->a.outbox, &e))
+			if (e.kind == APP_EV_STATUS && !strncmp(e.text, "Attitude oscillation", 20)) {
+				n++;
+				snprintf(text, cap, "%s", e.text);
+			}
+	}
+	return n;
+}
+
+/* The oscillation guard: a decaying roll oscillation (a take-off transient) leaves ATT_WN_RP
+ * alone; a sustained one lowers it by 15 %, says so, and refuses experiments (BUSY: later)
+ * until the rates are quiet again. */
+UNIT_TEST(app_oscillation_guard_detunes_and_holds_experiments)
+{
+	struct rig *r = rig_hovering(u);
+	char text[APP_EVENT_TEXT] = "", why[96] = "";
+	CHECK(fly_rolling(r, 4.0f, 20.0, 0.3, text, sizeof text) == 0);
+	CHECK(r->a.p.att_wn_rp == 7.0f);
+	CHECK(fly_rolling(r, 3.0f, 30.0, 1.0, text, sizeof text) == 1);
+	CHECK(fabsf(r->a.p.att_wn_rp - 5.95f) < 1e-5f);
+	CHECK(!strncmp(text, "Attitude oscillation 30 deg/s: ATT_WN_RP 7.00 -> 5.95", sizeof text));
+	CHECK(app_cmd_experiment(&r->a, 1.0f, 1, why, sizeof why) == APP_BUSY);
+	CHECK(strstr(why, "attitude oscillating") != NULL);
+	CHECK(r->a.mode == APP_HOLD);
+	fly_rolling(r, 2.5f, 0.0, 1.0, text, sizeof text);   /* quiet again */
+	CHECK(fabsf(r->a.p.att_wn_rp - 5.95f) < 1e-5f);
+	CHECK(app_cmd_experiment(&r->a, 1.0f, 1, why, sizeof why) == APP_IN_PROGRESS);
+}
+
 UNIT_TEST(app_identification_results_are_read_only)
 {
 	struct rig *r = rig_new();
