@@ -10,13 +10,16 @@ rate of 0.1 % that happens with probability 2e-6; a regression to the 3 % measur
 this round's two fixes, the lag grid's walk and the torque gain, fails it 71 % of the time, to
 the 1.1 % between them only 7 %). The sharp test is the second: the slow, late, strong
 vehicles that tipped over the experiments' tilt limit (the attitude loop's gain 1.6-1.8 times
-the map's with VEH_KF 20), drawn on their own: 30 % of them aborted before, 1.0 % are not
-identified now (1,000 draws: 10, most of them still at the tilt limit). At most 3 of 40: by
-chance at 1 % with probability 7e-4, and at the old 30 % with probability 6e-4.
+the map's with VEH_KF 20), drawn on their own: 30 % of them aborted before, 1.0 % were not
+identified with the torque gain (1,000 draws: 10, most of them still at the tilt limit), 0.5 %
+are not now, with the oscillation guard (1,000 draws, seeds 10000-10999: 1 at the tilt limit,
+4 rejected by the whiteness test, nothing accepted wrong). At most 3 of 40: by chance at
+0.5 % with probability 6e-5, and at the old 30 % with probability 6e-4.
 
 The seeds are new each run and printed; OCTO_MANY_SEED=N repeats a draw, OCTO_MANY_N=K flies K
-random vehicles instead of 200 (the figures above: OCTO_MANY_N=1000 with OCTO_MANY_SEED 7000,
-20000 and 40000; the bound is then 1 in 50).
+vehicles in each of the two campaigns instead of 200 and 40 (the figures above: OCTO_MANY_N=1000
+with OCTO_MANY_SEED 7000, 20000 and 40000, and 10000 for the slow ones; the bounds are then 1
+in 50 and 1 in 100).
 """
 
 import json
@@ -110,12 +113,13 @@ def slow_late_strong(rng):
 
 def test_slow_late_strong_vehicles_do_not_tip_over(tmp_path):
     """Lag 75-100 ms, 3 frames late, k_f 1.2-1.3 x the paper's: 30 % of these aborted at the
-    tilt limit before the torque demands took the throttle map's error at hover out, and
-    0.5 % still did (their attitude loop oscillating from the take-off on) before the
-    oscillation guard lowered ATT_WN_RP (0 of 400 since)."""
-    failed, silent = campaign(tmp_path, 40, slow_late_strong, "slow, late, strong vehicles")
+    tilt limit before the torque demands took the throttle map's error at hover out; of the
+    rest most did, their attitude loop oscillating from the take-off on, before the
+    oscillation guard lowered ATT_WN_RP (module docstring)."""
+    n = int(os.environ.get("OCTO_MANY_N", 40))
+    failed, silent = campaign(tmp_path, n, slow_late_strong, "slow, late, strong vehicles")
     assert not silent, silent
-    assert len(failed) <= 1, failed
+    assert len(failed) <= max(3, n // 100), failed
 
 
 OSC_LINE = re.compile(r"^Attitude oscillation (\d+) deg/s: ATT_WN_RP ([0-9.]+) -> ([0-9.]+)$")
