@@ -25,8 +25,9 @@ RESULTS = {"ID_KF_EST": 28.031, "ID_KF_SD": 0.009, "ID_KF_PLAIN": 25.6, "ID_KTAU
 
 
 class ScriptedVehicle(threading.Thread):
-    def __init__(self, gcs_port, hovering=True):
+    def __init__(self, gcs_port, hovering=True, oscillating=0):
         super().__init__(daemon=True)
+        self.oscillating = oscillating   # experiment commands answered TEMPORARILY_REJECTED first
         self.m = mavutil.mavlink_connection(f"udpout:127.0.0.1:{gcs_port}", source_system=1,
                                             source_component=1)
         self.mode = 3 if hovering else 0
@@ -70,6 +71,11 @@ class ScriptedVehicle(threading.Thread):
                 if self.mode != 3:
                     self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_DENIED)
                     self.text(f"Experiment {int(msg.param1)} refused: not hovering")
+                    continue
+                if self.oscillating > 0:
+                    self.oscillating -= 1
+                    self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_TEMPORARILY_REJECTED)
+                    self.text(f"Experiment {int(msg.param1)} refused: attitude oscillating (30 deg/s rms)")
                     continue
                 self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_IN_PROGRESS, 0)
                 self.started.append(int(msg.param1))
@@ -131,6 +137,14 @@ def test_identify_fails_against_another_truth(vehicle, capsys, tmp_path):
     assert main(["identify", "--connect", url, "--expect", str(truth), "--experiments", "1"]) == 1
     out = capsys.readouterr().out
     assert "[FAIL] k_f vs truth" in out and "FAIL" in out.splitlines()[-1]
+
+
+def test_identify_waits_while_the_attitude_oscillates(vehicle, capsys):
+    """The firmware refuses an experiment with TEMPORARILY_REJECTED while its oscillation
+    guard lowers the attitude gain: identify asks again until it starts."""
+    v, url = vehicle(oscillating=3)
+    assert main(["identify", "--connect", url, "--experiments", "1"]) == 0, capsys.readouterr()
+    assert v.started == [1] and v.oscillating == 0
 
 
 def test_identify_refuses_a_vehicle_on_the_ground(vehicle, capsys):
