@@ -197,7 +197,8 @@ void exp_pump(struct experiment *e)
 {
 	/* the motor model's bank update and grid refinement, between frames (the step does them
 	 * if nobody did) */
-	if (e->state == EXP_RUNNING && !e->reporting && e->phase_kind[e->phase] == PK_ROTOR && e->cfg.exc_null)
+	if (e->state == EXP_RUNNING && !e->reporting && !e->begin_pending && e->phase_kind[e->phase] == PK_ROTOR &&
+	    e->cfg.exc_null)
 		motor_id_refine(&e->mid);   /* processes the waiting frame first */
 	if (!e->pump_ready || e->msg[0] || !e->q_n)
 		return;
@@ -741,6 +742,12 @@ static void read_estimates(struct experiment *e)
 
 void exp_turn(struct experiment *e, const struct app_params *p)
 {
+	if (e->begin_pending) {   /* the experiment's first step ran: its first phase begins */
+		e->begin_pending = false;
+		if (e->state == EXP_RUNNING)
+			phase_begin(e, p, &e->turn);
+		return;
+	}
 	if (!e->turn_pending)
 		return;
 	e->turn_pending = false;
@@ -788,7 +795,7 @@ bool exp_reads_torque(const struct experiment *e)
 {
 	if (e->state != EXP_RUNNING || e->reporting)
 		return false;
-	if (e->turn_pending)   /* the phase may change first (exp_turn in exp_step) */
+	if (e->turn_pending || e->begin_pending)   /* the phase may change first (exp_turn in exp_step) */
 		return true;
 	int k = e->phase_kind[e->phase];
 	return k == PK_ROTOR || k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z;
@@ -808,8 +815,14 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 		e->dt_nom = dtn > 0.001f && dtn < 0.1f ? dtn : 1.0f / 90.0f;
 		e->inv_dt_nom = 1.0f / e->dt_nom;
 		e->z0 = f->pos_i_m[2];
+		/* the first phase begins between frames (exp_turn), from what this step saw, as
+		 * every later one does: its set-up (the estimators' initialisation, 0.1 M
+		 * instructions for the inertia's on M4F, 3 M on M0) stays out of the step, which
+		 * sends no excitation yet */
 		snapshot(&e->turn, in);
-		phase_begin(e, in->params, &e->turn);
+		e->begin_pending = true;
+		e->pump_ready = true;
+		return e->state;
 	}
 	if (app_f_lt(HEIGHT_ABORT_M, fabsf(f->pos_i_m[2] - e->z0))) {
 		exp_abort(e, "height limit");

@@ -134,7 +134,9 @@
  *     formatted between frames (exp_pump, called by the app's tick), not in the step.
  *   - a phase that ends in a step is closed (results posted) and the next started between
  *     frames (exp_turn, called by the app before it applies results), from a copy of that
- *     step's inputs: the next step sees exactly what it saw when this ran in the step.
+ *     step's inputs: the next step sees exactly what it saw when this ran in the step. The
+ *     first phase too: the experiment's first step only takes its frame (no excitation), and
+ *     the phase begins between frames.
  */
 #ifndef OCTO_EXPERIMENT_H
 #define OCTO_EXPERIMENT_H
@@ -271,6 +273,7 @@ struct experiment {
 		};
 	};
 	bool turn_pending;                     /* a phase ended: exp_turn ends it, starts the next */
+	bool begin_pending;                    /* the first step ran: exp_turn begins the first phase */
 	struct exp_turn turn;
 	struct exp_line queue[EXP_QUEUE];      /* status lines, formatted by exp_pump */
 	int q_head, q_n;
