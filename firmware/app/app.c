@@ -6,7 +6,6 @@
 #include <stdio.h>
 #include <string.h>
 
-#define DEG_F 0.017453292519943295f
 #define FIRST_DT_S (1.0f / 90.0f)
 #define MAX_DT_S 0.2f              /* longer gaps are integrated as 200 ms */
 #define HOVER_Z_TOL_M 0.3f

@@ -42,6 +42,8 @@
 #include "pos_ctrl.h"
 #include "thrmap.h"
 
+#define DEG_F 0.017453292519943295f   /* rad per degree */
+
 /* The frame's inputs as scalars: in the fixed build converted once per frame (app_on_frame)
  * and read by the step's every part (control, k_f tracker, experiment); in the float build
  * scalar_t is float and app_in() gives the frame itself (no copy). Fields named as in

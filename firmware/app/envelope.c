@@ -15,7 +15,6 @@
 #define ENV_OSC_DETUNE 0.85f   /* its factor on ATT_WN_RP */
 #define ENV_OSC_KEEP 0.8f      /* sustained: the rms of a second at least this share of the one before */
 #define ENV_OSC_MIN_FRAMES 45u /* a second with fewer frames is not judged */
-#define ENV_DEG 0.017453292f   /* rad per degree */
 
 static float nominal_u(const struct app_params *p)
 {
@@ -146,7 +145,7 @@ void envelope_publish(struct app *a)
 
 float envelope_osc_rms_dps(const struct app *a)
 {
-	return sqrtf(a->env.osc_last_ms) / ENV_DEG;
+	return sqrtf(a->env.osc_last_ms) / DEG_F;
 }
 
 bool envelope_oscillating(const struct app *a)
@@ -179,7 +178,7 @@ static void guard_osc(struct app *a)
 	if (!e->osc_due)
 		return;
 	e->osc_due = false;
-	const float lim = ENV_OSC_RATE_DPS * ENV_DEG;
+	const float lim = ENV_OSC_RATE_DPS * DEG_F;
 	bool judged = (e->osc_due_mode == APP_TAKEOFF || e->osc_due_mode == APP_HOLD) &&
 		      e->osc_due_n >= ENV_OSC_MIN_FRAMES;
 	float ms = judged ? sc_to_float(e->osc_due_ss) / (float)e->osc_due_n : 0.0f, prev = e->osc_prev_ms;
@@ -190,14 +189,14 @@ static void guard_osc(struct app *a)
 	float wn = a->p.att_wn_rp, nw = fmaxf(wn * ENV_OSC_DETUNE, param_defs[PX_ATT_WN_RP].min);
 	if (!(nw < wn) || params_set(&a->p, PX_ATT_WN_RP, nw) != PARAM_OK) {
 		app_status(a, APP_SEV_WARNING, "Attitude oscillation %.0f deg/s: ATT_WN_RP at its minimum",
-			   (double)(sqrtf(ms) / ENV_DEG));
+			   (double)(sqrtf(ms) / DEG_F));
 		return;
 	}
 	post_param(a, PX_ATT_WN_RP);
 	a->params_dirty = true;
 	a->save_pending = true;
 	app_status(a, APP_SEV_WARNING, "Attitude oscillation %.0f deg/s: ATT_WN_RP %.2f -> %.2f",
-		   (double)(sqrtf(ms) / ENV_DEG), (double)wn, (double)nw);
+		   (double)(sqrtf(ms) / DEG_F), (double)wn, (double)nw);
 }
 
 /* The KFT_* parameters of the last due step and, in HOLD, the VEH_KF refresh. */

@@ -341,15 +341,22 @@ NOINLINE static unsigned delay_scan(const struct motor_id *m, float xs[ND], floa
 	return best;
 }
 
+/* the delay taken: the given one (fix_delay; the largest hypothesis beyond the bank), else
+ * the one the scan preferred */
+static unsigned chosen_delay(const struct motor_id *m, unsigned scanned)
+{
+	if (!m->cfg.fix_delay)
+		return scanned;
+	return m->cfg.delay_fr < ND ? m->cfg.delay_fr : ND - 1u;
+}
+
 /* the hypothesis the data so far prefer (or the given delay) and its lag's grid position */
 static void best_hyp(const struct motor_id *m, unsigned *d_best, float *x_best)
 {
 	float xs[ND], ks[ND], smin[ND];
-	unsigned d = delay_scan(m, xs, ks, smin);
-	if (m->cfg.fix_delay)
-		d = m->cfg.delay_fr;
-	*d_best = d < ND ? d : 0u;
-	*x_best = d < ND ? xs[d] : 0.0f;
+	unsigned d = chosen_delay(m, delay_scan(m, xs, ks, smin));
+	*d_best = d;
+	*x_best = xs[d];
 }
 
 /* rotor's m at curve c from its statistics: sum g f / sum g^2 with g = w^T x and
@@ -578,9 +585,7 @@ void motor_id_refine(struct motor_id *m)
 	float kf_ref = 0.0f, c_ref = 0.0f;
 	bool have_ref = reference_fit(m, &kf_ref, &c_ref);
 	float xs[ND], ks[ND], smin[ND];   /* each delay's criterion's minimum */
-	unsigned bd = delay_scan(m, xs, ks, smin);
-	if (m->cfg.fix_delay)
-		bd = m->cfg.delay_fr < ND ? m->cfg.delay_fr : ND - 1u;
+	unsigned bd = chosen_delay(m, delay_scan(m, xs, ks, smin));
 	/* the interim stage only if the best delay's minimum lies beyond its grid (its next grid
 	 * would stay wide: about 13 % of fresh vehicles, every stale prior); else straight to
 	 * the last. The other delays' grids only rank them, far apart. */
@@ -781,8 +786,7 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	float smin[ND], xs[ND], ks[ND];
 	unsigned best = delay_scan(m, xs, ks, smin);
 	res->free_delay = best;
-	if (m->cfg.fix_delay)
-		best = m->cfg.delay_fr < ND ? m->cfg.delay_fr : ND - 1u;
+	best = chosen_delay(m, best);
 	/* the next best (smin is a sum of logs: any sign) */
 	float second = 0.0f;
 	bool have2 = false;

@@ -22,6 +22,9 @@ struct rig {
 	double t;
 	bool stuck;      /* the vehicle stays at height z_stuck whatever the app asks */
 	float z_stuck;
+	/* the roll rate, while roll_dps > 0: a 2 Hz sine of rms roll_dps, times roll_decay per
+	 * second from roll_t0 */
+	double roll_dps, roll_decay, roll_t0;
 };
 
 static struct rig R;   /* large: kept off the stack */
@@ -43,6 +46,9 @@ static void frame_at(struct rig *r, double t)
 	bool flying = app_flying(a);
 	f->t_s = t;
 	f->seq++;
+	if (r->roll_dps > 0.0)   /* else the rate a test set stays */
+		f->rate_b_rps[0] = (float)(r->roll_dps * sqrt(2.0) * pow(r->roll_decay, t - r->roll_t0) *
+					   0.017453292519943295 * sin(2.0 * 3.141592653589793 * 2.0 * t));
 	f->valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	f->pos_i_m[2] = flying ? fmaxf(sc_to_float(a->guid.z_sp_m), 0.0f) : 0.0f;
 	f->vel_i_mps[2] = flying && f->pos_i_m[2] > 0.0f ? sc_to_float(a->guid.vz_ff_mps) : 0.0f;
@@ -255,9 +261,9 @@ UNIT_TEST(app_plant_time_gap_not_integrated)
 /* A burst storm in a fast lockstep run: one "frames missing" line a wall second, the gaps
  * between counted into the next line, so that other lines keep their place in the ground
  * station's STATUSTEXT rate. */
-/* Frames without app_tick (which would hand the outbox to MAVLink); the "frames missing"
- * lines among the outbox's events counted, the last one kept. */
-static int gap_lines(struct rig *r, int frames, char *last, size_t cap)
+/* Frames without app_tick (which would hand the outbox to MAVLink); the status lines that
+ * start with prefix among the outbox's events counted, the last one kept. */
+static int said_lines(struct rig *r, int frames, const char *prefix, char *last, size_t cap)
 {
 	int n = 0;
 	for (int i = 0; i < frames; i++) {
@@ -266,12 +272,17 @@ static int gap_lines(struct rig *r, int frames, char *last, size_t cap)
 		frame_at(r, r->t);
 		struct app_event e;
 		while (outbox_pop(&r->a.outbox, &e))
-			if (e.kind == APP_EV_STATUS && !strncmp(e.text, "X-Plane frames missing", 22)) {
+			if (e.kind == APP_EV_STATUS && !strncmp(e.text, prefix, strlen(prefix))) {
 				n++;
 				snprintf(last, cap, "%s", e.text);
 			}
 	}
 	return n;
+}
+
+static int gap_lines(struct rig *r, int frames, char *last, size_t cap)
+{
+	return said_lines(r, frames, "X-Plane frames missing", last, cap);
 }
 
 UNIT_TEST(app_frames_missing_said_once_a_wall_second)
@@ -333,26 +344,15 @@ UNIT_TEST(app_experiment_refused_unless_hovering)
 	CHECK(r->a.mode == APP_DISARMED);
 }
 
-/* seconds of frames whose roll rate is a 2 Hz sine of rms rms_dps times decay^t; the
- * status lines that start with "Attitude oscillation" counted, the last kept */
+/* seconds of frames rolling at rms_dps (decaying by decay per second from now); the
+ * "Attitude oscillation" lines counted, the last kept */
 static int fly_rolling(struct rig *r, float seconds, double rms_dps, double decay, char *text, size_t cap)
 {
-	int n = 0;
-	double t0 = r->t;
-	for (int i = 0; i < (int)(seconds * 90.0f); i++) {
-		r->t += 1.0 / 90.0;
-		r->h.now_us += FRAME_US;
-		double amp = rms_dps * sqrt(2.0) * pow(decay, r->t - t0) * 0.017453292519943295;
-		r->f.rate_b_rps[0] = (float)(amp * sin(2.0 * 3.141592653589793 * 2.0 * r->t));
-		frame_at(r, r->t);
-		struct app_event e;
-		while (outbox_pop(&r->a.outbox, &e))
-			if (e.kind == APP_EV_STATUS && !strncmp(e.text, "Attitude oscillation", 20)) {
-				n++;
-				snprintf(text, cap, "%s", e.text);
-			}
-	}
-	return n;
+	r->roll_dps = rms_dps;
+	r->roll_decay = decay;
+	r->roll_t0 = r->t;
+	r->f.rate_b_rps[0] = 0.0f;
+	return said_lines(r, (int)(seconds * 90.0f), "Attitude oscillation", text, cap);
 }
 
 /* The oscillation guard: a decaying roll oscillation (a take-off transient) leaves ATT_WN_RP

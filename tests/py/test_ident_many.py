@@ -11,10 +11,10 @@ this round's two fixes, the lag grid's walk and the torque gain, fails it 71 % o
 the 1.1 % between them only 7 %). The sharp test is the second: the slow, late, strong
 vehicles that tipped over the experiments' tilt limit (the attitude loop's gain 1.6-1.8 times
 the map's with VEH_KF 20), drawn on their own: 30 % of them aborted before, 1.0 % were not
-identified with the torque gain (1,000 draws: 10, most of them still at the tilt limit), 0.5 %
+identified with the torque gain (1,000 draws: 10, most of them still at the tilt limit), 0.6 %
 are not now, with the oscillation guard (1,000 draws, seeds 10000-10999: 1 at the tilt limit,
-4 rejected by the whiteness test, nothing accepted wrong). At most 3 of 40: by chance at
-0.5 % with probability 6e-5, and at the old 30 % with probability 6e-4.
+5 rejected by the whiteness test, nothing accepted wrong). At most 3 of 40: by chance at
+0.6 % with probability 1e-4, and at the old 30 % with probability 6e-4.
 
 The seeds are new each run and printed; OCTO_MANY_SEED=N repeats a draw, OCTO_MANY_N=K flies K
 vehicles in each of the two campaigns instead of 200 and 40 (the figures above: OCTO_MANY_N=1000
