@@ -7,6 +7,7 @@
 #   make bench-tools  only the harnesses (the host ones are part of `make`;
 #                     tests/py/test_bench_smoke.py runs them tiny)
 #   BENCH_ARGS="--repeats 3 --only speed,step"  passed to bench.py (see bench.py --help)
+#   BENCH_ARGS=--readme  also writes the table into docs/performance.md, between its markers
 #
 # Harnesses (build/bench/):
 #   pingpong       bare UDP ping-pong over loopback between two processes with octo-sim's and

@@ -2,10 +2,11 @@
 """make bench: Octo-SIL's performance figures, measured side by side.
 
 Run by `make bench` (which builds the harnesses first) as
-    .venv/bin/python tests/bench/bench.py [--repeats N] [--only ITEMS] [--quick] [--no-arm]
+    .venv/bin/python tests/bench/bench.py [--repeats N] [--only ITEMS] [--quick] [--no-arm] [--readme]
 Prints one table (each timed figure: median of N runs with [min, max]; each count: exact,
 deterministic) beside its reference measured in the same run and its target, then the
-machine and the exact command behind each figure, and writes build/bench.json.
+machine and the exact command behind each figure, and writes build/bench.json and the table
+as markdown (build/bench.md); --readme also puts that table into docs/performance.md.
 
 Items:
   speed   1. closed loop: octo-sim --lockstep + octo-fw (--actuation dref and data25) + a
@@ -1122,6 +1123,21 @@ ITEMS = {"speed": item_speed, "step": item_step, "memory": item_memory, "alloc":
          "estim": item_estim, "sim": item_sim, "sil": item_sil, "campaign": item_campaign}
 
 
+# The page whose table `--readme` replaces: the text between its two markers
+# (<!-- bench:begin ... --> and <!-- bench:end -->); the text around them is left alone.
+PERF_DOC = REPO / "docs" / "performance.md"
+
+
+def write_table(doc, table):
+    """Replace the table between doc's bench markers with table; say what was done."""
+    text = doc.read_text()
+    m = re.search(r"(<!-- bench:begin[^>]*-->\n).*?(<!-- bench:end -->)", text, re.S)
+    if not m:
+        return f"{rel(doc)}: no <!-- bench:begin --> ... <!-- bench:end --> markers: not changed"
+    doc.write_text(text[:m.end(1)] + table + text[m.start(2):])
+    return f"{rel(doc)}: performance table replaced"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeats", type=int, default=5, help="runs per timed figure (median, min, max)")
@@ -1130,7 +1146,7 @@ def main():
     ap.add_argument("--no-arm", action="store_true", help="skip the Cortex-M figures")
     ap.add_argument("--out", default=str(B / "bench.json"))
     ap.add_argument("--readme", action="store_true",
-                    help="also replace the table between the bench markers of README.md's Performance section")
+                    help="also replace the table between the bench markers of " + rel(PERF_DOC))
     args = ap.parse_args()
     only = [x for x in args.only.split(",") if x] or list(ITEMS)
     bad = [x for x in only if x not in ITEMS]
@@ -1172,14 +1188,7 @@ def main():
                   f"{mach['date_utc']} UTC, {dur:.0f} s; timed figures: median of {args.repeats} runs "
                   f"[min .. max].\n\n" + rep.markdown())
     if args.readme:
-        readme = REPO / "README.md"
-        text = readme.read_text()
-        m = re.search(r"(<!-- bench:begin[^>]*-->\n).*?(<!-- bench:end -->)", text, re.S)
-        if m:
-            readme.write_text(text[:m.end(1)] + md.read_text() + text[m.start(2):])
-            print("== README.md: Performance table replaced")
-        else:
-            print("== README.md: no <!-- bench:begin --> ... <!-- bench:end --> markers: not changed")
+        print("== " + write_table(PERF_DOC, md.read_text()))
     return 1 if errors else 0
 
 
