@@ -315,7 +315,8 @@ static const char usage[] =
 	"plant (octo-sim's flags):\n"
 	"  --vehicle FILE.json  --ideal  --seed N  --rate HZ  --step S  --xplane-version 11|12\n"
 	"  --rows LIST  --drop P  --burst N  --burst-prob P  --delay-frames K  --duplicate P\n"
-	"  --reorder P          (see octo-sim --help)\n"
+	"  --reorder P  --start-time S   (see octo-sim --help; the plant clock starts at S,\n"
+	"                       --duration counts from there)\n"
 	"  --lcm-sim URL            octo-sim's truth log (OCTO_TRUTH)\n"
 	"\n"
 	"run:\n"
@@ -499,7 +500,7 @@ static int run(struct sil *s, int argc, char **argv)
 			}
 			fprintf(stderr, "octo-sil: %s\n", why);
 		}
-		if (duration > 0.0 && (tr.t >= duration - 1e-9 || (double)(s->now_us - 1000000u) * 1e-6 >= duration))
+		if (duration > 0.0 && (tr.t - tr.t0 >= duration - 1e-9 || (double)(s->now_us - 1000000u) * 1e-6 >= duration))
 			break;
 		pass++;
 		if (!started) {
