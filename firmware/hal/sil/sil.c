@@ -459,6 +459,8 @@ static int run(struct sil *s, int argc, char **argv)
 	xp_client_init(&s->xp, &s->xplane, act);
 	s->xp.send = to_plant;
 	s->xp.send_ctx = &s->to_plant;
+	/* the configured rate: the plant's frame period (the stamps are not needed to measure it) */
+	xp_clock_set_period(&s->xp.clock, 1.0 / octo_plant_rate(s->plant));
 
 	const double rate = octo_plant_rate(s->plant);
 	const double period_us = 1e6 / rate;
