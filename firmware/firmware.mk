@@ -1,4 +1,5 @@
-# firmware/: the portable core (three builds: float, Q16.16, sanitizers) and octo-fw.
+# firmware/: the portable core (three builds: float, Q16.16, sanitizers) and octo-fw
+# (float, and octo-fw-fixed on the Q16.16 core).
 #
 # core/  pure C11, no heap, no globals, no I/O; compiled with the strict FW_WARN set.
 # app/   the autopilot (90 Hz step, modes, parameters, telemetry, commands).
@@ -52,6 +53,19 @@ $(B)/octo-fw: $(FW_OBJ) $(B)/libcore.a $(B)/liblcmtypes.a
 	$(CC) $(OPT) -o $@ $(FW_OBJ) $(B)/libcore.a $(B)/liblcmtypes.a $(LCM_LDFLAGS) -lm
 
 ALL_TARGETS += $(B)/octo-fw
+
+# ---- octo-fw-fixed: the same program on the Q16.16 core (OCTO_FIXED: the app's scalars and
+#   struct app change with it, so every object is compiled again, into build/fw-fixed/).
+FW_FIXED_OBJ := $(FW_SRC:firmware/%.c=$(B)/fw-fixed/%.o)
+
+$(B)/fw-fixed/%.o: firmware/%.c $(B)/config.mk | $(MAVLINK_STAMP) $(LCM_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_FW) -DOCTO_FIXED=1 -D_POSIX_C_SOURCE=200809L $(FW_INC) -c $< -o $@
+
+$(B)/octo-fw-fixed: $(FW_FIXED_OBJ) $(B)/libcore-fixed.a $(B)/liblcmtypes.a
+	$(CC) $(OPT) -o $@ $(FW_FIXED_OBJ) $(B)/libcore-fixed.a $(B)/liblcmtypes.a $(LCM_LDFLAGS) -lm
+
+ALL_TARGETS += $(B)/octo-fw-fixed
 
 # ---- octo-fw-asan: the same program under AddressSanitizer and UBSan (not part of `all`):
 #   make build/octo-fw-asan, then e.g. copy it as octo-fw into a directory with octo-sim

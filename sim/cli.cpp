@@ -34,6 +34,9 @@ static const char kUsage[] =
 "  --ideal                no noise, no motor lag, no delay (the paper's ideal set-up)\n"
 "  --seed N               seed of the noise and of the fault injection (1)\n"
 "  --duration S           simulated seconds to run, then exit 0 (0: until stopped)\n"
+"  --start-time S         the plant clock at the first frame (0): Data Output row 1's\n"
+"                         times, the time datarefs and the truth log start at S, the\n"
+"                         dynamics are those of a run from 0 (a long uptime in seconds)\n"
 "  --lockstep             advance one frame when all 8 throttles are commanded (DATA\n"
 "                         row 25 or DREFs ENGN_thro_use[0..7]) or on timeout; before the\n"
 "                         first command time stands still and frame 0 is re-sent at --rate\n"
@@ -149,6 +152,8 @@ int parse_options(int argc, char **argv, Options &o)
 				o.seed = s;
 			} else if (a == "--duration") {
 				o.duration = num(a, val(), 0.0, 1e9);
+			} else if (a == "--start-time") {
+				o.start_time = num(a, val(), 0.0, 1e9);
 			} else if (a == "--lcm") {
 				o.lcm_url = val();
 			} else if (a == "--lockstep") {

@@ -151,7 +151,7 @@ void Model::ground_contact()
 		// the body stops where and as it hit (arms and propellers in the ground)
 		crashed_ = true;
 		on_ground_ = true;
-		crash_ = CrashInfo{t_, speed, tilt_deg};
+		crash_ = CrashInfo{clock(), speed, tilt_deg};
 		x_.r.z() = 0;
 		x_.v.setZero();
 		x_.w.setZero();

@@ -36,7 +36,7 @@ constexpr double kCrashTiltDeg = 60.0;
 constexpr double kCrashSpeed = 10.0;
 
 struct CrashInfo {
-	double t = 0;          // simulated time of the contact, s
+	double t = 0;          // the plant's clock at the contact, s
 	double speed = 0;      // speed towards the ground, m/s
 	double tilt_deg = 0;   // tilt from the vertical, deg
 };
@@ -57,7 +57,13 @@ public:
 	// exactly at t1.
 	void advance_to(double t1);
 
+	// Time since the start of the simulation, s: the model's own time, integrated from 0.
 	double t() const { return t_; }
+	// The plant's clock, s: the start (octo-sim --start-time) plus t(). What the plant
+	// shows as time (Data Output row 1, the time datarefs, the truth log); the dynamics
+	// run on t() alone, so a run started at S integrates exactly as one started at 0.
+	double clock() const { return clock0_ + t_; }
+	void set_clock_start(double s) { clock0_ = s; }
 	const BodyState &state() const { return x_; }
 	void set_state(const BodyState &x, double t);
 	bool on_ground() const { return on_ground_; }
@@ -101,6 +107,7 @@ private:
 	BodyState x_;
 	double t_ = 0;
 	double h_max_ = 0.002;
+	double clock0_ = 0;
 	bool on_ground_ = true;
 	bool ground_enabled_ = true;
 	bool crashed_ = false;

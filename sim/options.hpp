@@ -24,6 +24,7 @@ struct Options {
 	bool ideal = false;
 	uint64_t seed = 1;
 	double duration = 0;          // simulated s; 0 = run until stopped
+	double start_time = 0;        // the plant clock at frame 0, s (Data Output row 1 starts there)
 	std::string lcm_url;
 	bool lockstep = false;
 	double lockstep_timeout = 0.5; // wall s to wait for the 8 throttles

@@ -39,6 +39,7 @@ struct octo_plant {
 	    : o(opt), model(o.vehicle), input(c), faults(o.faults, o.seed, c)
 	{
 		model.set_h_max(o.step);
+		model.set_clock_start(o.start_time);
 		input.target = o.data_out_addr;
 		for (int r : o.rows)
 			if (r >= 0 && r <= sim::XpInput::kMaxRow)
@@ -175,7 +176,8 @@ void octo_plant_advance(octo_plant *p)
 void octo_plant_truth(const octo_plant *p, struct octo_plant_truth *t)
 {
 	const sim::BodyState &x = p->model.state();
-	t->t = p->model.t();
+	t->t = p->model.clock();
+	t->t0 = p->o.start_time;
 	t->frame = p->n;
 	for (int i = 0; i < 3; i++) {
 		t->pos_i[i] = x.r[i];

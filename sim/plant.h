@@ -33,7 +33,7 @@ extern "C" {
 typedef struct octo_plant octo_plant;
 
 /* Creates a plant from octo-sim's simulation and fault flags (argv[0] is the
- * program name; --vehicle, --ideal, --seed, --rate, --step, --xplane-version,
+ * program name; --vehicle, --ideal, --seed, --rate, --step, --start-time, --xplane-version,
  * --rows, --drop, --burst, --burst-prob, --delay-frames, --duplicate, --reorder).
  * Network and run-loop flags are refused. On error returns NULL, *status = 2 and
  * the message on stderr; after --help *status = 0 and NULL. `prog` names the
@@ -53,7 +53,8 @@ bool octo_plant_commanded(const octo_plant *p);
 void octo_plant_advance(octo_plant *p);
 
 struct octo_plant_truth {
-	double t;                /* simulated time, s */
+	double t;                /* the plant's clock, s (starts at t0) */
+	double t0;               /* the clock at frame 0 (--start-time), s */
 	uint64_t frame;          /* frames advanced */
 	double pos_i[3];         /* S_I (north, west, up), m */
 	double vel_i[3];

@@ -36,6 +36,7 @@ public:
 	    : o_(o), stop_(stop), model_(o.vehicle), input_(c_), faults_(o.faults, o.seed, c_)
 	{
 		model_.set_h_max(o.step);
+		model_.set_clock_start(o.start_time);
 		input_.target = o.data_out_addr;
 		for (int r : o.rows)
 			if (r >= 0 && r <= XpInput::kMaxRow)
@@ -159,7 +160,7 @@ void Server::status(double now)
 	std::fprintf(stderr,
 	             "octo-sim: t=%.2fs frame=%llu x%.1f pos=(%.2f %.2f %.2f)m roll=%.1f pitch=%.1f hdg=%.1f "
 	             "rx=%llu tx=%llu%s\n",
-	             model_.t(), static_cast<unsigned long long>(n_), wall > 0 ? model_.t() / wall : 0.0, x.r.x(),
+	             model_.clock(), static_cast<unsigned long long>(n_), wall > 0 ? model_.t() / wall : 0.0, x.r.x(),
 	             x.r.y(), x.r.z(), frame_.roll, frame_.pitch, frame_.heading,
 	             static_cast<unsigned long long>(c_[Counters::RxDatagrams]),
 	             static_cast<unsigned long long>(c_[Counters::TxData]),
@@ -238,7 +239,7 @@ int Server::run()
 		}
 		advance();
 	}
-	std::fprintf(stderr, "octo-sim: stopped at t=%.3fs after %llu frames; counters %s\n", model_.t(),
+	std::fprintf(stderr, "octo-sim: stopped at t=%.3fs after %llu frames; counters %s\n", model_.clock(),
 	             static_cast<unsigned long long>(n_), c_.json().c_str());
 	return 0;
 }

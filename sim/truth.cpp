@@ -74,9 +74,9 @@ void TruthPublisher::publish(const Model &m, uint64_t frame)
 	const RotorOutputs o = m.rotor_outputs(x, m.t());
 	const Eigen::Vector3d a = m.acceleration(o);
 	octo::truth_t msg;
-	msg.utime = static_cast<int64_t>(std::llround(m.t() * 1e6));
+	msg.utime = static_cast<int64_t>(std::llround(m.clock() * 1e6));
 	msg.frame = static_cast<int64_t>(frame);
-	msg.t = m.t();
+	msg.t = m.clock();
 	for (int i = 0; i < 3; i++) {
 		msg.pos_i[i] = x.r(i);
 		msg.vel_i[i] = x.v(i);

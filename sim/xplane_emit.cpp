@@ -44,7 +44,7 @@ void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint6
 	const VehicleParams &p = m.params();
 	const BodyState &x = m.state();
 	Rng rng(seed, Stream::Noise, frame);
-	f.t = m.t();
+	f.t = m.clock();
 
 	// body rates: FLU -> FRD, gyro noise
 	const double sg = p.noise.gyro;

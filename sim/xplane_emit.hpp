@@ -23,7 +23,7 @@ namespace sim {
 
 // One measured frame in X-Plane's frames and SI units (noise included).
 struct XpFrame {
-	double t = 0;                      // simulated time, s
+	double t = 0;                      // the plant's clock, s (Model::clock)
 	double P = 0, Q = 0, R = 0;        // body rates about forward-right-down, rad/s
 	double roll = 0, pitch = 0, heading = 0; // deg (heading in [0, 360))
 	double roll_rad = 0, pitch_rad = 0, yaw_rad = 0; // the same angles in radians (yaw not wrapped)

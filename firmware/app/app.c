@@ -8,6 +8,7 @@
 
 #define FIRST_DT_S (1.0f / 90.0f)
 #define MAX_DT_S 0.2f              /* longer gaps are integrated as 200 ms */
+#define PERIOD_FRAMES 90u          /* frames over which the frame period is measured */
 #define HOVER_Z_TOL_M 0.3f
 #define HOVER_TILT_DEG 5.0f
 
@@ -863,6 +864,31 @@ static void say_gap(struct app *a, float gap_s, uint64_t now_us)
 	a->gap_max_unsaid_s = 0.0f;
 }
 
+/* The time of k frames (k >= 1 since the last step): k frame periods, never a difference of
+ * plant stamps. The period is measured on the platform's integer clock, over the first step
+ * and then every PERIOD_FRAMES frames (a difference of integers first), and moves half way
+ * to a measurement that differs from it by more than the microseconds can tell (a quarter
+ * off: all the way); so it stays the same from step to step while the clock keeps time. */
+static float step_gap(struct app *a, const struct hal_sensor_frame *f, uint64_t k)
+{
+	if (!a->have_step) {
+		a->per_n = f->frame_n;
+		a->per_us = f->t_us;
+		return FIRST_DT_S;
+	}
+	uint64_t span = f->frame_n - a->per_n;
+	if (!(a->dt_frame > 0.0f) || span >= PERIOD_FRAMES) {
+		float p = (float)(f->t_us - a->per_us) * 1e-6f / (float)span, d = p - a->dt_frame;
+		if (!(a->dt_frame > 0.0f) || fabsf(d) > 0.25f * a->dt_frame)
+			a->dt_frame = p;
+		else if (fabsf(d) * (float)span > 2e-6f)
+			a->dt_frame += 0.5f * d;
+		a->per_n = f->frame_n;
+		a->per_us = f->t_us;
+	}
+	return (float)k * a->dt_frame;
+}
+
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
 	app_settle(a);   /* normally done by app_tick already (nothing left here) */
@@ -877,9 +903,10 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	float dt = 0.0f;
 	bool stepped = false;
 	if (complete) {
-		/* the difference of the plant times in double (they grow large; app_t_gap: the
-		 * same float by integer operations), the rest in float */
-		float gap = a->have_step ? app_t_gap(f->t_s, a->t_prev) : FIRST_DT_S;
+		/* frames since the last step, as the platform counts them (lost ones included; a
+		 * frame without a newer count, a duplicate or an older one, brings none) */
+		uint64_t k = !a->have_step ? 1u : f->frame_n > a->n_prev ? f->frame_n - a->n_prev : 0u;
+		float gap = k > 0u ? step_gap(a, f, k) : 0.0f;
 		if (app_f_lt(0.0f, gap)) {   /* the frame's comparisons: fcmp.h */
 			bool missing = a->have_step && app_f_lt(a->p.fs_link_to, gap);
 			if (missing) {
@@ -892,16 +919,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 				}
 			}
 			dt = app_f_lt(MAX_DT_S, gap) ? MAX_DT_S : gap;
-			/* the frame period, for the experiments (a step after lost frames is a
-			 * multiple of it): a shorter step replaces it, a near one refines it; a step of
-			 * exactly the period known (the common case) leaves it as it is */
-			if (a->have_step && !app_f_eq(dt, a->dt_frame)) {
-				if (!(a->dt_frame > 0.0f) || dt < 0.75f * a->dt_frame)
-					a->dt_frame = dt;
-				else if (dt < 1.25f * a->dt_frame)
-					a->dt_frame += 0.02f * (dt - a->dt_frame);
-			}
-			a->t_prev = f->t_s;
+			a->n_prev = f->frame_n;
 			a->have_step = true;
 			/* After frames missing the controllers were out of the loop (their last
 			 * command held): they take one frame period, not the gap, so that their
@@ -915,10 +933,10 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	 * or a reordered (older) frame is not answered again. Free-running X-Plane
 	 * keeps the last command anyway; a lockstep simulator would otherwise take
 	 * the extra command for its next frame and run one frame ahead of us. */
-	if (a->actuating && (!a->have_actuated || app_t_before(a->t_actuated, f->t_s))) {
+	if (a->actuating && (!a->have_actuated || a->n_actuated < f->frame_n)) {
 		hal_actuate(a->hal, a->thr);
 		a->have_actuated = true;
-		a->t_actuated = f->t_s;
+		a->n_actuated = f->frame_n;
 	}
 	fill_log(a, stepped, dt);
 	hal_log_frame(a->hal, &a->log);

@@ -78,8 +78,9 @@ struct app {
 	/* plant link */
 	struct hal_sensor_frame fr;
 	bool have_frame, have_step;
-	double t_prev;
-	float dt_frame;               /* frame period: the shortest recent step, smoothed */
+	uint64_t n_prev;              /* frame_n of the last step */
+	uint64_t per_n, per_us;       /* frame_n and t_us where the period's measurement started */
+	float dt_frame;               /* frame period, measured from t_us and smoothed */
 	uint64_t wall_last_frame_us;
 	bool link_ok, link_ever;
 	uint64_t link_lost_at_us;
@@ -90,7 +91,7 @@ struct app {
 	float gap_max_unsaid_s;
 	bool actuating;               /* throttles are ours (from the first arming) */
 	bool have_actuated;
-	double t_actuated;            /* plant time of the last frame answered */
+	uint64_t n_actuated;          /* frame_n of the last frame answered */
 	float thr[HAL_ROTORS];
 #if OCTO_FIXED
 	struct app_frame_sc fs;       /* the frame's inputs as scalars (app_in) */

@@ -125,7 +125,7 @@
  *     ~+13 ms of lag), or a lockstep loop that slipped a frame (the simulator timed out on
  *     a late answer and took it for the next frame: every throttle then acts one frame late).
  *   - lost frames: a step after a gap has dt_s a multiple of the frame period
- *     (dt_frame_s, the app's: the shortest recent step); the rotor and validation models
+ *     (dt_frame_s, the app's: measured on the platform clock); the rotor and validation models
  *     advance through the gap with the held throttle, the inertia updates wait GAP_HOLD
  *     frames. Stale (reordered, duplicated) frames are not stepped.
  *   - the app switches to an identified k_f bumplessly (height integrator rescaled).

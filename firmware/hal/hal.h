@@ -53,7 +53,14 @@ enum {
 
 /* One sensor frame in the paper's frames and SI units. */
 struct hal_sensor_frame {
-	double t_s;                          /* plant time, re-based: never runs backwards */
+	/* Time: the plant's time line in the platform's integer microseconds. frame_n counts the
+	 * plant's frames since the first (lost ones included), t_us is its time (frame_n frame
+	 * periods after the first frame's); both never run backwards, and a frame that brings
+	 * no new plant time (duplicate, older) keeps them. The app takes the frames since its
+	 * last step from frame_n and the frame period from differences of t_us (docs/time.md). */
+	uint64_t t_us;                       /* plant time, us */
+	uint64_t frame_n;                    /* plant frames since the first */
+	double t_s;                          /* t_us in seconds (logs, events, 1 s schedules) */
 	uint32_t seq;                        /* frames received so far (1 = first) */
 	uint32_t valid;                      /* HAL_FRAME_* bits */
 	float q_ib[4];                       /* attitude [w, x, y, z], body FLU in S_I (NWU) */
@@ -143,6 +150,13 @@ static inline long hal_param_fetch(const struct hal *h, char *buf, size_t cap)
 static inline void hal_log_frame(const struct hal *h, const struct app_log_frame *f)
 {
 	h->log_frame(h->ctx, f);
+}
+/* Sets a frame's time: plant frame n at t_us (t_s follows). */
+static inline void hal_frame_time(struct hal_sensor_frame *f, uint64_t frame_n, uint64_t t_us)
+{
+	f->frame_n = frame_n;
+	f->t_us = t_us;
+	f->t_s = (double)t_us * 1e-6;
 }
 static inline void hal_log_event(const struct hal *h, double t_s, int severity, const char *text)
 {

@@ -366,6 +366,31 @@ TEST(noise_depends_on_seed_and_frame_only)
 	CHECK(std::fabs(sigma / want - 1) < 0.05, "thrust sigma %g, want %g", sigma, want);
 }
 
+// A clock started at S (--start-time) changes what the plant shows as time, not its
+// dynamics: the state after the same frames is the same bit for bit, row 1's mission time
+// is the float32 of S + n / rate, and the crash time is on the clock.
+TEST(start_time_moves_the_clock_not_the_dynamics)
+{
+	VehicleParams p;   // default noise
+	for (double S : {40000.0, 1e6}) {
+		Model a(p), b(p);
+		b.set_clock_start(S);
+		a.command(all(0.7));
+		b.command(all(0.7));
+		for (int n = 1; n <= 450; n++) {
+			a.advance_to(n / 90.0);
+			b.advance_to(n / 90.0);
+		}
+		CHECK(a.state().r == b.state().r && a.state().q.coeffs() == b.state().q.coeffs() &&
+		      a.state().w == b.state().w, "S = %g: another state", S);
+		CHECK(b.t() == a.t() && b.clock() == S + a.t(), "S = %g: t %.17g clock %.17g", S, b.t(), b.clock());
+		XpFrame fa = xp_measure(a, all(0.7), 5, 450), fb = xp_measure(b, all(0.7), 5, 450);
+		CHECK(fa.P == fb.P && fa.thrust_n[3] == fb.thrust_n[3], "S = %g: other noise", S);
+		xp::DataRow r = xp_row(fb, 1, 12);
+		CHECK(r.col[2] == static_cast<float>(S + 5.0), "S = %g: mission time %.9g", S, (double)r.col[2]);
+	}
+}
+
 // The plant's per-frame form writes every field of the frame it is given: over a frame
 // full of another frame's values it gives the very bytes of a fresh one.
 TEST(measure_into_a_used_frame_writes_every_field)

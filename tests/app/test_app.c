@@ -44,7 +44,7 @@ static void frame_at(struct rig *r, double t)
 	struct app *a = &r->a;
 	struct hal_sensor_frame *f = &r->f;
 	bool flying = app_flying(a);
-	f->t_s = t;
+	hal_frame_time(f, (uint64_t)llround(t * 90.0), (uint64_t)llround(t * 1e6));
 	f->seq++;
 	if (r->roll_dps > 0.0)   /* else the rate a test set stays */
 		f->rate_b_rps[0] = (float)(r->roll_dps * sqrt(2.0) * pow(r->roll_decay, t - r->roll_t0) *

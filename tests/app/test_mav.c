@@ -57,7 +57,7 @@ static void frames(struct mrig *r, int n, double lat, double lon, float alt)
 {
 	for (int k = 0; k < n; k++) {
 		r->h.now_us += 11111u;
-		r->f.t_s += 1.0 / 90.0;
+		hal_frame_time(&r->f, r->f.frame_n + 1u, r->f.t_us + 11111u);
 		r->f.seq++;
 		r->f.valid = HAL_FRAME_NEEDED | HAL_FRAME_GLOBAL;
 		r->f.lat_deg = lat;

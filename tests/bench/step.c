@@ -69,7 +69,7 @@ static void next_frame(void)
 	H.now_us += 11111u;
 	double t = (double)n_frame / RATE_HZ;
 	float tf = (float)t;
-	F.t_s = t;
+	hal_frame_time(&F, n_frame, (uint64_t)llround(t * 1e6));
 	F.seq = n_frame;
 	F.valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	/* attitude: roll/pitch wobble of 0.3 deg, heading 0 */

@@ -46,7 +46,7 @@ static void frame(const uint8_t *b, size_t n)
 	struct hal_sensor_frame f;
 	memset(&f, 0, sizeof f);
 	t_plant += 1.0 / 90.0;
-	f.t_s = t_plant;
+	hal_frame_time(&f, (uint64_t)llround(t_plant * 90.0), (uint64_t)llround(t_plant * 1e6));
 	f.seq = app.fr.seq + 1;
 	f.valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	f.q_ib[0] = 1.0f;

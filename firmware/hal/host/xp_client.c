@@ -28,6 +28,10 @@ static const uint32_t wanted_bits[N_WANTED] = {HAL_FRAME_TIME, HAL_FRAME_RATES, 
 #define OVERRIDE_PERIOD_US 1000000u
 #define XP_SILENCE_US 1000000u    /* DATA silent this long: re-detect the version */
 #define XP_STALE_S 0.25             /* older by less than this: a reordered frame */
+#define XP_NOMINAL_PERIOD_S (1.0 / 90.0)   /* the period until one is known */
+#define XP_MEASURE_EVERY 90u        /* frames between measurements of the period */
+#define XP_MEASURE_REL 1e-3         /* ... taken when the stamps' error is below this of the span */
+#define XP_MAX_COUNT 1e9            /* frames one step may count (a day's silence is 8e6) */
 
 static const char VERSION_REF[] = "sim/version/xplane_internal_version";
 static const char OVERRIDE_REF[] = "sim/operation/override/override_throttles";
@@ -36,6 +40,132 @@ static const char *const THRO_USE_REF[HAL_ROTORS] = {
 	"sim/flightmodel/engine/ENGN_thro_use[2]", "sim/flightmodel/engine/ENGN_thro_use[3]",
 	"sim/flightmodel/engine/ENGN_thro_use[4]", "sim/flightmodel/engine/ENGN_thro_use[5]",
 	"sim/flightmodel/engine/ENGN_thro_use[6]", "sim/flightmodel/engine/ENGN_thro_use[7]"};
+
+/* ---------------------------------------------------------------- the plant's time line */
+
+void xp_clock_init(struct xp_clock *k)
+{
+	memset(k, 0, sizeof *k);
+	k->period_s = XP_NOMINAL_PERIOD_S;
+}
+
+/* The time line of the current period starts at the newest frame. */
+static void clock_base(struct xp_clock *k)
+{
+	k->base_n = k->frame_n;
+	k->base_us = k->t_us;
+}
+
+/* The period's measurement starts over at the newest frame. */
+static void clock_ref(struct xp_clock *k)
+{
+	k->ref_s = k->last_s;
+	k->ref_n = k->frame_n;
+	k->measured_n = k->frame_n;
+}
+
+void xp_clock_set_period(struct xp_clock *k, double period_s)
+{
+	if (!(period_s > 0.0))
+		return;
+	clock_base(k);
+	k->period_s = period_s;
+	k->period_fixed = k->period_known = true;
+}
+
+/* The spacing of float32 values at the magnitude of x (its ulp), s. */
+static double f32_ulp(float x)
+{
+	int e;
+	(void)frexpf(fabsf(x), &e);   /* |x| = m 2^e, m in [0.5, 1) */
+	return ldexp(1.0, (e < -125 ? -125 : e) - 24);
+}
+
+static uint64_t us_of(double s)
+{
+	return s > 0.0 ? (uint64_t)(s * 1e6 + 0.5) : 0u;
+}
+
+enum xp_stamp xp_clock_stamp(struct xp_clock *k, float stamp, uint64_t *n)
+{
+	*n = 0;
+	double s = (double)stamp + k->offset_s;
+	if (!k->have) {
+		k->have = true;
+		k->last_raw = stamp;
+		k->last_s = s;
+		k->t_us = us_of(s);
+		clock_base(k);
+		clock_ref(k);
+		return XP_STAMP_NEW;
+	}
+	double u = f32_ulp(fabsf(stamp) > fabsf(k->last_raw) ? stamp : k->last_raw);
+	double d = s - k->last_s, p = k->period_s;
+	double c;           /* frames counted */
+	bool restart = false;   /* the measurement starts over after this frame */
+	if (d < 0.0) {
+		if (-d < XP_STALE_S + u)
+			return XP_STAMP_OLD;   /* reordered or delayed */
+		/* a larger step back: X-Plane reloaded or the simulator restarted; the time line
+		 * goes on one period after the newest frame */
+		k->offset_s += k->last_s + p - s;
+		s = k->last_s + p;
+		c = 1.0;
+		k->rebased++;
+		restart = true;
+	} else if (d == 0.0) {
+		if (u < p)
+			return XP_STAMP_SAME;   /* consecutive frames always differ: a duplicate */
+		c = 1.0;                    /* too coarse to tell: a new datagram is a new frame */
+		k->coarse++;
+	} else if (!k->period_fixed && 8.0 * u <= d && (!k->period_known || d < 0.75 * p)) {
+		/* the first step a fine stamp shows, or a shorter one (the first was a gap): the period */
+		clock_base(k);
+		clock_ref(k);
+		k->period_s = p = d;
+		k->period_known = true;
+		c = 1.0;
+	} else {
+		/* the counts n >= 1 with |d - n p| <= u */
+		double lo = ceil((d - u) / p), hi = floor((d + u) / p);
+		if (lo < 1.0)
+			lo = 1.0;
+		if (lo == hi) {
+			c = lo;
+		} else if (lo < hi) {
+			c = 1.0;   /* several: the stamp is too coarse to count lost frames */
+			k->coarse++;
+		} else {
+			c = floor(d / p + 0.5);   /* none: jitter, or another period */
+			c = c < 1.0 ? 1.0 : c;
+			k->off_grid++;
+			restart = true;
+		}
+	}
+	if (c > XP_MAX_COUNT)
+		c = XP_MAX_COUNT;
+	*n = (uint64_t)c;
+	k->frame_n += *n;
+	k->last_raw = stamp;
+	k->last_s = s;
+	k->t_us = k->base_us + us_of((double)(k->frame_n - k->base_n) * k->period_s);
+	if (restart) {
+		clock_ref(k);
+	} else if (!k->period_fixed && k->frame_n - k->measured_n >= XP_MEASURE_EVERY) {
+		/* the stamps' difference over the frames counted since the reference: its error is
+		 * at most the ulp (half of each stamp's) */
+		double span = s - k->ref_s;
+		if (span > 0.0 && u <= XP_MEASURE_REL * span) {
+			clock_base(k);
+			k->period_s = span / (double)(k->frame_n - k->ref_n);
+			k->period_known = true;
+		}
+		k->measured_n = k->frame_n;
+	}
+	return XP_STAMP_NEW;
+}
+
+/* ---------------------------------------------------------------- the client */
 
 static void send_to_xp(struct xp_client *c, const uint8_t *buf, size_t len)
 {
@@ -56,6 +186,7 @@ void xp_client_init(struct xp_client *c, const struct sockaddr_in *xplane, enum 
 	c->fd = -1;
 	c->xp = *xplane;
 	c->act = act;
+	xp_clock_init(&c->clock);
 	c->stats.parts_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_GLOBAL |
 				 HAL_FRAME_POS | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	for (int i = 0; i < HAL_ROTORS; i++)
@@ -297,26 +428,18 @@ int xp_client_input(struct xp_client *c, const uint8_t *buf, size_t n, const str
 		c->stats.dropped++;   /* a frame without time cannot be placed */
 		return 0;
 	}
-	/* Time never runs backwards. A frame older than the last one by less than
-	 * XP_STALE_S was reordered or delayed: the newest state stands, the frame
-	 * still counts (it is answered with one actuation) but carries no news.
-	 * A larger step back is an X-Plane reload or a restarted simulator: time
-	 * is re-based to continue one nominal frame after the last. */
-	double t = (double)raw_t + c->t_offset;
-	if (!c->have_t) {
-		c->have_t = true;
-	} else if (t < c->t_last) {
-		if (c->t_last - t < XP_STALE_S) {
-			c->stats.stale++;
-			frame->seq = ++c->seq;
-			c->stats.frames++;
-			return 1;
-		}
-		c->t_offset = c->t_last + 1.0 / 90.0 - (double)raw_t;
-		t = c->t_last + 1.0 / 90.0;
+	/* Time never runs backwards (xp_clock_stamp). A frame older than the newest was
+	 * reordered or delayed: the newest state stands, the frame still counts (it is answered
+	 * with one actuation) but carries no news. A duplicate brings its own (equal) values and
+	 * the same time. */
+	uint64_t n_new;
+	if (xp_clock_stamp(&c->clock, raw_t, &n_new) == XP_STAMP_OLD) {
+		c->stats.stale++;
+		frame->seq = ++c->seq;
+		c->stats.frames++;
+		return 1;
 	}
-	c->t_last = t;
-	f.t_s = t;
+	hal_frame_time(&f, c->clock.frame_n, c->clock.t_us);
 	f.valid = bits;
 	f.seq = ++c->seq;
 	*frame = f;

@@ -14,7 +14,10 @@
  *   - converts X-Plane's conventions to the paper's frames (xp_frame_convert,
  *     the one place where that happens in octo-fw);
  *   - actuates with 8 DREFs ENGN_thro_use[i] plus override_throttles, or one
- *     DATA row 25 datagram.
+ *     DATA row 25 datagram;
+ *   - keeps the plant's time line in integer microseconds (struct xp_clock): X-Plane's
+ *     float32 mission time tells order, gaps and lost frames only as far as its
+ *     resolution allows (docs/time.md).
  */
 #ifndef OCTO_XP_CLIENT_H
 #define OCTO_XP_CLIENT_H
@@ -41,6 +44,48 @@ enum xp_actuation { XP_ACT_DREF = 0, XP_ACT_DATA25 = 1 };
 #define XP_ROW_THRUST 35
 #define XP_ROW_TORQUE 36
 
+/*
+ * The plant's time line from row 1's mission time, a float32 whose resolution (its ulp)
+ * grows with the time: 3.9 ms from 2^15 s, 62.5 ms from 2^19 s. Each new stamp advances
+ * the count of plant frames by the difference of the stamps rounded to the period, when
+ * that count is the only one within the stamp's resolution (|d - n P| <= ulp, n >= 1).
+ * When several counts are (the resolution is as coarse as the period or coarser), each
+ * new datagram counts as one frame: lost frames are then not seen, and when the stamp
+ * cannot tell consecutive frames apart (ulp >= P) neither are duplicates.
+ * The time is t_us = base_us + (frame_n - base_n) P, in integers of microseconds from the
+ * first frame's stamp. P is configured (xp_clock_set_period) or measured: the first step
+ * a fine stamp shows, then the stamps' difference over all frames counted since a
+ * reference frame, once its error (the ulp over that span) is below 1e-3 of it; each new
+ * measurement moves the base, so t_us never jumps.
+ */
+struct xp_clock {
+	bool have;                  /* a first stamp seen */
+	bool period_fixed;          /* P configured: not measured */
+	bool period_known;          /* P configured or measured (else the nominal 1/90 s) */
+	float last_raw;             /* the newest frame's stamp as sent */
+	double last_s;              /* ... re-based (offset_s added) */
+	double offset_s;            /* re-basing after a step back (an X-Plane reload) */
+	double period_s;            /* P */
+	uint64_t frame_n, t_us;     /* the newest frame's count and time */
+	uint64_t base_n, base_us;   /* where the time line of the current P starts */
+	double ref_s;               /* the measurement's reference frame: stamp ... */
+	uint64_t ref_n;             /* ... and count */
+	uint64_t measured_n;        /* frame_n at the last measurement */
+	uint32_t coarse;            /* new datagrams counted as one frame: the stamp could not tell */
+	uint32_t off_grid;          /* steps no count of the period explained (jitter, another rate) */
+	uint32_t rebased;           /* steps back taken for a reload */
+};
+
+/* What one stamp was: a new frame (n frames on), a duplicate, or older than the newest. */
+enum xp_stamp { XP_STAMP_NEW = 1, XP_STAMP_SAME = 0, XP_STAMP_OLD = -1 };
+
+void xp_clock_init(struct xp_clock *k);
+/* Configures the period (s > 0): counted with it, not measured. */
+void xp_clock_set_period(struct xp_clock *k, double period_s);
+/* Takes one stamp: XP_STAMP_NEW with *n frames counted (k->frame_n, k->t_us updated), or
+ * SAME / OLD (*n = 0, nothing changed). */
+enum xp_stamp xp_clock_stamp(struct xp_clock *k, float stamp, uint64_t *n);
+
 struct xp_client {
 	int fd;                           /* -1 without a socket (see send) */
 	/* Where requests go when set (in-process platforms); otherwise sendto(fd). */
@@ -54,8 +99,7 @@ struct xp_client {
 	uint64_t last_dsel_us, last_rref_us, last_override_us, last_usel_us;
 	uint64_t last_data_us;            /* wall time of the last DATA datagram */
 	uint8_t unselected[256 / 8];      /* rows already USEL'd */
-	bool have_t;
-	double t_offset, t_last;          /* time re-basing */
+	struct xp_clock clock;            /* the plant's time line */
 	uint32_t seq;
 	struct xp_msg_in msg;             /* decode buffer (large: kept off the stack) */
 	/* the throttle DREFs (ENGN_thro_use[i]), encoded once: a frame rewrites their values */

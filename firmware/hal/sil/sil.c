@@ -315,7 +315,8 @@ static const char usage[] =
 	"plant (octo-sim's flags):\n"
 	"  --vehicle FILE.json  --ideal  --seed N  --rate HZ  --step S  --xplane-version 11|12\n"
 	"  --rows LIST  --drop P  --burst N  --burst-prob P  --delay-frames K  --duplicate P\n"
-	"  --reorder P          (see octo-sim --help)\n"
+	"  --reorder P  --start-time S   (see octo-sim --help; the plant clock starts at S,\n"
+	"                       --duration counts from there)\n"
 	"  --lcm-sim URL            octo-sim's truth log (OCTO_TRUTH)\n"
 	"\n"
 	"run:\n"
@@ -458,6 +459,8 @@ static int run(struct sil *s, int argc, char **argv)
 	xp_client_init(&s->xp, &s->xplane, act);
 	s->xp.send = to_plant;
 	s->xp.send_ctx = &s->to_plant;
+	/* the configured rate: the plant's frame period (the stamps are not needed to measure it) */
+	xp_clock_set_period(&s->xp.clock, 1.0 / octo_plant_rate(s->plant));
 
 	const double rate = octo_plant_rate(s->plant);
 	const double period_us = 1e6 / rate;
@@ -499,7 +502,7 @@ static int run(struct sil *s, int argc, char **argv)
 			}
 			fprintf(stderr, "octo-sil: %s\n", why);
 		}
-		if (duration > 0.0 && (tr.t >= duration - 1e-9 || (double)(s->now_us - 1000000u) * 1e-6 >= duration))
+		if (duration > 0.0 && (tr.t - tr.t0 >= duration - 1e-9 || (double)(s->now_us - 1000000u) * 1e-6 >= duration))
 			break;
 		pass++;
 		if (!started) {

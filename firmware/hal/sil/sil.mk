@@ -18,6 +18,20 @@ $(B)/octo-sil: $(SIL_OBJ) $(SIL_FW_OBJ) $(B)/libcore.a $(B)/liblcmtypes.a $(B)/l
 
 ALL_TARGETS += $(B)/octo-sil
 
+# octo-sil-fixed: the same on the Q16.16 core, from octo-fw-fixed's objects.
+SIL_FIXED_OBJ    := $(SIL_SRC:firmware/hal/sil/%.c=$(B)/sil-fixed/%.o)
+SIL_FW_FIXED_OBJ := $(SIL_FW_OBJ:$(B)/fw/%=$(B)/fw-fixed/%)
+
+$(B)/sil-fixed/%.o: firmware/hal/sil/%.c $(B)/config.mk | $(MAVLINK_STAMP) $(LCM_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_FW) -DOCTO_FIXED=1 -D_POSIX_C_SOURCE=200809L $(FW_INC) -Ifirmware/hal/host -Isim -c $< -o $@
+
+$(B)/octo-sil-fixed: $(SIL_FIXED_OBJ) $(SIL_FW_FIXED_OBJ) $(B)/libcore-fixed.a $(B)/liblcmtypes.a $(B)/libocto-plant.a
+	$(CXX) $(OPT) -o $@ $(SIL_FIXED_OBJ) $(SIL_FW_FIXED_OBJ) $(B)/libocto-plant.a $(B)/libcore-fixed.a \
+	  $(B)/liblcmtypes.a $(LCM_LDFLAGS) -lm
+
+ALL_TARGETS += $(B)/octo-sil-fixed
+
 # octo-sil-asan: the same under AddressSanitizer and UBSan (not part of `all`), from the
 # sanitizer objects of octo-fw-asan and sim-asan.
 SIL_ASAN_OBJ    := $(SIL_SRC:firmware/hal/sil/%.c=$(B)/sil-asan/%.o)
