@@ -316,6 +316,7 @@ static const char usage[] =
 	"  --vehicle FILE.json  --ideal  --seed N  --rate HZ  --step S  --xplane-version 11|12\n"
 	"  --rows LIST  --drop P  --burst N  --burst-prob P  --delay-frames K  --duplicate P\n"
 	"  --reorder P          (see octo-sim --help)\n"
+	"  --sensors LIST           what the plant serves: imu,rpm,torque,thrust (all)\n"
 	"  --lcm-sim URL            octo-sim's truth log (OCTO_TRUTH)\n"
 	"\n"
 	"run:\n"
