@@ -94,3 +94,35 @@ def test_bad_sensor_keys_exit_2_naming_the_key(tmp_path):
         veh.write_text(json.dumps(text))
         r = subprocess.run([binary("octo-sim"), "--vehicle", str(veh)], capture_output=True, text=True, timeout=10)
         assert r.returncode == 2 and f"'{key}'" in r.stderr, r.stderr
+
+
+def test_fw_converts_row_4_and_row_38_into_its_frame(launch, port, tmp_path):
+    """octo-fw asks for rows 4 and 38 and converts them in its one place: the load factors
+    (normal up +, axial forward +, side right +) into the specific force over g in FLU, the
+    prop rpm into rad/s; the fw frame log carries both with their validity bits."""
+    import math
+    import struct
+    import time
+    from test_fw_rig import read_log
+    from test_fw_xplane import start, frame
+
+    rig, fake = start(launch, port, tmp_path)
+    fake.pump(0.3)
+    dsel = fake.of_type(b"DSEL")
+    assert dsel and {4, 38} <= set(struct.unpack(f"<{(len(dsel[0]) - 5) // 4}i", dsel[0][5:]))
+    _, index, _ = xp.decode_rref_request(fake.of_type(b"RREF")[0])
+    for d in xp.encode_rref_reply([(index, 120100.0)]):
+        fake.send(d)
+    time.sleep(0.05)
+    rpm = [1000.0 * (j + 1) for j in range(8)]
+    for k in range(20):
+        d = frame(10.0 + k / 90.0, 12)
+        d += struct.pack("<i8f", 4, 0.0, -999.0, 0.0, -999.0, 1.02, 0.1, 0.2, -999.0)
+        d += struct.pack("<i8f", 38, *rpm)
+        fake.send(d)
+        fake.pump(0.01)
+    rig.fw.stop()
+    fake.close()
+    f = [r for r in read_log(rig.fw_log, "OCTO_FW_FRAME") if r.valid & (3 << 8) == (3 << 8)][-1]
+    assert f.accel_b == pytest.approx((0.1, -0.2, 1.02), abs=1e-6)
+    assert f.rotor_speed == pytest.approx([v * 2 * math.pi / 60 for v in rpm], rel=1e-6)
