@@ -126,3 +126,18 @@ def test_fw_converts_row_4_and_row_38_into_its_frame(launch, port, tmp_path):
     f = [r for r in read_log(rig.fw_log, "OCTO_FW_FRAME") if r.valid & (3 << 8) == (3 << 8)][-1]
     assert f.accel_b == pytest.approx((0.1, -0.2, 1.02), abs=1e-6)
     assert f.rotor_speed == pytest.approx([v * 2 * math.pi / 60 for v in rpm], rel=1e-6)
+
+
+def test_static_vehicle_reads_plus_one_g_up_through_the_pipeline(launch, tmp_path):
+    """octo-sim's row 4 through octo-fw's conversion: landed and level, the frame holds
+    (0, 0, +1) g in FLU, with its validity bit, and rotor speeds of 0."""
+    from test_fw_rig import read_log
+
+    log = tmp_path / "fw.log"
+    p = launch("octo-sil", "--ideal", "--duration", "0.5", "--quiet", "--lcm-fw", f"file://{log}")
+    assert wait_until(lambda: not p.alive(), timeout=20) and p.stop() == 0, p.stderr()
+    frames_ = [r for r in read_log(log, "OCTO_FW_FRAME") if r.valid & (1 << 8)]
+    assert frames_, p.stderr()
+    for f in frames_:
+        assert tuple(f.accel_b) == (0.0, 0.0, 1.0)
+        assert f.valid & (1 << 9) and tuple(f.rotor_speed) == (0.0,) * 8
