@@ -42,6 +42,9 @@ static const char kUsage[] =
 "                         first command time stands still and frame 0 is re-sent at --rate\n"
 "  --lockstep-timeout S   wall-clock seconds to wait for the throttles (0.5)\n"
 "  --step S               RK4 step (0.002)\n"
+"  --sensors LIST         what the plant serves, from imu (rows 4, 16), rpm (37, 38),\n"
+"                         torque (36), thrust (35), comma-separated (all; vehicle key\n"
+"                         `sensors`); a row not served is not sent, its datarefs reply 0\n"
 "  --lcm URL              ground truth on channel OCTO_TRUTH (octo.truth_t); file://PATH\n"
 "                         writes an LCM log stamped with simulated time\n"
 "\n"
@@ -58,7 +61,10 @@ static const char kUsage[] =
 "\n"
 "vehicle keys: mass, g, arm_length, kf, ktau, inertia [3], motor_tau, delay,\n"
 "thrust_curve, rotor_scale [8], kf_drift_per_min, noise {thrust, torque, gyro,\n"
-"attitude_deg, position}, origin [lat, lon, alt_m].\n"
+"attitude_deg, position, accel, rpm, current}, origin [lat, lon, alt_m];\n"
+"sensors: imu_bias {accel, gyro, accel_walk, gyro_walk}, imu_scale, vibration\n"
+"{accel, gyro, harmonics [<=4], cutoff_hz, sample_hz}, rpm_max, esc_pole_pairs,\n"
+"esc_kt, esc_current_offset, sensors [list] (docs/sensors.md).\n"
 "Refused (exit 2, naming key, value and accepted range): mass, inertia or kf <= 0,\n"
 "|kf_drift_per_min| > 0.2, a negative noise, inertia violating the triangle\n"
 "inequality (each moment <= the sum of the other two), hover throttle\n"
@@ -181,6 +187,10 @@ int parse_options(int argc, char **argv, Options &o)
 				if (o.computer_name.empty() || o.computer_name.size() > 255 ||
 				    o.computer_name.find('\0') != std::string::npos)
 					throw Bad{a, "expected a name of 1 to 255 characters"};
+			} else if (a == "--sensors") {
+				std::string bad;
+				if (!sensors_parse(val(), o.sensors, bad))
+					throw Bad{a, "unknown sensor '" + bad + "' (known: imu, rpm, torque, thrust)"};
 			} else if (a == "--verbose" || a == "-v") {
 				o.verbose = true;
 			} else {
@@ -200,6 +210,8 @@ int parse_options(int argc, char **argv, Options &o)
 		}
 		if (o.ideal)
 			o.vehicle.make_ideal();
+		if (o.sensors)
+			o.vehicle.sensors = o.sensors;
 	} catch (const Bad &b) {
 		std::fprintf(stderr, "octo-sim: %s: %s\n", b.flag.c_str(), b.msg.c_str());
 		return 2;

@@ -17,7 +17,7 @@ bool frame_data(const Options &o, const XpInput &in, const XpFrame &f, FaultChan
 	std::array<xp::DataRow, XpInput::kMaxRow + 1> rows;
 	size_t n_rows = 0;
 	for (int r : xp_supported_rows())
-		if (in.selected[static_cast<size_t>(r)])
+		if (in.selected[static_cast<size_t>(r)] && xp_row_served(r, o.vehicle.sensors))
 			rows[n_rows++] = xp_row(f, r, o.xplane_version);
 	if (n_rows == 0)
 		return true; // X-Plane sends nothing while no row is selected
@@ -45,7 +45,8 @@ void rref_replies(const Options &o, XpInput &in, const XpFrame &f, Counters &c,
 			continue;
 		s.phase -= std::floor(s.phase);
 		float v = 0.0f;
-		if (!xp_dataref(f, s.path, o.xplane_version, in.override_on, in.thro_use, in.thro, v))
+		if (!xp_dataref_served(s.path, o.vehicle.sensors) ||
+		    !xp_dataref(f, s.path, o.xplane_version, in.override_on, in.thro_use, in.thro, v))
 			c.inc(Counters::RrefUnknown);
 		size_t g = 0;
 		while (g < groups.size() && !same_addr(groups[g].first, s.to))
@@ -59,14 +60,16 @@ void rref_replies(const Options &o, XpInput &in, const XpFrame &f, Counters &c,
 			out.push_back({g.first, std::move(b)});
 }
 
-void advance_frame(const Options &o, Model &m, XpInput &in, uint64_t &n, XpFrame &f, TruthPublisher &truth)
+void advance_frame(const Options &o, Model &m, XpInput &in, uint64_t &n, Sensors &s, XpFrame &f,
+                   TruthPublisher &truth)
 {
 	std::array<double, kRotors> u = in.effective_throttle();
 	m.command(u);
 	in.cmd_mask = 0;
 	n++;
 	m.advance_to(static_cast<double>(n) / o.rate);
-	xp_measure(m, u, o.seed, n, f);
+	s.advance(m, n);
+	xp_measure(m, u, o.seed, n, s, f);
 	truth.publish(m, n);
 }
 

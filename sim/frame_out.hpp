@@ -12,6 +12,7 @@
 #include "faults.hpp"
 #include "model.hpp"
 #include "options.hpp"
+#include "sensors.hpp"
 #include "truth.hpp"
 #include "xplane_emit.hpp"
 #include "xplane_input.hpp"
@@ -32,7 +33,8 @@ void rref_replies(const Options &o, XpInput &in, const XpFrame &f, Counters &c,
                   std::vector<std::pair<sockaddr_in, xp::Bytes>> &out);
 
 // One frame: the commanded throttles take effect, the model integrates to (n+1)/rate,
-// the frame is measured and the truth written.
-void advance_frame(const Options &o, Model &m, XpInput &in, uint64_t &n, XpFrame &f, TruthPublisher &truth);
+// the sensors advance, the frame is measured and the truth written.
+void advance_frame(const Options &o, Model &m, XpInput &in, uint64_t &n, Sensors &s, XpFrame &f,
+                   TruthPublisher &truth);
 
 } // namespace sim

@@ -34,6 +34,8 @@ struct Options {
 	bool verbose = false;
 	bool beacon = true;           // BECN once a second on 239.255.1.1:49707
 	std::string computer_name;    // announced in the beacon; empty: this machine's name
+	// --sensors: what the plant serves (SensorBits); 0 = the vehicle file's `sensors`
+	unsigned sensors = 0;
 };
 
 // Parses argv. Returns -1 to run, or an exit status (0 after --help, 2 on a

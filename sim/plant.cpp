@@ -36,7 +36,7 @@ struct Out {
 
 struct octo_plant {
 	explicit octo_plant(const sim::Options &opt)
-	    : o(opt), model(o.vehicle), input(c), faults(o.faults, o.seed, c)
+	    : o(opt), model(o.vehicle), sensors(o.vehicle, o.seed, o.rate), input(c), faults(o.faults, o.seed, c)
 	{
 		model.set_h_max(o.step);
 		model.set_clock_start(o.start_time);
@@ -44,7 +44,7 @@ struct octo_plant {
 		for (int r : o.rows)
 			if (r >= 0 && r <= sim::XpInput::kMaxRow)
 				input.selected[static_cast<size_t>(r)] = true;
-		frame = sim::xp_measure(model, input.effective_throttle(), o.seed, 0);
+		sim::xp_measure(model, input.effective_throttle(), o.seed, 0, sensors, frame);
 	}
 
 	void send(xp::Bytes &&b, const sockaddr_in &to) { out.push_back(Out{std::move(b), to}); }
@@ -54,6 +54,7 @@ struct octo_plant {
 	sim::Options o;
 	sim::Counters c;
 	sim::Model model;
+	sim::Sensors sensors;
 	sim::XpInput input;
 	sim::FaultChannel faults;
 	sim::TruthPublisher truth;
@@ -170,7 +171,7 @@ bool octo_plant_commanded(const octo_plant *p)
 
 void octo_plant_advance(octo_plant *p)
 {
-	sim::advance_frame(p->o, p->model, p->input, p->n, p->frame, p->truth);
+	sim::advance_frame(p->o, p->model, p->input, p->n, p->sensors, p->frame, p->truth);
 }
 
 void octo_plant_truth(const octo_plant *p, struct octo_plant_truth *t)

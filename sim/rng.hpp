@@ -9,7 +9,17 @@
 
 namespace sim {
 
-enum class Stream : uint64_t { Noise = 1, Fault = 2 };
+// Noise: the white noise of rows 16, 17, 20/21, 35 and 36 (its draws and their order are
+// fixed); the IMU's and ESCs' own draws come from their own streams, so adding or
+// changing them does not move the others.
+enum class Stream : uint64_t {
+	Noise = 1,
+	Fault = 2,
+	ImuSetup = 3,   // once per run (frame 0): scale errors, constant biases, rotor phases
+	ImuWalk = 4,    // per frame: bias random-walk increments
+	ImuNoise = 5,   // per frame: accelerometer white noise
+	Esc = 6,        // per frame: rpm report and current noise
+};
 
 inline uint64_t splitmix64(uint64_t &x)
 {

@@ -33,7 +33,8 @@ double wall_now()
 class Server {
 public:
 	Server(const Options &o, const std::atomic<bool> &stop)
-	    : o_(o), stop_(stop), model_(o.vehicle), input_(c_), faults_(o.faults, o.seed, c_)
+	    : o_(o), stop_(stop), model_(o.vehicle), sensors_(o.vehicle, o.seed, o.rate), input_(c_),
+	      faults_(o.faults, o.seed, c_)
 	{
 		model_.set_h_max(o.step);
 		model_.set_clock_start(o.start_time);
@@ -62,6 +63,7 @@ private:
 	const std::atomic<bool> &stop_;
 	Counters c_;
 	Model model_;
+	Sensors sensors_;
 	XpInput input_;
 	FaultChannel faults_;
 	UdpSocket sock_;
@@ -129,7 +131,7 @@ bool Server::pump(double deadline, bool until_full)
 void Server::advance()
 {
 	const bool was = model_.crashed();
-	advance_frame(o_, model_, input_, n_, frame_, truth_);
+	advance_frame(o_, model_, input_, n_, sensors_, frame_, truth_);
 	if (model_.crashed() && !was) {
 		const CrashInfo &c = model_.crash();
 		std::fprintf(stderr,
@@ -194,7 +196,7 @@ int Server::run()
 		             kBeaconPort);
 	}
 
-	frame_ = xp_measure(model_, input_.effective_throttle(), o_.seed, 0);
+	xp_measure(model_, input_.effective_throttle(), o_.seed, 0, sensors_, frame_);
 	truth_.publish(model_, 0);
 	wall_start_ = wall_now();
 	const double period = 1.0 / o_.rate;

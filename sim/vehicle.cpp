@@ -17,6 +17,38 @@ void VehicleParams::make_ideal()
 	delay = 0.0;
 	noise.thrust = noise.torque = 0.0;
 	noise.gyro = noise.attitude_deg = noise.position = 0.0;
+	noise.accel = noise.rpm = noise.current = 0.0;
+	imu_bias = ImuBiasParams{0, 0, 0, 0};
+	imu_scale = 0.0;
+	vibration.accel = vibration.gyro = 0.0;
+	esc_current_offset = 0.0;
+}
+
+bool sensors_parse(const std::string &list, unsigned &bits, std::string &bad)
+{
+	static const struct {
+		const char *name;
+		unsigned bit;
+	} names[] = {{"imu", kSensorImu}, {"rpm", kSensorRpm}, {"torque", kSensorTorque}, {"thrust", kSensorThrust}};
+	bits = 0;
+	size_t p = 0;
+	while (p <= list.size()) {
+		size_t c = list.find(',', p);
+		const std::string w = list.substr(p, c == std::string::npos ? std::string::npos : c - p);
+		unsigned b = 0;
+		for (const auto &n : names)
+			if (w == n.name)
+				b = n.bit;
+		if (!b) {
+			bad = w;
+			return false;
+		}
+		bits |= b;
+		if (c == std::string::npos)
+			break;
+		p = c + 1;
+	}
+	return true;
 }
 
 namespace {
@@ -148,8 +180,79 @@ void vehicle_from_json(const std::string &text, VehicleParams &p)
 				else if (nk.first == "gyro") q.noise.gyro = d;
 				else if (nk.first == "attitude_deg") q.noise.attitude_deg = d;
 				else if (nk.first == "position") q.noise.position = d;
+				else if (nk.first == "accel") q.noise.accel = d;
+				else if (nk.first == "rpm") q.noise.rpm = d;
+				else if (nk.first == "current") q.noise.current = d;
 				else throw VehicleError(key, "unknown key '" + key + "'");
 			}
+		}
+		else if (k == "imu_bias") {
+			if (v.kind != json::Value::Kind::Object)
+				throw VehicleError(k, "key 'imu_bias' must be an object");
+			for (const auto &nk : v.obj) {
+				const std::string key = "imu_bias." + nk.first;
+				const double d = num(nk.second, key, Rule::NonNegative);
+				if (nk.first == "accel") q.imu_bias.accel = d;
+				else if (nk.first == "gyro") q.imu_bias.gyro = d;
+				else if (nk.first == "accel_walk") q.imu_bias.accel_walk = d;
+				else if (nk.first == "gyro_walk") q.imu_bias.gyro_walk = d;
+				else throw VehicleError(key, "unknown key '" + key + "'");
+			}
+		}
+		else if (k == "imu_scale") {
+			q.imu_scale = num(v, k, Rule::NonNegative);
+			if (q.imu_scale > 0.2)
+				throw out_of_range(k, q.imu_scale, "[0, 0.2] (an sd as a fraction: 0.005 is 0.5 %)");
+		}
+		else if (k == "vibration") {
+			if (v.kind != json::Value::Kind::Object)
+				throw VehicleError(k, "key 'vibration' must be an object");
+			for (const auto &nk : v.obj) {
+				const std::string key = "vibration." + nk.first;
+				if (nk.first == "harmonics") {
+					const json::Value &h = nk.second;
+					if (h.kind != json::Value::Kind::Array || h.arr.empty() || h.arr.size() > q.vibration.harmonics.size())
+						throw VehicleError(key, "key '" + key + "' must be an array of 1 to " +
+						                   std::to_string(q.vibration.harmonics.size()) + " numbers");
+					q.vibration.harmonics.fill(0.0);
+					for (size_t i = 0; i < h.arr.size(); i++)
+						q.vibration.harmonics[i] = num(h.arr[i], key, Rule::NonNegative);
+					continue;
+				}
+				if (nk.first == "accel") q.vibration.accel = num(nk.second, key, Rule::NonNegative);
+				else if (nk.first == "gyro") q.vibration.gyro = num(nk.second, key, Rule::NonNegative);
+				else if (nk.first == "cutoff_hz") q.vibration.cutoff_hz = num(nk.second, key, Rule::Positive);
+				else if (nk.first == "sample_hz") {
+					q.vibration.sample_hz = num(nk.second, key, Rule::Positive);
+					if (q.vibration.sample_hz < 100.0 || q.vibration.sample_hz > 32000.0)
+						throw out_of_range(key, q.vibration.sample_hz, "[100, 32000] Hz");
+				}
+				else throw VehicleError(key, "unknown key '" + key + "'");
+			}
+			if (!(q.vibration.cutoff_hz < 0.45 * q.vibration.sample_hz))
+				throw out_of_range("vibration.cutoff_hz", q.vibration.cutoff_hz,
+				                   "< 0.45 vibration.sample_hz = " + fmt(0.45 * q.vibration.sample_hz) + " Hz");
+		}
+		else if (k == "rpm_max") q.rpm_max = num(v, k, Rule::Positive);
+		else if (k == "esc_pole_pairs") {
+			q.esc_pole_pairs = num(v, k, Rule::Positive);
+			if (q.esc_pole_pairs != std::floor(q.esc_pole_pairs) || q.esc_pole_pairs > 64)
+				throw out_of_range(k, q.esc_pole_pairs, "an integer in [1, 64]");
+		}
+		else if (k == "esc_kt") q.esc_kt = num(v, k, Rule::Positive);
+		else if (k == "esc_current_offset") q.esc_current_offset = num(v, k, Rule::Any);
+		else if (k == "sensors") {
+			if (v.kind != json::Value::Kind::Array || v.arr.empty())
+				throw VehicleError(k, "key 'sensors' must be a non-empty list of \"imu\", \"rpm\", \"torque\", \"thrust\"");
+			std::string list;
+			for (const auto &e : v.arr) {
+				if (e.kind != json::Value::Kind::String)
+					throw VehicleError(k, "key 'sensors' must be a list of strings");
+				list += (list.empty() ? "" : ",") + e.str;
+			}
+			std::string bad;
+			if (!sensors_parse(list, q.sensors, bad))
+				throw VehicleError(k, "key 'sensors': unknown sensor '" + bad + "' (known: imu, rpm, torque, thrust)");
 		}
 		else throw VehicleError(k, "unknown key '" + k + "'");
 	}

@@ -16,7 +16,42 @@ struct NoiseParams {
 	double gyro = 0.005;        // rad/s, body rates (row 16, Prad/Qrad/Rrad)
 	double attitude_deg = 0.02; // deg, row 17 and theta/phi/psi
 	double position = 0.005;    // m, rows 20/21 and local_x/y/z
+	double accel = 0.004;       // m/s^2, white noise of the specific force per axis (row 4, g_*)
+	double rpm = 5.0;           // rpm, each ESC report's noise before quantisation (rows 37/38)
+	double current = 0.0;       // A, ESC current-sensor noise, as torque Kt * A (row 36)
 };
+
+// IMU bias per axis: a constant drawn once from the seed (sd) plus a random walk
+// (sd of its increment over one second; the variance grows linearly with time).
+struct ImuBiasParams {
+	double accel = 0.05;        // m/s^2, constant bias sd
+	double gyro = 0.001;        // rad/s, constant bias sd
+	double accel_walk = 0.001;  // m/s^2 per sqrt(s)
+	double gyro_walk = 1e-4;    // rad/s per sqrt(s)
+};
+
+// Rotor imbalance as the IMU sees it: per rotor, a vibration at the rotor speed and
+// its harmonics (relative amplitudes), sampled at sample_hz, low-passed (2nd-order
+// Butterworth at cutoff_hz) and read at the frame rate.
+struct VibrationParams {
+	double accel = 0.5;         // m/s^2, amplitude per rotor at the hover rotor speed (~ speed^2)
+	double gyro = 0.01;         // rad/s, amplitude per rotor at the hover rotor speed (~ speed)
+	std::array<double, 4> harmonics{{1.0, 0.3, 0.1, 0.0}}; // relative amplitude of 1x..4x
+	double cutoff_hz = 30.0;    // anti-alias low-pass cutoff
+	double sample_hz = 1000.0;  // the IMU's internal sample rate
+};
+
+// Which measurements the plant serves (octo-sim --sensors, vehicle key `sensors`).
+enum SensorBits : unsigned {
+	kSensorImu = 1u,     // rows 4 and 16, g_nrml/g_axil/g_side, Prad/Qrad/Rrad, P/Q/R
+	kSensorRpm = 2u,     // rows 37 and 38, POINT_tacrad, ENGN_tacrad
+	kSensorTorque = 4u,  // row 36, ENGN_TRQ
+	kSensorThrust = 8u,  // row 35, POINT_thrust
+	kSensorAll = 15u,
+};
+// Parses "imu,rpm,torque,thrust" (any subset, no repeats needed) into bits; false
+// with the offending word in `bad` for an unknown one or an empty list.
+bool sensors_parse(const std::string &list, unsigned &bits, std::string &bad);
 
 struct VehicleParams {
 	double mass = 2.132;        // kg
@@ -31,6 +66,14 @@ struct VehicleParams {
 	std::array<double, kRotors> rotor_scale{{1, 1, 1, 1, 1, 1, 1, 1}};
 	double kf_drift_per_min = 0.0; // fraction per minute (-0.02 = -2 %/min), on kf and ktau
 	NoiseParams noise;
+	ImuBiasParams imu_bias;
+	double imu_scale = 0.005;   // sd of each IMU axis's scale-factor error (fraction)
+	VibrationParams vibration;
+	double rpm_max = 9000.0;    // rotor rpm at full throttle without drift (thrust ~ rpm^2)
+	double esc_pole_pairs = 7;  // motor pole pairs: eRPM = pole pairs * rpm (DShot telemetry)
+	double esc_kt = 0.013642;   // N m/A, motor torque constant 60 / (2 pi KV), KV 700
+	double esc_current_offset = 0.0; // A, each ESC's current reading at zero torque
+	unsigned sensors = kSensorAll;   // SensorBits served
 	std::array<double, 3> origin{{-23.2100, -45.8760, 640.0}}; // lat deg, lon deg, alt m MSL
 
 	double hover_throttle() const { return mass * g / (kRotors * kf); }

@@ -17,7 +17,6 @@ constexpr double kKnPerMps = 3600.0 / 1852.0;
 constexpr double kMphPerMps = 3600.0 / 1609.344;
 constexpr double kHpPerW = 1.0 / 745.69987158227;
 constexpr double kEarthR = 6371008.8;   // m, mean radius (flat-earth offsets)
-constexpr double kRpmMax = 9000.0;      // rotor rpm at full throttle (thrust ~ rpm^2)
 constexpr double kSoundMps = 340.29;
 
 float f32(double v) { return static_cast<float>(v); }
@@ -41,16 +40,24 @@ XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, ui
 
 void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, XpFrame &f)
 {
+	const Sensors s(m.params(), seed, 90.0);
+	xp_measure(m, thro_cmd, seed, frame, s, f);
+}
+
+void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, const Sensors &s,
+                XpFrame &f)
+{
 	const VehicleParams &p = m.params();
 	const BodyState &x = m.state();
 	Rng rng(seed, Stream::Noise, frame);
 	f.t = m.clock();
 
-	// body rates: FLU -> FRD, gyro noise
+	// body rates: the gyro's reading (FLU) -> FRD, white noise
+	const Eigen::Vector3d w = s.gyro(x.w);
 	const double sg = p.noise.gyro;
-	f.P = x.w.x() + sg * rng.gauss();
-	f.Q = -x.w.y() + sg * rng.gauss();
-	f.R = -x.w.z() + sg * rng.gauss();
+	f.P = w.x() + sg * rng.gauss();
+	f.Q = -w.y() + sg * rng.gauss();
+	f.R = -w.z() + sg * rng.gauss();
 
 	// attitude: R_ned<-frd = D R_i<-b D with D = diag(1, -1, -1)
 	const Eigen::Matrix3d D = Eigen::Vector3d(1, -1, -1).asDiagonal();
@@ -88,26 +95,35 @@ void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint6
 	f.agl_m = f.up;
 	f.crashed = m.crashed() ? 1.0 : 0.0;
 
-	// load factors: specific force in the body (FLU), over g
+	// load factors: the accelerometer's reading of the specific force in the body (FLU)
+	// plus its white noise, over g
 	const RotorOutputs o = m.rotor_outputs(x, m.t());
 	const Eigen::Vector3d acc = m.acceleration(o);
 	const Eigen::Vector3d sf_i = acc + Eigen::Vector3d(0, 0, p.g);
-	const Eigen::Vector3d sf_b = x.q.normalized().conjugate() * sf_i;
+	Eigen::Vector3d sf_b = s.accel(x.q.normalized().conjugate() * sf_i);
+	Rng imu(seed, Stream::ImuNoise, frame);
+	for (int i = 0; i < 3; i++)
+		sf_b[i] += p.noise.accel * imu.gauss();
 	const double g = p.g > 0 ? p.g : 9.80665;
 	f.g_nrml = sf_b.z() / g;   // up along the body: +1 when level at rest
 	f.g_axil = sf_b.x() / g;   // forward positive
 	f.g_side = -sf_b.y() / g;  // right positive
 
-	// rotors: true outputs plus noise on thrust and torque
+	// rotors: true outputs plus noise on thrust; torque as the ESC's current gives it
+	// (Kt times the current, whose offset and noise add to the torque's own noise);
+	// speed as bidirectional DShot reports it
 	const double st = p.sigma_thrust(), sq = p.sigma_torque();
+	Rng esc(seed, Stream::Esc, frame);
 	for (int j = 0; j < kRotors; j++) {
 		f.thro_cmd[j] = thro_cmd[j];
 		f.thro_act[j] = x.s[j];
 		f.thrust_n[j] = o.thrust[j] + st * rng.gauss();
 		f.torque_nm[j] = std::fabs(o.torque[j]) + sq * rng.gauss();
 		f.torque_abs_nm[j] = std::fabs(o.torque[j]);
+		f.rpm_true[j] = rotor_speed(p, x.s[j], m.t()) * (60.0 / (2 * M_PI));
+		f.rpm[j] = dshot_rpm(f.rpm_true[j] + p.noise.rpm * esc.gauss(), p.esc_pole_pairs);
+		f.torque_nm[j] += p.esc_kt * (p.esc_current_offset + p.noise.current * esc.gauss());
 	}
-	f.thrust_curve = p.thrust_curve;
 }
 
 void xp_frame_quat(const XpFrame &f, double q[4])
@@ -124,8 +140,7 @@ void xp_frame_quat(const XpFrame &f, double q[4])
 
 double xp_frame_rpm(const XpFrame &f, int j)
 {
-	const double gs = thrust_curve(f.thrust_curve, f.thro_act[static_cast<size_t>(j)]);
-	return kRpmMax * std::sqrt(gs);
+	return f.rpm_true[static_cast<size_t>(j)];
 }
 
 double xp_frame_power_w(const XpFrame &f, int j)
@@ -145,6 +160,42 @@ bool xp_row_supported(int row)
 		if (r == row)
 			return true;
 	return false;
+}
+
+bool xp_row_served(int row, unsigned sensors)
+{
+	switch (row) {
+	case 4:
+	case 16: return (sensors & kSensorImu) != 0;
+	case 35: return (sensors & kSensorThrust) != 0;
+	case 36: return (sensors & kSensorTorque) != 0;
+	case 37:
+	case 38: return (sensors & kSensorRpm) != 0;
+	default: return true;
+	}
+}
+
+bool xp_dataref_served(const std::string &path, unsigned sensors)
+{
+	std::string base;
+	int idx = -1;
+	if (!xp::split_index(path, base, idx))
+		return true;
+	static const char *const imu[] = {"sim/flightmodel/position/Prad", "sim/flightmodel/position/Qrad",
+	                                  "sim/flightmodel/position/Rrad", "sim/flightmodel/position/P",
+	                                  "sim/flightmodel/position/Q",    "sim/flightmodel/position/R",
+	                                  "sim/flightmodel/forces/g_nrml", "sim/flightmodel/forces/g_axil",
+	                                  "sim/flightmodel/forces/g_side"};
+	for (const char *n : imu)
+		if (base == n)
+			return (sensors & kSensorImu) != 0;
+	if (base == "sim/flightmodel/engine/POINT_thrust")
+		return (sensors & kSensorThrust) != 0;
+	if (base == "sim/flightmodel/engine/ENGN_TRQ")
+		return (sensors & kSensorTorque) != 0;
+	if (base == "sim/flightmodel/engine/POINT_tacrad" || base == "sim/flightmodel/engine/ENGN_tacrad")
+		return (sensors & kSensorRpm) != 0;
+	return true;
 }
 
 xp::DataRow xp_row(const XpFrame &f, int row, int version)
@@ -227,7 +278,7 @@ xp::DataRow xp_row(const XpFrame &f, int row, int version)
 			case 34: val = xp_frame_power_w(f, j) * kHpPerW; break;
 			case 35: val = f.thrust_n[j] * kLbPerN; break;
 			case 36: val = f.torque_nm[j] * kFtLbPerNm; break;
-			default: val = xp_frame_rpm(f, j); break;
+			default: val = f.rpm[j]; break;
 			}
 			r.col[j] = f32(val);
 		}
@@ -272,8 +323,16 @@ bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool ove
 		if (n == "ENGN_thro") { out = thro[static_cast<size_t>(i)]; return true; }
 		if (n == "POINT_thrust") { out = i < kRotors ? f32(f.thrust_n[static_cast<size_t>(i)]) : 0.0f; return true; }
 		if (n == "ENGN_TRQ") { out = i < kRotors ? f32(f.torque_nm[static_cast<size_t>(i)]) : 0.0f; return true; }
+		if (n == "POINT_tacrad" || n == "ENGN_tacrad") {
+			out = i < kRotors ? f32(f.rpm[static_cast<size_t>(i)] * (2 * M_PI / 60.0)) : 0.0f;
+			return true;
+		}
 		return false;
 	}
+	static const std::string forces = "sim/flightmodel/forces/";
+	if (base == forces + "g_nrml") { out = f32(f.g_nrml); return true; }
+	if (base == forces + "g_axil") { out = f32(f.g_axil); return true; }
+	if (base == forces + "g_side") { out = f32(f.g_side); return true; }
 	if (base.compare(0, pos.size(), pos) != 0)
 		return false;
 	const std::string n = base.substr(pos.size());

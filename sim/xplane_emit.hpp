@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "model.hpp"
+#include "sensors.hpp"
 #include "xplane_proto.hpp"
 
 namespace sim {
@@ -30,32 +31,42 @@ struct XpFrame {
 	double north = 0, east = 0, up = 0;      // m from the origin
 	double vn = 0, ve = 0, vd = 0;     // m/s (true, no noise)
 	double lat = 0, lon = 0, alt_msl_m = 0, agl_m = 0;
-	double g_nrml = 1, g_axil = 0, g_side = 0; // load factors (+1 level, at rest)
+	double g_nrml = 1, g_axil = 0, g_side = 0; // IMU load factors (+1 level, at rest)
 	RotorArray thro_cmd{};             // throttle driving each engine
 	RotorArray thro_act{};             // actuator output s_j
 	RotorArray thrust_n{};             // measured thrust, N
-	RotorArray torque_nm{};            // measured engine torque (magnitude), N m
+	RotorArray torque_nm{};            // measured engine torque (magnitude, ESC current * Kt), N m
+	RotorArray rpm{};                  // rotor speed as the ESC reports it (DShot), rpm
+	RotorArray rpm_true{};             // true rotor speed, rpm
 	RotorArray torque_abs_nm{};        // true engine torque (magnitude), N m
-	double thrust_curve = 0;           // the vehicle's thrust curve (rotor speed from s_j)
 	double crashed = 0;                // 1 after a crash (sim/flightmodel2/misc/has_crashed)
 };
 
 // Quantities few rows and datarefs show, computed when they are asked for (from the
 // frame's fields alone, so the same frame gives the same values whenever that is):
-// X-Plane's q [w x y z] from the half angles; rotor speed (rpm) and shaft power (W).
+// X-Plane's q [w x y z] from the half angles; true rotor speed (rpm) and shaft power (W).
 void xp_frame_quat(const XpFrame &f, double q[4]);
 double xp_frame_rpm(const XpFrame &f, int j);
 double xp_frame_power_w(const XpFrame &f, int j);
 
-// Builds the measured frame for the model's current state; noise is drawn from
-// Rng(seed, Noise, frame) in a fixed order (independent of the selected rows).
+// Builds the measured frame for the model's current state with the sensors' state s
+// (advanced to this frame); white noise is drawn from Rng(seed, Noise, frame) in a fixed
+// order (independent of the selected rows), the IMU's and ESCs' from their own streams.
+// Every field of f is written (the plant's per-frame form: no temporary).
+void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, const Sensors &s,
+                XpFrame &f);
+// The same with the sensors as they start a run (no walk, no vibration yet).
 XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame);
-// The same into f, every field written (the plant's per-frame form: no temporary).
 void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, XpFrame &f);
 
 // Rows this emitter fills (ascending). Other selected rows are not sent.
 const std::vector<int> &xp_supported_rows();
 bool xp_row_supported(int row);
+// Whether the sensors served (SensorBits) include what a row or a dataref shows: rows 4
+// and 16 and the IMU's datarefs need imu, 35 thrust, 36 torque, 37/38 rpm. A row not
+// served is not sent; a dataref not served replies 0 as an unknown one.
+bool xp_row_served(int row, unsigned sensors);
+bool xp_dataref_served(const std::string &path, unsigned sensors);
 
 // One Data Output row in X-Plane units; unused columns -999. version: 11 or 12.
 xp::DataRow xp_row(const XpFrame &f, int row, int version);

@@ -753,6 +753,7 @@ static void excitation_to_float(float out[HAL_ROTORS], const scalar_t d[HAL_ROTO
 
 #define LOG_LEN(field) (sizeof ((struct app_log_frame *)0)->field / sizeof(float))
 _Static_assert(LOG_LEN(q) == 4 && LOG_LEN(rotor_thrust) == HAL_ROTORS && LOG_LEN(rotor_torque) == HAL_ROTORS &&
+		       LOG_LEN(rotor_speed) == HAL_ROTORS &&
 		       LOG_LEN(throttle) == HAL_ROTORS && LOG_LEN(est) == EXP_MAX_EST && LOG_LEN(est_sd) == EXP_MAX_EST &&
 		       HAL_ROTORS % 4 == 0 && EXP_MAX_EST % 4 == 0,
 	       "the log's arrays are copied whole, four floats at a time");
@@ -777,6 +778,8 @@ static void fill_log(struct app *a, bool stepped, float dt)
 	copy3(l->vel_i, f->vel_i_mps);
 	copy4n(l->rotor_thrust, f->rotor_thrust_n, HAL_ROTORS);
 	copy4n(l->rotor_torque, f->rotor_torque_nm, HAL_ROTORS);
+	copy3(l->accel_b, f->accel_b_g);
+	copy4n(l->rotor_speed, f->rotor_speed_rps, HAL_ROTORS);
 	l->z_sp = TO_FLOAT_KEPT(a, 0, a->guid.z_sp_m);
 	l->vz_ff = TO_FLOAT_KEPT(a, 1, a->guid.vz_ff_mps);
 	l->pos_sp[0] = TO_FLOAT_KEPT(a, 2, a->guid.pos_sp_m[0]);

@@ -32,6 +32,8 @@
 	ARR(float, float, vel_i, 3)                                       \
 	ARR(float, float, rotor_thrust, 8)                                \
 	ARR(float, float, rotor_torque, 8)                                \
+	ARR(float, float, accel_b, 3)                                     \
+	ARR(float, float, rotor_speed, 8)                                 \
 	ARR(float, float, q_sp, 4)                                        \
 	ONE(float, float, z_sp)                                           \
 	ONE(float, float, vz_ff)                                          \

@@ -48,6 +48,8 @@ enum {
 	HAL_FRAME_TORQUE = 1u << 5,   /* measured rotor reaction torques */
 	HAL_FRAME_THR_CMD = 1u << 6,  /* echo of the throttle command */
 	HAL_FRAME_GLOBAL = 1u << 7,   /* geodetic position (latitude, longitude, altitude MSL) */
+	HAL_FRAME_ACCEL = 1u << 8,    /* specific force (accelerometer) */
+	HAL_FRAME_RPM = 1u << 9,      /* rotor speeds (ESC telemetry) */
 };
 #define HAL_FRAME_NEEDED (HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_POS)
 
@@ -72,6 +74,9 @@ struct hal_sensor_frame {
 	float thr_cmd_echo[HAL_ROTORS];      /* throttle command as the plant saw it */
 	double lat_deg, lon_deg;             /* plant's geodetic position, WGS84 degrees */
 	float alt_msl_m;                     /* altitude above mean sea level, m */
+	float accel_b_g[3];                  /* specific force in FLU over the plant's gravity, g:
+	                                        (0, 0, +1) level at rest or in steady hover */
+	float rotor_speed_rps[HAL_ROTORS];   /* rotor speed, rad/s */
 };
 
 /* Health of the plant link, as the platform counts it. */

@@ -15,6 +15,7 @@
 #include "model.hpp"
 #include "vehicle.hpp"
 #include "rng.hpp"
+#include "sensors.hpp"
 #include "xplane_emit.hpp"
 #include "xplane_input.hpp"
 #include "xplane_proto.hpp"
@@ -692,6 +693,355 @@ TEST(fuzz_xplane_input_never_crashes)
 	CHECK(in_range, "throttles stay in [0, 1]");
 	CHECK(c[Counters::RxDatagrams] == 50000, "all counted");
 	CHECK(in.subs.size() <= XpInput::kMaxSubs, "subscriptions bounded");
+}
+
+
+// ------------------------------------------------------------------ sensors (docs/sensors.md)
+
+// A vehicle with no noise, lag or delay, and one sensor term switched on by the test.
+static VehicleParams quiet()
+{
+	VehicleParams p = ideal();
+	p.vibration.sample_hz = 1800.0;   // a multiple of 90 Hz: the read falls on a sample
+	return p;
+}
+
+// Specific force over g in the body, from the three load factors (FLU).
+static Eigen::Vector3d sf_g(const XpFrame &f)
+{
+	return Eigen::Vector3d(f.g_axil, -f.g_side, f.g_nrml);
+}
+
+TEST(imu_static_reads_plus_one_g_up)
+{
+	VehicleParams p = quiet();
+	Model m(p);
+	XpFrame f = xp_measure(m, all(0), 1, 0);
+	CHECK(f.g_nrml == 1.0 && f.g_axil == 0.0 && f.g_side == 0.0, "at rest: %g %g %g", f.g_nrml, f.g_axil, f.g_side);
+	xp::DataRow r4 = xp_row(f, 4, 12);
+	CHECK(r4.col[4] == 1.0f && r4.col[5] == 0.0f && r4.col[6] == 0.0f, "row 4 c5..c7");
+	// steady hover in the air: the thrust holds the weight, +1 g along the body's up
+	BodyState x;
+	x.r = Eigen::Vector3d(0, 0, 10);
+	x.s = all(p.hover_throttle());
+	m.set_state(x, 0.0);
+	f = xp_measure(m, all(p.hover_throttle()), 1, 0);
+	CHECK(std::fabs(f.g_nrml - 1.0) < 1e-12 && std::fabs(f.g_axil) < 1e-12, "hover %g", f.g_nrml);
+	// twice the hover thrust: 2 g; rotors off in the air (free fall): 0 g
+	x.s = all(2 * p.hover_throttle());
+	m.set_state(x, 0.0);
+	f = xp_measure(m, all(0), 1, 0);
+	CHECK(std::fabs(f.g_nrml - 2.0) < 1e-12, "2 x hover thrust %g", f.g_nrml);
+	x.s = all(0);
+	x.q = Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()));
+	m.set_state(x, 0.0);
+	f = xp_measure(m, all(0), 1, 0);
+	CHECK(sf_g(f).norm() < 1e-12, "free fall reads 0 g: %g", sf_g(f).norm());
+	// the model's only force is the thrust along +Z_B: a forward or sideways specific force
+	// (here a bias) maps to g axial forward-positive and g side right-positive
+	Sensors sn(p, 1, 90.0);
+	sn.bias_a = Eigen::Vector3d(0.1 * p.g, 0.2 * p.g, 0);   // forward, left (FLU)
+	xp_measure(m, all(0), 1, 0, sn, f);
+	CHECK(std::fabs(f.g_axil - 0.1) < 1e-12 && std::fabs(f.g_side + 0.2) < 1e-12, "axial %g side %g", f.g_axil,
+	      f.g_side);
+}
+
+TEST(imu_white_noise_levels)
+{
+	VehicleParams p = quiet();
+	p.noise.accel = 0.05;
+	p.noise.gyro = 0.01;
+	Model m(p);
+	const int N = 4000;
+	double sa = 0, sg = 0, ma = 0;
+	for (int k = 0; k < N; k++) {
+		XpFrame f = xp_measure(m, all(0), 5, static_cast<uint64_t>(k));
+		const double e = (f.g_nrml - 1.0) * p.g;
+		ma += e;
+		sa += e * e;
+		sg += f.P * f.P;
+	}
+	// the sample sd's relative sd is 1/sqrt(2N) = 1.1 %: 5 % is beyond 4 sd
+	CHECK(std::fabs(std::sqrt(sa / N) / 0.05 - 1) < 0.05, "accel sd %g", std::sqrt(sa / N));
+	CHECK(std::fabs(ma / N) < 4 * 0.05 / std::sqrt(N), "accel mean %g", ma / N);
+	CHECK(std::fabs(std::sqrt(sg / N) / 0.01 - 1) < 0.05, "gyro sd %g", std::sqrt(sg / N));
+}
+
+// The IMU's draws come from streams of their own: the rows' white noise is drawn as before.
+TEST(imu_keeps_the_noise_stream)
+{
+	VehicleParams p; // every default on
+	Model m(p);
+	Sensors s(p, 9, 90.0);
+	m.command(all(0.3));
+	for (uint64_t n = 1; n <= 30; n++) {
+		m.advance_to(static_cast<double>(n) / 90.0);
+		s.advance(m, n);
+	}
+	XpFrame f;
+	xp_measure(m, all(0.3), 9, 30, s, f);
+	Rng r(9, Stream::Noise, 30);
+	const double want_p = s.gyro(m.state().w).x() + p.noise.gyro * r.gauss();
+	CHECK(f.P == want_p, "P %.17g, want %.17g", f.P, want_p);
+	for (int i = 0; i < 8; i++)
+		r.gauss();   // Q, R, attitude, position
+	const RotorOutputs o = m.rotor_outputs(m.state(), m.t());
+	CHECK(f.thrust_n[0] == o.thrust[0] + p.sigma_thrust() * r.gauss(), "thrust noise is the same draw");
+	// deterministic from the seed
+	Sensors s2(p, 9, 90.0), s3(p, 10, 90.0);
+	CHECK(s2.bias_a == s.bias_a && s2.scale_g == s.scale_g && s3.bias_a != s.bias_a, "per-run draws from the seed");
+}
+
+TEST(imu_bias_scale_and_walk)
+{
+	VehicleParams p = quiet();
+	p.imu_bias = ImuBiasParams{0.05, 0.002, 0.01, 0.001};
+	p.imu_scale = 0.01;
+	const int M = 1000;
+	double b2 = 0, s2 = 0, w90 = 0, w360 = 0, g360 = 0;
+	Model m(p);   // at rest: the walk does not depend on the motion
+	for (int seed = 1; seed <= M; seed++) {
+		Sensors s(p, static_cast<uint64_t>(seed), 90.0);
+		b2 += s.bias_a.squaredNorm() / 3;
+		s2 += s.scale_g.squaredNorm() / 3;
+		for (uint64_t n = 1; n <= 360; n++) {
+			s.advance(m, n);
+			if (n == 90)
+				w90 += s.walk_a.squaredNorm() / 3;
+		}
+		w360 += s.walk_a.squaredNorm() / 3;
+		g360 += s.walk_g.squaredNorm() / 3;
+	}
+	// variances over 3000 draws: relative sd sqrt(2/3000) = 2.6 %; 12 % is beyond 4 sd
+	CHECK(std::fabs(std::sqrt(b2 / M) / 0.05 - 1) < 0.06, "constant bias sd %g", std::sqrt(b2 / M));
+	CHECK(std::fabs(std::sqrt(s2 / M) / 0.01 - 1) < 0.06, "scale sd %g", std::sqrt(s2 / M));
+	// the walk's variance grows linearly with time: sd^2 t at 1 s and at 4 s
+	CHECK(std::fabs(w90 / M / (0.01 * 0.01 * 1.0) - 1) < 0.12, "walk var at 1 s %g", w90 / M);
+	CHECK(std::fabs(w360 / M / (0.01 * 0.01 * 4.0) - 1) < 0.12, "walk var at 4 s %g", w360 / M);
+	CHECK(std::fabs(g360 / M / (0.001 * 0.001 * 4.0) - 1) < 0.12, "gyro walk var at 4 s %g", g360 / M);
+	// the reading: (1 + scale) x + bias + walk
+	Sensors s(p, 3, 90.0);
+	const Eigen::Vector3d w(0.5, -1, 2);
+	const Eigen::Vector3d want = w + s.scale_g.cwiseProduct(w) + s.bias_g + s.walk_g + s.vib_g;
+	CHECK((s.gyro(w) - want).norm() < 1e-15, "gyro reading");
+}
+
+// Amplitude of x at frequency f (Hz) from samples at rate fs (a single DFT bin).
+static double amplitude(const std::vector<double> &x, double f, double fs)
+{
+	double re = 0, im = 0;
+	for (size_t k = 0; k < x.size(); k++) {
+		const double a = 2 * M_PI * f * static_cast<double>(k) / fs;
+		re += x[k] * std::cos(a);
+		im -= x[k] * std::sin(a);
+	}
+	return 2 * std::hypot(re, im) / static_cast<double>(x.size());
+}
+
+// One rotor spinning at rotor_hz; the x vibration of the accelerometer read at 90 Hz.
+static std::vector<double> vibration_read(VehicleParams p, double rotor_hz, size_t frames)
+{
+	Model m(p);   // the body's motion plays no part: only the rotor speed does
+	Sensors s(p, 4, 90.0);
+	const double rev_per_s = p.rpm_max / 60.0;
+	RotorArray u = all(0);
+	u[0] = (rotor_hz / rev_per_s) * (rotor_hz / rev_per_s);   // g(s) = s: speed ~ sqrt(s)
+	m.command(u);
+	std::vector<double> x;
+	for (uint64_t n = 1; n <= frames + 90; n++) {
+		m.advance_to(static_cast<double>(n) / 90.0);
+		s.advance(m, n);
+		if (n > 90)   // after the filter's start
+			x.push_back(s.vib_a.x());
+	}
+	return x;
+}
+
+TEST(vibration_aliases_at_the_frame_rate_through_the_filter)
+{
+	VehicleParams p = quiet();
+	p.vibration.accel = 1.0;
+	p.vibration.harmonics = {{1.0, 0.0, 0.0, 0.0}};
+	const double f_rot = 70.0, fs = p.vibration.sample_hz;
+	const double hover_hz = hover_rotor_speed(p) / (2 * M_PI);
+	const double a_rot = 1.0 * (f_rot / hover_hz) * (f_rot / hover_hz);   // ~ speed^2
+	Biquad lp;
+	lp.design(p.vibration.cutoff_hz, fs);
+	const std::vector<double> x = vibration_read(p, f_rot, 900);
+	// 70 Hz read at 90 Hz appears at 20 Hz, attenuated by the filter's gain at 70 Hz
+	const double peak = amplitude(x, 20.0, 90.0), want = a_rot * lp.gain(f_rot, fs);
+	CHECK(std::fabs(peak / want - 1) < 0.03, "alias peak %g, want %g", peak, want);
+	double other = 0;
+	for (int b = 1; b < 450; b++)
+		if (b != 200)
+			other = std::max(other, amplitude(x, b * 0.1, 90.0));
+	CHECK(other < 0.05 * peak, "one peak: largest other bin %g of %g", other, peak);
+	// the filter is a 2nd-order Butterworth: |H| = 1 / sqrt(1 + (f/fc)^4) (bilinear: close)
+	const double analog = 1 / std::sqrt(1 + std::pow(f_rot / p.vibration.cutoff_hz, 4));
+	CHECK(std::fabs(lp.gain(f_rot, fs) / analog - 1) < 0.1, "gain %g, analog %g", lp.gain(f_rot, fs), analog);
+	CHECK(std::fabs(lp.gain(0.0, fs) - 1) < 1e-12, "unit DC gain");
+	// a higher cutoff lets more through, by the ratio of the gains
+	VehicleParams q = p;
+	q.vibration.cutoff_hz = 300.0;
+	Biquad hp;
+	hp.design(300.0, fs);
+	const double peak_q = amplitude(vibration_read(q, f_rot, 900), 20.0, 90.0);
+	CHECK(std::fabs(peak_q / peak / (hp.gain(f_rot, fs) / lp.gain(f_rot, fs)) - 1) < 0.03, "cutoff ratio %g",
+	      peak_q / peak);
+	// the second harmonic (140 Hz) folds to 40 Hz
+	q = p;
+	q.vibration.harmonics = {{0.0, 1.0, 0.0, 0.0}};
+	const std::vector<double> x2 = vibration_read(q, f_rot, 900);
+	const double p40 = amplitude(x2, 40.0, 90.0);
+	CHECK(std::fabs(p40 / (a_rot * lp.gain(2 * f_rot, fs)) - 1) < 0.03, "2x at 40 Hz %g", p40);
+	// none when the vibration is off
+	q.vibration.accel = 0;
+	const std::vector<double> x0 = vibration_read(q, f_rot, 90);
+	CHECK(amplitude(x0, 40.0, 90.0) == 0.0, "off");
+}
+
+TEST(rpm_follows_the_lagged_throttle_and_dshot_quantises)
+{
+	VehicleParams p = quiet();
+	p.motor_tau = 0.05;
+	p.thrust_curve = 0.4;
+	Model m(p);
+	m.set_ground(false);
+	m.command(all(0.6));
+	m.advance_to(0.05);
+	XpFrame f = xp_measure(m, all(0.6), 1, 5);
+	const RotorOutputs o = m.rotor_outputs(m.state(), m.t());
+	// speed^2 is proportional to thrust (one constant), at the lagged output s
+	const double c = f.rpm_true[0] * f.rpm_true[0] / o.thrust[0];
+	CHECK(std::fabs(c * p.kf / (p.rpm_max * p.rpm_max) - 1) < 1e-12, "rpm^2 / thrust");
+	CHECK(f.rpm_true[0] < 0.99 * p.rpm_max * std::sqrt(thrust_curve(0.4, 0.6)), "lagged");
+	// DShot: the period in us, a 9-bit mantissa shifted by the exponent
+	const double pp = 7;
+	CHECK(dshot_rpm(0, pp) == 0 && dshot_rpm(10, pp) == 0, "stopped reads 0");
+	CHECK(std::fabs(dshot_rpm(9000, pp) - 60e6 / (952 * pp)) < 1e-9, "9000 rpm: period 952 us");
+	double last = -1;
+	int steps = 0;
+	for (double r = 500; r < 12000; r += 0.25) {
+		const double q = dshot_rpm(r, pp);
+		const double period = 60e6 / (q * pp);
+		const double true_period = 60e6 / (r * pp);
+		int e = 0;
+		while ((std::lround(true_period) >> e) > 511)
+			e++;
+		const double step = static_cast<double>(1 << e);
+		// the reported period is a whole multiple of the step, within half a step (+ rounding to us)
+		const double mult = period / step;
+		CHECK(std::fabs(mult - std::round(mult)) < 1e-6 && std::fabs(period - true_period) <= step / 2 + 0.5 + 1e-9,
+		      "rpm %g: period %g, true %g, step %g", r, period, true_period, step);
+		if (q != last)
+			steps++;
+		last = q;
+	}
+	CHECK(steps > 100, "quantised into %d values", steps);
+	// report noise: sd near noise.rpm (quantisation adds step^2 / 12)
+	p.noise.rpm = 50;
+	Model h(p);
+	h.set_ground(false);
+	h.command(all(0.3));
+	h.advance_to(1.0);
+	double s1 = 0, s2 = 0;
+	const int N = 4000;
+	for (int k = 0; k < N; k++) {
+		XpFrame g = xp_measure(h, all(0.3), 2, static_cast<uint64_t>(k));
+		const double e = g.rpm[3] - g.rpm_true[3];
+		s1 += e;
+		s2 += e * e;
+	}
+	const double sd = std::sqrt(s2 / N - (s1 / N) * (s1 / N));
+	CHECK(std::fabs(sd / 50 - 1) < 0.06, "rpm noise sd %g", sd);
+	xp::DataRow r37 = xp_row(f, 37, 12), r38 = xp_row(f, 38, 12);
+	CHECK(r37.col[2] == static_cast<float>(f.rpm[2]) && r38.col[2] == r37.col[2], "rows 37/38 report the ESC rpm");
+}
+
+TEST(torque_from_esc_current_offset_and_noise)
+{
+	VehicleParams p = quiet();
+	p.esc_kt = 0.02;
+	p.esc_current_offset = 0.5;
+	p.noise.current = 0.1;
+	Model m(p);
+	m.command(all(0.3));
+	m.advance_to(0.5);
+	double s1 = 0, s2 = 0;
+	const int N = 4000;
+	for (int k = 0; k < N; k++) {
+		XpFrame f = xp_measure(m, all(0.3), 6, static_cast<uint64_t>(k));
+		const double e = f.torque_nm[1] - f.torque_abs_nm[1];
+		s1 += e;
+		s2 += e * e;
+	}
+	const double mean = s1 / N, sd = std::sqrt(s2 / N - mean * mean);
+	CHECK(std::fabs(mean - 0.02 * 0.5) < 4 * 0.002 / std::sqrt(N), "offset Kt * I0: %g", mean);
+	CHECK(std::fabs(sd / 0.002 - 1) < 0.05, "current noise Kt * sd: %g", sd);
+}
+
+TEST(sensors_served_and_ideal)
+{
+	unsigned b = 0;
+	std::string bad;
+	CHECK(sensors_parse("imu", b, bad) && b == kSensorImu, "imu");
+	CHECK(sensors_parse("thrust,rpm", b, bad) && b == (kSensorThrust | kSensorRpm), "two");
+	CHECK(!sensors_parse("imu,gps", b, bad) && bad == "gps", "unknown");
+	CHECK(!sensors_parse("", b, bad), "empty");
+	CHECK(xp_row_served(4, kSensorImu) && xp_row_served(16, kSensorImu) && !xp_row_served(35, kSensorImu) &&
+	      !xp_row_served(36, kSensorImu) && !xp_row_served(37, kSensorImu) && !xp_row_served(38, kSensorImu) &&
+	      xp_row_served(17, kSensorImu), "imu rows");
+	CHECK(!xp_row_served(16, kSensorThrust) && xp_row_served(35, kSensorThrust), "thrust rows");
+	CHECK(!xp_dataref_served("sim/flightmodel/position/Prad", kSensorRpm) &&
+	      xp_dataref_served("sim/flightmodel/engine/POINT_tacrad[3]", kSensorRpm) &&
+	      !xp_dataref_served("sim/flightmodel/engine/ENGN_TRQ[0]", kSensorRpm) &&
+	      xp_dataref_served("sim/flightmodel/position/theta", 0), "datarefs");
+	VehicleParams p;
+	vehicle_from_json(R"({"sensors": ["imu", "rpm"], "noise": {"accel": 0.1, "rpm": 3, "current": 0.2},
+	                      "imu_bias": {"gyro_walk": 0.01}, "imu_scale": 0.02, "esc_current_offset": -0.1,
+	                      "vibration": {"accel": 2, "harmonics": [1, 0.5], "cutoff_hz": 40, "sample_hz": 8000}})",
+	                  p);
+	CHECK(p.sensors == (kSensorImu | kSensorRpm) && p.noise.accel == 0.1 && p.noise.rpm == 3 &&
+	      p.imu_bias.gyro_walk == 0.01 && p.imu_bias.accel == 0.05 && p.vibration.harmonics[1] == 0.5 &&
+	      p.vibration.harmonics[2] == 0 && p.vibration.sample_hz == 8000 && p.esc_current_offset == -0.1,
+	      "sensor keys applied");
+	const char *badkeys[][2] = {
+		{R"({"sensors": ["imu", "sonar"]})", "sensors"}, {R"({"sensors": []})", "sensors"},
+		{R"({"imu_bias": {"accel": -1}})", "imu_bias.accel"}, {R"({"imu_bias": {"x": 1}})", "imu_bias.x"},
+		{R"({"vibration": {"cutoff_hz": 600}})", "vibration.cutoff_hz"},
+		{R"({"vibration": {"harmonics": [1, 1, 1, 1, 1]}})", "vibration.harmonics"},
+		{R"({"noise": {"rpm": -1}})", "noise.rpm"}, {R"({"esc_pole_pairs": 6.5})", "esc_pole_pairs"},
+		{R"({"imu_scale": 1})", "imu_scale"},
+	};
+	for (const auto &k : badkeys) {
+		std::string key = "?";
+		try {
+			VehicleParams q;
+			vehicle_from_json(k[0], q);
+		} catch (const VehicleError &e) {
+			key = e.key;
+		}
+		CHECK(key == k[1], "%s: key '%s'", k[0], key.c_str());
+	}
+	// --ideal: every sensor term zero (the rpm keeps DShot's resolution)
+	VehicleParams q;
+	q.make_ideal();
+	Model m(q);   // lifts off: the thrust exceeds the weight
+	m.command(all(0.5));
+	Sensors s(q, 3, 90.0);
+	for (uint64_t n = 1; n <= 45; n++) {
+		m.advance_to(static_cast<double>(n) / 90.0);
+		s.advance(m, n);
+	}
+	XpFrame f;
+	xp_measure(m, all(0.5), 3, 45, s, f);
+	const RotorOutputs o = m.rotor_outputs(m.state(), m.t());
+	CHECK(std::fabs(f.g_nrml - o.force / q.mass / q.g) < 1e-12 && std::fabs(f.g_axil) < 1e-12 &&
+	      std::fabs(f.g_side) < 1e-12, "ideal accel %.17g %.17g %g %g", f.g_nrml, o.force / q.mass / q.g, f.g_axil,
+	      f.g_side);
+	CHECK(f.P == m.state().w.x() && f.torque_nm[2] == f.torque_abs_nm[2] && f.thrust_n[2] == o.thrust[2],
+	      "ideal gyro, torque, thrust");
+	CHECK(f.rpm[2] == dshot_rpm(f.rpm_true[2], q.esc_pole_pairs), "ideal rpm: DShot's resolution only");
 }
 
 int main()

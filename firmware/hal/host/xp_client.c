@@ -12,14 +12,19 @@
 #include <unistd.h>
 
 static const int32_t wanted_rows[] = {XP_ROW_TIMES, XP_ROW_RATES, XP_ROW_ATT, XP_ROW_GLOBAL,
-				      XP_ROW_LOCAL, XP_ROW_THRUST, XP_ROW_TORQUE};
+				      XP_ROW_LOCAL, XP_ROW_THRUST, XP_ROW_TORQUE,
+				      XP_ROW_GLOADS, XP_ROW_PROP_RPM};
 #define N_WANTED (sizeof wanted_rows / sizeof wanted_rows[0])
+_Static_assert(N_WANTED <= sizeof ((struct xp_client *)0)->row_seen_us / sizeof(uint64_t),
+	       "a last-seen time per wanted row");
 static const uint32_t wanted_bits[N_WANTED] = {HAL_FRAME_TIME, HAL_FRAME_RATES, HAL_FRAME_ATT,
 					       HAL_FRAME_GLOBAL, HAL_FRAME_POS, HAL_FRAME_THRUST,
-					       HAL_FRAME_TORQUE};
+					       HAL_FRAME_TORQUE,
+					       HAL_FRAME_ACCEL, HAL_FRAME_RPM};
 
 #define LB_TO_N 4.4482216152605
 #define FTLB_TO_NM 1.3558179483314
+#define RPM_TO_RPS (2.0 * 3.14159265358979323846 / 60.0)
 #define DEG_TO_RAD 0.017453292519943295
 #define FT_TO_M 0.3048
 #define ROW_FRESH_US 1000000u     /* a row not seen for 1 s is selected again */
@@ -188,7 +193,8 @@ void xp_client_init(struct xp_client *c, const struct sockaddr_in *xplane, enum 
 	c->act = act;
 	xp_clock_init(&c->clock);
 	c->stats.parts_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_GLOBAL |
-				 HAL_FRAME_POS | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
+				 HAL_FRAME_POS | HAL_FRAME_THRUST | HAL_FRAME_TORQUE |
+				 HAL_FRAME_ACCEL | HAL_FRAME_RPM;
 	for (int i = 0; i < HAL_ROTORS; i++)
 		(void)xp_encode_dref(c->thro_dref[i], sizeof c->thro_dref[i], 0.0f, THRO_USE_REF[i]);
 	memset(c->wanted_slot, -1, sizeof c->wanted_slot);
@@ -245,6 +251,9 @@ static void quat_of_euler_ned(float phi_deg, float theta_deg, float psi_deg, dou
  *   X, so the attitude quaternion is conjugated by that half turn:
  *   q_ib = [w, x, -y, -z] of X-Plane's q_ned_frd; omega_B = [P, -Q, -R];
  *   r_I = [north, west, up] = [-Z, -X, Y] of OpenGL, likewise for velocity.
+ *   Row 4's load factors (c5 normal, up +; c6 axial, forward +; c7 side, right +)
+ *   give the specific force over g in FLU: [axial, -side, normal].
+ *   Row 38's prop rpm gives the rotor speed: rad/s = rpm * 2 pi / 60.
  */
 uint32_t xp_frame_convert(const struct xp_data_rec *recs, size_t n, uint32_t xp_version,
 			  struct hal_sensor_frame *f, float *raw_time_s)
@@ -325,6 +334,20 @@ uint32_t xp_frame_convert(const struct xp_data_rec *recs, size_t n, uint32_t xp_
 			for (int i = 0; i < HAL_ROTORS; i++)
 				f->rotor_torque_nm[i] = isfinite(c[i]) ? (float)((double)c[i] * FTLB_TO_NM) : 0.0f;
 			bits |= HAL_FRAME_TORQUE;
+			break;
+		case XP_ROW_GLOADS:
+			if (!isfinite(c[4]) || !isfinite(c[5]) || !isfinite(c[6]))
+				break;
+			f->accel_b_g[0] = c[5];
+			f->accel_b_g[1] = -c[6];
+			f->accel_b_g[2] = c[4];
+			bits |= HAL_FRAME_ACCEL;
+			break;
+		case XP_ROW_PROP_RPM:
+			for (int i = 0; i < HAL_ROTORS; i++)
+				f->rotor_speed_rps[i] =
+					isfinite(c[i]) && c[i] > 0.0f ? (float)((double)c[i] * RPM_TO_RPS) : 0.0f;
+			bits |= HAL_FRAME_RPM;
 			break;
 		case XP_ROW_THR_CMD:
 			for (int i = 0; i < HAL_ROTORS; i++)

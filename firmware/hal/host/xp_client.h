@@ -36,6 +36,7 @@ enum xp_actuation { XP_ACT_DREF = 0, XP_ACT_DATA25 = 1 };
 
 /* Row numbers the client needs and the HAL_FRAME_* bit each one fills. */
 #define XP_ROW_TIMES 1
+#define XP_ROW_GLOADS 4
 #define XP_ROW_RATES 16
 #define XP_ROW_ATT 17
 #define XP_ROW_GLOBAL 20
@@ -43,6 +44,7 @@ enum xp_actuation { XP_ACT_DREF = 0, XP_ACT_DATA25 = 1 };
 #define XP_ROW_THR_CMD 25
 #define XP_ROW_THRUST 35
 #define XP_ROW_TORQUE 36
+#define XP_ROW_PROP_RPM 38
 
 /*
  * The plant's time line from row 1's mission time, a float32 whose resolution (its ulp)
@@ -95,7 +97,7 @@ struct xp_client {
 	enum xp_actuation act;
 	struct hal_plant_stats stats;
 	uint32_t xp_version;              /* sim/version/xplane_internal_version, 0 = unknown yet */
-	uint64_t row_seen_us[8];          /* per wanted row, wall time last seen */
+	uint64_t row_seen_us[12];         /* per wanted row, wall time last seen */
 	uint64_t last_dsel_us, last_rref_us, last_override_us, last_usel_us;
 	uint64_t last_data_us;            /* wall time of the last DATA datagram */
 	uint8_t unselected[256 / 8];      /* rows already USEL'd */
