@@ -315,12 +315,9 @@ static const char usage[] =
 	"plant (octo-sim's flags):\n"
 	"  --vehicle FILE.json  --ideal  --seed N  --rate HZ  --step S  --xplane-version 11|12\n"
 	"  --rows LIST  --drop P  --burst N  --burst-prob P  --delay-frames K  --duplicate P\n"
-	"  --reorder P  --start-time S   (see octo-sim --help; the plant clock starts at S,
-"
-	"                       --duration counts from there)
-"
-	"  --sensors LIST           what the plant serves: imu,rpm,torque,thrust (all)
-"
+	"  --reorder P  --start-time S   (see octo-sim --help; the plant clock starts at S,\n"
+	"                       --duration counts from there)\n"
+	"  --sensors LIST           what the plant serves: imu,rpm,torque,thrust (all)\n"
 	"  --lcm-sim URL            octo-sim's truth log (OCTO_TRUTH)\n"
 	"\n"
 	"run:\n"
