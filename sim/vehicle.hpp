@@ -5,6 +5,7 @@
 #include <array>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace sim {
 
@@ -32,6 +33,9 @@ struct VehicleParams {
 	double kf_drift_per_min = 0.0; // fraction per minute (-0.02 = -2 %/min), on kf and ktau
 	NoiseParams noise;
 	std::array<double, 3> origin{{-23.2100, -45.8760, 640.0}}; // lat deg, lon deg, alt m MSL
+	// Plant times (s, ascending) at which the OpenGL local origin moves, as X-Plane's
+	// scenery shifts do (xplane_emit.hpp: xp_origin_offset).
+	std::vector<double> origin_shift_s;
 
 	double hover_throttle() const { return mass * g / (kRotors * kf); }
 	// Resolved noise sigmas (defaults relative to hover).

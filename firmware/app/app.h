@@ -37,6 +37,7 @@
 #include "log.h"
 #include "mav.h"
 #include "mixer.h"
+#include "origin.h"
 #include "outbox.h"
 #include "params.h"
 #include "pos_ctrl.h"
@@ -76,7 +77,8 @@ struct app {
 	enum app_mode mode;
 
 	/* plant link */
-	struct hal_sensor_frame fr;
+	struct hal_sensor_frame fr;   /* the newest frame, its position made continuous (origin.h) */
+	struct origin orig;
 	bool have_frame, have_step;
 	double t_prev;
 	float dt_frame;               /* frame period: the shortest recent step, smoothed */
