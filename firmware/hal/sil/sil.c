@@ -315,7 +315,7 @@ static const char usage[] =
 	"plant (octo-sim's flags):\n"
 	"  --vehicle FILE.json  --ideal  --seed N  --rate HZ  --step S  --xplane-version 11|12\n"
 	"  --rows LIST  --drop P  --burst N  --burst-prob P  --delay-frames K  --duplicate P\n"
-	"  --reorder P          (see octo-sim --help)\n"
+	"  --reorder P  --shift-origin T (repeatable)   (see octo-sim --help)\n"
 	"  --lcm-sim URL            octo-sim's truth log (OCTO_TRUTH)\n"
 	"\n"
 	"run:\n"
