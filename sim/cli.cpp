@@ -1,4 +1,5 @@
 // cli: flag parsing with clear errors (exit 2 naming the flag or the JSON key).
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -56,12 +57,19 @@ static const char kUsage[] =
 "  --duplicate P          send a frame twice with probability P\n"
 "  --reorder P            swap a frame with the next one with probability P\n"
 "\n"
+"faults of the plant:\n"
+"  --shift-origin T       at plant time T s move the OpenGL local origin as X-Plane does\n"
+"                         at a scenery shift: local x/y/z (row 21, local_x/y/z) jump by\n"
+"                         kilometres; latitude, longitude, elevation, velocities and the\n"
+"                         physics do not change (repeatable; vehicle key origin_shift_s)\n"
+"\n"
 "  --verbose              one status line per second on stderr\n"
 "  --help                 this text\n"
 "\n"
 "vehicle keys: mass, g, arm_length, kf, ktau, inertia [3], motor_tau, delay,\n"
 "thrust_curve, rotor_scale [8], kf_drift_per_min, noise {thrust, torque, gyro,\n"
-"attitude_deg, position, accel, rpm, current}, origin [lat, lon, alt_m];\n"
+"attitude_deg, position, accel, rpm, current}, origin [lat, lon, alt_m],\n"
+"origin_shift_s [T, ...];\n"
 "sensors: imu_bias {accel, gyro, accel_walk, gyro_walk}, imu_scale, vibration\n"
 "{accel, gyro, harmonics [<=4], cutoff_hz, sample_hz}, rpm_max, esc_pole_pairs,\n"
 "esc_kt, esc_current_offset, sensors [list] (docs/sensors.md).\n"
@@ -180,6 +188,8 @@ int parse_options(int argc, char **argv, Options &o)
 				o.faults.duplicate = num(a, val(), 0.0, 1.0);
 			} else if (a == "--reorder") {
 				o.faults.reorder = num(a, val(), 0.0, 1.0);
+			} else if (a == "--shift-origin") {
+				o.shift_origin.push_back(num(a, val(), 0.0, 1e9));
 			} else if (a == "--no-beacon") {
 				o.beacon = false;
 			} else if (a == "--computer-name") {
@@ -208,6 +218,9 @@ int parse_options(int argc, char **argv, Options &o)
 				return 2;
 			}
 		}
+		auto &shifts = o.vehicle.origin_shift_s;
+		shifts.insert(shifts.end(), o.shift_origin.begin(), o.shift_origin.end());
+		std::sort(shifts.begin(), shifts.end());
 		if (o.ideal)
 			o.vehicle.make_ideal();
 		if (o.sensors)

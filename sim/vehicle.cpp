@@ -2,6 +2,7 @@
 // impossible values are errors naming the key).
 #include "vehicle.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -168,6 +169,18 @@ void vehicle_from_json(const std::string &text, VehicleParams &p)
 			vec(v, k, Rule::Any, q.origin);
 			if (std::fabs(q.origin[0]) > 89.0 || std::fabs(q.origin[1]) > 180.0)
 				throw VehicleError(k, "key 'origin' must be [lat (|lat| <= 89), lon (|lon| <= 180), alt_m]");
+		}
+		else if (k == "origin_shift_s") {
+			if (v.kind != json::Value::Kind::Array)
+				throw VehicleError(k, "key 'origin_shift_s' must be an array of plant times (s)");
+			q.origin_shift_s.clear();
+			for (const auto &e : v.arr) {
+				const double ts = num(e, k, Rule::NonNegative);
+				if (ts > 1e9)
+					throw out_of_range(k, ts, "[0, 1e9] s");
+				q.origin_shift_s.push_back(ts);
+			}
+			std::sort(q.origin_shift_s.begin(), q.origin_shift_s.end());
 		}
 		else if (k == "noise") {
 			if (v.kind != json::Value::Kind::Object)

@@ -5,6 +5,7 @@
 #include <array>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace sim {
 
@@ -75,6 +76,9 @@ struct VehicleParams {
 	double esc_current_offset = 0.0; // A, each ESC's current reading at zero torque
 	unsigned sensors = kSensorAll;   // SensorBits served
 	std::array<double, 3> origin{{-23.2100, -45.8760, 640.0}}; // lat deg, lon deg, alt m MSL
+	// Plant times (s, ascending) at which the OpenGL local origin moves, as X-Plane's
+	// scenery shifts do (xplane_emit.hpp: xp_origin_offset).
+	std::vector<double> origin_shift_s;
 
 	double hover_throttle() const { return mass * g / (kRotors * kf); }
 	// Resolved noise sigmas (defaults relative to hover).

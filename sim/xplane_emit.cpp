@@ -29,7 +29,26 @@ void euler_from_rotation(const Eigen::Matrix3d &Rnf, double &roll, double &pitch
 	yaw = std::atan2(Rnf(1, 0), Rnf(0, 0));
 }
 
+// The origin's moves, east and north in m, cycled (xp_origin_offset).
+constexpr double kShiftMoves[4][2] = {{11200.0, -7400.0}, {-4600.0, 13900.0}, {9300.0, 5100.0}, {-15800.0, -2700.0}};
+
 } // namespace
+
+void xp_origin_offset(const VehicleParams &p, double t, double off[3])
+{
+	double e = 0, n = 0;
+	size_t k = 0;
+	for (double ts : p.origin_shift_s) {
+		if (ts > t)
+			break;
+		e += kShiftMoves[k % 4][0];
+		n += kShiftMoves[k % 4][1];
+		k++;
+	}
+	off[0] = -e;
+	off[1] = -(e * e + n * n) / (2 * kEarthR);
+	off[2] = n;
+}
 
 XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame)
 {
@@ -93,6 +112,12 @@ void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint6
 	f.lon = p.origin[1] + f.east / (kEarthR * std::cos(lat0)) * kDeg;
 	f.alt_msl_m = p.origin[2] + f.up;
 	f.agl_m = f.up;
+	double off[3] = {0, 0, 0};
+	if (!p.origin_shift_s.empty())
+		xp_origin_offset(p, f.t, off);
+	f.gl_x = f.east + off[0];
+	f.gl_y = f.alt_msl_m + off[1];
+	f.gl_z = -f.north + off[2];
 	f.crashed = m.crashed() ? 1.0 : 0.0;
 
 	// load factors: the accelerometer's reading of the specific force in the body (FLU)
@@ -252,13 +277,13 @@ xp::DataRow xp_row(const XpFrame &f, int row, int version)
 		r.col[3] = f32(f.agl_m * kFtPerM);
 		break;
 	case 21: { // OpenGL local position and velocity, distance from the origin
-		r.col[0] = f32(f.east);
-		r.col[1] = f32(f.alt_msl_m);
-		r.col[2] = f32(-f.north);
+		r.col[0] = f32(f.gl_x);
+		r.col[1] = f32(f.gl_y);
+		r.col[2] = f32(f.gl_z);
 		r.col[3] = f32(f.ve);
 		r.col[4] = f32(-f.vd);
 		r.col[5] = f32(-f.vn);
-		const double d = std::hypot(f.north, f.east);
+		const double d = std::hypot(f.gl_x, f.gl_z);
 		r.col[6] = f32(d * kFtPerM);
 		r.col[7] = f32(d / 1852.0);
 		break;
@@ -354,9 +379,9 @@ bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool ove
 		xp_frame_quat(f, q);
 		v = q[i];
 	}
-	else if (n == "local_x") v = f.east;
-	else if (n == "local_y") v = f.alt_msl_m;
-	else if (n == "local_z") v = -f.north;
+	else if (n == "local_x") v = f.gl_x;
+	else if (n == "local_y") v = f.gl_y;
+	else if (n == "local_z") v = f.gl_z;
 	else if (n == "local_vx") v = f.ve;
 	else if (n == "local_vy") v = -f.vd;
 	else if (n == "local_vz") v = -f.vn;

@@ -31,6 +31,7 @@ struct XpFrame {
 	double north = 0, east = 0, up = 0;      // m from the origin
 	double vn = 0, ve = 0, vd = 0;     // m/s (true, no noise)
 	double lat = 0, lon = 0, alt_msl_m = 0, agl_m = 0;
+	double gl_x = 0, gl_y = 0, gl_z = 0;     // OpenGL local position (m), origin shifts included
 	double g_nrml = 1, g_axil = 0, g_side = 0; // IMU load factors (+1 level, at rest)
 	RotorArray thro_cmd{};             // throttle driving each engine
 	RotorArray thro_act{};             // actuator output s_j
@@ -41,6 +42,14 @@ struct XpFrame {
 	RotorArray torque_abs_nm{};        // true engine torque (magnitude), N m
 	double crashed = 0;                // 1 after a crash (sim/flightmodel2/misc/has_crashed)
 };
+
+// The OpenGL local frame's displacement at plant time t (m, OpenGL axes): X-Plane moves
+// its origin at a scenery shift; the vehicle file's origin_shift_s says when. The k-th
+// shift (k = 1, 2, ...) moves the origin by the k-th entry of a fixed cycle of four moves
+// of 5 to 16 km (east, north); the local frame is the tangent plane at the new origin,
+// so y drops by the earth's curvature there, d^2 / 2R for the total move d. Latitude,
+// longitude, elevation and the velocities do not change.
+void xp_origin_offset(const VehicleParams &p, double t, double off[3]);
 
 // Quantities few rows and datarefs show, computed when they are asked for (from the
 // frame's fields alone, so the same frame gives the same values whenever that is):

@@ -244,6 +244,7 @@ void app_init(struct app *a, const struct hal *hal)
 	params_defaults(&a->p);
 	uint64_t now = hal_wall_us(a->hal);
 	mav_init(&a->mav, hal, now);
+	origin_init(&a->orig);
 	struct att_ctrl_params ap = att_ctrl_params_default();
 	att_ctrl_init(&a->att, &ap);
 	struct guid_params gp = guid_params_default();
@@ -897,6 +898,11 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	app_settle(a);   /* normally done by app_tick already (nothing left here) */
 	uint64_t now = hal_wall_us(a->hal);
 	a->fr = *f;
+	if (origin_correct(&a->orig, &a->fr))
+		app_status(a, APP_SEV_INFO, "Plant moved its local origin (%.0f m): position re-referenced",
+			   (double)sqrtf(a->orig.last_step[0] * a->orig.last_step[0] +
+					 a->orig.last_step[1] * a->orig.last_step[1] +
+					 a->orig.last_step[2] * a->orig.last_step[2]));
 	a->have_frame = true;
 	if (!a->link_ok)
 		link_back(a, a->link_ever ? (float)(now - a->link_lost_at_us) * 1e-6f : 0.0f);

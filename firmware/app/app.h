@@ -37,6 +37,7 @@
 #include "log.h"
 #include "mav.h"
 #include "mixer.h"
+#include "origin.h"
 #include "outbox.h"
 #include "params.h"
 #include "pos_ctrl.h"
@@ -76,7 +77,8 @@ struct app {
 	enum app_mode mode;
 
 	/* plant link */
-	struct hal_sensor_frame fr;
+	struct hal_sensor_frame fr;   /* the newest frame, its position made continuous (origin.h) */
+	struct origin orig;
 	bool have_frame, have_step;
 	uint64_t n_prev;              /* frame_n of the last step */
 	uint64_t per_n, per_us;       /* frame_n and t_us where the period's measurement started */

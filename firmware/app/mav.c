@@ -110,14 +110,6 @@ static void pack_attitude_q(const struct app *a, mavlink_message_t *msg)
 						  -f->rate_b_rps[2], zero);
 }
 
-static void pack_local_pos(const struct app *a, mavlink_message_t *msg)
-{
-	const struct hal_sensor_frame *f = &a->fr;
-	mavlink_msg_local_position_ned_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, boot_ms(a),
-						 f->pos_i_m[0], -f->pos_i_m[1], -f->pos_i_m[2],
-						 f->vel_i_mps[0], -f->vel_i_mps[1], -f->vel_i_mps[2]);
-}
-
 static void pack_actuator(const struct app *a, mavlink_message_t *msg)
 {
 	float act[32] = {0};
@@ -189,7 +181,6 @@ static const struct mav_stream streams[MAV_N_STREAMS] = {
 	{MAVLINK_MSG_ID_HEARTBEAT, 1000000u, pack_heartbeat, false},
 	{MAVLINK_MSG_ID_SYS_STATUS, 1000000u, pack_sys_status, false},
 	{MAVLINK_MSG_ID_ATTITUDE_QUATERNION, 100000u, pack_attitude_q, false},
-	{MAVLINK_MSG_ID_LOCAL_POSITION_NED, 100000u, pack_local_pos, false},
 	{MAVLINK_MSG_ID_ACTUATOR_OUTPUT_STATUS, 200000u, pack_actuator, false},
 	{MAVLINK_MSG_ID_SERVO_OUTPUT_RAW, 200000u, pack_servo, false},
 	{MAVLINK_MSG_ID_NAMED_VALUE_FLOAT, 500000u, pack_estimates, true},
@@ -476,9 +467,12 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 			return;
 		}
 		int s = id >= 0.0f && id < 65536.0f ? stream_index((uint32_t)id) : -1;
-		if (s >= 0 && !streams[s].direct) {
-			send_ack(a, cmd, MAV_RESULT_ACCEPTED, req);
-			send_stream(a, s);
+		if (s >= 0) {
+			/* the live estimates exist only while an experiment runs */
+			bool now = !streams[s].direct || a->mode == APP_EXPERIMENT;
+			send_ack(a, cmd, now ? MAV_RESULT_ACCEPTED : MAV_RESULT_TEMPORARILY_REJECTED, req);
+			if (now)
+				send_stream(a, s);
 			return;
 		}
 		if (id >= 0.0f && id < 65536.0f && mav_ftp_is_metadata_msg(&a->mav.ftp, (uint32_t)id)) {
@@ -506,6 +500,21 @@ static void handle_command(struct app *a, const mavlink_message_t *req, uint16_t
 			struct mav_telem_in in = telem_in(a);
 			mav_telem_request_send(&a->mav.telem, &in, MAVLINK_MSG_ID_HOME_POSITION, 0.0f, send_cb);
 		}
+		return;
+	}
+	case MAV_CMD_GET_MESSAGE_INTERVAL: {
+		/* ACK, then MESSAGE_INTERVAL: the interval in us, -1 disabled, 0 not available */
+		int32_t us = 0;
+		uint16_t id = prm[0] >= 0.0f && prm[0] < 65536.0f ? (uint16_t)prm[0] : 0;
+		int s = prm[0] >= 0.0f && prm[0] < 65536.0f ? stream_index(id) : -1;
+		if (s >= 0)
+			us = a->mav.interval_us[s] < 0 ? -1 : (int32_t)a->mav.interval_us[s];
+		else if (!mav_telem_get_interval(&a->mav.telem, id, &us))
+			us = 0;
+		send_ack(a, cmd, MAV_RESULT_ACCEPTED, req);
+		mavlink_message_t out;
+		mavlink_msg_message_interval_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &out, id, us);
+		send_msg(a, &out);
 		return;
 	}
 	case MAV_CMD_SET_MESSAGE_INTERVAL: {
@@ -605,6 +614,16 @@ static void handle(struct app *a, const mavlink_message_t *msg)
 	case MAVLINK_MSG_ID_FILE_TRANSFER_PROTOCOL:
 		handle_ftp(a, msg);
 		break;
+	case MAVLINK_MSG_ID_SET_GPS_GLOBAL_ORIGIN: {
+		mavlink_set_gps_global_origin_t o;
+		mavlink_msg_set_gps_global_origin_decode(msg, &o);
+		struct mav_telem_in in = telem_in(a);
+		if ((o.target_system == 0 || o.target_system == MAV_SYSID) &&
+		    !mav_telem_set_origin(&m->telem, &in, o.latitude, o.longitude, o.altitude, send_cb))
+			app_status(a, APP_SEV_WARNING, "Local origin kept: %s",
+				   in.armed ? "armed" : "no position yet");
+		break;
+	}
 	default:
 		break;
 	}

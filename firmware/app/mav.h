@@ -31,7 +31,7 @@
 
 #define MAV_SYSID 1
 #define MAV_COMPID 1
-#define MAV_N_STREAMS 7
+#define MAV_N_STREAMS 6
 
 struct app;
 struct hal;

@@ -12,7 +12,8 @@
 #define RAD_TO_DEG 57.29577951308232
 #define REREF_M 10.0                 /* row 20 and the projection disagree: new reference */
 
-enum { S_GLOBAL, S_GPS, S_ATTITUDE, S_VFR, S_EXT_STATE, S_CURRENT_MODE, S_HOME, S_BATTERY };
+enum { S_GLOBAL, S_GPS, S_ATTITUDE, S_VFR, S_EXT_STATE, S_CURRENT_MODE, S_HOME, S_BATTERY, S_LOCAL,
+       S_ORIGIN };
 
 static const struct {
 	uint32_t msgid;
@@ -24,8 +25,12 @@ static const struct {
 	[S_VFR] = {MAVLINK_MSG_ID_VFR_HUD, 250000},
 	[S_EXT_STATE] = {MAVLINK_MSG_ID_EXTENDED_SYS_STATE, 1000000},
 	[S_CURRENT_MODE] = {MAVLINK_MSG_ID_CURRENT_MODE, 2000000},
-	[S_HOME] = {MAVLINK_MSG_ID_HOME_POSITION, -1},
+	/* home also when it changes; periodically as PX4 does, so that a client that
+	 * subscribes after the change (MAVSDK's telemetry.home()) gets it within a second */
+	[S_HOME] = {MAVLINK_MSG_ID_HOME_POSITION, 1000000},
 	[S_BATTERY] = {MAVLINK_MSG_ID_BATTERY_STATUS, 1000000},
+	[S_LOCAL] = {MAVLINK_MSG_ID_LOCAL_POSITION_NED, 100000},
+	[S_ORIGIN] = {MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN, -1},
 };
 
 /* The modes as MAVLink's standard modes see them. None is user-selectable:
@@ -167,15 +172,29 @@ static int32_t mm(double m)
 
 /* ---- messages */
 
+/* home's x, y, z: in the local frame, from the local origin */
 static void send_home(const struct mav_telem *t, const struct mav_telem_in *in, mav_telem_send_fn send)
 {
 	const float q[4] = {1.0f, 0.0f, 0.0f, 0.0f};
+	float h[3];
+	for (int i = 0; i < 3; i++)
+		h[i] = t->home_ned[i] - t->origin_ned[i];
 	mavlink_message_t msg;
 	mavlink_msg_home_position_pack_chan(in->sysid, in->compid, in->chan, &msg, t->home_lat_e7,
-					    t->home_lon_e7, t->home_alt_mm, t->home_ned[0], t->home_ned[1],
-					    t->home_ned[2], q, 0.0f, 0.0f, 0.0f,
+					    t->home_lon_e7, t->home_alt_mm, h[0], h[1], h[2], q, 0.0f, 0.0f, 0.0f,
 					    (uint64_t)in->time_boot_ms * 1000u);
 	send(in->ctx, &msg);
+}
+
+static void send_origin(struct mav_telem *t, const struct mav_telem_in *in, mav_telem_send_fn send)
+{
+	double lat, lon, alt;
+	project(t, t->origin_ned, &lat, &lon, &alt);
+	mavlink_message_t msg;
+	mavlink_msg_gps_global_origin_pack_chan(in->sysid, in->compid, in->chan, &msg, e7(lat), e7(lon), mm(alt),
+						(uint64_t)in->time_boot_ms * 1000u);
+	send(in->ctx, &msg);
+	t->origin_sent = true;
 }
 
 static void send_current_mode(const struct mav_telem_in *in, mav_telem_send_fn send)
@@ -276,6 +295,18 @@ static bool send_stream(struct mav_telem *t, const struct mav_telem_in *in, int 
 			return false;
 		send_home(t, in, send);
 		return true;
+	case S_LOCAL:
+		if (!in->frame_ok || !t->origin_ok)
+			return false;
+		mavlink_msg_local_position_ned_pack_chan(in->sysid, in->compid, in->chan, &msg, in->time_boot_ms,
+							 ned[0] - t->origin_ned[0], ned[1] - t->origin_ned[1],
+							 ned[2] - t->origin_ned[2], vel[0], vel[1], vel[2]);
+		break;
+	case S_ORIGIN:
+		if (!t->origin_ok || !t->ref_ok)
+			return false;
+		send_origin(t, in, send);
+		return true;
 	case S_BATTERY: {
 		/* no battery is simulated: every field holds MAVLink's "unknown" value */
 		uint16_t v[10], vext[4];
@@ -301,6 +332,13 @@ void mav_telem_tick(struct mav_telem *t, const struct mav_telem_in *in, uint64_t
 	const struct hal_sensor_frame *f = in->fr;
 	if (in->frame_ok)
 		update_reference(t, f);
+	/* the local origin: the first position (the vehicle boots on the ground) */
+	if (in->frame_ok && !t->origin_ok && (f->valid & HAL_FRAME_POS)) {
+		ned_pos(f, t->origin_ned);
+		t->origin_ok = true;
+	}
+	if (t->origin_ok && t->ref_ok && !t->origin_sent)
+		send_origin(t, in, send);
 	/* home: on the ground once the position is known, and again at arming */
 	const bool arming = in->armed && !t->was_armed;
 	t->was_armed = in->armed;
@@ -359,8 +397,10 @@ int mav_telem_request_result(const struct mav_telem *t, uint32_t msgid, float pa
 	int s = stream_of(msgid);
 	if (s < 0)
 		return -1;
-	if (s == S_HOME && !t->home_ok)
-		return MAV_RESULT_TEMPORARILY_REJECTED;   /* no position yet */
+	/* no position yet */
+	if ((s == S_HOME && !t->home_ok) || (s == S_LOCAL && !t->origin_ok) ||
+	    (s == S_ORIGIN && !(t->origin_ok && t->ref_ok)) || ((s == S_GLOBAL || s == S_GPS) && !t->ref_ok))
+		return MAV_RESULT_TEMPORARILY_REJECTED;
 	return MAV_RESULT_ACCEPTED;
 }
 
@@ -393,6 +433,33 @@ int mav_telem_set_interval(struct mav_telem *t, uint32_t msgid, float interval_u
 		t->interval_us[s] = interval_us < 10000.0f ? 10000
 				    : (interval_us > 1.0e9f ? 1000000000 : (int64_t)interval_us);
 	return MAV_RESULT_ACCEPTED;
+}
+
+bool mav_telem_get_interval(const struct mav_telem *t, uint32_t msgid, int32_t *interval_us)
+{
+	int s = stream_of(msgid);
+	if (s < 0)
+		return false;
+	*interval_us = t->interval_us[s] < 0 ? -1 : (int32_t)t->interval_us[s];
+	return true;
+}
+
+bool mav_telem_set_origin(struct mav_telem *t, const struct mav_telem_in *in, int32_t lat_e7,
+			  int32_t lon_e7, int32_t alt_mm, mav_telem_send_fn send)
+{
+	if (in->armed || !t->ref_ok)
+		return false;
+	/* the inverse of project(): the geodetic point in the local frame */
+	const double lat = lat_e7 * 1e-7, lon = lon_e7 * 1e-7, alt = alt_mm * 1e-3;
+	t->origin_ned[0] = t->ref_ned[0] + (float)((lat - t->ref_lat_deg) / RAD_TO_DEG * EARTH_R_M);
+	t->origin_ned[1] = t->ref_ned[1] + (float)((lon - t->ref_lon_deg) / RAD_TO_DEG * EARTH_R_M *
+						   cos(t->ref_lat_deg / RAD_TO_DEG));
+	t->origin_ned[2] = t->ref_ned[2] - (float)(alt - t->ref_alt_m);
+	t->origin_ok = true;
+	send_origin(t, in, send);
+	if (t->home_ok)
+		send_home(t, in, send);
+	return true;
 }
 
 void mav_telem_sensors(const struct mav_telem_in *in, uint32_t *present, uint32_t *enabled,

@@ -1,6 +1,12 @@
 /* mav_telem.h - the telemetry common ground stations use (QGroundControl, MAVSDK,
- * MAVProxy): global position, GPS, attitude, HUD, home, landed state, standard
- * modes, sensor health.
+ * MAVProxy): local and global position, GPS, attitude, HUD, home, local origin,
+ * landed state, standard modes, sensor health.
+ *
+ * Frames as PX4 and ArduPilot give them: LOCAL_POSITION_NED is relative to the local
+ * origin, the position of the first frame that has one (the vehicle boots on the
+ * ground), kept across arming and moved only by SET_GPS_GLOBAL_ORIGIN while disarmed;
+ * GPS_GLOBAL_ORIGIN gives it geodetically. HOME_POSITION's x, y, z are home in that
+ * frame, and GLOBAL_POSITION_INT.relative_alt is the height above home.
  *
  * It reads only what it is given (struct mav_telem_in, rebuilt by the caller
  * for every call) and sends through a callback, so it does not depend on the
@@ -15,7 +21,7 @@
 
 #include "hal.h"
 
-#define MAV_TELEM_N_STREAMS 8
+#define MAV_TELEM_N_STREAMS 10
 
 /* The generated headers' message type, declared without them: struct mav (and
  * so app.h) embeds this module's state, and the app does not see MAVLink. */
@@ -42,6 +48,10 @@ struct mav_telem {
 	double ref_lat_deg, ref_lon_deg;
 	double ref_alt_m;
 	float ref_ned[3];
+	/* the local origin (NED, in the frame's continuous local position) */
+	bool origin_ok;
+	float origin_ned[3];
+	bool origin_sent;      /* GPS_GLOBAL_ORIGIN sent since it was last set */
 	/* home: set on the ground once the position is known, again at arming */
 	bool home_ok;
 	int32_t home_lat_e7, home_lon_e7, home_alt_mm;
@@ -71,6 +81,15 @@ void mav_telem_request_send(struct mav_telem *t, const struct mav_telem_in *in, 
 
 /* MAV_CMD_SET_MESSAGE_INTERVAL: MAV_RESULT, or -1 when msgid is not this module's. */
 int mav_telem_set_interval(struct mav_telem *t, uint32_t msgid, float interval_us);
+/* MAV_CMD_GET_MESSAGE_INTERVAL: true when msgid is this module's, with its interval
+ * (-1: only on change and on request, or disabled). */
+bool mav_telem_get_interval(const struct mav_telem *t, uint32_t msgid, int32_t *interval_us);
+
+/* SET_GPS_GLOBAL_ORIGIN: moves the local origin to (lat, lon in 1e-7 degrees, altitude
+ * MSL in mm) while disarmed; then GPS_GLOBAL_ORIGIN and HOME_POSITION go out. Returns
+ * false (nothing changed) when armed or when no geodetic position is known yet. */
+bool mav_telem_set_origin(struct mav_telem *t, const struct mav_telem_in *in, int32_t lat_e7,
+			  int32_t lon_e7, int32_t alt_mm, mav_telem_send_fn send);
 
 /* SYS_STATUS sensor bits (present, enabled, health) for what the plant link provides. */
 void mav_telem_sensors(const struct mav_telem_in *in, uint32_t *present, uint32_t *enabled,

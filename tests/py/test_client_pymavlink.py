@@ -97,3 +97,53 @@ def test_standard_modes_heartbeat_health_home_and_intervals(rig):
                    float("nan"))[0] == M.MAV_RESULT_DENIED
     assert rig.cmd(M.MAV_CMD_SET_MESSAGE_INTERVAL, 9999, 100000)[0] == unknown
     assert rig.cmd(M.MAV_CMD_REQUEST_MESSAGE, M.MAVLINK_MSG_ID_AVAILABLE_MODES, 7)[0] == M.MAV_RESULT_DENIED
+
+
+def local_positions(rig, seconds):
+    """LOCAL_POSITION_NED messages for `seconds` of wall time."""
+    out, deadline = [], time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        msg = rig.recv({"LOCAL_POSITION_NED"}, timeout=deadline - time.monotonic())
+        if msg is not None:
+            out.append(msg)
+    return out
+
+
+def test_local_position_ned_from_the_local_origin_in_a_hover_and_across_an_origin_shift(launch, port, tmp_path):
+    """LOCAL_POSITION_NED as PX4 and ArduPilot give it: from the local origin set on the ground
+    at the first position, so z is -10 in a 10 m hover (the truth log's height above the
+    take-off point), home is at the origin, relative_alt agrees with z; the plant's origin shift
+    (real time, plant second 30) leaves no step in it."""
+    from test_fw_rig import read_log
+    r = Rig(launch, port, tmp_path)
+    r.start_sim("--shift-origin", "30", lockstep=False)
+    r.start_fw()
+    r.connect()
+    first = local_positions(r, 1.0)
+    assert first and all(abs(m.z) < 0.1 and math.hypot(m.x, m.y) < 0.1 for m in first), first[:3]
+    r.takeoff_and_hold(10.0, timeout=30.0)
+    time.sleep(2.0)
+    before = local_positions(r, 2.0)
+    home = request(r, M.MAVLINK_MSG_ID_HOME_POSITION, "HOME_POSITION")[0]
+    assert abs(home.x) < 0.1 and abs(home.y) < 0.1 and abs(home.z) < 0.1, home
+    gp = r.recv({"GLOBAL_POSITION_INT"}, timeout=2)
+    deadline = time.monotonic() + 40.0
+    while not any(t.startswith("Plant moved its local origin") for t in r.texts):
+        assert time.monotonic() < deadline, r.texts[-10:]
+        r.recv(set(), timeout=0.1)
+    across = local_positions(r, 3.0)
+    r.sim.stop()
+    r.fw.stop()
+    truth = read_log(r.truth_log, "OCTO_TRUTH")
+    z0 = truth[0].pos_i[2]
+    hover = [t.pos_i[2] - z0 for t in truth if t.t > truth[-1].t - 12.0]
+    assert min(hover) > 9.7 and max(hover) < 10.3   # the truth hovers at 10 m
+    for m in before + across:
+        assert abs(m.z + 10.0) < 0.2, m              # done-when: within 0.2 m of -10
+    assert abs(gp.relative_alt / 1000.0 + sum(m.z for m in before) / len(before)) < 0.2
+    seq = first[-1:] + before + across
+    for a, b in zip(across, across[1:]):
+        assert max(abs(b.x - a.x), abs(b.y - a.y), abs(b.z - a.z)) < 0.3, (a, b)
+    # north and east against the truth (S_I: x north, y west)
+    tn, te = truth[-1].pos_i[0] - truth[0].pos_i[0], -(truth[-1].pos_i[1] - truth[0].pos_i[1])
+    assert abs(seq[-1].x - tn) < 0.3 and abs(seq[-1].y - te) < 0.3, (seq[-1], tn, te)

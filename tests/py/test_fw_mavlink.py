@@ -230,8 +230,11 @@ def test_autopilot_version_and_request_message(launch, port, tmp_path):
     assert v.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_MAVLINK2
     assert v.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE
     assert rig.cmd(mavlink.MAV_CMD_REQUEST_MESSAGE, 9999)[0] == mavlink.MAV_RESULT_UNSUPPORTED
-    r, _ = rig.cmd(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED)
+    r, _ = rig.cmd(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION)
     assert r == mavlink.MAV_RESULT_ACCEPTED
+    # no plant: no position, so no local origin yet
+    r, _ = rig.cmd(mavlink.MAV_CMD_REQUEST_MESSAGE, mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED)
+    assert r == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
 
 
 def test_heartbeat_and_message_intervals(launch, port, tmp_path):

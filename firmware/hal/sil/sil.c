@@ -318,6 +318,7 @@ static const char usage[] =
 	"  --reorder P  --start-time S   (see octo-sim --help; the plant clock starts at S,\n"
 	"                       --duration counts from there)\n"
 	"  --sensors LIST           what the plant serves: imu,rpm,torque,thrust (all)\n"
+	"  --shift-origin T         move the plant's local origin at T (repeatable)\n"
 	"  --lcm-sim URL            octo-sim's truth log (OCTO_TRUTH)\n"
 	"\n"
 	"run:\n"
