@@ -15,8 +15,8 @@
  * squares) is float in both builds: the sums are taken relative to a reference model near
  * the data (motor_id.h), so a residual sum of squares is not a small difference of large
  * products, and float holds the estimates well within 0.02 % of float64 in both builds (the
- * fixed build's 30-bit integer sums are rounded once to float; double there cost 1.5
- * times the soft-float instructions on Cortex-M0 for no change of accuracy that matters). */
+ * fixed build's 30-bit integer sums are rounded once to float; double there would cost
+ * more soft-float work on Cortex-M0 for no change of accuracy that matters). */
 
 /* a rotor's least-squares sums under one hypothesis (SI units): float st[S_N], in the order of
  * struct motor_id_stat's members and of their exponents MID_E_G11..MID_E_RR */
