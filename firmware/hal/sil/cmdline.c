@@ -5,40 +5,39 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char usage[] =
-	"usage: octo-sil [options]\n"
-	"  octo-fw's app and octo-sim's plant in one process, lockstep, deterministic: the\n"
-	"  X-Plane datagrams pass as bytes through both sides' encoders and decoders, without\n"
-	"  sockets. Same flags, same bytes (LCM logs, parameter file).\n"
-	"\n"
-	"firmware:\n"
-	"  --params FILE            parameter storage (loaded at start, saved atomically)\n"
-	"  --actuation dref|data25  throttles as DREFs (default) or one DATA row 25 datagram\n"
-	"  --lcm-fw URL             octo-fw's log (file://PATH: LCM log in simulated time)\n"
-	"  --mavlink-listen PORT    serve MAVLink on UDP PORT to watch a run (telemetry rates\n"
-	"  --gcs HOST:PORT          then in wall-clock time; ground station 127.0.0.1:14550)\n"
-	"\n"
-	"plant (octo-sim's flags):\n"
-	"  --vehicle FILE.json  --ideal  --seed N  --rate HZ  --step S  --xplane-version 11|12\n"
-	"  --rows LIST  --drop P  --burst N  --burst-prob P  --delay-frames K  --duplicate P\n"
-	"  --reorder P          (see octo-sim --help)\n"
-	"  --lcm-sim URL            octo-sim's truth log (OCTO_TRUTH)\n"
-	"\n"
-	"run:\n"
-	"  --duration S             stop after S simulated seconds (0: until the script ends\n"
-	"                           or SIGINT/SIGTERM)\n"
-	"  --script FILE|TEXT       the ground station's steps, one per line or ';':\n"
-	"                           param NAME VALUE, arm, takeoff H, wait hold, experiment N,\n"
-	"                           wait experiment, land, wait disarmed, sleep S.\n"
-	"                           Exit 0 when every step completed; 1 naming the step that\n"
-	"                           failed and the firmware's reason (--mission: the same)\n"
-	"  --quiet                  no firmware console messages on stderr\n"
-	"  --help                   this text\n"
-	"exit status: 0 done, 1 a script step failed or did not complete, 2 bad arguments\n";
+static const char usage[] = "usage: octo-sil [options]\n"
+			    "  octo-fw's app and octo-sim's plant in one process, lockstep, deterministic: the\n"
+			    "  X-Plane datagrams pass as bytes through both sides' encoders and decoders, without\n"
+			    "  sockets. Same flags, same bytes (LCM logs, parameter file).\n"
+			    "\n"
+			    "firmware:\n"
+			    "  --params FILE            parameter storage (loaded at start, saved atomically)\n"
+			    "  --actuation dref|data25  throttles as DREFs (default) or one DATA row 25 datagram\n"
+			    "  --lcm-fw URL             octo-fw's log (file://PATH: LCM log in simulated time)\n"
+			    "  --mavlink-listen PORT    serve MAVLink on UDP PORT to watch a run (telemetry rates\n"
+			    "  --gcs HOST:PORT          then in wall-clock time; ground station 127.0.0.1:14550)\n"
+			    "\n"
+			    "plant (octo-sim's flags):\n"
+			    "  --vehicle FILE.json  --ideal  --seed N  --rate HZ  --step S  --xplane-version 11|12\n"
+			    "  --rows LIST  --drop P  --burst N  --burst-prob P  --delay-frames K  --duplicate P\n"
+			    "  --reorder P          (see octo-sim --help)\n"
+			    "  --lcm-sim URL            octo-sim's truth log (OCTO_TRUTH)\n"
+			    "\n"
+			    "run:\n"
+			    "  --duration S             stop after S simulated seconds (0: until the script ends\n"
+			    "                           or SIGINT/SIGTERM)\n"
+			    "  --script FILE|TEXT       the ground station's steps, one per line or ';':\n"
+			    "                           param NAME VALUE, arm, takeoff H, wait hold, experiment N,\n"
+			    "                           wait experiment, land, wait disarmed, sleep S.\n"
+			    "                           Exit 0 when every step completed; 1 naming the step that\n"
+			    "                           failed and the firmware's reason (--mission: the same)\n"
+			    "  --quiet                  no firmware console messages on stderr\n"
+			    "  --help                   this text\n"
+			    "exit status: 0 done, 1 a script step failed or did not complete, 2 bad arguments\n";
 
 /* the flags that take a value and are octo-sil's, not the plant's */
-static const char *const own[] = {"--params",   "--actuation",     "--lcm-fw", "--lcm-sim", "--script",
-				  "--mission", "--duration", "--mavlink-listen", "--gcs"};
+static const char *const own[] = {"--params",  "--actuation", "--lcm-fw",         "--lcm-sim", "--script",
+				  "--mission", "--duration",  "--mavlink-listen", "--gcs"};
 
 static bool is_own(const char *flag)
 {

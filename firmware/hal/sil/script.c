@@ -16,14 +16,25 @@
 #define MAX_STEPS 512
 #define SEEN_TEXT 256
 
-enum step_kind { ST_PARAM, ST_ARM, ST_TAKEOFF, ST_WAIT_HOLD, ST_EXPERIMENT, ST_WAIT_EXP, ST_LAND, ST_WAIT_DISARMED, ST_SLEEP };
+enum step_kind {
+	ST_PARAM,
+	ST_ARM,
+	ST_TAKEOFF,
+	ST_WAIT_HOLD,
+	ST_EXPERIMENT,
+	ST_WAIT_EXP,
+	ST_LAND,
+	ST_WAIT_DISARMED,
+	ST_SLEEP
+};
 
 /* How long a step may take (platform clock, s) and how often a refused command
  * is retried (arm: until the vehicle has frames; experiment: until it hovers, or while it answers
  * TEMPORARILY_REJECTED). */
 static const double step_timeout_s[] = {
-	[ST_PARAM] = 1.0, [ST_ARM] = 10.0, [ST_TAKEOFF] = 1.0, [ST_WAIT_HOLD] = 60.0, [ST_EXPERIMENT] = 10.0,
-	[ST_WAIT_EXP] = 30000.0, [ST_LAND] = 1.0, [ST_WAIT_DISARMED] = 120.0, [ST_SLEEP] = 0.0,
+	[ST_PARAM] = 1.0,       [ST_ARM] = 10.0,         [ST_TAKEOFF] = 1.0, [ST_WAIT_HOLD] = 60.0,
+	[ST_EXPERIMENT] = 10.0, [ST_WAIT_EXP] = 30000.0, [ST_LAND] = 1.0,    [ST_WAIT_DISARMED] = 120.0,
+	[ST_SLEEP] = 0.0,
 };
 #define RETRY_S 0.5
 
@@ -31,18 +42,18 @@ struct step {
 	enum step_kind kind;
 	char name[17];
 	float value;
-	char text[STEP_TEXT];   /* the step as written, for messages */
+	char text[STEP_TEXT]; /* the step as written, for messages */
 };
 
 /* What the app last said on MAVLink, decoded as a ground station would: acknowledgements,
  * parameter values, and the status lines (STATUSTEXT) that carry the firmware's reasons. */
 struct seen {
-	bool ack;                  /* a COMMAND_ACK since the last clear */
+	bool ack; /* a COMMAND_ACK since the last clear */
 	uint16_t ack_command;
 	uint8_t ack_result;
-	bool exp_final;            /* the final ACK of MAV_CMD_USER_1 arrived */
+	bool exp_final; /* the final ACK of MAV_CMD_USER_1 arrived */
 	uint8_t exp_result;
-	bool param;                /* a PARAM_VALUE since the last clear */
+	bool param; /* a PARAM_VALUE since the last clear */
 	char param_id[17];
 	float param_value;
 	uint64_t texts;            /* reports seen so far */
@@ -58,9 +69,9 @@ struct seen {
 struct script {
 	struct step steps[MAX_STEPS];
 	size_t n, cur;
-	bool begun;             /* the current step has started */
-	bool quiet;             /* no line per step done */
-	uint64_t t0_us;         /* when it started */
+	bool begun;     /* the current step has started */
+	bool quiet;     /* no line per step done */
+	uint64_t t0_us; /* when it started */
 	uint64_t last_try_us;
 	char msg[640];
 	/* the vehicle and the time of the script_run in progress */
@@ -212,10 +223,7 @@ struct script *script_parse(const char *spec, bool quiet)
 	return m;
 }
 
-void script_free(struct script *m)
-{
-	free(m);
-}
+void script_free(struct script *m) { free(m); }
 
 const char *script_pending(struct script *m)
 {
@@ -251,7 +259,7 @@ static void note_chunk(struct script *m, const mavlink_statustext_t *t)
 {
 	enum { W = MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN };
 	char text[W + 1];
-	memcpy(text, t->text, W);   /* no NUL when full */
+	memcpy(text, t->text, W); /* no NUL when full */
 	text[W] = 0;
 	if (t->id == 0) {
 		note_text(m, text, t->severity);
@@ -290,7 +298,7 @@ void script_on_vehicle(struct script *m, const uint8_t *buf, size_t len)
 	for (size_t i = 0; i < len; i++) {
 		uint8_t r = mavlink_frame_char_buffer(&m->rx_msg, &m->rx_status, buf[i], &msg, &st);
 		if (r == MAVLINK_FRAMING_BAD_CRC || r == MAVLINK_FRAMING_BAD_SIGNATURE)
-			m->rx_status.parse_state = MAVLINK_PARSE_STATE_IDLE;   /* as mavlink_parse_char does */
+			m->rx_status.parse_state = MAVLINK_PARSE_STATE_IDLE; /* as mavlink_parse_char does */
 		if (r != MAVLINK_FRAMING_OK)
 			continue;
 		if (msg.msgid == MAVLINK_MSG_ID_COMMAND_ACK) {
@@ -303,7 +311,7 @@ void script_on_vehicle(struct script *m, const uint8_t *buf, size_t len)
 			}
 			if ((a.command == MAV_CMD_NAV_TAKEOFF || a.command == MAV_CMD_NAV_LAND) &&
 			    a.result == MAV_RESULT_FAILED)
-				m->seen.phase_failed = true;   /* the phase ran out of its time limit */
+				m->seen.phase_failed = true; /* the phase ran out of its time limit */
 			m->seen.ack = true;
 			m->seen.ack_command = a.command;
 			m->seen.ack_result = a.result;
@@ -337,7 +345,7 @@ static int command(struct script *m, uint16_t cmd, float p1, float p7)
 {
 	mavlink_message_t msg;
 	mavlink_msg_command_long_pack_status(GCS_SYSID, GCS_COMPID, &m->gcs_tx, &msg, 1, 1, cmd, 0, p1, 0, 0, 0, 0, 0,
-					   p7);
+					     p7);
 	m->seen.ack = false;
 	if (cmd == MAV_CMD_USER_1)
 		m->seen.exp_final = false;
@@ -399,7 +407,7 @@ static int wait_mode(struct script *m, enum app_mode want)
 {
 	if (m->app->mode == want)
 		return 1;
-	if (m->seen.phase_failed)   /* the firmware gave up the phase: its reason, at once */
+	if (m->seen.phase_failed) /* the firmware gave up the phase: its reason, at once */
 		return fail(m, "%s", m->seen.fail_text[0] ? m->seen.fail_text : "COMMAND_ACK FAILED, no reason given");
 	if (!waited_too_long(m))
 		return 0;
@@ -417,7 +425,7 @@ static int step(struct script *m, const struct step *st, bool first)
 	case ST_PARAM: {
 		mavlink_message_t msg;
 		mavlink_msg_param_set_pack_status(GCS_SYSID, GCS_COMPID, &m->gcs_tx, &msg, 1, 1, st->name, st->value,
-						MAV_PARAM_TYPE_REAL32);
+						  MAV_PARAM_TYPE_REAL32);
 		m->seen.param = false;
 		m->seen.text[0] = 0;
 		send_msg(m, &msg);
@@ -425,8 +433,8 @@ static int step(struct script *m, const struct step *st, bool first)
 			return fail(m, "no such parameter (%s)", m->seen.text[0] ? m->seen.text : "no answer");
 		if (m->seen.param_value != st->value) {
 			char d[400];
-			snprintf(d, sizeof d, "value is %g%s%s", (double)m->seen.param_value, m->seen.text[0] ? ": " : "",
-				 m->seen.text);
+			snprintf(d, sizeof d, "value is %g%s%s", (double)m->seen.param_value,
+				 m->seen.text[0] ? ": " : "", m->seen.text);
 			return fail(m, "refused, %s", d);
 		}
 		return 1;
@@ -453,7 +461,8 @@ static int step(struct script *m, const struct step *st, bool first)
 			return 1;
 		/* a vehicle still settling after take-off answers "not hovering"; one whose attitude
 		 * still oscillates (the guard lowering its gain), TEMPORARILY_REJECTED */
-		if ((r == MAV_RESULT_TEMPORARILY_REJECTED || (r == MAV_RESULT_DENIED && strstr(m->seen.text, "hover"))) &&
+		if ((r == MAV_RESULT_TEMPORARILY_REJECTED ||
+		     (r == MAV_RESULT_DENIED && strstr(m->seen.text, "hover"))) &&
 		    !waited_too_long(m))
 			return 0;
 		return refused(m, r);
@@ -466,7 +475,8 @@ static int step(struct script *m, const struct step *st, bool first)
 			/* a phase over its time limit: the firmware's "ID <phase> failed: ..." and what
 			 * it adds; otherwise its last ID line ("ID aborted: ...") */
 			const char *why = m->seen.fail_text[0] ? m->seen.fail_text
-					  : m->seen.id_text[0] ? m->seen.id_text : "no reason given";
+					  : m->seen.id_text[0] ? m->seen.id_text
+							       : "no reason given";
 			snprintf(d, sizeof d, "experiment ended %s (%s)", result_name(m->seen.exp_result), why);
 			return fail(m, "%s", d);
 		}
@@ -479,12 +489,9 @@ static int step(struct script *m, const struct step *st, bool first)
 		int r = command(m, MAV_CMD_NAV_LAND, 0.0f, 0.0f);
 		return r == MAV_RESULT_ACCEPTED ? 1 : refused(m, r);
 	}
-	case ST_WAIT_HOLD:
-		return wait_mode(m, APP_HOLD);
-	case ST_WAIT_DISARMED:
-		return wait_mode(m, APP_DISARMED);
-	case ST_SLEEP:
-		return (double)(m->now_us - m->t0_us) * 1e-6 >= (double)st->value - 1e-9 ? 1 : 0;
+	case ST_WAIT_HOLD: return wait_mode(m, APP_HOLD);
+	case ST_WAIT_DISARMED: return wait_mode(m, APP_DISARMED);
+	case ST_SLEEP: return (double)(m->now_us - m->t0_us) * 1e-6 >= (double)st->value - 1e-9 ? 1 : 0;
 	}
 	return -1;
 }
@@ -507,7 +514,8 @@ int script_run(struct script *m, struct app *app, uint64_t now_us)
 		if (r == 0)
 			return 0;
 		if (!m->quiet)
-			fprintf(stderr, "octo-sil: t=%.2f s: step %zu '%s' done\n", m->app->fr.t_s, m->cur + 1, st->text);
+			fprintf(stderr, "octo-sil: t=%.2f s: step %zu '%s' done\n", m->app->fr.t_s, m->cur + 1,
+				st->text);
 		m->cur++;
 		m->begun = false;
 	}
