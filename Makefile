@@ -109,6 +109,7 @@ include tests/core/probe.mk
 include tests/arm/arm.mk
 include tests/bench/bench.mk
 include tests/fuzz/fuzz.mk
+include tests/lint.mk
 
 # ---------------------------------------------------------------- top-level goals
 .PHONY: all test run campaign bench arm clean distclean help

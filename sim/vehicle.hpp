@@ -57,7 +57,7 @@ bool sensors_parse(const std::string &list, unsigned &bits, std::string &bad);
 struct VehicleParams {
 	double mass = 2.132;        // kg
 	double g = 9.796;           // m/s^2
-	double arm_length = 0.35;   // m (not in the paper; DESIGN.md's assumption)
+	double arm_length = 0.35;   // m (the paper gives none: an assumption)
 	double kf = 28.0269;        // N per unit throttle
 	double ktau = 0.3869;       // N m per unit throttle
 	std::array<double, 3> inertia{{0.0628, 0.0762, 0.1014}}; // kg m^2

@@ -3,41 +3,14 @@
  * (lag-aware and the paper's plain estimator side by side), inertia about one body axis,
  * validation statistics (NE, fit %), and the acceptance rule.
  *
- * ---------------------------------------------------------------- rotor coefficients
- * Plant (octo-sim, X-Plane): the throttle T_k computed from frame k is applied over
- * [t_k, t_(k+1)] (the UDP loop's one unavoidable frame), after a transport delay of D more
- * frames, through a first-order lag tau: s_(k+1) = a s_k + (1 - a) T_(k-D), a = exp(-dt/tau);
- * frame k+1 then reports f_1 = k_f g(s_(k+1)), tau_1 = k_tau g(s_(k+1)), g(s) = (1-c) s + c s^2.
- *
- * Lag-aware estimator: at frame k (measurement y_k = [f_1, tau_1]) the regressor is
- *     phi_k = g(s_hat_k),  s_hat_k = lag_tau(delay_D(T_(k-1)))
- * i.e. the throttle sent on the previous frame (the only one that can have acted), passed
- * through the modelled transport delay (D = ID_DELAY_FR frames) and the exact ZOH
- * discretisation of the modelled lag (tau = ID_MOT_TAU, a parameter, not estimated).
- * One RLS, 1 parameter, 2 outputs (k_f and k_tau share the regressor and P), no intercept,
- * lambda = 1. With the model right this is the plain least-squares problem with white
- * measurement noise: unbiased and efficient (var/CRLB ~ 1).
- *
- * Plain estimator (the paper's eq. 18-20): y_k regressed on the raw command T_k of the same
- * frame (no intercept), what Simulink does in the paper. It is biased whenever thrust lags:
- *     bias = -(E[d^2] - E[d d_lag]) / (T_h^2 + E[d^2])
- * with d the dither and d_lag what the plant's thrust sees of it at the same sample.
- * The update for frame k runs at frame k+1 (T_k is only known after the mixer), so the plain
- * estimator keeps the previous measurement.
- *
- * ---------------------------------------------------------------- inertia, one axis
- * Euler: tau = I w_dot + w x (I w), diagonal I: tau_i = I_i w_dot_i + (I_k - I_j) w_j w_k
- * (i, j, k cyclic). tau from the MEASURED rotor forces through Gamma_o (ident_body_torque);
- * the gyroscopic term with the current values of the two other inertias.
- * Sampled exactly: over one frame I_i (w_k - w_(k-1)) = integral of tau. Rotor thrusts are
- * first-order lags (tau_m) of throttles held over each frame, so that integral is exactly
- * dt (alpha tau_k + (1 - alpha) tau_(k-1)) with alpha = ident_torque_weight(tau_m, dt)
- * (1 without lag: the torque measured at frame k acted over the whole previous frame;
- * 0.53 for 30 ms at 90 Hz, near the trapezoid's 0.5). Torque (so weighted), rate and the
- * product w_j w_k pass through the SAME state-variable filter H (filt_svf) and
- *     y = H(tau~)_k - (I_k - I_j) H(w_j w_k)_k,  phi = (H(w)_k - H(w)_(k-1)) / dt
- * (the backward difference of the FILTERED rate: no raw differencing), y = I_i phi; RLS,
- * 1 parameter. Without noise this is exact for any H (tested to 1e-4 with the plant's lag).
+ * Rotor coefficients: one RLS (1 parameter, 2 outputs) of the measured thrust and torque of
+ * rotor 1 on the lag-aware regressor phi_k = g(s_hat_k), the previous frame's throttle through
+ * the modelled delay (ID_DELAY_FR) and lag (ID_MOT_TAU); beside it the paper's plain
+ * estimator (eqs. 18-20: the raw command of the same frame), biased whenever thrust lags.
+ * Inertia about axis i: Euler's equation sampled exactly over a frame, torque (from the
+ * measured rotor forces through Gamma_o), rate and gyroscopic product through the same
+ * state-variable filter, RLS of 1 parameter.
+ * The derivations: docs/identification.md, "Inertia and rotor coefficients".
  *
  * ---------------------------------------------------------------- number formats
  * One source, two builds (docs/number-formats.md). What runs every frame (ident.c: the

@@ -11,8 +11,8 @@
 /* Kept out of line for flash: the compiler would inline these at every use (sc_div's zero
  * test and sc_clamp's two compares are calls of their own on a core without FPU), and
  * preimage's locals would crowd the registers of its caller; scaled_rp and
- * attainable_scaled have several callers. A call costs a few
- * instructions per division or clamp; the allocator measured no slower on Cortex-M4F. */
+ * attainable_scaled have several callers. A call costs little beside a division or a
+ * clamp. */
 #if defined(__GNUC__)
 #define MIX_NOINLINE static __attribute__((noinline))
 #else

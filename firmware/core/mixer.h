@@ -1,74 +1,21 @@
 /*
  * mixer.h - Gamma_o mixer, eqs. (11)-(15): [f; tau] <-> rotor thrusts f_j (N).
  *
- * Geometry, eq. (14), rows [f; tau_x; tau_y; tau_z], columns rotors 1..8 (index 0..7),
- * s = sqrt(2)/2, k = k_tau / k_f:
- *     f     [  1     1     1     1     1     1     1     1  ]
- *     tau_x [  0   -s l   -l   -s l    0    s l    l    s l ]
- *     tau_y [ -l   -s l    0    s l    l    s l    0   -s l ]
- *     tau_z [  k    -k     k    -k     k    -k     k    -k  ]
- * A rotor cleared in `rotor_mask` is a zero column (rotor removed); `custom_gamma` replaces
- * the whole matrix for a different layout (then arm_l_m and the mask's columns are ignored /
- * applied on top respectively).
+ * Gamma (4 x 8, eq. 14, or a custom layout) maps rotor thrusts to [f; tau_x; tau_y; tau_z];
+ * a rotor cleared in rotor_mask is a zero column; per-rotor effectiveness (scale) scales the
+ * columns and the allocation runs on u_j = f_j / scale_j, whose box [k_f t_min, k_f t_max] is
+ * the same for every rotor.
  *
- * Per-rotor effectiveness (`scale`, MOT_SCALEj): rotor j gives scale_j times a nominal rotor's
- * thrust and torque at the same throttle. The allocation works on u_j, the thrust a nominal
- * rotor would give at rotor j's throttle (what the throttle map inverts, u_j = f_j / scale_j),
- * with the effective matrix Gamma S (S = diag(scale), columns scaled): u = (Gamma S)^+ [f; tau]
- * is the least-throttle allocation, and every rotor's box is the same in u, [k_f t_min,
- * k_f t_max], so a weak rotor's smaller thrust range is allocated around exactly (its
- * physical box is scale_j times that). Everything below (pseudo-inverse, null space, facets,
- * box) is of Gamma S in u; mixer_update returns the physical thrusts f_j = scale_j u_j.
+ * Set-up (mixer_init, mixer_set_params; off the 90 Hz path, float32 in both builds, results
+ * kept as scalar_t): the pseudo-inverse Gamma^+, the null space of Gamma, and the facet tables
+ * of the box-constrained allocator. mixer_set_params recomputes only when the geometry changed.
  *
- * Set-up (mixer_init / mixer_set_params; NOT the 90 Hz path; float32 in both builds, results
- * stored as scalar_t for the hot path):
- *   - Moore-Penrose pseudo-inverse Gamma^+ (8x4) from the Gram-Schmidt QR of Gamma's rows,
- *     Gamma^+ = Q (R R^T)^-1 R (general: any layout; a row within 1e-5 of its length of the
- *     span of the rows before it adds nothing to the rank), polished by two Newton-Schulz
- *     steps; an orthonormal basis of the null space of Gamma (8 x (8 - rank), 4 columns at
- *     full rank).
- *   - For the box-constrained allocator, in a "scaled space" (each row of Gamma divided by its
- *     largest |entry|, rotor thrust u = (f - f_lo) / (f_hi - f_lo) in [0, 1]): the facets of
- *     the attainable set (the zonotope Gamma [f_lo, f_hi]^8: one normal per 3 columns that
- *     span a hyperplane, duplicates merged) and of the sub-zonotopes of the preimage steps.
- *   mixer_set_params() recomputes only when l, k_f, k_tau, t_min/t_max, mask or layout changed.
- *
- * Update (mixer_update, 90 Hz): scalar_t arithmetic only (add, mul, div, one sqrt per
- * Gram-Schmidt row in the refinement; no trig, no float in the Q16.16 build).
- *   1. Unconstrained allocation, eq. (15) (with Gamma S): u = (Gamma S)^+ [f; tau] (removed
- *      rotors: 0).
- *   2. If every present u_j is inside [f_lo, f_hi] (f_lo = k_f t_min, f_hi = k_f t_max;
- *      throttle 1 = k_f by eqs. (16)-(17)): done (limits = 0, steps = 0).
- *   The steps below work on u likewise; the output is f_j = scale_j u_j.
- *   3. Otherwise, by mode:
- *      MIXER_MODE_CLIP     the baseline: clip each f_j to the box; flags by comparison.
- *      MIXER_MODE_PRIORITY box-constrained allocation, priority roll/pitch > thrust > yaw:
- *        a. attainable demand (exact facet test) -> target = demand, reproduced exactly;
- *        b. roll/pitch: if (F, tau_x, tau_y, 0) is attainable for some F, kept exactly; else
- *           scaled by the largest alpha in [0, 1] (direction kept) for which it is, found by
- *           MIXER_ALPHA_ITERS bisection steps; then no room is left for yaw (yaw target 0) and
- *           the thrust is the attainable one nearest to the demand;
- *        c. thrust (alpha = 1): the demanded f if attainable with some yaw beta tau_z,
- *           beta in [0, 1]; else the nearest such thrust (exact when the zero-yaw slice
- *           reaches it, otherwise MIXER_ALPHA_ITERS bisection steps towards the demand);
- *        d. yaw: the largest beta in [0, 1] attainable at that thrust (exact). beta >= 0:
- *           achieved yaw never has the opposite sign of the demanded yaw;
- *        e. rotor thrusts for the target: an exact preimage in the box in n_active - 4
- *           closed-form steps (each fixes one rotor inside the interval that keeps the rest
- *           attainable, nearest to the pseudo-inverse solution; then a 4x4 solve), a move along
- *           the null space back towards the pseudo-inverse solution, then at most
- *           MIXER_QP_ITERS active-set iterations towards the unique minimiser of
- *           |f - Gamma^+ target| over the box (every iterate feasible and exact; at the
- *           optimum mirrored demands give mirrored rotor outputs).
- *        Steps b-d keep an inner margin (3e-6 of a rotor's range in float, 3.7e-4 in Q16.16)
- *        so that the target is attainable despite rounding.
- *      Work is bounded: out->steps <= 2 MIXER_ALPHA_ITERS + (n_active - 4) + MIXER_QP_ITERS.
- *      Measured (QEMU instruction counts, paper vehicle, core built -Os): unconstrained 753
- *      instructions on Cortex-M4F (4,550 on M0 Q16.16); a demand that saturates one rotor
- *      (5 steps) 17,300 on M4F (108,000 on M0 Q16.16), more with more steps, only while a
- *      rotor saturates. Set-up: 490,000 on M4F.
- *      If the allocator is unavailable (rank(Gamma) < 4, fewer than 4 rotors, more facets than
- *      MIXER_MAX_FACETS / MIXER_MAX_SUB_FACETS), PRIORITY clips and sets MIXER_LIMIT_NO_ALLOC.
+ * Update (mixer_update, 90 Hz, scalar_t only): u = Gamma^+ [f; tau]; if a rotor leaves its
+ * box, MIXER_MODE_CLIP clips, MIXER_MODE_PRIORITY allocates exactly within the box with the
+ * priority roll/pitch > thrust > yaw (achieved yaw never of the opposite sign), in at most
+ * 2 MIXER_ALPHA_ITERS + (n_active - 4) + MIXER_QP_ITERS steps. Without an allocator (rank < 4,
+ * fewer than 4 rotors, facet tables too small) PRIORITY clips and sets MIXER_LIMIT_NO_ALLOC.
+ * The derivation: docs/identification.md, "Allocation".
  *
  * Accuracy (tests/core/test_mixer.c): float build: Gamma Gamma^+ = I4 to 1e-6; attainable
  * demands reproduced to 2e-4 N thrust, 1e-4 N m roll/pitch, 3e-5 N m yaw. Q16.16 build:
@@ -98,7 +45,7 @@
  * per-rotor scale (the counts depend on which columns are coplanar and, for the preimage
  * steps, on which four rotors come last: 44 is the most over every choice). A layout in general
  * position needs up to C(8,3) = 56 and 35+20+10 = 65: if they do not fit, the priority
- * allocator is disabled for that layout (MIXER_LIMIT_NO_ALLOC, clipping). Each costs 24 B of
+ * allocator is disabled for that layout (MIXER_LIMIT_NO_ALLOC, clipping). Each is a facet in
  * the caller's struct mixer. */
 #define MIXER_MAX_FACETS 26
 #define MIXER_MAX_SUB_FACETS 44

@@ -227,26 +227,12 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
 	return mixer_init_design(m, p, &d);
 }
 
-bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mixer_design *dz)
+/* The pseudo-inverse from the Gram-Schmidt QR of Gamma's rows: Gamma = R^T Q^T with Q
+ * (8 x rank) orthonormal (the row space, columns 0..rank-1 of basis) and R (rank x 4), so
+ * that Gamma^+ = Q (R^T)^+ = Q (R R^T)^-1 R. A row whose remainder after the earlier ones
+ * is below 1e-5 of its own length adds nothing to the rank. Returns the rank. */
+static int pseudo_inverse(struct mixer_design *dz, float basis[NR][NR])
 {
-	unsigned char *raw = (unsigned char *)m; /* zero the caller's structs without a template */
-	for (size_t b = 0; b < sizeof *m; b++)
-		raw[b] = 0;
-	raw = (unsigned char *)dz;
-	for (size_t b = 0; b < sizeof *dz; b++)
-		raw[b] = 0;
-	m->p = *p;
-	m->p.custom_gamma = NULL;
-	m->custom = p->custom_gamma != NULL;
-	build_gamma(dz, p);
-	for (int j = 0; j < NR; j++)
-		m->p.scale[j] = scale_used(p->scale[j]);
-
-	/* ---- pseudo-inverse from the Gram-Schmidt QR of Gamma's rows: Gamma = R^T Q^T with Q
-	 * (8 x rank) orthonormal (the row space, columns 0..rank-1 of basis) and R (rank x 4), so
-	 * that Gamma^+ = Q (R^T)^+ = Q (R R^T)^-1 R. A row whose remainder after the earlier ones
-	 * is below 1e-5 of its own length adds nothing to the rank. */
-	float basis[NR][NR]; /* columns: the row space of Gamma, then the null space */
 	float r[NA][NA] = { { 0 } }, x[NR], cf[NR];
 	int rank = 0;
 	for (int i = 0; i < NA; i++) {
@@ -278,10 +264,13 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 					acc += basis[j][k] * gi[k][l] * r[l][i];
 			dz->pinv_f[j][i] = acc;
 		}
-	m->rank = (uint8_t)rank;
-	dz->rank = (uint8_t)rank;
-	/* two Newton-Schulz steps P <- 2P - P Gamma P (converge to the Moore-Penrose inverse,
-	 * also when rank-deficient) polish the float32 result */
+	return rank;
+}
+
+/* Two Newton-Schulz steps P <- 2P - P Gamma P (converge to the Moore-Penrose inverse, also
+ * when rank-deficient) polish the float32 result. */
+static void polish_pinv(struct mixer_design *dz)
+{
 	for (int it = 0; it < 2; it++) {
 		float e[NA][NA]; /* I - Gamma P */
 		for (int i = 0; i < NA; i++)
@@ -295,9 +284,13 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 				dz->pinv_f[j][k] = np[k];
 		}
 	}
+}
 
-	/* ---- null space: complete the row space of Gamma (basis 0..rank-1) with unit vectors,
-	 * Gram-Schmidt */
+/* The null space: the row space of Gamma (basis 0..rank-1) completed with unit vectors,
+ * Gram-Schmidt, the one with the largest remainder first. */
+static void null_space(struct mixer_design *dz, float basis[NR][NR], int rank)
+{
+	float x[NR], cf[NR];
 	int nb = rank;
 	while (nb < NR) {
 		float best[NR] = { 0 }, bestn = -1.0f;
@@ -319,12 +312,13 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		nb++;
 	}
 	dz->n_null = (uint8_t)(NR - rank);
+}
 
-	for (int j = 0; j < NR; j++)
-		for (int i = 0; i < NA; i++)
-			m->pinv[j][i] = sc_from_float(dz->pinv_f[j][i]);
-
-	/* ---- box and row scaling */
+/* The thrust box [k_f t_min, k_f t_max] and Gamma's rows scaled by their largest entry
+ * (gsc, and m->gn in scalar_t). Returns false when the box is empty or a row is zero. */
+static bool box_and_rows(struct mixer *m, const struct mixer_params *p, const struct mixer_design *dz,
+			 float gsc[NA][NR])
+{
 	float kf = sc_to_float(p->k_f_n);
 	float tmin = sc_to_float(p->t_min), tmax = sc_to_float(p->t_max);
 	if (!(tmin >= 0.0f))
@@ -334,7 +328,6 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	float flo = kf * tmin, fhi = kf * tmax, width = fhi - flo;
 	m->f_lo = sc_from_float(flo);
 	m->f_hi = sc_from_float(fhi);
-	float gsc[NA][NR];
 	float rowmax[NA];
 	bool rows_ok = width > 0.0f;
 	for (int i = 0; i < NA; i++) {
@@ -359,8 +352,71 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 		}
 	}
 	m->width = sc_from_float(width);
+	return rows_ok;
+}
 
-	/* ---- allocator: present rotors, the best-conditioned 4 of them last */
+/* Every 4 of the na present rotors act[], as a mask over positions t (bit na-1-t): masks in
+ * descending order visit them lexicographically; the first of the largest |det| (within
+ * 1e-4) wins. Returns its mask (0: none) with its |det| in *det and its inverse in inv. */
+static unsigned best_four(float gsc[NA][NR], const uint8_t act[NR], int na, float *det, float inv[4][4])
+{
+	float bestdet = 0.0f, invs[2][4][4]; /* the best inverse so far (invs[bi]), the next */
+	unsigned best = 0;
+	int bi = 0;
+	for (unsigned mask = (1u << na) - 1u; mask; mask--) {
+		float mm[4][4];
+		int c = 0;
+		uint8_t col[NR]; /* the mask's rotors */
+		for (int t = 0; t < na; t++)
+			if (mask >> (na - 1 - t) & 1u)
+				col[c++] = act[t];
+		if (c != 4)
+			continue;
+		for (int k = 0; k < 16; k++)
+			mm[k / 4][k % 4] = gsc[k / 4][col[k % 4]];
+		float d = inv4(mm, invs[1 - bi]);
+		if (d > bestdet * 1.0001f) {
+			bestdet = d;
+			best = mask;
+			bi = 1 - bi;
+		}
+	}
+	*det = bestdet;
+	for (int c = 0; c < 4; c++)
+		for (int i = 0; i < NA; i++)
+			inv[c][i] = invs[bi][c][i];
+	return best;
+}
+
+/* The facets of the attainable set of all present rotors, and of what the rotors after each
+ * fixed one span (the allocator's sub-problems). Returns false when a table is too small. */
+static bool facet_tables(struct mixer *m, float gsc[NA][NR], const uint8_t act[NR], int na)
+{
+	int nfull = facets_of(gsc, act, na, m->facet, MIXER_MAX_FACETS);
+	bool fits = nfull > 0;
+	m->n_facets = (uint8_t)(nfull > 0 ? nfull : 0);
+	int used = 0;
+	for (int st = 0; st + 5 <= na; st++) {
+		int cnt = na - st - 1; /* generators left after fixing order[st] */
+		m->sub_first[st] = (uint8_t)used;
+		m->sub_n[st] = 0;
+		if (cnt > 4) {
+			int k = facets_of(gsc, &m->order[st + 1], cnt, &m->sub[used], MIXER_MAX_SUB_FACETS - used);
+			if (k < 0) {
+				fits = false;
+				break;
+			}
+			m->sub_n[st] = (uint8_t)k;
+			used += k;
+		}
+	}
+	return fits;
+}
+
+/* The allocator: present rotors, the best-conditioned 4 of them last, its inverse and the
+ * facet tables; m->alloc_ok when all of it exists. */
+static void allocator(struct mixer *m, const struct mixer_design *dz, float gsc[NA][NR], int rank, bool rows_ok)
+{
 	uint8_t act[NR];
 	int na = 0;
 	for (int j = 0; j < NR; j++) {
@@ -371,62 +427,51 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	}
 	m->n_active = (uint8_t)na;
 	m->alloc_ok = false;
-	if (rank == NA && na >= NA && rows_ok) {
-		/* every 4 of the na present rotors, as a mask over positions t (bit na-1-t): masks
-		 * in descending order visit them lexicographically; the first of the largest
-		 * |det| (within 1e-4) wins, its inverse kept */
-		float bestdet = 0.0f, invs[2][4][4]; /* the best inverse so far (invs[bi]), the next */
-		unsigned best = 0;
-		int bi = 0;
-		for (unsigned mask = (1u << na) - 1u; mask; mask--) {
-			float mm[4][4];
-			int c = 0;
-			uint8_t col[NR]; /* the mask's rotors */
-			for (int t = 0; t < na; t++)
-				if (mask >> (na - 1 - t) & 1u)
-					col[c++] = act[t];
-			if (c != 4)
-				continue;
-			for (int k = 0; k < 16; k++)
-				mm[k / 4][k % 4] = gsc[k / 4][col[k % 4]];
-			float d = inv4(mm, invs[1 - bi]);
-			if (d > bestdet * 1.0001f) {
-				bestdet = d;
-				best = mask;
-				bi = 1 - bi;
-			}
-		}
-		if (bestdet > 1e-4f) {
-			int no = 0; /* the others in order, then the best 4 */
-			for (int pass = 0; pass < 2; pass++)
-				for (int t = 0; t < na; t++)
-					if ((best >> (na - 1 - t) & 1u) == (unsigned)pass)
-						m->order[no++] = act[t];
-			for (int c = 0; c < 4; c++)
-				for (int i = 0; i < NA; i++)
-					m->tail_inv[c][i] = sc_from_float(invs[bi][c][i]);
-			int nfull = facets_of(gsc, act, na, m->facet, MIXER_MAX_FACETS);
-			bool fits = nfull > 0;
-			m->n_facets = (uint8_t)(nfull > 0 ? nfull : 0);
-			int used = 0;
-			for (int st = 0; st + 5 <= na; st++) {
-				int cnt = na - st - 1; /* generators left after fixing order[st] */
-				m->sub_first[st] = (uint8_t)used;
-				m->sub_n[st] = 0;
-				if (cnt > 4) {
-					int k = facets_of(gsc, &m->order[st + 1], cnt, &m->sub[used],
-							  MIXER_MAX_SUB_FACETS - used);
-					if (k < 0) {
-						fits = false;
-						break;
-					}
-					m->sub_n[st] = (uint8_t)k;
-					used += k;
-				}
-			}
-			m->alloc_ok = fits;
-		}
-	}
+	if (rank != NA || na < NA || !rows_ok)
+		return;
+	float bestdet, inv[4][4];
+	unsigned best = best_four(gsc, act, na, &bestdet, inv);
+	if (!(bestdet > 1e-4f))
+		return;
+	int no = 0; /* the others in order, then the best 4 */
+	for (int pass = 0; pass < 2; pass++)
+		for (int t = 0; t < na; t++)
+			if ((best >> (na - 1 - t) & 1u) == (unsigned)pass)
+				m->order[no++] = act[t];
+	for (int c = 0; c < 4; c++)
+		for (int i = 0; i < NA; i++)
+			m->tail_inv[c][i] = sc_from_float(inv[c][i]);
+	m->alloc_ok = facet_tables(m, gsc, act, na);
+}
+
+bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mixer_design *dz)
+{
+	unsigned char *raw = (unsigned char *)m; /* zero the caller's structs without a template */
+	for (size_t b = 0; b < sizeof *m; b++)
+		raw[b] = 0;
+	raw = (unsigned char *)dz;
+	for (size_t b = 0; b < sizeof *dz; b++)
+		raw[b] = 0;
+	m->p = *p;
+	m->p.custom_gamma = NULL;
+	m->custom = p->custom_gamma != NULL;
+	build_gamma(dz, p);
+	for (int j = 0; j < NR; j++)
+		m->p.scale[j] = scale_used(p->scale[j]);
+
+	float basis[NR][NR]; /* columns: the row space of Gamma, then the null space */
+	int rank = pseudo_inverse(dz, basis);
+	m->rank = (uint8_t)rank;
+	dz->rank = (uint8_t)rank;
+	polish_pinv(dz);
+	null_space(dz, basis, rank);
+	for (int j = 0; j < NR; j++)
+		for (int i = 0; i < NA; i++)
+			m->pinv[j][i] = sc_from_float(dz->pinv_f[j][i]);
+
+	float gsc[NA][NR];
+	bool rows_ok = box_and_rows(m, p, dz, gsc);
+	allocator(m, dz, gsc, rank, rows_ok);
 	return rank == NA;
 }
 

@@ -4,76 +4,12 @@
  * k_f, k_tau, thrust curve c and a per-rotor effectiveness (scale), each with its standard
  * deviation.
  *
- * ---------------------------------------------------------------- model
- * Rotor j: the throttle T_k sent at frame k acts after D more frames through a first-order
- * lag tau (exact ZOH discretisation): s_(k+1) = a s_k + (1 - a) T_(k-D), a = exp(-dt / tau);
- * frame k+1 reports f_j = m_j g(s), tau_j = rho m_j g(s), g(s) = (1 - c) s + c s^2,
- * m_j = scale_j k_f, rho = k_tau / k_f. D and tau are common to all rotors (one motor type,
- * one link); c is common; the scales are normalised to median 1, so k_f = median(m_j).
- *
- * ---------------------------------------------------------------- the bank
- * For every delay hypothesis D = 0..MOTOR_ID_DELAYS-1 and MOTOR_ID_LAGS lag values on a
- * geometric grid tau_D r^(i-1), i = 0..2, each rotor's command runs through that delay and
- * lag (s), and the per-rotor least-squares statistics of the thrust on the basis
- *     x = [s, s (s - 2 s_c)]     (s_c: the rotor's throttle at the start)
- * are accumulated: G = sum x x^T, b = sum x r, rr = sum r^2 with r = f - x^T theta_ref, the
- * residual of a reference model (common k_f and c), so that the sums do not cancel: the
- * prior at first; after MOTOR_ID_NREF frames of the first stage the fit so far, and at every
- * refinement the fit of the stage that ends (the statistics restart then, so nothing is
- * transformed). With the reference near the data SSR is not a small difference of large
- * sums, and its rounding (float or integer) stays far below the differences between lags. f = A s + B s (s - 2 s_c) is the curve model exactly: m = A + B (1 - 2 s_c),
- * c = B / m. The basis keeps G well conditioned at the low throttles of hover.
- * With curve estimation off the regressor is the prior curve's g (w^T x, one parameter).
- *
- * Selection by prediction error: J = sum over rotors of log SSR_j (every rotor's k_f and
- * curve fitted; -2/n times the log-likelihood with each rotor's noise unknown, so a rotor
- * no lag explains pulls the common lag little) is interpolated by a parabola in log tau
- * over the three lags; each delay's minimum is its lag. The grid is refined around it between frames
- * (motor_id_refine: wide ratio 2.5, then 1.3, then 1.08; a minimum beyond the grid keeps the
- * next grid wider, and one below the first grid walks twice as far, towards no lag; the statistics restart, the lag
- * filters keep running), so the last stage's data give the estimates. A minimum beyond the
- * second grid (a prior far from the lag) would leave the last grid wide (ratio up to 1.26),
- * whose interpolation biases the lag by a few % and k_f by several of its sds: then an
- * interim stage on that wider grid (55-65 % of the planned frames) places the last, 1.08 grid,
- * which starts at 65 % instead of 55 %. The final estimates
- * (motor_id_solve, between frames) take the delay of least interpolated SSR, its lag refined
- * by Newton steps on sum_j log SSR_j of the interpolated statistics, and the statistics at
- * that lag by quadratic interpolation over the grid (smooth in tau).
- * sd(tau) from the curvature of the profile criterion (the Fisher information of the lag with
- * k_f and c profiled out).
- *
- * k_tau: rho by regressing every rotor's measured torque on its measured thrust (no
- * intercept; the thrust noise biases it by -sigma_f^2 / mean(f^2), ~1e-4, corrected), so
- * k_tau = rho k_f with rho's and k_f's variances combined.
- *
- * Noise: while not excited (the experiment's settling second) the thrust noise is measured
- * from first differences (var(f_k - f_(k-1)) / 2: slow control motion cancels). The
- * acceptance compares the fit's residual variance with it (normalised error per rotor).
- *
- * Identifiability: k_f is thrust at FULL throttle; hovering rotors run near 0.1, so with the
- * curve estimated k_f is an extrapolation: d k_f / k_f = d c / (1 - c). Its sd includes that.
- * The sds of k_f, the curve and the scales also carry the lag's (their change with the lag
- * times its variance); k_f's part from the rotors is the variance of a median of eight
- * (0.19 of one rotor's, not the 0.5 of a mean of the two central ones).
- *
- * Whiteness (the data cannot fool the acceptance): at 75 % of the planned frames (85 % after
- * an interim stage: the last stage's first 20 % either way), the model of the hypothesis then best (or of the given delay) is frozen:
- * its lag (the criterion's minimum, a lag filter of its own started from the grid's states
- * interpolated there) and every rotor's k_f and curve, from the last stage's data so far. Over
- * the remaining frames each frame's one-step prediction error of every rotor under that model is taken, split by the rotor's
- * throttle level (three bins of s - s_c: below -0.025, within, above +0.025), and each
- * (rotor, level) series' normalised autocorrelation at lags 1..MOTOR_ID_WLAGS (about its own
- * mean) is accumulated. Under the model the prediction errors are the white measurement noise:
- * n sum_L rho_L^2 is chi-square with MOTOR_ID_WLAGS degrees of freedom (Box-Pierce), summed over
- * rotors and levels with their degrees. An error the model leaves (a lag or delay that is not
- * the plant's, a thrust curve not modelled, a rotor unlike the others) is a smooth function of
- * the recent commands, so it is correlated from frame to frame, which the test sees whatever
- * the noise level it is measured against (the normalised error needs that level). The sum over everything,
- * each rotor's and each level's sum are compared with their chi-square quantiles (Wilson-
- * Hilferty) at about 1e-3 false rejections in all; the one that fails names the cause (one
- * rotor: that rotor; one level: the thrust curve; else the dynamics). The frozen model's own
- * error (an estimate from the frames before) is of the order of its standard deviations: a
- * coloured error of a few noise variances in all, no measurable colour.
+ * Model: rotor j's throttle acts after a delay of D whole frames through a first-order lag
+ * tau; it reports thrust f_j = scale_j k_f g(s) and torque (k_tau / k_f) f_j, with the thrust
+ * curve g(s) = (1 - c) s + c s^2. A bank of least-squares fits over delay hypotheses and lag
+ * grids, refined between frames, chooses D and tau by prediction error; a whiteness test of
+ * the frozen model's one-step prediction errors guards the acceptance (enum motor_id_cause).
+ * The derivation: docs/identification.md, "The motor model".
  *
  * Core rules: no heap, globals or I/O; interfaces in scalar_t. The per-frame part (motor_id.c:
  * motor_id_step, motor_id_process, motor_id_hold: the command ring, the lag filters, the sums)
@@ -85,6 +21,7 @@
 #ifndef OCTO_MOTOR_ID_H
 #define OCTO_MOTOR_ID_H
 
+#include "motor_id_q.h"
 #include "scalar.h"
 
 #include <stdbool.h>
@@ -111,50 +48,7 @@ struct motor_id_cfg {
 	uint32_t delay_fr;       /* the given delay, frames (< MOTOR_ID_DELAYS) */
 };
 
-/* ---------------------------------------------------------------- number formats
- * The per-frame part (motor_id.c) is written once against these types; the float build keeps
- * float (the values in SI units), the fixed build (OCTO_FIXED) integers (qfmt.h, docs/number-formats.md):
- *   motor_id_u_t    Q1.30 (QF_UNIT_FRAC) int32: throttles, lag states s, regressors
- *                   x1 = s and x2 = s (s - 2 s_c) (in [-2, 1]), 1 - a of a lag, the curve
- *                   (c in [-0.5, 0.99], 1 - c); range [-2, 2), resolution 9.3e-10; saturates.
- *   motor_id_f_t    Q2.29 (QF_MOTN_FRAC) int32: thrusts and torques normalised by 2^kexp (the
- *                   power of two that brings the prior k_f into [0.5, 1)), residuals of the
- *                   reference model, prediction errors, the frozen model's changes of theta;
- *                   range [-4, 4) of the prior k_f (about 4 k_f0), resolution 1.9e-9 of it;
- *                   saturates (a thrust beyond 4 k_f0 is not a hovering rotor's).
- *   motor_id_sum_t  block floating point, int32 mantissa m with an exponent e shared by
- *                   every sum of one kind (motor_id_e_t): value = m 2^(e - QF_MSUM_FRAC) in
- *                   the normalised units. Each term is rounded to the current exponent; a
- *                   term of 2^29 or more first halves the whole kind (rounded) and raises e
- *                   until it fits, and a kind whose largest sum reached 2^29 is halved after
- *                   the frame, so sum and term stay below 2^29 and their sum below 2^30: no
- *                   overflow or wrap however long the run. e starts at MOTOR_ID_E0 at each
- *                   restart. Resolution 2^-28 to 2^-29 of the kind's largest sum.
- * Counts (frames, noise terms) are integers in both builds. */
-#if OCTO_FIXED
-typedef int32_t motor_id_u_t;
-typedef int32_t motor_id_f_t;
-typedef int32_t motor_id_sum_t;
-#else
-typedef float motor_id_u_t;
-typedef float motor_id_f_t;
-typedef float motor_id_sum_t;
-#endif
-typedef int8_t motor_id_e_t;
-/* every kind starts at this exponent (fine resolution, 2^-41 in normalised units): its first
- * terms raise it as far as they need */
-#define MOTOR_ID_E0 (-16)
-
-/* the kinds of sums, each with its exponent */
-enum {
-	MID_E_G11, MID_E_G12, MID_E_G22, MID_E_B1, MID_E_B2, MID_E_RR,   /* the bank */
-	MID_E_FF, MID_E_TF, MID_E_TT,    /* torque ratio */
-	MID_E_NZ,                        /* noise from differences */
-	MID_E_WSE, MID_E_WSEE,           /* whiteness: sum e; sums e^2 and e_k e_(k-L) */
-	MID_E_N
-};
-
-/* the whiteness test's sums (see above) */
+/* the whiteness test's sums (docs/identification.md, "Whiteness") */
 struct motor_id_white {
 	bool on;                 /* the last stage's model is frozen and the sums run */
 	uint8_t delay;           /* the hypothesis followed (its lag: grid index 1) */
@@ -170,7 +64,7 @@ struct motor_id_white {
 	      sl[MOTOR_ID_ROTORS][MOTOR_ID_WBINS][MOTOR_ID_WLAGS];
 };
 
-/* least-squares sums of one rotor under one hypothesis (see above) */
+/* least-squares sums of one rotor under one hypothesis (the bank) */
 struct motor_id_stat {
 	motor_id_sum_t g11, g12, g22, b1, b2, rr;
 };
@@ -199,7 +93,7 @@ struct motor_id {
 	bool nz_have;            /* the last frame taken was not excited (and none was lost since) */
 	bool refine_due;
 	bool white_due;          /* the whiteness model is to be frozen (between frames) */
-	bool reref_due, reref_done;   /* the first stage's early re-referencing (see above) */
+	bool reref_due, reref_done;   /* the first stage's early re-referencing (after MOTOR_ID_NREF frames) */
 	/* the frame motor_id_step took, waiting for motor_id_process (its commands sit in
 	 * hist's next slot, its noise sums are already taken) */
 	bool q_excited, q_pending;
@@ -257,10 +151,9 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg,
 /* One frame: thr_prev[8] = throttles sent on the previous frame, f[8] = measured thrusts
  * (N), tq[8] = measured reaction-torque magnitudes (N m) of this frame. excited = false: the
  * filters run and the noise is measured; true: the bank accumulates. The step only takes
- * the frame (and, when still, its noise sums; a few hundred instructions); the bank update
- * (15 hypotheses x 8 rotors, ~8,000 instructions on M4F) runs in motor_id_process, between
- * frames; a step that finds the previous frame still waiting processes it first, so nothing
- * is lost or reordered. */
+ * the frame (and, when still, its noise sums); the bank update (15 hypotheses x 8 rotors)
+ * runs in motor_id_process, between frames; a step that finds the previous frame still
+ * waiting processes it first, so nothing is lost or reordered. */
 void motor_id_step(struct motor_id *m, const scalar_t thr_prev[MOTOR_ID_ROTORS],
 		   const scalar_t f[MOTOR_ID_ROTORS], const scalar_t tq[MOTOR_ID_ROTORS], bool excited);
 

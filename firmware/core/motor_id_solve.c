@@ -15,8 +15,8 @@
  * squares) is float in both builds: the sums are taken relative to a reference model near
  * the data (motor_id.h), so a residual sum of squares is not a small difference of large
  * products, and float holds the estimates well within 0.02 % of float64 in both builds (the
- * fixed build's 30-bit integer sums are rounded once to float; double there cost 1.5
- * times the soft-float instructions on Cortex-M0 for no change of accuracy that matters). */
+ * fixed build's 30-bit integer sums are rounded once to float; double there would cost
+ * more soft-float work on Cortex-M0 for no change of accuracy that matters). */
 
 /* a rotor's least-squares sums under one hypothesis (SI units): float st[S_N], in the order of
  * struct motor_id_stat's members and of their exponents MID_E_G11..MID_E_RR */
@@ -765,24 +765,17 @@ NOINLINE static float ne_limit(float ne_max, float dof, float v_nz)
 	return fmaxf(ne_max, 1.0f + NE_SIGMAS * sqrtf(2.0f / fmaxf(dof, 1.0f) + v_nz));
 }
 
-void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_result *res)
-{
-	*res = (struct motor_id_result){0};
-	res->cause_rotor = -1;
-	const bool ec = m->cfg.est_curve;
-	const unsigned np = ec ? 2u : 1u;
-	res->n = m->n_stat;
-	/* the thrust noise (still frames): reported even when the excitation's data are too few */
-	const float nz_n = (float)m->nz_n;
-	float nz = div_pos(mid_sum_to_float(m->nz_ss, m->e[MID_E_NZ], 2, m->kexp), nz_n);
-	res->noise_sd = sqrt0(nz);
-	if (m->n_stat < 30u) {
-		res->cause = MOTOR_ID_NO_DATA;
-		return;
-	}
-	float dof = (float)(m->n_stat * NR) - (float)(np * NR) - 1.0f;
+/* the delay and the lag chosen (pick_lag) */
+struct lag_pick {
+	unsigned best;           /* the delay */
+	float x, var_x;          /* the lag on the grid's log scale, and its variance */
+	bool have_k, no_lag;     /* the criterion is convex there; the lag is below a frame's reach */
+};
 
-	/* the delay hypothesis of least criterion at its best lag */
+/* The delay hypothesis of least criterion at its best lag (or the given one), its margin over
+ * the next best, its lag refined by Newton steps with the lag's sd, and whether that is no lag. */
+static void pick_lag(const struct motor_id *m, struct motor_id_result *res, struct lag_pick *lp)
+{
 	float smin[ND], xs[ND], ks[ND];
 	unsigned best = delay_scan(m, xs, ks, smin);
 	res->free_delay = best;
@@ -815,51 +808,54 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->tau = 0.0f;
 		res->tau_sd = NO_LAG_FRAC * dtf;
 	}
+	*lp = (struct lag_pick){.best = best, .x = x, .var_x = var_x, .have_k = have_k, .no_lag = no_lag};
+}
 
-	/* every rotor at that lag: the common curve, each rotor's m, k_f = their median, scales */
-	struct fit f;
-	fit_at(m, best, x, &f, res->scale);
-	res->curve = f.curve;
-	res->curve_sd = f.curve_sd;
-	res->kf = f.kf;
-	float dkdc = (0.5f * (f.mj_e[f.ia] + f.mj_e[f.ib]) - res->kf) / FIT_EPS;
-	float vkf = MEDIAN8_VAR * 0.5f * (f.vm[f.ia] + f.vm[f.ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
-	for (unsigned j = 0; j < NR; j++)
-		res->scale_sd[j] = div_pos(sqrt0(f.vm[j]), res->kf);
+/* the normalised errors (residual over noise variance) of the rotors */
+struct ne_stats {
+	float hi, mid;           /* the largest, the median */
+	unsigned worst;          /* the rotor of the largest */
+};
 
-	/* the normalised errors */
-	float ne_hi = 0.0f, ne_sorted_mid;
-	unsigned worst = 0;
+static void normalised_errors(const struct fit *f, float nz, float dof, struct motor_id_result *res,
+			      struct ne_stats *ne)
+{
+	ne->hi = 0.0f;
+	ne->worst = 0;
 	for (unsigned j = 0; j < NR; j++) {
-		res->ne[j] = div_pos(f.s2[j], nz);
-		if (res->ne[j] > ne_hi) {
-			ne_hi = res->ne[j];
-			worst = j;
+		res->ne[j] = div_pos(f->s2[j], nz);
+		if (res->ne[j] > ne->hi) {
+			ne->hi = res->ne[j];
+			ne->worst = j;
 		}
 	}
-	res->ne_all = div_pos(f.ssr_sum / dof, nz);
+	res->ne_all = div_pos(f->ssr_sum / dof, nz);
 	unsigned ma, mb;
-	ne_sorted_mid = median8(res->ne, &ma, &mb);
-	res->curve_chi2 = div_pos(f.chi2, nz);
-	const float sf2 = fb_pos(nz) ? nz : f.ssr_sum / dof;   /* the thrust noise's variance for k_tau */
+	ne->mid = median8(res->ne, &ma, &mb);
+	res->curve_chi2 = div_pos(f->chi2, nz);
+}
 
-	/* the lag's share: k_f, curve and scales move with the lag (central differences; the lag's
-	 * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient
-	 * is orthogonal to their regressors) */
-	if (!no_lag && have_k) {
-		float kp, cp, sp[NR], sm[NR];
-		fit_at(m, best, x + LAG_H, &f, sp);   /* f's fit at x is no longer needed: stack on M0 */
-		kp = f.kf;
-		cp = f.curve;
-		fit_at(m, best, x - LAG_H, &f, sm);
-		vkf += lag_var(kp, f.kf, var_x);
-		res->curve_sd = sd_with_lag(res->curve_sd, cp, f.curve, var_x);
-		for (unsigned j = 0; j < NR; j++)
-			res->scale_sd[j] = sd_with_lag(res->scale_sd[j], sp[j], sm[j], var_x);
-	}
-	res->kf_sd = sqrt0(vkf);
+/* The lag's share: k_f, curve and scales move with the lag (central differences; the lag's
+ * error is uncorrelated with theirs at a fixed lag, to first order: the profile's gradient is
+ * orthogonal to their regressors). f is the caller's scratch (stack on M0). */
+static void add_lag_share(const struct motor_id *m, const struct lag_pick *lp, struct fit *f,
+			  struct motor_id_result *res, float *vkf)
+{
+	float kp, cp, sp[NR], sm[NR];
+	fit_at(m, lp->best, lp->x + LAG_H, f, sp);
+	kp = f->kf;
+	cp = f->curve;
+	fit_at(m, lp->best, lp->x - LAG_H, f, sm);
+	*vkf += lag_var(kp, f->kf, lp->var_x);
+	res->curve_sd = sd_with_lag(res->curve_sd, cp, f->curve, lp->var_x);
+	for (unsigned j = 0; j < NR; j++)
+		res->scale_sd[j] = sd_with_lag(res->scale_sd[j], sp[j], sm[j], lp->var_x);
+}
 
-	/* k_tau = rho k_f, rho from torque on thrust over every rotor (noise-corrected) */
+/* k_tau = rho k_f, rho from torque on thrust over every rotor (noise-corrected: sf2 is the
+ * thrust noise's variance); vkf: k_f's variance. */
+static void solve_ktau(const struct motor_id *m, float vkf, float sf2, struct motor_id_result *res)
+{
 	float ff = mid_sum_to_float(m->ff, m->e[MID_E_FF], 2, m->kexp), tf = mid_sum_to_float(m->tf, m->e[MID_E_TF], 2, m->kexp),
 	      tt = mid_sum_to_float(m->tt, m->e[MID_E_TT], 2, m->kexp);
 	float nall = (float)(m->n_exc * NR);
@@ -870,13 +866,21 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		rho *= ff / (ff - nall * sf2);
 	res->ktau = rho * res->kf;
 	res->ktau_sd = sqrt0(rho * rho * vkf + res->kf * res->kf * vrho);
+}
 
-	/* the cause, most specific first */
+/* The acceptance: res->cause (and cause_rotor), the most specific cause first. np: the
+ * parameters per rotor; dof: the fit's degrees of freedom over all rotors. */
+static void verdict(const struct motor_id *m, float ne_max, unsigned np, float dof, const struct lag_pick *lp,
+		    const struct ne_stats *ne, struct motor_id_result *res)
+{
+	const bool ec = m->cfg.est_curve;
+	const unsigned best = lp->best;
+	const bool no_lag = lp->no_lag;
 	float dof_j = (float)m->n_stat - (float)np;
 	float chi2_lim = (float)NR + CURVE_CHI2_SIGMAS * sqrtf(2.0f * (float)NR);
 	/* the normalised errors' limits (the noise's variance from first differences: about a
 	 * third of its count effective) */
-	float v_nz = m->nz_n > 0u ? 6.0f / nz_n : 1.0f;
+	float v_nz = m->nz_n > 0u ? 6.0f / (float)m->nz_n : 1.0f;
 	float lim_j = ne_limit(ne_max, dof_j, v_nz);
 	float lim_all = ne_limit(ne_max, dof, v_nz);
 	const bool fixd = m->cfg.fix_delay;
@@ -893,9 +897,9 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 	/* outside the last grid the statistics are extrapolated: a lag there (a prior far from
 	 * the truth left the grids short of it) came out 7 % off with a sd of 0.3 %, so it is
 	 * not accepted, whether the criterion is convex there or not */
-	else if (!no_lag && fabsf(x) > 1.0f)
+	else if (!no_lag && fabsf(lp->x) > 1.0f)
 		res->cause = MOTOR_ID_LAG_REACH;
-	else if (!no_lag && !have_k)
+	else if (!no_lag && !lp->have_k)
 		res->cause = MOTOR_ID_LAG_RANGE;
 	else if (!fixd && best == ND - 1u)
 		res->cause = MOTOR_ID_DELAY_RANGE;
@@ -905,13 +909,51 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->cause = white_c == MOTOR_ID_LEVEL && !ec ? MOTOR_ID_CURVE : white_c;
 		if (white_c == MOTOR_ID_ROTOR)
 			res->cause_rotor = white_rotor;
-	} else if (ne_hi > lim_j && ne_sorted_mid <= lim_j && fb_pos(dof_j)) {
+	} else if (ne->hi > lim_j && ne->mid <= lim_j && fb_pos(dof_j)) {
 		res->cause = MOTOR_ID_ROTOR;
-		res->cause_rotor = (int)worst;
+		res->cause_rotor = (int)ne->worst;
 	} else if (res->ne_all > lim_all)
 		res->cause = MOTOR_ID_MODEL;
 	else
 		res->cause = MOTOR_ID_OK;
+}
+
+void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_result *res)
+{
+	*res = (struct motor_id_result){0};
+	res->cause_rotor = -1;
+	const unsigned np = m->cfg.est_curve ? 2u : 1u;
+	res->n = m->n_stat;
+	/* the thrust noise (still frames): reported even when the excitation's data are too few */
+	float nz = div_pos(mid_sum_to_float(m->nz_ss, m->e[MID_E_NZ], 2, m->kexp), (float)m->nz_n);
+	res->noise_sd = sqrt0(nz);
+	if (m->n_stat < 30u) {
+		res->cause = MOTOR_ID_NO_DATA;
+		return;
+	}
+	float dof = (float)(m->n_stat * NR) - (float)(np * NR) - 1.0f;
+	struct lag_pick lp;
+	pick_lag(m, res, &lp);
+
+	/* every rotor at that lag: the common curve, each rotor's m, k_f = their median, scales */
+	struct fit f;
+	fit_at(m, lp.best, lp.x, &f, res->scale);
+	res->curve = f.curve;
+	res->curve_sd = f.curve_sd;
+	res->kf = f.kf;
+	float dkdc = (0.5f * (f.mj_e[f.ia] + f.mj_e[f.ib]) - res->kf) / FIT_EPS;
+	float vkf = MEDIAN8_VAR * 0.5f * (f.vm[f.ia] + f.vm[f.ib]) + dkdc * dkdc * res->curve_sd * res->curve_sd;
+	for (unsigned j = 0; j < NR; j++)
+		res->scale_sd[j] = div_pos(sqrt0(f.vm[j]), res->kf);
+	struct ne_stats ne;
+	normalised_errors(&f, nz, dof, res, &ne);
+	const float sf2 = fb_pos(nz) ? nz : f.ssr_sum / dof;   /* the thrust noise's variance for k_tau */
+	if (!lp.no_lag && lp.have_k)
+		add_lag_share(m, &lp, &f, res, &vkf);   /* f's fit at x is no longer needed */
+	res->kf_sd = sqrt0(vkf);
+
+	solve_ktau(m, vkf, sf2, res);
+	verdict(m, ne_max, np, dof, &lp, &ne, res);
 }
 
 /* The causes' texts and remedies, in the order of enum motor_id_cause, each ended by a NUL

@@ -7,9 +7,8 @@
  * y = [f_1, tau_1], theta = [k_f, k_tau] is two scalar problems sharing P (one gain updates k_f
  * and k_tau).
  *
- * P = U D U^T with U unit upper triangular, updated by Bierman's algorithm with forgetting
- * factor lambda:
- *     K = P phi / (lambda + phi^T P phi),  P <- (P - K phi^T P) / lambda,  theta_o += K e_o.
+ * P = U D U^T (U unit upper triangular) is updated by Bierman's algorithm with forgetting
+ * factor lambda (docs/identification.md, "Recursive least squares").
  *
  * Number representation (one source, two builds; docs/number-formats.md):
  *   - The algorithm runs on normalised signals: phi_n_i = phi_i 2^-phi_shift_i and
@@ -48,10 +47,8 @@
  *   - NaN/Inf guard: a non-finite input sample is rejected (RLS_REJECTED); if an update
  *     produces a non-finite value or D_i <= 0, the previous estimate is kept and the
  *     covariance is reset to p0 I (RLS_RESET).
- * Residual variance (per output): s_o <- lambda s_o + e_o^2 / (1 + phi^T P phi) with the a
- * priori error e_o, n_eff <- lambda n_eff + 1, var_o = s_o / max(n_eff - n_params, 1); with
- * lambda = 1 and a large p0 this is the batch residual variance SSR / (n - p).
- * Parameter std: sqrt(P_ii var_o) (the batch LS standard error when lambda = 1).
+ * Residual variance per output and parameter sds: with lambda = 1 and a large p0, the
+ * batch least-squares ones (SSR / (n - p), sqrt(P_ii var_o)).
  */
 #ifndef OCTO_RLS_H
 #define OCTO_RLS_H

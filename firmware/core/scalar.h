@@ -138,10 +138,10 @@ static inline scalar_t sc_from_int(int32_t i) { return sc_sat64((int64_t)i * 655
  * sign, and INT32_MIN (outside the range; the one r with r << 1 == 0 but r != 0, tested so
  * by a shift instead of loading the constant on Cortex-M0) becomes SC_MAX_NEG.
  * sca_add/sca_sub: always inline, for the hottest loops of the 90 Hz step, where a call
- * costs more than the operation (a few instructions of register moves and the call itself
- * on Cortex-M0). sc_add/sc_sub: the same, external inline definitions with their one copy in
- * scalar.c: a compiler optimising for size calls that copy (about 12 bytes less per use on
- * Cortex-M0), one optimising for speed inlines them. */
+ * costs more than the operation (register moves and the call itself on Cortex-M0).
+ * sc_add/sc_sub: the same, external inline definitions with their one copy in scalar.c: a
+ * compiler optimising for size calls that copy (smaller than a copy per use on Cortex-M0),
+ * one optimising for speed inlines them. */
 SC_ALWAYS_INLINE_EXT scalar_t sca_add(scalar_t a, scalar_t b)
 {
 	uint32_t r = (uint32_t)a + (uint32_t)b;
@@ -261,8 +261,8 @@ inline scalar_t sc_div_prepared(scalar_t a, scalar_t b, uint32_t ub, int s, uint
 scalar_t sc_div(scalar_t a, scalar_t b);
 
 /* sqrt(a 2^16) rounded to nearest, digit by digit in 32-bit words (no 64-bit arithmetic on
- * Cortex-M0); 0 for a <= 0. Out of line (scalar.c): a loop of about 200 instructions, whose
- * call costs little, used by several objects. */
+ * Cortex-M0); 0 for a <= 0. Out of line (scalar.c): a loop whose call costs little beside
+ * it, used by several objects. */
 scalar_t sc_sqrt(scalar_t a);
 
 static inline bool sc_isfinite(scalar_t a) { (void)a; return true; }
@@ -271,8 +271,7 @@ static inline bool sc_isfinite(scalar_t a) { (void)a; return true; }
  * Cortex-M0), for the trigonometry below: with constant shifts it stays in 32-bit words
  * there, where a 64-bit product and a variable 64-bit shift are library calls. Always
  * inline, as sc_qmul32w: the set point's sine and cosine make 16 of these products in every
- * step, and inline, with their shift a constant, each costs half as much (M0 fixed step
- * about 720 instructions less for 190 bytes). */
+ * step, and inline, with their shift a constant, each costs about half as much. */
 static inline SC_ALWAYS_INLINE void sc_umul32w(uint32_t a, uint32_t b, uint32_t *hi, uint32_t *lo)
 {
 	uint32_t al = a & 0xffffu, ah = a >> 16, bl = b & 0xffffu, bh = b >> 16;

@@ -37,8 +37,8 @@ struct thrmap {
 	scalar_t curve;
 	scalar_t one_minus_a; /* 1 - a */
 	/* 1 / (scale k_f) per rotor: thrmap_update's f -> u, one product (scalar_ops.h's
-	 * sc_gain; in the fixed build its mantissa and shift in two arrays, 5 B a rotor
-	 * instead of 8) */
+	 * sc_gain; in the fixed build its mantissa and shift in two arrays, smaller than a
+	 * pair of words) */
 #if OCTO_FIXED
 	uint32_t g_y[THRMAP_ROTORS];
 	uint8_t g_sh[THRMAP_ROTORS];

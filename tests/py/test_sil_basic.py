@@ -1,7 +1,7 @@
 """octo-sil: one process, lockstep by construction, deterministic.
 
 Same flags give byte-identical LCM logs and parameter files; another seed gives other
-bytes; a failing mission step ends the run with its message and exit status 1; every
+bytes; a failing script step ends the run with its message and exit status 1; every
 fault flag of octo-sim works in-process (its counters move and the flight completes).
 """
 
@@ -15,9 +15,9 @@ import pytest
 from conftest import binary, draw_inertia
 
 # the rotor experiment alone accepts k_f only with the motor lag known (ID_MOT_TAU)
-ID_MISSION = ("param VEH_MASS {mass}; param VEH_ARM_L {arm}; param ID_MOT_TAU {tau}; arm; takeoff 5; wait hold; "
+ID_SCRIPT = ("param VEH_MASS {mass}; param VEH_ARM_L {arm}; param ID_MOT_TAU {tau}; arm; takeoff 5; wait hold; "
               "experiment 1; wait experiment; land; wait disarmed")
-HOVER_MISSION = "arm; takeoff 5; wait hold; sleep 5; land; wait disarmed"
+HOVER_SCRIPT = "arm; takeoff 5; wait hold; sleep 5; land; wait disarmed"
 
 
 def random_vehicle(rng):
@@ -57,10 +57,10 @@ def vehicle(tmp_path):
 def test_same_flags_same_bytes_other_seed_other_bytes(tmp_path, vehicle):
     v, vpath = vehicle
     seed = random.randrange(1, 10**6)
-    mission = ID_MISSION.format(mass=v["mass"], arm=v["arm_length"], tau=v["motor_tau"])
+    script = ID_SCRIPT.format(mass=v["mass"], arm=v["arm_length"], tau=v["motor_tau"])
     runs = {}
     for name, s in (("a", seed), ("b", seed), ("c", seed + 1)):
-        r = sil(tmp_path, name, "--vehicle", vpath, "--seed", s, "--mission", mission)
+        r = sil(tmp_path, name, "--vehicle", vpath, "--seed", s, "--script", script)
         assert r.returncode == 0, r.stderr
         runs[name] = {f: (r.dir / f).read_bytes() for f in ("fw.lcm", "truth.lcm", "p.parm")}
     for f in ("fw.lcm", "truth.lcm", "p.parm"):
@@ -81,25 +81,25 @@ def test_same_flags_same_bytes_other_seed_other_bytes(tmp_path, vehicle):
 
 def test_failing_step_names_step_and_reason(tmp_path):
     # an experiment while not hovering: refused by the firmware with its reason
-    r = sil(tmp_path, "exp", "--mission", "arm; experiment 1")
+    r = sil(tmp_path, "exp", "--script", "arm; experiment 1")
     assert r.returncode == 1, r.stderr
-    m = re.search(r"mission step 2 'experiment 1' failed at t=[0-9.]+ s: refused: (\w+): (.+)", r.stderr)
+    m = re.search(r"script step 2 'experiment 1' failed at t=[0-9.]+ s: refused: (\w+): (.+)", r.stderr)
     assert m, r.stderr
     assert m.group(1) in ("DENIED", "TEMPORARILY_REJECTED") and "hover" in m.group(2)
 
 
 @pytest.mark.parametrize("weak", [(3, 4, 5), (0, 1, 7)])
-def test_crash_ends_the_mission_with_its_cause(tmp_path, weak):
+def test_crash_ends_the_script_with_its_cause(tmp_path, weak):
     # rotors the firmware does not know are nearly dead tip the vehicle at take-off: the
-    # plant's crash (too tilted a contact) ends the mission with when and how it hit
+    # plant's crash (too tilted a contact) ends the script with when and how it hit
     scale = [1.0] * 8
     for j in weak:
         scale[j] = round(random.uniform(0.0, 0.1), 3)
     vpath = tmp_path / "tip.json"
     vpath.write_text(json.dumps({"rotor_scale": scale}))
-    r = sil(tmp_path, "tip", "--vehicle", vpath, "--mission", "arm; takeoff 5; wait hold; sleep 5")
+    r = sil(tmp_path, "tip", "--vehicle", vpath, "--script", "arm; takeoff 5; wait hold; sleep 5")
     assert r.returncode == 1, r.stderr
-    m = re.search(r"mission step \d '[^']+' failed at t=([0-9.]+) s: the vehicle crashed at t=([0-9.]+) s: "
+    m = re.search(r"script step \d '[^']+' failed at t=([0-9.]+) s: the vehicle crashed at t=([0-9.]+) s: "
                   r"hit the ground at ([0-9.]+) m/s, ([0-9]+) deg from level", r.stderr)
     assert m, r.stderr
     assert float(m.group(1)) == pytest.approx(float(m.group(2)), abs=0.02)
@@ -109,26 +109,38 @@ def test_crash_ends_the_mission_with_its_cause(tmp_path, weak):
 
 
 def test_unknown_parameter_and_refused_value(tmp_path):
-    r = sil(tmp_path, "unknown", "--mission", "param NO_SUCH_PARAM 1")
+    r = sil(tmp_path, "unknown", "--script", "param NO_SUCH_PARAM 1")
     assert r.returncode == 1
     assert "step 1 'param NO_SUCH_PARAM 1' failed" in r.stderr and "no such parameter" in r.stderr
-    r = sil(tmp_path, "range", "--mission", "param VEH_MASS -5")
+    r = sil(tmp_path, "range", "--script", "param VEH_MASS -5")
     assert r.returncode == 1
     assert "step 1 'param VEH_MASS -5' failed" in r.stderr and "refused" in r.stderr
 
 
-def test_mission_not_completed_within_duration(tmp_path):
-    r = sil(tmp_path, "short", "--duration", "3", "--mission", HOVER_MISSION)
+def test_script_not_completed_within_duration(tmp_path):
+    r = sil(tmp_path, "short", "--duration", "3", "--script", HOVER_SCRIPT)
     assert r.returncode == 1
-    assert "mission not completed" in r.stderr and "'wait hold' still running" in r.stderr
+    assert "script not completed" in r.stderr and "'wait hold' still running" in r.stderr
 
 
 @pytest.mark.parametrize("text,line", [("arm\ntakeoff\n", 2), ("arm; fly away", 1), ("experiment 9", 1),
                                         ("param VEH_MASS two", 1), ("", None)])
-def test_bad_mission_text_exit_2(tmp_path, text, line):
-    r = sil(tmp_path, "bad", "--mission", text)
+def test_bad_script_text_exit_2(tmp_path, text, line):
+    r = sil(tmp_path, "bad", "--script", text)
     assert r.returncode == 2
     assert (f"line {line}:" in r.stderr) if line else "no steps" in r.stderr
+
+
+def test_mission_is_an_alias_of_script_and_help_lists_script(tmp_path):
+    for flag in ("--script", "--mission"):
+        r = sil(tmp_path, flag.strip("-"), flag, "param VEH_MASS 2.5")
+        assert r.returncode == 0, r.stderr
+        r = sil(tmp_path, flag.strip("-") + "-refused", flag, "param NO_SUCH_PARAM 1")
+        assert r.returncode == 1 and "script step 1 'param NO_SUCH_PARAM 1' failed" in r.stderr
+    r = sil(tmp_path, "alias-bad", "--mission", "fly away")
+    assert r.returncode == 2 and "--script: line 1:" in r.stderr
+    h = subprocess.run([str(binary("octo-sil")), "--help"], capture_output=True, text=True, timeout=30)
+    assert h.returncode == 0 and "--script FILE|TEXT" in h.stdout
 
 
 def test_bad_flags_exit_2(tmp_path):
@@ -148,7 +160,7 @@ def test_bad_flags_exit_2(tmp_path):
 ])
 def test_fault_flags_in_process(tmp_path, flags, counter):
     seed = random.randrange(1, 10**6)
-    r = sil(tmp_path, "f", "--seed", seed, *flags, "--mission", HOVER_MISSION)
+    r = sil(tmp_path, "f", "--seed", seed, *flags, "--script", HOVER_SCRIPT)
     assert r.returncode == 0, r.stderr
     c = counters(r.stderr)
     withheld = int(re.search(r"(\d+) withheld by faults", r.stderr).group(1))
@@ -158,7 +170,7 @@ def test_fault_flags_in_process(tmp_path, flags, counter):
         assert withheld == 2, r.stderr   # the first two frames: the answers come 2 frames late
     if flags[0] in ("--drop", "--burst"):
         assert withheld == c["fault_dropped"]
-    r0 = sil(tmp_path, "clean", "--seed", seed, "--mission", HOVER_MISSION)
+    r0 = sil(tmp_path, "clean", "--seed", seed, "--script", HOVER_SCRIPT)
     assert r0.returncode == 0
     assert (r.dir / "fw.lcm").read_bytes() != (r0.dir / "fw.lcm").read_bytes()
 
@@ -166,7 +178,7 @@ def test_fault_flags_in_process(tmp_path, flags, counter):
 @pytest.mark.parametrize("flags", [["--xplane-version", "11"], ["--actuation", "data25"], ["--ideal"],
                                    ["--rate", "60"], ["--step", "0.001"]])
 def test_simulation_flags_fly(tmp_path, flags):
-    r = sil(tmp_path, "s", *flags, "--mission", HOVER_MISSION)
+    r = sil(tmp_path, "s", *flags, "--script", HOVER_SCRIPT)
     assert r.returncode == 0, r.stderr
     assert "step 6 'wait disarmed'" not in r.stderr   # --quiet: no progress lines
     # every frame answered in its own pass (lockstep by construction)
@@ -185,9 +197,9 @@ def test_identification_from_a_far_nominal_kf(tmp_path, draw, ratio):
     v["motor_tau"] = round(rng.uniform(0.02, 0.06), 3)
     path = tmp_path / "vehicle.json"
     path.write_text(json.dumps(v))
-    mission = (f"param VEH_KF {v['kf'] * ratio:.4f}; param VEH_MASS {v['mass']}; arm; takeoff 5; wait hold; "
-               "experiment 1; wait experiment; land; wait disarmed")
-    r = sil(tmp_path, "far", "--vehicle", path, "--seed", draw, "--mission", mission)
+    script = (f"param VEH_KF {v['kf'] * ratio:.4f}; param VEH_MASS {v['mass']}; arm; takeoff 5; wait hold; "
+              "experiment 1; wait experiment; land; wait disarmed")
+    r = sil(tmp_path, "far", "--vehicle", path, "--seed", draw, "--script", script)
     assert r.returncode == 0, r.stderr[-2000:]
     parm = dict(line.split() for line in (r.dir / "p.parm").read_text().splitlines()
                 if line and not line.startswith("#"))

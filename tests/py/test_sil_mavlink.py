@@ -10,14 +10,14 @@ from pymavlink import mavutil  # noqa: E402
 from conftest import wait_until  # noqa: E402
 
 
-def test_ground_station_watches_an_in_process_mission(launch, port, tmp_path):
+def test_ground_station_watches_an_in_process_script(launch, port, tmp_path):
     mav, gcs_port = port(), port()
     conn = mavutil.mavlink_connection(f"udpin:127.0.0.1:{gcs_port}", source_system=255, dialect="common")
     try:
         # a long hover: seconds of wall time at thousands of times real time
         sil = launch("octo-sil", "--mavlink-listen", mav, "--gcs", f"127.0.0.1:{gcs_port}",
                      "--params", tmp_path / "p.parm",
-                     "--mission", "arm; takeoff 5; wait hold; sleep 6000; land; wait disarmed")
+                     "--script", "arm; takeoff 5; wait hold; sleep 6000; land; wait disarmed")
         hb = conn.recv_match(type="HEARTBEAT", blocking=True, timeout=10)
         assert hb is not None, "no heartbeat"
         assert hb.type == mavutil.mavlink.MAV_TYPE_OCTOROTOR

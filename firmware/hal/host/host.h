@@ -22,6 +22,7 @@
 
 #include "app.h"
 #include "hal.h"
+#include "host_report.h"
 #include "xp_client.h"
 
 typedef struct _lcm_t lcm_t;
@@ -79,9 +80,6 @@ struct host {
 };
 /* Sets h->hal to the host's functions with h as their context. */
 void host_hal_bind(struct host *h);
-/* One line "octo-fw: ..." on stderr: the console of param_file.c and xp_client.c.
- * Defined by the program that links them (host_hal.c here, hal/sil/sil.c for octo-sil). */
-void host_report(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
 /* udp_addr.c: command-line ports and HOST:PORT (0, or -1 with a message naming prog,
  * flag and value) and the non-blocking MAVLink socket on all addresses (fd or -1). */

@@ -1,7 +1,7 @@
 /* xp_client.c - X-Plane client: rows, version, conventions, actuation (see xp_client.h). */
 #include "xp_client.h"
 
-#include "host.h"
+#include "host_report.h"
 
 #include <errno.h>
 #include <fcntl.h>

@@ -1,6 +1,6 @@
 /*
- * sil.c - octo-sil: command line, the lockstep loop, and the struct hal of the
- * in-process platform (see sil.h).
+ * sil.c - octo-sil: the lockstep loop and the struct hal of the in-process platform
+ * (see sil.h; the command line is cmdline.c, the ground station's steps script.c).
  *
  * Clock: the struct hal's wall_us is the platform clock. Without a ground station it is
  * virtual: it starts at 1 s and advances by one frame period per pass of the
@@ -27,7 +27,7 @@
 #include <common/mavlink.h>
 
 #include "host.h"
-#include "mission.h"
+#include "script.h"
 
 /* ---------------------------------------------------------------- struct hal */
 
@@ -71,106 +71,15 @@ static void plant_stats(void *ctx, struct hal_plant_stats *out)
 	*out = s->xp.stats;
 }
 
-static void note_text(struct sil *s, const char *text, int severity)
-{
-	snprintf(s->seen.text, sizeof s->seen.text, "%s", text);
-	if (severity <= MAV_SEVERITY_ERROR) {
-		/* the firmware's reason for a failure: its "... failed: ..." line and what it adds */
-		char *f = s->seen.fail_text;
-		size_t n = strlen(f);
-		if (strstr(text, "failed"))
-			snprintf(f, sizeof s->seen.fail_text, "%s", text);
-		else if (n > 0 && n < sizeof s->seen.fail_text)
-			snprintf(f + n, sizeof s->seen.fail_text - n, "; %s", text);
-	}
-	if (!strncmp(text, "ID", 2))
-		snprintf(s->seen.id_text, sizeof s->seen.id_text, "%s", text);
-	s->seen.texts++;
-}
-
-/* A STATUSTEXT: id 0 is a whole line; a nonzero id is one chunk of a long line, joined until
- * the chunk that is not full (its NUL ends the line). A chunk out of order restarts the line
- * from what arrived, marked "[...]" (the link is in-process: only a bug could cause it). */
-static void note_chunk(struct sil *s, const mavlink_statustext_t *t)
-{
-	enum { W = MAVLINK_MSG_STATUSTEXT_FIELD_TEXT_LEN };
-	char text[W + 1];
-	memcpy(text, t->text, W);   /* no NUL when full */
-	text[W] = 0;
-	if (t->id == 0) {
-		note_text(s, text, t->severity);
-		return;
-	}
-	char *c = s->seen.chunks;
-	if (t->id != s->seen.chunk_id || t->chunk_seq != s->seen.chunk_next) {
-		snprintf(c, sizeof s->seen.chunks, "%s", t->chunk_seq == 0 ? "" : "[...]");
-		s->seen.chunk_id = t->id;
-	}
-	size_t n = strlen(c);
-	if (n < sizeof s->seen.chunks)
-		snprintf(c + n, sizeof s->seen.chunks - n, "%s", text);
-	s->seen.chunk_next = (uint8_t)(t->chunk_seq + 1u);
-	if (strlen(text) < W) {
-		note_text(s, c, t->severity);
-		c[0] = 0;
-		s->seen.chunk_id = 0;
-	}
-}
-
-/* The app's MAVLink output: decoded for the mission (acks, parameter values,
- * status lines), and sent to the ground station when one is served. */
+/* The app's MAVLink output: to the ground station when one is served, and to the
+ * script (acknowledgements, parameter values, status lines). */
 static void ground_send(void *ctx, const uint8_t *buf, size_t len)
 {
 	struct sil *s = ctx;
 	if (s->mav_fd >= 0)
 		(void)sendto(s->mav_fd, buf, len, 0, (const struct sockaddr *)&s->gcs, sizeof s->gcs);
-	if (!s->mission)
-		return;
-	/* The app hands over one message per call: only acknowledgements, parameter
-	 * values and status lines concern the mission, the telemetry is skipped by
-	 * its id (MAVLink 2: 0xFD, then the id in bytes 7..9) without running the
-	 * parser over it. */
-	if (len >= 10 && buf[0] == MAVLINK_STX) {
-		uint32_t id = (uint32_t)buf[7] | (uint32_t)buf[8] << 8 | (uint32_t)buf[9] << 16;
-		if (id != MAVLINK_MSG_ID_COMMAND_ACK && id != MAVLINK_MSG_ID_PARAM_VALUE &&
-		    id != MAVLINK_MSG_ID_STATUSTEXT)
-			return;
-	}
-	mavlink_message_t msg;
-	mavlink_status_t st;
-	for (size_t i = 0; i < len; i++) {
-		uint8_t r = mavlink_frame_char_buffer(&s->rx_msg, &s->rx_status, buf[i], &msg, &st);
-		if (r == MAVLINK_FRAMING_BAD_CRC || r == MAVLINK_FRAMING_BAD_SIGNATURE)
-			s->rx_status.parse_state = MAVLINK_PARSE_STATE_IDLE;   /* as mavlink_parse_char does */
-		if (r != MAVLINK_FRAMING_OK)
-			continue;
-		if (msg.msgid == MAVLINK_MSG_ID_COMMAND_ACK) {
-			mavlink_command_ack_t a;
-			mavlink_msg_command_ack_decode(&msg, &a);
-			if (a.command == MAV_CMD_USER_1 && a.result != MAV_RESULT_IN_PROGRESS) {
-				/* a refusal, or the final answer of a running experiment */
-				s->seen.exp_final = true;
-				s->seen.exp_result = a.result;
-			}
-			if ((a.command == MAV_CMD_NAV_TAKEOFF || a.command == MAV_CMD_NAV_LAND) &&
-			    a.result == MAV_RESULT_FAILED)
-				s->seen.phase_failed = true;   /* the phase ran out of its time limit */
-			s->seen.ack = true;
-			s->seen.ack_command = a.command;
-			s->seen.ack_result = a.result;
-		} else if (msg.msgid == MAVLINK_MSG_ID_PARAM_VALUE) {
-			mavlink_param_value_t v;
-			mavlink_msg_param_value_decode(&msg, &v);
-			memcpy(s->seen.param_id, v.param_id, 16);
-			s->seen.param_id[16] = 0;
-			s->seen.param_value = v.param_value;
-			s->seen.param = true;
-		} else if (msg.msgid == MAVLINK_MSG_ID_STATUSTEXT) {
-			mavlink_statustext_t t;
-			mavlink_msg_statustext_decode(&msg, &t);
-			note_chunk(s, &t);
-		}
-	}
+	if (s->script)
+		script_on_vehicle(s->script, buf, len);
 }
 
 static bool ground_signing_key(void *ctx, uint8_t key[32])
@@ -297,41 +206,7 @@ static void mavlink_in(struct sil *s)
 	}
 }
 
-/* ---------------------------------------------------------------- command line */
-
-static const char usage[] =
-	"usage: octo-sil [options]\n"
-	"  octo-fw's app and octo-sim's plant in one process, lockstep, deterministic: the\n"
-	"  X-Plane datagrams pass as bytes through both sides' encoders and decoders, without\n"
-	"  sockets. Same flags, same bytes (LCM logs, parameter file).\n"
-	"\n"
-	"firmware:\n"
-	"  --params FILE            parameter storage (loaded at start, saved atomically)\n"
-	"  --actuation dref|data25  throttles as DREFs (default) or one DATA row 25 datagram\n"
-	"  --lcm-fw URL             octo-fw's log (file://PATH: LCM log in simulated time)\n"
-	"  --mavlink-listen PORT    serve MAVLink on UDP PORT to watch a run (telemetry rates\n"
-	"  --gcs HOST:PORT          then in wall-clock time; ground station 127.0.0.1:14550)\n"
-	"\n"
-	"plant (octo-sim's flags):\n"
-	"  --vehicle FILE.json  --ideal  --seed N  --rate HZ  --step S  --xplane-version 11|12\n"
-	"  --rows LIST  --drop P  --burst N  --burst-prob P  --delay-frames K  --duplicate P\n"
-	"  --reorder P  --start-time S   (see octo-sim --help; the plant clock starts at S,\n"
-	"                       --duration counts from there)\n"
-	"  --sensors LIST           what the plant serves: imu,rpm,torque,thrust (all)\n"
-	"  --shift-origin T         move the plant's local origin at T (repeatable)\n"
-	"  --lcm-sim URL            octo-sim's truth log (OCTO_TRUTH)\n"
-	"\n"
-	"run:\n"
-	"  --duration S             stop after S simulated seconds (0: until the mission ends\n"
-	"                           or SIGINT/SIGTERM)\n"
-	"  --mission FILE|TEXT      the ground station's steps, one per line or ';':\n"
-	"                           param NAME VALUE, arm, takeoff H, wait hold, experiment N,\n"
-	"                           wait experiment, land, wait disarmed, sleep S.\n"
-	"                           Exit 0 when every step completed; 1 naming the step that\n"
-	"                           failed and the firmware's reason\n"
-	"  --quiet                  no firmware console messages on stderr\n"
-	"  --help                   this text\n"
-	"exit status: 0 done, 1 a mission step failed or did not complete, 2 bad arguments\n";
+/* ---------------------------------------------------------------- the run */
 
 /* SIGINT or SIGTERM arrived (they are blocked and taken here, between passes,
  * so that no handler and no flag outside struct sil are needed). */
@@ -341,114 +216,36 @@ static bool stop_requested(const sigset_t *stop_set)
 	return sigtimedwait(stop_set, NULL, &no_wait) >= 0;
 }
 
-static double parse_duration(const char *v)
+/* The plant, the script, the signals to stop on (*stop_set), the logs, the ground link and
+ * the client, from the command line; the app started. Returns -1 to fly, or the exit status. */
+static int start(struct sil *s, const struct sil_config *cfg, sigset_t *stop_set)
 {
-	char *e = NULL;
-	double d = strtod(v, &e);
-	if (!*v || *e || !(d >= 0.0) || d > 1e9) {
-		fprintf(stderr, "octo-sil: --duration: expected seconds in [0, 1e9], got '%s'\n", v);
-		return -1.0;
-	}
-	return d;
-}
-
-static int run(struct sil *s, int argc, char **argv)
-{
-	s->mav_fd = -1;
-	const char *params = NULL, *lcm_fw = NULL, *lcm_sim = NULL, *mission_spec = NULL;
-	uint16_t mav_listen = 0;
-	double duration = 0.0;
-	enum xp_actuation act = XP_ACT_DREF;
-	if (udp_parse_hostport("octo-sil", "--gcs", "127.0.0.1:14550", &s->gcs))
-		return 2;
-
-	/* octo-sil's own flags here; the rest are the plant's */
-	char **plant_argv = calloc((size_t)argc + 1, sizeof *plant_argv);
-	if (!plant_argv)
-		return 1;
-	int plant_argc = 0;
-	plant_argv[plant_argc++] = argv[0];
-	for (int i = 1; i < argc; i++) {
-		const char *f = argv[i];
-		if (!strcmp(f, "--help") || !strcmp(f, "-h")) {
-			fputs(usage, stdout);
-			return 0;
-		}
-		if (!strcmp(f, "--quiet")) {
-			s->quiet = true;
-			continue;
-		}
-		static const char *const own[] = {"--params", "--actuation", "--lcm-fw", "--lcm-sim", "--mission",
-						  "--duration", "--mavlink-listen", "--gcs"};
-		bool mine = false;
-		for (size_t k = 0; k < sizeof own / sizeof own[0]; k++)
-			mine = mine || !strcmp(f, own[k]);
-		if (!mine) {
-			plant_argv[plant_argc++] = argv[i];
-			continue;
-		}
-		if (i + 1 >= argc) {
-			fprintf(stderr, "octo-sil: %s needs a value (see --help)\n", f);
-			return 2;
-		}
-		const char *v = argv[++i];
-		if (!strcmp(f, "--params"))
-			params = v;
-		else if (!strcmp(f, "--lcm-fw"))
-			lcm_fw = v;
-		else if (!strcmp(f, "--lcm-sim"))
-			lcm_sim = v;
-		else if (!strcmp(f, "--mission"))
-			mission_spec = v;
-		else if (!strcmp(f, "--duration")) {
-			duration = parse_duration(v);
-			if (duration < 0.0)
-				return 2;
-		} else if (!strcmp(f, "--mavlink-listen")) {
-			if (udp_parse_port("octo-sil", f, v, &mav_listen))
-				return 2;
-		} else if (!strcmp(f, "--gcs")) {
-			if (udp_parse_hostport("octo-sil", f, v, &s->gcs))
-				return 2;
-		} else if (!strcmp(f, "--actuation")) {
-			if (!strcmp(v, "dref"))
-				act = XP_ACT_DREF;
-			else if (!strcmp(v, "data25"))
-				act = XP_ACT_DATA25;
-			else {
-				fprintf(stderr, "octo-sil: --actuation: '%s' is not dref or data25\n", v);
-				return 2;
-			}
-		}
-	}
 	int status = 0;
-	s->plant = octo_plant_create("octo-sil", plant_argc, plant_argv, &status);
-	free(plant_argv);
+	s->plant = octo_plant_create("octo-sil", cfg->plant_argc, cfg->plant_argv, &status);
 	if (!s->plant)
 		return status;
-	if (mission_spec) {
-		s->mission = mission_parse(mission_spec);
-		if (!s->mission)
+	if (cfg->script) {
+		s->script = script_parse(cfg->script, cfg->quiet);
+		if (!s->script)
 			return 2;
 	}
-	if (!s->mission && duration <= 0.0)
-		fprintf(stderr, "octo-sil: neither --mission nor --duration: running until SIGINT/SIGTERM\n");
+	if (!s->script && cfg->duration <= 0.0)
+		fprintf(stderr, "octo-sil: neither --script nor --duration: running until SIGINT/SIGTERM\n");
 
 	signal(SIGPIPE, SIG_IGN);
-	sigset_t stop_set;
-	sigemptyset(&stop_set);
-	sigaddset(&stop_set, SIGINT);
-	sigaddset(&stop_set, SIGTERM);
-	sigprocmask(SIG_BLOCK, &stop_set, NULL);
+	sigemptyset(stop_set);
+	sigaddset(stop_set, SIGINT);
+	sigaddset(stop_set, SIGTERM);
+	sigprocmask(SIG_BLOCK, stop_set, NULL);
 
-	if (lcm_sim && octo_plant_open_truth(s->plant, lcm_sim))
+	if (cfg->lcm_sim && octo_plant_open_truth(s->plant, cfg->lcm_sim))
 		return 1;
 	sil_hal_bind(s);
-	param_file_set_path(&s->params, params);
-	if (lcm_fw && lcm_log_open(&s->log, lcm_fw))
+	param_file_set_path(&s->params, cfg->params);
+	if (cfg->lcm_fw && lcm_log_open(&s->log, cfg->lcm_fw))
 		return 1;
-	if (mav_listen) {
-		s->mav_fd = udp_open_ground("octo-sil", mav_listen);
+	if (cfg->mav_listen) {
+		s->mav_fd = udp_open_ground("octo-sil", cfg->mav_listen);
 		if (s->mav_fd < 0)
 			return 1;
 		s->wall_clock = true;
@@ -458,81 +255,117 @@ static int run(struct sil *s, int argc, char **argv)
 	s->xplane.sin_family = AF_INET;
 	s->xplane.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
 	s->xplane.sin_port = htons(49000);
-	xp_client_init(&s->xp, &s->xplane, act);
+	xp_client_init(&s->xp, &s->xplane, cfg->act);
 	s->xp.send = to_plant;
 	s->xp.send_ctx = &s->to_plant;
 	/* the configured rate: the plant's frame period (the stamps are not needed to measure it) */
 	xp_clock_set_period(&s->xp.clock, 1.0 / octo_plant_rate(s->plant));
 
+	s->now_us = 1000000u;
+	app_init(&s->app, &s->hal);
+	return -1;
+}
+
+/* One frame's exchange at platform time now_us: the plant's frame into the app, the app's
+ * step, the script's current step, the app's answer into the plant. *delivered: the plant's
+ * frame left its fault injector. Returns the script's result (0 running, 1 done, -1 failed). */
+static int exchange(struct sil *s, bool started, int result, bool *delivered)
+{
+	*delivered = octo_plant_emit(s->plant, started);
+	flush_to_fw(s);
+	xp_client_poll(&s->xp, sil_clock(s));
+	if (s->mav_fd >= 0)
+		mavlink_in(s);
+	app_tick(&s->app);
+	if (s->script && result == 0)
+		result = script_run(s->script, &s->app, s->now_us);
+	flush_to_plant(s);
+	return result;
+}
+
+/* The plant's crash verdict, said once: it fails the script's current step (-1), or is
+ * reported when no script runs. Returns the script's result. */
+static int crash_check(struct sil *s, const struct octo_plant_truth *tr, bool *crash_said, int result)
+{
+	if (!tr->crashed || *crash_said)
+		return result;
+	/* the plant's verdict, not the firmware's: a script cannot go on */
+	char why[200];
+	snprintf(why, sizeof why, "the vehicle crashed at t=%.2f s: hit the ground at %.1f m/s, %.0f deg from level",
+		 tr->crash_t, tr->crash_speed, tr->crash_tilt_deg);
+	*crash_said = true;
+	if (s->script && result == 0)
+		return script_abort(s->script, &s->app, why);
+	fprintf(stderr, "octo-sil: %s\n", why);
+	return result;
+}
+
+/* After a pass: whether the plant advances. Until the first command time stands still (a
+ * watched run waits for its ground station at the real-time rate, as octo-sim does); then
+ * frames the faults withheld or the firmware did not answer are counted. */
+static bool may_advance(struct sil *s, bool *started, bool delivered, double period_us)
+{
+	if (!*started) {
+		if (!octo_plant_commanded(s->plant)) {
+			if (s->wall_clock)
+				(void)nanosleep(&(struct timespec){.tv_sec = 0, .tv_nsec = (long)(period_us * 1e3)}, NULL);
+			return false;
+		}
+		*started = true;
+	} else if (!delivered) {
+		s->withheld++;     /* the fault injector withheld it: nobody can answer */
+	} else if (!octo_plant_commanded(s->plant)) {
+		s->unanswered++;   /* answered (or not) in this pass: no later answer comes */
+	}
+	return true;
+}
+
+/* The lockstep loop: one pass per frame until the script ends, --duration is reached or a
+ * signal arrives (*stopped). Returns the script's result (0 when it did not end). */
+static int fly(struct sil *s, double duration, const sigset_t *stop_set, bool *stopped)
+{
 	const double rate = octo_plant_rate(s->plant);
 	const double period_us = 1e6 / rate;
 	uint64_t pass = 0;
-	s->now_us = 1000000u;
-	app_init(&s->app, &s->hal);
-
-	bool started = false;
-	int result = 0;   /* mission: 0 running, 1 done, -1 failed */
+	bool started = false, crash_said = false;
+	int result = 0;   /* script: 0 running, 1 done, -1 failed */
 	struct octo_plant_truth tr;
-	bool stop = false, crash_said = false;
 	/* The signal check is a system call: every pass when a ground station sets
 	 * the pace, every 64 passes (well under a wall second) otherwise. */
 	const uint64_t check_every = s->wall_clock ? 1u : 64u;
-	while (!(pass % check_every == 0 && (stop = stop_requested(&stop_set)))) {
+	while (!(pass % check_every == 0 && (*stopped = stop_requested(stop_set)))) {
 		s->now_us = 1000000u + (uint64_t)((double)pass * period_us + 0.5);
-		bool delivered = octo_plant_emit(s->plant, started);
-		flush_to_fw(s);
-		xp_client_poll(&s->xp, sil_clock(s));
-		if (s->mav_fd >= 0)
-			mavlink_in(s);
-		app_tick(&s->app);
-		if (s->mission && result == 0)
-			result = mission_run(s->mission, s);
-		flush_to_plant(s);
+		bool delivered;
+		result = exchange(s, started, result, &delivered);
 		if (result != 0)
 			break;
 		octo_plant_truth(s->plant, &tr);
-		if (tr.crashed && !crash_said) {
-			/* the plant's verdict, not the firmware's: a mission cannot go on */
-			char why[200];
-			snprintf(why, sizeof why,
-				 "the vehicle crashed at t=%.2f s: hit the ground at %.1f m/s, %.0f deg from level", tr.crash_t,
-				 tr.crash_speed, tr.crash_tilt_deg);
-			crash_said = true;
-			if (s->mission && result == 0) {
-				result = mission_abort(s->mission, s, why);
-				break;
-			}
-			fprintf(stderr, "octo-sil: %s\n", why);
-		}
+		result = crash_check(s, &tr, &crash_said, result);
+		if (result != 0)
+			break;
 		if (duration > 0.0 && (tr.t - tr.t0 >= duration - 1e-9 || (double)(s->now_us - 1000000u) * 1e-6 >= duration))
 			break;
 		pass++;
-		if (!started) {
-			if (!octo_plant_commanded(s->plant)) {
-				/* time stands still until the first command; a watched run waits for
-				 * its ground station at the real-time rate, as octo-sim does */
-				if (s->wall_clock)
-					(void)nanosleep(&(struct timespec){.tv_sec = 0, .tv_nsec = (long)(period_us * 1e3)},
-							NULL);
-				continue;
-			}
-			started = true;
-		} else if (!delivered) {
-			s->withheld++;     /* the fault injector withheld it: nobody can answer */
-		} else if (!octo_plant_commanded(s->plant)) {
-			s->unanswered++;   /* answered (or not) in this pass: no later answer comes */
-		}
-		octo_plant_advance(s->plant);
+		if (may_advance(s, &started, delivered, period_us))
+			octo_plant_advance(s->plant);
 	}
+	return result;
+}
+
+/* The last parameter save, the logs closed, the closing lines; everything freed. Returns
+ * the exit status: 1 when a script step failed or did not complete. */
+static int finish(struct sil *s, int result, bool stopped)
+{
+	struct octo_plant_truth tr;
 	app_tick(&s->app);   /* a pending parameter save */
 	lcm_log_close(&s->log);
 	octo_plant_truth(s->plant, &tr);
 	int rc = 0;
-	if (s->mission && result < 0) {
+	if (s->script && result < 0) {
 		rc = 1;
-	} else if (s->mission && result == 0) {
-		fprintf(stderr, "octo-sil: mission not completed at t=%.2f s%s: %s\n", tr.t,
-			stop ? " (stopped by a signal)" : " (--duration reached)", mission_pending(s->mission));
+	} else if (s->script && result == 0) {
+		fprintf(stderr, "octo-sil: script not completed at t=%.2f s%s: %s\n", tr.t,
+			stopped ? " (stopped by a signal)" : " (--duration reached)", script_pending(s->script));
 		rc = 1;
 	}
 	fprintf(stderr,
@@ -540,12 +373,32 @@ static int run(struct sil *s, int argc, char **argv)
 		"faults, %llu unanswered, %u requests lost to a full queue); plant %s\n",
 		tr.t, (unsigned long long)tr.frame, s->xp.stats.frames, (unsigned long long)s->withheld,
 		(unsigned long long)s->unanswered, s->to_plant.overflow, octo_plant_counters(s->plant));
-	if (s->mission)
-		mission_free(s->mission);
+	if (s->script)
+		script_free(s->script);
 	octo_plant_destroy(s->plant);
 	if (s->mav_fd >= 0)
 		close(s->mav_fd);
 	return rc;
+}
+
+static int run(struct sil *s, int argc, char **argv)
+{
+	s->mav_fd = -1;
+	struct sil_config cfg;
+	int rc = sil_parse_args(argc, argv, &cfg);
+	if (rc >= 0)
+		return rc;
+	s->quiet = cfg.quiet;
+	s->gcs = cfg.gcs;
+
+	sigset_t stop_set;
+	rc = start(s, &cfg, &stop_set);
+	free(cfg.plant_argv);
+	if (rc >= 0)
+		return rc;
+	bool stopped = false;
+	int result = fly(s, cfg.duration, &stop_set, &stopped);
+	return finish(s, result, stopped);
 }
 
 int main(int argc, char **argv)

@@ -18,8 +18,6 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include <common/mavlink.h>
-
 #include "app.h"
 #include "hal.h"
 #include "host.h"
@@ -27,7 +25,6 @@
 #include "xp_client.h"
 
 #define SIL_QUEUE_BYTES 65536
-#define SIL_TEXT_LEN 256
 
 /* The firmware's datagrams on their way to the plant (filled by xp_client's send
  * hook, emptied into the plant once per pass). */
@@ -37,29 +34,23 @@ struct sil_queue {
 	uint32_t overflow;
 };
 
-/* What the app last said on MAVLink, decoded (the mission reads it, as a ground
- * station would): acknowledgements, parameter values, and the status lines
- * (STATUSTEXT) that carry the firmware's reasons. */
-struct sil_mav_seen {
-	bool ack;                  /* a COMMAND_ACK since the last clear */
-	uint16_t ack_command;
-	uint8_t ack_result;
-	bool exp_final;            /* the final ACK of MAV_CMD_USER_1 arrived */
-	uint8_t exp_result;
-	bool param;                /* a PARAM_VALUE since the last clear */
-	char param_id[17];
-	float param_value;
-	uint64_t texts;            /* reports seen so far */
-	char text[SIL_TEXT_LEN];   /* the last STATUSTEXT */
-	char id_text[SIL_TEXT_LEN];/* the last "ID ..." STATUSTEXT */
-	bool phase_failed;         /* a final COMMAND_ACK FAILED of take-off or landing (its time limit) */
-	char fail_text[SIL_TEXT_LEN];/* the last error line saying "failed", and the error lines after it */
-	char chunks[SIL_TEXT_LEN]; /* a long STATUSTEXT's chunks so far (id chunk_id, next chunk_next) */
-	uint16_t chunk_id;
-	uint8_t chunk_next;
+/* ---- cmdline.c: octo-sil's own flags; the rest are the plant's (plant_argv, for
+ * octo_plant_create, allocated: the caller frees it). */
+struct sil_config {
+	const char *params, *lcm_fw, *lcm_sim, *script;
+	uint16_t mav_listen;           /* 0: no ground station served */
+	struct sockaddr_in gcs;
+	double duration;               /* simulated seconds, 0: no limit */
+	enum xp_actuation act;
+	bool quiet;
+	int plant_argc;
+	char **plant_argv;
 };
+/* Fills *cfg from argv. Returns -1 to run, or the exit status (0 after --help, 1 or 2
+ * after an error, reported on stderr). */
+int sil_parse_args(int argc, char **argv, struct sil_config *cfg);
 
-struct mission;
+struct script;
 
 struct sil {
 	octo_plant *plant;
@@ -79,14 +70,8 @@ struct sil {
 	/* MAVLink to a ground station (optional) */
 	int mav_fd;
 	struct sockaddr_in gcs;
-	/* MAVLink parser and sender state of the mission (the library's per-channel
-	 * globals are not used): the app's output is parsed here, the mission's
-	 * messages are sequenced here */
-	mavlink_message_t rx_msg;
-	mavlink_status_t rx_status, gcs_tx;
-	struct sil_mav_seen seen;
 
-	struct mission *mission;
+	struct script *script;         /* --script: the ground station's steps (script.c) */
 	uint64_t withheld, unanswered;
 };
 

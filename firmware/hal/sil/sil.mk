@@ -1,7 +1,8 @@
 # octo-sil: octo-fw's app on the in-process platform (firmware/hal/sil/) linked with
 # octo-sim's plant (build/libocto-plant.a). From hal/host it reuses the X-Plane
 # client and codec, the parameter file and the LCM log, object for object, and
-# hal/hal.c (hal_reportf).
+# hal/hal.c (hal_reportf). Its own sources: sil.c (the loop and the struct hal), cmdline.c
+# (the command line) and script.c (--script: the ground station's steps).
 
 SIL_SRC     := $(sort $(wildcard firmware/hal/sil/*.c))
 SIL_OBJ     := $(SIL_SRC:firmware/hal/sil/%.c=$(B)/sil/%.o)
