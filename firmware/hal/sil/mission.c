@@ -206,7 +206,7 @@ static void send_msg(struct sil *s, const mavlink_message_t *msg)
 {
 	uint8_t buf[MAVLINK_MAX_PACKET_LEN];
 	uint16_t n = mavlink_msg_to_send_buffer(buf, msg);
-	(void)app_on_ground(&s->app, buf, n);
+	(void)mav_receive(&s->mav, buf, n);
 }
 
 /* COMMAND_LONG to the vehicle; returns the MAV_RESULT of its COMMAND_ACK (-1:

@@ -204,6 +204,12 @@ static void log_event(void *ctx, double t_s, int severity, const char *text)
 	lcm_log_event(&s->log, t_s, severity, text);
 }
 
+static void log_id_result(void *ctx, double t_s, const struct app_id_result *r)
+{
+	struct sil *s = ctx;
+	lcm_log_id_result(&s->log, t_s, r);
+}
+
 /* The firmware's console: stderr, unless --quiet. */
 static void report(void *ctx, const char *line)
 {
@@ -226,6 +232,7 @@ static void sil_hal_bind(struct sil *s)
 		.param_fetch = param_fetch,
 		.log_frame = log_frame,
 		.log_event = log_event,
+		.log_id_result = log_id_result,
 		.report = report,
 	};
 }
@@ -292,7 +299,7 @@ static void mavlink_in(struct sil *s)
 		ssize_t n = recvfrom(s->mav_fd, buf, sizeof buf, 0, (struct sockaddr *)&from, &fl);
 		if (n < 0)
 			break;
-		if (app_on_ground(&s->app, buf, (size_t)n) > 0 && fl >= sizeof from && from.sin_family == AF_INET)
+		if (mav_receive(&s->mav, buf, (size_t)n) > 0 && fl >= sizeof from && from.sin_family == AF_INET)
 			s->gcs = from;
 	}
 }
@@ -464,6 +471,7 @@ static int run(struct sil *s, int argc, char **argv)
 	uint64_t pass = 0;
 	s->now_us = 1000000u;
 	app_init(&s->app, &s->hal);
+	mav_init(&s->mav, &s->app, &s->hal, hal_wall_us(&s->hal));
 
 	bool started = false;
 	int result = 0;   /* mission: 0 running, 1 done, -1 failed */
@@ -480,6 +488,7 @@ static int run(struct sil *s, int argc, char **argv)
 		if (s->mav_fd >= 0)
 			mavlink_in(s);
 		app_tick(&s->app);
+		mav_tick(&s->mav, hal_wall_us(&s->hal));
 		if (s->mission && result == 0)
 			result = mission_run(s->mission, s);
 		flush_to_plant(s);
@@ -520,6 +529,7 @@ static int run(struct sil *s, int argc, char **argv)
 		octo_plant_advance(s->plant);
 	}
 	app_tick(&s->app);   /* a pending parameter save */
+	mav_tick(&s->mav, hal_wall_us(&s->hal));
 	lcm_log_close(&s->log);
 	octo_plant_truth(s->plant, &tr);
 	int rc = 0;
