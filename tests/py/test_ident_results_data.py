@@ -7,24 +7,34 @@ and the codes of docs/mavlink.md. No regular expression over STATUSTEXT is invol
 import math
 import time
 
+import pytest
+from pymavlink import mavutil
+
 from ident_helpers import IdentFlight
-from test_fw_rig import mavlink
+
+mavlink = None   # the dialect octo's module, while a test runs (octo_dialect)
 
 ID_RESULT = 54000
 
 
 def request_results(rig, index=-1, timeout=5.0):
-    r, _ = rig.cmd(mavlink.MAV_CMD_REQUEST_MESSAGE, ID_RESULT, index)
-    got = []
+    """MAV_CMD_REQUEST_MESSAGE for OCTO_ID_RESULT: its COMMAND_ACK result and the messages."""
+    rig.m.mav.command_long_send(1, 1, mavlink.MAV_CMD_REQUEST_MESSAGE, 0, ID_RESULT, index, 0, 0, 0, 0, 0)
+    result, got = None, []
     deadline = time.monotonic() + timeout
-    while r == mavlink.MAV_RESULT_ACCEPTED and time.monotonic() < deadline:
-        m = rig.recv({"OCTO_ID_RESULT"}, timeout=0.5)
+    while time.monotonic() < deadline:
+        m = rig.m.recv_match(type=["COMMAND_ACK", "OCTO_ID_RESULT"], blocking=True, timeout=0.2)
         if m is None:
-            break
-        got.append(m)
-        if m.run_done and m.index == m.count - 1:
-            break
-    return r, got
+            if result is not None:
+                break   # the answer is complete
+            continue
+        if m.get_type() == "COMMAND_ACK" and m.command == mavlink.MAV_CMD_REQUEST_MESSAGE:
+            result = m.result
+            if result != mavlink.MAV_RESULT_ACCEPTED:
+                break
+        elif m.get_type() == "OCTO_ID_RESULT" and result is not None:
+            got.append(m)
+    return result, got
 
 
 def fw_id_records(path):
@@ -34,8 +44,21 @@ def fw_id_records(path):
             if ev.channel == "OCTO_FW_ID_RESULT"]
 
 
-def test_rotor_experiment_results_as_data(launch, port, tmp_path):
-    fl = IdentFlight(launch, port, tmp_path, seed=5)
+@pytest.fixture
+def octo_dialect():
+    """The project's dialect for the rig's connection (OCTO_ID_RESULT is not in common)."""
+    global mavlink
+    before = mavutil.current_dialect
+    mavutil.set_dialect("octo")
+    mavlink = mavutil.mavlink
+    yield
+    mavutil.set_dialect(before)
+
+
+def test_rotor_experiment_results_as_data(launch, port, tmp_path, octo_dialect):
+    # two experiments and the ground station's requests between them (lockstep: plant time
+    # runs on while it waits): the plant's 200 s default can run out
+    fl = IdentFlight(launch, port, tmp_path, seed=5, duration=600)
     fl.takeoff()
     r, got = request_results(fl.rig)
     assert r == mavlink.MAV_RESULT_FAILED and not got   # no run yet
@@ -83,6 +106,7 @@ def test_rotor_experiment_results_as_data(launch, port, tmp_path):
 
     # validation: run 2, the NE with the fit % in sd's place
     texts = fl.experiment(2)
+    assert "ID done" in texts, texts
     r, val = request_results(fl.rig)
     assert r == mavlink.MAV_RESULT_ACCEPTED and len(val) == 1
     v = val[0]
