@@ -10,8 +10,7 @@
  *   app_tick(a)              often (main loop), and between frames: applies
  *                            identification results, rebuilds the mixer after
  *                            a parameter change, saves the parameter file,
- *                            link supervision (docs/architecture.md, "Between
- *                            frames")
+ *                            link supervision (app.c: "between frames")
  *
  * A ground-station module (mav.h) reads the app through app_view, takes its
  * events with app_next_event and acts through the app_cmd_* functions.
