@@ -145,12 +145,55 @@ static void exp_flush(struct app *a)
 	}
 }
 
+/* One result as data: to the log and the outbox, with its place in the run. */
+static void post_id(struct app *a, const struct app_id_result *r)
+{
+	hal_log_id_result(a->hal, a->fr.t_s, r);
+	struct app_event e = {.kind = APP_EV_ID_RESULT, .id = *r};
+	outbox_post(&a->outbox, &e);
+}
+
+/* The results as data of the phase the experiment just closed, numbered within the run;
+ * the run's last (ids_final) says the run is done. */
+static void publish_ids(struct app *a)
+{
+	struct app_id_run *run = &a->id_run;
+	for (int i = 0; i < a->exp.n_ids && run->count < APP_ID_RUN_MAX; i++) {
+		struct app_id_result *r = &run->r[run->count];
+		*r = a->exp.ids[i];
+		r->run_id = run->run_id;
+		r->index = run->count;
+		r->count = (uint8_t)(run->count + 1u);
+		run->count++;
+		run->done = a->exp.ids_final && i == a->exp.n_ids - 1;
+		r->run_done = run->done ? 1u : 0u;
+		post_id(a, r);
+	}
+	a->exp.n_ids = 0;
+}
+
+/* A run that ends without its last phase's results (aborted): its last result again, now
+ * with run_done, so that a reader knows the count is final. */
+static void end_id_run(struct app *a)
+{
+	struct app_id_run *run = &a->id_run;
+	if (run->done || run->count == 0)
+		return;
+	run->done = true;
+	struct app_id_result *r = &run->r[run->count - 1];
+	r->count = run->count;
+	r->run_done = 1u;
+	post_id(a, r);
+}
+
 static void set_mode(struct app *a, enum app_mode m)
 {
 	if (a->mode == m)
 		return;
 	if (a->mode == APP_EXPERIMENT && a->exp.state == EXP_ABORTED)
 		exp_flush(a);
+	if (a->mode == APP_EXPERIMENT)
+		end_id_run(a);
 	if (a->mode == APP_EXPERIMENT && a->exp_ack_pending) {
 		/* the final answer to the experiment command: ACCEPTED when it
 		 * finished, FAILED when it was aborted (the experiment sets final_result) */
@@ -242,8 +285,6 @@ void app_init(struct app *a, const struct hal *hal)
 	memset(a, 0, sizeof *a);
 	a->hal = hal;
 	params_defaults(&a->p);
-	uint64_t now = hal_wall_us(a->hal);
-	mav_init(&a->mav, hal, now);
 	origin_init(&a->orig);
 	struct att_ctrl_params ap = att_ctrl_params_default();
 	att_ctrl_init(&a->att, &ap);
@@ -438,6 +479,9 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 	envelope_seed_kf(a, id);
 	int r = exp_start(&a->exp, id, &a->p, why, cap);
 	if (r == APP_ACCEPTED || r == APP_IN_PROGRESS) {
+		a->id_run.run_id++;
+		a->id_run.count = 0;
+		a->id_run.done = false;
 		set_mode(a, APP_EXPERIMENT);
 		a->exp_ack_pending = true;
 		a->exp_origin = origin;
@@ -454,7 +498,7 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
  * phases must already fly with the new VEH_* values. Applied results are
  * broadcast as PARAM_VALUE, removed from the list, and saved to the parameter
  * file by app_tick (save_pending). */
-_Static_assert(APP_OUTBOX_LEN >= EXP_MAX_RESULTS + 8,
+_Static_assert(APP_OUTBOX_LEN >= EXP_MAX_RESULTS + EXP_MAX_IDS + 8,
 	       "the outbox holds a turn's results and the status lines of the same pass");
 
 static void apply_results(struct app *a)
@@ -510,11 +554,13 @@ static void apply_results(struct app *a)
  * low-priority work has not finished when the next frame comes (or, on the host, several
  * frames arrive in one pass of the main loop), the step starts with app_settle and waits
  * for it: a late step, never an inconsistent one. */
-static void app_settle(struct app *a)
+void app_settle(struct app *a)
 {
 	envelope_publish(a);        /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh */
 	envelope_torque_scale(a);   /* the torque demands' gain, from the hover throttle learned so far */
 	exp_turn(&a->exp, &a->p);   /* a phase that ended in the last step: close it, start the next */
+	if (a->exp.n_ids > 0)
+		publish_ids(a);
 	if (a->exp.n_results > 0)
 		apply_results(a);
 	if (a->params_dirty) {
@@ -951,10 +997,31 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	hal_log_frame(a->hal, &a->log);
 }
 
-size_t app_on_ground(struct app *a, const uint8_t *buf, size_t len)
+struct app_view app_view(const struct app *a)
 {
-	app_settle(a);   /* commands see the results of the last step applied */
-	return mav_receive(a, buf, len);
+	bool ok = a->have_step && a->link_ok;
+	return (struct app_view){
+		.mode = a->mode,
+		.armed = a->mode != APP_DISARMED,
+		.flying = app_flying(a),
+		.link_ok = a->link_ok,
+		.frames_ok = ok,
+		.fr = &a->fr,
+		.thr = a->thr,
+		.params = &a->p,
+		.exp_progress = a->exp.progress,
+		.n_est = a->exp.n_est,
+		.est_live = a->exp.est_live,
+		.est_name = a->exp.est_name,
+		.est = a->exp.est,
+		.est_sd = a->exp.est_sd,
+		.id_run = &a->id_run,
+	};
+}
+
+bool app_next_event(struct app *a, struct app_event *e)
+{
+	return outbox_pop(&a->outbox, e);
 }
 
 void app_tick(struct app *a)
@@ -977,5 +1044,4 @@ void app_tick(struct app *a)
 		app_status(a, a->exp.msg_severity, "%s", a->exp.msg);
 		a->exp.msg[0] = 0;
 	}
-	mav_tick(a, now);
 }

@@ -7,12 +7,13 @@
  *   app_on_frame(a, frame)   each sensor frame (the app actuates once per frame
  *                            that brings a new time stamp, from the first arming
  *                            on: duplicates and reordered frames are not answered)
- *   app_on_ground(a, b, n)   bytes from the ground station (MAVLink)
  *   app_tick(a)              often (main loop), and between frames: applies
  *                            identification results, rebuilds the mixer after
  *                            a parameter change, saves the parameter file,
- *                            telemetry, link supervision (app.c: "between
- *                            frames")
+ *                            link supervision (app.c: "between frames")
+ *
+ * A ground-station module (mav.h) reads the app through app_view, takes its
+ * events with app_next_event and acts through the app_cmd_* functions.
  *
  * Modes: DISARMED -> (arm) IDLE -> (NAV_TAKEOFF) TAKEOFF -> HOLD
  *        HOLD <-> EXPERIMENT (app_cmd_experiment, only while hovering)
@@ -35,7 +36,6 @@
 #include "guidance.h"
 #include "hal.h"
 #include "log.h"
-#include "mav.h"
 #include "mixer.h"
 #include "origin.h"
 #include "outbox.h"
@@ -125,6 +125,7 @@ struct app {
 	/* identification */
 	struct experiment exp;
 	struct exp_output exp_out;
+	struct app_id_run id_run;     /* the last run's results as data */
 	bool exp_ack_pending;         /* a final result of the experiment command is owed */
 	app_origin exp_origin;        /* to whom */
 
@@ -133,8 +134,7 @@ struct app {
 	bool save_pending;            /* results applied: write the parameter file */
 	char param_text[8192];        /* the parameter file's text while it is loaded or saved */
 
-	struct app_outbox outbox;     /* events for the ground station (mav.c drains it) */
-	struct mav mav;
+	struct app_outbox outbox;     /* events for the ground station (app_next_event) */
 	struct app_log_frame log;     /* this frame's record; the step writes its set point (q_sp)
 				       * and allocated rotor thrusts (rotor_f) here directly */
 	uint32_t steps;
@@ -152,10 +152,33 @@ static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr; }
 
 void app_init(struct app *a, const struct hal *hal);
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f);
-/* Returns the number of MAVLink messages accepted (the platform may learn the
- * ground station's address from a datagram that had one). */
-size_t app_on_ground(struct app *a, const uint8_t *buf, size_t len);
 void app_tick(struct app *a);
+/* The work between frames (app_tick's first part): results of the last step applied,
+ * the mixer rebuilt after a parameter change. A ground-station module calls it before
+ * it handles commands, so that they see a settled app. */
+void app_settle(struct app *a);
+
+/* What a ground-station module reads of the app: a view, rebuilt on each call. */
+struct app_view {
+	enum app_mode mode;
+	bool armed, flying;
+	bool link_ok;
+	bool frames_ok;                       /* complete frames arrive (a step ran, link up) */
+	const struct hal_sensor_frame *fr;    /* the newest frame */
+	const float *thr;                     /* HAL_ROTORS throttles sent */
+	const struct app_params *params;
+	/* the running experiment: progress 0..1 and its live estimates (experiment.h) */
+	float exp_progress;
+	int n_est;
+	uint32_t est_live;
+	const char (*est_name)[11];
+	const float *est, *est_sd;
+	const struct app_id_run *id_run;      /* the last identification run's results */
+};
+struct app_view app_view(const struct app *a);
+static inline const struct app_params *app_params(const struct app *a) { return &a->p; }
+/* Takes the oldest event of the outbox into *e; false when there is none. */
+bool app_next_event(struct app *a, struct app_event *e);
 
 const char *app_mode_name(enum app_mode m);
 bool app_hovering(const struct app *a);

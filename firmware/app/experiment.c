@@ -219,6 +219,54 @@ static void result(struct experiment *e, int idx, float value)
 	e->n_results++;
 }
 
+/* A result as data (id_result.h): the quantity, its estimate and verdict; the app numbers it
+ * within the run. The phase gives the experiment field: 1 rotor, 2 validation, 3-5 inertia. */
+static void id_out(struct experiment *e, enum app_id_param param, int rotor, float value, float sd, bool accepted,
+		   enum app_id_reason reason)
+{
+	if (e->n_ids >= EXP_MAX_IDS)
+		return;
+	int k = e->phase_kind[e->phase];
+	uint8_t x = k == PK_ROTOR ? 1u : (k >= PK_INR_X && k <= PK_INR_Z) ? (uint8_t)(3 + k - PK_INR_X) : 2u;
+	e->ids[e->n_ids++] = (struct app_id_result){
+		.experiment = x,
+		.param = (uint8_t)param,
+		.rotor = (uint8_t)rotor,
+		.value = value,
+		.sd = sd,
+		.accepted = accepted ? 1u : 0u,
+		.reason = (uint16_t)(accepted ? APP_ID_OK : reason),
+		.source = APP_ID_SOURCE_THRUST,
+	};
+}
+
+/* The motor model's results as data: one reason for what the model and the ranges decided
+ * (the cause, the curve or a rotor out of range, else the partner k_f / k_tau rejected). */
+static void rotor_ids(struct experiment *e, const struct motor_id_result *mr, bool ok, enum ident_verdict vf,
+		      enum ident_verdict vt, bool curve_bad, int bad_rotor, float kfp, float ktp)
+{
+	bool model_ok = mr->cause == MOTOR_ID_OK;
+	enum app_id_reason common = !model_ok ? app_id_reason_of_cause(mr->cause)
+				    : curve_bad ? APP_ID_CURVE
+				    : bad_rotor >= 0 ? APP_ID_ROTOR : APP_ID_PARTNER_REJECTED;
+	int culprit = !model_ok && mr->cause == MOTOR_ID_ROTOR ? mr->cause_rotor + 1
+		      : model_ok && !curve_bad && bad_rotor >= 0 ? bad_rotor + 1 : 0;
+	int crot = common == APP_ID_ROTOR ? culprit : 0;
+	id_out(e, APP_ID_KF, vf == IDENT_ACCEPT ? crot : 0, mr->kf, mr->kf_sd, ok,
+	       vf != IDENT_ACCEPT ? app_id_reason_of_verdict(vf) : common);
+	id_out(e, APP_ID_KTAU, vt == IDENT_ACCEPT ? crot : 0, mr->ktau, mr->ktau_sd, ok,
+	       vt != IDENT_ACCEPT ? app_id_reason_of_verdict(vt) : common);
+	id_out(e, APP_ID_KF_PLAIN, 0, kfp, NAN, false, APP_ID_AUXILIARY);
+	id_out(e, APP_ID_KTAU_PLAIN, 0, ktp, NAN, false, APP_ID_AUXILIARY);
+	id_out(e, APP_ID_MOT_TAU, crot, mr->tau, mr->tau_sd, ok, common);
+	id_out(e, APP_ID_DELAY_FR, crot, (float)mr->delay, NAN, ok, common);
+	if (e->cfg.crv_est)
+		id_out(e, APP_ID_MOT_CURVE, crot, mr->curve, mr->curve_sd, ok, curve_bad ? APP_ID_CURVE : common);
+	for (int j = 0; j < HAL_ROTORS; j++)
+		id_out(e, APP_ID_MOT_SCALE, j + 1, mr->scale[j], mr->scale_sd[j], ok,
+		       culprit == j + 1 ? APP_ID_ROTOR : common);
+}
+
 /* ID_RESULT is read live: the results of earlier phases change it during the experiment */
 static uint32_t result_mask(const struct app_params *p)
 {
@@ -291,6 +339,7 @@ void exp_abort(struct experiment *e, const char *reason)
 	if (e->state == EXP_RUNNING) {
 		e->state = EXP_ABORTED;
 		e->n_results = 0;
+		e->n_ids = 0;
 		e->q_n = 0;
 		e->est_live = 0;
 		e->final_result = APP_FAILED;
@@ -457,6 +506,7 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 		e->cfg.delay_fr = mr.delay;
 	}
 	set_result_bit(e, p, 1u, ok);
+	rotor_ids(e, &mr, ok, vf, vt, curve_bad, bad_rotor, kfp, ktp);
 	const char *why = !model_ok ? "motor model" : !range_ok ? "out of range" : "";
 	const char *why_f = ok ? "accepted" : vf != IDENT_ACCEPT ? ident_verdict_text(vf) : why[0] ? why : "ktau rejected";
 	const char *why_t = ok ? "accepted" : vt != IDENT_ACCEPT ? ident_verdict_text(vt) : why[0] ? why : "kf rejected";
@@ -590,6 +640,13 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 			result(e, PX_VEH_KTAU, kt);
 		}
 		set_result_bit(e, p, 1u, ok);
+		enum app_id_reason partner = lag_off ? APP_ID_LAG_OFF : APP_ID_PARTNER_REJECTED;
+		id_out(e, APP_ID_KF, 0, kf, kf_sd, ok, vf != IDENT_ACCEPT ? app_id_reason_of_verdict(vf) : partner);
+		id_out(e, APP_ID_KTAU, 0, kt, kt_sd, ok, vt != IDENT_ACCEPT ? app_id_reason_of_verdict(vt) : partner);
+		id_out(e, APP_ID_KF_PLAIN, 0, kfp, NAN, false, APP_ID_AUXILIARY);
+		id_out(e, APP_ID_KTAU_PLAIN, 0, ktp, NAN, false, APP_ID_AUXILIARY);
+		if (tau_c >= 0.0f && isfinite(tau_c))   /* the lag check: shown, never applied */
+			id_out(e, APP_ID_MOT_TAU, 0, tau_c, NAN, false, lag_off ? APP_ID_LAG_OFF : APP_ID_AUXILIARY);
 		const char *why_f = ok ? "accepted" : vf != IDENT_ACCEPT ? ident_verdict_text(vf)
 					     : lag_off ? "motor lag off" : "ktau rejected";
 		const char *why_t = ok ? "accepted" : vt != IDENT_ACCEPT ? ident_verdict_text(vt)
@@ -619,6 +676,7 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		if (ok)
 			result(e, pv[ax], est);
 		set_result_bit(e, p, 2u << ax, ok);
+		id_out(e, (enum app_id_param)(APP_ID_IXX + (int)ax), 0, est, sd, ok, app_id_reason_of_verdict(v));
 		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID %s %.5f +/- %.5f %s%s", nm[ax],
 		    (double)est, (double)sd, ok ? "kg m^2 " : "rejected: ", ident_verdict_text(v));
 		/* a rejection says what would have been accepted, or what to change */
@@ -632,6 +690,7 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		float ne = ident_fit_ne(&e->fit), fit = ident_fit_pct(&e->fit);
 		result(e, post ? PX_ID_VAL_NE_POST : PX_ID_VAL_NE_PRE, ne);
 		result(e, post ? PX_ID_VAL_FIT_POST : PX_ID_VAL_FIT_PRE, fit);
+		id_out(e, post ? APP_ID_VAL_NE_AFTER : APP_ID_VAL_NE_BEFORE, 0, ne, fit, isfinite(ne), APP_ID_NOT_FINITE);
 		say(e, APP_SEV_INFO, "ID validation %s: NE %.4f fit %.1f %%", post ? "after" : "before",
 		    (double)ne, (double)fit);
 	}
@@ -759,6 +818,7 @@ void exp_turn(struct experiment *e, const struct app_params *p)
 		e->phase = e->n_phases - 1;
 		e->progress = 1.0f;
 		e->reporting = true;
+		e->ids_final = true;
 		say(e, APP_SEV_INFO, "ID done");
 	} else {
 		phase_begin(e, p, &e->turn);

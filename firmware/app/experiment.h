@@ -148,6 +148,7 @@
 #include "excite.h"
 #include "filt.h"
 #include "hal.h"
+#include "id_result.h"
 #include "ident.h"
 #include "motor_id.h"
 #include "outbox.h"
@@ -155,6 +156,7 @@
 
 #define EXP_MAX_EST 8
 #define EXP_MAX_RESULTS 32
+#define EXP_MAX_IDS 24        /* results as data of one phase's end (the rotor model's: 15) */
 #define EXP_MAX_PHASES 6
 #define EXP_QUEUE 20
 #define EXP_TILT_ABORT_DEG 15.0f
@@ -235,6 +237,9 @@ struct experiment {
 	int msg_severity;                      /* enum app_severity */
 	int n_results;
 	struct exp_result results[EXP_MAX_RESULTS];
+	int n_ids;                             /* results as data of the last phase's end: the app */
+	struct app_id_result ids[EXP_MAX_IDS]; /* numbers and posts them, then sets n_ids = 0 */
+	bool ids_final;                        /* they are the run's last */
 	uint32_t est_live;                     /* bit i: est[i] is being estimated (streamed) */
 	int final_result;                      /* enum app_result of the command's final answer */
 

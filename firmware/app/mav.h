@@ -15,7 +15,13 @@
  *   FileNotFound), MISSION_REQUEST_LIST -> MISSION_COUNT 0;
  * - MAVLink 2 signing when the platform has a key: outgoing signed, incoming
  *   unsigned / wrongly signed / replayed packets rejected and counted (only
- *   RADIO_STATUS may come unsigned).
+ *   RADIO_STATUS may come unsigned);
+ * - identification results as data (OCTO_ID_RESULT, docs/mavlink.md).
+ *
+ * The module reads the app through the view it publishes (app_view) and acts
+ * through its command functions; the app does not know this module. The
+ * platform owns one struct mav beside its struct app and calls mav_init after
+ * app_init, mav_receive for each ground datagram and mav_tick after app_tick.
  */
 #ifndef OCTO_MAV_H
 #define OCTO_MAV_H
@@ -37,6 +43,8 @@ struct app;
 struct hal;
 
 struct mav {
+	struct app *app;                       /* the app this endpoint serves (mav_init) */
+	const struct hal *hal;
 	int64_t interval_us[MAV_N_STREAMS];   /* < 0: off */
 	uint64_t last_us[MAV_N_STREAMS];
 	long param_next;                       /* next index of a list stream, -1 = none */
@@ -56,12 +64,15 @@ struct mav {
 	struct mav_ftp ftp;                    /* component metadata and its FTP (mav_ftp.c) */
 };
 
-void mav_init(struct mav *m, const struct hal *hal, uint64_t now_us);
+void mav_init(struct mav *m, struct app *a, const struct hal *hal, uint64_t now_us);
 /* Parses one datagram from the ground station (whole packets: the parser
- * restarts at its first byte) and handles complete messages; returns how many
- * were accepted (valid checksum, and signature when signing is on). */
-size_t mav_receive(struct app *a, const uint8_t *buf, size_t len);
-/* Sends the app's events (outbox), due telemetry and parameters. */
-void mav_tick(struct app *a, uint64_t now_us);
+ * restarts at its first byte) and handles complete messages, after the app's
+ * work between frames (app_settle: commands see the last step's results
+ * applied); returns how many were accepted (valid checksum, and signature when
+ * signing is on): the platform may learn the ground station's address from a
+ * datagram that had one. */
+size_t mav_receive(struct mav *m, const uint8_t *buf, size_t len);
+/* Sends the app's events (its outbox), due telemetry and parameters. */
+void mav_tick(struct mav *m, uint64_t now_us);
 
 #endif /* OCTO_MAV_H */

@@ -10,6 +10,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "id_result.h"
+
 /* Outcome of a command. mav.c maps it to MAV_RESULT. */
 enum app_result {
 	APP_ACCEPTED = 0,     /* done (or nothing to do: a retry) */
@@ -45,6 +47,7 @@ enum app_event_kind {
 	APP_EV_PARAM,         /* param_index changed */
 	APP_EV_CMD_DONE,      /* cmd finished with result (progress 0..100) for origin */
 	APP_EV_VALUE,         /* a named live value: text (name, 10 characters at most), value */
+	APP_EV_ID_RESULT,     /* an identification result: id */
 };
 
 #define APP_EVENT_TEXT 96
@@ -57,12 +60,16 @@ struct app_event {
 	uint16_t param_index;
 	app_origin origin;
 	float value;
-	char text[APP_EVENT_TEXT];
+	union {
+		char text[APP_EVENT_TEXT];
+		struct app_id_result id;
+	};
 };
 
 /* Room for one experiment turn's results (EXP_MAX_RESULTS parameter events, applied
- * together) and the status lines of the same pass before mav.c drains (app.c checks). */
-#define APP_OUTBOX_LEN 40
+ * together, and as many identification results) and the status lines of the same pass
+ * before the ground-station module drains (app.c checks). */
+#define APP_OUTBOX_LEN 72
 /* A ring of events; a full outbox drops the newest and counts it. */
 struct app_outbox {
 	struct app_event ev[APP_OUTBOX_LEN];

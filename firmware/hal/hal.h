@@ -89,6 +89,7 @@ struct hal_plant_stats {
 };
 
 struct app_log_frame;   /* defined in app/log.h; the platform serialises it */
+struct app_id_result;   /* defined in app/id_result.h */
 
 struct hal {
 	void *ctx;   /* the platform's own state, passed back to every function */
@@ -120,6 +121,8 @@ struct hal {
 	void (*log_frame)(void *ctx, const struct app_log_frame *f);
 	/* An event (mode change, warning) stamped with plant time. */
 	void (*log_event)(void *ctx, double t_s, int severity, const char *text);
+	/* An identification result as data, stamped with plant time (NULL: not logged). */
+	void (*log_id_result)(void *ctx, double t_s, const struct app_id_result *r);
 
 	/* ---- console / diagnostics: one line, without its newline */
 	void (*report)(void *ctx, const char *line);
@@ -166,6 +169,11 @@ static inline void hal_frame_time(struct hal_sensor_frame *f, uint64_t frame_n, 
 static inline void hal_log_event(const struct hal *h, double t_s, int severity, const char *text)
 {
 	h->log_event(h->ctx, t_s, severity, text);
+}
+static inline void hal_log_id_result(const struct hal *h, double t_s, const struct app_id_result *r)
+{
+	if (h->log_id_result)
+		h->log_id_result(h->ctx, t_s, r);
 }
 /* printf-style line to the platform's console (formatted into 256 bytes). */
 void hal_reportf(const struct hal *h, const char *fmt, ...) __attribute__((format(printf, 2, 3)));

@@ -93,6 +93,15 @@ static void log_event(void *ctx, double t_s, int severity, const char *text)
 	copy_text(s->last_event, sizeof s->last_event, text);
 }
 
+static void log_id_result(void *ctx, double t_s, const struct app_id_result *r)
+{
+	struct stub_hal *s = ctx;
+	(void)t_s;
+	if (s->n_id_results < STUB_IDS)
+		s->id_results[s->n_id_results] = *r;
+	s->n_id_results++;
+}
+
 static void report(void *ctx, const char *line)
 {
 	struct stub_hal *s = ctx;
@@ -118,6 +127,7 @@ void stub_hal_init(struct stub_hal *s)
 		.param_fetch = param_fetch,
 		.log_frame = log_frame,
 		.log_event = log_event,
+		.log_id_result = log_id_result,
 		.report = report,
 	};
 }

@@ -13,8 +13,10 @@
 #include <stdint.h>
 
 #include "hal.h"
+#include "id_result.h"
 
 #define STUB_STORE_CAP 8192
+#define STUB_IDS 32
 
 struct stub_hal {
 	struct hal hal;                 /* hand &s->hal to app_init */
@@ -37,6 +39,8 @@ struct stub_hal {
 	int last_severity;              /* of the last event */
 	char last_event[128];
 	char last_report[256];
+	uint32_t n_id_results;          /* identification results logged; the first STUB_IDS kept */
+	struct app_id_result id_results[STUB_IDS];
 };
 
 /* Zeroes *s, sets the clock to 1 s and binds s->hal to the stub functions. */

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "mav.h"
 #include "stub_hal.h"
 #include "unit.h"
 
@@ -18,6 +19,7 @@
 struct rig {
 	struct stub_hal h;
 	struct app a;
+	struct mav mav;  /* the platform's MAVLink endpoint: drains the outbox after app_tick */
 	struct hal_sensor_frame f;
 	double t;
 	bool stuck;      /* the vehicle stays at height z_stuck whatever the app asks */
@@ -34,8 +36,16 @@ static struct rig *rig_new(void)
 	memset(&R, 0, sizeof R);
 	stub_hal_init(&R.h);
 	app_init(&R.a, &R.h.hal);
+	mav_init(&R.mav, &R.a, &R.h.hal, R.h.now_us);
 	R.f.q_ib[0] = 1.0f;
 	return &R;
+}
+
+/* The main loop's pass after a frame: the app's work between frames, then MAVLink. */
+static void tick(struct rig *r)
+{
+	app_tick(&r->a);
+	mav_tick(&r->mav, r->h.now_us);
 }
 
 /* One plant frame at time t (not advanced), without app_tick. */
@@ -68,7 +78,7 @@ static void fly(struct rig *r, int n)
 		r->t += 1.0 / 90.0;
 		r->h.now_us += FRAME_US;
 		frame_at(r, r->t);
-		app_tick(&r->a);
+		tick(r);
 	}
 }
 
@@ -203,7 +213,7 @@ UNIT_TEST(app_link_loss_reported_then_lands_on_recovery)
 	uint32_t events = r->h.n_events;
 	for (int i = 0; i < 100; i++) {   /* 1.1 s > FS_LINK_TO */
 		r->h.now_us += FRAME_US;
-		app_tick(&r->a);
+		tick(r);
 	}
 	CHECK(!r->a.link_ok);
 	CHECK(r->h.n_events > events);
@@ -219,7 +229,7 @@ UNIT_TEST(app_short_link_loss_keeps_holding)
 	struct rig *r = rig_hovering(u);
 	for (int i = 0; i < 50; i++) {   /* 0.55 s: lost, but shorter than FS_LAND_AFTER */
 		r->h.now_us += FRAME_US;
-		app_tick(&r->a);
+		tick(r);
 	}
 	CHECK(!r->a.link_ok);
 	fly(r, 1);
@@ -508,7 +518,7 @@ UNIT_TEST(app_outbox_holds_a_turn_of_results)
 	r->a.exp.n_results = EXP_MAX_RESULTS;
 	snprintf(r->a.exp.msg, sizeof r->a.exp.msg, "ID test line");
 	r->a.exp.msg_severity = APP_SEV_INFO;
-	app_tick(&r->a);
+	tick(r);
 	CHECK(r->a.outbox.dropped == 0);
 	CHECK(r->a.exp.n_results == 0 && r->a.exp.msg[0] == 0);
 	CHECK(params_get(&r->a.p, (size_t)tko) == 4.0f + 0.01f * (float)(EXP_MAX_RESULTS - 1));
@@ -614,7 +624,7 @@ UNIT_TEST(app_kft_published_between_frames_after_its_step)
 							   (e.param_index == i_t || e.param_index == i_est))));
 		CHECK(params_get(&r->a.p, (size_t)i_t) == t_before);
 		bool due = r->a.env.kft_pub_due;
-		app_tick(&r->a);
+		tick(r);
 		float t_after = params_get(&r->a.p, (size_t)i_t);
 		if (due) {
 			published++;
@@ -645,7 +655,7 @@ UNIT_TEST(app_hold_entry_published_between_frames)
 		r->h.now_us += FRAME_US;
 		frame_at(r, r->t);
 		if (r->a.mode != APP_HOLD) {
-			app_tick(&r->a);
+			tick(r);
 			continue;
 		}
 		struct app_event e;
@@ -659,7 +669,7 @@ UNIT_TEST(app_hold_entry_published_between_frames)
 		CHECK(params_get(&r->a.p, (size_t)i_thr) == thr0);
 		/* as of the entry (set_mode within the step, before this step's hover update) */
 		float at_entry = sc_to_float(r->a.env.hov_pub_u), now = sc_to_float(hover_est_u(&r->a.env.hov));
-		app_tick(&r->a);
+		tick(r);
 		CHECK(params_get(&r->a.p, (size_t)i_thr) == at_entry);
 		CHECK(at_entry > 0.0f && fabsf(at_entry - now) < 1e-3f * now);
 	}

@@ -14,6 +14,7 @@
 #include <octo/mavlink.h>
 
 #include "app.h"
+#include "mav.h"
 #include "params.h"
 #include "stub_hal.h"
 #include "unit.h"
@@ -25,6 +26,7 @@
 struct mrig {
 	struct stub_hal h;   /* first: the hal's ctx points to the rig */
 	struct app a;
+	struct mav m;
 	struct hal_sensor_frame f;
 	mavlink_message_t got[GOT_CAP];
 	int n_got;
@@ -49,6 +51,7 @@ static void mrig_init(struct mrig *r)
 	stub_hal_init(&r->h);
 	r->h.hal.ground_send = capture;
 	app_init(&r->a, &r->h.hal);
+	mav_init(&r->m, &r->a, &r->h.hal, r->h.now_us);
 	r->f.q_ib[0] = 1.0f;
 }
 
@@ -65,6 +68,7 @@ static void frames(struct mrig *r, int n, double lat, double lon, float alt)
 		r->f.alt_msl_m = alt;
 		app_on_frame(&r->a, &r->f);
 		app_tick(&r->a);
+		mav_tick(&r->m, r->h.now_us);
 	}
 }
 
@@ -72,7 +76,7 @@ static void to_vehicle(struct mrig *r, const mavlink_message_t *m)
 {
 	uint8_t buf[MAVLINK_MAX_PACKET_LEN];
 	uint16_t n = mavlink_msg_to_send_buffer(buf, m);
-	app_on_ground(&r->a, buf, n);
+	mav_receive(&r->m, buf, n);
 }
 
 static void command(struct mrig *r, uint16_t cmd, float p1)

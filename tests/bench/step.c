@@ -29,6 +29,7 @@
 
 #include "app.h"
 #include "bench_mark.h"
+#include "mav.h"
 #include "stub_hal.h"
 
 #ifdef BENCH_QUICK
@@ -50,6 +51,7 @@ static struct stub_hal H;   /* tests/app/stub_hal.c: clock advanced 1/90 s per f
 
 /* ---------------------------------------------------------------- synthetic plant */
 static struct app A;   /* global: the compiler cannot see through it across the markers */
+static struct mav M;   /* its MAVLink endpoint, ticked after the app as the platform does */
 static struct hal_sensor_frame F;
 static float s_rotor[HAL_ROTORS];
 static uint32_t rng = 12345u;
@@ -129,6 +131,7 @@ __attribute__((noinline)) static void bench_exp_tick(void)
 	bench_phase = 6;
 	bench_mark_begin();
 	app_tick(&A);
+	mav_tick(&M, H.now_us);
 	bench_mark_end();
 }
 
@@ -164,6 +167,7 @@ static void frame_unmeasured(void)
 	next_frame();
 	app_on_frame(&A, &F);
 	app_tick(&A);
+	mav_tick(&M, H.now_us);
 }
 
 /* seeded demands around the app's hover: thrust 0..1.6 hover x 8 at random, torques up to
@@ -190,6 +194,7 @@ int main(void)
 	char why[96] = "";
 	stub_hal_init(&H);
 	app_init(&A, &H.hal);
+	mav_init(&M, &A, &H.hal, H.now_us);
 	for (int i = 0; i < 20; i++)
 		frame_unmeasured();
 	int r = app_cmd_arm(&A, true, false, why, sizeof why);
@@ -210,6 +215,7 @@ int main(void)
 		next_frame();
 		bench_hold_step();
 		app_tick(&A);
+		mav_tick(&M, H.now_us);
 	}
 	printf("step: hold_steps %d\n", hold);
 

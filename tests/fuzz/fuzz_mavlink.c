@@ -1,6 +1,6 @@
 /*
  * fuzz_mavlink.c - libFuzzer harness of octo-fw's MAVLink receive path:
- * app_on_ground -> mav_receive (framing, CRC, signing) -> dispatch ->
+ * mav_receive (framing, CRC, signing) -> dispatch ->
  * parameter and command handlers -> app (modes, experiments, storage).
  *
  * So that the fuzzer gets past the checksum, the input is a sequence of
@@ -15,7 +15,7 @@
  *                     with garbage before delivery (truncated / oversized)
  *     10..11: the bytes as a raw datagram (no framing)
  *     12..13: a sensor frame (hovering vehicle, the bytes perturb it)
- *     14..15: app_tick after a wall-clock step
+ *     14..15: app_tick and mav_tick after a wall-clock step
  * Checks: parameters stay finite and inside their ranges.
  */
 #include <math.h>
@@ -25,6 +25,7 @@
 #include <octo/mavlink.h>
 
 #include "app.h"
+#include "mav.h"
 #include "stub_hal.h"
 
 static const uint32_t ids[10] = {
@@ -36,6 +37,7 @@ static const uint32_t ids[10] = {
 };
 
 static struct app app;
+static struct mav mav;   /* the platform's MAVLink endpoint, bound to app */
 static struct stub_hal hal;
 static mavlink_signing_t tx_signing;
 static mavlink_signing_streams_t tx_streams;
@@ -88,7 +90,7 @@ static void message(uint8_t kind, const uint8_t *b, size_t n)
 				buf[k++] = (uint8_t)(i * 37u + cut);
 		}
 	}
-	app_on_ground(&app, buf, k);
+	mav_receive(&mav, buf, k);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -110,7 +112,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		have_snap[hal.have_key] = true;
 	}
 	app = snap[hal.have_key];
-	mav_init(&app.mav, &hal.hal, hal.now_us);
+	mav_init(&mav, &app, &hal.hal, hal.now_us);
 	mavlink_status_t *st = mavlink_get_channel_status(MAVLINK_COMM_1);
 	if (hal.have_key) {
 		memset(&tx_signing, 0, sizeof tx_signing);
@@ -135,7 +137,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		switch (kind & 15) {
 		case 10:
 		case 11:
-			app_on_ground(&app, b, len);
+			mav_receive(&mav, b, len);
 			break;
 		case 12:
 		case 13:
@@ -145,6 +147,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		case 15:
 			hal.now_us += (uint64_t)(len ? b[0] : 1) * 10000u;
 			app_tick(&app);
+			mav_tick(&mav, hal.now_us);
 			break;
 		default:
 			message(kind, b, len);

@@ -23,6 +23,7 @@
 #include "app.h"
 #include "hal.h"
 #include "host_report.h"
+#include "mav.h"
 #include "xp_client.h"
 
 typedef struct _lcm_t lcm_t;
@@ -62,6 +63,7 @@ int lcm_log_open(struct lcm_log *lg, const char *url);
 void lcm_log_close(struct lcm_log *lg);
 void lcm_log_frame(struct lcm_log *lg, const struct app_log_frame *f);
 void lcm_log_event(struct lcm_log *lg, double t_s, int severity, const char *text);
+void lcm_log_id_result(struct lcm_log *lg, double t_s, const struct app_id_result *r);
 
 /* ---- host_hal.c */
 struct host {
@@ -77,6 +79,7 @@ struct host {
 	struct lcm_log log;
 	struct hal hal;
 	struct app app;
+	struct mav mav;                    /* the app's MAVLink endpoint */
 };
 /* Sets h->hal to the host's functions with h as their context. */
 void host_hal_bind(struct host *h);

@@ -72,6 +72,12 @@ static void log_frame(void *ctx, const struct app_log_frame *f)
 	lcm_log_frame(&h->log, f);
 }
 
+static void log_id_result(void *ctx, double t_s, const struct app_id_result *r)
+{
+	struct host *h = ctx;
+	lcm_log_id_result(&h->log, t_s, r);
+}
+
 static void log_event(void *ctx, double t_s, int severity, const char *text)
 {
 	struct host *h = ctx;
@@ -108,6 +114,7 @@ void host_hal_bind(struct host *h)
 		.param_fetch = param_fetch,
 		.log_frame = log_frame,
 		.log_event = log_event,
+		.log_id_result = log_id_result,
 		.report = report,
 	};
 }

@@ -1,8 +1,10 @@
 /*
- * lcm_log.c - the firmware log as LCM messages (the host's log_frame / log_event).
+ * lcm_log.c - the firmware log as LCM messages (the host's log_frame / log_event /
+ * log_id_result).
  *
  * Channels: OCTO_FW_FRAME (octo.fw_frame_t, every frame), OCTO_FW_EVENT
- * (octo.fw_event_t). With --lcm file://PATH the events are written straight
+ * (octo.fw_event_t), OCTO_FW_ID_RESULT (octo.fw_id_result_t, each identification
+ * result as data). With --lcm file://PATH the events are written straight
  * into an LCM event log with plant-time stamps, so two lockstep runs with the
  * same inputs give identical logs; any other URL goes through lcm_publish.
  */
@@ -17,6 +19,7 @@
 
 #include <octo_fw_event_t.h>
 #include <octo_fw_frame_t.h>
+#include <octo_fw_id_result_t.h>
 
 #include "log.h"
 
@@ -111,4 +114,31 @@ void lcm_log_event(struct lcm_log *lg, double t_s, int severity, const char *tex
 		return;
 	if (octo_fw_event_t_encode(buf, 0, n, &m) == n)
 		emit(lg, "OCTO_FW_EVENT", m.utime, buf, n);
+}
+
+void lcm_log_id_result(struct lcm_log *lg, double t_s, const struct app_id_result *r)
+{
+	if (!lg->elog && !lg->lcm)
+		return;
+	octo_fw_id_result_t m = {
+		.utime = utime_of(t_s),
+		.run_id = (int16_t)r->run_id,
+		.index = (int8_t)r->index,
+		.count = (int8_t)r->count,
+		.run_done = (int8_t)r->run_done,
+		.experiment = (int8_t)r->experiment,
+		.param = (int8_t)r->param,
+		.rotor = (int8_t)r->rotor,
+		.value = r->value,
+		.sd = r->sd,
+		.accepted = (int8_t)r->accepted,
+		.reason = (int16_t)r->reason,
+		.source = (int8_t)r->source,
+	};
+	uint8_t buf[128];
+	int n = octo_fw_id_result_t_encoded_size(&m);
+	if (n <= 0 || n > (int)sizeof buf)
+		return;
+	if (octo_fw_id_result_t_encode(buf, 0, n, &m) == n)
+		emit(lg, "OCTO_FW_ID_RESULT", m.utime, buf, n);
 }

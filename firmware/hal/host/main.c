@@ -3,7 +3,8 @@
  *
  * The loop waits (poll, 2 ms) on the X-Plane socket and the ground (MAVLink)
  * socket; every X-Plane DATA frame is handed to app_on_frame (which actuates
- * once), every ground datagram to app_on_ground; app_tick runs on every pass.
+ * once), every ground datagram to the MAVLink endpoint (mav_receive); app_tick
+ * and then mav_tick run on every pass.
  * SIGINT and SIGTERM are blocked and taken between passes (sigtimedwait), so
  * no handler and no flag outside struct host are needed.
  */
@@ -63,7 +64,7 @@ static void receive_ground(struct host *h)
 			break;
 		/* the ground station is whoever sent the last datagram with an
 		 * accepted message (valid checksum, and signature when signing) */
-		if (app_on_ground(&h->app, buf, (size_t)n) == 0)
+		if (mav_receive(&h->mav, buf, (size_t)n) == 0)
 			h->mav_empty++;   /* not one valid message in it */
 		else if (fl >= sizeof from && from.sin_family == AF_INET)
 			h->gcs = from;
@@ -94,6 +95,7 @@ static int run(struct host *h)
 	if (h->mav_fd < 0)
 		return 1;
 	app_init(&h->app, &h->hal);
+	mav_init(&h->mav, &h->app, &h->hal, now_us(h));
 	if (h->have_key)
 		host_report("MAVLink 2 signing on (key from %s)", cfg->signing_key_path);
 	host_report("flying X-Plane at %s:%u (listening on %u, actuation %s), MAVLink on %u -> %s:%u",
@@ -113,13 +115,14 @@ static int run(struct host *h)
 			receive_ground(h);
 		xp_client_poll(&h->xp, now_us(h));
 		app_tick(&h->app);
+		mav_tick(&h->mav, now_us(h));
 	}
 	xp_client_release(&h->xp);
 	lcm_log_close(&h->log);
 	const struct hal_plant_stats *ls = &h->xp.stats;
 	host_report("exit: %u frames, %u datagrams dropped (%u foreign); MAVLink %u messages, %u bad checksum, "
 		    "%u rejected by signing, %u datagrams without a valid message", ls->frames, ls->dropped,
-		    ls->foreign, h->app.mav.rx_msgs, h->app.mav.rx_dropped, h->app.mav.rx_unsigned, h->mav_empty);
+		    ls->foreign, h->mav.rx_msgs, h->mav.rx_dropped, h->mav.rx_unsigned, h->mav_empty);
 	return 0;
 }
 

@@ -76,6 +76,7 @@ struct script {
 	char msg[640];
 	/* the vehicle and the time of the script_run in progress */
 	struct app *app;
+	struct mav *mav;   /* the vehicle's MAVLink endpoint: the path a ground station's bytes take */
 	uint64_t now_us;
 	/* MAVLink parser and sender state (the library's per-channel globals are not used):
 	 * the app's output is parsed here, the script's messages are sequenced here */
@@ -336,7 +337,7 @@ static void send_msg(struct script *m, const mavlink_message_t *msg)
 {
 	uint8_t buf[MAVLINK_MAX_PACKET_LEN];
 	uint16_t n = mavlink_msg_to_send_buffer(buf, msg);
-	(void)app_on_ground(m->app, buf, n);
+	(void)mav_receive(m->mav, buf, n);
 }
 
 /* COMMAND_LONG to the vehicle; returns the MAV_RESULT of its COMMAND_ACK (-1:
@@ -384,9 +385,10 @@ static int fail(struct script *m, const char *fmt, const char *detail)
 	return -1;
 }
 
-int script_abort(struct script *m, struct app *app, const char *why)
+int script_abort(struct script *m, struct app *app, struct mav *mav, const char *why)
 {
 	m->app = app;
+	m->mav = mav;
 	return fail(m, "%s", why);
 }
 
@@ -496,9 +498,10 @@ static int step(struct script *m, const struct step *st, bool first)
 	return -1;
 }
 
-int script_run(struct script *m, struct app *app, uint64_t now_us)
+int script_run(struct script *m, struct app *app, struct mav *mav, uint64_t now_us)
 {
 	m->app = app;
+	m->mav = mav;
 	m->now_us = now_us;
 	while (m->cur < m->n) {
 		const struct step *st = &m->steps[m->cur];

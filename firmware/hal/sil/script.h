@@ -10,7 +10,7 @@
  *   land               MAV_CMD_NAV_LAND
  *   wait disarmed      until the vehicle has landed and disarmed
  *   sleep S            S seconds of simulated time
- * Commands are packed MAVLink 2 messages handed to app_on_ground, the path a ground
+ * Commands are packed MAVLink 2 messages handed to mav_receive, the path a ground
  * station's bytes take; the app's answers come back through script_on_vehicle.
  */
 #ifndef OCTO_SIL_SCRIPT_H
@@ -21,6 +21,7 @@
 #include <stdint.h>
 
 #include "app.h"
+#include "mav.h"
 
 struct script;
 
@@ -35,9 +36,9 @@ void script_on_vehicle(struct script *sc, const uint8_t *buf, size_t len);
 
 /* Runs the current step once (between frames) on `app` at platform time now_us. Returns
  * 0 while running, 1 when every step completed, -1 when a step failed (message on stderr). */
-int script_run(struct script *sc, struct app *app, uint64_t now_us);
+int script_run(struct script *sc, struct app *app, struct mav *mav, uint64_t now_us);
 /* Fails the current step for a reason outside the script (the plant crashed): -1. */
-int script_abort(struct script *sc, struct app *app, const char *why);
+int script_abort(struct script *sc, struct app *app, struct mav *mav, const char *why);
 /* The message of the failure or of the step not completed, for the exit line. */
 const char *script_pending(struct script *sc);
 

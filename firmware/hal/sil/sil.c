@@ -113,6 +113,12 @@ static void log_event(void *ctx, double t_s, int severity, const char *text)
 	lcm_log_event(&s->log, t_s, severity, text);
 }
 
+static void log_id_result(void *ctx, double t_s, const struct app_id_result *r)
+{
+	struct sil *s = ctx;
+	lcm_log_id_result(&s->log, t_s, r);
+}
+
 /* The firmware's console: stderr, unless --quiet. */
 static void report(void *ctx, const char *line)
 {
@@ -135,6 +141,7 @@ static void sil_hal_bind(struct sil *s)
 		.param_fetch = param_fetch,
 		.log_frame = log_frame,
 		.log_event = log_event,
+		.log_id_result = log_id_result,
 		.report = report,
 	};
 }
@@ -201,7 +208,7 @@ static void mavlink_in(struct sil *s)
 		ssize_t n = recvfrom(s->mav_fd, buf, sizeof buf, 0, (struct sockaddr *)&from, &fl);
 		if (n < 0)
 			break;
-		if (app_on_ground(&s->app, buf, (size_t)n) > 0 && fl >= sizeof from && from.sin_family == AF_INET)
+		if (mav_receive(&s->mav, buf, (size_t)n) > 0 && fl >= sizeof from && from.sin_family == AF_INET)
 			s->gcs = from;
 	}
 }
@@ -263,6 +270,7 @@ static int start(struct sil *s, const struct sil_config *cfg, sigset_t *stop_set
 
 	s->now_us = 1000000u;
 	app_init(&s->app, &s->hal);
+	mav_init(&s->mav, &s->app, &s->hal, hal_wall_us(&s->hal));
 	return -1;
 }
 
@@ -277,8 +285,9 @@ static int exchange(struct sil *s, bool started, int result, bool *delivered)
 	if (s->mav_fd >= 0)
 		mavlink_in(s);
 	app_tick(&s->app);
+	mav_tick(&s->mav, hal_wall_us(&s->hal));
 	if (s->script && result == 0)
-		result = script_run(s->script, &s->app, s->now_us);
+		result = script_run(s->script, &s->app, &s->mav, s->now_us);
 	flush_to_plant(s);
 	return result;
 }
@@ -295,7 +304,7 @@ static int crash_check(struct sil *s, const struct octo_plant_truth *tr, bool *c
 		 tr->crash_t, tr->crash_speed, tr->crash_tilt_deg);
 	*crash_said = true;
 	if (s->script && result == 0)
-		return script_abort(s->script, &s->app, why);
+		return script_abort(s->script, &s->app, &s->mav, why);
 	fprintf(stderr, "octo-sil: %s\n", why);
 	return result;
 }
@@ -358,6 +367,7 @@ static int finish(struct sil *s, int result, bool stopped)
 {
 	struct octo_plant_truth tr;
 	app_tick(&s->app);   /* a pending parameter save */
+	mav_tick(&s->mav, hal_wall_us(&s->hal));
 	lcm_log_close(&s->log);
 	octo_plant_truth(s->plant, &tr);
 	int rc = 0;

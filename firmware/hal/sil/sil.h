@@ -20,6 +20,7 @@
 
 #include "app.h"
 #include "hal.h"
+#include "mav.h"
 #include "host.h"
 #include "plant.h"
 #include "xp_client.h"
@@ -58,6 +59,7 @@ struct sil {
 	struct sockaddr_in xplane;     /* the plant's address as the client sees it */
 	struct hal hal;                /* sil.c's functions, ctx = this struct */
 	struct app app;
+	struct mav mav;                /* the app's MAVLink endpoint */
 	struct param_file params;      /* --params (hal/host/param_file.c) */
 	struct lcm_log log;            /* --lcm-fw (hal/host/lcm_log.c) */
 	struct hal_sensor_frame frame; /* persistent: absent rows keep their values */
