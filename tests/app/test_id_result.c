@@ -30,7 +30,7 @@ static void step(struct idrig *r)
 	bool flying = app_flying(a);
 	r->t += 1.0 / 90.0;
 	r->h.now_us += 11111u;
-	f->t_s = r->t;
+	hal_frame_time(f, (uint64_t)llround(r->t * 90.0), (uint64_t)llround(r->t * 1e6));
 	f->seq++;
 	f->valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	f->pos_i_m[2] = flying ? fmaxf(sc_to_float(a->guid.z_sp_m), 0.0f) : 0.0f;
