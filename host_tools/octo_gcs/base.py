@@ -1,6 +1,9 @@
 """What every octo-gcs command shares without loading pymavlink: the error a user reads,
-the default connection, octo-fw's mode numbers and parameter defaults. link.py re-exports
-them; commands that never open a MAVLink link (mission --in-process, plot) start faster for it."""
+the default connection, octo-fw's mode numbers and parameter defaults, float32 rounding.
+link.py re-exports them; commands that never open a MAVLink link (mission --in-process, plot)
+start faster for it."""
+
+import struct
 
 DEFAULT_URL = "udpin:0.0.0.0:14550"
 
@@ -13,6 +16,11 @@ except ImportError:  # pragma: no cover - a tree that was never built
 # octo-fw's modes: HEARTBEAT.custom_mode, and the STATUSTEXT "Mode <NAME>" on each change
 MODES = dict(_FW_MODES)
 MODE_NUMBERS = {v: k for k, v in MODES.items()}
+
+
+def f32(x):
+    """x rounded to float32, as a parameter travels in PARAM_VALUE and is stored by octo-fw."""
+    return struct.unpack("<f", struct.pack("<f", float(x)))[0]
 
 
 def fw_default(name):

@@ -1,29 +1,31 @@
 """``octo-gcs campaign SPEC.json``: Monte Carlo missions on a Dask cluster.
 
-One Dask task is one mission, in a temporary directory on the worker, with the mission's vehicle
-file, seed, fault flags and parameters, under a timeout. With the in-process plant the task calls
-``octo-gcs mission --in-process`` inside the worker's own Python process (inprocess.mission: no
-Python start-up and imports per mission); octo-sil is still a child process, so a firmware crash
-or hang is isolated, stopped at the timeout and recorded. With the UDP plant the task runs
-``octo-gcs mission`` as a subprocess. The task never raises for a mission that goes wrong: a
-crash or a timeout comes back as a result with its reason. A worker that dies while running a
+One Dask task is one mission, in a temporary directory on the worker: the task builds the
+mission's MissionOptions (vehicle file, seed, faults, parameters) and flies it under a timeout.
+With the in-process plant the mission runs inside the worker's own Python process
+(octo_gcs.mission.run: no Python start-up and imports per mission); octo-sil is still a child
+process, so a firmware crash or hang is isolated, stopped at the timeout and recorded. With the
+UDP plant the mission runs in a child process (``python -m octo_gcs.mission.child``, its options
+as JSON on stdin). The task never raises for a mission that goes wrong: a crash or a timeout
+comes back as a result with its reason. A worker that dies while running a
 task has the task retried by Dask (the scheduler's ``allowed-failures``, the spec's
 ``retries``); after that the mission is a row with the reason too.
 
 Results reach the client as they finish (``as_completed``); each one is appended to
 DIR/results.csv at once (flush and fsync), its report.json and vehicle file copied to
-DIR/missions/NNNN/ (with the last lines of a failed run's program logs). ``--resume`` skips the missions already in results.csv. At the end
+DIR/missions/NNNN/ (with the last lines of a failed run's program logs). The firmware's
+rejection reasons and the estimates' source come from the mission's report.json (the
+firmware's result records). ``--resume`` skips the missions already in results.csv. At the end
 campaign_report writes campaign.json, campaign.md and the figures.
 
-octo-sim's fault flags reach the plant through a directory of wrappers given to the mission as
-``--build-dir``: octo-sim (and octo-sil) there run the real program with the fault flags added,
-octo-fw is a link to the real one. The same wrappers, written into missions/NNNN/sim/ for the
-worst missions, make their replay command one ``octo-gcs mission`` line.
+Faults are data: the mission's options carry them by the spec's names and the plant turns them
+into octo-sim's (or octo-sil's) flags. The worst missions' replay command is one
+``octo-gcs mission`` line (``--fault NAME=VALUE``).
 
 For tests only: the environment variable OCTO_CAMPAIGN_MISSION, when set, replaces the mission
-command (``python -m octo_gcs.cli mission``) by its words (split like a shell), e.g. a fake
-mission that crashes or hangs; the options given to it are the same, and it always runs as a
-subprocess.
+command (``python -m octo_gcs.mission.child``) by its words (split like a shell), e.g. a fake
+mission that crashes or hangs; it reads the same options as JSON on stdin, and it always runs
+as a subprocess.
 """
 
 import csv
@@ -41,14 +43,14 @@ from pathlib import Path
 
 from . import campaign_spec
 from .atomicfile import atomic_write
-from .campaign_spec import QUANTITIES, SpecError
+from .campaign_spec import SpecError
+from .mission.options import MissionOptions
 from .progress import Progress
+from .quantities import KEYS as QUANTITIES
 
 MISSION_ENV = "OCTO_CAMPAIGN_MISSION"
 STATUSES = ("pass", "fail", "crash", "timeout", "lost", "error")
 RAN = ("pass", "fail")   # the mission ran to its report (its checks passed or not)
-REJECTED_RE = re.compile(r"\bID (kf|ktau|Ixx|Iyy|Izz) .*\brejected: (.+?)\s*$")
-QKEY = {"kf": "kf", "ktau": "ktau", "Ixx": "ixx", "Iyy": "iyy", "Izz": "izz"}
 TAIL_LINES = 40
 # A mission's scratch directory on its worker: the worker's pid in the name, so that the
 # directories of a worker that died (SIGKILL runs no clean-up) can be told from live ones.
@@ -64,31 +66,18 @@ class CampaignError(Exception):
 
 # ---------------------------------------------------------------- the task (runs on a worker)
 def mission_command(override=None):
-    """The words that start a mission on this machine."""
+    """The words that start a mission in a child process on this machine (its options as JSON
+    on stdin)."""
     if override:
         return shlex.split(override)
-    return [sys.executable, "-m", "octo_gcs.cli", "mission"]
+    return [sys.executable, "-m", "octo_gcs.mission.child"]
 
 
-def write_sim_wrappers(dest, build, fault_flags):
-    """dest/: octo-sim and octo-sil that run build's with `fault_flags` added; octo-fw a link."""
-    dest = Path(dest)
-    dest.mkdir(parents=True, exist_ok=True)
-    flags = " ".join(shlex.quote(f) for f in fault_flags)
-    for name in ("octo-sim", "octo-sil", "octo-fw"):
-        real = Path(build).resolve() / name
-        if not os.access(real, os.X_OK):
-            continue
-        target = dest / name
-        if target.exists() or target.is_symlink():
-            target.unlink()
-        if name == "octo-fw":
-            target.symlink_to(real)
-            continue
-        target.write_text(f"#!/bin/sh\n# {name} with the campaign's fault flags\n"
-                          f"exec {shlex.quote(str(real))} \"$@\" {flags}\n")
-        target.chmod(0o755)
-    return dest
+def mission_options(job, tmp):
+    """The MissionOptions of a job in its directory `tmp` (holding vehicle.json)."""
+    return MissionOptions(plant="sil" if job["in_process"] else "udp", vehicle=str(tmp / "vehicle.json"),
+                          seed=job["seed"], out=str(tmp / "out"), plots=False, experiments=list(job["experiments"]),
+                          params=dict(job["params"]), faults=dict(job["faults"]))
 
 
 def _stop_group(p):
@@ -113,23 +102,56 @@ def _tail(path, n=TAIL_LINES):
         return []
 
 
-def _mission_in_worker(argv, log, timeout):
+def _mission_in_worker(opts, log, timeout):
     """An in-process mission in this (the worker's) Python process, octo-sil its child process
-    stopped after `timeout` s: what ``octo-gcs mission ARGV`` would print goes to `log`, its
-    error line included. Returns (exit status as the command's, timed out)."""
-    from . import inprocess
+    stopped after `timeout` s: what ``octo-gcs mission`` would print goes to `log`, its error line
+    included. Returns (exit status as the command's, timed out)."""
     from .atomicfile import scratch
     from .base import GcsError
+    from .mission.flying_sil import WallLimit
+    from .mission.run import run
+
+    opts.wall_limit = timeout
     with open(log, "w", encoding="utf-8") as out:
         try:
             with scratch():   # the mission's directory goes away after the task
-                return inprocess.mission(argv, out, wall_limit=timeout), False
-        except inprocess.WallLimit as e:
+                return run(opts, out, out), False
+        except WallLimit as e:
             print(f"octo-gcs: {e}", file=out)
             return 1, True
         except GcsError as e:
             print(f"octo-gcs: {e}", file=out)
             return 1, False
+
+
+def _mission_subprocess(cmd, opts, log, cwd, timeout):
+    """A mission in a child process (its own process group), its options as JSON on stdin,
+    stopped after `timeout` s. Returns (exit status, timed out)."""
+    with open(log, "wb") as out:
+        p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.PIPE, cwd=cwd,
+                             start_new_session=True)
+        try:
+            try:
+                p.stdin.write(json.dumps(opts.to_json()).encode())
+                p.stdin.close()
+            except BrokenPipeError:   # a command that does not read its options
+                pass
+            return p.wait(timeout=timeout), False
+        except subprocess.TimeoutExpired:
+            _stop_group(p)
+            return p.returncode, True
+        except BaseException:
+            _stop_group(p)
+            raise
+
+
+def _rejections(report):
+    """{quantity: the firmware's reason} of the estimates report.json says were not accepted."""
+    out = {}
+    for q, row in ((report or {}).get("parameters") or {}).items():
+        if row.get("estimate") is not None and not row.get("accepted") and row.get("reason"):
+            out[q] = row["reason"]
+    return out
 
 
 def _alive(pid):
@@ -179,47 +201,15 @@ def run_mission(job):
         tmp = Path(tmp)
         try:
             (tmp / "vehicle.json").write_text(json.dumps(job["vehicle"], indent=1))
-            cmd = mission_command(job.get("mission_cmd"))
-            cmd += ["--vehicle", str(tmp / "vehicle.json"), "--seed", str(job["seed"]), "--out", str(tmp / "out"),
-                    "--no-plots", "--experiments", ",".join(map(str, job["experiments"])) or "none"]
-            for name, value in sorted(job["params"].items()):
-                cmd += ["--param", f"{name}={value!r}"]
-            if job["in_process"]:
-                cmd.append("--in-process")
-            if job["faults"]:
-                from .procs import build_dir
-                try:
-                    build = build_dir(None)
-                except Exception as e:   # GcsError: no build here
-                    raise RuntimeError(str(e)) from None
-                cmd += ["--build-dir", str(write_sim_wrappers(tmp / "sim", build, job["faults"]))]
+            opts = mission_options(job, tmp)
             log = tmp / "mission.log"
             if job.get("in_worker"):
-                rc, timed_out = _mission_in_worker(cmd[len(mission_command()):], log, job["timeout"])
+                rc, timed_out = _mission_in_worker(opts, log, job["timeout"])
             else:
-                with open(log, "wb") as out:
-                    p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                         cwd=tmp, start_new_session=True)
-                    try:
-                        rc = p.wait(timeout=job["timeout"])
-                        timed_out = False
-                    except subprocess.TimeoutExpired:
-                        timed_out = True
-                        _stop_group(p)
-                        rc = p.returncode
-                    except BaseException:
-                        _stop_group(p)
-                        raise
+                rc, timed_out = _mission_subprocess(mission_command(job.get("mission_cmd")), opts, log, tmp,
+                                                    job["timeout"])
             tail = _tail(log)
             res["output_tail"] = tail
-            # the firmware's rejection reasons: its status texts, in the mission's output (UDP plant)
-            # or in the program logs it wrote (octo-sil.log of the in-process plant)
-            logs = [log] + sorted((tmp / "out").glob("*.log")) + sorted((tmp / "out" / "failed-run").glob("*.log"))
-            for path in logs:
-                for line in _tail(path, 100000):
-                    m = REJECTED_RE.search(line)
-                    if m:
-                        res["rejections"][QKEY[m.group(1)]] = m.group(2)
             # the reason: octo-gcs's own error line if it printed one, else the last line of output
             said = [ln[len("octo-gcs: "):].strip().rstrip(":") for ln in tail if ln.startswith("octo-gcs: ")]
             last = said[0] if said else next((ln.strip() for ln in reversed(tail) if ln.strip()), "")
@@ -234,6 +224,7 @@ def run_mission(job):
             elif rp.exists() and rc in (0, 1):
                 try:
                     res["report"] = json.loads(rp.read_text())
+                    res["rejections"] = _rejections(res["report"])
                     res["status"] = "pass" if rc == 0 else "fail"
                     if rc == 1:
                         failed = [c["check"] for c in res["report"].get("checks", [])
@@ -262,7 +253,8 @@ def _cpu_s():
 def warm_up():
     """Imports what an in-process mission needs (run once on each worker before the missions,
     so that the missions' rate is not that of the first imports)."""
-    from . import analysis, inprocess, logs, mission, report   # noqa: F401
+    from . import analysis, logs   # noqa: F401
+    from .mission import report, run   # noqa: F401
     return os.getpid()
 
 
@@ -272,7 +264,7 @@ def csv_columns(spec):
     cols = ["index", "seed", "status", "reason", "wall_s", "host"] + draw_cols
     for q in QUANTITIES:
         cols += [f"{q}_truth", f"{q}_estimate", f"{q}_sd", f"{q}_error_pct", f"{q}_accepted"]
-    return cols + ["rejection_reasons", "failed_checks"]
+    return cols + ["source", "rejection_reasons", "failed_checks"]
 
 
 def result_row(res, draws):
@@ -287,6 +279,7 @@ def result_row(res, draws):
             v = r.get(field)
             row[f"{q}_{field}"] = "" if v is None else repr(float(v))
         row[f"{q}_accepted"] = "" if not r or r.get("estimate") is None else int(bool(r.get("accepted")))
+    row["source"] = (rep.get("estimator") or {}).get("source") or ""
     row["rejection_reasons"] = "; ".join(f"{q}: {why}" for q, why in sorted(res.get("rejections", {}).items()))
     row["failed_checks"] = "; ".join(c["check"] for c in rep.get("checks", [])
                                      if not c.get("ok") and not c.get("warning_only"))
@@ -349,7 +342,8 @@ class ResultsFile:
 
 # ---------------------------------------------------------------- the client
 def mission_has_in_process(cmd):
-    """True when this `octo-gcs mission` takes --in-process (asks its --help)."""
+    """True when the mission command given for tests takes the in-process plant (its --help says
+    --in-process)."""
     try:
         p = subprocess.run(cmd + ["--help"], capture_output=True, text=True, timeout=60)
     except (OSError, subprocess.TimeoutExpired):
@@ -357,18 +351,17 @@ def mission_has_in_process(cmd):
     return "--in-process" in p.stdout
 
 
-def replay_command(out, res_index, seed, spec, draws_, faults, params, build=None):
-    """The one `octo-gcs mission` line that flies mission `res_index` again (its files are in
-    DIR/missions/NNNN/; with faults, the wrappers there carry the fault flags)."""
+def replay_command(out, res_index, seed, spec, faults, params):
+    """The one `octo-gcs mission` line that flies mission `res_index` again (its vehicle file is
+    in DIR/missions/NNNN/)."""
     d = Path(out) / "missions" / f"{res_index:04d}"
     cmd = ["octo-gcs", "mission", "--vehicle", str(d / "vehicle.json"), "--seed", str(seed)]
     if spec["experiments"] != [6]:
         cmd += ["--experiments", ",".join(map(str, spec["experiments"])) or "none"]
     for name, value in sorted(params.items()):
         cmd += ["--param", f"{name}={value!r}"]
-    if faults and build is not None:
-        write_sim_wrappers(d / "sim", build, faults)
-        cmd += ["--build-dir", str(d / "sim")]
+    for name, value in sorted(faults.items()):
+        cmd += ["--fault", f"{name}={value!r}"]
     return " ".join(shlex.quote(c) for c in cmd)
 
 
@@ -458,10 +451,9 @@ def _run(args, spec, out, prog, campaign_report):
     total = spec["missions"]
 
     override = os.environ.get(MISSION_ENV) or None
-    cmd = mission_command(override)
     in_process = False
     if spec["plant"] == "in-process" and todo:
-        in_process = mission_has_in_process(cmd)
+        in_process = override is None or mission_has_in_process(mission_command(override))
         if not in_process:
             prog.say("campaign: the spec asks for the in-process plant, but this octo-gcs mission has no "
                      "--in-process: missions use the UDP plant (octo-sim + octo-fw)")
@@ -556,24 +548,19 @@ def _run(args, spec, out, prog, campaign_report):
     wall = time.monotonic() - t0
     run_s = time.monotonic() - t_run if t_run is not None else 0.0
     rows = read_results(results, columns)
-    from .procs import build_dir
-    try:
-        build = build_dir(None)
-    except Exception:
-        build = None
     summary = campaign_report.write(out, spec, rows, columns, {
         "missions_this_run": n_new, "wall_s": round(wall, 2), "missions_s": round(run_s, 2), "workers": n_workers,
         "plant": plant, "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None,
         "mission_cpu_s_mean": round(sum(cpu) / len(cpu), 4) if cpu else None},
-        replay=lambda idx, seed: _replay(out, spec, idx, seed, build))
+        replay=lambda idx, seed: _replay(out, spec, idx, seed))
     for line in summary["lines"]:
         print(line)
     return 0 if summary["ok"] else 1
 
 
-def _replay(out, spec, idx, seed, build):
-    _seed, d, _vehicle, faults, params = campaign_spec.mission_inputs(spec, idx)
-    return replay_command(out, idx, seed, spec, d, faults, params, build)
+def _replay(out, spec, idx, seed):
+    _seed, _d, _vehicle, faults, params = campaign_spec.mission_inputs(spec, idx)
+    return replay_command(out, idx, seed, spec, faults, params)
 
 
 def _keep_mission(out, res, job):

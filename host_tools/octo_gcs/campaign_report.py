@@ -15,9 +15,10 @@ import statistics
 from collections import Counter
 
 from .atomicfile import atomic_write
-from .campaign_spec import QUANTITIES, expect_key
+from .campaign_spec import expect_key
+from .quantities import KEYS as QUANTITIES
+from .quantities import LABELS as LABEL
 
-LABEL = {"kf": "k_f", "ktau": "k_tau", "ixx": "I_x", "iyy": "I_y", "izz": "I_z"}
 RAN = ("pass", "fail")
 WORST = 10
 
@@ -77,6 +78,11 @@ def analyse(spec, rows):
                   "_z": z, "_err": errs}
     failures = Counter(f"{r['status']}: {r['reason']}"[:160] for r in rows if r["status"] not in RAN)
     return ran, per, silently, failures
+
+
+def sources(rows):
+    """{source: missions} of the missions that ran (the measurements their estimates rest on)."""
+    return dict(Counter(r.get("source") or "not stated" for r in rows if r["status"] in RAN).most_common())
 
 
 def _score(row, spec, only=None):
@@ -211,7 +217,7 @@ def write(out, spec, rows, columns, throughput, replay):
            "silently_wrong": len(silently), "silently_wrong_list": silently,
            "parameters": {q: {k: v for k, v in p.items() if not k.startswith("_")} for q, p in per.items()},
            "failures": dict(failures.most_common()), "worst": worst, "not_ran": not_ran, "expect": expect,
-           "throughput": throughput, "all_ran": all_ran, "ok": ok, "figures": figs, "spec": spec}
+           "sources": sources(rows), "throughput": throughput, "all_ran": all_ran, "ok": ok, "figures": figs, "spec": spec}
     atomic_write(out / "campaign.json", json.dumps(doc, indent=1) + "\n")
     md = markdown(doc, per)
     atomic_write(out / "campaign.md", md)
@@ -247,6 +253,8 @@ def markdown(doc, per):
     L += _md_table(*table(per))
     L += ["", "Errors are of the accepted estimates, percent of truth; z = (estimate - truth) / sd over every "
           "estimate (a standard normal when the sd is honest).", ""]
+    if doc.get("sources"):
+        L += ["Estimated from: " + ", ".join(f"{src} ({n})" for src, n in doc["sources"].items()) + ".", ""]
     L += ["## Acceptance and rejection reasons", ""]
     for q, p in per.items():
         rs = ", ".join(f"{why} ({n})" for why, n in p["rejection_reasons"].items()) or "none"

@@ -26,6 +26,8 @@ import zlib
 
 import numpy as np
 
+from .mission.options import FAULTS
+from .quantities import KEYS as QUANTITIES
 from .vehiclefile import DEFAULTS as VEHICLE_DEFAULTS
 
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "choice")
@@ -42,17 +44,10 @@ VEHICLE_RANGE = {"mass": (0, None, False), "g": (0, None, False), "arm_length": 
                  "rotor_scale": (0, None, True), "kf_drift_per_min": (None, None, True),
                  "origin": (None, None, True)}
 
-# octo-sim's fault injection flags: key -> (flag, integer, lo, hi)
-FAULTS = {"drop": ("--drop", False, 0.0, 1.0), "burst": ("--burst", True, 0, 1000000),
-          "burst_prob": ("--burst-prob", False, 0.0, 1.0),
-          "delay_frames": ("--delay-frames", True, 0, 100000),
-          "duplicate": ("--duplicate", False, 0.0, 1.0), "reorder": ("--reorder", False, 0.0, 1.0)}
-
 TOP_KEYS = ("name", "missions", "seed", "vehicle", "faults", "params", "experiments", "plant", "timeout",
             "retries", "tolerance_pct", "expect")
 
-# the identified quantities (report.json's keys), their other names in `expect`, default tolerances
-QUANTITIES = ("kf", "ktau", "ixx", "iyy", "izz")
+# the identified quantities' other names in `expect`, default tolerances
 ALIASES = {"kf": "kf", "k_f": "kf", "ktau": "ktau", "k_tau": "ktau", "ixx": "ixx", "i_x": "ixx",
            "iyy": "iyy", "i_y": "iyy", "izz": "izz", "i_z": "izz"}
 DEFAULT_TOL_PCT = {"kf": 0.3, "ktau": 0.3, "ixx": 2.0, "iyy": 2.0, "izz": 2.0}
@@ -282,9 +277,10 @@ def draws(spec, index):
 
 
 def mission_inputs(spec, index):
-    """(seed, draws, vehicle dict for octo-sim, fault flags [str], params {NAME: value})."""
+    """(seed, draws, vehicle dict for octo-sim, faults {name: value} (those that are on),
+    params {NAME: value})."""
     d = draws(spec, index)
-    vehicle, faults, params = {}, [], {}
+    vehicle, faults, params = {}, {}, {}
     for path, _v, _rng, _integer, target in _walk(spec):
         x = d[path]
         if target[0] == "vehicle":
@@ -297,9 +293,8 @@ def mission_inputs(spec, index):
             else:
                 vehicle[key] = x
         elif target[0] == "faults":
-            flag, integer, _lo, _hi = FAULTS[target[1]]
             if x != 0 or target[1] == "burst_prob":   # 0 is octo-sim's "off" (burst_prob: never)
-                faults += [flag, str(int(x)) if integer else repr(x)]
+                faults[target[1]] = int(x) if FAULTS[target[1]][1] else x
         else:
             params[target[1]] = x
     return spec["seed"] + index, d, vehicle, faults, params

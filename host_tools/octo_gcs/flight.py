@@ -74,24 +74,3 @@ class Flight:
         if r != mavlink.MAV_RESULT_ACCEPTED:
             raise GcsError(f"landing refused: {result_name(r)} {why}".strip())
         self.wait_mode({"DISARMED"}, timeout, "landing")
-
-
-def run(args):
-    """``octo-gcs takeoff`` / ``octo-gcs land``."""
-    from .link import Vehicle
-
-    with Vehicle(args.connect, timeout=args.timeout, signing_key=args.signing_key) as v:
-        v.wait_heartbeat()
-        fl = Flight(v)
-        if args.command == "takeoff":
-            if v.mode in (MODE_NUMBERS["HOLD"], MODE_NUMBERS["EXPERIMENT"]):
-                print(f"already flying (mode {fl.mode_name()})")
-                return 0
-            fl.arm(timeout=args.wait)
-            print("armed; taking off")
-            fl.takeoff(args.height, timeout=args.wait)
-            print(f"holding at {args.height:g} m")
-        else:
-            fl.land(timeout=args.wait)
-            print("landed and disarmed")
-    return 0

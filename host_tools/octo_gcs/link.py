@@ -6,7 +6,6 @@ COMMAND_LONG with acknowledgement, STATUSTEXT and NAMED_VALUE_FLOAT collection.
 """
 
 import os
-import struct
 import sys
 import time
 
@@ -25,12 +24,7 @@ mavutil.set_dialect(DIALECT)
 mavlink = mavutil.mavlink
 
 from .base import (DEFAULT_URL, FW_PARAMS, MODE_NUMBERS, MODES, GcsError,  # noqa: E402,F401
-                   fw_default)  # (re-exported)
-
-
-def f32(x):
-    """x rounded to float32, as it travels in PARAM_VALUE."""
-    return struct.unpack("<f", struct.pack("<f", float(x)))[0]
+                   f32, fw_default)  # (re-exported)
 
 
 def read_signing_key(path):

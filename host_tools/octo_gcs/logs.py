@@ -1,4 +1,5 @@
-"""Reading the LCM logs of octo-sim (OCTO_TRUTH) and octo-fw (OCTO_FW_FRAME, OCTO_FW_EVENT).
+"""Reading the LCM logs of octo-sim (OCTO_TRUTH) and octo-fw (OCTO_FW_FRAME, OCTO_FW_EVENT,
+OCTO_FW_ID_RESULT).
 
 Both programs write LCM event logs stamped with plant (simulated) time when given
 ``--lcm file://PATH``. A log is recognised by its channels, not by its name.
@@ -7,25 +8,27 @@ array fields), so ``fw.throttle[:, 0]`` is T_1 over time.
 """
 
 import os
-import re
 import struct
 
 import numpy as np
 
+from . import id_results
 from .base import GcsError
+from .experiments import phase_of
 
 SYNC = 0xEDA1DA01
 _HDR = struct.Struct(">IqqII")
 
-CHANNELS = ("OCTO_TRUTH", "OCTO_FW_FRAME", "OCTO_FW_EVENT")
+CHANNELS = ("OCTO_TRUTH", "OCTO_FW_FRAME", "OCTO_FW_EVENT", "OCTO_FW_ID_RESULT")
 
 
 def _types():
     try:
-        from octo import fw_event_t, fw_frame_t, truth_t
+        from octo import fw_event_t, fw_frame_t, fw_id_result_t, truth_t
     except ImportError:
         raise GcsError("the LCM Python types (package 'octo') are missing: run `make`") from None
-    return {"OCTO_TRUTH": truth_t, "OCTO_FW_FRAME": fw_frame_t, "OCTO_FW_EVENT": fw_event_t}
+    return {"OCTO_TRUTH": truth_t, "OCTO_FW_FRAME": fw_frame_t, "OCTO_FW_EVENT": fw_event_t,
+            "OCTO_FW_ID_RESULT": fw_id_result_t}
 
 
 def read_events(path):
@@ -138,6 +141,16 @@ class Series:
         return s
 
 
+class _Row:
+    """Record i of a Series, by attribute."""
+
+    def __init__(self, series, i):
+        self._s, self._i = series, i
+
+    def __getattr__(self, name):
+        return getattr(self._s, name)[self._i]
+
+
 class Logs:
     """The truth (octo-sim) and firmware (octo-fw) records found in some log files."""
 
@@ -178,6 +191,16 @@ class Logs:
         self.truth = self._series(series["OCTO_TRUTH"])
         self.fw = self._series(series["OCTO_FW_FRAME"])
         self.events = [(e.utime * 1e-6, e.severity, e.text) for e in (series["OCTO_FW_EVENT"] or [])]
+        self.id_results = self._records(series["OCTO_FW_ID_RESULT"])
+
+    @staticmethod
+    def _records(x):
+        """The identification results (id_results.record dicts), in the log's order."""
+        if x is None:
+            return []
+        if isinstance(x, Series):
+            return [id_results.record(_Row(x, i)) for i in range(len(x))]
+        return [id_results.record(r) for r in x]
 
     @staticmethod
     def _series(x):
@@ -192,11 +215,11 @@ class Logs:
         "ID aborted" begins)."""
         out = []
         for t, _sev, text in self.events:
-            m = re.match(r"^ID (\d+)/(\d+): (.*)$", text)
-            if m:
+            ph = phase_of(text)
+            if ph:
                 if out and out[-1][2] is None:
                     out[-1][2] = t
-                out.append([m.group(3), t, None, int(m.group(1))])
+                out.append([ph[2], t, None, ph[0]])
             elif text == "ID done" or text.startswith("ID aborted") or text.startswith("Mode "):
                 if out and out[-1][2] is None and not text == "Mode EXPERIMENT":
                     out[-1][2] = t

@@ -164,7 +164,7 @@ def convergence_series(logs):
 
 
 def convergence(logs, rep, path, plt):
-    from .identify import QUANTITIES
+    from .quantities import QUANTITIES
     series = convergence_series(logs)
     truth = (rep or {}).get("truth", {})
     fig, axes = plt.subplots(len(QUANTITIES), 1, figsize=(8, 10.5))

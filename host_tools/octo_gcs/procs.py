@@ -152,3 +152,22 @@ class signals_as_exceptions:
         for sig, h in self._old.items():
             signal.signal(sig, h)
         return False
+
+
+def exit_status(call, err=None):
+    """call()'s exit status, octo-gcs's way: a GcsError is its message and 1, Ctrl-C 130,
+    SIGTERM or SIGHUP 143 (signals_as_exceptions)."""
+    import sys
+
+    err = err if err is not None else sys.stderr
+    try:
+        return call()
+    except GcsError as e:
+        print(f"octo-gcs: {e}", file=err)
+        return 1
+    except KeyboardInterrupt:
+        print("octo-gcs: interrupted", file=err)
+        return 130
+    except Terminated as e:
+        print(f"octo-gcs: stopped by {e}", file=err)
+        return 143

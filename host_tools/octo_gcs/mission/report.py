@@ -12,10 +12,11 @@ import json
 import math
 import os
 
-from . import __version__
-from .atomicfile import atomic_write
-from .identify import QUANTITIES, against_truth, motor_model_rows, plausibility, quantities_of
-from .vehiclefile import PAPER, truth_of
+from .. import __version__, id_results
+from ..atomicfile import atomic_write
+from ..checks import Check, against_truth, motor_model_rows, plausibility
+from ..quantities import QUANTITIES, quantities_of
+from ..vehiclefile import PAPER, truth_of
 
 PAPER_VALUES = {"kf": PAPER["kf"], "ktau": PAPER["ktau"], "ixx": PAPER["inertia"][0],
                 "iyy": PAPER["inertia"][1], "izz": PAPER["inertia"][2]}
@@ -131,9 +132,10 @@ def kf_tracked(logs, kf_sd_pct=None):
     return {"summary": summary, "samples": samples}
 
 
-def parameter_rows(nominal, after, truth, experiments):
+def parameter_rows(nominal, after, truth, experiments, results=()):
     rows = {}
     ident = {q.key for q in quantities_of(experiments)}
+    verdicts = id_results.verdicts(results)
     for q in QUANTITIES:
         est = after.get(q.est) if q.key in ident else None
         est = est if est is not None and est > 0 else None
@@ -150,6 +152,9 @@ def parameter_rows(nominal, after, truth, experiments):
             "error_over_sd": _num((est - true) / sd if est and sd and true else None, 3),
             "accepted": bool(int(after.get("ID_RESULT", 0)) & q.bit) if est is not None else False,
             "vehicle_value": _num(after.get(q.veh)),
+            # the firmware's result record: why it was not accepted, what it rests on
+            "reason": verdicts[q.key]["reason"] if q.key in verdicts and est is not None else None,
+            "source": verdicts[q.key]["source"] if q.key in verdicts and est is not None else None,
         }
         rows[q.key] = row
     return rows
@@ -164,11 +169,13 @@ def _validation_params(after, tag):
     return {"ne": _num(ne_), "fit_pct": _num(fit, 3)}
 
 
-def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=None, logs=None,
-                 from_texts=()):
-    """The report dict of a mission whose files are in `stage`."""
-    from . import analysis
-    from .logs import Logs
+def build_report(stage, veh, opts, nominal, after, experiments, wall_flight_s=None, logs=None, filled=(),
+                 results=()):
+    """The report dict of a mission whose files are in `stage`: opts its MissionOptions,
+    results the firmware's identification results (id_results.record dicts), filled the
+    names of `after` that only those carried."""
+    from .. import analysis
+    from ..logs import Logs
 
     if logs is None:
         paths = [p for p in (os.path.join(stage, "truth.lcm"), os.path.join(stage, "fw.lcm"))
@@ -179,21 +186,23 @@ def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=No
     rep = {
         "tool": f"octo-gcs {__version__}",
         "created_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-        "run": {"vehicle_file": os.path.basename(args.vehicle) if getattr(args, "vehicle", None) else None,
-                "seed": getattr(args, "seed", None),
-                "plant": "octo-sim " + ("real time" if getattr(args, "realtime", False) else "lockstep"),
-                "xplane_version": getattr(args, "xplane_version", None),
+        "run": {"vehicle_file": os.path.basename(opts.vehicle) if getattr(opts, "vehicle", None) else None,
+                "seed": getattr(opts, "seed", None),
+                "plant": "octo-sim " + ("real time" if getattr(opts, "realtime", False) else "lockstep"),
+                "xplane_version": getattr(opts, "xplane_version", None),
                 "experiments": experiments},
         "bench": {"mass_kg": veh["mass"], "arm_length_m": veh["arm_length"]},
         "truth": {k: _num(v) for k, v in truth.items()},
         "truth_window_s": {k: [_num(a, 3), _num(b, 3)] for k, (a, b) in windows.items()},
-        "parameters": parameter_rows(nominal, after, truth, experiments),
+        "parameters": parameter_rows(nominal, after, truth, experiments, results),
         "validation": {tag: _validation_params(after, tag) for tag in ("before", "after")},
         "motor_model": [dict(zip(("quantity", "found", "sd", "truth", "error"), r))
                         for r in motor_model_rows(after, veh)],
         "estimator": {k: _num(after.get(k)) for k in sorted(after) if k.startswith("ID_") and not any(
             k in (q.est, q.sd, q.plain) for q in QUANTITIES)},
+        "id_results": [id_results.describe(r) for r in results],
     }
+    rep["estimator"]["source"] = id_results.estimator_source(results)
     if logs is not None:
         val = analysis.validation(logs, after)
         rep["validation"]["from_log"] = [
@@ -205,7 +214,7 @@ def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=No
              "fit_pct": {ax: _num(f, 2) for ax, f in zip(("wx", "wy", "wz"), fits)}}
             for kind, t, _w, _wm, fits in rates]
         # the plain estimator's std is only in the log (est_sd[2], est_sd[3]): last value
-        from .plots import convergence_series
+        from ..plots import convergence_series
         conv = convergence_series(logs)
         for key in ("kf", "ktau"):
             row = rep["parameters"][key]
@@ -217,15 +226,14 @@ def build_report(stage, veh, args, nominal, after, experiments, wall_flight_s=No
         t_end = logs.truth.t[-1] if logs.truth is not None else (logs.fw.t[-1] if logs.fw is not None else None)
     else:
         t_end = None
-    rep["results_from_status_texts"] = list(from_texts)
-    checks = plausibility(after, experiments, set(from_texts)) if experiments else []
+    rep["results_from_records"] = list(filled)
+    checks = plausibility(after, experiments) if experiments else []
     checks += against_truth(after, experiments, truth, TOL_ROTOR_PCT, TOL_INERTIA_PCT)
     kft = kf_tracked(logs, rep["parameters"]["kf"]["sd_pct"] if "kf" in rep["parameters"] else None)
     if kft is not None:
         rep["kf_tracked"] = kft
         s_ = kft["summary"]
         if s_["samples"]:
-            from .identify import Check
             checks.append(Check("k_f tracked vs truth at the same time", s_["max_abs_error_pct"] <= s_["limit_pct"],
                                 f"max {s_['max_abs_error_pct']:.3f} %, rms {s_['rms_error_pct']:.3f} % over "
                                 f"{s_['samples']} frames from t={s_['from_t']:.1f} s (limit {s_['limit_pct']:.3g} %: "
@@ -268,7 +276,7 @@ def table_rows(rep):
             plain += f" +/- {r['plain_sd']:.2g}"
         rows.append([f"{r['label']} [{r['unit']}]", _f(r["paper"]), _f(r["truth"]), _f(r["nominal"]),
                      plain, _pct(r["plain_error_pct"]), est, _pct(r["error_pct"]),
-                     "yes" if r["accepted"] else "no"])
+                     "yes" if r["accepted"] else ("no: " + r["reason"] if r.get("reason") else "no")])
     return head, rows
 
 
@@ -333,6 +341,9 @@ def markdown(rep, figures=()):
               "the truth log's mean over the experiment phase the estimate comes from "
               + ", ".join(f"{k} {w[0]:.1f}-{w[1]:.1f} s" for k, w in rep.get("truth_window_s", {}).items())
               + ".", ""]
+    source = rep.get("estimator", {}).get("source")
+    if source:
+        lines += [f"Estimated from: {source} (the firmware's identification results).", ""]
     kft = rep.get("kf_tracked")
     if kft:
         s_ = kft["summary"]
@@ -384,7 +395,7 @@ def write_outputs(stage, rep, plots=True):
     """report.md and the figures into `stage` (report.json is written by the caller)."""
     figures = []
     if plots and rep.get("_logs") is not None:
-        from .plots import make_figures
+        from ..plots import make_figures
         figures = make_figures(rep["_logs"], rep, stage)
     rep["figures"] = figures
     atomic_write(os.path.join(stage, "report.md"), markdown(rep, figures))

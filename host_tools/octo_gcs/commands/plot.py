@@ -2,7 +2,20 @@
 
 import os
 
-from .link import GcsError
+from ..base import GcsError
+
+
+def register(sub):
+    pl = sub.add_parser(
+        "plot", help="the report's figures from existing LCM logs",
+        description="Draws fig5_excitation.png, fig6_validation.png, fig7_rates.png and convergence.png "
+        "from LCM logs of octo-fw (OCTO_FW_FRAME/EVENT) and, if given, octo-sim (OCTO_TRUTH). The model "
+        "of Fig. 7 uses the parameters in use at the end of the firmware log, or those of --params.")
+    pl.add_argument("logs", nargs="+", metavar="LOG", help="LCM log files, or directories holding *.lcm")
+    pl.add_argument("--out", default=".", metavar="DIR", help="where the figures go (default .)")
+    pl.add_argument("--params", metavar="FILE",
+                    help="parameter file (default: params.parm in a LOG directory, if there)")
+    pl.set_defaults(run=run)
 
 
 def params_from_logs(logs):
@@ -19,11 +32,12 @@ def params_from_logs(logs):
 
 
 def run(args):
-    from . import paramfile
-    from .logs import Logs, find_logs
-    from .plots import make_figures
-    from .report import truth_from_logs
-    from .vehiclefile import load
+    from .. import paramfile
+    from ..analysis import rate_comparison, validation
+    from ..logs import Logs, find_logs
+    from ..mission.report import truth_from_logs
+    from ..plots import make_figures
+    from ..vehiclefile import load
 
     logs = Logs(find_logs(args.logs))
     params = params_from_logs(logs)
@@ -41,7 +55,6 @@ def run(args):
         os.makedirs(args.out, exist_ok=True)
     except OSError as e:
         raise GcsError(f"cannot write {args.out}: {e.strerror}") from None
-    from .analysis import rate_comparison, validation
     rep["_rates"] = rate_comparison(logs, params)
     rep["_validation"] = validation(logs, params)
     names = make_figures(logs, rep, args.out)
