@@ -30,7 +30,7 @@ def results(rng):
     """(param, rotor, value, sd, accepted, reason) of a made-up sequence 6, k_tau rejected."""
     kf = rng.uniform(20.0, 35.0)
     return [("VAL_NE_BEFORE", 0, 0.31, 12.5, 0, "AUXILIARY"),
-            ("KF", 0, kf, kf * 1e-3, 1, "OK"), ("KTAU", 0, kf / 72.4, 1e-2, 0, "UNCERTAIN"),
+            ("KF", 0, kf, kf * 1e-3, 0, "PARTNER_REJECTED"), ("KTAU", 0, kf / 72.4, 1e-2, 0, "UNCERTAIN"),
             ("KF_PLAIN", 0, kf * 0.94, math.nan, 0, "AUXILIARY"), ("MOT_SCALE", 3, 0.987, 0.004, 1, "OK"),
             ("VAL_NE_AFTER", 0, 0.02, 95.0, 0, "AUXILIARY"),
             ("IXX", 0, 0.0631, 2e-4, 1, "OK"), ("IYY", 0, 0.0765, 2e-4, 1, "OK"), ("IZZ", 0, 0.1012, 4e-4, 1, "OK")]
@@ -61,9 +61,9 @@ def check_reading(recs, rows):
     assert p["ID_VAL_NE_POST"] == f32(0.02) and p["ID_VAL_FIT_POST"] == f32(95.0)
     assert p["ID_RESULT"] == 14.0   # k_tau rejected: k_f's and k_tau's bit off, the inertias' on
     v = id_results.verdicts(recs)
-    assert v["kf"] == {"accepted": True, "reason": "ok", "source": "imu_rpm"}
+    assert v["kf"] == {"accepted": False, "reason": "partner_rejected", "source": "imu_rpm"}
     assert v["ktau"] == {"accepted": False, "reason": "uncertain", "source": "imu_rpm"}
-    assert id_results.rejections(recs) == {"ktau": "uncertain"}
+    assert id_results.rejections(recs) == {"kf": "partner_rejected", "ktau": "uncertain"}
     assert id_results.estimator_source(recs) == "imu_rpm"
     merged, filled = id_results.merge({"ID_KF_EST": 1.0, "VEH_KF": 1.0}, recs)
     assert merged["ID_KF_EST"] == 1.0 and "ID_KF_EST" not in filled and "ID_IZZ_EST" in filled
@@ -122,7 +122,7 @@ def test_report_and_campaign_row_carry_reasons_and_source(tmp_path):
     assert rep["estimator"]["source"] == "imu_rpm"
     kt = rep["parameters"]["ktau"]
     assert kt["accepted"] is False and kt["reason"] == "uncertain" and kt["source"] == "imu_rpm"
-    assert rep["parameters"]["kf"]["accepted"] is False   # ID_RESULT's bit: k_f with k_tau
+    assert rep["parameters"]["kf"]["accepted"] is False and rep["parameters"]["kf"]["reason"] == "partner_rejected"
     assert rep["parameters"]["ixx"]["accepted"] and rep["parameters"]["ixx"]["reason"] == "ok"
     assert [r["param"] for r in rep["id_results"]][:3] == ["val_ne_before", "kf", "ktau"]
     assert rep["id_results"][3]["sd"] is None   # NaN: none defined
@@ -132,7 +132,7 @@ def test_report_and_campaign_row_carry_reasons_and_source(tmp_path):
     res = {"index": 0, "seed": 1, "status": "fail", "reason": "", "wall_s": 1.0,
            "report": rep, "rejections": campaign._rejections(rep)}
     row = campaign.result_row(res, {})
-    assert row["source"] == "imu_rpm" and row["rejection_reasons"] == "kf: uncertain; ktau: uncertain"
+    assert row["source"] == "imu_rpm" and row["rejection_reasons"] == "kf: partner_rejected; ktau: uncertain"
     assert set(row) == set(campaign.csv_columns(spec))
 
 
