@@ -50,7 +50,7 @@ from .quantities import KEYS as QUANTITIES
 
 MISSION_ENV = "OCTO_CAMPAIGN_MISSION"
 STATUSES = ("pass", "fail", "crash", "timeout", "lost", "error")
-RAN = ("pass", "fail")   # the mission ran to its report (its checks passed or not)
+RAN = ("pass", "fail")  # the mission ran to its report (its checks passed or not)
 TAIL_LINES = 40
 # A mission's scratch directory on its worker: the worker's pid in the name, so that the
 # directories of a worker that died (SIGKILL runs no clean-up) can be told from live ones.
@@ -75,9 +75,16 @@ def mission_command(override=None):
 
 def mission_options(job, tmp):
     """The MissionOptions of a job in its directory `tmp` (holding vehicle.json)."""
-    return MissionOptions(plant="sil" if job["in_process"] else "udp", vehicle=str(tmp / "vehicle.json"),
-                          seed=job["seed"], out=str(tmp / "out"), plots=False, experiments=list(job["experiments"]),
-                          params=dict(job["params"]), faults=dict(job["faults"]))
+    return MissionOptions(
+        plant="sil" if job["in_process"] else "udp",
+        vehicle=str(tmp / "vehicle.json"),
+        seed=job["seed"],
+        out=str(tmp / "out"),
+        plots=False,
+        experiments=list(job["experiments"]),
+        params=dict(job["params"]),
+        faults=dict(job["faults"]),
+    )
 
 
 def _stop_group(p):
@@ -114,7 +121,7 @@ def _mission_in_worker(opts, log, timeout):
     opts.wall_limit = timeout
     with open(log, "w", encoding="utf-8") as out:
         try:
-            with scratch():   # the mission's directory goes away after the task
+            with scratch():  # the mission's directory goes away after the task
                 return run(opts, out, out), False
         except WallLimit as e:
             print(f"octo-gcs: {e}", file=out)
@@ -128,13 +135,14 @@ def _mission_subprocess(cmd, opts, log, cwd, timeout):
     """A mission in a child process (its own process group), its options as JSON on stdin,
     stopped after `timeout` s. Returns (exit status, timed out)."""
     with open(log, "wb") as out:
-        p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.PIPE, cwd=cwd,
-                             start_new_session=True)
+        p = subprocess.Popen(
+            cmd, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.PIPE, cwd=cwd, start_new_session=True
+        )
         try:
             try:
                 p.stdin.write(json.dumps(opts.to_json()).encode())
                 p.stdin.close()
-            except BrokenPipeError:   # a command that does not read its options
+            except BrokenPipeError:  # a command that does not read its options
                 pass
             return p.wait(timeout=timeout), False
         except subprocess.TimeoutExpired:
@@ -159,7 +167,7 @@ def _alive(pid):
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
-    except OSError:   # EPERM: another user's process
+    except OSError:  # EPERM: another user's process
         return True
     return True
 
@@ -189,14 +197,24 @@ _swept = False
 def run_mission(job):
     """One mission; returns a dict (never raises for the mission's own failures)."""
     import socket
+
     global _swept
-    if not _swept:   # once per worker process: what a killed predecessor left here
+    if not _swept:  # once per worker process: what a killed predecessor left here
         _swept = True
         sweep_stale()
     t0 = time.monotonic()
     cpu0 = _cpu_s()
-    res = {"index": job["index"], "seed": job["seed"], "status": "error", "reason": "", "report": None,
-           "output_tail": [], "rejections": {}, "host": socket.gethostname(), "wall_s": 0.0}
+    res = {
+        "index": job["index"],
+        "seed": job["seed"],
+        "status": "error",
+        "reason": "",
+        "report": None,
+        "output_tail": [],
+        "rejections": {},
+        "host": socket.gethostname(),
+        "wall_s": 0.0,
+    }
     with tempfile.TemporaryDirectory(prefix=f"{TMP_PREFIX}{os.getpid()}-{job['index']:04d}-") as tmp:
         tmp = Path(tmp)
         try:
@@ -206,29 +224,36 @@ def run_mission(job):
             if job.get("in_worker"):
                 rc, timed_out = _mission_in_worker(opts, log, job["timeout"])
             else:
-                rc, timed_out = _mission_subprocess(mission_command(job.get("mission_cmd")), opts, log, tmp,
-                                                    job["timeout"])
+                rc, timed_out = _mission_subprocess(
+                    mission_command(job.get("mission_cmd")), opts, log, tmp, job["timeout"]
+                )
             tail = _tail(log)
             res["output_tail"] = tail
             # the reason: octo-gcs's own error line if it printed one, else the last line of output
-            said = [ln[len("octo-gcs: "):].strip().rstrip(":") for ln in tail if ln.startswith("octo-gcs: ")]
+            said = [ln[len("octo-gcs: ") :].strip().rstrip(":") for ln in tail if ln.startswith("octo-gcs: ")]
             last = said[0] if said else next((ln.strip() for ln in reversed(tail) if ln.strip()), "")
             failed_run = tmp / "out" / "failed-run"
-            if failed_run.is_dir():   # the failed run's program logs (tails): the worker's copy goes away
-                res["failed_logs"] = {p.name: "\n".join(_tail(p, 200)) + "\n"
-                                      for p in sorted(failed_run.glob("*.log"))}
+            if failed_run.is_dir():  # the failed run's program logs (tails): the worker's copy goes away
+                res["failed_logs"] = {
+                    p.name: "\n".join(_tail(p, 200)) + "\n" for p in sorted(failed_run.glob("*.log"))
+                }
             rp = tmp / "out" / "report.json"
             if timed_out:
                 res["status"] = "timeout"
-                res["reason"] = f"no end after {job['timeout']:g} s" + (f" (last output: {last})" if last else "")
+                res["reason"] = f"no end after {job['timeout']:g} s" + (
+                    f" (last output: {last})" if last else ""
+                )
             elif rp.exists() and rc in (0, 1):
                 try:
                     res["report"] = json.loads(rp.read_text())
                     res["rejections"] = _rejections(res["report"])
                     res["status"] = "pass" if rc == 0 else "fail"
                     if rc == 1:
-                        failed = [c["check"] for c in res["report"].get("checks", [])
-                                  if not c.get("ok") and not c.get("warning_only")]
+                        failed = [
+                            c["check"]
+                            for c in res["report"].get("checks", [])
+                            if not c.get("ok") and not c.get("warning_only")
+                        ]
                         res["reason"] = "failed checks: " + "; ".join(failed) if failed else "exit status 1"
                 except (ValueError, OSError) as e:
                     res["status"], res["reason"] = "crash", f"unreadable report.json: {e}"
@@ -246,15 +271,19 @@ def run_mission(job):
 def _cpu_s():
     """CPU seconds of this process (all its threads) and of its children that ended."""
     import resource
-    return sum(r.ru_utime + r.ru_stime for r in (resource.getrusage(resource.RUSAGE_SELF),
-                                                 resource.getrusage(resource.RUSAGE_CHILDREN)))
+
+    return sum(
+        r.ru_utime + r.ru_stime
+        for r in (resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN))
+    )
 
 
 def warm_up():
     """Imports what an in-process mission needs (run once on each worker before the missions,
     so that the missions' rate is not that of the first imports)."""
-    from . import analysis, logs   # noqa: F401
-    from .mission import report, run   # noqa: F401
+    from . import analysis, logs  # noqa: F401
+    from .mission import report, run  # noqa: F401
+
     return os.getpid()
 
 
@@ -268,8 +297,14 @@ def csv_columns(spec):
 
 
 def result_row(res, draws):
-    row = {"index": res["index"], "seed": res["seed"], "status": res["status"], "reason": res["reason"],
-           "wall_s": res["wall_s"], "host": res.get("host", "")}
+    row = {
+        "index": res["index"],
+        "seed": res["seed"],
+        "status": res["status"],
+        "reason": res["reason"],
+        "wall_s": res["wall_s"],
+        "host": res.get("host", ""),
+    }
     row.update({k: repr(v) if isinstance(v, float) else v for k, v in draws.items()})
     rep = res.get("report") or {}
     params = rep.get("parameters", {})
@@ -280,9 +315,12 @@ def result_row(res, draws):
             row[f"{q}_{field}"] = "" if v is None else repr(float(v))
         row[f"{q}_accepted"] = "" if not r or r.get("estimate") is None else int(bool(r.get("accepted")))
     row["source"] = (rep.get("estimator") or {}).get("source") or ""
-    row["rejection_reasons"] = "; ".join(f"{q}: {why}" for q, why in sorted(res.get("rejections", {}).items()))
-    row["failed_checks"] = "; ".join(c["check"] for c in rep.get("checks", [])
-                                     if not c.get("ok") and not c.get("warning_only"))
+    row["rejection_reasons"] = "; ".join(
+        f"{q}: {why}" for q, why in sorted(res.get("rejections", {}).items())
+    )
+    row["failed_checks"] = "; ".join(
+        c["check"] for c in rep.get("checks", []) if not c.get("ok") and not c.get("warning_only")
+    )
     return row
 
 
@@ -297,12 +335,13 @@ def read_results(path, columns):
     if not rows:
         return []
     if rows[0] != columns:
-        raise CampaignError(f"{path}: its columns are not this spec's (another campaign?): choose another --out",
-                            status=2)
+        raise CampaignError(
+            f"{path}: its columns are not this spec's (another campaign?): choose another --out", status=2
+        )
     good = [r for r in rows[1:] if len(r) == len(columns)]
     complete = text.endswith("\n")
     if not complete and good and len(good) == len(rows) - 1:
-        good = good[:-1]   # the last row has all its fields but no line end: it may be cut short
+        good = good[:-1]  # the last row has all its fields but no line end: it may be cut short
     if len(good) != len(rows) - 1 or not complete:
         _rewrite(path, columns, good)
     return [dict(zip(columns, r)) for r in good]
@@ -310,6 +349,7 @@ def read_results(path, columns):
 
 def _rewrite(path, columns, rows):
     import io
+
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(columns)
@@ -381,27 +421,39 @@ def _allowed_failures(dask_scheduler=None):
 
 def _start_cluster(args, spec, prog):
     import logging
+
     import dask
     from dask.distributed import Client, LocalCluster
+
     # worker-saturation 1.0: a worker holds only the mission it runs, so a worker that dies takes
     # no queued mission with it (Dask counts a death against every task the worker held)
-    dask.config.set({"distributed.scheduler.allowed-failures": spec["retries"],
-                     "distributed.scheduler.worker-saturation": 1.0})
+    dask.config.set(
+        {
+            "distributed.scheduler.allowed-failures": spec["retries"],
+            "distributed.scheduler.worker-saturation": 1.0,
+        }
+    )
     if args.scheduler:
         try:
             client = Client(args.scheduler, timeout=30)
         except (OSError, TimeoutError) as e:
             raise CampaignError(f"cannot reach the Dask scheduler {args.scheduler}: {e}") from None
         n = len(client.scheduler_info().get("workers", {}))
-        try:   # the scheduler's own retry count (its configuration, not this client's)
+        try:  # the scheduler's own retry count (its configuration, not this client's)
             retries = int(client.run_on_scheduler(_allowed_failures))
         except Exception:
             retries = None
         prog.say(f"campaign: Dask cluster {args.scheduler}, {n} workers")
         return client, None, n, retries
     n = args.workers or os.cpu_count() or 1
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                           memory_limit=0, silence_logs=logging.ERROR)
+    cluster = LocalCluster(
+        n_workers=n,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        memory_limit=0,
+        silence_logs=logging.ERROR,
+    )
     client = Client(cluster)
     prog.say(f"campaign: local Dask cluster of {n} worker processes")
     return client, cluster, n, spec["retries"]
@@ -410,6 +462,7 @@ def _start_cluster(args, spec, prog):
 def run(args):
     """The command; returns the exit status."""
     from . import campaign_report
+
     prog = Progress(stream=sys.stderr)
     try:
         spec = campaign_spec.load(args.spec)
@@ -440,10 +493,13 @@ def _run(args, spec, out, prog, campaign_report):
     except OSError as e:
         raise CampaignError(f"cannot write {out}: {e.strerror}", status=2) from None
     if results.exists() and not args.resume:
-        raise CampaignError(f"{results} exists: add --resume to go on with that campaign, or choose another --out",
-                            status=2)
+        raise CampaignError(
+            f"{results} exists: add --resume to go on with that campaign, or choose another --out", status=2
+        )
     if args.resume and spec_copy.exists() and spec_copy.read_text() != spec_text:
-        raise CampaignError(f"--resume: {args.spec} is not the spec {out} was started with ({spec_copy})", status=2)
+        raise CampaignError(
+            f"--resume: {args.spec} is not the spec {out} was started with ({spec_copy})", status=2
+        )
     atomic_write(spec_copy, spec_text)
     done_rows = read_results(results, columns) if args.resume else []
     done = {int(r["index"]) for r in done_rows}
@@ -455,66 +511,100 @@ def _run(args, spec, out, prog, campaign_report):
     if spec["plant"] == "in-process" and todo:
         in_process = override is None or mission_has_in_process(mission_command(override))
         if not in_process:
-            prog.say("campaign: the spec asks for the in-process plant, but this octo-gcs mission has no "
-                     "--in-process: missions use the UDP plant (octo-sim + octo-fw)")
+            prog.say(
+                "campaign: the spec asks for the in-process plant, but this octo-gcs mission has no "
+                "--in-process: missions use the UDP plant (octo-sim + octo-fw)"
+            )
     plant = "in-process (octo-sil)" if in_process else "udp (octo-sim + octo-fw)"
-    prog.say(f"campaign {spec['name']}: {total} missions, seeds {spec['seed']}..{spec['seed'] + total - 1}, "
-             f"{len(done)} already in {results}, plant {plant}")
+    prog.say(
+        f"campaign {spec['name']}: {total} missions, seeds {spec['seed']}..{spec['seed'] + total - 1}, "
+        f"{len(done)} already in {results}, plant {plant}"
+    )
 
     inputs = {}
     jobs = []
     for i in todo:
         seed, d, vehicle, faults, params = campaign_spec.mission_inputs(spec, i)
         inputs[i] = d
-        jobs.append({"index": i, "seed": seed, "vehicle": vehicle, "faults": faults, "params": params,
-                     "experiments": spec["experiments"], "timeout": float(spec["timeout"]),
-                     "in_process": in_process, "mission_cmd": override,
-                     # octo-gcs's own in-process mission runs inside the worker's Python process
-                     # (octo-sil its child); a mission command given for tests stays a subprocess
-                     "in_worker": in_process and override is None})
+        jobs.append(
+            {
+                "index": i,
+                "seed": seed,
+                "vehicle": vehicle,
+                "faults": faults,
+                "params": params,
+                "experiments": spec["experiments"],
+                "timeout": float(spec["timeout"]),
+                "in_process": in_process,
+                "mission_cmd": override,
+                # octo-gcs's own in-process mission runs inside the worker's Python process
+                # (octo-sil its child); a mission command given for tests stays a subprocess
+                "in_worker": in_process and override is None,
+            }
+        )
 
     t0 = time.monotonic()
     n_new = failures = 0
     n_workers = 0
     failures += sum(1 for r in done_rows if r["status"] not in RAN)
-    t_run = None   # from the first submission: the missions' own rate, without the cluster's start
-    cpu = []   # CPU seconds of each mission of this run on its worker (its process and children)
+    t_run = None  # from the first submission: the missions' own rate, without the cluster's start
+    cpu = []  # CPU seconds of each mission of this run on its worker (its process and children)
     if jobs:
         client, cluster, n_workers, retries = _start_cluster(args, spec, prog)
         if in_process and override is None:
             try:
                 client.run(warm_up)
-            except Exception as e:   # a worker without this octo_gcs: the missions will say so
+            except Exception as e:  # a worker without this octo_gcs: the missions will say so
                 prog.say(f"campaign: the workers could not import the mission ({type(e).__name__}: {e})")
         t_run = time.monotonic()
         rf = ResultsFile(results, columns)
         futures = []
         from .procs import Terminated, signals_as_exceptions
+
         try:
             with signals_as_exceptions():
+                import uuid
+
                 from dask.distributed import as_completed
                 from distributed.scheduler import KilledWorker
-                import uuid
+
                 tag = uuid.uuid4().hex[:8]
-                futures = [client.submit(run_mission, j, key=f"mission-{j['index']:05d}-{tag}", pure=False)
-                           for j in jobs]
+                futures = [
+                    client.submit(run_mission, j, key=f"mission-{j['index']:05d}-{tag}", pure=False)
+                    for j in jobs
+                ]
                 by_key = {f.key: j for f, j in zip(futures, jobs)}
                 for fut in as_completed(futures):
                     j = by_key[fut.key]
                     if fut.status == "error":
                         exc = fut.exception()
                         if isinstance(exc, KilledWorker):
-                            why = (f"lost: the worker running it died {retries + 1} times (Dask retried it "
-                                   f"{retries} times)" if retries is not None else
-                                   f"lost: the workers running it died: {str(exc).splitlines()[0]}")
+                            why = (
+                                f"lost: the worker running it died {retries + 1} times (Dask retried it "
+                                f"{retries} times)"
+                                if retries is not None
+                                else f"lost: the workers running it died: {str(exc).splitlines()[0]}"
+                            )
                             status = "lost"
                         else:
                             why, status = f"{type(exc).__name__}: {exc}", "error"
-                        res = {"index": j["index"], "seed": j["seed"], "status": status, "reason": why,
-                               "wall_s": "", "host": ""}
+                        res = {
+                            "index": j["index"],
+                            "seed": j["seed"],
+                            "status": status,
+                            "reason": why,
+                            "wall_s": "",
+                            "host": "",
+                        }
                     elif fut.status == "cancelled":
-                        res = {"index": j["index"], "seed": j["seed"], "status": "lost",
-                               "reason": "cancelled by the cluster", "wall_s": "", "host": ""}
+                        res = {
+                            "index": j["index"],
+                            "seed": j["seed"],
+                            "status": "lost",
+                            "reason": "cancelled by the cluster",
+                            "wall_s": "",
+                            "host": "",
+                        }
                     else:
                         res = fut.result()
                     fut.release()
@@ -528,13 +618,19 @@ def _run(args, spec, out, prog, campaign_report):
                     el = time.monotonic() - t_run
                     rate = n_new / el * 60.0 if el > 0 else 0.0
                     left = (len(jobs) - n_new) / (rate / 60.0) if rate > 0 else None
-                    prog.update(f"campaign {spec['name']}: {len(done) + n_new}/{total} done, {failures} failed, "
-                                f"{rate:.1f} missions/min, {_fmt_minutes(left)} left", key=n_new)
+                    prog.update(
+                        f"campaign {spec['name']}: {len(done) + n_new}/{total} done, {failures} failed, "
+                        f"{rate:.1f} missions/min, {_fmt_minutes(left)} left",
+                        key=n_new,
+                    )
         except (KeyboardInterrupt, Terminated) as e:
             prog.done()
             how = "interrupted" if isinstance(e, KeyboardInterrupt) else f"stopped by {e}"
-            print(f"octo-gcs campaign: {how}; {len(done) + n_new} of {total} missions are in {results} "
-                  "(--resume goes on)", file=sys.stderr)
+            print(
+                f"octo-gcs campaign: {how}; {len(done) + n_new} of {total} missions are in {results} "
+                "(--resume goes on)",
+                file=sys.stderr,
+            )
             return 130 if isinstance(e, KeyboardInterrupt) else 143
         finally:
             rf.close()
@@ -543,16 +639,27 @@ def _run(args, spec, out, prog, campaign_report):
             client.close()
             if cluster is not None:
                 cluster.close()
-                sweep_stale()   # local workers: what those killed left in this host's temp dir
+                sweep_stale()  # local workers: what those killed left in this host's temp dir
         prog.done()
     wall = time.monotonic() - t0
     run_s = time.monotonic() - t_run if t_run is not None else 0.0
     rows = read_results(results, columns)
-    summary = campaign_report.write(out, spec, rows, columns, {
-        "missions_this_run": n_new, "wall_s": round(wall, 2), "missions_s": round(run_s, 2), "workers": n_workers,
-        "plant": plant, "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None,
-        "mission_cpu_s_mean": round(sum(cpu) / len(cpu), 4) if cpu else None},
-        replay=lambda idx, seed: _replay(out, spec, idx, seed))
+    summary = campaign_report.write(
+        out,
+        spec,
+        rows,
+        columns,
+        {
+            "missions_this_run": n_new,
+            "wall_s": round(wall, 2),
+            "missions_s": round(run_s, 2),
+            "workers": n_workers,
+            "plant": plant,
+            "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None,
+            "mission_cpu_s_mean": round(sum(cpu) / len(cpu), 4) if cpu else None,
+        },
+        replay=lambda idx, seed: _replay(out, spec, idx, seed),
+    )
     for line in summary["lines"]:
         print(line)
     return 0 if summary["ok"] else 1

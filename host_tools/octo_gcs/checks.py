@@ -41,8 +41,13 @@ def plausibility(params, experiments):
         detail = f"{est:.6g} +/- {sd:.3g} {q.unit}" if sd is not None else f"{est:.6g} {q.unit}"
         checks.append(Check(f"{q.label} estimated", _finite_pos(sd), detail))
         if rsd_max is not None and _finite_pos(sd):
-            checks.append(Check(f"{q.label} relative std", sd / est <= rsd_max,
-                                f"{100 * sd / est:.3f} % (limit {100 * rsd_max:.3g} %)"))
+            checks.append(
+                Check(
+                    f"{q.label} relative std",
+                    sd / est <= rsd_max,
+                    f"{100 * sd / est:.3f} % (limit {100 * rsd_max:.3g} %)",
+                )
+            )
         checks.append(Check(f"{q.label} accepted", result_bits & q.bit, f"ID_RESULT = {result_bits}"))
         if result_bits & q.bit and q.veh in params:
             same = abs(params[q.veh] - est) <= 1e-6 * abs(est)
@@ -53,19 +58,30 @@ def plausibility(params, experiments):
         checks.append(Check("hover throttle m g / (8 k_f)", 0.02 <= th <= 0.9, f"{th:.4f} (0.02 .. 0.9)"))
         if _finite_pos(ktau):
             k = ktau / kf
-            checks.append(Check("yaw coefficient k = k_tau / k_f", 0.001 <= k <= 0.1,
-                                f"{k:.5f} m (0.001 .. 0.1)"))
+            checks.append(
+                Check("yaw coefficient k = k_tau / k_f", 0.001 <= k <= 0.1, f"{k:.5f} m (0.001 .. 0.1)")
+            )
     ixx, iyy, izz = (params.get(n) for n in ("ID_IXX_EST", "ID_IYY_EST", "ID_IZZ_EST"))
     if 6 in experiments and all(_finite_pos(x) for x in (ixx, iyy, izz)):
-        checks.append(Check("inertia triangle inequality I_z <= I_x + I_y", izz <= ixx + iyy,
-                            f"{izz:.5f} vs {ixx + iyy:.5f}", warning=True))
+        checks.append(
+            Check(
+                "inertia triangle inequality I_z <= I_x + I_y",
+                izz <= ixx + iyy,
+                f"{izz:.5f} vs {ixx + iyy:.5f}",
+                warning=True,
+            )
+        )
     if 6 in experiments or 2 in experiments:
         pre, post = params.get("ID_VAL_NE_PRE"), params.get("ID_VAL_NE_POST")
         if 6 in experiments and pre is not None and post is not None:
-            checks.append(Check("validation error after identification: NE halved or < 0.05",
-                                post < 0.5 * pre or post < 0.05,
-                                f"NE {pre:.4f} -> {post:.4f}; fit {params.get('ID_VAL_FIT_PRE', float('nan')):.1f} % "
-                                f"-> {params.get('ID_VAL_FIT_POST', float('nan')):.1f} %"))
+            checks.append(
+                Check(
+                    "validation error after identification: NE halved or < 0.05",
+                    post < 0.5 * pre or post < 0.05,
+                    f"NE {pre:.4f} -> {post:.4f}; fit {params.get('ID_VAL_FIT_PRE', float('nan')):.1f} % "
+                    f"-> {params.get('ID_VAL_FIT_POST', float('nan')):.1f} %",
+                )
+            )
     return checks
 
 
@@ -86,8 +102,11 @@ def against_truth(params, experiments, truth, tol_rotor_pct, tol_inertia_pct):
             # extrapolation from hover throttles, and its reported std says how far it holds
             tol = 400.0 * sd / true
             why = f"{tol:.3g} %: 4 sd"
-        checks.append(Check(f"{q.label} vs truth", abs(err) <= tol,
-                            f"{est:.6g} vs {true:.6g}: {err:+.3f} % (limit {why})"))
+        checks.append(
+            Check(
+                f"{q.label} vs truth", abs(err) <= tol, f"{est:.6g} vs {true:.6g}: {err:+.3f} % (limit {why})"
+            )
+        )
     return checks
 
 
@@ -98,6 +117,7 @@ def motor_model_rows(params, veh):
     """The motor model found (lag, delay, curve, per-rotor scales) with its standard deviations
     beside the truth of the vehicle file (None: unknown). Rows: (label, found, sd, truth, error
     text) as strings."""
+
     def f(x, fmt="{:.4g}"):
         return "-" if x is None or not isinstance(x, (int, float)) or not math.isfinite(x) else fmt.format(x)
 
@@ -108,17 +128,33 @@ def motor_model_rows(params, veh):
     rows.append(("motor lag [s]", f(tau), f(tau_sd), f(t_tau), err))
     d = params.get("ID_DELAY_FR")
     t_d = round(veh["delay"] * MOTOR_RATE_HZ) if veh and veh.get("delay") is not None else None
-    rows.append(("transport delay [frames]", f(d, "{:.0f}"), "-", f(t_d, "{:.0f}"),
-                 "-" if d is None or t_d is None else ("exact" if round(d) == t_d else f"{round(d) - t_d:+d}")))
+    rows.append(
+        (
+            "transport delay [frames]",
+            f(d, "{:.0f}"),
+            "-",
+            f(t_d, "{:.0f}"),
+            "-" if d is None or t_d is None else ("exact" if round(d) == t_d else f"{round(d) - t_d:+d}"),
+        )
+    )
     c, c_sd = params.get("MOT_CURVE"), params.get("ID_CRV_SD")
     t_c = veh.get("thrust_curve") if veh else None
-    rows.append(("thrust curve c", f(c), f(c_sd), f(t_c), "-" if c is None or t_c is None else f"{c - t_c:+.4f}"))
+    rows.append(
+        ("thrust curve c", f(c), f(c_sd), f(t_c), "-" if c is None or t_c is None else f"{c - t_c:+.4f}")
+    )
     t_s = veh.get("rotor_scale") if veh else None
     for j in range(8):
         sj = params.get(f"MOT_SCALE{j + 1}")
         tj = t_s[j] if t_s else None
-        rows.append((f"rotor {j + 1} effectiveness", f(sj), "-", f(tj),
-                     "-" if sj is None or not tj else f"{100.0 * (sj - tj) / tj:+.2f} %"))
+        rows.append(
+            (
+                f"rotor {j + 1} effectiveness",
+                f(sj),
+                "-",
+                f(tj),
+                "-" if sj is None or not tj else f"{100.0 * (sj - tj) / tj:+.2f} %",
+            )
+        )
     rows.append(("residual / noise variance (NE)", f(params.get("ID_MOT_NE")), "-", "1", "-"))
     return rows
 

@@ -36,7 +36,7 @@ class Flight:
         self.alive()
         t0 = time.time()
         r = self.v.command(cmd, *params, timeout=timeout)
-        self.v.recv(types=(), timeout=0.02)   # the STATUSTEXT with a reason follows the ACK
+        self.v.recv(types=(), timeout=0.02)  # the STATUSTEXT with a reason follows the ACK
         return r, self.v._last_text(since=t0)
 
     def wait_mode(self, modes, timeout, what):
@@ -45,8 +45,10 @@ class Flight:
         while self.v.mode not in want:
             if time.monotonic() > deadline:
                 last = self.v._last_text()
-                raise GcsError(f"{what}: vehicle still in mode {self.mode_name()} after {timeout:g} s"
-                               + (f" (last message: {last})" if last else ""))
+                raise GcsError(
+                    f"{what}: vehicle still in mode {self.mode_name()} after {timeout:g} s"
+                    + (f" (last message: {last})" if last else "")
+                )
             self.poll(0.05)
 
     def arm(self, timeout=10.0):

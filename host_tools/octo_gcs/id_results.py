@@ -12,8 +12,20 @@ import math
 
 from .quantities import QUANTITIES
 
-FIELDS = ("run_id", "index", "count", "run_done", "experiment", "param", "rotor", "value", "sd",
-          "accepted", "reason", "source")
+FIELDS = (
+    "run_id",
+    "index",
+    "count",
+    "run_done",
+    "experiment",
+    "param",
+    "rotor",
+    "value",
+    "sd",
+    "accepted",
+    "reason",
+    "source",
+)
 
 # OCTO_ID_PARAM -> (parameter of the estimate, parameter of its sd; None: not a parameter)
 _PARAMS = {
@@ -27,7 +39,7 @@ _PARAMS = {
     "MOT_CURVE": ("MOT_CURVE", "ID_CRV_SD"),
     "KF_PLAIN": ("ID_KF_PLAIN", None),
     "KTAU_PLAIN": ("ID_KTAU_PLAIN", None),
-    "VAL_NE_BEFORE": ("ID_VAL_NE_PRE", "ID_VAL_FIT_PRE"),   # the fit % travels in sd's place
+    "VAL_NE_BEFORE": ("ID_VAL_NE_PRE", "ID_VAL_FIT_PRE"),  # the fit % travels in sd's place
     "VAL_NE_AFTER": ("ID_VAL_NE_POST", "ID_VAL_FIT_POST"),
 }
 # OCTO_ID_PARAM of each identified quantity (report.json's keys)
@@ -39,7 +51,11 @@ def _enum(name):
     from pymavlink.dialects.v20 import octo
 
     prefix = name + "_"
-    return {code: e.name[len(prefix) :].lower() for code, e in octo.enums[name].items() if e.name.startswith(prefix)}
+    return {
+        code: e.name[len(prefix) :].lower()
+        for code, e in octo.enums[name].items()
+        if e.name.startswith(prefix)
+    }
 
 
 _names = {}
@@ -161,8 +177,11 @@ def verdicts(records):
     for key, p in QUANTITY_PARAM.items():
         rec = by_param.get(p.lower())
         if rec is not None:
-            out[key] = {"accepted": bool(rec["accepted"]), "reason": reason_name(rec["reason"]),
-                        "source": source_name(rec["source"])}
+            out[key] = {
+                "accepted": bool(rec["accepted"]),
+                "reason": reason_name(rec["reason"]),
+                "source": source_name(rec["source"]),
+            }
     return out
 
 
@@ -189,8 +208,15 @@ def rejections(records):
 
 def describe(rec):
     """One result as data for report.json (names instead of codes)."""
-    return {"run_id": rec["run_id"], "index": rec["index"], "experiment": rec["experiment"],
-            "param": param_name(rec["param"]), "rotor": rec["rotor"],
-            "value": rec["value"] if _finite(rec["value"]) else None,
-            "sd": rec["sd"] if _finite(rec["sd"]) else None, "accepted": bool(rec["accepted"]),
-            "reason": reason_name(rec["reason"]), "source": source_name(rec["source"])}
+    return {
+        "run_id": rec["run_id"],
+        "index": rec["index"],
+        "experiment": rec["experiment"],
+        "param": param_name(rec["param"]),
+        "rotor": rec["rotor"],
+        "value": rec["value"] if _finite(rec["value"]) else None,
+        "sd": rec["sd"] if _finite(rec["sd"]) else None,
+        "accepted": bool(rec["accepted"]),
+        "reason": reason_name(rec["reason"]),
+        "source": source_name(rec["source"]),
+    }

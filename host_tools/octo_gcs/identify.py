@@ -17,10 +17,15 @@ from .experiments import EXPERIMENTS, phase_of
 from .id_results import Collector
 
 # live estimates (NAMED_VALUE_FLOAT) shown on the progress line, in this order
-LIVE = [("KF", "KF_SD", "{:.4f}"), ("KTAU", "KTAU_SD", "{:.5f}"), ("IXX", "IXX_SD", "{:.5f}"),
-        ("IYY", "IYY_SD", "{:.5f}"), ("IZZ", "IZZ_SD", "{:.5f}")]
+LIVE = [
+    ("KF", "KF_SD", "{:.4f}"),
+    ("KTAU", "KTAU_SD", "{:.5f}"),
+    ("IXX", "IXX_SD", "{:.5f}"),
+    ("IYY", "IYY_SD", "{:.5f}"),
+    ("IZZ", "IZZ_SD", "{:.5f}"),
+]
 
-SEV_ERROR = 3   # MAV_SEVERITY_ERROR (the syslog levels): the vehicle's failure reports
+SEV_ERROR = 3  # MAV_SEVERITY_ERROR (the syslog levels): the vehicle's failure reports
 OCTO_ID_RESULT_ID = 54000
 
 
@@ -31,9 +36,9 @@ class Live:
         self.phase = ""
         self.phase_k = self.phase_n = 0
         self.progress = None
-        self.results = results if results is not None else Collector()   # OCTO_ID_RESULT records
-        self.done = None        # "done" | "aborted: why" | "failed"
-        self.failure = None     # the vehicle's error text about the experiment (a phase's time limit)
+        self.results = results if results is not None else Collector()  # OCTO_ID_RESULT records
+        self.done = None  # "done" | "aborted: why" | "failed"
+        self.failure = None  # the vehicle's error text about the experiment (a phase's time limit)
         self.texts = []
 
     def on_text(self, text, severity=None):
@@ -65,8 +70,9 @@ def _start(v, experiment, start_timeout):
     confirmation = 0
     while True:
         t_cmd = time.time()
-        v.conn.mav.command_long_send(v.target_system, v.target_component, cmd, confirmation,
-                                     experiment, 0, 0, 0, 0, 0, 0)
+        v.conn.mav.command_long_send(
+            v.target_system, v.target_component, cmd, confirmation, experiment, 0, 0, 0, 0, 0, 0
+        )
         ack = v.recv("COMMAND_ACK", 1.5, cond=lambda a: a.command == cmd)
         if ack is None:
             confirmation += 1
@@ -76,13 +82,17 @@ def _start(v, experiment, start_timeout):
         r = ack.result
         if r in (mavlink.MAV_RESULT_IN_PROGRESS, mavlink.MAV_RESULT_ACCEPTED):
             return
-        v.recv(types=(), timeout=0.05)   # the reason follows the ACK
+        v.recv(types=(), timeout=0.05)  # the reason follows the ACK
         why = v._last_text(since=t_cmd)
-        if (r == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
-                or (r == mavlink.MAV_RESULT_DENIED and "hover" in why)) and time.monotonic() < deadline:
+        if (
+            r == mavlink.MAV_RESULT_TEMPORARILY_REJECTED
+            or (r == mavlink.MAV_RESULT_DENIED and "hover" in why)
+        ) and time.monotonic() < deadline:
             v.recv(types=(), timeout=0.2)
             continue
-        raise GcsError(f"experiment {experiment} ({name}) refused: {result_name(r)}" + (f": {why}" if why else ""))
+        raise GcsError(
+            f"experiment {experiment} ({name}) refused: {result_name(r)}" + (f": {why}" if why else "")
+        )
 
 
 def _wait_end(v, live, state, t_wall0, timeout, show, experiment):
@@ -96,8 +106,15 @@ def _wait_end(v, live, state, t_wall0, timeout, show, experiment):
             # the final ACK comes last (after the results are applied)
             v.recv(types=(), timeout=0.05)
             if live.done is None or state["final"] != mavlink.MAV_RESULT_ACCEPTED:
-                live.done = "done" if state["final"] == mavlink.MAV_RESULT_ACCEPTED else \
-                    (live.done if live.done and live.done != "done" else f"failed ({result_name(state['final'])})")
+                live.done = (
+                    "done"
+                    if state["final"] == mavlink.MAV_RESULT_ACCEPTED
+                    else (
+                        live.done
+                        if live.done and live.done != "done"
+                        else f"failed ({result_name(state['final'])})"
+                    )
+                )
             return
         in_exp = v.mode == MODE_NUMBERS["EXPERIMENT"]
         if live.done is not None:
@@ -110,10 +127,14 @@ def _wait_end(v, live, state, t_wall0, timeout, show, experiment):
             # the vehicle left the experiment without the closing messages
             v.recv(types=(), timeout=0.3)
             if live.done is None and state["final"] is None:
-                live.done = "done" if v.mode == MODE_NUMBERS["HOLD"] else f"ended in mode {MODES.get(v.mode, v.mode)}"
+                live.done = (
+                    "done" if v.mode == MODE_NUMBERS["HOLD"] else f"ended in mode {MODES.get(v.mode, v.mode)}"
+                )
             continue
         if time.monotonic() - t_wall0 > timeout:
-            raise GcsError(f"experiment {experiment} ({EXPERIMENTS[experiment]}) still running after {timeout:g} s")
+            raise GcsError(
+                f"experiment {experiment} ({EXPERIMENTS[experiment]}) still running after {timeout:g} s"
+            )
         v.recv(types=(), timeout=0.05 if live.done else 0.1)
         show()
 
@@ -129,9 +150,9 @@ def request_missing_results(v, live, wait=1.0):
     try:
         r = v.command(mavlink.MAV_CMD_REQUEST_MESSAGE, OCTO_ID_RESULT_ID, -1, timeout=1.0, retries=1)
     except GcsError:
-        return   # no answer: the results stay as they came
+        return  # no answer: the results stay as they came
     if r != mavlink.MAV_RESULT_ACCEPTED:
-        return   # a vehicle that does not publish results as data
+        return  # a vehicle that does not publish results as data
     deadline = time.monotonic() + wait
     while time.monotonic() < deadline:
         runs = live.results.runs()
@@ -164,7 +185,9 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
             tlabel = f"wall {time.monotonic() - t_wall0[0]:5.1f} s"
         ph = f"{live.phase_k}/{live.phase_n} {live.phase}" if live.phase else name
         pct = f" {live.progress:3d}%" if live.progress is not None else ""
-        progress.update(f"ID {ph}{pct}  {tlabel}  {live_estimates(v)}".rstrip(), key=(live.phase_k, live.phase))
+        progress.update(
+            f"ID {ph}{pct}  {tlabel}  {live_estimates(v)}".rstrip(), key=(live.phase_k, live.phase)
+        )
 
     def listen(msg):
         t = msg.get_type()
@@ -195,12 +218,14 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
         t_wall0[0] = time.monotonic()
         show()
         _wait_end(v, live, state, t_wall0[0], timeout, show, experiment)
-        v.recv(types=(), timeout=0.05)   # trailing results and texts
+        v.recv(types=(), timeout=0.05)  # trailing results and texts
         if live.done == "done":
             request_missing_results(v, live)
         est = live_estimates(v)
-        progress.say(f"  {live.done} after {time.monotonic() - t_wall0[0]:.1f} s wall"
-                     + (f"; last live estimates: {est}" if est else ""))
+        progress.say(
+            f"  {live.done} after {time.monotonic() - t_wall0[0]:.1f} s wall"
+            + (f"; last live estimates: {est}" if est else "")
+        )
     finally:
         v.listeners.remove(listen)
         progress.done()
@@ -214,7 +239,7 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
 def live_estimates(v):
     parts = []
     for name, sd, fmt in LIVE:
-        if name in v.named_values and v.named_values[name][1] != 0.0:   # 0: not estimated yet
+        if name in v.named_values and v.named_values[name][1] != 0.0:  # 0: not estimated yet
             s = fmt.format(v.named_values[name][1])
             if sd in v.named_values:
                 s += " +/- " + fmt.format(v.named_values[sd][1])

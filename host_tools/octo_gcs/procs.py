@@ -46,6 +46,7 @@ def _child_setup():
     os.setpgrp()
     try:
         import ctypes
+
         libc = ctypes.CDLL(None, use_errno=True)
         libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
     except Exception:
@@ -64,9 +65,14 @@ class Proc:
         self._log = open(self.log_path, "wb")
         self._err = open(self.stderr_path, "wb") if self.stderr_path else None
         try:
-            self.popen = subprocess.Popen(self.argv, stdin=subprocess.DEVNULL, stdout=self._log,
-                                          stderr=self._err or subprocess.STDOUT, env=env,
-                                          preexec_fn=_child_setup)
+            self.popen = subprocess.Popen(
+                self.argv,
+                stdin=subprocess.DEVNULL,
+                stdout=self._log,
+                stderr=self._err or subprocess.STDOUT,
+                env=env,
+                preexec_fn=_child_setup,
+            )
         except OSError as e:
             self._close()
             raise GcsError(f"cannot start {self.argv[0]}: {e}") from None

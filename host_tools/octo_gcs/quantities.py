@@ -6,7 +6,7 @@ class Quantity:
     def __init__(self, key, label, unit, est, sd, plain, veh, bit, exp):
         self.key, self.label, self.unit = key, label, unit
         self.est, self.sd, self.plain, self.veh = est, sd, plain, veh
-        self.bit, self.exp = bit, exp   # ID_RESULT's bit when accepted; the experiment that finds it
+        self.bit, self.exp = bit, exp  # ID_RESULT's bit when accepted; the experiment that finds it
 
 
 QUANTITIES = (

@@ -8,9 +8,11 @@ from .common import add_connection_args
 
 
 def register(sub):
-    pp = sub.add_parser("params", help="list, get, set, save, load, diff vehicle parameters",
-                        description="Vehicle parameters over MAVLink. Files use MAVProxy's "
-                        "'NAME VALUE' format.")
+    pp = sub.add_parser(
+        "params",
+        help="list, get, set, save, load, diff vehicle parameters",
+        description="Vehicle parameters over MAVLink. Files use MAVProxy's 'NAME VALUE' format.",
+    )
     add_connection_args(pp)
     pp.set_defaults(run=run)
     psub = pp.add_subparsers(dest="action", metavar="ACTION", required=True)

@@ -19,7 +19,7 @@ from ..experiments import planned_total
 from .flown import Flown
 from .options import TAKEOFF_M, fault_flags
 
-WALL_LIMIT_S = 600.0   # octo-sil flies a mission in well under a second
+WALL_LIMIT_S = 600.0  # octo-sil flies a mission in well under a second
 
 
 class WallLimit(GcsError):
@@ -29,8 +29,9 @@ class WallLimit(GcsError):
 def firmware_defaults(build):
     """{NAME: default} of octo-fw's parameter table (octo-sil starts from it)."""
     try:
-        out = subprocess.run([str(build / "octo-fw"), "--dump-params"], capture_output=True, text=True,
-                             timeout=30, check=True).stdout
+        out = subprocess.run(
+            [str(build / "octo-fw"), "--dump-params"], capture_output=True, text=True, timeout=30, check=True
+        ).stdout
         return {p["name"]: f32(p["default"]) for p in json.loads(out)["params"]}
     except (OSError, subprocess.SubprocessError, ValueError, KeyError) as e:
         raise GcsError(f"cannot read octo-fw's parameter table (octo-fw --dump-params): {e}") from None
@@ -48,10 +49,23 @@ def script_text(bench, experiments):
 
 def sil_argv(build, opts, stage, duration):
     """octo-sil's command line (its steps in stage/mission.txt)."""
-    argv = [build / "octo-sil", "--seed", opts.seed, "--xplane-version", opts.xplane_version,
-            "--params", stage / "fw-storage.parm", "--lcm-fw", f"file://{stage / 'fw.lcm'}",
-            "--lcm-sim", f"file://{stage / 'truth.lcm'}", "--duration", duration,
-            "--mission", stage / "mission.txt"]
+    argv = [
+        build / "octo-sil",
+        "--seed",
+        opts.seed,
+        "--xplane-version",
+        opts.xplane_version,
+        "--params",
+        stage / "fw-storage.parm",
+        "--lcm-fw",
+        f"file://{stage / 'fw.lcm'}",
+        "--lcm-sim",
+        f"file://{stage / 'truth.lcm'}",
+        "--duration",
+        duration,
+        "--mission",
+        stage / "mission.txt",
+    ]
     if opts.vehicle:
         argv += ["--vehicle", os.path.abspath(opts.vehicle)]
     return argv + fault_flags(opts.faults)
@@ -61,8 +75,9 @@ def _run_limited(argv, log_path, limit):
     """Runs argv, its output into log_path, killed after `limit` wall seconds; returns its exit
     status. A watchdog instead of wait(timeout), which polls in sleeps of up to 50 ms."""
     with open(log_path, "wb") as log:
-        proc = subprocess.Popen([str(a) for a in argv], stdout=log, stderr=subprocess.STDOUT,
-                                stdin=subprocess.DEVNULL)
+        proc = subprocess.Popen(
+            [str(a) for a in argv], stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL
+        )
         expired = threading.Event()
 
         def kill():
@@ -97,8 +112,10 @@ def _bench(opts, veh, nominal):
 
 def describe(opts, staged):
     vname = f"vehicle {opts.vehicle}" if opts.vehicle else "the paper's vehicle"
-    return (f"mission in-process: octo-sil (X-Plane {opts.xplane_version}, seed {opts.seed}, {vname}) "
-            f"from {staged.build}")
+    return (
+        f"mission in-process: octo-sil (X-Plane {opts.xplane_version}, seed {opts.seed}, {vname}) "
+        f"from {staged.build}"
+    )
 
 
 def check_build(opts):
@@ -121,7 +138,9 @@ def fly(opts, staged, prog):
     duration = max(300.0, 3 * planned_total(nominal, opts.experiments) + 200.0)
     (stage / "mission.txt").write_text(script_text(bench, opts.experiments))
     t0 = time.monotonic()
-    rc = _run_limited(sil_argv(build, opts, stage, duration), stage / "octo-sil.log", opts.wall_limit or WALL_LIMIT_S)
+    rc = _run_limited(
+        sil_argv(build, opts, stage, duration), stage / "octo-sil.log", opts.wall_limit or WALL_LIMIT_S
+    )
     wall = time.monotonic() - t0
     if rc != 0:
         text = (stage / "octo-sil.log").read_text(errors="replace")
@@ -140,7 +159,7 @@ def fly(opts, staged, prog):
             raise GcsError(f"octo-sil's parameter file: {e}") from None
     os.unlink(stage / "mission.txt")
     if (stage / "fw-storage.parm").exists():
-        os.unlink(stage / "fw-storage.parm")   # the firmware's own storage: params.parm says it
+        os.unlink(stage / "fw-storage.parm")  # the firmware's own storage: params.parm says it
     paths = [p for p in (stage / "truth.lcm", stage / "fw.lcm") if p.exists()]
     logs = Logs(paths) if paths else None
     records = logs.id_results if logs is not None else []

@@ -44,8 +44,21 @@ class FlightFailed(GcsError):
 def sim_argv(build, opts, ports, stage, sim_limit):
     """octo-sim's command line."""
     xp_port, xp_listen, _mav_port, _gcs_port = ports
-    argv = [build / "octo-sim", "--xp-port", xp_port, "--data-out", f"127.0.0.1:{xp_listen}", "--seed", opts.seed,
-            "--xplane-version", opts.xplane_version, "--lcm", f"file://{stage / 'truth.lcm'}", "--duration", sim_limit]
+    argv = [
+        build / "octo-sim",
+        "--xp-port",
+        xp_port,
+        "--data-out",
+        f"127.0.0.1:{xp_listen}",
+        "--seed",
+        opts.seed,
+        "--xplane-version",
+        opts.xplane_version,
+        "--lcm",
+        f"file://{stage / 'truth.lcm'}",
+        "--duration",
+        sim_limit,
+    ]
     if not opts.realtime:
         argv.append("--lockstep")
     if opts.vehicle:
@@ -56,9 +69,21 @@ def sim_argv(build, opts, ports, stage, sim_limit):
 def fw_argv(build, ports, stage):
     """octo-fw's command line."""
     xp_port, xp_listen, mav_port, gcs_port = ports
-    return [build / "octo-fw", "--xplane", f"127.0.0.1:{xp_port}", "--xp-listen", xp_listen,
-            "--mavlink-listen", mav_port, "--gcs", f"127.0.0.1:{gcs_port}",
-            "--params", stage / "fw-storage.parm", "--lcm", f"file://{stage / 'fw.lcm'}"]
+    return [
+        build / "octo-fw",
+        "--xplane",
+        f"127.0.0.1:{xp_port}",
+        "--xp-listen",
+        xp_listen,
+        "--mavlink-listen",
+        mav_port,
+        "--gcs",
+        f"127.0.0.1:{gcs_port}",
+        "--params",
+        stage / "fw-storage.parm",
+        "--lcm",
+        f"file://{stage / 'fw.lcm'}",
+    ]
 
 
 class UdpFlight:
@@ -68,9 +93,11 @@ class UdpFlight:
         self.sim = self.fw = None
         self.vehicle = None
         self.results = id_results.Collector()
-        self.phase = "start"          # what the mission is doing (named in a failure)
+        self.phase = "start"  # what the mission is doing (named in a failure)
         self.phase_since = time.time()
-        self.sim_limit = max(300.0, 3 * planned_total(opts.params, opts.experiments) + 200.0)   # bounds the logs
+        self.sim_limit = max(
+            300.0, 3 * planned_total(opts.params, opts.experiments) + 200.0
+        )  # bounds the logs
 
     def set_phase(self, name):
         self.phase, self.phase_since = name, time.time()
@@ -79,7 +106,11 @@ class UdpFlight:
         """The vehicle's failure reports (severity ERROR or worse, saying "failed")."""
         if self.vehicle is None:
             return []
-        return [t for (w, sev, t) in self.vehicle.statustexts if w >= since and sev <= SEV_ERROR and "failed" in t.lower()]
+        return [
+            t
+            for (w, sev, t) in self.vehicle.statustexts
+            if w >= since and sev <= SEV_ERROR and "failed" in t.lower()
+        ]
 
     def vehicle_errors(self, since=0.0):
         """Every text of severity ERROR or worse (the failure and what it adds)."""
@@ -91,10 +122,10 @@ class UdpFlight:
     def _alive(self):
         failures = self.vehicle_failures(self.phase_since) if self.vehicle is not None else []
         if failures:
-            self.vehicle.recv(types=(), timeout=0.1)   # the lines that explain it follow
+            self.vehicle.recv(types=(), timeout=0.1)  # the lines that explain it follow
             why = "; ".join(self.vehicle_errors(self.phase_since))
             if failures[0].startswith("Hold entry failed"):
-                self.phase = "hold entry"   # the take-off's last part: at the height, settling
+                self.phase = "hold entry"  # the take-off's last part: at the height, settling
             raise GcsError(f"{self.phase} failed: {why}")
         for p in (self.sim, self.fw):
             if p is not None and not p.alive():
@@ -103,12 +134,16 @@ class UdpFlight:
                 if p is self.sim and rc == 0:
                     what += f" (its --duration of {self.sim_limit:g} s simulated ran out)"
                 last = self.vehicle._last_text() if self.vehicle is not None else ""
-                raise GcsError(f"{self.phase} failed: {what}"
-                               + (f"; last message from the vehicle: {last}" if last else "") + f":\n{p.tail()}")
+                raise GcsError(
+                    f"{self.phase} failed: {what}"
+                    + (f"; last message from the vehicle: {last}" if last else "")
+                    + f":\n{p.tail()}"
+                )
 
     def start(self, build, ports, stage):
-        self.sim = procs.Proc(sim_argv(build, self.opts, ports, stage, self.sim_limit), stage / "octo-sim.log",
-                              "octo-sim")
+        self.sim = procs.Proc(
+            sim_argv(build, self.opts, ports, stage, self.sim_limit), stage / "octo-sim.log", "octo-sim"
+        )
         self.fw = procs.Proc(fw_argv(build, ports, stage), stage / "octo-fw.log", "octo-fw")
 
     def stop(self):
@@ -155,11 +190,15 @@ class UdpFlight:
             except PortTaken as e:
                 self.stop()
                 if attempt == PORT_ATTEMPTS:
-                    raise GcsError(f"{e}\n(a UDP port was taken at start {PORT_ATTEMPTS} times "
-                                   "in a row: is something binding many ports on 127.0.0.1?)") from None
+                    raise GcsError(
+                        f"{e}\n(a UDP port was taken at start {PORT_ATTEMPTS} times "
+                        "in a row: is something binding many ports on 127.0.0.1?)"
+                    ) from None
                 first = str(e).splitlines()[-1].strip()
-                self.prog.say(f"start-up: a UDP port was taken before a program bound it ({first}); "
-                              f"retrying on fresh ports ({attempt + 1} of {PORT_ATTEMPTS})")
+                self.prog.say(
+                    f"start-up: a UDP port was taken before a program bound it ({first}); "
+                    f"retrying on fresh ports ({attempt + 1} of {PORT_ATTEMPTS})"
+                )
 
     def _on_message(self, msg):
         if msg.get_type() == "OCTO_ID_RESULT":
@@ -180,8 +219,11 @@ class UdpFlight:
             bench[name] = value
         for name, value in bench.items():
             v.set_param(name, value)
-        self.prog.say("vehicle up; set " + ", ".join(f"{k} {val:g}" for k, val in bench.items())
-                      + f"  ({time.monotonic() - t0:.1f} s)")
+        self.prog.say(
+            "vehicle up; set "
+            + ", ".join(f"{k} {val:g}" for k, val in bench.items())
+            + f"  ({time.monotonic() - t0:.1f} s)"
+        )
         nominal.update({k: float(val) for k, val in bench.items()})
         return nominal
 
@@ -199,23 +241,35 @@ class UdpFlight:
         fl.arm()
         self.set_phase("take-off")
         fl.takeoff(TAKEOFF_M, timeout=tlimit)
-        say(f"take-off: holding at {TAKEOFF_M:g} m (t={tail.time() or 0:.1f} s simulated, "
-            f"{time.monotonic() - t0:.1f} s wall)")
+        say(
+            f"take-off: holding at {TAKEOFF_M:g} m (t={tail.time() or 0:.1f} s simulated, "
+            f"{time.monotonic() - t0:.1f} s wall)"
+        )
         for e in self.opts.experiments:
             self.set_phase(f"experiment {e}")
             say(f"experiment {e}: {EXPERIMENTS[e]}")
             n0 = len(self.results)
             planned = planned_sim_seconds(nominal, e)
-            run_experiment(self.vehicle, e, self.prog, sim_time=tail.time, results=self.results,
-                           timeout=planned * (1.5 if self.opts.realtime else 0.5) + 60.0)
-            say(f"experiment {e} done at t={tail.time() or 0:.1f} s simulated "
-                f"({len(self.results) - n0} results, {time.monotonic() - t0:.1f} s wall)")
+            run_experiment(
+                self.vehicle,
+                e,
+                self.prog,
+                sim_time=tail.time,
+                results=self.results,
+                timeout=planned * (1.5 if self.opts.realtime else 0.5) + 60.0,
+            )
+            say(
+                f"experiment {e} done at t={tail.time() or 0:.1f} s simulated "
+                f"({len(self.results) - n0} results, {time.monotonic() - t0:.1f} s wall)"
+            )
         self.set_phase("collecting parameters")
         after = self.vehicle.fetch_params()
         say(f"collected {len(after)} parameters")
         self.set_phase("landing")
         fl.land(timeout=tlimit)
-        say(f"landed and disarmed at t={tail.time() or 0:.1f} s simulated ({time.monotonic() - t0:.1f} s wall)")
+        say(
+            f"landed and disarmed at t={tail.time() or 0:.1f} s simulated ({time.monotonic() - t0:.1f} s wall)"
+        )
         tail.close()
         return nominal, after
 
@@ -242,8 +296,10 @@ class UdpFlight:
 def describe(opts, staged):
     mode = "real time" if opts.realtime else "lockstep"
     vname = f"vehicle {opts.vehicle}" if opts.vehicle else "the paper's vehicle"
-    return (f"mission: octo-sim ({mode}, X-Plane {opts.xplane_version}, seed {opts.seed}, {vname}) "
-            f"+ octo-fw from {staged.build}")
+    return (
+        f"mission: octo-sim ({mode}, X-Plane {opts.xplane_version}, seed {opts.seed}, {vname}) "
+        f"+ octo-fw from {staged.build}"
+    )
 
 
 def fly(opts, staged, prog):

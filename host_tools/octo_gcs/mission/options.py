@@ -9,7 +9,7 @@ from typing import Literal, Optional
 from ..base import GcsError
 from ..experiments import check_experiment, parse_experiments
 
-TAKEOFF_M = 10.0   # the height of every mission's take-off and hold
+TAKEOFF_M = 10.0  # the height of every mission's take-off and hold
 
 # octo-sim's (and octo-sil's) fault injection flags: name -> (flag, integer, lo, hi)
 FAULTS = {
@@ -30,18 +30,18 @@ class MissionOptions:
     plant "sil": octo-sil, firmware and plant in one deterministic lockstep process."""
 
     plant: Literal["udp", "sil"] = "udp"
-    vehicle: Optional[str] = None         # octo-sim's vehicle file (None: the paper's vehicle)
+    vehicle: Optional[str] = None  # octo-sim's vehicle file (None: the paper's vehicle)
     seed: int = 1
     out: str = "out"
-    realtime: bool = False                # udp only: octo-sim paced like X-Plane
+    realtime: bool = False  # udp only: octo-sim paced like X-Plane
     xplane_version: int = 12
-    experiments: list = field(default_factory=lambda: [6])   # [] only flies
-    params: dict = field(default_factory=dict)               # {NAME: value} set before the flight
-    faults: dict = field(default_factory=dict)               # {FAULTS name: value} for the plant
-    build_dir: Optional[str] = None       # None: $OCTO_BUILD, else the repository's build/
+    experiments: list = field(default_factory=lambda: [6])  # [] only flies
+    params: dict = field(default_factory=dict)  # {NAME: value} set before the flight
+    faults: dict = field(default_factory=dict)  # {FAULTS name: value} for the plant
+    build_dir: Optional[str] = None  # None: $OCTO_BUILD, else the repository's build/
     plots: bool = True
-    timeout: float = 5.0                  # udp: seconds to wait for the vehicle's answers
-    wall_limit: Optional[float] = None    # sil: octo-sil is stopped after this many wall seconds
+    timeout: float = 5.0  # udp: seconds to wait for the vehicle's answers
+    wall_limit: Optional[float] = None  # sil: octo-sil is stopped after this many wall seconds
 
     def __post_init__(self):
         self.check()

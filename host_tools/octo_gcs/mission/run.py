@@ -61,9 +61,19 @@ def _report(opts, staged, flown, wall_flight):
     stage = staged.stage
     paramfile.save(stage / "params.parm", flown.params_only)
     if (stage / "fw-storage.parm").exists():
-        (stage / "fw-storage.parm").unlink()   # octo-fw's own storage: params.parm says it
-    rep = build_report(stage, staged.vehicle, opts, flown.nominal, flown.after, opts.experiments,
-                       wall_flight_s=wall_flight, logs=flown.logs, filled=flown.filled, results=flown.results)
+        (stage / "fw-storage.parm").unlink()  # octo-fw's own storage: params.parm says it
+    rep = build_report(
+        stage,
+        staged.vehicle,
+        opts,
+        flown.nominal,
+        flown.after,
+        opts.experiments,
+        wall_flight_s=wall_flight,
+        logs=flown.logs,
+        filled=flown.filled,
+        results=flown.results,
+    )
     rep["run"]["plant"] = flown.plant
     write_outputs(stage, rep, opts.plots)
     return rep
@@ -74,9 +84,14 @@ def _verdict(rep, files, out, stream, digits):
     print(table_text(rep), file=stream)
     print(file=stream)
     verdict = "PASS" if rep["pass"] else "FAIL"
-    print(f"{verdict}: {len(files)} files in {out}/ ({', '.join(files)}); "
-          f"{rep['timing']['wall_total_s']:.{digits}f} s", file=stream)
+    print(
+        f"{verdict}: {len(files)} files in {out}/ ({', '.join(files)}); "
+        f"{rep['timing']['wall_total_s']:.{digits}f} s",
+        file=stream,
+    )
     for c in rep["checks"]:
         if not c["ok"]:
-            print(f"  {'warning' if c['warning_only'] else 'failed'}: {c['check']}: {c['detail']}", file=stream)
+            print(
+                f"  {'warning' if c['warning_only'] else 'failed'}: {c['check']}: {c['detail']}", file=stream
+            )
     return 0 if rep["pass"] else 1

@@ -14,8 +14,20 @@ from .. import procs, vehiclefile
 from ..atomicfile import atomic_write
 from ..base import GcsError
 
-OUTPUTS = ("report.md", "report.json", "params.parm", "truth.lcm", "fw.lcm", "octo-sim.log", "octo-fw.log",
-           "octo-sil.log", "fig5_excitation.png", "fig6_validation.png", "fig7_rates.png", "convergence.png")
+OUTPUTS = (
+    "report.md",
+    "report.json",
+    "params.parm",
+    "truth.lcm",
+    "fw.lcm",
+    "octo-sim.log",
+    "octo-fw.log",
+    "octo-sil.log",
+    "fig5_excitation.png",
+    "fig6_validation.png",
+    "fig7_rates.png",
+    "convergence.png",
+)
 
 
 class Staged:
@@ -86,16 +98,32 @@ def failure_report(stage, opts, reason, phase, vehicle_errors, texts):
         return
     files = sorted(p.name for p in stage.iterdir() if p.is_file())
     first = reason.splitlines()[0] if reason else "unknown"
-    rep = {"pass": False, "failed_phase": phase, "failure": first, "failure_detail": reason,
-           "vehicle_errors": vehicle_errors, "statustexts": texts, "seed": opts.seed,
-           "vehicle_file": str(opts.vehicle) if opts.vehicle else None,
-           "files": sorted(set(files) | {"report.md", "report.json"})}
+    rep = {
+        "pass": False,
+        "failed_phase": phase,
+        "failure": first,
+        "failure_detail": reason,
+        "vehicle_errors": vehicle_errors,
+        "statustexts": texts,
+        "seed": opts.seed,
+        "vehicle_file": str(opts.vehicle) if opts.vehicle else None,
+        "files": sorted(set(files) | {"report.md", "report.json"}),
+    }
     md = [f"# Mission FAILED in phase: {phase}", "", f"**Reason:** {first}", ""]
     if len(reason.splitlines()) > 1:
         md += ["```", *reason.splitlines()[1:], "```", ""]
     if vehicle_errors:
         md += ["## Errors reported by the vehicle", "", *[f"- {t}" for t in vehicle_errors], ""]
-    md += ["## Status texts", "", *[f"- {t}" for t in texts], "", "## Files", "", *[f"- {f}" for f in rep["files"]], ""]
+    md += [
+        "## Status texts",
+        "",
+        *[f"- {t}" for t in texts],
+        "",
+        "## Files",
+        "",
+        *[f"- {f}" for f in rep["files"]],
+        "",
+    ]
     try:
         atomic_write(stage / "report.json", json.dumps(rep, indent=2) + "\n")
         atomic_write(stage / "report.md", "\n".join(md))
