@@ -485,6 +485,58 @@ def run(args):
 def _run(args, spec, out, prog, campaign_report):
     columns = csv_columns(spec)
     results = out / "results.csv"
+    done_rows = _open_out(args, spec, out, results, columns)
+    done = {int(r["index"]) for r in done_rows}
+    todo = [i for i in range(spec["missions"]) if i not in done]
+    total = spec["missions"]
+    override = os.environ.get(MISSION_ENV) or None
+    in_process = _in_process(spec, todo, override, prog)
+    plant = "in-process (octo-sil)" if in_process else "udp (octo-sim + octo-fw)"
+    prog.say(
+        f"campaign {spec['name']}: {total} missions, seeds {spec['seed']}..{spec['seed'] + total - 1}, "
+        f"{len(done)} already in {results}, plant {plant}"
+    )
+    jobs, inputs = _jobs(spec, todo, in_process, override)
+    t0 = time.monotonic()
+    stats = {
+        "n_new": 0,
+        "failures": sum(1 for r in done_rows if r["status"] not in RAN),
+        "workers": 0,
+        "t_run": None,
+        "cpu": [],
+        "done": len(done),
+        "total": total,
+    }
+    if jobs:
+        stopped = _fly_all(
+            args, spec, jobs, inputs, out, results, columns, prog, stats, warm=in_process and not override
+        )
+        if stopped is not None:
+            return stopped
+    wall = time.monotonic() - t0
+    run_s = time.monotonic() - stats["t_run"] if stats["t_run"] is not None else 0.0
+    n_new, cpu = stats["n_new"], stats["cpu"]
+    throughput = {
+        "missions_this_run": n_new,
+        "wall_s": round(wall, 2),
+        "missions_s": round(run_s, 2),
+        "workers": stats["workers"],
+        "plant": plant,
+        "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None,
+        "mission_cpu_s_mean": round(sum(cpu) / len(cpu), 4) if cpu else None,
+    }
+    rows = read_results(results, columns)
+    summary = campaign_report.write(
+        out, spec, rows, columns, throughput, replay=lambda idx, seed: _replay(out, spec, idx, seed)
+    )
+    for line in summary["lines"]:
+        print(line)
+    return 0 if summary["ok"] else 1
+
+
+def _open_out(args, spec, out, results, columns):
+    """DIR made ready (its spec.json checked against the spec on --resume); returns the rows
+    already in results.csv (none without --resume)."""
     spec_copy = out / "spec.json"
     spec_text = json.dumps(spec, indent=1, sort_keys=True) + "\n"
     try:
@@ -501,168 +553,130 @@ def _run(args, spec, out, prog, campaign_report):
             f"--resume: {args.spec} is not the spec {out} was started with ({spec_copy})", status=2
         )
     atomic_write(spec_copy, spec_text)
-    done_rows = read_results(results, columns) if args.resume else []
-    done = {int(r["index"]) for r in done_rows}
-    todo = [i for i in range(spec["missions"]) if i not in done]
-    total = spec["missions"]
+    return read_results(results, columns) if args.resume else []
 
-    override = os.environ.get(MISSION_ENV) or None
-    in_process = False
-    if spec["plant"] == "in-process" and todo:
-        in_process = override is None or mission_has_in_process(mission_command(override))
-        if not in_process:
-            prog.say(
-                "campaign: the spec asks for the in-process plant, but this octo-gcs mission has no "
-                "--in-process: missions use the UDP plant (octo-sim + octo-fw)"
-            )
-    plant = "in-process (octo-sil)" if in_process else "udp (octo-sim + octo-fw)"
+
+def _in_process(spec, todo, override, prog):
+    """Whether the missions fly in-process (octo-sil): the spec's choice, when the mission
+    command given for tests can."""
+    if spec["plant"] != "in-process" or not todo:
+        return False
+    if override is None or mission_has_in_process(mission_command(override)):
+        return True
     prog.say(
-        f"campaign {spec['name']}: {total} missions, seeds {spec['seed']}..{spec['seed'] + total - 1}, "
-        f"{len(done)} already in {results}, plant {plant}"
+        "campaign: the spec asks for the in-process plant, but this octo-gcs mission has no "
+        "--in-process: missions use the UDP plant (octo-sim + octo-fw)"
     )
+    return False
 
-    inputs = {}
-    jobs = []
+
+def _jobs(spec, todo, in_process, override):
+    """The tasks of the missions `todo`, and each mission's draws."""
+    inputs, jobs = {}, []
     for i in todo:
         seed, d, vehicle, faults, params = campaign_spec.mission_inputs(spec, i)
         inputs[i] = d
-        jobs.append(
-            {
-                "index": i,
-                "seed": seed,
-                "vehicle": vehicle,
-                "faults": faults,
-                "params": params,
-                "experiments": spec["experiments"],
-                "timeout": float(spec["timeout"]),
-                "in_process": in_process,
-                "mission_cmd": override,
-                # octo-gcs's own in-process mission runs inside the worker's Python process
-                # (octo-sil its child); a mission command given for tests stays a subprocess
-                "in_worker": in_process and override is None,
-            }
-        )
+        jobs.append({
+            "index": i, "seed": seed, "vehicle": vehicle, "faults": faults, "params": params,
+            "experiments": spec["experiments"], "timeout": float(spec["timeout"]),
+            "in_process": in_process, "mission_cmd": override,
+            # octo-gcs's own in-process mission runs inside the worker's Python process
+            # (octo-sil its child); a mission command given for tests stays a subprocess
+            "in_worker": in_process and override is None,
+        })  # fmt: skip
+    return jobs, inputs
 
-    t0 = time.monotonic()
-    n_new = failures = 0
-    n_workers = 0
-    failures += sum(1 for r in done_rows if r["status"] not in RAN)
-    t_run = None  # from the first submission: the missions' own rate, without the cluster's start
-    cpu = []  # CPU seconds of each mission of this run on its worker (its process and children)
-    if jobs:
-        client, cluster, n_workers, retries = _start_cluster(args, spec, prog)
-        if in_process and override is None:
-            try:
-                client.run(warm_up)
-            except Exception as e:  # a worker without this octo_gcs: the missions will say so
-                prog.say(f"campaign: the workers could not import the mission ({type(e).__name__}: {e})")
-        t_run = time.monotonic()
-        rf = ResultsFile(results, columns)
-        futures = []
-        from .procs import Terminated, signals_as_exceptions
 
-        try:
-            with signals_as_exceptions():
-                import uuid
+def _not_run(j, fut, retries):
+    """The row of a task that came back without a result: its worker died, it raised or the
+    cluster cancelled it."""
+    from distributed.scheduler import KilledWorker
 
-                from dask.distributed import as_completed
-                from distributed.scheduler import KilledWorker
-
-                tag = uuid.uuid4().hex[:8]
-                futures = [
-                    client.submit(run_mission, j, key=f"mission-{j['index']:05d}-{tag}", pure=False)
-                    for j in jobs
-                ]
-                by_key = {f.key: j for f, j in zip(futures, jobs)}
-                for fut in as_completed(futures):
-                    j = by_key[fut.key]
-                    if fut.status == "error":
-                        exc = fut.exception()
-                        if isinstance(exc, KilledWorker):
-                            why = (
-                                f"lost: the worker running it died {retries + 1} times (Dask retried it "
-                                f"{retries} times)"
-                                if retries is not None
-                                else f"lost: the workers running it died: {str(exc).splitlines()[0]}"
-                            )
-                            status = "lost"
-                        else:
-                            why, status = f"{type(exc).__name__}: {exc}", "error"
-                        res = {
-                            "index": j["index"],
-                            "seed": j["seed"],
-                            "status": status,
-                            "reason": why,
-                            "wall_s": "",
-                            "host": "",
-                        }
-                    elif fut.status == "cancelled":
-                        res = {
-                            "index": j["index"],
-                            "seed": j["seed"],
-                            "status": "lost",
-                            "reason": "cancelled by the cluster",
-                            "wall_s": "",
-                            "host": "",
-                        }
-                    else:
-                        res = fut.result()
-                    fut.release()
-                    if isinstance(res.get("cpu_s"), float):
-                        cpu.append(res["cpu_s"])
-                    _keep_mission(out, res, j)
-                    rf.append(result_row(res, inputs[j["index"]]))
-                    n_new += 1
-                    if res["status"] not in RAN:
-                        failures += 1
-                    el = time.monotonic() - t_run
-                    rate = n_new / el * 60.0 if el > 0 else 0.0
-                    left = (len(jobs) - n_new) / (rate / 60.0) if rate > 0 else None
-                    prog.update(
-                        f"campaign {spec['name']}: {len(done) + n_new}/{total} done, {failures} failed, "
-                        f"{rate:.1f} missions/min, {_fmt_minutes(left)} left",
-                        key=n_new,
-                    )
-        except (KeyboardInterrupt, Terminated) as e:
-            prog.done()
-            how = "interrupted" if isinstance(e, KeyboardInterrupt) else f"stopped by {e}"
-            print(
-                f"octo-gcs campaign: {how}; {len(done) + n_new} of {total} missions are in {results} "
-                "(--resume goes on)",
-                file=sys.stderr,
+    if fut.status == "cancelled":
+        status, why = "lost", "cancelled by the cluster"
+    else:
+        exc = fut.exception()
+        if isinstance(exc, KilledWorker):
+            status = "lost"
+            why = (
+                f"lost: the worker running it died {retries + 1} times (Dask retried it {retries} times)"
+                if retries is not None
+                else f"lost: the workers running it died: {str(exc).splitlines()[0]}"
             )
-            return 130 if isinstance(e, KeyboardInterrupt) else 143
-        finally:
-            rf.close()
-            for f in futures:
-                f.cancel()
-            client.close()
-            if cluster is not None:
-                cluster.close()
-                sweep_stale()  # local workers: what those killed left in this host's temp dir
+        else:
+            status, why = "error", f"{type(exc).__name__}: {exc}"
+    return {"index": j["index"], "seed": j["seed"], "status": status, "reason": why, "wall_s": "", "host": ""}
+
+
+def _fly_all(args, spec, jobs, inputs, out, results, columns, prog, stats, warm):
+    """Submits the jobs to the cluster and records each result as it comes (results.csv,
+    missions/NNNN/). Returns None, or the exit status of a campaign stopped by a signal."""
+    import uuid
+
+    from dask.distributed import as_completed
+
+    from .procs import Terminated, signals_as_exceptions
+
+    client, cluster, stats["workers"], retries = _start_cluster(args, spec, prog)
+    if warm:
+        try:
+            client.run(warm_up)
+        except Exception as e:  # a worker without this octo_gcs: the missions will say so
+            prog.say(f"campaign: the workers could not import the mission ({type(e).__name__}: {e})")
+    stats["t_run"] = time.monotonic()  # the missions' own rate, without the cluster's start
+    rf = ResultsFile(results, columns)
+    futures = []
+    try:
+        with signals_as_exceptions():
+            tag = uuid.uuid4().hex[:8]
+            futures = [
+                client.submit(run_mission, j, key=f"mission-{j['index']:05d}-{tag}", pure=False) for j in jobs
+            ]
+            by_key = {f.key: j for f, j in zip(futures, jobs)}
+            for fut in as_completed(futures):
+                j = by_key[fut.key]
+                res = fut.result() if fut.status == "finished" else _not_run(j, fut, retries)
+                fut.release()
+                _record(out, rf, res, j, inputs, prog, spec, stats, len(jobs))
+    except (KeyboardInterrupt, Terminated) as e:
         prog.done()
-    wall = time.monotonic() - t0
-    run_s = time.monotonic() - t_run if t_run is not None else 0.0
-    rows = read_results(results, columns)
-    summary = campaign_report.write(
-        out,
-        spec,
-        rows,
-        columns,
-        {
-            "missions_this_run": n_new,
-            "wall_s": round(wall, 2),
-            "missions_s": round(run_s, 2),
-            "workers": n_workers,
-            "plant": plant,
-            "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None,
-            "mission_cpu_s_mean": round(sum(cpu) / len(cpu), 4) if cpu else None,
-        },
-        replay=lambda idx, seed: _replay(out, spec, idx, seed),
+        how = "interrupted" if isinstance(e, KeyboardInterrupt) else f"stopped by {e}"
+        print(
+            f"octo-gcs campaign: {how}; {stats['done'] + stats['n_new']} of {stats['total']} missions are in "
+            f"{results} (--resume goes on)",
+            file=sys.stderr,
+        )
+        return 130 if isinstance(e, KeyboardInterrupt) else 143
+    finally:
+        rf.close()
+        for f in futures:
+            f.cancel()
+        client.close()
+        if cluster is not None:
+            cluster.close()
+            sweep_stale()  # local workers: what those killed left in this host's temp dir
+    prog.done()
+    return None
+
+
+def _record(out, rf, res, j, inputs, prog, spec, stats, n_jobs):
+    """One mission's result: its files, its row, the progress line."""
+    if isinstance(res.get("cpu_s"), float):
+        stats["cpu"].append(res["cpu_s"])  # CPU seconds on its worker (its process and children)
+    _keep_mission(out, res, j)
+    rf.append(result_row(res, inputs[j["index"]]))
+    stats["n_new"] += 1
+    if res["status"] not in RAN:
+        stats["failures"] += 1
+    n_new = stats["n_new"]
+    el = time.monotonic() - stats["t_run"]
+    rate = n_new / el * 60.0 if el > 0 else 0.0
+    left = (n_jobs - n_new) / (rate / 60.0) if rate > 0 else None
+    prog.update(
+        f"campaign {spec['name']}: {stats['done'] + n_new}/{stats['total']} done, {stats['failures']} failed, "
+        f"{rate:.1f} missions/min, {_fmt_minutes(left)} left",
+        key=n_new,
     )
-    for line in summary["lines"]:
-        print(line)
-    return 0 if summary["ok"] else 1
 
 
 def _replay(out, spec, idx, seed):

@@ -212,7 +212,6 @@ def build_report(
     """The report dict of a mission whose files are in `stage`: opts its MissionOptions,
     results the firmware's identification results (id_results.record dicts), filled the
     names of `after` that only those carried."""
-    from .. import analysis
     from ..logs import Logs
 
     if logs is None:
@@ -248,78 +247,86 @@ def build_report(
         "id_results": [id_results.describe(r) for r in results],
     }
     rep["estimator"]["source"] = id_results.estimator_source(results)
-    if logs is not None:
-        val = analysis.validation(logs, after)
-        rep["validation"]["from_log"] = [
-            {
-                "window": lab,
-                "t_start": _num(t[0], 3),
-                "t_end": _num(t[-1], 3),
-                "ne": _num(n),
-                "fit_pct": _num(f, 3),
-            }
-            for lab, t, _c, _m, _p, n, f in val
-        ]
-        rates = analysis.rate_comparison(logs, after)
-        rep["model_fit"] = [
-            {
-                "experiment": kind,
-                "t_start": _num(t[0], 3),
-                "t_end": _num(t[-1], 3),
-                "fit_pct": {ax: _num(f, 2) for ax, f in zip(("wx", "wy", "wz"), fits)},
-            }
-            for kind, t, _w, _wm, fits in rates
-        ]
-        # the plain estimator's std is only in the log (est_sd[2], est_sd[3]): last value
-        from ..plots import convergence_series
-
-        conv = convergence_series(logs)
-        for key in ("kf", "ktau"):
-            row = rep["parameters"][key]
-            if row["plain"] is not None and key + "_plain" in conv:
-                row["plain_sd"] = _num(float(conv[key + "_plain"][2][-1]), 8)
-        rep["_rates"] = rates  # for the figures; removed before writing JSON
-        rep["_validation"] = val
-        rep["_logs"] = logs
-        t_end = (
-            logs.truth.t[-1] if logs.truth is not None else (logs.fw.t[-1] if logs.fw is not None else None)
-        )
-    else:
-        t_end = None
+    t_end = _from_logs(rep, logs, after) if logs is not None else None
     rep["results_from_records"] = list(filled)
     checks = plausibility(after, experiments) if experiments else []
     checks += against_truth(after, experiments, truth, TOL_ROTOR_PCT, TOL_INERTIA_PCT)
     kft = kf_tracked(logs, rep["parameters"]["kf"]["sd_pct"] if "kf" in rep["parameters"] else None)
     if kft is not None:
         rep["kf_tracked"] = kft
-        s_ = kft["summary"]
-        if s_["samples"]:
-            checks.append(
-                Check(
-                    "k_f tracked vs truth at the same time",
-                    s_["max_abs_error_pct"] <= s_["limit_pct"],
-                    f"max {s_['max_abs_error_pct']:.3f} %, rms {s_['rms_error_pct']:.3f} % over "
-                    f"{s_['samples']} frames from t={s_['from_t']:.1f} s (limit {s_['limit_pct']:.3g} %: "
-                    "the identified k_f's)",
-                    warning=True,
-                )
-            )
-            if s_.get("drift_truth_pct") is not None:
-                d = s_["drift_tracked_pct"] - s_["drift_truth_pct"]
-                checks.append(
-                    Check(
-                        "k_f drift tracked",
-                        abs(d) <= KFT_TOL_PCT,
-                        f"{s_['drift_tracked_pct']:+.3f} % tracked, {s_['drift_truth_pct']:+.3f} % "
-                        f"true (limit {KFT_TOL_PCT} %)",
-                        warning=True,
-                    )
-                )
+        checks += _kf_tracked_checks(kft["summary"])
     rep["checks"] = [c.as_dict() for c in checks]
     rep["tolerances_pct"] = {"kf_ktau": TOL_ROTOR_PCT, "inertia": TOL_INERTIA_PCT}
     rep["pass"] = all(c.ok or c.warning for c in checks)
     rep["timing"] = {"simulated_s": _num(t_end, 3), "wall_flight_s": _num(wall_flight_s, 2)}
     return rep
+
+
+def _from_logs(rep, logs, after):
+    """What the report takes from the logs: the validation and the rates' fit recomputed, the
+    plain estimates' sd, what the figures need; returns the simulated time at the end."""
+    from .. import analysis
+    from ..plots import convergence_series
+
+    val = analysis.validation(logs, after)
+    rep["validation"]["from_log"] = [
+        {
+            "window": lab,
+            "t_start": _num(t[0], 3),
+            "t_end": _num(t[-1], 3),
+            "ne": _num(n),
+            "fit_pct": _num(f, 3),
+        }
+        for lab, t, _c, _m, _p, n, f in val
+    ]
+    rates = analysis.rate_comparison(logs, after)
+    rep["model_fit"] = [
+        {
+            "experiment": kind,
+            "t_start": _num(t[0], 3),
+            "t_end": _num(t[-1], 3),
+            "fit_pct": {ax: _num(f, 2) for ax, f in zip(("wx", "wy", "wz"), fits)},
+        }
+        for kind, t, _w, _wm, fits in rates
+    ]
+    # the plain estimator's std is only in the log (est_sd[2], est_sd[3]): last value
+    conv = convergence_series(logs)
+    for key in ("kf", "ktau"):
+        row = rep["parameters"][key]
+        if row["plain"] is not None and key + "_plain" in conv:
+            row["plain_sd"] = _num(float(conv[key + "_plain"][2][-1]), 8)
+    rep["_rates"] = rates  # for the figures; removed before writing JSON
+    rep["_validation"] = val
+    rep["_logs"] = logs
+    return logs.truth.t[-1] if logs.truth is not None else (logs.fw.t[-1] if logs.fw is not None else None)
+
+
+def _kf_tracked_checks(s_):
+    """The tracked k_f against the truth, and its drift (warnings only)."""
+    checks = []
+    if s_["samples"]:
+        checks.append(
+            Check(
+                "k_f tracked vs truth at the same time",
+                s_["max_abs_error_pct"] <= s_["limit_pct"],
+                f"max {s_['max_abs_error_pct']:.3f} %, rms {s_['rms_error_pct']:.3f} % over "
+                f"{s_['samples']} frames from t={s_['from_t']:.1f} s (limit {s_['limit_pct']:.3g} %: "
+                "the identified k_f's)",
+                warning=True,
+            )
+        )
+        if s_.get("drift_truth_pct") is not None:
+            d = s_["drift_tracked_pct"] - s_["drift_truth_pct"]
+            checks.append(
+                Check(
+                    "k_f drift tracked",
+                    abs(d) <= KFT_TOL_PCT,
+                    f"{s_['drift_tracked_pct']:+.3f} % tracked, {s_['drift_truth_pct']:+.3f} % "
+                    f"true (limit {KFT_TOL_PCT} %)",
+                    warning=True,
+                )
+            )
+    return checks
 
 
 def public(rep):
@@ -416,6 +423,35 @@ def _motor_lines(rep):
     return [fmt.format(*r) for r in rows]
 
 
+def _kf_tracked_md(kft):
+    """report.md's section on the tracked k_f (none without it)."""
+    lines = []
+    if not kft:
+        return lines
+    s_ = kft["summary"]
+    lines += ["## k_f tracked against the truth at the same simulated time", ""]
+    if s_["samples"]:
+        lines += [
+            f"From t = {s_['from_t']:.1f} s ({KFT_WARM_S:g} s after the rotor model is final): "
+            f"max |error| {s_['max_abs_error_pct']:.3f} %, rms {s_['rms_error_pct']:.3f} % over "
+            f"{s_['samples']} frames (limit {s_['limit_pct']:.3g} %: the tracker regresses on the "
+            "identified rotor model, so its k_f at full throttle carries the thrust curve's "
+            "error as the identified k_f does); drift over that window "
+            f"{s_.get('drift_tracked_pct', float('nan')):+.3f} % tracked, "
+            f"{s_.get('drift_truth_pct', float('nan')):+.3f} % true; the truth changed "
+            f"{s_['truth_change_pct']:+.3f} % over the whole tracking.",
+            "",
+        ]
+    lines += ["| t [s] | tracked k_f [N] | sd | truth [N] | error |", "|---|---|---|---|---|"]
+    lines += [
+        f"| {x['t']:.1f} | {x['estimate']:.5g} | {x['sd']:.2g} | {x['truth']:.5g} | "
+        f"{x['error_pct']:+.3f} %{'' if x['compared'] else ' (warming up)'} |"
+        for x in kft["samples"]
+    ]
+    lines += [""]
+    return lines
+
+
 def markdown(rep, figures=()):
     head, rows = table_rows(rep)
     run = rep["run"]
@@ -449,29 +485,7 @@ def markdown(rep, figures=()):
     source = rep.get("estimator", {}).get("source")
     if source:
         lines += [f"Estimated from: {source} (the firmware's identification results).", ""]
-    kft = rep.get("kf_tracked")
-    if kft:
-        s_ = kft["summary"]
-        lines += ["## k_f tracked against the truth at the same simulated time", ""]
-        if s_["samples"]:
-            lines += [
-                f"From t = {s_['from_t']:.1f} s ({KFT_WARM_S:g} s after the rotor model is final): "
-                f"max |error| {s_['max_abs_error_pct']:.3f} %, rms {s_['rms_error_pct']:.3f} % over "
-                f"{s_['samples']} frames (limit {s_['limit_pct']:.3g} %: the tracker regresses on the "
-                "identified rotor model, so its k_f at full throttle carries the thrust curve's "
-                "error as the identified k_f does); drift over that window "
-                f"{s_.get('drift_tracked_pct', float('nan')):+.3f} % tracked, "
-                f"{s_.get('drift_truth_pct', float('nan')):+.3f} % true; the truth changed "
-                f"{s_['truth_change_pct']:+.3f} % over the whole tracking.",
-                "",
-            ]
-        lines += ["| t [s] | tracked k_f [N] | sd | truth [N] | error |", "|---|---|---|---|---|"]
-        lines += [
-            f"| {x['t']:.1f} | {x['estimate']:.5g} | {x['sd']:.2g} | {x['truth']:.5g} | "
-            f"{x['error_pct']:+.3f} %{'' if x['compared'] else ' (warming up)'} |"
-            for x in kft["samples"]
-        ]
-        lines += [""]
+    lines += _kf_tracked_md(rep.get("kf_tracked"))
     lines += ["## Validation", ""] + [f"- {x}" for x in _validation_lines(rep)] + [""]
     mm = rep.get("motor_model", [])
     if mm:
