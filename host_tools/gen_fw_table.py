@@ -6,6 +6,7 @@
 octo-gcs imports OUT (octo_fw_table) instead of keeping copies of defaults and mode
 numbers; the build regenerates it whenever octo-fw changes. OUT is written atomically.
 """
+
 import json
 import os
 import sys
@@ -16,9 +17,10 @@ def main():
         sys.exit("usage: octo-fw --dump-params | gen_fw_table.py OUT.py")
     try:
         table = json.load(sys.stdin)
-        params = {p["name"]: {k: p[k] for k in ("index", "default", "min", "max", "unit",
-                                                "locked", "readonly")}
-                  for p in table["params"]}
+        params = {
+            p["name"]: {k: p[k] for k in ("index", "default", "min", "max", "unit", "locked", "readonly")}
+            for p in table["params"]
+        }
         modes = {int(n): name for name, n in table["modes"].items()}
     except (ValueError, KeyError, TypeError) as e:
         sys.exit(f"gen_fw_table.py: octo-fw --dump-params gave no usable table ({e})")

@@ -16,3 +16,10 @@ $(FW_TABLE_PY): $(B)/octo-fw host_tools/gen_fw_table.py | $(LCM_STAMP)
 	$(B)/octo-fw --dump-params | $(PYTHON) host_tools/gen_fw_table.py $@
 
 ALL_TARGETS += $(FW_TABLE_PY)
+
+# Python formatting and lint of host_tools/ (ruff, pinned in requirements.txt; its settings in
+# host_tools/pyproject.toml).
+.PHONY: lint-py
+lint-py: $(VENV_STAMP)
+	$(VENV)/bin/ruff check host_tools
+	$(VENV)/bin/ruff format --check host_tools

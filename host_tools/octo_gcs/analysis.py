@@ -18,7 +18,7 @@ import numpy as np
 from .model import Model, Params
 
 FRAME_DT = 1.0 / 90.0
-RK4_STEP = 0.002   # the paper's T
+RK4_STEP = 0.002  # the paper's T
 
 # the firmware's defaults for the actuator model its estimators use (experiment.c)
 DEFAULT_MOT_TAU = 0.03
@@ -30,7 +30,9 @@ def actuator_model(params):
     tau = params.get("ID_MOT_TAU")
     delay = params.get("ID_DELAY_FR")
     tau = float(tau) if tau is not None and math.isfinite(tau) and tau >= 0 else DEFAULT_MOT_TAU
-    delay = int(round(delay)) if delay is not None and math.isfinite(delay) and delay >= 0 else DEFAULT_DELAY_FR
+    delay = (
+        int(round(delay)) if delay is not None and math.isfinite(delay) and delay >= 0 else DEFAULT_DELAY_FR
+    )
     return tau, delay
 
 
@@ -44,7 +46,7 @@ def fit_pct(y, yhat):
 
 def ne(y, yhat):
     y, yhat = np.asarray(y, float), np.asarray(yhat, float)
-    den = math.sqrt(float(np.mean(y ** 2))) if len(y) else 0.0
+    den = math.sqrt(float(np.mean(y**2))) if len(y) else 0.0
     if den == 0:
         return float("nan")
     return float(math.sqrt(float(np.mean((y - yhat) ** 2))) / den)
@@ -56,8 +58,11 @@ def classify(name):
     n = name.lower()
     if "valid" in n:
         return "validation"
-    m = re.search(r"\bi[_ ]?(x|y|z)\1?\b", n) or re.search(r"\b(x|y|z)[- ]axis\b", n) \
+    m = (
+        re.search(r"\bi[_ ]?(x|y|z)\1?\b", n)
+        or re.search(r"\b(x|y|z)[- ]axis\b", n)
         or re.search(r"\b(roll|pitch|yaw)\b", n)
+    )
     if m:
         axis = {"roll": "x", "pitch": "y", "yaw": "z"}.get(m.group(1), m.group(1))
         return "i" + axis * 2
@@ -116,8 +121,9 @@ def validation(logs, params=None, settle_s=1.0):
         return out
     tau, delay = actuator_model(params or {})
     wins = phases(logs).get("validation", [])
-    labels = ["before identification", "after identification"] + \
-        [f"validation {i + 3}" for i in range(max(0, len(wins) - 2))]
+    labels = ["before identification", "after identification"] + [
+        f"validation {i + 3}" for i in range(max(0, len(wins) - 2))
+    ]
     for label, (t0, t1) in zip(labels, wins):
         w = window(fw, t0, t1)
         if len(w) < 10:
@@ -125,22 +131,33 @@ def validation(logs, params=None, settle_s=1.0):
         f_cmd, f_meas = w.rotor_f[:, 0], w.rotor_thrust[:, 0]
         f_pred = predicted_thrust(f_cmd, FRAME_DT, tau, delay)
         m = w.t >= t0 + settle_s
-        out.append((label, w.t, f_cmd, f_meas, f_pred, ne(f_meas[m], f_pred[m]), fit_pct(f_meas[m], f_pred[m])))
+        out.append(
+            (label, w.t, f_cmd, f_meas, f_pred, ne(f_meas[m], f_pred[m]), fit_pct(f_meas[m], f_pred[m]))
+        )
     return out
 
 
 # ---------------------------------------------------------------- rates vs model (Fig. 7)
 def model_params(params):
     """model.Params from vehicle parameters (identified ones where present)."""
+
     def get(name, default):
         v = params.get(name)
         return float(v) if v is not None and math.isfinite(v) and v > 0 else default
+
     p = Params()
-    return Params(mass=get("VEH_MASS", p.mass), g=get("VEH_GRAV", p.g), arm_length=get("VEH_ARM_L", p.arm_length),
-                  kf=get("ID_KF_EST", get("VEH_KF", p.kf)), ktau=get("ID_KTAU_EST", get("VEH_KTAU", p.ktau)),
-                  inertia=(get("ID_IXX_EST", get("VEH_IXX", p.inertia[0])),
-                           get("ID_IYY_EST", get("VEH_IYY", p.inertia[1])),
-                           get("ID_IZZ_EST", get("VEH_IZZ", p.inertia[2]))))
+    return Params(
+        mass=get("VEH_MASS", p.mass),
+        g=get("VEH_GRAV", p.g),
+        arm_length=get("VEH_ARM_L", p.arm_length),
+        kf=get("ID_KF_EST", get("VEH_KF", p.kf)),
+        ktau=get("ID_KTAU_EST", get("VEH_KTAU", p.ktau)),
+        inertia=(
+            get("ID_IXX_EST", get("VEH_IXX", p.inertia[0])),
+            get("ID_IYY_EST", get("VEH_IYY", p.inertia[1])),
+            get("ID_IZZ_EST", get("VEH_IZZ", p.inertia[2])),
+        ),
+    )
 
 
 def simulate_rates(t, q0, w0, throttles, s0, p, motor_tau=0.0, delay_frames=0):
@@ -162,7 +179,7 @@ def simulate_rates(t, q0, w0, throttles, s0, p, motor_tau=0.0, delay_frames=0):
     # G s_(k+1) = P_k + E_k a^n. So the whole integration runs on 3-vectors of floats, one
     # pass, without arrays per frame.
     G = m.gamma[1:4] * p.kf
-    P = (G @ thr[:len(t) - 1].T).T.tolist()
+    P = (G @ thr[: len(t) - 1].T).T.tolist()
     qx, qy, qz = (G @ np.asarray(s0, float)).tolist()
     Ix, Iy, Iz = (float(v) for v in m.I)
     ax_, ay_, az_ = (Iy - Iz) / Ix, (Iz - Ix) / Iy, (Ix - Iy) / Iz
@@ -191,7 +208,7 @@ def simulate_rates(t, q0, w0, throttles, s0, p, motor_tau=0.0, delay_frames=0):
             wx += h6 * (k1x + 2 * k2x + 2 * k3x + k4x)
             wy += h6 * (k1y + 2 * k2y + 2 * k3y + k4y)
             wz += h6 * (k1z + 2 * k2z + 2 * k3z + k4z)
-        an = a ** n
+        an = a**n
         qx, qy, qz = px + ex * an, py + ey * an, pz + ez * an
         out.append((wx, wy, wz))
     return np.array(out)
@@ -205,7 +222,7 @@ def rate_comparison(logs, params):
     ph = phases(logs)
     out = []
     for kind in ("ixx", "iyy", "izz"):
-        for (t0, t1) in ph.get(kind, [])[:1]:
+        for t0, t1 in ph.get(kind, [])[:1]:
             if logs.truth is not None:
                 tr = window(logs.truth, t0, t1, stepped=False)
                 if len(tr) < 10:

@@ -1,29 +1,31 @@
 """``octo-gcs campaign SPEC.json``: Monte Carlo missions on a Dask cluster.
 
-One Dask task is one mission, in a temporary directory on the worker, with the mission's vehicle
-file, seed, fault flags and parameters, under a timeout. With the in-process plant the task calls
-``octo-gcs mission --in-process`` inside the worker's own Python process (inprocess.mission: no
-Python start-up and imports per mission); octo-sil is still a child process, so a firmware crash
-or hang is isolated, stopped at the timeout and recorded. With the UDP plant the task runs
-``octo-gcs mission`` as a subprocess. The task never raises for a mission that goes wrong: a
-crash or a timeout comes back as a result with its reason. A worker that dies while running a
+One Dask task is one mission, in a temporary directory on the worker: the task builds the
+mission's MissionOptions (vehicle file, seed, faults, parameters) and flies it under a timeout.
+With the in-process plant the mission runs inside the worker's own Python process
+(octo_gcs.mission.run: no Python start-up and imports per mission); octo-sil is still a child
+process, so a firmware crash or hang is isolated, stopped at the timeout and recorded. With the
+UDP plant the mission runs in a child process (``python -m octo_gcs.mission.child``, its options
+as JSON on stdin). The task never raises for a mission that goes wrong: a crash or a timeout
+comes back as a result with its reason. A worker that dies while running a
 task has the task retried by Dask (the scheduler's ``allowed-failures``, the spec's
 ``retries``); after that the mission is a row with the reason too.
 
 Results reach the client as they finish (``as_completed``); each one is appended to
 DIR/results.csv at once (flush and fsync), its report.json and vehicle file copied to
-DIR/missions/NNNN/ (with the last lines of a failed run's program logs). ``--resume`` skips the missions already in results.csv. At the end
+DIR/missions/NNNN/ (with the last lines of a failed run's program logs). The firmware's
+rejection reasons and the estimates' source come from the mission's report.json (the
+firmware's result records). ``--resume`` skips the missions already in results.csv. At the end
 campaign_report writes campaign.json, campaign.md and the figures.
 
-octo-sim's fault flags reach the plant through a directory of wrappers given to the mission as
-``--build-dir``: octo-sim (and octo-sil) there run the real program with the fault flags added,
-octo-fw is a link to the real one. The same wrappers, written into missions/NNNN/sim/ for the
-worst missions, make their replay command one ``octo-gcs mission`` line.
+Faults are data: the mission's options carry them by the spec's names and the plant turns them
+into octo-sim's (or octo-sil's) flags. The worst missions' replay command is one
+``octo-gcs mission`` line (``--fault NAME=VALUE``).
 
 For tests only: the environment variable OCTO_CAMPAIGN_MISSION, when set, replaces the mission
-command (``python -m octo_gcs.cli mission``) by its words (split like a shell), e.g. a fake
-mission that crashes or hangs; the options given to it are the same, and it always runs as a
-subprocess.
+command (``python -m octo_gcs.mission.child``) by its words (split like a shell), e.g. a fake
+mission that crashes or hangs; it reads the same options as JSON on stdin, and it always runs
+as a subprocess.
 """
 
 import csv
@@ -41,14 +43,14 @@ from pathlib import Path
 
 from . import campaign_spec
 from .atomicfile import atomic_write
-from .campaign_spec import QUANTITIES, SpecError
+from .campaign_spec import SpecError
+from .mission.options import MissionOptions
 from .progress import Progress
+from .quantities import KEYS as QUANTITIES
 
 MISSION_ENV = "OCTO_CAMPAIGN_MISSION"
 STATUSES = ("pass", "fail", "crash", "timeout", "lost", "error")
-RAN = ("pass", "fail")   # the mission ran to its report (its checks passed or not)
-REJECTED_RE = re.compile(r"\bID (kf|ktau|Ixx|Iyy|Izz) .*\brejected: (.+?)\s*$")
-QKEY = {"kf": "kf", "ktau": "ktau", "Ixx": "ixx", "Iyy": "iyy", "Izz": "izz"}
+RAN = ("pass", "fail")  # the mission ran to its report (its checks passed or not)
 TAIL_LINES = 40
 # A mission's scratch directory on its worker: the worker's pid in the name, so that the
 # directories of a worker that died (SIGKILL runs no clean-up) can be told from live ones.
@@ -64,31 +66,25 @@ class CampaignError(Exception):
 
 # ---------------------------------------------------------------- the task (runs on a worker)
 def mission_command(override=None):
-    """The words that start a mission on this machine."""
+    """The words that start a mission in a child process on this machine (its options as JSON
+    on stdin)."""
     if override:
         return shlex.split(override)
-    return [sys.executable, "-m", "octo_gcs.cli", "mission"]
+    return [sys.executable, "-m", "octo_gcs.mission.child"]
 
 
-def write_sim_wrappers(dest, build, fault_flags):
-    """dest/: octo-sim and octo-sil that run build's with `fault_flags` added; octo-fw a link."""
-    dest = Path(dest)
-    dest.mkdir(parents=True, exist_ok=True)
-    flags = " ".join(shlex.quote(f) for f in fault_flags)
-    for name in ("octo-sim", "octo-sil", "octo-fw"):
-        real = Path(build).resolve() / name
-        if not os.access(real, os.X_OK):
-            continue
-        target = dest / name
-        if target.exists() or target.is_symlink():
-            target.unlink()
-        if name == "octo-fw":
-            target.symlink_to(real)
-            continue
-        target.write_text(f"#!/bin/sh\n# {name} with the campaign's fault flags\n"
-                          f"exec {shlex.quote(str(real))} \"$@\" {flags}\n")
-        target.chmod(0o755)
-    return dest
+def mission_options(job, tmp):
+    """The MissionOptions of a job in its directory `tmp` (holding vehicle.json)."""
+    return MissionOptions(
+        plant="sil" if job["in_process"] else "udp",
+        vehicle=str(tmp / "vehicle.json"),
+        seed=job["seed"],
+        out=str(tmp / "out"),
+        plots=False,
+        experiments=list(job["experiments"]),
+        params=dict(job["params"]),
+        faults=dict(job["faults"]),
+    )
 
 
 def _stop_group(p):
@@ -113,18 +109,21 @@ def _tail(path, n=TAIL_LINES):
         return []
 
 
-def _mission_in_worker(argv, log, timeout):
+def _mission_in_worker(opts, log, timeout):
     """An in-process mission in this (the worker's) Python process, octo-sil its child process
-    stopped after `timeout` s: what ``octo-gcs mission ARGV`` would print goes to `log`, its
-    error line included. Returns (exit status as the command's, timed out)."""
-    from . import inprocess
+    stopped after `timeout` s: what ``octo-gcs mission`` would print goes to `log`, its error line
+    included. Returns (exit status as the command's, timed out)."""
     from .atomicfile import scratch
     from .base import GcsError
+    from .mission.flying_sil import WallLimit
+    from .mission.run import run
+
+    opts.wall_limit = timeout
     with open(log, "w", encoding="utf-8") as out:
         try:
-            with scratch():   # the mission's directory goes away after the task
-                return inprocess.mission(argv, out, wall_limit=timeout), False
-        except inprocess.WallLimit as e:
+            with scratch():  # the mission's directory goes away after the task
+                return run(opts, out, out), False
+        except WallLimit as e:
             print(f"octo-gcs: {e}", file=out)
             return 1, True
         except GcsError as e:
@@ -132,12 +131,43 @@ def _mission_in_worker(argv, log, timeout):
             return 1, False
 
 
+def _mission_subprocess(cmd, opts, log, cwd, timeout):
+    """A mission in a child process (its own process group), its options as JSON on stdin,
+    stopped after `timeout` s. Returns (exit status, timed out)."""
+    with open(log, "wb") as out:
+        p = subprocess.Popen(
+            cmd, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.PIPE, cwd=cwd, start_new_session=True
+        )
+        try:
+            try:
+                p.stdin.write(json.dumps(opts.to_json()).encode())
+                p.stdin.close()
+            except BrokenPipeError:  # a command that does not read its options
+                pass
+            return p.wait(timeout=timeout), False
+        except subprocess.TimeoutExpired:
+            _stop_group(p)
+            return p.returncode, True
+        except BaseException:
+            _stop_group(p)
+            raise
+
+
+def _rejections(report):
+    """{quantity: the firmware's reason} of the estimates report.json says were not accepted."""
+    out = {}
+    for q, row in ((report or {}).get("parameters") or {}).items():
+        if row.get("estimate") is not None and not row.get("accepted") and row.get("reason"):
+            out[q] = row["reason"]
+    return out
+
+
 def _alive(pid):
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
-    except OSError:   # EPERM: another user's process
+    except OSError:  # EPERM: another user's process
         return True
     return True
 
@@ -167,77 +197,63 @@ _swept = False
 def run_mission(job):
     """One mission; returns a dict (never raises for the mission's own failures)."""
     import socket
+
     global _swept
-    if not _swept:   # once per worker process: what a killed predecessor left here
+    if not _swept:  # once per worker process: what a killed predecessor left here
         _swept = True
         sweep_stale()
     t0 = time.monotonic()
     cpu0 = _cpu_s()
-    res = {"index": job["index"], "seed": job["seed"], "status": "error", "reason": "", "report": None,
-           "output_tail": [], "rejections": {}, "host": socket.gethostname(), "wall_s": 0.0}
+    res = {
+        "index": job["index"],
+        "seed": job["seed"],
+        "status": "error",
+        "reason": "",
+        "report": None,
+        "output_tail": [],
+        "rejections": {},
+        "host": socket.gethostname(),
+        "wall_s": 0.0,
+    }
     with tempfile.TemporaryDirectory(prefix=f"{TMP_PREFIX}{os.getpid()}-{job['index']:04d}-") as tmp:
         tmp = Path(tmp)
         try:
             (tmp / "vehicle.json").write_text(json.dumps(job["vehicle"], indent=1))
-            cmd = mission_command(job.get("mission_cmd"))
-            cmd += ["--vehicle", str(tmp / "vehicle.json"), "--seed", str(job["seed"]), "--out", str(tmp / "out"),
-                    "--no-plots", "--experiments", ",".join(map(str, job["experiments"])) or "none"]
-            for name, value in sorted(job["params"].items()):
-                cmd += ["--param", f"{name}={value!r}"]
-            if job["in_process"]:
-                cmd.append("--in-process")
-            if job["faults"]:
-                from .procs import build_dir
-                try:
-                    build = build_dir(None)
-                except Exception as e:   # GcsError: no build here
-                    raise RuntimeError(str(e)) from None
-                cmd += ["--build-dir", str(write_sim_wrappers(tmp / "sim", build, job["faults"]))]
+            opts = mission_options(job, tmp)
             log = tmp / "mission.log"
             if job.get("in_worker"):
-                rc, timed_out = _mission_in_worker(cmd[len(mission_command()):], log, job["timeout"])
+                rc, timed_out = _mission_in_worker(opts, log, job["timeout"])
             else:
-                with open(log, "wb") as out:
-                    p = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                         cwd=tmp, start_new_session=True)
-                    try:
-                        rc = p.wait(timeout=job["timeout"])
-                        timed_out = False
-                    except subprocess.TimeoutExpired:
-                        timed_out = True
-                        _stop_group(p)
-                        rc = p.returncode
-                    except BaseException:
-                        _stop_group(p)
-                        raise
+                rc, timed_out = _mission_subprocess(
+                    mission_command(job.get("mission_cmd")), opts, log, tmp, job["timeout"]
+                )
             tail = _tail(log)
             res["output_tail"] = tail
-            # the firmware's rejection reasons: its status texts, in the mission's output (UDP plant)
-            # or in the program logs it wrote (octo-sil.log of the in-process plant)
-            logs = [log] + sorted((tmp / "out").glob("*.log")) + sorted((tmp / "out" / "failed-run").glob("*.log"))
-            for path in logs:
-                for line in _tail(path, 100000):
-                    m = REJECTED_RE.search(line)
-                    if m:
-                        res["rejections"][QKEY[m.group(1)]] = m.group(2)
             # the reason: octo-gcs's own error line if it printed one, else the last line of output
-            said = [ln[len("octo-gcs: "):].strip().rstrip(":") for ln in tail if ln.startswith("octo-gcs: ")]
+            said = [ln[len("octo-gcs: ") :].strip().rstrip(":") for ln in tail if ln.startswith("octo-gcs: ")]
             last = said[0] if said else next((ln.strip() for ln in reversed(tail) if ln.strip()), "")
             failed_run = tmp / "out" / "failed-run"
-            if failed_run.is_dir():   # the failed run's program logs (tails): the worker's copy goes away
-                res["failed_logs"] = {p.name: "\n".join(_tail(p, 200)) + "\n"
-                                      for p in sorted(failed_run.glob("*.log"))}
+            if failed_run.is_dir():  # the failed run's program logs (tails): the worker's copy goes away
+                res["failed_logs"] = {
+                    p.name: "\n".join(_tail(p, 200)) + "\n" for p in sorted(failed_run.glob("*.log"))
+                }
             rp = tmp / "out" / "report.json"
             if timed_out:
                 res["status"] = "timeout"
-                res["reason"] = f"no end after {job['timeout']:g} s" + (f" (last output: {last})" if last else "")
+                res["reason"] = f"no end after {job['timeout']:g} s" + (
+                    f" (last output: {last})" if last else ""
+                )
             elif rp.exists() and rc in (0, 1):
                 try:
                     res["report"] = json.loads(rp.read_text())
+                    res["rejections"] = _rejections(res["report"])
                     res["status"] = "pass" if rc == 0 else "fail"
                     if rc == 1:
-                        failed = [c["check"] for c in res["report"].get("checks", [])
-                                  if not c.get("ok") and not c.get("warning_only")]
+                        failed = [
+                            c["check"]
+                            for c in res["report"].get("checks", [])
+                            if not c.get("ok") and not c.get("warning_only")
+                        ]
                         res["reason"] = "failed checks: " + "; ".join(failed) if failed else "exit status 1"
                 except (ValueError, OSError) as e:
                     res["status"], res["reason"] = "crash", f"unreadable report.json: {e}"
@@ -255,14 +271,19 @@ def run_mission(job):
 def _cpu_s():
     """CPU seconds of this process (all its threads) and of its children that ended."""
     import resource
-    return sum(r.ru_utime + r.ru_stime for r in (resource.getrusage(resource.RUSAGE_SELF),
-                                                 resource.getrusage(resource.RUSAGE_CHILDREN)))
+
+    return sum(
+        r.ru_utime + r.ru_stime
+        for r in (resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN))
+    )
 
 
 def warm_up():
     """Imports what an in-process mission needs (run once on each worker before the missions,
     so that the missions' rate is not that of the first imports)."""
-    from . import analysis, inprocess, logs, mission, report   # noqa: F401
+    from . import analysis, logs  # noqa: F401
+    from .mission import report, run  # noqa: F401
+
     return os.getpid()
 
 
@@ -272,12 +293,18 @@ def csv_columns(spec):
     cols = ["index", "seed", "status", "reason", "wall_s", "host"] + draw_cols
     for q in QUANTITIES:
         cols += [f"{q}_truth", f"{q}_estimate", f"{q}_sd", f"{q}_error_pct", f"{q}_accepted"]
-    return cols + ["rejection_reasons", "failed_checks"]
+    return cols + ["source", "rejection_reasons", "failed_checks"]
 
 
 def result_row(res, draws):
-    row = {"index": res["index"], "seed": res["seed"], "status": res["status"], "reason": res["reason"],
-           "wall_s": res["wall_s"], "host": res.get("host", "")}
+    row = {
+        "index": res["index"],
+        "seed": res["seed"],
+        "status": res["status"],
+        "reason": res["reason"],
+        "wall_s": res["wall_s"],
+        "host": res.get("host", ""),
+    }
     row.update({k: repr(v) if isinstance(v, float) else v for k, v in draws.items()})
     rep = res.get("report") or {}
     params = rep.get("parameters", {})
@@ -287,9 +314,13 @@ def result_row(res, draws):
             v = r.get(field)
             row[f"{q}_{field}"] = "" if v is None else repr(float(v))
         row[f"{q}_accepted"] = "" if not r or r.get("estimate") is None else int(bool(r.get("accepted")))
-    row["rejection_reasons"] = "; ".join(f"{q}: {why}" for q, why in sorted(res.get("rejections", {}).items()))
-    row["failed_checks"] = "; ".join(c["check"] for c in rep.get("checks", [])
-                                     if not c.get("ok") and not c.get("warning_only"))
+    row["source"] = (rep.get("estimator") or {}).get("source") or ""
+    row["rejection_reasons"] = "; ".join(
+        f"{q}: {why}" for q, why in sorted(res.get("rejections", {}).items())
+    )
+    row["failed_checks"] = "; ".join(
+        c["check"] for c in rep.get("checks", []) if not c.get("ok") and not c.get("warning_only")
+    )
     return row
 
 
@@ -304,12 +335,13 @@ def read_results(path, columns):
     if not rows:
         return []
     if rows[0] != columns:
-        raise CampaignError(f"{path}: its columns are not this spec's (another campaign?): choose another --out",
-                            status=2)
+        raise CampaignError(
+            f"{path}: its columns are not this spec's (another campaign?): choose another --out", status=2
+        )
     good = [r for r in rows[1:] if len(r) == len(columns)]
     complete = text.endswith("\n")
     if not complete and good and len(good) == len(rows) - 1:
-        good = good[:-1]   # the last row has all its fields but no line end: it may be cut short
+        good = good[:-1]  # the last row has all its fields but no line end: it may be cut short
     if len(good) != len(rows) - 1 or not complete:
         _rewrite(path, columns, good)
     return [dict(zip(columns, r)) for r in good]
@@ -317,6 +349,7 @@ def read_results(path, columns):
 
 def _rewrite(path, columns, rows):
     import io
+
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(columns)
@@ -349,7 +382,8 @@ class ResultsFile:
 
 # ---------------------------------------------------------------- the client
 def mission_has_in_process(cmd):
-    """True when this `octo-gcs mission` takes --in-process (asks its --help)."""
+    """True when the mission command given for tests takes the in-process plant (its --help says
+    --in-process)."""
     try:
         p = subprocess.run(cmd + ["--help"], capture_output=True, text=True, timeout=60)
     except (OSError, subprocess.TimeoutExpired):
@@ -357,18 +391,17 @@ def mission_has_in_process(cmd):
     return "--in-process" in p.stdout
 
 
-def replay_command(out, res_index, seed, spec, draws_, faults, params, build=None):
-    """The one `octo-gcs mission` line that flies mission `res_index` again (its files are in
-    DIR/missions/NNNN/; with faults, the wrappers there carry the fault flags)."""
+def replay_command(out, res_index, seed, spec, faults, params):
+    """The one `octo-gcs mission` line that flies mission `res_index` again (its vehicle file is
+    in DIR/missions/NNNN/)."""
     d = Path(out) / "missions" / f"{res_index:04d}"
     cmd = ["octo-gcs", "mission", "--vehicle", str(d / "vehicle.json"), "--seed", str(seed)]
     if spec["experiments"] != [6]:
         cmd += ["--experiments", ",".join(map(str, spec["experiments"])) or "none"]
     for name, value in sorted(params.items()):
         cmd += ["--param", f"{name}={value!r}"]
-    if faults and build is not None:
-        write_sim_wrappers(d / "sim", build, faults)
-        cmd += ["--build-dir", str(d / "sim")]
+    for name, value in sorted(faults.items()):
+        cmd += ["--fault", f"{name}={value!r}"]
     return " ".join(shlex.quote(c) for c in cmd)
 
 
@@ -388,27 +421,39 @@ def _allowed_failures(dask_scheduler=None):
 
 def _start_cluster(args, spec, prog):
     import logging
+
     import dask
     from dask.distributed import Client, LocalCluster
+
     # worker-saturation 1.0: a worker holds only the mission it runs, so a worker that dies takes
     # no queued mission with it (Dask counts a death against every task the worker held)
-    dask.config.set({"distributed.scheduler.allowed-failures": spec["retries"],
-                     "distributed.scheduler.worker-saturation": 1.0})
+    dask.config.set(
+        {
+            "distributed.scheduler.allowed-failures": spec["retries"],
+            "distributed.scheduler.worker-saturation": 1.0,
+        }
+    )
     if args.scheduler:
         try:
             client = Client(args.scheduler, timeout=30)
         except (OSError, TimeoutError) as e:
             raise CampaignError(f"cannot reach the Dask scheduler {args.scheduler}: {e}") from None
         n = len(client.scheduler_info().get("workers", {}))
-        try:   # the scheduler's own retry count (its configuration, not this client's)
+        try:  # the scheduler's own retry count (its configuration, not this client's)
             retries = int(client.run_on_scheduler(_allowed_failures))
         except Exception:
             retries = None
         prog.say(f"campaign: Dask cluster {args.scheduler}, {n} workers")
         return client, None, n, retries
     n = args.workers or os.cpu_count() or 1
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                           memory_limit=0, silence_logs=logging.ERROR)
+    cluster = LocalCluster(
+        n_workers=n,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        memory_limit=0,
+        silence_logs=logging.ERROR,
+    )
     client = Client(cluster)
     prog.say(f"campaign: local Dask cluster of {n} worker processes")
     return client, cluster, n, spec["retries"]
@@ -417,6 +462,7 @@ def _start_cluster(args, spec, prog):
 def run(args):
     """The command; returns the exit status."""
     from . import campaign_report
+
     prog = Progress(stream=sys.stderr)
     try:
         spec = campaign_spec.load(args.spec)
@@ -439,6 +485,58 @@ def run(args):
 def _run(args, spec, out, prog, campaign_report):
     columns = csv_columns(spec)
     results = out / "results.csv"
+    done_rows = _open_out(args, spec, out, results, columns)
+    done = {int(r["index"]) for r in done_rows}
+    todo = [i for i in range(spec["missions"]) if i not in done]
+    total = spec["missions"]
+    override = os.environ.get(MISSION_ENV) or None
+    in_process = _in_process(spec, todo, override, prog)
+    plant = "in-process (octo-sil)" if in_process else "udp (octo-sim + octo-fw)"
+    prog.say(
+        f"campaign {spec['name']}: {total} missions, seeds {spec['seed']}..{spec['seed'] + total - 1}, "
+        f"{len(done)} already in {results}, plant {plant}"
+    )
+    jobs, inputs = _jobs(spec, todo, in_process, override)
+    t0 = time.monotonic()
+    stats = {
+        "n_new": 0,
+        "failures": sum(1 for r in done_rows if r["status"] not in RAN),
+        "workers": 0,
+        "t_run": None,
+        "cpu": [],
+        "done": len(done),
+        "total": total,
+    }
+    if jobs:
+        stopped = _fly_all(
+            args, spec, jobs, inputs, out, results, columns, prog, stats, warm=in_process and not override
+        )
+        if stopped is not None:
+            return stopped
+    wall = time.monotonic() - t0
+    run_s = time.monotonic() - stats["t_run"] if stats["t_run"] is not None else 0.0
+    n_new, cpu = stats["n_new"], stats["cpu"]
+    throughput = {
+        "missions_this_run": n_new,
+        "wall_s": round(wall, 2),
+        "missions_s": round(run_s, 2),
+        "workers": stats["workers"],
+        "plant": plant,
+        "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None,
+        "mission_cpu_s_mean": round(sum(cpu) / len(cpu), 4) if cpu else None,
+    }
+    rows = read_results(results, columns)
+    summary = campaign_report.write(
+        out, spec, rows, columns, throughput, replay=lambda idx, seed: _replay(out, spec, idx, seed)
+    )
+    for line in summary["lines"]:
+        print(line)
+    return 0 if summary["ok"] else 1
+
+
+def _open_out(args, spec, out, results, columns):
+    """DIR made ready (its spec.json checked against the spec on --resume); returns the rows
+    already in results.csv (none without --resume)."""
     spec_copy = out / "spec.json"
     spec_text = json.dumps(spec, indent=1, sort_keys=True) + "\n"
     try:
@@ -447,133 +545,143 @@ def _run(args, spec, out, prog, campaign_report):
     except OSError as e:
         raise CampaignError(f"cannot write {out}: {e.strerror}", status=2) from None
     if results.exists() and not args.resume:
-        raise CampaignError(f"{results} exists: add --resume to go on with that campaign, or choose another --out",
-                            status=2)
+        raise CampaignError(
+            f"{results} exists: add --resume to go on with that campaign, or choose another --out", status=2
+        )
     if args.resume and spec_copy.exists() and spec_copy.read_text() != spec_text:
-        raise CampaignError(f"--resume: {args.spec} is not the spec {out} was started with ({spec_copy})", status=2)
+        raise CampaignError(
+            f"--resume: {args.spec} is not the spec {out} was started with ({spec_copy})", status=2
+        )
     atomic_write(spec_copy, spec_text)
-    done_rows = read_results(results, columns) if args.resume else []
-    done = {int(r["index"]) for r in done_rows}
-    todo = [i for i in range(spec["missions"]) if i not in done]
-    total = spec["missions"]
+    return read_results(results, columns) if args.resume else []
 
-    override = os.environ.get(MISSION_ENV) or None
-    cmd = mission_command(override)
-    in_process = False
-    if spec["plant"] == "in-process" and todo:
-        in_process = mission_has_in_process(cmd)
-        if not in_process:
-            prog.say("campaign: the spec asks for the in-process plant, but this octo-gcs mission has no "
-                     "--in-process: missions use the UDP plant (octo-sim + octo-fw)")
-    plant = "in-process (octo-sil)" if in_process else "udp (octo-sim + octo-fw)"
-    prog.say(f"campaign {spec['name']}: {total} missions, seeds {spec['seed']}..{spec['seed'] + total - 1}, "
-             f"{len(done)} already in {results}, plant {plant}")
 
-    inputs = {}
-    jobs = []
+def _in_process(spec, todo, override, prog):
+    """Whether the missions fly in-process (octo-sil): the spec's choice, when the mission
+    command given for tests can."""
+    if spec["plant"] != "in-process" or not todo:
+        return False
+    if override is None or mission_has_in_process(mission_command(override)):
+        return True
+    prog.say(
+        "campaign: the spec asks for the in-process plant, but this octo-gcs mission has no "
+        "--in-process: missions use the UDP plant (octo-sim + octo-fw)"
+    )
+    return False
+
+
+def _jobs(spec, todo, in_process, override):
+    """The tasks of the missions `todo`, and each mission's draws."""
+    inputs, jobs = {}, []
     for i in todo:
         seed, d, vehicle, faults, params = campaign_spec.mission_inputs(spec, i)
         inputs[i] = d
-        jobs.append({"index": i, "seed": seed, "vehicle": vehicle, "faults": faults, "params": params,
-                     "experiments": spec["experiments"], "timeout": float(spec["timeout"]),
-                     "in_process": in_process, "mission_cmd": override,
-                     # octo-gcs's own in-process mission runs inside the worker's Python process
-                     # (octo-sil its child); a mission command given for tests stays a subprocess
-                     "in_worker": in_process and override is None})
+        jobs.append({
+            "index": i, "seed": seed, "vehicle": vehicle, "faults": faults, "params": params,
+            "experiments": spec["experiments"], "timeout": float(spec["timeout"]),
+            "in_process": in_process, "mission_cmd": override,
+            # octo-gcs's own in-process mission runs inside the worker's Python process
+            # (octo-sil its child); a mission command given for tests stays a subprocess
+            "in_worker": in_process and override is None,
+        })  # fmt: skip
+    return jobs, inputs
 
-    t0 = time.monotonic()
-    n_new = failures = 0
-    n_workers = 0
-    failures += sum(1 for r in done_rows if r["status"] not in RAN)
-    t_run = None   # from the first submission: the missions' own rate, without the cluster's start
-    cpu = []   # CPU seconds of each mission of this run on its worker (its process and children)
-    if jobs:
-        client, cluster, n_workers, retries = _start_cluster(args, spec, prog)
-        if in_process and override is None:
-            try:
-                client.run(warm_up)
-            except Exception as e:   # a worker without this octo_gcs: the missions will say so
-                prog.say(f"campaign: the workers could not import the mission ({type(e).__name__}: {e})")
-        t_run = time.monotonic()
-        rf = ResultsFile(results, columns)
-        futures = []
-        from .procs import Terminated, signals_as_exceptions
+
+def _not_run(j, fut, retries):
+    """The row of a task that came back without a result: its worker died, it raised or the
+    cluster cancelled it."""
+    from distributed.scheduler import KilledWorker
+
+    if fut.status == "cancelled":
+        status, why = "lost", "cancelled by the cluster"
+    else:
+        exc = fut.exception()
+        if isinstance(exc, KilledWorker):
+            status = "lost"
+            why = (
+                f"lost: the worker running it died {retries + 1} times (Dask retried it {retries} times)"
+                if retries is not None
+                else f"lost: the workers running it died: {str(exc).splitlines()[0]}"
+            )
+        else:
+            status, why = "error", f"{type(exc).__name__}: {exc}"
+    return {"index": j["index"], "seed": j["seed"], "status": status, "reason": why, "wall_s": "", "host": ""}
+
+
+def _fly_all(args, spec, jobs, inputs, out, results, columns, prog, stats, warm):
+    """Submits the jobs to the cluster and records each result as it comes (results.csv,
+    missions/NNNN/). Returns None, or the exit status of a campaign stopped by a signal."""
+    import uuid
+
+    from dask.distributed import as_completed
+
+    from .procs import Terminated, signals_as_exceptions
+
+    client, cluster, stats["workers"], retries = _start_cluster(args, spec, prog)
+    if warm:
         try:
-            with signals_as_exceptions():
-                from dask.distributed import as_completed
-                from distributed.scheduler import KilledWorker
-                import uuid
-                tag = uuid.uuid4().hex[:8]
-                futures = [client.submit(run_mission, j, key=f"mission-{j['index']:05d}-{tag}", pure=False)
-                           for j in jobs]
-                by_key = {f.key: j for f, j in zip(futures, jobs)}
-                for fut in as_completed(futures):
-                    j = by_key[fut.key]
-                    if fut.status == "error":
-                        exc = fut.exception()
-                        if isinstance(exc, KilledWorker):
-                            why = (f"lost: the worker running it died {retries + 1} times (Dask retried it "
-                                   f"{retries} times)" if retries is not None else
-                                   f"lost: the workers running it died: {str(exc).splitlines()[0]}")
-                            status = "lost"
-                        else:
-                            why, status = f"{type(exc).__name__}: {exc}", "error"
-                        res = {"index": j["index"], "seed": j["seed"], "status": status, "reason": why,
-                               "wall_s": "", "host": ""}
-                    elif fut.status == "cancelled":
-                        res = {"index": j["index"], "seed": j["seed"], "status": "lost",
-                               "reason": "cancelled by the cluster", "wall_s": "", "host": ""}
-                    else:
-                        res = fut.result()
-                    fut.release()
-                    if isinstance(res.get("cpu_s"), float):
-                        cpu.append(res["cpu_s"])
-                    _keep_mission(out, res, j)
-                    rf.append(result_row(res, inputs[j["index"]]))
-                    n_new += 1
-                    if res["status"] not in RAN:
-                        failures += 1
-                    el = time.monotonic() - t_run
-                    rate = n_new / el * 60.0 if el > 0 else 0.0
-                    left = (len(jobs) - n_new) / (rate / 60.0) if rate > 0 else None
-                    prog.update(f"campaign {spec['name']}: {len(done) + n_new}/{total} done, {failures} failed, "
-                                f"{rate:.1f} missions/min, {_fmt_minutes(left)} left", key=n_new)
-        except (KeyboardInterrupt, Terminated) as e:
-            prog.done()
-            how = "interrupted" if isinstance(e, KeyboardInterrupt) else f"stopped by {e}"
-            print(f"octo-gcs campaign: {how}; {len(done) + n_new} of {total} missions are in {results} "
-                  "(--resume goes on)", file=sys.stderr)
-            return 130 if isinstance(e, KeyboardInterrupt) else 143
-        finally:
-            rf.close()
-            for f in futures:
-                f.cancel()
-            client.close()
-            if cluster is not None:
-                cluster.close()
-                sweep_stale()   # local workers: what those killed left in this host's temp dir
-        prog.done()
-    wall = time.monotonic() - t0
-    run_s = time.monotonic() - t_run if t_run is not None else 0.0
-    rows = read_results(results, columns)
-    from .procs import build_dir
+            client.run(warm_up)
+        except Exception as e:  # a worker without this octo_gcs: the missions will say so
+            prog.say(f"campaign: the workers could not import the mission ({type(e).__name__}: {e})")
+    stats["t_run"] = time.monotonic()  # the missions' own rate, without the cluster's start
+    rf = ResultsFile(results, columns)
+    futures = []
     try:
-        build = build_dir(None)
-    except Exception:
-        build = None
-    summary = campaign_report.write(out, spec, rows, columns, {
-        "missions_this_run": n_new, "wall_s": round(wall, 2), "missions_s": round(run_s, 2), "workers": n_workers,
-        "plant": plant, "missions_per_min": round(n_new / run_s * 60.0, 3) if n_new and run_s > 0 else None,
-        "mission_cpu_s_mean": round(sum(cpu) / len(cpu), 4) if cpu else None},
-        replay=lambda idx, seed: _replay(out, spec, idx, seed, build))
-    for line in summary["lines"]:
-        print(line)
-    return 0 if summary["ok"] else 1
+        with signals_as_exceptions():
+            tag = uuid.uuid4().hex[:8]
+            futures = [
+                client.submit(run_mission, j, key=f"mission-{j['index']:05d}-{tag}", pure=False) for j in jobs
+            ]
+            by_key = {f.key: j for f, j in zip(futures, jobs)}
+            for fut in as_completed(futures):
+                j = by_key[fut.key]
+                res = fut.result() if fut.status == "finished" else _not_run(j, fut, retries)
+                fut.release()
+                _record(out, rf, res, j, inputs, prog, spec, stats, len(jobs))
+    except (KeyboardInterrupt, Terminated) as e:
+        prog.done()
+        how = "interrupted" if isinstance(e, KeyboardInterrupt) else f"stopped by {e}"
+        print(
+            f"octo-gcs campaign: {how}; {stats['done'] + stats['n_new']} of {stats['total']} missions are in "
+            f"{results} (--resume goes on)",
+            file=sys.stderr,
+        )
+        return 130 if isinstance(e, KeyboardInterrupt) else 143
+    finally:
+        rf.close()
+        for f in futures:
+            f.cancel()
+        client.close()
+        if cluster is not None:
+            cluster.close()
+            sweep_stale()  # local workers: what those killed left in this host's temp dir
+    prog.done()
+    return None
 
 
-def _replay(out, spec, idx, seed, build):
-    _seed, d, _vehicle, faults, params = campaign_spec.mission_inputs(spec, idx)
-    return replay_command(out, idx, seed, spec, d, faults, params, build)
+def _record(out, rf, res, j, inputs, prog, spec, stats, n_jobs):
+    """One mission's result: its files, its row, the progress line."""
+    if isinstance(res.get("cpu_s"), float):
+        stats["cpu"].append(res["cpu_s"])  # CPU seconds on its worker (its process and children)
+    _keep_mission(out, res, j)
+    rf.append(result_row(res, inputs[j["index"]]))
+    stats["n_new"] += 1
+    if res["status"] not in RAN:
+        stats["failures"] += 1
+    n_new = stats["n_new"]
+    el = time.monotonic() - stats["t_run"]
+    rate = n_new / el * 60.0 if el > 0 else 0.0
+    left = (n_jobs - n_new) / (rate / 60.0) if rate > 0 else None
+    prog.update(
+        f"campaign {spec['name']}: {stats['done'] + n_new}/{stats['total']} done, {stats['failures']} failed, "
+        f"{rate:.1f} missions/min, {_fmt_minutes(left)} left",
+        key=n_new,
+    )
+
+
+def _replay(out, spec, idx, seed):
+    _seed, _d, _vehicle, faults, params = campaign_spec.mission_inputs(spec, idx)
+    return replay_command(out, idx, seed, spec, faults, params)
 
 
 def _keep_mission(out, res, job):

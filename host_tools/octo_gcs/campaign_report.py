@@ -15,9 +15,10 @@ import statistics
 from collections import Counter
 
 from .atomicfile import atomic_write
-from .campaign_spec import QUANTITIES, expect_key
+from .campaign_spec import expect_key
+from .quantities import KEYS as QUANTITIES
+from .quantities import LABELS as LABEL
 
-LABEL = {"kf": "k_f", "ktau": "k_tau", "ixx": "I_x", "iyy": "I_y", "izz": "I_z"}
 RAN = ("pass", "fail")
 WORST = 10
 
@@ -33,8 +34,13 @@ def _f(x):
 def _stats(xs):
     if not xs:
         return {"n": 0, "mean": None, "sd": None, "rms": None, "max_abs": None}
-    return {"n": len(xs), "mean": statistics.fmean(xs), "sd": statistics.stdev(xs) if len(xs) > 1 else None,
-            "rms": math.sqrt(statistics.fmean([x * x for x in xs])), "max_abs": max(abs(x) for x in xs)}
+    return {
+        "n": len(xs),
+        "mean": statistics.fmean(xs),
+        "sd": statistics.stdev(xs) if len(xs) > 1 else None,
+        "rms": math.sqrt(statistics.fmean([x * x for x in xs])),
+        "max_abs": max(abs(x) for x in xs),
+    }
 
 
 def _rejections(row):
@@ -60,23 +66,45 @@ def analyse(spec, rows):
             est, tru, sd = _f(r[f"{q}_estimate"]), _f(r[f"{q}_truth"]), _f(r[f"{q}_sd"])
             if sd and sd > 0:
                 z.append((est - tru) / sd)
-        reasons = Counter(_rejections(r).get(q, "no reason given") for r in est_rows if r[f"{q}_accepted"] != "1")
+        reasons = Counter(
+            _rejections(r).get(q, "no reason given") for r in est_rows if r[f"{q}_accepted"] != "1"
+        )
         wrong = []
         for r in acc:
             est, tru, sd = _f(r[f"{q}_estimate"]), _f(r[f"{q}_truth"]), _f(r[f"{q}_sd"]) or 0.0
             if abs(est - tru) > max(3.0 * sd, tol / 100.0 * abs(tru)):
                 wrong.append(int(r["index"]))
-                silently.append({"index": int(r["index"]), "seed": int(r["seed"]), "parameter": q,
-                                 "error_pct": _f(r[f"{q}_error_pct"]), "sd_pct": 100.0 * sd / est if est else None})
+                silently.append(
+                    {
+                        "index": int(r["index"]),
+                        "seed": int(r["seed"]),
+                        "parameter": q,
+                        "error_pct": _f(r[f"{q}_error_pct"]),
+                        "sd_pct": 100.0 * sd / est if est else None,
+                    }
+                )
         zs = _stats(z)
-        per[q] = {"label": LABEL[q], "tolerance_pct": tol, "estimated": len(est_rows), "accepted": len(acc),
-                  "acceptance_rate": len(acc) / len(est_rows) if est_rows else None,
-                  "error_pct_accepted": _stats(errs), "z": {"n": zs["n"], "mean": zs["mean"], "sd": zs["sd"]},
-                  "within_3sd_pct": 100.0 * sum(1 for x in z if abs(x) <= 3) / len(z) if z else None,
-                  "rejection_reasons": dict(reasons.most_common()), "silently_wrong": sorted(wrong),
-                  "_z": z, "_err": errs}
+        per[q] = {
+            "label": LABEL[q],
+            "tolerance_pct": tol,
+            "estimated": len(est_rows),
+            "accepted": len(acc),
+            "acceptance_rate": len(acc) / len(est_rows) if est_rows else None,
+            "error_pct_accepted": _stats(errs),
+            "z": {"n": zs["n"], "mean": zs["mean"], "sd": zs["sd"]},
+            "within_3sd_pct": 100.0 * sum(1 for x in z if abs(x) <= 3) / len(z) if z else None,
+            "rejection_reasons": dict(reasons.most_common()),
+            "silently_wrong": sorted(wrong),
+            "_z": z,
+            "_err": errs,
+        }
     failures = Counter(f"{r['status']}: {r['reason']}"[:160] for r in rows if r["status"] not in RAN)
     return ran, per, silently, failures
+
+
+def sources(rows):
+    """{source: missions} of the missions that ran (the measurements their estimates rest on)."""
+    return dict(Counter(r.get("source") or "not stated" for r in rows if r["status"] in RAN).most_common())
 
 
 def _score(row, spec, only=None):
@@ -101,14 +129,14 @@ def _expect(spec, rows, per, silently):
             got, ok = len(silently), len(silently) <= v
         elif what == "failures":
             got, ok = n_fail, n_fail <= v
-        elif what == "acceptance" and q is None:   # the lowest acceptance rate of any quantity
+        elif what == "acceptance" and q is None:  # the lowest acceptance rate of any quantity
             rates = [p["acceptance_rate"] for p in per.values() if p["acceptance_rate"] is not None]
             got = min(rates) if rates else None
             ok = got is not None and got >= v
         elif what == "error_pct":
             got = per[q]["error_pct_accepted"]["max_abs"]
             ok = got is not None and got <= v
-        else:   # PARAM_acceptance
+        else:  # PARAM_acceptance
             got = per[q]["acceptance_rate"]
             ok = got is not None and got >= v
         op = ">=" if what == "acceptance" else "<="
@@ -123,8 +151,10 @@ def _g(x, fmt="{:.4g}"):
 def figures(out, per):
     """error_pct.png, z_hist.png, z_qq.png in `out`; returns their names."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     names = []
     nd = statistics.NormalDist()
 
@@ -186,19 +216,38 @@ def write(out, spec, rows, columns, throughput, replay):
         wrong_q.setdefault(s_["index"], []).append(s_["parameter"])
     wrong_idx = set(wrong_q)
     # silently wrong missions first (ranked by their silently wrong estimates), then the rest
-    ranked = sorted((r for r in ran if int(r["index"]) in wrong_idx),
-                    key=lambda r: -_score(r, spec, wrong_q[int(r["index"])])[0])
+    ranked = sorted(
+        (r for r in ran if int(r["index"]) in wrong_idx),
+        key=lambda r: -_score(r, spec, wrong_q[int(r["index"])])[0],
+    )
     ranked += sorted((r for r in ran if int(r["index"]) not in wrong_idx), key=lambda r: -_score(r, spec)[0])
     for r in ranked[:WORST]:
         s, q = _score(r, spec, wrong_q.get(int(r["index"])))
         if q is None:
             continue
-        worst.append({"index": int(r["index"]), "seed": int(r["seed"]), "status": r["status"], "parameter": q,
-                      "error_pct": _f(r[f"{q}_error_pct"]), "accepted": r[f"{q}_accepted"] == "1",
-                      "silently_wrong": q in wrong_q.get(int(r["index"]), ()),
-                      "command": replay(int(r["index"]), int(r["seed"]))})
-    not_ran = [{"index": int(r["index"]), "seed": int(r["seed"]), "status": r["status"], "reason": r["reason"],
-                "command": replay(int(r["index"]), int(r["seed"]))} for r in rows if r["status"] not in RAN]
+        worst.append(
+            {
+                "index": int(r["index"]),
+                "seed": int(r["seed"]),
+                "status": r["status"],
+                "parameter": q,
+                "error_pct": _f(r[f"{q}_error_pct"]),
+                "accepted": r[f"{q}_accepted"] == "1",
+                "silently_wrong": q in wrong_q.get(int(r["index"]), ()),
+                "command": replay(int(r["index"]), int(r["seed"])),
+            }
+        )
+    not_ran = [
+        {
+            "index": int(r["index"]),
+            "seed": int(r["seed"]),
+            "status": r["status"],
+            "reason": r["reason"],
+            "command": replay(int(r["index"]), int(r["seed"])),
+        }
+        for r in rows
+        if r["status"] not in RAN
+    ]
     expect = _expect(spec, rows, per, silently)
     complete = len(rows_by_index) == spec["missions"]
     all_ran = complete and not not_ran
@@ -206,12 +255,26 @@ def write(out, spec, rows, columns, throughput, replay):
     walls = [_f(r["wall_s"]) for r in rows if _f(r["wall_s"]) is not None]
     throughput = dict(throughput, mission_wall_s_mean=statistics.fmean(walls) if walls else None)
     figs = figures(out, per)
-    doc = {"name": spec["name"], "missions": spec["missions"], "in_results": len(rows_by_index),
-           "ran": len(ran), "status_counts": dict(Counter(r["status"] for r in rows)),
-           "silently_wrong": len(silently), "silently_wrong_list": silently,
-           "parameters": {q: {k: v for k, v in p.items() if not k.startswith("_")} for q, p in per.items()},
-           "failures": dict(failures.most_common()), "worst": worst, "not_ran": not_ran, "expect": expect,
-           "throughput": throughput, "all_ran": all_ran, "ok": ok, "figures": figs, "spec": spec}
+    doc = {
+        "name": spec["name"],
+        "missions": spec["missions"],
+        "in_results": len(rows_by_index),
+        "ran": len(ran),
+        "status_counts": dict(Counter(r["status"] for r in rows)),
+        "silently_wrong": len(silently),
+        "silently_wrong_list": silently,
+        "parameters": {q: {k: v for k, v in p.items() if not k.startswith("_")} for q, p in per.items()},
+        "failures": dict(failures.most_common()),
+        "worst": worst,
+        "not_ran": not_ran,
+        "expect": expect,
+        "sources": sources(rows),
+        "throughput": throughput,
+        "all_ran": all_ran,
+        "ok": ok,
+        "figures": figs,
+        "spec": spec,
+    }
     atomic_write(out / "campaign.json", json.dumps(doc, indent=1) + "\n")
     md = markdown(doc, per)
     atomic_write(out / "campaign.md", md)
@@ -220,15 +283,35 @@ def write(out, spec, rows, columns, throughput, replay):
 
 
 def table(per):
-    head = ["parameter", "estimated", "accepted", "err mean %", "err sd %", "err RMS %", "max |err| %",
-            "z mean", "z sd", "silently wrong"]
+    head = [
+        "parameter",
+        "estimated",
+        "accepted",
+        "err mean %",
+        "err sd %",
+        "err RMS %",
+        "max |err| %",
+        "z mean",
+        "z sd",
+        "silently wrong",
+    ]
     rows = []
     for q, p in per.items():
         e, z = p["error_pct_accepted"], p["z"]
-        rows.append([p["label"], str(p["estimated"]), f"{p['accepted']} ({_g(p['acceptance_rate'] and 100 * p['acceptance_rate'], '{:.0f}')} %)",
-                     _g(e["mean"], "{:+.3f}"), _g(e["sd"], "{:.3f}"), _g(e["rms"], "{:.3f}"),
-                     _g(e["max_abs"], "{:.3f}"), _g(z["mean"], "{:+.2f}"), _g(z["sd"], "{:.2f}"),
-                     str(len(p["silently_wrong"]))])
+        rows.append(
+            [
+                p["label"],
+                str(p["estimated"]),
+                f"{p['accepted']} ({_g(p['acceptance_rate'] and 100 * p['acceptance_rate'], '{:.0f}')} %)",
+                _g(e["mean"], "{:+.3f}"),
+                _g(e["sd"], "{:.3f}"),
+                _g(e["rms"], "{:.3f}"),
+                _g(e["max_abs"], "{:.3f}"),
+                _g(z["mean"], "{:+.2f}"),
+                _g(z["sd"], "{:.2f}"),
+                str(len(p["silently_wrong"])),
+            ]
+        )
     return head, rows
 
 
@@ -240,13 +323,25 @@ def _md_table(head, rows):
 
 def markdown(doc, per):
     t = doc["throughput"]
-    L = [f"# Campaign {doc['name']}", "",
-         f"**SILENTLY WRONG: {doc['silently_wrong']}** (accepted with |error| > max(3 sd, tolerance))", "",
-         f"{doc['in_results']} of {doc['missions']} missions in results.csv; {doc['ran']} ran to a report; "
-         + ", ".join(f"{k} {v}" for k, v in sorted(doc["status_counts"].items())) + ".", ""]
+    L = [
+        f"# Campaign {doc['name']}",
+        "",
+        f"**SILENTLY WRONG: {doc['silently_wrong']}** (accepted with |error| > max(3 sd, tolerance))",
+        "",
+        f"{doc['in_results']} of {doc['missions']} missions in results.csv; {doc['ran']} ran to a report; "
+        + ", ".join(f"{k} {v}" for k, v in sorted(doc["status_counts"].items()))
+        + ".",
+        "",
+    ]
     L += _md_table(*table(per))
-    L += ["", "Errors are of the accepted estimates, percent of truth; z = (estimate - truth) / sd over every "
-          "estimate (a standard normal when the sd is honest).", ""]
+    L += [
+        "",
+        "Errors are of the accepted estimates, percent of truth; z = (estimate - truth) / sd over every "
+        "estimate (a standard normal when the sd is honest).",
+        "",
+    ]
+    if doc.get("sources"):
+        L += ["Estimated from: " + ", ".join(f"{src} ({n})" for src, n in doc["sources"].items()) + ".", ""]
     L += ["## Acceptance and rejection reasons", ""]
     for q, p in per.items():
         rs = ", ".join(f"{why} ({n})" for why, n in p["rejection_reasons"].items()) or "none"
@@ -256,24 +351,46 @@ def markdown(doc, per):
         L += [f"- {n} x {why}" for why, n in doc["failures"].items()]
     if doc["silently_wrong_list"]:
         L += ["", "## Silently wrong", ""]
-        L += [f"- mission {s['index']} (seed {s['seed']}): {LABEL[s['parameter']]} error {_g(s['error_pct'], '{:+.3f}')} %, "
-              f"sd {_g(s['sd_pct'], '{:.3f}')} %" for s in doc["silently_wrong_list"]]
-    L += ["", "## Worst missions", "", "Largest error relative to the tolerance; each replays with its command.", ""]
+        L += [
+            f"- mission {s['index']} (seed {s['seed']}): {LABEL[s['parameter']]} error {_g(s['error_pct'], '{:+.3f}')} %, "
+            f"sd {_g(s['sd_pct'], '{:.3f}')} %"
+            for s in doc["silently_wrong_list"]
+        ]
+    L += [
+        "",
+        "## Worst missions",
+        "",
+        "Largest error relative to the tolerance; each replays with its command.",
+        "",
+    ]
     for w in doc["worst"]:
-        L += [f"- mission {w['index']} (seed {w['seed']}, {w['status']}): {LABEL[w['parameter']]} error "
-              f"{_g(w['error_pct'], '{:+.3f}')} % ({'accepted' if w['accepted'] else 'rejected'}"
-              f"{', SILENTLY WRONG' if w['silently_wrong'] else ''})", f"  `{w['command']}`"]
+        L += [
+            f"- mission {w['index']} (seed {w['seed']}, {w['status']}): {LABEL[w['parameter']]} error "
+            f"{_g(w['error_pct'], '{:+.3f}')} % ({'accepted' if w['accepted'] else 'rejected'}"
+            f"{', SILENTLY WRONG' if w['silently_wrong'] else ''})",
+            f"  `{w['command']}`",
+        ]
     for w in doc["not_ran"][:WORST]:
-        L += [f"- mission {w['index']} (seed {w['seed']}): {w['status']}: {w['reason']}", f"  `{w['command']}`"]
+        L += [
+            f"- mission {w['index']} (seed {w['seed']}): {w['status']}: {w['reason']}",
+            f"  `{w['command']}`",
+        ]
     if doc["expect"]:
         L += ["", "## Expectations", ""]
-        L += [f"- {e['key']} = {_g(e['value'])} (must be {e['op']} {e['limit']:g}): {'ok' if e['ok'] else 'NOT MET'}"
-              for e in doc["expect"]]
-    L += ["", "## Throughput", "",
-          f"{t['missions_this_run']} missions in {t['missions_s']:.1f} s on {t['workers']} workers "
-          f"({t['wall_s']:.1f} s with the cluster's start)"
-          f" ({_g(t['missions_per_min'], '{:.2f}')} missions/min; a mission {_g(t['mission_wall_s_mean'], '{:.1f}')} s "
-          f"wall, {_g(t.get('mission_cpu_s_mean'), '{:.2f}')} s CPU on its worker, on average); plant {t['plant']}.", ""]
+        L += [
+            f"- {e['key']} = {_g(e['value'])} (must be {e['op']} {e['limit']:g}): {'ok' if e['ok'] else 'NOT MET'}"
+            for e in doc["expect"]
+        ]
+    L += [
+        "",
+        "## Throughput",
+        "",
+        f"{t['missions_this_run']} missions in {t['missions_s']:.1f} s on {t['workers']} workers "
+        f"({t['wall_s']:.1f} s with the cluster's start)"
+        f" ({_g(t['missions_per_min'], '{:.2f}')} missions/min; a mission {_g(t['mission_wall_s_mean'], '{:.1f}')} s "
+        f"wall, {_g(t.get('mission_cpu_s_mean'), '{:.2f}')} s CPU on its worker, on average); plant {t['plant']}.",
+        "",
+    ]
     L += [f"![{n}]({n})" for n in doc["figures"]]
     return "\n".join(L) + "\n"
 
@@ -285,7 +402,9 @@ def summary_lines(doc, per, out):
     lines = ["", fmt.format(*head)] + [fmt.format(*r) for r in rows] + [""]
     lines.append(f"SILENTLY WRONG: {doc['silently_wrong']}")
     for e in doc["expect"]:
-        lines.append(f"expect {e['key']} {e['op']} {e['limit']:g}: {_g(e['value'])} {'ok' if e['ok'] else 'NOT MET'}")
+        lines.append(
+            f"expect {e['key']} {e['op']} {e['limit']:g}: {_g(e['value'])} {'ok' if e['ok'] else 'NOT MET'}"
+        )
     verdict = "PASS" if doc["ok"] else "FAIL"
     why = "" if doc["all_ran"] else f" ({doc['missions'] - doc['ran']} missions did not run to a report)"
     lines.append(f"{verdict}{why}: {out}/campaign.md, campaign.json, results.csv")

@@ -26,35 +26,70 @@ import zlib
 
 import numpy as np
 
+from .mission.options import FAULTS
+from .quantities import KEYS as QUANTITIES
 from .vehiclefile import DEFAULTS as VEHICLE_DEFAULTS
 
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "choice")
 
 # octo-sim's vehicle keys: scalars, per-element lists (their length) and the noise object
-VEHICLE_SCALARS = ("mass", "g", "arm_length", "kf", "ktau", "motor_tau", "delay", "thrust_curve",
-                   "kf_drift_per_min")
+VEHICLE_SCALARS = (
+    "mass",
+    "g",
+    "arm_length",
+    "kf",
+    "ktau",
+    "motor_tau",
+    "delay",
+    "thrust_curve",
+    "kf_drift_per_min",
+)
 VEHICLE_LISTS = {"inertia": 3, "rotor_scale": 8, "origin": 3}
 NOISE_KEYS = ("thrust", "torque", "gyro", "attitude_deg", "position")
 # the range octo-sim accepts for a vehicle value (checked on the spec's bounds and on every draw)
-VEHICLE_RANGE = {"mass": (0, None, False), "g": (0, None, False), "arm_length": (0, None, False),
-                 "kf": (0, None, False), "ktau": (0, None, False), "inertia": (0, None, False),
-                 "motor_tau": (0, None, True), "delay": (0, 10, True), "thrust_curve": (0, 1, True),
-                 "rotor_scale": (0, None, True), "kf_drift_per_min": (None, None, True),
-                 "origin": (None, None, True)}
+VEHICLE_RANGE = {
+    "mass": (0, None, False),
+    "g": (0, None, False),
+    "arm_length": (0, None, False),
+    "kf": (0, None, False),
+    "ktau": (0, None, False),
+    "inertia": (0, None, False),
+    "motor_tau": (0, None, True),
+    "delay": (0, 10, True),
+    "thrust_curve": (0, 1, True),
+    "rotor_scale": (0, None, True),
+    "kf_drift_per_min": (None, None, True),
+    "origin": (None, None, True),
+}
 
-# octo-sim's fault injection flags: key -> (flag, integer, lo, hi)
-FAULTS = {"drop": ("--drop", False, 0.0, 1.0), "burst": ("--burst", True, 0, 1000000),
-          "burst_prob": ("--burst-prob", False, 0.0, 1.0),
-          "delay_frames": ("--delay-frames", True, 0, 100000),
-          "duplicate": ("--duplicate", False, 0.0, 1.0), "reorder": ("--reorder", False, 0.0, 1.0)}
+TOP_KEYS = (
+    "name",
+    "missions",
+    "seed",
+    "vehicle",
+    "faults",
+    "params",
+    "experiments",
+    "plant",
+    "timeout",
+    "retries",
+    "tolerance_pct",
+    "expect",
+)
 
-TOP_KEYS = ("name", "missions", "seed", "vehicle", "faults", "params", "experiments", "plant", "timeout",
-            "retries", "tolerance_pct", "expect")
-
-# the identified quantities (report.json's keys), their other names in `expect`, default tolerances
-QUANTITIES = ("kf", "ktau", "ixx", "iyy", "izz")
-ALIASES = {"kf": "kf", "k_f": "kf", "ktau": "ktau", "k_tau": "ktau", "ixx": "ixx", "i_x": "ixx",
-           "iyy": "iyy", "i_y": "iyy", "izz": "izz", "i_z": "izz"}
+# the identified quantities' other names in `expect`, default tolerances
+ALIASES = {
+    "kf": "kf",
+    "k_f": "kf",
+    "ktau": "ktau",
+    "k_tau": "ktau",
+    "ixx": "ixx",
+    "i_x": "ixx",
+    "iyy": "iyy",
+    "i_y": "iyy",
+    "izz": "izz",
+    "i_z": "izz",
+}
 DEFAULT_TOL_PCT = {"kf": 0.3, "ktau": 0.3, "ixx": 2.0, "iyy": 2.0, "izz": 2.0}
 EXPECT_SUFFIXES = ("_error_pct", "_acceptance")
 EXPECT_PLAIN = ("silently_wrong", "acceptance", "failures")
@@ -86,10 +121,12 @@ def _check_value(path, v, rng=None, integer=False):
             raise SpecError(f"{path}: must be a whole number, not {v}")
         return
     if not isinstance(v, dict):
-        raise SpecError(f"{path}: must be a number or a draw such as {{\"uniform\": [lo, hi]}}, not {json.dumps(v)}")
+        raise SpecError(
+            f'{path}: must be a number or a draw such as {{"uniform": [lo, hi]}}, not {json.dumps(v)}'
+        )
     if len(v) != 1:
         raise SpecError(f"{path}: a draw has exactly one of {', '.join(DISTRIBUTIONS)}; got {sorted(v)}")
-    (dist, a), = v.items()
+    ((dist, a),) = v.items()
     if dist not in DISTRIBUTIONS:
         raise SpecError(f"{path}: unknown distribution '{dist}' (known: {', '.join(DISTRIBUTIONS)})")
     where = f"{path}.{dist}"
@@ -109,7 +146,7 @@ def _check_value(path, v, rng=None, integer=False):
             raise SpecError(f"{where}: the standard deviation {hi:g} is negative")
         if rng and hi == 0:
             _check_range(path, lo, rng)
-        return   # an unbounded draw: check_all_draws checks every value drawn
+        return  # an unbounded draw: check_all_draws checks every value drawn
     if hi < lo:
         raise SpecError(f"{where}: empty range [{lo:g}, {hi:g}] (lo > hi)")
     if dist == "loguniform" and lo <= 0:
@@ -182,20 +219,27 @@ def validate(spec):
             raise SpecError(f"faults: unknown key '{k}' (known: {', '.join(FAULTS)})")
     for k in s["params"]:
         if not PARAM_NAME.match(k):
-            raise SpecError(f"params: '{k}' is not a parameter name (capitals, digits, _; 16 characters at most)")
+            raise SpecError(
+                f"params: '{k}' is not a parameter name (capitals, digits, _; 16 characters at most)"
+            )
         if k in ("VEH_MASS", "VEH_ARM_L"):
-            raise SpecError(f"params.{k}: set by the mission from the vehicle's mass and arm length; "
-                            "draw vehicle.mass / vehicle.arm_length instead")
+            raise SpecError(
+                f"params.{k}: set by the mission from the vehicle's mass and arm length; "
+                "draw vehicle.mass / vehicle.arm_length instead"
+            )
     for path, v, rng, integer, _t in _walk(s):
         _check_value(path, v, rng, integer)
     s.setdefault("experiments", [6])
     e = s["experiments"]
-    if not isinstance(e, list) or not all(isinstance(x, int) and not isinstance(x, bool) and 1 <= x <= 6
-                                          for x in e):
-        raise SpecError(f"experiments: must be a list of experiment numbers 1..6 ([] only flies), not {json.dumps(e)}")
+    if not isinstance(e, list) or not all(
+        isinstance(x, int) and not isinstance(x, bool) and 1 <= x <= 6 for x in e
+    ):
+        raise SpecError(
+            f"experiments: must be a list of experiment numbers 1..6 ([] only flies), not {json.dumps(e)}"
+        )
     s.setdefault("plant", "in-process")
     if s["plant"] not in ("in-process", "udp"):
-        raise SpecError(f"plant: must be \"in-process\" or \"udp\", not {json.dumps(s['plant'])}")
+        raise SpecError(f'plant: must be "in-process" or "udp", not {json.dumps(s["plant"])}')
     s.setdefault("timeout", 600)
     if not _is_num(s["timeout"]) or s["timeout"] <= 0:
         raise SpecError(f"timeout: must be a positive number of seconds, not {json.dumps(s['timeout'])}")
@@ -224,11 +268,13 @@ def expect_key(k):
         return None, k
     for suf in EXPECT_SUFFIXES:
         if k.endswith(suf):
-            q = ALIASES.get(k[:-len(suf)].lower())
+            q = ALIASES.get(k[: -len(suf)].lower())
             if q:
                 return q, suf[1:]
-    raise SpecError(f"expect: unknown key '{k}' (known: PARAM_error_pct, PARAM_acceptance with PARAM one of "
-                    f"{', '.join(QUANTITIES)} or k_f, k_tau, I_x, I_y, I_z; {', '.join(EXPECT_PLAIN)})")
+    raise SpecError(
+        f"expect: unknown key '{k}' (known: PARAM_error_pct, PARAM_acceptance with PARAM one of "
+        f"{', '.join(QUANTITIES)} or k_f, k_tau, I_x, I_y, I_z; {', '.join(EXPECT_PLAIN)})"
+    )
 
 
 def load(path):
@@ -256,7 +302,7 @@ def _draw(path, v, rng_bounds, integer, gen):
     if _is_num(v):
         x = float(v)
     else:
-        (dist, a), = v.items()
+        ((dist, a),) = v.items()
         if dist == "uniform":
             x = float(gen.uniform(a[0], a[1]))
         elif dist == "loguniform":
@@ -277,14 +323,17 @@ def _draw(path, v, rng_bounds, integer, gen):
 
 def draws(spec, index):
     """Mission `index`'s values: {path: value} for every value of the spec (drawn or fixed)."""
-    return {path: _draw(path, v, rng, integer, _generator(spec["seed"], index, path))
-            for path, v, rng, integer, _t in _walk(spec)}
+    return {
+        path: _draw(path, v, rng, integer, _generator(spec["seed"], index, path))
+        for path, v, rng, integer, _t in _walk(spec)
+    }
 
 
 def mission_inputs(spec, index):
-    """(seed, draws, vehicle dict for octo-sim, fault flags [str], params {NAME: value})."""
+    """(seed, draws, vehicle dict for octo-sim, faults {name: value} (those that are on),
+    params {NAME: value})."""
     d = draws(spec, index)
-    vehicle, faults, params = {}, [], {}
+    vehicle, faults, params = {}, {}, {}
     for path, _v, _rng, _integer, target in _walk(spec):
         x = d[path]
         if target[0] == "vehicle":
@@ -297,9 +346,8 @@ def mission_inputs(spec, index):
             else:
                 vehicle[key] = x
         elif target[0] == "faults":
-            flag, integer, _lo, _hi = FAULTS[target[1]]
-            if x != 0 or target[1] == "burst_prob":   # 0 is octo-sim's "off" (burst_prob: never)
-                faults += [flag, str(int(x)) if integer else repr(x)]
+            if x != 0 or target[1] == "burst_prob":  # 0 is octo-sim's "off" (burst_prob: never)
+                faults[target[1]] = int(x) if FAULTS[target[1]][1] else x
         else:
             params[target[1]] = x
     return spec["seed"] + index, d, vehicle, faults, params

@@ -36,7 +36,7 @@ class Flight:
         self.alive()
         t0 = time.time()
         r = self.v.command(cmd, *params, timeout=timeout)
-        self.v.recv(types=(), timeout=0.02)   # the STATUSTEXT with a reason follows the ACK
+        self.v.recv(types=(), timeout=0.02)  # the STATUSTEXT with a reason follows the ACK
         return r, self.v._last_text(since=t0)
 
     def wait_mode(self, modes, timeout, what):
@@ -45,8 +45,10 @@ class Flight:
         while self.v.mode not in want:
             if time.monotonic() > deadline:
                 last = self.v._last_text()
-                raise GcsError(f"{what}: vehicle still in mode {self.mode_name()} after {timeout:g} s"
-                               + (f" (last message: {last})" if last else ""))
+                raise GcsError(
+                    f"{what}: vehicle still in mode {self.mode_name()} after {timeout:g} s"
+                    + (f" (last message: {last})" if last else "")
+                )
             self.poll(0.05)
 
     def arm(self, timeout=10.0):
@@ -74,24 +76,3 @@ class Flight:
         if r != mavlink.MAV_RESULT_ACCEPTED:
             raise GcsError(f"landing refused: {result_name(r)} {why}".strip())
         self.wait_mode({"DISARMED"}, timeout, "landing")
-
-
-def run(args):
-    """``octo-gcs takeoff`` / ``octo-gcs land``."""
-    from .link import Vehicle
-
-    with Vehicle(args.connect, timeout=args.timeout, signing_key=args.signing_key) as v:
-        v.wait_heartbeat()
-        fl = Flight(v)
-        if args.command == "takeoff":
-            if v.mode in (MODE_NUMBERS["HOLD"], MODE_NUMBERS["EXPERIMENT"]):
-                print(f"already flying (mode {fl.mode_name()})")
-                return 0
-            fl.arm(timeout=args.wait)
-            print("armed; taking off")
-            fl.takeoff(args.height, timeout=args.wait)
-            print(f"holding at {args.height:g} m")
-        else:
-            fl.land(timeout=args.wait)
-            print("landed and disarmed")
-    return 0

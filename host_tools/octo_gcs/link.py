@@ -6,7 +6,6 @@ COMMAND_LONG with acknowledgement, STATUSTEXT and NAMED_VALUE_FLOAT collection.
 """
 
 import os
-import struct
 import sys
 import time
 
@@ -24,13 +23,15 @@ from pymavlink import mavutil  # noqa: E402  (MAVLINK20 must be set first)
 mavutil.set_dialect(DIALECT)
 mavlink = mavutil.mavlink
 
-from .base import (DEFAULT_URL, FW_PARAMS, MODE_NUMBERS, MODES, GcsError,  # noqa: E402,F401
-                   fw_default)  # (re-exported)
-
-
-def f32(x):
-    """x rounded to float32, as it travels in PARAM_VALUE."""
-    return struct.unpack("<f", struct.pack("<f", float(x)))[0]
+from .base import (  # noqa: E402,F401
+    DEFAULT_URL,
+    FW_PARAMS,
+    MODE_NUMBERS,
+    MODES,
+    GcsError,
+    f32,  # (re-exported)
+    fw_default,
+)
 
 
 def read_signing_key(path):
@@ -56,7 +57,7 @@ def result_name(result):
     return entry.name.replace("MAV_RESULT_", "") if entry is not None else f"result {result}"
 
 
-STATUSTEXT_LEN = 50   # STATUSTEXT.text: a full chunk has no NUL, so more follow
+STATUSTEXT_LEN = 50  # STATUSTEXT.text: a full chunk has no NUL, so more follow
 
 
 class Vehicle:
@@ -66,21 +67,24 @@ class Vehicle:
         self.url = url
         self.timeout = timeout
         try:
-            self.conn = mavutil.mavlink_connection(url, source_system=source_system,
-                                                   source_component=mavlink.MAV_COMP_ID_MISSIONPLANNER,
-                                                   autoreconnect=True)
+            self.conn = mavutil.mavlink_connection(
+                url,
+                source_system=source_system,
+                source_component=mavlink.MAV_COMP_ID_MISSIONPLANNER,
+                autoreconnect=True,
+            )
         except Exception as e:  # pymavlink raises bare exceptions for bad URLs
             raise GcsError(f"cannot open {url}: {e}") from None
         if signing_key is not None:
             self.conn.setup_signing(read_signing_key(signing_key), sign_outgoing=True)
         self.target_system = 1
         self.target_component = 1
-        self.statustexts = []      # (wall time, severity, text), long lines joined
-        self._chunks = {}          # (system, component) -> (id, next chunk_seq, text so far)
-        self.named_values = {}     # name -> (time_boot_ms, value)
+        self.statustexts = []  # (wall time, severity, text), long lines joined
+        self._chunks = {}  # (system, component) -> (id, next chunk_seq, text so far)
+        self.named_values = {}  # name -> (time_boot_ms, value)
         self.heartbeat = None
-        self.mode = None           # octo-fw's mode (HEARTBEAT.custom_mode / "Mode X" texts)
-        self.listeners = []        # callables(msg) that see every message received
+        self.mode = None  # octo-fw's mode (HEARTBEAT.custom_mode / "Mode X" texts)
+        self.listeners = []  # callables(msg) that see every message received
 
     # ------------------------------------------------------------ plumbing
     def close(self):
@@ -104,7 +108,7 @@ class Vehicle:
             return msg.text
         key = (msg.get_srcSystem(), msg.get_srcComponent())
         have = self._chunks.get(key)
-        if have is None or have[0] != cid:   # a new line: its start lost if this is not chunk 0
+        if have is None or have[0] != cid:  # a new line: its start lost if this is not chunk 0
             have = (cid, 0, "")
         text = have[2] + ("[...]" if msg.chunk_seq > have[1] else "") + msg.text
         if len(msg.text) < STATUSTEXT_LEN:
@@ -124,8 +128,11 @@ class Vehicle:
                 self.mode = MODE_NUMBERS[text[5:]]
         elif t == "NAMED_VALUE_FLOAT":
             self.named_values[msg.name] = (msg.time_boot_ms, msg.value)
-        elif t == "HEARTBEAT" and msg.get_srcComponent() == self.target_component \
-                and msg.type != mavlink.MAV_TYPE_GCS:
+        elif (
+            t == "HEARTBEAT"
+            and msg.get_srcComponent() == self.target_component
+            and msg.type != mavlink.MAV_TYPE_GCS
+        ):
             self.heartbeat = msg
             self.mode = msg.custom_mode
         for f in self.listeners:
@@ -200,15 +207,21 @@ class Vehicle:
 
     def get_param(self, name, retries=3):
         for _ in range(retries):
-            self.conn.mav.param_request_read_send(self.target_system, self.target_component,
-                                                  name.encode(), -1)
+            self.conn.mav.param_request_read_send(
+                self.target_system, self.target_component, name.encode(), -1
+            )
             m = self.recv("PARAM_VALUE", 1.0, cond=lambda m: m.param_id == name)
             if m is not None:
                 return m.param_value
         why = self._last_text()
-        raise GcsError(f"no parameter {name} on the vehicle"
-                       + (f" ({why})" if why else " (no answer: unknown name, or the vehicle wants "
-                          "signed messages: --signing-key)"))
+        raise GcsError(
+            f"no parameter {name} on the vehicle"
+            + (
+                f" ({why})"
+                if why
+                else " (no answer: unknown name, or the vehicle wants signed messages: --signing-key)"
+            )
+        )
 
     def set_param(self, name, value, retries=3):
         """PARAM_SET with the echo check ground stations make. Returns the echoed value;
@@ -217,8 +230,9 @@ class Vehicle:
         echoed = None
         for _ in range(retries):
             t0 = time.time()
-            self.conn.mav.param_set_send(self.target_system, self.target_component, name.encode(),
-                                         want, mavlink.MAV_PARAM_TYPE_REAL32)
+            self.conn.mav.param_set_send(
+                self.target_system, self.target_component, name.encode(), want, mavlink.MAV_PARAM_TYPE_REAL32
+            )
             m = self.recv("PARAM_VALUE", 1.0, cond=lambda m: m.param_id == name)
             if m is None:
                 continue
@@ -228,8 +242,9 @@ class Vehicle:
             # a refusal: the vehicle echoed its current value; wait briefly for the reason
             self.recv("STATUSTEXT", 0.2, cond=lambda s: True)
             reason = self._last_text(since=t0)
-            raise GcsError(f"vehicle refused {name} = {value:g}: kept {echoed:g}"
-                           + (f" ({reason})" if reason else ""))
+            raise GcsError(
+                f"vehicle refused {name} = {value:g}: kept {echoed:g}" + (f" ({reason})" if reason else "")
+            )
         if echoed is None:
             raise GcsError(f"no answer to setting {name} ({self._last_text() or 'unknown name?'})")
         raise GcsError(f"{name}: vehicle answered {echoed:g}, not {want:g}")
@@ -245,12 +260,10 @@ class Vehicle:
         timeout = self.timeout if timeout is None else timeout
         p = list(params) + [0.0] * (7 - len(params))
         for confirmation in range(retries):
-            self.conn.mav.command_long_send(self.target_system, self.target_component, cmd,
-                                            confirmation, *p)
+            self.conn.mav.command_long_send(self.target_system, self.target_component, cmd, confirmation, *p)
             deadline = time.monotonic() + timeout
             while time.monotonic() < deadline:
-                ack = self.recv("COMMAND_ACK", deadline - time.monotonic(),
-                                cond=lambda a: a.command == cmd)
+                ack = self.recv("COMMAND_ACK", deadline - time.monotonic(), cond=lambda a: a.command == cmd)
                 if ack is None:
                     break
                 if ack.result == mavlink.MAV_RESULT_IN_PROGRESS:

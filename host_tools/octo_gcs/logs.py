@@ -1,4 +1,5 @@
-"""Reading the LCM logs of octo-sim (OCTO_TRUTH) and octo-fw (OCTO_FW_FRAME, OCTO_FW_EVENT).
+"""Reading the LCM logs of octo-sim (OCTO_TRUTH) and octo-fw (OCTO_FW_FRAME, OCTO_FW_EVENT,
+OCTO_FW_ID_RESULT).
 
 Both programs write LCM event logs stamped with plant (simulated) time when given
 ``--lcm file://PATH``. A log is recognised by its channels, not by its name.
@@ -7,25 +8,31 @@ array fields), so ``fw.throttle[:, 0]`` is T_1 over time.
 """
 
 import os
-import re
 import struct
 
 import numpy as np
 
+from . import id_results
 from .base import GcsError
+from .experiments import phase_of
 
 SYNC = 0xEDA1DA01
 _HDR = struct.Struct(">IqqII")
 
-CHANNELS = ("OCTO_TRUTH", "OCTO_FW_FRAME", "OCTO_FW_EVENT")
+CHANNELS = ("OCTO_TRUTH", "OCTO_FW_FRAME", "OCTO_FW_EVENT", "OCTO_FW_ID_RESULT")
 
 
 def _types():
     try:
-        from octo import fw_event_t, fw_frame_t, truth_t
+        from octo import fw_event_t, fw_frame_t, fw_id_result_t, truth_t
     except ImportError:
         raise GcsError("the LCM Python types (package 'octo') are missing: run `make`") from None
-    return {"OCTO_TRUTH": truth_t, "OCTO_FW_FRAME": fw_frame_t, "OCTO_FW_EVENT": fw_event_t}
+    return {
+        "OCTO_TRUTH": truth_t,
+        "OCTO_FW_FRAME": fw_frame_t,
+        "OCTO_FW_EVENT": fw_event_t,
+        "OCTO_FW_ID_RESULT": fw_id_result_t,
+    }
 
 
 def read_events(path):
@@ -38,7 +45,7 @@ def read_events(path):
     with f:
         buf = f.read()
     off, n = 0, len(buf)
-    unpack, hsize, names = _HDR.unpack_from, _HDR.size, {}   # names: channel bytes -> str, decoded once
+    unpack, hsize, names = _HDR.unpack_from, _HDR.size, {}  # names: channel bytes -> str, decoded once
     append = out.append
     while off + hsize <= n:
         sync, _num, utime, clen, dlen = unpack(buf, off)
@@ -60,9 +67,16 @@ def read_events(path):
 
 # numpy's big-endian types of LCM's fixed-size primitives, and the native types the
 # fields become (those of decoding message by message: Python ints, floats and bools)
-_NP = {"int8_t": ("i1", np.int64), "int16_t": (">i2", np.int64), "int32_t": (">i4", np.int64),
-       "int64_t": (">i8", np.int64), "byte": ("u1", np.int64), "boolean": ("i1", np.bool_),
-       "float": (">f4", np.float64), "double": (">f8", np.float64)}
+_NP = {
+    "int8_t": ("i1", np.int64),
+    "int16_t": (">i2", np.int64),
+    "int32_t": (">i4", np.int64),
+    "int64_t": (">i8", np.int64),
+    "byte": ("u1", np.int64),
+    "boolean": ("i1", np.bool_),
+    "float": (">f4", np.float64),
+    "double": (">f8", np.float64),
+}
 
 
 def _fixed_dtype(lcm_type):
@@ -86,13 +100,17 @@ def _decode_fixed(lcm_type, dtype, datas, path, channel):
     """{field: array} of many messages of one fixed-size type at once (numpy), checked
     as LCM's decode checks them (size and fingerprint)."""
     if any(len(d) != dtype.itemsize for d in datas):
-        raise GcsError(f"{path}: {channel} record does not decode (wrong size): "
-                       "log from another version of the LCM types?")
+        raise GcsError(
+            f"{path}: {channel} record does not decode (wrong size): "
+            "log from another version of the LCM types?"
+        )
     rec = np.frombuffer(b"".join(datas), dtype=dtype)
     fp = int.from_bytes(lcm_type._get_packed_fingerprint(), "big")
     if len(rec) and np.any(rec["_fingerprint"] != fp):
-        raise GcsError(f"{path}: {channel} record does not decode (Decode error): "
-                       "log from another version of the LCM types?")
+        raise GcsError(
+            f"{path}: {channel} record does not decode (Decode error): "
+            "log from another version of the LCM types?"
+        )
     natives = dict(zip(lcm_type.__slots__, (_NP[t][1] for t in lcm_type.__typenames__)))
     return {name: rec[name].astype(natives[name]) for name in lcm_type.__slots__}
 
@@ -133,9 +151,21 @@ class Series:
     def select(self, mask):
         s = Series([])
         s.n = int(np.count_nonzero(mask))
-        s._fields = {k: (v[mask] if isinstance(v, np.ndarray) else [x for x, m in zip(v, mask) if m])
-                     for k, v in self._fields.items()}
+        s._fields = {
+            k: (v[mask] if isinstance(v, np.ndarray) else [x for x, m in zip(v, mask) if m])
+            for k, v in self._fields.items()
+        }
         return s
+
+
+class _Row:
+    """Record i of a Series, by attribute."""
+
+    def __init__(self, series, i):
+        self._s, self._i = series, i
+
+    def __getattr__(self, name):
+        return getattr(self._s, name)[self._i]
 
 
 class Logs:
@@ -143,7 +173,7 @@ class Logs:
 
     def __init__(self, paths):
         types = _types()
-        raw = {c: {} for c in CHANNELS}   # channel -> {path: [data, ...]} in the files' order
+        raw = {c: {} for c in CHANNELS}  # channel -> {path: [data, ...]} in the files' order
         self.paths = [str(p) for p in paths]
         for p in paths:
             lists = {c: [] for c in CHANNELS}
@@ -163,7 +193,7 @@ class Logs:
                 continue
             dtype = _fixed_dtype(types[channel])
             if dtype is not None and len(by_path) == 1:
-                (p, datas), = by_path.items()
+                ((p, datas),) = by_path.items()
                 series[channel] = Series.from_arrays(_decode_fixed(types[channel], dtype, datas, p, channel))
                 continue
             msgs = []
@@ -172,12 +202,24 @@ class Logs:
                     try:
                         msgs.append(types[channel].decode(data))
                     except ValueError as e:
-                        raise GcsError(f"{p}: {channel} record does not decode ({e}): "
-                                       "log from another version of the LCM types?") from None
+                        raise GcsError(
+                            f"{p}: {channel} record does not decode ({e}): "
+                            "log from another version of the LCM types?"
+                        ) from None
             series[channel] = msgs
         self.truth = self._series(series["OCTO_TRUTH"])
         self.fw = self._series(series["OCTO_FW_FRAME"])
         self.events = [(e.utime * 1e-6, e.severity, e.text) for e in (series["OCTO_FW_EVENT"] or [])]
+        self.id_results = self._records(series["OCTO_FW_ID_RESULT"])
+
+    @staticmethod
+    def _records(x):
+        """The identification results (id_results.record dicts), in the log's order."""
+        if x is None:
+            return []
+        if isinstance(x, Series):
+            return [id_results.record(_Row(x, i)) for i in range(len(x))]
+        return [id_results.record(r) for r in x]
 
     @staticmethod
     def _series(x):
@@ -192,11 +234,11 @@ class Logs:
         "ID aborted" begins)."""
         out = []
         for t, _sev, text in self.events:
-            m = re.match(r"^ID (\d+)/(\d+): (.*)$", text)
-            if m:
+            ph = phase_of(text)
+            if ph:
                 if out and out[-1][2] is None:
                     out[-1][2] = t
-                out.append([m.group(3), t, None, int(m.group(1))])
+                out.append([ph[2], t, None, ph[0]])
             elif text == "ID done" or text.startswith("ID aborted") or text.startswith("Mode "):
                 if out and out[-1][2] is None and not text == "Mode EXPERIMENT":
                     out[-1][2] = t

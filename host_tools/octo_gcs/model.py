@@ -29,33 +29,40 @@ class Params:
 def gamma_o(l, k):
     """Gamma_o of eq. (14): [f, tau_x, tau_y, tau_z] = Gamma_o @ [f_1 .. f_8], k = k_tau / k_f."""
     s = S2 * l
-    return np.array([
-        [1, 1, 1, 1, 1, 1, 1, 1],
-        [0, -s, -l, -s, 0, s, l, s],
-        [-l, -s, 0, s, l, s, 0, -s],
-        [k, -k, k, -k, k, -k, k, -k],
-    ], dtype=float)
+    return np.array(
+        [
+            [1, 1, 1, 1, 1, 1, 1, 1],
+            [0, -s, -l, -s, 0, s, l, s],
+            [-l, -s, 0, s, l, s, 0, -s],
+            [k, -k, k, -k, k, -k, k, -k],
+        ],
+        dtype=float,
+    )
 
 
 def quat_to_rot(q):
     """Rotation matrix of q = [w, x, y, z] (body to inertial)."""
     w, x, y, z = q
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def omega_matrix(w):
     """Omega of eq. (2)/(4)."""
     wx, wy, wz = w
-    return 0.5 * np.array([
-        [0, -wx, -wy, -wz],
-        [wx, 0, wz, -wy],
-        [wy, -wz, 0, wx],
-        [wz, wy, -wx, 0],
-    ])
+    return 0.5 * np.array(
+        [
+            [0, -wx, -wy, -wz],
+            [wx, 0, wz, -wy],
+            [wy, -wz, 0, wx],
+            [wz, wy, -wx, 0],
+        ]
+    )
 
 
 @dataclass
@@ -92,14 +99,16 @@ class Model:
         p, I = self.p, self.I
         q, w = x[6:10], x[10:13]
         f, tau = u[0], u[1:4]
-        n = quat_to_rot(q)[:, 2]                       # rotor-plane normal in S_I
+        n = quat_to_rot(q)[:, 2]  # rotor-plane normal in S_I
         acc = f / p.mass * n + np.array([0.0, 0.0, -p.g])  # eq. (10)
-        qd = omega_matrix(w) @ q                        # eq. (1)-(4)
-        wd = np.array([                                 # eqs. (7)-(9)
-            ((I[1] - I[2]) * w[1] * w[2] + tau[0]) / I[0],
-            ((I[2] - I[0]) * w[0] * w[2] + tau[1]) / I[1],
-            ((I[0] - I[1]) * w[0] * w[1] + tau[2]) / I[2],
-        ])
+        qd = omega_matrix(w) @ q  # eq. (1)-(4)
+        wd = np.array(
+            [  # eqs. (7)-(9)
+                ((I[1] - I[2]) * w[1] * w[2] + tau[0]) / I[0],
+                ((I[2] - I[0]) * w[0] * w[2] + tau[1]) / I[1],
+                ((I[0] - I[1]) * w[0] * w[1] + tau[2]) / I[2],
+            ]
+        )
         return np.concatenate([x[3:6], acc, qd, wd])
 
     def step(self, x, u, dt):

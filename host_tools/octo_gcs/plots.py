@@ -24,14 +24,23 @@ FIGURES = ("fig5_excitation.png", "fig6_validation.png", "fig7_rates.png", "conv
 # est[] slots of OCTO_FW_FRAME (firmware/app/experiment.c, the same in every experiment):
 # est[i] and est_sd[i]; slot 7 is the validation's NE (its est_sd: the fit %)
 EST_SLOTS = {"kf": 0, "ktau": 1, "kf_plain": 2, "ktau_plain": 3, "ixx": 4, "iyy": 5, "izz": 6}
-EST_PHASE = {"kf": "rotor", "ktau": "rotor", "kf_plain": "rotor", "ktau_plain": "rotor",
-             "ixx": "ixx", "iyy": "iyy", "izz": "izz"}
+EST_PHASE = {
+    "kf": "rotor",
+    "ktau": "rotor",
+    "kf_plain": "rotor",
+    "ktau_plain": "rotor",
+    "ixx": "ixx",
+    "iyy": "iyy",
+    "izz": "izz",
+}
 
 
 def _plt():
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     return plt
 
 
@@ -42,6 +51,7 @@ def _save(fig, path):
     try:
         fig.savefig(tmp, dpi=110)
         from .atomicfile import file_mode
+
         os.chmod(tmp, file_mode())
         os.replace(tmp, path)
     except BaseException:
@@ -76,8 +86,9 @@ def fig5(logs, path, plt):
         w = analysis.window(fw, t0, t1)
         a1.plot(w.t - t0, w.excitation[:, 0], lw=0.6, color="C0")
         a1.set_ylabel("delta_1 (throttle)")
-        a1.set_title(f"delta_1: added to T_1 in the rotor experiment (t = {t0:.1f} .. {t1:.1f} s)",
-                     fontsize=10)
+        a1.set_title(
+            f"delta_1: added to T_1 in the rotor experiment (t = {t0:.1f} .. {t1:.1f} s)", fontsize=10
+        )
     else:
         _empty(a1, "no rotor-coefficient experiment in the log")
     val = ph.get("validation", [])
@@ -88,8 +99,9 @@ def fig5(logs, path, plt):
         axis = int(np.argmax(np.abs(mu).max(axis=0))) if len(w) else 2
         a2.plot(w.t - t0, mu[:, axis], lw=0.6, color="C1")
         a2.set_ylabel(f"mu_1 [N m] ({'xyz'[axis]} torque)")
-        a2.set_title(f"mu_1: added to the torque demand in the validation (t = {t0:.1f} .. {t1:.1f} s)",
-                     fontsize=10)
+        a2.set_title(
+            f"mu_1: added to the torque demand in the validation (t = {t0:.1f} .. {t1:.1f} s)", fontsize=10
+        )
     else:
         _empty(a2, "no validation experiment in the log")
     a2.set_xlabel("time in the experiment [s]")
@@ -164,7 +176,8 @@ def convergence_series(logs):
 
 
 def convergence(logs, rep, path, plt):
-    from .identify import QUANTITIES
+    from .quantities import QUANTITIES
+
     series = convergence_series(logs)
     truth = (rep or {}).get("truth", {})
     fig, axes = plt.subplots(len(QUANTITIES), 1, figsize=(8, 10.5))
@@ -179,9 +192,12 @@ def convergence(logs, rep, path, plt):
             tv = truth.get(q.key)
             if tv is not None:
                 ax.axhline(tv, ls="--", color="k", lw=0.8, label="truth")
-                tail = est[len(est) // 3:]
-                span = max(abs(tv) * 0.02, 1.5 * float(np.nanmax(np.abs(tail - tv))) if len(tail) else 0.0,
-                           2.5 * float(np.nanmax(2 * sd[len(sd) // 3:])) if len(sd) > 3 else 0.0)
+                tail = est[len(est) // 3 :]
+                span = max(
+                    abs(tv) * 0.02,
+                    1.5 * float(np.nanmax(np.abs(tail - tv))) if len(tail) else 0.0,
+                    2.5 * float(np.nanmax(2 * sd[len(sd) // 3 :])) if len(sd) > 3 else 0.0,
+                )
                 if q.key + "_plain" in series:
                     span = max(span, 1.2 * abs(float(series[q.key + "_plain"][1][-1]) - tv))
                 ax.set_ylim(tv - span, tv + span)
@@ -199,10 +215,12 @@ def make_figures(logs, rep, outdir):
     """Writes the four figures into outdir; returns their file names."""
     plt = _plt()
     done = []
-    for name, fn in (("fig5_excitation.png", lambda p: fig5(logs, p, plt)),
-                     ("fig6_validation.png", lambda p: fig6(logs, rep, p, plt)),
-                     ("fig7_rates.png", lambda p: fig7(logs, rep, p, plt)),
-                     ("convergence.png", lambda p: convergence(logs, rep, p, plt))):
+    for name, fn in (
+        ("fig5_excitation.png", lambda p: fig5(logs, p, plt)),
+        ("fig6_validation.png", lambda p: fig6(logs, rep, p, plt)),
+        ("fig7_rates.png", lambda p: fig7(logs, rep, p, plt)),
+        ("convergence.png", lambda p: convergence(logs, rep, p, plt)),
+    ):
         fn(os.path.join(outdir, name))
         plt.close("all")
         done.append(name)

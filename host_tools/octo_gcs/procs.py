@@ -46,6 +46,7 @@ def _child_setup():
     os.setpgrp()
     try:
         import ctypes
+
         libc = ctypes.CDLL(None, use_errno=True)
         libc.prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
     except Exception:
@@ -64,9 +65,14 @@ class Proc:
         self._log = open(self.log_path, "wb")
         self._err = open(self.stderr_path, "wb") if self.stderr_path else None
         try:
-            self.popen = subprocess.Popen(self.argv, stdin=subprocess.DEVNULL, stdout=self._log,
-                                          stderr=self._err or subprocess.STDOUT, env=env,
-                                          preexec_fn=_child_setup)
+            self.popen = subprocess.Popen(
+                self.argv,
+                stdin=subprocess.DEVNULL,
+                stdout=self._log,
+                stderr=self._err or subprocess.STDOUT,
+                env=env,
+                preexec_fn=_child_setup,
+            )
         except OSError as e:
             self._close()
             raise GcsError(f"cannot start {self.argv[0]}: {e}") from None
@@ -152,3 +158,22 @@ class signals_as_exceptions:
         for sig, h in self._old.items():
             signal.signal(sig, h)
         return False
+
+
+def exit_status(call, err=None):
+    """call()'s exit status, octo-gcs's way: a GcsError is its message and 1, Ctrl-C 130,
+    SIGTERM or SIGHUP 143 (signals_as_exceptions)."""
+    import sys
+
+    err = err if err is not None else sys.stderr
+    try:
+        return call()
+    except GcsError as e:
+        print(f"octo-gcs: {e}", file=err)
+        return 1
+    except KeyboardInterrupt:
+        print("octo-gcs: interrupted", file=err)
+        return 130
+    except Terminated as e:
+        print(f"octo-gcs: stopped by {e}", file=err)
+        return 143

@@ -9,14 +9,25 @@ import json
 import math
 
 PAPER = {  # Table 1 of the paper and its Section 5
-    "kf": 28.0269, "ktau": 0.3869, "inertia": [0.0628, 0.0762, 0.1014],
-    "mass": 2.132, "g": 9.796,
+    "kf": 28.0269,
+    "ktau": 0.3869,
+    "inertia": [0.0628, 0.0762, 0.1014],
+    "mass": 2.132,
+    "g": 9.796,
 }
 
 DEFAULTS = {
-    "mass": 2.132, "g": 9.796, "arm_length": 0.35, "kf": 28.0269, "ktau": 0.3869,
-    "inertia": [0.0628, 0.0762, 0.1014], "motor_tau": 0.03, "delay": 0.0, "thrust_curve": 0.0,
-    "rotor_scale": [1.0] * 8, "kf_drift_per_min": 0.0,
+    "mass": 2.132,
+    "g": 9.796,
+    "arm_length": 0.35,
+    "kf": 28.0269,
+    "ktau": 0.3869,
+    "inertia": [0.0628, 0.0762, 0.1014],
+    "motor_tau": 0.03,
+    "delay": 0.0,
+    "thrust_curve": 0.0,
+    "rotor_scale": [1.0] * 8,
+    "kf_drift_per_min": 0.0,
 }
 
 KNOWN = set(DEFAULTS) | {"noise", "origin"}
@@ -68,5 +79,10 @@ def load(path):
 
 def truth_of(v):
     """The identified quantities' true values: {kf, ktau, ixx, iyy, izz}."""
-    return {"kf": v["kf"], "ktau": v["ktau"], "ixx": v["inertia"][0], "iyy": v["inertia"][1],
-            "izz": v["inertia"][2]}
+    return {
+        "kf": v["kf"],
+        "ktau": v["ktau"],
+        "ixx": v["inertia"][0],
+        "iyy": v["inertia"][1],
+        "izz": v["inertia"][2],
+    }

@@ -1,10 +1,12 @@
-"""A stand-in for `octo-gcs mission` in the campaign tests (given through OCTO_CAMPAIGN_MISSION).
+"""A stand-in for a campaign's mission command in the campaign tests (given through
+OCTO_CAMPAIGN_MISSION).
 
-Takes the mission's options, writes OUT/report.json with estimates near the vehicle file's truth
-(errors and sds from the seed, so they are random but reproducible) and exits 0. Options of its own,
-placed before the mission's: --crash-seed N (exit 3 with a message), --hang-seed N (sleep for
-ever), --reject-seed N (k_f rejected, with the firmware's status text on the output, or with --in-process in OUT/octo-sil.log), --in-process-help
-(its --help lists --in-process), --die-seed N (kill the Dask worker process running it).
+Reads the mission's options (MissionOptions as JSON) on stdin, writes OUT/report.json with
+estimates near the vehicle file's truth (errors and sds from the seed, so they are random but
+reproducible) and exits 0. Options of its own: --crash-seed N (exit 3 with a message),
+--hang-seed N (sleep for ever), --reject-seed N (k_f rejected, with the firmware's reason in the
+report as the mission writes it), --in-process-help (its --help lists --in-process), --die-seed N
+(kill the Dask worker process running it).
 """
 import argparse
 import json
@@ -20,21 +22,13 @@ p.add_argument("--hang-seed", type=int, action="append", default=[])
 p.add_argument("--reject-seed", type=int, action="append", default=[])
 p.add_argument("--die-seed", type=int, action="append", default=[])
 p.add_argument("--in-process-help", action="store_true")
-p.add_argument("--vehicle")
-p.add_argument("--seed", type=int, default=1)
-p.add_argument("--out", default="out")
-p.add_argument("--no-plots", action="store_true")
-p.add_argument("--experiments", default="6")
-p.add_argument("--param", action="append", default=[])
-p.add_argument("--build-dir")
-p.add_argument("--in-process", action="store_true")
-p.add_argument("--help-text", action="store_true")
 argv = sys.argv[1:]
 if "--help" in argv:
-    print("usage: fake-mission [--vehicle FILE] [--seed N] [--out DIR]"
-          + (" [--in-process]" if "--in-process-help" in argv else ""))
+    print("usage: fake-mission < OPTIONS.json" + (" (plant sil: --in-process)" if "--in-process-help" in argv else ""))
     sys.exit(0)
 a = p.parse_args(argv)
+opts = json.load(sys.stdin)
+a.seed, a.vehicle, a.out, a.in_process = opts["seed"], opts["vehicle"], opts["out"], opts["plant"] == "sil"
 print(f"fake mission seed {a.seed}", flush=True)
 if a.seed in a.crash_seed:
     print("fake: octo-fw exited with status 134 (crash on purpose)", flush=True)
@@ -56,18 +50,13 @@ for q, t in truth.items():
     sd = t * 0.001
     est = t + rng.gauss(0.0, sd)
     acc = not (q == "kf" and a.seed in a.reject_seed)
-    params[q] = {"truth": t, "estimate": est, "sd": sd, "error_pct": 100 * (est - t) / t, "accepted": acc}
+    params[q] = {"truth": t, "estimate": est, "sd": sd, "error_pct": 100 * (est - t) / t, "accepted": acc,
+                 "reason": "ok" if acc else "model", "source": "thrust"}
     checks.append({"check": f"{q} accepted", "ok": acc, "warning_only": False, "detail": ""})
 os.makedirs(a.out, exist_ok=True)
-if a.seed in a.reject_seed:   # the firmware's status text: on the output, or in-process in octo-sil.log
-    text = f"ID kf {params['kf']['estimate']:.3f} +/- 0.028 rejected: model does not fit"
-    if a.in_process:
-        with open(os.path.join(a.out, "octo-sil.log"), "w") as f:
-            f.write(f"octo-fw: {text}\n")
-    else:
-        print("  " + text, flush=True)
-rep = {"run": {"seed": a.seed, "in_process": a.in_process, "build_dir": a.build_dir,
-               "params": a.param}, "parameters": params, "checks": checks,
+rep = {"run": {"seed": a.seed, "in_process": a.in_process, "faults": opts["faults"], "params": opts["params"],
+               "plots": opts["plots"]},
+       "parameters": params, "checks": checks, "estimator": {"source": "thrust"},
        "pass": all(c["ok"] for c in checks)}
 with open(os.path.join(a.out, "report.json"), "w") as f:
     json.dump(rep, f)

@@ -1,8 +1,7 @@
 """The campaign's in-process missions inside the Dask worker's own Python process.
 
-campaign.run_mission flies a real in-process mission (octo-sil) both ways: as an
-`octo-gcs mission --in-process` subprocess and through inprocess.mission in the calling
-process. octo-sil is deterministic, so both give the same report. A crashing or hanging
+campaign.run_mission flies a real in-process mission (octo-sil) both ways: in a child process
+(octo_gcs.mission.child) and through octo_gcs.mission.run in the calling process. octo-sil is deterministic, so both give the same report. A crashing or hanging
 octo-sil (a stand-in in a build directory given through OCTO_BUILD) becomes a row with its
 reason, as it does through the subprocess.
 """
@@ -23,8 +22,8 @@ BUILD = REPO / "build"
 VARIABLE = ("created_utc", "timing")   # the clock's, not the mission's
 
 
-def job(index, seed, vehicle, faults=(), params=None, timeout=120.0, in_worker=True):
-    return {"index": index, "seed": seed, "vehicle": vehicle, "faults": list(faults), "params": params or {},
+def job(index, seed, vehicle, faults=None, params=None, timeout=120.0, in_worker=True):
+    return {"index": index, "seed": seed, "vehicle": vehicle, "faults": dict(faults or {}), "params": params or {},
             "experiments": [6], "timeout": timeout, "in_process": True, "mission_cmd": None,
             "in_worker": in_worker}
 
@@ -39,7 +38,7 @@ def test_in_worker_and_subprocess_give_the_same_report():
     vehicle = {"kf": rng.uniform(22.0, 34.0), "mass": rng.uniform(1.5, 3.0),
                "inertia": draw_inertia(lambda: [rng.uniform(0.05, 0.08), rng.uniform(0.06, 0.09),
                                                 rng.uniform(0.08, 0.12)])}
-    faults = ["--drop", "0.01"] if rng.random() < 0.5 else []
+    faults = {"drop": 0.01} if rng.random() < 0.5 else {}
     params = {"ID_INR_TIME": float(rng.choice([15, 20]))}
     info = f"seed {seed}, vehicle {vehicle}, faults {faults}"
     sub = campaign.run_mission(job(3, seed, vehicle, faults, params, in_worker=False))

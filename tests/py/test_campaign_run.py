@@ -94,7 +94,8 @@ def test_external_cluster_fake_missions_complete_and_resume_adds_nothing(tmp_pat
     assert sorted(int(x["seed"]) for x in rs) == list(range(100, 108))
     m = by_seed(rs)
     assert m[103]["status"] == "fail" and m[103]["kf_accepted"] == "0"
-    assert m[103]["rejection_reasons"] == "kf: model does not fit"
+    assert m[103]["rejection_reasons"] == "kf: model"
+    assert all(m[s]["source"] == "thrust" for s in m)
     assert all(m[s]["status"] == "pass" for s in m if s != 103)
     # every mission went to a worker of the cluster, not the client
     for i in range(8):
@@ -104,15 +105,17 @@ def test_external_cluster_fake_missions_complete_and_resume_adds_nothing(tmp_pat
         assert rep["run"]["seed"] == 100 + i
         assert veh["kf"] == float(m[100 + i]["vehicle.kf"]) == rep["parameters"]["kf"]["truth"]
         drop = float(m[100 + i]["faults.drop"])
-        assert (rep["run"]["build_dir"] is not None) == (drop > 0)   # faults reach octo-sim via wrappers
-        assert rep["run"]["params"] == [f"ID_INR_TIME={float(m[100 + i]['params.ID_INR_TIME'])!r}"]
+        assert rep["run"]["faults"] == ({"drop": drop} if drop > 0 else {})   # faults reach the plant as data
+        assert rep["run"]["params"] == {"ID_INR_TIME": float(m[100 + i]["params.ID_INR_TIME"])}
+        assert rep["run"]["plots"] is False
     doc = json.loads((out / "campaign.json").read_text())
     assert doc["in_results"] == 8 and doc["ran"] == 8 and doc["silently_wrong"] == 0
-    assert doc["parameters"]["kf"]["rejection_reasons"] == {"model does not fit": 1}
+    assert doc["parameters"]["kf"]["rejection_reasons"] == {"model": 1}
+    assert doc["sources"] == {"thrust": 8}
     assert doc["parameters"]["kf"]["accepted"] == 7 and doc["parameters"]["ktau"]["accepted"] == 8
     assert doc["throughput"]["workers"] == 2
     md = (out / "campaign.md").read_text()
-    assert "SILENTLY WRONG: 0" in md
+    assert "SILENTLY WRONG: 0" in md and "Estimated from: thrust (8)." in md
     for f in ("error_pct.png", "z_hist.png", "z_qq.png"):
         assert (out / f).stat().st_size > 1000
     # the campaign's missions in the progress line
@@ -220,8 +223,8 @@ def test_in_process_used_when_the_mission_has_it(tmp_path):
     assert r.returncode == 0, r.stderr
     assert json.loads((out / "missions/0000/report.json").read_text())["run"]["in_process"] is True
     assert "in-process (octo-sil)" in r.stderr
-    # the rejection reason found in the program log the in-process mission wrote
-    assert by_seed(rows(out))[101]["rejection_reasons"] == "kf: model does not fit"
+    # the rejection reason from the report the in-process mission wrote
+    assert by_seed(rows(out))[101]["rejection_reasons"] == "kf: model"
     out2 = tmp_path / "c2"
     spec = write_spec(tmp_path, missions=1, plant="in-process", faults={})
     r = run_campaign(spec, out2, "--workers", "1", mission=fake())
@@ -249,9 +252,7 @@ def test_real_missions_on_an_external_cluster(tmp_path, dask_cluster):
     doc = json.loads((out / "campaign.json").read_text())
     assert doc["ran"] == 2
     for w in doc["worst"]:
-        assert "--build-dir" in w["command"]   # the replay keeps the frame loss
-        sim = out / "missions" / f"{w['index']:04d}" / "sim" / "octo-sim"
-        assert "--drop 0.01" in sim.read_text()
+        assert "--fault drop=0.01" in w["command"]   # the replay keeps the frame loss
 
 
 def test_a_stopped_client_loses_no_finished_mission(tmp_path):

@@ -1,5 +1,5 @@
 """octo-gcs campaign's spec: validation errors that name the key, reproducible draws, the mission
-inputs made from them (vehicle file, fault flags, parameters), the fault-flag wrappers."""
+inputs made from them (vehicle file, faults, parameters), the faults as the plants' flags."""
 
 import json
 import os
@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 
 from octo_gcs import campaign, campaign_spec as cs
+from octo_gcs.base import GcsError
+from octo_gcs.mission.options import MissionOptions, fault_flags
 
 REPO = Path(__file__).resolve().parents[2]
 DEFAULT = REPO / "host_tools" / "campaigns" / "default.json"
@@ -118,27 +120,36 @@ def test_mission_inputs_vehicle_faults_params():
     assert veh["inertia"][0] == 0.05 and veh["inertia"][2] == 0.1 and 0.06 <= veh["inertia"][1] <= 0.08
     assert veh["rotor_scale"][2] == d["vehicle.rotor_scale[2]"] and veh["rotor_scale"][0] == 1.0
     assert set(veh["noise"]) == {"gyro"}
-    assert faults[:2] == ["--delay-frames", str(int(d["faults.delay_frames"]))]
-    assert faults[2:] == ["--drop", "0.02"]   # duplicate 0: octo-sim's default, no flag
+    assert faults == {"delay_frames": int(d["faults.delay_frames"]), "drop": 0.02}   # duplicate 0: off, left out
+    assert fault_flags(faults) == ["--delay-frames", str(int(d["faults.delay_frames"])), "--drop", "0.02"]
     assert params == {"ID_INR_TIME": d["params.ID_INR_TIME"]} and params["ID_INR_TIME"] in (15.0, 25.0)
     # the vehicle file made from the draws is one octo-gcs (and octo-sim) accept
     from octo_gcs import vehiclefile
     vehiclefile.parse(json.dumps(veh))
 
 
-def test_fault_wrappers_add_the_flags(tmp_path):
-    build = tmp_path / "build"
-    build.mkdir()
-    for name in ("octo-sim", "octo-fw"):
-        p = build / name
-        p.write_text(f"#!/bin/sh\necho {name} \"$@\"\n")
-        p.chmod(0o755)
-    d = campaign.write_sim_wrappers(tmp_path / "w", build, ["--drop", "0.02", "--delay-frames", "1"])
-    out = subprocess.run([str(d / "octo-sim"), "--seed", "3"], capture_output=True, text=True).stdout
-    assert out.split() == ["octo-sim", "--seed", "3", "--drop", "0.02", "--delay-frames", "1"]
-    out = subprocess.run([str(d / "octo-fw"), "--x"], capture_output=True, text=True).stdout
-    assert out.split() == ["octo-fw", "--x"]
-    assert not (d / "octo-sil").exists()   # only what the build has
+def test_faults_reach_the_plants_flags_as_data(tmp_path):
+    """A job's faults become the mission's options, and each plant's command line carries them
+    as its flags (octo-sim for the UDP plant, octo-sil for the in-process one)."""
+    from octo_gcs.mission import flying_sil, flying_udp
+
+    job = {"index": 0, "seed": 7, "vehicle": {}, "faults": {"drop": 0.02, "delay_frames": 1},
+           "params": {"ID_INR_TIME": 20.0}, "experiments": [6], "in_process": False}
+    opts = campaign.mission_options(job, tmp_path)
+    assert opts.plant == "udp" and opts.faults == {"drop": 0.02, "delay_frames": 1} and opts.plots is False
+    assert MissionOptions.from_json(json.loads(json.dumps(opts.to_json()))) == opts
+    flags = ["--delay-frames", "1", "--drop", "0.02"]
+    sim = [str(a) for a in flying_udp.sim_argv(tmp_path, opts, (1, 2, 3, 4), tmp_path, 300.0)]
+    assert sim[0].endswith("octo-sim") and sim[-4:] == flags and "--lockstep" in sim
+    assert [str(a) for a in flying_udp.fw_argv(tmp_path, (1, 2, 3, 4), tmp_path)][0].endswith("octo-fw")
+    sil = [str(a) for a in flying_sil.sil_argv(tmp_path, campaign.mission_options(dict(job, in_process=True),
+                                                                                 tmp_path), tmp_path, 300.0)]
+    assert sil[0].endswith("octo-sil") and sil[-4:] == flags
+    with pytest.raises(GcsError, match="fault 'loss' unknown"):
+        MissionOptions(faults={"loss": 0.1})
+    with pytest.raises(GcsError, match="--realtime"):
+        MissionOptions(plant="sil", realtime=True)
+    assert "--fault drop=0.02" in campaign.replay_command(tmp_path, 0, 7, {"experiments": [6]}, {"drop": 0.02}, {})
 
 
 def test_results_csv_drops_a_row_cut_short(tmp_path):

@@ -1,6 +1,7 @@
 """`octo-gcs identify` against a scripted MAVLink vehicle that follows the
 identification interface (firmware/app/experiment.h): USER_1 -> IN_PROGRESS, phase
-and result STATUSTEXTs, live NAMED_VALUE_FLOATs, final ACK, ID_* parameters.
+and result STATUSTEXTs, the results as OCTO_ID_RESULT messages (one lost, sent again on
+MAV_CMD_REQUEST_MESSAGE), live NAMED_VALUE_FLOATs, final ACK, ID_* parameters.
 The real firmware is flown by test_gcs_mission_e2e.py."""
 
 import os
@@ -13,6 +14,7 @@ os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil  # noqa: E402
 
 from conftest import free_port  # noqa: E402
+from octo_gcs import link  # noqa: E402,F401  (the octo dialect, with OCTO_ID_RESULT)
 from octo_gcs.cli import main  # noqa: E402
 
 mav = mavutil.mavlink
@@ -37,6 +39,8 @@ class ScriptedVehicle(threading.Thread):
         self.script = []
         self.stop = False
         self.started = []
+        self.requested = []   # MAV_CMD_REQUEST_MESSAGE's message ids
+        self.ktau_accepted = True
 
     def send_param(self, name):
         names = list(self.params)
@@ -67,6 +71,11 @@ class ScriptedVehicle(threading.Thread):
                 name = msg.param_id if msg.param_index == -1 else list(self.params)[msg.param_index]
                 if name in self.params:
                     self.send_param(name)
+            elif t == "COMMAND_LONG" and msg.command == mav.MAV_CMD_REQUEST_MESSAGE:
+                self.requested.append(int(msg.param1))
+                self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_ACCEPTED)
+                for i in range(5):
+                    self.send_result(i)
             elif t == "COMMAND_LONG" and msg.command == mav.MAV_CMD_USER_1:
                 if self.mode != 3:
                     self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_DENIED)
@@ -82,6 +91,17 @@ class ScriptedVehicle(threading.Thread):
                 self.mode = 4
                 self.plan(time.monotonic())
 
+    def send_result(self, i):
+        """Result i of run 1: k_f, k_tau, I_x, I_y, I_z (from the thrust rows)."""
+        name, est, sd = [("KF", "ID_KF_EST", "ID_KF_SD"), ("KTAU", "ID_KTAU_EST", "ID_KTAU_SD"),
+                         ("IXX", "ID_IXX_EST", "ID_IXX_SD"), ("IYY", "ID_IYY_EST", "ID_IYY_SD"),
+                         ("IZZ", "ID_IZZ_EST", "ID_IZZ_SD")][i]
+        ok = self.ktau_accepted or name != "KTAU"
+        self.m.mav.octo_id_result_send(0, 1, i, i + 1, int(i == 4), 1 if i < 2 else i, getattr(mav, f"OCTO_ID_PARAM_{name}"),
+                                       0, RESULTS[est], RESULTS[sd], int(ok),
+                                       mav.OCTO_ID_REASON_OK if ok else mav.OCTO_ID_REASON_UNCERTAIN,
+                                       mav.OCTO_ID_SOURCE_THRUST)
+
     def plan(self, t0):
         steps = [lambda: self.text("Mode EXPERIMENT")]
         for k, name in enumerate(["validation", "rotor coefficients", "validation", "Ix", "Iy", "Iz"], 1):
@@ -90,6 +110,7 @@ class ScriptedVehicle(threading.Thread):
             steps.append(lambda i=i: (self.m.mav.named_value_float_send(0, b"KF", 28.0 + 0.1 / (i + 1)),
                                       self.m.mav.named_value_float_send(0, b"KF_SD", 0.05 / (i + 1))))
         steps.append(lambda: self.text("ID kf 28.03 +/- 0.01 N accepted"))
+        steps += [lambda i=i: self.send_result(i) for i in (0, 1, 2, 4)]   # result 3 (I_y) is lost
         steps.append(lambda: (self.params.update(RESULTS), self.params.update(
             {"VEH_KF": RESULTS["ID_KF_EST"], "VEH_KTAU": RESULTS["ID_KTAU_EST"], "VEH_IXX": RESULTS["ID_IXX_EST"],
              "VEH_IYY": RESULTS["ID_IYY_EST"], "VEH_IZZ": RESULTS["ID_IZZ_EST"]})))
@@ -128,6 +149,16 @@ def test_identify_runs_the_sequence_and_passes(vehicle, capsys, tmp_path):
     assert "KF 28.0" in out and "+/-" in out             # live estimate with its std
     assert "ID kf 28.03 +/- 0.01 N accepted" in out
     assert "k_f vs truth" in out and "PASS" in out
+    assert v.requested == [54000]   # the lost result asked for again
+    assert "results: (from thrust)" in out and "rejected" not in out
+
+
+def test_identify_names_the_firmwares_reason(vehicle, capsys):
+    v, url = vehicle()
+    v.ktau_accepted = False
+    main(["identify", "--connect", url, "--experiments", "1"])
+    out = capsys.readouterr().out
+    assert "rejected: uncertain" in out.split("checks:")[0], out
 
 
 def test_identify_fails_against_another_truth(vehicle, capsys, tmp_path):

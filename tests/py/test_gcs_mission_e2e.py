@@ -23,7 +23,7 @@ from ident_helpers import false_alarm, fw_said
 
 sys.path.insert(0, str(BUILD / "gen" / "python"))
 
-from octo_gcs import paramfile  # noqa: E402
+from octo_gcs import id_results, paramfile  # noqa: E402
 from octo_gcs.logs import Logs  # noqa: E402
 
 GCS = REPO / ".venv" / "bin" / "octo-gcs"
@@ -138,6 +138,18 @@ def test_e2e_mission_on_a_random_vehicle(tmp_path):
     assert all(abs(errs[k]) <= 2.0 for k in ("ixx", "iyy", "izz")), errs
     failed = [c for c in rep["checks"] if not c["ok"] and not c["warning_only"]]
     assert rep["pass"] and not failed, failed
+
+    # the firmware's results as data (OCTO_ID_RESULT over MAVLink, and the same records in
+    # fw.lcm): each estimate's verdict and the measurements it rests on
+    sources = ("thrust", "imu", "imu_rpm", "imu_rpm_torque")
+    assert rep["estimator"]["source"] in sources, rep["estimator"]
+    for key, row in rep["parameters"].items():
+        assert row["source"] in sources and (row["reason"] == "ok") == row["accepted"], (key, row)
+    assert rep["results_from_records"] == []   # every value is a parameter too
+    assert {r["param"] for r in rep["id_results"]} >= {"kf", "ktau", "ixx", "iyy", "izz"}
+    logged = {(d["param"], d["rotor"]): d for d in map(id_results.describe, logs.id_results)}
+    for r in rep["id_results"]:
+        assert logged[(r["param"], r["rotor"])]["accepted"] == r["accepted"], r
     assert r.returncode == 0
     assert wall < 45, f"mission took {wall:.1f} s"
 

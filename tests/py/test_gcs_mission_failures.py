@@ -192,7 +192,8 @@ def test_a_port_always_taken_at_start_fails_with_the_reason(tmp_path, monkeypatc
     the port and the program that could not bind it."""
     import socket
 
-    from octo_gcs import cli, mission, procs
+    from octo_gcs import cli, procs
+    from octo_gcs.mission import flying_udp
 
     monkeypatch.setenv("OCTO_BUILD", str(BUILD))
     held = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -206,6 +207,6 @@ def test_a_port_always_taken_at_start_fails_with_the_reason(tmp_path, monkeypatc
     err = capsys.readouterr().err
     assert rc != 0
     assert f"cannot bind 127.0.0.1:{taken}: Address already in use" in err, err
-    assert f"taken at start {mission.PORT_ATTEMPTS} times in a row" in err, err
+    assert f"taken at start {flying_udp.PORT_ATTEMPTS} times in a row" in err, err
     rep = json.loads((tmp_path / "out" / "failed-run" / "report.json").read_text())
     assert rep["failed_phase"] == "start" and "octo-sim exited with status 1" in rep["failure"]

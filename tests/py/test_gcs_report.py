@@ -14,7 +14,9 @@ from conftest import BUILD
 
 sys.path.insert(0, str(BUILD / "gen" / "python"))
 
-from octo_gcs import analysis, identify, report  # noqa: E402
+from octo_gcs import analysis, checks, experiments, identify  # noqa: E402
+from octo_gcs.base import GcsError  # noqa: E402
+from octo_gcs.mission import report  # noqa: E402
 from octo_gcs.logs import Logs, LogTail, find_logs  # noqa: E402
 from octo_gcs.model import Params  # noqa: E402
 from octo_gcs.vehiclefile import VehicleFileError, load, parse, truth_of  # noqa: E402
@@ -246,33 +248,38 @@ def test_progress_one_updating_line_on_a_tty_plain_lines_otherwise():
 
 
 # ---------------------------------------------------------------- identification checks
-def test_live_status_texts_are_parsed():
+def test_live_status_texts_name_the_phases_not_the_results():
     live = identify.Live()
     for text in ["ID 1/6: validation", "ID 2/6: rotor coefficients", "ID kf 28.03 +/- 0.01 N accepted",
                  "ID Ixx 0.06 +/- 0.01 kg m^2 rejected: std too large", "Mode HOLD", "ID done"]:
-        live.on_text(text)
+        live.on_text(text, 6)
     assert (live.phase_k, live.phase_n, live.phase) == (2, 6, "rotor coefficients")
-    assert len(live.results) == 2 and live.done == "done"
+    assert len(live.results) == 0 and live.done == "done" and live.failure is None   # results come as data
+    assert len(live.texts) == 5
     live = identify.Live()
-    live.on_text("ID aborted: attitude limit")
+    live.on_text("ID rotor coefficients failed: ID_ROT_TO 2.0 s", 3)   # severity ERROR: the vehicle's failure
+    live.on_text("ID aborted: attitude limit", 3)
     assert live.done == "aborted: attitude limit"
+    assert live.failure == "ID rotor coefficients failed: ID_ROT_TO 2.0 s"
+    assert experiments.phase_of("ID 3/6: inertia Ixx") == (3, 6, "inertia Ixx")
+    assert experiments.phase_of("ID kf 28.03 +/- 0.01 N accepted") is None
 
 
 def test_plausibility_and_truth_checks():
-    ok = identify.plausibility(params_after(), [6])
+    ok = checks.plausibility(params_after(), [6])
     assert all(c.ok for c in ok), [c.line() for c in ok if not c.ok]
-    bad = identify.plausibility(params_after(ID_KF_SD=1.0, ID_RESULT=14.0, ID_VAL_NE_POST=0.5), [6])
+    bad = checks.plausibility(params_after(ID_KF_SD=1.0, ID_RESULT=14.0, ID_VAL_NE_POST=0.5), [6])
     failed = {c.name for c in bad if not c.ok}
     assert failed == {"k_f relative std", "k_f accepted", "k_tau accepted",
                       "validation error after identification: NE halved or < 0.05"}
-    assert {c.name for c in identify.plausibility(params_after(ID_KF_EST=float("nan")), [1]) if not c.ok} \
+    assert {c.name for c in checks.plausibility(params_after(ID_KF_EST=float("nan")), [1]) if not c.ok} \
         == {"k_f estimated"}
-    tr = identify.against_truth(params_after(), [1, 3], TRUTH, 0.3, 2.0)
+    tr = checks.against_truth(params_after(), [1, 3], TRUTH, 0.3, 2.0)
     assert [c.name for c in tr] == ["k_f vs truth", "k_tau vs truth", "I_x vs truth"]
     assert all(c.ok for c in tr)
-    assert identify.parse_experiments("1,3 4") == [1, 3, 4]
-    with pytest.raises(identify.GcsError):
-        identify.parse_experiments("7")
+    assert experiments.parse_experiments("1,3 4") == [1, 3, 4]
+    with pytest.raises(GcsError):
+        experiments.parse_experiments("7")
 
 
 def test_vehicle_files(tmp_path):

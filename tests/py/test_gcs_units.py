@@ -9,7 +9,7 @@ import pytest
 
 from octo_gcs import paramfile
 from octo_gcs.model import Model, Params, State, gamma_o
-from octo_gcs.params_cmd import diff
+from octo_gcs.commands.params import diff
 
 
 # ------------------------------------------------------------ parameter files

@@ -2,8 +2,34 @@
 
 import sys
 
-from . import paramfile
-from .link import GcsError, Vehicle, f32
+from .. import paramfile
+from ..base import GcsError, f32
+from .common import add_connection_args
+
+
+def register(sub):
+    pp = sub.add_parser(
+        "params",
+        help="list, get, set, save, load, diff vehicle parameters",
+        description="Vehicle parameters over MAVLink. Files use MAVProxy's 'NAME VALUE' format.",
+    )
+    add_connection_args(pp)
+    pp.set_defaults(run=run)
+    psub = pp.add_subparsers(dest="action", metavar="ACTION", required=True)
+    ls = psub.add_parser("list", help="print every parameter")
+    g = psub.add_parser("get", help="print one parameter")
+    g.add_argument("name")
+    s = psub.add_parser("set", help="set one parameter and check the vehicle's echo")
+    s.add_argument("name")
+    s.add_argument("value", type=float)
+    sv = psub.add_parser("save", help="save all parameters to FILE (atomically)")
+    sv.add_argument("file")
+    ld = psub.add_parser("load", help="set the parameters of FILE that differ on the vehicle")
+    ld.add_argument("file")
+    df = psub.add_parser("diff", help="show parameters that differ between the vehicle and FILE")
+    df.add_argument("file")
+    for action in (ls, g, s, sv, ld, df):
+        add_connection_args(action, again=True)
 
 
 def _differs(a, b):
@@ -25,6 +51,8 @@ def _fmt(v):
 
 
 def run(args) -> int:
+    from ..link import Vehicle
+
     if args.action in ("load", "diff"):
         try:
             wanted = paramfile.load(args.file)
