@@ -668,6 +668,11 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		static const int ps[3] = {PX_ID_IXX_SD, PX_ID_IYY_SD, PX_ID_IZZ_SD};
 		static const int pv[3] = {PX_VEH_IXX, PX_VEH_IYY, PX_VEH_IZZ};
 		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
+		/* the gyro's scale error scales the angular acceleration, so the estimate, by
+		 * (1 - s): the data cannot tell it, its calibration's sd joins the published sd */
+		float gs = cfg_f(p->imu_gyr_scl_sd, 0.0f) * est;
+		if (isfinite(sd) && isfinite(gs))
+			sd = sqrtf(sd * sd + gs * gs);
 		float lo, hi, raise;
 		enum ident_verdict v = ident_inertia_accept(est, sd, p->veh_mass, p->veh_arm_l, rsd, &lo, &hi, &raise);
 		bool ok = v == IDENT_ACCEPT;
