@@ -1,4 +1,4 @@
-// xplane_proto: the bytes of X-Plane 11/12's UDP messages (xplane-udp.md):
+// xplane_proto: the bytes of X-Plane 11/12's UDP messages (docs/xplane-protocol.md):
 // little-endian packing, DATA and RREF-reply encoders, request framing checks.
 // No sockets and no simulation here.
 #pragma once

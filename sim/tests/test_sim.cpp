@@ -407,7 +407,7 @@ TEST(measure_into_a_used_frame_writes_every_field)
 	CHECK(std::memcmp(&used, &fresh, sizeof used) == 0, "a field keeps the value it had");
 }
 
-// ------------------------------------------------------------------ byte vectors (xplane-udp.md)
+// ------------------------------------------------------------------ byte vectors (layouts in docs/xplane-protocol.md)
 
 TEST(data_out_vector_rows_16_17)
 {

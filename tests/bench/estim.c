@@ -17,7 +17,7 @@
  * Estimators, all fed the same data:
  *   ident    the core's lag-aware estimator (firmware/core/ident.h ident_rotor_*: RLS on the
  *            lag-filtered regressor), when the core has it;
- *   own      the same built here from filt.h + rls.h as estimation-notes.md describes
+ *   own      the same built here from filt.h + rls.h as docs/identification.md describes
  *            (filt_delay + filt_lag of the previous throttle, 1-parameter RLS, lambda 1);
  *   plain    the paper's eq. 18-20: f_1 regressed on the command of its own frame, no
  *            intercept (ident's plain estimator when available, else RLS here).

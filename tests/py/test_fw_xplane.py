@@ -1,4 +1,4 @@
-"""octo-fw's X-Plane client against a fake X-Plane written from xplane-udp.md
+"""octo-fw's X-Plane client against a fake X-Plane written from docs/xplane-protocol.md
 (tests/py/xplane_proto.py): the requests it sends, its conventions (one place:
 X-Plane NED/FRD/OpenGL -> the paper's NWU/FLU), actuation bytes, time
 re-basing, and what it does with foreign and malformed datagrams."""
@@ -171,7 +171,7 @@ def test_actuation_drefs_once_per_frame(launch, port, tmp_path):
     assert len(thro) == 5 * 8
     assert sorted(set(thro)) == [f"{xp.THRO_USE}[{i}]" for i in range(8)]
     assert all(v == 0.25 for p, v in drefs if p.startswith(xp.THRO_USE))
-    # byte for byte what the reference codec (xplane-udp.md vectors) encodes
+    # byte for byte what the reference codec (X-Plane's byte vectors) encodes
     assert all(d == xp.encode_dref(*xp.decode_dref(d)) for d in fake.of_type(b"DREF"))
     rig.fw.stop()   # hands the throttles back
     fake.pump(0.2)

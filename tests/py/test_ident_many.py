@@ -1,5 +1,5 @@
 """The motor model over many random vehicles, flown in octo-sil (one process, about 30 ms a
-flight): issue 13's ranges (motor lag 10-100 ms, delay 0-3 frames, thrust curve 0-0.5, one
+flight): the tests' ranges (motor lag 10-100 ms, delay 0-3 frames, thrust curve 0-0.5, one
 rotor at 0.8-1.0, k_f, k_tau and inertia +/-30 %), none of it told to the firmware.
 
 Nothing accepted is wrong: every accepted run has the delay exact, the lag within 5 %, the

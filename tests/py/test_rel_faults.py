@@ -1,4 +1,4 @@
-"""Issue 9, faults survived with identification running: frame loss (20 % random; 0.5 s
+"""Faults survived with identification running: frame loss (20 % random; 0.5 s
 bursts), duplicated, reordered, delayed frames (each alone, and together). The height holds within +/-0.5 m from the
 hover through the experiment, and rotor identification (experiment 1 over MAVLink USER_1
 param1=1) is either within its accuracy (k_f within 0.3 % of truth) or aborted with a clear
@@ -66,8 +66,8 @@ def test_identification_under_frame_faults(launch, port, tmp_path, fault):
     # to 3 s after the experiment's last line (done, aborted or rejected): identification under
     # faults. The hover after it under the same faults is not judged here: a burst storm
     # (0.5 s blackouts every 1.6 s on average) held for minutes can tip the vehicle, whose
-    # held corrections act blind for half a second each time (open finding, README
-    # Reliability)
+    # held corrections act blind for half a second each time (an open finding,
+    # docs/reliability.md)
     t_exp_end = max(e.utime * 1e-6 for e in events
                     if e.text == "ID done" or e.text.startswith(("ID aborted", "ID kf ")))
     t_end = min(fl.truth[-1].t, t_exp_end + 3.0)

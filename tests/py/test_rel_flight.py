@@ -1,4 +1,4 @@
-"""Issue 9, bad input and lost peers during a lockstep hover (octo-sim + octo-fw + the
+"""Bad input and lost peers during a lockstep hover (octo-sim + octo-fw + the
 rig's pymavlink ground station):
 
 - random and malformed datagrams at a high rate to every UDP port of both processes,

@@ -1,5 +1,5 @@
-"""Issue 9, bad MAVLink input and parameter storage: every bad request gets the answer the
-MAVLink rules give (mavlink-notes.md) and changes nothing (the whole parameter list is
+"""Bad MAVLink input and parameter storage: every bad request gets the answer the
+MAVLink rules give (docs/mavlink.md) and changes nothing (the whole parameter list is
 compared before and after); octo-fw killed with SIGKILL during parameter saves always
 leaves the complete old or the complete new file. Extends test_fw_mavlink.py."""
 

@@ -1,4 +1,4 @@
-"""Issue 9, security: signing key files that octo-fw and octo-gcs read alike, a
+"""Security: signing key files that octo-fw and octo-gcs read alike, a
 signed link end to end with the octo-gcs command, wrongly signed commands
 rejected and counted. (Unsigned/wrong/replayed PARAM_SET and COMMAND_LONG are in
 test_fw_mavlink.py; X-Plane datagrams from a foreign host in test_fw_xplane.py

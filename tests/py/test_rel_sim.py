@@ -1,4 +1,4 @@
-"""Issue 9, octo-sim's request decoder: a malformed throttle command must not count as a
+"""octo-sim's request decoder: a malformed throttle command must not count as a
 command (in lockstep it would advance the simulation without the client)."""
 
 import xplane_proto as xp

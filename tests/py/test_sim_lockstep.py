@@ -1,4 +1,4 @@
-"""--lockstep as DESIGN.md defines it, determinism, --duration, truth on LCM."""
+"""--lockstep as docs/running.md describes it, determinism, --duration, truth on LCM."""
 
 import random
 import subprocess

@@ -1,4 +1,4 @@
-"""octo-sim against the byte vectors and message rules of xplane-udp.md, in both
+"""octo-sim against the byte vectors and message rules of X-Plane's protocol (docs/xplane-protocol.md), in both
 directions: vectors the sim receives are sent and their effect observed; what the
 sim emits is decoded with the independent codec in xplane_proto.py."""
 
@@ -14,7 +14,7 @@ import xplane_proto as xp
 from conftest import wait_until
 from test_sim_support import HOVER, KF, KTAU, SimUnderTest, f32
 
-# ---- the vectors of xplane-udp.md, verbatim
+# ---- byte vectors of X-Plane's messages (layouts in docs/xplane-protocol.md), verbatim
 V_DATA_IN_25 = bytes.fromhex(
     "44415441 00 19000000 00000000 0000003e 0000803e 0000c03e 0000003f 0000203f 0000403f 0000803f")
 V_DATA_IN_LEAVE = bytes.fromhex(

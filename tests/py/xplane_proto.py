@@ -1,4 +1,4 @@
-"""X-Plane 11/12 native UDP protocol, written from docs xplane-udp.md only.
+"""X-Plane 11/12 native UDP protocol, written from docs/xplane-protocol.md only.
 
 A small, dependency-free codec for tests and tools (independent of octo-sim's
 C++ encoder, so that neither side can hide the other's mistake):
