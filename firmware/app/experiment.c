@@ -670,7 +670,7 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
 		/* the gyro's scale error scales the angular acceleration, so the estimate, by
 		 * (1 - s): the data cannot tell it, its calibration's sd joins the published sd */
-		float gs = cfg_f(p->imu_gyr_scl_sd, 0.0f) * est;
+		float gs = cfg_f(p->id_gyr_scl_sd, 0.0f) * est;
 		if (isfinite(sd) && isfinite(gs))
 			sd = sqrtf(sd * sd + gs * gs);
 		float lo, hi, raise;

@@ -68,4 +68,4 @@ PARAM(ID_MOT_NE,    id_mot_ne,    0.0f,    -1e9f,   1e9f,    "",       "Result (
 PARAM(ID_ROT_TO,    id_rot_to,    0.0f,    0.0f,    1000.0f, "s",      "Time limit of the rotor experiment (settling included; 0: twice its planned time + 5 s), else it fails")
 PARAM(ID_INR_TO,    id_inr_to,    0.0f,    0.0f,    1000.0f, "s",      "Time limit of each inertia experiment (settling included; 0: twice its planned time + 5 s), else it fails")
 PARAM(ID_VAL_TO,    id_val_to,    0.0f,    0.0f,    1000.0f, "s",      "Time limit of each validation (settling included; 0: twice its planned time + 5 s), else it fails")
-PARAM(IMU_GYR_SCL_SD,imu_gyr_scl_sd,0.005f, 0.0f,    0.2f,    "",       "Relative sd of the gyro's scale calibration, carried into the inertia's sd (a scale error s gives I (1 - s): the data cannot see it)")
+PARAM(ID_GYR_SCL_SD, id_gyr_scl_sd, 0.005f, 0.0f,    0.2f,    "",       "Relative sd of the gyro's scale calibration, carried into the inertia's sd (a scale error s gives I (1 - s): the data cannot see it)")
