@@ -206,6 +206,31 @@ def symbol(elf, name):
     fail(f"{elf} has no symbol {name}")
 
 
+class Outbox:
+    """Bytes for one UART socket, sent as QEMU takes them (never blocking: the board may be
+    waiting for this program to read its own output). Beyond cap bytes waiting, a new message
+    is dropped whole and counted, as a datagram to a busy receiver is."""
+
+    def __init__(self, sock, cap):
+        self.sock, self.cap = sock, cap
+        self.buf = bytearray()
+        self.dropped = 0
+
+    def put(self, data):
+        if len(self.buf) > self.cap:
+            self.dropped += 1
+            return
+        self.buf += data
+        self.flush()
+
+    def flush(self):
+        if self.buf:
+            try:
+                del self.buf[:self.sock.send(self.buf)]
+            except BlockingIOError:
+                pass
+
+
 class Stop(Exception):
     pass
 
@@ -250,6 +275,7 @@ def main(argv=None):
     rc = 0
     stats = {"plant_in": 0, "foreign": 0, "plant_out": 0, "mav_in": 0, "mav_out": 0}
     plant_rx, log_rx, ground = SlipReader(), SlipReader(), MavSplitter()
+    outs = {}
     try:
         proc = subprocess.Popen(qemu, stdin=subprocess.DEVNULL)
         deadline = time.monotonic() + 10.0
@@ -263,13 +289,15 @@ def main(argv=None):
         say(f"board {os.path.basename(a.elf)} on QEMU mps2-an386 (pid {proc.pid}); X-Plane at "
             f"{xp_addr[0]}:{xp_addr[1]} (listening on {a.xp_listen}, actuation data25), MAVLink on "
             f"{a.mavlink_listen} -> {gcs[0]}:{gcs[1]}" + (f"; counting steps into {counts}" if counts else ""))
+        outs = {n: Outbox(conns[n], 65536) for n in ("plant", "ground")}
         sel = selectors.DefaultSelector()
         sel.register(xp_sock, selectors.EVENT_READ, "xp")
         sel.register(mav_sock, selectors.EVENT_READ, "mav")
         for n in names:
             sel.register(conns[n], selectors.EVENT_READ, n)
         while True:
-            for key, _ in sel.select(timeout=0.2):
+            waiting = any(o.buf for o in outs.values())
+            for key, _ in sel.select(timeout=0.002 if waiting else 0.2):
                 what = key.data
                 if what == "xp":
                     while True:
@@ -281,7 +309,7 @@ def main(argv=None):
                             stats["foreign"] += 1   # the board takes X-Plane's datagrams only
                             continue
                         stats["plant_in"] += 1
-                        conns["plant"].sendall(slip_frame(data))
+                        outs["plant"].put(slip_frame(data))
                 elif what == "mav":
                     while True:
                         try:
@@ -291,7 +319,7 @@ def main(argv=None):
                         if data[:1] in (b"\xfd", b"\xfe"):
                             gcs = src
                         stats["mav_in"] += 1
-                        conns["ground"].sendall(data)
+                        outs["ground"].put(data)
                 else:
                     try:
                         data = conns[what].recv(65536)
@@ -313,10 +341,15 @@ def main(argv=None):
                     else:
                         for rec in log_rx.feed(data):
                             log.record(rec)
+            for o in outs.values():
+                o.flush()
             if proc.poll() is not None:
                 raise Stop()
     except Stop:
         pass
+    except OSError as e:
+        say(f"link to QEMU failed: {e}")
+        rc = 1
     finally:
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
         signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -335,7 +368,9 @@ def main(argv=None):
         for s in list(conns.values()) + list(listeners.values()):
             s.close()
         shutil.rmtree(tmp, ignore_errors=True)
-    say(f"exit: {stats['plant_in']} X-Plane datagrams to the board ({stats['foreign']} foreign dropped), "
+    busy = sum(o.dropped for o in outs.values()) if conns else 0
+    say(f"exit: {stats['plant_in']} X-Plane datagrams to the board ({stats['foreign']} foreign dropped, "
+        f"{busy} datagrams dropped while the board was busy), "
         f"{stats['plant_out']} from it, {plant_rx.dropped} frames dropped; log {log_rx.frames} records, "
         f"{log_rx.dropped} dropped; MAVLink {stats['mav_in']} datagrams in, {stats['mav_out']} packets out, "
         f"{ground.junk} bytes outside packets")
