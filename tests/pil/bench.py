@@ -27,7 +27,6 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[2]
 MODES = {0: "DISARMED", 1: "IDLE", 2: "TAKEOFF", 3: "HOLD", 4: "EXPERIMENT", 5: "LAND"}
 FRAME_CYCLES = 168e6 / 90.0
-EXP_NAMES = {1: "rotor", 2: "validation", 3: "I_x", 4: "I_y", 5: "I_z"}
 
 
 def percentile(sorted_vals, p):
@@ -94,7 +93,7 @@ def analyse(counts_path, frames):
         mode = MODES.get(f.mode, str(f.mode))
         keys = ["all", mode]
         if mode == "EXPERIMENT" and f.exp_id:
-            keys.append(f"EXPERIMENT {f.exp_id} ({EXP_NAMES.get(f.exp_id, '?')})")
+            keys.append(f"EXPERIMENT {f.exp_id} phase {f.exp_phase}")
         for k in keys:
             groups.setdefault(k, []).append(c)
         if worst is None or c > worst["instructions"]:
@@ -119,7 +118,9 @@ def main():
         bdir = build / ("pil" if b == "float" else f"pil-{b}")
         elf = build / "pil-img" / f"octo-fw-{b}.elf"
         rc, counts, wall = fly(b, bdir, out, a.experiments, a.mission_args)
-        frames = read_frames(out / b / "fw.lcm", build / "gen/python")
+        # a failed mission leaves its logs in failed-run/: its steps are counted all the same
+        logdir = out / b if (out / b / "fw.lcm").exists() and rc == 0 else out / b / "failed-run"
+        frames = read_frames(logdir / "fw.lcm", build / "gen/python")
         groups, worst = analyse(counts, frames)
         sz = sizes(elf)
         result["builds"][b] = {"mission_rc": rc, "wall_s": round(wall, 1), "size": sz, "steps": groups,
@@ -127,9 +128,11 @@ def main():
         rc_all |= rc
         print(f"\n== {b} image {elf.name}: flash {sz['flash']:,} B (.text {sz['text']:,} + .data {sz['data']:,}), "
               f"static RAM {sz['static_ram']:,} B (.data + .bss {sz['bss']:,}; stack 64 KB besides)")
-        print(f"   mission exit {rc}, {wall:.0f} s wall; instructions per step (QEMU mps2-an386, counting plugin):")
+        print(f"   mission exit {rc}" + (" (FAILED: the steps it flew are counted)" if rc else "")
+              + f", {wall:.0f} s wall; instructions per step (QEMU mps2-an386, counting plugin):")
         print(f"   {'mode':<26} {'steps':>6} {'median':>8} {'p99':>8} {'max':>8}  {'max / frame at 168 MHz, 90 Hz':>30}")
-        order = ["all"] + [m for m in MODES.values() if m in groups] + sorted(k for k in groups if k.startswith("EXPERIMENT "))
+        order = ["all"] + [m for m in MODES.values() if m in groups] + \
+            sorted((k for k in groups if k.startswith("EXPERIMENT ")), key=lambda k: [int(x) for x in k.split()[1::2]])
         for k in order:
             s = groups[k]
             print(f"   {k:<26} {s['steps']:>6} {s['median']:>8,} {s['p99']:>8,} {s['max']:>8,}  "
