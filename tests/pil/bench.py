@@ -12,7 +12,7 @@ the step's instructions as a share of one frame of a 168 MHz Cortex-M4F at 90 Hz
 cycles), counting one cycle per instruction (a lower bound: loads, branches and divides take
 more). Writes OUT/bench.json and keeps each flight's report in OUT/<build>/.
 
-    tests/pil/bench.py [--builds "float fixed"] [--build build] [--out out-pil/bench]
+    tests/pil/bench.py [--builds "float fixed"] [--build build] [--out out/pil/bench]
                        [--experiments LIST] [--limit N]
 """
 
@@ -106,7 +106,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--builds", default="float fixed")
     ap.add_argument("--build", default=str(REPO / "build"))
-    ap.add_argument("--out", default=str(REPO / "out-pil/bench"))
+    ap.add_argument("--out", default=str(REPO / "out/pil/bench"))
     ap.add_argument("--experiments", default=None, help="octo-gcs mission --experiments (default: its own, 6)")
     ap.add_argument("mission_args", nargs="*", help="more octo-gcs mission options (after --)")
     a = ap.parse_args()

@@ -4,7 +4,7 @@
 #                   each: octo-gcs mission with --build-dir build/pil (build/pil-fixed), where
 #                   octo-fw is a wrapper that starts QEMU (mps2-an386) with the image and the host
 #                   bridge (firmware/hal/mps2/host/octo_pil.py) that joins its UARTs to octo-sim
-#                   and to the ground station. Reports in $(PIL_OUT)/float and $(PIL_OUT)/fixed.
+#                   and to the ground station. Reports in $(PIL_OUT)/float and $(PIL_OUT)/fixed (out/pil/).
 #                   PIL_BUILDS="float" flies one build only; MISSION_ARGS as for `make run`.
 #   make pil-bench  the same flight with the instruction-counting plugin on every step
 #                   (tests/pil/bench.py): per-mode distribution, flash and static RAM, cycles per
@@ -18,7 +18,7 @@
 # (CFLAGS_FW for the target, ARM_CORE_OPT_m4f). The toolchain comes as for `make arm`.
 
 PIL_B       := $(B)/pil-img
-PIL_OUT     ?= out-pil
+PIL_OUT     ?= out/pil
 PIL_BUILDS  ?= float fixed
 PIL_BENCH_ARGS ?=
 PIL_BRIDGE  := firmware/hal/mps2/host/octo_pil.py
