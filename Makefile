@@ -9,6 +9,8 @@
 #                 (host_tools/campaigns/default.json; output in campaign/; goes on where it stopped)
 #   make arm      cross-build the core and run its unit tests on emulated Cortex-M4F and M0,
 #                 and the app's C suite on Cortex-M4F
+#   make pil      processor-in-the-loop: make run's mission on an emulated Cortex-M4F board
+#                 (QEMU mps2-an386), float and Q16.16 images (docs/pil.md)
 #   make fuzz     libFuzzer on every parser (make fuzz-smoke: a few seconds each, for CI)
 #   make clean    remove build/ (keeps .venv); make distclean removes .venv too
 #
@@ -110,9 +112,10 @@ include tests/arm/arm.mk
 include tests/bench/bench.mk
 include tests/fuzz/fuzz.mk
 include tests/lint.mk
+include firmware/hal/mps2/pil.mk
 
 # ---------------------------------------------------------------- top-level goals
-.PHONY: all test run campaign bench arm clean distclean help
+.PHONY: all test run campaign bench arm pil clean distclean help
 all: $(ALL_TARGETS)
 
 test: all
@@ -132,7 +135,7 @@ campaign: all
 	$(VENV)/bin/octo-gcs campaign $(CAMPAIGN_SPEC) --out campaign --resume $(CAMPAIGN_ARGS)
 
 help:
-	@sed -n '2,17p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,19p' Makefile | sed 's/^# \{0,1\}//'
 
 clean:
 	rm -rf $(B)
