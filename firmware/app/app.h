@@ -41,6 +41,7 @@
 #include "outbox.h"
 #include "params.h"
 #include "pos_ctrl.h"
+#include "rotor_fail.h"
 #include "thrmap.h"
 
 #define DEG_F 0.017453292519943295f   /* rad per degree */
@@ -119,6 +120,7 @@ struct app {
 	struct mixer mix;
 	struct thrmap map;
 	struct mixer_output mix_out;
+	struct rotor_fail rf;         /* a failed rotor, found from the rotors' outputs (rotor_guard.h) */
 	float wrench_dem[4];
 	uint32_t thr_clamped;
 
@@ -174,6 +176,7 @@ struct app_view {
 	const char (*est_name)[11];
 	const float *est, *est_sd;
 	const struct app_id_run *id_run;      /* the last identification run's results */
+	bool rotor_failed;                    /* a rotor has failed (rotor_guard.h) */
 };
 struct app_view app_view(const struct app *a);
 static inline const struct app_params *app_params(const struct app *a) { return &a->p; }
