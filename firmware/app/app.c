@@ -1,6 +1,5 @@
 /* app.c - the autopilot's step, modes and commands (see app.h). */
 #include "app.h"
-#include "rotor_guard.h"
 
 #include <math.h>
 #include <stdarg.h>

@@ -1,6 +1,4 @@
-/* rotor_guard.c - see rotor_guard.h. */
-#include "rotor_guard.h"
-
+/* rotor_guard.c - the app's side of a rotor failure (declared in app.h). */
 #include <stdio.h>
 
 #include "app.h"
