@@ -62,6 +62,10 @@ static const char kUsage[] =
 "                         at a scenery shift: local x/y/z (row 21, local_x/y/z) jump by\n"
 "                         kilometres; latitude, longitude, elevation, velocities and the\n"
 "                         physics do not change (repeatable; vehicle key origin_shift_s)\n"
+"  --fail-rotor J@T[:S]   at plant time T s rotor J (1..8) keeps S (0..1, default 0) of\n"
+"                         its thrust and torque, and its speed falls to sqrt(S) of what\n"
+"                         its throttle asks (repeatable; vehicle key rotor_failure\n"
+"                         {\"rotor\": J, \"at_s\": T, \"scale\": S} or a list of them)\n"
 "\n"
 "  --verbose              one status line per second on stderr\n"
 "  --help                 this text\n"
@@ -69,7 +73,7 @@ static const char kUsage[] =
 "vehicle keys: mass, g, arm_length, kf, ktau, inertia [3], motor_tau, delay,\n"
 "thrust_curve, rotor_scale [8], kf_drift_per_min, noise {thrust, torque, gyro,\n"
 "attitude_deg, position, accel, rpm, current}, origin [lat, lon, alt_m],\n"
-"origin_shift_s [T, ...];\n"
+"origin_shift_s [T, ...], rotor_failure {rotor, at_s, scale} or [{...}, ...];\n"
 "sensors: imu_bias {accel, gyro, accel_walk, gyro_walk}, imu_scale, vibration\n"
 "{accel, gyro, harmonics [<=4], cutoff_hz, sample_hz}, rpm_max, esc_pole_pairs,\n"
 "esc_kt, esc_current_offset, sensors [list] (docs/sensors.md).\n"
@@ -112,6 +116,23 @@ long integer(const std::string &flag, const char *v, long lo, long hi)
 		throw Bad{flag, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
 		                    "], got '" + v + "'"};
 	return d;
+}
+
+// --fail-rotor J@T[:S]
+RotorFailure fail_rotor(const std::string &flag, const std::string &v)
+{
+	const size_t at = v.find('@');
+	if (at == std::string::npos)
+		throw Bad{flag, "expected J@T[:S] (rotor 1..8, plant time s, remaining effectiveness 0..1), got '" + v + "'"};
+	const size_t colon = v.find(':', at);
+	const std::string j = v.substr(0, at);
+	const std::string t = v.substr(at + 1, colon == std::string::npos ? std::string::npos : colon - at - 1);
+	RotorFailure f;
+	f.rotor = static_cast<int>(integer(flag + " (rotor J)", j.c_str(), 1, kRotors)) - 1;
+	f.at_s = num(flag + " (time T)", t.c_str(), 0.0, 1e9);
+	if (colon != std::string::npos)
+		f.scale = num(flag + " (scale S)", v.substr(colon + 1).c_str(), 0.0, 1.0);
+	return f;
 }
 
 } // namespace
@@ -190,6 +211,8 @@ int parse_options(int argc, char **argv, Options &o)
 				o.faults.reorder = num(a, val(), 0.0, 1.0);
 			} else if (a == "--shift-origin") {
 				o.shift_origin.push_back(num(a, val(), 0.0, 1e9));
+			} else if (a == "--fail-rotor") {
+				o.fail_rotor.push_back(fail_rotor(a, val()));
 			} else if (a == "--no-beacon") {
 				o.beacon = false;
 			} else if (a == "--computer-name") {
@@ -221,6 +244,8 @@ int parse_options(int argc, char **argv, Options &o)
 		auto &shifts = o.vehicle.origin_shift_s;
 		shifts.insert(shifts.end(), o.shift_origin.begin(), o.shift_origin.end());
 		std::sort(shifts.begin(), shifts.end());
+		auto &fails = o.vehicle.rotor_failures;
+		fails.insert(fails.end(), o.fail_rotor.begin(), o.fail_rotor.end());
 		if (o.ideal)
 			o.vehicle.make_ideal();
 		if (o.sensors)

@@ -43,12 +43,29 @@ void Model::set_state(const BodyState &x, double t)
 	crashed_ = false;
 }
 
+double Model::effect(int j, double t) const
+{
+	double e = p_.rotor_scale[static_cast<size_t>(j)];
+	for (const auto &f : p_.rotor_failures)
+		if (f.rotor == j && t >= f.at_s - clock0_ - 1e-12)
+			e = f.scale;
+	return e;
+}
+
 RotorOutputs Model::rotor_outputs(const BodyState &x, double t) const
+{
+	RotorArray eff;
+	for (int j = 0; j < kRotors; j++)
+		eff[static_cast<size_t>(j)] = effect(j, t);
+	return outputs_with(x, t, eff);
+}
+
+RotorOutputs Model::outputs_with(const BodyState &x, double t, const RotorArray &eff) const
 {
 	RotorOutputs o;
 	const double d = drift_factor(p_, t);
 	for (int j = 0; j < kRotors; j++) {
-		const double gj = p_.rotor_scale[j] * d * thrust_curve(p_.thrust_curve, x.s[j]);
+		const double gj = eff[static_cast<size_t>(j)] * d * thrust_curve(p_.thrust_curve, x.s[j]);
 		o.thrust[j] = p_.kf * gj;
 		o.torque[j] = yaw_sign(j) * p_.ktau * gj;
 		o.force += o.thrust[j];
@@ -90,7 +107,7 @@ BodyState Model::unpack(const Vec &v)
 Model::Vec Model::deriv(double t, const Vec &v) const
 {
 	const BodyState x = unpack(v);
-	const RotorOutputs o = rotor_outputs(x, t);
+	const RotorOutputs o = outputs_with(x, t, eff_);   // constant over the segment
 	const Eigen::Quaterniond qn = x.q.normalized();
 	Vec d;
 	// eq. (10): r'' = f n / m + [0 0 -g], n = R(q) e_z
@@ -181,7 +198,13 @@ void Model::advance_to(double t1)
 		delay_.apply_due(t_, u_);
 		if (p_.motor_tau <= 0)
 			x_.s = u_;
-		const double seg_end = std::min(t1, delay_.next_after(t_));
+		// a segment ends at the next change of the command or of a rotor's effectiveness
+		double seg_end = std::min(t1, delay_.next_after(t_));
+		for (const auto &f : p_.rotor_failures)
+			if (f.at_s - clock0_ > t_ + 1e-12)
+				seg_end = std::min(seg_end, f.at_s - clock0_);
+		for (int j = 0; j < kRotors; j++)
+			eff_[static_cast<size_t>(j)] = effect(j, t_);
 		while (t_ < seg_end) {
 			double h = std::min(h_max_, seg_end - t_);
 			if (seg_end - t_ - h < 1e-9)

@@ -79,6 +79,9 @@ public:
 	void set_ground(bool enabled) { ground_enabled_ = enabled; }
 
 	RotorOutputs rotor_outputs(const BodyState &x, double t) const;
+	// Rotor j's effectiveness at model time t: rotor_scale, or a failure's scale from its
+	// time on (VehicleParams::rotor_failures, in plant time).
+	double effect(int j, double t) const;
 	// Acceleration in S_I at the current state (0 while resting on the ground).
 	Eigen::Vector3d acceleration() const;
 	// The same from this state's rotor outputs (rotor_outputs(state(), t())).
@@ -90,6 +93,7 @@ private:
 	static Vec pack(const BodyState &x);
 	static BodyState unpack(const Vec &v);
 	Vec deriv(double t, const Vec &v) const;
+	RotorOutputs outputs_with(const BodyState &x, double t, const RotorArray &eff) const;
 	// eq. (10): r'' = f n / m + [0 0 -g] for the normalised attitude qn (in the class:
 	// inlined into the integrator's derivative)
 	Eigen::Vector3d linear_acceleration(const Eigen::Quaterniond &qn, const RotorOutputs &o) const
@@ -115,6 +119,7 @@ private:
 	DelayLine delay_;
 	RotorArray u_{};     // command in force (after the delay)
 	RotorArray u_cmd_{}; // last command given
+	RotorArray eff_{};   // effectiveness over the segment being integrated (advance_to)
 };
 
 } // namespace sim

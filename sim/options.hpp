@@ -30,6 +30,7 @@ struct Options {
 	double lockstep_timeout = 0.5; // wall s to wait for the 8 throttles
 	std::vector<int> rows;        // preselected Data Output rows
 	std::vector<double> shift_origin; // --shift-origin T: plant times, added to the vehicle's
+	std::vector<RotorFailure> fail_rotor; // --fail-rotor J@T[:S], added to the vehicle's
 	FaultParams faults;
 	double step = 0.002;          // RK4 step, s
 	bool verbose = false;

@@ -114,7 +114,8 @@ void Sensors::advance(const Model &m, uint64_t n)
 	}
 	RotorArray speed;
 	for (int j = 0; j < kRotors; j++)
-		speed[static_cast<size_t>(j)] = rotor_speed(p_, m.state().s[static_cast<size_t>(j)], m.t());
+		speed[static_cast<size_t>(j)] = rotor_speed(p_, m.state().s[static_cast<size_t>(j)], m.t()) *
+		                                std::sqrt(p_.failure_factor(j, m.clock()));
 	if (vibrates() && dt > 0) {
 		const double fs = p_.vibration.sample_hz, ts = 1.0 / fs;
 		const int64_t k1 = static_cast<int64_t>(std::floor(t1 * fs + 1e-9));

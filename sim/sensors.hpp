@@ -14,7 +14,9 @@ namespace sim {
 // Rotor speed (rad/s) for the actuator output s at time t. A fixed propeller's thrust
 // goes with speed^2, and the thrust at s is k_f d(t) g(s) (drift included), so the
 // speed is speed_max sqrt(d(t) g(s)): it follows the lagged, delayed throttle as the
-// thrust does. rotor_scale is the propeller's effectiveness and leaves the speed alone.
+// thrust does. rotor_scale is the propeller's effectiveness and leaves the speed alone; a
+// rotor failure (VehicleParams::rotor_failures) is the motor's and scales the speed by
+// sqrt(its scale), applied by the callers.
 double rotor_speed(const VehicleParams &p, double s, double t);
 // The rotor speed in hover (rad/s): speed_max sqrt(m g / (8 k_f)).
 double hover_rotor_speed(const VehicleParams &p);

@@ -105,7 +105,7 @@ void TruthPublisher::publish(const Model &m, uint64_t frame)
 		msg.s[j] = x.s[static_cast<size_t>(j)];
 		msg.thrust[j] = o.thrust[static_cast<size_t>(j)];
 		msg.torque[j] = o.torque[static_cast<size_t>(j)];
-		msg.rotor_scale[j] = p.rotor_scale[static_cast<size_t>(j)];
+		msg.rotor_scale[j] = m.effect(j, m.t());
 	}
 	msg.force_total = o.force;
 	msg.mass = p.mass;

@@ -25,6 +25,24 @@ void VehicleParams::make_ideal()
 	esc_current_offset = 0.0;
 }
 
+double VehicleParams::failure_factor(int j, double clock) const
+{
+	double f = 1.0;
+	for (const auto &r : rotor_failures)
+		if (r.rotor == j && clock >= r.at_s)
+			f = r.scale;
+	return f;
+}
+
+double VehicleParams::rotor_effect(int j, double clock) const
+{
+	double e = rotor_scale[static_cast<size_t>(j)];
+	for (const auto &r : rotor_failures)
+		if (r.rotor == j && clock >= r.at_s)
+			e = r.scale;
+	return e;
+}
+
 bool sensors_parse(const std::string &list, unsigned &bits, std::string &bad)
 {
 	static const struct {
@@ -128,6 +146,39 @@ void check_physics(const VehicleParams &q)
 		                   " N (or a lower 'mass')");
 }
 
+// One rotor_failure object: {"rotor": J (1..8), "at_s": T (>= 0), "scale": S ([0, 1], default 0)}.
+RotorFailure rotor_failure(const json::Value &v)
+{
+	const std::string k = "rotor_failure";
+	if (v.kind != json::Value::Kind::Object)
+		throw VehicleError(k, "key 'rotor_failure' must be an object {\"rotor\": J, \"at_s\": T, \"scale\": S} "
+		                      "or an array of them");
+	RotorFailure f;
+	bool have_rotor = false, have_t = false;
+	for (const auto &kv : v.obj) {
+		const std::string key = k + "." + kv.first;
+		if (kv.first == "rotor") {
+			const double d = num(kv.second, key, Rule::Any);
+			if (d != std::floor(d) || d < 1 || d > kRotors)
+				throw out_of_range(key, d, "an integer in [1, 8]");
+			f.rotor = static_cast<int>(d) - 1;
+			have_rotor = true;
+		} else if (kv.first == "at_s") {
+			f.at_s = num(kv.second, key, Rule::NonNegative);
+			if (f.at_s > 1e9)
+				throw out_of_range(key, f.at_s, "[0, 1e9] s");
+			have_t = true;
+		} else if (kv.first == "scale") {
+			f.scale = num(kv.second, key, Rule::Unit);
+		} else {
+			throw VehicleError(key, "unknown key '" + key + "' (known: rotor, at_s, scale)");
+		}
+	}
+	if (!have_rotor || !have_t)
+		throw VehicleError(k, std::string("key 'rotor_failure' needs '") + (have_rotor ? "at_s" : "rotor") + "'");
+	return f;
+}
+
 } // namespace
 
 void vehicle_from_json(const std::string &text, VehicleParams &p)
@@ -181,6 +232,14 @@ void vehicle_from_json(const std::string &text, VehicleParams &p)
 				q.origin_shift_s.push_back(ts);
 			}
 			std::sort(q.origin_shift_s.begin(), q.origin_shift_s.end());
+		}
+		else if (k == "rotor_failure") {
+			q.rotor_failures.clear();
+			if (v.kind == json::Value::Kind::Array)
+				for (const auto &e : v.arr)
+					q.rotor_failures.push_back(rotor_failure(e));
+			else
+				q.rotor_failures.push_back(rotor_failure(v));
 		}
 		else if (k == "noise") {
 			if (v.kind != json::Value::Kind::Object)

@@ -54,6 +54,16 @@ enum SensorBits : unsigned {
 // with the offending word in `bad` for an unknown one or an empty list.
 bool sensors_parse(const std::string &list, unsigned &bits, std::string &bad);
 
+// A rotor that fails in flight (octo-sim --fail-rotor, vehicle key `rotor_failure`): from
+// plant time at_s on, rotor `rotor` (0-based) gives `scale` of a nominal rotor's thrust and
+// torque, in place of its rotor_scale. The motor loses power, so its speed falls with it:
+// to sqrt(scale) of the speed its throttle asks (thrust goes with speed^2).
+struct RotorFailure {
+	int rotor = 0;          // 0-based
+	double at_s = 0;        // plant time, s
+	double scale = 0;       // remaining effectiveness, [0, 1]
+};
+
 struct VehicleParams {
 	double mass = 2.132;        // kg
 	double g = 9.796;           // m/s^2
@@ -79,6 +89,12 @@ struct VehicleParams {
 	// Plant times (s, ascending) at which the OpenGL local origin moves, as X-Plane's
 	// scenery shifts do (xplane_emit.hpp: xp_origin_offset).
 	std::vector<double> origin_shift_s;
+	std::vector<RotorFailure> rotor_failures;   // in the order given (the last due one wins)
+
+	// Rotor j's effectiveness at plant time `clock` (rotor_scale, or a failure's scale once
+	// it is due), and the failure's factor alone (1 before any failure of rotor j).
+	double rotor_effect(int j, double clock) const;
+	double failure_factor(int j, double clock) const;
 
 	double hover_throttle() const { return mass * g / (kRotors * kf); }
 	// Resolved noise sigmas (defaults relative to hover).

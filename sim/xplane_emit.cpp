@@ -145,7 +145,7 @@ void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint6
 		f.thrust_n[j] = o.thrust[j] + st * rng.gauss();
 		f.torque_nm[j] = std::fabs(o.torque[j]) + sq * rng.gauss();
 		f.torque_abs_nm[j] = std::fabs(o.torque[j]);
-		f.rpm_true[j] = rotor_speed(p, x.s[j], m.t()) * (60.0 / (2 * M_PI));
+		f.rpm_true[j] = rotor_speed(p, x.s[j], m.t()) * std::sqrt(p.failure_factor(j, m.clock())) * (60.0 / (2 * M_PI));
 		f.rpm[j] = dshot_rpm(f.rpm_true[j] + p.noise.rpm * esc.gauss(), p.esc_pole_pairs);
 		f.torque_nm[j] += p.esc_kt * (p.esc_current_offset + p.noise.current * esc.gauss());
 	}

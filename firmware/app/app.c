@@ -257,8 +257,11 @@ static void sync_params(struct app *a)
 					    p->mot_scale5, p->mot_scale6, p->mot_scale7, p->mot_scale8};
 	struct mixer_params mp;
 	mixer_default_params(&mp);
-	for (int j = 0; j < MIXER_N_ROTORS; j++)
+	for (int j = 0; j < MIXER_N_ROTORS; j++) {
 		mp.scale[j] = sc_from_float(scale[j]);
+		if (!(scale[j] > 0.0f))   /* 0: a failed rotor, left out of the allocation */
+			mp.rotor_mask &= (uint8_t)~(1u << j);
+	}
 	mp.arm_l_m = sc_from_float(p->veh_arm_l);
 	mp.k_f_n = sc_from_float(p->veh_kf);
 	mp.k_tau_nm = sc_from_float(p->veh_ktau);
@@ -271,6 +274,7 @@ static void sync_params(struct app *a)
 	for (int j = 0; j < THRMAP_ROTORS; j++)
 		tp.scale[j] = sc_from_float(scale[j]);
 	thrmap_init(&a->map, &tp);
+	rotor_guard_sync(&a->rf, p);
 	envelope_model_sync(a);
 }
 
@@ -300,6 +304,7 @@ void app_init(struct app *a, const struct hal *hal)
 		hal_reportf(a->hal, "params: %s (defaults in use)", why);
 	envelope_init(a);
 	a->exp.mix = &a->mix;   /* the inertia phases take the body torque through the mixer's Gamma */
+	rotor_guard_init(&a->rf);
 	sync_params(a);
 	a->params_dirty = false;
 	a->mode = APP_DISARMED;
@@ -976,6 +981,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 			dt = app_f_lt(MAX_DT_S, gap) ? MAX_DT_S : gap;
 			a->n_prev = f->frame_n;
 			a->have_step = true;
+			rotor_guard_step(a, dt);   /* a failed rotor: its scale set, the vehicle told to land */
 			/* After frames missing the controllers were out of the loop (their last
 			 * command held): they take one frame period, not the gap, so that their
 			 * integrators do not wind up over time they could not act in. */
@@ -1016,6 +1022,7 @@ struct app_view app_view(const struct app *a)
 		.est = a->exp.est,
 		.est_sd = a->exp.est_sd,
 		.id_run = &a->id_run,
+		.rotor_failed = rotor_guard_failed(&a->rf),
 	};
 }
 

@@ -41,6 +41,7 @@
 #include "outbox.h"
 #include "params.h"
 #include "pos_ctrl.h"
+#include "rotor_fail.h"
 #include "thrmap.h"
 
 #define DEG_F 0.017453292519943295f   /* rad per degree */
@@ -119,6 +120,7 @@ struct app {
 	struct mixer mix;
 	struct thrmap map;
 	struct mixer_output mix_out;
+	struct rotor_fail rf;         /* a failed rotor, found from the rotors' outputs (rotor_guard.h) */
 	float wrench_dem[4];
 	uint32_t thr_clamped;
 
@@ -150,6 +152,19 @@ static inline const struct hal_sensor_frame *app_in(const struct app *a) { retur
 static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr; }
 #endif
 
+/* A failed rotor (rotor_guard.c; the detector is core/rotor_fail.h): once a frame before the
+ * step the detector is fed the last step's throttles and what the frame measured of the
+ * rotors; on a detection the rotor's MOT_SCALEj becomes the detected effectiveness (0: left
+ * out of the allocation) and the mixer is rebuilt before the next step, an experiment in
+ * progress stops with the rotor named, a critical status line says so, and after the
+ * detector's hold the vehicle lands. rotor_guard_sync gives the detector the rotor model
+ * from the parameters (with the mixer's, between frames); rotor_guard_failed: a rotor is
+ * known failed (its scale 0, or found failed and not set anew). */
+void rotor_guard_init(struct rotor_fail *rf);
+void rotor_guard_sync(struct rotor_fail *rf, const struct app_params *p);
+void rotor_guard_step(struct app *a, float dt);
+bool rotor_guard_failed(const struct rotor_fail *rf);
+
 void app_init(struct app *a, const struct hal *hal);
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f);
 void app_tick(struct app *a);
@@ -174,6 +189,7 @@ struct app_view {
 	const char (*est_name)[11];
 	const float *est, *est_sd;
 	const struct app_id_run *id_run;      /* the last identification run's results */
+	bool rotor_failed;                    /* a rotor has failed (rotor_guard.h) */
 };
 struct app_view app_view(const struct app *a);
 static inline const struct app_params *app_params(const struct app *a) { return &a->p; }

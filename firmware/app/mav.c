@@ -77,7 +77,7 @@ static struct mav_telem_in telem_in(const struct mav *m, const struct app_view *
 	for (int j = 0; j < HAL_ROTORS; j++)
 		thr += v->thr[j] / (float)HAL_ROTORS;
 	return (struct mav_telem_in){boot_ms(m), v->fr, v->frames_ok, v->armed, v->frames_ok, (uint32_t)v->mode,
-				     thr, MAV_SYSID, MAV_COMPID, CHAN, m};
+				     thr, MAV_SYSID, MAV_COMPID, CHAN, m, v->rotor_failed};
 }
 
 static struct mav_ftp_link ftp_link(const struct mav *m, const mavlink_message_t *req)

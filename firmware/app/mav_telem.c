@@ -486,6 +486,8 @@ void mav_telem_sensors(const struct mav_telem_in *in, uint32_t *present, uint32_
 			h |= gps;
 		if (in->armable)
 			h |= MAV_SYS_STATUS_PREARM_CHECK;
+		if (in->rotor_failed)
+			h &= ~(uint32_t)MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS;
 	}
 	/* no geofence: not present, never breached (a clear health bit reads as a breach) */
 	*health = h | MAV_SYS_STATUS_GEOFENCE;

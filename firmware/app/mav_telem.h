@@ -40,6 +40,7 @@ struct mav_telem_in {
 	float throttle;                     /* mean rotor throttle, 0..1 */
 	uint8_t sysid, compid, chan;
 	const void *ctx;                    /* handed back to the send callback */
+	bool rotor_failed;                  /* a rotor has failed: motor outputs unhealthy */
 };
 
 struct mav_telem {

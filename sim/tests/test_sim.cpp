@@ -13,6 +13,7 @@
 #include "actuator.hpp"
 #include "json.hpp"
 #include "model.hpp"
+#include "options.hpp"
 #include "vehicle.hpp"
 #include "rng.hpp"
 #include "sensors.hpp"
@@ -294,6 +295,82 @@ TEST(rotor_scale_curve_and_drift)
 	CHECK(std::fabs(o.thrust[0] - p.kf * 0.97 * g) < 1e-12, "thrust %g", o.thrust[0]);
 	CHECK(std::fabs(o.thrust[3] - 0.5 * p.kf * 0.97 * g) < 1e-12, "thrust %g", o.thrust[3]);
 	CHECK(std::fabs(o.torque[1] + p.ktau * 0.97 * g) < 1e-12, "torque %g", o.torque[1]);
+}
+
+// A rotor failure: from its plant time on, the rotor gives S of its thrust and torque (the
+// others unchanged), its speed falls to sqrt(S); the integration step is cut at the time.
+TEST(rotor_failure_cuts_thrust_torque_and_speed)
+{
+	VehicleParams p = ideal();
+	p.rotor_failures.push_back(RotorFailure{2, 0.5, 0.25});
+	Model m(p);
+	m.set_clock_start(0.25);   // the failure is due at plant time 0.5: model time 0.25
+	BodyState x;
+	x.r.z() = 10.0;
+	x.s = all(0.3);
+	m.set_state(x, 0.0);
+	m.command(all(0.3));
+	RotorOutputs o0 = m.rotor_outputs(m.state(), 0.2);
+	RotorOutputs o1 = m.rotor_outputs(m.state(), 0.3);
+	CHECK(std::fabs(o0.thrust[2] - p.kf * 0.3) < 1e-12, "before: %g", o0.thrust[2]);
+	CHECK(std::fabs(o1.thrust[2] - 0.25 * p.kf * 0.3) < 1e-12, "after: %g", o1.thrust[2]);
+	CHECK(std::fabs(o1.torque[2] - 0.25 * p.ktau * 0.3) < 1e-12, "torque after: %g", o1.torque[2]);
+	CHECK(o1.thrust[1] == o0.thrust[1] && o1.thrust[3] == o0.thrust[3], "others unchanged");
+	CHECK(p.failure_factor(2, 0.49) == 1.0 && p.failure_factor(2, 0.5) == 0.25 && p.failure_factor(1, 9) == 1.0,
+	      "factor");
+	// exact integration across the failure: a roll torque appears at model time 0.25 exactly
+	m.set_h_max(0.1);
+	m.advance_to(0.25);
+	CHECK(m.state().w.norm() < 1e-12, "no rate before the failure: %g", m.state().w.norm());
+	m.advance_to(0.3);
+	CHECK(m.state().w.norm() > 1e-3, "a rate after it: %g", m.state().w.norm());
+	// the measured speed and the truth's scale
+	XpFrame f = xp_measure(m, all(0.3), 1, 1);
+	CHECK(std::fabs(f.rpm_true[2] / f.rpm_true[0] - 0.5) < 1e-9, "speed ratio %g", f.rpm_true[2] / f.rpm_true[0]);
+	CHECK(p.rotor_effect(2, 0.6) == 0.25 && p.rotor_effect(0, 0.6) == 1.0, "effect");
+}
+
+// --fail-rotor J@T[:S] and the vehicle key rotor_failure (one object or a list); bad values
+// are refused (exit 2).
+TEST(fail_rotor_flag_and_key)
+{
+	auto parse = [](std::vector<std::string> args, Options &o) {
+		std::vector<char *> argv;
+		static char prog[] = "octo-sim";
+		argv.push_back(prog);
+		for (auto &a : args)
+			argv.push_back(&a[0]);
+		return parse_options(static_cast<int>(argv.size()), argv.data(), o);
+	};
+	Options o;
+	CHECK(parse({"--fail-rotor", "3@12.5", "--fail-rotor", "8@20:0.4"}, o) == -1, "parsed");
+	const auto &f = o.vehicle.rotor_failures;
+	CHECK(f.size() == 2 && f[0].rotor == 2 && f[0].at_s == 12.5 && f[0].scale == 0 && f[1].rotor == 7 &&
+	          f[1].at_s == 20 && f[1].scale == 0.4,
+	      "values");
+	for (const char *bad : {"0@1", "9@1", "x@1", "3", "3@", "3@-1", "3@1:1.5", "3@1:-0.1", "3@1:", "3@nan"}) {
+		Options q;
+		std::fprintf(stderr, "  (expected) ");
+		CHECK(parse({"--fail-rotor", bad}, q) == 2, "%s accepted", bad);
+	}
+	VehicleParams p;
+	vehicle_from_json(R"({"rotor_failure": {"rotor": 4, "at_s": 3, "scale": 0.2}})", p);
+	CHECK(p.rotor_failures.size() == 1 && p.rotor_failures[0].rotor == 3 && p.rotor_failures[0].scale == 0.2, "key");
+	vehicle_from_json(R"({"rotor_failure": [{"rotor": 1, "at_s": 3}, {"rotor": 2, "at_s": 4, "scale": 1}]})", p);
+	CHECK(p.rotor_failures.size() == 2 && p.rotor_failures[0].scale == 0 && p.rotor_failures[1].rotor == 1, "list");
+	for (const char *bad : {R"({"rotor_failure": {"rotor": 9, "at_s": 1}})", R"({"rotor_failure": {"rotor": 1.5, "at_s": 1}})",
+	                        R"({"rotor_failure": {"at_s": 1}})", R"({"rotor_failure": {"rotor": 1}})",
+	                        R"({"rotor_failure": {"rotor": 1, "at_s": 1, "scale": 2}})",
+	                        R"({"rotor_failure": {"rotor": 1, "at_s": 1, "x": 2}})", R"({"rotor_failure": 3})"}) {
+		std::string key;
+		try {
+			VehicleParams q;
+			vehicle_from_json(bad, q);
+		} catch (const VehicleError &e) {
+			key = e.key;
+		}
+		CHECK(key.rfind("rotor_failure", 0) == 0, "%s: key '%s'", bad, key.c_str());
+	}
 }
 
 TEST(command_clamps_and_rejects_nan)
