@@ -398,6 +398,8 @@ def replay_command(out, res_index, seed, spec, faults, params, build="float", se
     in DIR/missions/NNNN/)."""
     d = Path(out) / "missions" / f"{res_index:04d}"
     cmd = ["octo-gcs", "mission", "--vehicle", str(d / "vehicle.json"), "--seed", str(seed)]
+    if spec.get("plant") == "in-process":
+        cmd.append("--in-process")  # octo-sil: the same bytes as the campaign's mission
     if build == "fixed":
         cmd.append("--fixed")
     if sensors:

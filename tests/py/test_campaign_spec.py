@@ -241,6 +241,8 @@ def test_build_and_sensors_reach_the_missions_options_columns_and_replay(tmp_pat
     cmd = campaign.replay_command(tmp_path, 3, 8, s, {}, {}, "fixed", ["imu", "rpm"])
     assert "--fixed" in cmd and "--sensors imu,rpm" in cmd
     assert "--fixed" not in campaign.replay_command(tmp_path, 3, 8, s, {}, {})
+    assert "--in-process" in cmd and "--in-process" not in campaign.replay_command(
+        tmp_path, 3, 8, dict(s, plant="udp"), {}, {})
 
 
 def test_builds_spec_validates_and_flies_the_default_vehicles_on_both_builds():

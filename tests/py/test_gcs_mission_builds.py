@@ -95,12 +95,3 @@ def test_start_time_and_origin_shift_reach_the_plant(tmp_path):
     said = (out / "octo-sil.log").read_text()
     assert said.count("Plant moved its local origin") == 1, said[-2000:]
 
-
-def test_fixed_build_flies_the_mission_over_udp(tmp_path):
-    out = tmp_path / "out"
-    r = gcs("mission", "--fixed", "--out", out, "--no-plots")
-    assert r.returncode == 0, r.stdout[-3000:] + r.stderr
-    assert "+ octo-fw-fixed from" in r.stdout.splitlines()[0]
-    rep = report(out)
-    assert rep["pass"] and rep["run"]["build"] == "fixed" and rep["run"]["plant"] == "octo-sim lockstep"
-    assert all(rep["parameters"][k]["accepted"] for k in ESTIMATES)
