@@ -148,7 +148,7 @@ def fly(opts, staged, prog):
     if rc != 0:
         text = (stage / "octo-sil.log").read_text(errors="replace")
         lines = [ln for ln in text.splitlines() if ln.startswith("octo-sil")]
-        why = next((ln for ln in lines if "step" in ln or "not completed" in ln), None)
+        why = next((ln for ln in lines if "mission step" in ln or "not completed" in ln), None)
         raise GcsError(
             f"{sil_program(opts)} exited with status {rc}: " + (why or "\n".join(text.splitlines()[-12:]))
         )
