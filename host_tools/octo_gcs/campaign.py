@@ -84,6 +84,8 @@ def mission_options(job, tmp):
         experiments=list(job["experiments"]),
         params=dict(job["params"]),
         faults=dict(job["faults"]),
+        build=job.get("build", "float"),
+        sensors=job.get("sensors"),
     )
 
 
@@ -289,7 +291,7 @@ def warm_up():
 
 # ---------------------------------------------------------------- results.csv
 def csv_columns(spec):
-    draw_cols = [path for path, *_ in campaign_spec._walk(spec)]
+    draw_cols = list(campaign_spec.draws(spec, 0))  # build, sensors, then every value of the spec
     cols = ["index", "seed", "status", "reason", "wall_s", "host"] + draw_cols
     for q in QUANTITIES:
         cols += [f"{q}_truth", f"{q}_estimate", f"{q}_sd", f"{q}_error_pct", f"{q}_accepted"]
@@ -391,11 +393,17 @@ def mission_has_in_process(cmd):
     return "--in-process" in p.stdout
 
 
-def replay_command(out, res_index, seed, spec, faults, params):
+def replay_command(out, res_index, seed, spec, faults, params, build="float", sensors=None):
     """The one `octo-gcs mission` line that flies mission `res_index` again (its vehicle file is
     in DIR/missions/NNNN/)."""
     d = Path(out) / "missions" / f"{res_index:04d}"
     cmd = ["octo-gcs", "mission", "--vehicle", str(d / "vehicle.json"), "--seed", str(seed)]
+    if spec.get("plant") == "in-process":
+        cmd.append("--in-process")  # octo-sil: the same bytes as the campaign's mission
+    if build == "fixed":
+        cmd.append("--fixed")
+    if sensors:
+        cmd += ["--sensors", ",".join(sensors)]
     if spec["experiments"] != [6]:
         cmd += ["--experiments", ",".join(map(str, spec["experiments"])) or "none"]
     for name, value in sorted(params.items()):
@@ -575,9 +583,11 @@ def _jobs(spec, todo, in_process, override):
     inputs, jobs = {}, []
     for i in todo:
         seed, d, vehicle, faults, params = campaign_spec.mission_inputs(spec, i)
+        w = campaign_spec.words(spec, i)
         inputs[i] = d
         jobs.append({
             "index": i, "seed": seed, "vehicle": vehicle, "faults": faults, "params": params,
+            "build": w["build"], "sensors": w["sensors"],
             "experiments": spec["experiments"], "timeout": float(spec["timeout"]),
             "in_process": in_process, "mission_cmd": override,
             # octo-gcs's own in-process mission runs inside the worker's Python process
@@ -681,7 +691,8 @@ def _record(out, rf, res, j, inputs, prog, spec, stats, n_jobs):
 
 def _replay(out, spec, idx, seed):
     _seed, _d, _vehicle, faults, params = campaign_spec.mission_inputs(spec, idx)
-    return replay_command(out, idx, seed, spec, faults, params)
+    w = campaign_spec.words(spec, idx)
+    return replay_command(out, idx, seed, spec, faults, params, w["build"], w["sensors"])
 
 
 def _keep_mission(out, res, job):

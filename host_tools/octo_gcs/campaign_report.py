@@ -16,6 +16,7 @@ from collections import Counter
 
 from .atomicfile import atomic_write
 from .campaign_spec import expect_key
+from .id_results import source_words
 from .quantities import KEYS as QUANTITIES
 from .quantities import LABELS as LABEL
 
@@ -105,6 +106,38 @@ def analyse(spec, rows):
 def sources(rows):
     """{source: missions} of the missions that ran (the measurements their estimates rest on)."""
     return dict(Counter(r.get("source") or "not stated" for r in rows if r["status"] in RAN).most_common())
+
+
+def counts(rows, column):
+    """{value: missions} of a column of results.csv ("build", "sensors"), most common first."""
+    return dict(Counter(r.get(column) or "-" for r in rows).most_common())
+
+
+def groups(spec, rows):
+    """The error table of each (build, sensors) the missions flew, when they flew more than one:
+    [{"build", "sensors", "missions", "ran", "table": {quantity: statistics}}]."""
+    keys = sorted({(r.get("build") or "float", r.get("sensors") or "all") for r in rows})
+    if len(keys) < 2:
+        return []
+    out = []
+    for b, sens in keys:
+        sub = [r for r in rows if (r.get("build") or "float", r.get("sensors") or "all") == (b, sens)]
+        ran, per, silently, _failures = analyse(spec, sub)
+        out.append(
+            {
+                "build": b,
+                "sensors": sens,
+                "missions": len(sub),
+                "ran": len(ran),
+                "silently_wrong": len(silently),
+                "sources": sources(sub),
+                "_per": per,
+                "parameters": {
+                    q: {k: v for k, v in p.items() if not k.startswith("_")} for q, p in per.items()
+                },
+            }
+        )
+    return out
 
 
 def _score(row, spec, only=None):
@@ -255,6 +288,7 @@ def write(out, spec, rows, columns, throughput, replay):
     walls = [_f(r["wall_s"]) for r in rows if _f(r["wall_s"]) is not None]
     throughput = dict(throughput, mission_wall_s_mean=statistics.fmean(walls) if walls else None)
     figs = figures(out, per)
+    by_group = groups(spec, rows)
     doc = {
         "name": spec["name"],
         "missions": spec["missions"],
@@ -269,6 +303,9 @@ def write(out, spec, rows, columns, throughput, replay):
         "not_ran": not_ran,
         "expect": expect,
         "sources": sources(rows),
+        "builds": counts(rows, "build"),
+        "sensors": counts(rows, "sensors"),
+        "by_build_and_sensors": [{k: v for k, v in g.items() if not k.startswith("_")} for g in by_group],
         "throughput": throughput,
         "all_ran": all_ran,
         "ok": ok,
@@ -276,7 +313,7 @@ def write(out, spec, rows, columns, throughput, replay):
         "spec": spec,
     }
     atomic_write(out / "campaign.json", json.dumps(doc, indent=1) + "\n")
-    md = markdown(doc, per)
+    md = markdown(doc, per, by_group)
     atomic_write(out / "campaign.md", md)
     lines = summary_lines(doc, per, out)
     return {"ok": ok, "lines": lines, "doc": doc}
@@ -321,7 +358,7 @@ def _md_table(head, rows):
     return out
 
 
-def markdown(doc, per):
+def markdown(doc, per, by_group=()):
     t = doc["throughput"]
     L = [
         f"# Campaign {doc['name']}",
@@ -341,7 +378,39 @@ def markdown(doc, per):
         "",
     ]
     if doc.get("sources"):
-        L += ["Estimated from: " + ", ".join(f"{src} ({n})" for src, n in doc["sources"].items()) + ".", ""]
+        L += [
+            "Estimated from: "
+            + ", ".join(
+                f"{source_words(src) if src != 'not stated' else src} ({n})"
+                for src, n in doc["sources"].items()
+            )
+            + ".",
+            "",
+        ]
+    if doc.get("builds"):
+        L += [
+            "Firmware builds: "
+            + ", ".join(f"{b} ({n})" for b, n in doc["builds"].items())
+            + "; sensors served: "
+            + ", ".join(f"{x} ({n})" for x, n in doc.get("sensors", {}).items())
+            + ".",
+            "",
+        ]
+    if by_group:
+        L += ["## By build and sensors", ""]
+    for g in by_group:
+        src = ", ".join(
+            f"{source_words(x) if x != 'not stated' else x} ({n})" for x, n in g["sources"].items()
+        )
+        L += [
+            f"### Build {g['build']}, sensors {g['sensors']}",
+            "",
+            f"{g['missions']} missions, {g['ran']} ran to a report, {g['silently_wrong']} silently wrong; "
+            f"estimated from: {src or 'none'}.",
+            "",
+        ]
+        L += _md_table(*table(g["_per"]))
+        L += [""]
     L += ["## Acceptance and rejection reasons", ""]
     for q, p in per.items():
         rs = ", ".join(f"{why} ({n})" for why, n in p["rejection_reasons"].items()) or "none"

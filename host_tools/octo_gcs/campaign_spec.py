@@ -7,14 +7,20 @@ A spec is one JSON object::
                  "noise": {"gyro": {"uniform": [0.005, 0.025]}}},
      "faults": {"drop": {"choice": [0, 0.02]}},
      "params": {"ID_INR_TIME": 20},
-     "experiments": [6], "plant": "in-process", "timeout": 600, "retries": 2,
+     "experiments": [6], "plant": "in-process", "build": {"choice": ["float", "fixed"]},
+     "sensors": "imu,rpm", "timeout": 600, "retries": 2,
      "tolerance_pct": {"kf": 0.3}, "expect": {"k_f_error_pct": 0.3, "silently_wrong": 0}}
 
 A value is a number or a draw: ``{"uniform": [lo, hi]}``, ``{"loguniform": [lo, hi]}`` (0 < lo),
 ``{"normal": [mean, sd]}`` or ``{"choice": [v1, v2, ...]}``. Mission i (0-based) flies with seed
 ``seed + i``; every drawn value comes from its own generator seeded by (seed, i, the value's path),
 so a mission's draws depend on the spec alone, not on the order in which missions run, nor on
-which other keys the spec draws.
+which other keys the spec draws: two specs that differ only in ``build`` or ``sensors`` fly the
+same vehicles, mission by mission.
+
+``build`` ("float" or "fixed", the firmware's arithmetic) and ``sensors`` (what the plant serves:
+a list such as ``["imu", "rpm"]`` or the text ``"imu,rpm"``; absent: all) are words, fixed or
+drawn with ``{"choice": [...]}``; so is the vehicle's own ``sensors`` list.
 
 Validation happens before anything runs; every error names the key (``vehicle.inertia[1]``).
 """
@@ -26,7 +32,7 @@ import zlib
 
 import numpy as np
 
-from .mission.options import FAULTS
+from .mission.options import BUILDS, FAULTS, SENSORS
 from .quantities import KEYS as QUANTITIES
 from .vehiclefile import DEFAULTS as VEHICLE_DEFAULTS
 
@@ -43,9 +49,32 @@ VEHICLE_SCALARS = (
     "delay",
     "thrust_curve",
     "kf_drift_per_min",
+    "imu_scale",
+    "rpm_max",
+    "esc_pole_pairs",
+    "esc_kt",
+    "esc_current_offset",
 )
+VEHICLE_INTEGERS = ("esc_pole_pairs",)
 VEHICLE_LISTS = {"inertia": 3, "rotor_scale": 8, "origin": 3}
-NOISE_KEYS = ("thrust", "torque", "gyro", "attitude_deg", "position")
+# lists of any length (at least one value): plant times of an origin shift
+VEHICLE_VARLISTS = {"origin_shift_s": (0, 1e9, True)}
+NOISE_KEYS = ("thrust", "torque", "gyro", "attitude_deg", "position", "accel", "rpm", "current")
+# the vehicle's objects of numbers: their keys and ranges (vibration.harmonics: a list of 1 to 4)
+VEHICLE_OBJECTS = {
+    "noise": {k: (0, None, True) for k in NOISE_KEYS},
+    "imu_bias": {k: (0, None, True) for k in ("accel", "gyro", "accel_walk", "gyro_walk")},
+    "vibration": {
+        "accel": (0, None, True),
+        "gyro": (0, None, True),
+        "harmonics": (0, None, True),
+        "cutoff_hz": (0, None, False),
+        "sample_hz": (100, 32000, True),
+    },
+}
+HARMONICS_MAX = 4
+# octo-sim's defaults that a cross-check needs (vibration.cutoff_hz < 0.45 vibration.sample_hz)
+VIBRATION_DEFAULTS = {"cutoff_hz": 30.0, "sample_hz": 1000.0}
 # the range octo-sim accepts for a vehicle value (checked on the spec's bounds and on every draw)
 VEHICLE_RANGE = {
     "mass": (0, None, False),
@@ -60,6 +89,11 @@ VEHICLE_RANGE = {
     "rotor_scale": (0, None, True),
     "kf_drift_per_min": (None, None, True),
     "origin": (None, None, True),
+    "imu_scale": (0, 0.2, True),
+    "rpm_max": (0, None, False),
+    "esc_pole_pairs": (1, 64, True),
+    "esc_kt": (0, None, False),
+    "esc_current_offset": (None, None, True),
 }
 
 TOP_KEYS = (
@@ -71,6 +105,8 @@ TOP_KEYS = (
     "params",
     "experiments",
     "plant",
+    "build",
+    "sensors",
     "timeout",
     "retries",
     "tolerance_pct",
@@ -162,20 +198,83 @@ def _walk(spec):
     out = []
     veh = spec.get("vehicle", {})
     for k in sorted(veh):
-        if k in VEHICLE_LISTS:
+        if k == "sensors":
+            continue  # a word: _words
+        if k in VEHICLE_LISTS or k in VEHICLE_VARLISTS:
+            rng = VEHICLE_RANGE.get(k) or VEHICLE_VARLISTS[k]
             for j, x in enumerate(veh[k]):
-                out.append((f"vehicle.{k}[{j}]", x, VEHICLE_RANGE[k], False, ("vehicle", k, j)))
-        elif k == "noise":
+                out.append((f"vehicle.{k}[{j}]", x, rng, False, ("vehicle", k, j)))
+        elif k in VEHICLE_OBJECTS:
             for nk in sorted(veh[k]):
-                out.append((f"vehicle.noise.{nk}", veh[k][nk], (0, None, True), False, ("vehicle", k, nk)))
+                rng = VEHICLE_OBJECTS[k][nk]
+                if k == "vibration" and nk == "harmonics":
+                    for j, x in enumerate(veh[k][nk]):
+                        out.append((f"vehicle.{k}.{nk}[{j}]", x, rng, False, ("vehicle", k, (nk, j))))
+                else:
+                    out.append((f"vehicle.{k}.{nk}", veh[k][nk], rng, False, ("vehicle", k, nk)))
         else:
-            out.append((f"vehicle.{k}", veh[k], VEHICLE_RANGE[k], False, ("vehicle", k, None)))
+            integer = k in VEHICLE_INTEGERS
+            out.append((f"vehicle.{k}", veh[k], VEHICLE_RANGE[k], integer, ("vehicle", k, None)))
     for k in sorted(spec.get("faults", {})):
         _flag, integer, lo, hi = FAULTS[k]
         out.append((f"faults.{k}", spec["faults"][k], (lo, hi, True), integer, ("faults", k)))
     for k in sorted(spec.get("params", {})):
         out.append((f"params.{k}", spec["params"][k], None, False, ("params", k)))
     return out
+
+
+def _build_word(path, v):
+    if v not in BUILDS:
+        raise SpecError(f"{path}: {json.dumps(v)} is not a build (known: {', '.join(BUILDS)})")
+    return v
+
+
+def _sensors_word(path, v):
+    """The sensor names of a list or a comma-separated text, in SENSORS' order."""
+    names = v.split(",") if isinstance(v, str) else v
+    if not isinstance(names, list) or not names or not all(isinstance(x, str) for x in names):
+        raise SpecError(
+            f'{path}: must be a list of sensors such as ["imu", "rpm"] or a text "imu,rpm", not {json.dumps(v)}'
+        )
+    for x in names:
+        if x.strip() not in SENSORS:
+            raise SpecError(f"{path}: unknown sensor {json.dumps(x)} (known: {', '.join(SENSORS)})")
+    chosen = {x.strip() for x in names}
+    return [x for x in SENSORS if x in chosen]
+
+
+def _check_word(path, v, word):
+    """A word (checked by word(path, v)) or {"choice": [words]}."""
+    if isinstance(v, dict):
+        if set(v) != {"choice"}:
+            raise SpecError(f'{path}: a value or {{"choice": [...]}}, not {json.dumps(v)}')
+        a = v["choice"]
+        if not isinstance(a, list) or not a:
+            raise SpecError(f"{path}.choice: must be a non-empty list")
+        for j, x in enumerate(a):
+            word(f"{path}.choice[{j}]", x)
+        return
+    word(path, v)
+
+
+def _check_vibration(vib):
+    """octo-sim's cross-check: vibration.cutoff_hz < 0.45 vibration.sample_hz, on the bounds
+    (a draw's every value is checked by check_all_draws)."""
+
+    def bounds(key):
+        v = vib.get(key, VIBRATION_DEFAULTS[key])
+        if _is_num(v):
+            return v, v
+        ((dist, a),) = v.items()
+        return (min(a), max(a)) if dist != "normal" else (None, None)
+
+    cut_hi = bounds("cutoff_hz")[1]
+    rate_lo = bounds("sample_hz")[0]
+    if cut_hi is not None and rate_lo is not None and not cut_hi < 0.45 * rate_lo:
+        raise SpecError(
+            f"vehicle.vibration.cutoff_hz: {cut_hi:g} is out of range (must be < 0.45 vibration.sample_hz "
+            f"= {0.45 * rate_lo:g} Hz)"
+        )
 
 
 def validate(spec):
@@ -202,18 +301,31 @@ def validate(spec):
         if not isinstance(s[k], dict):
             raise SpecError(f"{k}: must be an object")
     for k, v in s["vehicle"].items():
-        if k == "noise":
+        if k in VEHICLE_OBJECTS:
+            names = VEHICLE_OBJECTS[k]
             if not isinstance(v, dict):
-                raise SpecError("vehicle.noise: must be an object of numbers or draws")
+                raise SpecError(f"vehicle.{k}: must be an object of numbers or draws")
             for nk in v:
-                if nk not in NOISE_KEYS:
-                    raise SpecError(f"vehicle.noise: unknown key '{nk}' (known: {', '.join(NOISE_KEYS)})")
+                if nk not in names:
+                    raise SpecError(f"vehicle.{k}: unknown key '{nk}' (known: {', '.join(names)})")
+            h = v.get("harmonics", []) if k == "vibration" else []
+            if not isinstance(h, list) or ("harmonics" in v and not 1 <= len(h) <= HARMONICS_MAX):
+                raise SpecError(
+                    f"vehicle.vibration.harmonics: must be a list of 1 to {HARMONICS_MAX} numbers or draws"
+                )
         elif k in VEHICLE_LISTS:
             if not isinstance(v, list) or len(v) != VEHICLE_LISTS[k]:
                 raise SpecError(f"vehicle.{k}: must be a list of {VEHICLE_LISTS[k]} numbers or draws")
+        elif k in VEHICLE_VARLISTS:
+            if not isinstance(v, list) or not v:
+                raise SpecError(f"vehicle.{k}: must be a non-empty list of numbers or draws")
+        elif k == "sensors":
+            _check_word("vehicle.sensors", v, _sensors_word)
         elif k not in VEHICLE_SCALARS:
-            known = sorted(set(VEHICLE_SCALARS) | set(VEHICLE_LISTS) | {"noise"})
-            raise SpecError(f"vehicle: unknown key '{k}' (known: {', '.join(known)})")
+            known = sorted(
+                set(VEHICLE_SCALARS) | set(VEHICLE_LISTS) | set(VEHICLE_VARLISTS) | set(VEHICLE_OBJECTS)
+            )
+            raise SpecError(f"vehicle: unknown key '{k}' (known: {', '.join(known + ['sensors'])})")
     for k in s["faults"]:
         if k not in FAULTS:
             raise SpecError(f"faults: unknown key '{k}' (known: {', '.join(FAULTS)})")
@@ -229,6 +341,8 @@ def validate(spec):
             )
     for path, v, rng, integer, _t in _walk(s):
         _check_value(path, v, rng, integer)
+    if "vibration" in s["vehicle"]:
+        _check_vibration(s["vehicle"]["vibration"])
     s.setdefault("experiments", [6])
     e = s["experiments"]
     if not isinstance(e, list) or not all(
@@ -240,6 +354,10 @@ def validate(spec):
     s.setdefault("plant", "in-process")
     if s["plant"] not in ("in-process", "udp"):
         raise SpecError(f'plant: must be "in-process" or "udp", not {json.dumps(s["plant"])}')
+    s.setdefault("build", "float")
+    _check_word("build", s["build"], _build_word)
+    if "sensors" in s:
+        _check_word("sensors", s["sensors"], _sensors_word)
     s.setdefault("timeout", 600)
     if not _is_num(s["timeout"]) or s["timeout"] <= 0:
         raise SpecError(f"timeout: must be a positive number of seconds, not {json.dumps(s['timeout'])}")
@@ -321,12 +439,53 @@ def _draw(path, v, rng_bounds, integer, gen):
     return x
 
 
-def draws(spec, index):
-    """Mission `index`'s values: {path: value} for every value of the spec (drawn or fixed)."""
+def _draw_word(spec, index, path, v, word):
+    if isinstance(v, dict):
+        a = v["choice"]
+        v = a[int(_generator(spec["seed"], index, path).integers(len(a)))]
+    return word(path, v)
+
+
+def words(spec, index):
+    """Mission `index`'s words: {"build": "float" | "fixed", "sensors": [names] or None (the spec
+    does not say: the plant's default, or the vehicle's list), "vehicle.sensors": [names] or None}."""
+    veh = spec.get("vehicle", {})
     return {
-        path: _draw(path, v, rng, integer, _generator(spec["seed"], index, path))
-        for path, v, rng, integer, _t in _walk(spec)
+        "build": _draw_word(spec, index, "build", spec.get("build", "float"), _build_word),
+        "sensors": _draw_word(spec, index, "sensors", spec["sensors"], _sensors_word)
+        if "sensors" in spec
+        else None,
+        "vehicle.sensors": _draw_word(spec, index, "vehicle.sensors", veh["sensors"], _sensors_word)
+        if "sensors" in veh
+        else None,
     }
+
+
+def draws(spec, index):
+    """Mission `index`'s values: {path: value} for every value of the spec (drawn or fixed), and
+    the words "build" and "sensors" (the sensors the plant serves, comma-separated, or "all")."""
+    w = words(spec, index)
+    served = w["sensors"] or w["vehicle.sensors"]
+    out = {"build": w["build"], "sensors": ",".join(served) if served else "all"}
+    if w["vehicle.sensors"] is not None:
+        out["vehicle.sensors"] = ",".join(w["vehicle.sensors"])
+    out.update(
+        {
+            path: _draw(path, v, rng, integer, _generator(spec["seed"], index, path))
+            for path, v, rng, integer, _t in _walk(spec)
+        }
+    )
+    return out
+
+
+def _check_drawn_vibration(d):
+    cut = d.get("vehicle.vibration.cutoff_hz", VIBRATION_DEFAULTS["cutoff_hz"])
+    rate = d.get("vehicle.vibration.sample_hz", VIBRATION_DEFAULTS["sample_hz"])
+    if not cut < 0.45 * rate:
+        raise SpecError(
+            f"vehicle.vibration.cutoff_hz: {cut:g} is out of range (must be < 0.45 vibration.sample_hz "
+            f"= {0.45 * rate:g} Hz) (a draw of its normal distribution; narrow it)"
+        )
 
 
 def mission_inputs(spec, index):
@@ -341,8 +500,17 @@ def mission_inputs(spec, index):
             if key in VEHICLE_LISTS:
                 vehicle.setdefault(key, list(VEHICLE_DEFAULTS.get(key, [0.0] * VEHICLE_LISTS[key])))
                 vehicle[key][sub] = x
-            elif key == "noise":
-                vehicle.setdefault("noise", {})[sub] = x
+            elif key in VEHICLE_VARLISTS:
+                vehicle.setdefault(key, [0.0] * len(spec["vehicle"][key]))[sub] = x
+            elif key == "vibration" and isinstance(sub, tuple):
+                h = vehicle.setdefault(key, {}).setdefault(
+                    "harmonics", [0.0] * len(spec["vehicle"][key]["harmonics"])
+                )
+                h[sub[1]] = x
+            elif key in VEHICLE_OBJECTS:
+                vehicle.setdefault(key, {})[sub] = x
+            elif key in VEHICLE_INTEGERS:
+                vehicle[key] = int(x)
             else:
                 vehicle[key] = x
         elif target[0] == "faults":
@@ -350,6 +518,8 @@ def mission_inputs(spec, index):
                 faults[target[1]] = int(x) if FAULTS[target[1]][1] else x
         else:
             params[target[1]] = x
+    if d.get("vehicle.sensors"):
+        vehicle["sensors"] = d["vehicle.sensors"].split(",")
     return spec["seed"] + index, d, vehicle, faults, params
 
 
@@ -357,4 +527,4 @@ def check_all_draws(spec):
     """Makes every mission's draws once, so that a normal draw out of its key's range is an error
     before anything runs (cheap: no mission runs)."""
     for i in range(spec["missions"]):
-        draws(spec, i)
+        _check_drawn_vibration(draws(spec, i))

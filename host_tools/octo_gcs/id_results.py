@@ -197,6 +197,32 @@ def estimator_source(records):
     return None
 
 
+# OCTO_ID_SOURCE's entries in words (report.md, the printed table, campaign.md)
+SOURCE_WORDS = {
+    "thrust": "thrust rows",
+    "imu": "IMU",
+    "imu_rpm": "IMU and rotor speed",
+    "imu_rpm_torque": "IMU, rotor speed and ESC torque",
+}
+
+
+# the plant's sensors (octo-sim --sensors) each source's estimates rest on
+SOURCE_SENSORS = {
+    "thrust": ("thrust", "torque"),
+    "imu": ("imu",),
+    "imu_rpm": ("imu", "rpm"),
+    "imu_rpm_torque": ("imu", "rpm", "torque"),
+}
+
+
+def source_words(name):
+    """'thrust rows', 'IMU', ... for a source name (the name itself when it has no words;
+    'not stated' for None)."""
+    if not name:
+        return "not stated"
+    return SOURCE_WORDS.get(name, name)
+
+
 def rejections(records):
     """{quantity key: reason} of the identified quantities whose last result was not accepted."""
     out = {}

@@ -30,7 +30,24 @@ DEFAULTS = {
     "kf_drift_per_min": 0.0,
 }
 
-KNOWN = set(DEFAULTS) | {"noise", "origin"}
+# octo-sim's other keys: the noise and sensor models (docs/sensors.md), the plant's faults
+OBJECTS = {  # an object's keys
+    "noise": ("thrust", "torque", "gyro", "attitude_deg", "position", "accel", "rpm", "current"),
+    "imu_bias": ("accel", "gyro", "accel_walk", "gyro_walk"),
+    "vibration": ("accel", "gyro", "harmonics", "cutoff_hz", "sample_hz"),
+}
+OTHER = (
+    "origin",
+    "origin_shift_s",
+    "imu_scale",
+    "rpm_max",
+    "esc_pole_pairs",
+    "esc_kt",
+    "esc_current_offset",
+    "sensors",
+)
+SENSORS = ("imu", "rpm", "torque", "thrust")
+KNOWN = set(DEFAULTS) | set(OBJECTS) | set(OTHER)
 
 
 class VehicleFileError(ValueError):
@@ -54,6 +71,25 @@ def parse(text, path="<vehicle>"):
     unknown = sorted(set(raw) - KNOWN)
     if unknown:
         raise VehicleFileError(f"{path}: unknown key '{unknown[0]}' (known: {', '.join(sorted(KNOWN))})")
+    for key, names in OBJECTS.items():
+        if key not in raw:
+            continue
+        if not isinstance(raw[key], dict):
+            raise VehicleFileError(f"{path}: key '{key}' must be an object")
+        bad = sorted(set(raw[key]) - set(names))
+        if bad:
+            raise VehicleFileError(f"{path}: unknown key '{key}.{bad[0]}' (known: {', '.join(names)})")
+    if "sensors" in raw:
+        sensors = raw["sensors"]
+        if not isinstance(sensors, list) or not sensors:
+            raise VehicleFileError(
+                f"{path}: key 'sensors' must be a non-empty list from {', '.join(SENSORS)}"
+            )
+        for x in sensors:
+            if x not in SENSORS:
+                raise VehicleFileError(
+                    f"{path}: key 'sensors': unknown sensor {json.dumps(x)} (known: {', '.join(SENSORS)})"
+                )
     v = json.loads(json.dumps(DEFAULTS))
     v.update(raw)
     for key in ("mass", "arm_length", "kf", "ktau"):

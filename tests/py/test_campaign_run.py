@@ -115,7 +115,7 @@ def test_external_cluster_fake_missions_complete_and_resume_adds_nothing(tmp_pat
     assert doc["parameters"]["kf"]["accepted"] == 7 and doc["parameters"]["ktau"]["accepted"] == 8
     assert doc["throughput"]["workers"] == 2
     md = (out / "campaign.md").read_text()
-    assert "SILENTLY WRONG: 0" in md and "Estimated from: thrust (8)." in md
+    assert "SILENTLY WRONG: 0" in md and "Estimated from: thrust rows (8)." in md
     for f in ("error_pct.png", "z_hist.png", "z_qq.png"):
         assert (out / f).stat().st_size > 1000
     # the campaign's missions in the progress line

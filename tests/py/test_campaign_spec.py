@@ -48,6 +48,26 @@ def spec(**kw):
     ({"missions": 3, "expect": {"kf_error": 0.3}}, "expect: unknown key 'kf_error'"),
     ({"missions": 3, "tolerance_pct": {"mass": 1}}, "tolerance_pct: unknown parameter 'mass'"),
     ({"missions": 3, "timeout": -1}, "timeout"),
+    ({"missions": 3, "build": "double"}, 'build: "double" is not a build'),
+    ({"missions": 3, "build": {"choice": ["float", "q15"]}}, 'build.choice[1]: "q15" is not a build'),
+    ({"missions": 3, "build": {"uniform": [0, 1]}}, "build: a value or"),
+    ({"missions": 3, "sensors": ["imu", "gps"]}, 'sensors: unknown sensor "gps"'),
+    ({"missions": 3, "sensors": {"choice": ["imu", "baro"]}}, 'sensors.choice[1]: unknown sensor "baro"'),
+    ({"missions": 3, "sensors": 4}, "sensors: must be a list of sensors"),
+    ({"missions": 3, "vehicle": {"sensors": ["lidar"]}}, 'vehicle.sensors: unknown sensor "lidar"'),
+    ({"missions": 3, "vehicle": {"noise": {"accels": 0.1}}}, "vehicle.noise: unknown key 'accels'"),
+    ({"missions": 3, "vehicle": {"imu_bias": {"gyro_drift": 0.1}}}, "vehicle.imu_bias: unknown key 'gyro_drift'"),
+    ({"missions": 3, "vehicle": {"imu_bias": {"gyro": -0.1}}}, "vehicle.imu_bias.gyro"),
+    ({"missions": 3, "vehicle": {"vibration": {"harmonics": [1, 1, 1, 1, 1]}}}, "vehicle.vibration.harmonics"),
+    ({"missions": 3, "vehicle": {"vibration": {"sample_hz": 50}}}, "vehicle.vibration.sample_hz"),
+    ({"missions": 3, "vehicle": {"vibration": {"cutoff_hz": {"uniform": [20, 500]}}}},
+     "vehicle.vibration.cutoff_hz: 500"),
+    ({"missions": 3, "vehicle": {"imu_scale": 0.5}}, "vehicle.imu_scale: 0.5 is out of range"),
+    ({"missions": 3, "vehicle": {"esc_pole_pairs": 6.5}}, "vehicle.esc_pole_pairs: must be a whole number"),
+    ({"missions": 3, "vehicle": {"esc_pole_pairs": 0}}, "vehicle.esc_pole_pairs: 0 is out of range"),
+    ({"missions": 3, "vehicle": {"rpm_max": 0}}, "vehicle.rpm_max"),
+    ({"missions": 3, "vehicle": {"origin_shift_s": []}}, "vehicle.origin_shift_s"),
+    ({"missions": 3, "vehicle": {"origin_shift_s": [-5]}}, "vehicle.origin_shift_s[0]"),
 ])
 def test_spec_errors_name_the_key(bad, names):
     with pytest.raises(cs.SpecError) as e:
@@ -169,3 +189,74 @@ def test_results_csv_drops_a_row_cut_short(tmp_path):
     assert path.read_text().endswith("\n") and path.read_text().count("\n") == 3
     with pytest.raises(campaign.CampaignError, match="columns"):
         campaign.read_results(path, cols[:-1])
+
+
+BUILDS = REPO / "host_tools" / "campaigns" / "builds.json"
+
+
+def test_sensor_keys_draws_and_the_vehicle_file_made_from_them():
+    s = cs.validate({"missions": 6, "seed": 11, "sensors": {"choice": [["imu"], "thrust,torque"]},
+                     "vehicle": {"noise": {"accel": 0.1, "rpm": {"uniform": [10, 30]}, "current": 0.05},
+                                 "imu_bias": {"gyro": {"uniform": [0, 0.003]}, "accel_walk": 1e-4},
+                                 "vibration": {"accel": 1.0, "harmonics": [1, {"uniform": [0, 0.5]}],
+                                               "cutoff_hz": 40},
+                                 "imu_scale": 0.01, "rpm_max": {"uniform": [8000, 10000]},
+                                 "esc_pole_pairs": {"choice": [6, 7]}, "esc_kt": 0.0136,
+                                 "esc_current_offset": {"normal": [0, 0.1]},
+                                 "origin_shift_s": [30, {"uniform": [50, 60]}], "sensors": ["imu", "thrust"]}})
+    cs.check_all_draws(s)
+    from octo_gcs import vehiclefile
+    seen = set()
+    for i in range(s["missions"]):
+        seed, d, veh, faults, params = cs.mission_inputs(s, i)
+        w = cs.words(s, i)
+        assert w["sensors"] in (["imu"], ["torque", "thrust"]) and d["sensors"] == ",".join(w["sensors"])
+        seen.add(d["sensors"])
+        assert veh["sensors"] == ["imu", "thrust"] and d["vehicle.sensors"] == "imu,thrust"
+        assert veh["esc_pole_pairs"] in (6, 7) and isinstance(veh["esc_pole_pairs"], int)
+        assert veh["vibration"]["harmonics"][0] == 1 and 0 <= veh["vibration"]["harmonics"][1] <= 0.5
+        assert veh["origin_shift_s"][0] == 30 and 50 <= veh["origin_shift_s"][1] <= 60
+        assert set(veh["noise"]) == {"accel", "rpm", "current"} and set(veh["imu_bias"]) == {"gyro", "accel_walk"}
+        vehiclefile.parse(json.dumps(veh))
+    assert len(seen) == 2
+    # the vehicle's own list is what the plant serves when the spec says nothing else
+    d = cs.draws(cs.validate({"missions": 1, "vehicle": {"sensors": ["thrust", "imu"]}}), 0)
+    assert d["sensors"] == "imu,thrust" and cs.draws(cs.validate({"missions": 1}), 0)["sensors"] == "all"
+
+
+def test_build_and_sensors_reach_the_missions_options_columns_and_replay(tmp_path):
+    s = cs.validate({"missions": 8, "seed": 5, "build": {"choice": ["float", "fixed"]}, "sensors": "imu,rpm",
+                     "vehicle": {"kf": {"uniform": [20, 30]}}})
+    builds = [cs.draws(s, i)["build"] for i in range(s["missions"])]
+    assert set(builds) == {"float", "fixed"}
+    cols = campaign.csv_columns(s)
+    assert cols[cols.index("host") + 1:cols.index("host") + 3] == ["build", "sensors"]
+    jobs, _inputs = campaign._jobs(s, range(s["missions"]), True, None)
+    for j, b in zip(jobs, builds):
+        opts = campaign.mission_options(j, tmp_path)
+        assert opts.build == b and opts.sensors == ["imu", "rpm"] and opts.plant == "sil"
+    row = campaign.result_row({"index": 0, "seed": 5, "status": "pass", "reason": "", "wall_s": 1.0},
+                              cs.draws(s, 0))
+    assert row["build"] == builds[0] and row["sensors"] == "imu,rpm"
+    cmd = campaign.replay_command(tmp_path, 3, 8, s, {}, {}, "fixed", ["imu", "rpm"])
+    assert "--fixed" in cmd and "--sensors imu,rpm" in cmd
+    assert "--fixed" not in campaign.replay_command(tmp_path, 3, 8, s, {}, {})
+    assert "--in-process" in cmd and "--in-process" not in campaign.replay_command(
+        tmp_path, 3, 8, dict(s, plant="udp"), {}, {})
+
+
+def test_builds_spec_validates_and_flies_the_default_vehicles_on_both_builds():
+    """builds.json is default.json with the build drawn: mission i flies default.json's vehicle i
+    (each value has its own generator), on the float or the fixed build."""
+    b = cs.validate(json.loads(BUILDS.read_text()))
+    d = cs.validate(json.loads(DEFAULT.read_text()))
+    cs.check_all_draws(b)
+    assert b["missions"] >= d["missions"] and b["seed"] == d["seed"] and b["vehicle"] == d["vehicle"]
+    builds = []
+    for i in range(d["missions"]):
+        db, dd = cs.draws(b, i), cs.draws(d, i)
+        builds.append(db.pop("build"))
+        assert dd.pop("build") == "float"
+        assert db == dd, i
+    n_fixed = builds.count("fixed")
+    assert 0.25 * len(builds) <= n_fixed <= 0.75 * len(builds), builds

@@ -127,11 +127,14 @@ def test_report_and_campaign_row_carry_reasons_and_source(tmp_path):
     assert [r["param"] for r in rep["id_results"]][:3] == ["val_ne_before", "kf", "ktau"]
     assert rep["id_results"][3]["sd"] is None   # NaN: none defined
     assert "no: uncertain" in report.table_text(rep)
+    assert "Estimated from: IMU and rotor speed (source imu_rpm)" in report.table_text(rep)
+    assert "Estimated from: IMU and rotor speed (source imu_rpm)." in report.markdown(rep)
     assert rep["results_from_records"] == filled and "ID_KTAU_EST" in filled
     spec = campaign_spec.validate({"missions": 1})
     res = {"index": 0, "seed": 1, "status": "fail", "reason": "", "wall_s": 1.0,
            "report": rep, "rejections": campaign._rejections(rep)}
-    row = campaign.result_row(res, {})
+    row = campaign.result_row(res, campaign_spec.draws(spec, 0))
+    assert row["build"] == "float" and row["sensors"] == "all"
     assert row["source"] == "imu_rpm" and row["rejection_reasons"] == "kf: partner_rejected; ktau: uncertain"
     assert set(row) == set(campaign.csv_columns(spec))
 

@@ -131,3 +131,96 @@ def test_link_joins_statustext_chunks_and_marks_a_lost_one():
     # chunk 0 of a line lost: marked once
     assert link._join_chunks(chunk(1, text[50:100], 9, 1)) is None
     assert link._join_chunks(chunk(1, text[100:], 9, 2)) == "[...]" + "y" * 50 + "z"
+
+
+# ------------------------------------------------------------ mission options: build, sensors, plant time
+def test_mission_options_build_sensors_and_plant_time_reach_the_plants_flags(tmp_path):
+    from octo_gcs.mission import flying_sil, flying_udp
+    from octo_gcs.mission.options import MissionOptions, plant_flags
+
+    o = MissionOptions(plant="sil", build="fixed", sensors="thrust,torque,imu,rpm", start_time=4e4,
+                       shift_origin=[30, 12.5], faults={"drop": 0.02})
+    assert o.sensors == ["imu", "rpm", "torque", "thrust"]   # each once, in the plant's order
+    assert plant_flags(o) == ["--sensors", "imu,rpm,torque,thrust", "--start-time", "40000.0",
+                              "--shift-origin", "30.0", "--shift-origin", "12.5", "--drop", "0.02"]
+    sil = [str(a) for a in flying_sil.sil_argv(tmp_path, o, tmp_path, 300.0)]
+    assert sil[0].endswith("/octo-sil-fixed") and sil[-len(plant_flags(o)):] == plant_flags(o)
+    assert "--script" in sil and "--mission" not in sil
+    u = MissionOptions(sensors=["imu"], start_time=0.0)
+    assert plant_flags(u) == ["--sensors", "imu"]   # start time 0: the plant's default, no flag
+    sim = [str(a) for a in flying_udp.sim_argv(tmp_path, u, (1, 2, 3, 4), tmp_path, 300.0)]
+    assert sim[0].endswith("/octo-sim") and sim[-2:] == ["--sensors", "imu"]
+    fw = [str(a) for a in flying_udp.fw_argv(tmp_path, (1, 2, 3, 4), tmp_path, "octo-fw-fixed")]
+    assert fw[0].endswith("/octo-fw-fixed")
+    assert MissionOptions.from_json(o.to_json()) == o
+
+
+@pytest.mark.parametrize("kw, names", [
+    ({"build": "double"}, "build 'double'"),
+    ({"sensors": "imu,gps"}, "unknown sensor 'gps'"),
+    ({"sensors": []}, "sensors"),
+    ({"start_time": -1}, "start time -1"),
+    ({"start_time": "soon"}, "start time 'soon'"),
+    ({"shift_origin": [5, 2e9]}, "origin shift time 2000000000.0"),
+])
+def test_mission_options_errors_name_the_option_and_value(kw, names):
+    from octo_gcs.base import GcsError
+    from octo_gcs.mission.options import MissionOptions
+
+    with pytest.raises(GcsError) as e:
+        MissionOptions(**kw)
+    assert names in str(e.value)
+
+
+def test_mission_command_line_fixed_sensors_start_time_shift_origin():
+    import argparse
+
+    from octo_gcs.base import GcsError
+    from octo_gcs.commands import mission
+
+    p = argparse.ArgumentParser()
+    mission.register(p.add_subparsers())
+    a = p.parse_args(["mission", "--fixed", "--in-process", "--sensors", "thrust,torque,imu,rpm",
+                      "--start-time", "1e5", "--shift-origin", "20", "--shift-origin", "40",
+                      "--fault", "drop=0.01"])
+    o = mission.options(a)
+    assert (o.plant, o.build, o.sensors) == ("sil", "fixed", ["imu", "rpm", "torque", "thrust"])
+    assert o.start_time == 1e5 and o.shift_origin == [20.0, 40.0] and o.faults == {"drop": 0.01}
+    d = mission.options(p.parse_args(["mission"]))
+    assert (d.build, d.sensors, d.start_time, d.shift_origin) == ("float", None, 0.0, [])
+    with pytest.raises(GcsError, match="--sensors: unknown sensor 'baro'"):
+        mission.options(p.parse_args(["mission", "--sensors", "imu,baro"]))
+
+
+# ------------------------------------------------------------ vehicle files: the plant's sensor keys
+def test_vehicle_file_accepts_the_plants_sensor_and_fault_keys():
+    import json
+
+    from octo_gcs import vehiclefile
+
+    v = {"noise": {"accel": 0.05, "rpm": 20, "current": 0.1, "gyro": 0.01},
+         "imu_bias": {"accel": 0.05, "gyro": 0.002, "accel_walk": 1e-4, "gyro_walk": 1e-5},
+         "imu_scale": 0.005, "vibration": {"accel": 1.0, "gyro": 0.05, "harmonics": [1, 0.3, 0.1],
+                                           "cutoff_hz": 30, "sample_hz": 1000},
+         "rpm_max": 9000, "esc_pole_pairs": 7, "esc_kt": 0.0136, "esc_current_offset": 0.2,
+         "sensors": ["imu", "rpm"], "origin_shift_s": [30, 60]}
+    assert vehiclefile.parse(json.dumps(v))["sensors"] == ["imu", "rpm"]
+
+
+@pytest.mark.parametrize("bad, names", [
+    ({"imu_bias": {"acc": 0.1}}, "unknown key 'imu_bias.acc'"),
+    ({"noise": {"baro": 0.1}}, "unknown key 'noise.baro'"),
+    ({"vibration": {"harmonic": [1]}}, "unknown key 'vibration.harmonic'"),
+    ({"vibration": 3}, "key 'vibration' must be an object"),
+    ({"sensors": ["imu", "gps"]}, "unknown sensor \"gps\""),
+    ({"sensors": []}, "key 'sensors'"),
+    ({"esc_kv": 700}, "unknown key 'esc_kv'"),
+])
+def test_vehicle_file_errors_name_the_key(bad, names):
+    import json
+
+    from octo_gcs import vehiclefile
+
+    with pytest.raises(vehiclefile.VehicleFileError) as e:
+        vehiclefile.parse(json.dumps(bad), "v.json")
+    assert names in str(e.value) and "v.json" in str(e.value)

@@ -53,9 +53,36 @@ def register(sub):
         "burst_prob, delay_frames, duplicate, reorder; e.g. drop=0.02 (repeatable)",
     )
     mp.add_argument(
+        "--fixed",
+        action="store_true",
+        help="fly the Q16.16 firmware build: octo-fw-fixed (with octo-sim), octo-sil-fixed with --in-process",
+    )
+    mp.add_argument(
+        "--sensors",
+        metavar="LIST",
+        help="what the plant serves, comma-separated from imu, rpm, torque, thrust (default: all; "
+        "octo-sim's --sensors); e.g. imu,rpm",
+    )
+    mp.add_argument(
+        "--start-time",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="start the plant's clock at S seconds (octo-sim's --start-time): a long uptime in seconds (0)",
+    )
+    mp.add_argument(
+        "--shift-origin",
+        action="append",
+        type=float,
+        default=[],
+        metavar="T",
+        help="at plant time T s move the plant's local OpenGL origin as X-Plane does (repeatable)",
+    )
+    mp.add_argument(
         "--build-dir",
         metavar="DIR",
-        help="where octo-sim and octo-fw are (default $OCTO_BUILD, else the repository's build/)",
+        help="where octo-sim and octo-fw (octo-sil, the -fixed builds) are (default $OCTO_BUILD, else the "
+        "repository's build/)",
     )
     mp.add_argument("--no-plots", dest="plots", action="store_false", help="skip the figures")
     mp.add_argument(
@@ -76,7 +103,13 @@ def register(sub):
 
 def options(args):
     """The MissionOptions of the parsed command line."""
-    from ..mission.options import MissionOptions, experiments_option, fault_options, param_options
+    from ..mission.options import (
+        MissionOptions,
+        experiments_option,
+        fault_options,
+        param_options,
+        sensors_list,
+    )
 
     return MissionOptions(
         plant="sil" if args.in_process else "udp",
@@ -91,6 +124,10 @@ def options(args):
         build_dir=args.build_dir,
         plots=args.plots,
         timeout=args.timeout,
+        build="fixed" if args.fixed else "float",
+        sensors=sensors_list(args.sensors) if args.sensors is not None else None,
+        start_time=args.start_time,
+        shift_origin=list(args.shift_origin),
     )
 
 

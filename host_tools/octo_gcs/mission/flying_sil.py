@@ -17,7 +17,7 @@ from .. import id_results, paramfile
 from ..base import GcsError, f32
 from ..experiments import planned_total
 from .flown import Flown
-from .options import TAKEOFF_M, fault_flags
+from .options import TAKEOFF_M, firmware_program, plant_flags, plant_words, sil_program
 
 WALL_LIMIT_S = 600.0  # octo-sil flies a mission in well under a second
 
@@ -26,15 +26,16 @@ class WallLimit(GcsError):
     """octo-sil ran past its wall-clock limit and was stopped."""
 
 
-def firmware_defaults(build):
-    """{NAME: default} of octo-fw's parameter table (octo-sil starts from it)."""
+def firmware_defaults(build, program="octo-fw"):
+    """{NAME: default} of the firmware's parameter table (octo-sil starts from octo-fw's, octo-sil-fixed
+    from octo-fw-fixed's)."""
     try:
         out = subprocess.run(
-            [str(build / "octo-fw"), "--dump-params"], capture_output=True, text=True, timeout=30, check=True
+            [str(build / program), "--dump-params"], capture_output=True, text=True, timeout=30, check=True
         ).stdout
         return {p["name"]: f32(p["default"]) for p in json.loads(out)["params"]}
     except (OSError, subprocess.SubprocessError, ValueError, KeyError) as e:
-        raise GcsError(f"cannot read octo-fw's parameter table (octo-fw --dump-params): {e}") from None
+        raise GcsError(f"cannot read {program}'s parameter table ({program} --dump-params): {e}") from None
 
 
 def script_text(bench, experiments):
@@ -48,9 +49,9 @@ def script_text(bench, experiments):
 
 
 def sil_argv(build, opts, stage, duration):
-    """octo-sil's command line (its steps in stage/mission.txt)."""
+    """octo-sil's (or octo-sil-fixed's) command line (its steps in stage/mission.txt)."""
     argv = [
-        build / "octo-sil",
+        build / sil_program(opts),
         "--seed",
         opts.seed,
         "--xplane-version",
@@ -63,12 +64,12 @@ def sil_argv(build, opts, stage, duration):
         f"file://{stage / 'truth.lcm'}",
         "--duration",
         duration,
-        "--mission",
+        "--script",
         stage / "mission.txt",
     ]
     if opts.vehicle:
         argv += ["--vehicle", os.path.abspath(opts.vehicle)]
-    return argv + fault_flags(opts.faults)
+    return argv + plant_flags(opts)
 
 
 def _run_limited(argv, log_path, limit):
@@ -95,7 +96,7 @@ def _run_limited(argv, log_path, limit):
         finally:
             timer.cancel()
     if expired.is_set():
-        raise WallLimit(f"octo-sil still running after {limit:g} s wall: stopped")
+        raise WallLimit(f"{os.path.basename(str(argv[0]))} still running after {limit:g} s wall: stopped")
     return rc
 
 
@@ -113,18 +114,20 @@ def _bench(opts, veh, nominal):
 def describe(opts, staged):
     vname = f"vehicle {opts.vehicle}" if opts.vehicle else "the paper's vehicle"
     return (
-        f"mission in-process: octo-sil (X-Plane {opts.xplane_version}, seed {opts.seed}, {vname}) "
-        f"from {staged.build}"
+        f"mission in-process: {sil_program(opts)} (X-Plane {opts.xplane_version}, seed {opts.seed}, {vname}"
+        f"{plant_words(opts)}) from {staged.build}"
     )
 
 
 def check_build(opts):
-    """octo-sil is there (before anything is staged)."""
+    """octo-sil (octo-sil-fixed) and the firmware whose parameter table it starts from are there
+    (before anything is staged)."""
     from .. import procs
 
     build = procs.build_dir(opts.build_dir)
-    if not os.access(build / "octo-sil", os.X_OK):
-        raise GcsError(f"{build / 'octo-sil'} not found: run `make` first, or give --build-dir")
+    for name in (sil_program(opts), firmware_program(opts)):
+        if not os.access(build / name, os.X_OK):
+            raise GcsError(f"{build / name} not found: run `make` first, or give --build-dir")
 
 
 def fly(opts, staged, prog):
@@ -132,7 +135,7 @@ def fly(opts, staged, prog):
     from ..logs import Logs
 
     build, stage = staged.build, staged.stage
-    nominal = firmware_defaults(build)
+    nominal = firmware_defaults(build, firmware_program(opts))
     bench = _bench(opts, staged.vehicle, nominal)
     nominal.update({k: f32(v) for k, v in bench.items()})
     duration = max(300.0, 3 * planned_total(nominal, opts.experiments) + 200.0)
@@ -144,10 +147,12 @@ def fly(opts, staged, prog):
     wall = time.monotonic() - t0
     if rc != 0:
         text = (stage / "octo-sil.log").read_text(errors="replace")
-        lines = [ln for ln in text.splitlines() if ln.startswith("octo-sil:")]
+        lines = [ln for ln in text.splitlines() if ln.startswith("octo-sil")]
         why = next((ln for ln in lines if "mission step" in ln or "not completed" in ln), None)
-        raise GcsError(f"octo-sil exited with status {rc}: " + (why or "\n".join(text.splitlines()[-12:])))
-    prog.say(f"flight done in octo-sil: {wall:.2f} s wall")
+        raise GcsError(
+            f"{sil_program(opts)} exited with status {rc}: " + (why or "\n".join(text.splitlines()[-12:]))
+        )
+    prog.say(f"flight done in {sil_program(opts)}: {wall:.2f} s wall")
     if not opts.experiments and not (stage / "fw-storage.parm").exists():
         # no experiment, so no result the firmware had to store: its parameters are the
         # defaults with what the mission set
@@ -164,4 +169,4 @@ def fly(opts, staged, prog):
     logs = Logs(paths) if paths else None
     records = logs.id_results if logs is not None else []
     after, filled = id_results.merge(after, records)
-    return Flown(nominal, after, records, filled, "octo-sil (in-process, lockstep)", logs)
+    return Flown(nominal, after, records, filled, f"{sil_program(opts)} (in-process, lockstep)", logs)

@@ -21,7 +21,7 @@ from ..base import GcsError
 from ..experiments import EXPERIMENTS, planned_sim_seconds, planned_total
 from ..identify import SEV_ERROR, run_experiment
 from .flown import Flown
-from .options import TAKEOFF_M, fault_flags
+from .options import TAKEOFF_M, firmware_program, plant_flags, plant_words
 
 # octo-fw's and octo-sim's words when a UDP port they were given is bound by another program
 PORT_TAKEN_RE = re.compile(r"cannot bind .*Address already in use")
@@ -63,14 +63,14 @@ def sim_argv(build, opts, ports, stage, sim_limit):
         argv.append("--lockstep")
     if opts.vehicle:
         argv += ["--vehicle", os.path.abspath(opts.vehicle)]
-    return argv + fault_flags(opts.faults)
+    return argv + plant_flags(opts)
 
 
-def fw_argv(build, ports, stage):
-    """octo-fw's command line."""
+def fw_argv(build, ports, stage, program="octo-fw"):
+    """octo-fw's (or octo-fw-fixed's) command line."""
     xp_port, xp_listen, mav_port, gcs_port = ports
     return [
-        build / "octo-fw",
+        build / program,
         "--xplane",
         f"127.0.0.1:{xp_port}",
         "--xp-listen",
@@ -144,7 +144,8 @@ class UdpFlight:
         self.sim = procs.Proc(
             sim_argv(build, self.opts, ports, stage, self.sim_limit), stage / "octo-sim.log", "octo-sim"
         )
-        self.fw = procs.Proc(fw_argv(build, ports, stage), stage / "octo-fw.log", "octo-fw")
+        fw = firmware_program(self.opts)
+        self.fw = procs.Proc(fw_argv(build, ports, stage, fw), stage / "octo-fw.log", fw)
 
     def stop(self):
         procs.stop_all([self.fw, self.sim])
@@ -297,13 +298,17 @@ def describe(opts, staged):
     mode = "real time" if opts.realtime else "lockstep"
     vname = f"vehicle {opts.vehicle}" if opts.vehicle else "the paper's vehicle"
     return (
-        f"mission: octo-sim ({mode}, X-Plane {opts.xplane_version}, seed {opts.seed}, {vname}) "
-        f"+ octo-fw from {staged.build}"
+        f"mission: octo-sim ({mode}, X-Plane {opts.xplane_version}, seed {opts.seed}, {vname}"
+        f"{plant_words(opts)}) + {firmware_program(opts)} from {staged.build}"
     )
 
 
 def fly(opts, staged, prog):
     """The flight; returns Flown. Raises FlightFailed (a GcsError) with the phase it stopped in."""
+    if not os.access(staged.build / firmware_program(opts), os.X_OK):
+        raise GcsError(
+            f"{staged.build / firmware_program(opts)} not found: run `make` first, or give --build-dir"
+        )
     flight = UdpFlight(opts, prog)
     try:
         flight.start_up(staged.build, staged.stage)

@@ -22,6 +22,9 @@ FAULTS = {
 }
 
 PLANTS = ("udp", "sil")
+BUILDS = ("float", "fixed")  # the firmware's arithmetic: octo-fw / octo-sil, or their Q16.16 -fixed builds
+SENSORS = ("imu", "rpm", "torque", "thrust")  # what the plant can serve (octo-sim --sensors)
+PLANT_TIME_MAX_S = 1e9  # octo-sim's bound on --start-time and --shift-origin
 
 
 @dataclass
@@ -42,6 +45,10 @@ class MissionOptions:
     plots: bool = True
     timeout: float = 5.0  # udp: seconds to wait for the vehicle's answers
     wall_limit: Optional[float] = None  # sil: octo-sil is stopped after this many wall seconds
+    build: Literal["float", "fixed"] = "float"
+    sensors: Optional[list] = None  # names from SENSORS the plant serves (None: the plant's default, all)
+    start_time: float = 0.0  # the plant clock at the first frame (s)
+    shift_origin: list = field(default_factory=list)  # plant times (s) of an OpenGL origin shift
 
     def __post_init__(self):
         self.check()
@@ -59,6 +66,12 @@ class MissionOptions:
         for name in self.faults:
             if name not in FAULTS:
                 raise GcsError(f"fault {name!r} unknown (known: {', '.join(FAULTS)})")
+        if self.build not in BUILDS:
+            raise GcsError(f"build {self.build!r}: must be one of {', '.join(BUILDS)}")
+        if self.sensors is not None:
+            self.sensors = sensors_list(self.sensors, "sensors")
+        self.start_time = plant_time(self.start_time, "start time")
+        self.shift_origin = [plant_time(t, "origin shift time") for t in self.shift_origin]
         if self.plant == "sil" and self.realtime:
             raise GcsError("--in-process runs lockstep only (octo-sil): --realtime needs the UDP mission")
 
@@ -72,6 +85,65 @@ class MissionOptions:
         if unknown:
             raise GcsError(f"mission options: unknown {', '.join(unknown)}")
         return cls(**doc)
+
+
+def sensors_list(value, what="--sensors"):
+    """The sensor names of `value` (a list of names, or one comma-separated text), each once, in
+    SENSORS' order. Raises GcsError naming `what` and the bad name."""
+    names = value.split(",") if isinstance(value, str) else value
+    if not isinstance(names, (list, tuple)) or not names:
+        raise GcsError(f"{what}: {value!r}: expected a non-empty list from {', '.join(SENSORS)}")
+    for n in names:
+        if not isinstance(n, str) or n.strip() not in SENSORS:
+            raise GcsError(f"{what}: unknown sensor {n!r} (known: {', '.join(SENSORS)})")
+    chosen = {n.strip() for n in names}
+    return [n for n in SENSORS if n in chosen]
+
+
+def plant_time(value, what):
+    """A plant time in seconds, in [0, PLANT_TIME_MAX_S]; raises GcsError naming `what`."""
+    try:
+        t = float(value)
+    except (TypeError, ValueError):
+        raise GcsError(f"{what} {value!r}: not a number of seconds") from None
+    if not 0.0 <= t <= PLANT_TIME_MAX_S:
+        raise GcsError(f"{what} {value!r}: out of range [0, {PLANT_TIME_MAX_S:g}] s")
+    return t
+
+
+def plant_flags(opts):
+    """The plant's command-line flags of MissionOptions `opts` (octo-sim's and octo-sil's alike):
+    the sensors served, the start time, the origin shifts and the faults (last)."""
+    out = []
+    if opts.sensors is not None:
+        out += ["--sensors", ",".join(opts.sensors)]
+    if opts.start_time:
+        out += ["--start-time", repr(float(opts.start_time))]
+    for t in opts.shift_origin:
+        out += ["--shift-origin", repr(float(t))]
+    return out + fault_flags(opts.faults)
+
+
+def plant_words(opts):
+    """What the plant is asked beyond its defaults, for the first line ("" when nothing)."""
+    words = []
+    if opts.sensors is not None:
+        words.append("sensors " + ",".join(opts.sensors))
+    if opts.start_time:
+        words.append(f"clock from {opts.start_time:g} s")
+    if opts.shift_origin:
+        words.append("origin shifts at " + ", ".join(f"{t:g}" for t in opts.shift_origin) + " s")
+    return "".join(", " + w for w in words)
+
+
+def firmware_program(opts):
+    """The firmware program of the UDP plant: octo-fw, or octo-fw-fixed for the Q16.16 build."""
+    return "octo-fw-fixed" if opts.build == "fixed" else "octo-fw"
+
+
+def sil_program(opts):
+    """The in-process program: octo-sil, or octo-sil-fixed for the Q16.16 build."""
+    return "octo-sil-fixed" if opts.build == "fixed" else "octo-sil"
 
 
 def fault_flags(faults):

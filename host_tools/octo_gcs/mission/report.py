@@ -230,6 +230,10 @@ def build_report(
             "plant": "octo-sim " + ("real time" if getattr(opts, "realtime", False) else "lockstep"),
             "xplane_version": getattr(opts, "xplane_version", None),
             "experiments": experiments,
+            "build": getattr(opts, "build", "float"),
+            "sensors": getattr(opts, "sensors", None),  # None: the plant's default (all)
+            "start_time_s": getattr(opts, "start_time", 0.0),
+            "shift_origin_s": list(getattr(opts, "shift_origin", []) or []),
         },
         "bench": {"mass_kg": veh["mass"], "arm_length_m": veh["arm_length"]},
         "truth": {k: _num(v) for k, v in truth.items()},
@@ -251,6 +255,9 @@ def build_report(
     rep["results_from_records"] = list(filled)
     checks = plausibility(after, experiments) if experiments else []
     checks += against_truth(after, experiments, truth, TOL_ROTOR_PCT, TOL_INERTIA_PCT)
+    checks += (
+        _source_checks(rep["estimator"]["source"], getattr(opts, "sensors", None)) if experiments else []
+    )
     kft = kf_tracked(logs, rep["parameters"]["kf"]["sd_pct"] if "kf" in rep["parameters"] else None)
     if kft is not None:
         rep["kf_tracked"] = kft
@@ -299,6 +306,18 @@ def _from_logs(rep, logs, after):
     rep["_validation"] = val
     rep["_logs"] = logs
     return logs.truth.t[-1] if logs.truth is not None else (logs.fw.t[-1] if logs.fw is not None else None)
+
+
+def _source_checks(source, served):
+    """The measurements the estimates rest on were served by the plant (with --sensors)."""
+    need = id_results.SOURCE_SENSORS.get(source or "")
+    if served is None or need is None:
+        return []
+    missing = [x for x in need if x not in served]
+    detail = f"estimated from {id_results.source_words(source)} (source {source}); the plant served {','.join(served)}"
+    if missing:
+        detail += f": {', '.join(missing)} not served"
+    return [Check("estimates rest on the sensors served", not missing, detail)]
 
 
 def _kf_tracked_checks(s_):
@@ -402,11 +421,33 @@ def _validation_lines(rep):
     return lines
 
 
+def source_line(rep):
+    """'Estimated from: thrust rows (source thrust)': the measurements the estimates rest on, as
+    the firmware's identification results state it."""
+    name = (rep.get("estimator") or {}).get("source")
+    if not name:
+        return "Estimated from: not stated (no identification result gave its source)"
+    return f"Estimated from: {id_results.source_words(name)} (source {name})"
+
+
+def run_words(run):
+    """The build and what the plant was asked beyond its defaults, for report.md's first lines."""
+    words = [f"firmware build {run.get('build') or 'float'}"]
+    sensors = run.get("sensors")
+    words.append("sensors served: " + (",".join(sensors) if sensors else "all"))
+    if run.get("start_time_s"):
+        words.append(f"plant clock from {run['start_time_s']:g} s")
+    if run.get("shift_origin_s"):
+        words.append("origin shifts at " + ", ".join(f"{t:g}" for t in run["shift_origin_s"]) + " s")
+    return "; ".join(words)
+
+
 def table_text(rep):
     head, rows = table_rows(rep)
     widths = [max(len(str(x)) for x in col) for col in zip(head, *rows)]
     fmt = "  ".join("{:<%d}" % w for w in widths)
-    out = [fmt.format(*head), fmt.format(*["-" * w for w in widths])]
+    out = [source_line(rep), ""]
+    out += [fmt.format(*head), fmt.format(*["-" * w for w in widths])]
     out += [fmt.format(*r) for r in rows]
     out += [""] + _validation_lines(rep)
     out += [""] + _motor_lines(rep)
@@ -462,7 +503,9 @@ def markdown(rep, figures=()):
         f"{rep['tool']}, {rep['created_utc']}. Plant: {run['plant']} (X-Plane {run['xplane_version']} "
         f"protocol), seed {run['seed']}, vehicle {vname}; "
         f"bench values given to the firmware: mass {rep['bench']['mass_kg']:g} kg, "
-        f"arm length {rep['bench']['arm_length_m']:g} m.",
+        f"arm length {rep['bench']['arm_length_m']:g} m; {run_words(run)}.",
+        "",
+        source_line(rep) + ".",
         "",
         "## Table 1 beside the truth and the estimates",
         "",
@@ -482,9 +525,6 @@ def markdown(rep, figures=()):
         + ".",
         "",
     ]
-    source = rep.get("estimator", {}).get("source")
-    if source:
-        lines += [f"Estimated from: {source} (the firmware's identification results).", ""]
     lines += _kf_tracked_md(rep.get("kf_tracked"))
     lines += ["## Validation", ""] + [f"- {x}" for x in _validation_lines(rep)] + [""]
     mm = rep.get("motor_model", [])
