@@ -481,6 +481,14 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 			 (double)envelope_osc_rms_dps(a));
 		return APP_BUSY;
 	}
+	/* every experiment regresses on each rotor's measured thrust and torque (X-Plane's rows
+	 * 35 and 36): without them it cannot run, and says so rather than fit zeros */
+	const uint32_t rows = HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
+	if ((a->fr.valid & rows) != rows) {
+		snprintf(why, cap, "Experiment %d refused: no rotor thrust/torque rows (IMU-only identification not available)",
+			 id);
+		return APP_DENIED;
+	}
 	envelope_seed_kf(a, id);
 	int r = exp_start(&a->exp, id, &a->p, why, cap);
 	if (r == APP_ACCEPTED || r == APP_IN_PROGRESS) {
