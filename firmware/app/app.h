@@ -30,7 +30,11 @@
 
 #include "alt_ctrl.h"
 #include "att_ctrl.h"
-#include "envelope.h"
+#include "boundary.h"
+#include "env_hover.h"
+#include "env_kf.h"
+#include "env_limits.h"
+#include "env_osc.h"
 #include "experiment.h"
 #include "fcmp.h"
 #include "guidance.h"
@@ -44,15 +48,6 @@
 #include "thrmap.h"
 
 #define DEG_F 0.017453292519943295f   /* rad per degree */
-
-/* The frame's inputs as scalars: in the fixed build converted once per frame (app_on_frame)
- * and read by the step's every part (control, k_f tracker, experiment); in the float build
- * scalar_t is float and app_in() gives the frame itself (no copy). Fields named as in
- * struct hal_sensor_frame, so that either serves. */
-struct app_frame_sc {
-	scalar_t q_ib[4], rate_b_rps[3], pos_i_m[3], vel_i_mps[3];
-	scalar_t rotor_thrust_n[HAL_ROTORS], rotor_torque_nm[HAL_ROTORS];
-};
 
 /* What the step reads of the parameters, as scalars: set by the parameter sync (between
  * frames, after every parameter change), not converted per frame. */
@@ -95,13 +90,7 @@ struct app {
 	bool have_actuated;
 	uint64_t n_actuated;          /* frame_n of the last frame answered */
 	float thr[HAL_ROTORS];
-#if OCTO_FIXED
-	struct app_frame_sc fs;       /* the frame's inputs as scalars (app_in) */
-	scalar_t thr_sc[HAL_ROTORS];  /* thr as scalars (app_thr_sc) */
-	/* conversions of values that mostly stay from step to step (a set point held, the frame
-	 * period), redone only when the value changed (app.c: to_float_kept, from_float_kept) */
-	struct app_sc_kept { scalar_t v; float f; } log_sp_kept[4], dt_kept;
-#endif
+	struct boundary bnd;          /* the frame and throttles as scalars (boundary.h) */
 
 	/* guidance (set points) and the position loop */
 	struct guid guid;
@@ -115,7 +104,11 @@ struct app {
 	/* control */
 	struct att_ctrl att;
 	struct alt_ctrl alt;
-	struct envelope env;          /* hover throttle learned in flight, phase limits */
+	/* the flight envelope: what the app learns and guards in flight */
+	struct env_hover env_hover;   /* hover throttle learned, hover thrust, torque gain */
+	struct env_kf env_kf;         /* k_f tracked */
+	struct env_osc env_osc;       /* the oscillation guard */
+	struct env_limits env_limits; /* take-off and landing time limits */
 	struct mixer mix;
 	struct thrmap map;
 	struct mixer_output mix_out;
@@ -140,15 +133,10 @@ struct app {
 	uint32_t steps;
 };
 
-/* The frame's inputs and the throttles sent, as scalars (see struct app_frame_sc): the
- * converted copies in the fixed build, the floats themselves in the float build. */
-#if OCTO_FIXED
-static inline const struct app_frame_sc *app_in(const struct app *a) { return &a->fs; }
-static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr_sc; }
-#else
-static inline const struct hal_sensor_frame *app_in(const struct app *a) { return &a->fr; }
-static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr; }
-#endif
+/* The frame's inputs and the throttles sent, as scalars (boundary.h): the converted copies
+ * in the fixed build, the floats themselves in the float build. */
+static inline const bnd_frame_t *app_in(const struct app *a) { return bnd_in(&a->bnd, &a->fr); }
+static inline const scalar_t *app_thr_sc(const struct app *a) { return bnd_thr(&a->bnd, a->thr); }
 
 void app_init(struct app *a, const struct hal *hal);
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f);
@@ -204,5 +192,33 @@ const char *app_param_write(struct app *a, size_t index, float value);
 /* A status line: console, log event, and an APP_EV_STATUS event in the outbox. */
 void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
 	__attribute__((format(printf, 3, 4)));
+
+/* ---- the app's own parts (app.c, step.c), not for platforms or ground stations ---- */
+
+/* The control step (step.c) on a complete frame, integrating dt. */
+void app_step(struct app *a, float dt);
+void app_set_mode(struct app *a, enum app_mode m);
+/* All throttles to t (and their scalars). */
+void app_set_thr_all(struct app *a, float t);
+/* The attitude and height controllers' integrals reset. */
+void app_reset_control(struct app *a);
+/* A take-off or landing that ran out of time (env_limits.h): said, answered, landed. */
+void app_phase_timeout(struct app *a, const struct env_limits_req *req);
+
+/* what guidance flies in each mode */
+static inline enum guid_mode app_guid_mode(enum app_mode m)
+{
+	switch (m) {
+	case APP_TAKEOFF:
+		return GUID_TAKEOFF;
+	case APP_HOLD:
+	case APP_EXPERIMENT:
+		return GUID_HOLD;
+	case APP_LAND:
+		return GUID_LAND;
+	default:
+		return GUID_GROUND;
+	}
+}
 
 #endif /* OCTO_APP_H */
