@@ -45,8 +45,6 @@ struct boundary {
 void bnd_frame_in(struct boundary *b, const struct hal_sensor_frame *f);
 /* The rotor torques too (only the experiments read them). */
 void bnd_torque_in(struct boundary *b, const struct hal_sensor_frame *f);
-/* The excitation's throttles as floats (for the log). */
-void bnd_excitation_to_float(float out[HAL_ROTORS], const scalar_t d[HAL_ROTORS]);
 
 #if OCTO_FIXED
 /* The zeroed pair is right: 0 converts to +0.0f and +0.0f to 0. The float is compared by
@@ -125,5 +123,39 @@ static inline scalar_t bnd_dt(struct boundary *b, float dt)
 	return dt;
 }
 #endif
+
+/* The excitation's throttles as floats (for the log). A dither gives the rotors a few values and their negations (the rotor experiment: two
+ * magnitudes per step), and a Q16.16 value and its negation convert to floats of opposite
+ * sign: each magnitude is converted once (the last two kept). */
+static inline void bnd_excitation_to_float(float out[HAL_ROTORS], const scalar_t d[HAL_ROTORS])
+{
+#if OCTO_FIXED
+	uint32_t m0 = 0u, m1 = 0u;
+	float f0 = 0.0f, f1 = 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		scalar_t v = d[j];
+		uint32_t m = v < 0 ? 0u - (uint32_t)v : (uint32_t)v;
+		float f;
+		if (m == m0) {
+			f = f0;
+		} else if (m == m1) {
+			f = f1;
+		} else if (m > (uint32_t)INT32_MAX) {   /* INT32_MIN: no positive twin */
+			out[j] = sc_to_float(v);
+			continue;
+		} else {
+			f = sc_to_float((scalar_t)m);
+			m1 = m0;
+			f1 = f0;
+			m0 = m;
+			f0 = f;
+		}
+		out[j] = v < 0 ? -f : f;
+	}
+#else
+	for (int j = 0; j < HAL_ROTORS; j++)
+		out[j] = d[j];
+#endif
+}
 
 #endif /* OCTO_BOUNDARY_H */

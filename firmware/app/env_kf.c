@@ -107,12 +107,3 @@ bool env_kf_publish(struct env_kf *k, const struct app_params *p, uint64_t now_u
 	}
 	return true;
 }
-
-bool env_kf_estimate(const struct env_kf *k, float *kf, float *sd)
-{
-	if (!k->kft.started)
-		return false;
-	*kf = sc_to_float(k->kft.k);
-	*sd = sc_to_float(kf_track_sd(&k->kft));
-	return true;
-}

@@ -65,6 +65,13 @@ bool env_kf_publish(struct env_kf *k, const struct app_params *p, uint64_t now_u
 		    struct env_kf_pub *out);
 
 /* The estimate and its sd for the log (false before the first estimate). */
-bool env_kf_estimate(const struct env_kf *k, float *kf, float *sd);
+static inline bool env_kf_estimate(const struct env_kf *k, float *kf, float *sd)
+{
+	if (!k->kft.started)
+		return false;
+	*kf = sc_to_float(k->kft.k);
+	*sd = sc_to_float(kf_track_sd(&k->kft));
+	return true;
+}
 
 #endif /* OCTO_ENV_KF_H */

@@ -17,7 +17,8 @@ void env_limits_on_mode(struct env_limits *l)
 
 static void not_learned(const struct env_limits_input *in, char *more, size_t cap)
 {
-	snprintf(more, cap, "Hover throttle %.3f+/-%.3f not learned", (double)in->hover_u, (double)in->hover_sd);
+	snprintf(more, cap, "Hover throttle %.3f+/-%.3f not learned", (double)sc_to_float(hover_est_u(&in->hover->hov)),
+		 (double)sc_to_float(hover_est_sd(&in->hover->hov)));
 }
 
 static bool timeout(struct env_limits *l, const struct env_limits_input *in, const struct app_params *p,
@@ -30,7 +31,7 @@ static bool timeout(struct env_limits *l, const struct env_limits_input *in, con
 	if (in->takeoff && l->phase_s > p->nav_tko_to) {
 		snprintf(r->why, sizeof r->why, "Take-off failed: NAV_TKO_TO %.0f s, %.2f/%.2f m",
 			 (double)p->nav_tko_to, (double)in->z_m, (double)in->target_m);
-		if (!in->hover_ready)
+		if (!env_hover_ready(in->hover))
 			not_learned(in, r->more, sizeof r->more);
 		return true;
 	}
@@ -40,7 +41,7 @@ static bool timeout(struct env_limits *l, const struct env_limits_input *in, con
 		l->hold_s += in->dt_s;
 		if (l->hold_s > p->nav_hold_to) {
 			snprintf(r->why, sizeof r->why, "Hold entry failed: NAV_HOLD_TO %g s", (double)p->nav_hold_to);
-			if (!in->hover_ready)
+			if (!env_hover_ready(in->hover))
 				not_learned(in, r->more, sizeof r->more);
 			else
 				snprintf(r->more, sizeof r->more, "Still %+.3f m %+.3f m/s off the target",

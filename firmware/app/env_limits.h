@@ -14,6 +14,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "env_hover.h"
 #include "outbox.h"
 #include "params.h"
 
@@ -32,8 +33,7 @@ struct env_limits_input {
 	float target_m;            /* the take-off's target height above the ground */
 	float vz_mps;
 	bool sp_at_target;         /* the take-off's set point has reached the target */
-	bool hover_ready;          /* the hover throttle is learned (env_hover_ready) */
-	float hover_u, hover_sd;   /* the hover throttle learned so far and its sd */
+	const struct env_hover *hover;   /* the hover throttle learned so far */
 };
 
 /* A phase that ran out: the lines to post (more[0] == 0: one line), the command's final

@@ -54,7 +54,6 @@ static inline void step_limits(struct app *a, struct step *s)
 	bool takeoff = a->mode == APP_TAKEOFF, land = a->mode == APP_LAND;
 	if (!takeoff && !land)
 		return;
-	const struct hover_est *h = &a->env_hover.hov;
 	float ground = sc_to_float(a->guid.z_ground_m);
 	struct env_limits_input in = {
 		.takeoff = takeoff,
@@ -64,9 +63,7 @@ static inline void step_limits(struct app *a, struct step *s)
 		.target_m = sc_to_float(a->guid.z_target_m) - ground,
 		.vz_mps = a->fr.vel_i_mps[2],
 		.sp_at_target = a->guid.z_sp_m == a->guid.z_target_m,
-		.hover_ready = env_hover_ready(&a->env_hover),
-		.hover_u = sc_to_float(hover_est_u(h)),
-		.hover_sd = sc_to_float(hover_est_sd(h)),
+		.hover = &a->env_hover,
 	};
 	struct env_limits_req req;
 	if (env_limits_step(&a->env_limits, &in, &a->p, &req))
