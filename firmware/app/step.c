@@ -235,7 +235,8 @@ static inline void step_output(struct app *a, struct step *s)
 
 void app_step(struct app *a, float dt)
 {
-	struct step s = {.dt = dt};
+	struct step s;               /* each field set by the stage that makes it */
+	s.dt = dt;
 	step_inputs(a, &s);          /* the frame as scalars, the excitation cleared */
 	if (step_ground(a, &s))      /* disarmed or idle: rotors at rest, control reset */
 		return;
