@@ -1,4 +1,5 @@
-/* app.c - the autopilot's step, modes and commands (see app.h). */
+/* app.c - the autopilot's modes, commands, parameters and frame handling (see app.h); the
+ * control step itself is step.c. */
 #include "app.h"
 
 #include <math.h>
@@ -282,7 +283,7 @@ void app_set_mode(struct app *a, enum app_mode m)
 
 /* Parameters -> controllers, mixer and throttle map. Not in the 90 Hz step: a parameter
  * change (PARAM_SET, a parameter load, identification results) sets params_dirty and
- * app_settle() runs this between frames (see "between frames" below). */
+ * app_settle() runs this between frames (docs/architecture.md, "Between frames"). */
 static void sync_params(struct app *a)
 {
 	const struct app_params *p = &a->p;
@@ -562,7 +563,7 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 	return r;
 }
 
-/* ---------------------------------------------------------------- the control step */
+/* ---------------------------------------------------------------- identification results */
 
 /* Results are applied as soon as the experiment posts them (at the frame
  * boundary after its step: app_settle), not only when it finishes: in the full

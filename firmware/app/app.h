@@ -10,7 +10,7 @@
  *   app_tick(a)              often (main loop), and between frames: applies
  *                            identification results, rebuilds the mixer after
  *                            a parameter change, saves the parameter file,
- *                            link supervision (app.c: "between frames")
+ *                            link supervision (docs/architecture.md, "Between frames")
  *
  * A ground-station module (mav.h) reads the app through app_view, takes its
  * events with app_next_event and acts through the app_cmd_* functions.
@@ -122,7 +122,7 @@ struct app {
 	bool exp_ack_pending;         /* a final result of the experiment command is owed */
 	app_origin exp_origin;        /* to whom */
 
-	/* between frames (app.c): work the 90 Hz step does not do */
+	/* between frames (app_settle, app_tick): work the 90 Hz step does not do */
 	bool params_dirty;            /* a parameter changed: rebuild gains, mixer, map */
 	bool save_pending;            /* results applied: write the parameter file */
 	char param_text[8192];        /* the parameter file's text while it is loaded or saved */

@@ -3,7 +3,7 @@
  * the step: the height controller's hover thrust 8 VEH_KF u_h, and the gain on the attitude
  * loop's torque demands that takes out the throttle map's error at hover. Between frames:
  * the HOV_* values of a HOLD entry, and the VEH_KF seed before a rotor experiment.
- * The derivations are in docs/identification.md ("Flight envelope").
+ * Why: docs/octo-fw.md, "Flight envelope".
  *
  * Knows nothing of the app: it reads its inputs and the parameters, and what it asks of
  * the app (parameters to write, a status line to post) is in its outputs.

@@ -3,8 +3,8 @@
  * frame into the current second of plant time; between frames each whole second flown in
  * TAKEOFF or HOLD is judged: two seconds in a row whose rate rms exceeds 12 deg/s, the
  * second at least 0.8 of the first (not decaying), ask for ATT_WN_RP lowered by 15 %
- * (within its range). No experiment starts on an oscillating vehicle. Why: see
- * docs/identification.md ("Flight envelope").
+ * (within its range). No experiment starts on an oscillating vehicle. Why: docs/octo-fw.md,
+ * "Flight envelope".
  *
  * Knows nothing of the app: its judgement is a request (the gain to lower, from and to,
  * with the rms for the warning) that the app carries out.
