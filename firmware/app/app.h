@@ -176,7 +176,7 @@ bool app_flying(const struct app *a);
  * refusal, a reason in `why`. All are idempotent: a retry gets the same answer. */
 enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size_t cap);
 /* Take-off and landing: ACCEPTED at once; should the phase then run out of its
- * time limit (envelope.h), an APP_EV_CMD_DONE event FAILED goes to `origin`
+ * time limit (env_limits.h), an APP_EV_CMD_DONE event FAILED goes to `origin`
  * (APP_ORIGIN_NONE: to no one). */
 enum app_result app_cmd_takeoff(struct app *a, float height_m, app_origin origin, char *why, size_t cap);
 enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t cap);

@@ -787,7 +787,7 @@ UNIT_TEST(app_f_cmp_is_the_ieee_order)
 	CHECK(bad == 0);
 }
 
-/* What the app's conversions of the log rely on (app.c: excitation_to_float, to_float_kept):
+/* What the app's conversions of the log rely on (boundary.h: bnd_excitation_to_float, bnd_kept_to_float):
  * a scalar and its negation convert to floats of opposite sign, 0 to +0.0f and +0.0f to 0,
  * over random scalars of every magnitude. */
 UNIT_TEST(app_sc_to_float_is_odd)
