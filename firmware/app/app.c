@@ -1,4 +1,5 @@
-/* app.c - the autopilot's step, modes and commands (see app.h). */
+/* app.c - the autopilot's modes, commands, parameters and frame handling (see app.h); the
+ * control step itself is step.c. */
 #include "app.h"
 
 #include <math.h>
@@ -44,68 +45,18 @@ static scalar_t frame_yaw(const struct hal_sensor_frame *f)
 	return quat_yaw(frame_q(f));
 }
 
-/* All throttles to t (the float sent and, in the fixed build, its scalar copy). */
-static void set_thr_all(struct app *a, float t)
+void app_set_thr_all(struct app *a, float t)
 {
 	for (int j = 0; j < HAL_ROTORS; j++)
 		a->thr[j] = t;
-#if OCTO_FIXED
-	scalar_t ts = sc_from_float(t);
-	for (int j = 0; j < HAL_ROTORS; j++)
-		a->thr_sc[j] = ts;
-#endif
+	bnd_thr_all(&a->bnd, t);
 }
-
-#if OCTO_FIXED
-/* sc_to_float(v) and sc_from_float(f) through a kept pair: the conversion runs only when the
- * value differs from the last one (the zeroed pair is right: 0 converts to +0.0f and +0.0f
- * to 0). The float is compared by its bits: one float converts to one scalar. */
-static float to_float_kept(struct app_sc_kept *k, scalar_t v)
-{
-	if (v != k->v) {
-		k->v = v;
-		k->f = sc_to_float(v);
-	}
-	return k->f;
-}
-
-static scalar_t from_float_kept(struct app_sc_kept *k, float f)
-{
-	union { float f; uint32_t u; } x = {f}, y = {k->f};
-	if (x.u != y.u) {
-		k->f = f;
-		k->v = sc_from_float(f);
-	}
-	return k->v;
-}
-#define TO_FLOAT_KEPT(a, i, v) to_float_kept(&(a)->log_sp_kept[i], v)
-#define FROM_FLOAT_KEPT(a, k, f) from_float_kept(&(a)->k, f)
-#else
-#define TO_FLOAT_KEPT(a, i, v) ((void)(a), (v))
-#define FROM_FLOAT_KEPT(a, k, f) ((void)(a), (f))
-#endif
 
 /* the frame's position as scalars */
 static void frame_pos(const struct hal_sensor_frame *f, scalar_t pos[3])
 {
 	for (int i = 0; i < 3; i++)
 		pos[i] = sc_from_float(f->pos_i_m[i]);
-}
-
-/* what guidance flies in each mode */
-static enum guid_mode guid_mode_of(enum app_mode m)
-{
-	switch (m) {
-	case APP_TAKEOFF:
-		return GUID_TAKEOFF;
-	case APP_HOLD:
-	case APP_EXPERIMENT:
-		return GUID_HOLD;
-	case APP_LAND:
-		return GUID_LAND;
-	default:
-		return GUID_GROUND;
-	}
 }
 
 bool app_hovering(const struct app *a)
@@ -186,7 +137,127 @@ static void end_id_run(struct app *a)
 	post_id(a, r);
 }
 
-static void set_mode(struct app *a, enum app_mode m)
+/* ---------------------------------------------------------------- the flight envelope's requests
+ *
+ * env_hover, env_kf, env_osc and env_limits learn and guard; what they ask for (parameters
+ * to write, a status line, a landing) the app carries out here. */
+
+/* A parameter changed by the envelope: the ground station hears of it (PARAM_VALUE). */
+static void post_param(struct app *a, int index)
+{
+	struct app_event ev = {.kind = APP_EV_PARAM, .param_index = (uint16_t)index};
+	outbox_post(&a->outbox, &ev);
+}
+
+/* A live value for the ground station (NAMED_VALUE_FLOAT). */
+static void post_value(struct app *a, const char *name, float v)
+{
+	struct app_event ev = {.kind = APP_EV_VALUE, .value = v};
+	snprintf(ev.text, sizeof ev.text, "%s", name);
+	outbox_post(&a->outbox, &ev);
+}
+
+static void set_param(struct app *a, int i, float v, bool announce)
+{
+	if (params_set(&a->p, (size_t)i, v) == PARAM_OK && announce)
+		post_param(a, i);
+}
+
+static void set_veh_kf(struct app *a, float kf, const char *why)
+{
+	float old = a->p.veh_kf;
+	if (params_set(&a->p, PX_VEH_KF, kf) != PARAM_OK)
+		return;
+	post_param(a, PX_VEH_KF);
+	a->params_dirty = true;
+	a->save_pending = true;
+	app_status(a, APP_SEV_INFO, "VEH_KF %.2f -> %.2f N (%s)", (double)old, (double)kf, why);
+}
+
+/* Between frames: what the last step noted. */
+static void env_publish(struct app *a)
+{
+	struct env_hover_pub hp;
+	if (env_hover_publish(&a->env_hover, &a->p, &hp)) {   /* a HOLD entry */
+		set_param(a, PX_HOV_THR, hp.u, true);
+		set_param(a, PX_HOV_THR_SD, hp.sd, true);
+		set_param(a, PX_HOV_KF, hp.kf, true);
+		set_param(a, PX_HOV_KF_SD, hp.kf_sd, true);
+		app_status(a, APP_SEV_INFO, "Hover throttle %.4f+/-%.4f, k_f %.2f+/-%.2f N", (double)hp.u,
+			   (double)hp.sd, (double)hp.kf, (double)hp.kf_sd);
+	}
+	struct env_kf_pub kp;
+	if (env_kf_due(&a->env_kf) &&
+	    env_kf_publish(&a->env_kf, &a->p, hal_wall_us(a->hal), a->fr.t_s, a->dt_frame, &kp)) {
+		set_param(a, PX_KFT_EST, kp.k, kp.announce);
+		set_param(a, PX_KFT_SD, kp.sd, kp.announce);
+		set_param(a, PX_KFT_T, kp.t, kp.announce);
+		set_param(a, PX_KFT_MEM, kp.mem, kp.announce);
+		if (kp.announce) {
+			post_value(a, "KFT", kp.k);
+			post_value(a, "KFT_SD", kp.sd);
+		}
+		if (kp.clear_apply)
+			set_param(a, PX_KFT_APPLY, 0.0f, true);
+		if (kp.refresh)
+			set_veh_kf(a, kp.kf, kp.why);
+	}
+	struct env_osc_req oq;
+	if (env_osc_judge(&a->env_osc, &a->p, &oq)) {
+		if (oq.at_min || params_set(&a->p, PX_ATT_WN_RP, oq.nw) != PARAM_OK) {
+			app_status(a, APP_SEV_WARNING, "Attitude oscillation %.0f deg/s: ATT_WN_RP at its minimum",
+				   (double)oq.rms_dps);
+		} else {
+			post_param(a, PX_ATT_WN_RP);
+			a->params_dirty = true;
+			a->save_pending = true;
+			app_status(a, APP_SEV_WARNING, "Attitude oscillation %.0f deg/s: ATT_WN_RP %.2f -> %.2f",
+				   (double)oq.rms_dps, (double)oq.wn, (double)oq.nw);
+		}
+	}
+}
+
+/* On every mode change. */
+static void env_on_mode(struct app *a)
+{
+	env_limits_on_mode(&a->env_limits);
+	if (a->mode == APP_TAKEOFF && env_hover_untaught(&a->env_hover)) {
+		/* nothing learned yet: start from the current VEH_* */
+		env_kf_init(&a->env_kf, &a->p);
+		env_hover_init(&a->env_hover, &a->p);
+	}
+	if (a->mode == APP_HOLD)
+		env_hover_on_hold(&a->env_hover);   /* published between frames */
+}
+
+/* Before experiment `id`: VEH_KF from the hover throttle (NAV_KF_SEED, env_hover.h). */
+static void seed_kf(struct app *a, int id)
+{
+	float kf, old = a->p.veh_kf;
+	if (!env_hover_seed_kf(&a->env_hover, &a->p, id, &kf) || params_set(&a->p, PX_VEH_KF, kf) != PARAM_OK)
+		return;
+	post_param(a, PX_VEH_KF);
+	a->params_dirty = true;
+	app_status(a, APP_SEV_INFO, "VEH_KF %.2f -> %.2f N (hover throttle)", (double)old, (double)kf);
+}
+
+void app_phase_timeout(struct app *a, const struct env_limits_req *r)
+{
+	app_status(a, APP_SEV_ERROR, "%s", r->why);
+	if (r->more[0])
+		app_status(a, APP_SEV_ERROR, "%s", r->more);
+	if (r->cmd && r->origin != APP_ORIGIN_NONE) {
+		struct app_event ev = {.kind = APP_EV_CMD_DONE, .cmd = r->cmd, .result = APP_FAILED,
+				       .origin = r->origin};
+		outbox_post(&a->outbox, &ev);
+	}
+	if (r->land) {   /* the take-off or its hold entry ran out: land */
+		char w[8];
+		app_cmd_land(a, APP_ORIGIN_NONE, w, sizeof w);   /* the take-off's origin has its answer */
+	}
+}
+
+void app_set_mode(struct app *a, enum app_mode m)
 {
 	if (a->mode == m)
 		return;
@@ -205,14 +276,14 @@ static void set_mode(struct app *a, enum app_mode m)
 	}
 	a->mode = m;
 	app_status(a, APP_SEV_INFO, "Mode %s", app_mode_name(m));
-	envelope_on_mode(a);
+	env_on_mode(a);
 }
 
 /* ---------------------------------------------------------------- parameters -> modules */
 
 /* Parameters -> controllers, mixer and throttle map. Not in the 90 Hz step: a parameter
  * change (PARAM_SET, a parameter load, identification results) sets params_dirty and
- * app_settle() runs this between frames (see "between frames" below). */
+ * app_settle() runs this between frames (docs/architecture.md, "Between frames"). */
 static void sync_params(struct app *a)
 {
 	const struct app_params *p = &a->p;
@@ -275,10 +346,11 @@ static void sync_params(struct app *a)
 		tp.scale[j] = sc_from_float(scale[j]);
 	thrmap_init(&a->map, &tp);
 	rotor_guard_sync(&a->rf, p);
-	envelope_model_sync(a);
+	env_kf_model_sync(&a->env_kf, p);
+	env_hover_model_sync(&a->env_hover, p);
 }
 
-static void reset_control(struct app *a)
+void app_reset_control(struct app *a)
 {
 	att_ctrl_reset(&a->att);
 	alt_ctrl_reset(&a->alt, SC_ZERO);
@@ -302,7 +374,8 @@ void app_init(struct app *a, const struct hal *hal)
 	char why[64];
 	if (app_params_load(a, why, sizeof why) != APP_ACCEPTED)
 		hal_reportf(a->hal, "params: %s (defaults in use)", why);
-	envelope_init(a);
+	env_kf_init(&a->env_kf, &a->p);
+	env_hover_init(&a->env_hover, &a->p);
 	a->exp.mix = &a->mix;   /* the inertia phases take the body torque through the mixer's Gamma */
 	rotor_guard_init(&a->rf);
 	sync_params(a);
@@ -381,8 +454,8 @@ enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size
 		scalar_t pos[3];
 		frame_pos(&a->fr, pos);
 		guid_arm(&a->guid, pos, frame_yaw(&a->fr));
-		reset_control(a);
-		set_mode(a, APP_IDLE);
+		app_reset_control(a);
+		app_set_mode(a, APP_IDLE);
 		return APP_ACCEPTED;
 	}
 	if (a->mode == APP_DISARMED)
@@ -393,8 +466,8 @@ enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size
 	}
 	if (a->mode == APP_EXPERIMENT)
 		exp_abort(&a->exp, "disarmed");
-	set_thr_all(a, 0.0f);
-	set_mode(a, APP_DISARMED);
+	app_set_thr_all(a, 0.0f);
+	app_set_mode(a, APP_DISARMED);
 	return APP_ACCEPTED;
 }
 
@@ -416,14 +489,14 @@ enum app_result app_cmd_takeoff(struct app *a, float height_m, app_origin origin
 	}
 	scalar_t pos[3];
 	frame_pos(&a->fr, pos);
-	if (!guid_takeoff(&a->guid, guid_mode_of(a->mode), sc_from_float(height_m), pos, frame_yaw(&a->fr)))
+	if (!guid_takeoff(&a->guid, app_guid_mode(a->mode), sc_from_float(height_m), pos, frame_yaw(&a->fr)))
 		return APP_ACCEPTED;   /* a retry: nothing changes */
 	if (a->mode == APP_IDLE)
-		reset_control(a);
+		app_reset_control(a);
 	app_status(a, APP_SEV_INFO, "Takeoff to %.2f m", (double)height_m);
-	envelope_on_command(a, APP_CMD_TAKEOFF, origin);
+	env_limits_on_command(&a->env_limits, APP_CMD_TAKEOFF, origin);
 	a->mode = APP_HOLD;   /* so that set_mode reports the change even from HOLD */
-	set_mode(a, APP_TAKEOFF);
+	app_set_mode(a, APP_TAKEOFF);
 	return APP_ACCEPTED;
 }
 
@@ -436,8 +509,8 @@ enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t
 	case APP_LAND:
 		return APP_ACCEPTED;
 	case APP_IDLE:
-		set_thr_all(a, 0.0f);
-		set_mode(a, APP_DISARMED);
+		app_set_thr_all(a, 0.0f);
+		app_set_mode(a, APP_DISARMED);
 		return APP_ACCEPTED;
 	case APP_EXPERIMENT:
 		exp_abort(&a->exp, "landing");
@@ -445,8 +518,8 @@ enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t
 	case APP_TAKEOFF:
 	case APP_HOLD:
 		guid_land(&a->guid, sc_from_float(a->fr.pos_i_m[2]));
-		envelope_on_command(a, APP_CMD_LAND, origin);
-		set_mode(a, APP_LAND);
+		env_limits_on_command(&a->env_limits, APP_CMD_LAND, origin);
+		app_set_mode(a, APP_LAND);
 		return APP_ACCEPTED;
 	}
 	return APP_FAILED;
@@ -462,7 +535,7 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 	if (id == 0) {
 		if (a->mode == APP_EXPERIMENT) {
 			exp_abort(&a->exp, "stopped by command");
-			set_mode(a, APP_HOLD);
+			app_set_mode(a, APP_HOLD);
 		}
 		return APP_ACCEPTED;
 	}
@@ -476,9 +549,9 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 		snprintf(why, cap, "Experiment %d refused: not hovering", id);
 		return APP_DENIED;
 	}
-	if (envelope_oscillating(a)) {   /* its excitation would take the tilt past the limit */
+	if (env_osc_oscillating(&a->env_osc)) {   /* its excitation would take the tilt past the limit */
 		snprintf(why, cap, "Experiment %d refused: attitude oscillating (%.0f deg/s rms)", id,
-			 (double)envelope_osc_rms_dps(a));
+			 (double)env_osc_rms_dps(&a->env_osc));
 		return APP_BUSY;
 	}
 	/* every experiment regresses on each rotor's measured thrust and torque (X-Plane's rows
@@ -489,13 +562,13 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 			 id);
 		return APP_DENIED;
 	}
-	envelope_seed_kf(a, id);
+	seed_kf(a, id);
 	int r = exp_start(&a->exp, id, &a->p, why, cap);
 	if (r == APP_ACCEPTED || r == APP_IN_PROGRESS) {
 		a->id_run.run_id++;
 		a->id_run.count = 0;
 		a->id_run.done = false;
-		set_mode(a, APP_EXPERIMENT);
+		app_set_mode(a, APP_EXPERIMENT);
 		a->exp_ack_pending = true;
 		a->exp_origin = origin;
 		r = APP_IN_PROGRESS;
@@ -503,7 +576,7 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 	return r;
 }
 
-/* ---------------------------------------------------------------- the control step */
+/* ---------------------------------------------------------------- identification results */
 
 /* Results are applied as soon as the experiment posts them (at the frame
  * boundary after its step: app_settle), not only when it finishes: in the full
@@ -539,38 +612,12 @@ static void apply_results(struct app *a)
 
 /* ---------------------------------------------------------------- between frames
  *
- * The 90 Hz step (control_step) only reads what the parameters imply: gains, mixer
- * (pseudo-inverse, facets) and throttle map. Whatever changes them runs between
- * frames, after the frame's actuation has gone out and before the next frame's step:
- *   app_settle()  publishes what the last step's envelope noted (envelope_publish: a
- *                 HOLD entry's HOV_* and status line, the tracked k_f's KFT_* each second
- *                 and a VEH_KF refresh), ends an experiment phase that ended in the last step and starts the
- *                 next (exp_turn: estimates, verdicts, status lines), applies results the
- *                 experiment posted (PARAM_VALUE for each) and,
- *                 when a parameter changed (params_dirty), rebuilds gains, mixer and
- *                 throttle map (sync_params; the mixer's set-up is ~370,000
- *                 instructions on Cortex-M4F, ~75 steps' worth). It runs first
- *                 in app_tick (the main loop's pass after the frame), and as a
- *                 fallback at the start of app_on_frame and app_on_ground, so that no
- *                 step, command or PARAM_SET ever sees a result half applied or the
- *                 old mixer beside new parameters (the mixer and throttle map are
- *                 rebuilt at a frame boundary);
- *   app_tick()    then writes the parameter file when results were applied
- *                 (save_pending).
- * On an MCU the step runs in the frame interrupt (or a high-priority task) and this in a
- * low-priority task: it would build a shadow struct mixer / struct thrmap from a copy
- * of the parameters and swap a pointer at a frame boundary (the step reads the pointer
- * once at its start), so that the step is never delayed by the set-up and never reads a
- * half-built mixer. That double buffer costs a second struct mixer (2.7 KB, more than the
- * 4 KB core RAM budget leaves) and is not implemented here: the host runs both paths in
- * one thread, so a rebuild between frames is already atomic for the step. If the
- * low-priority work has not finished when the next frame comes (or, on the host, several
- * frames arrive in one pass of the main loop), the step starts with app_settle and waits
- * for it: a late step, never an inconsistent one. */
+ * What changes the gains, mixer and throttle map runs here, at a frame boundary, never in
+ * the step: docs/architecture.md, "Between frames". */
 void app_settle(struct app *a)
 {
-	envelope_publish(a);        /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh */
-	envelope_torque_scale(a);   /* the torque demands' gain, from the hover throttle learned so far */
+	env_publish(a);   /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh, a detune */
+	env_hover_torque_scale(&a->env_hover, &a->p);   /* the torque demands' gain, from the hover learned so far */
 	exp_turn(&a->exp, &a->p);   /* a phase that ended in the last step: close it, start the next */
 	if (a->exp.n_ids > 0)
 		publish_ids(a);
@@ -582,297 +629,34 @@ void app_settle(struct app *a)
 	}
 }
 
-static void experiment_step(struct app *a, float dt)
-{
-	/* the rotor torques: only the rotor and inertia phases read them */
-	const scalar_t *torque = NULL;
-	if (exp_reads_torque(&a->exp)) {
-#if OCTO_FIXED
-		for (int j = 0; j < HAL_ROTORS; j++)
-			a->fs.rotor_torque_nm[j] = sc_from_float(a->fr.rotor_torque_nm[j]);
-#endif
-		torque = app_in(a)->rotor_torque_nm;
-	}
-	/* the thrusts allocated last step: the mixer's output (the log's rotor_f in floats) */
-	struct exp_input in = {&a->fr, app_in(a)->rotor_thrust_n, torque,
-			       app_in(a)->rate_b_rps, dt, &a->p, a->wrench_dem, a->mix_out.f_n,
-			       app_thr_sc(a), a->dt_frame};
-	enum exp_state st = exp_step(&a->exp, &in, &a->exp_out);
-	if (st != EXP_RUNNING) {
-		memset(&a->exp_out, 0, sizeof a->exp_out);
-		set_mode(a, APP_HOLD);
-	}
-}
-
-/* The frame's float inputs as scalars, once per step (the fixed build; the rotor torques
- * only for the experiments: experiment_step). */
-static void frame_to_sc(struct app *a)
-{
-#if OCTO_FIXED
-	const struct hal_sensor_frame *f = &a->fr;
-	struct app_frame_sc *s = &a->fs;
-	for (int i = 0; i < 4; i++)
-		s->q_ib[i] = sc_from_float(f->q_ib[i]);
-	for (int i = 0; i < 3; i++) {
-		s->rate_b_rps[i] = sc_from_float(f->rate_b_rps[i]);
-		s->pos_i_m[i] = sc_from_float(f->pos_i_m[i]);
-		s->vel_i_mps[i] = sc_from_float(f->vel_i_mps[i]);
-	}
-	for (int j = 0; j < HAL_ROTORS; j++)
-		s->rotor_thrust_n[j] = sc_from_float(f->rotor_thrust_n[j]);
-#else
-	(void)a;
-#endif
-}
-
-static void control_step(struct app *a, float dt)
-{
-	const struct app_params *p = &a->p;
-	frame_to_sc(a);
-	const scalar_t *pos = app_in(a)->pos_i_m, *vel = app_in(a)->vel_i_mps, *qf = app_in(a)->q_ib;
-	struct quat q = quat_normalize((struct quat){qf[0], qf[1], qf[2], qf[3]});
-
-	memset(&a->exp_out, 0, sizeof a->exp_out);
-	struct guid_input gi = {pos[2], vel[2], FROM_FLOAT_KEPT(a, dt_kept, dt), false};
-	if (a->mode == APP_DISARMED || a->mode == APP_IDLE) {
-		set_thr_all(a, a->mode == APP_IDLE ? p->mot_thr_idle : 0.0f);
-		reset_control(a);
-		guid_ground(&a->guid, gi.z_m, a->mode == APP_IDLE);
-		memset(a->wrench_dem, 0, sizeof a->wrench_dem);
-		memset(a->log.rotor_f, 0, sizeof a->log.rotor_f);
-		a->mix_out.limits = 0;
-		return;
-	}
-
-	envelope_limits(a, dt);   /* take-off and landing time limits */
-
-	/* guidance: set points and mode transitions (take-off ends once the hover is learned) */
-	gi.hold_ready = a->mode == APP_TAKEOFF && envelope_hover_ready(a);
-	uint32_t ev = guid_update(&a->guid, guid_mode_of(a->mode), &gi);
-	if (ev & GUID_HOLD_REACHED)
-		set_mode(a, APP_HOLD);
-	if (ev & GUID_LANDED) {
-		set_thr_all(a, 0.0f);
-		app_status(a, APP_SEV_INFO, "Landed");
-		set_mode(a, APP_DISARMED);
-		return;
-	}
-
-	/* horizontal: hold the position of the take-off through small tilts (level near the
-	 * ground during take-off) */
-	struct pos_ctrl_input pi = {
-		.pos_sp_m = {a->guid.pos_sp_m[0], a->guid.pos_sp_m[1]},
-		.pos_m = {pos[0], pos[1]},
-		.vel_mps = {vel[0], vel[1]},
-		.q_b2i = q,
-	};
-	struct pos_ctrl_output po = pos_ctrl_update(&a->pos, &pi);
-	if (guid_level_only(&a->guid, guid_mode_of(a->mode), gi.z_m))
-		po.roll_rad = po.pitch_rad = SC_ZERO;
-	if (!a->yaw_half_ok || a->guid.yaw_sp_rad != a->yaw_half_of) {
-		a->yaw_half_of = a->guid.yaw_sp_rad;
-		a->yaw_half = quat_yaw_half(a->yaw_half_of);
-		a->yaw_half_ok = true;
-	}
-	struct quat q_sp = quat_from_euler_yh(po.roll_rad, po.pitch_rad, a->yaw_half);
-	a->log.q_sp[0] = sc_to_float(q_sp.w);
-	a->log.q_sp[1] = sc_to_float(q_sp.x);
-	a->log.q_sp[2] = sc_to_float(q_sp.y);
-	a->log.q_sp[3] = sc_to_float(q_sp.z);
-
-	/* attitude and height control; what the allocation cut on the previous step stops
-	 * their integrals from winding further that way */
-	uint8_t short_pos, short_neg;
-	mixer_shortfall(&a->mix_out, &short_pos, &short_neg);
-	struct att_ctrl_input ai = {
-		.q_sp_b2i = q_sp,
-		.rate_ff_b = vec3_zero(),
-		.q_b2i = q,
-		.rate_b_rps = vec3_make(app_in(a)->rate_b_rps[0], app_in(a)->rate_b_rps[1],
-					app_in(a)->rate_b_rps[2]),
-		.inertia_kgm2 = a->ps.inertia_kgm2,
-		.dt_s = gi.dt_s,
-		.alloc_short_pos = (uint8_t)(short_pos >> 1),
-		.alloc_short_neg = (uint8_t)(short_neg >> 1),
-	};
-	struct vec3 tau;
-	att_ctrl_update(&a->att, &ai, &tau);
-	tau = envelope_torque(a, tau);   /* the throttle map's error at hover taken out */
-	envelope_osc_step(a);            /* the rates into the oscillation guard's second */
-	scalar_t cos_tilt = quat_body_z_up(q);
-	struct alt_ctrl_input li = {
-		.z_sp_m = a->guid.z_sp_m,
-		.vz_ff_mps = a->guid.vz_ff_mps,
-		.z_m = gi.z_m,
-		.vz_mps = gi.vz_mps,
-		.q_b2i = q,
-		.mass_kg = a->ps.mass_kg,
-		.dt_s = gi.dt_s,
-		.hover_f_n = envelope_hover_f(a, gi.dt_s, cos_tilt),
-		.alloc_short_up = (short_pos & 1u) != 0,
-		.alloc_short_down = (short_neg & 1u) != 0,
-	};
-	scalar_t fz = alt_ctrl_update(&a->alt, &li);
-	a->wrench_dem[0] = sc_to_float(fz);
-	a->wrench_dem[1] = sc_to_float(tau.x);
-	a->wrench_dem[2] = sc_to_float(tau.y);
-	a->wrench_dem[3] = sc_to_float(tau.z);
-
-	/* experiment: excitation on top of the hover control */
-	if (a->mode == APP_EXPERIMENT) {
-		/* tilt > EXP_TILT_ABORT_DEG, without acosf: the body's z axis vs cos(limit) */
-		if (cos_tilt < sc_from_float(cosf(EXP_TILT_ABORT_DEG * DEG_F))) {
-			exp_abort(&a->exp, "attitude limit");
-		}
-		experiment_step(a, dt);
-	}
-
-	/* allocation and throttle map, in scalars (the same float operations in the float
-	 * build; integer ones in the fixed build); outside an experiment the excitation is zero
-	 * (cleared above) and adds nothing */
-	bool excited = a->mode == APP_EXPERIMENT;
-	scalar_t demand[MIXER_N_AXES] = {fz, tau.x, tau.y, tau.z};
-	if (excited) {
-		demand[0] = sc_add(demand[0], a->exp_out.f_delta);
-		for (int i = 0; i < 3; i++)
-			demand[i + 1] = sc_add(demand[i + 1], a->exp_out.tau_delta[i]);
-	}
-	mixer_update(&a->mix, demand, &a->mix_out);
-	scalar_t thr[HAL_ROTORS];
-	a->thr_clamped = thrmap_update(&a->map, a->mix_out.f_n, thr, HAL_ROTORS);
-	const scalar_t thr_max = a->ps.thr_max;   /* read once: the stores below are floats too */
-	for (int j = 0; j < HAL_ROTORS; j++) {
-		a->log.rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
-		scalar_t t = excited ? sc_add(thr[j], a->exp_out.thr_delta[j]) : thr[j];
-		t = sc_clamp(sc_isfinite(t) ? t : SC_ZERO, SC_ZERO, thr_max);
-		a->thr[j] = sc_to_float(t);
-#if OCTO_FIXED
-		a->thr_sc[j] = t;   /* sc_from_float(thr[j]) exactly: a throttle in [0, 1] is a float */
-#endif
-	}
-}
-
 /* ---------------------------------------------------------------- per frame */
 
-/* Float arrays of the log by assignment, not memcpy: the library call costs more than the
- * copy for these few words on Cortex-M0 (alignment checks, a loop, no inlining). copy4n
- * loads four words before it stores them, which the compiler keeps as a plain copy (a loop
- * of single copies it would turn back into a memcpy call). */
-static inline void copy3(float d[3], const float s[3])
+/* This frame's record: the log table filled (log.c) and handed to the platform. */
+static void log_frame(struct app *a, bool stepped, float dt)
 {
-	d[0] = s[0];
-	d[1] = s[1];
-	d[2] = s[2];
-}
-
-static inline void copy4n(float *restrict d, const float *restrict s, int n)
-{
-	for (int i = 0; i < n; i += 4) {
-		float x0 = s[i], x1 = s[i + 1], x2 = s[i + 2], x3 = s[i + 3];
-		d[i] = x0;
-		d[i + 1] = x1;
-		d[i + 2] = x2;
-		d[i + 3] = x3;
-	}
-}
-
-/* The excitation's throttles as floats. A dither gives the rotors a few values and their
- * negations (the rotor experiment: two magnitudes per step), and a Q16.16 value and its
- * negation convert to floats of opposite sign: each magnitude is converted once (the last
- * two kept). */
-static void excitation_to_float(float out[HAL_ROTORS], const scalar_t d[HAL_ROTORS])
-{
-#if OCTO_FIXED
-	uint32_t m0 = 0u, m1 = 0u;
-	float f0 = 0.0f, f1 = 0.0f;
-	for (int j = 0; j < HAL_ROTORS; j++) {
-		scalar_t v = d[j];
-		uint32_t m = v < 0 ? 0u - (uint32_t)v : (uint32_t)v;
-		float f;
-		if (m == m0) {
-			f = f0;
-		} else if (m == m1) {
-			f = f1;
-		} else if (m > (uint32_t)INT32_MAX) {   /* INT32_MIN: no positive twin */
-			out[j] = sc_to_float(v);
-			continue;
-		} else {
-			f = sc_to_float((scalar_t)m);
-			m1 = m0;
-			f1 = f0;
-			m0 = m;
-			f0 = f;
-		}
-		out[j] = v < 0 ? -f : f;
-	}
-#else
-	for (int j = 0; j < HAL_ROTORS; j++)
-		out[j] = d[j];
-#endif
-}
-
-#define LOG_LEN(field) (sizeof ((struct app_log_frame *)0)->field / sizeof(float))
-_Static_assert(LOG_LEN(q) == 4 && LOG_LEN(rotor_thrust) == HAL_ROTORS && LOG_LEN(rotor_torque) == HAL_ROTORS &&
-		       LOG_LEN(rotor_speed) == HAL_ROTORS &&
-		       LOG_LEN(throttle) == HAL_ROTORS && LOG_LEN(est) == EXP_MAX_EST && LOG_LEN(est_sd) == EXP_MAX_EST &&
-		       HAL_ROTORS % 4 == 0 && EXP_MAX_EST % 4 == 0,
-	       "the log's arrays are copied whole, four floats at a time");
-
-static void fill_log(struct app *a, bool stepped, float dt)
-{
-	struct app_log_frame *l = &a->log;
-	const struct hal_sensor_frame *f = &a->fr;
-	/* every field is set below but q_sp and rotor_f, which the step writes (the platform
-	 * serialises the record field by field, so padding is not cleared on every frame) */
-	l->seq = f->seq;
-	l->t = f->t_s;
-	l->dt = stepped ? dt : 0.0f;
-	l->stepped = stepped;
-	l->armed = a->mode != APP_DISARMED;
-	l->link_ok = a->link_ok;
-	l->mode = (int8_t)a->mode;
-	l->valid = (int32_t)f->valid;
-	copy4n(l->q, f->q_ib, 4);
-	copy3(l->rate_b, f->rate_b_rps);
-	copy3(l->pos_i, f->pos_i_m);
-	copy3(l->vel_i, f->vel_i_mps);
-	copy4n(l->rotor_thrust, f->rotor_thrust_n, HAL_ROTORS);
-	copy4n(l->rotor_torque, f->rotor_torque_nm, HAL_ROTORS);
-	copy3(l->accel_b, f->accel_b_g);
-	copy4n(l->rotor_speed, f->rotor_speed_rps, HAL_ROTORS);
-	l->z_sp = TO_FLOAT_KEPT(a, 0, a->guid.z_sp_m);
-	l->vz_ff = TO_FLOAT_KEPT(a, 1, a->guid.vz_ff_mps);
-	l->pos_sp[0] = TO_FLOAT_KEPT(a, 2, a->guid.pos_sp_m[0]);
-	l->pos_sp[1] = TO_FLOAT_KEPT(a, 3, a->guid.pos_sp_m[1]);
-	l->f_dem = a->wrench_dem[0];
-	for (int i = 0; i < 3; i++)
-		l->tau_dem[i] = a->wrench_dem[i + 1];
-	l->f_alloc = sc_to_float(a->mix_out.achieved[0]);
-	for (int i = 0; i < 3; i++)
-		l->tau_alloc[i] = sc_to_float(a->mix_out.achieved[i + 1]);
-	excitation_to_float(l->excitation, a->exp_out.thr_delta);
-	copy4n(l->throttle, a->thr, HAL_ROTORS);
-	l->att_flags = (int32_t)a->att.flags;
-	l->alt_flags = (int32_t)a->alt.flags;
-	l->mix_flags = (int32_t)a->mix_out.limits;
-	l->thr_clamped = (int32_t)a->thr_clamped;
-	l->exp_id = (int8_t)(a->mode == APP_EXPERIMENT ? a->exp.id : 0);
-	l->exp_phase = (int8_t)a->exp.phase;
-	l->exp_progress = a->exp.progress;
-	copy4n(l->est, a->exp.est, EXP_MAX_EST);
-	copy4n(l->est_sd, a->exp.est_sd, EXP_MAX_EST);
-	l->kf = a->p.veh_kf;
-	l->ktau = a->p.veh_ktau;
-	l->inertia[0] = a->p.veh_ixx;
-	l->inertia[1] = a->p.veh_iyy;
-	l->inertia[2] = a->p.veh_izz;
-	l->mass = a->p.veh_mass;
-	if (a->env.kft.started) {
-		l->kft = sc_to_float(a->env.kft.k);
-		l->kft_sd = sc_to_float(kf_track_sd(&a->env.kft));
-	} else {
-		l->kft = l->kft_sd = 0.0f;
-	}
+	struct log_src s = {
+		.fr = &a->fr,
+		.stepped = stepped,
+		.dt = dt,
+		.mode = (int8_t)a->mode,
+		.armed = a->mode != APP_DISARMED,
+		.link_ok = a->link_ok,
+		.experiment = a->mode == APP_EXPERIMENT,
+		.guid = &a->guid,
+		.wrench_dem = a->wrench_dem,
+		.mix_out = &a->mix_out,
+		.excitation = a->exp_out.thr_delta,
+		.thr = a->thr,
+		.att_flags = a->att.flags,
+		.alt_flags = a->alt.flags,
+		.thr_clamped = a->thr_clamped,
+		.exp = &a->exp,
+		.p = &a->p,
+		.kf = &a->env_kf,
+		.bnd = &a->bnd,
+	};
+	log_fill(&a->log, &s);
+	hal_log_frame(a->hal, &a->log);
 }
 
 static void link_back(struct app *a, float gap_s)
@@ -898,7 +682,7 @@ static void abort_experiment(struct app *a, const char *reason)
 		return;
 	exp_abort(&a->exp, reason);
 	memset(&a->exp_out, 0, sizeof a->exp_out);
-	set_mode(a, APP_HOLD);
+	app_set_mode(a, APP_HOLD);
 }
 
 static void link_lost(struct app *a, const char *what)
@@ -993,7 +777,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 			/* After frames missing the controllers were out of the loop (their last
 			 * command held): they take one frame period, not the gap, so that their
 			 * integrators do not wind up over time they could not act in. */
-			control_step(a, missing && a->dt_frame > 0.0f ? a->dt_frame : dt);
+			app_step(a, missing && a->dt_frame > 0.0f ? a->dt_frame : dt);
 			a->steps++;
 			stepped = true;
 		}
@@ -1007,8 +791,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 		a->have_actuated = true;
 		a->n_actuated = f->frame_n;
 	}
-	fill_log(a, stepped, dt);
-	hal_log_frame(a->hal, &a->log);
+	log_frame(a, stepped, dt);
 }
 
 struct app_view app_view(const struct app *a)

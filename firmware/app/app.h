@@ -10,7 +10,7 @@
  *   app_tick(a)              often (main loop), and between frames: applies
  *                            identification results, rebuilds the mixer after
  *                            a parameter change, saves the parameter file,
- *                            link supervision (app.c: "between frames")
+ *                            link supervision (docs/architecture.md, "Between frames")
  *
  * A ground-station module (mav.h) reads the app through app_view, takes its
  * events with app_next_event and acts through the app_cmd_* functions.
@@ -30,7 +30,11 @@
 
 #include "alt_ctrl.h"
 #include "att_ctrl.h"
-#include "envelope.h"
+#include "boundary.h"
+#include "env_hover.h"
+#include "env_kf.h"
+#include "env_limits.h"
+#include "env_osc.h"
 #include "experiment.h"
 #include "fcmp.h"
 #include "guidance.h"
@@ -45,15 +49,6 @@
 #include "thrmap.h"
 
 #define DEG_F 0.017453292519943295f   /* rad per degree */
-
-/* The frame's inputs as scalars: in the fixed build converted once per frame (app_on_frame)
- * and read by the step's every part (control, k_f tracker, experiment); in the float build
- * scalar_t is float and app_in() gives the frame itself (no copy). Fields named as in
- * struct hal_sensor_frame, so that either serves. */
-struct app_frame_sc {
-	scalar_t q_ib[4], rate_b_rps[3], pos_i_m[3], vel_i_mps[3];
-	scalar_t rotor_thrust_n[HAL_ROTORS], rotor_torque_nm[HAL_ROTORS];
-};
 
 /* What the step reads of the parameters, as scalars: set by the parameter sync (between
  * frames, after every parameter change), not converted per frame. */
@@ -96,13 +91,7 @@ struct app {
 	bool have_actuated;
 	uint64_t n_actuated;          /* frame_n of the last frame answered */
 	float thr[HAL_ROTORS];
-#if OCTO_FIXED
-	struct app_frame_sc fs;       /* the frame's inputs as scalars (app_in) */
-	scalar_t thr_sc[HAL_ROTORS];  /* thr as scalars (app_thr_sc) */
-	/* conversions of values that mostly stay from step to step (a set point held, the frame
-	 * period), redone only when the value changed (app.c: to_float_kept, from_float_kept) */
-	struct app_sc_kept { scalar_t v; float f; } log_sp_kept[4], dt_kept;
-#endif
+	struct boundary bnd;          /* the frame and throttles as scalars (boundary.h) */
 
 	/* guidance (set points) and the position loop */
 	struct guid guid;
@@ -116,7 +105,11 @@ struct app {
 	/* control */
 	struct att_ctrl att;
 	struct alt_ctrl alt;
-	struct envelope env;          /* hover throttle learned in flight, phase limits */
+	/* the flight envelope: what the app learns and guards in flight */
+	struct env_hover env_hover;   /* hover throttle learned, hover thrust, torque gain */
+	struct env_kf env_kf;         /* k_f tracked */
+	struct env_osc env_osc;       /* the oscillation guard */
+	struct env_limits env_limits; /* take-off and landing time limits */
 	struct mixer mix;
 	struct thrmap map;
 	struct mixer_output mix_out;
@@ -131,7 +124,7 @@ struct app {
 	bool exp_ack_pending;         /* a final result of the experiment command is owed */
 	app_origin exp_origin;        /* to whom */
 
-	/* between frames (app.c): work the 90 Hz step does not do */
+	/* between frames (app_settle, app_tick): work the 90 Hz step does not do */
 	bool params_dirty;            /* a parameter changed: rebuild gains, mixer, map */
 	bool save_pending;            /* results applied: write the parameter file */
 	char param_text[8192];        /* the parameter file's text while it is loaded or saved */
@@ -142,15 +135,10 @@ struct app {
 	uint32_t steps;
 };
 
-/* The frame's inputs and the throttles sent, as scalars (see struct app_frame_sc): the
- * converted copies in the fixed build, the floats themselves in the float build. */
-#if OCTO_FIXED
-static inline const struct app_frame_sc *app_in(const struct app *a) { return &a->fs; }
-static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr_sc; }
-#else
-static inline const struct hal_sensor_frame *app_in(const struct app *a) { return &a->fr; }
-static inline const scalar_t *app_thr_sc(const struct app *a) { return a->thr; }
-#endif
+/* The frame's inputs and the throttles sent, as scalars (boundary.h): the converted copies
+ * in the fixed build, the floats themselves in the float build. */
+static inline const bnd_frame_t *app_in(const struct app *a) { return bnd_in(&a->bnd, &a->fr); }
+static inline const scalar_t *app_thr_sc(const struct app *a) { return bnd_thr(&a->bnd, a->thr); }
 
 /* A failed rotor (rotor_guard.c; the detector is core/rotor_fail.h): once a frame before the
  * step the detector is fed the last step's throttles and what the frame measured of the
@@ -204,7 +192,7 @@ bool app_flying(const struct app *a);
  * refusal, a reason in `why`. All are idempotent: a retry gets the same answer. */
 enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size_t cap);
 /* Take-off and landing: ACCEPTED at once; should the phase then run out of its
- * time limit (envelope.h), an APP_EV_CMD_DONE event FAILED goes to `origin`
+ * time limit (env_limits.h), an APP_EV_CMD_DONE event FAILED goes to `origin`
  * (APP_ORIGIN_NONE: to no one). */
 enum app_result app_cmd_takeoff(struct app *a, float height_m, app_origin origin, char *why, size_t cap);
 enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t cap);
@@ -220,5 +208,33 @@ const char *app_param_write(struct app *a, size_t index, float value);
 /* A status line: console, log event, and an APP_EV_STATUS event in the outbox. */
 void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
 	__attribute__((format(printf, 3, 4)));
+
+/* ---- the app's own parts (app.c, step.c), not for platforms or ground stations ---- */
+
+/* The control step (step.c) on a complete frame, integrating dt. */
+void app_step(struct app *a, float dt);
+void app_set_mode(struct app *a, enum app_mode m);
+/* All throttles to t (and their scalars). */
+void app_set_thr_all(struct app *a, float t);
+/* The attitude and height controllers' integrals reset. */
+void app_reset_control(struct app *a);
+/* A take-off or landing that ran out of time (env_limits.h): said, answered, landed. */
+void app_phase_timeout(struct app *a, const struct env_limits_req *req);
+
+/* what guidance flies in each mode */
+static inline enum guid_mode app_guid_mode(enum app_mode m)
+{
+	switch (m) {
+	case APP_TAKEOFF:
+		return GUID_TAKEOFF;
+	case APP_HOLD:
+	case APP_EXPERIMENT:
+		return GUID_HOLD;
+	case APP_LAND:
+		return GUID_LAND;
+	default:
+		return GUID_GROUND;
+	}
+}
 
 #endif /* OCTO_APP_H */

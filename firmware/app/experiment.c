@@ -105,8 +105,8 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	c->val_to = cfg_f(p->id_val_to, 0.0f);
 }
 
-/* Status lines are queued with their arguments and formatted (vsnprintf with %f: thousands
- * of instructions each) by exp_pump, between frames, not in the 90 Hz step. say() records the
+/* Status lines are queued with their arguments and formatted (vsnprintf with %f: costly) by
+ * exp_pump, between frames, not in the 90 Hz step. say() records the
  * arguments by the conversions of fmt (%d int, %s a string that outlives the experiment:
  * literals only, %f %g %e double; the formats below use no others). */
 static void say(struct experiment *e, int sev, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
@@ -881,9 +881,8 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 		e->inv_dt_nom = 1.0f / e->dt_nom;
 		e->z0 = f->pos_i_m[2];
 		/* the first phase begins between frames (exp_turn), from what this step saw, as
-		 * every later one does: its set-up (the estimators' initialisation, 0.1 M
-		 * instructions for the inertia's on M4F, 3 M on M0) stays out of the step, which
-		 * sends no excitation yet */
+		 * every later one does: its set-up (the estimators' initialisation, many steps'
+		 * worth on Cortex-M) stays out of the step, which sends no excitation yet */
 		snapshot(&e->turn, in);
 		e->begin_pending = true;
 		e->pump_ready = true;

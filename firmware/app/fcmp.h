@@ -1,7 +1,8 @@
 /*
  * fcmp.h - comparisons of floats and doubles by integer operations, for the per-frame
- * checks of the 90 Hz step, and the frame's plant-time step (app_t_gap). On a core without FPU (Cortex-M0) every float comparison is a
- * library call of some 30 to 40 instructions (two for a <= or >= of doubles); here a few.
+ * checks of the 90 Hz step, and the frame's plant-time step (app_t_gap). On a core without
+ * FPU (Cortex-M0) every float comparison is a library call (two for a <= or >= of doubles);
+ * here a few integer operations.
  * Each gives the IEEE answer for every pair: false when either operand is NaN, -0 equal
  * to +0. On cores with a single-precision FPU (and on the host) the float comparisons are
  * the compiler's own; the double one is always by integers (the M4F's FPU has no doubles).
@@ -58,7 +59,7 @@ static inline bool app_f_eq(float a, float b) { return a == b; }
 
 /* (float)(t - t_prev) for plant times: the same value bit for bit, by integer operations
  * in the common case, instead of a double subtraction and a conversion (two library calls
- * on a core without a double-precision FPU, some 200 instructions on Cortex-M0).
+ * on a core without a double-precision FPU).
  * Common case: both normal and positive, t > t_prev, exponents equal or one apart, and a
  * difference of at most 53 bits: the double subtraction is then exact, and the one rounding
  * is the conversion's (to nearest, ties to even), done here on the difference of the

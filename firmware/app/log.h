@@ -5,8 +5,9 @@
  * types of the LCM message octo.fw_frame_t (firmware/lcm/octo_fw_frame_t.lcm,
  * whose fields after utime must match it: tests/py/test_contracts.py checks).
  * It produces struct app_log_frame here and the field-by-field copy into the
- * LCM message in the host platform (hal/host/lcm_log.c). The app fills one
- * record per received frame (app.c: fill_log) and hands it to the HAL's log_frame.
+ * LCM message in the host platform (hal/host/lcm_log.c). log_fill (log.c) fills
+ * one record per received frame from the app's parts; the app hands it to the HAL's
+ * log_frame. The step writes q_sp and rotor_f itself; log_fill sets every other field.
  *
  *   ONE(c_type, lcm_type, name)          a scalar
  *   ARR(c_type, lcm_type, name, count)   a fixed-size array
@@ -16,6 +17,8 @@
 
 #include <stdbool.h>
 #include <stdint.h>
+
+#include "scalar.h"
 
 #define APP_LOG_FIELDS(ONE, ARR)                                         \
 	ONE(int64_t, int64_t, seq)                                        \
@@ -68,5 +71,34 @@ struct app_log_frame {
 #undef APP_LOG_ONE
 #undef APP_LOG_ARR
 };
+
+struct hal_sensor_frame;
+struct guid;
+struct mixer_output;
+struct experiment;
+struct app_params;
+struct env_kf;
+struct boundary;
+
+/* What one record is filled from. */
+struct log_src {
+	const struct hal_sensor_frame *fr;  /* the frame received */
+	bool stepped;                       /* the app stepped on it, with dt */
+	float dt;
+	int8_t mode;                        /* enum app_mode */
+	bool armed, link_ok, experiment;    /* experiment: in mode EXPERIMENT */
+	const struct guid *guid;            /* set points */
+	const float *wrench_dem;            /* [f, tau] demanded */
+	const struct mixer_output *mix_out; /* allocated */
+	const scalar_t *excitation;         /* HAL_ROTORS throttles of the experiment */
+	const float *thr;                   /* HAL_ROTORS throttles sent */
+	uint32_t att_flags, alt_flags, thr_clamped;
+	const struct experiment *exp;
+	const struct app_params *p;         /* VEH_* */
+	const struct env_kf *kf;            /* k_f tracked */
+	struct boundary *bnd;               /* the set points' conversions (fixed build) */
+};
+
+void log_fill(struct app_log_frame *l, const struct log_src *s);
 
 #endif /* OCTO_APP_LOG_H */

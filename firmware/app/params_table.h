@@ -65,8 +65,8 @@ PARAM(NAV_TOUCH_DOWN_S,nav_touch_down_s,GUID_DEFAULT_TOUCH_DOWN_S, 0.2f,    10.0
 #undef PARAM_FLAGS
 #define PARAM_FLAGS PARAM_LOCKED
 #include "experiment_params.h"
-/* the flight envelope (envelope.c): limits and tracking settings, and what it learns in
- * flight (HOV_*, KFT_EST/SD/T/MEM: read-only, only the app writes them) */
+/* the flight envelope (env_hover, env_kf, env_osc, env_limits): limits and tracking settings,
+ * and what it learns in flight (HOV_*, KFT_EST/SD/T/MEM: read-only, only the app writes them) */
 #undef PARAM_FLAGS
 #define PARAM_FLAGS 0
 PARAM(NAV_TKO_TO,   nav_tko_to,   60.0f,   1.0f,    600.0f,  "s",      "Take-off must reach HOLD within this, else it fails and lands")

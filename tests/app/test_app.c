@@ -623,13 +623,13 @@ UNIT_TEST(app_kft_published_between_frames_after_its_step)
 			CHECK(!(e.kind == APP_EV_VALUE || (e.kind == APP_EV_PARAM &&
 							   (e.param_index == i_t || e.param_index == i_est))));
 		CHECK(params_get(&r->a.p, (size_t)i_t) == t_before);
-		bool due = r->a.env.kft_pub_due;
+		bool due = r->a.env_kf.pub_due;
 		tick(r);
 		float t_after = params_get(&r->a.p, (size_t)i_t);
 		if (due) {
 			published++;
 			CHECK(t_after == (float)r->t);   /* the plant time of the step that was due */
-			CHECK(params_get(&r->a.p, (size_t)i_est) == sc_to_float(r->a.env.kft.k));
+			CHECK(params_get(&r->a.p, (size_t)i_est) == sc_to_float(r->a.env_kf.kft.k));
 		} else {
 			CHECK(t_after == t_before);
 		}
@@ -668,7 +668,7 @@ UNIT_TEST(app_hold_entry_published_between_frames)
 		CHECK(mode_hold == 1);
 		CHECK(params_get(&r->a.p, (size_t)i_thr) == thr0);
 		/* as of the entry (set_mode within the step, before this step's hover update) */
-		float at_entry = sc_to_float(r->a.env.hov_pub_u), now = sc_to_float(hover_est_u(&r->a.env.hov));
+		float at_entry = sc_to_float(r->a.env_hover.pub_u), now = sc_to_float(hover_est_u(&r->a.env_hover.hov));
 		tick(r);
 		CHECK(params_get(&r->a.p, (size_t)i_thr) == at_entry);
 		CHECK(at_entry > 0.0f && fabsf(at_entry - now) < 1e-3f * now);
@@ -787,7 +787,7 @@ UNIT_TEST(app_f_cmp_is_the_ieee_order)
 	CHECK(bad == 0);
 }
 
-/* What the app's conversions of the log rely on (app.c: excitation_to_float, to_float_kept):
+/* What the app's conversions of the log rely on (boundary.h: bnd_excitation_to_float, bnd_kept_to_float):
  * a scalar and its negation convert to floats of opposite sign, 0 to +0.0f and +0.0f to 0,
  * over random scalars of every magnitude. */
 UNIT_TEST(app_sc_to_float_is_odd)

@@ -677,14 +677,17 @@ def struct_sizes(obj):
     return sizes
 
 
+ENV_HEADERS = ("env_hover.h", "env_kf.h", "env_osc.h", "env_limits.h")   # the flight envelope's modules (firmware/app)
+
+
 def app_core_state(sizes):
     """Core structs the app keeps (members `struct NAME x;` or `x[N]` of the structs in
-    firmware/app/app.h, experiment.h and envelope.h whose type is a core struct), as {header: [(label,
+    firmware/app/app.h, experiment.h and the envelope's env_*.h whose type is a core struct), as {header: [(label,
     bytes)]}. Members of a `union { ... };` share their memory: the union counts as its
     largest member (an anonymous `struct { ... };` inside it as the sum of its members)."""
     out = {}
     member = re.compile(r"^\s+struct (\w+) \w+(?:\[(\d+)\])?;")
-    for h in ("app.h", "experiment.h", "envelope.h"):
+    for h in ("app.h", "experiment.h") + ENV_HEADERS:
         try:
             text = (REPO / "firmware/app" / h).read_text()
         except OSError:
@@ -785,7 +788,7 @@ def item_memory(rep, args):
                 linked = {"flash": (ct + cd) - (bt + bd), "ram": (cd + cb) - (bd + bb)}
             sizes = struct_sizes(ARM / v / "structs.o") if (ARM / v / "structs.o").exists() else {}
             owned = app_core_state(sizes)
-            ctl = sum(n for h in ("app.h", "envelope.h") for _, n in owned.get(h, []))   # the app owns env
+            ctl = sum(n for h in ("app.h",) + ENV_HEADERS for _, n in owned.get(h, []))   # the app owns env_*
             idn = sum(n for _, n in owned.get("experiment.h", []))
             mods = module_sizes(lib)
             big = sorted(mods.items(), key=lambda kv: -kv[1])[:2]

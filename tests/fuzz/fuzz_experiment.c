@@ -44,7 +44,7 @@ static void check_finite(const scalar_t *v, size_t n)
 			abort();
 }
 
-/* one exp_step as app.c runs it; false when the experiment has ended */
+/* one exp_step as the app runs it (step.c); false when the experiment has ended */
 static bool step(void)
 {
 	exp_turn(&ex, &prm);

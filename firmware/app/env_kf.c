@@ -1,0 +1,109 @@
+/* env_kf.c - see env_kf.h. */
+#include "env_kf.h"
+
+#include <math.h>
+
+#include "fcmp.h"
+
+#define KFT_WARM_S 10.0f   /* s of tracker updates before it may refresh VEH_KF */
+#define KFT_VOTES 3u       /* publications in a row that must call for the refresh */
+
+/* The tracker's model of the rotors: the vehicle's motor lag, thrust curve and per-rotor
+ * effectiveness, as identified (or given). */
+static struct kf_track_params kft_params(const struct app_params *p)
+{
+	struct kf_track_params kp = kf_track_params_default();
+	kp.drift_per_min = sc_from_float(p->kft_drift);
+	kp.tau_lag_s = sc_from_float(p->id_mot_tau);
+	kp.curve = sc_from_float(p->mot_curve);
+	const float scale[KF_TRACK_ROTORS] = {p->mot_scale1, p->mot_scale2, p->mot_scale3, p->mot_scale4,
+					      p->mot_scale5, p->mot_scale6, p->mot_scale7, p->mot_scale8};
+	for (int j = 0; j < KF_TRACK_ROTORS; j++)
+		kp.scale[j] = sc_from_float(scale[j]);
+	return kp;
+}
+
+void env_kf_init(struct env_kf *k, const struct app_params *p)
+{
+	struct kf_track_params kp = kft_params(p);
+	kf_track_init(&k->kft, &kp, sc_from_float(p->veh_kf));
+	k->pub_next_t = 1.0;
+	k->votes = 0;
+	k->pub_due = false;
+}
+
+void env_kf_model_sync(struct env_kf *k, const struct app_params *p)
+{
+	/* An estimate made with another rotor model (before identification found the curve,
+	 * lag or a weak rotor) would be compared with the new VEH_KF and "refresh" it wrongly. */
+	struct kf_track_params kp = kft_params(p);
+	const struct kf_track_params *cur = &k->kft.p;
+	bool same = kp.tau_lag_s == cur->tau_lag_s && kp.curve == cur->curve &&
+		    kp.drift_per_min == cur->drift_per_min;
+	for (int j = 0; j < KF_TRACK_ROTORS; j++)
+		same = same && kp.scale[j] == cur->scale[j];
+	if (!same)
+		env_kf_init(k, p);
+}
+
+/* The last step's throttles (what the plant answers now) against the sum of the measured
+ * rotor thrusts of this frame. */
+void env_kf_step(struct env_kf *k, const struct env_kf_input *in)
+{
+	struct kf_track *t = &k->kft;
+	scalar_t y = SC_ZERO;   /* the sum in scalars: float's own sum in the float build */
+	for (int j = 0; j < HAL_ROTORS; j++)
+		y = sc_add(y, in->thrust_n[j]);
+	kf_track_update(t, in->thr, HAL_ROTORS, y, in->dt_s, in->gate);
+	/* the publication once a second of plant time, between frames: the step only notes
+	 * that this frame is due and whether it flew in HOLD */
+	if (!t->started || app_t_before(in->t_s, k->pub_next_t))
+		return;
+	k->pub_next_t = in->t_s + 1.0;
+	k->pub_due = true;
+	k->pub_hold = in->hold;
+}
+
+bool env_kf_publish(struct env_kf *k, const struct app_params *p, uint64_t now_us, double t_s, float dt_frame,
+		    struct env_kf_pub *out)
+{
+	const struct kf_track *t = &k->kft;
+	if (!k->pub_due)
+		return false;
+	k->pub_due = false;
+	/* announced to the ground station at most once a second of wall time, whose rates are
+	 * wall-clock: a fast lockstep run must not flood the link */
+	out->announce = now_us - k->pub_wall_us >= 1000000u;
+	if (out->announce)
+		k->pub_wall_us = now_us;
+	float kf = sc_to_float(t->k), sd = sc_to_float(kf_track_sd(t));
+	out->k = kf;
+	out->sd = sd;
+	out->t = (float)t_s;
+	out->mem = sc_to_float(t->mem_s);
+	out->clear_apply = out->refresh = false;
+	out->kf = kf;
+	out->why = "";
+	if (!k->pub_hold)
+		return true;
+	if (p->kft_apply >= 0.5f) {
+		out->clear_apply = out->refresh = true;
+		out->why = "tracked, on request";
+		return true;
+	}
+	float rel = kf / p->veh_kf - 1.0f;
+	bool identified = ((unsigned)p->id_result & 1u) != 0;   /* k_f accepted by identification */
+	/* A refresh needs a warmed-up tracker (KFT_WARM_S of updates since its last start: the
+	 * throttles jump when a new rotor model is applied, and the first memories follow that
+	 * transient) and a drift seen on KFT_VOTES publications in a row (1 s apart): a battery
+	 * sags for minutes, a transient does not last. */
+	bool call = p->kft_refresh > 0.0f && identified && fabsf(rel) > p->kft_refresh &&
+		    3.0f * sd < p->kft_refresh * kf && (float)t->updates * dt_frame >= KFT_WARM_S;
+	k->votes = call ? k->votes + 1u : 0u;
+	if (k->votes >= KFT_VOTES) {
+		k->votes = 0;
+		out->refresh = true;
+		out->why = rel < 0.0f ? "tracked drift down" : "tracked drift up";
+	}
+	return true;
+}
