@@ -601,16 +601,9 @@ static uint8_t cmd_set_interval(struct mav *m, float msgid, float interval_us)
 		return (uint8_t)t;
 	if (s < 0)
 		return MAV_RESULT_UNSUPPORTED;
-	if (!isfinite(interval_us))
-		return MAV_RESULT_DENIED;
-	if (interval_us < 0.0f)
-		m->interval_us[s] = -1;
-	else if (interval_us == 0.0f)
-		m->interval_us[s] = streams[s].default_interval_us;
-	else   /* 10 ms .. 1000 s: a huge float must not reach the integer cast */
-		m->interval_us[s] = interval_us < 10000.0f ? 10000
-				    : (interval_us > 1.0e9f ? 1000000000 : (int64_t)interval_us);
-	return MAV_RESULT_ACCEPTED;
+	return mav_interval_of_request(interval_us, streams[s].default_interval_us, &m->interval_us[s])
+		       ? MAV_RESULT_ACCEPTED
+		       : MAV_RESULT_DENIED;
 }
 
 static void handle_command(struct mav *m, const mavlink_message_t *req, uint16_t cmd,

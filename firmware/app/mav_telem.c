@@ -423,16 +423,21 @@ int mav_telem_set_interval(struct mav_telem *t, uint32_t msgid, float interval_u
 	int s = stream_of(msgid);
 	if (s < 0)
 		return -1;
+	return mav_interval_of_request(interval_us, streams[s].default_us, &t->interval_us[s]) ? MAV_RESULT_ACCEPTED
+											       : MAV_RESULT_DENIED;
+}
+
+bool mav_interval_of_request(float interval_us, int64_t default_us, int64_t *out)
+{
 	if (!isfinite(interval_us))
-		return MAV_RESULT_DENIED;
+		return false;
 	if (interval_us < 0.0f)
-		t->interval_us[s] = -1;
+		*out = -1;
 	else if (interval_us == 0.0f)
-		t->interval_us[s] = streams[s].default_us;
+		*out = default_us;
 	else   /* 10 ms .. 1000 s: a huge float must not reach the integer cast */
-		t->interval_us[s] = interval_us < 10000.0f ? 10000
-				    : (interval_us > 1.0e9f ? 1000000000 : (int64_t)interval_us);
-	return MAV_RESULT_ACCEPTED;
+		*out = interval_us < 10000.0f ? 10000 : (interval_us > 1.0e9f ? 1000000000 : (int64_t)interval_us);
+	return true;
 }
 
 bool mav_telem_get_interval(const struct mav_telem *t, uint32_t msgid, int32_t *interval_us)

@@ -82,6 +82,9 @@ void mav_telem_request_send(struct mav_telem *t, const struct mav_telem_in *in, 
 
 /* MAV_CMD_SET_MESSAGE_INTERVAL: MAV_RESULT, or -1 when msgid is not this module's. */
 int mav_telem_set_interval(struct mav_telem *t, uint32_t msgid, float interval_us);
+/* SET_MESSAGE_INTERVAL's param2 as a stream's interval (*out): -1 off, 0 the default,
+ * else 10 ms .. 1000 s. false: not finite (the request is DENIED). Shared by every stream table. */
+bool mav_interval_of_request(float interval_us, int64_t default_us, int64_t *out);
 /* MAV_CMD_GET_MESSAGE_INTERVAL: true when msgid is this module's, with its interval
  * (-1: only on change and on request, or disabled). */
 bool mav_telem_get_interval(const struct mav_telem *t, uint32_t msgid, int32_t *interval_us);
