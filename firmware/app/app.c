@@ -558,8 +558,7 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 	 * 35 and 36): without them it cannot run, and says so rather than fit zeros */
 	const uint32_t rows = HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	if ((a->fr.valid & rows) != rows) {
-		snprintf(why, cap, "Experiment %d refused: no rotor thrust/torque rows (IMU-only identification not available)",
-			 id);
+		snprintf(why, cap, "Experiment %d refused: no rotor thrust/torque rows", id);
 		return APP_DENIED;
 	}
 	seed_kf(a, id);

@@ -7,8 +7,10 @@ kernel reports free and never hands out the same port twice in one session, so
 test files can run in parallel (pytest -n) without fixed ports.
 """
 
+import json
 import os
 import socket
+import subprocess
 import time
 from pathlib import Path
 
@@ -106,3 +108,18 @@ def wait_until(pred, timeout=5.0, step=0.01):
 def pytest_sessionfinish(session, exitstatus):
     for p in _live:
         p.stop(grace=1.0)
+
+
+GCS = REPO / ".venv" / "bin" / "octo-gcs"
+
+
+def run_gcs(*args, timeout=120):
+    """octo-gcs on the build under test (OCTO_BUILD), its output captured, no standard input."""
+    env = dict(os.environ, OCTO_BUILD=str(BUILD))
+    return subprocess.run([str(GCS), *map(str, args)], capture_output=True, text=True, timeout=timeout,
+                          env=env, stdin=subprocess.DEVNULL)
+
+
+def read_report(out):
+    """A mission's report.json."""
+    return json.loads((out / "report.json").read_text())

@@ -20,9 +20,8 @@ import sys
 
 import pytest
 
-from conftest import BUILD, REPO, draw_inertia
+from conftest import BUILD, REPO, draw_inertia, read_report, run_gcs
 
-GCS = REPO / ".venv" / "bin" / "octo-gcs"
 PAPER = {"mass": 2.132, "arm_length": 0.35, "kf": 28.0269, "ktau": 0.3869}
 INERTIA = (0.0628, 0.0762, 0.1014)
 ESTIMATES = ("kf", "ktau", "ixx", "iyy", "izz")
@@ -35,13 +34,10 @@ def random_vehicle(rng):
 
 
 def gcs(*args, timeout=120):
-    env = dict(os.environ, OCTO_BUILD=str(BUILD))
-    return subprocess.run([str(GCS), *map(str, args)], capture_output=True, text=True, timeout=timeout,
-                          env=env, stdin=subprocess.DEVNULL)
+    return run_gcs(*args, timeout=timeout)
 
 
-def report(out):
-    return json.loads((out / "report.json").read_text())
+report = read_report
 
 
 def stable(rep):
