@@ -30,7 +30,7 @@
 
 BENCH_B      := $(B)/bench
 BENCH_CFLAGS := $(filter-out -MMD -MP,$(CFLAGS_FW))
-BENCH_APP_SRC := $(sort $(wildcard firmware/app/*.c firmware/hal/*.c)) tests/app/stub_hal.c
+BENCH_APP_SRC := $(sort $(wildcard firmware/app/*.c firmware/hal/*.c)) $(PARAM_META_C) tests/app/stub_hal.c
 BENCH_APP_INC := -D_POSIX_C_SOURCE=200809L -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal \
                  -Itests/app -Itests/arm -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common
 BENCH_FW_HDR := $(wildcard firmware/core/*.h firmware/app/*.h firmware/hal/hal.h tests/app/stub_hal.h)
