@@ -4,7 +4,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include <octo/mavlink.h>
+#include "mav_lib.h"
 
 /* MAVLink FTP payload layout and codes (MAVLink's FTP protocol) */
 enum { P_SEQ = 0, P_SESSION = 2, P_OPCODE = 3, P_SIZE = 4, P_REQ_OPCODE = 5, P_BURST_COMPLETE = 6,

@@ -186,3 +186,35 @@ def test_component_messages_and_read_only_ftp(launch, port, tmp_path):
     # reading without an open session
     op, _, _, d, _ = ftp.request(OP_READ, size=10)
     assert (op, d[0]) == (NAK, 4)
+
+
+def test_signed_link_signs_metadata_ftp_and_telemetry(launch, port, tmp_path):
+    """With signing on, what the endpoint's helper files pack (component metadata, FTP
+    replies, the telemetry of mav_telem.c) is signed like the rest, on one sequence."""
+    from pymavlink import mavutil
+    from octo_gcs.link import read_signing_key
+    key = tmp_path / "pass.txt"
+    key.write_text("metadata signing passphrase\n")
+    rig = Rig(launch, port, tmp_path)
+    rig.start_fw("--signing-key", key)
+    rig.m = mavutil.mavlink_connection(f"udpin:127.0.0.1:{rig.gcs_port}", source_system=255,
+                                       source_component=190)
+    got = []
+    # unsigned messages are let through here so that they can be counted
+    rig.m.setup_signing(read_signing_key(key), sign_outgoing=True,
+                        allow_unsigned_callback=lambda mav, msgid: True)
+    rig.m.message_hooks.append(lambda conn, msg: got.append(msg))   # everything received
+    rig.connect()
+    rig.m.mav.command_long_send(1, 1, M.MAV_CMD_REQUEST_MESSAGE, 0, M.MAVLINK_MSG_ID_COMPONENT_METADATA,
+                                0, 0, 0, 0, 0, 0)
+    meta = rig.recv({"COMPONENT_METADATA"}, timeout=3)
+    assert meta is not None
+    general = Ftp(rig).read(meta.uri[len("mftp://"):])
+    assert zlib.crc32(general) == meta.file_crc
+    deadline = time.monotonic() + 2.0
+    while time.monotonic() < deadline:
+        rig.m.recv_match(blocking=True, timeout=0.2)
+    types = {m.get_type() for m in got}
+    assert {"HEARTBEAT", "COMPONENT_METADATA", "FILE_TRANSFER_PROTOCOL", "EXTENDED_SYS_STATE"} <= types, types
+    unsigned = sorted({m.get_type() for m in got if not m._signed})
+    assert not unsigned, f"sent unsigned: {unsigned}"
