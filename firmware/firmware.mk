@@ -30,13 +30,31 @@ $(B)/libcore-fixed.a: $(CORE_FIXED_OBJ)
 $(B)/libcore-asan.a: $(CORE_ASAN_OBJ)
 	@rm -f $@; $(AR) rcs $@ $^
 
-# ---- octo-fw: app + host HAL + core + generated MAVLink/LCM code
+# ---- the component metadata mav_ftp.c serves, as constant data (build/gen/param_metadata.c):
+#   firmware/tools/param_meta.c, linked with the parameter table on the host, prints the
+#   parameter metadata JSON; gen_param_metadata.py compresses it (xz) and adds the general
+#   metadata file. Every build that links mav_ftp.c compiles PARAM_META_C with its own flags.
+PARAM_META_TOOL := $(B)/tools/param-meta
+PARAM_META_C    := $(GEN)/param_metadata.c
+
+$(PARAM_META_TOOL): firmware/tools/param_meta.c firmware/app/params.c $(wildcard firmware/app/*.h firmware/core/*.h) \
+                    $(B)/config.mk
+	@mkdir -p $(@D)
+	$(CC) $(filter-out -MMD -MP,$(CFLAGS_FW)) -D_POSIX_C_SOURCE=200809L -Ifirmware/app -Ifirmware/core \
+	  -o $@ firmware/tools/param_meta.c firmware/app/params.c -lm
+$(PARAM_META_C): $(PARAM_META_TOOL) firmware/tools/gen_param_metadata.py | $(VENV_STAMP)
+	$(VPY) firmware/tools/gen_param_metadata.py $(PARAM_META_TOOL) $@
+
+# ---- octo-fw: app + host HAL + core + generated MAVLink/LCM code and metadata
 FW_SRC    := $(sort $(wildcard firmware/app/*.c firmware/hal/*.c firmware/hal/host/*.c))
-FW_OBJ    := $(FW_SRC:firmware/%.c=$(B)/fw/%.o)
+FW_OBJ    := $(FW_SRC:firmware/%.c=$(B)/fw/%.o) $(B)/fw/app/param_metadata.o
 FW_INC    := -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal \
              -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common -isystem $(GEN)/lcm -isystem $(LCM_INC)
 
 $(B)/fw/%.o: firmware/%.c $(B)/config.mk | $(MAVLINK_STAMP) $(LCM_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_FW) -D_POSIX_C_SOURCE=200809L $(FW_INC) -c $< -o $@
+$(B)/fw/app/param_metadata.o: $(PARAM_META_C) $(B)/config.mk
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS_FW) -D_POSIX_C_SOURCE=200809L $(FW_INC) -c $< -o $@
 
@@ -56,9 +74,12 @@ ALL_TARGETS += $(B)/octo-fw
 
 # ---- octo-fw-fixed: the same program on the Q16.16 core (OCTO_FIXED: the app's scalars and
 #   struct app change with it, so every object is compiled again, into build/fw-fixed/).
-FW_FIXED_OBJ := $(FW_SRC:firmware/%.c=$(B)/fw-fixed/%.o)
+FW_FIXED_OBJ := $(FW_OBJ:$(B)/fw/%=$(B)/fw-fixed/%)
 
 $(B)/fw-fixed/%.o: firmware/%.c $(B)/config.mk | $(MAVLINK_STAMP) $(LCM_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_FW) -DOCTO_FIXED=1 -D_POSIX_C_SOURCE=200809L $(FW_INC) -c $< -o $@
+$(B)/fw-fixed/app/param_metadata.o: $(PARAM_META_C) $(B)/config.mk
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS_FW) -DOCTO_FIXED=1 -D_POSIX_C_SOURCE=200809L $(FW_INC) -c $< -o $@
 
@@ -70,9 +91,12 @@ ALL_TARGETS += $(B)/octo-fw-fixed
 # ---- octo-fw-asan: the same program under AddressSanitizer and UBSan (not part of `all`):
 #   make build/octo-fw-asan, then e.g. copy it as octo-fw into a directory with octo-sim
 #   and run the pytest suite with OCTO_BUILD pointing there.
-FW_ASAN_OBJ := $(FW_SRC:firmware/%.c=$(B)/fw-asan/%.o)
+FW_ASAN_OBJ := $(FW_OBJ:$(B)/fw/%=$(B)/fw-asan/%)
 
 $(B)/fw-asan/%.o: firmware/%.c $(B)/config.mk | $(MAVLINK_STAMP) $(LCM_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS_FW) $(SAN) -D_POSIX_C_SOURCE=200809L $(FW_INC) -c $< -o $@
+$(B)/fw-asan/app/param_metadata.o: $(PARAM_META_C) $(B)/config.mk
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS_FW) $(SAN) -D_POSIX_C_SOURCE=200809L $(FW_INC) -c $< -o $@
 

@@ -33,7 +33,7 @@ $(B)/unit-tests-asan: $(UNIT_ALL_SRC) $(UNIT_LIST) $(B)/libcore-asan.a
 APP_TEST_SRC  := $(sort $(wildcard tests/app/test_*.c))
 APP_TEST_LIST := $(GEN)/app_tests/unit_list.h
 APP_TEST_ALL  := tests/core/unit.c $(APP_TEST_SRC) tests/app/stub_hal.c firmware/hal/hal.c \
-                 $(sort $(wildcard firmware/app/*.c))
+                 $(sort $(wildcard firmware/app/*.c)) $(PARAM_META_C)
 APP_TEST_CFLAGS := -std=c11 $(OPT) -Wall -Wextra -Werror -D_POSIX_C_SOURCE=200809L -I$(GEN)/app_tests \
                  -Itests/core -Itests/app -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal \
                  -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common -MMD -MP

@@ -5,10 +5,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include <octo/mavlink.h>
-
 #include "app.h"
 #include "mav_ftp.h"
+#include "mav_lib.h"
 #include "mav_telem.h"
 
 #define CHAN MAVLINK_COMM_0
@@ -17,6 +16,21 @@
 #define TEXT_BURST 50.0f           /* STATUSTEXT: burst of 50, then 20 per second */
 #define TEXT_RATE 20.0f
 #define FW_VERSION 0x00050000u     /* 0.5.0 */
+
+/* The channel's status and receive buffer (mav_lib.h): one channel, whatever its number. */
+mavlink_status_t *mavlink_get_channel_status(uint8_t chan)
+{
+	static mavlink_status_t status;
+	(void)chan;
+	return &status;
+}
+
+mavlink_message_t *mavlink_get_channel_buffer(uint8_t chan)
+{
+	static mavlink_message_t rx;
+	(void)chan;
+	return &rx;
+}
 
 /* With signing on, only RADIO_STATUS may arrive unsigned (common practice). */
 static bool accept_unsigned(const mavlink_status_t *status, uint32_t msgid)

@@ -1,13 +1,10 @@
 /* mav_ftp.c - component metadata and the read-only MAVLink FTP server (see mav_ftp.h). */
 #include "mav_ftp.h"
 
-#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
-#include <octo/mavlink.h>
-
-#include "params.h"
+#include "mav_lib.h"
 
 /* MAVLink FTP payload layout and codes (MAVLink's FTP protocol) */
 enum { P_SEQ = 0, P_SESSION = 2, P_OPCODE = 3, P_SIZE = 4, P_REQ_OPCODE = 5, P_BURST_COMPLETE = 6,
@@ -17,117 +14,22 @@ enum { OP_TERMINATE = 1, OP_RESET = 2, OP_OPEN_RO = 4, OP_READ = 5, OP_CRC32 = 1
        OP_ACK = 128, OP_NAK = 129 };
 enum { ERR_FAIL = 1, ERR_INVALID_SESSION = 4, ERR_EOF = 6, ERR_UNKNOWN_COMMAND = 7, ERR_FILE_NOT_FOUND = 10 };
 
-#define GENERAL_PATH "octo/general.json"
-#define PARAM_PATH "octo/param.json"
 #define URI_PREFIX "mftp://"
-
-
-/* CRC-32 (IEEE 802.3, as zlib computes it) */
-static uint32_t crc32_of(const void *data, size_t n)
-{
-	const uint8_t *p = data;
-	uint32_t c = 0xFFFFFFFFu;
-	for (size_t i = 0; i < n; i++) {
-		c ^= p[i];
-		for (int k = 0; k < 8; k++)
-			c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
-	}
-	return ~c;
-}
-
-struct out {
-	char *buf;
-	size_t cap, len;
-	bool full;
-};
-
-static void put(struct out *o, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put(struct out *o, const char *fmt, ...)
-{
-	if (o->full)
-		return;
-	va_list ap;
-	va_start(ap, fmt);
-	int n = vsnprintf(o->buf + o->len, o->cap - o->len, fmt, ap);
-	va_end(ap);
-	if (n < 0 || (size_t)n >= o->cap - o->len) {
-		o->full = true;
-		return;
-	}
-	o->len += (size_t)n;
-}
-
-static void put_str(struct out *o, const char *s)
-{
-	put(o, "\"");
-	for (; *s; s++) {
-		unsigned char c = (unsigned char)*s;
-		if (c == '"' || c == '\\')
-			put(o, "\\%c", c);
-		else if (c < 0x20)
-			put(o, "\\u%04x", c);
-		else
-			put(o, "%c", c);
-	}
-	put(o, "\"");
-}
 
 bool mav_ftp_init(struct mav_ftp *f)
 {
-	memset(f, 0, sizeof *f);
-	struct out p = {f->param_json, sizeof f->param_json, 0, false};
-	put(&p, "{\"version\": 1, \"parameters\": [");
-	for (size_t i = 0; i < param_count; i++) {
-		const struct param_def *d = &param_defs[i];
-		char def[32], min[32], max[32], group[PARAM_ID_LEN + 1];
-		params_fmt_float(def, sizeof def, d->def);
-		params_fmt_float(min, sizeof min, d->min);
-		params_fmt_float(max, sizeof max, d->max);
-		/* the group is the name's prefix, as in VEH_KF -> VEH */
-		size_t g = strcspn(d->name, "_");
-		if (g > PARAM_ID_LEN)
-			g = PARAM_ID_LEN;
-		memcpy(group, d->name, g);
-		group[g] = 0;
-		put(&p, "%s\n{\"name\": ", i ? "," : "");
-		put_str(&p, d->name);
-		put(&p, ", \"type\": \"Float\", \"shortDesc\": ");
-		put_str(&p, d->desc);
-		put(&p, ", \"units\": ");
-		put_str(&p, d->unit);
-		put(&p, ", \"default\": %s, \"min\": %s, \"max\": %s, \"group\": ", def, min, max);
-		put_str(&p, group);
-		put(&p, "}");
-	}
-	put(&p, "\n]}\n");
-	f->param_len = p.full ? 0 : (uint32_t)p.len;
-	f->param_crc = crc32_of(f->param_json, f->param_len);
-
-	struct out g = {f->general, sizeof f->general, 0, false};
-	put(&g, "{\"version\": 1, \"vendorName\": \"Octo-SIL\", \"modelName\": \"octo-fw\", "
-		"\"metadataTypes\": [{\"type\": %d, \"uri\": \"" URI_PREFIX PARAM_PATH "\", \"fileCrc\": %lu}]}\n",
-	    COMP_METADATA_TYPE_PARAMETER, (unsigned long)f->param_crc);
-	f->general_len = g.full || p.full ? 0 : (uint32_t)g.len;
-	f->general_crc = crc32_of(f->general, f->general_len);
 	f->session_open = false;
 	f->session_file = -1;
-	return f->general_len > 0;
+	return mav_ftp_files[MAV_FTP_GENERAL].len > 0 && mav_ftp_files[MAV_FTP_PARAM].len > 0;
 }
 
-const char *mav_ftp_file(const struct mav_ftp *f, const char *path, uint32_t *len, uint32_t *crc)
+const struct mav_ftp_file *mav_ftp_find(const char *path)
 {
 	while (*path == '/')
 		path++;
-	if (!strcmp(path, GENERAL_PATH) && f->general_len) {
-		*len = f->general_len;
-		*crc = f->general_crc;
-		return f->general;
-	}
-	if (!strcmp(path, PARAM_PATH) && f->param_len) {
-		*len = f->param_len;
-		*crc = f->param_crc;
-		return f->param_json;
-	}
+	for (int i = 0; i < MAV_FTP_N_FILES; i++)
+		if (!strcmp(path, mav_ftp_files[i].path))
+			return &mav_ftp_files[i];
 	return NULL;
 }
 
@@ -166,18 +68,17 @@ static void nak(const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, 
 	reply(l, req, seq, rsp, send);
 }
 
-static const char *session_data(const struct mav_ftp *f, uint32_t *len)
+static const struct mav_ftp_file *session_file(const struct mav_ftp *f)
 {
-	uint32_t crc;
-	return mav_ftp_file(f, f->session_file == 0 ? GENERAL_PATH : PARAM_PATH, len, &crc);
+	return &mav_ftp_files[f->session_file];
 }
 
 /* One ACK carrying the file's bytes from `offset`; returns how many. */
 static uint32_t send_chunk(const struct mav_ftp *f, const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, uint32_t offset,
 			   uint32_t want, bool burst, mav_ftp_send_fn send)
 {
-	uint32_t len = 0;
-	const char *data = session_data(f, &len);
+	const uint8_t *data = session_file(f)->data;
+	const uint32_t len = session_file(f)->len;
 	uint32_t n = len - offset < want ? len - offset : want;
 	uint8_t rsp[MAVLINK_MSG_FILE_TRANSFER_PROTOCOL_FIELD_PAYLOAD_LEN];
 	memset(rsp, 0, sizeof rsp);
@@ -202,8 +103,7 @@ void mav_ftp_handle(struct mav_ftp *f, const struct mav_ftp_link *l, const uint8
 		size_t n = req[P_SIZE] < FTP_DATA_MAX ? req[P_SIZE] : FTP_DATA_MAX;
 		memcpy(path, req + P_DATA, n);
 		path[n] = 0;
-		uint32_t len, crc;
-		const char *file = mav_ftp_file(f, path, &len, &crc);
+		const struct mav_ftp_file *file = mav_ftp_find(path);
 		if (!file) {
 			nak(l, req, seq, ERR_FILE_NOT_FOUND, send);
 			return;
@@ -211,12 +111,10 @@ void mav_ftp_handle(struct mav_ftp *f, const struct mav_ftp_link *l, const uint8
 		/* one session: a new open replaces it (a ground station that lost the
 		 * previous answer opens again) */
 		f->session_open = true;
-		while (*path == '/')
-			memmove(path, path + 1, strlen(path));
-		f->session_file = !strcmp(path, GENERAL_PATH) ? 0 : 1;
+		f->session_file = (int8_t)(file - mav_ftp_files);
 		rsp[P_OPCODE] = OP_ACK;
 		rsp[P_SIZE] = 4;
-		set32(rsp + P_DATA, len);
+		set32(rsp + P_DATA, file->len);
 		uint8_t r2[sizeof rsp];
 		memcpy(r2, req, sizeof r2);
 		r2[P_SESSION] = 0;
@@ -229,8 +127,7 @@ void mav_ftp_handle(struct mav_ftp *f, const struct mav_ftp_link *l, const uint8
 			nak(l, req, seq, ERR_INVALID_SESSION, send);
 			return;
 		}
-		uint32_t len = 0;
-		(void)session_data(f, &len);
+		const uint32_t len = session_file(f)->len;
 		uint32_t offset = get32(req + P_OFFSET);
 		if (offset >= len) {
 			nak(l, req, seq, ERR_EOF, send);
@@ -251,14 +148,14 @@ void mav_ftp_handle(struct mav_ftp *f, const struct mav_ftp_link *l, const uint8
 		size_t n = req[P_SIZE] < FTP_DATA_MAX ? req[P_SIZE] : FTP_DATA_MAX;
 		memcpy(path, req + P_DATA, n);
 		path[n] = 0;
-		uint32_t len, crc;
-		if (!mav_ftp_file(f, path, &len, &crc)) {
+		const struct mav_ftp_file *file = mav_ftp_find(path);
+		if (!file) {
 			nak(l, req, seq, ERR_FILE_NOT_FOUND, send);
 			return;
 		}
 		rsp[P_OPCODE] = OP_ACK;
 		rsp[P_SIZE] = 4;
-		set32(rsp + P_DATA, crc);
+		set32(rsp + P_DATA, file->crc);
 		reply(l, req, seq, rsp, send);
 		return;
 	}
@@ -292,25 +189,27 @@ void mav_ftp_handle(struct mav_ftp *f, const struct mav_ftp_link *l, const uint8
 
 bool mav_ftp_is_metadata_msg(const struct mav_ftp *f, uint32_t msgid)
 {
+	(void)f;
 	return (msgid == MAVLINK_MSG_ID_COMPONENT_METADATA || msgid == MAVLINK_MSG_ID_COMPONENT_INFORMATION) &&
-	       f->general_len > 0;
+	       mav_ftp_files[MAV_FTP_GENERAL].len > 0;
 }
 
 void mav_ftp_send_metadata_msg(const struct mav_ftp *f, const struct mav_ftp_link *l, uint32_t msgid,
 			       mav_ftp_send_fn send)
 {
+	(void)f;
 	char uri[MAVLINK_MSG_COMPONENT_METADATA_FIELD_URI_LEN];   /* zero-filled, full size */
 	memset(uri, 0, sizeof uri);
-	snprintf(uri, sizeof uri, "%s", URI_PREFIX GENERAL_PATH);
+	snprintf(uri, sizeof uri, "%s%s", URI_PREFIX, mav_ftp_files[MAV_FTP_GENERAL].path);
 	mavlink_message_t msg;
 	if (msgid == MAVLINK_MSG_ID_COMPONENT_METADATA) {
 		mavlink_msg_component_metadata_pack_chan(l->sysid, l->compid, l->chan, &msg, l->time_boot_ms,
-							 f->general_crc, uri);
+							 mav_ftp_files[MAV_FTP_GENERAL].crc, uri);
 	} else {
 		char none[MAVLINK_MSG_COMPONENT_INFORMATION_FIELD_PERIPHERALS_METADATA_URI_LEN];
 		memset(none, 0, sizeof none);
 		mavlink_msg_component_information_pack_chan(l->sysid, l->compid, l->chan, &msg, l->time_boot_ms,
-							    f->general_crc, uri, 0, none);
+							    mav_ftp_files[MAV_FTP_GENERAL].crc, uri, 0, none);
 	}
 	send(l->ctx, &msg);
 }

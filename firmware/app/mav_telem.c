@@ -4,9 +4,8 @@
 #include <math.h>
 #include <string.h>
 
-#include <octo/mavlink.h>
-
 #include "app.h"
+#include "mav_lib.h"
 
 #define EARTH_R_M 6371008.8          /* mean radius: flat earth around the reference */
 #define RAD_TO_DEG 57.29577951308232

@@ -3,8 +3,8 @@
  * HAL, its datagrams decoded as a ground station would: home position per
  * vehicle (the module's state is per struct app, so two vehicles in one
  * process keep their own), home refused before a position exists, and the
- * parameter metadata file read over FTP (every parameter in it, its CRC the one
- * the general metadata file announces).
+ * parameter metadata file read over FTP (the compressed bytes in flash, its CRC the
+ * one the general metadata file announces).
  */
 #include <math.h>
 #include <stdio.h>
@@ -249,25 +249,28 @@ UNIT_TEST(mav_ftp_serves_the_parameter_metadata)
 	mrig_init(&RA);
 	long gl = ftp_read(&RA, "octo/general.json", general_buf, sizeof general_buf);
 	CHECK(gl > 0);
-	long pl = ftp_read(&RA, "octo/param.json", file_buf, sizeof file_buf);
+	long pl = ftp_read(&RA, "octo/param.json.xz", file_buf, sizeof file_buf);
 	CHECK(pl > 0);
 	if (gl <= 0 || pl <= 0)
 		return;
 	general_buf[gl] = 0;
-	file_buf[pl] = 0;
-	for (size_t i = 0; i < param_count; i++) {
-		char key[64];
-		snprintf(key, sizeof key, "\"name\": \"%s\"", param_defs[i].name);
-		CHECK(strstr(file_buf, key) != NULL);
-	}
+	/* the bytes in flash, an xz stream (its magic), with the CRC the general file announces
+	 * (tests/py/test_client_metadata.py decompresses it against the parameter table) */
+	const struct mav_ftp_file *pf = &mav_ftp_files[MAV_FTP_PARAM];
+	CHECK((uint32_t)pl == pf->len && !memcmp(file_buf, pf->data, pf->len));
+	CHECK(!memcmp(file_buf, "\xfd" "7zXZ", 6));
 	char crc[48];
 	snprintf(crc, sizeof crc, "\"fileCrc\": %lu", (unsigned long)zlib_crc32(file_buf, (size_t)pl));
 	CHECK(strstr(general_buf, crc) != NULL);
-	CHECK(strstr(general_buf, "mftp://octo/param.json") != NULL);
-	/* anything else does not exist */
+	CHECK(strstr(general_buf, "\"mftp://octo/param.json.xz\"") != NULL);
+	CHECK(zlib_crc32(general_buf, (size_t)gl) == mav_ftp_files[MAV_FTP_GENERAL].crc);
+	/* anything else does not exist, the uncompressed name included */
 	uint8_t rsp[251];
 	int from = RA.n_got;
 	ftp(&RA, 9, 4, 0, "etc/passwd");
+	CHECK(ftp_reply(&RA, from, rsp) != NULL && rsp[3] == 129 && rsp[12] == 10);
+	from = RA.n_got;
+	ftp(&RA, 10, 4, 0, "octo/param.json");
 	CHECK(ftp_reply(&RA, from, rsp) != NULL && rsp[3] == 129 && rsp[12] == 10);
 }
 

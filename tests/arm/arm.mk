@@ -223,9 +223,13 @@ $(ARM_APP_LIST): $(ARM_APP_TEST_SRC) tests/arm/arm.mk
 ARM_APP_INC := -D_POSIX_C_SOURCE=200809L -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal \
                -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common
 define arm_app_variant
-ARM_APP_OBJ_$(1) := $$(ARM_APP_FW_SRC:%.c=$(ARM_B)/$(1)/app/%.o) $$(ARM_APP_TEST_ALL:%.c=$(ARM_B)/$(1)/app/%.o)
+ARM_APP_OBJ_$(1) := $$(ARM_APP_FW_SRC:%.c=$(ARM_B)/$(1)/app/%.o) $$(ARM_APP_TEST_ALL:%.c=$(ARM_B)/$(1)/app/%.o) \
+                    $(ARM_B)/$(1)/app/gen/param_metadata.o
 
 $(ARM_B)/$(1)/app/firmware/%.o: firmware/%.c | arm-toolchain $(MAVLINK_STAMP)
+	@mkdir -p $$(@D)
+	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(CFLAGS_FW) $$(ARM_CORE_OPT_$(1)) $$(ARM_APP_INC) -c $$< -o $$@
+$(ARM_B)/$(1)/app/gen/param_metadata.o: $(PARAM_META_C) | arm-toolchain
 	@mkdir -p $$(@D)
 	$$(ARM_CC) $$(ARM_CFLAGS_$(1)) $$(CFLAGS_FW) $$(ARM_CORE_OPT_$(1)) $$(ARM_APP_INC) -c $$< -o $$@
 $(ARM_B)/$(1)/app/tests/%.o: tests/%.c | arm-toolchain $(MAVLINK_STAMP)

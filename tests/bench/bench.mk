@@ -30,7 +30,7 @@
 
 BENCH_B      := $(B)/bench
 BENCH_CFLAGS := $(filter-out -MMD -MP,$(CFLAGS_FW))
-BENCH_APP_SRC := $(sort $(wildcard firmware/app/*.c firmware/hal/*.c)) tests/app/stub_hal.c
+BENCH_APP_SRC := $(sort $(wildcard firmware/app/*.c firmware/hal/*.c)) $(PARAM_META_C) tests/app/stub_hal.c
 BENCH_APP_INC := -D_POSIX_C_SOURCE=200809L -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal \
                  -Itests/app -Itests/arm -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common
 BENCH_FW_HDR := $(wildcard firmware/core/*.h firmware/app/*.h firmware/hal/hal.h tests/app/stub_hal.h)
@@ -87,10 +87,10 @@ ALL_TARGETS += $(BENCH_HOST)
 # ---- Cortex-M (only when the cross toolchain and QEMU are installed; else the table says so)
 BENCH_ARM_OK := $(shell command -v $(ARM_CC) >/dev/null 2>&1 && command -v $(ARM_QEMU) >/dev/null 2>&1 && echo 1)
 # The step per build: m4f (hard float), m4f-fixed, m0 (soft float), m0-fixed. The M0 images
-# hold the whole app (61 KB of static RAM), more than any QEMU Cortex-M0 board has (microbit
-# 16 KB, lm3s6965evb 64 KB): they are Cortex-M0 code (ARMv6-M, soft float) linked with
-# m4f.ld and counted on mps2-an386, whose Cortex-M4 executes the same Thumb instructions;
-# an instruction count depends on the code, not on the core that runs it.
+# hold the whole app and the test harness, more than microbit's RAM: they are Cortex-M0
+# code (ARMv6-M, soft float) linked with m4f.ld and counted on mps2-an386, whose Cortex-M4
+# executes the same Thumb instructions; an instruction count depends on the code, not on
+# the core that runs it.
 BENCH_STEP_VARIANTS := m4f m4f-fixed m0 m0-fixed
 ARM_ARCH_m4f-fixed     := $(ARM_ARCH_m4f)
 ARM_DEFS_m4f-fixed     := -DOCTO_FIXED=1

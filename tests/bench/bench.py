@@ -558,6 +558,26 @@ def profile_top(machine_, elf, first, every, last, top=6):
     return [(float(p), n) for p, n in rows], cmdline(argv)
 
 
+# tests/bench/step.c keeps the firmware's state in A (struct app) and M (struct mav), as a
+# platform's main does; every other RAM symbol defined under tests/ belongs to the harness
+# (stub HAL with its parameter "file", sensor frame, semihosting start-up).
+STEP_FIRMWARE_STATE = ("A", "M")
+
+
+def ram_split(elf):
+    """(firmware, harness) static RAM of a step image, bytes: .data and .bss symbols by the
+    source file that defines them (nm -l: the images carry debug information)"""
+    out = subprocess.run(["arm-none-eabi-nm", "-l", "-S", "-t", "d", str(elf)], capture_output=True, text=True,
+                         check=True).stdout
+    harness = 0
+    for ln in out.splitlines():
+        f = ln.split()
+        if len(f) >= 5 and f[2] in "bBdD" and "/tests/" in f[4] and f[3] not in STEP_FIRMWARE_STATE:
+            harness += int(f[1])
+    t, d, b = arm_size(elf)
+    return d + b - harness, harness
+
+
 def step_per_build(rep, args, res):
     builds = {}
     for v, mach in STEP_BUILDS:
@@ -568,16 +588,24 @@ def step_per_build(rep, args, res):
             continue
         r = run_step_elf(mach, elf)
         t, d, b = arm_size(elf)
+        fw_ram, harness_ram = ram_split(elf)
         phases = ("hold",) + tuple(f"exp{e}" for e in EXP_IDS) + ("exp_tick",)
         st = {k: mmm(r.get(k, [])) for k in phases}
         builds[v] = {"steps": st, "exit": r["exit"], "flash": t + d, "ram": d + b, "error": r.get("error"),
-                     "regions": r.get("regions")}
+                     "ram_firmware": fw_ram, "ram_harness": harness_ram, "regions": r.get("regions")}
         mm = lambda k: f"{fmt(st[k]['median'])} ({fmt(st[k]['max'])})" if st[k] else "n/a"
         rep.row(2, f"step per build, {v}: HOLD / exp. 1 rotor / exp. 2 validation / exp. 3 inertia / "
                 "between frames, median (max) instr.",
                 " / ".join(mm(k) for k in phases), "",
-                f"image (app + core + libs): flash {fmt((t + d) / 1024, 1)} KB, static RAM {fmt((d + b) / 1024, 1)} KB"
+                f"image (app + core + libs): flash {fmt((t + d) / 1024, 1)} KB, static RAM {fmt((d + b) / 1024, 1)} KB "
+                f"(firmware {fmt(fw_ram / 1024, 1)} KB, test harness {fmt(harness_ram / 1024, 1)} KB)"
                 + (f"; {r['error']}" if r.get("error") else ""), "(reported)", None, cmd)
+        if v == "m4f":
+            rep.row(2, "  firmware static RAM, M4F (the step image without the test harness: app, MAVLink, "
+                    "core, libs)", f"{fmt(fw_ram / 1024, 1)} KB", "",
+                    f"whole image {fmt((d + b) / 1024, 1)} KB, of it test harness {fmt(harness_ram / 1024, 1)} KB "
+                    "(stub HAL, frame, start-up)", "<= 32 KB", fw_ram <= 32 * 1024,
+                    f"arm-none-eabi-size {elf.relative_to(REPO)}; arm-none-eabi-nm -l -S {elf.relative_to(REPO)}")
     for cpu, fl, fx in (("M0", "m0", "m0-fixed"), ("M4F", "m4f", "m4f-fixed")):
         a, b_ = builds.get(fl, {}).get("steps", {}), builds.get(fx, {}).get("steps", {})
         ratios = {}

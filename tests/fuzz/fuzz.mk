@@ -53,7 +53,8 @@ $(FUZZ_TC_STAMP):
 
 FUZZ_FW_INC := -Ifirmware -Ifirmware/core -Ifirmware/app -Ifirmware/hal -Ifirmware/hal/host -Itests/app -Itests/fuzz \
                -isystem $(GEN)/mavlink -isystem $(GEN)/mavlink/common
-FUZZ_APP_SRC := $(sort $(wildcard firmware/app/*.c firmware/core/*.c)) firmware/hal/hal.c tests/app/stub_hal.c
+FUZZ_APP_SRC := $(sort $(wildcard firmware/app/*.c firmware/core/*.c)) $(PARAM_META_C) firmware/hal/hal.c \
+                tests/app/stub_hal.c
 
 $(FZ)/fuzz-xp_client: tests/fuzz/fuzz_xp_client.c tests/fuzz/records.h firmware/hal/host/xp_client.c firmware/hal/host/xp_proto.c \
 		firmware/hal/host/xp_client.h firmware/hal/host/xp_proto.h firmware/hal/hal.h | $(FUZZ_TC_STAMP)
