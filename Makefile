@@ -9,6 +9,7 @@
 #                 (host_tools/campaigns/default.json; output in campaign/; goes on where it stopped)
 #   make arm      cross-build the core and run its unit tests on emulated Cortex-M4F and M0,
 #                 and the app's C suite on Cortex-M4F
+#   make soak     a day in the air: 24 h of plant time in octo-sil (float, Q16.16, sanitizers)
 #   make fuzz     libFuzzer on every parser (make fuzz-smoke: a few seconds each, for CI)
 #   make clean    remove build/ (keeps .venv); make distclean removes .venv too
 #
@@ -109,10 +110,11 @@ include tests/core/probe.mk
 include tests/arm/arm.mk
 include tests/bench/bench.mk
 include tests/fuzz/fuzz.mk
+include tests/soak.mk
 include tests/lint.mk
 
 # ---------------------------------------------------------------- top-level goals
-.PHONY: all test run campaign bench arm clean distclean help
+.PHONY: all test run campaign bench arm soak clean distclean help
 all: $(ALL_TARGETS)
 
 test: all
@@ -132,7 +134,7 @@ campaign: all
 	$(VENV)/bin/octo-gcs campaign $(CAMPAIGN_SPEC) --out campaign --resume $(CAMPAIGN_ARGS)
 
 help:
-	@sed -n '2,17p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,18p' Makefile | sed 's/^# \{0,1\}//'
 
 clean:
 	rm -rf $(B)
