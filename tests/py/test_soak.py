@@ -105,18 +105,18 @@ def fly(tmp_path, build, hours):
     hwm_1h, hwm_end, lines = None, None, []
     for line in p.stderr:
         lines.append(line)
+        if line.startswith("octo-sil: stopped at"):   # the closing line: the process is still there
+            hwm_end = vm_kb(p.pid, "VmHWM") or hwm_end
         if "' done" in line and line.startswith("octo-sil: t="):
             t = float(line.split("t=")[1].split()[0])
             hwm = vm_kb(p.pid, "VmHWM")
             if hwm_1h is None and t >= 3600.0:
                 hwm_1h = hwm
+            hwm_end = hwm or hwm_end
             if "experiment" in line or "disarmed" in line:
                 print(f"[{build}] plant {t / 3600:6.2f} h  wall {time.monotonic() - wall0:6.1f} s  "
                       f"peak RSS {hwm} kB: {line.split(': ', 2)[-1].strip()}", flush=True)
-    # the peak RSS over the whole run, from the kernel's accounting of the ended process
-    _, status, usage = os.wait4(p.pid, 0)
-    p.returncode = rc = os.waitstatus_to_exitcode(status)
-    hwm_end = usage.ru_maxrss
+    rc = p.wait()
     wall = time.monotonic() - wall0
     stderr = "".join(lines)
     assert rc == 0, stderr[-4000:]
