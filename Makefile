@@ -11,6 +11,7 @@
 #                 and the app's C suite on Cortex-M4F
 #   make pil      processor-in-the-loop: make run's mission on an emulated Cortex-M4F board
 #                 (QEMU mps2-an386), float and Q16.16 images (docs/pil.md)
+#   make soak     a day in the air: 24 h of plant time in octo-sil (float, Q16.16, sanitizers)
 #   make fuzz     libFuzzer on every parser (make fuzz-smoke: a few seconds each, for CI)
 #   make clean    remove build/ (keeps .venv); make distclean removes .venv too
 #
@@ -111,11 +112,12 @@ include tests/core/probe.mk
 include tests/arm/arm.mk
 include tests/bench/bench.mk
 include tests/fuzz/fuzz.mk
+include tests/soak.mk
 include tests/lint.mk
 include firmware/hal/mps2/pil.mk
 
 # ---------------------------------------------------------------- top-level goals
-.PHONY: all test run campaign bench arm pil clean distclean help
+.PHONY: all test run campaign bench arm pil soak clean distclean help
 all: $(ALL_TARGETS)
 
 test: all
@@ -135,7 +137,7 @@ campaign: all
 	$(VENV)/bin/octo-gcs campaign $(CAMPAIGN_SPEC) --out campaign --resume $(CAMPAIGN_ARGS)
 
 help:
-	@sed -n '2,19p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '2,20p' Makefile | sed 's/^# \{0,1\}//'
 
 clean:
 	rm -rf $(B)

@@ -48,6 +48,7 @@ static const char kUsage[] =
 "                         `sensors`); a row not served is not sent, its datarefs reply 0\n"
 "  --lcm URL              ground truth on channel OCTO_TRUTH (octo.truth_t); file://PATH\n"
 "                         writes an LCM log stamped with simulated time\n"
+"  --log-every N          the truth log: every Nth frame only (1), frame 0 included\n"
 "\n"
 "fault injection on the DATA stream (seeded):\n"
 "  --drop P               lose each frame with probability P\n"
@@ -191,6 +192,8 @@ int parse_options(int argc, char **argv, Options &o)
 				o.start_time = num(a, val(), 0.0, 1e9);
 			} else if (a == "--lcm") {
 				o.lcm_url = val();
+			} else if (a == "--log-every") {
+				o.log_every = static_cast<unsigned>(integer(a, val(), 1, 1000000));
 			} else if (a == "--lockstep") {
 				o.lockstep = true;
 			} else if (a == "--lockstep-timeout") {

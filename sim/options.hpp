@@ -26,6 +26,7 @@ struct Options {
 	double duration = 0;          // simulated s; 0 = run until stopped
 	double start_time = 0;        // the plant clock at frame 0, s (Data Output row 1 starts there)
 	std::string lcm_url;
+	unsigned log_every = 1;       // --log-every: the truth log keeps every Nth frame
 	bool lockstep = false;
 	double lockstep_timeout = 0.5; // wall s to wait for the 8 throttles
 	std::vector<int> rows;        // preselected Data Output rows

@@ -125,6 +125,7 @@ int octo_plant_open_truth(octo_plant *p, const char *url)
 		std::fprintf(stderr, "octo-sil: --lcm-sim: %s\n", err.c_str());
 		return -1;
 	}
+	p->truth.set_every(p->o.log_every);
 	return 0;
 }
 

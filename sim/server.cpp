@@ -180,6 +180,7 @@ int Server::run()
 		std::fprintf(stderr, "octo-sim: --lcm: %s\n", err.c_str());
 		return 1;
 	}
+	truth_.set_every(o_.log_every);
 	std::fprintf(stderr, "octo-sim: X-Plane %d on %s:%u, Data Output to %s at %g Hz%s\n", o_.xplane_version,
 	             o_.bind_ip.c_str(), o_.xp_port, addr_str(input_.target).c_str(), o_.rate,
 	             o_.lockstep ? ", lockstep" : "");

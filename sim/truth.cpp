@@ -16,6 +16,7 @@ struct TruthPublisher::Impl {
 	std::unique_ptr<lcm::LCM> lcm;
 	lcm_eventlog_t *log = nullptr;
 	int64_t eventnum = 0;
+	unsigned every = 1;
 	std::vector<uint8_t> buf;
 	~Impl()
 	{
@@ -65,9 +66,14 @@ bool TruthPublisher::open(const std::string &url, std::string &err)
 	return true;
 }
 
+void TruthPublisher::set_every(unsigned every)
+{
+	d_->every = every ? every : 1;
+}
+
 void TruthPublisher::publish(const Model &m, uint64_t frame)
 {
-	if (!active())
+	if (!active() || frame % d_->every != 0)
 		return;
 	const VehicleParams &p = m.params();
 	const BodyState &x = m.state();

@@ -20,7 +20,7 @@ FUZZ_SMOKE_SECONDS ?= 10
 FUZZ_APT      := clang libclang-rt-14-dev
 FZ            := $(B)/fuzz
 FUZZ_SAN      := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
-                 -fno-omit-frame-pointer
+                 -fno-omit-frame-pointer -fsanitize-coverage-ignorelist=tests/fuzz/coverage-ignore.txt
 # params.c checks its table with _Static_assert on float comparisons, which GCC
 # folds and clang refuses in C: the GCC builds keep those checks, the fuzz
 # builds drop them.
@@ -75,9 +75,9 @@ define fuzz_app_build
 endef
 FUZZ_APP_DEP := tests/app/stub_hal.h $(FUZZ_APP_SRC) $(wildcard firmware/app/*.h firmware/core/*.h)
 
-$(FZ)/fuzz-mavlink: tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
+$(FZ)/fuzz-mavlink: tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_DEP) tests/fuzz/coverage-ignore.txt | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
 	$(call fuzz_app_build,tests/fuzz/fuzz_mavlink.c,)
-$(FZ)/fuzz-mavlink_fixed: tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
+$(FZ)/fuzz-mavlink_fixed: tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_DEP) tests/fuzz/coverage-ignore.txt | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
 	$(call fuzz_app_build,tests/fuzz/fuzz_mavlink.c,-DOCTO_FIXED=1)
 $(FZ)/fuzz-experiment: tests/fuzz/fuzz_experiment.c $(FUZZ_APP_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
 	$(call fuzz_app_build,tests/fuzz/fuzz_experiment.c,)

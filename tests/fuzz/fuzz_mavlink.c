@@ -16,6 +16,7 @@
  *     10..11: the bytes as a raw datagram (no framing)
  *     12..13: a sensor frame (hovering vehicle, the bytes perturb it)
  *     14..15: app_tick and mav_tick after a wall-clock step
+ * Every input starts from the state just after start-up (copied back, see start_state).
  * Checks: parameters stay finite and inside their ranges.
  */
 #include <math.h>
@@ -93,26 +94,73 @@ static void message(uint8_t kind, const uint8_t *b, size_t n)
 	mav_receive(&mav, buf, k);
 }
 
+/* The state an input starts from, one per signing mode: the platform, the app and its
+ * MAVLink endpoint just initialised, and the MAVLink library's parser and sender state of
+ * both channels. Set up once (app_init and mav_init cost about a millisecond under the
+ * sanitizers: mav_init formats the parameter metadata) and copied back before each input,
+ * so that every input starts from the same state and none sees what an earlier one left. */
+struct snapshot {
+	bool taken;
+	struct stub_hal hal;
+	struct app app;
+	struct mav mav;
+	mavlink_status_t status[2];
+	mavlink_message_t rxbuf[2];
+};
+static struct snapshot snap[2];
+
+static void channels_save(struct snapshot *s)
+{
+	for (int c = 0; c < 2; c++) {
+		s->status[c] = *mavlink_get_channel_status((uint8_t)c);
+		s->rxbuf[c] = *mavlink_get_channel_buffer((uint8_t)c);
+	}
+}
+
+static void channels_restore(const struct snapshot *s)
+{
+	for (int c = 0; c < 2; c++) {
+		*mavlink_get_channel_status((uint8_t)c) = s->status[c];
+		*mavlink_get_channel_buffer((uint8_t)c) = s->rxbuf[c];
+	}
+}
+
+/* The globals app, mav and hal as after a fresh start in signing mode `key`. They are
+ * initialised in place (the structs point at each other) and then copied, so the copies
+ * restored into the same globals keep valid pointers. */
+static void start_state(int key)
+{
+	struct snapshot *s = &snap[key];
+	if (s->taken) {
+		hal = s->hal;
+		app = s->app;
+		mav = s->mav;
+		channels_restore(s);
+		return;
+	}
+	stub_hal_init(&hal);
+	hal.have_key = key != 0;
+	for (int i = 0; i < 32; i++)
+		hal.key[i] = (uint8_t)(i * 7 + 1);
+	for (int c = 0; c < 2; c++) {
+		memset(mavlink_get_channel_status((uint8_t)c), 0, sizeof(mavlink_status_t));
+		memset(mavlink_get_channel_buffer((uint8_t)c), 0, sizeof(mavlink_message_t));
+	}
+	app_init(&app, &hal.hal);
+	mav_init(&mav, &app, &hal.hal, hal.now_us);
+	s->hal = hal;
+	s->app = app;
+	s->mav = mav;
+	channels_save(s);
+	s->taken = true;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
 	if (size < 1)
 		return 0;
-	stub_hal_init(&hal);
+	start_state(data[0] & 1);
 	t_plant = 0.0;
-	hal.have_key = data[0] & 1;
-	for (int i = 0; i < 32; i++)
-		hal.key[i] = (uint8_t)(i * 7 + 1);
-	/* app_init costs ~1 ms under the sanitizers: done once per key mode, then
-	 * the initialised state is copied; mav_init resets the MAVLink side
-	 * (signing streams included) so that no run sees the previous one. */
-	static struct app snap[2];
-	static bool have_snap[2];
-	if (!have_snap[hal.have_key]) {
-		app_init(&snap[hal.have_key], &hal.hal);
-		have_snap[hal.have_key] = true;
-	}
-	app = snap[hal.have_key];
-	mav_init(&mav, &app, &hal.hal, hal.now_us);
 	mavlink_status_t *st = mavlink_get_channel_status(MAVLINK_COMM_1);
 	if (hal.have_key) {
 		memset(&tx_signing, 0, sizeof tx_signing);

@@ -24,6 +24,10 @@ static const char usage[] =
 	"                           source of incoming MAVLink packets\n"
 	"  --params FILE            parameter storage (loaded at start, saved atomically)\n"
 	"  --lcm URL                LCM log: file://PATH (event log in plant time) or an LCM URL\n"
+	"  --log-every N            log every Nth frame (1); events and identification\n"
+	"                           results always\n"
+	"  --log-phases             log every frame during experiments; outside them none,\n"
+	"                           or every Nth with --log-every N\n"
 	"  --actuation dref|data25  throttles as 8 DREFs ENGN_thro_use[i] + override_throttles\n"
 	"                           (default) or one DATA row 25 datagram\n"
 	"  --signing-key FILE       MAVLink 2 signing: unsigned input rejected, output signed.\n"
@@ -92,8 +96,13 @@ int host_parse_args(int argc, char **argv, struct host_config *cfg)
 			dump_params();
 			return 0;
 		}
+		if (!strcmp(f, "--log-phases")) {
+			cfg->log_phases = true;
+			continue;
+		}
 		static const char *const with_value[] = {"--xplane", "--xp-listen", "--mavlink-listen", "--gcs",
-							  "--params", "--lcm", "--signing-key", "--actuation"};
+							  "--params", "--lcm", "--signing-key", "--actuation",
+							  "--log-every"};
 		bool known = false;
 		for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
 			known = known || !strcmp(f, with_value[k]);
@@ -125,6 +134,8 @@ int host_parse_args(int argc, char **argv, struct host_config *cfg)
 			cfg->lcm_url = v;
 		else if (!strcmp(f, "--signing-key"))
 			cfg->signing_key_path = v;
+		else if (!strcmp(f, "--log-every"))
+			bad = log_every_parse("octo-fw", v, &cfg->log_every);
 		else if (!strcmp(f, "--actuation")) {
 			if (!strcmp(v, "dref"))
 				cfg->act = XP_ACT_DREF;
@@ -138,5 +149,7 @@ int host_parse_args(int argc, char **argv, struct host_config *cfg)
 		if (bad)
 			return 2;
 	}
+	if (!cfg->log_every && !cfg->log_phases)
+		cfg->log_every = 1;
 	return -1;
 }

@@ -37,6 +37,8 @@ struct host_config {
 	uint16_t xp_listen, mav_listen;
 	const char *params_path, *lcm_url, *signing_key_path;
 	enum xp_actuation act;
+	unsigned log_every;                /* --log-every N (0 with --log-phases alone: none outside) */
+	bool log_phases;                   /* --log-phases: every frame during experiments */
 };
 /* Fills *cfg from argv. Returns -1 to run, or the exit status (0 after --help
  * or --dump-params, 1 or 2 after an error, reported on stderr). */
@@ -58,8 +60,18 @@ long param_file_fetch(const struct param_file *pf, char *buf, size_t cap);
 struct lcm_log {
 	lcm_t *lcm;
 	lcm_eventlog_t *elog;
+	/* frame thinning (--log-every, --log-phases): outside an experiment every
+	 * `every`-th frame is written (0: none); during one, every frame when `phases`.
+	 * Events and identification results are always written. */
+	unsigned every;
+	bool phases;
+	uint64_t frames_seen;   /* frames offered outside the written phases */
 };
 int lcm_log_open(struct lcm_log *lg, const char *url);
+/* thinning as above: every >= 1, or 0 with phases (experiments only) */
+void lcm_log_thin(struct lcm_log *lg, unsigned every, bool phases);
+/* --log-every's value into *out: 0, or 1 after a message on stderr naming prog */
+int log_every_parse(const char *prog, const char *v, unsigned *out);
 void lcm_log_close(struct lcm_log *lg);
 void lcm_log_frame(struct lcm_log *lg, const struct app_log_frame *f);
 void lcm_log_event(struct lcm_log *lg, double t_s, int severity, const char *text);

@@ -2,7 +2,8 @@
  * lcm_log.c - the firmware log as LCM messages (the host's log_frame / log_event /
  * log_id_result).
  *
- * Channels: OCTO_FW_FRAME (octo.fw_frame_t, every frame), OCTO_FW_EVENT
+ * Channels: OCTO_FW_FRAME (octo.fw_frame_t, every frame unless thinned by
+ * lcm_log_thin), OCTO_FW_EVENT
  * (octo.fw_event_t), OCTO_FW_ID_RESULT (octo.fw_id_result_t, each identification
  * result as data). With --lcm file://PATH the events are written straight
  * into an LCM event log with plant-time stamps, so two lockstep runs with the
@@ -25,6 +26,7 @@
 
 int lcm_log_open(struct lcm_log *lg, const char *url)
 {
+	lcm_log_thin(lg, 1, false);
 	if (!strncmp(url, "file://", 7)) {
 		char path[4096];
 		snprintf(path, sizeof path, "%s", url + 7);
@@ -43,6 +45,37 @@ int lcm_log_open(struct lcm_log *lg, const char *url)
 		fprintf(stderr, "octo-fw: --lcm: cannot open %s\n", url);
 		return -1;
 	}
+	return 0;
+}
+
+void lcm_log_thin(struct lcm_log *lg, unsigned every, bool phases)
+{
+	lg->every = every;
+	lg->phases = phases;
+	lg->frames_seen = 0;
+}
+
+/* Whether this frame goes into the log: all of them during an experiment with
+ * --log-phases, otherwise every `every`-th, counted from the first one offered. */
+static bool frame_kept(struct lcm_log *lg, const struct app_log_frame *l)
+{
+	if (lg->phases && l->exp_id != 0)
+		return true;
+	if (lg->every == 0)
+		return false;
+	return lg->frames_seen++ % lg->every == 0;
+}
+
+/* --log-every's value: an integer in [1, 1000000]; 0, or 1 after a message. */
+int log_every_parse(const char *prog, const char *v, unsigned *out)
+{
+	char *e = NULL;
+	long n = strtol(v, &e, 10);
+	if (!*v || *e || n < 1 || n > 1000000) {
+		fprintf(stderr, "%s: --log-every: expected a frame count in [1, 1000000], got '%s'\n", prog, v);
+		return 1;
+	}
+	*out = (unsigned)n;
 	return 0;
 }
 
@@ -79,7 +112,7 @@ static int64_t utime_of(double t_s)
 
 void lcm_log_frame(struct lcm_log *lg, const struct app_log_frame *l)
 {
-	if (!lg->elog && !lg->lcm)
+	if ((!lg->elog && !lg->lcm) || !frame_kept(lg, l))
 		return;
 	octo_fw_frame_t m;
 	memset(&m, 0, sizeof m);

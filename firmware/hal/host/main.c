@@ -87,6 +87,7 @@ static int run(struct host *h)
 	param_file_set_path(&h->params, cfg->params_path);
 	if (cfg->lcm_url && lcm_log_open(&h->log, cfg->lcm_url))
 		return 1;
+	lcm_log_thin(&h->log, cfg->log_every, cfg->log_phases);
 	if (cfg->xplane_auto && xp_find(h, &stop_set))
 		return 1;
 	if (xp_client_open(&h->xp, cfg->xp_listen, &cfg->xplane, cfg->act))

@@ -86,9 +86,12 @@ static double f32_ulp(float x)
 	return ldexp(1.0, (e < -125 ? -125 : e) - 24);
 }
 
+/* s in whole microseconds; a stamp beyond 2^64 us (a corrupt one) saturates. */
 static uint64_t us_of(double s)
 {
-	return s > 0.0 ? (uint64_t)(s * 1e6 + 0.5) : 0u;
+	if (!(s > 0.0))
+		return 0u;
+	return s < 1.8e13 ? (uint64_t)(s * 1e6 + 0.5) : UINT64_MAX;
 }
 
 enum xp_stamp xp_clock_stamp(struct xp_clock *k, float stamp, uint64_t *n)

@@ -14,6 +14,10 @@ static const char usage[] = "usage: octo-sil [options]\n"
 			    "  --params FILE            parameter storage (loaded at start, saved atomically)\n"
 			    "  --actuation dref|data25  throttles as DREFs (default) or one DATA row 25 datagram\n"
 			    "  --lcm-fw URL             octo-fw's log (file://PATH: LCM log in simulated time)\n"
+			    "  --log-every N            both logs: every Nth frame (1); events and identification\n"
+			    "                           results always\n"
+			    "  --log-phases             octo-fw's log: every frame during experiments; outside\n"
+			    "                           them none, or every Nth with --log-every N\n"
 			    "  --mavlink-listen PORT    serve MAVLink on UDP PORT to watch a run (telemetry rates\n"
 			    "  --gcs HOST:PORT          then in wall-clock time; ground station 127.0.0.1:14550)\n"
 			    "\n"
@@ -115,6 +119,14 @@ int sil_parse_args(int argc, char **argv, struct sil_config *cfg)
 			rc = 0;
 		} else if (!strcmp(f, "--quiet")) {
 			cfg->quiet = true;
+		} else if (!strcmp(f, "--log-phases")) {
+			cfg->log_phases = true;
+		} else if (!strcmp(f, "--log-every") && i + 1 < argc) {
+			/* both logs: the firmware's here, the truth's in the plant */
+			if (log_every_parse("octo-sil", argv[i + 1], &cfg->log_every))
+				rc = 2;
+			cfg->plant_argv[cfg->plant_argc++] = argv[i];
+			cfg->plant_argv[cfg->plant_argc++] = argv[++i];
 		} else if (!is_own(f)) {
 			cfg->plant_argv[cfg->plant_argc++] = argv[i];
 		} else if (i + 1 >= argc) {
@@ -130,5 +142,7 @@ int sil_parse_args(int argc, char **argv, struct sil_config *cfg)
 		free(cfg->plant_argv);
 		cfg->plant_argv = NULL;
 	}
+	if (!cfg->log_every && !cfg->log_phases)
+		cfg->log_every = 1;
 	return rc;
 }

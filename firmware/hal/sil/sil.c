@@ -251,6 +251,7 @@ static int start(struct sil *s, const struct sil_config *cfg, sigset_t *stop_set
 	param_file_set_path(&s->params, cfg->params);
 	if (cfg->lcm_fw && lcm_log_open(&s->log, cfg->lcm_fw))
 		return 1;
+	lcm_log_thin(&s->log, cfg->log_every, cfg->log_phases);
 	if (cfg->mav_listen) {
 		s->mav_fd = udp_open_ground("octo-sil", cfg->mav_listen);
 		if (s->mav_fd < 0)

@@ -44,6 +44,8 @@ struct sil_config {
 	double duration;               /* simulated seconds, 0: no limit */
 	enum xp_actuation act;
 	bool quiet;
+	unsigned log_every;            /* --log-every N: both logs (0 with --log-phases alone) */
+	bool log_phases;               /* --log-phases: the firmware's frames during experiments */
 	int plant_argc;
 	char **plant_argv;
 };
