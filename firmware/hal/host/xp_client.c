@@ -97,6 +97,8 @@ static uint64_t us_of(double s)
 enum xp_stamp xp_clock_stamp(struct xp_clock *k, float stamp, uint64_t *n)
 {
 	*n = 0;
+	if (!((double)stamp >= 0.0 && (double)stamp <= XP_STAMP_MAX_S))
+		return XP_STAMP_BAD;   /* the clock never takes it: time stays monotonic */
 	double s = (double)stamp + k->offset_s;
 	if (!k->have) {
 		k->have = true;
@@ -459,7 +461,12 @@ int xp_client_input(struct xp_client *c, const uint8_t *buf, size_t n, const str
 	 * with one actuation) but carries no news. A duplicate brings its own (equal) values and
 	 * the same time. */
 	uint64_t n_new;
-	if (xp_clock_stamp(&c->clock, raw_t, &n_new) == XP_STAMP_OLD) {
+	enum xp_stamp st = xp_clock_stamp(&c->clock, raw_t, &n_new);
+	if (st == XP_STAMP_BAD) {
+		c->stats.dropped++;   /* a corrupt time cannot be placed either */
+		return 0;
+	}
+	if (st == XP_STAMP_OLD) {
 		c->stats.stale++;
 		frame->seq = ++c->seq;
 		c->stats.frames++;

@@ -79,13 +79,16 @@ struct xp_clock {
 };
 
 /* What one stamp was: a new frame (n frames on), a duplicate, or older than the newest. */
-enum xp_stamp { XP_STAMP_NEW = 1, XP_STAMP_SAME = 0, XP_STAMP_OLD = -1 };
+enum xp_stamp { XP_STAMP_NEW = 1, XP_STAMP_SAME = 0, XP_STAMP_OLD = -1, XP_STAMP_BAD = -2 };
+/* The largest plant time a stamp may carry (about 31 years): beyond it, or negative or not
+ * finite, a stamp is corrupt (XP_STAMP_BAD) and its frame cannot be placed. */
+#define XP_STAMP_MAX_S 1.0e9
 
 void xp_clock_init(struct xp_clock *k);
 /* Configures the period (s > 0): counted with it, not measured. */
 void xp_clock_set_period(struct xp_clock *k, double period_s);
 /* Takes one stamp: XP_STAMP_NEW with *n frames counted (k->frame_n, k->t_us updated), or
- * SAME / OLD (*n = 0, nothing changed). */
+ * SAME / OLD / BAD (*n = 0, nothing changed). */
 enum xp_stamp xp_clock_stamp(struct xp_clock *k, float stamp, uint64_t *n);
 
 struct xp_client {
