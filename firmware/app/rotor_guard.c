@@ -48,8 +48,9 @@ void rotor_guard_step(struct app *a, float dt)
 	const scalar_t *thrust_n = thrust ? f->rotor_thrust_n : NULL, *speed_rps = speed ? f->rotor_speed_rps : NULL;
 	scalar_t dt_s = dt;
 #endif
-	const bool judge = a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_EXPERIMENT ||
-			   a->mode == APP_LAND;
+	/* judged in hover, the experiments and the landing; not in the take-off, whose spool-up and
+	 * climb swing the rotors most while the lag and delay are still the nominal ones */
+	const bool judge = a->mode == APP_HOLD || a->mode == APP_EXPERIMENT || a->mode == APP_LAND;
 	/* app_thr_sc: the throttles of the last step, what the plant answers with now */
 	struct rotor_fail_input in = {app_thr_sc(a), thrust_n, speed_rps, dt_s, judge && a->actuating};
 	struct rotor_fail_output o = rotor_fail_step(&a->rf, &in);

@@ -14,6 +14,7 @@ struct rotor_fail_params rotor_fail_params_default(void)
 	p.share_min = SC(0.3);
 	p.g_min = SC(0.02);
 	p.hold_s = SC(2.0);
+	p.tau_avg_s = SC(0.2);
 	p.confirm = 3;
 	return p;
 }
@@ -60,6 +61,7 @@ static scalar_t median(const scalar_t *v, int n)
 
 static void clear_streaks(struct rotor_fail *s)
 {
+	s->avg_primed = false;
 	for (int j = 0; j < NR; j++) {
 		s->streak[j] = 0;
 		s->q_sum[j] = SC_ZERO;
@@ -127,18 +129,36 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 		return out;
 	}
 
-	/* measured over modelled, for the rotors judged */
-	scalar_t r[NR], rj[NR];
+	/* measured and modelled, low-passed alike: the decision's inputs */
+	if (in->dt_s != s->c_avg_dt) {
+		s->c_avg_dt = in->dt_s;
+		s->avg_al = s->p.tau_avg_s > SC_ZERO ? sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(in->dt_s, s->p.tau_avg_s))))
+						     : SC(1.0);
+	}
+	for (int j = 0; j < NR; j++) {
+		scalar_t mj = meas[j] > SC_ZERO ? meas[j] : SC_ZERO;
+		s->mf[j] = s->avg_primed ? sc_add(s->mf[j], sc_mul(s->avg_al, sc_sub(mj, s->mf[j]))) : mj;
+		s->ef[j] = s->avg_primed ? sc_add(s->ef[j], sc_mul(s->avg_al, sc_sub(e[j], s->ef[j]))) : e[j];
+	}
+	s->avg_primed = true;
+
+	/* measured over modelled, for the rotors judged: raw (the effectiveness found) and
+	 * smoothed (the decision) */
+	scalar_t r[NR], rs[NR], rj[NR], rsj[NR];
 	bool judged[NR];
 	int n = 0;
 	for (int j = 0; j < NR; j++) {
-		judged[j] = e[j] > SC_ZERO && !(e[j] < e_floor);
+		judged[j] = e[j] > SC_ZERO && !(e[j] < e_floor) && s->ef[j] > SC_ZERO;
 		r[j] = judged[j] ? sc_div(meas[j] > SC_ZERO ? meas[j] : SC_ZERO, e[j]) : SC_ZERO;
-		if (judged[j])
-			rj[n++] = r[j];
+		rs[j] = judged[j] ? sc_div(s->mf[j], s->ef[j]) : SC_ZERO;
+		if (judged[j]) {
+			rj[n] = r[j];
+			rsj[n++] = rs[j];
+		}
 	}
 	scalar_t med = n >= MIN_JUDGED ? median(rj, n) : SC_ZERO;
-	if (!(med > SC_ZERO)) {
+	scalar_t meds = n >= MIN_JUDGED ? median(rsj, n) : SC_ZERO;
+	if (!(med > SC_ZERO) || !(meds > SC_ZERO)) {
 		clear_streaks(s);
 		return out;
 	}
@@ -151,10 +171,12 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 			s->q_sum[j] = SC_ZERO;
 			continue;
 		}
-		scalar_t q = sc_div(r[j], med);
-		if (!by_thrust)
-			q = sc_mul(q, q);   /* thrust goes with speed^2 */
-		if (q < s->p.ratio_fail) {
+		scalar_t q = sc_div(r[j], med), qs = sc_div(rs[j], meds);
+		if (!by_thrust) {   /* thrust goes with speed^2 */
+			q = sc_mul(q, q);
+			qs = sc_mul(qs, qs);
+		}
+		if (qs < s->p.ratio_fail) {
 			if (s->streak[j] < UINT8_MAX)
 				s->streak[j]++;
 			s->q_sum[j] = sc_add(s->q_sum[j], q);

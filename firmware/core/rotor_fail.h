@@ -9,9 +9,13 @@
  * and divided by the median of the rotors judged, so that neither k_f nor the speed at full
  * throttle need be known, and a k_f drift or a wrong VEH_KF move every rotor alike. What is
  * left, q_j = r_j / median (squared for the speed), is rotor j's effectiveness relative to
- * what MOT_SCALEj says. A rotor whose q_j stays below ratio_fail for `confirm` frames in a
- * row has failed; its effectiveness is then scale_j times the mean q_j over those frames
- * (0 below ratio_zero: the rotor is left out of the allocation).
+ * what MOT_SCALEj says. The decision reads q_j of the outputs low-passed alike (tau_avg):
+ * before identification the model's lag and delay are the nominal ones, and during an
+ * experiment's excitation the raw ratio swings with that mismatch, while the smoothed one
+ * stays near 1 unless the rotor's mean output falls. A rotor whose smoothed q_j stays below
+ * ratio_fail for `confirm` frames in a row has failed; its effectiveness is then scale_j
+ * times the mean raw q_j over those frames (0 below ratio_zero: the rotor is left out of
+ * the allocation).
  *
  * The thrust rows decide when the frame has them; the speed when it has only that. A rotor
  * is judged only while its modelled output is at least share_min of the mean (a rotor the
@@ -47,6 +51,7 @@ struct rotor_fail_params {
 	scalar_t share_min;    /* judged only while its modelled output is this share of the mean (0.3) */
 	scalar_t g_min;        /* ... and the mean g(T) is at least this (0.02) */
 	scalar_t hold_s;       /* hold before landing (2 s) */
+	scalar_t tau_avg_s;    /* the decision's low-pass of measured and modelled outputs (0.2 s) */
 	uint8_t confirm;       /* frames in a row (3) */
 };
 
@@ -76,6 +81,9 @@ struct rotor_fail {
 	struct rotor_fail_params p;
 	struct rotor_fail_model m;
 	scalar_t lag[ROTOR_FAIL_ROTORS];   /* lag-filtered throttles */
+	scalar_t mf[ROTOR_FAIL_ROTORS], ef[ROTOR_FAIL_ROTORS];   /* measured, modelled: low-passed */
+	bool avg_primed;                   /* mf, ef hold values */
+	scalar_t c_avg_dt, avg_al;         /* the low-pass coefficient and the dt it is for */
 	scalar_t q_sum[ROTOR_FAIL_ROTORS]; /* sum of q_j over the current streak */
 	uint8_t streak[ROTOR_FAIL_ROTORS];
 	uint8_t failed;                    /* bit j: rotor j+1 has failed */
