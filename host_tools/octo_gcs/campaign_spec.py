@@ -576,8 +576,23 @@ def mission_inputs(spec, index):
     return spec["seed"] + index, d, vehicle, faults, params
 
 
+def _check_drawn_inertia(spec, index, vehicle):
+    """octo-sim's cross-check: each principal moment at most the sum of the other two."""
+    inertia = vehicle.get("inertia")
+    if not inertia:
+        return
+    for i in range(3):
+        other = inertia[(i + 1) % 3] + inertia[(i + 2) % 3]
+        if inertia[i] > other:
+            raise SpecError(
+                f"vehicle.inertia[{i}]: mission {index} draws {inertia[i]:g} > {other:g}, the sum of the other "
+                "two (octo-sim refuses it: the triangle inequality); narrow the ranges"
+            )
+
+
 def check_all_draws(spec):
-    """Makes every mission's draws once, so that a normal draw out of its key's range is an error
-    before anything runs (cheap: no mission runs)."""
+    """Makes every mission's draws once, so that a normal draw out of its key's range, or inertia
+    that octo-sim would refuse, is an error before anything runs (cheap: no mission runs)."""
     for i in range(spec["missions"]):
         _check_drawn_vibration(draws(spec, i))
+        _check_drawn_inertia(spec, i, mission_inputs(spec, i)[2])
