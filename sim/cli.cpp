@@ -75,6 +75,7 @@ static const char kUsage[] =
 "thrust_curve, rotor_scale [8], kf_drift_per_min, noise {thrust, torque, gyro,\n"
 "attitude_deg, position, accel, rpm, current}, origin [lat, lon, alt_m],\n"
 "origin_shift_s [T, ...], rotor_failure {rotor, at_s, scale} or [{...}, ...];\n"
+"imu_spike {prob, gyro, accel}, stuck_rpm {rotor, at_s} or [{...}, ...];\n"
 "sensors: imu_bias {accel, gyro, accel_walk, gyro_walk}, imu_scale, vibration\n"
 "{accel, gyro, harmonics [<=4], cutoff_hz, sample_hz}, rpm_max, esc_pole_pairs,\n"
 "esc_kt, esc_current_offset, sensors [list] (docs/sensors.md).\n"
@@ -133,6 +134,18 @@ RotorFailure fail_rotor(const std::string &flag, const std::string &v)
 	f.at_s = num(flag + " (time T)", t.c_str(), 0.0, 1e9);
 	if (colon != std::string::npos)
 		f.scale = num(flag + " (scale S)", v.substr(colon + 1).c_str(), 0.0, 1.0);
+	return f;
+}
+
+// --stuck-rpm J@T
+StuckRpm stuck_rpm(const std::string &flag, const std::string &v)
+{
+	const size_t at = v.find('@');
+	if (at == std::string::npos)
+		throw Bad{flag, "expected J@T (rotor 1..8, plant time s), got '" + v + "'"};
+	StuckRpm f;
+	f.rotor = static_cast<int>(integer(flag + " (rotor J)", v.substr(0, at).c_str(), 1, kRotors)) - 1;
+	f.at_s = num(flag + " (time T)", v.substr(at + 1).c_str(), 0.0, 1e9);
 	return f;
 }
 
@@ -216,6 +229,14 @@ int parse_options(int argc, char **argv, Options &o)
 				o.shift_origin.push_back(num(a, val(), 0.0, 1e9));
 			} else if (a == "--fail-rotor") {
 				o.fail_rotor.push_back(fail_rotor(a, val()));
+			} else if (a == "--imu-spike") {
+				o.imu_spike = num(a, val(), 0.0, 1.0);
+			} else if (a == "--imu-spike-gyro") {
+				o.imu_spike_gyro = num(a, val(), 1e-6, 1e6);
+			} else if (a == "--imu-spike-accel") {
+				o.imu_spike_accel = num(a, val(), 1e-6, 1e6);
+			} else if (a == "--stuck-rpm") {
+				o.stuck_rpm.push_back(stuck_rpm(a, val()));
 			} else if (a == "--no-beacon") {
 				o.beacon = false;
 			} else if (a == "--computer-name") {
@@ -249,6 +270,14 @@ int parse_options(int argc, char **argv, Options &o)
 		std::sort(shifts.begin(), shifts.end());
 		auto &fails = o.vehicle.rotor_failures;
 		fails.insert(fails.end(), o.fail_rotor.begin(), o.fail_rotor.end());
+		auto &stuck = o.vehicle.stuck_rpm;
+		stuck.insert(stuck.end(), o.stuck_rpm.begin(), o.stuck_rpm.end());
+		if (o.imu_spike >= 0)
+			o.vehicle.imu_spike.prob = o.imu_spike;
+		if (o.imu_spike_gyro >= 0)
+			o.vehicle.imu_spike.gyro = o.imu_spike_gyro;
+		if (o.imu_spike_accel >= 0)
+			o.vehicle.imu_spike.accel = o.imu_spike_accel;
 		if (o.ideal)
 			o.vehicle.make_ideal();
 		if (o.sensors)

@@ -70,6 +70,7 @@ void advance_frame(const Options &o, Model &m, XpInput &in, uint64_t &n, Sensors
 	m.advance_to(static_cast<double>(n) / o.rate);
 	s.advance(m, n);
 	xp_measure(m, u, o.seed, n, s, f);
+	s.hold_stuck_rpm(m.clock(), f.rpm);
 	truth.publish(m, n);
 }
 

@@ -33,6 +33,9 @@ struct Options {
 	std::vector<double> shift_origin; // --shift-origin T: plant times, added to the vehicle's
 	std::vector<RotorFailure> fail_rotor; // --fail-rotor J@T[:S], added to the vehicle's
 	FaultParams faults;
+	// --imu-spike P, --imu-spike-gyro G, --imu-spike-accel A (< 0: the vehicle's imu_spike)
+	double imu_spike = -1, imu_spike_gyro = -1, imu_spike_accel = -1;
+	std::vector<StuckRpm> stuck_rpm; // --stuck-rpm J@T, added to the vehicle's
 	double step = 0.002;          // RK4 step, s
 	bool verbose = false;
 	bool beacon = true;           // BECN once a second on 239.255.1.1:49707

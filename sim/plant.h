@@ -34,7 +34,8 @@ typedef struct octo_plant octo_plant;
 
 /* Creates a plant from octo-sim's simulation and fault flags (argv[0] is the
  * program name; --vehicle, --ideal, --seed, --rate, --step, --start-time, --xplane-version,
- * --rows, --sensors, --drop, --burst, --burst-prob, --delay-frames, --duplicate, --reorder).
+ * --rows, --sensors, --drop, --burst, --burst-prob, --delay-frames, --duplicate, --reorder,
+ * --shift-origin, --fail-rotor, --imu-spike, --imu-spike-gyro, --imu-spike-accel, --stuck-rpm).
  * Network and run-loop flags are refused. On error returns NULL, *status = 2 and
  * the message on stderr; after --help *status = 0 and NULL. `prog` names the
  * program in messages. */

@@ -19,6 +19,7 @@ enum class Stream : uint64_t {
 	ImuWalk = 4,    // per frame: bias random-walk increments
 	ImuNoise = 5,   // per frame: accelerometer white noise
 	Esc = 6,        // per frame: rpm report and current noise
+	ImuSpike = 7,   // per frame: whether an IMU sample is an outlier, which one, its sign
 };
 
 inline uint64_t splitmix64(uint64_t &x)

@@ -160,6 +160,20 @@ void Sensors::advance(const Model &m, uint64_t n)
 	t_prev_ = t1;
 }
 
+void Sensors::hold_stuck_rpm(double clock, RotorArray &rpm)
+{
+	for (const auto &st : p_.stuck_rpm) {
+		if (clock < st.at_s)
+			continue;
+		const size_t j = static_cast<size_t>(st.rotor);
+		if (!stuck_[j]) {
+			stuck_[j] = true;
+			stuck_rpm_[j] = rpm[j];
+		}
+		rpm[j] = stuck_rpm_[j];
+	}
+}
+
 Eigen::Vector3d Sensors::accel(const Eigen::Vector3d &sf_b) const
 {
 	return sf_b + scale_a.cwiseProduct(sf_b) + bias_a + walk_a + vib_a;

@@ -54,6 +54,11 @@ public:
 	// interpolated between the two frames.
 	void advance(const Model &m, uint64_t n);
 
+	// Stuck rotor-speed reports (VehicleParams::stuck_rpm): called with each frame's reports
+	// `rpm` at plant time `clock`, frames in order; a report due to freeze keeps the value it
+	// had in the first frame at or after its time.
+	void hold_stuck_rpm(double clock, RotorArray &rpm);
+
 	// The IMU's readings in body axes (FLU) before the white noise, for the true specific
 	// force (m/s^2) and body rates (rad/s).
 	Eigen::Vector3d accel(const Eigen::Vector3d &sf_b) const;
@@ -79,6 +84,8 @@ private:
 	double psi_[kRotors][4][3] = {};    // per rotor and harmonic: phases of x, z (accel) and gyro
 	Eigen::Vector3d rock_[kRotors];     // unit axis a rotor's vertical imbalance rocks the body about
 	Biquad filt_[6];                    // accel x y z, gyro x y z
+	bool stuck_[kRotors] = {};          // rotor j's report is frozen
+	double stuck_rpm_[kRotors] = {};    // at this value, rpm
 };
 
 } // namespace sim

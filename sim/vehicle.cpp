@@ -179,6 +179,50 @@ RotorFailure rotor_failure(const json::Value &v)
 	return f;
 }
 
+// One stuck_rpm object: {"rotor": J (1..8), "at_s": T (>= 0)}.
+StuckRpm stuck_rpm(const json::Value &v)
+{
+	const std::string k = "stuck_rpm";
+	if (v.kind != json::Value::Kind::Object)
+		throw VehicleError(k, "key 'stuck_rpm' must be an object {\"rotor\": J, \"at_s\": T} or an array of them");
+	StuckRpm f;
+	bool have_rotor = false, have_t = false;
+	for (const auto &kv : v.obj) {
+		const std::string key = k + "." + kv.first;
+		if (kv.first == "rotor") {
+			const double d = num(kv.second, key, Rule::Any);
+			if (d != std::floor(d) || d < 1 || d > kRotors)
+				throw out_of_range(key, d, "an integer in [1, 8]");
+			f.rotor = static_cast<int>(d) - 1;
+			have_rotor = true;
+		} else if (kv.first == "at_s") {
+			f.at_s = num(kv.second, key, Rule::NonNegative);
+			if (f.at_s > 1e9)
+				throw out_of_range(key, f.at_s, "[0, 1e9] s");
+			have_t = true;
+		} else {
+			throw VehicleError(key, "unknown key '" + key + "' (known: rotor, at_s)");
+		}
+	}
+	if (!have_rotor || !have_t)
+		throw VehicleError(k, std::string("key 'stuck_rpm' needs '") + (have_rotor ? "at_s" : "rotor") + "'");
+	return f;
+}
+
+// The imu_spike object: {"prob": P ([0, 1]), "gyro": rad/s (> 0), "accel": m/s^2 (> 0)}.
+void imu_spike(const json::Value &v, ImuSpikeParams &s)
+{
+	if (v.kind != json::Value::Kind::Object)
+		throw VehicleError("imu_spike", "key 'imu_spike' must be an object {\"prob\": P, \"gyro\": G, \"accel\": A}");
+	for (const auto &kv : v.obj) {
+		const std::string key = "imu_spike." + kv.first;
+		if (kv.first == "prob") s.prob = num(kv.second, key, Rule::Unit);
+		else if (kv.first == "gyro") s.gyro = num(kv.second, key, Rule::Positive);
+		else if (kv.first == "accel") s.accel = num(kv.second, key, Rule::Positive);
+		else throw VehicleError(key, "unknown key '" + key + "' (known: prob, gyro, accel)");
+	}
+}
+
 } // namespace
 
 void vehicle_from_json(const std::string &text, VehicleParams &p)
@@ -241,6 +285,15 @@ void vehicle_from_json(const std::string &text, VehicleParams &p)
 			else
 				q.rotor_failures.push_back(rotor_failure(v));
 		}
+		else if (k == "stuck_rpm") {
+			q.stuck_rpm.clear();
+			if (v.kind == json::Value::Kind::Array)
+				for (const auto &e : v.arr)
+					q.stuck_rpm.push_back(stuck_rpm(e));
+			else
+				q.stuck_rpm.push_back(stuck_rpm(v));
+		}
+		else if (k == "imu_spike") imu_spike(v, q.imu_spike);
 		else if (k == "noise") {
 			if (v.kind != json::Value::Kind::Object)
 				throw VehicleError(k, "key 'noise' must be an object");

@@ -64,6 +64,23 @@ struct RotorFailure {
 	double scale = 0;       // remaining effectiveness, [0, 1]
 };
 
+// IMU spikes (octo-sim --imu-spike P, vehicle key `imu_spike`): with probability `prob` per
+// frame one IMU sample is an outlier: one axis of the gyro or of the accelerometer (drawn
+// alike) reads +gyro or -gyro rad/s, or +accel or -accel m/s^2, in place of its value.
+struct ImuSpikeParams {
+	double prob = 0;        // per frame, [0, 1]
+	double gyro = 5.0;      // rad/s, the outlier's magnitude on a gyro axis
+	double accel = 50.0;    // m/s^2, the outlier's magnitude on an accelerometer axis
+};
+
+// A rotor-speed report that freezes (octo-sim --stuck-rpm J@T, vehicle key `stuck_rpm`): from
+// the first frame at or after plant time at_s on, rotor `rotor`'s ESC report (rows 37/38)
+// repeats the value it had in that frame. The rotor itself is unaffected.
+struct StuckRpm {
+	int rotor = 0;          // 0-based
+	double at_s = 0;        // plant time, s
+};
+
 struct VehicleParams {
 	double mass = 2.132;        // kg
 	double g = 9.796;           // m/s^2
@@ -90,6 +107,8 @@ struct VehicleParams {
 	// scenery shifts do (xplane_emit.hpp: xp_origin_offset).
 	std::vector<double> origin_shift_s;
 	std::vector<RotorFailure> rotor_failures;   // in the order given (the last due one wins)
+	ImuSpikeParams imu_spike;                   // IMU outliers (none by default)
+	std::vector<StuckRpm> stuck_rpm;            // frozen rotor-speed reports
 
 	// Rotor j's effectiveness at plant time `clock` (rotor_scale, or a failure's scale once
 	// it is due), and the failure's factor alone (1 before any failure of rotor j).

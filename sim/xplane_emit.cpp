@@ -1,6 +1,7 @@
 // xplane_emit: frames, units and Data Output rows as X-Plane 11/12 emit them.
 #include "xplane_emit.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "rng.hpp"
@@ -133,6 +134,21 @@ void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint6
 	f.g_nrml = sf_b.z() / g;   // up along the body: +1 when level at rest
 	f.g_axil = sf_b.x() / g;   // forward positive
 	f.g_side = -sf_b.y() / g;  // right positive
+
+	// an IMU spike: one axis of one sensor replaced by an outlier (drawn every frame, so the
+	// draws of one frame do not depend on the probability)
+	Rng spike(seed, Stream::ImuSpike, frame);
+	const double u_spike = spike.uniform(), u_which = spike.uniform(), u_sign = spike.uniform();
+	if (u_spike < p.imu_spike.prob) {
+		const int which = std::min(5, static_cast<int>(u_which * 6));   // gyro x y z, accel x y z
+		const double sign = u_sign < 0.5 ? -1.0 : 1.0;
+		double *gyro_frd[3] = {&f.P, &f.Q, &f.R};
+		double *accel_g[3] = {&f.g_axil, &f.g_side, &f.g_nrml};
+		if (which < 3)
+			*gyro_frd[which] = sign * p.imu_spike.gyro;
+		else
+			*accel_g[which - 3] = sign * p.imu_spike.accel / g;
+	}
 
 	// rotors: true outputs plus noise on thrust; torque as the ESC's current gives it
 	// (Kt times the current, whose offset and noise add to the torque's own noise);

@@ -49,7 +49,10 @@ from .progress import Progress
 from .quantities import KEYS as QUANTITIES
 
 MISSION_ENV = "OCTO_CAMPAIGN_MISSION"
-STATUSES = ("pass", "fail", "crash", "timeout", "lost", "error")
+STATUSES = ("pass", "fail", "aborted", "crash", "timeout", "lost", "error")
+# "aborted": the vehicle ended the mission for a reason it stated, before a report (octo-sil: a
+# step of its script failed, e.g. an experiment stopped by a rotor failure); not a crash
+ABORTED_RE = re.compile(r"script step \d+ '[^']*' failed.*")
 RAN = ("pass", "fail")  # the mission ran to its report (its checks passed or not)
 TAIL_LINES = 40
 # A mission's scratch directory on its worker: the worker's pid in the name, so that the
@@ -234,6 +237,7 @@ def run_mission(job):
             # the reason: octo-gcs's own error line if it printed one, else the last line of output
             said = [ln[len("octo-gcs: ") :].strip().rstrip(":") for ln in tail if ln.startswith("octo-gcs: ")]
             last = said[0] if said else next((ln.strip() for ln in reversed(tail) if ln.strip()), "")
+            aborted = [m.group(0) for m in map(ABORTED_RE.search, tail) if m]
             failed_run = tmp / "out" / "failed-run"
             if failed_run.is_dir():  # the failed run's program logs (tails): the worker's copy goes away
                 res["failed_logs"] = {
@@ -259,6 +263,8 @@ def run_mission(job):
                         res["reason"] = "failed checks: " + "; ".join(failed) if failed else "exit status 1"
                 except (ValueError, OSError) as e:
                     res["status"], res["reason"] = "crash", f"unreadable report.json: {e}"
+            elif rc == 1 and said and " exited with status 1: " in said[0] and aborted:
+                res["status"], res["reason"] = "aborted", aborted[0]
             else:
                 res["status"] = "crash"
                 why = f"killed by signal {-rc}" if rc < 0 else f"exit status {rc}"

@@ -22,6 +22,11 @@ same vehicles, mission by mission.
 a list such as ``["imu", "rpm"]`` or the text ``"imu,rpm"``; absent: all) are words, fixed or
 drawn with ``{"choice": [...]}``; so is the vehicle's own ``sensors`` list.
 
+The plant's events ``vehicle.rotor_failure`` and ``vehicle.stuck_rpm`` are one object whose
+values are drawn (``{"rotor": {"choice": [1, 2, ..., 8]}, "at_s": {"uniform": [20, 60]},
+"scale": 0, "probability": 0.3}``): with ``probability`` (default 1) the mission's vehicle file
+gets the event, and the column ``vehicle.rotor_failure.on`` says whether it did.
+
 Validation happens before anything runs; every error names the key (``vehicle.inertia[1]``).
 """
 
@@ -71,7 +76,16 @@ VEHICLE_OBJECTS = {
         "cutoff_hz": (0, None, False),
         "sample_hz": (100, 32000, True),
     },
+    "imu_spike": {"prob": (0, 1, True), "gyro": (0, None, False), "accel": (0, None, False)},
 }
+# the plant's events at a plant time (one per mission, drawn): their keys and ranges; "rotor" is
+# a whole number. "probability" (a number in [0, 1], default 1) is the spec's: the share of
+# missions that have the event (the draw is the column vehicle.KEY.on, 1 or 0).
+VEHICLE_EVENTS = {
+    "rotor_failure": {"rotor": (1, 8, True), "at_s": (0, 1e9, True), "scale": (0, 1, True)},
+    "stuck_rpm": {"rotor": (1, 8, True), "at_s": (0, 1e9, True)},
+}
+EVENT_REQUIRED = ("rotor", "at_s")
 HARMONICS_MAX = 4
 # octo-sim's defaults that a cross-check needs (vibration.cutoff_hz < 0.45 vibration.sample_hz)
 VIBRATION_DEFAULTS = {"cutoff_hz": 30.0, "sample_hz": 1000.0}
@@ -204,6 +218,11 @@ def _walk(spec):
             rng = VEHICLE_RANGE.get(k) or VEHICLE_VARLISTS[k]
             for j, x in enumerate(veh[k]):
                 out.append((f"vehicle.{k}[{j}]", x, rng, False, ("vehicle", k, j)))
+        elif k in VEHICLE_EVENTS:
+            for nk in sorted(veh[k]):
+                if nk != "probability":
+                    rng = VEHICLE_EVENTS[k][nk]
+                    out.append((f"vehicle.{k}.{nk}", veh[k][nk], rng, nk == "rotor", ("vehicle", k, nk)))
         elif k in VEHICLE_OBJECTS:
             for nk in sorted(veh[k]):
                 rng = VEHICLE_OBJECTS[k][nk]
@@ -313,6 +332,25 @@ def validate(spec):
                 raise SpecError(
                     f"vehicle.vibration.harmonics: must be a list of 1 to {HARMONICS_MAX} numbers or draws"
                 )
+        elif k in VEHICLE_EVENTS:
+            names = VEHICLE_EVENTS[k]
+            if not isinstance(v, dict):
+                raise SpecError(
+                    f"vehicle.{k}: must be one object of numbers or draws ({', '.join(names)}, probability)"
+                )
+            for nk in v:
+                if nk not in names and nk != "probability":
+                    raise SpecError(
+                        f"vehicle.{k}: unknown key '{nk}' (known: {', '.join(names)}, probability)"
+                    )
+            for nk in EVENT_REQUIRED:
+                if nk not in v:
+                    raise SpecError(
+                        f"vehicle.{k}.{nk}: missing (the event needs {' and '.join(EVENT_REQUIRED)})"
+                    )
+            p = v.get("probability", 1)
+            if not _is_num(p) or not 0 <= p <= 1:
+                raise SpecError(f"vehicle.{k}.probability: must be a number in [0, 1], not {json.dumps(p)}")
         elif k in VEHICLE_LISTS:
             if not isinstance(v, list) or len(v) != VEHICLE_LISTS[k]:
                 raise SpecError(f"vehicle.{k}: must be a list of {VEHICLE_LISTS[k]} numbers or draws")
@@ -323,7 +361,11 @@ def validate(spec):
             _check_word("vehicle.sensors", v, _sensors_word)
         elif k not in VEHICLE_SCALARS:
             known = sorted(
-                set(VEHICLE_SCALARS) | set(VEHICLE_LISTS) | set(VEHICLE_VARLISTS) | set(VEHICLE_OBJECTS)
+                set(VEHICLE_SCALARS)
+                | set(VEHICLE_LISTS)
+                | set(VEHICLE_VARLISTS)
+                | set(VEHICLE_OBJECTS)
+                | set(VEHICLE_EVENTS)
             )
             raise SpecError(f"vehicle: unknown key '{k}' (known: {', '.join(known + ['sensors'])})")
     for k in s["faults"]:
@@ -469,6 +511,12 @@ def draws(spec, index):
     out = {"build": w["build"], "sensors": ",".join(served) if served else "all"}
     if w["vehicle.sensors"] is not None:
         out["vehicle.sensors"] = ",".join(w["vehicle.sensors"])
+    veh = spec.get("vehicle", {})
+    for k in sorted(VEHICLE_EVENTS):
+        if k in veh:
+            path = f"vehicle.{k}.on"
+            p = veh[k].get("probability", 1)
+            out[path] = int(float(_generator(spec["seed"], index, path).uniform()) < p)
     out.update(
         {
             path: _draw(path, v, rng, integer, _generator(spec["seed"], index, path))
@@ -507,6 +555,8 @@ def mission_inputs(spec, index):
                     "harmonics", [0.0] * len(spec["vehicle"][key]["harmonics"])
                 )
                 h[sub[1]] = x
+            elif key in VEHICLE_EVENTS:
+                vehicle.setdefault(key, {})[sub] = int(x) if sub == "rotor" else x
             elif key in VEHICLE_OBJECTS:
                 vehicle.setdefault(key, {})[sub] = x
             elif key in VEHICLE_INTEGERS:
@@ -520,11 +570,29 @@ def mission_inputs(spec, index):
             params[target[1]] = x
     if d.get("vehicle.sensors"):
         vehicle["sensors"] = d["vehicle.sensors"].split(",")
+    for k in VEHICLE_EVENTS:
+        if not d.get(f"vehicle.{k}.on", 1):
+            vehicle.pop(k, None)
     return spec["seed"] + index, d, vehicle, faults, params
 
 
+def _check_drawn_inertia(spec, index, vehicle):
+    """octo-sim's cross-check: each principal moment at most the sum of the other two."""
+    inertia = vehicle.get("inertia")
+    if not inertia:
+        return
+    for i in range(3):
+        other = inertia[(i + 1) % 3] + inertia[(i + 2) % 3]
+        if inertia[i] > other:
+            raise SpecError(
+                f"vehicle.inertia[{i}]: mission {index} draws {inertia[i]:g} > {other:g}, the sum of the other "
+                "two (octo-sim refuses it: the triangle inequality); narrow the ranges"
+            )
+
+
 def check_all_draws(spec):
-    """Makes every mission's draws once, so that a normal draw out of its key's range is an error
-    before anything runs (cheap: no mission runs)."""
+    """Makes every mission's draws once, so that a normal draw out of its key's range, or inertia
+    that octo-sim would refuse, is an error before anything runs (cheap: no mission runs)."""
     for i in range(spec["missions"]):
         _check_drawn_vibration(draws(spec, i))
+        _check_drawn_inertia(spec, i, mission_inputs(spec, i)[2])

@@ -35,6 +35,12 @@ OBJECTS = {  # an object's keys
     "noise": ("thrust", "torque", "gyro", "attitude_deg", "position", "accel", "rpm", "current"),
     "imu_bias": ("accel", "gyro", "accel_walk", "gyro_walk"),
     "vibration": ("accel", "gyro", "harmonics", "cutoff_hz", "sample_hz"),
+    "imu_spike": ("prob", "gyro", "accel"),
+}
+# the plant's events at a plant time: one object or a list of them, their keys and whether required
+EVENTS = {
+    "rotor_failure": {"rotor": True, "at_s": True, "scale": False},
+    "stuck_rpm": {"rotor": True, "at_s": True},
 }
 OTHER = (
     "origin",
@@ -47,7 +53,8 @@ OTHER = (
     "sensors",
 )
 SENSORS = ("imu", "rpm", "torque", "thrust")
-KNOWN = set(DEFAULTS) | set(OBJECTS) | set(OTHER)
+KNOWN = set(DEFAULTS) | set(OBJECTS) | set(OTHER) | set(EVENTS)
+PLANT_TIME_MAX_S = 1e9
 
 
 class VehicleFileError(ValueError):
@@ -58,6 +65,39 @@ def _positive(path, key, v):
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
         raise VehicleFileError(f"{path}: key '{key}' must be a positive number")
     return float(v)
+
+
+def _number(path, key, v, lo, hi, integer=False):
+    ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and lo <= v <= hi
+    if ok and integer and v != int(v):
+        ok = False
+    if not ok:
+        what = "an integer" if integer else "a number"
+        raise VehicleFileError(f"{path}: key '{key}' must be {what} in [{lo:g}, {hi:g}], not {json.dumps(v)}")
+    return v
+
+
+def _events(path, key, value):
+    """Checks a plant event (rotor_failure, stuck_rpm): one object or a non-empty list of them."""
+    names = EVENTS[key]
+    items = value if isinstance(value, list) else [value]
+    if not items:
+        raise VehicleFileError(f"{path}: key '{key}' must be an object or a non-empty list of objects")
+    for e in items:
+        if not isinstance(e, dict):
+            raise VehicleFileError(
+                f"{path}: key '{key}' must be an object {{{', '.join(names)}}} or a list of them"
+            )
+        bad = sorted(set(e) - set(names))
+        if bad:
+            raise VehicleFileError(f"{path}: unknown key '{key}.{bad[0]}' (known: {', '.join(names)})")
+        for k, required in names.items():
+            if required and k not in e:
+                raise VehicleFileError(f"{path}: key '{key}' needs '{k}'")
+        _number(path, f"{key}.rotor", e["rotor"], 1, 8, integer=True)
+        _number(path, f"{key}.at_s", e["at_s"], 0, PLANT_TIME_MAX_S)
+        if "scale" in e:
+            _number(path, f"{key}.scale", e["scale"], 0, 1)
 
 
 def parse(text, path="<vehicle>"):
@@ -79,6 +119,14 @@ def parse(text, path="<vehicle>"):
         bad = sorted(set(raw[key]) - set(names))
         if bad:
             raise VehicleFileError(f"{path}: unknown key '{key}.{bad[0]}' (known: {', '.join(names)})")
+    for key in EVENTS:
+        if key in raw:
+            _events(path, key, raw[key])
+    for k, v in (raw.get("imu_spike") or {}).items():
+        if k == "prob":
+            _number(path, "imu_spike.prob", v, 0, 1)
+        else:
+            _positive(path, f"imu_spike.{k}", v)
     if "sensors" in raw:
         sensors = raw["sensors"]
         if not isinstance(sensors, list) or not sensors:

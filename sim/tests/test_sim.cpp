@@ -1121,6 +1121,135 @@ TEST(sensors_served_and_ideal)
 	CHECK(f.rpm[2] == dshot_rpm(f.rpm_true[2], q.esc_pole_pairs), "ideal rpm: DShot's resolution only");
 }
 
+// --imu-spike P: about P of the frames carry one outlier, on each of the six IMU axes and with
+// both signs, of exactly the configured size; the other frames read as without spikes.
+TEST(imu_spike_replaces_one_axis)
+{
+	VehicleParams p = quiet();
+	p.noise.gyro = 0.01;
+	p.noise.accel = 0.05;
+	VehicleParams q = p;
+	q.imu_spike = ImuSpikeParams{0.1, 3.0, 40.0};
+	Model mp(p), mq(q);
+	const int N = 9000;
+	int spikes = 0, pos = 0, axis_hits[6] = {0, 0, 0, 0, 0, 0};
+	bool others_same = true, exact = true;
+	for (int k = 0; k < N; k++) {
+		const XpFrame a = xp_measure(mp, all(0), 7, static_cast<uint64_t>(k));
+		const XpFrame b = xp_measure(mq, all(0), 7, static_cast<uint64_t>(k));
+		const double va[6] = {a.P, a.Q, a.R, a.g_axil, a.g_side, a.g_nrml};
+		const double vb[6] = {b.P, b.Q, b.R, b.g_axil, b.g_side, b.g_nrml};
+		int changed = 0;
+		for (int i = 0; i < 6; i++) {
+			if (va[i] == vb[i])
+				continue;
+			changed++;
+			axis_hits[i]++;
+			const double size = i < 3 ? 3.0 : 40.0 / q.g;
+			exact = exact && std::fabs(vb[i]) == size;
+			pos += vb[i] > 0;
+		}
+		others_same = others_same && changed <= 1 && a.roll == b.roll && a.rpm[0] == b.rpm[0];
+		spikes += changed;
+	}
+	// binomial sd sqrt(0.1 0.9 / 9000) = 0.0032: 0.013 is 4 sd
+	CHECK(std::fabs(spikes / double(N) - 0.1) < 0.013, "spike rate %g", spikes / double(N));
+	for (int i = 0; i < 6; i++)
+		CHECK(axis_hits[i] > 90, "axis %d hit %d times", i, axis_hits[i]);
+	CHECK(pos > spikes / 3 && pos < 2 * spikes / 3, "signs %d of %d positive", pos, spikes);
+	CHECK(exact, "outliers of the configured size");
+	CHECK(others_same, "one axis per spike, the other rows unchanged");
+}
+
+// --stuck-rpm J@T: rotor J's report keeps its value from the first frame at or after T while
+// its speed changes; the other rotors' reports follow their speeds.
+TEST(stuck_rpm_freezes_one_report)
+{
+	VehicleParams p = quiet();
+	p.stuck_rpm.push_back(StuckRpm{2, 0.5});
+	Model m(p);
+	Sensors s(p, 3, 90.0);
+	XpFrame f;
+	double frozen = -1, first_rpm0 = -1;
+	bool held = true, before_free = true;
+	for (uint64_t n = 1; n <= 180; n++) {
+		const double u = 0.2 + 0.5 * static_cast<double>(n) / 180.0;   // a throttle ramp
+		m.command(all(u));
+		m.advance_to(static_cast<double>(n) / 90.0);
+		s.advance(m, n);
+		xp_measure(m, all(u), 3, n, s, f);
+		const double live = f.rpm[2];
+		s.hold_stuck_rpm(m.clock(), f.rpm);
+		if (m.clock() < 0.5) {
+			before_free = before_free && f.rpm[2] == live;
+		} else {
+			if (frozen < 0) {
+				frozen = live;
+				first_rpm0 = f.rpm[0];
+			}
+			held = held && f.rpm[2] == frozen;
+		}
+	}
+	CHECK(before_free, "the report is live before T");
+	CHECK(frozen > 0 && held, "frozen at %g", frozen);
+	CHECK(f.rpm_true[2] > 1.2 * frozen, "the rotor sped up (%g rpm) under its frozen report", f.rpm_true[2]);
+	CHECK(f.rpm[0] > 1.2 * first_rpm0, "rotor 1's report follows its speed: %g from %g", f.rpm[0], first_rpm0);
+}
+
+// The flags and keys of the IMU spikes and the stuck report; bad values refused, naming the key.
+TEST(imu_spike_and_stuck_rpm_flags_and_keys)
+{
+	auto parse = [](std::vector<std::string> args, Options &o) {
+		std::vector<char *> argv;
+		static char prog[] = "octo-sim";
+		argv.push_back(prog);
+		for (auto &a : args)
+			argv.push_back(&a[0]);
+		return parse_options(static_cast<int>(argv.size()), argv.data(), o);
+	};
+	Options o;
+	CHECK(parse({"--imu-spike", "0.02", "--imu-spike-gyro", "3", "--imu-spike-accel", "20", "--stuck-rpm", "2@4.5",
+	             "--stuck-rpm", "8@0"}, o) == -1, "parsed");
+	const auto &v = o.vehicle;
+	CHECK(v.imu_spike.prob == 0.02 && v.imu_spike.gyro == 3 && v.imu_spike.accel == 20, "spike values");
+	CHECK(v.stuck_rpm.size() == 2 && v.stuck_rpm[0].rotor == 1 && v.stuck_rpm[0].at_s == 4.5 &&
+	          v.stuck_rpm[1].rotor == 7 && v.stuck_rpm[1].at_s == 0, "stuck values");
+	Options d;
+	CHECK(parse({}, d) == -1 && d.vehicle.imu_spike.prob == 0 && d.vehicle.stuck_rpm.empty(), "off by default");
+	for (auto bad : std::vector<std::vector<std::string>>{
+	         {"--imu-spike", "1.5"}, {"--imu-spike", "-0.1"}, {"--imu-spike", "x"}, {"--imu-spike-gyro", "0"},
+	         {"--imu-spike-accel", "-3"}, {"--stuck-rpm", "0@1"}, {"--stuck-rpm", "9@1"}, {"--stuck-rpm", "3"},
+	         {"--stuck-rpm", "3@-1"}, {"--stuck-rpm", "3@nan"}, {"--stuck-rpm", "3@1:0.5"}}) {
+		Options q;
+		std::fprintf(stderr, "  (expected) ");
+		CHECK(parse(bad, q) == 2, "%s %s accepted", bad[0].c_str(), bad[1].c_str());
+	}
+	VehicleParams p;
+	vehicle_from_json(R"({"imu_spike": {"prob": 0.01, "gyro": 2}, "stuck_rpm": {"rotor": 5, "at_s": 7}})", p);
+	CHECK(p.imu_spike.prob == 0.01 && p.imu_spike.gyro == 2 && p.imu_spike.accel == 50, "spike key");
+	CHECK(p.stuck_rpm.size() == 1 && p.stuck_rpm[0].rotor == 4 && p.stuck_rpm[0].at_s == 7, "stuck key");
+	vehicle_from_json(R"({"stuck_rpm": [{"rotor": 1, "at_s": 3}, {"rotor": 2, "at_s": 4}]})", p);
+	CHECK(p.stuck_rpm.size() == 2 && p.stuck_rpm[1].rotor == 1, "stuck list");
+	const char *bad_keys[][2] = {{R"({"imu_spike": {"prob": 2}})", "imu_spike.prob"},
+	                             {R"({"imu_spike": {"gyro": 0}})", "imu_spike.gyro"},
+	                             {R"({"imu_spike": {"size": 1}})", "imu_spike.size"},
+	                             {R"({"imu_spike": 0.1})", "imu_spike"},
+	                             {R"({"stuck_rpm": {"rotor": 9, "at_s": 1}})", "stuck_rpm.rotor"},
+	                             {R"({"stuck_rpm": {"rotor": 1}})", "stuck_rpm"},
+	                             {R"({"stuck_rpm": {"rotor": 1, "at_s": -1}})", "stuck_rpm.at_s"},
+	                             {R"({"stuck_rpm": {"rotor": 1, "at_s": 1, "scale": 0}})", "stuck_rpm.scale"}};
+	for (const auto &k : bad_keys) {
+		std::string key;
+		try {
+			VehicleParams q;
+			vehicle_from_json(k[0], q);
+		} catch (const VehicleError &e) {
+			key = e.key;
+		}
+		CHECK(key == k[1], "%s: key '%s'", k[0], key.c_str());
+	}
+}
+
 int main()
 {
 	for (const auto &t : registry()) {

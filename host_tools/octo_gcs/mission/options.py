@@ -19,6 +19,9 @@ FAULTS = {
     "delay_frames": ("--delay-frames", True, 0, 100000),
     "duplicate": ("--duplicate", False, 0.0, 1.0),
     "reorder": ("--reorder", False, 0.0, 1.0),
+    "imu_spike": ("--imu-spike", False, 0.0, 1.0),
+    "imu_spike_gyro": ("--imu-spike-gyro", False, 1e-6, 1e6),
+    "imu_spike_accel": ("--imu-spike-accel", False, 1e-6, 1e6),
 }
 
 PLANTS = ("udp", "sil")
