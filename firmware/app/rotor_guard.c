@@ -49,8 +49,11 @@ void rotor_guard_step(struct app *a, float dt)
 	scalar_t dt_s = dt;
 #endif
 	/* judged in hover, the experiments and the landing; not in the take-off, whose spool-up and
-	 * climb swing the rotors most while the lag and delay are still the nominal ones */
-	const bool judge = a->mode == APP_HOLD || a->mode == APP_EXPERIMENT || a->mode == APP_LAND;
+	 * climb swing the rotors most while the lag and delay are still the nominal ones, nor while
+	 * the attitude loop oscillates (the oscillation guard's verdict: the rotors swing at full
+	 * range, far off a nominal motor model) */
+	const bool judge = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT || a->mode == APP_LAND) &&
+			   !env_osc_oscillating(&a->env_osc);
 	/* app_thr_sc: the throttles of the last step, what the plant answers with now */
 	struct rotor_fail_input in = {app_thr_sc(a), thrust_n, speed_rps, dt_s, judge && a->actuating};
 	struct rotor_fail_output o = rotor_fail_step(&a->rf, &in);

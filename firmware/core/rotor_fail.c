@@ -15,7 +15,7 @@ struct rotor_fail_params rotor_fail_params_default(void)
 	p.g_min = SC(0.02);
 	p.hold_s = SC(2.0);
 	p.tau_avg_s = SC(0.2);
-	p.confirm = 3;
+	p.confirm = 14;   /* 0.16 s at 90 Hz: longer than the lag and delay of any motor the experiments meet */
 	return p;
 }
 

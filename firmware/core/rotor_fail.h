@@ -52,7 +52,7 @@ struct rotor_fail_params {
 	scalar_t g_min;        /* ... and the mean g(T) is at least this (0.02) */
 	scalar_t hold_s;       /* hold before landing (2 s) */
 	scalar_t tau_avg_s;    /* the decision's low-pass of measured and modelled outputs (0.2 s) */
-	uint8_t confirm;       /* frames in a row (3) */
+	uint8_t confirm;       /* frames in a row (14) */
 };
 
 /* The rotor model (set when the parameters change): lag, curve, effectiveness. */
