@@ -670,11 +670,16 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
 		/* the gyro's scale error scales the angular acceleration, so the estimate, by
 		 * (1 - s): the data cannot tell it, its calibration's sd joins the published sd */
-		float gs = cfg_f(p->id_gyr_scl_sd, 0.0f) * est;
+		float gs = cfg_f(p->id_gyr_scl_sd, 0.0f) * est, sd_data = sd;
 		if (isfinite(sd) && isfinite(gs))
 			sd = sqrtf(sd * sd + gs * gs);
 		float lo, hi, raise;
 		enum ident_verdict v = ident_inertia_accept(est, sd, p->veh_mass, p->veh_arm_l, rsd, &lo, &hi, &raise);
+		/* only the data's part shrinks with a stronger or longer excitation: the advice aims
+		 * it at what the calibration's part leaves of the asked sd */
+		float room = rsd * est * rsd * est - gs * gs;
+		if (v == IDENT_UNCERTAIN && raise > 1.0f && gs > 0.0f)
+			raise = room > 0.0f ? sd_data / sqrtf(room) : INFINITY;
 		bool ok = v == IDENT_ACCEPT;
 		result(e, pe[ax], isfinite(est) ? est : 0.0f);
 		result(e, ps[ax], isfinite(sd) ? sd : 0.0f);
@@ -688,6 +693,9 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		if (v == IDENT_OUT_OF_RANGE)
 			say(e, APP_SEV_WARNING, "ID %s accepted in [%.4g, %.4g] kg m^2", nm[ax], (double)lo,
 			    (double)hi);
+		else if (v == IDENT_UNCERTAIN && !isfinite(raise))
+			say(e, APP_SEV_WARNING, "ID %s: ID_RSD_MAX %g out of reach: the gyro scale's sd (ID_GYR_SCL_SD %g) alone",
+			    nm[ax], (double)rsd, (double)cfg_f(p->id_gyr_scl_sd, 0.0f));
 		else if (v == IDENT_UNCERTAIN && raise > 1.0f)
 			inertia_advice(e, p, ax, nm[ax], raise);
 	} else {

@@ -54,9 +54,10 @@ def test_inertia_within_1pct_at_10x_gyro_noise(tmp_path, draw):
     rng = random.Random(seed)
     ix, iy = rng.uniform(0.04, 0.12), rng.uniform(0.04, 0.12)
     truth = {"Ixx": ix, "Iyy": iy, "Izz": rng.uniform(max(ix, iy), 0.95 * (ix + iy))}
-    vehicle = {"inertia": [truth["Ixx"], truth["Iyy"], truth["Izz"]], "noise": {"gyro": 0.05}}
+    # a calibrated gyro (no scale error, and the firmware told so): the gyro noise alone
+    vehicle = {"inertia": [truth["Ixx"], truth["Iyy"], truth["Izz"]], "noise": {"gyro": 0.05}, "imu_scale": 0}
     print(f"seed {seed}: truth {truth}")
-    asked = {"ID_RSD_MAX": 0.003}
+    asked = {"ID_RSD_MAX": 0.003, "ID_GYR_SCL_SD": 0}
     r, prm = fly(tmp_path, "first", seed, vehicle, asked, [3, 4, 5])
     advice = {m.group(1): (float(m.group(2)), float(m.group(4)), bool(m.group(5)))
               for m in ADVICE.finditer(r.stderr)}
