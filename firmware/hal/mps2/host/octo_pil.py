@@ -18,6 +18,8 @@ socket, to the world (docs/pil.md):
 The board's console (semihosting) is this program's stdout. SIGTERM or SIGINT stop QEMU and
 end the run; should QEMU stop by itself (a fault: exit status 126), its status is returned.
 
+OCTO_PIL_QEMU_ARGS (environment): further QEMU options, split at spaces.
+
 OCTO_PIL_DROP=P (environment, 0 <= P < 1) drops each byte towards the board (plant and
 ground) with probability P before it is framed onto the UARTs, to test the links' recovery.
 
@@ -190,6 +192,10 @@ def parse(argv):
     p.add_argument("--plugin", help="tests/arm's instruction-counting plugin (OCTO_PIL_COUNTS)")
     p.add_argument("--gen-python", default="", help="the generated LCM Python types")
     p.add_argument("--qemu", default="qemu-system-arm")
+    p.add_argument("--icount", default="3", metavar="SHIFT",
+                   help="QEMU's -icount shift=SHIFT: each instruction advances the board's clock "
+                   "2^SHIFT ns, so a host that pauses the running board does not age it; a board "
+                   "asleep in WFI sees the host's time pass (sleep=on). 'off': the host's clock")
     return p.parse_args(argv)
 
 
@@ -306,6 +312,11 @@ def main(argv=None):
     listeners = {}
     qemu = [a.qemu, "-M", "mps2-an386", "-display", "none", "-monitor", "none",
             "-semihosting-config", "enable=on,target=native", "-kernel", a.elf]
+    if a.icount != "off":
+        if not a.icount.isdigit() or int(a.icount) > 10:
+            fail(f"--icount: a shift 0..10 or off, not {a.icount}", 2)
+        qemu += ["-icount", f"shift={a.icount}"]
+    qemu += os.environ.get("OCTO_PIL_QEMU_ARGS", "").split()   # further QEMU options, for experiments
     for n in names:
         path = os.path.join(tmp, n + ".sock")
         ls = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
