@@ -388,9 +388,9 @@ int main(int argc, char **argv)
 	app_init(&b.app, &b.hal);
 	mav_init(&b.mav, &b.app, &b.hal, b.now_us);
 #if OCTO_FIXED
-	console_line("octo-fw: ", "MPS2 AN386 (Cortex-M4F), Q16.16 build: plant on UART0, MAVLink on UART1, log on UART2");
+	console_line("octo-fw: ", "MPS2 AN386 (Cortex-M4F), Q16.16 build: plant on UART0 (in: lanes UART0, 2, 3, 4), MAVLink on UART1, log on UART2");
 #else
-	console_line("octo-fw: ", "MPS2 AN386 (Cortex-M4F), float build: plant on UART0, MAVLink on UART1, log on UART2");
+	console_line("octo-fw: ", "MPS2 AN386 (Cortex-M4F), float build: plant on UART0 (in: lanes UART0, 2, 3, 4), MAVLink on UART1, log on UART2");
 #endif
 	for (;;) {
 		wake_clear();
