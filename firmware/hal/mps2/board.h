@@ -65,7 +65,6 @@ struct board {
 	uint64_t ticks;
 	uint64_t now_us;                      /* the pass's time: what wall_us answers */
 	uint64_t rx_last_us;                  /* the last pass that received a byte */
-	uint32_t sleeps;                      /* passes that ended in WFI */
 
 	/* links */
 	struct slip_rx plant_rx;

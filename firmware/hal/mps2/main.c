@@ -321,9 +321,7 @@ static void wake_clear(void)
 	NVIC_ICPR0 = WAKE_IRQS;
 }
 
-/* The requests pend (PRIMASK is set) and end the WFI; none is taken. The bytes of a datagram
- * arrive one at a time, so within BOARD_SPIN_US of the last byte the board polls on, and
- * sleeps only between datagrams. */
+/* The requests pend (PRIMASK is set) and end the WFI; none is taken. */
 static void wake_setup(void)
 {
 	__asm__ volatile("cpsid i" ::: "memory");
@@ -332,6 +330,8 @@ static void wake_setup(void)
 	NVIC_ISER0 = WAKE_IRQS;
 }
 
+/* After a pass: WFI when nothing came. The bytes of a datagram arrive one at a time, so within
+ * BOARD_SPIN_US of the last byte the board polls on and sleeps only between datagrams. */
 static void idle(struct board *b, unsigned got)
 {
 	if (got) {
@@ -341,7 +341,6 @@ static void idle(struct board *b, unsigned got)
 	if (b->now_us - b->rx_last_us < BOARD_SPIN_US)
 		return;
 	__asm__ volatile("dsb\n\twfi" ::: "memory");
-	b->sleeps++;
 }
 
 /* ---------------------------------------------------------------- start */
