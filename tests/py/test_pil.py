@@ -2,8 +2,9 @@
 QEMU (docs/pil.md).
 
 A short flight (take-off to 10 m, hold, land) through octo-gcs mission with the build
-directory build/pil/, whose octo-fw starts QEMU and the host bridge; and the bridge's
-framing against lost bytes. Skipped only when the ARM toolchain or QEMU is missing
+directory build/pil/, whose octo-fw starts QEMU and the host bridge; the framing of the
+bridge and of the board (slip.c, built for the host with tests/pil/slip_test.c) against lost
+bytes; and the bridge's dealing of the plant's bytes over the board's four receivers. Skipped only when the ARM toolchain or QEMU is missing
 (`make arm` / `make pil` install them as root). The image is built here with make, as
 `make pil-images` would (a no-op when it is up to date).
 """
@@ -45,6 +46,51 @@ def test_slip_frames_survive_lost_and_changed_bytes():
     assert r.feed(b"\x01\xdb\x07\x02\xc0" + f3) == [msgs[2]] and r.dropped == 1
     # the CRC is zlib's CRC-32, little-endian after the message (the board's slip.c)
     assert octo_pil.slip_frame(b"abc")[3:7] == zlib.crc32(b"abc").to_bytes(4, "little")
+
+
+def test_board_slip_decoder_survives_lost_changed_and_added_bytes(tmp_path):
+    cc = os.environ.get("CC", "cc")
+    exe = tmp_path / "slip_test"
+    r = subprocess.run([cc, "-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-Wconversion", "-Wshadow",
+                        "-I", str(REPO / "firmware/hal/mps2"), "-o", str(exe),
+                        str(REPO / "tests/pil/slip_test.c"), str(REPO / "firmware/hal/mps2/slip.c")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    r = subprocess.run([str(exe)], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and "all checks hold" in r.stdout, r.stdout + r.stderr
+
+
+class _Sink:
+    """A board UART's socket that takes everything."""
+
+    def __init__(self):
+        self.got = bytearray()
+
+    def send(self, data):
+        self.got += data
+        return len(data)
+
+
+def test_plant_lanes_deal_the_stream_in_turn():
+    sinks = [_Sink() for _ in range(4)]
+    lanes = octo_pil.Lanes([octo_pil.Outbox(s, 0) for s in sinks], 65536)
+    msgs = [bytes(i % 256 for i in range(n)) for n in (5, 7, 300, 1)]
+    frames = [octo_pil.slip_frame(m) for m in msgs]
+    for f in frames:
+        lanes.put(f)
+    stream = b"".join(frames)
+    # byte k of the stream on lane k mod 4: the board takes them back in the same turn
+    for j, s in enumerate(sinks):
+        assert bytes(s.got) == stream[j::4]
+    merged = bytearray(len(stream))
+    for j, s in enumerate(sinks):
+        merged[j::4] = s.got
+    assert octo_pil.SlipReader().feed(bytes(merged)) == msgs
+    # lost bytes are taken out of the stream before it is dealt: the turn stays whole
+    rng = octo_pil.random.Random(3)
+    data = bytes(range(256)) * 4
+    kept = octo_pil.lossy(data, 0.1, rng)
+    assert 0 < len(kept) < len(data) and octo_pil.lossy(data, 0.0, rng) == data
 
 
 def test_mavlink_splitter_cuts_whole_packets_and_skips_junk():

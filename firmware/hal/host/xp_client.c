@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -428,7 +429,7 @@ int xp_client_input(struct xp_client *c, const uint8_t *buf, size_t n, const str
 				float v = c->msg.rref[r].value;
 				if (isfinite(v) && v >= 1.0f && v < 1.0e7f && (uint32_t)v != c->xp_version) {
 					c->xp_version = (uint32_t)v;
-					host_report("X-Plane version %u (row 16 as X-Plane %s)", c->xp_version,
+					host_report("X-Plane version %" PRIu32 " (row 16 as X-Plane %s)", c->xp_version,
 						   c->xp_version >= XP_VERSION_12 ? "12: P,Q,R deg/s"
 											: "10/11: Q,P,R rad/s");
 				}

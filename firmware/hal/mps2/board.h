@@ -34,6 +34,8 @@
 #define BOARD_EVENTS 8            /* log events a step or a pass may leave */
 #define BOARD_EVENT_TEXT 200
 #define BOARD_MAV_CAP 280         /* the longest MAVLink 2 packet (signed) */
+#define BOARD_TICK_US 5000        /* the idle wake-up's period: app_tick and mav_tick at least this often */
+#define BOARD_SPIN_US 200         /* polling goes on this long after the last byte before WFI */
 
 /* Log record types on the log link (the first byte of a frame). */
 enum board_rec {
@@ -62,9 +64,11 @@ struct board {
 	uint32_t timer_last;
 	uint64_t ticks;
 	uint64_t now_us;                      /* the pass's time: what wall_us answers */
+	uint64_t rx_last_us;                  /* the last pass that received a byte */
 
 	/* links */
 	struct slip_rx plant_rx;
+	unsigned lane;                        /* the plant lane the next byte comes on */
 	struct slip_tx plant_tx, log_tx;
 	uint8_t mav_rx[BOARD_MAV_CAP];
 	size_t mav_n;

@@ -5,7 +5,8 @@
  * Each pass of the loop reads the 64-bit clock, takes every byte waiting on the plant and
  * ground UARTs (a complete X-Plane datagram runs one step at once; a complete MAVLink
  * packet goes to mav_receive), then runs the X-Plane client's periodic requests, app_tick,
- * mav_tick, and sends the log events that are waiting. Console lines (hal report) go to
+ * mav_tick, and sends the log events that are waiting. A pass that finds the links quiet
+ * ends in WFI until the next byte or tick (see idle()). Console lines (hal report) go to
  * the semihosting console, the only output a board without a debugger would not have.
  */
 #include <stdarg.h>
@@ -19,6 +20,12 @@
 #define UART_PLANT MPS2_UART(0)
 #define UART_GROUND MPS2_UART(1)
 #define UART_LOG MPS2_UART(2)
+
+/* The plant's bytes towards the board come dealt in turn over four receivers (docs/pil.md):
+ * QEMU moves one byte per UART at a time, so four lanes take four bytes at a time. */
+#define PLANT_LANES 4u
+static struct cmsdk_uart *const plant_lane[PLANT_LANES] = {
+	MPS2_UART(0), MPS2_UART(2), MPS2_UART(3), MPS2_UART(4)};
 
 int _write(int fd, const char *buf, int len);   /* tests/arm/semihost.c: the console */
 
@@ -233,14 +240,19 @@ static void step(struct board *b)
 	flush_events(b);
 }
 
-static void poll_plant(struct board *b)
+/* Every plant byte waiting, taken from the lanes in their turn; returns how many there were. */
+static unsigned poll_plant(struct board *b)
 {
+	unsigned got = 0;
 	uint8_t c;
-	while (cmsdk_uart_getc(UART_PLANT, &c)) {
+	while (cmsdk_uart_getc(plant_lane[b->lane], &c)) {
+		b->lane = (b->lane + 1u) % PLANT_LANES;
+		got++;
 		size_t n = slip_rx_byte(&b->plant_rx, c);
 		if (n && xp_client_input(&b->xp, b->plant_rx.buf, n, &b->plant_addr, &b->frame, b->now_us) == 1)
 			step(b);
 	}
+	return got;
 }
 
 /* MAVLink packet length from its first bytes (v2 0xFD, v1 0xFE); 0 while unknown. */
@@ -283,11 +295,52 @@ static void ground_byte(struct board *b, uint8_t c)
 	}
 }
 
-static void poll_ground(struct board *b)
+static unsigned poll_ground(struct board *b)
 {
+	unsigned got = 0;
 	uint8_t c;
-	while (cmsdk_uart_getc(UART_GROUND, &c))
+	while (cmsdk_uart_getc(UART_GROUND, &c)) {
+		got++;
 		ground_byte(b, c);
+	}
+	return got;
+}
+
+/* ---------------------------------------------------------------- idle */
+
+#define WAKE_IRQS (1u << MPS2_IRQ_UART0_RX | 1u << MPS2_IRQ_UART1_RX | 1u << MPS2_IRQ_UART2_RX | \
+		   1u << MPS2_IRQ_UART3_RX | 1u << MPS2_IRQ_UART4_RX | 1u << MPS2_IRQ_TIMER1)
+
+/* Clears the wake-up requests seen so far. Called before the links are polled, so that a
+ * byte arriving after its UART was drained is still pending when the pass ends in WFI. */
+static void wake_clear(void)
+{
+	for (unsigned i = 0; i < 5; i++)
+		cmsdk_uart_clear_rx_irq(MPS2_UART(i));
+	MPS2_TIMER1->intstatus = 0x1u;
+	NVIC_ICPR0 = WAKE_IRQS;
+}
+
+/* The requests pend (PRIMASK is set) and end the WFI; none is taken. */
+static void wake_setup(void)
+{
+	__asm__ volatile("cpsid i" ::: "memory");
+	cmsdk_timer_start_periodic(MPS2_TIMER1, MPS2_PCLK_HZ / 1000000u * BOARD_TICK_US);
+	wake_clear();
+	NVIC_ISER0 = WAKE_IRQS;
+}
+
+/* After a pass: WFI when nothing came. The bytes of a datagram arrive one at a time, so within
+ * BOARD_SPIN_US of the last byte the board polls on and sleeps only between datagrams. */
+static void idle(struct board *b, unsigned got)
+{
+	if (got) {
+		b->rx_last_us = b->now_us;
+		return;
+	}
+	if (b->now_us - b->rx_last_us < BOARD_SPIN_US)
+		return;
+	__asm__ volatile("dsb\n\twfi" ::: "memory");
 }
 
 /* ---------------------------------------------------------------- start */
@@ -311,10 +364,11 @@ static void board_init(struct board *b)
 		.report = report,
 	};
 	b->param_len = -1;
-	for (int i = 0; i < 3; i++)
-		cmsdk_uart_init(MPS2_UART(i));
+	for (int i = 0; i < 5; i++)
+		cmsdk_uart_init(MPS2_UART(i), true);
 	cmsdk_timer_start(MPS2_TIMER0);
 	b->timer_last = MPS2_TIMER0->value;
+	wake_setup();
 	b->plant_addr.sin_family = AF_INET;
 	b->plant_addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
 	xp_client_init(&b->xp, &b->plant_addr, XP_ACT_DATA25);
@@ -333,17 +387,19 @@ int main(int argc, char **argv)
 	app_init(&b.app, &b.hal);
 	mav_init(&b.mav, &b.app, &b.hal, b.now_us);
 #if OCTO_FIXED
-	console_line("octo-fw: ", "MPS2 AN386 (Cortex-M4F), Q16.16 build: plant on UART0, MAVLink on UART1, log on UART2");
+	console_line("octo-fw: ", "MPS2 AN386 (Cortex-M4F), Q16.16 build: plant on UART0 (in: lanes UART0, 2, 3, 4), MAVLink on UART1, log on UART2");
 #else
-	console_line("octo-fw: ", "MPS2 AN386 (Cortex-M4F), float build: plant on UART0, MAVLink on UART1, log on UART2");
+	console_line("octo-fw: ", "MPS2 AN386 (Cortex-M4F), float build: plant on UART0 (in: lanes UART0, 2, 3, 4), MAVLink on UART1, log on UART2");
 #endif
 	for (;;) {
+		wake_clear();
 		clock_update(&b);
-		poll_plant(&b);
-		poll_ground(&b);
+		unsigned got = poll_plant(&b);
+		got += poll_ground(&b);
 		xp_client_poll(&b.xp, b.now_us);
 		app_tick(&b.app);
 		mav_tick(&b.mav, b.now_us);
 		flush_events(&b);
+		idle(&b, got);
 	}
 }

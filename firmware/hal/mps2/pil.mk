@@ -47,10 +47,7 @@ PIL_OBJ_$(1) := $$(PIL_FW_SRC:firmware/%.c=$(PIL_B)/$(1)/%.o)
 $(PIL_B)/$(1)/%.o: firmware/%.c $(PIL_HDR) | arm-toolchain $(MAVLINK_STAMP)
 	@mkdir -p $$(@D)
 	$$(ARM_CC) $$(ARM_CFLAGS_$(PIL_VARIANT_$(1))) $$(filter-out -MMD -MP,$$(CFLAGS_FW)) $$(ARM_CORE_OPT_m4f) \
-	  -D_POSIX_C_SOURCE=200809L $(PIL_INC) $$(PIL_OBJ_FLAGS) -c $$< -o $$@
-# hal/host's client prints a uint32_t with %u, right on the host, where uint32_t is unsigned
-# int; newlib's uint32_t is unsigned long, of the same width on this target.
-$(PIL_B)/$(1)/hal/host/xp_client.o: PIL_OBJ_FLAGS := -Wno-format
+	  -D_POSIX_C_SOURCE=200809L $(PIL_INC) -c $$< -o $$@
 $(PIL_B)/octo-fw-$(1).elf: $$(PIL_OBJ_$(1)) $$(ARM_RT_OBJ_m4f) $(ARM_B)/$(PIL_VARIANT_$(1))/libcore.a \
                            tests/arm/m4f.ld tests/arm/sections.ld
 	$$(ARM_CC) $$(ARM_ARCH_m4f) $$(ARM_LDFLAGS) -Ttests/arm/m4f.ld -Wl,-Map,$$@.map -o $$@ \

@@ -7,13 +7,21 @@ octo-gcs mission and the tests as the host octo-fw does. It starts qemu-system-a
 mps2-an386 with the image and joins the board's three UARTs, each a QEMU chardev on a UNIX
 socket, to the world (docs/pil.md):
 
-  UART0  plant   X-Plane datagrams, one per SLIP frame with a CRC-32, <-> octo-sim's UDP
+  UART0  plant   X-Plane datagrams, one per SLIP frame with a CRC-32, <-> octo-sim's UDP;
+                 towards the board the frames' bytes are dealt in turn to four lanes, the
+                 receivers of UART0, UART2, UART3 and UART4 (QEMU moves one byte per UART
+                 at a time, so four receivers take four bytes at a time)
   UART1  ground  MAVLink 2 bytes; cut into whole packets, one per UDP datagram, <-> the
                  ground station (learned from the last datagram, as octo-fw does)
   UART2  log     the firmware log (SLIP frames with a CRC-32) -> the LCM event log of --lcm
 
 The board's console (semihosting) is this program's stdout. SIGTERM or SIGINT stop QEMU and
 end the run; should QEMU stop by itself (a fault: exit status 126), its status is returned.
+
+OCTO_PIL_QEMU_ARGS (environment): further QEMU options, split at spaces.
+
+OCTO_PIL_DROP=P (environment, 0 <= P < 1) drops each byte towards the board (plant and
+ground) with probability P before it is framed onto the UARTs, to test the links' recovery.
 
 OCTO_PIL_COUNTS=FILE (environment) loads tests/arm's instruction-counting plugin (--plugin) on
 the step markers board_step_begin/board_step_end: FILE gets one line per control step,
@@ -22,6 +30,7 @@ the step markers board_step_begin/board_step_end: FILE gets one line per control
 
 import argparse
 import os
+import random
 import selectors
 import shutil
 import signal
@@ -183,6 +192,10 @@ def parse(argv):
     p.add_argument("--plugin", help="tests/arm's instruction-counting plugin (OCTO_PIL_COUNTS)")
     p.add_argument("--gen-python", default="", help="the generated LCM Python types")
     p.add_argument("--qemu", default="qemu-system-arm")
+    p.add_argument("--icount", default="3", metavar="SHIFT",
+                   help="QEMU's -icount shift=SHIFT: each instruction advances the board's clock "
+                   "2^SHIFT ns, so a host that pauses the running board does not age it; a board "
+                   "asleep in WFI sees the host's time pass (sleep=on). 'off': the host's clock")
     return p.parse_args(argv)
 
 
@@ -231,6 +244,42 @@ class Outbox:
                 pass
 
 
+class Lanes:
+    """The plant's byte stream towards the board, dealt byte by byte in turn to the lanes'
+    outboxes (byte k of the stream to lane k mod len(outs)); the board takes them back in the
+    same turn. A datagram is dropped whole (and counted) while more than cap bytes wait."""
+
+    def __init__(self, outs, cap):
+        self.outs, self.cap = outs, cap
+        self.k = 0
+        self.dropped = 0
+
+    @property
+    def buf(self):
+        return any(o.buf for o in self.outs)
+
+    def put(self, data):
+        if sum(len(o.buf) for o in self.outs) > self.cap:
+            self.dropped += 1
+            return
+        n = len(self.outs)
+        for j, o in enumerate(self.outs):
+            o.buf += data[(j - self.k) % n::n]
+        self.k += len(data)
+        self.flush()
+
+    def flush(self):
+        for o in self.outs:
+            o.flush()
+
+
+def lossy(data, p, rng):
+    """data with each byte dropped with probability p."""
+    if p <= 0.0:
+        return data
+    return bytes(b for b in data if rng.random() >= p)
+
+
 class Stop(Exception):
     pass
 
@@ -250,10 +299,24 @@ def main(argv=None):
     log = LogWriter(a.lcm, a.gen_python)
 
     tmp = tempfile.mkdtemp(prefix="octo-pil-")
-    names = ("plant", "ground", "log")
+    # UART0..UART4: the log's UART2 and the otherwise unused UART3 and UART4 carry plant lanes
+    names = ("plant", "ground", "log", "lane3", "lane4")
+    lane_names = ("plant", "log", "lane3", "lane4")
+    try:
+        drop_p = float(os.environ.get("OCTO_PIL_DROP", "0") or 0)
+    except ValueError:
+        drop_p = -1.0
+    if not 0.0 <= drop_p < 1.0:
+        fail(f"OCTO_PIL_DROP: a probability in [0, 1), not {os.environ.get('OCTO_PIL_DROP')}", 2)
+    rng = random.Random(1)
     listeners = {}
     qemu = [a.qemu, "-M", "mps2-an386", "-display", "none", "-monitor", "none",
             "-semihosting-config", "enable=on,target=native", "-kernel", a.elf]
+    if a.icount != "off":
+        if not a.icount.isdigit() or int(a.icount) > 10:
+            fail(f"--icount: a shift 0..10 or off, not {a.icount}", 2)
+        qemu += ["-icount", f"shift={a.icount}"]
+    qemu += os.environ.get("OCTO_PIL_QEMU_ARGS", "").split()   # further QEMU options, for experiments
     for n in names:
         path = os.path.join(tmp, n + ".sock")
         ls = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
@@ -273,7 +336,8 @@ def main(argv=None):
     proc = None
     conns = {}
     rc = 0
-    stats = {"plant_in": 0, "foreign": 0, "plant_out": 0, "mav_in": 0, "mav_out": 0}
+    stats = {"plant_in": 0, "plant_bytes": 0, "foreign": 0, "plant_out": 0, "mav_in": 0, "mav_out": 0}
+    t_first = t_last = None   # the first and the last X-Plane datagram: the flight's wall time
     plant_rx, log_rx, ground = SlipReader(), SlipReader(), MavSplitter()
     outs = {}
     try:
@@ -288,8 +352,10 @@ def main(argv=None):
             conns[n].setblocking(False)
         say(f"board {os.path.basename(a.elf)} on QEMU mps2-an386 (pid {proc.pid}); X-Plane at "
             f"{xp_addr[0]}:{xp_addr[1]} (listening on {a.xp_listen}, actuation data25), MAVLink on "
-            f"{a.mavlink_listen} -> {gcs[0]}:{gcs[1]}" + (f"; counting steps into {counts}" if counts else ""))
-        outs = {n: Outbox(conns[n], 65536) for n in ("plant", "ground")}
+            f"{a.mavlink_listen} -> {gcs[0]}:{gcs[1]}" + (f"; counting steps into {counts}" if counts else "")
+            + (f"; dropping bytes towards the board with probability {drop_p:g}" if drop_p else ""))
+        outs = {"plant": Lanes([Outbox(conns[n], 0) for n in lane_names], 65536),
+                "ground": Outbox(conns["ground"], 65536)}
         sel = selectors.DefaultSelector()
         sel.register(xp_sock, selectors.EVENT_READ, "xp")
         sel.register(mav_sock, selectors.EVENT_READ, "mav")
@@ -309,7 +375,11 @@ def main(argv=None):
                             stats["foreign"] += 1   # the board takes X-Plane's datagrams only
                             continue
                         stats["plant_in"] += 1
-                        outs["plant"].put(slip_frame(data))
+                        t_last = time.monotonic()
+                        t_first = t_first or t_last
+                        frame = slip_frame(data)
+                        stats["plant_bytes"] += len(frame)
+                        outs["plant"].put(lossy(frame, drop_p, rng))
                 elif what == "mav":
                     while True:
                         try:
@@ -319,7 +389,7 @@ def main(argv=None):
                         if data[:1] in (b"\xfd", b"\xfe"):
                             gcs = src
                         stats["mav_in"] += 1
-                        outs["ground"].put(data)
+                        outs["ground"].put(lossy(data, drop_p, rng))
                 else:
                     try:
                         data = conns[what].recv(65536)
@@ -327,6 +397,8 @@ def main(argv=None):
                         continue
                     if not data:
                         raise Stop()   # QEMU went away
+                    if what in ("lane3", "lane4"):
+                        continue   # receive-only lanes: the board sends nothing on them
                     if what == "plant":
                         for d in plant_rx.feed(data):
                             stats["plant_out"] += 1
@@ -369,7 +441,11 @@ def main(argv=None):
             s.close()
         shutil.rmtree(tmp, ignore_errors=True)
     busy = sum(o.dropped for o in outs.values()) if conns else 0
-    say(f"exit: {stats['plant_in']} X-Plane datagrams to the board ({stats['foreign']} foreign dropped, "
+    span = (t_last - t_first) if t_first else 0.0
+    rate = f"{(stats['plant_in'] - 1) / span:.1f}" if span > 0 else "-"
+    say(f"exit: {stats['plant_in']} X-Plane datagrams to the board in {span:.1f} s ({rate} a second, "
+        f"{stats['plant_bytes'] / max(1, stats['plant_in']):.0f} bytes each on the UART; "
+        f"{stats['foreign']} foreign dropped, "
         f"{busy} datagrams dropped while the board was busy), "
         f"{stats['plant_out']} from it, {plant_rx.dropped} frames dropped; log {log_rx.frames} records, "
         f"{log_rx.dropped} dropped; MAVLink {stats['mav_in']} datagrams in, {stats['mav_out']} packets out, "
