@@ -56,13 +56,16 @@ EULER = (5.0, 10.0, 90.0)        # roll, pitch, heading in degrees
 GL = (3.0, 12.0, -4.0, 0.5, -1.0, 2.0)   # OpenGL x, y, z, vx, vy, vz
 
 
-def frame(t, version, extra_rows=()):
+GL0 = (1.0, 11.5, -1.0)          # OpenGL x, y, z of the first fix: the local origin
+
+
+def frame(t, version, extra_rows=(), gl=GL):
     if version >= 12:
         r16 = [math.degrees(PQR[0]), math.degrees(PQR[1]), math.degrees(PQR[2])]
     else:
         r16 = [PQR[1], PQR[0], PQR[2]]
     rows = {1: [t, t, t], 16: r16, 17: [EULER[1], EULER[0], EULER[2], EULER[2]],
-            21: list(GL), 35: [1.0 * (j + 1) for j in range(8)], 36: [0.1 * (j + 1) for j in range(8)]}
+            21: list(gl), 35: [1.0 * (j + 1) for j in range(8)], 36: [0.1 * (j + 1) for j in range(8)]}
     for r in extra_rows:
         rows[r] = [0.0] * 8
     return xp.encode_data(dict(sorted(rows.items())), byte4=xp.DATA_OUT_BYTE4)
@@ -102,18 +105,23 @@ def test_frame_conventions_in_one_place(launch, port, tmp_path, version):
     for d in xp.encode_rref_reply([(index, float(version))]):
         fake.send(d)
     time.sleep(0.05)
+    # the first fix sets the local origin (LOCAL_POSITION_NED is relative to it, as PX4's)
+    for k in range(5):
+        fake.send(frame(9.9 + k / 90.0, version // 10000, extra_rows=(3,), gl=GL0 + GL[3:]))
+        fake.pump(0.01)
     for k in range(30):
         fake.send(frame(10.0 + k / 90.0, version // 10000, extra_rows=(3,)))
         fake.pump(0.01)
-    # telemetry leaves in MAVLink's NED/FRD conventions: it must equal X-Plane's own
+    # telemetry leaves in MAVLink's NED/FRD conventions: it must equal X-Plane's own. The
+    # local position first: it is sent only while frames arrive (the link times out soon after)
+    lp = latest(rig, "LOCAL_POSITION_NED")
     aq = latest(rig, "ATTITUDE_QUATERNION")
     qx = euler_quat_ned(*EULER)
     assert all(abs(a - b) < 1e-5 for a, b in zip((aq.q1, aq.q2, aq.q3, aq.q4), qx)), (aq.to_dict(), qx)
     assert all(abs(a - b) < 1e-5 for a, b in zip((aq.rollspeed, aq.pitchspeed, aq.yawspeed), PQR))
-    lp = latest(rig, "LOCAL_POSITION_NED")
-    n, e, d = xp.ned_from_opengl(*GL[:3])
+    n, e, d = (a - b for a, b in zip(xp.ned_from_opengl(*GL[:3]), xp.ned_from_opengl(*GL0)))
     vn, ve, vd = xp.ned_from_opengl(*GL[3:])
-    assert [round(v, 4) for v in (lp.x, lp.y, lp.z, lp.vx, lp.vy, lp.vz)] == [n, e, d, vn, ve, vd]
+    assert [round(v, 4) for v in (lp.x, lp.y, lp.z, lp.vx, lp.vy, lp.vz)] == [round(v, 4) for v in (n, e, d, vn, ve, vd)]
     fake.pump(1.2)
     usel = fake.of_type(b"USEL")
     assert usel and 3 in struct.unpack(f"<{(len(usel[0]) - 5) // 4}i", usel[0][5:])
