@@ -6,15 +6,16 @@ COMMAND_LONG with acknowledgement, STATUSTEXT and NAMED_VALUE_FLOAT collection.
 """
 
 import os
-import sys
 import time
 
 # The project's dialect (firmware/mavlink/octo.xml: common.xml plus standard modes and
 # component metadata), installed into pymavlink by `make`; MAVLINK_DIALECT overrides
 # it as it does for pymavlink's own tools. Importing pymavlink sets MAVLINK_DIALECT=all
-# when it is unset: that default, left by an earlier import, is not a choice.
+# when it is unset: that default, left by an earlier import in this process or inherited
+# from a parent that imported pymavlink, is not a choice ("all" lacks the project's
+# messages, OCTO_ID_RESULT among them).
 _env_dialect = os.environ.get("MAVLINK_DIALECT")
-if _env_dialect == "all" and "pymavlink.mavutil" in sys.modules:
+if _env_dialect == "all":
     _env_dialect = None
 DIALECT = _env_dialect or "octo"
 os.environ.setdefault("MAVLINK20", "1")

@@ -148,8 +148,8 @@ def test_e2e_mission_on_a_random_vehicle(tmp_path):
     assert rep["results_from_records"] == []   # every value is a parameter too
     assert {r["param"] for r in rep["id_results"]} >= {"kf", "ktau", "ixx", "iyy", "izz"}
     logged = {(d["param"], d["rotor"]): d for d in map(id_results.describe, logs.id_results)}
-    for r in rep["id_results"]:
-        assert logged[(r["param"], r["rotor"])]["accepted"] == r["accepted"], r
+    for res in rep["id_results"]:
+        assert logged[(res["param"], res["rotor"])]["accepted"] == res["accepted"], res
     assert r.returncode == 0
     assert wall < 45, f"mission took {wall:.1f} s"
 
