@@ -82,6 +82,22 @@ static void lag_step(struct rotor_fail *s, const scalar_t *thr, scalar_t dt)
 	s->primed = true;
 }
 
+/* Measured and modelled outputs, low-passed alike (tau_avg): the decision's inputs. */
+static void avg_step(struct rotor_fail *s, const scalar_t *meas, const scalar_t *e, scalar_t dt)
+{
+	if (dt != s->c_avg_dt) {
+		s->c_avg_dt = dt;
+		s->avg_al = s->p.tau_avg_s > SC_ZERO ? sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt, s->p.tau_avg_s))))
+						     : SC(1.0);
+	}
+	for (int j = 0; j < NR; j++) {
+		scalar_t mj = meas[j] > SC_ZERO ? meas[j] : SC_ZERO;
+		s->mf[j] = s->avg_primed ? sc_add(s->mf[j], sc_mul(s->avg_al, sc_sub(mj, s->mf[j]))) : mj;
+		s->ef[j] = s->avg_primed ? sc_add(s->ef[j], sc_mul(s->avg_al, sc_sub(e[j], s->ef[j]))) : e[j];
+	}
+	s->avg_primed = true;
+}
+
 struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct rotor_fail_input *in)
 {
 	struct rotor_fail_output out = {-1, SC_ZERO, ROTOR_FAIL_SRC_NONE, false};
@@ -129,18 +145,7 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 		return out;
 	}
 
-	/* measured and modelled, low-passed alike: the decision's inputs */
-	if (in->dt_s != s->c_avg_dt) {
-		s->c_avg_dt = in->dt_s;
-		s->avg_al = s->p.tau_avg_s > SC_ZERO ? sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(in->dt_s, s->p.tau_avg_s))))
-						     : SC(1.0);
-	}
-	for (int j = 0; j < NR; j++) {
-		scalar_t mj = meas[j] > SC_ZERO ? meas[j] : SC_ZERO;
-		s->mf[j] = s->avg_primed ? sc_add(s->mf[j], sc_mul(s->avg_al, sc_sub(mj, s->mf[j]))) : mj;
-		s->ef[j] = s->avg_primed ? sc_add(s->ef[j], sc_mul(s->avg_al, sc_sub(e[j], s->ef[j]))) : e[j];
-	}
-	s->avg_primed = true;
+	avg_step(s, meas, e, in->dt_s);
 
 	/* measured over modelled, for the rotors judged: raw (the effectiveness found) and
 	 * smoothed (the decision) */
