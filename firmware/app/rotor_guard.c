@@ -50,8 +50,8 @@ void rotor_guard_step(struct app *a, float dt)
 #endif
 	/* judged in hover, the experiments and the landing; not in the take-off, whose spool-up and
 	 * climb swing the rotors most while the lag and delay are still the nominal ones, nor while
-	 * the attitude loop oscillates (the oscillation guard's verdict: the rotors swing at full
-	 * range, far off a nominal motor model) */
+	 * the attitude loop oscillates (the oscillation guard's verdict, over seconds: the rotors
+	 * swing at full range through a motor model still nominal) */
 	const bool judge = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT || a->mode == APP_LAND) &&
 			   !env_osc_oscillating(&a->env_osc);
 	/* app_thr_sc: the throttles of the last step, what the plant answers with now */

@@ -14,8 +14,7 @@ struct rotor_fail_params rotor_fail_params_default(void)
 	p.share_min = SC(0.3);
 	p.g_min = SC(0.02);
 	p.hold_s = SC(2.0);
-	p.tau_avg_s = SC(0.2);
-	p.confirm = 14;   /* 0.16 s at 90 Hz: longer than the lag and delay of any motor the experiments meet */
+	p.confirm = 3;
 	return p;
 }
 
@@ -61,7 +60,7 @@ static scalar_t median(const scalar_t *v, int n)
 
 static void clear_streaks(struct rotor_fail *s)
 {
-	s->avg_primed = false;
+	s->hist_n = 0;
 	for (int j = 0; j < NR; j++) {
 		s->streak[j] = 0;
 		s->q_sum[j] = SC_ZERO;
@@ -82,20 +81,53 @@ static void lag_step(struct rotor_fail *s, const scalar_t *thr, scalar_t dt)
 	s->primed = true;
 }
 
-/* Measured and modelled outputs, low-passed alike (tau_avg): the decision's inputs. */
-static void avg_step(struct rotor_fail *s, const scalar_t *meas, const scalar_t *e, scalar_t dt)
+/* The frame's lowest modelled outputs into the window; emin gets each rotor's smallest over it. */
+static void window_step(struct rotor_fail *s, const scalar_t *e, scalar_t *emin)
 {
-	if (dt != s->c_avg_dt) {
-		s->c_avg_dt = dt;
-		s->avg_al = s->p.tau_avg_s > SC_ZERO ? sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt, s->p.tau_avg_s))))
-						     : SC(1.0);
-	}
+	for (int j = 0; j < NR; j++)
+		s->hist[s->hist_at][j] = e[j];
+	s->hist_at = (uint8_t)((s->hist_at + 1u) % ROTOR_FAIL_WINDOW);
+	if (s->hist_n < ROTOR_FAIL_WINDOW)
+		s->hist_n++;
 	for (int j = 0; j < NR; j++) {
-		scalar_t mj = meas[j] > SC_ZERO ? meas[j] : SC_ZERO;
-		s->mf[j] = s->avg_primed ? sc_add(s->mf[j], sc_mul(s->avg_al, sc_sub(mj, s->mf[j]))) : mj;
-		s->ef[j] = s->avg_primed ? sc_add(s->ef[j], sc_mul(s->avg_al, sc_sub(e[j], s->ef[j]))) : e[j];
+		scalar_t m = e[j];
+		for (int k = 0; k < s->hist_n; k++)
+			if (s->hist[k][j] < m)
+				m = s->hist[k][j];
+		emin[j] = m;
 	}
-	s->avg_primed = true;
+}
+
+/* Each rotor's modelled output through the lag (e) and the lower of it and the unlagged
+ * command's (e_low: g rises with the command, so this is what a motor faster than the model
+ * gives as well as a slower one); the sums of g and e over the rotors in service, counted. */
+static int model_outputs(const struct rotor_fail *s, const scalar_t *thr, bool by_thrust, scalar_t *e,
+			 scalar_t *e_low, scalar_t *g_sum, scalar_t *e_sum)
+{
+	const scalar_t c = s->m.curve, c1 = sc_sub(SC(1.0), c);
+	int n_in = 0;
+	for (int j = 0; j < NR; j++) {
+		e[j] = e_low[j] = SC_ZERO;
+		if ((s->failed & (1u << j)) || !(s->m.scale[j] > SC_ZERO))
+			continue;
+		scalar_t u = s->lag[j];
+		scalar_t g = sc_add(sc_mul(c1, u), sc_mul(c, sc_mul(u, u)));
+		if (!(g > SC_ZERO))
+			g = SC_ZERO;
+		e[j] = by_thrust ? sc_mul(s->m.scale[j], g) : sc_sqrt(g);
+		scalar_t ui = sc_clamp(thr[j], SC_ZERO, SC(1.0));
+		if (ui < u) {
+			scalar_t gi = sc_add(sc_mul(c1, ui), sc_mul(c, sc_mul(ui, ui)));
+			gi = gi > SC_ZERO ? gi : SC_ZERO;
+			e_low[j] = by_thrust ? sc_mul(s->m.scale[j], gi) : sc_sqrt(gi);
+		} else {
+			e_low[j] = e[j];
+		}
+		*g_sum = sc_add(*g_sum, g);
+		*e_sum = sc_add(*e_sum, e[j]);
+		n_in++;
+	}
+	return n_in;
 }
 
 struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct rotor_fail_input *in)
@@ -118,77 +150,60 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 	}
 
 	/* the modelled output of each rotor still in service */
-	const scalar_t c = s->m.curve, c1 = sc_sub(SC(1.0), c);
-	scalar_t e[NR], g_sum = SC_ZERO, e_sum = SC_ZERO;
-	int n_in = 0;
-	for (int j = 0; j < NR; j++) {
-		e[j] = SC_ZERO;
-		if ((s->failed & (1u << j)) || !(s->m.scale[j] > SC_ZERO))
-			continue;
-		scalar_t u = s->lag[j];
-		scalar_t g = sc_add(sc_mul(c1, u), sc_mul(c, sc_mul(u, u)));
-		if (!(g > SC_ZERO))
-			g = SC_ZERO;
-		e[j] = by_thrust ? sc_mul(s->m.scale[j], g) : sc_sqrt(g);
-		g_sum = sc_add(g_sum, g);
-		e_sum = sc_add(e_sum, e[j]);
-		n_in++;
-	}
+	scalar_t e[NR], e_low[NR], g_sum = SC_ZERO, e_sum = SC_ZERO;
+	const int n_in = model_outputs(s, in->thr, by_thrust, e, e_low, &g_sum, &e_sum);
 	if (n_in < MIN_JUDGED) {
 		clear_streaks(s);
 		return out;
 	}
 	const scalar_t n_sc = sc_from_int(n_in);
-	const scalar_t e_floor = sc_mul(s->p.share_min, sc_div(e_sum, n_sc));
-	if (sc_div(g_sum, n_sc) < s->p.g_min) {
+	const scalar_t e_floor = sc_div(sc_mul(s->p.share_min, e_sum), n_sc);
+	if (g_sum < sc_mul(s->p.g_min, n_sc)) {
 		clear_streaks(s);
 		return out;
 	}
 
-	avg_step(s, meas, e, in->dt_s);
+	scalar_t emin[NR];
+	window_step(s, e_low, emin);
 
-	/* measured over modelled, for the rotors judged: raw (the effectiveness found) and
-	 * smoothed (the decision) */
-	scalar_t r[NR], rs[NR], rj[NR], rsj[NR];
+	/* the plain ratios and their median (k_f, or the speed at full throttle: the same for every
+	 * rotor, and the centre of the ratios however the excitation moves them) */
+	scalar_t r[NR], rj[NR];
 	bool judged[NR];
 	int n = 0;
 	for (int j = 0; j < NR; j++) {
-		judged[j] = e[j] > SC_ZERO && !(e[j] < e_floor) && s->ef[j] > SC_ZERO;
+		judged[j] = e[j] > SC_ZERO && !(emin[j] < e_floor);
 		r[j] = judged[j] ? sc_div(meas[j] > SC_ZERO ? meas[j] : SC_ZERO, e[j]) : SC_ZERO;
-		rs[j] = judged[j] ? sc_div(s->mf[j], s->ef[j]) : SC_ZERO;
-		if (judged[j]) {
-			rj[n] = r[j];
-			rsj[n++] = rs[j];
-		}
+		if (judged[j])
+			rj[n++] = r[j];
 	}
-	scalar_t med = n >= MIN_JUDGED ? median(rj, n) : SC_ZERO;
-	scalar_t meds = n >= MIN_JUDGED ? median(rsj, n) : SC_ZERO;
-	if (!(med > SC_ZERO) || !(meds > SC_ZERO)) {
+	const scalar_t med = n >= MIN_JUDGED ? median(rj, n) : SC_ZERO;
+	if (!(med > SC_ZERO)) {
 		clear_streaks(s);
 		return out;
 	}
+	/* the decision: measured against the window's smallest modelled output, scaled by the
+	 * median (with the speeds, q_j is the ratio squared: below ratio_fail when the ratio is
+	 * below its root) */
+	const scalar_t lim = sc_mul(by_thrust ? s->p.ratio_fail : sc_sqrt(s->p.ratio_fail), med);
+	bool failing[NR];
+	for (int j = 0; j < NR; j++)
+		failing[j] = judged[j] && meas[j] < sc_mul(lim, emin[j]);
 
 	int worst = -1;
 	scalar_t worst_q = SC_ZERO;
 	for (int j = 0; j < NR; j++) {
-		if (!judged[j]) {
+		if (!failing[j]) {
 			s->streak[j] = 0;
 			s->q_sum[j] = SC_ZERO;
 			continue;
 		}
-		scalar_t q = sc_div(r[j], med), qs = sc_div(rs[j], meds);
-		if (!by_thrust) {   /* thrust goes with speed^2 */
+		scalar_t q = sc_div(r[j], med);
+		if (!by_thrust)   /* thrust goes with speed^2 */
 			q = sc_mul(q, q);
-			qs = sc_mul(qs, qs);
-		}
-		if (qs < s->p.ratio_fail) {
-			if (s->streak[j] < UINT8_MAX)
-				s->streak[j]++;
-			s->q_sum[j] = sc_add(s->q_sum[j], q);
-		} else {
-			s->streak[j] = 0;
-			s->q_sum[j] = SC_ZERO;
-		}
+		if (s->streak[j] < UINT8_MAX)
+			s->streak[j]++;
+		s->q_sum[j] = sc_add(s->q_sum[j], q);
 		if (s->streak[j] >= s->p.confirm) {
 			scalar_t qm = sc_div(s->q_sum[j], sc_from_int(s->streak[j]));
 			if (worst < 0 || qm < worst_q) {

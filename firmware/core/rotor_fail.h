@@ -9,13 +9,14 @@
  * and divided by the median of the rotors judged, so that neither k_f nor the speed at full
  * throttle need be known, and a k_f drift or a wrong VEH_KF move every rotor alike. What is
  * left, q_j = r_j / median (squared for the speed), is rotor j's effectiveness relative to
- * what MOT_SCALEj says. The decision reads q_j of the outputs low-passed alike (tau_avg):
- * before identification the model's lag and delay are the nominal ones, and during an
- * experiment's excitation the raw ratio swings with that mismatch, while the smoothed one
- * stays near 1 unless the rotor's mean output falls. A rotor whose smoothed q_j stays below
- * ratio_fail for `confirm` frames in a row has failed; its effectiveness is then scale_j
- * times the mean raw q_j over those frames (0 below ratio_zero: the rotor is left out of
- * the allocation).
+ * what MOT_SCALEj says. The decision compares the measured output with the smallest modelled
+ * output of the last ROTOR_FAIL_WINDOW frames, through the model's lag and without it: before
+ * identification the model's lag and delay are the nominal ones, and a working rotor slower,
+ * faster or later than the model still gives at least that (its output follows some recent
+ * command), while a failed one gives far less.
+ * A rotor whose q_j so formed stays below ratio_fail for `confirm` frames in a row has
+ * failed; its effectiveness is then scale_j times the mean of the plain q_j over those frames
+ * (0 below ratio_zero: the rotor is left out of the allocation).
  *
  * The thrust rows decide when the frame has them; the speed when it has only that. A rotor
  * is judged only while its modelled output is at least share_min of the mean (a rotor the
@@ -38,6 +39,9 @@
 #include <stdint.h>
 
 #define ROTOR_FAIL_ROTORS 8
+/* frames of modelled output the decision looks back over: longer than the motor lag and delay
+ * of any motor the experiments meet, beyond the nominal ones (about 0.15 s at 90 Hz) */
+#define ROTOR_FAIL_WINDOW 14
 
 enum rotor_fail_source {
 	ROTOR_FAIL_SRC_NONE = 0,
@@ -51,8 +55,7 @@ struct rotor_fail_params {
 	scalar_t share_min;    /* judged only while its modelled output is this share of the mean (0.3) */
 	scalar_t g_min;        /* ... and the mean g(T) is at least this (0.02) */
 	scalar_t hold_s;       /* hold before landing (2 s) */
-	scalar_t tau_avg_s;    /* the decision's low-pass of measured and modelled outputs (0.2 s) */
-	uint8_t confirm;       /* frames in a row (14) */
+	uint8_t confirm;       /* frames in a row (3) */
 };
 
 /* The rotor model (set when the parameters change): lag, curve, effectiveness. */
@@ -81,9 +84,8 @@ struct rotor_fail {
 	struct rotor_fail_params p;
 	struct rotor_fail_model m;
 	scalar_t lag[ROTOR_FAIL_ROTORS];   /* lag-filtered throttles */
-	scalar_t mf[ROTOR_FAIL_ROTORS], ef[ROTOR_FAIL_ROTORS];   /* measured, modelled: low-passed */
-	bool avg_primed;                   /* mf, ef hold values */
-	scalar_t c_avg_dt, avg_al;         /* the low-pass coefficient and the dt it is for */
+	scalar_t hist[ROTOR_FAIL_WINDOW][ROTOR_FAIL_ROTORS];   /* the modelled outputs of recent frames */
+	uint8_t hist_at, hist_n;           /* the next slot; slots filled */
 	scalar_t q_sum[ROTOR_FAIL_ROTORS]; /* sum of q_j over the current streak */
 	uint8_t streak[ROTOR_FAIL_ROTORS];
 	uint8_t failed;                    /* bit j: rotor j+1 has failed */
