@@ -44,7 +44,7 @@ static const char *phase_name(int k)
 
 #define SETTLE_S 1.0f         /* no excitation, filters run, before each phase's excitation */
 #define HEIGHT_ABORT_M 1.5f   /* |z - z at start| beyond this aborts */
-#define GAP_HOLD 10           /* frames without inertia updates after a lost frame */
+#define GAP_HOLD 10           /* frames without inertia updates after interpolated lost frames */
 /* inertia: lost frames up to this many are interpolated through (ident_inertia_gap); after a
  * longer gap, or one of unknown length, the filters restart and are left GAP_SETTLE_TC of
  * their time constants 1 / (zeta wc) to settle */
@@ -722,7 +722,8 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	bool running = app_f_le(e->t_settle, e->t_phase);   /* the step's comparisons: fcmp.h */
 	/* frames since the last step: more than one when frames were lost on the link (the
 	 * plant then held the last throttles); the rotor and validation models advance through
-	 * the gap, the inertia filters (uniform sampling) are left GAP_HOLD frames to settle */
+	 * the gap, and so do the inertia filters (uniform sampling: interpolated, or restarted
+	 * after a long gap), their updates held for gap_hold frames after it */
 	if (!app_f_eq(in->dt_s, e->fr_dt)) {   /* the same period as the last step: the same count */
 		float fr = in->dt_s * e->inv_dt_nom;
 		e->fr_n = fr > 0.5f && fr < (float)FILT_DELAY_MAX + 0.5f ? (int)(fr + 0.5f) : 0;

@@ -306,7 +306,7 @@ static void inertia_run(struct unit_rng *g, const double I[3], unsigned ax, doub
 	struct dither d = {0, amp, 9, 0};
 	double cmd[3] = {0, 0, 0};
 	unsigned lost = 0;   /* frames lost since the last update */
-	int hold = 0;        /* updates left without excitation after a gap (the experiment's) */
+	int hold = 0;        /* updates left without excitation after a gap (GAP_HOLD, experiment.c) */
 	for (int k = 0; k < 900; k++) {
 		if (inr_drop > 0 && k > 0 && unit_rand_uniform(g, 0, 1) < inr_drop) {
 			lost++;   /* no measurement, no new command: the plant holds the last one */
