@@ -1,10 +1,11 @@
 """Inertia identification with frames lost or reordered on the plant's link (in-process
 missions, octo-sil). A frame the firmware never sees, or sees after a newer one, is a gap in
 the experiment's samples while the plant held the last command over it. The inertia filters
-assume uniform sampling: one update over the gap takes the gyro's change over two frames for
-one frame's derivative, an error correlated with the excitation that biased the inertia low
-(I_z -2.8 % at 0.08 % reported sd in the campaign's mission 370, the one below). Each inertia
-must be within max(3 sd, 2 %) of the truth when accepted, or be rejected with a reason."""
+assume uniform sampling: one update over the gap would take the gyro's change over two frames
+for one frame's derivative, an error correlated with the excitation that biases the inertia low
+(I_z -2.8 % at 0.95 % reported sd in the campaign's mission 370, the first case below; -2.5 % at
+0.79 % on the paper's vehicle, seed 5, reorder 3 %). Each inertia must be within
+max(3 sd, 2 %) of the truth when accepted, or be rejected with a reason."""
 
 import json
 
