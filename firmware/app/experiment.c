@@ -44,7 +44,12 @@ static const char *phase_name(int k)
 
 #define SETTLE_S 1.0f         /* no excitation, filters run, before each phase's excitation */
 #define HEIGHT_ABORT_M 1.5f   /* |z - z at start| beyond this aborts */
-#define GAP_HOLD 10           /* frames without inertia updates after a lost frame */
+#define GAP_HOLD 10           /* frames without inertia updates after interpolated lost frames */
+/* inertia: lost frames up to this many are interpolated through (ident_inertia_gap); after a
+ * longer gap, or one of unknown length, the filters restart and are left GAP_SETTLE_TC of
+ * their time constants 1 / (zeta wc) to settle */
+#define GAP_INTERP_MAX 4
+#define GAP_SETTLE_TC 5.0f
 #define LAG_TOL 0.1f          /* lag check off by more (relative): k_f, k_tau rejected */
 /* inertia: roll/pitch by a multisine (harmonics 4..15 of 0.5 Hz: 2..7.5 Hz, above the
  * attitude loop, where torque turns into acceleration rather than tilt) of peak ID_INR_AMP,
@@ -717,7 +722,8 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	bool running = app_f_le(e->t_settle, e->t_phase);   /* the step's comparisons: fcmp.h */
 	/* frames since the last step: more than one when frames were lost on the link (the
 	 * plant then held the last throttles); the rotor and validation models advance through
-	 * the gap, the inertia filters (uniform sampling) are left GAP_HOLD frames to settle */
+	 * the gap, and so do the inertia filters (uniform sampling: interpolated, or restarted
+	 * after a long gap), their updates held for gap_hold frames after it */
 	if (!app_f_eq(in->dt_s, e->fr_dt)) {   /* the same period as the last step: the same count */
 		float fr = in->dt_s * e->inv_dt_nom;
 		e->fr_n = fr > 0.5f && fr < (float)FILT_DELAY_MAX + 0.5f ? (int)(fr + 0.5f) : 0;
@@ -777,8 +783,15 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		else
 			ident_body_torque(sc_from_float(p->veh_arm_l), in->thrust_n, in->torque_nm, tau);
 		/* the instrument: the excitation sent on the previous step, which acted over the
-		 * frame this update closes */
+		 * frame this update closes (and, the plant holding it, over the frames lost before) */
 		ident_inertia_instrument(&e->inr, e->inr_u_prev);
+		if (n >= 2 && n <= GAP_INTERP_MAX + 1) {
+			ident_inertia_gap(&e->inr, tau, in->rate_b_rps, (unsigned)(n - 1));
+		} else if (n != 1) {
+			ident_inertia_restart(&e->inr, tau, in->rate_b_rps);
+			float wc = ax == 2u ? INR_WC_YAW_RPS : INR_WC_RP_RPS;
+			e->gap_hold = (int)(GAP_SETTLE_TC * e->inv_dt_nom / (INR_ZETA * wc) + 0.5f);
+		}
 		ident_inertia_update(&e->inr, tau, in->rate_b_rps, use && n == 1 && e->gap_hold == 0);
 		out->tau_delta[ax] = running ? excite_update(&e->exc) : SC_ZERO;
 		e->inr_u_prev = out->tau_delta[ax];

@@ -135,18 +135,62 @@ static scalar_t weigh(scalar_t alpha, scalar_t x, scalar_t x_prev)
 	return sc_add(x_prev, sc_mul(alpha, sc_sub(x, x_prev)));
 }
 
+/* The filters' step: torque of axis i, the axis' rate, the gyroscopic product w_j w_k. */
+static void inertia_filters(struct ident_inertia *e, scalar_t tau, scalar_t w, scalar_t ww)
+{
+	filt_svf_update(&e->svf_tau, weigh(e->alpha, tau, e->tau_prev));
+	/* the gyroscopic product is smooth: its frame mean is the trapezoid's */
+	filt_svf_update(&e->svf_ww, weigh(SC(0.5), ww, e->ww_prev));
+	filt_svf_update(&e->svf_w, w);
+	e->tau_prev = tau;
+	e->ww_prev = ww;
+	e->w_prev = w;
+}
+
+void ident_inertia_gap(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3], unsigned k)
+{
+	unsigned i = e->axis, j, l;
+	ident_other_axes(i, &j, &l);
+	scalar_t t0 = e->tau_prev, w0 = e->w_prev, p0 = e->ww_prev;
+	scalar_t dtau = sc_sub(tau_b[i], t0), dw = sc_sub(w_b[i], w0);
+	scalar_t dww = sc_sub(sc_mul(w_b[j], w_b[l]), p0);
+	for (unsigned m = 1; m <= k; m++) {
+		scalar_t f = sc_from_float((float)m / (float)(k + 1u));
+		inertia_filters(e, sc_add(t0, sc_mul(f, dtau)), sc_add(w0, sc_mul(f, dw)),
+				sc_add(p0, sc_mul(f, dww)));
+		e->wf_prev = e->svf_w.y;
+		if (e->iv)
+			filt_svf_update(&e->svf_z, e->z_in);
+	}
+}
+
+/* a filter at rest at y0 (its state as filt_svf_init leaves it) */
+static void svf_rest(struct filt_svf *f, scalar_t y0)
+{
+	f->y = y0;
+	f->ydot = SC_ZERO;
+	f->u_prev = y0;
+}
+
+void ident_inertia_restart(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3])
+{
+	unsigned i = e->axis, j, k;
+	ident_other_axes(i, &j, &k);
+	e->tau_prev = tau_b[i];
+	e->ww_prev = sc_mul(w_b[j], w_b[k]);
+	e->w_prev = e->wf_prev = w_b[i];
+	svf_rest(&e->svf_tau, e->tau_prev);
+	svf_rest(&e->svf_ww, e->ww_prev);
+	svf_rest(&e->svf_w, e->w_prev);
+	svf_rest(&e->svf_z, e->z_in);
+}
+
 void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3],
 			  bool excited)
 {
 	unsigned i = e->axis, j, k;
 	ident_other_axes(i, &j, &k);
-	scalar_t ww = sc_mul(w_b[j], w_b[k]);
-	filt_svf_update(&e->svf_tau, weigh(e->alpha, tau_b[i], e->tau_prev));
-	/* the gyroscopic product is smooth: its frame mean is the trapezoid's */
-	filt_svf_update(&e->svf_ww, weigh(SC(0.5), ww, e->ww_prev));
-	filt_svf_update(&e->svf_w, w_b[i]);
-	e->tau_prev = tau_b[i];
-	e->ww_prev = ww;
+	inertia_filters(e, tau_b[i], w_b[i], sc_mul(w_b[j], w_b[k]));
 	scalar_t y = sc_sub(e->svf_tau.y, sc_mul(e->coupling, e->svf_ww.y));
 	scalar_t phi = sc_mul(sc_sub(e->svf_w.y, e->wf_prev), e->inv_dt);
 	e->wf_prev = e->svf_w.y;

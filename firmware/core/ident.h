@@ -141,7 +141,7 @@ struct ident_inertia {
 	scalar_t coupling;              /* I_k - I_j of the gyroscopic term */
 	scalar_t alpha;                 /* torque weight (ident_torque_weight) */
 	scalar_t inv_dt;
-	scalar_t tau_prev, ww_prev, wf_prev;
+	scalar_t tau_prev, ww_prev, wf_prev, w_prev;
 	struct filt_svf svf_tau, svf_w, svf_ww;
 	struct rls rls;
 	float sd_scale;                 /* coloured-residual correction of the RLS std */
@@ -173,6 +173,19 @@ scalar_t ident_torque_weight(scalar_t tau_m_s, scalar_t dt_s);
 /* One frame: body torque (ident_body_torque) and body rates of the same frame. */
 void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3],
 			  bool excited);
+/* Frames lost on the link before this frame's update (the plant held the last command over
+ * them). The filters assume uniform sampling: one update for k + 1 frames would see the
+ * change of the gyro over all of them as one frame's derivative, an equation error
+ * correlated with the excitation (the estimate biased low). ident_inertia_gap advances the
+ * filters through k lost frames with values interpolated linearly between the last update's
+ * and this frame's (tau_b, w_b), the instrument held, without adding to the estimate; the
+ * residual error, second order in the gap, decays with the filters (a few frames without
+ * updates after it: the caller's). ident_inertia_restart, for a gap too long to interpolate
+ * or of unknown length: every filter at rest at this frame's values (the caller then waits
+ * for the filters to settle, ident_inertia_settle_frames). Either is followed by the frame's
+ * ident_inertia_update. */
+void ident_inertia_gap(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3], unsigned k);
+void ident_inertia_restart(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3]);
 float ident_inertia_est(const struct ident_inertia *e);
 float ident_inertia_sd(const struct ident_inertia *e);
 /* Instrumental variable against gyro noise. The regressor phi is the derivative of the

@@ -163,6 +163,7 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	e->tau_prev = tau0[i];
 	e->ww_prev = sc_mul(w0[j], w0[k]);
 	e->wf_prev = w0[i];
+	e->w_prev = w0[i];
 	filt_svf_init(&e->svf_tau, wc_rps, zeta, dt_s, tau0[i]);
 	filt_svf_init(&e->svf_w, wc_rps, zeta, dt_s, w0[i]);
 	filt_svf_init(&e->svf_ww, wc_rps, zeta, dt_s, e->ww_prev);
