@@ -4,7 +4,8 @@
 #include <algorithm>
 #include <limits>
 
-namespace sim {
+namespace sim
+{
 
 double thrust_curve(double c, double s)
 {
@@ -12,10 +13,7 @@ double thrust_curve(double c, double s)
 	return (1.0 - c) * s + c * s * s;
 }
 
-double drift_factor(const VehicleParams &p, double t)
-{
-	return std::max(0.0, 1.0 + p.kf_drift_per_min * t / 60.0);
-}
+double drift_factor(const VehicleParams &p, double t) { return std::max(0.0, 1.0 + p.kf_drift_per_min * t / 60.0); }
 
 void DelayLine::apply_due(double t, RotorArray &current)
 {

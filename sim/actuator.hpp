@@ -8,7 +8,8 @@
 
 #include "vehicle.hpp"
 
-namespace sim {
+namespace sim
+{
 
 using RotorArray = std::array<double, kRotors>;
 
@@ -19,8 +20,9 @@ double thrust_curve(double c, double s);
 double drift_factor(const VehicleParams &p, double t);
 
 // Delay line of throttle commands: a command given at t takes effect at t + delay.
-class DelayLine {
-public:
+class DelayLine
+{
+      public:
 	explicit DelayLine(double delay) : delay_(delay) {}
 
 	void push(double t, const RotorArray &u) { q_.push_back({t + delay_, u}); }
@@ -30,7 +32,7 @@ public:
 	double next_after(double t) const;
 	double delay() const { return delay_; }
 
-private:
+      private:
 	struct Entry {
 		double t;
 		RotorArray u;

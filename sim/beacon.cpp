@@ -3,12 +3,10 @@
 
 #include <unistd.h>
 
-namespace sim {
-
-int32_t xp_version_number(int xplane_version)
+namespace sim
 {
-	return xplane_version >= 12 ? 120100 : 115500;
-}
+
+int32_t xp_version_number(int xplane_version) { return xplane_version >= 12 ? 120100 : 115500; }
 
 xp::Bytes encode_becn(int xplane_version, uint16_t receive_port, const std::string &computer_name)
 {
@@ -18,11 +16,11 @@ xp::Bytes encode_becn(int xplane_version, uint16_t receive_port, const std::stri
 			b.push_back(static_cast<uint8_t>(v >> (8 * k)));
 	};
 	const bool v12 = xplane_version >= 12;
-	b.push_back(1);                 // beacon major version
-	b.push_back(v12 ? 2 : 1);       // beacon minor version
-	put(1, 4);                      // application host id: X-Plane
+	b.push_back(1);           // beacon major version
+	b.push_back(v12 ? 2 : 1); // beacon minor version
+	put(1, 4);                // application host id: X-Plane
 	put(static_cast<uint32_t>(xp_version_number(xplane_version)), 4);
-	put(1, 4);                      // role: master
+	put(1, 4); // role: master
 	put(receive_port, 2);
 	// the name is cut so that the datagram stays small (X-Plane's field is short too)
 	const std::string name = computer_name.substr(0, 255);

@@ -6,7 +6,8 @@
 
 #include "xplane_proto.hpp"
 
-namespace sim {
+namespace sim
+{
 
 constexpr const char *kBeaconGroup = "239.255.1.1";
 constexpr uint16_t kBeaconPort = 49707;

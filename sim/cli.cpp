@@ -10,82 +10,84 @@
 #include "net.hpp"
 #include "options.hpp"
 
-namespace sim {
+namespace sim
+{
 
 static const char kUsage[] =
-"usage: octo-sim [options]\n"
-"\n"
-"The paper's octocopter behind X-Plane 11/12's UDP protocol: receives DSEL/USEL,\n"
-"DATA (row 25), DREF, RREF, CMND and ISE4 on --xp-port and sends DATA* frames to\n"
-"the Data Output target at --rate, like X-Plane.\n"
-"\n"
-"network:\n"
-"  --xp-port N            UDP port X-Plane messages are received on (49000)\n"
-"  --bind ADDR            local IPv4 address to bind (127.0.0.1; 0.0.0.0 for all)\n"
-"  --data-out HOST:PORT   Data Output target (127.0.0.1:49005; ISE4 index 64 changes it)\n"
-"  --rate HZ              Data Output rate, frames per simulated second (90)\n"
-"  --xplane-version 11|12 protocol personality: row 16 order/units, version dataref (12)\n"
-"  --rows LIST            preselect Data Output rows, e.g. 1,16,17,20,21,25 (none)\n"
-"  --no-beacon            do not announce X-Plane's BECN beacon (sent once a second to\n"
-"                         239.255.1.1:49707, announcing --xp-port; a failed send is counted)\n"
-"  --computer-name NAME   computer name in the beacon (this machine's host name)\n"
-"\n"
-"simulation:\n"
-"  --vehicle FILE.json    truth, actuator and noise model; absent keys keep defaults\n"
-"  --ideal                no noise, no motor lag, no delay (the paper's ideal set-up)\n"
-"  --seed N               seed of the noise and of the fault injection (1)\n"
-"  --duration S           simulated seconds to run, then exit 0 (0: until stopped)\n"
-"  --start-time S         the plant clock at the first frame (0): Data Output row 1's\n"
-"                         times, the time datarefs and the truth log start at S, the\n"
-"                         dynamics are those of a run from 0 (a long uptime in seconds)\n"
-"  --lockstep             advance one frame when all 8 throttles are commanded (DATA\n"
-"                         row 25 or DREFs ENGN_thro_use[0..7]) or on timeout; before the\n"
-"                         first command time stands still and frame 0 is re-sent at --rate\n"
-"  --lockstep-timeout S   wall-clock seconds to wait for the throttles (0.5)\n"
-"  --step S               RK4 step (0.002)\n"
-"  --sensors LIST         what the plant serves, from imu (rows 4, 16), rpm (37, 38),\n"
-"                         torque (36), thrust (35), comma-separated (all; vehicle key\n"
-"                         `sensors`); a row not served is not sent, its datarefs reply 0\n"
-"  --lcm URL              ground truth on channel OCTO_TRUTH (octo.truth_t); file://PATH\n"
-"                         writes an LCM log stamped with simulated time\n"
-"  --log-every N          the truth log: every Nth frame only (1), frame 0 included\n"
-"\n"
-"fault injection on the DATA stream (seeded):\n"
-"  --drop P               lose each frame with probability P\n"
-"  --burst N              lose N consecutive frames at random times\n"
-"  --burst-prob P         probability per frame that a burst starts (0.005)\n"
-"  --delay-frames K       send every frame K frames late\n"
-"  --duplicate P          send a frame twice with probability P\n"
-"  --reorder P            swap a frame with the next one with probability P\n"
-"\n"
-"faults of the plant:\n"
-"  --shift-origin T       at plant time T s move the OpenGL local origin as X-Plane does\n"
-"                         at a scenery shift: local x/y/z (row 21, local_x/y/z) jump by\n"
-"                         kilometres; latitude, longitude, elevation, velocities and the\n"
-"                         physics do not change (repeatable; vehicle key origin_shift_s)\n"
-"  --fail-rotor J@T[:S]   at plant time T s rotor J (1..8) keeps S (0..1, default 0) of\n"
-"                         its thrust and torque, and its speed falls to sqrt(S) of what\n"
-"                         its throttle asks (repeatable; vehicle key rotor_failure\n"
-"                         {\"rotor\": J, \"at_s\": T, \"scale\": S} or a list of them)\n"
-"\n"
-"  --verbose              one status line per second on stderr\n"
-"  --help                 this text\n"
-"\n"
-"vehicle keys: mass, g, arm_length, kf, ktau, inertia [3], motor_tau, delay,\n"
-"thrust_curve, rotor_scale [8], kf_drift_per_min, noise {thrust, torque, gyro,\n"
-"attitude_deg, position, accel, rpm, current}, origin [lat, lon, alt_m],\n"
-"origin_shift_s [T, ...], rotor_failure {rotor, at_s, scale} or [{...}, ...];\n"
-"imu_spike {prob, gyro, accel}, stuck_rpm {rotor, at_s} or [{...}, ...];\n"
-"sensors: imu_bias {accel, gyro, accel_walk, gyro_walk}, imu_scale, vibration\n"
-"{accel, gyro, harmonics [<=4], cutoff_hz, sample_hz}, rpm_max, esc_pole_pairs,\n"
-"esc_kt, esc_current_offset, sensors [list] (docs/sensors.md).\n"
-"Refused (exit 2, naming key, value and accepted range): mass, inertia or kf <= 0,\n"
-"|kf_drift_per_min| > 0.2, a negative noise, inertia violating the triangle\n"
-"inequality (each moment <= the sum of the other two), hover throttle\n"
-"mass g / (8 kf) above 1.\n"
-"On exit (SIGINT/SIGTERM or --duration) the counters of dropped inputs go to stderr.\n";
+	"usage: octo-sim [options]\n"
+	"\n"
+	"The paper's octocopter behind X-Plane 11/12's UDP protocol: receives DSEL/USEL,\n"
+	"DATA (row 25), DREF, RREF, CMND and ISE4 on --xp-port and sends DATA* frames to\n"
+	"the Data Output target at --rate, like X-Plane.\n"
+	"\n"
+	"network:\n"
+	"  --xp-port N            UDP port X-Plane messages are received on (49000)\n"
+	"  --bind ADDR            local IPv4 address to bind (127.0.0.1; 0.0.0.0 for all)\n"
+	"  --data-out HOST:PORT   Data Output target (127.0.0.1:49005; ISE4 index 64 changes it)\n"
+	"  --rate HZ              Data Output rate, frames per simulated second (90)\n"
+	"  --xplane-version 11|12 protocol personality: row 16 order/units, version dataref (12)\n"
+	"  --rows LIST            preselect Data Output rows, e.g. 1,16,17,20,21,25 (none)\n"
+	"  --no-beacon            do not announce X-Plane's BECN beacon (sent once a second to\n"
+	"                         239.255.1.1:49707, announcing --xp-port; a failed send is counted)\n"
+	"  --computer-name NAME   computer name in the beacon (this machine's host name)\n"
+	"\n"
+	"simulation:\n"
+	"  --vehicle FILE.json    truth, actuator and noise model; absent keys keep defaults\n"
+	"  --ideal                no noise, no motor lag, no delay (the paper's ideal set-up)\n"
+	"  --seed N               seed of the noise and of the fault injection (1)\n"
+	"  --duration S           simulated seconds to run, then exit 0 (0: until stopped)\n"
+	"  --start-time S         the plant clock at the first frame (0): Data Output row 1's\n"
+	"                         times, the time datarefs and the truth log start at S, the\n"
+	"                         dynamics are those of a run from 0 (a long uptime in seconds)\n"
+	"  --lockstep             advance one frame when all 8 throttles are commanded (DATA\n"
+	"                         row 25 or DREFs ENGN_thro_use[0..7]) or on timeout; before the\n"
+	"                         first command time stands still and frame 0 is re-sent at --rate\n"
+	"  --lockstep-timeout S   wall-clock seconds to wait for the throttles (0.5)\n"
+	"  --step S               RK4 step (0.002)\n"
+	"  --sensors LIST         what the plant serves, from imu (rows 4, 16), rpm (37, 38),\n"
+	"                         torque (36), thrust (35), comma-separated (all; vehicle key\n"
+	"                         `sensors`); a row not served is not sent, its datarefs reply 0\n"
+	"  --lcm URL              ground truth on channel OCTO_TRUTH (octo.truth_t); file://PATH\n"
+	"                         writes an LCM log stamped with simulated time\n"
+	"  --log-every N          the truth log: every Nth frame only (1), frame 0 included\n"
+	"\n"
+	"fault injection on the DATA stream (seeded):\n"
+	"  --drop P               lose each frame with probability P\n"
+	"  --burst N              lose N consecutive frames at random times\n"
+	"  --burst-prob P         probability per frame that a burst starts (0.005)\n"
+	"  --delay-frames K       send every frame K frames late\n"
+	"  --duplicate P          send a frame twice with probability P\n"
+	"  --reorder P            swap a frame with the next one with probability P\n"
+	"\n"
+	"faults of the plant:\n"
+	"  --shift-origin T       at plant time T s move the OpenGL local origin as X-Plane does\n"
+	"                         at a scenery shift: local x/y/z (row 21, local_x/y/z) jump by\n"
+	"                         kilometres; latitude, longitude, elevation, velocities and the\n"
+	"                         physics do not change (repeatable; vehicle key origin_shift_s)\n"
+	"  --fail-rotor J@T[:S]   at plant time T s rotor J (1..8) keeps S (0..1, default 0) of\n"
+	"                         its thrust and torque, and its speed falls to sqrt(S) of what\n"
+	"                         its throttle asks (repeatable; vehicle key rotor_failure\n"
+	"                         {\"rotor\": J, \"at_s\": T, \"scale\": S} or a list of them)\n"
+	"\n"
+	"  --verbose              one status line per second on stderr\n"
+	"  --help                 this text\n"
+	"\n"
+	"vehicle keys: mass, g, arm_length, kf, ktau, inertia [3], motor_tau, delay,\n"
+	"thrust_curve, rotor_scale [8], kf_drift_per_min, noise {thrust, torque, gyro,\n"
+	"attitude_deg, position, accel, rpm, current}, origin [lat, lon, alt_m],\n"
+	"origin_shift_s [T, ...], rotor_failure {rotor, at_s, scale} or [{...}, ...];\n"
+	"imu_spike {prob, gyro, accel}, stuck_rpm {rotor, at_s} or [{...}, ...];\n"
+	"sensors: imu_bias {accel, gyro, accel_walk, gyro_walk}, imu_scale, vibration\n"
+	"{accel, gyro, harmonics [<=4], cutoff_hz, sample_hz}, rpm_max, esc_pole_pairs,\n"
+	"esc_kt, esc_current_offset, sensors [list] (docs/sensors.md).\n"
+	"Refused (exit 2, naming key, value and accepted range): mass, inertia or kf <= 0,\n"
+	"|kf_drift_per_min| > 0.2, a negative noise, inertia violating the triangle\n"
+	"inequality (each moment <= the sum of the other two), hover throttle\n"
+	"mass g / (8 kf) above 1.\n"
+	"On exit (SIGINT/SIGTERM or --duration) the counters of dropped inputs go to stderr.\n";
 
-namespace {
+namespace
+{
 
 std::string fmt(double d)
 {
@@ -104,8 +106,7 @@ double num(const std::string &flag, const char *v, double lo, double hi)
 	errno = 0;
 	double d = std::strtod(v, &end);
 	if (!*v || *end || errno || !std::isfinite(d) || d < lo || d > hi)
-		throw Bad{flag, "expected a number in [" + fmt(lo) + ", " + fmt(hi) +
-		                    "], got '" + v + "'"};
+		throw Bad{flag, "expected a number in [" + fmt(lo) + ", " + fmt(hi) + "], got '" + v + "'"};
 	return d;
 }
 
@@ -116,7 +117,7 @@ long integer(const std::string &flag, const char *v, long lo, long hi)
 	long d = std::strtol(v, &end, 10);
 	if (!*v || *end || errno || d < lo || d > hi)
 		throw Bad{flag, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-		                    "], got '" + v + "'"};
+					"], got '" + v + "'"};
 	return d;
 }
 
@@ -125,7 +126,8 @@ RotorFailure fail_rotor(const std::string &flag, const std::string &v)
 {
 	const size_t at = v.find('@');
 	if (at == std::string::npos)
-		throw Bad{flag, "expected J@T[:S] (rotor 1..8, plant time s, remaining effectiveness 0..1), got '" + v + "'"};
+		throw Bad{flag,
+			  "expected J@T[:S] (rotor 1..8, plant time s, remaining effectiveness 0..1), got '" + v + "'"};
 	const size_t colon = v.find(':', at);
 	const std::string j = v.substr(0, at);
 	const std::string t = v.substr(at + 1, colon == std::string::npos ? std::string::npos : colon - at - 1);

@@ -4,7 +4,8 @@
 #include <cstdint>
 #include <string>
 
-namespace sim {
+namespace sim
+{
 
 struct Counters {
 	enum Id {
@@ -30,8 +31,8 @@ struct Counters {
 		FaultReordered,
 		LockstepTimeouts,
 		LockstepWithheld, // lockstep ticks not waited for: the fault injector withheld the frame
-		TxBeacon,       // BECN beacons sent
-		TxBeaconError,  // BECN beacons that could not be sent (no multicast route)
+		TxBeacon,         // BECN beacons sent
+		TxBeaconError,    // BECN beacons that could not be sent (no multicast route)
 		Count
 	};
 	uint64_t v[Count] = {};

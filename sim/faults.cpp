@@ -3,7 +3,8 @@
 
 #include "rng.hpp"
 
-namespace sim {
+namespace sim
+{
 
 std::vector<xp::Bytes> FaultChannel::submit(uint64_t frame, xp::Bytes dgram)
 {

@@ -6,10 +6,11 @@
 
 #include "net.hpp"
 
-namespace sim {
+namespace sim
+{
 
 bool frame_data(const Options &o, const XpInput &in, const XpFrame &f, FaultChannel &faults, uint64_t n,
-                bool with_faults, std::vector<xp::Bytes> &out)
+		bool with_faults, std::vector<xp::Bytes> &out)
 {
 	if (!in.target_enabled)
 		return true;
@@ -34,7 +35,7 @@ bool frame_data(const Options &o, const XpInput &in, const XpFrame &f, FaultChan
 }
 
 void rref_replies(const Options &o, XpInput &in, const XpFrame &f, Counters &c,
-                  std::vector<std::pair<sockaddr_in, xp::Bytes>> &out)
+		  std::vector<std::pair<sockaddr_in, xp::Bytes>> &out)
 {
 	if (in.subs.empty())
 		return;
@@ -60,8 +61,7 @@ void rref_replies(const Options &o, XpInput &in, const XpFrame &f, Counters &c,
 			out.push_back({g.first, std::move(b)});
 }
 
-void advance_frame(const Options &o, Model &m, XpInput &in, uint64_t &n, Sensors &s, XpFrame &f,
-                   TruthPublisher &truth)
+void advance_frame(const Options &o, Model &m, XpInput &in, uint64_t &n, Sensors &s, XpFrame &f, TruthPublisher &truth)
 {
 	std::array<double, kRotors> u = in.effective_throttle();
 	m.command(u);

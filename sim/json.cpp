@@ -4,7 +4,8 @@
 #include <cmath>
 #include <cstdlib>
 
-namespace json {
+namespace json
+{
 
 const char *Value::kind_name() const
 {
@@ -19,10 +20,12 @@ const char *Value::kind_name() const
 	return "?";
 }
 
-namespace {
+namespace
+{
 
-class Parser {
-public:
+class Parser
+{
+      public:
 	explicit Parser(const std::string &t) : s_(t) {}
 
 	Value document()
@@ -35,7 +38,7 @@ public:
 		return v;
 	}
 
-private:
+      private:
 	const std::string &s_;
 	size_t i_ = 0;
 
@@ -278,7 +281,8 @@ private:
 			case 't': o += '\t'; break;
 			case 'u': {
 				unsigned cp = hex4();
-				if (cp >= 0xD800 && cp < 0xDC00 && i_ + 1 < s_.size() && s_[i_] == '\\' && s_[i_ + 1] == 'u') {
+				if (cp >= 0xD800 && cp < 0xDC00 && i_ + 1 < s_.size() && s_[i_] == '\\' &&
+				    s_[i_ + 1] == 'u') {
 					i_ += 2;
 					unsigned lo = hex4();
 					if (lo < 0xDC00 || lo > 0xDFFF)
@@ -296,9 +300,6 @@ private:
 
 } // namespace
 
-Value parse(const std::string &text)
-{
-	return Parser(text).document();
-}
+Value parse(const std::string &text) { return Parser(text).document(); }
 
 } // namespace json

@@ -7,7 +7,8 @@
 #include <string>
 #include <vector>
 
-namespace json {
+namespace json
+{
 
 struct Value {
 	enum class Kind { Null, Bool, Number, String, Array, Object };

@@ -8,10 +8,7 @@
 
 static std::atomic<bool> g_stop{false};
 
-static void on_signal(int)
-{
-	g_stop = true;
-}
+static void on_signal(int) { g_stop = true; }
 
 int main(int argc, char **argv)
 {

@@ -4,7 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
-namespace sim {
+namespace sim
+{
 
 Model::Model(const VehicleParams &p) : p_(p), delay_(p.delay)
 {
@@ -107,7 +108,7 @@ BodyState Model::unpack(const Vec &v)
 Model::Vec Model::deriv(double t, const Vec &v) const
 {
 	const BodyState x = unpack(v);
-	const RotorOutputs o = outputs_with(x, t, eff_);   // constant over the segment
+	const RotorOutputs o = outputs_with(x, t, eff_); // constant over the segment
 	const Eigen::Quaterniond qn = x.q.normalized();
 	Vec d;
 	// eq. (10): r'' = f n / m + [0 0 -g], n = R(q) e_z
@@ -222,10 +223,7 @@ void Model::advance_to(double t1)
 		x_.s = u_;
 }
 
-Eigen::Vector3d Model::acceleration() const
-{
-	return acceleration(rotor_outputs(x_, t_));
-}
+Eigen::Vector3d Model::acceleration() const { return acceleration(rotor_outputs(x_, t_)); }
 
 Eigen::Vector3d Model::acceleration(const RotorOutputs &o) const
 {
@@ -234,9 +232,6 @@ Eigen::Vector3d Model::acceleration(const RotorOutputs &o) const
 	return linear_acceleration(x_.q.normalized(), o);
 }
 
-double Model::kinetic_energy_rot() const
-{
-	return 0.5 * x_.w.dot(inertia_.cwiseProduct(x_.w));
-}
+double Model::kinetic_energy_rot() const { return 0.5 * x_.w.dot(inertia_.cwiseProduct(x_.w)); }
 
 } // namespace sim

@@ -12,21 +12,22 @@
 #include "actuator.hpp"
 #include "vehicle.hpp"
 
-namespace sim {
+namespace sim
+{
 
 struct BodyState {
-	Eigen::Vector3d r{0, 0, 0};              // position in S_I, m
-	Eigen::Vector3d v{0, 0, 0};              // velocity in S_I, m/s
-	Eigen::Quaterniond q{1, 0, 0, 0};        // v_I = q v_B q* (scalar first, eq. 1)
-	Eigen::Vector3d w{0, 0, 0};              // angular velocity in S_B, rad/s
-	RotorArray s{};                          // actuator outputs s_j (after lag)
+	Eigen::Vector3d r{0, 0, 0};       // position in S_I, m
+	Eigen::Vector3d v{0, 0, 0};       // velocity in S_I, m/s
+	Eigen::Quaterniond q{1, 0, 0, 0}; // v_I = q v_B q* (scalar first, eq. 1)
+	Eigen::Vector3d w{0, 0, 0};       // angular velocity in S_B, rad/s
+	RotorArray s{};                   // actuator outputs s_j (after lag)
 };
 
 // Forces and torques for a state (what the rotors do now).
 struct RotorOutputs {
-	RotorArray thrust{};       // f_j, N
-	RotorArray torque{};       // signed reaction torque about +Z_B, N m
-	double force = 0;          // sum f_j, N
+	RotorArray thrust{}; // f_j, N
+	RotorArray torque{}; // signed reaction torque about +Z_B, N m
+	double force = 0;    // sum f_j, N
 	Eigen::Vector3d torque_b{0, 0, 0};
 };
 
@@ -36,13 +37,14 @@ constexpr double kCrashTiltDeg = 60.0;
 constexpr double kCrashSpeed = 10.0;
 
 struct CrashInfo {
-	double t = 0;          // the plant's clock at the contact, s
-	double speed = 0;      // speed towards the ground, m/s
-	double tilt_deg = 0;   // tilt from the vertical, deg
+	double t = 0;        // the plant's clock at the contact, s
+	double speed = 0;    // speed towards the ground, m/s
+	double tilt_deg = 0; // tilt from the vertical, deg
 };
 
-class Model {
-public:
+class Model
+{
+      public:
 	explicit Model(const VehicleParams &p);
 
 	// Rotor j (0-based) position in S_B: angle -j * 45 deg from +X_B, radius l.
@@ -88,7 +90,7 @@ public:
 	Eigen::Vector3d acceleration(const RotorOutputs &o) const;
 	double kinetic_energy_rot() const;
 
-private:
+      private:
 	using Vec = Eigen::Matrix<double, 21, 1>;
 	static Vec pack(const BodyState &x);
 	static BodyState unpack(const Vec &v);

@@ -10,7 +10,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-namespace sim {
+namespace sim
+{
 
 bool parse_hostport(const std::string &s, sockaddr_in &out, std::string &err)
 {

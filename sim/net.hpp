@@ -7,15 +7,17 @@
 #include <cstdint>
 #include <string>
 
-namespace sim {
+namespace sim
+{
 
 // "HOST:PORT" (IPv4 literal or a resolvable name) -> address; false on error.
 bool parse_hostport(const std::string &s, sockaddr_in &out, std::string &err);
 std::string addr_str(const sockaddr_in &a);
 bool same_addr(const sockaddr_in &a, const sockaddr_in &b);
 
-class UdpSocket {
-public:
+class UdpSocket
+{
+      public:
 	UdpSocket() = default;
 	~UdpSocket();
 	UdpSocket(const UdpSocket &) = delete;
@@ -34,7 +36,7 @@ public:
 	// that receivers that joined the group on the default interface get it).
 	bool open_multicast_sender(const std::string &iface_ip, std::string &err);
 
-private:
+      private:
 	int fd_ = -1;
 };
 

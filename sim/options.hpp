@@ -10,7 +10,8 @@
 #include "faults.hpp"
 #include "vehicle.hpp"
 
-namespace sim {
+namespace sim
+{
 
 struct Options {
 	uint16_t xp_port = 49000;
@@ -23,23 +24,23 @@ struct Options {
 	VehicleParams vehicle;
 	bool ideal = false;
 	uint64_t seed = 1;
-	double duration = 0;          // simulated s; 0 = run until stopped
-	double start_time = 0;        // the plant clock at frame 0, s (Data Output row 1 starts there)
+	double duration = 0;   // simulated s; 0 = run until stopped
+	double start_time = 0; // the plant clock at frame 0, s (Data Output row 1 starts there)
 	std::string lcm_url;
-	unsigned log_every = 1;       // --log-every: the truth log keeps every Nth frame
+	unsigned log_every = 1; // --log-every: the truth log keeps every Nth frame
 	bool lockstep = false;
-	double lockstep_timeout = 0.5; // wall s to wait for the 8 throttles
-	std::vector<int> rows;        // preselected Data Output rows
-	std::vector<double> shift_origin; // --shift-origin T: plant times, added to the vehicle's
+	double lockstep_timeout = 0.5;        // wall s to wait for the 8 throttles
+	std::vector<int> rows;                // preselected Data Output rows
+	std::vector<double> shift_origin;     // --shift-origin T: plant times, added to the vehicle's
 	std::vector<RotorFailure> fail_rotor; // --fail-rotor J@T[:S], added to the vehicle's
 	FaultParams faults;
 	// --imu-spike P, --imu-spike-gyro G, --imu-spike-accel A (< 0: the vehicle's imu_spike)
 	double imu_spike = -1, imu_spike_gyro = -1, imu_spike_accel = -1;
 	std::vector<StuckRpm> stuck_rpm; // --stuck-rpm J@T, added to the vehicle's
-	double step = 0.002;          // RK4 step, s
+	double step = 0.002;             // RK4 step, s
 	bool verbose = false;
-	bool beacon = true;           // BECN once a second on 239.255.1.1:49707
-	std::string computer_name;    // announced in the beacon; empty: this machine's name
+	bool beacon = true;        // BECN once a second on 239.255.1.1:49707
+	std::string computer_name; // announced in the beacon; empty: this machine's name
 	// --sensors: what the plant serves (SensorBits); 0 = the vehicle file's `sensors`
 	unsigned sensors = 0;
 };

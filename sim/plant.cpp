@@ -25,7 +25,8 @@
 #include "xplane_input.hpp"
 #include "xplane_proto.hpp"
 
-namespace {
+namespace
+{
 
 struct Out {
 	xp::Bytes b;
@@ -60,15 +61,15 @@ struct octo_plant {
 	sim::TruthPublisher truth;
 	sim::XpFrame frame;
 	uint64_t n = 0;
-	bool truth0 = false;     // frame 0's truth written
+	bool truth0 = false; // frame 0's truth written
 	std::deque<Out> out;
-	std::vector<xp::Bytes> sent;   // this frame's DATA datagrams (send_frame)
+	std::vector<xp::Bytes> sent; // this frame's DATA datagrams (send_frame)
 	std::string counters_json;
 };
 
 bool octo_plant::send_frame(bool with_faults)
 {
-	sent.clear();   // kept between frames: its storage is allocated once
+	sent.clear(); // kept between frames: its storage is allocated once
 	const bool delivered = sim::frame_data(o, input, frame, faults, n, with_faults, sent);
 	for (auto &b : sent) {
 		c.inc(sim::Counters::TxData);
@@ -92,14 +93,14 @@ extern "C" {
 octo_plant *octo_plant_create(const char *prog, int argc, char **argv, int *status)
 {
 	// Flags that belong to octo-sim's server, not to the plant.
-	static const char *const refused[] = {"--xp-port", "--bind", "--data-out", "--lockstep",
-	                                      "--lockstep-timeout", "--lcm", "--duration", "--verbose", "-v",
-	                                      "--no-beacon", "--computer-name"};
+	static const char *const refused[] = {
+		"--xp-port",  "--bind",    "--data-out", "--lockstep",  "--lockstep-timeout", "--lcm",
+		"--duration", "--verbose", "-v",         "--no-beacon", "--computer-name"};
 	for (int i = 1; i < argc; i++)
 		for (const char *r : refused)
 			if (!std::strcmp(argv[i], r)) {
-				std::fprintf(stderr, "%s: %s: not an option of the in-process plant (see --help)\n", prog,
-				             argv[i]);
+				std::fprintf(stderr, "%s: %s: not an option of the in-process plant (see --help)\n",
+					     prog, argv[i]);
 				*status = 2;
 				return nullptr;
 			}
@@ -113,10 +114,7 @@ octo_plant *octo_plant_create(const char *prog, int argc, char **argv, int *stat
 	return new octo_plant(o);
 }
 
-void octo_plant_destroy(octo_plant *p)
-{
-	delete p;
-}
+void octo_plant_destroy(octo_plant *p) { delete p; }
 
 int octo_plant_open_truth(octo_plant *p, const char *url)
 {
@@ -165,10 +163,7 @@ long octo_plant_pop(octo_plant *p, uint8_t *buf, size_t cap, uint32_t *to_ip, ui
 	return len;
 }
 
-bool octo_plant_commanded(const octo_plant *p)
-{
-	return (p->input.cmd_mask & 0xFFu) == 0xFFu;
-}
+bool octo_plant_commanded(const octo_plant *p) { return (p->input.cmd_mask & 0xFFu) == 0xFFu; }
 
 void octo_plant_advance(octo_plant *p)
 {
@@ -197,10 +192,7 @@ void octo_plant_truth(const octo_plant *p, struct octo_plant_truth *t)
 	t->crash_tilt_deg = p->model.crash().tilt_deg;
 }
 
-double octo_plant_rate(const octo_plant *p)
-{
-	return p->o.rate;
-}
+double octo_plant_rate(const octo_plant *p) { return p->o.rate; }
 
 const char *octo_plant_counters(octo_plant *p)
 {

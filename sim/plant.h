@@ -54,16 +54,16 @@ bool octo_plant_commanded(const octo_plant *p);
 void octo_plant_advance(octo_plant *p);
 
 struct octo_plant_truth {
-	double t;                /* the plant's clock, s (starts at t0) */
-	double t0;               /* the clock at frame 0 (--start-time), s */
-	uint64_t frame;          /* frames advanced */
-	double pos_i[3];         /* S_I (north, west, up), m */
+	double t;        /* the plant's clock, s (starts at t0) */
+	double t0;       /* the clock at frame 0 (--start-time), s */
+	uint64_t frame;  /* frames advanced */
+	double pos_i[3]; /* S_I (north, west, up), m */
 	double vel_i[3];
-	double q_ib[4];          /* [w x y z] */
-	double omega_b[3];       /* rad/s, FLU */
+	double q_ib[4];    /* [w x y z] */
+	double omega_b[3]; /* rad/s, FLU */
 	bool on_ground;
-	bool crashed;            /* hit the ground too tilted or too fast: the body stays down */
-	double crash_t, crash_speed, crash_tilt_deg;   /* when, m/s towards the ground, deg */
+	bool crashed;                                /* hit the ground too tilted or too fast: the body stays down */
+	double crash_t, crash_speed, crash_tilt_deg; /* when, m/s towards the ground, deg */
 };
 void octo_plant_truth(const octo_plant *p, struct octo_plant_truth *out);
 double octo_plant_rate(const octo_plant *p);

@@ -7,7 +7,8 @@
 #include <cmath>
 #include <cstdint>
 
-namespace sim {
+namespace sim
+{
 
 // Noise: the white noise of rows 16, 17, 20/21, 35 and 36 (its draws and their order are
 // fixed); the IMU's and ESCs' own draws come from their own streams, so adding or
@@ -15,11 +16,11 @@ namespace sim {
 enum class Stream : uint64_t {
 	Noise = 1,
 	Fault = 2,
-	ImuSetup = 3,   // once per run (frame 0): scale errors, constant biases, rotor phases
-	ImuWalk = 4,    // per frame: bias random-walk increments
-	ImuNoise = 5,   // per frame: accelerometer white noise
-	Esc = 6,        // per frame: rpm report and current noise
-	ImuSpike = 7,   // per frame: whether an IMU sample is an outlier, which one, its sign
+	ImuSetup = 3, // once per run (frame 0): scale errors, constant biases, rotor phases
+	ImuWalk = 4,  // per frame: bias random-walk increments
+	ImuNoise = 5, // per frame: accelerometer white noise
+	Esc = 6,      // per frame: rpm report and current noise
+	ImuSpike = 7, // per frame: whether an IMU sample is an outlier, which one, its sign
 };
 
 inline uint64_t splitmix64(uint64_t &x)
@@ -31,8 +32,9 @@ inline uint64_t splitmix64(uint64_t &x)
 }
 
 // xoshiro256** seeded through splitmix64 from (seed, stream, frame).
-class Rng {
-public:
+class Rng
+{
+      public:
 	Rng(uint64_t seed, Stream stream, uint64_t frame)
 	{
 		uint64_t x = seed ^ (static_cast<uint64_t>(stream) * 0xD1B54A32D192ED03ull);
@@ -65,7 +67,7 @@ public:
 		return std::sqrt(-2.0 * std::log(1.0 - u1)) * std::cos(6.283185307179586 * u2);
 	}
 
-private:
+      private:
 	uint64_t s_[4];
 	static uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
 };

@@ -7,9 +7,11 @@
 
 #include "rng.hpp"
 
-namespace sim {
+namespace sim
+{
 
-namespace {
+namespace
+{
 
 constexpr double kRadPerRpm = 2.0 * M_PI / 60.0;
 constexpr int kHarm = 4;
@@ -22,23 +24,20 @@ double rotor_speed(const VehicleParams &p, double s, double t)
 	return p.rpm_max * kRadPerRpm * std::sqrt(g > 0 ? g : 0.0);
 }
 
-double hover_rotor_speed(const VehicleParams &p)
-{
-	return p.rpm_max * kRadPerRpm * std::sqrt(p.hover_throttle());
-}
+double hover_rotor_speed(const VehicleParams &p) { return p.rpm_max * kRadPerRpm * std::sqrt(p.hover_throttle()); }
 
 double dshot_rpm(double rpm, double pole_pairs)
 {
 	if (!(rpm > 0) || !(pole_pairs > 0))
 		return 0.0;
-	const double period = 60e6 / (rpm * pole_pairs);   // eRPM period, us
+	const double period = 60e6 / (rpm * pole_pairs); // eRPM period, us
 	if (period >= 65536.0)
 		return 0.0;
 	long us = std::lround(period);
 	int e = 0;
 	while ((us >> e) > 511)
 		e++;
-	long m = (us + ((1L << e) >> 1)) >> e;              // rounded to the exponent's step
+	long m = (us + ((1L << e) >> 1)) >> e; // rounded to the exponent's step
 	if (m > 511) {
 		e++;
 		m = (us + ((1L << e) >> 1)) >> e;
@@ -94,10 +93,7 @@ Sensors::Sensors(const VehicleParams &p, uint64_t seed, double rate)
 	t_prev_ = 0;
 }
 
-bool Sensors::vibrates() const
-{
-	return (p_.vibration.accel > 0 || p_.vibration.gyro > 0) && hover_speed_ > 0;
-}
+bool Sensors::vibrates() const { return (p_.vibration.accel > 0 || p_.vibration.gyro > 0) && hover_speed_ > 0; }
 
 void Sensors::advance(const Model &m, uint64_t n)
 {
@@ -115,7 +111,7 @@ void Sensors::advance(const Model &m, uint64_t n)
 	RotorArray speed;
 	for (int j = 0; j < kRotors; j++)
 		speed[static_cast<size_t>(j)] = rotor_speed(p_, m.state().s[static_cast<size_t>(j)], m.t()) *
-		                                std::sqrt(p_.failure_factor(j, m.clock()));
+						std::sqrt(p_.failure_factor(j, m.clock()));
 	if (vibrates() && dt > 0) {
 		const double fs = p_.vibration.sample_hz, ts = 1.0 / fs;
 		const int64_t k1 = static_cast<int64_t>(std::floor(t1 * fs + 1e-9));

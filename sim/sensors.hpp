@@ -9,7 +9,8 @@
 
 #include "model.hpp"
 
-namespace sim {
+namespace sim
+{
 
 // Rotor speed (rad/s) for the actuator output s at time t. A fixed propeller's thrust
 // goes with speed^2, and the thrust at s is k_f d(t) g(s) (drift included), so the
@@ -44,8 +45,9 @@ struct Biquad {
 	double gain(double f, double fs) const;
 };
 
-class Sensors {
-public:
+class Sensors
+{
+      public:
 	// The run's draws (scale errors, constant biases, rotor phases) from (seed, ImuSetup, 0).
 	Sensors(const VehicleParams &p, uint64_t seed, double rate);
 
@@ -65,27 +67,27 @@ public:
 	Eigen::Vector3d gyro(const Eigen::Vector3d &w_b) const;
 
 	// The state (read by the tests).
-	Eigen::Vector3d scale_a{0, 0, 0}, scale_g{0, 0, 0};  // scale errors (fractions)
-	Eigen::Vector3d bias_a{0, 0, 0}, bias_g{0, 0, 0};    // constant biases
-	Eigen::Vector3d walk_a{0, 0, 0}, walk_g{0, 0, 0};    // random walks
-	Eigen::Vector3d vib_a{0, 0, 0}, vib_g{0, 0, 0};      // filtered vibration at the read
+	Eigen::Vector3d scale_a{0, 0, 0}, scale_g{0, 0, 0}; // scale errors (fractions)
+	Eigen::Vector3d bias_a{0, 0, 0}, bias_g{0, 0, 0};   // constant biases
+	Eigen::Vector3d walk_a{0, 0, 0}, walk_g{0, 0, 0};   // random walks
+	Eigen::Vector3d vib_a{0, 0, 0}, vib_g{0, 0, 0};     // filtered vibration at the read
 
-private:
+      private:
 	bool vibrates() const;
 
 	VehicleParams p_;
 	uint64_t seed_;
 	double rate_;
 	double hover_speed_;
-	RotorArray speed_prev_{};           // rad/s at the previous frame
+	RotorArray speed_prev_{}; // rad/s at the previous frame
 	double t_prev_ = 0;
-	int64_t k_ = 0;                     // index of the last internal sample taken
-	double phase_[kRotors] = {};        // rotor angles, rad
-	double psi_[kRotors][4][3] = {};    // per rotor and harmonic: phases of x, z (accel) and gyro
-	Eigen::Vector3d rock_[kRotors];     // unit axis a rotor's vertical imbalance rocks the body about
-	Biquad filt_[6];                    // accel x y z, gyro x y z
-	bool stuck_[kRotors] = {};          // rotor j's report is frozen
-	double stuck_rpm_[kRotors] = {};    // at this value, rpm
+	int64_t k_ = 0;                  // index of the last internal sample taken
+	double phase_[kRotors] = {};     // rotor angles, rad
+	double psi_[kRotors][4][3] = {}; // per rotor and harmonic: phases of x, z (accel) and gyro
+	Eigen::Vector3d rock_[kRotors];  // unit axis a rotor's vertical imbalance rocks the body about
+	Biquad filt_[6];                 // accel x y z, gyro x y z
+	bool stuck_[kRotors] = {};       // rotor j's report is frozen
+	double stuck_rpm_[kRotors] = {}; // at this value, rpm
 };
 
 } // namespace sim

@@ -20,9 +20,11 @@
 #include "xplane_input.hpp"
 #include "xplane_proto.hpp"
 
-namespace sim {
+namespace sim
+{
 
-namespace {
+namespace
+{
 
 double wall_now()
 {
@@ -30,8 +32,9 @@ double wall_now()
 	return duration<double>(steady_clock::now().time_since_epoch()).count();
 }
 
-class Server {
-public:
+class Server
+{
+      public:
 	Server(const Options &o, const std::atomic<bool> &stop)
 	    : o_(o), stop_(stop), model_(o.vehicle), sensors_(o.vehicle, o.seed, o.rate), input_(c_),
 	      faults_(o.faults, o.seed, c_)
@@ -46,7 +49,7 @@ public:
 
 	int run();
 
-private:
+      private:
 	// Sends this tick's DATA; returns false when the fault injector withheld it
 	// (dropped, or held back for reordering or delay): no client can answer it.
 	bool send_frame(bool faults);
@@ -134,10 +137,11 @@ void Server::advance()
 	advance_frame(o_, model_, input_, n_, sensors_, frame_, truth_);
 	if (model_.crashed() && !was) {
 		const CrashInfo &c = model_.crash();
-		std::fprintf(stderr,
-		             "octo-sim: crashed at t=%.2fs: hit the ground at %.1f m/s, %.0f deg from level (limits %.0f "
-		             "m/s, %.0f deg); the vehicle stays down until octo-sim restarts\n",
-		             c.t, c.speed, c.tilt_deg, kCrashSpeed, kCrashTiltDeg);
+		std::fprintf(
+			stderr,
+			"octo-sim: crashed at t=%.2fs: hit the ground at %.1f m/s, %.0f deg from level (limits %.0f "
+			"m/s, %.0f deg); the vehicle stays down until octo-sim restarts\n",
+			c.t, c.speed, c.tilt_deg, kCrashSpeed, kCrashTiltDeg);
 	}
 }
 
@@ -160,13 +164,15 @@ void Server::status(double now)
 	const BodyState &x = model_.state();
 	const double wall = now - wall_start_;
 	std::fprintf(stderr,
-	             "octo-sim: t=%.2fs frame=%llu x%.1f pos=(%.2f %.2f %.2f)m roll=%.1f pitch=%.1f hdg=%.1f "
-	             "rx=%llu tx=%llu%s\n",
-	             model_.clock(), static_cast<unsigned long long>(n_), wall > 0 ? model_.t() / wall : 0.0, x.r.x(),
-	             x.r.y(), x.r.z(), frame_.roll, frame_.pitch, frame_.heading,
-	             static_cast<unsigned long long>(c_[Counters::RxDatagrams]),
-	             static_cast<unsigned long long>(c_[Counters::TxData]),
-	             model_.crashed() ? " crashed" : model_.on_ground() ? " landed" : "");
+		     "octo-sim: t=%.2fs frame=%llu x%.1f pos=(%.2f %.2f %.2f)m roll=%.1f pitch=%.1f hdg=%.1f "
+		     "rx=%llu tx=%llu%s\n",
+		     model_.clock(), static_cast<unsigned long long>(n_), wall > 0 ? model_.t() / wall : 0.0, x.r.x(),
+		     x.r.y(), x.r.z(), frame_.roll, frame_.pitch, frame_.heading,
+		     static_cast<unsigned long long>(c_[Counters::RxDatagrams]),
+		     static_cast<unsigned long long>(c_[Counters::TxData]),
+		     model_.crashed()     ? " crashed"
+		     : model_.on_ground() ? " landed"
+					  : "");
 }
 
 int Server::run()
@@ -182,8 +188,8 @@ int Server::run()
 	}
 	truth_.set_every(o_.log_every);
 	std::fprintf(stderr, "octo-sim: X-Plane %d on %s:%u, Data Output to %s at %g Hz%s\n", o_.xplane_version,
-	             o_.bind_ip.c_str(), o_.xp_port, addr_str(input_.target).c_str(), o_.rate,
-	             o_.lockstep ? ", lockstep" : "");
+		     o_.bind_ip.c_str(), o_.xp_port, addr_str(input_.target).c_str(), o_.rate,
+		     o_.lockstep ? ", lockstep" : "");
 	if (o_.beacon) {
 		const std::string name = o_.computer_name.empty() ? default_computer_name() : o_.computer_name;
 		becn_ = encode_becn(o_.xplane_version, o_.xp_port, name);
@@ -194,7 +200,7 @@ int Server::run()
 		if (!becn_sock_.open_multicast_sender(o_.bind_ip, err))
 			std::fprintf(stderr, "octo-sim: beacon: %s (sends will be counted as failed)\n", err.c_str());
 		std::fprintf(stderr, "octo-sim: beacon as \"%s\" to %s:%u once a second\n", name.c_str(), kBeaconGroup,
-		             kBeaconPort);
+			     kBeaconPort);
 	}
 
 	xp_measure(model_, input_.effective_throttle(), o_.seed, 0, sensors_, frame_);
@@ -243,7 +249,7 @@ int Server::run()
 		advance();
 	}
 	std::fprintf(stderr, "octo-sim: stopped at t=%.3fs after %llu frames; counters %s\n", model_.clock(),
-	             static_cast<unsigned long long>(n_), c_.json().c_str());
+		     static_cast<unsigned long long>(n_), c_.json().c_str());
 	return 0;
 }
 

@@ -8,7 +8,8 @@
 
 #include "options.hpp"
 
-namespace sim {
+namespace sim
+{
 
 // Runs until --duration or *stop; returns the exit status.
 int run_server(const Options &o, const std::atomic<bool> &stop);

@@ -8,7 +8,8 @@
 #include <cmath>
 #include <vector>
 
-namespace sim {
+namespace sim
+{
 
 static const char kChannel[] = "OCTO_TRUTH";
 
@@ -28,10 +29,7 @@ struct TruthPublisher::Impl {
 TruthPublisher::TruthPublisher() : d_(new Impl) {}
 TruthPublisher::~TruthPublisher() = default;
 
-bool TruthPublisher::active() const
-{
-	return d_->lcm || d_->log;
-}
+bool TruthPublisher::active() const { return d_->lcm || d_->log; }
 
 bool TruthPublisher::open(const std::string &url, std::string &err)
 {
@@ -66,10 +64,7 @@ bool TruthPublisher::open(const std::string &url, std::string &err)
 	return true;
 }
 
-void TruthPublisher::set_every(unsigned every)
-{
-	d_->every = every ? every : 1;
-}
+void TruthPublisher::set_every(unsigned every) { d_->every = every ? every : 1; }
 
 void TruthPublisher::publish(const Model &m, uint64_t frame)
 {

@@ -10,10 +10,12 @@
 
 #include "model.hpp"
 
-namespace sim {
+namespace sim
+{
 
-class TruthPublisher {
-public:
+class TruthPublisher
+{
+      public:
 	TruthPublisher();
 	~TruthPublisher();
 	// false with err set when the URL cannot be opened
@@ -23,7 +25,7 @@ public:
 	void publish(const Model &m, uint64_t frame);
 	bool active() const;
 
-private:
+      private:
 	struct Impl;
 	std::unique_ptr<Impl> d_;
 };

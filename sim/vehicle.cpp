@@ -10,7 +10,8 @@
 
 #include "json.hpp"
 
-namespace sim {
+namespace sim
+{
 
 void VehicleParams::make_ideal()
 {
@@ -70,7 +71,8 @@ bool sensors_parse(const std::string &list, unsigned &bits, std::string &bad)
 	return true;
 }
 
-namespace {
+namespace
+{
 
 // |kf_drift_per_min| above this (20 %/min) empties a battery within minutes: a typo, not a vehicle.
 constexpr double kMaxDriftPerMin = 0.2;
@@ -110,14 +112,12 @@ double num(const json::Value &v, const std::string &key, Rule r)
 		if (!(d >= 0 && d <= 1))
 			throw out_of_range(key, d, "[0, 1]");
 		break;
-	case Rule::Any:
-		break;
+	case Rule::Any: break;
 	}
 	return d;
 }
 
-template <size_t N>
-void vec(const json::Value &v, const std::string &key, Rule r, std::array<double, N> &out)
+template <size_t N> void vec(const json::Value &v, const std::string &key, Rule r, std::array<double, N> &out)
 {
 	if (v.kind != json::Value::Kind::Array || v.arr.size() != N)
 		throw VehicleError(key, "key '" + key + "' must be an array of " + std::to_string(N) + " numbers");
@@ -134,16 +134,18 @@ void check_physics(const VehicleParams &q)
 		const double other = q.inertia[(size_t)(i + 1) % 3] + q.inertia[(size_t)(i + 2) % 3];
 		if (q.inertia[(size_t)i] > other)
 			throw VehicleError("inertia", std::string("key 'inertia' = [") + fmt(q.inertia[0]) + ", " +
-			                   fmt(q.inertia[1]) + ", " + fmt(q.inertia[2]) + "] violates the triangle inequality: " +
-			                   axis[i] + " = " + fmt(q.inertia[(size_t)i]) + " is out of range: accepted <= " +
-			                   fmt(other) + " (the sum of the other two)");
+							      fmt(q.inertia[1]) + ", " + fmt(q.inertia[2]) +
+							      "] violates the triangle inequality: " + axis[i] + " = " +
+							      fmt(q.inertia[(size_t)i]) +
+							      " is out of range: accepted <= " + fmt(other) +
+							      " (the sum of the other two)");
 	}
 	// Eight rotors at full throttle must lift the vehicle: m g / (8 kf) <= 1.
 	const double th = q.hover_throttle();
 	if (th > 1.0)
-		throw VehicleError("kf", "key 'kf' = " + fmt(q.kf) + " N gives a hover throttle m g / (8 kf) = " + fmt(th) +
-		                   " > 1 with mass " + fmt(q.mass) + " kg: accepted kf >= " + fmt(q.mass * q.g / kRotors) +
-		                   " N (or a lower 'mass')");
+		throw VehicleError("kf", "key 'kf' = " + fmt(q.kf) + " N gives a hover throttle m g / (8 kf) = " +
+						 fmt(th) + " > 1 with mass " + fmt(q.mass) + " kg: accepted kf >= " +
+						 fmt(q.mass * q.g / kRotors) + " N (or a lower 'mass')");
 }
 
 // One rotor_failure object: {"rotor": J (1..8), "at_s": T (>= 0), "scale": S ([0, 1], default 0)}.
@@ -152,7 +154,7 @@ RotorFailure rotor_failure(const json::Value &v)
 	const std::string k = "rotor_failure";
 	if (v.kind != json::Value::Kind::Object)
 		throw VehicleError(k, "key 'rotor_failure' must be an object {\"rotor\": J, \"at_s\": T, \"scale\": S} "
-		                      "or an array of them");
+				      "or an array of them");
 	RotorFailure f;
 	bool have_rotor = false, have_t = false;
 	for (const auto &kv : v.obj) {
@@ -175,7 +177,8 @@ RotorFailure rotor_failure(const json::Value &v)
 		}
 	}
 	if (!have_rotor || !have_t)
-		throw VehicleError(k, std::string("key 'rotor_failure' needs '") + (have_rotor ? "at_s" : "rotor") + "'");
+		throw VehicleError(k,
+				   std::string("key 'rotor_failure' needs '") + (have_rotor ? "at_s" : "rotor") + "'");
 	return f;
 }
 
@@ -184,7 +187,8 @@ StuckRpm stuck_rpm(const json::Value &v)
 {
 	const std::string k = "stuck_rpm";
 	if (v.kind != json::Value::Kind::Object)
-		throw VehicleError(k, "key 'stuck_rpm' must be an object {\"rotor\": J, \"at_s\": T} or an array of them");
+		throw VehicleError(k,
+				   "key 'stuck_rpm' must be an object {\"rotor\": J, \"at_s\": T} or an array of them");
 	StuckRpm f;
 	bool have_rotor = false, have_t = false;
 	for (const auto &kv : v.obj) {
@@ -213,13 +217,18 @@ StuckRpm stuck_rpm(const json::Value &v)
 void imu_spike(const json::Value &v, ImuSpikeParams &s)
 {
 	if (v.kind != json::Value::Kind::Object)
-		throw VehicleError("imu_spike", "key 'imu_spike' must be an object {\"prob\": P, \"gyro\": G, \"accel\": A}");
+		throw VehicleError("imu_spike",
+				   "key 'imu_spike' must be an object {\"prob\": P, \"gyro\": G, \"accel\": A}");
 	for (const auto &kv : v.obj) {
 		const std::string key = "imu_spike." + kv.first;
-		if (kv.first == "prob") s.prob = num(kv.second, key, Rule::Unit);
-		else if (kv.first == "gyro") s.gyro = num(kv.second, key, Rule::Positive);
-		else if (kv.first == "accel") s.accel = num(kv.second, key, Rule::Positive);
-		else throw VehicleError(key, "unknown key '" + key + "' (known: prob, gyro, accel)");
+		if (kv.first == "prob")
+			s.prob = num(kv.second, key, Rule::Unit);
+		else if (kv.first == "gyro")
+			s.gyro = num(kv.second, key, Rule::Positive);
+		else if (kv.first == "accel")
+			s.accel = num(kv.second, key, Rule::Positive);
+		else
+			throw VehicleError(key, "unknown key '" + key + "' (known: prob, gyro, accel)");
 	}
 }
 
@@ -239,33 +248,40 @@ void vehicle_from_json(const std::string &text, VehicleParams &p)
 	for (const auto &kv : root.obj) {
 		const std::string &k = kv.first;
 		const json::Value &v = kv.second;
-		if (k == "mass") q.mass = num(v, k, Rule::Positive);
-		else if (k == "g") q.g = num(v, k, Rule::NonNegative);
-		else if (k == "arm_length") q.arm_length = num(v, k, Rule::Positive);
-		else if (k == "kf") q.kf = num(v, k, Rule::Positive);
-		else if (k == "ktau") q.ktau = num(v, k, Rule::Positive);
-		else if (k == "inertia") vec(v, k, Rule::Positive, q.inertia);
-		else if (k == "motor_tau") q.motor_tau = num(v, k, Rule::NonNegative);
+		if (k == "mass")
+			q.mass = num(v, k, Rule::Positive);
+		else if (k == "g")
+			q.g = num(v, k, Rule::NonNegative);
+		else if (k == "arm_length")
+			q.arm_length = num(v, k, Rule::Positive);
+		else if (k == "kf")
+			q.kf = num(v, k, Rule::Positive);
+		else if (k == "ktau")
+			q.ktau = num(v, k, Rule::Positive);
+		else if (k == "inertia")
+			vec(v, k, Rule::Positive, q.inertia);
+		else if (k == "motor_tau")
+			q.motor_tau = num(v, k, Rule::NonNegative);
 		else if (k == "delay") {
 			q.delay = num(v, k, Rule::NonNegative);
 			if (q.delay > 10.0)
 				throw out_of_range(k, q.delay, "[0, 10] s");
-		}
-		else if (k == "thrust_curve") q.thrust_curve = num(v, k, Rule::Unit);
-		else if (k == "rotor_scale") vec(v, k, Rule::NonNegative, q.rotor_scale);
+		} else if (k == "thrust_curve")
+			q.thrust_curve = num(v, k, Rule::Unit);
+		else if (k == "rotor_scale")
+			vec(v, k, Rule::NonNegative, q.rotor_scale);
 		else if (k == "kf_drift_per_min") {
 			q.kf_drift_per_min = num(v, k, Rule::Any);
 			if (std::fabs(q.kf_drift_per_min) > kMaxDriftPerMin)
 				throw out_of_range(k, q.kf_drift_per_min,
-				                   "[-" + fmt(kMaxDriftPerMin) + ", " + fmt(kMaxDriftPerMin) +
-				                   "] (a fraction per minute: -0.02 is -2 %/min)");
-		}
-		else if (k == "origin") {
+						   "[-" + fmt(kMaxDriftPerMin) + ", " + fmt(kMaxDriftPerMin) +
+							   "] (a fraction per minute: -0.02 is -2 %/min)");
+		} else if (k == "origin") {
 			vec(v, k, Rule::Any, q.origin);
 			if (std::fabs(q.origin[0]) > 89.0 || std::fabs(q.origin[1]) > 180.0)
-				throw VehicleError(k, "key 'origin' must be [lat (|lat| <= 89), lon (|lon| <= 180), alt_m]");
-		}
-		else if (k == "origin_shift_s") {
+				throw VehicleError(
+					k, "key 'origin' must be [lat (|lat| <= 89), lon (|lon| <= 180), alt_m]");
+		} else if (k == "origin_shift_s") {
 			if (v.kind != json::Value::Kind::Array)
 				throw VehicleError(k, "key 'origin_shift_s' must be an array of plant times (s)");
 			q.origin_shift_s.clear();
@@ -276,99 +292,118 @@ void vehicle_from_json(const std::string &text, VehicleParams &p)
 				q.origin_shift_s.push_back(ts);
 			}
 			std::sort(q.origin_shift_s.begin(), q.origin_shift_s.end());
-		}
-		else if (k == "rotor_failure") {
+		} else if (k == "rotor_failure") {
 			q.rotor_failures.clear();
 			if (v.kind == json::Value::Kind::Array)
 				for (const auto &e : v.arr)
 					q.rotor_failures.push_back(rotor_failure(e));
 			else
 				q.rotor_failures.push_back(rotor_failure(v));
-		}
-		else if (k == "stuck_rpm") {
+		} else if (k == "stuck_rpm") {
 			q.stuck_rpm.clear();
 			if (v.kind == json::Value::Kind::Array)
 				for (const auto &e : v.arr)
 					q.stuck_rpm.push_back(stuck_rpm(e));
 			else
 				q.stuck_rpm.push_back(stuck_rpm(v));
-		}
-		else if (k == "imu_spike") imu_spike(v, q.imu_spike);
+		} else if (k == "imu_spike")
+			imu_spike(v, q.imu_spike);
 		else if (k == "noise") {
 			if (v.kind != json::Value::Kind::Object)
 				throw VehicleError(k, "key 'noise' must be an object");
 			for (const auto &nk : v.obj) {
 				std::string key = "noise." + nk.first;
 				double d = num(nk.second, key, Rule::NonNegative);
-				if (nk.first == "thrust") q.noise.thrust = d;
-				else if (nk.first == "torque") q.noise.torque = d;
-				else if (nk.first == "gyro") q.noise.gyro = d;
-				else if (nk.first == "attitude_deg") q.noise.attitude_deg = d;
-				else if (nk.first == "position") q.noise.position = d;
-				else if (nk.first == "accel") q.noise.accel = d;
-				else if (nk.first == "rpm") q.noise.rpm = d;
-				else if (nk.first == "current") q.noise.current = d;
-				else throw VehicleError(key, "unknown key '" + key + "'");
+				if (nk.first == "thrust")
+					q.noise.thrust = d;
+				else if (nk.first == "torque")
+					q.noise.torque = d;
+				else if (nk.first == "gyro")
+					q.noise.gyro = d;
+				else if (nk.first == "attitude_deg")
+					q.noise.attitude_deg = d;
+				else if (nk.first == "position")
+					q.noise.position = d;
+				else if (nk.first == "accel")
+					q.noise.accel = d;
+				else if (nk.first == "rpm")
+					q.noise.rpm = d;
+				else if (nk.first == "current")
+					q.noise.current = d;
+				else
+					throw VehicleError(key, "unknown key '" + key + "'");
 			}
-		}
-		else if (k == "imu_bias") {
+		} else if (k == "imu_bias") {
 			if (v.kind != json::Value::Kind::Object)
 				throw VehicleError(k, "key 'imu_bias' must be an object");
 			for (const auto &nk : v.obj) {
 				const std::string key = "imu_bias." + nk.first;
 				const double d = num(nk.second, key, Rule::NonNegative);
-				if (nk.first == "accel") q.imu_bias.accel = d;
-				else if (nk.first == "gyro") q.imu_bias.gyro = d;
-				else if (nk.first == "accel_walk") q.imu_bias.accel_walk = d;
-				else if (nk.first == "gyro_walk") q.imu_bias.gyro_walk = d;
-				else throw VehicleError(key, "unknown key '" + key + "'");
+				if (nk.first == "accel")
+					q.imu_bias.accel = d;
+				else if (nk.first == "gyro")
+					q.imu_bias.gyro = d;
+				else if (nk.first == "accel_walk")
+					q.imu_bias.accel_walk = d;
+				else if (nk.first == "gyro_walk")
+					q.imu_bias.gyro_walk = d;
+				else
+					throw VehicleError(key, "unknown key '" + key + "'");
 			}
-		}
-		else if (k == "imu_scale") {
+		} else if (k == "imu_scale") {
 			q.imu_scale = num(v, k, Rule::NonNegative);
 			if (q.imu_scale > 0.2)
 				throw out_of_range(k, q.imu_scale, "[0, 0.2] (an sd as a fraction: 0.005 is 0.5 %)");
-		}
-		else if (k == "vibration") {
+		} else if (k == "vibration") {
 			if (v.kind != json::Value::Kind::Object)
 				throw VehicleError(k, "key 'vibration' must be an object");
 			for (const auto &nk : v.obj) {
 				const std::string key = "vibration." + nk.first;
 				if (nk.first == "harmonics") {
 					const json::Value &h = nk.second;
-					if (h.kind != json::Value::Kind::Array || h.arr.empty() || h.arr.size() > q.vibration.harmonics.size())
-						throw VehicleError(key, "key '" + key + "' must be an array of 1 to " +
-						                   std::to_string(q.vibration.harmonics.size()) + " numbers");
+					if (h.kind != json::Value::Kind::Array || h.arr.empty() ||
+					    h.arr.size() > q.vibration.harmonics.size())
+						throw VehicleError(
+							key, "key '" + key + "' must be an array of 1 to " +
+								     std::to_string(q.vibration.harmonics.size()) +
+								     " numbers");
 					q.vibration.harmonics.fill(0.0);
 					for (size_t i = 0; i < h.arr.size(); i++)
 						q.vibration.harmonics[i] = num(h.arr[i], key, Rule::NonNegative);
 					continue;
 				}
-				if (nk.first == "accel") q.vibration.accel = num(nk.second, key, Rule::NonNegative);
-				else if (nk.first == "gyro") q.vibration.gyro = num(nk.second, key, Rule::NonNegative);
-				else if (nk.first == "cutoff_hz") q.vibration.cutoff_hz = num(nk.second, key, Rule::Positive);
+				if (nk.first == "accel")
+					q.vibration.accel = num(nk.second, key, Rule::NonNegative);
+				else if (nk.first == "gyro")
+					q.vibration.gyro = num(nk.second, key, Rule::NonNegative);
+				else if (nk.first == "cutoff_hz")
+					q.vibration.cutoff_hz = num(nk.second, key, Rule::Positive);
 				else if (nk.first == "sample_hz") {
 					q.vibration.sample_hz = num(nk.second, key, Rule::Positive);
 					if (q.vibration.sample_hz < 100.0 || q.vibration.sample_hz > 32000.0)
 						throw out_of_range(key, q.vibration.sample_hz, "[100, 32000] Hz");
-				}
-				else throw VehicleError(key, "unknown key '" + key + "'");
+				} else
+					throw VehicleError(key, "unknown key '" + key + "'");
 			}
 			if (!(q.vibration.cutoff_hz < 0.45 * q.vibration.sample_hz))
 				throw out_of_range("vibration.cutoff_hz", q.vibration.cutoff_hz,
-				                   "< 0.45 vibration.sample_hz = " + fmt(0.45 * q.vibration.sample_hz) + " Hz");
-		}
-		else if (k == "rpm_max") q.rpm_max = num(v, k, Rule::Positive);
+						   "< 0.45 vibration.sample_hz = " + fmt(0.45 * q.vibration.sample_hz) +
+							   " Hz");
+		} else if (k == "rpm_max")
+			q.rpm_max = num(v, k, Rule::Positive);
 		else if (k == "esc_pole_pairs") {
 			q.esc_pole_pairs = num(v, k, Rule::Positive);
 			if (q.esc_pole_pairs != std::floor(q.esc_pole_pairs) || q.esc_pole_pairs > 64)
 				throw out_of_range(k, q.esc_pole_pairs, "an integer in [1, 64]");
-		}
-		else if (k == "esc_kt") q.esc_kt = num(v, k, Rule::Positive);
-		else if (k == "esc_current_offset") q.esc_current_offset = num(v, k, Rule::Any);
+		} else if (k == "esc_kt")
+			q.esc_kt = num(v, k, Rule::Positive);
+		else if (k == "esc_current_offset")
+			q.esc_current_offset = num(v, k, Rule::Any);
 		else if (k == "sensors") {
 			if (v.kind != json::Value::Kind::Array || v.arr.empty())
-				throw VehicleError(k, "key 'sensors' must be a non-empty list of \"imu\", \"rpm\", \"torque\", \"thrust\"");
+				throw VehicleError(
+					k,
+					"key 'sensors' must be a non-empty list of \"imu\", \"rpm\", \"torque\", \"thrust\"");
 			std::string list;
 			for (const auto &e : v.arr) {
 				if (e.kind != json::Value::Kind::String)
@@ -377,9 +412,10 @@ void vehicle_from_json(const std::string &text, VehicleParams &p)
 			}
 			std::string bad;
 			if (!sensors_parse(list, q.sensors, bad))
-				throw VehicleError(k, "key 'sensors': unknown sensor '" + bad + "' (known: imu, rpm, torque, thrust)");
-		}
-		else throw VehicleError(k, "unknown key '" + k + "'");
+				throw VehicleError(k, "key 'sensors': unknown sensor '" + bad +
+							      "' (known: imu, rpm, torque, thrust)");
+		} else
+			throw VehicleError(k, "unknown key '" + k + "'");
 	}
 	check_physics(q);
 	p = q;

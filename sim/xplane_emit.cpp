@@ -6,9 +6,11 @@
 
 #include "rng.hpp"
 
-namespace sim {
+namespace sim
+{
 
-namespace {
+namespace
+{
 
 constexpr double kDeg = 180.0 / M_PI;
 constexpr double kLbPerN = 1.0 / 4.4482216152605;
@@ -17,7 +19,7 @@ constexpr double kFtPerM = 1.0 / 0.3048;
 constexpr double kKnPerMps = 3600.0 / 1852.0;
 constexpr double kMphPerMps = 3600.0 / 1609.344;
 constexpr double kHpPerW = 1.0 / 745.69987158227;
-constexpr double kEarthR = 6371008.8;   // m, mean radius (flat-earth offsets)
+constexpr double kEarthR = 6371008.8; // m, mean radius (flat-earth offsets)
 constexpr double kSoundMps = 340.29;
 
 float f32(double v) { return static_cast<float>(v); }
@@ -64,8 +66,7 @@ void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint6
 	xp_measure(m, thro_cmd, seed, frame, s, f);
 }
 
-void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, const Sensors &s,
-                XpFrame &f)
+void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, const Sensors &s, XpFrame &f)
 {
 	const VehicleParams &p = m.params();
 	const BodyState &x = m.state();
@@ -131,16 +132,16 @@ void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint6
 	for (int i = 0; i < 3; i++)
 		sf_b[i] += p.noise.accel * imu.gauss();
 	const double g = p.g > 0 ? p.g : 9.80665;
-	f.g_nrml = sf_b.z() / g;   // up along the body: +1 when level at rest
-	f.g_axil = sf_b.x() / g;   // forward positive
-	f.g_side = -sf_b.y() / g;  // right positive
+	f.g_nrml = sf_b.z() / g;  // up along the body: +1 when level at rest
+	f.g_axil = sf_b.x() / g;  // forward positive
+	f.g_side = -sf_b.y() / g; // right positive
 
 	// an IMU spike: one axis of one sensor replaced by an outlier (drawn every frame, so the
 	// draws of one frame do not depend on the probability)
 	Rng spike(seed, Stream::ImuSpike, frame);
 	const double u_spike = spike.uniform(), u_which = spike.uniform(), u_sign = spike.uniform();
 	if (u_spike < p.imu_spike.prob) {
-		const int which = std::min(5, static_cast<int>(u_which * 6));   // gyro x y z, accel x y z
+		const int which = std::min(5, static_cast<int>(u_which * 6)); // gyro x y z, accel x y z
 		const double sign = u_sign < 0.5 ? -1.0 : 1.0;
 		double *gyro_frd[3] = {&f.P, &f.Q, &f.R};
 		double *accel_g[3] = {&f.g_axil, &f.g_side, &f.g_nrml};
@@ -161,7 +162,8 @@ void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint6
 		f.thrust_n[j] = o.thrust[j] + st * rng.gauss();
 		f.torque_nm[j] = std::fabs(o.torque[j]) + sq * rng.gauss();
 		f.torque_abs_nm[j] = std::fabs(o.torque[j]);
-		f.rpm_true[j] = rotor_speed(p, x.s[j], m.t()) * std::sqrt(p.failure_factor(j, m.clock())) * (60.0 / (2 * M_PI));
+		f.rpm_true[j] =
+			rotor_speed(p, x.s[j], m.t()) * std::sqrt(p.failure_factor(j, m.clock())) * (60.0 / (2 * M_PI));
 		f.rpm[j] = dshot_rpm(f.rpm_true[j] + p.noise.rpm * esc.gauss(), p.esc_pole_pairs);
 		f.torque_nm[j] += p.esc_kt * (p.esc_current_offset + p.noise.current * esc.gauss());
 	}
@@ -179,10 +181,7 @@ void xp_frame_quat(const XpFrame &f, double q[4])
 	q[3] = cr * cp * sy - sr * sp * cy;
 }
 
-double xp_frame_rpm(const XpFrame &f, int j)
-{
-	return f.rpm_true[static_cast<size_t>(j)];
-}
+double xp_frame_rpm(const XpFrame &f, int j) { return f.rpm_true[static_cast<size_t>(j)]; }
 
 double xp_frame_power_w(const XpFrame &f, int j)
 {
@@ -222,11 +221,10 @@ bool xp_dataref_served(const std::string &path, unsigned sensors)
 	int idx = -1;
 	if (!xp::split_index(path, base, idx))
 		return true;
-	static const char *const imu[] = {"sim/flightmodel/position/Prad", "sim/flightmodel/position/Qrad",
-	                                  "sim/flightmodel/position/Rrad", "sim/flightmodel/position/P",
-	                                  "sim/flightmodel/position/Q",    "sim/flightmodel/position/R",
-	                                  "sim/flightmodel/forces/g_nrml", "sim/flightmodel/forces/g_axil",
-	                                  "sim/flightmodel/forces/g_side"};
+	static const char *const imu[] = {
+		"sim/flightmodel/position/Prad", "sim/flightmodel/position/Qrad", "sim/flightmodel/position/Rrad",
+		"sim/flightmodel/position/P",    "sim/flightmodel/position/Q",    "sim/flightmodel/position/R",
+		"sim/flightmodel/forces/g_nrml", "sim/flightmodel/forces/g_axil", "sim/flightmodel/forces/g_side"};
 	for (const char *n : imu)
 		if (base == n)
 			return (sensors & kSensorImu) != 0;
@@ -324,14 +322,13 @@ xp::DataRow xp_row(const XpFrame &f, int row, int version)
 			r.col[j] = f32(val);
 		}
 		break;
-	default:
-		break;
+	default: break;
 	}
 	return r;
 }
 
 bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool override_on,
-                const std::array<float, 16> &thro_use, const std::array<float, 16> &thro, float &out)
+		const std::array<float, 16> &thro_use, const std::array<float, 16> &thro, float &out)
 {
 	std::string base;
 	int idx = -1;
@@ -360,10 +357,22 @@ bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool ove
 		const std::string n = base.substr(eng.size());
 		if (i >= 16)
 			return false;
-		if (n == "ENGN_thro_use") { out = thro_use[static_cast<size_t>(i)]; return true; }
-		if (n == "ENGN_thro") { out = thro[static_cast<size_t>(i)]; return true; }
-		if (n == "POINT_thrust") { out = i < kRotors ? f32(f.thrust_n[static_cast<size_t>(i)]) : 0.0f; return true; }
-		if (n == "ENGN_TRQ") { out = i < kRotors ? f32(f.torque_nm[static_cast<size_t>(i)]) : 0.0f; return true; }
+		if (n == "ENGN_thro_use") {
+			out = thro_use[static_cast<size_t>(i)];
+			return true;
+		}
+		if (n == "ENGN_thro") {
+			out = thro[static_cast<size_t>(i)];
+			return true;
+		}
+		if (n == "POINT_thrust") {
+			out = i < kRotors ? f32(f.thrust_n[static_cast<size_t>(i)]) : 0.0f;
+			return true;
+		}
+		if (n == "ENGN_TRQ") {
+			out = i < kRotors ? f32(f.torque_nm[static_cast<size_t>(i)]) : 0.0f;
+			return true;
+		}
 		if (n == "POINT_tacrad" || n == "ENGN_tacrad") {
 			out = i < kRotors ? f32(f.rpm[static_cast<size_t>(i)] * (2 * M_PI / 60.0)) : 0.0f;
 			return true;
@@ -371,41 +380,69 @@ bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool ove
 		return false;
 	}
 	static const std::string forces = "sim/flightmodel/forces/";
-	if (base == forces + "g_nrml") { out = f32(f.g_nrml); return true; }
-	if (base == forces + "g_axil") { out = f32(f.g_axil); return true; }
-	if (base == forces + "g_side") { out = f32(f.g_side); return true; }
+	if (base == forces + "g_nrml") {
+		out = f32(f.g_nrml);
+		return true;
+	}
+	if (base == forces + "g_axil") {
+		out = f32(f.g_axil);
+		return true;
+	}
+	if (base == forces + "g_side") {
+		out = f32(f.g_side);
+		return true;
+	}
 	if (base.compare(0, pos.size(), pos) != 0)
 		return false;
 	const std::string n = base.substr(pos.size());
 	const double rd = 180.0 / M_PI;
 	double v;
-	if (n == "Prad") v = f.P;
-	else if (n == "Qrad") v = f.Q;
-	else if (n == "Rrad") v = f.R;
-	else if (n == "P") v = f.P * rd;
-	else if (n == "Q") v = f.Q * rd;
-	else if (n == "R") v = f.R * rd;
-	else if (n == "theta") v = f.pitch;
-	else if (n == "phi") v = f.roll;
-	else if (n == "psi") v = f.heading;
+	if (n == "Prad")
+		v = f.P;
+	else if (n == "Qrad")
+		v = f.Q;
+	else if (n == "Rrad")
+		v = f.R;
+	else if (n == "P")
+		v = f.P * rd;
+	else if (n == "Q")
+		v = f.Q * rd;
+	else if (n == "R")
+		v = f.R * rd;
+	else if (n == "theta")
+		v = f.pitch;
+	else if (n == "phi")
+		v = f.roll;
+	else if (n == "psi")
+		v = f.heading;
 	else if (n == "q") {
 		if (i > 3)
 			return false;
 		double q[4];
 		xp_frame_quat(f, q);
 		v = q[i];
-	}
-	else if (n == "local_x") v = f.gl_x;
-	else if (n == "local_y") v = f.gl_y;
-	else if (n == "local_z") v = f.gl_z;
-	else if (n == "local_vx") v = f.ve;
-	else if (n == "local_vy") v = -f.vd;
-	else if (n == "local_vz") v = -f.vn;
-	else if (n == "latitude") v = f.lat;
-	else if (n == "longitude") v = f.lon;
-	else if (n == "elevation") v = f.alt_msl_m;
-	else if (n == "y_agl") v = f.agl_m;
-	else return false;
+	} else if (n == "local_x")
+		v = f.gl_x;
+	else if (n == "local_y")
+		v = f.gl_y;
+	else if (n == "local_z")
+		v = f.gl_z;
+	else if (n == "local_vx")
+		v = f.ve;
+	else if (n == "local_vy")
+		v = -f.vd;
+	else if (n == "local_vz")
+		v = -f.vn;
+	else if (n == "latitude")
+		v = f.lat;
+	else if (n == "longitude")
+		v = f.lon;
+	else if (n == "elevation")
+		v = f.alt_msl_m;
+	else if (n == "y_agl")
+		v = f.agl_m;
+	else
+		return false;
 	out = f32(v);
 	return true;
 }

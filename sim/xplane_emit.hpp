@@ -20,27 +20,28 @@
 #include "sensors.hpp"
 #include "xplane_proto.hpp"
 
-namespace sim {
+namespace sim
+{
 
 // One measured frame in X-Plane's frames and SI units (noise included).
 struct XpFrame {
-	double t = 0;                      // the plant's clock, s (Model::clock)
-	double P = 0, Q = 0, R = 0;        // body rates about forward-right-down, rad/s
-	double roll = 0, pitch = 0, heading = 0; // deg (heading in [0, 360))
+	double t = 0;                                    // the plant's clock, s (Model::clock)
+	double P = 0, Q = 0, R = 0;                      // body rates about forward-right-down, rad/s
+	double roll = 0, pitch = 0, heading = 0;         // deg (heading in [0, 360))
 	double roll_rad = 0, pitch_rad = 0, yaw_rad = 0; // the same angles in radians (yaw not wrapped)
-	double north = 0, east = 0, up = 0;      // m from the origin
-	double vn = 0, ve = 0, vd = 0;     // m/s (true, no noise)
+	double north = 0, east = 0, up = 0;              // m from the origin
+	double vn = 0, ve = 0, vd = 0;                   // m/s (true, no noise)
 	double lat = 0, lon = 0, alt_msl_m = 0, agl_m = 0;
-	double gl_x = 0, gl_y = 0, gl_z = 0;     // OpenGL local position (m), origin shifts included
+	double gl_x = 0, gl_y = 0, gl_z = 0;       // OpenGL local position (m), origin shifts included
 	double g_nrml = 1, g_axil = 0, g_side = 0; // IMU load factors (+1 level, at rest)
-	RotorArray thro_cmd{};             // throttle driving each engine
-	RotorArray thro_act{};             // actuator output s_j
-	RotorArray thrust_n{};             // measured thrust, N
-	RotorArray torque_nm{};            // measured engine torque (magnitude, ESC current * Kt), N m
-	RotorArray rpm{};                  // rotor speed as the ESC reports it (DShot), rpm
-	RotorArray rpm_true{};             // true rotor speed, rpm
-	RotorArray torque_abs_nm{};        // true engine torque (magnitude), N m
-	double crashed = 0;                // 1 after a crash (sim/flightmodel2/misc/has_crashed)
+	RotorArray thro_cmd{};                     // throttle driving each engine
+	RotorArray thro_act{};                     // actuator output s_j
+	RotorArray thrust_n{};                     // measured thrust, N
+	RotorArray torque_nm{};                    // measured engine torque (magnitude, ESC current * Kt), N m
+	RotorArray rpm{};                          // rotor speed as the ESC reports it (DShot), rpm
+	RotorArray rpm_true{};                     // true rotor speed, rpm
+	RotorArray torque_abs_nm{};                // true engine torque (magnitude), N m
+	double crashed = 0;                        // 1 after a crash (sim/flightmodel2/misc/has_crashed)
 };
 
 // The OpenGL local frame's displacement at plant time t (m, OpenGL axes): X-Plane moves
@@ -63,7 +64,7 @@ double xp_frame_power_w(const XpFrame &f, int j);
 // order (independent of the selected rows), the IMU's and ESCs' from their own streams.
 // Every field of f is written (the plant's per-frame form: no temporary).
 void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, const Sensors &s,
-                XpFrame &f);
+		XpFrame &f);
 // The same with the sensors as they start a run (no walk, no vibration yet).
 XpFrame xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame);
 void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint64_t frame, XpFrame &f);
@@ -82,6 +83,6 @@ xp::DataRow xp_row(const XpFrame &f, int row, int version);
 
 // Value of a dataref for an RREF reply; false for an unknown path.
 bool xp_dataref(const XpFrame &f, const std::string &path, int version, bool override_on,
-                const std::array<float, 16> &thro_use, const std::array<float, 16> &thro, float &out);
+		const std::array<float, 16> &thro_use, const std::array<float, 16> &thro, float &out);
 
 } // namespace sim

@@ -10,7 +10,8 @@
 
 #include "xplane_proto.hpp"
 
-namespace sim {
+namespace sim
+{
 
 void XpInput::handle(const uint8_t *p, size_t len, const sockaddr_in &from)
 {
@@ -110,10 +111,10 @@ void XpInput::dref(const uint8_t *p, size_t len)
 	// the bracket: such a field is taken by its bytes (the full decoding below gives the
 	// same path, base and index for it); every other field is decoded in full.
 	static constexpr char kThroUse[] = "sim/flightmodel/engine/ENGN_thro_use[";
-	constexpr size_t kLb = sizeof kThroUse - 2;   // where '[' is
+	constexpr size_t kLb = sizeof kThroUse - 2; // where '[' is
 	const uint8_t *field = p + 9;
 	const bool thro_use_digit = std::memcmp(field, kThroUse, kLb + 1) == 0 && field[kLb + 1] >= '0' &&
-	                            field[kLb + 1] <= '9' && field[kLb + 2] == ']' && field[kLb + 3] == 0;
+				    field[kLb + 1] <= '9' && field[kLb + 2] == ']' && field[kLb + 3] == 0;
 	std::string_view path;
 	if (!thro_use_digit && !xp::field_path(field, xp::kDrefPath, path)) {
 		c_.inc(Counters::RxUnterminated);

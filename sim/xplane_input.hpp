@@ -15,18 +15,20 @@
 #include "counters.hpp"
 #include "vehicle.hpp"
 
-namespace sim {
+namespace sim
+{
 
 struct RrefSub {
-	sockaddr_in to;       // replies go to the requester's source address
-	int32_t index;        // client's index
+	sockaddr_in to; // replies go to the requester's source address
+	int32_t index;  // client's index
 	std::string path;
-	int32_t freq;         // per second
-	double phase;         // accumulated ticks (a reply when >= 1)
+	int32_t freq; // per second
+	double phase; // accumulated ticks (a reply when >= 1)
 };
 
-class XpInput {
-public:
+class XpInput
+{
+      public:
 	static constexpr int kMaxRow = 255;
 	static constexpr size_t kMaxSubs = 4096;
 
@@ -39,15 +41,15 @@ public:
 	std::array<double, kRotors> effective_throttle() const;
 
 	std::array<bool, kMaxRow + 1> selected;
-	std::array<float, 16> thro{};      // sim/flightmodel/engine/ENGN_thro
-	std::array<float, 16> thro_use{};  // sim/flightmodel/engine/ENGN_thro_use
+	std::array<float, 16> thro{};     // sim/flightmodel/engine/ENGN_thro
+	std::array<float, 16> thro_use{}; // sim/flightmodel/engine/ENGN_thro_use
 	bool override_on = false;
-	uint32_t cmd_mask = 0;             // engines 0..7 commanded since the last clear
+	uint32_t cmd_mask = 0; // engines 0..7 commanded since the last clear
 	bool target_enabled = true;
 	sockaddr_in target{};
 	std::vector<RrefSub> subs;
 
-private:
+      private:
 	void dsel(const uint8_t *p, size_t len, bool on);
 	void data(const uint8_t *p, size_t len);
 	void dref(const uint8_t *p, size_t len);

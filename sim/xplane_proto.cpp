@@ -3,7 +3,8 @@
 
 #include <cstring>
 
-namespace xp {
+namespace xp
+{
 
 void store_i32(uint8_t *p, int32_t v)
 {
@@ -40,7 +41,7 @@ void put_f32(Bytes &b, float v)
 int32_t get_i32(const uint8_t *p)
 {
 	uint32_t u = static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) |
-	             (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
+		     (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
 	int32_t v;
 	std::memcpy(&v, &u, 4);
 	return v;
@@ -49,7 +50,7 @@ int32_t get_i32(const uint8_t *p)
 float get_f32(const uint8_t *p)
 {
 	uint32_t u = static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) |
-	             (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
+		     (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
 	float v;
 	std::memcpy(&v, &u, 4);
 	return v;
@@ -103,13 +104,20 @@ Msg message_type(const uint8_t *p, size_t len)
 {
 	if (len < kHeader)
 		return Msg::Unknown;
-	if (!std::memcmp(p, "DATA", 4)) return Msg::Data;
-	if (!std::memcmp(p, "DREF", 4)) return Msg::Dref;
-	if (!std::memcmp(p, "RREF", 4)) return Msg::Rref;
-	if (!std::memcmp(p, "DSEL", 4)) return Msg::Dsel;
-	if (!std::memcmp(p, "USEL", 4)) return Msg::Usel;
-	if (!std::memcmp(p, "CMND", 4)) return Msg::Cmnd;
-	if (!std::memcmp(p, "ISE4", 4)) return Msg::Ise4;
+	if (!std::memcmp(p, "DATA", 4))
+		return Msg::Data;
+	if (!std::memcmp(p, "DREF", 4))
+		return Msg::Dref;
+	if (!std::memcmp(p, "RREF", 4))
+		return Msg::Rref;
+	if (!std::memcmp(p, "DSEL", 4))
+		return Msg::Dsel;
+	if (!std::memcmp(p, "USEL", 4))
+		return Msg::Usel;
+	if (!std::memcmp(p, "CMND", 4))
+		return Msg::Cmnd;
+	if (!std::memcmp(p, "ISE4", 4))
+		return Msg::Ise4;
 	return Msg::Unknown;
 }
 
@@ -139,7 +147,7 @@ bool field_path(const uint8_t *field, size_t n, std::string_view &out)
 		const uint64_t zero = (w - ones) & ~w & highs;
 		const uint64_t bad = (((w - ones * 0x21) & ~w) | (w + ones) | w) & highs;
 		if (zero) {
-			const unsigned b = static_cast<unsigned>(__builtin_ctzll(zero)) / 8;   // the NUL's byte
+			const unsigned b = static_cast<unsigned>(__builtin_ctzll(zero)) / 8; // the NUL's byte
 			if (bad & ((1ull << (8 * b)) - 1))
 				return false;
 			len = k + b;

@@ -10,19 +10,20 @@
 #include <utility>
 #include <vector>
 
-namespace xp {
+namespace xp
+{
 
-constexpr float kNoData = -999.0f;        // bytes 00 c0 79 c4
-constexpr size_t kHeader = 5;             // 4 letters + 1 byte
-constexpr size_t kDataRecord = 36;        // int32 row + 8 float32
-constexpr size_t kDrefSize = 509;         // '<4sBf500s'
+constexpr float kNoData = -999.0f; // bytes 00 c0 79 c4
+constexpr size_t kHeader = 5;      // 4 letters + 1 byte
+constexpr size_t kDataRecord = 36; // int32 row + 8 float32
+constexpr size_t kDrefSize = 509;  // '<4sBf500s'
 constexpr size_t kDrefPath = 500;
-constexpr size_t kRrefReqSize = 413;      // '<4sBii400s'
+constexpr size_t kRrefReqSize = 413; // '<4sBii400s'
 constexpr size_t kRrefPath = 400;
-constexpr size_t kIse4Size = 37;          // '<4sxi16s8si'
+constexpr size_t kIse4Size = 37; // '<4sxi16s8si'
 constexpr int kRrefMaxRecords = 183;
-constexpr uint8_t kDataOutByte4 = '*';    // X-Plane 11 and 12
-constexpr uint8_t kRrefOutByte4 = ',';    // X-Plane 11 and 12
+constexpr uint8_t kDataOutByte4 = '*'; // X-Plane 11 and 12
+constexpr uint8_t kRrefOutByte4 = ','; // X-Plane 11 and 12
 
 using Bytes = std::vector<uint8_t>;
 
@@ -45,7 +46,7 @@ Bytes encode_data(const std::vector<DataRow> &rows, uint8_t byte4 = kDataOutByte
 void encode_data(const DataRow *rows, size_t n, Bytes &out, uint8_t byte4 = kDataOutByte4);
 // RREF replies: "RREF" + ',' + (index, value) records, at most 183 per datagram.
 std::vector<Bytes> encode_rref_replies(const std::vector<std::pair<int32_t, float>> &recs,
-                                       uint8_t byte4 = kRrefOutByte4);
+				       uint8_t byte4 = kRrefOutByte4);
 
 enum class Msg { Data, Dref, Rref, Dsel, Usel, Cmnd, Ise4, Unknown };
 // Matches bytes 0-3 only (byte 4 is skipped whatever it holds). len >= 5 required.

@@ -1,13 +1,13 @@
-# tests/lint.mk: formatting checks. `make lint-c` runs clang-format (pinned in requirements.txt,
-# style in .clang-format) in check mode over LINT_C_FILES: a file listed here is kept formatted;
-# a file joins the list when it is written or rewritten, not by reformatting the tree at once.
+# tests/lint.mk: formatting checks. `make lint` runs both: `make lint-c` runs clang-format
+# (pinned in requirements.txt, style in .clang-format) in check mode over every C and C++ source
+# of firmware/, sim/ and tests/; `make lint-py` (host_tools/host_tools.mk) runs ruff.
 
 CLANG_FORMAT ?= $(VENV)/bin/clang-format
-LINT_C_FILES := firmware/hal/host/host_report.h \
-                firmware/hal/sil/cmdline.c \
-                firmware/hal/sil/script.c \
-                firmware/hal/sil/script.h
+LINT_C_FILES := $(shell git ls-files 'firmware/*.c' 'firmware/*.h' 'sim/*.cpp' 'sim/*.hpp' 'sim/*.h' \
+                  'tests/*.c' 'tests/*.h' 'tests/*.cpp' 2>/dev/null)
 
-.PHONY: lint-c
+.PHONY: lint lint-c
+lint: lint-c lint-py
+
 lint-c: $(VENV_STAMP)
 	$(CLANG_FORMAT) --dry-run --Werror $(LINT_C_FILES)

@@ -8,8 +8,8 @@
 #include <string.h>
 
 #define FIRST_DT_S (1.0f / 90.0f)
-#define MAX_DT_S 0.2f              /* longer gaps are integrated as 200 ms */
-#define PERIOD_FRAMES 90u          /* frames over which the frame period is measured */
+#define MAX_DT_S 0.2f     /* longer gaps are integrated as 200 ms */
+#define PERIOD_FRAMES 90u /* frames over which the frame period is measured */
 #define HOVER_Z_TOL_M 0.3f
 #define HOVER_TILT_DEG 5.0f
 
@@ -23,14 +23,13 @@ const char *app_mode_name(enum app_mode m)
 
 bool app_flying(const struct app *a)
 {
-	return a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_EXPERIMENT ||
-	       a->mode == APP_LAND;
+	return a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_EXPERIMENT || a->mode == APP_LAND;
 }
 
 static struct quat frame_q(const struct hal_sensor_frame *f)
 {
-	struct quat q = {sc_from_float(f->q_ib[0]), sc_from_float(f->q_ib[1]),
-			 sc_from_float(f->q_ib[2]), sc_from_float(f->q_ib[3])};
+	struct quat q = {sc_from_float(f->q_ib[0]), sc_from_float(f->q_ib[1]), sc_from_float(f->q_ib[2]),
+			 sc_from_float(f->q_ib[3])};
 	return quat_normalize(q);
 }
 
@@ -40,10 +39,7 @@ static float tilt_deg(const struct hal_sensor_frame *f)
 	return acosf(clampf(c, -1.0f, 1.0f)) / DEG_F;
 }
 
-static scalar_t frame_yaw(const struct hal_sensor_frame *f)
-{
-	return quat_yaw(frame_q(f));
-}
+static scalar_t frame_yaw(const struct hal_sensor_frame *f) { return quat_yaw(frame_q(f)); }
 
 void app_set_thr_all(struct app *a, float t)
 {
@@ -178,7 +174,7 @@ static void set_veh_kf(struct app *a, float kf, const char *why)
 static void env_publish(struct app *a)
 {
 	struct env_hover_pub hp;
-	if (env_hover_publish(&a->env_hover, &a->p, &hp)) {   /* a HOLD entry */
+	if (env_hover_publish(&a->env_hover, &a->p, &hp)) { /* a HOLD entry */
 		set_param(a, PX_HOV_THR, hp.u, true);
 		set_param(a, PX_HOV_THR_SD, hp.sd, true);
 		set_param(a, PX_HOV_KF, hp.kf, true);
@@ -227,7 +223,7 @@ static void env_on_mode(struct app *a)
 		env_hover_init(&a->env_hover, &a->p);
 	}
 	if (a->mode == APP_HOLD)
-		env_hover_on_hold(&a->env_hover);   /* published between frames */
+		env_hover_on_hold(&a->env_hover); /* published between frames */
 }
 
 /* Before experiment `id`: VEH_KF from the hover throttle (NAV_KF_SEED, env_hover.h). */
@@ -247,13 +243,13 @@ void app_phase_timeout(struct app *a, const struct env_limits_req *r)
 	if (r->more[0])
 		app_status(a, APP_SEV_ERROR, "%s", r->more);
 	if (r->cmd && r->origin != APP_ORIGIN_NONE) {
-		struct app_event ev = {.kind = APP_EV_CMD_DONE, .cmd = r->cmd, .result = APP_FAILED,
-				       .origin = r->origin};
+		struct app_event ev = {
+			.kind = APP_EV_CMD_DONE, .cmd = r->cmd, .result = APP_FAILED, .origin = r->origin};
 		outbox_post(&a->outbox, &ev);
 	}
-	if (r->land) {   /* the take-off or its hold entry ran out: land */
+	if (r->land) { /* the take-off or its hold entry ran out: land */
 		char w[8];
-		app_cmd_land(a, APP_ORIGIN_NONE, w, sizeof w);   /* the take-off's origin has its answer */
+		app_cmd_land(a, APP_ORIGIN_NONE, w, sizeof w); /* the take-off's origin has its answer */
 	}
 }
 
@@ -269,8 +265,11 @@ void app_set_mode(struct app *a, enum app_mode m)
 		/* the final answer to the experiment command: ACCEPTED when it
 		 * finished, FAILED when it was aborted (the experiment sets final_result) */
 		enum app_result r = a->exp.final_result == APP_ACCEPTED ? APP_ACCEPTED : APP_FAILED;
-		struct app_event e = {.kind = APP_EV_CMD_DONE, .cmd = APP_CMD_EXPERIMENT, .result = (uint8_t)r,
-				      .progress = r == APP_ACCEPTED ? 100 : 0, .origin = a->exp_origin};
+		struct app_event e = {.kind = APP_EV_CMD_DONE,
+				      .cmd = APP_CMD_EXPERIMENT,
+				      .result = (uint8_t)r,
+				      .progress = r == APP_ACCEPTED ? 100 : 0,
+				      .origin = a->exp_origin};
 		outbox_post(&a->outbox, &e);
 		a->exp_ack_pending = false;
 	}
@@ -288,12 +287,10 @@ static void sync_params(struct app *a)
 {
 	const struct app_params *p = &a->p;
 	struct att_ctrl_params ap = att_ctrl_params_default();
-	ap.wn_rps = vec3_make(sc_from_float(p->att_wn_rp), sc_from_float(p->att_wn_rp),
-			      sc_from_float(p->att_wn_yaw));
-	ap.zeta = vec3_make(sc_from_float(p->att_zeta), sc_from_float(p->att_zeta),
-			    sc_from_float(p->att_zeta));
+	ap.wn_rps = vec3_make(sc_from_float(p->att_wn_rp), sc_from_float(p->att_wn_rp), sc_from_float(p->att_wn_yaw));
+	ap.zeta = vec3_make(sc_from_float(p->att_zeta), sc_from_float(p->att_zeta), sc_from_float(p->att_zeta));
 	ap.ki_rps = vec3_make(sc_from_float(p->att_ki), sc_from_float(p->att_ki), sc_from_float(p->att_ki));
-	att_ctrl_set_params(&a->att, &ap);   /* not att_ctrl_init: that would drop the integral */
+	att_ctrl_set_params(&a->att, &ap); /* not att_ctrl_init: that would drop the integral */
 
 	struct guid_params gp = guid_params_default();
 	gp.tko_vel_mps = sc_from_float(p->nav_tko_vel);
@@ -315,10 +312,9 @@ static void sync_params(struct app *a)
 	lp.vz_max_up_mps = sc_from_float(fmaxf(sc_to_float(lp.vz_max_up_mps), p->nav_tko_vel));
 	lp.vz_max_down_mps = sc_from_float(fmaxf(sc_to_float(lp.vz_max_down_mps), p->nav_land_vel));
 	lp.f_max_n = sc_from_float(8.0f * p->veh_kf * p->mot_thr_max);
-	alt_ctrl_set_params(&a->alt, &lp);   /* keeps the integral */
+	alt_ctrl_set_params(&a->alt, &lp); /* keeps the integral */
 
-	a->ps.inertia_kgm2 = vec3_make(sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy),
-				       sc_from_float(p->veh_izz));
+	a->ps.inertia_kgm2 = vec3_make(sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz));
 	a->ps.mass_kg = sc_from_float(p->veh_mass);
 	a->ps.thr_max = sc_from_float(p->mot_thr_max);
 
@@ -330,8 +326,8 @@ static void sync_params(struct app *a)
 	mixer_default_params(&mp);
 	for (int j = 0; j < MIXER_N_ROTORS; j++) {
 		mp.scale[j] = sc_from_float(scale[j]);
-		if (!(scale[j] > 0.0f))   /* 0: a failed rotor, left out of the allocation */
-			mp.rotor_mask &= (uint8_t)~(1u << j);
+		if (!(scale[j] > 0.0f)) /* 0: a failed rotor, left out of the allocation */
+			mp.rotor_mask &= (uint8_t) ~(1u << j);
 	}
 	mp.arm_l_m = sc_from_float(p->veh_arm_l);
 	mp.k_f_n = sc_from_float(p->veh_kf);
@@ -339,7 +335,7 @@ static void sync_params(struct app *a)
 	mp.t_min = SC(0.0);
 	mp.t_max = sc_from_float(p->mot_thr_max);
 	mp.mode = p->mix_mode >= 0.5f ? MIXER_MODE_PRIORITY : MIXER_MODE_CLIP;
-	mixer_set_params(&a->mix, &mp);   /* recomputes only when something changed */
+	mixer_set_params(&a->mix, &mp); /* recomputes only when something changed */
 
 	struct thrmap_params tp = {sc_from_float(p->veh_kf), sc_from_float(p->mot_curve), {0}};
 	for (int j = 0; j < THRMAP_ROTORS; j++)
@@ -376,7 +372,7 @@ void app_init(struct app *a, const struct hal *hal)
 		hal_reportf(a->hal, "params: %s (defaults in use)", why);
 	env_kf_init(&a->env_kf, &a->p);
 	env_hover_init(&a->env_hover, &a->p);
-	a->exp.mix = &a->mix;   /* the inertia phases take the body torque through the mixer's Gamma */
+	a->exp.mix = &a->mix; /* the inertia phases take the body torque through the mixer's Gamma */
 	rotor_guard_init(&a->rf);
 	sync_params(a);
 	a->params_dirty = false;
@@ -490,12 +486,12 @@ enum app_result app_cmd_takeoff(struct app *a, float height_m, app_origin origin
 	scalar_t pos[3];
 	frame_pos(&a->fr, pos);
 	if (!guid_takeoff(&a->guid, app_guid_mode(a->mode), sc_from_float(height_m), pos, frame_yaw(&a->fr)))
-		return APP_ACCEPTED;   /* a retry: nothing changes */
+		return APP_ACCEPTED; /* a retry: nothing changes */
 	if (a->mode == APP_IDLE)
 		app_reset_control(a);
 	app_status(a, APP_SEV_INFO, "Takeoff to %.2f m", (double)height_m);
 	env_limits_on_command(&a->env_limits, APP_CMD_TAKEOFF, origin);
-	a->mode = APP_HOLD;   /* so that set_mode reports the change even from HOLD */
+	a->mode = APP_HOLD; /* so that set_mode reports the change even from HOLD */
 	app_set_mode(a, APP_TAKEOFF);
 	return APP_ACCEPTED;
 }
@@ -506,8 +502,7 @@ enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t
 	(void)cap;
 	switch (a->mode) {
 	case APP_DISARMED:
-	case APP_LAND:
-		return APP_ACCEPTED;
+	case APP_LAND: return APP_ACCEPTED;
 	case APP_IDLE:
 		app_set_thr_all(a, 0.0f);
 		app_set_mode(a, APP_DISARMED);
@@ -541,7 +536,7 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 	}
 	if (a->mode == APP_EXPERIMENT) {
 		if (a->exp.id == id)
-			return APP_IN_PROGRESS;   /* a retry: still running */
+			return APP_IN_PROGRESS; /* a retry: still running */
 		snprintf(why, cap, "Experiment %d running", a->exp.id);
 		return APP_BUSY;
 	}
@@ -549,7 +544,7 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 		snprintf(why, cap, "Experiment %d refused: not hovering", id);
 		return APP_DENIED;
 	}
-	if (env_osc_oscillating(&a->env_osc)) {   /* its excitation would take the tilt past the limit */
+	if (env_osc_oscillating(&a->env_osc)) { /* its excitation would take the tilt past the limit */
 		snprintf(why, cap, "Experiment %d refused: attitude oscillating (%.0f deg/s rms)", id,
 			 (double)env_osc_rms_dps(&a->env_osc));
 		return APP_BUSY;
@@ -615,9 +610,9 @@ static void apply_results(struct app *a)
  * the step: docs/architecture.md, "Between frames". */
 void app_settle(struct app *a)
 {
-	env_publish(a);   /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh, a detune */
-	env_hover_torque_scale(&a->env_hover, &a->p);   /* the torque demands' gain, from the hover learned so far */
-	exp_turn(&a->exp, &a->p);   /* a phase that ended in the last step: close it, start the next */
+	env_publish(a); /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh, a detune */
+	env_hover_torque_scale(&a->env_hover, &a->p); /* the torque demands' gain, from the hover learned so far */
+	exp_turn(&a->exp, &a->p); /* a phase that ended in the last step: close it, start the next */
 	if (a->exp.n_ids > 0)
 		publish_ids(a);
 	if (a->exp.n_results > 0)
@@ -737,7 +732,7 @@ static float step_gap(struct app *a, const struct hal_sensor_frame *f, uint64_t 
 
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
-	app_settle(a);   /* normally done by app_tick already (nothing left here) */
+	app_settle(a); /* normally done by app_tick already (nothing left here) */
 	uint64_t now = hal_wall_us(a->hal);
 	a->fr = *f;
 	if (origin_correct(&a->orig, &a->fr))
@@ -758,7 +753,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 		 * frame without a newer count, a duplicate or an older one, brings none) */
 		uint64_t k = !a->have_step ? 1u : f->frame_n > a->n_prev ? f->frame_n - a->n_prev : 0u;
 		float gap = k > 0u ? step_gap(a, f, k) : 0.0f;
-		if (app_f_lt(0.0f, gap)) {   /* the frame's comparisons: fcmp.h */
+		if (app_f_lt(0.0f, gap)) { /* the frame's comparisons: fcmp.h */
 			bool missing = a->have_step && app_f_lt(a->p.fs_link_to, gap);
 			if (missing) {
 				/* frames missing in plant time (lockstep bursts, reload) */
@@ -772,7 +767,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 			dt = app_f_lt(MAX_DT_S, gap) ? MAX_DT_S : gap;
 			a->n_prev = f->frame_n;
 			a->have_step = true;
-			rotor_guard_step(a, dt);   /* a failed rotor: its scale set, the vehicle told to land */
+			rotor_guard_step(a, dt); /* a failed rotor: its scale set, the vehicle told to land */
 			/* After frames missing the controllers were out of the loop (their last
 			 * command held): they take one frame period, not the gap, so that their
 			 * integrators do not wind up over time they could not act in. */
@@ -816,10 +811,7 @@ struct app_view app_view(const struct app *a)
 	};
 }
 
-bool app_next_event(struct app *a, struct app_event *e)
-{
-	return outbox_pop(&a->outbox, e);
-}
+bool app_next_event(struct app *a, struct app_event *e) { return outbox_pop(&a->outbox, e); }
 
 void app_tick(struct app *a)
 {
@@ -836,7 +828,7 @@ void app_tick(struct app *a)
 		a->link_lost_at_us = a->wall_last_frame_us;
 		link_lost(a, "no frames");
 	}
-	exp_pump(&a->exp);   /* the experiment's next status line, formatted here */
+	exp_pump(&a->exp); /* the experiment's next status line, formatted here */
 	if (a->exp.msg[0]) {
 		app_status(a, a->exp.msg_severity, "%s", a->exp.msg);
 		a->exp.msg[0] = 0;

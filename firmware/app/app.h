@@ -48,55 +48,55 @@
 #include "rotor_fail.h"
 #include "thrmap.h"
 
-#define DEG_F 0.017453292519943295f   /* rad per degree */
+#define DEG_F 0.017453292519943295f /* rad per degree */
 
 /* What the step reads of the parameters, as scalars: set by the parameter sync (between
  * frames, after every parameter change), not converted per frame. */
 struct app_param_sc {
-	struct vec3 inertia_kgm2;     /* VEH_IXX, VEH_IYY, VEH_IZZ */
-	scalar_t mass_kg;             /* VEH_MASS */
-	scalar_t thr_max;             /* MOT_THR_MAX */
+	struct vec3 inertia_kgm2; /* VEH_IXX, VEH_IYY, VEH_IZZ */
+	scalar_t mass_kg;         /* VEH_MASS */
+	scalar_t thr_max;         /* MOT_THR_MAX */
 };
 
 enum app_mode {
 	APP_DISARMED = 0,
-	APP_IDLE = 1,        /* armed on the ground, rotors at MOT_THR_IDLE */
+	APP_IDLE = 1, /* armed on the ground, rotors at MOT_THR_IDLE */
 	APP_TAKEOFF = 2,
-	APP_HOLD = 3,        /* level, height and position held */
-	APP_EXPERIMENT = 4,  /* hold + identification experiment */
+	APP_HOLD = 3,       /* level, height and position held */
+	APP_EXPERIMENT = 4, /* hold + identification experiment */
 	APP_LAND = 5,
 };
 
 struct app {
-	const struct hal *hal;    /* the platform (set by app_init) */
+	const struct hal *hal; /* the platform (set by app_init) */
 	struct app_params p;
 	enum app_mode mode;
 
 	/* plant link */
-	struct hal_sensor_frame fr;   /* the newest frame, its position made continuous (origin.h) */
+	struct hal_sensor_frame fr; /* the newest frame, its position made continuous (origin.h) */
 	struct origin orig;
 	bool have_frame, have_step;
-	uint64_t n_prev;              /* frame_n of the last step */
-	uint64_t per_n, per_us;       /* frame_n and t_us where the period's measurement started */
-	float dt_frame;               /* frame period, measured from t_us and smoothed */
+	uint64_t n_prev;        /* frame_n of the last step */
+	uint64_t per_n, per_us; /* frame_n and t_us where the period's measurement started */
+	float dt_frame;         /* frame period, measured from t_us and smoothed */
 	uint64_t wall_last_frame_us;
 	bool link_ok, link_ever;
 	uint64_t link_lost_at_us;
 	/* "frames missing" lines: at most one a wall second (a fast lockstep run through a burst
 	 * storm would otherwise crowd the ground station's other lines out of its rate) */
 	uint64_t gap_said_us;
-	uint32_t gaps_unsaid;         /* gaps since the last line */
+	uint32_t gaps_unsaid; /* gaps since the last line */
 	float gap_max_unsaid_s;
-	bool actuating;               /* throttles are ours (from the first arming) */
+	bool actuating; /* throttles are ours (from the first arming) */
 	bool have_actuated;
-	uint64_t n_actuated;          /* frame_n of the last frame answered */
+	uint64_t n_actuated; /* frame_n of the last frame answered */
 	float thr[HAL_ROTORS];
-	struct boundary bnd;          /* the frame and throttles as scalars (boundary.h) */
+	struct boundary bnd; /* the frame and throttles as scalars (boundary.h) */
 
 	/* guidance (set points) and the position loop */
 	struct guid guid;
 	struct pos_ctrl_params pos;
-	struct app_param_sc ps;       /* parameters the step reads, as scalars */
+	struct app_param_sc ps; /* parameters the step reads, as scalars */
 	/* the set point's yaw and its half-angle trigonometry, kept while the yaw stays */
 	scalar_t yaw_half_of;
 	struct quat_yaw_half yaw_half;
@@ -113,24 +113,24 @@ struct app {
 	struct mixer mix;
 	struct thrmap map;
 	struct mixer_output mix_out;
-	struct rotor_fail rf;         /* a failed rotor, found from the rotors' outputs (rotor_guard.h) */
+	struct rotor_fail rf; /* a failed rotor, found from the rotors' outputs (rotor_guard.h) */
 	float wrench_dem[4];
 	uint32_t thr_clamped;
 
 	/* identification */
 	struct experiment exp;
 	struct exp_output exp_out;
-	struct app_id_run id_run;     /* the last run's results as data */
-	bool exp_ack_pending;         /* a final result of the experiment command is owed */
-	app_origin exp_origin;        /* to whom */
+	struct app_id_run id_run; /* the last run's results as data */
+	bool exp_ack_pending;     /* a final result of the experiment command is owed */
+	app_origin exp_origin;    /* to whom */
 
 	/* between frames (app_settle, app_tick): work the 90 Hz step does not do */
-	bool params_dirty;            /* a parameter changed: rebuild gains, mixer, map */
-	bool save_pending;            /* results applied: write the parameter file */
-	char param_text[8192];        /* the parameter file's text while it is loaded or saved */
+	bool params_dirty;     /* a parameter changed: rebuild gains, mixer, map */
+	bool save_pending;     /* results applied: write the parameter file */
+	char param_text[8192]; /* the parameter file's text while it is loaded or saved */
 
-	struct app_outbox outbox;     /* events for the ground station (app_next_event) */
-	struct app_log_frame log;     /* this frame's record; the step writes its set point (q_sp)
+	struct app_outbox outbox; /* events for the ground station (app_next_event) */
+	struct app_log_frame log; /* this frame's record; the step writes its set point (q_sp)
 				       * and allocated rotor thrusts (rotor_f) here directly */
 	uint32_t steps;
 };
@@ -166,9 +166,9 @@ struct app_view {
 	enum app_mode mode;
 	bool armed, flying;
 	bool link_ok;
-	bool frames_ok;                       /* complete frames arrive (a step ran, link up) */
-	const struct hal_sensor_frame *fr;    /* the newest frame */
-	const float *thr;                     /* HAL_ROTORS throttles sent */
+	bool frames_ok;                    /* complete frames arrive (a step ran, link up) */
+	const struct hal_sensor_frame *fr; /* the newest frame */
+	const float *thr;                  /* HAL_ROTORS throttles sent */
 	const struct app_params *params;
 	/* the running experiment: progress 0..1 and its live estimates (experiment.h) */
 	float exp_progress;
@@ -176,8 +176,8 @@ struct app_view {
 	uint32_t est_live;
 	const char (*est_name)[11];
 	const float *est, *est_sd;
-	const struct app_id_run *id_run;      /* the last identification run's results */
-	bool rotor_failed;                    /* a rotor has failed (rotor_guard.h) */
+	const struct app_id_run *id_run; /* the last identification run's results */
+	bool rotor_failed;               /* a rotor has failed (rotor_guard.h) */
 };
 struct app_view app_view(const struct app *a);
 static inline const struct app_params *app_params(const struct app *a) { return &a->p; }
@@ -206,8 +206,7 @@ enum app_result app_params_load(struct app *a, char *why, size_t cap);
 const char *app_param_write(struct app *a, size_t index, float value);
 
 /* A status line: console, log event, and an APP_EV_STATUS event in the outbox. */
-void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
-	__attribute__((format(printf, 3, 4)));
+void app_status(struct app *a, enum app_severity severity, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
 /* ---- the app's own parts (app.c, step.c), not for platforms or ground stations ---- */
 
@@ -225,15 +224,11 @@ void app_phase_timeout(struct app *a, const struct env_limits_req *req);
 static inline enum guid_mode app_guid_mode(enum app_mode m)
 {
 	switch (m) {
-	case APP_TAKEOFF:
-		return GUID_TAKEOFF;
+	case APP_TAKEOFF: return GUID_TAKEOFF;
 	case APP_HOLD:
-	case APP_EXPERIMENT:
-		return GUID_HOLD;
-	case APP_LAND:
-		return GUID_LAND;
-	default:
-		return GUID_GROUND;
+	case APP_EXPERIMENT: return GUID_HOLD;
+	case APP_LAND: return GUID_LAND;
+	default: return GUID_GROUND;
 	}
 }
 

@@ -29,10 +29,10 @@ struct bnd_kept {
 	float f;
 };
 struct boundary {
-	struct bnd_frame fs;           /* the frame's inputs as scalars */
-	scalar_t thr_sc[HAL_ROTORS];   /* the throttles sent, as scalars */
-	struct bnd_kept log_sp[4];     /* the logged set points (bnd_log_sp) */
-	struct bnd_kept dt;            /* the step's dt (bnd_dt) */
+	struct bnd_frame fs;         /* the frame's inputs as scalars */
+	scalar_t thr_sc[HAL_ROTORS]; /* the throttles sent, as scalars */
+	struct bnd_kept log_sp[4];   /* the logged set points (bnd_log_sp) */
+	struct bnd_kept dt;          /* the step's dt (bnd_dt) */
 };
 #else
 typedef struct hal_sensor_frame bnd_frame_t;
@@ -60,7 +60,10 @@ static inline float bnd_kept_to_float(struct bnd_kept *k, scalar_t v)
 
 static inline scalar_t bnd_kept_from_float(struct bnd_kept *k, float f)
 {
-	union { float f; uint32_t u; } x = {f}, y = {k->f};
+	union {
+		float f;
+		uint32_t u;
+	} x = {f}, y = {k->f};
 	if (x.u != y.u) {
 		k->f = f;
 		k->v = sc_from_float(f);
@@ -140,7 +143,7 @@ static inline void bnd_excitation_to_float(float out[HAL_ROTORS], const scalar_t
 			f = f0;
 		} else if (m == m1) {
 			f = f1;
-		} else if (m > (uint32_t)INT32_MAX) {   /* INT32_MIN: no positive twin */
+		} else if (m > (uint32_t)INT32_MAX) { /* INT32_MIN: no positive twin */
 			out[j] = sc_to_float(v);
 			continue;
 		} else {

@@ -4,20 +4,20 @@
 #include <math.h>
 #include <string.h>
 
-#define HOVER_READY_RSD 0.03f  /* take-off ends once u_h is known to 3 % */
-#define AIRBORNE_M 0.1f        /* above the take-off ground: the acceleration is free */
-#define KF_SEED_REL 0.10f      /* NAV_KF_SEED: VEH_KF replaced when this far off */
+#define HOVER_READY_RSD 0.03f /* take-off ends once u_h is known to 3 % */
+#define AIRBORNE_M 0.1f       /* above the take-off ground: the acceleration is free */
+#define KF_SEED_REL 0.10f     /* NAV_KF_SEED: VEH_KF replaced when this far off */
 
-static float nominal_u(const struct app_params *p)
-{
-	return p->veh_mass * p->veh_grav / (8.0f * p->veh_kf);
-}
+static float nominal_u(const struct app_params *p) { return p->veh_mass * p->veh_grav / (8.0f * p->veh_kf); }
 
 /* the same scalar, by its bits (an integer comparison in both builds: no soft-float call) */
 static bool same_bits(scalar_t a, scalar_t b)
 {
 	_Static_assert(sizeof(scalar_t) == sizeof(uint32_t), "a scalar is one word");
-	union { scalar_t s; uint32_t u; } x = {a}, y = {b};
+	union {
+		scalar_t s;
+		uint32_t u;
+	} x = {a}, y = {b};
 	return x.u == y.u;
 }
 
@@ -42,7 +42,7 @@ scalar_t env_hover_step(struct env_hover *h, const struct env_hover_input *in, b
 	 * kf8 is the one of the step's start (a VEH_KF refresh takes effect with the next step,
 	 * after the parameter sync). */
 	scalar_t kf8 = h->kf8;
-	scalar_t s_u = sc_div_r(in->f_achieved, kf8, &h->kf8_r);   /* sc_div by kf8 exactly */
+	scalar_t s_u = sc_div_r(in->f_achieved, kf8, &h->kf8_r); /* sc_div by kf8 exactly */
 	*up = sc_sub(in->z_m, in->z_ground_m) > SC(AIRBORNE_M);
 	if (*up && in->learn_mode)
 		hover_est_update(&h->hov, in->vz_mps, s_u, in->cos_tilt, in->dt_s);
@@ -61,10 +61,7 @@ scalar_t env_hover_step(struct env_hover *h, const struct env_hover_input *in, b
 	return h->hf;
 }
 
-bool env_hover_ready(const struct env_hover *h)
-{
-	return hover_est_converged(&h->hov, sc_from_float(HOVER_READY_RSD));
-}
+bool env_hover_ready(const struct env_hover *h) { return hover_est_converged(&h->hov, sc_from_float(HOVER_READY_RSD)); }
 
 void env_hover_on_hold(struct env_hover *h)
 {

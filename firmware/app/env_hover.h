@@ -20,10 +20,10 @@
 
 struct env_hover {
 	struct hover_est hov;
-	bool pub_due;              /* a HOLD entry's HOV_* wait for env_hover_publish */
-	scalar_t pub_u, pub_sd;    /* the hover throttle and its sd at that entry */
-	scalar_t kf8;              /* 8 VEH_KF (N at full throttle, all rotors) */
-	struct sc_recip kf8_r;     /* its reciprocal, for the step's division by it */
+	bool pub_due;           /* a HOLD entry's HOV_* wait for env_hover_publish */
+	scalar_t pub_u, pub_sd; /* the hover throttle and its sd at that entry */
+	scalar_t kf8;           /* 8 VEH_KF (N at full throttle, all rotors) */
+	struct sc_recip kf8_r;  /* its reciprocal, for the step's division by it */
 	/* the hover thrust kf8 / theta of the last step and its operands: the division is redone
 	 * only when one changed (theta stays while the estimator only tracks) */
 	scalar_t hf_kf8, hf_theta, hf;
@@ -34,13 +34,13 @@ struct env_hover {
 
 /* One step's inputs (scalars of this frame). */
 struct env_hover_input {
-	scalar_t f_achieved;       /* the collective thrust the mixer achieved last step, N */
-	scalar_t z_m, vz_mps;      /* height and vertical speed */
-	scalar_t z_ground_m;       /* the take-off ground */
-	scalar_t cos_tilt;         /* the body's z axis, up component */
+	scalar_t f_achieved;  /* the collective thrust the mixer achieved last step, N */
+	scalar_t z_m, vz_mps; /* height and vertical speed */
+	scalar_t z_ground_m;  /* the take-off ground */
+	scalar_t cos_tilt;    /* the body's z axis, up component */
 	scalar_t dt_s;
-	bool learn_mode;           /* TAKEOFF, HOLD or LAND: airborne measurements teach */
-	bool takeoff_climb;        /* TAKEOFF with a set point above the vehicle (spool up) */
+	bool learn_mode;    /* TAKEOFF, HOLD or LAND: airborne measurements teach */
+	bool takeoff_climb; /* TAKEOFF with a set point above the vehicle (spool up) */
 };
 
 /* A HOLD entry's publication: HOV_THR, HOV_THR_SD, HOV_KF, HOV_KF_SD and a status line. */

@@ -5,8 +5,8 @@
 
 #include "fcmp.h"
 
-#define KFT_WARM_S 10.0f   /* s of tracker updates before it may refresh VEH_KF */
-#define KFT_VOTES 3u       /* publications in a row that must call for the refresh */
+#define KFT_WARM_S 10.0f /* s of tracker updates before it may refresh VEH_KF */
+#define KFT_VOTES 3u     /* publications in a row that must call for the refresh */
 
 /* The tracker's model of the rotors: the vehicle's motor lag, thrust curve and per-rotor
  * effectiveness, as identified (or given). */
@@ -38,8 +38,7 @@ void env_kf_model_sync(struct env_kf *k, const struct app_params *p)
 	 * lag or a weak rotor) would be compared with the new VEH_KF and "refresh" it wrongly. */
 	struct kf_track_params kp = kft_params(p);
 	const struct kf_track_params *cur = &k->kft.p;
-	bool same = kp.tau_lag_s == cur->tau_lag_s && kp.curve == cur->curve &&
-		    kp.drift_per_min == cur->drift_per_min;
+	bool same = kp.tau_lag_s == cur->tau_lag_s && kp.curve == cur->curve && kp.drift_per_min == cur->drift_per_min;
 	for (int j = 0; j < KF_TRACK_ROTORS; j++)
 		same = same && kp.scale[j] == cur->scale[j];
 	if (!same)
@@ -51,7 +50,7 @@ void env_kf_model_sync(struct env_kf *k, const struct app_params *p)
 void env_kf_step(struct env_kf *k, const struct env_kf_input *in)
 {
 	struct kf_track *t = &k->kft;
-	scalar_t y = SC_ZERO;   /* the sum in scalars: float's own sum in the float build */
+	scalar_t y = SC_ZERO; /* the sum in scalars: float's own sum in the float build */
 	for (int j = 0; j < HAL_ROTORS; j++)
 		y = sc_add(y, in->thrust_n[j]);
 	kf_track_update(t, in->thr, HAL_ROTORS, y, in->dt_s, in->gate);
@@ -92,7 +91,7 @@ bool env_kf_publish(struct env_kf *k, const struct app_params *p, uint64_t now_u
 		return true;
 	}
 	float rel = kf / p->veh_kf - 1.0f;
-	bool identified = ((unsigned)p->id_result & 1u) != 0;   /* k_f accepted by identification */
+	bool identified = ((unsigned)p->id_result & 1u) != 0; /* k_f accepted by identification */
 	/* A refresh needs a warmed-up tracker (KFT_WARM_S of updates since its last start: the
 	 * throttles jump when a new rotor model is applied, and the first memories follow that
 	 * transient) and a drift seen on KFT_VOTES publications in a row (1 s apart): a battery

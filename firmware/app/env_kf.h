@@ -20,21 +20,21 @@
 
 struct env_kf {
 	struct kf_track kft;
-	double pub_next_t;     /* plant time of the next publication (1 s after the last) */
-	uint64_t pub_wall_us;  /* wall time of the last announced one */
-	uint32_t votes;        /* consecutive publications that called for a VEH_KF refresh */
-	bool pub_due;          /* the last step reached pub_next_t: env_kf_publish's turn */
-	bool pub_hold;         /* and flew in HOLD (where VEH_KF may be refreshed) */
+	double pub_next_t;    /* plant time of the next publication (1 s after the last) */
+	uint64_t pub_wall_us; /* wall time of the last announced one */
+	uint32_t votes;       /* consecutive publications that called for a VEH_KF refresh */
+	bool pub_due;         /* the last step reached pub_next_t: env_kf_publish's turn */
+	bool pub_hold;        /* and flew in HOLD (where VEH_KF may be refreshed) */
 };
 
 /* One step's inputs. */
 struct env_kf_input {
-	const scalar_t *thrust_n;  /* HAL_ROTORS measured rotor thrusts of this frame */
-	const scalar_t *thr;       /* HAL_ROTORS throttles of the last step (what acts now) */
+	const scalar_t *thrust_n; /* HAL_ROTORS measured rotor thrusts of this frame */
+	const scalar_t *thr;      /* HAL_ROTORS throttles of the last step (what acts now) */
 	scalar_t dt_s;
-	double t_s;                /* this frame's plant time */
-	bool gate;                 /* HOLD or an experiment, airborne, thrust rows present */
-	bool hold;                 /* in HOLD */
+	double t_s; /* this frame's plant time */
+	bool gate;  /* HOLD or an experiment, airborne, thrust rows present */
+	bool hold;  /* in HOLD */
 };
 
 /* What a publication asks of the app, in this order: KFT_EST, KFT_SD, KFT_T, KFT_MEM set

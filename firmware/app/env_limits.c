@@ -50,9 +50,9 @@ static bool timeout(struct env_limits *l, const struct env_limits_input *in, con
 		}
 	}
 	if (in->land && l->phase_s > p->nav_land_to) {
-		snprintf(r->why, sizeof r->why, "Landing failed: NAV_LAND_TO %.0f s, %.2f m up",
-			 (double)p->nav_land_to, (double)in->z_m);
-		l->phase_s = -1e30f;   /* said once; the landing goes on */
+		snprintf(r->why, sizeof r->why, "Landing failed: NAV_LAND_TO %.0f s, %.2f m up", (double)p->nav_land_to,
+			 (double)in->z_m);
+		l->phase_s = -1e30f; /* said once; the landing goes on */
 		return true;
 	}
 	return false;

@@ -19,21 +19,21 @@
 #include "params.h"
 
 struct env_limits {
-	float phase_s;      /* time in the current take-off or landing */
-	float hold_s;       /* time in the take-off's hold entry (set point at the target) */
-	uint8_t cmd;        /* enum app_command that started the phase, for its final result */
-	app_origin origin;  /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
+	float phase_s;     /* time in the current take-off or landing */
+	float hold_s;      /* time in the take-off's hold entry (set point at the target) */
+	uint8_t cmd;       /* enum app_command that started the phase, for its final result */
+	app_origin origin; /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
 };
 
 /* One step's inputs. */
 struct env_limits_input {
-	bool takeoff, land;        /* the phase flown */
+	bool takeoff, land; /* the phase flown */
 	float dt_s;
-	float z_m;                 /* height above the take-off ground */
-	float target_m;            /* the take-off's target height above the ground */
+	float z_m;      /* height above the take-off ground */
+	float target_m; /* the take-off's target height above the ground */
 	float vz_mps;
-	bool sp_at_target;         /* the take-off's set point has reached the target */
-	const struct env_hover *hover;   /* the hover throttle learned so far */
+	bool sp_at_target;             /* the take-off's set point has reached the target */
+	const struct env_hover *hover; /* the hover throttle learned so far */
 };
 
 /* A phase that ran out: the lines to post (more[0] == 0: one line), the command's final

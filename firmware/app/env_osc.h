@@ -25,8 +25,8 @@ struct env_osc {
 	bool due_judged;
 	bool due;
 	double next_t;
-	float prev_ms;   /* the second before's mean square (0: none, or not judged) */
-	float last_ms;   /* the last whole second's mean square (0 outside TAKEOFF and HOLD) */
+	float prev_ms; /* the second before's mean square (0: none, or not judged) */
+	float last_ms; /* the last whole second's mean square (0 outside TAKEOFF and HOLD) */
 };
 
 /* A judgement that found an oscillation: ATT_WN_RP from wn to nw (nw < wn), or, when it is

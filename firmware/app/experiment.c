@@ -11,16 +11,15 @@
 
 #include "fcmp.h"
 
-
 enum phase_kind {
 	PK_NONE = 0,
-	PK_VAL_PRE,    /* validation before rotor identification (ID_VAL_*_PRE) */
-	PK_ROTOR,      /* k_f, k_tau */
-	PK_VAL_POST,   /* validation after it (ID_VAL_*_POST) */
+	PK_VAL_PRE,  /* validation before rotor identification (ID_VAL_*_PRE) */
+	PK_ROTOR,    /* k_f, k_tau */
+	PK_VAL_POST, /* validation after it (ID_VAL_*_POST) */
 	PK_INR_X,
 	PK_INR_Y,
 	PK_INR_Z,
-	PK_VAL,        /* experiment 2 alone: PRE or POST by ID_RESULT bit 1 */
+	PK_VAL, /* experiment 2 alone: PRE or POST by ID_RESULT bit 1 */
 };
 
 static const char *phase_name(int k)
@@ -28,29 +27,24 @@ static const char *phase_name(int k)
 	switch (k) {
 	case PK_VAL_PRE:
 	case PK_VAL_POST:
-	case PK_VAL:
-		return "validation";
-	case PK_ROTOR:
-		return "rotor coefficients";
-	case PK_INR_X:
-		return "inertia Ixx";
-	case PK_INR_Y:
-		return "inertia Iyy";
-	case PK_INR_Z:
-		return "inertia Izz";
+	case PK_VAL: return "validation";
+	case PK_ROTOR: return "rotor coefficients";
+	case PK_INR_X: return "inertia Ixx";
+	case PK_INR_Y: return "inertia Iyy";
+	case PK_INR_Z: return "inertia Izz";
 	}
 	return "?";
 }
 
-#define SETTLE_S 1.0f         /* no excitation, filters run, before each phase's excitation */
-#define HEIGHT_ABORT_M 1.5f   /* |z - z at start| beyond this aborts */
-#define GAP_HOLD 10           /* frames without inertia updates after interpolated lost frames */
+#define SETTLE_S 1.0f       /* no excitation, filters run, before each phase's excitation */
+#define HEIGHT_ABORT_M 1.5f /* |z - z at start| beyond this aborts */
+#define GAP_HOLD 10         /* frames without inertia updates after interpolated lost frames */
 /* inertia: lost frames up to this many are interpolated through (ident_inertia_gap); after a
  * longer gap, or one of unknown length, the filters restart and are left GAP_SETTLE_TC of
  * their time constants 1 / (zeta wc) to settle */
 #define GAP_INTERP_MAX 4
 #define GAP_SETTLE_TC 5.0f
-#define LAG_TOL 0.1f          /* lag check off by more (relative): k_f, k_tau rejected */
+#define LAG_TOL 0.1f /* lag check off by more (relative): k_f, k_tau rejected */
 /* inertia: roll/pitch by a multisine (harmonics 4..15 of 0.5 Hz: 2..7.5 Hz, above the
  * attitude loop, where torque turns into acceleration rather than tilt) of peak ID_INR_AMP,
  * SVF corner 25 rad/s; yaw (weak torque, so the gyro noise matters more) by a PRBS at the
@@ -59,14 +53,14 @@ static const char *phase_name(int k)
 #define INR_WC_YAW_RPS 12.0f
 #define INR_MS_K_FIRST 4u
 #define INR_MS_COUNT 12u
-#define INR_YAW_DIV 10.0f     /* yaw (and validation mu_1) amplitude: ID_INR_AMP / 10 */
+#define INR_YAW_DIV 10.0f /* yaw (and validation mu_1) amplitude: ID_INR_AMP / 10 */
 #define INR_AMP_DEF 0.8f
 #define INR_ZETA 0.7f
 #define PRBS_ORDER 9u
-#define OFS_SEG_FRAMES 45u    /* rotor experiment: frames per offset level (0.5 s at 90 Hz) */
-#define EST_READ_FRAMES 9u    /* steps between reads of the live estimates (10 Hz at 90 Hz) */
-#define MOT_NE_MAX 1.3f       /* motor model: largest residual over noise variance */
-#define SCALE_LO 0.3f         /* accepted range of a rotor's effectiveness */
+#define OFS_SEG_FRAMES 45u /* rotor experiment: frames per offset level (0.5 s at 90 Hz) */
+#define EST_READ_FRAMES 9u /* steps between reads of the live estimates (10 Hz at 90 Hz) */
+#define MOT_NE_MAX 1.3f    /* motor model: largest residual over noise variance */
+#define SCALE_LO 0.3f      /* accepted range of a rotor's effectiveness */
 #define SCALE_HI 1.5f
 
 static const char *const est_names[EXP_MAX_EST] = {
@@ -138,7 +132,7 @@ static void say(struct experiment *e, int sev, const char *fmt, ...)
 		} else if (*c == 's') {
 			l->kind[n] = 's';
 			l->arg[n++].s = va_arg(ap, const char *);
-		} else if (*c == 'f' || *c == 'g' || *c == 'e') {   /* doubles, formatted by fmt */
+		} else if (*c == 'f' || *c == 'g' || *c == 'e') { /* doubles, formatted by fmt */
 			l->kind[n] = 'f';
 			l->arg[n++].f = va_arg(ap, double);
 		} else if (!*c) {
@@ -192,7 +186,7 @@ static void format_line(const struct exp_line *l, char *out, size_t cap)
 	else if (!strcmp(k, "ffff"))
 		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_F(2), ARG_F(3));
 	else
-		snprintf(out, cap, "ID: line with arguments %s", k);   /* a new pattern: add a case */
+		snprintf(out, cap, "ID: line with arguments %s", k); /* a new pattern: add a case */
 #pragma GCC diagnostic pop
 }
 
@@ -204,7 +198,7 @@ void exp_pump(struct experiment *e)
 	 * if nobody did) */
 	if (e->state == EXP_RUNNING && !e->reporting && !e->begin_pending && e->phase_kind[e->phase] == PK_ROTOR &&
 	    e->cfg.exc_null)
-		motor_id_refine(&e->mid);   /* processes the waiting frame first */
+		motor_id_refine(&e->mid); /* processes the waiting frame first */
 	if (!e->pump_ready || e->msg[0] || !e->q_n)
 		return;
 	const struct exp_line *l = &e->queue[e->q_head];
@@ -251,11 +245,13 @@ static void rotor_ids(struct experiment *e, const struct motor_id_result *mr, bo
 		      enum ident_verdict vt, bool curve_bad, int bad_rotor, float kfp, float ktp)
 {
 	bool model_ok = mr->cause == MOTOR_ID_OK;
-	enum app_id_reason common = !model_ok ? app_id_reason_of_cause(mr->cause)
-				    : curve_bad ? APP_ID_CURVE
-				    : bad_rotor >= 0 ? APP_ID_ROTOR : APP_ID_PARTNER_REJECTED;
-	int culprit = !model_ok && mr->cause == MOTOR_ID_ROTOR ? mr->cause_rotor + 1
-		      : model_ok && !curve_bad && bad_rotor >= 0 ? bad_rotor + 1 : 0;
+	enum app_id_reason common = !model_ok        ? app_id_reason_of_cause(mr->cause)
+				    : curve_bad      ? APP_ID_CURVE
+				    : bad_rotor >= 0 ? APP_ID_ROTOR
+						     : APP_ID_PARTNER_REJECTED;
+	int culprit = !model_ok && mr->cause == MOTOR_ID_ROTOR   ? mr->cause_rotor + 1
+		      : model_ok && !curve_bad && bad_rotor >= 0 ? bad_rotor + 1
+								 : 0;
 	int crot = common == APP_ID_ROTOR ? culprit : 0;
 	id_out(e, APP_ID_KF, vf == IDENT_ACCEPT ? crot : 0, mr->kf, mr->kf_sd, ok,
 	       vf != IDENT_ACCEPT ? app_id_reason_of_verdict(vf) : common);
@@ -292,14 +288,11 @@ static void set_result_bit(struct experiment *e, const struct app_params *p, uin
 
 /* ---------------------------------------------------------------- contract */
 
-bool exp_available(int id)
-{
-	return id >= 1 && id <= 6;
-}
+bool exp_available(int id) { return id >= 1 && id <= 6; }
 
 int exp_start(struct experiment *e, int id, const struct app_params *p, char *why, size_t cap)
 {
-	const struct mixer *mix = e->mix;   /* set once by the app, kept across experiments */
+	const struct mixer *mix = e->mix; /* set once by the app, kept across experiments */
 	memset(e, 0, sizeof *e);
 	e->mix = mix;
 	if (!exp_available(id)) {
@@ -312,17 +305,11 @@ int exp_start(struct experiment *e, int id, const struct app_params *p, char *wh
 		return APP_DENIED;
 	}
 	switch (id) {
-	case 1:
-		e->phase_kind[e->n_phases++] = PK_ROTOR;
-		break;
-	case 2:
-		e->phase_kind[e->n_phases++] = PK_VAL;
-		break;
+	case 1: e->phase_kind[e->n_phases++] = PK_ROTOR; break;
+	case 2: e->phase_kind[e->n_phases++] = PK_VAL; break;
 	case 3:
 	case 4:
-	case 5:
-		e->phase_kind[e->n_phases++] = PK_INR_X + (id - 3);
-		break;
+	case 5: e->phase_kind[e->n_phases++] = PK_INR_X + (id - 3); break;
 	case 6: {
 		static const int seq[] = {PK_VAL_PRE, PK_ROTOR, PK_VAL_POST, PK_INR_X, PK_INR_Y, PK_INR_Z};
 		for (int i = 0; i < 6; i++)
@@ -363,7 +350,7 @@ static void snapshot(struct exp_turn *t, const struct exp_input *in)
 	memcpy(t->thr_prev_all, in->thr_prev, sizeof t->thr_prev_all);
 	t->rotor_f_cmd0 = in->rotor_f_cmd[0];
 	memcpy(t->thrust_n, in->thrust_n, sizeof t->thrust_n);
-	for (int j = 0; j < HAL_ROTORS; j++)   /* from the frame: exp_input has them only for some phases */
+	for (int j = 0; j < HAL_ROTORS; j++) /* from the frame: exp_input has them only for some phases */
 		t->torque_nm[j] = sc_from_float(in->frame->rotor_torque_nm[j]);
 	memcpy(t->rate_b_rps, in->rate_b_rps, sizeof t->rate_b_rps);
 }
@@ -433,15 +420,15 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		xp.ms_k_first = INR_MS_K_FIRST;
 		xp.ms_count = INR_MS_COUNT;
 		xp.amplitude = sc_from_float(ax == 2u ? amp / INR_YAW_DIV : amp);
-		scalar_t tau[3], inertia[3] = {
-			sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz)};
+		scalar_t tau[3],
+			inertia[3] = {sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz)};
 		if (e->mix)
 			ident_body_torque_mixer(e->mix, in->thrust_n, in->torque_nm, tau);
 		else
 			ident_body_torque(sc_from_float(p->veh_arm_l), in->thrust_n, in->torque_nm, tau);
 		scalar_t alpha = ident_torque_weight(sc_from_float(cf->mot_tau), dt);
-		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS),
-				   SC(INR_ZETA), dt, alpha, inertia, in->rate_b_rps, tau);
+		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS), SC(INR_ZETA), dt,
+				   alpha, inertia, in->rate_b_rps, tau);
 		e->inr_u_prev = SC_ZERO;
 		e->est_live = 1u << (4u + ax);
 	} else {
@@ -461,7 +448,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	const char *lim_name;
 	e->t_total = total;
 	e->t_limit = phase_limit(e, &lim_name);
-	e->fr_dt = -1.0f;   /* no step yet */
+	e->fr_dt = -1.0f; /* no step yet */
 	e->prog_base = (float)(e->phase + (total > 0.0f ? 0 : 1)) / (float)e->n_phases;
 	e->prog_rate = total > 0.0f ? 1.0f / (total * (float)e->n_phases) : 0.0f;
 }
@@ -513,24 +500,30 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 	set_result_bit(e, p, 1u, ok);
 	rotor_ids(e, &mr, ok, vf, vt, curve_bad, bad_rotor, kfp, ktp);
 	const char *why = !model_ok ? "motor model" : !range_ok ? "out of range" : "";
-	const char *why_f = ok ? "accepted" : vf != IDENT_ACCEPT ? ident_verdict_text(vf) : why[0] ? why : "ktau rejected";
-	const char *why_t = ok ? "accepted" : vt != IDENT_ACCEPT ? ident_verdict_text(vt) : why[0] ? why : "kf rejected";
+	const char *why_f = ok                   ? "accepted"
+			    : vf != IDENT_ACCEPT ? ident_verdict_text(vf)
+			    : why[0]             ? why
+						 : "ktau rejected";
+	const char *why_t = ok                   ? "accepted"
+			    : vt != IDENT_ACCEPT ? ident_verdict_text(vt)
+			    : why[0]             ? why
+						 : "kf rejected";
 	int sev = ok ? APP_SEV_INFO : APP_SEV_WARNING;
 	say(e, sev, "ID kf %.3f +/- %.3f %s%s", (double)mr.kf, (double)mr.kf_sd, ok ? "N " : "rejected: ", why_f);
-	say(e, sev, "ID ktau %.4f +/- %.4f %s%s", (double)mr.ktau, (double)mr.ktau_sd, ok ? "N m " : "rejected: ",
-	    why_t);
+	say(e, sev, "ID ktau %.4f +/- %.4f %s%s", (double)mr.ktau, (double)mr.ktau_sd,
+	    ok ? "N m " : "rejected: ", why_t);
 	say(e, APP_SEV_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
 	say(e, sev, "ID motor lag %.4f +/- %.4f s delay %d fr", (double)mr.tau, (double)mr.tau_sd, (int)mr.delay);
 	if (e->cfg.crv_est)
 		say(e, sev, "ID curve %.3f +/- %.3f", (double)mr.curve, (double)mr.curve_sd);
 	else
 		say(e, APP_SEV_INFO, "ID curve %.3f given (ID_CRV_EST 0)", (double)mr.curve);
-	say(e, sev, "ID scale 1-4 %.4f %.4f %.4f %.4f", (double)mr.scale[0], (double)mr.scale[1],
-	    (double)mr.scale[2], (double)mr.scale[3]);
-	say(e, sev, "ID scale 5-8 %.4f %.4f %.4f %.4f", (double)mr.scale[4], (double)mr.scale[5],
-	    (double)mr.scale[6], (double)mr.scale[7]);
+	say(e, sev, "ID scale 1-4 %.4f %.4f %.4f %.4f", (double)mr.scale[0], (double)mr.scale[1], (double)mr.scale[2],
+	    (double)mr.scale[3]);
+	say(e, sev, "ID scale 5-8 %.4f %.4f %.4f %.4f", (double)mr.scale[4], (double)mr.scale[5], (double)mr.scale[6],
+	    (double)mr.scale[7]);
 	say(e, APP_SEV_INFO, "ID motor model NE %.3f noise %.4f N", (double)mr.ne_all, (double)mr.noise_sd);
-	if (mr.white_have)   /* the one-step prediction errors' whiteness (motor_id.h) */
+	if (mr.white_have) /* the one-step prediction errors' whiteness (motor_id.h) */
 		say(e, mr.white_ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID whiteness %.0f limit %.0f: %s",
 		    (double)mr.white_q, (double)mr.white_lim, mr.white_ok ? "white" : "coloured");
 	if (!model_ok) {
@@ -539,7 +532,7 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 			    (double)mr.ne[mr.cause_rotor]);
 		else
 			say(e, APP_SEV_WARNING, "ID rejected: %s", motor_id_cause_text(mr.cause));
-		if (mr.cause == MOTOR_ID_LAG_REACH)   /* the prior, not the data: start from what they say */
+		if (mr.cause == MOTOR_ID_LAG_REACH) /* the prior, not the data: start from what they say */
 			say(e, APP_SEV_WARNING, "ID remedy: ID_MOT_TAU %.4f (the lag found), fly again",
 			    (double)mr.tau);
 		else
@@ -577,7 +570,8 @@ static float inr_amp_limit(const struct app_params *p, unsigned ax)
 	return isfinite(lim) && lim > 0.0f && lim < pmax ? lim : pmax;
 }
 
-#define INR_ADVICE_MARGIN 2.0f   /* the std is itself an estimate (20 blocks of 0.5 s in 10 s: +/-16 %, 3 sd covered): aim lower */
+#define INR_ADVICE_MARGIN \
+	2.0f /* the std is itself an estimate (20 blocks of 0.5 s in 10 s: +/-16 %, 3 sd covered): aim lower */
 
 /* Asked accuracy (ID_RSD_MAX) not reached: the std falls as 1 / (amplitude sqrt(time)), so
  * the estimate needs raise x the amplitude or raise^2 x the time (with a margin). The
@@ -586,18 +580,17 @@ static float inr_amp_limit(const struct app_params *p, unsigned ax)
  * amplitude, with the std expected there (no margin): below ID_RSD_MAX it may pass; above, the
  * asked accuracy is out of reach on this vehicle and the warning says so. Advice never names
  * a value the parameter would refuse. */
-static void inertia_advice(struct experiment *e, const struct app_params *p, unsigned ax, const char *nm,
-			   float raise)
+static void inertia_advice(struct experiment *e, const struct app_params *p, unsigned ax, const char *nm, float raise)
 {
 	float r = raise * INR_ADVICE_MARGIN, amp = e->cfg.inr_amp, t = e->cfg.inr_time;
 	float lim = inr_amp_limit(p, ax), tmax = param_defs[PX_ID_INR_TIME].max;
 	if (amp * r <= lim) {
 		if (t * r * r <= tmax)
-			say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f or ID_INR_TIME %.0f s", nm,
-			    (double)(amp * r), (double)(t * r * r));
+			say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f or ID_INR_TIME %.0f s", nm, (double)(amp * r),
+			    (double)(t * r * r));
 		else
-			say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f and ID_INR_TIME %.0f s", nm,
-			    (double)(amp * r), (double)t);
+			say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f and ID_INR_TIME %.0f s", nm, (double)(amp * r),
+			    (double)t);
 		return;
 	}
 	float a = lim > amp ? lim / amp : 1.0f, tr = r / a;
@@ -608,11 +601,13 @@ static void inertia_advice(struct experiment *e, const struct app_params *p, uns
 	}
 	float rsd_at = raise * e->cfg.rsd_max / (a * sqrtf(tmax / t));
 	if (rsd_at < e->cfg.rsd_max)
-		say(e, APP_SEV_WARNING, "ID %s: ID_INR_AMP %.2f and ID_INR_TIME %.0f s (the longest: rsd %.5f expected)",
-		    nm, (double)(amp * a), (double)tmax, (double)rsd_at);
+		say(e, APP_SEV_WARNING,
+		    "ID %s: ID_INR_AMP %.2f and ID_INR_TIME %.0f s (the longest: rsd %.5f expected)", nm,
+		    (double)(amp * a), (double)tmax, (double)rsd_at);
 	else
-		say(e, APP_SEV_WARNING, "ID %s: ID_RSD_MAX %g out of reach: ID_INR_AMP %.2f and ID_INR_TIME %.0f s give rsd %.5f",
-		    nm, (double)e->cfg.rsd_max, (double)(amp * a), (double)tmax, (double)rsd_at);
+		say(e, APP_SEV_WARNING,
+		    "ID %s: ID_RSD_MAX %g out of reach: ID_INR_AMP %.2f and ID_INR_TIME %.0f s give rsd %.5f", nm,
+		    (double)e->cfg.rsd_max, (double)(amp * a), (double)tmax, (double)rsd_at);
 }
 
 static void phase_end(struct experiment *e, const struct app_params *p)
@@ -650,17 +645,21 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		id_out(e, APP_ID_KTAU, 0, kt, kt_sd, ok, vt != IDENT_ACCEPT ? app_id_reason_of_verdict(vt) : partner);
 		id_out(e, APP_ID_KF_PLAIN, 0, kfp, NAN, false, APP_ID_AUXILIARY);
 		id_out(e, APP_ID_KTAU_PLAIN, 0, ktp, NAN, false, APP_ID_AUXILIARY);
-		if (tau_c >= 0.0f && isfinite(tau_c))   /* the lag check: shown, never applied */
+		if (tau_c >= 0.0f && isfinite(tau_c)) /* the lag check: shown, never applied */
 			id_out(e, APP_ID_MOT_TAU, 0, tau_c, NAN, false, lag_off ? APP_ID_LAG_OFF : APP_ID_AUXILIARY);
-		const char *why_f = ok ? "accepted" : vf != IDENT_ACCEPT ? ident_verdict_text(vf)
-					     : lag_off ? "motor lag off" : "ktau rejected";
-		const char *why_t = ok ? "accepted" : vt != IDENT_ACCEPT ? ident_verdict_text(vt)
-					     : lag_off ? "motor lag off" : "kf rejected";
+		const char *why_f = ok                   ? "accepted"
+				    : vf != IDENT_ACCEPT ? ident_verdict_text(vf)
+				    : lag_off            ? "motor lag off"
+							 : "ktau rejected";
+		const char *why_t = ok                   ? "accepted"
+				    : vt != IDENT_ACCEPT ? ident_verdict_text(vt)
+				    : lag_off            ? "motor lag off"
+							 : "kf rejected";
 		/* STATUSTEXT holds 50 characters: the unit goes when a reason has to fit */
-		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID kf %.3f +/- %.3f %s%s", (double)kf,
-		    (double)kf_sd, ok ? "N " : "rejected: ", why_f);
-		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID ktau %.4f +/- %.4f %s%s",
-		    (double)kt, (double)kt_sd, ok ? "N m " : "rejected: ", why_t);
+		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID kf %.3f +/- %.3f %s%s", (double)kf, (double)kf_sd,
+		    ok ? "N " : "rejected: ", why_f);
+		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID ktau %.4f +/- %.4f %s%s", (double)kt, (double)kt_sd,
+		    ok ? "N m " : "rejected: ", why_t);
 		say(e, APP_SEV_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
 		result(e, PX_ID_TAU_CHECK, isfinite(tau_c) ? tau_c : -1.0f);
 		if (tau_c >= 0.0f && isfinite(tau_c))
@@ -692,15 +691,16 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 			result(e, pv[ax], est);
 		set_result_bit(e, p, 2u << ax, ok);
 		id_out(e, (enum app_id_param)(APP_ID_IXX + (int)ax), 0, est, sd, ok, app_id_reason_of_verdict(v));
-		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID %s %.5f +/- %.5f %s%s", nm[ax],
-		    (double)est, (double)sd, ok ? "kg m^2 " : "rejected: ", ident_verdict_text(v));
+		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID %s %.5f +/- %.5f %s%s", nm[ax], (double)est, (double)sd,
+		    ok ? "kg m^2 " : "rejected: ", ident_verdict_text(v));
 		/* a rejection says what would have been accepted, or what to change */
 		if (v == IDENT_OUT_OF_RANGE)
 			say(e, APP_SEV_WARNING, "ID %s accepted in [%.4g, %.4g] kg m^2", nm[ax], (double)lo,
 			    (double)hi);
 		else if (v == IDENT_UNCERTAIN && !isfinite(raise))
-			say(e, APP_SEV_WARNING, "ID %s: ID_RSD_MAX %g out of reach: the gyro scale's sd (ID_GYR_SCL_SD %g) alone",
-			    nm[ax], (double)rsd, (double)cfg_f(p->id_gyr_scl_sd, 0.0f));
+			say(e, APP_SEV_WARNING,
+			    "ID %s: ID_RSD_MAX %g out of reach: the gyro scale's sd (ID_GYR_SCL_SD %g) alone", nm[ax],
+			    (double)rsd, (double)cfg_f(p->id_gyr_scl_sd, 0.0f));
 		else if (v == IDENT_UNCERTAIN && raise > 1.0f)
 			inertia_advice(e, p, ax, nm[ax], raise);
 	} else {
@@ -708,9 +708,10 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		float ne = ident_fit_ne(&e->fit), fit = ident_fit_pct(&e->fit);
 		result(e, post ? PX_ID_VAL_NE_POST : PX_ID_VAL_NE_PRE, ne);
 		result(e, post ? PX_ID_VAL_FIT_POST : PX_ID_VAL_FIT_PRE, fit);
-		id_out(e, post ? APP_ID_VAL_NE_AFTER : APP_ID_VAL_NE_BEFORE, 0, ne, fit, isfinite(ne), APP_ID_NOT_FINITE);
-		say(e, APP_SEV_INFO, "ID validation %s: NE %.4f fit %.1f %%", post ? "after" : "before",
-		    (double)ne, (double)fit);
+		id_out(e, post ? APP_ID_VAL_NE_AFTER : APP_ID_VAL_NE_BEFORE, 0, ne, fit, isfinite(ne),
+		       APP_ID_NOT_FINITE);
+		say(e, APP_SEV_INFO, "ID validation %s: NE %.4f fit %.1f %%", post ? "after" : "before", (double)ne,
+		    (double)fit);
 	}
 	e->est_live = 0;
 }
@@ -719,12 +720,12 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 {
 	const struct app_params *p = in->params;
 	int k = e->phase_kind[e->phase];
-	bool running = app_f_le(e->t_settle, e->t_phase);   /* the step's comparisons: fcmp.h */
+	bool running = app_f_le(e->t_settle, e->t_phase); /* the step's comparisons: fcmp.h */
 	/* frames since the last step: more than one when frames were lost on the link (the
 	 * plant then held the last throttles); the rotor and validation models advance through
 	 * the gap, and so do the inertia filters (uniform sampling: interpolated, or restarted
 	 * after a long gap), their updates held for gap_hold frames after it */
-	if (!app_f_eq(in->dt_s, e->fr_dt)) {   /* the same period as the last step: the same count */
+	if (!app_f_eq(in->dt_s, e->fr_dt)) { /* the same period as the last step: the same count */
 		float fr = in->dt_s * e->inv_dt_nom;
 		e->fr_n = fr > 0.5f && fr < (float)FILT_DELAY_MAX + 0.5f ? (int)(fr + 0.5f) : 0;
 		e->fr_dt = in->dt_s;
@@ -827,7 +828,7 @@ static void read_estimates(struct experiment *e)
 
 void exp_turn(struct experiment *e, const struct app_params *p)
 {
-	if (e->begin_pending) {   /* the experiment's first step ran: its first phase begins */
+	if (e->begin_pending) { /* the experiment's first step ran: its first phase begins */
 		e->begin_pending = false;
 		if (e->state == EXP_RUNNING)
 			phase_begin(e, p, &e->turn);
@@ -881,7 +882,7 @@ bool exp_reads_torque(const struct experiment *e)
 {
 	if (e->state != EXP_RUNNING || e->reporting)
 		return false;
-	if (e->turn_pending || e->begin_pending)   /* the phase may change first (exp_turn in exp_step) */
+	if (e->turn_pending || e->begin_pending) /* the phase may change first (exp_turn in exp_step) */
 		return true;
 	int k = e->phase_kind[e->phase];
 	return k == PK_ROTOR || k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z;
@@ -891,7 +892,7 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 {
 	if (e->state != EXP_RUNNING)
 		return e->state;
-	exp_turn(e, in->params);   /* normally done between frames already (nothing left here) */
+	exp_turn(e, in->params); /* normally done between frames already (nothing left here) */
 	const struct hal_sensor_frame *f = in->frame;
 	if (!e->started) {
 		e->started = true;
@@ -943,7 +944,7 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 			e->turn_pending = true;
 		}
 	}
-	e->pump_ready = true;   /* exp_pump may hand out the next line (between frames) */
+	e->pump_ready = true; /* exp_pump may hand out the next line (between frames) */
 	/* finished once every line has gone out (exp_pump and the app's tick send them) */
 	if (e->reporting && !e->q_n && !e->msg[0]) {
 		e->state = EXP_FINISHED;

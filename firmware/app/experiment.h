@@ -27,7 +27,7 @@
 
 #define EXP_MAX_EST 8
 #define EXP_MAX_RESULTS 32
-#define EXP_MAX_IDS 24        /* results as data of one phase's end (the rotor model's: 15) */
+#define EXP_MAX_IDS 24 /* results as data of one phase's end (the rotor model's: 15) */
 #define EXP_MAX_PHASES 6
 #define EXP_QUEUE 20
 #define EXP_TILT_ABORT_DEG 15.0f
@@ -35,31 +35,31 @@
 enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
 
 struct exp_input {
-	const struct hal_sensor_frame *frame;  /* this frame (paper's frames) */
+	const struct hal_sensor_frame *frame; /* this frame (paper's frames) */
 	/* this frame's measurements as scalars (converted once by the app): */
-	const scalar_t *thrust_n;              /* 8 rotor thrusts, N */
-	const scalar_t *torque_nm;             /* 8 rotor reaction torques, N m: read only when
+	const scalar_t *thrust_n;        /* 8 rotor thrusts, N */
+	const scalar_t *torque_nm;       /* 8 rotor reaction torques, N m: read only when
 						* exp_reads_torque() (NULL otherwise) */
-	const scalar_t *rate_b_rps;            /* 3 body rates, rad/s */
-	float dt_s;                            /* time since the previous step */
-	const struct app_params *params;       /* parameters in use */
-	const float *wrench_dem;               /* [f, tau_x, tau_y, tau_z] of the hover control */
-	const scalar_t *rotor_f_cmd;           /* 8 rotor thrusts allocated last step, N */
-	const scalar_t *thr_prev;              /* 8 throttles sent on the previous frame */
-	float dt_frame_s;                      /* the plant's frame period (0: unknown, the
+	const scalar_t *rate_b_rps;      /* 3 body rates, rad/s */
+	float dt_s;                      /* time since the previous step */
+	const struct app_params *params; /* parameters in use */
+	const float *wrench_dem;         /* [f, tau_x, tau_y, tau_z] of the hover control */
+	const scalar_t *rotor_f_cmd;     /* 8 rotor thrusts allocated last step, N */
+	const scalar_t *thr_prev;        /* 8 throttles sent on the previous frame */
+	float dt_frame_s;                /* the plant's frame period (0: unknown, the
 						* first step's dt_s is taken) */
 };
 
 /* in scalars: the app adds them to its scalar demands and throttles (the log has thr_delta as
  * floats); every value is small enough (|x| < 256) to be a float exactly */
 struct exp_output {
-	scalar_t f_delta;                      /* added to the demanded thrust, N */
-	scalar_t tau_delta[3];                 /* added to the demanded torque, N m (mu_1) */
-	scalar_t thr_delta[HAL_ROTORS];        /* added to each throttle after the map (delta_1) */
+	scalar_t f_delta;               /* added to the demanded thrust, N */
+	scalar_t tau_delta[3];          /* added to the demanded torque, N m (mu_1) */
+	scalar_t thr_delta[HAL_ROTORS]; /* added to each throttle after the map (delta_1) */
 };
 
 struct exp_result {
-	int param_index;                       /* params_find() of the parameter */
+	int param_index; /* params_find() of the parameter */
 	float value;
 };
 
@@ -67,8 +67,8 @@ struct exp_result {
 #define EXP_LINE_ARGS 5
 struct exp_line {
 	const char *fmt;
-	int sev;                               /* enum app_severity */
-	char kind[EXP_LINE_ARGS + 1];          /* 'd' int, 's' string, 'f' double per argument */
+	int sev;                      /* enum app_severity */
+	char kind[EXP_LINE_ARGS + 1]; /* 'd' int, 's' string, 'f' double per argument */
 	union {
 		int i;
 		const char *s;
@@ -79,33 +79,33 @@ struct exp_line {
 /* what the start of a phase needs of the step that ended the previous one (a copy: the
  * frame is gone by the time the turn runs between frames) */
 struct exp_turn {
-	scalar_t thr_prev0;                    /* rotor 1's throttle sent before that step */
-	scalar_t thr_prev_all[HAL_ROTORS];     /* every rotor's */
-	scalar_t rotor_f_cmd0;                 /* rotor 1's thrust allocated before that step */
-	scalar_t thrust_n[HAL_ROTORS], torque_nm[HAL_ROTORS], rate_b_rps[3];   /* of its frame */
+	scalar_t thr_prev0;                /* rotor 1's throttle sent before that step */
+	scalar_t thr_prev_all[HAL_ROTORS]; /* every rotor's */
+	scalar_t rotor_f_cmd0;             /* rotor 1's thrust allocated before that step */
+	scalar_t thrust_n[HAL_ROTORS], torque_nm[HAL_ROTORS], rate_b_rps[3]; /* of its frame */
 };
 
 /* the experiment's configuration (ID_* parameters), read once at exp_start */
 struct exp_cfg {
 	float exc_amp, exc_time, mot_tau, inr_amp, inr_time, val_time, rsd_max, exc_ofs;
-	float rot_to, inr_to, val_to;          /* phase time limits (0: automatic) */
+	float rot_to, inr_to, val_to; /* phase time limits (0: automatic) */
 	uint32_t exc_kind, exc_div, seed, delay_fr;
 	bool exc_null, crv_est;
 };
 
 struct experiment {
-	const struct mixer *mix;               /* the app's mixer: its Gamma gives the inertia phases' torque */
+	const struct mixer *mix; /* the app's mixer: its Gamma gives the inertia phases' torque */
 	/* id and state are experiment.c's alone: exp_start sets them, exp_step and exp_abort
 	 * move the state on; the app reads them */
-	int id;                                /* MAV_CMD_USER_1 param1; 0 = none */
+	int id; /* MAV_CMD_USER_1 param1; 0 = none */
 	enum exp_state state;
 	int phase;
-	float progress;                        /* 0..1 */
+	float progress; /* 0..1 */
 	int n_est;
-	char est_name[EXP_MAX_EST][11];        /* NAMED_VALUE_FLOAT names, <= 10 chars */
+	char est_name[EXP_MAX_EST][11]; /* NAMED_VALUE_FLOAT names, <= 10 chars */
 	float est[EXP_MAX_EST], est_sd[EXP_MAX_EST];
-	char msg[APP_EVENT_TEXT];              /* pending status line ("" = none) */
-	int msg_severity;                      /* enum app_severity */
+	char msg[APP_EVENT_TEXT]; /* pending status line ("" = none) */
+	int msg_severity;         /* enum app_severity */
 	int n_results;
 	struct exp_result results[EXP_MAX_RESULTS];
 	int n_ids;                             /* results as data of the last phase's end: the app */
@@ -116,44 +116,44 @@ struct experiment {
 
 	/* implementation state (experiment.c) */
 	int n_phases, phase_kind[EXP_MAX_PHASES];
-	float t_phase;                         /* time in the current phase, s */
-	float t_settle, t_run;                 /* of the current phase */
+	float t_phase;         /* time in the current phase, s */
+	float t_settle, t_run; /* of the current phase */
 	bool started, reporting;
 	float dt_nom, z0;
-	float inv_dt_nom;                      /* 1 / dt_nom: frames in a step's dt */
-	float prog_base, prog_rate;            /* progress = base + min(t_phase, total) rate */
-	float t_total, t_limit;                /* the phase's planned time and time limit (phase_limit) */
-	float fr_dt;                           /* the last step's dt_s ... */
-	int fr_n;                              /* ... and the frames it spans (phase_step) */
-	int gap_hold;                          /* frames left without inertia updates after a gap */
+	float inv_dt_nom;           /* 1 / dt_nom: frames in a step's dt */
+	float prog_base, prog_rate; /* progress = base + min(t_phase, total) rate */
+	float t_total, t_limit;     /* the phase's planned time and time limit (phase_limit) */
+	float fr_dt;                /* the last step's dt_s ... */
+	int fr_n;                   /* ... and the frames it spans (phase_step) */
+	int gap_hold;               /* frames left without inertia updates after a gap */
 	struct exp_cfg cfg;
 	struct excite exc;
-	struct excite exc2;                    /* rotor experiment: the second pattern's dither */
-	uint32_t rot_k;                        /* rotor experiment: excited frames so far */
-	uint32_t est_wait;                     /* steps until est[] / est_sd[] are read again */
-	scalar_t inr_u_prev;                   /* inertia: the excitation of the previous step (the instrument) */
+	struct excite exc2;  /* rotor experiment: the second pattern's dither */
+	uint32_t rot_k;      /* rotor experiment: excited frames so far */
+	uint32_t est_wait;   /* steps until est[] / est_sd[] are read again */
+	scalar_t inr_u_prev; /* inertia: the excitation of the previous step (the instrument) */
 	/* the estimator of the current phase: phases never overlap, so they share the memory
 	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */
 	union {
-		struct {                           /* rotor coefficients */
-			struct ident_rotor rot;    /* rotor 1, model given (and the paper's plain) */
-			struct motor_id mid;       /* every rotor, the motor model found (motor_id.h) */
+		struct {                             /* rotor coefficients */
+			struct ident_rotor rot;      /* rotor 1, model given (and the paper's plain) */
+			struct motor_id mid;         /* every rotor, the motor model found (motor_id.h) */
 			scalar_t pat[2][HAL_ROTORS]; /* the two null-space patterns (excite_null_pattern) */
-			scalar_t ofs;              /* ID_EXC_OFS: the offset's amplitude */
+			scalar_t ofs;                /* ID_EXC_OFS: the offset's amplitude */
 		};
-		struct ident_inertia inr;          /* inertia Ixx, Iyy or Izz */
-		struct {                           /* validation */
+		struct ident_inertia inr; /* inertia Ixx, Iyy or Izz */
+		struct {                  /* validation */
 			struct ident_fit fit;
 			struct filt_delay val_delay;
 			struct filt_lag val_lag;
 		};
 	};
-	bool turn_pending;                     /* a phase ended: exp_turn ends it, starts the next */
-	bool begin_pending;                    /* the first step ran: exp_turn begins the first phase */
+	bool turn_pending;  /* a phase ended: exp_turn ends it, starts the next */
+	bool begin_pending; /* the first step ran: exp_turn begins the first phase */
 	struct exp_turn turn;
-	struct exp_line queue[EXP_QUEUE];      /* status lines, formatted by exp_pump */
+	struct exp_line queue[EXP_QUEUE]; /* status lines, formatted by exp_pump */
 	int q_head, q_n;
-	bool pump_ready;                       /* a step ran since the last line was handed out */
+	bool pump_ready; /* a step ran since the last line was handed out */
 };
 
 /* Is experiment `id` (1..6) built into this firmware? */

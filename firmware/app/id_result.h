@@ -24,11 +24,11 @@ enum app_id_param {
 	APP_ID_MOT_TAU,
 	APP_ID_DELAY_FR,
 	APP_ID_MOT_CURVE,
-	APP_ID_MOT_SCALE,         /* the rotor field names the rotor */
+	APP_ID_MOT_SCALE, /* the rotor field names the rotor */
 	APP_ID_KF_PLAIN,
 	APP_ID_KTAU_PLAIN,
 	APP_ID_KTAU_OVER_IZZ,
-	APP_ID_VAL_NE_BEFORE,     /* sd holds the fit % */
+	APP_ID_VAL_NE_BEFORE, /* sd holds the fit % */
 	APP_ID_VAL_NE_AFTER,
 };
 
@@ -58,26 +58,26 @@ enum app_id_reason {
 
 enum app_id_source {
 	APP_ID_SOURCE_UNKNOWN = 0,
-	APP_ID_SOURCE_THRUST = 1,  /* each rotor's measured thrust and reaction torque */
+	APP_ID_SOURCE_THRUST = 1, /* each rotor's measured thrust and reaction torque */
 };
 
 struct app_id_result {
-	uint16_t run_id;          /* experiment commands since boot (the app sets it) */
-	uint8_t index, count;     /* within the run; count: published so far (the app) */
-	uint8_t run_done;         /* 1: the run has ended, count is its total (the app) */
-	uint8_t experiment;       /* the phase: 1 rotor, 2 validation, 3-5 inertia x, y, z */
-	uint8_t param;            /* enum app_id_param */
-	uint8_t rotor;            /* 1..8 for APP_ID_MOT_SCALE, else 0 */
-	uint8_t accepted;         /* 1: applied to the vehicle's parameters */
-	uint8_t source;           /* enum app_id_source */
-	uint16_t reason;          /* enum app_id_reason (APP_ID_OK when accepted) */
-	float value, sd;          /* sd NaN when none is defined */
+	uint16_t run_id;      /* experiment commands since boot (the app sets it) */
+	uint8_t index, count; /* within the run; count: published so far (the app) */
+	uint8_t run_done;     /* 1: the run has ended, count is its total (the app) */
+	uint8_t experiment;   /* the phase: 1 rotor, 2 validation, 3-5 inertia x, y, z */
+	uint8_t param;        /* enum app_id_param */
+	uint8_t rotor;        /* 1..8 for APP_ID_MOT_SCALE, else 0 */
+	uint8_t accepted;     /* 1: applied to the vehicle's parameters */
+	uint8_t source;       /* enum app_id_source */
+	uint16_t reason;      /* enum app_id_reason (APP_ID_OK when accepted) */
+	float value, sd;      /* sd NaN when none is defined */
 };
 
 /* The results of the last run, as published (a request for them is answered from here). */
 #define APP_ID_RUN_MAX 32
 struct app_id_run {
-	uint16_t run_id;          /* 0: no run yet */
+	uint16_t run_id; /* 0: no run yet */
 	uint8_t count;
 	bool done;
 	struct app_id_result r[APP_ID_RUN_MAX];

@@ -31,11 +31,11 @@ static inline void copy4n(float *restrict d, const float *restrict s, int n)
 	}
 }
 
-#define LOG_LEN(field) (sizeof ((struct app_log_frame *)0)->field / sizeof(float))
+#define LOG_LEN(field) (sizeof((struct app_log_frame *)0)->field / sizeof(float))
 _Static_assert(LOG_LEN(q) == 4 && LOG_LEN(rotor_thrust) == HAL_ROTORS && LOG_LEN(rotor_torque) == HAL_ROTORS &&
-		       LOG_LEN(rotor_speed) == HAL_ROTORS &&
-		       LOG_LEN(throttle) == HAL_ROTORS && LOG_LEN(est) == EXP_MAX_EST && LOG_LEN(est_sd) == EXP_MAX_EST &&
-		       HAL_ROTORS % 4 == 0 && EXP_MAX_EST % 4 == 0,
+		       LOG_LEN(rotor_speed) == HAL_ROTORS && LOG_LEN(throttle) == HAL_ROTORS &&
+		       LOG_LEN(est) == EXP_MAX_EST && LOG_LEN(est_sd) == EXP_MAX_EST && HAL_ROTORS % 4 == 0 &&
+		       EXP_MAX_EST % 4 == 0,
 	       "the log's arrays are copied whole, four floats at a time");
 
 void log_fill(struct app_log_frame *l, const struct log_src *s)

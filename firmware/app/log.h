@@ -20,48 +20,48 @@
 
 #include "scalar.h"
 
-#define APP_LOG_FIELDS(ONE, ARR)                                         \
-	ONE(int64_t, int64_t, seq)                                        \
-	ONE(double, double, t)                                            \
-	ONE(float, float, dt)                                             \
-	ONE(bool, boolean, stepped)                                       \
-	ONE(int8_t, int8_t, mode)                                         \
-	ONE(bool, boolean, armed)                                         \
-	ONE(bool, boolean, link_ok)                                       \
-	ONE(int32_t, int32_t, valid)                                      \
-	ARR(float, float, q, 4)                                           \
-	ARR(float, float, rate_b, 3)                                      \
-	ARR(float, float, pos_i, 3)                                       \
-	ARR(float, float, vel_i, 3)                                       \
-	ARR(float, float, rotor_thrust, 8)                                \
-	ARR(float, float, rotor_torque, 8)                                \
-	ARR(float, float, accel_b, 3)                                     \
-	ARR(float, float, rotor_speed, 8)                                 \
-	ARR(float, float, q_sp, 4)                                        \
-	ONE(float, float, z_sp)                                           \
-	ONE(float, float, vz_ff)                                          \
-	ARR(float, float, pos_sp, 2)                                      \
-	ONE(float, float, f_dem)                                          \
-	ARR(float, float, tau_dem, 3)                                     \
-	ONE(float, float, f_alloc)                                        \
-	ARR(float, float, tau_alloc, 3)                                   \
-	ARR(float, float, rotor_f, 8)                                     \
-	ARR(float, float, excitation, 8)                                  \
-	ARR(float, float, throttle, 8)                                    \
-	ONE(int32_t, int32_t, att_flags)                                  \
-	ONE(int32_t, int32_t, alt_flags)                                  \
-	ONE(int32_t, int32_t, mix_flags)                                  \
-	ONE(int32_t, int32_t, thr_clamped)                                \
-	ONE(int8_t, int8_t, exp_id)                                       \
-	ONE(int8_t, int8_t, exp_phase)                                    \
-	ONE(float, float, exp_progress)                                   \
-	ARR(float, float, est, 8)                                         \
-	ARR(float, float, est_sd, 8)                                      \
-	ONE(float, float, kf)                                             \
-	ONE(float, float, ktau)                                           \
-	ARR(float, float, inertia, 3)                                     \
-	ONE(float, float, mass)                                           \
-	ONE(float, float, kft)                                            \
+#define APP_LOG_FIELDS(ONE, ARR)           \
+	ONE(int64_t, int64_t, seq)         \
+	ONE(double, double, t)             \
+	ONE(float, float, dt)              \
+	ONE(bool, boolean, stepped)        \
+	ONE(int8_t, int8_t, mode)          \
+	ONE(bool, boolean, armed)          \
+	ONE(bool, boolean, link_ok)        \
+	ONE(int32_t, int32_t, valid)       \
+	ARR(float, float, q, 4)            \
+	ARR(float, float, rate_b, 3)       \
+	ARR(float, float, pos_i, 3)        \
+	ARR(float, float, vel_i, 3)        \
+	ARR(float, float, rotor_thrust, 8) \
+	ARR(float, float, rotor_torque, 8) \
+	ARR(float, float, accel_b, 3)      \
+	ARR(float, float, rotor_speed, 8)  \
+	ARR(float, float, q_sp, 4)         \
+	ONE(float, float, z_sp)            \
+	ONE(float, float, vz_ff)           \
+	ARR(float, float, pos_sp, 2)       \
+	ONE(float, float, f_dem)           \
+	ARR(float, float, tau_dem, 3)      \
+	ONE(float, float, f_alloc)         \
+	ARR(float, float, tau_alloc, 3)    \
+	ARR(float, float, rotor_f, 8)      \
+	ARR(float, float, excitation, 8)   \
+	ARR(float, float, throttle, 8)     \
+	ONE(int32_t, int32_t, att_flags)   \
+	ONE(int32_t, int32_t, alt_flags)   \
+	ONE(int32_t, int32_t, mix_flags)   \
+	ONE(int32_t, int32_t, thr_clamped) \
+	ONE(int8_t, int8_t, exp_id)        \
+	ONE(int8_t, int8_t, exp_phase)     \
+	ONE(float, float, exp_progress)    \
+	ARR(float, float, est, 8)          \
+	ARR(float, float, est_sd, 8)       \
+	ONE(float, float, kf)              \
+	ONE(float, float, ktau)            \
+	ARR(float, float, inertia, 3)      \
+	ONE(float, float, mass)            \
+	ONE(float, float, kft)             \
 	ONE(float, float, kft_sd)
 
 struct app_log_frame {
@@ -82,8 +82,8 @@ struct boundary;
 
 /* What one record is filled from. */
 struct log_src {
-	const struct hal_sensor_frame *fr;  /* the frame received */
-	bool stepped;                       /* the app stepped on it, with dt */
+	const struct hal_sensor_frame *fr; /* the frame received */
+	bool stepped;                      /* the app stepped on it, with dt */
 	float dt;
 	int8_t mode;                        /* enum app_mode */
 	bool armed, link_ok, experiment;    /* experiment: in mode EXPERIMENT */
@@ -94,9 +94,9 @@ struct log_src {
 	const float *thr;                   /* HAL_ROTORS throttles sent */
 	uint32_t att_flags, alt_flags, thr_clamped;
 	const struct experiment *exp;
-	const struct app_params *p;         /* VEH_* */
-	const struct env_kf *kf;            /* k_f tracked */
-	struct boundary *bnd;               /* the set points' conversions (fixed build) */
+	const struct app_params *p; /* VEH_* */
+	const struct env_kf *kf;    /* k_f tracked */
+	struct boundary *bnd;       /* the set points' conversions (fixed build) */
 };
 
 void log_fill(struct app_log_frame *l, const struct log_src *s);

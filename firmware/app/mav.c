@@ -11,11 +11,11 @@
 #include "mav_telem.h"
 
 #define CHAN MAVLINK_COMM_0
-#define PARAM_PACE_US 2000u        /* list streaming: one PARAM_VALUE per 2 ms */
+#define PARAM_PACE_US 2000u /* list streaming: one PARAM_VALUE per 2 ms */
 #define PARAM_PER_TICK 4
-#define TEXT_BURST 50.0f           /* STATUSTEXT: burst of 50, then 20 per second */
+#define TEXT_BURST 50.0f /* STATUSTEXT: burst of 50, then 20 per second */
 #define TEXT_RATE 20.0f
-#define FW_VERSION 0x00050000u     /* 0.5.0 */
+#define FW_VERSION 0x00050000u /* 0.5.0 */
 
 /* The channel's status and receive buffer (mav_lib.h): one channel, whatever its number. */
 mavlink_status_t *mavlink_get_channel_status(uint8_t chan)
@@ -72,26 +72,21 @@ static void send_msg(const struct mav *m, const mavlink_message_t *msg)
 	hal_ground_send(m->hal, buf, n);
 }
 
-static uint32_t boot_ms(const struct mav *m)
-{
-	return (uint32_t)((hal_wall_us(m->hal) - m->boot_us) / 1000u);
-}
+static uint32_t boot_ms(const struct mav *m) { return (uint32_t)((hal_wall_us(m->hal) - m->boot_us) / 1000u); }
 
 static void send_named_float(const struct mav *m, const char *name, float value);
 
 /* The sender handed to the telemetry and FTP modules (their context is the endpoint). */
-static void send_cb(const void *ctx, const mavlink_message_t *msg)
-{
-	send_msg(ctx, msg);
-}
+static void send_cb(const void *ctx, const mavlink_message_t *msg) { send_msg(ctx, msg); }
 
 static struct mav_telem_in telem_in(const struct mav *m, const struct app_view *v)
 {
 	float thr = 0.0f;
 	for (int j = 0; j < HAL_ROTORS; j++)
 		thr += v->thr[j] / (float)HAL_ROTORS;
-	return (struct mav_telem_in){boot_ms(m), v->fr, v->frames_ok, v->armed, v->frames_ok, (uint32_t)v->mode,
-				     thr, MAV_SYSID, MAV_COMPID, CHAN, m, v->rotor_failed};
+	return (struct mav_telem_in){
+		boot_ms(m), v->fr,      v->frames_ok, v->armed, v->frames_ok,   (uint32_t)v->mode, thr,
+		MAV_SYSID,  MAV_COMPID, CHAN,         m,        v->rotor_failed};
 }
 
 static struct mav_ftp_link ftp_link(const struct mav *m, const mavlink_message_t *req)
@@ -109,8 +104,8 @@ static void pack_heartbeat(const struct mav *m, const struct app_view *v, mavlin
 	uint8_t status = MAV_STATE_STANDBY;
 	if (v->flying)
 		status = v->link_ok ? MAV_STATE_ACTIVE : MAV_STATE_CRITICAL;
-	mavlink_msg_heartbeat_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, MAV_TYPE_OCTOROTOR,
-					MAV_AUTOPILOT_GENERIC, base, (uint32_t)v->mode, status);
+	mavlink_msg_heartbeat_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, MAV_TYPE_OCTOROTOR, MAV_AUTOPILOT_GENERIC,
+					base, (uint32_t)v->mode, status);
 }
 
 /* Telemetry leaves in MAVLink's NED / forward-right-down conventions. */
@@ -118,9 +113,8 @@ static void pack_attitude_q(const struct mav *m, const struct app_view *v, mavli
 {
 	const struct hal_sensor_frame *f = v->fr;
 	const float zero[4] = {0, 0, 0, 0};
-	mavlink_msg_attitude_quaternion_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, boot_ms(m),
-						  f->q_ib[0], f->q_ib[1], -f->q_ib[2], -f->q_ib[3],
-						  f->rate_b_rps[0], -f->rate_b_rps[1],
+	mavlink_msg_attitude_quaternion_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, boot_ms(m), f->q_ib[0], f->q_ib[1],
+						  -f->q_ib[2], -f->q_ib[3], f->rate_b_rps[0], -f->rate_b_rps[1],
 						  -f->rate_b_rps[2], zero);
 }
 
@@ -129,8 +123,8 @@ static void pack_actuator(const struct mav *m, const struct app_view *v, mavlink
 	float act[32] = {0};
 	for (int j = 0; j < HAL_ROTORS; j++)
 		act[j] = v->thr[j];
-	mavlink_msg_actuator_output_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg,
-						     (uint64_t)boot_ms(m) * 1000u, 0xFFu, act);
+	mavlink_msg_actuator_output_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, (uint64_t)boot_ms(m) * 1000u,
+						     0xFFu, act);
 }
 
 static uint16_t pwm(float t)
@@ -142,9 +136,9 @@ static uint16_t pwm(float t)
 static void pack_servo(const struct mav *m, const struct app_view *v, mavlink_message_t *msg)
 {
 	const float *t = v->thr;
-	mavlink_msg_servo_output_raw_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, boot_ms(m) * 1000u, 0,
-					       pwm(t[0]), pwm(t[1]), pwm(t[2]), pwm(t[3]), pwm(t[4]),
-					       pwm(t[5]), pwm(t[6]), pwm(t[7]), 0, 0, 0, 0, 0, 0, 0, 0);
+	mavlink_msg_servo_output_raw_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, boot_ms(m) * 1000u, 0, pwm(t[0]),
+					       pwm(t[1]), pwm(t[2]), pwm(t[3]), pwm(t[4]), pwm(t[5]), pwm(t[6]),
+					       pwm(t[7]), 0, 0, 0, 0, 0, 0, 0, 0);
 }
 
 static void pack_sys_status(const struct mav *m, const struct app_view *v, mavlink_message_t *msg)
@@ -155,10 +149,9 @@ static void pack_sys_status(const struct mav *m, const struct app_view *v, mavli
 	uint32_t present, enabled, health;
 	struct mav_telem_in in = telem_in(m, v);
 	mav_telem_sensors(&in, &present, &enabled, &health);
-	mavlink_msg_sys_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, present, enabled, health, 0, UINT16_MAX,
-					 -1, -1, 0,
-					 (uint16_t)(m->rx_dropped > 65535u ? 65535u : m->rx_dropped),
-					 drops, (uint16_t)(ls.foreign > 65535u ? 65535u : ls.foreign),
+	mavlink_msg_sys_status_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, msg, present, enabled, health, 0, UINT16_MAX, -1,
+					 -1, 0, (uint16_t)(m->rx_dropped > 65535u ? 65535u : m->rx_dropped), drops,
+					 (uint16_t)(ls.foreign > 65535u ? 65535u : ls.foreign),
 					 (uint16_t)(m->text_dropped > 65535u ? 65535u : m->text_dropped),
 					 (uint16_t)(m->rx_unsigned > 65535u ? 65535u : m->rx_unsigned), 0, 0, 0);
 }
@@ -188,7 +181,7 @@ struct mav_stream {
 	uint32_t msgid;
 	uint32_t default_interval_us;
 	void (*pack)(const struct mav *m, const struct app_view *v, mavlink_message_t *msg);
-	bool direct;   /* pack sends itself (zero or several messages) */
+	bool direct; /* pack sends itself (zero or several messages) */
 };
 
 static const struct mav_stream streams[MAV_N_STREAMS] = {
@@ -228,7 +221,7 @@ void mav_init(struct mav *m, struct app *a, const struct hal *hal, uint64_t now_
 	m->text_tokens = TEXT_BURST;
 	m->text_last_us = now_us;
 	mav_telem_init(&m->telem);
-	(void)mav_ftp_init(&m->ftp);   /* without metadata, FTP NAKs everything and 395/397 are UNSUPPORTED */
+	(void)mav_ftp_init(&m->ftp); /* without metadata, FTP NAKs everything and 395/397 are UNSUPPORTED */
 	signing_setup(m, hal);
 }
 
@@ -261,7 +254,7 @@ static void send_statustext(struct mav *m, int severity, const char *text)
 	}
 	uint8_t sev = (uint8_t)(severity < 0 ? 0 : (severity > 7 ? 7 : severity));
 	for (unsigned c = 0; c < chunks; c++) {
-		char buf[W];   /* zero-filled, full size */
+		char buf[W]; /* zero-filled, full size */
 		memset(buf, 0, sizeof buf);
 		size_t at = (size_t)c * W, k = n - at < W ? n - at : W;
 		memcpy(buf, text + at, k);
@@ -365,7 +358,7 @@ static void send_param_value(const struct mav *m, size_t index)
 {
 	if (index >= param_count)
 		return;
-	char id[MAVLINK_MSG_PARAM_VALUE_FIELD_PARAM_ID_LEN];   /* 16, no NUL when full */
+	char id[MAVLINK_MSG_PARAM_VALUE_FIELD_PARAM_ID_LEN]; /* 16, no NUL when full */
 	memset(id, 0, sizeof id);
 	size_t n = strlen(param_defs[index].name);
 	memcpy(id, param_defs[index].name, n < sizeof id ? n : sizeof id);
@@ -375,12 +368,11 @@ static void send_param_value(const struct mav *m, size_t index)
 	send_msg(m, &msg);
 }
 
-static void send_command_ack(const struct mav *m, uint16_t cmd, uint8_t result, uint8_t progress,
-			     uint8_t sysid, uint8_t compid)
+static void send_command_ack(const struct mav *m, uint16_t cmd, uint8_t result, uint8_t progress, uint8_t sysid,
+			     uint8_t compid)
 {
 	mavlink_message_t msg;
-	mavlink_msg_command_ack_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, cmd, result, progress, 0, sysid,
-					  compid);
+	mavlink_msg_command_ack_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg, cmd, result, progress, 0, sysid, compid);
 	send_msg(m, &msg);
 }
 
@@ -398,11 +390,11 @@ static void send_autopilot_version(const struct mav *m)
 	uint8_t custom[8] = {0}, uid2[18] = {0};
 	memcpy(custom, "octofw05", 8);
 	mavlink_message_t msg;
-	mavlink_msg_autopilot_version_pack_chan(
-		MAV_SYSID, MAV_COMPID, CHAN, &msg,
-		MAV_PROTOCOL_CAPABILITY_MAVLINK2 | MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE |
-			MAV_PROTOCOL_CAPABILITY_COMMAND_INT,
-		FW_VERSION, 0, 0, 0, custom, custom, custom, 0, 0, 1, uid2);
+	mavlink_msg_autopilot_version_pack_chan(MAV_SYSID, MAV_COMPID, CHAN, &msg,
+						MAV_PROTOCOL_CAPABILITY_MAVLINK2 |
+							MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE |
+							MAV_PROTOCOL_CAPABILITY_COMMAND_INT,
+						FW_VERSION, 0, 0, 0, custom, custom, custom, 0, 0, 1, uid2);
 	send_msg(m, &msg);
 }
 
@@ -442,10 +434,10 @@ static void handle_param_set(struct mav *m, const mavlink_message_t *msg)
 	}
 	const char *why = app_param_write(m->app, (size_t)idx, ps.param_value);
 	if (why)
-		app_status(m->app, APP_SEV_WARNING, "%s: %g refused (%s)", param_defs[idx].name,
-			   (double)ps.param_value, why);
+		app_status(m->app, APP_SEV_WARNING, "%s: %g refused (%s)", param_defs[idx].name, (double)ps.param_value,
+			   why);
 	drain(m);
-	send_param_value(m, (size_t)idx);   /* always: the current value */
+	send_param_value(m, (size_t)idx); /* always: the current value */
 }
 
 static void handle_param_read(struct mav *m, const mavlink_message_t *msg)
@@ -471,33 +463,24 @@ static void handle_param_read(struct mav *m, const mavlink_message_t *msg)
 static uint8_t mav_result(enum app_result r)
 {
 	switch (r) {
-	case APP_ACCEPTED:
-		return MAV_RESULT_ACCEPTED;
-	case APP_IN_PROGRESS:
-		return MAV_RESULT_IN_PROGRESS;
-	case APP_BUSY:
-		return MAV_RESULT_TEMPORARILY_REJECTED;
-	case APP_DENIED:
-		return MAV_RESULT_DENIED;
-	case APP_FAILED:
-		return MAV_RESULT_FAILED;
-	case APP_UNSUPPORTED:
-		break;
+	case APP_ACCEPTED: return MAV_RESULT_ACCEPTED;
+	case APP_IN_PROGRESS: return MAV_RESULT_IN_PROGRESS;
+	case APP_BUSY: return MAV_RESULT_TEMPORARILY_REJECTED;
+	case APP_DENIED: return MAV_RESULT_DENIED;
+	case APP_FAILED: return MAV_RESULT_FAILED;
+	case APP_UNSUPPORTED: break;
 	}
 	return MAV_RESULT_UNSUPPORTED;
 }
 
 /* The sender of a command, as the app keeps it (opaque to it). */
-static app_origin origin_of(const mavlink_message_t *req)
-{
-	return (app_origin)req->sysid << 8 | req->compid;
-}
+static app_origin origin_of(const mavlink_message_t *req) { return (app_origin)req->sysid << 8 | req->compid; }
 
 /* MAV_CMD_USER_1: long-running, IN_PROGRESS (with progress) now and on retries, the final
  * ACCEPTED / FAILED when the experiment ends (the app's APP_EV_CMD_DONE). Returns true when
  * it answered itself. */
-static bool cmd_experiment(struct mav *m, const mavlink_message_t *req, uint16_t cmd, float id,
-			   uint8_t *r, char *why, size_t cap)
+static bool cmd_experiment(struct mav *m, const mavlink_message_t *req, uint16_t cmd, float id, uint8_t *r, char *why,
+			   size_t cap)
 {
 	*r = mav_result(app_cmd_experiment(m->app, id, origin_of(req), why, cap));
 	if (*r != MAV_RESULT_IN_PROGRESS)
@@ -506,8 +489,7 @@ static bool cmd_experiment(struct mav *m, const mavlink_message_t *req, uint16_t
 	 * the final ACK */
 	float pr = ceilf(app_view(m->app).exp_progress * 100.0f);
 	drain(m);
-	send_command_ack(m, cmd, *r, (uint8_t)(pr < 0.0f ? 0.0f : (pr > 99.0f ? 99.0f : pr)), req->sysid,
-			 req->compid);
+	send_command_ack(m, cmd, *r, (uint8_t)(pr < 0.0f ? 0.0f : (pr > 99.0f ? 99.0f : pr)), req->sysid, req->compid);
 	if (why[0])
 		app_status(m->app, APP_SEV_INFO, "%s", why);
 	return true;
@@ -525,7 +507,7 @@ static uint8_t cmd_storage(struct mav *m, float what, char *why, size_t cap)
 		r = mav_result(app_params_load(m->app, why, cap));
 		if (r == MAV_RESULT_ACCEPTED) {
 			app_status(m->app, APP_SEV_INFO, "Parameters loaded");
-			m->param_next = 0;   /* the ground station's copy is stale */
+			m->param_next = 0; /* the ground station's copy is stale */
 		}
 		return r;
 	}
@@ -542,8 +524,7 @@ static uint8_t cmd_storage(struct mav *m, float what, char *why, size_t cap)
 /* MAV_CMD_REQUEST_MESSAGE (and REQUEST_AUTOPILOT_CAPABILITIES, as a request for
  * AUTOPILOT_VERSION): acknowledged, then the message sent. Returns false when no module
  * has message `id` (UNSUPPORTED). */
-static bool cmd_request_message(struct mav *m, const mavlink_message_t *req, uint16_t cmd, float id,
-				float param2)
+static bool cmd_request_message(struct mav *m, const mavlink_message_t *req, uint16_t cmd, float id, float param2)
 {
 	if (id == (float)MAVLINK_MSG_ID_AUTOPILOT_VERSION) {
 		send_ack(m, cmd, MAV_RESULT_ACCEPTED, req);
@@ -610,7 +591,8 @@ static uint8_t cmd_set_interval(struct mav *m, float msgid, float interval_us)
 {
 	int s = msgid >= 0.0f && msgid < 65536.0f ? stream_index((uint32_t)msgid) : -1;
 	int t = s < 0 && msgid >= 0.0f && msgid < 65536.0f
-			? mav_telem_set_interval(&m->telem, (uint32_t)msgid, interval_us) : -1;
+			? mav_telem_set_interval(&m->telem, (uint32_t)msgid, interval_us)
+			: -1;
 	if (t >= 0)
 		return (uint8_t)t;
 	if (s < 0)
@@ -620,8 +602,7 @@ static uint8_t cmd_set_interval(struct mav *m, float msgid, float interval_us)
 		       : MAV_RESULT_DENIED;
 }
 
-static void handle_command(struct mav *m, const mavlink_message_t *req, uint16_t cmd,
-			   const float prm[7])
+static void handle_command(struct mav *m, const mavlink_message_t *req, uint16_t cmd, const float prm[7])
 {
 	struct app *a = m->app;
 	char why[64] = {0};
@@ -635,24 +616,18 @@ static void handle_command(struct mav *m, const mavlink_message_t *req, uint16_t
 			snprintf(why, sizeof why, "Arm/disarm: param1 must be 0 or 1");
 		}
 		break;
-	case MAV_CMD_NAV_TAKEOFF:
-		r = mav_result(app_cmd_takeoff(a, prm[6], origin_of(req), why, sizeof why));
-		break;
-	case MAV_CMD_NAV_LAND:
-		r = mav_result(app_cmd_land(a, origin_of(req), why, sizeof why));
-		break;
+	case MAV_CMD_NAV_TAKEOFF: r = mav_result(app_cmd_takeoff(a, prm[6], origin_of(req), why, sizeof why)); break;
+	case MAV_CMD_NAV_LAND: r = mav_result(app_cmd_land(a, origin_of(req), why, sizeof why)); break;
 	case MAV_CMD_USER_1:
 		if (cmd_experiment(m, req, cmd, prm[0], &r, why, sizeof why))
 			return;
 		break;
-	case MAV_CMD_PREFLIGHT_STORAGE:
-		r = cmd_storage(m, prm[0], why, sizeof why);
-		break;
+	case MAV_CMD_PREFLIGHT_STORAGE: r = cmd_storage(m, prm[0], why, sizeof why); break;
 	case MAV_CMD_REQUEST_MESSAGE:
 	case MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES:
-		if (cmd_request_message(m, req, cmd,
-					cmd == MAV_CMD_REQUEST_MESSAGE ? prm[0] : (float)MAVLINK_MSG_ID_AUTOPILOT_VERSION,
-					prm[1]))
+		if (cmd_request_message(
+			    m, req, cmd,
+			    cmd == MAV_CMD_REQUEST_MESSAGE ? prm[0] : (float)MAVLINK_MSG_ID_AUTOPILOT_VERSION, prm[1]))
 			return;
 		r = MAV_RESULT_UNSUPPORTED;
 		break;
@@ -666,15 +641,9 @@ static void handle_command(struct mav *m, const mavlink_message_t *req, uint16_t
 		}
 		return;
 	}
-	case MAV_CMD_GET_MESSAGE_INTERVAL:
-		cmd_get_interval(m, req, cmd, prm[0]);
-		return;
-	case MAV_CMD_SET_MESSAGE_INTERVAL:
-		r = cmd_set_interval(m, prm[0], prm[1]);
-		break;
-	default:
-		r = MAV_RESULT_UNSUPPORTED;
-		break;
+	case MAV_CMD_GET_MESSAGE_INTERVAL: cmd_get_interval(m, req, cmd, prm[0]); return;
+	case MAV_CMD_SET_MESSAGE_INTERVAL: r = cmd_set_interval(m, prm[0], prm[1]); break;
+	default: r = MAV_RESULT_UNSUPPORTED; break;
 	}
 	send_ack(m, cmd, r, req);
 	if (why[0])
@@ -695,7 +664,7 @@ static void handle(struct mav *m, const mavlink_message_t *msg)
 {
 	m->rx_msgs++;
 	if (msg->sysid == MAV_SYSID && msg->compid == MAV_COMPID)
-		return;   /* our own echo */
+		return; /* our own echo */
 	switch (msg->msgid) {
 	case MAVLINK_MSG_ID_HEARTBEAT:
 		m->gcs_sysid = msg->sysid;
@@ -705,15 +674,11 @@ static void handle(struct mav *m, const mavlink_message_t *msg)
 		mavlink_param_request_list_t pl;
 		mavlink_msg_param_request_list_decode(msg, &pl);
 		if (for_us(pl.target_system, pl.target_component))
-			m->param_next = 0;   /* (re)start the paced stream */
+			m->param_next = 0; /* (re)start the paced stream */
 		break;
 	}
-	case MAVLINK_MSG_ID_PARAM_REQUEST_READ:
-		handle_param_read(m, msg);
-		break;
-	case MAVLINK_MSG_ID_PARAM_SET:
-		handle_param_set(m, msg);
-		break;
+	case MAVLINK_MSG_ID_PARAM_REQUEST_READ: handle_param_read(m, msg); break;
+	case MAVLINK_MSG_ID_PARAM_SET: handle_param_set(m, msg); break;
 	case MAVLINK_MSG_ID_COMMAND_LONG: {
 		mavlink_command_long_t c;
 		mavlink_msg_command_long_decode(msg, &c);
@@ -743,9 +708,7 @@ static void handle(struct mav *m, const mavlink_message_t *msg)
 		send_msg(m, &out);
 		break;
 	}
-	case MAVLINK_MSG_ID_FILE_TRANSFER_PROTOCOL:
-		handle_ftp(m, msg);
-		break;
+	case MAVLINK_MSG_ID_FILE_TRANSFER_PROTOCOL: handle_ftp(m, msg); break;
 	case MAVLINK_MSG_ID_SET_GPS_GLOBAL_ORIGIN: {
 		mavlink_set_gps_global_origin_t o;
 		mavlink_msg_set_gps_global_origin_decode(msg, &o);
@@ -757,8 +720,7 @@ static void handle(struct mav *m, const mavlink_message_t *msg)
 				   in.armed ? "armed" : "no position yet");
 		break;
 	}
-	default:
-		break;
+	default: break;
 	}
 }
 
@@ -769,34 +731,28 @@ static void drain(struct mav *m)
 	struct app_event e;
 	while (app_next_event(m->app, &e)) {
 		switch (e.kind) {
-		case APP_EV_STATUS:
-			send_statustext(m, e.severity, e.text);
-			break;
-		case APP_EV_PARAM:
-			send_param_value(m, e.param_index);
-			break;
+		case APP_EV_STATUS: send_statustext(m, e.severity, e.text); break;
+		case APP_EV_PARAM: send_param_value(m, e.param_index); break;
 		case APP_EV_CMD_DONE:
 			if (e.cmd == APP_CMD_EXPERIMENT || e.cmd == APP_CMD_TAKEOFF || e.cmd == APP_CMD_LAND)
-				send_command_ack(m, e.cmd == APP_CMD_EXPERIMENT ? MAV_CMD_USER_1
-						    : (e.cmd == APP_CMD_TAKEOFF ? MAV_CMD_NAV_TAKEOFF : MAV_CMD_NAV_LAND),
-						 mav_result((enum app_result)e.result), e.progress,
-						 (uint8_t)(e.origin >> 8), (uint8_t)e.origin);
+				send_command_ack(
+					m,
+					e.cmd == APP_CMD_EXPERIMENT
+						? MAV_CMD_USER_1
+						: (e.cmd == APP_CMD_TAKEOFF ? MAV_CMD_NAV_TAKEOFF : MAV_CMD_NAV_LAND),
+					mav_result((enum app_result)e.result), e.progress, (uint8_t)(e.origin >> 8),
+					(uint8_t)e.origin);
 			break;
-		case APP_EV_VALUE:
-			send_named_float(m, e.text, e.value);
-			break;
-		case APP_EV_ID_RESULT:
-			send_id_result(m, &e.id);
-			break;
-		default:
-			break;
+		case APP_EV_VALUE: send_named_float(m, e.text, e.value); break;
+		case APP_EV_ID_RESULT: send_id_result(m, &e.id); break;
+		default: break;
 		}
 	}
 }
 
 size_t mav_receive(struct mav *m, const uint8_t *buf, size_t len)
 {
-	app_settle(m->app);   /* commands see the results of the last step applied */
+	app_settle(m->app); /* commands see the results of the last step applied */
 	mavlink_message_t msg;
 	mavlink_status_t st;
 	size_t accepted = 0;

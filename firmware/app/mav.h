@@ -43,25 +43,25 @@ struct app;
 struct hal;
 
 struct mav {
-	struct app *app;                       /* the app this endpoint serves (mav_init) */
+	struct app *app; /* the app this endpoint serves (mav_init) */
 	const struct hal *hal;
-	int64_t interval_us[MAV_N_STREAMS];   /* < 0: off */
+	int64_t interval_us[MAV_N_STREAMS]; /* < 0: off */
 	uint64_t last_us[MAV_N_STREAMS];
-	long param_next;                       /* next index of a list stream, -1 = none */
+	long param_next; /* next index of a list stream, -1 = none */
 	uint64_t param_last_us;
 	uint64_t boot_us;
 	uint8_t gcs_sysid, gcs_compid;
-	float text_tokens;                     /* STATUSTEXT rate limit */
+	float text_tokens; /* STATUSTEXT rate limit */
 	uint64_t text_last_us;
-	uint16_t text_id;                      /* the last long STATUSTEXT's chunk id (0 = none yet) */
+	uint16_t text_id; /* the last long STATUSTEXT's chunk id (0 = none yet) */
 	uint32_t rx_msgs, rx_dropped, text_dropped;
-	uint32_t rx_unsigned;                  /* rejected by signing (unsigned, bad, replayed) */
-	bool signing;                          /* MAVLink 2 signing on (hal_signing_key) */
+	uint32_t rx_unsigned; /* rejected by signing (unsigned, bad, replayed) */
+	bool signing;         /* MAVLink 2 signing on (hal_signing_key) */
 	/* the channel's signing state; the library's channel status points here */
 	mavlink_signing_t signing_state;
 	mavlink_signing_streams_t signing_streams;
-	struct mav_telem telem;                /* ground-station telemetry (mav_telem.c) */
-	struct mav_ftp ftp;                    /* component metadata and its FTP (mav_ftp.c) */
+	struct mav_telem telem; /* ground-station telemetry (mav_telem.c) */
+	struct mav_ftp ftp;     /* component metadata and its FTP (mav_ftp.c) */
 };
 
 void mav_init(struct mav *m, struct app *a, const struct hal *hal, uint64_t now_us);

@@ -7,11 +7,27 @@
 #include "mav_lib.h"
 
 /* MAVLink FTP payload layout and codes (MAVLink's FTP protocol) */
-enum { P_SEQ = 0, P_SESSION = 2, P_OPCODE = 3, P_SIZE = 4, P_REQ_OPCODE = 5, P_BURST_COMPLETE = 6,
-       P_OFFSET = 8, P_DATA = 12 };
+enum {
+	P_SEQ = 0,
+	P_SESSION = 2,
+	P_OPCODE = 3,
+	P_SIZE = 4,
+	P_REQ_OPCODE = 5,
+	P_BURST_COMPLETE = 6,
+	P_OFFSET = 8,
+	P_DATA = 12
+};
 #define FTP_DATA_MAX 239
-enum { OP_TERMINATE = 1, OP_RESET = 2, OP_OPEN_RO = 4, OP_READ = 5, OP_CRC32 = 14, OP_BURST_READ = 15,
-       OP_ACK = 128, OP_NAK = 129 };
+enum {
+	OP_TERMINATE = 1,
+	OP_RESET = 2,
+	OP_OPEN_RO = 4,
+	OP_READ = 5,
+	OP_CRC32 = 14,
+	OP_BURST_READ = 15,
+	OP_ACK = 128,
+	OP_NAK = 129
+};
 enum { ERR_FAIL = 1, ERR_INVALID_SESSION = 4, ERR_EOF = 6, ERR_UNKNOWN_COMMAND = 7, ERR_FILE_NOT_FOUND = 10 };
 
 #define URI_PREFIX "mftp://"
@@ -44,21 +60,19 @@ static void set32(uint8_t *p, uint32_t v)
 		p[k] = (uint8_t)(v >> (8 * k));
 }
 
-static void reply(const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, uint8_t *rsp,
-		  mav_ftp_send_fn send)
+static void reply(const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, uint8_t *rsp, mav_ftp_send_fn send)
 {
 	rsp[P_SEQ] = (uint8_t)seq;
 	rsp[P_SEQ + 1] = (uint8_t)(seq >> 8);
 	rsp[P_SESSION] = req[P_SESSION];
 	rsp[P_REQ_OPCODE] = req[P_OPCODE];
 	mavlink_message_t msg;
-	mavlink_msg_file_transfer_protocol_pack_chan(l->sysid, l->compid, l->chan, &msg, 0, l->to_sysid,
-						     l->to_compid, rsp);
+	mavlink_msg_file_transfer_protocol_pack_chan(l->sysid, l->compid, l->chan, &msg, 0, l->to_sysid, l->to_compid,
+						     rsp);
 	send(l->ctx, &msg);
 }
 
-static void nak(const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, uint8_t err,
-		mav_ftp_send_fn send)
+static void nak(const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, uint8_t err, mav_ftp_send_fn send)
 {
 	uint8_t rsp[MAVLINK_MSG_FILE_TRANSFER_PROTOCOL_FIELD_PAYLOAD_LEN];
 	memset(rsp, 0, sizeof rsp);
@@ -68,14 +82,11 @@ static void nak(const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, 
 	reply(l, req, seq, rsp, send);
 }
 
-static const struct mav_ftp_file *session_file(const struct mav_ftp *f)
-{
-	return &mav_ftp_files[f->session_file];
-}
+static const struct mav_ftp_file *session_file(const struct mav_ftp *f) { return &mav_ftp_files[f->session_file]; }
 
 /* One ACK carrying the file's bytes from `offset`; returns how many. */
-static uint32_t send_chunk(const struct mav_ftp *f, const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq, uint32_t offset,
-			   uint32_t want, bool burst, mav_ftp_send_fn send)
+static uint32_t send_chunk(const struct mav_ftp *f, const struct mav_ftp_link *l, const uint8_t *req, uint16_t seq,
+			   uint32_t offset, uint32_t want, bool burst, mav_ftp_send_fn send)
 {
 	const uint8_t *data = session_file(f)->data;
 	const uint32_t len = session_file(f)->len;
@@ -170,20 +181,18 @@ void mav_ftp_handle(struct mav_ftp *f, const struct mav_ftp_link *l, const uint8
 		rsp[P_OPCODE] = OP_ACK;
 		reply(l, req, seq, rsp, send);
 		return;
-	case 3:    /* ListDirectory: nothing to list but the two files' folder */
-	case 6:    /* CreateFile */
-	case 7:    /* WriteFile */
-	case 8:    /* RemoveFile */
-	case 9:    /* CreateDirectory */
-	case 10:   /* RemoveDirectory */
-	case 11:   /* OpenFileWO */
-	case 12:   /* TruncateFile */
-	case 13:   /* Rename */
-		nak(l, req, seq, ERR_FILE_NOT_FOUND, send);   /* read-only: nothing else exists */
+	case 3:  /* ListDirectory: nothing to list but the two files' folder */
+	case 6:  /* CreateFile */
+	case 7:  /* WriteFile */
+	case 8:  /* RemoveFile */
+	case 9:  /* CreateDirectory */
+	case 10: /* RemoveDirectory */
+	case 11: /* OpenFileWO */
+	case 12: /* TruncateFile */
+	case 13: /* Rename */
+		nak(l, req, seq, ERR_FILE_NOT_FOUND, send); /* read-only: nothing else exists */
 		return;
-	default:
-		nak(l, req, seq, ERR_UNKNOWN_COMMAND, send);
-		return;
+	default: nak(l, req, seq, ERR_UNKNOWN_COMMAND, send); return;
 	}
 }
 
@@ -198,7 +207,7 @@ void mav_ftp_send_metadata_msg(const struct mav_ftp *f, const struct mav_ftp_lin
 			       mav_ftp_send_fn send)
 {
 	(void)f;
-	char uri[MAVLINK_MSG_COMPONENT_METADATA_FIELD_URI_LEN];   /* zero-filled, full size */
+	char uri[MAVLINK_MSG_COMPONENT_METADATA_FIELD_URI_LEN]; /* zero-filled, full size */
 	memset(uri, 0, sizeof uri);
 	snprintf(uri, sizeof uri, "%s%s", URI_PREFIX, mav_ftp_files[MAV_FTP_GENERAL].path);
 	mavlink_message_t msg;

@@ -32,7 +32,7 @@ struct mav_ftp_link {
 	uint8_t sysid, compid, chan;
 	uint8_t to_sysid, to_compid;
 	uint32_t time_boot_ms;
-	const void *ctx;   /* handed back to the send callback */
+	const void *ctx; /* handed back to the send callback */
 };
 
 /* A served file: its path (without the leading '/'), bytes, length and CRC32 (zlib's). */
@@ -51,15 +51,14 @@ extern const struct mav_ftp_file mav_ftp_files[MAV_FTP_N_FILES];
 /* The one session. A member of struct mav. */
 struct mav_ftp {
 	bool session_open;
-	int8_t session_file;   /* index into mav_ftp_files, -1 none */
+	int8_t session_file; /* index into mav_ftp_files, -1 none */
 };
 
 /* Closes the session; true when the metadata files exist. */
 bool mav_ftp_init(struct mav_ftp *f);
 
 /* One FILE_TRANSFER_PROTOCOL payload (addressed to this component). */
-void mav_ftp_handle(struct mav_ftp *f, const struct mav_ftp_link *l, const uint8_t *payload,
-		    mav_ftp_send_fn send);
+void mav_ftp_handle(struct mav_ftp *f, const struct mav_ftp_link *l, const uint8_t *payload, mav_ftp_send_fn send);
 
 /* MAV_CMD_REQUEST_MESSAGE for COMPONENT_METADATA or COMPONENT_INFORMATION:
  * true when msgid is one of them (and the files exist); then

@@ -7,16 +7,15 @@
 #include "app.h"
 #include "mav_lib.h"
 
-#define EARTH_R_M 6371008.8          /* mean radius: flat earth around the reference */
+#define EARTH_R_M 6371008.8 /* mean radius: flat earth around the reference */
 #define RAD_TO_DEG 57.29577951308232
-#define REREF_M 10.0                 /* row 20 and the projection disagree: new reference */
+#define REREF_M 10.0 /* row 20 and the projection disagree: new reference */
 
-enum { S_GLOBAL, S_GPS, S_ATTITUDE, S_VFR, S_EXT_STATE, S_CURRENT_MODE, S_HOME, S_BATTERY, S_LOCAL,
-       S_ORIGIN };
+enum { S_GLOBAL, S_GPS, S_ATTITUDE, S_VFR, S_EXT_STATE, S_CURRENT_MODE, S_HOME, S_BATTERY, S_LOCAL, S_ORIGIN };
 
 static const struct {
 	uint32_t msgid;
-	int64_t default_us;   /* < 0: only on change and on request */
+	int64_t default_us; /* < 0: only on change and on request */
 } streams[MAV_TELEM_N_STREAMS] = {
 	[S_GLOBAL] = {MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 200000},
 	[S_GPS] = {MAVLINK_MSG_ID_GPS_RAW_INT, 200000},
@@ -41,14 +40,12 @@ static const struct {
 } modes[] = {
 	{APP_DISARMED, MAV_STANDARD_MODE_NON_STANDARD, MAV_MODE_PROPERTY_NOT_USER_SELECTABLE},
 	{APP_IDLE, MAV_STANDARD_MODE_NON_STANDARD, MAV_MODE_PROPERTY_NOT_USER_SELECTABLE},
-	{APP_TAKEOFF, MAV_STANDARD_MODE_TAKEOFF,
-	 MAV_MODE_PROPERTY_NOT_USER_SELECTABLE | MAV_MODE_PROPERTY_AUTO_MODE},
+	{APP_TAKEOFF, MAV_STANDARD_MODE_TAKEOFF, MAV_MODE_PROPERTY_NOT_USER_SELECTABLE | MAV_MODE_PROPERTY_AUTO_MODE},
 	{APP_HOLD, MAV_STANDARD_MODE_POSITION_HOLD,
 	 MAV_MODE_PROPERTY_NOT_USER_SELECTABLE | MAV_MODE_PROPERTY_AUTO_MODE},
 	{APP_EXPERIMENT, MAV_STANDARD_MODE_NON_STANDARD,
 	 MAV_MODE_PROPERTY_NOT_USER_SELECTABLE | MAV_MODE_PROPERTY_AUTO_MODE},
-	{APP_LAND, MAV_STANDARD_MODE_LAND,
-	 MAV_MODE_PROPERTY_NOT_USER_SELECTABLE | MAV_MODE_PROPERTY_AUTO_MODE},
+	{APP_LAND, MAV_STANDARD_MODE_LAND, MAV_MODE_PROPERTY_NOT_USER_SELECTABLE | MAV_MODE_PROPERTY_AUTO_MODE},
 };
 #define N_MODES (sizeof modes / sizeof modes[0])
 
@@ -59,10 +56,7 @@ void mav_telem_init(struct mav_telem *t)
 		t->interval_us[i] = streams[i].default_us;
 }
 
-uint8_t mav_telem_base_mode(bool armed)
-{
-	return armed ? (uint8_t)MAV_MODE_FLAG_SAFETY_ARMED : 0u;
-}
+uint8_t mav_telem_base_mode(bool armed) { return armed ? (uint8_t)MAV_MODE_FLAG_SAFETY_ARMED : 0u; }
 
 static uint8_t landed_state(uint32_t mode)
 {
@@ -144,7 +138,7 @@ static void update_reference(struct mav_telem *t, const struct hal_sensor_frame 
 		const double de = (lon - f->lon_deg) / RAD_TO_DEG * EARTH_R_M * cos(lat / RAD_TO_DEG);
 		const double dd = alt - (double)f->alt_msl_m;
 		if (dn * dn + de * de + dd * dd < REREF_M * REREF_M)
-			return;   /* consistent: keep the smooth projection */
+			return; /* consistent: keep the smooth projection */
 	}
 	/* first fix, or the simulator moved its local origin */
 	t->ref_ok = true;
@@ -154,20 +148,11 @@ static void update_reference(struct mav_telem *t, const struct hal_sensor_frame 
 	memcpy(t->ref_ned, ned, sizeof ned);
 }
 
-static bool global_ok(const struct mav_telem *t, const struct mav_telem_in *in)
-{
-	return t->ref_ok && in->frame_ok;
-}
+static bool global_ok(const struct mav_telem *t, const struct mav_telem_in *in) { return t->ref_ok && in->frame_ok; }
 
-static int32_t e7(double deg)
-{
-	return (int32_t)lround(deg * 1e7);
-}
+static int32_t e7(double deg) { return (int32_t)lround(deg * 1e7); }
 
-static int32_t mm(double m)
-{
-	return (int32_t)lround(m * 1000.0);
-}
+static int32_t mm(double m) { return (int32_t)lround(m * 1000.0); }
 
 /* ---- messages */
 
@@ -179,8 +164,8 @@ static void send_home(const struct mav_telem *t, const struct mav_telem_in *in, 
 	for (int i = 0; i < 3; i++)
 		h[i] = t->home_ned[i] - t->origin_ned[i];
 	mavlink_message_t msg;
-	mavlink_msg_home_position_pack_chan(in->sysid, in->compid, in->chan, &msg, t->home_lat_e7,
-					    t->home_lon_e7, t->home_alt_mm, h[0], h[1], h[2], q, 0.0f, 0.0f, 0.0f,
+	mavlink_msg_home_position_pack_chan(in->sysid, in->compid, in->chan, &msg, t->home_lat_e7, t->home_lon_e7,
+					    t->home_alt_mm, h[0], h[1], h[2], q, 0.0f, 0.0f, 0.0f,
 					    (uint64_t)in->time_boot_ms * 1000u);
 	send(in->ctx, &msg);
 }
@@ -199,22 +184,21 @@ static void send_origin(struct mav_telem *t, const struct mav_telem_in *in, mav_
 static void send_current_mode(const struct mav_telem_in *in, mav_telem_send_fn send)
 {
 	mavlink_message_t msg;
-	mavlink_msg_current_mode_pack_chan(in->sysid, in->compid, in->chan, &msg, standard_mode(in->mode),
-					   in->mode, in->mode);
+	mavlink_msg_current_mode_pack_chan(in->sysid, in->compid, in->chan, &msg, standard_mode(in->mode), in->mode,
+					   in->mode);
 	send(in->ctx, &msg);
 }
 
 static void send_available_mode(const struct mav_telem_in *in, size_t i, mav_telem_send_fn send)
 {
-	char name[MAVLINK_MSG_AVAILABLE_MODES_FIELD_MODE_NAME_LEN];   /* zero-filled, full size */
+	char name[MAVLINK_MSG_AVAILABLE_MODES_FIELD_MODE_NAME_LEN]; /* zero-filled, full size */
 	memset(name, 0, sizeof name);
 	const char *n = app_mode_name((enum app_mode)modes[i].custom);
 	size_t len = strlen(n);
 	memcpy(name, n, len < sizeof name - 1 ? len : sizeof name - 1);
 	mavlink_message_t msg;
-	mavlink_msg_available_modes_pack_chan(in->sysid, in->compid, in->chan, &msg, (uint8_t)N_MODES,
-					      (uint8_t)(i + 1), modes[i].standard, modes[i].custom,
-					      modes[i].properties, name);
+	mavlink_msg_available_modes_pack_chan(in->sysid, in->compid, in->chan, &msg, (uint8_t)N_MODES, (uint8_t)(i + 1),
+					      modes[i].standard, modes[i].custom, modes[i].properties, name);
 	send(in->ctx, &msg);
 }
 
@@ -255,9 +239,7 @@ static bool send_stream(struct mav_telem *t, const struct mav_telem_in *in, int 
 		mavlink_msg_gps_raw_int_pack_chan(in->sysid, in->compid, in->chan, &msg,
 						  (uint64_t)in->time_boot_ms * 1000u, GPS_FIX_TYPE_3D_FIX, e7(lat),
 						  e7(lon), mm(alt), UINT16_MAX, UINT16_MAX,
-						  (uint16_t)lround(gs * 100.0),
-						  cog_cdeg,
-						  UINT8_MAX, 0, 0, 0, 0, 0, 0);
+						  (uint16_t)lround(gs * 100.0), cog_cdeg, UINT8_MAX, 0, 0, 0, 0, 0, 0);
 		break;
 	}
 	case S_ATTITUDE: {
@@ -278,17 +260,15 @@ static bool send_stream(struct mav_telem *t, const struct mav_telem_in *in, int 
 		float thr = in->throttle < 0.0f ? 0.0f : (in->throttle > 1.0f ? 1.0f : in->throttle);
 		/* no wind in the simulation: airspeed = ground speed */
 		mavlink_msg_vfr_hud_pack_chan(in->sysid, in->compid, in->chan, &msg, (float)gs, (float)gs,
-					      (int16_t)lround(heading_deg(f)) % 360,
-					      (uint16_t)lroundf(thr * 100.0f), (float)alt, -vel[2]);
+					      (int16_t)lround(heading_deg(f)) % 360, (uint16_t)lroundf(thr * 100.0f),
+					      (float)alt, -vel[2]);
 		break;
 	}
 	case S_EXT_STATE:
 		mavlink_msg_extended_sys_state_pack_chan(in->sysid, in->compid, in->chan, &msg,
 							 MAV_VTOL_STATE_UNDEFINED, landed_state(in->mode));
 		break;
-	case S_CURRENT_MODE:
-		send_current_mode(in, send);
-		return true;
+	case S_CURRENT_MODE: send_current_mode(in, send); return true;
 	case S_HOME:
 		if (!t->home_ok)
 			return false;
@@ -313,20 +293,18 @@ static bool send_stream(struct mav_telem *t, const struct mav_telem_in *in, int 
 			v[i] = UINT16_MAX;
 		memset(vext, 0, sizeof vext);
 		mavlink_msg_battery_status_pack_chan(in->sysid, in->compid, in->chan, &msg, 0,
-						     MAV_BATTERY_FUNCTION_UNKNOWN, MAV_BATTERY_TYPE_UNKNOWN,
-						     INT16_MAX, v, -1, -1, -1, -1, 0,
-						     MAV_BATTERY_CHARGE_STATE_UNDEFINED, vext, 0, 0);
+						     MAV_BATTERY_FUNCTION_UNKNOWN, MAV_BATTERY_TYPE_UNKNOWN, INT16_MAX,
+						     v, -1, -1, -1, -1, 0, MAV_BATTERY_CHARGE_STATE_UNDEFINED, vext, 0,
+						     0);
 		break;
 	}
-	default:
-		return false;
+	default: return false;
 	}
 	send(in->ctx, &msg);
 	return true;
 }
 
-void mav_telem_tick(struct mav_telem *t, const struct mav_telem_in *in, uint64_t now_us,
-		    mav_telem_send_fn send)
+void mav_telem_tick(struct mav_telem *t, const struct mav_telem_in *in, uint64_t now_us, mav_telem_send_fn send)
 {
 	const struct hal_sensor_frame *f = in->fr;
 	if (in->frame_ok)
@@ -403,8 +381,8 @@ int mav_telem_request_result(const struct mav_telem *t, uint32_t msgid, float pa
 	return MAV_RESULT_ACCEPTED;
 }
 
-void mav_telem_request_send(struct mav_telem *t, const struct mav_telem_in *in, uint32_t msgid,
-			    float param2, mav_telem_send_fn send)
+void mav_telem_request_send(struct mav_telem *t, const struct mav_telem_in *in, uint32_t msgid, float param2,
+			    mav_telem_send_fn send)
 {
 	if (msgid == MAVLINK_MSG_ID_AVAILABLE_MODES) {
 		for (size_t i = 0; i < N_MODES; i++)
@@ -434,7 +412,7 @@ bool mav_interval_of_request(float interval_us, int64_t default_us, int64_t *out
 		*out = -1;
 	else if (interval_us == 0.0f)
 		*out = default_us;
-	else   /* 10 ms .. 1000 s: a huge float must not reach the integer cast */
+	else /* 10 ms .. 1000 s: a huge float must not reach the integer cast */
 		*out = interval_us < 10000.0f ? 10000 : (interval_us > 1.0e9f ? 1000000000 : (int64_t)interval_us);
 	return true;
 }
@@ -448,16 +426,16 @@ bool mav_telem_get_interval(const struct mav_telem *t, uint32_t msgid, int32_t *
 	return true;
 }
 
-bool mav_telem_set_origin(struct mav_telem *t, const struct mav_telem_in *in, int32_t lat_e7,
-			  int32_t lon_e7, int32_t alt_mm, mav_telem_send_fn send)
+bool mav_telem_set_origin(struct mav_telem *t, const struct mav_telem_in *in, int32_t lat_e7, int32_t lon_e7,
+			  int32_t alt_mm, mav_telem_send_fn send)
 {
 	if (in->armed || !t->ref_ok)
 		return false;
 	/* the inverse of project(): the geodetic point in the local frame */
 	const double lat = lat_e7 * 1e-7, lon = lon_e7 * 1e-7, alt = alt_mm * 1e-3;
 	t->origin_ned[0] = t->ref_ned[0] + (float)((lat - t->ref_lat_deg) / RAD_TO_DEG * EARTH_R_M);
-	t->origin_ned[1] = t->ref_ned[1] + (float)((lon - t->ref_lon_deg) / RAD_TO_DEG * EARTH_R_M *
-						   cos(t->ref_lat_deg / RAD_TO_DEG));
+	t->origin_ned[1] = t->ref_ned[1] +
+			   (float)((lon - t->ref_lon_deg) / RAD_TO_DEG * EARTH_R_M * cos(t->ref_lat_deg / RAD_TO_DEG));
 	t->origin_ned[2] = t->ref_ned[2] - (float)(alt - t->ref_alt_m);
 	t->origin_ok = true;
 	send_origin(t, in, send);
@@ -466,19 +444,17 @@ bool mav_telem_set_origin(struct mav_telem *t, const struct mav_telem_in *in, in
 	return true;
 }
 
-void mav_telem_sensors(const struct mav_telem_in *in, uint32_t *present, uint32_t *enabled,
-		       uint32_t *health)
+void mav_telem_sensors(const struct mav_telem_in *in, uint32_t *present, uint32_t *enabled, uint32_t *health)
 {
 	/* The simulator measures rates, attitude (with the magnetic heading), the
 	 * position and the motors' outputs; the vehicle estimates its attitude and
 	 * position from them (AHRS). */
 	const uint32_t sensors = MAV_SYS_STATUS_SENSOR_3D_GYRO | MAV_SYS_STATUS_SENSOR_3D_ACCEL |
-				 MAV_SYS_STATUS_SENSOR_3D_MAG | MAV_SYS_STATUS_SENSOR_GPS |
-				 MAV_SYS_STATUS_AHRS | MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS |
-				 MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL |
+				 MAV_SYS_STATUS_SENSOR_3D_MAG | MAV_SYS_STATUS_SENSOR_GPS | MAV_SYS_STATUS_AHRS |
+				 MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS | MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL |
 				 MAV_SYS_STATUS_SENSOR_ATTITUDE_STABILIZATION |
-				 MAV_SYS_STATUS_SENSOR_Z_ALTITUDE_CONTROL |
-				 MAV_SYS_STATUS_SENSOR_XY_POSITION_CONTROL | MAV_SYS_STATUS_PREARM_CHECK;
+				 MAV_SYS_STATUS_SENSOR_Z_ALTITUDE_CONTROL | MAV_SYS_STATUS_SENSOR_XY_POSITION_CONTROL |
+				 MAV_SYS_STATUS_PREARM_CHECK;
 	const uint32_t gps = MAV_SYS_STATUS_SENSOR_GPS;
 	const struct hal_sensor_frame *f = in->fr;
 	*present = sensors;

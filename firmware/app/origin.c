@@ -6,18 +6,12 @@
 
 #include "fcmp.h"
 
-#define EARTH_R_M 6371008.8   /* mean radius: a flat earth over one frame's step */
+#define EARTH_R_M 6371008.8 /* mean radius: a flat earth over one frame's step */
 #define DEG_TO_RAD 0.017453292519943295
 
-void origin_init(struct origin *o)
-{
-	memset(o, 0, sizeof *o);
-}
+void origin_init(struct origin *o) { memset(o, 0, sizeof *o); }
 
-static bool has_geo(const struct hal_sensor_frame *f)
-{
-	return (f->valid & HAL_FRAME_GLOBAL) != 0u;
-}
+static bool has_geo(const struct hal_sensor_frame *f) { return (f->valid & HAL_FRAME_GLOBAL) != 0u; }
 
 /* The geodetic step from the previous frame in NWU metres (only when a shift is suspected). */
 static void geo_step(const struct origin *o, const struct hal_sensor_frame *f, float d[3])
@@ -50,14 +44,14 @@ static bool is_shift(const struct origin *o, const struct hal_sensor_frame *f, f
 	}
 	const bool gap = dt > ORIGIN_GAP_S;
 	if (!gap && max_abs3(step) <= ORIGIN_STEP_M + ORIGIN_SPEED_MPS * dt)
-		return false;   /* the common case: a step a vehicle can make */
+		return false; /* the common case: a step a vehicle can make */
 	if (has_geo(f) && o->geo_prev) {
 		float geo[3], e[3];
 		geo_step(o, f, geo);
 		for (int i = 0; i < 3; i++)
 			e[i] = step[i] - geo[i];
 		if (max_abs3(e) <= ORIGIN_GEO_TOL_M)
-			return false;   /* the geodetic position moved as much */
+			return false; /* the geodetic position moved as much */
 		memcpy(cont, gap ? geo : by_vel, sizeof by_vel);
 		return true;
 	}

@@ -27,24 +27,24 @@
 
 #include "hal.h"
 
-#define ORIGIN_STEP_M 50.0f       /* a step larger than this (plus speed x time) is a shift */
+#define ORIGIN_STEP_M 50.0f /* a step larger than this (plus speed x time) is a shift */
 #define ORIGIN_SPEED_MPS 100.0f
-#define ORIGIN_GEO_TOL_M 25.0f    /* local and geodetic steps disagree by more: a shift */
-#define ORIGIN_GAP_S 1.0f         /* a longer gap is checked against the geodetic step */
+#define ORIGIN_GEO_TOL_M 25.0f /* local and geodetic steps disagree by more: a shift */
+#define ORIGIN_GAP_S 1.0f      /* a longer gap is checked against the geodetic step */
 
 struct origin {
-	bool have;              /* a previous frame with a position */
-	double t_prev;          /* its plant time */
-	float raw_prev[3];      /* its plant position (NWU, m) and velocity */
+	bool have;         /* a previous frame with a position */
+	double t_prev;     /* its plant time */
+	float raw_prev[3]; /* its plant position (NWU, m) and velocity */
 	float vel_prev[3];
-	bool geo_prev;          /* it carried the geodetic position */
+	bool geo_prev; /* it carried the geodetic position */
 	double lat_prev, lon_prev;
 	float alt_prev;
-	float off[3];           /* added to the plant position (NWU, m) */
-	float off_before[3];    /* the offset before the last shift */
-	double t_shift;         /* plant time of the first frame after the last shift */
-	uint32_t shifts;        /* shifts absorbed */
-	float last_step[3];     /* the last shift's step in the plant position, m */
+	float off[3];        /* added to the plant position (NWU, m) */
+	float off_before[3]; /* the offset before the last shift */
+	double t_shift;      /* plant time of the first frame after the last shift */
+	uint32_t shifts;     /* shifts absorbed */
+	float last_step[3];  /* the last shift's step in the plant position, m */
 };
 
 void origin_init(struct origin *o);

@@ -14,12 +14,12 @@
 
 /* Outcome of a command. mav.c maps it to MAV_RESULT. */
 enum app_result {
-	APP_ACCEPTED = 0,     /* done (or nothing to do: a retry) */
-	APP_IN_PROGRESS,      /* started; a final result follows as an event */
-	APP_BUSY,             /* not now (state, link): may work later */
-	APP_DENIED,           /* never with these arguments */
-	APP_FAILED,           /* tried and failed (storage, an aborted experiment) */
-	APP_UNSUPPORTED,      /* no such command */
+	APP_ACCEPTED = 0, /* done (or nothing to do: a retry) */
+	APP_IN_PROGRESS,  /* started; a final result follows as an event */
+	APP_BUSY,         /* not now (state, link): may work later */
+	APP_DENIED,       /* never with these arguments */
+	APP_FAILED,       /* tried and failed (storage, an aborted experiment) */
+	APP_UNSUPPORTED,  /* no such command */
 };
 
 /* Severity of a status line: the syslog levels (MAVLink's MAV_SEVERITY uses the same). */
@@ -38,24 +38,24 @@ typedef uint32_t app_origin;
 /* Long-running commands whose result comes later as an event. */
 enum app_command {
 	APP_CMD_EXPERIMENT = 1,
-	APP_CMD_TAKEOFF,      /* final result only when it fails (its time limit) */
-	APP_CMD_LAND,         /* likewise */
+	APP_CMD_TAKEOFF, /* final result only when it fails (its time limit) */
+	APP_CMD_LAND,    /* likewise */
 };
 
 enum app_event_kind {
-	APP_EV_STATUS = 1,    /* text, severity */
-	APP_EV_PARAM,         /* param_index changed */
-	APP_EV_CMD_DONE,      /* cmd finished with result (progress 0..100) for origin */
-	APP_EV_VALUE,         /* a named live value: text (name, 10 characters at most), value */
-	APP_EV_ID_RESULT,     /* an identification result: id */
+	APP_EV_STATUS = 1, /* text, severity */
+	APP_EV_PARAM,      /* param_index changed */
+	APP_EV_CMD_DONE,   /* cmd finished with result (progress 0..100) for origin */
+	APP_EV_VALUE,      /* a named live value: text (name, 10 characters at most), value */
+	APP_EV_ID_RESULT,  /* an identification result: id */
 };
 
 #define APP_EVENT_TEXT 96
 struct app_event {
-	uint8_t kind;         /* enum app_event_kind */
-	uint8_t severity;     /* enum app_severity */
-	uint8_t cmd;          /* enum app_command */
-	uint8_t result;       /* enum app_result */
+	uint8_t kind;     /* enum app_event_kind */
+	uint8_t severity; /* enum app_severity */
+	uint8_t cmd;      /* enum app_command */
+	uint8_t result;   /* enum app_result */
 	uint8_t progress;
 	uint16_t param_index;
 	app_origin origin;

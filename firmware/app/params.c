@@ -16,16 +16,13 @@ const struct param_def param_defs[] = {
 const size_t param_count = sizeof param_defs / sizeof param_defs[0];
 
 /* Compile-time checks: names fit MAVLink's 16 characters, defaults are in range. */
-#define PARAM(name, field, def, min, max, unit, desc)                                     \
+#define PARAM(name, field, def, min, max, unit, desc)                                        \
 	_Static_assert(sizeof(#name) - 1 <= PARAM_ID_LEN, #name " is longer than 16 chars"); \
 	_Static_assert((def) >= (min) && (def) <= (max), #name " default out of range");
 #include "params_table.h"
 #undef PARAM
 
-static float *slot(struct app_params *p, size_t i)
-{
-	return (float *)(void *)((char *)p + param_defs[i].offset);
-}
+static float *slot(struct app_params *p, size_t i) { return (float *)(void *)((char *)p + param_defs[i].offset); }
 
 void params_defaults(struct app_params *p)
 {
@@ -74,12 +71,9 @@ enum param_set_result params_set(struct app_params *p, size_t index, float value
 const char *params_set_result_text(enum param_set_result r)
 {
 	switch (r) {
-	case PARAM_OK:
-		return "ok";
-	case PARAM_NOT_FINITE:
-		return "not a finite number";
-	case PARAM_OUT_OF_RANGE:
-		return "out of range";
+	case PARAM_OK: return "ok";
+	case PARAM_NOT_FINITE: return "not a finite number";
+	case PARAM_OUT_OF_RANGE: return "out of range";
 	}
 	return "?";
 }
@@ -109,8 +103,7 @@ size_t params_format(const struct app_params *p, char *buf, size_t cap)
 	return len;
 }
 
-unsigned params_parse(struct app_params *p, const char *text, size_t len, params_report_fn report,
-		      void *ctx)
+unsigned params_parse(struct app_params *p, const char *text, size_t len, params_report_fn report, void *ctx)
 {
 	unsigned bad = 0, line_no = 0;
 	size_t pos = 0;
@@ -144,7 +137,7 @@ unsigned params_parse(struct app_params *p, const char *text, size_t len, params
 			char name[PARAM_ID_LEN + 2] = {0}, rest[64] = {0};
 			char *save = NULL, *tok = strtok_r(line, " ", &save);
 			if (!tok)
-				goto next;   /* blank or comment */
+				goto next; /* blank or comment */
 			if (strlen(tok) > PARAM_ID_LEN) {
 				why = "name longer than 16 characters";
 				goto done;
@@ -167,13 +160,13 @@ unsigned params_parse(struct app_params *p, const char *text, size_t len, params
 					why = params_set_result_text(params_set(p, (size_t)idx, v));
 			}
 		}
-done:
+	done:
 		if (why) {
 			bad++;
 			if (report)
 				report(ctx, line_no, why);
 		}
-next:
+	next:
 		pos = end + 1;
 	}
 	return bad;

@@ -9,7 +9,7 @@
 #include "att_ctrl.h" /* ATT_CTRL_DEFAULT_*: defaults of the ATT_* rows */
 #include "guidance.h" /* GUID_DEFAULT_*: defaults of NAV_TKO_VEL, NAV_LAND_VEL, NAV_TOUCH_DOWN_S */
 #include "pos_ctrl.h" /* POS_CTRL_DEFAULT_*: defaults of POS_GAIN, POS_VEL_GAIN, ATT_TILT_MAX */
-#include "thrmap.h" /* THRMAP_CURVE_MIN/MAX: the range of MOT_CURVE */
+#include "thrmap.h"   /* THRMAP_CURVE_MIN/MAX: the range of MOT_CURVE */
 
 #include <stddef.h>
 #include <stdint.h>
@@ -34,8 +34,8 @@ enum {
 
 /* Flags of a parameter (params_table.h sets them per group of rows). */
 enum {
-	PARAM_LOCKED = 1u << 0,     /* refused from outside while an experiment runs */
-	PARAM_READONLY = 1u << 1,   /* refused from outside always (identification results) */
+	PARAM_LOCKED = 1u << 0,   /* refused from outside while an experiment runs */
+	PARAM_READONLY = 1u << 1, /* refused from outside always (identification results) */
 };
 
 struct param_def {
@@ -43,7 +43,7 @@ struct param_def {
 	size_t offset;
 	float def, min, max;
 	const char *unit, *desc;
-	unsigned flags;             /* PARAM_LOCKED, PARAM_READONLY */
+	unsigned flags; /* PARAM_LOCKED, PARAM_READONLY */
 };
 
 extern const struct param_def param_defs[];
@@ -74,7 +74,6 @@ typedef void (*params_report_fn)(void *ctx, unsigned line, const char *why);
  * not finite, out of range, too long) is reported and changes nothing: the
  * value it meant keeps its previous (default) value. Returns the number of
  * damaged lines. */
-unsigned params_parse(struct app_params *p, const char *text, size_t len, params_report_fn report,
-		      void *ctx);
+unsigned params_parse(struct app_params *p, const char *text, size_t len, params_report_fn report, void *ctx);
 
 #endif /* OCTO_PARAMS_H */

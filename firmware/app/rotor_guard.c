@@ -24,10 +24,7 @@ void rotor_guard_sync(struct rotor_fail *rf, const struct app_params *p)
 	rotor_fail_set_model(rf, &m);
 }
 
-bool rotor_guard_failed(const struct rotor_fail *rf)
-{
-	return rf->failed != 0;
-}
+bool rotor_guard_failed(const struct rotor_fail *rf) { return rf->failed != 0; }
 
 void rotor_guard_step(struct app *a, float dt)
 {
@@ -66,14 +63,15 @@ void rotor_guard_step(struct app *a, float dt)
 			struct app_event e = {.kind = APP_EV_PARAM, .param_index = (uint16_t)idx};
 			outbox_post(&a->outbox, &e);
 		}
-		a->params_dirty = true;   /* mixer and throttle map rebuilt before the next step */
-		app_status(a, APP_SEV_CRITICAL, "Rotor %d failed (effectiveness %.2f, from its %s): holding on %s, then landing",
-			   j + 1, (double)s, o.source == ROTOR_FAIL_SRC_THRUST ? "thrust" : "speed",
+		a->params_dirty = true; /* mixer and throttle map rebuilt before the next step */
+		app_status(a, APP_SEV_CRITICAL,
+			   "Rotor %d failed (effectiveness %.2f, from its %s): holding on %s, then landing", j + 1,
+			   (double)s, o.source == ROTOR_FAIL_SRC_THRUST ? "thrust" : "speed",
 			   s > 0.0f ? "all rotors" : "the others");
 		if (a->mode == APP_EXPERIMENT) {
 			char why[24];
 			snprintf(why, sizeof why, "rotor %d failed", j + 1);
-			exp_abort(&a->exp, why);   /* the step's experiment part ends it, to HOLD */
+			exp_abort(&a->exp, why); /* the step's experiment part ends it, to HOLD */
 		}
 	}
 	if (o.land && (a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_EXPERIMENT)) {

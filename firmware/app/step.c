@@ -7,17 +7,17 @@
 
 /* What one step's stages hand each other. */
 struct step {
-	float dt;                 /* the time the step integrates, s */
-	struct guid_input gi;     /* height, vertical speed and dt as scalars; hold_ready */
+	float dt;             /* the time the step integrates, s */
+	struct guid_input gi; /* height, vertical speed and dt as scalars; hold_ready */
 	const scalar_t *pos, *vel;
-	struct quat q;            /* the attitude */
-	scalar_t cos_tilt;        /* its body z axis, up component */
-	struct quat q_sp;         /* the attitude set point */
-	uint8_t short_pos, short_neg;   /* what the allocation cut on the previous step */
-	struct vec3 tau;          /* torque demand */
-	scalar_t fz;              /* thrust demand */
-	bool excited;             /* an experiment adds its excitation */
-	scalar_t thr[HAL_ROTORS]; /* the throttle map's throttles */
+	struct quat q;                /* the attitude */
+	scalar_t cos_tilt;            /* its body z axis, up component */
+	struct quat q_sp;             /* the attitude set point */
+	uint8_t short_pos, short_neg; /* what the allocation cut on the previous step */
+	struct vec3 tau;              /* torque demand */
+	scalar_t fz;                  /* thrust demand */
+	bool excited;                 /* an experiment adds its excitation */
+	scalar_t thr[HAL_ROTORS];     /* the throttle map's throttles */
 };
 
 /* The frame as scalars; the excitation is zero unless the experiment sets it. */
@@ -195,8 +195,10 @@ static inline void step_excitation(struct app *a, struct step *s)
 		torque = app_in(a)->rotor_torque_nm;
 	}
 	/* the thrusts allocated last step: the mixer's output (the log's rotor_f in floats) */
-	struct exp_input in = {&a->fr, app_in(a)->rotor_thrust_n, torque,
-			       app_in(a)->rate_b_rps, s->dt, &a->p, a->wrench_dem, a->mix_out.f_n,
+	struct exp_input in = {&a->fr,        app_in(a)->rotor_thrust_n,
+			       torque,        app_in(a)->rate_b_rps,
+			       s->dt,         &a->p,
+			       a->wrench_dem, a->mix_out.f_n,
 			       app_thr_sc(a), a->dt_frame};
 	if (exp_step(&a->exp, &in, &a->exp_out) != EXP_RUNNING) {
 		memset(&a->exp_out, 0, sizeof a->exp_out);
@@ -223,30 +225,30 @@ static inline void step_allocation(struct app *a, struct step *s)
  * finite: 0), stored as sent. */
 static inline void step_output(struct app *a, struct step *s)
 {
-	const scalar_t thr_max = a->ps.thr_max;   /* read once: the stores below are floats too */
+	const scalar_t thr_max = a->ps.thr_max; /* read once: the stores below are floats too */
 	for (int j = 0; j < HAL_ROTORS; j++) {
 		a->log.rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
 		scalar_t t = s->excited ? sc_add(s->thr[j], a->exp_out.thr_delta[j]) : s->thr[j];
 		t = sc_clamp(sc_isfinite(t) ? t : SC_ZERO, SC_ZERO, thr_max);
 		a->thr[j] = sc_to_float(t);
-		bnd_thr_store(&a->bnd, j, t);   /* sc_from_float(a->thr[j]) exactly: a throttle in [0, 1] is a float */
+		bnd_thr_store(&a->bnd, j, t); /* sc_from_float(a->thr[j]) exactly: a throttle in [0, 1] is a float */
 	}
 }
 
 void app_step(struct app *a, float dt)
 {
-	struct step s;               /* each field set by the stage that makes it */
+	struct step s; /* each field set by the stage that makes it */
 	s.dt = dt;
-	step_inputs(a, &s);          /* the frame as scalars, the excitation cleared */
-	if (step_ground(a, &s))      /* disarmed or idle: rotors at rest, control reset */
+	step_inputs(a, &s);     /* the frame as scalars, the excitation cleared */
+	if (step_ground(a, &s)) /* disarmed or idle: rotors at rest, control reset */
 		return;
-	step_limits(a, &s);          /* take-off and landing time limits */
-	if (step_guidance(a, &s))    /* set points and mode transitions; landed: done */
+	step_limits(a, &s);       /* take-off and landing time limits */
+	if (step_guidance(a, &s)) /* set points and mode transitions; landed: done */
 		return;
-	step_position(a, &s);        /* the tilt that holds the position, the attitude set point */
-	step_attitude(a, &s);        /* the torque demand; the rates into the oscillation guard */
-	step_height(a, &s);          /* hover learning, k_f tracking, the thrust demand */
-	step_excitation(a, &s);      /* the experiment's excitation on top (EXPERIMENT only) */
-	step_allocation(a, &s);      /* demands -> rotor thrusts -> throttles */
-	step_output(a, &s);          /* throttles clamped and stored */
+	step_position(a, &s);   /* the tilt that holds the position, the attitude set point */
+	step_attitude(a, &s);   /* the torque demand; the rates into the oscillation guard */
+	step_height(a, &s);     /* hover learning, k_f tracking, the thrust demand */
+	step_excitation(a, &s); /* the experiment's excitation on top (EXPERIMENT only) */
+	step_allocation(a, &s); /* demands -> rotor thrusts -> throttles */
+	step_output(a, &s);     /* throttles clamped and stored */
 }

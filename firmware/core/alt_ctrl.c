@@ -50,8 +50,8 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 		s->flags = ALT_CTRL_BAD_INPUT;
 		return s->f_n;
 	}
-	scalar_t kv = s->m_kv;   /* 2 zeta wn */
-	scalar_t kz = s->m_kz;   /* wn / (2 zeta) */
+	scalar_t kv = s->m_kv; /* 2 zeta wn */
+	scalar_t kz = s->m_kz; /* wn / (2 zeta) */
 
 	scalar_t vz_cmd = sc_mul(kz, sc_sub(in->z_sp_m, in->z_m));
 	if (vz_cmd > p->vz_max_up_mps || vz_cmd < sc_neg(p->vz_max_down_mps)) {

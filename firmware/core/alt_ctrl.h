@@ -30,35 +30,35 @@
 
 #include <stdint.h>
 
-#define ALT_CTRL_SAT_HIGH (1u << 0) /* f clamped to f_max */
-#define ALT_CTRL_SAT_LOW  (1u << 1) /* f clamped to f_min */
-#define ALT_CTRL_VZ_LIM   (1u << 2) /* height part of vz_cmd clamped */
-#define ALT_CTRL_TILT_LIM (1u << 3) /* cos_tilt below cos_tilt_min */
-#define ALT_CTRL_INT_LIM  (1u << 4) /* a_int at +/-a_int_max */
+#define ALT_CTRL_SAT_HIGH (1u << 0)  /* f clamped to f_max */
+#define ALT_CTRL_SAT_LOW (1u << 1)   /* f clamped to f_min */
+#define ALT_CTRL_VZ_LIM (1u << 2)    /* height part of vz_cmd clamped */
+#define ALT_CTRL_TILT_LIM (1u << 3)  /* cos_tilt below cos_tilt_min */
+#define ALT_CTRL_INT_LIM (1u << 4)   /* a_int at +/-a_int_max */
 #define ALT_CTRL_BAD_INPUT (1u << 5) /* a non-finite input (float build): last f kept */
 
 struct alt_ctrl_params {
-	scalar_t wn_rps;         /* closed-loop natural frequency, rad/s (> 0) */
-	scalar_t zeta;           /* damping ratio (> 0) */
-	scalar_t ki_rps;         /* integral pole, 1/s (0 = none) */
-	scalar_t vz_max_up_mps;  /* climb-rate limit of the height loop, m/s */
-	scalar_t vz_max_down_mps;/* descent-rate limit of the height loop, m/s (> 0) */
-	scalar_t a_int_max_mps2; /* integral acceleration limit, m/s^2 */
-	scalar_t cos_tilt_min;   /* tilt compensation bound, (0, 1] */
-	scalar_t f_min_n;        /* thrust limits, N */
+	scalar_t wn_rps;          /* closed-loop natural frequency, rad/s (> 0) */
+	scalar_t zeta;            /* damping ratio (> 0) */
+	scalar_t ki_rps;          /* integral pole, 1/s (0 = none) */
+	scalar_t vz_max_up_mps;   /* climb-rate limit of the height loop, m/s */
+	scalar_t vz_max_down_mps; /* descent-rate limit of the height loop, m/s (> 0) */
+	scalar_t a_int_max_mps2;  /* integral acceleration limit, m/s^2 */
+	scalar_t cos_tilt_min;    /* tilt compensation bound, (0, 1] */
+	scalar_t f_min_n;         /* thrust limits, N */
 	scalar_t f_max_n;
-	scalar_t g_mps2;         /* gravity, m/s^2 */
+	scalar_t g_mps2; /* gravity, m/s^2 */
 };
 
 struct alt_ctrl_input {
-	scalar_t z_sp_m;    /* height setpoint (S_I, up), m */
-	scalar_t vz_ff_mps; /* vertical-speed feedforward (takeoff/landing ramps), m/s */
-	scalar_t z_m;       /* measured height, m */
-	scalar_t vz_mps;    /* measured vertical speed (up), m/s */
-	struct quat q_b2i;  /* attitude, for the tilt compensation */
-	scalar_t mass_kg;   /* current mass parameter, kg */
-	scalar_t hover_f_n; /* learned hover thrust demand, N (0: use mass * g) */
-	scalar_t dt_s;      /* time since the last update, s */
+	scalar_t z_sp_m;       /* height setpoint (S_I, up), m */
+	scalar_t vz_ff_mps;    /* vertical-speed feedforward (takeoff/landing ramps), m/s */
+	scalar_t z_m;          /* measured height, m */
+	scalar_t vz_mps;       /* measured vertical speed (up), m/s */
+	struct quat q_b2i;     /* attitude, for the tilt compensation */
+	scalar_t mass_kg;      /* current mass parameter, kg */
+	scalar_t hover_f_n;    /* learned hover thrust demand, N (0: use mass * g) */
+	scalar_t dt_s;         /* time since the last update, s */
 	bool alloc_short_up;   /* the allocation delivered less thrust than demanded (last step) */
 	bool alloc_short_down; /* it delivered more thrust than demanded (last step) */
 };
@@ -70,15 +70,15 @@ struct alt_ctrl {
 	uint32_t flags;      /* ALT_CTRL_* of the last update */
 	/* the parameters' products and quotients, computed when they are set
 	 * (alt_ctrl_set_params): no division by a parameter in the update */
-	scalar_t m_kv;                 /* kv = 2 zeta wn */
-	scalar_t m_kz;                 /* kz = wn^2 / (2 zeta wn) */
-	struct sc_recip r_g;           /* 1 / g_mps2 */
+	scalar_t m_kv;       /* kv = 2 zeta wn */
+	scalar_t m_kz;       /* kz = wn^2 / (2 zeta wn) */
+	struct sc_recip r_g; /* 1 / g_mps2 */
 };
 
 /* Default gains, the ones octo-fw flies: its parameter table (ALT_WN, ALT_ZETA, ALT_KI)
  * takes its defaults from these. */
 #define ALT_CTRL_DEFAULT_WN_RPS 2.5f /* natural frequency, rad/s */
-#define ALT_CTRL_DEFAULT_ZETA   1.0f /* damping ratio */
+#define ALT_CTRL_DEFAULT_ZETA 1.0f   /* damping ratio */
 #define ALT_CTRL_DEFAULT_KI_RPS 0.8f /* integral pole, 1/s */
 
 /* Defaults for the paper's octocopter at 90 Hz (m = 2.132 kg, 8 x 28 N rotors):

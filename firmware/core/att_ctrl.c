@@ -7,8 +7,7 @@ struct att_ctrl_params att_ctrl_params_default(void)
 	p.wn_rps = vec3_make(SC(ATT_CTRL_DEFAULT_WN_RP_RPS), SC(ATT_CTRL_DEFAULT_WN_RP_RPS),
 			     SC(ATT_CTRL_DEFAULT_WN_YAW_RPS));
 	p.zeta = vec3_make(SC(ATT_CTRL_DEFAULT_ZETA), SC(ATT_CTRL_DEFAULT_ZETA), SC(ATT_CTRL_DEFAULT_ZETA));
-	p.ki_rps = vec3_make(SC(ATT_CTRL_DEFAULT_KI_RPS), SC(ATT_CTRL_DEFAULT_KI_RPS),
-			     SC(ATT_CTRL_DEFAULT_KI_RPS));
+	p.ki_rps = vec3_make(SC(ATT_CTRL_DEFAULT_KI_RPS), SC(ATT_CTRL_DEFAULT_KI_RPS), SC(ATT_CTRL_DEFAULT_KI_RPS));
 	p.rate_max_rps = vec3_make(SC(3.0), SC(3.0), SC(1.5));
 	p.tau_max_nm = vec3_make(SC(3.0), SC(3.0), SC(0.4));
 	p.int_tau_max_nm = vec3_make(SC(0.5), SC(0.5), SC(0.1));
@@ -17,10 +16,7 @@ struct att_ctrl_params att_ctrl_params_default(void)
 	return p;
 }
 
-void att_ctrl_reset(struct att_ctrl *s)
-{
-	s->int_r_rad = vec3_zero();
-}
+void att_ctrl_reset(struct att_ctrl *s) { s->int_r_rad = vec3_zero(); }
 
 void att_ctrl_init(struct att_ctrl *s, const struct att_ctrl_params *params)
 {
@@ -30,15 +26,9 @@ void att_ctrl_init(struct att_ctrl *s, const struct att_ctrl_params *params)
 }
 
 /* component i (0 x, 1 y, 2 z) of a vec3 */
-static scalar_t *comp(struct vec3 *v, int i)
-{
-	return i == 0 ? &v->x : (i == 1 ? &v->y : &v->z);
-}
+static scalar_t *comp(struct vec3 *v, int i) { return i == 0 ? &v->x : (i == 1 ? &v->y : &v->z); }
 
-static scalar_t get(struct vec3 v, int i)
-{
-	return *comp(&v, i);
-}
+static scalar_t get(struct vec3 v, int i) { return *comp(&v, i); }
 
 void att_ctrl_set_params(struct att_ctrl *s, const struct att_ctrl_params *params)
 {
@@ -58,10 +48,7 @@ void att_ctrl_set_params(struct att_ctrl *s, const struct att_ctrl_params *param
 	s->gyro_comp = params->gyro_comp;
 }
 
-static bool vec3_finite(struct vec3 v)
-{
-	return sc_isfinite(v.x) && sc_isfinite(v.y) && sc_isfinite(v.z);
-}
+static bool vec3_finite(struct vec3 v) { return sc_isfinite(v.x) && sc_isfinite(v.y) && sc_isfinite(v.z); }
 
 static bool quat_finite(struct quat q)
 {
@@ -92,7 +79,7 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		scalar_t ii = get(inertia, i);
 		scalar_t *int_r = comp(&s->int_r_rad, i);
 
-		if (ii != s->m_ii[i]) {   /* the inertia changed: its products and the limit */
+		if (ii != s->m_ii[i]) { /* the inertia changed: its products and the limit */
 			s->m_ii[i] = ii;
 			s->m_ikd[i] = sc_mul(ii, s->kd[i]);
 			scalar_t k = sc_mul(s->m_ikd[i], s->ki[i]);
@@ -106,7 +93,7 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		rc = sc_add(rc, get(in->rate_ff_b, i));
 
 		/* integral torque I 2 zeta wn ki int(r), clamped */
-		scalar_t ikd = s->m_ikd[i];          /* N m / (rad/s) */
+		scalar_t ikd = s->m_ikd[i];            /* N m / (rad/s) */
 		scalar_t kint = sc_mul(ikd, s->ki[i]); /* N m / rad */
 		scalar_t tau_i = sc_clamp(sc_mul(kint, *int_r), sc_neg(int_tau_max), int_tau_max);
 		scalar_t r = sc_sub(rc, get(w, i));
@@ -124,7 +111,7 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		bool cut = (r > SC_ZERO && (in->alloc_short_pos >> i & 1u)) ||
 			   (r < SC_ZERO && (in->alloc_short_neg >> i & 1u));
 		if (kint > SC_ZERO && !sat && !cut && sc_abs(ei) < s->int_err_max_rad) {
-			scalar_t lim = s->m_lim[i];   /* int_tau_max / kint: keeps the state bounded too */
+			scalar_t lim = s->m_lim[i]; /* int_tau_max / kint: keeps the state bounded too */
 			*int_r = sc_clamp(sc_add(*int_r, sc_mul(r, dt)), sc_neg(lim), lim);
 		} else if (kint <= SC_ZERO) {
 			*int_r = SC_ZERO;

@@ -37,13 +37,13 @@
 #include <stdint.h>
 
 /* flags (att_ctrl.flags and the return value of att_ctrl_update) */
-#define ATT_CTRL_SAT_X      (1u << 0) /* tau_b.x clamped to tau_max.x */
-#define ATT_CTRL_SAT_Y      (1u << 1)
-#define ATT_CTRL_SAT_Z      (1u << 2)
+#define ATT_CTRL_SAT_X (1u << 0) /* tau_b.x clamped to tau_max.x */
+#define ATT_CTRL_SAT_Y (1u << 1)
+#define ATT_CTRL_SAT_Z (1u << 2)
 #define ATT_CTRL_RATE_LIM_X (1u << 3) /* attitude part of rate_cmd.x clamped to rate_max.x */
 #define ATT_CTRL_RATE_LIM_Y (1u << 4)
 #define ATT_CTRL_RATE_LIM_Z (1u << 5)
-#define ATT_CTRL_BAD_INPUT  (1u << 6) /* a non-finite input (float build): tau = 0, state kept */
+#define ATT_CTRL_BAD_INPUT (1u << 6) /* a non-finite input (float build): tau = 0, state kept */
 
 struct att_ctrl_params {
 	struct vec3 wn_rps;         /* closed-loop natural frequency per axis, rad/s (> 0) */
@@ -71,27 +71,27 @@ struct att_ctrl_input {
 struct att_ctrl {
 	/* the parameters as the update uses them, per axis (0 x, 1 y, 2 z), prepared by
 	 * att_ctrl_set_params: no division and no product of parameters in the update */
-	scalar_t kp[3];           /* wn^2 / (2 zeta wn), 1/s */
-	scalar_t kd[3];           /* 2 zeta wn, 1/s */
-	scalar_t ki[3];           /* integral pole, 1/s */
+	scalar_t kp[3]; /* wn^2 / (2 zeta wn), 1/s */
+	scalar_t kd[3]; /* 2 zeta wn, 1/s */
+	scalar_t ki[3]; /* integral pole, 1/s */
 	scalar_t rate_max[3], tau_max[3], int_tau_max[3];
 	scalar_t int_err_max_rad;
 	bool gyro_comp;
-	struct vec3 int_r_rad;    /* integral of the rate error, rad */
-	uint32_t flags;           /* ATT_CTRL_* of the last update */
+	struct vec3 int_r_rad; /* integral of the rate error, rad */
+	uint32_t flags;        /* ATT_CTRL_* of the last update */
 	/* per axis, what depends on the inertia input m_ii as well (0: none yet), recomputed
 	 * when it changes: the same values as computing them on every step */
 	scalar_t m_ii[3];
-	scalar_t m_ikd[3];        /* I 2 zeta wn, N m / (rad/s) */
-	scalar_t m_lim[3];        /* int_tau_max / kint, kint = I 2 zeta wn ki (when kint > 0) */
+	scalar_t m_ikd[3]; /* I 2 zeta wn, N m / (rad/s) */
+	scalar_t m_lim[3]; /* int_tau_max / kint, kint = I 2 zeta wn ki (when kint > 0) */
 };
 
 /* Default gains, the ones octo-fw flies: its parameter table (ATT_WN_RP, ATT_WN_YAW,
  * ATT_ZETA, ATT_KI) takes its defaults from these. */
-#define ATT_CTRL_DEFAULT_WN_RP_RPS  7.0f /* roll and pitch natural frequency, rad/s */
+#define ATT_CTRL_DEFAULT_WN_RP_RPS 7.0f  /* roll and pitch natural frequency, rad/s */
 #define ATT_CTRL_DEFAULT_WN_YAW_RPS 3.5f /* yaw natural frequency, rad/s */
-#define ATT_CTRL_DEFAULT_ZETA       1.0f /* damping ratio, every axis */
-#define ATT_CTRL_DEFAULT_KI_RPS     0.3f /* integral pole, every axis, 1/s */
+#define ATT_CTRL_DEFAULT_ZETA 1.0f       /* damping ratio, every axis */
+#define ATT_CTRL_DEFAULT_KI_RPS 0.3f     /* integral pole, every axis, 1/s */
 
 /* Defaults for the paper's octocopter at 90 Hz with a one-frame delay and a 30 ms
  * motor lag: the gains above, rate_max 3 / 3 / 1.5 rad/s, tau_max 3 / 3 / 0.4 N m,

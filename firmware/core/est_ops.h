@@ -38,16 +38,10 @@
 
 /* q_umul32(a, b) always inlined: the products below are the RLS update's most frequent
  * operation, and a call costs about half as much again as the product on Cortex-M0 */
-EST_INLINE uint64_t est_umul32(uint32_t a, uint32_t b)
-{
-	return qa_umul32(a, b);
-}
+EST_INLINE uint64_t est_umul32(uint32_t a, uint32_t b) { return qa_umul32(a, b); }
 
 /* q_clz32(v) always inlined */
-EST_INLINE int est_clz32(uint32_t v)
-{
-	return qa_clz32(v);
-}
+EST_INLINE int est_clz32(uint32_t v) { return qa_clz32(v); }
 
 /* q_clz64(v) from the clz of the word that holds the leading one */
 EST_INLINE int est_clz64(uint64_t v)
@@ -67,16 +61,10 @@ EST_INLINE uint32_t est_top32(uint64_t v, int s)
 }
 
 /* q_shr64(v, s): v / 2^s rounded to nearest (ties away from zero), s in [0, 62] */
-EST_INLINE int64_t est_shr64c(int64_t v, unsigned s)
-{
-	return qa_shr64(v, s);
-}
+EST_INLINE int64_t est_shr64c(int64_t v, unsigned s) { return qa_shr64(v, s); }
 
 /* q_shl64(v, s): v 2^s saturating to +/-INT64_MAX, s in [0, 62] */
-EST_INLINE int64_t est_shl64c(int64_t v, unsigned s)
-{
-	return qa_shl64(v, s);
-}
+EST_INLINE int64_t est_shl64c(int64_t v, unsigned s) { return qa_shl64(v, s); }
 
 /* q_sat32(q_shr64(v, s)), s in [0, 62] */
 EST_INLINE int32_t est_sat_shr64c(int64_t v, unsigned s)
@@ -160,7 +148,7 @@ static inline int64_t est_scale64(int64_t v, int s)
 		else
 			r = ((uint64_t)((hi << t) | (lo >> (32u - t))) << 32) | (uint32_t)(lo << t);
 	} else {
-		unsigned t = (unsigned)-s - 1u;   /* m / 2^(t + 1), rounded: (m 2^-t + 1) / 2 */
+		unsigned t = (unsigned)-s - 1u; /* m / 2^(t + 1), rounded: (m 2^-t + 1) / 2 */
 		uint64_t q;
 		if (t == 0u)
 			q = m;
@@ -195,7 +183,7 @@ static inline uint32_t est_recip(int64_t x, int *e)
 	if (x <= 0)
 		return 0;
 	int s = est_clz64((uint64_t)x);
-	uint32_t v = est_top32((uint64_t)x, s);                                 /* Q32, [0.5, 1) */
+	uint32_t v = est_top32((uint64_t)x, s);                                  /* Q32, [0.5, 1) */
 	uint32_t y = 3031741621u - (uint32_t)(est_umul32(2021161081u, v) >> 32); /* Q30 */
 	for (int i = 0; i < 3; i++) {
 		uint32_t t = (uint32_t)(est_umul32(v, y) >> 32);

@@ -45,7 +45,7 @@ static uint32_t xorshift32(uint32_t *s)
  * case can arise). Every operand of the sine's polynomial is of this kind. */
 EXC_INLINE uint32_t ms_mul(uint32_t x, uint32_t y)
 {
-	if (x >> 16)   /* x = 1 */
+	if (x >> 16) /* x = 1 */
 		return y;
 	return ((x * (y & 0xffffu) + 0x8000u) >> 16) + ((y >> 16) ? x : 0u);
 }
@@ -181,7 +181,7 @@ scalar_t excite_update(struct excite *e)
 			scalar_t u = sc_div(sc_from_int(2 * v - 32767), sc_from_int(32767));
 			e->value = sc_mul(a, u);
 		}
-		if (++e->count >= p->clock_div)   /* count < clock_div: no division */
+		if (++e->count >= p->clock_div) /* count < clock_div: no division */
 			e->count = 0;
 		y = e->value;
 		break;
@@ -209,9 +209,7 @@ scalar_t excite_update(struct excite *e)
 		}
 		break;
 	case EXCITE_OFF:
-	default:
-		y = SC_ZERO;
-		break;
+	default: y = SC_ZERO; break;
 	}
 	return sc_clamp(y, sc_neg(a), a);
 }

@@ -39,25 +39,25 @@ enum excite_kind {
 
 struct excite_params {
 	enum excite_kind kind;
-	scalar_t amplitude;  /* A >= 0 (negative is taken as 0) */
-	uint32_t clock_div;  /* frames per value / bit (>= 1; 0 is taken as 1) */
-	uint32_t seed;       /* any value; 0 is replaced by a fixed nonzero seed */
-	uint32_t prbs_order; /* n in [2, 16] (clamped) */
+	scalar_t amplitude;        /* A >= 0 (negative is taken as 0) */
+	uint32_t clock_div;        /* frames per value / bit (>= 1; 0 is taken as 1) */
+	uint32_t seed;             /* any value; 0 is replaced by a fixed nonzero seed */
+	uint32_t prbs_order;       /* n in [2, 16] (clamped) */
 	uint32_t ms_period_frames; /* multisine period P in frames (>= 4; f0 = frame rate / P) */
-	uint32_t ms_count;   /* N sines, 1..EXCITE_MS_MAX (clamped) */
-	uint32_t ms_k_first; /* first harmonic index (>= 1) */
+	uint32_t ms_count;         /* N sines, 1..EXCITE_MS_MAX (clamped) */
+	uint32_t ms_k_first;       /* first harmonic index (>= 1) */
 };
 
 struct excite {
 	struct excite_params p;
-	uint32_t rng;        /* xorshift32 state (uniform) */
-	uint32_t lfsr;       /* LFSR state (PRBS) */
+	uint32_t rng;  /* xorshift32 state (uniform) */
+	uint32_t lfsr; /* LFSR state (PRBS) */
 	uint32_t lfsr_taps;
-	uint32_t count;      /* frames since the value was drawn (multisine: frame in period) */
-	scalar_t value;      /* current held value (uniform, PRBS) */
+	uint32_t count;                /* frames since the value was drawn (multisine: frame in period) */
+	scalar_t value;                /* current held value (uniform, PRBS) */
 	uint32_t phase[EXCITE_MS_MAX]; /* multisine phases, 2^32 = one turn */
-	uint32_t dphase1;    /* phase step per frame of harmonic 1 (sine k: ms_k_first + k times it) */
-	scalar_t ms_scale;   /* A / (N * peak of the normalised sum) */
+	uint32_t dphase1;              /* phase step per frame of harmonic 1 (sine k: ms_k_first + k times it) */
+	scalar_t ms_scale;             /* A / (N * peak of the normalised sum) */
 };
 
 /* Sensible defaults: uniform, A = 0.05, clock_div 1, seed 1, PRBS order 9,

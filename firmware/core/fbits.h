@@ -15,7 +15,10 @@
 /* the bits of x (its first 32 where float is wider: used only where it is 32 bits) */
 static inline uint32_t fb_bits(float x)
 {
-	union { float f; uint32_t u; } v = { x };
+	union {
+		float f;
+		uint32_t u;
+	} v = {x};
 	return v.u;
 }
 

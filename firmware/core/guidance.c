@@ -20,7 +20,7 @@ struct guid_params guid_params_default(void)
 
 void guid_init(struct guid *g, const struct guid_params *params)
 {
-	struct guid z = { 0 };
+	struct guid z = {0};
 	*g = z;
 	g->p = *params;
 }
@@ -41,8 +41,7 @@ void guid_arm(struct guid *g, const scalar_t pos_m[3], scalar_t yaw_rad)
 	g->yaw_sp_rad = yaw_rad;
 }
 
-bool guid_takeoff(struct guid *g, enum guid_mode from, scalar_t height_m, const scalar_t pos_m[3],
-		  scalar_t yaw_rad)
+bool guid_takeoff(struct guid *g, enum guid_mode from, scalar_t height_m, const scalar_t pos_m[3], scalar_t yaw_rad)
 {
 	scalar_t target = sc_add(g->z_ground_m, height_m);
 	switch (from) {
@@ -81,8 +80,9 @@ static uint32_t takeoff_step(struct guid *g, const struct guid_input *in)
 	const struct guid_params *p = &g->p;
 	scalar_t dt = in->dt_s;
 	scalar_t d = sc_sub(g->z_target_m, g->z_sp_m), ad = sc_abs(d);
-	scalar_t v = sc_min(sc_min(p->tko_vel_mps, sc_sqrt(sc_mul(sc_add(p->profile_acc_mps2, p->profile_acc_mps2), ad))),
-			    sc_add(sc_abs(g->vz_ff_mps), sc_mul(p->profile_acc_mps2, dt)));
+	scalar_t v =
+		sc_min(sc_min(p->tko_vel_mps, sc_sqrt(sc_mul(sc_add(p->profile_acc_mps2, p->profile_acc_mps2), ad))),
+		       sc_add(sc_abs(g->vz_ff_mps), sc_mul(p->profile_acc_mps2, dt)));
 	if (ad <= sc_mul(v, dt) || ad < SC(1e-3)) {
 		g->z_sp_m = g->z_target_m;
 		g->vz_ff_mps = SC_ZERO;
@@ -99,8 +99,8 @@ static uint32_t takeoff_step(struct guid *g, const struct guid_input *in)
 static uint32_t land_step(struct guid *g, const struct guid_input *in)
 {
 	const struct guid_params *p = &g->p;
-	g->z_sp_m = sc_max(sc_sub(g->z_sp_m, sc_mul(p->land_vel_mps, in->dt_s)),
-			   sc_sub(g->z_ground_m, p->land_floor_m));
+	g->z_sp_m =
+		sc_max(sc_sub(g->z_sp_m, sc_mul(p->land_vel_mps, in->dt_s)), sc_sub(g->z_ground_m, p->land_floor_m));
 	g->vz_ff_mps = sc_neg(p->land_vel_mps);
 	if (sc_sub(in->z_m, g->z_ground_m) < p->landed_h_m && sc_abs(in->vz_mps) < p->landed_vz_mps)
 		g->on_ground_s = sc_add(g->on_ground_s, in->dt_s);
@@ -112,17 +112,13 @@ static uint32_t land_step(struct guid *g, const struct guid_input *in)
 uint32_t guid_update(struct guid *g, enum guid_mode m, const struct guid_input *in)
 {
 	switch (m) {
-	case GUID_GROUND:
-		guid_ground(g, in->z_m, false);
-		return 0;
-	case GUID_TAKEOFF:
-		return takeoff_step(g, in);
+	case GUID_GROUND: guid_ground(g, in->z_m, false); return 0;
+	case GUID_TAKEOFF: return takeoff_step(g, in);
 	case GUID_HOLD:
 		g->z_sp_m = g->z_target_m;
 		g->vz_ff_mps = SC_ZERO;
 		return 0;
-	case GUID_LAND:
-		return land_step(g, in);
+	case GUID_LAND: return land_step(g, in);
 	}
 	return 0;
 }

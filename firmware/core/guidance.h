@@ -30,7 +30,7 @@ enum guid_mode { GUID_GROUND = 0, GUID_TAKEOFF, GUID_HOLD, GUID_LAND };
 
 /* events (the return value of guid_update) */
 #define GUID_HOLD_REACHED (1u << 0) /* take-off finished: the caller may hold */
-#define GUID_LANDED       (1u << 1) /* landing finished: the caller may stop the motors */
+#define GUID_LANDED (1u << 1)       /* landing finished: the caller may stop the motors */
 
 struct guid_params {
 	scalar_t tko_vel_mps;      /* climb rate of take-off (> 0) */
@@ -47,13 +47,13 @@ struct guid_params {
 
 struct guid {
 	struct guid_params p;
-	scalar_t z_ground_m;   /* height of the ground (where the vehicle was armed or idled) */
-	scalar_t z_target_m;   /* height of take-off and hold */
-	scalar_t z_sp_m;       /* height set point */
-	scalar_t vz_ff_mps;    /* its rate (feedforward of the height loop) */
-	scalar_t pos_sp_m[2];  /* horizontal set point, x and y of S_I */
-	scalar_t yaw_sp_rad;   /* heading set point */
-	scalar_t on_ground_s;  /* landing: time spent touched down */
+	scalar_t z_ground_m;  /* height of the ground (where the vehicle was armed or idled) */
+	scalar_t z_target_m;  /* height of take-off and hold */
+	scalar_t z_sp_m;      /* height set point */
+	scalar_t vz_ff_mps;   /* its rate (feedforward of the height loop) */
+	scalar_t pos_sp_m[2]; /* horizontal set point, x and y of S_I */
+	scalar_t yaw_sp_rad;  /* heading set point */
+	scalar_t on_ground_s; /* landing: time spent touched down */
 };
 
 struct guid_input {
@@ -66,7 +66,7 @@ struct guid_input {
 /* Defaults of octo-fw: take-off 1.5 m/s, landing 0.7 m/s, touch-down 1 s, profile
  * 0.5 m/s^2, hold entry 5 cm and 0.1 m/s, landed below 0.2 m and 0.25 m/s, level below
  * 0.3 m, landing floor 1 m. */
-#define GUID_DEFAULT_TKO_VEL_MPS  1.5f
+#define GUID_DEFAULT_TKO_VEL_MPS 1.5f
 #define GUID_DEFAULT_LAND_VEL_MPS 0.7f
 #define GUID_DEFAULT_TOUCH_DOWN_S 1.0f
 struct guid_params guid_params_default(void);
@@ -85,8 +85,7 @@ void guid_arm(struct guid *g, const scalar_t pos_m[3], scalar_t yaw_rad);
  * ground, the set points start at the vehicle; GUID_LAND: the profile starts at the
  * vehicle's height; GUID_TAKEOFF / GUID_HOLD: from the current set point). Returns false,
  * changing nothing, for a retry of the same target (within 1 cm) while in the air. */
-bool guid_takeoff(struct guid *g, enum guid_mode from, scalar_t height_m, const scalar_t pos_m[3],
-		  scalar_t yaw_rad);
+bool guid_takeoff(struct guid *g, enum guid_mode from, scalar_t height_m, const scalar_t pos_m[3], scalar_t yaw_rad);
 
 /* A landing from the air: the set point starts no higher than the vehicle. */
 void guid_land(struct guid *g, scalar_t z_m);

@@ -28,10 +28,7 @@ static scalar_t p0_pct2(const struct hover_est_params *p)
 }
 
 /* theta within [1/u_max, 1/u_min] */
-static scalar_t clamp_theta(const struct hover_est *s, scalar_t th)
-{
-	return sc_clamp(th, s->theta_lo, s->theta_hi);
-}
+static scalar_t clamp_theta(const struct hover_est *s, scalar_t th) { return sc_clamp(th, s->theta_lo, s->theta_hi); }
 
 void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scalar_t u0)
 {
@@ -65,14 +62,13 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 
 static bool inputs_ok(scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
 {
-	return sc_isfinite(vz) && sc_isfinite(u) && sc_isfinite(c) && sc_isfinite(dt) && dt > SC_ZERO &&
-	       dt < SC(1.0);
+	return sc_isfinite(vz) && sc_isfinite(u) && sc_isfinite(c) && sc_isfinite(dt) && dt > SC_ZERO && dt < SC(1.0);
 }
 
 /* Advances the state-variable filter; returns the filtered acceleration. */
 static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
 {
-	scalar_t uc = est_mul_unit(u, c);   /* c = cos(tilt) in [0, 1] (est_mul_unit: exact for any) */
+	scalar_t uc = est_mul_unit(u, c); /* c = cos(tilt) in [0, 1] (est_mul_unit: exact for any) */
 	if (!s->primed) {
 		s->v_f = vz;
 		s->uc_f = uc;
@@ -85,7 +81,7 @@ static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c
 		s->al = sc_div(dt, sc_add(s->p.tau_s, dt));
 	}
 	scalar_t al = s->al;
-	s->v_f = sc_add(s->v_f, est_mul_unit(sc_sub(vz, s->v_f), al));   /* al in [0, 1] */
+	s->v_f = sc_add(s->v_f, est_mul_unit(sc_sub(vz, s->v_f), al)); /* al in [0, 1] */
 	s->uc_f = sc_add(s->uc_f, est_mul_unit(sc_sub(uc, s->uc_f), al));
 	return sc_div_r(sc_sub(vz, s->v_f), s->p.tau_s, &s->r_tau);
 }
@@ -113,7 +109,7 @@ bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t
 		return false;
 	scalar_t y_hat = sc_mul(sc_mul(s->p.g_mps2, s->uc_f), s->theta);
 	if (!(y_hat > s->y_min))
-		return false;   /* (almost) no thrust: nothing to learn */
+		return false; /* (almost) no thrust: nothing to learn */
 	scalar_t y = sc_add(a_f, s->p.g_mps2);
 	/* two quotients by y^: its reciprocal prepared once (scalar_ops.h) */
 	struct sc_gain inv_y_hat = sc_gain_recip2(y_hat, SC(1.0));
@@ -156,10 +152,7 @@ void hover_est_spool(struct hover_est *s, scalar_t dt_s)
 	s->p_pct2 = sc_max(s->p_pct2, p0_pct2(&s->p));
 }
 
-scalar_t hover_est_u(const struct hover_est *s)
-{
-	return sc_div(SC(1.0), s->theta);
-}
+scalar_t hover_est_u(const struct hover_est *s) { return sc_div(SC(1.0), s->theta); }
 
 scalar_t hover_est_sd(const struct hover_est *s)
 {

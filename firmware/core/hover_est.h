@@ -46,28 +46,28 @@
 #define HOVER_EST_GATED_S 1.0f
 
 struct hover_est_params {
-	scalar_t u_min;        /* accepted hover throttle range, e.g. [0.02, 0.8] */
+	scalar_t u_min; /* accepted hover throttle range, e.g. [0.02, 0.8] */
 	scalar_t u_max;
-	scalar_t sigma_u0;     /* initial standard deviation of u_h as a fraction of u_h (e.g. 1.0) */
-	scalar_t sigma_acc;    /* measurement noise of the filtered acceleration, m/s^2 */
-	scalar_t q_rel;        /* process noise: relative drift of u_h per sqrt(s) */
-	scalar_t tau_s;        /* state-variable filter time constant, s */
-	scalar_t gate_sigma;   /* innovation gate, standard deviations */
-	scalar_t spool_rate;   /* ground spool-up: fraction of u_h per second */
+	scalar_t sigma_u0;   /* initial standard deviation of u_h as a fraction of u_h (e.g. 1.0) */
+	scalar_t sigma_acc;  /* measurement noise of the filtered acceleration, m/s^2 */
+	scalar_t q_rel;      /* process noise: relative drift of u_h per sqrt(s) */
+	scalar_t tau_s;      /* state-variable filter time constant, s */
+	scalar_t gate_sigma; /* innovation gate, standard deviations */
+	scalar_t spool_rate; /* ground spool-up: fraction of u_h per second */
 	scalar_t g_mps2;
 };
 
 struct hover_est {
 	struct hover_est_params p;
-	scalar_t theta;   /* 1 / u_h */
-	scalar_t p_pct2;  /* variance of theta's relative error, percent^2 */
-	scalar_t v_f;     /* filtered vertical speed */
-	scalar_t uc_f;    /* filtered u cos_tilt */
-	bool primed;      /* filters initialised */
-	int8_t gated_sign;/* sign of the current run of gated innovations */
-	uint32_t updates; /* accepted measurements */
-	uint32_t rejected;/* gated measurements */
-	scalar_t gated_s; /* time of the current run of gated innovations of one sign, s */
+	scalar_t theta;    /* 1 / u_h */
+	scalar_t p_pct2;   /* variance of theta's relative error, percent^2 */
+	scalar_t v_f;      /* filtered vertical speed */
+	scalar_t uc_f;     /* filtered u cos_tilt */
+	bool primed;       /* filters initialised */
+	int8_t gated_sign; /* sign of the current run of gated innovations */
+	uint32_t updates;  /* accepted measurements */
+	uint32_t rejected; /* gated measurements */
+	scalar_t gated_s;  /* time of the current run of gated innovations of one sign, s */
 	/* what depends on the parameters and the frame period only, computed at init and when
 	 * the period changes: the update's divisions by them become products, with the same
 	 * quotients */

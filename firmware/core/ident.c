@@ -49,8 +49,7 @@ void ident_rotor_hold(struct ident_rotor *r, scalar_t thr_sent_prev)
 	r->have_prev = false;
 }
 
-void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t f_meas,
-			scalar_t tau_meas, bool excited)
+void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t f_meas, scalar_t tau_meas, bool excited)
 {
 	/* lag-aware: the previous frame's throttle, delayed and lagged, for this measurement */
 	scalar_t s = rotor_advance(r, thr_sent_prev);
@@ -78,15 +77,13 @@ void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t 
 
 /* ---------------------------------------------------------------- body torque */
 
-void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS],
-		       const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3])
+void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS], const scalar_t tm[IDENT_ROTORS],
+		       scalar_t tau_out[3])
 {
 	/* eq. (14) in units of l: tau_x row [0 -s -1 -s 0 s 1 s], tau_y row [-1 -s 0 s 1 s 0 -s] */
 	const scalar_t s = SC(0.70710678118654752);
-	scalar_t tx = sc_add(sc_mul(s, sc_sub(sc_add(f[5], f[7]), sc_add(f[1], f[3]))),
-			     sc_sub(f[6], f[2]));
-	scalar_t ty = sc_add(sc_mul(s, sc_sub(sc_add(f[3], f[5]), sc_add(f[1], f[7]))),
-			     sc_sub(f[4], f[0]));
+	scalar_t tx = sc_add(sc_mul(s, sc_sub(sc_add(f[5], f[7]), sc_add(f[1], f[3]))), sc_sub(f[6], f[2]));
+	scalar_t ty = sc_add(sc_mul(s, sc_sub(sc_add(f[3], f[5]), sc_add(f[1], f[7]))), sc_sub(f[4], f[0]));
 	scalar_t tz = SC_ZERO;
 	for (int j = 0; j < IDENT_ROTORS; j += 2)
 		tz = sc_add(tz, sc_sub(tm[j], tm[j + 1]));
@@ -95,8 +92,8 @@ void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS],
 	tau_out[2] = tz;
 }
 
-void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTORS],
-			     const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3])
+void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTORS], const scalar_t tm[IDENT_ROTORS],
+			     scalar_t tau_out[3])
 {
 	/* roll and pitch: rows 1 and 2 of mixer_wrench's wrench, by its operations in its order
 	 * (the same values, bit for bit: tests/core/test_ident_inertia_accept.c), without the
@@ -112,7 +109,7 @@ void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTOR
 	}
 	scalar_t tz = SC_ZERO;
 	for (int j = 0; j < IDENT_ROTORS; j++) {
-		scalar_t g = m->gn[3][j];   /* row-scaled Gamma: its sign is the yaw sign */
+		scalar_t g = m->gn[3][j]; /* row-scaled Gamma: its sign is the yaw sign */
 		if (g > SC_ZERO)
 			tz = sc_add(tz, tm[j]);
 		else if (g < SC_ZERO)
@@ -156,8 +153,7 @@ void ident_inertia_gap(struct ident_inertia *e, const scalar_t tau_b[3], const s
 	scalar_t dww = sc_sub(sc_mul(w_b[j], w_b[l]), p0);
 	for (unsigned m = 1; m <= k; m++) {
 		scalar_t f = sc_from_float((float)m / (float)(k + 1u));
-		inertia_filters(e, sc_add(t0, sc_mul(f, dtau)), sc_add(w0, sc_mul(f, dw)),
-				sc_add(p0, sc_mul(f, dww)));
+		inertia_filters(e, sc_add(t0, sc_mul(f, dtau)), sc_add(w0, sc_mul(f, dw)), sc_add(p0, sc_mul(f, dww)));
 		e->wf_prev = e->svf_w.y;
 		if (e->iv)
 			filt_svf_update(&e->svf_z, e->z_in);
@@ -185,8 +181,7 @@ void ident_inertia_restart(struct ident_inertia *e, const scalar_t tau_b[3], con
 	svf_rest(&e->svf_z, e->z_in);
 }
 
-void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3],
-			  bool excited)
+void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3], bool excited)
 {
 	unsigned i = e->axis, j, k;
 	ident_other_axes(i, &j, &k);

@@ -57,26 +57,26 @@ static inline void ident_other_axes(unsigned i, unsigned *j, unsigned *k)
 
 /* ---------------------------------------------------------------- rotor coefficients */
 struct ident_rotor_cfg {
-	scalar_t dt_s;          /* frame period (90 Hz: 1/90) */
-	scalar_t mot_tau_s;     /* modelled first-order lag (0 = none) */
-	uint32_t delay_frames;  /* modelled transport delay beyond the loop's one frame */
-	scalar_t curve;         /* thrust curve c of g(s) (MOT_CURVE; 0 = linear) */
-	scalar_t thr0;          /* throttle before the start (initial state of delay and lag) */
-	float kf0, ktau0;       /* initial estimates (nominal values) */
-	float p0;               /* initial covariance (0 = 1e6) */
+	scalar_t dt_s;         /* frame period (90 Hz: 1/90) */
+	scalar_t mot_tau_s;    /* modelled first-order lag (0 = none) */
+	uint32_t delay_frames; /* modelled transport delay beyond the loop's one frame */
+	scalar_t curve;        /* thrust curve c of g(s) (MOT_CURVE; 0 = linear) */
+	scalar_t thr0;         /* throttle before the start (initial state of delay and lag) */
+	float kf0, ktau0;      /* initial estimates (nominal values) */
+	float p0;              /* initial covariance (0 = 1e6) */
 };
 
 struct ident_rotor {
-	scalar_t mot_tau_s, curve;  /* of the configuration: what is read after the init */
+	scalar_t mot_tau_s, curve; /* of the configuration: what is read after the init */
 	struct filt_delay delay;
 	struct filt_lag lag;
-	struct rls lagaware;    /* theta[0][0] = k_f, theta[1][0] = k_tau */
+	struct rls lagaware; /* theta[0][0] = k_f, theta[1][0] = k_tau */
 	struct rls plain;
-	struct rls sens;        /* lag check: f_1 on [phi, d phi / d tau_m] (2 parameters) */
-	scalar_t dphi_dtau;     /* sensitivity of the lagged throttle to tau_m, 1/s */
-	scalar_t dalpha_dtau;   /* d alpha / d tau_m of the lag's coefficient, 1/s */
-	scalar_t phi;           /* last lag-aware regressor */
-	scalar_t y_prev[2];     /* measurement of the previous frame (for the plain update) */
+	struct rls sens;      /* lag check: f_1 on [phi, d phi / d tau_m] (2 parameters) */
+	scalar_t dphi_dtau;   /* sensitivity of the lagged throttle to tau_m, 1/s */
+	scalar_t dalpha_dtau; /* d alpha / d tau_m of the lag's coefficient, 1/s */
+	scalar_t phi;         /* last lag-aware regressor */
+	scalar_t y_prev[2];   /* measurement of the previous frame (for the plain update) */
 	bool have_prev;
 	uint32_t n;
 };
@@ -86,8 +86,8 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg);
 /* One frame: thr_sent_prev = throttle of the rotor sent on the previous frame; f_meas, tau_meas
  * = measured thrust (N) and reaction-torque magnitude (N m) of this frame. `excited` gates
  * both RLS (false: the filters run, the estimates do not move). */
-void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t f_meas,
-			scalar_t tau_meas, bool excited);
+void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t f_meas, scalar_t tau_meas,
+			bool excited);
 
 /* A frame without measurement (lost on the link): the plant held thr_sent_prev for one more
  * frame; the delay, lag and sensitivity advance, nothing is estimated, and the plain
@@ -125,35 +125,35 @@ static inline float ident_plain_bias(float e_d2, float e_d_dlag, float t_hover)
 /* ---------------------------------------------------------------- body torque */
 /* Torque about S_B from measured rotor thrusts f[8] (N) through Gamma_o rows 2-3 (eq. 14,
  * arm l) and yaw from the measured reaction-torque magnitudes tm[8] (odd rotors +, even -). */
-void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS],
-		       const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3]);
+void ident_body_torque(scalar_t arm_l_m, const scalar_t f[IDENT_ROTORS], const scalar_t tm[IDENT_ROTORS],
+		       scalar_t tau_out[3]);
 
 /* The same torque through the mixer's own Gamma (its rotor mask and layout, custom or
  * eq. (14) with its arm length): roll and pitch are rows 2-3 of Gamma f; yaw is the sum of
  * the measured reaction torques of the rotors present, signed as Gamma's yaw row (the
  * measured torques, not k_tau / k_f times the thrusts). */
-void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTORS],
-			     const scalar_t tm[IDENT_ROTORS], scalar_t tau_out[3]);
+void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTORS], const scalar_t tm[IDENT_ROTORS],
+			     scalar_t tau_out[3]);
 
 /* ---------------------------------------------------------------- inertia */
 struct ident_inertia {
-	unsigned axis;                  /* 0 x, 1 y, 2 z */
-	scalar_t coupling;              /* I_k - I_j of the gyroscopic term */
-	scalar_t alpha;                 /* torque weight (ident_torque_weight) */
+	unsigned axis;     /* 0 x, 1 y, 2 z */
+	scalar_t coupling; /* I_k - I_j of the gyroscopic term */
+	scalar_t alpha;    /* torque weight (ident_torque_weight) */
 	scalar_t inv_dt;
 	scalar_t tau_prev, ww_prev, wf_prev, w_prev;
 	struct filt_svf svf_tau, svf_w, svf_ww;
 	struct rls rls;
-	float sd_scale;                 /* coloured-residual correction of the RLS std */
+	float sd_scale; /* coloured-residual correction of the RLS std */
 	uint32_t n;
 	/* instrumental variable (ident_inertia_instrument): the excitation through the same SVF */
 	struct filt_svf svf_z;
-	scalar_t z_in;                  /* the instrument's input for the next update */
-	bool iv;                        /* an instrument was given: the estimate is the IV one */
-	uint32_t s_n, b_n, b_len;       /* excited updates, of them in the current block, block length */
-	ident_sum_t s_zy, s_zp;         /* sums of z y and z phi over the excited updates */
-	ident_sum_t b_zy, b_zp;         /* the same over the current block */
-	ident_sum_t s_aa, s_ab, s_bb;   /* sums of the complete blocks' products (the variance) */
+	scalar_t z_in;                /* the instrument's input for the next update */
+	bool iv;                      /* an instrument was given: the estimate is the IV one */
+	uint32_t s_n, b_n, b_len;     /* excited updates, of them in the current block, block length */
+	ident_sum_t s_zy, s_zp;       /* sums of z y and z phi over the excited updates */
+	ident_sum_t b_zy, b_zp;       /* the same over the current block */
+	ident_sum_t s_aa, s_ab, s_bb; /* sums of the complete blocks' products (the variance) */
 };
 
 /* The std: the RLS std assumes white residuals, but the SVF colours the (white) torque
@@ -163,16 +163,14 @@ struct ident_inertia {
  * tests/core/test_ident.c and against the spread over simulated flights).
  * wc, zeta: the SVF; inertia[3]: current values (the two others enter the gyroscopic term;
  * the axis' own is the initial estimate). */
-void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps, scalar_t zeta,
-			scalar_t dt_s, scalar_t alpha, const scalar_t inertia[3], const scalar_t w0[3],
-			const scalar_t tau0[3]);
+void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps, scalar_t zeta, scalar_t dt_s,
+			scalar_t alpha, const scalar_t inertia[3], const scalar_t w0[3], const scalar_t tau0[3]);
 /* Weight of the torque measured at the end of a frame in the frame's mean torque when every
  * rotor thrust is a first-order lag tau_m of a throttle held over the frame (exact):
  *     alpha = (1 - c) / (1 - a), a = exp(-dt / tau_m), c = (tau_m / dt) (1 - a); 1 if tau_m <= 0 */
 scalar_t ident_torque_weight(scalar_t tau_m_s, scalar_t dt_s);
 /* One frame: body torque (ident_body_torque) and body rates of the same frame. */
-void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3],
-			  bool excited);
+void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3], bool excited);
 /* Frames lost on the link before this frame's update (the plant held the last command over
  * them). The filters assume uniform sampling: one update for k + 1 frames would see the
  * change of the gyro over all of them as one frame's derivative, an equation error
@@ -212,8 +210,8 @@ void ident_inertia_instrument(struct ident_inertia *e, scalar_t u);
  * instead is raise^2 as long: std ~ 1 / sqrt(T)); 1 otherwise. */
 #define IDENT_INR_LO 0.01f
 #define IDENT_INR_HI 2.0f
-enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max,
-					float *lo, float *hi, float *raise);
+enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max, float *lo,
+					float *hi, float *raise);
 
 /* ---------------------------------------------------------------- validation */
 /* y (measured) against y_hat (model): NE = RMS(y - y_hat) / RMS(y),
@@ -221,10 +219,10 @@ enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, floa
  * the first sample y0 (shifted data: sum y^2 and the sum of squared deviations from the
  * mean follow without cancellation), ident_sum_t; no division per sample. */
 struct ident_fit {
-	uint32_t n;            /* samples */
-	scalar_t y0;           /* the first sample */
-	ident_sum_t s1, s2;    /* sum (y - y0), sum (y - y0)^2 */
-	ident_sum_t sse;       /* sum (y - y_hat)^2 */
+	uint32_t n;         /* samples */
+	scalar_t y0;        /* the first sample */
+	ident_sum_t s1, s2; /* sum (y - y0), sum (y - y0)^2 */
+	ident_sum_t sse;    /* sum (y - y_hat)^2 */
 };
 
 void ident_fit_init(struct ident_fit *v);

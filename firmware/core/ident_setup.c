@@ -61,7 +61,7 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	filt_delay_init(&r->delay, cfg->delay_frames, cfg->thr0);
 	filt_lag_init(&r->lag, cfg->mot_tau_s, cfg->dt_s, cfg->thr0);
 	struct rls_config c;
-	rls_default_config(&c);   /* one parameter, lambda 1 */
+	rls_default_config(&c); /* one parameter, lambda 1 */
 	c.n_outputs = 2;
 	c.p0 = or_default(cfg->p0, 1e6f);
 	c.theta0[0][0] = cfg->kf0;
@@ -91,20 +91,11 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	r->n = 0;
 }
 
-float ident_rotor_est(const struct ident_rotor *r, unsigned which)
-{
-	return rls_estimate_f(&r->lagaware, which, 0);
-}
+float ident_rotor_est(const struct ident_rotor *r, unsigned which) { return rls_estimate_f(&r->lagaware, which, 0); }
 
-float ident_rotor_sd(const struct ident_rotor *r, unsigned which)
-{
-	return rls_std(&r->lagaware, which, 0);
-}
+float ident_rotor_sd(const struct ident_rotor *r, unsigned which) { return rls_std(&r->lagaware, which, 0); }
 
-float ident_rotor_plain(const struct ident_rotor *r, unsigned which)
-{
-	return rls_estimate_f(&r->plain, which, 0);
-}
+float ident_rotor_plain(const struct ident_rotor *r, unsigned which) { return rls_estimate_f(&r->plain, which, 0); }
 
 /* estimates of one 1-parameter RLS with two outputs and their std: rls_std's arithmetic
  * with P_00 and the degrees of freedom computed once */
@@ -145,13 +136,13 @@ scalar_t ident_torque_weight(scalar_t tau_m_s, scalar_t dt_s)
 	/* alpha = 1 / (1 - exp(-x)) - 1 / x, x = dt / tau_m; series for small x (cancellation) */
 	float x = dt / tm;
 	/* x < 0.1 by its bits (x is positive, not NaN) */
-	float w = fb_bits(x) < fb_bits(0.1f) ? 0.5f + x / 12.0f - x * x * x / 720.0f : 1.0f / (1.0f - expf(-x)) - 1.0f / x;
+	float w = fb_bits(x) < fb_bits(0.1f) ? 0.5f + x / 12.0f - x * x * x / 720.0f
+					     : 1.0f / (1.0f - expf(-x)) - 1.0f / x;
 	return sc_from_float(w);
 }
 
-void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps, scalar_t zeta,
-			scalar_t dt_s, scalar_t alpha, const scalar_t inertia[3], const scalar_t w0[3],
-			const scalar_t tau0[3])
+void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps, scalar_t zeta, scalar_t dt_s,
+			scalar_t alpha, const scalar_t inertia[3], const scalar_t w0[3], const scalar_t tau0[3])
 {
 	unsigned i = axis > 2u ? 2u : axis, j, k;
 	ident_other_axes(i, &j, &k);
@@ -168,7 +159,7 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	filt_svf_init(&e->svf_w, wc_rps, zeta, dt_s, w0[i]);
 	filt_svf_init(&e->svf_ww, wc_rps, zeta, dt_s, e->ww_prev);
 	struct rls_config c;
-	rls_default_config(&c);   /* one parameter, one output, lambda 1, p0 1e4 */
+	rls_default_config(&c); /* one parameter, one output, lambda 1, p0 1e4 */
 	c.theta0[0][0] = sc_to_float(inertia[i]);
 	rls_init(&e->rls, &c);
 	float wdt = sc_to_float(wc_rps) * sc_to_float(dt_s), z4 = 4.0f * sc_to_float(zeta);
@@ -252,8 +243,8 @@ __attribute__((noinline)) static enum ident_verdict verdict(float est, float sd,
 	return IDENT_ACCEPT;
 }
 
-enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max,
-					float *lo, float *hi, float *raise)
+enum ident_verdict ident_inertia_accept(float est, float sd, float mass_kg, float arm_l_m, float rsd_max, float *lo,
+					float *hi, float *raise)
 {
 	float ml2 = mass_kg * arm_l_m * arm_l_m;
 	*lo = IDENT_INR_LO * ml2;
@@ -313,14 +304,10 @@ enum ident_verdict ident_accept(float est, float sd, float nominal, float rsd_ma
 const char *ident_verdict_text(enum ident_verdict v)
 {
 	switch (v) {
-	case IDENT_ACCEPT:
-		return "accepted";
-	case IDENT_NOT_FINITE:
-		return "not finite";
-	case IDENT_OUT_OF_RANGE:
-		return "out of range";
-	case IDENT_UNCERTAIN:
-		return "std too large";
+	case IDENT_ACCEPT: return "accepted";
+	case IDENT_NOT_FINITE: return "not finite";
+	case IDENT_OUT_OF_RANGE: return "out of range";
+	case IDENT_UNCERTAIN: return "std too large";
 	}
 	return "?";
 }

@@ -80,7 +80,9 @@ static scalar_t regressor(const struct kf_track *s, const scalar_t *thr, int n)
 		scalar_t t = sc_clamp(thr[j], SC_ZERO, SC(1.0));
 		/* a straight curve and a nominal rotor skip their products (x 1 and + 0 are exact
 		 * in both builds); t and t^2 are in [0, 1]: est_mul_unit */
-		scalar_t g = c == SC_ZERO ? t : sc_add(est_mul_unit(sc_sub(SC(1.0), c), t), est_mul_unit(c, est_mul_unit(t, t)));
+		scalar_t g = c == SC_ZERO
+				     ? t
+				     : sc_add(est_mul_unit(sc_sub(SC(1.0), c), t), est_mul_unit(c, est_mul_unit(t, t)));
 		sum = sc_add(sum, s->p.scale[j] == SC(1.0) ? g : sc_mul(s->p.scale[j], g));
 	}
 	return sum;
@@ -93,7 +95,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	for (int j = 0; j < n; j++)
 		if (!sc_isfinite(thr[j]))
 			return false;
-	if (dt_s != s->c_dt) {   /* the step changed: the exact discrete lag, the averages */
+	if (dt_s != s->c_dt) { /* the step changed: the exact discrete lag, the averages */
 		s->c_dt = dt_s;
 		if (s->p.tau_lag_s > SC_ZERO)
 			s->lag_al = sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt_s, s->p.tau_lag_s))));
@@ -107,7 +109,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		s->primed = true;
 	} else {
 		scalar_t al = s->lag_al;
-		s->phi_f = sc_add(s->phi_f, est_mul_unit(sc_sub(phi, s->phi_f), al));   /* al in [0, 1] */
+		s->phi_f = sc_add(s->phi_f, est_mul_unit(sc_sub(phi, s->phi_f), al)); /* al in [0, 1] */
 	}
 	phi = s->phi_f;
 	if (!gate || phi < s->p.phi_min || !(y_n > SC_ZERO))
@@ -136,7 +138,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	 * (s_pct / 100) / (2 drift_per_min / 60) = 0.3 s_pct / drift_per_min */
 	if (s->p.drift_per_min > SC_ZERO) {
 		scalar_t q = sc_div_r(est_mul_unit(s->s_pct, SC(0.3)), s->p.drift_per_min, &s->r_drift);
-		scalar_t x = est_mul_unit(sc_sq(q), dt_s);   /* (s / 2r)^2 / f_s */
+		scalar_t x = est_mul_unit(sc_sq(q), dt_s); /* (s / 2r)^2 / f_s */
 		s->mem_s = sc_clamp(cbrt_warm(x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
 	} else {
 		s->mem_s = s->p.t_max_s;
@@ -148,7 +150,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	 * quotient) */
 	scalar_t phi2 = sc_sq(phi);
 	scalar_t den = sc_add(s->lambda, sc_mul(phi2, s->P));
-	s->P = est_div_near(s->P, den, s->P);   /* den is about 1 once P has settled */
+	s->P = est_div_near(s->P, den, s->P); /* den is about 1 once P has settled */
 	scalar_t K = sc_mul(s->P, phi);
 	s->k = sc_add(s->k, sc_mul(K, e));
 	/* no wind-up: P at most its steady state for the shortest memory and this regressor,

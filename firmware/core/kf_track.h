@@ -37,34 +37,34 @@ struct kf_track_params {
 	scalar_t drift_per_min; /* largest drift to follow, fraction per minute (e.g. 0.02) */
 	scalar_t t_min_s;       /* bounds of the memory T*, s */
 	scalar_t t_max_s;
-	scalar_t phi_min;       /* gate: smallest regressor (sum of throttles) */
-	scalar_t tau_lag_s;     /* motor lag of the regressor, s (0: none) */
-	scalar_t curve;         /* thrust curve c: g(T) = (1 - c) T + c T^2 */
+	scalar_t phi_min;                /* gate: smallest regressor (sum of throttles) */
+	scalar_t tau_lag_s;              /* motor lag of the regressor, s (0: none) */
+	scalar_t curve;                  /* thrust curve c: g(T) = (1 - c) T + c T^2 */
 	scalar_t scale[KF_TRACK_ROTORS]; /* per-rotor effectiveness: rotor j gives scale_j k g(T_j) */
-	scalar_t s_tau_s;       /* averaging time of the noise estimate, s */
-	scalar_t s0_pct;        /* noise assumed before any residual, percent of y */
+	scalar_t s_tau_s;                /* averaging time of the noise estimate, s */
+	scalar_t s0_pct;                 /* noise assumed before any residual, percent of y */
 };
 
 struct kf_track {
 	struct kf_track_params p;
-	scalar_t k;        /* estimate, N per unit throttle */
-	scalar_t P;        /* 1 / sum lambda^i phi^2 */
-	scalar_t s2_pct2;  /* relative noise variance, percent^2 */
-	scalar_t s_pct;    /* its square root, set with it (the update and kf_track_sd read it) */
-	scalar_t mem_s;    /* current memory T*, s */
+	scalar_t k;       /* estimate, N per unit throttle */
+	scalar_t P;       /* 1 / sum lambda^i phi^2 */
+	scalar_t s2_pct2; /* relative noise variance, percent^2 */
+	scalar_t s_pct;   /* its square root, set with it (the update and kf_track_sd read it) */
+	scalar_t mem_s;   /* current memory T*, s */
 	scalar_t lambda;
-	scalar_t p_rt;     /* sqrt(P / (1 + lambda)), set with P and lambda (kf_track_sd reads it) */
-	scalar_t phi_f;    /* lag-filtered regressor */
+	scalar_t p_rt;       /* sqrt(P / (1 + lambda)), set with P and lambda (kf_track_sd reads it) */
+	scalar_t phi_f;      /* lag-filtered regressor */
 	scalar_t e_prev_pct; /* last residual, percent of y */
 	/* what depends on the frame period and the parameters only, computed when they change
 	 * (the update's divisions by them become products) */
-	scalar_t c_dt;     /* the frame period they were computed for (0: none yet) */
-	scalar_t lag_al;   /* the lag filter's coefficient 1 - e^(-dt/tau_lag) */
-	scalar_t a_s;      /* the noise average's coefficient dt / (s_tau_s + dt) */
-	scalar_t dt_tmin;  /* dt / t_min_s */
+	scalar_t c_dt;           /* the frame period they were computed for (0: none yet) */
+	scalar_t lag_al;         /* the lag filter's coefficient 1 - e^(-dt/tau_lag) */
+	scalar_t a_s;            /* the noise average's coefficient dt / (s_tau_s + dt) */
+	scalar_t dt_tmin;        /* dt / t_min_s */
 	struct sc_recip r_drift; /* 1 / drift_per_min */
-	bool started;      /* an estimate exists */
-	bool primed;       /* the lag filter holds a value */
+	bool started;            /* an estimate exists */
+	bool primed;             /* the lag filter holds a value */
 	uint32_t updates;
 };
 

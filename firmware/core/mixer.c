@@ -48,7 +48,10 @@ static inline bool mzero(scalar_t x)
 #if OCTO_FIXED || defined(__ARM_FP)
 	return x == SC_ZERO;
 #else
-	union { float f; uint32_t u; } v = { x };
+	union {
+		float f;
+		uint32_t u;
+	} v = {x};
 	return (v.u << 1) == 0u;
 #endif
 }
@@ -73,7 +76,8 @@ MIX_NOINLINE scalar_t mdot(scalar_t acc, const scalar_t *a, int sa, const scalar
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline void maxpy(scalar_t *v, scalar_t d, const scalar_t *q, int n)
+static inline void
+maxpy(scalar_t *v, scalar_t d, const scalar_t *q, int n)
 #else
 MIX_NOINLINE void maxpy(scalar_t *v, scalar_t d, const scalar_t *q, int n)
 #endif
@@ -102,7 +106,8 @@ static scalar_t to_scaled(const struct mixer *m, int i, scalar_t v)
 #if OCTO_FIXED && defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline scalar_t gmul(scalar_t g, scalar_t u)
+static inline scalar_t
+gmul(scalar_t g, scalar_t u)
 {
 #if OCTO_FIXED
 	if (g == SC_ZERO)
@@ -188,7 +193,7 @@ static bool facet_scan(const struct mixer *m, const scalar_t w[NA], const scalar
 
 MIX_NOINLINE bool attainable_scaled(const struct mixer *m, const scalar_t w[NA], scalar_t tol)
 {
-	scalar_t iv[2] = { SC_ZERO, SC_ZERO };
+	scalar_t iv[2] = {SC_ZERO, SC_ZERO};
 	return facet_scan(m, w, NULL, 0, tol, iv);
 }
 
@@ -204,8 +209,7 @@ bool mixer_attainable(const struct mixer *m, const scalar_t wrench[NA], scalar_t
 
 /* Interval iv of the scaled thrust w[0] such that w is attainable with the inner margin, other
  * components fixed. Returns false if empty. */
-static bool thrust_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA],
-			    scalar_t iv[2])
+static bool thrust_interval(const struct mixer *m, const struct facet_recips *rc, const scalar_t w[NA], scalar_t iv[2])
 {
 	const scalar_t w0[NA] = {SC_ZERO, w[1], w[2], w[3]};
 	iv[0] = SC_MAX_NEG;
@@ -276,10 +280,7 @@ static int row_basis(const struct mixer *m, const int8_t bnd[NR], int fr[NR], in
 }
 
 /* u clamped to the box [0, 1] of the scaled space */
-static scalar_t clamp01(scalar_t u)
-{
-	return mclamp(u, SC_ZERO, SC(1));
-}
+static scalar_t clamp01(scalar_t u) { return mclamp(u, SC_ZERO, SC(1)); }
 
 /* Active-set refinement (at most MIXER_QP_ITERS iterations) from the feasible u towards the
  * unique minimiser of |u - uref| subject to gn u = w, 0 <= u <= 1: every iterate stays in the
@@ -342,7 +343,7 @@ static int refine(const struct mixer *m, const scalar_t w[NA], const scalar_t ur
 		 * i.e. L^T lambda = Q g_F = -c (c = Q (uref - u)_F from above, u unchanged since:
 		 * the same values as summing Q g_F, in float up to the sign of a zero, which the
 		 * test against EPS_MU > 0 below cannot see), back substitution over the basis rows */
-		scalar_t lam[NA] = { SC_ZERO, SC_ZERO, SC_ZERO, SC_ZERO };
+		scalar_t lam[NA] = {SC_ZERO, SC_ZERO, SC_ZERO, SC_ZERO};
 		/* (summed over every k: lam[k] is still 0 for k <= piv[i], as piv rises with i, and
 		 * acc - x 0 is acc, in float up to the sign of a zero, which EPS_MU cannot see) */
 		for (int i = r - 1; i >= 0; i--)
@@ -399,7 +400,7 @@ MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t 
 	int st;
 	for (st = 0; st + 4 < na; st++) {
 		int j = m->order[st];
-		scalar_t g[NA] = { m->gn[0][j], m->gn[1][j], m->gn[2][j], m->gn[3][j] };
+		scalar_t g[NA] = {m->gn[0][j], m->gn[1][j], m->gn[2][j], m->gn[3][j]};
 		scalar_t lo = SC_ZERO, hi = SC(1);
 		/* the last step's rest is the invertible tail: u_tail = T r - u T g in [0, 1]^4,
 		 * i.e. 0 <= tr - u tg <= 1 <=> -1/2 <= (tr - 1/2) - u tg <= 1/2 per row of T: the
@@ -450,7 +451,7 @@ MIX_NOINLINE int preimage(const struct mixer *m, const scalar_t w[NA], scalar_t 
 }
 
 /* the limit flag of each axis of [f, tau_x, tau_y, tau_z] */
-static const uint32_t axis_limit[NA] = { MIXER_LIMIT_F, MIXER_LIMIT_TX, MIXER_LIMIT_TY, MIXER_LIMIT_TZ };
+static const uint32_t axis_limit[NA] = {MIXER_LIMIT_F, MIXER_LIMIT_TX, MIXER_LIMIT_TY, MIXER_LIMIT_TZ};
 
 /* w[1], w[2]: the scaled roll and pitch of a times the demanded ones */
 MIX_NOINLINE void scaled_rp(const struct mixer *m, const scalar_t demand[NA], scalar_t a, scalar_t w[NA])
@@ -567,7 +568,7 @@ static bool priority(const struct mixer *m, const scalar_t demand[NA], struct mi
 static void pinv_products(const struct mixer *m, const scalar_t demand[NA], scalar_t pin[NR][NA])
 {
 	for (int i = 0; i < NA; i++) {
-		scalar_t mag[2] = { SC_ZERO, SC_ZERO }, prod[2] = { SC_ZERO, SC_ZERO };
+		scalar_t mag[2] = {SC_ZERO, SC_ZERO}, prod[2] = {SC_ZERO, SC_ZERO};
 		for (int j = 0; j < NR; j++) {
 			scalar_t p = m->pinv[j][i], a = p < 0 ? -p : p, t; /* p > INT32_MIN */
 			if (a == mag[0]) {

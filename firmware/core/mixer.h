@@ -30,11 +30,11 @@
 #include <stdint.h>
 
 #define MIXER_N_ROTORS 8
-#define MIXER_N_AXES   4   /* [f, tau_x, tau_y, tau_z] */
-#define MIXER_AXIS_F   0
-#define MIXER_AXIS_TX  1
-#define MIXER_AXIS_TY  2
-#define MIXER_AXIS_TZ  3
+#define MIXER_N_AXES 4 /* [f, tau_x, tau_y, tau_z] */
+#define MIXER_AXIS_F 0
+#define MIXER_AXIS_TX 1
+#define MIXER_AXIS_TY 2
+#define MIXER_AXIS_TZ 3
 
 /* bisection steps for the roll/pitch scale when even full roll/pitch is unattainable */
 #define MIXER_ALPHA_ITERS 20
@@ -56,14 +56,14 @@ enum mixer_mode {
 };
 
 /* Limit flags (mixer_output.limits) */
-#define MIXER_LIMIT_ROTOR_MIN  (1u << 0)  /* some rotor at its lower bound */
-#define MIXER_LIMIT_ROTOR_MAX  (1u << 1)  /* some rotor at its upper bound */
-#define MIXER_LIMIT_F          (1u << 2)  /* total thrust not as demanded */
-#define MIXER_LIMIT_TX         (1u << 3)  /* roll torque reduced */
-#define MIXER_LIMIT_TY         (1u << 4)  /* pitch torque reduced */
-#define MIXER_LIMIT_TZ         (1u << 5)  /* yaw torque reduced */
-#define MIXER_LIMIT_NO_ALLOC   (1u << 6)  /* priority allocator unavailable: clipped */
-#define MIXER_LIMIT_BAD_INPUT  (1u << 7)  /* non-finite demand (float build): all rotors 0 */
+#define MIXER_LIMIT_ROTOR_MIN (1u << 0) /* some rotor at its lower bound */
+#define MIXER_LIMIT_ROTOR_MAX (1u << 1) /* some rotor at its upper bound */
+#define MIXER_LIMIT_F (1u << 2)         /* total thrust not as demanded */
+#define MIXER_LIMIT_TX (1u << 3)        /* roll torque reduced */
+#define MIXER_LIMIT_TY (1u << 4)        /* pitch torque reduced */
+#define MIXER_LIMIT_TZ (1u << 5)        /* yaw torque reduced */
+#define MIXER_LIMIT_NO_ALLOC (1u << 6)  /* priority allocator unavailable: clipped */
+#define MIXER_LIMIT_BAD_INPUT (1u << 7) /* non-finite demand (float build): all rotors 0 */
 
 struct mixer_params {
 	scalar_t arm_l_m;   /* l, m (> 0) */
@@ -105,40 +105,40 @@ struct mixer_design {
 struct mixer {
 	uint8_t rank;
 	uint8_t n_active;
-	uint8_t present;                   /* bit j: rotor j+1 has a nonzero column */
+	uint8_t present; /* bit j: rotor j+1 has a nonzero column */
 	uint8_t n_facets;
 	bool alloc_ok;
-	bool custom;                       /* built from custom_gamma */
-	uint8_t order[MIXER_N_ROTORS];     /* present rotors; the last 4 are independent */
+	bool custom;                   /* built from custom_gamma */
+	uint8_t order[MIXER_N_ROTORS]; /* present rotors; the last 4 are independent */
 	/* the preimage's steps 0..n_active-5 (at most 4): facets of the suffix set after each */
 	uint8_t sub_n[MIXER_N_ROTORS - 4];
 	uint8_t sub_first[MIXER_N_ROTORS - 4];
 
 	/* hot-path data, scalar_t; everything of the allocation is in u (f_j / scale_j) */
-	scalar_t f_lo, f_hi;               /* box of u, N (rotor j's thrust: scale_j times it) */
-	scalar_t width;                    /* f_hi - f_lo (physical wrench per unit of scaled
+	scalar_t f_lo, f_hi;                         /* box of u, N (rotor j's thrust: scale_j times it) */
+	scalar_t width;                              /* f_hi - f_lo (physical wrench per unit of scaled
 					    * wrench: width row_max) */
-	scalar_t row_max[MIXER_N_AXES];    /* max_j |Gamma_ij|: pinv times it (column i) is the
+	scalar_t row_max[MIXER_N_AXES];              /* max_j |Gamma_ij|: pinv times it (column i) is the
 					    * pseudo-inverse in the scaled space */
-	scalar_t row_div[MIXER_N_AXES];    /* 1 / max_j |Gamma_ij| */
-	scalar_t w_lo[MIXER_N_AXES];       /* physical wrench with every present rotor at u = f_lo */
-	struct mixer_params p;         /* copy (custom_gamma set to NULL after copying; scale as
+	scalar_t row_div[MIXER_N_AXES];              /* 1 / max_j |Gamma_ij| */
+	scalar_t w_lo[MIXER_N_AXES];                 /* physical wrench with every present rotor at u = f_lo */
+	struct mixer_params p;                       /* copy (custom_gamma set to NULL after copying; scale as
 					* used: 0 replaced by 1, clamped) */
-	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES];  /* (Gamma S)^+ (physical wrench -> u) */
-	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];    /* row-scaled Gamma S, entries in [-1, 1] */
-	scalar_t tail_inv[4][MIXER_N_AXES]; /* inverse of the last 4 scaled columns */
+	scalar_t pinv[MIXER_N_ROTORS][MIXER_N_AXES]; /* (Gamma S)^+ (physical wrench -> u) */
+	scalar_t gn[MIXER_N_AXES][MIXER_N_ROTORS];   /* row-scaled Gamma S, entries in [-1, 1] */
+	scalar_t tail_inv[4][MIXER_N_AXES];          /* inverse of the last 4 scaled columns */
 	struct mixer_facet facet[MIXER_MAX_FACETS];
 	struct mixer_facet sub[MIXER_MAX_SUB_FACETS];
 };
 
 struct mixer_output {
-	scalar_t f_n[MIXER_N_ROTORS];           /* rotor thrust commands, N, in scale_j [f_lo, f_hi] (0 if absent) */
-	scalar_t demanded[MIXER_N_AXES];        /* [f, tau_x, tau_y, tau_z] as given */
-	scalar_t achieved[MIXER_N_AXES];        /* Gamma * f_n */
-	uint32_t limits;                        /* MIXER_LIMIT_* */
-	uint8_t rotor_at_min;                   /* bit j: rotor j+1 at its lower bound */
-	uint8_t rotor_at_max;                   /* bit j: rotor j+1 at its upper bound */
-	uint8_t steps;                          /* bisection + preimage + active-set steps used */
+	scalar_t f_n[MIXER_N_ROTORS];    /* rotor thrust commands, N, in scale_j [f_lo, f_hi] (0 if absent) */
+	scalar_t demanded[MIXER_N_AXES]; /* [f, tau_x, tau_y, tau_z] as given */
+	scalar_t achieved[MIXER_N_AXES]; /* Gamma * f_n */
+	uint32_t limits;                 /* MIXER_LIMIT_* */
+	uint8_t rotor_at_min;            /* bit j: rotor j+1 at its lower bound */
+	uint8_t rotor_at_max;            /* bit j: rotor j+1 at its upper bound */
+	uint8_t steps;                   /* bisection + preimage + active-set steps used */
 };
 
 /* Defaults: the paper's vehicle (l = 0.35 m, k_f = 28.0269 N, k_tau = 0.3869 N m), throttle

@@ -19,7 +19,8 @@ static float absf(float x) { return fabsf(x); }
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif
-static float dotf(const float *a, int sa, const float *b, int sb, int n)
+static float
+dotf(const float *a, int sa, const float *b, int sb, int n)
 {
 	float acc = 0.0f;
 	for (int k = 0; k < n; k++)
@@ -61,7 +62,7 @@ static float inv4(const float m[4][4], float out[4][4])
 		for (int r = c + 1; r < 4; r++)
 			if (absf(a[r][c]) > absf(a[piv][c]))
 				piv = r;
-		if (fb_abs_bits(a[piv][c]) == 0u)   /* +-0 */
+		if (fb_abs_bits(a[piv][c]) == 0u) /* +-0 */
 			return 0.0f;
 		for (int j = 0; j < 8; j++) { /* rows c and piv swapped (nothing when the same) */
 			float t = a[c][j];
@@ -177,15 +178,13 @@ void mixer_default_params(struct mixer_params *p)
 #if defined(__GNUC__)
 __attribute__((noinline))
 #endif
-static scalar_t scale_used(scalar_t s)
+static scalar_t
+scale_used(scalar_t s)
 {
 	return s == SC_ZERO ? SC(1) : sc_clamp(s, SC(0.1), SC(4));
 }
 
-static float scale_of(const struct mixer_params *p, int j)
-{
-	return sc_to_float(scale_used(p->scale[j]));
-}
+static float scale_of(const struct mixer_params *p, int j) { return sc_to_float(scale_used(p->scale[j])); }
 
 static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 {
@@ -199,7 +198,7 @@ static void build_gamma(struct mixer_design *m, const struct mixer_params *p)
 		float kf = sc_to_float(p->k_f_n);
 		float k = fb_pos(kf) ? sc_to_float(p->k_tau_nm) / kf : 0.0f;
 		/* sign of tau_x per rotor; tau_y's is the same two rotors on */
-		static const signed char sx[NR] = { 0, -1, -1, -1, 0, 1, 1, 1 };
+		static const signed char sx[NR] = {0, -1, -1, -1, 0, 1, 1, 1};
 		for (int j = 0; j < NR; j++) {
 			float diag = (j & 1) ? s : 1.0f; /* even-numbered rotors 2,4,6,8 at 45 deg */
 			m->gamma_f[0][j] = 1.0f;
@@ -233,7 +232,7 @@ bool mixer_init(struct mixer *m, const struct mixer_params *p)
  * is below 1e-5 of its own length adds nothing to the rank. Returns the rank. */
 static int pseudo_inverse(struct mixer_design *dz, float basis[NR][NR])
 {
-	float r[NA][NA] = { { 0 } }, x[NR], cf[NR];
+	float r[NA][NA] = {{0}}, x[NR], cf[NR];
 	int rank = 0;
 	for (int i = 0; i < NA; i++) {
 		for (int j = 0; j < NR; j++)
@@ -293,7 +292,7 @@ static void null_space(struct mixer_design *dz, float basis[NR][NR], int rank)
 	float x[NR], cf[NR];
 	int nb = rank;
 	while (nb < NR) {
-		float best[NR] = { 0 }, bestn = -1.0f;
+		float best[NR] = {0}, bestn = -1.0f;
 		for (int e = 0; e < NR; e++) {
 			for (int j = 0; j < NR; j++)
 				x[j] = j == e ? 1.0f : 0.0f;
@@ -335,8 +334,9 @@ static bool box_and_rows(struct mixer *m, const struct mixer_params *p, const st
 		float wl = 0.0f;
 		for (int j = 0; j < NR; j++) {
 			rowmax[i] = absf(dz->gamma_f[i][j]) > rowmax[i] ? absf(dz->gamma_f[i][j]) : rowmax[i];
-			if ((fb_abs_bits(dz->gamma_f[0][j]) | fb_abs_bits(dz->gamma_f[1][j]) | fb_abs_bits(dz->gamma_f[2][j]) |
-			     fb_abs_bits(dz->gamma_f[3][j])) != 0u)   /* an entry not 0 */
+			if ((fb_abs_bits(dz->gamma_f[0][j]) | fb_abs_bits(dz->gamma_f[1][j]) |
+			     fb_abs_bits(dz->gamma_f[2][j]) | fb_abs_bits(dz->gamma_f[3][j])) !=
+			    0u) /* an entry not 0 */
 				wl += dz->gamma_f[i][j] * flo;
 		}
 		m->w_lo[i] = sc_from_float(wl);
@@ -481,9 +481,8 @@ static bool same_geometry(const struct mixer *m, const struct mixer_params *b)
 	for (int j = 0; j < NR; j++)
 		if (a->scale[j] != scale_used(b->scale[j]))
 			return false;
-	return a->arm_l_m == b->arm_l_m && a->k_f_n == b->k_f_n && a->k_tau_nm == b->k_tau_nm &&
-	       a->t_min == b->t_min && a->t_max == b->t_max && a->rotor_mask == b->rotor_mask &&
-	       !m->custom && b->custom_gamma == NULL;
+	return a->arm_l_m == b->arm_l_m && a->k_f_n == b->k_f_n && a->k_tau_nm == b->k_tau_nm && a->t_min == b->t_min &&
+	       a->t_max == b->t_max && a->rotor_mask == b->rotor_mask && !m->custom && b->custom_gamma == NULL;
 }
 
 bool mixer_set_params(struct mixer *m, const struct mixer_params *p)

@@ -23,8 +23,8 @@
 #define SH_UU (2 * QF_UNIT_FRAC - QF_MSUM_FRAC)
 #define SH_UF (QF_UNIT_FRAC + QF_MOTN_FRAC - QF_MSUM_FRAC)
 #define SH_FF (2 * QF_MOTN_FRAC - QF_MSUM_FRAC)
-#define SUM_HI_BIT 29   /* a kind is halved when one of its sums reaches 2^29 */
-#define E_MAX 100       /* exponent ceiling (2^70 frames away): beyond it terms are dropped */
+#define SUM_HI_BIT 29 /* a kind is halved when one of its sums reaches 2^29 */
+#define E_MAX 100     /* exponent ceiling (2^70 frames away): beyond it terms are dropped */
 #define WBIN_U ((motor_id_u_t)(0.025 * (1 << QF_UNIT_FRAC) + 0.5))
 typedef uint32_t big_t;
 /* a b / 2^s rounded to nearest (ties away from zero), s in [1, 62]: qfmt.h's
@@ -39,7 +39,7 @@ MID_INLINE int64_t mid_mul_rnd_in(int32_t a, int32_t b, unsigned s)
 	uint32_t mid = (ll >> 16) + (lh & 0xffffu) + (hl & 0xffffu);
 	uint32_t hi = hh + (lh >> 16) + (hl >> 16) + (mid >> 16), lo = (mid << 16) | (ll & 0xffffu);
 	uint64_t r;
-	if (s >= 32u) {   /* |a b| < 2^62: hi < 2^30, the sum below 2^31 */
+	if (s >= 32u) { /* |a b| < 2^62: hi < 2^30, the sum below 2^31 */
 		hi += s > 32u ? 1u << (s - 33u) : (lo >> 31);
 		r = hi >> (s - 32u);
 	} else {
@@ -81,7 +81,7 @@ MID_INLINE term_t term(int32_t a, int32_t b, int sh, motor_id_e_t e)
 	int s = sh + (int)e;
 	if (s >= 1 && s <= 62)
 		return mid_mul_rnd_in(a, b, (unsigned)s);
-	return q_scale64(q_smul32(a, b), -s);   /* beyond: left shifts (saturating) or 0 */
+	return q_scale64(q_smul32(a, b), -s); /* beyond: left shifts (saturating) or 0 */
 }
 static inline motor_id_sum_t sum_half(motor_id_sum_t v) { return (motor_id_sum_t)q_shr64(v, 1); }
 static inline bool big_over(big_t b) { return (b >> SUM_HI_BIT) != 0u; }
@@ -92,14 +92,14 @@ static inline bool sum_big(int64_t v) { return v >= SUM_LIM || v <= -SUM_LIM; }
 static void sum_fit(struct motor_id *m, unsigned k, const motor_id_sum_t *s, term_t *t, big_t *big)
 {
 	while (sum_big(*t) || sum_big(*s)) {
-		if (m->e[k] >= E_MAX) {   /* unreachable: 2^70 frames of the largest terms */
+		if (m->e[k] >= E_MAX) { /* unreachable: 2^70 frames of the largest terms */
 			*t = 0;
 			return;
 		}
 		sums_halve(m, 1u << k);
 		*t = q_shr64(*t, 1);
 	}
-	*big = 0;   /* every sum of the kind is below 2^29 now */
+	*big = 0; /* every sum of the kind is below 2^29 now */
 }
 /* *s + t for a sum of kind k, noting its size in *big: a sum and a term below 2^29 in
  * magnitude cannot wrap */
@@ -120,7 +120,11 @@ typedef int big_t;
 #define MID_UNROLL_SUMS
 #endif
 static inline motor_id_u_t u_of_sc(scalar_t v) { return sc_to_float(v); }
-static inline motor_id_f_t f_of_sc(scalar_t v, int kexp) { (void)kexp; return sc_to_float(v); }
+static inline motor_id_f_t f_of_sc(scalar_t v, int kexp)
+{
+	(void)kexp;
+	return sc_to_float(v);
+}
 static inline float sub32(float a, float b) { return a - b; }
 static inline motor_id_u_t u_lag(motor_id_u_t s, motor_id_u_t k, motor_id_u_t u) { return s + k * (u - s); }
 static inline motor_id_u_t u_x2(motor_id_u_t s, motor_id_u_t sc) { return s * (s - 2.0f * sc); }
@@ -146,7 +150,11 @@ static inline void sum_add(struct motor_id *m, unsigned k, motor_id_sum_t *s, te
 	(void)big;
 	*s += t;
 }
-static inline bool big_over(big_t b) { (void)b; return false; }
+static inline bool big_over(big_t b)
+{
+	(void)b;
+	return false;
+}
 #endif
 
 /* Halves every sum of the kinds in mask (bits MID_E_*) and raises their exponents: the
@@ -157,18 +165,28 @@ static void sums_halve(struct motor_id *m, unsigned mask)
 	if (mask & 0x3fu) {
 		struct motor_id_stat *st = &m->st[0][0][0];
 		for (unsigned n = 0; n < ND * NL * NR; n++) {
-			if (mask & (1u << MID_E_G11)) st[n].g11 = sum_half(st[n].g11);
-			if (mask & (1u << MID_E_G12)) st[n].g12 = sum_half(st[n].g12);
-			if (mask & (1u << MID_E_G22)) st[n].g22 = sum_half(st[n].g22);
-			if (mask & (1u << MID_E_B1)) st[n].b1 = sum_half(st[n].b1);
-			if (mask & (1u << MID_E_B2)) st[n].b2 = sum_half(st[n].b2);
-			if (mask & (1u << MID_E_RR)) st[n].rr = sum_half(st[n].rr);
+			if (mask & (1u << MID_E_G11))
+				st[n].g11 = sum_half(st[n].g11);
+			if (mask & (1u << MID_E_G12))
+				st[n].g12 = sum_half(st[n].g12);
+			if (mask & (1u << MID_E_G22))
+				st[n].g22 = sum_half(st[n].g22);
+			if (mask & (1u << MID_E_B1))
+				st[n].b1 = sum_half(st[n].b1);
+			if (mask & (1u << MID_E_B2))
+				st[n].b2 = sum_half(st[n].b2);
+			if (mask & (1u << MID_E_RR))
+				st[n].rr = sum_half(st[n].rr);
 		}
 	}
-	if (mask & (1u << MID_E_FF)) m->ff = sum_half(m->ff);
-	if (mask & (1u << MID_E_TF)) m->tf = sum_half(m->tf);
-	if (mask & (1u << MID_E_TT)) m->tt = sum_half(m->tt);
-	if (mask & (1u << MID_E_NZ)) m->nz_ss = sum_half(m->nz_ss);
+	if (mask & (1u << MID_E_FF))
+		m->ff = sum_half(m->ff);
+	if (mask & (1u << MID_E_TF))
+		m->tf = sum_half(m->tf);
+	if (mask & (1u << MID_E_TT))
+		m->tt = sum_half(m->tt);
+	if (mask & (1u << MID_E_NZ))
+		m->nz_ss = sum_half(m->nz_ss);
 	struct motor_id_white *w = &m->wh;
 	for (unsigned j = 0; j < NR; j++)
 		for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
@@ -198,8 +216,8 @@ _Static_assert(sizeof(struct motor_id_stat) == 6 * sizeof(motor_id_sum_t) && MID
 	       "struct motor_id_stat: six sums in the order of their exponents");
 static const int bank_sh[6] = {SH_UU, SH_UU, SH_UU, SH_UF, SH_UF, SH_FF};
 /* the factors of rotor j's six terms at lag state s and normalised thrust fm */
-MID_INLINE void bank_factors(const struct motor_id *m, motor_id_u_t s, unsigned j, motor_id_f_t fm,
-			     opnd_t a[6], opnd_t b[6])
+MID_INLINE void bank_factors(const struct motor_id *m, motor_id_u_t s, unsigned j, motor_id_f_t fm, opnd_t a[6],
+			     opnd_t b[6])
 {
 	motor_id_u_t x2 = u_x2(s, m->s_c[j]);
 	motor_id_f_t r = sub32(fm, f_ref(m, s));
@@ -267,7 +285,7 @@ static void advance(struct motor_id *m)
 				s[j] = u_lag(s[j], k, u[j]);
 		}
 	}
-	if (m->wh.on) {   /* the whiteness model's own lag */
+	if (m->wh.on) { /* the whiteness model's own lag */
 		const motor_id_u_t *u = m->hist[(m->head + ND - m->wh.delay) % ND];
 		for (unsigned j = 0; j < NR; j++)
 			m->wh.s[j] = u_lag(m->wh.s[j], m->wh.k1, u[j]);
@@ -280,13 +298,13 @@ void motor_id_hold(struct motor_id *m, const scalar_t thr_prev[NR])
 	push(m, thr_prev);
 	advance(m);
 	m->nz_have = false;
-	m->wh.run = 0;   /* no prediction error across a lost frame */
+	m->wh.run = 0; /* no prediction error across a lost frame */
 }
 
-void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar_t f[NR],
-		   const scalar_t tq[NR], bool excited)
+void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar_t f[NR], const scalar_t tq[NR],
+		   bool excited)
 {
-	motor_id_process(m);   /* the previous frame's, if nobody did it between frames */
+	motor_id_process(m); /* the previous frame's, if nobody did it between frames */
 	push(m, thr_prev);
 	/* thrust noise from first differences of still frames (slow control motion cancels),
 	 * taken here while the previous frame's thrust is still in q_f (only in the settling
@@ -320,22 +338,23 @@ static void white_update(struct motor_id *m, const motor_id_f_t fm[NR])
 	big_t big[2] = {0, 0};
 	for (unsigned j = 0; j < NR; j++) {
 		motor_id_u_t x1 = s[j], x2 = u_x2(s[j], m->s_c[j]);
-		motor_id_f_t e = sub32(sub32(sub32(fm[j], f_ref(m, s[j])), f_mul_u(w->dl[j][0], x1)),
-				       f_mul_u(w->dl[j][1], x2));
+		motor_id_f_t e =
+			sub32(sub32(sub32(fm[j], f_ref(m, s[j])), f_mul_u(w->dl[j][0], x1)), f_mul_u(w->dl[j][1], x2));
 		motor_id_u_t ds = sub32(s[j], m->s_c[j]);
 		unsigned b = ds < -WBIN_U ? 0u : (ds > WBIN_U ? 2u : 1u);
-		if (w->n[j][b] < UINT16_MAX) {   /* a full series keeps what it has */
+		if (w->n[j][b] < UINT16_MAX) { /* a full series keeps what it has */
 			w->n[j][b]++;
 #if OCTO_FIXED
-			sum_add(m, MID_E_WSE, &w->se[j][b], q_scale64(e, QF_MSUM_FRAC - QF_MOTN_FRAC - m->e[MID_E_WSE]), &big[0]);
+			sum_add(m, MID_E_WSE, &w->se[j][b], q_scale64(e, QF_MSUM_FRAC - QF_MOTN_FRAC - m->e[MID_E_WSE]),
+				&big[0]);
 #else
 			sum_add(m, MID_E_WSE, &w->se[j][b], e, &big[0]);
 #endif
 			sum_add(m, MID_E_WSEE, &w->see[j][b], term(e, e, SH_FF, m->e[MID_E_WSEE]), &big[1]);
 			for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++)
 				if (l < w->run)
-					sum_add(m, MID_E_WSEE, &w->sl[j][b][l], term(e, w->ring[l][j], SH_FF, m->e[MID_E_WSEE]),
-						&big[1]);
+					sum_add(m, MID_E_WSEE, &w->sl[j][b][l],
+						term(e, w->ring[l][j], SH_FF, m->e[MID_E_WSEE]), &big[1]);
 		}
 		for (unsigned l = MOTOR_ID_WLAGS - 1u; l > 0u; l--)
 			w->ring[l][j] = w->ring[l - 1u][j];
@@ -386,8 +405,8 @@ void motor_id_process(struct motor_id *m)
 					 * build (flash); unrolled in float, where a term is one product */
 					MID_UNROLL_SUMS
 					for (unsigned k = 0; k < 6; k++)
-						sum_add(m, MID_E_G11 + k, &v[k], term(a[k], b[k], bank_sh[k], e[MID_E_G11 + k]),
-							&big[k]);
+						sum_add(m, MID_E_G11 + k, &v[k],
+							term(a[k], b[k], bank_sh[k], e[MID_E_G11 + k]), &big[k]);
 				}
 			}
 		sums_halve(m, over_mask(big, MID_E_G11, 6));

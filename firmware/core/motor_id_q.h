@@ -48,10 +48,18 @@ typedef int8_t motor_id_e_t;
 
 /* the kinds of sums, each with its exponent */
 enum {
-	MID_E_G11, MID_E_G12, MID_E_G22, MID_E_B1, MID_E_B2, MID_E_RR,   /* the bank */
-	MID_E_FF, MID_E_TF, MID_E_TT,    /* torque ratio */
-	MID_E_NZ,                        /* noise from differences */
-	MID_E_WSE, MID_E_WSEE,           /* whiteness: sum e; sums e^2 and e_k e_(k-L) */
+	MID_E_G11,
+	MID_E_G12,
+	MID_E_G22,
+	MID_E_B1,
+	MID_E_B2,
+	MID_E_RR, /* the bank */
+	MID_E_FF,
+	MID_E_TF,
+	MID_E_TT, /* torque ratio */
+	MID_E_NZ, /* noise from differences */
+	MID_E_WSE,
+	MID_E_WSEE, /* whiteness: sum e; sums e^2 and e_k e_(k-L) */
 	MID_E_N
 };
 
@@ -60,7 +68,7 @@ enum {
 static inline int32_t mid_q_of_float(float x, int frac)
 {
 	float v = x * sc_pow2f(frac);
-	if (!(v < 2147483520.0f))   /* the largest float below 2^31; NaN too */
+	if (!(v < 2147483520.0f)) /* the largest float below 2^31; NaN too */
 		return v < 0.0f ? -INT32_MAX : INT32_MAX;
 	if (v <= -2147483520.0f)
 		return -INT32_MAX;
@@ -78,7 +86,11 @@ static inline float mid_sum_to_float(motor_id_sum_t v, int ev, int p, int kexp)
 #else
 static inline float mid_u_to_float(motor_id_u_t v) { return v; }
 static inline motor_id_u_t mid_u_of_float(float x) { return x; }
-static inline motor_id_f_t mid_f_of_float(float x, int kexp) { (void)kexp; return x; }
+static inline motor_id_f_t mid_f_of_float(float x, int kexp)
+{
+	(void)kexp;
+	return x;
+}
 static inline float mid_sum_to_float(motor_id_sum_t v, int ev, int p, int kexp)
 {
 	(void)ev;

@@ -21,8 +21,7 @@
 /* a rotor's least-squares sums under one hypothesis (SI units): float st[S_N], in the order of
  * struct motor_id_stat's members and of their exponents MID_E_G11..MID_E_RR */
 enum { S_G11, S_G12, S_G22, S_B1, S_B2, S_RR, S_N };
-_Static_assert(sizeof(struct motor_id_stat) == S_N * sizeof(motor_id_sum_t) &&
-		       MID_E_RR - MID_E_G11 == S_RR - S_G11,
+_Static_assert(sizeof(struct motor_id_stat) == S_N * sizeof(motor_id_sum_t) && MID_E_RR - MID_E_G11 == S_RR - S_G11,
 	       "struct motor_id_stat: S_N sums in the order of their exponents");
 
 /* sum k of a struct motor_id_stat (its members are S_N sums, in order, without padding) */
@@ -39,10 +38,7 @@ static motor_id_sum_t stat_sum(const struct motor_id_stat *s, unsigned k)
 #define NOINLINE __attribute__((noinline))
 
 /* l[0] a + l[1] b + l[2] c: a value interpolated over the grid */
-NOINLINE static float wsum3(const float l[3], float a, float b, float c)
-{
-	return l[0] * a + l[1] * b + l[2] * c;
-}
+NOINLINE static float wsum3(const float l[3], float a, float b, float c) { return l[0] * a + l[1] * b + l[2] * c; }
 
 /* Rotor j's statistics of delay d: at grid point gi (< NL), or (gi = NL) interpolated over the
  * grid with the weights l. Sums of kind G (power of thrust 0), B (1), RR (2). */
@@ -78,23 +74,16 @@ static float ref_c(const struct motor_id *m) { return mid_u_to_float(m->c0); }
 static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f, 1.08f};
 static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u, 65u};
 #define STAGE_INTERIM 2u
-#define X_MAX 1.5f          /* how far beyond the grid the parabola may place the minimum */
+#define X_MAX 1.5f /* how far beyond the grid the parabola may place the minimum */
 #define CURVE_CHI2_SIGMAS 5.0f
 #define NE_SIGMAS 5.0f
-#define NO_LAG_FRAC 0.15f  /* a lag below this fraction of a frame is taken as none (a < 0.0013) */
-#define MARGIN_MIN 12.0f   /* log-likelihood ratio of the best delay over the next */
+#define NO_LAG_FRAC 0.15f /* a lag below this fraction of a frame is taken as none (a < 0.0013) */
+#define MARGIN_MIN 12.0f  /* log-likelihood ratio of the best delay over the next */
 
-
-NOINLINE static float clampf(float x, float lo, float hi)
-{
-	return x < lo ? lo : (x > hi ? hi : x);
-}
+NOINLINE static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
 /* 1 - a of a lag; below NO_LAG_FRAC of a frame the lag is none (a = 0) */
-static float lag_k1(float tau, float dt)
-{
-	return tau > NO_LAG_FRAC * dt ? 1.0f - expf(-dt / tau) : 1.0f;
-}
+static float lag_k1(float tau, float dt) { return tau > NO_LAG_FRAC * dt ? 1.0f - expf(-dt / tau) : 1.0f; }
 
 /* the whiteness model is frozen this share of the planned frames into the last stage */
 #define WHITE_AFTER_PCT 20u
@@ -176,7 +165,6 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const sca
 		set_grid(m, d, m->cfg.tau0_s, stage_ratio[0]);
 }
 
-
 /* the prior curve's regressor on the basis: g0 = w1 x1 + w2 x2 */
 static void curve_w(float c, float s_c, float w[2])
 {
@@ -185,10 +173,7 @@ static void curve_w(float c, float s_c, float w[2])
 }
 
 /* det G of a rotor's statistics */
-NOINLINE static float stat_det(const float st[S_N])
-{
-	return st[S_G11] * st[S_G22] - st[S_G12] * st[S_G12];
-}
+NOINLINE static float stat_det(const float st[S_N]) { return st[S_G11] * st[S_G22] - st[S_G12] * st[S_G12]; }
 
 /* w^T G w of a rotor's statistics (sum g^2 of the regressor g = w^T x) */
 static float stat_gww(const float st[S_N], float w0, float w1)
@@ -265,7 +250,6 @@ static void lagrange3(float x, float l[3])
 	l[2] = 0.5f * x * (x + 1.0f);
 }
 
-
 /* the lag filters' states interpolated over a grid's three (s, weights l) into out */
 NOINLINE static void lag_states(const motor_id_u_t s[NL][NR], const float l[3], motor_id_u_t out[NR])
 {
@@ -306,7 +290,7 @@ static void delay_crit(const struct motor_id *m, unsigned d, float jv[3])
 static float delay_logssr(const struct motor_id *m, unsigned d, float x)
 {
 	float sum = 0.0f;
-	for (int pass = 0; pass < 2; pass++) {   /* the second at the edge, if the first failed */
+	for (int pass = 0; pass < 2; pass++) { /* the second at the edge, if the first failed */
 		float dl[2], l[3];
 		bool ok = true;
 		lagrange3(x, l);
@@ -427,12 +411,12 @@ static float rotor_curve(const struct motor_id *m, const float st[S_N], unsigned
 
 /* the model of delay d's statistics at grid position x (see fit_at) */
 struct fit {
-	float s2[NR];            /* residual variance under the configured model */
-	float mj[NR], vm[NR];    /* each rotor's m at the common curve, its variance */
-	float mj_e[NR];          /* m at the common curve + FIT_EPS */
-	float ssr_sum, chi2;     /* residual sum of squares; less the rotors' own curves' SSRs */
+	float s2[NR];         /* residual variance under the configured model */
+	float mj[NR], vm[NR]; /* each rotor's m at the common curve, its variance */
+	float mj_e[NR];       /* m at the common curve + FIT_EPS */
+	float ssr_sum, chi2;  /* residual sum of squares; less the rotors' own curves' SSRs */
 	float curve, curve_sd, kf;
-	unsigned ia, ib;         /* the rotors whose mean is the median */
+	unsigned ia, ib; /* the rotors whose mean is the median */
 };
 #define FIT_EPS 1e-3f
 
@@ -552,8 +536,7 @@ static void white_begin(struct motor_id *m)
 		w->dl[j][1] = mid_f_of_float(dl[1], m->kexp);
 	}
 	lag_states(m->s[d], l, w->s);
-	w->k1 = mid_u_of_float(lag_k1(clamp_tau(grid_tau(m, d, x)),
-				      sc_to_float(m->cfg.dt_s)));
+	w->k1 = mid_u_of_float(lag_k1(clamp_tau(grid_tau(m, d, x)), sc_to_float(m->cfg.dt_s)));
 	w->delay = (uint8_t)d;
 	w->on = true;
 }
@@ -565,7 +548,7 @@ void motor_id_refine(struct motor_id *m)
 		m->white_due = false;
 		white_begin(m);
 	}
-	if (m->reref_due) {   /* early in the first stage: re-fit the reference, restart */
+	if (m->reref_due) { /* early in the first stage: re-fit the reference, restart */
 		m->reref_due = false;
 		m->reref_done = true;
 		float kf, c;
@@ -584,7 +567,7 @@ void motor_id_refine(struct motor_id *m)
 	/* the next stage's reference: this one's fit (relative to this reference) */
 	float kf_ref = 0.0f, c_ref = 0.0f;
 	bool have_ref = reference_fit(m, &kf_ref, &c_ref);
-	float xs[ND], ks[ND], smin[ND];   /* each delay's criterion's minimum */
+	float xs[ND], ks[ND], smin[ND]; /* each delay's criterion's minimum */
 	unsigned bd = chosen_delay(m, delay_scan(m, xs, ks, smin));
 	/* the interim stage only if the best delay's minimum lies beyond its grid (its next grid
 	 * would stay wide: about 13 % of fresh vehicles, every stale prior); else straight to
@@ -639,12 +622,12 @@ void motor_id_refine(struct motor_id *m)
  * var x = 1 / (n k) still holds). Kept within +/- X_MAX; unchanged if not convex there. */
 static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k)
 {
-	const float h = 0.2f;   /* wide enough that float rounding of the SSRs stays out of d2 */
+	const float h = 0.2f; /* wide enough that float rounding of the SSRs stays out of d2 */
 	float xi = *x, kk = *k;
 	if (!fb_pos(kk) || fabsf(xi) >= X_MAX - 1e-3f)
 		return;
 	for (int it = 0; it < 3; it++) {
-		float fv[3], c;   /* at xi - h, xi, xi + h */
+		float fv[3], c; /* at xi - h, xi, xi + h */
 		for (int i = 0; i < 3; i++)
 			fv[i] = delay_logssr(m, d, xi + (float)(i - 1) * h);
 		/* the Newton step -f'/f'' of the central differences: the minimum of the parabola
@@ -674,7 +657,7 @@ NOINLINE static float chi2_quant(float k, float z)
 #define WZ_ALL 3.5f
 #define WZ_ROTOR 3.9f
 #define WZ_LEVEL 3.7f
-#define WMIN_N 20u       /* fewest frames of a (rotor, level) series that enters the test */
+#define WMIN_N 20u /* fewest frames of a (rotor, level) series that enters the test */
 
 /* The whiteness test from its sums (see motor_id.h). Returns the cause of coloured prediction
  * errors: one rotor alone (the others white) is that rotor (*rotor); colour at one throttle
@@ -691,18 +674,21 @@ NOINLINE static enum motor_id_cause white_eval(const struct motor_id *m, struct 
 	 * NR + 1.. one level's rotors. Each (rotor, level) series in the test adds to its three
 	 * (every sum taken over its series in the order of the series) */
 	float qg[1 + NR + MOTOR_ID_WBINS] = {0};
-	unsigned ng[1 + NR + MOTOR_ID_WBINS] = {0};   /* series in each test */
+	unsigned ng[1 + NR + MOTOR_ID_WBINS] = {0}; /* series in each test */
 	for (unsigned j = 0; j < NR; j++)
 		for (unsigned b = 0; b < MOTOR_ID_WBINS; b++) {
 			float n = (float)w->n[j][b];
 			if (w->n[j][b] < WMIN_N)
 				continue;
 			float mu = mid_sum_to_float(w->se[j][b], m->e[MID_E_WSE], 1, m->kexp) / n,
-			      c0 = mid_sum_to_float(w->see[j][b], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu, qq = 0.0f;
+			      c0 = mid_sum_to_float(w->see[j][b], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu,
+			      qq = 0.0f;
 			if (!fb_pos(c0))
 				continue;
 			for (unsigned l = 0; l < MOTOR_ID_WLAGS; l++) {
-				float rho = (mid_sum_to_float(w->sl[j][b][l], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu) / c0;
+				float rho =
+					(mid_sum_to_float(w->sl[j][b][l], m->e[MID_E_WSEE], 2, m->kexp) - n * mu * mu) /
+					c0;
 				qq += rho * rho;
 			}
 			qq *= n;
@@ -767,9 +753,9 @@ NOINLINE static float ne_limit(float ne_max, float dof, float v_nz)
 
 /* the delay and the lag chosen (pick_lag) */
 struct lag_pick {
-	unsigned best;           /* the delay */
-	float x, var_x;          /* the lag on the grid's log scale, and its variance */
-	bool have_k, no_lag;     /* the criterion is convex there; the lag is below a frame's reach */
+	unsigned best;       /* the delay */
+	float x, var_x;      /* the lag on the grid's log scale, and its variance */
+	bool have_k, no_lag; /* the criterion is convex there; the lag is below a frame's reach */
 };
 
 /* The delay hypothesis of least criterion at its best lag (or the given one), its margin over
@@ -794,7 +780,7 @@ static void pick_lag(const struct motor_id *m, struct motor_id_result *res, stru
 
 	/* sd of the lag: -log-likelihood = (n / 2) J, J = J_min + k (x - x*)^2, so var x = 1 / (n k) */
 	float x = xs[best], r = m->lag_r[best];
-	float kx = ks[best];   /* the criterion's curvature in x there */
+	float kx = ks[best]; /* the criterion's curvature in x there */
 	lag_newton(m, best, &x, &kx);
 	const bool have_k = fb_pos(kx);
 	res->tau = grid_tau(m, best, x);
@@ -813,8 +799,8 @@ static void pick_lag(const struct motor_id *m, struct motor_id_result *res, stru
 
 /* the normalised errors (residual over noise variance) of the rotors */
 struct ne_stats {
-	float hi, mid;           /* the largest, the median */
-	unsigned worst;          /* the rotor of the largest */
+	float hi, mid;  /* the largest, the median */
+	unsigned worst; /* the rotor of the largest */
 };
 
 static void normalised_errors(const struct fit *f, float nz, float dof, struct motor_id_result *res,
@@ -856,7 +842,8 @@ static void add_lag_share(const struct motor_id *m, const struct lag_pick *lp, s
  * thrust noise's variance); vkf: k_f's variance. */
 static void solve_ktau(const struct motor_id *m, float vkf, float sf2, struct motor_id_result *res)
 {
-	float ff = mid_sum_to_float(m->ff, m->e[MID_E_FF], 2, m->kexp), tf = mid_sum_to_float(m->tf, m->e[MID_E_TF], 2, m->kexp),
+	float ff = mid_sum_to_float(m->ff, m->e[MID_E_FF], 2, m->kexp),
+	      tf = mid_sum_to_float(m->tf, m->e[MID_E_TF], 2, m->kexp),
 	      tt = mid_sum_to_float(m->tt, m->e[MID_E_TT], 2, m->kexp);
 	float nall = (float)(m->n_exc * NR);
 	float rho = div_pos(tf, ff);
@@ -947,9 +934,9 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 		res->scale_sd[j] = div_pos(sqrt0(f.vm[j]), res->kf);
 	struct ne_stats ne;
 	normalised_errors(&f, nz, dof, res, &ne);
-	const float sf2 = fb_pos(nz) ? nz : f.ssr_sum / dof;   /* the thrust noise's variance for k_tau */
+	const float sf2 = fb_pos(nz) ? nz : f.ssr_sum / dof; /* the thrust noise's variance for k_tau */
 	if (!lp.no_lag && lp.have_k)
-		add_lag_share(m, &lp, &f, res, &vkf);   /* f's fit at x is no longer needed */
+		add_lag_share(m, &lp, &f, res, &vkf); /* f's fit at x is no longer needed */
 	res->kf_sd = sqrt0(vkf);
 
 	solve_ktau(m, vkf, sf2, res);
@@ -958,34 +945,32 @@ void motor_id_solve(const struct motor_id *m, float ne_max, struct motor_id_resu
 
 /* The causes' texts and remedies, in the order of enum motor_id_cause, each ended by a NUL
  * (one string, no table of pointers). */
-static const char cause_texts[] =
-	"accepted\0"
-	"too few frames\0"
-	"noise not measured\0"
-	"motor lag out of range\0"
-	"delay out of range\0"
-	"delay ambiguous\0"
-	"thrust curve not modelled\0"
-	"a rotor unexplained\0"
-	"residuals above noise\0"
-	"given delay contradicted\0"
-	"residuals coloured at one throttle level\0"
-	"residuals not white\0"
-	"motor lag past the prior's reach";
-static const char cause_remedies[] =
-	"\0"
-	"longer ID_EXC_TIME\0"
-	"hover still before the run\0"
-	"lag 0.5-500 ms only; check motors\0"
-	"delay > 3 frames: fix the link\0"
-	"raise ID_EXC_AMP or ID_EXC_TIME\0"
-	"set ID_CRV_EST 1\0"
-	"inspect that rotor\0"
-	"check link timing and rotors\0"
-	"let the delay be found\0"
-	"thrust curve not quadratic: lower ID_EXC_OFS\0"
-	"motor not first-order or link jitter: check both\0"
-	"ID_MOT_TAU to the lag found, fly again";
+static const char cause_texts[] = "accepted\0"
+				  "too few frames\0"
+				  "noise not measured\0"
+				  "motor lag out of range\0"
+				  "delay out of range\0"
+				  "delay ambiguous\0"
+				  "thrust curve not modelled\0"
+				  "a rotor unexplained\0"
+				  "residuals above noise\0"
+				  "given delay contradicted\0"
+				  "residuals coloured at one throttle level\0"
+				  "residuals not white\0"
+				  "motor lag past the prior's reach";
+static const char cause_remedies[] = "\0"
+				     "longer ID_EXC_TIME\0"
+				     "hover still before the run\0"
+				     "lag 0.5-500 ms only; check motors\0"
+				     "delay > 3 frames: fix the link\0"
+				     "raise ID_EXC_AMP or ID_EXC_TIME\0"
+				     "set ID_CRV_EST 1\0"
+				     "inspect that rotor\0"
+				     "check link timing and rotors\0"
+				     "let the delay be found\0"
+				     "thrust curve not quadratic: lower ID_EXC_OFS\0"
+				     "motor not first-order or link jitter: check both\0"
+				     "ID_MOT_TAU to the lag found, fly again";
 
 /* the string number c of list (c < MOTOR_ID_LAG_REACH + 1), else dflt */
 NOINLINE static const char *nth_text(const char *list, enum motor_id_cause c, const char *dflt)

@@ -50,7 +50,7 @@ static scalar_t clamp_flag(scalar_t x, scalar_t lim, uint32_t flag, uint32_t *fl
 
 struct pos_ctrl_output pos_ctrl_update(const struct pos_ctrl_params *p, const struct pos_ctrl_input *in)
 {
-	struct pos_ctrl_output o = { SC_ZERO, SC_ZERO, 0 };
+	struct pos_ctrl_output o = {SC_ZERO, SC_ZERO, 0};
 	if (!finite_in(in)) {
 		o.flags = POS_CTRL_BAD_INPUT;
 		return o;

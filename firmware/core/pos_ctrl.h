@@ -27,8 +27,8 @@
 
 #include <stdint.h>
 
-#define POS_CTRL_VEL_LIM  (1u << 0) /* a velocity command clamped to vel_max */
-#define POS_CTRL_TILT_LIM (1u << 1) /* a tilt set point clamped to tilt_max */
+#define POS_CTRL_VEL_LIM (1u << 0)   /* a velocity command clamped to vel_max */
+#define POS_CTRL_TILT_LIM (1u << 1)  /* a tilt set point clamped to tilt_max */
 #define POS_CTRL_BAD_INPUT (1u << 2) /* a non-finite input (float build): level set points */
 
 struct pos_ctrl_params {
@@ -46,16 +46,16 @@ struct pos_ctrl_input {
 };
 
 struct pos_ctrl_output {
-	scalar_t roll_rad;    /* roll set point */
-	scalar_t pitch_rad;   /* pitch set point */
-	uint32_t flags;       /* POS_CTRL_* */
+	scalar_t roll_rad;  /* roll set point */
+	scalar_t pitch_rad; /* pitch set point */
+	uint32_t flags;     /* POS_CTRL_* */
 };
 
 /* Defaults of octo-fw: k_p 0.3 1/s, k_v 0.15 rad s/m, vel_max 2 m/s, tilt_max 20 deg. */
-#define POS_CTRL_DEFAULT_POS_GAIN_RPS     0.3f
+#define POS_CTRL_DEFAULT_POS_GAIN_RPS 0.3f
 #define POS_CTRL_DEFAULT_VEL_GAIN_RAD_MPS 0.15f
-#define POS_CTRL_DEFAULT_VEL_MAX_MPS      2.0f
-#define POS_CTRL_DEFAULT_TILT_MAX_DEG     20.0f
+#define POS_CTRL_DEFAULT_VEL_MAX_MPS 2.0f
+#define POS_CTRL_DEFAULT_TILT_MAX_DEG 20.0f
 struct pos_ctrl_params pos_ctrl_params_default(void);
 
 /* One step of the law above. */

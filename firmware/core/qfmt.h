@@ -34,12 +34,12 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#define QF_SC_FRAC   16 /* Q16.16: scalar_t of the fixed build */
-#define QF_SIG_FRAC  24 /* Q7.24: a signal or parameter normalised to about 1 */
+#define QF_SC_FRAC 16   /* Q16.16: scalar_t of the fixed build */
+#define QF_SIG_FRAC 24  /* Q7.24: a signal or parameter normalised to about 1 */
 #define QF_UNIT_FRAC 30 /* Q1.30: forgetting factors, covariance mantissas, ratios in (0, 2) */
-#define QF_ACC_FRAC  40 /* Q23.40 in int64: sums of products of normalised signals */
-#define QF_PAR_FRAC  48 /* Q15.48 in int64: estimated parameters, normalised */
-#define QF_INN_FRAC  54 /* Q9.54 in int64: innovation terms, precise for tiny ones */
+#define QF_ACC_FRAC 40  /* Q23.40 in int64: sums of products of normalised signals */
+#define QF_PAR_FRAC 48  /* Q15.48 in int64: estimated parameters, normalised */
+#define QF_INN_FRAC 54  /* Q9.54 in int64: innovation terms, precise for tiny ones */
 #define QF_WIDE_FRAC 62 /* Q1.62 in int64: mantissas that need more than 31 bits */
 
 #define QF_ONE(frac) ((int64_t)1 << (frac))
@@ -97,10 +97,7 @@ QF_ALWAYS uint64_t qa_umul32(uint32_t a, uint32_t b)
 #endif
 }
 
-QF_INLINE uint64_t q_umul32(uint32_t a, uint32_t b)
-{
-	return qa_umul32(a, b);
-}
+QF_INLINE uint64_t q_umul32(uint32_t a, uint32_t b) { return qa_umul32(a, b); }
 
 QF_INLINE int64_t q_smul32(int32_t a, int32_t b)
 {
@@ -118,18 +115,29 @@ QF_ALWAYS int qa_clz32(uint32_t v)
 	if (v == 0u)
 		return 32;
 	int n = 0;
-	if (!(v >> 16)) { n += 16; v <<= 16; }
-	if (!(v >> 24)) { n += 8; v <<= 8; }
-	if (!(v >> 28)) { n += 4; v <<= 4; }
-	if (!(v >> 30)) { n += 2; v <<= 2; }
-	if (!(v >> 31)) { n += 1; }
+	if (!(v >> 16)) {
+		n += 16;
+		v <<= 16;
+	}
+	if (!(v >> 24)) {
+		n += 8;
+		v <<= 8;
+	}
+	if (!(v >> 28)) {
+		n += 4;
+		v <<= 4;
+	}
+	if (!(v >> 30)) {
+		n += 2;
+		v <<= 2;
+	}
+	if (!(v >> 31)) {
+		n += 1;
+	}
 	return n;
 }
 
-QF_INLINE int q_clz32(uint32_t v)
-{
-	return qa_clz32(v);
-}
+QF_INLINE int q_clz32(uint32_t v) { return qa_clz32(v); }
 
 /* number of leading zero bits of v (64 for 0), by halving */
 QF_INLINE int q_clz64(uint64_t v)
@@ -137,12 +145,29 @@ QF_INLINE int q_clz64(uint64_t v)
 	if (v == 0u)
 		return 64;
 	int n = 0;
-	if (!(v >> 32)) { n += 32; v <<= 32; }
-	if (!(v >> 48)) { n += 16; v <<= 16; }
-	if (!(v >> 56)) { n += 8; v <<= 8; }
-	if (!(v >> 60)) { n += 4; v <<= 4; }
-	if (!(v >> 62)) { n += 2; v <<= 2; }
-	if (!(v >> 63)) { n += 1; }
+	if (!(v >> 32)) {
+		n += 32;
+		v <<= 32;
+	}
+	if (!(v >> 48)) {
+		n += 16;
+		v <<= 16;
+	}
+	if (!(v >> 56)) {
+		n += 8;
+		v <<= 8;
+	}
+	if (!(v >> 60)) {
+		n += 4;
+		v <<= 4;
+	}
+	if (!(v >> 62)) {
+		n += 2;
+		v <<= 2;
+	}
+	if (!(v >> 63)) {
+		n += 1;
+	}
 	return n;
 }
 
@@ -158,10 +183,7 @@ QF_ALWAYS int64_t qa_shr64(int64_t v, unsigned s)
 	return -((m >> s) + ((m >> (s - 1u)) & 1));
 }
 
-QF_INLINE int64_t q_shr64(int64_t v, unsigned s)
-{
-	return qa_shr64(v, s);
-}
+QF_INLINE int64_t q_shr64(int64_t v, unsigned s) { return qa_shr64(v, s); }
 
 /* v * 2^s, saturating; s in [0, 62] */
 QF_ALWAYS int64_t qa_shl64(int64_t v, unsigned s)
@@ -174,10 +196,7 @@ QF_ALWAYS int64_t qa_shl64(int64_t v, unsigned s)
 	return v >= 0 ? (int64_t)((uint64_t)v << s) : -(int64_t)((uint64_t)-v << s);
 }
 
-QF_INLINE int64_t q_shl64(int64_t v, unsigned s)
-{
-	return qa_shl64(v, s);
-}
+QF_INLINE int64_t q_shl64(int64_t v, unsigned s) { return qa_shl64(v, s); }
 
 /* v * 2^s for s of either sign: left shifts saturate, right shifts round (beyond 62 bits
  * to 0) */
@@ -199,16 +218,10 @@ static inline int32_t q16_of_q24(int32_t v) { return q_scale32(v, QF_SC_FRAC - Q
 
 /* a * b / 2^frac for int32 a, b (frac in [1, 62]): the product of two values of formats
  * Qx.fa and Qy.fb is returned in format Q.(fa + fb - frac); saturates to int32 */
-static inline int32_t q_mul32(int32_t a, int32_t b, unsigned frac)
-{
-	return q_sat32(q_shr64(q_smul32(a, b), frac));
-}
+static inline int32_t q_mul32(int32_t a, int32_t b, unsigned frac) { return q_sat32(q_shr64(q_smul32(a, b), frac)); }
 
 /* a * b / 2^frac with the int64 result (exact for frac = 0; no saturation needed: |a b| < 2^62) */
-static inline int64_t q_mul64(int32_t a, int32_t b, unsigned frac)
-{
-	return q_shr64(q_smul32(a, b), frac);
-}
+static inline int64_t q_mul64(int32_t a, int32_t b, unsigned frac) { return q_shr64(q_smul32(a, b), frac); }
 
 /* a * u / 2^30 for int64 a and a Q1.30 factor u: a keeps its format; saturating.
  * Split in two 32 x 32 products so that nothing overflows for any a. */
@@ -217,8 +230,8 @@ static inline int64_t q_mul64_q30(int64_t a, int32_t u)
 	bool neg = (a < 0) != (u < 0);
 	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
 	uint32_t uu = u < 0 ? 0u - (uint32_t)u : (uint32_t)u;
-	uint64_t hi = q_umul32((uint32_t)(ua >> 32), uu);         /* a_hi u, < 2^63 */
-	uint64_t lo = q_umul32((uint32_t)ua, uu);                 /* a_lo u, < 2^64 */
+	uint64_t hi = q_umul32((uint32_t)(ua >> 32), uu); /* a_hi u, < 2^63 */
+	uint64_t lo = q_umul32((uint32_t)ua, uu);         /* a_lo u, < 2^64 */
 	/* a u / 2^30 = hi 2^2 + lo / 2^30 */
 	if (hi >= ((uint64_t)1 << 61))
 		return neg ? -INT64_MAX : INT64_MAX;
@@ -236,9 +249,9 @@ QF_INLINE int64_t q_mul64_32(int64_t a, int32_t b, unsigned s)
 	bool neg = (a < 0) != (b < 0);
 	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
 	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-	uint64_t hi = q_umul32((uint32_t)(ua >> 32), ub);           /* < 2^63 */
-	uint64_t lo = q_umul32((uint32_t)ua, ub) >> 32;             /* < 2^32 */
-	int64_t sum = (int64_t)(hi + lo);                            /* |a b| / 2^32 */
+	uint64_t hi = q_umul32((uint32_t)(ua >> 32), ub); /* < 2^63 */
+	uint64_t lo = q_umul32((uint32_t)ua, ub) >> 32;   /* < 2^32 */
+	int64_t sum = (int64_t)(hi + lo);                 /* |a b| / 2^32 */
 	sum = neg ? -sum : sum;
 	return s >= 32u ? q_shr64(sum, s - 32u) : q_shl64(sum, 32u - s);
 }
@@ -268,10 +281,10 @@ static inline uint32_t q_recip(int64_t x, int *e)
 	if (x <= 0)
 		return 0;
 	int s = q_clz64((uint64_t)x);
-	uint32_t v = (uint32_t)(((uint64_t)x << s) >> 32);               /* Q32, [0.5, 1) */
+	uint32_t v = (uint32_t)(((uint64_t)x << s) >> 32);                     /* Q32, [0.5, 1) */
 	uint32_t y = 3031741621u - (uint32_t)(q_umul32(2021161081u, v) >> 32); /* Q30 */
 	for (int i = 0; i < 3; i++) {
-		uint32_t t = (uint32_t)(q_umul32(v, y) >> 32);            /* v y in Q30, ~1 */
+		uint32_t t = (uint32_t)(q_umul32(v, y) >> 32); /* v y in Q30, ~1 */
 		y = (uint32_t)((q_umul32(y, 0x80000000u - t) + ((uint64_t)1 << 29)) >> 30);
 	}
 	*e = 94 - s; /* x = v 2^(64 - s): 1 / x = (1 / v) 2^(s - 64) = y 2^(s - 94) */
@@ -287,9 +300,9 @@ static inline int32_t q30_mul_recip(int64_t a, uint32_t y, int eb, int *sh)
 		return 0;
 	uint64_t ua = a < 0 ? (uint64_t)0 - (uint64_t)a : (uint64_t)a;
 	int sa = q_clz64(ua);
-	uint32_t a32 = (uint32_t)((ua << sa) >> 32);          /* a = a32 2^(32 - sa) */
-	uint64_t p = q_umul32(a32, y);                         /* [2^61, 2^63] */
-	uint64_t rr = (p + ((uint64_t)1 << 31)) >> 32;         /* [2^29, 2^31]: Q30 in [0.5, 2] */
+	uint32_t a32 = (uint32_t)((ua << sa) >> 32);   /* a = a32 2^(32 - sa) */
+	uint64_t p = q_umul32(a32, y);                 /* [2^61, 2^63] */
+	uint64_t rr = (p + ((uint64_t)1 << 31)) >> 32; /* [2^29, 2^31]: Q30 in [0.5, 2] */
 	int32_t r = rr > (uint64_t)INT32_MAX ? INT32_MAX : (int32_t)rr;
 	/* a / b = a32 2^(32 - sa) y 2^-eb = r 2^32 2^(32 - sa - eb) = (r 2^-30) 2^(94 - sa - eb) */
 	*sh = sa + eb - 94;
@@ -388,7 +401,7 @@ static inline int64_t q_mul64_64(int64_t a, int64_t b, unsigned s)
 	uint64_t ub = b < 0 ? (uint64_t)0 - (uint64_t)b : (uint64_t)b;
 	uint32_t ah = (uint32_t)(ua >> 32), al = (uint32_t)ua, bh = (uint32_t)(ub >> 32), bl = (uint32_t)ub;
 	uint64_t hi = q_umul32(ah, bh), lo = q_umul32(al, bl);
-	uint64_t mid[2] = { q_umul32(ah, bl), q_umul32(al, bh) };
+	uint64_t mid[2] = {q_umul32(ah, bl), q_umul32(al, bh)};
 	for (int i = 0; i < 2; i++) { /* (hi, lo) += mid 2^32 */
 		uint64_t m = mid[i] << 32;
 		lo += m;

@@ -22,7 +22,7 @@ struct quat quat_normalize(struct quat q)
 {
 	scalar_t n2 = quat_norm2(q);
 	if (!(n2 > SC(1e-6))) {
-		struct quat one = { SC(1), SC_ZERO, SC_ZERO, SC_ZERO };
+		struct quat one = {SC(1), SC_ZERO, SC_ZERO, SC_ZERO};
 		return one;
 	}
 #if OCTO_FIXED
@@ -32,9 +32,9 @@ struct quat quat_normalize(struct quat q)
 		return q;
 #endif
 	scalar_t n = sc_sqrt(n2);
-	if (n == SC(1))   /* already unit (Q16.16: to the LSB): the divisions would change nothing */
+	if (n == SC(1)) /* already unit (Q16.16: to the LSB): the divisions would change nothing */
 		return q;
-	struct quat r = { sc_div(q.w, n), sc_div(q.x, n), sc_div(q.y, n), sc_div(q.z, n) };
+	struct quat r = {sc_div(q.w, n), sc_div(q.x, n), sc_div(q.y, n), sc_div(q.z, n)};
 	return r;
 }
 
@@ -80,7 +80,7 @@ scalar_t quat_yaw(struct quat q)
 
 struct vec3 quat_error_b(struct quat q_sp_b2i, struct quat q_b2i)
 {
-	struct quat c = { q_b2i.w, sc_neg(q_b2i.x), sc_neg(q_b2i.y), sc_neg(q_b2i.z) };
+	struct quat c = {q_b2i.w, sc_neg(q_b2i.x), sc_neg(q_b2i.y), sc_neg(q_b2i.z)};
 	struct quat e = quat_mul(c, q_sp_b2i);
 	/* 2 e (or -2 e: the shorter way round) as sums, the same as the products by +/-2 */
 	struct vec3 v = vec3_make(sc_add(e.x, e.x), sc_add(e.y, e.y), sc_add(e.z, e.z));

@@ -34,10 +34,7 @@ static inline rls_sig_t sig_sub(rls_sig_t a, rls_sig_t b) { return q_sat32((int6
 /* Q7.24 * Q7.24 -> Q7.24 */
 static inline rls_sig_t sig_mul(rls_sig_t a, rls_sig_t b) { return q_mul32(a, b, QF_SIG_FRAC); }
 /* Q7.24 * Q7.24 -> Q23.40 */
-static inline rls_acc_t acc_of_prod(rls_sig_t a, rls_sig_t b)
-{
-	return q_mul64(a, b, 2 * QF_SIG_FRAC - QF_ACC_FRAC);
-}
+static inline rls_acc_t acc_of_prod(rls_sig_t a, rls_sig_t b) { return q_mul64(a, b, 2 * QF_SIG_FRAC - QF_ACC_FRAC); }
 /* Q23.40 * Q7.24 -> Q23.40 */
 static inline rls_acc_t acc_mul_sig(rls_acc_t a, rls_sig_t b) { return q_mul64_32(a, b, QF_SIG_FRAC); }
 /* Q1.62 * Q7.24 -> Q23.40 */
@@ -73,7 +70,10 @@ static inline rls_wide_t wide_pow4(rls_wide_t d, int s) { return est_scale64(d, 
  * reciprocal packed in one word, y in the low half, e (in [0, 94]) in the high half, so that
  * it is copied and selected in registers (an 8-byte struct is copied by memcpy at -Os) */
 typedef uint64_t rls_rcp_t;
-typedef struct { int32_t r; int sh; } rls_gain_t;
+typedef struct {
+	int32_t r;
+	int sh;
+} rls_gain_t;
 #define RCP_NONE ((rls_rcp_t)0)
 static inline uint32_t rcp_y(rls_rcp_t c) { return (uint32_t)c; }
 static inline int rcp_e(rls_rcp_t c) { return (int)(uint32_t)(c >> 32); }
@@ -114,8 +114,8 @@ static inline rls_gain_t gain_of_pow2(int k, rls_rcp_t c)
 }
 /* d a_prev / (a lambda) = result 2^-*sh, with the reciprocal c of a (lambda = 1: no other);
  * k_prev >= 0: a_prev is 2^k_prev (the first innovation with lambda = 1) */
-static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c,
-					  rls_unit_t lambda, int k_prev, int *sh)
+static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c, rls_unit_t lambda,
+					  int k_prev, int *sh)
 {
 	rls_gain_t g;
 	if (lambda == UNIT_ONE && k_prev >= 0)
@@ -168,12 +168,23 @@ static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s)
 static inline rls_inn_t inn_mul_sig(rls_inn_t a, rls_sig_t b) { return est_mul64_32c(a, b, QF_SIG_FRAC); }
 static inline rls_inn_t inn_add(rls_inn_t a, rls_inn_t b) { return q_add64(a, b); }
 /* Q1.30 2^e -> Q9.54 (e <= 0) */
-static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { return est_scale64((int64_t)m << (QF_INN_FRAC - QF_UNIT_FRAC), e); }
+static inline rls_inn_t inn_of_unit(rls_unit_t m, int e)
+{
+	return est_scale64((int64_t)m << (QF_INN_FRAC - QF_UNIT_FRAC), e);
+}
 /* inn_of_unit(UNIT_ONE, e) is 2^INN_POW2(e) (e >= RLS_EXP_MIN > -QF_INN_FRAC: exact) */
 #define INN_POW2(e) (QF_INN_FRAC + (e))
 static inline bool wide_ok(rls_wide_t d) { return d > 0; }
-static inline bool sig_ok(rls_sig_t x) { (void)x; return true; }
-static inline bool acc_ok(rls_acc_t x) { (void)x; return true; }
+static inline bool sig_ok(rls_sig_t x)
+{
+	(void)x;
+	return true;
+}
+static inline bool acc_ok(rls_acc_t x)
+{
+	(void)x;
+	return true;
+}
 /* (a left shift, the common case, inlined: est_shl32c is est_scale32 for shifts in [0, 30]) */
 static inline rls_sig_t sig_of_sc(scalar_t x, int shift)
 {
@@ -200,14 +211,22 @@ static inline rls_acc_t acc_of_wide_sig(rls_wide_t d, rls_sig_t b) { return d * 
 static inline rls_acc_t acc_add(rls_acc_t a, rls_acc_t b) { return a + b; }
 static inline rls_acc_t acc_sub(rls_acc_t a, rls_acc_t b) { return a - b; }
 static inline rls_acc_t acc_mul_unit(rls_acc_t a, rls_unit_t m) { return a * m; }
-static inline rls_acc_t acc_ldexp(rls_acc_t a, int32_t e) { (void)e; return a; } /* e is 0 */
+static inline rls_acc_t acc_ldexp(rls_acc_t a, int32_t e)
+{
+	(void)e;
+	return a;
+} /* e is 0 */
 static inline rls_acc_t acc_pow4(rls_acc_t a, int s) { return s ? a * sc_pow2f(2 * s) : a; }
 static inline rls_acc_t acc_of_unit(rls_unit_t m) { return m; }
 static inline rls_acc_t acc_of_wide(rls_wide_t d) { return d; }
 static inline rls_wide_t wide_of_acc(rls_acc_t a) { return a; }
 static inline rls_wide_t wide_add(rls_wide_t a, rls_wide_t b) { return a + b; }
 static inline rls_unit_t unit_ratio(rls_acc_t a, rls_acc_t b) { return a / b; }
-static inline rls_wide_t wide_ldexp(rls_wide_t d, int e) { (void)e; return d; } /* e is 0 */
+static inline rls_wide_t wide_ldexp(rls_wide_t d, int e)
+{
+	(void)e;
+	return d;
+} /* e is 0 */
 static inline rls_wide_t wide_pow4(rls_wide_t d, int s) { return d * sc_pow2f(2 * s); } /* exact */
 typedef float rls_rcp_t;
 typedef float rls_gain_t;
@@ -215,12 +234,9 @@ typedef float rls_gain_t;
 static inline rls_rcp_t rcp_of(rls_inn_t a) { return a; }
 static inline rls_gain_t gain_of(rls_inn_t a, rls_rcp_t c) { return a / c; }
 static inline rls_par_t par_add_g(rls_par_t x, rls_gain_t g, rls_sig_t c) { return x + g * c; }
-static inline rls_sig_t u_update(rls_sig_t uij, rls_inn_t b, rls_sig_t f, rls_rcp_t c)
-{
-	return uij + b * (-f / c);
-}
-static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c,
-					  rls_unit_t lambda, int k_prev, int *sh)
+static inline rls_sig_t u_update(rls_sig_t uij, rls_inn_t b, rls_sig_t f, rls_rcp_t c) { return uij + b * (-f / c); }
+static inline rls_wide_t wide_scale_ratio(rls_wide_t d, rls_inn_t a_prev, rls_inn_t a, rls_rcp_t c, rls_unit_t lambda,
+					  int k_prev, int *sh)
 {
 	(void)c;
 	(void)k_prev;
@@ -244,10 +260,18 @@ static inline rls_dot_t dot_sub(rls_dot_t a, rls_dot_t b) { return a - b; }
 static inline rls_sig_t sig_of_dot(rls_dot_t s) { return s; }
 /* x + (a / b) c: the float build's order of operations */
 /* x + a (c / b) */
-static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s) { (void)s; return d * f; }
+static inline rls_inn_t inn_of_wide_sig(rls_wide_t d, rls_sig_t f, int s)
+{
+	(void)s;
+	return d * f;
+}
 static inline rls_inn_t inn_mul_sig(rls_inn_t a, rls_sig_t b) { return a * b; }
 static inline rls_inn_t inn_add(rls_inn_t a, rls_inn_t b) { return a + b; }
-static inline rls_inn_t inn_of_unit(rls_unit_t m, int e) { (void)e; return m; }
+static inline rls_inn_t inn_of_unit(rls_unit_t m, int e)
+{
+	(void)e;
+	return m;
+}
 #define INN_POW2(e) (e)
 static inline bool wide_ok(rls_wide_t d) { return d > 0.0f && isfinite(d); }
 static inline bool sig_ok(rls_sig_t x) { return isfinite(x); }
@@ -256,7 +280,11 @@ static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return shift ? x * sc
 static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return shift ? x * sc_pow2f(shift) : x; }
 static inline rls_acc_t phi2_of_sc(scalar_t x) { return x * x; }
 /* also for the overflow check below */
-static inline bool phi2_needed(const struct rls *r) { (void)r; return true; }
+static inline bool phi2_needed(const struct rls *r)
+{
+	(void)r;
+	return true;
+}
 #endif
 
 /* ---------------------------------------------------------------- the update */
@@ -324,8 +352,8 @@ rls_acc_t rls_cov_diag_n(const struct rls *r, unsigned param)
  * in which sigma cancels from the gain and the U update; only the new d_j = d_j
  * a_(j-1) / (a_j lambda) and the residual need alpha itself. On a numerical failure the
  * estimate is kept and the covariance reset. */
-RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rls_sig_t *y,
-				      rls_unit_t lambda, unsigned n)
+RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rls_sig_t *y, rls_unit_t lambda,
+				   unsigned n)
 {
 	const unsigned no = r->cfg.n_outputs;
 	rls_sig_t f[RLS_MAX_PARAMS], u[RLS_MAX_PARAMS][RLS_MAX_PARAMS];
@@ -342,7 +370,7 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 		rls_sig_t s = j ? sig_of_dot(dot_mac(sd, phi[j], UNIT_SIG)) : phi[j];
 		f[j] = s;
 		v[j] = inn_of_wide_sig(r->d[j], s, (int)r->d_exp - fr);
-		for (unsigned i = 0; i < j; i++)   /* the strict upper part: all that is read */
+		for (unsigned i = 0; i < j; i++) /* the strict upper part: all that is read */
 			u[i][j] = r->u[RLS_U_IDX(i, j)];
 	}
 	rls_inn_t alpha = inn_of_unit(lambda, fr);
@@ -431,8 +459,7 @@ RLS_INLINE enum rls_result bierman(struct rls *r, const rls_sig_t *phi, const rl
 	return RLS_UPDATED;
 }
 
-enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_sig_t *y_n,
-			     rls_acc_t phi2, bool excited)
+enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_sig_t *y_n, rls_acc_t phi2, bool excited)
 {
 	const unsigned n = r->cfg.n_params;
 	if (!excited || phi2 < r->phi_min2) {
@@ -446,8 +473,8 @@ enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_si
 		for (unsigned i = 0; i < n; i++) {
 			if (!(r->p_max_n > ACC_ZERO))
 				continue;
-			rls_unit_t lmin = unit_ratio(pdiag_m(r, i), acc_ldexp(acc_pow4(r->p_max_n, r->cfg.phi_shift[i]),
-									 r->d_exp));
+			rls_unit_t lmin = unit_ratio(pdiag_m(r, i),
+						     acc_ldexp(acc_pow4(r->p_max_n, r->cfg.phi_shift[i]), r->d_exp));
 			if (lmin > lambda)
 				lambda = lmin < UNIT_ONE ? lmin : UNIT_ONE;
 		}

@@ -61,7 +61,7 @@
 /* The largest problem the firmware solves (ident.h: k_f and k_tau on one regressor, the lag
  * check's two parameters on one output); every struct rls holds this much, so it is kept to
  * what is used */
-#define RLS_MAX_PARAMS  2
+#define RLS_MAX_PARAMS 2
 #define RLS_MAX_OUTPUTS 2
 /* limits of the shared exponent of D (D = d 2^-d_exp): P in about [2^-22, 2^40] */
 #define RLS_EXP_MIN (-40)
@@ -70,12 +70,12 @@
 #define RLS_FIXED_P_CEIL 65536.0f
 
 #if OCTO_FIXED
-typedef int32_t rls_sig_t; /* Q7.24: normalised signals, parameters, U, errors */
+typedef int32_t rls_sig_t;  /* Q7.24: normalised signals, parameters, U, errors */
 typedef int32_t rls_unit_t; /* Q1.30: D mantissas, lambda, ratios */
-typedef int64_t rls_acc_t; /* Q23.40: innovations, covariance diagonal, residual sums */
+typedef int64_t rls_acc_t;  /* Q23.40: innovations, covariance diagonal, residual sums */
 typedef int64_t rls_wide_t; /* Q1.62: D mantissas */
-typedef int64_t rls_inn_t; /* Q9.54: D f, gain numerators, innovation */
-typedef int64_t rls_par_t; /* Q15.48: theta_n */
+typedef int64_t rls_inn_t;  /* Q9.54: D f, gain numerators, innovation */
+typedef int64_t rls_par_t;  /* Q15.48: theta_n */
 #else
 typedef float rls_par_t;
 typedef float rls_wide_t;
@@ -86,22 +86,22 @@ typedef float rls_acc_t;
 #endif
 
 struct rls_config {
-	uint8_t n_params;   /* 1..RLS_MAX_PARAMS (clamped) */
-	uint8_t n_outputs;  /* 1..RLS_MAX_OUTPUTS (clamped) */
-	float lambda;       /* forgetting factor, clamped to [0.5, 1] */
-	float p0;           /* initial and reset covariance: P = p0 I (> 0) */
-	float p_min;        /* floor on diag(P); 0 = none */
-	float p_max;        /* ceiling on diag(P) through forgetting; 0 = none */
-	float phi_min;      /* gate: no update when |phi|_2 < phi_min; 0 = none */
+	uint8_t n_params;                              /* 1..RLS_MAX_PARAMS (clamped) */
+	uint8_t n_outputs;                             /* 1..RLS_MAX_OUTPUTS (clamped) */
+	float lambda;                                  /* forgetting factor, clamped to [0.5, 1] */
+	float p0;                                      /* initial and reset covariance: P = p0 I (> 0) */
+	float p_min;                                   /* floor on diag(P); 0 = none */
+	float p_max;                                   /* ceiling on diag(P) through forgetting; 0 = none */
+	float phi_min;                                 /* gate: no update when |phi|_2 < phi_min; 0 = none */
 	float theta0[RLS_MAX_OUTPUTS][RLS_MAX_PARAMS]; /* initial estimate */
-	int8_t phi_shift[RLS_MAX_PARAMS]; /* phi_n_i = phi_i 2^-phi_shift_i; clamped to [-16, 16] */
+	int8_t phi_shift[RLS_MAX_PARAMS];              /* phi_n_i = phi_i 2^-phi_shift_i; clamped to [-16, 16] */
 };
 
 enum rls_result {
 	RLS_UPDATED = 0,
-	RLS_GATED = 1,     /* not excited or |phi| < phi_min: nothing changed */
-	RLS_REJECTED = 2,  /* non-finite input: nothing changed */
-	RLS_RESET = 3,     /* numerical failure: estimate kept, covariance reset to p0 I */
+	RLS_GATED = 1,    /* not excited or |phi| < phi_min: nothing changed */
+	RLS_REJECTED = 2, /* non-finite input: nothing changed */
+	RLS_RESET = 3,    /* numerical failure: estimate kept, covariance reset to p0 I */
 };
 
 /* What the update and the getters need of the configuration, as rls_init clamped it; the
@@ -119,21 +119,21 @@ struct rls_shape {
 #define RLS_U_IDX(i, j) ((j) * ((j) - 1u) / 2u + (i))
 struct rls {
 	struct rls_shape cfg;
-	int8_t y_shift[RLS_MAX_OUTPUTS];          /* y_n_o = y_o 2^-y_shift_o */
-	int8_t d_exp;                             /* D_n_i = d_i 2^-d_exp, in [RLS_EXP_MIN, RLS_EXP_MAX] */
-	int8_t d0_exp;                            /* p0 I in the same form (resets): */
+	int8_t y_shift[RLS_MAX_OUTPUTS];                  /* y_n_o = y_o 2^-y_shift_o */
+	int8_t d_exp;                                     /* D_n_i = d_i 2^-d_exp, in [RLS_EXP_MIN, RLS_EXP_MAX] */
+	int8_t d0_exp;                                    /* p0 I in the same form (resets): */
 	rls_par_t theta[RLS_MAX_OUTPUTS][RLS_MAX_PARAMS]; /* theta_n */
 	rls_wide_t d[RLS_MAX_PARAMS];
-	rls_wide_t d0;                            /* D0_n_i = d0 4^(phi_shift_i - m) 2^-d0_exp, m the
+	rls_wide_t d0;                  /* D0_n_i = d0 4^(phi_shift_i - m) 2^-d0_exp, m the
 						   * largest phi_shift of the n_params */
-	rls_acc_t ssr[RLS_MAX_OUTPUTS];           /* forgotten sum of normalised residuals^2 (y_n) */
-	rls_acc_t n_eff;                          /* forgotten sample count */
-	rls_acc_t p_min_n, p_max_n;               /* floor and ceiling on P_n_ii (d_exp = 0) of a
+	rls_acc_t ssr[RLS_MAX_OUTPUTS]; /* forgotten sum of normalised residuals^2 (y_n) */
+	rls_acc_t n_eff;                /* forgotten sample count */
+	rls_acc_t p_min_n, p_max_n;     /* floor and ceiling on P_n_ii (d_exp = 0) of a
 						   * parameter with phi_shift 0: 2^(2 phi_shift_i) times
 						   * them for parameter i */
-	rls_acc_t phi_min2;                       /* phi_min^2: Q16.16 squared (Q32) when fixed */
-	rls_sig_t u[RLS_U_N];                     /* U_n_ij = u[RLS_U_IDX(i, j)], i < j */
-	rls_unit_t lambda;                        /* cfg.lambda */
+	rls_acc_t phi_min2;             /* phi_min^2: Q16.16 squared (Q32) when fixed */
+	rls_sig_t u[RLS_U_N];           /* U_n_ij = u[RLS_U_IDX(i, j)], i < j */
+	rls_unit_t lambda;              /* cfg.lambda */
 	uint32_t n_updates, n_gated, n_rejected, n_resets;
 };
 
@@ -151,8 +151,7 @@ void rls_reset_covariance(struct rls *r);
 enum rls_result rls_update(struct rls *r, const scalar_t *phi, const scalar_t *y, bool excited);
 enum rls_result rls_update_f(struct rls *r, const float *phi, const float *y, bool excited);
 /* the update on normalised signals (phi_n, y_n), which both entry points above call */
-enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_sig_t *y_n,
-			     rls_acc_t phi2, bool excited);
+enum rls_result rls_update_n(struct rls *r, const rls_sig_t *phi_n, const rls_sig_t *y_n, rls_acc_t phi2, bool excited);
 
 /* theta[out][param] (rls_setup.c) */
 float rls_estimate_f(const struct rls *r, unsigned out, unsigned param);

@@ -4,7 +4,6 @@
 #include "fbits.h"
 #include "qfmt.h"
 
-
 /* float to the normalised formats and back (rls.h); the float build keeps float */
 #if OCTO_FIXED
 static int64_t i64_of_f(float x, int frac, int64_t lim)
@@ -39,7 +38,7 @@ static rls_acc_t phi2_of_f(float x) { return x; }
 
 void rls_default_config(struct rls_config *cfg)
 {
-	struct rls_config c = { 0 };
+	struct rls_config c = {0};
 	c.n_params = 1;
 	c.n_outputs = 1;
 	c.lambda = 1.0f;
@@ -73,7 +72,7 @@ __attribute__((noinline)) static float nonneg_f(float x)
 
 void rls_init(struct rls *r, const struct rls_config *cfg)
 {
-	struct rls z = { 0 };
+	struct rls z = {0};
 	*r = z;
 	struct rls_config cc = *cfg; /* clamped below; r keeps its shape (rls_shape) */
 	struct rls_config *c = &cc;
@@ -89,7 +88,7 @@ void rls_init(struct rls *r, const struct rls_config *cfg)
 		c->lambda = 0.5f;
 	if (!(c->lambda <= 1.0f))
 		c->lambda = 1.0f;
-	if (fb_bits(c->p0) - 1u >= 0x7f7fffffu)   /* not (positive and finite) */
+	if (fb_bits(c->p0) - 1u >= 0x7f7fffffu) /* not (positive and finite) */
 		c->p0 = 1e4f;
 	c->p_min = nonneg_f(c->p_min);
 	c->p_max = nonneg_f(c->p_max);

@@ -35,7 +35,7 @@ void rotor_fail_set_model(struct rotor_fail *s, const struct rotor_fail_model *m
 		if (!(m->scale[j] > SC_ZERO))
 			s->failed |= bit;
 		else if ((s->failed & bit) && m->scale[j] != s->m.scale[j])
-			s->failed &= (uint8_t)~bit;   /* set anew (repaired, or identified again) */
+			s->failed &= (uint8_t)~bit; /* set anew (repaired, or identified again) */
 	}
 	s->m = *m;
 }
@@ -101,8 +101,8 @@ static void window_step(struct rotor_fail *s, const scalar_t *e, scalar_t *emin)
 /* Each rotor's modelled output through the lag (e) and the lower of it and the unlagged
  * command's (e_low: g rises with the command, so this is what a motor faster than the model
  * gives as well as a slower one); the sums of g and e over the rotors in service, counted. */
-static int model_outputs(const struct rotor_fail *s, const scalar_t *thr, bool by_thrust, scalar_t *e,
-			 scalar_t *e_low, scalar_t *g_sum, scalar_t *e_sum)
+static int model_outputs(const struct rotor_fail *s, const scalar_t *thr, bool by_thrust, scalar_t *e, scalar_t *e_low,
+			 scalar_t *g_sum, scalar_t *e_sum)
 {
 	const scalar_t c = s->m.curve, c1 = sc_sub(SC(1.0), c);
 	int n_in = 0;
@@ -199,7 +199,7 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 			continue;
 		}
 		scalar_t q = sc_div(r[j], med);
-		if (!by_thrust)   /* thrust goes with speed^2 */
+		if (!by_thrust) /* thrust goes with speed^2 */
 			q = sc_mul(q, q);
 		if (s->streak[j] < UINT8_MAX)
 			s->streak[j]++;

@@ -45,54 +45,54 @@
 
 enum rotor_fail_source {
 	ROTOR_FAIL_SRC_NONE = 0,
-	ROTOR_FAIL_SRC_THRUST = 1,   /* the measured thrust rows */
-	ROTOR_FAIL_SRC_SPEED = 2,    /* the rotor speeds (ESC telemetry) */
+	ROTOR_FAIL_SRC_THRUST = 1, /* the measured thrust rows */
+	ROTOR_FAIL_SRC_SPEED = 2,  /* the rotor speeds (ESC telemetry) */
 };
 
 struct rotor_fail_params {
-	scalar_t ratio_fail;   /* q_j below this is failing (0.6) */
-	scalar_t ratio_zero;   /* a detected effectiveness below this is 0 (0.1) */
-	scalar_t share_min;    /* judged only while its modelled output is this share of the mean (0.3) */
-	scalar_t g_min;        /* ... and the mean g(T) is at least this (0.02) */
-	scalar_t hold_s;       /* hold before landing (2 s) */
-	uint8_t confirm;       /* frames in a row (3) */
+	scalar_t ratio_fail; /* q_j below this is failing (0.6) */
+	scalar_t ratio_zero; /* a detected effectiveness below this is 0 (0.1) */
+	scalar_t share_min;  /* judged only while its modelled output is this share of the mean (0.3) */
+	scalar_t g_min;      /* ... and the mean g(T) is at least this (0.02) */
+	scalar_t hold_s;     /* hold before landing (2 s) */
+	uint8_t confirm;     /* frames in a row (3) */
 };
 
 /* The rotor model (set when the parameters change): lag, curve, effectiveness. */
 struct rotor_fail_model {
-	scalar_t tau_lag_s;                    /* ID_MOT_TAU */
-	scalar_t curve;                        /* MOT_CURVE */
-	scalar_t scale[ROTOR_FAIL_ROTORS];     /* MOT_SCALEj (0: failed, left out) */
+	scalar_t tau_lag_s;                /* ID_MOT_TAU */
+	scalar_t curve;                    /* MOT_CURVE */
+	scalar_t scale[ROTOR_FAIL_ROTORS]; /* MOT_SCALEj (0: failed, left out) */
 };
 
 struct rotor_fail_input {
-	const scalar_t *thr;        /* the throttles sent in the last step (ROTOR_FAIL_ROTORS) */
-	const scalar_t *thrust_n;   /* measured thrusts, N; NULL: not in this frame */
-	const scalar_t *speed_rps;  /* measured rotor speeds, rad/s; NULL: not in this frame */
-	scalar_t dt_s;              /* this step's time */
-	bool judge;                 /* flying: rotors are judged (else only the lag filter runs) */
+	const scalar_t *thr;       /* the throttles sent in the last step (ROTOR_FAIL_ROTORS) */
+	const scalar_t *thrust_n;  /* measured thrusts, N; NULL: not in this frame */
+	const scalar_t *speed_rps; /* measured rotor speeds, rad/s; NULL: not in this frame */
+	scalar_t dt_s;             /* this step's time */
+	bool judge;                /* flying: rotors are judged (else only the lag filter runs) */
 };
 
 struct rotor_fail_output {
-	int rotor;                  /* 0-based rotor found failed in this frame; -1: none */
-	scalar_t scale;             /* its effectiveness now (what MOT_SCALEj becomes) */
+	int rotor;      /* 0-based rotor found failed in this frame; -1: none */
+	scalar_t scale; /* its effectiveness now (what MOT_SCALEj becomes) */
 	enum rotor_fail_source source;
-	bool land;                  /* the hold after a detection is over: land now (once) */
+	bool land; /* the hold after a detection is over: land now (once) */
 };
 
 struct rotor_fail {
 	struct rotor_fail_params p;
 	struct rotor_fail_model m;
-	scalar_t lag[ROTOR_FAIL_ROTORS];   /* lag-filtered throttles */
-	scalar_t hist[ROTOR_FAIL_WINDOW][ROTOR_FAIL_ROTORS];   /* the modelled outputs of recent frames */
-	uint8_t hist_at, hist_n;           /* the next slot; slots filled */
-	scalar_t q_sum[ROTOR_FAIL_ROTORS]; /* sum of q_j over the current streak */
+	scalar_t lag[ROTOR_FAIL_ROTORS];                     /* lag-filtered throttles */
+	scalar_t hist[ROTOR_FAIL_WINDOW][ROTOR_FAIL_ROTORS]; /* the modelled outputs of recent frames */
+	uint8_t hist_at, hist_n;                             /* the next slot; slots filled */
+	scalar_t q_sum[ROTOR_FAIL_ROTORS];                   /* sum of q_j over the current streak */
 	uint8_t streak[ROTOR_FAIL_ROTORS];
-	uint8_t failed;                    /* bit j: rotor j+1 has failed */
-	bool primed;                       /* the lag filter holds a value */
-	bool holding;                      /* a detection's hold is running */
+	uint8_t failed; /* bit j: rotor j+1 has failed */
+	bool primed;    /* the lag filter holds a value */
+	bool holding;   /* a detection's hold is running */
 	scalar_t hold_left_s;
-	scalar_t c_dt, c_tau, lag_al;      /* the lag coefficient and what it was computed for */
+	scalar_t c_dt, c_tau, lag_al; /* the lag coefficient and what it was computed for */
 };
 
 struct rotor_fail_params rotor_fail_params_default(void);

@@ -20,7 +20,7 @@
  * 2^-26, and sc_div_prepared makes the quotient exact by its remainder all the same (the
  * same quotients as sc_div). The float build keeps nothing (ys 0). */
 struct sc_recip {
-	uint32_t ys;  /* 1 / |b| = y 2^(s - 63): y = ys & ~SC_RECIP_SMASK, s = ys & SC_RECIP_SMASK;
+	uint32_t ys; /* 1 / |b| = y 2^(s - 63): y = ys & ~SC_RECIP_SMASK, s = ys & SC_RECIP_SMASK;
 		       * 0 when b is 0 */
 };
 #define SC_RECIP_SMASK 31u
@@ -30,7 +30,7 @@ static inline struct sc_recip sc_recip_of(scalar_t b)
 {
 	uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
 	int s = q_clz32(ub);
-	struct sc_recip r = { ub ? (sc_recip_norm(ub << s) & ~SC_RECIP_SMASK) | (uint32_t)s : 0u };
+	struct sc_recip r = {ub ? (sc_recip_norm(ub << s) & ~SC_RECIP_SMASK) | (uint32_t)s : 0u};
 	return r;
 }
 
@@ -44,7 +44,7 @@ static inline scalar_t sc_div_r(scalar_t a, scalar_t b, const struct sc_recip *r
 static inline struct sc_recip sc_recip_of(scalar_t b)
 {
 	(void)b;
-	struct sc_recip r = { 0u };
+	struct sc_recip r = {0u};
 	return r;
 }
 

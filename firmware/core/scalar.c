@@ -24,7 +24,7 @@ extern inline int64_t q_shr64(int64_t v, unsigned s);
 extern inline int64_t q_shl64(int64_t v, unsigned s);
 extern inline int64_t q_scale64(int64_t v, int s);
 extern inline int64_t q_mul64_32(int64_t a, int32_t b, unsigned s);
-#if !defined(__GNUC__)   /* GCC and Clang always inline qa_* (or fail to compile): no copy */
+#if !defined(__GNUC__) /* GCC and Clang always inline qa_* (or fail to compile): no copy */
 extern inline uint64_t qa_umul32(uint32_t a, uint32_t b);
 extern inline int qa_clz32(uint32_t v);
 extern inline int64_t qa_shr64(int64_t v, unsigned s);
@@ -69,7 +69,7 @@ scalar_t sc_sqrt(scalar_t a)
 		sc_sqrt_step(&r, &rem, (v >> sh) & 3u);
 	for (int i = 0; i < 8; i++)
 		sc_sqrt_step(&r, &rem, 0u);
-	if (rem > r)   /* a 2^16 > r^2 + r: nearer r + 1 */
+	if (rem > r) /* a 2^16 > r^2 + r: nearer r + 1 */
 		r++;
 	return (scalar_t)r;
 }
@@ -80,22 +80,22 @@ scalar_t sc_sqrt(scalar_t a)
  * SC_MAX above ln(32768) and gives 0 below ln(2^-17) */
 scalar_t sc_exp(scalar_t a)
 {
-	if (a >= 681391)        /* 10.3972 = ln(32768) in Q16.16 */
+	if (a >= 681391) /* 10.3972 = ln(32768) in Q16.16 */
 		return SC_MAX;
-	if (a <= -794978)       /* -12.1301 = ln(2^-17.5) */
+	if (a <= -794978) /* -12.1301 = ln(2^-17.5) */
 		return 0;
 	const int64_t ln2_q32 = 2977044472LL; /* ln 2 * 2^32, rounded */
 	int64_t x = (int64_t)a * 65536;       /* Q32 */
 	int64_t k = x / ln2_q32;
 	if (k * ln2_q32 > x)
-		k--;                              /* floor */
-	int64_t r = (x - k * ln2_q32) >> 2;   /* Q30, [0, ln 2) */
+		k--;                        /* floor */
+	int64_t r = (x - k * ln2_q32) >> 2; /* Q30, [0, ln 2) */
 	int64_t term = (int64_t)1 << 30, sum = term;
 	for (int i = 1; i <= 13; i++) {
 		term = (term * r >> 30) / i;
 		sum += term;
 	}
-	int sh = 14 - (int)k;                 /* Q30 * 2^k -> Q16 */
+	int sh = 14 - (int)k; /* Q30 * 2^k -> Q16 */
 	if (sh <= 0)
 		return sc_sat64(sum << -sh);
 	return sc_sat64((sum + ((int64_t)1 << (sh - 1))) >> sh);
@@ -124,9 +124,6 @@ scalar_t sc_sqrt(scalar_t a)
 
 scalar_t sc_min(scalar_t a, scalar_t b) { return a < b ? a : b; }
 scalar_t sc_max(scalar_t a, scalar_t b) { return a > b ? a : b; }
-scalar_t sc_clamp(scalar_t x, scalar_t lo, scalar_t hi)
-{
-	return x < lo ? lo : (x > hi ? hi : x);
-}
+scalar_t sc_clamp(scalar_t x, scalar_t lo, scalar_t hi) { return x < lo ? lo : (x > hi ? hi : x); }
 #endif
 #endif

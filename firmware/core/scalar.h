@@ -71,12 +71,12 @@
 /* ------------------------------------------------------------ Q16.16 */
 typedef int32_t scalar_t;
 
-#define SC_FRAC    16
+#define SC_FRAC 16
 #define SC_SOFT_FLOAT 0
-#define SC_ONE     ((scalar_t)65536)
-#define SC_MAX     ((scalar_t)INT32_MAX)
+#define SC_ONE ((scalar_t)65536)
+#define SC_MAX ((scalar_t)INT32_MAX)
 #define SC_MAX_NEG ((scalar_t)(-INT32_MAX))
-#define SC_EPS     ((scalar_t)1)
+#define SC_EPS ((scalar_t)1)
 /* Literal to Q16.16, rounded to nearest; for compile-time constants in range. */
 #define SC(x) ((scalar_t)((x) >= 0 ? (double)(x) * 65536.0 + 0.5 : (double)(x) * 65536.0 - 0.5))
 
@@ -93,14 +93,17 @@ static inline scalar_t sc_sat64(int64_t v)
  * core without FPU. sc_from_float rounds x 2^16 to nearest (ties away from zero). */
 inline scalar_t sc_from_float(float x)
 {
-	union { float f; uint32_t u; } v = { x };
+	union {
+		float f;
+		uint32_t u;
+	} v = {x};
 	uint32_t e = (v.u >> 23) & 0xffu, m = (v.u & 0x7fffffu) | 0x800000u;
 	bool neg = (v.u >> 31) != 0u;
 	if (e == 0xffu && (v.u & 0x7fffffu))
-		return 0;                                /* NaN */
-	if (e >= 142u)                               /* |x| >= 2^15, and infinities */
+		return 0; /* NaN */
+	if (e >= 142u)    /* |x| >= 2^15, and infinities */
 		return neg ? SC_MAX_NEG : SC_MAX;
-	if (e < 109u)                                /* |x| < 2^-18 (and subnormals): 0 */
+	if (e < 109u) /* |x| < 2^-18 (and subnormals): 0 */
 		return 0;
 	/* |x| 2^16 = m 2^(e - 134) */
 	uint32_t r = e >= 134u ? m << (e - 134u) : (m + (1u << (133u - e))) >> (134u - e);
@@ -110,17 +113,20 @@ inline scalar_t sc_from_float(float x)
 /* a 2^-16 as float, rounded to nearest even: the same value as (float)a / 65536 */
 inline float sc_to_float(scalar_t a)
 {
-	union { float f; uint32_t u; } v = { 0.0f };
+	union {
+		float f;
+		uint32_t u;
+	} v = {0.0f};
 	if (a == 0)
 		return 0.0f;
 	uint32_t m = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
-	uint32_t e = 31u - (uint32_t)q_clz32(m);     /* m in [2^e, 2^(e + 1)) */
+	uint32_t e = 31u - (uint32_t)q_clz32(m); /* m in [2^e, 2^(e + 1)) */
 	if (e > 23u) {
 		uint32_t sh = e - 23u, rem = m & ((1u << sh) - 1u), half = 1u << (sh - 1u);
 		m >>= sh;
 		if (rem > half || (rem == half && (m & 1u)))
 			m++;
-		if (m >> 24) {                           /* rounded up to the next power of 2 */
+		if (m >> 24) { /* rounded up to the next power of 2 */
 			m >>= 1;
 			e++;
 		}
@@ -177,7 +183,7 @@ static inline scalar_t sc_abs(scalar_t a) { return a < 0 ? sc_neg(a) : a; }
 inline scalar_t sc_mul(scalar_t a, scalar_t b)
 {
 #if !defined(__ARM_ARCH_6M__)
-	int64_t p = (int64_t)a * b;                           /* |p| <= 2^62 */
+	int64_t p = (int64_t)a * b; /* |p| <= 2^62 */
 	int64_t r = p >= 0 ? (p + 32768) >> 16 : -((32768 - p) >> 16);
 	return r > INT32_MAX ? SC_MAX : (r < -INT32_MAX ? SC_MAX_NEG : (scalar_t)r);
 #else
@@ -192,7 +198,7 @@ inline scalar_t sc_mul(scalar_t a, scalar_t b)
 	} else {
 		uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
 		uint32_t hh = ah * bh, lh = al * bh;
-		r = ah * bl + ((al * bl + 0x8000u) >> 16);        /* < 2^31 + 2^16: no carry */
+		r = ah * bl + ((al * bl + 0x8000u) >> 16); /* < 2^31 + 2^16: no carry */
 		if (hh >= 0x8000u)
 			r = (uint32_t)INT32_MAX;
 		else if ((r += hh << 16) < (hh << 16) || (r += lh) < lh || r > (uint32_t)INT32_MAX)
@@ -206,19 +212,19 @@ inline scalar_t sc_mul(scalar_t a, scalar_t b)
  * steps y <- y (2 - v y) in 16-bit words from 48/17 - 32/17 v, then one on 2^47 - v y */
 inline uint32_t sc_recip_norm(uint32_t v)
 {
-	uint32_t v16 = v >> 16;                               /* Q16, [0.5, 1) */
-	uint32_t y = 92521u - ((61681u * v16) >> 16);         /* 1 / v in Q15 (error < 1/17) */
+	uint32_t v16 = v >> 16;                       /* Q16, [0.5, 1) */
+	uint32_t y = 92521u - ((61681u * v16) >> 16); /* 1 / v in Q15 (error < 1/17) */
 	for (int i = 0; i < 2; i++) {
-		uint32_t t = v16 * y;                             /* v y in Q31, about 2^31 */
-		y = (y * ((0u - t) >> 16)) >> 15;                 /* y (2 - v y), Q15: error < 2^-14 */
+		uint32_t t = v16 * y;             /* v y in Q31, about 2^31 */
+		y = (y * ((0u - t) >> 16)) >> 15; /* y (2 - v y), Q15: error < 2^-14 */
 	}
 	/* v y 2^16 with y <= 2^16 is 2^63 (1 - e): e 2^47 = 2^47 - v y, |e| < 2^-14 */
 	uint64_t vy = ((uint64_t)((v >> 16) * y) << 16) + (v & 0xffffu) * y;
-	int64_t err = (int64_t)(((uint64_t)1 << 47) - vy);    /* |err| < 2^33 */
+	int64_t err = (int64_t)(((uint64_t)1 << 47) - vy); /* |err| < 2^33 */
 	uint32_t ue = (uint32_t)((err < 0 ? (uint64_t)0 - (uint64_t)err : (uint64_t)err) >> 18);
 	uint32_t c = (y * (ue > 0xffffu ? 0xffffu : ue)) >> 13; /* y 2^16 |e| */
 	uint64_t r = ((uint64_t)y << 16);
-	r = err < 0 ? r - c : r + c;                          /* y 2^16 (1 + e) */
+	r = err < 0 ? r - c : r + c; /* y 2^16 (1 + e) */
 	return r > 0xffffffffu ? 0xffffffffu : (uint32_t)r;
 }
 
@@ -233,8 +239,8 @@ inline scalar_t sc_div_prepared(scalar_t a, scalar_t b, uint32_t ub, int s, uint
 		return a > 0 ? SC_MAX : (a < 0 ? SC_MAX_NEG : 0);
 	bool neg = (a < 0) != (b < 0);
 	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
-	uint64_t x = ((uint64_t)ua << 16) + (ub >> 1);        /* < 2^48 + 2^31 */
-	if ((x >> 31) >= ub)                                  /* quotient >= 2^31 */
+	uint64_t x = ((uint64_t)ua << 16) + (ub >> 1); /* < 2^48 + 2^31 */
+	if ((x >> 31) >= ub)                           /* quotient >= 2^31 */
 		return neg ? SC_MAX_NEG : SC_MAX;
 	/* x32 = floor(x / 2^k) with 2^k <= |b| < 2^(k + 1): below 2^32 as the quotient is below
 	 * 2^31, and dropping x's low k bits lowers the quotient by less than 1 */
@@ -265,7 +271,11 @@ scalar_t sc_div(scalar_t a, scalar_t b);
  * it, used by several objects. */
 scalar_t sc_sqrt(scalar_t a);
 
-static inline bool sc_isfinite(scalar_t a) { (void)a; return true; }
+static inline bool sc_isfinite(scalar_t a)
+{
+	(void)a;
+	return true;
+}
 
 /* The 64-bit product |a| |b| in two 32-bit words, from 16 x 16 products (as q_umul32 on
  * Cortex-M0), for the trigonometry below: with constant shifts it stays in 32-bit words
@@ -287,8 +297,8 @@ static inline SC_ALWAYS_INLINE int32_t sc_qmul32w(int32_t a, int32_t b, unsigned
 {
 	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
 	uint32_t hi, lo, q, over;
-	sc_umul32w(ua, ub, &hi, &lo);                /* < 2^62 */
-	if (s <= 32u) {                              /* + 2^(s - 1), then / 2^s */
+	sc_umul32w(ua, ub, &hi, &lo); /* < 2^62 */
+	if (s <= 32u) {               /* + 2^(s - 1), then / 2^s */
 		uint32_t add = 1u << (s - 1u);
 		lo += add;
 		hi += lo < add ? 1u : 0u;
@@ -317,13 +327,13 @@ static inline scalar_t sc_sin_turn(uint32_t p)
 {
 	uint32_t quad = p >> 30, f = p & 0x3fffffffu;
 	if (quad & 1u)
-		f = 0x40000000u - f;                 /* sin(pi/2 (1 - x)) = sin(pi/2 (1 + x)) */
+		f = 0x40000000u - f; /* sin(pi/2 (1 - x)) = sin(pi/2 (1 + x)) */
 	int32_t x = (int32_t)f, z = SC_QMUL(x, x, 30);
-	int32_t r = -4652625;                    /* coefficients in Q30 */
+	int32_t r = -4652625; /* coefficients in Q30 */
 	r = 85291977 + SC_QMUL(r, z, 30);
 	r = -693522166 + SC_QMUL(r, z, 30);
 	r = 1686624005 + SC_QMUL(r, z, 30);
-	r = SC_QMUL(r, x, 44);                   /* Q30 x Q30 -> Q16 */
+	r = SC_QMUL(r, x, 44); /* Q30 x Q30 -> Q16 */
 	return quad >= 2u ? -r : r;
 }
 /* radians to turns: a 2^16 / (2 pi) in units of 2^-32 turn (K = 2^32 / (2 pi), rounded, in
@@ -347,7 +357,7 @@ static inline scalar_t sc_cos(scalar_t a) { return sc_sin_turn(sc_turns(a) + 0x4
 static inline int32_t sc_atan_q30(uint64_t n, uint64_t d)
 {
 	int32_t t = q30_ratio((int64_t)n, (int64_t)d), z = q_mul32(t, t, 30);
-	int32_t r = 7314099;                     /* coefficients in Q30 */
+	int32_t r = 7314099; /* coefficients in Q30 */
 	r = -36082232 + q_mul32(r, z, 30);
 	r = 85495239 + q_mul32(r, z, 30);
 	r = -142091914 + q_mul32(r, z, 30);
@@ -373,7 +383,7 @@ static inline scalar_t sc_atan2(scalar_t y, scalar_t x)
 	uint32_t ay = y < 0 ? 0u - (uint32_t)y : (uint32_t)y, ax = x < 0 ? 0u - (uint32_t)x : (uint32_t)x;
 	int64_t r = sc_angle_q30(ay, ax);
 	if (x < 0)
-		r = 3373259426LL - r;                /* pi in Q30 */
+		r = 3373259426LL - r; /* pi in Q30 */
 	return (scalar_t)q_shr64(y < 0 ? -r : r, 30 - SC_FRAC);
 }
 /* asin(a) = atan2(a, sqrt(1 - a^2)) with 1 - a^2 exact in Q32 and its root in Q30; |a| >= 1
@@ -382,9 +392,9 @@ static inline scalar_t sc_asin(scalar_t a)
 {
 	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
 	if (ua >= 65536u)
-		return a < 0 ? -102944 : 102944;     /* pi / 2, rounded */
+		return a < 0 ? -102944 : 102944; /* pi / 2, rounded */
 	uint64_t v = (((uint64_t)1 << 32) - (uint64_t)ua * ua) << 28, c = 0, bit = (uint64_t)1 << 60;
-	while (bit) {                            /* c = floor(sqrt(v)): sqrt(1 - a^2) in Q30 */
+	while (bit) { /* c = floor(sqrt(v)): sqrt(1 - a^2) in Q30 */
 		if (v >= c + bit) {
 			v -= c + bit;
 			c = (c >> 1) + bit;
@@ -413,9 +423,9 @@ typedef float scalar_t;
 #define SC_SOFT_FLOAT 0
 #endif
 
-#define SC_MAX     3.0e38f
+#define SC_MAX 3.0e38f
 #define SC_MAX_NEG (-3.0e38f)
-#define SC_EPS     1.1920929e-7f
+#define SC_EPS 1.1920929e-7f
 #define SC(x) ((scalar_t)(x))
 
 static inline scalar_t sc_from_float(float x) { return x; }
@@ -445,7 +455,10 @@ static inline scalar_t sc_sqrt(scalar_t a) { return a > 0.0f ? sqrtf(a) : 0.0f; 
  * of isfinite */
 static inline bool sc_isfinite(scalar_t a)
 {
-	union { float f; uint32_t u; } v = { a };
+	union {
+		float f;
+		uint32_t u;
+	} v = {a};
 	return (v.u & 0x7f800000u) != 0x7f800000u;
 }
 
@@ -463,7 +476,10 @@ static inline scalar_t sc_exp(scalar_t a) { return expf(a); }
 /* 2^s as float, exact, from its exponent bits (no loop, no libm): s clamped to [-126, 127] */
 static inline float sc_pow2f(int s)
 {
-	union { uint32_t u; float f; } v;
+	union {
+		uint32_t u;
+		float f;
+	} v;
 	s = s < -126 ? -126 : (s > 127 ? 127 : s);
 	v.u = (uint32_t)(s + 127) << 23;
 	return v.f;
@@ -478,16 +494,10 @@ scalar_t sc_clamp(scalar_t x, scalar_t lo, scalar_t hi);
 #else
 static inline scalar_t sc_min(scalar_t a, scalar_t b) { return a < b ? a : b; }
 static inline scalar_t sc_max(scalar_t a, scalar_t b) { return a > b ? a : b; }
-static inline scalar_t sc_clamp(scalar_t x, scalar_t lo, scalar_t hi)
-{
-	return x < lo ? lo : (x > hi ? hi : x);
-}
+static inline scalar_t sc_clamp(scalar_t x, scalar_t lo, scalar_t hi) { return x < lo ? lo : (x > hi ? hi : x); }
 #endif
 /* a * b + c (always inline: a call around sc_mul and sc_add costs a call more) */
-static inline SC_ALWAYS_INLINE scalar_t sc_mac(scalar_t a, scalar_t b, scalar_t c)
-{
-	return sc_add(sc_mul(a, b), c);
-}
+static inline SC_ALWAYS_INLINE scalar_t sc_mac(scalar_t a, scalar_t b, scalar_t c) { return sc_add(sc_mul(a, b), c); }
 static inline scalar_t sc_sq(scalar_t a) { return sc_mul(a, a); }
 
 #endif /* OCTO_SCALAR_H */

@@ -46,14 +46,14 @@ static inline scalar_t sc_div_int(scalar_t a, uint32_t n)
 }
 
 struct sc_gain {
-	uint32_t y;   /* mantissa: g = y 2^-sh in Q16.16 units */
-	uint32_t sh;  /* in [1, 63] */
+	uint32_t y;  /* mantissa: g = y 2^-sh in Q16.16 units */
+	uint32_t sh; /* in [1, 63] */
 };
 
 /* 1 / (a b) for a, b > 0 (a b >= 2^-16 in real terms: a_raw b_raw >= 2^16) */
 static inline struct sc_gain sc_gain_recip2(scalar_t a, scalar_t b)
 {
-	struct sc_gain g = { 0u, 1u };
+	struct sc_gain g = {0u, 1u};
 	if (a <= 0 || b <= 0)
 		return g;
 	/* 1 / (a b) in raw units: g_raw = 2^32 / (a_raw b_raw) = 2^32 / P. With P << c in
@@ -61,11 +61,11 @@ static inline struct sc_gain sc_gain_recip2(scalar_t a, scalar_t b)
 	uint64_t p = q_umul32((uint32_t)a, (uint32_t)b);
 	int c = q_clz64(p);
 	if (c < 1)
-		c = 1;                  /* cannot happen: a, b < 2^31 */
+		c = 1; /* cannot happen: a, b < 2^31 */
 	uint32_t v = (uint32_t)((p << c) >> 32);
 	g.y = sc_recip_norm(v);
 	g.sh = (uint32_t)(63 - c);
-	if (g.sh == 0u) {           /* a b < 2^-15: g beyond the format anyway */
+	if (g.sh == 0u) { /* a b < 2^-15: g beyond the format anyway */
 		g.y >>= 1;
 		g.sh = 1u;
 	}
@@ -79,7 +79,7 @@ static inline scalar_t sc_mul_gain_ysh(scalar_t x, uint32_t y, uint32_t sh)
 	/* r = floor(p 2^(1 - sh)) = floor(2 x g), then (r + 1) / 2 rounded to nearest; in 32-bit
 	 * words (sc_umul32w): a variable 64-bit shift is a library call on Cortex-M0 */
 	uint32_t hi, lo, k = sh - 1u, rh, rl;
-	sc_umul32w(ux, y, &hi, &lo);                           /* p = x y < 2^64 */
+	sc_umul32w(ux, y, &hi, &lo); /* p = x y < 2^64 */
 	if (k >= 32u) {
 		rh = 0u;
 		rl = hi >> (k - 32u);
@@ -87,16 +87,13 @@ static inline scalar_t sc_mul_gain_ysh(scalar_t x, uint32_t y, uint32_t sh)
 		rh = hi >> k;
 		rl = k ? (lo >> k) | (hi << (32u - k)) : lo;
 	}
-	if (rh || rl == 0xffffffffu)                           /* (r + 1) / 2 > INT32_MAX */
+	if (rh || rl == 0xffffffffu) /* (r + 1) / 2 > INT32_MAX */
 		return x < 0 ? SC_MAX_NEG : SC_MAX;
-	uint32_t q = (rl >> 1) + (rl & 1u);                    /* (r + 1) / 2 */
+	uint32_t q = (rl >> 1) + (rl & 1u); /* (r + 1) / 2 */
 	return x < 0 ? -(scalar_t)q : (scalar_t)q;
 }
 
-static inline scalar_t sc_mul_gain(scalar_t x, const struct sc_gain *g)
-{
-	return sc_mul_gain_ysh(x, g->y, g->sh);
-}
+static inline scalar_t sc_mul_gain(scalar_t x, const struct sc_gain *g) { return sc_mul_gain_ysh(x, g->y, g->sh); }
 #else
 static inline void sc_sincos(scalar_t a, scalar_t *s, scalar_t *c)
 {
@@ -112,7 +109,7 @@ struct sc_gain {
 
 static inline struct sc_gain sc_gain_recip2(scalar_t a, scalar_t b)
 {
-	struct sc_gain g = { sc_div(SC(1), sc_mul(a, b)) };
+	struct sc_gain g = {sc_div(SC(1), sc_mul(a, b))};
 	return g;
 }
 

@@ -24,7 +24,7 @@
 #define THRMAP_CURVE_MAX 0.99f
 
 struct thrmap_params {
-	scalar_t k_f_n;  /* thrust at full throttle, N (> 0; smaller values are raised to 1e-3) */
+	scalar_t k_f_n; /* thrust at full throttle, N (> 0; smaller values are raised to 1e-3) */
 	scalar_t curve; /* a in [THRMAP_CURVE_MIN, THRMAP_CURVE_MAX] (clamped) */
 	/* per-rotor effectiveness (MOT_SCALEj): rotor j gives scale[j] times a nominal rotor's
 	 * thrust, so thrmap_update maps f_j / scale[j]; 0 (not given) is taken as 1, other
@@ -33,10 +33,10 @@ struct thrmap_params {
 };
 
 struct thrmap {
-	scalar_t k_f_n;       /* params' k_f_n and curve, clamped */
+	scalar_t k_f_n; /* params' k_f_n and curve, clamped */
 	scalar_t curve;
 	scalar_t one_minus_a; /* 1 - a */
-	/* 1 / (scale k_f) per rotor: thrmap_update's f -> u, one product (scalar_ops.h's
+			      /* 1 / (scale k_f) per rotor: thrmap_update's f -> u, one product (scalar_ops.h's
 	 * sc_gain; in the fixed build its mantissa and shift in two arrays, smaller than a
 	 * pair of words) */
 #if OCTO_FIXED

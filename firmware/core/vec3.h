@@ -16,7 +16,7 @@ struct vec3 {
 /* (x, y, z) */
 static inline struct vec3 vec3_make(scalar_t x, scalar_t y, scalar_t z)
 {
-	struct vec3 r = { x, y, z };
+	struct vec3 r = {x, y, z};
 	return r;
 }
 
@@ -56,8 +56,7 @@ static inline scalar_t vec3_dot(struct vec3 a, struct vec3 b)
 /* a x b */
 static inline struct vec3 vec3_cross(struct vec3 a, struct vec3 b)
 {
-	return vec3_make(sc_sub(sc_mul(a.y, b.z), sc_mul(a.z, b.y)),
-			 sc_sub(sc_mul(a.z, b.x), sc_mul(a.x, b.z)),
+	return vec3_make(sc_sub(sc_mul(a.y, b.z), sc_mul(a.z, b.y)), sc_sub(sc_mul(a.z, b.x), sc_mul(a.x, b.z)),
 			 sc_sub(sc_mul(a.x, b.y), sc_mul(a.y, b.x)));
 }
 

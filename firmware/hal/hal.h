@@ -40,16 +40,16 @@
 
 /* Bits of hal_sensor_frame.valid: which parts the plant delivered in this frame. */
 enum {
-	HAL_FRAME_TIME = 1u << 0,     /* plant time */
-	HAL_FRAME_RATES = 1u << 1,    /* body rates */
-	HAL_FRAME_ATT = 1u << 2,      /* attitude */
-	HAL_FRAME_POS = 1u << 3,      /* position and velocity */
-	HAL_FRAME_THRUST = 1u << 4,   /* measured rotor thrusts */
-	HAL_FRAME_TORQUE = 1u << 5,   /* measured rotor reaction torques */
-	HAL_FRAME_THR_CMD = 1u << 6,  /* echo of the throttle command */
-	HAL_FRAME_GLOBAL = 1u << 7,   /* geodetic position (latitude, longitude, altitude MSL) */
-	HAL_FRAME_ACCEL = 1u << 8,    /* specific force (accelerometer) */
-	HAL_FRAME_RPM = 1u << 9,      /* rotor speeds (ESC telemetry) */
+	HAL_FRAME_TIME = 1u << 0,    /* plant time */
+	HAL_FRAME_RATES = 1u << 1,   /* body rates */
+	HAL_FRAME_ATT = 1u << 2,     /* attitude */
+	HAL_FRAME_POS = 1u << 3,     /* position and velocity */
+	HAL_FRAME_THRUST = 1u << 4,  /* measured rotor thrusts */
+	HAL_FRAME_TORQUE = 1u << 5,  /* measured rotor reaction torques */
+	HAL_FRAME_THR_CMD = 1u << 6, /* echo of the throttle command */
+	HAL_FRAME_GLOBAL = 1u << 7,  /* geodetic position (latitude, longitude, altitude MSL) */
+	HAL_FRAME_ACCEL = 1u << 8,   /* specific force (accelerometer) */
+	HAL_FRAME_RPM = 1u << 9,     /* rotor speeds (ESC telemetry) */
 };
 #define HAL_FRAME_NEEDED (HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_POS)
 
@@ -60,39 +60,39 @@ struct hal_sensor_frame {
 	 * periods after the first frame's); both never run backwards, and a frame that brings
 	 * no new plant time (duplicate, older) keeps them. The app takes the frames since its
 	 * last step from frame_n and the frame period from differences of t_us (docs/time.md). */
-	uint64_t t_us;                       /* plant time, us */
-	uint64_t frame_n;                    /* plant frames since the first */
-	double t_s;                          /* t_us in seconds (logs, events, 1 s schedules) */
-	uint32_t seq;                        /* frames received so far (1 = first) */
-	uint32_t valid;                      /* HAL_FRAME_* bits */
-	float q_ib[4];                       /* attitude [w, x, y, z], body FLU in S_I (NWU) */
-	float rate_b_rps[3];                 /* omega_x, omega_y, omega_z about FLU, rad/s */
-	float pos_i_m[3];                    /* position in S_I (north, west, up), m */
-	float vel_i_mps[3];                  /* velocity in S_I, m/s */
-	float rotor_thrust_n[HAL_ROTORS];    /* measured thrust f_j, N */
-	float rotor_torque_nm[HAL_ROTORS];   /* measured reaction torque tau_j, N m */
-	float thr_cmd_echo[HAL_ROTORS];      /* throttle command as the plant saw it */
-	double lat_deg, lon_deg;             /* plant's geodetic position, WGS84 degrees */
-	float alt_msl_m;                     /* altitude above mean sea level, m */
-	float accel_b_g[3];                  /* specific force in FLU over the plant's gravity, g:
+	uint64_t t_us;                     /* plant time, us */
+	uint64_t frame_n;                  /* plant frames since the first */
+	double t_s;                        /* t_us in seconds (logs, events, 1 s schedules) */
+	uint32_t seq;                      /* frames received so far (1 = first) */
+	uint32_t valid;                    /* HAL_FRAME_* bits */
+	float q_ib[4];                     /* attitude [w, x, y, z], body FLU in S_I (NWU) */
+	float rate_b_rps[3];               /* omega_x, omega_y, omega_z about FLU, rad/s */
+	float pos_i_m[3];                  /* position in S_I (north, west, up), m */
+	float vel_i_mps[3];                /* velocity in S_I, m/s */
+	float rotor_thrust_n[HAL_ROTORS];  /* measured thrust f_j, N */
+	float rotor_torque_nm[HAL_ROTORS]; /* measured reaction torque tau_j, N m */
+	float thr_cmd_echo[HAL_ROTORS];    /* throttle command as the plant saw it */
+	double lat_deg, lon_deg;           /* plant's geodetic position, WGS84 degrees */
+	float alt_msl_m;                   /* altitude above mean sea level, m */
+	float accel_b_g[3];                /* specific force in FLU over the plant's gravity, g:
 	                                        (0, 0, +1) level at rest or in steady hover */
-	float rotor_speed_rps[HAL_ROTORS];   /* rotor speed, rad/s */
+	float rotor_speed_rps[HAL_ROTORS]; /* rotor speed, rad/s */
 };
 
 /* Health of the plant link, as the platform counts it. */
 struct hal_plant_stats {
-	uint32_t frames;          /* sensor frames accepted */
-	uint32_t dropped;         /* datagrams or messages dropped: malformed, foreign, unknown */
-	uint32_t foreign;         /* of which from a sender other than the configured plant */
-	uint32_t stale;           /* frames older than the newest (reordered, delayed) */
-	uint32_t parts_missing;   /* HAL_FRAME_* bits of wanted parts not seen yet */
+	uint32_t frames;        /* sensor frames accepted */
+	uint32_t dropped;       /* datagrams or messages dropped: malformed, foreign, unknown */
+	uint32_t foreign;       /* of which from a sender other than the configured plant */
+	uint32_t stale;         /* frames older than the newest (reordered, delayed) */
+	uint32_t parts_missing; /* HAL_FRAME_* bits of wanted parts not seen yet */
 };
 
-struct app_log_frame;   /* defined in app/log.h; the platform serialises it */
-struct app_id_result;   /* defined in app/id_result.h */
+struct app_log_frame; /* defined in app/log.h; the platform serialises it */
+struct app_id_result; /* defined in app/id_result.h */
 
 struct hal {
-	void *ctx;   /* the platform's own state, passed back to every function */
+	void *ctx; /* the platform's own state, passed back to every function */
 
 	/* ---- time */
 	/* Monotonic wall-clock time, microseconds (telemetry rates, link supervision). */
@@ -131,22 +131,13 @@ struct hal {
 /* Call sites read as before: hal_actuate(h, thr) instead of h->plant_actuate(h->ctx, thr). */
 static inline uint64_t hal_wall_us(const struct hal *h) { return h->wall_us(h->ctx); }
 static inline uint64_t hal_unix_us(const struct hal *h) { return h->unix_us(h->ctx); }
-static inline void hal_actuate(const struct hal *h, const float thr[HAL_ROTORS])
-{
-	h->plant_actuate(h->ctx, thr);
-}
-static inline void hal_plant_stats(const struct hal *h, struct hal_plant_stats *out)
-{
-	h->plant_stats(h->ctx, out);
-}
+static inline void hal_actuate(const struct hal *h, const float thr[HAL_ROTORS]) { h->plant_actuate(h->ctx, thr); }
+static inline void hal_plant_stats(const struct hal *h, struct hal_plant_stats *out) { h->plant_stats(h->ctx, out); }
 static inline void hal_ground_send(const struct hal *h, const uint8_t *buf, size_t len)
 {
 	h->ground_send(h->ctx, buf, len);
 }
-static inline bool hal_signing_key(const struct hal *h, uint8_t key[32])
-{
-	return h->ground_signing_key(h->ctx, key);
-}
+static inline bool hal_signing_key(const struct hal *h, uint8_t key[32]) { return h->ground_signing_key(h->ctx, key); }
 static inline int hal_param_store(const struct hal *h, const char *text, size_t len)
 {
 	return h->param_store(h->ctx, text, len);
@@ -155,10 +146,7 @@ static inline long hal_param_fetch(const struct hal *h, char *buf, size_t cap)
 {
 	return h->param_fetch(h->ctx, buf, cap);
 }
-static inline void hal_log_frame(const struct hal *h, const struct app_log_frame *f)
-{
-	h->log_frame(h->ctx, f);
-}
+static inline void hal_log_frame(const struct hal *h, const struct app_log_frame *f) { h->log_frame(h->ctx, f); }
 /* Sets a frame's time: plant frame n at t_us (t_s follows). */
 static inline void hal_frame_time(struct hal_sensor_frame *f, uint64_t frame_n, uint64_t t_us)
 {

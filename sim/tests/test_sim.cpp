@@ -26,15 +26,15 @@ using namespace sim;
 static int g_failed = 0, g_checks = 0;
 static const char *g_test = "";
 
-#define CHECK(cond, ...)                                                               \
-	do {                                                                           \
-		g_checks++;                                                            \
-		if (!(cond)) {                                                         \
-			g_failed++;                                                    \
+#define CHECK(cond, ...)                                                                         \
+	do {                                                                                     \
+		g_checks++;                                                                      \
+		if (!(cond)) {                                                                   \
+			g_failed++;                                                              \
 			std::printf("FAIL %s (%s:%d): %s: ", g_test, __FILE__, __LINE__, #cond); \
-			std::printf(__VA_ARGS__);                                      \
-			std::printf("\n");                                             \
-		}                                                                      \
+			std::printf(__VA_ARGS__);                                                \
+			std::printf("\n");                                                       \
+		}                                                                                \
 	} while (0)
 
 struct TestCase {
@@ -49,9 +49,9 @@ static std::vector<TestCase> &registry()
 struct Reg {
 	Reg(const char *n, std::function<void()> f) { registry().push_back({n, f}); }
 };
-#define TEST(name)                                  \
-	static void name();                         \
-	static Reg reg_##name(#name, name);         \
+#define TEST(name)                          \
+	static void name();                 \
+	static Reg reg_##name(#name, name); \
 	static void name()
 
 static VehicleParams ideal()
@@ -142,8 +142,8 @@ TEST(crash_tilted_or_fast_contact_stays_down)
 	const struct {
 		double tilt_deg, vz;
 		bool crash;
-	} cases[] = {{80.0, -1.0, true}, {65.0, -0.5, true}, {30.0, -1.0, false}, {0.0, -12.0, true},
-		     {0.0, -3.0, false}};
+	} cases[] = {
+		{80.0, -1.0, true}, {65.0, -0.5, true}, {30.0, -1.0, false}, {0.0, -12.0, true}, {0.0, -3.0, false}};
 	for (const auto &c : cases) {
 		Model m(p);
 		BodyState x;
@@ -221,7 +221,7 @@ TEST(rk4_order_error_ratio_16)
 		m.advance_to(2.0);
 		Eigen::Matrix<double, 13, 1> v;
 		v << m.state().r, m.state().v, m.state().q.w(), m.state().q.x(), m.state().q.y(), m.state().q.z(),
-		    m.state().w;
+			m.state().w;
 		return v;
 	};
 	const auto ref = run(0.02 / 64);
@@ -254,7 +254,8 @@ TEST(geometry_matches_gamma_o)
 			want[i] += G[i][j] * p.kf * s[j];
 	CHECK(std::fabs(o.force - want[0]) < 1e-12, "f %g vs %g", o.force, want[0]);
 	for (int i = 0; i < 3; i++)
-		CHECK(std::fabs(o.torque_b(i) - want[i + 1]) < 1e-12, "tau[%d] %g vs %g", i, o.torque_b(i), want[i + 1]);
+		CHECK(std::fabs(o.torque_b(i) - want[i + 1]) < 1e-12, "tau[%d] %g vs %g", i, o.torque_b(i),
+		      want[i + 1]);
 }
 
 // ------------------------------------------------------------------ actuator
@@ -304,7 +305,7 @@ TEST(rotor_failure_cuts_thrust_torque_and_speed)
 	VehicleParams p = ideal();
 	p.rotor_failures.push_back(RotorFailure{2, 0.5, 0.25});
 	Model m(p);
-	m.set_clock_start(0.25);   // the failure is due at plant time 0.5: model time 0.25
+	m.set_clock_start(0.25); // the failure is due at plant time 0.5: model time 0.25
 	BodyState x;
 	x.r.z() = 10.0;
 	x.s = all(0.3);
@@ -346,7 +347,7 @@ TEST(fail_rotor_flag_and_key)
 	CHECK(parse({"--fail-rotor", "3@12.5", "--fail-rotor", "8@20:0.4"}, o) == -1, "parsed");
 	const auto &f = o.vehicle.rotor_failures;
 	CHECK(f.size() == 2 && f[0].rotor == 2 && f[0].at_s == 12.5 && f[0].scale == 0 && f[1].rotor == 7 &&
-	          f[1].at_s == 20 && f[1].scale == 0.4,
+		      f[1].at_s == 20 && f[1].scale == 0.4,
 	      "values");
 	for (const char *bad : {"0@1", "9@1", "x@1", "3", "3@", "3@-1", "3@1:1.5", "3@1:-0.1", "3@1:", "3@nan"}) {
 		Options q;
@@ -355,13 +356,15 @@ TEST(fail_rotor_flag_and_key)
 	}
 	VehicleParams p;
 	vehicle_from_json(R"({"rotor_failure": {"rotor": 4, "at_s": 3, "scale": 0.2}})", p);
-	CHECK(p.rotor_failures.size() == 1 && p.rotor_failures[0].rotor == 3 && p.rotor_failures[0].scale == 0.2, "key");
+	CHECK(p.rotor_failures.size() == 1 && p.rotor_failures[0].rotor == 3 && p.rotor_failures[0].scale == 0.2,
+	      "key");
 	vehicle_from_json(R"({"rotor_failure": [{"rotor": 1, "at_s": 3}, {"rotor": 2, "at_s": 4, "scale": 1}]})", p);
 	CHECK(p.rotor_failures.size() == 2 && p.rotor_failures[0].scale == 0 && p.rotor_failures[1].rotor == 1, "list");
-	for (const char *bad : {R"({"rotor_failure": {"rotor": 9, "at_s": 1}})", R"({"rotor_failure": {"rotor": 1.5, "at_s": 1}})",
-	                        R"({"rotor_failure": {"at_s": 1}})", R"({"rotor_failure": {"rotor": 1}})",
-	                        R"({"rotor_failure": {"rotor": 1, "at_s": 1, "scale": 2}})",
-	                        R"({"rotor_failure": {"rotor": 1, "at_s": 1, "x": 2}})", R"({"rotor_failure": 3})"}) {
+	for (const char *bad :
+	     {R"({"rotor_failure": {"rotor": 9, "at_s": 1}})", R"({"rotor_failure": {"rotor": 1.5, "at_s": 1}})",
+	      R"({"rotor_failure": {"at_s": 1}})", R"({"rotor_failure": {"rotor": 1}})",
+	      R"({"rotor_failure": {"rotor": 1, "at_s": 1, "scale": 2}})",
+	      R"({"rotor_failure": {"rotor": 1, "at_s": 1, "x": 2}})", R"({"rotor_failure": 3})"}) {
 		std::string key;
 		try {
 			VehicleParams q;
@@ -449,7 +452,7 @@ TEST(noise_depends_on_seed_and_frame_only)
 // is the float32 of S + n / rate, and the crash time is on the clock.
 TEST(start_time_moves_the_clock_not_the_dynamics)
 {
-	VehicleParams p;   // default noise
+	VehicleParams p; // default noise
 	for (double S : {40000.0, 1e6}) {
 		Model a(p), b(p);
 		b.set_clock_start(S);
@@ -460,7 +463,8 @@ TEST(start_time_moves_the_clock_not_the_dynamics)
 			b.advance_to(n / 90.0);
 		}
 		CHECK(a.state().r == b.state().r && a.state().q.coeffs() == b.state().q.coeffs() &&
-		      a.state().w == b.state().w, "S = %g: another state", S);
+			      a.state().w == b.state().w,
+		      "S = %g: another state", S);
 		CHECK(b.t() == a.t() && b.clock() == S + a.t(), "S = %g: t %.17g clock %.17g", S, b.t(), b.clock());
 		XpFrame fa = xp_measure(a, all(0.7), 5, 450), fb = xp_measure(b, all(0.7), 5, 450);
 		CHECK(fa.P == fb.P && fa.thrust_n[3] == fb.thrust_n[3], "S = %g: other noise", S);
@@ -479,7 +483,7 @@ TEST(measure_into_a_used_frame_writes_every_field)
 	m.advance_to(0.5);
 	static_assert(std::is_trivially_copyable<XpFrame>::value, "compared as bytes");
 	XpFrame used, fresh = xp_measure(m, all(0.7), 3, 45);
-	std::memset(static_cast<void *>(&used), 0x5a, sizeof used);   // all doubles: no padding
+	std::memset(static_cast<void *>(&used), 0x5a, sizeof used); // all doubles: no padding
 	xp_measure(m, all(0.7), 3, 45, used);
 	CHECK(std::memcmp(&used, &fresh, sizeof used) == 0, "a field keeps the value it had");
 }
@@ -490,9 +494,9 @@ TEST(data_out_vector_rows_16_17)
 {
 	xp::DataRow a{16, {1.5f, -2.25f, 10.0f, xp::kNoData, xp::kNoData, xp::kNoData, xp::kNoData, xp::kNoData}};
 	xp::DataRow b{17, {2.0f, -4.5f, 237.75f, 259.25f, xp::kNoData, xp::kNoData, xp::kNoData, xp::kNoData}};
-	const std::string want =
-	    "444154412a100000000000c03f000010c00000204100c079c400c079c400c079c400c079c400c079c4"
-	    "110000000000004000009" "0c000c06d4300a0814300c079c400c079c400c079c400c079c4";
+	const std::string want = "444154412a100000000000c03f000010c00000204100c079c400c079c400c079c400c079c400c079c4"
+				 "110000000000004000009"
+				 "0c000c06d4300a0814300c079c400c079c400c079c400c079c4";
 	xp::Bytes d = xp::encode_data({a, b});
 	CHECK(d.size() == 77, "size %zu", d.size());
 	CHECK(hex(d) == want, "%s", hex(d).c_str());
@@ -502,7 +506,7 @@ TEST(data_row25_vector_bytes)
 {
 	xp::DataRow r{25, {0, .125f, .25f, .375f, .5f, .625f, .75f, 1.0f}};
 	CHECK(hex(xp::encode_data({r}, 0)) ==
-	          "444154410019000000000000000000003e0000803e0000c03e0000003f0000203f0000403f0000803f",
+		      "444154410019000000000000000000003e0000803e0000c03e0000003f0000203f0000403f0000803f",
 	      "%s", hex(xp::encode_data({r}, 0)).c_str());
 }
 
@@ -511,9 +515,8 @@ TEST(rref_reply_vectors)
 	auto one = xp::encode_rref_replies({{7, 0.25f}});
 	CHECK(one.size() == 1 && hex(one[0]) == "525245462c070000000000803e", "%s", hex(one[0]).c_str());
 	auto three = xp::encode_rref_replies({{1, 120100.0f}, {7, 0.25f}, {8, -1.5f}});
-	CHECK(three.size() == 1 &&
-	          hex(three[0]) == "525245462c010000000092ea47070000000000803e080000000000c0bf",
-	      "%s", hex(three[0]).c_str());
+	CHECK(three.size() == 1 && hex(three[0]) == "525245462c010000000092ea47070000000000803e080000000000c0bf", "%s",
+	      hex(three[0]).c_str());
 	std::vector<std::pair<int32_t, float>> many;
 	for (int i = 0; i < 400; i++)
 		many.push_back({i, static_cast<float>(i)});
@@ -533,7 +536,7 @@ TEST(path_fields_and_indices)
 	int i;
 	CHECK(xp::split_index("x/ENGN_thro_use[7]", base, i) && base == "x/ENGN_thro_use" && i == 7, "index");
 	CHECK(!xp::split_index("x[]", base, i) && !xp::split_index("x[a]", base, i) &&
-	          !xp::split_index("x[99999]", base, i) && !xp::split_index("x]", base, i),
+		      !xp::split_index("x[99999]", base, i) && !xp::split_index("x]", base, i),
 	      "malformed subscripts");
 }
 
@@ -567,18 +570,19 @@ TEST(path_field_every_byte_everywhere)
 			wrong++;
 	};
 	for (size_t n = 1; n <= 40; n++)
-		for (size_t nul = 0; nul <= n; nul++)   // nul == n: no NUL in the field
+		for (size_t nul = 0; nul <= n; nul++) // nul == n: no NUL in the field
 			for (size_t at = 0; at < n; at++)
 				for (int v = 0; v < 256; v++) {
 					uint8_t f[48];
 					std::memset(f, 'a', sizeof f);
 					for (size_t k = nul + 1; k < n; k++)
-						f[k] = static_cast<uint8_t>(0xff - k);   // after the NUL: anything
+						f[k] = static_cast<uint8_t>(0xff - k); // after the NUL: anything
 					if (nul < n)
 						f[nul] = 0;
 					f[at] = static_cast<uint8_t>(v);
 					if (at > 0)
-						f[at - 1] = (v & 1) ? 0x7e : 0x21;   // neighbours at both edges of the range
+						f[at - 1] =
+							(v & 1) ? 0x7e : 0x21; // neighbours at both edges of the range
 					check(f, n);
 				}
 	Rng r(5, Stream::Noise, 0);
@@ -603,7 +607,7 @@ TEST(json_reader)
 	CHECK(v.obj[0].second.arr[1].num == -25.0, "number");
 	CHECK(v.obj[1].second.obj[0].second.str == "x\xc3\xa9\n", "string escapes");
 	CHECK(std::isinf(json::parse("Infinity").num) && std::isnan(json::parse("NaN").num) &&
-	          json::parse("-Infinity").num < 0,
+		      json::parse("-Infinity").num < 0,
 	      "non-finite numbers as Python writes them");
 	const char *bad[] = {"", "{", "{\"a\":}", "[1,]", "01", "{\"a\":1,\"a\":2}", "\"abc", "nul", "[1] x", "1e999"};
 	for (const char *b : bad) {
@@ -629,18 +633,25 @@ TEST(vehicle_keys)
 {
 	VehicleParams p;
 	vehicle_from_json(R"({"mass": 3, "inertia": [0.1, 0.2, 0.3], "noise": {"gyro": 0.01},
-	                      "rotor_scale": [1,1,1,1,1,1,1,0], "origin": [10, 20, 30]})", p);
+	                      "rotor_scale": [1,1,1,1,1,1,1,0], "origin": [10, 20, 30]})",
+			  p);
 	CHECK(p.mass == 3 && p.inertia[2] == 0.3 && p.noise.gyro == 0.01 && p.rotor_scale[7] == 0, "applied");
 	CHECK(p.kf == 28.0269, "absent keys keep defaults");
 	struct {
 		const char *text, *key;
 	} bad[] = {
-		{R"({"mass": 0})", "mass"},           {R"({"mass": -2})", "mass"},
-		{R"({"inertia": [1, 0, 1]})", "inertia"}, {R"({"inertia": [1, 1]})", "inertia"},
-		{R"({"bogus": 1})", "bogus"},         {R"({"noise": {"gyr": 1}})", "noise.gyr"},
-		{R"({"kf": "x"})", "kf"},             {R"({"thrust_curve": 2})", "thrust_curve"},
-		{R"({"rotor_scale": [1]})", "rotor_scale"}, {R"({"motor_tau": -1})", "motor_tau"},
-		{R"({"g": NaN})", "g"},               {R"({"inertia": [1, Infinity, 1]})", "inertia"},
+		{R"({"mass": 0})", "mass"},
+		{R"({"mass": -2})", "mass"},
+		{R"({"inertia": [1, 0, 1]})", "inertia"},
+		{R"({"inertia": [1, 1]})", "inertia"},
+		{R"({"bogus": 1})", "bogus"},
+		{R"({"noise": {"gyr": 1}})", "noise.gyr"},
+		{R"({"kf": "x"})", "kf"},
+		{R"({"thrust_curve": 2})", "thrust_curve"},
+		{R"({"rotor_scale": [1]})", "rotor_scale"},
+		{R"({"motor_tau": -1})", "motor_tau"},
+		{R"({"g": NaN})", "g"},
+		{R"({"inertia": [1, Infinity, 1]})", "inertia"},
 		{R"({"noise": {"gyro": -Infinity}})", "noise.gyro"},
 	};
 	for (const auto &b : bad) {
@@ -671,15 +682,22 @@ TEST(fuzz_json_and_vehicle_never_crash)
 			const char c = alphabet[r.next() % alphabet.size()];
 			switch (r.next() % 3) {
 			case 0: t.insert(pos, 1, c); break;
-			case 1: if (pos < t.size()) t.erase(pos, 1); break;
-			default: if (pos < t.size()) t[pos] = c; break;
+			case 1:
+				if (pos < t.size())
+					t.erase(pos, 1);
+				break;
+			default:
+				if (pos < t.size())
+					t[pos] = c;
+				break;
 			}
 		}
 		try {
 			VehicleParams p;
 			vehicle_from_json(t, p);
 			parsed++;
-			if (!(p.mass > 0 && p.inertia[0] > 0 && p.inertia[1] > 0 && p.inertia[2] > 0 && std::isfinite(p.g)))
+			if (!(p.mass > 0 && p.inertia[0] > 0 && p.inertia[1] > 0 && p.inertia[2] > 0 &&
+			      std::isfinite(p.g)))
 				CHECK(false, "accepted an impossible vehicle: %s", t.c_str());
 		} catch (const VehicleError &) {
 		}
@@ -712,26 +730,27 @@ TEST(dref_throttle_by_bytes_as_in_full)
 			std::snprintf(p1, sizeof p1, "sim/flightmodel/engine/ENGN_thro_use[%d]", d);
 			std::snprintf(p2, sizeof p2, "sim/flightmodel/engine/ENGN_thro_use[0%d]", d);
 			auto x = dref_bytes(v, p1, std::strlen(p1)), y = dref_bytes(v, p2, std::strlen(p2));
-			x[9 + std::strlen(p1) + 1] = 'z';   // after the NUL: not part of the path
+			x[9 + std::strlen(p1) + 1] = 'z'; // after the NUL: not part of the path
 			a.handle(x.data(), x.size(), from);
 			b.handle(y.data(), y.size(), from);
-			if (a.thro_use != b.thro_use || a.cmd_mask != b.cmd_mask || std::memcmp(ca.v, cb.v, sizeof ca.v))
+			if (a.thro_use != b.thro_use || a.cmd_mask != b.cmd_mask ||
+			    std::memcmp(ca.v, cb.v, sizeof ca.v))
 				differ++;
 		}
 	CHECK(differ == 0, "%d of 70 throttle DREFs decoded otherwise", differ);
 	struct {
 		const char *path;
 		size_t len;
-		Counters::Id counter;   // Count: a throttle written
+		Counters::Id counter; // Count: a throttle written
 	} near[] = {
-	    {"sim/flightmodel/engine/ENGN_thro_use[7]x", 40, Counters::RxIgnoredDref},
-	    {"sim/flightmodel/engine/ENGN_thro_use[7] ", 40, Counters::RxUnterminated},
-	    {"sim/flightmodel/engine/ENGN_thro_use[a]", 39, Counters::RxIgnoredDref},
-	    {"sim/flightmodel/engine/ENGN_thro_use[7", 38, Counters::RxIgnoredDref},
-	    {"sim/flightmodel/engine/ENGN_thro_use[]", 38, Counters::RxIgnoredDref},
-	    {"sim/flightmodel/engine/ENGN_thro_use[15]", 40, Counters::Count},
-	    {"sim/flightmodel/engine/ENGN_thro_use[16]", 40, Counters::RxIgnoredDref},
-	    {"sim/flightmodel/engine/ENGN_thro[7]", 35, Counters::Count},
+		{"sim/flightmodel/engine/ENGN_thro_use[7]x", 40, Counters::RxIgnoredDref},
+		{"sim/flightmodel/engine/ENGN_thro_use[7] ", 40, Counters::RxUnterminated},
+		{"sim/flightmodel/engine/ENGN_thro_use[a]", 39, Counters::RxIgnoredDref},
+		{"sim/flightmodel/engine/ENGN_thro_use[7", 38, Counters::RxIgnoredDref},
+		{"sim/flightmodel/engine/ENGN_thro_use[]", 38, Counters::RxIgnoredDref},
+		{"sim/flightmodel/engine/ENGN_thro_use[15]", 40, Counters::Count},
+		{"sim/flightmodel/engine/ENGN_thro_use[16]", 40, Counters::RxIgnoredDref},
+		{"sim/flightmodel/engine/ENGN_thro[7]", 35, Counters::Count},
 	};
 	for (const auto &n : near) {
 		Counters c;
@@ -741,7 +760,7 @@ TEST(dref_throttle_by_bytes_as_in_full)
 		in.handle(x.data(), x.size(), from);
 		const bool wrote = in.thro_use[7] == 0.25f || in.thro_use[15] == 0.25f || in.thro[7] == 0.25f;
 		const bool ok = n.counter == Counters::Count ? wrote && c[Counters::RxIgnoredDref] == 0
-		                                             : !wrote && c[n.counter] == 1;
+							     : !wrote && c[n.counter] == 1;
 		CHECK(ok, "%s", n.path);
 	}
 }
@@ -765,13 +784,13 @@ TEST(fuzz_xplane_input_never_crashes)
 			std::memcpy(b.data(), tags[r.next() % 8], 4);
 		in.handle(b.data(), b.size(), from);
 		for (size_t j = 0; j < 16; j++)
-			in_range = in_range && in.thro[j] >= 0 && in.thro[j] <= 1 && in.thro_use[j] >= 0 && in.thro_use[j] <= 1;
+			in_range = in_range && in.thro[j] >= 0 && in.thro[j] <= 1 && in.thro_use[j] >= 0 &&
+				   in.thro_use[j] <= 1;
 	}
 	CHECK(in_range, "throttles stay in [0, 1]");
 	CHECK(c[Counters::RxDatagrams] == 50000, "all counted");
 	CHECK(in.subs.size() <= XpInput::kMaxSubs, "subscriptions bounded");
 }
-
 
 // ------------------------------------------------------------------ sensors (docs/sensors.md)
 
@@ -779,15 +798,12 @@ TEST(fuzz_xplane_input_never_crashes)
 static VehicleParams quiet()
 {
 	VehicleParams p = ideal();
-	p.vibration.sample_hz = 1800.0;   // a multiple of 90 Hz: the read falls on a sample
+	p.vibration.sample_hz = 1800.0; // a multiple of 90 Hz: the read falls on a sample
 	return p;
 }
 
 // Specific force over g in the body, from the three load factors (FLU).
-static Eigen::Vector3d sf_g(const XpFrame &f)
-{
-	return Eigen::Vector3d(f.g_axil, -f.g_side, f.g_nrml);
-}
+static Eigen::Vector3d sf_g(const XpFrame &f) { return Eigen::Vector3d(f.g_axil, -f.g_side, f.g_nrml); }
 
 TEST(imu_static_reads_plus_one_g_up)
 {
@@ -817,7 +833,7 @@ TEST(imu_static_reads_plus_one_g_up)
 	// the model's only force is the thrust along +Z_B: a forward or sideways specific force
 	// (here a bias) maps to g axial forward-positive and g side right-positive
 	Sensors sn(p, 1, 90.0);
-	sn.bias_a = Eigen::Vector3d(0.1 * p.g, 0.2 * p.g, 0);   // forward, left (FLU)
+	sn.bias_a = Eigen::Vector3d(0.1 * p.g, 0.2 * p.g, 0); // forward, left (FLU)
 	xp_measure(m, all(0), 1, 0, sn, f);
 	CHECK(std::fabs(f.g_axil - 0.1) < 1e-12 && std::fabs(f.g_side + 0.2) < 1e-12, "axial %g side %g", f.g_axil,
 	      f.g_side);
@@ -861,7 +877,7 @@ TEST(imu_keeps_the_noise_stream)
 	const double want_p = s.gyro(m.state().w).x() + p.noise.gyro * r.gauss();
 	CHECK(f.P == want_p, "P %.17g, want %.17g", f.P, want_p);
 	for (int i = 0; i < 8; i++)
-		r.gauss();   // Q, R, attitude, position
+		r.gauss(); // Q, R, attitude, position
 	const RotorOutputs o = m.rotor_outputs(m.state(), m.t());
 	CHECK(f.thrust_n[0] == o.thrust[0] + p.sigma_thrust() * r.gauss(), "thrust noise is the same draw");
 	// deterministic from the seed
@@ -876,7 +892,7 @@ TEST(imu_bias_scale_and_walk)
 	p.imu_scale = 0.01;
 	const int M = 1000;
 	double b2 = 0, s2 = 0, w90 = 0, w360 = 0, g360 = 0;
-	Model m(p);   // at rest: the walk does not depend on the motion
+	Model m(p); // at rest: the walk does not depend on the motion
 	for (int seed = 1; seed <= M; seed++) {
 		Sensors s(p, static_cast<uint64_t>(seed), 90.0);
 		b2 += s.bias_a.squaredNorm() / 3;
@@ -918,17 +934,17 @@ static double amplitude(const std::vector<double> &x, double f, double fs)
 // One rotor spinning at rotor_hz; the x vibration of the accelerometer read at 90 Hz.
 static std::vector<double> vibration_read(VehicleParams p, double rotor_hz, size_t frames)
 {
-	Model m(p);   // the body's motion plays no part: only the rotor speed does
+	Model m(p); // the body's motion plays no part: only the rotor speed does
 	Sensors s(p, 4, 90.0);
 	const double rev_per_s = p.rpm_max / 60.0;
 	RotorArray u = all(0);
-	u[0] = (rotor_hz / rev_per_s) * (rotor_hz / rev_per_s);   // g(s) = s: speed ~ sqrt(s)
+	u[0] = (rotor_hz / rev_per_s) * (rotor_hz / rev_per_s); // g(s) = s: speed ~ sqrt(s)
 	m.command(u);
 	std::vector<double> x;
 	for (uint64_t n = 1; n <= frames + 90; n++) {
 		m.advance_to(static_cast<double>(n) / 90.0);
 		s.advance(m, n);
-		if (n > 90)   // after the filter's start
+		if (n > 90) // after the filter's start
 			x.push_back(s.vib_a.x());
 	}
 	return x;
@@ -941,7 +957,7 @@ TEST(vibration_aliases_at_the_frame_rate_through_the_filter)
 	p.vibration.harmonics = {{1.0, 0.0, 0.0, 0.0}};
 	const double f_rot = 70.0, fs = p.vibration.sample_hz;
 	const double hover_hz = hover_rotor_speed(p) / (2 * M_PI);
-	const double a_rot = 1.0 * (f_rot / hover_hz) * (f_rot / hover_hz);   // ~ speed^2
+	const double a_rot = 1.0 * (f_rot / hover_hz) * (f_rot / hover_hz); // ~ speed^2
 	Biquad lp;
 	lp.design(p.vibration.cutoff_hz, fs);
 	const std::vector<double> x = vibration_read(p, f_rot, 900);
@@ -1008,7 +1024,8 @@ TEST(rpm_follows_the_lagged_throttle_and_dshot_quantises)
 		const double step = static_cast<double>(1 << e);
 		// the reported period is a whole multiple of the step, within half a step (+ rounding to us)
 		const double mult = period / step;
-		CHECK(std::fabs(mult - std::round(mult)) < 1e-6 && std::fabs(period - true_period) <= step / 2 + 0.5 + 1e-9,
+		CHECK(std::fabs(mult - std::round(mult)) < 1e-6 &&
+			      std::fabs(period - true_period) <= step / 2 + 0.5 + 1e-9,
 		      "rpm %g: period %g, true %g, step %g", r, period, true_period, step);
 		if (q != last)
 			steps++;
@@ -1066,28 +1083,33 @@ TEST(sensors_served_and_ideal)
 	CHECK(!sensors_parse("imu,gps", b, bad) && bad == "gps", "unknown");
 	CHECK(!sensors_parse("", b, bad), "empty");
 	CHECK(xp_row_served(4, kSensorImu) && xp_row_served(16, kSensorImu) && !xp_row_served(35, kSensorImu) &&
-	      !xp_row_served(36, kSensorImu) && !xp_row_served(37, kSensorImu) && !xp_row_served(38, kSensorImu) &&
-	      xp_row_served(17, kSensorImu), "imu rows");
+		      !xp_row_served(36, kSensorImu) && !xp_row_served(37, kSensorImu) &&
+		      !xp_row_served(38, kSensorImu) && xp_row_served(17, kSensorImu),
+	      "imu rows");
 	CHECK(!xp_row_served(16, kSensorThrust) && xp_row_served(35, kSensorThrust), "thrust rows");
 	CHECK(!xp_dataref_served("sim/flightmodel/position/Prad", kSensorRpm) &&
-	      xp_dataref_served("sim/flightmodel/engine/POINT_tacrad[3]", kSensorRpm) &&
-	      !xp_dataref_served("sim/flightmodel/engine/ENGN_TRQ[0]", kSensorRpm) &&
-	      xp_dataref_served("sim/flightmodel/position/theta", 0), "datarefs");
+		      xp_dataref_served("sim/flightmodel/engine/POINT_tacrad[3]", kSensorRpm) &&
+		      !xp_dataref_served("sim/flightmodel/engine/ENGN_TRQ[0]", kSensorRpm) &&
+		      xp_dataref_served("sim/flightmodel/position/theta", 0),
+	      "datarefs");
 	VehicleParams p;
 	vehicle_from_json(R"({"sensors": ["imu", "rpm"], "noise": {"accel": 0.1, "rpm": 3, "current": 0.2},
 	                      "imu_bias": {"gyro_walk": 0.01}, "imu_scale": 0.02, "esc_current_offset": -0.1,
 	                      "vibration": {"accel": 2, "harmonics": [1, 0.5], "cutoff_hz": 40, "sample_hz": 8000}})",
-	                  p);
+			  p);
 	CHECK(p.sensors == (kSensorImu | kSensorRpm) && p.noise.accel == 0.1 && p.noise.rpm == 3 &&
-	      p.imu_bias.gyro_walk == 0.01 && p.imu_bias.accel == 0.05 && p.vibration.harmonics[1] == 0.5 &&
-	      p.vibration.harmonics[2] == 0 && p.vibration.sample_hz == 8000 && p.esc_current_offset == -0.1,
+		      p.imu_bias.gyro_walk == 0.01 && p.imu_bias.accel == 0.05 && p.vibration.harmonics[1] == 0.5 &&
+		      p.vibration.harmonics[2] == 0 && p.vibration.sample_hz == 8000 && p.esc_current_offset == -0.1,
 	      "sensor keys applied");
 	const char *badkeys[][2] = {
-		{R"({"sensors": ["imu", "sonar"]})", "sensors"}, {R"({"sensors": []})", "sensors"},
-		{R"({"imu_bias": {"accel": -1}})", "imu_bias.accel"}, {R"({"imu_bias": {"x": 1}})", "imu_bias.x"},
+		{R"({"sensors": ["imu", "sonar"]})", "sensors"},
+		{R"({"sensors": []})", "sensors"},
+		{R"({"imu_bias": {"accel": -1}})", "imu_bias.accel"},
+		{R"({"imu_bias": {"x": 1}})", "imu_bias.x"},
 		{R"({"vibration": {"cutoff_hz": 600}})", "vibration.cutoff_hz"},
 		{R"({"vibration": {"harmonics": [1, 1, 1, 1, 1]}})", "vibration.harmonics"},
-		{R"({"noise": {"rpm": -1}})", "noise.rpm"}, {R"({"esc_pole_pairs": 6.5})", "esc_pole_pairs"},
+		{R"({"noise": {"rpm": -1}})", "noise.rpm"},
+		{R"({"esc_pole_pairs": 6.5})", "esc_pole_pairs"},
 		{R"({"imu_scale": 1})", "imu_scale"},
 	};
 	for (const auto &k : badkeys) {
@@ -1103,7 +1125,7 @@ TEST(sensors_served_and_ideal)
 	// --ideal: every sensor term zero (the rpm keeps DShot's resolution)
 	VehicleParams q;
 	q.make_ideal();
-	Model m(q);   // lifts off: the thrust exceeds the weight
+	Model m(q); // lifts off: the thrust exceeds the weight
 	m.command(all(0.5));
 	Sensors s(q, 3, 90.0);
 	for (uint64_t n = 1; n <= 45; n++) {
@@ -1114,8 +1136,8 @@ TEST(sensors_served_and_ideal)
 	xp_measure(m, all(0.5), 3, 45, s, f);
 	const RotorOutputs o = m.rotor_outputs(m.state(), m.t());
 	CHECK(std::fabs(f.g_nrml - o.force / q.mass / q.g) < 1e-12 && std::fabs(f.g_axil) < 1e-12 &&
-	      std::fabs(f.g_side) < 1e-12, "ideal accel %.17g %.17g %g %g", f.g_nrml, o.force / q.mass / q.g, f.g_axil,
-	      f.g_side);
+		      std::fabs(f.g_side) < 1e-12,
+	      "ideal accel %.17g %.17g %g %g", f.g_nrml, o.force / q.mass / q.g, f.g_axil, f.g_side);
 	CHECK(f.P == m.state().w.x() && f.torque_nm[2] == f.torque_abs_nm[2] && f.thrust_n[2] == o.thrust[2],
 	      "ideal gyro, torque, thrust");
 	CHECK(f.rpm[2] == dshot_rpm(f.rpm_true[2], q.esc_pole_pairs), "ideal rpm: DShot's resolution only");
@@ -1173,7 +1195,7 @@ TEST(stuck_rpm_freezes_one_report)
 	double frozen = -1, first_rpm0 = -1;
 	bool held = true, before_free = true;
 	for (uint64_t n = 1; n <= 180; n++) {
-		const double u = 0.2 + 0.5 * static_cast<double>(n) / 180.0;   // a throttle ramp
+		const double u = 0.2 + 0.5 * static_cast<double>(n) / 180.0; // a throttle ramp
 		m.command(all(u));
 		m.advance_to(static_cast<double>(n) / 90.0);
 		s.advance(m, n);
@@ -1209,17 +1231,27 @@ TEST(imu_spike_and_stuck_rpm_flags_and_keys)
 	};
 	Options o;
 	CHECK(parse({"--imu-spike", "0.02", "--imu-spike-gyro", "3", "--imu-spike-accel", "20", "--stuck-rpm", "2@4.5",
-	             "--stuck-rpm", "8@0"}, o) == -1, "parsed");
+		     "--stuck-rpm", "8@0"},
+		    o) == -1,
+	      "parsed");
 	const auto &v = o.vehicle;
 	CHECK(v.imu_spike.prob == 0.02 && v.imu_spike.gyro == 3 && v.imu_spike.accel == 20, "spike values");
 	CHECK(v.stuck_rpm.size() == 2 && v.stuck_rpm[0].rotor == 1 && v.stuck_rpm[0].at_s == 4.5 &&
-	          v.stuck_rpm[1].rotor == 7 && v.stuck_rpm[1].at_s == 0, "stuck values");
+		      v.stuck_rpm[1].rotor == 7 && v.stuck_rpm[1].at_s == 0,
+	      "stuck values");
 	Options d;
 	CHECK(parse({}, d) == -1 && d.vehicle.imu_spike.prob == 0 && d.vehicle.stuck_rpm.empty(), "off by default");
-	for (auto bad : std::vector<std::vector<std::string>>{
-	         {"--imu-spike", "1.5"}, {"--imu-spike", "-0.1"}, {"--imu-spike", "x"}, {"--imu-spike-gyro", "0"},
-	         {"--imu-spike-accel", "-3"}, {"--stuck-rpm", "0@1"}, {"--stuck-rpm", "9@1"}, {"--stuck-rpm", "3"},
-	         {"--stuck-rpm", "3@-1"}, {"--stuck-rpm", "3@nan"}, {"--stuck-rpm", "3@1:0.5"}}) {
+	for (auto bad : std::vector<std::vector<std::string>>{{"--imu-spike", "1.5"},
+							      {"--imu-spike", "-0.1"},
+							      {"--imu-spike", "x"},
+							      {"--imu-spike-gyro", "0"},
+							      {"--imu-spike-accel", "-3"},
+							      {"--stuck-rpm", "0@1"},
+							      {"--stuck-rpm", "9@1"},
+							      {"--stuck-rpm", "3"},
+							      {"--stuck-rpm", "3@-1"},
+							      {"--stuck-rpm", "3@nan"},
+							      {"--stuck-rpm", "3@1:0.5"}}) {
 		Options q;
 		std::fprintf(stderr, "  (expected) ");
 		CHECK(parse(bad, q) == 2, "%s %s accepted", bad[0].c_str(), bad[1].c_str());
@@ -1231,13 +1263,13 @@ TEST(imu_spike_and_stuck_rpm_flags_and_keys)
 	vehicle_from_json(R"({"stuck_rpm": [{"rotor": 1, "at_s": 3}, {"rotor": 2, "at_s": 4}]})", p);
 	CHECK(p.stuck_rpm.size() == 2 && p.stuck_rpm[1].rotor == 1, "stuck list");
 	const char *bad_keys[][2] = {{R"({"imu_spike": {"prob": 2}})", "imu_spike.prob"},
-	                             {R"({"imu_spike": {"gyro": 0}})", "imu_spike.gyro"},
-	                             {R"({"imu_spike": {"size": 1}})", "imu_spike.size"},
-	                             {R"({"imu_spike": 0.1})", "imu_spike"},
-	                             {R"({"stuck_rpm": {"rotor": 9, "at_s": 1}})", "stuck_rpm.rotor"},
-	                             {R"({"stuck_rpm": {"rotor": 1}})", "stuck_rpm"},
-	                             {R"({"stuck_rpm": {"rotor": 1, "at_s": -1}})", "stuck_rpm.at_s"},
-	                             {R"({"stuck_rpm": {"rotor": 1, "at_s": 1, "scale": 0}})", "stuck_rpm.scale"}};
+				     {R"({"imu_spike": {"gyro": 0}})", "imu_spike.gyro"},
+				     {R"({"imu_spike": {"size": 1}})", "imu_spike.size"},
+				     {R"({"imu_spike": 0.1})", "imu_spike"},
+				     {R"({"stuck_rpm": {"rotor": 9, "at_s": 1}})", "stuck_rpm.rotor"},
+				     {R"({"stuck_rpm": {"rotor": 1}})", "stuck_rpm"},
+				     {R"({"stuck_rpm": {"rotor": 1, "at_s": -1}})", "stuck_rpm.at_s"},
+				     {R"({"stuck_rpm": {"rotor": 1, "at_s": 1, "scale": 0}})", "stuck_rpm.scale"}};
 	for (const auto &k : bad_keys) {
 		std::string key;
 		try {

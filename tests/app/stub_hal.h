@@ -19,27 +19,27 @@
 #define STUB_IDS 32
 
 struct stub_hal {
-	struct hal hal;                 /* hand &s->hal to app_init */
-	uint64_t now_us;                /* monotonic clock; the caller advances it */
-	uint64_t unix_base_us;          /* unix_us = unix_base_us + now_us */
+	struct hal hal;        /* hand &s->hal to app_init */
+	uint64_t now_us;       /* monotonic clock; the caller advances it */
+	uint64_t unix_base_us; /* unix_us = unix_base_us + now_us */
 	bool have_key;
 	uint8_t key[32];
-	struct hal_plant_stats plant;   /* returned by plant_stats */
+	struct hal_plant_stats plant; /* returned by plant_stats */
 
-	float thr[HAL_ROTORS];          /* the last actuation */
+	float thr[HAL_ROTORS]; /* the last actuation */
 	uint32_t n_actuate;
-	size_t sent_bytes;              /* ground link: bytes and datagrams sent */
+	size_t sent_bytes; /* ground link: bytes and datagrams sent */
 	uint32_t sent_datagrams;
-	uint8_t sent_sum;               /* every sent byte is read (sanitizers see overreads) */
-	bool store_fails;               /* param_store refuses (a full disk) */
+	uint8_t sent_sum; /* every sent byte is read (sanitizers see overreads) */
+	bool store_fails; /* param_store refuses (a full disk) */
 	char store[STUB_STORE_CAP];
-	long store_len;                 /* -1: nothing stored */
+	long store_len; /* -1: nothing stored */
 	uint32_t n_stores;
 	uint32_t n_log_frames, n_events, n_reports;
-	int last_severity;              /* of the last event */
+	int last_severity; /* of the last event */
 	char last_event[128];
 	char last_report[256];
-	uint32_t n_id_results;          /* identification results logged; the first STUB_IDS kept */
+	uint32_t n_id_results; /* identification results logged; the first STUB_IDS kept */
 	struct app_id_result id_results[STUB_IDS];
 };
 

@@ -19,17 +19,17 @@
 struct rig {
 	struct stub_hal h;
 	struct app a;
-	struct mav mav;  /* the platform's MAVLink endpoint: drains the outbox after app_tick */
+	struct mav mav; /* the platform's MAVLink endpoint: drains the outbox after app_tick */
 	struct hal_sensor_frame f;
 	double t;
-	bool stuck;      /* the vehicle stays at height z_stuck whatever the app asks */
+	bool stuck; /* the vehicle stays at height z_stuck whatever the app asks */
 	float z_stuck;
 	/* the roll rate, while roll_dps > 0: a 2 Hz sine of rms roll_dps, times roll_decay per
 	 * second from roll_t0 */
 	double roll_dps, roll_decay, roll_t0;
 };
 
-static struct rig R;   /* large: kept off the stack */
+static struct rig R; /* large: kept off the stack */
 
 static struct rig *rig_new(void)
 {
@@ -56,7 +56,7 @@ static void frame_at(struct rig *r, double t)
 	bool flying = app_flying(a);
 	hal_frame_time(f, (uint64_t)llround(t * 90.0), (uint64_t)llround(t * 1e6));
 	f->seq++;
-	if (r->roll_dps > 0.0)   /* else the rate a test set stays */
+	if (r->roll_dps > 0.0) /* else the rate a test set stays */
 		f->rate_b_rps[0] = (float)(r->roll_dps * sqrt(2.0) * pow(r->roll_decay, t - r->roll_t0) *
 					   0.017453292519943295 * sin(2.0 * 3.141592653589793 * 2.0 * t));
 	f->valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
@@ -102,10 +102,7 @@ static struct rig *rig_hovering(struct unit_ctx *u)
 	return r;
 }
 
-static int param_index(const char *name)
-{
-	return params_find(name, strlen(name));
-}
+static int param_index(const char *name) { return params_find(name, strlen(name)); }
 
 /* The outbox's events of one kind, drained (a test looks before app_tick does). */
 static int take_events(struct app *a, enum app_event_kind kind, struct app_event *last)
@@ -129,10 +126,10 @@ UNIT_TEST(app_boots_disarmed_and_arms_only_with_frames)
 	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_BUSY);
 	CHECK(strstr(why, "no complete") != NULL);
 	fly(r, 3);
-	CHECK(r->h.n_actuate == 0);   /* the throttles are not ours before arming */
+	CHECK(r->h.n_actuate == 0); /* the throttles are not ours before arming */
 	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
 	CHECK(r->a.mode == APP_IDLE);
-	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);   /* a retry */
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED); /* a retry */
 	CHECK(r->a.mode == APP_IDLE);
 	fly(r, 4);
 	CHECK(r->h.n_actuate == 4);
@@ -142,7 +139,7 @@ UNIT_TEST(app_arm_refused_when_tilted_unless_forced)
 {
 	struct rig *r = rig_new();
 	char why[64] = "";
-	r->f.q_ib[0] = cosf(0.5f * 0.7f);   /* 40 deg roll */
+	r->f.q_ib[0] = cosf(0.5f * 0.7f); /* 40 deg roll */
 	r->f.q_ib[1] = sinf(0.5f * 0.7f);
 	fly(r, 3);
 	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_BUSY);
@@ -159,9 +156,9 @@ UNIT_TEST(app_answers_each_new_frame_once)
 	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
 	fly(r, 1);
 	uint32_t n = r->h.n_actuate;
-	frame_at(r, r->t);                 /* a duplicate */
+	frame_at(r, r->t); /* a duplicate */
 	CHECK(r->h.n_actuate == n);
-	frame_at(r, r->t - 1.0 / 90.0);    /* an older frame */
+	frame_at(r, r->t - 1.0 / 90.0); /* an older frame */
 	CHECK(r->h.n_actuate == n);
 	fly(r, 1);
 	CHECK(r->h.n_actuate == n + 1);
@@ -171,7 +168,7 @@ UNIT_TEST(app_takeoff_hold_land_disarm)
 {
 	struct rig *r = rig_new();
 	char why[64] = "";
-	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_BUSY);   /* not armed */
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_BUSY); /* not armed */
 	fly(r, 3);
 	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
 	CHECK(app_cmd_takeoff(&r->a, 200.0f, 7, why, sizeof why) == APP_DENIED);
@@ -180,15 +177,15 @@ UNIT_TEST(app_takeoff_hold_land_disarm)
 	CHECK(r->a.mode == APP_TAKEOFF);
 	fly(r, 20);
 	scalar_t z_sp = r->a.guid.z_sp_m;
-	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_ACCEPTED);   /* a retry */
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_ACCEPTED); /* a retry */
 	CHECK(r->a.mode == APP_TAKEOFF && r->a.guid.z_sp_m == z_sp);
 	fly_until(r, APP_HOLD, 90 * 60);
 	CHECK(r->a.mode == APP_HOLD);
 	CHECK_NEAR(r->f.pos_i_m[2], 3.0, 0.05);
-	CHECK(app_cmd_arm(&r->a, false, false, why, sizeof why) == APP_BUSY);   /* flying */
+	CHECK(app_cmd_arm(&r->a, false, false, why, sizeof why) == APP_BUSY); /* flying */
 	CHECK(app_cmd_land(&r->a, 7, why, sizeof why) == APP_ACCEPTED);
 	CHECK(r->a.mode == APP_LAND);
-	CHECK(app_cmd_land(&r->a, 7, why, sizeof why) == APP_ACCEPTED);             /* a retry */
+	CHECK(app_cmd_land(&r->a, 7, why, sizeof why) == APP_ACCEPTED); /* a retry */
 	CHECK(r->a.mode == APP_LAND);
 	fly_until(r, APP_DISARMED, 90 * 60);
 	CHECK(r->a.mode == APP_DISARMED);
@@ -203,7 +200,7 @@ UNIT_TEST(app_disarm_forced_while_flying)
 	char why[64];
 	CHECK(app_cmd_arm(&r->a, false, true, why, sizeof why) == APP_ACCEPTED);
 	CHECK(r->a.mode == APP_DISARMED);
-	CHECK(app_cmd_arm(&r->a, false, false, why, sizeof why) == APP_ACCEPTED);   /* a retry */
+	CHECK(app_cmd_arm(&r->a, false, false, why, sizeof why) == APP_ACCEPTED); /* a retry */
 }
 
 UNIT_TEST(app_link_loss_reported_then_lands_on_recovery)
@@ -211,13 +208,13 @@ UNIT_TEST(app_link_loss_reported_then_lands_on_recovery)
 	struct rig *r = rig_hovering(u);
 	/* silence on the plant link: the main loop keeps ticking on wall time */
 	uint32_t events = r->h.n_events;
-	for (int i = 0; i < 100; i++) {   /* 1.1 s > FS_LINK_TO */
+	for (int i = 0; i < 100; i++) { /* 1.1 s > FS_LINK_TO */
 		r->h.now_us += FRAME_US;
 		tick(r);
 	}
 	CHECK(!r->a.link_ok);
 	CHECK(r->h.n_events > events);
-	CHECK(r->a.mode == APP_HOLD);     /* not yet: FS_LAND_AFTER not exceeded */
+	CHECK(r->a.mode == APP_HOLD); /* not yet: FS_LAND_AFTER not exceeded */
 	r->h.now_us += (uint64_t)(r->a.p.fs_land_after * 1e6f);
 	fly(r, 1);
 	CHECK(r->a.link_ok);
@@ -227,7 +224,7 @@ UNIT_TEST(app_link_loss_reported_then_lands_on_recovery)
 UNIT_TEST(app_short_link_loss_keeps_holding)
 {
 	struct rig *r = rig_hovering(u);
-	for (int i = 0; i < 50; i++) {   /* 0.55 s: lost, but shorter than FS_LAND_AFTER */
+	for (int i = 0; i < 50; i++) { /* 0.55 s: lost, but shorter than FS_LAND_AFTER */
 		r->h.now_us += FRAME_US;
 		tick(r);
 	}
@@ -240,7 +237,7 @@ UNIT_TEST(app_short_link_loss_keeps_holding)
 UNIT_TEST(app_plant_time_gap_lands)
 {
 	struct rig *r = rig_hovering(u);
-	r->t += (double)r->a.p.fs_land_after + 0.5;   /* frames missing in plant time */
+	r->t += (double)r->a.p.fs_land_after + 0.5; /* frames missing in plant time */
 	fly(r, 1);
 	CHECK(r->a.mode == APP_LAND);
 	CHECK(!strcmp(r->h.last_event, "Mode LAND"));
@@ -253,12 +250,12 @@ UNIT_TEST(app_plant_time_gap_lands)
 UNIT_TEST(app_plant_time_gap_not_integrated)
 {
 	struct rig *r = rig_hovering(u);
-	r->f.rate_b_rps[0] = 0.1f;   /* a steady roll-rate error for the integral to act on */
+	r->f.rate_b_rps[0] = 0.1f; /* a steady roll-rate error for the integral to act on */
 	fly(r, 2);
 	double i0 = (double)sc_to_float(r->a.att.int_r_rad.x);
 	fly(r, 1);
 	double step = (double)sc_to_float(r->a.att.int_r_rad.x) - i0;
-	r->t += 0.5;   /* 0.5 s of frames missing: longer than FS_LINK_TO, shorter than FS_LAND_AFTER */
+	r->t += 0.5; /* 0.5 s of frames missing: longer than FS_LINK_TO, shorter than FS_LAND_AFTER */
 	double i1 = (double)sc_to_float(r->a.att.int_r_rad.x);
 	fly(r, 1);
 	double gap_step = (double)sc_to_float(r->a.att.int_r_rad.x) - i1;
@@ -300,7 +297,7 @@ UNIT_TEST(app_frames_missing_said_once_a_wall_second)
 	struct rig *r = rig_hovering(u);
 	char last[APP_EVENT_TEXT] = "";
 	int lines = 0;
-	for (int g = 0; g < 12; g++) {   /* 12 gaps of 0.4 s, 3 frames apart: 0.4 s of wall time */
+	for (int g = 0; g < 12; g++) { /* 12 gaps of 0.4 s, 3 frames apart: 0.4 s of wall time */
 		r->t += 0.4;
 		lines += gap_lines(r, 3, last, sizeof last);
 	}
@@ -323,7 +320,7 @@ UNIT_TEST(app_experiment_command_idempotent_and_locks_parameters)
 	CHECK(app_cmd_experiment(&r->a, 9.0f, 7, why, sizeof why) == APP_DENIED);
 	CHECK(app_cmd_experiment(&r->a, 1.0f, 0x0102, why, sizeof why) == APP_IN_PROGRESS);
 	CHECK(r->a.mode == APP_EXPERIMENT);
-	CHECK(app_cmd_experiment(&r->a, 1.0f, 0x0102, why, sizeof why) == APP_IN_PROGRESS);   /* a retry */
+	CHECK(app_cmd_experiment(&r->a, 1.0f, 0x0102, why, sizeof why) == APP_IN_PROGRESS); /* a retry */
 	CHECK(app_cmd_experiment(&r->a, 2.0f, 0x0102, why, sizeof why) == APP_BUSY);
 	CHECK(app_cmd_takeoff(&r->a, 4.0f, 7, why, sizeof why) == APP_BUSY);
 	fly(r, 10);
@@ -333,16 +330,16 @@ UNIT_TEST(app_experiment_command_idempotent_and_locks_parameters)
 	const char *no = app_param_write(&r->a, (size_t)kf, kf_before * 1.1f);
 	CHECK(no != NULL && strstr(no, "locked") != NULL);
 	CHECK(params_get(&r->a.p, (size_t)kf) == kf_before);
-	CHECK(app_param_write(&r->a, (size_t)tko, 6.0f) == NULL);   /* not a model parameter */
+	CHECK(app_param_write(&r->a, (size_t)tko, 6.0f) == NULL); /* not a model parameter */
 
 	take_events(&r->a, APP_EV_CMD_DONE, NULL);
-	CHECK(app_cmd_experiment(&r->a, 0.0f, 0x0304, why, sizeof why) == APP_ACCEPTED);   /* stop */
+	CHECK(app_cmd_experiment(&r->a, 0.0f, 0x0304, why, sizeof why) == APP_ACCEPTED); /* stop */
 	CHECK(r->a.mode == APP_HOLD);
 	struct app_event done = {0};
 	CHECK(take_events(&r->a, APP_EV_CMD_DONE, &done) == 1);
 	CHECK(done.cmd == APP_CMD_EXPERIMENT && done.result == APP_FAILED && done.origin == 0x0102);
-	CHECK(app_cmd_experiment(&r->a, 0.0f, 0x0304, why, sizeof why) == APP_ACCEPTED);   /* a retry */
-	CHECK(app_param_write(&r->a, (size_t)kf, kf_before * 1.1f) == NULL);   /* unlocked */
+	CHECK(app_cmd_experiment(&r->a, 0.0f, 0x0304, why, sizeof why) == APP_ACCEPTED); /* a retry */
+	CHECK(app_param_write(&r->a, (size_t)kf, kf_before * 1.1f) == NULL);             /* unlocked */
 }
 
 UNIT_TEST(app_experiment_refused_unless_hovering)
@@ -380,7 +377,7 @@ UNIT_TEST(app_oscillation_guard_detunes_and_holds_experiments)
 	CHECK(app_cmd_experiment(&r->a, 1.0f, 1, why, sizeof why) == APP_BUSY);
 	CHECK(strstr(why, "attitude oscillating") != NULL);
 	CHECK(r->a.mode == APP_HOLD);
-	fly_rolling(r, 2.5f, 0.0, 1.0, text, sizeof text);   /* quiet again */
+	fly_rolling(r, 2.5f, 0.0, 1.0, text, sizeof text); /* quiet again */
 	CHECK(fabsf(r->a.p.att_wn_rp - 5.95f) < 1e-5f);
 	CHECK(app_cmd_experiment(&r->a, 1.0f, 1, why, sizeof why) == APP_IN_PROGRESS);
 }
@@ -392,7 +389,7 @@ UNIT_TEST(app_identification_results_are_read_only)
 	CHECK(est >= 0);
 	const char *no = app_param_write(&r->a, (size_t)est, 1.0f);
 	CHECK(no != NULL && strstr(no, "read-only") != NULL);
-	CHECK(app_param_write(&r->a, param_count, 1.0f) != NULL);   /* no such index */
+	CHECK(app_param_write(&r->a, param_count, 1.0f) != NULL); /* no such index */
 }
 
 /* The rotor model's settings and the priors it refines are settable on the ground and
@@ -400,9 +397,8 @@ UNIT_TEST(app_identification_results_are_read_only)
 UNIT_TEST(app_motor_model_parameters_settable_results_read_only)
 {
 	static const char *const settable[] = {
-		"ID_MOT_TAU", "ID_DELAY_FR", "MOT_CURVE", "ID_CRV_EST", "ID_EXC_OFS", "MOT_SCALE1",
-		"MOT_SCALE2", "MOT_SCALE3", "MOT_SCALE4", "MOT_SCALE5", "MOT_SCALE6", "MOT_SCALE7",
-		"MOT_SCALE8", "MOT_SCALE_MIN",
+		"ID_MOT_TAU", "ID_DELAY_FR", "MOT_CURVE",  "ID_CRV_EST", "ID_EXC_OFS", "MOT_SCALE1", "MOT_SCALE2",
+		"MOT_SCALE3", "MOT_SCALE4",  "MOT_SCALE5", "MOT_SCALE6", "MOT_SCALE7", "MOT_SCALE8", "MOT_SCALE_MIN",
 	};
 	static const char *const results[] = {"ID_TAU_SD", "ID_CRV_SD", "ID_MOT_NE", "ID_TAU_CHECK"};
 	struct rig *r = rig_new();
@@ -462,7 +458,7 @@ UNIT_TEST(app_parameters_saved_and_loaded)
 	struct rig *r = rig_new();
 	char why[64] = "";
 	int tko = param_index("NAV_TKO_ALT");
-	CHECK(app_params_load(&r->a, why, sizeof why) == APP_FAILED);   /* nothing stored */
+	CHECK(app_params_load(&r->a, why, sizeof why) == APP_FAILED); /* nothing stored */
 	CHECK(app_param_write(&r->a, (size_t)tko, 7.5f) == NULL);
 	CHECK(app_params_save(&r->a, why, sizeof why) == APP_ACCEPTED);
 	CHECK(strstr(r->h.store, "NAV_TKO_ALT") != NULL);
@@ -545,8 +541,8 @@ UNIT_TEST(app_parameter_flags_follow_their_groups)
 /* Frames for `seconds` without app_tick, the outbox drained after each: the
  * status lines that start with `prefix` counted (the last kept in `text`), the
  * final results (APP_EV_CMD_DONE) counted (the last kept in *done). */
-static int fly_collect(struct rig *r, float seconds, const char *prefix, char *text, size_t cap,
-		       int *n_done, struct app_event *done)
+static int fly_collect(struct rig *r, float seconds, const char *prefix, char *text, size_t cap, int *n_done,
+		       struct app_event *done)
 {
 	int n_text = 0;
 	for (int i = 0; i < (int)(seconds * 90.0f); i++) {
@@ -589,7 +585,7 @@ UNIT_TEST(app_takeoff_time_limit_fails_to_its_origin)
 	struct app_event done;
 	memset(&done, 0, sizeof done);
 	int n = fly_collect(r, limit - 0.5f, "Take-off failed", text, sizeof text, &n_done, &done);
-	CHECK(n == 0 && n_done == 0 && r->a.mode == APP_TAKEOFF);   /* not before its limit */
+	CHECK(n == 0 && n_done == 0 && r->a.mode == APP_TAKEOFF); /* not before its limit */
 	n = fly_collect(r, 1.0f, "Take-off failed", text, sizeof text, &n_done, &done);
 	CHECK(n == 1);
 	char want[64];
@@ -599,7 +595,7 @@ UNIT_TEST(app_takeoff_time_limit_fails_to_its_origin)
 	CHECK(done.cmd == APP_CMD_TAKEOFF && done.result == APP_FAILED && done.origin == origin);
 	CHECK(r->a.mode == APP_LAND || r->a.mode == APP_DISARMED);
 	n = fly_collect(r, 3.0f, "Take-off failed", text, sizeof text, &n_done, &done);
-	CHECK(n == 0 && n_done == 1);   /* said once; the landing it became answers no one */
+	CHECK(n == 0 && n_done == 1); /* said once; the landing it became answers no one */
 	CHECK(r->a.mode == APP_DISARMED);
 }
 
@@ -609,7 +605,7 @@ UNIT_TEST(app_takeoff_time_limit_fails_to_its_origin)
 UNIT_TEST(app_kft_published_between_frames_after_its_step)
 {
 	struct rig *r = rig_hovering(u);
-	fly(r, 3 * 90);   /* the tracker has started and published */
+	fly(r, 3 * 90); /* the tracker has started and published */
 	const int i_t = param_index("KFT_T"), i_est = param_index("KFT_EST");
 	CHECK(params_get(&r->a.p, (size_t)i_t) > 0.0f);
 	int published = 0;
@@ -619,22 +615,22 @@ UNIT_TEST(app_kft_published_between_frames_after_its_step)
 		r->h.now_us += FRAME_US;
 		frame_at(r, r->t);
 		struct app_event e;
-		while (outbox_pop(&r->a.outbox, &e))   /* the step posts no KFT event */
-			CHECK(!(e.kind == APP_EV_VALUE || (e.kind == APP_EV_PARAM &&
-							   (e.param_index == i_t || e.param_index == i_est))));
+		while (outbox_pop(&r->a.outbox, &e)) /* the step posts no KFT event */
+			CHECK(!(e.kind == APP_EV_VALUE ||
+				(e.kind == APP_EV_PARAM && (e.param_index == i_t || e.param_index == i_est))));
 		CHECK(params_get(&r->a.p, (size_t)i_t) == t_before);
 		bool due = r->a.env_kf.pub_due;
 		tick(r);
 		float t_after = params_get(&r->a.p, (size_t)i_t);
 		if (due) {
 			published++;
-			CHECK(t_after == (float)r->t);   /* the plant time of the step that was due */
+			CHECK(t_after == (float)r->t); /* the plant time of the step that was due */
 			CHECK(params_get(&r->a.p, (size_t)i_est) == sc_to_float(r->a.env_kf.kft.k));
 		} else {
 			CHECK(t_after == t_before);
 		}
 	}
-	CHECK(published >= 2 && published <= 3);   /* once a second of plant time, in 3 s */
+	CHECK(published >= 2 && published <= 3); /* once a second of plant time, in 3 s */
 }
 
 /* The HOLD entry's HOV_* parameters and "Hover throttle" status line are formatted between
@@ -718,16 +714,32 @@ static uint64_t xs64(uint64_t *s)
 
 static double dbl_of_bits(uint64_t u)
 {
-	union { uint64_t u; double d; } v = {u};
+	union {
+		uint64_t u;
+		double d;
+	} v = {u};
 	return v.d;
 }
 
 UNIT_TEST(app_t_before_is_the_ieee_order)
 {
-	const double sp[] = {0.0, -0.0, dbl_of_bits(1u), -dbl_of_bits(1u), 1.0, -1.0, 1e-300, -1e-300,
-			     1.7976931348623157e308, -1.7976931348623157e308, INFINITY, -INFINITY,
-			     dbl_of_bits(0x7ff8000000000000u), dbl_of_bits(0xfff8000000000001u),
-			     dbl_of_bits(0x7ff0000000000001u), 12.345678, 12.345678 + 1.0 / 90.0};
+	const double sp[] = {0.0,
+			     -0.0,
+			     dbl_of_bits(1u),
+			     -dbl_of_bits(1u),
+			     1.0,
+			     -1.0,
+			     1e-300,
+			     -1e-300,
+			     1.7976931348623157e308,
+			     -1.7976931348623157e308,
+			     INFINITY,
+			     -INFINITY,
+			     dbl_of_bits(0x7ff8000000000000u),
+			     dbl_of_bits(0xfff8000000000001u),
+			     dbl_of_bits(0x7ff0000000000001u),
+			     12.345678,
+			     12.345678 + 1.0 / 90.0};
 	const int n_sp = (int)(sizeof sp / sizeof sp[0]);
 	int bad = 0;
 	for (int i = 0; i < n_sp; i++)
@@ -739,7 +751,7 @@ UNIT_TEST(app_t_before_is_the_ieee_order)
 		uint64_t ua = xs64(&s), ub = xs64(&s);
 		double a = dbl_of_bits(ua), b = dbl_of_bits(ub);
 		bad += app_t_before(a, b) != (a < b);
-		double c = dbl_of_bits(ua ^ (ub & 3u));   /* a neighbour of a, or a itself */
+		double c = dbl_of_bits(ua ^ (ub & 3u)); /* a neighbour of a, or a itself */
 		bad += app_t_before(a, c) != (a < c) || app_t_before(c, a) != (c < a);
 		double t = (double)(ub >> 40) / 90.0, t1 = t + 1.0 / 90.0, tm = -t;
 		bad += app_t_before(t, t1) != (t < t1) || app_t_before(t1, t) != (t1 < t) ||
@@ -753,7 +765,10 @@ UNIT_TEST(app_t_before_is_the_ieee_order)
  * neighbours; frame periods) */
 static float flt_of_bits(uint32_t u)
 {
-	union { uint32_t u; float f; } v = {u};
+	union {
+		uint32_t u;
+		float f;
+	} v = {u};
 	return v.f;
 }
 
@@ -766,9 +781,24 @@ static int fcmp_wrong(float a, float b)
 
 UNIT_TEST(app_f_cmp_is_the_ieee_order)
 {
-	const float sp[] = {0.0f, -0.0f, flt_of_bits(1u), -flt_of_bits(1u), 1.0f, -1.0f, 1e-38f, -1e-38f,
-			    3.4028235e38f, -3.4028235e38f, INFINITY, -INFINITY, flt_of_bits(0x7fc00000u),
-			    flt_of_bits(0xffc00001u), flt_of_bits(0x7f800001u), 1.0f / 90.0f, 0.2f, 0.3f};
+	const float sp[] = {0.0f,
+			    -0.0f,
+			    flt_of_bits(1u),
+			    -flt_of_bits(1u),
+			    1.0f,
+			    -1.0f,
+			    1e-38f,
+			    -1e-38f,
+			    3.4028235e38f,
+			    -3.4028235e38f,
+			    INFINITY,
+			    -INFINITY,
+			    flt_of_bits(0x7fc00000u),
+			    flt_of_bits(0xffc00001u),
+			    flt_of_bits(0x7f800001u),
+			    1.0f / 90.0f,
+			    0.2f,
+			    0.3f};
 	const int n_sp = (int)(sizeof sp / sizeof sp[0]);
 	int bad = 0;
 	for (int i = 0; i < n_sp; i++)
@@ -797,7 +827,7 @@ UNIT_TEST(app_sc_to_float_is_odd)
 	for (int k = 0; k < 100000; k++) {
 		uint64_t r = xs64(&s);
 #if OCTO_FIXED
-		scalar_t v = (scalar_t)((uint32_t)r >> (r >> 59));   /* 0 .. INT32_MAX, any magnitude */
+		scalar_t v = (scalar_t)((uint32_t)r >> (r >> 59)); /* 0 .. INT32_MAX, any magnitude */
 		if (v < 0)
 			v = -(v + 1);
 		bad += sc_to_float(-v) != -sc_to_float(v) || (signbit(sc_to_float(-v)) != 0) != (v != 0);
@@ -806,7 +836,10 @@ UNIT_TEST(app_sc_to_float_is_odd)
 		bad += !isnan(v) && (sc_to_float(-v) != -sc_to_float(v));
 #endif
 	}
-	union { float f; uint32_t u; } z = {sc_to_float(SC_ZERO)};
+	union {
+		float f;
+		uint32_t u;
+	} z = {sc_to_float(SC_ZERO)};
 	CHECK(z.u == 0u && sc_from_float(0.0f) == SC_ZERO);
 	CHECK(bad == 0);
 }
@@ -816,15 +849,22 @@ UNIT_TEST(app_sc_to_float_is_odd)
 static int gap_wrong(double t, double tp)
 {
 	float g = app_t_gap(t, tp), want = (float)(t - tp);
-	union { float f; uint32_t u; } x = {g}, y = {want};
+	union {
+		float f;
+		uint32_t u;
+	} x = {g}, y = {want};
 	return x.u != y.u && !(isnan(g) && isnan(want));
 }
 
 UNIT_TEST(app_t_gap_is_the_float_of_the_difference)
 {
-	const double sp[] = {0.0, -0.0, dbl_of_bits(1u), 1.0, -1.0, 2.0, 1e-300, 1e300, 1.7976931348623157e308,
-			     INFINITY, -INFINITY, dbl_of_bits(0x7ff8000000000000u), 1.0 / 90.0, 3.0, 4.0,
-			     1.5, 0.75, 1e-40, 1e-38};
+	const double sp[] = {0.0,        -0.0,      dbl_of_bits(1u),
+			     1.0,        -1.0,      2.0,
+			     1e-300,     1e300,     1.7976931348623157e308,
+			     INFINITY,   -INFINITY, dbl_of_bits(0x7ff8000000000000u),
+			     1.0 / 90.0, 3.0,       4.0,
+			     1.5,        0.75,      1e-40,
+			     1e-38};
 	const int n_sp = (int)(sizeof sp / sizeof sp[0]);
 	int bad = 0;
 	for (int i = 0; i < n_sp; i++)
@@ -853,16 +893,24 @@ UNIT_TEST(app_t_gap_is_the_float_of_the_difference)
 		 * float of the rounded double, which can differ from the exact difference's) */
 		uint64_t q = (r & 0xffffffu) | 0x800000u, mb = (1ull << 52) + 1u;
 		unsigned sh = 1u + (unsigned)(r2 % 28u);
-		uint64_t tie = (q << sh) | (1ull << (sh - 1u)), over = (0xffffffull << sh) | (3ull << (sh - 2u + (sh < 2u)));
-		const uint64_t dd[] = {tie, tie + 1u, tie - 1u, over, q << sh, (q << 30) | 0x3fffffffu,
-				       (((q & 0xefffffu) | 1u) << 30) | 0x1fffffffu, ((q & 0xeffffeu) << 30) | 0x1fffffffu};
+		uint64_t tie = (q << sh) | (1ull << (sh - 1u)),
+			 over = (0xffffffull << sh) | (3ull << (sh - 2u + (sh < 2u)));
+		const uint64_t dd[] = {tie,
+				       tie + 1u,
+				       tie - 1u,
+				       over,
+				       q << sh,
+				       (q << 30) | 0x3fffffffu,
+				       (((q & 0xefffffu) | 1u) << 30) | 0x1fffffffu,
+				       ((q & 0xeffffeu) << 30) | 0x1fffffffu};
 		for (int k2 = 0; k2 < 8; k2++) {
-			uint64_t d2 = dd[k2], ma = mb + d2;   /* same exponent while ma < 2^53 */
+			uint64_t d2 = dd[k2], ma = mb + d2; /* same exponent while ma < 2^53 */
 			double tp = dbl_of_bits(0x3ff0000000000001u);
 			if (ma < (1ull << 53))
 				bad += gap_wrong(dbl_of_bits((ma - (1ull << 52)) | 0x3ff0000000000000u), tp);
-			else if (!((d2 + mb) & 1u) && (d2 + mb) / 2u < (1ull << 53))   /* t in [2, 4) */
-				bad += gap_wrong(dbl_of_bits(((d2 + mb) / 2u - (1ull << 52)) | 0x4000000000000000u), tp);
+			else if (!((d2 + mb) & 1u) && (d2 + mb) / 2u < (1ull << 53)) /* t in [2, 4) */
+				bad += gap_wrong(dbl_of_bits(((d2 + mb) / 2u - (1ull << 52)) | 0x4000000000000000u),
+						 tp);
 		}
 	}
 	CHECK(bad == 0);

@@ -21,7 +21,7 @@ struct idrig {
 	double t;
 };
 
-static struct idrig G;   /* large: kept off the stack */
+static struct idrig G; /* large: kept off the stack */
 
 static void step(struct idrig *r)
 {

@@ -24,7 +24,7 @@
 #define GOT_CAP 512
 
 struct mrig {
-	struct stub_hal h;   /* first: the hal's ctx points to the rig */
+	struct stub_hal h; /* first: the hal's ctx points to the rig */
 	struct app a;
 	struct mav m;
 	struct hal_sensor_frame f;
@@ -32,7 +32,7 @@ struct mrig {
 	int n_got;
 };
 
-static struct mrig RA, RB;   /* large: kept off the stack */
+static struct mrig RA, RB; /* large: kept off the stack */
 
 /* The ground link of the rig: every datagram decoded (a whole packet each). */
 static void capture(void *ctx, const uint8_t *buf, size_t len)
@@ -82,8 +82,8 @@ static void to_vehicle(struct mrig *r, const mavlink_message_t *m)
 static void command(struct mrig *r, uint16_t cmd, float p1)
 {
 	mavlink_message_t m;
-	mavlink_msg_command_long_pack_chan(GCS_SYSID, GCS_COMPID, MAVLINK_COMM_2, &m, MAV_SYSID, MAV_COMPID, cmd, 0,
-					   p1, 0, 0, 0, 0, 0, 0);
+	mavlink_msg_command_long_pack_chan(GCS_SYSID, GCS_COMPID, MAVLINK_COMM_2, &m, MAV_SYSID, MAV_COMPID, cmd, 0, p1,
+					   0, 0, 0, 0, 0, 0);
 	to_vehicle(r, &m);
 }
 
@@ -218,10 +218,10 @@ static long ftp_read(struct mrig *r, const char *path, char *buf, size_t cap)
 		ftp(r, seq, 5, (uint32_t)len, NULL);
 		if (!ftp_reply(r, from, rsp))
 			return -1;
-		if (rsp[3] == 129)   /* NAK: EOF ends the file */
+		if (rsp[3] == 129) /* NAK: EOF ends the file */
 			return rsp[12] == 6 ? (long)len : -1;
-		uint32_t off = (uint32_t)rsp[8] | (uint32_t)rsp[9] << 8 | (uint32_t)rsp[10] << 16 |
-			       (uint32_t)rsp[11] << 24;
+		uint32_t off =
+			(uint32_t)rsp[8] | (uint32_t)rsp[9] << 8 | (uint32_t)rsp[10] << 16 | (uint32_t)rsp[11] << 24;
 		if (off != len || rsp[4] == 0 || len + rsp[4] >= cap)
 			return -1;
 		memcpy(buf + len, rsp + 12, rsp[4]);
@@ -258,7 +258,10 @@ UNIT_TEST(mav_ftp_serves_the_parameter_metadata)
 	 * (tests/py/test_client_metadata.py decompresses it against the parameter table) */
 	const struct mav_ftp_file *pf = &mav_ftp_files[MAV_FTP_PARAM];
 	CHECK((uint32_t)pl == pf->len && !memcmp(file_buf, pf->data, pf->len));
-	CHECK(!memcmp(file_buf, "\xfd" "7zXZ", 6));
+	CHECK(!memcmp(file_buf,
+		      "\xfd"
+		      "7zXZ",
+		      6));
 	char crc[48];
 	snprintf(crc, sizeof crc, "\"fileCrc\": %lu", (unsigned long)zlib_crc32(file_buf, (size_t)pl));
 	CHECK(strstr(general_buf, crc) != NULL);
@@ -285,15 +288,15 @@ UNIT_TEST(mav_param_names_found_exactly)
 		char id[PARAM_ID_LEN + 2];
 		memset(id, 'X', sizeof id);
 		memcpy(id, nm, n);
-		CHECK(params_find(id, n) == (int)i);                /* the field ends at n */
+		CHECK(params_find(id, n) == (int)i); /* the field ends at n */
 		id[n] = '\0';
-		CHECK(params_find(id, PARAM_ID_LEN) == (int)i);     /* NUL-terminated */
+		CHECK(params_find(id, PARAM_ID_LEN) == (int)i); /* NUL-terminated */
 		if (n > 1)
-			CHECK(params_find(id, n - 1) != (int)i);         /* a prefix is another name */
+			CHECK(params_find(id, n - 1) != (int)i); /* a prefix is another name */
 		if (n < PARAM_ID_LEN) {
 			id[n] = 'Z';
 			id[n + 1] = '\0';
-			CHECK(params_find(id, PARAM_ID_LEN) != (int)i);  /* so is an extension */
+			CHECK(params_find(id, PARAM_ID_LEN) != (int)i); /* so is an extension */
 		}
 	}
 	CHECK(params_find("", PARAM_ID_LEN) == -1);
@@ -346,7 +349,7 @@ UNIT_TEST(mav_long_statustext_goes_out_in_chunks)
 	mrig_init(r);
 	frames(r, 5, 45.0, 7.0, 300.0f);
 	char want[3][APP_EVENT_TEXT];
-	const size_t len[3] = {50, 51, APP_EVENT_TEXT - 1};   /* one message; two chunks; the longest line */
+	const size_t len[3] = {50, 51, APP_EVENT_TEXT - 1}; /* one message; two chunks; the longest line */
 	for (int k = 0; k < 3; k++) {
 		for (size_t i = 0; i < len[k]; i++)
 			want[k][i] = (char)('a' + (i * 7u + (size_t)k) % 26u);
@@ -368,7 +371,7 @@ UNIT_TEST(mav_long_statustext_goes_out_in_chunks)
 	int m = 0;
 	for (int i = from; i < r->n_got && m < 8; i++)
 		if (r->got[i].msgid == MAVLINK_MSG_ID_STATUSTEXT) {
-			mavlink_statustext_t t;   /* decoded: the getters read the payload unaligned */
+			mavlink_statustext_t t; /* decoded: the getters read the payload unaligned */
 			mavlink_msg_statustext_decode(&r->got[i], &t);
 			ids[m++] = t.id;
 		}

@@ -35,7 +35,7 @@ typedef void (*qemu_plugin_vcpu_udata_cb_t)(unsigned int vcpu_index, void *userd
 typedef void (*qemu_plugin_udata_cb_t)(qemu_plugin_id_t id, void *userdata);
 void qemu_plugin_register_vcpu_tb_trans_cb(qemu_plugin_id_t id, qemu_plugin_vcpu_tb_trans_cb_t cb);
 void qemu_plugin_register_vcpu_tb_exec_cb(struct qemu_plugin_tb *tb, qemu_plugin_vcpu_udata_cb_t cb,
-                                          enum qemu_plugin_cb_flags flags, void *userdata);
+					  enum qemu_plugin_cb_flags flags, void *userdata);
 void qemu_plugin_register_atexit_cb(qemu_plugin_id_t id, qemu_plugin_udata_cb_t cb, void *userdata);
 size_t qemu_plugin_tb_n_insns(const struct qemu_plugin_tb *tb);
 uint64_t qemu_plugin_tb_vaddr(const struct qemu_plugin_tb *tb);
@@ -45,7 +45,11 @@ void qemu_plugin_outs(const char *string);
 EXPORT int qemu_plugin_version = 1;
 
 enum { TB_PLAIN, TB_BEGIN, TB_END };
-struct tb_info { uint64_t n, pc, prof; int kind; struct tb_info *next; };
+struct tb_info {
+	uint64_t n, pc, prof;
+	int kind;
+	struct tb_info *next;
+};
 
 static uint64_t begin_addr = UINT64_MAX, end_addr = UINT64_MAX, count;
 static int active, regions, prof_on;

@@ -25,7 +25,7 @@ int _read(int fd, char *buf, int len);
 void *_sbrk(ptrdiff_t incr);
 void _exit(int code) __attribute__((noreturn));
 
-static int32_t tt_handle[3] = { -1, -1, -1 };
+static int32_t tt_handle[3] = {-1, -1, -1};
 
 int _write(int fd, const char *buf, int len)
 {
@@ -35,14 +35,22 @@ int _write(int fd, const char *buf, int len)
 	}
 	if (tt_handle[fd] < 0) {
 		/* mode 4 is "w" (stdout), 8 is "a" (stderr) */
-		struct { const char *name; int32_t mode; int32_t len; } o = { ":tt", fd == 1 ? 4 : 8, 3 };
+		struct {
+			const char *name;
+			int32_t mode;
+			int32_t len;
+		} o = {":tt", fd == 1 ? 4 : 8, 3};
 		tt_handle[fd] = semihost(SH_SYS_OPEN, &o);
 		if (tt_handle[fd] < 0) {
 			errno = EIO;
 			return -1;
 		}
 	}
-	struct { int32_t h; const char *buf; int32_t len; } w = { tt_handle[fd], buf, len };
+	struct {
+		int32_t h;
+		const char *buf;
+		int32_t len;
+	} w = {tt_handle[fd], buf, len};
 	return len - semihost(SH_SYS_WRITE, &w); /* returns the bytes NOT written */
 }
 
@@ -89,7 +97,10 @@ static void put_dec(uint32_t v)
 
 void semihost_exit(int code)
 {
-	struct { uint32_t reason; int32_t code; } e = { SH_ADP_STOPPED_APPLICATION_EXIT, code };
+	struct {
+		uint32_t reason;
+		int32_t code;
+	} e = {SH_ADP_STOPPED_APPLICATION_EXIT, code};
 	semihost(SH_SYS_EXIT_EXTENDED, &e);
 	/* not supported: fall back to SYS_EXIT, which can only report success */
 	semihost(SH_SYS_EXIT, (void *)(uintptr_t)SH_ADP_STOPPED_APPLICATION_EXIT);

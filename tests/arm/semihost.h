@@ -10,11 +10,11 @@
 
 #include <stdint.h>
 
-#define SH_SYS_OPEN          0x01
-#define SH_SYS_WRITE0        0x04
-#define SH_SYS_WRITE         0x05
-#define SH_SYS_GET_CMDLINE   0x15
-#define SH_SYS_EXIT          0x18
+#define SH_SYS_OPEN 0x01
+#define SH_SYS_WRITE0 0x04
+#define SH_SYS_WRITE 0x05
+#define SH_SYS_GET_CMDLINE 0x15
+#define SH_SYS_EXIT 0x18
 #define SH_SYS_EXIT_EXTENDED 0x20
 #define SH_ADP_STOPPED_APPLICATION_EXIT 0x20026
 

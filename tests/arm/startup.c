@@ -36,7 +36,10 @@ static char *argv_buf[16];
 
 static int parse_cmdline(void)
 {
-	struct { char *buf; int32_t len; } blk = { cmdline, (int32_t)sizeof cmdline - 1 };
+	struct {
+		char *buf;
+		int32_t len;
+	} blk = {cmdline, (int32_t)sizeof cmdline - 1};
 	int argc = 0;
 	if (semihost(SH_SYS_GET_CMDLINE, &blk) != 0)
 		blk.len = 0;
@@ -91,10 +94,7 @@ uint32_t startup_stack_used(void)
 	return (uint32_t)((uintptr_t)__stack_top - (uintptr_t)p);
 }
 
-uint32_t startup_stack_size(void)
-{
-	return (uint32_t)((uintptr_t)__stack_top - (uintptr_t)__stack_bottom);
-}
+uint32_t startup_stack_size(void) { return (uint32_t)((uintptr_t)__stack_top - (uintptr_t)__stack_bottom); }
 
 static void put_hex(const char *label, uint32_t v)
 {
@@ -122,20 +122,18 @@ void fault_report(const uint32_t *frame, uint32_t ipsr)
 /* Reset the stack pointer first: the fault may be a stack overflow. */
 __attribute__((naked)) void fault_handler(void)
 {
-	__asm__ volatile(
-		"mrs r0, msp\n\t"
-		"mrs r1, ipsr\n\t"
-		"ldr r2, =__stack_top\n\t"
-		"mov sp, r2\n\t"
-		"ldr r2, =fault_report\n\t"
-		"bx r2\n\t"
-		".ltorg");
+	__asm__ volatile("mrs r0, msp\n\t"
+			 "mrs r1, ipsr\n\t"
+			 "ldr r2, =__stack_top\n\t"
+			 "mov sp, r2\n\t"
+			 "ldr r2, =fault_report\n\t"
+			 "bx r2\n\t"
+			 ".ltorg");
 }
 
 /* ARMv6-M and ARMv7-M vector table: initial sp, reset, 14 system exceptions,
    then device interrupts (none enabled here). */
-__attribute__((section(".vectors"), used))
-static void (*const vectors[16 + 32])(void) = {
+__attribute__((section(".vectors"), used)) static void (*const vectors[16 + 32])(void) = {
 	[0] = (void (*)(void))(uintptr_t)__stack_top,
 	[1] = reset_handler,
 	[2 ... 16 + 31] = fault_handler,

@@ -26,7 +26,7 @@
 #include "mixer.h"
 
 static uint64_t rs;
-static double urand(void)   /* [-1, 1) */
+static double urand(void) /* [-1, 1) */
 {
 	rs ^= rs >> 12;
 	rs ^= rs << 25;
@@ -38,8 +38,8 @@ static const double tol_exact[MIXER_N_AXES] = {1e-3, 1e-3, 1e-3, 1e-4};
 static const char *const axis_name[MIXER_N_AXES] = {"f_n", "tau_x_nm", "tau_y_nm", "tau_z_nm"};
 
 struct stats {
-	long exact_att;                 /* attainable and reproduced exactly */
-	double err_sum[MIXER_N_AXES];   /* unattainable: sum |error| */
+	long exact_att;               /* attainable and reproduced exactly */
+	double err_sum[MIXER_N_AXES]; /* unattainable: sum |error| */
 	double err_max[MIXER_N_AXES];
 	double att_err_max[MIXER_N_AXES]; /* attainable: max |error| */
 	long unatt;
@@ -126,7 +126,8 @@ int main(int argc, char **argv)
 		account(&sc, att, &o);
 	}
 	printf("{\n  \"demands\": %ld, \"seed\": %llu, \"attainable\": %ld, \"unattainable\": %ld, "
-	       "\"boundary_band\": %ld,\n", n, (unsigned long long)seed, n_att, n_unatt, n_band);
+	       "\"boundary_band\": %ld,\n",
+	       n, (unsigned long long)seed, n_att, n_unatt, n_band);
 	printf("  \"priority_max_steps\": %ld, \"step_bound\": %d,\n", max_steps,
 	       2 * MIXER_ALPHA_ITERS + (prio.n_active - 4) + MIXER_QP_ITERS);
 	print_stats("priority", &sp, n_att, 0);

@@ -56,7 +56,7 @@
 #define MOT_TAU 0.03
 #define DELAY_FR 0
 #define N_CHECK 2
-static const int check_frames[N_CHECK] = {450, 900};   /* 5 s, 10 s */
+static const int check_frames[N_CHECK] = {450, 900}; /* 5 s, 10 s */
 
 /* splitmix64 + Box-Muller: Gaussian noise independent of the core's generators */
 static uint64_t sm_state;
@@ -74,7 +74,7 @@ static double gauss(void)
 	return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
 }
 
-struct acc {   /* running sums over runs of the relative error */
+struct acc { /* running sums over runs of the relative error */
 	double s, ss, crlb;
 	long n;
 };
@@ -130,10 +130,14 @@ int main(int argc, char **argv)
 
 #if HAVE_IDENT
 		struct ident_rotor id;
-		struct ident_rotor_cfg ic = {
-			.dt_s = sc_from_float((float)dt), .mot_tau_s = sc_from_float((float)MOT_TAU),
-			.delay_frames = DELAY_FR, .curve = SC_ZERO, .thr0 = sc_from_float((float)t_h),
-			.kf0 = 20.0f, .ktau0 = 0.3f, .p0 = 0.0f};
+		struct ident_rotor_cfg ic = {.dt_s = sc_from_float((float)dt),
+					     .mot_tau_s = sc_from_float((float)MOT_TAU),
+					     .delay_frames = DELAY_FR,
+					     .curve = SC_ZERO,
+					     .thr0 = sc_from_float((float)t_h),
+					     .kf0 = 20.0f,
+					     .ktau0 = 0.3f,
+					     .p0 = 0.0f};
 		ident_rotor_init(&id, &ic);
 #endif
 		/* own: delay + lag of the previous throttle, RLS with 1 parameter */
@@ -149,11 +153,11 @@ int main(int argc, char **argv)
 		rls_init(&own, &rc);
 		rls_init(&plain, &rc);
 
-		double s = t_h;                 /* true actuator state s_k */
+		double s = t_h; /* true actuator state s_k */
 		double hist[FILT_DELAY_MAX + 1];
 		for (int i = 0; i <= FILT_DELAY_MAX; i++)
 			hist[i] = t_h;
-		double t_prev = t_h;            /* T_(k-1): the throttle sent on the previous frame */
+		double t_prev = t_h; /* T_(k-1): the throttle sent on the previous frame */
 		double y_prev = 0;
 		double sum_phi2 = 0;
 		int ci = 0;
@@ -167,7 +171,8 @@ int main(int argc, char **argv)
 				ident_rotor_update(&id, sc_from_float((float)t_prev), sc_from_float((float)y),
 						   sc_from_float((float)ytau), true);
 #endif
-				scalar_t phi = filt_lag_update(&lg, filt_delay_update(&dl, sc_from_float((float)t_prev)));
+				scalar_t phi =
+					filt_lag_update(&lg, filt_delay_update(&dl, sc_from_float((float)t_prev)));
 				scalar_t yy = sc_from_float((float)y);
 				rls_update(&own, &phi, &yy, true);
 #if !HAVE_IDENT
@@ -209,13 +214,13 @@ int main(int argc, char **argv)
 	e_ddlag /= (double)n_samples;
 	double closed = -(e_d2 - e_ddlag) / (t_h * t_h + e_d2);
 
-	printf("{\n  \"runs\": %ld, \"seed\": %llu, \"rate_hz\": %.0f, \"t_hover\": %.5f, \"sigma_f_n\": %.5f,\n",
-	       runs, (unsigned long long)seed, RATE_HZ, t_h, sigma);
-	printf("  \"mot_tau_s\": %.3f, \"delay_frames\": %d, \"excitation\": \"%s +/-%.3f, clock_div %u\",\n",
-	       MOT_TAU, DELAY_FR, kind_name[ep.kind], (double)sc_to_float(ep.amplitude), (unsigned)ep.clock_div);
+	printf("{\n  \"runs\": %ld, \"seed\": %llu, \"rate_hz\": %.0f, \"t_hover\": %.5f, \"sigma_f_n\": %.5f,\n", runs,
+	       (unsigned long long)seed, RATE_HZ, t_h, sigma);
+	printf("  \"mot_tau_s\": %.3f, \"delay_frames\": %d, \"excitation\": \"%s +/-%.3f, clock_div %u\",\n", MOT_TAU,
+	       DELAY_FR, kind_name[ep.kind], (double)sc_to_float(ep.amplitude), (unsigned)ep.clock_div);
 	printf("  \"have_ident\": %s,\n", HAVE_IDENT ? "true" : "false");
-	printf("  \"plain_bias_closed_form_pct\": %.4f, \"e_d2\": %.6g, \"e_d_dlag\": %.6g,\n", 100.0 * closed,
-	       e_d2, e_ddlag);
+	printf("  \"plain_bias_closed_form_pct\": %.4f, \"e_d2\": %.6g, \"e_d_dlag\": %.6g,\n", 100.0 * closed, e_d2,
+	       e_ddlag);
 	for (int c = 0; c < N_CHECK; c++) {
 		printf("  \"t%d\": {\n", (int)(check_frames[c] / RATE_HZ + 0.5));
 		printf("    \"seconds\": %.1f,\n", check_frames[c] / RATE_HZ);

@@ -59,9 +59,9 @@ int main(void)
 		if (k % 9 == 0)
 			thr = 0.45f + (urand() < 0.0f ? -0.06f : 0.06f);
 		s += 0.24f * (thr - s);
-		scalar_t phi[2] = { sc_from_float(s), sc_from_float(0.1f * (thr - s)) };
-		scalar_t y[2] = { sc_from_float(28.0f * s * (1.0f + 0.01f * urand())),
-				  sc_from_float(0.39f * s * (1.0f + 0.01f * urand())) };
+		scalar_t phi[2] = {sc_from_float(s), sc_from_float(0.1f * (thr - s))};
+		scalar_t y[2] = {sc_from_float(28.0f * s * (1.0f + 0.01f * urand())),
+				 sc_from_float(0.39f * s * (1.0f + 0.01f * urand()))};
 		bench_mark_begin();
 		rls_update(&R1, phi, y, true);
 		bench_mark_end();
@@ -70,13 +70,13 @@ int main(void)
 		if (k % 9 == 0)
 			thr = 0.45f + (urand() < 0.0f ? -0.06f : 0.06f);
 		s += 0.24f * (thr - s);
-		scalar_t phi[2] = { sc_from_float(s), sc_from_float(0.1f * (thr - s)) };
+		scalar_t phi[2] = {sc_from_float(s), sc_from_float(0.1f * (thr - s))};
 		scalar_t y = sc_from_float(28.0f * s * (1.0f + 0.01f * urand()));
 		bench_mark_begin();
 		rls_update(&R2, phi, &y, true);
 		bench_mark_end();
 	}
-	struct ident_rotor_cfg rc = { 0 };
+	struct ident_rotor_cfg rc = {0};
 	rc.dt_s = SC(1.0 / 90.0);
 	rc.mot_tau_s = SC(0.04);
 	rc.delay_frames = 1;
@@ -96,7 +96,7 @@ int main(void)
 		bench_mark_end();
 	}
 	/* inertia about x: a PRBS torque on a 0.06 kg m^2 body with a rate damper, 1 % noise */
-	scalar_t in3[3] = { SC(0.06), SC(0.07), SC(0.1) }, zero[3] = { 0, 0, 0 };
+	scalar_t in3[3] = {SC(0.06), SC(0.07), SC(0.1)}, zero[3] = {0, 0, 0};
 	ident_inertia_init(&INR, 0, SC(25.0), SC(0.7), SC(1.0 / 90.0), SC(0.53), in3, zero, zero);
 	float w = 0.0f, u = 0.0f;
 	for (int k = 0; k < N_INR; k++) {
@@ -104,9 +104,9 @@ int main(void)
 			u = urand() < 0.0f ? -0.3f : 0.3f;
 		float tq = u - 0.24f * w;
 		w += tq / 0.06f / 90.0f;
-		scalar_t tb[3] = { sc_from_float(tq * (1.0f + 0.01f * urand())), 0, 0 };
-		scalar_t wb[3] = { sc_from_float(w + 0.005f * urand()), sc_from_float(0.01f * urand()),
-				   sc_from_float(0.01f * urand()) };
+		scalar_t tb[3] = {sc_from_float(tq * (1.0f + 0.01f * urand())), 0, 0};
+		scalar_t wb[3] = {sc_from_float(w + 0.005f * urand()), sc_from_float(0.01f * urand()),
+				  sc_from_float(0.01f * urand())};
 		bench_mark_begin();
 		ident_inertia_instrument(&INR, sc_from_float(u));
 		ident_inertia_update(&INR, tb, wb, true);
@@ -114,8 +114,12 @@ int main(void)
 	}
 	/* the motor model: 8 rotors dithered on the null-space patterns through a 40 ms lag,
 	 * 1 s still first (not counted) */
-	struct motor_id_cfg mc = { .dt_s = SC(1.0 / 90.0), .tau0_s = 0.03f, .kf0 = 25.0f, .curve0 = 0.0f,
-				   .est_curve = true, .n_frames = N_MID };
+	struct motor_id_cfg mc = {.dt_s = SC(1.0 / 90.0),
+				  .tau0_s = 0.03f,
+				  .kf0 = 25.0f,
+				  .curve0 = 0.0f,
+				  .est_curve = true,
+				  .n_frames = N_MID};
 	scalar_t thr0[MOTOR_ID_ROTORS];
 	float sj[MOTOR_ID_ROTORS], cmd[MOTOR_ID_ROTORS];
 	for (int j = 0; j < MOTOR_ID_ROTORS; j++) {
@@ -123,7 +127,7 @@ int main(void)
 		sj[j] = cmd[j] = 0.45f;
 	}
 	motor_id_init(&MID, &mc, thr0);
-	static const float p1[8] = { 1, 0, -1, 0, 1, 0, -1, 0 }, p2[8] = { 0, 1, 0, -1, 0, 1, 0, -1 };
+	static const float p1[8] = {1, 0, -1, 0, 1, 0, -1, 0}, p2[8] = {0, 1, 0, -1, 0, 1, 0, -1};
 	float d1 = 0.0f, d2 = 0.0f;
 	for (int k = 0; k < 90 + N_MID; k++) {
 		bool exc = k >= 90;

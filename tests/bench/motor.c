@@ -51,7 +51,13 @@ static double gauss(void)
 struct acc {
 	double n, s, s2, sd2, right, rej, white, wq, bad_delay, bad_lag, bad_kf;
 };
-static void add(struct acc *a, double e, double sd) { a->n++; a->s += e; a->s2 += e * e; a->sd2 += sd * sd; }
+static void add(struct acc *a, double e, double sd)
+{
+	a->n++;
+	a->s += e;
+	a->s2 += e * e;
+	a->sd2 += sd * sd;
+}
 static double mean(const struct acc *a) { return a->n > 0 ? a->s / a->n : 0; }
 static double sdev(const struct acc *a)
 {
@@ -62,13 +68,13 @@ static double sdev(const struct acc *a)
 static const double P1[NR] = {1, 0, -1, 0, 1, 0, -1, 0};
 static const double P2[NR] = {0, 1, 0, -1, 0, 1, 0, -1};
 
-static bool stale_prior;   /* the case of a stale lag prior (main) */
+static bool stale_prior; /* the case of a stale lag prior (main) */
 
 static void one_run(int n_exc, bool est_curve, bool linear, struct acc *kf, struct acc *lag, struct acc *dly,
 		    struct acc *crv, struct acc *scl)
 {
 	double kf_t = 28.0269 * uni(0.7, 1.3), kt_t = 0.3869 * uni(0.7, 1.3), tau = uni(0.01, 0.1);
-	if (stale_prior)   /* another vehicle's lag as the prior: 85 ms, the truth 10-20 ms */
+	if (stale_prior) /* another vehicle's lag as the prior: 85 ms, the truth 10-20 ms */
 		tau = uni(0.01, 0.02);
 	unsigned delay = (unsigned)uni(0, 3.999);
 	double c = linear ? 0.0 : uni(0, 0.5), sc[NR];
@@ -80,8 +86,12 @@ static void one_run(int n_exc, bool est_curve, bool linear, struct acc *kf, stru
 	double sf = 0.01 * hf, st = 0.01 * hf * kt_t / kf_t, a = exp(-DT / tau);
 	double s[NR], hist[8][NR], tp[NR], d1 = 0, d2 = 0;
 	scalar_t thr0[NR];
-	struct motor_id_cfg cfg = {.dt_s = sc_from_float((float)DT), .tau0_s = stale_prior ? 0.085f : 0.03f, .kf0 = 20.0f,
-				   .curve0 = 0.0f, .est_curve = est_curve, .n_frames = (uint32_t)n_exc};
+	struct motor_id_cfg cfg = {.dt_s = sc_from_float((float)DT),
+				   .tau0_s = stale_prior ? 0.085f : 0.03f,
+				   .kf0 = 20.0f,
+				   .curve0 = 0.0f,
+				   .est_curve = est_curve,
+				   .n_frames = (uint32_t)n_exc};
 	for (int j = 0; j < NR; j++) {
 		s[j] = tp[j] = L;
 		for (int i = 0; i < 8; i++)
@@ -127,12 +137,12 @@ static void one_run(int n_exc, bool est_curve, bool linear, struct acc *kf, stru
 	dly->n++;
 	dly->white += r.white_have && !r.white_ok;
 	dly->wq += r.white_have ? (double)(r.white_q / r.white_dof) : 1.0;
-	if (r.cause != MOTOR_ID_OK) {   /* rejected: counted, not in the accuracy figures */
+	if (r.cause != MOTOR_ID_OK) { /* rejected: counted, not in the accuracy figures */
 		dly->rej++;
 		return;
 	}
-	dly->bad_delay += r.delay != delay;                          /* accepted, yet wrong: */
-	dly->bad_lag += fabs((double)r.tau / tau - 1.0) > 0.05;      /* the silent errors */
+	dly->bad_delay += r.delay != delay;                     /* accepted, yet wrong: */
+	dly->bad_lag += fabs((double)r.tau / tau - 1.0) > 0.05; /* the silent errors */
 	dly->bad_kf += fabs((double)r.kf - kf_t) > 4.0 * (double)r.kf_sd;
 	add(kf, (double)r.kf / kf_t - 1.0, (double)r.kf_sd / kf_t);
 	add(lag, (double)r.tau / tau - 1.0, (double)r.tau_sd / tau);

@@ -13,7 +13,7 @@
  * it), so ru_maxrss from Python reads the size of Python. Forked from this small
  * process, PROGRAM's ru_maxrss is its own (at least this harness's few hundred kB).
  */
-#define _DEFAULT_SOURCE   /* wait4 */
+#define _DEFAULT_SOURCE /* wait4 */
 #include <errno.h>
 #include <stdio.h>
 #include <string.h>
@@ -25,7 +25,8 @@
 int main(int argc, char **argv)
 {
 	if (argc < 2 || !strcmp(argv[1], "--help")) {
-		fprintf(stderr, "usage: peakrss PROGRAM [ARGS...]  (runs PROGRAM; its peak RSS and CPU time on stderr)\n");
+		fprintf(stderr,
+			"usage: peakrss PROGRAM [ARGS...]  (runs PROGRAM; its peak RSS and CPU time on stderr)\n");
 		return argc < 2 ? 2 : 0;
 	}
 	pid_t pid = fork();

@@ -37,9 +37,9 @@ int main(int argc, char **argv)
 		sink = sink + m.state().r.z();
 	}
 	double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-	long steps = frames * 6;   // ceil((1/90) / 0.002) = 6 RK4 steps per frame
+	long steps = frames * 6; // ceil((1/90) / 0.002) = 6 RK4 steps per frame
 	std::printf("{\"frames\": %ld, \"rk4_steps\": %ld, \"wall_s\": %.6f, \"frames_per_s\": %.1f, "
-	            "\"rk4_steps_per_s\": %.1f, \"sim_s_per_wall_s\": %.1f, \"z_end_m\": %.3f}\n",
-	            frames, steps, wall, frames / wall, steps / wall, seconds / wall, (double)sink / frames);
+		    "\"rk4_steps_per_s\": %.1f, \"sim_s_per_wall_s\": %.1f, \"z_end_m\": %.3f}\n",
+		    frames, steps, wall, frames / wall, steps / wall, seconds / wall, (double)sink / frames);
 	return 0;
 }

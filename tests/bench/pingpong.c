@@ -90,7 +90,7 @@ static int pingpong(long frames, size_t out_b, int back_n, size_t back_b)
 		perror("fork");
 		return 1;
 	}
-	if (pid == 0) {   /* the firmware side */
+	if (pid == 0) { /* the firmware side */
 		close(plant);
 		for (long i = 0; i < total; i++) {
 			if (recv(fw, buf, sizeof buf, 0) < 0)
@@ -119,8 +119,7 @@ static int pingpong(long frames, size_t out_b, int back_n, size_t back_b)
 	double wall = now_s() - t0;
 	int st = 0;
 	waitpid(pid, &st, 0);
-	printf("{\"frames\": %ld, \"wall_s\": %.6f, \"frames_per_s\": %.1f}\n", frames, wall,
-	       (double)frames / wall);
+	printf("{\"frames\": %ld, \"wall_s\": %.6f, \"frames_per_s\": %.1f}\n", frames, wall, (double)frames / wall);
 	return WIFEXITED(st) && WEXITSTATUS(st) == 0 ? 0 : 1;
 }
 
@@ -187,7 +186,7 @@ static int client(uint16_t xp_port, uint16_t listen_port, int dref, float thr)
 	for (;;) {
 		ssize_t r = recv(fd, rx, sizeof rx, 0);
 		if (r < 0)
-			break;   /* 1 s of silence: octo-sim has stopped */
+			break; /* 1 s of silence: octo-sim has stopped */
 		if (r < 5 || memcmp(rx, "DATA", 4) != 0)
 			continue;
 		if (dref) {

@@ -47,17 +47,17 @@
 #define KTAU_TRUE 0.3869f
 
 /* ---------------------------------------------------------------- stub HAL */
-static struct stub_hal H;   /* tests/app/stub_hal.c: clock advanced 1/90 s per frame */
+static struct stub_hal H; /* tests/app/stub_hal.c: clock advanced 1/90 s per frame */
 
 /* ---------------------------------------------------------------- synthetic plant */
-static struct app A;   /* global: the compiler cannot see through it across the markers */
-static struct mav M;   /* its MAVLink endpoint, ticked after the app as the platform does */
+static struct app A; /* global: the compiler cannot see through it across the markers */
+static struct mav M; /* its MAVLink endpoint, ticked after the app as the platform does */
 static struct hal_sensor_frame F;
 static float s_rotor[HAL_ROTORS];
 static uint32_t rng = 12345u;
 static uint32_t n_frame;
 
-static float urand(void)   /* [-1, 1) */
+static float urand(void) /* [-1, 1) */
 {
 	rng ^= rng << 13;
 	rng ^= rng >> 17;
@@ -82,8 +82,10 @@ static void next_frame(void)
 	F.q_ib[1] = sr * cp;
 	F.q_ib[2] = cr * sp;
 	F.q_ib[3] = -sr * sp;
-	F.rate_b_rps[0] = 0.3f * 0.01745f * 2.0f * 3.14159f * 0.7f * cosf(2.0f * 3.14159f * 0.7f * tf) + 0.005f * urand();
-	F.rate_b_rps[1] = -0.3f * 0.01745f * 2.0f * 3.14159f * 0.45f * sinf(2.0f * 3.14159f * 0.45f * tf) + 0.005f * urand();
+	F.rate_b_rps[0] =
+		0.3f * 0.01745f * 2.0f * 3.14159f * 0.7f * cosf(2.0f * 3.14159f * 0.7f * tf) + 0.005f * urand();
+	F.rate_b_rps[1] =
+		-0.3f * 0.01745f * 2.0f * 3.14159f * 0.45f * sinf(2.0f * 3.14159f * 0.45f * tf) + 0.005f * urand();
 	F.rate_b_rps[2] = 0.005f * urand();
 	/* height follows the app's setpoint; horizontal position within a few cm */
 	bool flying = A.mode != APP_DISARMED && A.mode != APP_IDLE;
@@ -181,7 +183,7 @@ static void alloc_demand(uint32_t i, scalar_t d[MIXER_N_AXES])
 	float fmax = 8.0f * kf * A.p.mot_thr_max;
 	float f = hover * (1.0f + 0.8f * urand());
 	if (i % 4 == 3)
-		f = fmax * (0.5f + 0.5f * urand());   /* some near the top of the box */
+		f = fmax * (0.5f + 0.5f * urand()); /* some near the top of the box */
 	d[0] = sc_from_float(f);
 	d[1] = sc_from_float(urand() * 0.6f * f * l);
 	d[2] = sc_from_float(urand() * 0.6f * f * l);
@@ -206,7 +208,7 @@ int main(void)
 	int n = 0;
 	while (A.mode != APP_HOLD && n++ < 90 * 60)
 		frame_unmeasured();
-	for (int i = 0; i < 90; i++)   /* settle a second in HOLD */
+	for (int i = 0; i < 90; i++) /* settle a second in HOLD */
 		frame_unmeasured();
 	printf("step: mode %s after %d frames\n", app_mode_name(A.mode), n);
 
@@ -226,7 +228,7 @@ int main(void)
 	for (size_t k = 0; k < sizeof exp_ids / sizeof exp_ids[0]; k++) {
 		int id = exp_ids[k], exp = 0;
 		if (k > 0) {
-			for (int i = 0; i < 90 && A.mode == APP_HOLD; i++)   /* a second of HOLD between */
+			for (int i = 0; i < 90 && A.mode == APP_HOLD; i++) /* a second of HOLD between */
 				frame_unmeasured();
 		}
 		if (exp_available(id) && A.mode == APP_HOLD) {
@@ -237,7 +239,7 @@ int main(void)
 				bench_exp_step();
 				bench_exp_tick();
 			}
-			if (A.mode == APP_EXPERIMENT) {   /* cut at N_EXP: stop it, unmeasured */
+			if (A.mode == APP_EXPERIMENT) { /* cut at N_EXP: stop it, unmeasured */
 				app_cmd_experiment(&A, 0.0f, 0, why, sizeof why);
 				frame_unmeasured();
 			}
@@ -273,8 +275,7 @@ int main(void)
 	bench_alloc_worst();
 	printf("step: alloc_calls %d saturated %u\n", N_ALLOC, n_sat);
 	printf("step: alloc_worst_steps %u demand %u\n", (unsigned)mix_out.steps, worst_i);
-	printf("step: alloc_step_bound %d\n",
-	       2 * MIXER_ALPHA_ITERS + (A.mix.n_active - 4) + MIXER_QP_ITERS);
+	printf("step: alloc_step_bound %d\n", 2 * MIXER_ALPHA_ITERS + (A.mix.n_active - 4) + MIXER_QP_ITERS);
 	printf("step: mix_mode %d\n", (int)A.mix.p.mode);
 	printf("step: done\n");
 	return 0;

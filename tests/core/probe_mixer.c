@@ -17,7 +17,6 @@
 static struct mixer mix;
 static struct mixer_design des; /* the float32 set-up results (not kept by struct mixer) */
 
-
 int main(void)
 {
 	char line[512];
@@ -28,7 +27,8 @@ int main(void)
 		double a[8];
 		unsigned mask;
 		int mode;
-		if (sscanf(line, "init %lf %lf %lf %u %lf %lf %d", &a[0], &a[1], &a[2], &mask, &a[3], &a[4], &mode) == 7) {
+		if (sscanf(line, "init %lf %lf %lf %u %lf %lf %d", &a[0], &a[1], &a[2], &mask, &a[3], &a[4], &mode) ==
+		    7) {
 			mixer_default_params(&p);
 			p.arm_l_m = sc_from_float((float)a[0]);
 			p.k_f_n = sc_from_float((float)a[1]);

@@ -21,10 +21,10 @@
 static scalar_t s(double x) { return sc_from_float((float)x); }
 
 struct vert {
-	double z, vz;    /* m, m/s (up) */
-	double f_a;      /* thrust after the lag, N */
-	double f_queue;  /* one frame of delay */
-	double m;        /* true mass */
+	double z, vz;        /* m, m/s (up) */
+	double f_a;          /* thrust after the lag, N */
+	double f_queue;      /* one frame of delay */
+	double m;            /* true mass */
 	double thrust_scale; /* true thrust / commanded thrust (a k_f error) */
 	double lag_s;
 	double cos_tilt;
@@ -56,7 +56,7 @@ struct alt_result {
 struct alt_cfg {
 	struct alt_ctrl_params p;
 	double m_nom, m_true, thrust_scale, cos_tilt, tilt_rad, seconds;
-	double pre_s; /* seconds of hold at 1 m before the step (lets the integral converge) */
+	double pre_s;        /* seconds of hold at 1 m before the step (lets the integral converge) */
 	double f_alloc_max;  /* the allocation delivers at most this thrust, N (0: all) */
 	bool alloc_feedback; /* tell the controller when it cut */
 };
@@ -90,7 +90,7 @@ static struct alt_cfg alt_cfg_default(void)
 /* Starts in hover at 1 m (thrust at m_true g), steps the setpoint to 1 + step. */
 static void run_alt(const struct alt_cfg *c, double step, struct alt_result *r)
 {
-	struct vert v = { 1.0, 0, 0, 0, c->m_true, c->thrust_scale, 0.030, cos(c->tilt_rad) };
+	struct vert v = {1.0, 0, 0, 0, c->m_true, c->thrust_scale, 0.030, cos(c->tilt_rad)};
 	v.f_a = v.f_queue = c->m_true * G / cos(c->tilt_rad);
 	struct alt_ctrl ac;
 	alt_ctrl_init(&ac, &c->p);
@@ -136,8 +136,9 @@ static void run_alt(const struct alt_cfg *c, double step, struct alt_result *r)
 	}
 #ifdef TEST_VERBOSE
 	printf("alt step %.2f m_nom %.3f m_true %.3f scale %.2f tilt %.2f pre %.0f: os %.1f %% settle %.2f s "
-	       "final %.1e maxdev %.3f flags %x\n", step, c->m_nom, c->m_true, c->thrust_scale, c->tilt_rad,
-	       c->pre_s, 100 * r->overshoot, r->settle_s, r->final_err, r->max_dev, (unsigned)r->flags_or);
+	       "final %.1e maxdev %.3f flags %x\n",
+	       step, c->m_nom, c->m_true, c->thrust_scale, c->tilt_rad, c->pre_s, 100 * r->overshoot, r->settle_s,
+	       r->final_err, r->max_dev, (unsigned)r->flags_or);
 #endif
 }
 
@@ -169,18 +170,18 @@ UNIT_TEST(alt_ctrl_wrong_mass)
 {
 	struct alt_cfg c = alt_cfg_default();
 	struct alt_result r;
-	double cases[4][2] = { { 1.7, 1.0 }, { 2.7, 1.0 }, { M_TRUE, 0.8 }, { M_TRUE, 1.25 } }; /* m_nom, thrust scale */
+	double cases[4][2] = {{1.7, 1.0}, {2.7, 1.0}, {M_TRUE, 0.8}, {M_TRUE, 1.25}}; /* m_nom, thrust scale */
 	for (int i = 0; i < 4; i++) {
 		c.m_nom = cases[i][0];
 		c.thrust_scale = cases[i][1];
 		c.seconds = 12;
 		c.pre_s = 0;
-		run_alt(&c, 0.0, &r); /* hold from a wrong initial thrust: the sag is recovered */
+		run_alt(&c, 0.0, &r);    /* hold from a wrong initial thrust: the sag is recovered */
 		CHECK(r.max_dev < 0.35); /* measured 0.16 ... 0.23 m */
 		CHECK(r.final_err < 0.01);
 		run_alt(&c, 1.0, &r); /* step at once: stable, converges */
 		CHECK(r.final_err < 0.01);
-		c.pre_s = 12;         /* step once the integral has converged */
+		c.pre_s = 12; /* step once the integral has converged */
 		c.seconds = 8;
 		run_alt(&c, 1.0, &r);
 		CHECK(r.overshoot < 0.10);
@@ -221,7 +222,7 @@ UNIT_TEST(alt_ctrl_saturation_anti_windup)
 	p.f_max_n = s(25.0); /* just above m g = 20.9 N */
 	struct alt_ctrl ac;
 	alt_ctrl_init(&ac, &p);
-	struct vert v = { 1.0, 0, M_TRUE * G, M_TRUE * G, 2.9, 1.0, 0.030, 1.0 }; /* 2.9 kg: cannot hover */
+	struct vert v = {1.0, 0, M_TRUE * G, M_TRUE * G, 2.9, 1.0, 0.030, 1.0}; /* 2.9 kg: cannot hover */
 	struct alt_ctrl_input in;
 	memset(&in, 0, sizeof in);
 	in.z_sp_m = s(3.0);
@@ -270,7 +271,7 @@ UNIT_TEST(alt_ctrl_law_matches_double_reference)
 	p.ki_rps = SC_ZERO;
 	struct alt_ctrl ac;
 	alt_ctrl_init(&ac, &p);
-	struct unit_rng r = { 0xa17ULL };
+	struct unit_rng r = {0xa17ULL};
 	double wn = d(p.wn_rps), z = d(p.zeta), kv = 2 * z * wn, kz = wn * wn / kv;
 	for (int i = 0; i < 500; i++) {
 		struct alt_ctrl_input in;
@@ -285,7 +286,8 @@ UNIT_TEST(alt_ctrl_law_matches_double_reference)
 		in.dt_s = s(FRAME_S);
 		scalar_t f = alt_ctrl_update(&ac, &in);
 		double vc = kz * (d(in.z_sp_m) - d(in.z_m));
-		vc = vc > d(p.vz_max_up_mps) ? d(p.vz_max_up_mps) : (vc < -d(p.vz_max_down_mps) ? -d(p.vz_max_down_mps) : vc);
+		vc = vc > d(p.vz_max_up_mps) ? d(p.vz_max_up_mps)
+					     : (vc < -d(p.vz_max_down_mps) ? -d(p.vz_max_down_mps) : vc);
 		vc += d(in.vz_ff_mps);
 		double a = kv * (vc - d(in.vz_mps));
 		double qx = d(in.q_b2i.x), qy = d(in.q_b2i.y), cz = 1 - 2 * (qx * qx + qy * qy);
@@ -327,7 +329,7 @@ UNIT_TEST(alt_ctrl_nan_guard)
  * m/s^2) and the climb does not overshoot. Random mass error and limit. */
 UNIT_TEST(alt_ctrl_allocation_limits_stop_windup)
 {
-	struct unit_rng g = { 0xa17ULL };
+	struct unit_rng g = {0xa17ULL};
 	for (int run = 0; run < 4; run++) {
 		struct alt_cfg c = alt_cfg_default();
 		c.m_nom = M_TRUE * unit_rand_uniform(&g, 0.9, 1.1);

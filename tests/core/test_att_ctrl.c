@@ -22,20 +22,19 @@
 
 static scalar_t s(double x) { return sc_from_float((float)x); }
 
-static const double I_TRUE[3] = { 0.0628, 0.0762, 0.1014 };
+static const double I_TRUE[3] = {0.0628, 0.0762, 0.1014};
 
 /* ------------------------------------------------------------ rigid-body model */
 struct rb {
-	double q[4];                 /* q_b2i, w x y z */
-	double w[3];                 /* body rate, rad/s */
-	double I[3];                 /* true inertia */
-	double tau_a[3];             /* torque after the motor lag */
-	double queue[MAX_DELAY][3];  /* commands in transit (frames) */
-	int ndelay;                  /* frames of transport delay, 0..MAX_DELAY */
-	double lag_s;                /* motor lag time constant, 0 = none */
-	double tau_dist[3];          /* disturbance torque, N m */
+	double q[4];                /* q_b2i, w x y z */
+	double w[3];                /* body rate, rad/s */
+	double I[3];                /* true inertia */
+	double tau_a[3];            /* torque after the motor lag */
+	double queue[MAX_DELAY][3]; /* commands in transit (frames) */
+	int ndelay;                 /* frames of transport delay, 0..MAX_DELAY */
+	double lag_s;               /* motor lag time constant, 0 = none */
+	double tau_dist[3];         /* disturbance torque, N m */
 };
-
 
 static void rb_init(struct rb *b, int ndelay, double lag_s)
 {
@@ -80,7 +79,7 @@ static void rb_frame(struct rb *b, const double tau_cmd[3])
 		rb_wdot(b, wm, tau, wd2);
 		double n = sqrt(wm[0] * wm[0] + wm[1] * wm[1] + wm[2] * wm[2]), a = 0.5 * n * h;
 		double sn = n > 1e-12 ? sin(a) / n : 0.5 * h;
-		double e[4] = { cos(a), wm[0] * sn, wm[1] * sn, wm[2] * sn };
+		double e[4] = {cos(a), wm[0] * sn, wm[1] * sn, wm[2] * sn};
 		dq_mul(b->q, e, b->q);
 		double m = sqrt(b->q[0] * b->q[0] + b->q[1] * b->q[1] + b->q[2] * b->q[2] + b->q[3] * b->q[3]);
 		for (int i = 0; i < 4; i++)
@@ -93,7 +92,7 @@ static void rb_frame(struct rb *b, const double tau_cmd[3])
 /* rotation error (rad, body axes, angle * axis) from the state to the double setpoint */
 static void rb_error(const struct rb *b, const double sp[4], double e[3])
 {
-	double c[4] = { b->q[0], -b->q[1], -b->q[2], -b->q[3] }, qe[4];
+	double c[4] = {b->q[0], -b->q[1], -b->q[2], -b->q[3]}, qe[4];
 	dq_mul(c, sp, qe);
 	if (qe[0] < 0)
 		for (int i = 0; i < 4; i++)
@@ -106,15 +105,15 @@ static void rb_error(const struct rb *b, const double sp[4], double e[3])
 
 /* ------------------------------------------------------------ closed-loop runs */
 struct step_result {
-	double overshoot[3]; /* max over time of -(e_axis / e0_axis), relative to the step */
-	double settle_s[3];  /* last time |e_axis| > 5 % of the step (or 0.005 rad) */
-	double final_err;    /* |e| at the end, rad */
-	double max_err;      /* max |e| after the first second, rad */
-	double max_rate;     /* max |omega|, rad/s */
-	int sat_frames;      /* frames with any torque saturation */
-	int alloc_frames;    /* frames in which the allocation cut a torque */
+	double overshoot[3];   /* max over time of -(e_axis / e0_axis), relative to the step */
+	double settle_s[3];    /* last time |e_axis| > 5 % of the step (or 0.005 rad) */
+	double final_err;      /* |e| at the end, rad */
+	double max_err;        /* max |e| after the first second, rad */
+	double max_rate;       /* max |omega|, rad/s */
+	int sat_frames;        /* frames with any torque saturation */
+	int alloc_frames;      /* frames in which the allocation cut a torque */
 	double int_tau_cut[3]; /* largest integral torque (N m) towards a torque the allocation cut */
-	int int_grew_cut;    /* frames in which the integral grew towards a torque the allocation cut */
+	int int_grew_cut;      /* frames in which the integral grew towards a torque the allocation cut */
 };
 
 struct loop_cfg {
@@ -152,10 +151,7 @@ static struct loop_cfg cfg_default(void)
 	return c;
 }
 
-static scalar_t get_axis(struct vec3 v, int i)
-{
-	return i == 0 ? v.x : (i == 1 ? v.y : v.z);
-}
+static scalar_t get_axis(struct vec3 v, int i) { return i == 0 ? v.x : (i == 1 ? v.y : v.z); }
 
 /* From level, step to the setpoint (roll, pitch, yaw); fills r. */
 static void run_step(const struct loop_cfg *c, double roll, double pitch, double yaw, struct step_result *r)
@@ -171,14 +167,14 @@ static void run_step(const struct loop_cfg *c, double roll, double pitch, double
 	in.inertia_kgm2 = vec3_make(s(c->I_nom[0]), s(c->I_nom[1]), s(c->I_nom[2]));
 	in.dt_s = s(FRAME_S);
 	/* setpoint in double from the same Euler angles */
-	double sp[4], qz[4] = { cos(yaw / 2), 0, 0, sin(yaw / 2) }, qy[4] = { cos(pitch / 2), 0, sin(pitch / 2), 0 };
-	double qx[4] = { cos(roll / 2), sin(roll / 2), 0, 0 };
+	double sp[4], qz[4] = {cos(yaw / 2), 0, 0, sin(yaw / 2)}, qy[4] = {cos(pitch / 2), 0, sin(pitch / 2), 0};
+	double qx[4] = {cos(roll / 2), sin(roll / 2), 0, 0};
 	dq_mul(qz, qy, sp);
 	dq_mul(sp, qx, sp);
 	double e0[3];
 	rb_error(&b, sp, e0);
 	memset(r, 0, sizeof *r);
-	struct unit_rng rng = { 0xd17eULL };
+	struct unit_rng rng = {0xd17eULL};
 	uint8_t prev_pos = 0, prev_neg = 0; /* what the allocation cut on the previous step */
 	int n = (int)(c->seconds / FRAME_S);
 	for (int k = 0; k < n; k++) {
@@ -189,7 +185,7 @@ static void run_step(const struct loop_cfg *c, double roll, double pitch, double
 		uint32_t f = att_ctrl_update(&ac, &in, &tau);
 		if (f & (ATT_CTRL_SAT_X | ATT_CTRL_SAT_Y | ATT_CTRL_SAT_Z))
 			r->sat_frames++;
-		double tc[3] = { d(tau.x), d(tau.y), d(tau.z) };
+		double tc[3] = {d(tau.x), d(tau.y), d(tau.z)};
 		/* the allocation: torque beyond alloc_max_nm is cut, and said so for the next step */
 		uint8_t cut_pos = 0, cut_neg = 0;
 		for (int i = 0; i < 3; i++) {
@@ -199,8 +195,8 @@ static void run_step(const struct loop_cfg *c, double roll, double pitch, double
 			else if (m > 0 && tc[i] < -m)
 				cut_neg |= (uint8_t)(1u << i), tc[i] = -m;
 		}
-		double ib[3] = { d(int_before.x), d(int_before.y), d(int_before.z) };
-		double ia[3] = { d(ac.int_r_rad.x), d(ac.int_r_rad.y), d(ac.int_r_rad.z) };
+		double ib[3] = {d(int_before.x), d(int_before.y), d(int_before.z)};
+		double ia[3] = {d(ac.int_r_rad.x), d(ac.int_r_rad.y), d(ac.int_r_rad.z)};
 		for (int i = 0; i < 3; i++) {
 			/* the integral this step grew towards the torque the previous step's allocation cut */
 			if (((in.alloc_short_pos | (c->alloc_feedback ? 0 : prev_pos)) >> i & 1u) && ia[i] > ib[i])
@@ -214,7 +210,9 @@ static void run_step(const struct loop_cfg *c, double roll, double pitch, double
 			for (int i = 0; i < 3; i++) {
 				double wn = d(get_axis(c->p.wn_rps, i)), z = d(get_axis(c->p.zeta, i));
 				kint[i] = c->I_nom[i] * 2 * z * wn * d(get_axis(c->p.ki_rps, i));
-				double t = (cut_pos >> i & 1u) ? kint[i] * ia[i] : (cut_neg >> i & 1u) ? -kint[i] * ia[i] : 0;
+				double t = (cut_pos >> i & 1u)   ? kint[i] * ia[i]
+					   : (cut_neg >> i & 1u) ? -kint[i] * ia[i]
+								 : 0;
 				r->int_tau_cut[i] = t > r->int_tau_cut[i] ? t : r->int_tau_cut[i];
 			}
 		}
@@ -222,7 +220,8 @@ static void run_step(const struct loop_cfg *c, double roll, double pitch, double
 		if (c->alloc_feedback)
 			in.alloc_short_pos = cut_pos, in.alloc_short_neg = cut_neg;
 		if (c->pitch_dither_nm > 0)
-			b.tau_dist[1] = c->tau_dist[1] + unit_rand_uniform(&rng, -c->pitch_dither_nm, c->pitch_dither_nm);
+			b.tau_dist[1] =
+				c->tau_dist[1] + unit_rand_uniform(&rng, -c->pitch_dither_nm, c->pitch_dither_nm);
 		rb_frame(&b, tc);
 		double e[3], t = (k + 1) * FRAME_S;
 		rb_error(&b, sp, e);
@@ -242,8 +241,8 @@ static void run_step(const struct loop_cfg *c, double roll, double pitch, double
 	}
 #ifdef TEST_VERBOSE
 	printf("att step %.2f %.2f %.2f I_nom %.4f %.4f %.4f delay %d lag %.3f: overshoot %.1f %.1f %.1f %% "
-	       "settle %.2f %.2f %.2f s final %.1e max_err %.4f max_rate %.2f sat %d\n", roll, pitch, yaw,
-	       c->I_nom[0], c->I_nom[1], c->I_nom[2], c->ndelay, c->lag_s, 100 * r->overshoot[0],
+	       "settle %.2f %.2f %.2f s final %.1e max_err %.4f max_rate %.2f sat %d\n",
+	       roll, pitch, yaw, c->I_nom[0], c->I_nom[1], c->I_nom[2], c->ndelay, c->lag_s, 100 * r->overshoot[0],
 	       100 * r->overshoot[1], 100 * r->overshoot[2], r->settle_s[0], r->settle_s[1], r->settle_s[2],
 	       r->final_err, r->max_err, r->max_rate, r->sat_frames);
 #endif
@@ -255,12 +254,12 @@ static void run_step(const struct loop_cfg *c, double roll, double pitch, double
 static void ref_law(const struct att_ctrl_params *p, const double e[3], const double w[3], const double I[3],
 		    double tau[3])
 {
-	double Iw[3] = { I[0] * w[0], I[1] * w[1], I[2] * w[2] };
-	double g[3] = { w[1] * Iw[2] - w[2] * Iw[1], w[2] * Iw[0] - w[0] * Iw[2], w[0] * Iw[1] - w[1] * Iw[0] };
-	double wn[3] = { d(p->wn_rps.x), d(p->wn_rps.y), d(p->wn_rps.z) };
-	double z[3] = { d(p->zeta.x), d(p->zeta.y), d(p->zeta.z) };
-	double rm[3] = { d(p->rate_max_rps.x), d(p->rate_max_rps.y), d(p->rate_max_rps.z) };
-	double tm[3] = { d(p->tau_max_nm.x), d(p->tau_max_nm.y), d(p->tau_max_nm.z) };
+	double Iw[3] = {I[0] * w[0], I[1] * w[1], I[2] * w[2]};
+	double g[3] = {w[1] * Iw[2] - w[2] * Iw[1], w[2] * Iw[0] - w[0] * Iw[2], w[0] * Iw[1] - w[1] * Iw[0]};
+	double wn[3] = {d(p->wn_rps.x), d(p->wn_rps.y), d(p->wn_rps.z)};
+	double z[3] = {d(p->zeta.x), d(p->zeta.y), d(p->zeta.z)};
+	double rm[3] = {d(p->rate_max_rps.x), d(p->rate_max_rps.y), d(p->rate_max_rps.z)};
+	double tm[3] = {d(p->tau_max_nm.x), d(p->tau_max_nm.y), d(p->tau_max_nm.z)};
 	for (int i = 0; i < 3; i++) {
 		double kd = 2 * z[i] * wn[i], rc = wn[i] * wn[i] / kd * e[i];
 		rc = rc > rm[i] ? rm[i] : (rc < -rm[i] ? -rm[i] : rc);
@@ -277,15 +276,16 @@ UNIT_TEST(att_ctrl_law_matches_double_reference)
 	p.ki_rps = vec3_zero();
 	struct att_ctrl ac;
 	att_ctrl_init(&ac, &p);
-	struct unit_rng r = { 0xa77ULL };
+	struct unit_rng r = {0xa77ULL};
 	for (int i = 0; i < 500; i++) {
-		double eul[3] = { unit_rand_uniform(&r, -0.6, 0.6), unit_rand_uniform(&r, -0.6, 0.6),
-				  unit_rand_uniform(&r, -3, 3) };
-		double eul_sp[3] = { unit_rand_uniform(&r, -0.6, 0.6), unit_rand_uniform(&r, -0.6, 0.6),
-				     unit_rand_uniform(&r, -3, 3) };
-		double w[3] = { unit_rand_uniform(&r, -3, 3), unit_rand_uniform(&r, -3, 3), unit_rand_uniform(&r, -2, 2) };
-		double I[3] = { unit_rand_uniform(&r, 0.03, 0.15), unit_rand_uniform(&r, 0.03, 0.15),
-				unit_rand_uniform(&r, 0.05, 0.2) };
+		double eul[3] = {unit_rand_uniform(&r, -0.6, 0.6), unit_rand_uniform(&r, -0.6, 0.6),
+				 unit_rand_uniform(&r, -3, 3)};
+		double eul_sp[3] = {unit_rand_uniform(&r, -0.6, 0.6), unit_rand_uniform(&r, -0.6, 0.6),
+				    unit_rand_uniform(&r, -3, 3)};
+		double w[3] = {unit_rand_uniform(&r, -3, 3), unit_rand_uniform(&r, -3, 3),
+			       unit_rand_uniform(&r, -2, 2)};
+		double I[3] = {unit_rand_uniform(&r, 0.03, 0.15), unit_rand_uniform(&r, 0.03, 0.15),
+			       unit_rand_uniform(&r, 0.05, 0.2)};
 		struct att_ctrl_input in;
 		memset(&in, 0, sizeof in);
 		in.q_b2i = tq_from_euler(s(eul[0]), s(eul[1]), s(eul[2]));
@@ -296,12 +296,12 @@ UNIT_TEST(att_ctrl_law_matches_double_reference)
 		struct vec3 tau;
 		att_ctrl_update(&ac, &in, &tau);
 		/* reference error from the represented quaternions, in double */
-		double qc[4] = { d(in.q_b2i.w), -d(in.q_b2i.x), -d(in.q_b2i.y), -d(in.q_b2i.z) };
-		double qs[4] = { d(in.q_sp_b2i.w), d(in.q_sp_b2i.x), d(in.q_sp_b2i.y), d(in.q_sp_b2i.z) }, qe[4];
+		double qc[4] = {d(in.q_b2i.w), -d(in.q_b2i.x), -d(in.q_b2i.y), -d(in.q_b2i.z)};
+		double qs[4] = {d(in.q_sp_b2i.w), d(in.q_sp_b2i.x), d(in.q_sp_b2i.y), d(in.q_sp_b2i.z)}, qe[4];
 		dq_mul(qc, qs, qe);
-		double k = qe[0] < 0 ? -2 : 2, e[3] = { k * qe[1], k * qe[2], k * qe[3] };
-		double wq[3] = { d(in.rate_b_rps.x), d(in.rate_b_rps.y), d(in.rate_b_rps.z) };
-		double Iq[3] = { d(in.inertia_kgm2.x), d(in.inertia_kgm2.y), d(in.inertia_kgm2.z) }, ref[3];
+		double k = qe[0] < 0 ? -2 : 2, e[3] = {k * qe[1], k * qe[2], k * qe[3]};
+		double wq[3] = {d(in.rate_b_rps.x), d(in.rate_b_rps.y), d(in.rate_b_rps.z)};
+		double Iq[3] = {d(in.inertia_kgm2.x), d(in.inertia_kgm2.y), d(in.inertia_kgm2.z)}, ref[3];
 		ref_law(&p, e, wq, Iq, ref);
 		double tol = OCTO_FIXED ? 2e-3 : 1e-5;
 		CHECK_NEAR(d(tau.x), ref[0], tol);
@@ -332,7 +332,8 @@ UNIT_TEST(att_ctrl_limits_and_flags)
 	/* rates far beyond anything physical: torque saturates, never overflows */
 	in.rate_b_rps = vec3_make(SC(80), SC(-80), SC(80));
 	f = att_ctrl_update(&ac, &in, &tau);
-	CHECK((f & (ATT_CTRL_SAT_X | ATT_CTRL_SAT_Y | ATT_CTRL_SAT_Z)) == (ATT_CTRL_SAT_X | ATT_CTRL_SAT_Y | ATT_CTRL_SAT_Z));
+	CHECK((f & (ATT_CTRL_SAT_X | ATT_CTRL_SAT_Y | ATT_CTRL_SAT_Z)) ==
+	      (ATT_CTRL_SAT_X | ATT_CTRL_SAT_Y | ATT_CTRL_SAT_Z));
 	CHECK(fabs(d(tau.x)) <= d(p.tau_max_nm.x) && fabs(d(tau.y)) <= d(p.tau_max_nm.y));
 	/* at the setpoint and at rest: no torque, no flags */
 	att_ctrl_init(&ac, &p);
@@ -469,7 +470,7 @@ UNIT_TEST(att_ctrl_nan_guard)
  * cannot give. Random inertia scale and allocation limit. */
 UNIT_TEST(att_ctrl_allocation_limits_stop_windup)
 {
-	struct unit_rng g = { 0xa11cULL };
+	struct unit_rng g = {0xa11cULL};
 	for (int run = 0; run < 4; run++) {
 		struct loop_cfg c = cfg_default();
 		double sc = unit_rand_uniform(&g, 0.8, 1.25);

@@ -143,7 +143,8 @@ UNIT_TEST(est_products_and_reciprocals_equal_qfmt)
 UNIT_TEST(est_mul_unit_equals_sc_mul)
 {
 	long bad = 0;
-	const int32_t edge[] = {0, 1, -1, 32767, 32768, 32769, 65535, 65536, 65537, -65536, INT32_MAX, -INT32_MAX, INT32_MIN};
+	const int32_t edge[] = {0,     1,     -1,     32767,     32768,      32769,    65535,
+				65536, 65537, -65536, INT32_MAX, -INT32_MAX, INT32_MIN};
 	const unsigned ne = sizeof edge / sizeof edge[0];
 	for (int k = 0; k < 400000; k++) {
 		int32_t a = k < (int)(ne * ne) ? edge[k % ne] : (int32_t)(xr() >> (xr() % 32u));
@@ -151,7 +152,7 @@ UNIT_TEST(est_mul_unit_equals_sc_mul)
 		if (k >= (int)(ne * ne) && (xr() & 1u))
 			a = -a;
 		if (k % 16 == 0)
-			u = (int32_t)(xr() >> (xr() % 32u)) * ((xr() & 1u) ? 1 : -1);   /* beyond [0, 1] too */
+			u = (int32_t)(xr() >> (xr() % 32u)) * ((xr() & 1u) ? 1 : -1); /* beyond [0, 1] too */
 		scalar_t x = sc_of_raw(a), y = sc_of_raw(u);
 		scalar_t p = est_mul_unit(x, y), q = sc_mul(x, y);
 		if (!(p == q))
@@ -163,8 +164,23 @@ UNIT_TEST(est_mul_unit_equals_sc_mul)
 UNIT_TEST(est_div_int_equals_sc_div_int)
 {
 	long bad = 0;
-	const int32_t edge[] = {0, 1, -1, 2, -2, 49, 50, 51, -50, 99, 100, 101, INT32_MAX, -INT32_MAX, INT32_MIN,
-				INT32_MAX - 50, -INT32_MAX + 50};
+	const int32_t edge[] = {0,
+				1,
+				-1,
+				2,
+				-2,
+				49,
+				50,
+				51,
+				-50,
+				99,
+				100,
+				101,
+				INT32_MAX,
+				-INT32_MAX,
+				INT32_MIN,
+				INT32_MAX - 50,
+				-INT32_MAX + 50};
 	const uint32_t ns[] = {3u, 100u, 7u};
 	for (unsigned i = 0; i < sizeof edge / sizeof edge[0]; i++)
 		for (unsigned k = 0; k < 3u; k++) {
@@ -214,7 +230,7 @@ UNIT_TEST(est_div_near_equals_sc_div)
 	}
 	CHECK(bad == 0);
 #if OCTO_FIXED
-	CHECK(near > 100000);   /* the guessing path was taken */
+	CHECK(near > 100000); /* the guessing path was taken */
 #endif
 }
 

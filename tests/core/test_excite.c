@@ -14,7 +14,6 @@
 
 #define PI 3.14159265358979323846
 
-
 #if OCTO_FIXED
 #define LSB (1.0 / 65536.0)
 #else
@@ -31,7 +30,7 @@ static struct excite_params params(enum excite_kind kind, double A)
 
 UNIT_TEST(excite_bounds_all_kinds)
 {
-	const enum excite_kind kinds[3] = { EXCITE_UNIFORM, EXCITE_PRBS, EXCITE_MULTISINE };
+	const enum excite_kind kinds[3] = {EXCITE_UNIFORM, EXCITE_PRBS, EXCITE_MULTISINE};
 	for (int j = 0; j < 3; j++) {
 		struct excite_params p = params(kinds[j], 0.05);
 		p.seed = 1234u + (uint32_t)j;
@@ -56,7 +55,7 @@ UNIT_TEST(excite_bounds_all_kinds)
 
 UNIT_TEST(excite_deterministic)
 {
-	const enum excite_kind kinds[3] = { EXCITE_UNIFORM, EXCITE_PRBS, EXCITE_MULTISINE };
+	const enum excite_kind kinds[3] = {EXCITE_UNIFORM, EXCITE_PRBS, EXCITE_MULTISINE};
 	for (int j = 0; j < 3; j++) {
 		struct excite_params p = params(kinds[j], 0.1);
 		p.seed = 77;
@@ -160,7 +159,7 @@ static double ms_ref_raw(int n, int k_first, int P, int frame)
 
 UNIT_TEST(excite_multisine_peak_period_reference)
 {
-	const int cases[3][3] = { { 8, 1, 180 }, { 5, 2, 90 }, { EXCITE_MS_MAX, 1, 360 } }; /* N, k_first, P */
+	const int cases[3][3] = {{8, 1, 180}, {5, 2, 90}, {EXCITE_MS_MAX, 1, 360}}; /* N, k_first, P */
 	for (int j = 0; j < 3; j++) {
 		struct excite_params p = params(EXCITE_MULTISINE, 1.0);
 		p.ms_count = (uint32_t)cases[j][0];
@@ -212,9 +211,12 @@ UNIT_TEST(excite_null_patterns_in_gamma_null_space)
 			.arm_l_m = sc_from_float((float)unit_rand_uniform(&g, 0.2, 0.6)),
 			.k_f_n = sc_from_float((float)unit_rand_uniform(&g, 15.0, 40.0)),
 			.k_tau_nm = sc_from_float((float)unit_rand_uniform(&g, 0.2, 0.6)),
-			.t_min = SC(0.0), .t_max = SC(1.0), .rotor_mask = 0xFF, .mode = MIXER_MODE_PRIORITY,
+			.t_min = SC(0.0),
+			.t_max = SC(1.0),
+			.rotor_mask = 0xFF,
+			.mode = MIXER_MODE_PRIORITY,
 		};
-		struct mixer mix;   /* on the stack (M0 RAM) */
+		struct mixer mix; /* on the stack (M0 RAM) */
 		struct mixer_design des;
 		CHECK(mixer_init_design(&mix, &p, &des));
 		for (unsigned k = 0; k < EXCITE_NULL_PATTERNS; k++) {
@@ -247,5 +249,5 @@ UNIT_TEST(excite_null_patterns_in_gamma_null_space)
 	CHECK(excite_offset_level(90, 45) == SC(-1.0));
 	CHECK(excite_offset_level(179, 45) == SC(0.0));
 	CHECK(excite_offset_level(180, 45) == SC(1.0));
-	CHECK(excite_offset_level(6, 0) == SC(-1.0));   /* seg 0 is taken as 1 */
+	CHECK(excite_offset_level(6, 0) == SC(-1.0)); /* seg 0 is taken as 1 */
 }

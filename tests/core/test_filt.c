@@ -14,7 +14,7 @@ static scalar_t s(double x) { return sc_from_float((float)x); }
 /* Step response of the ZOH-exact lag equals 1 - exp(-t / tau) at every sample. */
 UNIT_TEST(filt_lag_step_matches_exp)
 {
-	const double taus[3] = { 0.03, 0.1, 1.0 };
+	const double taus[3] = {0.03, 0.1, 1.0};
 	for (int j = 0; j < 3; j++) {
 		struct filt_lag f;
 		filt_lag_init(&f, s(taus[j]), s(FRAME_S), SC_ZERO);
@@ -92,7 +92,7 @@ UNIT_TEST(filt_svf_sine_derivative)
  * y_f(k) - y_f(k-1) = T/2 (y_f_dot(k) + y_f_dot(k-1)) (float 2e-6; Q16.16 see below). */
 UNIT_TEST(filt_svf_step_and_trapezoid)
 {
-	const double wcs[3] = { 5.0, 30.0, 150.0 };
+	const double wcs[3] = {5.0, 30.0, 150.0};
 	for (int j = 0; j < 3; j++) {
 		struct filt_svf f;
 		filt_svf_init(&f, s(wcs[j]), SC(1), s(FRAME_S), SC_ZERO);
@@ -125,7 +125,7 @@ UNIT_TEST(filt_svf_linearity)
 	struct filt_svf a, b;
 	filt_svf_init(&a, SC(25), SC(0.8), s(FRAME_S), SC_ZERO);
 	filt_svf_init(&b, SC(25), SC(0.8), s(FRAME_S), SC_ZERO);
-	struct unit_rng r = { 0x11ULL };
+	struct unit_rng r = {0x11ULL};
 	double worst = 0;
 	for (int k = 0; k < 500; k++) {
 		double y = unit_rand_uniform(&r, -1, 1);

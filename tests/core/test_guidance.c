@@ -33,14 +33,14 @@ static struct rcase random_case(struct unit_rng *g, double h_min)
 
 UNIT_TEST(guid_takeoff_profile)
 {
-	struct unit_rng g = { 0x7a6eULL };
+	struct unit_rng g = {0x7a6eULL};
 	for (int run = 0; run < 40; run++) {
 		struct rcase rc = random_case(&g, 0.5);
 		const struct guid_params p = rc.p;
 		const double ground = rc.ground, h = rc.h, dt = rc.dt;
 		struct guid gd;
 		guid_init(&gd, &p);
-		scalar_t pos[3] = { s(unit_rand_uniform(&g, -9, 9)), s(unit_rand_uniform(&g, -9, 9)), s(ground) };
+		scalar_t pos[3] = {s(unit_rand_uniform(&g, -9, 9)), s(unit_rand_uniform(&g, -9, 9)), s(ground)};
 		guid_arm(&gd, pos, s(0.4));
 		guid_ground(&gd, s(ground), true);
 		CHECK(guid_takeoff(&gd, GUID_GROUND, s(h), pos, s(0.7)));
@@ -51,11 +51,11 @@ UNIT_TEST(guid_takeoff_profile)
 		double vmax = d(p.tko_vel_mps), acc = d(p.profile_acc_mps2), q = OCTO_FIXED ? 2e-4 : 1e-5;
 		double prev_sp = d(gd.z_sp_m), prev_v = 0, t = 0;
 		int steps = 0, reached = -1;
-		struct guid_input in = { s(ground), SC_ZERO, s(dt), false };
+		struct guid_input in = {s(ground), SC_ZERO, s(dt), false};
 		for (int k = 0; k < 100000 && reached < 0; k++) {
 			uint32_t ev = guid_update(&gd, GUID_TAKEOFF, &in);
 			double sp = d(gd.z_sp_m), v = d(gd.vz_ff_mps);
-			CHECK(v >= -q && v <= vmax + q);                      /* climbs, never faster */
+			CHECK(v >= -q && v <= vmax + q); /* climbs, never faster */
 			/* no jump in the rate: acc dt a step; braking on sqrt(2 acc d) with d sampled a
 			 * step apart brakes by up to acc dt (1 + acc dt / v); the profile snaps to the
 			 * target from a rate below 8 acc dt (measured: up to 7) */
@@ -64,9 +64,9 @@ UNIT_TEST(guid_takeoff_profile)
 				CHECK(prev_v <= 8 * adt);
 			else
 				CHECK(fabs(v - prev_v) <= adt * (1 + adt / fmax(fmin(v, prev_v), adt)) + q);
-			CHECK(sp >= prev_sp - q && sp <= ground + h + q);      /* monotonic, never past */
+			CHECK(sp >= prev_sp - q && sp <= ground + h + q); /* monotonic, never past */
 			prev_sp = sp, prev_v = v, t += dt, steps++;
-			in.z_m = gd.z_sp_m;                                    /* a vehicle that follows */
+			in.z_m = gd.z_sp_m; /* a vehicle that follows */
 			if (sp == d(gd.z_target_m)) {
 				/* at the target: no hold before the vehicle is there, still and ready */
 				in.vz_mps = s(0.5);
@@ -103,12 +103,12 @@ UNIT_TEST(guid_takeoff_down_and_hold)
 	struct guid_params p = guid_params_default();
 	struct guid gd;
 	guid_init(&gd, &p);
-	scalar_t pos[3] = { SC(0), SC(0), SC(0) };
+	scalar_t pos[3] = {SC(0), SC(0), SC(0)};
 	guid_arm(&gd, pos, SC_ZERO);
 	pos[2] = SC(10);
 	CHECK(guid_takeoff(&gd, GUID_GROUND, SC(10), pos, SC_ZERO));
 	CHECK(guid_takeoff(&gd, GUID_TAKEOFF, SC(4), pos, SC_ZERO)); /* a lower target: descends */
-	struct guid_input in = { SC(10), SC_ZERO, s(1.0 / 90), true };
+	struct guid_input in = {SC(10), SC_ZERO, s(1.0 / 90), true};
 	guid_update(&gd, GUID_TAKEOFF, &in);
 	CHECK(gd.vz_ff_mps < SC_ZERO && gd.z_sp_m < SC(10));
 	guid_update(&gd, GUID_HOLD, &in);
@@ -117,7 +117,7 @@ UNIT_TEST(guid_takeoff_down_and_hold)
 
 UNIT_TEST(guid_landing)
 {
-	struct unit_rng g = { 0x1a4dULL };
+	struct unit_rng g = {0x1a4dULL};
 	for (int run = 0; run < 40; run++) {
 		struct rcase rc = random_case(&g, 1.0);
 		const struct guid_params p = rc.p;
@@ -125,12 +125,12 @@ UNIT_TEST(guid_landing)
 		struct guid gd;
 		guid_init(&gd, &p);
 		double q = OCTO_FIXED ? 2e-4 : 1e-5;
-		scalar_t pos[3] = { SC_ZERO, SC_ZERO, s(ground) };
+		scalar_t pos[3] = {SC_ZERO, SC_ZERO, s(ground)};
 		guid_arm(&gd, pos, SC_ZERO);
 		gd.z_sp_m = s(ground + h + 1); /* the set point above the vehicle: landing starts at it */
 		guid_land(&gd, s(ground + h));
 		CHECK_NEAR(d(gd.z_sp_m), ground + h, q);
-		struct guid_input in = { s(ground + h), SC_ZERO, s(dt), false };
+		struct guid_input in = {s(ground + h), SC_ZERO, s(dt), false};
 		double prev = d(gd.z_sp_m), t_ground = 0;
 		int landed = -1, bounced = 0;
 		for (int k = 0; k < 200000 && landed < 0; k++) {
@@ -166,11 +166,11 @@ UNIT_TEST(guid_on_the_ground)
 	guid_init(&gd, &p);
 	guid_ground(&gd, SC(3), true);
 	CHECK(gd.z_ground_m == SC(3) && gd.z_sp_m == SC(3));
-	struct guid_input in = { SC(2.5), SC(0.3), s(1.0 / 90), true };
+	struct guid_input in = {SC(2.5), SC(0.3), s(1.0 / 90), true};
 	CHECK(guid_update(&gd, GUID_GROUND, &in) == 0);
 	CHECK(gd.z_sp_m == SC(2.5) && gd.vz_ff_mps == SC_ZERO && gd.z_ground_m == SC(3));
 	/* a take-off from a landing starts at the vehicle, with no feedforward */
-	scalar_t pos[3] = { SC(1), SC(2), SC(6) };
+	scalar_t pos[3] = {SC(1), SC(2), SC(6)};
 	gd.vz_ff_mps = SC(-0.7);
 	CHECK(guid_takeoff(&gd, GUID_LAND, SC(5), pos, SC_ZERO));
 	CHECK(gd.z_sp_m == SC(6) && gd.vz_ff_mps == SC_ZERO && gd.z_target_m == SC(8));

@@ -40,7 +40,7 @@ static void plant_frame(struct plant *v, double f_cmd)
 		double a = (v->f_a + noise) / v->m - G;
 		v->z += h * v->vz + 0.5 * h * h * a;
 		v->vz += h * a;
-		if (v->z <= 0.0 && v->vz <= 0.0) {   /* resting on the ground */
+		if (v->z <= 0.0 && v->vz <= 0.0) { /* resting on the ground */
 			v->z = 0.0;
 			v->vz = 0.0;
 		}
@@ -52,7 +52,7 @@ static void plant_frame(struct plant *v, double f_cmd)
  * its error within 4 reported sd. Random truth u_h in [0.03, 0.6], random mass 1-5 kg. */
 UNIT_TEST(hover_est_learns_random_truth_open_loop)
 {
-	struct unit_rng r = { 0x40e5ULL };
+	struct unit_rng r = {0x40e5ULL};
 	for (int trial = 0; trial < TRIALS(30); trial++) {
 		double uh = unit_rand_uniform(&r, 0.03, 0.6), m = unit_rand_uniform(&r, 1.0, 5.0);
 		double off = exp(unit_rand_uniform(&r, log(0.3), log(3.0)));
@@ -60,8 +60,8 @@ UNIT_TEST(hover_est_learns_random_truth_open_loop)
 		struct hover_est he;
 		hover_est_init(&he, &hp, s(uh * off));
 		/* plant in throttle units: thrust = m g u / u_h */
-		struct plant v = { 50.0, 0, m * G, m * G, m, 1.0, unit_rand_uniform(&r, 0.01, 0.05),
-				   0.01 * m * G / sqrt(8.0), &r };
+		struct plant v = {
+			50.0, 0, m * G, m * G, m, 1.0, unit_rand_uniform(&r, 0.01, 0.05), 0.01 * m * G / sqrt(8.0), &r};
 		double thr = uh;
 		for (int k = 0; k < (int)(10.0 / FRAME_S); k++) {
 			if (k % 45 == 0)
@@ -113,7 +113,7 @@ UNIT_TEST(hover_est_ground_and_spool)
  * within 2 % of the truth; the height never more than 2.5 m above the target. */
 UNIT_TEST(hover_est_takeoff_from_any_nominal)
 {
-	struct unit_rng r = { 0x7a6eULL };
+	struct unit_rng r = {0x7a6eULL};
 	for (int trial = 0; trial < TRIALS(24); trial++) {
 		double m = unit_rand_uniform(&r, 1.0, 5.0), uh = unit_rand_uniform(&r, 0.03, 0.6);
 		double kf_true = m * G / (8 * uh);
@@ -127,8 +127,9 @@ UNIT_TEST(hover_est_takeoff_from_any_nominal)
 		struct hover_est_params hp = hover_est_params_default();
 		struct hover_est he;
 		hover_est_init(&he, &hp, s(m * G / (8 * kf_nom)));
-		struct plant v = { 0, 0, 0, 0, m, kf_true / kf_nom, unit_rand_uniform(&r, 0.01, 0.05),
-				   0.01 * m * G / sqrt(8.0), &r };
+		struct plant v = {
+			0, 0, 0, 0, m, kf_true / kf_nom, unit_rand_uniform(&r, 0.01, 0.05), 0.01 * m * G / sqrt(8.0),
+			&r};
 		struct alt_ctrl_input in;
 		memset(&in, 0, sizeof in);
 		in.q_b2i = tq_from_euler(SC_ZERO, SC_ZERO, SC_ZERO);
@@ -138,7 +139,7 @@ UNIT_TEST(hover_est_takeoff_from_any_nominal)
 		int n = (int)(30.0 / FRAME_S);
 		for (int k = 0; k < n; k++) {
 			double t = k * FRAME_S;
-			zsp = fmin(5.0, t * 1.0);   /* 1 m/s ramp */
+			zsp = fmin(5.0, t * 1.0); /* 1 m/s ramp */
 			double thr = f / (8 * kf_nom);
 			if (v.z > 0.1)
 				hover_est_update(&he, s(v.vz), s(thr), SC(1.0), s(FRAME_S));
@@ -185,7 +186,7 @@ UNIT_TEST(hover_est_recovers_from_a_wrong_convergence)
 		struct hover_est_params p = hover_est_params_default();
 		struct hover_est h;
 		hover_est_init(&h, &p, s(uh * (1.0 + off)));
-		h.p_pct2 = s(1.0);   /* "converged": sd 1 % */
+		h.p_pct2 = s(1.0); /* "converged": sd 1 % */
 		for (int k = 0; k < 90 * 6; k++) {
 			double vz = 0.02 * unit_rand_normal(&g);
 			hover_est_update(&h, s(vz), s(uh), s(1.0), s(1.0 / 90.0));

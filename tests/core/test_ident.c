@@ -19,7 +19,7 @@
 #endif
 
 #if OCTO_FIXED
-#define KF_TOL 3e-3   /* Q16.16 throttle resolution 1.5e-5 of ~0.09 */
+#define KF_TOL 3e-3 /* Q16.16 throttle resolution 1.5e-5 of ~0.09 */
 #else
 #define KF_TOL 1.5e-3
 #endif
@@ -28,7 +28,7 @@ static scalar_t s(double x) { return sc_from_float((float)x); }
 
 #define DT (1.0 / 90.0)
 #ifndef WCZ
-#define WCZ 12.0   /* experiment.c's SVF corner */
+#define WCZ 12.0 /* experiment.c's SVF corner */
 #endif
 #ifndef WCXY
 #define WCXY 12.0
@@ -39,12 +39,11 @@ static scalar_t s(double x) { return sc_from_float((float)x); }
 
 struct rotor_plant {
 	double kf, ktau, a, s, sig_f, sig_t;
-	double hist[8];  /* transport delay line of commands */
+	double hist[8]; /* transport delay line of commands */
 	unsigned delay;
 };
 
-static void plant_init(struct rotor_plant *p, double kf, double ktau, double tau_s, unsigned delay,
-		       double t0)
+static void plant_init(struct rotor_plant *p, double kf, double ktau, double tau_s, unsigned delay, double t0)
 {
 	p->kf = kf;
 	p->ktau = ktau;
@@ -85,9 +84,8 @@ struct rotor_run {
 
 /* one experiment: n frames of dither `amp` clocked at `div`, thrust noise sig (N), the
  * estimator told tau_model / delay_model */
-static void rotor_run(struct unit_rng *g, double kf, double ktau, double tau_true, unsigned delay,
-		      double tau_model, int n, double amp, int div, double sig_f, double sig_t,
-		      struct rotor_run *out)
+static void rotor_run(struct unit_rng *g, double kf, double ktau, double tau_true, unsigned delay, double tau_model,
+		      int n, double amp, int div, double sig_f, double sig_t, struct rotor_run *out)
 {
 	double th = 2.132 * 9.796 / 8.0 / kf;
 	struct rotor_plant p;
@@ -120,8 +118,7 @@ static void rotor_run(struct unit_rng *g, double kf, double ktau, double tau_tru
 	out->kf_plain = ident_rotor_plain(&r, 0);
 	out->ktau_plain = ident_rotor_plain(&r, 1);
 	double mt = sum_t / n, ms = sum_s / n;
-	out->bias_cf = ident_plain_bias((float)(sum_t2 / n - mt * mt), (float)(sum_ts / n - mt * ms),
-					(float)mt);
+	out->bias_cf = ident_plain_bias((float)(sum_t2 / n - mt * mt), (float)(sum_ts / n - mt * ms), (float)mt);
 	out->crlb_kf = sig_f * sig_f / sphi2;
 	out->tau_check = ident_rotor_tau_check(&r);
 }
@@ -146,12 +143,11 @@ UNIT_TEST(ident_rotor_lag_aware_random_truth)
 		CHECK(b < -0.01);
 		CHECK_NEAR(b, o.bias_cf, 0.004);
 		CHECK_NEAR(bt, o.bias_cf, 0.004);
-		CHECK_NEAR(o.tau_check, 0.03, 0.004);   /* the lag model checked out */
+		CHECK_NEAR(o.tau_check, 0.03, 0.004); /* the lag model checked out */
 #ifdef TEST_VERBOSE
 		printf("  tau check %.4f s\n", o.tau_check);
 		printf("  kf %.4f (%+.4f %%, sd %.4f %%) ktau %+.4f %% plain %+.3f %% cf %+.3f %%\n", kf,
-		       100 * (o.kf / kf - 1), 100 * o.kf_sd / kf, 100 * (o.ktau / ktau - 1), 100 * b,
-		       100 * o.bias_cf);
+		       100 * (o.kf / kf - 1), 100 * o.kf_sd / kf, 100 * (o.ktau / ktau - 1), 100 * b, 100 * o.bias_cf);
 #endif
 	}
 }
@@ -226,7 +222,7 @@ UNIT_TEST(ident_rotor_wrong_tau_bounded)
 	struct rotor_run o;
 	rotor_run(&g, 28.0269, 0.3869, 0.03, 0, 0.036, 900, 0.04, 9, 0.0, 0.0, &o);
 	CHECK(fabs(o.kf / 28.0269 - 1.0) < 0.01);
-	CHECK_NEAR(o.tau_check, 0.03, 0.002);   /* ... and the lag check sees it */
+	CHECK_NEAR(o.tau_check, 0.03, 0.002); /* ... and the lag check sees it */
 	rotor_run(&g, 28.0269, 0.3869, 0.03, 0, 0.024, 900, 0.04, 9, 0.0, 0.0, &o);
 	CHECK(fabs(o.kf / 28.0269 - 1.0) < 0.01);
 	CHECK_NEAR(o.tau_check, 0.03, 0.002);
@@ -288,12 +284,12 @@ UNIT_TEST(ident_body_torque_matches_gamma)
 
 /* inertia: a rigid body under a lagged, PRBS-like torque about one axis with a slow spin about
  * the others (gyroscopic coupling), gyro noise 0.005 rad/s, torque noise as the sim's */
-static bool inr_iv;   /* inertia_run: the excitation as instrument, the hold on measured rates */
-static double inr_drop;    /* ... the probability that a frame is lost (the command held over it) */
-static bool inr_gap_one;   /* ... a gap taken as one frame (no ident_inertia_gap) */
+static bool inr_iv;      /* inertia_run: the excitation as instrument, the hold on measured rates */
+static double inr_drop;  /* ... the probability that a frame is lost (the command held over it) */
+static bool inr_gap_one; /* ... a gap taken as one frame (no ident_inertia_gap) */
 
-static void inertia_run(struct unit_rng *g, const double I[3], unsigned ax, double amp, double tau_m,
-			double sig_t, double sig_g, double *est, double *sd)
+static void inertia_run(struct unit_rng *g, const double I[3], unsigned ax, double amp, double tau_m, double sig_t,
+			double sig_g, double *est, double *sd)
 {
 	double u_prev = 0, wmeas[3] = {0, 0, 0};
 	double w[3] = {0, 0, 0}, ang[3] = {0, 0, 0}, tau_lag[3] = {0, 0, 0};
@@ -301,42 +297,42 @@ static void inertia_run(struct unit_rng *g, const double I[3], unsigned ax, doub
 	scalar_t i_now[3] = {s(I[0]), s(I[1]), s(I[2])}, z3[3] = {SC(0), SC(0), SC(0)};
 	i_now[ax] = SC(0.05);
 	struct ident_inertia e;
-	ident_inertia_init(&e, ax, ax == 2 ? SC(WCZ) : SC(WCXY), SC(0.7), s(DT),
-			   ident_torque_weight(s(tau_m), s(DT)), i_now, z3, z3);
+	ident_inertia_init(&e, ax, ax == 2 ? SC(WCZ) : SC(WCXY), SC(0.7), s(DT), ident_torque_weight(s(tau_m), s(DT)),
+			   i_now, z3, z3);
 	struct dither d = {0, amp, 9, 0};
 	double cmd[3] = {0, 0, 0};
-	unsigned lost = 0;   /* frames lost since the last update */
-	int hold = 0;        /* updates left without excitation after a gap (GAP_HOLD, experiment.c) */
+	unsigned lost = 0; /* frames lost since the last update */
+	int hold = 0;      /* updates left without excitation after a gap (GAP_HOLD, experiment.c) */
 	for (int k = 0; k < 900; k++) {
 		if (inr_drop > 0 && k > 0 && unit_rand_uniform(g, 0, 1) < inr_drop) {
-			lost++;   /* no measurement, no new command: the plant holds the last one */
+			lost++; /* no measurement, no new command: the plant holds the last one */
 		} else {
-		/* measurement at this frame */
-		scalar_t tm[3], wm[3];
-		for (int i = 0; i < 3; i++) {
-			tm[i] = s(tau_lag[i] + (i == 2 ? sig_t / 18 : sig_t) * unit_rand_normal(g));
-			wmeas[i] = w[i] + sig_g * unit_rand_normal(g);
-			wm[i] = s(wmeas[i]);
-		}
-		if (inr_iv)
-			ident_inertia_instrument(&e, s(u_prev));
-		if (lost > 0) {
-			if (!inr_gap_one)
-				ident_inertia_gap(&e, tm, wm, lost);
-			hold = 10;
-		} else if (hold > 0) {
-			hold--;
-		}
-		ident_inertia_update(&e, tm, wm, lost == 0 && hold == 0);
-		lost = 0;
-		/* command: excitation + a PD hold on every axis + a small bias on the others */
-		for (int i = 0; i < 3; i++) {
-			double wn = i == 2 ? 3.5 : 7.0;
-			cmd[i] = -0.05 * (wn * wn * ang[i] + 2 * wn * (inr_iv ? wmeas[i] : w[i])) +
-				 ((unsigned)i == ax ? 0 : 0.002);
-		}
-		u_prev = dither_next(&d, g);
-		cmd[ax] += u_prev;
+			/* measurement at this frame */
+			scalar_t tm[3], wm[3];
+			for (int i = 0; i < 3; i++) {
+				tm[i] = s(tau_lag[i] + (i == 2 ? sig_t / 18 : sig_t) * unit_rand_normal(g));
+				wmeas[i] = w[i] + sig_g * unit_rand_normal(g);
+				wm[i] = s(wmeas[i]);
+			}
+			if (inr_iv)
+				ident_inertia_instrument(&e, s(u_prev));
+			if (lost > 0) {
+				if (!inr_gap_one)
+					ident_inertia_gap(&e, tm, wm, lost);
+				hold = 10;
+			} else if (hold > 0) {
+				hold--;
+			}
+			ident_inertia_update(&e, tm, wm, lost == 0 && hold == 0);
+			lost = 0;
+			/* command: excitation + a PD hold on every axis + a small bias on the others */
+			for (int i = 0; i < 3; i++) {
+				double wn = i == 2 ? 3.5 : 7.0;
+				cmd[i] = -0.05 * (wn * wn * ang[i] + 2 * wn * (inr_iv ? wmeas[i] : w[i])) +
+					 ((unsigned)i == ax ? 0 : 0.002);
+			}
+			u_prev = dither_next(&d, g);
+			cmd[ax] += u_prev;
 		}
 		/* integrate one frame in 20 substeps; torque lags the command (its integral over
 		 * each substep exact), the gyroscopic term by midpoint */
@@ -401,8 +397,8 @@ UNIT_TEST(ident_inertia_std_monte_carlo)
 	double mean = sum / RUNS, var = (sum2 / RUNS - mean * mean) * RUNS / (RUNS - 1);
 	double ratio = sqrt(var / (sdp / RUNS));
 #ifdef TEST_VERBOSE
-	printf("  inertia MC %d runs: bias %+.3f %%, std %.3f %%, std/predicted %.2f\n", RUNS,
-	       100 * (mean / I[0] - 1), 100 * sqrt(var) / I[0], ratio);
+	printf("  inertia MC %d runs: bias %+.3f %%, std %.3f %%, std/predicted %.2f\n", RUNS, 100 * (mean / I[0] - 1),
+	       100 * sqrt(var) / I[0], ratio);
 #endif
 	CHECK(ratio > 0.5 && ratio < 1.6);
 	CHECK(fabs(mean / I[0] - 1) < 0.005);
@@ -413,7 +409,7 @@ UNIT_TEST(ident_inertia_std_monte_carlo)
  * and its std is honest (Monte Carlo spread against the reported std) */
 UNIT_TEST(ident_inertia_iv_unbiased_under_gyro_noise)
 {
-	enum { RUNS = MC_RUNS / 8 > 12 ? MC_RUNS / 8 : 12 };   /* 37 on the host, 12 on Cortex-M */
+	enum { RUNS = MC_RUNS / 8 > 12 ? MC_RUNS / 8 : 12 }; /* 37 on the host, 12 on Cortex-M */
 	struct unit_rng g = {0x1f1ULL};
 	for (unsigned ax = 0; ax < 3; ax += 2) {
 		double I[3] = {0.0628 * unit_rand_uniform(&g, 0.7, 1.3), 0.0762 * unit_rand_uniform(&g, 0.7, 1.3),
@@ -438,7 +434,7 @@ UNIT_TEST(ident_inertia_iv_unbiased_under_gyro_noise)
 		printf("  gyro 0.05, axis %u: LS bias %+.2f %%, IV bias %+.2f %% (spread %.2f %%, reported %.2f %%)\n",
 		       ax, 100 * m_ls, 100 * m_iv, 100 * sd_iv, 100 * pred);
 #endif
-		if (ax == 2)   /* yaw, weakly excited: least squares biased low */
+		if (ax == 2) /* yaw, weakly excited: least squares biased low */
 			CHECK(m_ls < -3.0 * sd_iv / sqrt(RUNS));
 		CHECK(fabs(m_iv) < 3.0 * sd_iv / sqrt(RUNS) + 0.002); /* IV: no bias beyond its spread */
 		CHECK(sd_iv / pred > 0.5 && sd_iv / pred < 1.6);
@@ -534,7 +530,7 @@ UNIT_TEST(ident_acceptance_rule)
 	CHECK(ident_accept(5.0f, 0.001f, 20.0f, 0.01f) == IDENT_ACCEPT);
 	CHECK(ident_accept(80.0f, 0.001f, 20.0f, 0.01f) == IDENT_ACCEPT);
 	CHECK(ident_accept(28.0f, 0.3f, 20.0f, 0.01f) == IDENT_UNCERTAIN);
-	CHECK(ident_accept(28.0f, 0.0f, 20.0f, 0.01f) == IDENT_ACCEPT);   /* noise-free data */
+	CHECK(ident_accept(28.0f, 0.0f, 20.0f, 0.01f) == IDENT_ACCEPT); /* noise-free data */
 	CHECK(ident_accept(-28.0f, 0.01f, 20.0f, 0.01f) == IDENT_OUT_OF_RANGE);
 	CHECK(ident_verdict_text(IDENT_UNCERTAIN)[0] != 0);
 }
@@ -564,7 +560,7 @@ UNIT_TEST(ident_rotor_lost_frames)
 		} else {
 			lost++;
 		}
-		plant_step(&p, t_sent);   /* the plant holds the last command it got */
+		plant_step(&p, t_sent); /* the plant holds the last command it got */
 	}
 	CHECK_REL(ident_rotor_est(&r, 0), kf, OCTO_FIXED ? 2e-3 : 2e-5);
 	CHECK_REL(ident_rotor_est(&r, 1), 0.4, OCTO_FIXED ? 2e-3 : 2e-5);
@@ -586,7 +582,7 @@ UNIT_TEST(ident_rotor_lag_check_flags_wrong_delay)
 		double kf = 28.0 * unit_rand_uniform(&g, 0.7, 1.3), ktau = 0.387 * unit_rand_uniform(&g, 0.7, 1.3);
 		double tau = unit_rand_uniform(&g, 0.02, 0.06);
 		unsigned d_true = (unsigned)unit_rand_uniform(&g, 0, 4), d_model = d_true;
-		if (run % 2)   /* every other run told a wrong delay */
+		if (run % 2) /* every other run told a wrong delay */
 			d_model = (d_true + 1u + (unsigned)unit_rand_uniform(&g, 0, 3)) % 4u;
 		double th = 2.132 * 9.796 / 8.0 / kf, sig_f = 0.01 * kf * th, sig_t = 0.01 * ktau * th;
 		struct rotor_plant p;
@@ -605,8 +601,8 @@ UNIT_TEST(ident_rotor_lag_check_flags_wrong_delay)
 		double tc = ident_rotor_tau_check(&r), kf_err = ident_rotor_est(&r, 0) / kf - 1.0;
 		bool off = fabs(tc - tau) > 0.1 * tau;
 #ifdef TEST_VERBOSE
-		printf("  delay %u told %u, tau %.4f check %.4f (%+.1f %%), kf %+.3f %%\n", d_true, d_model,
-		       tau, tc, 100.0 * (tc / tau - 1.0), 100.0 * kf_err);
+		printf("  delay %u told %u, tau %.4f check %.4f (%+.1f %%), kf %+.3f %%\n", d_true, d_model, tau, tc,
+		       100.0 * (tc / tau - 1.0), 100.0 * kf_err);
 #endif
 		if (d_model == d_true) {
 			CHECK(!off);

@@ -8,7 +8,7 @@
 
 UNIT_TEST(ident_inertia_accept_scale_bounds_and_advice)
 {
-	struct unit_rng r = { 0x1a7eULL };
+	struct unit_rng r = {0x1a7eULL};
 	for (int i = 0; i < 200; i++) {
 		float m = (float)unit_rand_uniform(&r, 1.0, 5.0), l = (float)unit_rand_uniform(&r, 0.15, 0.6);
 		float ml2 = m * l * l, lo, hi, raise;
@@ -42,7 +42,7 @@ UNIT_TEST(ident_body_torque_mixer_follows_mask_and_arm)
 	(void)u;
 	return;
 #else
-	struct unit_rng r = { 0xb0d7ULL };
+	struct unit_rng r = {0xb0d7ULL};
 	for (int i = 0; i < 50; i++) {
 		struct mixer_params mp;
 		mixer_default_params(&mp);
@@ -80,7 +80,8 @@ UNIT_TEST(ident_body_torque_mixer_follows_mask_and_arm)
 		if (mp.rotor_mask == 0xFFu && !scaled) {
 			ident_body_torque(mp.arm_l_m, f, tm, ref);
 			for (int k = 0; k < 3; k++)
-				CHECK_NEAR(sc_to_float(tau[k]), sc_to_float(ref[k]), 2e-3 * (1 + fabs(sc_to_float(ref[k]))));
+				CHECK_NEAR(sc_to_float(tau[k]), sc_to_float(ref[k]),
+					   2e-3 * (1 + fabs(sc_to_float(ref[k]))));
 		}
 	}
 #endif

@@ -61,8 +61,8 @@ static void rotor_ref_init(struct rotor_ref *r, const struct ident_rotor_cfg *cf
 		r->hist[i] = r->s;
 	r->alpha = r->tau > 0 ? 1.0 - exp(-DT / r->tau) : 1.0;
 	r->dalpha = r->tau > 0 ? -(DT / (r->tau * r->tau)) * exp(-DT / r->tau) : 0.0;
-	const double th0[2][4] = { { (double)cfg->kf0 }, { (double)cfg->ktau0 } };
-	const double th0s[1][4] = { { (double)cfg->kf0, 0.0 } };
+	const double th0[2][4] = {{(double)cfg->kf0}, {(double)cfg->ktau0}};
+	const double th0s[1][4] = {{(double)cfg->kf0, 0.0}};
 	ref_init(&r->lag, 1, 2, 1e6, 1.0, th0);
 	ref_init(&r->plain, 1, 2, 1e6, 1.0, th0);
 	ref_init(&r->sens, 2, 1, 1e6, 1.0, th0s);
@@ -84,10 +84,10 @@ static void rotor_ref_advance(struct rotor_ref *r, double thr_prev)
 static void rotor_ref_update(struct rotor_ref *r, double thr_prev, double f, double tq)
 {
 	rotor_ref_advance(r, thr_prev);
-	double phi = g_curve(r->c, r->s), y[2] = { f, tq };
+	double phi = g_curve(r->c, r->s), y[2] = {f, tq};
 	ref_update(&r->lag, &phi, y);
 	if (r->dalpha != 0.0) {
-		double phi2[2] = { phi, (1.0 - r->c + 2.0 * r->c * r->s) * r->sig };
+		double phi2[2] = {phi, (1.0 - r->c + 2.0 * r->c * r->s) * r->sig};
 		ref_update(&r->sens, phi2, y);
 	}
 	if (r->have_prev) {
@@ -193,7 +193,7 @@ static bool rotor_run(struct unit_rng *g, const struct rotor_run *p, struct stat
 
 UNIT_TEST(ident_ref_rotor_monte_carlo)
 {
-	struct unit_rng g = { 0x1de7f00dULL };
+	struct unit_rng g = {0x1de7f00dULL};
 	struct stat st[5];
 	memset(st, 0, sizeof st);
 	int runs = TRIALS(40), bad = 0;
@@ -203,12 +203,14 @@ UNIT_TEST(ident_ref_rotor_monte_carlo)
 		bad += !rotor_run(&g, &p, st, true);
 	}
 	printf("ident_ref rotor, %d runs: vs float64 max/rms: k_f %.2e/%.2e k_tau %.2e/%.2e plain k_f %.2e/%.2e "
-	       "plain k_tau %.2e/%.2e lag check %.2e/%.2e\n", runs, st[0].max, stat_rms(&st[0]), st[1].max,
-	       stat_rms(&st[1]), st[2].max, stat_rms(&st[2]), st[3].max, stat_rms(&st[3]), st[4].max, stat_rms(&st[4]));
+	       "plain k_tau %.2e/%.2e lag check %.2e/%.2e\n",
+	       runs, st[0].max, stat_rms(&st[0]), st[1].max, stat_rms(&st[1]), st[2].max, stat_rms(&st[2]), st[3].max,
+	       stat_rms(&st[3]), st[4].max, stat_rms(&st[4]));
 	CHECK(bad == 0); /* the reference found the truth, the firmware never reset */
 	for (int i = 0; i < 4; i++)
 		if (!(st[i].max < REL_BOUND))
-			unit_fail(u, __FILE__, __LINE__, "estimate %d: %.3g from float64 (bound %.3g)", i, st[i].max, REL_BOUND);
+			unit_fail(u, __FILE__, __LINE__, "estimate %d: %.3g from float64 (bound %.3g)", i, st[i].max,
+				  REL_BOUND);
 	CHECK(st[4].max < REL_BOUND); /* the lag check's tau_m */
 }
 
@@ -216,7 +218,7 @@ UNIT_TEST(ident_ref_rotor_monte_carlo)
  * ten decades; nothing overflows, resets or stalls, and the estimates stay on float64 */
 UNIT_TEST(ident_ref_rotor_long_hover)
 {
-	struct unit_rng g = { 0x40e7b0a7ULL };
+	struct unit_rng g = {0x40e7b0a7ULL};
 	struct stat st[5];
 	memset(st, 0, sizeof st);
 	struct rotor_run p;
@@ -278,7 +280,7 @@ static void inertia_ref_init(struct inertia_ref *r, int ax, double wc, double ze
 	svf_ref_init(&r->w, wc, zeta, 0.0);
 	svf_ref_init(&r->ww, wc, zeta, 0.0);
 	svf_ref_init(&r->z, wc, zeta, 0.0);
-	const double th0[1][4] = { { d(inertia[ax]) } };
+	const double th0[1][4] = {{d(inertia[ax])}};
 	ref_init(&r->rls, 1, 1, 1e4, 1.0, th0);
 }
 
@@ -328,7 +330,7 @@ struct inertia_run {
 
 static void inertia_draw(struct unit_rng *g, int ax, struct inertia_run *p)
 {
-	static const double nominal[3] = { 0.0628, 0.0762, 0.1014 };
+	static const double nominal[3] = {0.0628, 0.0762, 0.1014};
 	p->ax = ax;
 	for (int i = 0; i < 3; i++)
 		p->in[i] = nominal[i] * unit_rand_uniform(g, 0.7, 1.3);
@@ -347,24 +349,26 @@ static void inertia_draw(struct unit_rng *g, int ax, struct inertia_run *p)
 static bool inertia_run(struct unit_rng *g, const struct inertia_run *p, struct stat st[3], int sub)
 {
 	int ax = p->ax;
-	scalar_t inertia[3], zero[3] = { 0, 0, 0 };
+	scalar_t inertia[3], zero[3] = {0, 0, 0};
 	for (int i = 0; i < 3; i++) /* the two others near the truth (they enter the gyroscopic term) */
 		inertia[i] = sc_from_float((float)(p->in[i] * (i == ax ? unit_rand_uniform(g, 0.7, 1.43)
-									: unit_rand_uniform(g, 0.99, 1.01))));
+								       : unit_rand_uniform(g, 0.99, 1.01))));
 	scalar_t alpha = ident_torque_weight(sc_from_float((float)p->tau_m), SC(1.0 / 90.0));
 	scalar_t wc = sc_from_float((float)p->wc), zeta = SC(0.7);
 	struct ident_inertia e;
 	ident_inertia_init(&e, (unsigned)ax, wc, zeta, SC(1.0 / 90.0), alpha, inertia, zero, zero);
 	struct inertia_ref r;
 	inertia_ref_init(&r, ax, d(wc), d(zeta), d(alpha), inertia);
-	double w[3] = { 0, 0, 0 }, tq[3] = { 0, 0, 0 }, wm[3] = { 0, 0, 0 }, uex[3] = { 0, 0, 0 }, cmd[3];
+	double w[3] = {0, 0, 0}, tq[3] = {0, 0, 0}, wm[3] = {0, 0, 0}, uex[3] = {0, 0, 0}, cmd[3];
 	double h = DT / sub, el = exp(-h / p->tau_m), elh = exp(-0.5 * h / p->tau_m);
 	for (long k = 0; k < p->quiet + p->frames; k++) {
 		bool exc = k >= p->quiet;
 		/* the command held over this frame: damper on the measured rates plus excitation */
 		for (int i = 0; i < 3; i++) {
 			if (k % p->clock == 0)
-				uex[i] = !exc ? 0.0 : (unit_rand_uniform(g, 0, 1) < 0.5 ? -1.0 : 1.0) * p->amp * (i == ax ? 1.0 : 0.2);
+				uex[i] = !exc ? 0.0
+					      : (unit_rand_uniform(g, 0, 1) < 0.5 ? -1.0 : 1.0) * p->amp *
+							 (i == ax ? 1.0 : 0.2);
 			cmd[i] = uex[i] - 4.0 * p->in[i] * wm[i];
 		}
 		for (int s = 0; s < sub; s++) {
@@ -406,7 +410,7 @@ static bool inertia_run(struct unit_rng *g, const struct inertia_run *p, struct 
 
 UNIT_TEST(ident_ref_inertia_monte_carlo)
 {
-	struct unit_rng g = { 0x1e271a5eULL };
+	struct unit_rng g = {0x1e271a5eULL};
 	struct stat st[3];
 	memset(st, 0, sizeof st);
 	int runs = TRIALS(30), bad = 0;
@@ -429,7 +433,7 @@ UNIT_TEST(ident_ref_inertia_monte_carlo)
  * or stall, and the estimate on float64 */
 UNIT_TEST(ident_ref_inertia_long)
 {
-	struct unit_rng g = { 0x1e2704ULL };
+	struct unit_rng g = {0x1e2704ULL};
 	struct stat st[3];
 	memset(st, 0, sizeof st);
 	struct inertia_run p;
@@ -447,7 +451,7 @@ UNIT_TEST(ident_ref_inertia_long)
 /* ---------------------------------------------------------------- validation statistics */
 UNIT_TEST(ident_ref_fit)
 {
-	struct unit_rng g = { 0xf17ULL };
+	struct unit_rng g = {0xf17ULL};
 	double worst_ne = 0, worst_pct = 0;
 	for (int run = 0; run < TRIALS(10); run++) {
 		double mean = unit_rand_uniform(&g, 5.0, 60.0), amp = mean * unit_rand_uniform(&g, 0.005, 0.1);
@@ -458,7 +462,8 @@ UNIT_TEST(ident_ref_fit)
 		long frames = run == 0 ? LONG_S(3600L) * FPS : 900;
 		for (long k = 0; k < frames; k++) {
 			double y = mean + amp * sin(0.05 * (double)k) + err * unit_rand_normal(&g);
-			scalar_t ys = sc_from_float((float)y), yh = sc_from_float((float)(mean + amp * sin(0.05 * (double)k)));
+			scalar_t ys = sc_from_float((float)y),
+				 yh = sc_from_float((float)(mean + amp * sin(0.05 * (double)k)));
 			ident_fit_add(&v, ys, yh);
 			double a = d(ys), b = d(yh);
 			n += 1;
@@ -480,7 +485,7 @@ UNIT_TEST(ident_ref_fit)
 /* q_mul64_64 (the IV variance's products) against exact products */
 UNIT_TEST(ident_ref_q_mul64_64)
 {
-	struct unit_rng g = { 0x64646464ULL };
+	struct unit_rng g = {0x64646464ULL};
 	for (int t = 0; t < 2000; t++) {
 		/* magnitudes from 2^0 to 2^62, either sign */
 		int ea = (int)unit_rand_uniform(&g, 0, 62), eb = (int)unit_rand_uniform(&g, 0, 62);
@@ -507,20 +512,20 @@ UNIT_TEST(ident_saturating_inputs)
 	/* the top of Q16.16 (in the float build, merely large) */
 	const scalar_t big_p = SC(32767.0), big_n = SC(-32767.0);
 	/* inertia: torque, rates and the instrument at the top of the range */
-	scalar_t inertia[3] = { SC(0.06), SC(0.07), SC(0.1) }, zero[3] = { 0, 0, 0 };
+	scalar_t inertia[3] = {SC(0.06), SC(0.07), SC(0.1)}, zero[3] = {0, 0, 0};
 	struct ident_inertia e;
 	ident_inertia_init(&e, 0, SC(25.0), SC(0.7), SC(1.0 / 90.0), SC(0.5), inertia, zero, zero);
 	ident_sum_t prev = 0;
 	bool monotonic = true;
 	for (long k = 0; k < 20000; k++) {
 		scalar_t big = (k / 100) % 2 ? big_p : big_n;
-		scalar_t tb[3] = { big, big, big }, wb[3] = { big, big_p, big_n };
+		scalar_t tb[3] = {big, big, big}, wb[3] = {big, big_p, big_n};
 		ident_inertia_instrument(&e, big);
 		ident_inertia_update(&e, tb, wb, true);
 		monotonic = monotonic && e.s_aa >= prev;
 		prev = e.s_aa;
 	}
-	CHECK(monotonic);   /* a sum of squares only grows, or stays at its saturation */
+	CHECK(monotonic); /* a sum of squares only grows, or stays at its saturation */
 	CHECK(e.s_aa > 0 && e.s_bb > 0);
 	CHECK(isfinite(ident_inertia_est(&e)) && isfinite(ident_inertia_sd(&e)));
 	CHECK(e.n == 20000u);

@@ -21,10 +21,10 @@ static scalar_t s(double x) { return sc_from_float((float)x); }
  * time; the error within 5 reported sd most of the time; the memory near the formula's. */
 UNIT_TEST(kf_track_follows_drift_and_step)
 {
-	struct unit_rng r = { 0x6b66ULL };
+	struct unit_rng r = {0x6b66ULL};
 	for (int trial = 0; trial < TRIALS(12); trial++) {
 		double kf0 = unit_rand_uniform(&r, 5.0, 60.0), u_h = unit_rand_uniform(&r, 0.05, 0.5);
-		double rate = unit_rand_uniform(&r, -0.04, 0.0);        /* per minute */
+		double rate = unit_rand_uniform(&r, -0.04, 0.0); /* per minute */
 		double t_step = unit_rand_uniform(&r, 20.0, 60.0), noise = unit_rand_uniform(&r, 0.005, 0.015);
 		double tau = unit_rand_uniform(&r, 0.01, 0.05);
 		struct kf_track_params p = kf_track_params_default();
@@ -32,10 +32,11 @@ UNIT_TEST(kf_track_follows_drift_and_step)
 		p.tau_lag_s = s(tau);
 		struct kf_track kt;
 		kf_track_init(&kt, &p, s(kf0 * 0.8));
-		double al = 1 - exp(-1.0 / (FS * tau)), lag[NR], thr[NR] = {0}, dt = 1.0 / FS, worst = 0, sum2 = 0, mem = 0, t_worst = 0;
+		double al = 1 - exp(-1.0 / (FS * tau)), lag[NR], thr[NR] = {0}, dt = 1.0 / FS, worst = 0, sum2 = 0,
+		       mem = 0, t_worst = 0;
 		int n = 0, outside = 0;
 		for (int j = 0; j < NR; j++)
-			lag[j] = thr[j] = u_h;   /* in hover when tracking starts */
+			lag[j] = thr[j] = u_h; /* in hover when tracking starts */
 		for (int k = 0; k < (int)(90.0 * FS); k++) {
 			double t = k * dt;
 			double kf = kf0 * (1 + rate * t / 60.0) * (t >= t_step ? 0.97 : 1.0);
@@ -49,7 +50,7 @@ UNIT_TEST(kf_track_follows_drift_and_step)
 			}
 			kf_track_update(&kt, th, NR, s(y), s(dt), true);
 			for (int j = 0; j < NR; j++)
-				thr[j] = u_h * (1 + 0.03 * unit_rand_normal(&r));   /* the next command */
+				thr[j] = u_h * (1 + 0.03 * unit_rand_normal(&r)); /* the next command */
 			double est = d(kt.k), err = est / kf - 1;
 			if (t > 5.0 && !(t >= t_step && t < t_step + 3 * d(kt.mem_s) + 0.5)) {
 				if (fabs(err) > worst)
@@ -68,8 +69,9 @@ UNIT_TEST(kf_track_follows_drift_and_step)
 #ifdef TEST_VERBOSE
 		printf("step at %.1f s, worst at %.2f s: ", t_step, t_worst);
 		printf("kf %.1f u_h %.2f rate %.1f %%/min noise %.1f %%: worst %.3f %% rms %.3f %% mem %.2f s "
-		       "(formula %.2f) outside 5 sd %.2f %%\n", kf0, u_h, 100 * rate, 100 * noise, 100 * worst,
-		       100 * sqrt(sum2 / n), mem, t_star, 100.0 * outside / n);
+		       "(formula %.2f) outside 5 sd %.2f %%\n",
+		       kf0, u_h, 100 * rate, 100 * noise, 100 * worst, 100 * sqrt(sum2 / n), mem, t_star,
+		       100.0 * outside / n);
 #endif
 		(void)t_worst;
 		CHECK(worst < 0.003);
@@ -118,7 +120,7 @@ UNIT_TEST(kf_track_no_windup_without_excitation)
  * make it "refresh" VEH_KF with). */
 UNIT_TEST(kf_track_uses_curve_and_rotor_scales)
 {
-	struct unit_rng r = { 0x5ca1eULL };
+	struct unit_rng r = {0x5ca1eULL};
 	for (int trial = 0; trial < TRIALS(8); trial++) {
 		double kf = unit_rand_uniform(&r, 5.0, 60.0), u_h = unit_rand_uniform(&r, 0.05, 0.4);
 		double c = unit_rand_uniform(&r, 0.1, 0.5), tau = unit_rand_uniform(&r, 0.01, 0.05);

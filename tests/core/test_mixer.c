@@ -22,17 +22,17 @@
 #endif
 
 #if OCTO_FIXED
-#define TOL_F   6e-3
+#define TOL_F 6e-3
 #define TOL_TXY 2e-3
-#define TOL_TZ  2e-4
+#define TOL_TZ 2e-4
 #define TOL_PINV_REL 2e-4
 #define TOL_ROTOR 0.05
 #define F_STEP 0.2
 #define YAW_STEP 3e-3
 #else
-#define TOL_F   2e-4
+#define TOL_F 2e-4
 #define TOL_TXY 1e-4
-#define TOL_TZ  3e-5
+#define TOL_TZ 3e-5
 #define TOL_PINV_REL 2e-6
 #define TOL_ROTOR 0.02
 #define F_STEP 0.05
@@ -46,13 +46,13 @@
 #define SWEEP(n) (n)
 #endif
 
-
-static const double tol_axis[4] = { TOL_F, TOL_TXY, TOL_TXY, TOL_TZ };
+static const double tol_axis[4] = {TOL_F, TOL_TXY, TOL_TXY, TOL_TZ};
 
 static struct mixer mix;
 /* a second mixer for comparisons (one for all tests: the M0 image has 16 KB of RAM) */
 static struct mixer mix_b;
-static struct mixer_design des; /* the float32 set-up results (not kept by struct mixer) */ /* 4 KB: not on the test's stack */
+static struct mixer_design des;
+/* the float32 set-up results (not kept by struct mixer) */ /* 4 KB: not on the test's stack */
 
 static void params(struct mixer_params *p, double l, double kf, double kt, unsigned mask)
 {
@@ -80,51 +80,66 @@ struct pinv_ref {
 	double p[8][4];
 };
 static const struct pinv_ref pinv_refs[] = {
-	{ 0.35, 28.0269, 0.3869, 0xFF,
-		{ { 0.125, 2.68347525e-17, -0.714285714, 9.05495606 },
-		  { 0.125, -0.505076272, -0.505076272, -9.05495606 },
-		  { 0.125, -0.714285714, -1.16499197e-16, 9.05495606 },
-		  { 0.125, -0.505076272, 0.505076272, -9.05495606 },
-		  { 0.125, 7.00934133e-18, 0.714285714, 9.05495606 },
-		  { 0.125, 0.505076272, 0.505076272, -9.05495606 },
-		  { 0.125, 0.714285714, 2.45326947e-18, 9.05495606 },
-		  { 0.125, 0.505076272, -0.505076272, -9.05495606 } } },
-	{ 0.25, 10, 0.2, 0xFF,
-		{ { 0.125, 6.21451232e-18, -1, 6.25 },
-		  { 0.125, -0.707106781, -0.707106781, -6.25 },
-		  { 0.125, -1, 3.235427e-16, 6.25 },
-		  { 0.125, -0.707106781, 0.707106781, -6.25 },
-		  { 0.125, 2.41570101e-17, 1, 6.25 },
-		  { 0.125, 0.707106781, 0.707106781, -6.25 },
-		  { 0.125, 1, 2.12520397e-16, 6.25 },
-		  { 0.125, 0.707106781, -0.707106781, -6.25 } } },
-	{ 0.5, 40, 1, 0xFF,
-		{ { 0.125, -1.79541689e-17, -0.5, 5 },
-		  { 0.125, -0.353553391, -0.353553391, -5 },
-		  { 0.125, -0.5, 8.32667268e-17, 5 },
-		  { 0.125, -0.353553391, 0.353553391, -5 },
-		  { 0.125, -8.98292007e-18, 0.5, 5 },
-		  { 0.125, 0.353553391, 0.353553391, -5 },
-		  { 0.125, 0.5, 2.77555756e-17, 5 },
-		  { 0.125, 0.353553391, -0.353553391, -5 } } },
-	{ 0.35, 28.0269, 0.3869, 0xFE,
-		{ { 1.03287292e-17, -3.96508223e-17, -1.59554493e-16, 1.1921416e-15 },
-		  { 0.169194174, -0.505076272, -0.757614408, -5.85354564 },
-		  { 0.1875, -0.714285714, -0.357142857, 13.5824341 },
-		  { 0.0808058262, -0.505076272, 0.757614408, -12.2563665 },
-		  { 0.125, 1.02516979e-16, 0.714285714, 9.05495606 },
-		  { 0.0808058262, 0.505076272, 0.757614408, -12.2563665 },
-		  { 0.1875, 0.714285714, -0.357142857, 13.5824341 },
-		  { 0.169194174, 0.505076272, -0.757614408, -5.85354564 } } },
-	{ 0.25, 12, 0.15, 0xF7,
-		{ { 0.0808058262, 0.25, -1.25, 13.5355339 },
-		  { 0.1875, -1.06066017, -0.353553391, -15 },
-		  { 0.169194174, -1.25, 0.25, 6.46446609 },
-		  { 0, 0, 0, 0 },
-		  { 0.169194174, -0.25, 1.25, 6.46446609 },
-		  { 0.1875, 0.353553391, 1.06066017, -15 },
-		  { 0.0808058262, 1.25, -0.25, 13.5355339 },
-		  { 0.125, 0.707106781, -0.707106781, -10 } } },
+	{0.35,
+	 28.0269,
+	 0.3869,
+	 0xFF,
+	 {{0.125, 2.68347525e-17, -0.714285714, 9.05495606},
+	  {0.125, -0.505076272, -0.505076272, -9.05495606},
+	  {0.125, -0.714285714, -1.16499197e-16, 9.05495606},
+	  {0.125, -0.505076272, 0.505076272, -9.05495606},
+	  {0.125, 7.00934133e-18, 0.714285714, 9.05495606},
+	  {0.125, 0.505076272, 0.505076272, -9.05495606},
+	  {0.125, 0.714285714, 2.45326947e-18, 9.05495606},
+	  {0.125, 0.505076272, -0.505076272, -9.05495606}}},
+	{0.25,
+	 10,
+	 0.2,
+	 0xFF,
+	 {{0.125, 6.21451232e-18, -1, 6.25},
+	  {0.125, -0.707106781, -0.707106781, -6.25},
+	  {0.125, -1, 3.235427e-16, 6.25},
+	  {0.125, -0.707106781, 0.707106781, -6.25},
+	  {0.125, 2.41570101e-17, 1, 6.25},
+	  {0.125, 0.707106781, 0.707106781, -6.25},
+	  {0.125, 1, 2.12520397e-16, 6.25},
+	  {0.125, 0.707106781, -0.707106781, -6.25}}},
+	{0.5,
+	 40,
+	 1,
+	 0xFF,
+	 {{0.125, -1.79541689e-17, -0.5, 5},
+	  {0.125, -0.353553391, -0.353553391, -5},
+	  {0.125, -0.5, 8.32667268e-17, 5},
+	  {0.125, -0.353553391, 0.353553391, -5},
+	  {0.125, -8.98292007e-18, 0.5, 5},
+	  {0.125, 0.353553391, 0.353553391, -5},
+	  {0.125, 0.5, 2.77555756e-17, 5},
+	  {0.125, 0.353553391, -0.353553391, -5}}},
+	{0.35,
+	 28.0269,
+	 0.3869,
+	 0xFE,
+	 {{1.03287292e-17, -3.96508223e-17, -1.59554493e-16, 1.1921416e-15},
+	  {0.169194174, -0.505076272, -0.757614408, -5.85354564},
+	  {0.1875, -0.714285714, -0.357142857, 13.5824341},
+	  {0.0808058262, -0.505076272, 0.757614408, -12.2563665},
+	  {0.125, 1.02516979e-16, 0.714285714, 9.05495606},
+	  {0.0808058262, 0.505076272, 0.757614408, -12.2563665},
+	  {0.1875, 0.714285714, -0.357142857, 13.5824341},
+	  {0.169194174, 0.505076272, -0.757614408, -5.85354564}}},
+	{0.25,
+	 12,
+	 0.15,
+	 0xF7,
+	 {{0.0808058262, 0.25, -1.25, 13.5355339},
+	  {0.1875, -1.06066017, -0.353553391, -15},
+	  {0.169194174, -1.25, 0.25, 6.46446609},
+	  {0, 0, 0, 0},
+	  {0.169194174, -0.25, 1.25, 6.46446609},
+	  {0.1875, 0.353553391, 1.06066017, -15},
+	  {0.0808058262, 1.25, -0.25, 13.5355339},
+	  {0.125, 0.707106781, -0.707106781, -10}}},
 };
 #define N_REFS (sizeof pinv_refs / sizeof pinv_refs[0])
 
@@ -135,10 +150,10 @@ UNIT_TEST(mixer_gamma_is_eq14)
 	CHECK(mixer_init_design(&mix, &p, &des));
 	double l = d(p.arm_l_m), k = d(p.k_tau_nm) / d(p.k_f_n), s = sqrt(2.0) / 2;
 	const double g[4][8] = {
-		{ 1, 1, 1, 1, 1, 1, 1, 1 },
-		{ 0, -s * l, -l, -s * l, 0, s * l, l, s * l },
-		{ -l, -s * l, 0, s * l, l, s * l, 0, -s * l },
-		{ k, -k, k, -k, k, -k, k, -k },
+		{1, 1, 1, 1, 1, 1, 1, 1},
+		{0, -s * l, -l, -s * l, 0, s * l, l, s * l},
+		{-l, -s * l, 0, s * l, l, s * l, 0, -s * l},
+		{k, -k, k, -k, k, -k, k, -k},
 	};
 	for (int i = 0; i < 4; i++)
 		for (int j = 0; j < 8; j++)
@@ -186,7 +201,7 @@ UNIT_TEST(mixer_pinv_rank_deficient)
 	params(&p, 0.35, 28.0269, 0.0, 0xFF); /* k = 0: no yaw authority, rank 3 */
 	CHECK(!mixer_init_design(&mix, &p, &des));
 	CHECK(mix.rank == 3 && des.n_null == 5 && !mix.alloc_ok);
-	double gp[4][4] = { { 0 } };
+	double gp[4][4] = {{0}};
 	for (int i = 0; i < 4; i++)
 		for (int k = 0; k < 4; k++)
 			for (int j = 0; j < 8; j++)
@@ -202,7 +217,7 @@ UNIT_TEST(mixer_pinv_rank_deficient)
 		for (int k = 0; k < 4; k++)
 			CHECK_NEAR(gp[i][k], gp[k][i], 1e-6);
 	/* saturation without an allocator: clipped and flagged */
-	scalar_t dem[4] = { SC(300), SC(0), SC(0), SC(0) };
+	scalar_t dem[4] = {SC(300), SC(0), SC(0), SC(0)};
 	struct mixer_output o;
 	mixer_update(&mix, dem, &o);
 	CHECK(o.limits & MIXER_LIMIT_NO_ALLOC);
@@ -213,7 +228,7 @@ UNIT_TEST(mixer_pinv_rank_deficient)
 
 UNIT_TEST(mixer_null_space)
 {
-	const unsigned masks[2] = { 0xFF, 0xFE };
+	const unsigned masks[2] = {0xFF, 0xFE};
 	for (int c = 0; c < 2; c++) {
 		struct mixer_params p;
 		params(&p, 0.35, 28.0269, 0.3869, masks[c]);
@@ -242,10 +257,10 @@ UNIT_TEST(mixer_unconstrained_is_eq15)
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
 	mixer_init_design(&mix, &p, &des);
-	struct unit_rng r = { 0x1234ULL };
+	struct unit_rng r = {0x1234ULL};
 	for (int n = 0; n < SWEEP(500); n++) {
-		double v[4] = { unit_rand_uniform(&r, 40, 180), unit_rand_uniform(&r, -2, 2),
-				unit_rand_uniform(&r, -2, 2), unit_rand_uniform(&r, -0.2, 0.2) };
+		double v[4] = {unit_rand_uniform(&r, 40, 180), unit_rand_uniform(&r, -2, 2),
+			       unit_rand_uniform(&r, -2, 2), unit_rand_uniform(&r, -0.2, 0.2)};
 		scalar_t dem[4];
 		for (int i = 0; i < 4; i++)
 			dem[i] = sc_from_float((float)v[i]);
@@ -271,7 +286,7 @@ UNIT_TEST(mixer_unconstrained_is_eq15)
 static void check_attainable(struct unit_ctx *u, const struct mixer_params *p, unsigned seed)
 {
 	mixer_init_design(&mix, p, &des);
-	struct unit_rng r = { 0x9e3779b97f4a7c15ULL ^ seed };
+	struct unit_rng r = {0x9e3779b97f4a7c15ULL ^ seed};
 	double flo = d(mix.f_lo), fhi = d(mix.f_hi);
 	int maxsteps = 0;
 	for (int n = 0; n < SWEEP(3000); n++) {
@@ -326,7 +341,7 @@ UNIT_TEST(mixer_attainable_reproduced_exactly)
 /* a different layout through custom_gamma: a hexacopter (+ two unused columns) */
 UNIT_TEST(mixer_custom_layout)
 {
-	float g[4 * 8] = { 0 };
+	float g[4 * 8] = {0};
 	const double l = 0.3, k = 0.02;
 	for (int j = 0; j < 6; j++) {
 		double a = j * 3.14159265358979 / 3;
@@ -353,22 +368,22 @@ UNIT_TEST(mixer_custom_layout)
 /* mirror y -> -y: rotors 2<->8, 3<->7, 4<->6; demand (f, -tau_x, tau_y, tau_z) */
 UNIT_TEST(mixer_symmetry)
 {
-	static const int mir[8] = { 0, 7, 6, 5, 4, 3, 2, 1 };
+	static const int mir[8] = {0, 7, 6, 5, 4, 3, 2, 1};
 	/* mirror x -> -x: 1<->5, 2<->4, 6<->8; demand (f, tau_x, -tau_y, tau_z) */
-	static const int mirx[8] = { 4, 3, 2, 1, 0, 7, 6, 5 };
+	static const int mirx[8] = {4, 3, 2, 1, 0, 7, 6, 5};
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
 	mixer_init_design(&mix, &p, &des);
-	struct unit_rng r = { 0xabcdefULL };
+	struct unit_rng r = {0xabcdefULL};
 	for (int n = 0; n < SWEEP(2000); n++) {
 		/* half in the box, half far outside */
 		double s = n % 2 ? 1.0 : 0.1;
-		scalar_t dem[4] = { sc_from_float((float)unit_rand_uniform(&r, -10, 250)),
-				    sc_from_float((float)(s * unit_rand_uniform(&r, -20, 20))),
-				    sc_from_float((float)(s * unit_rand_uniform(&r, -20, 20))),
-				    sc_from_float((float)(s * unit_rand_uniform(&r, -3, 3))) };
-		scalar_t dy[4] = { dem[0], sc_neg(dem[1]), dem[2], dem[3] };
-		scalar_t dx[4] = { dem[0], dem[1], sc_neg(dem[2]), dem[3] };
+		scalar_t dem[4] = {sc_from_float((float)unit_rand_uniform(&r, -10, 250)),
+				   sc_from_float((float)(s * unit_rand_uniform(&r, -20, 20))),
+				   sc_from_float((float)(s * unit_rand_uniform(&r, -20, 20))),
+				   sc_from_float((float)(s * unit_rand_uniform(&r, -3, 3)))};
+		scalar_t dy[4] = {dem[0], sc_neg(dem[1]), dem[2], dem[3]};
+		scalar_t dx[4] = {dem[0], dem[1], sc_neg(dem[2]), dem[3]};
 		struct mixer_output o, oy, ox;
 		mixer_update(&mix, dem, &o);
 		mixer_update(&mix, dy, &oy);
@@ -390,18 +405,19 @@ UNIT_TEST(mixer_monotonic_thrust)
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
 	mixer_init_design(&mix, &p, &des);
-	struct unit_rng r = { 0x77ULL };
+	struct unit_rng r = {0x77ULL};
 	for (int n = 0; n < SWEEP(100); n++) {
 		double tx = unit_rand_uniform(&r, -3, 3), ty = unit_rand_uniform(&r, -3, 3),
 		       tz = unit_rand_uniform(&r, -0.5, 0.5);
-		struct mixer_output prev = { 0 };
+		struct mixer_output prev = {0};
 		for (int s = 0; s <= 250; s++) {
-			scalar_t dem[4] = { sc_from_float((float)s), sc_from_float((float)tx),
-					    sc_from_float((float)ty), sc_from_float((float)tz) };
+			scalar_t dem[4] = {sc_from_float((float)s), sc_from_float((float)tx), sc_from_float((float)ty),
+					   sc_from_float((float)tz)};
 			struct mixer_output o;
 			mixer_update(&mix, dem, &o);
 			if (s > 0) {
-				CHECK(d(o.achieved[0]) >= d(prev.achieved[0]) - TOL_F - 250.0 / (1 << MIXER_ALPHA_ITERS));
+				CHECK(d(o.achieved[0]) >=
+				      d(prev.achieved[0]) - TOL_F - 250.0 / (1 << MIXER_ALPHA_ITERS));
 				if (o.limits == 0 && prev.limits == 0)
 					for (int j = 0; j < 8; j++)
 						CHECK(o.f_n[j] >= prev.f_n[j]);
@@ -417,13 +433,12 @@ UNIT_TEST(mixer_no_yaw_reversal)
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
 	mixer_init_design(&mix, &p, &des);
-	struct unit_rng r = { 0x5eedULL };
+	struct unit_rng r = {0x5eedULL};
 	for (int n = 0; n < SWEEP(5000); n++) {
 		double tz = unit_rand_uniform(&r, -3, 3);
-		scalar_t dem[4] = { sc_from_float((float)unit_rand_uniform(&r, -20, 260)),
-				    sc_from_float((float)unit_rand_uniform(&r, -25, 25)),
-				    sc_from_float((float)unit_rand_uniform(&r, -25, 25)),
-				    sc_from_float((float)tz) };
+		scalar_t dem[4] = {sc_from_float((float)unit_rand_uniform(&r, -20, 260)),
+				   sc_from_float((float)unit_rand_uniform(&r, -25, 25)),
+				   sc_from_float((float)unit_rand_uniform(&r, -25, 25)), sc_from_float((float)tz)};
 		struct mixer_output o;
 		mixer_update(&mix, dem, &o);
 		double az = d(o.achieved[3]);
@@ -438,14 +453,14 @@ UNIT_TEST(mixer_priority_order)
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
 	mixer_init_design(&mix, &p, &des);
-	struct unit_rng r = { 0xfeedULL };
+	struct unit_rng r = {0xfeedULL};
 	int n_rp_exact = 0, n_f_exact = 0, n_alpha = 0;
 	for (int n = 0; n < SWEEP(1500); n++) {
 		double rp = n % 2 ? 30 : 12;
-		scalar_t dem[4] = { sc_from_float((float)unit_rand_uniform(&r, -20, 260)),
-				    sc_from_float((float)unit_rand_uniform(&r, -rp, rp)),
-				    sc_from_float((float)unit_rand_uniform(&r, -rp, rp)),
-				    sc_from_float((float)unit_rand_uniform(&r, -3, 3)) };
+		scalar_t dem[4] = {sc_from_float((float)unit_rand_uniform(&r, -20, 260)),
+				   sc_from_float((float)unit_rand_uniform(&r, -rp, rp)),
+				   sc_from_float((float)unit_rand_uniform(&r, -rp, rp)),
+				   sc_from_float((float)unit_rand_uniform(&r, -3, 3))};
 		if (mixer_attainable(&mix, dem, SC(0)))
 			continue;
 		struct mixer_output o;
@@ -455,7 +470,7 @@ UNIT_TEST(mixer_priority_order)
 		 * allocator must keep roll/pitch exactly */
 		bool rp_ok = false;
 		for (int s = 0; s <= 225 && !rp_ok; s++) {
-			scalar_t t[4] = { sc_from_int(s), dem[1], dem[2], SC(0) };
+			scalar_t t[4] = {sc_from_int(s), dem[1], dem[2], SC(0)};
 			rp_ok = mixer_attainable(&mix, t, SC(0));
 		}
 		bool rp_cut = (o.limits & (MIXER_LIMIT_TX | MIXER_LIMIT_TY)) != 0;
@@ -465,7 +480,7 @@ UNIT_TEST(mixer_priority_order)
 			n_rp_exact++;
 			CHECK_NEAR(d(o.achieved[1]), d(dem[1]), TOL_TXY);
 			CHECK_NEAR(d(o.achieved[2]), d(dem[2]), TOL_TXY);
-			scalar_t t[4] = { dem[0], dem[1], dem[2], SC(0) };
+			scalar_t t[4] = {dem[0], dem[1], dem[2], SC(0)};
 			if (mixer_attainable(&mix, t, SC(0))) {
 				n_f_exact++; /* thrust attainable at zero yaw: kept, yaw reduced */
 				CHECK_NEAR(d(o.achieved[0]), d(dem[0]), TOL_F);
@@ -475,9 +490,9 @@ UNIT_TEST(mixer_priority_order)
 				 * yaw between zero and the demand */
 				double dir = d(dem[0]) > d(o.achieved[0]) ? 1 : -1;
 				for (int b = 0; b <= 20; b++) {
-					scalar_t c[4] = { sc_from_float((float)(d(o.achieved[0]) + dir * F_STEP)),
-							  o.achieved[1], o.achieved[2],
-							  sc_from_float((float)(b * 0.05 * d(dem[3]))) };
+					scalar_t c[4] = {sc_from_float((float)(d(o.achieved[0]) + dir * F_STEP)),
+							 o.achieved[1], o.achieved[2],
+							 sc_from_float((float)(b * 0.05 * d(dem[3])))};
 					CHECK(!mixer_attainable(&mix, c, SC(0)));
 				}
 				CHECK(o.limits & MIXER_LIMIT_F);
@@ -492,20 +507,21 @@ UNIT_TEST(mixer_priority_order)
 			 * achieved thrust) */
 			bool more = false;
 			for (int s = 0; s <= 226 && !more; s++) {
-				scalar_t t[4] = { s == 226 ? o.achieved[0] : sc_from_int(s),
-						  sc_from_float((float)(1.01 * d(o.achieved[1]))),
-						  sc_from_float((float)(1.01 * d(o.achieved[2]))), SC(0) };
+				scalar_t t[4] = {s == 226 ? o.achieved[0] : sc_from_int(s),
+						 sc_from_float((float)(1.01 * d(o.achieved[1]))),
+						 sc_from_float((float)(1.01 * d(o.achieved[2]))), SC(0)};
 				more = mixer_attainable(&mix, t, SC(0));
 			}
 			CHECK(!more);
 		}
 		/* yaw maximal: 1 % more (with the same f, tau_x, tau_y) is unattainable */
 		if (fabs(d(o.achieved[3])) < fabs(d(dem[3])) - 1e-3) {
-			scalar_t c[4] = { o.achieved[0], o.achieved[1], o.achieved[2],
-					  sc_from_float((float)(d(o.achieved[3]) + 0.01 * d(dem[3]) +
-								 (d(dem[3]) > 0 ? YAW_STEP : -YAW_STEP))) };
+			scalar_t c[4] = {o.achieved[0], o.achieved[1], o.achieved[2],
+					 sc_from_float((float)(d(o.achieved[3]) + 0.01 * d(dem[3]) +
+							       (d(dem[3]) > 0 ? YAW_STEP : -YAW_STEP)))};
 			if (mixer_attainable(&mix, c, SC(0)))
-				unit_fail(u, __FILE__, __LINE__, "yaw not maximal: demand %g %g %g %g achieved %g %g %g %g limits %x",
+				unit_fail(u, __FILE__, __LINE__,
+					  "yaw not maximal: demand %g %g %g %g achieved %g %g %g %g limits %x",
 					  d(dem[0]), d(dem[1]), d(dem[2]), d(dem[3]), d(o.achieved[0]),
 					  d(o.achieved[1]), d(o.achieved[2]), d(o.achieved[3]), (unsigned)o.limits);
 		}
@@ -521,7 +537,7 @@ UNIT_TEST(mixer_priority_cases)
 	mixer_init_design(&mix, &p, &des);
 	struct mixer_output o;
 	/* hover with a huge yaw demand: f, tau_x, tau_y kept, yaw reduced, same sign */
-	scalar_t a[4] = { SC(20.9), SC(0.5), SC(-0.3), SC(5.0) };
+	scalar_t a[4] = {SC(20.9), SC(0.5), SC(-0.3), SC(5.0)};
 	mixer_update(&mix, a, &o);
 	CHECK_NEAR(d(o.achieved[0]), 20.9, TOL_F);
 	CHECK_NEAR(d(o.achieved[1]), 0.5, TOL_TXY);
@@ -530,20 +546,20 @@ UNIT_TEST(mixer_priority_cases)
 	CHECK(o.limits & MIXER_LIMIT_TZ);
 	CHECK(!(o.limits & (MIXER_LIMIT_F | MIXER_LIMIT_TX | MIXER_LIMIT_TY)));
 	/* full thrust with a roll demand: roll kept, thrust reduced */
-	scalar_t b[4] = { SC(230), SC(3.0), SC(0), SC(0) };
+	scalar_t b[4] = {SC(230), SC(3.0), SC(0), SC(0)};
 	mixer_update(&mix, b, &o);
 	CHECK_NEAR(d(o.achieved[1]), 3.0, TOL_TXY);
 	CHECK(d(o.achieved[0]) < 224.3 && d(o.achieved[0]) > 200);
 	CHECK(o.limits & MIXER_LIMIT_F);
 	CHECK(!(o.limits & MIXER_LIMIT_TX));
 	/* negative thrust: everything at the floor */
-	scalar_t c[4] = { SC(-5), SC(0), SC(0), SC(0) };
+	scalar_t c[4] = {SC(-5), SC(0), SC(0), SC(0)};
 	mixer_update(&mix, c, &o);
 	for (int j = 0; j < 8; j++)
 		CHECK_NEAR(d(o.f_n[j]), d(mix.f_lo), OCTO_FIXED ? 0.02 : 1e-3);
 	CHECK(o.rotor_at_min == 0xFF && (o.limits & MIXER_LIMIT_ROTOR_MIN));
 	/* the clipping baseline reduces roll here, the allocator does not */
-	scalar_t e[4] = { SC(40), SC(11.0), SC(0), SC(0) };
+	scalar_t e[4] = {SC(40), SC(11.0), SC(0), SC(0)};
 	CHECK(mixer_attainable(&mix, e, SC(0)));
 	p.mode = MIXER_MODE_CLIP;
 	mixer_set_params(&mix, &p);
@@ -574,28 +590,22 @@ UNIT_TEST(mixer_golden_vectors)
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
 	mixer_init_design(&mix, &p, &des);
 	static const float dem[][4] = {
-		{ 20.9f, 0.0f, 0.0f, 0.0f },
-		{ 20.9f, 1.0f, -0.5f, 0.1f },
-		{ 100.0f, 5.0f, 2.0f, -0.8f },
-		{ 20.9f, 0.5f, -0.3f, 5.0f },
-		{ 230.0f, 3.0f, 0.0f, 0.0f },
-		{ 60.0f, 30.0f, 10.0f, 1.0f },
+		{20.9f, 0.0f, 0.0f, 0.0f},  {20.9f, 1.0f, -0.5f, 0.1f}, {100.0f, 5.0f, 2.0f, -0.8f},
+		{20.9f, 0.5f, -0.3f, 5.0f}, {230.0f, 3.0f, 0.0f, 0.0f}, {60.0f, 30.0f, 10.0f, 1.0f},
 	};
 	/* expected achieved wrench (float build) */
 	static const double ach[][4] = {
-		{ 20.9, 0.0, 0.0, 0.0 },
-		{ 20.9, 1.0, -0.5, 0.1 },
-		{ 100.0, 5.0, 2.0, -0.8 },
-		{ 20.9, 0.5, -0.3, 0.2885144 },
-		{ 214.173, 3.0, 0.0, 0.0 },
-		{ 112.1075, 23.68198, 7.893991, 0.0 },
+		{20.9, 0.0, 0.0, 0.0},        {20.9, 1.0, -0.5, 0.1},   {100.0, 5.0, 2.0, -0.8},
+		{20.9, 0.5, -0.3, 0.2885144}, {214.173, 3.0, 0.0, 0.0}, {112.1075, 23.68198, 7.893991, 0.0},
 	};
 	static const uint32_t golden_limits[] = {
-		0, 0, 0,
+		0,
+		0,
+		0,
 		MIXER_LIMIT_ROTOR_MIN | MIXER_LIMIT_TZ,
 		MIXER_LIMIT_ROTOR_MAX | MIXER_LIMIT_F,
-		MIXER_LIMIT_ROTOR_MIN | MIXER_LIMIT_ROTOR_MAX | MIXER_LIMIT_F | MIXER_LIMIT_TX |
-			MIXER_LIMIT_TY | MIXER_LIMIT_TZ,
+		MIXER_LIMIT_ROTOR_MIN | MIXER_LIMIT_ROTOR_MAX | MIXER_LIMIT_F | MIXER_LIMIT_TX | MIXER_LIMIT_TY |
+			MIXER_LIMIT_TZ,
 	};
 	for (size_t n = 0; n < sizeof dem / sizeof dem[0]; n++) {
 		scalar_t v[4];
@@ -634,7 +644,7 @@ UNIT_TEST(mixer_non_finite_demand)
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
 	mixer_init_design(&mix, &p, &des);
-	scalar_t v[4] = { 20.0f, __builtin_nanf(""), 0.0f, 0.0f };
+	scalar_t v[4] = {20.0f, __builtin_nanf(""), 0.0f, 0.0f};
 	struct mixer_output o;
 	mixer_update(&mix, v, &o);
 	CHECK(o.limits & MIXER_LIMIT_BAD_INPUT);
@@ -651,7 +661,7 @@ UNIT_TEST(mixer_non_finite_demand)
  * fills the 44 sub-facets) */
 UNIT_TEST(mixer_facet_caps_fit_eq14)
 {
-	struct unit_rng r = { 0xface7ULL };
+	struct unit_rng r = {0xface7ULL};
 	int n_masks = 0;
 	for (unsigned mask = 0; mask < 256; mask++) {
 		int removed = 0;
@@ -690,7 +700,7 @@ UNIT_TEST(mixer_facet_caps_fit_eq14)
 UNIT_TEST(mixer_too_many_facets_falls_back)
 {
 	float g[4 * 8];
-	struct unit_rng r = { 0x1a2b3cULL };
+	struct unit_rng r = {0x1a2b3cULL};
 	for (int j = 0; j < 8; j++) {
 		g[0 * 8 + j] = 1.0f;
 		g[1 * 8 + j] = (float)unit_rand_uniform(&r, -0.4, 0.4);
@@ -709,7 +719,7 @@ UNIT_TEST(mixer_too_many_facets_falls_back)
 				s += (double)des.gamma_f[i][j] * (double)des.pinv_f[j][k];
 			CHECK_NEAR(s, i == k ? 1.0 : 0.0, 1e-5);
 		}
-	scalar_t dem[4] = { SC(300), SC(0), SC(0), SC(0) };
+	scalar_t dem[4] = {SC(300), SC(0), SC(0), SC(0)};
 	struct mixer_output o;
 	mixer_update(&mix, dem, &o);
 	CHECK((o.limits & MIXER_LIMIT_NO_ALLOC) && (o.limits & MIXER_LIMIT_F));
@@ -722,7 +732,7 @@ UNIT_TEST(mixer_extreme_demands)
 {
 	struct mixer_params p;
 	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
-	struct unit_rng r = { 0xe7ULL };
+	struct unit_rng r = {0xe7ULL};
 	for (int mode = 0; mode < 2; mode++) {
 		p.mode = mode ? MIXER_MODE_PRIORITY : MIXER_MODE_CLIP;
 		mixer_init_design(&mix, &p, &des);
@@ -731,8 +741,10 @@ UNIT_TEST(mixer_extreme_demands)
 			for (int i = 0; i < 4; i++) {
 				double pick = unit_rand_uniform(&r, 0, 1);
 				double big = OCTO_FIXED ? 32767.0 : 1e30;
-				double v = pick < 0.25 ? big : pick < 0.5 ? -big : pick < 0.6 ? 0.0
-					 : unit_rand_uniform(&r, -300, 300);
+				double v = pick < 0.25  ? big
+					   : pick < 0.5 ? -big
+					   : pick < 0.6 ? 0.0
+							: unit_rand_uniform(&r, -300, 300);
 				dem[i] = sc_from_float((float)v);
 			}
 			struct mixer_output o;
@@ -743,9 +755,9 @@ UNIT_TEST(mixer_extreme_demands)
 				CHECK(sc_isfinite(o.achieved[i]));
 			/* yaw never reversed, even here */
 			if (mode && d(o.achieved[3]) * (d(dem[3]) >= 0 ? 1 : -1) < -TOL_TZ)
-				unit_fail(u, __FILE__, __LINE__, "yaw reversed: %g %g %g %g -> %g %g %g %g",
-					  d(dem[0]), d(dem[1]), d(dem[2]), d(dem[3]), d(o.achieved[0]),
-					  d(o.achieved[1]), d(o.achieved[2]), d(o.achieved[3]));
+				unit_fail(u, __FILE__, __LINE__, "yaw reversed: %g %g %g %g -> %g %g %g %g", d(dem[0]),
+					  d(dem[1]), d(dem[2]), d(dem[3]), d(o.achieved[0]), d(o.achieved[1]),
+					  d(o.achieved[2]), d(o.achieved[3]));
 		}
 	}
 }
@@ -755,7 +767,7 @@ UNIT_TEST(mixer_extreme_demands)
  * delivered as demanded (unflagged) is neither */
 UNIT_TEST(mixer_shortfall_directions)
 {
-	struct unit_rng g = { 0x5a7ULL };
+	struct unit_rng g = {0x5a7ULL};
 	int n_pos = 0, n_neg = 0;
 	for (int k = 0; k < 400; k++) {
 		struct mixer_params p;
@@ -763,17 +775,17 @@ UNIT_TEST(mixer_shortfall_directions)
 		p.mode = k % 2 ? MIXER_MODE_PRIORITY : MIXER_MODE_CLIP;
 		mixer_init(&mix, &p);
 		double kf = (double)sc_to_float(p.k_f_n);
-		scalar_t v[4] = { sc_from_float((float)unit_rand_uniform(&g, 0.0, 10.0 * kf)),
-				  sc_from_float((float)unit_rand_uniform(&g, -8, 8)),
-				  sc_from_float((float)unit_rand_uniform(&g, -8, 8)),
-				  sc_from_float((float)unit_rand_uniform(&g, -1.5, 1.5)) };
+		scalar_t v[4] = {sc_from_float((float)unit_rand_uniform(&g, 0.0, 10.0 * kf)),
+				 sc_from_float((float)unit_rand_uniform(&g, -8, 8)),
+				 sc_from_float((float)unit_rand_uniform(&g, -8, 8)),
+				 sc_from_float((float)unit_rand_uniform(&g, -1.5, 1.5))};
 		struct mixer_output o;
 		mixer_update(&mix, v, &o);
 		uint8_t pos, neg;
 		mixer_shortfall(&o, &pos, &neg);
 		CHECK((pos & neg) == 0);
 		CHECK((pos | neg) >> 4 == 0);
-		static const uint32_t flag[4] = { MIXER_LIMIT_F, MIXER_LIMIT_TX, MIXER_LIMIT_TY, MIXER_LIMIT_TZ };
+		static const uint32_t flag[4] = {MIXER_LIMIT_F, MIXER_LIMIT_TX, MIXER_LIMIT_TY, MIXER_LIMIT_TZ};
 		for (int a = 0; a < 4; a++) {
 			bool flagged = (o.limits & flag[a]) != 0;
 			if (!flagged)
@@ -796,8 +808,8 @@ UNIT_TEST(mixer_shortfall_directions)
 /* eq. (14) in double: the geometry, no effectiveness */
 static void gamma_geom(double l, double kf, double kt, double g[4][8])
 {
-	static const double tx[8] = { 0, -1, -1, -1, 0, 1, 1, 1 };
-	static const double ty[8] = { -1, -1, 0, 1, 1, 1, 0, -1 };
+	static const double tx[8] = {0, -1, -1, -1, 0, 1, 1, 1};
+	static const double ty[8] = {-1, -1, 0, 1, 1, 1, 0, -1};
 	for (int j = 0; j < 8; j++) {
 		double diag = (j & 1) ? sqrt(2.0) / 2 : 1.0;
 		g[0][j] = 1.0;
@@ -810,9 +822,8 @@ static void gamma_geom(double l, double kf, double kt, double g[4][8])
 /* What the rotors really give for a demand: mixer, then the throttle map (both with the
  * mixer's knowledge of the scales, blind or not), then the plant's rotors (true scales,
  * true curve) in double; the physical wrench of their thrusts by eq. (14). */
-static void fly_demand(const struct mixer *m, const struct thrmap *map, const double g[4][8], double kf,
-		       double curve, const double scale[8], const double dem[4], double got[4],
-		       struct mixer_output *o)
+static void fly_demand(const struct mixer *m, const struct thrmap *map, const double g[4][8], double kf, double curve,
+		       const double scale[8], const double dem[4], double got[4], struct mixer_output *o)
 {
 	scalar_t w[4], thr[8];
 	for (int i = 0; i < 4; i++)
@@ -837,9 +848,9 @@ static void fly_demand(const struct mixer *m, const struct thrmap *map, const do
  * miss by up to (1 - scale) k_f where that rotor saturates: the test is not vacuous. */
 UNIT_TEST(mixer_weak_rotor_allocated_around)
 {
-	struct unit_rng r = { 0x3eadbeefULL };
+	struct unit_rng r = {0x3eadbeefULL};
 #if OCTO_FIXED
-	const double map_tol = 8 * 2e-3;   /* T resolution 1.5e-5 at up to 37 N per rotor */
+	const double map_tol = 8 * 2e-3; /* T resolution 1.5e-5 at up to 37 N per rotor */
 #else
 	const double map_tol = 8 * 1e-5;
 #endif
@@ -853,7 +864,7 @@ UNIT_TEST(mixer_weak_rotor_allocated_around)
 		scale[weak] = unit_rand_uniform(&r, 0.8, 1.0);
 		struct mixer_params p;
 		params(&p, l, kf, kt, 0xFF);
-		struct thrmap_params tp = { p.k_f_n, sc_from_float((float)curve), { 0 } };
+		struct thrmap_params tp = {p.k_f_n, sc_from_float((float)curve), {0}};
 		for (int j = 0; j < 8; j++)
 			tp.scale[j] = p.scale[j] = sc_from_float((float)scale[j]);
 		struct mixer *blind = &mix_b;
@@ -868,7 +879,7 @@ UNIT_TEST(mixer_weak_rotor_allocated_around)
 		gamma_geom(d(p.arm_l_m), kfq, d(p.k_tau_nm), g);
 		double worst = 0.0, worst_blind = 0.0;
 		for (int n = 0; n < SWEEP(400); n++) {
-			double f[8], dem[4] = { 0, 0, 0, 0 }, got[4];
+			double f[8], dem[4] = {0, 0, 0, 0}, got[4];
 			scalar_t fs[8], wm[4];
 			for (int j = 0; j < 8; j++) {
 				double hi = d(tp.scale[j]) * kfq, pick = unit_rand_uniform(&r, 0, 1);
@@ -909,8 +920,8 @@ UNIT_TEST(mixer_weak_rotor_allocated_around)
 				worst_blind = fmax(worst_blind, fabs(got[i] - dem[i]));
 		}
 #ifdef TEST_VERBOSE
-		printf("  weak rotor %d scale %.3f: worst wrench error %.2e with the scales, %.2e blind\n",
-		       weak + 1, sw, worst, worst_blind);
+		printf("  weak rotor %d scale %.3f: worst wrench error %.2e with the scales, %.2e blind\n", weak + 1,
+		       sw, worst, worst_blind);
 #endif
 		if ((1.0 - sw) * kfq > 0.05)
 			CHECK(worst_blind > 0.1 * (1.0 - sw) * kfq);
@@ -922,7 +933,7 @@ UNIT_TEST(mixer_weak_rotor_allocated_around)
  * double), and the scales 1 reproduce eq. (15) exactly. */
 UNIT_TEST(mixer_weak_rotor_pinv_is_column_scaled)
 {
-	struct unit_rng r = { 0x5ca1eULL };
+	struct unit_rng r = {0x5ca1eULL};
 	for (int v = 0; v < 8; v++) {
 		double l = 0.35 * unit_rand_uniform(&r, 0.7, 1.3), kf = 28.0269 * unit_rand_uniform(&r, 0.7, 1.3);
 		double kt = 0.3869 * unit_rand_uniform(&r, 0.7, 1.3), scale[8];
@@ -943,9 +954,9 @@ UNIT_TEST(mixer_weak_rotor_pinv_is_column_scaled)
 				CHECK_NEAR(des.gamma_f[i][j], gs[i][j], 1e-6 * (1.0 + fabs(gs[i][j])));
 			}
 		/* a hover-like demand: u = G^T (G G^T)^-1 w, G = Gamma S, solved by Gauss in double */
-		double w[4] = { 8.0 * 0.1 * d(p.k_f_n) * unit_rand_uniform(&r, 0.8, 1.2),
-				unit_rand_uniform(&r, -0.2, 0.2), unit_rand_uniform(&r, -0.2, 0.2),
-				unit_rand_uniform(&r, -0.02, 0.02) };
+		double w[4] = {8.0 * 0.1 * d(p.k_f_n) * unit_rand_uniform(&r, 0.8, 1.2),
+			       unit_rand_uniform(&r, -0.2, 0.2), unit_rand_uniform(&r, -0.2, 0.2),
+			       unit_rand_uniform(&r, -0.02, 0.02)};
 		double a[4][5];
 		for (int i = 0; i < 4; i++) {
 			for (int k = 0; k < 4; k++) {

@@ -19,14 +19,14 @@ static scalar_t s(double x) { return sc_from_float((float)x); }
 struct truth {
 	double kf, ktau, tau, curve, scale[NR], sig_f, sig_t;
 	unsigned delay;
-	int odd_rotor;       /* a rotor with another lag (-1: none) */
+	int odd_rotor; /* a rotor with another lag (-1: none) */
 	double odd_tau;
-	double tau2;         /* a second lag in series (0: none; a motor not first-order) */
-	int given_delay;     /* the delay told to the estimator (-1: it chooses) */
-	double tau0;         /* the lag prior (s) */
+	double tau2;     /* a second lag in series (0: none; a motor not first-order) */
+	int given_delay; /* the delay told to the estimator (-1: it chooses) */
+	double tau0;     /* the lag prior (s) */
 };
 
-static float last_ratio;   /* run()'s last lag grid ratio, at the delay chosen */
+static float last_ratio; /* run()'s last lag grid ratio, at the delay chosen */
 
 struct plant {
 	double a[NR], st[NR], hist[8][NR], a2, st2[NR];
@@ -78,14 +78,18 @@ static void run(struct unit_rng *g, const struct truth *t, int n, bool est_curve
 			p.hist[i][j] = L;
 	}
 	p.a2 = t->tau2 > 0.0 ? exp(-DT / t->tau2) : 0.0;
-	struct motor_id_cfg cfg = {.dt_s = s(DT), .tau0_s = (float)t->tau0, .kf0 = (float)kf0, .curve0 = 0.0f,
-				   .est_curve = est_curve, .n_frames = (uint32_t)n,
+	struct motor_id_cfg cfg = {.dt_s = s(DT),
+				   .tau0_s = (float)t->tau0,
+				   .kf0 = (float)kf0,
+				   .curve0 = 0.0f,
+				   .est_curve = est_curve,
+				   .n_frames = (uint32_t)n,
 				   .fix_delay = t->given_delay >= 0,
 				   .delay_fr = t->given_delay >= 0 ? (uint32_t)t->given_delay : 0u};
 	scalar_t thr0[NR];
 	for (int j = 0; j < NR; j++)
 		thr0[j] = s(L);
-	struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
+	struct motor_id m; /* on the stack: the M0 image has no RAM for statics to spare */
 	motor_id_init(&m, &cfg, thr0);
 	double tprev[NR], d1 = 0, d2 = 0;
 	for (int j = 0; j < NR; j++)
@@ -133,11 +137,10 @@ static void show(const struct truth *t, const struct motor_id_result *r)
 {
 	printf("  truth D %u tau %.4f c %.3f kf %.4f | D %u (margin %.1f) tau %.4f +/- %.4f c %.4f +/- %.4f "
 	       "kf %.4f +/- %.4f (%+.3f %%) ktau %+.3f %% ne %.3f chi2 %.1f white %.1f/%.1f (%s) cause %s %d\n",
-	       t->delay, t->tau, t->curve, t->kf, r->delay, (double)r->delay_margin, (double)r->tau,
-	       (double)r->tau_sd, (double)r->curve, (double)r->curve_sd, (double)r->kf, (double)r->kf_sd,
-	       100.0 * (r->kf / t->kf - 1.0), 100.0 * (r->ktau / t->ktau - 1.0), (double)r->ne_all,
-	       (double)r->curve_chi2, (double)r->white_q, (double)r->white_lim, r->white_ok ? "white" : "coloured",
-	       motor_id_cause_text(r->cause), r->cause_rotor);
+	       t->delay, t->tau, t->curve, t->kf, r->delay, (double)r->delay_margin, (double)r->tau, (double)r->tau_sd,
+	       (double)r->curve, (double)r->curve_sd, (double)r->kf, (double)r->kf_sd, 100.0 * (r->kf / t->kf - 1.0),
+	       100.0 * (r->ktau / t->ktau - 1.0), (double)r->ne_all, (double)r->curve_chi2, (double)r->white_q,
+	       (double)r->white_lim, r->white_ok ? "white" : "coloured", motor_id_cause_text(r->cause), r->cause_rotor);
 }
 #endif
 
@@ -238,16 +241,16 @@ UNIT_TEST(motor_id_noise_not_across_a_lost_frame)
 	struct unit_rng g = {0x5eed0014ULL};
 	for (int v = 0; v < 4; v++) {
 		double sig = unit_rand_uniform(&g, 0.005, 0.05), lvl = unit_rand_uniform(&g, 2.0, 4.0);
-		struct motor_id_cfg cfg = {.dt_s = s(DT), .tau0_s = 0.03f, .kf0 = 20.0f, .est_curve = true,
-					   .n_frames = 160};
+		struct motor_id_cfg cfg = {
+			.dt_s = s(DT), .tau0_s = 0.03f, .kf0 = 20.0f, .est_curve = true, .n_frames = 160};
 		scalar_t thr0[NR], tp[NR], f[NR], tq[NR];
 		for (int j = 0; j < NR; j++)
 			thr0[j] = tp[j] = s(0.12);
-		struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
+		struct motor_id m; /* on the stack: the M0 image has no RAM for statics to spare */
 		motor_id_init(&m, &cfg, thr0);
 		for (int k = 0; k < 300; k++) {
 			if (k == 60 || k == 120) {
-				motor_id_hold(&m, tp);   /* lost: the thrust jumps meanwhile */
+				motor_id_hold(&m, tp); /* lost: the thrust jumps meanwhile */
 				lvl += 0.5;
 			}
 			bool exc = k >= 140;
@@ -257,7 +260,7 @@ UNIT_TEST(motor_id_noise_not_across_a_lost_frame)
 			}
 			motor_id_step(&m, tp, f, tq, exc);
 			if (k % 2)
-				motor_id_process(&m);   /* between frames, or by the next step */
+				motor_id_process(&m); /* between frames, or by the next step */
 		}
 		motor_id_process(&m);
 		struct motor_id_result r;
@@ -309,11 +312,11 @@ UNIT_TEST(motor_id_linear_rotors_curve_estimated_unbiased)
 		zk += (r.kf - t.kf) / r.kf_sd;
 	}
 #ifdef TEST_VERBOSE
-	printf("  linear rotors, curve estimated: %d of %d accepted, mean z curve %+.3f, k_f %+.3f\n", ok, n,
-	       zc / ok, zk / ok);
+	printf("  linear rotors, curve estimated: %d of %d accepted, mean z curve %+.3f, k_f %+.3f\n", ok, n, zc / ok,
+	       zk / ok);
 #endif
 	CHECK(ok >= n - 2 - n / 20);
-	if (n >= 50) {   /* the statistic needs the host's 100 runs */
+	if (n >= 50) { /* the statistic needs the host's 100 runs */
 		CHECK(fabs(zc / ok) < 0.3);
 		CHECK(fabs(zk / ok) < 0.3);
 	}
@@ -330,7 +333,7 @@ UNIT_TEST(motor_id_curve_not_modelled_rejected)
 		struct motor_id_result r;
 		identify(&g, &t, 900, false, 20.0, &r);
 		CHECK(r.cause == MOTOR_ID_CURVE);
-		CHECK(r.white_have && !r.white_ok);   /* the prediction errors are coloured too */
+		CHECK(r.white_have && !r.white_ok); /* the prediction errors are coloured too */
 	}
 }
 
@@ -432,12 +435,11 @@ UNIT_TEST(motor_id_odd_rotor_named)
 /* No data, no noise measurement: refused with those causes */
 UNIT_TEST(motor_id_refusals)
 {
-	struct motor_id_cfg cfg = {.dt_s = s(DT), .tau0_s = 0.03f, .kf0 = 20.0f, .est_curve = true,
-				   .n_frames = 900};
+	struct motor_id_cfg cfg = {.dt_s = s(DT), .tau0_s = 0.03f, .kf0 = 20.0f, .est_curve = true, .n_frames = 900};
 	scalar_t thr0[NR];
 	for (int j = 0; j < NR; j++)
 		thr0[j] = s(0.1);
-	struct motor_id m;   /* on the stack: the M0 image has no RAM for statics to spare */
+	struct motor_id m; /* on the stack: the M0 image has no RAM for statics to spare */
 	motor_id_init(&m, &cfg, thr0);
 	struct motor_id_result r;
 	motor_id_process(&m);

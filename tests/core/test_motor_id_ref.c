@@ -49,7 +49,7 @@ static inline void random_vehicle(struct unit_rng *g, struct vehicle *v)
 /* One experiment (settle frames still, then n excited frames) fed to this build's estimator m
  * and, if ref, to the float64 one (the same scalar_t inputs, as double) */
 static inline void experiment(struct unit_rng *g, const struct vehicle *v, int settle, int n, double kf0, bool ref,
-		       struct motor_id *m, struct motor_id_result *res, struct mid64_res *r64)
+			      struct motor_id *m, struct motor_id_result *res, struct mid64_res *r64)
 {
 	double a = exp(-DT / v->tau), st[NR], hist[8][NR], tprev[NR], d1 = 0, d2 = 0;
 	for (int j = 0; j < NR; j++) {
@@ -58,8 +58,12 @@ static inline void experiment(struct unit_rng *g, const struct vehicle *v, int s
 			hist[i][j] = v->L;
 	}
 	scalar_t dt = sc_from_float((float)DT), thr0[NR];
-	struct motor_id_cfg cfg = {.dt_s = dt, .tau0_s = 0.03f, .kf0 = (float)kf0, .curve0 = 0.0f,
-				   .est_curve = true, .n_frames = (uint32_t)n};
+	struct motor_id_cfg cfg = {.dt_s = dt,
+				   .tau0_s = 0.03f,
+				   .kf0 = (float)kf0,
+				   .curve0 = 0.0f,
+				   .est_curve = true,
+				   .n_frames = (uint32_t)n};
 	double thr0d[NR];
 	for (int j = 0; j < NR; j++) {
 		thr0[j] = sc_from_float((float)v->L);
@@ -67,8 +71,12 @@ static inline void experiment(struct unit_rng *g, const struct vehicle *v, int s
 	}
 	motor_id_init(m, &cfg, thr0);
 #if MID64_HAVE
-	struct mid64_cfg c64 = {.dt_s = (double)sc_to_float(dt), .tau0_s = 0.03, .kf0 = (double)(float)kf0,
-				.curve0 = 0.0, .est_curve = true, .n_frames = (uint32_t)n};
+	struct mid64_cfg c64 = {.dt_s = (double)sc_to_float(dt),
+				.tau0_s = 0.03,
+				.kf0 = (double)(float)kf0,
+				.curve0 = 0.0,
+				.est_curve = true,
+				.n_frames = (uint32_t)n};
 	if (ref)
 		mid64_init(&c64, thr0d);
 #else
@@ -151,8 +159,8 @@ UNIT_TEST(motor_id_ref_float64_random_vehicles)
 		CHECK((int)r.cause == r64.cause);
 		if (r.delay != r64.delay || r64.tau <= 0.0)
 			continue;
-		double e[5] = {rel(r.kf, r64.kf), rel(r.ktau, r64.ktau), rel(r.tau, r64.tau),
-			       fabs(r.curve - r64.curve), 0.0};
+		double e[5] = {rel(r.kf, r64.kf), rel(r.ktau, r64.ktau), rel(r.tau, r64.tau), fabs(r.curve - r64.curve),
+			       0.0};
 		for (int j = 0; j < NR; j++)
 			e[4] = fmax(e[4], fabs(r.scale[j] - r64.scale[j]));
 		for (int i = 0; i < 5; i++) {
@@ -170,8 +178,8 @@ UNIT_TEST(motor_id_ref_float64_random_vehicles)
 #ifdef TEST_VERBOSE
 		printf("  run %2d n %d: D %u/%u cause %d/%d kf %.6f/%.6f tau %.6f/%.6f c %.5f/%.5f "
 		       "diff kf %.2e ktau %.2e lag %.2e curve %.2e scale %.2e\n",
-		       run, run % 2 ? 900 : 450, r.delay, r64.delay, (int)r.cause, r64.cause, (double)r.kf,
-		       r64.kf, (double)r.tau, r64.tau, (double)r.curve, r64.curve, e[0], e[1], e[2], e[3], e[4]);
+		       run, run % 2 ? 900 : 450, r.delay, r64.delay, (int)r.cause, r64.cause, (double)r.kf, r64.kf,
+		       (double)r.tau, r64.tau, (double)r.curve, r64.curve, e[0], e[1], e[2], e[3], e[4]);
 #endif
 	}
 	CHECK(n_cmp >= runs - 1);
@@ -205,8 +213,8 @@ static double sumv(const struct motor_id *m, motor_id_sum_t v, unsigned k, int p
 UNIT_TEST(motor_id_extreme_inputs_never_wrap)
 {
 	struct motor_id m;
-	struct motor_id_cfg cfg = {.dt_s = sc_from_float((float)DT), .tau0_s = 0.03f, .kf0 = 28.0f,
-				   .est_curve = true, .n_frames = 3000};
+	struct motor_id_cfg cfg = {
+		.dt_s = sc_from_float((float)DT), .tau0_s = 0.03f, .kf0 = 28.0f, .est_curve = true, .n_frames = 3000};
 	scalar_t thr0[NR];
 	for (int j = 0; j < NR; j++)
 		thr0[j] = sc_from_float(0.4f);
@@ -271,7 +279,7 @@ UNIT_TEST(motor_id_long_run_holds)
 	for (int j = 0; j < NR; j++)
 		for (int b = 0; b < MOTOR_ID_WBINS; b++)
 			full = full || m.wh.n[j][b] == UINT16_MAX;
-	CHECK(full);   /* the run went past a series' capacity */
+	CHECK(full); /* the run went past a series' capacity */
 #if MID64_HAVE && OCTO_FIXED
 	CHECK(r.delay == r64.delay);
 	CHECK_REL(r.kf, r64.kf, REL_BOUND);
@@ -279,8 +287,8 @@ UNIT_TEST(motor_id_long_run_holds)
 	CHECK_REL(r.tau, r64.tau, REL_BOUND);
 	CHECK_NEAR(r.curve, r64.curve, REL_BOUND);
 #ifdef TEST_VERBOSE
-	printf("  long run: kf %.6f / %.6f (truth %.6f), tau %.6f / %.6f, cause %d / %d\n", (double)r.kf, r64.kf,
-	       v.kf, (double)r.tau, r64.tau, (int)r.cause, r64.cause);
+	printf("  long run: kf %.6f / %.6f (truth %.6f), tau %.6f / %.6f, cause %d / %d\n", (double)r.kf, r64.kf, v.kf,
+	       (double)r.tau, r64.tau, (int)r.cause, r64.cause);
 #endif
 #endif
 #endif

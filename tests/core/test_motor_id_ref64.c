@@ -37,9 +37,14 @@ static struct motor_id M64;
 
 void mid64_init(const struct mid64_cfg *c, const double thr0[8])
 {
-	struct motor_id_cfg cfg = {.dt_s = c->dt_s, .tau0_s = c->tau0_s, .kf0 = c->kf0, .curve0 = c->curve0,
-				   .est_curve = c->est_curve, .n_frames = c->n_frames,
-				   .fix_delay = c->fix_delay, .delay_fr = c->delay_fr};
+	struct motor_id_cfg cfg = {.dt_s = c->dt_s,
+				   .tau0_s = c->tau0_s,
+				   .kf0 = c->kf0,
+				   .curve0 = c->curve0,
+				   .est_curve = c->est_curve,
+				   .n_frames = c->n_frames,
+				   .fix_delay = c->fix_delay,
+				   .delay_fr = c->delay_fr};
 	motor_id_init(&M64, &cfg, thr0);
 }
 

@@ -27,8 +27,7 @@ static struct pos_ctrl_params random_params(struct unit_rng *g)
 }
 
 /* the law of pos_ctrl.h in double on the represented inputs; returns the flags */
-static uint32_t ref_law(const struct pos_ctrl_params *p, const struct pos_ctrl_input *in, double *roll,
-			double *pitch)
+static uint32_t ref_law(const struct pos_ctrl_params *p, const struct pos_ctrl_input *in, double *roll, double *pitch)
 {
 	uint32_t f = 0;
 	double a[2];
@@ -52,7 +51,7 @@ static uint32_t ref_law(const struct pos_ctrl_params *p, const struct pos_ctrl_i
 
 UNIT_TEST(pos_ctrl_law_matches_double_reference)
 {
-	struct unit_rng g = { 0x9051ULL };
+	struct unit_rng g = {0x9051ULL};
 	int n_vel = 0, n_tilt = 0;
 	for (int k = 0; k < 2000; k++) {
 		struct pos_ctrl_params p = random_params(&g);
@@ -64,7 +63,7 @@ UNIT_TEST(pos_ctrl_law_matches_double_reference)
 			in.vel_mps[i] = s(unit_rand_uniform(&g, -3, 3));
 		}
 		in.q_b2i = tq_from_euler(s(unit_rand_uniform(&g, -0.6, 0.6)), s(unit_rand_uniform(&g, -0.6, 0.6)),
-					   s(unit_rand_uniform(&g, -3.1, 3.1)));
+					 s(unit_rand_uniform(&g, -3.1, 3.1)));
 		struct pos_ctrl_output o = pos_ctrl_update(&p, &in);
 		double roll, pitch;
 		uint32_t f = ref_law(&p, &in, &roll, &pitch);
@@ -76,7 +75,8 @@ UNIT_TEST(pos_ctrl_law_matches_double_reference)
 		double vm = d(p.vel_max_mps), margin = OCTO_FIXED ? 1e-3 : 1e-5;
 		bool near = false;
 		for (int i = 0; i < 2; i++)
-			near = near || fabs(fabs(d(p.pos_gain_rps) * (d(in.pos_sp_m[i]) - d(in.pos_m[i]))) - vm) < margin;
+			near = near ||
+			       fabs(fabs(d(p.pos_gain_rps) * (d(in.pos_sp_m[i]) - d(in.pos_m[i]))) - vm) < margin;
 		if (!near)
 			CHECK((o.flags & POS_CTRL_VEL_LIM) == (f & POS_CTRL_VEL_LIM));
 		if (fabs(fabs(roll) - d(p.tilt_max_rad)) > tol && fabs(fabs(pitch) - d(p.tilt_max_rad)) > tol)
@@ -89,10 +89,10 @@ UNIT_TEST(pos_ctrl_law_matches_double_reference)
 
 UNIT_TEST(pos_ctrl_heading_is_quat_yaw)
 {
-	struct unit_rng g = { 0x4ead1ULL };
+	struct unit_rng g = {0x4ead1ULL};
 	for (int k = 0; k < 1000; k++) {
 		struct quat q = tq_from_euler(s(unit_rand_uniform(&g, -1.2, 1.2)), s(unit_rand_uniform(&g, -1.2, 1.2)),
-						s(unit_rand_uniform(&g, -3.14, 3.14)));
+					      s(unit_rand_uniform(&g, -3.14, 3.14)));
 		scalar_t c, sn;
 		pos_ctrl_heading(q, &c, &sn);
 		double yaw = d(quat_yaw(q)), tol = OCTO_FIXED ? 1e-3 : 1e-5;
@@ -115,16 +115,16 @@ UNIT_TEST(pos_ctrl_heading_is_quat_yaw)
  * offset, within 5 cm after 25 s. */
 UNIT_TEST(pos_ctrl_closed_loop_holds)
 {
-	struct unit_rng g = { 0xc105eULL };
+	struct unit_rng g = {0xc105eULL};
 	for (int run = 0; run < 12; run++) {
 		struct pos_ctrl_params p = pos_ctrl_params_default();
 		p.pos_gain_rps = s(d(p.pos_gain_rps) * unit_rand_uniform(&g, 0.7, 1.4));
 		p.vel_gain_rad_mps = s(d(p.vel_gain_rad_mps) * unit_rand_uniform(&g, 0.7, 1.4));
 		double yaw = unit_rand_uniform(&g, -3.1, 3.1), ang = unit_rand_uniform(&g, -3.1, 3.1);
 		double r0 = unit_rand_uniform(&g, 3, 8);
-		double pos[2] = { r0 * cos(ang), r0 * sin(ang) }, vel[2] = { unit_rand_uniform(&g, -1, 1),
-									    unit_rand_uniform(&g, -1, 1) };
-		double tilt[2] = { 0, 0 }, cmd_prev[2] = { 0, 0 }; /* pitch, roll */
+		double pos[2] = {r0 * cos(ang), r0 * sin(ang)},
+		       vel[2] = {unit_rand_uniform(&g, -1, 1), unit_rand_uniform(&g, -1, 1)};
+		double tilt[2] = {0, 0}, cmd_prev[2] = {0, 0}; /* pitch, roll */
 		struct pos_ctrl_input in;
 		in.pos_sp_m[0] = in.pos_sp_m[1] = SC_ZERO;
 		in.q_b2i = tq_from_euler(SC(0), SC(0), s(yaw));
@@ -137,14 +137,14 @@ UNIT_TEST(pos_ctrl_closed_loop_holds)
 				in.vel_mps[i] = s(vel[i]);
 			}
 			struct pos_ctrl_output o = pos_ctrl_update(&p, &in);
-			double cmd[2] = { d(o.pitch_rad), d(o.roll_rad) };
+			double cmd[2] = {d(o.pitch_rad), d(o.roll_rad)};
 			for (int i = 0; i < 2; i++) {
 				tilt[i] += (cmd_prev[i] - tilt[i]) * (1 - exp(-FRAME_S / lag));
 				cmd_prev[i] = cmd[i];
 				max_tilt = fmax(max_tilt, fabs(cmd[i]));
 			}
 			double fwd = G_MPS2 * tan(tilt[0]), left = -G_MPS2 * tan(tilt[1]);
-			double acc[2] = { cos(yaw) * fwd - sin(yaw) * left, sin(yaw) * fwd + cos(yaw) * left };
+			double acc[2] = {cos(yaw) * fwd - sin(yaw) * left, sin(yaw) * fwd + cos(yaw) * left};
 			for (int i = 0; i < 2; i++) {
 				vel[i] += acc[i] * FRAME_S;
 				pos[i] += vel[i] * FRAME_S;
@@ -168,7 +168,7 @@ UNIT_TEST(pos_ctrl_nan_guard)
 	(void)u; /* Q16.16 has no NaN */
 #else
 	struct pos_ctrl_params p = pos_ctrl_params_default();
-	struct pos_ctrl_input in = { { 0, 0 }, { 1, 2 }, { 0.5f, 0 }, tq_identity() };
+	struct pos_ctrl_input in = {{0, 0}, {1, 2}, {0.5f, 0}, tq_identity()};
 	in.vel_mps[1] = __builtin_nanf("");
 	struct pos_ctrl_output o = pos_ctrl_update(&p, &in);
 	CHECK(o.flags == POS_CTRL_BAD_INPUT && o.roll_rad == 0 && o.pitch_rad == 0);

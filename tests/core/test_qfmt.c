@@ -37,7 +37,7 @@ UNIT_TEST(qfmt_named_conversions)
 
 UNIT_TEST(qfmt_products_match_double)
 {
-	struct unit_rng g = { 0x9f0ULL };
+	struct unit_rng g = {0x9f0ULL};
 	for (int k = 0; k < 3000; k++) {
 		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
 		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
@@ -61,7 +61,8 @@ UNIT_TEST(qfmt_products_match_double)
 			double ps = ldexp((double)w * (double)a, -(int)s);
 			int64_t ms = q_mul64_32(w, a, s);
 			if (fabs(ps) < 9.2e18)
-				CHECK_NEAR((double)ms, ps, (s >= 32 ? 1.0 : ldexp(1.0, 32 - (int)s)) + 1e-15 * fabs(ps));
+				CHECK_NEAR((double)ms, ps,
+					   (s >= 32 ? 1.0 : ldexp(1.0, 32 - (int)s)) + 1e-15 * fabs(ps));
 			else
 				CHECK(ms == (ps > 0 ? INT64_MAX : -INT64_MAX));
 		}
@@ -70,7 +71,7 @@ UNIT_TEST(qfmt_products_match_double)
 
 UNIT_TEST(qfmt_quotients_match_double)
 {
-	struct unit_rng g = { 0x7a7ULL };
+	struct unit_rng g = {0x7a7ULL};
 	for (int k = 0; k < 3000; k++) {
 		/* operands over many decades */
 		int64_t a = (int64_t)ldexp(unit_rand_uniform(&g, 0.5, 1.0), (int)unit_rand_uniform(&g, 1, 62));

@@ -18,14 +18,19 @@
 
 static scalar_t s(double x) { return sc_from_float((float)x); }
 
-
 /* rotation matrix of q_b2i (body -> inertial), double */
 static void dq_to_R(const double q[4], double R[3][3])
 {
 	double w = q[0], x = q[1], y = q[2], z = q[3];
-	R[0][0] = 1 - 2 * (y * y + z * z); R[0][1] = 2 * (x * y - w * z);     R[0][2] = 2 * (x * z + w * y);
-	R[1][0] = 2 * (x * y + w * z);     R[1][1] = 1 - 2 * (x * x + z * z); R[1][2] = 2 * (y * z - w * x);
-	R[2][0] = 2 * (x * z - w * y);     R[2][1] = 2 * (y * z + w * x);     R[2][2] = 1 - 2 * (x * x + y * y);
+	R[0][0] = 1 - 2 * (y * y + z * z);
+	R[0][1] = 2 * (x * y - w * z);
+	R[0][2] = 2 * (x * z + w * y);
+	R[1][0] = 2 * (x * y + w * z);
+	R[1][1] = 1 - 2 * (x * x + z * z);
+	R[1][2] = 2 * (y * z - w * x);
+	R[2][0] = 2 * (x * z - w * y);
+	R[2][1] = 2 * (y * z + w * x);
+	R[2][2] = 1 - 2 * (x * x + y * y);
 }
 
 static struct quat random_quat(struct unit_rng *r)
@@ -36,14 +41,11 @@ static struct quat random_quat(struct unit_rng *r)
 		n += q[i] * q[i];
 	}
 	n = sqrt(n);
-	struct quat o = { s(q[0] / n), s(q[1] / n), s(q[2] / n), s(q[3] / n) };
+	struct quat o = {s(q[0] / n), s(q[1] / n), s(q[2] / n), s(q[3] / n)};
 	return o;
 }
 
-static void to_d(struct quat q, double o[4])
-{
-	o[0] = d(q.w), o[1] = d(q.x), o[2] = d(q.y), o[3] = d(q.z);
-}
+static void to_d(struct quat q, double o[4]) { o[0] = d(q.w), o[1] = d(q.x), o[2] = d(q.y), o[3] = d(q.z); }
 
 /* sign-insensitive distance between two unit quaternions */
 static double qdist(const double a[4], const double b[4])
@@ -58,7 +60,7 @@ static double qdist(const double a[4], const double b[4])
 
 UNIT_TEST(quat_product_conj_norm)
 {
-	struct unit_rng r = { 0x9a7e1ULL };
+	struct unit_rng r = {0x9a7e1ULL};
 	for (int i = 0; i < 200; i++) {
 		struct quat a = random_quat(&r), b = random_quat(&r);
 		double da[4], db[4], dr[4], got[4];
@@ -68,26 +70,27 @@ UNIT_TEST(quat_product_conj_norm)
 		for (int k = 0; k < 4; k++)
 			CHECK_NEAR(got[k], dr[k], OCTO_FIXED ? 4 * LSB : 1e-6); /* 4 products, rounded */
 		/* q (x) conj(q) = identity */
-		struct quat ca = { a.w, sc_neg(a.x), sc_neg(a.y), sc_neg(a.z) };
+		struct quat ca = {a.w, sc_neg(a.x), sc_neg(a.y), sc_neg(a.z)};
 		to_d(quat_mul(a, ca), got);
 		CHECK_NEAR(got[0], 1.0, OCTO_FIXED ? 8 * LSB : 1e-6);
 		CHECK_NEAR(got[1], 0.0, OCTO_FIXED ? 4 * LSB : 1e-6);
 		/* normalisation of a scaled quaternion */
-		struct quat big = { sc_mul(a.w, SC(3.7)), sc_mul(a.x, SC(3.7)), sc_mul(a.y, SC(3.7)), sc_mul(a.z, SC(3.7)) };
+		struct quat big = {sc_mul(a.w, SC(3.7)), sc_mul(a.x, SC(3.7)), sc_mul(a.y, SC(3.7)),
+				   sc_mul(a.z, SC(3.7))};
 		struct quat n = quat_normalize(big);
 		CHECK_NEAR(d(quat_norm2(n)), 1.0, OCTO_FIXED ? 8 * LSB : 1e-6);
 		to_d(n, got);
 		CHECK_NEAR(qdist(got, da), 0.0, OCTO_FIXED ? 8 * LSB : 1e-6);
 	}
 	/* degenerate input gives the identity, not NaN */
-	struct quat z = { SC_ZERO, SC_ZERO, SC_ZERO, SC_ZERO };
+	struct quat z = {SC_ZERO, SC_ZERO, SC_ZERO, SC_ZERO};
 	struct quat n = quat_normalize(z);
 	CHECK(n.w == SC(1) && n.x == SC_ZERO && n.y == SC_ZERO && n.z == SC_ZERO);
 }
 
 UNIT_TEST(quat_body_z_up_matches_matrix)
 {
-	struct unit_rng r = { 0x5eedULL };
+	struct unit_rng r = {0x5eedULL};
 	for (int i = 0; i < 200; i++) {
 		struct quat q = random_quat(&r);
 		double dq[4], R[3][3];
@@ -128,10 +131,10 @@ UNIT_TEST(quat_frames_and_euler_signs)
 
 UNIT_TEST(quat_from_euler_and_yaw)
 {
-	struct unit_rng r = { 0xe1e1ULL };
+	struct unit_rng r = {0xe1e1ULL};
 	for (int i = 0; i < 300; i++) {
-		double e[3] = { unit_rand_uniform(&r, -3.1, 3.1), unit_rand_uniform(&r, -1.5, 1.5),
-				unit_rand_uniform(&r, -3.1, 3.1) };
+		double e[3] = {unit_rand_uniform(&r, -3.1, 3.1), unit_rand_uniform(&r, -1.5, 1.5),
+			       unit_rand_uniform(&r, -3.1, 3.1)};
 		struct quat_yaw_half yh = quat_yaw_half(s(e[2]));
 		CHECK_NEAR(d(yh.c), cos(e[2] / 2), OCTO_FIXED ? 2 * LSB : 1e-6);
 		CHECK_NEAR(d(yh.s), sin(e[2] / 2), OCTO_FIXED ? 2 * LSB : 1e-6);
@@ -139,7 +142,7 @@ UNIT_TEST(quat_from_euler_and_yaw)
 		/* against the double reference Rz Ry Rx */
 		double cr = cos(e[0] / 2), sr = sin(e[0] / 2), cp = cos(e[1] / 2), sp = sin(e[1] / 2);
 		double cy = cos(e[2] / 2), sy = sin(e[2] / 2);
-		double qz[4] = { cy, 0, 0, sy }, qy[4] = { cp, 0, sp, 0 }, qx[4] = { cr, sr, 0, 0 }, ref[4], got[4];
+		double qz[4] = {cy, 0, 0, sy}, qy[4] = {cp, 0, sp, 0}, qx[4] = {cr, sr, 0, 0}, ref[4], got[4];
 		dq_mul(qz, qy, ref);
 		dq_mul(ref, qx, ref);
 		to_d(q, got);
@@ -164,7 +167,7 @@ UNIT_TEST(quat_error)
 	CHECK_NEAR(d(e.x), 2 * sin(0.05), OCTO_FIXED ? 20 * LSB : 1e-6);
 	CHECK_NEAR(d(e.y), 0, OCTO_FIXED ? 20 * LSB : 1e-6);
 	/* shortest way: -q is the same attitude, and a 350 deg yaw is -10 deg */
-	struct quat neg = { sc_neg(sp.w), sc_neg(sp.x), sc_neg(sp.y), sc_neg(sp.z) };
+	struct quat neg = {sc_neg(sp.w), sc_neg(sp.x), sc_neg(sp.y), sc_neg(sp.z)};
 	struct vec3 e2 = quat_error_b(neg, cur);
 	CHECK_NEAR(d(e2.x), d(e.x), 2 * LSB);
 	sp = tq_from_euler(SC_ZERO, SC_ZERO, s(350.0 * PI / 180.0));

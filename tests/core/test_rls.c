@@ -75,7 +75,7 @@ static bool pos_def(const struct rls *r)
 		if (!((double)r->d[i] > 0.0) || !isfinite((double)r->d[i]))
 			return false;
 	for (unsigned i = 0; i < r->cfg.n_params; i++)
-		for (unsigned j = i + 1; j < r->cfg.n_params; j++)   /* the strict upper part U keeps */
+		for (unsigned j = i + 1; j < r->cfg.n_params; j++) /* the strict upper part U keeps */
 			if (!isfinite((double)r->u[RLS_U_IDX(i, j)]))
 				return false;
 	return true;
@@ -85,7 +85,7 @@ static bool pos_def(const struct rls *r)
 
 UNIT_TEST(rls_equals_batch_ls)
 {
-	static const double truth[3][4] = { { 28.0, -1.5, 0.7, 3.0 }, { 0.39, 2.0, -4.0, 0.1 }, { -7.0, 0.0, 1.0, 12.0 } };
+	static const double truth[3][4] = {{28.0, -1.5, 0.7, 3.0}, {0.39, 2.0, -4.0, 0.1}, {-7.0, 0.0, 1.0, 12.0}};
 	/* every shape the firmware's RLS holds (RLS_MAX_PARAMS x RLS_MAX_OUTPUTS) */
 	for (int shape = 0; shape < RLS_MAX_PARAMS * RLS_MAX_OUTPUTS; shape++) {
 		int p = 1 + shape / RLS_MAX_OUTPUTS, no = 1 + shape % RLS_MAX_OUTPUTS;
@@ -101,7 +101,7 @@ UNIT_TEST(rls_equals_batch_ls)
 		memset(&b, 0, sizeof b);
 		b.p = p;
 		b.no = no;
-		struct unit_rng g = { 0x1000ULL + (unsigned)shape };
+		struct unit_rng g = {0x1000ULL + (unsigned)shape};
 		for (int k = 0; k < N_LS; k++) {
 			float phi[4], y[3];
 			for (int i = 0; i < p; i++) {
@@ -150,13 +150,13 @@ UNIT_TEST(rls_two_outputs_share_regressor)
 	c.n_outputs = 1;
 	rls_init(&kf, &c);
 	rls_init(&kt, &c);
-	struct unit_rng g = { 0xbeefULL };
+	struct unit_rng g = {0xbeefULL};
 	double sxx = 0, sxf = 0, sxt = 0;
 	for (int k = 0; k < 900; k++) {
 		double t = 0.093 + unit_rand_uniform(&g, -0.05, 0.05);
 		double f = 28.0269 * t + 0.026 * unit_rand_normal(&g);
 		double tau = 0.3869 * t + 0.0004 * unit_rand_normal(&g);
-		float phi = (float)t, y[2] = { (float)f, (float)tau };
+		float phi = (float)t, y[2] = {(float)f, (float)tau};
 		rls_update_f(&both, &phi, y, true);
 		rls_update_f(&kf, &phi, &y[0], true);
 		rls_update_f(&kt, &phi, &y[1], true);
@@ -185,13 +185,13 @@ static void windup_run(struct unit_ctx *u, float p_max, bool gate, int expect_re
 	c.theta0[0][0] = 20.0f;
 	struct rls r;
 	rls_init(&r, &c);
-	struct unit_rng g = { 0x42ULL };
+	struct unit_rng g = {0x42ULL};
 	const double kf = 28.0269, sig = 0.005;
 	/* 5 s of excitation, 120 s without, 10 s with */
 	for (int k = 0; k < 90 * 135; k++) {
 		bool exc = k < 90 * 5 || k >= 90 * 125;
 		double t = 0.093 + (exc ? unit_rand_uniform(&g, -0.05, 0.05) : 0.0);
-		float phi[2] = { (float)t, 1.0f };
+		float phi[2] = {(float)t, 1.0f};
 		float y = (float)(kf * t + sig * unit_rand_normal(&g));
 		enum rls_result res = rls_update_f(&r, phi, &y, gate ? exc : true);
 		CHECK(res != RLS_REJECTED);
@@ -210,15 +210,9 @@ static void windup_run(struct unit_ctx *u, float p_max, bool gate, int expect_re
 	CHECK_NEAR(rls_estimate_f(&r, 0, 1), 0.0, 0.005 * kf * 0.093);
 }
 
-UNIT_TEST(rls_windup_ceiling)
-{
-	windup_run(u, 1e4f, false, 0); /* covariance ceiling: finite, no reset */
-}
+UNIT_TEST(rls_windup_ceiling) { windup_run(u, 1e4f, false, 0); /* covariance ceiling: finite, no reset */ }
 
-UNIT_TEST(rls_windup_gated)
-{
-	windup_run(u, 0.0f, true, 0); /* updates gated on the excitation flag: no wind-up */
-}
+UNIT_TEST(rls_windup_gated) { windup_run(u, 0.0f, true, 0); /* updates gated on the excitation flag: no wind-up */ }
 
 UNIT_TEST(rls_windup_unprotected_guard)
 {
@@ -237,16 +231,16 @@ UNIT_TEST(rls_nan_guard)
 	c.p0 = 10.0f;
 	struct rls r;
 	rls_init(&r, &c);
-	float phi[2] = { 1.0f, 0.5f }, y[2] = { 2.0f, -1.0f };
+	float phi[2] = {1.0f, 0.5f}, y[2] = {2.0f, -1.0f};
 	for (int k = 0; k < 20; k++) {
 		phi[1] = (float)k * 0.1f;
 		rls_update_f(&r, phi, y, true);
 	}
 	float th0 = rls_estimate_f(&r, 0, 0), th1 = rls_estimate_f(&r, 1, 1), p0 = rls_cov_diag(&r, 0);
 	uint32_t n = r.n_updates;
-	float bad[2] = { __builtin_nanf(""), 1.0f };
+	float bad[2] = {__builtin_nanf(""), 1.0f};
 	CHECK(rls_update_f(&r, bad, y, true) == RLS_REJECTED);
-	float inf_y[2] = { __builtin_inff(), 0.0f };
+	float inf_y[2] = {__builtin_inff(), 0.0f};
 	CHECK(rls_update_f(&r, phi, inf_y, true) == RLS_REJECTED);
 	CHECK(rls_estimate_f(&r, 0, 0) == th0 && rls_estimate_f(&r, 1, 1) == th1);
 	CHECK(rls_cov_diag(&r, 0) == p0 && r.n_updates == n && r.n_rejected == 2);
@@ -274,7 +268,7 @@ UNIT_TEST(rls_gating_and_floor)
 	struct rls r;
 	rls_init(&r, &c);
 	float phi = 0.005f, y = 1.0f;
-	CHECK(rls_update_f(&r, &phi, &y, true) == RLS_GATED);  /* |phi| < phi_min */
+	CHECK(rls_update_f(&r, &phi, &y, true) == RLS_GATED); /* |phi| < phi_min */
 	phi = 1.0f;
 	CHECK(rls_update_f(&r, &phi, &y, false) == RLS_GATED); /* caller: not excited */
 	CHECK(r.n_gated == 2 && r.n_updates == 0 && rls_cov_diag(&r, 0) == 1.0f);
@@ -288,9 +282,9 @@ UNIT_TEST(rls_gating_and_floor)
 UNIT_TEST(rls_std_matches_monte_carlo)
 {
 	enum { RUNS = 200, N = 300 };
-	const double truth[2] = { 28.0269, -0.8 }, sig = 0.05;
-	double sum[2] = { 0 }, sum2[2] = { 0 }, var_pred[2] = { 0 }, rv = 0;
-	struct unit_rng g = { 0xc0ffeeULL };
+	const double truth[2] = {28.0269, -0.8}, sig = 0.05;
+	double sum[2] = {0}, sum2[2] = {0}, var_pred[2] = {0}, rv = 0;
+	struct unit_rng g = {0xc0ffeeULL};
 	for (int run = 0; run < RUNS; run++) {
 		struct rls_config c;
 		rls_default_config(&c);
@@ -299,8 +293,8 @@ UNIT_TEST(rls_std_matches_monte_carlo)
 		struct rls r;
 		rls_init(&r, &c);
 		for (int k = 0; k < N; k++) {
-			float phi[2] = { (float)(0.093 + unit_rand_uniform(&g, -0.05, 0.05)),
-					 (float)unit_rand_uniform(&g, -1, 1) };
+			float phi[2] = {(float)(0.093 + unit_rand_uniform(&g, -0.05, 0.05)),
+					(float)unit_rand_uniform(&g, -1, 1)};
 			float y = (float)(truth[0] * phi[0] + truth[1] * phi[1] + sig * unit_rand_normal(&g));
 			rls_update_f(&r, phi, &y, true);
 		}
@@ -334,14 +328,14 @@ UNIT_TEST(rls_scalar_interface)
 	struct rls a, b;
 	rls_init(&a, &c);
 	rls_init(&b, &c);
-	struct unit_rng g = { 0x5ULL };
+	struct unit_rng g = {0x5ULL};
 	for (int k = 0; k < 200; k++) {
-		scalar_t phi[2] = { sc_from_float((float)unit_rand_uniform(&g, 0.04, 0.14)),
-				    sc_from_float((float)unit_rand_uniform(&g, -1, 1)) };
-		scalar_t y[2] = { sc_from_float((float)unit_rand_uniform(&g, 0, 4)),
-				  sc_from_float((float)unit_rand_uniform(&g, -0.1, 0.1)) };
-		float pf[2] = { sc_to_float(phi[0]), sc_to_float(phi[1]) };
-		float yf[2] = { sc_to_float(y[0]), sc_to_float(y[1]) };
+		scalar_t phi[2] = {sc_from_float((float)unit_rand_uniform(&g, 0.04, 0.14)),
+				   sc_from_float((float)unit_rand_uniform(&g, -1, 1))};
+		scalar_t y[2] = {sc_from_float((float)unit_rand_uniform(&g, 0, 4)),
+				 sc_from_float((float)unit_rand_uniform(&g, -0.1, 0.1))};
+		float pf[2] = {sc_to_float(phi[0]), sc_to_float(phi[1])};
+		float yf[2] = {sc_to_float(y[0]), sc_to_float(y[1])};
 		CHECK(rls_update(&a, phi, y, true) == rls_update_f(&b, pf, yf, true));
 	}
 	for (unsigned o = 0; o < 2; o++)

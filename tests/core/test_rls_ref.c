@@ -20,13 +20,12 @@
 
 static double g_curve(double c, double s) { return (1.0 - c) * s + c * s * s; }
 
-
 /* k_f, k_tau and the lag check of ident_rotor on random rotor experiments */
 UNIT_TEST(rls_ref_rotor_experiments)
 {
-	struct unit_rng g = { 0x70707ULL };
+	struct unit_rng g = {0x70707ULL};
 	const double dt = 1.0 / 90.0;
-	double worst[3] = { 0, 0, 0 };
+	double worst[3] = {0, 0, 0};
 	for (int run = 0; run < 8; run++) {
 		double kf = unit_rand_uniform(&g, 8.0, 40.0), kt = kf * unit_rand_uniform(&g, 0.008, 0.03);
 		double c = unit_rand_uniform(&g, 0.0, 0.6), tau = unit_rand_uniform(&g, 0.02, 0.09);
@@ -44,7 +43,7 @@ UNIT_TEST(rls_ref_rotor_experiments)
 		struct ident_rotor rot; /* on the stack: M0's 16 KB of RAM have no room for statics */
 		struct ident_rotor *rp = &rot;
 		ident_rotor_init(rp, &cfg);
-		const double th0[2][4] = { { cfg.kf0 }, { cfg.ktau0 } }, th0s[1][4] = { { cfg.kf0, 0.0 } };
+		const double th0[2][4] = {{cfg.kf0}, {cfg.ktau0}}, th0s[1][4] = {{cfg.kf0, 0.0}};
 		struct ref lag, sens;
 		ref_init(&lag, 1, 2, 1e6, 1.0, th0);
 		ref_init(&sens, 2, 1, 1e6, 1.0, th0s);
@@ -66,11 +65,11 @@ UNIT_TEST(rls_ref_rotor_experiments)
 			/* this frame's measurement with the previous frame's throttle */
 			scalar_t prev = sc_from_float((float)hist[1]);
 			ident_rotor_update(rp, prev, fm, tm, true);
-			double y[2] = { d(fm), d(tm) }, phi = d(rp->phi);
+			double y[2] = {d(fm), d(tm)}, phi = d(rp->phi);
 			ref_update(&lag, &phi, y);
 			scalar_t s = rp->lag.y;
 			scalar_t gp = sc_add(sc_sub(SC(1.0), cfg.curve), sc_mul(sc_add(cfg.curve, cfg.curve), s));
-			double phi2[2] = { phi, d(sc_mul(gp, rp->dphi_dtau)) };
+			double phi2[2] = {phi, d(sc_mul(gp, rp->dphi_dtau))};
 			ref_update(&sens, phi2, y);
 		}
 		double e_kf = fabs(ident_rotor_est(rp, 0) / lag.th[0][0] - 1.0);
@@ -85,14 +84,15 @@ UNIT_TEST(rls_ref_rotor_experiments)
 		CHECK_REL(t_ref, tau, 0.3);
 	}
 	if (!(worst[0] < REL_BOUND && worst[1] < REL_BOUND && worst[2] < REL_BOUND))
-		unit_fail(u, __FILE__, __LINE__, "worst relative differences to float64: k_f %.2e, k_tau %.2e, lag %.2e",
-			  worst[0], worst[1], worst[2]);
+		unit_fail(u, __FILE__, __LINE__,
+			  "worst relative differences to float64: k_f %.2e, k_tau %.2e, lag %.2e", worst[0], worst[1],
+			  worst[2]);
 }
 
 /* the inertia of ident_inertia on random vehicles and multisine rate excitation */
 UNIT_TEST(rls_ref_inertia_experiments)
 {
-	struct unit_rng g = { 0x1e27ULL };
+	struct unit_rng g = {0x1e27ULL};
 	const double dt = 1.0 / 90.0;
 	double worst = 0;
 	for (int run = 0; run < 6; run++) {
@@ -100,14 +100,14 @@ UNIT_TEST(rls_ref_inertia_experiments)
 		double in[3];
 		for (int i = 0; i < 3; i++)
 			in[i] = unit_rand_uniform(&g, 0.01, 0.12);
-		scalar_t inertia[3], w0[3] = { 0, 0, 0 }, tau0[3] = { 0, 0, 0 };
+		scalar_t inertia[3], w0[3] = {0, 0, 0}, tau0[3] = {0, 0, 0};
 		for (int i = 0; i < 3; i++)
 			inertia[i] = sc_from_float((float)(in[i] * unit_rand_uniform(&g, 0.8, 1.25)));
 		struct ident_inertia inr;
 		struct ident_inertia *ep = &inr;
-		ident_inertia_init(ep, ax, ax == 2u ? SC(12.0) : SC(25.0), SC(0.7), SC(1.0 / 90.0), SC(0.5),
-				   inertia, w0, tau0);
-		const double th0[1][4] = { { d(inertia[ax]) } };
+		ident_inertia_init(ep, ax, ax == 2u ? SC(12.0) : SC(25.0), SC(0.7), SC(1.0 / 90.0), SC(0.5), inertia,
+				   w0, tau0);
+		const double th0[1][4] = {{d(inertia[ax])}};
 		struct ref rf;
 		ref_init(&rf, 1, 1, 1e4, 1.0, th0);
 		double a1 = unit_rand_uniform(&g, 0.3, 1.0), a2 = unit_rand_uniform(&g, 0.2, 0.6);
@@ -146,7 +146,7 @@ UNIT_TEST(rls_ref_inertia_experiments)
  * stalls or resets, and the estimate stays on the float64 reference */
 UNIT_TEST(rls_ref_long_hover)
 {
-	struct unit_rng g = { 0x40e7ULL };
+	struct unit_rng g = {0x40e7ULL};
 	double kf = unit_rand_uniform(&g, 10, 30), hover = unit_rand_uniform(&g, 0.35, 0.6);
 	struct rls_config c;
 	rls_default_config(&c);
@@ -155,7 +155,7 @@ UNIT_TEST(rls_ref_long_hover)
 	c.theta0[0][0] = (float)(kf * 1.1);
 	struct rls r;
 	rls_init(&r, &c);
-	const double th0[1][4] = { { kf * 1.1 } };
+	const double th0[1][4] = {{kf * 1.1}};
 	struct ref rf;
 	ref_init(&rf, 1, 1, 1e6, 1.0, th0);
 	for (long k = 0; k < 90L * 3600L; k++) {
@@ -189,7 +189,7 @@ UNIT_TEST(rls_ref_long_hover)
  * float build, float32, drifts 3.6e-4 from float64 here: its bound is 1e-3.) */
 UNIT_TEST(rls_ref_forgetting_step)
 {
-	struct unit_rng g = { 0xf0f0ULL };
+	struct unit_rng g = {0xf0f0ULL};
 	double kf0 = unit_rand_uniform(&g, 10, 30), hover = unit_rand_uniform(&g, 0.4, 0.55);
 	struct rls_config c;
 	rls_default_config(&c);
@@ -199,7 +199,7 @@ UNIT_TEST(rls_ref_forgetting_step)
 	c.theta0[0][0] = (float)kf0;
 	struct rls r;
 	rls_init(&r, &c);
-	const double th0[1][4] = { { kf0, 0.0 } };
+	const double th0[1][4] = {{kf0, 0.0}};
 	struct ref rf;
 	ref_init(&rf, 2, 1, 100.0, (double)c.lambda, th0);
 	double err_max = 0, diff_max = 0, kf = kf0;
@@ -208,14 +208,14 @@ UNIT_TEST(rls_ref_forgetting_step)
 		kf = kf0 * (1.0 - 0.02 * t / 60.0) * (t >= 300.0 ? 0.97 : 1.0);
 		bool exc = fmod(t, 60.0) < 40.0;
 		double thr = hover + (exc ? unit_rand_uniform(&g, -0.08, 0.08) : 0.0);
-		scalar_t phi[2] = { sc_from_float((float)thr), SC(1.0) };
+		scalar_t phi[2] = {sc_from_float((float)thr), SC(1.0)};
 		scalar_t y = sc_from_float((float)(kf * thr + 0.005 * kf * unit_rand_normal(&g)));
 		enum rls_result res = rls_update(&r, phi, &y, true);
 		if (res != RLS_UPDATED) {
 			unit_fail(u, __FILE__, __LINE__, "result %d at sample %ld", (int)res, k);
 			return;
 		}
-		double pd[2] = { d(phi[0]), d(phi[1]) }, yd = d(y);
+		double pd[2] = {d(phi[0]), d(phi[1])}, yd = d(y);
 		ref_update(&rf, pd, &yd);
 		for (unsigned i = 0; i < 2; i++)
 			CHECK(rls_cov_diag(&r, i) > 0.0f && isfinite(rls_cov_diag(&r, i)));
@@ -227,6 +227,5 @@ UNIT_TEST(rls_ref_forgetting_step)
 	}
 	CHECK(r.n_resets == 0);
 	if (!(diff_max < (OCTO_FIXED ? REL_BOUND : 1e-3) && err_max < 0.03))
-		unit_fail(u, __FILE__, __LINE__, "k_f: %.3g from float64, which tracks within %.3g",
-			  diff_max, err_max);
+		unit_fail(u, __FILE__, __LINE__, "k_f: %.3g from float64, which tracks within %.3g", diff_max, err_max);
 }

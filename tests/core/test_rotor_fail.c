@@ -15,9 +15,9 @@ static scalar_t s(double x) { return sc_from_float((float)x); }
 
 struct plant {
 	double kf, u_h, tau, noise, speed_max, speed_noise;
-	double eff[NR];     /* true effectiveness */
-	double lag[NR];     /* true lagged throttle */
-	double thr[NR];     /* commanded (last step) */
+	double eff[NR]; /* true effectiveness */
+	double lag[NR]; /* true lagged throttle */
+	double thr[NR]; /* commanded (last step) */
 };
 
 static void plant_draw(struct plant *p, struct unit_rng *r, double weak)
@@ -25,7 +25,7 @@ static void plant_draw(struct plant *p, struct unit_rng *r, double weak)
 	p->kf = unit_rand_uniform(r, 15.0, 40.0);
 	p->u_h = unit_rand_uniform(r, 0.08, 0.5);
 	p->tau = unit_rand_uniform(r, 0.02, 0.05);
-	p->noise = unit_rand_uniform(r, 0.005, 0.02) * p->kf * p->u_h;   /* N per rotor */
+	p->noise = unit_rand_uniform(r, 0.005, 0.02) * p->kf * p->u_h; /* N per rotor */
 	p->speed_max = unit_rand_uniform(r, 700.0, 1200.0);
 	p->speed_noise = 0.005 * p->speed_max * sqrt(p->u_h);
 	int w = (int)unit_rand_uniform(r, 0.0, 7.999);
@@ -95,7 +95,7 @@ UNIT_TEST(rotor_fail_found_fast_and_right)
 						      s(1.0 / FS), true};
 			struct rotor_fail_output o = rotor_fail_step(&d, &in);
 			if (o.rotor >= 0) {
-				CHECK(found_k < 0);   /* once */
+				CHECK(found_k < 0); /* once */
 				CHECK(o.rotor == jf);
 				CHECK(o.source == (by_speed ? ROTOR_FAIL_SRC_SPEED : ROTOR_FAIL_SRC_THRUST));
 				found_k = k;

@@ -11,7 +11,7 @@
 
 UNIT_TEST(sc_recip_div_equals_sc_div)
 {
-	struct unit_rng g = { 0x5ec1ULL };
+	struct unit_rng g = {0x5ec1ULL};
 #if OCTO_FIXED
 	for (int i = 0; i < N_RAND; i++) {
 		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
@@ -26,8 +26,8 @@ UNIT_TEST(sc_recip_div_equals_sc_div)
 		}
 	}
 	/* edges: zero divisors, saturation, the extreme operands */
-	static const int32_t v[] = { 0, 1, -1, 2, 3, 65535, 65536, -65536, 0x8000, 0x40000000, INT32_MAX,
-				     -INT32_MAX, 0x55555555, 12345677 };
+	static const int32_t v[] = {0,      1,      -1,         2,         3,          65535,      65536,
+				    -65536, 0x8000, 0x40000000, INT32_MAX, -INT32_MAX, 0x55555555, 12345677};
 	for (size_t i = 0; i < sizeof v / sizeof v[0]; i++) {
 		struct sc_recip r = sc_recip_of(v[i]);
 		for (size_t j = 0; j < sizeof v / sizeof v[0]; j++)
@@ -50,7 +50,7 @@ UNIT_TEST(sc_recip_div_equals_sc_div)
 UNIT_TEST(sc_recip_div_large_quotients)
 {
 #if OCTO_FIXED
-	struct unit_rng g = { 0x1a59ULL };
+	struct unit_rng g = {0x1a59ULL};
 	for (int i = 0; i < N_RAND; i++) {
 		int32_t b = (int32_t)unit_rand_uniform(&g, 1.0, 65536.0);
 		int32_t a = (int32_t)((double)b * unit_rand_uniform(&g, 32760.0, 32768.5));
@@ -64,6 +64,6 @@ UNIT_TEST(sc_recip_div_large_quotients)
 		}
 	}
 #else
-	(void)u;   /* the float build's quotients are the IEEE ones: nothing prepared */
+	(void)u; /* the float build's quotients are the IEEE ones: nothing prepared */
 #endif
 }

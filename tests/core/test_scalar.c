@@ -20,10 +20,9 @@
 #define LSB 1e-7
 #endif
 
-
 UNIT_TEST(scalar_arithmetic_matches_double)
 {
-	struct unit_rng r = { 0x5ca1ab1eULL };
+	struct unit_rng r = {0x5ca1ab1eULL};
 	for (int i = 0; i < 2000; i++) {
 		double a = unit_rand_uniform(&r, -150.0, 150.0), b = unit_rand_uniform(&r, -150.0, 150.0);
 		scalar_t sa = sc_from_float((float)a), sb = sc_from_float((float)b);
@@ -99,7 +98,7 @@ UNIT_TEST(scalar_exp)
 	CHECK(sc_exp(SC_MAX) == SC_MAX && sc_exp(SC_MAX_NEG) == 0 && sc_exp(SC(-13)) == 0);
 	CHECK(sc_exp(0) == SC(1));
 	/* integer in the fixed build: within 0.5 LSB + 1e-8 relative over the whole range */
-	struct unit_rng g = { 0xe4bULL };
+	struct unit_rng g = {0xe4bULL};
 	for (int i = 0; i < 5000; i++) {
 		scalar_t s = (scalar_t)unit_rand_uniform(&g, -13.0 * 65536, 10.39 * 65536);
 		double ref = exp(d(s));
@@ -113,7 +112,7 @@ UNIT_TEST(scalar_exp)
 UNIT_TEST(scalar_div_exact)
 {
 #if OCTO_FIXED
-	struct unit_rng g = { 0xd1fULL };
+	struct unit_rng g = {0xd1fULL};
 	for (int i = 0; i < 20000; i++) {
 		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
 		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
@@ -136,7 +135,7 @@ UNIT_TEST(scalar_div_exact)
 	CHECK(sc_div(1, 2) == 32768 && sc_div(SC_MAX, SC_MAX) == SC(1));
 #else
 	/* float: the IEEE quotient, and zero divisors saturate */
-	struct unit_rng g = { 0xd1fULL };
+	struct unit_rng g = {0xd1fULL};
 	for (int i = 0; i < 2000; i++) {
 		float a = (float)unit_rand_uniform(&g, -1e4, 1e4), b = (float)unit_rand_uniform(&g, -10, 10);
 		CHECK(b == 0.0f || sc_div(a, b) == a / b);
@@ -150,7 +149,7 @@ UNIT_TEST(scalar_div_exact)
 UNIT_TEST(scalar_mul_exact)
 {
 #if OCTO_FIXED
-	struct unit_rng g = { 0x3a1ULL };
+	struct unit_rng g = {0x3a1ULL};
 	for (int i = 0; i < N_RAND; i++) {
 		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
 		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
@@ -181,9 +180,9 @@ UNIT_TEST(scalar_mul_exact)
 UNIT_TEST(scalar_mul_paths_exact)
 {
 #if OCTO_FIXED
-	struct unit_rng g = { 0x5a1ULL };
-	static const int32_t small[] = { 0, 1, 2, 0x7fff, 0x8000, 0x8001, 0xfffe, 0xffff, 0x10000, 0x10001,
-					 0x1ffff, 0x20000 };
+	struct unit_rng g = {0x5a1ULL};
+	static const int32_t small[] = {0,      1,      2,       0x7fff,  0x8000,  0x8001,
+					0xfffe, 0xffff, 0x10000, 0x10001, 0x1ffff, 0x20000};
 	for (int i = 0; i < N_RAND; i++) {
 		int32_t b = small[i % (int)(sizeof small / sizeof small[0])];
 		double hi = 2147483647.0;
@@ -225,18 +224,19 @@ UNIT_TEST(scalar_mul_paths_exact)
 UNIT_TEST(scalar_div_exact_edges)
 {
 #if OCTO_FIXED
-	static const int32_t bs[] = { 1, 2, 3, 65535, 65536, 65537, 0x7fff, 0x8000, 0x8001, 0x40000000,
-				      0x3fffffff, INT32_MAX, 0x55555555, 12345677 };
+	static const int32_t bs[] = {1,      2,      3,          65535,      65536,     65537,      0x7fff,
+				     0x8000, 0x8001, 0x40000000, 0x3fffffff, INT32_MAX, 0x55555555, 12345677};
 	for (size_t i = 0; i < sizeof bs / sizeof bs[0]; i++) {
 		for (int k = -40; k <= 40; k++) {
 			int32_t b = bs[i];
-			int64_t a64 = (int64_t)b / 2 + k * 9973;   /* quotients near 32768 */
+			int64_t a64 = (int64_t)b / 2 + k * 9973; /* quotients near 32768 */
 			for (int sh = 0; sh < 2; sh++) {
 				int32_t a = (int32_t)(sh ? (a64 % INT32_MAX) : (int64_t)b * 3 / 4 + k);
 				int64_t n = (int64_t)a * 65536, half = (int64_t)b / 2;
 				n += n >= 0 ? half : -half;
 				int64_t q = n / b;
-				scalar_t ref = q > INT32_MAX ? SC_MAX : (q < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)q);
+				scalar_t ref =
+					q > INT32_MAX ? SC_MAX : (q < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)q);
 				CHECK(sc_div(a, b) == ref && sc_div(-a, -b) == ref);
 			}
 		}
@@ -261,7 +261,7 @@ UNIT_TEST(scalar_div_exact_edges)
 UNIT_TEST(scalar_float_conversions_exact)
 {
 #if OCTO_FIXED
-	struct unit_rng g = { 0xf10aULL };
+	struct unit_rng g = {0xf10aULL};
 	for (int i = 0; i < N_RAND; i++) {
 		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
 		a >>= (int)unit_rand_uniform(&g, 0, 31);
@@ -300,7 +300,7 @@ UNIT_TEST(scalar_float_conversions_exact)
 UNIT_TEST(scalar_sin_cos_integer)
 {
 #if OCTO_FIXED
-	struct unit_rng g = { 0x51cULL };
+	struct unit_rng g = {0x51cULL};
 	for (int i = 0; i < N_RAND; i++) {
 		scalar_t a = (scalar_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
 		a >>= (int)unit_rand_uniform(&g, 0, 31);
@@ -320,7 +320,7 @@ UNIT_TEST(scalar_sin_cos_integer)
 UNIT_TEST(scalar_add_sub_exact)
 {
 #if OCTO_FIXED
-	struct unit_rng g = { 0xadd5ULL };
+	struct unit_rng g = {0xadd5ULL};
 	for (int i = 0; i < N_RAND; i++) {
 		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483648.0, 2147483647.0);
 		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483648.0, 2147483647.0);
@@ -333,8 +333,8 @@ UNIT_TEST(scalar_add_sub_exact)
 		scalar_t rs = s > INT32_MAX ? SC_MAX : (s < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)s);
 		scalar_t rd = d_ > INT32_MAX ? SC_MAX : (d_ < -(int64_t)INT32_MAX ? SC_MAX_NEG : (scalar_t)d_);
 		if (sc_add(a, b) != rs || sc_sub(a, b) != rd || sca_add(a, b) != rs || sca_sub(a, b) != rd) {
-			unit_fail(u, __FILE__, __LINE__, "sc_add/sc_sub(%d, %d) = %d/%d, expected %d/%d", (int)a, (int)b,
-				  (int)sc_add(a, b), (int)sc_sub(a, b), (int)rs, (int)rd);
+			unit_fail(u, __FILE__, __LINE__, "sc_add/sc_sub(%d, %d) = %d/%d, expected %d/%d", (int)a,
+				  (int)b, (int)sc_add(a, b), (int)sc_sub(a, b), (int)rs, (int)rd);
 			return;
 		}
 	}
@@ -344,7 +344,8 @@ UNIT_TEST(scalar_add_sub_exact)
 	CHECK(sc_sub(-1, INT32_MAX) == SC_MAX_NEG && sc_sub(INT32_MIN, INT32_MIN) == 0);
 	CHECK(sca_add(0, INT32_MIN) == SC_MAX_NEG && sca_sub(-1, INT32_MAX) == SC_MAX_NEG);
 	CHECK(sca_add(SC_MAX, 1) == SC_MAX && sca_sub(0, INT32_MIN) == SC_MAX && sca_add(3, -5) == -2);
-	CHECK(sc_sub(0, INT32_MIN) == SC_MAX && sc_sub(-1, INT32_MIN) == SC_MAX && sc_sub(-2, INT32_MIN) == INT32_MAX - 1);
+	CHECK(sc_sub(0, INT32_MIN) == SC_MAX && sc_sub(-1, INT32_MIN) == SC_MAX &&
+	      sc_sub(-2, INT32_MIN) == INT32_MAX - 1);
 	CHECK(sc_add(SC_MAX, SC_MAX_NEG) == 0 && sc_add(SC_MAX, 1) == SC_MAX && sc_sub(SC_MAX_NEG, 1) == SC_MAX_NEG);
 #else
 	CHECK(sc_add(1.5f, 2.25f) == 3.75f && sc_sub(1.5f, 2.25f) == -0.75f);
@@ -355,7 +356,7 @@ UNIT_TEST(scalar_add_sub_exact)
 UNIT_TEST(scalar_atan2_asin_integer)
 {
 #if OCTO_FIXED
-	struct unit_rng g = { 0xa7a2ULL };
+	struct unit_rng g = {0xa7a2ULL};
 	for (int i = 0; i < N_RAND; i++) {
 		scalar_t y = (scalar_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
 		scalar_t x = (scalar_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
@@ -379,7 +380,7 @@ UNIT_TEST(scalar_atan2_asin_integer)
 UNIT_TEST(scalar_sqrt_exact)
 {
 #if OCTO_FIXED
-	struct unit_rng g = { 0x5a27ULL };
+	struct unit_rng g = {0x5a27ULL};
 	for (int i = 0; i < N_RAND; i++) {
 		int32_t a = (int32_t)unit_rand_uniform(&g, 0.0, 2147483647.0);
 		a >>= (int)unit_rand_uniform(&g, 0, 31);
@@ -393,7 +394,8 @@ UNIT_TEST(scalar_sqrt_exact)
 		if (n - r * r > r)
 			r++;
 		if (a > 0 && sc_sqrt(a) != (scalar_t)r) {
-			unit_fail(u, __FILE__, __LINE__, "sc_sqrt(%d) = %d, expected %d", (int)a, (int)sc_sqrt(a), (int)r);
+			unit_fail(u, __FILE__, __LINE__, "sc_sqrt(%d) = %d, expected %d", (int)a, (int)sc_sqrt(a),
+				  (int)r);
 			return;
 		}
 	}
@@ -409,10 +411,10 @@ UNIT_TEST(scalar_sqrt_exact)
 UNIT_TEST(scalar_trig_products_in_words_exact)
 {
 #if OCTO_FIXED
-	struct unit_rng g = { 0x7e1ULL };
-	static const unsigned sh[] = { 1, 14, 16, 30, 31, 32, 33, 44, 62, 63 };
-	static const int32_t edge[] = { 0, 1, -1, 0x40000000, -0x40000000, INT32_MAX, -INT32_MAX, INT32_MIN, 0xffff,
-					0x10000 };
+	struct unit_rng g = {0x7e1ULL};
+	static const unsigned sh[] = {1, 14, 16, 30, 31, 32, 33, 44, 62, 63};
+	static const int32_t edge[] = {0,         1,          -1,        0x40000000, -0x40000000,
+				       INT32_MAX, -INT32_MAX, INT32_MIN, 0xffff,     0x10000};
 	for (int i = 0; i < N_RAND; i++) {
 		int32_t a = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
 		int32_t b = (int32_t)unit_rand_uniform(&g, -2147483647.0, 2147483647.0);
@@ -438,6 +440,6 @@ UNIT_TEST(scalar_trig_products_in_words_exact)
 	for (int i = 0; i < 10; i++)
 		CHECK(sc_turns(edge[i]) == (uint32_t)((uint64_t)q_smul32(edge[i], 683565276) >> 16));
 #else
-	CHECK(sc_sin(0.0f) == 0.0f);   /* float build: libm's trigonometry */
+	CHECK(sc_sin(0.0f) == 0.0f); /* float build: libm's trigonometry */
 #endif
 }

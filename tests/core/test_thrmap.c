@@ -11,7 +11,7 @@ static scalar_t s(double x) { return sc_from_float((float)x); }
 /* the throttle of one thrust through thrmap_update (rotor 0, scale 1 unless given) */
 static scalar_t throttle_of(const struct thrmap *m, scalar_t f, bool *clamped)
 {
-	scalar_t fs[THRMAP_ROTORS] = { f }, t[THRMAP_ROTORS];
+	scalar_t fs[THRMAP_ROTORS] = {f}, t[THRMAP_ROTORS];
 	uint32_t mask = thrmap_update(m, fs, t, 1);
 	if (clamped)
 		*clamped = (mask & 1u) != 0;
@@ -20,7 +20,7 @@ static scalar_t throttle_of(const struct thrmap *m, scalar_t f, bool *clamped)
 
 UNIT_TEST(thrmap_linear_round_trip_and_clamp)
 {
-	struct thrmap_params p = { SC(28.0269), SC(0), {0} };
+	struct thrmap_params p = {SC(28.0269), SC(0), {0}};
 	struct thrmap m;
 	thrmap_init(&m, &p);
 	/* hover: 2.132 * 9.796 / 8 = 2.6106 N per rotor -> T = 0.0931 */
@@ -44,7 +44,7 @@ UNIT_TEST(thrmap_linear_round_trip_and_clamp)
 	/* rotors beyond THRMAP_ROTORS: scale 1, the same map */
 	scalar_t f[THRMAP_ROTORS + 2], tt[THRMAP_ROTORS + 2];
 	for (int j = 0; j < THRMAP_ROTORS + 2; j++)
-		f[j] = s(0.5 + 3.2 * j);   /* the last above k_f */
+		f[j] = s(0.5 + 3.2 * j); /* the last above k_f */
 	CHECK(thrmap_update(&m, f, tt, THRMAP_ROTORS + 2) == (1u << (THRMAP_ROTORS + 1)));
 	CHECK_NEAR(d(tt[THRMAP_ROTORS]), d(f[THRMAP_ROTORS]) / d(m.k_f_n), OCTO_FIXED ? 1e-5 : 1e-7);
 	CHECK(tt[THRMAP_ROTORS + 1] == SC(1));
@@ -52,10 +52,10 @@ UNIT_TEST(thrmap_linear_round_trip_and_clamp)
 
 UNIT_TEST(thrmap_update_mask)
 {
-	struct thrmap_params p = { SC(28), SC(0), {0} };
+	struct thrmap_params p = {SC(28), SC(0), {0}};
 	struct thrmap m;
 	thrmap_init(&m, &p);
-	scalar_t f[8] = { SC(2.6), SC(-0.1), SC(2.6), SC(40), SC(0), SC(28), SC(14), SC(2.6) };
+	scalar_t f[8] = {SC(2.6), SC(-0.1), SC(2.6), SC(40), SC(0), SC(28), SC(14), SC(2.6)};
 	scalar_t t[8];
 	uint32_t mask = thrmap_update(&m, f, t, 8);
 	CHECK(mask == ((1u << 1) | (1u << 3)));
@@ -68,9 +68,9 @@ UNIT_TEST(thrmap_update_mask)
 UNIT_TEST(thrmap_curve_inverse)
 {
 	const double kf = 28.0269;
-	const double as[7] = { -0.5, -0.2, -0.01, 0.1, 0.3, 0.6, 0.95 };
+	const double as[7] = {-0.5, -0.2, -0.01, 0.1, 0.3, 0.6, 0.95};
 	for (int j = 0; j < 7; j++) {
-		struct thrmap_params p = { s(kf), s(as[j]), {0} };
+		struct thrmap_params p = {s(kf), s(as[j]), {0}};
 		struct thrmap m;
 		thrmap_init(&m, &p);
 		double a = d(p.curve);
@@ -89,7 +89,7 @@ UNIT_TEST(thrmap_curve_inverse)
 		}
 	}
 	/* bad parameters are clamped, never divide by zero */
-	struct thrmap_params bad = { SC(0), SC(2), {0} };
+	struct thrmap_params bad = {SC(0), SC(2), {0}};
 	struct thrmap m;
 	thrmap_init(&m, &bad);
 	CHECK(d(m.k_f_n) > 0 && d(m.curve) <= 0.99 + 1e-4);
@@ -98,7 +98,7 @@ UNIT_TEST(thrmap_curve_inverse)
 	thrmap_init(&m, &bad);
 	CHECK_NEAR(d(m.curve), THRMAP_CURVE_MIN, 1e-4);
 	scalar_t last = SC_ZERO;
-	for (int i = 0; i <= 20; i++) {   /* monotonic, within [0, 1] */
+	for (int i = 0; i <= 20; i++) { /* monotonic, within [0, 1] */
 		scalar_t t = throttle_of(&m, sc_mul(m.k_f_n, s(i / 20.0)), NULL);
 		CHECK(t >= last && t <= SC(1));
 		last = t;

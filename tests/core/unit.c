@@ -16,11 +16,10 @@ struct unit_entry {
 };
 
 static const struct unit_entry unit_entries[] = {
-#define UNIT_ENTRY(name) { #name, unit_test_##name },
+#define UNIT_ENTRY(name) {#name, unit_test_##name},
 #include "unit_list.h"
 #undef UNIT_ENTRY
-	{ NULL, NULL }
-};
+	{NULL, NULL}};
 
 void unit_fail(struct unit_ctx *u, const char *file, int line, const char *fmt, ...)
 {
@@ -73,7 +72,7 @@ int main(int argc, char **argv)
 	for (const struct unit_entry *e = unit_entries; e->name; e++) {
 		if (!selected(e->name, argc, argv))
 			continue;
-		struct unit_ctx u = { .name = e->name, .failures = 0, .first = "" };
+		struct unit_ctx u = {.name = e->name, .failures = 0, .first = ""};
 		e->fn(&u);
 		if (u.failures) {
 			failed++;

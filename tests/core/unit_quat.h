@@ -13,7 +13,7 @@
 /* [1, 0, 0, 0] */
 static inline struct quat tq_identity(void)
 {
-	struct quat q = { SC(1), SC_ZERO, SC_ZERO, SC_ZERO };
+	struct quat q = {SC(1), SC_ZERO, SC_ZERO, SC_ZERO};
 	return q;
 }
 
@@ -28,8 +28,8 @@ static inline struct quat tq_from_euler(scalar_t roll, scalar_t pitch, scalar_t 
 static inline struct quat tq_from_rotvec(double x, double y, double z)
 {
 	double a = sqrt(x * x + y * y + z * z), k = a > 0 ? sin(a / 2) / a : 0.5;
-	struct quat q = { sc_from_float((float)cos(a / 2)), sc_from_float((float)(k * x)),
-			  sc_from_float((float)(k * y)), sc_from_float((float)(k * z)) };
+	struct quat q = {sc_from_float((float)cos(a / 2)), sc_from_float((float)(k * x)), sc_from_float((float)(k * y)),
+			 sc_from_float((float)(k * z))};
 	return q;
 }
 

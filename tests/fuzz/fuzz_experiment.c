@@ -33,7 +33,7 @@
 static struct experiment ex;
 static struct app_params prm;
 static struct hal_sensor_frame fr;
-static scalar_t thr[HAL_ROTORS], rotor_f[HAL_ROTORS];   /* scalars, as the app keeps them */
+static scalar_t thr[HAL_ROTORS], rotor_f[HAL_ROTORS]; /* scalars, as the app keeps them */
 static float wrench[4];
 static long frames;
 
@@ -65,7 +65,7 @@ static bool step(void)
 	}
 	for (int i = 0; i < 3; i++)
 		w[i] = sc_from_float(fr.rate_b_rps[i]);
-	struct exp_input in = { &fr, f, tq, w, 1.0f / 90.0f, &prm, wrench, rotor_f, thr, 1.0f / 90.0f };
+	struct exp_input in = {&fr, f, tq, w, 1.0f / 90.0f, &prm, wrench, rotor_f, thr, 1.0f / 90.0f};
 	struct exp_output out;
 	memset(&out, 0, sizeof out);
 	enum exp_state st = exp_step(&ex, &in, &out);

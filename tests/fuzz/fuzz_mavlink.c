@@ -30,15 +30,20 @@
 #include "stub_hal.h"
 
 static const uint32_t ids[10] = {
-	MAVLINK_MSG_ID_PARAM_SET,           MAVLINK_MSG_ID_COMMAND_LONG,
-	MAVLINK_MSG_ID_COMMAND_INT,         MAVLINK_MSG_ID_PARAM_REQUEST_READ,
-	MAVLINK_MSG_ID_PARAM_REQUEST_LIST,  MAVLINK_MSG_ID_HEARTBEAT,
-	MAVLINK_MSG_ID_MISSION_REQUEST_LIST, MAVLINK_MSG_ID_FILE_TRANSFER_PROTOCOL,
-	MAVLINK_MSG_ID_RADIO_STATUS,        MAVLINK_MSG_ID_STATUSTEXT,
+	MAVLINK_MSG_ID_PARAM_SET,
+	MAVLINK_MSG_ID_COMMAND_LONG,
+	MAVLINK_MSG_ID_COMMAND_INT,
+	MAVLINK_MSG_ID_PARAM_REQUEST_READ,
+	MAVLINK_MSG_ID_PARAM_REQUEST_LIST,
+	MAVLINK_MSG_ID_HEARTBEAT,
+	MAVLINK_MSG_ID_MISSION_REQUEST_LIST,
+	MAVLINK_MSG_ID_FILE_TRANSFER_PROTOCOL,
+	MAVLINK_MSG_ID_RADIO_STATUS,
+	MAVLINK_MSG_ID_STATUSTEXT,
 };
 
 static struct app app;
-static struct mav mav;   /* the platform's MAVLink endpoint, bound to app */
+static struct mav mav; /* the platform's MAVLink endpoint, bound to app */
 static struct stub_hal hal;
 static mavlink_signing_t tx_signing;
 static mavlink_signing_streams_t tx_streams;
@@ -78,11 +83,10 @@ static void message(uint8_t kind, const uint8_t *b, size_t n)
 	/* sender: the ground station, another system, or our own id (an echo) */
 	static const uint8_t sys[4] = {255, 1, 42, 0};
 	uint8_t sysid = sys[(kind >> 4) & 3], compid = (kind & 0x40) ? 1 : 190;
-	mavlink_finalize_message_chan(&msg, sysid, compid, MAVLINK_COMM_1, e->min_msg_len, (uint8_t)len,
-				      e->crc_extra);
+	mavlink_finalize_message_chan(&msg, sysid, compid, MAVLINK_COMM_1, e->min_msg_len, (uint8_t)len, e->crc_extra);
 	uint8_t buf[MAVLINK_MAX_PACKET_LEN + 64];
 	size_t k = mavlink_msg_to_send_buffer(buf, &msg);
-	if (kind & 0x80) {   /* truncated or oversized */
+	if (kind & 0x80) { /* truncated or oversized */
 		size_t cut = n ? b[0] : 0;
 		if (cut < k) {
 			k = cut;
@@ -184,22 +188,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		pos += len;
 		switch (kind & 15) {
 		case 10:
-		case 11:
-			mav_receive(&mav, b, len);
-			break;
+		case 11: mav_receive(&mav, b, len); break;
 		case 12:
-		case 13:
-			frame(b, len);
-			break;
+		case 13: frame(b, len); break;
 		case 14:
 		case 15:
 			hal.now_us += (uint64_t)(len ? b[0] : 1) * 10000u;
 			app_tick(&app);
 			mav_tick(&mav, hal.now_us);
 			break;
-		default:
-			message(kind, b, len);
-			break;
+		default: message(kind, b, len); break;
 		}
 	}
 	for (size_t i = 0; i < param_count; i++) {

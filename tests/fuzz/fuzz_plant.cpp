@@ -28,8 +28,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (size < 2)
 		return 0;
 	const uint8_t flags = data[0], fb = data[1];
-	std::vector<std::string> args = {"fuzz-plant", "--seed", std::to_string(fb), "--xplane-version",
-	                                 (flags & 1) ? "11" : "12", "--rows", "1,16,17,21,25,35,36"};
+	std::vector<std::string> args = {"fuzz-plant",
+					 "--seed",
+					 std::to_string(fb),
+					 "--xplane-version",
+					 (flags & 1) ? "11" : "12",
+					 "--rows",
+					 "1,16,17,21,25,35,36"};
 	if (flags & 2)
 		args.insert(args.end(), {"--drop", "0.2", "--duplicate", "0.2", "--reorder", "0.2"});
 	if (flags & 4)
@@ -41,7 +46,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	octo_plant *p = octo_plant_create("fuzz-plant", static_cast<int>(argv.size()), argv.data(), &status);
 	if (!p)
 		std::abort();
-	static struct xp_msg_in msg;   // large: off the stack
+	static struct xp_msg_in msg; // large: off the stack
 	size_t pos = 2;
 	bool started = false;
 	int frames = 0;
@@ -61,7 +66,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		long n;
 		while ((n = octo_plant_pop(p, out, sizeof out, nullptr, nullptr)) >= 0) {
 			if (static_cast<size_t>(n) > sizeof out)
-				std::abort();   // no X-Plane datagram is this long
+				std::abort(); // no X-Plane datagram is this long
 			enum xp_msg t = xp_decode(out, static_cast<size_t>(n), &msg);
 			if (t != XP_MSG_DATA && t != XP_MSG_RREF)
 				std::abort();

@@ -24,10 +24,7 @@
 #include "records.h"
 
 /* The client's console lines: dropped (the compiler checks their formats, host.h). */
-void host_report(const char *fmt, ...)
-{
-	(void)fmt;
-}
+void host_report(const char *fmt, ...) { (void)fmt; }
 
 static const uint8_t *cur;
 static size_t cur_len;

@@ -12,8 +12,8 @@
 
 /* The record at *pos: its control byte, its bytes and their length; *pos moves past it.
  * False when fewer than 3 bytes are left. */
-static inline bool fuzz_next_record(const uint8_t *data, size_t size, size_t *pos, uint8_t *ctrl,
-                                    const uint8_t **bytes, size_t *len)
+static inline bool fuzz_next_record(const uint8_t *data, size_t size, size_t *pos, uint8_t *ctrl, const uint8_t **bytes,
+				    size_t *len)
 {
 	if (*pos + 3 > size)
 		return false;

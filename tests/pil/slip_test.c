@@ -12,12 +12,12 @@
 
 static int failures;
 
-#define CHECK(c)                                                                   \
-	do {                                                                       \
-		if (!(c)) {                                                        \
+#define CHECK(c)                                                                       \
+	do {                                                                           \
+		if (!(c)) {                                                            \
 			fprintf(stderr, "slip_test.c:%d: failed: %s\n", __LINE__, #c); \
-			failures++;                                                \
-		}                                                                  \
+			failures++;                                                    \
+		}                                                                      \
 	} while (0)
 
 struct wire {
@@ -41,8 +41,8 @@ static void frame(struct wire *w, const uint8_t *msg, size_t len)
 }
 
 /* Feeds the wire; writes the delivered messages' lengths into got (at most cap). */
-static size_t feed(struct slip_rx *r, const uint8_t *p, size_t n, const uint8_t *const *msgs,
-		   const size_t *lens, size_t nmsg, int *which, size_t cap)
+static size_t feed(struct slip_rx *r, const uint8_t *p, size_t n, const uint8_t *const *msgs, const size_t *lens,
+		   size_t nmsg, int *which, size_t cap)
 {
 	size_t k = 0;
 	for (size_t i = 0; i < n; i++) {
@@ -54,7 +54,7 @@ static size_t feed(struct slip_rx *r, const uint8_t *p, size_t n, const uint8_t 
 			if (len == lens[m] && memcmp(r->buf, msgs[m], len) == 0)
 				w = (int)m;
 		if (k < cap)
-			which[k] = w;   /* -1: a frame that is none of the messages sent */
+			which[k] = w; /* -1: a frame that is none of the messages sent */
 		k++;
 	}
 	return k;
@@ -64,7 +64,7 @@ int main(void)
 {
 	static uint8_t m0[5], m1[300], m2[41];
 	for (size_t i = 0; i < sizeof m1; i++)
-		m1[i] = (uint8_t)i;   /* holds END and ESC */
+		m1[i] = (uint8_t)i; /* holds END and ESC */
 	memcpy(m0, "\xc0\xdb\xdc\xdd\x01", 5);
 	memset(m2, SLIP_END, sizeof m2);
 	const uint8_t *msgs[3] = {m0, m1, m2};

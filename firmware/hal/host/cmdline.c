@@ -10,32 +10,31 @@
 
 #include "params.h"
 
-static const char usage[] =
-	"usage: octo-fw [options]\n"
-	"  the autopilot as a software-in-the-loop process: flies X-Plane 11/12 (or octo-sim)\n"
-	"  over X-Plane's UDP protocol, talks MAVLink 2 to a ground station\n"
-	"\n"
-	"  --xplane HOST:PORT|auto  where X-Plane receives (127.0.0.1:49000); only datagrams\n"
-	"                           from HOST are accepted. auto: host and port from the first\n"
-	"                           X-Plane beacon (BECN on 239.255.1.1:49707; waits up to 30 s)\n"
-	"  --xp-listen PORT         X-Plane Data Output target port (49005)\n"
-	"  --mavlink-listen PORT    MAVLink UDP port (14580)\n"
-	"  --gcs HOST:PORT          ground station (127.0.0.1:14550); also learned from the\n"
-	"                           source of incoming MAVLink packets\n"
-	"  --params FILE            parameter storage (loaded at start, saved atomically)\n"
-	"  --lcm URL                LCM log: file://PATH (event log in plant time) or an LCM URL\n"
-	"  --log-every N            log every Nth frame (1); events and identification\n"
-	"                           results always\n"
-	"  --log-phases             log every frame during experiments; outside them none,\n"
-	"                           or every Nth with --log-every N\n"
-	"  --actuation dref|data25  throttles as 8 DREFs ENGN_thro_use[i] + override_throttles\n"
-	"                           (default) or one DATA row 25 datagram\n"
-	"  --signing-key FILE       MAVLink 2 signing: unsigned input rejected, output signed.\n"
-	"                           FILE (surrounding white space stripped) holds 64 hex digits\n"
-	"                           (the key) or a passphrase (key = its sha256): the rule of\n"
-	"                           octo-gcs --signing-key and MAVProxy, so one file serves both\n"
-	"  --dump-params            print the parameter table as JSON and exit\n"
-	"  --help                   this text\n";
+static const char usage[] = "usage: octo-fw [options]\n"
+			    "  the autopilot as a software-in-the-loop process: flies X-Plane 11/12 (or octo-sim)\n"
+			    "  over X-Plane's UDP protocol, talks MAVLink 2 to a ground station\n"
+			    "\n"
+			    "  --xplane HOST:PORT|auto  where X-Plane receives (127.0.0.1:49000); only datagrams\n"
+			    "                           from HOST are accepted. auto: host and port from the first\n"
+			    "                           X-Plane beacon (BECN on 239.255.1.1:49707; waits up to 30 s)\n"
+			    "  --xp-listen PORT         X-Plane Data Output target port (49005)\n"
+			    "  --mavlink-listen PORT    MAVLink UDP port (14580)\n"
+			    "  --gcs HOST:PORT          ground station (127.0.0.1:14550); also learned from the\n"
+			    "                           source of incoming MAVLink packets\n"
+			    "  --params FILE            parameter storage (loaded at start, saved atomically)\n"
+			    "  --lcm URL                LCM log: file://PATH (event log in plant time) or an LCM URL\n"
+			    "  --log-every N            log every Nth frame (1); events and identification\n"
+			    "                           results always\n"
+			    "  --log-phases             log every frame during experiments; outside them none,\n"
+			    "                           or every Nth with --log-every N\n"
+			    "  --actuation dref|data25  throttles as 8 DREFs ENGN_thro_use[i] + override_throttles\n"
+			    "                           (default) or one DATA row 25 datagram\n"
+			    "  --signing-key FILE       MAVLink 2 signing: unsigned input rejected, output signed.\n"
+			    "                           FILE (surrounding white space stripped) holds 64 hex digits\n"
+			    "                           (the key) or a passphrase (key = its sha256): the rule of\n"
+			    "                           octo-gcs --signing-key and MAVProxy, so one file serves both\n"
+			    "  --dump-params            print the parameter table as JSON and exit\n"
+			    "  --help                   this text\n";
 
 static void json_str(const char *s)
 {
@@ -62,8 +61,7 @@ static void dump_params(void)
 		params_fmt_float(def, sizeof def, d->def);
 		params_fmt_float(min, sizeof min, d->min);
 		params_fmt_float(max, sizeof max, d->max);
-		printf(", \"type\": \"REAL32\", \"default\": %s, \"min\": %s, \"max\": %s, \"unit\": ", def,
-		       min, max);
+		printf(", \"type\": \"REAL32\", \"default\": %s, \"min\": %s, \"max\": %s, \"unit\": ", def, min, max);
 		json_str(d->unit);
 		printf(", \"description\": ");
 		json_str(d->desc);
@@ -100,9 +98,9 @@ int host_parse_args(int argc, char **argv, struct host_config *cfg)
 			cfg->log_phases = true;
 			continue;
 		}
-		static const char *const with_value[] = {"--xplane", "--xp-listen", "--mavlink-listen", "--gcs",
-							  "--params", "--lcm", "--signing-key", "--actuation",
-							  "--log-every"};
+		static const char *const with_value[] = {"--xplane",      "--xp-listen", "--mavlink-listen",
+							 "--gcs",         "--params",    "--lcm",
+							 "--signing-key", "--actuation", "--log-every"};
 		bool known = false;
 		for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
 			known = known || !strcmp(f, with_value[k]);
@@ -121,8 +119,7 @@ int host_parse_args(int argc, char **argv, struct host_config *cfg)
 		} else if (!strcmp(f, "--xplane")) {
 			bad = udp_parse_hostport("octo-fw", f, v, &cfg->xplane);
 			cfg->xplane_auto = false;
-		}
-		else if (!strcmp(f, "--gcs"))
+		} else if (!strcmp(f, "--gcs"))
 			bad = udp_parse_hostport("octo-fw", f, v, &cfg->gcs);
 		else if (!strcmp(f, "--xp-listen"))
 			bad = udp_parse_port("octo-fw", f, v, &cfg->xp_listen);

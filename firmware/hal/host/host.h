@@ -31,14 +31,14 @@ typedef struct _lcm_eventlog_t lcm_eventlog_t;
 
 /* ---- cmdline.c */
 struct host_config {
-	struct sockaddr_in xplane;         /* where X-Plane receives (found when xplane_auto) */
-	bool xplane_auto;                  /* --xplane auto: from X-Plane's beacon */
-	struct sockaddr_in gcs;            /* ground station until one is heard */
+	struct sockaddr_in xplane; /* where X-Plane receives (found when xplane_auto) */
+	bool xplane_auto;          /* --xplane auto: from X-Plane's beacon */
+	struct sockaddr_in gcs;    /* ground station until one is heard */
 	uint16_t xp_listen, mav_listen;
 	const char *params_path, *lcm_url, *signing_key_path;
 	enum xp_actuation act;
-	unsigned log_every;                /* --log-every N (0 with --log-phases alone: none outside) */
-	bool log_phases;                   /* --log-phases: every frame during experiments */
+	unsigned log_every; /* --log-every N (0 with --log-phases alone: none outside) */
+	bool log_phases;    /* --log-phases: every frame during experiments */
 };
 /* Fills *cfg from argv. Returns -1 to run, or the exit status (0 after --help
  * or --dump-params, 1 or 2 after an error, reported on stderr). */
@@ -49,7 +49,7 @@ int signing_key_load(const char *path, uint8_t key[32]);
 
 /* ---- param_file.c */
 struct param_file {
-	char path[4096];                   /* empty: no storage */
+	char path[4096]; /* empty: no storage */
 };
 void param_file_set_path(struct param_file *pf, const char *path);
 int param_file_store(const struct param_file *pf, const char *text, size_t len);
@@ -65,7 +65,7 @@ struct lcm_log {
 	 * Events and identification results are always written. */
 	unsigned every;
 	bool phases;
-	uint64_t frames_seen;   /* frames offered outside the written phases */
+	uint64_t frames_seen; /* frames offered outside the written phases */
 };
 int lcm_log_open(struct lcm_log *lg, const char *url);
 /* thinning as above: every >= 1, or 0 with phases (experiments only) */
@@ -81,17 +81,17 @@ void lcm_log_id_result(struct lcm_log *lg, double t_s, const struct app_id_resul
 struct host {
 	struct host_config cfg;
 	struct xp_client xp;
-	struct hal_sensor_frame frame;     /* persistent: absent rows keep their values */
+	struct hal_sensor_frame frame; /* persistent: absent rows keep their values */
 	int mav_fd;
-	struct sockaddr_in gcs;            /* where the ground link sends */
+	struct sockaddr_in gcs; /* where the ground link sends */
 	bool have_key;
 	uint8_t signing_key[32];
-	uint32_t mav_empty;                /* ground datagrams without one accepted message */
+	uint32_t mav_empty; /* ground datagrams without one accepted message */
 	struct param_file params;
 	struct lcm_log log;
 	struct hal hal;
 	struct app app;
-	struct mav mav;                    /* the app's MAVLink endpoint */
+	struct mav mav; /* the app's MAVLink endpoint */
 };
 /* Sets h->hal to the host's functions with h as their context. */
 void host_hal_bind(struct host *h);

@@ -105,10 +105,7 @@ static void emit(struct lcm_log *lg, const char *channel, int64_t utime, const v
 	}
 }
 
-static int64_t utime_of(double t_s)
-{
-	return (int64_t)(t_s * 1e6 + (t_s >= 0 ? 0.5 : -0.5));
-}
+static int64_t utime_of(double t_s) { return (int64_t)(t_s * 1e6 + (t_s >= 0 ? 0.5 : -0.5)); }
 
 void lcm_log_frame(struct lcm_log *lg, const struct app_log_frame *l)
 {
@@ -118,7 +115,7 @@ void lcm_log_frame(struct lcm_log *lg, const struct app_log_frame *l)
 	memset(&m, 0, sizeof m);
 	m.utime = utime_of(l->t);
 	/* every field of the record, by the one table (log.h); same sizes, checked */
-#define COPY(c_type, lcm_type, name)                                                        \
+#define COPY(c_type, lcm_type, name)                                                             \
 	_Static_assert(sizeof m.name == sizeof l->name, "log field " #name " differs from LCM"); \
 	memcpy(&m.name, &l->name, sizeof m.name);
 #define COPY_ARR(c_type, lcm_type, name, n) COPY(c_type, lcm_type, name)

@@ -37,10 +37,7 @@ static int xp_find(struct host *h, const sigset_t *stop_set)
 	return 0;
 }
 
-static uint64_t now_us(const struct host *h)
-{
-	return hal_wall_us(&h->hal);
-}
+static uint64_t now_us(const struct host *h) { return hal_wall_us(&h->hal); }
 
 static void receive_plant(struct host *h)
 {
@@ -65,7 +62,7 @@ static void receive_ground(struct host *h)
 		/* the ground station is whoever sent the last datagram with an
 		 * accepted message (valid checksum, and signature when signing) */
 		if (mav_receive(&h->mav, buf, (size_t)n) == 0)
-			h->mav_empty++;   /* not one valid message in it */
+			h->mav_empty++; /* not one valid message in it */
 		else if (fl >= sizeof from && from.sin_family == AF_INET)
 			h->gcs = from;
 	}
@@ -122,8 +119,9 @@ static int run(struct host *h)
 	lcm_log_close(&h->log);
 	const struct hal_plant_stats *ls = &h->xp.stats;
 	host_report("exit: %u frames, %u datagrams dropped (%u foreign); MAVLink %u messages, %u bad checksum, "
-		    "%u rejected by signing, %u datagrams without a valid message", ls->frames, ls->dropped,
-		    ls->foreign, h->mav.rx_msgs, h->mav.rx_dropped, h->mav.rx_unsigned, h->mav_empty);
+		    "%u rejected by signing, %u datagrams without a valid message",
+		    ls->frames, ls->dropped, ls->foreign, h->mav.rx_msgs, h->mav.rx_dropped, h->mav.rx_unsigned,
+		    h->mav_empty);
 	return 0;
 }
 

@@ -15,7 +15,6 @@
 #include <string.h>
 #include <unistd.h>
 
-
 void param_file_set_path(struct param_file *pf, const char *path)
 {
 	snprintf(pf->path, sizeof pf->path, "%s", path ? path : "");

@@ -23,10 +23,7 @@ static int hexval(int c)
  * file's text with surrounding white space stripped (as Python's bytes.strip:
  * space, \t \n \v \f \r); exactly 64 hex digits are the key itself, anything
  * else is a passphrase and the key is its sha256. An empty file is an error. */
-static bool key_space(uint8_t c)
-{
-	return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f';
-}
+static bool key_space(uint8_t c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f'; }
 
 int signing_key_load(const char *path, uint8_t key[32])
 {

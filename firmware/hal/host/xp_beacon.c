@@ -1,5 +1,5 @@
 /* xp_beacon.c - finding X-Plane by its BECN beacon (see xp_beacon.h). */
-#define _DEFAULT_SOURCE   /* struct ip_mreq */
+#define _DEFAULT_SOURCE /* struct ip_mreq */
 #include "xp_beacon.h"
 
 #include <arpa/inet.h>
@@ -28,7 +28,7 @@ int xp_beacon_decode(const uint8_t *p, size_t n, struct xp_beacon *out)
 	uint32_t host = le32(b + 2), role = le32(b + 10);
 	uint16_t port = (uint16_t)(b[14] | b[15] << 8);
 	if (b[0] != 1 || host != 1 || role != 1 || port == 0)
-		return -1;   /* not a master X-Plane (Plane-Maker, external visual, IOS) */
+		return -1; /* not a master X-Plane (Plane-Maker, external visual, IOS) */
 	const uint8_t *name = p + 21;
 	const uint8_t *nul = memchr(name, 0, n - 21);
 	if (!nul)
@@ -138,7 +138,9 @@ int xp_beacon_find(double timeout_s, const sigset_t *stop_set, struct xp_beacon 
 	}
 	close(fd);
 	if (found < 0 && !stop)
-		fprintf(stderr, "octo-fw: --xplane auto: no X-Plane beacon within %.0f s (is X-Plane running on "
-				"this network, with multicast reaching this host?)\n", timeout_s);
+		fprintf(stderr,
+			"octo-fw: --xplane auto: no X-Plane beacon within %.0f s (is X-Plane running on "
+			"this network, with multicast reaching this host?)\n",
+			timeout_s);
 	return found;
 }

@@ -16,10 +16,10 @@
 #include <stdint.h>
 
 struct xp_beacon {
-	struct sockaddr_in addr;   /* where X-Plane receives: source IP, announced port */
+	struct sockaddr_in addr; /* where X-Plane receives: source IP, announced port */
 	uint8_t major, minor;
-	int32_t version;           /* e.g. 120100 for 12.1.0 */
-	char name[64];             /* computer name (cut, NUL-terminated) */
+	int32_t version; /* e.g. 120100 for 12.1.0 */
+	char name[64];   /* computer name (cut, NUL-terminated) */
 };
 
 /* Decodes one datagram: 0 when it is an X-Plane master's beacon, -1 otherwise. */

@@ -12,32 +12,30 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-static const int32_t wanted_rows[] = {XP_ROW_TIMES, XP_ROW_RATES, XP_ROW_ATT, XP_ROW_GLOBAL,
-				      XP_ROW_LOCAL, XP_ROW_THRUST, XP_ROW_TORQUE,
-				      XP_ROW_GLOADS, XP_ROW_PROP_RPM};
+static const int32_t wanted_rows[] = {XP_ROW_TIMES,  XP_ROW_RATES,  XP_ROW_ATT,    XP_ROW_GLOBAL,  XP_ROW_LOCAL,
+				      XP_ROW_THRUST, XP_ROW_TORQUE, XP_ROW_GLOADS, XP_ROW_PROP_RPM};
 #define N_WANTED (sizeof wanted_rows / sizeof wanted_rows[0])
-_Static_assert(N_WANTED <= sizeof ((struct xp_client *)0)->row_seen_us / sizeof(uint64_t),
+_Static_assert(N_WANTED <= sizeof((struct xp_client *)0)->row_seen_us / sizeof(uint64_t),
 	       "a last-seen time per wanted row");
-static const uint32_t wanted_bits[N_WANTED] = {HAL_FRAME_TIME, HAL_FRAME_RATES, HAL_FRAME_ATT,
-					       HAL_FRAME_GLOBAL, HAL_FRAME_POS, HAL_FRAME_THRUST,
-					       HAL_FRAME_TORQUE,
-					       HAL_FRAME_ACCEL, HAL_FRAME_RPM};
+static const uint32_t wanted_bits[N_WANTED] = {HAL_FRAME_TIME,   HAL_FRAME_RATES, HAL_FRAME_ATT,
+					       HAL_FRAME_GLOBAL, HAL_FRAME_POS,   HAL_FRAME_THRUST,
+					       HAL_FRAME_TORQUE, HAL_FRAME_ACCEL, HAL_FRAME_RPM};
 
 #define LB_TO_N 4.4482216152605
 #define FTLB_TO_NM 1.3558179483314
 #define RPM_TO_RPS (2.0 * 3.14159265358979323846 / 60.0)
 #define DEG_TO_RAD 0.017453292519943295
 #define FT_TO_M 0.3048
-#define ROW_FRESH_US 1000000u     /* a row not seen for 1 s is selected again */
+#define ROW_FRESH_US 1000000u /* a row not seen for 1 s is selected again */
 #define DSEL_PERIOD_US 1000000u
 #define RREF_PERIOD_US 5000000u
 #define OVERRIDE_PERIOD_US 1000000u
-#define XP_SILENCE_US 1000000u    /* DATA silent this long: re-detect the version */
-#define XP_STALE_S 0.25             /* older by less than this: a reordered frame */
-#define XP_NOMINAL_PERIOD_S (1.0 / 90.0)   /* the period until one is known */
-#define XP_MEASURE_EVERY 90u        /* frames between measurements of the period */
-#define XP_MEASURE_REL 1e-3         /* ... taken when the stamps' error is below this of the span */
-#define XP_MAX_COUNT 1e9            /* frames one step may count (a day's silence is 8e6) */
+#define XP_SILENCE_US 1000000u           /* DATA silent this long: re-detect the version */
+#define XP_STALE_S 0.25                  /* older by less than this: a reordered frame */
+#define XP_NOMINAL_PERIOD_S (1.0 / 90.0) /* the period until one is known */
+#define XP_MEASURE_EVERY 90u             /* frames between measurements of the period */
+#define XP_MEASURE_REL 1e-3              /* ... taken when the stamps' error is below this of the span */
+#define XP_MAX_COUNT 1e9                 /* frames one step may count (a day's silence is 8e6) */
 
 static const char VERSION_REF[] = "sim/version/xplane_internal_version";
 static const char OVERRIDE_REF[] = "sim/operation/override/override_throttles";
@@ -83,7 +81,7 @@ void xp_clock_set_period(struct xp_clock *k, double period_s)
 static double f32_ulp(float x)
 {
 	int e;
-	(void)frexpf(fabsf(x), &e);   /* |x| = m 2^e, m in [0.5, 1) */
+	(void)frexpf(fabsf(x), &e); /* |x| = m 2^e, m in [0.5, 1) */
 	return ldexp(1.0, (e < -125 ? -125 : e) - 24);
 }
 
@@ -99,7 +97,7 @@ enum xp_stamp xp_clock_stamp(struct xp_clock *k, float stamp, uint64_t *n)
 {
 	*n = 0;
 	if (!((double)stamp >= 0.0 && (double)stamp <= XP_STAMP_MAX_S))
-		return XP_STAMP_BAD;   /* the clock never takes it: time stays monotonic */
+		return XP_STAMP_BAD; /* the clock never takes it: time stays monotonic */
 	double s = (double)stamp + k->offset_s;
 	if (!k->have) {
 		k->have = true;
@@ -112,11 +110,11 @@ enum xp_stamp xp_clock_stamp(struct xp_clock *k, float stamp, uint64_t *n)
 	}
 	double u = f32_ulp(fabsf(stamp) > fabsf(k->last_raw) ? stamp : k->last_raw);
 	double d = s - k->last_s, p = k->period_s;
-	double c;           /* frames counted */
-	bool restart = false;   /* the measurement starts over after this frame */
+	double c;             /* frames counted */
+	bool restart = false; /* the measurement starts over after this frame */
 	if (d < 0.0) {
 		if (-d < XP_STALE_S + u)
-			return XP_STAMP_OLD;   /* reordered or delayed */
+			return XP_STAMP_OLD; /* reordered or delayed */
 		/* a larger step back: X-Plane reloaded or the simulator restarted; the time line
 		 * goes on one period after the newest frame */
 		k->offset_s += k->last_s + p - s;
@@ -126,8 +124,8 @@ enum xp_stamp xp_clock_stamp(struct xp_clock *k, float stamp, uint64_t *n)
 		restart = true;
 	} else if (d == 0.0) {
 		if (u < p)
-			return XP_STAMP_SAME;   /* consecutive frames always differ: a duplicate */
-		c = 1.0;                    /* too coarse to tell: a new datagram is a new frame */
+			return XP_STAMP_SAME; /* consecutive frames always differ: a duplicate */
+		c = 1.0;                      /* too coarse to tell: a new datagram is a new frame */
 		k->coarse++;
 	} else if (!k->period_fixed && 8.0 * u <= d && (!k->period_known || d < 0.75 * p)) {
 		/* the first step a fine stamp shows, or a shorter one (the first was a gap): the period */
@@ -144,10 +142,10 @@ enum xp_stamp xp_clock_stamp(struct xp_clock *k, float stamp, uint64_t *n)
 		if (lo == hi) {
 			c = lo;
 		} else if (lo < hi) {
-			c = 1.0;   /* several: the stamp is too coarse to count lost frames */
+			c = 1.0; /* several: the stamp is too coarse to count lost frames */
 			k->coarse++;
 		} else {
-			c = floor(d / p + 0.5);   /* none: jitter, or another period */
+			c = floor(d / p + 0.5); /* none: jitter, or another period */
 			c = c < 1.0 ? 1.0 : c;
 			k->off_grid++;
 			restart = true;
@@ -198,9 +196,8 @@ void xp_client_init(struct xp_client *c, const struct sockaddr_in *xplane, enum 
 	c->xp = *xplane;
 	c->act = act;
 	xp_clock_init(&c->clock);
-	c->stats.parts_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_GLOBAL |
-				 HAL_FRAME_POS | HAL_FRAME_THRUST | HAL_FRAME_TORQUE |
-				 HAL_FRAME_ACCEL | HAL_FRAME_RPM;
+	c->stats.parts_missing = HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_GLOBAL | HAL_FRAME_POS |
+				 HAL_FRAME_THRUST | HAL_FRAME_TORQUE | HAL_FRAME_ACCEL | HAL_FRAME_RPM;
 	for (int i = 0; i < HAL_ROTORS; i++)
 		(void)xp_encode_dref(c->thro_dref[i], sizeof c->thro_dref[i], 0.0f, THRO_USE_REF[i]);
 	memset(c->wanted_slot, -1, sizeof c->wanted_slot);
@@ -208,8 +205,7 @@ void xp_client_init(struct xp_client *c, const struct sockaddr_in *xplane, enum 
 		c->wanted_slot[wanted_rows[i]] = (int8_t)i;
 }
 
-int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct sockaddr_in *xplane,
-		   enum xp_actuation act)
+int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct sockaddr_in *xplane, enum xp_actuation act)
 {
 	xp_client_init(c, xplane, act);
 	c->fd = socket(AF_INET, SOCK_DGRAM, 0);
@@ -261,8 +257,8 @@ static void quat_of_euler_ned(float phi_deg, float theta_deg, float psi_deg, dou
  *   give the specific force over g in FLU: [axial, -side, normal].
  *   Row 38's prop rpm gives the rotor speed: rad/s = rpm * 2 pi / 60.
  */
-uint32_t xp_frame_convert(const struct xp_data_rec *recs, size_t n, uint32_t xp_version,
-			  struct hal_sensor_frame *f, float *raw_time_s)
+uint32_t xp_frame_convert(const struct xp_data_rec *recs, size_t n, uint32_t xp_version, struct hal_sensor_frame *f,
+			  float *raw_time_s)
 {
 	uint32_t bits = 0;
 	for (size_t r = 0; r < n; r++) {
@@ -276,7 +272,7 @@ uint32_t xp_frame_convert(const struct xp_data_rec *recs, size_t n, uint32_t xp_
 			break;
 		case XP_ROW_RATES: {
 			if (!xp_version)
-				break;   /* column order and units unknown until the version is */
+				break; /* column order and units unknown until the version is */
 			double p, q, rr;
 			if (xp_version >= XP_VERSION_12) {
 				p = (double)c[0] * DEG_TO_RAD;
@@ -360,8 +356,7 @@ uint32_t xp_frame_convert(const struct xp_data_rec *recs, size_t n, uint32_t xp_
 				f->thr_cmd_echo[i] = isfinite(c[i]) ? c[i] : 0.0f;
 			bits |= HAL_FRAME_THR_CMD;
 			break;
-		default:
-			break;
+		default: break;
 		}
 	}
 	return bits;
@@ -377,8 +372,7 @@ static void note_rows(struct xp_client *c, const struct xp_msg_in *m, uint64_t n
 		bool found = slot >= 0;
 		if (found)
 			c->row_seen_us[slot] = now_us;
-		if (!found && row >= 0 && row < 256 &&
-		    !(c->unselected[row / 8] & (1u << (row % 8)))) {
+		if (!found && row >= 0 && row < 256 && !(c->unselected[row / 8] & (1u << (row % 8)))) {
 			unsel[nu++] = row;
 		}
 	}
@@ -406,7 +400,7 @@ int xp_client_receive(struct xp_client *c, struct hal_sensor_frame *frame, uint6
 	if (n < 0)
 		return -1;
 	if (fl < sizeof from)
-		from.sin_family = AF_UNSPEC;   /* not an IPv4 sender: foreign */
+		from.sin_family = AF_UNSPEC; /* not an IPv4 sender: foreign */
 	return xp_client_input(c, buf, (size_t)n, &from, frame, now_us);
 }
 
@@ -418,7 +412,7 @@ int xp_client_input(struct xp_client *c, const uint8_t *buf, size_t n, const str
 		c->stats.foreign++;
 		return 0;
 	}
-	if (n >= 2048) {   /* truncated: larger than any X-Plane message we take */
+	if (n >= 2048) { /* truncated: larger than any X-Plane message we take */
 		c->stats.dropped++;
 		return 0;
 	}
@@ -430,16 +424,13 @@ int xp_client_input(struct xp_client *c, const uint8_t *buf, size_t n, const str
 				if (isfinite(v) && v >= 1.0f && v < 1.0e7f && (uint32_t)v != c->xp_version) {
 					c->xp_version = (uint32_t)v;
 					host_report("X-Plane version %" PRIu32 " (row 16 as X-Plane %s)", c->xp_version,
-						   c->xp_version >= XP_VERSION_12 ? "12: P,Q,R deg/s"
-											: "10/11: Q,P,R rad/s");
+						    c->xp_version >= XP_VERSION_12 ? "12: P,Q,R deg/s"
+										   : "10/11: Q,P,R rad/s");
 				}
 			}
 		return 0;
-	case XP_MSG_DATA:
-		break;
-	default:
-		c->stats.dropped++;
-		return 0;
+	case XP_MSG_DATA: break;
+	default: c->stats.dropped++; return 0;
 	}
 	/* DATA again after a silence: X-Plane may have been restarted (another
 	 * version): ask for the version now instead of at the next 5 s re-request */
@@ -450,11 +441,11 @@ int xp_client_input(struct xp_client *c, const uint8_t *buf, size_t n, const str
 	}
 	c->last_data_us = now_us;
 	note_rows(c, &c->msg, now_us);
-	struct hal_sensor_frame f = *frame;   /* keeps the previous values of absent rows */
+	struct hal_sensor_frame f = *frame; /* keeps the previous values of absent rows */
 	float raw_t = 0.0f;
 	uint32_t bits = xp_frame_convert(c->msg.data, c->msg.n, c->xp_version, &f, &raw_t);
 	if (!(bits & HAL_FRAME_TIME)) {
-		c->stats.dropped++;   /* a frame without time cannot be placed */
+		c->stats.dropped++; /* a frame without time cannot be placed */
 		return 0;
 	}
 	/* Time never runs backwards (xp_clock_stamp). A frame older than the newest was
@@ -464,7 +455,7 @@ int xp_client_input(struct xp_client *c, const uint8_t *buf, size_t n, const str
 	uint64_t n_new;
 	enum xp_stamp st = xp_clock_stamp(&c->clock, raw_t, &n_new);
 	if (st == XP_STAMP_BAD) {
-		c->stats.dropped++;   /* a corrupt time cannot be placed either */
+		c->stats.dropped++; /* a corrupt time cannot be placed either */
 		return 0;
 	}
 	if (st == XP_STAMP_OLD) {
@@ -513,7 +504,7 @@ void xp_client_actuate(struct xp_client *c, const float thr[HAL_ROTORS], uint64_
 	float t[HAL_ROTORS];
 	for (int i = 0; i < HAL_ROTORS; i++) {
 		float v = thr[i];
-		t[i] = !(v > 0.0f) ? 0.0f : (v > 1.0f ? 1.0f : v);   /* NaN -> 0 */
+		t[i] = !(v > 0.0f) ? 0.0f : (v > 1.0f ? 1.0f : v); /* NaN -> 0 */
 	}
 	if (c->act == XP_ACT_DATA25) {
 		struct xp_data_rec r = {.row = XP_ROW_THR_CMD};

@@ -61,21 +61,21 @@ enum xp_actuation { XP_ACT_DREF = 0, XP_ACT_DATA25 = 1 };
  * measurement moves the base, so t_us never jumps.
  */
 struct xp_clock {
-	bool have;                  /* a first stamp seen */
-	bool period_fixed;          /* P configured: not measured */
-	bool period_known;          /* P configured or measured (else the nominal 1/90 s) */
-	float last_raw;             /* the newest frame's stamp as sent */
-	double last_s;              /* ... re-based (offset_s added) */
-	double offset_s;            /* re-basing after a step back (an X-Plane reload) */
-	double period_s;            /* P */
-	uint64_t frame_n, t_us;     /* the newest frame's count and time */
-	uint64_t base_n, base_us;   /* where the time line of the current P starts */
-	double ref_s;               /* the measurement's reference frame: stamp ... */
-	uint64_t ref_n;             /* ... and count */
-	uint64_t measured_n;        /* frame_n at the last measurement */
-	uint32_t coarse;            /* new datagrams counted as one frame: the stamp could not tell */
-	uint32_t off_grid;          /* steps no count of the period explained (jitter, another rate) */
-	uint32_t rebased;           /* steps back taken for a reload */
+	bool have;                /* a first stamp seen */
+	bool period_fixed;        /* P configured: not measured */
+	bool period_known;        /* P configured or measured (else the nominal 1/90 s) */
+	float last_raw;           /* the newest frame's stamp as sent */
+	double last_s;            /* ... re-based (offset_s added) */
+	double offset_s;          /* re-basing after a step back (an X-Plane reload) */
+	double period_s;          /* P */
+	uint64_t frame_n, t_us;   /* the newest frame's count and time */
+	uint64_t base_n, base_us; /* where the time line of the current P starts */
+	double ref_s;             /* the measurement's reference frame: stamp ... */
+	uint64_t ref_n;           /* ... and count */
+	uint64_t measured_n;      /* frame_n at the last measurement */
+	uint32_t coarse;          /* new datagrams counted as one frame: the stamp could not tell */
+	uint32_t off_grid;        /* steps no count of the period explained (jitter, another rate) */
+	uint32_t rebased;         /* steps back taken for a reload */
 };
 
 /* What one stamp was: a new frame (n frames on), a duplicate, or older than the newest. */
@@ -92,31 +92,30 @@ void xp_clock_set_period(struct xp_clock *k, double period_s);
 enum xp_stamp xp_clock_stamp(struct xp_clock *k, float stamp, uint64_t *n);
 
 struct xp_client {
-	int fd;                           /* -1 without a socket (see send) */
+	int fd; /* -1 without a socket (see send) */
 	/* Where requests go when set (in-process platforms); otherwise sendto(fd). */
 	void (*send)(void *ctx, const uint8_t *buf, size_t len);
 	void *send_ctx;
-	struct sockaddr_in xp;            /* where X-Plane receives (requests go there) */
+	struct sockaddr_in xp; /* where X-Plane receives (requests go there) */
 	enum xp_actuation act;
 	struct hal_plant_stats stats;
-	uint32_t xp_version;              /* sim/version/xplane_internal_version, 0 = unknown yet */
-	uint64_t row_seen_us[12];         /* per wanted row, wall time last seen */
+	uint32_t xp_version;      /* sim/version/xplane_internal_version, 0 = unknown yet */
+	uint64_t row_seen_us[12]; /* per wanted row, wall time last seen */
 	uint64_t last_dsel_us, last_rref_us, last_override_us, last_usel_us;
-	uint64_t last_data_us;            /* wall time of the last DATA datagram */
-	uint8_t unselected[256 / 8];      /* rows already USEL'd */
-	struct xp_clock clock;            /* the plant's time line */
+	uint64_t last_data_us;       /* wall time of the last DATA datagram */
+	uint8_t unselected[256 / 8]; /* rows already USEL'd */
+	struct xp_clock clock;       /* the plant's time line */
 	uint32_t seq;
-	struct xp_msg_in msg;             /* decode buffer (large: kept off the stack) */
+	struct xp_msg_in msg; /* decode buffer (large: kept off the stack) */
 	/* the throttle DREFs (ENGN_thro_use[i]), encoded once: a frame rewrites their values */
 	uint8_t thro_dref[HAL_ROTORS][XP_DREF_LEN];
-	int8_t wanted_slot[256];          /* row -> its index among the wanted rows, -1: not wanted */
+	int8_t wanted_slot[256]; /* row -> its index among the wanted rows, -1: not wanted */
 };
 
 /* Sets the client up without a socket: requests go to c->send (set it after). */
 void xp_client_init(struct xp_client *c, const struct sockaddr_in *xplane, enum xp_actuation act);
 /* Opens the socket; returns 0 or -1 (reason on stderr). */
-int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct sockaddr_in *xplane,
-		   enum xp_actuation act);
+int xp_client_open(struct xp_client *c, uint16_t listen_port, const struct sockaddr_in *xplane, enum xp_actuation act);
 /* Reads one datagram (non-blocking). Returns 1 when it was a DATA frame turned
  * into *frame (absent rows keep their previous values), 0 for any other
  * datagram (RREF, dropped), -1 when there was nothing to read. */
@@ -134,7 +133,7 @@ void xp_client_release(struct xp_client *c);
 /* Pure conversion of decoded DATA records into the paper's frames: fills the
  * fields of *f for the rows present and returns their HAL_FRAME_* bits. Rates
  * need the version (0 = unknown: rates left out). Time is not re-based here. */
-uint32_t xp_frame_convert(const struct xp_data_rec *recs, size_t n, uint32_t xp_version,
-			  struct hal_sensor_frame *f, float *raw_time_s);
+uint32_t xp_frame_convert(const struct xp_data_rec *recs, size_t n, uint32_t xp_version, struct hal_sensor_frame *f,
+			  float *raw_time_s);
 
 #endif /* OCTO_XP_CLIENT_H */

@@ -93,7 +93,7 @@ static int put_path(uint8_t *dst, size_t field, const char *path)
 	if (n == 0 || n >= field)
 		return -1;
 	memcpy(dst, path, n);
-	memset(dst + n, 0, field - n);   /* the NUL and the padding after the path */
+	memset(dst + n, 0, field - n); /* the NUL and the padding after the path */
 	return 0;
 }
 
@@ -120,10 +120,7 @@ size_t xp_encode_dref(uint8_t *buf, size_t cap, float value, const char *path)
 	return XP_DREF_LEN;
 }
 
-void xp_dref_set_value(uint8_t *dref, float value)
-{
-	put_f32(dref + 5, value);
-}
+void xp_dref_set_value(uint8_t *dref, float value) { put_f32(dref + 5, value); }
 
 size_t xp_encode_data(uint8_t *buf, size_t cap, const struct xp_data_rec *recs, size_t n)
 {

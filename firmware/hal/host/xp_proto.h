@@ -11,16 +11,16 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define XP_DATA_REC_LEN   36      /* int32 row + 8 float32 */
-#define XP_DREF_LEN       509
-#define XP_RREF_REQ_LEN   413
-#define XP_MAX_DATA_RECS  64      /* more records than this: datagram rejected */
-#define XP_MAX_RREF_RECS  183
-#define XP_LEAVE_ALONE    (-999.0f)
+#define XP_DATA_REC_LEN 36 /* int32 row + 8 float32 */
+#define XP_DREF_LEN 509
+#define XP_RREF_REQ_LEN 413
+#define XP_MAX_DATA_RECS 64 /* more records than this: datagram rejected */
+#define XP_MAX_RREF_RECS 183
+#define XP_LEAVE_ALONE (-999.0f)
 
 struct xp_data_rec {
 	int32_t row;
-	float col[8];                 /* col[0] is X-Plane's column 1 */
+	float col[8]; /* col[0] is X-Plane's column 1 */
 };
 
 struct xp_rref_rec {
@@ -33,7 +33,7 @@ enum xp_msg { XP_MSG_BAD = 0, XP_MSG_DATA, XP_MSG_RREF, XP_MSG_OTHER };
 /* Decoded datagram. */
 struct xp_msg_in {
 	enum xp_msg type;
-	size_t n;                     /* records */
+	size_t n; /* records */
 	struct xp_data_rec data[XP_MAX_DATA_RECS];
 	struct xp_rref_rec rref[XP_MAX_RREF_RECS];
 };

@@ -30,22 +30,22 @@
 #include "slip.h"
 #include "xp_client.h"
 
-#define BOARD_PARAM_CAP 8192      /* the parameter sector */
-#define BOARD_EVENTS 8            /* log events a step or a pass may leave */
+#define BOARD_PARAM_CAP 8192 /* the parameter sector */
+#define BOARD_EVENTS 8       /* log events a step or a pass may leave */
 #define BOARD_EVENT_TEXT 200
-#define BOARD_MAV_CAP 280         /* the longest MAVLink 2 packet (signed) */
-#define BOARD_TICK_US 5000        /* the idle wake-up's period: app_tick and mav_tick at least this often */
-#define BOARD_SPIN_US 200         /* polling goes on this long after the last byte before WFI */
+#define BOARD_MAV_CAP 280  /* the longest MAVLink 2 packet (signed) */
+#define BOARD_TICK_US 5000 /* the idle wake-up's period: app_tick and mav_tick at least this often */
+#define BOARD_SPIN_US 200  /* polling goes on this long after the last byte before WFI */
 
 /* Log record types on the log link (the first byte of a frame). */
 enum board_rec {
-	BOARD_REC_FRAME = 'F',        /* octo.fw_frame_t without its fingerprint */
-	BOARD_REC_EVENT = 'E',        /* utime (int64), severity (int8), text */
-	BOARD_REC_ID = 'I',           /* octo.fw_id_result_t without its fingerprint */
+	BOARD_REC_FRAME = 'F', /* octo.fw_frame_t without its fingerprint */
+	BOARD_REC_EVENT = 'E', /* utime (int64), severity (int8), text */
+	BOARD_REC_ID = 'I',    /* octo.fw_id_result_t without its fingerprint */
 };
 
 struct board_event {
-	uint8_t kind;                 /* BOARD_REC_EVENT or BOARD_REC_ID */
+	uint8_t kind; /* BOARD_REC_EVENT or BOARD_REC_ID */
 	int8_t severity;
 	double t_s;
 	struct app_id_result id;
@@ -57,22 +57,22 @@ struct board {
 	struct mav mav;
 	struct hal hal;
 	struct xp_client xp;
-	struct hal_sensor_frame frame;        /* persistent: absent rows keep their values */
-	struct sockaddr_in plant_addr;        /* stands for the bridge at the other end of UART0 */
+	struct hal_sensor_frame frame; /* persistent: absent rows keep their values */
+	struct sockaddr_in plant_addr; /* stands for the bridge at the other end of UART0 */
 
 	/* clock: TIMER0 extended to 64 bits on every pass */
 	uint32_t timer_last;
 	uint64_t ticks;
-	uint64_t now_us;                      /* the pass's time: what wall_us answers */
-	uint64_t rx_last_us;                  /* the last pass that received a byte */
+	uint64_t now_us;     /* the pass's time: what wall_us answers */
+	uint64_t rx_last_us; /* the last pass that received a byte */
 
 	/* links */
 	struct slip_rx plant_rx;
-	unsigned lane;                        /* the plant lane the next byte comes on */
+	unsigned lane; /* the plant lane the next byte comes on */
 	struct slip_tx plant_tx, log_tx;
 	uint8_t mav_rx[BOARD_MAV_CAP];
 	size_t mav_n;
-	uint32_t mav_junk;                    /* ground bytes outside any packet */
+	uint32_t mav_junk; /* ground bytes outside any packet */
 
 	/* what a step hands over, sent after it */
 	float thr[HAL_ROTORS];
@@ -84,7 +84,7 @@ struct board {
 
 	/* parameter storage: a RAM sector (kept while the board is powered) */
 	char param[BOARD_PARAM_CAP];
-	long param_len;                       /* -1: never stored */
+	long param_len; /* -1: never stored */
 
 	uint32_t steps;
 };

@@ -24,18 +24,18 @@
 #define MPS2_PCLK_HZ 25000000u
 
 struct cmsdk_uart {
-	volatile uint32_t data;       /* a byte received (read) or to send (write) */
-	volatile uint32_t state;      /* bit 0 TX buffer full, bit 1 RX buffer full */
-	volatile uint32_t ctrl;       /* bit 0 TX enable, bit 1 RX enable, bit 3 RX interrupt enable */
-	volatile uint32_t intstatus;  /* bit 1 RX: set by a received byte, cleared by writing 1 */
-	volatile uint32_t bauddiv;    /* at least 16, else the UART neither sends nor receives */
+	volatile uint32_t data;      /* a byte received (read) or to send (write) */
+	volatile uint32_t state;     /* bit 0 TX buffer full, bit 1 RX buffer full */
+	volatile uint32_t ctrl;      /* bit 0 TX enable, bit 1 RX enable, bit 3 RX interrupt enable */
+	volatile uint32_t intstatus; /* bit 1 RX: set by a received byte, cleared by writing 1 */
+	volatile uint32_t bauddiv;   /* at least 16, else the UART neither sends nor receives */
 };
 
 struct cmsdk_timer {
-	volatile uint32_t ctrl;       /* bit 0 enable, bit 3 interrupt enable */
-	volatile uint32_t value;      /* counts down at PCLK, reloads from reload at zero */
+	volatile uint32_t ctrl;  /* bit 0 enable, bit 3 interrupt enable */
+	volatile uint32_t value; /* counts down at PCLK, reloads from reload at zero */
 	volatile uint32_t reload;
-	volatile uint32_t intstatus;  /* bit 0: reached zero; cleared by writing 1 */
+	volatile uint32_t intstatus; /* bit 0: reached zero; cleared by writing 1 */
 };
 
 /* UART0..UART2 at 0x40004000 + 0x1000 n, UART3 at 0x40007000, UART4 at 0x40009000 */
@@ -50,8 +50,8 @@ struct cmsdk_timer {
 #define MPS2_IRQ_UART3_RX 18u
 #define MPS2_IRQ_UART4_RX 20u
 #define MPS2_IRQ_TIMER1 9u
-#define NVIC_ISER0 (*(volatile uint32_t *)(uintptr_t)0xE000E100u)   /* set enable */
-#define NVIC_ICPR0 (*(volatile uint32_t *)(uintptr_t)0xE000E280u)   /* clear pending */
+#define NVIC_ISER0 (*(volatile uint32_t *)(uintptr_t)0xE000E100u) /* set enable */
+#define NVIC_ICPR0 (*(volatile uint32_t *)(uintptr_t)0xE000E280u) /* clear pending */
 
 /* 921,600 baud: the divider a board would use; QEMU moves bytes as fast as its host does. */
 #define MPS2_UART_BAUDDIV (MPS2_PCLK_HZ / 921600u)
@@ -63,10 +63,7 @@ static inline void cmsdk_uart_init(struct cmsdk_uart *u, bool rx_irq)
 	u->ctrl = rx_irq ? 0xBu : 0x3u;
 }
 
-static inline void cmsdk_uart_clear_rx_irq(struct cmsdk_uart *u)
-{
-	u->intstatus = 0x2u;
-}
+static inline void cmsdk_uart_clear_rx_irq(struct cmsdk_uart *u) { u->intstatus = 0x2u; }
 
 /* One received byte into *b: true, or false when there is none. */
 static inline bool cmsdk_uart_getc(struct cmsdk_uart *u, uint8_t *b)

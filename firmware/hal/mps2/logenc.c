@@ -18,7 +18,7 @@ struct enc {
 static void put_be(struct enc *e, uint64_t v, size_t bytes)
 {
 	if (e->n + bytes > e->cap) {
-		e->n = e->cap + 1;   /* too long: the caller sees it */
+		e->n = e->cap + 1; /* too long: the caller sees it */
 		return;
 	}
 	for (size_t i = 0; i < bytes; i++)
@@ -44,27 +44,27 @@ static void put_f64(struct enc *e, double v)
 	put_be(e, u, 8);
 }
 
-#define PUT(e, v)                                                                       \
-	_Generic((v), int64_t: put_i64, double: put_f64, float: put_f32, bool: put_bool, \
-		 int8_t: put_i8, int16_t: put_i16, int32_t: put_i32)(e, v)
+#define PUT(e, v)                 \
+	_Generic((v),             \
+		int64_t: put_i64, \
+		double: put_f64,  \
+		float: put_f32,   \
+		bool: put_bool,   \
+		int8_t: put_i8,   \
+		int16_t: put_i16, \
+		int32_t: put_i32)(e, v)
 
 /* plant time in microseconds, rounded as the host's log does */
-static int64_t utime_of(double t_s)
-{
-	return (int64_t)(t_s * 1e6 + (t_s >= 0 ? 0.5 : -0.5));
-}
+static int64_t utime_of(double t_s) { return (int64_t)(t_s * 1e6 + (t_s >= 0 ? 0.5 : -0.5)); }
 
-static size_t done(const struct enc *e)
-{
-	return e->n <= e->cap ? e->n : 0;
-}
+static size_t done(const struct enc *e) { return e->n <= e->cap ? e->n : 0; }
 
 size_t board_enc_frame(uint8_t *buf, size_t cap, const struct app_log_frame *f)
 {
 	struct enc e = {buf, 0, cap};
 	put_i64(&e, utime_of(f->t));
 #define ONE(c_type, lcm_type, name) PUT(&e, f->name);
-#define ARR(c_type, lcm_type, name, count)          \
+#define ARR(c_type, lcm_type, name, count)      \
 	for (size_t i_ = 0; i_ < (count); i_++) \
 		PUT(&e, f->name[i_]);
 	APP_LOG_FIELDS(ONE, ARR)

@@ -24,10 +24,9 @@
 /* The plant's bytes towards the board come dealt in turn over four receivers (docs/pil.md):
  * QEMU moves one byte per UART at a time, so four lanes take four bytes at a time. */
 #define PLANT_LANES 4u
-static struct cmsdk_uart *const plant_lane[PLANT_LANES] = {
-	MPS2_UART(0), MPS2_UART(2), MPS2_UART(3), MPS2_UART(4)};
+static struct cmsdk_uart *const plant_lane[PLANT_LANES] = {MPS2_UART(0), MPS2_UART(2), MPS2_UART(3), MPS2_UART(4)};
 
-int _write(int fd, const char *buf, int len);   /* tests/arm/semihost.c: the console */
+int _write(int fd, const char *buf, int len); /* tests/arm/semihost.c: the console */
 
 static void console_line(const char *prefix, const char *line)
 {
@@ -56,7 +55,7 @@ __attribute__((noinline)) void board_step_end(void) { __asm__ volatile("" ::: "m
 static void clock_update(struct board *b)
 {
 	uint32_t v = MPS2_TIMER0->value;
-	b->ticks += (uint32_t)(b->timer_last - v);   /* a down-counter: elapsed ticks, modulo 2^32 */
+	b->ticks += (uint32_t)(b->timer_last - v); /* a down-counter: elapsed ticks, modulo 2^32 */
 	b->timer_last = v;
 	b->now_us = b->ticks / (MPS2_PCLK_HZ / 1000000u);
 }
@@ -130,7 +129,7 @@ static long param_fetch(void *ctx, char *buf, size_t cap)
 static void log_frame(void *ctx, const struct app_log_frame *f)
 {
 	struct board *b = ctx;
-	b->log_pending = f;   /* the app's own record: unchanged until its next frame */
+	b->log_pending = f; /* the app's own record: unchanged until its next frame */
 }
 
 static struct board_event *event_slot(struct board *b)
@@ -234,7 +233,7 @@ static void step(struct board *b)
 	if (b->actuate)
 		xp_client_actuate(&b->xp, b->thr, b->now_us);
 	if (b->log_pending) {
-		static uint8_t rec[1024];   /* the encoded record; one at a time */
+		static uint8_t rec[1024]; /* the encoded record; one at a time */
 		log_send(b, BOARD_REC_FRAME, rec, board_enc_frame(rec, sizeof rec, b->log_pending));
 	}
 	flush_events(b);
@@ -308,8 +307,9 @@ static unsigned poll_ground(struct board *b)
 
 /* ---------------------------------------------------------------- idle */
 
-#define WAKE_IRQS (1u << MPS2_IRQ_UART0_RX | 1u << MPS2_IRQ_UART1_RX | 1u << MPS2_IRQ_UART2_RX | \
-		   1u << MPS2_IRQ_UART3_RX | 1u << MPS2_IRQ_UART4_RX | 1u << MPS2_IRQ_TIMER1)
+#define WAKE_IRQS                                                                                                \
+	(1u << MPS2_IRQ_UART0_RX | 1u << MPS2_IRQ_UART1_RX | 1u << MPS2_IRQ_UART2_RX | 1u << MPS2_IRQ_UART3_RX | \
+	 1u << MPS2_IRQ_UART4_RX | 1u << MPS2_IRQ_TIMER1)
 
 /* Clears the wake-up requests seen so far. Called before the links are polled, so that a
  * byte arriving after its UART was drained is still pending when the pass ends in WFI. */
@@ -387,9 +387,13 @@ int main(int argc, char **argv)
 	app_init(&b.app, &b.hal);
 	mav_init(&b.mav, &b.app, &b.hal, b.now_us);
 #if OCTO_FIXED
-	console_line("octo-fw: ", "MPS2 AN386 (Cortex-M4F), Q16.16 build: plant on UART0 (in: lanes UART0, 2, 3, 4), MAVLink on UART1, log on UART2");
+	console_line(
+		"octo-fw: ",
+		"MPS2 AN386 (Cortex-M4F), Q16.16 build: plant on UART0 (in: lanes UART0, 2, 3, 4), MAVLink on UART1, log on UART2");
 #else
-	console_line("octo-fw: ", "MPS2 AN386 (Cortex-M4F), float build: plant on UART0 (in: lanes UART0, 2, 3, 4), MAVLink on UART1, log on UART2");
+	console_line(
+		"octo-fw: ",
+		"MPS2 AN386 (Cortex-M4F), float build: plant on UART0 (in: lanes UART0, 2, 3, 4), MAVLink on UART1, log on UART2");
 #endif
 	for (;;) {
 		wake_clear();

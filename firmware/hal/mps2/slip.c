@@ -4,10 +4,9 @@
 /* CRC-32, reflected polynomial 0xEDB88320, four bits at a time (a 64-byte table). */
 uint32_t slip_crc32(uint32_t crc, const uint8_t *p, size_t n)
 {
-	static const uint32_t tab[16] = {
-		0x00000000u, 0x1DB71064u, 0x3B6E20C8u, 0x26D930ACu, 0x76DC4190u, 0x6B6B51F4u,
-		0x4DB26158u, 0x5005713Cu, 0xEDB88320u, 0xF00F9344u, 0xD6D6A3E8u, 0xCB61B38Cu,
-		0x9B64C2B0u, 0x86D3D2D4u, 0xA00AE278u, 0xBDBDF21Cu};
+	static const uint32_t tab[16] = {0x00000000u, 0x1DB71064u, 0x3B6E20C8u, 0x26D930ACu, 0x76DC4190u, 0x6B6B51F4u,
+					 0x4DB26158u, 0x5005713Cu, 0xEDB88320u, 0xF00F9344u, 0xD6D6A3E8u, 0xCB61B38Cu,
+					 0x9B64C2B0u, 0x86D3D2D4u, 0xA00AE278u, 0xBDBDF21Cu};
 	crc = ~crc;
 	for (size_t i = 0; i < n; i++) {
 		crc ^= p[i];
@@ -30,10 +29,7 @@ static void put_escaped(struct slip_tx *t, uint8_t b)
 	}
 }
 
-void slip_tx_begin(struct slip_tx *t)
-{
-	t->crc = 0;
-}
+void slip_tx_begin(struct slip_tx *t) { t->crc = 0; }
 
 void slip_tx_add(struct slip_tx *t, const void *p, size_t n)
 {
@@ -58,13 +54,13 @@ size_t slip_rx_byte(struct slip_rx *r, uint8_t b)
 		r->n = 0;
 		r->esc = r->bad = false;
 		if (n == 0 && !bad)
-			return 0;   /* an END between frames (or the first one) */
+			return 0; /* an END between frames (or the first one) */
 		if (bad || n < 5) {
 			r->dropped++;
 			return 0;
 		}
-		uint32_t got = (uint32_t)r->buf[n - 4] | (uint32_t)r->buf[n - 3] << 8 |
-			       (uint32_t)r->buf[n - 2] << 16 | (uint32_t)r->buf[n - 1] << 24;
+		uint32_t got = (uint32_t)r->buf[n - 4] | (uint32_t)r->buf[n - 3] << 8 | (uint32_t)r->buf[n - 2] << 16 |
+			       (uint32_t)r->buf[n - 1] << 24;
 		if (slip_crc32(0, r->buf, n - 4) != got) {
 			r->dropped++;
 			return 0;

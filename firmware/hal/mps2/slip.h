@@ -35,7 +35,7 @@ struct slip_rx {
 	uint8_t buf[SLIP_RX_CAP];
 	size_t n;
 	bool esc, bad;
-	uint32_t frames, dropped;     /* frames accepted; frames dropped (CRC, escape, length) */
+	uint32_t frames, dropped; /* frames accepted; frames dropped (CRC, escape, length) */
 };
 /* Takes one byte; returns the message length (CRC removed) when it completed a good frame, else 0. */
 size_t slip_rx_byte(struct slip_rx *r, uint8_t b);

@@ -76,7 +76,7 @@ struct script {
 	char msg[640];
 	/* the vehicle and the time of the script_run in progress */
 	struct app *app;
-	struct mav *mav;   /* the vehicle's MAVLink endpoint: the path a ground station's bytes take */
+	struct mav *mav; /* the vehicle's MAVLink endpoint: the path a ground station's bytes take */
 	uint64_t now_us;
 	/* MAVLink parser and sender state (the library's per-channel globals are not used):
 	 * the app's output is parsed here, the script's messages are sequenced here */

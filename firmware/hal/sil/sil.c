@@ -40,10 +40,7 @@ static uint64_t mono_us(void)
 
 /* The platform clock: virtual (one frame period per pass) unless a ground
  * station is served. */
-static uint64_t sil_clock(const struct sil *s)
-{
-	return s->wall_clock ? mono_us() : s->now_us;
-}
+static uint64_t sil_clock(const struct sil *s) { return s->wall_clock ? mono_us() : s->now_us; }
 
 static uint64_t wall_us(void *ctx)
 {
@@ -318,14 +315,15 @@ static bool may_advance(struct sil *s, bool *started, bool delivered, double per
 	if (!*started) {
 		if (!octo_plant_commanded(s->plant)) {
 			if (s->wall_clock)
-				(void)nanosleep(&(struct timespec){.tv_sec = 0, .tv_nsec = (long)(period_us * 1e3)}, NULL);
+				(void)nanosleep(&(struct timespec){.tv_sec = 0, .tv_nsec = (long)(period_us * 1e3)},
+						NULL);
 			return false;
 		}
 		*started = true;
 	} else if (!delivered) {
-		s->withheld++;     /* the fault injector withheld it: nobody can answer */
+		s->withheld++; /* the fault injector withheld it: nobody can answer */
 	} else if (!octo_plant_commanded(s->plant)) {
-		s->unanswered++;   /* answered (or not) in this pass: no later answer comes */
+		s->unanswered++; /* answered (or not) in this pass: no later answer comes */
 	}
 	return true;
 }
@@ -338,7 +336,7 @@ static int fly(struct sil *s, double duration, const sigset_t *stop_set, bool *s
 	const double period_us = 1e6 / rate;
 	uint64_t pass = 0;
 	bool started = false, crash_said = false;
-	int result = 0;   /* script: 0 running, 1 done, -1 failed */
+	int result = 0; /* script: 0 running, 1 done, -1 failed */
 	struct octo_plant_truth tr;
 	/* The signal check is a system call: every pass when a ground station sets
 	 * the pace, every 64 passes (well under a wall second) otherwise. */
@@ -353,7 +351,8 @@ static int fly(struct sil *s, double duration, const sigset_t *stop_set, bool *s
 		result = crash_check(s, &tr, &crash_said, result);
 		if (result != 0)
 			break;
-		if (duration > 0.0 && (tr.t - tr.t0 >= duration - 1e-9 || (double)(s->now_us - 1000000u) * 1e-6 >= duration))
+		if (duration > 0.0 &&
+		    (tr.t - tr.t0 >= duration - 1e-9 || (double)(s->now_us - 1000000u) * 1e-6 >= duration))
 			break;
 		pass++;
 		if (may_advance(s, &started, delivered, period_us))
@@ -367,7 +366,7 @@ static int fly(struct sil *s, double duration, const sigset_t *stop_set, bool *s
 static int finish(struct sil *s, int result, bool stopped)
 {
 	struct octo_plant_truth tr;
-	app_tick(&s->app);   /* a pending parameter save */
+	app_tick(&s->app); /* a pending parameter save */
 	mav_tick(&s->mav, hal_wall_us(&s->hal));
 	lcm_log_close(&s->log);
 	octo_plant_truth(s->plant, &tr);

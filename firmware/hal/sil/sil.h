@@ -39,13 +39,13 @@ struct sil_queue {
  * octo_plant_create, allocated: the caller frees it). */
 struct sil_config {
 	const char *params, *lcm_fw, *lcm_sim, *script;
-	uint16_t mav_listen;           /* 0: no ground station served */
+	uint16_t mav_listen; /* 0: no ground station served */
 	struct sockaddr_in gcs;
-	double duration;               /* simulated seconds, 0: no limit */
+	double duration; /* simulated seconds, 0: no limit */
 	enum xp_actuation act;
 	bool quiet;
-	unsigned log_every;            /* --log-every N: both logs (0 with --log-phases alone) */
-	bool log_phases;               /* --log-phases: the firmware's frames during experiments */
+	unsigned log_every; /* --log-every N: both logs (0 with --log-phases alone) */
+	bool log_phases;    /* --log-phases: the firmware's frames during experiments */
 	int plant_argc;
 	char **plant_argv;
 };
@@ -58,24 +58,24 @@ struct script;
 struct sil {
 	octo_plant *plant;
 	struct xp_client xp;
-	struct sockaddr_in xplane;     /* the plant's address as the client sees it */
-	struct hal hal;                /* sil.c's functions, ctx = this struct */
+	struct sockaddr_in xplane; /* the plant's address as the client sees it */
+	struct hal hal;            /* sil.c's functions, ctx = this struct */
 	struct app app;
 	struct mav mav;                /* the app's MAVLink endpoint */
 	struct param_file params;      /* --params (hal/host/param_file.c) */
 	struct lcm_log log;            /* --lcm-fw (hal/host/lcm_log.c) */
 	struct hal_sensor_frame frame; /* persistent: absent rows keep their values */
 	struct sil_queue to_plant;
-	uint8_t from_plant[4096];      /* one plant datagram on its way to the client */
-	uint64_t now_us;               /* the platform clock (see hal_wall_us in sil.c) */
-	bool wall_clock;               /* MAVLink served: telemetry rates in wall time */
+	uint8_t from_plant[4096]; /* one plant datagram on its way to the client */
+	uint64_t now_us;          /* the platform clock (see hal_wall_us in sil.c) */
+	bool wall_clock;          /* MAVLink served: telemetry rates in wall time */
 	bool quiet;
 
 	/* MAVLink to a ground station (optional) */
 	int mav_fd;
 	struct sockaddr_in gcs;
 
-	struct script *script;         /* --script: the ground station's steps (script.c) */
+	struct script *script; /* --script: the ground station's steps (script.c) */
 	uint64_t withheld, unanswered;
 };
 
