@@ -3,6 +3,7 @@
 #include "vehicle.hpp"
 
 #include <algorithm>
+#include <initializer_list>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -146,6 +147,38 @@ void check_physics(const VehicleParams &q)
 		throw VehicleError("kf", "key 'kf' = " + fmt(q.kf) + " N gives a hover throttle m g / (8 kf) = " +
 						 fmt(th) + " > 1 with mass " + fmt(q.mass) + " kg: accepted kf >= " +
 						 fmt(q.mass * q.g / kRotors) + " N (or a lower 'mass')");
+}
+
+// An object of non-negative numbers, each member stored where `fields` says; an unknown
+// member or a non-object names itself.
+void non_negative_members(const json::Value &v, const std::string &k,
+			  std::initializer_list<std::pair<const char *, double *>> fields)
+{
+	if (v.kind != json::Value::Kind::Object)
+		throw VehicleError(k, "key '" + k + "' must be an object");
+	for (const auto &nk : v.obj) {
+		const std::string key = k + "." + nk.first;
+		const double d = num(nk.second, key, Rule::NonNegative);
+		bool known = false;
+		for (const auto &f : fields)
+			if (nk.first == f.first) {
+				*f.second = d;
+				known = true;
+			}
+		if (!known)
+			throw VehicleError(key, "unknown key '" + key + "'");
+	}
+}
+
+// One object or a list of them, each parsed by `one`, replacing `out`.
+template <typename T, typename F> void one_or_list(const json::Value &v, F one, std::vector<T> &out)
+{
+	out.clear();
+	if (v.kind == json::Value::Kind::Array)
+		for (const auto &e : v.arr)
+			out.push_back(one(e));
+	else
+		out.push_back(one(v));
 }
 
 // One rotor_failure object: {"rotor": J (1..8), "at_s": T (>= 0), "scale": S ([0, 1], default 0)}.
@@ -293,63 +326,27 @@ void vehicle_from_json(const std::string &text, VehicleParams &p)
 			}
 			std::sort(q.origin_shift_s.begin(), q.origin_shift_s.end());
 		} else if (k == "rotor_failure") {
-			q.rotor_failures.clear();
-			if (v.kind == json::Value::Kind::Array)
-				for (const auto &e : v.arr)
-					q.rotor_failures.push_back(rotor_failure(e));
-			else
-				q.rotor_failures.push_back(rotor_failure(v));
+			one_or_list(v, rotor_failure, q.rotor_failures);
 		} else if (k == "stuck_rpm") {
-			q.stuck_rpm.clear();
-			if (v.kind == json::Value::Kind::Array)
-				for (const auto &e : v.arr)
-					q.stuck_rpm.push_back(stuck_rpm(e));
-			else
-				q.stuck_rpm.push_back(stuck_rpm(v));
+			one_or_list(v, stuck_rpm, q.stuck_rpm);
 		} else if (k == "imu_spike")
 			imu_spike(v, q.imu_spike);
 		else if (k == "noise") {
-			if (v.kind != json::Value::Kind::Object)
-				throw VehicleError(k, "key 'noise' must be an object");
-			for (const auto &nk : v.obj) {
-				std::string key = "noise." + nk.first;
-				double d = num(nk.second, key, Rule::NonNegative);
-				if (nk.first == "thrust")
-					q.noise.thrust = d;
-				else if (nk.first == "torque")
-					q.noise.torque = d;
-				else if (nk.first == "gyro")
-					q.noise.gyro = d;
-				else if (nk.first == "attitude_deg")
-					q.noise.attitude_deg = d;
-				else if (nk.first == "position")
-					q.noise.position = d;
-				else if (nk.first == "accel")
-					q.noise.accel = d;
-				else if (nk.first == "rpm")
-					q.noise.rpm = d;
-				else if (nk.first == "current")
-					q.noise.current = d;
-				else
-					throw VehicleError(key, "unknown key '" + key + "'");
-			}
+			non_negative_members(v, k,
+					     {{"thrust", &q.noise.thrust},
+					      {"torque", &q.noise.torque},
+					      {"gyro", &q.noise.gyro},
+					      {"attitude_deg", &q.noise.attitude_deg},
+					      {"position", &q.noise.position},
+					      {"accel", &q.noise.accel},
+					      {"rpm", &q.noise.rpm},
+					      {"current", &q.noise.current}});
 		} else if (k == "imu_bias") {
-			if (v.kind != json::Value::Kind::Object)
-				throw VehicleError(k, "key 'imu_bias' must be an object");
-			for (const auto &nk : v.obj) {
-				const std::string key = "imu_bias." + nk.first;
-				const double d = num(nk.second, key, Rule::NonNegative);
-				if (nk.first == "accel")
-					q.imu_bias.accel = d;
-				else if (nk.first == "gyro")
-					q.imu_bias.gyro = d;
-				else if (nk.first == "accel_walk")
-					q.imu_bias.accel_walk = d;
-				else if (nk.first == "gyro_walk")
-					q.imu_bias.gyro_walk = d;
-				else
-					throw VehicleError(key, "unknown key '" + key + "'");
-			}
+			non_negative_members(v, k,
+					     {{"accel", &q.imu_bias.accel},
+					      {"gyro", &q.imu_bias.gyro},
+					      {"accel_walk", &q.imu_bias.accel_walk},
+					      {"gyro_walk", &q.imu_bias.gyro_walk}});
 		} else if (k == "imu_scale") {
 			q.imu_scale = num(v, k, Rule::NonNegative);
 			if (q.imu_scale > 0.2)
