@@ -125,8 +125,10 @@ def test_inertia_advice_never_names_a_refused_value(tmp_path):
     seed = random.randint(1, 10**6)
     rng = random.Random(seed)
     ix, iy = rng.uniform(0.04, 0.12), rng.uniform(0.04, 0.12)
-    vehicle = {"inertia": [ix, iy, rng.uniform(max(ix, iy), 0.95 * (ix + iy))], "noise": {"gyro": 0.05}}
-    r, prm = fly(tmp_path, "far", seed, vehicle, {"ID_RSD_MAX": 0.0002}, [3, 4, 5])
+    # a calibrated gyro (no scale error, and the firmware told so): the advice is about the data
+    vehicle = {"inertia": [ix, iy, rng.uniform(max(ix, iy), 0.95 * (ix + iy))], "noise": {"gyro": 0.05},
+               "imu_scale": 0}
+    r, prm = fly(tmp_path, "far", seed, vehicle, {"ID_RSD_MAX": 0.0002, "ID_GYR_SCL_SD": 0}, [3, 4, 5])
     lines = [l for l in r.stderr.splitlines() if re.search(r"ID I..: ID_", l)]
     print(f"seed {seed}: vehicle {vehicle}\n" + "\n".join(lines))
     assert not int(prm["ID_RESULT"]) & 14, lines
@@ -141,3 +143,17 @@ def test_inertia_advice_never_names_a_refused_value(tmp_path):
     for amp, time_s in told.values():
         assert 0 < amp <= INR_MAX["ID_INR_AMP"] and 0 < time_s <= INR_MAX["ID_INR_TIME"], lines
     assert any(BEYOND.finditer(r.stderr)), lines   # Izz at least: 0.0002 is out of reach
+
+
+def test_an_accuracy_below_the_gyro_calibration_is_out_of_reach(tmp_path):
+    """The gyro's scale error scales the inertia and no flight can see it: with ID_GYR_SCL_SD
+    0.005 (the default) an asked 0.3 % is refused, naming the calibration, not an experiment
+    longer or stronger (which could not help)."""
+    seed = random.randint(1, 10**6)
+    r, prm = fly(tmp_path, "calib", seed, {}, {"ID_RSD_MAX": 0.003}, [3])
+    lines = [l for l in r.stderr.splitlines() if "ID Ixx" in l]
+    print(f"seed {seed}\n" + "\n".join(lines))
+    assert not int(prm["ID_RESULT"]) & 2, lines
+    assert any("out of reach: the gyro scale's sd (ID_GYR_SCL_SD 0.005) alone" in l for l in lines), lines
+    assert not ADVICE.search(r.stderr) and not BEYOND.search(r.stderr), lines
+    assert prm["ID_IXX_SD"] >= 0.005 * prm["ID_IXX_EST"] * 0.999, prm   # the calibration's share is in the sd

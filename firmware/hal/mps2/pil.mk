@@ -43,8 +43,13 @@ endif
 
 # $(1) = build (float, fixed)
 define pil_build
-PIL_OBJ_$(1) := $$(PIL_FW_SRC:firmware/%.c=$(PIL_B)/$(1)/%.o)
+PIL_OBJ_$(1) := $$(PIL_FW_SRC:firmware/%.c=$(PIL_B)/$(1)/%.o) $(PIL_B)/$(1)/app/param_metadata.o
 $(PIL_B)/$(1)/%.o: firmware/%.c $(PIL_HDR) | arm-toolchain $(MAVLINK_STAMP)
+	@mkdir -p $$(@D)
+	$$(ARM_CC) $$(ARM_CFLAGS_$(PIL_VARIANT_$(1))) $$(filter-out -MMD -MP,$$(CFLAGS_FW)) $$(ARM_CORE_OPT_m4f) \
+	  -D_POSIX_C_SOURCE=200809L $(PIL_INC) -c $$< -o $$@
+# the parameter metadata, generated at build time (firmware/firmware.mk), as constant data
+$(PIL_B)/$(1)/app/param_metadata.o: $(PARAM_META_C) $(PIL_HDR) | arm-toolchain $(MAVLINK_STAMP)
 	@mkdir -p $$(@D)
 	$$(ARM_CC) $$(ARM_CFLAGS_$(PIL_VARIANT_$(1))) $$(filter-out -MMD -MP,$$(CFLAGS_FW)) $$(ARM_CORE_OPT_m4f) \
 	  -D_POSIX_C_SOURCE=200809L $(PIL_INC) -c $$< -o $$@
