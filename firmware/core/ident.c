@@ -152,7 +152,7 @@ void ident_inertia_gap(struct ident_inertia *e, const scalar_t tau_b[3], const s
 	scalar_t dtau = sc_sub(tau_b[i], t0), dw = sc_sub(w_b[i], w0);
 	scalar_t dww = sc_sub(sc_mul(w_b[j], w_b[l]), p0);
 	for (unsigned m = 1; m <= k; m++) {
-		scalar_t f = sc_from_float((float)m / (float)(k + 1u));
+		scalar_t f = sc_div(sc_from_int((int32_t)m), sc_from_int((int32_t)(k + 1u))); /* m / (k + 1) */
 		inertia_filters(e, sc_add(t0, sc_mul(f, dtau)), sc_add(w0, sc_mul(f, dw)), sc_add(p0, sc_mul(f, dww)));
 		e->wf_prev = e->svf_w.y;
 		if (e->iv)
