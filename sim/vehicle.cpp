@@ -181,6 +181,29 @@ template <typename T, typename F> void one_or_list(const json::Value &v, F one, 
 		out.push_back(one(v));
 }
 
+// The members an event on one rotor at one time shares: "rotor" (1..8, kept 0-based) and
+// "at_s" (plant seconds); false for another member.
+bool rotor_at(const std::string &member, const json::Value &val, const std::string &key, int &rotor, double &at_s,
+	      bool &have_rotor, bool &have_t)
+{
+	if (member == "rotor") {
+		const double d = num(val, key, Rule::Any);
+		if (d != std::floor(d) || d < 1 || d > kRotors)
+			throw out_of_range(key, d, "an integer in [1, 8]");
+		rotor = static_cast<int>(d) - 1;
+		have_rotor = true;
+		return true;
+	}
+	if (member == "at_s") {
+		at_s = num(val, key, Rule::NonNegative);
+		if (at_s > 1e9)
+			throw out_of_range(key, at_s, "[0, 1e9] s");
+		have_t = true;
+		return true;
+	}
+	return false;
+}
+
 // One rotor_failure object: {"rotor": J (1..8), "at_s": T (>= 0), "scale": S ([0, 1], default 0)}.
 RotorFailure rotor_failure(const json::Value &v)
 {
@@ -192,18 +215,9 @@ RotorFailure rotor_failure(const json::Value &v)
 	bool have_rotor = false, have_t = false;
 	for (const auto &kv : v.obj) {
 		const std::string key = k + "." + kv.first;
-		if (kv.first == "rotor") {
-			const double d = num(kv.second, key, Rule::Any);
-			if (d != std::floor(d) || d < 1 || d > kRotors)
-				throw out_of_range(key, d, "an integer in [1, 8]");
-			f.rotor = static_cast<int>(d) - 1;
-			have_rotor = true;
-		} else if (kv.first == "at_s") {
-			f.at_s = num(kv.second, key, Rule::NonNegative);
-			if (f.at_s > 1e9)
-				throw out_of_range(key, f.at_s, "[0, 1e9] s");
-			have_t = true;
-		} else if (kv.first == "scale") {
+		if (rotor_at(kv.first, kv.second, key, f.rotor, f.at_s, have_rotor, have_t))
+			continue;
+		if (kv.first == "scale") {
 			f.scale = num(kv.second, key, Rule::Unit);
 		} else {
 			throw VehicleError(key, "unknown key '" + key + "' (known: rotor, at_s, scale)");
@@ -226,20 +240,8 @@ StuckRpm stuck_rpm(const json::Value &v)
 	bool have_rotor = false, have_t = false;
 	for (const auto &kv : v.obj) {
 		const std::string key = k + "." + kv.first;
-		if (kv.first == "rotor") {
-			const double d = num(kv.second, key, Rule::Any);
-			if (d != std::floor(d) || d < 1 || d > kRotors)
-				throw out_of_range(key, d, "an integer in [1, 8]");
-			f.rotor = static_cast<int>(d) - 1;
-			have_rotor = true;
-		} else if (kv.first == "at_s") {
-			f.at_s = num(kv.second, key, Rule::NonNegative);
-			if (f.at_s > 1e9)
-				throw out_of_range(key, f.at_s, "[0, 1e9] s");
-			have_t = true;
-		} else {
+		if (!rotor_at(kv.first, kv.second, key, f.rotor, f.at_s, have_rotor, have_t))
 			throw VehicleError(key, "unknown key '" + key + "' (known: rotor, at_s)");
-		}
 	}
 	if (!have_rotor || !have_t)
 		throw VehicleError(k, std::string("key 'stuck_rpm' needs '") + (have_rotor ? "at_s" : "rotor") + "'");

@@ -52,7 +52,10 @@ void rotor_guard_step(struct app *a, float dt)
 	const bool judge = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT || a->mode == APP_LAND) &&
 			   !env_osc_oscillating(&a->env_osc);
 	/* app_thr_sc: the throttles of the last step, what the plant answers with now */
-	struct rotor_fail_input in = {app_thr_sc(a), thrust_n, speed_rps, dt_s, judge && a->actuating};
+	/* an experiment's excitation swings the rotors through a model that may be another
+	 * vehicle's (a stale parameter file): only a deeper drop is a failure there */
+	struct rotor_fail_input in = {
+		app_thr_sc(a), thrust_n, speed_rps, dt_s, judge && a->actuating, a->mode == APP_EXPERIMENT};
 	struct rotor_fail_output o = rotor_fail_step(&a->rf, &in);
 
 	if (o.rotor >= 0) {

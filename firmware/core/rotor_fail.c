@@ -10,6 +10,7 @@ struct rotor_fail_params rotor_fail_params_default(void)
 {
 	struct rotor_fail_params p;
 	p.ratio_fail = SC(0.6);
+	p.ratio_fail_excited = SC(0.3);
 	p.ratio_zero = SC(0.1);
 	p.share_min = SC(0.3);
 	p.g_min = SC(0.02);
@@ -185,7 +186,8 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 	/* the decision: measured against the window's smallest modelled output, scaled by the
 	 * median (with the speeds, q_j is the ratio squared: below ratio_fail when the ratio is
 	 * below its root) */
-	const scalar_t lim = sc_mul(by_thrust ? s->p.ratio_fail : sc_sqrt(s->p.ratio_fail), med);
+	const scalar_t fail = in->excited ? s->p.ratio_fail_excited : s->p.ratio_fail;
+	const scalar_t lim = sc_mul(by_thrust ? fail : sc_sqrt(fail), med);
 	bool failing[NR];
 	for (int j = 0; j < NR; j++)
 		failing[j] = judged[j] && meas[j] < sc_mul(lim, emin[j]);

@@ -51,11 +51,13 @@ enum rotor_fail_source {
 
 struct rotor_fail_params {
 	scalar_t ratio_fail; /* q_j below this is failing (0.6) */
-	scalar_t ratio_zero; /* a detected effectiveness below this is 0 (0.1) */
-	scalar_t share_min;  /* judged only while its modelled output is this share of the mean (0.3) */
-	scalar_t g_min;      /* ... and the mean g(T) is at least this (0.02) */
-	scalar_t hold_s;     /* hold before landing (2 s) */
-	uint8_t confirm;     /* frames in a row (3) */
+	scalar_t
+		ratio_fail_excited; /* ... while an experiment excites the rotors through a model not yet identified (0.3) */
+	scalar_t ratio_zero;        /* a detected effectiveness below this is 0 (0.1) */
+	scalar_t share_min;         /* judged only while its modelled output is this share of the mean (0.3) */
+	scalar_t g_min;             /* ... and the mean g(T) is at least this (0.02) */
+	scalar_t hold_s;            /* hold before landing (2 s) */
+	uint8_t confirm;            /* frames in a row (3) */
 };
 
 /* The rotor model (set when the parameters change): lag, curve, effectiveness. */
@@ -71,6 +73,7 @@ struct rotor_fail_input {
 	const scalar_t *speed_rps; /* measured rotor speeds, rad/s; NULL: not in this frame */
 	scalar_t dt_s;             /* this step's time */
 	bool judge;                /* flying: rotors are judged (else only the lag filter runs) */
+	bool excited;              /* an experiment's excitation: ratio_fail_excited decides */
 };
 
 struct rotor_fail_output {
