@@ -166,4 +166,11 @@ static inline void hal_log_id_result(const struct hal *h, double t_s, const stru
 /* printf-style line to the platform's console (formatted into 256 bytes). */
 void hal_reportf(const struct hal *h, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
+/* A parameter store held in RAM (a board's sector image, a test's file) for the param_store and
+ * param_fetch hooks: buf of cap bytes holds the text, *len its length (-1: nothing stored).
+ * hal_ram_param_put returns -1 when the text does not fit (nothing changed), else 0;
+ * hal_ram_param_get copies at most out_cap - 1 bytes and a NUL, returning the count (-1: none). */
+int hal_ram_param_put(char *buf, size_t cap, long *len, const char *text, size_t n);
+long hal_ram_param_get(const char *buf, long len, char *out, size_t out_cap);
+
 #endif /* OCTO_HAL_H */

@@ -57,11 +57,8 @@ static bool ground_signing_key(void *ctx, uint8_t key[32])
 static int param_store(void *ctx, const char *text, size_t len)
 {
 	struct stub_hal *s = ctx;
-	if (s->store_fails || len >= sizeof s->store)
+	if (s->store_fails || hal_ram_param_put(s->store, sizeof s->store, &s->store_len, text, len) < 0)
 		return -1;
-	memcpy(s->store, text, len);
-	s->store[len] = 0;
-	s->store_len = (long)len;
 	s->n_stores++;
 	return 0;
 }
@@ -69,12 +66,7 @@ static int param_store(void *ctx, const char *text, size_t len)
 static long param_fetch(void *ctx, char *buf, size_t cap)
 {
 	const struct stub_hal *s = ctx;
-	if (s->store_len < 0 || cap == 0)
-		return -1;
-	size_t n = (size_t)s->store_len < cap - 1 ? (size_t)s->store_len : cap - 1;
-	memcpy(buf, s->store, n);
-	buf[n] = 0;
-	return (long)n;
+	return hal_ram_param_get(s->store, s->store_len, buf, cap);
 }
 
 static void log_frame(void *ctx, const struct app_log_frame *f)

@@ -105,25 +105,17 @@ static bool ground_signing_key(void *ctx, uint8_t key[32])
 static int param_store(void *ctx, const char *text, size_t len)
 {
 	struct board *b = ctx;
-	if (len >= sizeof b->param) {
+	if (hal_ram_param_put(b->param, sizeof b->param, &b->param_len, text, len) < 0) {
 		console_line("octo-fw: ", "parameter sector full: not stored");
 		return -1;
 	}
-	memcpy(b->param, text, len);
-	b->param[len] = 0;
-	b->param_len = (long)len;
 	return 0;
 }
 
 static long param_fetch(void *ctx, char *buf, size_t cap)
 {
 	const struct board *b = ctx;
-	if (b->param_len < 0 || cap == 0)
-		return -1;
-	size_t n = (size_t)b->param_len < cap - 1 ? (size_t)b->param_len : cap - 1;
-	memcpy(buf, b->param, n);
-	buf[n] = 0;
-	return (long)n;
+	return hal_ram_param_get(b->param, b->param_len, buf, cap);
 }
 
 static void log_frame(void *ctx, const struct app_log_frame *f)
