@@ -227,6 +227,34 @@ static void env_on_mode(struct app *a)
 }
 
 /* Before experiment `id`: VEH_KF from the hover throttle (NAV_KF_SEED, env_hover.h). */
+/* The experiment's source (ID_SOURCE): thrust rows (each rotor's measured thrust and torque,
+ * X-Plane's rows 35 and 36), or the IMU (accelerometer and gyro, with the throttles sent and
+ * the mass). Auto takes the rows when the frames carry them, else the IMU. A source the
+ * frames do not deliver, or one this firmware does not build, is refused with the reason. */
+static bool exp_source_pick(const struct app *a, int id, enum exp_source *src, char *why, size_t cap)
+{
+	const uint32_t rows = HAL_FRAME_THRUST | HAL_FRAME_TORQUE, imu = HAL_FRAME_ACCEL | HAL_FRAME_RATES;
+	bool have_rows = (a->fr.valid & rows) == rows, have_imu = (a->fr.valid & imu) == imu;
+	float v = a->p.id_source;
+	int want = isfinite(v) ? (int)(v + 0.5f) : 0;
+	if (want == 0)
+		want = have_rows ? EXP_SRC_THRUST : EXP_SRC_IMU;
+	if (want >= 3) {
+		snprintf(why, cap, "Experiment %d refused: ID_SOURCE %d not built (1 thrust, 2 imu)", id, want);
+		return false;
+	}
+	if (want == EXP_SRC_THRUST && !have_rows) {
+		snprintf(why, cap, "Experiment %d refused: no rotor thrust/torque rows", id);
+		return false;
+	}
+	if (want == EXP_SRC_IMU && !have_imu) {
+		snprintf(why, cap, "Experiment %d refused: no accelerometer (ID_SOURCE imu)", id);
+		return false;
+	}
+	*src = (enum exp_source)want;
+	return true;
+}
+
 static void seed_kf(struct app *a, int id)
 {
 	float kf, old = a->p.veh_kf;
@@ -549,15 +577,11 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 			 (double)env_osc_rms_dps(&a->env_osc));
 		return APP_BUSY;
 	}
-	/* every experiment regresses on each rotor's measured thrust and torque (X-Plane's rows
-	 * 35 and 36): without them it cannot run, and says so rather than fit zeros */
-	const uint32_t rows = HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
-	if ((a->fr.valid & rows) != rows) {
-		snprintf(why, cap, "Experiment %d refused: no rotor thrust/torque rows", id);
+	enum exp_source src;
+	if (!exp_source_pick(a, id, &src, why, cap))
 		return APP_DENIED;
-	}
 	seed_kf(a, id);
-	int r = exp_start(&a->exp, id, &a->p, why, cap);
+	int r = exp_start(&a->exp, id, &a->p, src, why, cap);
 	if (r == APP_ACCEPTED || r == APP_IN_PROGRESS) {
 		a->id_run.run_id++;
 		a->id_run.count = 0;

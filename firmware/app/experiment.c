@@ -60,6 +60,8 @@ static const char *phase_name(int k)
 #define OFS_SEG_FRAMES 45u /* rotor experiment: frames per offset level (0.5 s at 90 Hz) */
 #define EST_READ_FRAMES 9u /* steps between reads of the live estimates (10 Hz at 90 Hz) */
 #define MOT_NE_MAX 1.3f    /* motor model: largest residual over noise variance */
+#define IMU_NE_MAX 1.3f    /* the IMU's collective model: the same over the still hover's */
+#define VAL_IMU_F 0.1f     /* IMU validation: mu_1 on the thrust demand, this share of the weight */
 #define SCALE_LO 0.3f      /* accepted range of a rotor's effectiveness */
 #define SCALE_HI 1.5f
 
@@ -102,6 +104,10 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	c->rot_to = cfg_f(p->id_rot_to, 0.0f);
 	c->inr_to = cfg_f(p->id_inr_to, 0.0f);
 	c->val_to = cfg_f(p->id_val_to, 0.0f);
+	c->col_amp = cfg_f(p->id_col_amp, 0.03f);
+	c->swp_thr = cfg_f(p->id_swp_thr, 0.25f);
+	c->swp_dz = cfg_f(p->id_swp_dz, 0.3f);
+	c->izz_sd = cfg_f(p->id_izz_pri_sd, 0.0f);
 }
 
 /* Status lines are queued with their arguments and formatted (vsnprintf with %f: costly) by
@@ -196,9 +202,12 @@ void exp_pump(struct experiment *e)
 {
 	/* the motor model's bank update and grid refinement, between frames (the step does them
 	 * if nobody did) */
-	if (e->state == EXP_RUNNING && !e->reporting && !e->begin_pending && e->phase_kind[e->phase] == PK_ROTOR &&
-	    e->cfg.exc_null)
-		motor_id_refine(&e->mid); /* processes the waiting frame first */
+	if (e->state == EXP_RUNNING && !e->reporting && !e->begin_pending && e->phase_kind[e->phase] == PK_ROTOR) {
+		if (e->cfg.src == EXP_SRC_IMU)
+			imu_id_process(&e->imid);
+		else if (e->cfg.exc_null)
+			motor_id_refine(&e->mid); /* processes the waiting frame first */
+	}
 	if (!e->pump_ready || e->msg[0] || !e->q_n)
 		return;
 	const struct exp_line *l = &e->queue[e->q_head];
@@ -235,7 +244,7 @@ static void id_out(struct experiment *e, enum app_id_param param, int rotor, flo
 		.sd = sd,
 		.accepted = accepted ? 1u : 0u,
 		.reason = (uint16_t)(accepted ? APP_ID_OK : reason),
-		.source = APP_ID_SOURCE_THRUST,
+		.source = (uint8_t)e->cfg.src,
 	};
 }
 
@@ -286,11 +295,87 @@ static void set_result_bit(struct experiment *e, const struct app_params *p, uin
 	result(e, PX_ID_RESULT, (float)m);
 }
 
+/* ---------------------------------------------------------------- the IMU source */
+
+static float mot_scale(const struct app_params *p, int j)
+{
+	const float s[HAL_ROTORS] = {p->mot_scale1, p->mot_scale2, p->mot_scale3, p->mot_scale4,
+				     p->mot_scale5, p->mot_scale6, p->mot_scale7, p->mot_scale8};
+	return isfinite(s[j]) && s[j] >= 0.0f ? s[j] : 1.0f;
+}
+
+/* the rotors as the parameters model them (ID_DELAY_FR, ID_MOT_TAU, MOT_CURVE, VEH_KF,
+ * MOT_SCALEj, VEH_KTAU), from the throttles thr0 */
+static void rmodel_init(struct exp_rmodel *r, const struct app_params *p, const struct exp_cfg *cf, scalar_t dt,
+			const scalar_t thr0[HAL_ROTORS])
+{
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		filt_delay_init(&r->d[j], cf->delay_fr, thr0[j]);
+		filt_lag_init(&r->l[j], sc_from_float(cf->mot_tau), dt, thr0[j]);
+		r->kfs[j] = sc_from_float(p->veh_kf * mot_scale(p, j));
+	}
+	r->c = sc_from_float(p->mot_curve);
+	r->c1 = sc_sub(SC(1), r->c);
+	r->kt = sc_from_float(p->veh_kf > 0.0f ? p->veh_ktau / p->veh_kf : 0.0f);
+}
+
+/* n frames of the throttles thr_prev (n > 1 after lost frames: the plant held them); the
+ * modelled thrusts f (N) and reaction-torque magnitudes tq (N m) */
+static void rmodel_step(struct exp_rmodel *r, const scalar_t thr_prev[HAL_ROTORS], int n, scalar_t f[HAL_ROTORS],
+			scalar_t tq[HAL_ROTORS])
+{
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		scalar_t y = r->l[j].y;
+		for (int i = 0; i < (n > 1 ? n : 1); i++)
+			y = filt_lag_update(&r->l[j], filt_delay_update(&r->d[j], thr_prev[j]));
+		f[j] = sc_mul(r->kfs[j], sc_mul(y, sc_add(r->c1, sc_mul(r->c, y))));
+		tq[j] = sc_mul(r->kt, f[j]);
+	}
+}
+
+/* the force along body z the accelerometer reads, N: m g a_z (a in g) */
+static scalar_t imu_force(const struct exp_input *in, const struct app_params *p)
+{
+	return sc_from_float(p->veh_mass * p->veh_grav * in->frame->accel_b_g[2]);
+}
+
+/* its vertical (world) component, N: m g (R a)_z, R the attitude's rotation body to world */
+static scalar_t imu_force_up(const struct exp_input *in, const struct app_params *p)
+{
+	const float *q = in->frame->q_ib, *a = in->frame->accel_b_g; /* q: w x y z */
+	float r20 = 2.0f * (q[1] * q[3] - q[0] * q[2]), r21 = 2.0f * (q[2] * q[3] + q[0] * q[1]);
+	float r22 = 1.0f - 2.0f * (q[1] * q[1] + q[2] * q[2]);
+	return sc_from_float(p->veh_mass * p->veh_grav * (r20 * a[0] + r21 * a[1] + r22 * a[2]));
+}
+
+/* The IMU rotor experiment's throttle sweep: a collective step of ID_SWP_THR above the hover
+ * throttle thr_h held for the frames whose climb (the step's acceleration a, then coasting up
+ * against gravity) stays within ID_SWP_DZ: dz = a T^2 (1 + a / g) / 2. The curve's prior
+ * gives a; one step every SWP_PERIOD_S. */
+#define SWP_PERIOD_S 1.0f
+static void sweep_plan(struct experiment *e, const struct app_params *p, float thr_h)
+{
+	const struct exp_cfg *cf = &e->cfg;
+	float c = p->mot_curve, thr_max = isfinite(p->mot_thr_max) ? p->mot_thr_max : 1.0f;
+	float top = fminf(thr_h + cf->swp_thr, thr_max);
+	float gh = (1.0f - c) * thr_h + c * thr_h * thr_h, gt = (1.0f - c) * top + c * top * top;
+	float g = p->veh_grav, a = gh > 0.0f ? g * (gt / gh - 1.0f) : 0.0f;
+	e->swp_len = 0u;
+	e->swp_per = (uint32_t)(SWP_PERIOD_S * e->inv_dt_nom + 0.5f);
+	if (!(a > 0.0f) || !(cf->swp_thr > 0.0f))
+		return;
+	float t = sqrtf(2.0f * cf->swp_dz / (a * (1.0f + a / g)));
+	e->swp_len = (uint32_t)(t * e->inv_dt_nom + 0.5f);
+	if (e->swp_len < 1u)
+		e->swp_len = 1u;
+	e->swp_thr = sc_from_float(top - thr_h);
+}
+
 /* ---------------------------------------------------------------- contract */
 
 bool exp_available(int id) { return id >= 1 && id <= 6; }
 
-int exp_start(struct experiment *e, int id, const struct app_params *p, char *why, size_t cap)
+int exp_start(struct experiment *e, int id, const struct app_params *p, enum exp_source src, char *why, size_t cap)
 {
 	const struct mixer *mix = e->mix; /* set once by the app, kept across experiments */
 	memset(e, 0, sizeof *e);
@@ -300,6 +385,7 @@ int exp_start(struct experiment *e, int id, const struct app_params *p, char *wh
 		return APP_DENIED;
 	}
 	cfg_resolve(&e->cfg, p);
+	e->cfg.src = src == EXP_SRC_IMU ? EXP_SRC_IMU : EXP_SRC_THRUST;
 	if (!(e->cfg.exc_amp > 0.0f) || !(e->cfg.exc_time > 0.0f)) {
 		snprintf(why, cap, "Experiment %d refused: ID_EXC_AMP/ID_EXC_TIME not > 0", id);
 		return APP_DENIED;
@@ -373,7 +459,43 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	xp.prbs_order = PRBS_ORDER;
 	scalar_t dt = sc_from_float(e->dt_nom);
 
-	if (k == PK_ROTOR) {
+	if (k == PK_ROTOR && cf->src == EXP_SRC_IMU) {
+		/* the accelerometer sees the rotors' sum: the null-space dithers (the vehicle still)
+		 * plus a collective dither (a fast vertical jiggle) and the throttle sweep */
+		e->t_run = cf->exc_time;
+		uint32_t kind = cf->exc_kind;
+		xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
+		xp.amplitude = sc_from_float(cf->exc_amp);
+		xp.ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
+		struct imu_id_cfg ic = {
+			.dt_s = e->dt_nom,
+			.mass_kg = p->veh_mass,
+			.g = p->veh_grav,
+			.kf0 = p->veh_kf,
+			.curve0 = p->mot_curve,
+			.est_curve = cf->crv_est,
+			.n_frames = (uint32_t)(cf->exc_time / e->dt_nom + 0.5f),
+		};
+		float thr_h = 0.0f;
+		for (int j = 0; j < HAL_ROTORS; j++) {
+			ic.scale[j] = mot_scale(p, j);
+			thr_h += sc_to_float(in->thr_prev_all[j]) / (float)HAL_ROTORS;
+		}
+		imu_id_init(&e->imid, &ic, in->thr_prev_all);
+		struct excite_params xp2 = xp, xp3 = xp;
+		xp2.seed = xp.seed * 2654435761u + 12345u;
+		excite_init(&e->exc2, &xp2);
+		xp3.seed = xp.seed * 2246822519u + 777u;
+		xp3.kind = EXCITE_PRBS;
+		xp3.amplitude = sc_from_float(cf->col_amp);
+		excite_init(&e->exc3, &xp3);
+		e->rot_k = 0;
+		excite_null_pattern(0, e->pat[0]);
+		excite_null_pattern(1, e->pat[1]);
+		e->ofs = sc_from_float(cf->exc_ofs);
+		sweep_plan(e, p, thr_h);
+		e->est_live = 0;
+	} else if (k == PK_ROTOR) {
 		e->t_run = cf->exc_time;
 		uint32_t kind = cf->exc_kind;
 		xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
@@ -422,10 +544,17 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		xp.amplitude = sc_from_float(ax == 2u ? amp / INR_YAW_DIV : amp);
 		scalar_t tau[3],
 			inertia[3] = {sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz)};
+		const scalar_t *fm = in->thrust_n, *tm = in->torque_nm;
+		if (cf->src == EXP_SRC_IMU) { /* the torque the identified rotor model gives */
+			rmodel_init(&e->rm, p, cf, dt, in->thr_prev_all);
+			rmodel_step(&e->rm, in->thr_prev_all, 1, e->f_model, e->tq_model);
+			fm = e->f_model;
+			tm = e->tq_model;
+		}
 		if (e->mix)
-			ident_body_torque_mixer(e->mix, in->thrust_n, in->torque_nm, tau);
+			ident_body_torque_mixer(e->mix, fm, tm, tau);
 		else
-			ident_body_torque(sc_from_float(p->veh_arm_l), in->thrust_n, in->torque_nm, tau);
+			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		scalar_t alpha = ident_torque_weight(sc_from_float(cf->mot_tau), dt);
 		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS), SC(INR_ZETA), dt,
 				   alpha, inertia, in->rate_b_rps, tau);
@@ -437,6 +566,10 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		 * single rotor thrusts most for the least attitude change) */
 		xp.kind = EXCITE_UNIFORM;
 		xp.amplitude = sc_from_float(cf->inr_amp / INR_YAW_DIV);
+		if (cf->src == EXP_SRC_IMU) { /* on the thrust demand: the accelerometer sees the sum */
+			xp.amplitude = sc_from_float(VAL_IMU_F * p->veh_mass * p->veh_grav);
+			rmodel_init(&e->rm, p, cf, dt, in->thr_prev_all);
+		}
 		filt_delay_init(&e->val_delay, cf->delay_fr, in->rotor_f_cmd0);
 		filt_lag_init(&e->val_lag, sc_from_float(cf->mot_tau), dt, in->rotor_f_cmd0);
 		ident_fit_init(&e->fit);
@@ -553,6 +686,81 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 				    (double)mr.scale[j]);
 }
 
+static enum app_id_reason imu_reason(enum imu_id_cause c)
+{
+	switch (c) {
+	case IMU_ID_OK: return APP_ID_OK;
+	case IMU_ID_NO_DATA: return APP_ID_NO_DATA;
+	case IMU_ID_NOISE_UNKNOWN: return APP_ID_NOISE_UNKNOWN;
+	case IMU_ID_LAG_RANGE: return APP_ID_LAG_RANGE;
+	case IMU_ID_DELAY_RANGE: return APP_ID_DELAY_RANGE;
+	case IMU_ID_DELAY_AMBIGUOUS: return APP_ID_DELAY_AMBIGUOUS;
+	case IMU_ID_MODEL: return APP_ID_MODEL;
+	case IMU_ID_CURVE_WEAK: return APP_ID_UNCERTAIN;
+	}
+	return APP_ID_MODEL;
+}
+
+/* The IMU rotor experiment's end: the collective model (imu_id.h), its acceptance, results
+ * and status lines. k_tau and the per-rotor scales are not seen by the accelerometer: they
+ * are reported as such (k_tau / I_z comes from the yaw inertia phase). */
+static void imu_rotor_end(struct experiment *e, const struct app_params *p)
+{
+	struct imu_id_result r;
+	imu_id_process(&e->imid);
+	imu_id_solve(&e->imid, IMU_NE_MAX, &r);
+	enum ident_verdict vf = ident_accept(r.kf, r.kf_sd, p->veh_kf, e->cfg.rsd_max);
+	bool model_ok = r.cause == IMU_ID_OK;
+	bool curve_bad = e->cfg.crv_est && !(r.curve >= THRMAP_CURVE_MIN && r.curve <= THRMAP_CURVE_MAX);
+	bool ok = vf == IDENT_ACCEPT && model_ok && !curve_bad;
+	result(e, PX_ID_KF_EST, isfinite(r.kf) ? r.kf : 0.0f);
+	result(e, PX_ID_KF_SD, isfinite(r.kf_sd) ? r.kf_sd : 0.0f);
+	result(e, PX_ID_TAU_CHECK, isfinite(r.tau) ? r.tau : -1.0f);
+	result(e, PX_ID_TAU_SD, isfinite(r.tau_sd) ? r.tau_sd : 0.0f);
+	result(e, PX_ID_CRV_SD, isfinite(r.curve_sd) ? r.curve_sd : 0.0f);
+	result(e, PX_ID_MOT_NE, isfinite(r.ne) ? r.ne : 0.0f);
+	if (ok) {
+		result(e, PX_VEH_KF, r.kf);
+		result(e, PX_ID_MOT_TAU, r.tau);
+		result(e, PX_ID_DELAY_FR, (float)r.delay);
+		if (e->cfg.crv_est)
+			result(e, PX_MOT_CURVE, r.curve);
+		e->cfg.mot_tau = r.tau;
+		e->cfg.delay_fr = r.delay;
+	}
+	set_result_bit(e, p, 1u, ok);
+	enum app_id_reason common = !model_ok   ? imu_reason(r.cause)
+				    : curve_bad ? APP_ID_CURVE
+						: APP_ID_PARTNER_REJECTED;
+	id_out(e, APP_ID_KF, 0, r.kf, r.kf_sd, ok, vf != IDENT_ACCEPT ? app_id_reason_of_verdict(vf) : common);
+	id_out(e, APP_ID_KTAU, 0, NAN, NAN, false, APP_ID_NOT_IDENTIFIABLE);
+	id_out(e, APP_ID_MOT_TAU, 0, r.tau, r.tau_sd, ok, common);
+	id_out(e, APP_ID_DELAY_FR, 0, (float)r.delay, NAN, ok, common);
+	if (e->cfg.crv_est)
+		id_out(e, APP_ID_MOT_CURVE, 0, r.curve, r.curve_sd, ok, curve_bad ? APP_ID_CURVE : common);
+	int sev = ok ? APP_SEV_INFO : APP_SEV_WARNING;
+	say(e, APP_SEV_INFO, "ID source imu: accelerometer, mass, throttles");
+	say(e, sev, "ID kf %.3f +/- %.3f %s%s", (double)r.kf, (double)r.kf_sd, ok ? "N " : "rejected: ",
+	    ok                   ? "accepted"
+	    : vf != IDENT_ACCEPT ? ident_verdict_text(vf)
+	    : model_ok           ? "out of range"
+				 : "motor model");
+	say(e, sev, "ID motor lag %.4f +/- %.4f s delay %d fr", (double)r.tau, (double)r.tau_sd, (int)r.delay);
+	if (e->cfg.crv_est)
+		say(e, sev, "ID curve %.3f +/- %.3f", (double)r.curve, (double)r.curve_sd);
+	say(e, APP_SEV_INFO, "ID collective NE %.3f noise %.4f N HAC %.2f", (double)r.ne, (double)r.noise_sd,
+	    (double)r.hac);
+	say(e, APP_SEV_INFO, "ID accelerometer scale %.4f +/- %.4f (in flight)", (double)r.kappa, (double)r.kappa_sd);
+	say(e, APP_SEV_INFO, "ID ktau: not seen by the IMU (the ratio: Izz phase)");
+	if (!model_ok) {
+		say(e, APP_SEV_WARNING, "ID rejected: %s", imu_id_cause_text(r.cause));
+		say(e, APP_SEV_WARNING, "ID remedy: %s", imu_id_cause_remedy(r.cause));
+	} else if (curve_bad) {
+		say(e, APP_SEV_WARNING, "ID rejected: curve %.3f outside %.2f to %.2f", (double)r.curve,
+		    (double)THRMAP_CURVE_MIN, (double)THRMAP_CURVE_MAX);
+	}
+}
+
 /* The inertia excitation's largest useful ID_INR_AMP on axis ax: the amplitude at which the
  * rotor thrusts it moves swing by half the hover thrust f_h = m g / 8 (beyond, rotors near
  * idle or saturation distort the torque). Roll/pitch: the multisine's peak torque tau moves
@@ -610,11 +818,49 @@ static void inertia_advice(struct experiment *e, const struct app_params *p, uns
 		    (double)e->cfg.rsd_max, (double)(amp * a), (double)tmax, (double)rsd_at);
 }
 
+/* The yaw inertia phase under the IMU source: the yaw torque was modelled with the prior
+ * VEH_KTAU, so the estimate is I_z VEH_KTAU / k_tau and the gyro gives only the ratio
+ * k_tau / I_z = VEH_KTAU / estimate. k_tau follows from it only with a prior on I_z
+ * (ID_IZZ_PRI_SD > 0: VEH_IZZ with that relative sd, carried); I_z is never published alone. */
+static void izz_imu_end(struct experiment *e, const struct app_params *p, float est, float sd)
+{
+	float rsd_max = e->cfg.rsd_max, rel = est > 0.0f ? sd / est : INFINITY;
+	float ratio = est > 0.0f ? p->veh_ktau / est : NAN, ratio_sd = ratio * rel;
+	bool fin = isfinite(ratio) && isfinite(ratio_sd) && ratio > 0.0f;
+	bool r_ok = fin && rel < rsd_max;
+	result(e, PX_ID_KTIZ, fin ? ratio : 0.0f);
+	result(e, PX_ID_KTIZ_SD, fin ? ratio_sd : 0.0f);
+	id_out(e, APP_ID_KTAU_OVER_IZZ, 0, ratio, ratio_sd, r_ok, fin ? APP_ID_UNCERTAIN : APP_ID_NOT_FINITE);
+	say(e, r_ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID ktau/Izz %.4f +/- %.4f 1/s^2 %s", (double)ratio,
+	    (double)ratio_sd, r_ok ? "(gyro: the ratio)" : "rejected: uncertain");
+	float izz_sd = e->cfg.izz_sd;
+	if (r_ok && izz_sd > 0.0f) {
+		float kt = ratio * p->veh_izz, kt_sd = kt * sqrtf(rel * rel + izz_sd * izz_sd);
+		enum ident_verdict v = ident_accept(kt, kt_sd, p->veh_ktau, rsd_max);
+		bool ok = v == IDENT_ACCEPT;
+		result(e, PX_ID_KTAU_EST, isfinite(kt) ? kt : 0.0f);
+		result(e, PX_ID_KTAU_SD, isfinite(kt_sd) ? kt_sd : 0.0f);
+		if (ok)
+			result(e, PX_VEH_KTAU, kt);
+		id_out(e, APP_ID_KTAU, 0, kt, kt_sd, ok, app_id_reason_of_verdict(v));
+		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID ktau %.4f +/- %.4f %s%s", (double)kt, (double)kt_sd,
+		    ok ? "N m (VEH_IZZ prior) " : "rejected: ", ok ? "accepted" : ident_verdict_text(v));
+	} else {
+		id_out(e, APP_ID_KTAU, 0, NAN, NAN, false, APP_ID_NOT_IDENTIFIABLE);
+		say(e, APP_SEV_INFO, "ID ktau, Izz: the ratio only (ID_IZZ_PRI_SD: a prior)");
+	}
+	id_out(e, APP_ID_IZZ, 0, NAN, NAN, false, APP_ID_NOT_IDENTIFIABLE);
+	set_result_bit(e, p, 2u << 2, false);
+}
+
 static void phase_end(struct experiment *e, const struct app_params *p)
 {
 	int k = e->phase_kind[e->phase];
+	result(e, PX_ID_SRC_USED, (float)e->cfg.src);
 	float rsd = e->cfg.rsd_max;
-	if (k == PK_ROTOR && e->cfg.exc_null) {
+	if (k == PK_ROTOR && e->cfg.src == EXP_SRC_IMU) {
+		imu_rotor_end(e, p);
+	} else if (k == PK_ROTOR && e->cfg.exc_null) {
 		rotor_end(e, p);
 	} else if (k == PK_ROTOR) {
 		float kf = ident_rotor_est(&e->rot, 0), kf_sd = ident_rotor_sd(&e->rot, 0);
@@ -677,6 +923,17 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		float gs = cfg_f(p->id_gyr_scl_sd, 0.0f) * est, sd_data = sd;
 		if (isfinite(sd) && isfinite(gs))
 			sd = sqrtf(sd * sd + gs * gs);
+		if (e->cfg.src == EXP_SRC_IMU && ax == 2u) {
+			izz_imu_end(e, p, est, sd);
+			return;
+		}
+		if (e->cfg.src == EXP_SRC_IMU) {
+			/* roll/pitch torque is the model's k_f s_j g(y) l: k_f's uncertainty passes
+			 * one for one into the inertia */
+			float rk = p->veh_kf > 0.0f ? cfg_f(p->id_kf_sd, 0.0f) / p->veh_kf : 0.0f;
+			if (isfinite(sd) && rk > 0.0f)
+				sd = sqrtf(sd * sd + rk * est * rk * est);
+		}
 		float lo, hi, raise;
 		enum ident_verdict v = ident_inertia_accept(est, sd, p->veh_mass, p->veh_arm_l, rsd, &lo, &hi, &raise);
 		/* only the data's part shrinks with a stronger or longer excitation: the advice aims
@@ -716,6 +973,37 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 	e->est_live = 0;
 }
 
+/* The null-space dithers: d on the first pattern, a second dither on the other, plus an
+ * offset on their sum (below); into out->thr_delta, counting the excited frames in rot_k. */
+static void null_dither(struct experiment *e, bool running, scalar_t d, struct exp_output *out)
+{
+	/* two dithers on the null-space patterns of Gamma_o (excite.h: rotors 1, 5
+		 * against 3, 7 and 2, 6 against 4, 8; thrust, roll, pitch and yaw all cancel
+		 * whatever k_f and k_tau are, so the vehicle stays still), plus an offset on
+		 * their sum cycling +o, 0, -o, 0 every half second: every rotor is excited,
+		 * each over three mean throttles (the curve) */
+	scalar_t d2 = running ? excite_update(&e->exc2) : SC_ZERO;
+	scalar_t o = running ? sc_mul(e->ofs, excite_offset_level(e->rot_k, OFS_SEG_FRAMES)) : SC_ZERO;
+	if (running)
+		e->rot_k++;
+	const scalar_t *p1 = e->pat[0], *p2 = e->pat[1];
+	/* in scalars: integer in the fixed build, the same float operations in the other */
+	scalar_t a1 = sc_add(d, o), a2 = sc_add(d2, o);
+#if OCTO_FIXED
+	/* a1 p1 + a2 p2 with every p 1, -1 or 0: in Q16.16 a product by +/-1 rounds
+		 * nothing (and |a| <= INT32_MAX negates without overflow), so the products are
+		 * +/-a or 0 exactly, without the multiplications */
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		scalar_t v1 = p1[j] > 0 ? a1 : (p1[j] < 0 ? -a1 : SC_ZERO);
+		scalar_t v2 = p2[j] > 0 ? a2 : (p2[j] < 0 ? -a2 : SC_ZERO);
+		out->thr_delta[j] = sc_add(v1, v2);
+	}
+#else
+	for (int j = 0; j < HAL_ROTORS; j++)
+		out->thr_delta[j] = sc_add(sc_mul(a1, p1[j]), sc_mul(a2, p2[j]));
+#endif
+}
+
 static void phase_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
 {
 	const struct app_params *p = in->params;
@@ -737,7 +1025,22 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		e->gap_hold--;
 	bool use = running && n >= 1;
 
-	if (k == PK_ROTOR) {
+	if (k == PK_ROTOR && e->cfg.src == EXP_SRC_IMU) {
+		const scalar_t *tp = in->thr_prev;
+		for (int i = 1; i < n; i++)
+			imu_id_hold(&e->imid, tp);
+		if (n >= 1)
+			imu_id_step(&e->imid, tp, imu_force(in, p), imu_force_up(in, p),
+				    sc_from_float(in->frame->vel_i_mps[2]), use);
+		/* the sweep's steps start half a period into the excitation */
+		uint32_t ph = (e->rot_k + e->swp_per / 2u) % (e->swp_per ? e->swp_per : 1u);
+		null_dither(e, running, running ? excite_update(&e->exc) : SC_ZERO, out);
+		scalar_t d0 = running ? excite_update(&e->exc3) : SC_ZERO;
+		if (running && ph < e->swp_len)
+			d0 = sc_add(d0, e->swp_thr);
+		for (int j = 0; j < HAL_ROTORS; j++)
+			out->thr_delta[j] = sc_add(out->thr_delta[j], d0);
+	} else if (k == PK_ROTOR) {
 		const scalar_t *tp = in->thr_prev, *fm = in->thrust_n, *tm = in->torque_nm;
 		for (int i = 1; i < n; i++) {
 			ident_rotor_hold(&e->rot, tp[0]);
@@ -749,40 +1052,21 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			motor_id_step(&e->mid, tp, fm, tm, use);
 		scalar_t d = running ? excite_update(&e->exc) : SC_ZERO;
 		out->thr_delta[0] = d;
-		if (e->cfg.exc_null) {
-			/* two dithers on the null-space patterns of Gamma_o (excite.h: rotors 1, 5
-			 * against 3, 7 and 2, 6 against 4, 8; thrust, roll, pitch and yaw all cancel
-			 * whatever k_f and k_tau are, so the vehicle stays still), plus an offset on
-			 * their sum cycling +o, 0, -o, 0 every half second: every rotor is excited,
-			 * each over three mean throttles (the curve) */
-			scalar_t d2 = running ? excite_update(&e->exc2) : SC_ZERO;
-			scalar_t o = running ? sc_mul(e->ofs, excite_offset_level(e->rot_k, OFS_SEG_FRAMES)) : SC_ZERO;
-			if (running)
-				e->rot_k++;
-			const scalar_t *p1 = e->pat[0], *p2 = e->pat[1];
-			/* in scalars: integer in the fixed build, the same float operations in the other */
-			scalar_t a1 = sc_add(d, o), a2 = sc_add(d2, o);
-#if OCTO_FIXED
-			/* a1 p1 + a2 p2 with every p 1, -1 or 0: in Q16.16 a product by +/-1 rounds
-			 * nothing (and |a| <= INT32_MAX negates without overflow), so the products are
-			 * +/-a or 0 exactly, without the multiplications */
-			for (int j = 0; j < HAL_ROTORS; j++) {
-				scalar_t v1 = p1[j] > 0 ? a1 : (p1[j] < 0 ? -a1 : SC_ZERO);
-				scalar_t v2 = p2[j] > 0 ? a2 : (p2[j] < 0 ? -a2 : SC_ZERO);
-				out->thr_delta[j] = sc_add(v1, v2);
-			}
-#else
-			for (int j = 0; j < HAL_ROTORS; j++)
-				out->thr_delta[j] = sc_add(sc_mul(a1, p1[j]), sc_mul(a2, p2[j]));
-#endif
-		}
+		if (e->cfg.exc_null)
+			null_dither(e, running, d, out);
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
 		scalar_t tau[3];
+		const scalar_t *fm = in->thrust_n, *tm = in->torque_nm;
+		if (e->cfg.src == EXP_SRC_IMU) {
+			rmodel_step(&e->rm, in->thr_prev, n, e->f_model, e->tq_model);
+			fm = e->f_model;
+			tm = e->tq_model;
+		}
 		if (e->mix)
-			ident_body_torque_mixer(e->mix, in->thrust_n, in->torque_nm, tau);
+			ident_body_torque_mixer(e->mix, fm, tm, tau);
 		else
-			ident_body_torque(sc_from_float(p->veh_arm_l), in->thrust_n, in->torque_nm, tau);
+			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
 		/* the instrument: the excitation sent on the previous step, which acted over the
 		 * frame this update closes (and, the plant holding it, over the frames lost before) */
 		ident_inertia_instrument(&e->inr, e->inr_u_prev);
@@ -799,6 +1083,17 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	} else {
 		/* the model's prediction of rotor 1's thrust: the allocation behind the throttle
 		 * sent on the previous frame, through the modelled delay and lag */
+		if (e->cfg.src == EXP_SRC_IMU) {
+			/* the specific force's prediction: the modelled thrusts' sum */
+			rmodel_step(&e->rm, in->thr_prev, n, e->f_model, e->tq_model);
+			scalar_t y_hat = SC_ZERO;
+			for (int j = 0; j < HAL_ROTORS; j++)
+				y_hat = sc_add(y_hat, e->f_model[j]);
+			if (use)
+				ident_fit_add(&e->fit, imu_force(in, p), y_hat);
+			out->f_delta = running ? excite_update(&e->exc) : SC_ZERO;
+			return;
+		}
 		scalar_t fc = in->rotor_f_cmd[0], y_hat = SC_ZERO;
 		for (int i = 0; i < (n > 1 ? n : 1); i++)
 			y_hat = filt_lag_update(&e->val_lag, filt_delay_update(&e->val_delay, fc));
@@ -814,7 +1109,9 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 static void read_estimates(struct experiment *e)
 {
 	int k = e->phase_kind[e->phase];
-	if (k == PK_ROTOR) {
+	if (k == PK_ROTOR && e->cfg.src == EXP_SRC_IMU) {
+		return; /* no live estimate: the IMU's solve runs once, at the phase's end */
+	} else if (k == PK_ROTOR) {
 		ident_rotor_read(&e->rot, e->est, e->est_sd);
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);

@@ -21,6 +21,7 @@
 #include "hal.h"
 #include "id_result.h"
 #include "ident.h"
+#include "imu_id.h"
 #include "motor_id.h"
 #include "outbox.h"
 #include "params.h"
@@ -33,6 +34,12 @@
 #define EXP_TILT_ABORT_DEG 15.0f
 
 enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
+
+/* what an experiment measures the rotors with (ID_SOURCE; the codes of OCTO_ID_SOURCE) */
+enum exp_source {
+	EXP_SRC_THRUST = 1, /* each rotor's thrust and torque rows (a simulator, a test bench) */
+	EXP_SRC_IMU = 2,    /* gyro, accelerometer, throttles sent, mass and geometry */
+};
 
 struct exp_input {
 	const struct hal_sensor_frame *frame; /* this frame (paper's frames) */
@@ -91,6 +98,18 @@ struct exp_cfg {
 	float rot_to, inr_to, val_to; /* phase time limits (0: automatic) */
 	uint32_t exc_kind, exc_div, seed, delay_fr;
 	bool exc_null, crv_est;
+	enum exp_source src;
+	float col_amp, swp_thr, swp_dz, izz_sd; /* the IMU rotor experiment's; I_z's prior */
+};
+
+/* the rotors as the identified model has them: each throttle sent through the delay and the
+ * lag, then k_f s_j g(y) (the IMU source's thrusts and torques) */
+struct exp_rmodel {
+	struct filt_delay d[HAL_ROTORS];
+	struct filt_lag l[HAL_ROTORS];
+	scalar_t kfs[HAL_ROTORS]; /* k_f s_j */
+	scalar_t c, c1;           /* the curve c and 1 - c */
+	scalar_t kt;              /* k_tau / k_f */
 };
 
 struct experiment {
@@ -128,7 +147,12 @@ struct experiment {
 	int gap_hold;               /* frames left without inertia updates after a gap */
 	struct exp_cfg cfg;
 	struct excite exc;
-	struct excite exc2;  /* rotor experiment: the second pattern's dither */
+	struct excite exc2;        /* rotor experiment: the second pattern's dither */
+	struct excite exc3;        /* IMU rotor experiment: the collective dither */
+	uint32_t swp_len, swp_per; /* IMU rotor experiment: the sweep's frames and its period */
+	scalar_t swp_thr;          /* the sweep's step (throttle) */
+	struct exp_rmodel rm;      /* IMU source: the modelled thrusts (inertia, validation) */
+	scalar_t f_model[HAL_ROTORS], tq_model[HAL_ROTORS];
 	uint32_t rot_k;      /* rotor experiment: excited frames so far */
 	uint32_t est_wait;   /* steps until est[] / est_sd[] are read again */
 	scalar_t inr_u_prev; /* inertia: the excitation of the previous step (the instrument) */
@@ -138,6 +162,7 @@ struct experiment {
 		struct {                             /* rotor coefficients */
 			struct ident_rotor rot;      /* rotor 1, model given (and the paper's plain) */
 			struct motor_id mid;         /* every rotor, the motor model found (motor_id.h) */
+			struct imu_id imid;          /* the IMU source's collective model (imu_id.h) */
 			scalar_t pat[2][HAL_ROTORS]; /* the two null-space patterns (excite_null_pattern) */
 			scalar_t ofs;                /* ID_EXC_OFS: the offset's amplitude */
 		};
@@ -161,7 +186,7 @@ bool exp_available(int id);
 
 /* Starts experiment `id` (the caller has checked that the vehicle hovers).
  * Returns an app_result; on refusal `why` says why (for a status line). */
-int exp_start(struct experiment *e, int id, const struct app_params *p, char *why, size_t cap);
+int exp_start(struct experiment *e, int id, const struct app_params *p, enum exp_source src, char *why, size_t cap);
 
 /* Does the next exp_step read exp_input.torque_nm? Only the rotor and inertia phases do (a
  * phase's start takes its torques from the frame), so the app converts the rotor torques to

@@ -104,3 +104,23 @@ PARAM(KFT_MEM, kft_mem, 0.0f, -1e9f, 1e9f, "s", "Tracked (read-only): memory of 
 PARAM(NAV_HOLD_TO, nav_hold_to, 30.0f, 0.0f, 600.0f, "s",
       "Hold entry (take-off at its target height: still, hover learned) must reach HOLD within this, else it fails and lands")
 #undef PARAM_FLAGS
+/* identification from the flight controller's own sensors (docs/identification.md, "From the IMU") */
+#undef PARAM_FLAGS
+#define PARAM_FLAGS PARAM_LOCKED
+PARAM(ID_SOURCE, id_source, 0.0f, 0.0f, 4.0f, "",
+      "Identification source: 0 auto (the richest the frames deliver), 1 thrust rows, 2 imu, 3 imu_rpm, 4 imu_rpm_torque")
+PARAM(ID_COL_AMP, id_col_amp, 0.03f, 0.0f, 0.2f, "",
+      "IMU rotor experiment: amplitude of the collective dither (throttle, on every rotor)")
+PARAM(ID_SWP_THR, id_swp_thr, 0.25f, 0.0f, 0.8f, "",
+      "IMU rotor experiment: the throttle sweep's step above hover (0: no sweep), within ID_SWP_DZ")
+PARAM(ID_SWP_DZ, id_swp_dz, 0.3f, 0.05f, 1.2f, "m", "IMU rotor experiment: climb each throttle sweep may cost")
+PARAM(ID_IZZ_PRI_SD, id_izz_pri_sd, 0.0f, 0.0f, 1.0f, "",
+      "Relative sd of VEH_IZZ as a prior (0: none): without ESC torque k_tau is then VEH_IZZ x the ratio k_tau/I_z")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS PARAM_READONLY
+PARAM(ID_KTIZ, id_ktiz, 0.0f, -1e9f, 1e9f, "1/s^2",
+      "Result (read-only): k_tau / I_z from the gyro (identifiable without torque sensing)")
+PARAM(ID_KTIZ_SD, id_ktiz_sd, 0.0f, -1e9f, 1e9f, "1/s^2", "Result (read-only): standard deviation of ID_KTIZ")
+PARAM(ID_SRC_USED, id_src_used, 0.0f, -1e9f, 1e9f, "",
+      "Result (read-only): the source the last identification used (1 thrust, 2 imu, 3 imu_rpm, 4 imu_rpm_torque)")
+#undef PARAM_FLAGS

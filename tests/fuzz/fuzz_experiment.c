@@ -123,7 +123,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		pos += 1 + n + 4;
 	}
 	char why[96];
-	if (exp_start(&ex, id, &prm, why, sizeof why) != 0)
+	/* the source: bit 3 of the second byte (the IMU source reads the accelerometer) */
+	enum exp_source src = (data[1] & 8u) ? EXP_SRC_IMU : EXP_SRC_THRUST;
+	if (exp_start(&ex, id, &prm, src, why, sizeof why) != 0)
 		return 0;
 	plant_frame(1.0f);
 	bool running = true;

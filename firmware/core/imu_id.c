@@ -1,0 +1,479 @@
+/*
+ * imu_id.c - the collective rotor model from the accelerometer (imu_id.h).
+ */
+#include "imu_id.h"
+
+#include <math.h>
+#include <string.h>
+
+#define NP IMU_ID_NP
+#define NT IMU_ID_NT
+#define P_B 1   /* B: pinned at 0 when the curve is not estimated */
+#define P_LAG 2 /* k_f d ln tau */
+#define P_OFS 3 /* the accelerometer's offset, N */
+
+/* index of (i, j) (either order) in the upper triangle stored row by row */
+static unsigned ut(unsigned i, unsigned j)
+{
+	static const unsigned idx[NP][NP] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3, 6, 8, 9}};
+	return idx[i][j];
+}
+
+/* the reference model's regressor: the prior's prediction over k_f */
+static float ref_x(const struct imu_id_cfg *c, float x1, float x2) { return (1.0f - c->curve0) * x1 + c->curve0 * x2; }
+
+static float grid_step(void) { return logf(IMU_ID_TAU_MAX / IMU_ID_TAU_MIN) / (float)(IMU_ID_LAGS - 1); }
+
+static float lag_tau(unsigned l) { return IMU_ID_TAU_MIN * expf(grid_step() * (float)l); }
+
+/* the lag filters and their sensitivities, their sums into the rings' newest slot */
+static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
+{
+	const struct imu_id_cfg *c = &m->cfg;
+	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
+		float a = m->a[l], da = m->da[l], s1 = 0.0f, s2 = 0.0f, s3 = 0.0f;
+		for (unsigned d = IMU_ID_RING - 1; d > 0; d--) {
+			m->x1[l][d] = m->x1[l][d - 1];
+			m->x2[l][d] = m->x2[l][d - 1];
+			m->x3[l][d] = m->x3[l][d - 1];
+		}
+		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
+			float y0 = m->y[l][j];
+			/* y = a y0 + (1 - a) u: d y / d ln tau = a w0 + (d a / d ln tau) (y0 - u) */
+			float w = a * m->w[l][j] + da * (y0 - u[j]);
+			float y = a * y0 + (1.0f - a) * u[j];
+			m->y[l][j] = y;
+			m->w[l][j] = w;
+			float sj = c->scale[j];
+			s1 += sj * y;
+			s2 += sj * y * y;
+			s3 += sj * w * ((1.0f - c->curve0) + 2.0f * c->curve0 * y);
+		}
+		m->x1[l][0] = s1;
+		m->x2[l][0] = s2;
+		m->x3[l][0] = s3;
+	}
+}
+
+void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t thr0[IMU_ID_ROTORS])
+{
+	memset(m, 0, sizeof *m);
+	m->cfg = *cfg;
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		if (!(m->cfg.scale[j] > 0.0f))
+			m->cfg.scale[j] = 1.0f;
+	float u[IMU_ID_ROTORS];
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		u[j] = sc_to_float(thr0[j]);
+	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
+		float r = cfg->dt_s / lag_tau(l);
+		m->a[l] = expf(-r);
+		m->da[l] = m->a[l] * r; /* a = exp(-dt e^-ln tau) */
+		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+			m->y[l][j] = u[j];
+	}
+	for (unsigned d = 0; d < IMU_ID_RING; d++)
+		advance(m, u); /* the rings at the steady state */
+}
+
+void imu_id_step(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS], scalar_t f_n, scalar_t fw_n, scalar_t vz,
+		 bool excited)
+{
+	if (m->q_pending)
+		imu_id_process(m);
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		m->q_thr[j] = sc_to_float(thr_prev[j]);
+	m->q_f = sc_to_float(f_n);
+	m->q_fw = sc_to_float(fw_n);
+	m->q_vz = sc_to_float(vz);
+	m->q_excited = excited;
+	m->q_pending = true;
+}
+
+void imu_id_hold(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS])
+{
+	if (m->q_pending)
+		imu_id_process(m);
+	float u[IMU_ID_ROTORS];
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		u[j] = sc_to_float(thr_prev[j]);
+	advance(m, u);
+	if (m->n_cal > 0u) { /* the lost frame's force: the last one's */
+		m->fw_sum += m->q_fw;
+		m->n_cal++;
+	}
+	m->n_fr = 0;     /* the smoother restarts after a gap */
+	m->hac_head = 0; /* the HAC ring restarts after a gap: no products across it */
+	memset(m->hac_u, 0, sizeof m->hac_u);
+}
+
+/* inverse of a symmetric positive definite matrix (upper triangle) into h, by Cholesky
+ * with the columns scaled to unit diagonal first (the regressors' sizes differ by orders of
+ * magnitude); false if not positive */
+static bool inv_sym(const float g[NT], float h[NP][NP])
+{
+	double a[NP][NP], l[NP][NP] = {{0}}, d[NP];
+	for (unsigned i = 0; i < NP; i++) {
+		float gi = g[ut(i, i)];
+		if (!(gi > 0.0f) || !isfinite(gi))
+			return false;
+		d[i] = 1.0 / sqrt((double)gi);
+	}
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++)
+			a[i][k] = (double)g[ut(i, k)] * d[i] * d[k];
+	for (unsigned k = 0; k < NP; k++) {
+		double v = a[k][k];
+		for (unsigned q = 0; q < k; q++)
+			v -= l[k][q] * l[k][q];
+		if (!(v > 1e-12))
+			return false;
+		l[k][k] = sqrt(v);
+		for (unsigned i = k + 1; i < NP; i++) {
+			double w = a[i][k];
+			for (unsigned q = 0; q < k; q++)
+				w -= l[i][q] * l[k][q];
+			l[i][k] = w / l[k][k];
+		}
+	}
+	/* L^-1 (lower), then A^-1 = L^-T L^-1 */
+	double li[NP][NP] = {{0}};
+	for (unsigned i = 0; i < NP; i++) {
+		li[i][i] = 1.0 / l[i][i];
+		for (unsigned k = 0; k < i; k++) {
+			double w = 0.0;
+			for (unsigned q = k; q < i; q++)
+				w -= l[i][q] * li[q][k];
+			li[i][k] = w / l[i][i];
+		}
+	}
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++) {
+			double w = 0.0;
+			for (unsigned q = (i > k ? i : k); q < NP; q++)
+				w += li[q][i] * li[q][k];
+			h[i][k] = (float)(w * d[i] * d[k]);
+		}
+	return true;
+}
+
+/* sums with the unused parameter pinned (curve not estimated: B = 0) */
+static void pinned(const struct imu_id *m, const float gs[NT], const float *bs, float g[NT], float b[NP])
+{
+	memcpy(g, gs, NT * sizeof g[0]);
+	for (unsigned i = 0; i < NP; i++)
+		b[i] = bs ? bs[i] : 0.0f;
+	if (!m->cfg.est_curve) {
+		for (unsigned i = 0; i < NP; i++)
+			g[ut(i, P_B)] = 0.0f;
+		g[ut(P_B, P_B)] = 1.0f;
+		b[P_B] = 0.0f;
+	}
+}
+
+/* a hypothesis' parameters (relative to the reference), G^-1, and its residual sum */
+static float hyp_solve(const struct imu_id *m, const struct imu_id_stat *s, float th[NP], float h[NP][NP])
+{
+	float g[NT], b[NP];
+	pinned(m, s->g, s->b, g, b);
+	if (!inv_sym(g, h)) {
+		memset(th, 0, NP * sizeof th[0]);
+		return INFINITY;
+	}
+	float j = s->rr;
+	for (unsigned i = 0; i < NP; i++) {
+		th[i] = 0.0f;
+		for (unsigned k = 0; k < NP; k++)
+			th[i] += h[i][k] * b[k];
+		j -= th[i] * b[i];
+	}
+	return j;
+}
+
+static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl)
+{
+	float best = INFINITY;
+	*bd = 0;
+	*bl = 0;
+	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
+		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
+			float th[NP], h[NP][NP], j = hyp_solve(m, &m->st[d][l], th, h);
+			if (j < best) {
+				best = j;
+				*bd = d;
+				*bl = l;
+			}
+		}
+}
+
+static float smooth(const float *r) { return 0.25f * (r[0] + 2.0f * r[1] + r[2]); }
+
+/* the hypothesis' smoothed regressors: with the curve estimated (x1, x2, x3, 1), else (the
+ * reference's, 0, x3, 1); xr: the reference model's regressor */
+static void regs(const struct imu_id *m, unsigned d, unsigned l, float x[NP], float *xr)
+{
+	float s1 = smooth(&m->x1[l][d]), s2 = smooth(&m->x2[l][d]);
+	*xr = ref_x(&m->cfg, s1, s2);
+	x[0] = m->cfg.est_curve ? s1 : *xr;
+	x[P_B] = m->cfg.est_curve ? s2 : 0.0f;
+	x[P_LAG] = smooth(&m->x3[l][d]);
+	x[P_OFS] = 1.0f;
+}
+
+static void add_outer(float g[NT], const float x[NP], const float y[NP])
+{
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = i; k < NP; k++)
+			g[ut(i, k)] += 0.5f * (x[i] * y[k] + x[k] * y[i]);
+}
+
+void imu_id_process(struct imu_id *m)
+{
+	if (!m->q_pending)
+		return;
+	m->q_pending = false;
+	advance(m, m->q_thr);
+	if (m->q_excited) { /* the calibration's sums: from the velocity before the first */
+		if (m->n_cal == 0u)
+			m->v0 = m->vz_prev;
+		m->fw_sum += m->q_fw;
+		m->n_cal++;
+		m->v_last = m->q_vz;
+	}
+	m->vz_prev = m->q_vz;
+	m->fr[2] = m->fr[1];
+	m->fr[1] = m->fr[0];
+	m->fr[0] = m->q_f;
+	if (++m->n_fr < 3u)
+		return; /* the smoother fills */
+	float f = smooth(m->fr);
+	if (!m->q_excited) {
+		m->nz_n++;
+		m->nz_s += f;
+		m->nz_ss += f * f;
+		return;
+	}
+	m->n_exc++;
+	const struct imu_id_cfg *c = &m->cfg;
+	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
+		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
+			float x[NP], xr;
+			regs(m, d, l, x, &xr);
+			float z = f - c->kf0 * xr;
+			struct imu_id_stat *s = &m->st[d][l];
+			add_outer(s->g, x, x);
+			for (unsigned i = 0; i < NP; i++)
+				s->b[i] += x[i] * z;
+			s->rr += z * z;
+		}
+	if (!m->hac_on && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_exc >= 30u) {
+		unsigned bd, bl;
+		float h[NP][NP];
+		best_hyp(m, &bd, &bl);
+		m->hac_d = (uint8_t)bd;
+		m->hac_l = (uint8_t)bl;
+		hyp_solve(m, &m->st[bd][bl], m->hac_th, h);
+		m->hac_on = true;
+	}
+	if (m->hac_on) {
+		float x[NP], xr;
+		regs(m, m->hac_d, m->hac_l, x, &xr);
+		float e = f - c->kf0 * xr;
+		for (unsigned i = 0; i < NP; i++)
+			e -= m->hac_th[i] * x[i];
+		float u[NP];
+		for (unsigned i = 0; i < NP; i++)
+			u[i] = x[i] * e;
+		add_outer(m->hac_s, u, u);
+		/* Bartlett weights over the ring (newest first, zeros after a restart): the
+		 * cross terms u_k v' + v u_k' */
+		for (unsigned k = 0; k < IMU_ID_HAC; k++) {
+			unsigned i = (m->hac_head + IMU_ID_HAC - 1u - k) % IMU_ID_HAC;
+			float w = 1.0f - (float)(k + 1u) / (float)(IMU_ID_HAC + 1);
+			float v[NP], uw[NP];
+			for (unsigned q = 0; q < NP; q++) {
+				v[q] = m->hac_u[i][q];
+				uw[q] = 2.0f * w * u[q];
+			}
+			add_outer(m->hac_s, uw, v);
+		}
+		memcpy(m->hac_u[m->hac_head], u, sizeof u);
+		m->hac_head = (uint8_t)((m->hac_head + 1u) % IMU_ID_HAC);
+		add_outer(m->hac_g, x, x);
+		m->hac_ee += e * e;
+		m->hac_n++;
+	}
+}
+
+/* The parameters' HAC (Newey-West) covariance, H S H with H the inverse of the frozen
+ * model's G, scaled from its frames to all the excited ones; false when there is none. */
+static bool hac_cov(const struct imu_id *m, float v[NP][NP])
+{
+	if (!m->hac_on || m->hac_n < 2u * IMU_ID_HAC || !(m->hac_ee > 0.0f) || m->n_exc == 0u)
+		return false;
+	float g[NT], b[NP], h[NP][NP], sf[NT];
+	pinned(m, m->hac_g, NULL, g, b);
+	if (!inv_sym(g, h))
+		return false;
+	pinned(m, m->hac_s, NULL, sf, b);
+	float k = (float)m->hac_n / (float)m->n_exc;
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned q = 0; q < NP; q++) {
+			float w = 0.0f;
+			for (unsigned a = 0; a < NP; a++)
+				for (unsigned c = 0; c < NP; c++)
+					w += h[i][a] * sf[ut(a, c)] * h[c][q];
+			v[i][q] = w * k;
+		}
+	return true;
+}
+
+/* j' V j */
+static float quad(const float v[NP][NP], const float j[NP])
+{
+	float w = 0.0f;
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++)
+			w += j[i] * v[i][k] * j[k];
+	return w > 0.0f ? w : 0.0f;
+}
+
+void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
+{
+	memset(r, 0, sizeof *r);
+	const struct imu_id_cfg *c = &m->cfg;
+	uint32_t n = m->n_exc;
+	r->n = n;
+	r->curve = c->curve0;
+	r->kf = c->kf0;
+	unsigned np = c->est_curve ? NP : NP - 1u;
+	if (n < 60u) {
+		r->cause = IMU_ID_NO_DATA;
+		return;
+	}
+	float nz_var = 0.0f;
+	if (m->nz_n >= 20u) {
+		float mu = m->nz_s / (float)m->nz_n;
+		nz_var = m->nz_ss / (float)m->nz_n - mu * mu;
+		if (nz_var < 0.0f)
+			nz_var = 0.0f;
+	}
+	r->noise_sd = sqrtf(nz_var);
+	unsigned bd, bl;
+	best_hyp(m, &bd, &bl);
+	/* the delay's margin: the best lag of every other delay */
+	float jb[IMU_ID_DELAYS];
+	for (unsigned d = 0; d < IMU_ID_DELAYS; d++) {
+		jb[d] = INFINITY;
+		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
+			float th[NP], h[NP][NP], j = hyp_solve(m, &m->st[d][l], th, h);
+			if (j < jb[d])
+				jb[d] = j;
+		}
+	}
+	float j0 = jb[bd], j2 = INFINITY;
+	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
+		if (d != bd && jb[d] < j2)
+			j2 = jb[d];
+	r->delay = bd;
+	r->delay_margin = j0 > 0.0f ? 0.5f * (float)n * logf(j2 / j0) : INFINITY;
+	float s2 = j0 / (float)(n - np);
+	r->ne = nz_var > 0.0f ? s2 / nz_var : INFINITY;
+
+	float th[NP], h[NP][NP], vh[NP][NP], v[NP][NP];
+	hyp_solve(m, &m->st[bd][bl], th, h);
+	/* two covariances: white noise (s2 H) and HAC (coloured, heteroscedastic: the
+	 * vibration grows with the rotor speed); each quantity takes the larger variance */
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++)
+			v[i][k] = s2 * h[i][k];
+	bool have_hac = hac_cov(m, vh);
+	/* the raw (uncalibrated) k_f = A + B, the curve c = B / (A + B) */
+	float A = c->est_curve ? c->kf0 * (1.0f - c->curve0) + th[0] : c->kf0 + th[0];
+	float B = c->est_curve ? c->kf0 * c->curve0 + th[P_B] : 0.0f;
+	float kf_raw = A + B;
+	r->curve = c->est_curve ? (kf_raw != 0.0f ? B / kf_raw : 0.0f) : c->curve0;
+	if (c->est_curve) { /* dc/dA = -B / K^2, dc/dB = A / K^2 */
+		float k2 = kf_raw * kf_raw, jc[NP] = {-B / k2, A / k2, 0.0f, 0.0f};
+		float w = quad(v, jc);
+		r->curve_sd = sqrtf(have_hac ? fmaxf(w, quad(vh, jc)) : w);
+	}
+	/* the calibration: kappa = m (g T + v_last - v0) / (sum (F_w - D) dt), D the offset;
+	 * k_f = kappa (A + B), its sd from the parameters' covariance through the Jacobian
+	 * (kappa, kappa, 0, k_f / (F_w mean - D)) and the velocity's share of kappa's */
+	float tc = (float)m->n_cal * c->dt_s, kap = 1.0f, kap_sd = 0.0f, ofs = th[P_OFS];
+	float fm = m->n_cal > 0u ? m->fw_sum / (float)m->n_cal - ofs : 0.0f;
+	if (fm > 0.0f) {
+		kap = c->mass_kg * (c->g + (m->v_last - m->v0) / tc) / fm;
+		kap_sd = kap * 1.41421356f * IMU_ID_VEL_SD / (c->g * tc);
+	}
+	r->kappa = kap;
+	r->offset_n = ofs;
+	r->kf = kap * kf_raw;
+	float jac[NP] = {kap, c->est_curve ? kap : 0.0f, 0.0f, fm > 0.0f ? r->kf / fm : 0.0f};
+	float var = quad(v, jac);
+	float vw = var;
+	if (have_hac) {
+		var = quad(vh, jac);
+		r->hac = vw > 0.0f ? var / vw : 1.0f;
+		var = fmaxf(var, vw);
+	}
+	float vo = have_hac ? fmaxf(v[P_OFS][P_OFS], vh[P_OFS][P_OFS]) : v[P_OFS][P_OFS];
+	r->kappa_sd = fm > 0.0f ? sqrtf(kap_sd * kap_sd + kap * kap * vo / (fm * fm)) : 0.0f;
+	r->kf_sd = sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
+	/* the lag: the grid point moved by the Gauss-Newton step d ln tau = th[2] / k_f */
+	float dl = kf_raw > 0.0f ? th[P_LAG] / kf_raw : 0.0f;
+	float vl = have_hac ? fmaxf(v[P_LAG][P_LAG], vh[P_LAG][P_LAG]) : v[P_LAG][P_LAG];
+	float dl_sd = kf_raw > 0.0f ? sqrtf(fmaxf(vl, 0.0f)) / kf_raw : INFINITY;
+	float hstep = grid_step();
+	r->tau = lag_tau(bl) * expf(dl);
+	r->tau_sd = r->tau * dl_sd;
+	/* the step must stay within the grid's reach: beyond half a step the neighbour is
+	 * better, and at an end of the grid beyond it the lag is outside the range */
+	bool edge = (bl == 0u && dl < -0.5f * hstep) || (bl == IMU_ID_LAGS - 1u && dl > 0.5f * hstep) ||
+		    !(fabsf(dl) <= 1.5f * hstep);
+	if (m->nz_n < 20u)
+		r->cause = IMU_ID_NOISE_UNKNOWN;
+	else if (edge)
+		r->cause = IMU_ID_LAG_RANGE;
+	else if (bd == IMU_ID_DELAYS - 1u)
+		r->cause = IMU_ID_DELAY_RANGE;
+	else if (r->delay_margin < 12.0f)
+		r->cause = IMU_ID_DELAY_AMBIGUOUS;
+	else if (!(r->ne <= ne_max))
+		r->cause = IMU_ID_MODEL;
+	else if (c->est_curve && !(r->curve_sd < 0.2f))
+		r->cause = IMU_ID_CURVE_WEAK;
+	else
+		r->cause = IMU_ID_OK;
+}
+
+const char *imu_id_cause_text(enum imu_id_cause c)
+{
+	switch (c) {
+	case IMU_ID_OK: return "ok";
+	case IMU_ID_NO_DATA: return "too few frames";
+	case IMU_ID_NOISE_UNKNOWN: return "accelerometer noise not measured";
+	case IMU_ID_LAG_RANGE: return "motor lag outside 5-250 ms";
+	case IMU_ID_DELAY_RANGE: return "delay at the largest hypothesis";
+	case IMU_ID_DELAY_AMBIGUOUS: return "delay ambiguous";
+	case IMU_ID_MODEL: return "specific force not explained by the rotors";
+	case IMU_ID_CURVE_WEAK: return "thrust curve not determined";
+	}
+	return "?";
+}
+
+const char *imu_id_cause_remedy(enum imu_id_cause c)
+{
+	switch (c) {
+	case IMU_ID_OK: return "";
+	case IMU_ID_NO_DATA:
+	case IMU_ID_DELAY_AMBIGUOUS:
+	case IMU_ID_CURVE_WEAK: return "raise ID_EXC_TIME or ID_SWP_DZ";
+	case IMU_ID_NOISE_UNKNOWN: return "hover still before the experiment";
+	case IMU_ID_LAG_RANGE:
+	case IMU_ID_DELAY_RANGE: return "check the ESC protocol and its latency";
+	case IMU_ID_MODEL: return "check VEH_MASS, the accelerometer's mounting and its vibration";
+	}
+	return "";
+}

@@ -1,0 +1,145 @@
+/*
+ * imu_id.h - the rotors' collective model from the accelerometer: transport delay (whole
+ * frames), motor lag, k_f and the thrust curve c, each with its standard deviation, from the
+ * specific force along body z, the vehicle's mass and the throttles sent. No per-rotor thrust
+ * row is read: this is what a flight controller measures.
+ *
+ * Model: rotor j's throttle acts after D whole frames through a first-order lag tau (y_j);
+ * the rotors together push F = m a_z = k_f sum_j s_j g(y_j), with g(y) = (1 - c) y + c y^2
+ * and s_j the per-rotor effectiveness taken as known (MOT_SCALE). Linear in (A, B) =
+ * (k_f (1 - c), k_f c) with the regressors x1 = sum s_j y_j, x2 = sum s_j y_j^2; the lag
+ * filters are linear and time-invariant, so a delayed hypothesis is the undelayed filter's
+ * output read D frames late: one lag filter per rotor and grid point, a ring of the sums per
+ * delay. Each (D, tau) hypothesis keeps its least-squares sums relative to a reference model
+ * (the prior k_f and curve), which keeps them well conditioned in float.
+ *
+ * Choice: the hypothesis of least residual. Each hypothesis also carries the lag's
+ * sensitivity x3 = sum s_j g'(y_j) dy_j / d ln tau (a filter beside each lag filter, with
+ * the reference curve in g'), so its least squares is a Gauss-Newton step in ln tau from the
+ * grid point: k_f d ln tau is a third linear parameter, and tau, k_f and c come with their
+ * joint covariance. The
+ * accelerometer's noise is coloured (the rotors' vibration, aliased at the frame rate), so
+ * the white-noise covariance is replaced by a Newey-West (HAC) one measured on the model
+ * frozen at IMU_ID_FREEZE of the planned frames: the ratio of the two scales every sd.
+ * Both sides pass through the same [1 2 1] / 4 smoother first: its zero at half the frame
+ * rate removes most of the vibration (a rotor near the frame rate aliases there), and a
+ * linear filter on both sides keeps the regression's parameters.
+ * The accelerometer's bias and scale error are calibrated in flight: its offset is a fourth
+ * parameter of the regression (a constant beside the thrust's linear and quadratic shapes,
+ * which the throttle sweep separates), and over the excited frames the vertical (world)
+ * component of m times the reading, less the offset, must average m g plus m times the
+ * vertical velocity's change over their time: the ratio (kappa) scales the force. Its sd
+ * (the velocity's, the offset's) joins k_f's.
+ * The derivation: docs/identification.md, "From the IMU".
+ *
+ * Core rules: no heap, globals or I/O. imu_id_step stores the frame (scalars); the bank
+ * update (imu_id_process) and the solve run between frames, in float in both builds.
+ */
+#ifndef OCTO_IMU_ID_H
+#define OCTO_IMU_ID_H
+
+#include "scalar.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#define IMU_ID_ROTORS 8
+#define IMU_ID_DELAYS 5 /* 0..4 frames beyond the loop's one */
+#define IMU_ID_LAGS 30  /* log grid IMU_ID_TAU_MIN .. IMU_ID_TAU_MAX */
+#define IMU_ID_TAU_MIN 0.005f
+#define IMU_ID_TAU_MAX 0.25f
+#define IMU_ID_RING (IMU_ID_DELAYS + 2) /* the rings also feed the [1 2 1] / 4 smoother */
+#define IMU_ID_HAC 45                   /* Newey-West lags, frames (0.5 s at 90 Hz) */
+#define IMU_ID_VEL_SD 0.05f             /* the velocity's error at either end of the calibration, m/s */
+#define IMU_ID_FREEZE 0.35f             /* share of the planned frames after which the HAC model freezes */
+
+struct imu_id_cfg {
+	float dt_s;                 /* frame period */
+	float mass_kg;              /* the weighed mass */
+	float g;                    /* gravity, m/s^2 */
+	float kf0, curve0;          /* the reference model (and the curve when not estimated) */
+	bool est_curve;             /* estimate c (else c = curve0) */
+	float scale[IMU_ID_ROTORS]; /* per-rotor effectiveness (MOT_SCALE) */
+	uint32_t n_frames;          /* excited frames planned */
+};
+
+#define IMU_ID_NP 4  /* parameters: A (or k_f), B, k_f d ln tau, the accelerometer's offset */
+#define IMU_ID_NT 10 /* their upper triangle */
+
+/* least-squares sums of one hypothesis: G (upper triangle, row by row), b, z'z */
+struct imu_id_stat {
+	float g[IMU_ID_NT], b[IMU_ID_NP], rr;
+};
+
+struct imu_id {
+	struct imu_id_cfg cfg;
+	float a[IMU_ID_LAGS];                                               /* the lags' poles exp(-dt / tau) */
+	float da[IMU_ID_LAGS];                                              /* d a / d ln tau */
+	float y[IMU_ID_LAGS][IMU_ID_ROTORS], w[IMU_ID_LAGS][IMU_ID_ROTORS]; /* outputs, d y / d ln tau */
+	/* rings of x1, x2, x3 by frame age */
+	float x1[IMU_ID_LAGS][IMU_ID_RING], x2[IMU_ID_LAGS][IMU_ID_RING], x3[IMU_ID_LAGS][IMU_ID_RING];
+	float fr[3];   /* the force's last three frames, newest first */
+	uint32_t n_fr; /* consecutive frames in fr (a gap restarts it) */
+	struct imu_id_stat st[IMU_ID_DELAYS][IMU_ID_LAGS];
+	/* the still frames' force: its count, mean and spread (the noise, about the mean) */
+	uint32_t nz_n;
+	float nz_s, nz_ss;
+	/* HAC: the frozen hypothesis, its increments' ring, its sums */
+	bool hac_on;
+	uint8_t hac_d, hac_l, hac_head;
+	float hac_th[IMU_ID_NP];
+	float hac_u[IMU_ID_HAC][IMU_ID_NP];
+	float hac_s[IMU_ID_NT], hac_g[IMU_ID_NT], hac_ee; /* sandwich S, G (upper triangles), sum e^2 */
+	uint32_t hac_n;
+	uint32_t n_exc; /* excited frames so far */
+	/* the accelerometer's calibration in flight: over the excited frames the mean vertical
+	 * specific force is g plus the velocity's change over their time */
+	float fw_sum, vz_prev, v0, v_last;
+	uint32_t n_cal;
+	bool q_pending, q_excited;
+	float q_thr[IMU_ID_ROTORS], q_f, q_fw, q_vz;
+};
+
+enum imu_id_cause {
+	IMU_ID_OK = 0,
+	IMU_ID_NO_DATA,       /* too few frames */
+	IMU_ID_NOISE_UNKNOWN, /* no still frames measured the noise */
+	IMU_ID_LAG_RANGE,     /* the best lag at the grid's edge */
+	IMU_ID_DELAY_RANGE,   /* the best delay is the largest hypothesis */
+	IMU_ID_DELAY_AMBIGUOUS,
+	IMU_ID_MODEL,      /* residuals well above the still noise */
+	IMU_ID_CURVE_WEAK, /* the data cannot tell the curve (no throttle spread) */
+};
+
+struct imu_id_result {
+	uint32_t delay;
+	float delay_margin; /* log-likelihood ratio of the best delay over the next best */
+	float tau, tau_sd;
+	float kf, kf_sd, curve, curve_sd;
+	float ne;              /* residual variance / still-noise variance */
+	float noise_sd;        /* the still frames' force spread, N */
+	float hac;             /* HAC variance over white variance (>= 1 for coloured noise) */
+	float kappa, kappa_sd; /* the accelerometer's calibration factor found in flight */
+	float offset_n;        /* the accelerometer's offset found, as a force (N) */
+	uint32_t n;
+	enum imu_id_cause cause;
+};
+
+/* thr0: the throttles before the start (the filters' initial state) */
+void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t thr0[IMU_ID_ROTORS]);
+/* One frame: the throttles sent on the previous frame; of this one the force m g a_z along
+ * body z (N, the reading a in g), its vertical (world) component m g (R a)_z (N) and the
+ * vertical velocity (m/s, up); excited: the bank accumulates, else the still noise is
+ * measured. Stores only. */
+void imu_id_step(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS], scalar_t f_n, scalar_t fw_n, scalar_t vz,
+		 bool excited);
+/* Between frames: the stored frame into the bank (no-op if none waits). */
+void imu_id_process(struct imu_id *m);
+/* A frame without measurement: the plant held thr_prev one more frame. */
+void imu_id_hold(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS]);
+/* Between frames: the estimates and the acceptance cause. ne_max: largest accepted NE. */
+void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r);
+const char *imu_id_cause_text(enum imu_id_cause c);
+const char *imu_id_cause_remedy(enum imu_id_cause c);
+
+#endif /* OCTO_IMU_ID_H */
