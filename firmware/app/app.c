@@ -364,6 +364,7 @@ static void sync_params(struct app *a)
 	mp.t_max = sc_from_float(p->mot_thr_max);
 	mp.mode = p->mix_mode >= 0.5f ? MIXER_MODE_PRIORITY : MIXER_MODE_CLIP;
 	mixer_set_params(&a->mix, &mp); /* recomputes only when something changed */
+	mixer_warm_reset(&a->mix_warm); /* its face belongs to the mixer it was found on */
 
 	struct thrmap_params tp = {sc_from_float(p->veh_kf), sc_from_float(p->mot_curve), {0}};
 	for (int j = 0; j < THRMAP_ROTORS; j++)
@@ -840,6 +841,7 @@ bool app_next_event(struct app *a, struct app_event *e) { return outbox_pop(&a->
 void app_tick(struct app *a)
 {
 	app_settle(a);
+	mixer_refresh(&a->mix, &a->mix_warm); /* the last step's saturated demand, exactly */
 	if (a->save_pending) {
 		a->save_pending = false;
 		char why[64];

@@ -111,6 +111,7 @@ struct app {
 	struct env_osc env_osc;       /* the oscillation guard */
 	struct env_limits env_limits; /* take-off and landing time limits */
 	struct mixer mix;
+	struct mixer_warm mix_warm; /* the step's allocation between frames: mixer_step, mixer_refresh */
 	struct thrmap map;
 	struct mixer_output mix_out;
 	struct rotor_fail rf; /* a failed rotor, found from the rotors' outputs (rotor_guard.h) */

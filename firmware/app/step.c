@@ -217,7 +217,7 @@ static inline void step_allocation(struct app *a, struct step *s)
 		for (int i = 0; i < 3; i++)
 			demand[i + 1] = sc_add(demand[i + 1], a->exp_out.tau_delta[i]);
 	}
-	mixer_update(&a->mix, demand, &a->mix_out);
+	mixer_step(&a->mix, &a->mix_warm, demand, &a->mix_out); /* its exact search: app_tick */
 	a->thr_clamped = thrmap_update(&a->map, a->mix_out.f_n, s->thr, HAL_ROTORS);
 }
 

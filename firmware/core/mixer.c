@@ -588,11 +588,13 @@ static void pinv_products(const struct mixer *m, const scalar_t demand[NA], scal
 }
 #endif
 
-void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
+/* 1. eq. (15) into out->f_n (u, N); out->demanded, limits and steps set. Returns 0 for a
+ * non-finite demand (every rotor 0, flagged), 1 when u is in the box, 2 when it is not. */
+static int pinv_alloc(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
 {
 	out->limits = 0;
 	out->steps = 0;
-	bool finite = true, clip = false;
+	bool finite = true;
 	for (int i = 0; i < NA; i++) {
 		out->demanded[i] = demand[i];
 		finite = finite && sc_isfinite(demand[i]);
@@ -601,42 +603,42 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		for (int j = 0; j < NR; j++)
 			out->f_n[j] = SC_ZERO;
 		out->limits = MIXER_LIMIT_BAD_INPUT;
-	} else {
-		/* 1. eq. (15) */
-		bool inside = true;
-#if OCTO_FIXED
-		scalar_t pin[NR][NA];
-		pinv_products(m, demand, pin);
-#endif
-		for (int j = 0; j < NR; j++) {
-#if OCTO_FIXED
-			scalar_t f = pin[j][0];
-			for (int i = 1; i < NA; i++)
-				f = sc_add(pin[j][i], f);
-			out->f_n[j] = f;
-#else
-			out->f_n[j] = dot4(m->pinv[j], demand);
-#endif
-			if (!(m->present & (1u << j)))
-				out->f_n[j] = SC_ZERO;
-			else if (out->f_n[j] < m->f_lo || out->f_n[j] > m->f_hi)
-				inside = false;
-		}
-		/* 3. by mode; PRIORITY with the allocator unavailable (or unusable) clips */
-		if (!inside) {
-			clip = m->p.mode != MIXER_MODE_PRIORITY;
-			if (!clip && !(m->alloc_ok && priority(m, demand, out))) {
-				out->limits |= MIXER_LIMIT_NO_ALLOC;
-				clip = true;
-			}
-		}
-		if (clip)
-			for (int j = 0; j < NR; j++)
-				if (m->present & (1u << j))
-					out->f_n[j] = mclamp(out->f_n[j], m->f_lo, m->f_hi);
+		return 0;
 	}
+	bool inside = true;
+#if OCTO_FIXED
+	scalar_t pin[NR][NA];
+	pinv_products(m, demand, pin);
+#endif
+	for (int j = 0; j < NR; j++) {
+#if OCTO_FIXED
+		scalar_t f = pin[j][0];
+		for (int i = 1; i < NA; i++)
+			f = sc_add(pin[j][i], f);
+		out->f_n[j] = f;
+#else
+		out->f_n[j] = dot4(m->pinv[j], demand);
+#endif
+		if (!(m->present & (1u << j)))
+			out->f_n[j] = SC_ZERO;
+		else if (out->f_n[j] < m->f_lo || out->f_n[j] > m->f_hi)
+			inside = false;
+	}
+	return inside ? 1 : 2;
+}
 
-	/* out->f_n holds u: the achieved wrench and the bound flags from it, then f_j = scale_j u_j */
+/* every present rotor's u (N) clamped to the box */
+static void clip_box(const struct mixer *m, scalar_t f_n[NR])
+{
+	for (int j = 0; j < NR; j++)
+		if (m->present & (1u << j))
+			f_n[j] = mclamp(f_n[j], m->f_lo, m->f_hi);
+}
+
+/* out->f_n holds u: the achieved wrench and the bound flags from it, then f_j = scale_j u_j;
+ * cmp: the axis flags from comparing achieved and demanded (clipping, mixer_step) */
+static void finish(const struct mixer *m, struct mixer_output *out, bool cmp)
+{
 	wrench_u(m, out->f_n, out->achieved);
 	unsigned at_min = 0, at_max = 0;
 	/* a rotor within 4 inner margins of a bound counts as at the bound */
@@ -657,13 +659,230 @@ void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer
 		out->limits |= MIXER_LIMIT_ROTOR_MIN;
 	if (at_max)
 		out->limits |= MIXER_LIMIT_ROTOR_MAX;
-	/* clipping: flags of axes whose achieved value differs from the demand by more than the
-	 * margin times the physical wrench per unit of scaled wrench */
-	for (int i = 0; i < NA && clip; i++) {
+	/* flags of axes whose achieved value differs from the demand by more than the margin
+	 * times the physical wrench per unit of scaled wrench */
+	for (int i = 0; i < NA && cmp; i++) {
 		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
 		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
 			out->limits |= axis_limit[i];
 	}
+}
+
+void mixer_update(const struct mixer *m, const scalar_t demand[NA], struct mixer_output *out)
+{
+	bool clip = false;
+	if (pinv_alloc(m, demand, out) == 2) {
+		/* 3. by mode; PRIORITY with the allocator unavailable (or unusable) clips */
+		clip = m->p.mode != MIXER_MODE_PRIORITY;
+		if (!clip && !(m->alloc_ok && priority(m, demand, out))) {
+			out->limits |= MIXER_LIMIT_NO_ALLOC;
+			clip = true;
+		}
+		if (clip)
+			clip_box(m, out->f_n);
+	}
+	finish(m, out, clip);
+}
+
+/* ---------------------------------------------------------------- frame-budgeted allocation */
+
+void mixer_warm_reset(struct mixer_warm *s)
+{
+	s->valid = false;
+	s->pending = false;
+	s->held = 0;
+	s->path = MIXER_PATH_PINV;
+}
+
+/* The s nearest to s0 within [lo, hi] such that u + s c keeps every present rotor in the box
+ * widened by slack (N; one inner margin: the caller clips the rounding; its negative: an
+ * inner margin); false if there is none. One division per rotor. */
+static bool line_fit(const struct mixer *m, const scalar_t u[NR], const scalar_t c[NR], scalar_t lo, scalar_t hi,
+		     scalar_t s0, scalar_t slack, scalar_t *s)
+{
+	const scalar_t blo = sc_sub(m->f_lo, slack), bhi = sc_add(m->f_hi, slack);
+	for (int j = 0; j < NR; j++) {
+		if (!(m->present & (1u << j)))
+			continue;
+		if (sc_abs(c[j]) <= EPS_S) { /* the rotor does not move along c */
+			if (u[j] < blo || u[j] > bhi)
+				return false;
+			continue;
+		}
+		scalar_t a = mdiv(sc_sub(blo, u[j]), c[j]), b = mdiv(sc_sub(bhi, u[j]), c[j]);
+		if (c[j] < 0) {
+			scalar_t t = a;
+			a = b;
+			b = t;
+		}
+		lo = mmax(lo, a);
+		hi = mmin(hi, b);
+	}
+	if (lo > hi)
+		return false;
+	*s = mclamp(s0, lo, hi);
+	return true;
+}
+
+/* u += s c */
+static void line_move(scalar_t u[NR], const scalar_t c[NR], scalar_t s)
+{
+	for (int j = 0; j < NR; j++)
+		u[j] = sc_mac(s, c[j], u[j]);
+}
+
+/* c = column ax of the pseudo-inverse times v (0 for absent rotors): the u change of v on
+ * that axis alone */
+static void pinv_col(const struct mixer *m, int ax, scalar_t v, scalar_t c[NR])
+{
+	for (int j = 0; j < NR; j++)
+		c[j] = (m->present & (1u << j)) ? sc_mul(m->pinv[j][ax], v) : SC_ZERO;
+}
+
+/* The bounded fallback (u, N, written), with the priority roll/pitch > thrust > yaw along
+ * the pseudo-inverse's axis columns: the demand without yaw, the thrust change nearest to none
+ * that fits, then as much of the demanded yaw as fits (never of the opposite sign). When no
+ * thrust fits the roll/pitch: without roll/pitch the nearest thrust that fits, then the
+ * largest share of the demanded roll/pitch that fits there, no yaw. The demand is first
+ * limited to 16 times the attainable set's extent per axis (huge demands lose no resolution
+ * to cancellation). Returns the path (MIXER_PATH_FALLBACK or _FALLBACK_RP). */
+static int fallback(const struct mixer *m, const scalar_t demand[NA], scalar_t u[NR])
+{
+	scalar_t dm[NA], c[NR], v[NR], s;
+	for (int i = 0; i < NA; i++) {
+		scalar_t ext = sc_mul(sc_mul(m->width, m->row_max[i]), SC(16));
+		dm[i] = mclamp(demand[i], sc_sub(m->w_lo[i], ext), sc_add(m->w_lo[i], ext));
+	}
+	const scalar_t dy = dm[3], slack = sc_mul(m->width, TOL_IN);
+	dm[3] = SC_ZERO;
+	for (int j = 0; j < NR; j++)
+		u[j] = (m->present & (1u << j)) ? dot4(m->pinv[j], dm) : SC_ZERO;
+	pinv_col(m, 0, SC(1), v);
+	if (line_fit(m, u, v, SC_MAX_NEG, SC_MAX, SC_ZERO, slack, &s)) {
+		line_move(u, v, s);
+		pinv_col(m, 3, SC(1), c);
+		if (line_fit(m, u, c, mmin(SC_ZERO, dy), mmax(SC_ZERO, dy), dy, slack, &s))
+			line_move(u, c, s);
+		clip_box(m, u);
+		return MIXER_PATH_FALLBACK;
+	}
+	/* c: the roll/pitch part of u; u: the thrust alone */
+	pinv_col(m, 1, dm[1], c);
+	for (int j = 0; j < NR; j++) {
+		c[j] = sc_mac(m->pinv[j][2], dm[2], c[j]);
+		c[j] = (m->present & (1u << j)) ? c[j] : SC_ZERO;
+		u[j] = sc_mul(v[j], dm[0]);
+	}
+	if (line_fit(m, u, v, SC_MAX_NEG, SC_MAX, SC_ZERO, slack, &s)) {
+		line_move(u, v, s);
+		/* within an inner margin: nothing left for the clip to unbalance */
+		if (line_fit(m, u, c, SC_ZERO, SC(1), SC(1), sc_neg(slack), &s))
+			line_move(u, c, s);
+	}
+	clip_box(m, u);
+	return MIXER_PATH_FALLBACK_RP;
+}
+
+void mixer_step(const struct mixer *m, struct mixer_warm *s, const scalar_t demand[NA], struct mixer_output *out)
+{
+	int r = pinv_alloc(m, demand, out);
+	s->pending = false;
+	s->path = MIXER_PATH_PINV;
+	if (r != 2) {
+		/* in the box (or not finite): the exact allocation itself; a face found for an
+		 * earlier saturation is stale from here on */
+		s->valid = false;
+		finish(m, out, false);
+		return;
+	}
+	if (m->p.mode != MIXER_MODE_PRIORITY || !m->alloc_ok) {
+		if (m->p.mode == MIXER_MODE_PRIORITY)
+			out->limits |= MIXER_LIMIT_NO_ALLOC;
+		s->path = MIXER_PATH_CLIP;
+		clip_box(m, out->f_n);
+		finish(m, out, true);
+		return;
+	}
+	for (int i = 0; i < NA; i++)
+		s->demand[i] = demand[i];
+	s->pending = true;
+	if (s->valid) {
+		/* the exact allocation's face moved to this demand: axes it could not meet held
+		 * at what it achieved (yaw between zero and the demand), the others as demanded */
+		scalar_t d[NA], u[NR];
+		for (int i = 0; i < NA; i++) {
+			scalar_t t = (s->held >> i & 1u) ? s->t_ex[i] : demand[i];
+			if (i == 3)
+				t = mclamp(t, mmin(SC_ZERO, demand[3]), mmax(SC_ZERO, demand[3]));
+			d[i] = sc_sub(t, s->t_ex[i]);
+		}
+		const scalar_t slack = sc_mul(m->width, TOL_IN);
+		const scalar_t blo = sc_sub(m->f_lo, slack), bhi = sc_add(m->f_hi, slack);
+		/* a face whose free columns do not span the wrench moves nothing exactly */
+		bool fits = true;
+		for (int i = 0; i < NA && !s->full; i++) /* within the flags' margin of its own wrench */
+			fits = fits && sc_abs(d[i]) <= sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
+		for (int j = 0; j < NR; j++) {
+			u[j] = sc_add(s->u_ex[j], dot4(s->map[j], d));
+			fits = fits && u[j] >= blo && u[j] <= bhi;
+		}
+		if (fits) {
+			for (int j = 0; j < NR; j++)
+				out->f_n[j] = u[j];
+			clip_box(m, out->f_n);
+			s->path = MIXER_PATH_FACE;
+			finish(m, out, true);
+			return;
+		}
+	}
+	s->path = (uint8_t)fallback(m, demand, out->f_n);
+	out->steps = s->path == MIXER_PATH_FALLBACK ? 2 : 3;
+	finish(m, out, true);
+}
+
+void mixer_refresh(const struct mixer *m, struct mixer_warm *s)
+{
+	if (!s->pending)
+		return;
+	s->pending = false;
+	s->valid = false;
+	scalar_t w[NA], u[NR];
+	uint32_t lim;
+	if (!m->alloc_ok || m->p.mode != MIXER_MODE_PRIORITY || target(m, s->demand, w, &lim) < 0)
+		return;
+	preimage(m, w, u);
+	/* its face: the rotors within an inner margin of a bound stay there, the others move by
+	 * the minimum-norm solution of the free columns, G_F^+ (basis q, lt, piv as refine's) */
+	int8_t bnd[NR];
+	for (int j = 0; j < NR; j++)
+		bnd[j] = u[j] <= TOL_IN ? -1 : (u[j] >= sc_sub(SC(1), TOL_IN) ? 1 : 0);
+	scalar_t q[NA][NR], lt[NA][NA];
+	int piv[NA], fr[NR], nf;
+	int r = row_basis(m, bnd, fr, &nf, q, lt, piv);
+	for (int j = 0; j < NR; j++)
+		for (int a = 0; a < NA; a++)
+			s->map[j][a] = SC_ZERO;
+	for (int a = 0; a < NA; a++) {
+		/* column a: L y = e_a (scaled), du_F = Q^T y; per physical unit: times row_div[a]
+		 * (scaled wrench per physical is row_div / width, u in N is width times scaled) */
+		scalar_t y[NA];
+		for (int i = 0; i < r; i++) {
+			scalar_t e = piv[i] == a ? SC(1) : SC_ZERO;
+			y[i] = mdiv(mdot(e, lt[piv[i]], -1, y, i), lt[piv[i]][i]);
+		}
+		for (int t = 0; t < nf; t++)
+			s->map[fr[t]][a] = sc_mul(mdot(SC_ZERO, &q[0][t], NR, y, r), m->row_div[a]);
+	}
+	for (int j = 0; j < NR; j++)
+		s->u_ex[j] = (m->present & (1u << j)) ? sc_add(m->f_lo, sc_mul(clamp01(u[j]), m->width)) : SC_ZERO;
+	wrench_u(m, s->u_ex, s->t_ex);
+	unsigned held = 0;
+	for (int i = 0; i < NA; i++)
+		if (lim & axis_limit[i])
+			held |= 1u << i;
+	s->held = (uint8_t)held;
+	s->full = r == NA;
+	s->valid = true;
 }
 
 void mixer_shortfall(const struct mixer_output *out, uint8_t *short_pos, uint8_t *short_neg)

@@ -141,6 +141,43 @@ struct mixer_output {
 	uint8_t steps;                   /* bisection + preimage + active-set steps used */
 };
 
+/* The frame-budgeted allocation (the 90 Hz step's): the exact priority allocation above
+ * costs many steps' worth when the demand saturates, so the step does a bounded part and the
+ * exact search runs between frames.
+ *   mixer_step (in the step): eq. (15); in the box that is the allocation (exact). Outside it,
+ *     the face of the last exact allocation (its rotors at a bound kept there, the free ones
+ *     moved by the minimum-norm solution of their columns, axes it could not meet held at what
+ *     it achieved) applied to this demand: exact whenever this demand lies on that face, as
+ *     it does while a saturation evolves from frame to frame. When the face does not fit the
+ *     box (the first saturated frame, a jump): the bounded fallback along the pseudo-inverse's
+ *     axis columns (yaw to zero, the nearest thrust that fits, then as much yaw as fits; when
+ *     no thrust fits the roll/pitch, the largest share of it that fits, no yaw). The saturated demand is kept for:
+ *   mixer_refresh (between frames): the exact priority allocation of that demand (as
+ *     mixer_update) and its face for the next steps. Nothing to do after an unsaturated step.
+ * Per step: at most three line scans over the rotors beyond eq. (15), no iteration; the axis
+ * flags compare achieved and demanded (as clipping does); out->steps = the fallback's line
+ * scans (0 on the face, 2 or 3). A held demand is allocated as mixer_update allocates it
+ * from the step after its refresh on (tests/core/test_mixer.c). */
+enum mixer_path {
+	MIXER_PATH_PINV = 0,     /* eq. (15) in the box, or a non-finite demand */
+	MIXER_PATH_FACE = 1,     /* the last exact allocation's face */
+	MIXER_PATH_FALLBACK = 2,    /* the bounded fallback: thrust, then yaw */
+	MIXER_PATH_FALLBACK_RP = 3, /* the bounded fallback: roll/pitch scaled, no yaw */
+	MIXER_PATH_CLIP = 4,        /* clipped (CLIP mode, or no allocator) */
+};
+
+struct mixer_warm {
+	bool valid;   /* u_ex, t_ex, map, held: mixer_refresh's for the current mixer */
+	bool pending; /* the last mixer_step saturated: demand waits for mixer_refresh */
+	uint8_t held; /* bit i: axis i of [f, tau_x, tau_y, tau_z] was limited in the exact allocation */
+	uint8_t path; /* enum mixer_path of the last mixer_step */
+	bool full;    /* the face's free columns span the wrench (else it serves only its own wrench) */
+	scalar_t demand[MIXER_N_AXES];            /* the last saturated demand */
+	scalar_t t_ex[MIXER_N_AXES];              /* the wrench the exact allocation achieved */
+	scalar_t u_ex[MIXER_N_ROTORS];            /* its u_j = f_j / scale_j, N (0 if absent) */
+	scalar_t map[MIXER_N_ROTORS][MIXER_N_AXES]; /* du (N) per wrench change on its face (0: at a bound) */
+};
+
 /* Defaults: the paper's vehicle (l = 0.35 m, k_f = 28.0269 N, k_tau = 0.3869 N m), throttle
  * [0, 1], all rotors, PRIORITY. */
 void mixer_default_params(struct mixer_params *p);
@@ -161,6 +198,17 @@ bool mixer_set_params(struct mixer *m, const struct mixer_params *p);
 
 /* demand = [f (N), tau_x, tau_y, tau_z (N m)] -> out. Never fails. */
 void mixer_update(const struct mixer *m, const scalar_t demand[MIXER_N_AXES], struct mixer_output *out);
+
+/* No face: the next saturated mixer_step falls back (call it when the mixer was rebuilt). */
+void mixer_warm_reset(struct mixer_warm *s);
+
+/* The step's allocation (see struct mixer_warm): bounded, never fails. */
+void mixer_step(const struct mixer *m, struct mixer_warm *s, const scalar_t demand[MIXER_N_AXES],
+		struct mixer_output *out);
+
+/* Between frames: the exact allocation of the last saturated step's demand and its face;
+ * returns at once when that step was not saturated. */
+void mixer_refresh(const struct mixer *m, struct mixer_warm *s);
 
 /* What the allocation cut, by axis and direction, for the controllers' anti-windup: bit k
  * (axis k of [f, tau_x, tau_y, tau_z]) of *short_pos when an axis the mixer flagged

@@ -507,18 +507,23 @@ def item_step(rep, args):
                 + f"; host mean {fmt(mean('bench_exp_tick'))} Ir", "(reported)", None, m4_cmd)
     al = mmm(m4f.get("alloc", []))
     n_sat = kv.get("alloc_calls", "? saturated ?").split()[-1]
-    rep.row(2, f"  allocator alone, {kv.get('alloc_calls', '?').split()[0]} demands ({n_sat} saturating), M4F",
+    rep.row(2, f"  the step's allocation alone (mixer_step), {kv.get('alloc_calls', '?').split()[0]} demands "
+            f"({n_sat} saturating), M4F",
             fmt(al["median"] if al else None), spread(al),
             f"hover demand: {fmt(m4f.get('alloc_hover'))}; host mean {fmt(mean('bench_alloc_call'))} Ir", "", None, m4_cmd)
-    worst = m4f.get("alloc_worst")
-    rep.row(2, f"  allocator worst demand ({worst_steps} of <= {bound} steps), M4F", fmt(worst), "",
-            f"host x86-64: {fmt(mean('bench_alloc_worst'))} Ir", "(reported)", None, m4_cmd)
+    exact = m4f.get("alloc_worst")
+    res["alloc_exact_worst_m4f"] = exact
+    rep.row(2, f"  between frames: the exact allocation's worst demand ({worst_steps} of <= {bound} steps; "
+            "mixer_refresh), M4F", fmt(exact), "",
+            f"host x86-64: {fmt(mean('bench_alloc_worst'))} Ir; step paths: {kv.get('alloc_paths', '?')}",
+            "(reported)", None, m4_cmd)
+    worst = al["max"] if al else None   # the step's allocation (mixer_step): its worst call
     if hold and worst is not None:
         ctl = hold["max"] - m4f["alloc_hover"] + worst
         est = max(hold["max"], ex["max"] if ex else 0) - m4f["alloc_hover"] + worst
         res["worst_step_hold_saturated_m4f"] = ctl
         res["worst_step_estimate_m4f"] = est
-        rep.row(2, "  worst case: HOLD step with the worst allocation (max - hover alloc. + worst)", fmt(ctl), "",
+        rep.row(2, "  worst case: HOLD step with the step's worst allocation (max - hover alloc. + worst)", fmt(ctl), "",
                 f"any step so: {fmt(est)}", "<= 5,000", ctl <= 5000 and est <= 5000, m4_cmd)
     step_per_build(rep, args, res)
     rep.data["step"] = res

@@ -11,9 +11,11 @@
  *   -> experiments 1 (rotor coefficients), 2 (validation), 3 (inertia Ixx), each started
  *      from HOLD as MAV_CMD_USER_1 does (measured: up to N_EXP steps each, and the app_tick
  *      after each: the between-frames work, counted apart; "step: exp_steps_N" per experiment)
- *   -> the allocator alone on the app's mixer: the last hover demand (unsaturated), N_ALLOC
- *      seeded demands (many saturating), then again the one that needed the most allocator
- *      steps (its worst case).
+ *   -> the allocator alone on the app's mixer: the step's allocation (mixer_step) of the
+ *      last hover demand (unsaturated) and of N_ALLOC seeded demands (many saturating; every
+ *      other one a repeat after its exact search between frames), then the exact search
+ *      (mixer_update, as mixer_refresh runs it between frames) of the demand that needed the
+ *      most allocator steps (its worst case).
  * One measured call = app_on_frame() (or mixer_update()) between bench_mark_begin/end
  * (tests/arm/bench_mark.h): on Cortex-M the QEMU plugin prints one count per call; on the
  * host, valgrind's callgrind counts the inclusive cost of the wrappers below (bench.py
@@ -140,11 +142,15 @@ __attribute__((noinline)) static void bench_exp_tick(void)
 static scalar_t demand[MIXER_N_AXES];
 static struct mixer_output mix_out;
 
+static struct mixer_warm warm; /* the step's allocation state, as the app keeps it */
+
+/* the step's allocation (mixer_step), its exact search after it, unmeasured (mixer_refresh:
+ * between frames) */
 __attribute__((noinline)) static void bench_alloc_call(void)
 {
 	bench_phase = 3;
 	bench_mark_begin();
-	mixer_update(&A.mix, demand, &mix_out);
+	mixer_step(&A.mix, &warm, demand, &mix_out);
 	bench_mark_end();
 }
 
@@ -152,7 +158,7 @@ __attribute__((noinline)) static void bench_alloc_hover(void)
 {
 	bench_phase = 5;
 	bench_mark_begin();
-	mixer_update(&A.mix, demand, &mix_out);
+	mixer_step(&A.mix, &warm, demand, &mix_out);
 	bench_mark_end();
 }
 
@@ -258,19 +264,30 @@ int main(void)
 	 * demands, then the one that needed the most allocator steps again */
 	for (int i = 0; i < MIXER_N_AXES; i++)
 		demand[i] = sc_from_float(A.wrench_dem[i]);
+	mixer_warm_reset(&warm);
 	bench_alloc_hover();
 	printf("step: alloc_hover_steps %u limits %u\n", (unsigned)mix_out.steps, (unsigned)mix_out.limits);
-	unsigned worst_i = 0, worst_steps = 0, n_sat = 0;
+	/* odd calls: the previous demand again, after its exact search (the face path); even
+	 * calls: a new one (a jump: the fallback when it saturates) */
+	unsigned worst_i = 0, worst_steps = 0, n_sat = 0, paths[5] = {0};
 	for (uint32_t i = 0; i < N_ALLOC; i++) {
-		alloc_demand(i, demand);
+		alloc_demand(i & ~1u, demand);
 		bench_alloc_call();
+		paths[warm.path < 5 ? warm.path : 0]++;
+		mixer_refresh(&A.mix, &warm);
 		if (mix_out.limits)
 			n_sat++;
-		if (mix_out.steps > worst_steps) {
-			worst_steps = mix_out.steps;
-			worst_i = i;
+		struct mixer_output ex;
+		mixer_update(&A.mix, demand, &ex);
+		if (ex.steps > worst_steps) {
+			worst_steps = ex.steps;
+			worst_i = i & ~1u;
 		}
 	}
+	printf("step: alloc_paths pinv %u face %u fallback %u fallback_rp %u clip %u\n", paths[0], paths[1], paths[2],
+	       paths[3], paths[4]);
+	/* the exact search of the demand that needed the most steps (mixer_update: what
+	 * mixer_refresh runs between frames) */
 	alloc_demand(worst_i, demand);
 	bench_alloc_worst();
 	printf("step: alloc_calls %d saturated %u\n", N_ALLOC, n_sat);

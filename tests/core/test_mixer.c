@@ -998,3 +998,193 @@ UNIT_TEST(mixer_weak_rotor_pinv_is_column_scaled)
 	mixer_init(&mix, &p0);
 	CHECK(memcmp(m1->pinv, mix.pinv, sizeof mix.pinv) == 0);
 }
+
+/* ---------------------------------------------------------------- the frame-budgeted step */
+
+/* yaw of the step's fallback: it moves along the pseudo-inverse's columns, whose Q16.16
+ * rounding (and the face's) leaves up to about 1e-3 N m of yaw */
+#define STEP_TZ (OCTO_FIXED ? 2e-3 : TOL_TZ)
+
+/* mixer_step after mixer_refresh of the same demand is the exact allocation (mixer_update's),
+ * for attainable and unattainable demands, on several layouts: the exact search spread
+ * between frames loses nothing */
+static void check_step_refreshed(struct unit_ctx *u, const struct mixer_params *p, unsigned seed)
+{
+	mixer_init(&mix, p);
+	struct mixer_warm w;
+	mixer_warm_reset(&w);
+	struct unit_rng r = {0x51e9ULL ^ seed};
+	double kf = d(p->k_f_n);
+	int n_face = 0, n_sat = 0;
+	for (int n = 0; n < SWEEP(2000); n++) {
+		double s = n % 3 ? 1.0 : 0.3;
+		scalar_t dem[4] = {sc_from_float((float)unit_rand_uniform(&r, 0.0, 9.0 * kf)),
+				   sc_from_float((float)(s * unit_rand_uniform(&r, -20, 20))),
+				   sc_from_float((float)(s * unit_rand_uniform(&r, -20, 20))),
+				   sc_from_float((float)(s * unit_rand_uniform(&r, -2, 2)))};
+		struct mixer_output o, oe;
+		mixer_step(&mix, &w, dem, &o);
+		CHECK(o.steps <= 3);
+		mixer_refresh(&mix, &w);
+		mixer_step(&mix, &w, dem, &o);
+		mixer_update(&mix, dem, &oe);
+		if (w.path == MIXER_PATH_PINV)
+			continue;
+		n_sat++;
+		if (w.path != MIXER_PATH_FACE)
+			continue;
+		n_face++;
+		for (int i = 0; i < 4; i++)
+			CHECK_NEAR(d(o.achieved[i]), d(oe.achieved[i]), tol_axis[i] + 1e-6 * fabs(d(oe.achieved[i])));
+		for (int j = 0; j < 8; j++)
+			CHECK_NEAR(d(o.f_n[j]), d(oe.f_n[j]), TOL_ROTOR);
+		/* the limited axes as mixer_update flags them */
+		const uint32_t ax = MIXER_LIMIT_F | MIXER_LIMIT_TX | MIXER_LIMIT_TY | MIXER_LIMIT_TZ;
+		if ((o.limits & ax) != (oe.limits & ax)) {
+			/* only where the shortfall is within the flags' margin */
+			for (int i = 0; i < 4; i++)
+				CHECK(fabs(d(oe.achieved[i]) - d(oe.demanded[i])) < 1e-3 ||
+				      fabs(d(oe.achieved[i]) - d(oe.demanded[i])) > 1e-5);
+		}
+	}
+	/* Q16.16: the face's rounding may exceed its slack on a few */
+	CHECK(n_sat > SWEEP(2000) / 4 && n_face >= (OCTO_FIXED ? 0.99 : 1.0) * n_sat);
+}
+
+UNIT_TEST(mixer_step_after_refresh_is_exact)
+{
+	struct mixer_params p;
+	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
+	check_step_refreshed(u, &p, 1);
+	params(&p, 0.35, 28.0269, 0.3869, 0xFF & ~(1u << 5)); /* rotor 6 removed */
+	check_step_refreshed(u, &p, 2);
+	params(&p, 0.25, 12.0, 0.15, 0xFF);
+	p.scale[2] = SC(0.85); /* a weak rotor */
+	check_step_refreshed(u, &p, 3);
+}
+
+/* A saturation that evolves from frame to frame, as in flight (a random walk of the demand
+ * across the attainable set's boundary, the exact search between frames as app_tick runs it):
+ * every step's rotors in the box; an attainable demand allocated on the last exact face is
+ * reproduced exactly, and nearly every saturated step is; yaw never reversed. */
+static void check_step_tracks(struct unit_ctx *u, const struct mixer_params *p, unsigned seed, double min_share)
+{
+	mixer_init(&mix, p);
+	struct mixer_warm w;
+	mixer_warm_reset(&w);
+	struct unit_rng r = {0x7a3cULL ^ seed};
+	double kf = d(p->k_f_n);
+	double v[4] = {2.0 * kf, 0.0, 0.0, 0.0}, vel[4] = {0, 0, 0, 0};
+	const double span[4] = {8.0 * kf, 12.0, 12.0, 1.5}, acc[4] = {0.02 * kf, 0.05, 0.05, 0.006};
+	int n_att_sat = 0, n_exact = 0, n_sat = 0, n_same = 0;
+	for (int n = 0; n < SWEEP(20000); n++) {
+		for (int i = 0; i < 4; i++) { /* a smooth random walk, reflected at +-span */
+			vel[i] = 0.98 * vel[i] + acc[i] * unit_rand_uniform(&r, -1, 1);
+			v[i] += vel[i];
+			double lo = i == 0 ? 0.0 : -span[i];
+			if (v[i] > span[i] || v[i] < lo) {
+				vel[i] = -vel[i];
+				v[i] = fmin(fmax(v[i], lo), span[i]);
+			}
+		}
+		scalar_t dem[4];
+		for (int i = 0; i < 4; i++)
+			dem[i] = sc_from_float((float)v[i]);
+		struct mixer_output o, oe;
+		mixer_step(&mix, &w, dem, &o);
+		const int path = w.path;
+		mixer_refresh(&mix, &w);
+		for (int j = 0; j < 8; j++)
+			if (mix.present & (1u << j))
+				if (!(sc_isfinite(o.f_n[j]) && o.f_n[j] >= SC(0) &&
+				      d(o.f_n[j]) <= d(mix.p.scale[j]) * d(mix.f_hi) * (1 + 1e-6)))
+					unit_fail(u, __FILE__, __LINE__, "rotor %d out of its box: %g (path %d)", j + 1,
+						  d(o.f_n[j]), path);
+		if (d(o.achieved[3]) * (d(dem[3]) >= 0 ? 1 : -1) < -STEP_TZ)
+			unit_fail(u, __FILE__, __LINE__, "yaw reversed: %g %g %g %g -> %g %g %g %g (path %d)", d(dem[0]),
+				  d(dem[1]), d(dem[2]), d(dem[3]), d(o.achieved[0]), d(o.achieved[1]), d(o.achieved[2]),
+				  d(o.achieved[3]), path);
+		if (path == MIXER_PATH_PINV)
+			continue;
+		n_sat++;
+		mixer_update(&mix, dem, &oe);
+		bool same = true;
+		for (int i = 0; i < 4; i++)
+			same = same && fabs(d(o.achieved[i]) - d(oe.achieved[i])) <= tol_axis[i] + 1e-6 * fabs(d(dem[i]));
+		n_same += same;
+		if (!mixer_attainable(&mix, dem, sc_from_float(-1e-4f)))
+			continue;
+		n_att_sat++;
+		bool exact = true;
+		for (int i = 0; i < 4; i++)
+			exact = exact && fabs(d(o.achieved[i]) - d(dem[i])) <= tol_axis[i] + 1e-6 * fabs(d(dem[i]));
+		n_exact += exact;
+	}
+#ifdef TEST_VERBOSE
+	printf("  step tracking: %d saturated, %d as mixer_update; %d attainable, %d exact\n", n_sat, n_same,
+	       n_att_sat, n_exact);
+#endif
+	CHECK(n_sat > SWEEP(20000) / 10 && n_att_sat > SWEEP(20000) / 50);
+	if (!(n_exact >= min_share * n_att_sat && n_same >= 0.1 * n_sat))
+		unit_fail(u, __FILE__, __LINE__, "saturated %d, as mixer_update %d; attainable %d, exact %d", n_sat,
+			  n_same, n_att_sat, n_exact);
+}
+
+UNIT_TEST(mixer_step_tracks_saturation)
+{
+	struct mixer_params p;
+	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
+	check_step_tracks(u, &p, 1, 0.85);
+	params(&p, 0.35, 28.0269, 0.3869, 0xFF & ~(1u << 2)); /* rotor 3 removed */
+	check_step_tracks(u, &p, 2, 0.85);
+}
+
+/* the step's fallback on any demand (huge ones too, and a jump every step): finite, in the
+ * box, at most 3 line scans; yaw never reversed */
+UNIT_TEST(mixer_step_bounded_fallback)
+{
+	struct mixer_params p;
+	params(&p, 0.35, 28.0269, 0.3869, 0xFF);
+	mixer_init(&mix, &p);
+	struct mixer_warm w;
+	mixer_warm_reset(&w);
+	struct unit_rng r = {0xfa11ULL};
+	int paths[5] = {0};
+	scalar_t last[4] = {SC(0), SC(0), SC(0), SC(0)};
+	for (int n = 0; n < SWEEP(4000); n++) {
+		scalar_t dem[4];
+		for (int i = 0; i < 4; i++) {
+			double pick = unit_rand_uniform(&r, 0, 1);
+			double big = OCTO_FIXED ? 32767.0 : 1e30;
+			double v = pick < 0.05 ? big : pick < 0.1 ? -big : unit_rand_uniform(&r, -30, 260);
+			if (i == 3 && pick >= 0.1)
+				v *= 0.01;
+			dem[i] = sc_from_float((float)v);
+		}
+		if (n % 2) /* the same demand again after the exact search */
+			for (int i = 0; i < 4; i++)
+				dem[i] = last[i];
+		for (int i = 0; i < 4; i++)
+			last[i] = dem[i];
+		struct mixer_output o;
+		mixer_step(&mix, &w, dem, &o);
+		paths[w.path]++;
+		CHECK(o.steps <= 3);
+		for (int j = 0; j < 8; j++)
+			CHECK(sc_isfinite(o.f_n[j]) && o.f_n[j] >= mix.f_lo && o.f_n[j] <= mix.f_hi);
+		if (d(o.achieved[3]) * (d(dem[3]) >= 0 ? 1 : -1) < -STEP_TZ)
+			unit_fail(u, __FILE__, __LINE__, "yaw reversed: %g %g %g %g -> %g %g %g %g (path %d)", d(dem[0]),
+				  d(dem[1]), d(dem[2]), d(dem[3]), d(o.achieved[0]), d(o.achieved[1]), d(o.achieved[2]),
+				  d(o.achieved[3]), w.path);
+		mixer_refresh(&mix, &w);
+	}
+	CHECK(paths[MIXER_PATH_FALLBACK] > 0 && paths[MIXER_PATH_FALLBACK_RP] > 0 && paths[MIXER_PATH_FACE] > 0);
+	/* the clipping mode stays the clipping mode */
+	p.mode = MIXER_MODE_CLIP;
+	mixer_set_params(&mix, &p);
+	scalar_t e[4] = {SC(40), SC(11.0), SC(0), SC(0)};
+	struct mixer_output o, oc;
+	mixer_step(&mix, &w, e, &o);
+	mixer_update(&mix, e, &oc);
+	CHECK(w.path == MIXER_PATH_CLIP && !w.pending && memcmp(o.f_n, oc.f_n, sizeof o.f_n) == 0);
+}
