@@ -117,7 +117,7 @@ PARAM(ID_SWP_DZ, id_swp_dz, 0.3f, 0.05f, 1.2f, "m", "IMU rotor experiment: climb
 PARAM(ID_IZZ_PRI_SD, id_izz_pri_sd, 0.0f, 0.0f, 1.0f, "",
       "Relative sd of VEH_IZZ as a prior (0: none): without ESC torque k_tau is then VEH_IZZ x the ratio k_tau/I_z")
 #undef PARAM_FLAGS
-#define PARAM_FLAGS PARAM_READONLY
+#define PARAM_FLAGS (PARAM_LOCKED | PARAM_READONLY)
 PARAM(ID_KTIZ, id_ktiz, 0.0f, -1e9f, 1e9f, "1/s^2",
       "Result (read-only): k_tau / I_z from the gyro (identifiable without torque sensing)")
 PARAM(ID_KTIZ_SD, id_ktiz_sd, 0.0f, -1e9f, 1e9f, "1/s^2", "Result (read-only): standard deviation of ID_KTIZ")

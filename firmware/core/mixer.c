@@ -811,7 +811,7 @@ void mixer_step(const struct mixer *m, struct mixer_warm *s, const scalar_t dema
 		 * at what it achieved (yaw between zero and the demand), the others as demanded */
 		scalar_t d[NA], u[NR];
 		for (int i = 0; i < NA; i++) {
-			scalar_t t = (s->held >> i & 1u) ? s->t_ex[i] : demand[i];
+			scalar_t t = (((unsigned)s->held >> (unsigned)i) & 1u) ? s->t_ex[i] : demand[i];
 			if (i == 3)
 				t = mclamp(t, mmin(SC_ZERO, demand[3]), mmax(SC_ZERO, demand[3]));
 			d[i] = sc_sub(t, s->t_ex[i]);
