@@ -108,6 +108,7 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	c->swp_thr = cfg_f(p->id_swp_thr, 0.25f);
 	c->swp_dz = cfg_f(p->id_swp_dz, 0.3f);
 	c->izz_sd = cfg_f(p->id_izz_pri_sd, 0.0f);
+	c->imu_time = cfg_f(p->id_imu_time, 30.0f);
 }
 
 /* Status lines are queued with their arguments and formatted (vsnprintf with %f: costly) by
@@ -348,27 +349,32 @@ static scalar_t imu_force_up(const struct exp_input *in, const struct app_params
 	return sc_from_float(p->veh_mass * p->veh_grav * (r20 * a[0] + r21 * a[1] + r22 * a[2]));
 }
 
-/* The IMU rotor experiment's throttle sweep: a collective step of ID_SWP_THR above the hover
- * throttle thr_h held for the frames whose climb (the step's acceleration a, then coasting up
- * against gravity) stays within ID_SWP_DZ: dz = a T^2 (1 + a / g) / 2. The curve's prior
- * gives a; one step every SWP_PERIOD_S. */
+/* The IMU rotor experiment's throttle sweep: collective steps above the hover throttle thr_h,
+ * at the shares SWP_SHARE of ID_SWP_THR in turn (the rotors' speeds, and so the frequencies
+ * their vibration aliases to, differ from step to step), each held for the frames whose
+ * climb (the step's acceleration a, then coasting up against gravity) stays within
+ * ID_SWP_DZ: dz = a T^2 (1 + a / g) / 2. The curve's prior gives a; one step every
+ * SWP_PERIOD_S. */
 #define SWP_PERIOD_S 1.0f
+static const float SWP_SHARE[EXP_SWP_LEVELS] = {1.0f, 0.55f, 0.8f, 0.35f};
 static void sweep_plan(struct experiment *e, const struct app_params *p, float thr_h)
 {
 	const struct exp_cfg *cf = &e->cfg;
-	float c = p->mot_curve, thr_max = isfinite(p->mot_thr_max) ? p->mot_thr_max : 1.0f;
-	float top = fminf(thr_h + cf->swp_thr, thr_max);
-	float gh = (1.0f - c) * thr_h + c * thr_h * thr_h, gt = (1.0f - c) * top + c * top * top;
-	float g = p->veh_grav, a = gh > 0.0f ? g * (gt / gh - 1.0f) : 0.0f;
-	e->swp_len = 0u;
+	float c = p->mot_curve, thr_max = isfinite(p->mot_thr_max) ? p->mot_thr_max : 1.0f, g = p->veh_grav;
+	float gh = (1.0f - c) * thr_h + c * thr_h * thr_h;
 	e->swp_per = (uint32_t)(SWP_PERIOD_S * e->inv_dt_nom + 0.5f);
-	if (!(a > 0.0f) || !(cf->swp_thr > 0.0f))
-		return;
-	float t = sqrtf(2.0f * cf->swp_dz / (a * (1.0f + a / g)));
-	e->swp_len = (uint32_t)(t * e->inv_dt_nom + 0.5f);
-	if (e->swp_len < 1u)
-		e->swp_len = 1u;
-	e->swp_thr = sc_from_float(top - thr_h);
+	for (int k = 0; k < EXP_SWP_LEVELS; k++) {
+		float top = fminf(thr_h + SWP_SHARE[k] * cf->swp_thr, thr_max);
+		float gt = (1.0f - c) * top + c * top * top, a = gh > 0.0f ? g * (gt / gh - 1.0f) : 0.0f;
+		e->swp_len[k] = 0u;
+		e->swp_thr[k] = SC_ZERO;
+		if (!(a > 0.0f) || !(cf->swp_thr > 0.0f))
+			continue;
+		float t = sqrtf(2.0f * cf->swp_dz / (a * (1.0f + a / g)));
+		uint32_t n = (uint32_t)(t * e->inv_dt_nom + 0.5f);
+		e->swp_len[k] = n < 1u ? 1u : (n > e->swp_per / 2u ? e->swp_per / 2u : n);
+		e->swp_thr[k] = sc_from_float(top - thr_h);
+	}
 }
 
 /* ---------------------------------------------------------------- contract */
@@ -462,7 +468,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	if (k == PK_ROTOR && cf->src == EXP_SRC_IMU) {
 		/* the accelerometer sees the rotors' sum: the null-space dithers (the vehicle still)
 		 * plus a collective dither (a fast vertical jiggle) and the throttle sweep */
-		e->t_run = cf->exc_time;
+		e->t_run = cf->imu_time;
 		uint32_t kind = cf->exc_kind;
 		xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
 		xp.amplitude = sc_from_float(cf->exc_amp);
@@ -474,7 +480,8 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 			.kf0 = p->veh_kf,
 			.curve0 = p->mot_curve,
 			.est_curve = cf->crv_est,
-			.n_frames = (uint32_t)(cf->exc_time / e->dt_nom + 0.5f),
+			.n_frames = (uint32_t)(cf->imu_time / e->dt_nom + 0.5f),
+			.block_frames = (uint32_t)(SWP_PERIOD_S / e->dt_nom + 0.5f),
 		};
 		float thr_h = 0.0f;
 		for (int j = 0; j < HAL_ROTORS; j++) {
@@ -748,8 +755,8 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	say(e, sev, "ID motor lag %.4f +/- %.4f s delay %d fr", (double)r.tau, (double)r.tau_sd, (int)r.delay);
 	if (e->cfg.crv_est)
 		say(e, sev, "ID curve %.3f +/- %.3f", (double)r.curve, (double)r.curve_sd);
-	say(e, APP_SEV_INFO, "ID collective NE %.3f noise %.4f N HAC %.2f", (double)r.ne, (double)r.noise_sd,
-	    (double)r.hac);
+	say(e, APP_SEV_INFO, "ID collective NE %.3f noise %.4f N", (double)r.ne, (double)r.noise_sd);
+	say(e, APP_SEV_INFO, "ID %d clusters: sd x %.2f (vibration)", (int)r.blocks, (double)sqrtf(r.hac));
 	say(e, APP_SEV_INFO, "ID accelerometer scale %.4f +/- %.4f (in flight)", (double)r.kappa, (double)r.kappa_sd);
 	say(e, APP_SEV_INFO, "ID ktau: not seen by the IMU (the ratio: Izz phase)");
 	if (!model_ok) {
@@ -1033,11 +1040,12 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			imu_id_step(&e->imid, tp, imu_force(in, p), imu_force_up(in, p),
 				    sc_from_float(in->frame->vel_i_mps[2]), use);
 		/* the sweep's steps start half a period into the excitation */
-		uint32_t ph = (e->rot_k + e->swp_per / 2u) % (e->swp_per ? e->swp_per : 1u);
+		uint32_t per = e->swp_per ? e->swp_per : 1u, kk = e->rot_k + per / 2u;
+		uint32_t ph = kk % per, lv = (kk / per) % EXP_SWP_LEVELS;
 		null_dither(e, running, running ? excite_update(&e->exc) : SC_ZERO, out);
 		scalar_t d0 = running ? excite_update(&e->exc3) : SC_ZERO;
-		if (running && ph < e->swp_len)
-			d0 = sc_add(d0, e->swp_thr);
+		if (running && ph < e->swp_len[lv])
+			d0 = sc_add(d0, e->swp_thr[lv]);
 		for (int j = 0; j < HAL_ROTORS; j++)
 			out->thr_delta[j] = sc_add(out->thr_delta[j], d0);
 	} else if (k == PK_ROTOR) {

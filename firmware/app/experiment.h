@@ -32,6 +32,7 @@
 #define EXP_MAX_PHASES 6
 #define EXP_QUEUE 20
 #define EXP_TILT_ABORT_DEG 15.0f
+#define EXP_SWP_LEVELS 4 /* the IMU rotor experiment's sweep levels */
 
 enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
 
@@ -99,7 +100,7 @@ struct exp_cfg {
 	uint32_t exc_kind, exc_div, seed, delay_fr;
 	bool exc_null, crv_est;
 	enum exp_source src;
-	float col_amp, swp_thr, swp_dz, izz_sd; /* the IMU rotor experiment's; I_z's prior */
+	float col_amp, swp_thr, swp_dz, izz_sd, imu_time; /* the IMU rotor experiment's; I_z's prior */
 };
 
 /* the rotors as the identified model has them: each throttle sent through the delay and the
@@ -147,11 +148,13 @@ struct experiment {
 	int gap_hold;               /* frames left without inertia updates after a gap */
 	struct exp_cfg cfg;
 	struct excite exc;
-	struct excite exc2;        /* rotor experiment: the second pattern's dither */
-	struct excite exc3;        /* IMU rotor experiment: the collective dither */
-	uint32_t swp_len, swp_per; /* IMU rotor experiment: the sweep's frames and its period */
-	scalar_t swp_thr;          /* the sweep's step (throttle) */
-	struct exp_rmodel rm;      /* IMU source: the modelled thrusts (inertia, validation) */
+	struct excite exc2; /* rotor experiment: the second pattern's dither */
+	struct excite exc3; /* IMU rotor experiment: the collective dither */
+	/* IMU rotor experiment: the sweep's steps (throttle above hover) and their frames, cycled,
+	 * one per period */
+	uint32_t swp_len[EXP_SWP_LEVELS], swp_per;
+	scalar_t swp_thr[EXP_SWP_LEVELS];
+	struct exp_rmodel rm; /* IMU source: the modelled thrusts (inertia, validation) */
 	scalar_t f_model[HAL_ROTORS], tq_model[HAL_ROTORS];
 	uint32_t rot_k;      /* rotor experiment: excited frames so far */
 	uint32_t est_wait;   /* steps until est[] / est_sd[] are read again */

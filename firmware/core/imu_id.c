@@ -102,9 +102,7 @@ void imu_id_hold(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS])
 		m->fw_sum += m->q_fw;
 		m->n_cal++;
 	}
-	m->n_fr = 0;     /* the smoother restarts after a gap */
-	m->hac_head = 0; /* the HAC ring restarts after a gap: no products across it */
-	memset(m->hac_u, 0, sizeof m->hac_u);
+	m->n_fr = 0; /* the smoother restarts after a gap */
 }
 
 /* inverse of a symmetric positive definite matrix (upper triangle) into h, by Cholesky
@@ -227,6 +225,37 @@ static void add_outer(float g[NT], const float x[NP], const float y[NP])
 			g[ut(i, k)] += 0.5f * (x[i] * y[k] + x[k] * y[i]);
 }
 
+/* the frozen hypothesis' frame into its block; a full set of blocks merges in pairs */
+static void cl_add(struct imu_id *m, float f)
+{
+	float x[NP], xr;
+	regs(m, m->cl_d, m->cl_l, x, &xr);
+	float z = f - m->cfg.kf0 * xr;
+	struct imu_id_stat *b = &m->blk[m->nb];
+	add_outer(b->g, x, x);
+	for (unsigned i = 0; i < NP; i++)
+		b->b[i] += x[i] * z;
+	b->rr += z * z;
+	if (++m->cl_k < m->cl_len)
+		return;
+	m->cl_k = 0;
+	if (++m->nb < IMU_ID_BLOCKS)
+		return;
+	for (unsigned k = 0; k < IMU_ID_BLOCKS / 2u; k++) {
+		struct imu_id_stat t = m->blk[2u * k];
+		const struct imu_id_stat *p1 = &m->blk[2u * k + 1u];
+		for (unsigned i = 0; i < NT; i++)
+			t.g[i] += p1->g[i];
+		for (unsigned i = 0; i < NP; i++)
+			t.b[i] += p1->b[i];
+		t.rr += p1->rr;
+		m->blk[k] = t;
+	}
+	memset(&m->blk[IMU_ID_BLOCKS / 2u], 0, (IMU_ID_BLOCKS / 2u + 1u) * sizeof m->blk[0]);
+	m->nb = IMU_ID_BLOCKS / 2u;
+	m->cl_len *= 2u;
+}
+
 void imu_id_process(struct imu_id *m)
 {
 	if (!m->q_pending)
@@ -266,66 +295,69 @@ void imu_id_process(struct imu_id *m)
 				s->b[i] += x[i] * z;
 			s->rr += z * z;
 		}
-	if (!m->hac_on && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_exc >= 30u) {
+	if (!m->cl_on && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_exc >= 30u) {
 		unsigned bd, bl;
-		float h[NP][NP];
 		best_hyp(m, &bd, &bl);
-		m->hac_d = (uint8_t)bd;
-		m->hac_l = (uint8_t)bl;
-		hyp_solve(m, &m->st[bd][bl], m->hac_th, h);
-		m->hac_on = true;
+		m->cl_d = (uint8_t)bd;
+		m->cl_l = (uint8_t)bl;
+		m->cl_len = c->block_frames ? c->block_frames : 90u;
+		m->cl_on = true;
 	}
-	if (m->hac_on) {
-		float x[NP], xr;
-		regs(m, m->hac_d, m->hac_l, x, &xr);
-		float e = f - c->kf0 * xr;
-		for (unsigned i = 0; i < NP; i++)
-			e -= m->hac_th[i] * x[i];
-		float u[NP];
-		for (unsigned i = 0; i < NP; i++)
-			u[i] = x[i] * e;
-		add_outer(m->hac_s, u, u);
-		/* Bartlett weights over the ring (newest first, zeros after a restart): the
-		 * cross terms u_k v' + v u_k' */
-		for (unsigned k = 0; k < IMU_ID_HAC; k++) {
-			unsigned i = (m->hac_head + IMU_ID_HAC - 1u - k) % IMU_ID_HAC;
-			float w = 1.0f - (float)(k + 1u) / (float)(IMU_ID_HAC + 1);
-			float v[NP], uw[NP];
-			for (unsigned q = 0; q < NP; q++) {
-				v[q] = m->hac_u[i][q];
-				uw[q] = 2.0f * w * u[q];
-			}
-			add_outer(m->hac_s, uw, v);
-		}
-		memcpy(m->hac_u[m->hac_head], u, sizeof u);
-		m->hac_head = (uint8_t)((m->hac_head + 1u) % IMU_ID_HAC);
-		add_outer(m->hac_g, x, x);
-		m->hac_ee += e * e;
-		m->hac_n++;
-	}
+	if (m->cl_on)
+		cl_add(m, f);
 }
 
-/* The parameters' HAC (Newey-West) covariance, H S H with H the inverse of the frozen
- * model's G, scaled from its frames to all the excited ones; false when there is none. */
-static bool hac_cov(const struct imu_id *m, float v[NP][NP])
+/* The clusters' variance factor for the projection j of the parameters: the cluster-robust
+ * variance of j' theta over its white-noise variance, both on the frozen hypothesis' frames
+ * (its residuals from theta, the whole flight's estimate), with the small-sample factors;
+ * 1 with fewer than 4 clusters (*g_out: the clusters used). */
+static float cl_factor(const struct imu_id *m, const float th[NP], const float j[NP], unsigned *g_out)
 {
-	if (!m->hac_on || m->hac_n < 2u * IMU_ID_HAC || !(m->hac_ee > 0.0f) || m->n_exc == 0u)
-		return false;
-	float g[NT], b[NP], h[NP][NP], sf[NT];
-	pinned(m, m->hac_g, NULL, g, b);
-	if (!inv_sym(g, h))
-		return false;
-	pinned(m, m->hac_s, NULL, sf, b);
-	float k = (float)m->hac_n / (float)m->n_exc;
-	for (unsigned i = 0; i < NP; i++)
-		for (unsigned q = 0; q < NP; q++) {
-			float w = 0.0f;
-			for (unsigned a = 0; a < NP; a++)
-				for (unsigned c = 0; c < NP; c++)
-					w += h[i][a] * sf[ut(a, c)] * h[c][q];
-			v[i][q] = w * k;
+	unsigned nb =
+		m->nb + (m->cl_k * 2u >= m->cl_len && m->cl_len > 0u ? 1u : 0u); /* a half-full last block counts */
+	*g_out = nb;
+	if (!m->cl_on || nb < 4u)
+		return 1.0f;
+	float gs[NT] = {0}, ss[NT] = {0}, ee = 0.0f;
+	uint32_t n = 0;
+	for (unsigned k = 0; k < nb; k++) {
+		const struct imu_id_stat *b = &m->blk[k];
+		/* the block's score r = b - G theta; its e'e = rr - 2 theta' b + theta' G theta */
+		float r[NP], gth[NP];
+		for (unsigned i = 0; i < NP; i++) {
+			gth[i] = 0.0f;
+			for (unsigned q = 0; q < NP; q++)
+				gth[i] += b->g[ut(i, q)] * th[q];
+			r[i] = b->b[i] - gth[i];
+			ee += th[i] * (gth[i] - 2.0f * b->b[i]);
 		}
-	return true;
+		ee += b->rr;
+		add_outer(ss, r, r);
+		for (unsigned i = 0; i < NT; i++)
+			gs[i] += b->g[i];
+		n += k < m->nb ? m->cl_len : m->cl_k;
+	}
+	float g[NT], h[NP][NP], sp[NT], bb[NP];
+	pinned(m, gs, NULL, g, bb);
+	if (!inv_sym(g, h) || !(ee > 0.0f) || n <= NP)
+		return 1.0f;
+	pinned(m, ss, NULL, sp, bb);
+	float hj[NP], vc = 0.0f, vw = 0.0f;
+	for (unsigned i = 0; i < NP; i++) {
+		hj[i] = 0.0f;
+		for (unsigned q = 0; q < NP; q++)
+			hj[i] += h[i][q] * j[q];
+	}
+	for (unsigned i = 0; i < NP; i++) {
+		vw += j[i] * hj[i];
+		for (unsigned q = 0; q < NP; q++)
+			vc += hj[i] * sp[ut(i, q)] * hj[q];
+	}
+	vw *= ee / (float)(n - NP);
+	float gf = (float)nb;
+	vc *= gf / (gf - 1.0f) * (gf - 1.0f) / (gf - 3.0f);
+	float q = vw > 0.0f ? vc / vw : 1.0f;
+	return q > 1.0f && isfinite(q) ? q : 1.0f;
 }
 
 /* j' V j */
@@ -380,14 +412,17 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	float s2 = j0 / (float)(n - np);
 	r->ne = nz_var > 0.0f ? s2 / nz_var : INFINITY;
 
-	float th[NP], h[NP][NP], vh[NP][NP], v[NP][NP];
+	float th[NP], h[NP][NP], v[NP][NP], thc[NP], hc[NP][NP];
 	hyp_solve(m, &m->st[bd][bl], th, h);
-	/* two covariances: white noise (s2 H) and HAC (coloured, heteroscedastic: the
-	 * vibration grows with the rotor speed); each quantity takes the larger variance */
+	/* the white-noise covariance (s2 H); each quantity's variance then scaled by the
+	 * clusters' factor for its projection (the frozen hypothesis' estimate theta) */
 	for (unsigned i = 0; i < NP; i++)
 		for (unsigned k = 0; k < NP; k++)
 			v[i][k] = s2 * h[i][k];
-	bool have_hac = hac_cov(m, vh);
+	memset(thc, 0, sizeof thc);
+	if (m->cl_on)
+		hyp_solve(m, &m->st[m->cl_d][m->cl_l], thc, hc);
+	unsigned ncl = 0;
 	/* the raw (uncalibrated) k_f = A + B, the curve c = B / (A + B) */
 	float A = c->est_curve ? c->kf0 * (1.0f - c->curve0) + th[0] : c->kf0 + th[0];
 	float B = c->est_curve ? c->kf0 * c->curve0 + th[P_B] : 0.0f;
@@ -395,8 +430,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->curve = c->est_curve ? (kf_raw != 0.0f ? B / kf_raw : 0.0f) : c->curve0;
 	if (c->est_curve) { /* dc/dA = -B / K^2, dc/dB = A / K^2 */
 		float k2 = kf_raw * kf_raw, jc[NP] = {-B / k2, A / k2, 0.0f, 0.0f};
-		float w = quad(v, jc);
-		r->curve_sd = sqrtf(have_hac ? fmaxf(w, quad(vh, jc)) : w);
+		r->curve_sd = sqrtf(quad(v, jc) * cl_factor(m, thc, jc, &ncl));
 	}
 	/* the calibration: kappa = m (g T + v_last - v0) / (sum (F_w - D) dt), D the offset;
 	 * k_f = kappa (A + B), its sd from the parameters' covariance through the Jacobian
@@ -412,18 +446,16 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->kf = kap * kf_raw;
 	float jac[NP] = {kap, c->est_curve ? kap : 0.0f, 0.0f, fm > 0.0f ? r->kf / fm : 0.0f};
 	float var = quad(v, jac);
-	float vw = var;
-	if (have_hac) {
-		var = quad(vh, jac);
-		r->hac = vw > 0.0f ? var / vw : 1.0f;
-		var = fmaxf(var, vw);
-	}
-	float vo = have_hac ? fmaxf(v[P_OFS][P_OFS], vh[P_OFS][P_OFS]) : v[P_OFS][P_OFS];
+	r->hac = cl_factor(m, thc, jac, &ncl);
+	r->blocks = ncl;
+	var *= r->hac;
+	const float jo[NP] = {0.0f, 0.0f, 0.0f, 1.0f}, jl[NP] = {0.0f, 0.0f, 1.0f, 0.0f};
+	float vo = v[P_OFS][P_OFS] * cl_factor(m, thc, jo, &ncl);
 	r->kappa_sd = fm > 0.0f ? sqrtf(kap_sd * kap_sd + kap * kap * vo / (fm * fm)) : 0.0f;
 	r->kf_sd = sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
 	/* the lag: the grid point moved by the Gauss-Newton step d ln tau = th[2] / k_f */
 	float dl = kf_raw > 0.0f ? th[P_LAG] / kf_raw : 0.0f;
-	float vl = have_hac ? fmaxf(v[P_LAG][P_LAG], vh[P_LAG][P_LAG]) : v[P_LAG][P_LAG];
+	float vl = v[P_LAG][P_LAG] * cl_factor(m, thc, jl, &ncl);
 	float dl_sd = kf_raw > 0.0f ? sqrtf(fmaxf(vl, 0.0f)) / kf_raw : INFINITY;
 	float hstep = grid_step();
 	r->tau = lag_tau(bl) * expf(dl);

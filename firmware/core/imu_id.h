@@ -17,13 +17,17 @@
  * sensitivity x3 = sum s_j g'(y_j) dy_j / d ln tau (a filter beside each lag filter, with
  * the reference curve in g'), so its least squares is a Gauss-Newton step in ln tau from the
  * grid point: k_f d ln tau is a third linear parameter, and tau, k_f and c come with their
- * joint covariance. The
- * accelerometer's noise is coloured (the rotors' vibration, aliased at the frame rate), so
- * the white-noise covariance is replaced by a Newey-West (HAC) one measured on the model
- * frozen at IMU_ID_FREEZE of the planned frames: the ratio of the two scales every sd.
+ * joint covariance.
+ *
  * Both sides pass through the same [1 2 1] / 4 smoother first: its zero at half the frame
- * rate removes most of the vibration (a rotor near the frame rate aliases there), and a
- * linear filter on both sides keeps the regression's parameters.
+ * rate removes the vibration of rotors turning near half the frame rate (a hover), and a
+ * linear filter on both sides keeps the regression's parameters. What remains is coloured
+ * and grows with the rotor speed (near the frame rate a rotor's tone aliases to almost a
+ * constant over a sweep step), so each sd is the white-noise one scaled by a cluster-robust
+ * factor measured on the hypothesis frozen at IMU_ID_FREEZE of the planned frames, its
+ * clusters blocks of the sweep's period, with the small-sample factors of G clusters
+ * (G / (G - 1), and (G - 1) / (G - 3) for the t-distribution the estimate then follows).
+ *
  * The accelerometer's bias and scale error are calibrated in flight: its offset is a fourth
  * parameter of the regression (a constant beside the thrust's linear and quadratic shapes,
  * which the throttle sweep separates), and over the excited frames the vertical (world)
@@ -49,9 +53,12 @@
 #define IMU_ID_TAU_MIN 0.005f
 #define IMU_ID_TAU_MAX 0.25f
 #define IMU_ID_RING (IMU_ID_DELAYS + 2) /* the rings also feed the [1 2 1] / 4 smoother */
-#define IMU_ID_HAC 45                   /* Newey-West lags, frames (0.5 s at 90 Hz) */
+#define IMU_ID_BLOCKS 32                /* clusters of the variance (merged in pairs when full) */
 #define IMU_ID_VEL_SD 0.05f             /* the velocity's error at either end of the calibration, m/s */
-#define IMU_ID_FREEZE 0.35f             /* share of the planned frames after which the HAC model freezes */
+#define IMU_ID_FREEZE 0.2f              /* share of the planned frames after which the clusters' hypothesis freezes */
+
+#define IMU_ID_NP 4  /* parameters: A (or k_f), B, k_f d ln tau, the accelerometer's offset */
+#define IMU_ID_NT 10 /* their upper triangle */
 
 struct imu_id_cfg {
 	float dt_s;                 /* frame period */
@@ -61,10 +68,8 @@ struct imu_id_cfg {
 	bool est_curve;             /* estimate c (else c = curve0) */
 	float scale[IMU_ID_ROTORS]; /* per-rotor effectiveness (MOT_SCALE) */
 	uint32_t n_frames;          /* excited frames planned */
+	uint32_t block_frames;      /* a cluster's frames (the sweep's period; 0: 90) */
 };
-
-#define IMU_ID_NP 4  /* parameters: A (or k_f), B, k_f d ln tau, the accelerometer's offset */
-#define IMU_ID_NT 10 /* their upper triangle */
 
 /* least-squares sums of one hypothesis: G (upper triangle, row by row), b, z'z */
 struct imu_id_stat {
@@ -84,13 +89,11 @@ struct imu_id {
 	/* the still frames' force: its count, mean and spread (the noise, about the mean) */
 	uint32_t nz_n;
 	float nz_s, nz_ss;
-	/* HAC: the frozen hypothesis, its increments' ring, its sums */
-	bool hac_on;
-	uint8_t hac_d, hac_l, hac_head;
-	float hac_th[IMU_ID_NP];
-	float hac_u[IMU_ID_HAC][IMU_ID_NP];
-	float hac_s[IMU_ID_NT], hac_g[IMU_ID_NT], hac_ee; /* sandwich S, G (upper triangles), sum e^2 */
-	uint32_t hac_n;
+	/* the clusters: the frozen hypothesis and its blocks' sums (the last one being filled) */
+	bool cl_on;
+	uint8_t cl_d, cl_l, nb; /* hypothesis, complete blocks */
+	uint32_t cl_len, cl_k;  /* frames per block, frames in the block being filled */
+	struct imu_id_stat blk[IMU_ID_BLOCKS + 1];
 	uint32_t n_exc; /* excited frames so far */
 	/* the accelerometer's calibration in flight: over the excited frames the mean vertical
 	 * specific force is g plus the velocity's change over their time */
@@ -118,7 +121,8 @@ struct imu_id_result {
 	float kf, kf_sd, curve, curve_sd;
 	float ne;              /* residual variance / still-noise variance */
 	float noise_sd;        /* the still frames' force spread, N */
-	float hac;             /* HAC variance over white variance (>= 1 for coloured noise) */
+	float hac;             /* k_f's cluster-robust variance over its white-noise one */
+	uint32_t blocks;       /* clusters behind it */
 	float kappa, kappa_sd; /* the accelerometer's calibration factor found in flight */
 	float offset_n;        /* the accelerometer's offset found, as a force (N) */
 	uint32_t n;
