@@ -109,6 +109,13 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	c->swp_dz = cfg_f(p->id_swp_dz, 0.3f);
 	c->izz_sd = cfg_f(p->id_izz_pri_sd, 0.0f);
 	c->imu_time = cfg_f(p->id_imu_time, 30.0f);
+	/* until this run's IMU rotor experiment says better: k_f's own relative sd (the
+	 * slope about hover is known at least as well as the extrapolation to full throttle) */
+	float kf_rsd = p->veh_kf > 0.0f ? cfg_f(p->id_kf_sd, 0.0f) / p->veh_kf : 0.0f;
+	c->slope_rsd = isfinite(kf_rsd) && kf_rsd > 0.0f ? kf_rsd : 0.0f;
+	/* and the curve's sd through g'(y) = 1 - c + 2 c y, near hover (y << 1): dg'/dc ~ -1 */
+	float crv_sd = cfg_f(p->id_crv_sd, 0.0f);
+	c->gp_rsd = crv_sd > 0.0f ? crv_sd : 0.0f;
 }
 
 /* Status lines are queued with their arguments and formatted (vsnprintf with %f: costly) by
@@ -734,6 +741,9 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 			result(e, PX_MOT_CURVE, r.curve);
 		e->cfg.mot_tau = r.tau;
 		e->cfg.delay_fr = r.delay;
+		e->cfg.slope_rsd = r.slope_rsd;
+		float gp = 1.0f - r.curve + 2.0f * r.curve * r.thr_hover;
+		e->cfg.gp_rsd = gp > 0.0f ? fabsf(2.0f * r.thr_hover - 1.0f) * r.curve_sd / gp : INFINITY;
 	}
 	set_result_bit(e, p, 1u, ok);
 	enum app_id_reason common = !model_ok   ? imu_reason(r.cause)
@@ -831,7 +841,9 @@ static void inertia_advice(struct experiment *e, const struct app_params *p, uns
  * (ID_IZZ_PRI_SD > 0: VEH_IZZ with that relative sd, carried); I_z is never published alone. */
 static void izz_imu_end(struct experiment *e, const struct app_params *p, float est, float sd)
 {
-	float rsd_max = e->cfg.rsd_max, rel = est > 0.0f ? sd / est : INFINITY;
+	/* the yaw torque was veh_ktau g(y): its swings scale with g'(y_h), the curve's */
+	float rsd_max = e->cfg.rsd_max, rel0 = est > 0.0f ? sd / est : INFINITY, gp = e->cfg.gp_rsd;
+	float rel = sqrtf(rel0 * rel0 + gp * gp);
 	float ratio = est > 0.0f ? p->veh_ktau / est : NAN, ratio_sd = ratio * rel;
 	bool fin = isfinite(ratio) && isfinite(ratio_sd) && ratio > 0.0f;
 	bool r_ok = fin && rel < rsd_max;
@@ -930,16 +942,16 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		float gs = cfg_f(p->id_gyr_scl_sd, 0.0f) * est, sd_data = sd;
 		if (isfinite(sd) && isfinite(gs))
 			sd = sqrtf(sd * sd + gs * gs);
+		if (e->cfg.src == EXP_SRC_IMU && ax != 2u) {
+			/* the torque is the model's, its swings about hover scaled by the thrust's
+			 * slope there: the slope's uncertainty passes one for one into the inertia */
+			float rk = e->cfg.slope_rsd;
+			if (isfinite(sd) && rk > 0.0f)
+				sd = sqrtf(sd * sd + rk * est * rk * est);
+		}
 		if (e->cfg.src == EXP_SRC_IMU && ax == 2u) {
 			izz_imu_end(e, p, est, sd);
 			return;
-		}
-		if (e->cfg.src == EXP_SRC_IMU) {
-			/* roll/pitch torque is the model's k_f s_j g(y) l: k_f's uncertainty passes
-			 * one for one into the inertia */
-			float rk = p->veh_kf > 0.0f ? cfg_f(p->id_kf_sd, 0.0f) / p->veh_kf : 0.0f;
-			if (isfinite(sd) && rk > 0.0f)
-				sd = sqrtf(sd * sd + rk * est * rk * est);
 		}
 		float lo, hi, raise;
 		enum ident_verdict v = ident_inertia_accept(est, sd, p->veh_mass, p->veh_arm_l, rsd, &lo, &hi, &raise);

@@ -101,6 +101,8 @@ struct exp_cfg {
 	bool exc_null, crv_est;
 	enum exp_source src;
 	float col_amp, swp_thr, swp_dz, izz_sd, imu_time; /* the IMU rotor experiment's; I_z's prior */
+	float slope_rsd; /* IMU: the modelled thrust's relative sd about hover (imu_id_result) */
+	float gp_rsd;    /* IMU: the curve's slope g'(y_h)'s relative sd (the yaw torque's scale) */
 };
 
 /* the rotors as the identified model has them: each throttle sent through the delay and the

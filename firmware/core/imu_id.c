@@ -277,9 +277,13 @@ void imu_id_process(struct imu_id *m)
 		return; /* the smoother fills */
 	float f = smooth(m->fr);
 	if (!m->q_excited) {
+		float u = 0.0f;
+		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+			u += m->q_thr[j];
 		m->nz_n++;
 		m->nz_s += f;
 		m->nz_ss += f * f;
+		m->nz_thr += u / (float)IMU_ID_ROTORS;
 		return;
 	}
 	m->n_exc++;
@@ -453,6 +457,13 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	float vo = v[P_OFS][P_OFS] * cl_factor(m, thc, jo, &ncl);
 	r->kappa_sd = fm > 0.0f ? sqrtf(kap_sd * kap_sd + kap * kap * vo / (fm * fm)) : 0.0f;
 	r->kf_sd = sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
+	/* the slope at hover: kappa (A + 2 B y_h) */
+	float yh = m->nz_n ? m->nz_thr / (float)m->nz_n : 0.0f, sl_raw = A + 2.0f * B * yh;
+	r->thr_hover = yh;
+	r->slope = kap * sl_raw;
+	float js[NP] = {kap, c->est_curve ? 2.0f * kap * yh : 0.0f, 0.0f, fm > 0.0f ? r->slope / fm : 0.0f};
+	float vs = quad(v, js) * cl_factor(m, thc, js, &ncl) + kap_sd * kap_sd * sl_raw * sl_raw;
+	r->slope_rsd = r->slope > 0.0f ? sqrtf(vs) / r->slope : INFINITY;
 	/* the lag: the grid point moved by the Gauss-Newton step d ln tau = th[2] / k_f */
 	float dl = kf_raw > 0.0f ? th[P_LAG] / kf_raw : 0.0f;
 	float vl = v[P_LAG][P_LAG] * cl_factor(m, thc, jl, &ncl);

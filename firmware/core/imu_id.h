@@ -88,7 +88,7 @@ struct imu_id {
 	struct imu_id_stat st[IMU_ID_DELAYS][IMU_ID_LAGS];
 	/* the still frames' force: its count, mean and spread (the noise, about the mean) */
 	uint32_t nz_n;
-	float nz_s, nz_ss;
+	float nz_s, nz_ss, nz_thr; /* nz_thr: the still frames' summed mean throttle */
 	/* the clusters: the frozen hypothesis and its blocks' sums (the last one being filled) */
 	bool cl_on;
 	uint8_t cl_d, cl_l, nb; /* hypothesis, complete blocks */
@@ -125,6 +125,10 @@ struct imu_id_result {
 	uint32_t blocks;       /* clusters behind it */
 	float kappa, kappa_sd; /* the accelerometer's calibration factor found in flight */
 	float offset_n;        /* the accelerometer's offset found, as a force (N) */
+	/* the thrust's slope at the hover throttle y_h, k_f g'(y_h) (N per unit throttle, a
+	 * rotor), and its relative sd: what scales the inertia experiments' modelled torque
+	 * (the weight pins k_f g(y_h), the collective dither the slope) */
+	float slope, slope_rsd, thr_hover;
 	uint32_t n;
 	enum imu_id_cause cause;
 };
