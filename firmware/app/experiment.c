@@ -495,6 +495,12 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 			ic.scale[j] = mot_scale(p, j);
 			thr_h += sc_to_float(in->thr_prev_all[j]) / (float)HAL_ROTORS;
 		}
+		excite_null_pattern(0, e->pat[0]);
+		excite_null_pattern(1, e->pat[1]);
+		for (int j = 0; j < HAL_ROTORS; j++) {
+			ic.pat[0][j] = sc_to_float(e->pat[0][j]);
+			ic.pat[1][j] = sc_to_float(e->pat[1][j]);
+		}
 		imu_id_init(&e->imid, &ic, in->thr_prev_all);
 		struct excite_params xp2 = xp, xp3 = xp;
 		xp2.seed = xp.seed * 2654435761u + 12345u;
@@ -711,6 +717,7 @@ static enum app_id_reason imu_reason(enum imu_id_cause c)
 	case IMU_ID_DELAY_AMBIGUOUS: return APP_ID_DELAY_AMBIGUOUS;
 	case IMU_ID_MODEL: return APP_ID_MODEL;
 	case IMU_ID_CURVE_WEAK: return APP_ID_UNCERTAIN;
+	case IMU_ID_SCALES: return APP_ID_ROTOR;
 	}
 	return APP_ID_MODEL;
 }

@@ -32,10 +32,13 @@ static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 	const struct imu_id_cfg *c = &m->cfg;
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
 		float a = m->a[l], da = m->da[l], s1 = 0.0f, s2 = 0.0f, s3 = 0.0f;
+		float p1 = 0.0f, p2 = 0.0f;
 		for (unsigned d = IMU_ID_RING - 1; d > 0; d--) {
 			m->x1[l][d] = m->x1[l][d - 1];
 			m->x2[l][d] = m->x2[l][d - 1];
 			m->x3[l][d] = m->x3[l][d - 1];
+			m->q1[l][d] = m->q1[l][d - 1];
+			m->q2[l][d] = m->q2[l][d - 1];
 		}
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
 			float y0 = m->y[l][j];
@@ -48,10 +51,14 @@ static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 			s1 += sj * y;
 			s2 += sj * y * y;
 			s3 += sj * w * ((1.0f - c->curve0) + 2.0f * c->curve0 * y);
+			p1 += c->pat[0][j] * sj * y;
+			p2 += c->pat[1][j] * sj * y;
 		}
 		m->x1[l][0] = s1;
 		m->x2[l][0] = s2;
 		m->x3[l][0] = s3;
+		m->q1[l][0] = p1;
+		m->q2[l][0] = p2;
 	}
 }
 
@@ -225,12 +232,24 @@ static void add_outer(float g[NT], const float x[NP], const float y[NP])
 			g[ut(i, k)] += 0.5f * (x[i] * y[k] + x[k] * y[i]);
 }
 
-/* the frozen hypothesis' frame into its block; a full set of blocks merges in pairs */
+/* the frozen hypothesis' frame into its block; a full set of blocks merges in pairs; and
+ * into the scales' check (the two patterns' responses beside the parameters) */
 static void cl_add(struct imu_id *m, float f)
 {
 	float x[NP], xr;
 	regs(m, m->cl_d, m->cl_l, x, &xr);
 	float z = f - m->cfg.kf0 * xr;
+	float xx[IMU_ID_NX] = {x[0], x[1], x[2], x[3], smooth(&m->q1[m->cl_l][m->cl_d]),
+			       smooth(&m->q2[m->cl_l][m->cl_d])};
+	if (!m->cfg.est_curve)
+		xx[P_B] = 0.0f;
+	for (unsigned i = 0; i < IMU_ID_NX; i++) {
+		for (unsigned k = 0; k < IMU_ID_NX; k++)
+			m->xg[i][k] += xx[i] * xx[k];
+		m->xb[i] += xx[i] * z;
+	}
+	m->xrr += z * z;
+	m->xn++;
 	struct imu_id_stat *b = &m->blk[m->nb];
 	add_outer(b->g, x, x);
 	for (unsigned i = 0; i < NP; i++)
@@ -364,6 +383,81 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 	return q > 1.0f && isfinite(q) ? q : 1.0f;
 }
 
+/* The scales' check: the frozen hypothesis refitted with the two null-space patterns'
+ * responses; each response over its sd in t[2] (0 when the fit is not possible). */
+static void scales_check(const struct imu_id *m, float t[2])
+{
+	enum { N = IMU_ID_NX };
+	double a[N][N], l[N][N] = {{0}}, b[N];
+	t[0] = t[1] = 0.0f;
+	if (m->xn <= 2u * N)
+		return;
+	for (unsigned i = 0; i < N; i++) {
+		b[i] = m->xb[i];
+		for (unsigned k = 0; k < N; k++)
+			a[i][k] = m->xg[i][k];
+	}
+	if (!m->cfg.est_curve) {
+		for (unsigned i = 0; i < N; i++)
+			a[i][P_B] = a[P_B][i] = 0.0;
+		a[P_B][P_B] = 1.0;
+		b[P_B] = 0.0;
+	}
+	double d[N];
+	for (unsigned i = 0; i < N; i++) {
+		if (!(a[i][i] > 0.0))
+			return;
+		d[i] = 1.0 / sqrt(a[i][i]);
+	}
+	for (unsigned k = 0; k < N; k++) {
+		double v = a[k][k] * d[k] * d[k];
+		for (unsigned q = 0; q < k; q++)
+			v -= l[k][q] * l[k][q];
+		if (!(v > 1e-12))
+			return;
+		l[k][k] = sqrt(v);
+		for (unsigned i = k + 1; i < N; i++) {
+			double w = a[i][k] * d[i] * d[k];
+			for (unsigned q = 0; q < k; q++)
+				w -= l[i][q] * l[k][q];
+			l[i][k] = w / l[k][k];
+		}
+	}
+	/* solves (D A D) u = r by L L' */
+	double th[N], col[2][N];
+	for (unsigned s = 0; s < 3; s++) {
+		double r[N], y[N], u[N];
+		for (unsigned i = 0; i < N; i++)
+			r[i] = s == 0 ? b[i] * d[i] : (i == N - 3u + s ? d[i] : 0.0);
+		for (unsigned i = 0; i < N; i++) {
+			double w = r[i];
+			for (unsigned q = 0; q < i; q++)
+				w -= l[i][q] * y[q];
+			y[i] = w / l[i][i];
+		}
+		for (unsigned i = N; i-- > 0;) {
+			double w = y[i];
+			for (unsigned q = i + 1; q < N; q++)
+				w -= l[q][i] * u[q];
+			u[i] = w / l[i][i];
+		}
+		for (unsigned i = 0; i < N; i++) {
+			if (s == 0)
+				th[i] = u[i] * d[i];
+			else
+				col[s - 1][i] = u[i] * d[i]; /* column of A^-1 */
+		}
+	}
+	double ee = m->xrr;
+	for (unsigned i = 0; i < N; i++)
+		ee -= th[i] * b[i];
+	double s2 = ee / (double)(m->xn - N);
+	for (unsigned k = 0; k < 2; k++) {
+		double v = s2 * col[k][N - 2u + k];
+		t[k] = v > 0.0 ? (float)(th[N - 2u + k] / sqrt(v)) : 0.0f;
+	}
+}
+
 /* j' V j */
 static float quad(const float v[NP][NP], const float j[NP])
 {
@@ -470,6 +564,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	float dl_sd = kf_raw > 0.0f ? sqrtf(fmaxf(vl, 0.0f)) / kf_raw : INFINITY;
 	float hstep = grid_step();
 	r->tau = lag_tau(bl) * expf(dl);
+	scales_check(m, r->t_pattern);
 	r->tau_sd = r->tau * dl_sd;
 	/* the step must stay within the grid's reach: beyond half a step the neighbour is
 	 * better, and at an end of the grid beyond it the lag is outside the range */
@@ -487,6 +582,8 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 		r->cause = IMU_ID_MODEL;
 	else if (c->est_curve && !(r->curve_sd < 0.2f))
 		r->cause = IMU_ID_CURVE_WEAK;
+	else if (fabsf(r->t_pattern[0]) > IMU_ID_T_ROTOR || fabsf(r->t_pattern[1]) > IMU_ID_T_ROTOR)
+		r->cause = IMU_ID_SCALES;
 	else
 		r->cause = IMU_ID_OK;
 }
@@ -502,6 +599,7 @@ const char *imu_id_cause_text(enum imu_id_cause c)
 	case IMU_ID_DELAY_AMBIGUOUS: return "delay ambiguous";
 	case IMU_ID_MODEL: return "specific force not explained by the rotors";
 	case IMU_ID_CURVE_WEAK: return "thrust curve not determined";
+	case IMU_ID_SCALES: return "a rotor's effectiveness is not MOT_SCALE's";
 	}
 	return "?";
 }
@@ -517,6 +615,7 @@ const char *imu_id_cause_remedy(enum imu_id_cause c)
 	case IMU_ID_LAG_RANGE:
 	case IMU_ID_DELAY_RANGE: return "check the ESC protocol and its latency";
 	case IMU_ID_MODEL: return "check VEH_MASS, the accelerometer's mounting and its vibration";
+	case IMU_ID_SCALES: return "MOT_SCALE1..8 from thrust rows (ID_SOURCE 1) or a bench";
 	}
 	return "";
 }

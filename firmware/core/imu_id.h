@@ -69,7 +69,11 @@ struct imu_id_cfg {
 	float scale[IMU_ID_ROTORS]; /* per-rotor effectiveness (MOT_SCALE) */
 	uint32_t n_frames;          /* excited frames planned */
 	uint32_t block_frames;      /* a cluster's frames (the sweep's period; 0: 90) */
+	float pat[2][IMU_ID_ROTORS]; /* the null-space dithers' patterns (the scales' check) */
 };
+
+#define IMU_ID_NX 6 /* the scales' check: the 4 parameters and the two patterns' responses */
+#define IMU_ID_T_ROTOR 5.0f /* |t| of a pattern's response beyond which the scales are wrong */
 
 /* least-squares sums of one hypothesis: G (upper triangle, row by row), b, z'z */
 struct imu_id_stat {
@@ -83,6 +87,10 @@ struct imu_id {
 	float y[IMU_ID_LAGS][IMU_ID_ROTORS], w[IMU_ID_LAGS][IMU_ID_ROTORS]; /* outputs, d y / d ln tau */
 	/* rings of x1, x2, x3 by frame age */
 	float x1[IMU_ID_LAGS][IMU_ID_RING], x2[IMU_ID_LAGS][IMU_ID_RING], x3[IMU_ID_LAGS][IMU_ID_RING];
+	float q1[IMU_ID_LAGS][IMU_ID_RING], q2[IMU_ID_LAGS][IMU_ID_RING]; /* sum p_kj s_j y_j */
+	/* the scales' check on the frozen hypothesis: G (full), b, z'z over its frames */
+	float xg[IMU_ID_NX][IMU_ID_NX], xb[IMU_ID_NX], xrr;
+	uint32_t xn;
 	float fr[3];   /* the force's last three frames, newest first */
 	uint32_t n_fr; /* consecutive frames in fr (a gap restarts it) */
 	struct imu_id_stat st[IMU_ID_DELAYS][IMU_ID_LAGS];
@@ -112,6 +120,8 @@ enum imu_id_cause {
 	IMU_ID_DELAY_AMBIGUOUS,
 	IMU_ID_MODEL,      /* residuals well above the still noise */
 	IMU_ID_CURVE_WEAK, /* the data cannot tell the curve (no throttle spread) */
+	IMU_ID_SCALES,     /* the force answers a null-space dither: a rotor's effectiveness is
+			    * not MOT_SCALE's (the accelerometer cannot tell which rotor) */
 };
 
 struct imu_id_result {
@@ -123,6 +133,7 @@ struct imu_id_result {
 	float noise_sd;        /* the still frames' force spread, N */
 	float hac;             /* k_f's cluster-robust variance over its white-noise one */
 	uint32_t blocks;       /* clusters behind it */
+	float t_pattern[2];    /* the null-space patterns' responses over their sds */
 	float kappa, kappa_sd; /* the accelerometer's calibration factor found in flight */
 	float offset_n;        /* the accelerometer's offset found, as a force (N) */
 	/* the thrust's slope at the hover throttle y_h, k_f g'(y_h) (N per unit throttle, a
