@@ -109,6 +109,8 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	c->swp_dz = cfg_f(p->id_swp_dz, 0.3f);
 	c->izz_sd = cfg_f(p->id_izz_pri_sd, 0.0f);
 	c->imu_time = cfg_f(p->id_imu_time, 30.0f);
+	c->kf = p->veh_kf;
+	c->curve = p->mot_curve;
 	/* until this run's IMU rotor experiment says better: k_f's own relative sd (the
 	 * slope about hover is known at least as well as the extrapolation to full throttle) */
 	float kf_rsd = p->veh_kf > 0.0f ? cfg_f(p->id_kf_sd, 0.0f) / p->veh_kf : 0.0f;
@@ -320,11 +322,11 @@ static void rmodel_init(struct exp_rmodel *r, const struct app_params *p, const 
 	for (int j = 0; j < HAL_ROTORS; j++) {
 		filt_delay_init(&r->d[j], cf->delay_fr, thr0[j]);
 		filt_lag_init(&r->l[j], sc_from_float(cf->mot_tau), dt, thr0[j]);
-		r->kfs[j] = sc_from_float(p->veh_kf * mot_scale(p, j));
+		r->kfs[j] = sc_from_float(cf->kf * mot_scale(p, j));
 	}
-	r->c = sc_from_float(p->mot_curve);
+	r->c = sc_from_float(cf->curve);
 	r->c1 = sc_sub(SC(1), r->c);
-	r->kt = sc_from_float(p->veh_kf > 0.0f ? p->veh_ktau / p->veh_kf : 0.0f);
+	r->kt = sc_from_float(cf->kf > 0.0f ? p->veh_ktau / cf->kf : 0.0f);
 }
 
 /* n frames of the throttles thr_prev (n > 1 after lost frames: the plant held them); the
@@ -749,6 +751,9 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 		e->cfg.mot_tau = r.tau;
 		e->cfg.delay_fr = r.delay;
 		e->cfg.slope_rsd = r.slope_rsd;
+		e->cfg.kf = r.kf;
+		if (e->cfg.crv_est)
+			e->cfg.curve = r.curve;
 		float gp = 1.0f - r.curve + 2.0f * r.curve * r.thr_hover;
 		e->cfg.gp_rsd = gp > 0.0f ? fabsf(2.0f * r.thr_hover - 1.0f) * r.curve_sd / gp : INFINITY;
 	}

@@ -103,6 +103,8 @@ struct exp_cfg {
 	float col_amp, swp_thr, swp_dz, izz_sd, imu_time; /* the IMU rotor experiment's; I_z's prior */
 	float slope_rsd; /* IMU: the modelled thrust's relative sd about hover (imu_id_result) */
 	float gp_rsd;    /* IMU: the curve's slope g'(y_h)'s relative sd (the yaw torque's scale) */
+	float kf, curve; /* the rotor model the later phases fly with: VEH_KF, MOT_CURVE, or what
+			  * this run found (applied only at the next frame boundary) */
 };
 
 /* the rotors as the identified model has them: each throttle sent through the delay and the
