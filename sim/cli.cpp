@@ -79,7 +79,7 @@ static const char kUsage[] =
 	"imu_spike {prob, gyro, accel}, stuck_rpm {rotor, at_s} or [{...}, ...];\n"
 	"sensors: imu_bias {accel, gyro, accel_walk, gyro_walk}, imu_scale, vibration\n"
 	"{accel, gyro, harmonics [<=4], cutoff_hz, sample_hz}, rpm_max, esc_pole_pairs,\n"
-	"esc_kt, esc_current_offset, sensors [list] (docs/sensors.md).\n"
+	"esc_kt, esc_current_offset, thrust_row_scale, sensors [list] (docs/sensors.md).\n"
 	"Refused (exit 2, naming key, value and accepted range): mass, inertia or kf <= 0,\n"
 	"|kf_drift_per_min| > 0.2, a negative noise, inertia violating the triangle\n"
 	"inequality (each moment <= the sum of the other two), hover throttle\n"

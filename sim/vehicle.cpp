@@ -396,6 +396,8 @@ void vehicle_from_json(const std::string &text, VehicleParams &p)
 				throw out_of_range(k, q.esc_pole_pairs, "an integer in [1, 64]");
 		} else if (k == "esc_kt")
 			q.esc_kt = num(v, k, Rule::Positive);
+		else if (k == "thrust_row_scale")
+			q.thrust_row_scale = num(v, k, Rule::Positive);
 		else if (k == "esc_current_offset")
 			q.esc_current_offset = num(v, k, Rule::Any);
 		else if (k == "sensors") {

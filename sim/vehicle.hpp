@@ -102,6 +102,7 @@ struct VehicleParams {
 	double esc_pole_pairs = 7;       // motor pole pairs: eRPM = pole pairs * rpm (DShot telemetry)
 	double esc_kt = 0.013642;        // N m/A, motor torque constant 60 / (2 pi KV), KV 700
 	double esc_current_offset = 0.0; // A, each ESC's current reading at zero torque
+	double thrust_row_scale = 1.0;   // the thrust rows' gain: a miscalibrated load cell (1: true)
 	unsigned sensors = kSensorAll;   // SensorBits served
 	std::array<double, 3> origin{{-23.2100, -45.8760, 640.0}}; // lat deg, lon deg, alt m MSL
 	// Plant times (s, ascending) at which the OpenGL local origin moves, as X-Plane's

@@ -159,7 +159,7 @@ void xp_measure(const Model &m, const RotorArray &thro_cmd, uint64_t seed, uint6
 	for (int j = 0; j < kRotors; j++) {
 		f.thro_cmd[j] = thro_cmd[j];
 		f.thro_act[j] = x.s[j];
-		f.thrust_n[j] = o.thrust[j] + st * rng.gauss();
+		f.thrust_n[j] = p.thrust_row_scale * (o.thrust[j] + st * rng.gauss());
 		f.torque_nm[j] = std::fabs(o.torque[j]) + sq * rng.gauss();
 		f.torque_abs_nm[j] = std::fabs(o.torque[j]);
 		f.rpm_true[j] =
