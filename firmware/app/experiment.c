@@ -203,16 +203,23 @@ static void read_estimates(struct experiment *e);
 void exp_pump(struct experiment *e)
 {
 	/* the estimators' updates of the frame the last step took (the motor model's bank update
-	 * and grid refinement, rotor 1's and the inertia's RLS), between frames (the step does
-	 * them if nobody did), then the live estimates when the step asked for them */
+	 * and grid refinement, rotor 1's and the inertia's RLS) and the next excitation samples,
+	 * between frames (the step does them if nobody did), then the live estimates when the
+	 * step asked for them */
 	if (e->state == EXP_RUNNING && !e->begin_pending) {
 		int k = e->phase_kind[e->phase];
+		if (!e->reporting)
+			excite_prepare(&e->exc); /* the next step's excitation (a multisine's sum) */
 		if (!e->reporting && k == PK_ROTOR) {
 			if (e->cfg.src == EXP_SRC_IMU) {
 				imu_id_process(&e->imid);
+				excite_prepare(&e->exc2);
+				excite_prepare(&e->exc3);
 			} else {
-				if (e->cfg.exc_null)
+				if (e->cfg.exc_null) {
 					motor_id_refine(&e->mid); /* processes the waiting frame first */
+					excite_prepare(&e->exc2);
+				}
 				ident_rotor_process(&e->rot);
 			}
 		} else if (!e->reporting && (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z)) {
