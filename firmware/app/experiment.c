@@ -206,17 +206,37 @@ static void format_line(const struct exp_line *l, char *out, size_t cap)
 #pragma GCC diagnostic pop
 }
 
+static void read_estimates(struct experiment *e);
+
 /* one queued line into the app's pending slot when it is free and a step ran since the last
  * one (one line per frame, as before: the app sends it on its tick) */
 void exp_pump(struct experiment *e)
 {
-	/* the motor model's bank update and grid refinement, between frames (the step does them
-	 * if nobody did) */
-	if (e->state == EXP_RUNNING && !e->reporting && !e->begin_pending && e->phase_kind[e->phase] == PK_ROTOR) {
-		if (e->cfg.src == EXP_SRC_IMU)
-			imu_id_process(&e->imid);
-		else if (e->cfg.exc_null)
-			motor_id_refine(&e->mid); /* processes the waiting frame first */
+	/* the estimators' updates of the frame the last step took (the motor model's bank update
+	 * and grid refinement, rotor 1's and the inertia's RLS) and the next excitation samples,
+	 * between frames (the step does them if nobody did), then the live estimates when the
+	 * step asked for them */
+	if (e->state == EXP_RUNNING && !e->begin_pending) {
+		int k = e->phase_kind[e->phase];
+		if (!e->reporting)
+			excite_prepare(&e->exc); /* the next step's excitation (a multisine's sum) */
+		if (!e->reporting && k == PK_ROTOR) {
+			if (e->cfg.src == EXP_SRC_IMU) {
+				imu_id_process(&e->imid);
+				excite_prepare(&e->exc2);
+				excite_prepare(&e->exc3);
+			} else {
+				if (e->cfg.exc_null) {
+					motor_id_refine(&e->mid); /* processes the waiting frame first */
+					excite_prepare(&e->exc2);
+				}
+				ident_rotor_process(&e->rot);
+			}
+		} else if (!e->reporting && (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z)) {
+			ident_inertia_process(&e->inr);
+		}
+		if (e->est_wait == EST_READ_FRAMES - 1u) /* read_estimates ran in the last step */
+			read_estimates(e);
 	}
 	if (!e->pump_ready || e->msg[0] || !e->q_n)
 		return;
@@ -1137,15 +1157,19 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 
 /* The current phase's live estimates into est[] / est_sd[] (telemetry at a few Hz, the log,
  * the status lines): est[0..3] rotor 1's k_f and k_tau, lag-aware and plain; est[4 + axis]
- * the inertia; est[7] the validation's NE and fit %. */
+ * the inertia; est[7] the validation's NE and fit %. An estimator whose frame still waits
+ * for its update (the step's call) is read by exp_pump after the update, between frames. */
 static void read_estimates(struct experiment *e)
 {
 	int k = e->phase_kind[e->phase];
 	if (k == PK_ROTOR && e->cfg.src == EXP_SRC_IMU) {
 		return; /* no live estimate: the IMU's solve runs once, at the phase's end */
 	} else if (k == PK_ROTOR) {
-		ident_rotor_read(&e->rot, e->est, e->est_sd);
+		if (!e->rot.q_pending)
+			ident_rotor_read(&e->rot, e->est, e->est_sd);
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
+		if (e->inr.q_pending)
+			return;
 		unsigned ax = (unsigned)(k - PK_INR_X);
 		e->est[4 + ax] = ident_inertia_est(&e->inr);
 		e->est_sd[4 + ax] = ident_inertia_sd(&e->inr);

@@ -131,6 +131,24 @@ static void excite_ms_start(struct excite *e)
 	}
 }
 
+/* what the phases do after a sample (struct excite, ms_due) */
+#define EXCITE_MS_NONE 0u
+#define EXCITE_MS_STEP 1u
+#define EXCITE_MS_RESTART 2u
+
+void excite_prepare(struct excite *e)
+{
+	if (e->p.kind != EXCITE_MULTISINE || e->ms_ready)
+		return;
+	if (e->ms_due == EXCITE_MS_STEP)
+		excite_ms_step(e);
+	else if (e->ms_due == EXCITE_MS_RESTART)
+		excite_ms_start(e);
+	e->ms_due = EXCITE_MS_NONE;
+	e->ms_next = excite_ms_raw(e);
+	e->ms_ready = true;
+}
+
 void excite_init(struct excite *e, const struct excite_params *params)
 {
 	e->p = *params;
@@ -154,6 +172,9 @@ void excite_init(struct excite *e, const struct excite_params *params)
 	e->count = 0;
 	e->value = SC_ZERO;
 	e->ms_scale = SC_ZERO;
+	e->ms_due = EXCITE_MS_NONE;
+	e->ms_ready = false;
+	e->ms_next = SC_ZERO;
 
 	/* multisine: scan one period for the peak of the normalised sum */
 	excite_ms_start(e);
@@ -198,14 +219,17 @@ scalar_t excite_update(struct excite *e)
 		y = e->value;
 		break;
 	case EXCITE_MULTISINE:
-		y = sc_mul(e->ms_scale, excite_ms_raw(e));
+		excite_prepare(e); /* when it was not done between frames */
+		y = sc_mul(e->ms_scale, e->ms_next);
+		e->ms_ready = false;
 		/* restart the phases every period: exactly periodic, the phase jump at the
-		 * restart is below P / 2^33 of a turn */
+		 * restart is below P / 2^33 of a turn; the phases move before the next sum
+		 * (excite_prepare) */
 		if (++e->count >= p->ms_period_frames) {
 			e->count = 0;
-			excite_ms_start(e);
+			e->ms_due = EXCITE_MS_RESTART;
 		} else {
-			excite_ms_step(e);
+			e->ms_due = EXCITE_MS_STEP;
 		}
 		break;
 	case EXCITE_OFF:

@@ -58,6 +58,11 @@ struct excite {
 	uint32_t phase[EXCITE_MS_MAX]; /* multisine phases, 2^32 = one turn */
 	uint32_t dphase1;              /* phase step per frame of harmonic 1 (sine k: ms_k_first + k times it) */
 	scalar_t ms_scale;             /* A / (N * peak of the normalised sum) */
+	/* multisine, between frames (excite_prepare): the phases' move after the last sample
+	 * (EXCITE_MS_*), then the next sample's normalised sum */
+	uint8_t ms_due;
+	bool ms_ready;   /* ms_next holds the sum at the current phases */
+	scalar_t ms_next;
 };
 
 /* Sensible defaults: uniform, A = 0.05, clock_div 1, seed 1, PRBS order 9,
@@ -69,6 +74,11 @@ void excite_init(struct excite *e, const struct excite_params *params);
 
 /* Next sample, in [-A, A] (0 for EXCITE_OFF). */
 scalar_t excite_update(struct excite *e);
+
+/* Between frames: the multisine's next sample ready for excite_update (its phases moved and
+ * its sum of sines formed), which then only scales it; a no-op for the other kinds and when
+ * it is ready. excite_update does it when nobody did: the same sequence either way. */
+void excite_prepare(struct excite *e);
 
 /* Period of the sequence in frames: PRBS (2^n - 1) clock_div, multisine P (exactly
  * periodic), 0 for uniform (not periodic) and off. An inline: no flash unless a caller

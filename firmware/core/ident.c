@@ -51,28 +51,42 @@ void ident_rotor_hold(struct ident_rotor *r, scalar_t thr_sent_prev)
 
 void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t f_meas, scalar_t tau_meas, bool excited)
 {
+	ident_rotor_process(r); /* a frame still waiting first: nothing lost or reordered */
 	/* lag-aware: the previous frame's throttle, delayed and lagged, for this measurement */
 	scalar_t s = rotor_advance(r, thr_sent_prev);
 	r->phi = curve_g(r->curve, s);
-	scalar_t y[2] = {f_meas, tau_meas};
-	rls_update(&r->lagaware, &r->phi, y, excited);
-
 	/* the lag check: g'(s) = 1 - c + 2 c s times the sensitivity of s */
 	scalar_t gp = sc_add(sc_sub(SC(1.0), r->curve), est_mul_unit(sc_add(r->curve, r->curve), s));
-	scalar_t phi2[2] = {r->phi, sc_mul(gp, r->dphi_dtau)};
-	if (r->dalpha_dtau != SC_ZERO)
-		rls_update(&r->sens, phi2, y, excited);
-
+	r->q_dphi = sc_mul(gp, r->dphi_dtau);
 	/* plain (eq. 18-20): the previous measurement against the command of its own frame,
 	 * which is the throttle sent on the previous frame */
+	r->q_plain = r->have_prev;
 	if (r->have_prev) {
-		scalar_t phi_raw = curve_g(r->curve, thr_sent_prev);
-		rls_update(&r->plain, &phi_raw, r->y_prev, excited);
+		r->q_phi_raw = curve_g(r->curve, thr_sent_prev);
+		r->q_y_prev[0] = r->y_prev[0];
+		r->q_y_prev[1] = r->y_prev[1];
 	}
+	r->q_y[0] = f_meas;
+	r->q_y[1] = tau_meas;
+	r->q_excited = excited;
+	r->q_pending = true;
 	r->y_prev[0] = f_meas;
 	r->y_prev[1] = tau_meas;
 	r->have_prev = true;
 	r->n++;
+}
+
+void ident_rotor_process(struct ident_rotor *r)
+{
+	if (!r->q_pending)
+		return;
+	r->q_pending = false;
+	rls_update(&r->lagaware, &r->phi, r->q_y, r->q_excited);
+	scalar_t phi2[2] = {r->phi, r->q_dphi};
+	if (r->dalpha_dtau != SC_ZERO)
+		rls_update(&r->sens, phi2, r->q_y, r->q_excited);
+	if (r->q_plain)
+		rls_update(&r->plain, &r->q_phi_raw, r->q_y_prev, r->q_excited);
 }
 
 /* ---------------------------------------------------------------- body torque */
@@ -183,13 +197,17 @@ void ident_inertia_restart(struct ident_inertia *e, const scalar_t tau_b[3], con
 
 void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3], bool excited)
 {
+	ident_inertia_process(e); /* a frame still waiting first: nothing lost or reordered */
 	unsigned i = e->axis, j, k;
 	ident_other_axes(i, &j, &k);
 	inertia_filters(e, tau_b[i], w_b[i], sc_mul(w_b[j], w_b[k]));
 	scalar_t y = sc_sub(e->svf_tau.y, sc_mul(e->coupling, e->svf_ww.y));
 	scalar_t phi = sc_mul(sc_sub(e->svf_w.y, e->wf_prev), e->inv_dt);
 	e->wf_prev = e->svf_w.y;
-	rls_update(&e->rls, &phi, &y, excited);
+	e->q_phi = phi;
+	e->q_y = y;
+	e->q_excited = excited;
+	e->q_pending = true;
 	e->n++;
 	if (!e->iv)
 		return;
@@ -210,6 +228,14 @@ void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], cons
 		e->b_zy = e->b_zp = SUM_ZERO;
 		e->b_n = 0;
 	}
+}
+
+void ident_inertia_process(struct ident_inertia *e)
+{
+	if (!e->q_pending)
+		return;
+	e->q_pending = false;
+	rls_update(&e->rls, &e->q_phi, &e->q_y, e->q_excited);
 }
 
 /* ---------------------------------------------------------------- validation */

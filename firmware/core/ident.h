@@ -79,30 +79,42 @@ struct ident_rotor {
 	scalar_t y_prev[2];   /* measurement of the previous frame (for the plain update) */
 	bool have_prev;
 	uint32_t n;
+	/* the frame ident_rotor_update took, its RLS updates waiting for ident_rotor_process:
+	 * the sensitivity's regressor, the plain pair, the measurement */
+	scalar_t q_dphi, q_phi_raw, q_y_prev[2], q_y[2];
+	bool q_plain, q_excited, q_pending;
 };
 
 void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg);
 
 /* One frame: thr_sent_prev = throttle of the rotor sent on the previous frame; f_meas, tau_meas
  * = measured thrust (N) and reaction-torque magnitude (N m) of this frame. `excited` gates
- * both RLS (false: the filters run, the estimates do not move). */
+ * both RLS (false: the filters run, the estimates do not move). The step advances the delay,
+ * lag and sensitivity and forms the regressors; the three RLS updates wait for
+ * ident_rotor_process (between frames). An update, and every getter below, processes a frame
+ * still waiting first, so nothing is lost or reordered and the estimates read include every
+ * frame taken. */
 void ident_rotor_update(struct ident_rotor *r, scalar_t thr_sent_prev, scalar_t f_meas, scalar_t tau_meas,
 			bool excited);
+/* Between frames: the RLS updates of the frame ident_rotor_update took (no-op if none waits). */
+void ident_rotor_process(struct ident_rotor *r);
 
 /* A frame without measurement (lost on the link): the plant held thr_sent_prev for one more
  * frame; the delay, lag and sensitivity advance, nothing is estimated, and the plain
  * estimator's pairing restarts. */
 void ident_rotor_hold(struct ident_rotor *r, scalar_t thr_sent_prev);
 
-/* estimates and standard deviations: which 0 = k_f, 1 = k_tau */
-float ident_rotor_est(const struct ident_rotor *r, unsigned which);
-float ident_rotor_sd(const struct ident_rotor *r, unsigned which);
+/* estimates and standard deviations: which 0 = k_f, 1 = k_tau (each processes a waiting
+ * frame first: ident_rotor_update) */
+float ident_rotor_est(struct ident_rotor *r, unsigned which);
+float ident_rotor_sd(struct ident_rotor *r, unsigned which);
 /* All four at once, as ident_rotor_est/sd/plain/plain_sd give them (the same values):
  * est = {k_f, k_tau, k_f plain, k_tau plain}, sd = their standard deviations. */
-void ident_rotor_read(const struct ident_rotor *r, float est[4], float sd[4]);
-float ident_rotor_plain(const struct ident_rotor *r, unsigned which);
-static inline float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned which)
+void ident_rotor_read(struct ident_rotor *r, float est[4], float sd[4]);
+float ident_rotor_plain(struct ident_rotor *r, unsigned which);
+static inline float ident_rotor_plain_sd(struct ident_rotor *r, unsigned which)
 {
+	ident_rotor_process(r);
 	return rls_std(&r->plain, which, 0);
 }
 
@@ -112,7 +124,7 @@ static inline float ident_rotor_plain_sd(const struct ident_rotor *r, unsigned w
  * sensitivity runs beside the lag: sigma_k = (1 - alpha) sigma_(k-1) + alpha' (u_k - s_(k-1)),
  * alpha' = d alpha / d tau = -(dt / tau^2) exp(-dt / tau). Returns tau_hat (s), or -1 when
  * the model has no lag (tau = 0: no sensitivity) or no data. */
-float ident_rotor_tau_check(const struct ident_rotor *r);
+float ident_rotor_tau_check(struct ident_rotor *r);
 
 /* The closed form of the plain estimator's relative bias (the formula above); an inline (no
  * flash unless a caller uses it: the firmware does not, the tests do) */
@@ -154,6 +166,9 @@ struct ident_inertia {
 	ident_sum_t s_zy, s_zp;       /* sums of z y and z phi over the excited updates */
 	ident_sum_t b_zy, b_zp;       /* the same over the current block */
 	ident_sum_t s_aa, s_ab, s_bb; /* sums of the complete blocks' products (the variance) */
+	/* the frame ident_inertia_update took, its RLS update waiting for ident_inertia_process */
+	scalar_t q_phi, q_y;
+	bool q_excited, q_pending;
 };
 
 /* The std: the RLS std assumes white residuals, but the SVF colours the (white) torque
@@ -169,8 +184,12 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
  * rotor thrust is a first-order lag tau_m of a throttle held over the frame (exact):
  *     alpha = (1 - c) / (1 - a), a = exp(-dt / tau_m), c = (tau_m / dt) (1 - a); 1 if tau_m <= 0 */
 scalar_t ident_torque_weight(scalar_t tau_m_s, scalar_t dt_s);
-/* One frame: body torque (ident_body_torque) and body rates of the same frame. */
+/* One frame: body torque (ident_body_torque) and body rates of the same frame. The step runs
+ * the filters and the instrument's sums; the RLS update waits for ident_inertia_process
+ * (between frames); an update and the getters process a frame still waiting first. */
 void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3], bool excited);
+/* Between frames: the RLS update of the frame ident_inertia_update took (no-op if none waits). */
+void ident_inertia_process(struct ident_inertia *e);
 /* Frames lost on the link before this frame's update (the plant held the last command over
  * them). The filters assume uniform sampling: one update for k + 1 frames would see the
  * change of the gyro over all of them as one frame's derivative, an equation error
@@ -184,8 +203,8 @@ void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], cons
  * ident_inertia_update. */
 void ident_inertia_gap(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3], unsigned k);
 void ident_inertia_restart(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3]);
-float ident_inertia_est(const struct ident_inertia *e);
-float ident_inertia_sd(const struct ident_inertia *e);
+float ident_inertia_est(struct ident_inertia *e);
+float ident_inertia_sd(struct ident_inertia *e);
 /* Instrumental variable against gyro noise. The regressor phi is the derivative of the
  * filtered gyro, so gyro noise is noise in the regressor (errors in variables): least squares
  * is then biased low by var(noise of phi) / var(phi) (-3 ... -8 % on yaw at 10x the default

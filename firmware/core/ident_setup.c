@@ -89,13 +89,26 @@ void ident_rotor_init(struct ident_rotor *r, const struct ident_rotor_cfg *cfg)
 	r->y_prev[0] = r->y_prev[1] = SC_ZERO;
 	r->have_prev = false;
 	r->n = 0;
+	r->q_pending = false;
 }
 
-float ident_rotor_est(const struct ident_rotor *r, unsigned which) { return rls_estimate_f(&r->lagaware, which, 0); }
+float ident_rotor_est(struct ident_rotor *r, unsigned which)
+{
+	ident_rotor_process(r);
+	return rls_estimate_f(&r->lagaware, which, 0);
+}
 
-float ident_rotor_sd(const struct ident_rotor *r, unsigned which) { return rls_std(&r->lagaware, which, 0); }
+float ident_rotor_sd(struct ident_rotor *r, unsigned which)
+{
+	ident_rotor_process(r);
+	return rls_std(&r->lagaware, which, 0);
+}
 
-float ident_rotor_plain(const struct ident_rotor *r, unsigned which) { return rls_estimate_f(&r->plain, which, 0); }
+float ident_rotor_plain(struct ident_rotor *r, unsigned which)
+{
+	ident_rotor_process(r);
+	return rls_estimate_f(&r->plain, which, 0);
+}
 
 /* estimates of one 1-parameter RLS with two outputs and their std: rls_std's arithmetic
  * with P_00 and the degrees of freedom computed once */
@@ -109,14 +122,16 @@ static void read_1x2(const struct rls *q, float est[2], float sd[2])
 	}
 }
 
-void ident_rotor_read(const struct ident_rotor *r, float est[4], float sd[4])
+void ident_rotor_read(struct ident_rotor *r, float est[4], float sd[4])
 {
+	ident_rotor_process(r);
 	read_1x2(&r->lagaware, est, sd);
 	read_1x2(&r->plain, est + 2, sd + 2);
 }
 
-float ident_rotor_tau_check(const struct ident_rotor *r)
+float ident_rotor_tau_check(struct ident_rotor *r)
 {
+	ident_rotor_process(r);
 	if (scalar_zero(r->dalpha_dtau) || r->sens.n_updates < 2u)
 		return -1.0f;
 	float k = rls_estimate_f(&r->sens, 0, 0), kd = rls_estimate_f(&r->sens, 0, 1);
@@ -165,6 +180,7 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	float wdt = sc_to_float(wc_rps) * sc_to_float(dt_s), z4 = 4.0f * sc_to_float(zeta);
 	e->sd_scale = fb_pos(wdt) && wdt < z4 ? sqrtf(z4 / wdt) : 1.0f;
 	e->n = 0;
+	e->q_pending = false;
 	filt_svf_init(&e->svf_z, wc_rps, zeta, dt_s, SC_ZERO);
 	e->z_in = SC_ZERO;
 	e->iv = false;
@@ -210,15 +226,17 @@ static float iv_resid2(const struct ident_inertia *e, float est)
 	return f_of_sum(e->s_aa) - 2.0f * est * f_of_sum(e->s_ab) + est * est * f_of_sum(e->s_bb);
 }
 
-float ident_inertia_est(const struct ident_inertia *e)
+float ident_inertia_est(struct ident_inertia *e)
 {
+	ident_inertia_process(e);
 	if (!iv_ready(e))
 		return rls_estimate_f(&e->rls, 0, 0);
 	return f_of_sum(e->s_zy) / f_of_sum(e->s_zp);
 }
 
-float ident_inertia_sd(const struct ident_inertia *e)
+float ident_inertia_sd(struct ident_inertia *e)
 {
+	ident_inertia_process(e);
 	if (!iv_ready(e))
 		return e->sd_scale * rls_std(&e->rls, 0, 0);
 	float est = ident_inertia_est(e);

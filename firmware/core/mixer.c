@@ -694,6 +694,14 @@ void mixer_warm_reset(struct mixer_warm *s)
 	s->path = MIXER_PATH_PINV;
 }
 
+/* a / b for b known nonzero: with an FPU the division instruction itself (sc_div only adds
+ * the zero test), else mdiv */
+#if !OCTO_FIXED && defined(__ARM_FP)
+#define mdiv_nz(a, b) ((a) / (b))
+#else
+#define mdiv_nz(a, b) mdiv((a), (b))
+#endif
+
 /* The s nearest to s0 within [lo, hi] such that u + s c keeps every present rotor in the box
  * widened by slack (N; one inner margin: the caller clips the rounding; its negative: an
  * inner margin); false if there is none. One division per rotor. */
@@ -709,7 +717,7 @@ static bool line_fit(const struct mixer *m, const scalar_t u[NR], const scalar_t
 				return false;
 			continue;
 		}
-		scalar_t a = mdiv(sc_sub(blo, u[j]), c[j]), b = mdiv(sc_sub(bhi, u[j]), c[j]);
+		scalar_t a = mdiv_nz(sc_sub(blo, u[j]), c[j]), b = mdiv_nz(sc_sub(bhi, u[j]), c[j]);
 		if (c[j] < 0) {
 			scalar_t t = a;
 			a = b;

@@ -4,8 +4,10 @@
  * Counted calls (one bench_mark_begin/end pair each, in this order):
  *   N_RLS x rls_update of the rotor experiment's RLS (1 parameter, outputs f and tau),
  *   N_RLS x rls_update of its lag check (2 parameters, 1 output),
- *   N_ROT x ident_rotor_update (delay, lag and the three RLS of one rotor),
- *   N_INR x ident_inertia_update with its instrument (the SVFs, the RLS, the IV sums),
+ *   N_ROT x ident_rotor_update + ident_rotor_process (delay, lag and the three RLS of one
+ *           rotor: the step's part and its RLS updates between frames),
+ *   N_INR x ident_inertia_update + ident_inertia_process with its instrument (the SVFs, the
+ *           IV sums; the RLS between frames),
  *   N_MID x motor_id_step + motor_id_process (the joint rotor-model estimator's frame: every
  *           rotor, 15 hypotheses; its refinements between frames are not counted),
  *   1 x motor_id_solve (between frames, at the end).
@@ -93,6 +95,7 @@ int main(void)
 		scalar_t t = sc_from_float(0.39f * s * (1.0f + 0.01f * urand()));
 		bench_mark_begin();
 		ident_rotor_update(&ROT, sc_from_float(thr), f, t, true);
+		ident_rotor_process(&ROT);
 		bench_mark_end();
 	}
 	/* inertia about x: a PRBS torque on a 0.06 kg m^2 body with a rate damper, 1 % noise */
@@ -110,6 +113,7 @@ int main(void)
 		bench_mark_begin();
 		ident_inertia_instrument(&INR, sc_from_float(u));
 		ident_inertia_update(&INR, tb, wb, true);
+		ident_inertia_process(&INR);
 		bench_mark_end();
 	}
 	/* the motor model: 8 rotors dithered on the null-space patterns through a 40 ms lag,

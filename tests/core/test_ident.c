@@ -8,6 +8,7 @@
 #include "unit.h"
 
 #include <math.h>
+#include <string.h>
 #ifdef TEST_VERBOSE
 #include <stdio.h>
 #endif
@@ -121,6 +122,61 @@ static void rotor_run(struct unit_rng *g, double kf, double ktau, double tau_tru
 	out->bias_cf = ident_plain_bias((float)(sum_t2 / n - mt * mt), (float)(sum_ts / n - mt * ms), (float)mt);
 	out->crlb_kf = sig_f * sig_f / sphi2;
 	out->tau_check = ident_rotor_tau_check(&r);
+}
+
+/* The RLS updates between frames (ident_rotor_process, ident_inertia_process: sometimes
+ * called, sometimes not, a hold between) give the estimators of a frame-by-frame update bit
+ * for bit: a getter or the next update processes a waiting frame first */
+UNIT_TEST(ident_process_between_frames_same_estimates)
+{
+	struct unit_rng g = {0x9e11ULL};
+	struct ident_rotor_cfg c = {s(DT), s(0.03), 1, SC(0.2), s(0.5), 20.0f, 0.3f, 0.0f};
+	struct ident_rotor ra, rb;
+	ident_rotor_init(&ra, &c);
+	ident_rotor_init(&rb, &c);
+	scalar_t in3[3] = {SC(0.06), SC(0.07), SC(0.1)}, zero[3] = {0, 0, 0};
+	struct ident_inertia ea, eb;
+	ident_inertia_init(&ea, 0, SC(25.0), SC(0.7), s(DT), SC(0.53), in3, zero, zero);
+	ident_inertia_init(&eb, 0, SC(25.0), SC(0.7), s(DT), SC(0.53), in3, zero, zero);
+	int same = 1;
+	for (int k = 0; k < 3000; k++) {
+		scalar_t t = s(0.5 + unit_rand_uniform(&g, -0.1, 0.1)), f = s(unit_rand_uniform(&g, 10, 16));
+		scalar_t q = s(unit_rand_uniform(&g, 0.1, 0.2)), u = s(unit_rand_uniform(&g, -0.3, 0.3));
+		scalar_t tb[3] = {s(unit_rand_uniform(&g, -0.3, 0.3)), 0, 0};
+		scalar_t wb[3] = {s(unit_rand_uniform(&g, -1, 1)), s(unit_rand_uniform(&g, -0.1, 0.1)), 0};
+		bool exc = k % 50 != 7;
+		if (k % 97 == 5) {
+			ident_rotor_hold(&ra, t);
+			ident_rotor_process(&ra);
+			ident_rotor_hold(&rb, t);
+		}
+		ident_rotor_update(&ra, t, f, q, exc);
+		ident_rotor_process(&ra);
+		ident_rotor_update(&rb, t, f, q, exc);
+		if (k % 3 == 0)
+			ident_rotor_process(&rb);
+		ident_inertia_instrument(&ea, u);
+		ident_inertia_update(&ea, tb, wb, exc);
+		ident_inertia_process(&ea);
+		ident_inertia_instrument(&eb, u);
+		ident_inertia_update(&eb, tb, wb, exc);
+		if (k % 4 == 1)
+			ident_inertia_process(&eb);
+		if (k % 211 == 0) { /* a getter in between processes the waiting frame */
+			same &= ident_rotor_est(&ra, 0) == ident_rotor_est(&rb, 0);
+			same &= ident_inertia_sd(&ea) == ident_inertia_sd(&eb);
+		}
+	}
+	float ea4[4], sa4[4], eb4[4], sb4[4];
+	ident_rotor_read(&ra, ea4, sa4);
+	ident_rotor_read(&rb, eb4, sb4);
+	same &= memcmp(ea4, eb4, sizeof ea4) == 0 && memcmp(sa4, sb4, sizeof sa4) == 0;
+	same &= ident_rotor_tau_check(&ra) == ident_rotor_tau_check(&rb);
+	same &= ident_inertia_est(&ea) == ident_inertia_est(&eb) && ident_inertia_sd(&ea) == ident_inertia_sd(&eb);
+	same &= ra.lagaware.n_updates == rb.lagaware.n_updates && ra.plain.n_updates == rb.plain.n_updates &&
+		ra.sens.n_updates == rb.sens.n_updates && ea.rls.n_updates == eb.rls.n_updates;
+	CHECK(same);
+	CHECK(ra.lagaware.n_updates > 2000u);
 }
 
 /* random truth within +/-30 % of the paper's values, default noise and lag: unbiased to 0.15 % */
