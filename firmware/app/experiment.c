@@ -60,7 +60,7 @@ static const char *phase_name(int k)
 #define OFS_SEG_FRAMES 45u /* rotor experiment: frames per offset level (0.5 s at 90 Hz) */
 #define EST_READ_FRAMES 9u /* steps between reads of the live estimates (10 Hz at 90 Hz) */
 #define MOT_NE_MAX 1.3f    /* motor model: largest residual over noise variance */
-#define IMU_NE_MAX 1.3f    /* the IMU's collective model: the same over the still hover's */
+#define IMU_HAC_MAX 100.0f /* the IMU's collective model: largest cluster factor (sd x 10) */
 #define VAL_IMU_F 0.1f     /* IMU validation: mu_1 on the thrust demand, this share of the weight */
 #define SCALE_LO 0.3f      /* accepted range of a rotor's effectiveness */
 #define SCALE_HI 1.5f
@@ -111,6 +111,9 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	c->imu_time = cfg_f(p->id_imu_time, 30.0f);
 	c->kf = p->veh_kf;
 	c->curve = p->mot_curve;
+	/* the rotor model flown with: identified if an earlier rotor experiment was accepted */
+	float rm = cfg_f(p->id_result, 0.0f);
+	c->model_ok = rm >= 0.0f && rm < 256.0f && ((uint32_t)rm & 1u) != 0u;
 	/* until this run's IMU rotor experiment says better: k_f's own relative sd (the
 	 * slope about hover is known at least as well as the extrapolation to full throttle) */
 	float kf_rsd = p->veh_kf > 0.0f ? cfg_f(p->id_kf_sd, 0.0f) / p->veh_kf : 0.0f;
@@ -751,7 +754,7 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 {
 	struct imu_id_result r;
 	imu_id_process(&e->imid);
-	imu_id_solve(&e->imid, IMU_NE_MAX, &r);
+	imu_id_solve(&e->imid, IMU_HAC_MAX, &r);
 	enum ident_verdict vf = ident_accept(r.kf, r.kf_sd, p->veh_kf, e->cfg.rsd_max);
 	bool model_ok = r.cause == IMU_ID_OK;
 	bool curve_bad = e->cfg.crv_est && !(r.curve >= THRMAP_CURVE_MIN && r.curve <= THRMAP_CURVE_MAX);
@@ -771,6 +774,7 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 		e->cfg.mot_tau = r.tau;
 		e->cfg.delay_fr = r.delay;
 		e->cfg.slope_rsd = r.slope_rsd;
+		e->cfg.model_ok = true;
 		e->cfg.kf = r.kf;
 		if (e->cfg.crv_est)
 			e->cfg.curve = r.curve;
@@ -980,6 +984,18 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 			float rk = e->cfg.slope_rsd;
 			if (isfinite(sd) && rk > 0.0f)
 				sd = sqrtf(sd * sd + rk * est * rk * est);
+		}
+		if (e->cfg.src == EXP_SRC_IMU && !e->cfg.model_ok) {
+			/* the torque is the rotor model's: without an identified model the estimate
+			 * rests on priors (ID_MOT_TAU, MOT_CURVE, VEH_KF), never to be applied */
+			static const int pi[3] = {APP_ID_IXX, APP_ID_IYY, APP_ID_KTAU_OVER_IZZ};
+			result(e, pe[ax], isfinite(est) ? est : 0.0f);
+			result(e, ps[ax], isfinite(sd) ? sd : 0.0f);
+			set_result_bit(e, p, 2u << ax, false);
+			id_out(e, (enum app_id_param)pi[ax], 0, ax == 2u ? NAN : est, ax == 2u ? NAN : sd, false,
+			       APP_ID_PARTNER_REJECTED);
+			say(e, APP_SEV_WARNING, "ID %s rejected: rotor model not identified (experiment 1)", nm[ax]);
+			return;
 		}
 		if (e->cfg.src == EXP_SRC_IMU && ax == 2u) {
 			izz_imu_end(e, p, est, sd);

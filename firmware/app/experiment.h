@@ -105,6 +105,7 @@ struct exp_cfg {
 	float gp_rsd;    /* IMU: the curve's slope g'(y_h)'s relative sd (the yaw torque's scale) */
 	float kf, curve; /* the rotor model the later phases fly with: VEH_KF, MOT_CURVE, or what
 			  * this run found (applied only at the next frame boundary) */
+	bool model_ok;   /* that model was identified (ID_RESULT bit 0, or this run) */
 };
 
 /* the rotors as the identified model has them: each throttle sent through the delay and the

@@ -9,14 +9,15 @@
 #define NP IMU_ID_NP
 #define NT IMU_ID_NT
 #define P_B 1   /* B: pinned at 0 when the curve is not estimated */
-#define P_LAG 2 /* k_f d ln tau */
-#define P_OFS 3 /* the accelerometer's offset, N */
+#define P_LA 2  /* A d ln tau (k_f d ln tau when the curve is known) */
+#define P_LB 3  /* B d ln tau: pinned with B */
+#define P_OFS 4 /* the accelerometer's offset, N */
 
 /* index of (i, j) (either order) in the upper triangle stored row by row */
 static unsigned ut(unsigned i, unsigned j)
 {
-	static const unsigned idx[NP][NP] = {{0, 1, 2, 3}, {1, 4, 5, 6}, {2, 5, 7, 8}, {3, 6, 8, 9}};
-	return idx[i][j];
+	unsigned a = i < j ? i : j, b = i < j ? j : i;
+	return a * NP - a * (a - 1u) / 2u + (b - a) - (a ? 0u : 0u);
 }
 
 /* the reference model's regressor: the prior's prediction over k_f */
@@ -31,12 +32,13 @@ static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 {
 	const struct imu_id_cfg *c = &m->cfg;
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-		float a = m->a[l], da = m->da[l], s1 = 0.0f, s2 = 0.0f, s3 = 0.0f;
+		float a = m->a[l], da = m->da[l], s1 = 0.0f, s2 = 0.0f, s3 = 0.0f, s4 = 0.0f;
 		float p1 = 0.0f, p2 = 0.0f;
 		for (unsigned d = IMU_ID_RING - 1; d > 0; d--) {
 			m->x1[l][d] = m->x1[l][d - 1];
 			m->x2[l][d] = m->x2[l][d - 1];
 			m->x3[l][d] = m->x3[l][d - 1];
+			m->x4[l][d] = m->x4[l][d - 1];
 			m->q1[l][d] = m->q1[l][d - 1];
 			m->q2[l][d] = m->q2[l][d - 1];
 		}
@@ -50,13 +52,15 @@ static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 			float sj = c->scale[j];
 			s1 += sj * y;
 			s2 += sj * y * y;
-			s3 += sj * w * ((1.0f - c->curve0) + 2.0f * c->curve0 * y);
+			s3 += sj * w;
+			s4 += 2.0f * sj * y * w;
 			p1 += c->pat[0][j] * sj * y;
 			p2 += c->pat[1][j] * sj * y;
 		}
 		m->x1[l][0] = s1;
 		m->x2[l][0] = s2;
 		m->x3[l][0] = s3;
+		m->x4[l][0] = s4;
 		m->q1[l][0] = p1;
 		m->q2[l][0] = p2;
 	}
@@ -169,10 +173,13 @@ static void pinned(const struct imu_id *m, const float gs[NT], const float *bs, 
 	for (unsigned i = 0; i < NP; i++)
 		b[i] = bs ? bs[i] : 0.0f;
 	if (!m->cfg.est_curve) {
-		for (unsigned i = 0; i < NP; i++)
-			g[ut(i, P_B)] = 0.0f;
-		g[ut(P_B, P_B)] = 1.0f;
-		b[P_B] = 0.0f;
+		for (unsigned q = 0; q < 2; q++) {
+			unsigned k = q ? P_LB : P_B;
+			for (unsigned i = 0; i < NP; i++)
+				g[ut(i, k)] = 0.0f;
+			g[ut(k, k)] = 1.0f;
+			b[k] = 0.0f;
+		}
 	}
 }
 
@@ -220,8 +227,10 @@ static void regs(const struct imu_id *m, unsigned d, unsigned l, float x[NP], fl
 	float s1 = smooth(&m->x1[l][d]), s2 = smooth(&m->x2[l][d]);
 	*xr = ref_x(&m->cfg, s1, s2);
 	x[0] = m->cfg.est_curve ? s1 : *xr;
+	float s3 = smooth(&m->x3[l][d]), s4 = smooth(&m->x4[l][d]);
 	x[P_B] = m->cfg.est_curve ? s2 : 0.0f;
-	x[P_LAG] = smooth(&m->x3[l][d]);
+	x[P_LA] = m->cfg.est_curve ? s3 : ref_x(&m->cfg, s3, s4); /* (1 - c) x3 + c x4: g' known */
+	x[P_LB] = m->cfg.est_curve ? s4 : 0.0f;
 	x[P_OFS] = 1.0f;
 }
 
@@ -239,10 +248,11 @@ static void cl_add(struct imu_id *m, float f)
 	float x[NP], xr;
 	regs(m, m->cl_d, m->cl_l, x, &xr);
 	float z = f - m->cfg.kf0 * xr;
-	float xx[IMU_ID_NX] = {x[0], x[1], x[2], x[3], smooth(&m->q1[m->cl_l][m->cl_d]),
-			       smooth(&m->q2[m->cl_l][m->cl_d])};
-	if (!m->cfg.est_curve)
-		xx[P_B] = 0.0f;
+	float xx[IMU_ID_NX];
+	for (unsigned i = 0; i < NP; i++)
+		xx[i] = x[i];
+	xx[NP] = smooth(&m->q1[m->cl_l][m->cl_d]);
+	xx[NP + 1u] = smooth(&m->q2[m->cl_l][m->cl_d]);
 	for (unsigned i = 0; i < IMU_ID_NX; i++) {
 		for (unsigned k = 0; k < IMU_ID_NX; k++)
 			m->xg[i][k] += xx[i] * xx[k];
@@ -306,6 +316,7 @@ void imu_id_process(struct imu_id *m)
 		return;
 	}
 	m->n_exc++;
+	m->ff += f * f;
 	const struct imu_id_cfg *c = &m->cfg;
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
 		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
@@ -383,6 +394,15 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 	return q > 1.0f && isfinite(q) ? q : 1.0f;
 }
 
+/* a hypothesis' Gauss-Newton step from its grid point, d ln tau = (A d + B d) / (A + B) */
+static float step_of(const struct imu_id *m, const float th[NP])
+{
+	const struct imu_id_cfg *c = &m->cfg;
+	float A = c->est_curve ? c->kf0 * (1.0f - c->curve0) + th[0] : c->kf0 + th[0];
+	float B = c->est_curve ? c->kf0 * c->curve0 + th[P_B] : 0.0f;
+	return A + B > 0.0f ? (th[P_LA] + (c->est_curve ? th[P_LB] : 0.0f)) / (A + B) : 0.0f;
+}
+
 /* The scales' check: the frozen hypothesis refitted with the two null-space patterns'
  * responses; each response over its sd in t[2] (0 when the fit is not possible). */
 static void scales_check(const struct imu_id *m, float t[2])
@@ -398,10 +418,13 @@ static void scales_check(const struct imu_id *m, float t[2])
 			a[i][k] = m->xg[i][k];
 	}
 	if (!m->cfg.est_curve) {
-		for (unsigned i = 0; i < N; i++)
-			a[i][P_B] = a[P_B][i] = 0.0;
-		a[P_B][P_B] = 1.0;
-		b[P_B] = 0.0;
+		for (unsigned q = 0; q < 2; q++) {
+			unsigned k = q ? P_LB : P_B;
+			for (unsigned i = 0; i < N; i++)
+				a[i][k] = a[k][i] = 0.0;
+			a[k][k] = 1.0;
+			b[k] = 0.0;
+		}
 	}
 	double d[N];
 	for (unsigned i = 0; i < N; i++) {
@@ -476,7 +499,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->n = n;
 	r->curve = c->curve0;
 	r->kf = c->kf0;
-	unsigned np = c->est_curve ? NP : NP - 1u;
+	unsigned np = c->est_curve ? NP : NP - 2u;
 	if (n < 60u) {
 		r->cause = IMU_ID_NO_DATA;
 		return;
@@ -508,10 +531,29 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->delay = bd;
 	r->delay_margin = j0 > 0.0f ? 0.5f * (float)n * logf(j2 / j0) : INFINITY;
 	float s2 = j0 / (float)(n - np);
-	r->ne = nz_var > 0.0f ? s2 / nz_var : INFINITY;
+	/* the residual variance over the noise the still frames measured, scaled to each frame's
+	 * thrust: the vibration's amplitude goes with the rotor speed squared, as the thrust
+	 * does, so a frame at force f has the still variance times (f / f_still)^2 */
+	float mu = m->nz_n ? m->nz_s / (float)m->nz_n : 0.0f;
+	float grow = mu > 0.0f ? m->ff / (float)n / (mu * mu) : 1.0f;
+	r->ne = nz_var > 0.0f ? s2 / (nz_var * (grow > 1.0f ? grow : 1.0f)) : INFINITY;
 
 	float th[NP], h[NP][NP], v[NP][NP], thc[NP], hc[NP][NP];
 	hyp_solve(m, &m->st[bd][bl], th, h);
+	float hstep = grid_step(), dl = step_of(m, th), lcorr = 0.0f;
+	/* the Gauss-Newton step is first order: each grid point's estimate at the lag found is
+	 * off by about K d^2 (d its distance in ln tau). The neighbours on either side, at d + h
+	 * and d - h, give K: theta* = theta + d (theta(l+1) - theta(l-1)) / (4 h), and the same
+	 * for ln tau (their own steps from their own points) */
+	if (bl > 0u && bl + 1u < IMU_ID_LAGS) {
+		float tm[NP], tp[NP], hh[NP][NP];
+		hyp_solve(m, &m->st[bd][bl - 1u], tm, hh);
+		hyp_solve(m, &m->st[bd][bl + 1u], tp, hh);
+		float k = dl / (4.0f * hstep);
+		for (unsigned i = 0; i < NP; i++)
+			th[i] += k * (tp[i] - tm[i]);
+		lcorr = k * ((hstep + step_of(m, tp)) - (-hstep + step_of(m, tm)));
+	}
 	/* the white-noise covariance (s2 H); each quantity's variance then scaled by the
 	 * clusters' factor for its projection (the frozen hypothesis' estimate theta) */
 	for (unsigned i = 0; i < NP; i++)
@@ -527,7 +569,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	float kf_raw = A + B;
 	r->curve = c->est_curve ? (kf_raw != 0.0f ? B / kf_raw : 0.0f) : c->curve0;
 	if (c->est_curve) { /* dc/dA = -B / K^2, dc/dB = A / K^2 */
-		float k2 = kf_raw * kf_raw, jc[NP] = {-B / k2, A / k2, 0.0f, 0.0f};
+		float k2 = kf_raw * kf_raw, jc[NP] = {-B / k2, A / k2, 0.0f, 0.0f, 0.0f};
 		r->curve_sd = sqrtf(quad(v, jc) * cl_factor(m, thc, jc, &ncl));
 	}
 	/* the calibration: kappa = m (g T + v_last - v0) / (sum (F_w - D) dt), D the offset;
@@ -542,12 +584,13 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->kappa = kap;
 	r->offset_n = ofs;
 	r->kf = kap * kf_raw;
-	float jac[NP] = {kap, c->est_curve ? kap : 0.0f, 0.0f, fm > 0.0f ? r->kf / fm : 0.0f};
+	float jac[NP] = {kap, c->est_curve ? kap : 0.0f, 0.0f, 0.0f, fm > 0.0f ? r->kf / fm : 0.0f};
 	float var = quad(v, jac);
 	r->hac = cl_factor(m, thc, jac, &ncl);
 	r->blocks = ncl;
 	var *= r->hac;
-	const float jo[NP] = {0.0f, 0.0f, 0.0f, 1.0f}, jl[NP] = {0.0f, 0.0f, 1.0f, 0.0f};
+	const float jo[NP] = {0.0f, 0.0f, 0.0f, 0.0f, 1.0f};
+	float jl[NP] = {0.0f, 0.0f, 1.0f, c->est_curve ? 1.0f : 0.0f, 0.0f};
 	float vo = v[P_OFS][P_OFS] * cl_factor(m, thc, jo, &ncl);
 	r->kappa_sd = fm > 0.0f ? sqrtf(kap_sd * kap_sd + kap * kap * vo / (fm * fm)) : 0.0f;
 	r->kf_sd = sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
@@ -555,15 +598,13 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	float yh = m->nz_n ? m->nz_thr / (float)m->nz_n : 0.0f, sl_raw = A + 2.0f * B * yh;
 	r->thr_hover = yh;
 	r->slope = kap * sl_raw;
-	float js[NP] = {kap, c->est_curve ? 2.0f * kap * yh : 0.0f, 0.0f, fm > 0.0f ? r->slope / fm : 0.0f};
+	float js[NP] = {kap, c->est_curve ? 2.0f * kap * yh : 0.0f, 0.0f, 0.0f, fm > 0.0f ? r->slope / fm : 0.0f};
 	float vs = quad(v, js) * cl_factor(m, thc, js, &ncl) + kap_sd * kap_sd * sl_raw * sl_raw;
 	r->slope_rsd = r->slope > 0.0f ? sqrtf(vs) / r->slope : INFINITY;
-	/* the lag: the grid point moved by the Gauss-Newton step d ln tau = th[2] / k_f */
-	float dl = kf_raw > 0.0f ? th[P_LAG] / kf_raw : 0.0f;
-	float vl = v[P_LAG][P_LAG] * cl_factor(m, thc, jl, &ncl);
+	/* the lag: the grid point moved by the Gauss-Newton step, its second-order term removed */
+	float vl = quad(v, jl) * cl_factor(m, thc, jl, &ncl);
 	float dl_sd = kf_raw > 0.0f ? sqrtf(fmaxf(vl, 0.0f)) / kf_raw : INFINITY;
-	float hstep = grid_step();
-	r->tau = lag_tau(bl) * expf(dl);
+	r->tau = lag_tau(bl) * expf(dl + lcorr);
 	scales_check(m, r->t_pattern);
 	r->tau_sd = r->tau * dl_sd;
 	/* the step must stay within the grid's reach: beyond half a step the neighbour is
@@ -578,7 +619,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 		r->cause = IMU_ID_DELAY_RANGE;
 	else if (r->delay_margin < 12.0f)
 		r->cause = IMU_ID_DELAY_AMBIGUOUS;
-	else if (!(r->ne <= ne_max))
+	else if (!(r->hac <= ne_max))
 		r->cause = IMU_ID_MODEL;
 	else if (c->est_curve && !(r->curve_sd < 0.2f))
 		r->cause = IMU_ID_CURVE_WEAK;
@@ -597,7 +638,7 @@ const char *imu_id_cause_text(enum imu_id_cause c)
 	case IMU_ID_LAG_RANGE: return "motor lag outside 5-250 ms";
 	case IMU_ID_DELAY_RANGE: return "delay at the largest hypothesis";
 	case IMU_ID_DELAY_AMBIGUOUS: return "delay ambiguous";
-	case IMU_ID_MODEL: return "specific force not explained by the rotors";
+	case IMU_ID_MODEL: return "residuals coloured beyond the vibration's";
 	case IMU_ID_CURVE_WEAK: return "thrust curve not determined";
 	case IMU_ID_SCALES: return "a rotor's effectiveness is not MOT_SCALE's";
 	}

@@ -14,10 +14,11 @@
  * (the prior k_f and curve), which keeps them well conditioned in float.
  *
  * Choice: the hypothesis of least residual. Each hypothesis also carries the lag's
- * sensitivity x3 = sum s_j g'(y_j) dy_j / d ln tau (a filter beside each lag filter, with
- * the reference curve in g'), so its least squares is a Gauss-Newton step in ln tau from the
- * grid point: k_f d ln tau is a third linear parameter, and tau, k_f and c come with their
- * joint covariance.
+ * sensitivities x3 = sum s_j w_j and x4 = sum s_j 2 y_j w_j, w_j = dy_j / d ln tau (a filter
+ * beside each lag filter): d F / d ln tau = A x3 + B x4 for any curve, so the least squares
+ * over (x1, x2, x3, x4, 1) is a Gauss-Newton step in ln tau from the grid point (A d ln tau
+ * and B d ln tau are linear parameters), and tau, k_f and c come with their joint
+ * covariance.
  *
  * Both sides pass through the same [1 2 1] / 4 smoother first: its zero at half the frame
  * rate removes the vibration of rotors turning near half the frame rate (a hover), and a
@@ -57,23 +58,24 @@
 #define IMU_ID_VEL_SD 0.05f             /* the velocity's error at either end of the calibration, m/s */
 #define IMU_ID_FREEZE 0.2f              /* share of the planned frames after which the clusters' hypothesis freezes */
 
-#define IMU_ID_NP 4  /* parameters: A (or k_f), B, k_f d ln tau, the accelerometer's offset */
-#define IMU_ID_NT 10 /* their upper triangle */
+/* parameters: A (or k_f), B, A d ln tau, B d ln tau, the accelerometer's offset */
+#define IMU_ID_NP 5
+#define IMU_ID_NT 15 /* their upper triangle */
 
 struct imu_id_cfg {
-	float dt_s;                 /* frame period */
-	float mass_kg;              /* the weighed mass */
-	float g;                    /* gravity, m/s^2 */
-	float kf0, curve0;          /* the reference model (and the curve when not estimated) */
-	bool est_curve;             /* estimate c (else c = curve0) */
-	float scale[IMU_ID_ROTORS]; /* per-rotor effectiveness (MOT_SCALE) */
-	uint32_t n_frames;          /* excited frames planned */
-	uint32_t block_frames;      /* a cluster's frames (the sweep's period; 0: 90) */
+	float dt_s;                  /* frame period */
+	float mass_kg;               /* the weighed mass */
+	float g;                     /* gravity, m/s^2 */
+	float kf0, curve0;           /* the reference model (and the curve when not estimated) */
+	bool est_curve;              /* estimate c (else c = curve0) */
+	float scale[IMU_ID_ROTORS];  /* per-rotor effectiveness (MOT_SCALE) */
+	uint32_t n_frames;           /* excited frames planned */
+	uint32_t block_frames;       /* a cluster's frames (the sweep's period; 0: 90) */
 	float pat[2][IMU_ID_ROTORS]; /* the null-space dithers' patterns (the scales' check) */
 };
 
-#define IMU_ID_NX 6 /* the scales' check: the 4 parameters and the two patterns' responses */
-#define IMU_ID_T_ROTOR 5.0f /* |t| of a pattern's response beyond which the scales are wrong */
+#define IMU_ID_NX (IMU_ID_NP + 2) /* the scales' check: the parameters and two patterns' responses */
+#define IMU_ID_T_ROTOR 5.0f       /* |t| of a pattern's response beyond which the scales are wrong */
 
 /* least-squares sums of one hypothesis: G (upper triangle, row by row), b, z'z */
 struct imu_id_stat {
@@ -86,7 +88,8 @@ struct imu_id {
 	float da[IMU_ID_LAGS];                                              /* d a / d ln tau */
 	float y[IMU_ID_LAGS][IMU_ID_ROTORS], w[IMU_ID_LAGS][IMU_ID_ROTORS]; /* outputs, d y / d ln tau */
 	/* rings of x1, x2, x3 by frame age */
-	float x1[IMU_ID_LAGS][IMU_ID_RING], x2[IMU_ID_LAGS][IMU_ID_RING], x3[IMU_ID_LAGS][IMU_ID_RING];
+	float x1[IMU_ID_LAGS][IMU_ID_RING], x2[IMU_ID_LAGS][IMU_ID_RING];
+	float x3[IMU_ID_LAGS][IMU_ID_RING], x4[IMU_ID_LAGS][IMU_ID_RING]; /* sum s w, sum 2 s y w */
 	float q1[IMU_ID_LAGS][IMU_ID_RING], q2[IMU_ID_LAGS][IMU_ID_RING]; /* sum p_kj s_j y_j */
 	/* the scales' check on the frozen hypothesis: G (full), b, z'z over its frames */
 	float xg[IMU_ID_NX][IMU_ID_NX], xb[IMU_ID_NX], xrr;
@@ -103,6 +106,7 @@ struct imu_id {
 	uint32_t cl_len, cl_k;  /* frames per block, frames in the block being filled */
 	struct imu_id_stat blk[IMU_ID_BLOCKS + 1];
 	uint32_t n_exc; /* excited frames so far */
+	float ff;       /* their force's sum of squares (the noise's growth with thrust) */
 	/* the accelerometer's calibration in flight: over the excited frames the mean vertical
 	 * specific force is g plus the velocity's change over their time */
 	float fw_sum, vz_prev, v0, v_last;
@@ -118,7 +122,7 @@ enum imu_id_cause {
 	IMU_ID_LAG_RANGE,     /* the best lag at the grid's edge */
 	IMU_ID_DELAY_RANGE,   /* the best delay is the largest hypothesis */
 	IMU_ID_DELAY_AMBIGUOUS,
-	IMU_ID_MODEL,      /* residuals well above the still noise */
+	IMU_ID_MODEL,      /* residuals coloured far beyond the vibration's (the cluster factor) */
 	IMU_ID_CURVE_WEAK, /* the data cannot tell the curve (no throttle spread) */
 	IMU_ID_SCALES,     /* the force answers a null-space dither: a rotor's effectiveness is
 			    * not MOT_SCALE's (the accelerometer cannot tell which rotor) */
@@ -129,7 +133,7 @@ struct imu_id_result {
 	float delay_margin; /* log-likelihood ratio of the best delay over the next best */
 	float tau, tau_sd;
 	float kf, kf_sd, curve, curve_sd;
-	float ne;              /* residual variance / still-noise variance */
+	float ne;              /* residual variance / the still noise's, grown with the thrust */
 	float noise_sd;        /* the still frames' force spread, N */
 	float hac;             /* k_f's cluster-robust variance over its white-noise one */
 	uint32_t blocks;       /* clusters behind it */
@@ -156,7 +160,11 @@ void imu_id_step(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS], scala
 void imu_id_process(struct imu_id *m);
 /* A frame without measurement: the plant held thr_prev one more frame. */
 void imu_id_hold(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS]);
-/* Between frames: the estimates and the acceptance cause. ne_max: largest accepted NE. */
+/* Between frames: the estimates and the acceptance cause. ne_max: the largest accepted
+ * cluster factor (hac: the residuals' colour; beyond it the model misses something the
+ * vibration does not explain). NE (the residual over the still hover's spread) is reported
+ * only: the still second's spread mixes the noise with the hover control's own thrust
+ * changes, so it measures neither. */
 void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r);
 const char *imu_id_cause_text(enum imu_id_cause c);
 const char *imu_id_cause_remedy(enum imu_id_cause c);

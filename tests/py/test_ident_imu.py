@@ -1,0 +1,159 @@
+"""Identification from a flight controller's own sensors (ID_SOURCE 2, imu): the accelerometer,
+the gyro, the throttles sent and the weighed mass, with the IMU octo-sim serves by default
+(white noise, bias and walk, scale error, the rotors' vibration aliased at 90 Hz).
+
+- A plant that serves no thrust or torque rows (`--sensors imu`) identifies: k_f, the motor
+  lag, delay and curve, I_x and I_y, and k_tau / I_z as a ratio (k_tau and I_z alone are
+  reported as not identifiable, never as values); the source is said.
+- Thrust rows that lie (scaled by 2) leave the IMU estimate exactly as it was.
+- Random vehicles of the tests' ranges (motor lag 10-100 ms, delay 0-3 frames, curve 0-0.5,
+  k_f, k_tau and inertia +/-30 %, the rotors' scales known): every accepted value lies within
+  max(3 sd, tolerance) of the truth, and the errors over the reported sds have an rms below 1.5
+  (a unit normal's 40-sample rms exceeds 1.3 with probability below 1e-3).
+- A rotor whose effectiveness is not MOT_SCALE's is named as the cause of a rejection: the
+  accelerometer cannot tell which rotor, and k_f would otherwise carry it.
+
+OCTO_IMU_SEED=N repeats a draw; OCTO_IMU_N=K flies K random vehicles (default 40).
+"""
+
+import json
+import math
+import os
+import random
+import re
+import subprocess
+
+from conftest import binary
+from ident_helpers import fw_said, random_vehicle
+
+SCRIPT = "arm; takeoff 5; wait hold; experiment 6; wait experiment"
+PAPER = dict(kf=28.0269, ktau=0.3869, inertia=[0.0628, 0.0762, 0.1014], motor_tau=0.03, delay=0.0,
+             thrust_curve=0.0)
+LINE = {
+    "kf": re.compile(r"^ID kf ([-0-9.]+) \+/- ([-0-9.]+) (N accepted|rejected: .*)$"),
+    "ixx": re.compile(r"^ID Ixx ([-0-9.]+) \+/- ([-0-9.]+) (kg m\^2 accepted|rejected: .*)$"),
+    "iyy": re.compile(r"^ID Iyy ([-0-9.]+) \+/- ([-0-9.]+) (kg m\^2 accepted|rejected: .*)$"),
+    "ratio": re.compile(r"^ID ktau/Izz ([-0-9.]+) \+/- ([-0-9.]+) 1/s\^2 (\(gyro: the ratio\)|rejected: .*)$"),
+    "lag": re.compile(r"^ID motor lag ([-0-9.]+) \+/- ([-0-9.]+) s delay (\d+) fr$"),
+}
+TOL = {"kf": 0.01, "ixx": 0.02, "iyy": 0.02, "ratio": 0.02}
+
+
+def fly(tmp, veh, seed, script=SCRIPT, sensors="imu,rpm", params=""):
+    (tmp / "v.json").write_text(json.dumps(veh))
+    prm = tmp / "p.parm"
+    prm.unlink(missing_ok=True)
+    r = subprocess.run([str(binary("octo-sil")), "--seed", str(seed), "--vehicle", str(tmp / "v.json"),
+                        "--sensors", sensors, "--params", str(prm), "--duration", "900", "--script",
+                        f"param ID_SEED {seed}; {params}{script}"],
+                       capture_output=True, text=True, timeout=120)
+    return r, fw_said(r.stderr)
+
+
+def results(said):
+    """{name: (value, sd, accepted)} of the status lines; lag: (tau, sd, delay)."""
+    out = {}
+    for ln in said:
+        for k, rx in LINE.items():
+            m = rx.match(ln)
+            if m:
+                g = m.groups()
+                out[k] = (float(g[0]), float(g[1]), int(g[2]) if k == "lag" else "accepted" in g[2] or "ratio" in g[2])
+    return out
+
+
+def truth(veh):
+    return dict(kf=veh["kf"], ixx=veh["inertia"][0], iyy=veh["inertia"][1],
+                ratio=veh["ktau"] / veh["inertia"][2])
+
+
+def judge(res, veh):
+    """(z of each accepted estimate, the accepted ones beyond max(3 sd, tolerance))."""
+    t, zs, wrong = truth(veh), {}, []
+    for k, tol in TOL.items():
+        if k not in res or not res[k][2]:
+            continue
+        v, sd, _ = res[k]
+        err = v - t[k]
+        zs[k] = err / sd
+        if abs(err) > max(3.0 * sd, tol * abs(t[k])):
+            wrong.append((k, v, sd, t[k]))
+    lag = res.get("lag")
+    if lag and res.get("kf", (0, 0, False))[2]:
+        if lag[2] != round(veh["delay"] * 90.0):
+            wrong.append(("delay", lag[2], veh["delay"] * 90.0))
+        if abs(lag[0] / veh["motor_tau"] - 1.0) > max(0.1, 3.0 * lag[1] / veh["motor_tau"]):
+            wrong.append(("lag", lag[0], veh["motor_tau"]))
+    return zs, wrong
+
+
+def test_imu_only_identifies_and_says_so(tmp_path):
+    r, said = fly(tmp_path, PAPER, 11, sensors="imu")
+    print("\n".join(said[-40:]))
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert "ID source imu: accelerometer, mass, throttles" in said
+    res = results(said)
+    assert all(res[k][2] for k in ("kf", "ixx", "iyy", "ratio")), res
+    zs, wrong = judge(res, PAPER)
+    assert not wrong, wrong
+    # k_tau and I_z alone: the ratio only, said as such (no VEH_KTAU / VEH_IZZ result)
+    assert "ID ktau, Izz: the ratio only (ID_IZZ_PRI_SD: a prior)" in said
+    assert not any(ln.startswith("ID Izz ") or ln.startswith("ID ktau 0") for ln in said), said
+
+
+def test_forced_thrust_source_without_rows_is_refused(tmp_path):
+    r, said = fly(tmp_path, PAPER, 12, sensors="imu", params="param ID_SOURCE 1; ",
+                  script="arm; takeoff 5; wait hold; experiment 1; wait experiment")
+    assert r.returncode == 1
+    assert "Experiment 1 refused: no rotor thrust/torque rows" in said, said
+
+
+def test_lying_thrust_rows_leave_the_imu_estimate_alone(tmp_path):
+    script = "arm; takeoff 5; wait hold; experiment 1; wait experiment"
+    est = []
+    for scale in (1.0, 2.0):
+        veh = dict(PAPER, thrust_row_scale=scale)
+        r, said = fly(tmp_path, veh, 13, script=script, sensors="imu,rpm,thrust,torque",
+                      params="param ID_SOURCE 2; ")
+        assert r.returncode == 0, r.stderr[-2000:]
+        assert "ID source imu: accelerometer, mass, throttles" in said
+        est.append([ln for ln in said if ln.startswith(("ID kf ", "ID motor lag ", "ID curve "))])
+    assert est[0] and est[0] == est[1], est
+
+
+def imu_vehicle(rng):
+    veh = random_vehicle(rng)
+    veh.update(motor_tau=rng.uniform(0.010, 0.100), delay=rng.randint(0, 3) / 90.0,
+               thrust_curve=rng.uniform(0.0, 0.5))
+    return veh
+
+
+def test_random_vehicles_accepted_values_are_right_and_their_sds_honest(tmp_path):
+    n = int(os.environ.get("OCTO_IMU_N", 40))
+    seed0 = int(os.environ.get("OCTO_IMU_SEED", random.SystemRandom().randrange(1, 10**6)))
+    print(f"OCTO_IMU_SEED={seed0}: {n} random vehicles, source imu")
+    zs, wrong, failed = {k: [] for k in TOL}, [], []
+    for i in range(n):
+        seed = seed0 + i
+        veh = imu_vehicle(random.Random(seed))
+        r, said = fly(tmp_path, veh, seed)
+        res = results(said)
+        if not res.get("kf", (0, 0, False))[2]:
+            failed.append((seed, [ln for ln in said if "rejected" in ln or "aborted" in ln][-2:]))
+        z, w = judge(res, veh)
+        for k, v in z.items():
+            zs[k].append(v)
+        if w:
+            wrong.append((seed, w, veh))
+    rms = {k: math.sqrt(sum(v * v for v in zs[k]) / len(zs[k])) for k in zs if zs[k]}
+    print("rms z:", rms, "\nnot identified:", failed)
+    assert not wrong, wrong                      # accepted and wrong: the worst defect
+    assert len(failed) <= max(2, n // 10), failed
+    assert all(r < 1.5 for r in rms.values()), rms
+
+
+def test_a_rotor_off_its_scale_is_named_not_absorbed(tmp_path):
+    veh = dict(PAPER, rotor_scale=[1, 1, 0.88, 1, 1, 1, 1, 1])
+    r, said = fly(tmp_path, veh, 14, script="arm; takeoff 5; wait hold; experiment 1; wait experiment")
+    assert "ID rejected: a rotor's effectiveness is not MOT_SCALE's" in said, said
+    assert not results(said)["kf"][2]
