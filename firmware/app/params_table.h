@@ -103,4 +103,13 @@ PARAM(KFT_MEM, kft_mem, 0.0f, -1e9f, 1e9f, "s", "Tracked (read-only): memory of 
 #define PARAM_FLAGS 0
 PARAM(NAV_HOLD_TO, nav_hold_to, 30.0f, 0.0f, 600.0f, "s",
       "Hold entry (take-off at its target height: still, hover learned) must reach HOLD within this, else it fails and lands")
+/* what identification, hover learning and the k_f tracker measure with (docs/identification.md) */
+#undef PARAM_FLAGS
+#define PARAM_FLAGS PARAM_LOCKED
+PARAM(ID_SOURCE, id_source, 0.0f, 0.0f, 4.0f, "",
+      "Measurements: 0 auto (thrust rows when served, else IMU), 1 thrust rows, 2 imu, 3 imu_rpm, 4 imu_rpm_torque")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS 0
+PARAM(KFT_ACC_WALK, kft_acc_walk, 0.001f, 0.0f, 1.0f, "m/s^2/sqrt(s)",
+      "k_f tracking from the IMU: accelerometer bias random walk, carried into KFT_SD from the ground calibration")
 #undef PARAM_FLAGS

@@ -17,6 +17,7 @@ struct kf_track_params kf_track_params_default(void)
 		p.scale[j] = SC(1.0);
 	p.s_tau_s = SC(5.0);
 	p.s0_pct = SC(1.0);
+	p.avg_n = 1u;
 	return p;
 }
 
@@ -27,6 +28,8 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 		s->p.t_min_s = SC(0.2);
 	if (!(s->p.t_max_s > s->p.t_min_s))
 		s->p.t_max_s = s->p.t_min_s;
+	if (s->p.avg_n < 1u)
+		s->p.avg_n = 1u;
 	s->k = k0 > SC_ZERO ? k0 : SC(1.0);
 	s->P = SC_ZERO;
 	s->s2_pct2 = sc_sq(s->p.s0_pct);
@@ -35,6 +38,10 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->lambda = SC(0.98);
 	s->p_rt = SC_ZERO;
 	s->phi_f = SC_ZERO;
+	s->phi_s = SC_ZERO;
+	s->blk_phi = s->blk_y = SC_ZERO;
+	s->blk_n = 0;
+	s->c_ds = SC_ZERO;
 	s->e_prev_pct = SC_ZERO;
 	s->lag_al = SC(1.0);
 	s->c_dt = SC_ZERO;
@@ -99,8 +106,10 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		s->c_dt = dt_s;
 		if (s->p.tau_lag_s > SC_ZERO)
 			s->lag_al = sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt_s, s->p.tau_lag_s))));
-		s->a_s = sc_div(dt_s, sc_add(s->p.s_tau_s, dt_s));
-		s->dt_tmin = sc_div(dt_s, s->p.t_min_s);
+		/* the sample period: avg_n frames (one frame: dt itself) */
+		s->c_ds = s->p.avg_n > 1u ? sc_mul(dt_s, sc_from_int((int32_t)s->p.avg_n)) : dt_s;
+		s->a_s = sc_div(s->c_ds, sc_add(s->p.s_tau_s, s->c_ds));
+		s->dt_tmin = sc_div(s->c_ds, s->p.t_min_s);
 	}
 	/* the thrust a throttle produces, as the motor lag delivers it */
 	scalar_t phi = regressor(s, thr, n);
@@ -112,8 +121,23 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		s->phi_f = sc_add(s->phi_f, est_mul_unit(sc_sub(phi, s->phi_f), al)); /* al in [0, 1] */
 	}
 	phi = s->phi_f;
-	if (!gate || phi < s->p.phi_min || !(y_n > SC_ZERO))
+	if (!gate || phi < s->p.phi_min || !(y_n > SC_ZERO)) {
+		s->blk_n = 0; /* a block is whole or not taken */
+		s->blk_phi = s->blk_y = SC_ZERO;
 		return false;
+	}
+	if (s->p.avg_n > 1u) { /* a sample: the block's means */
+		s->blk_phi = sc_add(s->blk_phi, phi);
+		s->blk_y = sc_add(s->blk_y, y_n);
+		if (++s->blk_n < s->p.avg_n)
+			return false;
+		phi = est_div_int(s->blk_phi, s->p.avg_n);
+		y_n = est_div_int(s->blk_y, s->p.avg_n);
+		s->blk_n = 0;
+		s->blk_phi = s->blk_y = SC_ZERO;
+	}
+	dt_s = s->c_ds;
+	s->phi_s = phi;
 	if (!s->started) {
 		s->k = sc_div(y_n, phi);
 		s->e_prev_pct = SC_ZERO;
@@ -138,7 +162,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	 * (s_pct / 100) / (2 drift_per_min / 60) = 0.3 s_pct / drift_per_min */
 	if (s->p.drift_per_min > SC_ZERO) {
 		scalar_t q = sc_div_r(est_mul_unit(s->s_pct, SC(0.3)), s->p.drift_per_min, &s->r_drift);
-		scalar_t x = est_mul_unit(sc_sq(q), dt_s); /* (s / 2r)^2 / f_s */
+		scalar_t x = dt_s <= SC(1.0) ? est_mul_unit(sc_sq(q), dt_s) : sc_mul(sc_sq(q), dt_s); /* (s / 2r)^2 / f_s */
 		s->mem_s = sc_clamp(cbrt_warm(x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
 	} else {
 		s->mem_s = s->p.t_max_s;
@@ -167,7 +191,7 @@ scalar_t kf_track_sd(const struct kf_track *s)
 {
 	if (!s->started)
 		return SC_ZERO;
-	/* sigma (N) = s y ~ s k phi; var(k) = sigma^2 P / (1 + lambda) */
-	scalar_t sigma = sc_mul(est_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_f));
+	/* sigma (N) = s y ~ s k phi (the last sample's); var(k) = sigma^2 P / (1 + lambda) */
+	scalar_t sigma = sc_mul(est_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_s));
 	return sc_mul(sigma, s->p_rt);
 }

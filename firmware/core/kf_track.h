@@ -22,6 +22,16 @@
  *
  * Estimate and sd: k = sum lambda^i phi y / sum lambda^i phi^2; with P = 1 / sum lambda^i phi^2,
  * var(k) = sigma^2 P / (1 + lambda) (sigma = s y). Q16.16: the noise is kept in percent.
+ *
+ * Samples: with avg_n > 1 the tracker updates once per avg_n frames, on the means of y and
+ * of the lag-filtered regressor over them (the lag filter still runs every frame). That is
+ * for a y whose noise is coloured at the frame rate (an accelerometer's vibration folded
+ * near half the frame rate): the means are nearly white at their own rate, which the noise
+ * estimate and var(k) assume. A block with a gated frame is dropped. avg_n = 1 updates on
+ * every frame.
+ *
+ * The sd is the tracking's alone: relative to the rotor model (curve, scales, lag) the
+ * regressor is built from. The model's own uncertainty is the caller's to add (env_kf.h).
  */
 #ifndef OCTO_KF_TRACK_H
 #define OCTO_KF_TRACK_H
@@ -43,6 +53,7 @@ struct kf_track_params {
 	scalar_t scale[KF_TRACK_ROTORS]; /* per-rotor effectiveness: rotor j gives scale_j k g(T_j) */
 	scalar_t s_tau_s;                /* averaging time of the noise estimate, s */
 	scalar_t s0_pct;                 /* noise assumed before any residual, percent of y */
+	uint32_t avg_n;                  /* frames per sample (means over them; 1: every frame) */
 };
 
 struct kf_track {
@@ -55,29 +66,34 @@ struct kf_track {
 	scalar_t lambda;
 	scalar_t p_rt;       /* sqrt(P / (1 + lambda)), set with P and lambda (kf_track_sd reads it) */
 	scalar_t phi_f;      /* lag-filtered regressor */
+	scalar_t phi_s;      /* the last sample's regressor (a block's mean) */
 	scalar_t e_prev_pct; /* last residual, percent of y */
 	/* what depends on the frame period and the parameters only, computed when they change
 	 * (the update's divisions by them become products) */
 	scalar_t c_dt;           /* the frame period they were computed for (0: none yet) */
 	scalar_t lag_al;         /* the lag filter's coefficient 1 - e^(-dt/tau_lag) */
-	scalar_t a_s;            /* the noise average's coefficient dt / (s_tau_s + dt) */
-	scalar_t dt_tmin;        /* dt / t_min_s */
+	scalar_t a_s;            /* the noise average's coefficient ds / (s_tau_s + ds), ds the sample period */
+	scalar_t c_ds;           /* the sample period: avg_n frames */
+	scalar_t dt_tmin;        /* sample period / t_min_s */
 	struct sc_recip r_drift; /* 1 / drift_per_min */
+	scalar_t blk_phi, blk_y; /* sums of the current block of avg_n frames */
+	uint32_t blk_n;          /* frames in it */
 	bool started;            /* an estimate exists */
 	bool primed;             /* the lag filter holds a value */
 	uint32_t updates;
 };
 
 /* Defaults: 2 %/min, T* in [0.2, 60] s, phi_min 0.08, tau_lag 0.03 s, curve 0, scales 1,
- * noise average 5 s, initial noise 1 %. */
+ * noise average 5 s, initial noise 1 %, every frame a sample (avg_n 1). */
 struct kf_track_params kf_track_params_default(void);
 
 /* k0 > 0: the starting estimate (e.g. VEH_KF); the first updates replace it quickly. */
 void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t k0);
 
-/* One frame: throttles thr[0..n-1] (n <= KF_TRACK_ROTORS) as commanded, the sum of the measured rotor thrusts y,
- * dt. `gate` false (on the ground, excitation running, a frame without thrust rows) only
- * advances the lag filter. Returns true when the estimate was updated. */
+/* One frame: throttles thr[0..n-1] (n <= KF_TRACK_ROTORS) as commanded, the total thrust
+ * measured y (N: the rotors' thrust rows summed, or mass times the specific force), dt.
+ * `gate` false (on the ground, a frame without the measurement) only advances the lag filter
+ * (and drops the block under way). Returns true when the estimate was updated. */
 bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_n, scalar_t dt_s, bool gate);
 
 /* Standard deviation of k (N). */
