@@ -42,6 +42,8 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->blk_phi = s->blk_y = SC_ZERO;
 	s->blk_n = 0;
 	s->c_ds = SC_ZERO;
+	s->w_sum = s->w_t = s->w_kref = s->w_inv = s->w_prev = s->w_var_pct2 = SC_ZERO;
+	s->w_n = s->w_count = 0;
 	s->e_prev_pct = SC_ZERO;
 	s->lag_al = SC(1.0);
 	s->c_dt = SC_ZERO;
@@ -95,6 +97,36 @@ static scalar_t regressor(const struct kf_track *s, const scalar_t *thr, int n)
 	return sum;
 }
 
+/* A window starts at the current estimate. */
+static void window_start(struct kf_track *s)
+{
+	s->w_kref = s->k;
+	s->w_inv = sc_div(SC(100.0), s->k);
+	s->w_sum = s->w_t = SC_ZERO;
+	s->w_n = 0;
+}
+
+/* One sample into the window: m_pct, the sample's y / phi in percent from w_kref. A window of
+ * 2 T* ends with its mean compared with the last one's. */
+static void window_add(struct kf_track *s, scalar_t m_pct, scalar_t ds)
+{
+	s->w_sum = sc_add(s->w_sum, sc_clamp(m_pct, SC(-KF_TRACK_W_CLIP), SC(KF_TRACK_W_CLIP)));
+	s->w_t = sc_add(s->w_t, ds);
+	if (++s->w_n < KF_TRACK_W_MAX && s->w_t < sc_add(s->mem_s, s->mem_s))
+		return;
+	/* the mean in newtons: w_kref (1 + mean / 100) */
+	scalar_t mean = sc_add(s->w_kref, sc_mul(s->w_kref, est_div_int(est_div_int(s->w_sum, s->w_n), 100u)));
+	if (s->w_count > 0u || s->w_prev > SC_ZERO) {
+		scalar_t d = sc_div(sc_mul(SC(100.0), sc_sub(mean, s->w_prev)), mean);
+		scalar_t v = est_mul_unit(sc_sq(d), SC(0.5));
+		/* the first comparison as it is, then an average over about four windows */
+		s->w_var_pct2 = s->w_count == 0u ? v : sc_add(s->w_var_pct2, est_mul_unit(sc_sub(v, s->w_var_pct2), SC(0.25)));
+		s->w_count++;
+	}
+	s->w_prev = mean;
+	window_start(s);
+}
+
 bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_n, scalar_t dt_s, bool gate)
 {
 	if (!sc_isfinite(y_n) || !sc_isfinite(dt_s) || !(dt_s > SC_ZERO) || dt_s > SC(1.0))
@@ -145,6 +177,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		set_p_rt(s);
 		s->started = true;
 		s->updates++;
+		window_start(s);
 		return true;
 	}
 	scalar_t e = sc_sub(y_n, sc_mul(s->k, phi));
@@ -152,6 +185,8 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	 * between samples (var = 2 s^2 for white noise): a slow tracking error or a step does
 	 * not pass for noise, which would lengthen the memory and slow the tracking further */
 	scalar_t e_pct = sc_div(sc_mul(SC(100.0), e), y_n);
+	/* y / phi from the window's reference, percent: the residual and where k stands */
+	window_add(s, sc_add(e_pct, sc_mul(sc_sub(s->k, s->w_kref), s->w_inv)), dt_s);
 	scalar_t de = sc_sub(e_pct, s->e_prev_pct);
 	s->e_prev_pct = e_pct;
 	/* half the square: x 0.5 is x / 2 exactly in both builds (factors in [0, 1]: est_mul_unit) */
@@ -193,5 +228,9 @@ scalar_t kf_track_sd(const struct kf_track *s)
 		return SC_ZERO;
 	/* sigma (N) = s y ~ s k phi (the last sample's); var(k) = sigma^2 P / (1 + lambda) */
 	scalar_t sigma = sc_mul(est_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_s));
-	return sc_mul(sigma, s->p_rt);
+	scalar_t sd = sc_mul(sigma, s->p_rt);
+	if (s->w_count == 0u)
+		return sd;
+	scalar_t sd_w = sc_mul(s->k, est_div_int(sc_sqrt(s->w_var_pct2), 100u));
+	return sc_max(sd, sd_w);
 }

@@ -30,6 +30,14 @@
  * estimate and var(k) assume. A block with a gated frame is dropped. avg_n = 1 updates on
  * every frame.
  *
+ * Coloured noise: var(k) above holds for white noise. Noise slower than the sample rate (an
+ * accelerometer's vibration folded close to 0 Hz) moves k by more, and the differences that
+ * measure s do not see it. So the measurement y / phi is also averaged over windows of 2 T*
+ * (the span an exponential memory T* weighs like a plain mean), and half the squared change
+ * between consecutive window means, averaged over windows, is the variance of such a mean
+ * as observed: noise at every frequency the estimate passes, and the drift over a window
+ * (at least the lag behind it). kf_track_sd is the larger of the two.
+ *
  * The sd is the tracking's alone: relative to the rotor model (curve, scales, lag) the
  * regressor is built from. The model's own uncertainty is the caller's to add (env_kf.h).
  */
@@ -42,6 +50,8 @@
 #include <stdint.h>
 
 #define KF_TRACK_ROTORS 8
+#define KF_TRACK_W_CLIP 5 /* percent: a sample's y / phi from the window's reference, clipped */
+#define KF_TRACK_W_MAX 4096u /* samples in a window at most (the clipped sum stays in range) */
 
 struct kf_track_params {
 	scalar_t drift_per_min; /* largest drift to follow, fraction per minute (e.g. 0.02) */
@@ -78,6 +88,15 @@ struct kf_track {
 	struct sc_recip r_drift; /* 1 / drift_per_min */
 	scalar_t blk_phi, blk_y; /* sums of the current block of avg_n frames */
 	uint32_t blk_n;          /* frames in it */
+	/* the window means (coloured noise, header comment) */
+	scalar_t w_sum;      /* sum of the samples' y / phi, percent from w_kref (each within +/- KF_TRACK_W_CLIP) */
+	scalar_t w_t;        /* the window's time so far, s */
+	uint32_t w_n;        /* its samples */
+	scalar_t w_kref;     /* k at its start, and 100 / w_kref */
+	scalar_t w_inv;
+	scalar_t w_prev;     /* the last window's mean, N */
+	scalar_t w_var_pct2; /* variance of a window's mean, percent^2 (average over windows) */
+	uint32_t w_count;    /* windows compared */
 	bool started;            /* an estimate exists */
 	bool primed;             /* the lag filter holds a value */
 	uint32_t updates;
@@ -96,7 +115,7 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
  * (and drops the block under way). Returns true when the estimate was updated. */
 bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_n, scalar_t dt_s, bool gate);
 
-/* Standard deviation of k (N). */
+/* Standard deviation of k (N): the white-noise formula's, or the window means' when larger. */
 scalar_t kf_track_sd(const struct kf_track *s);
 
 #endif /* OCTO_KF_TRACK_H */
