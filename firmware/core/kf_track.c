@@ -44,6 +44,9 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->c_ds = SC_ZERO;
 	s->w_sum = s->w_t = s->w_kref = s->w_inv = s->w_prev = s->w_var_pct2 = SC_ZERO;
 	s->w_n = s->w_count = 0;
+	s->l_t = s->l_tn = s->l_kref = s->l_inv = SC_ZERO;
+	s->l_su = s->l_suu = s->l_sc = s->l_scc = s->l_suc = s->l_var_pct2 = SC_ZERO;
+	s->l_n = s->l_count = 0;
 	s->e_prev_pct = SC_ZERO;
 	s->lag_al = SC(1.0);
 	s->c_dt = SC_ZERO;
@@ -97,6 +100,56 @@ static scalar_t regressor(const struct kf_track *s, const scalar_t *thr, int n)
 	return sum;
 }
 
+/* A long window starts at the current estimate. */
+static void long_start(struct kf_track *s)
+{
+	s->l_kref = s->k;
+	s->l_inv = sc_div(SC(100.0), s->k);
+	s->l_t = s->l_tn = SC_ZERO;
+	s->l_su = s->l_suu = s->l_sc = s->l_scc = s->l_suc = SC_ZERO;
+	s->l_n = 0;
+}
+
+/* The estimate after a sample into the long window (u: its time in memories T*, bounded by
+ * KF_TRACK_L_MEM, c: k in percent from l_kref, clipped); at the window's end the residual
+ * variance of c about its least-squares line, and the square of the line's slope per
+ * memory (the lag of k behind the drift the line follows). */
+static void long_add(struct kf_track *s, scalar_t ds)
+{
+	scalar_t c = sc_clamp(sc_mul(sc_sub(s->k, s->l_kref), s->l_inv), SC(-KF_TRACK_W_CLIP), SC(KF_TRACK_W_CLIP));
+	scalar_t u = sc_min(s->l_tn, SC(KF_TRACK_L_MEM));
+	s->l_su = sc_add(s->l_su, u);
+	s->l_suu = sc_add(s->l_suu, sc_sq(u));
+	s->l_sc = sc_add(s->l_sc, c);
+	s->l_scc = sc_add(s->l_scc, sc_sq(c));
+	s->l_suc = sc_add(s->l_suc, sc_mul(u, c));
+	/* the time in memories: ds / T* of each sample, 1 - lambda */
+	s->l_t = sc_add(s->l_t, ds);
+	s->l_tn = sc_add(s->l_tn, sc_sub(SC(1.0), s->lambda));
+	if (++s->l_n < KF_TRACK_L_MAX && s->l_tn < SC(KF_TRACK_L_MEM))
+		return;
+	if (s->l_n >= 8u) {
+		/* with means mu, mc: Suu' = Suu / n - mu^2, Suc' = Suc / n - mu mc, Scc' = Scc / n - mc^2;
+		 * the residual variance Scc' - Suc'^2 / Suu' */
+		uint32_t n = s->l_n;
+		scalar_t mu = est_div_int(s->l_su, n), mc = est_div_int(s->l_sc, n);
+		scalar_t vuu = sc_sub(est_div_int(s->l_suu, n), sc_sq(mu));
+		scalar_t vuc = sc_sub(est_div_int(s->l_suc, n), sc_mul(mu, mc));
+		scalar_t vcc = sc_sub(est_div_int(s->l_scc, n), sc_sq(mc));
+		scalar_t v = vcc, slope = SC_ZERO;
+		if (vuu > SC_ZERO) {
+			slope = sc_div(vuc, vuu); /* percent per memory */
+			v = sc_sub(vcc, sc_mul(slope, vuc));
+		}
+		/* and the lag behind that drift: an exponential memory T* lags it by one T* */
+		v = sc_add(sc_max(v, SC_ZERO), sc_sq(slope));
+		s->l_count++;
+		uint32_t m = s->l_count < KF_TRACK_W_AVG ? s->l_count : KF_TRACK_W_AVG;
+		s->l_var_pct2 = sc_add(s->l_var_pct2, est_div_int(sc_sub(v, s->l_var_pct2), m));
+	}
+	long_start(s);
+}
+
 /* A window starts at the current estimate. */
 static void window_start(struct kf_track *s)
 {
@@ -107,21 +160,23 @@ static void window_start(struct kf_track *s)
 }
 
 /* One sample into the window: m_pct, the sample's y / phi in percent from w_kref. A window of
- * 2 T* ends with its mean compared with the last one's. */
+ * T* ends with its mean compared with the last one's: half the squared change is the
+ * variance of a T* mean, half that the variance of a 2 T* mean (kf_track.h). */
 static void window_add(struct kf_track *s, scalar_t m_pct, scalar_t ds)
 {
 	s->w_sum = sc_add(s->w_sum, sc_clamp(m_pct, SC(-KF_TRACK_W_CLIP), SC(KF_TRACK_W_CLIP)));
 	s->w_t = sc_add(s->w_t, ds);
-	if (++s->w_n < KF_TRACK_W_MAX && s->w_t < sc_add(s->mem_s, s->mem_s))
+	if (++s->w_n < KF_TRACK_W_MAX && s->w_t < s->mem_s)
 		return;
 	/* the mean in newtons: w_kref (1 + mean / 100) */
 	scalar_t mean = sc_add(s->w_kref, sc_mul(s->w_kref, est_div_int(est_div_int(s->w_sum, s->w_n), 100u)));
 	if (s->w_count > 0u || s->w_prev > SC_ZERO) {
 		scalar_t d = sc_div(sc_mul(SC(100.0), sc_sub(mean, s->w_prev)), mean);
-		scalar_t v = est_mul_unit(sc_sq(d), SC(0.5));
-		/* the first comparison as it is, then an average over about four windows */
-		s->w_var_pct2 = s->w_count == 0u ? v : sc_add(s->w_var_pct2, est_mul_unit(sc_sub(v, s->w_var_pct2), SC(0.25)));
+		scalar_t v = est_mul_unit(sc_sq(d), SC(0.25));
+		/* the mean of the first KF_TRACK_W_AVG comparisons, then an average over about as many */
 		s->w_count++;
+		uint32_t n = s->w_count < KF_TRACK_W_AVG ? s->w_count : KF_TRACK_W_AVG;
+		s->w_var_pct2 = sc_add(s->w_var_pct2, est_div_int(sc_sub(v, s->w_var_pct2), n));
 	}
 	s->w_prev = mean;
 	window_start(s);
@@ -178,6 +233,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		s->started = true;
 		s->updates++;
 		window_start(s);
+		long_start(s);
 		return true;
 	}
 	scalar_t e = sc_sub(y_n, sc_mul(s->k, phi));
@@ -212,6 +268,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	s->P = est_div_near(s->P, den, s->P); /* den is about 1 once P has settled */
 	scalar_t K = sc_mul(s->P, phi);
 	s->k = sc_add(s->k, sc_mul(K, e));
+	long_add(s, dt_s);
 	/* no wind-up: P at most its steady state for the shortest memory and this regressor,
 	 * dt_tmin / phi^2 (its quotient only when the bound is reached) */
 	if (sc_mul(s->P, phi2) > s->dt_tmin)
@@ -229,8 +286,8 @@ scalar_t kf_track_sd(const struct kf_track *s)
 	/* sigma (N) = s y ~ s k phi (the last sample's); var(k) = sigma^2 P / (1 + lambda) */
 	scalar_t sigma = sc_mul(est_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_s));
 	scalar_t sd = sc_mul(sigma, s->p_rt);
-	if (s->w_count == 0u)
+	scalar_t v = sc_max(s->w_count ? s->w_var_pct2 : SC_ZERO, s->l_count ? s->l_var_pct2 : SC_ZERO);
+	if (!(v > SC_ZERO))
 		return sd;
-	scalar_t sd_w = sc_mul(s->k, est_div_int(sc_sqrt(s->w_var_pct2), 100u));
-	return sc_max(sd, sd_w);
+	return sc_max(sd, sc_mul(s->k, est_div_int(sc_sqrt(v), 100u)));
 }

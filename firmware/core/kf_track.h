@@ -32,11 +32,20 @@
  *
  * Coloured noise: var(k) above holds for white noise. Noise slower than the sample rate (an
  * accelerometer's vibration folded close to 0 Hz) moves k by more, and the differences that
- * measure s do not see it. So the measurement y / phi is also averaged over windows of 2 T*
- * (the span an exponential memory T* weighs like a plain mean), and half the squared change
- * between consecutive window means, averaged over windows, is the variance of such a mean
- * as observed: noise at every frequency the estimate passes, and the drift over a window
- * (at least the lag behind it). kf_track_sd is the larger of the two.
+ * measure s do not see it. So the measurement y / phi is also averaged over windows of T*:
+ * half the squared change between consecutive window means is the variance of a T* mean
+ * as observed (noise at every frequency the estimate passes, and the drift over a window),
+ * and half that again the variance of a 2 T* mean, the span an exponential memory T* weighs
+ * like a plain mean. Averaged over the last KF_TRACK_W_AVG or so comparisons, it is the
+ * window part of the sd; kf_track_sd is the larger of the two. A window of T* rather than
+ * 2 T* keeps a fold whose period is near 2 T* from passing unseen; it errs on the safe side
+ * for white noise (the two parts then agree within sqrt 2). Noise much slower than T* is
+ * followed like a drift: so k's own spread about a straight line fitted over a long window
+ * (KF_TRACK_L_MEM T*, the line taking the drift out), with the square of the line's slope
+ * per T* (k lags a drift by one memory), is a third part, averaged over windows alike: a fold of a period up to a few T* moves k by about its amplitude, and this spread
+ * is its rms. What varies slower than the long window (a rotor turning at the frame rate
+ * exactly folds its vibration to 0 Hz) is a bias no part sees. The window parts need a few
+ * windows (some 10 T* after a start).
  *
  * The sd is the tracking's alone: relative to the rotor model (curve, scales, lag) the
  * regressor is built from. The model's own uncertainty is the caller's to add (env_kf.h).
@@ -52,6 +61,9 @@
 #define KF_TRACK_ROTORS 8
 #define KF_TRACK_W_CLIP 5 /* percent: a sample's y / phi from the window's reference, clipped */
 #define KF_TRACK_W_MAX 4096u /* samples in a window at most (the clipped sum stays in range) */
+#define KF_TRACK_W_AVG 8u    /* window comparisons averaged */
+#define KF_TRACK_L_MEM 8     /* a long window: this many memories T* */
+#define KF_TRACK_L_MAX 1024u /* samples in a long window at most (its sums stay in range) */
 
 struct kf_track_params {
 	scalar_t drift_per_min; /* largest drift to follow, fraction per minute (e.g. 0.02) */
@@ -97,6 +109,13 @@ struct kf_track {
 	scalar_t w_prev;     /* the last window's mean, N */
 	scalar_t w_var_pct2; /* variance of a window's mean, percent^2 (average over windows) */
 	uint32_t w_count;    /* windows compared */
+	/* the long windows: k's spread about its own straight line over KF_TRACK_L_MEM T* */
+	scalar_t l_t, l_tn;                        /* the window's time so far, s, and in memories T* */
+	uint32_t l_n;                              /* its samples */
+	scalar_t l_kref, l_inv;                    /* k at its start, 100 / l_kref */
+	scalar_t l_su, l_suu, l_sc, l_scc, l_suc; /* sums of u, u^2, c, c^2, u c (u: time in T*; c: k, percent from l_kref) */
+	scalar_t l_var_pct2;                       /* the spread's variance, percent^2 (average over windows) */
+	uint32_t l_count;                          /* windows ended */
 	bool started;            /* an estimate exists */
 	bool primed;             /* the lag filter holds a value */
 	uint32_t updates;
@@ -115,7 +134,7 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
  * (and drops the block under way). Returns true when the estimate was updated. */
 bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_n, scalar_t dt_s, bool gate);
 
-/* Standard deviation of k (N): the white-noise formula's, or the window means' when larger. */
+/* Standard deviation of k (N): the largest of the white-noise formula's and the windows'. */
 scalar_t kf_track_sd(const struct kf_track *s);
 
 #endif /* OCTO_KF_TRACK_H */
