@@ -96,7 +96,8 @@ PARAM(KFT_APPLY, kft_apply, 0.0f, 0.0f, 1.0f, "", "Set 1: VEH_KF := KFT_EST now 
 #undef PARAM_FLAGS
 #define PARAM_FLAGS PARAM_READONLY
 PARAM(KFT_EST, kft_est, 0.0f, -1e9f, 1e9f, "N", "Tracked (read-only): k_f in hover, updated each second")
-PARAM(KFT_SD, kft_sd, 0.0f, -1e9f, 1e9f, "N", "Tracked (read-only): standard deviation of KFT_EST")
+PARAM(KFT_SD, kft_sd, 0.0f, -1e9f, 1e9f, "N",
+      "Tracked (read-only): standard deviation of KFT_EST, with the identified k_f's (absolute once identification accepted k_f)")
 PARAM(KFT_T, kft_t, 0.0f, -1e9f, 1e9f, "s", "Tracked (read-only): plant time KFT_EST holds for")
 PARAM(KFT_MEM, kft_mem, 0.0f, -1e9f, 1e9f, "s", "Tracked (read-only): memory of the tracker (its averaging time)")
 #undef PARAM_FLAGS
