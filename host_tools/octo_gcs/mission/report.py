@@ -558,7 +558,8 @@ def markdown(rep, figures=()):
             "fig5_excitation.png": "Fig. 5: the excitation delta_1 (rotor 1 throttle) and mu_1 (torque).",
             "fig6_validation.png": "Fig. 6: commanded vs measured f_1, (a) before and (b) after identification.",
             "fig7_rates.png": "Fig. 7: body rates, simulator vs the analytical model with the estimates.",
-            "convergence.png": "Estimates +/- 2 sigma over time; truth dashed.",
+            "convergence.png": "Each identification result (the applied estimate) +/- 2 sd beside the live "
+            "estimates in flight (auxiliary); truth dashed.",
         }
         for f in figures:
             lines += [f"![{f}]({f})", "", captions.get(f, ""), ""]
