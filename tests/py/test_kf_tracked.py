@@ -38,7 +38,7 @@ def base_seed(offset):
     return seed * 100 + offset
 
 
-def fly(tmp, veh, seed, mission, params="", must_end=True):
+def fly(tmp, veh, seed, mission, params="", must_end=True, args=()):
     """One octo-sil flight; (parameter file after it, fw frames, fw events, truth series), or
     None when its script failed and not `must_end` (the flight's own failure)."""
     (tmp / "v.json").write_text(json.dumps(veh))
@@ -48,7 +48,7 @@ def fly(tmp, veh, seed, mission, params="", must_end=True):
     prm.write_text(params)
     r = subprocess.run([str(binary("octo-sil")), "--seed", str(seed), "--vehicle", str(tmp / "v.json"),
                         "--params", str(prm), "--lcm-fw", f"file://{fw}", "--lcm-sim", f"file://{tr}",
-                        "--log-every", "9", "--duration", "600", "--quiet", "--mission", mission],
+                        "--log-every", "9", "--duration", "600", "--quiet", *args, "--mission", mission],
                        capture_output=True, text=True, timeout=120)
     if r.returncode != 0 and not must_end:
         print(f"seed {seed}: {r.stderr.strip().splitlines()[-1] if r.stderr.strip() else r.returncode}")
@@ -165,10 +165,9 @@ def test_imu_only_hover_and_tracker_follow_a_drift(tmp_path):
         rng = random.Random(seed)
         mass, u_h = rng.uniform(1.0, 5.0), rng.uniform(0.06, 0.4)
         kf = mass * G / (8 * u_h)
-        veh = dict(mass=mass, kf=kf, ktau=0.3869 * kf / 28.0269, kf_drift_per_min=rng.uniform(-0.03, -0.015),
-                   sensors=["imu", "rpm"])
+        veh = dict(mass=mass, kf=kf, ktau=0.3869 * kf / 28.0269, kf_drift_per_min=rng.uniform(-0.03, -0.015))
         p, frames, events, truth = fly(tmp_path, veh, seed, "arm; takeoff 5; wait hold; sleep 90",
-                                       f"VEH_MASS {mass:.6g}\n")
+                                       f"VEH_MASS {mass:.6g}\n", args=("--sensors", "imu,rpm"))
         assert not any(f.valid & (1 << 4) for f in frames), "thrust rows served"
         h = hover_line(events)
         assert h is not None, [e.text for e in events]
