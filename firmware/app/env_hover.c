@@ -4,9 +4,12 @@
 #include <math.h>
 #include <string.h>
 
+#include "est_ops.h"
+
 #define HOVER_READY_RSD 0.03f /* take-off ends once u_h is known to 3 % */
 #define AIRBORNE_M 0.1f       /* above the take-off ground: the acceleration is free */
 #define KF_SEED_REL 0.10f     /* NAV_KF_SEED: VEH_KF replaced when this far off */
+#define CAL_BLOCK 900u        /* ground frames per calibration block (10 s at 90 Hz) */
 
 static float nominal_u(const struct app_params *p) { return p->veh_mass * p->veh_grav / (8.0f * p->veh_kf); }
 
@@ -35,6 +38,37 @@ void env_hover_model_sync(struct env_hover *h, const struct app_params *p)
 	h->kf8_r = sc_recip_of(h->kf8);
 }
 
+/* The block under way becomes the calibration: a_z at rest reads 1 + mean. */
+static void cal_end(struct env_acc_cal *c, double t_s)
+{
+	scalar_t mean = est_div_int(c->sum, c->n);
+	c->fac = sc_div(SC(1.0), sc_add(SC(1.0), mean));
+	c->have = true;
+	c->t_s = t_s;
+	c->n_cal = c->n;
+	c->sum = SC_ZERO;
+	c->n = 0;
+}
+
+void env_hover_sense(struct env_hover *h, uint32_t valid, scalar_t acc_z_g, bool ground, double t_s)
+{
+	struct env_acc_cal *c = &h->cal;
+	if (valid & HAL_FRAME_THRUST)
+		c->rows = true;
+	if (!ground) {
+		if (c->n > 0u) /* off the ground: what the ground gave is the calibration */
+			cal_end(c, t_s);
+		return;
+	}
+	/* at rest the specific force is 1 g: the deviations summed (small: no overflow of the
+	 * fixed build's sum over a block) */
+	if (!(valid & HAL_FRAME_ACCEL) || !sc_isfinite(acc_z_g) || sc_abs(sc_sub(acc_z_g, SC(1.0))) > SC(0.2))
+		return; /* not at rest (handled, bumped): not taken */
+	c->sum = sc_add(c->sum, sc_sub(acc_z_g, SC(1.0)));
+	if (++c->n >= CAL_BLOCK)
+		cal_end(c, t_s);
+}
+
 scalar_t env_hover_step(struct env_hover *h, const struct env_hover_input *in, bool *up)
 {
 	/* collective throttle of the last step's achieved thrust (linearised by the map), in
@@ -44,10 +78,20 @@ scalar_t env_hover_step(struct env_hover *h, const struct env_hover_input *in, b
 	scalar_t kf8 = h->kf8;
 	scalar_t s_u = sc_div_r(in->f_achieved, kf8, &h->kf8_r); /* sc_div by kf8 exactly */
 	*up = sc_sub(in->z_m, in->z_ground_m) > SC(AIRBORNE_M);
-	if (*up && in->learn_mode)
+	bool learn = *up && in->learn_mode;
+	if (in->src == ENV_SRC_IMU) { /* the thrust per mass from the accelerometer, m/s^2 */
+		scalar_t a = in->acc_ok ? sc_mul(h->hov.p.g_mps2, in->acc_z_g) : SC_ZERO;
+		if (!in->acc_ok)
+			hover_est_track_acc(&h->hov, a, s_u, SC_ZERO); /* no reading: the filters restart */
+		else if (learn)
+			hover_est_update_acc(&h->hov, a, s_u, in->dt_s);
+		else
+			hover_est_track_acc(&h->hov, a, s_u, in->dt_s);
+	} else if (learn) {
 		hover_est_update(&h->hov, in->vz_mps, s_u, in->cos_tilt, in->dt_s);
-	else
+	} else {
 		hover_est_track(&h->hov, in->vz_mps, s_u, in->cos_tilt, in->dt_s);
+	}
 	/* a climb commanded that has not lifted off: the hover throttle is higher */
 	if (in->takeoff_climb && !*up)
 		hover_est_spool(&h->hov, in->dt_s);

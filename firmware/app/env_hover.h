@@ -7,19 +7,60 @@
  *
  * Knows nothing of the app: it reads its inputs and the parameters, and what it asks of
  * the app (parameters to write, a status line to post) is in its outputs.
+ *
+ * What hover learning and the k_f tracker (env_kf.h) measure the thrust with (ID_SOURCE):
+ * the rotors' thrust rows, or the accelerometer. With the thrust rows the hover is learnt
+ * from the vertical speed's derivative and the tracker sums the rows; with the accelerometer
+ * both read the specific force along the body's z axis, a_z (g), whose total thrust is
+ * VEH_MASS VEH_GRAV a_z. The accelerometer is calibrated on the ground: at rest it reads
+ * exactly 1 g, so the mean of the ground frames' a_z before a take-off gives the factor
+ * 1 / mean that takes its bias and scale error out at 1 g (where a hover reads). That
+ * calibration survives env_hover_init (a take-off restarts the learning, not it).
  */
 #ifndef OCTO_ENV_HOVER_H
 #define OCTO_ENV_HOVER_H
 
 #include <stdbool.h>
 
+#include "hal.h"
 #include "hover_est.h"
 #include "params.h"
 #include "sc_recip.h"
 #include "vec3.h"
 
+/* What the thrust is measured with (env_src_of). */
+enum env_src {
+	ENV_SRC_NONE = 0,   /* neither: the hover from the vertical speed, no tracking */
+	ENV_SRC_THRUST = 1, /* the rotors' thrust rows */
+	ENV_SRC_IMU = 2,    /* the accelerometer */
+};
+
+/* ID_SOURCE (0 auto, 1 thrust, 2 imu, 3 imu_rpm, 4 imu_rpm_torque) against what the frames
+ * deliver: `rows` thrust rows seen since start, `acc` an accelerometer. Auto takes the rows
+ * when the plant serves them, else the accelerometer. */
+static inline enum env_src env_src_of(float id_source, bool rows, bool acc)
+{
+	if (id_source >= 1.5f)
+		return ENV_SRC_IMU;
+	if (id_source >= 0.5f)
+		return ENV_SRC_THRUST;
+	return rows ? ENV_SRC_THRUST : acc ? ENV_SRC_IMU : ENV_SRC_NONE;
+}
+
+/* The accelerometer's calibration on the ground (zeroed with the app, kept by env_hover_init). */
+struct env_acc_cal {
+	scalar_t sum;   /* sum of a_z - 1 (g) over the ground frames of the block under way */
+	uint32_t n;     /* frames in it */
+	scalar_t fac;   /* 1 / (1 + mean): the correction of a_z (valid with `have`) */
+	double t_s;     /* plant time of the calibration */
+	uint32_t n_cal; /* ground frames it averaged */
+	bool have;      /* a calibration exists */
+	bool rows;      /* thrust rows seen in a frame since start */
+};
+
 struct env_hover {
 	struct hover_est hov;
+	struct env_acc_cal cal;
 	bool pub_due;           /* a HOLD entry's HOV_* wait for env_hover_publish */
 	scalar_t pub_u, pub_sd; /* the hover throttle and its sd at that entry */
 	scalar_t kf8;           /* 8 VEH_KF (N at full throttle, all rotors) */
@@ -35,6 +76,9 @@ struct env_hover {
 /* One step's inputs (scalars of this frame). */
 struct env_hover_input {
 	scalar_t f_achieved;  /* the collective thrust the mixer achieved last step, N */
+	scalar_t acc_z_g;     /* the accelerometer's specific force along body z, g (calibrated: env_hover_acc) */
+	enum env_src src;     /* what the thrust is measured with */
+	bool acc_ok;          /* this frame has the accelerometer */
 	scalar_t z_m, vz_mps; /* height and vertical speed */
 	scalar_t z_ground_m;  /* the take-off ground */
 	scalar_t cos_tilt;    /* the body's z axis, up component */
@@ -47,6 +91,21 @@ struct env_hover_input {
 struct env_hover_pub {
 	float u, sd, kf, kf_sd;
 };
+
+/* Every stepped frame, before the flying steps: notes thrust rows (valid: HAL_FRAME_* bits)
+ * and, on the ground (disarmed or idle, `ground`), takes the accelerometer's a_z (g) into its
+ * calibration; the first frame off the ground ends the calibration's block. */
+void env_hover_sense(struct env_hover *h, uint32_t valid, scalar_t acc_z_g, bool ground, double t_s);
+/* The calibrated a_z (g): a_z itself before any calibration. */
+static inline scalar_t env_hover_acc(const struct env_hover *h, scalar_t acc_z_g)
+{
+	return h->cal.have ? sc_mul(acc_z_g, h->cal.fac) : acc_z_g;
+}
+/* What the thrust is measured with under ID_SOURCE, given the frame's bits. */
+static inline enum env_src env_hover_src(const struct env_hover *h, const struct app_params *p, uint32_t valid)
+{
+	return env_src_of(p->id_source, h->cal.rows, (valid & HAL_FRAME_ACCEL) != 0);
+}
 
 /* From the parameters: the estimator starts at m g / (8 VEH_KF); the torque gain at 1. */
 void env_hover_init(struct env_hover *h, const struct app_params *p);

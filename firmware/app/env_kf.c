@@ -7,12 +7,19 @@
 
 #define KFT_WARM_S 10.0f /* s of tracker updates before it may refresh VEH_KF */
 #define KFT_VOTES 3u     /* publications in a row that must call for the refresh */
+#define IMU_AVG_N 9u     /* frames per sample with the accelerometer (0.1 s at 90 Hz) */
+#define IMU_T_MIN_S 1.0f /* the shortest memory then: ten samples */
 
 /* The tracker's model of the rotors: the vehicle's motor lag, thrust curve and per-rotor
- * effectiveness, as identified (or given). */
-static struct kf_track_params kft_params(const struct app_params *p)
+ * effectiveness, as identified (or given); with the accelerometer, samples of IMU_AVG_N
+ * frames (its vibration is coloured at the frame rate: kf_track.h). */
+static struct kf_track_params kft_params(const struct app_params *p, enum env_src src)
 {
 	struct kf_track_params kp = kf_track_params_default();
+	if (src == ENV_SRC_IMU) {
+		kp.avg_n = IMU_AVG_N;
+		kp.t_min_s = sc_from_float(IMU_T_MIN_S);
+	}
 	kp.drift_per_min = sc_from_float(p->kft_drift);
 	kp.tau_lag_s = sc_from_float(p->id_mot_tau);
 	kp.curve = sc_from_float(p->mot_curve);
@@ -23,12 +30,29 @@ static struct kf_track_params kft_params(const struct app_params *p)
 	return kp;
 }
 
+/* What the parameters say of the uncertainty the tracker rests on. */
+static void model_sd(struct env_kf *k, const struct app_params *p)
+{
+	bool kf_ok = ((unsigned)p->id_result & 1u) != 0 && p->id_kf_est > 0.0f && p->id_kf_sd > 0.0f;
+	k->model_rsd = kf_ok ? p->id_kf_sd / p->id_kf_est : 0.0f;
+	float w = p->veh_grav > 0.0f ? p->kft_acc_walk / p->veh_grav : 0.0f;
+	k->walk_rel2 = w * w;
+}
+
+static void start(struct env_kf *k, const struct app_params *p, enum env_src src)
+{
+	struct kf_track_params kp = kft_params(p, src);
+	kf_track_init(&k->kft, &kp, sc_from_float(p->veh_kf));
+	k->src = src;
+	k->mg = sc_from_float(p->veh_mass * p->veh_grav);
+	model_sd(k, p);
+	k->votes = 0;
+}
+
 void env_kf_init(struct env_kf *k, const struct app_params *p)
 {
-	struct kf_track_params kp = kft_params(p);
-	kf_track_init(&k->kft, &kp, sc_from_float(p->veh_kf));
+	start(k, p, k->src == ENV_SRC_IMU ? ENV_SRC_IMU : ENV_SRC_THRUST);
 	k->pub_next_t = 1.0;
-	k->votes = 0;
 	k->pub_due = false;
 }
 
@@ -36,24 +60,42 @@ void env_kf_model_sync(struct env_kf *k, const struct app_params *p)
 {
 	/* An estimate made with another rotor model (before identification found the curve,
 	 * lag or a weak rotor) would be compared with the new VEH_KF and "refresh" it wrongly. */
-	struct kf_track_params kp = kft_params(p);
+	struct kf_track_params kp = kft_params(p, k->src);
 	const struct kf_track_params *cur = &k->kft.p;
 	bool same = kp.tau_lag_s == cur->tau_lag_s && kp.curve == cur->curve && kp.drift_per_min == cur->drift_per_min;
 	for (int j = 0; j < KF_TRACK_ROTORS; j++)
 		same = same && kp.scale[j] == cur->scale[j];
+	if (k->src == ENV_SRC_IMU) /* the thrust is m a_z: another mass, another measurement */
+		same = same && sc_from_float(p->veh_mass * p->veh_grav) == k->mg;
 	if (!same)
-		env_kf_init(k, p);
+		start(k, p, k->src);
+	model_sd(k, p);
 }
 
-/* The last step's throttles (what the plant answers now) against the sum of the measured
- * rotor thrusts of this frame. */
-void env_kf_step(struct env_kf *k, const struct env_kf_input *in)
+float env_kf_sd_abs(const struct env_kf *k, double t_s)
 {
+	float kf = sc_to_float(k->kft.k), sd = sc_to_float(kf_track_sd(&k->kft));
+	float rel2 = k->model_rsd * k->model_rsd;
+	if (k->src == ENV_SRC_IMU && t_s > k->t_cal)
+		rel2 += k->walk_rel2 * (float)(t_s - k->t_cal);
+	return sqrtf(sd * sd + kf * kf * rel2);
+}
+
+/* The last step's throttles (what the plant answers now) against the thrust measured in
+ * this frame: the sum of the rotors' thrust rows, or m g a_z. */
+void env_kf_step(struct env_kf *k, const struct env_kf_input *in, const struct app_params *p)
+{
+	if (in->src != k->src && in->src != ENV_SRC_NONE) /* another measurement: start again */
+		start(k, p, in->src);
+	k->t_cal = in->t_cal_s;
 	struct kf_track *t = &k->kft;
 	scalar_t y = SC_ZERO; /* the sum in scalars: float's own sum in the float build */
-	for (int j = 0; j < HAL_ROTORS; j++)
-		y = sc_add(y, in->thrust_n[j]);
-	kf_track_update(t, in->thr, HAL_ROTORS, y, in->dt_s, in->gate);
+	if (k->src == ENV_SRC_IMU)
+		y = sc_mul(k->mg, in->acc_z_g);
+	else if (in->thrust_n)
+		for (int j = 0; j < HAL_ROTORS; j++)
+			y = sc_add(y, in->thrust_n[j]);
+	kf_track_update(t, in->thr, HAL_ROTORS, y, in->dt_s, in->gate && in->src != ENV_SRC_NONE);
 	/* the publication once a second of plant time, between frames: the step only notes
 	 * that this frame is due and whether it flew in HOLD */
 	if (!t->started || app_t_before(in->t_s, k->pub_next_t))
@@ -75,9 +117,11 @@ bool env_kf_publish(struct env_kf *k, const struct app_params *p, uint64_t now_u
 	out->announce = now_us - k->pub_wall_us >= 1000000u;
 	if (out->announce)
 		k->pub_wall_us = now_us;
+	/* sd: the tracking's (the drift against VEH_KF, whose model error is the same); the
+	 * published one is absolute */
 	float kf = sc_to_float(t->k), sd = sc_to_float(kf_track_sd(t));
 	out->k = kf;
-	out->sd = sd;
+	out->sd = env_kf_sd_abs(k, t_s);
 	out->t = (float)t_s;
 	out->mem = sc_to_float(t->mem_s);
 	out->clear_apply = out->refresh = false;

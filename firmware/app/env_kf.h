@@ -7,6 +7,22 @@
  * Knows nothing of the app: the step gives it this frame's thrusts and throttles, and the
  * publication is a request (the values to write and announce, a VEH_KF to set and why)
  * that the app carries out.
+ *
+ * The measured thrust y (env_hover.h, ENV_SRC_*): the thrust rows summed, or
+ * VEH_MASS VEH_GRAV a_z from the calibrated accelerometer. The accelerometer's vibration
+ * is coloured at the frame rate: the tracker then updates on 0.1 s means (kf_track.h, avg_n).
+ * A change of source restarts the tracker.
+ *
+ * The sd published (KFT_SD, and the log's) is absolute: the tracking's sd (kf_track_sd,
+ * relative to the rotor model it regresses on) combined in quadrature with the model's own
+ * relative sd, that of k_f in the last accepted identification (ID_KF_SD / ID_KF_EST,
+ * which carries the thrust curve's and the motor lag's shares: motor_id.h), and with the
+ * accelerometer, its bias walk since the ground calibration (KFT_ACC_WALK). The model's
+ * error is common to the tracked and the identified k_f, so a VEH_KF refresh keeps it:
+ * the refresh compares the tracked drift with the tracking sd alone, and the later
+ * publications still carry the identification's share. Without an accepted identification
+ * the model is the one given (MOT_CURVE, MOT_SCALE*, ID_MOT_TAU) and KFT_SD carries no share
+ * of it. docs/identification.md, "k_f tracked in flight".
  */
 #ifndef OCTO_ENV_KF_H
 #define OCTO_ENV_KF_H
@@ -14,12 +30,18 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "env_hover.h"
 #include "hal.h"
 #include "kf_track.h"
 #include "params.h"
 
 struct env_kf {
 	struct kf_track kft;
+	enum env_src src;  /* what the running tracker's y is */
+	scalar_t mg;       /* VEH_MASS VEH_GRAV, N: the thrust of 1 g of specific force */
+	float model_rsd;   /* the rotor model's relative sd (an accepted identification's k_f) */
+	float walk_rel2;   /* (KFT_ACC_WALK / VEH_GRAV)^2: relative variance per second of the calibration's age */
+	double t_cal;      /* plant time of the accelerometer's calibration (src IMU) */
 	double pub_next_t;    /* plant time of the next publication (1 s after the last) */
 	uint64_t pub_wall_us; /* wall time of the last announced one */
 	uint32_t votes;       /* consecutive publications that called for a VEH_KF refresh */
@@ -29,15 +51,18 @@ struct env_kf {
 
 /* One step's inputs. */
 struct env_kf_input {
-	const scalar_t *thrust_n; /* HAL_ROTORS measured rotor thrusts of this frame */
+	const scalar_t *thrust_n; /* HAL_ROTORS measured rotor thrusts of this frame (src THRUST) */
+	scalar_t acc_z_g;         /* the calibrated specific force along body z, g (src IMU) */
+	enum env_src src;         /* what the thrust is measured with (env_hover_src) */
+	double t_cal_s;           /* plant time of the accelerometer's calibration (src IMU) */
 	const scalar_t *thr;      /* HAL_ROTORS throttles of the last step (what acts now) */
 	scalar_t dt_s;
 	double t_s; /* this frame's plant time */
-	bool gate;  /* HOLD or an experiment, airborne, thrust rows present */
+	bool gate;  /* HOLD or an experiment, airborne, the source's measurement in this frame */
 	bool hold;  /* in HOLD */
 };
 
-/* What a publication asks of the app, in this order: KFT_EST, KFT_SD, KFT_T, KFT_MEM set
+/* What a publication asks of the app, in this order: KFT_EST, KFT_SD (absolute), KFT_T, KFT_MEM set
  * (announced as PARAM_VALUE and the values "KFT", "KFT_SD" when `announce`); KFT_APPLY set
  * back to 0 (clear_apply); VEH_KF := kf (refresh, with `why` for its status line). */
 struct env_kf_pub {
@@ -49,13 +74,15 @@ struct env_kf_pub {
 	const char *why;
 };
 
-/* Starts the tracker at VEH_KF with the rotor model of the parameters. */
+/* Starts the tracker at VEH_KF with the rotor model of the parameters (and the source of the
+ * last step: thrust rows before any). */
 void env_kf_init(struct env_kf *k, const struct app_params *p);
-/* After a parameter change: a changed rotor model (lag, curve, scales, drift bound)
- * restarts the tracker from the current VEH_KF. */
+/* After a parameter change: a changed rotor model (lag, curve, scales, drift bound, and
+ * with the accelerometer the mass) restarts the tracker from the current VEH_KF; the model's
+ * sd and the walk are read again. */
 void env_kf_model_sync(struct env_kf *k, const struct app_params *p);
-/* In the step, every flying frame. */
-void env_kf_step(struct env_kf *k, const struct env_kf_input *in);
+/* In the step, every flying frame (p: for a restart on a change of source). */
+void env_kf_step(struct env_kf *k, const struct env_kf_input *in, const struct app_params *p);
 /* A publication is due (env_kf_publish has something to say). */
 static inline bool env_kf_due(const struct env_kf *k) { return k->pub_due; }
 /* Between frames: true (and *out) after a step that reached the next second of plant time.
@@ -64,13 +91,16 @@ static inline bool env_kf_due(const struct env_kf *k) { return k->pub_due; }
 bool env_kf_publish(struct env_kf *k, const struct app_params *p, uint64_t now_us, double t_s, float dt_frame,
 		    struct env_kf_pub *out);
 
-/* The estimate and its sd for the log (false before the first estimate). */
-static inline bool env_kf_estimate(const struct env_kf *k, float *kf, float *sd)
+/* The absolute sd of the estimate at plant time t_s (header comment). */
+float env_kf_sd_abs(const struct env_kf *k, double t_s);
+
+/* The estimate and its absolute sd for the log (false before the first estimate). */
+static inline bool env_kf_estimate(const struct env_kf *k, double t_s, float *kf, float *sd)
 {
 	if (!k->kft.started)
 		return false;
 	*kf = sc_to_float(k->kft.k);
-	*sd = sc_to_float(kf_track_sd(&k->kft));
+	*sd = env_kf_sd_abs(k, t_s);
 	return true;
 }
 

@@ -86,6 +86,6 @@ void log_fill(struct app_log_frame *l, const struct log_src *s)
 	l->inertia[1] = s->p->veh_iyy;
 	l->inertia[2] = s->p->veh_izz;
 	l->mass = s->p->veh_mass;
-	if (!env_kf_estimate(s->kf, &l->kft, &l->kft_sd))
+	if (!env_kf_estimate(s->kf, f->t_s, &l->kft, &l->kft_sd))
 		l->kft = l->kft_sd = 0.0f;
 }

@@ -96,13 +96,23 @@ PARAM(KFT_APPLY, kft_apply, 0.0f, 0.0f, 1.0f, "", "Set 1: VEH_KF := KFT_EST now 
 #undef PARAM_FLAGS
 #define PARAM_FLAGS PARAM_READONLY
 PARAM(KFT_EST, kft_est, 0.0f, -1e9f, 1e9f, "N", "Tracked (read-only): k_f in hover, updated each second")
-PARAM(KFT_SD, kft_sd, 0.0f, -1e9f, 1e9f, "N", "Tracked (read-only): standard deviation of KFT_EST")
+PARAM(KFT_SD, kft_sd, 0.0f, -1e9f, 1e9f, "N",
+      "Tracked (read-only): standard deviation of KFT_EST, with the identified k_f's (absolute once identification accepted k_f)")
 PARAM(KFT_T, kft_t, 0.0f, -1e9f, 1e9f, "s", "Tracked (read-only): plant time KFT_EST holds for")
 PARAM(KFT_MEM, kft_mem, 0.0f, -1e9f, 1e9f, "s", "Tracked (read-only): memory of the tracker (its averaging time)")
 #undef PARAM_FLAGS
 #define PARAM_FLAGS 0
 PARAM(NAV_HOLD_TO, nav_hold_to, 30.0f, 0.0f, 600.0f, "s",
       "Hold entry (take-off at its target height: still, hover learned) must reach HOLD within this, else it fails and lands")
+/* what identification, hover learning and the k_f tracker measure with (docs/identification.md) */
+#undef PARAM_FLAGS
+#define PARAM_FLAGS PARAM_LOCKED
+PARAM(ID_SOURCE, id_source, 0.0f, 0.0f, 4.0f, "",
+      "Measurements: 0 auto (thrust rows when served, else IMU), 1 thrust rows, 2 imu, 3 imu_rpm, 4 imu_rpm_torque")
+#undef PARAM_FLAGS
+#define PARAM_FLAGS 0
+PARAM(KFT_ACC_WALK, kft_acc_walk, 0.001f, 0.0f, 1.0f, "m/s^2/sqrt(s)",
+      "k_f tracking from the IMU: accelerometer bias random walk, carried into KFT_SD from the ground calibration")
 #undef PARAM_FLAGS
 /* identification from the flight controller's own sensors (docs/identification.md, "From the IMU") */
 #undef PARAM_FLAGS

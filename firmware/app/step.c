@@ -18,6 +18,7 @@ struct step {
 	scalar_t fz;                  /* thrust demand */
 	bool excited;                 /* an experiment adds its excitation */
 	scalar_t thr[HAL_ROTORS];     /* the throttle map's throttles */
+	scalar_t acc_z;               /* the accelerometer's specific force along body z, g (as read) */
 };
 
 /* The frame as scalars; the excitation is zero unless the experiment sets it. */
@@ -36,7 +37,11 @@ static inline void step_inputs(struct app *a, struct step *s)
  * points on the ground. True: the step ends here. */
 static inline bool step_ground(struct app *a, struct step *s)
 {
-	if (a->mode != APP_DISARMED && a->mode != APP_IDLE)
+	bool ground = a->mode == APP_DISARMED || a->mode == APP_IDLE;
+	/* thrust rows noted; on the ground the accelerometer calibrated (env_hover.h) */
+	s->acc_z = sc_from_float(a->fr.accel_b_g[2]);
+	env_hover_sense(&a->env_hover, a->fr.valid, s->acc_z, ground, a->fr.t_s);
+	if (!ground)
 		return false;
 	app_set_thr_all(a, a->mode == APP_IDLE ? a->p.mot_thr_idle : 0.0f);
 	app_reset_control(a);
@@ -139,8 +144,15 @@ static inline void step_attitude(struct app *a, struct step *s)
 static inline void step_height(struct app *a, struct step *s)
 {
 	s->cos_tilt = quat_body_z_up(s->q);
+	/* what the thrust is measured with, and the accelerometer's a_z calibrated */
+	enum env_src src = env_hover_src(&a->env_hover, &a->p, a->fr.valid);
+	bool acc_ok = (a->fr.valid & HAL_FRAME_ACCEL) != 0;
+	scalar_t acc_z = acc_ok ? env_hover_acc(&a->env_hover, s->acc_z) : SC_ZERO;
 	struct env_hover_input hi = {
 		.f_achieved = a->mix_out.achieved[0],
+		.acc_z_g = acc_z,
+		.src = src,
+		.acc_ok = acc_ok,
 		.z_m = s->pos[2],
 		.vz_mps = s->vel[2],
 		.z_ground_m = a->guid.z_ground_m,
@@ -151,15 +163,19 @@ static inline void step_height(struct app *a, struct step *s)
 	};
 	bool up;
 	scalar_t hover_f = env_hover_step(&a->env_hover, &hi, &up);
+	bool have = src == ENV_SRC_IMU ? acc_ok : (a->fr.valid & HAL_FRAME_THRUST) != 0;
 	struct env_kf_input ki = {
 		.thrust_n = app_in(a)->rotor_thrust_n,
+		.acc_z_g = acc_z,
+		.src = src,
+		.t_cal_s = a->env_hover.cal.t_s,
 		.thr = app_thr_sc(a),
 		.dt_s = s->gi.dt_s,
 		.t_s = a->fr.t_s,
-		.gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && (a->fr.valid & HAL_FRAME_THRUST),
+		.gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && have,
 		.hold = a->mode == APP_HOLD,
 	};
-	env_kf_step(&a->env_kf, &ki);
+	env_kf_step(&a->env_kf, &ki, &a->p);
 	struct alt_ctrl_input li = {
 		.z_sp_m = a->guid.z_sp_m,
 		.vz_ff_mps = a->guid.vz_ff_mps,

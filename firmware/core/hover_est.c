@@ -13,6 +13,7 @@ struct hover_est_params hover_est_params_default(void)
 	p.u_max = SC(0.8);
 	p.sigma_u0 = SC(1.0);
 	p.sigma_acc = SC(0.5);
+	p.sigma_imu = SC(0.3);
 	p.q_rel = SC(0.003);
 	p.tau_s = SC(0.1);
 	p.gate_sigma = SC(4.0);
@@ -45,6 +46,7 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 	s->q2 = sc_sq(sc_mul(SC(100.0), s->p.q_rel));
 	s->y_min = sc_mul(SC(0.05), s->p.g_mps2);
 	s->r_sd0 = sc_mul(SC(100.0), s->p.sigma_acc);
+	s->r_sd0_imu = sc_mul(SC(100.0), s->p.sigma_imu);
 	s->gate2 = sc_sq(s->p.gate_sigma);
 	s->al_dt = SC_ZERO;
 	s->al = SC_ZERO;
@@ -54,6 +56,7 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 	s->v_f = SC_ZERO;
 	s->uc_f = SC_ZERO;
 	s->primed = false;
+	s->acc = false;
 	s->gated_s = SC_ZERO;
 	s->gated_sign = 0;
 	s->updates = 0;
@@ -65,10 +68,15 @@ static bool inputs_ok(scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
 	return sc_isfinite(vz) && sc_isfinite(u) && sc_isfinite(c) && sc_isfinite(dt) && dt > SC_ZERO && dt < SC(1.0);
 }
 
-/* Advances the state-variable filter; returns the filtered acceleration. */
-static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
+/* Advances the state-variable filter; returns the filtered acceleration. acc: vz is the
+ * accelerometer's specific force and c is 1 (then the filtered input is returned). */
+static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c, scalar_t dt, bool acc)
 {
-	scalar_t uc = est_mul_unit(u, c); /* c = cos(tilt) in [0, 1] (est_mul_unit: exact for any) */
+	scalar_t uc = acc ? u : est_mul_unit(u, c); /* c = cos(tilt) in [0, 1] (est_mul_unit: exact for any) */
+	if (acc != s->acc) { /* another kind of input: the filters start again */
+		s->acc = acc;
+		s->primed = false;
+	}
 	if (!s->primed) {
 		s->v_f = vz;
 		s->uc_f = uc;
@@ -83,7 +91,7 @@ static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c
 	scalar_t al = s->al;
 	s->v_f = sc_add(s->v_f, est_mul_unit(sc_sub(vz, s->v_f), al)); /* al in [0, 1] */
 	s->uc_f = sc_add(s->uc_f, est_mul_unit(sc_sub(uc, s->uc_f), al));
-	return sc_div_r(sc_sub(vz, s->v_f), s->p.tau_s, &s->r_tau);
+	return acc ? s->v_f : sc_div_r(sc_sub(vz, s->v_f), s->p.tau_s, &s->r_tau);
 }
 
 void hover_est_track(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t cos_tilt, scalar_t dt_s)
@@ -92,29 +100,26 @@ void hover_est_track(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t 
 		s->primed = false;
 		return;
 	}
-	(void)filters(s, vz_mps, u, cos_tilt, dt_s);
+	(void)filters(s, vz_mps, u, cos_tilt, dt_s, false);
 }
 
-bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t cos_tilt, scalar_t dt_s)
+void hover_est_track_acc(struct hover_est *s, scalar_t a_mps2, scalar_t u, scalar_t dt_s)
 {
-	if (!inputs_ok(vz_mps, u, cos_tilt, dt_s)) {
+	if (!inputs_ok(a_mps2, u, SC(1.0), dt_s)) {
 		s->primed = false;
-		return false;
+		return;
 	}
-	bool was_primed = s->primed;
-	scalar_t a_f = filters(s, vz_mps, u, cos_tilt, dt_s);
-	/* process noise: a random walk of the relative error (dt < 1) */
-	s->p_pct2 = sc_min(sc_add(s->p_pct2, est_mul_unit(s->q2, dt_s)), P_MAX_PCT2);
-	if (!was_primed)
-		return false;
-	scalar_t y_hat = sc_mul(sc_mul(s->p.g_mps2, s->uc_f), s->theta);
-	if (!(y_hat > s->y_min))
-		return false; /* (almost) no thrust: nothing to learn */
-	scalar_t y = sc_add(a_f, s->p.g_mps2);
+	(void)filters(s, a_mps2, u, SC(1.0), dt_s, true);
+}
+
+/* The measurement y against the prediction y^ (m/s^2) with the noise level r_sd0 (percent
+ * of 1 m/s^2): the gate, the relative innovation of theta and its variance. */
+static bool innovate(struct hover_est *s, scalar_t y, scalar_t y_hat, scalar_t r_sd0, scalar_t dt_s)
+{
 	/* two quotients by y^: its reciprocal prepared once (scalar_ops.h) */
 	struct sc_gain inv_y_hat = sc_gain_recip2(y_hat, SC(1.0));
 	scalar_t e_pct = sc_mul(SC(100.0), sc_sub(sc_mul_gain(y, &inv_y_hat), SC(1.0)));
-	scalar_t r_sd = sc_mul_gain(s->r_sd0, &inv_y_hat);
+	scalar_t r_sd = sc_mul_gain(r_sd0, &inv_y_hat);
 	scalar_t r = sc_sq(r_sd);
 	scalar_t pr = sc_add(s->p_pct2, r);
 	if (sc_sq(e_pct) > sc_mul(s->gate2, pr)) {
@@ -140,6 +145,38 @@ bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t
 	s->p_pct2 = sc_max(sc_mul_gain(sc_mul(s->p_pct2, r), &inv_pr), SC_EPS);
 	s->updates++;
 	return true;
+}
+
+/* One update from either kind of input (acc: the accelerometer, c = 1). */
+static bool update(struct hover_est *s, scalar_t x, scalar_t u, scalar_t cos_tilt, scalar_t dt_s, bool acc)
+{
+	if (!inputs_ok(x, u, cos_tilt, dt_s)) {
+		s->primed = false;
+		return false;
+	}
+	bool was_primed = s->primed && s->acc == acc;
+	scalar_t a_f = filters(s, x, u, cos_tilt, dt_s, acc);
+	/* process noise: a random walk of the relative error (dt < 1) */
+	s->p_pct2 = sc_min(sc_add(s->p_pct2, est_mul_unit(s->q2, dt_s)), P_MAX_PCT2);
+	if (!was_primed)
+		return false;
+	scalar_t y_hat = sc_mul(sc_mul(s->p.g_mps2, s->uc_f), s->theta);
+	if (!(y_hat > s->y_min))
+		return false; /* (almost) no thrust: nothing to learn */
+	/* the accelerometer's filtered reading is the thrust per mass; the speed's derivative
+	 * plus gravity is its vertical part */
+	scalar_t y = acc ? a_f : sc_add(a_f, s->p.g_mps2);
+	return innovate(s, y, y_hat, acc ? s->r_sd0_imu : s->r_sd0, dt_s);
+}
+
+bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t cos_tilt, scalar_t dt_s)
+{
+	return update(s, vz_mps, u, cos_tilt, dt_s, false);
+}
+
+bool hover_est_update_acc(struct hover_est *s, scalar_t a_mps2, scalar_t u, scalar_t dt_s)
+{
+	return update(s, a_mps2, u, SC(1.0), dt_s, true);
 }
 
 void hover_est_spool(struct hover_est *s, scalar_t dt_s)

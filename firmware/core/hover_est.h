@@ -25,6 +25,14 @@
  * and u cos_tilt goes through the same filter, so that both sides of the model see the
  * same lag (a lag on one side only would bias u_h during climbs).
  *
+ * With an accelerometer (hover_est_update_acc): the specific force along the body's z axis,
+ * a_b = f / m, is the thrust itself, so the model is a_b = g u / u_h (no tilt, no
+ * derivative): y = a_b and y^ = g u theta, both through the same first-order filter of time
+ * constant tau_s (the motor lag and the accelerometer's vibration are then out of the
+ * innovation), with the accelerometer's own noise level sigma_imu. The caller calibrates a_b
+ * (at rest it reads exactly 1 g: env_hover.h). A filter runs on one kind of input at a time:
+ * a change of kind restarts it.
+ *
  * Ground: on the ground the acceleration is zero whatever the throttle, so no update is
  * made there. While the caller commands a climb that has not lifted off,
  * hover_est_spool() raises u_h at a bounded rate (the controller then raises the
@@ -50,6 +58,7 @@ struct hover_est_params {
 	scalar_t u_max;
 	scalar_t sigma_u0;   /* initial standard deviation of u_h as a fraction of u_h (e.g. 1.0) */
 	scalar_t sigma_acc;  /* measurement noise of the filtered acceleration, m/s^2 */
+	scalar_t sigma_imu;  /* the same of the filtered accelerometer reading, m/s^2 */
 	scalar_t q_rel;      /* process noise: relative drift of u_h per sqrt(s) */
 	scalar_t tau_s;      /* state-variable filter time constant, s */
 	scalar_t gate_sigma; /* innovation gate, standard deviations */
@@ -61,9 +70,10 @@ struct hover_est {
 	struct hover_est_params p;
 	scalar_t theta;    /* 1 / u_h */
 	scalar_t p_pct2;   /* variance of theta's relative error, percent^2 */
-	scalar_t v_f;      /* filtered vertical speed */
+	scalar_t v_f;      /* filtered vertical speed (or specific force, acc) */
 	scalar_t uc_f;     /* filtered u cos_tilt */
 	bool primed;       /* filters initialised */
+	bool acc;          /* the filters hold the accelerometer's kind of input */
 	int8_t gated_sign; /* sign of the current run of gated innovations */
 	uint32_t updates;  /* accepted measurements */
 	uint32_t rejected; /* gated measurements */
@@ -77,11 +87,12 @@ struct hover_est {
 	scalar_t q2;                 /* (100 q_rel)^2, percent^2 per s */
 	scalar_t y_min;              /* 0.05 g: the least predicted acceleration that is learnt from */
 	scalar_t r_sd0;              /* 100 sigma_acc */
+	scalar_t r_sd0_imu;          /* 100 sigma_imu */
 	scalar_t gate2;              /* gate_sigma^2 */
 };
 
-/* Defaults: u_h in [0.02, 0.8], sigma_u0 1.0, sigma_acc 0.5 m/s^2, q_rel 0.003 /sqrt(s),
- * tau 0.1 s, gate 4 sigma, spool 0.6 /s, g 9.796. */
+/* Defaults: u_h in [0.02, 0.8], sigma_u0 1.0, sigma_acc 0.5 m/s^2, sigma_imu 0.3 m/s^2,
+ * q_rel 0.003 /sqrt(s), tau 0.1 s, gate 4 sigma, spool 0.6 /s, g 9.796. */
 struct hover_est_params hover_est_params_default(void);
 
 /* Starts from the nominal hover throttle u0 (clamped to the range), relative sd sigma_u0. */
@@ -94,6 +105,11 @@ bool hover_est_update(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t
 /* A step on the ground (or not to be used): keeps the filters in step with the signals
  * without updating the state. */
 void hover_est_track(struct hover_est *s, scalar_t vz_mps, scalar_t u, scalar_t cos_tilt, scalar_t dt_s);
+
+/* The same two from the accelerometer: a_mps2 the specific force along the body's z axis
+ * (calibrated), m/s^2. */
+bool hover_est_update_acc(struct hover_est *s, scalar_t a_mps2, scalar_t u, scalar_t dt_s);
+void hover_est_track_acc(struct hover_est *s, scalar_t a_mps2, scalar_t u, scalar_t dt_s);
 
 /* Ground spool-up (a climb commanded, no lift-off): u_h *= 1 + spool_rate dt, up to u_max;
  * the variance is kept at least at the initial one. */

@@ -17,6 +17,7 @@ struct kf_track_params kf_track_params_default(void)
 		p.scale[j] = SC(1.0);
 	p.s_tau_s = SC(5.0);
 	p.s0_pct = SC(1.0);
+	p.avg_n = 1u;
 	return p;
 }
 
@@ -27,6 +28,8 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 		s->p.t_min_s = SC(0.2);
 	if (!(s->p.t_max_s > s->p.t_min_s))
 		s->p.t_max_s = s->p.t_min_s;
+	if (s->p.avg_n < 1u)
+		s->p.avg_n = 1u;
 	s->k = k0 > SC_ZERO ? k0 : SC(1.0);
 	s->P = SC_ZERO;
 	s->s2_pct2 = sc_sq(s->p.s0_pct);
@@ -35,6 +38,15 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->lambda = SC(0.98);
 	s->p_rt = SC_ZERO;
 	s->phi_f = SC_ZERO;
+	s->phi_s = SC_ZERO;
+	s->blk_phi = s->blk_y = SC_ZERO;
+	s->blk_n = 0;
+	s->c_ds = SC_ZERO;
+	s->w_sum = s->w_t = s->w_kref = s->w_inv = s->w_prev = s->w_var_pct2 = SC_ZERO;
+	s->w_n = s->w_count = 0;
+	s->l_t = s->l_tn = s->l_kref = s->l_inv = SC_ZERO;
+	s->l_su = s->l_suu = s->l_sc = s->l_scc = s->l_suc = s->l_var_pct2 = SC_ZERO;
+	s->l_n = s->l_count = 0;
 	s->e_prev_pct = SC_ZERO;
 	s->lag_al = SC(1.0);
 	s->c_dt = SC_ZERO;
@@ -88,6 +100,88 @@ static scalar_t regressor(const struct kf_track *s, const scalar_t *thr, int n)
 	return sum;
 }
 
+/* A long window starts at the current estimate. */
+static void long_start(struct kf_track *s)
+{
+	s->l_kref = s->k;
+	s->l_inv = sc_div(SC(100.0), s->k);
+	s->l_t = s->l_tn = SC_ZERO;
+	s->l_su = s->l_suu = s->l_sc = s->l_scc = s->l_suc = SC_ZERO;
+	s->l_n = 0;
+}
+
+/* The estimate after a sample into the long window (u: its time in memories T*, bounded by
+ * KF_TRACK_L_MEM, c: k in percent from l_kref, clipped); at the window's end the residual
+ * variance of c about its least-squares line, and the square of the line's slope per
+ * memory (the lag of k behind the drift the line follows). */
+static void long_add(struct kf_track *s, scalar_t ds)
+{
+	scalar_t c = sc_clamp(sc_mul(sc_sub(s->k, s->l_kref), s->l_inv), SC(-KF_TRACK_W_CLIP), SC(KF_TRACK_W_CLIP));
+	scalar_t u = sc_min(s->l_tn, SC(KF_TRACK_L_MEM));
+	s->l_su = sc_add(s->l_su, u);
+	s->l_suu = sc_add(s->l_suu, sc_sq(u));
+	s->l_sc = sc_add(s->l_sc, c);
+	s->l_scc = sc_add(s->l_scc, sc_sq(c));
+	s->l_suc = sc_add(s->l_suc, sc_mul(u, c));
+	/* the time in memories: ds / T* of each sample, 1 - lambda */
+	s->l_t = sc_add(s->l_t, ds);
+	s->l_tn = sc_add(s->l_tn, sc_sub(SC(1.0), s->lambda));
+	if (++s->l_n < KF_TRACK_L_MAX && s->l_tn < SC(KF_TRACK_L_MEM))
+		return;
+	if (s->l_n >= 8u) {
+		/* with means mu, mc: Suu' = Suu / n - mu^2, Suc' = Suc / n - mu mc, Scc' = Scc / n - mc^2;
+		 * the residual variance Scc' - Suc'^2 / Suu' */
+		uint32_t n = s->l_n;
+		scalar_t mu = est_div_int(s->l_su, n), mc = est_div_int(s->l_sc, n);
+		scalar_t vuu = sc_sub(est_div_int(s->l_suu, n), sc_sq(mu));
+		scalar_t vuc = sc_sub(est_div_int(s->l_suc, n), sc_mul(mu, mc));
+		scalar_t vcc = sc_sub(est_div_int(s->l_scc, n), sc_sq(mc));
+		scalar_t v = vcc, slope = SC_ZERO;
+		if (vuu > SC_ZERO) {
+			slope = sc_div(vuc, vuu); /* percent per memory */
+			v = sc_sub(vcc, sc_mul(slope, vuc));
+		}
+		/* and the lag behind that drift: an exponential memory T* lags it by one T* */
+		v = sc_add(sc_max(v, SC_ZERO), sc_sq(slope));
+		s->l_count++;
+		uint32_t m = s->l_count < KF_TRACK_W_AVG ? s->l_count : KF_TRACK_W_AVG;
+		s->l_var_pct2 = sc_add(s->l_var_pct2, est_div_int(sc_sub(v, s->l_var_pct2), m));
+	}
+	long_start(s);
+}
+
+/* A window starts at the current estimate. */
+static void window_start(struct kf_track *s)
+{
+	s->w_kref = s->k;
+	s->w_inv = sc_div(SC(100.0), s->k);
+	s->w_sum = s->w_t = SC_ZERO;
+	s->w_n = 0;
+}
+
+/* One sample into the window: m_pct, the sample's y / phi in percent from w_kref. A window of
+ * T* ends with its mean compared with the last one's: half the squared change is the
+ * variance of a T* mean, half that the variance of a 2 T* mean (kf_track.h). */
+static void window_add(struct kf_track *s, scalar_t m_pct, scalar_t ds)
+{
+	s->w_sum = sc_add(s->w_sum, sc_clamp(m_pct, SC(-KF_TRACK_W_CLIP), SC(KF_TRACK_W_CLIP)));
+	s->w_t = sc_add(s->w_t, ds);
+	if (++s->w_n < KF_TRACK_W_MAX && s->w_t < s->mem_s)
+		return;
+	/* the mean in newtons: w_kref (1 + mean / 100) */
+	scalar_t mean = sc_add(s->w_kref, sc_mul(s->w_kref, est_div_int(est_div_int(s->w_sum, s->w_n), 100u)));
+	if (s->w_count > 0u || s->w_prev > SC_ZERO) {
+		scalar_t d = sc_div(sc_mul(SC(100.0), sc_sub(mean, s->w_prev)), mean);
+		scalar_t v = est_mul_unit(sc_sq(d), SC(0.25));
+		/* the mean of the first KF_TRACK_W_AVG comparisons, then an average over about as many */
+		s->w_count++;
+		uint32_t n = s->w_count < KF_TRACK_W_AVG ? s->w_count : KF_TRACK_W_AVG;
+		s->w_var_pct2 = sc_add(s->w_var_pct2, est_div_int(sc_sub(v, s->w_var_pct2), n));
+	}
+	s->w_prev = mean;
+	window_start(s);
+}
+
 bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_n, scalar_t dt_s, bool gate)
 {
 	if (!sc_isfinite(y_n) || !sc_isfinite(dt_s) || !(dt_s > SC_ZERO) || dt_s > SC(1.0))
@@ -99,8 +193,10 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		s->c_dt = dt_s;
 		if (s->p.tau_lag_s > SC_ZERO)
 			s->lag_al = sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt_s, s->p.tau_lag_s))));
-		s->a_s = sc_div(dt_s, sc_add(s->p.s_tau_s, dt_s));
-		s->dt_tmin = sc_div(dt_s, s->p.t_min_s);
+		/* the sample period: avg_n frames (one frame: dt itself) */
+		s->c_ds = s->p.avg_n > 1u ? sc_mul(dt_s, sc_from_int((int32_t)s->p.avg_n)) : dt_s;
+		s->a_s = sc_div(s->c_ds, sc_add(s->p.s_tau_s, s->c_ds));
+		s->dt_tmin = sc_div(s->c_ds, s->p.t_min_s);
 	}
 	/* the thrust a throttle produces, as the motor lag delivers it */
 	scalar_t phi = regressor(s, thr, n);
@@ -112,8 +208,23 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		s->phi_f = sc_add(s->phi_f, est_mul_unit(sc_sub(phi, s->phi_f), al)); /* al in [0, 1] */
 	}
 	phi = s->phi_f;
-	if (!gate || phi < s->p.phi_min || !(y_n > SC_ZERO))
+	if (!gate || phi < s->p.phi_min || !(y_n > SC_ZERO)) {
+		s->blk_n = 0; /* a block is whole or not taken */
+		s->blk_phi = s->blk_y = SC_ZERO;
 		return false;
+	}
+	if (s->p.avg_n > 1u) { /* a sample: the block's means */
+		s->blk_phi = sc_add(s->blk_phi, phi);
+		s->blk_y = sc_add(s->blk_y, y_n);
+		if (++s->blk_n < s->p.avg_n)
+			return false;
+		phi = est_div_int(s->blk_phi, s->p.avg_n);
+		y_n = est_div_int(s->blk_y, s->p.avg_n);
+		s->blk_n = 0;
+		s->blk_phi = s->blk_y = SC_ZERO;
+	}
+	dt_s = s->c_ds;
+	s->phi_s = phi;
 	if (!s->started) {
 		s->k = sc_div(y_n, phi);
 		s->e_prev_pct = SC_ZERO;
@@ -121,6 +232,8 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		set_p_rt(s);
 		s->started = true;
 		s->updates++;
+		window_start(s);
+		long_start(s);
 		return true;
 	}
 	scalar_t e = sc_sub(y_n, sc_mul(s->k, phi));
@@ -128,6 +241,8 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	 * between samples (var = 2 s^2 for white noise): a slow tracking error or a step does
 	 * not pass for noise, which would lengthen the memory and slow the tracking further */
 	scalar_t e_pct = sc_div(sc_mul(SC(100.0), e), y_n);
+	/* y / phi from the window's reference, percent: the residual and where k stands */
+	window_add(s, sc_add(e_pct, sc_mul(sc_sub(s->k, s->w_kref), s->w_inv)), dt_s);
 	scalar_t de = sc_sub(e_pct, s->e_prev_pct);
 	s->e_prev_pct = e_pct;
 	/* half the square: x 0.5 is x / 2 exactly in both builds (factors in [0, 1]: est_mul_unit) */
@@ -138,7 +253,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	 * (s_pct / 100) / (2 drift_per_min / 60) = 0.3 s_pct / drift_per_min */
 	if (s->p.drift_per_min > SC_ZERO) {
 		scalar_t q = sc_div_r(est_mul_unit(s->s_pct, SC(0.3)), s->p.drift_per_min, &s->r_drift);
-		scalar_t x = est_mul_unit(sc_sq(q), dt_s); /* (s / 2r)^2 / f_s */
+		scalar_t x = dt_s <= SC(1.0) ? est_mul_unit(sc_sq(q), dt_s) : sc_mul(sc_sq(q), dt_s); /* (s / 2r)^2 / f_s */
 		s->mem_s = sc_clamp(cbrt_warm(x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
 	} else {
 		s->mem_s = s->p.t_max_s;
@@ -153,6 +268,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	s->P = est_div_near(s->P, den, s->P); /* den is about 1 once P has settled */
 	scalar_t K = sc_mul(s->P, phi);
 	s->k = sc_add(s->k, sc_mul(K, e));
+	long_add(s, dt_s);
 	/* no wind-up: P at most its steady state for the shortest memory and this regressor,
 	 * dt_tmin / phi^2 (its quotient only when the bound is reached) */
 	if (sc_mul(s->P, phi2) > s->dt_tmin)
@@ -167,7 +283,11 @@ scalar_t kf_track_sd(const struct kf_track *s)
 {
 	if (!s->started)
 		return SC_ZERO;
-	/* sigma (N) = s y ~ s k phi; var(k) = sigma^2 P / (1 + lambda) */
-	scalar_t sigma = sc_mul(est_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_f));
-	return sc_mul(sigma, s->p_rt);
+	/* sigma (N) = s y ~ s k phi (the last sample's); var(k) = sigma^2 P / (1 + lambda) */
+	scalar_t sigma = sc_mul(est_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_s));
+	scalar_t sd = sc_mul(sigma, s->p_rt);
+	scalar_t v = sc_max(s->w_count ? s->w_var_pct2 : SC_ZERO, s->l_count ? s->l_var_pct2 : SC_ZERO);
+	if (!(v > SC_ZERO))
+		return sd;
+	return sc_max(sd, sc_mul(s->k, est_div_int(sc_sqrt(v), 100u)));
 }

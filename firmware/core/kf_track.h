@@ -22,6 +22,33 @@
  *
  * Estimate and sd: k = sum lambda^i phi y / sum lambda^i phi^2; with P = 1 / sum lambda^i phi^2,
  * var(k) = sigma^2 P / (1 + lambda) (sigma = s y). Q16.16: the noise is kept in percent.
+ *
+ * Samples: with avg_n > 1 the tracker updates once per avg_n frames, on the means of y and
+ * of the lag-filtered regressor over them (the lag filter still runs every frame). That is
+ * for a y whose noise is coloured at the frame rate (an accelerometer's vibration folded
+ * near half the frame rate): the means are nearly white at their own rate, which the noise
+ * estimate and var(k) assume. A block with a gated frame is dropped. avg_n = 1 updates on
+ * every frame.
+ *
+ * Coloured noise: var(k) above holds for white noise. Noise slower than the sample rate (an
+ * accelerometer's vibration folded close to 0 Hz) moves k by more, and the differences that
+ * measure s do not see it. So the measurement y / phi is also averaged over windows of T*:
+ * half the squared change between consecutive window means is the variance of a T* mean
+ * as observed (noise at every frequency the estimate passes, and the drift over a window),
+ * and half that again the variance of a 2 T* mean, the span an exponential memory T* weighs
+ * like a plain mean. Averaged over the last KF_TRACK_W_AVG or so comparisons, it is the
+ * window part of the sd; kf_track_sd is the larger of the two. A window of T* rather than
+ * 2 T* keeps a fold whose period is near 2 T* from passing unseen; it errs on the safe side
+ * for white noise (the two parts then agree within sqrt 2). Noise much slower than T* is
+ * followed like a drift: so k's own spread about a straight line fitted over a long window
+ * (KF_TRACK_L_MEM T*, the line taking the drift out), with the square of the line's slope
+ * per T* (k lags a drift by one memory), is a third part, averaged over windows alike: a fold of a period up to a few T* moves k by about its amplitude, and this spread
+ * is its rms. What varies slower than the long window (a rotor turning at the frame rate
+ * exactly folds its vibration to 0 Hz) is a bias no part sees. The window parts need a few
+ * windows (some 10 T* after a start).
+ *
+ * The sd is the tracking's alone: relative to the rotor model (curve, scales, lag) the
+ * regressor is built from. The model's own uncertainty is the caller's to add (env_kf.h).
  */
 #ifndef OCTO_KF_TRACK_H
 #define OCTO_KF_TRACK_H
@@ -32,6 +59,11 @@
 #include <stdint.h>
 
 #define KF_TRACK_ROTORS 8
+#define KF_TRACK_W_CLIP 5 /* percent: a sample's y / phi from the window's reference, clipped */
+#define KF_TRACK_W_MAX 4096u /* samples in a window at most (the clipped sum stays in range) */
+#define KF_TRACK_W_AVG 8u    /* window comparisons averaged */
+#define KF_TRACK_L_MEM 8     /* a long window: this many memories T* */
+#define KF_TRACK_L_MAX 1024u /* samples in a long window at most (its sums stay in range) */
 
 struct kf_track_params {
 	scalar_t drift_per_min; /* largest drift to follow, fraction per minute (e.g. 0.02) */
@@ -43,6 +75,7 @@ struct kf_track_params {
 	scalar_t scale[KF_TRACK_ROTORS]; /* per-rotor effectiveness: rotor j gives scale_j k g(T_j) */
 	scalar_t s_tau_s;                /* averaging time of the noise estimate, s */
 	scalar_t s0_pct;                 /* noise assumed before any residual, percent of y */
+	uint32_t avg_n;                  /* frames per sample (means over them; 1: every frame) */
 };
 
 struct kf_track {
@@ -55,32 +88,53 @@ struct kf_track {
 	scalar_t lambda;
 	scalar_t p_rt;       /* sqrt(P / (1 + lambda)), set with P and lambda (kf_track_sd reads it) */
 	scalar_t phi_f;      /* lag-filtered regressor */
+	scalar_t phi_s;      /* the last sample's regressor (a block's mean) */
 	scalar_t e_prev_pct; /* last residual, percent of y */
 	/* what depends on the frame period and the parameters only, computed when they change
 	 * (the update's divisions by them become products) */
 	scalar_t c_dt;           /* the frame period they were computed for (0: none yet) */
 	scalar_t lag_al;         /* the lag filter's coefficient 1 - e^(-dt/tau_lag) */
-	scalar_t a_s;            /* the noise average's coefficient dt / (s_tau_s + dt) */
-	scalar_t dt_tmin;        /* dt / t_min_s */
+	scalar_t a_s;            /* the noise average's coefficient ds / (s_tau_s + ds), ds the sample period */
+	scalar_t c_ds;           /* the sample period: avg_n frames */
+	scalar_t dt_tmin;        /* sample period / t_min_s */
 	struct sc_recip r_drift; /* 1 / drift_per_min */
+	scalar_t blk_phi, blk_y; /* sums of the current block of avg_n frames */
+	uint32_t blk_n;          /* frames in it */
+	/* the window means (coloured noise, header comment) */
+	scalar_t w_sum;      /* sum of the samples' y / phi, percent from w_kref (each within +/- KF_TRACK_W_CLIP) */
+	scalar_t w_t;        /* the window's time so far, s */
+	uint32_t w_n;        /* its samples */
+	scalar_t w_kref;     /* k at its start, and 100 / w_kref */
+	scalar_t w_inv;
+	scalar_t w_prev;     /* the last window's mean, N */
+	scalar_t w_var_pct2; /* variance of a window's mean, percent^2 (average over windows) */
+	uint32_t w_count;    /* windows compared */
+	/* the long windows: k's spread about its own straight line over KF_TRACK_L_MEM T* */
+	scalar_t l_t, l_tn;                        /* the window's time so far, s, and in memories T* */
+	uint32_t l_n;                              /* its samples */
+	scalar_t l_kref, l_inv;                    /* k at its start, 100 / l_kref */
+	scalar_t l_su, l_suu, l_sc, l_scc, l_suc; /* sums of u, u^2, c, c^2, u c (u: time in T*; c: k, percent from l_kref) */
+	scalar_t l_var_pct2;                       /* the spread's variance, percent^2 (average over windows) */
+	uint32_t l_count;                          /* windows ended */
 	bool started;            /* an estimate exists */
 	bool primed;             /* the lag filter holds a value */
 	uint32_t updates;
 };
 
 /* Defaults: 2 %/min, T* in [0.2, 60] s, phi_min 0.08, tau_lag 0.03 s, curve 0, scales 1,
- * noise average 5 s, initial noise 1 %. */
+ * noise average 5 s, initial noise 1 %, every frame a sample (avg_n 1). */
 struct kf_track_params kf_track_params_default(void);
 
 /* k0 > 0: the starting estimate (e.g. VEH_KF); the first updates replace it quickly. */
 void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t k0);
 
-/* One frame: throttles thr[0..n-1] (n <= KF_TRACK_ROTORS) as commanded, the sum of the measured rotor thrusts y,
- * dt. `gate` false (on the ground, excitation running, a frame without thrust rows) only
- * advances the lag filter. Returns true when the estimate was updated. */
+/* One frame: throttles thr[0..n-1] (n <= KF_TRACK_ROTORS) as commanded, the total thrust
+ * measured y (N: the rotors' thrust rows summed, or mass times the specific force), dt.
+ * `gate` false (on the ground, a frame without the measurement) only advances the lag filter
+ * (and drops the block under way). Returns true when the estimate was updated. */
 bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_n, scalar_t dt_s, bool gate);
 
-/* Standard deviation of k (N). */
+/* Standard deviation of k (N): the largest of the white-noise formula's and the windows'. */
 scalar_t kf_track_sd(const struct kf_track *s);
 
 #endif /* OCTO_KF_TRACK_H */

@@ -6,7 +6,9 @@
   identification.
 - fig7_rates.png: body rates of the simulator vs the analytical model (eqs. 1-10,
   RK4, estimated parameters, same throttles) during the inertia experiments.
-- convergence.png: the live estimates +/- 2 sigma over simulated time, truth dashed.
+- convergence.png: each quantity's identification result (the estimate that is applied, from
+  report.json's parameters or the log's OCTO_ID_RESULT records) +/- 2 sd, beside the live
+  recursive estimate in flight, labelled as the auxiliary it is; truth dashed.
 
 Every figure is written atomically (temporary name, then rename). A figure whose
 data is missing from the logs says so inside the figure instead of failing.
@@ -175,38 +177,89 @@ def convergence_series(logs):
     return out
 
 
+def applied_results(logs, rep):
+    """{key: (estimate, sd, accepted, reason)} of each quantity's identification result: the
+    report's parameter rows (a mission), else the firmware log's OCTO_ID_RESULT records."""
+    from . import id_results
+
+    out = {}
+    rows = (rep or {}).get("parameters") or {}
+    for key, r in rows.items():
+        if r.get("estimate") is not None and r.get("sd") is not None:
+            out[key] = (float(r["estimate"]), float(r["sd"]), bool(r.get("accepted")), r.get("reason"))
+    if out or logs is None or not getattr(logs, "id_results", None):
+        return out
+    from .quantities import QUANTITIES
+
+    vals, verdicts = id_results.to_params(logs.id_results), id_results.verdicts(logs.id_results)
+    for q in QUANTITIES:
+        est, sd = vals.get(q.est), vals.get(q.sd)
+        if est and sd is not None and np.isfinite(est) and np.isfinite(sd):
+            v = verdicts.get(q.key, {})
+            out[q.key] = (float(est), float(sd), bool(v.get("accepted")), v.get("reason"))
+    return out
+
+
+# what each live trace is beside the result (the result comes from another estimator, or
+# carries more in its sd)
+LIVE_LABEL = {
+    "kf": "auxiliary: live lag-aware RLS (not the result: the motor model's)",
+    "ktau": "auxiliary: live lag-aware RLS (not the result: the motor model's)",
+    "ixx": "auxiliary: live RLS (its sd without the gyro scale's share)",
+    "iyy": "auxiliary: live RLS (its sd without the gyro scale's share)",
+    "izz": "auxiliary: live RLS (its sd without the gyro scale's share)",
+}
+
+
 def convergence(logs, rep, path, plt):
     from .quantities import QUANTITIES
 
     series = convergence_series(logs)
+    applied = applied_results(logs, rep)
     truth = (rep or {}).get("truth", {})
-    fig, axes = plt.subplots(len(QUANTITIES), 1, figsize=(8, 10.5))
+    fig, axes = plt.subplots(len(QUANTITIES), 1, figsize=(8, 11.5))
     for ax, q in zip(axes, QUANTITIES):
+        if q.key not in series and q.key not in applied:
+            _empty(ax, f"no {q.label} estimate in the log")
+            ax.set_ylabel(f"{q.label} [{q.unit}]", fontsize=8)
+            continue
+        centre, spread = [], []
         if q.key in series:
             t, est, sd = series[q.key]
-            ax.plot(t, est, lw=0.9, color="C0", label="lag-aware estimate")
-            ax.fill_between(t, est - 2 * sd, est + 2 * sd, color="C0", alpha=0.25, lw=0, label="+/- 2 sigma")
+            ax.plot(t, est, lw=0.8, color="0.45", label=LIVE_LABEL.get(q.key, "auxiliary: live estimate"))
+            ax.fill_between(t, est - 2 * sd, est + 2 * sd, color="0.6", alpha=0.2, lw=0)
+            tail = slice(len(est) // 3, None)
+            centre += list(est[tail])
+            spread += list(2 * sd[tail])
+            t0, t1 = float(t[0]), float(t[-1])
+        if q.key + "_plain" in series:
+            tp, ep, _ = series[q.key + "_plain"]
+            ax.plot(tp, ep, lw=0.7, color="C3", ls="-.", label="auxiliary: plain LS (eq. 20)")
+        if q.key in applied:
+            val, sd_a, ok, why = applied[q.key]
+            if q.key not in series:  # the phase's window, else the axis's
+                t0, t1 = ((rep or {}).get("truth_window_s") or {}).get(q.key) or ax.get_xlim()
+            # the result, from the end of the phase whose data it comes from
+            te = t1 + 0.15 * max(t1 - t0, 1.0)
+            word = "applied" if ok else "not applied" + (f": {why}" if why else "")
+            ax.fill_between([t0, te], val - 2 * sd_a, val + 2 * sd_a, color="C0", alpha=0.3, lw=0)
+            ax.plot([t0, te], [val, val], lw=1.6, color="C0",
+                    label=f"identification result {val:.5g}, sd {sd_a:.2g} (band 2 sd; {word})")
+            centre.append(val)
+            spread.append(2 * sd_a)
+        tv = truth.get(q.key)
+        if tv is not None:
+            ax.axhline(tv, ls="--", color="k", lw=0.8, label="truth")
+            dev = [abs(c - tv) + w for c, w in zip(centre, spread)]
+            span = max([abs(tv) * 0.01] + [1.2 * x for x in dev])
             if q.key + "_plain" in series:
-                tp, ep, _ = series[q.key + "_plain"]
-                ax.plot(tp, ep, lw=0.8, color="C3", ls="-.", label="plain LS (eq. 20)")
-            tv = truth.get(q.key)
-            if tv is not None:
-                ax.axhline(tv, ls="--", color="k", lw=0.8, label="truth")
-                tail = est[len(est) // 3 :]
-                span = max(
-                    abs(tv) * 0.02,
-                    1.5 * float(np.nanmax(np.abs(tail - tv))) if len(tail) else 0.0,
-                    2.5 * float(np.nanmax(2 * sd[len(sd) // 3 :])) if len(sd) > 3 else 0.0,
-                )
-                if q.key + "_plain" in series:
-                    span = max(span, 1.2 * abs(float(series[q.key + "_plain"][1][-1]) - tv))
-                ax.set_ylim(tv - span, tv + span)
-            ax.legend(loc="upper right", fontsize=7)
-        else:
-            _empty(ax, f"no {q.label} estimate in the log")
+                span = max(span, 1.2 * abs(float(series[q.key + "_plain"][1][-1]) - tv))
+            ax.set_ylim(tv - span, tv + span)
+        ax.legend(loc="upper right", fontsize=6)
         ax.set_ylabel(f"{q.label} [{q.unit}]", fontsize=8)
     axes[-1].set_xlabel("simulated time [s]")
-    fig.suptitle("Convergence of the recursive estimates (+/- 2 sigma); truth dashed")
+    fig.suptitle("Identification results (+/- 2 sd, as applied) and the live estimates in flight; truth dashed",
+                 fontsize=10)
     fig.tight_layout()
     _save(fig, path)
 

@@ -157,3 +157,68 @@ UNIT_TEST(kf_track_uses_curve_and_rotor_scales)
 		CHECK(fabs(d(naive.k) / kf - 1) > 0.003);
 	}
 }
+
+/* An accelerometer's total thrust m a_z: per-frame noise mostly near half the frame rate (a
+ * rotor's vibration folded to 40-45 Hz, 2-3 % of y) plus a slow fold (a rotor turning near
+ * the frame rate: 0.1-0.5 Hz, 0-0.7 % of y), k_f drifting 0 ... -3 %/min. The tracker on 9-frame
+ * means: after 30 s (its first windows are long while the memory settles), the error over the reported sd has an rms within [0.5, 1.5] and stays
+ * within 4 sd; with a slow fold of 0.5 % or more the sd is at least a quarter of the fold
+ * (the differences alone would report about a tenth of it). */
+UNIT_TEST(kf_track_coloured_noise_sd)
+{
+	struct unit_rng r = {0x6b67ULL};
+	double z2 = 0;
+	int n = 0, outside = 0;
+	for (int trial = 0; trial < TRIALS(12); trial++) {
+		double kf0 = unit_rand_uniform(&r, 5.0, 60.0), u_h = unit_rand_uniform(&r, 0.06, 0.4);
+		double rate = unit_rand_uniform(&r, -0.03, 0.0), fast = unit_rand_uniform(&r, 0.02, 0.03);
+		double f_fast = unit_rand_uniform(&r, 40.0, 45.0), f_slow = unit_rand_uniform(&r, 0.1, 0.5);
+		double a_slow = unit_rand_uniform(&r, 0.0, 0.007), ph = unit_rand_uniform(&r, 0.0, 6.283);
+		struct kf_track_params p = kf_track_params_default();
+		p.avg_n = 9;
+		p.t_min_s = SC(1.0);
+		struct kf_track kt;
+		kf_track_init(&kt, &p, s(kf0));
+		double dt = 1.0 / FS, al = 1 - exp(-dt / 0.03), lag[NR], thr[NR];
+		for (int j = 0; j < NR; j++)
+			lag[j] = thr[j] = u_h;
+		double sd_min = 1.0;
+		for (int k = 0; k < (int)(90.0 * FS); k++) {
+			double t = k * dt, kf = kf0 * (1 + rate * t / 60.0), y = 0;
+			scalar_t th[NR];
+			for (int j = 0; j < NR; j++) {
+				lag[j] += al * (thr[j] - lag[j]);
+				y += kf * lag[j];
+				th[j] = s(thr[j]);
+			}
+			y *= 1 + fast * sin(6.283185 * f_fast * t + ph) + a_slow * sin(6.283185 * f_slow * t + 2 * ph) +
+			     0.002 * unit_rand_normal(&r);
+			kf_track_update(&kt, th, NR, s(y), s(dt), true);
+			for (int j = 0; j < NR; j++)
+				thr[j] = u_h * (1 + 0.01 * unit_rand_normal(&r));
+			if (t > 30.0 && k % 45 == 0) {
+				double sd = d(kf_track_sd(&kt)), z = (d(kt.k) - kf) / sd;
+				z2 += z * z;
+				n++;
+				outside += fabs(z) > 4.0;
+				sd_min = fmin(sd_min, sd / kf);
+#ifdef TEST_VERBOSE
+				if (fabs(z) > 3.0 || sd / kf < 0.2 * a_slow)
+					printf("  trial %d t %.1f z %+.2f err %+.3f %% sd %.3f %% mem %.2f w_count %u\n", trial, t, z,
+					       100 * (d(kt.k) / kf - 1), 100 * sd / kf, d(kt.mem_s), (unsigned)kt.w_count);
+#endif
+			}
+		}
+#ifdef TEST_VERBOSE
+		printf("kf %.1f u_h %.2f rate %.1f %%/min fold %.2f %% at %.2f Hz: sd >= %.3f %%\n", kf0, u_h,
+		       100 * rate, 100 * a_slow, f_slow, 100 * sd_min);
+#endif
+		if (a_slow >= 0.005)
+			CHECK(sd_min > 0.25 * a_slow);
+	}
+#ifdef TEST_VERBOSE
+	printf("rms z %.3f over %d, %d beyond 4 sd\n", sqrt(z2 / n), n, outside);
+#endif
+	CHECK(sqrt(z2 / n) > 0.5 && sqrt(z2 / n) < 1.5);
+	CHECK(outside == 0);
+}

@@ -56,6 +56,8 @@ def test_report_compares_with_the_truth_at_the_same_time(tmp_path):
             assert abs(s["error_pct"]) < summ["limit_pct"], s
     assert summ["samples"] > 20 * 90 and summ["max_abs_error_pct"] < summ["limit_pct"]
     assert abs(summ["drift_tracked_pct"] - summ["drift_truth_pct"]) < 0.3
+    # and against its own sd, which is absolute (it carries the identified k_f's)
+    assert summ["max_abs_error_over_sd"] < 4.0
     assert abs(summ["drift_truth_pct"]) > 0.6   # the truth moved more than the tolerance
     md = (out / "report.md").read_text()
     assert "k_f tracked against the truth at the same simulated time" in md
