@@ -104,7 +104,8 @@ PARAM(KFT_MEM, kft_mem, 0.0f, -1e9f, 1e9f, "s", "Tracked (read-only): memory of 
 #define PARAM_FLAGS 0
 PARAM(NAV_HOLD_TO, nav_hold_to, 30.0f, 0.0f, 600.0f, "s",
       "Hold entry (take-off at its target height: still, hover learned) must reach HOLD within this, else it fails and lands")
-/* what identification, hover learning and the k_f tracker measure with (docs/identification.md) */
+/* what identification, hover learning and the k_f tracker measure with (docs/identification.md,
+ * "From the IMU"; 3 and 4 are refused by the experiments: not built) */
 #undef PARAM_FLAGS
 #define PARAM_FLAGS PARAM_LOCKED
 PARAM(ID_SOURCE, id_source, 0.0f, 0.0f, 4.0f, "",
@@ -114,11 +115,9 @@ PARAM(ID_SOURCE, id_source, 0.0f, 0.0f, 4.0f, "",
 PARAM(KFT_ACC_WALK, kft_acc_walk, 0.001f, 0.0f, 1.0f, "m/s^2/sqrt(s)",
       "k_f tracking from the IMU: accelerometer bias random walk, carried into KFT_SD from the ground calibration")
 #undef PARAM_FLAGS
-/* identification from the flight controller's own sensors (docs/identification.md, "From the IMU") */
+/* the IMU rotor experiment's settings (docs/identification.md, "From the IMU") */
 #undef PARAM_FLAGS
 #define PARAM_FLAGS PARAM_LOCKED
-PARAM(ID_SOURCE, id_source, 0.0f, 0.0f, 4.0f, "",
-      "Identification source: 0 auto (the richest the frames deliver), 1 thrust rows, 2 imu, 3 imu_rpm, 4 imu_rpm_torque")
 PARAM(ID_COL_AMP, id_col_amp, 0.03f, 0.0f, 0.2f, "",
       "IMU rotor experiment: amplitude of the collective dither (throttle, on every rotor)")
 PARAM(ID_SWP_THR, id_swp_thr, 0.25f, 0.0f, 0.8f, "",
