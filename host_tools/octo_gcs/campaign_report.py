@@ -263,23 +263,24 @@ def by_source_table(bs):
             est = f"not identifiable ({x['not_identifiable']})" + (
                 f", {x['estimated']}" if x["estimated"] else ""
             )
-        rows.append(
-            [
-                x["label"],
-                source_words(x["source"]) if x["source"] != "not stated" else x["source"],
-                est,
-                str(x["accepted"]),
-                _g(e["mean"], "{:+.3f}"),
-                _g(e["max_abs"], "{:.3f}"),
-                _g(x["z"]["sd"], "{:.2f}"),
-                str(len(x["silently_wrong"])),
-                "reference" if v is None else str(v["pairs"]),
-                "-" if v is None else _g(v["diff_pct"]["mean"], "{:+.3f}"),
-                "-" if v is None else _g(v["diff_pct"]["max_abs"], "{:.3f}"),
-                "-" if v is None else _g(v["z"]["sd"], "{:.2f}"),
-                "-" if v is None else str(v["beyond_3_combined_sd"]),
-            ]
-        )
+        row = [
+            x["label"],
+            source_words(x["source"]) if x["source"] != "not stated" else x["source"],
+            est,
+            str(x["accepted"]),
+            _g(e["mean"], "{:+.3f}"),
+            _g(e["max_abs"], "{:.3f}"),
+            _g(x["z"]["sd"], "{:.2f}"),
+            str(len(x["silently_wrong"])),
+            "reference" if v is None else str(v["pairs"]),
+            "-" if v is None else _g(v["diff_pct"]["mean"], "{:+.3f}"),
+            "-" if v is None else _g(v["diff_pct"]["max_abs"], "{:.3f}"),
+            "-" if v is None else _g(v["z"]["sd"], "{:.2f}"),
+            "-" if v is None else str(v["beyond_3_combined_sd"]),
+        ]
+        if not x["estimated"]:  # nothing to judge: not identifiable under this source
+            row[3:] = ["-"] * (len(row) - 3)
+        rows.append(row)
     return head, rows
 
 
