@@ -78,7 +78,8 @@ def test_imu_report_states_the_ratio_and_what_is_not_identifiable(tmp_path):
     assert "k_tau estimated" not in names and "I_z vs truth" not in names and "k_tau/I_z vs truth" in names
     assert "k_tau not identifiable from the gyro alone" in names and "I_z not identifiable from the gyro alone" in names
     text = report.table_text(rep)
-    assert text.count("not identifiable from the gyro alone (source imu)") == 2 and "k_tau/I_z [1/s^2]" in text
+    assert text.count("not identifiable from the gyro alone") == 3 and "k_tau/I_z [1/s^2]" in text
+    assert "k_tau and I_z: not identifiable from the gyro alone (source imu, no ESC torque): their ratio" in text
     assert text.count("not identified (source imu)") == 8
     assert "measured collective force m g a_z vs the modelled thrusts' sum, firmware" in text
     md = report.markdown(rep)

@@ -491,7 +491,7 @@ def table_rows(rep):
                     "-",
                     "-",
                     "-",
-                    f"not identifiable from the gyro alone (source {r.get('source') or '?'}): see k_tau/I_z",
+                    "not identifiable from the gyro alone",
                 ]
             )
             continue
@@ -586,9 +586,23 @@ def table_text(rep):
     out = [source_line(rep), ""]
     out += [fmt.format(*head), fmt.format(*["-" * w for w in widths])]
     out += [fmt.format(*r) for r in rows]
+    note = _unidentifiable_note(rep)
+    if note:
+        out += ["", note]
     out += [""] + _validation_lines(rep)
     out += [""] + _motor_lines(rep)
     return "\n".join(out)
+
+
+def _unidentifiable_note(rep):
+    """The line under Table 1 naming what the source cannot determine alone ("" when nothing)."""
+    names = [r["label"] for r in rep["parameters"].values() if r.get("identifiable") is False]
+    if not names:
+        return ""
+    src = (rep.get("estimator") or {}).get("source") or "?"
+    what = " and ".join(names)
+    ratio = "their ratio k_tau/I_z is identified" if "ktau_over_izz" in rep else "no ratio was identified"
+    return f"{what}: not identifiable from the gyro alone (source {src}, no ESC torque): {ratio}, no value of either."
 
 
 def _motor_lines(rep):
