@@ -499,8 +499,11 @@ def table(per):
 
 
 def _md_table(head, rows):
-    out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    out += ["| " + " | ".join(r) + " |" for r in rows]
+    def cells(r):
+        return "| " + " | ".join(str(x).replace("|", "\\|") for x in r) + " |"
+
+    out = [cells(head), "|" + "---|" * len(head)]
+    out += [cells(r) for r in rows]
     return out
 
 
