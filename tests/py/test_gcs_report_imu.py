@@ -144,6 +144,8 @@ def test_k_tau_from_an_izz_prior_is_judged_as_an_estimate(tmp_path):
     assert rep["pass"], failed(rep)
     names = [c["check"] for c in rep["checks"]]
     assert "k_tau vs truth" in names and "k_tau not identifiable from the gyro alone" not in names
+    assert "I_z: not identifiable from the gyro alone (source imu, no ESC torque): the ratio k_tau/I_z is " \
+        "identified, k_tau from it with the prior on I_z" in report.table_text(rep)
 
 
 def test_params_alone_say_what_the_source_cannot_determine():

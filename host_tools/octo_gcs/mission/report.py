@@ -601,8 +601,13 @@ def _unidentifiable_note(rep):
         return ""
     src = (rep.get("estimator") or {}).get("source") or "?"
     what = " and ".join(names)
-    ratio = "their ratio k_tau/I_z is identified" if "ktau_over_izz" in rep else "no ratio was identified"
-    return f"{what}: not identifiable from the gyro alone (source {src}, no ESC torque): {ratio}, no value of either."
+    if "ktau_over_izz" not in rep:
+        how = "no ratio was identified"
+    elif len(names) > 1:
+        how = "their ratio k_tau/I_z is identified, no value of either"
+    else:
+        how = "the ratio k_tau/I_z is identified, k_tau from it with the prior on I_z (ID_IZZ_PRI_SD)"
+    return f"{what}: not identifiable from the gyro alone (source {src}, no ESC torque): {how}."
 
 
 def _motor_lines(rep):
