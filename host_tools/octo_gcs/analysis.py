@@ -2,7 +2,8 @@
 
 - Phases of the identification (from the firmware's "ID k/n: name" events).
 - Validation (Fig. 6): commanded rotor-1 thrust f_bar_1 (the allocation) against the
-  measured f_1 (X-Plane's row 35), normalised error and fit.
+  measured f_1 (X-Plane's row 35), normalised error and fit; under the IMU source the
+  measured collective force m g a_z against the modelled thrusts' sum.
 - Fig. 7: the body rates of the simulator against the paper's analytical model,
   eqs. (1)-(10) integrated with RK4 (model.py) from the same throttle inputs with the
   ESTIMATED parameters, over each inertia experiment.
@@ -137,6 +138,52 @@ def validation(logs, params=None, settle_s=1.0):
     return out
 
 
+def _curve(y, c):
+    """The thrust curve g(y) = (1 - c) y + c y^2 (firmware/core/thrmap.h)."""
+    return (1.0 - c) * y + c * y * y
+
+
+def validation_collective(logs, params=None, before=None, settle_s=1.0):
+    """The validation under the IMU source, as validation() returns it: the commanded total
+    (the allocation's sum), the measured collective force m g a_z along body z (row 4) and the
+    modelled thrusts' sum: each rotor's throttle sent on the previous frame through the
+    transport delay and lag, the thrust curve and its effectiveness, times the k_f in use at
+    the frame. The window before identification is modelled with `before` (the parameters
+    before the flight) where it has them, the rest with `params`."""
+    out = []
+    fw = logs.fw
+    if fw is None or not fw.has("accel_b"):
+        return out
+    wins = phases(logs).get("validation", [])
+    labels = ["before identification", "after identification"] + [
+        f"validation {i + 3}" for i in range(max(0, len(wins) - 2))
+    ]
+    for i, (label, (t0, t1)) in enumerate(zip(labels, wins)):
+        w = window(fw, t0, t1)
+        if len(w) < 10:
+            continue
+        p = dict(params or {})
+        if i == 0 and before:
+            p.update({k: v for k, v in before.items() if k in ("ID_MOT_TAU", "ID_DELAY_FR", "MOT_CURVE")})
+        tau, delay = actuator_model(p)
+        c = p.get("MOT_CURVE", 0.0)
+        c = float(c) if c is not None and math.isfinite(c) else 0.0
+        g = float(p.get("VEH_GRAV", 9.81))
+        f_pred = np.zeros(len(w))
+        for j in range(w.throttle.shape[1]):
+            s_j = p.get(f"MOT_SCALE{j + 1}", 1.0)
+            y = predicted_thrust(w.throttle[:, j], FRAME_DT, tau, delay)
+            f_pred += float(s_j) * _curve(y, c)
+        f_pred *= w.kf
+        f_cmd = w.rotor_f.sum(axis=1)
+        f_meas = w.mass * g * w.accel_b[:, 2]
+        m = w.t >= t0 + settle_s
+        out.append(
+            (label, w.t, f_cmd, f_meas, f_pred, ne(f_meas[m], f_pred[m]), fit_pct(f_meas[m], f_pred[m]))
+        )
+    return out
+
+
 # ---------------------------------------------------------------- rates vs model (Fig. 7)
 def model_params(params):
     """model.Params from vehicle parameters (identified ones where present)."""
@@ -146,17 +193,23 @@ def model_params(params):
         return float(v) if v is not None and math.isfinite(v) and v > 0 else default
 
     p = Params()
+    inertia = (
+        get("ID_IXX_EST", get("VEH_IXX", p.inertia[0])),
+        get("ID_IYY_EST", get("VEH_IYY", p.inertia[1])),
+        get("ID_IZZ_EST", get("VEH_IZZ", p.inertia[2])),
+    )
+    ktau = get("ID_KTAU_EST", get("VEH_KTAU", p.ktau))
+    ratio = get("ID_KTIZ", 0.0)
+    if ratio > 0 and get("ID_KTAU_EST", 0.0) == 0 and get("ID_IZZ_EST", 0.0) == 0:
+        # the gyro's k_tau / I_z without either alone: the yaw model needs only the ratio
+        ktau = ratio * inertia[2]
     return Params(
         mass=get("VEH_MASS", p.mass),
         g=get("VEH_GRAV", p.g),
         arm_length=get("VEH_ARM_L", p.arm_length),
         kf=get("ID_KF_EST", get("VEH_KF", p.kf)),
-        ktau=get("ID_KTAU_EST", get("VEH_KTAU", p.ktau)),
-        inertia=(
-            get("ID_IXX_EST", get("VEH_IXX", p.inertia[0])),
-            get("ID_IYY_EST", get("VEH_IYY", p.inertia[1])),
-            get("ID_IZZ_EST", get("VEH_IZZ", p.inertia[2])),
-        ),
+        ktau=ktau,
+        inertia=inertia,
     )
 
 

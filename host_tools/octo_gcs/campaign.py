@@ -48,6 +48,8 @@ from .mission.options import MissionOptions
 from .progress import Progress
 from .quantities import KEYS as QUANTITIES
 
+RATIO = "ktiz"  # results.csv's k_tau / I_z, the firmware's own (the IMU source; empty otherwise)
+
 MISSION_ENV = "OCTO_CAMPAIGN_MISSION"
 STATUSES = ("pass", "fail", "aborted", "crash", "timeout", "lost", "error")
 # "aborted": the vehicle ended the mission for a reason it stated, before a report (octo-sil: a
@@ -299,9 +301,9 @@ def warm_up():
 def csv_columns(spec):
     draw_cols = list(campaign_spec.draws(spec, 0))  # build, sensors, then every value of the spec
     cols = ["index", "seed", "status", "reason", "wall_s", "host"] + draw_cols
-    for q in QUANTITIES:
+    for q in QUANTITIES + (RATIO,):
         cols += [f"{q}_truth", f"{q}_estimate", f"{q}_sd", f"{q}_error_pct", f"{q}_accepted"]
-    return cols + ["source", "rejection_reasons", "failed_checks"]
+    return cols + ["source", "not_identifiable", "rejection_reasons", "failed_checks"]
 
 
 def result_row(res, draws):
@@ -316,13 +318,16 @@ def result_row(res, draws):
     row.update({k: repr(v) if isinstance(v, float) else v for k, v in draws.items()})
     rep = res.get("report") or {}
     params = rep.get("parameters", {})
-    for q in QUANTITIES:
-        r = params.get(q) or {}
+    for q in QUANTITIES + (RATIO,):
+        r = (params.get(q) if q != RATIO else rep.get("ktau_over_izz")) or {}
         for field in ("truth", "estimate", "sd", "error_pct"):
             v = r.get(field)
             row[f"{q}_{field}"] = "" if v is None else repr(float(v))
         row[f"{q}_accepted"] = "" if not r or r.get("estimate") is None else int(bool(r.get("accepted")))
     row["source"] = (rep.get("estimator") or {}).get("source") or ""
+    row["not_identifiable"] = " ".join(
+        q for q in QUANTITIES if (params.get(q) or {}).get("identifiable") is False
+    )
     row["rejection_reasons"] = "; ".join(
         f"{q}: {why}" for q, why in sorted(res.get("rejections", {}).items())
     )
@@ -501,13 +506,15 @@ def _run(args, spec, out, prog, campaign_report):
     results = out / "results.csv"
     done_rows = _open_out(args, spec, out, results, columns)
     done = {int(r["index"]) for r in done_rows}
-    todo = [i for i in range(spec["missions"]) if i not in done]
-    total = spec["missions"]
+    total = campaign_spec.flights(spec)
+    todo = [i for i in range(total) if i not in done]
     override = os.environ.get(MISSION_ENV) or None
     in_process = _in_process(spec, todo, override, prog)
     plant = "in-process (octo-sil)" if in_process else "udp (octo-sim + octo-fw)"
+    sets = campaign_spec.sensor_sets(spec)
+    each = f" ({spec['missions']} vehicles x {len(sets)} sensor sets)" if sets else ""
     prog.say(
-        f"campaign {spec['name']}: {total} missions, seeds {spec['seed']}..{spec['seed'] + total - 1}, "
+        f"campaign {spec['name']}: {total} missions{each}, seeds {spec['seed']}..{spec['seed'] + spec['missions'] - 1}, "
         f"{len(done)} already in {results}, plant {plant}"
     )
     jobs, inputs = _jobs(spec, todo, in_process, override)

@@ -15,11 +15,13 @@ import statistics
 from collections import Counter
 
 from .atomicfile import atomic_write
-from .campaign_spec import expect_key
+from .campaign_spec import expect_key, flights
 from .id_results import source_words
 from .quantities import KEYS as QUANTITIES
-from .quantities import LABELS as LABEL
+from .quantities import LABELS
 
+RATIO = "ktiz"  # k_tau / I_z: results.csv's ktiz_* (a source without ESC torque identifies it)
+LABEL = dict(LABELS, **{RATIO: "k_tau/I_z"})
 RAN = ("pass", "fail")
 WORST = 10
 
@@ -53,11 +55,17 @@ def _rejections(row):
     return out
 
 
+def keys_of(rows):
+    """The quantities of the table: the five, and k_tau / I_z when a mission identified it."""
+    has_ratio = any(_f(r.get(f"{RATIO}_estimate")) is not None for r in rows)
+    return QUANTITIES + ((RATIO,) if has_ratio else ())
+
+
 def analyse(spec, rows):
     ran = [r for r in rows if r["status"] in RAN]
     per = {}
     silently = []
-    for q in QUANTITIES:
+    for q in keys_of(rows):
         tol = spec["tolerance_pct"][q]
         est_rows = [r for r in ran if _f(r[f"{q}_estimate"]) is not None and _f(r[f"{q}_truth"]) is not None]
         acc = [r for r in est_rows if r[f"{q}_accepted"] == "1"]
@@ -140,12 +148,148 @@ def groups(spec, rows):
     return out
 
 
+REFERENCE = "thrust"  # the source the others are compared with: each rotor's thrust and torque rows
+
+
+def _value(row, q):
+    """(estimate, sd, truth, accepted) of quantity q in a row of results.csv, or None. k_tau / I_z
+    under the thrust rows is their k_tau over their I_z (sd from both, accepted when both are)."""
+    est, sd, tru = (_f(row.get(f"{q}_{x}")) for x in ("estimate", "sd", "truth"))
+    if est is not None:
+        return est, sd, tru, row.get(f"{q}_accepted") == "1"
+    if q != RATIO:
+        return None
+    k, i = _value(row, "ktau"), _value(row, "izz")
+    if k is None or i is None or not k[0] or not i[0]:
+        return None
+    est = k[0] / i[0]
+    rel = [x[1] / x[0] for x in (k, i) if x[1] is not None]
+    sd = est * math.sqrt(sum(r * r for r in rel)) if len(rel) == 2 else None
+    tru = k[2] / i[2] if k[2] and i[2] else None
+    return est, sd, tru, k[3] and i[3]
+
+
+def by_source(spec, rows):
+    """The same vehicles flown with several sensor sets (results.csv's column "vehicle"): per
+    quantity and source, the estimates against the truth and against the same vehicle's
+    thrust-row estimate (the difference in percent of it and over the combined sd). None when
+    the campaign did not fly sensor sets."""
+    if not rows or "vehicle" not in rows[0]:
+        return None
+    ran = [r for r in rows if r["status"] in RAN]
+
+    def src(r):
+        return r.get("source") or "not stated"
+
+    names = sorted({src(r) for r in ran}, key=lambda x: (x != REFERENCE, x))
+    ref = {r["vehicle"]: r for r in ran if src(r) == REFERENCE}
+    out = []
+    for q in QUANTITIES + (RATIO,):
+        tol = spec["tolerance_pct"][q]
+        for name in names:
+            sub = [r for r in ran if src(r) == name]
+            vals = [(r, v) for r in sub for v in [_value(r, q)] if v is not None]
+            n_ni = sum(1 for r in sub if q in (r.get("not_identifiable") or "").split())
+            if not vals and not n_ni:
+                continue
+            acc = [(r, v) for r, v in vals if v[3] and v[2]]
+            errs = [100.0 * (v[0] - v[2]) / v[2] for _r, v in acc]
+            z = [(v[0] - v[2]) / v[1] for _r, v in vals if v[1] and v[2]]
+            wrong = [
+                r for r, v in acc if abs(v[0] - v[2]) > max(3.0 * (v[1] or 0.0), tol / 100.0 * abs(v[2]))
+            ]
+            pairs = []
+            if name != REFERENCE:
+                for r, v in acc:
+                    w = _value(ref[r["vehicle"]], q) if r["vehicle"] in ref else None
+                    if w is None or not w[3] or not w[0]:
+                        continue
+                    comb = math.hypot(v[1] or 0.0, w[1] or 0.0)
+                    pairs.append((100.0 * (v[0] - w[0]) / w[0], (v[0] - w[0]) / comb if comb else None))
+            d = [p[0] for p in pairs]
+            zc = [p[1] for p in pairs if p[1] is not None]
+            out.append(
+                {
+                    "parameter": q,
+                    "label": LABEL[q],
+                    "source": name,
+                    "missions": len(sub),
+                    "not_identifiable": n_ni,
+                    "estimated": len(vals),
+                    "accepted": len(acc),
+                    "error_pct": _stats(errs),
+                    "z": {k: v for k, v in _stats(z).items() if k in ("n", "mean", "sd")},
+                    "silently_wrong": sorted(int(r["index"]) for r in wrong),
+                    "vs_reference": None
+                    if name == REFERENCE
+                    else {
+                        "pairs": len(pairs),
+                        "diff_pct": _stats(d),
+                        "z": {k: v for k, v in _stats(zc).items() if k in ("n", "mean", "sd")},
+                        "beyond_3_combined_sd": sum(1 for x in zc if abs(x) > 3.0),
+                    },
+                }
+            )
+    return {
+        "reference": REFERENCE,
+        "sources": names,
+        "vehicles": len({r["vehicle"] for r in rows}),
+        "rows": out,
+    }
+
+
+def by_source_table(bs):
+    """campaign.md's table of by_source."""
+    head = [
+        "parameter",
+        "source",
+        "estimated",
+        "accepted",
+        "err mean %",
+        "max |err| %",
+        "z sd",
+        "silently wrong",
+        f"pairs with {source_words(bs['reference'])}",
+        "diff mean %",
+        "max |diff| %",
+        "diff / combined sd: sd",
+        "beyond 3 combined sd",
+    ]
+    rows = []
+    for x in bs["rows"]:
+        e, v = x["error_pct"], x["vs_reference"]
+        est = str(x["estimated"])
+        if x["not_identifiable"]:
+            est = f"not identifiable ({x['not_identifiable']})" + (
+                f", {x['estimated']}" if x["estimated"] else ""
+            )
+        row = [
+            x["label"],
+            source_words(x["source"]) if x["source"] != "not stated" else x["source"],
+            est,
+            str(x["accepted"]),
+            _g(e["mean"], "{:+.3f}"),
+            _g(e["max_abs"], "{:.3f}"),
+            _g(x["z"]["sd"], "{:.2f}"),
+            str(len(x["silently_wrong"])),
+            "reference" if v is None else str(v["pairs"]),
+            "-" if v is None else _g(v["diff_pct"]["mean"], "{:+.3f}"),
+            "-" if v is None else _g(v["diff_pct"]["max_abs"], "{:.3f}"),
+            "-" if v is None else _g(v["z"]["sd"], "{:.2f}"),
+            "-" if v is None else str(v["beyond_3_combined_sd"]),
+        ]
+        if not x["estimated"]:  # nothing to judge: not identifiable under this source
+            row[3:] = ["-"] * (len(row) - 3)
+        rows.append(row)
+    return head, rows
+
+
 def _score(row, spec, only=None):
     """How far the mission's worst estimate (of the quantities `only`, default all) is from its
     truth, in tolerances: (score, quantity)."""
     best = (0.0, None)
-    for q in only or QUANTITIES:
-        e = _f(row[f"{q}_error_pct"])
+    for q in only or QUANTITIES + (RATIO,):
+        e = _f(row.get(f"{q}_error_pct"))
         if e is not None:
             s = abs(e) / spec["tolerance_pct"][q]
             if s > best[0]:
@@ -282,16 +426,17 @@ def write(out, spec, rows, columns, throughput, replay):
         if r["status"] not in RAN
     ]
     expect = _expect(spec, rows, per, silently)
-    complete = len(rows_by_index) == spec["missions"]
+    complete = len(rows_by_index) == flights(spec)
     all_ran = complete and not not_ran
     ok = all_ran and all(e["ok"] for e in expect)
     walls = [_f(r["wall_s"]) for r in rows if _f(r["wall_s"]) is not None]
     throughput = dict(throughput, mission_wall_s_mean=statistics.fmean(walls) if walls else None)
     figs = figures(out, per)
     by_group = groups(spec, rows)
+    bs = by_source(spec, rows)
     doc = {
         "name": spec["name"],
-        "missions": spec["missions"],
+        "missions": flights(spec),
         "in_results": len(rows_by_index),
         "ran": len(ran),
         "status_counts": dict(Counter(r["status"] for r in rows)),
@@ -306,6 +451,7 @@ def write(out, spec, rows, columns, throughput, replay):
         "builds": counts(rows, "build"),
         "sensors": counts(rows, "sensors"),
         "by_build_and_sensors": [{k: v for k, v in g.items() if not k.startswith("_")} for g in by_group],
+        "by_source": bs,
         "throughput": throughput,
         "all_ran": all_ran,
         "ok": ok,
@@ -353,8 +499,11 @@ def table(per):
 
 
 def _md_table(head, rows):
-    out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    out += ["| " + " | ".join(r) + " |" for r in rows]
+    def cells(r):
+        return "| " + " | ".join(str(x).replace("|", "\\|") for x in r) + " |"
+
+    out = [cells(head), "|" + "---|" * len(head)]
+    out += [cells(r) for r in rows]
     return out
 
 
@@ -396,6 +545,24 @@ def markdown(doc, per, by_group=()):
             + ".",
             "",
         ]
+    bs = doc.get("by_source")
+    if bs and bs["rows"]:
+        L += [
+            "## Sources side by side (the same vehicles)",
+            "",
+            f"{bs['vehicles']} vehicles, each flown with every sensor set; by the source the "
+            "firmware used: "
+            + ", ".join(source_words(x) if x != "not stated" else x for x in bs["sources"])
+            + f". Each source's estimates against the truth (errors of the accepted, z = (estimate - "
+            f"truth) / sd over every estimate), and against the same vehicle's {source_words(bs['reference'])} "
+            "estimate where both were accepted: their difference in percent of it and over "
+            "the combined sd sqrt(sd^2 + sd_ref^2). k_tau/I_z of the thrust rows is their k_tau over "
+            "their I_z. Not identifiable: the missions whose source cannot determine the quantity "
+            "alone (reported as such, no value).",
+            "",
+        ]
+        L += _md_table(*by_source_table(bs))
+        L += [""]
     if by_group:
         L += ["## By build and sensors", ""]
     for g in by_group:

@@ -22,6 +22,12 @@ same vehicles, mission by mission.
 a list such as ``["imu", "rpm"]`` or the text ``"imu,rpm"``; absent: all) are words, fixed or
 drawn with ``{"choice": [...]}``; so is the vehicle's own ``sensors`` list.
 
+``sensors`` as a list of sensor lists (``[["imu", "rpm", "torque", "thrust"], ["imu"]]``) flies
+every vehicle once with each set: ``missions`` counts the vehicles, the campaign flies
+missions x sets. Flight i flies vehicle i // sets (its draws, its seed ``seed + i // sets``)
+with set i % sets; the column ``vehicle`` pairs the flights of one vehicle, so campaign.md
+compares each source's estimates with the same vehicle's thrust-row estimates.
+
 The plant's events ``vehicle.rotor_failure`` and ``vehicle.stuck_rpm`` are one object whose
 values are drawn (``{"rotor": {"choice": [1, 2, ..., 8]}, "at_s": {"uniform": [20, 60]},
 "scale": 0, "probability": 0.3}``): with ``probability`` (default 1) the mission's vehicle file
@@ -38,7 +44,6 @@ import zlib
 import numpy as np
 
 from .mission.options import BUILDS, FAULTS, SENSORS
-from .quantities import KEYS as QUANTITIES
 from .vehiclefile import DEFAULTS as VEHICLE_DEFAULTS
 
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "choice")
@@ -139,8 +144,12 @@ ALIASES = {
     "i_y": "iyy",
     "izz": "izz",
     "i_z": "izz",
+    "ktiz": "ktiz",
+    "ktau_over_izz": "ktiz",
+    "k_tau/i_z": "ktiz",
 }
-DEFAULT_TOL_PCT = {"kf": 0.3, "ktau": 0.3, "ixx": 2.0, "iyy": 2.0, "izz": 2.0}
+# ktiz: k_tau / I_z, identified in their place by a source without ESC torque
+DEFAULT_TOL_PCT = {"kf": 0.3, "ktau": 0.3, "ixx": 2.0, "iyy": 2.0, "izz": 2.0, "ktiz": 2.0}
 EXPECT_SUFFIXES = ("_error_pct", "_acceptance")
 EXPECT_PLAIN = ("silently_wrong", "acceptance", "failures")
 PARAM_NAME = re.compile(r"^[A-Z][A-Z0-9_]{0,15}$")
@@ -260,6 +269,32 @@ def _sensors_word(path, v):
             raise SpecError(f"{path}: unknown sensor {json.dumps(x)} (known: {', '.join(SENSORS)})")
     chosen = {x.strip() for x in names}
     return [x for x in SENSORS if x in chosen]
+
+
+def _is_sets(v):
+    """`sensors` as a list of sensor lists: every vehicle flies once with each."""
+    return isinstance(v, list) and bool(v) and all(isinstance(x, list) for x in v)
+
+
+def sensor_sets(spec):
+    """The sensor sets every vehicle flies with (lists of names), or None (one flight each)."""
+    v = spec.get("sensors")
+    if not _is_sets(v):
+        return None
+    return [_sensors_word(f"sensors[{j}]", x) for j, x in enumerate(v)]
+
+
+def flights(spec):
+    """The campaign's missions: one per vehicle, or one per vehicle and sensor set."""
+    sets = sensor_sets(spec)
+    return spec["missions"] * (len(sets) if sets else 1)
+
+
+def vehicle_of(spec, index):
+    """(vehicle, sensor set) of flight `index`: the vehicle whose draws it flies and the index of
+    its sensor set (0 without sets)."""
+    sets = sensor_sets(spec)
+    return (index // len(sets), index % len(sets)) if sets else (index, 0)
 
 
 def _check_word(path, v, word):
@@ -398,7 +433,14 @@ def validate(spec):
         raise SpecError(f'plant: must be "in-process" or "udp", not {json.dumps(s["plant"])}')
     s.setdefault("build", "float")
     _check_word("build", s["build"], _build_word)
-    if "sensors" in s:
+    if "sensors" in s and _is_sets(s["sensors"]):
+        seen = []
+        for j, x in enumerate(s["sensors"]):
+            names = _sensors_word(f"sensors[{j}]", x)
+            if names in seen:
+                raise SpecError(f"sensors[{j}]: the same set as sensors[{seen.index(names)}]")
+            seen.append(names)
+    elif "sensors" in s:
         _check_word("sensors", s["sensors"], _sensors_word)
     s.setdefault("timeout", 600)
     if not _is_num(s["timeout"]) or s["timeout"] <= 0:
@@ -410,7 +452,7 @@ def validate(spec):
     for k, v in s["tolerance_pct"].items():
         q = ALIASES.get(k.lower())
         if q is None:
-            raise SpecError(f"tolerance_pct: unknown parameter '{k}' (known: {', '.join(QUANTITIES)})")
+            raise SpecError(f"tolerance_pct: unknown parameter '{k}' (known: {', '.join(DEFAULT_TOL_PCT)})")
         if not _is_num(v) or v <= 0:
             raise SpecError(f"tolerance_pct.{k}: must be a positive number")
         tol[q] = float(v)
@@ -433,7 +475,7 @@ def expect_key(k):
                 return q, suf[1:]
     raise SpecError(
         f"expect: unknown key '{k}' (known: PARAM_error_pct, PARAM_acceptance with PARAM one of "
-        f"{', '.join(QUANTITIES)} or k_f, k_tau, I_x, I_y, I_z; {', '.join(EXPECT_PLAIN)})"
+        f"{', '.join(DEFAULT_TOL_PCT)} or k_f, k_tau, I_x, I_y, I_z, k_tau/I_z; {', '.join(EXPECT_PLAIN)})"
     )
 
 
@@ -490,13 +532,20 @@ def _draw_word(spec, index, path, v, word):
 
 def words(spec, index):
     """Mission `index`'s words: {"build": "float" | "fixed", "sensors": [names] or None (the spec
-    does not say: the plant's default, or the vehicle's list), "vehicle.sensors": [names] or None}."""
+    does not say: the plant's default, or the vehicle's list), "vehicle.sensors": [names] or None}.
+    With sensor sets, the build and the vehicle's list are its vehicle's, the sensors its set."""
     veh = spec.get("vehicle", {})
+    sets = sensor_sets(spec)
+    index, k = vehicle_of(spec, index)
+    if sets:
+        sensors = sets[k]
+    elif "sensors" in spec:
+        sensors = _draw_word(spec, index, "sensors", spec["sensors"], _sensors_word)
+    else:
+        sensors = None
     return {
         "build": _draw_word(spec, index, "build", spec.get("build", "float"), _build_word),
-        "sensors": _draw_word(spec, index, "sensors", spec["sensors"], _sensors_word)
-        if "sensors" in spec
-        else None,
+        "sensors": sensors,
         "vehicle.sensors": _draw_word(spec, index, "vehicle.sensors", veh["sensors"], _sensors_word)
         if "sensors" in veh
         else None,
@@ -505,10 +554,14 @@ def words(spec, index):
 
 def draws(spec, index):
     """Mission `index`'s values: {path: value} for every value of the spec (drawn or fixed), and
-    the words "build" and "sensors" (the sensors the plant serves, comma-separated, or "all")."""
+    the words "build" and "sensors" (the sensors the plant serves, comma-separated, or "all");
+    with sensor sets also "vehicle", the vehicle's number (its flights' values are the same)."""
     w = words(spec, index)
     served = w["sensors"] or w["vehicle.sensors"]
     out = {"build": w["build"], "sensors": ",".join(served) if served else "all"}
+    if sensor_sets(spec):
+        index = vehicle_of(spec, index)[0]
+        out["vehicle"] = index
     if w["vehicle.sensors"] is not None:
         out["vehicle.sensors"] = ",".join(w["vehicle.sensors"])
     veh = spec.get("vehicle", {})
@@ -540,6 +593,7 @@ def mission_inputs(spec, index):
     """(seed, draws, vehicle dict for octo-sim, faults {name: value} (those that are on),
     params {NAME: value})."""
     d = draws(spec, index)
+    index = vehicle_of(spec, index)[0]
     vehicle, faults, params = {}, {}, {}
     for path, _v, _rng, _integer, target in _walk(spec):
         x = d[path]
@@ -593,6 +647,7 @@ def _check_drawn_inertia(spec, index, vehicle):
 def check_all_draws(spec):
     """Makes every mission's draws once, so that a normal draw out of its key's range, or inertia
     that octo-sim would refuse, is an error before anything runs (cheap: no mission runs)."""
-    for i in range(spec["missions"]):
+    sets = sensor_sets(spec)
+    for i in range(0, flights(spec), len(sets) if sets else 1):
         _check_drawn_vibration(draws(spec, i))
-        _check_drawn_inertia(spec, i, mission_inputs(spec, i)[2])
+        _check_drawn_inertia(spec, vehicle_of(spec, i)[0], mission_inputs(spec, i)[2])

@@ -27,6 +27,8 @@ FIELDS = (
     "source",
 )
 
+NOT_IDENTIFIABLE = "not_identifiable"  # OCTO_ID_REASON_NOT_IDENTIFIABLE's name
+
 # OCTO_ID_PARAM -> (parameter of the estimate, parameter of its sd; None: not a parameter)
 _PARAMS = {
     "KF": ("ID_KF_EST", "ID_KF_SD"),
@@ -39,6 +41,7 @@ _PARAMS = {
     "MOT_CURVE": ("MOT_CURVE", "ID_CRV_SD"),
     "KF_PLAIN": ("ID_KF_PLAIN", None),
     "KTAU_PLAIN": ("ID_KTAU_PLAIN", None),
+    "KTAU_OVER_IZZ": ("ID_KTIZ", "ID_KTIZ_SD"),
     "VAL_NE_BEFORE": ("ID_VAL_NE_PRE", "ID_VAL_FIT_PRE"),  # the fit % travels in sd's place
     "VAL_NE_AFTER": ("ID_VAL_NE_POST", "ID_VAL_FIT_POST"),
 }
@@ -152,7 +155,8 @@ def to_params(records):
     by_param = {param_name(code): rec for (code, _rotor), rec in latest.items()}
     for bit in sorted({q.bit for q in QUANTITIES}):
         recs = [by_param.get(QUANTITY_PARAM[q.key].lower()) for q in QUANTITIES if q.bit == bit]
-        recs = [r for r in recs if r is not None]
+        # a quantity the data cannot determine (only a ratio) has no part in its bit
+        recs = [r for r in recs if r is not None and reason_name(r["reason"]) != NOT_IDENTIFIABLE]
         if recs:
             seen |= bit
             if all(r["accepted"] for r in recs):
@@ -183,6 +187,28 @@ def verdicts(records):
                 "source": source_name(rec["source"]),
             }
     return out
+
+
+def not_identifiable(records):
+    """The quantity keys whose last result says the data cannot determine them alone (the
+    IMU source: k_tau and I_z, of which only the ratio k_tau / I_z is identified)."""
+    return {k for k, v in verdicts(records).items() if v["reason"] == NOT_IDENTIFIABLE}
+
+
+def ratio_verdict(records):
+    """{"value", "sd", "accepted", "reason", "source"} of the last k_tau / I_z result (None
+    without one)."""
+    recs = [r for r in records if param_name(r["param"]) == "ktau_over_izz"]
+    if not recs:
+        return None
+    rec = recs[-1]
+    return {
+        "value": rec["value"] if _finite(rec["value"]) else None,
+        "sd": rec["sd"] if _finite(rec["sd"]) else None,
+        "accepted": bool(rec["accepted"]),
+        "reason": reason_name(rec["reason"]),
+        "source": source_name(rec["source"]),
+    }
 
 
 def estimator_source(records):

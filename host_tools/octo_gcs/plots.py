@@ -118,20 +118,31 @@ def fig6(logs, rep, path, plt):
         val = analysis.validation(logs, (rep or {}).get("_params"))
     fig, axes = plt.subplots(2, 1, figsize=(8, 6.5), sharey=True)
     titles = ["(a) before identification (nominal k_f, k_tau)", "(b) after identification"]
+    # the IMU source compares the collective force (report: validation.compares)
+    collective = bool(((rep or {}).get("validation") or {}).get("compares"))
+    names = (
+        ("commanded sum of f_bar_j", "measured m g a_z", "modelled thrusts' sum", "force along body z [N]")
+        if collective
+        else ("commanded f_bar_1", "measured f_1", "commanded, through the motor lag", "f_1 [N]")
+    )
     for i, ax in enumerate(axes):
         if i < len(val):
             label, t, f_cmd, f_meas, f_pred, e, fit = val[i]
-            ax.plot(t - t[0], f_cmd, lw=0.9, color="C0", label="commanded f_bar_1")
-            ax.plot(t - t[0], f_meas, lw=0.6, color="C1", alpha=0.85, label="measured f_1")
-            ax.plot(t - t[0], f_pred, lw=0.6, color="k", ls=":", label="commanded, through the motor lag")
+            ax.plot(t - t[0], f_cmd, lw=0.9, color="C0", label=names[0])
+            ax.plot(t - t[0], f_meas, lw=0.6, color="C1", alpha=0.85, label=names[1])
+            ax.plot(t - t[0], f_pred, lw=0.6, color="k", ls=":", label=names[2])
             ax.set_title(f"{titles[i]}: NE {e:.3f}, fit {fit:.1f} %", fontsize=10)
-            ax.set_ylabel("f_1 [N]")
+            ax.set_ylabel(names[3])
             ax.legend(loc="upper right", fontsize=7)
         else:
             ax.set_title(titles[i], fontsize=10)
             _empty(ax, "no validation data in the log")
     axes[-1].set_xlabel("time in the validation [s]")
-    fig.suptitle("Fig. 6: commanded vs measured thrust of rotor 1")
+    fig.suptitle(
+        "Fig. 6: measured collective force vs the modelled thrusts' sum"
+        if collective
+        else "Fig. 6: commanded vs measured thrust of rotor 1"
+    )
     fig.tight_layout()
     _save(fig, path)
 

@@ -12,6 +12,8 @@ def register(sub):
         "every mission ran and the spec's expect holds, 1 otherwise, 2 for a bad spec or options.",
         epilog="SPEC keys: name, missions, seed, vehicle {octo-sim keys}, faults {drop, burst, burst_prob, "
         "delay_frames, duplicate, reorder}, params {NAME: value}, experiments [6], plant in-process|udp, "
+        'build float|fixed, sensors (what the plant serves: "imu,rpm"; a list of such lists flies every '
+        "vehicle with each, side by side in campaign.md), "
         "timeout (s per mission, 600), retries (2), tolerance_pct {kf: 0.3, ...}, expect {k_f_error_pct: 0.3, "
         'silently_wrong: 0, ...}. A value is a number or {"uniform": [lo, hi]}, {"loguniform": [lo, hi]}, '
         '{"normal": [mean, sd]}, {"choice": [...]}.',

@@ -93,4 +93,5 @@ def run(args):
         args.tol_inertia,
         verdicts=id_results.verdicts(records),
         source=id_results.estimator_source(records),
+        ratio=id_results.ratio_verdict(records),
     )

@@ -14,7 +14,18 @@ import os
 
 from .. import __version__, id_results
 from ..atomicfile import atomic_write
-from ..checks import Check, against_truth, motor_model_rows, plausibility
+from ..checks import (
+    TOL_RATIO_PCT,
+    Check,
+    against_truth,
+    has_ratio,
+    motor_model_rows,
+    not_identifiable_checks,
+    plausibility,
+    ratio_checks,
+    ratio_row,
+    unidentifiable,
+)
 from ..quantities import QUANTITIES, quantities_of
 from ..vehiclefile import PAPER, truth_of
 
@@ -168,11 +179,67 @@ def kf_tracked(logs, kf_sd_pct=None):
     return {"summary": summary, "samples": samples}
 
 
-def parameter_rows(nominal, after, truth, experiments, results=()):
+def ratio_truth(logs, veh, windows=None):
+    """The truth of k_tau / I_z: the truth log's mean of k_tau / I_z over the yaw inertia
+    phase (the ratio's data; k_tau drifts with k_f), else at the log's end, else the vehicle
+    file's."""
+    t = truth_of(veh)
+    if logs is None or logs.truth is None or not len(logs.truth):
+        return t["ktau"] / t["izz"]
+    tr = logs.truth
+    r = tr.ktau / tr.inertia[:, 2]
+    w = (windows if windows is not None else truth_windows(logs)).get("izz")
+    if w:
+        sel = (tr.t >= w[0]) & (tr.t <= w[1])
+        if sel.any():
+            return float(r[sel].mean())
+    return float(r[-1])
+
+
+# what the validation compares (the paper's mu_1 test), by the source of the rotor model
+VALIDATION_WORDS = {
+    "thrust": "commanded vs measured f_1",
+    "imu": "measured collective force m g a_z vs the modelled thrusts' sum",
+}
+
+
+def validation_words(source):
+    """The validation's comparison in words for `source` (thrust rows: rotor 1's thrust)."""
+    if source and source != "thrust":
+        return VALIDATION_WORDS["imu"]
+    return VALIDATION_WORDS["thrust"]
+
+
+def parameter_rows(nominal, after, truth, experiments, results=(), unident=()):
+    """Table 1's rows. unident: the quantities the source cannot determine alone: no estimate,
+    reported as not identifiable (never as a failure, never with a value)."""
     rows = {}
     ident = {q.key for q in quantities_of(experiments)}
     verdicts = id_results.verdicts(results)
+    source = id_results.estimator_source(results)
     for q in QUANTITIES:
+        if q.key in ident and q.key in unident:
+            true = truth.get(q.key) if truth else None
+            rows[q.key] = {
+                "label": q.label,
+                "unit": q.unit,
+                "paper": PAPER_VALUES[q.key],
+                "truth": _num(true),
+                "nominal": _num(nominal.get(q.veh)),
+                "plain": None,
+                "plain_error_pct": None,
+                "estimate": None,
+                "sd": None,
+                "sd_pct": None,
+                "error_pct": None,
+                "error_over_sd": None,
+                "accepted": False,
+                "vehicle_value": _num(after.get(q.veh)),
+                "identifiable": False,
+                "reason": id_results.NOT_IDENTIFIABLE,
+                "source": source,
+            }
+            continue
         est = after.get(q.est) if q.key in ident else None
         est = est if est is not None and est > 0 else None
         sd = after.get(q.sd) if est is not None else None
@@ -192,7 +259,10 @@ def parameter_rows(nominal, after, truth, experiments, results=()):
             "sd_pct": _num(100.0 * sd / est if est and sd is not None else None, 4),
             "error_pct": _num(_err(est, true), 4),
             "error_over_sd": _num((est - true) / sd if est and sd and true else None, 3),
-            "accepted": bool(int(after.get("ID_RESULT", 0)) & q.bit) if est is not None else False,
+            "accepted": bool(int(after.get("ID_RESULT", 0)) & q.bit)
+            and verdicts.get(q.key, {}).get("accepted", True)
+            if est is not None
+            else False,
             "vehicle_value": _num(after.get(q.veh)),
             # the firmware's result record: why it was not accepted, what it rests on
             "reason": verdicts[q.key]["reason"] if q.key in verdicts and est is not None else None,
@@ -226,6 +296,12 @@ def build_report(
         logs = Logs(paths) if paths else None
     windows = truth_windows(logs)
     truth = truth_from_logs(logs, veh, windows)
+    source = id_results.estimator_source(results)
+    # the quantities the source cannot determine alone: the firmware's own word (its records;
+    # without records, what its source and ID_IZZ_PRI_SD imply), checked against each other below
+    stated = id_results.not_identifiable(results) if experiments else set()
+    expected = unidentifiable(_with_source(after, source)) if experiments else set()
+    unident = stated if results else expected
     rep = {
         "tool": f"octo-gcs {__version__}",
         "created_utc": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
@@ -243,10 +319,11 @@ def build_report(
         "bench": {"mass_kg": veh["mass"], "arm_length_m": veh["arm_length"]},
         "truth": {k: _num(v) for k, v in truth.items()},
         "truth_window_s": {k: [_num(a, 3), _num(b, 3)] for k, (a, b) in windows.items()},
-        "parameters": parameter_rows(nominal, after, truth, experiments, results),
+        "parameters": parameter_rows(nominal, after, truth, experiments, results, unident),
         "validation": {tag: _validation_params(after, tag) for tag in ("before", "after")},
         "motor_model": [
-            dict(zip(("quantity", "found", "sd", "truth", "error"), r)) for r in motor_model_rows(after, veh)
+            dict(zip(("quantity", "found", "sd", "truth", "error"), r))
+            for r in motor_model_rows(after, veh, source)
         ],
         "estimator": {
             k: _num(after.get(k))
@@ -255,11 +332,24 @@ def build_report(
         },
         "id_results": [id_results.describe(r) for r in results],
     }
-    rep["estimator"]["source"] = id_results.estimator_source(results)
-    t_end = _from_logs(rep, logs, after) if logs is not None else None
+    rep["estimator"]["source"] = source
+    if source and source != "thrust":
+        rep["validation"]["compares"] = validation_words(source)
+    ratio = None
+    if experiments and "izz" in unident and has_ratio(_with_source(after, source), experiments):
+        ratio = ratio_row(after, id_results.ratio_verdict(results), ratio_truth(logs, veh, windows))
+        ratio = {k: (_num(v) if isinstance(v, float) else v) for k, v in ratio.items()}
+        ratio["source"] = source
+        rep["ktau_over_izz"] = ratio
+    t_end = _from_logs(rep, logs, after, nominal, source) if logs is not None else None
     rep["results_from_records"] = list(filled)
-    checks = plausibility(after, experiments) if experiments else []
-    checks += against_truth(after, experiments, truth, TOL_ROTOR_PCT, TOL_INERTIA_PCT)
+    verdicts = id_results.verdicts(results)
+    checks = plausibility(after, experiments, unident, verdicts) if experiments else []
+    checks += against_truth(after, experiments, truth, TOL_ROTOR_PCT, TOL_INERTIA_PCT, unident)
+    if stated or expected:
+        checks += not_identifiable_checks(after, nominal, stated, expected, source)
+    if ratio is not None:
+        checks += ratio_checks(ratio)
     checks += (
         _source_checks(rep["estimator"]["source"], getattr(opts, "sensors", None)) if experiments else []
     )
@@ -269,18 +359,31 @@ def build_report(
         checks += _kf_tracked_checks(kft["summary"])
     rep["checks"] = [c.as_dict() for c in checks]
     rep["tolerances_pct"] = {"kf_ktau": TOL_ROTOR_PCT, "inertia": TOL_INERTIA_PCT}
+    if ratio is not None:
+        rep["tolerances_pct"]["ktau_over_izz"] = TOL_RATIO_PCT
     rep["pass"] = all(c.ok or c.warning for c in checks)
     rep["timing"] = {"simulated_s": _num(t_end, 3), "wall_flight_s": _num(wall_flight_s, 2)}
     return rep
 
 
-def _from_logs(rep, logs, after):
+def _with_source(after, source):
+    """`after` with ID_SRC_USED from the records' source when the parameters lack it."""
+    if "ID_SRC_USED" in after or not source:
+        return after
+    code = {"thrust": 1, "imu": 2, "imu_rpm": 3, "imu_rpm_torque": 4}.get(source)
+    return dict(after, ID_SRC_USED=float(code)) if code else after
+
+
+def _from_logs(rep, logs, after, nominal=None, source=None):
     """What the report takes from the logs: the validation and the rates' fit recomputed, the
     plain estimates' sd, what the figures need; returns the simulated time at the end."""
     from .. import analysis
     from ..plots import convergence_series
 
-    val = analysis.validation(logs, after)
+    if source and source != "thrust":
+        val = analysis.validation_collective(logs, after, nominal)
+    else:
+        val = analysis.validation(logs, after)
     rep["validation"]["from_log"] = [
         {
             "window": lab,
@@ -304,8 +407,8 @@ def _from_logs(rep, logs, after):
     # the plain estimator's std is only in the log (est_sd[2], est_sd[3]): last value
     conv = convergence_series(logs)
     for key in ("kf", "ktau"):
-        row = rep["parameters"][key]
-        if row["plain"] is not None and key + "_plain" in conv:
+        row = rep["parameters"].get(key)
+        if row is not None and row["plain"] is not None and key + "_plain" in conv:
             row["plain_sd"] = _num(float(conv[key + "_plain"][2][-1]), 8)
     rep["_rates"] = rates  # for the figures; removed before writing JSON
     rep["_validation"] = val
@@ -382,6 +485,21 @@ def table_rows(rep):
     ]
     rows = []
     for key, r in rep["parameters"].items():
+        if r.get("identifiable") is False:
+            rows.append(
+                [
+                    f"{r['label']} [{r['unit']}]",
+                    _f(r["paper"]),
+                    _f(r["truth"]),
+                    _f(r["nominal"]),
+                    "-",
+                    "-",
+                    "-",
+                    "-",
+                    "not identifiable from the gyro alone",
+                ]
+            )
+            continue
         est = "-" if r["estimate"] is None else f"{r['estimate']:.6g} +/- {r['sd']:.2g}"
         plain = _f(r["plain"])
         if r["plain"] is not None and r.get("plain_sd") is not None:
@@ -399,6 +517,23 @@ def table_rows(rep):
                 "yes" if r["accepted"] else ("no: " + r["reason"] if r.get("reason") else "no"),
             ]
         )
+    x = rep.get("ktau_over_izz")
+    if x is not None:
+        paper = PAPER_VALUES["ktau"] / PAPER_VALUES["izz"]
+        nom = [rep["parameters"].get(k, {}).get("nominal") for k in ("ktau", "izz")]
+        rows.append(
+            [
+                f"{x['label']} [{x['unit']}]",
+                _f(paper),
+                _f(x["truth"]),
+                _f(nom[0] / nom[1] if all(nom) else None),
+                "-",
+                "-",
+                "-" if x["estimate"] is None else f"{x['estimate']:.6g} +/- {_f(x['sd'], '{:.2g}')}",
+                _pct(x["error_pct"]),
+                "yes" if x["accepted"] else ("no: " + x["reason"] if x.get("reason") else "no"),
+            ]
+        )
     return head, rows
 
 
@@ -406,15 +541,17 @@ def _validation_lines(rep):
     v = rep["validation"]
     lines = []
     b, a = v["before"], v["after"]
+    words = v.get("compares") or validation_words("thrust")
     if b["ne"] is not None or a["ne"] is not None:
         lines.append(
-            f"validation (commanded vs measured f_1, firmware): before NE {_f(b['ne'], '{:.4f}')}, "
+            f"validation ({words}, firmware): before NE {_f(b['ne'], '{:.4f}')}, "
             f"fit {_f(b['fit_pct'], '{:.1f}')} %; after NE {_f(a['ne'], '{:.4f}')}, "
             f"fit {_f(a['fit_pct'], '{:.1f}')} %"
         )
     for w in v.get("from_log", []):
         lines.append(
-            f"validation {w['window']} (from the log): NE {_f(w['ne'], '{:.4f}')}, "
+            f"validation {w['window']} ({words + ', ' if v.get('compares') else ''}from the log): "
+            f"NE {_f(w['ne'], '{:.4f}')}, "
             f"fit {_f(w['fit_pct'], '{:.1f}')} %"
         )
     for m in rep.get("model_fit", []):
@@ -454,9 +591,28 @@ def table_text(rep):
     out = [source_line(rep), ""]
     out += [fmt.format(*head), fmt.format(*["-" * w for w in widths])]
     out += [fmt.format(*r) for r in rows]
+    note = _unidentifiable_note(rep)
+    if note:
+        out += ["", note]
     out += [""] + _validation_lines(rep)
     out += [""] + _motor_lines(rep)
     return "\n".join(out)
+
+
+def _unidentifiable_note(rep):
+    """The line under Table 1 naming what the source cannot determine alone ("" when nothing)."""
+    names = [r["label"] for r in rep["parameters"].values() if r.get("identifiable") is False]
+    if not names:
+        return ""
+    src = (rep.get("estimator") or {}).get("source") or "?"
+    what = " and ".join(names)
+    if "ktau_over_izz" not in rep:
+        how = "no ratio was identified"
+    elif len(names) > 1:
+        how = "their ratio k_tau/I_z is identified, no value of either"
+    else:
+        how = "the ratio k_tau/I_z is identified, k_tau from it with the prior on I_z (ID_IZZ_PRI_SD)"
+    return f"{what}: not identifiable from the gyro alone (source {src}, no ESC torque): {how}."
 
 
 def _motor_lines(rep):
@@ -538,6 +694,16 @@ def markdown(rep, figures=()):
         + ".",
         "",
     ]
+    x = rep.get("ktau_over_izz")
+    if x is not None:
+        lines += [
+            f"*Source {x.get('source')}*: the gyro sees the yaw torque only through k_tau / I_z, so "
+            "k_tau and I_z are not identifiable alone and no value of either is given; their ratio "
+            "is identified, with its sd, and compared with the truth log's k_tau / I_z over the "
+            f"yaw phase (limit max(3 sd, {TOL_RATIO_PCT:g} %)). A prior on I_z (VEH_IZZ, with its "
+            "relative sd in ID_IZZ_PRI_SD) turns the ratio into k_tau.",
+            "",
+        ]
     lines += _kf_tracked_md(rep.get("kf_tracked"))
     lines += ["## Validation", ""] + [f"- {x}" for x in _validation_lines(rep)] + [""]
     mm = rep.get("motor_model", [])
@@ -549,12 +715,16 @@ def markdown(rep, figures=()):
             "|---|---|---|---|---|",
         ]
         lines += [f"| {r['quantity']} | {r['found']} | {r['sd']} | {r['truth']} | {r['error']} |" for r in mm]
-        lines += [
-            "",
-            "Found by the rotor experiment (transport delay, motor lag, thrust curve and each "
-            "rotor's effectiveness, median 1); applied only when accepted.",
-            "",
-        ]
+        source = (rep.get("estimator") or {}).get("source")
+        if source in (None, "thrust"):
+            what = "transport delay, motor lag, thrust curve and each rotor's effectiveness, median 1"
+        else:
+            what = (
+                "transport delay, motor lag and thrust curve from the accelerometer; it sees the "
+                "rotors' sum, so each rotor's effectiveness is not identified: the flight assumed "
+                "MOT_SCALE, and a rotor off it is a rejection naming the cause"
+            )
+        lines += ["", f"Found by the rotor experiment ({what}); applied only when accepted.", ""]
     lines += ["## Checks", ""]
     for c in rep["checks"]:
         tag = "ok" if c["ok"] else ("warning" if c["warning_only"] else "**FAILED**")
@@ -562,14 +732,21 @@ def markdown(rep, figures=()):
     lines += [
         "",
         f"Overall: **{'PASS' if rep['pass'] else 'FAIL'}** (tolerances: k_f, k_tau "
-        f"{rep['tolerances_pct']['kf_ktau']} %, inertia {rep['tolerances_pct']['inertia']} %).",
+        f"{rep['tolerances_pct']['kf_ktau']} %, inertia {rep['tolerances_pct']['inertia']} %"
+        + (
+            f", k_tau/I_z {rep['tolerances_pct']['ktau_over_izz']} % or 3 sd"
+            if "ktau_over_izz" in rep["tolerances_pct"]
+            else ""
+        )
+        + ").",
         "",
     ]
     if figures:
         lines += ["## Figures", ""]
         captions = {
             "fig5_excitation.png": "Fig. 5: the excitation delta_1 (rotor 1 throttle) and mu_1 (torque).",
-            "fig6_validation.png": "Fig. 6: commanded vs measured f_1, (a) before and (b) after identification.",
+            "fig6_validation.png": f"Fig. 6: {rep['validation'].get('compares') or 'commanded vs measured f_1'}, "
+            "(a) before and (b) after identification.",
             "fig7_rates.png": "Fig. 7: body rates, simulator vs the analytical model with the estimates.",
             "convergence.png": "Each identification result (the applied estimate) +/- 2 sd beside the live "
             "estimates in flight (auxiliary); truth dashed.",
