@@ -38,6 +38,10 @@ Items:
              when octo-gcs mission has it): missions per minute, the scaling efficiency
              rate(2) / (2 rate(1)), the CPU seconds of a mission on its worker and the rate
              they allow on idle cores (the machine's load is printed beside the rates)
+  sources 9. identification per source (tests/bench/ident_sources.py): the full sequence on
+             random vehicles from the thrust rows, from the IMU with the rotors' scales given,
+             and from the IMU with a weak rotor unknown; accuracy, error / sd, rejections and
+             their causes, and the IMU's agreement with the thrust rows on the same vehicle
 """
 
 import argparse
@@ -1154,9 +1158,51 @@ def item_campaign(rep, args):
     return res
 
 
+# ====================================================================== item 9: per source
+def item_sources(rep, args):
+    """Identification per source on random vehicles (tests/bench/ident_sources.py)."""
+    runs = 40 if args.quick else 1000
+    argv = [sys.executable, Path(__file__).parent / "ident_sources.py", "--runs", runs, "--jobs", 2]
+    r = json.loads(subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=True,
+                                  timeout=7200).stdout)
+    c = cmdline([".venv/bin/python", "tests/bench/ident_sources.py", "--runs", runs, "--jobs", 2])
+    rep.commands["identification per source"] = c
+    rep.row(9, f"identification per source: experiment 6 on {runs} random vehicles (lag 10-100 ms, delay 0-3, "
+               "curve 0-0.5, k_f, k_tau, inertia +/-30 %, one rotor 0.8-1), default sensor noise", "", "", "", "",
+            None, c)
+    names = {"thrust": "thrust rows (ID_SOURCE 1)", "imu": "imu, rotor scales given",
+             "imu_weak": "imu, the weak rotor unknown"}
+    for how, label in names.items():
+        t = r[how]
+        causes = ", ".join(f"{k} {v}" for k, v in sorted(t["causes"].items(), key=lambda kv: -kv[1])) or "none"
+        rep.row(9, f"  {label}: not identified (k_f not accepted), with the causes",
+                f"{100.0 * t['rejected'] / t['runs']:.1f} %", "", causes,
+                "<= 2 %" if how != "imu_weak" else "(reported)",
+                t["rejected"] <= 0.02 * t["runs"] if how != "imu_weak" else None, c)
+        for k in ("kf", "ktau", "ratio", "ixx", "iyy", "izz"):
+            q = t.get(k)
+            if not q:
+                continue
+            tol = {"kf": 1.0, "ratio": 2.0, "ixx": 2.0, "iyy": 2.0}.get(k) if how != "thrust" else None
+            rep.row(9, f"    {k}: error rms / max (%), error / sd rms, beyond max(3 sd, 1 %)",
+                    f"{q['err_rms_pct']:.2f} / {q['err_max_pct']:.2f}, {q['z_rms']:.2f}, {q['beyond_3sd_and_1pct']}",
+                    "", f"{q['accepted']} accepted",
+                    "z rms in [0.8, 1.25], 0 beyond" + (f", within {tol:g} %" if tol else ""),
+                    0.8 <= q["z_rms"] <= 1.25 and q["beyond_3sd_and_1pct"] == 0, c)
+        if t.get("lag_within_10pct") is not None:
+            rep.row(9, "    lag within 10 %, delay right", f"{100 * t['lag_within_10pct']:.1f} %, "
+                    f"{100 * t['delay_right']:.1f} %", "", "", ">= 99 % delay right",
+                    t["delay_right"] >= 0.99, c)
+    for k, q in r["imu_vs_thrust"].items():
+        rep.row(9, f"  imu vs thrust rows on the same vehicle, {k}: difference / combined sd, rms and beyond 3",
+                f"{q['rms']:.2f}, {q['beyond_3']}", "", f"{q['n']} pairs", "rms <= 1.25", q["rms"] <= 1.25, c)
+    rep.data["sources"] = r
+
+
 # ====================================================================== main
 ITEMS = {"speed": item_speed, "step": item_step, "memory": item_memory, "alloc": item_alloc,
-         "estim": item_estim, "sim": item_sim, "sil": item_sil, "campaign": item_campaign}
+         "estim": item_estim, "sim": item_sim, "sil": item_sil, "campaign": item_campaign,
+         "sources": item_sources}
 
 
 # The page whose table `--readme` replaces: the text between its two markers

@@ -1,0 +1,165 @@
+#!/usr/bin/env python3
+"""Identification per source on random vehicles (bench item 9; also runs alone).
+
+    .venv/bin/python tests/bench/ident_sources.py [--runs N] [--seed S] [--jobs J]
+
+Each run flies the full sequence (experiment 6) in octo-sil on a vehicle of the tests' ranges
+(motor lag 10-100 ms, delay 0-3 frames, thrust curve 0-0.5, k_f, k_tau and inertia +/-30 %)
+with the default realistic sensor noise, three ways on the same vehicle and seed:
+
+- thrust: the thrust and torque rows (ID_SOURCE 1), one rotor at 0.8-1.0 unknown to the firmware;
+- imu: no thrust or torque rows (--sensors imu,rpm), the rotors' scales given (MOT_SCALEj set
+  to the truth, as from a bench);
+- imu, a weak rotor: as imu, with the 0.8-1.0 rotor unknown (the accelerometer cannot tell
+  which rotor: the run must be rejected naming it, or its values right).
+
+Prints one JSON object: per source and quantity the accepted count, the error's rms (%), the
+error / sd rms and the share beyond 3 sd, the rejections with their causes, the delay right
+and the lag within 10 %; and per IMU quantity its agreement with the thrust rows' estimate of
+the same vehicle (difference over the combined sd).
+"""
+
+import argparse
+import concurrent.futures as cf
+import json
+import math
+import random
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+SIL = ROOT / "build" / "octo-sil"
+PAPER_I = [0.0628, 0.0762, 0.1014]
+PAPER = {"kf": 28.0269, "ktau": 0.3869}
+RX = {
+    "kf": r"^ID kf ([-0-9.]+) \+/- ([-0-9.]+) (N accepted|rejected: .*)$",
+    "ktau": r"^ID ktau ([-0-9.]+) \+/- ([-0-9.]+) (N m accepted|N m \(VEH_IZZ prior\) accepted|rejected: .*)$",
+    "ixx": r"^ID Ixx ([-0-9.]+) \+/- ([-0-9.]+) (kg m\^2 accepted|rejected: .*)$",
+    "iyy": r"^ID Iyy ([-0-9.]+) \+/- ([-0-9.]+) (kg m\^2 accepted|rejected: .*)$",
+    "izz": r"^ID Izz ([-0-9.]+) \+/- ([-0-9.]+) (kg m\^2 accepted|rejected: .*)$",
+    "ratio": r"^ID ktau/Izz ([-0-9.]+) \+/- ([-0-9.]+) 1/s\^2 (\(gyro: the ratio\)|rejected: .*)$",
+}
+LAG = re.compile(r"^ID motor lag ([-0-9.]+) \+/- ([-0-9.]+) s delay (\d+) fr$")
+CAUSE = re.compile(r"^ID (rejected|aborted): (.*)$")
+
+
+def vehicle(rng):
+    inertia = [i * rng.uniform(0.7, 1.3) for i in PAPER_I]
+    inertia[2] = min(inertia[2], inertia[0] + inertia[1] - 1e-4)  # a rigid body's inertia
+    scale = [1.0] * 8
+    scale[rng.randrange(8)] = rng.uniform(0.8, 1.0)
+    return {"kf": PAPER["kf"] * rng.uniform(0.7, 1.3), "ktau": PAPER["ktau"] * rng.uniform(0.7, 1.3),
+            "inertia": inertia, "motor_tau": rng.uniform(0.010, 0.100), "delay": rng.randint(0, 3) / 90.0,
+            "thrust_curve": rng.uniform(0.0, 0.5), "rotor_scale": scale}
+
+
+def fly(veh, seed, how, tmp):
+    d = Path(tmp)
+    (d / f"v{seed}{how}.json").write_text(json.dumps(veh))
+    prm = d / f"p{seed}{how}.parm"
+    steps = [f"param ID_SEED {seed}"]
+    sensors = "imu,rpm,thrust,torque"
+    if how == "thrust":
+        steps.append("param ID_SOURCE 1")
+    else:
+        sensors = "imu,rpm"
+        if how == "imu":
+            steps += [f"param MOT_SCALE{j + 1} {s!r}" for j, s in enumerate(veh["rotor_scale"])]
+    steps += ["arm", "takeoff 5", "wait hold", "experiment 6", "wait experiment"]
+    r = subprocess.run([str(SIL), "--seed", str(seed), "--vehicle", str(d / f"v{seed}{how}.json"), "--sensors", sensors,
+                        "--params", str(prm), "--duration", "900", "--script", "; ".join(steps)],
+                       capture_output=True, text=True, timeout=300)
+    prm.unlink(missing_ok=True)
+    out = {"causes": []}
+    for ln in r.stderr.splitlines():
+        ln = ln[len("octo-fw: "):] if ln.startswith("octo-fw: ") else ln
+        for k, rx in RX.items():
+            m = re.match(rx, ln)
+            if m:
+                out[k] = (float(m.group(1)), float(m.group(2)), "accepted" in m.group(3) or "ratio" in m.group(3))
+        m = LAG.match(ln)
+        if m:
+            out["lag"] = (float(m.group(1)), float(m.group(2)), int(m.group(3)))
+        m = CAUSE.match(ln)
+        if m:
+            out["causes"].append(m.group(2))
+    return out
+
+
+def truth(veh):
+    i = veh["inertia"]
+    return {"kf": veh["kf"], "ktau": veh["ktau"], "ixx": i[0], "iyy": i[1], "izz": i[2], "ratio": veh["ktau"] / i[2]}
+
+
+def one(args):
+    seed, tmp = args
+    veh = vehicle(random.Random(seed))
+    return seed, veh, {h: fly(veh, seed, h, tmp) for h in ("thrust", "imu", "imu_weak")}
+
+
+def summarise(runs):
+    res = {}
+    for how in ("thrust", "imu", "imu_weak"):
+        s = {"runs": len(runs), "rejected": 0, "causes": {}}
+        for k in RX:
+            zs, errs, beyond = [], [], 0
+            for seed, veh, r in runs:
+                v = r[how].get(k)
+                if not v or not v[2]:
+                    continue
+                t = truth(veh)[k]
+                errs.append(100.0 * (v[0] / t - 1.0))
+                z = (v[0] - t) / v[1] if v[1] > 0 else math.inf
+                zs.append(z)
+                beyond += abs(z) > 3.0 and abs(v[0] / t - 1.0) > 0.01
+            if zs:
+                s[k] = {"accepted": len(zs), "err_rms_pct": math.sqrt(sum(e * e for e in errs) / len(errs)),
+                        "z_rms": math.sqrt(sum(z * z for z in zs) / len(zs)), "beyond_3sd_and_1pct": beyond,
+                        "err_max_pct": max(abs(e) for e in errs)}
+        lag_ok = delay_ok = n_lag = 0
+        for seed, veh, r in runs:
+            x = r[how]
+            if not x.get("kf", (0, 0, False))[2]:
+                s["rejected"] += 1
+                for c in x["causes"][:1] or ["no result"]:
+                    s["causes"][c] = s["causes"].get(c, 0) + 1
+            if "lag" in x and x.get("kf", (0, 0, False))[2]:
+                n_lag += 1
+                lag_ok += abs(x["lag"][0] / veh["motor_tau"] - 1.0) <= 0.10
+                delay_ok += x["lag"][2] == round(veh["delay"] * 90.0)
+        s["lag_within_10pct"] = lag_ok / n_lag if n_lag else None
+        s["delay_right"] = delay_ok / n_lag if n_lag else None
+        res[how] = s
+    # the IMU's agreement with the thrust rows' estimate of the same vehicle
+    agree = {}
+    for k in ("kf", "ixx", "iyy"):
+        d = []
+        for seed, veh, r in runs:
+            a, b = r["imu"].get(k), r["thrust"].get(k)
+            if a and b and a[2] and b[2]:
+                d.append((a[0] - b[0]) / math.hypot(a[1], b[1]))
+        if d:
+            agree[k] = {"n": len(d), "rms": math.sqrt(sum(x * x for x in d) / len(d)),
+                        "beyond_3": sum(abs(x) > 3 for x in d)}
+    res["imu_vs_thrust"] = agree
+    return res
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--runs", type=int, default=200)
+    ap.add_argument("--seed", type=int, default=30000)
+    ap.add_argument("--jobs", type=int, default=2)
+    a = ap.parse_args(argv)
+    if not SIL.exists():
+        sys.exit(f"ident_sources: {SIL} missing (make first)")
+    with tempfile.TemporaryDirectory(prefix="bench-sources-") as tmp, cf.ProcessPoolExecutor(a.jobs) as ex:
+        runs = list(ex.map(one, [(a.seed + i, tmp) for i in range(a.runs)]))
+    print(json.dumps({"runs": a.runs, "seed": a.seed, **summarise(runs)}))
+
+
+if __name__ == "__main__":
+    main()
