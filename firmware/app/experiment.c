@@ -481,6 +481,55 @@ static void snapshot(struct exp_turn *t, const struct exp_input *in)
 
 static float phase_limit(const struct experiment *e, const char **name);
 
+/* The IMU rotor experiment's start: the accelerometer sees the rotors' sum, so the null-space
+ * dithers (the vehicle still) get a collective dither (a fast vertical jiggle) and the
+ * throttle sweep beside them (docs/identification.md, "From the IMU"). */
+static void imu_rotor_begin(struct experiment *e, const struct app_params *p, const struct exp_turn *in,
+			    struct excite_params *xpp)
+{
+	const struct exp_cfg *cf = &e->cfg;
+	struct excite_params xp = *xpp;
+	e->t_run = cf->imu_time;
+	uint32_t kind = cf->exc_kind;
+	xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
+	xp.amplitude = sc_from_float(cf->exc_amp);
+	xp.ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
+	struct imu_id_cfg ic = {
+		.dt_s = e->dt_nom,
+		.mass_kg = p->veh_mass,
+		.g = p->veh_grav,
+		.kf0 = p->veh_kf,
+		.curve0 = p->mot_curve,
+		.est_curve = cf->crv_est,
+		.n_frames = (uint32_t)(cf->imu_time / e->dt_nom + 0.5f),
+		.block_frames = (uint32_t)(SWP_PERIOD_S / e->dt_nom + 0.5f),
+	};
+	float thr_h = 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		ic.scale[j] = mot_scale(p, j);
+		thr_h += sc_to_float(in->thr_prev_all[j]) / (float)HAL_ROTORS;
+	}
+	excite_null_pattern(0, e->pat[0]);
+	excite_null_pattern(1, e->pat[1]);
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		ic.pat[0][j] = sc_to_float(e->pat[0][j]);
+		ic.pat[1][j] = sc_to_float(e->pat[1][j]);
+	}
+	imu_id_init(&e->imid, &ic, in->thr_prev_all);
+	struct excite_params xp2 = xp, xp3 = xp;
+	xp2.seed = xp.seed * 2654435761u + 12345u;
+	excite_init(&e->exc2, &xp2);
+	xp3.seed = xp.seed * 2246822519u + 777u;
+	xp3.kind = EXCITE_PRBS;
+	xp3.amplitude = sc_from_float(cf->col_amp);
+	excite_init(&e->exc3, &xp3);
+	e->rot_k = 0;
+	e->ofs = sc_from_float(cf->exc_ofs);
+	sweep_plan(e, p, thr_h);
+	e->est_live = 0;
+	*xpp = xp;
+}
+
 static void phase_begin(struct experiment *e, const struct app_params *p, const struct exp_turn *in)
 {
 	const struct exp_cfg *cf = &e->cfg;
@@ -498,48 +547,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	scalar_t dt = sc_from_float(e->dt_nom);
 
 	if (k == PK_ROTOR && cf->src == EXP_SRC_IMU) {
-		/* the accelerometer sees the rotors' sum: the null-space dithers (the vehicle still)
-		 * plus a collective dither (a fast vertical jiggle) and the throttle sweep */
-		e->t_run = cf->imu_time;
-		uint32_t kind = cf->exc_kind;
-		xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
-		xp.amplitude = sc_from_float(cf->exc_amp);
-		xp.ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
-		struct imu_id_cfg ic = {
-			.dt_s = e->dt_nom,
-			.mass_kg = p->veh_mass,
-			.g = p->veh_grav,
-			.kf0 = p->veh_kf,
-			.curve0 = p->mot_curve,
-			.est_curve = cf->crv_est,
-			.n_frames = (uint32_t)(cf->imu_time / e->dt_nom + 0.5f),
-			.block_frames = (uint32_t)(SWP_PERIOD_S / e->dt_nom + 0.5f),
-		};
-		float thr_h = 0.0f;
-		for (int j = 0; j < HAL_ROTORS; j++) {
-			ic.scale[j] = mot_scale(p, j);
-			thr_h += sc_to_float(in->thr_prev_all[j]) / (float)HAL_ROTORS;
-		}
-		excite_null_pattern(0, e->pat[0]);
-		excite_null_pattern(1, e->pat[1]);
-		for (int j = 0; j < HAL_ROTORS; j++) {
-			ic.pat[0][j] = sc_to_float(e->pat[0][j]);
-			ic.pat[1][j] = sc_to_float(e->pat[1][j]);
-		}
-		imu_id_init(&e->imid, &ic, in->thr_prev_all);
-		struct excite_params xp2 = xp, xp3 = xp;
-		xp2.seed = xp.seed * 2654435761u + 12345u;
-		excite_init(&e->exc2, &xp2);
-		xp3.seed = xp.seed * 2246822519u + 777u;
-		xp3.kind = EXCITE_PRBS;
-		xp3.amplitude = sc_from_float(cf->col_amp);
-		excite_init(&e->exc3, &xp3);
-		e->rot_k = 0;
-		excite_null_pattern(0, e->pat[0]);
-		excite_null_pattern(1, e->pat[1]);
-		e->ofs = sc_from_float(cf->exc_ofs);
-		sweep_plan(e, p, thr_h);
-		e->est_live = 0;
+		imu_rotor_begin(e, p, in, &xp);
 	} else if (k == PK_ROTOR) {
 		e->t_run = cf->exc_time;
 		uint32_t kind = cf->exc_kind;
@@ -908,6 +916,72 @@ static void izz_imu_end(struct experiment *e, const struct app_params *p, float 
 	set_result_bit(e, p, 2u << 2, false);
 }
 
+/* An inertia phase's end: the estimate with its sd (the gyro's scale, and under the IMU the
+ * modelled torque's), its acceptance, results and status lines; under the IMU the yaw phase
+ * gives the ratio k_tau / I_z (izz_imu_end). */
+static void inertia_end(struct experiment *e, const struct app_params *p, unsigned ax)
+{
+	float rsd = e->cfg.rsd_max;
+	static const char *const nm[3] = {"Ixx", "Iyy", "Izz"};
+	static const int pe[3] = {PX_ID_IXX_EST, PX_ID_IYY_EST, PX_ID_IZZ_EST};
+	static const int ps[3] = {PX_ID_IXX_SD, PX_ID_IYY_SD, PX_ID_IZZ_SD};
+	static const int pv[3] = {PX_VEH_IXX, PX_VEH_IYY, PX_VEH_IZZ};
+	float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
+	/* the gyro's scale error scales the angular acceleration, so the estimate, by
+	 * (1 - s): the data cannot tell it, its calibration's sd joins the published sd */
+	float gs = cfg_f(p->id_gyr_scl_sd, 0.0f) * est, sd_data = sd;
+	if (isfinite(sd) && isfinite(gs))
+		sd = sqrtf(sd * sd + gs * gs);
+	if (e->cfg.src == EXP_SRC_IMU && ax != 2u) {
+		/* the torque is the model's, its swings about hover scaled by the thrust's
+		 * slope there: the slope's uncertainty passes one for one into the inertia */
+		float rk = e->cfg.slope_rsd;
+		if (isfinite(sd) && rk > 0.0f)
+			sd = sqrtf(sd * sd + rk * est * rk * est);
+	}
+	if (e->cfg.src == EXP_SRC_IMU && !e->cfg.model_ok) {
+		/* the torque is the rotor model's: without an identified model the estimate
+		 * rests on priors (ID_MOT_TAU, MOT_CURVE, VEH_KF), never to be applied */
+		static const int pi[3] = {APP_ID_IXX, APP_ID_IYY, APP_ID_KTAU_OVER_IZZ};
+		result(e, pe[ax], isfinite(est) ? est : 0.0f);
+		result(e, ps[ax], isfinite(sd) ? sd : 0.0f);
+		set_result_bit(e, p, 2u << ax, false);
+		id_out(e, (enum app_id_param)pi[ax], 0, ax == 2u ? NAN : est, ax == 2u ? NAN : sd, false,
+		       APP_ID_PARTNER_REJECTED);
+		say(e, APP_SEV_WARNING, "ID %s rejected: rotor model not identified (experiment 1)", nm[ax]);
+		return;
+	}
+	if (e->cfg.src == EXP_SRC_IMU && ax == 2u) {
+		izz_imu_end(e, p, est, sd);
+		return;
+	}
+	float lo, hi, raise;
+	enum ident_verdict v = ident_inertia_accept(est, sd, p->veh_mass, p->veh_arm_l, rsd, &lo, &hi, &raise);
+	/* only the data's part shrinks with a stronger or longer excitation: the advice aims
+	 * it at what the calibration's part leaves of the asked sd */
+	float room = rsd * est * rsd * est - gs * gs;
+	if (v == IDENT_UNCERTAIN && raise > 1.0f && gs > 0.0f)
+		raise = room > 0.0f ? sd_data / sqrtf(room) : INFINITY;
+	bool ok = v == IDENT_ACCEPT;
+	result(e, pe[ax], isfinite(est) ? est : 0.0f);
+	result(e, ps[ax], isfinite(sd) ? sd : 0.0f);
+	if (ok)
+		result(e, pv[ax], est);
+	set_result_bit(e, p, 2u << ax, ok);
+	id_out(e, (enum app_id_param)(APP_ID_IXX + (int)ax), 0, est, sd, ok, app_id_reason_of_verdict(v));
+	say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID %s %.5f +/- %.5f %s%s", nm[ax], (double)est, (double)sd,
+	    ok ? "kg m^2 " : "rejected: ", ident_verdict_text(v));
+	/* a rejection says what would have been accepted, or what to change */
+	if (v == IDENT_OUT_OF_RANGE)
+		say(e, APP_SEV_WARNING, "ID %s accepted in [%.4g, %.4g] kg m^2", nm[ax], (double)lo, (double)hi);
+	else if (v == IDENT_UNCERTAIN && !isfinite(raise))
+		say(e, APP_SEV_WARNING,
+		    "ID %s: ID_RSD_MAX %g out of reach: the gyro scale's sd (ID_GYR_SCL_SD %g) alone", nm[ax],
+		    (double)rsd, (double)cfg_f(p->id_gyr_scl_sd, 0.0f));
+	else if (v == IDENT_UNCERTAIN && raise > 1.0f)
+		inertia_advice(e, p, ax, nm[ax], raise);
+}
+
 static void phase_end(struct experiment *e, const struct app_params *p)
 {
 	int k = e->phase_kind[e->phase];
@@ -967,66 +1041,7 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 			say(e, lag_off ? APP_SEV_WARNING : APP_SEV_INFO, "ID motor lag %.4f s%s (ID_MOT_TAU %.4f)",
 			    (double)tau_c, lag_off ? " DIFFERS" : "", (double)tau_m);
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
-		unsigned ax = (unsigned)(k - PK_INR_X);
-		static const char *const nm[3] = {"Ixx", "Iyy", "Izz"};
-		static const int pe[3] = {PX_ID_IXX_EST, PX_ID_IYY_EST, PX_ID_IZZ_EST};
-		static const int ps[3] = {PX_ID_IXX_SD, PX_ID_IYY_SD, PX_ID_IZZ_SD};
-		static const int pv[3] = {PX_VEH_IXX, PX_VEH_IYY, PX_VEH_IZZ};
-		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
-		/* the gyro's scale error scales the angular acceleration, so the estimate, by
-		 * (1 - s): the data cannot tell it, its calibration's sd joins the published sd */
-		float gs = cfg_f(p->id_gyr_scl_sd, 0.0f) * est, sd_data = sd;
-		if (isfinite(sd) && isfinite(gs))
-			sd = sqrtf(sd * sd + gs * gs);
-		if (e->cfg.src == EXP_SRC_IMU && ax != 2u) {
-			/* the torque is the model's, its swings about hover scaled by the thrust's
-			 * slope there: the slope's uncertainty passes one for one into the inertia */
-			float rk = e->cfg.slope_rsd;
-			if (isfinite(sd) && rk > 0.0f)
-				sd = sqrtf(sd * sd + rk * est * rk * est);
-		}
-		if (e->cfg.src == EXP_SRC_IMU && !e->cfg.model_ok) {
-			/* the torque is the rotor model's: without an identified model the estimate
-			 * rests on priors (ID_MOT_TAU, MOT_CURVE, VEH_KF), never to be applied */
-			static const int pi[3] = {APP_ID_IXX, APP_ID_IYY, APP_ID_KTAU_OVER_IZZ};
-			result(e, pe[ax], isfinite(est) ? est : 0.0f);
-			result(e, ps[ax], isfinite(sd) ? sd : 0.0f);
-			set_result_bit(e, p, 2u << ax, false);
-			id_out(e, (enum app_id_param)pi[ax], 0, ax == 2u ? NAN : est, ax == 2u ? NAN : sd, false,
-			       APP_ID_PARTNER_REJECTED);
-			say(e, APP_SEV_WARNING, "ID %s rejected: rotor model not identified (experiment 1)", nm[ax]);
-			return;
-		}
-		if (e->cfg.src == EXP_SRC_IMU && ax == 2u) {
-			izz_imu_end(e, p, est, sd);
-			return;
-		}
-		float lo, hi, raise;
-		enum ident_verdict v = ident_inertia_accept(est, sd, p->veh_mass, p->veh_arm_l, rsd, &lo, &hi, &raise);
-		/* only the data's part shrinks with a stronger or longer excitation: the advice aims
-		 * it at what the calibration's part leaves of the asked sd */
-		float room = rsd * est * rsd * est - gs * gs;
-		if (v == IDENT_UNCERTAIN && raise > 1.0f && gs > 0.0f)
-			raise = room > 0.0f ? sd_data / sqrtf(room) : INFINITY;
-		bool ok = v == IDENT_ACCEPT;
-		result(e, pe[ax], isfinite(est) ? est : 0.0f);
-		result(e, ps[ax], isfinite(sd) ? sd : 0.0f);
-		if (ok)
-			result(e, pv[ax], est);
-		set_result_bit(e, p, 2u << ax, ok);
-		id_out(e, (enum app_id_param)(APP_ID_IXX + (int)ax), 0, est, sd, ok, app_id_reason_of_verdict(v));
-		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID %s %.5f +/- %.5f %s%s", nm[ax], (double)est, (double)sd,
-		    ok ? "kg m^2 " : "rejected: ", ident_verdict_text(v));
-		/* a rejection says what would have been accepted, or what to change */
-		if (v == IDENT_OUT_OF_RANGE)
-			say(e, APP_SEV_WARNING, "ID %s accepted in [%.4g, %.4g] kg m^2", nm[ax], (double)lo,
-			    (double)hi);
-		else if (v == IDENT_UNCERTAIN && !isfinite(raise))
-			say(e, APP_SEV_WARNING,
-			    "ID %s: ID_RSD_MAX %g out of reach: the gyro scale's sd (ID_GYR_SCL_SD %g) alone", nm[ax],
-			    (double)rsd, (double)cfg_f(p->id_gyr_scl_sd, 0.0f));
-		else if (v == IDENT_UNCERTAIN && raise > 1.0f)
-			inertia_advice(e, p, ax, nm[ax], raise);
+		inertia_end(e, p, (unsigned)(k - PK_INR_X));
 	} else {
 		bool post = k == PK_VAL_POST || (k == PK_VAL && (result_mask(p) & 1u));
 		float ne = ident_fit_ne(&e->fit), fit = ident_fit_pct(&e->fit);

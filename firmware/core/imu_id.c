@@ -491,6 +491,54 @@ static float quad(const float v[NP][NP], const float j[NP])
 	return w > 0.0f ? w : 0.0f;
 }
 
+/* The chosen delay bd and its margin: the log-likelihood ratio of the best lag of every other
+ * delay over bd's (into r); bd's least residual. */
+static float delay_margin(const struct imu_id *m, unsigned bd, struct imu_id_result *r)
+{
+	float jb[IMU_ID_DELAYS];
+	for (unsigned d = 0; d < IMU_ID_DELAYS; d++) {
+		jb[d] = INFINITY;
+		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
+			float th[NP], h[NP][NP], j = hyp_solve(m, &m->st[d][l], th, h);
+			if (j < jb[d])
+				jb[d] = j;
+		}
+	}
+	float j0 = jb[bd], j2 = INFINITY;
+	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
+		if (d != bd && jb[d] < j2)
+			j2 = jb[d];
+	r->delay = bd;
+	r->delay_margin = j0 > 0.0f ? 0.5f * (float)m->n_exc * logf(j2 / j0) : INFINITY;
+	return j0;
+}
+
+/* The acceptance cause from the result's diagnostics (dl: the lag's step from grid point bl). */
+static enum imu_id_cause verdict(const struct imu_id *m, const struct imu_id_result *r, unsigned bl, float dl,
+				 float hac_max)
+{
+	float hstep = grid_step();
+	/* the step must stay within the grid's reach: beyond half a step the neighbour is
+	 * better, and at an end of the grid beyond it the lag is outside the range */
+	bool edge = (bl == 0u && dl < -0.5f * hstep) || (bl == IMU_ID_LAGS - 1u && dl > 0.5f * hstep) ||
+		    !(fabsf(dl) <= 1.5f * hstep);
+	if (m->nz_n < 20u)
+		return IMU_ID_NOISE_UNKNOWN;
+	if (edge)
+		return IMU_ID_LAG_RANGE;
+	if (r->delay == IMU_ID_DELAYS - 1u)
+		return IMU_ID_DELAY_RANGE;
+	if (r->delay_margin < 12.0f)
+		return IMU_ID_DELAY_AMBIGUOUS;
+	if (!(r->hac <= hac_max))
+		return IMU_ID_MODEL;
+	if (m->cfg.est_curve && !(r->curve_sd < 0.2f))
+		return IMU_ID_CURVE_WEAK;
+	if (fabsf(r->t_pattern[0]) > IMU_ID_T_ROTOR || fabsf(r->t_pattern[1]) > IMU_ID_T_ROTOR)
+		return IMU_ID_SCALES;
+	return IMU_ID_OK;
+}
+
 void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 {
 	memset(r, 0, sizeof *r);
@@ -514,22 +562,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->noise_sd = sqrtf(nz_var);
 	unsigned bd, bl;
 	best_hyp(m, &bd, &bl);
-	/* the delay's margin: the best lag of every other delay */
-	float jb[IMU_ID_DELAYS];
-	for (unsigned d = 0; d < IMU_ID_DELAYS; d++) {
-		jb[d] = INFINITY;
-		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-			float th[NP], h[NP][NP], j = hyp_solve(m, &m->st[d][l], th, h);
-			if (j < jb[d])
-				jb[d] = j;
-		}
-	}
-	float j0 = jb[bd], j2 = INFINITY;
-	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
-		if (d != bd && jb[d] < j2)
-			j2 = jb[d];
-	r->delay = bd;
-	r->delay_margin = j0 > 0.0f ? 0.5f * (float)n * logf(j2 / j0) : INFINITY;
+	float j0 = delay_margin(m, bd, r);
 	float s2 = j0 / (float)(n - np);
 	/* the residual variance over the noise the still frames measured, scaled to each frame's
 	 * thrust: the vibration's amplitude goes with the rotor speed squared, as the thrust
@@ -607,26 +640,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->tau = lag_tau(bl) * expf(dl + lcorr);
 	scales_check(m, r->t_pattern);
 	r->tau_sd = r->tau * dl_sd;
-	/* the step must stay within the grid's reach: beyond half a step the neighbour is
-	 * better, and at an end of the grid beyond it the lag is outside the range */
-	bool edge = (bl == 0u && dl < -0.5f * hstep) || (bl == IMU_ID_LAGS - 1u && dl > 0.5f * hstep) ||
-		    !(fabsf(dl) <= 1.5f * hstep);
-	if (m->nz_n < 20u)
-		r->cause = IMU_ID_NOISE_UNKNOWN;
-	else if (edge)
-		r->cause = IMU_ID_LAG_RANGE;
-	else if (bd == IMU_ID_DELAYS - 1u)
-		r->cause = IMU_ID_DELAY_RANGE;
-	else if (r->delay_margin < 12.0f)
-		r->cause = IMU_ID_DELAY_AMBIGUOUS;
-	else if (!(r->hac <= ne_max))
-		r->cause = IMU_ID_MODEL;
-	else if (c->est_curve && !(r->curve_sd < 0.2f))
-		r->cause = IMU_ID_CURVE_WEAK;
-	else if (fabsf(r->t_pattern[0]) > IMU_ID_T_ROTOR || fabsf(r->t_pattern[1]) > IMU_ID_T_ROTOR)
-		r->cause = IMU_ID_SCALES;
-	else
-		r->cause = IMU_ID_OK;
+	r->cause = verdict(m, r, bl, dl, ne_max);
 }
 
 const char *imu_id_cause_text(enum imu_id_cause c)
