@@ -82,7 +82,9 @@ def test_rejection_and_attitude_abort(launch, port, tmp_path):
     """An estimate whose relative std exceeds ID_RSD_MAX is reported but not applied; an
     excitation that tilts the vehicle beyond the limit aborts (FAILED, back to hold, nothing
     applied)."""
-    fl = IdentFlight(launch, port, tmp_path, seed=41, params={"ID_RSD_MAX": 0.0001})
+    # lockstep runs as fast as the pair can: the ground station's exchanges between the two
+    # experiments may cost the plant well over 100 s, so its clock gets room (not 200 s)
+    fl = IdentFlight(launch, port, tmp_path, seed=41, params={"ID_RSD_MAX": 0.0001}, duration=1000.0)
     rig = fl.rig
     fl.takeoff()
     texts = fl.experiment(1)
