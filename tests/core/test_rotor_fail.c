@@ -92,7 +92,8 @@ UNIT_TEST(rotor_fail_found_fast_and_right)
 				sent[j] = thr[j];
 			plant_step(&p, &r, k, thr, thrust, speed);
 			struct rotor_fail_input in = {
-				sent, by_speed ? NULL : thrust, by_speed ? speed : NULL, s(1.0 / FS), true, false};
+				sent, by_speed ? NULL : thrust, by_speed ? speed : NULL, s(1.0 / FS), true, false,
+				false};
 			struct rotor_fail_output o = rotor_fail_step(&d, &in);
 			if (o.rotor >= 0) {
 				CHECK(found_k < 0); /* once */
@@ -133,7 +134,8 @@ UNIT_TEST(rotor_fail_no_false_alarm)
 				sent[j] = thr[j];
 			plant_step(&p, &r, k, thr, thrust, speed);
 			struct rotor_fail_input in = {
-				sent, trial & 2 ? NULL : thrust, trial & 2 ? speed : NULL, s(1.0 / FS), true, false};
+				sent, trial & 2 ? NULL : thrust, trial & 2 ? speed : NULL, s(1.0 / FS), true, false,
+				false};
 			struct rotor_fail_output o = rotor_fail_step(&d, &in);
 			found += o.rotor >= 0;
 		}
@@ -162,15 +164,15 @@ UNIT_TEST(rotor_fail_model_and_gates)
 		thrust[j] = j == 2 ? SC(0.0) : SC(5.0);
 	}
 	for (int k = 0; k < 20; k++) {
-		struct rotor_fail_input off = {thr, thrust, NULL, s(1.0 / FS), false, false};
+		struct rotor_fail_input off = {thr, thrust, NULL, s(1.0 / FS), false, false, false};
 		CHECK(rotor_fail_step(&d, &off).rotor < 0);
-		struct rotor_fail_input none = {thr, NULL, NULL, s(1.0 / FS), true, false};
+		struct rotor_fail_input none = {thr, NULL, NULL, s(1.0 / FS), true, false, false};
 		CHECK(rotor_fail_step(&d, &none).rotor < 0);
 	}
 	/* rotor 3 gives nothing from the first frame judged: found on the confirm-th */
 	int k_found = -1;
 	for (int k = 0; k < 40 && k_found < 0; k++) {
-		struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, false};
+		struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, false, false};
 		struct rotor_fail_output o = rotor_fail_step(&d, &in);
 		if (o.rotor >= 0) {
 			CHECK(o.rotor == 2 && o.scale == SC_ZERO);
@@ -184,7 +186,7 @@ UNIT_TEST(rotor_fail_model_and_gates)
 	rotor_fail_set_model(&d, &m);
 	CHECK(d.failed == 0x04);
 	for (int k = 0; k < 20; k++) {
-		struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, false};
+		struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, false, false};
 		CHECK(rotor_fail_step(&d, &in).rotor < 0);
 	}
 }
@@ -203,7 +205,7 @@ UNIT_TEST(rotor_fail_excited_takes_a_deeper_drop)
 		}
 		int found = -1;
 		for (int k = 0; k < 40; k++) {
-			struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, excited != 0};
+			struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, false, excited != 0};
 			struct rotor_fail_output o = rotor_fail_step(&d, &in);
 			if (o.rotor >= 0 && found < 0)
 				found = o.rotor;
