@@ -15,6 +15,7 @@ struct rotor_fail_params rotor_fail_params_default(void)
 	p.share_min = SC(0.3);
 	p.g_min = SC(0.02);
 	p.env_tau_s = SC(0.1);
+	p.gain_tau_s = SC(0.3);
 	p.hold_s = SC(2.0);
 	p.confirm = 3;
 	return p;
@@ -28,6 +29,7 @@ void rotor_fail_init(struct rotor_fail *s, const struct rotor_fail_params *p)
 		s->p.confirm = 1;
 	s->rf_speed = sc_sqrt(s->p.ratio_fail);
 	s->rf_speed_exc = sc_sqrt(s->p.ratio_fail_excited);
+	s->n_lp = -1;
 	for (int j = 0; j < NR; j++)
 		s->m.scale[j] = SC(1.0);
 }
@@ -154,16 +156,18 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 	}
 	/* the coefficients, again only when the period or the model's lag changes; no time: the
 	 * lag and the envelope hold */
-	scalar_t al = SC_ZERO, env_al = SC_ZERO;
+	scalar_t al = SC_ZERO, env_al = SC_ZERO, gain_al = SC_ZERO;
 	if (in->dt_s > SC_ZERO) {
 		if (in->dt_s != s->c_dt || s->m.tau_lag_s != s->c_tau) {
 			s->c_dt = in->dt_s;
 			s->c_tau = s->m.tau_lag_s;
 			s->lag_al = lag_coef(s->c_dt, s->c_tau);
 			s->env_al = lag_coef(s->c_dt, s->p.env_tau_s);
+			s->gain_al = lag_coef(s->c_dt, s->p.gain_tau_s);
 		}
 		al = s->lag_al;
 		env_al = s->env_al;
+		gain_al = s->gain_al;
 	}
 	if (!s->primed) {
 		memcpy(s->lag, in->thr, sizeof s->lag);
@@ -178,27 +182,37 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 				      : meas    ? ROTOR_FAIL_SRC_SPEED
 						: ROTOR_FAIL_SRC_NONE);
 	struct model_frame f;
-	model_step(s, in->thr, meas, by_thrust, s->env_src != src, al, env_al, &f);
+	const bool env_new = s->env_src != src;
+	model_step(s, in->thr, meas, by_thrust, env_new, al, env_al, &f);
 	s->env_src = src;
+	/* the sums' low-pass, started anew with a new source or another set of rotors */
+	if (env_new || f.n_in != s->n_lp) {
+		s->m_lp = f.m_sum;
+		s->e_lp = f.e_sum;
+		s->n_lp = (int8_t)f.n_in;
+	} else {
+		s->m_lp = sc_add(s->m_lp, sc_mul(gain_al, sc_sub(f.m_sum, s->m_lp)));
+		s->e_lp = sc_add(s->e_lp, sc_mul(gain_al, sc_sub(f.e_sum, s->e_lp)));
+	}
 	const scalar_t n_sc = sc_from_int(f.n_in);
 	if (!meas || !in->judge || in->gap || f.n_in < MIN_JUDGED || f.g_sum < sc_mul(s->p.g_min, n_sc) ||
-	    !(f.m_sum > SC_ZERO)) {
+	    !(s->m_lp > SC_ZERO) || !(s->e_lp > SC_ZERO)) {
 		clear_streaks(s);
 		return out;
 	}
 
 	/* the rotors judged (envelope at least share_min of the mean: env_j n >= share_min E) and
-	 * failing among them: m_j E < lim env_j M */
+	 * failing among them: m_j E < lim env_j M, M and E low-passed */
 	const scalar_t lim = by_thrust ? (in->excited ? s->p.ratio_fail_excited : s->p.ratio_fail)
 				       : (in->excited ? s->rf_speed_exc : s->rf_speed);
-	const scalar_t floor_n = sc_mul(s->p.share_min, f.e_sum), lim_m = sc_mul(lim, f.m_sum);
+	const scalar_t floor_n = sc_mul(s->p.share_min, f.e_sum), lim_m = sc_mul(lim, s->m_lp);
 	uint8_t failing = 0;
 	int n = 0;
 	for (int j = 0; j < NR; j++) {
 		if (!(f.e[j] > SC_ZERO) || sc_mul(s->env[j], n_sc) < floor_n)
 			continue;
 		n++;
-		if (sc_mul(meas[j], f.e_sum) < sc_mul(lim_m, s->env[j]))
+		if (sc_mul(meas[j], s->e_lp) < sc_mul(lim_m, s->env[j]))
 			failing |= (uint8_t)(1u << j);
 	}
 	if (n < MIN_JUDGED || !failing) {

@@ -9,7 +9,9 @@
  * The common gain (k_f, or the speed at full throttle) is never needed: it is the ratio
  * M / E of the sums of measured and modelled outputs over the rotors in service (their
  * total follows the collective however an excitation or a correction moves them apart),
- * so a k_f drift or a wrong VEH_KF move every rotor alike.
+ * both low-passed alike (gain_tau_s), so that a motor slower or later than the model does
+ * not swing it when many rotors move at once; a k_f drift or a wrong VEH_KF move every rotor
+ * alike.
  * The decision compares the measured output with a lower envelope of the modelled output:
  * it follows the model's output at once where that falls (taken the lower of the output
  * through the lag and of the command itself, so a motor faster than the model is covered)
@@ -17,9 +19,10 @@
  * delay are the nominal ones; a working rotor slower or later than the model still gives at
  * least the envelope, a failed one far less. Rotor j is failing in a frame when
  *   m_j E < ratio_fail env_j M        (thrust; the speed: sqrt(ratio_fail), thrust ~ speed^2)
+ * (M and E low-passed)
  * and has failed after `confirm` such frames in a row; its effectiveness is then scale_j
- * times the mean over those frames of q_j = (m_j / e_j) / (M' / E'), M' and E' the sums
- * without the rotors failing (squared for the speed; 0 below ratio_zero: the rotor is left
+ * times the mean over those frames of q_j = (m_j / e_j) / (M' / E'), M' and E' the frame's
+ * sums without the rotors failing (squared for the speed; 0 below ratio_zero: the rotor is left
  * out of the allocation). A frame where no rotor is failing takes products and comparisons
  * only; the divisions are the failing frames' and the coefficients', which are computed again
  * only when the frame period or the model's lag changes.
@@ -61,6 +64,7 @@ struct rotor_fail_params {
 	scalar_t share_min;          /* judged only while its modelled output is this share of the mean (0.3) */
 	scalar_t g_min;              /* ... and the mean g(T) is at least this (0.02) */
 	scalar_t env_tau_s;          /* the envelope's rise: beyond the lag and delay of any motor met (0.1 s) */
+	scalar_t gain_tau_s;         /* the low-pass of the sums the common gain is taken from (0.3 s) */
 	scalar_t hold_s;             /* hold before landing (2 s) */
 	uint8_t confirm;             /* frames in a row (3) */
 };
@@ -102,9 +106,11 @@ struct rotor_fail {
 	bool primed;       /* the lag filter holds a value */
 	bool holding;      /* a detection's hold is running */
 	scalar_t hold_left_s;
-	scalar_t c_dt, c_tau;            /* what the coefficients were computed for */
-	scalar_t lag_al, env_al;         /* the lag's and the envelope's coefficients */
-	scalar_t rf_speed, rf_speed_exc; /* sqrt(ratio_fail), sqrt(ratio_fail_excited) */
+	scalar_t c_dt, c_tau;             /* what the coefficients were computed for */
+	scalar_t lag_al, env_al, gain_al; /* the lag's, the envelope's and the sums' coefficients */
+	scalar_t m_lp, e_lp;              /* the low-passed sums of measured and modelled outputs */
+	int8_t n_lp;                      /* the rotors they sum (-1: none yet) */
+	scalar_t rf_speed, rf_speed_exc;  /* sqrt(ratio_fail), sqrt(ratio_fail_excited) */
 };
 
 struct rotor_fail_params rotor_fail_params_default(void);
