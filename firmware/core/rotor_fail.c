@@ -27,6 +27,10 @@ void rotor_fail_init(struct rotor_fail *s, const struct rotor_fail_params *p)
 	s->p = *p;
 	if (s->p.confirm < 1)
 		s->p.confirm = 1;
+	if (!(s->p.share_min > SC_ZERO)) /* a rotor judged has a positive output */
+		s->p.share_min = SC(0.01);
+	if (!(s->p.g_min > SC_ZERO))
+		s->p.g_min = SC(0.001);
 	s->rf_speed = sc_sqrt(s->p.ratio_fail);
 	s->rf_speed_exc = sc_sqrt(s->p.ratio_fail_excited);
 	s->n_lp = -1;
@@ -70,19 +74,25 @@ struct model_frame {
 /* One frame of the lag filter and, with measurements (meas), of the model: each rotor's
  * output through the lag (e) and its lower envelope, which takes the lower of e and the
  * unlagged command's output (g rises with the command: what a motor faster than the model
- * gives too) at once when lower and approaches it at env_al when higher. g(T) = T (c1 + c T). */
+ * gives too) at once when lower and approaches it at env_al when higher, so that
+ * env <= e. g(T) = T (c1 + c T). A rotor out of service has e = env = 0. */
 static void model_step(struct rotor_fail *s, const scalar_t *thr, const scalar_t *meas, bool by_thrust, bool env_new,
 		       scalar_t al, scalar_t env_al, struct model_frame *f)
 {
 	const scalar_t c = s->m.curve, c1 = sc_sub(SC(1.0), c);
-	f->g_sum = f->e_sum = f->m_sum = SC_ZERO;
-	f->n_in = 0;
+	const unsigned svc = meas ? (uint8_t)~s->failed : 0u; /* bit j: rotor j modelled */
+	scalar_t g_sum = SC_ZERO, e_sum = SC_ZERO, m_sum = SC_ZERO;
+	int n_in = 0;
+	if (env_new) /* above any output: the first one taken */
+		for (int j = 0; j < NR; j++)
+			s->env[j] = SC_MAX;
 	for (int j = 0; j < NR; j++) {
 		const scalar_t t = thr[j], u = sc_add(s->lag[j], sc_mul(al, sc_sub(t, s->lag[j])));
 		s->lag[j] = u;
-		f->e[j] = SC_ZERO;
-		if (!meas || (s->failed & (1u << j)))
+		if (!((svc >> j) & 1u)) {
+			f->e[j] = s->env[j] = SC_ZERO;
 			continue;
+		}
 		const scalar_t g = sc_mul(u, sc_add(c1, sc_mul(c, u)));
 		const scalar_t gl = t < u ? sc_mul(t, sc_add(c1, sc_mul(c, t))) : g;
 		scalar_t e, x;
@@ -94,13 +104,17 @@ static void model_step(struct rotor_fail *s, const scalar_t *thr, const scalar_t
 			x = gl < g ? sc_sqrt(gl) : e;
 		}
 		const scalar_t v = s->env[j];
-		s->env[j] = env_new || x < v ? x : sc_add(v, sc_mul(env_al, sc_sub(x, v)));
+		s->env[j] = x < v ? x : sc_add(v, sc_mul(env_al, sc_sub(x, v)));
 		f->e[j] = e;
-		f->g_sum = sc_add(f->g_sum, g);
-		f->e_sum = sc_add(f->e_sum, e);
-		f->m_sum = sc_add(f->m_sum, meas[j]);
-		f->n_in++;
+		g_sum = sc_add(g_sum, g);
+		e_sum = sc_add(e_sum, e);
+		m_sum = sc_add(m_sum, meas[j]);
+		n_in++;
 	}
+	f->g_sum = g_sum;
+	f->e_sum = e_sum;
+	f->m_sum = m_sum;
+	f->n_in = n_in;
 }
 
 /* The failing rotors' streaks (the others' end): q_j = (m_j E') / (e_j M'), the sums without
@@ -209,7 +223,7 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 	uint8_t failing = 0;
 	int n = 0;
 	for (int j = 0; j < NR; j++) {
-		if (!(f.e[j] > SC_ZERO) || sc_mul(s->env[j], n_sc) < floor_n)
+		if (sc_mul(s->env[j], n_sc) < floor_n) /* judged: env > 0, so e >= env > 0 */
 			continue;
 		n++;
 		if (sc_mul(meas[j], s->e_lp) < sc_mul(lim_m, s->env[j]))

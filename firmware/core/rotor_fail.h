@@ -61,8 +61,8 @@ struct rotor_fail_params {
 	scalar_t ratio_fail;         /* q_j below this is failing (0.6) */
 	scalar_t ratio_fail_excited; /* ... while the rotors swing through a model not yet identified (0.3) */
 	scalar_t ratio_zero;         /* a detected effectiveness below this is 0 (0.1) */
-	scalar_t share_min;          /* judged only while its modelled output is this share of the mean (0.3) */
-	scalar_t g_min;              /* ... and the mean g(T) is at least this (0.02) */
+	scalar_t share_min;          /* judged only while its envelope is this share of the mean output (0.3; > 0) */
+	scalar_t g_min;              /* ... and the mean g(T) is at least this (0.02; > 0) */
 	scalar_t env_tau_s;          /* the envelope's rise: beyond the lag and delay of any motor met (0.1 s) */
 	scalar_t gain_tau_s;         /* the low-pass of the sums the common gain is taken from (0.3 s) */
 	scalar_t hold_s;             /* hold before landing (2 s) */
