@@ -45,17 +45,23 @@ void rotor_guard_step(struct app *a, float dt)
 	const scalar_t *thrust_n = thrust ? f->rotor_thrust_n : NULL, *speed_rps = speed ? f->rotor_speed_rps : NULL;
 	scalar_t dt_s = dt;
 #endif
-	/* judged in hover, the experiments and the landing; not in the take-off, whose spool-up and
-	 * climb swing the rotors most while the lag and delay are still the nominal ones, nor while
-	 * the attitude loop oscillates (the oscillation guard's verdict, over seconds: the rotors
-	 * swing at full range through a motor model still nominal) */
-	const bool judge = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT || a->mode == APP_LAND) &&
-			   !env_osc_oscillating(&a->env_osc);
-	/* app_thr_sc: the throttles of the last step, what the plant answers with now */
-	/* an experiment's excitation swings the rotors through a model that may be another
-	 * vehicle's (a stale parameter file): only a deeper drop is a failure there */
-	struct rotor_fail_input in = {
-		app_thr_sc(a), thrust_n, speed_rps, dt_s, judge && a->actuating, a->mode == APP_EXPERIMENT};
+	/* judged in hover, the experiments, the landing, and the take-off once off the ground
+	 * (above the height where its set points turn from level: the spool-up and ground
+	 * contact are below it) */
+	const bool airborne =
+		a->mode == APP_HOLD || a->mode == APP_EXPERIMENT || a->mode == APP_LAND ||
+		(a->mode == APP_TAKEOFF && !guid_level_only(&a->guid, GUID_TAKEOFF, sc_from_float(a->fr.pos_i_m[2])));
+	/* frames missing before this one: the step covers more than one frame period */
+	const bool gap = a->dt_frame > 0.0f && dt > 1.5f * a->dt_frame;
+	/* Only a deeper drop is a failure while the rotors swing through a model that may be
+	 * off: an experiment's excitation (the model may be another vehicle's, from a stale
+	 * parameter file), or rates over the oscillation guard's limit (an oscillating attitude
+	 * loop swings the rotors at full range through a motor model still nominal; IMU
+	 * outliers raise the rates too, so this is not a reason to stop judging).
+	 * app_thr_sc: the throttles of the last step, what the plant answers with now. */
+	const bool swinging = a->mode == APP_EXPERIMENT || env_osc_oscillating(&a->env_osc);
+	struct rotor_fail_input in = {app_thr_sc(a), thrust_n, speed_rps, dt_s, airborne && a->actuating,
+				      gap,           swinging};
 	struct rotor_fail_output o = rotor_fail_step(&a->rf, &in);
 
 	if (o.rotor >= 0) {
@@ -71,6 +77,17 @@ void rotor_guard_step(struct app *a, float dt)
 			   "Rotor %d failed (effectiveness %.2f, from its %s): holding on %s, then landing", j + 1,
 			   (double)s, o.source == ROTOR_FAIL_SRC_THRUST ? "thrust" : "speed",
 			   s > 0.0f ? "all rotors" : "the others");
+		if (a->mode == APP_TAKEOFF && a->env_limits.cmd == APP_CMD_TAKEOFF &&
+		    a->env_limits.origin != APP_ORIGIN_NONE) {
+			/* the take-off will not be completed: its command's final answer, once
+			 * (the landing follows the hold) */
+			struct app_event e = {.kind = APP_EV_CMD_DONE,
+					      .cmd = APP_CMD_TAKEOFF,
+					      .result = APP_FAILED,
+					      .origin = a->env_limits.origin};
+			outbox_post(&a->outbox, &e);
+			a->env_limits.origin = APP_ORIGIN_NONE;
+		}
 		if (a->mode == APP_EXPERIMENT) {
 			char why[24];
 			snprintf(why, sizeof why, "rotor %d failed", j + 1);

@@ -14,6 +14,8 @@ struct rotor_fail_params rotor_fail_params_default(void)
 	p.ratio_zero = SC(0.1);
 	p.share_min = SC(0.3);
 	p.g_min = SC(0.02);
+	p.env_tau_s = SC(0.1);
+	p.gain_tau_s = SC(0.3);
 	p.hold_s = SC(2.0);
 	p.confirm = 3;
 	return p;
@@ -25,6 +27,13 @@ void rotor_fail_init(struct rotor_fail *s, const struct rotor_fail_params *p)
 	s->p = *p;
 	if (s->p.confirm < 1)
 		s->p.confirm = 1;
+	if (!(s->p.share_min > SC_ZERO)) /* a rotor judged has a positive output */
+		s->p.share_min = SC(0.01);
+	if (!(s->p.g_min > SC_ZERO))
+		s->p.g_min = SC(0.001);
+	s->rf_speed = sc_sqrt(s->p.ratio_fail);
+	s->rf_speed_exc = sc_sqrt(s->p.ratio_fail_excited);
+	s->n_lp = -1;
 	for (int j = 0; j < NR; j++)
 		s->m.scale[j] = SC(1.0);
 }
@@ -41,101 +50,117 @@ void rotor_fail_set_model(struct rotor_fail *s, const struct rotor_fail_model *m
 	s->m = *m;
 }
 
-/* the median of n values (n <= NR), by insertion sort of a copy */
-static scalar_t median(const scalar_t *v, int n)
-{
-	scalar_t a[NR];
-	for (int i = 0; i < n; i++) {
-		scalar_t x = v[i];
-		int k = i;
-		while (k > 0 && a[k - 1] > x) {
-			a[k] = a[k - 1];
-			k--;
-		}
-		a[k] = x;
-	}
-	if (n & 1)
-		return a[n / 2];
-	return sc_mul(SC(0.5), sc_add(a[n / 2 - 1], a[n / 2]));
-}
-
 static void clear_streaks(struct rotor_fail *s)
 {
-	s->hist_n = 0;
-	for (int j = 0; j < NR; j++) {
-		s->streak[j] = 0;
-		s->q_sum[j] = SC_ZERO;
-	}
+	if (s->streaking)
+		memset(s->streak, 0, sizeof s->streak);
+	s->streaking = 0;
 }
 
-static void lag_step(struct rotor_fail *s, const scalar_t *thr, scalar_t dt)
+/* 1 - e^(-dt/tau): the step of a first-order lag (1 without one) */
+static scalar_t lag_coef(scalar_t dt, scalar_t tau)
 {
-	if (dt != s->c_dt || s->m.tau_lag_s != s->c_tau) {
-		s->c_dt = dt;
-		s->c_tau = s->m.tau_lag_s;
-		s->lag_al = s->c_tau > SC_ZERO ? sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt, s->c_tau)))) : SC(1.0);
-	}
-	for (int j = 0; j < NR; j++) {
-		scalar_t t = sc_clamp(thr[j], SC_ZERO, SC(1.0));
-		s->lag[j] = s->primed ? sc_add(s->lag[j], sc_mul(s->lag_al, sc_sub(t, s->lag[j]))) : t;
-	}
-	s->primed = true;
+	return tau > SC_ZERO ? sc_sub(SC(1.0), sc_exp(sc_neg(sc_div(dt, tau)))) : SC(1.0);
 }
 
-/* The frame's lowest modelled outputs into the window; emin gets each rotor's smallest over it. */
-static void window_step(struct rotor_fail *s, const scalar_t *e, scalar_t *emin)
-{
-	for (int j = 0; j < NR; j++)
-		s->hist[s->hist_at][j] = e[j];
-	s->hist_at = (uint8_t)((s->hist_at + 1u) % ROTOR_FAIL_WINDOW);
-	if (s->hist_n < ROTOR_FAIL_WINDOW)
-		s->hist_n++;
-	for (int j = 0; j < NR; j++) {
-		scalar_t m = e[j];
-		for (int k = 0; k < s->hist_n; k++)
-			if (s->hist[k][j] < m)
-				m = s->hist[k][j];
-		emin[j] = m;
-	}
-}
+/* The frame's modelled outputs: what the model gives (e) and the sums over the rotors in
+ * service, counted. */
+struct model_frame {
+	scalar_t e[NR];
+	scalar_t g_sum, e_sum, m_sum;
+	int n_in;
+};
 
-/* Each rotor's modelled output through the lag (e) and the lower of it and the unlagged
- * command's (e_low: g rises with the command, so this is what a motor faster than the model
- * gives as well as a slower one); the sums of g and e over the rotors in service, counted. */
-static int model_outputs(const struct rotor_fail *s, const scalar_t *thr, bool by_thrust, scalar_t *e, scalar_t *e_low,
-			 scalar_t *g_sum, scalar_t *e_sum)
+/* One frame of the lag filter and, with measurements (meas), of the model: each rotor's
+ * output through the lag (e) and its lower envelope, which takes the lower of e and the
+ * unlagged command's output (g rises with the command: what a motor faster than the model
+ * gives too) at once when lower and approaches it at env_al when higher, so that
+ * env <= e. g(T) = T (c1 + c T). A rotor out of service has e = env = 0. */
+static void model_step(struct rotor_fail *s, const scalar_t *thr, const scalar_t *meas, bool by_thrust, bool env_new,
+		       scalar_t al, scalar_t env_al, struct model_frame *f)
 {
 	const scalar_t c = s->m.curve, c1 = sc_sub(SC(1.0), c);
+	const unsigned svc = meas ? (uint8_t)~s->failed : 0u; /* bit j: rotor j modelled */
+	scalar_t g_sum = SC_ZERO, e_sum = SC_ZERO, m_sum = SC_ZERO;
 	int n_in = 0;
+	if (env_new) /* above any output: the first one taken */
+		for (int j = 0; j < NR; j++)
+			s->env[j] = SC_MAX;
 	for (int j = 0; j < NR; j++) {
-		e[j] = e_low[j] = SC_ZERO;
-		if ((s->failed & (1u << j)) || !(s->m.scale[j] > SC_ZERO))
+		const scalar_t t = thr[j], u = sc_add(s->lag[j], sc_mul(al, sc_sub(t, s->lag[j])));
+		s->lag[j] = u;
+		if (!((svc >> j) & 1u)) {
+			f->e[j] = s->env[j] = SC_ZERO;
 			continue;
-		scalar_t u = s->lag[j];
-		scalar_t g = sc_add(sc_mul(c1, u), sc_mul(c, sc_mul(u, u)));
-		if (!(g > SC_ZERO))
-			g = SC_ZERO;
-		e[j] = by_thrust ? sc_mul(s->m.scale[j], g) : sc_sqrt(g);
-		scalar_t ui = sc_clamp(thr[j], SC_ZERO, SC(1.0));
-		if (ui < u) {
-			scalar_t gi = sc_add(sc_mul(c1, ui), sc_mul(c, sc_mul(ui, ui)));
-			gi = gi > SC_ZERO ? gi : SC_ZERO;
-			e_low[j] = by_thrust ? sc_mul(s->m.scale[j], gi) : sc_sqrt(gi);
-		} else {
-			e_low[j] = e[j];
 		}
-		*g_sum = sc_add(*g_sum, g);
-		*e_sum = sc_add(*e_sum, e[j]);
+		const scalar_t g = sc_mul(u, sc_add(c1, sc_mul(c, u)));
+		const scalar_t gl = t < u ? sc_mul(t, sc_add(c1, sc_mul(c, t))) : g;
+		scalar_t e, x;
+		if (by_thrust) {
+			e = sc_mul(s->m.scale[j], g);
+			x = sc_mul(s->m.scale[j], gl);
+		} else {
+			e = sc_sqrt(g);
+			x = gl < g ? sc_sqrt(gl) : e;
+		}
+		const scalar_t v = s->env[j];
+		s->env[j] = x < v ? x : sc_add(v, sc_mul(env_al, sc_sub(x, v)));
+		f->e[j] = e;
+		g_sum = sc_add(g_sum, g);
+		e_sum = sc_add(e_sum, e);
+		m_sum = sc_add(m_sum, meas[j]);
 		n_in++;
 	}
-	return n_in;
+	f->g_sum = g_sum;
+	f->e_sum = e_sum;
+	f->m_sum = m_sum;
+	f->n_in = n_in;
+}
+
+/* The failing rotors' streaks (the others' end): q_j = (m_j E') / (e_j M'), the sums without
+ * the failing rotors; the rotor whose streak reached `confirm` with the lowest mean q, or -1. */
+static int streaks_step(struct rotor_fail *s, const scalar_t *meas, bool by_thrust, const struct model_frame *f,
+			uint8_t failing, scalar_t *q_mean)
+{
+	scalar_t m_o = f->m_sum, e_o = f->e_sum;
+	for (int j = 0; j < NR; j++)
+		if (failing & (1u << j)) {
+			m_o = sc_sub(m_o, meas[j]);
+			e_o = sc_sub(e_o, f->e[j]);
+		}
+	if (!(m_o > SC_ZERO) || !(e_o > SC_ZERO)) {
+		clear_streaks(s);
+		return -1;
+	}
+	int worst = -1;
+	for (int j = 0; j < NR; j++) {
+		const uint8_t bit = (uint8_t)(1u << j);
+		if (!(failing & bit)) {
+			s->streak[j] = 0;
+			continue;
+		}
+		const scalar_t mj = meas[j] > SC_ZERO ? meas[j] : SC_ZERO;
+		scalar_t q = sc_div(sc_mul(mj, e_o), sc_mul(f->e[j], m_o));
+		if (!by_thrust) /* thrust goes with speed^2 */
+			q = sc_mul(q, q);
+		s->q_sum[j] = s->streak[j] > 0 ? sc_add(s->q_sum[j], q) : q;
+		if (s->streak[j] < UINT8_MAX)
+			s->streak[j]++;
+		if (s->streak[j] >= s->p.confirm) {
+			scalar_t qm = sc_div(s->q_sum[j], sc_from_int(s->streak[j]));
+			if (worst < 0 || qm < *q_mean) {
+				worst = j;
+				*q_mean = qm;
+			}
+		}
+	}
+	s->streaking = failing;
+	return worst;
 }
 
 struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct rotor_fail_input *in)
 {
 	struct rotor_fail_output out = {-1, SC_ZERO, ROTOR_FAIL_SRC_NONE, false};
-	if (in->dt_s > SC_ZERO)
-		lag_step(s, in->thr, in->dt_s);
 	if (s->holding) {
 		s->hold_left_s = sc_sub(s->hold_left_s, in->dt_s);
 		if (!(s->hold_left_s > SC_ZERO)) {
@@ -143,77 +168,73 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 			out.land = true;
 		}
 	}
+	/* the coefficients, again only when the period or the model's lag changes; no time: the
+	 * lag and the envelope hold */
+	scalar_t al = SC_ZERO, env_al = SC_ZERO, gain_al = SC_ZERO;
+	if (in->dt_s > SC_ZERO) {
+		if (in->dt_s != s->c_dt || s->m.tau_lag_s != s->c_tau) {
+			s->c_dt = in->dt_s;
+			s->c_tau = s->m.tau_lag_s;
+			s->lag_al = lag_coef(s->c_dt, s->c_tau);
+			s->env_al = lag_coef(s->c_dt, s->p.env_tau_s);
+			s->gain_al = lag_coef(s->c_dt, s->p.gain_tau_s);
+		}
+		al = s->lag_al;
+		env_al = s->env_al;
+		gain_al = s->gain_al;
+	}
+	if (!s->primed) {
+		memcpy(s->lag, in->thr, sizeof s->lag);
+		s->primed = true;
+	}
+
+	/* the lag, the modelled outputs and their envelope, kept whether judged or not (a new
+	 * envelope when the source changes: thrusts and speeds are not compared) */
 	const bool by_thrust = in->thrust_n != NULL;
 	const scalar_t *meas = by_thrust ? in->thrust_n : in->speed_rps;
-	if (!in->judge || !meas || !s->primed) {
+	const uint8_t src = (uint8_t)(by_thrust ? ROTOR_FAIL_SRC_THRUST
+				      : meas    ? ROTOR_FAIL_SRC_SPEED
+						: ROTOR_FAIL_SRC_NONE);
+	struct model_frame f;
+	const bool env_new = s->env_src != src;
+	model_step(s, in->thr, meas, by_thrust, env_new, al, env_al, &f);
+	s->env_src = src;
+	/* the sums' low-pass, started anew with a new source or another set of rotors */
+	if (env_new || f.n_in != s->n_lp) {
+		s->m_lp = f.m_sum;
+		s->e_lp = f.e_sum;
+		s->n_lp = (int8_t)f.n_in;
+	} else {
+		s->m_lp = sc_add(s->m_lp, sc_mul(gain_al, sc_sub(f.m_sum, s->m_lp)));
+		s->e_lp = sc_add(s->e_lp, sc_mul(gain_al, sc_sub(f.e_sum, s->e_lp)));
+	}
+	const scalar_t n_sc = sc_from_int(f.n_in);
+	if (!meas || !in->judge || in->gap || f.n_in < MIN_JUDGED || f.g_sum < sc_mul(s->p.g_min, n_sc) ||
+	    !(s->m_lp > SC_ZERO) || !(s->e_lp > SC_ZERO)) {
 		clear_streaks(s);
 		return out;
 	}
 
-	/* the modelled output of each rotor still in service */
-	scalar_t e[NR], e_low[NR], g_sum = SC_ZERO, e_sum = SC_ZERO;
-	const int n_in = model_outputs(s, in->thr, by_thrust, e, e_low, &g_sum, &e_sum);
-	if (n_in < MIN_JUDGED) {
-		clear_streaks(s);
-		return out;
-	}
-	const scalar_t n_sc = sc_from_int(n_in);
-	const scalar_t e_floor = sc_div(sc_mul(s->p.share_min, e_sum), n_sc);
-	if (g_sum < sc_mul(s->p.g_min, n_sc)) {
-		clear_streaks(s);
-		return out;
-	}
-
-	scalar_t emin[NR];
-	window_step(s, e_low, emin);
-
-	/* the plain ratios and their median (k_f, or the speed at full throttle: the same for every
-	 * rotor, and the centre of the ratios however the excitation moves them) */
-	scalar_t r[NR], rj[NR];
-	bool judged[NR];
+	/* the rotors judged (envelope at least share_min of the mean: env_j n >= share_min E) and
+	 * failing among them: m_j E < lim env_j M, M and E low-passed */
+	const scalar_t lim = by_thrust ? (in->excited ? s->p.ratio_fail_excited : s->p.ratio_fail)
+				       : (in->excited ? s->rf_speed_exc : s->rf_speed);
+	const scalar_t floor_n = sc_mul(s->p.share_min, f.e_sum), lim_m = sc_mul(lim, s->m_lp);
+	uint8_t failing = 0;
 	int n = 0;
 	for (int j = 0; j < NR; j++) {
-		judged[j] = e[j] > SC_ZERO && !(emin[j] < e_floor);
-		r[j] = judged[j] ? sc_div(meas[j] > SC_ZERO ? meas[j] : SC_ZERO, e[j]) : SC_ZERO;
-		if (judged[j])
-			rj[n++] = r[j];
+		if (sc_mul(s->env[j], n_sc) < floor_n) /* judged: env > 0, so e >= env > 0 */
+			continue;
+		n++;
+		if (sc_mul(meas[j], s->e_lp) < sc_mul(lim_m, s->env[j]))
+			failing |= (uint8_t)(1u << j);
 	}
-	const scalar_t med = n >= MIN_JUDGED ? median(rj, n) : SC_ZERO;
-	if (!(med > SC_ZERO)) {
+	if (n < MIN_JUDGED || !failing) {
 		clear_streaks(s);
 		return out;
 	}
-	/* the decision: measured against the window's smallest modelled output, scaled by the
-	 * median (with the speeds, q_j is the ratio squared: below ratio_fail when the ratio is
-	 * below its root) */
-	const scalar_t fail = in->excited ? s->p.ratio_fail_excited : s->p.ratio_fail;
-	const scalar_t lim = sc_mul(by_thrust ? fail : sc_sqrt(fail), med);
-	bool failing[NR];
-	for (int j = 0; j < NR; j++)
-		failing[j] = judged[j] && meas[j] < sc_mul(lim, emin[j]);
-
-	int worst = -1;
 	scalar_t worst_q = SC_ZERO;
-	for (int j = 0; j < NR; j++) {
-		if (!failing[j]) {
-			s->streak[j] = 0;
-			s->q_sum[j] = SC_ZERO;
-			continue;
-		}
-		scalar_t q = sc_div(r[j], med);
-		if (!by_thrust) /* thrust goes with speed^2 */
-			q = sc_mul(q, q);
-		if (s->streak[j] < UINT8_MAX)
-			s->streak[j]++;
-		s->q_sum[j] = sc_add(s->q_sum[j], q);
-		if (s->streak[j] >= s->p.confirm) {
-			scalar_t qm = sc_div(s->q_sum[j], sc_from_int(s->streak[j]));
-			if (worst < 0 || qm < worst_q) {
-				worst = j;
-				worst_q = qm;
-			}
-		}
-	}
+	const int worst = streaks_step(s, meas, by_thrust, &f, failing, &worst_q);
 	if (worst < 0)
 		return out;
 

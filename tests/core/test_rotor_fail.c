@@ -92,7 +92,8 @@ UNIT_TEST(rotor_fail_found_fast_and_right)
 				sent[j] = thr[j];
 			plant_step(&p, &r, k, thr, thrust, speed);
 			struct rotor_fail_input in = {
-				sent, by_speed ? NULL : thrust, by_speed ? speed : NULL, s(1.0 / FS), true, false};
+				sent, by_speed ? NULL : thrust, by_speed ? speed : NULL, s(1.0 / FS), true, false,
+				false};
 			struct rotor_fail_output o = rotor_fail_step(&d, &in);
 			if (o.rotor >= 0) {
 				CHECK(found_k < 0); /* once */
@@ -133,7 +134,8 @@ UNIT_TEST(rotor_fail_no_false_alarm)
 				sent[j] = thr[j];
 			plant_step(&p, &r, k, thr, thrust, speed);
 			struct rotor_fail_input in = {
-				sent, trial & 2 ? NULL : thrust, trial & 2 ? speed : NULL, s(1.0 / FS), true, false};
+				sent, trial & 2 ? NULL : thrust, trial & 2 ? speed : NULL, s(1.0 / FS), true, false,
+				false};
 			struct rotor_fail_output o = rotor_fail_step(&d, &in);
 			found += o.rotor >= 0;
 		}
@@ -162,15 +164,15 @@ UNIT_TEST(rotor_fail_model_and_gates)
 		thrust[j] = j == 2 ? SC(0.0) : SC(5.0);
 	}
 	for (int k = 0; k < 20; k++) {
-		struct rotor_fail_input off = {thr, thrust, NULL, s(1.0 / FS), false, false};
+		struct rotor_fail_input off = {thr, thrust, NULL, s(1.0 / FS), false, false, false};
 		CHECK(rotor_fail_step(&d, &off).rotor < 0);
-		struct rotor_fail_input none = {thr, NULL, NULL, s(1.0 / FS), true, false};
+		struct rotor_fail_input none = {thr, NULL, NULL, s(1.0 / FS), true, false, false};
 		CHECK(rotor_fail_step(&d, &none).rotor < 0);
 	}
 	/* rotor 3 gives nothing from the first frame judged: found on the confirm-th */
 	int k_found = -1;
 	for (int k = 0; k < 40 && k_found < 0; k++) {
-		struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, false};
+		struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, false, false};
 		struct rotor_fail_output o = rotor_fail_step(&d, &in);
 		if (o.rotor >= 0) {
 			CHECK(o.rotor == 2 && o.scale == SC_ZERO);
@@ -184,7 +186,7 @@ UNIT_TEST(rotor_fail_model_and_gates)
 	rotor_fail_set_model(&d, &m);
 	CHECK(d.failed == 0x04);
 	for (int k = 0; k < 20; k++) {
-		struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, false};
+		struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, false, false};
 		CHECK(rotor_fail_step(&d, &in).rotor < 0);
 	}
 }
@@ -203,11 +205,98 @@ UNIT_TEST(rotor_fail_excited_takes_a_deeper_drop)
 		}
 		int found = -1;
 		for (int k = 0; k < 40; k++) {
-			struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, excited != 0};
+			struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, false, excited != 0};
 			struct rotor_fail_output o = rotor_fail_step(&d, &in);
 			if (o.rotor >= 0 && found < 0)
 				found = o.rotor;
 		}
 		CHECK(found == (excited ? -1 : 5));
+	}
+}
+
+/* Frames after missing ones are not judged and restart the streaks: a rotor giving nothing is
+ * not concluded from failing frames that are never `confirm` in a row without a gap between;
+ * once they are, it is found on the confirm-th. */
+UNIT_TEST(rotor_fail_gap_restarts_streaks)
+{
+	struct rotor_fail d;
+	init_det(&d, 0.03);
+	scalar_t thr[NR], thrust[NR];
+	for (int j = 0; j < NR; j++) {
+		thr[j] = SC(0.2);
+		thrust[j] = j == 6 ? SC(0.0) : SC(5.0);
+	}
+	const int every = d.p.confirm;          /* a gap every confirm-th frame: at most confirm - 1 in a row */
+	for (int k = 0; k <= 66 * every; k++) { /* ends with a gap */
+		bool gap = k % every == 0;
+		struct rotor_fail_input in = {thr, thrust, NULL, gap ? s(2.0 / FS) : s(1.0 / FS), true, gap, false};
+		CHECK(rotor_fail_step(&d, &in).rotor < 0);
+	}
+	int k_found = -1;
+	for (int k = 0; k < 20 && k_found < 0; k++) {
+		struct rotor_fail_input in = {thr, thrust, NULL, s(1.0 / FS), true, false, false};
+		if (rotor_fail_step(&d, &in).rotor == 6)
+			k_found = k;
+	}
+	CHECK(k_found == d.p.confirm - 1);
+}
+
+/* A motor slower (80 ms) and later (4 frames: transport and link delay) than the model (30 ms,
+ * none), each throttle stepping between 50 % and 150 % of hover every 0.2 s or so: no failure
+ * read in 60 s (the output follows a step up about 0.1 s after the model); and a rotor cut to
+ * 0 there is found within 0.5 s, the right one. */
+UNIT_TEST(rotor_fail_slow_late_motor)
+{
+	struct unit_rng r = {0x736c6f77ULL};
+	enum { DELAY = 4 };
+	for (int trial = 0; trial < TRIALS(16); trial++) {
+		struct plant p;
+		plant_draw(&p, &r, 0.9);
+		p.tau = 0.08;
+		const int jf = trial % NR, k_fail = trial & 1 ? (int)(40 * FS) : -1;
+		struct rotor_fail d;
+		init_det(&d, 0.03);
+		double line[DELAY + 1][NR];
+		for (int i = 0; i <= DELAY; i++)
+			for (int j = 0; j < NR; j++)
+				line[i][j] = p.u_h;
+		const double al = 1.0 - exp(-1.0 / FS / p.tau);
+		int found = -1, found_k = -1;
+		scalar_t sent[NR], thrust[NR];
+		double lvl[NR];
+		for (int j = 0; j < NR; j++) {
+			sent[j] = s(p.u_h);
+			lvl[j] = 1.0;
+		}
+		for (int k = 0; k < (int)(60 * FS); k++) {
+			if (k == k_fail)
+				p.eff[jf] = 0.0;
+			for (int i = DELAY; i > 0; i--) /* the plant answers the command of DELAY frames ago */
+				for (int j = 0; j < NR; j++)
+					line[i][j] = line[i - 1][j];
+			for (int j = 0; j < NR; j++) {
+				line[0][j] = sc_to_float(sent[j]);
+				p.lag[j] += al * (line[DELAY][j] - p.lag[j]);
+				thrust[j] = s(p.kf * p.eff[j] * p.lag[j] + p.noise * unit_rand_normal(&r));
+			}
+			struct rotor_fail_input in = {sent, thrust, NULL, s(1.0 / FS), true, false, false};
+			struct rotor_fail_output o = rotor_fail_step(&d, &in);
+			if (o.rotor >= 0 && found < 0) {
+				found = o.rotor;
+				found_k = k;
+			}
+			for (int j = 0; j < NR; j++) { /* a step of +/-50 % now and then, each rotor its own */
+				if (unit_rand_uniform(&r, 0.0, 1.0) < 0.06)
+					lvl[j] = unit_rand_uniform(&r, 0.0, 1.0) < 0.5 ? 0.5 : 1.5;
+				double t = p.u_h * (lvl[j] + 0.02 * unit_rand_normal(&r));
+				sent[j] = s(t < 0 ? 0 : t > 1 ? 1 : t);
+			}
+		}
+		if (k_fail < 0) {
+			CHECK(found < 0);
+		} else {
+			CHECK(found == jf);
+			CHECK(found_k >= k_fail && found_k <= k_fail + (int)(0.5 * FS));
+		}
 	}
 }
