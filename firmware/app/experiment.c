@@ -1086,6 +1086,16 @@ static void null_dither(struct experiment *e, bool running, scalar_t d, struct e
 #endif
 }
 
+/* The IMU rotor experiment's throttle sweep: this frame's collective step (sweep_plan; 0
+ * between steps), the steps half a period into the excitation, at the levels in turn. Before
+ * the null dither (which counts the excited frames in rot_k). */
+static scalar_t sweep_step(const struct experiment *e, bool running)
+{
+	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = e->rot_k + per / 2u;
+	uint32_t ph = kk % per, lv = (kk / per) % EXP_SWP_LEVELS;
+	return running && ph < e->swp_len[lv] ? e->swp_thr[lv] : SC_ZERO;
+}
+
 static void phase_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
 {
 	const struct app_params *p = in->params;
@@ -1114,13 +1124,9 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		if (n >= 1)
 			imu_id_step(&e->imid, tp, imu_force(in, p), imu_force_up(in, p),
 				    sc_from_float(in->frame->vel_i_mps[2]), use);
-		/* the sweep's steps start half a period into the excitation */
-		uint32_t per = e->swp_per ? e->swp_per : 1u, kk = e->rot_k + per / 2u;
-		uint32_t ph = kk % per, lv = (kk / per) % EXP_SWP_LEVELS;
+		scalar_t d0 = sweep_step(e, running);
 		null_dither(e, running, running ? excite_update(&e->exc) : SC_ZERO, out);
-		scalar_t d0 = running ? excite_update(&e->exc3) : SC_ZERO;
-		if (running && ph < e->swp_len[lv])
-			d0 = sc_add(d0, e->swp_thr[lv]);
+		d0 = sc_add(d0, running ? excite_update(&e->exc3) : SC_ZERO);
 		for (int j = 0; j < HAL_ROTORS; j++)
 			out->thr_delta[j] = sc_add(out->thr_delta[j], d0);
 	} else if (k == PK_ROTOR) {
