@@ -4,7 +4,8 @@ the gyro, the throttles sent and the weighed mass, with the IMU octo-sim serves 
 
 - A plant that serves no thrust or torque rows (`--sensors imu`) identifies: k_f, the motor
   lag, delay and curve, I_x and I_y, and k_tau / I_z as a ratio (k_tau and I_z alone are
-  reported as not identifiable, never as values); the source is said.
+  reported as not identifiable, never as values); the source is said. The fixed-point build
+  too.
 - Thrust rows that lie (scaled by 2) leave the IMU estimate exactly as it was.
 - Random vehicles of the tests' ranges (motor lag 10-100 ms, delay 0-3 frames, curve 0-0.5,
   k_f, k_tau and inertia +/-30 %, the rotors' scales known): every accepted value lies within
@@ -39,11 +40,11 @@ LINE = {
 TOL = {"kf": 0.01, "ixx": 0.02, "iyy": 0.02, "ratio": 0.02}
 
 
-def fly(tmp, veh, seed, script=SCRIPT, sensors="imu,rpm", params=""):
+def fly(tmp, veh, seed, script=SCRIPT, sensors="imu,rpm", params="", program="octo-sil"):
     (tmp / "v.json").write_text(json.dumps(veh))
     prm = tmp / "p.parm"
     prm.unlink(missing_ok=True)
-    r = subprocess.run([str(binary("octo-sil")), "--seed", str(seed), "--vehicle", str(tmp / "v.json"),
+    r = subprocess.run([str(binary(program)), "--seed", str(seed), "--vehicle", str(tmp / "v.json"),
                         "--sensors", sensors, "--params", str(prm), "--duration", "900", "--script",
                         f"param ID_SEED {seed}; {params}{script}"],
                        capture_output=True, text=True, timeout=120)
@@ -99,6 +100,17 @@ def test_imu_only_identifies_and_says_so(tmp_path):
     # k_tau and I_z alone: the ratio only, said as such (no VEH_KTAU / VEH_IZZ result)
     assert "ID ktau, Izz: the ratio only (ID_IZZ_PRI_SD: a prior)" in said
     assert not any(ln.startswith("ID Izz ") or ln.startswith("ID ktau 0") for ln in said), said
+
+
+def test_the_fixed_point_build_identifies_from_the_imu(tmp_path):
+    """octo-sil-fixed (Q16.16 firmware): the same sequence from the IMU alone, judged alike."""
+    r, said = fly(tmp_path, PAPER, 15, sensors="imu", program="octo-sil-fixed")
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert "ID source imu: accelerometer, mass, throttles" in said
+    res = results(said)
+    assert all(res[k][2] for k in ("kf", "ixx", "iyy", "ratio")), res
+    zs, wrong = judge(res, PAPER)
+    assert not wrong, (wrong, zs)
 
 
 def test_forced_thrust_source_without_rows_is_refused(tmp_path):
