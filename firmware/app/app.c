@@ -235,19 +235,25 @@ static bool exp_source_pick(const struct app *a, int id, enum exp_source *src, c
 {
 	const uint32_t rows = HAL_FRAME_THRUST | HAL_FRAME_TORQUE, imu = HAL_FRAME_ACCEL | HAL_FRAME_RATES;
 	bool have_rows = (a->fr.valid & rows) == rows, have_imu = (a->fr.valid & imu) == imu;
+	bool have_rpm = (a->fr.valid & HAL_FRAME_RPM) != 0;
 	float v = a->p.id_source;
 	int want = isfinite(v) ? (int)(v + 0.5f) : 0;
 	if (want == 0)
-		want = have_rows ? EXP_SRC_THRUST : EXP_SRC_IMU;
-	if (want >= 3) {
-		snprintf(why, cap, "Experiment %d refused: ID_SOURCE %d not built (1 thrust, 2 imu)", id, want);
+		want = have_rows ? EXP_SRC_THRUST : have_rpm ? EXP_SRC_IMU_RPM : EXP_SRC_IMU;
+	if (want >= 4) {
+		snprintf(why, cap, "Experiment %d refused: ID_SOURCE %d not built (1 thrust, 2 imu, 3 imu_rpm)", id,
+			 want);
+		return false;
+	}
+	if (want == EXP_SRC_IMU_RPM && !have_rpm) {
+		snprintf(why, cap, "Experiment %d refused: no rotor speeds (ID_SOURCE imu_rpm)", id);
 		return false;
 	}
 	if (want == EXP_SRC_THRUST && !have_rows) {
 		snprintf(why, cap, "Experiment %d refused: no rotor thrust/torque rows", id);
 		return false;
 	}
-	if (want == EXP_SRC_IMU && !have_imu) {
+	if ((want == EXP_SRC_IMU || want == EXP_SRC_IMU_RPM) && !have_imu) {
 		snprintf(why, cap, "Experiment %d refused: no accelerometer (ID_SOURCE imu)", id);
 		return false;
 	}

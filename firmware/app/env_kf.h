@@ -37,11 +37,11 @@
 
 struct env_kf {
 	struct kf_track kft;
-	enum env_src src;  /* what the running tracker's y is */
-	scalar_t mg;       /* VEH_MASS VEH_GRAV, N: the thrust of 1 g of specific force */
-	float model_rsd;   /* the rotor model's relative sd (an accepted identification's k_f) */
-	float walk_rel2;   /* (KFT_ACC_WALK / VEH_GRAV)^2: relative variance per second of the calibration's age */
-	double t_cal;      /* plant time of the accelerometer's calibration (src IMU) */
+	enum env_src src;     /* what the running tracker's y is */
+	scalar_t mg;          /* VEH_MASS VEH_GRAV, N: the thrust of 1 g of specific force */
+	float model_rsd;      /* the rotor model's relative sd (an accepted identification's k_f) */
+	float walk_rel2;      /* (KFT_ACC_WALK / VEH_GRAV)^2: relative variance per second of the calibration's age */
+	double t_cal;         /* plant time of the accelerometer's calibration (src IMU) */
 	double pub_next_t;    /* plant time of the next publication (1 s after the last) */
 	uint64_t pub_wall_us; /* wall time of the last announced one */
 	uint32_t votes;       /* consecutive publications that called for a VEH_KF refresh */

@@ -123,6 +123,9 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	c->gp_rsd = crv_sd > 0.0f ? crv_sd : 0.0f;
 }
 
+/* the experiment measures with the IMU (with or without the rotor speeds) */
+static bool imu_src(const struct exp_cfg *c) { return c->src == EXP_SRC_IMU || c->src == EXP_SRC_IMU_RPM; }
+
 /* Status lines are queued with their arguments and formatted (vsnprintf with %f: costly) by
  * exp_pump, between frames, not in the 90 Hz step. say() records the
  * arguments by the conversions of fmt (%d int, %s a string that outlives the experiment:
@@ -224,8 +227,10 @@ void exp_pump(struct experiment *e)
 		if (!e->reporting)
 			excite_prepare(&e->exc); /* the next step's excitation (a multisine's sum) */
 		if (!e->reporting && k == PK_ROTOR) {
-			if (e->cfg.src == EXP_SRC_IMU) {
+			if (imu_src(&e->cfg)) {
 				imu_id_process(&e->imid);
+				if (e->cfg.src == EXP_SRC_IMU_RPM)
+					motor_id_refine(&e->mid); /* processes the waiting frame first */
 				excite_prepare(&e->exc2);
 				excite_prepare(&e->exc3);
 			} else {
@@ -423,7 +428,7 @@ int exp_start(struct experiment *e, int id, const struct app_params *p, enum exp
 		return APP_DENIED;
 	}
 	cfg_resolve(&e->cfg, p);
-	e->cfg.src = src == EXP_SRC_IMU ? EXP_SRC_IMU : EXP_SRC_THRUST;
+	e->cfg.src = src == EXP_SRC_IMU || src == EXP_SRC_IMU_RPM ? src : EXP_SRC_THRUST;
 	if (!(e->cfg.exc_amp > 0.0f) || !(e->cfg.exc_time > 0.0f)) {
 		snprintf(why, cap, "Experiment %d refused: ID_EXC_AMP/ID_EXC_TIME not > 0", id);
 		return APP_DENIED;
@@ -477,9 +482,51 @@ static void snapshot(struct exp_turn *t, const struct exp_input *in)
 	for (int j = 0; j < HAL_ROTORS; j++) /* from the frame: exp_input has them only for some phases */
 		t->torque_nm[j] = sc_from_float(in->frame->rotor_torque_nm[j]);
 	memcpy(t->rate_b_rps, in->rate_b_rps, sizeof t->rate_b_rps);
+	memcpy(t->speed_rps, in->frame->rotor_speed_rps, sizeof t->speed_rps);
 }
 
 static float phase_limit(const struct experiment *e, const char **name);
+
+/* With the rotor speeds (ESC telemetry) the motor model is seen rotor by rotor: thrust goes
+ * with speed^2 (rpm^2 = rpm_max^2 g(y), the effectiveness aside), so motor_id (motor_id.h)
+ * reads w2_gain w_j^2 as rotor j's "thrust": its delay, lag and curve are the motor's; its
+ * k_f and scales are the speed's, not the propellers', and are not used. The gain makes the
+ * start's speeds match the prior model's thrusts (k_f g(y)), so the sums stay well scaled. */
+static void speed_model_begin(struct experiment *e, const struct app_params *p, const struct exp_turn *in)
+{
+	const struct exp_cfg *cf = &e->cfg;
+	float gsum = 0.0f, wsum = 0.0f, c = p->mot_curve;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		float y = sc_to_float(in->thr_prev_all[j]), w = in->speed_rps[j];
+		gsum += (1.0f - c) * y + c * y * y;
+		wsum += w * w;
+	}
+	e->w2_gain = wsum > 0.0f && isfinite(wsum) ? p->veh_kf * gsum / wsum : 0.0f;
+	struct motor_id_cfg mc = {
+		.dt_s = sc_from_float(e->dt_nom),
+		.tau0_s = cf->mot_tau,
+		.kf0 = p->veh_kf,
+		.curve0 = p->mot_curve,
+		.est_curve = cf->crv_est,
+		.n_frames = (uint32_t)(cf->imu_time / e->dt_nom + 0.5f),
+	};
+	motor_id_init(&e->mid, &mc, in->thr_prev_all);
+}
+
+/* a frame of the speed model: the speeds as thrusts (no torques: not read) */
+static void speed_model_step(struct experiment *e, const struct exp_input *in, int n, bool use)
+{
+	scalar_t f[HAL_ROTORS], tq[HAL_ROTORS];
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		float w = in->frame->rotor_speed_rps[j];
+		f[j] = sc_from_float(isfinite(w) ? e->w2_gain * w * w : 0.0f);
+		tq[j] = SC_ZERO;
+	}
+	for (int i = 1; i < n; i++)
+		motor_id_hold(&e->mid, in->thr_prev);
+	if (n >= 1)
+		motor_id_step(&e->mid, in->thr_prev, f, tq, use);
+}
 
 /* The IMU rotor experiment's start: the accelerometer sees the rotors' sum, so the null-space
  * dithers (the vehicle still) get a collective dither (a fast vertical jiggle) and the
@@ -526,6 +573,8 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	e->rot_k = 0;
 	e->ofs = sc_from_float(cf->exc_ofs);
 	sweep_plan(e, p, thr_h);
+	if (cf->src == EXP_SRC_IMU_RPM)
+		speed_model_begin(e, p, in);
 	e->est_live = 0;
 	*xpp = xp;
 }
@@ -546,7 +595,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	xp.prbs_order = PRBS_ORDER;
 	scalar_t dt = sc_from_float(e->dt_nom);
 
-	if (k == PK_ROTOR && cf->src == EXP_SRC_IMU) {
+	if (k == PK_ROTOR && imu_src(cf)) {
 		imu_rotor_begin(e, p, in, &xp);
 	} else if (k == PK_ROTOR) {
 		e->t_run = cf->exc_time;
@@ -598,7 +647,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		scalar_t tau[3],
 			inertia[3] = {sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz)};
 		const scalar_t *fm = in->thrust_n, *tm = in->torque_nm;
-		if (cf->src == EXP_SRC_IMU) { /* the torque the identified rotor model gives */
+		if (imu_src(cf)) { /* the torque the identified rotor model gives */
 			rmodel_init(&e->rm, p, cf, dt, in->thr_prev_all);
 			rmodel_step(&e->rm, in->thr_prev_all, 1, e->f_model, e->tq_model);
 			fm = e->f_model;
@@ -619,7 +668,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		 * single rotor thrusts most for the least attitude change) */
 		xp.kind = EXCITE_UNIFORM;
 		xp.amplitude = sc_from_float(cf->inr_amp / INR_YAW_DIV);
-		if (cf->src == EXP_SRC_IMU) { /* on the thrust demand: the accelerometer sees the sum */
+		if (imu_src(cf)) { /* on the thrust demand: the accelerometer sees the sum */
 			xp.amplitude = sc_from_float(VAL_IMU_F * p->veh_mass * p->veh_grav);
 			rmodel_init(&e->rm, p, cf, dt, in->thr_prev_all);
 		}
@@ -765,8 +814,22 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	imu_id_solve(&e->imid, IMU_HAC_MAX, &r);
 	enum ident_verdict vf = ident_accept(r.kf, r.kf_sd, p->veh_kf, e->cfg.rsd_max);
 	bool model_ok = r.cause == IMU_ID_OK;
+	/* with the rotor speeds the motor's lag and delay are theirs (seen rotor by rotor); the
+	 * IMU's own stay as a check (said); k_f and its curve are the IMU's (the speeds do not
+	 * see the propellers' thrust) */
+	struct motor_id_result mr;
+	bool by_speed = e->cfg.src == EXP_SRC_IMU_RPM;
+	float tau_imu = r.tau;
+	if (by_speed) {
+		motor_id_process(&e->mid);
+		motor_id_solve(&e->mid, MOT_NE_MAX, &mr);
+		r.tau = mr.tau;
+		r.tau_sd = mr.tau_sd;
+		r.delay = mr.delay;
+	}
+	bool speed_ok = !by_speed || mr.cause == MOTOR_ID_OK;
 	bool curve_bad = e->cfg.crv_est && !(r.curve >= THRMAP_CURVE_MIN && r.curve <= THRMAP_CURVE_MAX);
-	bool ok = vf == IDENT_ACCEPT && model_ok && !curve_bad;
+	bool ok = vf == IDENT_ACCEPT && model_ok && speed_ok && !curve_bad;
 	result(e, PX_ID_KF_EST, isfinite(r.kf) ? r.kf : 0.0f);
 	result(e, PX_ID_KF_SD, isfinite(r.kf_sd) ? r.kf_sd : 0.0f);
 	result(e, PX_ID_TAU_CHECK, isfinite(r.tau) ? r.tau : -1.0f);
@@ -791,6 +854,7 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	}
 	set_result_bit(e, p, 1u, ok);
 	enum app_id_reason common = !model_ok   ? imu_reason(r.cause)
+				    : !speed_ok ? app_id_reason_of_cause(mr.cause)
 				    : curve_bad ? APP_ID_CURVE
 						: APP_ID_PARTNER_REJECTED;
 	id_out(e, APP_ID_KF, 0, r.kf, r.kf_sd, ok, vf != IDENT_ACCEPT ? app_id_reason_of_verdict(vf) : common);
@@ -800,13 +864,17 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	if (e->cfg.crv_est)
 		id_out(e, APP_ID_MOT_CURVE, 0, r.curve, r.curve_sd, ok, curve_bad ? APP_ID_CURVE : common);
 	int sev = ok ? APP_SEV_INFO : APP_SEV_WARNING;
-	say(e, APP_SEV_INFO, "ID source imu: accelerometer, mass, throttles");
+	say(e, APP_SEV_INFO,
+	    by_speed ? "ID source imu_rpm: accelerometer, mass, throttles, rotor speeds"
+		     : "ID source imu: accelerometer, mass, throttles");
 	say(e, sev, "ID kf %.3f +/- %.3f %s%s", (double)r.kf, (double)r.kf_sd, ok ? "N " : "rejected: ",
 	    ok                   ? "accepted"
 	    : vf != IDENT_ACCEPT ? ident_verdict_text(vf)
 	    : model_ok           ? "out of range"
 				 : "motor model");
 	say(e, sev, "ID motor lag %.4f +/- %.4f s delay %d fr", (double)r.tau, (double)r.tau_sd, (int)r.delay);
+	if (by_speed)
+		say(e, APP_SEV_INFO, "ID lag from the speeds; the accelerometer's %.4f s", (double)tau_imu);
 	if (e->cfg.crv_est)
 		say(e, sev, "ID curve %.3f +/- %.3f", (double)r.curve, (double)r.curve_sd);
 	say(e, APP_SEV_INFO, "ID collective NE %.3f noise %.4f N", (double)r.ne, (double)r.noise_sd);
@@ -816,6 +884,9 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	if (!model_ok) {
 		say(e, APP_SEV_WARNING, "ID rejected: %s", imu_id_cause_text(r.cause));
 		say(e, APP_SEV_WARNING, "ID remedy: %s", imu_id_cause_remedy(r.cause));
+	} else if (!speed_ok) {
+		say(e, APP_SEV_WARNING, "ID rejected: speeds: %s", motor_id_cause_text(mr.cause));
+		say(e, APP_SEV_WARNING, "ID remedy: %s", motor_id_cause_remedy(mr.cause));
 	} else if (curve_bad) {
 		say(e, APP_SEV_WARNING, "ID rejected: curve %.3f outside %.2f to %.2f", (double)r.curve,
 		    (double)THRMAP_CURVE_MIN, (double)THRMAP_CURVE_MAX);
@@ -932,14 +1003,14 @@ static void inertia_end(struct experiment *e, const struct app_params *p, unsign
 	float gs = cfg_f(p->id_gyr_scl_sd, 0.0f) * est, sd_data = sd;
 	if (isfinite(sd) && isfinite(gs))
 		sd = sqrtf(sd * sd + gs * gs);
-	if (e->cfg.src == EXP_SRC_IMU && ax != 2u) {
+	if (imu_src(&e->cfg) && ax != 2u) {
 		/* the torque is the model's, its swings about hover scaled by the thrust's
 		 * slope there: the slope's uncertainty passes one for one into the inertia */
 		float rk = e->cfg.slope_rsd;
 		if (isfinite(sd) && rk > 0.0f)
 			sd = sqrtf(sd * sd + rk * est * rk * est);
 	}
-	if (e->cfg.src == EXP_SRC_IMU && !e->cfg.model_ok) {
+	if (imu_src(&e->cfg) && !e->cfg.model_ok) {
 		/* the torque is the rotor model's: without an identified model the estimate
 		 * rests on priors (ID_MOT_TAU, MOT_CURVE, VEH_KF), never to be applied */
 		static const int pi[3] = {APP_ID_IXX, APP_ID_IYY, APP_ID_KTAU_OVER_IZZ};
@@ -951,7 +1022,7 @@ static void inertia_end(struct experiment *e, const struct app_params *p, unsign
 		say(e, APP_SEV_WARNING, "ID %s rejected: rotor model not identified (experiment 1)", nm[ax]);
 		return;
 	}
-	if (e->cfg.src == EXP_SRC_IMU && ax == 2u) {
+	if (imu_src(&e->cfg) && ax == 2u) {
 		izz_imu_end(e, p, est, sd);
 		return;
 	}
@@ -987,7 +1058,7 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 	int k = e->phase_kind[e->phase];
 	result(e, PX_ID_SRC_USED, (float)e->cfg.src);
 	float rsd = e->cfg.rsd_max;
-	if (k == PK_ROTOR && e->cfg.src == EXP_SRC_IMU) {
+	if (k == PK_ROTOR && imu_src(&e->cfg)) {
 		imu_rotor_end(e, p);
 	} else if (k == PK_ROTOR && e->cfg.exc_null) {
 		rotor_end(e, p);
@@ -1117,13 +1188,15 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		e->gap_hold--;
 	bool use = running && n >= 1;
 
-	if (k == PK_ROTOR && e->cfg.src == EXP_SRC_IMU) {
+	if (k == PK_ROTOR && imu_src(&e->cfg)) {
 		const scalar_t *tp = in->thr_prev;
 		for (int i = 1; i < n; i++)
 			imu_id_hold(&e->imid, tp);
 		if (n >= 1)
 			imu_id_step(&e->imid, tp, imu_force(in, p), imu_force_up(in, p),
 				    sc_from_float(in->frame->vel_i_mps[2]), use);
+		if (e->cfg.src == EXP_SRC_IMU_RPM)
+			speed_model_step(e, in, n, use);
 		scalar_t d0 = sweep_step(e, running);
 		null_dither(e, running, running ? excite_update(&e->exc) : SC_ZERO, out);
 		d0 = sc_add(d0, running ? excite_update(&e->exc3) : SC_ZERO);
@@ -1147,7 +1220,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		unsigned ax = (unsigned)(k - PK_INR_X);
 		scalar_t tau[3];
 		const scalar_t *fm = in->thrust_n, *tm = in->torque_nm;
-		if (e->cfg.src == EXP_SRC_IMU) {
+		if (imu_src(&e->cfg)) {
 			rmodel_step(&e->rm, in->thr_prev, n, e->f_model, e->tq_model);
 			fm = e->f_model;
 			tm = e->tq_model;
@@ -1172,7 +1245,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	} else {
 		/* the model's prediction of rotor 1's thrust: the allocation behind the throttle
 		 * sent on the previous frame, through the modelled delay and lag */
-		if (e->cfg.src == EXP_SRC_IMU) {
+		if (imu_src(&e->cfg)) {
 			/* the specific force's prediction: the modelled thrusts' sum */
 			rmodel_step(&e->rm, in->thr_prev, n, e->f_model, e->tq_model);
 			scalar_t y_hat = SC_ZERO;
@@ -1199,7 +1272,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 static void read_estimates(struct experiment *e)
 {
 	int k = e->phase_kind[e->phase];
-	if (k == PK_ROTOR && e->cfg.src == EXP_SRC_IMU) {
+	if (k == PK_ROTOR && imu_src(&e->cfg)) {
 		return; /* no live estimate: the IMU's solve runs once, at the phase's end */
 	} else if (k == PK_ROTOR) {
 		if (!e->rot.q_pending)

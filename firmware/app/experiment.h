@@ -38,8 +38,9 @@ enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
 
 /* what an experiment measures the rotors with (ID_SOURCE; the codes of OCTO_ID_SOURCE) */
 enum exp_source {
-	EXP_SRC_THRUST = 1, /* each rotor's thrust and torque rows (a simulator, a test bench) */
-	EXP_SRC_IMU = 2,    /* gyro, accelerometer, throttles sent, mass and geometry */
+	EXP_SRC_THRUST = 1,  /* each rotor's thrust and torque rows (a simulator, a test bench) */
+	EXP_SRC_IMU = 2,     /* gyro, accelerometer, throttles sent, mass and geometry */
+	EXP_SRC_IMU_RPM = 3, /* the IMU, and each rotor's speed (ESC telemetry) for its motor model */
 };
 
 struct exp_input {
@@ -91,6 +92,7 @@ struct exp_turn {
 	scalar_t thr_prev_all[HAL_ROTORS]; /* every rotor's */
 	scalar_t rotor_f_cmd0;             /* rotor 1's thrust allocated before that step */
 	scalar_t thrust_n[HAL_ROTORS], torque_nm[HAL_ROTORS], rate_b_rps[3]; /* of its frame */
+	float speed_rps[HAL_ROTORS];                                         /* its rotor speeds */
 };
 
 /* the experiment's configuration (ID_* parameters), read once at exp_start */
@@ -161,6 +163,7 @@ struct experiment {
 	scalar_t swp_thr[EXP_SWP_LEVELS];
 	struct exp_rmodel rm; /* IMU source: the modelled thrusts (inertia, validation) */
 	scalar_t f_model[HAL_ROTORS], tq_model[HAL_ROTORS];
+	float w2_gain;       /* IMU with rotor speeds: the speed^2 to "thrust" gain the motor model reads */
 	uint32_t rot_k;      /* rotor experiment: excited frames so far */
 	uint32_t est_wait;   /* steps until est[] / est_sd[] are read again */
 	scalar_t inr_u_prev; /* inertia: the excitation of the previous step (the instrument) */

@@ -61,7 +61,7 @@ struct excite {
 	/* multisine, between frames (excite_prepare): the phases' move after the last sample
 	 * (EXCITE_MS_*), then the next sample's normalised sum */
 	uint8_t ms_due;
-	bool ms_ready;   /* ms_next holds the sum at the current phases */
+	bool ms_ready; /* ms_next holds the sum at the current phases */
 	scalar_t ms_next;
 };
 

@@ -73,7 +73,7 @@ static bool inputs_ok(scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
 static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c, scalar_t dt, bool acc)
 {
 	scalar_t uc = acc ? u : est_mul_unit(u, c); /* c = cos(tilt) in [0, 1] (est_mul_unit: exact for any) */
-	if (acc != s->acc) { /* another kind of input: the filters start again */
+	if (acc != s->acc) {                        /* another kind of input: the filters start again */
 		s->acc = acc;
 		s->primed = false;
 	}

@@ -253,7 +253,8 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	 * (s_pct / 100) / (2 drift_per_min / 60) = 0.3 s_pct / drift_per_min */
 	if (s->p.drift_per_min > SC_ZERO) {
 		scalar_t q = sc_div_r(est_mul_unit(s->s_pct, SC(0.3)), s->p.drift_per_min, &s->r_drift);
-		scalar_t x = dt_s <= SC(1.0) ? est_mul_unit(sc_sq(q), dt_s) : sc_mul(sc_sq(q), dt_s); /* (s / 2r)^2 / f_s */
+		scalar_t x =
+			dt_s <= SC(1.0) ? est_mul_unit(sc_sq(q), dt_s) : sc_mul(sc_sq(q), dt_s); /* (s / 2r)^2 / f_s */
 		s->mem_s = sc_clamp(cbrt_warm(x, s->mem_s), s->p.t_min_s, s->p.t_max_s);
 	} else {
 		s->mem_s = s->p.t_max_s;

@@ -59,7 +59,7 @@
 #include <stdint.h>
 
 #define KF_TRACK_ROTORS 8
-#define KF_TRACK_W_CLIP 5 /* percent: a sample's y / phi from the window's reference, clipped */
+#define KF_TRACK_W_CLIP 5    /* percent: a sample's y / phi from the window's reference, clipped */
 #define KF_TRACK_W_MAX 4096u /* samples in a window at most (the clipped sum stays in range) */
 #define KF_TRACK_W_AVG 8u    /* window comparisons averaged */
 #define KF_TRACK_L_MEM 8     /* a long window: this many memories T* */
@@ -101,23 +101,24 @@ struct kf_track {
 	scalar_t blk_phi, blk_y; /* sums of the current block of avg_n frames */
 	uint32_t blk_n;          /* frames in it */
 	/* the window means (coloured noise, header comment) */
-	scalar_t w_sum;      /* sum of the samples' y / phi, percent from w_kref (each within +/- KF_TRACK_W_CLIP) */
-	scalar_t w_t;        /* the window's time so far, s */
-	uint32_t w_n;        /* its samples */
-	scalar_t w_kref;     /* k at its start, and 100 / w_kref */
+	scalar_t w_sum;  /* sum of the samples' y / phi, percent from w_kref (each within +/- KF_TRACK_W_CLIP) */
+	scalar_t w_t;    /* the window's time so far, s */
+	uint32_t w_n;    /* its samples */
+	scalar_t w_kref; /* k at its start, and 100 / w_kref */
 	scalar_t w_inv;
 	scalar_t w_prev;     /* the last window's mean, N */
 	scalar_t w_var_pct2; /* variance of a window's mean, percent^2 (average over windows) */
 	uint32_t w_count;    /* windows compared */
 	/* the long windows: k's spread about its own straight line over KF_TRACK_L_MEM T* */
-	scalar_t l_t, l_tn;                        /* the window's time so far, s, and in memories T* */
-	uint32_t l_n;                              /* its samples */
-	scalar_t l_kref, l_inv;                    /* k at its start, 100 / l_kref */
-	scalar_t l_su, l_suu, l_sc, l_scc, l_suc; /* sums of u, u^2, c, c^2, u c (u: time in T*; c: k, percent from l_kref) */
-	scalar_t l_var_pct2;                       /* the spread's variance, percent^2 (average over windows) */
-	uint32_t l_count;                          /* windows ended */
-	bool started;            /* an estimate exists */
-	bool primed;             /* the lag filter holds a value */
+	scalar_t l_t, l_tn;     /* the window's time so far, s, and in memories T* */
+	uint32_t l_n;           /* its samples */
+	scalar_t l_kref, l_inv; /* k at its start, 100 / l_kref */
+	scalar_t l_su, l_suu, l_sc, l_scc,
+		l_suc;       /* sums of u, u^2, c, c^2, u c (u: time in T*; c: k, percent from l_kref) */
+	scalar_t l_var_pct2; /* the spread's variance, percent^2 (average over windows) */
+	uint32_t l_count;    /* windows ended */
+	bool started;        /* an estimate exists */
+	bool primed;         /* the lag filter holds a value */
 	uint32_t updates;
 };
 

@@ -159,8 +159,8 @@ struct mixer_output {
  * scans (0 on the face, 2 or 3). A held demand is allocated as mixer_update allocates it
  * from the step after its refresh on (tests/core/test_mixer.c). */
 enum mixer_path {
-	MIXER_PATH_PINV = 0,     /* eq. (15) in the box, or a non-finite demand */
-	MIXER_PATH_FACE = 1,     /* the last exact allocation's face */
+	MIXER_PATH_PINV = 0,        /* eq. (15) in the box, or a non-finite demand */
+	MIXER_PATH_FACE = 1,        /* the last exact allocation's face */
 	MIXER_PATH_FALLBACK = 2,    /* the bounded fallback: thrust, then yaw */
 	MIXER_PATH_FALLBACK_RP = 3, /* the bounded fallback: roll/pitch scaled, no yaw */
 	MIXER_PATH_CLIP = 4,        /* clipped (CLIP mode, or no allocator) */
@@ -172,9 +172,9 @@ struct mixer_warm {
 	uint8_t held; /* bit i: axis i of [f, tau_x, tau_y, tau_z] was limited in the exact allocation */
 	uint8_t path; /* enum mixer_path of the last mixer_step */
 	bool full;    /* the face's free columns span the wrench (else it serves only its own wrench) */
-	scalar_t demand[MIXER_N_AXES];            /* the last saturated demand */
-	scalar_t t_ex[MIXER_N_AXES];              /* the wrench the exact allocation achieved */
-	scalar_t u_ex[MIXER_N_ROTORS];            /* its u_j = f_j / scale_j, N (0 if absent) */
+	scalar_t demand[MIXER_N_AXES];              /* the last saturated demand */
+	scalar_t t_ex[MIXER_N_AXES];                /* the wrench the exact allocation achieved */
+	scalar_t u_ex[MIXER_N_ROTORS];              /* its u_j = f_j / scale_j, N (0 if absent) */
 	scalar_t map[MIXER_N_ROTORS][MIXER_N_AXES]; /* du (N) per wrench change on its face (0: at a bound) */
 };
 

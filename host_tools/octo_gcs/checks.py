@@ -211,8 +211,9 @@ def ratio_checks(row, tol_pct=TOL_RATIO_PCT):
 MOTOR_RATE_HZ = 90.0
 
 
-# the sources whose data tell the rotors apart (each rotor's effectiveness, MOT_SCALE)
-SOURCES_PER_ROTOR = ("thrust", "imu_rpm", "imu_rpm_torque")
+# the sources whose data tell the rotors apart (each rotor's effectiveness, MOT_SCALE): only the
+# thrust rows; a rotor's speed is not its propeller's thrust, and the accelerometer sees the sum
+SOURCES_PER_ROTOR = ("thrust",)
 
 
 def motor_model_rows(params, veh, source=None):

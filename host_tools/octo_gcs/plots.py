@@ -254,8 +254,13 @@ def convergence(logs, rep, path, plt):
             te = t1 + 0.15 * max(t1 - t0, 1.0)
             word = "applied" if ok else "not applied" + (f": {why}" if why else "")
             ax.fill_between([t0, te], val - 2 * sd_a, val + 2 * sd_a, color="C0", alpha=0.3, lw=0)
-            ax.plot([t0, te], [val, val], lw=1.6, color="C0",
-                    label=f"identification result {val:.5g}, sd {sd_a:.2g} (band 2 sd; {word})")
+            ax.plot(
+                [t0, te],
+                [val, val],
+                lw=1.6,
+                color="C0",
+                label=f"identification result {val:.5g}, sd {sd_a:.2g} (band 2 sd; {word})",
+            )
             centre.append(val)
             spread.append(2 * sd_a)
         tv = truth.get(q.key)
@@ -269,8 +274,10 @@ def convergence(logs, rep, path, plt):
         ax.legend(loc="upper right", fontsize=6)
         ax.set_ylabel(f"{q.label} [{q.unit}]", fontsize=8)
     axes[-1].set_xlabel("simulated time [s]")
-    fig.suptitle("Identification results (+/- 2 sd, as applied) and the live estimates in flight; truth dashed",
-                 fontsize=10)
+    fig.suptitle(
+        "Identification results (+/- 2 sd, as applied) and the live estimates in flight; truth dashed",
+        fontsize=10,
+    )
     fig.tight_layout()
     _save(fig, path)
 

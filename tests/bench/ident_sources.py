@@ -71,11 +71,11 @@ def fly(veh, seed, how, tmp):
     steps += ["arm", "takeoff 5", "wait hold", "experiment 6", "wait experiment"]
     r = subprocess.run([str(SIL), "--seed", str(seed), "--vehicle", str(d / f"v{seed}{how}.json"), "--sensors", sensors,
                         "--params", str(prm), "--duration", "900", "--script", "; ".join(steps)],
-                       capture_output=True, text=True, timeout=300)
+                       capture_output=True, text=True, timeout=300, check=False)
     prm.unlink(missing_ok=True)
     out = {"causes": []}
     for ln in r.stderr.splitlines():
-        ln = ln[len("octo-fw: "):] if ln.startswith("octo-fw: ") else ln
+        ln = ln.removeprefix("octo-fw: ")
         for k, rx in RX.items():
             m = re.match(rx, ln)
             if m:

@@ -195,7 +195,7 @@ UNIT_TEST(hover_est_recovers_from_a_wrong_convergence)
 		CHECK_REL(sc_to_float(hover_est_u(&h)), uh, 0.01);
 		CHECK(h.rejected > 0);
 	}
-}/* From the accelerometer (hover_est_update_acc): the specific force along body z, g u / u_h
+} /* From the accelerometer (hover_est_update_acc): the specific force along body z, g u / u_h
  * through a 10-50 ms motor lag, with the vibration of a 90 Hz read (a fold near 44 Hz of
  * 0.2-0.4 m/s^2, white noise 0.05 m/s^2). Random truth u_h in [0.03, 0.6], start 0.3x ... 3x off:
  * within 1 % after 10 s and within 4 reported sd. */
@@ -215,7 +215,8 @@ UNIT_TEST(hover_est_learns_from_the_accelerometer)
 				thr = uh * unit_rand_uniform(&r, 0.85, 1.15);
 			u_lag += al * (u_prev - u_lag); /* the last frame's command, through the lag */
 			u_prev = thr;
-			double a = G * u_lag / uh + vib * sin(6.283185 * f_vib * k * FRAME_S) + 0.05 * unit_rand_normal(&r);
+			double a = G * u_lag / uh + vib * sin(6.283185 * f_vib * k * FRAME_S) +
+				   0.05 * unit_rand_normal(&r);
 			hover_est_update_acc(&he, s(a), s(thr), s(FRAME_S));
 		}
 		double est = d(hover_est_u(&he)), sd = d(hover_est_sd(&he));
@@ -228,5 +229,3 @@ UNIT_TEST(hover_est_learns_from_the_accelerometer)
 		CHECK(hover_est_converged(&he, SC(0.02)));
 	}
 }
-
-

@@ -204,8 +204,9 @@ UNIT_TEST(kf_track_coloured_noise_sd)
 				sd_min = fmin(sd_min, sd / kf);
 #ifdef TEST_VERBOSE
 				if (fabs(z) > 3.0 || sd / kf < 0.2 * a_slow)
-					printf("  trial %d t %.1f z %+.2f err %+.3f %% sd %.3f %% mem %.2f w_count %u\n", trial, t, z,
-					       100 * (d(kt.k) / kf - 1), 100 * sd / kf, d(kt.mem_s), (unsigned)kt.w_count);
+					printf("  trial %d t %.1f z %+.2f err %+.3f %% sd %.3f %% mem %.2f w_count %u\n",
+					       trial, t, z, 100 * (d(kt.k) / kf - 1), 100 * sd / kf, d(kt.mem_s),
+					       (unsigned)kt.w_count);
 #endif
 			}
 		}

@@ -1101,16 +1101,17 @@ static void check_step_tracks(struct unit_ctx *u, const struct mixer_params *p, 
 					unit_fail(u, __FILE__, __LINE__, "rotor %d out of its box: %g (path %d)", j + 1,
 						  d(o.f_n[j]), path);
 		if (d(o.achieved[3]) * (d(dem[3]) >= 0 ? 1 : -1) < -STEP_TZ)
-			unit_fail(u, __FILE__, __LINE__, "yaw reversed: %g %g %g %g -> %g %g %g %g (path %d)", d(dem[0]),
-				  d(dem[1]), d(dem[2]), d(dem[3]), d(o.achieved[0]), d(o.achieved[1]), d(o.achieved[2]),
-				  d(o.achieved[3]), path);
+			unit_fail(u, __FILE__, __LINE__, "yaw reversed: %g %g %g %g -> %g %g %g %g (path %d)",
+				  d(dem[0]), d(dem[1]), d(dem[2]), d(dem[3]), d(o.achieved[0]), d(o.achieved[1]),
+				  d(o.achieved[2]), d(o.achieved[3]), path);
 		if (path == MIXER_PATH_PINV)
 			continue;
 		n_sat++;
 		mixer_update(&mix, dem, &oe);
 		bool same = true;
 		for (int i = 0; i < 4; i++)
-			same = same && fabs(d(o.achieved[i]) - d(oe.achieved[i])) <= tol_axis[i] + 1e-6 * fabs(d(dem[i]));
+			same = same &&
+			       fabs(d(o.achieved[i]) - d(oe.achieved[i])) <= tol_axis[i] + 1e-6 * fabs(d(dem[i]));
 		n_same += same;
 		if (!mixer_attainable(&mix, dem, sc_from_float(-1e-4f)))
 			continue;
@@ -1121,8 +1122,8 @@ static void check_step_tracks(struct unit_ctx *u, const struct mixer_params *p, 
 		n_exact += exact;
 	}
 #ifdef TEST_VERBOSE
-	printf("  step tracking: %d saturated, %d as mixer_update; %d attainable, %d exact\n", n_sat, n_same,
-	       n_att_sat, n_exact);
+	printf("  step tracking: %d saturated, %d as mixer_update; %d attainable, %d exact\n", n_sat, n_same, n_att_sat,
+	       n_exact);
 #endif
 	CHECK(n_sat > SWEEP(20000) / 10 && n_att_sat > SWEEP(20000) / 50);
 	if (!(n_exact >= min_share * n_att_sat && n_same >= 0.1 * n_sat))
@@ -1173,9 +1174,9 @@ UNIT_TEST(mixer_step_bounded_fallback)
 		for (int j = 0; j < 8; j++)
 			CHECK(sc_isfinite(o.f_n[j]) && o.f_n[j] >= mix.f_lo && o.f_n[j] <= mix.f_hi);
 		if (d(o.achieved[3]) * (d(dem[3]) >= 0 ? 1 : -1) < -STEP_TZ)
-			unit_fail(u, __FILE__, __LINE__, "yaw reversed: %g %g %g %g -> %g %g %g %g (path %d)", d(dem[0]),
-				  d(dem[1]), d(dem[2]), d(dem[3]), d(o.achieved[0]), d(o.achieved[1]), d(o.achieved[2]),
-				  d(o.achieved[3]), w.path);
+			unit_fail(u, __FILE__, __LINE__, "yaw reversed: %g %g %g %g -> %g %g %g %g (path %d)",
+				  d(dem[0]), d(dem[1]), d(dem[2]), d(dem[3]), d(o.achieved[0]), d(o.achieved[1]),
+				  d(o.achieved[2]), d(o.achieved[3]), w.path);
 		mixer_refresh(&mix, &w);
 	}
 	CHECK(paths[MIXER_PATH_FALLBACK] > 0 && paths[MIXER_PATH_FALLBACK_RP] > 0 && paths[MIXER_PATH_FACE] > 0);

@@ -13,6 +13,8 @@ the gyro, the throttles sent and the weighed mass, with the IMU octo-sim serves 
   (a unit normal's 40-sample rms exceeds 1.3 with probability below 1e-3).
 - A rotor whose effectiveness is not MOT_SCALE's is named as the cause of a rejection: the
   accelerometer cannot tell which rotor, and k_f would otherwise carry it.
+- With the ESC's rotor speeds (imu_rpm, what auto takes when they are served) the motor's lag
+  and delay come from the speeds: within 3 % and exact.
 
 OCTO_IMU_SEED=N repeats a draw; OCTO_IMU_N=K flies K random vehicles (default 40).
 """
@@ -162,6 +164,28 @@ def test_random_vehicles_accepted_values_are_right_and_their_sds_honest(tmp_path
     assert not wrong, wrong                      # accepted and wrong: the worst defect
     assert len(failed) <= max(2, n // 10), failed
     assert all(r < 1.5 for r in rms.values()), rms
+
+
+def test_rotor_speeds_give_the_motor_lag_and_delay(tmp_path):
+    """ID_SOURCE auto with the ESC's speeds served (imu,rpm): the source is imu_rpm and the
+    motor's lag (within 3 %) and delay (exact) come from the speeds, on random vehicles."""
+    seed0 = int(os.environ.get("OCTO_IMU_SEED", random.SystemRandom().randrange(1, 10**6)))
+    print(f"OCTO_IMU_SEED={seed0}")
+    bad, n_ok = [], 0
+    for i in range(10):
+        seed = seed0 + i
+        veh = imu_vehicle(random.Random(seed))
+        r, said = fly(tmp_path, veh, seed, script="arm; takeoff 5; wait hold; experiment 1; wait experiment")
+        assert "ID source imu_rpm: accelerometer, mass, throttles, rotor speeds" in said, said
+        res = results(said)
+        if not res.get("kf", (0, 0, False))[2]:
+            continue
+        n_ok += 1
+        tau, _, delay = res["lag"]
+        if abs(tau / veh["motor_tau"] - 1.0) > 0.03 or delay != round(veh["delay"] * 90.0):
+            bad.append((seed, tau, delay, veh["motor_tau"], veh["delay"] * 90.0))
+    assert not bad, bad
+    assert n_ok >= 8
 
 
 def test_a_rotor_off_its_scale_is_named_not_absorbed(tmp_path):

@@ -169,7 +169,9 @@ def kf_tracked(logs, kf_sd_pct=None):
         "rms_error_pct": _num(float(np.sqrt(np.mean(cmp_**2))), 4) if len(cmp_) else None,
         "limit_pct": _num(max(KFT_TOL_PCT, 4.0 * kf_sd_pct) if kf_sd_pct else KFT_TOL_PCT, 4),
         "max_abs_error_over_sd": _num(float(np.nanmax(np.abs(z[w]))), 3) if np.isfinite(z[w]).any() else None,
-        "rms_error_over_sd": _num(float(np.sqrt(np.nanmean(z[w] ** 2))), 3) if np.isfinite(z[w]).any() else None,
+        "rms_error_over_sd": _num(float(np.sqrt(np.nanmean(z[w] ** 2))), 3)
+        if np.isfinite(z[w]).any()
+        else None,
         "truth_change_pct": _num(100.0 * (true[-1] / true[0] - 1), 4),
     }
     if w.sum() > 1:
@@ -651,7 +653,10 @@ def _kf_tracked_md(kft):
                 f"max {s_['max_abs_error_over_sd']:.2f}.",
                 "",
             ]
-    lines += ["| t [s] | tracked k_f [N] | sd | truth [N] | error | error / sd |", "|---|---|---|---|---|---|"]
+    lines += [
+        "| t [s] | tracked k_f [N] | sd | truth [N] | error | error / sd |",
+        "|---|---|---|---|---|---|",
+    ]
     lines += [
         f"| {x['t']:.1f} | {x['estimate']:.5g} | {x['sd']:.2g} | {x['truth']:.5g} | "
         f"{x['error_pct']:+.3f} %{'' if x['compared'] else ' (warming up)'} | "
