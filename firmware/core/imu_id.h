@@ -50,11 +50,11 @@
 
 #define IMU_ID_ROTORS 8
 #define IMU_ID_DELAYS 5 /* 0..4 frames beyond the loop's one */
-#define IMU_ID_LAGS 30  /* log grid IMU_ID_TAU_MIN .. IMU_ID_TAU_MAX */
+#define IMU_ID_LAGS 20  /* log grid IMU_ID_TAU_MIN .. IMU_ID_TAU_MAX */
 #define IMU_ID_TAU_MIN 0.005f
 #define IMU_ID_TAU_MAX 0.25f
 #define IMU_ID_RING (IMU_ID_DELAYS + 2) /* the rings also feed the [1 2 1] / 4 smoother */
-#define IMU_ID_BLOCKS 32                /* clusters of the variance (merged in pairs when full) */
+#define IMU_ID_BLOCKS 16                /* clusters of the variance (merged in pairs when full) */
 #define IMU_ID_VEL_SD 0.05f             /* the velocity's error at either end of the calibration, m/s */
 #define IMU_ID_FREEZE 0.2f              /* share of the planned frames after which the clusters' hypothesis freezes */
 
