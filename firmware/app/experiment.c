@@ -265,6 +265,12 @@ static void result(struct experiment *e, int idx, float value)
 	e->n_results++;
 }
 
+/* a parameter result, or `none` when the value is not finite */
+static void result_fin(struct experiment *e, int idx, float value, float none)
+{
+	result(e, idx, isfinite(value) ? value : none);
+}
+
 /* A result as data (id_result.h): the quantity, its estimate and verdict; the app numbers it
  * within the run. The phase gives the experiment field: 1 rotor, 2 validation, 3-5 inertia. */
 static void id_out(struct experiment *e, enum app_id_param param, int rotor, float value, float sd, bool accepted,
@@ -688,6 +694,26 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	e->prog_rate = total > 0.0f ? 1.0f / (total * (float)e->n_phases) : 0.0f;
 }
 
+/* The motor model's results (the lag found and its sd, the curve's sd, NE) and, accepted, the
+ * model itself (ID_MOT_TAU, ID_DELAY_FR, MOT_CURVE when estimated), which the later phases
+ * (validation, inertia) also fly with. */
+static void motor_results(struct experiment *e, float tau, float tau_sd, uint32_t delay, float curve, float curve_sd,
+			  float ne, bool ok)
+{
+	result_fin(e, PX_ID_TAU_CHECK, tau, -1.0f);
+	result_fin(e, PX_ID_TAU_SD, tau_sd, 0.0f);
+	result_fin(e, PX_ID_CRV_SD, curve_sd, 0.0f);
+	result_fin(e, PX_ID_MOT_NE, ne, 0.0f);
+	if (!ok)
+		return;
+	result(e, PX_ID_MOT_TAU, tau);
+	result(e, PX_ID_DELAY_FR, (float)delay);
+	if (e->cfg.crv_est)
+		result(e, PX_MOT_CURVE, curve);
+	e->cfg.mot_tau = tau;
+	e->cfg.delay_fr = delay;
+}
+
 /* The rotor experiment's end with the null-space dither: the motor model of every rotor
  * (motor_id.h), its acceptance, results and status lines. Nothing is applied unless the model
  * explains the data (its cause) and every value is in range; ID_MOT_TAU, ID_DELAY_FR,
@@ -709,28 +735,18 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 			bad_rotor = j;
 	bool range_ok = !curve_bad && bad_rotor < 0;
 	bool ok = vf == IDENT_ACCEPT && vt == IDENT_ACCEPT && model_ok && range_ok;
-	result(e, PX_ID_KF_EST, isfinite(mr.kf) ? mr.kf : 0.0f);
-	result(e, PX_ID_KF_SD, isfinite(mr.kf_sd) ? mr.kf_sd : 0.0f);
-	result(e, PX_ID_KF_PLAIN, isfinite(kfp) ? kfp : 0.0f);
-	result(e, PX_ID_KTAU_EST, isfinite(mr.ktau) ? mr.ktau : 0.0f);
-	result(e, PX_ID_KTAU_SD, isfinite(mr.ktau_sd) ? mr.ktau_sd : 0.0f);
-	result(e, PX_ID_KTAU_PLAIN, isfinite(ktp) ? ktp : 0.0f);
-	result(e, PX_ID_TAU_CHECK, isfinite(mr.tau) ? mr.tau : -1.0f);
-	result(e, PX_ID_TAU_SD, isfinite(mr.tau_sd) ? mr.tau_sd : 0.0f);
-	result(e, PX_ID_CRV_SD, isfinite(mr.curve_sd) ? mr.curve_sd : 0.0f);
-	result(e, PX_ID_MOT_NE, isfinite(mr.ne_all) ? mr.ne_all : 0.0f);
+	result_fin(e, PX_ID_KF_EST, mr.kf, 0.0f);
+	result_fin(e, PX_ID_KF_SD, mr.kf_sd, 0.0f);
+	result_fin(e, PX_ID_KF_PLAIN, kfp, 0.0f);
+	result_fin(e, PX_ID_KTAU_EST, mr.ktau, 0.0f);
+	result_fin(e, PX_ID_KTAU_SD, mr.ktau_sd, 0.0f);
+	result_fin(e, PX_ID_KTAU_PLAIN, ktp, 0.0f);
+	motor_results(e, mr.tau, mr.tau_sd, mr.delay, mr.curve, mr.curve_sd, mr.ne_all, ok);
 	if (ok) {
 		result(e, PX_VEH_KF, mr.kf);
 		result(e, PX_VEH_KTAU, mr.ktau);
-		result(e, PX_ID_MOT_TAU, mr.tau);
-		result(e, PX_ID_DELAY_FR, (float)mr.delay);
-		if (e->cfg.crv_est)
-			result(e, PX_MOT_CURVE, mr.curve);
 		for (int j = 0; j < HAL_ROTORS; j++)
 			result(e, PX_MOT_SCALE1 + j, mr.scale[j]);
-		/* the later phases (validation, inertia) model the rotors with what was found */
-		e->cfg.mot_tau = mr.tau;
-		e->cfg.delay_fr = mr.delay;
 	}
 	set_result_bit(e, p, 1u, ok);
 	rotor_ids(e, &mr, ok, vf, vt, curve_bad, bad_rotor, kfp, ktp);
@@ -830,20 +846,11 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	bool speed_ok = !by_speed || mr.cause == MOTOR_ID_OK;
 	bool curve_bad = e->cfg.crv_est && !(r.curve >= THRMAP_CURVE_MIN && r.curve <= THRMAP_CURVE_MAX);
 	bool ok = vf == IDENT_ACCEPT && model_ok && speed_ok && !curve_bad;
-	result(e, PX_ID_KF_EST, isfinite(r.kf) ? r.kf : 0.0f);
-	result(e, PX_ID_KF_SD, isfinite(r.kf_sd) ? r.kf_sd : 0.0f);
-	result(e, PX_ID_TAU_CHECK, isfinite(r.tau) ? r.tau : -1.0f);
-	result(e, PX_ID_TAU_SD, isfinite(r.tau_sd) ? r.tau_sd : 0.0f);
-	result(e, PX_ID_CRV_SD, isfinite(r.curve_sd) ? r.curve_sd : 0.0f);
-	result(e, PX_ID_MOT_NE, isfinite(r.ne) ? r.ne : 0.0f);
+	result_fin(e, PX_ID_KF_EST, r.kf, 0.0f);
+	result_fin(e, PX_ID_KF_SD, r.kf_sd, 0.0f);
+	motor_results(e, r.tau, r.tau_sd, r.delay, r.curve, r.curve_sd, r.ne, ok);
 	if (ok) {
 		result(e, PX_VEH_KF, r.kf);
-		result(e, PX_ID_MOT_TAU, r.tau);
-		result(e, PX_ID_DELAY_FR, (float)r.delay);
-		if (e->cfg.crv_est)
-			result(e, PX_MOT_CURVE, r.curve);
-		e->cfg.mot_tau = r.tau;
-		e->cfg.delay_fr = r.delay;
 		e->cfg.slope_rsd = r.slope_rsd;
 		e->cfg.model_ok = true;
 		e->cfg.kf = r.kf;
@@ -972,8 +979,8 @@ static void izz_imu_end(struct experiment *e, const struct app_params *p, float 
 		float kt = ratio * p->veh_izz, kt_sd = kt * sqrtf(rel * rel + izz_sd * izz_sd);
 		enum ident_verdict v = ident_accept(kt, kt_sd, p->veh_ktau, rsd_max);
 		bool ok = v == IDENT_ACCEPT;
-		result(e, PX_ID_KTAU_EST, isfinite(kt) ? kt : 0.0f);
-		result(e, PX_ID_KTAU_SD, isfinite(kt_sd) ? kt_sd : 0.0f);
+		result_fin(e, PX_ID_KTAU_EST, kt, 0.0f);
+		result_fin(e, PX_ID_KTAU_SD, kt_sd, 0.0f);
 		if (ok)
 			result(e, PX_VEH_KTAU, kt);
 		id_out(e, APP_ID_KTAU, 0, kt, kt_sd, ok, app_id_reason_of_verdict(v));
@@ -1075,12 +1082,12 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		float tau_m = e->cfg.mot_tau, tau_c = ident_rotor_tau_check(&e->rot);
 		bool lag_off = tau_c >= 0.0f && isfinite(tau_c) && fabsf(tau_c - tau_m) > LAG_TOL * tau_m;
 		bool ok = vf == IDENT_ACCEPT && vt == IDENT_ACCEPT && !lag_off;
-		result(e, PX_ID_KF_EST, isfinite(kf) ? kf : 0.0f);
-		result(e, PX_ID_KF_SD, isfinite(kf_sd) ? kf_sd : 0.0f);
-		result(e, PX_ID_KF_PLAIN, isfinite(kfp) ? kfp : 0.0f);
-		result(e, PX_ID_KTAU_EST, isfinite(kt) ? kt : 0.0f);
-		result(e, PX_ID_KTAU_SD, isfinite(kt_sd) ? kt_sd : 0.0f);
-		result(e, PX_ID_KTAU_PLAIN, isfinite(ktp) ? ktp : 0.0f);
+		result_fin(e, PX_ID_KF_EST, kf, 0.0f);
+		result_fin(e, PX_ID_KF_SD, kf_sd, 0.0f);
+		result_fin(e, PX_ID_KF_PLAIN, kfp, 0.0f);
+		result_fin(e, PX_ID_KTAU_EST, kt, 0.0f);
+		result_fin(e, PX_ID_KTAU_SD, kt_sd, 0.0f);
+		result_fin(e, PX_ID_KTAU_PLAIN, ktp, 0.0f);
 		if (ok) {
 			result(e, PX_VEH_KF, kf);
 			result(e, PX_VEH_KTAU, kt);
@@ -1107,7 +1114,7 @@ static void phase_end(struct experiment *e, const struct app_params *p)
 		say(e, ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID ktau %.4f +/- %.4f %s%s", (double)kt, (double)kt_sd,
 		    ok ? "N m " : "rejected: ", why_t);
 		say(e, APP_SEV_INFO, "ID plain (eq. 20) kf %.3f N ktau %.4f N m", (double)kfp, (double)ktp);
-		result(e, PX_ID_TAU_CHECK, isfinite(tau_c) ? tau_c : -1.0f);
+		result_fin(e, PX_ID_TAU_CHECK, tau_c, -1.0f);
 		if (tau_c >= 0.0f && isfinite(tau_c))
 			say(e, lag_off ? APP_SEV_WARNING : APP_SEV_INFO, "ID motor lag %.4f s%s (ID_MOT_TAU %.4f)",
 			    (double)tau_c, lag_off ? " DIFFERS" : "", (double)tau_m);
