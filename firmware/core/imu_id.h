@@ -54,7 +54,7 @@
 #define IMU_ID_TAU_MIN 0.005f
 #define IMU_ID_TAU_MAX 0.25f
 #define IMU_ID_RING (IMU_ID_DELAYS + 2) /* the rings also feed the [1 2 1] / 4 smoother */
-#define IMU_ID_BLOCKS 16                /* clusters of the variance (merged in pairs when full) */
+#define IMU_ID_BLOCKS 32                /* clusters of the variance (merged in pairs when full) */
 #define IMU_ID_VEL_SD 0.05f             /* the velocity's error at either end of the calibration, m/s */
 #define IMU_ID_FREEZE 0.2f              /* share of the planned frames after which the clusters' hypothesis freezes */
 
