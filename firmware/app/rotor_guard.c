@@ -60,8 +60,13 @@ void rotor_guard_step(struct app *a, float dt)
 	 * outliers raise the rates too, so this is not a reason to stop judging).
 	 * app_thr_sc: the throttles of the last step, what the plant answers with now. */
 	const bool swinging = a->mode == APP_EXPERIMENT || env_osc_oscillating(&a->env_osc);
-	struct rotor_fail_input in = {app_thr_sc(a), thrust_n, speed_rps, dt_s, airborne && a->actuating,
-				      gap,           swinging};
+	struct rotor_fail_input in = {.thr = app_thr_sc(a),
+				      .thrust_n = thrust_n,
+				      .speed_rps = speed_rps,
+				      .dt_s = dt_s,
+				      .judge = airborne && a->actuating,
+				      .gap = gap,
+				      .excited = swinging};
 	struct rotor_fail_output o = rotor_fail_step(&a->rf, &in);
 
 	if (o.rotor >= 0) {
