@@ -1170,8 +1170,8 @@ def item_sources(rep, args):
     rep.row(9, f"identification per source: experiment 6 on {runs} random vehicles (lag 10-100 ms, delay 0-3, "
                "curve 0-0.5, k_f, k_tau, inertia +/-30 %, one rotor 0.8-1), default sensor noise", "", "", "", "",
             None, c)
-    names = {"thrust": "thrust rows (ID_SOURCE 1)", "imu": "imu, rotor scales given",
-             "imu_weak": "imu, the weak rotor unknown"}
+    names = {"thrust": "thrust rows (ID_SOURCE 1)", "imu": "imu_rpm (IMU + ESC speeds), rotor scales given",
+             "imu_weak": "imu_rpm, the weak rotor unknown"}
     for how, label in names.items():
         t = r[how]
         causes = ", ".join(f"{k} {v}" for k, v in sorted(t["causes"].items(), key=lambda kv: -kv[1])) or "none"

@@ -8,8 +8,9 @@ Each run flies the full sequence (experiment 6) in octo-sil on a vehicle of the 
 with the default realistic sensor noise, three ways on the same vehicle and seed:
 
 - thrust: the thrust and torque rows (ID_SOURCE 1), one rotor at 0.8-1.0 unknown to the firmware;
-- imu: no thrust or torque rows (--sensors imu,rpm), the rotors' scales given (MOT_SCALEj set
-  to the truth, as from a bench);
+- imu: no thrust or torque rows (--sensors imu,rpm: ID_SOURCE auto takes imu_rpm, the motor's
+  lag and delay from the ESC speeds, k_f from the accelerometer), the rotors' scales given
+  (MOT_SCALEj set to the truth, as from a bench);
 - imu, a weak rotor: as imu, with the 0.8-1.0 rotor unknown (the accelerometer cannot tell
   which rotor: the run must be rejected naming it, or its values right).
 
