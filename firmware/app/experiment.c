@@ -839,13 +839,18 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	if (by_speed) {
 		motor_id_process(&e->mid);
 		motor_id_solve(&e->mid, MOT_NE_MAX, &mr);
-		r.tau = mr.tau;
-		r.tau_sd = mr.tau_sd;
-		r.delay = mr.delay;
+		/* a speed model its own checks reject (the sweep's throttle levels lie outside
+		 * what its whiteness test was made for) leaves the accelerometer's lag and delay,
+		 * which passed theirs: said, never silently */
+		by_speed = mr.cause == MOTOR_ID_OK;
+		if (by_speed) {
+			r.tau = mr.tau;
+			r.tau_sd = mr.tau_sd;
+			r.delay = mr.delay;
+		}
 	}
-	bool speed_ok = !by_speed || mr.cause == MOTOR_ID_OK;
 	bool curve_bad = e->cfg.crv_est && !(r.curve >= THRMAP_CURVE_MIN && r.curve <= THRMAP_CURVE_MAX);
-	bool ok = vf == IDENT_ACCEPT && model_ok && speed_ok && !curve_bad;
+	bool ok = vf == IDENT_ACCEPT && model_ok && !curve_bad;
 	result_fin(e, PX_ID_KF_EST, r.kf, 0.0f);
 	result_fin(e, PX_ID_KF_SD, r.kf_sd, 0.0f);
 	motor_results(e, r.tau, r.tau_sd, r.delay, r.curve, r.curve_sd, r.ne, ok);
@@ -861,7 +866,6 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	}
 	set_result_bit(e, p, 1u, ok);
 	enum app_id_reason common = !model_ok   ? imu_reason(r.cause)
-				    : !speed_ok ? app_id_reason_of_cause(mr.cause)
 				    : curve_bad ? APP_ID_CURVE
 						: APP_ID_PARTNER_REJECTED;
 	id_out(e, APP_ID_KF, 0, r.kf, r.kf_sd, ok, vf != IDENT_ACCEPT ? app_id_reason_of_verdict(vf) : common);
@@ -872,8 +876,8 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 		id_out(e, APP_ID_MOT_CURVE, 0, r.curve, r.curve_sd, ok, curve_bad ? APP_ID_CURVE : common);
 	int sev = ok ? APP_SEV_INFO : APP_SEV_WARNING;
 	say(e, APP_SEV_INFO,
-	    by_speed ? "ID source imu_rpm: accelerometer, mass, throttles, rotor speeds"
-		     : "ID source imu: accelerometer, mass, throttles");
+	    e->cfg.src == EXP_SRC_IMU_RPM ? "ID source imu_rpm: accelerometer, mass, throttles, rotor speeds"
+					  : "ID source imu: accelerometer, mass, throttles");
 	say(e, sev, "ID kf %.3f +/- %.3f %s%s", (double)r.kf, (double)r.kf_sd, ok ? "N " : "rejected: ",
 	    ok                   ? "accepted"
 	    : vf != IDENT_ACCEPT ? ident_verdict_text(vf)
@@ -882,6 +886,9 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	say(e, sev, "ID motor lag %.4f +/- %.4f s delay %d fr", (double)r.tau, (double)r.tau_sd, (int)r.delay);
 	if (by_speed)
 		say(e, APP_SEV_INFO, "ID lag from the speeds; the accelerometer's %.4f s", (double)tau_imu);
+	else if (e->cfg.src == EXP_SRC_IMU_RPM)
+		say(e, APP_SEV_WARNING, "ID speeds' model rejected (%s): the accelerometer's lag",
+		    motor_id_cause_text(mr.cause));
 	if (e->cfg.crv_est)
 		say(e, sev, "ID curve %.3f +/- %.3f", (double)r.curve, (double)r.curve_sd);
 	say(e, APP_SEV_INFO, "ID collective NE %.3f noise %.4f N", (double)r.ne, (double)r.noise_sd);
@@ -891,9 +898,6 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	if (!model_ok) {
 		say(e, APP_SEV_WARNING, "ID rejected: %s", imu_id_cause_text(r.cause));
 		say(e, APP_SEV_WARNING, "ID remedy: %s", imu_id_cause_remedy(r.cause));
-	} else if (!speed_ok) {
-		say(e, APP_SEV_WARNING, "ID rejected: speeds: %s", motor_id_cause_text(mr.cause));
-		say(e, APP_SEV_WARNING, "ID remedy: %s", motor_id_cause_remedy(mr.cause));
 	} else if (curve_bad) {
 		say(e, APP_SEV_WARNING, "ID rejected: curve %.3f outside %.2f to %.2f", (double)r.curve,
 		    (double)THRMAP_CURVE_MIN, (double)THRMAP_CURVE_MAX);

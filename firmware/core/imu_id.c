@@ -603,7 +603,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->curve = c->est_curve ? (kf_raw != 0.0f ? B / kf_raw : 0.0f) : c->curve0;
 	if (c->est_curve) { /* dc/dA = -B / K^2, dc/dB = A / K^2 */
 		float k2 = kf_raw * kf_raw, jc[NP] = {-B / k2, A / k2, 0.0f, 0.0f, 0.0f};
-		r->curve_sd = sqrtf(quad(v, jc) * cl_factor(m, thc, jc, &ncl));
+		r->curve_sd = IMU_ID_SD_CAL * sqrtf(quad(v, jc) * cl_factor(m, thc, jc, &ncl));
 	}
 	/* the calibration: kappa = m (g T + v_last - v0) / (sum (F_w - D) dt), D the offset;
 	 * k_f = kappa (A + B), its sd from the parameters' covariance through the Jacobian
@@ -626,14 +626,14 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	float jl[NP] = {0.0f, 0.0f, 1.0f, c->est_curve ? 1.0f : 0.0f, 0.0f};
 	float vo = v[P_OFS][P_OFS] * cl_factor(m, thc, jo, &ncl);
 	r->kappa_sd = fm > 0.0f ? sqrtf(kap_sd * kap_sd + kap * kap * vo / (fm * fm)) : 0.0f;
-	r->kf_sd = sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
+	r->kf_sd = IMU_ID_SD_CAL * sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
 	/* the slope at hover: kappa (A + 2 B y_h) */
 	float yh = m->nz_n ? m->nz_thr / (float)m->nz_n : 0.0f, sl_raw = A + 2.0f * B * yh;
 	r->thr_hover = yh;
 	r->slope = kap * sl_raw;
 	float js[NP] = {kap, c->est_curve ? 2.0f * kap * yh : 0.0f, 0.0f, 0.0f, fm > 0.0f ? r->slope / fm : 0.0f};
 	float vs = quad(v, js) * cl_factor(m, thc, js, &ncl) + kap_sd * kap_sd * sl_raw * sl_raw;
-	r->slope_rsd = r->slope > 0.0f ? sqrtf(vs) / r->slope : INFINITY;
+	r->slope_rsd = r->slope > 0.0f ? IMU_ID_SD_CAL * sqrtf(vs) / r->slope : INFINITY;
 	/* the lag: the grid point moved by the Gauss-Newton step, its second-order term removed */
 	float vl = quad(v, jl) * cl_factor(m, thc, jl, &ncl);
 	float dl_sd = kf_raw > 0.0f ? sqrtf(fmaxf(vl, 0.0f)) / kf_raw : INFINITY;
