@@ -493,6 +493,23 @@ static void snapshot(struct exp_turn *t, const struct exp_input *in)
 
 static float phase_limit(const struct experiment *e, const char **name);
 
+/* The motor model of every rotor (motor_id.h) for an excitation of run_s: ID_MOT_TAU centres
+ * the first lag grid, VEH_KF and MOT_CURVE are the reference model */
+static void motor_model_begin(struct experiment *e, const struct app_params *p, const struct exp_turn *in, float run_s)
+{
+	const struct exp_cfg *cf = &e->cfg;
+	struct motor_id_cfg mc = {
+		.dt_s = sc_from_float(e->dt_nom),
+		.tau0_s = cf->mot_tau,
+		.kf0 = p->veh_kf,
+		.curve0 = p->mot_curve,
+		.est_curve = cf->crv_est,
+		.n_frames = (uint32_t)(run_s / e->dt_nom + 0.5f),
+	};
+	_Static_assert(MOTOR_ID_ROTORS == HAL_ROTORS, "the motor model covers every rotor");
+	motor_id_init(&e->mid, &mc, in->thr_prev_all);
+}
+
 /* With the rotor speeds (ESC telemetry) the motor model is seen rotor by rotor: thrust goes
  * with speed^2 (rpm^2 = rpm_max^2 g(y), the effectiveness aside), so motor_id (motor_id.h)
  * reads w2_gain w_j^2 as rotor j's "thrust": its delay, lag and curve are the motor's; its
@@ -508,15 +525,7 @@ static void speed_model_begin(struct experiment *e, const struct app_params *p, 
 		wsum += w * w;
 	}
 	e->w2_gain = wsum > 0.0f && isfinite(wsum) ? p->veh_kf * gsum / wsum : 0.0f;
-	struct motor_id_cfg mc = {
-		.dt_s = sc_from_float(e->dt_nom),
-		.tau0_s = cf->mot_tau,
-		.kf0 = p->veh_kf,
-		.curve0 = p->mot_curve,
-		.est_curve = cf->crv_est,
-		.n_frames = (uint32_t)(cf->imu_time / e->dt_nom + 0.5f),
-	};
-	motor_id_init(&e->mid, &mc, in->thr_prev_all);
+	motor_model_begin(e, p, in, cf->imu_time);
 }
 
 /* a frame of the speed model: the speeds as thrusts (no torques: not read) */
@@ -623,16 +632,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		ident_rotor_init(&e->rot, &c);
 		/* the motor model of every rotor: delay, lag, curve, k_f, k_tau, scales (priors:
 		 * ID_MOT_TAU centres the first lag grid, VEH_KF and MOT_CURVE the reference model) */
-		struct motor_id_cfg mc = {
-			.dt_s = dt,
-			.tau0_s = cf->mot_tau,
-			.kf0 = p->veh_kf,
-			.curve0 = p->mot_curve,
-			.est_curve = cf->crv_est,
-			.n_frames = (uint32_t)(cf->exc_time / e->dt_nom + 0.5f),
-		};
-		_Static_assert(MOTOR_ID_ROTORS == HAL_ROTORS, "the motor model covers every rotor");
-		motor_id_init(&e->mid, &mc, in->thr_prev_all);
+		motor_model_begin(e, p, in, cf->exc_time);
 		struct excite_params xp2 = xp;
 		xp2.seed = xp.seed * 2654435761u + 12345u;
 		excite_init(&e->exc2, &xp2);
