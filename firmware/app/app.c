@@ -235,25 +235,35 @@ static bool exp_source_pick(const struct app *a, int id, enum exp_source *src, c
 {
 	const uint32_t rows = HAL_FRAME_THRUST | HAL_FRAME_TORQUE, imu = HAL_FRAME_ACCEL | HAL_FRAME_RATES;
 	bool have_rows = (a->fr.valid & rows) == rows, have_imu = (a->fr.valid & imu) == imu;
-	bool have_rpm = (a->fr.valid & HAL_FRAME_RPM) != 0;
+	bool have_rpm = (a->fr.valid & HAL_FRAME_RPM) != 0, have_tq = (a->fr.valid & HAL_FRAME_TORQUE) != 0;
 	float v = a->p.id_source;
 	int want = isfinite(v) ? (int)(v + 0.5f) : 0;
 	if (want == 0)
-		want = have_rows ? EXP_SRC_THRUST : have_rpm ? EXP_SRC_IMU_RPM : EXP_SRC_IMU;
-	if (want >= 4) {
-		snprintf(why, cap, "Experiment %d refused: ID_SOURCE %d not built (1 thrust, 2 imu, 3 imu_rpm)", id,
-			 want);
+		want = have_rows             ? EXP_SRC_THRUST
+		       : have_rpm && have_tq ? EXP_SRC_IMU_RPM_TQ
+		       : have_rpm            ? EXP_SRC_IMU_RPM
+					     : EXP_SRC_IMU;
+	if (want < 1 || want > 4) {
+		snprintf(why, cap,
+			 "Experiment %d refused: ID_SOURCE %d unknown (0 auto, 1 thrust, 2 imu, 3 imu_rpm, "
+			 "4 imu_rpm_torque)",
+			 id, want);
 		return false;
 	}
-	if (want == EXP_SRC_IMU_RPM && !have_rpm) {
-		snprintf(why, cap, "Experiment %d refused: no rotor speeds (ID_SOURCE imu_rpm)", id);
+	if ((want == EXP_SRC_IMU_RPM || want == EXP_SRC_IMU_RPM_TQ) && !have_rpm) {
+		snprintf(why, cap, "Experiment %d refused: no rotor speeds (ID_SOURCE %s)", id,
+			 want == EXP_SRC_IMU_RPM ? "imu_rpm" : "imu_rpm_torque");
+		return false;
+	}
+	if (want == EXP_SRC_IMU_RPM_TQ && !have_tq) {
+		snprintf(why, cap, "Experiment %d refused: no ESC torques (ID_SOURCE imu_rpm_torque)", id);
 		return false;
 	}
 	if (want == EXP_SRC_THRUST && !have_rows) {
 		snprintf(why, cap, "Experiment %d refused: no rotor thrust/torque rows", id);
 		return false;
 	}
-	if ((want == EXP_SRC_IMU || want == EXP_SRC_IMU_RPM) && !have_imu) {
+	if (want >= EXP_SRC_IMU && !have_imu) {
 		snprintf(why, cap, "Experiment %d refused: no accelerometer (ID_SOURCE imu)", id);
 		return false;
 	}

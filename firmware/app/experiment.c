@@ -111,6 +111,9 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	c->imu_time = cfg_f(p->id_imu_time, 30.0f);
 	c->kf = p->veh_kf;
 	c->curve = p->mot_curve;
+	c->ktau = p->veh_ktau;
+	c->kt_rsd = 0.0f;
+	c->kt_id = false;
 	/* the rotor model flown with: identified if an earlier rotor experiment was accepted */
 	float rm = cfg_f(p->id_result, 0.0f);
 	c->model_ok = rm >= 0.0f && rm < 256.0f && ((uint32_t)rm & 1u) != 0u;
@@ -124,7 +127,13 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 }
 
 /* the experiment measures with the IMU (with or without the rotor speeds) */
-static bool imu_src(const struct exp_cfg *c) { return c->src == EXP_SRC_IMU || c->src == EXP_SRC_IMU_RPM; }
+static bool imu_src(const struct exp_cfg *c)
+{
+	return c->src == EXP_SRC_IMU || c->src == EXP_SRC_IMU_RPM || c->src == EXP_SRC_IMU_RPM_TQ;
+}
+
+/* ... with the rotor speeds */
+static bool rpm_src(const struct exp_cfg *c) { return c->src == EXP_SRC_IMU_RPM || c->src == EXP_SRC_IMU_RPM_TQ; }
 
 /* Status lines are queued with their arguments and formatted (vsnprintf with %f: costly) by
  * exp_pump, between frames, not in the 90 Hz step. say() records the
@@ -229,7 +238,7 @@ void exp_pump(struct experiment *e)
 		if (!e->reporting && k == PK_ROTOR) {
 			if (imu_src(&e->cfg)) {
 				imu_id_process(&e->imid);
-				if (e->cfg.src == EXP_SRC_IMU_RPM)
+				if (rpm_src(&e->cfg))
 					motor_id_refine(&e->mid); /* processes the waiting frame first */
 				excite_prepare(&e->exc2);
 				excite_prepare(&e->exc3);
@@ -360,7 +369,7 @@ static void rmodel_init(struct exp_rmodel *r, const struct app_params *p, const 
 	}
 	r->c = sc_from_float(cf->curve);
 	r->c1 = sc_sub(SC(1), r->c);
-	r->kt = sc_from_float(cf->kf > 0.0f ? p->veh_ktau / cf->kf : 0.0f);
+	r->kt = sc_from_float(cf->kf > 0.0f ? cf->ktau / cf->kf : 0.0f);
 }
 
 /* n frames of the throttles thr_prev (n > 1 after lost frames: the plant held them); the
@@ -434,7 +443,7 @@ int exp_start(struct experiment *e, int id, const struct app_params *p, enum exp
 		return APP_DENIED;
 	}
 	cfg_resolve(&e->cfg, p);
-	e->cfg.src = src == EXP_SRC_IMU || src == EXP_SRC_IMU_RPM ? src : EXP_SRC_THRUST;
+	e->cfg.src = src == EXP_SRC_IMU || src == EXP_SRC_IMU_RPM || src == EXP_SRC_IMU_RPM_TQ ? src : EXP_SRC_THRUST;
 	if (!(e->cfg.exc_amp > 0.0f) || !(e->cfg.exc_time > 0.0f)) {
 		snprintf(why, cap, "Experiment %d refused: ID_EXC_AMP/ID_EXC_TIME not > 0", id);
 		return APP_DENIED;
@@ -565,6 +574,8 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 		.est_curve = cf->crv_est,
 		.n_frames = (uint32_t)(cf->imu_time / e->dt_nom + 0.5f),
 		.block_frames = (uint32_t)(SWP_PERIOD_S / e->dt_nom + 0.5f),
+		.torque = cf->src == EXP_SRC_IMU_RPM_TQ,
+		.kt0 = p->veh_ktau,
 	};
 	float thr_h = 0.0f;
 	for (int j = 0; j < HAL_ROTORS; j++) {
@@ -588,7 +599,7 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	e->rot_k = 0;
 	e->ofs = sc_from_float(cf->exc_ofs);
 	sweep_plan(e, p, thr_h);
-	if (cf->src == EXP_SRC_IMU_RPM)
+	if (rpm_src(cf))
 		speed_model_begin(e, p, in);
 	e->est_live = 0;
 	*xpp = xp;
@@ -820,6 +831,42 @@ static enum app_id_reason imu_reason(enum imu_id_cause c)
 	return APP_ID_MODEL;
 }
 
+/* k_tau under the IMU source: from the ESCs' torques (imu_rpm_torque) on the collective
+ * model's hypothesis, accepted only with the force's model (ok: k_f accepted); else not
+ * identifiable (the ratio k_tau / I_z comes from the yaw phase). Accepted, the later phases
+ * model the yaw torque with it, and I_z is estimated as the roll and pitch inertias are. */
+static void imu_ktau_end(struct experiment *e, const struct app_params *p, const struct imu_id_result *r, bool ok)
+{
+	if (e->cfg.src != EXP_SRC_IMU_RPM_TQ) {
+		id_out(e, APP_ID_KTAU, 0, NAN, NAN, false, APP_ID_NOT_IDENTIFIABLE);
+		return;
+	}
+	if (!r->tq_ok) {
+		id_out(e, APP_ID_KTAU, 0, NAN, NAN, false, APP_ID_NOT_FINITE);
+		say(e, APP_SEV_WARNING, "ID ktau rejected: ESC torque readings lost");
+		return;
+	}
+	enum ident_verdict v = ident_accept(r->ktau, r->ktau_sd, p->veh_ktau, e->cfg.rsd_max);
+	bool kt_ok = ok && v == IDENT_ACCEPT;
+	result_fin(e, PX_ID_KTAU_EST, r->ktau, 0.0f);
+	result_fin(e, PX_ID_KTAU_SD, r->ktau_sd, 0.0f);
+	if (kt_ok) {
+		result(e, PX_VEH_KTAU, r->ktau);
+		e->cfg.ktau = r->ktau;
+		e->cfg.kt_rsd = r->tq_slope_rsd;
+		e->cfg.kt_id = true;
+	}
+	id_out(e, APP_ID_KTAU, 0, r->ktau, r->ktau_sd, kt_ok,
+	       v != IDENT_ACCEPT ? app_id_reason_of_verdict(v) : APP_ID_PARTNER_REJECTED);
+	say(e, kt_ok ? APP_SEV_INFO : APP_SEV_WARNING, "ID ktau %.4f +/- %.4f %s%s", (double)r->ktau,
+	    (double)r->ktau_sd, kt_ok ? "N m (ESC torque) " : "rejected: ",
+	    kt_ok               ? "accepted"
+	    : v != IDENT_ACCEPT ? ident_verdict_text(v)
+				: "kf rejected");
+	say(e, APP_SEV_INFO, "ID ESC torque residual %.5f N m, sd x %.2f (clusters)", (double)r->tq_noise,
+	    (double)sqrtf(r->tq_hac));
+}
+
 /* The IMU rotor experiment's end: the collective model (imu_id.h), its acceptance, results
  * and status lines. k_tau and the per-rotor scales are not seen by the accelerometer: they
  * are reported as such (k_tau / I_z comes from the yaw inertia phase). */
@@ -834,7 +881,7 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	 * IMU's own stay as a check (said); k_f and its curve are the IMU's (the speeds do not
 	 * see the propellers' thrust) */
 	struct motor_id_result mr;
-	bool by_speed = e->cfg.src == EXP_SRC_IMU_RPM;
+	bool by_speed = rpm_src(&e->cfg);
 	float tau_imu = r.tau;
 	if (by_speed) {
 		motor_id_process(&e->mid);
@@ -869,24 +916,26 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 				    : curve_bad ? APP_ID_CURVE
 						: APP_ID_PARTNER_REJECTED;
 	id_out(e, APP_ID_KF, 0, r.kf, r.kf_sd, ok, vf != IDENT_ACCEPT ? app_id_reason_of_verdict(vf) : common);
-	id_out(e, APP_ID_KTAU, 0, NAN, NAN, false, APP_ID_NOT_IDENTIFIABLE);
 	id_out(e, APP_ID_MOT_TAU, 0, r.tau, r.tau_sd, ok, common);
 	id_out(e, APP_ID_DELAY_FR, 0, (float)r.delay, NAN, ok, common);
 	if (e->cfg.crv_est)
 		id_out(e, APP_ID_MOT_CURVE, 0, r.curve, r.curve_sd, ok, curve_bad ? APP_ID_CURVE : common);
 	int sev = ok ? APP_SEV_INFO : APP_SEV_WARNING;
 	say(e, APP_SEV_INFO,
-	    e->cfg.src == EXP_SRC_IMU_RPM ? "ID source imu_rpm: accelerometer, mass, throttles, rotor speeds"
-					  : "ID source imu: accelerometer, mass, throttles");
+	    e->cfg.src == EXP_SRC_IMU_RPM_TQ ? "ID source imu_rpm_torque: accelerometer, mass, throttles, rotor "
+					       "speeds, ESC torques"
+	    : e->cfg.src == EXP_SRC_IMU_RPM  ? "ID source imu_rpm: accelerometer, mass, throttles, rotor speeds"
+					     : "ID source imu: accelerometer, mass, throttles");
 	say(e, sev, "ID kf %.3f +/- %.3f %s%s", (double)r.kf, (double)r.kf_sd, ok ? "N " : "rejected: ",
 	    ok                   ? "accepted"
 	    : vf != IDENT_ACCEPT ? ident_verdict_text(vf)
 	    : model_ok           ? "out of range"
 				 : "motor model");
+	imu_ktau_end(e, p, &r, ok);
 	say(e, sev, "ID motor lag %.4f +/- %.4f s delay %d fr", (double)r.tau, (double)r.tau_sd, (int)r.delay);
 	if (by_speed)
 		say(e, APP_SEV_INFO, "ID lag from the speeds; the accelerometer's %.4f s", (double)tau_imu);
-	else if (e->cfg.src == EXP_SRC_IMU_RPM)
+	else if (rpm_src(&e->cfg))
 		say(e, APP_SEV_WARNING, "ID speeds' model rejected (%s): the accelerometer's lag",
 		    motor_id_cause_text(mr.cause));
 	if (e->cfg.crv_est)
@@ -894,7 +943,8 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	say(e, APP_SEV_INFO, "ID collective NE %.3f noise %.4f N", (double)r.ne, (double)r.noise_sd);
 	say(e, APP_SEV_INFO, "ID %d clusters: sd x %.2f (vibration)", (int)r.blocks, (double)sqrtf(r.hac));
 	say(e, APP_SEV_INFO, "ID accelerometer scale %.4f +/- %.4f (in flight)", (double)r.kappa, (double)r.kappa_sd);
-	say(e, APP_SEV_INFO, "ID ktau: not seen by the IMU (the ratio: Izz phase)");
+	if (e->cfg.src != EXP_SRC_IMU_RPM_TQ)
+		say(e, APP_SEV_INFO, "ID ktau: not seen by the IMU (the ratio: Izz phase)");
 	if (!model_ok) {
 		say(e, APP_SEV_WARNING, "ID rejected: %s", imu_id_cause_text(r.cause));
 		say(e, APP_SEV_WARNING, "ID remedy: %s", imu_id_cause_remedy(r.cause));
@@ -1014,10 +1064,12 @@ static void inertia_end(struct experiment *e, const struct app_params *p, unsign
 	float gs = cfg_f(p->id_gyr_scl_sd, 0.0f) * est, sd_data = sd;
 	if (isfinite(sd) && isfinite(gs))
 		sd = sqrtf(sd * sd + gs * gs);
-	if (imu_src(&e->cfg) && ax != 2u) {
-		/* the torque is the model's, its swings about hover scaled by the thrust's
-		 * slope there: the slope's uncertainty passes one for one into the inertia */
-		float rk = e->cfg.slope_rsd;
+	bool yaw_tq = ax == 2u && e->cfg.kt_id; /* the yaw torque from k_tau identified */
+	if (imu_src(&e->cfg) && (ax != 2u || yaw_tq)) {
+		/* the torque is the model's, its swings about hover scaled by the thrust's (the
+		 * reaction torque's) slope there: the slope's uncertainty passes one for one
+		 * into the inertia */
+		float rk = ax != 2u ? e->cfg.slope_rsd : e->cfg.kt_rsd;
 		if (isfinite(sd) && rk > 0.0f)
 			sd = sqrtf(sd * sd + rk * est * rk * est);
 	}
@@ -1033,7 +1085,7 @@ static void inertia_end(struct experiment *e, const struct app_params *p, unsign
 		say(e, APP_SEV_WARNING, "ID %s rejected: rotor model not identified (experiment 1)", nm[ax]);
 		return;
 	}
-	if (imu_src(&e->cfg) && ax == 2u) {
+	if (imu_src(&e->cfg) && ax == 2u && !yaw_tq) {
 		izz_imu_end(e, p, est, sd);
 		return;
 	}
@@ -1203,10 +1255,14 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		const scalar_t *tp = in->thr_prev;
 		for (int i = 1; i < n; i++)
 			imu_id_hold(&e->imid, tp);
+		scalar_t tq = SC_ZERO;
+		if (e->cfg.src == EXP_SRC_IMU_RPM_TQ && in->torque_nm)
+			for (int j = 0; j < HAL_ROTORS; j++)
+				tq = sc_add(tq, in->torque_nm[j]);
 		if (n >= 1)
 			imu_id_step(&e->imid, tp, imu_force(in, p), imu_force_up(in, p),
-				    sc_from_float(in->frame->vel_i_mps[2]), use);
-		if (e->cfg.src == EXP_SRC_IMU_RPM)
+				    sc_from_float(in->frame->vel_i_mps[2]), tq, use);
+		if (rpm_src(&e->cfg))
 			speed_model_step(e, in, n, use);
 		scalar_t d0 = sweep_step(e, running);
 		null_dither(e, running, running ? excite_update(&e->exc) : SC_ZERO, out);

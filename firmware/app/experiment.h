@@ -38,9 +38,10 @@ enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
 
 /* what an experiment measures the rotors with (ID_SOURCE; the codes of OCTO_ID_SOURCE) */
 enum exp_source {
-	EXP_SRC_THRUST = 1,  /* each rotor's thrust and torque rows (a simulator, a test bench) */
-	EXP_SRC_IMU = 2,     /* gyro, accelerometer, throttles sent, mass and geometry */
-	EXP_SRC_IMU_RPM = 3, /* the IMU, and each rotor's speed (ESC telemetry) for its motor model */
+	EXP_SRC_THRUST = 1,     /* each rotor's thrust and torque rows (a simulator, a test bench) */
+	EXP_SRC_IMU = 2,        /* gyro, accelerometer, throttles sent, mass and geometry */
+	EXP_SRC_IMU_RPM = 3,    /* the IMU, and each rotor's speed (ESC telemetry) for its motor model */
+	EXP_SRC_IMU_RPM_TQ = 4, /* those, and each rotor's shaft torque (ESC current) for k_tau */
 };
 
 struct exp_input {
@@ -107,6 +108,9 @@ struct exp_cfg {
 	float gp_rsd;    /* IMU: the curve's slope g'(y_h)'s relative sd (the yaw torque's scale) */
 	float kf, curve; /* the rotor model the later phases fly with: VEH_KF, MOT_CURVE, or what
 			  * this run found (applied only at the next frame boundary) */
+	float ktau;      /* its k_tau: VEH_KTAU, or the ESCs' torques' estimate of this run */
+	float kt_rsd;    /* that estimate's torque slope about hover: relative sd */
+	bool kt_id;      /* k_tau identified by this run (from the ESCs' torques) */
 	bool model_ok;   /* that model was identified (ID_RESULT bit 0, or this run) */
 };
 

@@ -58,9 +58,10 @@ enum app_id_reason {
 
 enum app_id_source {
 	APP_ID_SOURCE_UNKNOWN = 0,
-	APP_ID_SOURCE_THRUST = 1,  /* each rotor's measured thrust and reaction torque */
-	APP_ID_SOURCE_IMU = 2,     /* gyro, accelerometer, throttles sent, mass and geometry */
-	APP_ID_SOURCE_IMU_RPM = 3, /* the IMU and each rotor's speed */
+	APP_ID_SOURCE_THRUST = 1,     /* each rotor's measured thrust and reaction torque */
+	APP_ID_SOURCE_IMU = 2,        /* gyro, accelerometer, throttles sent, mass and geometry */
+	APP_ID_SOURCE_IMU_RPM = 3,    /* the IMU and each rotor's speed */
+	APP_ID_SOURCE_IMU_RPM_TQ = 4, /* those and each rotor's shaft torque (ESC current) */
 };
 
 struct app_id_result {

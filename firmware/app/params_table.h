@@ -105,11 +105,11 @@ PARAM(KFT_MEM, kft_mem, 0.0f, -1e9f, 1e9f, "s", "Tracked (read-only): memory of 
 PARAM(NAV_HOLD_TO, nav_hold_to, 30.0f, 0.0f, 600.0f, "s",
       "Hold entry (take-off at its target height: still, hover learned) must reach HOLD within this, else it fails and lands")
 /* what identification, hover learning and the k_f tracker measure with (docs/identification.md,
- * "From the IMU"; 4 is refused by the experiments: not built) */
+ * "From the IMU") */
 #undef PARAM_FLAGS
 #define PARAM_FLAGS PARAM_LOCKED
 PARAM(ID_SOURCE, id_source, 0.0f, 0.0f, 4.0f, "",
-      "Measurements: 0 auto (thrust rows when served, else IMU), 1 thrust rows, 2 imu, 3 imu_rpm, 4 imu_rpm_torque")
+      "Measurements: 0 auto (thrust rows when served, else the IMU with what ESC telemetry gives), 1 thrust rows, 2 imu, 3 imu_rpm, 4 imu_rpm_torque")
 #undef PARAM_FLAGS
 #define PARAM_FLAGS 0
 PARAM(KFT_ACC_WALK, kft_acc_walk, 0.001f, 0.0f, 1.0f, "m/s^2/sqrt(s)",

@@ -88,7 +88,7 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 }
 
 void imu_id_step(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS], scalar_t f_n, scalar_t fw_n, scalar_t vz,
-		 bool excited)
+		 scalar_t tq_n, bool excited)
 {
 	if (m->q_pending)
 		imu_id_process(m);
@@ -97,6 +97,11 @@ void imu_id_step(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS], scala
 	m->q_f = sc_to_float(f_n);
 	m->q_fw = sc_to_float(fw_n);
 	m->q_vz = sc_to_float(vz);
+	m->q_tq = m->cfg.torque ? sc_to_float(tq_n) : 0.0f;
+	if (!isfinite(m->q_tq)) {
+		m->tq_lost = true;
+		m->q_tq = 0.0f;
+	}
 	m->q_excited = excited;
 	m->q_pending = true;
 }
@@ -166,6 +171,13 @@ static bool inv_sym(const float g[NT], float h[NP][NP])
 	return true;
 }
 
+static void add_outer(float g[NT], const float x[NP], const float y[NP])
+{
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = i; k < NP; k++)
+			g[ut(i, k)] += 0.5f * (x[i] * y[k] + x[k] * y[i]);
+}
+
 /* sums with the unused parameter pinned (curve not estimated: B = 0) */
 static void pinned(const struct imu_id *m, const float gs[NT], const float *bs, float g[NT], float b[NP])
 {
@@ -183,16 +195,18 @@ static void pinned(const struct imu_id *m, const float gs[NT], const float *bs, 
 	}
 }
 
-/* a hypothesis' parameters (relative to the reference), G^-1, and its residual sum */
-static float hyp_solve(const struct imu_id *m, const struct imu_id_stat *s, float th[NP], float h[NP][NP])
+/* the least squares of sums (G, b, z'z): the parameters (relative to the reference), G^-1,
+ * and the residual sum */
+static float fit(const struct imu_id *m, const float gs[NT], const float bs[NP], float rr, float th[NP],
+		 float h[NP][NP])
 {
 	float g[NT], b[NP];
-	pinned(m, s->g, s->b, g, b);
+	pinned(m, gs, bs, g, b);
 	if (!inv_sym(g, h)) {
 		memset(th, 0, NP * sizeof th[0]);
 		return INFINITY;
 	}
-	float j = s->rr;
+	float j = rr;
 	for (unsigned i = 0; i < NP; i++) {
 		th[i] = 0.0f;
 		for (unsigned k = 0; k < NP; k++)
@@ -200,6 +214,33 @@ static float hyp_solve(const struct imu_id *m, const struct imu_id_stat *s, floa
 		j -= th[i] * b[i];
 	}
 	return j;
+}
+
+/* a hypothesis' force fit (fit) */
+static float hyp_solve(const struct imu_id *m, const struct imu_id_stat *s, float th[NP], float h[NP][NP])
+{
+	return fit(m, s->g, s->b, s->rr, th, h);
+}
+
+/* the same hypothesis' torque fit */
+static float hyp_solve_tq(const struct imu_id *m, const struct imu_id_stat *s, float th[NP], float h[NP][NP])
+{
+	return fit(m, s->g, s->bt, s->rrt, th, h);
+}
+
+/* a frame's regressors x and responses (force z, torque zt, both relative to the
+ * references) into a hypothesis' or a block's sums */
+static void stat_add(struct imu_id_stat *s, const float x[NP], float z, float zt, bool tq)
+{
+	add_outer(s->g, x, x);
+	for (unsigned i = 0; i < NP; i++)
+		s->b[i] += x[i] * z;
+	s->rr += z * z;
+	if (!tq)
+		return;
+	for (unsigned i = 0; i < NP; i++)
+		s->bt[i] += x[i] * zt;
+	s->rrt += zt * zt;
 }
 
 static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl)
@@ -234,20 +275,13 @@ static void regs(const struct imu_id *m, unsigned d, unsigned l, float x[NP], fl
 	x[P_OFS] = 1.0f;
 }
 
-static void add_outer(float g[NT], const float x[NP], const float y[NP])
-{
-	for (unsigned i = 0; i < NP; i++)
-		for (unsigned k = i; k < NP; k++)
-			g[ut(i, k)] += 0.5f * (x[i] * y[k] + x[k] * y[i]);
-}
-
 /* the frozen hypothesis' frame into its block; a full set of blocks merges in pairs; and
  * into the scales' check (the two patterns' responses beside the parameters) */
-static void cl_add(struct imu_id *m, float f)
+static void cl_add(struct imu_id *m, float f, float tq)
 {
 	float x[NP], xr;
 	regs(m, m->cl_d, m->cl_l, x, &xr);
-	float z = f - m->cfg.kf0 * xr;
+	float z = f - m->cfg.kf0 * xr, zt = tq - m->cfg.kt0 * xr;
 	float xx[IMU_ID_NX];
 	for (unsigned i = 0; i < NP; i++)
 		xx[i] = x[i];
@@ -260,11 +294,7 @@ static void cl_add(struct imu_id *m, float f)
 	}
 	m->xrr += z * z;
 	m->xn++;
-	struct imu_id_stat *b = &m->blk[m->nb];
-	add_outer(b->g, x, x);
-	for (unsigned i = 0; i < NP; i++)
-		b->b[i] += x[i] * z;
-	b->rr += z * z;
+	stat_add(&m->blk[m->nb], x, z, zt, m->cfg.torque);
 	if (++m->cl_k < m->cl_len)
 		return;
 	m->cl_k = 0;
@@ -275,9 +305,12 @@ static void cl_add(struct imu_id *m, float f)
 		const struct imu_id_stat *p1 = &m->blk[2u * k + 1u];
 		for (unsigned i = 0; i < NT; i++)
 			t.g[i] += p1->g[i];
-		for (unsigned i = 0; i < NP; i++)
+		for (unsigned i = 0; i < NP; i++) {
 			t.b[i] += p1->b[i];
+			t.bt[i] += p1->bt[i];
+		}
 		t.rr += p1->rr;
+		t.rrt += p1->rrt;
 		m->blk[k] = t;
 	}
 	memset(&m->blk[IMU_ID_BLOCKS / 2u], 0, (IMU_ID_BLOCKS / 2u + 1u) * sizeof m->blk[0]);
@@ -302,9 +335,12 @@ void imu_id_process(struct imu_id *m)
 	m->fr[2] = m->fr[1];
 	m->fr[1] = m->fr[0];
 	m->fr[0] = m->q_f;
+	m->tr[2] = m->tr[1];
+	m->tr[1] = m->tr[0];
+	m->tr[0] = m->q_tq;
 	if (++m->n_fr < 3u)
 		return; /* the smoother fills */
-	float f = smooth(m->fr);
+	float f = smooth(m->fr), t = smooth(m->tr);
 	if (!m->q_excited) {
 		float u = 0.0f;
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
@@ -322,12 +358,7 @@ void imu_id_process(struct imu_id *m)
 		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
 			float x[NP], xr;
 			regs(m, d, l, x, &xr);
-			float z = f - c->kf0 * xr;
-			struct imu_id_stat *s = &m->st[d][l];
-			add_outer(s->g, x, x);
-			for (unsigned i = 0; i < NP; i++)
-				s->b[i] += x[i] * z;
-			s->rr += z * z;
+			stat_add(&m->st[d][l], x, f - c->kf0 * xr, t - c->kt0 * xr, c->torque);
 		}
 	if (!m->cl_on && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_exc >= 30u) {
 		unsigned bd, bl;
@@ -338,14 +369,14 @@ void imu_id_process(struct imu_id *m)
 		m->cl_on = true;
 	}
 	if (m->cl_on)
-		cl_add(m, f);
+		cl_add(m, f, t);
 }
 
 /* The clusters' variance factor for the projection j of the parameters: the cluster-robust
  * variance of j' theta over its white-noise variance, both on the frozen hypothesis' frames
  * (its residuals from theta, the whole flight's estimate), with the small-sample factors;
  * 1 with fewer than 4 clusters (*g_out: the clusters used). */
-static float cl_factor(const struct imu_id *m, const float th[NP], const float j[NP], unsigned *g_out)
+static float cl_factor(const struct imu_id *m, const float th[NP], const float j[NP], bool tq, unsigned *g_out)
 {
 	unsigned nb =
 		m->nb + (m->cl_k * 2u >= m->cl_len && m->cl_len > 0u ? 1u : 0u); /* a half-full last block counts */
@@ -356,16 +387,17 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 	uint32_t n = 0;
 	for (unsigned k = 0; k < nb; k++) {
 		const struct imu_id_stat *b = &m->blk[k];
+		const float *bb = tq ? b->bt : b->b;
 		/* the block's score r = b - G theta; its e'e = rr - 2 theta' b + theta' G theta */
 		float r[NP], gth[NP];
 		for (unsigned i = 0; i < NP; i++) {
 			gth[i] = 0.0f;
 			for (unsigned q = 0; q < NP; q++)
 				gth[i] += b->g[ut(i, q)] * th[q];
-			r[i] = b->b[i] - gth[i];
-			ee += th[i] * (gth[i] - 2.0f * b->b[i]);
+			r[i] = bb[i] - gth[i];
+			ee += th[i] * (gth[i] - 2.0f * bb[i]);
 		}
-		ee += b->rr;
+		ee += tq ? b->rrt : b->rr;
 		add_outer(ss, r, r);
 		for (unsigned i = 0; i < NT; i++)
 			gs[i] += b->g[i];
@@ -513,6 +545,47 @@ static float delay_margin(const struct imu_id *m, unsigned bd, struct imu_id_res
 	return j0;
 }
 
+/* k_tau from the ESCs' torques: the torque's fit on the hypothesis the force chose (bd, bl),
+ * with the same second-order correction from the neighbours at the force's step dl, and its
+ * white-noise covariance scaled by the clusters' factor of its own residuals. */
+static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float dl, struct imu_id_result *r)
+{
+	const struct imu_id_cfg *c = &m->cfg;
+	if (!c->torque || m->tq_lost)
+		return;
+	unsigned np = c->est_curve ? NP : NP - 2u;
+	float th[NP], h[NP][NP], v[NP][NP], thc[NP], hc[NP][NP];
+	float j = hyp_solve_tq(m, &m->st[bd][bl], th, h);
+	if (bl > 0u && bl + 1u < IMU_ID_LAGS) {
+		float tm[NP], tp[NP], hh[NP][NP], k = dl / (4.0f * grid_step());
+		hyp_solve_tq(m, &m->st[bd][bl - 1u], tm, hh);
+		hyp_solve_tq(m, &m->st[bd][bl + 1u], tp, hh);
+		for (unsigned i = 0; i < NP; i++)
+			th[i] += k * (tp[i] - tm[i]);
+	}
+	float s2 = j / (float)(m->n_exc - np);
+	if (!(s2 >= 0.0f) || !isfinite(s2))
+		return;
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++)
+			v[i][k] = s2 * h[i][k];
+	memset(thc, 0, sizeof thc);
+	if (m->cl_on)
+		hyp_solve_tq(m, &m->st[m->cl_d][m->cl_l], thc, hc);
+	float A = c->est_curve ? c->kt0 * (1.0f - c->curve0) + th[0] : c->kt0 + th[0];
+	float B = c->est_curve ? c->kt0 * c->curve0 + th[P_B] : 0.0f;
+	const float jk[NP] = {1.0f, c->est_curve ? 1.0f : 0.0f, 0.0f, 0.0f, 0.0f};
+	unsigned ncl = 0;
+	r->tq_hac = cl_factor(m, thc, jk, true, &ncl);
+	r->ktau = A + B;
+	r->ktau_sd = sqrtf(quad(v, jk) * r->tq_hac);
+	r->tq_noise = sqrtf(s2);
+	float yh = m->nz_n ? m->nz_thr / (float)m->nz_n : 0.0f, sl = A + 2.0f * B * yh;
+	const float js[NP] = {1.0f, c->est_curve ? 2.0f * yh : 0.0f, 0.0f, 0.0f, 0.0f};
+	r->tq_slope_rsd = sl > 0.0f ? sqrtf(quad(v, js) * cl_factor(m, thc, js, true, &ncl)) / sl : INFINITY;
+	r->tq_ok = isfinite(r->ktau) && isfinite(r->ktau_sd) && r->ktau > 0.0f;
+}
+
 /* The acceptance cause from the result's diagnostics (dl: the lag's step from grid point bl). */
 static enum imu_id_cause verdict(const struct imu_id *m, const struct imu_id_result *r, unsigned bl, float dl,
 				 float hac_max)
@@ -603,7 +676,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->curve = c->est_curve ? (kf_raw != 0.0f ? B / kf_raw : 0.0f) : c->curve0;
 	if (c->est_curve) { /* dc/dA = -B / K^2, dc/dB = A / K^2 */
 		float k2 = kf_raw * kf_raw, jc[NP] = {-B / k2, A / k2, 0.0f, 0.0f, 0.0f};
-		r->curve_sd = IMU_ID_SD_CAL * sqrtf(quad(v, jc) * cl_factor(m, thc, jc, &ncl));
+		r->curve_sd = IMU_ID_SD_CAL * sqrtf(quad(v, jc) * cl_factor(m, thc, jc, false, &ncl));
 	}
 	/* the calibration: kappa = m (g T + v_last - v0) / (sum (F_w - D) dt), D the offset;
 	 * k_f = kappa (A + B), its sd from the parameters' covariance through the Jacobian
@@ -619,12 +692,12 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->kf = kap * kf_raw;
 	float jac[NP] = {kap, c->est_curve ? kap : 0.0f, 0.0f, 0.0f, fm > 0.0f ? r->kf / fm : 0.0f};
 	float var = quad(v, jac);
-	r->hac = cl_factor(m, thc, jac, &ncl);
+	r->hac = cl_factor(m, thc, jac, false, &ncl);
 	r->blocks = ncl;
 	var *= r->hac;
 	const float jo[NP] = {0.0f, 0.0f, 0.0f, 0.0f, 1.0f};
 	float jl[NP] = {0.0f, 0.0f, 1.0f, c->est_curve ? 1.0f : 0.0f, 0.0f};
-	float vo = v[P_OFS][P_OFS] * cl_factor(m, thc, jo, &ncl);
+	float vo = v[P_OFS][P_OFS] * cl_factor(m, thc, jo, false, &ncl);
 	r->kappa_sd = fm > 0.0f ? sqrtf(kap_sd * kap_sd + kap * kap * vo / (fm * fm)) : 0.0f;
 	r->kf_sd = IMU_ID_SD_CAL * sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
 	/* the slope at hover: kappa (A + 2 B y_h) */
@@ -632,15 +705,16 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->thr_hover = yh;
 	r->slope = kap * sl_raw;
 	float js[NP] = {kap, c->est_curve ? 2.0f * kap * yh : 0.0f, 0.0f, 0.0f, fm > 0.0f ? r->slope / fm : 0.0f};
-	float vs = quad(v, js) * cl_factor(m, thc, js, &ncl) + kap_sd * kap_sd * sl_raw * sl_raw;
+	float vs = quad(v, js) * cl_factor(m, thc, js, false, &ncl) + kap_sd * kap_sd * sl_raw * sl_raw;
 	r->slope_rsd = r->slope > 0.0f ? IMU_ID_SD_CAL * sqrtf(vs) / r->slope : INFINITY;
 	/* the lag: the grid point moved by the Gauss-Newton step, its second-order term removed */
-	float vl = quad(v, jl) * cl_factor(m, thc, jl, &ncl);
+	float vl = quad(v, jl) * cl_factor(m, thc, jl, false, &ncl);
 	float dl_sd = kf_raw > 0.0f ? sqrtf(fmaxf(vl, 0.0f)) / kf_raw : INFINITY;
 	r->tau = lag_tau(bl) * expf(dl + lcorr);
 	scales_check(m, r->t_pattern);
 	r->tau_sd = r->tau * dl_sd;
 	r->cause = verdict(m, r, bl, dl, ne_max);
+	torque_solve(m, bd, bl, dl, r);
 }
 
 const char *imu_id_cause_text(enum imu_id_cause c)

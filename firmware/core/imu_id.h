@@ -29,6 +29,11 @@
  * clusters blocks of the sweep's period, with the small-sample factors of G clusters
  * (G / (G - 1), and (G - 1) / (G - 3) for the t-distribution the estimate then follows).
  *
+ * With the ESCs' shaft torques (their sum Q, from the motor currents) the same regressors
+ * explain Q = k_tau sum_j s_j g(y_j) plus the current sensors' summed offset: a second
+ * response over the same sums, solved on the hypothesis the force chose, gives k_tau with
+ * its own cluster-robust sd. The accelerometer's calibration does not enter it.
+ *
  * The accelerometer's bias and scale error are calibrated in flight: its offset is a fourth
  * parameter of the regression (a constant beside the thrust's linear and quadratic shapes,
  * which the throttle sweep separates), and over the excited frames the vertical (world)
@@ -78,14 +83,18 @@ struct imu_id_cfg {
 	uint32_t n_frames;           /* excited frames planned */
 	uint32_t block_frames;       /* a cluster's frames (the sweep's period; 0: 90) */
 	float pat[2][IMU_ID_ROTORS]; /* the null-space dithers' patterns (the scales' check) */
+	bool torque;                 /* the ESCs' torques are read: k_tau beside k_f */
+	float kt0;                   /* the torque's reference model: the prior k_tau, N m */
 };
 
 #define IMU_ID_NX (IMU_ID_NP + 2) /* the scales' check: the parameters and two patterns' responses */
 #define IMU_ID_T_ROTOR 5.0f       /* |t| of a pattern's response beyond which the scales are wrong */
 
-/* least-squares sums of one hypothesis: G (upper triangle, row by row), b, z'z */
+/* least-squares sums of one hypothesis: G (upper triangle, row by row), b, z'z; and the
+ * torque's b and z'z over the same G (cfg.torque) */
 struct imu_id_stat {
 	float g[IMU_ID_NT], b[IMU_ID_NP], rr;
+	float bt[IMU_ID_NP], rrt;
 };
 
 struct imu_id {
@@ -101,6 +110,7 @@ struct imu_id {
 	float xg[IMU_ID_NX][IMU_ID_NX], xb[IMU_ID_NX], xrr;
 	uint32_t xn;
 	float fr[3];   /* the force's last three frames, newest first */
+	float tr[3];   /* the torques' sum, the same */
 	uint32_t n_fr; /* consecutive frames in fr (a gap restarts it) */
 	struct imu_id_stat st[IMU_ID_DELAYS][IMU_ID_LAGS];
 	/* the still frames' force: its count, mean and spread (the noise, about the mean) */
@@ -118,7 +128,8 @@ struct imu_id {
 	float fw_sum, vz_prev, v0, v_last;
 	uint32_t n_cal;
 	bool q_pending, q_excited;
-	float q_thr[IMU_ID_ROTORS], q_f, q_fw, q_vz;
+	bool tq_lost; /* a torque reading was not finite: k_tau is not estimated */
+	float q_thr[IMU_ID_ROTORS], q_f, q_fw, q_vz, q_tq;
 };
 
 enum imu_id_cause {
@@ -150,6 +161,11 @@ struct imu_id_result {
 	 * rotor), and its relative sd: what scales the inertia experiments' modelled torque
 	 * (the weight pins k_f g(y_h), the collective dither the slope) */
 	float slope, slope_rsd, thr_hover;
+	/* with the ESCs' torques (cfg.torque): k_tau, its sd, the cluster factor behind it and
+	 * the residual's sd (N m); tq_ok: estimated (readings finite throughout, the fit regular);
+	 * the torque's slope at y_h, relative sd (what scales the yaw phase's modelled torque) */
+	bool tq_ok;
+	float ktau, ktau_sd, tq_hac, tq_noise, tq_slope_rsd;
 	uint32_t n;
 	enum imu_id_cause cause;
 };
@@ -157,11 +173,11 @@ struct imu_id_result {
 /* thr0: the throttles before the start (the filters' initial state) */
 void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t thr0[IMU_ID_ROTORS]);
 /* One frame: the throttles sent on the previous frame; of this one the force m g a_z along
- * body z (N, the reading a in g), its vertical (world) component m g (R a)_z (N) and the
- * vertical velocity (m/s, up); excited: the bank accumulates, else the still noise is
- * measured. Stores only. */
+ * body z (N, the reading a in g), its vertical (world) component m g (R a)_z (N), the
+ * vertical velocity (m/s, up) and the ESCs' torques summed (N m; read with cfg.torque);
+ * excited: the bank accumulates, else the still noise is measured. Stores only. */
 void imu_id_step(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS], scalar_t f_n, scalar_t fw_n, scalar_t vz,
-		 bool excited);
+		 scalar_t tq_n, bool excited);
 /* Between frames: the stored frame into the bank (no-op if none waits). */
 void imu_id_process(struct imu_id *m);
 /* A frame without measurement: the plant held thr_prev one more frame. */
