@@ -1171,7 +1171,8 @@ def item_sources(rep, args):
                "curve 0-0.5, k_f, k_tau, inertia +/-30 %, one rotor 0.8-1), default sensor noise", "", "", "", "",
             None, c)
     names = {"thrust": "thrust rows (ID_SOURCE 1)", "imu": "imu_rpm (IMU + ESC speeds), rotor scales given",
-             "imu_weak": "imu_rpm, the weak rotor unknown"}
+             "imu_weak": "imu_rpm, the weak rotor unknown",
+             "imu_tq": "imu_rpm_torque (IMU + ESC speeds and torques), rotor scales given"}
     for how, label in names.items():
         t = r[how]
         causes = ", ".join(f"{k} {v}" for k, v in sorted(t["causes"].items(), key=lambda kv: -kv[1])) or "none"
@@ -1183,7 +1184,7 @@ def item_sources(rep, args):
             q = t.get(k)
             if not q:
                 continue
-            tol = {"kf": 1.0, "ratio": 2.0, "ixx": 2.0, "iyy": 2.0}.get(k) if how != "thrust" else None
+            tol = {"kf": 1.0, "ktau": 1.0, "ratio": 2.0, "ixx": 2.0, "iyy": 2.0}.get(k) if how != "thrust" else None
             rep.row(9, f"    {k}: error rms / max (%), error / sd rms, beyond max(3 sd, 1 %)",
                     f"{q['err_rms_pct']:.2f} / {q['err_max_pct']:.2f}, {q['z_rms']:.2f}, {q['beyond_3sd_and_1pct']}",
                     "", f"{q['accepted']} accepted",

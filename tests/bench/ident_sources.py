@@ -12,7 +12,10 @@ with the default realistic sensor noise, three ways on the same vehicle and seed
   lag and delay from the ESC speeds, k_f from the accelerometer), the rotors' scales given
   (MOT_SCALEj set to the truth, as from a bench);
 - imu, a weak rotor: as imu, with the 0.8-1.0 rotor unknown (the accelerometer cannot tell
-  which rotor: the run must be rejected naming it, or its values right).
+  which rotor: the run must be rejected naming it, or its values right);
+- imu_tq: as imu, with the ESCs' shaft torques served too (--sensors imu,rpm,torque: auto takes
+  imu_rpm_torque, k_tau from the torques), as an ESC's current gives them: an offset of
+  0.1-0.5 A, current noise 0.02-0.1 A, KV 500-1000.
 
 Prints one JSON object: per source and quantity the accepted count, the error's rms (%), the
 error / sd rms and the share beyond 3 sd, the rejections with their causes, the delay right
@@ -37,7 +40,7 @@ PAPER_I = [0.0628, 0.0762, 0.1014]
 PAPER = {"kf": 28.0269, "ktau": 0.3869}
 RX = {
     "kf": r"^ID kf ([-0-9.]+) \+/- ([-0-9.]+) (N accepted|rejected: .*)$",
-    "ktau": r"^ID ktau ([-0-9.]+) \+/- ([-0-9.]+) (N m accepted|N m \(VEH_IZZ prior\) accepted|rejected: .*)$",
+    "ktau": r"^ID ktau ([-0-9.]+) \+/- ([-0-9.]+) (N m accepted|N m \((VEH_IZZ prior|ESC torque)\) accepted|rejected: .*)$",
     "ixx": r"^ID Ixx ([-0-9.]+) \+/- ([-0-9.]+) (kg m\^2 accepted|rejected: .*)$",
     "iyy": r"^ID Iyy ([-0-9.]+) \+/- ([-0-9.]+) (kg m\^2 accepted|rejected: .*)$",
     "izz": r"^ID Izz ([-0-9.]+) \+/- ([-0-9.]+) (kg m\^2 accepted|rejected: .*)$",
@@ -45,6 +48,7 @@ RX = {
 }
 LAG = re.compile(r"^ID motor lag ([-0-9.]+) \+/- ([-0-9.]+) s delay (\d+) fr$")
 CAUSE = re.compile(r"^ID (rejected|aborted): (.*)$")
+HOWS = ("thrust", "imu", "imu_weak", "imu_tq")
 
 
 def vehicle(rng):
@@ -66,8 +70,12 @@ def fly(veh, seed, how, tmp):
     if how == "thrust":
         steps.append("param ID_SOURCE 1")
     else:
-        sensors = "imu,rpm"
-        if how == "imu":
+        sensors = "imu,rpm,torque" if how == "imu_tq" else "imu,rpm"
+        if how == "imu_tq":
+            esc = random.Random(seed * 7 + 1)
+            veh = dict(veh, esc_current_offset=esc.uniform(0.1, 0.5), noise={"current": esc.uniform(0.02, 0.1)},
+                       esc_kt=60.0 / (2.0 * math.pi * esc.uniform(500.0, 1000.0)))
+        if how in ("imu", "imu_tq"):
             steps += [f"param MOT_SCALE{j + 1} {s!r}" for j, s in enumerate(veh["rotor_scale"])]
     steps += ["arm", "takeoff 5", "wait hold", "experiment 6", "wait experiment"]
     r = subprocess.run([str(SIL), "--seed", str(seed), "--vehicle", str(d / f"v{seed}{how}.json"), "--sensors", sensors,
@@ -98,12 +106,12 @@ def truth(veh):
 def one(args):
     seed, tmp = args
     veh = vehicle(random.Random(seed))
-    return seed, veh, {h: fly(veh, seed, h, tmp) for h in ("thrust", "imu", "imu_weak")}
+    return seed, veh, {h: fly(veh, seed, h, tmp) for h in HOWS}
 
 
 def summarise(runs):
     res = {}
-    for how in ("thrust", "imu", "imu_weak"):
+    for how in HOWS:
         s = {"runs": len(runs), "rejected": 0, "causes": {}}
         for k in RX:
             zs, errs, beyond = [], [], 0
