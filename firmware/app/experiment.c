@@ -852,7 +852,10 @@ static void imu_ktau_end(struct experiment *e, const struct app_params *p, const
 	result_fin(e, PX_ID_KTAU_SD, r->ktau_sd, 0.0f);
 	if (kt_ok) {
 		result(e, PX_VEH_KTAU, r->ktau);
-		e->cfg.ktau = r->ktau;
+		/* the yaw phase's modelled torque k_tau g(y) takes the force's curve: its k_tau is
+		 * the one whose slope at hover is the torques' (what they measured best) */
+		float gp = 1.0f - e->cfg.curve + 2.0f * e->cfg.curve * r->thr_hover;
+		e->cfg.ktau = gp > 0.0f ? r->tq_slope / gp : r->ktau;
 		e->cfg.kt_rsd = r->tq_slope_rsd;
 		e->cfg.kt_id = true;
 	}

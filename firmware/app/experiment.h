@@ -108,7 +108,7 @@ struct exp_cfg {
 	float gp_rsd;    /* IMU: the curve's slope g'(y_h)'s relative sd (the yaw torque's scale) */
 	float kf, curve; /* the rotor model the later phases fly with: VEH_KF, MOT_CURVE, or what
 			  * this run found (applied only at the next frame boundary) */
-	float ktau;      /* its k_tau: VEH_KTAU, or the ESCs' torques' estimate of this run */
+	float ktau;      /* the yaw torque model's k_tau: VEH_KTAU, or the ESCs' torques' of this run */
 	float kt_rsd;    /* that estimate's torque slope about hover: relative sd */
 	bool kt_id;      /* k_tau identified by this run (from the ESCs' torques) */
 	bool model_ok;   /* that model was identified (ID_RESULT bit 0, or this run) */

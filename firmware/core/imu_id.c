@@ -23,9 +23,19 @@ static unsigned ut(unsigned i, unsigned j)
 /* the reference model's regressor: the prior's prediction over k_f */
 static float ref_x(const struct imu_id_cfg *c, float x1, float x2) { return (1.0f - c->curve0) * x1 + c->curve0 * x2; }
 
-static float grid_step(void) { return logf(IMU_ID_TAU_MAX / IMU_ID_TAU_MIN) / (float)(IMU_ID_LAGS - 1); }
+static float grid_step(const struct imu_id *m) { return m->lstep; }
 
-static float lag_tau(unsigned l) { return IMU_ID_TAU_MIN * expf(grid_step() * (float)l); }
+static float lag_tau(const struct imu_id *m, unsigned l) { return expf(m->ln0 + m->lstep * (float)l); }
+
+/* the lags' poles for the grid (ln0, lstep) */
+static void set_grid(struct imu_id *m)
+{
+	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
+		float r = m->cfg.dt_s / lag_tau(m, l);
+		m->a[l] = expf(-r);
+		m->da[l] = m->a[l] * r; /* a = exp(-dt e^-ln tau) */
+	}
+}
 
 /* the lag filters and their sensitivities, their sums into the rings' newest slot */
 static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
@@ -76,15 +86,30 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 	float u[IMU_ID_ROTORS];
 	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
 		u[j] = sc_to_float(thr0[j]);
-	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-		float r = cfg->dt_s / lag_tau(l);
-		m->a[l] = expf(-r);
-		m->da[l] = m->a[l] * r; /* a = exp(-dt e^-ln tau) */
+	m->ln0 = logf(IMU_ID_TAU_MIN);
+	m->lstep = logf(IMU_ID_TAU_MAX / IMU_ID_TAU_MIN) / (float)(IMU_ID_LAGS - 1);
+	set_grid(m);
+	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
 			m->y[l][j] = u[j];
-	}
 	for (unsigned d = 0; d < IMU_ID_RING; d++)
 		advance(m, u); /* the rings at the steady state */
+	/* the centring point: the start's mean throttle and the scales' sum; and the reference
+	 * model made to carry the weight there (k_f from the prior's curve and the mass), so that
+	 * the responses relative to it stay small: both keep the float sums' precision */
+	float yh = 0.0f, ss = 0.0f, gs = 0.0f, c0 = m->cfg.curve0;
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
+		yh += u[j] / (float)IMU_ID_ROTORS;
+		ss += m->cfg.scale[j];
+		gs += m->cfg.scale[j] * ((1.0f - c0) * u[j] + c0 * u[j] * u[j]);
+	}
+	m->yh = yh;
+	m->ssum = ss;
+	float kr = gs > 0.0f ? m->cfg.mass_kg * m->cfg.g / gs : 0.0f;
+	if (isfinite(kr) && kr > 0.0f && m->cfg.kf0 > 0.0f) {
+		m->cfg.kt0 *= kr / m->cfg.kf0;
+		m->cfg.kf0 = kr;
+	}
 }
 
 void imu_id_step(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS], scalar_t f_n, scalar_t fw_n, scalar_t vz,
@@ -195,8 +220,63 @@ static void pinned(const struct imu_id *m, const float gs[NT], const float *bs, 
 	}
 }
 
-/* the least squares of sums (G, b, z'z): the parameters (relative to the reference), G^-1,
- * and the residual sum */
+/* The centred basis (regs) to the parameters': theta = T theta'. With the curve estimated,
+ * A = a' - 2 y_h B, A d = g' - 2 y_h B d, D = delta' - y_h S a' + y_h^2 S B; else
+ * k_f = a', D = delta' - x_r(y_h) a'. */
+static void basis(const struct imu_id *m, float t[NP][NP])
+{
+	memset(t, 0, NP * NP * sizeof t[0][0]);
+	for (unsigned i = 0; i < NP; i++)
+		t[i][i] = 1.0f;
+	float yh = m->yh, s = m->ssum;
+	if (m->cfg.est_curve) {
+		t[0][P_B] = -2.0f * yh;
+		t[P_LA][P_LB] = -2.0f * yh;
+		t[P_OFS][0] = -yh * s;
+		t[P_OFS][P_B] = yh * yh * s;
+	} else {
+		t[P_OFS][0] = -ref_x(&m->cfg, yh * s, yh * yh * s);
+	}
+}
+
+/* theta = T theta' and H = T H' T^T */
+static void to_params(const struct imu_id *m, float th[NP], float h[NP][NP])
+{
+	float t[NP][NP], th2[NP], th1[NP][NP];
+	basis(m, t);
+	for (unsigned i = 0; i < NP; i++) {
+		th2[i] = 0.0f;
+		for (unsigned k = 0; k < NP; k++) {
+			th2[i] += t[i][k] * th[k];
+			th1[i][k] = 0.0f;
+			for (unsigned q = 0; q < NP; q++)
+				th1[i][k] += t[i][q] * h[q][k];
+		}
+	}
+	for (unsigned i = 0; i < NP; i++) {
+		th[i] = th2[i];
+		for (unsigned k = 0; k < NP; k++) {
+			h[i][k] = 0.0f;
+			for (unsigned q = 0; q < NP; q++)
+				h[i][k] += th1[i][q] * t[k][q];
+		}
+	}
+}
+
+/* a projection j of the parameters as one of the centred basis': T^T j */
+static void proj_centred(const struct imu_id *m, const float j[NP], float jc[NP])
+{
+	float t[NP][NP];
+	basis(m, t);
+	for (unsigned k = 0; k < NP; k++) {
+		jc[k] = 0.0f;
+		for (unsigned i = 0; i < NP; i++)
+			jc[k] += t[i][k] * j[i];
+	}
+}
+
+/* the least squares of sums (G, b, z'z) in the centred basis: the parameters (relative to the
+ * reference), G^-1, and the residual sum */
 static float fit(const struct imu_id *m, const float gs[NT], const float bs[NP], float rr, float th[NP],
 		 float h[NP][NP])
 {
@@ -216,16 +296,20 @@ static float fit(const struct imu_id *m, const float gs[NT], const float bs[NP],
 	return j;
 }
 
-/* a hypothesis' force fit (fit) */
+/* a hypothesis' force fit (fit), as the parameters */
 static float hyp_solve(const struct imu_id *m, const struct imu_id_stat *s, float th[NP], float h[NP][NP])
 {
-	return fit(m, s->g, s->b, s->rr, th, h);
+	float j = fit(m, s->g, s->b, s->rr, th, h);
+	to_params(m, th, h);
+	return j;
 }
 
 /* the same hypothesis' torque fit */
 static float hyp_solve_tq(const struct imu_id *m, const struct imu_id_stat *s, float th[NP], float h[NP][NP])
 {
-	return fit(m, s->g, s->bt, s->rrt, th, h);
+	float j = fit(m, s->g, s->bt, s->rrt, th, h);
+	to_params(m, th, h);
+	return j;
 }
 
 /* a frame's regressors x and responses (force z, torque zt, both relative to the
@@ -261,17 +345,26 @@ static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl)
 
 static float smooth(const float *r) { return 0.25f * (r[0] + 2.0f * r[1] + r[2]); }
 
-/* the hypothesis' smoothed regressors: with the curve estimated (x1, x2, x3, 1), else (the
- * reference's, 0, x3, 1); xr: the reference model's regressor */
+/* the hypothesis' smoothed regressors, centred at the start's hover (basis): with the curve
+ * estimated (x1 - y_h S, sum s (y - y_h)^2, x3, sum 2 s (y - y_h) w, 1), else (the
+ * reference's less its value at y_h, 0, its sensitivity, 0, 1); xr: the reference model's
+ * regressor */
 static void regs(const struct imu_id *m, unsigned d, unsigned l, float x[NP], float *xr)
 {
-	float s1 = smooth(&m->x1[l][d]), s2 = smooth(&m->x2[l][d]);
+	float s1 = smooth(&m->x1[l][d]), s2 = smooth(&m->x2[l][d]), yh = m->yh, s = m->ssum;
 	*xr = ref_x(&m->cfg, s1, s2);
-	x[0] = m->cfg.est_curve ? s1 : *xr;
 	float s3 = smooth(&m->x3[l][d]), s4 = smooth(&m->x4[l][d]);
-	x[P_B] = m->cfg.est_curve ? s2 : 0.0f;
-	x[P_LA] = m->cfg.est_curve ? s3 : ref_x(&m->cfg, s3, s4); /* (1 - c) x3 + c x4: g' known */
-	x[P_LB] = m->cfg.est_curve ? s4 : 0.0f;
+	if (m->cfg.est_curve) {
+		x[0] = s1 - yh * s;
+		x[P_B] = s2 - 2.0f * yh * s1 + yh * yh * s;
+		x[P_LA] = s3;
+		x[P_LB] = s4 - 2.0f * yh * s3;
+	} else {
+		x[0] = *xr - ref_x(&m->cfg, yh * s, yh * yh * s);
+		x[P_B] = 0.0f;
+		x[P_LA] = ref_x(&m->cfg, s3, s4); /* (1 - c) x3 + c x4: g' known */
+		x[P_LB] = 0.0f;
+	}
 	x[P_OFS] = 1.0f;
 }
 
@@ -318,6 +411,50 @@ static void cl_add(struct imu_id *m, float f, float tq)
 	m->cl_len *= 2u;
 }
 
+static float step_of(const struct imu_id *m, const float th[NP]);
+
+/* The grid's refinement: about the best hypothesis' lag (its Gauss-Newton step taken),
+ * +/- IMU_ID_FINE_HALF of the first grid's steps, kept inside IMU_ID_TAU_MIN..MAX; each new
+ * lag's filter state interpolated (in ln tau) between the old grid's; the sums restarted,
+ * the clusters' hypothesis the best delay at the centre. */
+static void refine(struct imu_id *m)
+{
+	unsigned bd, bl;
+	best_hyp(m, &bd, &bl);
+	float th[NP], h[NP][NP], h0 = m->lstep;
+	hyp_solve(m, &m->st[bd][bl], th, h);
+	float dl = step_of(m, th);
+	dl = dl > h0 ? h0 : dl < -h0 ? -h0 : dl;
+	float lo = logf(IMU_ID_TAU_MIN), hi = logf(IMU_ID_TAU_MAX), half = IMU_ID_FINE_HALF * h0;
+	float c = m->ln0 + h0 * (float)bl + dl;
+	c = c - half < lo ? lo + half : c + half > hi ? hi - half : c;
+	float y[IMU_ID_LAGS][IMU_ID_ROTORS], w[IMU_ID_LAGS][IMU_ID_ROTORS], ln_old0 = m->ln0;
+	memcpy(y, m->y, sizeof y);
+	memcpy(w, m->w, sizeof w);
+	m->ln0 = c - half;
+	m->lstep = 2.0f * half / (float)(IMU_ID_LAGS - 1);
+	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
+		float q = (m->ln0 + m->lstep * (float)l - ln_old0) / h0;
+		q = q < 0.0f ? 0.0f : q > (float)(IMU_ID_LAGS - 1) ? (float)(IMU_ID_LAGS - 1) : q;
+		unsigned i = (unsigned)q;
+		i = i >= IMU_ID_LAGS - 1u ? IMU_ID_LAGS - 2u : i;
+		float fq = q - (float)i;
+		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
+			m->y[l][j] = y[i][j] + fq * (y[i + 1u][j] - y[i][j]);
+			m->w[l][j] = w[i][j] + fq * (w[i + 1u][j] - w[i][j]);
+		}
+	}
+	set_grid(m);
+	memset(m->st, 0, sizeof m->st);
+	m->n_st = 0;
+	m->skip = IMU_ID_SKIP;
+	m->refined = true;
+	m->cl_d = (uint8_t)bd;
+	m->cl_l = (uint8_t)(IMU_ID_LAGS / 2u);
+	m->cl_len = m->cfg.block_frames ? m->cfg.block_frames : 90u;
+	m->cl_on = true;
+}
+
 void imu_id_process(struct imu_id *m)
 {
 	if (!m->q_pending)
@@ -353,6 +490,11 @@ void imu_id_process(struct imu_id *m)
 	}
 	m->n_exc++;
 	m->ff += f * f;
+	if (m->skip > 0u) {
+		m->skip--;
+		return;
+	}
+	m->n_st++;
 	const struct imu_id_cfg *c = &m->cfg;
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
 		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
@@ -360,13 +502,9 @@ void imu_id_process(struct imu_id *m)
 			regs(m, d, l, x, &xr);
 			stat_add(&m->st[d][l], x, f - c->kf0 * xr, t - c->kt0 * xr, c->torque);
 		}
-	if (!m->cl_on && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_exc >= 30u) {
-		unsigned bd, bl;
-		best_hyp(m, &bd, &bl);
-		m->cl_d = (uint8_t)bd;
-		m->cl_l = (uint8_t)bl;
-		m->cl_len = c->block_frames ? c->block_frames : 90u;
-		m->cl_on = true;
+	if (!m->refined && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_st >= 30u) {
+		refine(m);
+		return;
 	}
 	if (m->cl_on)
 		cl_add(m, f, t);
@@ -376,7 +514,7 @@ void imu_id_process(struct imu_id *m)
  * variance of j' theta over its white-noise variance, both on the frozen hypothesis' frames
  * (its residuals from theta, the whole flight's estimate), with the small-sample factors;
  * 1 with fewer than 4 clusters (*g_out: the clusters used). */
-static float cl_factor(const struct imu_id *m, const float th[NP], const float j[NP], bool tq, unsigned *g_out)
+static float cl_factor(const struct imu_id *m, const float th[NP], const float jo[NP], bool tq, unsigned *g_out)
 {
 	unsigned nb =
 		m->nb + (m->cl_k * 2u >= m->cl_len && m->cl_len > 0u ? 1u : 0u); /* a half-full last block counts */
@@ -403,7 +541,8 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 			gs[i] += b->g[i];
 		n += k < m->nb ? m->cl_len : m->cl_k;
 	}
-	float g[NT], h[NP][NP], sp[NT], bb[NP];
+	float g[NT], h[NP][NP], sp[NT], bb[NP], j[NP];
+	proj_centred(m, jo, j);
 	pinned(m, gs, NULL, g, bb);
 	if (!inv_sym(g, h) || !(ee > 0.0f) || n <= NP)
 		return 1.0f;
@@ -541,7 +680,7 @@ static float delay_margin(const struct imu_id *m, unsigned bd, struct imu_id_res
 		if (d != bd && jb[d] < j2)
 			j2 = jb[d];
 	r->delay = bd;
-	r->delay_margin = j0 > 0.0f ? 0.5f * (float)m->n_exc * logf(j2 / j0) : INFINITY;
+	r->delay_margin = j0 > 0.0f ? 0.5f * (float)m->n_st * logf(j2 / j0) : INFINITY;
 	return j0;
 }
 
@@ -557,13 +696,13 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 	float th[NP], h[NP][NP], v[NP][NP], thc[NP], hc[NP][NP];
 	float j = hyp_solve_tq(m, &m->st[bd][bl], th, h);
 	if (bl > 0u && bl + 1u < IMU_ID_LAGS) {
-		float tm[NP], tp[NP], hh[NP][NP], k = dl / (4.0f * grid_step());
+		float tm[NP], tp[NP], hh[NP][NP], k = dl / (4.0f * grid_step(m));
 		hyp_solve_tq(m, &m->st[bd][bl - 1u], tm, hh);
 		hyp_solve_tq(m, &m->st[bd][bl + 1u], tp, hh);
 		for (unsigned i = 0; i < NP; i++)
 			th[i] += k * (tp[i] - tm[i]);
 	}
-	float s2 = j / (float)(m->n_exc - np);
+	float s2 = j / (float)(m->n_st - np);
 	if (!(s2 >= 0.0f) || !isfinite(s2))
 		return;
 	for (unsigned i = 0; i < NP; i++)
@@ -571,7 +710,7 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 			v[i][k] = s2 * h[i][k];
 	memset(thc, 0, sizeof thc);
 	if (m->cl_on)
-		hyp_solve_tq(m, &m->st[m->cl_d][m->cl_l], thc, hc);
+		fit(m, m->st[m->cl_d][m->cl_l].g, m->st[m->cl_d][m->cl_l].bt, m->st[m->cl_d][m->cl_l].rrt, thc, hc);
 	float A = c->est_curve ? c->kt0 * (1.0f - c->curve0) + th[0] : c->kt0 + th[0];
 	float B = c->est_curve ? c->kt0 * c->curve0 + th[P_B] : 0.0f;
 	const float jk[NP] = {1.0f, c->est_curve ? 1.0f : 0.0f, 0.0f, 0.0f, 0.0f};
@@ -582,6 +721,7 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 	r->tq_noise = sqrtf(s2);
 	float yh = m->nz_n ? m->nz_thr / (float)m->nz_n : 0.0f, sl = A + 2.0f * B * yh;
 	const float js[NP] = {1.0f, c->est_curve ? 2.0f * yh : 0.0f, 0.0f, 0.0f, 0.0f};
+	r->tq_slope = sl;
 	r->tq_slope_rsd = sl > 0.0f ? sqrtf(quad(v, js) * cl_factor(m, thc, js, true, &ncl)) / sl : INFINITY;
 	r->tq_ok = isfinite(r->ktau) && isfinite(r->ktau_sd) && r->ktau > 0.0f;
 }
@@ -590,7 +730,7 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 static enum imu_id_cause verdict(const struct imu_id *m, const struct imu_id_result *r, unsigned bl, float dl,
 				 float hac_max)
 {
-	float hstep = grid_step();
+	float hstep = grid_step(m);
 	/* the step must stay within the grid's reach: beyond half a step the neighbour is
 	 * better, and at an end of the grid beyond it the lag is outside the range */
 	bool edge = (bl == 0u && dl < -0.5f * hstep) || (bl == IMU_ID_LAGS - 1u && dl > 0.5f * hstep) ||
@@ -616,7 +756,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 {
 	memset(r, 0, sizeof *r);
 	const struct imu_id_cfg *c = &m->cfg;
-	uint32_t n = m->n_exc;
+	uint32_t n = m->n_st;
 	r->n = n;
 	r->curve = c->curve0;
 	r->kf = c->kf0;
@@ -636,17 +776,28 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	unsigned bd, bl;
 	best_hyp(m, &bd, &bl);
 	float j0 = delay_margin(m, bd, r);
+	float th[NP], h[NP][NP], v[NP][NP], thc[NP], hc[NP][NP];
+	hyp_solve(m, &m->st[bd][bl], th, h);
+	float hstep = grid_step(m), dl = step_of(m, th), lcorr = 0.0f;
+	/* the grid point nearest the lag found (the least residual's may lie a few of the
+	 * refined grid's steps off where the lag is weakly seen): the expansion below is about it */
+	for (int it = 0; it < 3; it++) {
+		float q = (float)bl + dl / hstep;
+		unsigned to = q <= 0.0f ? 0u : q >= (float)(IMU_ID_LAGS - 1) ? IMU_ID_LAGS - 1u : (unsigned)(q + 0.5f);
+		if (to == bl)
+			break;
+		bl = to;
+		j0 = hyp_solve(m, &m->st[bd][bl], th, h);
+		dl = step_of(m, th);
+	}
 	float s2 = j0 / (float)(n - np);
 	/* the residual variance over the noise the still frames measured, scaled to each frame's
 	 * thrust: the vibration's amplitude goes with the rotor speed squared, as the thrust
 	 * does, so a frame at force f has the still variance times (f / f_still)^2 */
 	float mu = m->nz_n ? m->nz_s / (float)m->nz_n : 0.0f;
-	float grow = mu > 0.0f ? m->ff / (float)n / (mu * mu) : 1.0f;
+	float grow = mu > 0.0f && m->n_exc > 0u ? m->ff / (float)m->n_exc / (mu * mu) : 1.0f;
 	r->ne = nz_var > 0.0f ? s2 / (nz_var * (grow > 1.0f ? grow : 1.0f)) : INFINITY;
 
-	float th[NP], h[NP][NP], v[NP][NP], thc[NP], hc[NP][NP];
-	hyp_solve(m, &m->st[bd][bl], th, h);
-	float hstep = grid_step(), dl = step_of(m, th), lcorr = 0.0f;
 	/* the Gauss-Newton step is first order: each grid point's estimate at the lag found is
 	 * off by about K d^2 (d its distance in ln tau). The neighbours on either side, at d + h
 	 * and d - h, give K: theta* = theta + d (theta(l+1) - theta(l-1)) / (4 h), and the same
@@ -667,7 +818,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 			v[i][k] = s2 * h[i][k];
 	memset(thc, 0, sizeof thc);
 	if (m->cl_on)
-		hyp_solve(m, &m->st[m->cl_d][m->cl_l], thc, hc);
+		fit(m, m->st[m->cl_d][m->cl_l].g, m->st[m->cl_d][m->cl_l].b, m->st[m->cl_d][m->cl_l].rr, thc, hc);
 	unsigned ncl = 0;
 	/* the raw (uncalibrated) k_f = A + B, the curve c = B / (A + B) */
 	float A = c->est_curve ? c->kf0 * (1.0f - c->curve0) + th[0] : c->kf0 + th[0];
@@ -676,7 +827,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->curve = c->est_curve ? (kf_raw != 0.0f ? B / kf_raw : 0.0f) : c->curve0;
 	if (c->est_curve) { /* dc/dA = -B / K^2, dc/dB = A / K^2 */
 		float k2 = kf_raw * kf_raw, jc[NP] = {-B / k2, A / k2, 0.0f, 0.0f, 0.0f};
-		r->curve_sd = IMU_ID_SD_CAL * sqrtf(quad(v, jc) * cl_factor(m, thc, jc, false, &ncl));
+		r->curve_sd = sqrtf(quad(v, jc) * cl_factor(m, thc, jc, false, &ncl));
 	}
 	/* the calibration: kappa = m (g T + v_last - v0) / (sum (F_w - D) dt), D the offset;
 	 * k_f = kappa (A + B), its sd from the parameters' covariance through the Jacobian
@@ -699,18 +850,18 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	float jl[NP] = {0.0f, 0.0f, 1.0f, c->est_curve ? 1.0f : 0.0f, 0.0f};
 	float vo = v[P_OFS][P_OFS] * cl_factor(m, thc, jo, false, &ncl);
 	r->kappa_sd = fm > 0.0f ? sqrtf(kap_sd * kap_sd + kap * kap * vo / (fm * fm)) : 0.0f;
-	r->kf_sd = IMU_ID_SD_CAL * sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
+	r->kf_sd = sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
 	/* the slope at hover: kappa (A + 2 B y_h) */
 	float yh = m->nz_n ? m->nz_thr / (float)m->nz_n : 0.0f, sl_raw = A + 2.0f * B * yh;
 	r->thr_hover = yh;
 	r->slope = kap * sl_raw;
 	float js[NP] = {kap, c->est_curve ? 2.0f * kap * yh : 0.0f, 0.0f, 0.0f, fm > 0.0f ? r->slope / fm : 0.0f};
 	float vs = quad(v, js) * cl_factor(m, thc, js, false, &ncl) + kap_sd * kap_sd * sl_raw * sl_raw;
-	r->slope_rsd = r->slope > 0.0f ? IMU_ID_SD_CAL * sqrtf(vs) / r->slope : INFINITY;
+	r->slope_rsd = r->slope > 0.0f ? sqrtf(vs) / r->slope : INFINITY;
 	/* the lag: the grid point moved by the Gauss-Newton step, its second-order term removed */
 	float vl = quad(v, jl) * cl_factor(m, thc, jl, false, &ncl);
 	float dl_sd = kf_raw > 0.0f ? sqrtf(fmaxf(vl, 0.0f)) / kf_raw : INFINITY;
-	r->tau = lag_tau(bl) * expf(dl + lcorr);
+	r->tau = lag_tau(m, bl) * expf(dl + lcorr);
 	scales_check(m, r->t_pattern);
 	r->tau_sd = r->tau * dl_sd;
 	r->cause = verdict(m, r, bl, dl, ne_max);

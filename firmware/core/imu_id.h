@@ -13,6 +13,12 @@
  * delay. Each (D, tau) hypothesis keeps its least-squares sums relative to a reference model
  * (the prior k_f and curve), which keeps them well conditioned in float.
  *
+ * Refinement: at IMU_ID_FREEZE of the planned frames the lag grid narrows to
+ * +/- IMU_ID_FINE_HALF of its steps about the lag found so far (the Gauss-Newton step below
+ * is first order: between the first grid's points it leaves an error of up to half a
+ * percent in k_f); the filters start from the old grid's states interpolated, and the sums
+ * restart after IMU_ID_SKIP frames.
+ *
  * Choice: the hypothesis of least residual. Each hypothesis also carries the lag's
  * sensitivities x3 = sum s_j w_j and x4 = sum s_j 2 y_j w_j, w_j = dy_j / d ln tau (a filter
  * beside each lag filter): d F / d ln tau = A x3 + B x4 for any curve, so the least squares
@@ -55,19 +61,16 @@
 
 #define IMU_ID_ROTORS 8
 #define IMU_ID_DELAYS 5 /* 0..4 frames beyond the loop's one */
-#define IMU_ID_LAGS 20  /* log grid IMU_ID_TAU_MIN .. IMU_ID_TAU_MAX */
+#define IMU_ID_LAGS 20  /* log grid IMU_ID_TAU_MIN .. IMU_ID_TAU_MAX, refined at IMU_ID_FREEZE */
 #define IMU_ID_TAU_MIN 0.005f
 #define IMU_ID_TAU_MAX 0.25f
 #define IMU_ID_RING (IMU_ID_DELAYS + 2) /* the rings also feed the [1 2 1] / 4 smoother */
 #define IMU_ID_BLOCKS 32                /* clusters of the variance (merged in pairs when full) */
-/* The sds of k_f, the curve and the slope are scaled by this: a calibration from Monte Carlo
- * (make bench item 9: error / sd rms 1.24 over 958 random vehicles, 1.3-1.7 on some draws),
- * standing for what the clusters miss: the vibration of a rotor turning near the frame rate
- * folds to 0.1-0.5 Hz, correlated over more than a block. A stopgap until that colour is
- * measured; docs/identification.md, "Vibration, and what the sds carry". */
-#define IMU_ID_SD_CAL 1.4f
-#define IMU_ID_VEL_SD 0.05f /* the velocity's error at either end of the calibration, m/s */
-#define IMU_ID_FREEZE 0.2f  /* share of the planned frames after which the clusters' hypothesis freezes */
+#define IMU_ID_VEL_SD 0.05f             /* the velocity's error at either end of the calibration, m/s */
+#define IMU_ID_FREEZE \
+	0.2f /* share of the planned frames after which the grid refines and the clusters' hypothesis freezes */
+#define IMU_ID_FINE_HALF 2.5f /* the refined grid's half-width, in steps of the first grid */
+#define IMU_ID_SKIP 9u        /* frames not taken after the refinement (the rings refill) */
 
 /* parameters: A (or k_f), B, A d ln tau, B d ln tau, the accelerometer's offset */
 #define IMU_ID_NP 5
@@ -99,8 +102,15 @@ struct imu_id_stat {
 
 struct imu_id {
 	struct imu_id_cfg cfg;
-	float a[IMU_ID_LAGS];                                               /* the lags' poles exp(-dt / tau) */
-	float da[IMU_ID_LAGS];                                              /* d a / d ln tau */
+	/* the regressors are centred at the start's hover (y_h, the scales' sum S): x1 - y_h S,
+	 * sum s (y - y_h)^2, x3, sum 2 s (y - y_h) w (imu_id.c: basis) */
+	float yh, ssum;
+	float ln0, lstep;      /* the lag grid: ln tau_l = ln0 + l lstep */
+	bool refined;          /* the grid was refined (the sums restarted) */
+	uint8_t skip;          /* frames still not taken since the refinement */
+	uint32_t n_st;         /* excited frames in the bank's sums */
+	float a[IMU_ID_LAGS];  /* the lags' poles exp(-dt / tau) */
+	float da[IMU_ID_LAGS]; /* d a / d ln tau */
 	float y[IMU_ID_LAGS][IMU_ID_ROTORS], w[IMU_ID_LAGS][IMU_ID_ROTORS]; /* outputs, d y / d ln tau */
 	/* rings of x1, x2, x3 by frame age */
 	float x1[IMU_ID_LAGS][IMU_ID_RING], x2[IMU_ID_LAGS][IMU_ID_RING];
@@ -165,7 +175,7 @@ struct imu_id_result {
 	 * the residual's sd (N m); tq_ok: estimated (readings finite throughout, the fit regular);
 	 * the torque's slope at y_h, relative sd (what scales the yaw phase's modelled torque) */
 	bool tq_ok;
-	float ktau, ktau_sd, tq_hac, tq_noise, tq_slope_rsd;
+	float ktau, ktau_sd, tq_hac, tq_noise, tq_slope, tq_slope_rsd;
 	uint32_t n;
 	enum imu_id_cause cause;
 };

@@ -10,11 +10,11 @@ the gyro, the throttles sent and the weighed mass, with the IMU octo-sim serves 
 - Random vehicles of the tests' ranges (motor lag 10-100 ms, delay 0-3 frames, curve 0-0.5,
   k_f, k_tau and inertia +/-30 %, the rotors' scales known): the errors over the reported sds
   have an rms (of those within 4) below 1.6 (a unit normal's 20-sample rms passes 1.6 with
-  probability below 1e-5; sds 1.25 x optimistic, the worst the bench measures, about 1 %), and
-  at most one of 20 accepted values lies beyond max(3 sd, tolerance) of the truth.
-  That one is a known defect, not a tolerance: `make bench` item 9 finds 13 of 958 accepted
-  IMU k_f beyond it (1.4 %, on strong vehicles hovering near 0.07 throttle; the target is 0),
-  so two or more in 20 (probability 3 % at that rate) mean it got worse.
+  probability below 1e-5; sds 1.25 x optimistic, about 1 %), and at most one of 20 accepted
+  values lies beyond max(3 sd, tolerance) of the truth: with about 24 clusters behind each sd
+  the ratio follows a t with about 23 degrees of freedom, beyond 3 in 0.5 % of runs (`make
+  bench` item 9: 1 of 200 IMU k_f beyond max(3 sd, 1 %), error / sd rms 0.98), so two or more
+  in 20 (probability below 0.5 %) mean it got worse.
 - A rotor whose effectiveness is not MOT_SCALE's is named as the cause of a rejection: the
   accelerometer cannot tell which rotor, and k_f would otherwise carry it.
 - With the ESC's rotor speeds (imu_rpm, what auto takes when they are served) the motor's lag
