@@ -611,6 +611,8 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	int k = e->phase_kind[e->phase];
 	e->t_phase = 0.0f;
 	e->t_settle = SETTLE_S;
+	e->exc_gain = SC(1);
+	e->exc_cut_t = -1.0f;
 	e->est_live = 0;
 	e->est_wait = 0u;
 	say(e, APP_SEV_INFO, "ID %d/%d: %s", e->phase + 1, e->n_phases, phase_name(k));
@@ -1207,7 +1209,7 @@ static void null_dither(struct experiment *e, bool running, scalar_t d, struct e
 		e->rot_k++;
 	const scalar_t *p1 = e->pat[0], *p2 = e->pat[1];
 	/* in scalars: integer in the fixed build, the same float operations in the other */
-	scalar_t a1 = sc_add(d, o), a2 = sc_add(d2, o);
+	scalar_t a1 = sc_mul(e->exc_gain, sc_add(d, o)), a2 = sc_mul(e->exc_gain, sc_add(d2, o));
 #if OCTO_FIXED
 	/* a1 p1 + a2 p2 with every p 1, -1 or 0: in Q16.16 a product by +/-1 rounds
 		 * nothing (and |a| <= INT32_MAX negates without overflow), so the products are
@@ -1283,7 +1285,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		if (e->cfg.exc_null && n >= 1)
 			motor_id_step(&e->mid, tp, fm, tm, use);
 		scalar_t d = running ? excite_update(&e->exc) : SC_ZERO;
-		out->thr_delta[0] = d;
+		out->thr_delta[0] = sc_mul(e->exc_gain, d);
 		if (e->cfg.exc_null)
 			null_dither(e, running, d, out);
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
@@ -1310,7 +1312,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			e->gap_hold = (int)(GAP_SETTLE_TC * e->inv_dt_nom / (INR_ZETA * wc) + 0.5f);
 		}
 		ident_inertia_update(&e->inr, tau, in->rate_b_rps, use && n == 1 && e->gap_hold == 0);
-		out->tau_delta[ax] = running ? excite_update(&e->exc) : SC_ZERO;
+		out->tau_delta[ax] = running ? sc_mul(e->exc_gain, excite_update(&e->exc)) : SC_ZERO;
 		e->inr_u_prev = out->tau_delta[ax];
 	} else {
 		/* the model's prediction of rotor 1's thrust: the allocation behind the throttle
@@ -1323,7 +1325,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 				y_hat = sc_add(y_hat, e->f_model[j]);
 			if (use)
 				ident_fit_add(&e->fit, imu_force(in, p), y_hat);
-			out->f_delta = running ? excite_update(&e->exc) : SC_ZERO;
+			out->f_delta = running ? sc_mul(e->exc_gain, excite_update(&e->exc)) : SC_ZERO;
 			return;
 		}
 		scalar_t fc = in->rotor_f_cmd[0], y_hat = SC_ZERO;
@@ -1331,7 +1333,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			y_hat = filt_lag_update(&e->val_lag, filt_delay_update(&e->val_delay, fc));
 		if (use)
 			ident_fit_add(&e->fit, in->thrust_n[0], y_hat);
-		out->tau_delta[2] = running ? excite_update(&e->exc) : SC_ZERO;
+		out->tau_delta[2] = running ? sc_mul(e->exc_gain, excite_update(&e->exc)) : SC_ZERO;
 	}
 }
 
@@ -1421,6 +1423,25 @@ bool exp_reads_torque(const struct experiment *e)
 	return k == PK_ROTOR || k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z;
 }
 
+/* The excitation against the attitude budget: beyond EXP_TILT_SOFT_DEG (the body's z axis
+ * against its cosine: 1 - 2 (qx^2 + qy^2)) the phase's excitation halves, at most every
+ * EXC_CUT_S and down to EXP_GAIN_MIN, and says so; the estimators regress on what was sent,
+ * so a smaller excitation costs precision, not bias. EXP_TILT_ABORT_DEG still aborts. */
+#define EXC_CUT_S 0.1f
+static void tilt_backoff(struct experiment *e, const struct hal_sensor_frame *f)
+{
+	const float cos_soft = 0.98768834f; /* cos(EXP_TILT_SOFT_DEG) */
+	float ct = 1.0f - 2.0f * (f->q_ib[1] * f->q_ib[1] + f->q_ib[2] * f->q_ib[2]);
+	if (!(ct < cos_soft) || e->t_phase - e->exc_cut_t < EXC_CUT_S || e->exc_cut_t > e->t_phase)
+		return;
+	if (e->exc_gain < SC(0.25)) /* 2 EXP_GAIN_MIN: one more halving would pass it */
+		return;
+	e->exc_gain = sc_mul(e->exc_gain, SC(0.5));
+	e->exc_cut_t = e->t_phase;
+	say(e, APP_SEV_WARNING, "ID excitation x%.3f: tilt beyond %.0f deg", (double)sc_to_float(e->exc_gain),
+	    (double)EXP_TILT_SOFT_DEG);
+}
+
 enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
 {
 	if (e->state != EXP_RUNNING)
@@ -1448,6 +1469,7 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 		return e->state;
 	}
 	if (!e->reporting) {
+		tilt_backoff(e, f);
 		phase_step(e, in, out);
 		e->t_phase += in->dt_s;
 		float total = e->t_total;

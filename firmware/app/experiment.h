@@ -32,6 +32,8 @@
 #define EXP_MAX_PHASES 6
 #define EXP_QUEUE 20
 #define EXP_TILT_ABORT_DEG 15.0f
+#define EXP_TILT_SOFT_DEG 9.0f /* beyond this tilt the excitation halves (down to EXP_GAIN_MIN) */
+#define EXP_GAIN_MIN 0.125f
 #define EXP_SWP_LEVELS 4 /* the IMU rotor experiment's sweep levels */
 
 enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
@@ -171,6 +173,8 @@ struct experiment {
 	uint32_t rot_k;      /* rotor experiment: excited frames so far */
 	uint32_t est_wait;   /* steps until est[] / est_sd[] are read again */
 	scalar_t inr_u_prev; /* inertia: the excitation of the previous step (the instrument) */
+	scalar_t exc_gain;   /* the phase's excitation scale: 1, halved beyond EXP_TILT_SOFT_DEG */
+	float exc_cut_t;     /* t_phase of the last halving */
 	/* the estimator of the current phase: phases never overlap, so they share the memory
 	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */
 	union {
