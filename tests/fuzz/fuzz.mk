@@ -6,7 +6,9 @@
 #                     build/fuzz/artifacts/; figures in build/fuzz/summary.txt
 #   make fuzz-smoke   the same for FUZZ_SMOKE_SECONDS (10) each (CI)
 #   make fuzz-build   the harnesses only
-# Both first replay tests/fuzz/regress/NAME/* (inputs that once failed).
+# Both first replay tests/fuzz/regress/NAME/* (inputs that once failed); for the MAVLink
+# harnesses, reset_check.sh then shows that each seed and regression input leaves the same
+# state whatever ran before it (the harness resets by copying a snapshot).
 # fuzz-mavlink compiles many sources in one command: if a firmware header changes
 # meanwhile (another editor), its translation units could disagree on struct
 # layouts and report false errors, so the build is refused and must be rerun.
@@ -113,6 +115,8 @@ define fuzz_run
 	    echo "== fuzz-$$h: replaying $$(ls $$reg | wc -l) regression input(s)"; \
 	    $$bin $$reg/* >$(FZ)/$$h.regress.log 2>&1 || { tail -30 $(FZ)/$$h.regress.log; rc=1; continue; }; \
 	  fi; \
+	  case $$h in mavlink*) echo "== fuzz-$$h: each seed and regression input from the same state"; \
+	    sh tests/fuzz/reset_check.sh $$bin tests/fuzz/corpus/$$src $$reg || { rc=1; continue; };; esac; \
 	  mkdir -p $(FZ)/corpus/$$h; \
 	  echo "== fuzz-$$h: $(1) s"; \
 	  dict=; [ -f tests/fuzz/$$src.dict ] && dict=-dict=tests/fuzz/$$src.dict; \
