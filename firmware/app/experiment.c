@@ -214,6 +214,8 @@ static void format_line(const struct exp_line *l, char *out, size_t cap)
 		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2), ARG_F(3));
 	else if (!strcmp(k, "sffff"))
 		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2), ARG_F(3), ARG_F(4));
+	else if (!strcmp(k, "fff"))
+		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_F(2));
 	else if (!strcmp(k, "ffff"))
 		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_F(2), ARG_F(3));
 	else
@@ -613,6 +615,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	e->t_settle = SETTLE_S;
 	e->exc_gain = SC(1);
 	e->exc_cut_t = -1.0f;
+	e->ext_done = false;
 	e->est_live = 0;
 	e->est_wait = 0u;
 	say(e, APP_SEV_INFO, "ID %d/%d: %s", e->phase + 1, e->n_phases, phase_name(k));
@@ -1361,6 +1364,87 @@ static void read_estimates(struct experiment *e)
 	}
 }
 
+#define EXT_MAX 4.0f      /* a phase excites at most this many times its planned time */
+#define EXT_AIM 0.8f      /* an extension aims the sd at this share of ID_RSD_MAX */
+#define EXT_GAIN_MAX 2.5f /* and raises an inertia phase's amplitude at most so much */
+
+/* The largest relative sd among what the phase would publish, from its data as they stand
+ * (NAN where its model is rejected for another cause, or for phases that are not extended) */
+static float phase_rsd(struct experiment *e)
+{
+	int k = e->phase_kind[e->phase];
+	if (k == PK_ROTOR && imu_src(&e->cfg)) {
+		struct imu_id_result r;
+		imu_id_process(&e->imid);
+		imu_id_solve(&e->imid, IMU_HAC_MAX, &r);
+		return r.cause == IMU_ID_OK && r.kf > 0.0f ? r.kf_sd / r.kf : NAN;
+	}
+	if (k == PK_ROTOR && e->cfg.exc_null) {
+		struct motor_id_result mr;
+		motor_id_process(&e->mid);
+		motor_id_solve(&e->mid, MOT_NE_MAX, &mr);
+		if (mr.cause != MOTOR_ID_OK || !(mr.kf > 0.0f) || !(mr.ktau > 0.0f))
+			return NAN;
+		return fmaxf(mr.kf_sd / mr.kf, mr.ktau_sd / mr.ktau);
+	}
+	if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
+		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
+		return est > 0.0f ? sd / est : NAN;
+	}
+	return NAN;
+}
+
+/* At the planned end of a rotor or inertia phase whose sd is above ID_RSD_MAX: the excitation
+ * goes on, once, until the information (time x amplitude^2: the sd falls as its square root)
+ * brings the sd to EXT_AIM of it: up to EXT_MAX times the planned time, and for an inertia
+ * phase whose need the time alone cannot meet, at a larger amplitude (up to inr_amp_limit
+ * and EXT_GAIN_MAX, not after a back-off; the tilt's back-off still guards it), within the phase's time limit, said; beyond
+ * twice that reach the phase ends as planned (its rejection says what to change). The
+ * progress carries on from where it was. */
+static bool phase_extend(struct experiment *e, const struct app_params *p)
+{
+	if (e->ext_done)
+		return false;
+	float rsd = phase_rsd(e), lim = e->cfg.rsd_max;
+	if (!(rsd > lim) || !isfinite(rsd) || !(lim > 0.0f))
+		return false;
+	float need = rsd / (EXT_AIM * lim);
+	need *= need;
+	int k = e->phase_kind[e->phase];
+	float a = 1.0f, a_max = 1.0f;
+	if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
+		float amp = e->cfg.inr_amp;
+		a_max = amp > 0.0f ? fminf(EXT_GAIN_MAX, inr_amp_limit(p, (unsigned)(k - PK_INR_X)) / amp) : 1.0f;
+		/* not where the tilt already made the excitation back off */
+		a_max = a_max > 1.0f && !(e->exc_cut_t >= 0.0f) ? a_max : 1.0f;
+		if (need > EXT_MAX)
+			a = fminf(a_max, sqrtf((need - 1.0f) / (EXT_MAX - 1.0f)));
+	}
+	if (need > 2.0f * (1.0f + (EXT_MAX - 1.0f) * a_max * a_max))
+		return false;
+	float add = e->t_run * (fminf(need, EXT_MAX) - 1.0f);
+	float user = k == PK_ROTOR ? e->cfg.rot_to : e->cfg.inr_to;
+	if (user > 0.0f)
+		add = fminf(add, user - 0.5f - e->t_total);
+	if (!(add >= 1.0f))
+		return false;
+	e->ext_done = true;
+	float p0 = e->prog_base + e->t_phase * e->prog_rate, p1 = (float)(e->phase + 1) / (float)e->n_phases;
+	e->t_run += add;
+	e->t_total += add;
+	const char *lim_name;
+	e->t_limit = phase_limit(e, &lim_name);
+	float left = e->t_total - e->t_phase;
+	e->prog_rate = left > 0.0f && p1 > p0 ? (p1 - p0) / left : 0.0f;
+	e->prog_base = p0 - e->t_phase * e->prog_rate;
+	e->exc_gain = sc_mul(e->exc_gain, sc_from_float(a));
+	say(e, APP_SEV_INFO, "ID excitation %.0f s longer: sd %.4f above ID_RSD_MAX %.4f", (double)add, (double)rsd,
+	    (double)lim);
+	if (a > 1.0f)
+		say(e, APP_SEV_INFO, "ID excitation x%.2f for it", (double)a);
+	return true;
+}
+
 void exp_turn(struct experiment *e, const struct app_params *p)
 {
 	if (e->begin_pending) { /* the experiment's first step ran: its first phase begins */
@@ -1373,6 +1457,8 @@ void exp_turn(struct experiment *e, const struct app_params *p)
 		return;
 	e->turn_pending = false;
 	if (e->state != EXP_RUNNING)
+		return;
+	if (phase_extend(e, p))
 		return;
 	phase_end(e, p);
 	e->phase++;
