@@ -639,8 +639,30 @@ static void apply_results(struct app *a)
  *
  * What changes the gains, mixer and throttle map runs here, at a frame boundary, never in
  * the step: docs/architecture.md, "Between frames". */
+/* The last frame's work its step left (app.h, a->after), in the order the step had it: the
+ * k_f tracker, the frame's record (which shows the tracker's estimate after the frame), the
+ * rotor-failure judge. Before anything else between frames: whatever runs next sees the
+ * frame done. */
+static void log_frame(struct app *a, bool stepped, float dt);
+static void after_frame(struct app *a)
+{
+	if (a->after.kf_due) {
+		a->after.kf_due = false;
+		env_kf_step(&a->env_kf, &a->after.kf_in, &a->p);
+	}
+	if (a->after.log_due) {
+		a->after.log_due = false;
+		log_frame(a, a->after.log_step, a->after.log_dt);
+	}
+	if (a->after.judge_due) {
+		a->after.judge_due = false;
+		rotor_guard_run(a); /* a failed rotor: its scale set, the vehicle told to land */
+	}
+}
+
 void app_settle(struct app *a)
 {
+	after_frame(a);
 	env_publish(a); /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh, a detune */
 	env_hover_torque_scale(&a->env_hover, &a->p); /* the torque demands' gain, from the hover learned so far */
 	exp_turn(&a->exp, &a->p); /* a phase that ended in the last step: close it, start the next */
@@ -798,7 +820,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 			dt = app_f_lt(MAX_DT_S, gap) ? MAX_DT_S : gap;
 			a->n_prev = f->frame_n;
 			a->have_step = true;
-			rotor_guard_step(a, dt); /* a failed rotor: its scale set, the vehicle told to land */
+			rotor_guard_note(a, dt); /* judged at the frame boundary (after_frame) */
 			/* After frames missing the controllers were out of the loop (their last
 			 * command held): they take one frame period, not the gap, so that their
 			 * integrators do not wind up over time they could not act in. */
@@ -816,7 +838,10 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 		a->have_actuated = true;
 		a->n_actuated = f->frame_n;
 	}
-	log_frame(a, stepped, dt);
+	/* the frame's record: filled and handed to the platform at the frame boundary */
+	a->after.log_due = true;
+	a->after.log_step = stepped;
+	a->after.log_dt = dt;
 }
 
 struct app_view app_view(const struct app *a)

@@ -139,8 +139,8 @@ static inline void step_attitude(struct app *a, struct step *s)
 	env_osc_step(&a->env_osc, w, a->fr.t_s, a->mode == APP_TAKEOFF || a->mode == APP_HOLD);
 }
 
-/* Height: the hover throttle learned from the last step, k_f tracked, and the thrust
- * demand around the hover thrust. */
+/* Height: the hover throttle learned from the last step, the k_f tracker's input, and the
+ * thrust demand around the hover thrust. */
 static inline void step_height(struct app *a, struct step *s)
 {
 	s->cos_tilt = quat_body_z_up(s->q);
@@ -164,18 +164,19 @@ static inline void step_height(struct app *a, struct step *s)
 	bool up;
 	scalar_t hover_f = env_hover_step(&a->env_hover, &hi, &up);
 	bool have = src == ENV_SRC_IMU ? acc_ok : (a->fr.valid & HAL_FRAME_THRUST) != 0;
-	struct env_kf_input ki = {
+	/* k_f tracked at the frame boundary (app_settle), on the throttles before this step */
+	a->after.kf_in = (struct env_kf_input){
 		.thrust_n = app_in(a)->rotor_thrust_n,
 		.acc_z_g = acc_z,
 		.src = src,
 		.t_cal_s = a->env_hover.cal.t_s,
-		.thr = app_thr_sc(a),
+		.thr = a->after.thr_prev,
 		.dt_s = s->gi.dt_s,
 		.t_s = a->fr.t_s,
 		.gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && have,
 		.hold = a->mode == APP_HOLD,
 	};
-	env_kf_step(&a->env_kf, &ki, &a->p);
+	a->after.kf_due = true;
 	struct alt_ctrl_input li = {
 		.z_sp_m = a->guid.z_sp_m,
 		.vz_ff_mps = a->guid.vz_ff_mps,
@@ -263,7 +264,7 @@ void app_step(struct app *a, float dt)
 		return;
 	step_position(a, &s);   /* the tilt that holds the position, the attitude set point */
 	step_attitude(a, &s);   /* the torque demand; the rates into the oscillation guard */
-	step_height(a, &s);     /* hover learning, k_f tracking, the thrust demand */
+	step_height(a, &s);     /* hover learning, the k_f tracker's input, the thrust demand */
 	step_excitation(a, &s); /* the experiment's excitation on top (EXPERIMENT only) */
 	step_allocation(a, &s); /* demands -> rotor thrusts -> throttles */
 	step_output(a, &s);     /* throttles clamped and stored */
