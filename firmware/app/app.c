@@ -62,6 +62,20 @@ bool app_hovering(const struct app *a)
 	       fabsf(a->fr.vel_i_mps[2]) < 0.3f && tilt_deg(&a->fr) < HOVER_TILT_DEG;
 }
 
+/* A status line (text, NUL-terminated within APP_EVENT_TEXT): the platform's report and
+ * log, and the outbox. */
+static void status_out(struct app *a, enum app_severity severity, const char *text)
+{
+	a->hal->report(a->hal->ctx, text);
+	hal_log_event(a->hal, a->fr.t_s, (int)severity, text);
+	struct app_event *e = outbox_put(&a->outbox);
+	if (!e)
+		return;
+	e->kind = APP_EV_STATUS;
+	e->severity = (uint8_t)severity;
+	memcpy(e->text, text, strlen(text) + 1u);
+}
+
 void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
 {
 	char text[APP_EVENT_TEXT];
@@ -69,11 +83,19 @@ void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
 	va_start(ap, fmt);
 	vsnprintf(text, sizeof text, fmt, ap);
 	va_end(ap);
-	a->hal->report(a->hal->ctx, text);
-	hal_log_event(a->hal, a->fr.t_s, (int)severity, text);
-	struct app_event e = {.kind = APP_EV_STATUS, .severity = (uint8_t)severity};
-	memcpy(e.text, text, sizeof e.text);
-	outbox_post(&a->outbox, &e);
+	status_out(a, severity, text);
+}
+
+void app_status2(struct app *a, enum app_severity severity, const char *s1, const char *s2)
+{
+	char text[APP_EVENT_TEXT];
+	size_t n = 0;
+	for (const char *p = s1; *p && n + 1u < sizeof text; p++)
+		text[n++] = *p;
+	for (const char *p = s2; *p && n + 1u < sizeof text; p++)
+		text[n++] = *p;
+	text[n] = 0;
+	status_out(a, severity, text);
 }
 
 /* An aborted experiment's reasons (its message and queued lines) go out at once, before the
@@ -308,7 +330,7 @@ void app_set_mode(struct app *a, enum app_mode m)
 		a->exp_ack_pending = false;
 	}
 	a->mode = m;
-	app_status(a, APP_SEV_INFO, "Mode %s", app_mode_name(m));
+	app_status2(a, APP_SEV_INFO, "Mode ", app_mode_name(m)); /* "Mode %s" without a format */
 	env_on_mode(a);
 }
 
@@ -711,7 +733,7 @@ static void link_back(struct app *a, float gap_s)
 	a->link_ok = true;
 	if (!a->link_ever) {
 		a->link_ever = true;
-		app_status(a, APP_SEV_INFO, "X-Plane link up");
+		app_status2(a, APP_SEV_INFO, "X-Plane link up", "");
 		return;
 	}
 	app_status(a, APP_SEV_WARNING, "X-Plane link back after %.2f s", (double)gap_s);

@@ -227,6 +227,9 @@ const char *app_param_write(struct app *a, size_t index, float value);
 
 /* A status line: console, log event, and an APP_EV_STATUS event in the outbox. */
 void app_status(struct app *a, enum app_severity severity, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* The same for the text s1 s2 (cut to APP_EVENT_TEXT - 1 characters) without a format: what
+ * the step says (a mode, "Landed") costs no formatting there. */
+void app_status2(struct app *a, enum app_severity severity, const char *s1, const char *s2);
 
 /* ---- the app's own parts (app.c, step.c), not for platforms or ground stations ---- */
 

@@ -112,7 +112,7 @@ void rotor_guard_run(struct app *a)
 	}
 	if (o.land && (a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_EXPERIMENT)) {
 		char why[8];
-		app_status(a, APP_SEV_CRITICAL, "Rotor failure: landing");
+		app_status2(a, APP_SEV_CRITICAL, "Rotor failure: landing", "");
 		app_cmd_land(a, APP_ORIGIN_NONE, why, sizeof why);
 	}
 }

@@ -86,7 +86,7 @@ static inline bool step_guidance(struct app *a, struct step *s)
 	if (!(ev & GUID_LANDED))
 		return false;
 	app_set_thr_all(a, 0.0f);
-	app_status(a, APP_SEV_INFO, "Landed");
+	app_status2(a, APP_SEV_INFO, "Landed", "");
 	app_set_mode(a, APP_DISARMED);
 	return true;
 }
