@@ -165,17 +165,16 @@ static inline void step_height(struct app *a, struct step *s)
 	scalar_t hover_f = env_hover_step(&a->env_hover, &hi, &up);
 	bool have = src == ENV_SRC_IMU ? acc_ok : (a->fr.valid & HAL_FRAME_THRUST) != 0;
 	/* k_f tracked at the frame boundary (app_settle), on the throttles before this step */
-	a->after.kf_in = (struct env_kf_input){
-		.thrust_n = app_in(a)->rotor_thrust_n,
-		.acc_z_g = acc_z,
-		.src = src,
-		.t_cal_s = a->env_hover.cal.t_s,
-		.thr = a->after.thr_prev,
-		.dt_s = s->gi.dt_s,
-		.t_s = a->fr.t_s,
-		.gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && have,
-		.hold = a->mode == APP_HOLD,
-	};
+	struct env_kf_input *ki = &a->after.kf_in; /* every field set, in place */
+	ki->thrust_n = app_in(a)->rotor_thrust_n;
+	ki->acc_z_g = acc_z;
+	ki->src = src;
+	ki->t_cal_s = a->env_hover.cal.t_s;
+	ki->thr = a->after.thr_prev;
+	ki->dt_s = s->gi.dt_s;
+	ki->t_s = a->fr.t_s;
+	ki->gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && have;
+	ki->hold = a->mode == APP_HOLD;
 	a->after.kf_due = true;
 	struct alt_ctrl_input li = {
 		.z_sp_m = a->guid.z_sp_m,
@@ -243,6 +242,7 @@ static inline void step_allocation(struct app *a, struct step *s)
 static inline void step_output(struct app *a, struct step *s)
 {
 	const scalar_t thr_max = a->ps.thr_max; /* read once: the stores below are floats too */
+	SC_HOT_UNROLL
 	for (int j = 0; j < HAL_ROTORS; j++) {
 		a->log.rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
 		scalar_t t = s->excited ? sc_add(s->thr[j], a->exp_out.thr_delta[j]) : s->thr[j];

@@ -73,6 +73,7 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 	uint32_t flags = 0;
 	struct vec3 tau_out = vec3_zero();
 
+	SC_HOT_UNROLL
 	for (int i = 0; i < 3; i++) {
 		scalar_t ei = get(e, i), rate_max = s->rate_max[i], tau_max = s->tau_max[i];
 		scalar_t int_tau_max = s->int_tau_max[i];

@@ -32,18 +32,13 @@ MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b)
  * loops over the rotors and axes unrolled (MIX_UNROLL), as their counting, addressing and
  * calls cost as much as their arithmetic; the fixed and soft-float builds keep them out of
  * line and rolled (flash). */
-#if !OCTO_FIXED && !SC_SOFT_FLOAT
-#define MIX_HARD_FLOAT 1
-#else
-#define MIX_HARD_FLOAT 0
-#endif
+#define MIX_HARD_FLOAT SC_HARD_FLOAT
 #if MIX_HARD_FLOAT && defined(__GNUC__)
 #define MIX_HOT static inline __attribute__((always_inline))
-#define MIX_UNROLL _Pragma("GCC unroll 8")
 #else
 #define MIX_HOT static
-#define MIX_UNROLL
 #endif
+#define MIX_UNROLL SC_HOT_UNROLL
 
 #if SC_SOFT_FLOAT
 /* where float is soft, sc_clamp, sc_max and sc_min are already out of line (scalar.c) */

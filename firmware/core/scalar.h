@@ -473,6 +473,27 @@ static inline scalar_t sc_exp(scalar_t a) { return expf(a); }
 /* ------------------------------------------------------------ both builds */
 #define SC_ZERO SC(0)
 
+/* SC_HOT_UNROLL before a loop of the 90 Hz step over rotors or axes (a constant count)
+ * unrolls it where float is an instruction (an FPU, the host): there the loop's counting
+ * and addressing cost as much as its arithmetic. The fixed and soft-float builds keep such
+ * loops rolled (flash). */
+#if !OCTO_FIXED && !SC_SOFT_FLOAT
+#define SC_HARD_FLOAT 1 /* float is an instruction */
+#else
+#define SC_HARD_FLOAT 0
+#endif
+#if SC_HARD_FLOAT && defined(__GNUC__)
+#define SC_HOT_UNROLL _Pragma("GCC unroll 8")
+#else
+#define SC_HOT_UNROLL
+#endif
+/* SC_HOT_INLINE: a helper of such a loop, inlined into every copy where it is unrolled */
+#if SC_HARD_FLOAT
+#define SC_HOT_INLINE static inline SC_ALWAYS_INLINE
+#else
+#define SC_HOT_INLINE static
+#endif
+
 /* 2^s as float, exact, from its exponent bits (no loop, no libm): s clamped to [-126, 127] */
 static inline float sc_pow2f(int s)
 {

@@ -19,7 +19,7 @@ void thrmap_init(struct thrmap *m, const struct thrmap_params *params)
 }
 
 /* T of u = f / k_f: the inverse map, clamped (*clamped set when it was) */
-static scalar_t throttle_of_u(const struct thrmap *m, scalar_t u, bool *clamped)
+SC_HOT_INLINE scalar_t throttle_of_u(const struct thrmap *m, scalar_t u, bool *clamped)
 {
 	bool c = false;
 	if (!sc_isfinite(u)) { /* float build: NaN gives no thrust, +/-Inf the limits */
@@ -49,6 +49,19 @@ static scalar_t throttle_of_u(const struct thrmap *m, scalar_t u, bool *clamped)
 uint32_t thrmap_update(const struct thrmap *m, const scalar_t *f_n, scalar_t *throttle_out, size_t n)
 {
 	uint32_t mask = 0;
+#if SC_HARD_FLOAT
+	if (n == THRMAP_ROTORS) { /* the vehicle's rotors: a constant count (SC_HOT_UNROLL) */
+		SC_HOT_UNROLL
+		for (size_t j = 0; j < THRMAP_ROTORS; j++) {
+			bool c;
+			scalar_t u = sc_mul_gain(f_n[j], &m->g[j]);
+			throttle_out[j] = throttle_of_u(m, u, &c);
+			if (c)
+				mask |= (uint32_t)1 << j;
+		}
+		return mask;
+	}
+#endif
 	for (size_t j = 0; j < n; j++) {
 		bool c;
 		/* u = f / (scale k_f): one product by the prepared factor per rotor */
