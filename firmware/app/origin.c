@@ -38,13 +38,13 @@ static bool is_shift(const struct origin *o, const struct hal_sensor_frame *f, f
 {
 	const float *raw = f->pos_i_m;
 	float step[3], by_vel[3];
-	for (int i = 0; i < 3; i++) {
+	for (int i = 0; i < 3; i++)
 		step[i] = raw[i] - o->raw_prev[i];
-		by_vel[i] = 0.5f * (f->vel_i_mps[i] + o->vel_prev[i]) * dt;
-	}
 	const bool gap = dt > ORIGIN_GAP_S;
 	if (!gap && max_abs3(step) <= ORIGIN_STEP_M + ORIGIN_SPEED_MPS * dt)
 		return false; /* the common case: a step a vehicle can make */
+	for (int i = 0; i < 3; i++) /* the step the velocities make */
+		by_vel[i] = 0.5f * (f->vel_i_mps[i] + o->vel_prev[i]) * dt;
 	if (has_geo(f) && o->geo_prev) {
 		float geo[3], e[3];
 		geo_step(o, f, geo);

@@ -780,6 +780,46 @@ static bool line_fit(const struct mixer *m, const scalar_t u[NR], const scalar_t
 	return true;
 }
 
+/* line_fit along column ax (k 0: thrust, ax 0; k 1: yaw, ax 3) of the pseudo-inverse, its
+ * rotors sorted at the set-up (col_up, col_dn, col_fix): the same quotients and bounds in
+ * the same order, without the column's copy and its per-rotor tests */
+static bool line_fit_col(const struct mixer *m, const scalar_t u[NR], int k, scalar_t lo, scalar_t hi, scalar_t s0,
+			 scalar_t slack, scalar_t *s)
+{
+	const int ax = k ? 3 : 0;
+	const unsigned up = m->col_up[k], dn = m->col_dn[k], fix = m->col_fix[k];
+	const scalar_t blo = sc_sub(m->f_lo, slack), bhi = sc_add(m->f_hi, slack);
+	MIX_UNROLL
+	for (int j = 0; j < NR; j++) {
+		const unsigned bit = 1u << j;
+		if (up & bit) {
+			const scalar_t c = m->pinv[j][ax];
+			lo = mmax(lo, mdiv_nz(sc_sub(blo, u[j]), c));
+			hi = mmin(hi, mdiv_nz(sc_sub(bhi, u[j]), c));
+		} else if (dn & bit) {
+			const scalar_t c = m->pinv[j][ax];
+			lo = mmax(lo, mdiv_nz(sc_sub(bhi, u[j]), c));
+			hi = mmin(hi, mdiv_nz(sc_sub(blo, u[j]), c));
+		} else if ((fix & bit) && (u[j] < blo || u[j] > bhi)) {
+			return false;
+		}
+	}
+	if (lo > hi)
+		return false;
+	*s = mclamp(s0, lo, hi);
+	return true;
+}
+
+/* u += s (column ax of the pseudo-inverse) on the present rotors */
+static void line_move_col(const struct mixer *m, scalar_t u[NR], int ax, scalar_t s)
+{
+	const unsigned present = m->present;
+	MIX_UNROLL
+	for (int j = 0; j < NR; j++)
+		if (present & (1u << j))
+			u[j] = sc_mac(s, m->pinv[j][ax], u[j]);
+}
+
 /* u += s c */
 static void line_move(scalar_t u[NR], const scalar_t c[NR], scalar_t s)
 {
@@ -817,16 +857,15 @@ static int fallback(const struct mixer *m, const scalar_t demand[NA], scalar_t u
 	MIX_UNROLL
 	for (int j = 0; j < NR; j++)
 		u[j] = (m->present & (1u << j)) ? dot4(m->pinv[j], dm) : SC_ZERO;
-	pinv_col(m, 0, SC(1), v);
-	if (line_fit(m, u, v, SC_MAX_NEG, SC_MAX, SC_ZERO, slack, &s)) {
-		line_move(u, v, s);
-		pinv_col(m, 3, SC(1), c);
-		if (line_fit(m, u, c, mmin(SC_ZERO, dy), mmax(SC_ZERO, dy), dy, slack, &s))
-			line_move(u, c, s);
+	if (line_fit_col(m, u, 0, SC_MAX_NEG, SC_MAX, SC_ZERO, slack, &s)) {
+		line_move_col(m, u, 0, s);
+		if (line_fit_col(m, u, 1, mmin(SC_ZERO, dy), mmax(SC_ZERO, dy), dy, slack, &s))
+			line_move_col(m, u, 3, s);
 		clip_box(m, u);
 		return MIXER_PATH_FALLBACK;
 	}
-	/* c: the roll/pitch part of u; u: the thrust alone */
+	/* c: the roll/pitch part of u; u: the thrust alone (v: the thrust column) */
+	pinv_col(m, 0, SC(1), v);
 	pinv_col(m, 1, dm[1], c);
 	MIX_UNROLL
 	for (int j = 0; j < NR; j++) {
