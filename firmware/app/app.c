@@ -62,9 +62,9 @@ bool app_hovering(const struct app *a)
 	       fabsf(a->fr.vel_i_mps[2]) < 0.3f && tilt_deg(&a->fr) < HOVER_TILT_DEG;
 }
 
-/* A status line (text, NUL-terminated within APP_EVENT_TEXT): the platform's report and
- * log, and the outbox. */
-static void status_out(struct app *a, enum app_severity severity, const char *text)
+/* A status line (text of n characters and its NUL, n < APP_EVENT_TEXT): the platform's
+ * report and log, and the outbox. */
+static void status_out(struct app *a, enum app_severity severity, const char *text, size_t n)
 {
 	a->hal->report(a->hal->ctx, text);
 	hal_log_event(a->hal, a->fr.t_s, (int)severity, text);
@@ -73,7 +73,7 @@ static void status_out(struct app *a, enum app_severity severity, const char *te
 		return;
 	e->kind = APP_EV_STATUS;
 	e->severity = (uint8_t)severity;
-	memcpy(e->text, text, strlen(text) + 1u);
+	memcpy(e->text, text, n + 1u);
 }
 
 void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
@@ -81,9 +81,14 @@ void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
 	char text[APP_EVENT_TEXT];
 	va_list ap;
 	va_start(ap, fmt);
-	vsnprintf(text, sizeof text, fmt, ap);
+	int n = vsnprintf(text, sizeof text, fmt, ap);
 	va_end(ap);
-	status_out(a, severity, text);
+	size_t len = n < 0 ? 0u : (size_t)n; /* what vsnprintf wrote, cut to the buffer */
+	if (n < 0)
+		text[0] = 0;
+	if (len >= sizeof text)
+		len = sizeof text - 1u;
+	status_out(a, severity, text, len);
 }
 
 void app_status2(struct app *a, enum app_severity severity, const char *s1, const char *s2)
@@ -95,7 +100,7 @@ void app_status2(struct app *a, enum app_severity severity, const char *s1, cons
 	for (const char *p = s2; *p && n + 1u < sizeof text; p++)
 		text[n++] = *p;
 	text[n] = 0;
-	status_out(a, severity, text);
+	status_out(a, severity, text, n);
 }
 
 /* An aborted experiment's reasons (its message and queued lines) go out at once, before the
@@ -321,12 +326,14 @@ void app_set_mode(struct app *a, enum app_mode m)
 		/* the final answer to the experiment command: ACCEPTED when it
 		 * finished, FAILED when it was aborted (the experiment sets final_result) */
 		enum app_result r = a->exp.final_result == APP_ACCEPTED ? APP_ACCEPTED : APP_FAILED;
-		struct app_event e = {.kind = APP_EV_CMD_DONE,
-				      .cmd = APP_CMD_EXPERIMENT,
-				      .result = (uint8_t)r,
-				      .progress = r == APP_ACCEPTED ? 100 : 0,
-				      .origin = a->exp_origin};
-		outbox_post(&a->outbox, &e);
+		struct app_event *e = outbox_put(&a->outbox); /* in place: the step may end it */
+		if (e) {
+			e->kind = APP_EV_CMD_DONE;
+			e->cmd = APP_CMD_EXPERIMENT;
+			e->result = (uint8_t)r;
+			e->progress = r == APP_ACCEPTED ? 100 : 0;
+			e->origin = a->exp_origin;
+		}
 		a->exp_ack_pending = false;
 	}
 	a->mode = m;

@@ -1,8 +1,6 @@
 /* outbox.c - the app's event ring (see outbox.h). */
 #include "outbox.h"
 
-#include <string.h>
-
 void outbox_post(struct app_outbox *o, const struct app_event *e)
 {
 	if (o->count >= APP_OUTBOX_LEN) {
@@ -31,6 +29,9 @@ struct app_event *outbox_put(struct app_outbox *o)
 	}
 	struct app_event *e = &o->ev[(o->head + o->count) % APP_OUTBOX_LEN];
 	o->count++;
-	memset(e, 0, sizeof *e);
+	e->kind = e->severity = e->cmd = e->result = e->progress = 0;
+	e->param_index = 0;
+	e->origin = 0;
+	e->value = 0.0f;
 	return e;
 }

@@ -179,7 +179,8 @@ static void frame_unmeasured(void)
 }
 
 /* seeded demands around the app's hover: thrust 0..1.6 hover x 8 at random, torques up to
- * about twice what the box allows (k is the app's yaw moment arm) */
+ * about twice what the box allows, every eighth (i = 6 mod 8) with a roll/pitch up to eight
+ * times it (k is the app's yaw moment arm) */
 static void alloc_demand(uint32_t i, scalar_t d[MIXER_N_AXES])
 {
 	uint32_t saved = rng;
@@ -190,9 +191,11 @@ static void alloc_demand(uint32_t i, scalar_t d[MIXER_N_AXES])
 	float f = hover * (1.0f + 0.8f * urand());
 	if (i % 4 == 3)
 		f = fmax * (0.5f + 0.5f * urand()); /* some near the top of the box */
+	/* some with a roll/pitch no thrust allows (the fallback's other path) */
+	float rp = i % 8 == 6 ? 2.4f : 0.6f;
 	d[0] = sc_from_float(f);
-	d[1] = sc_from_float(urand() * 0.6f * f * l);
-	d[2] = sc_from_float(urand() * 0.6f * f * l);
+	d[1] = sc_from_float(urand() * rp * f * l);
+	d[2] = sc_from_float(urand() * rp * f * l);
 	d[3] = sc_from_float(urand() * 0.6f * f * k);
 	rng = saved;
 }
