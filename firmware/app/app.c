@@ -812,11 +812,49 @@ static float step_gap(struct app *a, const struct hal_sensor_frame *f, uint64_t 
 	return (float)k * a->dt_frame;
 }
 
+/* *d = *s field by field: the library's memcpy of the whole frame costs more on a core that
+ * copies a word per load and store anyway. Every field of struct hal_sensor_frame is here
+ * (hal.h says so at the struct; the assertion catches a field added beyond the padding). */
+#define FRAME_FIELDS_SIZE                                                                                      \
+	(2 * sizeof(uint64_t) + 3 * sizeof(double) + 2 * sizeof(uint32_t) +                                    \
+	 (4 + 3 * 4 + 4 * HAL_ROTORS + 1) * sizeof(float))
+_Static_assert(sizeof(struct hal_sensor_frame) == FRAME_FIELDS_SIZE ||
+		       sizeof(struct hal_sensor_frame) == FRAME_FIELDS_SIZE + 4u, /* a double's alignment */
+	       "frame_copy copies every field of struct hal_sensor_frame");
+static void frame_copy(struct hal_sensor_frame *restrict d, const struct hal_sensor_frame *restrict s)
+{
+	d->t_us = s->t_us;
+	d->frame_n = s->frame_n;
+	d->t_s = s->t_s;
+	d->seq = s->seq;
+	d->valid = s->valid;
+	d->lat_deg = s->lat_deg;
+	d->lon_deg = s->lon_deg;
+	d->alt_msl_m = s->alt_msl_m;
+	SC_HOT_UNROLL
+	for (int i = 0; i < 4; i++)
+		d->q_ib[i] = s->q_ib[i];
+	SC_HOT_UNROLL
+	for (int i = 0; i < 3; i++) {
+		d->rate_b_rps[i] = s->rate_b_rps[i];
+		d->pos_i_m[i] = s->pos_i_m[i];
+		d->vel_i_mps[i] = s->vel_i_mps[i];
+		d->accel_b_g[i] = s->accel_b_g[i];
+	}
+	SC_HOT_UNROLL
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		d->rotor_thrust_n[j] = s->rotor_thrust_n[j];
+		d->rotor_torque_nm[j] = s->rotor_torque_nm[j];
+		d->thr_cmd_echo[j] = s->thr_cmd_echo[j];
+		d->rotor_speed_rps[j] = s->rotor_speed_rps[j];
+	}
+}
+
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
 	app_settle(a); /* normally done by app_tick already (nothing left here) */
 	uint64_t now = hal_wall_us(a->hal);
-	a->fr = *f;
+	frame_copy(&a->fr, f);
 	if (origin_correct(&a->orig, &a->fr))
 		app_status(a, APP_SEV_INFO, "Plant moved its local origin (%.0f m): position re-referenced",
 			   (double)sqrtf(a->orig.last_step[0] * a->orig.last_step[0] +

@@ -46,6 +46,7 @@ void rotor_guard_note(struct app *a, float dt)
 	a->after.dt = dt;
 	/* app_thr_sc: the throttles of the last step, what the plant answers with now */
 	const scalar_t *thr = app_thr_sc(a);
+	SC_HOT_UNROLL
 	for (int j = 0; j < HAL_ROTORS; j++)
 		a->after.thr_prev[j] = thr[j];
 	a->after.judge_due = true;

@@ -846,7 +846,7 @@ static void pinv_col(const struct mixer *m, int ax, scalar_t v, scalar_t c[NR])
  * to cancellation). Returns the path (MIXER_PATH_FALLBACK or _FALLBACK_RP). */
 static int fallback(const struct mixer *m, const scalar_t demand[NA], scalar_t u[NR])
 {
-	scalar_t dm[NA], c[NR], v[NR], s;
+	scalar_t dm[NA], c[NR], s;
 	MIX_UNROLL
 	for (int i = 0; i < NA; i++) {
 		scalar_t ext = sc_mul(sc_mul(m->width, m->row_max[i]), SC(16));
@@ -864,17 +864,17 @@ static int fallback(const struct mixer *m, const scalar_t demand[NA], scalar_t u
 		clip_box(m, u);
 		return MIXER_PATH_FALLBACK;
 	}
-	/* c: the roll/pitch part of u; u: the thrust alone (v: the thrust column) */
-	pinv_col(m, 0, SC(1), v);
+	/* c: the roll/pitch part of u; u: the thrust alone */
 	pinv_col(m, 1, dm[1], c);
+	const unsigned present = m->present;
 	MIX_UNROLL
 	for (int j = 0; j < NR; j++) {
-		c[j] = sc_mac(m->pinv[j][2], dm[2], c[j]);
-		c[j] = (m->present & (1u << j)) ? c[j] : SC_ZERO;
-		u[j] = sc_mul(v[j], dm[0]);
+		const bool on = (present & (1u << j)) != 0;
+		c[j] = on ? sc_mac(m->pinv[j][2], dm[2], c[j]) : SC_ZERO;
+		u[j] = sc_mul(on ? m->pinv[j][0] : SC_ZERO, dm[0]);
 	}
-	if (line_fit(m, u, v, SC_MAX_NEG, SC_MAX, SC_ZERO, slack, &s)) {
-		line_move(u, v, s);
+	if (line_fit_col(m, u, 0, SC_MAX_NEG, SC_MAX, SC_ZERO, slack, &s)) {
+		line_move_col(m, u, 0, s);
 		/* within an inner margin: nothing left for the clip to unbalance */
 		if (line_fit(m, u, c, SC_ZERO, SC(1), SC(1), sc_neg(slack), &s))
 			line_move(u, c, s);
