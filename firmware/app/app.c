@@ -244,6 +244,7 @@ static void env_publish(struct app *a)
 static void env_on_mode(struct app *a)
 {
 	env_limits_on_mode(&a->env_limits);
+	a->torque_gain_due = true;
 	if (a->mode == APP_TAKEOFF && env_hover_untaught(&a->env_hover)) {
 		/* nothing learned yet: start from the current VEH_* */
 		env_kf_init(&a->env_kf, &a->p);
@@ -349,6 +350,7 @@ void app_set_mode(struct app *a, enum app_mode m)
 static void sync_params(struct app *a)
 {
 	const struct app_params *p = &a->p;
+	a->torque_gain_due = true;
 	struct att_ctrl_params ap = att_ctrl_params_default();
 	ap.wn_rps = vec3_make(sc_from_float(p->att_wn_rp), sc_from_float(p->att_wn_rp), sc_from_float(p->att_wn_yaw));
 	ap.zeta = vec3_make(sc_from_float(p->att_zeta), sc_from_float(p->att_zeta), sc_from_float(p->att_zeta));
@@ -436,6 +438,7 @@ void app_init(struct app *a, const struct hal *hal)
 		hal_reportf(a->hal, "params: %s (defaults in use)", why);
 	env_kf_init(&a->env_kf, &a->p);
 	env_hover_init(&a->env_hover, &a->p);
+	a->torque_gain_due = true;
 	a->exp.mix = &a->mix; /* the inertia phases take the body torque through the mixer's Gamma */
 	rotor_guard_init(&a->rf);
 	sync_params(a);
@@ -693,7 +696,10 @@ void app_settle(struct app *a)
 {
 	after_frame(a);
 	env_publish(a); /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh, a detune */
-	env_hover_torque_scale(&a->env_hover, &a->p); /* the torque demands' gain, from the hover learned so far */
+	if (a->torque_gain_due) { /* the torque demands' gain, from the hover learned so far */
+		a->torque_gain_due = false;
+		env_hover_torque_scale(&a->env_hover, &a->p);
+	}
 	exp_turn(&a->exp, &a->p); /* a phase that ended in the last step: close it, start the next */
 	if (a->exp.n_ids > 0)
 		publish_ids(a);

@@ -143,6 +143,7 @@ struct app {
 
 	/* between frames (app_settle, app_tick): work the 90 Hz step does not do */
 	bool params_dirty;     /* a parameter changed: rebuild gains, mixer, map */
+	bool torque_gain_due;  /* a step, a mode change or new parameters: the torque gain again */
 	bool save_pending;     /* results applied: write the parameter file */
 	char param_text[8192]; /* the parameter file's text while it is loaded or saved */
 

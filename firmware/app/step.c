@@ -262,7 +262,8 @@ void app_step(struct app *a, float dt)
 {
 	struct step s; /* each field set by the stage that makes it */
 	s.dt = dt;
-	step_inputs(a, &s);     /* the frame as scalars, the excitation cleared */
+	a->torque_gain_due = true; /* what this step learns of the hover: the gain between frames */
+	step_inputs(a, &s);        /* the frame as scalars, the excitation cleared */
 	if (step_ground(a, &s)) /* disarmed or idle: rotors at rest, control reset */
 		return;
 	step_limits(a, &s);       /* take-off and landing time limits */
