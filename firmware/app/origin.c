@@ -88,8 +88,10 @@ bool origin_correct(struct origin *o, struct hal_sensor_frame *f)
 	}
 	o->have = true;
 	o->t_prev = f->t_s;
-	memcpy(o->raw_prev, p, sizeof o->raw_prev);
-	memcpy(o->vel_prev, f->vel_i_mps, sizeof o->vel_prev);
+	for (int i = 0; i < 3; i++) { /* by assignment: a library memcpy costs more for three words */
+		o->raw_prev[i] = p[i];
+		o->vel_prev[i] = f->vel_i_mps[i];
+	}
 	o->geo_prev = has_geo(f);
 	if (o->geo_prev) {
 		o->lat_prev = f->lat_deg;

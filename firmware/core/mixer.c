@@ -103,7 +103,16 @@ MIX_NOINLINE void maxpy(scalar_t *v, scalar_t d, const scalar_t *q, int n)
 		v[t] = sca_sub(v[t], sc_mul(d, q[t]));
 }
 
-MIX_HOT scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
+static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
+{
+	scalar_t s = sc_mul(a[0], b[0]);
+	s = sc_mac(a[1], b[1], s);
+	s = sc_mac(a[2], b[2], s);
+	return sc_mac(a[3], b[3], s);
+}
+
+/* dot4 inline on hard float: the step's allocation (pinv_alloc, the face, the fallback) */
+MIX_HOT scalar_t dot4h(const scalar_t a[NA], const scalar_t b[NA])
 {
 	scalar_t s = sc_mul(a[0], b[0]);
 	s = sc_mac(a[1], b[1], s);
@@ -654,7 +663,7 @@ static int pinv_alloc(const struct mixer *m, const scalar_t demand[NA], struct m
 		for (int i = 1; i < NA; i++)
 			f = sc_add(pin[j][i], f);
 #else
-		scalar_t f = dot4(m->pinv[j], d);
+		scalar_t f = dot4h(m->pinv[j], d);
 #endif
 		if (!(present & (1u << j)))
 			f = SC_ZERO;
@@ -856,7 +865,7 @@ static int fallback(const struct mixer *m, const scalar_t demand[NA], scalar_t u
 	dm[3] = SC_ZERO;
 	MIX_UNROLL
 	for (int j = 0; j < NR; j++)
-		u[j] = (m->present & (1u << j)) ? dot4(m->pinv[j], dm) : SC_ZERO;
+		u[j] = (m->present & (1u << j)) ? dot4h(m->pinv[j], dm) : SC_ZERO;
 	if (line_fit_col(m, u, 0, SC_MAX_NEG, SC_MAX, SC_ZERO, slack, &s)) {
 		line_move_col(m, u, 0, s);
 		if (line_fit_col(m, u, 1, mmin(SC_ZERO, dy), mmax(SC_ZERO, dy), dy, slack, &s))
@@ -929,7 +938,7 @@ void mixer_step(const struct mixer *m, struct mixer_warm *s, const scalar_t dema
 		}
 		MIX_UNROLL
 		for (int j = 0; j < NR; j++) {
-			u[j] = sc_add(s->u_ex[j], dot4(s->map[j], d));
+			u[j] = sc_add(s->u_ex[j], dot4h(s->map[j], d));
 			fits = fits && u[j] >= blo && u[j] <= bhi;
 		}
 		if (fits) {

@@ -440,8 +440,19 @@ static inline scalar_t sc_neg(scalar_t a) { return -a; }
 static inline scalar_t sc_abs(scalar_t a) { return fabsf(a); }
 static inline scalar_t sc_mul(scalar_t a, scalar_t b) { return a * b; }
 /* a / b; division by zero saturates like the fixed build instead of giving Inf/NaN. Out of
- * line (scalar.c): the test and the soft-float call are not worth a copy per object. */
+ * line where float is soft (scalar.c): the test and the soft-float call are not worth a copy
+ * per object; inline where the division is an instruction (the test and it cost less than a
+ * call). */
+#if SC_SOFT_FLOAT
 scalar_t sc_div(scalar_t a, scalar_t b);
+#else
+static inline scalar_t sc_div(scalar_t a, scalar_t b)
+{
+	if (b == 0.0f)
+		return a > 0.0f ? SC_MAX : (a < 0.0f ? SC_MAX_NEG : 0.0f);
+	return a / b;
+}
+#endif
 /* sqrt(a) for a > 0, else 0 (NaN included). Out of line where float is soft (scalar.c):
  * there the test and the call to sqrtf are not worth a copy per use; inline where the root
  * is an instruction. */
