@@ -821,8 +821,8 @@ static float step_gap(struct app *a, const struct hal_sensor_frame *f, uint64_t 
 /* *d = *s field by field: the library's memcpy of the whole frame costs more on a core that
  * copies a word per load and store anyway. Every field of struct hal_sensor_frame is here
  * (hal.h says so at the struct; the assertion catches a field added beyond the padding). */
-#define FRAME_FIELDS_SIZE                                                                                      \
-	(2 * sizeof(uint64_t) + 3 * sizeof(double) + 2 * sizeof(uint32_t) +                                    \
+#define FRAME_FIELDS_SIZE                                                   \
+	(2 * sizeof(uint64_t) + 3 * sizeof(double) + 2 * sizeof(uint32_t) + \
 	 (4 + 3 * 4 + 4 * HAL_ROTORS + 1) * sizeof(float))
 _Static_assert(sizeof(struct hal_sensor_frame) == FRAME_FIELDS_SIZE ||
 		       sizeof(struct hal_sensor_frame) == FRAME_FIELDS_SIZE + 4u, /* a double's alignment */

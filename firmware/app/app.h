@@ -130,15 +130,15 @@ struct app {
 	 * results do not enter the step's outputs; they see the frame, the state and the
 	 * throttles the step saw (the plant's answer to thr_prev), as if run in the step. */
 	struct {
-		bool kf_due;                  /* the k_f tracker's input waits (kf_in) */
-		bool judge_due;               /* the rotor-failure judge's input waits */
-		bool log_due;                 /* the frame's record waits (log_step, log_dt) */
-		bool log_step;                /* the frame was stepped */
-		float log_dt;                 /* its dt */
-		float dt;                     /* the step's dt */
-		bool judged, gap, excited;    /* the judge's conditions at the step (rotor_guard.c) */
+		bool kf_due;                   /* the k_f tracker's input waits (kf_in) */
+		bool judge_due;                /* the rotor-failure judge's input waits */
+		bool log_due;                  /* the frame's record waits (log_step, log_dt) */
+		bool log_step;                 /* the frame was stepped */
+		float log_dt;                  /* its dt */
+		float dt;                      /* the step's dt */
+		bool judged, gap, excited;     /* the judge's conditions at the step (rotor_guard.c) */
 		scalar_t thr_prev[HAL_ROTORS]; /* the throttles before the step */
-		struct env_kf_input kf_in;    /* the k_f tracker's input (thr: thr_prev) */
+		struct env_kf_input kf_in;     /* the k_f tracker's input (thr: thr_prev) */
 	} after;
 
 	/* between frames (app_settle, app_tick): work the 90 Hz step does not do */

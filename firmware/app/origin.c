@@ -42,7 +42,7 @@ static bool is_shift(const struct origin *o, const struct hal_sensor_frame *f, f
 		step[i] = raw[i] - o->raw_prev[i];
 	const bool gap = dt > ORIGIN_GAP_S;
 	if (!gap && max_abs3(step) <= ORIGIN_STEP_M + ORIGIN_SPEED_MPS * dt)
-		return false; /* the common case: a step a vehicle can make */
+		return false;       /* the common case: a step a vehicle can make */
 	for (int i = 0; i < 3; i++) /* the step the velocities make */
 		by_vel[i] = 0.5f * (f->vel_i_mps[i] + o->vel_prev[i]) * dt;
 	if (has_geo(f) && o->geo_prev) {

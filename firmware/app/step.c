@@ -264,7 +264,7 @@ void app_step(struct app *a, float dt)
 	s.dt = dt;
 	a->torque_gain_due = true; /* what this step learns of the hover: the gain between frames */
 	step_inputs(a, &s);        /* the frame as scalars, the excitation cleared */
-	if (step_ground(a, &s)) /* disarmed or idle: rotors at rest, control reset */
+	if (step_ground(a, &s))    /* disarmed or idle: rotors at rest, control reset */
 		return;
 	step_limits(a, &s);       /* take-off and landing time limits */
 	if (step_guidance(a, &s)) /* set points and mode transitions; landed: done */
