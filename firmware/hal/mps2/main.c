@@ -401,8 +401,9 @@ int main(int argc, char **argv)
 		got += poll_ground(&b);
 		xp_client_poll(&b.xp, b.now_us);
 		app_tick(&b.app);
+		flush_log(&b); /* the last frame's record (app_tick's frame boundary) before MAVLink */
 		mav_tick(&b.mav, b.now_us);
-		flush_log(&b);
+		flush_events(&b);
 		idle(&b, got);
 	}
 }
