@@ -62,18 +62,45 @@ bool app_hovering(const struct app *a)
 	       fabsf(a->fr.vel_i_mps[2]) < 0.3f && tilt_deg(&a->fr) < HOVER_TILT_DEG;
 }
 
+/* A status line (text of n characters and its NUL, n < APP_EVENT_TEXT): the platform's
+ * report and log, and the outbox. */
+static void status_out(struct app *a, enum app_severity severity, const char *text, size_t n)
+{
+	a->hal->report(a->hal->ctx, text);
+	hal_log_event(a->hal, a->fr.t_s, (int)severity, text);
+	struct app_event *e = outbox_put(&a->outbox);
+	if (!e)
+		return;
+	e->kind = APP_EV_STATUS;
+	e->severity = (uint8_t)severity;
+	memcpy(e->text, text, n + 1u);
+}
+
 void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
 {
 	char text[APP_EVENT_TEXT];
 	va_list ap;
 	va_start(ap, fmt);
-	vsnprintf(text, sizeof text, fmt, ap);
+	int n = vsnprintf(text, sizeof text, fmt, ap);
 	va_end(ap);
-	a->hal->report(a->hal->ctx, text);
-	hal_log_event(a->hal, a->fr.t_s, (int)severity, text);
-	struct app_event e = {.kind = APP_EV_STATUS, .severity = (uint8_t)severity};
-	memcpy(e.text, text, sizeof e.text);
-	outbox_post(&a->outbox, &e);
+	size_t len = n < 0 ? 0u : (size_t)n; /* what vsnprintf wrote, cut to the buffer */
+	if (n < 0)
+		text[0] = 0;
+	if (len >= sizeof text)
+		len = sizeof text - 1u;
+	status_out(a, severity, text, len);
+}
+
+void app_status2(struct app *a, enum app_severity severity, const char *s1, const char *s2)
+{
+	char text[APP_EVENT_TEXT];
+	size_t n = 0;
+	for (const char *p = s1; *p && n + 1u < sizeof text; p++)
+		text[n++] = *p;
+	for (const char *p = s2; *p && n + 1u < sizeof text; p++)
+		text[n++] = *p;
+	text[n] = 0;
+	status_out(a, severity, text, n);
 }
 
 /* An aborted experiment's reasons (its message and queued lines) go out at once, before the
@@ -217,6 +244,7 @@ static void env_publish(struct app *a)
 static void env_on_mode(struct app *a)
 {
 	env_limits_on_mode(&a->env_limits);
+	a->torque_gain_due = true;
 	if (a->mode == APP_TAKEOFF && env_hover_untaught(&a->env_hover)) {
 		/* nothing learned yet: start from the current VEH_* */
 		env_kf_init(&a->env_kf, &a->p);
@@ -309,16 +337,18 @@ void app_set_mode(struct app *a, enum app_mode m)
 		/* the final answer to the experiment command: ACCEPTED when it
 		 * finished, FAILED when it was aborted (the experiment sets final_result) */
 		enum app_result r = a->exp.final_result == APP_ACCEPTED ? APP_ACCEPTED : APP_FAILED;
-		struct app_event e = {.kind = APP_EV_CMD_DONE,
-				      .cmd = APP_CMD_EXPERIMENT,
-				      .result = (uint8_t)r,
-				      .progress = r == APP_ACCEPTED ? 100 : 0,
-				      .origin = a->exp_origin};
-		outbox_post(&a->outbox, &e);
+		struct app_event *e = outbox_put(&a->outbox); /* in place: the step may end it */
+		if (e) {
+			e->kind = APP_EV_CMD_DONE;
+			e->cmd = APP_CMD_EXPERIMENT;
+			e->result = (uint8_t)r;
+			e->progress = r == APP_ACCEPTED ? 100 : 0;
+			e->origin = a->exp_origin;
+		}
 		a->exp_ack_pending = false;
 	}
 	a->mode = m;
-	app_status(a, APP_SEV_INFO, "Mode %s", app_mode_name(m));
+	app_status2(a, APP_SEV_INFO, "Mode ", app_mode_name(m)); /* "Mode %s" without a format */
 	env_on_mode(a);
 }
 
@@ -330,6 +360,7 @@ void app_set_mode(struct app *a, enum app_mode m)
 static void sync_params(struct app *a)
 {
 	const struct app_params *p = &a->p;
+	a->torque_gain_due = true;
 	struct att_ctrl_params ap = att_ctrl_params_default();
 	ap.wn_rps = vec3_make(sc_from_float(p->att_wn_rp), sc_from_float(p->att_wn_rp), sc_from_float(p->att_wn_yaw));
 	ap.zeta = vec3_make(sc_from_float(p->att_zeta), sc_from_float(p->att_zeta), sc_from_float(p->att_zeta));
@@ -417,6 +448,7 @@ void app_init(struct app *a, const struct hal *hal)
 		hal_reportf(a->hal, "params: %s (defaults in use)", why);
 	env_kf_init(&a->env_kf, &a->p);
 	env_hover_init(&a->env_hover, &a->p);
+	a->torque_gain_due = true;
 	a->exp.mix = &a->mix; /* the inertia phases take the body torque through the mixer's Gamma */
 	rotor_guard_init(&a->rf);
 	sync_params(a);
@@ -649,10 +681,35 @@ static void apply_results(struct app *a)
  *
  * What changes the gains, mixer and throttle map runs here, at a frame boundary, never in
  * the step: docs/architecture.md, "Between frames". */
+/* The last frame's work its step left (app.h, a->after), in the order the step had it: the
+ * k_f tracker, the frame's record (which shows the tracker's estimate after the frame), the
+ * rotor-failure judge. Before anything else between frames: whatever runs next sees the
+ * frame done. */
+static void log_frame(struct app *a, bool stepped, float dt);
+static void after_frame(struct app *a)
+{
+	if (a->after.kf_due) {
+		a->after.kf_due = false;
+		env_kf_step(&a->env_kf, &a->after.kf_in, &a->p);
+	}
+	if (a->after.log_due) {
+		a->after.log_due = false;
+		log_frame(a, a->after.log_step, a->after.log_dt);
+	}
+	if (a->after.judge_due) {
+		a->after.judge_due = false;
+		rotor_guard_run(a); /* a failed rotor: its scale set, the vehicle told to land */
+	}
+}
+
 void app_settle(struct app *a)
 {
+	after_frame(a);
 	env_publish(a); /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh, a detune */
-	env_hover_torque_scale(&a->env_hover, &a->p); /* the torque demands' gain, from the hover learned so far */
+	if (a->torque_gain_due) { /* the torque demands' gain, from the hover learned so far */
+		a->torque_gain_due = false;
+		env_hover_torque_scale(&a->env_hover, &a->p);
+	}
 	exp_turn(&a->exp, &a->p); /* a phase that ended in the last step: close it, start the next */
 	if (a->exp.n_ids > 0)
 		publish_ids(a);
@@ -699,7 +756,7 @@ static void link_back(struct app *a, float gap_s)
 	a->link_ok = true;
 	if (!a->link_ever) {
 		a->link_ever = true;
-		app_status(a, APP_SEV_INFO, "X-Plane link up");
+		app_status2(a, APP_SEV_INFO, "X-Plane link up", "");
 		return;
 	}
 	app_status(a, APP_SEV_WARNING, "X-Plane link back after %.2f s", (double)gap_s);
@@ -771,11 +828,49 @@ static float step_gap(struct app *a, const struct hal_sensor_frame *f, uint64_t 
 	return (float)k * a->dt_frame;
 }
 
+/* *d = *s field by field: the library's memcpy of the whole frame costs more on a core that
+ * copies a word per load and store anyway. Every field of struct hal_sensor_frame is here
+ * (hal.h says so at the struct; the assertion catches a field added beyond the padding). */
+#define FRAME_FIELDS_SIZE                                                   \
+	(2 * sizeof(uint64_t) + 3 * sizeof(double) + 2 * sizeof(uint32_t) + \
+	 (4 + 3 * 4 + 4 * HAL_ROTORS + 1) * sizeof(float))
+_Static_assert(sizeof(struct hal_sensor_frame) == FRAME_FIELDS_SIZE ||
+		       sizeof(struct hal_sensor_frame) == FRAME_FIELDS_SIZE + 4u, /* a double's alignment */
+	       "frame_copy copies every field of struct hal_sensor_frame");
+static void frame_copy(struct hal_sensor_frame *restrict d, const struct hal_sensor_frame *restrict s)
+{
+	d->t_us = s->t_us;
+	d->frame_n = s->frame_n;
+	d->t_s = s->t_s;
+	d->seq = s->seq;
+	d->valid = s->valid;
+	d->lat_deg = s->lat_deg;
+	d->lon_deg = s->lon_deg;
+	d->alt_msl_m = s->alt_msl_m;
+	SC_HOT_UNROLL
+	for (int i = 0; i < 4; i++)
+		d->q_ib[i] = s->q_ib[i];
+	SC_HOT_UNROLL
+	for (int i = 0; i < 3; i++) {
+		d->rate_b_rps[i] = s->rate_b_rps[i];
+		d->pos_i_m[i] = s->pos_i_m[i];
+		d->vel_i_mps[i] = s->vel_i_mps[i];
+		d->accel_b_g[i] = s->accel_b_g[i];
+	}
+	SC_HOT_UNROLL
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		d->rotor_thrust_n[j] = s->rotor_thrust_n[j];
+		d->rotor_torque_nm[j] = s->rotor_torque_nm[j];
+		d->thr_cmd_echo[j] = s->thr_cmd_echo[j];
+		d->rotor_speed_rps[j] = s->rotor_speed_rps[j];
+	}
+}
+
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
 	app_settle(a); /* normally done by app_tick already (nothing left here) */
 	uint64_t now = hal_wall_us(a->hal);
-	a->fr = *f;
+	frame_copy(&a->fr, f);
 	if (origin_correct(&a->orig, &a->fr))
 		app_status(a, APP_SEV_INFO, "Plant moved its local origin (%.0f m): position re-referenced",
 			   (double)sqrtf(a->orig.last_step[0] * a->orig.last_step[0] +
@@ -808,7 +903,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 			dt = app_f_lt(MAX_DT_S, gap) ? MAX_DT_S : gap;
 			a->n_prev = f->frame_n;
 			a->have_step = true;
-			rotor_guard_step(a, dt); /* a failed rotor: its scale set, the vehicle told to land */
+			rotor_guard_note(a, dt); /* judged at the frame boundary (after_frame) */
 			/* After frames missing the controllers were out of the loop (their last
 			 * command held): they take one frame period, not the gap, so that their
 			 * integrators do not wind up over time they could not act in. */
@@ -826,7 +921,10 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 		a->have_actuated = true;
 		a->n_actuated = f->frame_n;
 	}
-	log_frame(a, stepped, dt);
+	/* the frame's record: filled and handed to the platform at the frame boundary */
+	a->after.log_due = true;
+	a->after.log_step = stepped;
+	a->after.log_dt = dt;
 }
 
 struct app_view app_view(const struct app *a)

@@ -125,8 +125,25 @@ struct app {
 	bool exp_ack_pending;     /* a final result of the experiment command is owed */
 	app_origin exp_origin;    /* to whom */
 
+	/* The frame's work the step leaves to the frame boundary (app_settle runs it first):
+	 * the k_f tracker's update, the rotor-failure judge and the frame's log record. Their
+	 * results do not enter the step's outputs; they see the frame, the state and the
+	 * throttles the step saw (the plant's answer to thr_prev), as if run in the step. */
+	struct {
+		bool kf_due;                   /* the k_f tracker's input waits (kf_in) */
+		bool judge_due;                /* the rotor-failure judge's input waits */
+		bool log_due;                  /* the frame's record waits (log_step, log_dt) */
+		bool log_step;                 /* the frame was stepped */
+		float log_dt;                  /* its dt */
+		float dt;                      /* the step's dt */
+		bool judged, gap, excited;     /* the judge's conditions at the step (rotor_guard.c) */
+		scalar_t thr_prev[HAL_ROTORS]; /* the throttles before the step */
+		struct env_kf_input kf_in;     /* the k_f tracker's input (thr: thr_prev) */
+	} after;
+
 	/* between frames (app_settle, app_tick): work the 90 Hz step does not do */
 	bool params_dirty;     /* a parameter changed: rebuild gains, mixer, map */
+	bool torque_gain_due;  /* a step, a mode change or new parameters: the torque gain again */
 	bool save_pending;     /* results applied: write the parameter file */
 	char param_text[8192]; /* the parameter file's text while it is loaded or saved */
 
@@ -141,9 +158,9 @@ struct app {
 static inline const bnd_frame_t *app_in(const struct app *a) { return bnd_in(&a->bnd, &a->fr); }
 static inline const scalar_t *app_thr_sc(const struct app *a) { return bnd_thr(&a->bnd, a->thr); }
 
-/* A failed rotor (rotor_guard.c; the detector is core/rotor_fail.h): once a frame before the
- * step the detector is fed the last step's throttles and what the frame measured of the
- * rotors; on a detection the rotor's MOT_SCALEj becomes the detected effectiveness (0: left
+/* A failed rotor (rotor_guard.c; the detector is core/rotor_fail.h): once a frame, at the
+ * boundary after the step, the detector is fed the throttles before that step and what the
+ * frame measured of the rotors; on a detection the rotor's MOT_SCALEj becomes the detected effectiveness (0: left
  * out of the allocation) and the mixer is rebuilt before the next step, an experiment in
  * progress stops with the rotor named, a critical status line says so, and after the
  * detector's hold the vehicle lands. rotor_guard_sync gives the detector the rotor model
@@ -151,7 +168,10 @@ static inline const scalar_t *app_thr_sc(const struct app *a) { return bnd_thr(&
  * known failed (its scale 0, or found failed and not set anew). */
 void rotor_guard_init(struct rotor_fail *rf);
 void rotor_guard_sync(struct rotor_fail *rf, const struct app_params *p);
-void rotor_guard_step(struct app *a, float dt);
+/* In the step, before app_step: the judge's conditions (mode, gaps, swinging rotors) and the
+ * throttles the frame answers (a->after); rotor_guard_run judges at the frame boundary. */
+void rotor_guard_note(struct app *a, float dt);
+void rotor_guard_run(struct app *a);
 bool rotor_guard_failed(const struct rotor_fail *rf);
 
 void app_init(struct app *a, const struct hal *hal);
@@ -208,6 +228,9 @@ const char *app_param_write(struct app *a, size_t index, float value);
 
 /* A status line: console, log event, and an APP_EV_STATUS event in the outbox. */
 void app_status(struct app *a, enum app_severity severity, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* The same for the text s1 s2 (cut to APP_EVENT_TEXT - 1 characters) without a format: what
+ * the step says (a mode, "Landed") costs no formatting there. */
+void app_status2(struct app *a, enum app_severity severity, const char *s1, const char *s2);
 
 /* ---- the app's own parts (app.c, step.c), not for platforms or ground stations ---- */
 

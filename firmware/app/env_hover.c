@@ -132,8 +132,10 @@ void env_hover_torque_scale(struct env_hover *h, const struct app_params *p)
 	float k = 1.0f;
 	if (h->hf_ok && env_hover_ready(h)) {
 		float mg = p->veh_mass * p->veh_grav, hf = sc_to_float(h->hf);
-		if (mg > 0.0f && hf > 0.0f)
-			k = fminf(fmaxf(hf / mg, 0.5f), 1.0f);
+		if (mg > 0.0f && hf > 0.0f) { /* fminf(fmaxf(r, 0.5), 1) by compares (NaN: 0.5 too) */
+			float r = hf / mg;
+			k = r > 0.5f ? (r < 1.0f ? r : 1.0f) : 0.5f;
+		}
 	}
 	h->tau_k_target = sc_from_float(k);
 }

@@ -493,13 +493,19 @@ void exp_abort(struct experiment *e, const char *reason)
 static void snapshot(struct exp_turn *t, const struct exp_input *in)
 {
 	t->thr_prev0 = in->thr_prev[0];
-	memcpy(t->thr_prev_all, in->thr_prev, sizeof t->thr_prev_all);
 	t->rotor_f_cmd0 = in->rotor_f_cmd[0];
-	memcpy(t->thrust_n, in->thrust_n, sizeof t->thrust_n);
-	for (int j = 0; j < HAL_ROTORS; j++) /* from the frame: exp_input has them only for some phases */
+	/* by assignment: the library's memcpy costs more for these few words */
+	SC_HOT_UNROLL
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		t->thr_prev_all[j] = in->thr_prev[j];
+		t->thrust_n[j] = in->thrust_n[j];
+		/* from the frame: exp_input has them only for some phases */
 		t->torque_nm[j] = sc_from_float(in->frame->rotor_torque_nm[j]);
-	memcpy(t->rate_b_rps, in->rate_b_rps, sizeof t->rate_b_rps);
-	memcpy(t->speed_rps, in->frame->rotor_speed_rps, sizeof t->speed_rps);
+		t->speed_rps[j] = in->frame->rotor_speed_rps[j];
+	}
+	SC_HOT_UNROLL
+	for (int i = 0; i < 3; i++)
+		t->rate_b_rps[i] = in->rate_b_rps[i];
 }
 
 static float phase_limit(const struct experiment *e, const char **name);

@@ -38,13 +38,13 @@ static bool is_shift(const struct origin *o, const struct hal_sensor_frame *f, f
 {
 	const float *raw = f->pos_i_m;
 	float step[3], by_vel[3];
-	for (int i = 0; i < 3; i++) {
+	for (int i = 0; i < 3; i++)
 		step[i] = raw[i] - o->raw_prev[i];
-		by_vel[i] = 0.5f * (f->vel_i_mps[i] + o->vel_prev[i]) * dt;
-	}
 	const bool gap = dt > ORIGIN_GAP_S;
 	if (!gap && max_abs3(step) <= ORIGIN_STEP_M + ORIGIN_SPEED_MPS * dt)
-		return false; /* the common case: a step a vehicle can make */
+		return false;       /* the common case: a step a vehicle can make */
+	for (int i = 0; i < 3; i++) /* the step the velocities make */
+		by_vel[i] = 0.5f * (f->vel_i_mps[i] + o->vel_prev[i]) * dt;
 	if (has_geo(f) && o->geo_prev) {
 		float geo[3], e[3];
 		geo_step(o, f, geo);
@@ -88,8 +88,10 @@ bool origin_correct(struct origin *o, struct hal_sensor_frame *f)
 	}
 	o->have = true;
 	o->t_prev = f->t_s;
-	memcpy(o->raw_prev, p, sizeof o->raw_prev);
-	memcpy(o->vel_prev, f->vel_i_mps, sizeof o->vel_prev);
+	for (int i = 0; i < 3; i++) { /* by assignment: a library memcpy costs more for three words */
+		o->raw_prev[i] = p[i];
+		o->vel_prev[i] = f->vel_i_mps[i];
+	}
 	o->geo_prev = has_geo(f);
 	if (o->geo_prev) {
 		o->lat_prev = f->lat_deg;

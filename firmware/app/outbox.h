@@ -78,6 +78,10 @@ struct app_outbox {
 };
 
 void outbox_post(struct app_outbox *o, const struct app_event *e);
+/* The next slot for an event written in place (no copy of it): its fields before the union
+ * zeroed, the union's bytes the caller's to write (a text up to its NUL: the ground-station
+ * module reads no further); NULL when the outbox is full (the event dropped and counted). */
+struct app_event *outbox_put(struct app_outbox *o);
 /* Takes the oldest event into *e; false when empty. */
 bool outbox_pop(struct app_outbox *o, struct app_event *e);
 

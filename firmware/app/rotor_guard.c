@@ -26,9 +26,36 @@ void rotor_guard_sync(struct rotor_fail *rf, const struct app_params *p)
 
 bool rotor_guard_failed(const struct rotor_fail *rf) { return rf->failed != 0; }
 
-void rotor_guard_step(struct app *a, float dt)
+void rotor_guard_note(struct app *a, float dt)
+{
+	/* judged in hover, the experiments, the landing, and the take-off once off the ground
+	 * (above the height where its set points turn from level: the spool-up and ground
+	 * contact are below it) */
+	const bool airborne =
+		a->mode == APP_HOLD || a->mode == APP_EXPERIMENT || a->mode == APP_LAND ||
+		(a->mode == APP_TAKEOFF && !guid_level_only(&a->guid, GUID_TAKEOFF, sc_from_float(a->fr.pos_i_m[2])));
+	a->after.judged = airborne && a->actuating;
+	/* frames missing before this one: the step covers more than one frame period */
+	a->after.gap = a->dt_frame > 0.0f && dt > 1.5f * a->dt_frame;
+	/* Only a deeper drop is a failure while the rotors swing through a model that may be
+	 * off: an experiment's excitation (the model may be another vehicle's, from a stale
+	 * parameter file), or rates over the oscillation guard's limit (an oscillating attitude
+	 * loop swings the rotors at full range through a motor model still nominal; IMU
+	 * outliers raise the rates too, so this is not a reason to stop judging). */
+	a->after.excited = a->mode == APP_EXPERIMENT || env_osc_oscillating(&a->env_osc);
+	a->after.dt = dt;
+	/* app_thr_sc: the throttles of the last step, what the plant answers with now */
+	const scalar_t *thr = app_thr_sc(a);
+	SC_HOT_UNROLL
+	for (int j = 0; j < HAL_ROTORS; j++)
+		a->after.thr_prev[j] = thr[j];
+	a->after.judge_due = true;
+}
+
+void rotor_guard_run(struct app *a)
 {
 	const struct hal_sensor_frame *f = &a->fr;
+	const float dt = a->after.dt;
 	/* the speeds only when the thrust rows are missing (the thrusts decide otherwise) */
 	const bool thrust = (f->valid & HAL_FRAME_THRUST) != 0, speed = !thrust && (f->valid & HAL_FRAME_RPM);
 #if OCTO_FIXED
@@ -45,28 +72,13 @@ void rotor_guard_step(struct app *a, float dt)
 	const scalar_t *thrust_n = thrust ? f->rotor_thrust_n : NULL, *speed_rps = speed ? f->rotor_speed_rps : NULL;
 	scalar_t dt_s = dt;
 #endif
-	/* judged in hover, the experiments, the landing, and the take-off once off the ground
-	 * (above the height where its set points turn from level: the spool-up and ground
-	 * contact are below it) */
-	const bool airborne =
-		a->mode == APP_HOLD || a->mode == APP_EXPERIMENT || a->mode == APP_LAND ||
-		(a->mode == APP_TAKEOFF && !guid_level_only(&a->guid, GUID_TAKEOFF, sc_from_float(a->fr.pos_i_m[2])));
-	/* frames missing before this one: the step covers more than one frame period */
-	const bool gap = a->dt_frame > 0.0f && dt > 1.5f * a->dt_frame;
-	/* Only a deeper drop is a failure while the rotors swing through a model that may be
-	 * off: an experiment's excitation (the model may be another vehicle's, from a stale
-	 * parameter file), or rates over the oscillation guard's limit (an oscillating attitude
-	 * loop swings the rotors at full range through a motor model still nominal; IMU
-	 * outliers raise the rates too, so this is not a reason to stop judging).
-	 * app_thr_sc: the throttles of the last step, what the plant answers with now. */
-	const bool swinging = a->mode == APP_EXPERIMENT || env_osc_oscillating(&a->env_osc);
-	struct rotor_fail_input in = {.thr = app_thr_sc(a),
+	struct rotor_fail_input in = {.thr = a->after.thr_prev,
 				      .thrust_n = thrust_n,
 				      .speed_rps = speed_rps,
 				      .dt_s = dt_s,
-				      .judge = airborne && a->actuating,
-				      .gap = gap,
-				      .excited = swinging};
+				      .judge = a->after.judged,
+				      .gap = a->after.gap,
+				      .excited = a->after.excited};
 	struct rotor_fail_output o = rotor_fail_step(&a->rf, &in);
 
 	if (o.rotor >= 0) {
@@ -96,12 +108,12 @@ void rotor_guard_step(struct app *a, float dt)
 		if (a->mode == APP_EXPERIMENT) {
 			char why[24];
 			snprintf(why, sizeof why, "rotor %d failed", j + 1);
-			exp_abort(&a->exp, why); /* the step's experiment part ends it, to HOLD */
+			exp_abort(&a->exp, why); /* the next step's experiment part ends it, to HOLD */
 		}
 	}
 	if (o.land && (a->mode == APP_TAKEOFF || a->mode == APP_HOLD || a->mode == APP_EXPERIMENT)) {
 		char why[8];
-		app_status(a, APP_SEV_CRITICAL, "Rotor failure: landing");
+		app_status2(a, APP_SEV_CRITICAL, "Rotor failure: landing", "");
 		app_cmd_land(a, APP_ORIGIN_NONE, why, sizeof why);
 	}
 }

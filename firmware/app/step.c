@@ -29,7 +29,13 @@ static inline void step_inputs(struct app *a, struct step *s)
 	s->vel = app_in(a)->vel_i_mps;
 	const scalar_t *qf = app_in(a)->q_ib;
 	s->q = quat_normalize((struct quat){qf[0], qf[1], qf[2], qf[3]});
-	memset(&a->exp_out, 0, sizeof a->exp_out);
+	a->exp_out.f_delta = SC_ZERO; /* field by field: the library's memset costs more */
+	SC_HOT_UNROLL
+	for (int i = 0; i < 3; i++)
+		a->exp_out.tau_delta[i] = SC_ZERO;
+	SC_HOT_UNROLL
+	for (int j = 0; j < HAL_ROTORS; j++)
+		a->exp_out.thr_delta[j] = SC_ZERO;
 	s->gi = (struct guid_input){s->pos[2], s->vel[2], bnd_dt(&a->bnd, s->dt), false};
 }
 
@@ -86,7 +92,7 @@ static inline bool step_guidance(struct app *a, struct step *s)
 	if (!(ev & GUID_LANDED))
 		return false;
 	app_set_thr_all(a, 0.0f);
-	app_status(a, APP_SEV_INFO, "Landed");
+	app_status2(a, APP_SEV_INFO, "Landed", "");
 	app_set_mode(a, APP_DISARMED);
 	return true;
 }
@@ -139,8 +145,8 @@ static inline void step_attitude(struct app *a, struct step *s)
 	env_osc_step(&a->env_osc, w, a->fr.t_s, a->mode == APP_TAKEOFF || a->mode == APP_HOLD);
 }
 
-/* Height: the hover throttle learned from the last step, k_f tracked, and the thrust
- * demand around the hover thrust. */
+/* Height: the hover throttle learned from the last step, the k_f tracker's input, and the
+ * thrust demand around the hover thrust. */
 static inline void step_height(struct app *a, struct step *s)
 {
 	s->cos_tilt = quat_body_z_up(s->q);
@@ -164,18 +170,18 @@ static inline void step_height(struct app *a, struct step *s)
 	bool up;
 	scalar_t hover_f = env_hover_step(&a->env_hover, &hi, &up);
 	bool have = src == ENV_SRC_IMU ? acc_ok : (a->fr.valid & HAL_FRAME_THRUST) != 0;
-	struct env_kf_input ki = {
-		.thrust_n = app_in(a)->rotor_thrust_n,
-		.acc_z_g = acc_z,
-		.src = src,
-		.t_cal_s = a->env_hover.cal.t_s,
-		.thr = app_thr_sc(a),
-		.dt_s = s->gi.dt_s,
-		.t_s = a->fr.t_s,
-		.gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && have,
-		.hold = a->mode == APP_HOLD,
-	};
-	env_kf_step(&a->env_kf, &ki, &a->p);
+	/* k_f tracked at the frame boundary (app_settle), on the throttles before this step */
+	struct env_kf_input *ki = &a->after.kf_in; /* every field set, in place */
+	ki->thrust_n = app_in(a)->rotor_thrust_n;
+	ki->acc_z_g = acc_z;
+	ki->src = src;
+	ki->t_cal_s = a->env_hover.cal.t_s;
+	ki->thr = a->after.thr_prev;
+	ki->dt_s = s->gi.dt_s;
+	ki->t_s = a->fr.t_s;
+	ki->gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && have;
+	ki->hold = a->mode == APP_HOLD;
+	a->after.kf_due = true;
 	struct alt_ctrl_input li = {
 		.z_sp_m = a->guid.z_sp_m,
 		.vz_ff_mps = a->guid.vz_ff_mps,
@@ -242,6 +248,7 @@ static inline void step_allocation(struct app *a, struct step *s)
 static inline void step_output(struct app *a, struct step *s)
 {
 	const scalar_t thr_max = a->ps.thr_max; /* read once: the stores below are floats too */
+	SC_HOT_UNROLL
 	for (int j = 0; j < HAL_ROTORS; j++) {
 		a->log.rotor_f[j] = sc_to_float(a->mix_out.f_n[j]);
 		scalar_t t = s->excited ? sc_add(s->thr[j], a->exp_out.thr_delta[j]) : s->thr[j];
@@ -255,15 +262,16 @@ void app_step(struct app *a, float dt)
 {
 	struct step s; /* each field set by the stage that makes it */
 	s.dt = dt;
-	step_inputs(a, &s);     /* the frame as scalars, the excitation cleared */
-	if (step_ground(a, &s)) /* disarmed or idle: rotors at rest, control reset */
+	a->torque_gain_due = true; /* what this step learns of the hover: the gain between frames */
+	step_inputs(a, &s);        /* the frame as scalars, the excitation cleared */
+	if (step_ground(a, &s))    /* disarmed or idle: rotors at rest, control reset */
 		return;
 	step_limits(a, &s);       /* take-off and landing time limits */
 	if (step_guidance(a, &s)) /* set points and mode transitions; landed: done */
 		return;
 	step_position(a, &s);   /* the tilt that holds the position, the attitude set point */
 	step_attitude(a, &s);   /* the torque demand; the rates into the oscillation guard */
-	step_height(a, &s);     /* hover learning, k_f tracking, the thrust demand */
+	step_height(a, &s);     /* hover learning, the k_f tracker's input, the thrust demand */
 	step_excitation(a, &s); /* the experiment's excitation on top (EXPERIMENT only) */
 	step_allocation(a, &s); /* demands -> rotor thrusts -> throttles */
 	step_output(a, &s);     /* throttles clamped and stored */

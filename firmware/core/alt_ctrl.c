@@ -43,10 +43,19 @@ scalar_t alt_ctrl_update(struct alt_ctrl *s, const struct alt_ctrl_input *in)
 {
 	const struct alt_ctrl_params *p = &s->p;
 	uint32_t flags = 0;
-	if (!sc_isfinite(in->z_sp_m) || !sc_isfinite(in->vz_ff_mps) || !sc_isfinite(in->z_m) ||
-	    !sc_isfinite(in->vz_mps) || !sc_isfinite(in->mass_kg) || !sc_isfinite(in->dt_s) ||
-	    !sc_isfinite(in->q_b2i.w) || !sc_isfinite(in->q_b2i.x) || !sc_isfinite(in->q_b2i.y) ||
-	    !sc_isfinite(in->q_b2i.z)) {
+#if SC_HARD_FLOAT
+	/* every input finite: with an FPU one test of their sum (a NaN or an infinity anywhere
+	 * makes it non-finite; so does a sum beyond the float range, which no real input reaches) */
+	const bool finite =
+		sc_isfinite(((in->z_sp_m + in->vz_ff_mps) + (in->z_m + in->vz_mps)) +
+			    ((in->mass_kg + in->dt_s) + (in->q_b2i.w + in->q_b2i.x)) + (in->q_b2i.y + in->q_b2i.z));
+#else
+	const bool finite = sc_isfinite(in->z_sp_m) && sc_isfinite(in->vz_ff_mps) && sc_isfinite(in->z_m) &&
+			    sc_isfinite(in->vz_mps) && sc_isfinite(in->mass_kg) && sc_isfinite(in->dt_s) &&
+			    sc_isfinite(in->q_b2i.w) && sc_isfinite(in->q_b2i.x) && sc_isfinite(in->q_b2i.y) &&
+			    sc_isfinite(in->q_b2i.z);
+#endif
+	if (!finite) {
 		s->flags = ALT_CTRL_BAD_INPUT;
 		return s->f_n;
 	}

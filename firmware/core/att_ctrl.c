@@ -48,17 +48,35 @@ void att_ctrl_set_params(struct att_ctrl *s, const struct att_ctrl_params *param
 	s->gyro_comp = params->gyro_comp;
 }
 
+#if !SC_HARD_FLOAT
 static bool vec3_finite(struct vec3 v) { return sc_isfinite(v.x) && sc_isfinite(v.y) && sc_isfinite(v.z); }
 
 static bool quat_finite(struct quat q)
 {
 	return sc_isfinite(q.w) && sc_isfinite(q.x) && sc_isfinite(q.y) && sc_isfinite(q.z);
 }
+#endif
+
+/* Every input finite. With an FPU one test of their sum: a NaN or an infinity anywhere makes it
+ * non-finite (so does a sum beyond the float range, which no real input reaches); else each
+ * by its bits. */
+static bool inputs_finite(const struct att_ctrl_input *in)
+{
+#if SC_HARD_FLOAT
+	const struct quat a = in->q_sp_b2i, b = in->q_b2i;
+	const struct vec3 f = in->rate_ff_b, w = in->rate_b_rps, j = in->inertia_kgm2;
+	scalar_t sum = ((a.w + a.x) + (a.y + a.z)) + ((b.w + b.x) + (b.y + b.z));
+	sum += ((f.x + f.y) + (f.z + w.x)) + ((w.y + w.z) + (j.x + j.y)) + (j.z + in->dt_s);
+	return sc_isfinite(sum);
+#else
+	return quat_finite(in->q_sp_b2i) && quat_finite(in->q_b2i) && vec3_finite(in->rate_ff_b) &&
+	       vec3_finite(in->rate_b_rps) && vec3_finite(in->inertia_kgm2) && sc_isfinite(in->dt_s);
+#endif
+}
 
 uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, struct vec3 *tau_b_nm)
 {
-	if (!quat_finite(in->q_sp_b2i) || !quat_finite(in->q_b2i) || !vec3_finite(in->rate_ff_b) ||
-	    !vec3_finite(in->rate_b_rps) || !vec3_finite(in->inertia_kgm2) || !sc_isfinite(in->dt_s)) {
+	if (!inputs_finite(in)) {
 		*tau_b_nm = vec3_zero();
 		s->flags = ATT_CTRL_BAD_INPUT;
 		return s->flags;
@@ -73,6 +91,7 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 	uint32_t flags = 0;
 	struct vec3 tau_out = vec3_zero();
 
+	SC_HOT_UNROLL
 	for (int i = 0; i < 3; i++) {
 		scalar_t ei = get(e, i), rate_max = s->rate_max[i], tau_max = s->tau_max[i];
 		scalar_t int_tau_max = s->int_tau_max[i];

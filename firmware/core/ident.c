@@ -113,15 +113,19 @@ void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTOR
 	 * (the same values, bit for bit: tests/core/test_ident_inertia_accept.c), without the
 	 * thrust and yaw rows it would form too */
 	scalar_t u[IDENT_ROTORS];
+	SC_HOT_UNROLL
 	for (int j = 0; j < IDENT_ROTORS; j++)
 		u[j] = m->p.scale[j] == SC(1) ? f[j] : sc_div(f[j], m->p.scale[j]);
+	SC_HOT_UNROLL
 	for (int i = 1; i <= 2; i++) {
 		scalar_t s = SC_ZERO;
+		SC_HOT_UNROLL
 		for (int j = 0; j < IDENT_ROTORS; j++)
 			s = sc_mac(m->gn[i][j], u[j], s);
 		tau_out[i - 1] = sc_div(s, m->row_div[i]);
 	}
 	scalar_t tz = SC_ZERO;
+	SC_HOT_UNROLL
 	for (int j = 0; j < IDENT_ROTORS; j++) {
 		scalar_t g = m->gn[3][j]; /* row-scaled Gamma: its sign is the yaw sign */
 		if (g > SC_ZERO)

@@ -28,11 +28,28 @@ MIX_NOINLINE scalar_t mdiv(scalar_t a, scalar_t b)
 #endif
 	return sc_div(a, b);
 }
+/* Where float is an instruction (an FPU, the host): the step's small helpers inline and its
+ * loops over the rotors and axes unrolled (MIX_UNROLL), as their counting, addressing and
+ * calls cost as much as their arithmetic; the fixed and soft-float builds keep them out of
+ * line and rolled (flash). */
+#define MIX_HARD_FLOAT SC_HARD_FLOAT
+#if MIX_HARD_FLOAT && defined(__GNUC__)
+#define MIX_HOT static inline __attribute__((always_inline))
+#else
+#define MIX_HOT static
+#endif
+#define MIX_UNROLL SC_HOT_UNROLL
+
 #if SC_SOFT_FLOAT
 /* where float is soft, sc_clamp, sc_max and sc_min are already out of line (scalar.c) */
 #define mclamp sc_clamp
 #define mmax sc_max
 #define mmin sc_min
+#elif MIX_HARD_FLOAT
+/* with an FPU two compares: inline */
+static inline scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_clamp(x, lo, hi); }
+static inline scalar_t mmax(scalar_t a, scalar_t b) { return sc_max(a, b); }
+static inline scalar_t mmin(scalar_t a, scalar_t b) { return sc_min(a, b); }
 #else
 MIX_NOINLINE scalar_t mclamp(scalar_t x, scalar_t lo, scalar_t hi) { return sc_clamp(x, lo, hi); }
 /* max and min inline in the fixed build and with an FPU (a compare instruction) */
@@ -94,6 +111,15 @@ static scalar_t dot4(const scalar_t a[NA], const scalar_t b[NA])
 	return sc_mac(a[3], b[3], s);
 }
 
+/* dot4 inline on hard float: the step's allocation (pinv_alloc, the face, the fallback) */
+MIX_HOT scalar_t dot4h(const scalar_t a[NA], const scalar_t b[NA])
+{
+	scalar_t s = sc_mul(a[0], b[0]);
+	s = sc_mac(a[1], b[1], s);
+	s = sc_mac(a[2], b[2], s);
+	return sc_mac(a[3], b[3], s);
+}
+
 /* physical wrench component -> scaled space */
 static scalar_t to_scaled(const struct mixer *m, int i, scalar_t v)
 {
@@ -120,14 +146,28 @@ gmul(scalar_t g, scalar_t u)
 	return sc_mul(g, u);
 }
 
+/* s / row_div[i] (row_div > 0 by the set-up): with an FPU the division instruction itself,
+ * the same quotient as sc_div's for a nonzero divisor */
+#if MIX_HARD_FLOAT
+#define mdiv_row(a, b) ((a) / (b))
+#else
+#define mdiv_row(a, b) mdiv((a), (b))
+#endif
+
 /* the physical wrench of u (Gamma S u) */
 static void wrench_u(const struct mixer *m, const scalar_t u[NR], scalar_t wrench[NA])
 {
+	scalar_t uu[NR]; /* in locals: the stores to wrench cannot change them */
+	MIX_UNROLL
+	for (int j = 0; j < NR; j++)
+		uu[j] = u[j];
+	MIX_UNROLL
 	for (int i = 0; i < NA; i++) {
 		scalar_t s = SC_ZERO;
+		MIX_UNROLL
 		for (int j = 0; j < NR; j++)
-			s = sca_add(gmul(m->gn[i][j], u[j]), s);
-		wrench[i] = mdiv(s, m->row_div[i]);
+			s = sca_add(gmul(m->gn[i][j], uu[j]), s);
+		wrench[i] = mdiv_row(s, m->row_div[i]);
 	}
 }
 
@@ -595,11 +635,15 @@ static int pinv_alloc(const struct mixer *m, const scalar_t demand[NA], struct m
 	out->limits = 0;
 	out->steps = 0;
 	bool finite = true;
+	/* the demand in locals: the stores to out cannot change them */
+	const scalar_t d[NA] = {demand[0], demand[1], demand[2], demand[3]};
+	MIX_UNROLL
 	for (int i = 0; i < NA; i++) {
-		out->demanded[i] = demand[i];
-		finite = finite && sc_isfinite(demand[i]);
+		out->demanded[i] = d[i];
+		finite = finite && sc_isfinite(d[i]);
 	}
 	if (!finite) {
+		MIX_UNROLL
 		for (int j = 0; j < NR; j++)
 			out->f_n[j] = SC_ZERO;
 		out->limits = MIXER_LIMIT_BAD_INPUT;
@@ -608,21 +652,24 @@ static int pinv_alloc(const struct mixer *m, const scalar_t demand[NA], struct m
 	bool inside = true;
 #if OCTO_FIXED
 	scalar_t pin[NR][NA];
-	pinv_products(m, demand, pin);
+	pinv_products(m, d, pin);
 #endif
+	const scalar_t lo = m->f_lo, hi = m->f_hi;
+	const unsigned present = m->present;
+	MIX_UNROLL
 	for (int j = 0; j < NR; j++) {
 #if OCTO_FIXED
 		scalar_t f = pin[j][0];
 		for (int i = 1; i < NA; i++)
 			f = sc_add(pin[j][i], f);
-		out->f_n[j] = f;
 #else
-		out->f_n[j] = dot4(m->pinv[j], demand);
+		scalar_t f = dot4h(m->pinv[j], d);
 #endif
-		if (!(m->present & (1u << j)))
-			out->f_n[j] = SC_ZERO;
-		else if (out->f_n[j] < m->f_lo || out->f_n[j] > m->f_hi)
+		if (!(present & (1u << j)))
+			f = SC_ZERO;
+		else if (f < lo || f > hi)
 			inside = false;
+		out->f_n[j] = f;
 	}
 	return inside ? 1 : 2;
 }
@@ -630,9 +677,12 @@ static int pinv_alloc(const struct mixer *m, const scalar_t demand[NA], struct m
 /* every present rotor's u (N) clamped to the box */
 static void clip_box(const struct mixer *m, scalar_t f_n[NR])
 {
+	const scalar_t lo = m->f_lo, hi = m->f_hi;
+	const unsigned present = m->present;
+	MIX_UNROLL
 	for (int j = 0; j < NR; j++)
-		if (m->present & (1u << j))
-			f_n[j] = mclamp(f_n[j], m->f_lo, m->f_hi);
+		if (present & (1u << j))
+			f_n[j] = mclamp(f_n[j], lo, hi);
 }
 
 /* out->f_n holds u: the achieved wrench and the bound flags from it, then f_j = scale_j u_j;
@@ -644,14 +694,17 @@ static void finish(const struct mixer *m, struct mixer_output *out, bool cmp)
 	/* a rotor within 4 inner margins of a bound counts as at the bound */
 	const scalar_t at_tol = sc_mul(m->width, 4 * TOL_IN);
 	const scalar_t at_lo = sc_add(m->f_lo, at_tol), at_hi = sc_sub(m->f_hi, at_tol);
+	const unsigned present = m->present;
+	MIX_UNROLL
 	for (int j = 0; j < NR; j++) {
-		if (m->present & (1u << j)) {
-			if (out->f_n[j] <= at_lo)
+		const scalar_t u = out->f_n[j];
+		if (present & (1u << j)) {
+			if (u <= at_lo)
 				at_min |= 1u << j;
-			if (out->f_n[j] >= at_hi)
+			if (u >= at_hi)
 				at_max |= 1u << j;
 		}
-		out->f_n[j] = gmul(m->p.scale[j], out->f_n[j]);
+		out->f_n[j] = gmul(m->p.scale[j], u);
 	}
 	out->rotor_at_min = (uint8_t)at_min;
 	out->rotor_at_max = (uint8_t)at_max;
@@ -661,7 +714,10 @@ static void finish(const struct mixer *m, struct mixer_output *out, bool cmp)
 		out->limits |= MIXER_LIMIT_ROTOR_MAX;
 	/* flags of axes whose achieved value differs from the demand by more than the margin
 	 * times the physical wrench per unit of scaled wrench */
-	for (int i = 0; i < NA && cmp; i++) {
+	if (!cmp)
+		return;
+	MIX_UNROLL
+	for (int i = 0; i < NA; i++) {
 		scalar_t tol = sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
 		if (sc_abs(sc_sub(out->achieved[i], out->demanded[i])) > tol)
 			out->limits |= axis_limit[i];
@@ -709,6 +765,7 @@ static bool line_fit(const struct mixer *m, const scalar_t u[NR], const scalar_t
 		     scalar_t s0, scalar_t slack, scalar_t *s)
 {
 	const scalar_t blo = sc_sub(m->f_lo, slack), bhi = sc_add(m->f_hi, slack);
+	MIX_UNROLL
 	for (int j = 0; j < NR; j++) {
 		if (!(m->present & (1u << j)))
 			continue;
@@ -732,9 +789,50 @@ static bool line_fit(const struct mixer *m, const scalar_t u[NR], const scalar_t
 	return true;
 }
 
+/* line_fit along column ax (k 0: thrust, ax 0; k 1: yaw, ax 3) of the pseudo-inverse, its
+ * rotors sorted at the set-up (col_up, col_dn, col_fix): the same quotients and bounds in
+ * the same order, without the column's copy and its per-rotor tests */
+static bool line_fit_col(const struct mixer *m, const scalar_t u[NR], int k, scalar_t lo, scalar_t hi, scalar_t s0,
+			 scalar_t slack, scalar_t *s)
+{
+	const int ax = k ? 3 : 0;
+	const unsigned up = m->col_up[k], dn = m->col_dn[k], fix = m->col_fix[k];
+	const scalar_t blo = sc_sub(m->f_lo, slack), bhi = sc_add(m->f_hi, slack);
+	MIX_UNROLL
+	for (int j = 0; j < NR; j++) {
+		const unsigned bit = 1u << j;
+		if (up & bit) {
+			const scalar_t c = m->pinv[j][ax];
+			lo = mmax(lo, mdiv_nz(sc_sub(blo, u[j]), c));
+			hi = mmin(hi, mdiv_nz(sc_sub(bhi, u[j]), c));
+		} else if (dn & bit) {
+			const scalar_t c = m->pinv[j][ax];
+			lo = mmax(lo, mdiv_nz(sc_sub(bhi, u[j]), c));
+			hi = mmin(hi, mdiv_nz(sc_sub(blo, u[j]), c));
+		} else if ((fix & bit) && (u[j] < blo || u[j] > bhi)) {
+			return false;
+		}
+	}
+	if (lo > hi)
+		return false;
+	*s = mclamp(s0, lo, hi);
+	return true;
+}
+
+/* u += s (column ax of the pseudo-inverse) on the present rotors */
+static void line_move_col(const struct mixer *m, scalar_t u[NR], int ax, scalar_t s)
+{
+	const unsigned present = m->present;
+	MIX_UNROLL
+	for (int j = 0; j < NR; j++)
+		if (present & (1u << j))
+			u[j] = sc_mac(s, m->pinv[j][ax], u[j]);
+}
+
 /* u += s c */
 static void line_move(scalar_t u[NR], const scalar_t c[NR], scalar_t s)
 {
+	MIX_UNROLL
 	for (int j = 0; j < NR; j++)
 		u[j] = sc_mac(s, c[j], u[j]);
 }
@@ -743,6 +841,7 @@ static void line_move(scalar_t u[NR], const scalar_t c[NR], scalar_t s)
  * that axis alone */
 static void pinv_col(const struct mixer *m, int ax, scalar_t v, scalar_t c[NR])
 {
+	MIX_UNROLL
 	for (int j = 0; j < NR; j++)
 		c[j] = (m->present & (1u << j)) ? sc_mul(m->pinv[j][ax], v) : SC_ZERO;
 }
@@ -756,33 +855,35 @@ static void pinv_col(const struct mixer *m, int ax, scalar_t v, scalar_t c[NR])
  * to cancellation). Returns the path (MIXER_PATH_FALLBACK or _FALLBACK_RP). */
 static int fallback(const struct mixer *m, const scalar_t demand[NA], scalar_t u[NR])
 {
-	scalar_t dm[NA], c[NR], v[NR], s;
+	scalar_t dm[NA], c[NR], s;
+	MIX_UNROLL
 	for (int i = 0; i < NA; i++) {
 		scalar_t ext = sc_mul(sc_mul(m->width, m->row_max[i]), SC(16));
 		dm[i] = mclamp(demand[i], sc_sub(m->w_lo[i], ext), sc_add(m->w_lo[i], ext));
 	}
 	const scalar_t dy = dm[3], slack = sc_mul(m->width, TOL_IN);
 	dm[3] = SC_ZERO;
+	MIX_UNROLL
 	for (int j = 0; j < NR; j++)
-		u[j] = (m->present & (1u << j)) ? dot4(m->pinv[j], dm) : SC_ZERO;
-	pinv_col(m, 0, SC(1), v);
-	if (line_fit(m, u, v, SC_MAX_NEG, SC_MAX, SC_ZERO, slack, &s)) {
-		line_move(u, v, s);
-		pinv_col(m, 3, SC(1), c);
-		if (line_fit(m, u, c, mmin(SC_ZERO, dy), mmax(SC_ZERO, dy), dy, slack, &s))
-			line_move(u, c, s);
+		u[j] = (m->present & (1u << j)) ? dot4h(m->pinv[j], dm) : SC_ZERO;
+	if (line_fit_col(m, u, 0, SC_MAX_NEG, SC_MAX, SC_ZERO, slack, &s)) {
+		line_move_col(m, u, 0, s);
+		if (line_fit_col(m, u, 1, mmin(SC_ZERO, dy), mmax(SC_ZERO, dy), dy, slack, &s))
+			line_move_col(m, u, 3, s);
 		clip_box(m, u);
 		return MIXER_PATH_FALLBACK;
 	}
 	/* c: the roll/pitch part of u; u: the thrust alone */
 	pinv_col(m, 1, dm[1], c);
+	const unsigned present = m->present;
+	MIX_UNROLL
 	for (int j = 0; j < NR; j++) {
-		c[j] = sc_mac(m->pinv[j][2], dm[2], c[j]);
-		c[j] = (m->present & (1u << j)) ? c[j] : SC_ZERO;
-		u[j] = sc_mul(v[j], dm[0]);
+		const bool on = (present & (1u << j)) != 0;
+		c[j] = on ? sc_mac(m->pinv[j][2], dm[2], c[j]) : SC_ZERO;
+		u[j] = sc_mul(on ? m->pinv[j][0] : SC_ZERO, dm[0]);
 	}
-	if (line_fit(m, u, v, SC_MAX_NEG, SC_MAX, SC_ZERO, slack, &s)) {
-		line_move(u, v, s);
+	if (line_fit_col(m, u, 0, SC_MAX_NEG, SC_MAX, SC_ZERO, slack, &s)) {
+		line_move_col(m, u, 0, s);
 		/* within an inner margin: nothing left for the clip to unbalance */
 		if (line_fit(m, u, c, SC_ZERO, SC(1), SC(1), sc_neg(slack), &s))
 			line_move(u, c, s);
@@ -811,6 +912,7 @@ void mixer_step(const struct mixer *m, struct mixer_warm *s, const scalar_t dema
 		finish(m, out, true);
 		return;
 	}
+	MIX_UNROLL
 	for (int i = 0; i < NA; i++)
 		s->demand[i] = demand[i];
 	s->pending = true;
@@ -818,6 +920,7 @@ void mixer_step(const struct mixer *m, struct mixer_warm *s, const scalar_t dema
 		/* the exact allocation's face moved to this demand: axes it could not meet held
 		 * at what it achieved (yaw between zero and the demand), the others as demanded */
 		scalar_t d[NA], u[NR];
+		MIX_UNROLL
 		for (int i = 0; i < NA; i++) {
 			scalar_t t = (((unsigned)s->held >> (unsigned)i) & 1u) ? s->t_ex[i] : demand[i];
 			if (i == 3)
@@ -828,13 +931,18 @@ void mixer_step(const struct mixer *m, struct mixer_warm *s, const scalar_t dema
 		const scalar_t blo = sc_sub(m->f_lo, slack), bhi = sc_add(m->f_hi, slack);
 		/* a face whose free columns do not span the wrench moves nothing exactly */
 		bool fits = true;
-		for (int i = 0; i < NA && !s->full; i++) /* within the flags' margin of its own wrench */
-			fits = fits && sc_abs(d[i]) <= sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
+		if (!s->full) {
+			MIX_UNROLL
+			for (int i = 0; i < NA; i++) /* within the flags' margin of its own wrench */
+				fits = fits && sc_abs(d[i]) <= sc_mul(sc_mul(m->width, m->row_max[i]), TOL_FLAG_REL);
+		}
+		MIX_UNROLL
 		for (int j = 0; j < NR; j++) {
-			u[j] = sc_add(s->u_ex[j], dot4(s->map[j], d));
+			u[j] = sc_add(s->u_ex[j], dot4h(s->map[j], d));
 			fits = fits && u[j] >= blo && u[j] <= bhi;
 		}
 		if (fits) {
+			MIX_UNROLL
 			for (int j = 0; j < NR; j++)
 				out->f_n[j] = u[j];
 			clip_box(m, out->f_n);

@@ -113,6 +113,10 @@ struct mixer {
 	/* the preimage's steps 0..n_active-5 (at most 4): facets of the suffix set after each */
 	uint8_t sub_n[MIXER_N_ROTORS - 4];
 	uint8_t sub_first[MIXER_N_ROTORS - 4];
+	/* the step's fallback along the pseudo-inverse's thrust ([0]) and yaw ([1]) columns: bit j
+	 * of col_up / col_dn when present rotor j moves up / down along it, of col_fix when it
+	 * does not move (|entry| <= the slopes' threshold) */
+	uint8_t col_up[2], col_dn[2], col_fix[2];
 
 	/* hot-path data, scalar_t; everything of the allocation is in u (f_j / scale_j) */
 	scalar_t f_lo, f_hi;                         /* box of u, N (rotor j's thrust: scale_j times it) */

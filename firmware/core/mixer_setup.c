@@ -472,6 +472,23 @@ bool mixer_init_design(struct mixer *m, const struct mixer_params *p, struct mix
 	float gsc[NA][NR];
 	bool rows_ok = box_and_rows(m, p, dz, gsc);
 	allocator(m, dz, gsc, rank, rows_ok);
+	for (int k = 0; k < 2; k++) { /* the fallback's columns: thrust (0) and yaw (3) */
+		unsigned up = 0, dn = 0, fix = 0;
+		for (int j = 0; j < NR; j++) {
+			scalar_t c = m->pinv[j][k ? 3 : 0];
+			if (!(m->present & (1u << j)))
+				continue;
+			if (sc_abs(c) <= EPS_S)
+				fix |= 1u << j;
+			else if (c < SC_ZERO)
+				dn |= 1u << j;
+			else
+				up |= 1u << j;
+		}
+		m->col_up[k] = (uint8_t)up;
+		m->col_dn[k] = (uint8_t)dn;
+		m->col_fix[k] = (uint8_t)fix;
+	}
 	return rank == NA;
 }
 

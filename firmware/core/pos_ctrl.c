@@ -39,7 +39,7 @@ static bool finite_in(const struct pos_ctrl_input *in)
 	return sc_isfinite(sum);
 }
 
-static scalar_t clamp_flag(scalar_t x, scalar_t lim, uint32_t flag, uint32_t *flags)
+SC_HOT_INLINE scalar_t clamp_flag(scalar_t x, scalar_t lim, uint32_t flag, uint32_t *flags)
 {
 	if (x > lim || x < sc_neg(lim)) {
 		*flags |= flag;
@@ -56,6 +56,7 @@ struct pos_ctrl_output pos_ctrl_update(const struct pos_ctrl_params *p, const st
 		return o;
 	}
 	scalar_t a[2];
+	SC_HOT_UNROLL
 	for (int i = 0; i < 2; i++) {
 		scalar_t v = sc_mul(p->pos_gain_rps, sc_sub(in->pos_sp_m[i], in->pos_m[i]));
 		v = clamp_flag(v, p->vel_max_mps, POS_CTRL_VEL_LIM, &o.flags);

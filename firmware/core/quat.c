@@ -34,7 +34,12 @@ struct quat quat_normalize(struct quat q)
 	scalar_t n = sc_sqrt(n2);
 	if (n == SC(1)) /* already unit (Q16.16: to the LSB): the divisions would change nothing */
 		return q;
+#if !SC_HARD_FLOAT
 	struct quat r = {sc_div(q.w, n), sc_div(q.x, n), sc_div(q.y, n), sc_div(q.z, n)};
+#else
+	/* n > 1e-3: sc_div's quotient is the division instruction's */
+	struct quat r = {q.w / n, q.x / n, q.y / n, q.z / n};
+#endif
 	return r;
 }
 

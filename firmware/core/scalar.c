@@ -8,8 +8,9 @@
  * `extern` declarations below, instead of keeping a static copy of its own. So do sc_add and
  * sc_sub: their inline forms sca_add and sca_sub serve the hottest loops. The trivial
  * primitives (sc_neg, q_sat32 ...) stay static inline. sc_div, a call wherever it is
- * used, is defined here only, in both builds; so are sc_sqrt, sc_min, sc_max and sc_clamp
- * where float is soft (SC_SOFT_FLOAT); the fixed build's sc_sqrt and sc_exp too.
+ * used, is defined here only, in the fixed build and where float is soft (an FPU's build
+ * inlines it: scalar.h); so are sc_sqrt, sc_min, sc_max and sc_clamp where float is soft
+ * (SC_SOFT_FLOAT); the fixed build's sc_sqrt and sc_exp too.
  */
 #include "scalar.h"
 #include "fbits.h"
@@ -107,7 +108,7 @@ scalar_t sc_div(scalar_t a, scalar_t b)
 	int s = q_clz32(ub);
 	return sc_div_prepared(a, b, ub, s, ub ? sc_recip_norm(ub << s) : 0u);
 }
-#else
+#elif SC_SOFT_FLOAT
 scalar_t sc_div(scalar_t a, scalar_t b)
 {
 	if (b == 0.0f)
@@ -115,7 +116,6 @@ scalar_t sc_div(scalar_t a, scalar_t b)
 	return a / b;
 }
 
-#if SC_SOFT_FLOAT
 scalar_t sc_sqrt(scalar_t a)
 {
 	/* a > 0 from its bits: one word test, not a soft-float comparison */
@@ -125,5 +125,4 @@ scalar_t sc_sqrt(scalar_t a)
 scalar_t sc_min(scalar_t a, scalar_t b) { return a < b ? a : b; }
 scalar_t sc_max(scalar_t a, scalar_t b) { return a > b ? a : b; }
 scalar_t sc_clamp(scalar_t x, scalar_t lo, scalar_t hi) { return x < lo ? lo : (x > hi ? hi : x); }
-#endif
 #endif

@@ -440,8 +440,19 @@ static inline scalar_t sc_neg(scalar_t a) { return -a; }
 static inline scalar_t sc_abs(scalar_t a) { return fabsf(a); }
 static inline scalar_t sc_mul(scalar_t a, scalar_t b) { return a * b; }
 /* a / b; division by zero saturates like the fixed build instead of giving Inf/NaN. Out of
- * line (scalar.c): the test and the soft-float call are not worth a copy per object. */
+ * line where float is soft (scalar.c): the test and the soft-float call are not worth a copy
+ * per object; inline where the division is an instruction (the test and it cost less than a
+ * call). */
+#if SC_SOFT_FLOAT
 scalar_t sc_div(scalar_t a, scalar_t b);
+#else
+static inline scalar_t sc_div(scalar_t a, scalar_t b)
+{
+	if (b == 0.0f)
+		return a > 0.0f ? SC_MAX : (a < 0.0f ? SC_MAX_NEG : 0.0f);
+	return a / b;
+}
+#endif
 /* sqrt(a) for a > 0, else 0 (NaN included). Out of line where float is soft (scalar.c):
  * there the test and the call to sqrtf are not worth a copy per use; inline where the root
  * is an instruction. */
@@ -472,6 +483,27 @@ static inline scalar_t sc_exp(scalar_t a) { return expf(a); }
 
 /* ------------------------------------------------------------ both builds */
 #define SC_ZERO SC(0)
+
+/* SC_HOT_UNROLL before a loop of the 90 Hz step over rotors or axes (a constant count)
+ * unrolls it where float is an instruction (an FPU, the host): there the loop's counting
+ * and addressing cost as much as its arithmetic. The fixed and soft-float builds keep such
+ * loops rolled (flash). */
+#if !OCTO_FIXED && !SC_SOFT_FLOAT
+#define SC_HARD_FLOAT 1 /* float is an instruction */
+#else
+#define SC_HARD_FLOAT 0
+#endif
+#if SC_HARD_FLOAT && defined(__GNUC__)
+#define SC_HOT_UNROLL _Pragma("GCC unroll 8")
+#else
+#define SC_HOT_UNROLL
+#endif
+/* SC_HOT_INLINE: a helper of such a loop, inlined into every copy where it is unrolled */
+#if SC_HARD_FLOAT
+#define SC_HOT_INLINE static inline SC_ALWAYS_INLINE
+#else
+#define SC_HOT_INLINE static
+#endif
 
 /* 2^s as float, exact, from its exponent bits (no loop, no libm): s clamped to [-126, 127] */
 static inline float sc_pow2f(int s)

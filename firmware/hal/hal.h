@@ -54,6 +54,7 @@ enum {
 #define HAL_FRAME_NEEDED (HAL_FRAME_TIME | HAL_FRAME_RATES | HAL_FRAME_ATT | HAL_FRAME_POS)
 
 /* One sensor frame in the paper's frames and SI units. */
+/* app.c's frame_copy copies it field by field: a field added here goes there too. */
 struct hal_sensor_frame {
 	/* Time: the plant's time line in the platform's integer microseconds. frame_n counts the
 	 * plant's frames since the first (lost ones included), t_us is its time (frame_n frame

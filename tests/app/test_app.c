@@ -599,9 +599,10 @@ UNIT_TEST(app_takeoff_time_limit_fails_to_its_origin)
 	CHECK(r->a.mode == APP_DISARMED);
 }
 
-/* The tracked k_f's publication (KFT_* parameters, their PARAM_VALUE and NAMED_VALUE_FLOAT
- * events, a VEH_KF refresh) is between-frames work: the step that reaches the next second of
- * plant time only marks it due; the app_tick after it publishes what that step saw. */
+/* The tracked k_f's update and publication (KFT_* parameters, their PARAM_VALUE and
+ * NAMED_VALUE_FLOAT events, a VEH_KF refresh) are between-frames work: the step only leaves
+ * the tracker its input; the app_tick after it updates the tracker and, when that frame
+ * reaches the next second of plant time, publishes what it saw. */
 UNIT_TEST(app_kft_published_between_frames_after_its_step)
 {
 	struct rig *r = rig_hovering(u);
@@ -619,7 +620,10 @@ UNIT_TEST(app_kft_published_between_frames_after_its_step)
 			CHECK(!(e.kind == APP_EV_VALUE ||
 				(e.kind == APP_EV_PARAM && (e.param_index == i_t || e.param_index == i_est))));
 		CHECK(params_get(&r->a.p, (size_t)i_t) == t_before);
-		bool due = r->a.env_kf.pub_due;
+		/* the tracker takes the frame at the frame boundary (app_settle in the tick): due
+		 * when its update reaches the next second of plant time */
+		CHECK(r->a.after.kf_due);
+		bool due = r->a.env_kf.kft.started && !app_t_before(r->a.fr.t_s, r->a.env_kf.pub_next_t);
 		tick(r);
 		float t_after = params_get(&r->a.p, (size_t)i_t);
 		if (due) {

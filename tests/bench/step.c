@@ -7,7 +7,8 @@
  * to fly the app's own mode logic: the height follows the app's setpoint, the attitude wobbles
  * by a few tenths of a degree, the measured rotor thrusts are the commanded throttles through
  * a 30 ms lag times the paper's k_f with 1 % noise. Sequence:
- *   boot (disarmed frames) -> arm -> take-off to 10 m -> HOLD (measured: N_HOLD steps)
+ *   boot (disarmed frames) -> arm -> take-off to 10 m -> HOLD (measured: N_HOLD steps; half way
+ *   a parameter change between frames, so that one of them is a parameter change's step)
  *   -> experiments 1 (rotor coefficients), 2 (validation), 3 (inertia Ixx), each started
  *      from HOLD as MAV_CMD_USER_1 does (measured: up to N_EXP steps each, and the app_tick
  *      after each: the between-frames work, counted apart; "step: exp_steps_N" per experiment)
@@ -32,6 +33,7 @@
 #include "app.h"
 #include "bench_mark.h"
 #include "mav.h"
+#include "params.h"
 #include "stub_hal.h"
 
 #ifdef BENCH_QUICK
@@ -179,7 +181,8 @@ static void frame_unmeasured(void)
 }
 
 /* seeded demands around the app's hover: thrust 0..1.6 hover x 8 at random, torques up to
- * about twice what the box allows (k is the app's yaw moment arm) */
+ * about twice what the box allows, every eighth (i = 6 mod 8) with a roll/pitch up to eight
+ * times it (k is the app's yaw moment arm) */
 static void alloc_demand(uint32_t i, scalar_t d[MIXER_N_AXES])
 {
 	uint32_t saved = rng;
@@ -190,9 +193,11 @@ static void alloc_demand(uint32_t i, scalar_t d[MIXER_N_AXES])
 	float f = hover * (1.0f + 0.8f * urand());
 	if (i % 4 == 3)
 		f = fmax * (0.5f + 0.5f * urand()); /* some near the top of the box */
+	/* some with a roll/pitch no thrust allows (the fallback's other path) */
+	float rp = i % 8 == 6 ? 2.4f : 0.6f;
 	d[0] = sc_from_float(f);
-	d[1] = sc_from_float(urand() * 0.6f * f * l);
-	d[2] = sc_from_float(urand() * 0.6f * f * l);
+	d[1] = sc_from_float(urand() * rp * f * l);
+	d[2] = sc_from_float(urand() * rp * f * l);
 	d[3] = sc_from_float(urand() * 0.6f * f * k);
 	rng = saved;
 }
@@ -220,6 +225,19 @@ int main(void)
 
 	int hold = 0;
 	for (; hold < N_HOLD && A.mode == APP_HOLD; hold++) {
+		if (hold == N_HOLD / 2) {
+			/* a parameter change between frames (as a PARAM_SET: the gains, the inertia and
+			 * the rotor model rebuilt in app_tick): the next measured step is its step */
+			static const char *const names[] = {"ATT_WN_RP", "VEH_IXX", "ID_MOT_TAU"};
+			for (size_t k = 0; k < sizeof names / sizeof names[0]; k++) {
+				int i = params_find(names[k], strlen(names[k]));
+				const char *no =
+					i < 0 ? "unknown"
+					      : app_param_write(&A, (size_t)i, params_get(&A.p, (size_t)i) * 1.01f);
+				printf("step: param_change_%s %s\n", names[k], no ? no : "ok");
+			}
+			app_tick(&A);
+		}
 		next_frame();
 		bench_hold_step();
 		app_tick(&A);

@@ -15,7 +15,8 @@
  *
  * A step is app_on_frame() alone, between board_step_begin() and board_step_end(): the
  * markers QEMU's instruction-counting plugin watches. What the app hands the platform in
- * a step (throttles, the log record, events) is kept and sent after the step.
+ * a step (throttles, events) is kept and sent after the step; the frame's log record comes
+ * at the frame boundary (app_tick) and is sent after it.
  */
 #ifndef OCTO_MPS2_BOARD_H
 #define OCTO_MPS2_BOARD_H

@@ -213,22 +213,29 @@ static void flush_events(struct board *b)
 	}
 }
 
+/* A frame's record the app handed over (at the frame boundary after its step: app_settle,
+ * in app_tick or at the start of the next step), then the events. */
+static void flush_log(struct board *b)
+{
+	if (b->log_pending) {
+		static uint8_t rec[1024]; /* the encoded record; one at a time */
+		log_send(b, BOARD_REC_FRAME, rec, board_enc_frame(rec, sizeof rec, b->log_pending));
+		b->log_pending = NULL;
+	}
+	flush_events(b);
+}
+
 /* One control step on the frame just decoded, then what it handed over. */
 static void step(struct board *b)
 {
 	b->actuate = false;
-	b->log_pending = NULL;
 	board_step_begin();
 	app_on_frame(&b->app, &b->frame);
 	board_step_end();
 	b->steps++;
 	if (b->actuate)
 		xp_client_actuate(&b->xp, b->thr, b->now_us);
-	if (b->log_pending) {
-		static uint8_t rec[1024]; /* the encoded record; one at a time */
-		log_send(b, BOARD_REC_FRAME, rec, board_enc_frame(rec, sizeof rec, b->log_pending));
-	}
-	flush_events(b);
+	flush_log(b);
 }
 
 /* Every plant byte waiting, taken from the lanes in their turn; returns how many there were. */
@@ -394,6 +401,7 @@ int main(int argc, char **argv)
 		got += poll_ground(&b);
 		xp_client_poll(&b.xp, b.now_us);
 		app_tick(&b.app);
+		flush_log(&b); /* the last frame's record (app_tick's frame boundary) before MAVLink */
 		mav_tick(&b.mav, b.now_us);
 		flush_events(&b);
 		idle(&b, got);
