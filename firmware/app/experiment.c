@@ -922,7 +922,7 @@ static float inr_amp_limit(const struct app_params *p, unsigned ax)
 }
 
 #define INR_ADVICE_MARGIN \
-	2.0f /* the std is itself an estimate (20 blocks of 0.5 s in 10 s: +/-16 %, 3 sd covered): aim lower */
+	2.0f /* the std's scaling with amplitude and time holds only roughly (rotors nearer idle or full): aim lower */
 
 /* Asked accuracy (ID_RSD_MAX) not reached: the std falls as 1 / (amplitude sqrt(time)), so
  * the estimate needs raise x the amplitude or raise^2 x the time (with a margin). The
