@@ -167,6 +167,8 @@ struct experiment {
 	uint32_t rot_k;      /* rotor experiment: excited frames so far */
 	uint32_t est_wait;   /* steps until est[] / est_sd[] are read again */
 	scalar_t inr_u_prev; /* inertia: the excitation of the previous step (the instrument) */
+	scalar_t inr_gate_k; /* inertia: the gyro outlier gate's rate change per N m of torque */
+	int inr_skip;        /* inertia: frames since the filters' last, past gyro outliers */
 	/* the estimator of the current phase: phases never overlap, so they share the memory
 	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */
 	union {
