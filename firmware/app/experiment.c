@@ -44,6 +44,12 @@ static const char *phase_name(int k)
  * their time constants 1 / (zeta wc) to settle */
 #define GAP_INTERP_MAX 4
 #define GAP_SETTLE_TC 5.0f
+/* inertia: a gyro reading whose change since the filters' last one exceeds, per frame,
+ * INR_GATE_W rad/s (5 sds of the change for a gyro noise of 0.04 rad/s) plus
+ * INR_GATE_MARGIN times what the torques on either side can do, dt (|tau_k| + |tau_(k-1)|) /
+ * VEH_I (a 30 % error in VEH_I covered), is an outlier (an IMU spike): taken as a lost frame */
+#define INR_GATE_W 0.3f
+#define INR_GATE_MARGIN 1.5f
 #define LAG_TOL 0.1f /* lag check off by more (relative): k_f, k_tau rejected */
 /* inertia: roll/pitch by a multisine (harmonics 4..15 of 0.5 Hz: 2..7.5 Hz, above the
  * attitude loop, where torque turns into acceleration rather than tilt) of peak ID_INR_AMP,
@@ -689,6 +695,9 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS), SC(INR_ZETA), dt,
 				   alpha, inertia, in->rate_b_rps, tau);
 		e->inr_u_prev = SC_ZERO;
+		float i_ax = ax == 0u ? p->veh_ixx : ax == 1u ? p->veh_iyy : p->veh_izz;
+		e->inr_gate_k = sc_from_float(i_ax > 0.0f ? INR_GATE_MARGIN * sc_to_float(dt) / i_ax : 0.0f);
+		e->inr_skip = 0;
 		e->est_live = 1u << (4u + ax);
 	} else {
 		e->t_run = cf->val_time;
@@ -986,7 +995,7 @@ static float inr_amp_limit(const struct app_params *p, unsigned ax)
 }
 
 #define INR_ADVICE_MARGIN \
-	2.0f /* the std is itself an estimate (20 blocks of 0.5 s in 10 s: +/-16 %, 3 sd covered): aim lower */
+	2.0f /* the std's scaling with amplitude and time holds only roughly (rotors nearer idle or full): aim lower */
 
 /* Asked accuracy (ID_RSD_MAX) not reached: the std falls as 1 / (amplitude sqrt(time)), so
  * the estimate needs raise x the amplitude or raise^2 x the time (with a margin). The
@@ -1244,6 +1253,15 @@ static scalar_t sweep_step(const struct experiment *e, bool running)
 	return running && ph < e->swp_len[lv] ? e->swp_thr[lv] : SC_ZERO;
 }
 
+/* The inertia axis' gyro reading w an outlier (INR_GATE_W): its change since the filters'
+ * last reading, over m frames, beyond what noise and the torques can make it (scalar_t). */
+static bool inr_gyro_outlier(const struct experiment *e, scalar_t w, scalar_t tau, int m)
+{
+	scalar_t dw = sc_abs(sc_sub(w, e->inr.w_prev));
+	scalar_t lim = sc_add(SC(INR_GATE_W), sc_mul(e->inr_gate_k, sc_add(sc_abs(tau), sc_abs(e->inr.tau_prev))));
+	return dw > sc_mul(lim, sc_from_int((int32_t)m));
+}
+
 static void phase_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
 {
 	const struct app_params *p = in->params;
@@ -1313,14 +1331,23 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		/* the instrument: the excitation sent on the previous step, which acted over the
 		 * frame this update closes (and, the plant holding it, over the frames lost before) */
 		ident_inertia_instrument(&e->inr, e->inr_u_prev);
-		if (n >= 2 && n <= GAP_INTERP_MAX + 1) {
-			ident_inertia_gap(&e->inr, tau, in->rate_b_rps, (unsigned)(n - 1));
-		} else if (n != 1) {
-			ident_inertia_restart(&e->inr, tau, in->rate_b_rps);
-			float wc = ax == 2u ? INR_WC_YAW_RPS : INR_WC_RP_RPS;
-			e->gap_hold = (int)(GAP_SETTLE_TC * e->inv_dt_nom / (INR_ZETA * wc) + 0.5f);
+		int m = n + e->inr_skip; /* frames since the filters' last */
+		if (n >= 1 && m <= GAP_INTERP_MAX && inr_gyro_outlier(e, in->rate_b_rps[ax], tau[ax], m)) {
+			/* never into the filters: interpolated through at the next frame, as a lost
+			 * one, the updates held after it */
+			e->inr_skip = m;
+			e->gap_hold = GAP_HOLD;
+		} else {
+			e->inr_skip = 0;
+			if (m >= 2 && m <= GAP_INTERP_MAX + 1) {
+				ident_inertia_gap(&e->inr, tau, in->rate_b_rps, (unsigned)(m - 1));
+			} else if (m != 1) {
+				ident_inertia_restart(&e->inr, tau, in->rate_b_rps);
+				float wc = ax == 2u ? INR_WC_YAW_RPS : INR_WC_RP_RPS;
+				e->gap_hold = (int)(GAP_SETTLE_TC * e->inv_dt_nom / (INR_ZETA * wc) + 0.5f);
+			}
+			ident_inertia_update(&e->inr, tau, in->rate_b_rps, use && m == 1 && e->gap_hold == 0);
 		}
-		ident_inertia_update(&e->inr, tau, in->rate_b_rps, use && n == 1 && e->gap_hold == 0);
 		out->tau_delta[ax] = running ? sc_mul(e->exc_gain, excite_update(&e->exc)) : SC_ZERO;
 		e->inr_u_prev = out->tau_delta[ax];
 	} else {

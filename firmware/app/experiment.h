@@ -176,6 +176,8 @@ struct experiment {
 	scalar_t exc_gain;   /* the phase's excitation scale: 1, halved beyond EXP_TILT_SOFT_DEG */
 	float exc_cut_t;     /* t_phase of the last halving */
 	bool ext_done;       /* the phase's excitation was extended (once at most) */
+	scalar_t inr_gate_k; /* inertia: the gyro outlier gate's rate change per N m of torque */
+	int inr_skip;        /* inertia: frames since the filters' last, past gyro outliers */
 	/* the estimator of the current phase: phases never overlap, so they share the memory
 	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */
 	union {

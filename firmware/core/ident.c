@@ -12,14 +12,11 @@ static inline ident_sum_t sum_prod(scalar_t a, scalar_t b) { return q_smul32(a, 
 /* a 1 (a Q16.16 value in Q31.32) */
 static inline ident_sum_t sum_of_sc(scalar_t a) { return (ident_sum_t)a * ((int64_t)1 << (QF_PROD_FRAC - QF_SC_FRAC)); }
 static inline ident_sum_t sum_add(ident_sum_t a, ident_sum_t b) { return q_add64(a, b); }
-/* a b of two Q31.32 sums, rounded to Q31.32 */
-static inline ident_sum_t sum_mul(ident_sum_t a, ident_sum_t b) { return q_mul64_64(a, b, QF_PROD_FRAC); }
 #define SUM_ZERO 0
 #else
 static inline ident_sum_t sum_prod(scalar_t a, scalar_t b) { return a * b; }
 static inline ident_sum_t sum_of_sc(scalar_t a) { return a; }
 static inline ident_sum_t sum_add(ident_sum_t a, ident_sum_t b) { return a + b; }
-static inline ident_sum_t sum_mul(ident_sum_t a, ident_sum_t b) { return a * b; }
 #define SUM_ZERO 0.0f
 #endif
 
@@ -162,8 +159,54 @@ static void inertia_filters(struct ident_inertia *e, scalar_t tau, scalar_t w, s
 	e->w_prev = w;
 }
 
+/* No lag pairs across what follows (a gap, a restart, an update without excitation). */
+static void lag_break(struct ident_inertia *e)
+{
+	e->z_n = e->r_n = 0;
+}
+
+/* One excited update's lag products with the updates before it in the ring: z z' from the
+ * first on, and once the residual's sums run, r r', r phi' + phi r' and phi phi' of
+ * r = y - i0 phi (R(h) follows for any estimate I as rr - (I - i0) rp + (I - i0)^2 pp). */
+static void lag_sums(struct ident_inertia *e, scalar_t z, scalar_t y, scalar_t phi)
+{
+	bool r_on = e->r_on;
+	scalar_t r = r_on ? sc_sub(y, sc_mul(e->i0, phi)) : SC_ZERO;
+	uint32_t nz = e->z_n < e->lags ? e->z_n : e->lags, nr = e->r_n < nz ? e->r_n : nz;
+	e->c_zz[0] = sum_add(e->c_zz[0], sum_prod(z, z));
+	if (r_on) {
+		ident_sum_t rp = sum_prod(r, phi);
+		e->c_rr[0] = sum_add(e->c_rr[0], sum_prod(r, r));
+		e->c_rp[0] = sum_add(e->c_rp[0], sum_add(rp, rp));
+		e->c_pp[0] = sum_add(e->c_pp[0], sum_prod(phi, phi));
+		e->c_rn[0]++;
+	}
+	uint32_t m = e->ring_pos;
+	for (uint32_t h = 1u; h <= nz; h++) {
+		m = m == 0u ? IDENT_INR_LAGS - 1u : m - 1u; /* h updates back */
+		e->c_zz[h] = sum_add(e->c_zz[h], sum_prod(z, e->ring_z[m]));
+		if (h <= nr) {
+			e->c_rr[h] = sum_add(e->c_rr[h], sum_prod(r, e->ring_r[m]));
+			e->c_rp[h] = sum_add(e->c_rp[h], sum_add(sum_prod(r, e->ring_p[m]), sum_prod(phi, e->ring_r[m])));
+			e->c_pp[h] = sum_add(e->c_pp[h], sum_prod(phi, e->ring_p[m]));
+			e->c_rn[h]++;
+		}
+	}
+	m = e->ring_pos;
+	e->ring_z[m] = z;
+	e->ring_r[m] = r;
+	e->ring_p[m] = phi;
+	e->ring_pos = m + 1u >= IDENT_INR_LAGS ? 0u : m + 1u;
+	if (e->z_n < IDENT_INR_LAGS)
+		e->z_n++;
+	if (r_on && e->r_n < IDENT_INR_LAGS)
+		e->r_n++;
+}
+
 void ident_inertia_gap(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3], unsigned k)
 {
+	ident_inertia_process(e);
+	lag_break(e);
 	unsigned i = e->axis, j, l;
 	ident_other_axes(i, &j, &l);
 	scalar_t t0 = e->tau_prev, w0 = e->w_prev, p0 = e->ww_prev;
@@ -188,6 +231,8 @@ static void svf_rest(struct filt_svf *f, scalar_t y0)
 
 void ident_inertia_restart(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3])
 {
+	ident_inertia_process(e);
+	lag_break(e);
 	unsigned i = e->axis, j, k;
 	ident_other_axes(i, &j, &k);
 	e->tau_prev = tau_b[i];
@@ -211,35 +256,36 @@ void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], cons
 	e->q_phi = phi;
 	e->q_y = y;
 	e->q_excited = excited;
+	e->q_iv = false;
 	e->q_pending = true;
 	e->n++;
 	if (!e->iv)
 		return;
 	scalar_t z = filt_svf_update(&e->svf_z, e->z_in);
+	e->q_z = z;
+	e->q_iv = true;
 	if (!excited)
 		return;
-	ident_sum_t zy = sum_prod(z, y), zp = sum_prod(z, phi);
-	e->s_zy = sum_add(e->s_zy, zy);
-	e->s_zp = sum_add(e->s_zp, zp);
-	e->b_zy = sum_add(e->b_zy, zy);
-	e->b_zp = sum_add(e->b_zp, zp);
+	e->s_zy = sum_add(e->s_zy, sum_prod(z, y));
+	e->s_zp = sum_add(e->s_zp, sum_prod(z, phi));
 	if (e->s_n < UINT32_MAX)
 		e->s_n++;
-	if (++e->b_n >= e->b_len) {
-		e->s_aa = sum_add(e->s_aa, sum_mul(e->b_zy, e->b_zy));
-		e->s_ab = sum_add(e->s_ab, sum_mul(e->b_zy, e->b_zp));
-		e->s_bb = sum_add(e->s_bb, sum_mul(e->b_zp, e->b_zp));
-		e->b_zy = e->b_zp = SUM_ZERO;
-		e->b_n = 0;
-	}
+	/* the residual about the IV ratio from here on (once the instrument has moved) */
+	if (!e->r_on && e->s_n >= e->b_len)
+		e->r_on = ident_inertia_ratio_sc(e, &e->i0);
 }
 
+/* Between frames: the RLS update and the IV std's lag products of the frame taken. */
 void ident_inertia_process(struct ident_inertia *e)
 {
 	if (!e->q_pending)
 		return;
 	e->q_pending = false;
 	rls_update(&e->rls, &e->q_phi, &e->q_y, e->q_excited);
+	if (e->q_iv && e->q_excited)
+		lag_sums(e, e->q_z, e->q_y, e->q_phi);
+	else
+		lag_break(e);
 }
 
 /* ---------------------------------------------------------------- validation */

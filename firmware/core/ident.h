@@ -23,8 +23,6 @@
  *       each product exact; range +/-2.1e9, resolution 2.3e-10; saturate (never wrap).
  *       An hour at 90 Hz (324,000 frames) of products up to 6,600 (e.g. 1 N m x 6,600
  *       rad/s^2, or (81 N)^2) fits; larger ones saturate and the estimate stays finite.
- *   sums of squares of block sums (the IV variance)                  Q31.32 in int64:
- *       the products of two Q31.32 sums rounded back to Q31.32 (q_mul64_64); saturate.
  *   counters                                                         uint32_t
  * Float build: ident_sum_t is float.
  */
@@ -148,6 +146,8 @@ void ident_body_torque_mixer(const struct mixer *m, const scalar_t f[IDENT_ROTOR
 			     scalar_t tau_out[3]);
 
 /* ---------------------------------------------------------------- inertia */
+#define IDENT_INR_LAGS 32u /* most lags of the residual's autocovariance in the IV std */
+
 struct ident_inertia {
 	unsigned axis;     /* 0 x, 1 y, 2 z */
 	scalar_t coupling; /* I_k - I_j of the gyroscopic term */
@@ -160,15 +160,24 @@ struct ident_inertia {
 	uint32_t n;
 	/* instrumental variable (ident_inertia_instrument): the excitation through the same SVF */
 	struct filt_svf svf_z;
-	scalar_t z_in;                /* the instrument's input for the next update */
-	bool iv;                      /* an instrument was given: the estimate is the IV one */
-	uint32_t s_n, b_n, b_len;     /* excited updates, of them in the current block, block length */
-	ident_sum_t s_zy, s_zp;       /* sums of z y and z phi over the excited updates */
-	ident_sum_t b_zy, b_zp;       /* the same over the current block */
-	ident_sum_t s_aa, s_ab, s_bb; /* sums of the complete blocks' products (the variance) */
-	/* the frame ident_inertia_update took, its RLS update waiting for ident_inertia_process */
-	scalar_t q_phi, q_y;
-	bool q_excited, q_pending;
+	scalar_t z_in;          /* the instrument's input for the next update */
+	bool iv;                /* an instrument was given: the estimate is the IV one */
+	uint32_t s_n, b_len;    /* excited updates; those before the estimate is the IV one */
+	ident_sum_t s_zy, s_zp; /* sums of z y and z phi over the excited updates */
+	/* the IV std (ident_inertia_sd): lag products of the instrument from the first excited
+	 * update on, of the residual r = y - i0 phi from the b_len-th on (i0: the IV ratio
+	 * then), over runs of consecutive excited updates (a ring of the last ones) */
+	scalar_t i0;
+	bool r_on;                /* the residual's sums run */
+	uint32_t lags;            /* largest lag, <= IDENT_INR_LAGS */
+	uint32_t ring_pos, z_n, r_n; /* next slot; entries with z, with r */
+	scalar_t ring_z[IDENT_INR_LAGS], ring_r[IDENT_INR_LAGS], ring_p[IDENT_INR_LAGS];
+	ident_sum_t c_zz[IDENT_INR_LAGS + 1];                /* sum z_k z_(k+h) */
+	ident_sum_t c_rr[IDENT_INR_LAGS + 1], c_rp[IDENT_INR_LAGS + 1], c_pp[IDENT_INR_LAGS + 1];
+	uint32_t c_rn[IDENT_INR_LAGS + 1]; /* the residual's pairs at lag h */
+	/* the frame ident_inertia_update took, its updates waiting for ident_inertia_process */
+	scalar_t q_phi, q_y, q_z;
+	bool q_excited, q_pending, q_iv;
 };
 
 /* The std: the RLS std assumes white residuals, but the SVF colours the (white) torque
@@ -211,13 +220,21 @@ float ident_inertia_sd(struct ident_inertia *e);
  * gyro noise), and the attitude loop feeds the same noise into the torque, which biases the
  * reversed regression too. The excitation u (the torque added by the experiment, known and
  * independent of every noise) filtered by the same SVF is an instrument z:
- *     I = sum z y / sum z phi,  var(I) = sum_b (sum_b z (y - I phi))^2 / (sum z phi)^2
- * over blocks b of 0.5 s (longer than the residual's correlation, which the SVF colours:
- * the blocks' sums are nearly independent, so the std needs no white-noise assumption).
+ *     I = sum z y / sum z phi,   I - I_true = sum z r / sum z phi,  r = y - I_true phi.
+ * The residual r is noise the SVF colours (stationary, independent of the known z), so
+ *     var(I) = sum_h w_h Z(h) R(h) / (sum z phi)^2,   w_0 = 1, w_h = 2,
+ * Z(h) = sum_k z_k z_(k+h) (known exactly), R(h) the residual's autocovariance at lag h,
+ * estimated from every pair of the run, h up to the SVF's 5 time constants 1 / (zeta wc)
+ * (at most IDENT_INR_LAGS frames): hundreds of pairs per lag, so the std is nearly exact and
+ * error / std a unit normal, tails included (a std from twenty 0.5 s blocks' sums has far
+ * fewer degrees of freedom: its error / std has a t's heavy tails, docs/identification.md).
  * Called before each ident_inertia_update with the excitation that acted over the frame that
- * update closes; est and sd are the IV ones from the first complete block on (before it, the
- * least-squares ones, as live values). */
+ * update closes; est and sd are the IV ones from the first 0.5 s of excited updates on
+ * (before, the least-squares ones, as live values). */
 void ident_inertia_instrument(struct ident_inertia *e, scalar_t u);
+/* The IV ratio of the sums so far into *i0, for ident.c's residual; false (*i0 kept) while
+ * sum z phi is 0 or the ratio is not finite. */
+bool ident_inertia_ratio_sc(const struct ident_inertia *e, scalar_t *i0);
 
 /* Acceptance of an inertia, relative to the vehicle's own scale m l^2 (mass, arm length)
  * rather than to a nominal inertia that may be far off: a body whose mass sits within the

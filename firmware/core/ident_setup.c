@@ -184,46 +184,44 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	filt_svf_init(&e->svf_z, wc_rps, zeta, dt_s, SC_ZERO);
 	e->z_in = SC_ZERO;
 	e->iv = false;
-	e->s_zy = e->s_zp = e->b_zy = e->b_zp = e->s_aa = e->s_ab = e->s_bb = (ident_sum_t)0;
-	e->s_n = e->b_n = 0;
+	e->s_zy = e->s_zp = (ident_sum_t)0;
+	e->s_n = 0;
 	float dt = sc_to_float(dt_s);
 	float len = fb_pos(dt) ? 0.5f / dt + 0.5f : 45.0f; /* 0.5 s of updates */
 	/* len is positive, not NaN: compared by its bits */
 	const uint32_t lb = fb_bits(len);
 	e->b_len = lb < fb_bits(1.0f) ? 1u : (lb > fb_bits(1e6f) ? 1000000u : (uint32_t)len);
+	/* the residual's correlation: the SVF's 5 time constants 1 / (zeta wc), in frames */
+	float zw = sc_to_float(zeta) * sc_to_float(wc_rps) * dt, nl = fb_pos(zw) ? 5.0f / zw + 1.0f : 0.0f;
+	e->lags = fb_pos(nl) && fb_bits(nl) < fb_bits((float)IDENT_INR_LAGS) ? (uint32_t)nl : IDENT_INR_LAGS;
+	e->i0 = SC_ZERO;
+	e->r_on = false;
+	e->ring_pos = e->z_n = e->r_n = 0;
+	for (uint32_t h = 0; h <= IDENT_INR_LAGS; h++) {
+		e->c_zz[h] = e->c_rr[h] = e->c_rp[h] = e->c_pp[h] = (ident_sum_t)0;
+		e->c_rn[h] = 0;
+	}
+	e->q_iv = false;
 }
 
-/* the IV estimate once a first block is complete (before, least squares: a live value); out
- * of line: its copies (two 64-bit tests) cost more flash than the calls */
+/* the IV estimate once its first 0.5 s are in (before, least squares: a live value); out of
+ * line: its copies (two 64-bit tests) cost more flash than the calls */
 __attribute__((noinline)) static bool iv_ready(const struct ident_inertia *e)
 {
 #if OCTO_FIXED
-	return e->iv && e->s_bb > 0 && e->s_zp != 0;
+	return e->iv && e->r_on && e->s_zp != 0;
 #else
-	return e->iv && fb_pos(e->s_bb) && !fb_zero(e->s_zp);
+	return e->iv && e->r_on && !fb_zero(e->s_zp);
 #endif
 }
 
-/* The sum over the blocks of (A_b - I B_b)^2, A_b = sum_b z y, B_b = sum_b z phi, as
- * s_aa - 2 I s_ab + I^2 s_bb: the three terms cancel down to the residuals' share (1e-4 of
- * s_aa for a block residual of 1 %), more than float's 24 bits keep. The fixed build forms
- * it in Q31.32 with I = s_zy / s_zp as a 30-bit ratio (error ~1e-9 relative, so ~1e-5 of
- * the result after that cancellation); the float build's float32 sums already carry
- * rounding of that order (their std is good to a few %). */
-static float iv_resid2(const struct ident_inertia *e, float est)
+bool ident_inertia_ratio_sc(const struct ident_inertia *e, scalar_t *i0)
 {
-#if OCTO_FIXED
-	int sh;
-	int32_t r = q30_ratio_x(e->s_zy, e->s_zp, &sh); /* I = r 2^-(30 + sh) */
-	int s = QF_UNIT_FRAC + sh;
-	if (s >= 1 && s <= 62) {
-		ident_sum_t t1 = q_mul64_32(e->s_ab, r, (unsigned)s);
-		ident_sum_t t2 = q_mul64_32(q_mul64_32(e->s_bb, r, (unsigned)s), r, (unsigned)s);
-		ident_sum_t v = q_add64(q_add64(e->s_aa, -q_add64(t1, t1)), t2);
-		return f_of_sum(v);
-	}
-#endif
-	return f_of_sum(e->s_aa) - 2.0f * est * f_of_sum(e->s_ab) + est * est * f_of_sum(e->s_bb);
+	float zp = f_of_sum(e->s_zp), r = fb_zero(zp) ? NAN : f_of_sum(e->s_zy) / zp;
+	if (!fb_finite(r))
+		return false;
+	*i0 = sc_from_float(r);
+	return true;
 }
 
 float ident_inertia_est(struct ident_inertia *e)
@@ -234,6 +232,21 @@ float ident_inertia_est(struct ident_inertia *e)
 	return f_of_sum(e->s_zy) / f_of_sum(e->s_zp);
 }
 
+/* var(I) (sum z phi)^2 = sum_h w_h Z(h) R(h) (ident.h), R(h) the residual's mean lag product
+ * about est: r = r0 - d phi with r0 = y - i0 phi, d = est - i0. The sums are about i0, the
+ * ratio after the first 0.5 s, so d is small and rr - d rp + d^2 pp keeps its digits. */
+static float iv_var_sum(const struct ident_inertia *e, float est)
+{
+	float d = est - sc_to_float(e->i0), v = 0.0f;
+	for (uint32_t h = 0; h <= e->lags; h++) {
+		if (e->c_rn[h] == 0u)
+			break;
+		float rr = f_of_sum(e->c_rr[h]) - d * f_of_sum(e->c_rp[h]) + d * d * f_of_sum(e->c_pp[h]);
+		v += (h == 0u ? 1.0f : 2.0f) * f_of_sum(e->c_zz[h]) * rr / (float)e->c_rn[h];
+	}
+	return v;
+}
+
 float ident_inertia_sd(struct ident_inertia *e)
 {
 	ident_inertia_process(e);
@@ -242,7 +255,7 @@ float ident_inertia_sd(struct ident_inertia *e)
 	float est = ident_inertia_est(e);
 	if (!fb_finite(est))
 		return NAN;
-	float v = iv_resid2(e, est);
+	float v = iv_var_sum(e, est);
 	return sqrtf(fb_pos(v) ? v : 0.0f) / fabsf(f_of_sum(e->s_zp));
 }
 

@@ -22,11 +22,11 @@
 #include <string.h>
 
 #define REL_BOUND 2e-4 /* 0.02 % */
-/* The inertia's std (the spread of the blocks' residuals) is a small difference of large
- * sums and follows the residuals themselves: 2 % (float build: 10 %, its float32 sums lose
- * to that cancellation), against the std's own sampling error of 1 / sqrt(2 K) >= 11 % for
- * K >= 40 blocks of 0.5 s. */
-#define SD_BOUND (OCTO_FIXED ? 2e-2 : 1e-1)
+/* The inertia's std (the residual's lag products about the ratio after 0.5 s, ident.h)
+ * follows the residual, a small difference of large signals: 2 % (the fixed build's Q16.16
+ * filter states round it; float build: 5 %, from its float32 sums over an hour, 1e-4 over a
+ * run of 10-30 s), against the std's own sampling error of a few %. */
+#define SD_BOUND (OCTO_FIXED ? 2e-2 : 5e-2)
 #define DT (1.0 / 90.0)
 #define FPS 90L
 /* Long runs: hours on the host; on emulated Cortex-M (make arm), where an emulated minute
@@ -260,11 +260,15 @@ static double svf_ref_update(struct svf_ref *f, double u)
 }
 
 struct inertia_ref {
-	int ax, b_n, b_len;
-	double coupling, alpha, tau_prev, ww_prev, wf_prev, z_in;
+	int ax, s_n, b_len, lags, n_ring, r_ring, r_on;
+	double coupling, alpha, tau_prev, ww_prev, wf_prev, z_in, i0;
 	struct svf_ref tau, w, ww, z;
 	struct ref rls;
-	double s_zy, s_zp, b_zy, b_zp, s_aa, s_ab, s_bb;
+	double s_zy, s_zp;
+	/* the std's lag products (ident.h), newest first in the ring */
+	double rz[IDENT_INR_LAGS], rr[IDENT_INR_LAGS], rp[IDENT_INR_LAGS];
+	double c_zz[IDENT_INR_LAGS + 1], c_rr[IDENT_INR_LAGS + 1], c_rp[IDENT_INR_LAGS + 1], c_pp[IDENT_INR_LAGS + 1];
+	double c_rn[IDENT_INR_LAGS + 1];
 };
 
 static void inertia_ref_init(struct inertia_ref *r, int ax, double wc, double zeta, double alpha,
@@ -276,6 +280,7 @@ static void inertia_ref_init(struct inertia_ref *r, int ax, double wc, double ze
 	r->coupling = d(inertia[k]) - d(inertia[j]);
 	r->alpha = alpha;
 	r->b_len = (int)(0.5 / DT + 0.5);
+	r->lags = (int)fmin(5.0 / (zeta * wc * DT) + 1.0, IDENT_INR_LAGS);
 	svf_ref_init(&r->tau, wc, zeta, 0.0);
 	svf_ref_init(&r->w, wc, zeta, 0.0);
 	svf_ref_init(&r->ww, wc, zeta, 0.0);
@@ -299,22 +304,46 @@ static void inertia_ref_update(struct inertia_ref *r, const double tau[3], const
 	double z = svf_ref_update(&r->z, r->z_in);
 	r->s_zy += z * y;
 	r->s_zp += z * phi;
-	r->b_zy += z * y;
-	r->b_zp += z * phi;
-	if (++r->b_n >= r->b_len) {
-		r->s_aa += r->b_zy * r->b_zy;
-		r->s_ab += r->b_zy * r->b_zp;
-		r->s_bb += r->b_zp * r->b_zp;
-		r->b_zy = r->b_zp = 0.0;
-		r->b_n = 0;
+	if (!r->r_on && ++r->s_n >= r->b_len && r->s_zp != 0.0) {
+		r->i0 = d(sc_from_float((float)(r->s_zy / r->s_zp))); /* as the firmware keeps it */
+		r->r_on = 1;
 	}
+	double res = r->r_on ? y - r->i0 * phi : 0.0;
+	int nz = r->n_ring < r->lags ? r->n_ring : r->lags, nr = r->r_ring < nz ? r->r_ring : nz;
+	r->c_zz[0] += z * z;
+	if (r->r_on) {
+		r->c_rr[0] += res * res;
+		r->c_rp[0] += 2.0 * res * phi;
+		r->c_pp[0] += phi * phi;
+		r->c_rn[0] += 1.0;
+	}
+	for (int h = 1; h <= nz; h++) {
+		r->c_zz[h] += z * r->rz[h - 1];
+		if (h <= nr) {
+			r->c_rr[h] += res * r->rr[h - 1];
+			r->c_rp[h] += res * r->rp[h - 1] + phi * r->rr[h - 1];
+			r->c_pp[h] += phi * r->rp[h - 1];
+			r->c_rn[h] += 1.0;
+		}
+	}
+	memmove(r->rz + 1, r->rz, (IDENT_INR_LAGS - 1) * sizeof r->rz[0]);
+	memmove(r->rr + 1, r->rr, (IDENT_INR_LAGS - 1) * sizeof r->rr[0]);
+	memmove(r->rp + 1, r->rp, (IDENT_INR_LAGS - 1) * sizeof r->rp[0]);
+	r->rz[0] = z;
+	r->rr[0] = res;
+	r->rp[0] = phi;
+	r->n_ring += r->n_ring < (int)IDENT_INR_LAGS;
+	r->r_ring += r->r_on && r->r_ring < (int)IDENT_INR_LAGS;
 }
 
 static double inertia_ref_est(const struct inertia_ref *r) { return r->s_zy / r->s_zp; }
 
+/* var(I) (sum z phi)^2 = sum_h w_h Z(h) R(h), R(h) about the estimate (ident.h) */
 static double inertia_ref_sd(const struct inertia_ref *r)
 {
-	double est = inertia_ref_est(r), v = r->s_aa - 2.0 * est * r->s_ab + est * est * r->s_bb;
+	double dd = inertia_ref_est(r) - r->i0, v = 0.0;
+	for (int h = 0; h <= r->lags && r->c_rn[h] > 0.0; h++)
+		v += (h ? 2.0 : 1.0) * r->c_zz[h] * (r->c_rr[h] - dd * r->c_rp[h] + dd * dd * r->c_pp[h]) / r->c_rn[h];
 	return sqrt(fmax(v, 0.0)) / fabs(r->s_zp);
 }
 
@@ -482,7 +511,7 @@ UNIT_TEST(ident_ref_fit)
 
 /* ---------------------------------------------------------------- saturation */
 
-/* q_mul64_64 (the IV variance's products) against exact products */
+/* q_mul64_64 against exact products */
 UNIT_TEST(ident_ref_q_mul64_64)
 {
 	struct unit_rng g = {0x64646464ULL};
@@ -522,11 +551,12 @@ UNIT_TEST(ident_saturating_inputs)
 		scalar_t tb[3] = {big, big, big}, wb[3] = {big, big_p, big_n};
 		ident_inertia_instrument(&e, big);
 		ident_inertia_update(&e, tb, wb, true);
-		monotonic = monotonic && e.s_aa >= prev;
-		prev = e.s_aa;
+		ident_inertia_process(&e);
+		monotonic = monotonic && e.c_zz[0] >= prev;
+		prev = e.c_zz[0];
 	}
 	CHECK(monotonic); /* a sum of squares only grows, or stays at its saturation */
-	CHECK(e.s_aa > 0 && e.s_bb > 0);
+	CHECK(e.c_zz[0] > 0 && e.c_pp[0] > 0 && e.r_on);
 	CHECK(isfinite(ident_inertia_est(&e)) && isfinite(ident_inertia_sd(&e)));
 	CHECK(e.n == 20000u);
 	/* validation: the largest errors saturate the sums */
@@ -536,7 +566,7 @@ UNIT_TEST(ident_saturating_inputs)
 		ident_fit_add(&v, k % 2 ? big_p : big_n, k % 2 ? big_n : big_p);
 	CHECK(v.sse > 0 && v.s2 > 0);
 #if OCTO_FIXED
-	CHECK(v.sse == INT64_MAX && e.s_aa == INT64_MAX);
+	CHECK(v.sse == INT64_MAX && e.c_zz[0] == INT64_MAX);
 #endif
 	CHECK(isfinite(ident_fit_ne(&v)) && isfinite(ident_fit_pct(&v)));
 	/* rotor: throttles and measurements at both ends, then ordinary data: it still updates */

@@ -4,10 +4,9 @@ On random vehicles (each of mass, arm length, k_f, k_tau, Ix, Iy, Iz within +/-3
 the paper's) both fly the same mission with the same seed; the in-process run writes
 the same report: the same checks pass, the same estimates are accepted, and each
 estimate lies within 4 combined standard deviations of the other's. Four, not three: a run
-makes ten such comparisons (five estimates, two draws) and each inertia sd is itself estimated
-from 20 blocks of 0.5 s, so the ratio is t-distributed (about 38 degrees of freedom). At 3 the
-run would fail by chance 4.7 % of the time; at 4, 0.28 %: the 3-sigma level for the ten together
-(a failure seen at 3.1 combined sds, both estimates within 2.5 of their own sds of the truth). Two in-process runs
+makes ten such comparisons (five estimates, two draws), so at 3 it would fail by chance 2.7 % of
+the time, at 4 0.06 % (a failure seen at 3.1 combined sds, both estimates within 2.5 of their
+own sds of the truth). Two in-process runs
 give the same report (apart from time stamps and wall times). OCTO_SIL_SEED=N repeats a
 draw.
 """
