@@ -684,6 +684,22 @@ static float delay_margin(const struct imu_id *m, unsigned bd, struct imu_id_res
 	return j0;
 }
 
+/* The white-noise covariance s2 H into v, and the frozen hypothesis' fit of the force (or,
+ * tq, the torque) in the centred basis into thc (zero before the clusters start): what
+ * cl_factor scales each projection's variance by. */
+static void cov_frozen(const struct imu_id *m, float s2, const float h[NP][NP], bool tq, float v[NP][NP], float thc[NP])
+{
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++)
+			v[i][k] = s2 * h[i][k];
+	memset(thc, 0, NP * sizeof thc[0]);
+	if (m->cl_on) {
+		const struct imu_id_stat *s = &m->st[m->cl_d][m->cl_l];
+		float hc[NP][NP];
+		fit(m, s->g, tq ? s->bt : s->b, tq ? s->rrt : s->rr, thc, hc);
+	}
+}
+
 /* k_tau from the ESCs' torques: the torque's fit on the hypothesis the force chose (bd, bl),
  * with the same second-order correction from the neighbours at the force's step dl, and its
  * white-noise covariance scaled by the clusters' factor of its own residuals. */
@@ -693,7 +709,7 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 	if (!c->torque || m->tq_lost)
 		return;
 	unsigned np = c->est_curve ? NP : NP - 2u;
-	float th[NP], h[NP][NP], v[NP][NP], thc[NP], hc[NP][NP];
+	float th[NP], h[NP][NP], v[NP][NP], thc[NP];
 	float j = hyp_solve_tq(m, &m->st[bd][bl], th, h);
 	if (bl > 0u && bl + 1u < IMU_ID_LAGS) {
 		float tm[NP], tp[NP], hh[NP][NP], k = dl / (4.0f * grid_step(m));
@@ -705,12 +721,7 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 	float s2 = j / (float)(m->n_st - np);
 	if (!(s2 >= 0.0f) || !isfinite(s2))
 		return;
-	for (unsigned i = 0; i < NP; i++)
-		for (unsigned k = 0; k < NP; k++)
-			v[i][k] = s2 * h[i][k];
-	memset(thc, 0, sizeof thc);
-	if (m->cl_on)
-		fit(m, m->st[m->cl_d][m->cl_l].g, m->st[m->cl_d][m->cl_l].bt, m->st[m->cl_d][m->cl_l].rrt, thc, hc);
+	cov_frozen(m, s2, h, true, v, thc);
 	float A = c->est_curve ? c->kt0 * (1.0f - c->curve0) + th[0] : c->kt0 + th[0];
 	float B = c->est_curve ? c->kt0 * c->curve0 + th[P_B] : 0.0f;
 	const float jk[NP] = {1.0f, c->est_curve ? 1.0f : 0.0f, 0.0f, 0.0f, 0.0f};
@@ -776,7 +787,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	unsigned bd, bl;
 	best_hyp(m, &bd, &bl);
 	float j0 = delay_margin(m, bd, r);
-	float th[NP], h[NP][NP], v[NP][NP], thc[NP], hc[NP][NP];
+	float th[NP], h[NP][NP], v[NP][NP], thc[NP];
 	hyp_solve(m, &m->st[bd][bl], th, h);
 	float hstep = grid_step(m), dl = step_of(m, th), lcorr = 0.0f;
 	/* the grid point nearest the lag found (the least residual's may lie a few of the
@@ -813,12 +824,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	}
 	/* the white-noise covariance (s2 H); each quantity's variance then scaled by the
 	 * clusters' factor for its projection (the frozen hypothesis' estimate theta) */
-	for (unsigned i = 0; i < NP; i++)
-		for (unsigned k = 0; k < NP; k++)
-			v[i][k] = s2 * h[i][k];
-	memset(thc, 0, sizeof thc);
-	if (m->cl_on)
-		fit(m, m->st[m->cl_d][m->cl_l].g, m->st[m->cl_d][m->cl_l].b, m->st[m->cl_d][m->cl_l].rr, thc, hc);
+	cov_frozen(m, s2, h, false, v, thc);
 	unsigned ncl = 0;
 	/* the raw (uncalibrated) k_f = A + B, the curve c = B / (A + B) */
 	float A = c->est_curve ? c->kf0 * (1.0f - c->curve0) + th[0] : c->kf0 + th[0];

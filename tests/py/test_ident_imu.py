@@ -34,6 +34,8 @@ import random
 import re
 import subprocess
 
+import pytest
+
 from conftest import binary
 from ident_helpers import fw_said, random_vehicle
 
@@ -123,11 +125,15 @@ def test_the_fixed_point_build_identifies_from_the_imu(tmp_path):
     assert not wrong, (wrong, zs)
 
 
-def test_forced_thrust_source_without_rows_is_refused(tmp_path):
-    r, said = fly(tmp_path, PAPER, 12, sensors="imu", params="param ID_SOURCE 1; ",
+@pytest.mark.parametrize(("sensors", "source", "why"), [
+    ("imu", 1, "Experiment 1 refused: no rotor thrust/torque rows"),
+    ("imu,rpm", 4, "Experiment 1 refused: no ESC torques (ID_SOURCE imu_rpm_torque)"),
+])
+def test_a_forced_source_the_frames_do_not_carry_is_refused(tmp_path, sensors, source, why):
+    r, said = fly(tmp_path, PAPER, 12, sensors=sensors, params=f"param ID_SOURCE {source}; ",
                   script="arm; takeoff 5; wait hold; experiment 1; wait experiment")
     assert r.returncode == 1
-    assert "Experiment 1 refused: no rotor thrust/torque rows" in said, said
+    assert why in said, said
 
 
 def test_lying_thrust_rows_leave_the_imu_estimate_alone(tmp_path):
@@ -261,13 +267,6 @@ def test_esc_torques_give_ktau_and_izz(tmp_path):
         zs, wrong = judge_torque(res, veh)
         assert not wrong, (program, wrong, zs)
         assert "ID ktau, Izz: the ratio only (ID_IZZ_PRI_SD: a prior)" not in said
-
-
-def test_forced_torque_source_without_torques_is_refused(tmp_path):
-    r, said = fly(tmp_path, PAPER, 17, sensors="imu,rpm", params="param ID_SOURCE 4; ",
-                  script="arm; takeoff 5; wait hold; experiment 1; wait experiment")
-    assert r.returncode == 1
-    assert "Experiment 1 refused: no ESC torques (ID_SOURCE imu_rpm_torque)" in said, said
 
 
 def test_esc_torque_random_vehicles(tmp_path):
