@@ -156,31 +156,39 @@ def imu_vehicle(rng):
     return veh
 
 
-def test_random_vehicles_accepted_values_are_right_and_their_sds_honest(tmp_path):
-    n = int(os.environ.get("OCTO_IMU_N", 20))
-    seed0 = int(os.environ.get("OCTO_IMU_SEED", random.SystemRandom().randrange(1, 10**6)))
-    print(f"OCTO_IMU_SEED={seed0}: {n} random vehicles, source imu")
-    zs, wrong, failed = {k: [] for k in TOL}, [], []
+def random_flights(tmp_path, n_default, source, draw, sensors, parse, judge_fn, key):
+    """OCTO_IMU_N (default n_default) random vehicles draw(rng) flown from OCTO_IMU_SEED (new
+    each run, printed), their status lines parsed and judged: (n, the accepted values beyond
+    their tolerance, the flights whose `key` was not accepted, each quantity's rms of error /
+    sd over those within 4 sds)."""
+    n = int(os.environ.get("OCTO_IMU_N", str(n_default)))
+    seed0 = int(os.environ.get("OCTO_IMU_SEED", str(random.SystemRandom().randrange(1, 10**6))))
+    print(f"OCTO_IMU_SEED={seed0}: {n} random vehicles, source {source}")
+    zs, wrong, failed = {}, [], []
     for i in range(n):
         seed = seed0 + i
-        veh = imu_vehicle(random.Random(seed))
-        r, said = fly(tmp_path, veh, seed)
-        res = results(said)
-        if not res.get("kf", (0, 0, False))[2]:
+        veh = draw(random.Random(seed))
+        _, said = fly(tmp_path, veh, seed, sensors=sensors)
+        res = parse(said)
+        if not res.get(key, (0, 0, False))[2]:
             failed.append((seed, [ln for ln in said if "rejected" in ln or "aborted" in ln][-2:]))
-        z, w = judge(res, veh)
+        z, w = judge_fn(res, veh)
         for k, v in z.items():
-            zs[k].append(v)
+            zs.setdefault(k, []).append(v)
         if w:
             wrong.append((seed, w, veh))
-    rms = {k: math.sqrt(sum(v * v for v in zs[k]) / len(zs[k])) for k in zs if zs[k]}
-    # the bulk's rms, without the known tail beyond 4 (see the docstring)
+    rms = {k: math.sqrt(sum(v * v for v in zs[k]) / len(zs[k])) for k in zs}
     bulk = {k: math.sqrt(sum(v * v for v in zs[k] if abs(v) <= 4.0) / max(1, sum(abs(v) <= 4.0 for v in zs[k])))
-            for k in zs if zs[k]}
+            for k in zs}
     print("rms z:", rms, "\nrms z within 4:", bulk, "\nnot identified:", failed)
+    return n, wrong, failed, bulk
+
+
+def test_random_vehicles_accepted_values_are_right_and_their_sds_honest(tmp_path):
+    n, wrong, failed, bulk = random_flights(tmp_path, 20, "imu", imu_vehicle, "imu,rpm", results, judge, "kf")
     assert len(wrong) <= max(1, n // 20), wrong  # accepted and wrong: see the docstring
     assert len(failed) <= max(2, n // 10), failed
-    assert all(r < 1.6 for r in bulk.values()), (bulk, rms)
+    assert all(r < 1.6 for r in bulk.values()), bulk
 
 
 def test_rotor_speeds_give_the_motor_lag_and_delay(tmp_path):
@@ -275,26 +283,9 @@ def test_esc_torque_random_vehicles(tmp_path):
     rms of z below 1.6, at most one accepted value beyond max(3 sd, tolerance)). Measured over
     100 vehicles (seeds 3000-3099): k_tau's error rms 0.33 % (largest 0.94 %), z rms 0.96; I_z's
     error rms 0.57 %, z rms 0.97."""
-    n = int(os.environ.get("OCTO_IMU_N", 12))
-    seed0 = int(os.environ.get("OCTO_IMU_SEED", random.SystemRandom().randrange(1, 10**6)))
-    print(f"OCTO_IMU_SEED={seed0}: {n} random vehicles, source imu_rpm_torque")
-    zs, wrong, failed = {"ktau": [], "izz": []}, [], []
-    for i in range(n):
-        seed = seed0 + i
-        rng = random.Random(seed)
-        veh = esc_vehicle(rng, imu_vehicle(rng))
-        r, said = fly(tmp_path, veh, seed, sensors="imu,rpm,torque")
-        res = torque_results(said)
-        if not res.get("ktau", (0, 0, False))[2]:
-            failed.append((seed, [ln for ln in said if "rejected" in ln or "aborted" in ln][-2:]))
-        z, w = judge_torque(res, veh)
-        for k, v in z.items():
-            zs[k].append(v)
-        if w:
-            wrong.append((seed, w))
-    bulk = {k: math.sqrt(sum(v * v for v in zs[k] if abs(v) <= 4.0) / max(1, sum(abs(v) <= 4.0 for v in zs[k])))
-            for k in zs if zs[k]}
-    print("rms z within 4:", bulk, "\nnot identified:", failed)
+    n, wrong, failed, bulk = random_flights(tmp_path, 12, "imu_rpm_torque",
+                                            lambda rng: esc_vehicle(rng, imu_vehicle(rng)), "imu,rpm,torque",
+                                            torque_results, judge_torque, "ktau")
     assert len(wrong) <= 1, wrong
     assert len(failed) <= max(1, n // 10), failed
     assert all(r < 1.6 for r in bulk.values()), bulk
