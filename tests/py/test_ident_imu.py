@@ -280,9 +280,8 @@ def test_esc_torques_give_ktau_and_izz(tmp_path):
 def test_esc_torque_random_vehicles(tmp_path):
     """Random vehicles of the tests' ranges with random ESC offsets, noise and motor constants:
     k_tau and I_z judged against the truth and their sds, as the IMU's k_f is above (the bulk's
-    rms of z below 1.6, at most one accepted value beyond max(3 sd, tolerance)). Measured over
-    100 vehicles (seeds 3000-3099): k_tau's error rms 0.33 % (largest 0.94 %), z rms 0.96; I_z's
-    error rms 0.57 %, z rms 0.97."""
+    rms of z below 1.6, at most one accepted value beyond max(3 sd, tolerance)). `make bench`
+    item 9 measures the same over 1,000 vehicles (docs/identification.md)."""
     n, wrong, failed, bulk = random_flights(tmp_path, 12, "imu_rpm_torque",
                                             lambda rng: esc_vehicle(rng, imu_vehicle(rng)), "imu,rpm,torque",
                                             torque_results, judge_torque, "ktau")
