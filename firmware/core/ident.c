@@ -160,10 +160,7 @@ static void inertia_filters(struct ident_inertia *e, scalar_t tau, scalar_t w, s
 }
 
 /* No lag pairs across what follows (a gap, a restart, an update without excitation). */
-static void lag_break(struct ident_inertia *e)
-{
-	e->z_n = e->r_n = 0;
-}
+static void lag_break(struct ident_inertia *e) { e->z_n = e->r_n = 0; }
 
 /* One excited update's lag products with the updates before it in the ring: z z' from the
  * first on, and once the residual's sums run, r r', r phi' + phi r' and phi phi' of
@@ -187,7 +184,8 @@ static void lag_sums(struct ident_inertia *e, scalar_t z, scalar_t y, scalar_t p
 		e->c_zz[h] = sum_add(e->c_zz[h], sum_prod(z, e->ring_z[m]));
 		if (h <= nr) {
 			e->c_rr[h] = sum_add(e->c_rr[h], sum_prod(r, e->ring_r[m]));
-			e->c_rp[h] = sum_add(e->c_rp[h], sum_add(sum_prod(r, e->ring_p[m]), sum_prod(phi, e->ring_r[m])));
+			e->c_rp[h] =
+				sum_add(e->c_rp[h], sum_add(sum_prod(r, e->ring_p[m]), sum_prod(phi, e->ring_r[m])));
 			e->c_pp[h] = sum_add(e->c_pp[h], sum_prod(phi, e->ring_p[m]));
 			e->c_rn[h]++;
 		}

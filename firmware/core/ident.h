@@ -168,11 +168,11 @@ struct ident_inertia {
 	 * update on, of the residual r = y - i0 phi from the b_len-th on (i0: the IV ratio
 	 * then), over runs of consecutive excited updates (a ring of the last ones) */
 	scalar_t i0;
-	bool r_on;                /* the residual's sums run */
-	uint32_t lags;            /* largest lag, <= IDENT_INR_LAGS */
+	bool r_on;                   /* the residual's sums run */
+	uint32_t lags;               /* largest lag, <= IDENT_INR_LAGS */
 	uint32_t ring_pos, z_n, r_n; /* next slot; entries with z, with r */
 	scalar_t ring_z[IDENT_INR_LAGS], ring_r[IDENT_INR_LAGS], ring_p[IDENT_INR_LAGS];
-	ident_sum_t c_zz[IDENT_INR_LAGS + 1];                /* sum z_k z_(k+h) */
+	ident_sum_t c_zz[IDENT_INR_LAGS + 1]; /* sum z_k z_(k+h) */
 	ident_sum_t c_rr[IDENT_INR_LAGS + 1], c_rp[IDENT_INR_LAGS + 1], c_pp[IDENT_INR_LAGS + 1];
 	uint32_t c_rn[IDENT_INR_LAGS + 1]; /* the residual's pairs at lag h */
 	/* the frame ident_inertia_update took, its updates waiting for ident_inertia_process */
