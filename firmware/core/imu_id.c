@@ -118,15 +118,11 @@ void imu_id_step(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS], scala
 	if (m->q_pending)
 		imu_id_process(m);
 	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-		m->q_thr[j] = sc_to_float(thr_prev[j]);
-	m->q_f = sc_to_float(f_n);
-	m->q_fw = sc_to_float(fw_n);
-	m->q_vz = sc_to_float(vz);
-	m->q_tq = m->cfg.torque ? sc_to_float(tq_n) : 0.0f;
-	if (!isfinite(m->q_tq)) {
-		m->tq_lost = true;
-		m->q_tq = 0.0f;
-	}
+		m->q_thr[j] = thr_prev[j];
+	m->q_f = f_n;
+	m->q_fw = fw_n;
+	m->q_vz = vz;
+	m->q_tq = tq_n;
 	m->q_excited = excited;
 	m->q_pending = true;
 }
@@ -135,15 +131,26 @@ void imu_id_hold(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS])
 {
 	if (m->q_pending)
 		imu_id_process(m);
-	float u[IMU_ID_ROTORS];
 	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-		u[j] = sc_to_float(thr_prev[j]);
-	advance(m, u);
-	if (m->n_cal > 0u) { /* the lost frame's force: the last one's */
-		m->fw_sum += m->q_fw;
-		m->n_cal++;
+		m->h_thr[j] = thr_prev[j];
+	m->n_hold++;
+}
+
+/* the lost frames counted by imu_id_hold: the filters run on what the plant held, the
+ * calibration takes the last frame's force for each, and the smoother restarts */
+static void holds_take(struct imu_id *m)
+{
+	for (; m->n_hold > 0u; m->n_hold--) {
+		float u[IMU_ID_ROTORS];
+		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+			u[j] = sc_to_float(m->h_thr[j]);
+		advance(m, u);
+		if (m->n_cal > 0u) {
+			m->fw_sum += m->fw_last;
+			m->n_cal++;
+		}
+		m->n_fr = 0;
 	}
-	m->n_fr = 0; /* the smoother restarts after a gap */
 }
 
 /* inverse of a symmetric positive definite matrix (upper triangle) into h, by Cholesky
@@ -457,31 +464,42 @@ static void refine(struct imu_id *m)
 
 void imu_id_process(struct imu_id *m)
 {
+	holds_take(m);
 	if (!m->q_pending)
 		return;
 	m->q_pending = false;
-	advance(m, m->q_thr);
+	float thr[IMU_ID_ROTORS];
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		thr[j] = sc_to_float(m->q_thr[j]);
+	float qfw = sc_to_float(m->q_fw), qvz = sc_to_float(m->q_vz);
+	float qtq = m->cfg.torque ? sc_to_float(m->q_tq) : 0.0f;
+	if (!isfinite(qtq)) {
+		m->tq_lost = true;
+		qtq = 0.0f;
+	}
+	advance(m, thr);
 	if (m->q_excited) { /* the calibration's sums: from the velocity before the first */
 		if (m->n_cal == 0u)
 			m->v0 = m->vz_prev;
-		m->fw_sum += m->q_fw;
+		m->fw_sum += qfw;
 		m->n_cal++;
-		m->v_last = m->q_vz;
+		m->v_last = qvz;
 	}
-	m->vz_prev = m->q_vz;
+	m->fw_last = qfw;
+	m->vz_prev = qvz;
 	m->fr[2] = m->fr[1];
 	m->fr[1] = m->fr[0];
-	m->fr[0] = m->q_f;
+	m->fr[0] = sc_to_float(m->q_f);
 	m->tr[2] = m->tr[1];
 	m->tr[1] = m->tr[0];
-	m->tr[0] = m->q_tq;
+	m->tr[0] = qtq;
 	if (++m->n_fr < 3u)
 		return; /* the smoother fills */
 	float f = smooth(m->fr), t = smooth(m->tr);
 	if (!m->q_excited) {
 		float u = 0.0f;
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-			u += m->q_thr[j];
+			u += thr[j];
 		m->nz_n++;
 		m->nz_s += f;
 		m->nz_ss += f * f;

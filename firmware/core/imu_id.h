@@ -48,8 +48,9 @@
  * (the velocity's, the offset's) joins k_f's.
  * The derivation: docs/identification.md, "From the IMU".
  *
- * Core rules: no heap, globals or I/O. imu_id_step stores the frame (scalars); the bank
- * update (imu_id_process) and the solve run between frames, in float in both builds.
+ * Core rules: no heap, globals or I/O. imu_id_step and imu_id_hold store the frame (scalars,
+ * no conversion); the bank update (imu_id_process) and the solve run between frames, in float
+ * in both builds.
  */
 #ifndef OCTO_IMU_ID_H
 #define OCTO_IMU_ID_H
@@ -139,7 +140,10 @@ struct imu_id {
 	uint32_t n_cal;
 	bool q_pending, q_excited;
 	bool tq_lost; /* a torque reading was not finite: k_tau is not estimated */
-	float q_thr[IMU_ID_ROTORS], q_f, q_fw, q_vz, q_tq;
+	scalar_t q_thr[IMU_ID_ROTORS], q_f, q_fw, q_vz, q_tq; /* the frame stored, as given */
+	scalar_t h_thr[IMU_ID_ROTORS];                        /* the throttles of the frames lost before it, */
+	uint32_t n_hold;                                      /* and their count (imu_id_hold; taken between frames) */
+	float fw_last;                                        /* the last frame taken's vertical force (a lost one's) */
 };
 
 enum imu_id_cause {
@@ -190,7 +194,8 @@ void imu_id_step(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS], scala
 		 scalar_t tq_n, bool excited);
 /* Between frames: the stored frame into the bank (no-op if none waits). */
 void imu_id_process(struct imu_id *m);
-/* A frame without measurement: the plant held thr_prev one more frame. */
+/* A frame without measurement: the plant held thr_prev one more frame (counted; the bank
+ * takes it between frames, before the next frame stored). */
 void imu_id_hold(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS]);
 /* Between frames: the estimates and the acceptance cause. ne_max: the largest accepted
  * cluster factor (hac: the residuals' colour; beyond it the model misses something the
