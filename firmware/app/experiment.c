@@ -451,7 +451,9 @@ int exp_start(struct experiment *e, int id, const struct app_params *p, enum exp
 		return APP_DENIED;
 	}
 	cfg_resolve(&e->cfg, p);
-	e->cfg.src = src == EXP_SRC_IMU || src == EXP_SRC_IMU_RPM || src == EXP_SRC_IMU_RPM_TQ ? src : EXP_SRC_THRUST;
+	e->cfg.src = src;
+	if (!imu_src(&e->cfg))
+		e->cfg.src = EXP_SRC_THRUST;
 	if (!(e->cfg.exc_amp > 0.0f) || !(e->cfg.exc_time > 0.0f)) {
 		snprintf(why, cap, "Experiment %d refused: ID_EXC_AMP/ID_EXC_TIME not > 0", id);
 		return APP_DENIED;
