@@ -134,9 +134,12 @@ def test_an_oscillating_attitude_loop_is_detuned_and_identified(tmp_path):
     are within the tolerances; the lowered gain is saved with them. Over 300 draws (seeds
     118900-119199) every one was detuned and identified. At ATT_WN_RP 10, 5 % of the draws
     oscillate too little in hover for the guard, and 2 % then tip past the experiment's
-    tilt limit (the guard does not act in an experiment: the inertia's excites the rates)."""
+    tilt limit (the guard does not act in an experiment: the inertia's excites the rates).
+    One flight of the four may meet the whiteness test's false alarm (its designed rate, about
+    1 %, on these vehicles: seed 134982), as any flight may; it is still detuned as above."""
     seed0 = int(os.environ.get("OCTO_MANY_SEED", random.SystemRandom().randrange(1, 10**6)))
     print(f"OCTO_MANY_SEED={seed0}")
+    chance = []
     for i in range(4):
         veh = slow_late_strong(random.Random(seed0 + i))
         p, r = fly(tmp_path, veh, seed0 + i, first="param ATT_WN_RP 12; ", settle="sleep 10; ")
@@ -148,9 +151,13 @@ def test_an_oscillating_attitude_loop_is_detuned_and_identified(tmp_path):
             assert float(m.group(1)) > 12.0 and float(m.group(2)) == pytest.approx(wn, abs=0.006)
             wn = float(m.group(3))
             assert wn == pytest.approx(0.85 * float(m.group(2)), abs=0.006)
+        assert p["ATT_WN_RP"] == pytest.approx(wn, abs=0.006)   # the line gives 2 decimals
+        if not int(p.get("ID_RESULT", 0)) & 1 and false_alarm(said):
+            chance.append(seed0 + i)
+            continue
         assert int(p.get("ID_RESULT", 0)) & 1, (seed0 + i, said[-8:])
         assert not wrong(p, veh), (seed0 + i, wrong(p, veh))
-        assert p["ATT_WN_RP"] == pytest.approx(wn, abs=0.006)   # the line gives 2 decimals
+    assert len(chance) <= 1, chance
 
 
 def test_a_stable_vehicle_is_never_detuned(tmp_path):

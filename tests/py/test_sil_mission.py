@@ -2,7 +2,8 @@
 
 On random vehicles (each of mass, arm length, k_f, k_tau, Ix, Iy, Iz within +/-30 % of
 the paper's) both fly the same mission with the same seed; the in-process run writes
-the same report: the same checks pass, the same estimates are accepted, and each
+the same report: the same checks pass, the same estimates are accepted (unless one flight
+alone meets a statistical test's chance rejection, whose reason is then the test's), and each
 estimate lies within 4 combined standard deviations of the other's. Four, not three: a run
 makes ten such comparisons (five estimates, two draws), so at 3 it would fail by chance 2.7 % of
 the time, at 4 0.06 % (a failure seen at 3.1 combined sds, both estimates within 2.5 of their
@@ -24,6 +25,9 @@ from conftest import BUILD, REPO, draw_inertia, read_report, run_gcs
 PAPER = {"mass": 2.132, "arm_length": 0.35, "kf": 28.0269, "ktau": 0.3869}
 INERTIA = (0.0628, 0.0762, 0.1014)
 ESTIMATES = ("kf", "ktau", "ixx", "iyy", "izz")
+# the rejections of the motor model's whiteness and residual tests, each with a designed
+# false-alarm rate (bench item 5: 0.1-1.4 % of flights)
+CHANCE = {"rotor", "coloured", "level", "model", "curve"}
 
 
 def random_vehicle(rng):
@@ -66,11 +70,23 @@ def test_in_process_agrees_with_udp_on_a_random_vehicle(tmp_path, draw):
     (rc_u, u), (rc_s, s), (rc_s2, s2) = runs["udp"], runs["sil"], runs["sil2"]
     assert stable(s) == stable(s2), "two in-process missions with the same options differ"
     assert s["run"]["plant"].startswith("octo-sil") and not u["run"]["plant"].startswith("octo-sil")
-    assert rc_s == rc_u and s["pass"] == u["pass"]
-    assert {c["check"]: c["ok"] for c in s["checks"]} == {c["check"]: c["ok"] for c in u["checks"]}
+    # the two flights are two realisations of the noise (the ground station's commands reach the
+    # UDP firmware at other frames): a rejection by one of the motor model's statistical tests,
+    # at their designed false-alarm rate, may fall on one flight alone; then the verdicts differ
+    # for that reason only, and the estimates must still agree
+    chance = [
+        key
+        for key in ESTIMATES
+        if u["parameters"][key]["accepted"] != s["parameters"][key]["accepted"]
+        and {u["parameters"][key]["reason"], s["parameters"][key]["reason"]} - {"ok"} <= CHANCE
+    ]
+    print("verdicts differing by a statistical test's chance rejection:", chance)
+    if not chance:
+        assert rc_s == rc_u and s["pass"] == u["pass"]
+        assert {c["check"]: c["ok"] for c in s["checks"]} == {c["check"]: c["ok"] for c in u["checks"]}
     for key in ESTIMATES:
         a, b = u["parameters"][key], s["parameters"][key]
-        assert a["accepted"] == b["accepted"], key
+        assert a["accepted"] == b["accepted"] or key in chance, (key, a["reason"], b["reason"])
         assert a["truth"] == b["truth"], key
         sd = (a["sd"] ** 2 + b["sd"] ** 2) ** 0.5
         assert abs(a["estimate"] - b["estimate"]) <= 4 * sd, (key, a["estimate"], b["estimate"], sd)
