@@ -416,6 +416,8 @@ static scalar_t imu_force_up(const struct exp_input *in, const struct app_params
  * ID_SWP_DZ: dz = a T^2 (1 + a / g) / 2. The curve's prior gives a; one step every
  * SWP_PERIOD_S. */
 #define SWP_PERIOD_S 1.0f
+#define SWP_WHITE_TAUS 4.0f  /* lags a step's transient lasts (thrust rows: whiteness) */
+#define SWP_WHITE_MIN_S 0.4f /* ... and at least this, s */
 static const float SWP_SHARE[EXP_SWP_LEVELS] = {1.0f, 0.55f, 0.8f, 0.35f};
 static void sweep_plan(struct experiment *e, const struct app_params *p, float thr_h)
 {
@@ -670,6 +672,14 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		excite_null_pattern(0, e->pat[0]);
 		excite_null_pattern(1, e->pat[1]);
 		e->ofs = sc_from_float(cf->exc_ofs);
+		float thr_h = 0.0f;
+		for (int j = 0; j < HAL_ROTORS; j++)
+			thr_h += sc_to_float(in->thr_prev_all[j]) / (float)HAL_ROTORS;
+		sweep_plan(e, p, thr_h);
+		/* a step and the motor's settling after it (the lags of the test's range, up to a
+		 * slow prior's, and the longest delay) stay out of the whiteness test */
+		float settle = fmaxf(SWP_WHITE_TAUS * cf->mot_tau, SWP_WHITE_MIN_S);
+		e->swp_white = (uint16_t)((float)MOTOR_ID_DELAYS + settle * e->inv_dt_nom + 0.5f);
 		e->est_live = 0x0Fu;
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
@@ -1314,9 +1324,15 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		if (e->cfg.exc_null && n >= 1)
 			motor_id_step(&e->mid, tp, fm, tm, use);
 		scalar_t d = running ? excite_update(&e->exc) : SC_ZERO;
+		scalar_t d0 = e->cfg.exc_null ? sweep_step(e, running) : SC_ZERO;
+		if (d0 != SC_ZERO)
+			motor_id_white_pause(&e->mid, e->swp_white);
 		out->thr_delta[0] = sc_mul(e->exc_gain, d);
-		if (e->cfg.exc_null)
+		if (e->cfg.exc_null) {
 			null_dither(e, running, d, out);
+			for (int j = 0; j < HAL_ROTORS; j++)
+				out->thr_delta[j] = sc_add(out->thr_delta[j], d0);
+		}
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
 		scalar_t tau[3];

@@ -163,10 +163,11 @@ struct experiment {
 	struct excite exc;
 	struct excite exc2; /* rotor experiment: the second pattern's dither */
 	struct excite exc3; /* IMU rotor experiment: the collective dither */
-	/* IMU rotor experiment: the sweep's steps (throttle above hover) and their frames, cycled,
-	 * one per period */
+	/* rotor experiment: the sweep's steps (throttle above hover) and their frames, cycled,
+	 * one per period; with the thrust rows, the frames a step keeps out of the whiteness test */
 	uint32_t swp_len[EXP_SWP_LEVELS], swp_per;
 	scalar_t swp_thr[EXP_SWP_LEVELS];
+	uint16_t swp_white;
 	struct exp_rmodel rm; /* IMU source: the modelled thrusts (inertia, validation) */
 	scalar_t f_model[HAL_ROTORS], tq_model[HAL_ROTORS];
 	float w2_gain;       /* IMU with rotor speeds: the speed^2 to "thrust" gain the motor model reads */

@@ -327,6 +327,12 @@ void motor_id_step(struct motor_id *m, const scalar_t thr_prev[NR], const scalar
 	m->q_pending = true;
 }
 
+void motor_id_white_pause(struct motor_id *m, uint16_t frames)
+{
+	if (frames > m->white_pause)
+		m->white_pause = frames;
+}
+
 /* the frozen model's one-step prediction error of every rotor at this frame, into the
  * whiteness sums (its level, lagged products with the ring) */
 static void white_update(struct motor_id *m, const motor_id_f_t fm[NR])
@@ -334,6 +340,11 @@ static void white_update(struct motor_id *m, const motor_id_f_t fm[NR])
 	struct motor_id_white *w = &m->wh;
 	if (!w->on)
 		return;
+	if (m->white_pause > 0u) {
+		m->white_pause--;
+		w->run = 0;
+		return;
+	}
 	const motor_id_u_t *s = w->s;
 	big_t big[2] = {0, 0};
 	for (unsigned j = 0; j < NR; j++) {

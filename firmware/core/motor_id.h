@@ -88,6 +88,7 @@ struct motor_id {
 	int8_t kexp;               /* thrusts and torques are taken as value 2^-kexp (fixed build) */
 	uint8_t head;              /* the ring's newest slot */
 	uint8_t skip;              /* frames not accumulated after a refinement (lag transients) */
+	uint16_t white_pause;      /* excited frames left out of the whiteness sums (motor_id_white_pause) */
 	uint8_t stage;
 	bool interim; /* the wide interim stage ran (the last stage starts later) */
 	bool nz_have; /* the last frame taken was not excited (and none was lost since) */
@@ -155,6 +156,13 @@ void motor_id_init(struct motor_id *m, const struct motor_id_cfg *cfg, const sca
  * waiting processes it first, so nothing is lost or reordered. */
 void motor_id_step(struct motor_id *m, const scalar_t thr_prev[MOTOR_ID_ROTORS], const scalar_t f[MOTOR_ID_ROTORS],
 		   const scalar_t tq[MOTOR_ID_ROTORS], bool excited);
+
+/* The next `frames` excited frames (from the frame taken last) stay out of the whiteness
+ * sums, which restart after them as after a lost frame; the bank takes them as any other.
+ * For a throttle sweep's large steps: the frozen model's small parameter error, times a
+ * regressor many times the dither's, would colour its prediction errors there, and the test
+ * is of the model's form, which the dither frames show at the noise's scale. */
+void motor_id_white_pause(struct motor_id *m, uint16_t frames);
 
 /* Between frames: the bank update of the frame motor_id_step took (no-op if none waits).
  * motor_id_hold, motor_id_refine and (the caller's duty) motor_id_solve come after it. */

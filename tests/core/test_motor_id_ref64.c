@@ -26,6 +26,7 @@
 #define motor_id_process ref64_motor_id_process
 #define motor_id_hold ref64_motor_id_hold
 #define motor_id_refine ref64_motor_id_refine
+#define motor_id_white_pause ref64_motor_id_white_pause
 #define motor_id_solve ref64_motor_id_solve
 #define motor_id_cause_text ref64_motor_id_cause_text
 #define motor_id_cause_remedy ref64_motor_id_cause_remedy
