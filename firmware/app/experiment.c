@@ -418,14 +418,14 @@ void exp_abort(struct experiment *e, const char *reason)
 		e->est_live = 0;
 		e->final_result = APP_FAILED;
 		/* "ID aborted: <reason>" without a format: it may be the step that aborts, and the
-		 * reason may be the caller's (a rotor named): copied */
+		 * reason may be the caller's (a rotor named): copied, by the library's word copies */
 		static const char head[] = "ID aborted: ";
-		size_t n = 0;
-		for (; head[n]; n++)
-			e->msg[n] = head[n];
-		for (const char *c = reason; *c && n + 1u < sizeof e->msg; c++)
-			e->msg[n++] = *c;
-		e->msg[n] = 0;
+		size_t h = sizeof head - 1u, n = strlen(reason);
+		if (n > sizeof e->msg - 1u - h)
+			n = sizeof e->msg - 1u - h;
+		memcpy(e->msg, head, h);
+		memcpy(e->msg + h, reason, n);
+		e->msg[h + n] = 0;
 		e->msg_severity = APP_SEV_WARNING;
 	}
 }

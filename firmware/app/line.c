@@ -9,10 +9,8 @@ void line_vset(struct line *l, int sev, const char *fmt, va_list ap)
 	l->fmt = fmt;
 	l->sev = sev;
 	unsigned n = 0;
-	for (const char *c = fmt; *c && n < LINE_ARGS; c++) {
-		if (*c != '%')
-			continue;
-		c++;
+	for (const char *c = strchr(fmt, '%'); c && n < LINE_ARGS; c = strchr(c, '%')) {
+		c++; /* the conversion's flags, width, precision and letter */
 		while (*c == '+' || *c == '-' || *c == ' ' || *c == '#' || *c == '.' || (*c >= '0' && *c <= '9'))
 			c++;
 		if (*c == 'd') {
@@ -27,6 +25,7 @@ void line_vset(struct line *l, int sev, const char *fmt, va_list ap)
 		} else if (!*c) {
 			break;
 		}
+		c++;
 	}
 	l->kind[n] = 0;
 }
