@@ -193,6 +193,7 @@ static void post_done(struct app *a, uint8_t cmd, uint8_t result, uint8_t progre
 }
 
 static void exp_end(struct app *a, bool aborted);
+
 /* One result as data: to the log and the outbox, with its place in the run. */
 static void post_id(struct app *a, const struct app_id_result *r)
 {
