@@ -76,11 +76,49 @@ static void status_out(struct app *a, enum app_severity severity, const char *te
 	memcpy(e->text, text, n + 1u);
 }
 
+/* ---------------------------------------------------------------- what the step says
+ *
+ * In the step what is said is recorded (struct app_said, app.h) and said between frames, in
+ * the order it was said. */
+
+static void said_flush(struct app *a);
+
+/* In the step (and not saying the ring): record, do not say. */
+static bool said_defer(const struct app *a) { return a->said.in_step && !a->said.saying; }
+
+/* The ring's next item; a full ring is said first, at once (an overflow, counted). */
+static struct app_said_item *said_put(struct app *a)
+{
+	struct app_said *s = &a->said;
+	if (s->n >= APP_SAID_LEN) {
+		s->overflows++;
+		said_flush(a);
+	}
+	struct app_said_item *it = &s->q[(s->head + s->n) % APP_SAID_LEN];
+	s->n++;
+	return it;
+}
+
+/* Between frames: what the last step said, first (before anything newer is said). */
+static void said_out(struct app *a)
+{
+	if (!a->said.in_step)
+		said_flush(a);
+}
+
 void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
 {
-	char text[APP_EVENT_TEXT];
 	va_list ap;
 	va_start(ap, fmt);
+	if (said_defer(a)) {
+		struct app_said_item *it = said_put(a);
+		it->kind = APP_SAID_LINE;
+		line_vset(&it->line, (int)severity, fmt, ap);
+		va_end(ap);
+		return;
+	}
+	said_out(a);
+	char text[APP_EVENT_TEXT];
 	int n = vsnprintf(text, sizeof text, fmt, ap);
 	va_end(ap);
 	size_t len = n < 0 ? 0u : (size_t)n; /* what vsnprintf wrote, cut to the buffer */
@@ -91,8 +129,36 @@ void app_status(struct app *a, enum app_severity severity, const char *fmt, ...)
 	status_out(a, severity, text, len);
 }
 
+/* A status line kept as its format and values (line.h), said as app_status says it. */
+static void status_line(struct app *a, const struct line *l)
+{
+	if (said_defer(a)) {
+		struct app_said_item *it = said_put(a);
+		it->kind = APP_SAID_LINE;
+		it->line = *l;
+		return;
+	}
+	said_out(a);
+	char text[APP_EVENT_TEXT];
+	line_format(l, text, sizeof text);
+	status_out(a, (enum app_severity)l->sev, text, strlen(text));
+}
+
 void app_status2(struct app *a, enum app_severity severity, const char *s1, const char *s2)
 {
+	if (said_defer(a)) { /* "%s%s", without parsing the format */
+		struct app_said_item *it = said_put(a);
+		it->kind = APP_SAID_LINE;
+		it->line.fmt = "%s%s";
+		it->line.sev = (int)severity;
+		it->line.kind[0] = 's';
+		it->line.kind[1] = 's';
+		it->line.kind[2] = 0;
+		it->line.arg[0].s = s1;
+		it->line.arg[1].s = s2;
+		return;
+	}
+	said_out(a);
 	char text[APP_EVENT_TEXT];
 	size_t n = 0;
 	for (const char *p = s1; *p && n + 1u < sizeof text; p++)
@@ -103,21 +169,30 @@ void app_status2(struct app *a, enum app_severity severity, const char *s1, cons
 	status_out(a, severity, text, n);
 }
 
-/* An aborted experiment's reasons (its message and queued lines) go out at once, before the
- * command's final FAILED: a ground station that stops on the FAILED has them already. */
-static void exp_flush(struct app *a)
+/* A command's final answer (APP_EV_CMD_DONE for origin). */
+static void post_done(struct app *a, uint8_t cmd, uint8_t result, uint8_t progress, app_origin origin)
 {
-	for (int i = 0; i <= EXP_QUEUE; i++) {
-		if (!a->exp.msg[0]) {
-			a->exp.pump_ready = true;
-			exp_pump(&a->exp);
-		}
-		if (!a->exp.msg[0])
-			return;
-		app_status(a, a->exp.msg_severity, "%s", a->exp.msg);
-		a->exp.msg[0] = 0;
+	if (said_defer(a)) {
+		struct app_said_item *it = said_put(a);
+		it->kind = APP_SAID_DONE;
+		it->cmd = cmd;
+		it->result = result;
+		it->progress = progress;
+		it->origin = origin;
+		return;
 	}
+	said_out(a);
+	struct app_event *e = outbox_put(&a->outbox); /* in place */
+	if (!e)
+		return;
+	e->kind = APP_EV_CMD_DONE;
+	e->cmd = cmd;
+	e->result = result;
+	e->progress = progress;
+	e->origin = origin;
 }
+
+static void exp_end(struct app *a, bool aborted);
 
 /* One result as data: to the log and the outbox, with its place in the run. */
 static void post_id(struct app *a, const struct app_id_result *r)
@@ -158,6 +233,65 @@ static void end_id_run(struct app *a)
 	r->count = run->count;
 	r->run_done = 1u;
 	post_id(a, r);
+}
+
+/* An aborted experiment's reasons (its message and queued lines) go out at once, before the
+ * command's final FAILED: a ground station that stops on the FAILED has them already. */
+static void exp_flush(struct app *a)
+{
+	for (int i = 0; i <= EXP_QUEUE; i++) {
+		if (!a->exp.msg[0]) {
+			a->exp.pump_ready = true;
+			exp_pump(&a->exp);
+		}
+		if (!a->exp.msg[0])
+			return;
+		app_status(a, a->exp.msg_severity, "%s", a->exp.msg);
+		a->exp.msg[0] = 0;
+	}
+}
+
+/* The experiment ended (app_set_mode, leaving EXPERIMENT): an aborted one's lines said, the
+ * run closed. In the step: recorded, done between frames. */
+static void exp_end(struct app *a, bool aborted)
+{
+	if (said_defer(a)) {
+		struct app_said_item *it = said_put(a);
+		it->kind = APP_SAID_EXP_END;
+		it->result = aborted ? 1u : 0u;
+		return;
+	}
+	said_out(a);
+	if (aborted)
+		exp_flush(a);
+	end_id_run(a);
+}
+
+/* What the step said, said in its order (between frames; in the step only when the ring is
+ * full), then a status line for overflows not reported yet. */
+static void said_flush(struct app *a)
+{
+	struct app_said *s = &a->said;
+	if (s->saying)
+		return;
+	s->saying = true;
+	while (s->n > 0) {
+		const struct app_said_item *it = &s->q[s->head];
+		switch (it->kind) {
+		case APP_SAID_LINE: status_line(a, &it->line); break;
+		case APP_SAID_EXP_END: exp_end(a, it->result != 0u); break;
+		case APP_SAID_DONE: post_done(a, it->cmd, it->result, it->progress, it->origin); break;
+		default: break;
+		}
+		s->head = (uint8_t)((s->head + 1u) % APP_SAID_LEN);
+		s->n--;
+	}
+	s->saying = false;
+	if (s->overflows != s->overflows_said) {
+		s->overflows_said = s->overflows;
+		app_status(a, APP_SEV_WARNING, "Step said over %d lines %d times: said in the step", APP_SAID_LEN,
+			   (int)s->overflows);
+	}
 }
 
 /* ---------------------------------------------------------------- the flight envelope's requests
@@ -311,14 +445,11 @@ static void seed_kf(struct app *a, int id)
 
 void app_phase_timeout(struct app *a, const struct env_limits_req *r)
 {
-	app_status(a, APP_SEV_ERROR, "%s", r->why);
-	if (r->more[0])
-		app_status(a, APP_SEV_ERROR, "%s", r->more);
-	if (r->cmd && r->origin != APP_ORIGIN_NONE) {
-		struct app_event ev = {
-			.kind = APP_EV_CMD_DONE, .cmd = r->cmd, .result = APP_FAILED, .origin = r->origin};
-		outbox_post(&a->outbox, &ev);
-	}
+	status_line(a, &r->why);
+	if (r->more.fmt)
+		status_line(a, &r->more);
+	if (r->cmd && r->origin != APP_ORIGIN_NONE)
+		post_done(a, r->cmd, APP_FAILED, 0, r->origin);
 	if (r->land) { /* the take-off or its hold entry ran out: land */
 		char w[8];
 		app_cmd_land(a, APP_ORIGIN_NONE, w, sizeof w); /* the take-off's origin has its answer */
@@ -329,22 +460,13 @@ void app_set_mode(struct app *a, enum app_mode m)
 {
 	if (a->mode == m)
 		return;
-	if (a->mode == APP_EXPERIMENT && a->exp.state == EXP_ABORTED)
-		exp_flush(a);
 	if (a->mode == APP_EXPERIMENT)
-		end_id_run(a);
+		exp_end(a, a->exp.state == EXP_ABORTED);
 	if (a->mode == APP_EXPERIMENT && a->exp_ack_pending) {
 		/* the final answer to the experiment command: ACCEPTED when it
 		 * finished, FAILED when it was aborted (the experiment sets final_result) */
 		enum app_result r = a->exp.final_result == APP_ACCEPTED ? APP_ACCEPTED : APP_FAILED;
-		struct app_event *e = outbox_put(&a->outbox); /* in place: the step may end it */
-		if (e) {
-			e->kind = APP_EV_CMD_DONE;
-			e->cmd = APP_CMD_EXPERIMENT;
-			e->result = (uint8_t)r;
-			e->progress = r == APP_ACCEPTED ? 100 : 0;
-			e->origin = a->exp_origin;
-		}
+		post_done(a, APP_CMD_EXPERIMENT, (uint8_t)r, r == APP_ACCEPTED ? 100 : 0, a->exp_origin);
 		a->exp_ack_pending = false;
 	}
 	a->mode = m;
@@ -495,6 +617,7 @@ enum app_result app_params_save(struct app *a, char *why, size_t cap)
 
 const char *app_param_write(struct app *a, size_t index, float value)
 {
+	said_out(a);
 	if (index >= param_count)
 		return "unknown parameter";
 	if (param_defs[index].flags & PARAM_READONLY)
@@ -512,6 +635,7 @@ const char *app_param_write(struct app *a, size_t index, float value)
 
 enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size_t cap)
 {
+	said_out(a);
 	if (arm) {
 		if (a->mode != APP_DISARMED)
 			return APP_ACCEPTED;
@@ -546,6 +670,7 @@ enum app_result app_cmd_arm(struct app *a, bool arm, bool force, char *why, size
 
 enum app_result app_cmd_takeoff(struct app *a, float height_m, app_origin origin, char *why, size_t cap)
 {
+	said_out(a);
 	if (!isfinite(height_m) || height_m <= 0.0f)
 		height_m = a->p.nav_tko_alt;
 	if (height_m < 0.5f || height_m > 100.0f) {
@@ -575,6 +700,7 @@ enum app_result app_cmd_takeoff(struct app *a, float height_m, app_origin origin
 
 enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t cap)
 {
+	said_out(a); /* between frames; in the step (a failsafe) it records, as the step does */
 	(void)why;
 	(void)cap;
 	switch (a->mode) {
@@ -599,6 +725,7 @@ enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t
 
 enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin, char *why, size_t cap)
 {
+	said_out(a);
 	if (!isfinite(id_f) || id_f != floorf(id_f) || id_f < 0.0f || id_f > 6.0f) {
 		snprintf(why, cap, "Experiment %g unknown (1..6, 0 = stop)", (double)id_f);
 		return APP_DENIED;
@@ -704,6 +831,7 @@ static void after_frame(struct app *a)
 
 void app_settle(struct app *a)
 {
+	said_out(a); /* what the last step said, in its order, before anything newer */
 	after_frame(a);
 	env_publish(a); /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh, a detune */
 	if (a->torque_gain_due) { /* the torque demands' gain, from the hover learned so far */
@@ -794,8 +922,8 @@ static void say_gap(struct app *a, float gap_s, uint64_t now_us)
 		return;
 	}
 	if (a->gaps_unsaid > 0)
-		app_status(a, APP_SEV_WARNING, "X-Plane frames missing: %u gaps, longest %.2f s",
-			   (unsigned)a->gaps_unsaid + 1u, (double)fmaxf(gap_s, a->gap_max_unsaid_s));
+		app_status(a, APP_SEV_WARNING, "X-Plane frames missing: %d gaps, longest %.2f s",
+			   (int)(a->gaps_unsaid + 1u), (double)fmaxf(gap_s, a->gap_max_unsaid_s));
 	else
 		app_status(a, APP_SEV_WARNING, "X-Plane frames missing for %.2f s", (double)gap_s);
 	a->gap_said_us = now_us > 0u ? now_us : 1u;
@@ -868,7 +996,8 @@ static void frame_copy(struct hal_sensor_frame *restrict d, const struct hal_sen
 
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
-	app_settle(a); /* normally done by app_tick already (nothing left here) */
+	app_settle(a);          /* normally done by app_tick already (nothing left here) */
+	a->said.in_step = true; /* what the step says is said between frames (struct app_said) */
 	uint64_t now = hal_wall_us(a->hal);
 	frame_copy(&a->fr, f);
 	if (origin_correct(&a->orig, &a->fr))
@@ -925,6 +1054,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 	a->after.log_due = true;
 	a->after.log_step = stepped;
 	a->after.log_dt = dt;
+	a->said.in_step = false;
 }
 
 struct app_view app_view(const struct app *a)
@@ -950,7 +1080,11 @@ struct app_view app_view(const struct app *a)
 	};
 }
 
-bool app_next_event(struct app *a, struct app_event *e) { return outbox_pop(&a->outbox, e); }
+bool app_next_event(struct app *a, struct app_event *e)
+{
+	said_out(a);
+	return outbox_pop(&a->outbox, e);
+}
 
 void app_tick(struct app *a)
 {

@@ -39,6 +39,7 @@
 #include "fcmp.h"
 #include "guidance.h"
 #include "hal.h"
+#include "line.h"
 #include "log.h"
 #include "mixer.h"
 #include "origin.h"
@@ -65,6 +66,36 @@ enum app_mode {
 	APP_HOLD = 3,       /* level, height and position held */
 	APP_EXPERIMENT = 4, /* hold + identification experiment */
 	APP_LAND = 5,
+};
+
+/* What the step says, said between frames. Status lines formatted in the 90 Hz step would
+ * cost more than the step (vsnprintf with %f), so while app_on_frame runs, what the app says
+ * is recorded here in the order it is said: status lines as formats and values (line.h), an
+ * experiment's end (its lines when it was aborted, its run closed) and a command's final
+ * answer. The next pass between frames (app_settle; app_next_event and every command first)
+ * says them in that order, before anything newer: the ground station, the console and the
+ * log see them as if said in the step. A step that says more than the ring holds says what
+ * the ring holds at once, in the step, and goes on: nothing is lost and the order stays; such
+ * overflows are counted and a status line reports them. */
+#define APP_SAID_LEN 16
+enum app_said_kind {
+	APP_SAID_LINE = 1, /* line */
+	APP_SAID_EXP_END,  /* the experiment ended: aborted (its lines said), its run closed */
+	APP_SAID_DONE,     /* a command's final answer: cmd, result, progress, origin */
+};
+struct app_said_item {
+	uint8_t kind; /* enum app_said_kind */
+	uint8_t cmd, result, progress;
+	app_origin origin;
+	struct line line;
+};
+struct app_said {
+	struct app_said_item q[APP_SAID_LEN];
+	uint8_t head, n;
+	bool in_step;            /* app_on_frame runs: what is said goes into q */
+	bool saying;             /* q is being said */
+	uint32_t overflows;      /* steps that said more than q holds (said in the step) */
+	uint32_t overflows_said; /* of them, reported */
 };
 
 struct app {
@@ -147,6 +178,7 @@ struct app {
 	bool save_pending;     /* results applied: write the parameter file */
 	char param_text[8192]; /* the parameter file's text while it is loaded or saved */
 
+	struct app_said said;     /* what the step said, to be said between frames */
 	struct app_outbox outbox; /* events for the ground station (app_next_event) */
 	struct app_log_frame log; /* this frame's record; the step writes its set point (q_sp)
 				       * and allocated rotor thrusts (rotor_f) here directly */
@@ -202,7 +234,8 @@ struct app_view {
 };
 struct app_view app_view(const struct app *a);
 static inline const struct app_params *app_params(const struct app *a) { return &a->p; }
-/* Takes the oldest event of the outbox into *e; false when there is none. */
+/* Takes the oldest event of the outbox into *e (what the last step said, said first); false
+ * when there is none. */
 bool app_next_event(struct app *a, struct app_event *e);
 
 const char *app_mode_name(enum app_mode m);
@@ -226,7 +259,9 @@ enum app_result app_params_load(struct app *a, char *why, size_t cap);
  * parameters while an experiment runs. Returns 0 or a reason. */
 const char *app_param_write(struct app *a, size_t index, float value);
 
-/* A status line: console, log event, and an APP_EV_STATUS event in the outbox. */
+/* A status line: console, log event, and an APP_EV_STATUS event in the outbox. In the step
+ * (app_on_frame) it is recorded (struct app_said) and said between frames: a %s argument
+ * said in the step must outlive the step (a literal). */
 void app_status(struct app *a, enum app_severity severity, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 /* The same for the text s1 s2 (cut to APP_EVENT_TEXT - 1 characters) without a format: what
  * the step says (a mode, "Landed") costs no formatting there. */

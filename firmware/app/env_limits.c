@@ -1,8 +1,6 @@
 /* env_limits.c - see env_limits.h. */
 #include "env_limits.h"
 
-#include <stdio.h>
-
 void env_limits_on_command(struct env_limits *l, enum app_command cmd, app_origin origin)
 {
 	l->cmd = (uint8_t)cmd;
@@ -15,24 +13,24 @@ void env_limits_on_mode(struct env_limits *l)
 	l->hold_s = 0.0f;
 }
 
-static void not_learned(const struct env_limits_input *in, char *more, size_t cap)
+static void not_learned(const struct env_limits_input *in, struct line *more)
 {
-	snprintf(more, cap, "Hover throttle %.3f+/-%.3f not learned", (double)sc_to_float(hover_est_u(&in->hover->hov)),
-		 (double)sc_to_float(hover_est_sd(&in->hover->hov)));
+	line_set(more, APP_SEV_ERROR, "Hover throttle %.3f+/-%.3f not learned",
+		 (double)sc_to_float(hover_est_u(&in->hover->hov)), (double)sc_to_float(hover_est_sd(&in->hover->hov)));
 }
 
 static bool timeout(struct env_limits *l, const struct env_limits_input *in, const struct app_params *p,
 		    struct env_limits_req *r)
 {
-	r->more[0] = 0;
+	r->more.fmt = NULL;
 	if (!in->takeoff && !in->land)
 		return false;
 	l->phase_s += in->dt_s;
 	if (in->takeoff && l->phase_s > p->nav_tko_to) {
-		snprintf(r->why, sizeof r->why, "Take-off failed: NAV_TKO_TO %.0f s, %.2f/%.2f m",
+		line_set(&r->why, APP_SEV_ERROR, "Take-off failed: NAV_TKO_TO %.0f s, %.2f/%.2f m",
 			 (double)p->nav_tko_to, (double)in->z_m, (double)in->target_m);
 		if (!env_hover_ready(in->hover))
-			not_learned(in, r->more, sizeof r->more);
+			not_learned(in, &r->more);
 		return true;
 	}
 	/* hold entry: the take-off's set point at the target, the vehicle still to settle there
@@ -40,18 +38,18 @@ static bool timeout(struct env_limits *l, const struct env_limits_input *in, con
 	if (in->takeoff && in->sp_at_target) {
 		l->hold_s += in->dt_s;
 		if (l->hold_s > p->nav_hold_to) {
-			snprintf(r->why, sizeof r->why, "Hold entry failed: NAV_HOLD_TO %g s", (double)p->nav_hold_to);
+			line_set(&r->why, APP_SEV_ERROR, "Hold entry failed: NAV_HOLD_TO %g s", (double)p->nav_hold_to);
 			if (!env_hover_ready(in->hover))
-				not_learned(in, r->more, sizeof r->more);
+				not_learned(in, &r->more);
 			else
-				snprintf(r->more, sizeof r->more, "Still %+.3f m %+.3f m/s off the target",
+				line_set(&r->more, APP_SEV_ERROR, "Still %+.3f m %+.3f m/s off the target",
 					 (double)(in->z_m - in->target_m), (double)in->vz_mps);
 			return true;
 		}
 	}
 	if (in->land && l->phase_s > p->nav_land_to) {
-		snprintf(r->why, sizeof r->why, "Landing failed: NAV_LAND_TO %.0f s, %.2f m up", (double)p->nav_land_to,
-			 (double)in->z_m);
+		line_set(&r->why, APP_SEV_ERROR, "Landing failed: NAV_LAND_TO %.0f s, %.2f m up",
+			 (double)p->nav_land_to, (double)in->z_m);
 		l->phase_s = -1e30f; /* said once; the landing goes on */
 		return true;
 	}

@@ -15,6 +15,7 @@
 #include <stdint.h>
 
 #include "env_hover.h"
+#include "line.h"
 #include "outbox.h"
 #include "params.h"
 
@@ -36,11 +37,12 @@ struct env_limits_input {
 	const struct env_hover *hover; /* the hover throttle learned so far */
 };
 
-/* A phase that ran out: the lines to post (more[0] == 0: one line), the command's final
- * FAILED to send (cmd != 0 and origin not APP_ORIGIN_NONE), and whether to land. Reasons
- * fit one STATUSTEXT (50 characters). */
+/* A phase that ran out: the lines to post, as formats and values that the app formats
+ * between frames (line.h; more.fmt NULL: one line), the command's final FAILED to send
+ * (cmd != 0 and origin not APP_ORIGIN_NONE), and whether to land. Reasons fit one STATUSTEXT
+ * (50 characters). */
 struct env_limits_req {
-	char why[64], more[64];
+	struct line why, more;
 	uint8_t cmd;
 	app_origin origin;
 	bool land;

@@ -141,92 +141,20 @@ static bool imu_src(const struct exp_cfg *c)
 /* ... with the rotor speeds */
 static bool rpm_src(const struct exp_cfg *c) { return c->src == EXP_SRC_IMU_RPM || c->src == EXP_SRC_IMU_RPM_TQ; }
 
-/* Status lines are queued with their arguments and formatted (vsnprintf with %f: costly) by
- * exp_pump, between frames, not in the 90 Hz step. say() records the
- * arguments by the conversions of fmt (%d int, %s a string that outlives the experiment:
- * literals only, %f %g %e double; the formats below use no others). */
+/* Status lines are queued with their arguments (line.h) and formatted (vsnprintf with %f:
+ * costly) by exp_pump, between frames, not in the 90 Hz step. A %s argument is a string that
+ * outlives the experiment: literals only. */
 static void say(struct experiment *e, int sev, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 static void say(struct experiment *e, int sev, const char *fmt, ...)
 {
 	if (e->q_n >= EXP_QUEUE)
 		return;
-	struct exp_line *l = &e->queue[(e->q_head + e->q_n) % EXP_QUEUE];
-	memset(l, 0, sizeof *l);
-	l->fmt = fmt;
-	l->sev = sev;
+	struct line *l = &e->queue[(e->q_head + e->q_n) % EXP_QUEUE];
 	va_list ap;
 	va_start(ap, fmt);
-	unsigned n = 0;
-	for (const char *c = fmt; *c && n < EXP_LINE_ARGS; c++) {
-		if (*c != '%')
-			continue;
-		c++;
-		while (*c == '.' || (*c >= '0' && *c <= '9'))
-			c++;
-		if (*c == 'd') {
-			l->kind[n] = 'd';
-			l->arg[n++].i = va_arg(ap, int);
-		} else if (*c == 's') {
-			l->kind[n] = 's';
-			l->arg[n++].s = va_arg(ap, const char *);
-		} else if (*c == 'f' || *c == 'g' || *c == 'e') { /* doubles, formatted by fmt */
-			l->kind[n] = 'f';
-			l->arg[n++].f = va_arg(ap, double);
-		} else if (!*c) {
-			break;
-		}
-	}
+	line_vset(l, sev, fmt, ap);
 	va_end(ap);
 	e->q_n++;
-}
-
-#define ARG_D(k) (l->arg[k].i)
-#define ARG_S(k) (l->arg[k].s)
-#define ARG_F(k) (l->arg[k].f)
-
-/* the line's text, with the arguments say() recorded (one case per argument pattern) */
-static void format_line(const struct exp_line *l, char *out, size_t cap)
-{
-	const char *k = l->kind;
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wformat-nonliteral"
-	if (!strcmp(k, ""))
-		snprintf(out, cap, "%s", l->fmt);
-	else if (!strcmp(k, "dds"))
-		snprintf(out, cap, l->fmt, ARG_D(0), ARG_D(1), ARG_S(2));
-	else if (!strcmp(k, "ffss"))
-		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_S(2), ARG_S(3));
-	else if (!strcmp(k, "ff"))
-		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1));
-	else if (!strcmp(k, "ffs"))
-		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_S(2));
-	else if (!strcmp(k, "fsf"))
-		snprintf(out, cap, l->fmt, ARG_F(0), ARG_S(1), ARG_F(2));
-	else if (!strcmp(k, "sffss"))
-		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2), ARG_S(3), ARG_S(4));
-	else if (!strcmp(k, "sff"))
-		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2));
-	else if (!strcmp(k, "ffd"))
-		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_D(2));
-	else if (!strcmp(k, "f"))
-		snprintf(out, cap, l->fmt, ARG_F(0));
-	else if (!strcmp(k, "s"))
-		snprintf(out, cap, l->fmt, ARG_S(0));
-	else if (!strcmp(k, "df"))
-		snprintf(out, cap, l->fmt, ARG_D(0), ARG_F(1));
-	else if (!strcmp(k, "ssf"))
-		snprintf(out, cap, l->fmt, ARG_S(0), ARG_S(1), ARG_F(2));
-	else if (!strcmp(k, "sfff"))
-		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2), ARG_F(3));
-	else if (!strcmp(k, "sffff"))
-		snprintf(out, cap, l->fmt, ARG_S(0), ARG_F(1), ARG_F(2), ARG_F(3), ARG_F(4));
-	else if (!strcmp(k, "fff"))
-		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_F(2));
-	else if (!strcmp(k, "ffff"))
-		snprintf(out, cap, l->fmt, ARG_F(0), ARG_F(1), ARG_F(2), ARG_F(3));
-	else
-		snprintf(out, cap, "ID: line with arguments %s", k); /* a new pattern: add a case */
-#pragma GCC diagnostic pop
 }
 
 static void read_estimates(struct experiment *e);
@@ -265,8 +193,8 @@ void exp_pump(struct experiment *e)
 	}
 	if (!e->pump_ready || e->msg[0] || !e->q_n)
 		return;
-	const struct exp_line *l = &e->queue[e->q_head];
-	format_line(l, e->msg, sizeof e->msg);
+	const struct line *l = &e->queue[e->q_head];
+	line_format(l, e->msg, sizeof e->msg);
 	e->msg_severity = l->sev;
 	e->q_head = (e->q_head + 1) % EXP_QUEUE;
 	e->q_n--;
@@ -491,7 +419,15 @@ void exp_abort(struct experiment *e, const char *reason)
 		e->q_n = 0;
 		e->est_live = 0;
 		e->final_result = APP_FAILED;
-		snprintf(e->msg, sizeof e->msg, "ID aborted: %s", reason);
+		/* "ID aborted: <reason>" without a format: it may be the step that aborts, and the
+		 * reason may be the caller's (a rotor named): copied, by the library's word copies */
+		static const char head[] = "ID aborted: ";
+		size_t h = sizeof head - 1u, n = strlen(reason);
+		if (n > sizeof e->msg - 1u - h)
+			n = sizeof e->msg - 1u - h;
+		memcpy(e->msg, head, h);
+		memcpy(e->msg + h, reason, n);
+		e->msg[h + n] = 0;
 		e->msg_severity = APP_SEV_WARNING;
 	}
 }

@@ -22,6 +22,7 @@
 #include "id_result.h"
 #include "ident.h"
 #include "imu_id.h"
+#include "line.h"
 #include "motor_id.h"
 #include "outbox.h"
 #include "params.h"
@@ -73,19 +74,6 @@ struct exp_output {
 struct exp_result {
 	int param_index; /* params_find() of the parameter */
 	float value;
-};
-
-/* a status line waiting to be formatted: the format and its arguments (experiment.c) */
-#define EXP_LINE_ARGS 5
-struct exp_line {
-	const char *fmt;
-	int sev;                      /* enum app_severity */
-	char kind[EXP_LINE_ARGS + 1]; /* 'd' int, 's' string, 'f' double per argument */
-	union {
-		int i;
-		const char *s;
-		double f;
-	} arg[EXP_LINE_ARGS];
 };
 
 /* what the start of a phase needs of the step that ended the previous one (a copy: the
@@ -199,7 +187,7 @@ struct experiment {
 	bool turn_pending;  /* a phase ended: exp_turn ends it, starts the next */
 	bool begin_pending; /* the first step ran: exp_turn begins the first phase */
 	struct exp_turn turn;
-	struct exp_line queue[EXP_QUEUE]; /* status lines, formatted by exp_pump */
+	struct line queue[EXP_QUEUE]; /* status lines, formatted by exp_pump (line.h) */
 	int q_head, q_n;
 	bool pump_ready; /* a step ran since the last line was handed out */
 };

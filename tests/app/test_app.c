@@ -109,7 +109,7 @@ static int take_events(struct app *a, enum app_event_kind kind, struct app_event
 {
 	struct app_event e;
 	int n = 0;
-	while (outbox_pop(&a->outbox, &e))
+	while (app_next_event(a, &e))
 		if (e.kind == kind) {
 			n++;
 			if (last)
@@ -278,7 +278,7 @@ static int said_lines(struct rig *r, int frames, const char *prefix, char *last,
 		r->h.now_us += FRAME_US;
 		frame_at(r, r->t);
 		struct app_event e;
-		while (outbox_pop(&r->a.outbox, &e))
+		while (app_next_event(&r->a, &e))
 			if (e.kind == APP_EV_STATUS && !strncmp(e.text, prefix, strlen(prefix))) {
 				n++;
 				snprintf(last, cap, "%s", e.text);
@@ -550,7 +550,7 @@ static int fly_collect(struct rig *r, float seconds, const char *prefix, char *t
 		r->h.now_us += FRAME_US;
 		frame_at(r, r->t);
 		struct app_event e;
-		while (outbox_pop(&r->a.outbox, &e)) {
+		while (app_next_event(&r->a, &e)) {
 			if (e.kind == APP_EV_STATUS && !strncmp(e.text, prefix, strlen(prefix))) {
 				n_text++;
 				snprintf(text, cap, "%s", e.text);
@@ -616,7 +616,7 @@ UNIT_TEST(app_kft_published_between_frames_after_its_step)
 		r->h.now_us += FRAME_US;
 		frame_at(r, r->t);
 		struct app_event e;
-		while (outbox_pop(&r->a.outbox, &e)) /* the step posts no KFT event */
+		while (app_next_event(&r->a, &e)) /* the step posts no KFT event */
 			CHECK(!(e.kind == APP_EV_VALUE ||
 				(e.kind == APP_EV_PARAM && (e.param_index == i_t || e.param_index == i_est))));
 		CHECK(params_get(&r->a.p, (size_t)i_t) == t_before);
@@ -660,7 +660,7 @@ UNIT_TEST(app_hold_entry_published_between_frames)
 		}
 		struct app_event e;
 		int mode_hold = 0;
-		while (outbox_pop(&r->a.outbox, &e)) {
+		while (app_next_event(&r->a, &e)) {
 			CHECK(!(e.kind == APP_EV_STATUS && !strncmp(e.text, "Hover throttle", 14)));
 			CHECK(!(e.kind == APP_EV_PARAM && e.param_index == i_thr));
 			mode_hold += e.kind == APP_EV_STATUS && !strcmp(e.text, "Mode HOLD");
@@ -702,6 +702,212 @@ UNIT_TEST(app_landing_time_limit_fails_to_its_origin)
 	r->stuck = false;
 	fly_until(r, APP_DISARMED, 90 * 60);
 	CHECK(r->a.mode == APP_DISARMED);
+}
+
+/* ---------------------------------------------------------------- what the step says
+ *
+ * The step formats no status line: it records what it says (struct app_said), and the pass
+ * between frames says it, in the order the step said it, with the text it had. */
+
+#define SAID_MAX 32
+struct said_log {
+	int n;
+	char line[SAID_MAX][APP_EVENT_TEXT]; /* a status line's text; a final answer as "DONE cmd result origin" */
+};
+
+/* The outbox's status lines and final answers, in order, appended to s (app_next_event: what
+ * the last step said comes first). */
+static void said_take(struct rig *r, struct said_log *s)
+{
+	struct app_event e;
+	while (app_next_event(&r->a, &e)) {
+		if (s->n >= SAID_MAX)
+			continue;
+		if (e.kind == APP_EV_STATUS)
+			snprintf(s->line[s->n++], APP_EVENT_TEXT, "%s", e.text);
+		else if (e.kind == APP_EV_CMD_DONE)
+			snprintf(s->line[s->n++], APP_EVENT_TEXT, "DONE %u %u %x", (unsigned)e.cmd, (unsigned)e.result,
+				 (unsigned)e.origin);
+	}
+}
+
+/* One frame dt_plant after the last (the wall clock a frame on): the pass between frames
+ * before it, then its step, which says nothing during the step (no console line, no log
+ * event); then what it said, into *s in order, each line also on the console and in the log. */
+static void step_said(struct unit_ctx *u, struct rig *r, double dt_plant, struct said_log *s)
+{
+	app_settle(&r->a);
+	struct said_log older = {0};
+	said_take(r, &older);
+	memset(s, 0, sizeof *s);
+	r->t += dt_plant;
+	r->h.now_us += FRAME_US;
+	uint32_t reports = r->h.n_reports, events = r->h.n_events;
+	frame_at(r, r->t);
+	CHECK(r->h.n_reports == reports && r->h.n_events == events);
+	said_take(r, s);
+	int lines = 0;
+	for (int i = 0; i < s->n; i++)
+		lines += strncmp(s->line[i], "DONE ", 5) != 0;
+	CHECK(r->h.n_reports == reports + (uint32_t)lines && r->h.n_events == events + (uint32_t)lines);
+	if (lines > 0) { /* the console's and the log's last line: the outbox's last status line */
+		int last = s->n - 1;
+		while (!strncmp(s->line[last], "DONE ", 5))
+			last--;
+		CHECK(!strcmp(r->h.last_report, s->line[last]) && !strcmp(r->h.last_event, s->line[last]));
+	}
+}
+
+/* Between frames only (app_tick without MAVLink) for `seconds` of wall time: no frames. */
+static void silence(struct rig *r, double seconds)
+{
+	for (int i = 0; i < (int)(seconds * 1e6 / FRAME_US); i++) {
+		r->h.now_us += FRAME_US;
+		app_tick(&r->a);
+	}
+}
+
+UNIT_TEST(app_step_lines_said_between_frames_in_order)
+{
+	struct rig *r = rig_hovering(u);
+	struct said_log s;
+	char why[64];
+	/* the plant moves its origin: the step that absorbs the shift */
+	r->f.pos_i_m[0] = 1000.0f;
+	step_said(u, r, 1.0 / 90.0, &s);
+	CHECK(s.n == 1 && !strcmp(s.line[0], "Plant moved its local origin (1000 m): position re-referenced"));
+	fly(r, 2 * 90);
+	/* frames missing in plant time, fewer than FS_LAND_AFTER: 45 frame periods */
+	step_said(u, r, 0.5, &s);
+	CHECK(s.n == 1 && !strcmp(s.line[0], "X-Plane frames missing for 0.50 s"));
+	CHECK(r->a.mode == APP_HOLD);
+	fly(r, 2 * 90);
+	/* the link lost (between frames) and back within FS_LAND_AFTER (the step) */
+	s.n = 0;
+	silence(r, 0.5);
+	said_take(r, &s);
+	CHECK(s.n == 1 && !strcmp(s.line[0], "X-Plane link lost (no frames)"));
+	step_said(u, r, 1.0 / 90.0, &s);
+	CHECK(s.n == 1 && !strncmp(s.line[0], "X-Plane link back after 0.5", 27));
+	CHECK(r->a.mode == APP_HOLD);
+	fly(r, 2 * 90);
+	/* an experiment aborted in the step: its reason, the command's FAILED, the mode */
+	if (exp_available(1)) {
+		CHECK(app_cmd_experiment(&r->a, 1.0f, 0x0A0B, why, sizeof why) == APP_IN_PROGRESS);
+		fly(r, 10);
+		step_said(u, r, 0.5, &s);
+		CHECK(s.n == 4);
+		CHECK(!strcmp(s.line[0], "X-Plane frames missing for 0.50 s"));
+		CHECK(!strcmp(s.line[1], "ID aborted: X-Plane frames missing"));
+		CHECK(!strcmp(s.line[2], "DONE 1 4 a0b")); /* APP_CMD_EXPERIMENT, APP_FAILED */
+		CHECK(!strcmp(s.line[3], "Mode HOLD"));
+		CHECK(r->a.mode == APP_HOLD);
+		fly(r, 2 * 90);
+	}
+	/* the link lost for longer than FS_LAND_AFTER: back, the landing said, the mode */
+	s.n = 0;
+	silence(r, (double)r->a.p.fs_land_after + 0.5);
+	said_take(r, &s);
+	CHECK(s.n == 1 && !strcmp(s.line[0], "X-Plane link lost (no frames)"));
+	step_said(u, r, 1.0 / 90.0, &s);
+	CHECK(s.n == 3);
+	CHECK(!strncmp(s.line[0], "X-Plane link back after 2.", 26));
+	CHECK(!strcmp(s.line[1], "Link was lost for more than 2.0 s: landing"));
+	CHECK(!strcmp(s.line[2], "Mode LAND"));
+	CHECK(r->a.mode == APP_LAND);
+	/* the step that lands: "Landed", then the mode */
+	for (int i = 0; i < 90 * 60 && r->a.mode != APP_DISARMED; i++)
+		step_said(u, r, 1.0 / 90.0, &s);
+	CHECK(r->a.mode == APP_DISARMED);
+	CHECK(s.n == 2 && !strcmp(s.line[0], "Landed") && !strcmp(s.line[1], "Mode DISARMED"));
+	/* take-off (a command: said at once), then the step that reaches HOLD */
+	fly(r, 5);
+	s.n = 0;
+	said_take(r, &s);
+	s.n = 0;
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_ACCEPTED);
+	said_take(r, &s);
+	CHECK(s.n == 3 && !strcmp(s.line[0], "Mode IDLE") && !strcmp(s.line[1], "Takeoff to 3.00 m") &&
+	      !strcmp(s.line[2], "Mode TAKEOFF"));
+	for (int i = 0; i < 90 * 60 && r->a.mode != APP_HOLD; i++)
+		step_said(u, r, 1.0 / 90.0, &s);
+	CHECK(r->a.mode == APP_HOLD);
+	CHECK(s.n == 1 && !strcmp(s.line[0], "Mode HOLD"));
+	/* a parameter change between frames: its step says nothing */
+	CHECK(app_param_write(&r->a, (size_t)param_index("ATT_WN_RP"), 6.5f) == NULL);
+	step_said(u, r, 1.0 / 90.0, &s);
+	CHECK(s.n == 0);
+}
+
+/* The time limits of take-off and landing, said from the step: the reason (and what was
+ * missing), the command's FAILED, then the landing's mode. */
+UNIT_TEST(app_step_phase_limits_said_in_order)
+{
+	struct rig *r = rig_new();
+	struct said_log s;
+	char why[64];
+	CHECK(app_param_write(&r->a, (size_t)param_index("NAV_TKO_TO"), 1.0f) == NULL);
+	r->stuck = true;
+	r->z_stuck = 0.0f;
+	fly(r, 5);
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
+	CHECK(app_cmd_takeoff(&r->a, 4.0f, 0x0102u, why, sizeof why) == APP_ACCEPTED);
+	int i = 0;
+	for (; i < 3 * 90 && r->a.mode == APP_TAKEOFF; i++)
+		step_said(u, r, 1.0 / 90.0, &s);
+	CHECK(r->a.mode == APP_LAND);
+	CHECK(s.n == 3 || s.n == 4);
+	CHECK(!strcmp(s.line[0], "Take-off failed: NAV_TKO_TO 1 s, 0.00/4.00 m"));
+	CHECK(s.n == 3 || !strncmp(s.line[1], "Hover throttle ", 15));
+	CHECK(!strcmp(s.line[s.n - 2], "DONE 2 4 102")); /* APP_CMD_TAKEOFF, APP_FAILED */
+	CHECK(!strcmp(s.line[s.n - 1], "Mode LAND"));
+
+	r = rig_hovering(u);
+	CHECK(app_param_write(&r->a, (size_t)param_index("NAV_LAND_TO"), 1.0f) == NULL);
+	r->stuck = true;
+	r->z_stuck = r->f.pos_i_m[2];
+	CHECK(app_cmd_land(&r->a, 0x0BEEu, why, sizeof why) == APP_ACCEPTED);
+	int said = 0;
+	for (i = 0; i < 2 * 90 && !said; i++) {
+		step_said(u, r, 1.0 / 90.0, &s);
+		said = s.n;
+	}
+	CHECK(s.n == 2);
+	char want[64];
+	snprintf(want, sizeof want, "Landing failed: NAV_LAND_TO 1 s, %.2f m up", (double)r->z_stuck);
+	CHECK(!strcmp(s.line[0], want));
+	CHECK(!strcmp(s.line[1], "DONE 3 4 bee")); /* APP_CMD_LAND, APP_FAILED */
+	CHECK(r->a.mode == APP_LAND);
+}
+
+/* More than the ring holds in one step: the ring's lines said at once, in the step, and the
+ * rest after them; nothing lost, the order kept, the overflow counted and reported. */
+UNIT_TEST(app_step_said_ring_full_said_in_order)
+{
+	struct rig *r = rig_hovering(u);
+	struct said_log s = {0};
+	said_take(r, &s);
+	memset(&s, 0, sizeof s);
+	uint32_t reports = r->h.n_reports;
+	r->a.said.in_step = true; /* as in a step */
+	for (int i = 0; i < APP_SAID_LEN + 4; i++)
+		app_status(&r->a, APP_SEV_INFO, "line %d %.1f", i, 0.5);
+	CHECK(r->h.n_reports == reports + APP_SAID_LEN); /* the full ring, said in the step */
+	r->a.said.in_step = false;
+	said_take(r, &s);
+	CHECK(s.n == APP_SAID_LEN + 5);
+	char want[APP_EVENT_TEXT];
+	for (int i = 0, k = 0; i < s.n && k < APP_SAID_LEN + 4; i++) {
+		if (i == APP_SAID_LEN) {
+			snprintf(want, sizeof want, "Step said over %d lines 1 times: said in the step", APP_SAID_LEN);
+			CHECK(!strcmp(s.line[i], want));
+			continue;
+		}
+		snprintf(want, sizeof want, "line %d 0.5", k++);
+		CHECK(!strcmp(s.line[i], want));
+	}
+	CHECK(r->a.said.overflows == 1 && r->a.said.n == 0);
 }
 
 /* app_t_before (the per-frame plant-time comparisons by integer operations) gives the IEEE

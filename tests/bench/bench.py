@@ -18,7 +18,9 @@ Items:
              stub HAL): instructions per step on the host (valgrind --tool=callgrind) and on
              Cortex-M4F (QEMU mps2-an386 + tests/arm's counting plugin); per build (float,
              fixed) on M4F and M0 (ARMv6-M code counted on mps2-an386) in HOLD, experiments
-             1 (rotor), 2 (validation), 3 (inertia Ixx) and between frames, median and max,
+             1 (rotor), 2 (validation), 3 (inertia Ixx), the steps that say something (a
+             parameter change, origin shift, frames missing, experiment aborts, link back,
+             take-off, landing, mode changes, time limits) and between frames, median and max,
              the float/fixed ratio per phase, and where the m0-fixed step's instructions go
              (tests/arm/insn-profile.sh: top routines); the allocator alone
   memory  3. the core's .text/.data/.bss on Cortex-M4F, M0 and M0 fixed (tests/arm's images), the core
@@ -406,15 +408,45 @@ EXP_IDS = (1, 2, 3)
 EXP_NAMES = {1: "experiment 1 (rotor)", 2: "experiment 2 (validation)", 3: "experiment 3 (inertia Ixx)"}
 
 
-def split_step_counts(counts, kv):
+def parse_step_events(text):
+    """tests/bench/step.c's last part: (name, "step" or "tick") of each measured region, in order."""
+    return re.findall(r"^step: ev (\S+) (step|tick)$", text, re.M)
+
+
+# the steps that say something (tests/bench/step.c, events()): name -> what the step does
+STEP_EVENTS = (
+    ("param_change", "a parameter change's step (ATT_WN_RP, VEH_IXX, ID_MOT_TAU set between frames)"),
+    ("origin_shift", "the plant moved its origin (1 km): re-referenced, said"),
+    ("frames_missing", "frames missing (0.5 s of plant frames lost): said"),
+    ("exp_abort_frames_missing", "experiment 1 aborted by frames missing: said, FAILED, mode HOLD"),
+    ("exp_abort_attitude", "experiment 1 aborted at the attitude limit: said, FAILED, mode HOLD"),
+    ("link_back", "the link back after 0.5 s silent: said"),
+    ("link_back_landing", "the link back after more than FS_LAND_AFTER: said, landing, mode LAND"),
+    ("landing", "landing steps"),
+    ("landed", "touch-down: said, mode DISARMED"),
+    ("takeoff", "a take-off's first step (mode TAKEOFF)"),
+    ("climb", "take-off climb steps"),
+    ("hold_reached", "take-off reaches HOLD: mode HOLD"),
+    ("takeoff_timeout", "take-off out of NAV_TKO_TO: said, FAILED, landing, mode LAND"),
+    ("landing_timeout", "landing out of NAV_LAND_TO: said, FAILED"),
+)
+
+
+def split_step_counts(counts, kv, events=()):
     """tests/bench/step.c's regions in order: HOLD steps, then per experiment (1, 2, 3) its
     steps each followed by its app_tick, the hover allocation, N_ALLOC allocations, the worst
-    one. None if the number of counts does not match what the image printed."""
+    one, then the named regions of its events part (parse_step_events). None if the number of
+    counts does not match what the image printed."""
     nh, ne = int(kv.get("hold_steps", 0)), int(kv.get("exp_steps", 0))
     nt = int(kv.get("exp_ticks", 0))   # 0 or ne: each experiment step followed by its app_tick
     na = int(kv.get("alloc_calls", "0").split()[0])
-    if len(counts) != nh + ne + nt + 1 + na + 1:
+    if len(counts) != nh + ne + nt + 1 + na + 1 + len(events):
         return None
+    base = nh + ne + nt + 1 + na + 1
+    ev = {}
+    for (name, kind), c in zip(events, counts[base:]):
+        ev.setdefault(name, {"step": [], "tick": []})[kind].append(c)
+    counts = counts[:base]
     out = {"hold": counts[:nh], "exp_by": {}, "tick_by": {}, "exp": [], "exp_tick": []}
     i = nh
     per = [(e, int(kv[f"exp_steps_{e}"])) for e in EXP_IDS if f"exp_steps_{e}" in kv] or [(1, ne)]
@@ -429,6 +461,7 @@ def split_step_counts(counts, kv):
     out["alloc"] = counts[i + 1:i + 1 + na]
     out["alloc_worst"] = counts[-1]
     out["regions"] = {"hold": (1, nh), "exp_first": nh + 1, "exp_last": nh + ne + nt}
+    out["events"] = ev
     return out
 
 
@@ -436,7 +469,7 @@ def item_step(rep, args):
     exe = BB / ("bench-step-quick" if args.quick else "bench-step")
     res = {}
     names = ["bench_hold_step", "bench_exp_step", "bench_exp_tick", "bench_alloc_hover", "bench_alloc_call",
-             "bench_alloc_worst"]
+             "bench_alloc_worst", "bench_ev_step", "bench_ev_tick"]
     host = {}
     with tempfile.TemporaryDirectory(dir=BB) as tmp:
         cg = Path(tmp) / "callgrind.out"
@@ -468,10 +501,13 @@ def item_step(rep, args):
                              capture_output=True, text=True, timeout=600, cwd=REPO)
         counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
         kv = parse_step_output(out.stdout)
-        sp = split_step_counts(counts, kv)
+        sp = split_step_counts(counts, kv, parse_step_events(out.stdout))
         if sp:
             m4f = {"hold": sp["hold"], "exp": sp["exp_by"].get(1, []), "exp_all": sp["exp"],
                    "alloc_hover": sp["alloc_hover"], "alloc": sp["alloc"], "alloc_worst": sp["alloc_worst"]}
+            for name, v in sp["events"].items():
+                m4f[f"ev_{name}"] = v["step"]
+                m4f[f"ev_{name}_tick"] = v["tick"]
             if sp["exp_tick"]:
                 m4f["exp_tick"] = sp["exp_tick"]
         res["m4f_output"] = kv
@@ -521,15 +557,35 @@ def item_step(rep, args):
             "mixer_refresh), M4F", fmt(exact), "",
             f"host x86-64: {fmt(mean('bench_alloc_worst'))} Ir; step paths: {kv.get('alloc_paths', '?')}",
             "(reported)", None, m4_cmd)
+    # the steps that say something: each kind's worst step (said between frames: the app_tick after it)
+    ev_max = 0
+    for name, what in STEP_EVENTS:
+        st, tk = mmm(m4f.get(f"ev_{name}", [])), mmm(m4f.get(f"ev_{name}_tick", []))
+        if not st:
+            if m4f:
+                rep.row(2, f"  step that says: {what}, M4F", "n/a", "", "not measured", "<= 5,000", None, m4_cmd)
+            continue
+        ev_max = max(ev_max, st["max"])
+        n = f"{st['n']} steps, max" if st["n"] > 1 else "1 step"
+        rep.row(2, f"  step that says: {what}, M4F ({n})", fmt(st["max"]), spread(st) if st["n"] > 1 else "",
+                f"between frames, the app_tick after it (says it): max {fmt(tk['max'] if tk else None)}",
+                "<= 5,000", st["max"] <= 5000, m4_cmd)
+    lost = mmm(m4f.get("ev_link_lost_tick", []))
+    if lost:
+        rep.row(2, "  between frames: the app_tick that finds the link lost (its watchdog: said there), M4F",
+                fmt(lost["max"]), "", f"{lost['n']} losses", "(reported)", None, m4_cmd)
+    if ev_max:
+        res["m4f"]["events_max"] = ev_max
     worst = al["max"] if al else None   # the step's allocation (mixer_step): its worst call
     if hold and worst is not None:
         ctl = hold["max"] - m4f["alloc_hover"] + worst
         ea = mmm(m4f.get("exp_all", []))   # every experiment phase's steps (1-3)
-        est = max(hold["max"], ea["max"] if ea else 0) - m4f["alloc_hover"] + worst
+        est = max(hold["max"], ea["max"] if ea else 0, ev_max) - m4f["alloc_hover"] + worst
         res["worst_step_hold_saturated_m4f"] = ctl
         res["worst_step_estimate_m4f"] = est
         rep.row(2, "  worst case: HOLD step with the step's worst allocation (max - hover alloc. + worst)", fmt(ctl), "",
-                f"any step so (HOLD, experiments 1-3): {fmt(est)}", "<= 5,000", ctl <= 5000 and est <= 5000, m4_cmd)
+                f"any step so (HOLD, experiments 1-3, the steps that say something): {fmt(est)}", "<= 5,000",
+                ctl <= 5000 and est <= 5000, m4_cmd)
     step_per_build(rep, args, res)
     rep.data["step"] = res
     rep.commands["step_host"] = host_cmd
@@ -549,13 +605,14 @@ def run_step_elf(machine_, elf):
                          capture_output=True, text=True, timeout=1800, cwd=REPO)
     counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
     kv = parse_step_output(out.stdout)
-    sp = split_step_counts(counts, kv)
+    sp = split_step_counts(counts, kv, parse_step_events(out.stdout))
     if not sp:
         return {"exit": out.returncode, "error": f"{len(counts)} counts", "output": kv}
     r = {"exit": out.returncode, "hold": sp["hold"], "exp": sp["exp"], "exp_tick": sp["exp_tick"], "output": kv,
          "regions": sp["regions"]}
     for e, v in sp["exp_by"].items():
         r[f"exp{e}"] = v
+    r["events"] = [c for v in sp["events"].values() for c in v["step"]]
     return r
 
 
@@ -599,13 +656,13 @@ def step_per_build(rep, args, res):
         r = run_step_elf(mach, elf)
         t, d, b = arm_size(elf)
         fw_ram, harness_ram = ram_split(elf)
-        phases = ("hold",) + tuple(f"exp{e}" for e in EXP_IDS) + ("exp_tick",)
+        phases = ("hold",) + tuple(f"exp{e}" for e in EXP_IDS) + ("events", "exp_tick")
         st = {k: mmm(r.get(k, [])) for k in phases}
         builds[v] = {"steps": st, "exit": r["exit"], "flash": t + d, "ram": d + b, "error": r.get("error"),
                      "ram_firmware": fw_ram, "ram_harness": harness_ram, "regions": r.get("regions")}
         mm = lambda k: f"{fmt(st[k]['median'])} ({fmt(st[k]['max'])})" if st[k] else "n/a"
         rep.row(2, f"step per build, {v}: HOLD / exp. 1 rotor / exp. 2 validation / exp. 3 inertia / "
-                "between frames, median (max) instr.",
+                "steps that say something / between frames, median (max) instr.",
                 " / ".join(mm(k) for k in phases), "",
                 f"image (app + core + libs): flash {fmt((t + d) / 1024, 1)} KB, static RAM {fmt((d + b) / 1024, 1)} KB "
                 f"(firmware {fmt(fw_ram / 1024, 1)} KB, test harness {fmt(harness_ram / 1024, 1)} KB)"
@@ -619,12 +676,12 @@ def step_per_build(rep, args, res):
     for cpu, fl, fx in (("M0", "m0", "m0-fixed"), ("M4F", "m4f", "m4f-fixed")):
         a, b_ = builds.get(fl, {}).get("steps", {}), builds.get(fx, {}).get("steps", {})
         ratios = {}
-        for k in ("hold",) + tuple(f"exp{e}" for e in EXP_IDS) + ("exp_tick",):
+        for k in ("hold",) + tuple(f"exp{e}" for e in EXP_IDS) + ("events", "exp_tick"):
             if a.get(k) and b_.get(k):
                 ratios[k] = (a[k]["median"] / b_[k]["median"], a[k]["max"] / b_[k]["max"])
         if ratios:
             names = {"hold": "HOLD", "exp1": "exp. 1", "exp2": "exp. 2", "exp3": "exp. 3",
-                     "exp_tick": "between frames"}
+                     "events": "steps that say something", "exp_tick": "between frames"}
             rep.row(2, f"  {cpu}: float build / fixed build, instructions (median; max)",
                     f"{ratios['hold'][0]:.2f}x" if "hold" in ratios else "n/a", "",
                     "; ".join(f"{names[k]} {m:.2f}x; {x:.2f}x" for k, (m, x) in ratios.items()),

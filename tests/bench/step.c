@@ -16,12 +16,20 @@
  *      last hover demand (unsaturated) and of N_ALLOC seeded demands (many saturating; every
  *      other one a repeat after its exact search between frames), then the exact search
  *      (mixer_update, as mixer_refresh runs it between frames) of the demand that needed the
- *      most allocator steps (its worst case).
+ *      most allocator steps (its worst case)
+ *   -> the steps that say something (each measured with the app_tick after it, which says
+ *      it): a parameter change, the plant's origin shift, frames missing, experiment 1
+ *      aborted by frames missing and by the attitude limit, the link lost (the app_tick that
+ *      finds it) and back, back after FS_LAND_AFTER (landing), the landing's steps and its
+ *      touch-down, a take-off's first step, climb and HOLD entry, and a take-off and a
+ *      landing that run out of their time limits. "step: ev NAME step|tick" names each
+ *      measured region of this part, in order.
  * One measured call = app_on_frame() (or mixer_update()) between bench_mark_begin/end
  * (tests/arm/bench_mark.h): on Cortex-M the QEMU plugin prints one count per call; on the
  * host, valgrind's callgrind counts the inclusive cost of the wrappers below (bench.py
  * reads the call counts and costs of bench_hold_step, bench_exp_step, bench_exp_tick,
- * bench_alloc_hover, bench_alloc_call and bench_alloc_worst from callgrind's output).
+ * bench_alloc_hover, bench_alloc_call, bench_alloc_worst, bench_ev_step and bench_ev_tick
+ * from callgrind's output).
  *
  * Prints (semihosting stdout on ARM): "step: KEY VALUE" lines (mode reached, steps measured,
  * allocator steps of the worst demand, etc.). Argument-free; sizes below, or -DBENCH_QUICK.
@@ -60,6 +68,8 @@ static struct hal_sensor_frame F;
 static float s_rotor[HAL_ROTORS];
 static uint32_t rng = 12345u;
 static uint32_t n_frame;
+static float pos_shift_x; /* the plant's origin moved by this (m, north) */
+static float roll_extra;  /* added to the frame's roll (rad) */
 
 static float urand(void) /* [-1, 1) */
 {
@@ -79,7 +89,7 @@ static void next_frame(void)
 	F.seq = n_frame;
 	F.valid = HAL_FRAME_NEEDED | HAL_FRAME_THRUST | HAL_FRAME_TORQUE;
 	/* attitude: roll/pitch wobble of 0.3 deg, heading 0 */
-	float roll = 0.3f * 0.01745f * sinf(2.0f * 3.14159f * 0.7f * tf);
+	float roll = 0.3f * 0.01745f * sinf(2.0f * 3.14159f * 0.7f * tf) + roll_extra;
 	float pitch = 0.3f * 0.01745f * cosf(2.0f * 3.14159f * 0.45f * tf);
 	float cr = cosf(0.5f * roll), sr = sinf(0.5f * roll), cp = cosf(0.5f * pitch), sp = sinf(0.5f * pitch);
 	F.q_ib[0] = cr * cp;
@@ -93,12 +103,15 @@ static void next_frame(void)
 	F.rate_b_rps[2] = 0.005f * urand();
 	/* height follows the app's setpoint; horizontal position within a few cm */
 	bool flying = A.mode != APP_DISARMED && A.mode != APP_IDLE;
-	F.pos_i_m[0] = 0.02f * sinf(0.3f * tf);
+	F.pos_i_m[0] = 0.02f * sinf(0.3f * tf) + pos_shift_x;
 	F.pos_i_m[1] = 0.02f * cosf(0.2f * tf);
 	F.pos_i_m[2] = flying ? sc_to_float(A.guid.z_sp_m) + 0.01f * sinf(1.3f * tf) : 0.0f;
+	bool ground = F.pos_i_m[2] <= 0.0f; /* never below the ground: a landing touches down */
+	if (ground)
+		F.pos_i_m[2] = 0.0f;
 	F.vel_i_mps[0] = 0.006f * cosf(0.3f * tf);
 	F.vel_i_mps[1] = -0.004f * sinf(0.2f * tf);
-	F.vel_i_mps[2] = flying ? sc_to_float(A.guid.vz_ff_mps) + 0.013f * cosf(1.3f * tf) : 0.0f;
+	F.vel_i_mps[2] = flying && !ground ? sc_to_float(A.guid.vz_ff_mps) + 0.013f * cosf(1.3f * tf) : 0.0f;
 	/* rotors: the last throttles through a 30 ms lag, k_f, 1 % noise */
 	float alpha = 1.0f - expf(-(float)(1.0 / RATE_HZ) / 0.03f);
 	float sigma = 0.01f * 2.132f * 9.796f / 8.0f;
@@ -172,6 +185,49 @@ __attribute__((noinline)) static void bench_alloc_worst(void)
 	bench_mark_end();
 }
 
+/* the steps that say something, and the app_tick after each (between frames: it says it) */
+__attribute__((noinline)) static void bench_ev_step(void)
+{
+	bench_phase = 7;
+	bench_mark_begin();
+	app_on_frame(&A, &F);
+	bench_mark_end();
+}
+
+__attribute__((noinline)) static void bench_ev_tick(void)
+{
+	bench_phase = 8;
+	bench_mark_begin();
+	app_tick(&A);
+	mav_tick(&M, H.now_us);
+	bench_mark_end();
+}
+
+/* The step just measured named, the app_tick after it measured and named, and the last line
+ * they said (the stub's console) when they said any. */
+static void ev_print(const char *name)
+{
+	uint32_t reports = H.n_reports;
+	printf("step: ev %s step\n", name);
+	bench_ev_tick();
+	printf("step: ev %s tick\n", name);
+	if (H.n_reports != reports)
+		printf("step: ev_said %s: %u lines, the last \"%s\"\n", name, (unsigned)(H.n_reports - reports),
+		       H.last_report);
+}
+
+/* The next frame (skip: plant frames lost before it) measured as a step named `name`, or,
+ * when the step changed the mode, `changed` (NULL: still `name`); then the app_tick after
+ * it, measured. */
+static void ev_frame(uint32_t skip, const char *name, const char *changed)
+{
+	n_frame += skip;
+	next_frame();
+	enum app_mode before = A.mode;
+	bench_ev_step();
+	ev_print(changed && A.mode != before ? changed : name);
+}
+
 static void frame_unmeasured(void)
 {
 	next_frame();
@@ -200,6 +256,124 @@ static void alloc_demand(uint32_t i, scalar_t d[MIXER_N_AXES])
 	d[2] = sc_from_float(urand() * rp * f * l);
 	d[3] = sc_from_float(urand() * 0.6f * f * k);
 	rng = saved;
+}
+
+/* a parameter set as PARAM_SET sets it (app_param_write: applied between frames) */
+static void param_set(const char *name, float v)
+{
+	int i = params_find(name, strlen(name));
+	const char *no = i < 0 ? "unknown" : app_param_write(&A, (size_t)i, v);
+	if (no)
+		printf("step: param_%s %s\n", name, no);
+}
+
+static float param(const char *name)
+{
+	int i = params_find(name, strlen(name));
+	return i < 0 ? 0.0f : params_get(&A.p, (size_t)i);
+}
+
+/* Between frames only, for `seconds` of wall time (no frames: the link goes silent); the
+ * app_tick that finds the link lost measured. */
+static void silence(float seconds)
+{
+	uint64_t to = (uint64_t)(A.p.fs_link_to * 1e6f);
+	for (int i = 0; i < (int)(seconds * 90.0f); i++) {
+		H.now_us += 11111u;
+		if (A.link_ok && H.now_us - A.wall_last_frame_us > to) {
+			bench_ev_tick();
+			printf("step: ev link_lost tick\n");
+		} else {
+			app_tick(&A);
+			mav_tick(&M, H.now_us);
+		}
+	}
+}
+
+/* The steps that say something (status lines, a command's final answer, a mode), each with
+ * the app_tick after it, from a settled HOLD. */
+static void events(void)
+{
+	char why[96];
+	for (int i = 0; i < 90; i++)
+		frame_unmeasured();
+	if (A.mode != APP_HOLD) {
+		printf("step: events_skipped mode %s\n", app_mode_name(A.mode));
+		return;
+	}
+	/* a parameter change (the gains, the inertia and the rotor model rebuilt between frames) */
+	param_set("ATT_WN_RP", param("ATT_WN_RP") * 1.01f);
+	param_set("VEH_IXX", param("VEH_IXX") * 1.01f);
+	param_set("ID_MOT_TAU", param("ID_MOT_TAU") * 1.01f);
+	app_tick(&A);
+	ev_frame(0, "param_change", NULL);
+	/* the plant moves its origin by a kilometre */
+	pos_shift_x = 1000.0f;
+	ev_frame(0, "origin_shift", NULL);
+	for (int i = 0; i < 90; i++)
+		frame_unmeasured();
+	/* frames missing: 0.5 s of plant frames lost (the link up) */
+	ev_frame(45, "frames_missing", NULL);
+	for (int i = 0; i < 2 * 90; i++)
+		frame_unmeasured();
+	/* experiment 1 aborted by frames missing, then by the attitude limit */
+	if (exp_available(1) && app_cmd_experiment(&A, 1.0f, 0x0A0B, why, sizeof why) == APP_IN_PROGRESS) {
+		for (int i = 0; i < 30; i++)
+			frame_unmeasured();
+		ev_frame(45, "exp_abort_frames_missing", NULL);
+		for (int i = 0; i < 2 * 90; i++)
+			frame_unmeasured();
+	} else {
+		printf("step: ev_exp_abort unavailable\n");
+	}
+	if (exp_available(1) && app_cmd_experiment(&A, 1.0f, 0x0A0C, why, sizeof why) == APP_IN_PROGRESS) {
+		for (int i = 0; i < 30; i++)
+			frame_unmeasured();
+		roll_extra = 20.0f * 0.01745f;
+		ev_frame(0, "exp_abort_attitude", NULL);
+		roll_extra = 0.0f;
+		for (int i = 0; i < 2 * 90; i++)
+			frame_unmeasured();
+	}
+	/* the link silent for 0.5 s (a lockstep plant waits: no plant frames lost), back */
+	silence(0.5f);
+	ev_frame(0, "link_back", NULL);
+	for (int i = 0; i < 2 * 90; i++)
+		frame_unmeasured();
+	/* silent for longer than FS_LAND_AFTER: back, landing; the landing to its touch-down */
+	silence(A.p.fs_land_after + 0.5f);
+	ev_frame(0, "link_back_landing", NULL);
+	for (int i = 0; i < 90 * 60 && A.mode == APP_LAND; i++)
+		ev_frame(0, "landing", "landed");
+	/* take-off: its first step, the climb, the HOLD entry */
+	for (int i = 0; i < 10; i++)
+		frame_unmeasured();
+	app_cmd_arm(&A, true, false, why, sizeof why);
+	for (int i = 0; i < 10; i++)
+		frame_unmeasured();
+	app_cmd_takeoff(&A, 10.0f, 0x0A0D, why, sizeof why);
+	ev_frame(0, "takeoff", NULL);
+	for (int i = 0; i < 90 * 60 && A.mode == APP_TAKEOFF; i++)
+		ev_frame(0, "climb", "hold_reached");
+	for (int i = 0; i < 90; i++)
+		frame_unmeasured();
+	/* a take-off (from HOLD, 2 m higher) and its landing that run out of their limits */
+	param_set("NAV_TKO_TO", 1.0f);
+	param_set("NAV_LAND_TO", 1.0f);
+	app_tick(&A);
+	app_cmd_takeoff(&A, 12.0f, 0x0A0E, why, sizeof why);
+	for (int i = 0; i < 90 * 5 && A.mode == APP_TAKEOFF; i++)
+		ev_frame(0, "climb", "takeoff_timeout");
+	for (int i = 0; i < 90 * 60 && A.mode == APP_LAND; i++) {
+		bool said = A.env_limits.phase_s < 0.0f; /* the landing's limit: said once */
+		next_frame();
+		enum app_mode before = A.mode;
+		bench_ev_step();
+		ev_print(A.mode != before                       ? "landed"
+			 : !said && A.env_limits.phase_s < 0.0f ? "landing_timeout"
+								: "landing");
+	}
+	printf("step: events_mode_after %s\n", app_mode_name(A.mode));
 }
 
 int main(void)
@@ -312,6 +486,7 @@ int main(void)
 	printf("step: alloc_worst_steps %u demand %u\n", (unsigned)mix_out.steps, worst_i);
 	printf("step: alloc_step_bound %d\n", 2 * MIXER_ALPHA_ITERS + (A.mix.n_active - 4) + MIXER_QP_ITERS);
 	printf("step: mix_mode %d\n", (int)A.mix.p.mode);
+	events();
 	printf("step: done\n");
 	return 0;
 }
