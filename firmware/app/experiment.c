@@ -337,13 +337,21 @@ static scalar_t imu_force_up(const struct exp_input *in, const struct app_params
 	return sc_from_float(p->veh_mass * p->veh_grav * (r20 * a[0] + r21 * a[1] + r22 * a[2]));
 }
 
-/* The IMU rotor experiment's throttle sweep: collective steps above the hover throttle thr_h,
+/* The rotor experiment's throttle sweep: collective steps above the hover throttle thr_h,
  * at the shares SWP_SHARE of ID_SWP_THR in turn (the rotors' speeds, and so the frequencies
  * their vibration aliases to, differ from step to step), each held for the frames whose
  * climb (the step's acceleration a, then coasting up against gravity) stays within
  * ID_SWP_DZ: dz = a T^2 (1 + a / g) / 2. The curve's prior gives a; one step every
- * SWP_PERIOD_S. */
+ * SWP_PERIOD_S. A step's thrust is at most SWP_A_MAX_G g above the weight: a vehicle of
+ * high thrust-to-weight, hovering at a few percent, would otherwise take a step of many g
+ * whose few frames the motor's lag and delay stretch, and climb past the height limit; its
+ * way down is at most 1 g. With the thrust rows the phase runs SWP_TAIL_S beyond its
+ * excitation time without steps (the dithers go on): the vehicle is back at its height when
+ * the phase ends, and the last stage of the motor model, which alone makes the estimates
+ * (motor_id.h), keeps every step. */
 #define SWP_PERIOD_S 1.0f
+#define SWP_A_MAX_G 3.0f
+#define SWP_TAIL_S 1.5f
 #define SWP_WHITE_TAUS 4.0f  /* lags a step's transient lasts (thrust rows: whiteness) */
 #define SWP_WHITE_MIN_S 0.4f /* ... and at least this, s */
 static const float SWP_SHARE[EXP_SWP_LEVELS] = {1.0f, 0.55f, 0.8f, 0.35f};
@@ -353,8 +361,11 @@ static void sweep_plan(struct experiment *e, const struct app_params *p, float t
 	float c = p->mot_curve, thr_max = isfinite(p->mot_thr_max) ? p->mot_thr_max : 1.0f, g = p->veh_grav;
 	float gh = (1.0f - c) * thr_h + c * thr_h * thr_h;
 	e->swp_per = (uint32_t)(SWP_PERIOD_S * e->inv_dt_nom + 0.5f);
+	/* the throttle of the largest step: g(top) = (1 + SWP_A_MAX_G) g(thr_h) */
+	float gm = (1.0f + SWP_A_MAX_G) * gh, b = 1.0f - c;
+	float top_max = c > 1e-4f ? (sqrtf(b * b + 4.0f * c * gm) - b) / (2.0f * c) : gm / fmaxf(b, 1e-4f);
 	for (int k = 0; k < EXP_SWP_LEVELS; k++) {
-		float top = fminf(thr_h + SWP_SHARE[k] * cf->swp_thr, thr_max);
+		float top = fminf(fminf(thr_h + SWP_SHARE[k] * cf->swp_thr, thr_max), top_max);
 		float gt = (1.0f - c) * top + c * top * top, a = gh > 0.0f ? g * (gt / gh - 1.0f) : 0.0f;
 		e->swp_len[k] = 0u;
 		e->swp_thr[k] = SC_ZERO;
@@ -506,6 +517,23 @@ static void speed_model_step(struct experiment *e, const struct exp_input *in, i
 		motor_id_step(&e->mid, in->thr_prev, f, tq, use);
 }
 
+/* The rotor experiment's null-space dithers against the hover throttle thr_h: a rotor
+ * dithered below zero is clipped there, the patterns' thrusts and torques then cancel no
+ * longer, and a vehicle hovering at a few percent of its throttle loses the height loop's
+ * authority (its rotors cannot go lower) and climbs. So the dithers' gain keeps their swing
+ * (and `fixed`, what is added to every rotor unscaled) within DITHER_ROOM of thr_h, down to
+ * EXP_GAIN_MIN; the estimators regress on what was sent: precision, not bias. */
+#define DITHER_ROOM 0.8f
+static void dither_fit(struct experiment *e, float thr_h, float swing, float fixed)
+{
+	float room = DITHER_ROOM * thr_h - fixed;
+	if (!(swing > 0.0f) || swing <= room)
+		return;
+	float g = fmaxf(room / swing, EXP_GAIN_MIN);
+	e->exc_gain = sc_from_float(g);
+	say(e, APP_SEV_INFO, "ID excitation x%.3f: hover throttle %.3f", (double)g, (double)thr_h);
+}
+
 /* The IMU rotor experiment's start: the accelerometer sees the rotors' sum, so the null-space
  * dithers (the vehicle still) get a collective dither (a fast vertical jiggle) and the
  * throttle sweep beside them (docs/identification.md, "From the IMU"). */
@@ -515,6 +543,7 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	const struct exp_cfg *cf = &e->cfg;
 	struct excite_params xp = *xpp;
 	e->t_run = cf->imu_time;
+	e->swp_end = e->t_settle + e->t_run;
 	uint32_t kind = cf->exc_kind;
 	xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
 	xp.amplitude = sc_from_float(cf->exc_amp);
@@ -553,6 +582,7 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	e->rot_k = 0;
 	e->ofs = sc_from_float(cf->exc_ofs);
 	sweep_plan(e, p, thr_h);
+	dither_fit(e, thr_h, cf->exc_amp + cf->exc_ofs, cf->col_amp);
 	if (rpm_src(cf))
 		speed_model_begin(e, p, in);
 	e->est_live = 0;
@@ -581,7 +611,8 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	if (k == PK_ROTOR && imu_src(cf)) {
 		imu_rotor_begin(e, p, in, &xp);
 	} else if (k == PK_ROTOR) {
-		e->t_run = cf->exc_time;
+		e->t_run = cf->exc_time + (cf->exc_null && cf->swp_thr > 0.0f ? SWP_TAIL_S : 0.0f);
+		e->swp_end = e->t_settle + cf->exc_time;
 		uint32_t kind = cf->exc_kind;
 		xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
 		xp.amplitude = sc_from_float(cf->exc_amp);
@@ -612,6 +643,8 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		for (int j = 0; j < HAL_ROTORS; j++)
 			thr_h += sc_to_float(in->thr_prev_all[j]) / (float)HAL_ROTORS;
 		sweep_plan(e, p, thr_h);
+		if (cf->exc_null)
+			dither_fit(e, thr_h, cf->exc_amp + cf->exc_ofs, 0.0f);
 		/* a step and the motor's settling after it (the lags of the test's range, up to a
 		 * slow prior's, and the longest delay) stay out of the whiteness test */
 		float settle = fmaxf(SWP_WHITE_TAUS * cf->mot_tau, SWP_WHITE_MIN_S);
@@ -1198,7 +1231,7 @@ static scalar_t sweep_step(const struct experiment *e, bool running)
 {
 	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = e->rot_k + per / 2u;
 	uint32_t ph = kk % per, lv = (kk / per) % EXP_SWP_LEVELS;
-	return running && ph < e->swp_len[lv] ? e->swp_thr[lv] : SC_ZERO;
+	return running && ph < e->swp_len[lv] && app_f_lt(e->t_phase, e->swp_end) ? e->swp_thr[lv] : SC_ZERO;
 }
 
 /* The inertia axis' gyro reading w an outlier (INR_GATE_W): its change since the filters'
@@ -1419,6 +1452,7 @@ static bool phase_extend(struct experiment *e, const struct app_params *p)
 	float p0 = e->prog_base + e->t_phase * e->prog_rate, p1 = (float)(e->phase + 1) / (float)e->n_phases;
 	e->t_run += add;
 	e->t_total += add;
+	e->swp_end += add;
 	const char *lim_name;
 	e->t_limit = phase_limit(e, &lim_name);
 	float left = e->t_total - e->t_phase;

@@ -156,6 +156,7 @@ struct experiment {
 	uint32_t swp_len[EXP_SWP_LEVELS], swp_per;
 	scalar_t swp_thr[EXP_SWP_LEVELS];
 	uint16_t swp_white;
+	float swp_end;        /* phase time after which no step starts */
 	struct exp_rmodel rm; /* IMU source: the modelled thrusts (inertia, validation) */
 	scalar_t f_model[HAL_ROTORS], tq_model[HAL_ROTORS];
 	float w2_gain;       /* IMU with rotor speeds: the speed^2 to "thrust" gain the motor model reads */

@@ -4,7 +4,8 @@ Accuracy against octo-sim's truth with the default noise and actuator lag, on ve
 random within +/-30 % of the paper's k_f, k_tau and inertia (seeded): k_f, k_tau within 0.3 %,
 Ixx, Iyy, Izz within 2 %, the paper's plain estimator biased as the notes' closed form says
 (within 1 percentage point), the vehicle within +/-0.5 m of its height during the rotor
-experiment and within 10 deg of level during the inertia experiments.
+experiment (its throttle sweep climbs up to ID_SWP_DZ, 0.3 m, at each step) and within 0.2 m
+in the other phases, and within 10 deg of level during the inertia experiments.
 """
 
 import random
@@ -58,8 +59,10 @@ def test_full_sequence_accuracy_on_random_vehicles(launch, port, tmp_path):
         z = [s.pos_i[2] for s in truth_at(fl.truth, rot)]
         z0 = truth_at(fl.truth, rot[:1])[0].pos_i[2]
         dz = max(abs(v - z0) for v in z)
-        # the whole sequence, including the switch to the identified k_f (bumpless)
-        dz_all = max(abs(s.pos_i[2] - z0) for s in truth_at(fl.truth, exp_window(fr, 6)))
+        # the rest of the sequence, from the switch to the identified k_f on (bumpless): the
+        # rotor phase's sweep climbs up to ID_SWP_DZ by design, within dz's bound
+        dz_all = max(abs(s.pos_i[2] - z0) for s in truth_at(fl.truth, [f for f in exp_window(fr, 6)
+                                                                        if f.exp_phase != 1]))
         tilt = max(tilt_deg(s.q_i2b) for a in range(3)
                    for s in truth_at(fl.truth, phase_frames(fr, 6, 3 + a)))
         rows.append((i, e_kf, e_kt, e_in, b_plain, b_plain_t, cf, dz, tilt, val, dz_all))

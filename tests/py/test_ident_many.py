@@ -23,6 +23,7 @@ in 50 and 1 in 100).
 """
 
 import json
+import math
 import os
 import random
 import re
@@ -79,23 +80,40 @@ def wrong(p, veh):
     return bad
 
 
+def kf_summary(kf):
+    """k_f's relative errors and sds (pairs) in one line: rms error, median and largest sd,
+    rms of error / sd and how many lie beyond 3 sds."""
+    if not kf:
+        return "k_f: none accepted"
+    z = [e / sd for e, sd in kf]
+    sds = sorted(sd for _, sd in kf)
+    return (f"k_f of {len(kf)} accepted: error {100 * math.sqrt(sum(e * e for e, _ in kf) / len(kf)):.3f} % rms, "
+            f"sd {100 * sds[len(sds) // 2]:.3f} % median ({100 * sds[-1]:.3f} % at most), error / sd "
+            f"{math.sqrt(sum(x * x for x in z) / len(z)):.3f} rms, {sum(abs(x) > 3 for x in z)} beyond 3")
+
+
 def campaign(tmp_path, n, draw, what):
+    """n vehicles drawn by `draw`, each flown once; OCTO_MANY_FIRST: mission steps before
+    arming (e.g. "param ID_SWP_THR 0; ", the rotor experiment without its sweep)."""
     seed0 = int(os.environ.get("OCTO_MANY_SEED", random.SystemRandom().randrange(1, 10**6)))
+    first = os.environ.get("OCTO_MANY_FIRST", "")
     print(f"OCTO_MANY_SEED={seed0}: {n} {what}")
-    failed, silent = [], []
+    failed, silent, kf = [], [], []
     for i in range(n):
         seed = seed0 + i
         veh = draw(random.Random(seed))
-        p, r = fly(tmp_path, veh, seed)
+        p, r = fly(tmp_path, veh, seed, first=first)
         if not int(p.get("ID_RESULT", 0)) & 1:
             why = [ln for ln in r.stderr.splitlines() if "rejected" in ln or "aborted" in ln or "failed" in ln]
             failed.append((seed, why[-2:]))
             continue
+        kf.append((p["VEH_KF"] / veh["kf"] - 1.0, p["ID_KF_SD"] / p["VEH_KF"]))
         bad = wrong(p, veh)
         if bad:
             silent.append((seed, bad, veh, {k: p[k] for k in ("VEH_KF", "ID_KF_SD", "ID_MOT_TAU", "ID_DELAY_FR",
                                                                  "MOT_CURVE")}))
     print(f"not identified {len(failed)}: {failed}")
+    print(kf_summary(kf))
     return failed, silent
 
 
