@@ -351,11 +351,15 @@ static scalar_t imu_force_up(const struct exp_input *in, const struct app_params
  * (motor_id.h), keeps every step. */
 #define SWP_PERIOD_S 1.0f
 #define SWP_A_MAX_G 3.0f
+/* With the thrust rows a step climbs this share of ID_SWP_DZ: the rows see each step at their
+ * own noise (the accelerometer's vibration needs the IMU's whole climb), and the experiment
+ * stays within the hover's height budget under a lossy link */
+#define SWP_DZ_ROWS 0.5f
 #define SWP_TAIL_S 1.5f
 #define SWP_WHITE_TAUS 4.0f  /* lags a step's transient lasts (thrust rows: whiteness) */
 #define SWP_WHITE_MIN_S 0.4f /* ... and at least this, s */
 static const float SWP_SHARE[EXP_SWP_LEVELS] = {1.0f, 0.55f, 0.8f, 0.35f};
-static void sweep_plan(struct experiment *e, const struct app_params *p, float thr_h)
+static void sweep_plan(struct experiment *e, const struct app_params *p, float thr_h, float dz)
 {
 	const struct exp_cfg *cf = &e->cfg;
 	float c = p->mot_curve, thr_max = isfinite(p->mot_thr_max) ? p->mot_thr_max : 1.0f, g = p->veh_grav;
@@ -371,7 +375,7 @@ static void sweep_plan(struct experiment *e, const struct app_params *p, float t
 		e->swp_thr[k] = SC_ZERO;
 		if (!(a > 0.0f) || !(cf->swp_thr > 0.0f))
 			continue;
-		float t = sqrtf(2.0f * cf->swp_dz / (a * (1.0f + a / g)));
+		float t = sqrtf(2.0f * dz / (a * (1.0f + a / g)));
 		uint32_t n = (uint32_t)(t * e->inv_dt_nom + 0.5f);
 		e->swp_len[k] = n < 1u ? 1u : (n > e->swp_per / 2u ? e->swp_per / 2u : n);
 		e->swp_thr[k] = sc_from_float(top - thr_h);
@@ -581,7 +585,7 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	excite_init(&e->exc3, &xp3);
 	e->rot_k = 0;
 	e->ofs = sc_from_float(cf->exc_ofs);
-	sweep_plan(e, p, thr_h);
+	sweep_plan(e, p, thr_h, cf->swp_dz);
 	dither_fit(e, thr_h, cf->exc_amp + cf->exc_ofs, cf->col_amp);
 	if (rpm_src(cf))
 		speed_model_begin(e, p, in);
@@ -642,7 +646,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		float thr_h = 0.0f;
 		for (int j = 0; j < HAL_ROTORS; j++)
 			thr_h += sc_to_float(in->thr_prev_all[j]) / (float)HAL_ROTORS;
-		sweep_plan(e, p, thr_h);
+		sweep_plan(e, p, thr_h, SWP_DZ_ROWS * cf->swp_dz);
 		if (cf->exc_null)
 			dither_fit(e, thr_h, cf->exc_amp + cf->exc_ofs, 0.0f);
 		/* a step and the motor's settling after it (the lags of the test's range, up to a

@@ -108,14 +108,17 @@ def test_hold_entry_within_its_default_limit(tmp_path):
     ("6", "ID_INR_TO", "inertia Ixx"),   # the sequence: its first inertia phase
 ])
 def test_experiment_limit_stops_the_mission_with_its_reason(tmp_path, experiment, param, phase):
-    """A phase limit shorter than the phase (1 s of settling + 5 or 10 s): the experiment fails
+    """A phase limit shorter than the phase (1 s of settling + 5 or 10 s, + 1.5 s in the rotor
+    phase): the experiment fails
     with the limit and the phase's planned time; the mission stops and names them."""
     limit = round(random.uniform(1.5, 4.5), 1)
     out = tmp_path / "out"
     r = gcs("mission", "--experiments", experiment, "--param", f"{param}={limit}",
             "--seed", random.randint(1, 999), "--out", out)
     assert r.returncode != 0, r.stdout
-    planned = 6.0 if param == "ID_VAL_TO" else 11.0
+    # settling 1 s + excitation 5 s (validation) or 10 s, and the rotor phase's 1.5 s after its
+    # last sweep step
+    planned = {"ID_VAL_TO": 6.0, "ID_ROT_TO": 12.5}.get(param, 11.0)
     why = f"ID {phase} failed: {param} {limit:.1f} s"
     assert f"experiment {experiment} " in r.stderr and f"failed: {why}; aborted: time limit, " \
         f"phase planned {planned:.1f} s" in r.stderr, r.stderr
