@@ -59,7 +59,17 @@ static void compress_c(uint32_t h[8], const uint8_t b[64])
 
 #ifdef FUZZ_SHA_X86
 /* The SHA extensions keep the state as ABEF and CDGH and take four schedule words (plus
- * their constants) per pair of sha256rnds2. */
+ * their constants) per pair of sha256rnds2; the schedule is a ring of four vectors. */
+#define FUZZ_SHA_ROUNDS(g, w)                                                                               \
+	do {                                                                                                \
+		__m128i m_ = _mm_add_epi32(w, _mm_loadu_si128((const __m128i *)(const void *)&K[4 * (g)])); \
+		st1 = _mm_sha256rnds2_epu32(st1, st0, m_);                                                  \
+		st0 = _mm_sha256rnds2_epu32(st0, st1, _mm_shuffle_epi32(m_, 0x0E));                         \
+	} while (0)
+/* w0 <- the next four schedule words from the last sixteen (w0, w1, w2, w3 oldest first) */
+#define FUZZ_SHA_NEXT(w0, w1, w2, w3) \
+	w0 = _mm_sha256msg2_epu32(_mm_add_epi32(_mm_sha256msg1_epu32(w0, w1), _mm_alignr_epi8(w3, w2, 4)), w3)
+
 __attribute__((target("sha,ssse3,sse4.1"))) static void compress_ni(uint32_t h[8], const uint8_t b[64])
 {
 	const __m128i bswap = _mm_set_epi64x(0x0c0d0e0f08090a0bll, 0x0405060700010203ll);
@@ -68,17 +78,23 @@ __attribute__((target("sha,ssse3,sse4.1"))) static void compress_ni(uint32_t h[8
 	__m128i st0 = _mm_alignr_epi8(tmp, st1, 8);                                                   /* ABEF */
 	st1 = _mm_blend_epi16(st1, tmp, 0xF0);                                                        /* CDGH */
 	const __m128i abef = st0, cdgh = st1;
-	__m128i w[16];
-	for (int g = 0; g < 16; g++) {
-		if (g < 4)
-			w[g] = _mm_shuffle_epi8(_mm_loadu_si128((const __m128i *)(const void *)(b + 16 * g)), bswap);
-		else
-			w[g] = _mm_sha256msg2_epu32(_mm_add_epi32(_mm_sha256msg1_epu32(w[g - 4], w[g - 3]),
-								  _mm_alignr_epi8(w[g - 1], w[g - 2], 4)),
-						    w[g - 1]);
-		__m128i m = _mm_add_epi32(w[g], _mm_loadu_si128((const __m128i *)(const void *)&K[4 * g]));
-		st1 = _mm_sha256rnds2_epu32(st1, st0, m);
-		st0 = _mm_sha256rnds2_epu32(st0, st1, _mm_shuffle_epi32(m, 0x0E));
+	__m128i w0 = _mm_shuffle_epi8(_mm_loadu_si128((const __m128i *)(const void *)(b + 0)), bswap);
+	__m128i w1 = _mm_shuffle_epi8(_mm_loadu_si128((const __m128i *)(const void *)(b + 16)), bswap);
+	__m128i w2 = _mm_shuffle_epi8(_mm_loadu_si128((const __m128i *)(const void *)(b + 32)), bswap);
+	__m128i w3 = _mm_shuffle_epi8(_mm_loadu_si128((const __m128i *)(const void *)(b + 48)), bswap);
+	FUZZ_SHA_ROUNDS(0, w0);
+	FUZZ_SHA_ROUNDS(1, w1);
+	FUZZ_SHA_ROUNDS(2, w2);
+	FUZZ_SHA_ROUNDS(3, w3);
+	for (int g = 4; g < 16; g += 4) {
+		FUZZ_SHA_NEXT(w0, w1, w2, w3);
+		FUZZ_SHA_ROUNDS(g, w0);
+		FUZZ_SHA_NEXT(w1, w2, w3, w0);
+		FUZZ_SHA_ROUNDS(g + 1, w1);
+		FUZZ_SHA_NEXT(w2, w3, w0, w1);
+		FUZZ_SHA_ROUNDS(g + 2, w2);
+		FUZZ_SHA_NEXT(w3, w0, w1, w2);
+		FUZZ_SHA_ROUNDS(g + 3, w3);
 	}
 	st0 = _mm_add_epi32(st0, abef);
 	st1 = _mm_add_epi32(st1, cdgh);
@@ -132,7 +148,8 @@ void mavlink_sha256_update(mavlink_sha256_ctx *m, const void *v, uint32_t len)
 	m->sz += len;
 	while (len > 0) {
 		uint32_t l = 64 - off < len ? 64 - off : len;
-		memcpy(m->block + off, p, l);
+		for (uint32_t i = 0; i < l; i++)
+			m->block[off + i] = p[i];
 		off += l;
 		p += l;
 		len -= l;
