@@ -107,6 +107,9 @@ unsigned params_parse(struct app_params *p, const char *text, size_t len, params
 {
 	unsigned bad = 0, line_no = 0;
 	size_t pos = 0;
+	/* the table entry after the last line's: a file params_format wrote lists the table in
+	 * order, so that each name is found at its first comparison, without a search */
+	size_t next = 0;
 	while (pos < len) {
 		size_t end = pos;
 		while (end < len && text[end] != '\n')
@@ -145,7 +148,11 @@ unsigned params_parse(struct app_params *p, const char *text, size_t len, params
 			memcpy(name, tok, strlen(tok));
 			char *val = strtok_r(NULL, " ", &save);
 			char *extra = strtok_r(NULL, " ", &save);
-			int idx = params_find(name, sizeof name);
+			int idx = next < param_count && !strcmp(param_defs[next].name, name)
+					  ? (int)next
+					  : params_find(name, sizeof name);
+			if (idx >= 0)
+				next = (size_t)idx + 1;
 			if (idx < 0) {
 				why = "unknown parameter";
 			} else if (!val || extra) {

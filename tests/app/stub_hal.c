@@ -40,8 +40,22 @@ static void plant_stats(void *ctx, struct hal_plant_stats *out)
 static void ground_send(void *ctx, const uint8_t *buf, size_t len)
 {
 	struct stub_hal *s = ctx;
-	for (size_t i = 0; i < len; i++)
-		s->sent_sum ^= buf[i];
+	/* Every byte is read: eight at a time, then the last 8 to 15 one by one, so that an
+	 * overread past the end is a byte read of its own. The XOR of the words, folded, is the
+	 * XOR of the bytes. */
+	uint64_t x = 0;
+	size_t i = 0;
+	for (; i + 16 <= len; i += 8) {
+		uint64_t w;
+		memcpy(&w, buf + i, sizeof w);
+		x ^= w;
+	}
+	for (; i < len; i++)
+		x ^= buf[i];
+	x ^= x >> 32;
+	x ^= x >> 16;
+	x ^= x >> 8;
+	s->sent_sum ^= (uint8_t)x;
 	s->sent_bytes += len;
 	s->sent_datagrams++;
 }

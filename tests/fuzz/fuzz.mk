@@ -78,15 +78,17 @@ endef
 FUZZ_APP_DEP := tests/app/stub_hal.h $(FUZZ_APP_SRC) $(wildcard firmware/app/*.h firmware/core/*.h)
 
 # fuzz-mavlink: coverage and comparison tracing only where the receive path decides
-# (coverage-ignore-mavlink.txt), MAVLink's SHA-256 outside the sanitizers (sanitize-ignore.txt)
+# (coverage-ignore-mavlink.txt); MAVLink's SHA-256 is fuzz_sha256.c's (fuzz_sha256.h, included
+# first in every file), outside the sanitizers (sanitize-ignore.txt)
 FUZZ_MAV_FLAGS := -fsanitize-coverage-ignorelist=tests/fuzz/coverage-ignore-mavlink.txt \
-                  -fsanitize-ignorelist=tests/fuzz/sanitize-ignore.txt
-FUZZ_MAV_DEP  := tests/fuzz/fuzz_mavlink.c $(FUZZ_APP_DEP) tests/fuzz/coverage-ignore.txt \
+                  -fsanitize-ignorelist=tests/fuzz/sanitize-ignore.txt -include tests/fuzz/fuzz_sha256.h
+FUZZ_MAV_SRC  := tests/fuzz/fuzz_mavlink.c tests/fuzz/fuzz_sha256.c
+FUZZ_MAV_DEP  := $(FUZZ_MAV_SRC) tests/fuzz/fuzz_sha256.h $(FUZZ_APP_DEP) tests/fuzz/coverage-ignore.txt \
                  tests/fuzz/coverage-ignore-mavlink.txt tests/fuzz/sanitize-ignore.txt
 $(FZ)/fuzz-mavlink: $(FUZZ_MAV_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
-	$(call fuzz_app_build,tests/fuzz/fuzz_mavlink.c,$(FUZZ_MAV_FLAGS))
+	$(call fuzz_app_build,$(FUZZ_MAV_SRC),$(FUZZ_MAV_FLAGS))
 $(FZ)/fuzz-mavlink_fixed: $(FUZZ_MAV_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
-	$(call fuzz_app_build,tests/fuzz/fuzz_mavlink.c,-DOCTO_FIXED=1 $(FUZZ_MAV_FLAGS))
+	$(call fuzz_app_build,$(FUZZ_MAV_SRC),-DOCTO_FIXED=1 $(FUZZ_MAV_FLAGS))
 $(FZ)/fuzz-experiment: tests/fuzz/fuzz_experiment.c $(FUZZ_APP_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
 	$(call fuzz_app_build,tests/fuzz/fuzz_experiment.c,)
 $(FZ)/fuzz-experiment_fixed: tests/fuzz/fuzz_experiment.c $(FUZZ_APP_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)

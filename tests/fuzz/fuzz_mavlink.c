@@ -25,6 +25,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "fuzz_sha256.h"
 #include "mav.h"
 #include "mav_lib.h" /* the endpoint's one channel: its status and receive buffer */
 #include "stub_hal.h"
@@ -138,6 +139,7 @@ static void start_state(int key)
 	mavlink_status_t *st = mavlink_get_channel_status(MAVLINK_COMM_0);
 	mavlink_message_t *rx = mavlink_get_channel_buffer(MAVLINK_COMM_0);
 	if (!s->taken) {
+		fuzz_sha256_selftest();
 		stub_hal_init(&hal);
 		hal.have_key = key != 0;
 		for (int i = 0; i < 32; i++)
