@@ -479,7 +479,8 @@ void app_set_mode(struct app *a, enum app_mode m)
 /* Parameters -> controllers, mixer and throttle map. Not in the 90 Hz step: a parameter
  * change (PARAM_SET, a parameter load, identification results) sets params_dirty and
  * app_settle() runs this between frames (docs/architecture.md, "Between frames"). */
-/* New rotor effectivenesses in flight (identified, not a rotor found failed: scale 0): the
+/* New rotor effectivenesses in flight (identified; not a rotor the guard found failed, whose
+ * loss came too suddenly for the integral to take): the
  * torque the old ones left out, which the attitude integral had taken, goes back out of the
  * integral: rotor j's allocated thrust f_j was delivered as f_j s_new / s_old, and the mixer
  * now allocates for that (without it the integral's trim and the new allocation would both
@@ -493,7 +494,8 @@ static void hand_back_trim(struct app *a, const struct mixer_params *mp)
 	for (int j = 0; j < MIXER_N_ROTORS; j++) {
 		scalar_t s0 = a->mix.p.scale[j], s1 = mp->scale[j];
 		df[j] = SC_ZERO;
-		if (s1 == s0 || !(s0 > SC_ZERO) || !(s1 > SC_ZERO) || !((mp->rotor_mask >> j) & 1u))
+		if (s1 == s0 || !(s0 > SC_ZERO) || !(s1 > SC_ZERO) || !((mp->rotor_mask >> j) & 1u) ||
+		    ((a->rf.failed >> j) & 1u))
 			continue;
 		df[j] = sc_mul(a->mix_out.f_n[j], sc_sub(sc_div(s1, s0), SC(1)));
 		any = true;
