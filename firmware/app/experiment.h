@@ -35,9 +35,9 @@
 #define EXP_TILT_ABORT_DEG 15.0f
 #define EXP_TILT_SOFT_DEG 9.0f /* beyond this tilt the excitation halves (down to EXP_GAIN_MIN) */
 #define EXP_GAIN_MIN 0.125f
-/* the position hold's tilt set point per axis during an experiment: within the excitation's
- * soft limit with both axes at it, so that the attitude error stays within the attitude
- * integral's range (ATT: the integral works while the error is small) */
+/* the position hold's tilt set point per axis during an experiment: both axes at it stay
+ * within EXP_TILT_SOFT_DEG, and a position error met in the experiment asks for no tilt the
+ * excitation's budget does not have */
 #define EXP_TILT_SP_DEG 5.0f
 #define EXP_HEIGHT_SOFT_M 0.75f /* beyond this climb or sink since the start the excitation halves too */
 #define EXP_SWP_LEVELS 4        /* the IMU rotor experiment's sweep levels */
