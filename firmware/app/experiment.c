@@ -578,6 +578,9 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	e->exc_gain = SC(1);
 	e->exc_cap = SC(1);
 	e->exc_cut_t = -1.0f;
+	e->exc_over_t = -1.0f;
+	e->exc_top = SC(1);
+	e->exc_up = false;
 	e->ext_done = false;
 	e->est_live = 0;
 	e->est_wait = 0u;
@@ -1440,6 +1443,8 @@ static bool phase_extend(struct experiment *e, const struct app_params *p)
 	e->prog_rate = left > 0.0f && p1 > p0 ? (p1 - p0) / left : 0.0f;
 	e->prog_base = p0 - e->t_phase * e->prog_rate;
 	e->exc_gain = sc_mul(e->exc_gain, sc_from_float(a));
+	if (!(e->exc_cut_t >= 0.0f))
+		e->exc_top = e->exc_gain;
 	say(e, APP_SEV_INFO, "ID excitation %.0f s longer: sd %.4f above ID_RSD_MAX %.4f", (double)add, (double)rsd,
 	    (double)lim);
 	if (a > 1.0f)
@@ -1514,19 +1519,39 @@ bool exp_reads_torque(const struct experiment *e)
 /* The excitation against the attitude and height budgets: beyond EXP_TILT_SOFT_DEG (the
  * body's z axis against its cosine: 1 - 2 (qx^2 + qy^2)) or EXP_HEIGHT_SOFT_M from the height
  * at the start, the phase's excitation (the sweep's steps included) halves, at most every
- * EXC_CUT_S and down to EXP_GAIN_MIN, and says so; the estimators regress on what was sent,
+ * EXC_CUT_S and down to EXP_GAIN_MIN, and says so; EXC_RECOVER_S within both it doubles back,
+ * up to half the scale it was over at (a sweep step's kick passes, the loop's response to it
+ * does not); the estimators regress on what was sent,
  * so a smaller excitation costs precision, not bias. EXP_TILT_ABORT_DEG and the height limit
  * still abort. */
 #define EXC_CUT_S 0.1f
+#define EXC_RECOVER_S 2.0f
 static void exc_backoff(struct experiment *e, const struct hal_sensor_frame *f)
 {
 	const float cos_soft = 0.98768834f; /* cos(EXP_TILT_SOFT_DEG) */
 	float ct = 1.0f - 2.0f * (f->q_ib[1] * f->q_ib[1] + f->q_ib[2] * f->q_ib[2]);
 	bool tilt = ct < cos_soft, high = app_f_lt(EXP_HEIGHT_SOFT_M, fabsf(f->pos_i_m[2] - e->z0));
+	if (tilt || high) {
+		e->exc_over_t = e->t_phase;
+	} else if (e->exc_cut_t >= 0.0f && e->exc_gain < e->exc_top && e->t_phase - e->exc_over_t >= EXC_RECOVER_S &&
+		   e->t_phase - e->exc_cut_t >= EXC_RECOVER_S) {
+		/* EXC_RECOVER_S within both budgets since the last halving or doubling: doubles
+		 * back, up to the phase's scale (what tilted it may have been a passing kick) */
+		scalar_t g = sc_mul(e->exc_gain, SC(2));
+		e->exc_gain = g < e->exc_top ? g : e->exc_top;
+		e->exc_cut_t = e->t_phase;
+		e->exc_up = true;
+		say(e, APP_SEV_INFO, "ID excitation x%.3f: within the budgets again", (double)sc_to_float(e->exc_gain));
+		return;
+	}
 	if (!(tilt || high) || e->t_phase - e->exc_cut_t < EXC_CUT_S || e->exc_cut_t > e->t_phase)
 		return;
 	if (e->exc_gain < SC(0.25)) /* 2 EXP_GAIN_MIN: one more halving would pass it */
 		return;
+	/* over at a scale it had not been cut from since: a recovery comes back to half of it */
+	if (!(e->exc_cut_t >= 0.0f) || e->exc_up)
+		e->exc_top = sc_mul(e->exc_gain, SC(0.5));
+	e->exc_up = false;
 	e->exc_gain = sc_mul(e->exc_gain, SC(0.5));
 	e->exc_cut_t = e->t_phase;
 	if (tilt)

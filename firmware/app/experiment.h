@@ -170,6 +170,9 @@ struct experiment {
 	scalar_t exc_gain;   /* the phase's excitation scale: 1, halved beyond EXP_TILT_SOFT_DEG or EXP_HEIGHT_SOFT_M */
 	scalar_t exc_cap;    /* rotor phase: the dithers' scale against the hover throttle (1 elsewhere) */
 	float exc_cut_t;     /* t_phase of the last halving */
+	float exc_over_t;    /* t_phase the tilt or the height was last beyond its soft limit */
+	scalar_t exc_top;    /* what a recovery doubles back to: half the scale last over a limit */
+	bool exc_up;         /* the scale doubled back since the last halving */
 	bool ext_done;       /* the phase's excitation was extended (once at most) */
 	scalar_t inr_gate_k; /* inertia: the gyro outlier gate's rate change per N m of torque */
 	int inr_skip;        /* inertia: frames since the filters' last, past gyro outliers */
