@@ -625,7 +625,8 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		float thr_h = 0.0f;
 		for (int j = 0; j < HAL_ROTORS; j++)
 			thr_h += sc_to_float(in->thr_prev_all[j]) / (float)HAL_ROTORS;
-		e->exc_cap = hover_cap(thr_h, cf->exc_amp + cf->exc_ofs);
+		if (cf->exc_null) /* rotor 1's excitation alone (the paper's) keeps its amplitude */
+			e->exc_cap = hover_cap(thr_h, cf->exc_amp + cf->exc_ofs);
 		sweep_plan(e, p, thr_h);
 		/* a step and the motor's settling after it (the lags of the test's range, up to a
 		 * slow prior's, and the longest delay) stay out of the whiteness test */
