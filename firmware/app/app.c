@@ -479,6 +479,34 @@ void app_set_mode(struct app *a, enum app_mode m)
 /* Parameters -> controllers, mixer and throttle map. Not in the 90 Hz step: a parameter
  * change (PARAM_SET, a parameter load, identification results) sets params_dirty and
  * app_settle() runs this between frames (docs/architecture.md, "Between frames"). */
+/* New rotor effectivenesses in flight (identified; not a rotor the guard found failed, whose
+ * loss came too suddenly for the integral to take): the
+ * torque the old ones left out, which the attitude integral had taken, goes back out of the
+ * integral: rotor j's allocated thrust f_j was delivered as f_j s_new / s_old, and the mixer
+ * now allocates for that (without it the integral's trim and the new allocation would both
+ * correct it: a torque step as large as the trim). */
+static void hand_back_trim(struct app *a, const struct mixer_params *mp)
+{
+	if (a->mode == APP_DISARMED || a->mode == APP_IDLE)
+		return;
+	scalar_t df[MIXER_N_ROTORS], w[MIXER_N_AXES];
+	bool any = false;
+	for (int j = 0; j < MIXER_N_ROTORS; j++) {
+		scalar_t s0 = a->mix.p.scale[j], s1 = mp->scale[j];
+		df[j] = SC_ZERO;
+		if (s1 == s0 || !(s0 > SC_ZERO) || !(s1 > SC_ZERO) || !((mp->rotor_mask >> j) & 1u) ||
+		    ((a->rf.failed >> j) & 1u))
+			continue;
+		df[j] = sc_mul(a->mix_out.f_n[j], sc_sub(sc_div(s1, s0), SC(1)));
+		any = true;
+	}
+	if (!any)
+		return;
+	mixer_wrench(&a->mix, df, w);
+	att_ctrl_shift_integral(&a->att, vec3_make(w[1], w[2], w[3]), a->ps.inertia_kgm2);
+}
+
+#define ATT_INT_WEAK_SHARE 0.75f
 static void sync_params(struct app *a)
 {
 	const struct app_params *p = &a->p;
@@ -487,6 +515,16 @@ static void sync_params(struct app *a)
 	ap.wn_rps = vec3_make(sc_from_float(p->att_wn_rp), sc_from_float(p->att_wn_rp), sc_from_float(p->att_wn_yaw));
 	ap.zeta = vec3_make(sc_from_float(p->att_zeta), sc_from_float(p->att_zeta), sc_from_float(p->att_zeta));
 	ap.ki_rps = vec3_make(sc_from_float(p->att_ki), sc_from_float(p->att_ki), sc_from_float(p->att_ki));
+	/* the roll and pitch integral's reach: at least what rotors weaker than their MOT_SCALEj
+	 * leave unbalanced before they are identified (three at 0.75 on a side: 0.75 of a
+	 * rotor's hover thrust at the arm); beyond its reach the attitude error carries the
+	 * torque, and the set point that error leaves behind is flown once the scales are
+	 * identified */
+	float tau_w = ATT_INT_WEAK_SHARE * p->veh_mass * p->veh_grav / (float)HAL_ROTORS * p->veh_arm_l;
+	if (isfinite(tau_w) && tau_w > sc_to_float(ap.int_tau_max_nm.x)) {
+		ap.int_tau_max_nm.x = sc_from_float(tau_w);
+		ap.int_tau_max_nm.y = sc_from_float(tau_w);
+	}
 	att_ctrl_set_params(&a->att, &ap); /* not att_ctrl_init: that would drop the integral */
 
 	struct guid_params gp = guid_params_default();
@@ -500,6 +538,8 @@ static void sync_params(struct app *a)
 	pp.vel_gain_rad_mps = sc_from_float(p->pos_vel_gain);
 	pp.tilt_max_rad = sc_from_float(p->att_tilt_max * DEG_F);
 	a->pos = pp;
+	pp.tilt_max_rad = sc_from_float(fminf(p->att_tilt_max, EXP_TILT_SP_DEG) * DEG_F);
+	a->pos_exp = pp;
 
 	struct alt_ctrl_params lp = alt_ctrl_params_default();
 	lp.wn_rps = sc_from_float(p->alt_wn);
@@ -532,6 +572,7 @@ static void sync_params(struct app *a)
 	mp.t_min = SC(0.0);
 	mp.t_max = sc_from_float(p->mot_thr_max);
 	mp.mode = p->mix_mode >= 0.5f ? MIXER_MODE_PRIORITY : MIXER_MODE_CLIP;
+	hand_back_trim(a, &mp);
 	mixer_set_params(&a->mix, &mp); /* recomputes only when something changed */
 	mixer_warm_reset(&a->mix_warm); /* its face belongs to the mixer it was found on */
 

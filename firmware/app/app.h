@@ -127,7 +127,8 @@ struct app {
 	/* guidance (set points) and the position loop */
 	struct guid guid;
 	struct pos_ctrl_params pos;
-	struct app_param_sc ps; /* parameters the step reads, as scalars */
+	struct pos_ctrl_params pos_exp; /* in EXPERIMENT: the tilt set point within EXP_TILT_SP_DEG */
+	struct app_param_sc ps;         /* parameters the step reads, as scalars */
 	/* the set point's yaw and its half-angle trigonometry, kept while the yaw stays */
 	scalar_t yaw_half_of;
 	struct quat_yaw_half yaw_half;

@@ -356,6 +356,15 @@ static scalar_t imu_force_up(const struct exp_input *in, const struct app_params
  * stays within the hover's height budget under a lossy link */
 #define SWP_DZ_ROWS 0.5f
 #define SWP_TAIL_S 1.5f
+/* rotor phase: the dithers' peak on a rotor (ID_EXC_AMP + ID_EXC_OFS, or ID_COL_AMP) at most
+ * this share of the hover throttle; beyond it a rotor's throttle clips at 0 whenever the
+ * altitude loop lowers the collective (braking after a sweep step), which raises the
+ * collective and leaves a torque: the vehicle cannot brake or hold its attitude */
+#define EXC_HOVER_SHARE 0.6f
+static scalar_t hover_cap(float thr_h, float peak)
+{
+	return peak > 0.0f && EXC_HOVER_SHARE * thr_h < peak ? sc_from_float(EXC_HOVER_SHARE * thr_h / peak) : SC(1);
+}
 #define SWP_WHITE_TAUS 4.0f  /* lags a step's transient lasts (thrust rows: whiteness) */
 #define SWP_WHITE_MIN_S 0.4f /* ... and at least this, s */
 static const float SWP_SHARE[EXP_SWP_LEVELS] = {1.0f, 0.55f, 0.8f, 0.35f};
@@ -521,21 +530,12 @@ static void speed_model_step(struct experiment *e, const struct exp_input *in, i
 		motor_id_step(&e->mid, in->thr_prev, f, tq, use);
 }
 
-/* The rotor experiment's null-space dithers against the hover throttle thr_h: a rotor
- * dithered below zero is clipped there, the patterns' thrusts and torques then cancel no
- * longer, and a vehicle hovering at a few percent of its throttle loses the height loop's
- * authority (its rotors cannot go lower) and climbs. So the dithers' gain keeps their swing
- * (and `fixed`, what is added to every rotor unscaled) within DITHER_ROOM of thr_h, down to
- * EXP_GAIN_MIN; the estimators regress on what was sent: precision, not bias. */
-#define DITHER_ROOM 0.8f
-static void dither_fit(struct experiment *e, float thr_h, float swing, float fixed)
+/* the dithers' cap, said when it holds them below their amplitude */
+static void cap_say(struct experiment *e, float thr_h)
 {
-	float room = DITHER_ROOM * thr_h - fixed;
-	if (!(swing > 0.0f) || swing <= room)
-		return;
-	float g = fmaxf(room / swing, EXP_GAIN_MIN);
-	e->exc_gain = sc_from_float(g);
-	say(e, APP_SEV_INFO, "ID excitation x%.3f: hover throttle %.3f", (double)g, (double)thr_h);
+	if (e->exc_cap < SC(1))
+		say(e, APP_SEV_INFO, "ID excitation x%.3f: hover throttle %.3f", (double)sc_to_float(e->exc_cap),
+		    (double)thr_h);
 }
 
 /* The IMU rotor experiment's start: the accelerometer sees the rotors' sum, so the null-space
@@ -585,8 +585,9 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	excite_init(&e->exc3, &xp3);
 	e->rot_k = 0;
 	e->ofs = sc_from_float(cf->exc_ofs);
+	e->exc_cap = hover_cap(thr_h, fmaxf(cf->exc_amp + cf->exc_ofs, cf->col_amp));
+	cap_say(e, thr_h);
 	sweep_plan(e, p, thr_h, cf->swp_dz);
-	dither_fit(e, thr_h, cf->exc_amp + cf->exc_ofs, cf->col_amp);
 	if (rpm_src(cf))
 		speed_model_begin(e, p, in);
 	e->est_live = 0;
@@ -600,7 +601,11 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	e->t_phase = 0.0f;
 	e->t_settle = SETTLE_S;
 	e->exc_gain = SC(1);
+	e->exc_cap = SC(1);
 	e->exc_cut_t = -1.0f;
+	e->exc_over_t = -1.0f;
+	e->exc_top = SC(1);
+	e->exc_up = false;
 	e->ext_done = false;
 	e->est_live = 0;
 	e->est_wait = 0u;
@@ -646,9 +651,10 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		float thr_h = 0.0f;
 		for (int j = 0; j < HAL_ROTORS; j++)
 			thr_h += sc_to_float(in->thr_prev_all[j]) / (float)HAL_ROTORS;
+		if (cf->exc_null) /* rotor 1's excitation alone (the paper's) keeps its amplitude */
+			e->exc_cap = hover_cap(thr_h, cf->exc_amp + cf->exc_ofs);
+		cap_say(e, thr_h);
 		sweep_plan(e, p, thr_h, SWP_DZ_ROWS * cf->swp_dz);
-		if (cf->exc_null)
-			dither_fit(e, thr_h, cf->exc_amp + cf->exc_ofs, 0.0f);
 		/* a step and the motor's settling after it (the lags of the test's range, up to a
 		 * slow prior's, and the longest delay) stay out of the whiteness test */
 		float settle = fmaxf(SWP_WHITE_TAUS * cf->mot_tau, SWP_WHITE_MIN_S);
@@ -1212,7 +1218,8 @@ static void null_dither(struct experiment *e, bool running, scalar_t d, struct e
 		e->rot_k++;
 	const scalar_t *p1 = e->pat[0], *p2 = e->pat[1];
 	/* in scalars: integer in the fixed build, the same float operations in the other */
-	scalar_t a1 = sc_mul(e->exc_gain, sc_add(d, o)), a2 = sc_mul(e->exc_gain, sc_add(d2, o));
+	const scalar_t gn = sc_mul(e->exc_gain, e->exc_cap);
+	scalar_t a1 = sc_mul(gn, sc_add(d, o)), a2 = sc_mul(gn, sc_add(d2, o));
 #if OCTO_FIXED
 	/* a1 p1 + a2 p2 with every p 1, -1 or 0: in Q16.16 a product by +/-1 rounds
 		 * nothing (and |a| <= INT32_MAX negates without overflow), so the products are
@@ -1230,7 +1237,8 @@ static void null_dither(struct experiment *e, bool running, scalar_t d, struct e
 
 /* The IMU rotor experiment's throttle sweep: this frame's collective step (sweep_plan; 0
  * between steps), the steps half a period into the excitation, at the levels in turn. Before
- * the null dither (which counts the excited frames in rot_k). */
+ * the null dither (which counts the excited frames in rot_k). The caller scales it by the
+ * tilt's back-off: a collective step is a torque step on a rotor weaker than its MOT_SCALEj. */
 static scalar_t sweep_step(const struct experiment *e, bool running)
 {
 	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = e->rot_k + per / 2u;
@@ -1283,7 +1291,8 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			speed_model_step(e, in, n, use);
 		scalar_t d0 = sweep_step(e, running);
 		null_dither(e, running, running ? excite_update(&e->exc) : SC_ZERO, out);
-		d0 = sc_add(d0, running ? excite_update(&e->exc3) : SC_ZERO);
+		scalar_t dc = running ? sc_mul(e->exc_cap, excite_update(&e->exc3)) : SC_ZERO;
+		d0 = sc_mul(e->exc_gain, sc_add(d0, dc));
 		for (int j = 0; j < HAL_ROTORS; j++)
 			out->thr_delta[j] = sc_add(out->thr_delta[j], d0);
 	} else if (k == PK_ROTOR) {
@@ -1297,10 +1306,10 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		if (e->cfg.exc_null && n >= 1)
 			motor_id_step(&e->mid, tp, fm, tm, use);
 		scalar_t d = running ? excite_update(&e->exc) : SC_ZERO;
-		scalar_t d0 = e->cfg.exc_null ? sweep_step(e, running) : SC_ZERO;
+		scalar_t d0 = e->cfg.exc_null ? sc_mul(e->exc_gain, sweep_step(e, running)) : SC_ZERO;
 		if (d0 != SC_ZERO)
 			motor_id_white_pause(&e->mid, e->swp_white);
-		out->thr_delta[0] = sc_mul(e->exc_gain, d);
+		out->thr_delta[0] = sc_mul(sc_mul(e->exc_gain, e->exc_cap), d);
 		if (e->cfg.exc_null) {
 			null_dither(e, running, d, out);
 			for (int j = 0; j < HAL_ROTORS; j++)
@@ -1463,6 +1472,8 @@ static bool phase_extend(struct experiment *e, const struct app_params *p)
 	e->prog_rate = left > 0.0f && p1 > p0 ? (p1 - p0) / left : 0.0f;
 	e->prog_base = p0 - e->t_phase * e->prog_rate;
 	e->exc_gain = sc_mul(e->exc_gain, sc_from_float(a));
+	if (!(e->exc_cut_t >= 0.0f))
+		e->exc_top = e->exc_gain;
 	say(e, APP_SEV_INFO, "ID excitation %.0f s longer: sd %.4f above ID_RSD_MAX %.4f", (double)add, (double)rsd,
 	    (double)lim);
 	if (a > 1.0f)
@@ -1534,23 +1545,50 @@ bool exp_reads_torque(const struct experiment *e)
 	return k == PK_ROTOR || k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z;
 }
 
-/* The excitation against the attitude budget: beyond EXP_TILT_SOFT_DEG (the body's z axis
- * against its cosine: 1 - 2 (qx^2 + qy^2)) the phase's excitation halves, at most every
- * EXC_CUT_S and down to EXP_GAIN_MIN, and says so; the estimators regress on what was sent,
- * so a smaller excitation costs precision, not bias. EXP_TILT_ABORT_DEG still aborts. */
+/* The excitation against the attitude and height budgets: beyond EXP_TILT_SOFT_DEG (the
+ * body's z axis against its cosine: 1 - 2 (qx^2 + qy^2)) or EXP_HEIGHT_SOFT_M from the height
+ * at the start, the phase's excitation (the sweep's steps included) halves, at most every
+ * EXC_CUT_S and down to EXP_GAIN_MIN, and says so; EXC_RECOVER_S within both it doubles back,
+ * up to half the scale it was over at (a sweep step's kick passes, the loop's response to it
+ * does not); the estimators regress on what was sent,
+ * so a smaller excitation costs precision, not bias. EXP_TILT_ABORT_DEG and the height limit
+ * still abort. */
 #define EXC_CUT_S 0.1f
-static void tilt_backoff(struct experiment *e, const struct hal_sensor_frame *f)
+#define EXC_RECOVER_S 2.0f
+static void exc_backoff(struct experiment *e, const struct hal_sensor_frame *f)
 {
 	const float cos_soft = 0.98768834f; /* cos(EXP_TILT_SOFT_DEG) */
 	float ct = 1.0f - 2.0f * (f->q_ib[1] * f->q_ib[1] + f->q_ib[2] * f->q_ib[2]);
-	if (!(ct < cos_soft) || e->t_phase - e->exc_cut_t < EXC_CUT_S || e->exc_cut_t > e->t_phase)
+	bool tilt = ct < cos_soft, high = app_f_lt(EXP_HEIGHT_SOFT_M, fabsf(f->pos_i_m[2] - e->z0));
+	if (tilt || high) {
+		e->exc_over_t = e->t_phase;
+	} else if (e->exc_cut_t >= 0.0f && e->exc_gain < e->exc_top && e->t_phase - e->exc_over_t >= EXC_RECOVER_S &&
+		   e->t_phase - e->exc_cut_t >= EXC_RECOVER_S) {
+		/* EXC_RECOVER_S within both budgets since the last halving or doubling: doubles
+		 * back, up to the phase's scale (what tilted it may have been a passing kick) */
+		scalar_t g = sc_mul(e->exc_gain, SC(2));
+		e->exc_gain = g < e->exc_top ? g : e->exc_top;
+		e->exc_cut_t = e->t_phase;
+		e->exc_up = true;
+		say(e, APP_SEV_INFO, "ID excitation x%.3f: within the budgets again", (double)sc_to_float(e->exc_gain));
+		return;
+	}
+	if (!(tilt || high) || e->t_phase - e->exc_cut_t < EXC_CUT_S || e->exc_cut_t > e->t_phase)
 		return;
 	if (e->exc_gain < SC(0.25)) /* 2 EXP_GAIN_MIN: one more halving would pass it */
 		return;
+	/* over at a scale it had not been cut from since: a recovery comes back to half of it */
+	if (!(e->exc_cut_t >= 0.0f) || e->exc_up)
+		e->exc_top = sc_mul(e->exc_gain, SC(0.5));
+	e->exc_up = false;
 	e->exc_gain = sc_mul(e->exc_gain, SC(0.5));
 	e->exc_cut_t = e->t_phase;
-	say(e, APP_SEV_WARNING, "ID excitation x%.3f: tilt beyond %.0f deg", (double)sc_to_float(e->exc_gain),
-	    (double)EXP_TILT_SOFT_DEG);
+	if (tilt)
+		say(e, APP_SEV_WARNING, "ID excitation x%.3f: tilt beyond %.0f deg", (double)sc_to_float(e->exc_gain),
+		    (double)EXP_TILT_SOFT_DEG);
+	else
+		say(e, APP_SEV_WARNING, "ID excitation x%.3f: height beyond %.2f m", (double)sc_to_float(e->exc_gain),
+		    (double)EXP_HEIGHT_SOFT_M);
 }
 
 enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
@@ -1580,7 +1618,7 @@ enum exp_state exp_step(struct experiment *e, const struct exp_input *in, struct
 		return e->state;
 	}
 	if (!e->reporting) {
-		tilt_backoff(e, f);
+		exc_backoff(e, f);
 		phase_step(e, in, out);
 		e->t_phase += in->dt_s;
 		float total = e->t_total;

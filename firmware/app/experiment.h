@@ -35,7 +35,12 @@
 #define EXP_TILT_ABORT_DEG 15.0f
 #define EXP_TILT_SOFT_DEG 9.0f /* beyond this tilt the excitation halves (down to EXP_GAIN_MIN) */
 #define EXP_GAIN_MIN 0.125f
-#define EXP_SWP_LEVELS 4 /* the IMU rotor experiment's sweep levels */
+/* the position hold's tilt set point per axis during an experiment: both axes at it stay
+ * within EXP_TILT_SOFT_DEG, and a position error met in the experiment asks for no tilt the
+ * excitation's budget does not have */
+#define EXP_TILT_SP_DEG 5.0f
+#define EXP_HEIGHT_SOFT_M 0.75f /* beyond this climb or sink since the start the excitation halves too */
+#define EXP_SWP_LEVELS 4        /* the IMU rotor experiment's sweep levels */
 
 enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
 
@@ -163,8 +168,12 @@ struct experiment {
 	uint32_t rot_k;      /* rotor experiment: excited frames so far */
 	uint32_t est_wait;   /* steps until est[] / est_sd[] are read again */
 	scalar_t inr_u_prev; /* inertia: the excitation of the previous step (the instrument) */
-	scalar_t exc_gain;   /* the phase's excitation scale: 1, halved beyond EXP_TILT_SOFT_DEG */
+	scalar_t exc_gain;   /* the phase's excitation scale: 1, halved beyond EXP_TILT_SOFT_DEG or EXP_HEIGHT_SOFT_M */
+	scalar_t exc_cap;    /* rotor phase: the dithers' scale against the hover throttle (1 elsewhere) */
 	float exc_cut_t;     /* t_phase of the last halving */
+	float exc_over_t;    /* t_phase the tilt or the height was last beyond its soft limit */
+	scalar_t exc_top;    /* what a recovery doubles back to: half the scale last over a limit */
+	bool exc_up;         /* the scale doubled back since the last halving */
 	bool ext_done;       /* the phase's excitation was extended (once at most) */
 	scalar_t inr_gate_k; /* inertia: the gyro outlier gate's rate change per N m of torque */
 	int inr_skip;        /* inertia: frames since the filters' last, past gyro outliers */

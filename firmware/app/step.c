@@ -98,7 +98,8 @@ static inline bool step_guidance(struct app *a, struct step *s)
 }
 
 /* Position: hold the position of the take-off through small tilts (level near the ground
- * during take-off); the attitude set point with the set point's yaw. */
+ * during take-off; within EXP_TILT_SP_DEG in an experiment); the attitude set point with the
+ * set point's yaw. */
 static inline void step_position(struct app *a, struct step *s)
 {
 	struct pos_ctrl_input pi = {
@@ -107,7 +108,7 @@ static inline void step_position(struct app *a, struct step *s)
 		.vel_mps = {s->vel[0], s->vel[1]},
 		.q_b2i = s->q,
 	};
-	struct pos_ctrl_output po = pos_ctrl_update(&a->pos, &pi);
+	struct pos_ctrl_output po = pos_ctrl_update(a->mode == APP_EXPERIMENT ? &a->pos_exp : &a->pos, &pi);
 	if (guid_level_only(&a->guid, app_guid_mode(a->mode), s->gi.z_m))
 		po.roll_rad = po.pitch_rad = SC_ZERO;
 	/* the yaw's half-angle trigonometry, kept while the yaw stays */

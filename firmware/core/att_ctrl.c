@@ -30,6 +30,17 @@ static scalar_t *comp(struct vec3 *v, int i) { return i == 0 ? &v->x : (i == 1 ?
 
 static scalar_t get(struct vec3 v, int i) { return *comp(&v, i); }
 
+void att_ctrl_shift_integral(struct att_ctrl *s, struct vec3 tau_nm, struct vec3 inertia_kgm2)
+{
+	for (int i = 0; i < 3; i++) {
+		scalar_t kint = sc_mul(sc_mul(get(inertia_kgm2, i), s->kd[i]), s->ki[i]);
+		if (!(kint > SC_ZERO))
+			continue;
+		scalar_t lim = sc_div(s->int_tau_max[i], kint), *int_r = comp(&s->int_r_rad, i);
+		*int_r = sc_clamp(sc_add(*int_r, sc_div(get(tau_nm, i), kint)), sc_neg(lim), lim);
+	}
+}
+
 void att_ctrl_set_params(struct att_ctrl *s, const struct att_ctrl_params *params)
 {
 	for (int i = 0; i < 3; i++) {
@@ -125,11 +136,14 @@ uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, st
 		}
 		*comp(&tau_out, i) = tau;
 
-		/* conditional integration: small error, torque not saturated here or in the
-		 * allocation in the direction the integral would grow */
+		/* conditional integration: small error, or a large one the axis does not turn
+		 * towards (a torque the integral must take: a slew turns at its rate limit),
+		 * torque not saturated here or in the allocation in the direction the integral
+		 * would grow */
 		bool cut = (r > SC_ZERO && (in->alloc_short_pos >> i & 1u)) ||
 			   (r < SC_ZERO && (in->alloc_short_neg >> i & 1u));
-		if (kint > SC_ZERO && !sat && !cut && sc_abs(ei) < s->int_err_max_rad) {
+		bool held = sc_abs(ei) < s->int_err_max_rad || sc_abs(get(w, i)) < SC(ATT_CTRL_STUCK_RPS);
+		if (kint > SC_ZERO && !sat && !cut && held) {
 			scalar_t lim = s->m_lim[i]; /* int_tau_max / kint: keeps the state bounded too */
 			*int_r = sc_clamp(sc_add(*int_r, sc_mul(r, dt)), sc_neg(lim), lim);
 		} else if (kint <= SC_ZERO) {

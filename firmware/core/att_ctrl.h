@@ -16,7 +16,10 @@
  * The integral acts on the rate error, so over a setpoint step it returns to about zero
  * (its slow pole near -ki nearly cancels its zero at -ki: little overshoot) while a
  * constant disturbance torque is removed with time constant ~1/ki. It accumulates only
- * while |e| < int_err_max and the axis is not saturated; its torque is clamped to
+ * while |e| < int_err_max, or while the axis turns slower than ATT_CTRL_STUCK_RPS (a
+ * large error the rate loop does not close: a disturbance beyond the integral's reach
+ * otherwise pins the attitude away from its set point for good), and the axis is not
+ * saturated; its torque is clamped to
  * +/-int_tau_max. Anti-windup from the allocator (as PX4's rate controller takes its
  * allocator's saturation): an axis whose torque the allocation could not deliver in one
  * direction on the previous step (alloc_short_pos / _neg, e.g. from mixer_shortfall) does
@@ -91,6 +94,7 @@ struct att_ctrl {
 #define ATT_CTRL_DEFAULT_WN_RP_RPS 7.0f  /* roll and pitch natural frequency, rad/s */
 #define ATT_CTRL_DEFAULT_WN_YAW_RPS 3.5f /* yaw natural frequency, rad/s */
 #define ATT_CTRL_DEFAULT_ZETA 1.0f       /* damping ratio, every axis */
+#define ATT_CTRL_STUCK_RPS 0.25f         /* beyond int_err_max, integrate while the axis turns slower */
 #define ATT_CTRL_DEFAULT_KI_RPS 0.3f     /* integral pole, every axis, 1/s */
 
 /* Defaults for the paper's octocopter at 90 Hz with a one-frame delay and a 30 ms
@@ -112,6 +116,11 @@ void att_ctrl_set_params(struct att_ctrl *s, const struct att_ctrl_params *param
 
 /* Zeroes the integral (e.g. on the ground, or after a mode change). */
 void att_ctrl_reset(struct att_ctrl *s);
+
+/* Adds tau_nm to the integral's torque (for the inertia given: the next update's), within
+ * its limit: a torque the allocation stops leaving out (a rotor's effectiveness identified)
+ * which the integral had taken, handed back so that the torque sent stays the same. */
+void att_ctrl_shift_integral(struct att_ctrl *s, struct vec3 tau_nm, struct vec3 inertia_kgm2);
 
 /* One control step (law above): writes tau_b_nm, returns (and stores) the flags. */
 uint32_t att_ctrl_update(struct att_ctrl *s, const struct att_ctrl_input *in, struct vec3 *tau_b_nm);

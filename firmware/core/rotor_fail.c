@@ -17,7 +17,10 @@ struct rotor_fail_params rotor_fail_params_default(void)
 	p.env_tau_s = SC(0.1);
 	p.gain_tau_s = SC(0.3);
 	p.hold_s = SC(2.0);
+	p.q_work = SC(0.8);
+	p.noise_tau_s = SC(0.5);
 	p.confirm = 3;
+	p.confirm_max = 30;
 	return p;
 }
 
@@ -27,6 +30,8 @@ void rotor_fail_init(struct rotor_fail *s, const struct rotor_fail_params *p)
 	s->p = *p;
 	if (s->p.confirm < 1)
 		s->p.confirm = 1;
+	if (s->p.confirm_max < s->p.confirm)
+		s->p.confirm_max = s->p.confirm;
 	if (!(s->p.share_min > SC_ZERO)) /* a rotor judged has a positive output */
 		s->p.share_min = SC(0.01);
 	if (!(s->p.g_min > SC_ZERO))
@@ -117,11 +122,58 @@ static void model_step(struct rotor_fail *s, const scalar_t *thr, const scalar_t
 	f->n_in = n_in;
 }
 
+/* The measurement noise (header: "Measurement noise"); restart: the frame follows missing
+ * ones or a new source (no change is taken). */
+static void noise_step(struct rotor_fail *s, const scalar_t *meas, const struct model_frame *f, bool restart)
+{
+	if (!meas) {
+		s->prev_ok = false;
+		return;
+	}
+	if (s->prev_ok && !restart && f->n_in > 0 && s->m_lp > SC_ZERO && s->e_lp > SC_ZERO) {
+		scalar_t sum = SC_ZERO;
+		for (int j = 0; j < NR; j++)
+			if (f->e[j] > SC_ZERO)
+				sum = sc_add(sum, sc_abs(sc_sub(sc_mul(sc_sub(meas[j], s->m_prev[j]), s->e_lp),
+								sc_mul(s->m_lp, sc_sub(f->e[j], s->e_prev[j])))));
+		s->noise = s->noise_ok ? sc_add(s->noise, sc_mul(s->noise_al, sc_sub(sum, s->noise))) : sum;
+		s->noise_ok = true;
+	}
+	for (int j = 0; j < NR; j++) {
+		s->m_prev[j] = meas[j];
+		s->e_prev[j] = f->e[j];
+	}
+	s->prev_ok = true;
+}
+
+/* The frames in a row a failing rotor needs (header: "Measurement noise"), as a scalar:
+ * r = s_q / margin, s_q = sd_me k / E (twice that for the speed), E the low-passed modelled
+ * sum. */
+static scalar_t streak_need(const struct rotor_fail *s, scalar_t sd_me, scalar_t k, bool by_thrust, scalar_t margin)
+{
+	const scalar_t n0 = sc_from_int(s->p.confirm);
+	if (!(sd_me > SC_ZERO) || !(margin > SC_ZERO))
+		return n0;
+	scalar_t sq = sc_div(sc_mul(sd_me, k), s->e_lp);
+	if (!by_thrust)
+		sq = sc_add(sq, sq);
+	const scalar_t r = sc_div(sq, margin);
+	const scalar_t add = r <= SC(0.25)  ? SC_ZERO
+			     : r <= SC(1.0) ? sc_mul(SC(9.3333333), sc_sub(r, SC(0.25)))
+					    : sc_add(SC(7.0), sc_mul(SC(3.5), sc_sub(r, SC(1.0))));
+	const scalar_t room = sc_from_int((int32_t)s->p.confirm_max - (int32_t)s->p.confirm);
+	return sc_add(n0, add < room ? add : room);
+}
+
 /* The failing rotors' streaks (the others' end): q_j = (m_j E') / (e_j M'), the sums without
  * the failing rotors; the rotor whose streak reached `confirm` with the lowest mean q, or -1. */
 static int streaks_step(struct rotor_fail *s, const scalar_t *meas, bool by_thrust, const struct model_frame *f,
-			uint8_t failing, scalar_t *q_mean)
+			uint8_t failing, scalar_t lim, scalar_t *q_mean)
 {
+	/* the noise's sd in units of m_j E: sqrt(pi) / 2 of its mean change, over the rotors */
+	const scalar_t sd_me =
+		s->noise_ok && f->n_in > 0 ? sc_div(sc_mul(SC(0.88622693), s->noise), sc_from_int(f->n_in)) : SC_ZERO;
+	const scalar_t margin = sc_sub(s->p.q_work, lim);
 	scalar_t m_o = f->m_sum, e_o = f->e_sum;
 	for (int j = 0; j < NR; j++)
 		if (failing & (1u << j)) {
@@ -140,13 +192,15 @@ static int streaks_step(struct rotor_fail *s, const scalar_t *meas, bool by_thru
 			continue;
 		}
 		const scalar_t mj = meas[j] > SC_ZERO ? meas[j] : SC_ZERO;
-		scalar_t q = sc_div(sc_mul(mj, e_o), sc_mul(f->e[j], m_o));
+		/* q_j = m_j k, k = E' / (e_j M'); the noise of m_j E in q: sd_me k / E */
+		const scalar_t k = sc_div(e_o, sc_mul(f->e[j], m_o));
+		scalar_t q = sc_mul(mj, k);
 		if (!by_thrust) /* thrust goes with speed^2 */
 			q = sc_mul(q, q);
 		s->q_sum[j] = s->streak[j] > 0 ? sc_add(s->q_sum[j], q) : q;
 		if (s->streak[j] < UINT8_MAX)
 			s->streak[j]++;
-		if (s->streak[j] >= s->p.confirm) {
+		if (sc_from_int(s->streak[j]) >= streak_need(s, sd_me, k, by_thrust, margin)) {
 			scalar_t qm = sc_div(s->q_sum[j], sc_from_int(s->streak[j]));
 			if (worst < 0 || qm < *q_mean) {
 				worst = j;
@@ -178,6 +232,7 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 			s->lag_al = lag_coef(s->c_dt, s->c_tau);
 			s->env_al = lag_coef(s->c_dt, s->p.env_tau_s);
 			s->gain_al = lag_coef(s->c_dt, s->p.gain_tau_s);
+			s->noise_al = lag_coef(s->c_dt, s->p.noise_tau_s);
 		}
 		al = s->lag_al;
 		env_al = s->env_al;
@@ -208,6 +263,7 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 		s->m_lp = sc_add(s->m_lp, sc_mul(gain_al, sc_sub(f.m_sum, s->m_lp)));
 		s->e_lp = sc_add(s->e_lp, sc_mul(gain_al, sc_sub(f.e_sum, s->e_lp)));
 	}
+	noise_step(s, meas, &f, env_new || in->gap);
 	const scalar_t n_sc = sc_from_int(f.n_in);
 	if (!meas || !in->judge || in->gap || f.n_in < MIN_JUDGED || f.g_sum < sc_mul(s->p.g_min, n_sc) ||
 	    !(s->m_lp > SC_ZERO) || !(s->e_lp > SC_ZERO)) {
@@ -234,7 +290,8 @@ struct rotor_fail_output rotor_fail_step(struct rotor_fail *s, const struct roto
 		return out;
 	}
 	scalar_t worst_q = SC_ZERO;
-	const int worst = streaks_step(s, meas, by_thrust, &f, failing, &worst_q);
+	const scalar_t lim_q = in->excited ? s->p.ratio_fail_excited : s->p.ratio_fail;
+	const int worst = streaks_step(s, meas, by_thrust, &f, failing, lim_q, &worst_q);
 	if (worst < 0)
 		return out;
 

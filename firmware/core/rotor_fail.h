@@ -38,6 +38,20 @@
  * rotors, then lands. A rotor stays in `failed` until its scale is set back to ratio_fail
  * or more; a rotor whose scale is 0 is failed (and not judged).
  *
+ * Measurement noise: the frames a failing streak needs grow with the noise of q_j, so that a
+ * working rotor (q at least q_work: a rotor weaker than its scale, not identified yet) does
+ * not fall below the bound for a streak by chance. Each frame the change of every rotor's
+ * residual m_j E - M e_j since the last frame is summed over the rotors in service and
+ * averaged (noise_tau_s); white measurement noise of sd sigma gives a mean |change| of
+ * 2 sigma / sqrt(pi) (times E). In a failing frame q_j's sd s_q follows (twice that for the
+ * speed: q is its square), and with r = s_q / (q_work - bound) a streak needs confirm
+ * frames for r <= 0.25, 9.33 (r - 0.25) more up to r = 1, 7 + 3.5 (r - 1) more beyond, at
+ * most confirm_max: the
+ * chance that a working rotor's q lies below the bound for so many frames in a row is below
+ * 1e-8 (a failed rotor's q lies near 0: below the bound in nearly every frame). A modelled
+ * output that differs from the measured one in its dynamics only reads as more noise (a
+ * slower, never a falser decision). The noise costs products and comparisons only.
+ *
  * Pure: no I/O, no globals; scalar_t in both builds (the ratios are about 1, thrusts below
  * 100 N, speeds below 2,000 rad/s: the products of a sum and an output stay in Q16.16).
  */
@@ -66,7 +80,10 @@ struct rotor_fail_params {
 	scalar_t env_tau_s;          /* the envelope's rise: beyond the lag and delay of any motor met (0.1 s) */
 	scalar_t gain_tau_s;         /* the low-pass of the sums the common gain is taken from (0.3 s) */
 	scalar_t hold_s;             /* hold before landing (2 s) */
-	uint8_t confirm;             /* frames in a row (3) */
+	scalar_t q_work;             /* the weakest working rotor's q (a scale not yet identified: 0.8) */
+	scalar_t noise_tau_s;        /* the measured noise's average (0.5 s) */
+	uint8_t confirm;             /* frames in a row (3), at the least */
+	uint8_t confirm_max;         /* ... at the most, however noisy (30) */
 };
 
 /* The rotor model (set when the parameters change): lag, curve, effectiveness. */
@@ -109,8 +126,13 @@ struct rotor_fail {
 	scalar_t c_dt, c_tau;             /* what the coefficients were computed for */
 	scalar_t lag_al, env_al, gain_al; /* the lag's, the envelope's and the sums' coefficients */
 	scalar_t m_lp, e_lp;              /* the low-passed sums of measured and modelled outputs */
-	int8_t n_lp;                      /* the rotors they sum (-1: none yet) */
-	scalar_t rf_speed, rf_speed_exc;  /* sqrt(ratio_fail), sqrt(ratio_fail_excited) */
+	scalar_t m_prev[ROTOR_FAIL_ROTORS], e_prev[ROTOR_FAIL_ROTORS]; /* last frame's outputs */
+	scalar_t noise;                  /* sum over rotors of |change of m_j E - M e_j| a frame, averaged */
+	scalar_t noise_al;               /* its average's coefficient */
+	bool prev_ok;                    /* m_prev, e_prev hold last frame's outputs */
+	bool noise_ok;                   /* noise holds a value */
+	int8_t n_lp;                     /* the rotors they sum (-1: none yet) */
+	scalar_t rf_speed, rf_speed_exc; /* sqrt(ratio_fail), sqrt(ratio_fail_excited) */
 };
 
 struct rotor_fail_params rotor_fail_params_default(void);

@@ -144,6 +144,52 @@ UNIT_TEST(rotor_fail_no_false_alarm)
 	}
 }
 
+/* Thrust noise of a wide envelope's vehicle: a sd of 0.15-0.3 of a rotor's hover thrust (12
+ * times the plant's default on a light vehicle), a weak rotor (0.8, the weakest a working rotor
+ * may be before its scale is identified) the model calls 1, 120 s of throttle motion: never a
+ * detection (with `confirm` frames alone, a streak below 0.6 comes within seconds); the same
+ * noise with a rotor cut to 0: the right one, within 0.5 s. */
+UNIT_TEST(rotor_fail_heavy_thrust_noise)
+{
+	struct unit_rng r = {0x6e6f697365ULL};
+	for (int trial = 0; trial < TRIALS(12); trial++) {
+		struct plant p;
+		plant_draw(&p, &r, 0.8);
+		p.noise = unit_rand_uniform(&r, 0.15, 0.3) * p.kf * p.u_h;
+		const int cut = trial & 1, k_fail = (int)(unit_rand_uniform(&r, 20.0, 100.0) * FS);
+		int jf = -1;
+		for (int j = 0; j < NR && jf < 0; j++)
+			if (p.eff[j] == 1.0)
+				jf = j + (int)unit_rand_uniform(&r, 0.0, 0.999);
+		struct rotor_fail d;
+		init_det(&d, p.tau * unit_rand_uniform(&r, 0.8, 1.25));
+		scalar_t thr[NR], thrust[NR], speed[NR];
+		for (int j = 0; j < NR; j++)
+			thr[j] = s(p.u_h);
+		int found = 0, found_k = -1, found_j = -1;
+		for (int k = 0; k < (int)(120 * FS); k++) {
+			if (cut && k == k_fail)
+				p.eff[jf] = 0.0;
+			scalar_t sent[NR];
+			for (int j = 0; j < NR; j++)
+				sent[j] = thr[j];
+			plant_step(&p, &r, k, thr, thrust, speed);
+			struct rotor_fail_input in = {sent, thrust, NULL, s(1.0 / FS), true, false, false};
+			struct rotor_fail_output o = rotor_fail_step(&d, &in);
+			if (o.rotor >= 0 && found++ == 0) {
+				found_k = k;
+				found_j = o.rotor;
+			}
+		}
+		if (!cut) {
+			CHECK(found == 0);
+		} else {
+			CHECK(found == 1 && found_j == jf);
+			CHECK(found_k >= k_fail && found_k <= k_fail + (int)(0.5 * FS));
+		}
+	}
+}
+
 /* The model's side: a scale of 0 is a failed rotor, not judged; a failed rotor set anew is
  * cleared; nothing is judged on the ground (judge false) or without measurements. */
 UNIT_TEST(rotor_fail_model_and_gates)

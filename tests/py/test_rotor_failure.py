@@ -301,3 +301,33 @@ def test_link_bursts_slow_late_motor(tmp_path, seed):
     found = [(t, s) for t, _, s in Logs([d / "fw.lcm"]).events if s.startswith("Rotor ") and " failed " in s]
     assert len(found) == 1 and found[0][1].startswith(f"Rotor {j} failed"), found
     assert 0.0 <= found[0][0] - T_FAIL_HOVER <= DETECT_S, found
+
+
+# Missions of the wide envelope (host_tools/campaigns/wide.json: no rotor fails) on which the
+# detector named a working rotor failed: a weak rotor (0.8-0.9, its scale not identified yet)
+# under thrust noise of up to 12 times the default, in the take-off, the hold or the
+# experiments.
+WIDE = Path(__file__).resolve().parents[2] / "host_tools" / "campaigns" / "wide.json"
+WIDE_MISSIONS = [41, 141, 233, 299, 379, 397, 425]
+
+
+@pytest.mark.parametrize("index", WIDE_MISSIONS)
+def test_wide_noisy_weak_rotor_no_false_failure(tmp_path, index):
+    """The wide envelope's missions with a noisy weak rotor: none is named, the sequence ends."""
+    spec = campaign_spec.validate(json.loads(WIDE.read_text()))
+    seed, _d, vehicle, _faults, _params = campaign_spec.mission_inputs(spec, index)
+    print(f"wide.json mission {index}: seed {seed}, thrust noise {vehicle['noise']['thrust']:.3f} N, "
+          f"rotor scales {vehicle['rotor_scale']}")
+    path = tmp_path / "v.json"
+    path.write_text(json.dumps(vehicle))
+    d = tmp_path / "f"
+    d.mkdir()
+    script = (f"param VEH_MASS {vehicle['mass']!r}; param VEH_ARM_L {vehicle['arm_length']!r}; param ID_SEED {seed}; "
+              "arm; takeoff 10; wait hold; experiment 6; wait experiment; land; wait disarmed")
+    argv = [str(binary("octo-sil")), "--quiet", "--params", str(d / "p.parm"), "--lcm-fw", f"file://{d / 'fw.lcm'}",
+            "--vehicle", str(path), "--seed", str(seed), "--script", script]
+    r = subprocess.run(argv, capture_output=True, text=True, timeout=120)
+    assert "crashed" not in r.stderr, r.stderr
+    texts = [s for _, _, s in Logs([d / "fw.lcm"]).events]
+    assert not any(s.startswith("Rotor ") for s in texts), [s for s in texts if s.startswith("Rotor")]
+    assert "ID done" in texts, texts[-20:]
