@@ -594,6 +594,58 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	*xpp = xp;
 }
 
+/* The rotor experiment's start with the thrust rows: rotor 1's model given (the paper's and the
+ * lag-aware estimators) and the motor model of every rotor, on the null-space dithers and the
+ * throttle sweep. */
+static void thrust_rotor_begin(struct experiment *e, const struct app_params *p, const struct exp_turn *in,
+			       struct excite_params *xpp)
+{
+	const struct exp_cfg *cf = &e->cfg;
+	struct excite_params xp = *xpp;
+	scalar_t dt = sc_from_float(e->dt_nom);
+	e->t_run = cf->exc_time + (cf->exc_null && cf->swp_thr > 0.0f ? SWP_TAIL_S : 0.0f);
+	e->swp_end = e->t_settle + cf->exc_time;
+	uint32_t kind = cf->exc_kind;
+	xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
+	xp.amplitude = sc_from_float(cf->exc_amp);
+	/* multisine: 8 harmonics of 0.5 Hz (0.5 .. 4 Hz at 90 Hz) */
+	xp.ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
+	struct ident_rotor_cfg c = {
+		.dt_s = dt,
+		.mot_tau_s = sc_from_float(cf->mot_tau),
+		.delay_frames = cf->delay_fr,
+		.curve = sc_from_float(p->mot_curve),
+		.thr0 = in->thr_prev0,
+		.kf0 = p->veh_kf,
+		.ktau0 = p->veh_ktau,
+		.p0 = 1e6f,
+	};
+	ident_rotor_init(&e->rot, &c);
+	/* the motor model of every rotor: delay, lag, curve, k_f, k_tau, scales (priors:
+	 * ID_MOT_TAU centres the first lag grid, VEH_KF and MOT_CURVE the reference model) */
+	motor_model_begin(e, p, in, cf->exc_time);
+	struct excite_params xp2 = xp;
+	xp2.seed = xp.seed * 2654435761u + 12345u;
+	excite_init(&e->exc2, &xp2);
+	e->rot_k = 0;
+	excite_null_pattern(0, e->pat[0]);
+	excite_null_pattern(1, e->pat[1]);
+	e->ofs = sc_from_float(cf->exc_ofs);
+	float thr_h = 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++)
+		thr_h += sc_to_float(in->thr_prev_all[j]) / (float)HAL_ROTORS;
+	if (cf->exc_null) /* rotor 1's excitation alone (the paper's) keeps its amplitude */
+		e->exc_cap = hover_cap(thr_h, cf->exc_amp + cf->exc_ofs);
+	cap_say(e, thr_h);
+	sweep_plan(e, p, thr_h, SWP_DZ_ROWS * cf->swp_dz);
+	/* a step and the motor's settling after it (the lags of the test's range, up to a
+	 * slow prior's, and the longest delay) stay out of the whiteness test */
+	float settle = fmaxf(SWP_WHITE_TAUS * cf->mot_tau, SWP_WHITE_MIN_S);
+	e->swp_white = (uint16_t)((float)MOTOR_ID_DELAYS + settle * e->inv_dt_nom + 0.5f);
+	e->est_live = 0x0Fu;
+	*xpp = xp;
+}
+
 static void phase_begin(struct experiment *e, const struct app_params *p, const struct exp_turn *in)
 {
 	const struct exp_cfg *cf = &e->cfg;
@@ -620,46 +672,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 	if (k == PK_ROTOR && imu_src(cf)) {
 		imu_rotor_begin(e, p, in, &xp);
 	} else if (k == PK_ROTOR) {
-		e->t_run = cf->exc_time + (cf->exc_null && cf->swp_thr > 0.0f ? SWP_TAIL_S : 0.0f);
-		e->swp_end = e->t_settle + cf->exc_time;
-		uint32_t kind = cf->exc_kind;
-		xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
-		xp.amplitude = sc_from_float(cf->exc_amp);
-		/* multisine: 8 harmonics of 0.5 Hz (0.5 .. 4 Hz at 90 Hz) */
-		xp.ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
-		struct ident_rotor_cfg c = {
-			.dt_s = dt,
-			.mot_tau_s = sc_from_float(cf->mot_tau),
-			.delay_frames = cf->delay_fr,
-			.curve = sc_from_float(p->mot_curve),
-			.thr0 = in->thr_prev0,
-			.kf0 = p->veh_kf,
-			.ktau0 = p->veh_ktau,
-			.p0 = 1e6f,
-		};
-		ident_rotor_init(&e->rot, &c);
-		/* the motor model of every rotor: delay, lag, curve, k_f, k_tau, scales (priors:
-		 * ID_MOT_TAU centres the first lag grid, VEH_KF and MOT_CURVE the reference model) */
-		motor_model_begin(e, p, in, cf->exc_time);
-		struct excite_params xp2 = xp;
-		xp2.seed = xp.seed * 2654435761u + 12345u;
-		excite_init(&e->exc2, &xp2);
-		e->rot_k = 0;
-		excite_null_pattern(0, e->pat[0]);
-		excite_null_pattern(1, e->pat[1]);
-		e->ofs = sc_from_float(cf->exc_ofs);
-		float thr_h = 0.0f;
-		for (int j = 0; j < HAL_ROTORS; j++)
-			thr_h += sc_to_float(in->thr_prev_all[j]) / (float)HAL_ROTORS;
-		if (cf->exc_null) /* rotor 1's excitation alone (the paper's) keeps its amplitude */
-			e->exc_cap = hover_cap(thr_h, cf->exc_amp + cf->exc_ofs);
-		cap_say(e, thr_h);
-		sweep_plan(e, p, thr_h, SWP_DZ_ROWS * cf->swp_dz);
-		/* a step and the motor's settling after it (the lags of the test's range, up to a
-		 * slow prior's, and the longest delay) stay out of the whiteness test */
-		float settle = fmaxf(SWP_WHITE_TAUS * cf->mot_tau, SWP_WHITE_MIN_S);
-		e->swp_white = (uint16_t)((float)MOTOR_ID_DELAYS + settle * e->inv_dt_nom + 0.5f);
-		e->est_live = 0x0Fu;
+		thrust_rotor_begin(e, p, in, &xp);
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		unsigned ax = (unsigned)(k - PK_INR_X);
 		e->t_run = cf->inr_time;
