@@ -530,6 +530,16 @@ static void speed_model_step(struct experiment *e, const struct exp_input *in, i
 		motor_id_step(&e->mid, in->thr_prev, f, tq, use);
 }
 
+/* the rotor experiment's dither: ID_EXC_KIND at ID_EXC_AMP (multisine: 8 harmonics of 0.5 Hz,
+ * 0.5 .. 4 Hz at 90 Hz) */
+static void rotor_dither_params(const struct experiment *e, struct excite_params *xp)
+{
+	uint32_t kind = e->cfg.exc_kind;
+	xp->kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
+	xp->amplitude = sc_from_float(e->cfg.exc_amp);
+	xp->ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
+}
+
 /* the dithers' cap, said when it holds them below their amplitude */
 static void cap_say(struct experiment *e, float thr_h)
 {
@@ -548,10 +558,7 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	struct excite_params xp = *xpp;
 	e->t_run = cf->imu_time;
 	e->swp_end = e->t_settle + e->t_run;
-	uint32_t kind = cf->exc_kind;
-	xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
-	xp.amplitude = sc_from_float(cf->exc_amp);
-	xp.ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
+	rotor_dither_params(e, &xp);
 	struct imu_id_cfg ic = {
 		.dt_s = e->dt_nom,
 		.mass_kg = p->veh_mass,
@@ -605,11 +612,7 @@ static void thrust_rotor_begin(struct experiment *e, const struct app_params *p,
 	scalar_t dt = sc_from_float(e->dt_nom);
 	e->t_run = cf->exc_time + (cf->exc_null && cf->swp_thr > 0.0f ? SWP_TAIL_S : 0.0f);
 	e->swp_end = e->t_settle + cf->exc_time;
-	uint32_t kind = cf->exc_kind;
-	xp.kind = kind == 0u ? EXCITE_UNIFORM : (kind == 1u ? EXCITE_PRBS : EXCITE_MULTISINE);
-	xp.amplitude = sc_from_float(cf->exc_amp);
-	/* multisine: 8 harmonics of 0.5 Hz (0.5 .. 4 Hz at 90 Hz) */
-	xp.ms_period_frames = (uint32_t)(2.0f / e->dt_nom + 0.5f);
+	rotor_dither_params(e, &xp);
 	struct ident_rotor_cfg c = {
 		.dt_s = dt,
 		.mot_tau_s = sc_from_float(cf->mot_tau),
