@@ -337,6 +337,16 @@ static scalar_t imu_force_up(const struct exp_input *in, const struct app_params
 	return sc_from_float(p->veh_mass * p->veh_grav * (r20 * a[0] + r21 * a[1] + r22 * a[2]));
 }
 
+/* rotor phase: the dithers' peak on a rotor (ID_EXC_AMP + ID_EXC_OFS, or ID_COL_AMP) at most
+ * this share of the hover throttle; beyond it a rotor's throttle clips at 0 whenever the
+ * altitude loop lowers the collective (braking after a sweep step), which raises the
+ * collective and leaves a torque: the vehicle cannot brake or hold its attitude */
+#define EXC_HOVER_SHARE 0.6f
+static scalar_t hover_cap(float thr_h, float peak)
+{
+	return peak > 0.0f && EXC_HOVER_SHARE * thr_h < peak ? sc_from_float(EXC_HOVER_SHARE * thr_h / peak) : SC(1);
+}
+
 /* The rotor experiment's throttle sweep: collective steps above the hover throttle thr_h,
  * at the shares SWP_SHARE of ID_SWP_THR in turn (the rotors' speeds, and so the frequencies
  * their vibration aliases to, differ from step to step), each held for the frames whose
@@ -356,15 +366,6 @@ static scalar_t imu_force_up(const struct exp_input *in, const struct app_params
  * stays within the hover's height budget under a lossy link */
 #define SWP_DZ_ROWS 0.5f
 #define SWP_TAIL_S 1.5f
-/* rotor phase: the dithers' peak on a rotor (ID_EXC_AMP + ID_EXC_OFS, or ID_COL_AMP) at most
- * this share of the hover throttle; beyond it a rotor's throttle clips at 0 whenever the
- * altitude loop lowers the collective (braking after a sweep step), which raises the
- * collective and leaves a torque: the vehicle cannot brake or hold its attitude */
-#define EXC_HOVER_SHARE 0.6f
-static scalar_t hover_cap(float thr_h, float peak)
-{
-	return peak > 0.0f && EXC_HOVER_SHARE * thr_h < peak ? sc_from_float(EXC_HOVER_SHARE * thr_h / peak) : SC(1);
-}
 #define SWP_WHITE_TAUS 4.0f  /* lags a step's transient lasts (thrust rows: whiteness) */
 #define SWP_WHITE_MIN_S 0.4f /* ... and at least this, s */
 static const float SWP_SHARE[EXP_SWP_LEVELS] = {1.0f, 0.55f, 0.8f, 0.35f};
