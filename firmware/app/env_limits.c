@@ -19,6 +19,28 @@ static void not_learned(const struct env_limits_input *in, struct line *more)
 		 (double)sc_to_float(hover_est_u(&in->hover->hov)), (double)sc_to_float(hover_est_sd(&in->hover->hov)));
 }
 
+/* The vehicle's thrust-to-weight from the hover throttle learned (the share u_h of all
+ * rotors' full thrust, 8 VEH_KF, that holds the weight): MOT_SCALE's sum over 8 u_h. Below
+ * NAV_TW_MIN the attitude and height loops have too little thrust in hand to fly an
+ * experiment or a gust, so the take-off ends, before HOLD, as soon as the hover throttle is
+ * learned, and says so. */
+static bool too_heavy(const struct env_limits_input *in, const struct app_params *p, struct env_limits_req *r)
+{
+	if (!(p->nav_tw_min > 0.0f) || !env_hover_ready(in->hover))
+		return false;
+	float u_h = sc_to_float(hover_est_u(&in->hover->hov));
+	float s = p->mot_scale1 + p->mot_scale2 + p->mot_scale3 + p->mot_scale4 + p->mot_scale5 + p->mot_scale6 +
+		  p->mot_scale7 + p->mot_scale8;
+	float tw = u_h > 0.0f ? s / (8.0f * u_h) : 0.0f;
+	if (!(tw < p->nav_tw_min))
+		return false;
+	line_set(&r->why, APP_SEV_ERROR, "Take-off failed: thrust-to-weight %.2f < %.2f", (double)tw,
+		 (double)p->nav_tw_min);
+	line_set(&r->more, APP_SEV_ERROR, "Hover at %.0f %% of full thrust: lighten it",
+		 (double)(100.0f * u_h * 8.0f / s));
+	return true;
+}
+
 static bool timeout(struct env_limits *l, const struct env_limits_input *in, const struct app_params *p,
 		    struct env_limits_req *r)
 {
@@ -33,6 +55,8 @@ static bool timeout(struct env_limits *l, const struct env_limits_input *in, con
 			not_learned(in, &r->more);
 		return true;
 	}
+	if (in->takeoff && too_heavy(in, p, r))
+		return true;
 	/* hold entry: the take-off's set point at the target, the vehicle still to settle there
 	 * and the hover throttle to be learned (guidance's GUID_HOLD_REACHED) */
 	if (in->takeoff && in->sp_at_target) {

@@ -3,7 +3,8 @@
  * (NAV_HOLD_TO: from the set point's arrival at the target height to HOLD) and of landing
  * (NAV_LAND_TO). When one runs out it asks the app to say why (status lines of severity
  * ERROR, naming what was reached and what was missing), to answer the command that started
- * the phase with FAILED, and, for a take-off, to land.
+ * the phase with FAILED, and, for a take-off, to land. A take-off also lands, before HOLD,
+ * when the hover throttle it learned gives a thrust-to-weight below NAV_TW_MIN.
  *
  * Knows nothing of the app: the step gives it the phase and the vehicle's state, and the
  * timeout is a request that the app carries out.

@@ -135,3 +135,7 @@ PARAM(ID_KTIZ_SD, id_ktiz_sd, 0.0f, -1e9f, 1e9f, "1/s^2", "Result (read-only): s
 PARAM(ID_SRC_USED, id_src_used, 0.0f, -1e9f, 1e9f, "",
       "Result (read-only): the source the last identification used (1 thrust, 2 imu, 3 imu_rpm, 4 imu_rpm_torque)")
 #undef PARAM_FLAGS
+#define PARAM_FLAGS 0
+PARAM(NAV_TW_MIN, nav_tw_min, 1.3f, 0.0f, 3.0f, "",
+      "Thrust-to-weight below which a take-off lands, saying so, once its hover throttle is learned (0: never)")
+#undef PARAM_FLAGS

@@ -10,7 +10,7 @@ struct hover_est_params hover_est_params_default(void)
 {
 	struct hover_est_params p;
 	p.u_min = SC(0.02);
-	p.u_max = SC(0.8);
+	p.u_max = SC(0.95); /* up to a thrust-to-weight of 1.05: the take-off judges it (NAV_TW_MIN) */
 	p.sigma_u0 = SC(1.0);
 	p.sigma_acc = SC(0.5);
 	p.sigma_imu = SC(0.3);

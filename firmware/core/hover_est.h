@@ -54,7 +54,7 @@
 #define HOVER_EST_GATED_S 1.0f
 
 struct hover_est_params {
-	scalar_t u_min; /* accepted hover throttle range, e.g. [0.02, 0.8] */
+	scalar_t u_min; /* accepted hover throttle range, e.g. [0.02, 0.95] */
 	scalar_t u_max;
 	scalar_t sigma_u0;   /* initial standard deviation of u_h as a fraction of u_h (e.g. 1.0) */
 	scalar_t sigma_acc;  /* measurement noise of the filtered acceleration, m/s^2 */
@@ -91,7 +91,7 @@ struct hover_est {
 	scalar_t gate2;              /* gate_sigma^2 */
 };
 
-/* Defaults: u_h in [0.02, 0.8], sigma_u0 1.0, sigma_acc 0.5 m/s^2, sigma_imu 0.3 m/s^2,
+/* Defaults: u_h in [0.02, 0.95], sigma_u0 1.0, sigma_acc 0.5 m/s^2, sigma_imu 0.3 m/s^2,
  * q_rel 0.003 /sqrt(s), tau 0.1 s, gate 4 sigma, spool 0.6 /s, g 9.796. */
 struct hover_est_params hover_est_params_default(void);
 

@@ -128,3 +128,46 @@ def test_kf_tracked_in_hold_against_truth_at_the_same_time(launch, port, tmp_pat
     assert n >= 15
     # the truth drifted over the hold by more than the tolerance: tracking, not a constant
     assert abs(truth[round(hold[-1].t, 4)] / truth[round(hold[0].t, 4)] - 1) > 0.006
+
+
+def wait_final_failed(rig, command):
+    """The final COMMAND_ACK FAILED of `command` (in the backlog or still to come)."""
+    acks = [m for m in rig.backlog if m.get_type() == "COMMAND_ACK"
+            and m.command == command and m.result == mavlink.MAV_RESULT_FAILED]
+    while not acks:
+        m = rig.recv({"COMMAND_ACK"}, timeout=5)
+        assert m is not None, "no final COMMAND_ACK FAILED"
+        if m.command == command and m.result == mavlink.MAV_RESULT_FAILED:
+            acks.append(m)
+    return acks[0]
+
+
+@pytest.mark.parametrize("seed", [21, 22])
+def test_too_heavy_a_vehicle_lands_before_hold_and_says_why(launch, port, tmp_path, seed):
+    """A random vehicle hovering at 0.79-0.86 of its full thrust (thrust-to-weight 1.16-1.27,
+    below NAV_TW_MIN 1.3) climbs, learns its hover throttle at the hold entry, and there
+    ends the take-off: the reason with the thrust-to-weight it found (within 3 % of the
+    truth), the final COMMAND_ACK FAILED, then a landing."""
+    rig, veh = start(launch, port, tmp_path, seed, 1.0, u_range=(0.79, 0.86))
+    tw = veh["kf"] * 8 / (veh["mass"] * G)
+    rig.arm_when_ready()
+    r, texts = rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, TAKEOFF_M)
+    assert r == mavlink.MAV_RESULT_ACCEPTED, texts
+    why = wait_text(rig, lambda t: t.startswith("Take-off failed"), 90)
+    assert why and "thrust-to-weight" in why, rig.texts
+    said = float(why.split("thrust-to-weight ")[1].split(" ")[0])
+    print(f"truth thrust-to-weight {tw:.3f}: {why}")
+    assert said == pytest.approx(tw, rel=0.03), (tw, why)
+    assert wait_final_failed(rig, mavlink.MAV_CMD_NAV_TAKEOFF).target_system == 255
+    assert "Mode HOLD" not in rig.texts
+    assert wait_text(rig, lambda t: t == "Landed", 120), rig.texts
+
+
+def test_a_vehicle_just_above_nav_tw_min_holds(launch, port, tmp_path):
+    """Thrust-to-weight 1.38-1.45 (hover at 0.69-0.72 of full thrust): no refusal, HOLD."""
+    rig, veh = start(launch, port, tmp_path, 23, 1.0, u_range=(0.69, 0.72))
+    rig.arm_when_ready()
+    r, texts = rig.cmd(mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, TAKEOFF_M)
+    assert r == mavlink.MAV_RESULT_ACCEPTED, texts
+    assert wait_text(rig, lambda t: t == "Mode HOLD", 120), rig.texts
+    assert not [t for t in rig.texts if "thrust-to-weight" in t], rig.texts
