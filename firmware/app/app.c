@@ -12,6 +12,8 @@
 #define PERIOD_FRAMES 90u /* frames over which the frame period is measured */
 #define HOVER_Z_TOL_M 0.3f
 #define HOVER_TILT_DEG 5.0f
+#define HOVER_VZ_MPS 0.3f
+#define EXP_WAIT_S 30.0 /* plant time an experiment waits for the hover before it fails */
 
 static float clampf(float x, float lo, float hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
@@ -55,11 +57,33 @@ static void frame_pos(const struct hal_sensor_frame *f, scalar_t pos[3])
 		pos[i] = sc_from_float(f->pos_i_m[i]);
 }
 
-bool app_hovering(const struct app *a)
+bool app_hovering(const struct app *a) { return !app_not_hovering(a, NULL, 0); }
+
+/* Why the vehicle does not hover (false when it does), into why[cap] when why is given. */
+bool app_not_hovering(const struct app *a, char *why, size_t cap)
 {
-	return a->mode == APP_HOLD && a->have_step && a->link_ok &&
-	       fabsf(a->fr.pos_i_m[2] - sc_to_float(a->guid.z_target_m)) < HOVER_Z_TOL_M &&
-	       fabsf(a->fr.vel_i_mps[2]) < 0.3f && tilt_deg(&a->fr) < HOVER_TILT_DEG;
+	float dz = a->fr.pos_i_m[2] - sc_to_float(a->guid.z_target_m), vz = a->fr.vel_i_mps[2], tilt = tilt_deg(&a->fr);
+	const char *w = NULL;
+	if (a->mode == APP_TAKEOFF)
+		w = "taking off";
+	else if (a->mode == APP_HOLD && (!a->have_step || !a->link_ok))
+		w = "no X-Plane frames";
+	if (w || a->mode != APP_HOLD) {
+		if (why)
+			snprintf(why, cap, "%s%s", w ? w : "mode ", w ? "" : app_mode_name(a->mode));
+		return true;
+	}
+	if (fabsf(dz) < HOVER_Z_TOL_M && fabsf(vz) < HOVER_VZ_MPS && tilt < HOVER_TILT_DEG)
+		return false;
+	if (why) {
+		if (!(fabsf(dz) < HOVER_Z_TOL_M))
+			snprintf(why, cap, "height %+.2f m off (%.2f)", (double)dz, (double)HOVER_Z_TOL_M);
+		else if (!(fabsf(vz) < HOVER_VZ_MPS))
+			snprintf(why, cap, "climbing %+.2f m/s (%.2f)", (double)vz, (double)HOVER_VZ_MPS);
+		else
+			snprintf(why, cap, "tilt %.1f deg (%.0f)", (double)tilt, (double)HOVER_TILT_DEG);
+	}
+	return true;
 }
 
 /* A status line (text of n characters and its NUL, n < APP_EVENT_TEXT): the platform's
@@ -764,6 +788,8 @@ enum app_result app_cmd_land(struct app *a, app_origin origin, char *why, size_t
 	return APP_FAILED;
 }
 
+static enum app_result exp_begin(struct app *a, int id, app_origin origin, char *why, size_t cap);
+
 enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin, char *why, size_t cap)
 {
 	said_out(a);
@@ -773,6 +799,11 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 	}
 	int id = (int)id_f;
 	if (id == 0) {
+		if (a->exp_wait.id) {
+			app_status(a, APP_SEV_WARNING, "Experiment %d not started: stopped by command", a->exp_wait.id);
+			post_done(a, APP_CMD_EXPERIMENT, APP_FAILED, 0, a->exp_wait.origin);
+			a->exp_wait.id = 0;
+		}
 		if (a->mode == APP_EXPERIMENT) {
 			exp_abort(&a->exp, "stopped by command");
 			app_set_mode(a, APP_HOLD);
@@ -785,10 +816,32 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 		snprintf(why, cap, "Experiment %d running", a->exp.id);
 		return APP_BUSY;
 	}
-	if (!app_hovering(a)) {
-		snprintf(why, cap, "Experiment %d refused: not hovering", id);
-		return APP_DENIED;
+	if (a->exp_wait.id) {
+		if (a->exp_wait.id == id)
+			return APP_IN_PROGRESS; /* a retry: still waiting */
+		snprintf(why, cap, "Experiment %d waits for the hover", a->exp_wait.id);
+		return APP_BUSY;
 	}
+	char nh[48];
+	if (app_not_hovering(a, nh, sizeof nh)) {
+		if (a->mode != APP_HOLD && a->mode != APP_TAKEOFF) {
+			snprintf(why, cap, "Experiment %d refused: not hovering, %s", id, nh);
+			return APP_DENIED;
+		}
+		/* flying but not yet settled: wait for the hover (exp_wait_tick) */
+		a->exp_wait.id = id;
+		a->exp_wait.origin = origin;
+		a->exp_wait.t0_s = a->fr.t_s;
+		app_status(a, APP_SEV_INFO, "Experiment %d waits: %s", id, nh);
+		return APP_IN_PROGRESS;
+	}
+	return exp_begin(a, id, origin, why, cap);
+}
+
+/* Experiment `id` on a hovering vehicle: refused while the attitude oscillates or when the
+ * source is not delivered; else started, its final answer owed to `origin`. */
+static enum app_result exp_begin(struct app *a, int id, app_origin origin, char *why, size_t cap)
+{
 	if (env_osc_oscillating(&a->env_osc)) { /* its excitation would take the tilt past the limit */
 		snprintf(why, cap, "Experiment %d refused: attitude oscillating (%.0f deg/s rms)", id,
 			 (double)env_osc_rms_dps(&a->env_osc));
@@ -1127,9 +1180,45 @@ bool app_next_event(struct app *a, struct app_event *e)
 	return outbox_pop(&a->outbox, e);
 }
 
+/* Between frames: an experiment waiting for the hover starts once the vehicle hovers (and
+ * its attitude no longer oscillates); it fails, saying why, when the vehicle leaves TAKEOFF
+ * and HOLD, when it cannot start, or after EXP_WAIT_S. */
+static void exp_wait_tick(struct app *a)
+{
+	int id = a->exp_wait.id;
+	if (!id)
+		return;
+	char nh[48], why[96] = "";
+	bool flying = a->mode == APP_HOLD || a->mode == APP_TAKEOFF;
+	bool hover = !app_not_hovering(a, nh, sizeof nh);
+	if (hover) {
+		a->exp_wait.id = 0;
+		enum app_result r = exp_begin(a, id, a->exp_wait.origin, why, sizeof why);
+		if (r == APP_IN_PROGRESS || r == APP_ACCEPTED)
+			return;
+		if (r != APP_BUSY) { /* cannot start at all: said, FAILED */
+			app_status(a, APP_SEV_ERROR, "%s", why);
+			post_done(a, APP_CMD_EXPERIMENT, APP_FAILED, 0, a->exp_wait.origin);
+			return;
+		}
+		a->exp_wait.id = id; /* oscillating: the guard lowers the gain; wait on */
+		snprintf(nh, sizeof nh, "attitude oscillating");
+	}
+	bool late = a->fr.t_s - a->exp_wait.t0_s > EXP_WAIT_S;
+	if (flying && !late)
+		return;
+	if (late)
+		app_status(a, APP_SEV_ERROR, "Experiment %d not started: %.0f s, %s", id, EXP_WAIT_S, nh);
+	else
+		app_status(a, APP_SEV_ERROR, "Experiment %d not started: %s", id, nh);
+	post_done(a, APP_CMD_EXPERIMENT, APP_FAILED, 0, a->exp_wait.origin);
+	a->exp_wait.id = 0;
+}
+
 void app_tick(struct app *a)
 {
 	app_settle(a);
+	exp_wait_tick(a);
 	mixer_refresh(&a->mix, &a->mix_warm); /* the last step's saturated demand, exactly */
 	if (a->save_pending) {
 		a->save_pending = false;

@@ -156,6 +156,13 @@ struct app {
 	struct app_id_run id_run; /* the last run's results as data */
 	bool exp_ack_pending;     /* a final result of the experiment command is owed */
 	app_origin exp_origin;    /* to whom */
+	/* an experiment commanded in TAKEOFF or HOLD before the vehicle hovers: it starts when it
+	 * does (app_tick), or fails with the reason after EXP_WAIT_S of plant time */
+	struct {
+		int id; /* 0: none waiting */
+		app_origin origin;
+		double t0_s; /* plant time of the command */
+	} exp_wait;
 
 	/* The frame's work the step leaves to the frame boundary (app_settle runs it first):
 	 * the k_f tracker's update, the rotor-failure judge and the frame's log record. Their
@@ -241,6 +248,7 @@ bool app_next_event(struct app *a, struct app_event *e);
 
 const char *app_mode_name(enum app_mode m);
 bool app_hovering(const struct app *a);
+bool app_not_hovering(const struct app *a, char *why, size_t cap);
 bool app_flying(const struct app *a);
 
 /* Commands (called by the MAVLink module). Each returns an app_result and, on

@@ -3,7 +3,8 @@
 Start: COMMAND_LONG MAV_CMD_USER_1, param1 = experiment (1 rotor coefficients,
 2 validation, 3 Ix, 4 Iy, 5 Iz, 6 the full sequence). The vehicle answers
 IN_PROGRESS (or ACCEPTED) when it starts, then a final COMMAND_ACK ACCEPTED or
-FAILED. Each result arrives as data, an OCTO_ID_RESULT message (id_results.py); a
+FAILED. A vehicle taking off or still settling answers IN_PROGRESS too, says
+"Experiment N waits: <why>", and starts once it hovers (or fails, saying why). Each result arrives as data, an OCTO_ID_RESULT message (id_results.py); a
 run's missing ones are asked for again with MAV_CMD_REQUEST_MESSAGE. STATUSTEXTs
 "ID k/n: <phase>", "ID done" or "ID aborted: <why>" name the phases for the progress
 line, and the texts are shown to the user; live estimates come as NAMED_VALUE_FLOAT.
@@ -40,6 +41,7 @@ class Live:
         self.done = None  # "done" | "aborted: why" | "failed"
         self.failure = None  # the vehicle's error text about the experiment (a phase's time limit)
         self.texts = []
+        self.waiting = False  # the vehicle said the experiment waits for the hover
 
     def on_text(self, text, severity=None):
         if not text.startswith("ID"):
@@ -61,8 +63,9 @@ class Live:
 
 def _start(v, experiment, start_timeout):
     """Sends the experiment's command until the vehicle starts it; raises GcsError on a refusal.
-    A vehicle still settling after take-off answers DENIED "not hovering", one whose attitude
-    still oscillates (the firmware lowering its gain) TEMPORARILY_REJECTED: both are retried."""
+    A vehicle that does not fly answers DENIED "not hovering" (retried: an older firmware also
+    answers so while it settles), one whose attitude still oscillates (the firmware lowering
+    its gain) TEMPORARILY_REJECTED (retried)."""
     from .link import mavlink, result_name
 
     cmd, name = mavlink.MAV_CMD_USER_1, EXPERIMENTS[experiment]
@@ -101,6 +104,7 @@ def _wait_end(v, live, state, t_wall0, timeout, show, experiment):
     from .link import mavlink, result_name
 
     t_text_done = None
+    entered = False  # the vehicle was seen in the experiment mode
     while True:
         if state["final"] is not None:
             # the final ACK comes last (after the results are applied)
@@ -117,13 +121,19 @@ def _wait_end(v, live, state, t_wall0, timeout, show, experiment):
                 )
             return
         in_exp = v.mode == MODE_NUMBERS["EXPERIMENT"]
+        entered = entered or in_exp
         if live.done is not None:
             # "ID done"/"ID aborted": the results are applied when the vehicle is back
             # in hold (or with the final ACK); don't wait forever for either
             t_text_done = t_text_done or time.monotonic()
             if not in_exp or time.monotonic() - t_text_done > 3.0:
                 return
-        elif not in_exp and v.mode is not None and time.monotonic() - t_wall0 > 2.0:
+        elif (
+            not in_exp
+            and v.mode is not None
+            and time.monotonic() - t_wall0 > 2.0
+            and (entered or not live.waiting)
+        ):
             # the vehicle left the experiment without the closing messages
             v.recv(types=(), timeout=0.3)
             if live.done is None and state["final"] is None:
@@ -194,6 +204,14 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
         if t == "OCTO_ID_RESULT":
             live.on_result(msg)
         elif t == "STATUSTEXT":
+            if msg.text.startswith(f"Experiment {experiment} ") and state["started"]:
+                # not hovering yet: "Experiment N waits: <why>", then it starts, or
+                # "Experiment N not started: <why>" with the final FAILED
+                live.waiting = live.waiting or " waits: " in msg.text
+                if " not started" in msg.text and live.failure is None:
+                    live.failure = msg.text
+                progress.say("  " + msg.text)
+                return
             if not msg.text.startswith("ID"):
                 return
             live.on_text(msg.text, msg.severity)

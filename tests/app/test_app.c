@@ -22,7 +22,8 @@ struct rig {
 	struct mav mav; /* the platform's MAVLink endpoint: drains the outbox after app_tick */
 	struct hal_sensor_frame f;
 	double t;
-	bool stuck; /* the vehicle stays at height z_stuck whatever the app asks */
+	bool stuck;         /* the vehicle stays at height z_stuck whatever the app asks */
+	bool collect_ticks; /* fly_collect runs app_tick after each frame */
 	float z_stuck;
 	/* the roll rate, while roll_dps > 0: a 2 Hz sine of rms roll_dps, times roll_decay per
 	 * second from roll_t0 */
@@ -348,6 +349,7 @@ UNIT_TEST(app_experiment_refused_unless_hovering)
 	char why[64] = "";
 	fly(r, 3);
 	CHECK(app_cmd_experiment(&r->a, 1.0f, 1, why, sizeof why) == APP_DENIED);
+	CHECK(!strcmp(why, "Experiment 1 refused: not hovering, mode DISARMED"));
 	CHECK(r->a.mode == APP_DISARMED);
 }
 
@@ -538,9 +540,9 @@ UNIT_TEST(app_parameter_flags_follow_their_groups)
 	}
 }
 
-/* Frames for `seconds` without app_tick, the outbox drained after each: the
- * status lines that start with `prefix` counted (the last kept in `text`), the
- * final results (APP_EV_CMD_DONE) counted (the last kept in *done). */
+/* Frames for `seconds` without app_tick (with it when r->collect_ticks), the outbox
+ * drained after each: the status lines that start with `prefix` counted (the last kept in
+ * `text`), the final results (APP_EV_CMD_DONE) counted (the last kept in *done). */
 static int fly_collect(struct rig *r, float seconds, const char *prefix, char *text, size_t cap, int *n_done,
 		       struct app_event *done)
 {
@@ -549,6 +551,8 @@ static int fly_collect(struct rig *r, float seconds, const char *prefix, char *t
 		r->t += 1.0 / 90.0;
 		r->h.now_us += FRAME_US;
 		frame_at(r, r->t);
+		if (r->collect_ticks)
+			app_tick(&r->a);
 		struct app_event e;
 		while (app_next_event(&r->a, &e)) {
 			if (e.kind == APP_EV_STATUS && !strncmp(e.text, prefix, strlen(prefix))) {
@@ -597,6 +601,60 @@ UNIT_TEST(app_takeoff_time_limit_fails_to_its_origin)
 	n = fly_collect(r, 3.0f, "Take-off failed", text, sizeof text, &n_done, &done);
 	CHECK(n == 0 && n_done == 1); /* said once; the landing it became answers no one */
 	CHECK(r->a.mode == APP_DISARMED);
+}
+
+/* Commanded during the take-off, an experiment waits (IN_PROGRESS, said once, retries
+ * answered IN_PROGRESS, another experiment BUSY) and starts once the vehicle hovers. */
+UNIT_TEST(app_experiment_commanded_in_the_take_off_waits_and_starts)
+{
+	struct rig *r = rig_new();
+	char why[64] = "", text[APP_EVENT_TEXT] = "";
+	fly(r, 5);
+	CHECK(app_cmd_arm(&r->a, true, false, why, sizeof why) == APP_ACCEPTED);
+	CHECK(app_cmd_takeoff(&r->a, 3.0f, 7, why, sizeof why) == APP_ACCEPTED);
+	fly(r, 2);
+	CHECK(r->a.mode == APP_TAKEOFF);
+	take_events(&r->a, APP_EV_STATUS, NULL);
+	CHECK(app_cmd_experiment(&r->a, 1.0f, 0x0203, why, sizeof why) == APP_IN_PROGRESS);
+	CHECK(app_cmd_experiment(&r->a, 1.0f, 0x0203, why, sizeof why) == APP_IN_PROGRESS);
+	CHECK(app_cmd_experiment(&r->a, 2.0f, 0x0203, why, sizeof why) == APP_BUSY);
+	CHECK(!strcmp(why, "Experiment 1 waits for the hover"));
+	r->collect_ticks = true;
+	int n_done = 0, n_wait = 0;
+	struct app_event done = {0};
+	for (int k = 0; k < 60 * 10 && r->a.mode != APP_EXPERIMENT; k++)
+		n_wait += fly_collect(r, 0.1f, "Experiment 1 waits", text, sizeof text, &n_done, &done);
+	CHECK(n_wait == 1 && !strcmp(text, "Experiment 1 waits: taking off"));
+	CHECK(r->a.mode == APP_EXPERIMENT && n_done == 0 && r->a.exp.id == 1);
+}
+
+/* Not hovering in HOLD (the vehicle held 1 m below its target): the experiment waits,
+ * then fails to its requester after 30 s of plant time, saying why; a landing ends a wait
+ * at once. */
+UNIT_TEST(app_experiment_waiting_fails_with_its_reason)
+{
+	struct rig *r = rig_hovering(u);
+	char why[64] = "", text[APP_EVENT_TEXT] = "";
+	r->stuck = true;
+	r->z_stuck = sc_to_float(r->a.guid.z_target_m) - 1.0f;
+	r->collect_ticks = true;
+	int n_done = 0;
+	struct app_event done = {0};
+	fly_collect(r, 0.1f, "", text, sizeof text, &n_done, &done);
+	CHECK(app_cmd_experiment(&r->a, 3.0f, 0x0405, why, sizeof why) == APP_IN_PROGRESS);
+	CHECK(fly_collect(r, 29.0f, "Experiment 3", text, sizeof text, &n_done, &done) == 1);
+	CHECK(!strcmp(text, "Experiment 3 waits: height -1.00 m off (0.30)") && n_done == 0);
+	CHECK(fly_collect(r, 2.0f, "Experiment 3", text, sizeof text, &n_done, &done) == 1);
+	CHECK(!strcmp(text, "Experiment 3 not started: 30 s, height -1.00 m off (0.30)"));
+	CHECK(n_done == 1 && done.cmd == APP_CMD_EXPERIMENT && done.result == APP_FAILED && done.origin == 0x0405);
+	CHECK(r->a.mode == APP_HOLD && r->a.exp_wait.id == 0);
+
+	CHECK(app_cmd_experiment(&r->a, 4.0f, 0x0405, why, sizeof why) == APP_IN_PROGRESS);
+	CHECK(app_cmd_land(&r->a, 7, why, sizeof why) == APP_ACCEPTED);
+	n_done = 0;
+	CHECK(fly_collect(r, 0.1f, "Experiment 4 not", text, sizeof text, &n_done, &done) == 1);
+	CHECK(!strcmp(text, "Experiment 4 not started: mode LAND"));
+	CHECK(n_done == 1 && done.result == APP_FAILED && done.origin == 0x0405);
 }
 
 /* The tracked k_f's update and publication (KFT_* parameters, their PARAM_VALUE and

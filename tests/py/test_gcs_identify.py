@@ -27,9 +27,11 @@ RESULTS = {"ID_KF_EST": 28.031, "ID_KF_SD": 0.009, "ID_KF_PLAIN": 25.6, "ID_KTAU
 
 
 class ScriptedVehicle(threading.Thread):
-    def __init__(self, gcs_port, hovering=True, oscillating=0):
+    def __init__(self, gcs_port, hovering=True, oscillating=0, settle_s=None, settles=True):
         super().__init__(daemon=True)
         self.oscillating = oscillating   # experiment commands answered TEMPORARILY_REJECTED first
+        self.settle_s = self.settle_s_was = settle_s  # an experiment waits this long for the hover
+        self.settles = settles           # ... then starts, or fails saying why
         self.m = mavutil.mavlink_connection(f"udpout:127.0.0.1:{gcs_port}", source_system=1,
                                             source_component=1)
         self.mode = 3 if hovering else 0
@@ -47,8 +49,8 @@ class ScriptedVehicle(threading.Thread):
         self.m.mav.param_value_send(name.encode(), self.params[name], mav.MAV_PARAM_TYPE_REAL32,
                                     len(names), names.index(name))
 
-    def text(self, s):
-        self.m.mav.statustext_send(6, s.encode())
+    def text(self, s, severity=6):
+        self.m.mav.statustext_send(severity, s.encode())
 
     def run(self):
         last_hb = 0.0
@@ -87,9 +89,23 @@ class ScriptedVehicle(threading.Thread):
                     self.text(f"Experiment {int(msg.param1)} refused: attitude oscillating (30 deg/s rms)")
                     continue
                 self.m.mav.command_ack_send(msg.command, mav.MAV_RESULT_IN_PROGRESS, 0)
-                self.started.append(int(msg.param1))
-                self.mode = 4
-                self.plan(time.monotonic())
+                if self.settle_s is not None:   # as octo-fw: IN_PROGRESS, then the wait said
+                    n, self.settle_s, t0 = int(msg.param1), None, time.monotonic()
+                    self.text(f"Experiment {n} waits: height +0.40 m off (0.30)")
+                    self.script = [(t0 + self.settle_s_was, self.wait_end(n))]
+                    continue
+                self.begin(int(msg.param1))
+
+    def begin(self, n):
+        self.started.append(n)
+        self.mode = 4
+        self.plan(time.monotonic())
+
+    def wait_end(self, n):
+        if self.settles:
+            return lambda: self.begin(n)
+        return lambda: (self.text(f"Experiment {n} not started: 30 s, height +0.40 m off", 3),
+                        self.m.mav.command_ack_send(mav.MAV_CMD_USER_1, mav.MAV_RESULT_FAILED))
 
     def send_result(self, i):
         """Result i of run 1: k_f, k_tau, I_x, I_y, I_z (from the thrust rows)."""
@@ -176,6 +192,24 @@ def test_identify_waits_while_the_attitude_oscillates(vehicle, capsys):
     v, url = vehicle(oscillating=3)
     assert main(["identify", "--connect", url, "--experiments", "1"]) == 0, capsys.readouterr()
     assert v.started == [1] and v.oscillating == 0
+
+
+def test_identify_waits_while_the_vehicle_waits_for_the_hover(vehicle, capsys):
+    """IN_PROGRESS and "Experiment 1 waits: ..." with the vehicle in HOLD for longer than
+    identify's 2 s grace for a vehicle that left the experiment mode: it is not taken for an
+    ended experiment; the experiment starts 3 s later and passes."""
+    v, url = vehicle(settle_s=3.0)
+    assert main(["identify", "--connect", url, "--experiments", "1"]) == 0, capsys.readouterr()
+    assert v.started == [1]
+    assert "Experiment 1 waits: height +0.40 m off (0.30)" in capsys.readouterr().out
+
+
+def test_identify_fails_with_the_vehicles_reason_when_it_never_hovers(vehicle, capsys):
+    v, url = vehicle(settle_s=3.0, settles=False)
+    assert main(["identify", "--connect", url, "--experiments", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "Experiment 1 not started: 30 s, height +0.40 m off" in err, err
+    assert v.started == [] and "Traceback" not in err
 
 
 def test_identify_refuses_a_vehicle_on_the_ground(vehicle, capsys):
