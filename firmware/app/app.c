@@ -386,8 +386,12 @@ static void env_publish(struct app *a)
 	struct env_osc_req oq;
 	if (env_osc_judge(&a->env_osc, &a->p, &oq)) {
 		if (oq.at_min || params_set(&a->p, PX_ATT_WN_RP, oq.nw) != PARAM_OK) {
-			app_status(a, APP_SEV_WARNING, "Attitude oscillation %.0f deg/s: ATT_WN_RP at its minimum",
+			/* a loop the guard cannot settle: the vehicle cannot be flown, it lands */
+			app_status(a, APP_SEV_ERROR, "Attitude oscillation %.0f deg/s: ATT_WN_RP at its minimum",
 				   (double)oq.rms_dps);
+			app_status(a, APP_SEV_ERROR, "Landing: the attitude loop cannot be settled");
+			char w[8];
+			app_cmd_land(a, APP_ORIGIN_NONE, w, sizeof w);
 		} else {
 			post_param(a, PX_ATT_WN_RP);
 			a->params_dirty = true;

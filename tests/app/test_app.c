@@ -384,6 +384,18 @@ UNIT_TEST(app_oscillation_guard_detunes_and_holds_experiments)
 	CHECK(app_cmd_experiment(&r->a, 1.0f, 1, why, sizeof why) == APP_IN_PROGRESS);
 }
 
+/* An oscillation at ATT_WN_RP's minimum: the guard cannot settle it, the vehicle lands. */
+UNIT_TEST(app_oscillation_at_the_gains_minimum_lands)
+{
+	struct rig *r = rig_hovering(u);
+	char text[APP_EVENT_TEXT] = "";
+	CHECK(app_param_write(&r->a, (size_t)param_index("ATT_WN_RP"), 1.0f) == NULL);
+	CHECK(fly_rolling(r, 3.0f, 30.0, 1.0, text, sizeof text) == 1);
+	CHECK(!strncmp(text, "Attitude oscillation 30 deg/s: ATT_WN_RP at its minimum", sizeof text));
+	CHECK(r->a.mode == APP_LAND);
+	CHECK(r->a.p.att_wn_rp == 1.0f);
+}
+
 UNIT_TEST(app_identification_results_are_read_only)
 {
 	struct rig *r = rig_new();
