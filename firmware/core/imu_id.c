@@ -37,6 +37,18 @@ static void set_grid(struct imu_id *m)
 	}
 }
 
+/* a ring one frame older: each slot takes the newer one's value (slot 0 keeps its own until
+ * overwritten); carried in a register so that the compiler keeps it inline */
+static void ring_age(float r[IMU_ID_RING])
+{
+	float v = r[0];
+	for (unsigned d = 1; d < IMU_ID_RING; d++) {
+		float t = r[d];
+		r[d] = v;
+		v = t;
+	}
+}
+
 /* the lag filters and their sensitivities, their sums into the rings' newest slot */
 static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 {
@@ -44,14 +56,12 @@ static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
 		float a = m->a[l], da = m->da[l], s1 = 0.0f, s2 = 0.0f, s3 = 0.0f, s4 = 0.0f;
 		float p1 = 0.0f, p2 = 0.0f;
-		for (unsigned d = IMU_ID_RING - 1; d > 0; d--) {
-			m->x1[l][d] = m->x1[l][d - 1];
-			m->x2[l][d] = m->x2[l][d - 1];
-			m->x3[l][d] = m->x3[l][d - 1];
-			m->x4[l][d] = m->x4[l][d - 1];
-			m->q1[l][d] = m->q1[l][d - 1];
-			m->q2[l][d] = m->q2[l][d - 1];
-		}
+		ring_age(m->x1[l]);
+		ring_age(m->x2[l]);
+		ring_age(m->x3[l]);
+		ring_age(m->x4[l]);
+		ring_age(m->q1[l]);
+		ring_age(m->q2[l]);
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
 			float y0 = m->y[l][j];
 			/* y = a y0 + (1 - a) u: d y / d ln tau = a w0 + (d a / d ln tau) (y0 - u) */
@@ -323,7 +333,13 @@ static float hyp_solve_tq(const struct imu_id *m, const struct imu_id_stat *s, f
  * references) into a hypothesis' or a block's sums */
 static void stat_add(struct imu_id_stat *s, const float x[NP], float z, float zt, bool tq)
 {
-	add_outer(s->g, x, x);
+	/* G += x x' (add_outer(g, x, x), its upper triangle in storage order) */
+	float *g = s->g;
+	for (unsigned i = 0; i < NP; i++) {
+		float xi = x[i];
+		for (unsigned k = i; k < NP; k++)
+			*g++ += xi * x[k];
+	}
 	for (unsigned i = 0; i < NP; i++)
 		s->b[i] += x[i] * z;
 	s->rr += z * z;
