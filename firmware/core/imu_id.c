@@ -333,20 +333,40 @@ static float hyp_solve_tq(const struct imu_id *m, const struct imu_id_stat *s, f
  * references) into a hypothesis' or a block's sums */
 static void stat_add(struct imu_id_stat *s, const float x[NP], float z, float zt, bool tq)
 {
-	/* G += x x' (add_outer(g, x, x), its upper triangle in storage order) */
-	float *g = s->g;
-	for (unsigned i = 0; i < NP; i++) {
-		float xi = x[i];
-		for (unsigned k = i; k < NP; k++)
-			*g++ += xi * x[k];
-	}
-	for (unsigned i = 0; i < NP; i++)
-		s->b[i] += x[i] * z;
+	/* G += x x' (add_outer(g, x, x), its upper triangle in storage order) and b += x z,
+	 * written out for the five parameters: the bank's inner loop, run for every hypothesis */
+	_Static_assert(NP == 5 && NT == 15, "stat_add is written out for five parameters");
+	const float x0 = x[0], x1 = x[1], x2 = x[2], x3 = x[3], x4 = x[4];
+	float *g = s->g, *b = s->b;
+	g[0] += x0 * x0;
+	g[1] += x0 * x1;
+	g[2] += x0 * x2;
+	g[3] += x0 * x3;
+	g[4] += x0 * x4;
+	g[5] += x1 * x1;
+	g[6] += x1 * x2;
+	g[7] += x1 * x3;
+	g[8] += x1 * x4;
+	g[9] += x2 * x2;
+	g[10] += x2 * x3;
+	g[11] += x2 * x4;
+	g[12] += x3 * x3;
+	g[13] += x3 * x4;
+	g[14] += x4 * x4;
+	b[0] += x0 * z;
+	b[1] += x1 * z;
+	b[2] += x2 * z;
+	b[3] += x3 * z;
+	b[4] += x4 * z;
 	s->rr += z * z;
 	if (!tq)
 		return;
-	for (unsigned i = 0; i < NP; i++)
-		s->bt[i] += x[i] * zt;
+	b = s->bt;
+	b[0] += x0 * zt;
+	b[1] += x1 * zt;
+	b[2] += x2 * zt;
+	b[3] += x3 * zt;
+	b[4] += x4 * zt;
 	s->rrt += zt * zt;
 }
 
