@@ -37,31 +37,26 @@ static void set_grid(struct imu_id *m)
 	}
 }
 
-/* a ring one frame older: each slot takes the newer one's value (slot 0 keeps its own until
- * overwritten); carried in a register so that the compiler keeps it inline */
-static void ring_age(float r[IMU_ID_RING])
+/* the lag whose patterns' responses the rings keep: the clusters' hypothesis after the
+ * refinement (refine), the grid's centre */
+#define CL_LAG (IMU_ID_LAGS / 2u)
+
+/* the slots of the frames of age 0 .. IMU_ID_RING - 1 in the rings */
+static void ring_slots(const struct imu_id *m, unsigned ix[IMU_ID_RING])
 {
-	float v = r[0];
-	for (unsigned d = 1; d < IMU_ID_RING; d++) {
-		float t = r[d];
-		r[d] = v;
-		v = t;
-	}
+	for (unsigned k = 0, i = m->rh; k < IMU_ID_RING; k++, i = i + 1u < IMU_ID_RING ? i + 1u : 0u)
+		ix[k] = i;
 }
 
-/* the lag filters and their sensitivities, their sums into the rings' newest slot */
+/* the lag filters and their sensitivities, their sums into the rings' newest slot (the
+ * oldest frame's, which the rings drop) */
 static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 {
 	const struct imu_id_cfg *c = &m->cfg;
+	unsigned h = m->rh ? m->rh - 1u : IMU_ID_RING - 1u;
+	m->rh = (uint8_t)h;
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
 		float a = m->a[l], da = m->da[l], s1 = 0.0f, s2 = 0.0f, s3 = 0.0f, s4 = 0.0f;
-		float p1 = 0.0f, p2 = 0.0f;
-		ring_age(m->x1[l]);
-		ring_age(m->x2[l]);
-		ring_age(m->x3[l]);
-		ring_age(m->x4[l]);
-		ring_age(m->q1[l]);
-		ring_age(m->q2[l]);
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
 			float y0 = m->y[l][j];
 			/* y = a y0 + (1 - a) u: d y / d ln tau = a w0 + (d a / d ln tau) (y0 - u) */
@@ -74,16 +69,20 @@ static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 			s2 += sj * y * y;
 			s3 += sj * w;
 			s4 += 2.0f * sj * y * w;
-			p1 += c->pat[0][j] * sj * y;
-			p2 += c->pat[1][j] * sj * y;
 		}
-		m->x1[l][0] = s1;
-		m->x2[l][0] = s2;
-		m->x3[l][0] = s3;
-		m->x4[l][0] = s4;
-		m->q1[l][0] = p1;
-		m->q2[l][0] = p2;
+		m->x1[l][h] = s1;
+		m->x2[l][h] = s2;
+		m->x3[l][h] = s3;
+		m->x4[l][h] = s4;
 	}
+	float p1 = 0.0f, p2 = 0.0f;
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
+		float sj = c->scale[j], y = m->y[CL_LAG][j];
+		p1 += c->pat[0][j] * sj * y;
+		p2 += c->pat[1][j] * sj * y;
+	}
+	m->q1[h] = p1;
+	m->q2[h] = p2;
 }
 
 void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t thr0[IMU_ID_ROTORS])
@@ -388,15 +387,18 @@ static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl)
 
 static float smooth(const float *r) { return 0.25f * (r[0] + 2.0f * r[1] + r[2]); }
 
-/* the hypothesis' smoothed regressors, centred at the start's hover (basis): with the curve
+/* the same of a ring's three slots ix[0..2] */
+static float smooth_at(const float *r, const unsigned *ix) { return 0.25f * (r[ix[0]] + 2.0f * r[ix[1]] + r[ix[2]]); }
+
+/* the hypothesis' (the delay's ring slots ix, lag l) smoothed regressors, centred at the start's hover (basis): with the curve
  * estimated (x1 - y_h S, sum s (y - y_h)^2, x3, sum 2 s (y - y_h) w, 1), else (the
  * reference's less its value at y_h, 0, its sensitivity, 0, 1); xr: the reference model's
  * regressor */
-static void regs(const struct imu_id *m, unsigned d, unsigned l, float x[NP], float *xr)
+static void regs(const struct imu_id *m, const unsigned ix[3], unsigned l, float x[NP], float *xr)
 {
-	float s1 = smooth(&m->x1[l][d]), s2 = smooth(&m->x2[l][d]), yh = m->yh, s = m->ssum;
+	float s1 = smooth_at(m->x1[l], ix), s2 = smooth_at(m->x2[l], ix), yh = m->yh, s = m->ssum;
 	*xr = ref_x(&m->cfg, s1, s2);
-	float s3 = smooth(&m->x3[l][d]), s4 = smooth(&m->x4[l][d]);
+	float s3 = smooth_at(m->x3[l], ix), s4 = smooth_at(m->x4[l], ix);
 	if (m->cfg.est_curve) {
 		x[0] = s1 - yh * s;
 		x[P_B] = s2 - 2.0f * yh * s1 + yh * yh * s;
@@ -416,13 +418,15 @@ static void regs(const struct imu_id *m, unsigned d, unsigned l, float x[NP], fl
 static void cl_add(struct imu_id *m, float f, float tq)
 {
 	float x[NP], xr;
-	regs(m, m->cl_d, m->cl_l, x, &xr);
+	unsigned ix[IMU_ID_RING];
+	ring_slots(m, ix);
+	regs(m, ix + m->cl_d, m->cl_l, x, &xr);
 	float z = f - m->cfg.kf0 * xr, zt = tq - m->cfg.kt0 * xr;
 	float xx[IMU_ID_NX];
 	for (unsigned i = 0; i < NP; i++)
 		xx[i] = x[i];
-	xx[NP] = smooth(&m->q1[m->cl_l][m->cl_d]);
-	xx[NP + 1u] = smooth(&m->q2[m->cl_l][m->cl_d]);
+	xx[NP] = smooth_at(m->q1, ix + m->cl_d);
+	xx[NP + 1u] = smooth_at(m->q2, ix + m->cl_d);
 	for (unsigned i = 0; i < IMU_ID_NX; i++) {
 		for (unsigned k = 0; k < IMU_ID_NX; k++)
 			m->xg[i][k] += xx[i] * xx[k];
@@ -493,7 +497,7 @@ static void refine(struct imu_id *m)
 	m->skip = IMU_ID_SKIP;
 	m->refined = true;
 	m->cl_d = (uint8_t)bd;
-	m->cl_l = (uint8_t)(IMU_ID_LAGS / 2u);
+	m->cl_l = (uint8_t)CL_LAG;
 	m->cl_len = m->cfg.block_frames ? m->cfg.block_frames : 90u;
 	m->cl_on = true;
 }
@@ -550,10 +554,12 @@ void imu_id_process(struct imu_id *m)
 	}
 	m->n_st++;
 	const struct imu_id_cfg *c = &m->cfg;
+	unsigned ix[IMU_ID_RING];
+	ring_slots(m, ix);
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
 		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
 			float x[NP], xr;
-			regs(m, d, l, x, &xr);
+			regs(m, ix + d, l, x, &xr);
 			stat_add(&m->st[d][l], x, f - c->kf0 * xr, t - c->kt0 * xr, c->torque);
 		}
 	if (!m->refined && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_st >= 30u) {

@@ -113,10 +113,11 @@ struct imu_id {
 	float a[IMU_ID_LAGS];  /* the lags' poles exp(-dt / tau) */
 	float da[IMU_ID_LAGS]; /* d a / d ln tau */
 	float y[IMU_ID_LAGS][IMU_ID_ROTORS], w[IMU_ID_LAGS][IMU_ID_ROTORS]; /* outputs, d y / d ln tau */
-	/* rings of x1, x2, x3 by frame age */
+	/* rings of x1, x2, x3, x4 by frame age: the frame of age k in slot (rh + k) % IMU_ID_RING */
+	uint8_t rh;
 	float x1[IMU_ID_LAGS][IMU_ID_RING], x2[IMU_ID_LAGS][IMU_ID_RING];
 	float x3[IMU_ID_LAGS][IMU_ID_RING], x4[IMU_ID_LAGS][IMU_ID_RING]; /* sum s w, sum 2 s y w */
-	float q1[IMU_ID_LAGS][IMU_ID_RING], q2[IMU_ID_LAGS][IMU_ID_RING]; /* sum p_kj s_j y_j */
+	float q1[IMU_ID_RING], q2[IMU_ID_RING]; /* sum p_kj s_j y_j, at the clusters' lag (imu_id.c) */
 	/* the scales' check on the frozen hypothesis: G (full), b, z'z over its frames */
 	float xg[IMU_ID_NX][IMU_ID_NX], xb[IMU_ID_NX], xrr;
 	uint32_t xn;
