@@ -41,20 +41,25 @@ static void set_grid(struct imu_id *m)
  * refinement (refine), the grid's centre */
 #define CL_LAG (IMU_ID_LAGS / 2u)
 
-/* the slots of the frames of age 0 .. IMU_ID_RING - 1 in the rings */
-static void ring_slots(const struct imu_id *m, unsigned ix[IMU_ID_RING])
+static float smooth(const float *r) { return 0.25f * (r[0] + 2.0f * r[1] + r[2]); }
+
+static void push3(float r[3], float v)
 {
-	for (unsigned k = 0, i = m->rh; k < IMU_ID_RING; k++, i = i + 1u < IMU_ID_RING ? i + 1u : 0u)
-		ix[k] = i;
+	r[2] = r[1];
+	r[1] = r[0];
+	r[0] = v;
 }
 
-/* the lag filters and their sensitivities, their sums into the rings' newest slot (the
- * oldest frame's, which the rings drop) */
+static void regs(const struct imu_id *m, unsigned l, float x[NP], float *xr);
+
+/* the lag filters and their sensitivities, their sums, and the newest frame's smoothed
+ * regressors into the slot of age 0 (the oldest's, which the delays drop): a delay d reads
+ * the regressors computed d frames before, the same numbers as from the sums d frames old */
 static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 {
 	const struct imu_id_cfg *c = &m->cfg;
-	unsigned h = m->rh ? m->rh - 1u : IMU_ID_RING - 1u;
-	m->rh = (uint8_t)h;
+	unsigned h = m->xh ? m->xh - 1u : IMU_ID_DELAYS - 1u;
+	m->xh = (uint8_t)h;
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
 		float a = m->a[l], da = m->da[l], s1 = 0.0f, s2 = 0.0f, s3 = 0.0f, s4 = 0.0f;
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
@@ -70,10 +75,12 @@ static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 			s3 += sj * w;
 			s4 += 2.0f * sj * y * w;
 		}
-		m->x1[l][h] = s1;
-		m->x2[l][h] = s2;
-		m->x3[l][h] = s3;
-		m->x4[l][h] = s4;
+		push3(m->x1[l], s1);
+		push3(m->x2[l], s2);
+		push3(m->x3[l], s3);
+		push3(m->x4[l], s4);
+		float *xc = m->xc[l][h];
+		regs(m, l, xc, &xc[NP]);
 	}
 	float p1 = 0.0f, p2 = 0.0f;
 	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
@@ -81,8 +88,17 @@ static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 		p1 += c->pat[0][j] * sj * y;
 		p2 += c->pat[1][j] * sj * y;
 	}
-	m->q1[h] = p1;
-	m->q2[h] = p2;
+	push3(m->q1, p1);
+	push3(m->q2, p2);
+	m->qc[0][h] = smooth(m->q1);
+	m->qc[1][h] = smooth(m->q2);
+}
+
+/* the slots of the frames of age 0 .. IMU_ID_DELAYS - 1 */
+static void age_slots(const struct imu_id *m, unsigned ix[IMU_ID_DELAYS])
+{
+	for (unsigned k = 0, i = m->xh; k < IMU_ID_DELAYS; k++, i = i + 1u < IMU_ID_DELAYS ? i + 1u : 0u)
+		ix[k] = i;
 }
 
 void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t thr0[IMU_ID_ROTORS])
@@ -101,8 +117,6 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
 			m->y[l][j] = u[j];
-	for (unsigned d = 0; d < IMU_ID_RING; d++)
-		advance(m, u); /* the rings at the steady state */
 	/* the centring point: the start's mean throttle and the scales' sum; and the reference
 	 * model made to carry the weight there (k_f from the prior's curve and the mass), so that
 	 * the responses relative to it stay small: both keep the float sums' precision */
@@ -114,6 +128,8 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 	}
 	m->yh = yh;
 	m->ssum = ss;
+	for (unsigned d = 0; d < IMU_ID_RING; d++)
+		advance(m, u); /* the steady state, each delay's regressors from three frames */
 	float kr = gs > 0.0f ? m->cfg.mass_kg * m->cfg.g / gs : 0.0f;
 	if (isfinite(kr) && kr > 0.0f && m->cfg.kf0 > 0.0f) {
 		m->cfg.kt0 *= kr / m->cfg.kf0;
@@ -385,20 +401,15 @@ static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl)
 		}
 }
 
-static float smooth(const float *r) { return 0.25f * (r[0] + 2.0f * r[1] + r[2]); }
-
-/* the same of a ring's three slots ix[0..2] */
-static float smooth_at(const float *r, const unsigned *ix) { return 0.25f * (r[ix[0]] + 2.0f * r[ix[1]] + r[ix[2]]); }
-
-/* the hypothesis' (the delay's ring slots ix, lag l) smoothed regressors, centred at the start's hover (basis): with the curve
- * estimated (x1 - y_h S, sum s (y - y_h)^2, x3, sum 2 s (y - y_h) w, 1), else (the
- * reference's less its value at y_h, 0, its sensitivity, 0, 1); xr: the reference model's
- * regressor */
-static void regs(const struct imu_id *m, const unsigned ix[3], unsigned l, float x[NP], float *xr)
+/* the newest frame's smoothed regressors of lag l, centred at the start's hover (basis):
+ * with the curve estimated (x1 - y_h S, sum s (y - y_h)^2, x3, sum 2 s (y - y_h) w, 1), else
+ * (the reference's less its value at y_h, 0, its sensitivity, 0, 1); xr: the reference
+ * model's regressor */
+static void regs(const struct imu_id *m, unsigned l, float x[NP], float *xr)
 {
-	float s1 = smooth_at(m->x1[l], ix), s2 = smooth_at(m->x2[l], ix), yh = m->yh, s = m->ssum;
+	float s1 = smooth(m->x1[l]), s2 = smooth(m->x2[l]), yh = m->yh, s = m->ssum;
 	*xr = ref_x(&m->cfg, s1, s2);
-	float s3 = smooth_at(m->x3[l], ix), s4 = smooth_at(m->x4[l], ix);
+	float s3 = smooth(m->x3[l]), s4 = smooth(m->x4[l]);
 	if (m->cfg.est_curve) {
 		x[0] = s1 - yh * s;
 		x[P_B] = s2 - 2.0f * yh * s1 + yh * yh * s;
@@ -417,16 +428,15 @@ static void regs(const struct imu_id *m, const unsigned ix[3], unsigned l, float
  * into the scales' check (the two patterns' responses beside the parameters) */
 static void cl_add(struct imu_id *m, float f, float tq)
 {
-	float x[NP], xr;
-	unsigned ix[IMU_ID_RING];
-	ring_slots(m, ix);
-	regs(m, ix + m->cl_d, m->cl_l, x, &xr);
-	float z = f - m->cfg.kf0 * xr, zt = tq - m->cfg.kt0 * xr;
+	unsigned ix[IMU_ID_DELAYS];
+	age_slots(m, ix);
+	const float *x = m->xc[m->cl_l][ix[m->cl_d]];
+	float z = f - m->cfg.kf0 * x[NP], zt = tq - m->cfg.kt0 * x[NP];
 	float xx[IMU_ID_NX];
 	for (unsigned i = 0; i < NP; i++)
 		xx[i] = x[i];
-	xx[NP] = smooth_at(m->q1, ix + m->cl_d);
-	xx[NP + 1u] = smooth_at(m->q2, ix + m->cl_d);
+	xx[NP] = m->qc[0][ix[m->cl_d]];
+	xx[NP + 1u] = m->qc[1][ix[m->cl_d]];
 	for (unsigned i = 0; i < IMU_ID_NX; i++) {
 		for (unsigned k = 0; k < IMU_ID_NX; k++)
 			m->xg[i][k] += xx[i] * xx[k];
@@ -554,13 +564,12 @@ void imu_id_process(struct imu_id *m)
 	}
 	m->n_st++;
 	const struct imu_id_cfg *c = &m->cfg;
-	unsigned ix[IMU_ID_RING];
-	ring_slots(m, ix);
+	unsigned ix[IMU_ID_DELAYS];
+	age_slots(m, ix);
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
 		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-			float x[NP], xr;
-			regs(m, ix + d, l, x, &xr);
-			stat_add(&m->st[d][l], x, f - c->kf0 * xr, t - c->kt0 * xr, c->torque);
+			const float *x = m->xc[l][ix[d]];
+			stat_add(&m->st[d][l], x, f - c->kf0 * x[NP], t - c->kt0 * x[NP], c->torque);
 		}
 	if (!m->refined && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_st >= 30u) {
 		refine(m);
