@@ -20,8 +20,8 @@ with the default realistic sensor noise, three ways on the same vehicle and seed
   imu_rpm_torque, k_tau from the torques), as an ESC's current gives them: an offset of
   0.1-0.5 A, current noise 0.02-0.1 A, KV 500-1000.
 
-Prints one JSON object: per source and quantity the accepted count, the error's rms (%), the
-error / sd rms and the share beyond 3 sd, the rejections with their causes, the delay right
+Prints one JSON object: per source and quantity the accepted count, the error's rms and max (%),
+the shares within 1 % and 2 %, the error / sd rms and the count beyond max(3 sd, 1 %), the rejections with their causes, the delay right
 and the lag within 10 %; and per IMU source (imu_only, imu) and quantity its agreement with the
 thrust rows' estimate of the same vehicle (difference over the combined sd). --sources flies
 only the listed ones (the agreement needs thrust among them).
@@ -131,7 +131,9 @@ def summarise(runs, hows=HOWS):
             if zs:
                 s[k] = {"accepted": len(zs), "err_rms_pct": math.sqrt(sum(e * e for e in errs) / len(errs)),
                         "z_rms": math.sqrt(sum(z * z for z in zs) / len(zs)), "beyond_3sd_and_1pct": beyond,
-                        "err_max_pct": max(abs(e) for e in errs)}
+                        "err_max_pct": max(abs(e) for e in errs),
+                        "within_1pct": sum(abs(e) <= 1.0 for e in errs) / len(errs),
+                        "within_2pct": sum(abs(e) <= 2.0 for e in errs) / len(errs)}
         lag_ok = delay_ok = n_lag = 0
         for seed, veh, r in runs:
             x = r[how]
