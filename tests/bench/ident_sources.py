@@ -21,10 +21,11 @@ with the default realistic sensor noise, three ways on the same vehicle and seed
   0.1-0.5 A, current noise 0.02-0.1 A, KV 500-1000.
 
 Prints one JSON object: per source and quantity the accepted count, the error's rms and max (%),
-the shares within 1 % and 2 %, the error / sd rms and the count beyond max(3 sd, 1 %), the rejections with their causes, the delay right
-and the lag within 10 %; and per IMU source (imu_only, imu) and quantity its agreement with the
-thrust rows' estimate of the same vehicle (difference over the combined sd). --sources flies
-only the listed ones (the agreement needs thrust among them).
+the shares within 1 % and 2 %, the error / sd rms and the count beyond max(3 sd, 1 %); the
+rejections with their causes, the delay right and the lag within 10 %; and per IMU source
+(imu_only, imu) and quantity its agreement with the thrust rows' estimate of the same vehicle
+(difference over the combined sd). --sources flies only the listed ones (the agreement needs
+thrust among them).
 """
 
 import argparse
