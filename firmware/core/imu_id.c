@@ -385,14 +385,17 @@ static void stat_add(struct imu_id_stat *s, const float x[NP], float z, float zt
 	s->rrt += zt * zt;
 }
 
-static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl)
+/* every hypothesis' least residual (its force fit) into jr; the least one's (bd, bl) */
+static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl, float jr[IMU_ID_DELAYS][IMU_ID_LAGS])
 {
 	float best = INFINITY;
 	*bd = 0;
 	*bl = 0;
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
 		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-			float th[NP], h[NP][NP], j = hyp_solve(m, &m->st[d][l], th, h);
+			const struct imu_id_stat *st = &m->st[d][l];
+			float th[NP], h[NP][NP], j = fit(m, st->g, st->b, st->rr, th, h); /* hyp_solve's residual */
+			jr[d][l] = j;
 			if (j < best) {
 				best = j;
 				*bd = d;
@@ -477,7 +480,8 @@ static float step_of(const struct imu_id *m, const float th[NP]);
 static void refine(struct imu_id *m)
 {
 	unsigned bd, bl;
-	best_hyp(m, &bd, &bl);
+	float jr[IMU_ID_DELAYS][IMU_ID_LAGS];
+	best_hyp(m, &bd, &bl, jr);
 	float th[NP], h[NP][NP], h0 = m->lstep;
 	hyp_solve(m, &m->st[bd][bl], th, h);
 	float dl = step_of(m, th);
@@ -732,17 +736,16 @@ static float quad(const float v[NP][NP], const float j[NP])
 }
 
 /* The chosen delay bd and its margin: the log-likelihood ratio of the best lag of every other
- * delay over bd's (into r); bd's least residual. */
-static float delay_margin(const struct imu_id *m, unsigned bd, struct imu_id_result *r)
+ * delay over bd's (into r), from the hypotheses' residuals jr (best_hyp); bd's least residual. */
+static float delay_margin(const struct imu_id *m, unsigned bd, float jr[IMU_ID_DELAYS][IMU_ID_LAGS],
+			  struct imu_id_result *r)
 {
 	float jb[IMU_ID_DELAYS];
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++) {
 		jb[d] = INFINITY;
-		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-			float th[NP], h[NP][NP], j = hyp_solve(m, &m->st[d][l], th, h);
-			if (j < jb[d])
-				jb[d] = j;
-		}
+		for (unsigned l = 0; l < IMU_ID_LAGS; l++)
+			if (jr[d][l] < jb[d])
+				jb[d] = jr[d][l];
 	}
 	float j0 = jb[bd], j2 = INFINITY;
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
@@ -854,8 +857,9 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	}
 	r->noise_sd = sqrtf(nz_var);
 	unsigned bd, bl;
-	best_hyp(m, &bd, &bl);
-	float j0 = delay_margin(m, bd, r);
+	float jr[IMU_ID_DELAYS][IMU_ID_LAGS];
+	best_hyp(m, &bd, &bl, jr);
+	float j0 = delay_margin(m, bd, jr, r);
 	float th[NP], h[NP][NP], v[NP][NP], thc[NP];
 	hyp_solve(m, &m->st[bd][bl], th, h);
 	float hstep = grid_step(m), dl = step_of(m, th), lcorr = 0.0f;
