@@ -171,7 +171,7 @@ int main(void)
 	/* the IMU's collective model: 8 rotors hovering at 0.45 through a 40 ms lag and one
 	 * frame's delay, the force m a_z with 1 % noise, a collective square wave of 1 s and the
 	 * two null-space dithers; 1 s still first (not counted); the planned frames put the
-	 * refinement at about a sixth of the counted ones */
+	 * refinement at about a tenth of the counted ones */
 	struct imu_id_cfg ic = {.dt_s = 1.0f / 90.0f,
 				.mass_kg = 10.27f, /* 28 N x 8 x 0.45 / g */
 				.g = 9.81f,
