@@ -1324,7 +1324,8 @@ def main():
             ITEMS[name](rep, args)
         except Exception as e:   # noqa: BLE001 - one broken item must not hide the others
             errors[name] = f"{type(e).__name__}: {e}"
-            rep.row({"speed": 1, "step": 2, "memory": 3, "alloc": 4, "estim": 5, "sim": 6, "sil": 7, "campaign": 8}[name],
+            rep.row({"speed": 1, "step": 2, "memory": 3, "alloc": 4, "estim": 5, "sim": 6, "sil": 7, "campaign": 8,
+                     "sources": 9}[name],
                     f"{name}: FAILED", "n/a", "", errors[name][:80], "", False)
     dur = time.monotonic() - t0
     invoked = "make bench" if os.environ.get("MAKELEVEL") else cmdline([sys.executable, *sys.argv])
