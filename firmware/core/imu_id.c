@@ -37,21 +37,31 @@ static void set_grid(struct imu_id *m)
 	}
 }
 
-/* the lag filters and their sensitivities, their sums into the rings' newest slot */
+/* the lag whose patterns' responses the rings keep: the clusters' hypothesis after the
+ * refinement (refine), the grid's centre */
+#define CL_LAG (IMU_ID_LAGS / 2u)
+
+static float smooth(const float *r) { return 0.25f * (r[0] + 2.0f * r[1] + r[2]); }
+
+static void push3(float r[3], float v)
+{
+	r[2] = r[1];
+	r[1] = r[0];
+	r[0] = v;
+}
+
+static void regs(const struct imu_id *m, unsigned l, float x[NP], float *xr);
+
+/* the lag filters and their sensitivities, their sums, and the newest frame's smoothed
+ * regressors into the slot of age 0 (the oldest's, which the delays drop): a delay d reads
+ * the regressors computed d frames before, the same numbers as from the sums d frames old */
 static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 {
 	const struct imu_id_cfg *c = &m->cfg;
+	unsigned h = m->xh ? m->xh - 1u : IMU_ID_DELAYS - 1u;
+	m->xh = (uint8_t)h;
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
 		float a = m->a[l], da = m->da[l], s1 = 0.0f, s2 = 0.0f, s3 = 0.0f, s4 = 0.0f;
-		float p1 = 0.0f, p2 = 0.0f;
-		for (unsigned d = IMU_ID_RING - 1; d > 0; d--) {
-			m->x1[l][d] = m->x1[l][d - 1];
-			m->x2[l][d] = m->x2[l][d - 1];
-			m->x3[l][d] = m->x3[l][d - 1];
-			m->x4[l][d] = m->x4[l][d - 1];
-			m->q1[l][d] = m->q1[l][d - 1];
-			m->q2[l][d] = m->q2[l][d - 1];
-		}
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
 			float y0 = m->y[l][j];
 			/* y = a y0 + (1 - a) u: d y / d ln tau = a w0 + (d a / d ln tau) (y0 - u) */
@@ -64,16 +74,31 @@ static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
 			s2 += sj * y * y;
 			s3 += sj * w;
 			s4 += 2.0f * sj * y * w;
-			p1 += c->pat[0][j] * sj * y;
-			p2 += c->pat[1][j] * sj * y;
 		}
-		m->x1[l][0] = s1;
-		m->x2[l][0] = s2;
-		m->x3[l][0] = s3;
-		m->x4[l][0] = s4;
-		m->q1[l][0] = p1;
-		m->q2[l][0] = p2;
+		push3(m->x1[l], s1);
+		push3(m->x2[l], s2);
+		push3(m->x3[l], s3);
+		push3(m->x4[l], s4);
+		float *xc = m->xc[l][h];
+		regs(m, l, xc, &xc[NP]);
 	}
+	float p1 = 0.0f, p2 = 0.0f;
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
+		float sj = c->scale[j], y = m->y[CL_LAG][j];
+		p1 += c->pat[0][j] * sj * y;
+		p2 += c->pat[1][j] * sj * y;
+	}
+	push3(m->q1, p1);
+	push3(m->q2, p2);
+	m->qc[0][h] = smooth(m->q1);
+	m->qc[1][h] = smooth(m->q2);
+}
+
+/* the slots of the frames of age 0 .. IMU_ID_DELAYS - 1 */
+static void age_slots(const struct imu_id *m, unsigned ix[IMU_ID_DELAYS])
+{
+	for (unsigned k = 0, i = m->xh; k < IMU_ID_DELAYS; k++, i = i + 1u < IMU_ID_DELAYS ? i + 1u : 0u)
+		ix[k] = i;
 }
 
 void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t thr0[IMU_ID_ROTORS])
@@ -92,8 +117,6 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
 			m->y[l][j] = u[j];
-	for (unsigned d = 0; d < IMU_ID_RING; d++)
-		advance(m, u); /* the rings at the steady state */
 	/* the centring point: the start's mean throttle and the scales' sum; and the reference
 	 * model made to carry the weight there (k_f from the prior's curve and the mass), so that
 	 * the responses relative to it stay small: both keep the float sums' precision */
@@ -105,6 +128,8 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 	}
 	m->yh = yh;
 	m->ssum = ss;
+	for (unsigned d = 0; d < IMU_ID_RING; d++)
+		advance(m, u); /* the steady state, each delay's regressors from three frames */
 	float kr = gs > 0.0f ? m->cfg.mass_kg * m->cfg.g / gs : 0.0f;
 	if (isfinite(kr) && kr > 0.0f && m->cfg.kf0 > 0.0f) {
 		m->cfg.kt0 *= kr / m->cfg.kf0;
@@ -323,25 +348,54 @@ static float hyp_solve_tq(const struct imu_id *m, const struct imu_id_stat *s, f
  * references) into a hypothesis' or a block's sums */
 static void stat_add(struct imu_id_stat *s, const float x[NP], float z, float zt, bool tq)
 {
-	add_outer(s->g, x, x);
-	for (unsigned i = 0; i < NP; i++)
-		s->b[i] += x[i] * z;
+	/* G += x x' (add_outer(g, x, x), its upper triangle in storage order) and b += x z,
+	 * written out for the five parameters: the bank's inner loop, run for every hypothesis */
+	_Static_assert(NP == 5 && NT == 15, "stat_add is written out for five parameters");
+	const float x0 = x[0], x1 = x[1], x2 = x[2], x3 = x[3], x4 = x[4];
+	float *g = s->g, *b = s->b;
+	g[0] += x0 * x0;
+	g[1] += x0 * x1;
+	g[2] += x0 * x2;
+	g[3] += x0 * x3;
+	g[4] += x0 * x4;
+	g[5] += x1 * x1;
+	g[6] += x1 * x2;
+	g[7] += x1 * x3;
+	g[8] += x1 * x4;
+	g[9] += x2 * x2;
+	g[10] += x2 * x3;
+	g[11] += x2 * x4;
+	g[12] += x3 * x3;
+	g[13] += x3 * x4;
+	g[14] += x4 * x4;
+	b[0] += x0 * z;
+	b[1] += x1 * z;
+	b[2] += x2 * z;
+	b[3] += x3 * z;
+	b[4] += x4 * z;
 	s->rr += z * z;
 	if (!tq)
 		return;
-	for (unsigned i = 0; i < NP; i++)
-		s->bt[i] += x[i] * zt;
+	b = s->bt;
+	b[0] += x0 * zt;
+	b[1] += x1 * zt;
+	b[2] += x2 * zt;
+	b[3] += x3 * zt;
+	b[4] += x4 * zt;
 	s->rrt += zt * zt;
 }
 
-static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl)
+/* every hypothesis' least residual (its force fit) into jr; the least one's (bd, bl) */
+static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl, float jr[IMU_ID_DELAYS][IMU_ID_LAGS])
 {
 	float best = INFINITY;
 	*bd = 0;
 	*bl = 0;
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
 		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-			float th[NP], h[NP][NP], j = hyp_solve(m, &m->st[d][l], th, h);
+			const struct imu_id_stat *st = &m->st[d][l];
+			float th[NP], h[NP][NP], j = fit(m, st->g, st->b, st->rr, th, h); /* hyp_solve's residual */
+			jr[d][l] = j;
 			if (j < best) {
 				best = j;
 				*bd = d;
@@ -350,17 +404,15 @@ static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl)
 		}
 }
 
-static float smooth(const float *r) { return 0.25f * (r[0] + 2.0f * r[1] + r[2]); }
-
-/* the hypothesis' smoothed regressors, centred at the start's hover (basis): with the curve
- * estimated (x1 - y_h S, sum s (y - y_h)^2, x3, sum 2 s (y - y_h) w, 1), else (the
- * reference's less its value at y_h, 0, its sensitivity, 0, 1); xr: the reference model's
- * regressor */
-static void regs(const struct imu_id *m, unsigned d, unsigned l, float x[NP], float *xr)
+/* the newest frame's smoothed regressors of lag l, centred at the start's hover (basis):
+ * with the curve estimated (x1 - y_h S, sum s (y - y_h)^2, x3, sum 2 s (y - y_h) w, 1), else
+ * (the reference's less its value at y_h, 0, its sensitivity, 0, 1); xr: the reference
+ * model's regressor */
+static void regs(const struct imu_id *m, unsigned l, float x[NP], float *xr)
 {
-	float s1 = smooth(&m->x1[l][d]), s2 = smooth(&m->x2[l][d]), yh = m->yh, s = m->ssum;
+	float s1 = smooth(m->x1[l]), s2 = smooth(m->x2[l]), yh = m->yh, s = m->ssum;
 	*xr = ref_x(&m->cfg, s1, s2);
-	float s3 = smooth(&m->x3[l][d]), s4 = smooth(&m->x4[l][d]);
+	float s3 = smooth(m->x3[l]), s4 = smooth(m->x4[l]);
 	if (m->cfg.est_curve) {
 		x[0] = s1 - yh * s;
 		x[P_B] = s2 - 2.0f * yh * s1 + yh * yh * s;
@@ -379,14 +431,15 @@ static void regs(const struct imu_id *m, unsigned d, unsigned l, float x[NP], fl
  * into the scales' check (the two patterns' responses beside the parameters) */
 static void cl_add(struct imu_id *m, float f, float tq)
 {
-	float x[NP], xr;
-	regs(m, m->cl_d, m->cl_l, x, &xr);
-	float z = f - m->cfg.kf0 * xr, zt = tq - m->cfg.kt0 * xr;
+	unsigned ix[IMU_ID_DELAYS];
+	age_slots(m, ix);
+	const float *x = m->xc[m->cl_l][ix[m->cl_d]];
+	float z = f - m->cfg.kf0 * x[NP], zt = tq - m->cfg.kt0 * x[NP];
 	float xx[IMU_ID_NX];
 	for (unsigned i = 0; i < NP; i++)
 		xx[i] = x[i];
-	xx[NP] = smooth(&m->q1[m->cl_l][m->cl_d]);
-	xx[NP + 1u] = smooth(&m->q2[m->cl_l][m->cl_d]);
+	xx[NP] = m->qc[0][ix[m->cl_d]];
+	xx[NP + 1u] = m->qc[1][ix[m->cl_d]];
 	for (unsigned i = 0; i < IMU_ID_NX; i++) {
 		for (unsigned k = 0; k < IMU_ID_NX; k++)
 			m->xg[i][k] += xx[i] * xx[k];
@@ -427,7 +480,8 @@ static float step_of(const struct imu_id *m, const float th[NP]);
 static void refine(struct imu_id *m)
 {
 	unsigned bd, bl;
-	best_hyp(m, &bd, &bl);
+	float jr[IMU_ID_DELAYS][IMU_ID_LAGS];
+	best_hyp(m, &bd, &bl, jr);
 	float th[NP], h[NP][NP], h0 = m->lstep;
 	hyp_solve(m, &m->st[bd][bl], th, h);
 	float dl = step_of(m, th);
@@ -457,7 +511,7 @@ static void refine(struct imu_id *m)
 	m->skip = IMU_ID_SKIP;
 	m->refined = true;
 	m->cl_d = (uint8_t)bd;
-	m->cl_l = (uint8_t)(IMU_ID_LAGS / 2u);
+	m->cl_l = (uint8_t)CL_LAG;
 	m->cl_len = m->cfg.block_frames ? m->cfg.block_frames : 90u;
 	m->cl_on = true;
 }
@@ -514,11 +568,12 @@ void imu_id_process(struct imu_id *m)
 	}
 	m->n_st++;
 	const struct imu_id_cfg *c = &m->cfg;
+	unsigned ix[IMU_ID_DELAYS];
+	age_slots(m, ix);
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
 		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-			float x[NP], xr;
-			regs(m, d, l, x, &xr);
-			stat_add(&m->st[d][l], x, f - c->kf0 * xr, t - c->kt0 * xr, c->torque);
+			const float *x = m->xc[l][ix[d]];
+			stat_add(&m->st[d][l], x, f - c->kf0 * x[NP], t - c->kt0 * x[NP], c->torque);
 		}
 	if (!m->refined && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_st >= 30u) {
 		refine(m);
@@ -681,17 +736,16 @@ static float quad(const float v[NP][NP], const float j[NP])
 }
 
 /* The chosen delay bd and its margin: the log-likelihood ratio of the best lag of every other
- * delay over bd's (into r); bd's least residual. */
-static float delay_margin(const struct imu_id *m, unsigned bd, struct imu_id_result *r)
+ * delay over bd's (into r), from the hypotheses' residuals jr (best_hyp); bd's least residual. */
+static float delay_margin(const struct imu_id *m, unsigned bd, float jr[IMU_ID_DELAYS][IMU_ID_LAGS],
+			  struct imu_id_result *r)
 {
 	float jb[IMU_ID_DELAYS];
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++) {
 		jb[d] = INFINITY;
-		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-			float th[NP], h[NP][NP], j = hyp_solve(m, &m->st[d][l], th, h);
-			if (j < jb[d])
-				jb[d] = j;
-		}
+		for (unsigned l = 0; l < IMU_ID_LAGS; l++)
+			if (jr[d][l] < jb[d])
+				jb[d] = jr[d][l];
 	}
 	float j0 = jb[bd], j2 = INFINITY;
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
@@ -803,8 +857,9 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	}
 	r->noise_sd = sqrtf(nz_var);
 	unsigned bd, bl;
-	best_hyp(m, &bd, &bl);
-	float j0 = delay_margin(m, bd, r);
+	float jr[IMU_ID_DELAYS][IMU_ID_LAGS];
+	best_hyp(m, &bd, &bl, jr);
+	float j0 = delay_margin(m, bd, jr, r);
 	float th[NP], h[NP][NP], v[NP][NP], thc[NP];
 	hyp_solve(m, &m->st[bd][bl], th, h);
 	float hstep = grid_step(m), dl = step_of(m, th), lcorr = 0.0f;

@@ -9,9 +9,9 @@
  * and s_j the per-rotor effectiveness taken as known (MOT_SCALE). Linear in (A, B) =
  * (k_f (1 - c), k_f c) with the regressors x1 = sum s_j y_j, x2 = sum s_j y_j^2; the lag
  * filters are linear and time-invariant, so a delayed hypothesis is the undelayed filter's
- * output read D frames late: one lag filter per rotor and grid point, a ring of the sums per
- * delay. Each (D, tau) hypothesis keeps its least-squares sums relative to a reference model
- * (the prior k_f and curve), which keeps them well conditioned in float.
+ * output read D frames late: one lag filter per rotor and grid point, a ring of the
+ * regressors per delay. Each (D, tau) hypothesis keeps its least-squares sums relative to a
+ * reference model (the prior k_f and curve), which keeps them well conditioned in float.
  *
  * Refinement: at IMU_ID_FREEZE of the planned frames the lag grid narrows to
  * +/- IMU_ID_FINE_HALF of its steps about the lag found so far (the Gauss-Newton step below
@@ -65,7 +65,7 @@
 #define IMU_ID_LAGS 20  /* log grid IMU_ID_TAU_MIN .. IMU_ID_TAU_MAX, refined at IMU_ID_FREEZE */
 #define IMU_ID_TAU_MIN 0.005f
 #define IMU_ID_TAU_MAX 0.25f
-#define IMU_ID_RING (IMU_ID_DELAYS + 2) /* the rings also feed the [1 2 1] / 4 smoother */
+#define IMU_ID_RING (IMU_ID_DELAYS + 2) /* frames behind the delays' regressors (the [1 2 1] / 4 smoother's too) */
 #define IMU_ID_BLOCKS 32                /* clusters of the variance (merged in pairs when full) */
 #define IMU_ID_VEL_SD 0.05f             /* the velocity's error at either end of the calibration, m/s */
 #define IMU_ID_FREEZE \
@@ -113,10 +113,17 @@ struct imu_id {
 	float a[IMU_ID_LAGS];  /* the lags' poles exp(-dt / tau) */
 	float da[IMU_ID_LAGS]; /* d a / d ln tau */
 	float y[IMU_ID_LAGS][IMU_ID_ROTORS], w[IMU_ID_LAGS][IMU_ID_ROTORS]; /* outputs, d y / d ln tau */
-	/* rings of x1, x2, x3 by frame age */
-	float x1[IMU_ID_LAGS][IMU_ID_RING], x2[IMU_ID_LAGS][IMU_ID_RING];
-	float x3[IMU_ID_LAGS][IMU_ID_RING], x4[IMU_ID_LAGS][IMU_ID_RING]; /* sum s w, sum 2 s y w */
-	float q1[IMU_ID_LAGS][IMU_ID_RING], q2[IMU_ID_LAGS][IMU_ID_RING]; /* sum p_kj s_j y_j */
+	/* the last three frames' x1, x2, x3, x4 and the patterns' responses (sum p_kj s_j y_j, at
+	 * the clusters' lag: imu_id.c), newest first: the [1 2 1] / 4 smoother's input */
+	float x1[IMU_ID_LAGS][3], x2[IMU_ID_LAGS][3];
+	float x3[IMU_ID_LAGS][3], x4[IMU_ID_LAGS][3]; /* sum s w, sum 2 s y w */
+	float q1[3], q2[3];
+	/* by frame age, the age k in slot (xh + k) % IMU_ID_DELAYS: each lag's smoothed regressors
+	 * (centred) and the reference model's regressor after them, what a delay reads; the
+	 * patterns' smoothed responses */
+	uint8_t xh;
+	float xc[IMU_ID_LAGS][IMU_ID_DELAYS][IMU_ID_NP + 1];
+	float qc[2][IMU_ID_DELAYS];
 	/* the scales' check on the frozen hypothesis: G (full), b, z'z over its frames */
 	float xg[IMU_ID_NX][IMU_ID_NX], xb[IMU_ID_NX], xrr;
 	uint32_t xn;

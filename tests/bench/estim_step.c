@@ -10,7 +10,12 @@
  *           IV sums; the RLS between frames),
  *   N_MID x motor_id_step + motor_id_process (the joint rotor-model estimator's frame: every
  *           rotor, 15 hypotheses; its refinements between frames are not counted),
- *   1 x motor_id_solve (between frames, at the end).
+ *   1 x motor_id_solve (between frames, at the end),
+ *   N_IMU x imu_id_step + imu_id_process (the collective model from the accelerometer: the
+ *           step stores the frame, the bank of delay and lag hypotheses takes it between
+ *           frames; the grid's refinement, once, at IMU_ID_FREEZE of the planned frames, then
+ *           the clusters' sums each frame),
+ *   1 x imu_id_solve (between frames, at the end).
  * The inputs are a PRBS throttle through a 40 ms lag with 1 % noise (the values do not
  * change the count much: no data-dependent loops but the fixed build's normalisation).
  * Prints "estim: KEY VALUE" lines.
@@ -18,7 +23,9 @@
 #include <stdio.h>
 
 #include "bench_mark.h"
+#include "excite.h"
 #include "ident.h"
+#include "imu_id.h"
 #include "motor_id.h"
 #include "rls.h"
 
@@ -26,6 +33,7 @@
 #define N_ROT 200
 #define N_MID 200
 #define N_INR 200
+#define N_IMU 400
 
 static uint32_t rng = 777u;
 static float urand(void) /* [-1, 1) */
@@ -42,6 +50,8 @@ struct ident_rotor ROT;
 struct motor_id MID;
 struct motor_id_result MRES;
 struct ident_inertia INR;
+struct imu_id IMU;
+struct imu_id_result IRES;
 
 int main(void)
 {
@@ -158,6 +168,60 @@ int main(void)
 	bench_mark_begin();
 	motor_id_solve(&MID, 1.3f, &MRES);
 	bench_mark_end();
+	/* the IMU's collective model: 8 rotors hovering at 0.45 through a 40 ms lag and one
+	 * frame's delay, the force m a_z with 1 % noise, a collective square wave of 1 s and the
+	 * two null-space dithers; 1 s still first (not counted); the planned frames put the
+	 * refinement at about a tenth of the counted ones */
+	struct imu_id_cfg ic = {.dt_s = 1.0f / 90.0f,
+				.mass_kg = 10.27f, /* 28 N x 8 x 0.45 / g */
+				.g = 9.81f,
+				.kf0 = 25.0f,
+				.curve0 = 0.0f,
+				.est_curve = true,
+				.n_frames = N_IMU / 2,
+				.block_frames = 90};
+	for (int j = 0; j < IMU_ID_ROTORS; j++) {
+		scalar_t pp[2][EXCITE_ROTORS];
+		excite_null_pattern(0, pp[0]);
+		excite_null_pattern(1, pp[1]);
+		ic.scale[j] = 1.0f;
+		ic.pat[0][j] = sc_to_float(pp[0][j]);
+		ic.pat[1][j] = sc_to_float(pp[1][j]);
+		thr0[j] = SC(0.45);
+		sj[j] = cmd[j] = 0.45f;
+	}
+	float sd[IMU_ID_ROTORS], dc = 0.0f;
+	for (int j = 0; j < IMU_ID_ROTORS; j++)
+		sd[j] = 0.45f;
+	imu_id_init(&IMU, &ic, thr0);
+	for (int k = 0; k < 90 + N_IMU; k++) {
+		bool exc = k >= 90;
+		if (exc && k % 9 == 0) {
+			d1 = urand() < 0.0f ? -0.04f : 0.04f;
+			d2 = urand() < 0.0f ? -0.04f : 0.04f;
+		}
+		if (exc && k % 45 == 0)
+			dc = dc > 0.0f ? -0.05f : 0.05f;
+		scalar_t tp[IMU_ID_ROTORS];
+		float fz = 0.0f;
+		for (int j = 0; j < IMU_ID_ROTORS; j++) {
+			tp[j] = sc_from_float(cmd[j]);
+			fz += 28.0f * sj[j];
+			sj[j] += 0.24f * (sd[j] - sj[j]);
+			sd[j] = cmd[j]; /* one frame's delay */
+			cmd[j] = exc ? 0.45f + dc + d1 * ic.pat[0][j] + d2 * ic.pat[1][j] : 0.45f;
+		}
+		fz *= 1.0f + 0.01f * urand();
+		if (exc)
+			bench_mark_begin();
+		imu_id_step(&IMU, tp, sc_from_float(fz), sc_from_float(fz), 0, 0, exc);
+		imu_id_process(&IMU);
+		if (exc)
+			bench_mark_end();
+	}
+	bench_mark_begin();
+	imu_id_solve(&IMU, 3.0f, &IRES);
+	bench_mark_end();
 	printf("estim: rls_1x2 %d\n", N_RLS);
 	printf("estim: rls_2x1 %d\n", N_RLS);
 	printf("estim: ident_rotor %d\n", N_ROT);
@@ -165,6 +229,9 @@ int main(void)
 	printf("estim: motor_id %d\n", N_MID);
 	printf("estim: motor_id_solve 1\n");
 	printf("estim: motor_id_kf %.4f\n", (double)MRES.kf);
+	printf("estim: imu_id %d\n", N_IMU);
+	printf("estim: imu_id_solve 1\n");
+	printf("estim: imu_id_kf %.4f cause %d\n", (double)IRES.kf, (int)IRES.cause);
 	printf("estim: kf %.4f\n", (double)rls_estimate_f(&R1, 0, 0));
 	printf("estim: done\n");
 	return 0;

@@ -8,6 +8,9 @@ Each run flies the full sequence (experiment 6) in octo-sil on a vehicle of the 
 with the default realistic sensor noise, three ways on the same vehicle and seed:
 
 - thrust: the thrust and torque rows (ID_SOURCE 1), one rotor at 0.8-1.0 unknown to the firmware;
+- imu_only: the IMU alone (--sensors imu: ID_SOURCE auto takes imu, the motor's lag, delay and
+  curve from the accelerometer's response to the throttles, k_f from it with the mass known),
+  the rotors' scales given (MOT_SCALEj set to the truth, as from a bench);
 - imu: no thrust or torque rows (--sensors imu,rpm: ID_SOURCE auto takes imu_rpm, the motor's
   lag and delay from the ESC speeds, k_f from the accelerometer), the rotors' scales given
   (MOT_SCALEj set to the truth, as from a bench);
@@ -17,10 +20,12 @@ with the default realistic sensor noise, three ways on the same vehicle and seed
   imu_rpm_torque, k_tau from the torques), as an ESC's current gives them: an offset of
   0.1-0.5 A, current noise 0.02-0.1 A, KV 500-1000.
 
-Prints one JSON object: per source and quantity the accepted count, the error's rms (%), the
-error / sd rms and the share beyond 3 sd, the rejections with their causes, the delay right
-and the lag within 10 %; and per IMU quantity its agreement with the thrust rows' estimate of
-the same vehicle (difference over the combined sd).
+Prints one JSON object: per source and quantity the accepted count, the error's rms and max (%),
+the shares within 1 % and 2 %, the error / sd rms and the count beyond max(3 sd, 1 %); the
+rejections with their causes, the delay right and the lag within 10 %; and per IMU source
+(imu_only, imu) and quantity its agreement with the thrust rows' estimate of the same vehicle
+(difference over the combined sd). --sources flies only the listed ones (the agreement needs
+thrust among them).
 """
 
 import argparse
@@ -48,7 +53,7 @@ RX = {
 }
 LAG = re.compile(r"^ID motor lag ([-0-9.]+) \+/- ([-0-9.]+) s delay (\d+) fr$")
 CAUSE = re.compile(r"^ID (rejected|aborted): (.*)$")
-HOWS = ("thrust", "imu", "imu_weak", "imu_tq")
+HOWS = ("thrust", "imu_only", "imu", "imu_weak", "imu_tq")
 
 
 def vehicle(rng):
@@ -70,12 +75,12 @@ def fly(veh, seed, how, tmp):
     if how == "thrust":
         steps.append("param ID_SOURCE 1")
     else:
-        sensors = "imu,rpm,torque" if how == "imu_tq" else "imu,rpm"
+        sensors = {"imu_tq": "imu,rpm,torque", "imu_only": "imu"}.get(how, "imu,rpm")
         if how == "imu_tq":
             esc = random.Random(seed * 7 + 1)
             veh = dict(veh, esc_current_offset=esc.uniform(0.1, 0.5), noise={"current": esc.uniform(0.02, 0.1)},
                        esc_kt=60.0 / (2.0 * math.pi * esc.uniform(500.0, 1000.0)))
-        if how in ("imu", "imu_tq"):
+        if how in ("imu_only", "imu", "imu_tq"):
             steps += [f"param MOT_SCALE{j + 1} {s!r}" for j, s in enumerate(veh["rotor_scale"])]
     steps += ["arm", "takeoff 5", "wait hold", "experiment 6", "wait experiment"]
     r = subprocess.run([str(SIL), "--seed", str(seed), "--vehicle", str(d / f"v{seed}{how}.json"), "--sensors", sensors,
@@ -104,14 +109,14 @@ def truth(veh):
 
 
 def one(args):
-    seed, tmp = args
+    seed, tmp, hows = args
     veh = vehicle(random.Random(seed))
-    return seed, veh, {h: fly(veh, seed, h, tmp) for h in HOWS}
+    return seed, veh, {h: fly(veh, seed, h, tmp) for h in hows}
 
 
-def summarise(runs):
+def summarise(runs, hows=HOWS):
     res = {}
-    for how in HOWS:
+    for how in hows:
         s = {"runs": len(runs), "rejected": 0, "causes": {}}
         for k in RX:
             zs, errs, beyond = [], [], 0
@@ -127,7 +132,9 @@ def summarise(runs):
             if zs:
                 s[k] = {"accepted": len(zs), "err_rms_pct": math.sqrt(sum(e * e for e in errs) / len(errs)),
                         "z_rms": math.sqrt(sum(z * z for z in zs) / len(zs)), "beyond_3sd_and_1pct": beyond,
-                        "err_max_pct": max(abs(e) for e in errs)}
+                        "err_max_pct": max(abs(e) for e in errs),
+                        "within_1pct": sum(abs(e) <= 1.0 for e in errs) / len(errs),
+                        "within_2pct": sum(abs(e) <= 2.0 for e in errs) / len(errs)}
         lag_ok = delay_ok = n_lag = 0
         for seed, veh, r in runs:
             x = r[how]
@@ -142,18 +149,21 @@ def summarise(runs):
         s["lag_within_10pct"] = lag_ok / n_lag if n_lag else None
         s["delay_right"] = delay_ok / n_lag if n_lag else None
         res[how] = s
-    # the IMU's agreement with the thrust rows' estimate of the same vehicle
-    agree = {}
-    for k in ("kf", "ixx", "iyy"):
-        d = []
-        for seed, veh, r in runs:
-            a, b = r["imu"].get(k), r["thrust"].get(k)
-            if a and b and a[2] and b[2]:
-                d.append((a[0] - b[0]) / math.hypot(a[1], b[1]))
-        if d:
-            agree[k] = {"n": len(d), "rms": math.sqrt(sum(x * x for x in d) / len(d)),
-                        "beyond_3": sum(abs(x) > 3 for x in d)}
-    res["imu_vs_thrust"] = agree
+    # each IMU source's agreement with the thrust rows' estimate of the same vehicle
+    for how in ("imu", "imu_only"):
+        if how not in hows or "thrust" not in hows:
+            continue
+        agree = {}
+        for k in ("kf", "ixx", "iyy"):
+            d = []
+            for seed, veh, r in runs:
+                a, b = r[how].get(k), r["thrust"].get(k)
+                if a and b and a[2] and b[2]:
+                    d.append((a[0] - b[0]) / math.hypot(a[1], b[1]))
+            if d:
+                agree[k] = {"n": len(d), "rms": math.sqrt(sum(x * x for x in d) / len(d)),
+                            "beyond_3": sum(abs(x) > 3 for x in d)}
+        res[f"{how}_vs_thrust"] = agree
     return res
 
 
@@ -162,12 +172,17 @@ def main(argv=None):
     ap.add_argument("--runs", type=int, default=200)
     ap.add_argument("--seed", type=int, default=30000)
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--sources", default=",".join(HOWS), help="comma-separated, of " + ",".join(HOWS))
     a = ap.parse_args(argv)
+    hows = tuple(h for h in HOWS if h in a.sources.split(","))
+    bad = set(a.sources.split(",")) - set(HOWS)
+    if bad or not hows:
+        ap.error(f"--sources: unknown {sorted(bad)}" if bad else "--sources: none given")
     if not SIL.exists():
         sys.exit(f"ident_sources: {SIL} missing (make first)")
     with tempfile.TemporaryDirectory(prefix="bench-sources-") as tmp, cf.ProcessPoolExecutor(a.jobs) as ex:
-        runs = list(ex.map(one, [(a.seed + i, tmp) for i in range(a.runs)]))
-    print(json.dumps({"runs": a.runs, "seed": a.seed, **summarise(runs)}))
+        runs = list(ex.map(one, [(a.seed + i, tmp, hows) for i in range(a.runs)]))
+    print(json.dumps({"runs": a.runs, "seed": a.seed, **summarise(runs, hows)}))
 
 
 if __name__ == "__main__":
