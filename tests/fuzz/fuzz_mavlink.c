@@ -16,7 +16,8 @@
  *     10..11: the bytes as a raw datagram (no framing)
  *     12..13: a sensor frame (hovering vehicle, the bytes perturb it)
  *     14..15: app_tick and mav_tick after a wall-clock step
- * Every input starts from the state just after start-up (copied back, see start_state).
+ * Every input starts from the state just after start-up (copied back, see start_state), or
+ * resumes from a checkpoint of an earlier input with the same first records (ckpt_find).
  * Checks: parameters stay finite and inside their ranges.
  */
 #include <math.h>
@@ -269,8 +270,9 @@ static bool verify; /* OCTO_FUZZ_VERIFY */
 static uint8_t prev[CKPT_INPUT_CAP]; /* the last input that ran with checkpoints */
 static size_t prev_len;
 
-static uint8_t *cov;   /* libFuzzer's coverage counters */
+static uint8_t *cov; /* libFuzzer's coverage counters */
 static size_t cov_n;
+
 __attribute__((noinline)) static void ckpt_save(struct ckpt *c, size_t pos)
 {
 	c->pos = pos;
@@ -310,7 +312,8 @@ static const struct ckpt *ckpt_find(const uint8_t *data, size_t size)
 	return n_ckpt > 0 ? &ckpt[n_ckpt - 1] : NULL;
 }
 
-/* Runs the input's records from pos (no coverage: coverage-ignore-mavlink.txt); with checkpoints on, takes them as it goes. */
+/* Runs the input's records from pos and, with checkpoints on, takes them as it goes (no
+ * coverage: coverage-ignore-mavlink.txt). */
 __attribute__((noinline)) static void run_records(const uint8_t *data, size_t size, size_t pos, bool checkpoints)
 {
 	unsigned work = 0;
