@@ -250,8 +250,8 @@ static void digest(void)
  * libFuzzer sees the coverage and hit counts of the whole input, as if it had run from the
  * start. A checkpoint is taken only after a record that was not cut by the input's end:
  * any input with the same bytes up to there holds the same whole records. OCTO_FUZZ_VERIFY
- * in the environment runs every input a second time from the start and aborts unless the
- * state and the counters agree. */
+ * in the environment runs every resumed input a second time, from the start, and aborts
+ * unless the state and the counters agree (verify_resumed). */
 #define CKPT_N 12
 #define CKPT_COV_CAP 16384
 #define CKPT_WORK 24 /* records between checkpoints, a frame counting 2 and a signed message 2 */
