@@ -32,6 +32,14 @@ FUZZ_CFLAGS   := -std=c11 $(FUZZ_SAN) -Wall -Wextra -D_POSIX_C_SOURCE=200809L -D
 # NAME's seed corpus, regression inputs and dictionary
 FUZZ_NAMES    := xp_client sim_input mavlink mavlink_fixed experiment experiment_fixed params plant
 FUZZ_BINS     := $(FUZZ_NAMES:%=$(FZ)/fuzz-%)
+# libFuzzer flags of the MAVLink harnesses beside the common ones (-reload=0: one
+# process writes the corpus, nothing to reread). The MAVLink harness's inputs cost from a few
+# microseconds to milliseconds (flight, experiments): the power schedule weighs each input's
+# energy by its speed.
+FUZZ_FLAGS_mavlink := -entropic_scale_per_exec_time=1
+# mutated inputs the MAVLink harnesses run with OCTO_FUZZ_VERIFY before fuzzing: every one
+# resumed from a prefix checkpoint runs again whole, and the run fails unless both agree
+FUZZ_VERIFY_RUNS ?= 20000
 FUZZ_TC_STAMP := $(FZ)/.toolchain
 
 # clang with a working libFuzzer + sanitizer runtime, or install it (root only).
@@ -82,8 +90,8 @@ FUZZ_APP_DEP := tests/app/stub_hal.h $(FUZZ_APP_SRC) $(wildcard firmware/app/*.h
 # first in every file), outside the sanitizers (sanitize-ignore.txt)
 FUZZ_MAV_FLAGS := -fsanitize-coverage-ignorelist=tests/fuzz/coverage-ignore-mavlink.txt \
                   -fsanitize-ignorelist=tests/fuzz/sanitize-ignore.txt -include tests/fuzz/fuzz_sha256.h
-FUZZ_MAV_SRC  := tests/fuzz/fuzz_mavlink.c tests/fuzz/fuzz_sha256.c
-FUZZ_MAV_DEP  := $(FUZZ_MAV_SRC) tests/fuzz/fuzz_sha256.h $(FUZZ_APP_DEP) tests/fuzz/coverage-ignore.txt \
+FUZZ_MAV_SRC  := tests/fuzz/fuzz_mavlink.c tests/fuzz/fuzz_sha256.c tests/fuzz/fuzz_cov.c
+FUZZ_MAV_DEP  := $(FUZZ_MAV_SRC) tests/fuzz/fuzz_sha256.h tests/fuzz/fuzz_cov.h $(FUZZ_APP_DEP) tests/fuzz/coverage-ignore.txt \
                  tests/fuzz/coverage-ignore-mavlink.txt tests/fuzz/sanitize-ignore.txt
 $(FZ)/fuzz-mavlink: $(FUZZ_MAV_DEP) | $(FUZZ_TC_STAMP) $(MAVLINK_STAMP)
 	$(call fuzz_app_build,$(FUZZ_MAV_SRC),$(FUZZ_MAV_FLAGS))
@@ -117,12 +125,20 @@ define fuzz_run
 	    echo "== fuzz-$$h: replaying $$(ls $$reg | wc -l) regression input(s)"; \
 	    $$bin $$reg/* >$(FZ)/$$h.regress.log 2>&1 || { tail -30 $(FZ)/$$h.regress.log; rc=1; continue; }; \
 	  fi; \
-	  case $$h in mavlink*) echo "== fuzz-$$h: each seed and regression input from the same state"; \
-	    sh tests/fuzz/reset_check.sh $$bin tests/fuzz/corpus/$$src $$reg || { rc=1; continue; };; esac; \
 	  mkdir -p $(FZ)/corpus/$$h; \
+	  flags=; case $$src in mavlink) flags="$(FUZZ_FLAGS_mavlink)";; esac; \
+	  case $$h in mavlink*) echo "== fuzz-$$h: each seed and regression input from the same state"; \
+	    sh tests/fuzz/reset_check.sh $$bin tests/fuzz/corpus/$$src $$reg || { rc=1; continue; }; \
+	    echo "== fuzz-$$h: $(FUZZ_VERIFY_RUNS) mutated inputs, those resumed from a checkpoint as if run whole"; \
+	    rm -rf $(FZ)/verify; mkdir -p $(FZ)/verify; \
+	    OCTO_FUZZ_VERIFY=1 $$bin -runs=$(FUZZ_VERIFY_RUNS) -seed=1 -max_len=4096 -timeout=10 $$flags \
+	      -artifact_prefix=$(FZ)/artifacts/$$h-verify- $(FZ)/verify $(FZ)/corpus/$$h tests/fuzz/corpus/$$src \
+	      >$(FZ)/$$h.verify.log 2>&1 || { tail -30 $(FZ)/$$h.verify.log; rc=1; continue; }; \
+	    rm -rf $(FZ)/verify;; esac; \
 	  echo "== fuzz-$$h: $(1) s"; \
 	  dict=; [ -f tests/fuzz/$$src.dict ] && dict=-dict=tests/fuzz/$$src.dict; \
-	  $$bin -max_total_time=$(1) -print_final_stats=1 -max_len=4096 -timeout=10 -rss_limit_mb=2048 $$dict \
+	  $$bin -max_total_time=$(1) -print_final_stats=1 -max_len=4096 -timeout=10 -rss_limit_mb=2048 -reload=0 \
+	    $$flags $$dict \
 	    -artifact_prefix=$(FZ)/artifacts/$$h- $(FZ)/corpus/$$h tests/fuzz/corpus/$$src \
 	    >$(FZ)/$$h.log 2>&1 || { tail -40 $(FZ)/$$h.log; echo "FAIL: fuzz-$$h (input in $(FZ)/artifacts/)"; rc=1; }; \
 	  execs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $(FZ)/$$h.log); \

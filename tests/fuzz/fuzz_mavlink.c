@@ -16,7 +16,8 @@
  *     10..11: the bytes as a raw datagram (no framing)
  *     12..13: a sensor frame (hovering vehicle, the bytes perturb it)
  *     14..15: app_tick and mav_tick after a wall-clock step
- * Every input starts from the state just after start-up (copied back, see start_state).
+ * Every input starts from the state just after start-up (copied back, see start_state), or
+ * resumes from a checkpoint of an earlier input with the same first records (ckpt_find).
  * Checks: parameters stay finite and inside their ranges.
  */
 #include <math.h>
@@ -25,6 +26,7 @@
 #include <string.h>
 
 #include "app.h"
+#include "fuzz_cov.h"
 #include "fuzz_sha256.h"
 #include "mav.h"
 #include "mav_lib.h" /* the endpoint's one channel: its status and receive buffer */
@@ -118,10 +120,10 @@ static void message(uint8_t kind, const uint8_t *b, size_t n)
 /* The state an input starts from, one per signing mode: the platform, the app, its MAVLink
  * endpoint and the endpoint's channel (parser state, sequence numbers, signing streams and
  * the pointer to the endpoint's signing state), just initialised. app_init and mav_init run
- * once per mode; before each input the snapshot is copied back, so that every input starts
+ * once per mode, before the first input (LLVMFuzzerInitialize, so that their coverage is
+ * no input's); before each input the snapshot is copied back, so that every input starts
  * from the same state whatever ran before it. */
 struct snapshot {
-	bool taken;
 	struct stub_hal hal;
 	struct app app;
 	struct mav mav;
@@ -129,37 +131,45 @@ struct snapshot {
 	mavlink_message_t rx;
 };
 static struct snapshot snap[2];
+/* The endpoint's channel (mav.c's), found once: the harness's own calls of mav.c's functions
+ * would count in an input's coverage. */
+static mavlink_status_t *ch_status;
+static mavlink_message_t *ch_rx;
 
-/* The globals app, mav and hal as after a fresh start in signing mode `key`. They are
- * initialised in place (the structs point at each other and the channel at mav's signing
- * state) and then copied, so the copies restored into the same globals keep valid pointers. */
-static void start_state(int key)
+/* snap[key]: the globals app, mav and hal as after a fresh start in signing mode `key`. They
+ * are initialised in place (the structs point at each other and the channel at mav's
+ * signing state) and then copied, so the copies restored into the same globals keep valid
+ * pointers. */
+static void take_snapshot(int key)
 {
 	struct snapshot *s = &snap[key];
-	mavlink_status_t *st = mavlink_get_channel_status(MAVLINK_COMM_0);
-	mavlink_message_t *rx = mavlink_get_channel_buffer(MAVLINK_COMM_0);
-	if (!s->taken) {
-		fuzz_sha256_selftest();
-		stub_hal_init(&hal);
-		hal.have_key = key != 0;
-		for (int i = 0; i < 32; i++)
-			hal.key[i] = (uint8_t)(i * 7 + 1);
-		memset(st, 0, sizeof *st);
-		memset(rx, 0, sizeof *rx);
-		app_init(&app, &hal.hal);
-		mav_init(&mav, &app, &hal.hal, hal.now_us);
-		s->hal = hal;
-		s->app = app;
-		s->mav = mav;
-		s->status = *st;
-		s->rx = *rx;
-		s->taken = true;
-	}
+	mavlink_status_t *st = ch_status = mavlink_get_channel_status(MAVLINK_COMM_0);
+	mavlink_message_t *rx = ch_rx = mavlink_get_channel_buffer(MAVLINK_COMM_0);
+	stub_hal_init(&hal);
+	hal.have_key = key != 0;
+	for (int i = 0; i < 32; i++)
+		hal.key[i] = (uint8_t)(i * 7 + 1);
+	memset(st, 0, sizeof *st);
+	memset(rx, 0, sizeof *rx);
+	app_init(&app, &hal.hal);
+	mav_init(&mav, &app, &hal.hal, hal.now_us);
+	s->hal = hal;
+	s->app = app;
+	s->mav = mav;
+	s->status = *st;
+	s->rx = *rx;
+}
+
+/* The globals as snap[key] holds them, and the sender's state from zero (no coverage:
+ * coverage-ignore-mavlink.txt). */
+__attribute__((noinline)) static void start_state(int key)
+{
+	const struct snapshot *s = &snap[key];
 	hal = s->hal;
 	app = s->app;
 	mav = s->mav;
-	*st = s->status;
-	*rx = s->rx;
+	*ch_status = s->status;
+	*ch_rx = s->rx;
 	/* the sender: numbering from 0, signing with the shared key */
 	memset(&tx_status, 0, sizeof tx_status);
 	memset(&tx_signing, 0, sizeof tx_signing);
@@ -194,19 +204,12 @@ static uint64_t fnv(uint64_t h, const void *p, size_t n)
 	return h;
 }
 
-/* With OCTO_FUZZ_DIGEST in the environment, a hash of the state an input leaves (platform,
- * app, endpoint, channel, sender) goes to stderr after it: reset_check.sh replays inputs in
- * two orders in one process and compares, so that an input's outcome cannot depend on the
- * inputs before it. The bytes of an event's text after its NUL are left out: the app copies
- * whole text buffers whose tails are whatever its stack held, and nothing reads them. Not
- * coverage-traced (coverage-ignore-mavlink.txt). */
-__attribute__((noinline)) static void digest(void)
+/* A hash of the state an input leaves (platform, app, endpoint, channel, sender). The bytes
+ * of an event's text after its NUL are left out: the app copies whole text buffers whose
+ * tails are whatever its stack held, and nothing reads them. Not coverage-traced
+ * (coverage-ignore-mavlink.txt). */
+__attribute__((noinline)) static uint64_t state_hash(void)
 {
-	static int on = -1;
-	if (on < 0)
-		on = getenv("OCTO_FUZZ_DIGEST") != NULL;
-	if (!on)
-		return;
 	static struct app a;
 	a = app;
 	for (size_t i = 0; i < APP_OUTBOX_LEN; i++) {
@@ -218,20 +221,102 @@ __attribute__((noinline)) static void digest(void)
 	h = fnv(h, &hal, sizeof hal);
 	h = fnv(h, &a, sizeof a);
 	h = fnv(h, &mav, sizeof mav);
-	h = fnv(h, mavlink_get_channel_status(MAVLINK_COMM_0), sizeof(mavlink_status_t));
-	h = fnv(h, mavlink_get_channel_buffer(MAVLINK_COMM_0), sizeof(mavlink_message_t));
+	h = fnv(h, ch_status, sizeof *ch_status);
+	h = fnv(h, ch_rx, sizeof *ch_rx);
 	h = fnv(h, &tx_status, sizeof tx_status);
 	h = fnv(h, &tx_signing, sizeof tx_signing);
-	fprintf(stderr, "digest %016llx\n", (unsigned long long)h);
+	return fnv(h, &t_plant, sizeof t_plant);
 }
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+/* With OCTO_FUZZ_DIGEST in the environment, state_hash goes to stderr after each input:
+ * reset_check.sh replays inputs in two orders in one process and compares, so that an
+ * input's outcome cannot depend on the inputs before it (neither through the reset nor
+ * through the prefix checkpoints below). */
+static void digest(void)
 {
-	if (size < 1)
-		return 0;
-	start_state(data[0] & 1);
-	t_plant = 0.0;
-	size_t pos = 1;
+	static int on = -1;
+	if (on < 0)
+		on = getenv("OCTO_FUZZ_DIGEST") != NULL;
+	if (on)
+		fprintf(stderr, "digest %016llx\n", (unsigned long long)state_hash());
+}
+
+/* Prefix checkpoints. libFuzzer mutates an input a few times in a row, each time at one
+ * place, so consecutive inputs often share their first records. While an input runs, the
+ * harness copies the whole state (as start_state's snapshot, plus the sender, the plant
+ * clock and libFuzzer's coverage counters) at record boundaries, every CKPT_WORK of work;
+ * the next input that begins with the same bytes up to a checkpoint resumes from it instead
+ * of running those records again. The counters are restored with the state, so that
+ * libFuzzer sees the coverage and hit counts of the whole input, as if it had run from the
+ * start. A checkpoint is taken only after a record that was not cut by the input's end:
+ * any input with the same bytes up to there holds the same whole records. OCTO_FUZZ_VERIFY
+ * in the environment runs every resumed input a second time, from the start, and aborts
+ * unless the state and the counters agree (verify_resumed). */
+#define CKPT_N 12
+#define CKPT_COV_CAP 16384
+#define CKPT_WORK 24 /* records between checkpoints, a frame counting 2 and a signed message 2 */
+#define CKPT_INPUT_CAP 4096
+struct ckpt {
+	size_t pos; /* the input's bytes [0, pos) ran */
+	double t_plant;
+	struct snapshot s;
+	mavlink_status_t tx_status;
+	mavlink_signing_t tx_signing;
+	uint8_t cov[CKPT_COV_CAP];
+};
+static struct ckpt ckpt[CKPT_N];
+static size_t n_ckpt;
+static bool verify; /* OCTO_FUZZ_VERIFY */
+static uint8_t prev[CKPT_INPUT_CAP]; /* the last input that ran with checkpoints */
+static size_t prev_len;
+
+static uint8_t *cov; /* libFuzzer's coverage counters */
+static size_t cov_n;
+
+__attribute__((noinline)) static void ckpt_save(struct ckpt *c, size_t pos)
+{
+	c->pos = pos;
+	c->t_plant = t_plant;
+	c->s.hal = hal;
+	c->s.app = app;
+	c->s.mav = mav;
+	c->s.status = *ch_status;
+	c->s.rx = *ch_rx;
+	c->tx_status = tx_status;
+	c->tx_signing = tx_signing;
+	memcpy(c->cov, cov, cov_n);
+}
+
+__attribute__((noinline)) static void ckpt_restore(const struct ckpt *c)
+{
+	t_plant = c->t_plant;
+	hal = c->s.hal;
+	app = c->s.app;
+	mav = c->s.mav;
+	*ch_status = c->s.status;
+	*ch_rx = c->s.rx;
+	tx_status = c->tx_status;
+	tx_signing = c->tx_signing;
+	memcpy(cov, c->cov, cov_n);
+}
+
+/* The checkpoint to resume the input from (its bytes up to there as the last input's), or
+ * NULL; the checkpoints past it are dropped. */
+static const struct ckpt *ckpt_find(const uint8_t *data, size_t size)
+{
+	size_t same = 0, n = size < prev_len ? size : prev_len;
+	while (same < n && data[same] == prev[same])
+		same++;
+	while (n_ckpt > 0 && ckpt[n_ckpt - 1].pos > same)
+		n_ckpt--;
+	return n_ckpt > 0 ? &ckpt[n_ckpt - 1] : NULL;
+}
+
+/* Runs the input's records from pos and, with checkpoints on, takes them as it goes (no
+ * coverage: coverage-ignore-mavlink.txt). */
+__attribute__((noinline)) static void run_records(const uint8_t *data, size_t size, size_t pos, bool checkpoints)
+{
+	unsigned work = 0;
 	while (pos + 2 <= size) {
 		uint8_t kind = data[pos], n = data[pos + 1];
 		pos += 2;
@@ -240,19 +325,96 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		pos += len;
 		switch (kind & 15) {
 		case 10:
-		case 11: mav_receive(&mav, b, len); break;
+		case 11:
+			mav_receive(&mav, b, len);
+			work += 1;
+			break;
 		case 12:
-		case 13: frame(b, len); break;
+		case 13:
+			frame(b, len);
+			work += 2;
+			break;
 		case 14:
 		case 15:
 			hal.now_us += (uint64_t)(len ? b[0] : 1) * 10000u;
 			app_tick(&app);
 			mav_tick(&mav, hal.now_us);
+			work += 1;
 			break;
-		default: message(kind, b, len); break;
+		default:
+			message(kind, b, len);
+			work += 1u + (data[0] & 1);
+			break;
 		}
+		if (checkpoints && work >= CKPT_WORK && len == n && n_ckpt < CKPT_N) {
+			ckpt_save(&ckpt[n_ckpt++], pos);
+			work = 0;
+		}
+	}
+}
+
+int LLVMFuzzerInitialize(int *argc, char ***argv)
+{
+	(void)argc;
+	(void)argv;
+	fuzz_sha256_selftest();
+	take_snapshot(0);
+	take_snapshot(1);
+	cov = fuzz_cov_counters(&cov_n);
+	if (cov_n > CKPT_COV_CAP)
+		abort(); /* raise CKPT_COV_CAP */
+	verify = getenv("OCTO_FUZZ_VERIFY") != NULL;
+	return 0;
+}
+
+/* OCTO_FUZZ_VERIFY: the input that was resumed at byte pos runs again from the start; the
+ * state it leaves and the coverage counters must be the same (no coverage:
+ * coverage-ignore-mavlink.txt). */
+__attribute__((noinline)) static void verify_resumed(const uint8_t *data, size_t size, size_t pos)
+{
+	static uint8_t resumed[CKPT_COV_CAP];
+	uint64_t h = state_hash();
+	memcpy(resumed, cov, cov_n);
+	memset(cov, 0, cov_n);
+	start_state(data[0] & 1);
+	t_plant = 0.0;
+	run_records(data, size, 1, false);
+	check_params(&snap[data[0] & 1].app.p);
+	bool same = state_hash() == h;
+	for (size_t i = 0; i < cov_n; i++)
+		if (resumed[i] != cov[i]) {
+			fprintf(stderr, "fuzz_mavlink: coverage counter %zu: %u resumed, %u run whole\n", i, resumed[i],
+				cov[i]);
+			same = false;
+		}
+	if (!same) {
+		fprintf(stderr, "fuzz_mavlink: the input resumed at byte %zu differs from it run whole\n", pos);
+		abort();
+	}
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	if (size < 1)
+		return 0;
+	bool checkpoints = size <= CKPT_INPUT_CAP && cov_n > 0;
+	const struct ckpt *c = checkpoints ? ckpt_find(data, size) : NULL;
+	if (c) {
+		ckpt_restore(c);
+		run_records(data, size, c->pos, true);
+	} else {
+		n_ckpt = 0;
+		start_state(data[0] & 1);
+		t_plant = 0.0;
+		run_records(data, size, 1, checkpoints);
+	}
+	if (checkpoints) {
+		memcpy(prev, data, size);
+		prev_len = size;
 	}
 	check_params(&snap[data[0] & 1].app.p);
 	digest();
+	if (verify && c)
+		verify_resumed(data, size, c->pos);
 	return 0;
 }
