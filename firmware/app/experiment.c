@@ -141,14 +141,6 @@ static bool imu_src(const struct exp_cfg *c)
 /* ... with the rotor speeds */
 static bool rpm_src(const struct exp_cfg *c) { return c->src == EXP_SRC_IMU_RPM || c->src == EXP_SRC_IMU_RPM_TQ; }
 
-/* An inertia phase's torque about axis ax: the identified rotor model's, from the throttles
- * sent (the IMU sources always; the thrust rows for roll and pitch once a rotor model is
- * identified, by this run or an earlier one), or the rows' measured one. The model's torque
- * carries none of the rows' noise, which otherwise dominates the inertia's sd on noisy rows;
- * its slope's uncertainty joins the sd instead (inertia_end). The yaw torque stays the
- * measured reaction torque's under the rows. */
-static bool inr_model_torque(const struct exp_cfg *c, unsigned ax) { return imu_src(c) || (ax != 2u && c->model_ok); }
-
 /* Status lines are queued with their arguments (line.h) and formatted (vsnprintf with %f:
  * costly) by exp_pump, between frames, not in the 90 Hz step. A %s argument is a string that
  * outlives the experiment: literals only. */
@@ -697,7 +689,7 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		scalar_t tau[3],
 			inertia[3] = {sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz)};
 		const scalar_t *fm = in->thrust_n, *tm = in->torque_nm;
-		if (inr_model_torque(cf, ax)) { /* the torque the identified rotor model gives */
+		if (imu_src(cf)) { /* the torque the identified rotor model gives */
 			rmodel_init(&e->rm, p, cf, dt, in->thr_prev_all);
 			rmodel_step(&e->rm, in->thr_prev_all, 1, e->f_model, e->tq_model);
 			fm = e->f_model;
@@ -761,25 +753,6 @@ static void motor_results(struct experiment *e, float tau, float tau_sd, uint32_
 	e->cfg.delay_fr = delay;
 }
 
-/* The relative sd of the thrust's slope at hover, k_f g'(y_h), from the thrust rows' model:
- * k_f (relative sd rk) at full throttle and the curve c (sd c_sd), the hover taking u_h of
- * the rotors' full thrust. The hover pins k_f g(y_h), so a curve error dc moves ln k_f by
- * y (1 - y) / g dc and ln g'(y_h) by -(1 - 2 y) / g' dc: the slope's error is their sum,
- * much smaller than k_f's near hover, plus what k_f's sd holds beyond the curve's part (the
- * pin's own). Without the curve estimated it is k_f's sd. */
-static float hover_slope_rsd(float rk, float c, float c_sd, float u_h)
-{
-	if (!(u_h > 0.0f && u_h < 1.0f) || !(c_sd > 0.0f))
-		return rk;
-	float b = 1.0f - c, y = fabsf(c) > 1e-4f ? (sqrtf(b * b + 4.0f * c * u_h) - b) / (2.0f * c) : u_h / b;
-	float gp = b + 2.0f * c * y;
-	if (!(y > 0.0f && y < 1.0f) || !(gp > 0.0f))
-		return rk;
-	float a_kf = y * (1.0f - y) / u_h, a = a_kf - (1.0f - 2.0f * y) / gp;
-	float pin2 = rk * rk - a_kf * a_kf * c_sd * c_sd;
-	return sqrtf(a * a * c_sd * c_sd + (pin2 > 0.0f ? pin2 : 0.0f));
-}
-
 /* The rotor experiment's end with the null-space dither: the motor model of every rotor
  * (motor_id.h), its acceptance, results and status lines. Nothing is applied unless the model
  * explains the data (its cause) and every value is in range; ID_MOT_TAU, ID_DELAY_FR,
@@ -813,21 +786,6 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 		result(e, PX_VEH_KTAU, mr.ktau);
 		for (int j = 0; j < HAL_ROTORS; j++)
 			result(e, PX_MOT_SCALE1 + j, mr.scale[j]);
-		/* the later inertia phases' rotor model (inr_model_torque), with its slope at
-		 * hover's uncertainty */
-		e->cfg.model_ok = true;
-		e->cfg.kf = mr.kf;
-		e->cfg.ktau = mr.ktau;
-		if (e->cfg.crv_est)
-			e->cfg.curve = mr.curve;
-		float ssum = 0.0f;
-		for (int j = 0; j < HAL_ROTORS; j++)
-			ssum += mr.scale[j];
-		float u_h = p->veh_mass * p->veh_grav / (mr.kf * ssum);
-		e->cfg.slope_rsd =
-			hover_slope_rsd(mr.kf_sd / mr.kf, mr.curve, e->cfg.crv_est ? mr.curve_sd : 0.0f, u_h);
-	} else {
-		e->cfg.model_ok = false; /* an earlier model is not this vehicle's: the rows measure */
 	}
 	set_result_bit(e, p, 1u, ok);
 	rotor_ids(e, &mr, ok, vf, vt, curve_bad, bad_rotor, kfp, ktp);
@@ -1138,7 +1096,7 @@ static void inertia_end(struct experiment *e, const struct app_params *p, unsign
 	if (isfinite(sd) && isfinite(gs))
 		sd = sqrtf(sd * sd + gs * gs);
 	bool yaw_tq = ax == 2u && e->cfg.kt_id; /* the yaw torque from k_tau identified */
-	if (inr_model_torque(&e->cfg, ax) && (ax != 2u || yaw_tq)) {
+	if (imu_src(&e->cfg) && (ax != 2u || yaw_tq)) {
 		/* the torque is the model's, its swings about hover scaled by the thrust's (the
 		 * reaction torque's) slope there: the slope's uncertainty passes one for one
 		 * into the inertia */
@@ -1378,7 +1336,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		unsigned ax = (unsigned)(k - PK_INR_X);
 		scalar_t tau[3];
 		const scalar_t *fm = in->thrust_n, *tm = in->torque_nm;
-		if (inr_model_torque(&e->cfg, ax)) {
+		if (imu_src(&e->cfg)) {
 			rmodel_step(&e->rm, in->thr_prev, n, e->f_model, e->tq_model);
 			fm = e->f_model;
 			tm = e->tq_model;
