@@ -116,7 +116,7 @@ void imu_scale_process(struct imu_scale *m)
 		m->f0 = f;
 		m->have_ref = true;
 	}
-	for (unsigned d = 2; d > 0; d--) {
+	for (unsigned d = IMU_SCALE_WIN - 1u; d > 0; d--) {
 		for (unsigned j = 0; j < N; j++)
 			m->xr[d][j] = m->xr[d - 1u][j];
 		for (unsigned i = 0; i < 3; i++)
@@ -130,19 +130,29 @@ void imu_scale_process(struct imu_scale *m)
 		m->rr3[0][i] = sc_to_float(m->q_rate[i]);
 	m->fr[0] = f - m->f0;
 	m->er[0] = m->q_excited;
-	if (m->n_fr < 3u)
+	if (m->n_fr < IMU_SCALE_WIN)
 		m->n_fr++;
-	if (m->n_fr < 3u || !m->er[1])
+	if (m->n_fr < IMU_SCALE_WIN || !m->er[IMU_SCALE_HALF])
 		return;
-	/* the middle frame: regressors and force through [1 2 1] / 4, the rates' central
-	 * difference (the torque's [1 2 1] / 4 average over the two periods) */
-	float xs[NR], z[NA], h = 0.5f / m->cfg.dt_s;
-	for (unsigned j = 0; j < N; j++)
-		xs[j] = 0.25f * (m->xr[0][j] + 2.0f * m->xr[1][j] + m->xr[2][j]);
+	/* the window's middle frame: the rates' change over the window (the torque's integral
+	 * over it) against the regressors' trapezoid mean over the same frames, and the force's
+	 * trapezoid mean (one filter on both sides). The closed loop feeds the gyro's noise back
+	 * into the speeds within a few frames: over a long window that feedback is a small share
+	 * of the speeds' change, and the rates' noise enters only at the window's two ends. */
+	float xs[NR], z[NA], h = 1.0f / (2.0f * (float)IMU_SCALE_HALF * m->cfg.dt_s), wt = 0.5f / (float)IMU_SCALE_HALF;
+	for (unsigned j = 0; j < N; j++) {
+		float s = 0.5f * (m->xr[0][j] + m->xr[IMU_SCALE_WIN - 1u][j]);
+		for (unsigned d = 1; d + 1u < IMU_SCALE_WIN; d++)
+			s += m->xr[d][j];
+		xs[j] = wt * s;
+	}
 	xs[N] = 1.0f;
-	z[0] = 0.25f * (m->fr[0] + 2.0f * m->fr[1] + m->fr[2]);
+	float sf = 0.5f * (m->fr[0] + m->fr[IMU_SCALE_WIN - 1u]);
+	for (unsigned d = 1; d + 1u < IMU_SCALE_WIN; d++)
+		sf += m->fr[d];
+	z[0] = wt * sf;
 	for (unsigned i = 0; i < 3; i++)
-		z[1u + i] = h * (m->rr3[0][i] - m->rr3[2][i]);
+		z[1u + i] = h * (m->rr3[0][i] - m->rr3[IMU_SCALE_WIN - 1u][i]);
 	stat_add(&m->all, xs, z);
 	for (unsigned a = 0; a < NA; a++)
 		m->zz[a] += z[a] * z[a];

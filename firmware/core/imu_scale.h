@@ -46,6 +46,10 @@
 #define IMU_SCALE_NP (IMU_SCALE_ROTORS + 3 + 4) /* c, gamma (3 axes), offsets (4) */
 #define IMU_SCALE_BLOCKS 32
 #define IMU_SCALE_ITERS 12 /* Gauss-Newton steps at most */
+/* the window's half-width, frames: the rates' change over 2 HALF frames against the
+ * regressors' trapezoid mean over the same frames (and the force's, the same filter) */
+#define IMU_SCALE_HALF 16
+#define IMU_SCALE_WIN (2 * IMU_SCALE_HALF + 1)
 
 struct imu_scale_cfg {
 	float dt_s;
@@ -66,9 +70,9 @@ struct imu_scale {
 	float x0[IMU_SCALE_ROTORS], f0; /* the centring point: the first frame's x and force */
 	bool have_ref;                  /* w2_ref, x0, f0 set */
 	bool lost;                      /* a speed was not finite or not positive in an excited frame */
-	float xr[3][IMU_SCALE_ROTORS];  /* the last three frames' x, newest first */
-	float fr[3], rr3[3][3];         /* their force and rates */
-	bool er[3];                     /* their excited flag */
+	float xr[IMU_SCALE_WIN][IMU_SCALE_ROTORS];      /* the window's frames' x, newest first */
+	float fr[IMU_SCALE_WIN], rr3[IMU_SCALE_WIN][3]; /* their force and rates */
+	bool er[IMU_SCALE_WIN];                         /* their excited flag */
 	uint32_t n_fr;                  /* consecutive frames in the rings */
 	struct imu_scale_stat all;      /* every excited frame's sums */
 	float zz[IMU_SCALE_AXES];       /* the responses' sums of squares */
