@@ -158,6 +158,7 @@ static void say(struct experiment *e, int sev, const char *fmt, ...)
 }
 
 static void read_estimates(struct experiment *e);
+static void scales_early(struct experiment *e);
 
 /* one queued line into the app's pending slot when it is free and a step ran since the last
  * one (one line per frame, as before: the app sends it on its tick) */
@@ -177,6 +178,7 @@ void exp_pump(struct experiment *e)
 				if (rpm_src(&e->cfg)) {
 					motor_id_refine(&e->mid); /* processes the waiting frame first */
 					imu_scale_process(&e->isc);
+					scales_early(e);
 				}
 				excite_prepare(&e->exc2);
 				excite_prepare(&e->exc3);
@@ -573,6 +575,26 @@ static void scales_begin(struct experiment *e)
 	imu_scale_init(&e->isc, &sc);
 }
 
+/* Shortly before the collective model refines its grid (IMU_ID_FREEZE of the planned frames,
+ * where its sums restart): the scales so far, if they separate every rotor and lie in range,
+ * become its regressors' (imu_id_set_scales), so the rest of the run fits the force with them
+ * rather than with MOT_SCALE. Once, between frames. */
+#define SCALES_EARLY_MARGIN 10u /* frames before the refinement */
+static void scales_early(struct experiment *e)
+{
+	float due = IMU_ID_FREEZE * (float)e->imid.cfg.n_frames;
+	if (e->isc_early || (float)(e->rot_k + SCALES_EARLY_MARGIN) < due)
+		return;
+	e->isc_early = true;
+	struct imu_scale_result sr;
+	imu_scale_solve(&e->isc, &sr);
+	bool in = sr.cause == IMU_SCALE_OK;
+	for (int j = 0; j < HAL_ROTORS; j++)
+		in = in && sr.scale[j] >= SCALE_LO && sr.scale[j] <= SCALE_HI;
+	if (in)
+		imu_id_set_scales(&e->imid, sr.scale);
+}
+
 /* The IMU rotor experiment's start: the accelerometer sees the rotors' sum, so the null-space
  * dithers (the vehicle still) get a collective dither (a fast vertical jiggle) and the
  * throttle sweep beside them (docs/identification.md, "From the IMU"). */
@@ -927,13 +949,14 @@ static void imu_ktau_end(struct experiment *e, const struct app_params *p, const
 }
 
 /* The speeds' scales at the IMU rotor phase's end (imu_scale.h) into *sr; *bad: the first
- * rotor out of SCALE_LO..SCALE_HI. Separated and in range they take MOT_SCALE's place in the
- * collective model: its regressors carried MOT_SCALE (s0), and the sweep and the collective
+ * rotor out of SCALE_LO..SCALE_HI. Separated and in range they take the place of the scales
+ * the collective model's regressors carried (s0: MOT_SCALE, or the early scales after its
+ * refinement, scales_early), and the sweep and the collective
  * dither move every rotor alike, so its k_f (and k_tau) is the true one times
  * sum s0_j g_j / sum s_j g_j (g_j at the phase's starting throttles); the scales' share joins
  * k_f's sd, and the scales' check (IMU_ID_SCALES) is answered. The scales' share of each
  * inertia phase's modelled torque goes to cfg.sc_rsd. Returns whether they are used. */
-static bool scales_end(struct experiment *e, const struct app_params *p, struct imu_id_result *r,
+static bool scales_end(struct experiment *e, struct imu_id_result *r,
 		       struct imu_scale_result *sr, int *bad)
 {
 	imu_scale_process(&e->isc);
@@ -948,7 +971,7 @@ static bool scales_end(struct experiment *e, const struct app_params *p, struct 
 	for (int j = 0; j < HAL_ROTORS; j++) {
 		float y = e->thr_h[j];
 		gw[j] = (1.0f - c) * y + c * y * y;
-		s0g += mot_scale(p, j) * gw[j];
+		s0g += e->imid.cfg.scale[j] * gw[j]; /* what the collective model's regressors carried */
 		sg += sr->scale[j] * gw[j];
 	}
 	float k = sg > 0.0f ? s0g / sg : NAN;
@@ -1040,7 +1063,7 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	imu_id_solve(&e->imid, IMU_HAC_MAX, &r);
 	struct imu_scale_result sr;
 	int bad = -1;
-	bool sc_used = rpm_src(&e->cfg) && scales_end(e, p, &r, &sr, &bad);
+	bool sc_used = rpm_src(&e->cfg) && scales_end(e, &r, &sr, &bad);
 	enum ident_verdict vf = ident_accept(r.kf, r.kf_sd, p->veh_kf, e->cfg.rsd_max);
 	bool model_ok = r.cause == IMU_ID_OK;
 	/* with the rotor speeds the motor's lag and delay are theirs (seen rotor by rotor); the

@@ -189,6 +189,7 @@ struct experiment {
 			struct imu_id imid;          /* the IMU source's collective model (imu_id.h) */
 			struct imu_scale isc;        /* with the speeds: each rotor's effectiveness (imu_scale.h) */
 			float thr_h[HAL_ROTORS];     /* the throttles at the IMU rotor phase's start */
+			bool isc_early;              /* the early scales were solved (scales_early) */
 			scalar_t pat[2][HAL_ROTORS]; /* the two null-space patterns (excite_null_pattern) */
 			scalar_t ofs;                /* ID_EXC_OFS: the offset's amplitude */
 		};

@@ -144,6 +144,8 @@ struct imu_id {
 	scalar_t h_thr[IMU_ID_ROTORS];                        /* the throttles of the frames lost before it, */
 	uint32_t n_hold;                                      /* and their count (imu_id_hold; taken between frames) */
 	float fw_last;                                        /* the last frame taken's vertical force (a lost one's) */
+	float scale_next[IMU_ID_ROTORS]; /* imu_id_set_scales: the scales the refinement takes */
+	bool scale_new;
 };
 
 enum imu_id_cause {
@@ -203,6 +205,10 @@ void imu_id_hold(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS]);
  * only: the still second's spread mixes the noise with the hover control's own thrust
  * changes, so it measures neither. */
 void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r);
+/* Scales identified in flight (the rotor speeds' imu_scale.h) for the sums after the grid's
+ * refinement, which restarts them: cfg.scale becomes these, the reference model keeps its
+ * weight (k_f0 sum s g at the start). Ignored once refined. */
+void imu_id_set_scales(struct imu_id *m, const float scale[IMU_ID_ROTORS]);
 const char *imu_id_cause_text(enum imu_id_cause c);
 const char *imu_id_cause_remedy(enum imu_id_cause c);
 
