@@ -56,9 +56,23 @@ static void stat_add(struct imu_scale_stat *s, const float x[NR], const float z[
 	for (unsigned i = 0; i < NR; i++)
 		for (unsigned k = i; k < NR; k++)
 			s->g[ut(i, k)] += x[i] * x[k];
-	for (unsigned a = 0; a < NA; a++)
+	for (unsigned a = 0; a < NA; a++) {
 		for (unsigned i = 0; i < NR; i++)
 			s->b[a][i] += x[i] * z[a];
+		s->zz[a] += z[a] * z[a];
+	}
+}
+
+/* a block's sums into the run's (double) */
+static void dstat_add(struct imu_scale_dstat *d, const struct imu_scale_stat *s)
+{
+	for (unsigned i = 0; i < NT; i++)
+		d->g[i] += (double)s->g[i];
+	for (unsigned a = 0; a < NA; a++) {
+		for (unsigned i = 0; i < NR; i++)
+			d->b[a][i] += (double)s->b[a][i];
+		d->zz[a] += (double)s->zz[a];
+	}
 }
 
 /* a frame into the current block; a full set of blocks merges in pairs */
@@ -67,6 +81,7 @@ static void cl_add(struct imu_scale *m, const float x[NR], const float z[NA])
 	stat_add(&m->blk[m->nb], x, z);
 	if (++m->cl_k < m->cl_len)
 		return;
+	dstat_add(&m->all, &m->blk[m->nb]);
 	m->cl_k = 0;
 	if (++m->nb < IMU_SCALE_BLOCKS)
 		return;
@@ -75,9 +90,11 @@ static void cl_add(struct imu_scale *m, const float x[NR], const float z[NA])
 		const struct imu_scale_stat *p1 = &m->blk[2u * k + 1u];
 		for (unsigned i = 0; i < NT; i++)
 			t.g[i] += p1->g[i];
-		for (unsigned a = 0; a < NA; a++)
+		for (unsigned a = 0; a < NA; a++) {
 			for (unsigned i = 0; i < NR; i++)
 				t.b[a][i] += p1->b[a][i];
+			t.zz[a] += p1->zz[a];
+		}
 		m->blk[k] = t;
 	}
 	memset(&m->blk[IMU_SCALE_BLOCKS / 2u], 0, (IMU_SCALE_BLOCKS / 2u + 1u) * sizeof m->blk[0]);
@@ -153,9 +170,6 @@ void imu_scale_process(struct imu_scale *m)
 	z[0] = wt * sf;
 	for (unsigned i = 0; i < 3; i++)
 		z[1u + i] = h * (m->rr3[0][i] - m->rr3[IMU_SCALE_WIN - 1u][i]);
-	stat_add(&m->all, xs, z);
-	for (unsigned a = 0; a < NA; a++)
-		m->zz[a] += z[a] * z[a];
 	m->n++;
 	cl_add(m, xs, z);
 }
@@ -224,7 +238,21 @@ static bool inv_spd(unsigned n, const double a[][NP], double v[][NP])
 	return true;
 }
 
-/* the sums' Gram matrix in full, and b */
+/* the run's sums (the completed blocks' and the block being filled) in full */
+static void unpack_all(const struct imu_scale *m, double g[NR][NP], double b[NA][NR], double zz[NA])
+{
+	const struct imu_scale_stat *p = &m->blk[m->nb];
+	for (unsigned i = 0; i < NR; i++)
+		for (unsigned k = 0; k < NR; k++)
+			g[i][k] = m->all.g[ut(i, k)] + (double)p->g[ut(i, k)];
+	for (unsigned a = 0; a < NA; a++) {
+		for (unsigned i = 0; i < NR; i++)
+			b[a][i] = m->all.b[a][i] + (double)p->b[a][i];
+		zz[a] = m->all.zz[a] + (double)p->zz[a];
+	}
+}
+
+/* a block's sums' Gram matrix in full, and b */
 static void unpack(const struct imu_scale_stat *s, double g[NR][NP], double b[NA][NR])
 {
 	for (unsigned i = 0; i < NR; i++)
@@ -366,8 +394,8 @@ void imu_scale_solve(const struct imu_scale *m, struct imu_scale_result *r)
 	r->cause = IMU_SCALE_NO_DATA;
 	if (m->n < MIN_FRAMES)
 		return;
-	double g[NR][NP], b[NA][NR], gi[NR][NP];
-	unpack(&m->all, g, b);
+	double g[NR][NP], b[NA][NR], gi[NR][NP], zz[NA];
+	unpack_all(m, g, b, zz);
 	if (!inv_spd(NR, g, gi))
 		return;
 	/* each axis' own fit: its noise variance (the weights) */
@@ -377,13 +405,13 @@ void imu_scale_solve(const struct imu_scale *m, struct imu_scale_result *r)
 		on[a] = a == 0u;
 		for (unsigned j = 0; a > 0u && j < N; j++)
 			on[a] = on[a] || c->geo[a - 1u][j] != 0.0f;
-		double e = (double)m->zz[a];
+		double e = zz[a];
 		for (unsigned i = 0; i < NR; i++)
 			for (unsigned k = 0; k < NR; k++)
 				e -= b[a][i] * gi[i][k] * b[a][k];
 		s2[a] = e / (double)(m->n - NR);
 		if (!(s2[a] > 0.0)) /* a response without noise (a noiseless simulation) */
-			s2[a] = 1e-12 * ((double)m->zz[a] / (double)m->n + 1e-12);
+			s2[a] = 1e-12 * (zz[a] / (double)m->n + 1e-12);
 		w[a] = on[a] ? 1.0 / s2[a] : 0.0;
 		r->noise_sd[a] = (float)sqrt(s2[a]);
 	}
@@ -428,27 +456,6 @@ void imu_scale_solve(const struct imu_scale *m, struct imu_scale_result *r)
 	hess(c, g, p, w, on, hm);
 	if (!inv_spd(NP, hm, hi))
 		return;
-	/* the joint model's misfit against each axis' own least squares */
-	double chi = 0.0;
-	unsigned dof = 0, n_on = 0;
-	for (unsigned a = 0; a < NA; a++) {
-		if (!on[a])
-			continue;
-		double beta[NR], jac[NR][NP], e[NR];
-		beta_of(c, p, a, beta, jac);
-		for (unsigned i = 0; i < NR; i++) {
-			e[i] = b[a][i];
-			for (unsigned k = 0; k < NR; k++)
-				e[i] -= g[i][k] * beta[k];
-		}
-		for (unsigned i = 0; i < NR; i++)
-			for (unsigned k = 0; k < NR; k++)
-				chi += e[i] * gi[i][k] * e[k] * w[a];
-		dof += NR;
-		n_on++;
-	}
-	dof -= N + 2u * n_on - 1u; /* N + 1 per axis, less c, the gains and the offsets */
-	r->chi2_dof = dof > 0u ? (float)(chi / (double)dof) : 0.0f;
 	/* the clusters' sandwich H^-1 S H^-1, S the blocks' score products */
 	unsigned nb = m->nb + (m->cl_k * 2u >= m->cl_len ? 1u : 0u);
 	r->blocks = nb;

@@ -58,25 +58,33 @@ struct imu_scale_cfg {
 	float sd_max;                   /* the largest sd of a scale taken as determined */
 };
 
-/* one set of sums: G (upper triangle of (x, 1), row by row), b per axis */
+/* one set of sums: G (upper triangle of (x, 1), row by row), b and z'z per axis */
 struct imu_scale_stat {
 	float g[IMU_SCALE_NT];
 	float b[IMU_SCALE_AXES][IMU_SCALE_NR];
+	float zz[IMU_SCALE_AXES];
+};
+
+/* the run's sums, in double: the blocks' added as each completes (a float sum over the whole
+ * run loses the rotors' small differences to rounding: the regressors are nearly collinear) */
+struct imu_scale_dstat {
+	double g[IMU_SCALE_NT];
+	double b[IMU_SCALE_AXES][IMU_SCALE_NR];
+	double zz[IMU_SCALE_AXES];
 };
 
 struct imu_scale {
 	struct imu_scale_cfg cfg;
-	float w2_ref;                   /* w_ref^2: the first frame's mean w^2 */
-	float x0[IMU_SCALE_ROTORS], f0; /* the centring point: the first frame's x and force */
-	bool have_ref;                  /* w2_ref, x0, f0 set */
-	bool lost;                      /* a speed was not finite or not positive in an excited frame */
+	float w2_ref;                                   /* w_ref^2: the first frame's mean w^2 */
+	float x0[IMU_SCALE_ROTORS], f0;                 /* the centring point: the first frame's x and force */
+	bool have_ref;                                  /* w2_ref, x0, f0 set */
+	bool lost;                                      /* a speed was not finite or not positive in an excited frame */
 	float xr[IMU_SCALE_WIN][IMU_SCALE_ROTORS];      /* the window's frames' x, newest first */
 	float fr[IMU_SCALE_WIN], rr3[IMU_SCALE_WIN][3]; /* their force and rates */
 	bool er[IMU_SCALE_WIN];                         /* their excited flag */
-	uint32_t n_fr;                  /* consecutive frames in the rings */
-	struct imu_scale_stat all;      /* every excited frame's sums */
-	float zz[IMU_SCALE_AXES];       /* the responses' sums of squares */
-	uint32_t n;                     /* frames in the sums */
+	uint32_t n_fr;                                  /* consecutive frames in the rings */
+	struct imu_scale_dstat all;                     /* the completed blocks' sums */
+	uint32_t n;                                     /* frames in the sums */
 	struct imu_scale_stat blk[IMU_SCALE_BLOCKS + 1];
 	uint32_t nb, cl_len, cl_k;   /* complete blocks, frames per block, frames in the last */
 	bool q_pending, q_excited;   /* the frame stored, as given */
@@ -97,7 +105,6 @@ struct imu_scale_result {
 	float cov_w[IMU_SCALE_ROTORS][IMU_SCALE_ROTORS], cov_c[IMU_SCALE_ROTORS][IMU_SCALE_ROTORS];
 	float gain[3];     /* gamma: the axes' gains (1 / I_x, 1 / I_y in the force's units) */
 	float noise_sd[4]; /* each axis' residual sd (N, rad/s^2) */
-	float chi2_dof;    /* the joint model's misfit over the axes' own fits, per degree of freedom */
 	uint32_t blocks, n, iters;
 	int worst; /* the rotor of the largest sd */
 	enum imu_scale_cause cause;
