@@ -956,8 +956,7 @@ static void imu_ktau_end(struct experiment *e, const struct app_params *p, const
  * sum s0_j g_j / sum s_j g_j (g_j at the phase's starting throttles); the scales' share joins
  * k_f's sd, and the scales' check (IMU_ID_SCALES) is answered. The scales' share of each
  * inertia phase's modelled torque goes to cfg.sc_rsd. Returns whether they are used. */
-static bool scales_end(struct experiment *e, struct imu_id_result *r,
-		       struct imu_scale_result *sr, int *bad)
+static bool scales_end(struct experiment *e, struct imu_id_result *r, struct imu_scale_result *sr, int *bad)
 {
 	imu_scale_process(&e->isc);
 	imu_scale_solve(&e->isc, sr);

@@ -144,7 +144,7 @@ struct imu_id {
 	scalar_t h_thr[IMU_ID_ROTORS];                        /* the throttles of the frames lost before it, */
 	uint32_t n_hold;                                      /* and their count (imu_id_hold; taken between frames) */
 	float fw_last;                                        /* the last frame taken's vertical force (a lost one's) */
-	float scale_next[IMU_ID_ROTORS]; /* imu_id_set_scales: the scales the refinement takes */
+	float scale_next[IMU_ID_ROTORS];                      /* imu_id_set_scales: the scales the refinement takes */
 	bool scale_new;
 };
 
