@@ -25,7 +25,6 @@ from test_ident_imu import PAPER, fly, imu_vehicle, judge, results
 
 SCALE = re.compile(r"^ID scale (1-4|5-8) ([-0-9.]+) ([-0-9.]+) ([-0-9.]+) ([-0-9.]+)$")
 SCALE_SD = re.compile(r"^ID scale sd (1-4|5-8) ([-0-9.]+) ([-0-9.]+) ([-0-9.]+) ([-0-9.]+)$")
-EXP1 = "arm; takeoff 5; wait hold; experiment 1; wait experiment"
 
 
 def scales(said):
@@ -80,7 +79,7 @@ def test_a_weak_rotor_is_identified_and_applied(tmp_path):
         assert any(ln.startswith("ID rotor 3 degraded: effectiveness 0.7") for ln in said), said
         assert not any("effectiveness is not MOT_SCALE" in ln for ln in said), said
         prm = (tmp_path / "p.parm").read_text()
-        m = re.search(r"^MOT_SCALE3\s*[ ,=]\s*([-0-9.eE]+)", prm, re.M)
+        m = re.search(r"^MOT_SCALE3\s*[ ,=]\s*([-0-9.eE]+)", prm, re.MULTILINE)
         assert m and abs(float(m.group(1)) - 0.78) < 0.01, prm
         res = results(said)
         assert all(res[k][2] for k in ("kf", "ixx", "iyy", "ratio")), (program, res)
