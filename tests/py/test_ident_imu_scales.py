@@ -6,6 +6,7 @@ MOT_SCALE says, unknown to the firmware, are identified rather than rejected.
   it is named degraded, MOT_SCALE3 is applied (the parameter file), and k_f, I_x, I_y and
   k_tau / I_z are accepted and right (they rest on the identified scales). The fixed-point
   build too.
+- A motor that turns slower at the same throttle: its scale is the speeds' share.
 - Random vehicles of the tests' ranges (lag 10-100 ms, delay 0-3 frames, curve 0-0.5, k_f,
   k_tau and inertia +/-30 %) with one or two rotors at 0.8-1.0 unknown to the firmware: every
   scale within max(3 sd, 1 %) of the truth (over its median, as the firmware normalises), the
@@ -85,6 +86,16 @@ def test_a_weak_rotor_is_identified_and_applied(tmp_path):
         assert all(res[k][2] for k in ("kf", "ixx", "iyy", "ratio")), (program, res)
         z, bad = judge(res, veh)
         assert not bad, (program, bad, z)
+
+
+def test_a_slow_motor_is_its_speeds_share(tmp_path):
+    """A motor that turns slower at the same throttle (its thrust 0.85 from the start, through
+    its speed): the thrust per w^2 is the others', the speed model's share makes the scale."""
+    veh = dict(PAPER, rotor_failure={"rotor": 3, "at_s": 0, "scale": 0.85})
+    _, said = fly(tmp_path, veh, 17, script="arm; takeoff 5; wait hold; experiment 1; wait experiment")
+    zs, wrong = judge_scales(said, dict(veh, rotor_scale=[1, 1, 0.85, 1, 1, 1, 1, 1]))
+    assert not wrong, (wrong, zs)
+    assert results(said)["kf"][2], said
 
 
 def test_random_weak_rotors_identified_against_truth_and_sd(tmp_path):
