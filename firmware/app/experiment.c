@@ -588,6 +588,7 @@ static void scales_early(struct experiment *e)
 	e->isc_early = true;
 	struct imu_scale_result sr;
 	imu_scale_solve(&e->isc, &sr);
+	imu_scale_per_throttle(&e->isc, e->cfg.curve, 0.0f, &sr);
 	bool in = sr.cause == IMU_SCALE_OK;
 	for (int j = 0; j < HAL_ROTORS; j++)
 		in = in && sr.scale[j] >= SCALE_LO && sr.scale[j] <= SCALE_HI;
@@ -948,43 +949,6 @@ static void imu_ktau_end(struct experiment *e, const struct app_params *p, const
 	    (double)sqrtf(r->tq_hac));
 }
 
-/* The scales per newton of w^2 (imu_scale.h) times the speed model's (w_j^2 per unit of
- * g(y_j), rotor by rotor: a motor that turns slower at the same throttle), over their median:
- * each rotor's thrust per throttle, what MOT_SCALE is. The speed model's sds join the
- * diagonal. */
-static void scales_per_throttle(struct imu_scale_result *sr, const struct motor_id_result *mr)
-{
-	float v[HAL_ROTORS], srt[HAL_ROTORS];
-	for (int j = 0; j < HAL_ROTORS; j++)
-		v[j] = sr->scale[j] * mr->scale[j];
-	for (int j = 0; j < HAL_ROTORS; j++)
-		srt[j] = v[j];
-	for (int i = 1; i < HAL_ROTORS; i++)
-		for (int k = i; k > 0 && srt[k - 1] > srt[k]; k--) {
-			float t = srt[k];
-			srt[k] = srt[k - 1];
-			srt[k - 1] = t;
-		}
-	float med = 0.5f * (srt[(HAL_ROTORS - 1) / 2] + srt[HAL_ROTORS / 2]);
-	if (!(med > 0.0f) || !isfinite(med))
-		return;
-	for (int i = 0; i < HAL_ROTORS; i++)
-		for (int k = 0; k < HAL_ROTORS; k++) {
-			float f = mr->scale[i] * mr->scale[k] / (med * med);
-			sr->cov_w[i][k] *= f;
-			sr->cov_c[i][k] *= f;
-		}
-	for (int j = 0; j < HAL_ROTORS; j++) {
-		float dv = sr->scale[j] * mr->scale_sd[j] / med;
-		dv = isfinite(dv) ? dv * dv : 0.0f;
-		sr->cov_w[j][j] += dv;
-		sr->cov_c[j][j] += dv;
-		sr->scale[j] = v[j] / med;
-		float q = fmaxf(sr->cov_w[j][j], sr->cov_c[j][j]);
-		sr->scale_sd[j] = q > 0.0f ? sqrtf(q) : 0.0f;
-	}
-}
-
 /* The speeds' scales at the IMU rotor phase's end (imu_scale.h) into *sr; *bad: the first
  * rotor out of SCALE_LO..SCALE_HI. Separated and in range they take the place of the scales
  * the collective model's regressors carried (s0: MOT_SCALE, or the early scales after its
@@ -993,13 +957,11 @@ static void scales_per_throttle(struct imu_scale_result *sr, const struct motor_
  * sum s0_j g_j / sum s_j g_j (g_j at the phase's starting throttles); the scales' share joins
  * k_f's sd, and the scales' check (IMU_ID_SCALES) is answered. The scales' share of each
  * inertia phase's modelled torque goes to cfg.sc_rsd. Returns whether they are used. */
-static bool scales_end(struct experiment *e, const struct motor_id_result *mr, struct imu_id_result *r,
-		       struct imu_scale_result *sr, int *bad)
+static bool scales_end(struct experiment *e, struct imu_id_result *r, struct imu_scale_result *sr, int *bad)
 {
 	imu_scale_process(&e->isc);
 	imu_scale_solve(&e->isc, sr);
-	if (mr && sr->cause == IMU_SCALE_OK)
-		scales_per_throttle(sr, mr);
+	imu_scale_per_throttle(&e->isc, r->curve, r->curve_sd, sr);
 	*bad = -1;
 	for (int j = 0; j < HAL_ROTORS; j++)
 		if (!(sr->scale[j] >= SCALE_LO && sr->scale[j] <= SCALE_HI) && *bad < 0)
@@ -1121,7 +1083,7 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	}
 	struct imu_scale_result sr;
 	int bad = -1;
-	bool sc_used = rpm_src(&e->cfg) && scales_end(e, by_speed ? &mr : NULL, &r, &sr, &bad);
+	bool sc_used = rpm_src(&e->cfg) && scales_end(e, &r, &sr, &bad);
 	enum ident_verdict vf = ident_accept(r.kf, r.kf_sd, p->veh_kf, e->cfg.rsd_max);
 	bool model_ok = r.cause == IMU_ID_OK;
 	bool curve_bad = e->cfg.crv_est && !(r.curve >= THRMAP_CURVE_MIN && r.curve <= THRMAP_CURVE_MAX);
@@ -1513,8 +1475,8 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			for (int i = 1; i < n; i++)
 				imu_scale_hold(&e->isc);
 			if (n >= 1)
-				imu_scale_step(&e->isc, in->frame->rotor_speed_rps, imu_force(in, p), in->rate_b_rps,
-					       use);
+				imu_scale_step(&e->isc, tp, in->frame->rotor_speed_rps, imu_force(in, p),
+					       in->rate_b_rps, use);
 		}
 		scalar_t d0 = sweep_step(e, running);
 		null_dither(e, running, running ? excite_update(&e->exc) : SC_ZERO, out);

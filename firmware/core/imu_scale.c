@@ -30,13 +30,15 @@ void imu_scale_init(struct imu_scale *m, const struct imu_scale_cfg *cfg)
 	m->cl_len = cfg->block_frames ? cfg->block_frames : 90u;
 }
 
-void imu_scale_step(struct imu_scale *m, const float w_rps[IMU_SCALE_ROTORS], scalar_t f_n, const scalar_t rate[3],
-		    bool excited)
+void imu_scale_step(struct imu_scale *m, const scalar_t thr[IMU_SCALE_ROTORS], const float w_rps[IMU_SCALE_ROTORS],
+		    scalar_t f_n, const scalar_t rate[3], bool excited)
 {
 	if (m->q_pending)
 		imu_scale_process(m);
-	for (unsigned j = 0; j < N; j++)
+	for (unsigned j = 0; j < N; j++) {
 		m->q_w[j] = w_rps[j];
+		m->q_thr[j] = thr[j];
+	}
 	m->q_f = f_n;
 	for (unsigned i = 0; i < 3; i++)
 		m->q_rate[i] = rate[i];
@@ -141,8 +143,15 @@ void imu_scale_process(struct imu_scale *m)
 		m->fr[d] = m->fr[d - 1u];
 		m->er[d] = m->er[d - 1u];
 	}
-	for (unsigned j = 0; j < N; j++)
+	for (unsigned j = 0; j < N; j++) {
 		m->xr[0][j] = x[j] / m->w2_ref - m->x0[j];
+		if (m->q_excited) {
+			float y = sc_to_float(m->q_thr[j]);
+			m->sw2[j] += x[j] / m->w2_ref;
+			m->sy[j] += y;
+			m->syy[j] += y * y;
+		}
+	}
 	for (unsigned i = 0; i < 3; i++)
 		m->rr3[0][i] = sc_to_float(m->q_rate[i]);
 	m->fr[0] = f - m->f0;
@@ -514,6 +523,67 @@ void imu_scale_solve(const struct imu_scale *m, struct imu_scale_result *r)
 	for (unsigned a = 1; a < NA; a++)
 		r->gain[a - 1u] = (float)p[P_GAM + a - 1u];
 	r->cause = worst <= c->sd_max && isfinite(worst) ? IMU_SCALE_OK : IMU_SCALE_NOT_SEPARATED;
+}
+
+/* c' = J c J^T into c */
+static void cov_map(const float jm[N][N], float c[N][N])
+{
+	float t[N][N];
+	for (unsigned i = 0; i < N; i++)
+		for (unsigned k = 0; k < N; k++) {
+			t[i][k] = 0.0f;
+			for (unsigned q = 0; q < N; q++)
+				t[i][k] += jm[i][q] * c[q][k];
+		}
+	for (unsigned i = 0; i < N; i++)
+		for (unsigned k = 0; k < N; k++) {
+			c[i][k] = 0.0f;
+			for (unsigned q = 0; q < N; q++)
+				c[i][k] += t[i][q] * jm[k][q];
+		}
+}
+
+void imu_scale_per_throttle(const struct imu_scale *m, float curve, float curve_sd, struct imu_scale_result *r)
+{
+	if (r->cause != IMU_SCALE_OK)
+		return;
+	float v[N], sp[N], dm[N];
+	double vd[N];
+	for (unsigned j = 0; j < N; j++) {
+		float gs = (1.0f - curve) * m->sy[j] + curve * m->syy[j];
+		sp[j] = gs > 0.0f ? m->sw2[j] / gs : 0.0f; /* the speed share w^2 / g(y) */
+		if (!(sp[j] > 0.0f) || !isfinite(sp[j]))
+			return;
+		dm[j] = (m->sy[j] - m->syy[j]) / gs; /* d ln(share) / d c */
+		v[j] = r->scale[j] * sp[j];
+		vd[j] = (double)v[j];
+	}
+	unsigned ia, ib;
+	float med = (float)median_of(vd, &ia, &ib), dmean = 0.0f;
+	if (!(med > 0.0f) || !isfinite(med))
+		return;
+	/* s' = (s sp) / median(s sp): its Jacobian in s (the scales before, already over a
+	 * median: s' depends on their ratios only, so the map is exact to first order) */
+	float jm[N][N] = {{0}};
+	for (unsigned j = 0; j < N; j++) {
+		jm[j][j] += sp[j] / med;
+		jm[j][ia] -= 0.5f * v[j] * sp[ia] / (med * med);
+		jm[j][ib] -= 0.5f * v[j] * sp[ib] / (med * med);
+		dmean += dm[j] / (float)N;
+	}
+	cov_map(jm, r->cov_w);
+	cov_map(jm, r->cov_c);
+	for (unsigned j = 0; j < N; j++) {
+		/* the curve moves each share by d ln(share) / d c: what differs from the rotors'
+		 * mean is not cancelled by the median */
+		float dv = v[j] / med * (dm[j] - dmean) * curve_sd;
+		dv = isfinite(dv) ? dv * dv : 0.0f;
+		r->cov_w[j][j] += dv;
+		r->cov_c[j][j] += dv;
+		r->scale[j] = v[j] / med;
+		float q = fmaxf(r->cov_w[j][j], r->cov_c[j][j]);
+		r->scale_sd[j] = q > 0.0f ? sqrtf(q) : 0.0f;
+	}
 }
 
 float imu_scale_ratio_rsd(const struct imu_scale_result *r, const float a[IMU_SCALE_ROTORS],

@@ -89,7 +89,11 @@ struct imu_scale {
 	uint32_t nb, cl_len, cl_k;   /* complete blocks, frames per block, frames in the last */
 	bool q_pending, q_excited;   /* the frame stored, as given */
 	float q_w[IMU_SCALE_ROTORS]; /* speeds, rad/s */
-	scalar_t q_f, q_rate[3];     /* force (N), body rates (rad/s) */
+	scalar_t q_thr[IMU_SCALE_ROTORS];
+	/* each rotor's speed per throttle: over the excited frames the sums of w^2 / w_ref^2, of
+	 * the throttle and of its square (the curve is applied at the solve) */
+	float sw2[IMU_SCALE_ROTORS], sy[IMU_SCALE_ROTORS], syy[IMU_SCALE_ROTORS];
+	scalar_t q_f, q_rate[3]; /* force (N), body rates (rad/s) */
 };
 
 enum imu_scale_cause {
@@ -111,15 +115,21 @@ struct imu_scale_result {
 };
 
 void imu_scale_init(struct imu_scale *m, const struct imu_scale_cfg *cfg);
-/* One frame: the speeds (rad/s, as measured), the force m g a_z (N) and the body rates
- * (rad/s); excited: into the sums. Stores only. */
-void imu_scale_step(struct imu_scale *m, const float w_rps[IMU_SCALE_ROTORS], scalar_t f_n, const scalar_t rate[3],
-		    bool excited);
+/* One frame: the throttles acting (those sent on the previous frame), the speeds (rad/s, as
+ * measured), the force m g a_z (N) and the body rates (rad/s); excited: into the sums.
+ * Stores only. */
+void imu_scale_step(struct imu_scale *m, const scalar_t thr[IMU_SCALE_ROTORS], const float w_rps[IMU_SCALE_ROTORS],
+		    scalar_t f_n, const scalar_t rate[3], bool excited);
 /* A frame without measurement: the rings restart. */
 void imu_scale_hold(struct imu_scale *m);
 /* Between frames: the stored frame into the sums (no-op if none waits). */
 void imu_scale_process(struct imu_scale *m);
 void imu_scale_solve(const struct imu_scale *m, struct imu_scale_result *r);
+/* The scales per throttle (what MOT_SCALE is): those per w^2 of the solve times each rotor's
+ * speed per throttle, w_j^2 / g(y_j) over the excited frames (g the thrust curve c; a motor
+ * that turns slower at the same throttle), over their median; the speed share's sd from the
+ * curve's (curve_sd) joins the diagonal. No-op unless r->cause is IMU_SCALE_OK. */
+void imu_scale_per_throttle(const struct imu_scale *m, float curve, float curve_sd, struct imu_scale_result *r);
 /* The sd of ln(sum_j a_j s_j / sum_j b_j s_j) under the scales' covariance (either b may be
  * NULL: the numerator alone): what the scales' uncertainty adds to a quantity they scale. */
 float imu_scale_ratio_rsd(const struct imu_scale_result *r, const float a[IMU_SCALE_ROTORS],
