@@ -135,9 +135,9 @@ static void fly(struct unit_rng *g, const struct truth *t, unsigned n, bool geom
 
 /* Random vehicles with one or two weak rotors (with two, a motor turning slower too; the
  * scales per w^2 on every third, per throttle on the others): every scale within 1 % and 4
- * of its sds, the
- * sds below 1.5 %, the roll and pitch gains within 2 %; over all the error / sd has an rms in [0.7, 1.4]
- * (a 240-sample rms of a unit normal lies outside with probability below 1e-6). */
+ * of its sds, the sds below 1.5 %, the roll and pitch gains within 2 %; over all the error /
+ * sd has an rms in [0.7, 1.4] (a 240-sample rms of a unit normal lies outside with
+ * probability below 1e-6). */
 UNIT_TEST(imu_scale_random_vehicles)
 {
 	struct unit_rng g = {0x5eed0027ULL};
