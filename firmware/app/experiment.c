@@ -588,7 +588,7 @@ static void scales_early(struct experiment *e)
 	e->isc_early = true;
 	struct imu_scale_result sr;
 	imu_scale_solve(&e->isc, &sr);
-	imu_scale_per_throttle(&e->isc, e->cfg.curve, 0.0f, &sr);
+	imu_scale_per_throttle(&e->isc, e->cfg.curve, 0.0f, NULL, NULL, &sr);
 	bool in = sr.cause == IMU_SCALE_OK;
 	for (int j = 0; j < HAL_ROTORS; j++)
 		in = in && sr.scale[j] >= SCALE_LO && sr.scale[j] <= SCALE_HI;
@@ -957,11 +957,14 @@ static void imu_ktau_end(struct experiment *e, const struct app_params *p, const
  * sum s0_j g_j / sum s_j g_j (g_j at the phase's starting throttles); the scales' share joins
  * k_f's sd, and the scales' check (IMU_ID_SCALES) is answered. The scales' share of each
  * inertia phase's modelled torque goes to cfg.sc_rsd. Returns whether they are used. */
-static bool scales_end(struct experiment *e, struct imu_id_result *r, struct imu_scale_result *sr, int *bad)
+static bool scales_end(struct experiment *e, const struct motor_id_result *mr, struct imu_id_result *r,
+		       struct imu_scale_result *sr, int *bad)
 {
 	imu_scale_process(&e->isc);
 	imu_scale_solve(&e->isc, sr);
-	imu_scale_per_throttle(&e->isc, r->curve, r->curve_sd, sr);
+	/* per throttle: the speed model's shares (its delay and lag) when it holds, else the
+	 * run's w^2 over g(y) */
+	imu_scale_per_throttle(&e->isc, r->curve, r->curve_sd, mr ? mr->scale : NULL, mr ? mr->scale_sd : NULL, sr);
 	*bad = -1;
 	for (int j = 0; j < HAL_ROTORS; j++)
 		if (!(sr->scale[j] >= SCALE_LO && sr->scale[j] <= SCALE_HI) && *bad < 0)
@@ -1083,7 +1086,7 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	}
 	struct imu_scale_result sr;
 	int bad = -1;
-	bool sc_used = rpm_src(&e->cfg) && scales_end(e, &r, &sr, &bad);
+	bool sc_used = rpm_src(&e->cfg) && scales_end(e, by_speed ? &mr : NULL, &r, &sr, &bad);
 	enum ident_verdict vf = ident_accept(r.kf, r.kf_sd, p->veh_kf, e->cfg.rsd_max);
 	bool model_ok = r.cause == IMU_ID_OK;
 	bool curve_bad = e->cfg.crv_est && !(r.curve >= THRMAP_CURVE_MIN && r.curve <= THRMAP_CURVE_MAX);

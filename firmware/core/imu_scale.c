@@ -543,7 +543,8 @@ static void cov_map(const float jm[N][N], float c[N][N])
 		}
 }
 
-void imu_scale_per_throttle(const struct imu_scale *m, float curve, float curve_sd, struct imu_scale_result *r)
+void imu_scale_per_throttle(const struct imu_scale *m, float curve, float curve_sd, const float *share,
+			    const float *share_sd, struct imu_scale_result *r)
 {
 	if (r->cause != IMU_SCALE_OK)
 		return;
@@ -551,10 +552,12 @@ void imu_scale_per_throttle(const struct imu_scale *m, float curve, float curve_
 	double vd[N];
 	for (unsigned j = 0; j < N; j++) {
 		float gs = (1.0f - curve) * m->sy[j] + curve * m->syy[j];
-		sp[j] = gs > 0.0f ? m->sw2[j] / gs : 0.0f; /* the speed share w^2 / g(y) */
+		/* the speed share, given or w^2 / g(y) over the run */
+		sp[j] = share ? share[j] : gs > 0.0f ? m->sw2[j] / gs : 0.0f;
 		if (!(sp[j] > 0.0f) || !isfinite(sp[j]))
 			return;
-		dm[j] = (m->sy[j] - m->syy[j]) / gs; /* d ln(share) / d c */
+		/* its sd: given, or from the curve's through d ln(share) / d c */
+		dm[j] = share ? 0.0f : (m->sy[j] - m->syy[j]) / gs;
 		v[j] = r->scale[j] * sp[j];
 		vd[j] = (double)v[j];
 	}
@@ -576,7 +579,7 @@ void imu_scale_per_throttle(const struct imu_scale *m, float curve, float curve_
 	for (unsigned j = 0; j < N; j++) {
 		/* the curve moves each share by d ln(share) / d c: what differs from the rotors'
 		 * mean is not cancelled by the median */
-		float dv = v[j] / med * (dm[j] - dmean) * curve_sd;
+		float dv = v[j] / med * (share ? (share_sd ? share_sd[j] / sp[j] : 0.0f) : (dm[j] - dmean) * curve_sd);
 		dv = isfinite(dv) ? dv * dv : 0.0f;
 		r->cov_w[j][j] += dv;
 		r->cov_c[j][j] += dv;

@@ -126,10 +126,14 @@ void imu_scale_hold(struct imu_scale *m);
 void imu_scale_process(struct imu_scale *m);
 void imu_scale_solve(const struct imu_scale *m, struct imu_scale_result *r);
 /* The scales per throttle (what MOT_SCALE is): those per w^2 of the solve times each rotor's
- * speed per throttle, w_j^2 / g(y_j) over the excited frames (g the thrust curve c; a motor
- * that turns slower at the same throttle), over their median; the speed share's sd from the
- * curve's (curve_sd) joins the diagonal. No-op unless r->cause is IMU_SCALE_OK. */
-void imu_scale_per_throttle(const struct imu_scale *m, float curve, float curve_sd, struct imu_scale_result *r);
+ * speed share, w_j^2 per unit of g(y_j) (a motor that turns slower at the same throttle),
+ * over their median. The shares: share[] with their sds share_sd[] (a model of the speeds
+ * with the motor's delay and lag, motor_id.h), or if NULL the ratio of w_j^2 to g(y_j) summed
+ * over the excited frames (g the thrust curve; the throttles sent, not lagged: a bias of the
+ * curve times the dithers' variance, a few 0.1 %), whose sd from the curve's (curve_sd) joins
+ * the diagonal. No-op unless r->cause is IMU_SCALE_OK. */
+void imu_scale_per_throttle(const struct imu_scale *m, float curve, float curve_sd, const float *share,
+			    const float *share_sd, struct imu_scale_result *r);
 /* The sd of ln(sum_j a_j s_j / sum_j b_j s_j) under the scales' covariance (either b may be
  * NULL: the numerator alone): what the scales' uncertainty adds to a quantity they scale. */
 float imu_scale_ratio_rsd(const struct imu_scale_result *r, const float a[IMU_SCALE_ROTORS],

@@ -130,7 +130,7 @@ static void fly(struct unit_rng *g, const struct truth *t, unsigned n, bool geom
 	}
 	imu_scale_solve(&m, r);
 	if (per_throttle)
-		imu_scale_per_throttle(&m, 0.0f, 0.0f, r);
+		imu_scale_per_throttle(&m, 0.0f, 0.0f, NULL, NULL, r);
 }
 
 /* Random vehicles with one or two weak rotors (with two, a motor turning slower too; the
