@@ -14,18 +14,24 @@
  * offsets (the accelerometer's, the gyro's drift). The force alone sees only sum_j c_j x_j
  * and what the null-space dithers leave of it; the gyro sees each pattern's two opposite
  * pairs apart and, on the yaw axis, the rotors of one spin direction against the other's: the
- * axes together separate every rotor. The effectiveness is s_j = c_j / median(c).
+ * axes together separate every rotor. The effectiveness per w^2 is c_j / median(c); per
+ * throttle (MOT_SCALE) it is that times the rotor's speed share (imu_scale_per_throttle).
  *
- * Sums: both sides through the same [1 2 1] / 4 smoother (the force, the regressors), the
- * rates by their central difference (which is the torque's [1 2 1] / 4 average over the two
- * frame periods); one Gram matrix of (x, 1) and a right-hand side per axis, kept for the
- * whole run and for clusters of block_frames (merged in pairs when full).
+ * Sums: the rates' change over a window of 2 IMU_SCALE_HALF frames (the torque's integral
+ * over it) against the regressors' trapezoid mean over the same frames, and the force's
+ * trapezoid mean (one filter on both sides): over a long window the speeds' reaction to the
+ * gyro's noise, which the attitude loop feeds back within a few frames, is a small share of
+ * their change. One Gram matrix of (x, 1) and a right-hand side per axis, in float per cluster
+ * of block_frames (merged in pairs when full) and in double over the run (each cluster added
+ * as it completes: the regressors are nearly collinear).
  *
  * Solve (between frames): each axis' own least squares gives its noise variance; the joint
  * model, weighted by them, is fitted by Gauss-Newton from a collective start (the problem is
  * bilinear in c and gamma); the covariance is the larger of the white-noise one and the
  * cluster-robust sandwich (with G / (G - 3) for G clusters), per projection. A rotor whose
  * sd exceeds cfg.sd_max is not separated: the result says which, and publishes nothing.
+ * The derivation: docs/identification.md, "Each rotor's effectiveness, with the rotor
+ * speeds".
  *
  * Core rules: no heap, globals or I/O. imu_scale_step and imu_scale_hold store the frame;
  * imu_scale_process (the sums) and imu_scale_solve run between frames, in float (solve in
