@@ -135,16 +135,16 @@ void imu_scale_process(struct imu_scale *m)
 		m->f0 = f;
 		m->have_ref = true;
 	}
-	for (unsigned d = IMU_SCALE_WIN - 1u; d > 0; d--) {
-		for (unsigned j = 0; j < N; j++)
-			m->xr[d][j] = m->xr[d - 1u][j];
-		for (unsigned i = 0; i < 3; i++)
-			m->rr3[d][i] = m->rr3[d - 1u][i];
-		m->fr[d] = m->fr[d - 1u];
-		m->er[d] = m->er[d - 1u];
+	if (m->n_fr == 0u) { /* a new run of consecutive frames */
+		memset(m->sx, 0, sizeof m->sx);
+		m->sf = 0.0f;
 	}
+	const unsigned h = (m->rh + 1u) % IMU_SCALE_WIN; /* the new frame's slot: the oldest's */
+	const bool full = m->n_fr >= IMU_SCALE_WIN;
 	for (unsigned j = 0; j < N; j++) {
-		m->xr[0][j] = x[j] / m->w2_ref - m->x0[j];
+		float xj = x[j] / m->w2_ref - m->x0[j];
+		m->sx[j] += xj - (full ? m->xr[h][j] : 0.0f);
+		m->xr[h][j] = xj;
 		if (m->q_excited) {
 			float y = sc_to_float(m->q_thr[j]);
 			m->sw2[j] += x[j] / m->w2_ref;
@@ -152,33 +152,41 @@ void imu_scale_process(struct imu_scale *m)
 			m->syy[j] += y * y;
 		}
 	}
+	m->sf += (f - m->f0) - (full ? m->fr[h] : 0.0f);
+	m->fr[h] = f - m->f0;
 	for (unsigned i = 0; i < 3; i++)
-		m->rr3[0][i] = sc_to_float(m->q_rate[i]);
-	m->fr[0] = f - m->f0;
-	m->er[0] = m->q_excited;
+		m->rr3[h][i] = sc_to_float(m->q_rate[i]);
+	m->er[h] = m->q_excited;
+	m->rh = h;
 	if (m->n_fr < IMU_SCALE_WIN)
 		m->n_fr++;
-	if (m->n_fr < IMU_SCALE_WIN || !m->er[IMU_SCALE_HALF])
+	if (m->n_fr < IMU_SCALE_WIN)
+		return;
+	if (h == 0u) { /* once a lap the running sums afresh: their rounding does not build up */
+		memset(m->sx, 0, sizeof m->sx);
+		m->sf = 0.0f;
+		for (unsigned d = 0; d < IMU_SCALE_WIN; d++) {
+			for (unsigned j = 0; j < N; j++)
+				m->sx[j] += m->xr[d][j];
+			m->sf += m->fr[d];
+		}
+	}
+	if (!m->er[(h + IMU_SCALE_WIN - IMU_SCALE_HALF) % IMU_SCALE_WIN])
 		return;
 	/* the window's middle frame: the rates' change over the window (the torque's integral
 	 * over it) against the regressors' trapezoid mean over the same frames, and the force's
 	 * trapezoid mean (one filter on both sides). The closed loop feeds the gyro's noise back
 	 * into the speeds within a few frames: over a long window that feedback is a small share
 	 * of the speeds' change, and the rates' noise enters only at the window's two ends. */
-	float xs[NR], z[NA], h = 1.0f / (2.0f * (float)IMU_SCALE_HALF * m->cfg.dt_s), wt = 0.5f / (float)IMU_SCALE_HALF;
-	for (unsigned j = 0; j < N; j++) {
-		float s = 0.5f * (m->xr[0][j] + m->xr[IMU_SCALE_WIN - 1u][j]);
-		for (unsigned d = 1; d + 1u < IMU_SCALE_WIN; d++)
-			s += m->xr[d][j];
-		xs[j] = wt * s;
-	}
+	const unsigned o = (h + 1u) % IMU_SCALE_WIN; /* the oldest */
+	float xs[NR], z[NA], hg = 1.0f / (2.0f * (float)IMU_SCALE_HALF * m->cfg.dt_s),
+			     wt = 0.5f / (float)IMU_SCALE_HALF;
+	for (unsigned j = 0; j < N; j++)
+		xs[j] = wt * (m->sx[j] - 0.5f * (m->xr[h][j] + m->xr[o][j]));
 	xs[N] = 1.0f;
-	float sf = 0.5f * (m->fr[0] + m->fr[IMU_SCALE_WIN - 1u]);
-	for (unsigned d = 1; d + 1u < IMU_SCALE_WIN; d++)
-		sf += m->fr[d];
-	z[0] = wt * sf;
+	z[0] = wt * (m->sf - 0.5f * (m->fr[h] + m->fr[o]));
 	for (unsigned i = 0; i < 3; i++)
-		z[1u + i] = h * (m->rr3[0][i] - m->rr3[IMU_SCALE_WIN - 1u][i]);
+		z[1u + i] = hg * (m->rr3[h][i] - m->rr3[o][i]);
 	m->n++;
 	cl_add(m, xs, z);
 }

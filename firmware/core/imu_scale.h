@@ -81,16 +81,18 @@ struct imu_scale_dstat {
 
 struct imu_scale {
 	struct imu_scale_cfg cfg;
-	float w2_ref;                                   /* w_ref^2: the first frame's mean w^2 */
-	float x0[IMU_SCALE_ROTORS], f0;                 /* the centring point: the first frame's x and force */
-	bool have_ref;                                  /* w2_ref, x0, f0 set */
-	bool lost;                                      /* a speed was not finite or not positive in an excited frame */
-	float xr[IMU_SCALE_WIN][IMU_SCALE_ROTORS];      /* the window's frames' x, newest first */
-	float fr[IMU_SCALE_WIN], rr3[IMU_SCALE_WIN][3]; /* their force and rates */
-	bool er[IMU_SCALE_WIN];                         /* their excited flag */
-	uint32_t n_fr;                                  /* consecutive frames in the rings */
-	struct imu_scale_dstat all;                     /* the completed blocks' sums */
-	uint32_t n;                                     /* frames in the sums */
+	float w2_ref;                   /* w_ref^2: the first frame's mean w^2 */
+	float x0[IMU_SCALE_ROTORS], f0; /* the centring point: the first frame's x and force */
+	bool have_ref;                  /* w2_ref, x0, f0 set */
+	bool lost;                      /* a speed was not finite or not positive in an excited frame */
+	/* the window's frames, a ring (rh: the newest's slot): x, force, rates, excited flag */
+	float xr[IMU_SCALE_WIN][IMU_SCALE_ROTORS];
+	float fr[IMU_SCALE_WIN], rr3[IMU_SCALE_WIN][3];
+	bool er[IMU_SCALE_WIN];
+	float sx[IMU_SCALE_ROTORS], sf; /* the ring's sums of x and of the force (summed afresh each lap) */
+	uint32_t n_fr, rh;              /* consecutive frames in the ring, the newest's slot */
+	struct imu_scale_dstat all;     /* the completed blocks' sums */
+	uint32_t n;                     /* frames in the sums */
 	struct imu_scale_stat blk[IMU_SCALE_BLOCKS + 1];
 	uint32_t nb, cl_len, cl_k;   /* complete blocks, frames per block, frames in the last */
 	bool q_pending, q_excited;   /* the frame stored, as given */
