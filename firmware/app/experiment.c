@@ -649,6 +649,7 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	}
 	for (int j = 0; j < HAL_ROTORS; j++)
 		e->thr_h[j] = sc_to_float(in->thr_prev_all[j]);
+	e->isc_early = false; /* the union's memory held an earlier phase's estimator */
 	e->est_live = 0;
 	*xpp = xp;
 }
@@ -949,14 +950,15 @@ static void imu_ktau_end(struct experiment *e, const struct app_params *p, const
 	    (double)sqrtf(r->tq_hac));
 }
 
-/* The speeds' scales at the IMU rotor phase's end (imu_scale.h) into *sr; *bad: the first
- * rotor out of SCALE_LO..SCALE_HI. Separated and in range they take the place of the scales
- * the collective model's regressors carried (s0: MOT_SCALE, or the early scales after its
- * refinement, scales_early), and the sweep and the collective
- * dither move every rotor alike, so its k_f (and k_tau) is the true one times
- * sum s0_j g_j / sum s_j g_j (g_j at the phase's starting throttles); the scales' share joins
- * k_f's sd, and the scales' check (IMU_ID_SCALES) is answered. The scales' share of each
- * inertia phase's modelled torque goes to cfg.sc_rsd. Returns whether they are used. */
+/* The speeds' scales at the IMU rotor phase's end (imu_scale.h) into *sr (mr: the speeds'
+ * motor model when it holds, for the scales per throttle); *bad: the first rotor out of
+ * SCALE_LO..SCALE_HI. Separated and in range they take the place of the scales the collective
+ * model's regressors carried (s0: MOT_SCALE, or the early scales after its refinement,
+ * scales_early); the sweep and the collective dither move every rotor alike, so its k_f (and
+ * k_tau) is the true one times sum s0_j g_j / sum s_j g_j (g_j at the phase's starting
+ * throttles). The scales' share joins k_f's sd, and the scales' check (IMU_ID_SCALES) is
+ * answered. The scales' share of each inertia phase's modelled torque goes to cfg.sc_rsd.
+ * Returns whether they are used. */
 static bool scales_end(struct experiment *e, const struct motor_id_result *mr, struct imu_id_result *r,
 		       struct imu_scale_result *sr, int *bad)
 {

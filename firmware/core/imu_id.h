@@ -6,7 +6,8 @@
  *
  * Model: rotor j's throttle acts after D whole frames through a first-order lag tau (y_j);
  * the rotors together push F = m a_z = k_f sum_j s_j g(y_j), with g(y) = (1 - c) y + c y^2
- * and s_j the per-rotor effectiveness taken as known (MOT_SCALE). Linear in (A, B) =
+ * and s_j the per-rotor effectiveness taken as known (MOT_SCALE, or from the refinement on the
+ * scales imu_id_set_scales gave). Linear in (A, B) =
  * (k_f (1 - c), k_f c) with the regressors x1 = sum s_j y_j, x2 = sum s_j y_j^2; the lag
  * filters are linear and time-invariant, so a delayed hypothesis is the undelayed filter's
  * output read D frames late: one lag filter per rotor and grid point, a ring of the sums per
