@@ -386,12 +386,18 @@ static double median_of(const double v[N], unsigned *ia, unsigned *ib)
 /* J V J' for the scales' Jacobian js (N x NP) */
 static void cov_scales(const double js[N][NP], const double v[NP][NP], float out[N][N])
 {
+	double jv[N][NP];
+	for (unsigned i = 0; i < N; i++)
+		for (unsigned t = 0; t < NP; t++) {
+			jv[i][t] = 0.0;
+			for (unsigned q = 0; q < NP; q++)
+				jv[i][t] += js[i][q] * v[q][t];
+		}
 	for (unsigned i = 0; i < N; i++)
 		for (unsigned k = 0; k < N; k++) {
 			double s = 0.0;
-			for (unsigned q = 0; q < NP; q++)
-				for (unsigned t = 0; t < NP; t++)
-					s += js[i][q] * v[q][t] * js[k][t];
+			for (unsigned t = 0; t < NP; t++)
+				s += jv[i][t] * js[k][t];
 			out[i][k] = (float)s;
 		}
 }
