@@ -84,7 +84,7 @@ struct imu_scale {
 	float w2_ref;                   /* w_ref^2: the first frame's mean w^2 */
 	float x0[IMU_SCALE_ROTORS], f0; /* the centring point: the first frame's x and force */
 	bool have_ref;                  /* w2_ref, x0, f0 set */
-	bool lost;                      /* a speed was not finite or not positive in an excited frame */
+	bool lost;                      /* a speed was not finite, or negative, in an excited frame */
 	/* the window's frames, a ring (rh: the newest's slot): x, force, rates, excited flag */
 	float xr[IMU_SCALE_WIN][IMU_SCALE_ROTORS];
 	float fr[IMU_SCALE_WIN], rr3[IMU_SCALE_WIN][3];
