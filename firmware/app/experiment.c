@@ -158,6 +158,7 @@ static void say(struct experiment *e, int sev, const char *fmt, ...)
 }
 
 static void read_estimates(struct experiment *e);
+static void scales_early(struct experiment *e);
 
 /* one queued line into the app's pending slot when it is free and a step ran since the last
  * one (one line per frame, as before: the app sends it on its tick) */
@@ -174,8 +175,11 @@ void exp_pump(struct experiment *e)
 		if (!e->reporting && k == PK_ROTOR) {
 			if (imu_src(&e->cfg)) {
 				imu_id_process(&e->imid);
-				if (rpm_src(&e->cfg))
+				if (rpm_src(&e->cfg)) {
 					motor_id_refine(&e->mid); /* processes the waiting frame first */
+					imu_scale_process(&e->isc);
+					scales_early(e);
+				}
 				excite_prepare(&e->exc2);
 				excite_prepare(&e->exc3);
 			} else {
@@ -549,6 +553,49 @@ static void cap_say(struct experiment *e, float thr_h)
 		    (double)thr_h);
 }
 
+/* With the rotor speeds, each rotor's effectiveness from the accelerometer and the gyro
+ * (imu_scale.h). The geometry is the mixer's Gamma, each column divided by its rotor's scale
+ * (per newton of thrust): only each row's shape enters. Without a mixer only the force is
+ * read, which cannot separate the rotors (the solve says so). */
+static void scales_begin(struct experiment *e)
+{
+	struct imu_scale_cfg sc = {
+		.dt_s = e->dt_nom,
+		.block_frames = (uint32_t)(SWP_PERIOD_S / e->dt_nom + 0.5f),
+		.sd_max = e->cfg.rsd_max,
+	};
+	_Static_assert(IMU_SCALE_ROTORS == HAL_ROTORS && MIXER_N_ROTORS == HAL_ROTORS, "every rotor's scale");
+	const struct mixer *mx = e->mix;
+	for (int i = 0; mx && i < 3; i++)
+		for (int j = 0; j < HAL_ROTORS; j++) {
+			float rd = sc_to_float(mx->row_div[i + 1]), s = sc_to_float(mx->p.scale[j]);
+			float v = rd > 0.0f && s > 0.0f ? sc_to_float(mx->gn[i + 1][j]) / (rd * s) : 0.0f;
+			sc.geo[i][j] = isfinite(v) ? v : 0.0f;
+		}
+	imu_scale_init(&e->isc, &sc);
+}
+
+/* Shortly before the collective model refines its grid (IMU_ID_FREEZE of the planned frames,
+ * where its sums restart): the scales so far, if they separate every rotor and lie in range,
+ * become its regressors' (imu_id_set_scales), so the rest of the run fits the force with them
+ * rather than with MOT_SCALE. Once, between frames. */
+#define SCALES_EARLY_MARGIN 10u /* frames before the refinement */
+static void scales_early(struct experiment *e)
+{
+	float due = IMU_ID_FREEZE * (float)e->imid.cfg.n_frames;
+	if (e->isc_early || (float)(e->rot_k + SCALES_EARLY_MARGIN) < due)
+		return;
+	e->isc_early = true;
+	struct imu_scale_result sr;
+	imu_scale_solve(&e->isc, &sr);
+	imu_scale_per_throttle(&e->isc, e->cfg.curve, 0.0f, NULL, NULL, &sr);
+	bool in = sr.cause == IMU_SCALE_OK;
+	for (int j = 0; j < HAL_ROTORS; j++)
+		in = in && sr.scale[j] >= SCALE_LO && sr.scale[j] <= SCALE_HI;
+	if (in)
+		imu_id_set_scales(&e->imid, sr.scale);
+}
+
 /* The IMU rotor experiment's start: the accelerometer sees the rotors' sum, so the null-space
  * dithers (the vehicle still) get a collective dither (a fast vertical jiggle) and the
  * throttle sweep beside them (docs/identification.md, "From the IMU"). */
@@ -596,8 +643,13 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	e->exc_cap = hover_cap(thr_h, fmaxf(cf->exc_amp + cf->exc_ofs, cf->col_amp));
 	cap_say(e, thr_h);
 	sweep_plan(e, p, thr_h, cf->swp_dz);
-	if (rpm_src(cf))
+	if (rpm_src(cf)) {
 		speed_model_begin(e, p, in);
+		scales_begin(e);
+	}
+	for (int j = 0; j < HAL_ROTORS; j++)
+		e->thr_h[j] = sc_to_float(in->thr_prev_all[j]);
+	e->isc_early = false; /* the union's memory held an earlier phase's estimator */
 	e->est_live = 0;
 	*xpp = xp;
 }
@@ -898,16 +950,123 @@ static void imu_ktau_end(struct experiment *e, const struct app_params *p, const
 	    (double)sqrtf(r->tq_hac));
 }
 
+/* The speeds' scales at the IMU rotor phase's end (imu_scale.h) into *sr (mr: the speeds'
+ * motor model when it holds, for the scales per throttle); *bad: the first rotor out of
+ * SCALE_LO..SCALE_HI. Separated and in range they take the place of the scales the collective
+ * model's regressors carried (s0: MOT_SCALE, or the early scales after its refinement,
+ * scales_early); the sweep and the collective dither move every rotor alike, so its k_f (and
+ * k_tau) is the true one times sum s0_j g_j / sum s_j g_j (g_j at the phase's starting
+ * throttles). The scales' share joins k_f's sd, and the scales' check (IMU_ID_SCALES) is
+ * answered. The scales' share of each inertia phase's modelled torque goes to cfg.sc_rsd.
+ * Returns whether they are used. */
+static bool scales_end(struct experiment *e, const struct motor_id_result *mr, struct imu_id_result *r,
+		       struct imu_scale_result *sr, int *bad)
+{
+	imu_scale_process(&e->isc);
+	imu_scale_solve(&e->isc, sr);
+	/* per throttle: the speed model's shares (its delay and lag) when it holds, else the
+	 * run's w^2 over g(y) */
+	imu_scale_per_throttle(&e->isc, r->curve, r->curve_sd, mr ? mr->scale : NULL, mr ? mr->scale_sd : NULL, sr);
+	*bad = -1;
+	for (int j = 0; j < HAL_ROTORS; j++)
+		if (!(sr->scale[j] >= SCALE_LO && sr->scale[j] <= SCALE_HI) && *bad < 0)
+			*bad = j;
+	if (sr->cause != IMU_SCALE_OK || *bad >= 0)
+		return false;
+	float gw[HAL_ROTORS], s0g = 0.0f, sg = 0.0f, c = r->curve;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		float y = e->thr_h[j];
+		gw[j] = (1.0f - c) * y + c * y * y;
+		s0g += e->imid.cfg.scale[j] * gw[j]; /* what the collective model's regressors carried */
+		sg += sr->scale[j] * gw[j];
+	}
+	float k = sg > 0.0f ? s0g / sg : NAN;
+	if (!(k > 0.0f) || !isfinite(k))
+		return false;
+	float rs = imu_scale_ratio_rsd(sr, gw, NULL);
+	float rel = r->kf > 0.0f ? r->kf_sd / r->kf : INFINITY;
+	r->kf *= k;
+	r->kf_sd = r->kf * sqrtf(rel * rel + rs * rs);
+	r->slope *= k; /* its rsd stays k_f's own: the inertia phases add the scales' share */
+	if (r->tq_ok) {
+		float relt = r->ktau > 0.0f ? r->ktau_sd / r->ktau : INFINITY;
+		r->ktau *= k;
+		r->ktau_sd = r->ktau * sqrtf(relt * relt + rs * rs);
+		r->tq_slope *= k;
+	}
+	if (r->cause == IMU_ID_SCALES)
+		r->cause = IMU_ID_OK;
+	/* an inertia phase models torque k_f s_j g(y_j) with k_f ~ 1 / sum s g; its excitation
+	 * moves rotor j's throttle along its arm, so the torque's gain goes with sum a_j^2 s_j
+	 * over sum g_j s_j (roll, pitch); the yaw torque's with sum s_j (VEH_KTAU) or over
+	 * sum g_j s_j (the ESCs' k_tau, corrected as k_f) */
+	float a[HAL_ROTORS], one[HAL_ROTORS];
+	for (int ax = 0; ax < 2; ax++) {
+		for (int j = 0; j < HAL_ROTORS; j++)
+			a[j] = e->isc.cfg.geo[ax][j] * e->isc.cfg.geo[ax][j];
+		e->cfg.sc_rsd[ax] = imu_scale_ratio_rsd(sr, a, gw);
+	}
+	for (int j = 0; j < HAL_ROTORS; j++)
+		one[j] = 1.0f;
+	e->cfg.sc_rsd[2] = imu_scale_ratio_rsd(sr, one, NULL);
+	e->cfg.sc_rsd[3] = imu_scale_ratio_rsd(sr, one, gw);
+	return true;
+}
+
+/* The speeds' scales as results and status lines: each with its sd, applied (MOT_SCALEj)
+ * when used and the rotor model accepted; a degraded rotor named whenever they are used; a
+ * rotor the excitation did not separate named, nothing published for it. */
+static void scales_report(struct experiment *e, const struct app_params *p, const struct imu_scale_result *sr,
+			  bool used, int bad, bool ok, enum app_id_reason common)
+{
+	bool sep = sr->cause == IMU_SCALE_OK;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		enum app_id_reason why =
+			!sep       ? (sr->cause == IMU_SCALE_NOT_SEPARATED ? APP_ID_UNCERTAIN : APP_ID_NO_DATA)
+			: bad >= 0 ? (bad == j ? APP_ID_OUT_OF_RANGE : APP_ID_ROTOR)
+				   : common;
+		id_out(e, APP_ID_MOT_SCALE, j + 1, sr->scale[j], sr->scale_sd[j], used && ok, why);
+		if (used && ok)
+			result(e, PX_MOT_SCALE1 + j, sr->scale[j]);
+	}
+	int sev = used && ok ? APP_SEV_INFO : APP_SEV_WARNING;
+	if (!sep) {
+		if (sr->cause == IMU_SCALE_NOT_SEPARATED)
+			say(e, APP_SEV_WARNING, "ID scales not separated: rotor %d sd %.4f", sr->worst + 1,
+			    (double)sr->scale_sd[sr->worst]);
+		else
+			say(e, APP_SEV_WARNING, "ID scales: %s", imu_scale_cause_text(sr->cause));
+		return;
+	}
+	say(e, sev, "ID scale 1-4 %.4f %.4f %.4f %.4f", (double)sr->scale[0], (double)sr->scale[1],
+	    (double)sr->scale[2], (double)sr->scale[3]);
+	say(e, sev, "ID scale 5-8 %.4f %.4f %.4f %.4f", (double)sr->scale[4], (double)sr->scale[5],
+	    (double)sr->scale[6], (double)sr->scale[7]);
+	say(e, APP_SEV_INFO, "ID scale sd 1-4 %.4f %.4f %.4f %.4f", (double)sr->scale_sd[0], (double)sr->scale_sd[1],
+	    (double)sr->scale_sd[2], (double)sr->scale_sd[3]);
+	say(e, APP_SEV_INFO, "ID scale sd 5-8 %.4f %.4f %.4f %.4f", (double)sr->scale_sd[4], (double)sr->scale_sd[5],
+	    (double)sr->scale_sd[6], (double)sr->scale_sd[7]);
+	if (bad >= 0) {
+		say(e, APP_SEV_WARNING, "ID scales not used: rotor %d scale %.3f outside 0.3-1.5", bad + 1,
+		    (double)sr->scale[bad]);
+		return;
+	}
+	float smin = cfg_f(p->mot_scale_min, 0.8f);
+	for (int j = 0; j < HAL_ROTORS; j++)
+		if (sr->scale[j] < smin)
+			say(e, APP_SEV_WARNING, "ID rotor %d degraded: effectiveness %.3f", j + 1,
+			    (double)sr->scale[j]);
+}
+
 /* The IMU rotor experiment's end: the collective model (imu_id.h), its acceptance, results
- * and status lines. k_tau and the per-rotor scales are not seen by the accelerometer: they
- * are reported as such (k_tau / I_z comes from the yaw inertia phase). */
+ * and status lines. k_tau is not seen by the accelerometer: it is reported as such (k_tau /
+ * I_z comes from the yaw inertia phase). With the rotor speeds each rotor's effectiveness is
+ * identified (scales_end) and the collective model's k_f and k_tau rest on it. */
 static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 {
 	struct imu_id_result r;
 	imu_id_process(&e->imid);
 	imu_id_solve(&e->imid, IMU_HAC_MAX, &r);
-	enum ident_verdict vf = ident_accept(r.kf, r.kf_sd, p->veh_kf, e->cfg.rsd_max);
-	bool model_ok = r.cause == IMU_ID_OK;
 	/* with the rotor speeds the motor's lag and delay are theirs (seen rotor by rotor); the
 	 * IMU's own stay as a check (said); k_f and its curve are the IMU's (the speeds do not
 	 * see the propellers' thrust) */
@@ -927,6 +1086,11 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 			r.delay = mr.delay;
 		}
 	}
+	struct imu_scale_result sr;
+	int bad = -1;
+	bool sc_used = rpm_src(&e->cfg) && scales_end(e, by_speed ? &mr : NULL, &r, &sr, &bad);
+	enum ident_verdict vf = ident_accept(r.kf, r.kf_sd, p->veh_kf, e->cfg.rsd_max);
+	bool model_ok = r.cause == IMU_ID_OK;
 	bool curve_bad = e->cfg.crv_est && !(r.curve >= THRMAP_CURVE_MIN && r.curve <= THRMAP_CURVE_MAX);
 	bool ok = vf == IDENT_ACCEPT && model_ok && !curve_bad;
 	result_fin(e, PX_ID_KF_EST, r.kf, 0.0f);
@@ -951,6 +1115,9 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	id_out(e, APP_ID_DELAY_FR, 0, (float)r.delay, NAN, ok, common);
 	if (e->cfg.crv_est)
 		id_out(e, APP_ID_MOT_CURVE, 0, r.curve, r.curve_sd, ok, curve_bad ? APP_ID_CURVE : common);
+	if (!sc_used)
+		for (int i = 0; i < 4; i++)
+			e->cfg.sc_rsd[i] = 0.0f;
 	int sev = ok ? APP_SEV_INFO : APP_SEV_WARNING;
 	say(e, APP_SEV_INFO,
 	    e->cfg.src == EXP_SRC_IMU_RPM_TQ ? "ID source imu_rpm_torque: accelerometer, mass, throttles, rotor "
@@ -976,6 +1143,8 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	say(e, APP_SEV_INFO, "ID accelerometer scale %.4f +/- %.4f (in flight)", (double)r.kappa, (double)r.kappa_sd);
 	if (e->cfg.src != EXP_SRC_IMU_RPM_TQ)
 		say(e, APP_SEV_INFO, "ID ktau: not seen by the IMU (the ratio: Izz phase)");
+	if (rpm_src(&e->cfg))
+		scales_report(e, p, &sr, sc_used, bad, ok, common);
 	if (!model_ok) {
 		say(e, APP_SEV_WARNING, "ID rejected: %s", imu_id_cause_text(r.cause));
 		say(e, APP_SEV_WARNING, "ID remedy: %s", imu_id_cause_remedy(r.cause));
@@ -1050,7 +1219,8 @@ static void izz_imu_end(struct experiment *e, const struct app_params *p, float 
 {
 	/* the yaw torque was veh_ktau g(y): its swings scale with g'(y_h), the curve's */
 	float rsd_max = e->cfg.rsd_max, rel0 = est > 0.0f ? sd / est : INFINITY, gp = e->cfg.gp_rsd;
-	float rel = sqrtf(rel0 * rel0 + gp * gp);
+	float rs = e->cfg.sc_rsd[2]; /* the identified scales' share of the yaw torque (scales_end) */
+	float rel = sqrtf(rel0 * rel0 + gp * gp + rs * rs);
 	float ratio = est > 0.0f ? p->veh_ktau / est : NAN, ratio_sd = ratio * rel;
 	bool fin = isfinite(ratio) && isfinite(ratio_sd) && ratio > 0.0f;
 	bool r_ok = fin && rel < rsd_max;
@@ -1099,8 +1269,9 @@ static void inertia_end(struct experiment *e, const struct app_params *p, unsign
 	if (imu_src(&e->cfg) && (ax != 2u || yaw_tq)) {
 		/* the torque is the model's, its swings about hover scaled by the thrust's (the
 		 * reaction torque's) slope there: the slope's uncertainty passes one for one
-		 * into the inertia */
-		float rk = ax != 2u ? e->cfg.slope_rsd : e->cfg.kt_rsd;
+		 * into the inertia; and the identified scales' share (scales_end) */
+		float rk = ax != 2u ? e->cfg.slope_rsd : e->cfg.kt_rsd, rs = e->cfg.sc_rsd[ax != 2u ? ax : 3u];
+		rk = sqrtf(rk * rk + rs * rs);
 		if (isfinite(sd) && rk > 0.0f)
 			sd = sqrtf(sd * sd + rk * est * rk * est);
 	}
@@ -1304,8 +1475,14 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		if (n >= 1)
 			imu_id_step(&e->imid, tp, imu_force(in, p), imu_force_up(in, p),
 				    sc_from_float(in->frame->vel_i_mps[2]), tq, use);
-		if (rpm_src(&e->cfg))
+		if (rpm_src(&e->cfg)) {
 			speed_model_step(e, in, n, use);
+			for (int i = 1; i < n; i++)
+				imu_scale_hold(&e->isc);
+			if (n >= 1)
+				imu_scale_step(&e->isc, tp, in->frame->rotor_speed_rps, imu_force(in, p),
+					       in->rate_b_rps, use);
+		}
 		scalar_t d0 = sweep_step(e, running);
 		null_dither(e, running, running ? excite_update(&e->exc) : SC_ZERO, out);
 		scalar_t dc = running ? sc_mul(e->exc_cap, excite_update(&e->exc3)) : SC_ZERO;

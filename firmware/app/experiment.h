@@ -22,6 +22,7 @@
 #include "id_result.h"
 #include "ident.h"
 #include "imu_id.h"
+#include "imu_scale.h"
 #include "line.h"
 #include "motor_id.h"
 #include "outbox.h"
@@ -106,6 +107,8 @@ struct exp_cfg {
 	float ktau;      /* the yaw torque model's k_tau: VEH_KTAU, or the ESCs' torques' of this run */
 	float kt_rsd;    /* that estimate's torque slope about hover: relative sd */
 	bool kt_id;      /* k_tau identified by this run (from the ESCs' torques) */
+	float sc_rsd[4]; /* IMU: the identified scales' share of the modelled torque's relative sd: roll, pitch,
+			  * yaw with VEH_KTAU, yaw with the ESCs' k_tau (0: MOT_SCALE flown, not identified) */
 	bool model_ok;   /* that model was identified (ID_RESULT bit 0, or this run) */
 };
 
@@ -184,6 +187,9 @@ struct experiment {
 			struct ident_rotor rot;      /* rotor 1, model given (and the paper's plain) */
 			struct motor_id mid;         /* every rotor, the motor model found (motor_id.h) */
 			struct imu_id imid;          /* the IMU source's collective model (imu_id.h) */
+			struct imu_scale isc;        /* with the speeds: each rotor's effectiveness (imu_scale.h) */
+			float thr_h[HAL_ROTORS];     /* the throttles at the IMU rotor phase's start */
+			bool isc_early;              /* the early scales were solved (scales_early) */
 			scalar_t pat[2][HAL_ROTORS]; /* the two null-space patterns (excite_null_pattern) */
 			scalar_t ofs;                /* ID_EXC_OFS: the offset's amplitude */
 		};

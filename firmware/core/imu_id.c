@@ -473,6 +473,35 @@ static void cl_add(struct imu_id *m, float f, float tq)
 
 static float step_of(const struct imu_id *m, const float th[NP]);
 
+void imu_id_set_scales(struct imu_id *m, const float scale[IMU_ID_ROTORS])
+{
+	if (m->refined)
+		return;
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		m->scale_next[j] = scale[j] > 0.0f && isfinite(scale[j]) ? scale[j] : m->cfg.scale[j];
+	m->scale_new = true;
+}
+
+/* At the refinement (the sums restart): the scales imu_id_set_scales gave, the centring's
+ * scale sum and the references scaled so that k_f0 sum s_j keeps its value. */
+static void scales_take(struct imu_id *m)
+{
+	if (!m->scale_new)
+		return;
+	m->scale_new = false;
+	float ss = 0.0f;
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		ss += m->scale_next[j];
+	if (!(ss > 0.0f) || !(m->ssum > 0.0f))
+		return;
+	float k = m->ssum / ss;
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		m->cfg.scale[j] = m->scale_next[j];
+	m->cfg.kf0 *= k;
+	m->cfg.kt0 *= k;
+	m->ssum = ss;
+}
+
 /* The grid's refinement: about the best hypothesis' lag (its Gauss-Newton step taken),
  * +/- IMU_ID_FINE_HALF of the first grid's steps, kept inside IMU_ID_TAU_MIN..MAX; each new
  * lag's filter state interpolated (in ln tau) between the old grid's; the sums restarted,
@@ -506,6 +535,7 @@ static void refine(struct imu_id *m)
 		}
 	}
 	set_grid(m);
+	scales_take(m);
 	memset(m->st, 0, sizeof m->st);
 	m->n_st = 0;
 	m->skip = IMU_ID_SKIP;

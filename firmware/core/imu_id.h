@@ -6,7 +6,8 @@
  *
  * Model: rotor j's throttle acts after D whole frames through a first-order lag tau (y_j);
  * the rotors together push F = m a_z = k_f sum_j s_j g(y_j), with g(y) = (1 - c) y + c y^2
- * and s_j the per-rotor effectiveness taken as known (MOT_SCALE). Linear in (A, B) =
+ * and s_j the per-rotor effectiveness taken as known (MOT_SCALE, or from the refinement on the
+ * scales imu_id_set_scales gave). Linear in (A, B) =
  * (k_f (1 - c), k_f c) with the regressors x1 = sum s_j y_j, x2 = sum s_j y_j^2; the lag
  * filters are linear and time-invariant, so a delayed hypothesis is the undelayed filter's
  * output read D frames late: one lag filter per rotor and grid point, a ring of the
@@ -151,6 +152,8 @@ struct imu_id {
 	scalar_t h_thr[IMU_ID_ROTORS];                        /* the throttles of the frames lost before it, */
 	uint32_t n_hold;                                      /* and their count (imu_id_hold; taken between frames) */
 	float fw_last;                                        /* the last frame taken's vertical force (a lost one's) */
+	float scale_next[IMU_ID_ROTORS];                      /* imu_id_set_scales: the scales the refinement takes */
+	bool scale_new;
 };
 
 enum imu_id_cause {
@@ -210,6 +213,10 @@ void imu_id_hold(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS]);
  * only: the still second's spread mixes the noise with the hover control's own thrust
  * changes, so it measures neither. */
 void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r);
+/* Scales identified in flight (the rotor speeds' imu_scale.h) for the sums after the grid's
+ * refinement, which restarts them: cfg.scale becomes these, the reference model keeps its
+ * weight (k_f0 sum s g at the start). Ignored once refined. */
+void imu_id_set_scales(struct imu_id *m, const float scale[IMU_ID_ROTORS]);
 const char *imu_id_cause_text(enum imu_id_cause c);
 const char *imu_id_cause_remedy(enum imu_id_cause c);
 

@@ -15,8 +15,10 @@ the gyro, the throttles sent and the weighed mass, with the IMU octo-sim serves 
   the ratio follows a t with about 23 degrees of freedom, beyond 3 in 0.5 % of runs (`make
   bench` item 9: 1 of 200 IMU k_f beyond max(3 sd, 1 %), error / sd rms 0.98), so two or more
   in 20 (probability below 0.5 %) mean it got worse.
-- A rotor whose effectiveness is not MOT_SCALE's is named as the cause of a rejection: the
-  accelerometer cannot tell which rotor, and k_f would otherwise carry it.
+- From the IMU alone (no rotor speeds), a rotor whose effectiveness is not MOT_SCALE's is
+  named as the cause of a rejection: the accelerometer cannot tell which rotor, and k_f would
+  otherwise carry it. With the speeds each rotor's effectiveness is identified
+  (test_ident_imu_scales.py).
 - With the ESC's rotor speeds (imu_rpm, what auto takes when they are served) the motor's lag
   and delay come from the speeds: within 3 % and exact (where the speeds' own model is
   rejected, that is said and the accelerometer's lag stands, judged as such).
@@ -219,8 +221,10 @@ def test_rotor_speeds_give_the_motor_lag_and_delay(tmp_path):
 
 
 def test_a_rotor_off_its_scale_is_named_not_absorbed(tmp_path):
+    """The IMU alone (no rotor speeds to identify the scales with: test_ident_imu_scales.py)."""
     veh = dict(PAPER, rotor_scale=[1, 1, 0.88, 1, 1, 1, 1, 1])
-    r, said = fly(tmp_path, veh, 14, script="arm; takeoff 5; wait hold; experiment 1; wait experiment")
+    r, said = fly(tmp_path, veh, 14, script="arm; takeoff 5; wait hold; experiment 1; wait experiment",
+                  sensors="imu")
     assert "ID rejected: a rotor's effectiveness is not MOT_SCALE's" in said, said
     assert not results(said)["kf"][2]
 
