@@ -1443,6 +1443,80 @@ static bool inr_gyro_outlier(const struct experiment *e, scalar_t w, scalar_t ta
 	return dw > sc_mul(lim, sc_from_int((int32_t)m));
 }
 
+/* The IMU rotor phase's frame: the collective model (imu_id), with the rotor speeds the
+ * motor's speed model and each rotor's effectiveness (imu_scale); the null-space dithers, the
+ * throttle sweep and the collective dither out. */
+static void imu_rotor_step(struct experiment *e, const struct exp_input *in, struct exp_output *out, int n,
+			   bool running, bool use)
+{
+	const struct app_params *p = in->params;
+	const scalar_t *tp = in->thr_prev;
+	for (int i = 1; i < n; i++)
+		imu_id_hold(&e->imid, tp);
+	scalar_t tq = SC_ZERO;
+	if (e->cfg.src == EXP_SRC_IMU_RPM_TQ && in->torque_nm)
+		for (int j = 0; j < HAL_ROTORS; j++)
+			tq = sc_add(tq, in->torque_nm[j]);
+	if (n >= 1)
+		imu_id_step(&e->imid, tp, imu_force(in, p), imu_force_up(in, p), sc_from_float(in->frame->vel_i_mps[2]),
+			    tq, use);
+	if (rpm_src(&e->cfg)) {
+		speed_model_step(e, in, n, use);
+		for (int i = 1; i < n; i++)
+			imu_scale_hold(&e->isc);
+		if (n >= 1)
+			imu_scale_step(&e->isc, tp, in->frame->rotor_speed_rps, imu_force(in, p), in->rate_b_rps, use);
+	}
+	scalar_t d0 = sweep_step(e, running);
+	null_dither(e, running, running ? excite_update(&e->exc) : SC_ZERO, out);
+	scalar_t dc = running ? sc_mul(e->exc_cap, excite_update(&e->exc3)) : SC_ZERO;
+	d0 = sc_mul(e->exc_gain, sc_add(d0, dc));
+	for (int j = 0; j < HAL_ROTORS; j++)
+		out->thr_delta[j] = sc_add(out->thr_delta[j], d0);
+}
+
+/* An inertia phase's frame about axis ax: the body torque (measured, or the rotor model's
+ * under the IMU), the gyro's outliers and lost frames bridged, the filters and the instrument
+ * updated; the torque excitation out. */
+static void inertia_step(struct experiment *e, const struct exp_input *in, struct exp_output *out, unsigned ax, int n,
+			 bool running, bool use)
+{
+	const struct app_params *p = in->params;
+	scalar_t tau[3];
+	const scalar_t *fm = in->thrust_n, *tm = in->torque_nm;
+	if (imu_src(&e->cfg)) {
+		rmodel_step(&e->rm, in->thr_prev, n, e->f_model, e->tq_model);
+		fm = e->f_model;
+		tm = e->tq_model;
+	}
+	if (e->mix)
+		ident_body_torque_mixer(e->mix, fm, tm, tau);
+	else
+		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
+	/* the instrument: the excitation sent on the previous step, which acted over the
+	 * frame this update closes (and, the plant holding it, over the frames lost before) */
+	ident_inertia_instrument(&e->inr, e->inr_u_prev);
+	int m = n + e->inr_skip; /* frames since the filters' last */
+	if (n >= 1 && m <= GAP_INTERP_MAX && inr_gyro_outlier(e, in->rate_b_rps[ax], tau[ax], m)) {
+		/* never into the filters: interpolated through at the next frame, as a lost
+		 * one, the updates held after it */
+		e->inr_skip = m;
+		e->gap_hold = GAP_HOLD;
+	} else {
+		e->inr_skip = 0;
+		if (m >= 2 && m <= GAP_INTERP_MAX + 1) {
+			ident_inertia_gap(&e->inr, tau, in->rate_b_rps, (unsigned)(m - 1));
+		} else if (m != 1) {
+			ident_inertia_restart(&e->inr, tau, in->rate_b_rps);
+			float wc = ax == 2u ? INR_WC_YAW_RPS : INR_WC_RP_RPS;
+			e->gap_hold = (int)(GAP_SETTLE_TC * e->inv_dt_nom / (INR_ZETA * wc) + 0.5f);
+		}
+		ident_inertia_update(&e->inr, tau, in->rate_b_rps, use && m == 1 && e->gap_hold == 0);
+	}
+	out->tau_delta[ax] = running ? sc_mul(e->exc_gain, excite_update(&e->exc)) : SC_ZERO;
+	e->inr_u_prev = out->tau_delta[ax];
+}
+
 static void phase_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
 {
 	const struct app_params *p = in->params;
@@ -1465,30 +1539,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	bool use = running && n >= 1;
 
 	if (k == PK_ROTOR && imu_src(&e->cfg)) {
-		const scalar_t *tp = in->thr_prev;
-		for (int i = 1; i < n; i++)
-			imu_id_hold(&e->imid, tp);
-		scalar_t tq = SC_ZERO;
-		if (e->cfg.src == EXP_SRC_IMU_RPM_TQ && in->torque_nm)
-			for (int j = 0; j < HAL_ROTORS; j++)
-				tq = sc_add(tq, in->torque_nm[j]);
-		if (n >= 1)
-			imu_id_step(&e->imid, tp, imu_force(in, p), imu_force_up(in, p),
-				    sc_from_float(in->frame->vel_i_mps[2]), tq, use);
-		if (rpm_src(&e->cfg)) {
-			speed_model_step(e, in, n, use);
-			for (int i = 1; i < n; i++)
-				imu_scale_hold(&e->isc);
-			if (n >= 1)
-				imu_scale_step(&e->isc, tp, in->frame->rotor_speed_rps, imu_force(in, p),
-					       in->rate_b_rps, use);
-		}
-		scalar_t d0 = sweep_step(e, running);
-		null_dither(e, running, running ? excite_update(&e->exc) : SC_ZERO, out);
-		scalar_t dc = running ? sc_mul(e->exc_cap, excite_update(&e->exc3)) : SC_ZERO;
-		d0 = sc_mul(e->exc_gain, sc_add(d0, dc));
-		for (int j = 0; j < HAL_ROTORS; j++)
-			out->thr_delta[j] = sc_add(out->thr_delta[j], d0);
+		imu_rotor_step(e, in, out, n, running, use);
 	} else if (k == PK_ROTOR) {
 		const scalar_t *tp = in->thr_prev, *fm = in->thrust_n, *tm = in->torque_nm;
 		for (int i = 1; i < n; i++) {
@@ -1510,40 +1561,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 				out->thr_delta[j] = sc_add(out->thr_delta[j], d0);
 		}
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
-		unsigned ax = (unsigned)(k - PK_INR_X);
-		scalar_t tau[3];
-		const scalar_t *fm = in->thrust_n, *tm = in->torque_nm;
-		if (imu_src(&e->cfg)) {
-			rmodel_step(&e->rm, in->thr_prev, n, e->f_model, e->tq_model);
-			fm = e->f_model;
-			tm = e->tq_model;
-		}
-		if (e->mix)
-			ident_body_torque_mixer(e->mix, fm, tm, tau);
-		else
-			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
-		/* the instrument: the excitation sent on the previous step, which acted over the
-		 * frame this update closes (and, the plant holding it, over the frames lost before) */
-		ident_inertia_instrument(&e->inr, e->inr_u_prev);
-		int m = n + e->inr_skip; /* frames since the filters' last */
-		if (n >= 1 && m <= GAP_INTERP_MAX && inr_gyro_outlier(e, in->rate_b_rps[ax], tau[ax], m)) {
-			/* never into the filters: interpolated through at the next frame, as a lost
-			 * one, the updates held after it */
-			e->inr_skip = m;
-			e->gap_hold = GAP_HOLD;
-		} else {
-			e->inr_skip = 0;
-			if (m >= 2 && m <= GAP_INTERP_MAX + 1) {
-				ident_inertia_gap(&e->inr, tau, in->rate_b_rps, (unsigned)(m - 1));
-			} else if (m != 1) {
-				ident_inertia_restart(&e->inr, tau, in->rate_b_rps);
-				float wc = ax == 2u ? INR_WC_YAW_RPS : INR_WC_RP_RPS;
-				e->gap_hold = (int)(GAP_SETTLE_TC * e->inv_dt_nom / (INR_ZETA * wc) + 0.5f);
-			}
-			ident_inertia_update(&e->inr, tau, in->rate_b_rps, use && m == 1 && e->gap_hold == 0);
-		}
-		out->tau_delta[ax] = running ? sc_mul(e->exc_gain, excite_update(&e->exc)) : SC_ZERO;
-		e->inr_u_prev = out->tau_delta[ax];
+		inertia_step(e, in, out, (unsigned)(k - PK_INR_X), n, running, use);
 	} else {
 		/* the model's prediction of rotor 1's thrust: the allocation behind the throttle
 		 * sent on the previous frame, through the modelled delay and lag */

@@ -402,6 +402,40 @@ static void cov_scales(const double js[N][NP], const double v[NP][NP], float out
 		}
 }
 
+/* The clusters' sandwich H^-1 S H^-1 G / (G - 3), S the nb blocks' score products at p, into
+ * vc; with fewer than 5 blocks, H^-1 itself. */
+static void sandwich(const struct imu_scale *m, unsigned nb, const double p[NP], const double w[NA], const bool on[NA],
+		     const double hi[NP][NP], double vc[NP][NP])
+{
+	const struct imu_scale_cfg *c = &m->cfg;
+	memcpy(vc, hi, sizeof(double) * NP * NP);
+	if (nb < 5u)
+		return;
+	double sm[NP][NP] = {{0}};
+	for (unsigned k = 0; k < nb; k++) {
+		double gb[NR][NP], bb[NA][NR], ub[NP];
+		unpack(&m->blk[k], gb, bb);
+		score(c, gb, bb, p, w, on, ub);
+		for (unsigned q = 0; q < NP; q++)
+			for (unsigned s = 0; s < NP; s++)
+				sm[q][s] += ub[q] * ub[s];
+	}
+	double t[NP][NP], gf = (double)nb;
+	for (unsigned q = 0; q < NP; q++)
+		for (unsigned s = 0; s < NP; s++) {
+			t[q][s] = 0.0;
+			for (unsigned k = 0; k < NP; k++)
+				t[q][s] += hi[q][k] * sm[k][s];
+		}
+	for (unsigned q = 0; q < NP; q++)
+		for (unsigned s = 0; s < NP; s++) {
+			vc[q][s] = 0.0;
+			for (unsigned k = 0; k < NP; k++)
+				vc[q][s] += t[q][k] * hi[k][s];
+			vc[q][s] *= gf / (gf - 3.0);
+		}
+}
+
 void imu_scale_solve(const struct imu_scale *m, struct imu_scale_result *r)
 {
 	memset(r, 0, sizeof *r);
@@ -479,36 +513,10 @@ void imu_scale_solve(const struct imu_scale *m, struct imu_scale_result *r)
 	hess(c, g, p, w, on, hm);
 	if (!inv_spd(NP, hm, hi))
 		return;
-	/* the clusters' sandwich H^-1 S H^-1, S the blocks' score products */
 	unsigned nb = m->nb + (m->cl_k * 2u >= m->cl_len ? 1u : 0u);
 	r->blocks = nb;
 	double vc[NP][NP];
-	memcpy(vc, hi, sizeof vc);
-	if (nb >= 5u) {
-		double sm[NP][NP] = {{0}};
-		for (unsigned k = 0; k < nb; k++) {
-			double gb[NR][NP], bb[NA][NR], ub[NP];
-			unpack(&m->blk[k], gb, bb);
-			score(c, gb, bb, p, w, on, ub);
-			for (unsigned q = 0; q < NP; q++)
-				for (unsigned s = 0; s < NP; s++)
-					sm[q][s] += ub[q] * ub[s];
-		}
-		double t[NP][NP], gf = (double)nb;
-		for (unsigned q = 0; q < NP; q++)
-			for (unsigned s = 0; s < NP; s++) {
-				t[q][s] = 0.0;
-				for (unsigned k = 0; k < NP; k++)
-					t[q][s] += hi[q][k] * sm[k][s];
-			}
-		for (unsigned q = 0; q < NP; q++)
-			for (unsigned s = 0; s < NP; s++) {
-				vc[q][s] = 0.0;
-				for (unsigned k = 0; k < NP; k++)
-					vc[q][s] += t[q][k] * hi[k][s];
-				vc[q][s] *= gf / (gf - 3.0);
-			}
-	}
+	sandwich(m, nb, p, w, on, hi, vc);
 	/* the scales c_j / median(c) and their Jacobian */
 	unsigned ia, ib;
 	double cj[N], js[N][NP] = {{0}};

@@ -1252,8 +1252,7 @@ def item_sources(rep, args):
         causes = ", ".join(f"{k} {v}" for k, v in sorted(t["causes"].items(), key=lambda kv: -kv[1])) or "none"
         rep.row(9, f"  {label}: not identified (k_f not accepted), with the causes",
                 f"{100.0 * t['rejected'] / t['runs']:.1f} %", "", causes,
-                "<= 2 %" if how != "imu_weak" else "(reported)",
-                t["rejected"] <= 0.02 * t["runs"] if how != "imu_weak" else None, c)
+                "<= 2 %", t["rejected"] <= 0.02 * t["runs"], c)
         for k in ("kf", "ktau", "ratio", "ixx", "iyy", "izz"):
             q = t.get(k)
             if not q:

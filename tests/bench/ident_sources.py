@@ -14,8 +14,9 @@ with the default realistic sensor noise, three ways on the same vehicle and seed
 - imu: no thrust or torque rows (--sensors imu,rpm: ID_SOURCE auto takes imu_rpm, the motor's
   lag and delay from the ESC speeds, k_f from the accelerometer), the rotors' scales given
   (MOT_SCALEj set to the truth, as from a bench);
-- imu, a weak rotor: as imu, with the 0.8-1.0 rotor unknown (the accelerometer cannot tell
-  which rotor: the run must be rejected naming it, or its values right);
+- imu, a weak rotor: as imu, with the 0.8-1.0 rotor unknown to the firmware (the rotor speeds
+  and the gyro separate the rotors: each rotor's effectiveness is identified, and the run's
+  values must be right; a run the estimate cannot separate is rejected naming the cause);
 - imu_tq: as imu, with the ESCs' shaft torques served too (--sensors imu,rpm,torque: auto takes
   imu_rpm_torque, k_tau from the torques), as an ESC's current gives them: an offset of
   0.1-0.5 A, current noise 0.02-0.1 A, KV 500-1000.

@@ -266,7 +266,7 @@ struct ckpt {
 };
 static struct ckpt ckpt[CKPT_N];
 static size_t n_ckpt;
-static bool verify; /* OCTO_FUZZ_VERIFY */
+static bool verify;                  /* OCTO_FUZZ_VERIFY */
 static uint8_t prev[CKPT_INPUT_CAP]; /* the last input that ran with checkpoints */
 static size_t prev_len;
 
