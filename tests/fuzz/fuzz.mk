@@ -26,6 +26,11 @@ FUZZ_SAN      := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recove
 # params.c checks its table with _Static_assert on float comparisons, which GCC
 # folds and clang refuses in C: the GCC builds keep those checks, the fuzz
 # builds drop them.
+# Every automatic variable starts from one fixed pattern, its padding included: a struct built
+# on the stack and copied into the state (a configuration, a status line's unused arguments)
+# then carries the same bytes whatever ran before, so the MAVLink harnesses' state hashes
+# (reset_check.sh, OCTO_FUZZ_VERIFY) compare what the firmware did, not stack garbage.
+FUZZ_SAN      += -ftrivial-auto-var-init=pattern
 FUZZ_CFLAGS   := -std=c11 $(FUZZ_SAN) -Wall -Wextra -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE \
                  '-D_Static_assert(c,m)=struct fuzz_static_assert_dropped'
 # NAME_fixed: the harness NAME built with the core in fixed point (OCTO_FIXED=1); it shares
