@@ -702,6 +702,23 @@ static void thrust_rotor_begin(struct experiment *e, const struct app_params *p,
 	*xpp = xp;
 }
 
+/* An inertia phase's body torque (N m) of this frame: from the rotors' measured thrusts fm
+ * and torques tm, or under the IMU from the rotor model (rmodel, n frames of the throttles
+ * thr); arm_l: the arm's length where no mixer gives the geometry. */
+static void inertia_torque(struct experiment *e, const scalar_t *fm, const scalar_t *tm, float arm_l,
+			   const scalar_t thr[HAL_ROTORS], int n, scalar_t tau[3])
+{
+	if (imu_src(&e->cfg)) {
+		rmodel_step(&e->rm, thr, n, e->f_model, e->tq_model);
+		fm = e->f_model;
+		tm = e->tq_model;
+	}
+	if (e->mix)
+		ident_body_torque_mixer(e->mix, fm, tm, tau);
+	else
+		ident_body_torque(sc_from_float(arm_l), fm, tm, tau);
+}
+
 static void phase_begin(struct experiment *e, const struct app_params *p, const struct exp_turn *in)
 {
 	const struct exp_cfg *cf = &e->cfg;
@@ -740,17 +757,9 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		xp.amplitude = sc_from_float(ax == 2u ? amp / INR_YAW_DIV : amp);
 		scalar_t tau[3],
 			inertia[3] = {sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz)};
-		const scalar_t *fm = in->thrust_n, *tm = in->torque_nm;
-		if (imu_src(cf)) { /* the torque the identified rotor model gives */
+		if (imu_src(cf)) /* the torque the identified rotor model gives */
 			rmodel_init(&e->rm, p, cf, dt, in->thr_prev_all);
-			rmodel_step(&e->rm, in->thr_prev_all, 1, e->f_model, e->tq_model);
-			fm = e->f_model;
-			tm = e->tq_model;
-		}
-		if (e->mix)
-			ident_body_torque_mixer(e->mix, fm, tm, tau);
-		else
-			ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
+		inertia_torque(e, in->thrust_n, in->torque_nm, p->veh_arm_l, in->thr_prev_all, 1, tau);
 		scalar_t alpha = ident_torque_weight(sc_from_float(cf->mot_tau), dt);
 		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS), SC(INR_ZETA), dt,
 				   alpha, inertia, in->rate_b_rps, tau);
@@ -1481,18 +1490,8 @@ static void imu_rotor_step(struct experiment *e, const struct exp_input *in, str
 static void inertia_step(struct experiment *e, const struct exp_input *in, struct exp_output *out, unsigned ax, int n,
 			 bool running, bool use)
 {
-	const struct app_params *p = in->params;
 	scalar_t tau[3];
-	const scalar_t *fm = in->thrust_n, *tm = in->torque_nm;
-	if (imu_src(&e->cfg)) {
-		rmodel_step(&e->rm, in->thr_prev, n, e->f_model, e->tq_model);
-		fm = e->f_model;
-		tm = e->tq_model;
-	}
-	if (e->mix)
-		ident_body_torque_mixer(e->mix, fm, tm, tau);
-	else
-		ident_body_torque(sc_from_float(p->veh_arm_l), fm, tm, tau);
+	inertia_torque(e, in->thrust_n, in->torque_nm, in->params->veh_arm_l, in->thr_prev, n, tau);
 	/* the instrument: the excitation sent on the previous step, which acted over the
 	 * frame this update closes (and, the plant holding it, over the frames lost before) */
 	ident_inertia_instrument(&e->inr, e->inr_u_prev);
