@@ -150,8 +150,7 @@ struct app {
 	float wrench_dem[4];
 	uint32_t thr_clamped;
 
-	/* identification */
-	struct experiment exp;
+	/* identification (the experiment's own state, large, is the struct's last member) */
 	struct exp_output exp_out;
 	struct app_id_run id_run; /* the last run's results as data */
 	bool exp_ack_pending;     /* a final result of the experiment command is owed */
@@ -181,16 +180,20 @@ struct app {
 	} after;
 
 	/* between frames (app_settle, app_tick): work the 90 Hz step does not do */
-	bool params_dirty;     /* a parameter changed: rebuild gains, mixer, map */
-	bool torque_gain_due;  /* a step, a mode change or new parameters: the torque gain again */
-	bool save_pending;     /* results applied: write the parameter file */
-	char param_text[8192]; /* the parameter file's text while it is loaded or saved */
+	bool params_dirty;    /* a parameter changed: rebuild gains, mixer, map */
+	bool torque_gain_due; /* a step, a mode change or new parameters: the torque gain again */
+	bool save_pending;    /* results applied: write the parameter file */
 
 	struct app_said said;     /* what the step said, to be said between frames */
 	struct app_outbox outbox; /* events for the ground station (app_next_event) */
 	struct app_log_frame log; /* this frame's record; the step writes its set point (q_sp)
 				       * and allocated rotor thrusts (rotor_f) here directly */
 	uint32_t steps;
+
+	/* Last, the large ones: the step's own fields above keep small offsets, which a
+	 * microcontroller's loads and stores reach without extra address arithmetic. */
+	char param_text[8192]; /* the parameter file's text while it is loaded or saved */
+	struct experiment exp;
 };
 
 /* The frame's inputs and the throttles sent, as scalars (boundary.h): the converted copies

@@ -28,8 +28,6 @@ void line_vset(struct line *l, int sev, const char *fmt, va_list ap)
 		c++;
 	}
 	l->kind[n] = 0;
-	for (unsigned k = n; k < LINE_ARGS; k++) /* a copied line carries no stale arguments */
-		l->arg[k].f = 0.0;
 }
 
 void line_set(struct line *l, int sev, const char *fmt, ...)
