@@ -127,6 +127,7 @@ static void cfg_resolve(struct exp_cfg *c, const struct app_params *p)
 	 * slope about hover is known at least as well as the extrapolation to full throttle) */
 	float kf_rsd = p->veh_kf > 0.0f ? cfg_f(p->id_kf_sd, 0.0f) / p->veh_kf : 0.0f;
 	c->slope_rsd = isfinite(kf_rsd) && kf_rsd > 0.0f ? kf_rsd : 0.0f;
+	c->tau_rsd = 0.0f; /* ID_MOT_TAU given: taken as exact */
 	/* and the curve's sd through g'(y) = 1 - c + 2 c y, near hover (y << 1): dg'/dc ~ -1 */
 	float crv_sd = cfg_f(p->id_crv_sd, 0.0f);
 	c->gp_rsd = crv_sd > 0.0f ? crv_sd : 0.0f;
@@ -305,6 +306,7 @@ static void rmodel_init(struct exp_rmodel *r, const struct app_params *p, const 
 	for (int j = 0; j < HAL_ROTORS; j++) {
 		filt_delay_init(&r->d[j], cf->delay_fr, thr0[j]);
 		filt_lag_init(&r->l[j], sc_from_float(cf->mot_tau), dt, thr0[j]);
+		filt_lag_init(&r->l2[j], sc_from_float(cf->mot_tau), dt, thr0[j]);
 		r->kfs[j] = sc_from_float(cf->kf * mot_scale(p, j));
 	}
 	r->c = sc_from_float(cf->curve);
@@ -313,16 +315,22 @@ static void rmodel_init(struct exp_rmodel *r, const struct app_params *p, const 
 }
 
 /* n frames of the throttles thr_prev (n > 1 after lost frames: the plant held them); the
- * modelled thrusts f (N) and reaction-torque magnitudes tq (N m) */
+ * modelled thrusts f (N) and reaction-torque magnitudes tq (N m); with df, each thrust's
+ * derivative in ln tau: y = U / (1 + s tau) gives tau dy/dtau = lag(y) - y */
 static void rmodel_step(struct exp_rmodel *r, const scalar_t thr_prev[HAL_ROTORS], int n, scalar_t f[HAL_ROTORS],
-			scalar_t tq[HAL_ROTORS])
+			scalar_t tq[HAL_ROTORS], scalar_t *df)
 {
 	for (int j = 0; j < HAL_ROTORS; j++) {
-		scalar_t y = r->l[j].y;
-		for (int i = 0; i < (n > 1 ? n : 1); i++)
+		scalar_t y = r->l[j].y, y2 = r->l2[j].y;
+		for (int i = 0; i < (n > 1 ? n : 1); i++) {
 			y = filt_lag_update(&r->l[j], filt_delay_update(&r->d[j], thr_prev[j]));
+			if (df)
+				y2 = filt_lag_update(&r->l2[j], y);
+		}
 		f[j] = sc_mul(r->kfs[j], sc_mul(y, sc_add(r->c1, sc_mul(r->c, y))));
 		tq[j] = sc_mul(r->kt, f[j]);
+		if (df) /* d f / d y = k_f s_j (1 - c + 2 c y) */
+			df[j] = sc_mul(sc_mul(r->kfs[j], sc_add(r->c1, sc_mul(sc_add(r->c, r->c), y))), sc_sub(y2, y));
 	}
 }
 
@@ -702,21 +710,34 @@ static void thrust_rotor_begin(struct experiment *e, const struct app_params *p,
 	*xpp = xp;
 }
 
+/* the body torque (N m) of the rotors' thrusts f and reaction torques tq: by the mixer's
+ * geometry, or a plain octocopter of arm arm_l */
+static void body_torque(const struct experiment *e, const scalar_t *f, const scalar_t *tq, float arm_l, scalar_t tau[3])
+{
+	if (e->mix)
+		ident_body_torque_mixer(e->mix, f, tq, tau);
+	else
+		ident_body_torque(sc_from_float(arm_l), f, tq, tau);
+}
+
 /* An inertia phase's body torque (N m) of this frame: from the rotors' measured thrusts fm
  * and torques tm, or under the IMU from the rotor model (rmodel, n frames of the throttles
- * thr); arm_l: the arm's length where no mixer gives the geometry. */
+ * thr), whose torque's derivative in ln tau (the lag's uncertainty) goes to the estimator;
+ * arm_l: the arm's length where no mixer gives the geometry. */
 static void inertia_torque(struct experiment *e, const scalar_t *fm, const scalar_t *tm, float arm_l,
 			   const scalar_t thr[HAL_ROTORS], int n, scalar_t tau[3])
 {
 	if (imu_src(&e->cfg)) {
-		rmodel_step(&e->rm, thr, n, e->f_model, e->tq_model);
+		scalar_t dtq[HAL_ROTORS], dtau[3];
+		rmodel_step(&e->rm, thr, n, e->f_model, e->tq_model, e->df_model);
+		for (int j = 0; j < HAL_ROTORS; j++)
+			dtq[j] = sc_mul(e->rm.kt, e->df_model[j]);
+		body_torque(e, e->df_model, dtq, arm_l, dtau);
+		ident_inertia_sensitivity(&e->inr, dtau[(e->phase_kind[e->phase] - PK_INR_X) % 3]);
 		fm = e->f_model;
 		tm = e->tq_model;
 	}
-	if (e->mix)
-		ident_body_torque_mixer(e->mix, fm, tm, tau);
-	else
-		ident_body_torque(sc_from_float(arm_l), fm, tm, tau);
+	body_torque(e, fm, tm, arm_l, tau);
 }
 
 static void phase_begin(struct experiment *e, const struct app_params *p, const struct exp_turn *in)
@@ -1108,6 +1129,7 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	if (ok) {
 		result(e, PX_VEH_KF, r.kf);
 		e->cfg.slope_rsd = r.slope_rsd;
+		e->cfg.tau_rsd = r.tau > 0.0f && isfinite(r.tau_sd) ? r.tau_sd / r.tau : 0.0f;
 		e->cfg.model_ok = true;
 		e->cfg.kf = r.kf;
 		if (e->cfg.crv_est)
@@ -1283,6 +1305,12 @@ static void inertia_end(struct experiment *e, const struct app_params *p, unsign
 		rk = sqrtf(rk * rk + rs * rs);
 		if (isfinite(sd) && rk > 0.0f)
 			sd = sqrtf(sd * sd + rk * est * rk * est);
+	}
+	if (imu_src(&e->cfg) && isfinite(sd)) {
+		/* the torque's dynamics are the modelled lag's: its sd through the estimate's own
+		 * sensitivity to it (ident_inertia_sens_rel) */
+		float rl = ident_inertia_sens_rel(&e->inr) * e->cfg.tau_rsd * est;
+		sd = sqrtf(sd * sd + rl * rl);
 	}
 	if (imu_src(&e->cfg) && !e->cfg.model_ok) {
 		/* the torque is the rotor model's: without an identified model the estimate
@@ -1566,7 +1594,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		 * sent on the previous frame, through the modelled delay and lag */
 		if (imu_src(&e->cfg)) {
 			/* the specific force's prediction: the modelled thrusts' sum */
-			rmodel_step(&e->rm, in->thr_prev, n, e->f_model, e->tq_model);
+			rmodel_step(&e->rm, in->thr_prev, n, e->f_model, e->tq_model, NULL);
 			scalar_t y_hat = SC_ZERO;
 			for (int j = 0; j < HAL_ROTORS; j++)
 				y_hat = sc_add(y_hat, e->f_model[j]);

@@ -101,6 +101,7 @@ struct exp_cfg {
 	enum exp_source src;
 	float col_amp, swp_thr, swp_dz, izz_sd, imu_time; /* the IMU rotor experiment's; I_z's prior */
 	float slope_rsd; /* IMU: the modelled thrust's relative sd about hover (imu_id_result) */
+	float tau_rsd;   /* IMU: the modelled lag's relative sd (the rotor experiment's) */
 	float gp_rsd;    /* IMU: the curve's slope g'(y_h)'s relative sd (the yaw torque's scale) */
 	float kf, curve; /* the rotor model the later phases fly with: VEH_KF, MOT_CURVE, or what
 			  * this run found (applied only at the next frame boundary) */
@@ -117,9 +118,10 @@ struct exp_cfg {
 struct exp_rmodel {
 	struct filt_delay d[HAL_ROTORS];
 	struct filt_lag l[HAL_ROTORS];
-	scalar_t kfs[HAL_ROTORS]; /* k_f s_j */
-	scalar_t c, c1;           /* the curve c and 1 - c */
-	scalar_t kt;              /* k_tau / k_f */
+	struct filt_lag l2[HAL_ROTORS]; /* the lag's output through the lag again: d y / d ln tau */
+	scalar_t kfs[HAL_ROTORS];       /* k_f s_j */
+	scalar_t c, c1;                 /* the curve c and 1 - c */
+	scalar_t kt;                    /* k_tau / k_f */
 };
 
 struct experiment {
@@ -167,10 +169,11 @@ struct experiment {
 	float swp_end;        /* phase time after which no step starts */
 	struct exp_rmodel rm; /* IMU source: the modelled thrusts (inertia, validation) */
 	scalar_t f_model[HAL_ROTORS], tq_model[HAL_ROTORS];
-	float w2_gain;       /* IMU with rotor speeds: the speed^2 to "thrust" gain the motor model reads */
-	uint32_t rot_k;      /* rotor experiment: excited frames so far */
-	uint32_t est_wait;   /* steps until est[] / est_sd[] are read again */
-	scalar_t inr_u_prev; /* inertia: the excitation of the previous step (the instrument) */
+	scalar_t df_model[HAL_ROTORS]; /* d f_model / d ln tau (the inertia phases) */
+	float w2_gain;                 /* IMU with rotor speeds: the speed^2 to "thrust" gain the motor model reads */
+	uint32_t rot_k;                /* rotor experiment: excited frames so far */
+	uint32_t est_wait;             /* steps until est[] / est_sd[] are read again */
+	scalar_t inr_u_prev;           /* inertia: the excitation of the previous step (the instrument) */
 	scalar_t exc_gain;   /* the phase's excitation scale: 1, halved beyond EXP_TILT_SOFT_DEG or EXP_HEIGHT_SOFT_M */
 	scalar_t exc_cap;    /* rotor phase: the dithers' scale against the hover throttle (1 elsewhere) */
 	float exc_cut_t;     /* t_phase of the last halving */

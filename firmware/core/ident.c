@@ -147,7 +147,14 @@ static scalar_t weigh(scalar_t alpha, scalar_t x, scalar_t x_prev)
 	return sc_add(x_prev, sc_mul(alpha, sc_sub(x, x_prev)));
 }
 
-/* The filters' step: torque of axis i, the axis' rate, the gyroscopic product w_j w_k. */
+void ident_inertia_sensitivity(struct ident_inertia *e, scalar_t d)
+{
+	e->d_in = d;
+	e->sens = true;
+}
+
+/* The filters' step: torque of axis i, the axis' rate, the gyroscopic product w_j w_k (and
+ * the torque's sensitivity, held through a gap). */
 static void inertia_filters(struct ident_inertia *e, scalar_t tau, scalar_t w, scalar_t ww)
 {
 	filt_svf_update(&e->svf_tau, weigh(e->alpha, tau, e->tau_prev));
@@ -157,6 +164,10 @@ static void inertia_filters(struct ident_inertia *e, scalar_t tau, scalar_t w, s
 	e->tau_prev = tau;
 	e->ww_prev = ww;
 	e->w_prev = w;
+	if (e->sens) {
+		filt_svf_update(&e->svf_d, weigh(e->alpha, e->d_in, e->d_prev));
+		e->d_prev = e->d_in;
+	}
 }
 
 /* No lag pairs across what follows (a gap, a restart, an update without excitation). */
@@ -240,6 +251,8 @@ void ident_inertia_restart(struct ident_inertia *e, const scalar_t tau_b[3], con
 	svf_rest(&e->svf_ww, e->ww_prev);
 	svf_rest(&e->svf_w, e->w_prev);
 	svf_rest(&e->svf_z, e->z_in);
+	svf_rest(&e->svf_d, e->d_in);
+	e->d_prev = e->d_in;
 }
 
 void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], const scalar_t w_b[3], bool excited)
@@ -266,6 +279,8 @@ void ident_inertia_update(struct ident_inertia *e, const scalar_t tau_b[3], cons
 		return;
 	e->s_zy = sum_add(e->s_zy, sum_prod(z, y));
 	e->s_zp = sum_add(e->s_zp, sum_prod(z, phi));
+	if (e->sens)
+		e->s_zd = sum_add(e->s_zd, sum_prod(z, e->svf_d.y));
 	if (e->s_n < UINT32_MAX)
 		e->s_n++;
 	/* the residual about the IV ratio from here on (once the instrument has moved) */

@@ -178,6 +178,12 @@ struct ident_inertia {
 	/* the frame ident_inertia_update took, its updates waiting for ident_inertia_process */
 	scalar_t q_phi, q_y, q_z;
 	bool q_excited, q_pending, q_iv;
+	/* the torque's sensitivity to a model parameter (ident_inertia_sensitivity) through the
+	 * torque's filter, and its sum with the instrument over the excited updates */
+	struct filt_svf svf_d;
+	scalar_t d_in, d_prev;
+	ident_sum_t s_zd;
+	bool sens;
 };
 
 /* The std: the RLS std assumes white residuals, but the SVF colours the (white) torque
@@ -232,6 +238,14 @@ float ident_inertia_sd(struct ident_inertia *e);
  * update closes; est and sd are the IV ones from the first 0.5 s of excited updates on
  * (before, the least-squares ones, as live values). */
 void ident_inertia_instrument(struct ident_inertia *e, scalar_t u);
+
+/* A torque modelled from identified parameters carries their error into the estimate: with
+ * d the modelled torque's derivative (axis' N m) in a parameter p, passed before each
+ * ident_inertia_update, d I / d p = I sum z d_f / sum z y (d_f: d through the torque's own
+ * filter), which ident_inertia_sens_rel returns as (d I / I) / d p (0 before the IV
+ * estimate, or without d). Linear in d: one pass, no second estimator. */
+void ident_inertia_sensitivity(struct ident_inertia *e, scalar_t d);
+float ident_inertia_sens_rel(struct ident_inertia *e);
 /* The IV ratio of the sums so far into *i0, for ident.c's residual; false (*i0 kept) while
  * sum z phi is 0 or the ratio is not finite. */
 bool ident_inertia_ratio_sc(const struct ident_inertia *e, scalar_t *i0);

@@ -186,6 +186,10 @@ void ident_inertia_init(struct ident_inertia *e, unsigned axis, scalar_t wc_rps,
 	e->iv = false;
 	e->s_zy = e->s_zp = (ident_sum_t)0;
 	e->s_n = 0;
+	filt_svf_init(&e->svf_d, wc_rps, zeta, dt_s, SC_ZERO);
+	e->d_in = e->d_prev = SC_ZERO;
+	e->s_zd = (ident_sum_t)0;
+	e->sens = false;
 	float dt = sc_to_float(dt_s);
 	float len = fb_pos(dt) ? 0.5f / dt + 0.5f : 45.0f; /* 0.5 s of updates */
 	/* len is positive, not NaN: compared by its bits */
@@ -230,6 +234,15 @@ float ident_inertia_est(struct ident_inertia *e)
 	if (!iv_ready(e))
 		return rls_estimate_f(&e->rls, 0, 0);
 	return f_of_sum(e->s_zy) / f_of_sum(e->s_zp);
+}
+
+float ident_inertia_sens_rel(struct ident_inertia *e)
+{
+	ident_inertia_process(e);
+	if (!e->sens || !iv_ready(e))
+		return 0.0f;
+	float zy = f_of_sum(e->s_zy), r = fb_zero(zy) ? 0.0f : f_of_sum(e->s_zd) / zy;
+	return fb_finite(r) ? r : 0.0f;
 }
 
 /* var(I) (sum z phi)^2 = sum_h w_h Z(h) R(h) (ident.h), R(h) the residual's mean lag product
