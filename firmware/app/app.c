@@ -611,6 +611,7 @@ static void sync_params(struct app *a)
 	rotor_guard_sync(&a->rf, p);
 	env_kf_model_sync(&a->env_kf, p);
 	env_hover_model_sync(&a->env_hover, p);
+	env_limits_sync(&a->env_limits, p);
 }
 
 void app_reset_control(struct app *a)

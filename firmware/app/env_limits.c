@@ -7,6 +7,12 @@ void env_limits_on_command(struct env_limits *l, enum app_command cmd, app_origi
 	l->origin = origin;
 }
 
+void env_limits_sync(struct env_limits *l, const struct app_params *p)
+{
+	l->scale_sum = p->mot_scale1 + p->mot_scale2 + p->mot_scale3 + p->mot_scale4 + p->mot_scale5 + p->mot_scale6 +
+		       p->mot_scale7 + p->mot_scale8;
+}
+
 void env_limits_on_mode(struct env_limits *l)
 {
 	l->phase_s = 0.0f;
@@ -24,13 +30,12 @@ static void not_learned(const struct env_limits_input *in, struct line *more)
  * NAV_TW_MIN the attitude and height loops have too little thrust in hand to fly an
  * experiment or a gust, so the take-off ends, before HOLD, as soon as the hover throttle is
  * learned, and says so. */
-static bool too_heavy(const struct env_limits_input *in, const struct app_params *p, struct env_limits_req *r)
+static bool too_heavy(const struct env_limits *l, const struct env_limits_input *in, const struct app_params *p,
+		      struct env_limits_req *r)
 {
 	if (!(p->nav_tw_min > 0.0f) || !env_hover_ready(in->hover))
 		return false;
-	float u_h = sc_to_float(hover_est_u(&in->hover->hov));
-	float s = p->mot_scale1 + p->mot_scale2 + p->mot_scale3 + p->mot_scale4 + p->mot_scale5 + p->mot_scale6 +
-		  p->mot_scale7 + p->mot_scale8;
+	float u_h = sc_to_float(hover_est_u(&in->hover->hov)), s = l->scale_sum;
 	float tw = u_h > 0.0f ? s / (8.0f * u_h) : 0.0f;
 	if (!(tw < p->nav_tw_min))
 		return false;
@@ -55,7 +60,7 @@ static bool timeout(struct env_limits *l, const struct env_limits_input *in, con
 			not_learned(in, &r->more);
 		return true;
 	}
-	if (in->takeoff && too_heavy(in, p, r))
+	if (in->takeoff && too_heavy(l, in, p, r))
 		return true;
 	/* hold entry: the take-off's set point at the target, the vehicle still to settle there
 	 * and the hover throttle to be learned (guidance's GUID_HOLD_REACHED) */

@@ -25,6 +25,7 @@ struct env_limits {
 	float hold_s;      /* time in the take-off's hold entry (set point at the target) */
 	uint8_t cmd;       /* enum app_command that started the phase, for its final result */
 	app_origin origin; /* who asked for it (APP_ORIGIN_NONE: no one to answer) */
+	float scale_sum;   /* MOT_SCALE1..8 summed: the rotors' full thrust in VEH_KF */
 };
 
 /* One step's inputs. */
@@ -51,6 +52,8 @@ struct env_limits_req {
 
 /* A take-off or landing command about to start its phase: who gets the final result. */
 void env_limits_on_command(struct env_limits *l, enum app_command cmd, app_origin origin);
+/* Parameters -> env_limits, between frames (the rotors' effectiveness summed). */
+void env_limits_sync(struct env_limits *l, const struct app_params *p);
 /* On every mode change: the phase's clocks restart. */
 void env_limits_on_mode(struct env_limits *l);
 /* Once per flying step: true (and *req) when the phase ran out. A landing's limit is said
