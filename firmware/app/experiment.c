@@ -764,6 +764,10 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS), SC(INR_ZETA), dt,
 				   alpha, inertia, in->rate_b_rps, tau);
 		e->inr_u_prev = SC_ZERO;
+		/* the instrument: the excitation through the motor model the phase flies with
+		 * (ID_DELAY_FR, ID_MOT_TAU), in phase with the torque it makes */
+		filt_delay_init(&e->inr_delay, cf->delay_fr, SC_ZERO);
+		filt_lag_init(&e->inr_lag, sc_from_float(cf->mot_tau), dt, SC_ZERO);
 		float i_ax = ax == 0u ? p->veh_ixx : ax == 1u ? p->veh_iyy : p->veh_izz;
 		e->inr_gate_k = sc_from_float(i_ax > 0.0f ? INR_GATE_MARGIN * sc_to_float(dt) / i_ax : 0.0f);
 		e->inr_skip = 0;
@@ -1493,8 +1497,16 @@ static void inertia_step(struct experiment *e, const struct exp_input *in, struc
 	scalar_t tau[3];
 	inertia_torque(e, in->thrust_n, in->torque_nm, in->params->veh_arm_l, in->thr_prev, n, tau);
 	/* the instrument: the excitation sent on the previous step, which acted over the
-	 * frame this update closes (and, the plant holding it, over the frames lost before) */
-	ident_inertia_instrument(&e->inr, e->inr_u_prev);
+	 * frame this update closes (and, the plant holding it, over the frames lost before),
+	 * through the motor model's delay and lag: the torque it makes at the frame's end. A
+	 * function of the excitation alone, so independent of every noise; in phase with the
+	 * torque, so its correlation with the regressor does not cancel across the multisine's
+	 * band on slow or late motors (where the excitation itself lags the torque by up to
+	 * half a period) */
+	scalar_t zi = SC_ZERO;
+	for (int i = 0; i < (n > 1 ? n : 1); i++)
+		zi = filt_lag_update(&e->inr_lag, filt_delay_update(&e->inr_delay, e->inr_u_prev));
+	ident_inertia_instrument(&e->inr, zi);
 	int m = n + e->inr_skip; /* frames since the filters' last */
 	if (n >= 1 && m <= GAP_INTERP_MAX && inr_gyro_outlier(e, in->rate_b_rps[ax], tau[ax], m)) {
 		/* never into the filters: interpolated through at the next frame, as a lost
