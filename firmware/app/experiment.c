@@ -1624,11 +1624,37 @@ static void read_estimates(struct experiment *e)
 #define EXT_AIM 0.8f      /* an extension aims the sd at this share of ID_RSD_MAX */
 #define EXT_GAIN_MAX 2.5f /* and raises an inertia phase's amplitude at most so much */
 
+/* An inertia phase's relative sd that no more data reduce, as inertia_end and izz_imu_end
+ * add it to the data's: the gyro scale's calibration (ID_GYR_SCL_SD) and, under the IMU,
+ * the modelled torque's (the thrust's or the reaction torque's slope, the scales' share; for
+ * the yaw ratio the curve's slope and the scales') */
+static float inertia_rsd_fixed(const struct experiment *e, const struct app_params *p, unsigned ax)
+{
+	float g = cfg_f(p->id_gyr_scl_sd, 0.0f), v = g * g;
+	if (imu_src(&e->cfg)) {
+		float a, b;
+		if (ax != 2u) {
+			a = e->cfg.slope_rsd;
+			b = e->cfg.sc_rsd[ax];
+		} else if (e->cfg.kt_id) {
+			a = e->cfg.kt_rsd;
+			b = e->cfg.sc_rsd[3];
+		} else {
+			a = e->cfg.gp_rsd;
+			b = e->cfg.sc_rsd[2];
+		}
+		v += a * a + b * b;
+	}
+	return sqrtf(v);
+}
+
 /* The largest relative sd among what the phase would publish, from its data as they stand
- * (NAN where its model is rejected for another cause, or for phases that are not extended) */
-static float phase_rsd(struct experiment *e)
+ * (NAN where its model is rejected for another cause, or for phases that are not extended);
+ * *fixed: the part of it more data do not reduce (inertia_rsd_fixed; 0 for the rotor phase) */
+static float phase_rsd(struct experiment *e, const struct app_params *p, float *fixed)
 {
 	int k = e->phase_kind[e->phase];
+	*fixed = 0.0f;
 	if (k == PK_ROTOR && imu_src(&e->cfg)) {
 		struct imu_id_result r;
 		imu_id_process(&e->imid);
@@ -1644,8 +1670,12 @@ static float phase_rsd(struct experiment *e)
 		return fmaxf(mr.kf_sd / mr.kf, mr.ktau_sd / mr.ktau);
 	}
 	if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
-		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
-		return est > 0.0f ? sd / est : NAN;
+		if (imu_src(&e->cfg) && !e->cfg.model_ok) /* rejected whatever its sd */
+			return NAN;
+		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr), rd = sd / est;
+		float fx = inertia_rsd_fixed(e, p, (unsigned)(k - PK_INR_X));
+		*fixed = fx;
+		return est > 0.0f ? sqrtf(rd * rd + fx * fx) : NAN;
 	}
 	return NAN;
 }
@@ -1661,11 +1691,14 @@ static bool phase_extend(struct experiment *e, const struct app_params *p)
 {
 	if (e->ext_done)
 		return false;
-	float rsd = phase_rsd(e), lim = e->cfg.rsd_max;
+	float fx, rsd = phase_rsd(e, p, &fx), lim = e->cfg.rsd_max;
 	if (!(rsd > lim) || !isfinite(rsd) || !(lim > 0.0f))
 		return false;
-	float need = rsd / (EXT_AIM * lim);
-	need *= need;
+	/* the data's part of the sd to the room the fixed part leaves of the aim */
+	float aim = EXT_AIM * lim, room = aim * aim - fx * fx;
+	if (!(room > 0.0f))
+		return false;
+	float need = (rsd * rsd - fx * fx) / room;
 	int k = e->phase_kind[e->phase];
 	float a = 1.0f, a_max = 1.0f;
 	if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
