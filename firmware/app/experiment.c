@@ -62,6 +62,7 @@ static const char *phase_name(int k)
 #define INR_YAW_DIV 10.0f /* yaw (and validation mu_1) amplitude: ID_INR_AMP / 10 */
 #define INR_AMP_DEF 0.8f
 #define INR_ZETA 0.7f
+#define INR_RAMP_S 0.5f /* the inertia excitation's fade-in */
 #define PRBS_ORDER 9u
 #define OFS_SEG_FRAMES 45u /* rotor experiment: frames per offset level (0.5 s at 90 Hz) */
 #define EST_READ_FRAMES 9u /* steps between reads of the live estimates (10 Hz at 90 Hz) */
@@ -1524,8 +1525,18 @@ static void inertia_step(struct experiment *e, const struct exp_input *in, struc
 		}
 		ident_inertia_update(&e->inr, tau, in->rate_b_rps, use && m == 1 && e->gap_hold == 0);
 	}
-	out->tau_delta[ax] = running ? sc_mul(e->exc_gain, excite_update(&e->exc)) : SC_ZERO;
-	e->inr_u_prev = out->tau_delta[ax];
+	scalar_t u = SC_ZERO;
+	if (running) {
+		/* faded in over INR_RAMP_S: the multisine's abrupt start kicks a weakly damped
+		 * attitude loop past the tilt's budget, and the back-off then halves the whole
+		 * phase's excitation for a transient */
+		float r = (e->t_phase - e->t_settle) * (1.0f / INR_RAMP_S);
+		u = sc_mul(e->exc_gain, excite_update(&e->exc));
+		if (r < 1.0f)
+			u = sc_mul(sc_from_float(r > 0.0f ? r : 0.0f), u);
+	}
+	out->tau_delta[ax] = u;
+	e->inr_u_prev = u;
 }
 
 static void phase_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
