@@ -193,12 +193,12 @@ struct experiment {
 			scalar_t pat[2][HAL_ROTORS]; /* the two null-space patterns (excite_null_pattern) */
 			scalar_t ofs;                /* ID_EXC_OFS: the offset's amplitude */
 		};
-		struct {                          /* inertia Ixx, Iyy or Izz */
+		struct { /* inertia Ixx, Iyy or Izz */
 			struct ident_inertia inr;
 			struct filt_delay inr_delay; /* the instrument through the motor model */
 			struct filt_lag inr_lag;
 		};
-		struct {                  /* validation */
+		struct { /* validation */
 			struct ident_fit fit;
 			struct filt_delay val_delay;
 			struct filt_lag val_lag;
