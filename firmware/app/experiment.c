@@ -62,6 +62,7 @@ static const char *phase_name(int k)
 #define INR_YAW_DIV 10.0f /* yaw (and validation mu_1) amplitude: ID_INR_AMP / 10 */
 #define INR_AMP_DEF 0.8f
 #define INR_ZETA 0.7f
+#define INR_RAMP_S 0.5f /* the inertia excitation's fade-in */
 #define PRBS_ORDER 9u
 #define OFS_SEG_FRAMES 45u /* rotor experiment: frames per offset level (0.5 s at 90 Hz) */
 #define EST_READ_FRAMES 9u /* steps between reads of the live estimates (10 Hz at 90 Hz) */
@@ -785,6 +786,10 @@ static void phase_begin(struct experiment *e, const struct app_params *p, const 
 		ident_inertia_init(&e->inr, ax, ax == 2u ? SC(INR_WC_YAW_RPS) : SC(INR_WC_RP_RPS), SC(INR_ZETA), dt,
 				   alpha, inertia, in->rate_b_rps, tau);
 		e->inr_u_prev = SC_ZERO;
+		/* the instrument: the excitation through the motor model the phase flies with
+		 * (ID_DELAY_FR, ID_MOT_TAU), in phase with the torque it makes */
+		filt_delay_init(&e->inr_delay, cf->delay_fr, SC_ZERO);
+		filt_lag_init(&e->inr_lag, sc_from_float(cf->mot_tau), dt, SC_ZERO);
 		float i_ax = ax == 0u ? p->veh_ixx : ax == 1u ? p->veh_iyy : p->veh_izz;
 		e->inr_gate_k = sc_from_float(i_ax > 0.0f ? INR_GATE_MARGIN * sc_to_float(dt) / i_ax : 0.0f);
 		e->inr_skip = 0;
@@ -1521,8 +1526,16 @@ static void inertia_step(struct experiment *e, const struct exp_input *in, struc
 	scalar_t tau[3];
 	inertia_torque(e, in->thrust_n, in->torque_nm, in->params->veh_arm_l, in->thr_prev, n, tau);
 	/* the instrument: the excitation sent on the previous step, which acted over the
-	 * frame this update closes (and, the plant holding it, over the frames lost before) */
-	ident_inertia_instrument(&e->inr, e->inr_u_prev);
+	 * frame this update closes (and, the plant holding it, over the frames lost before),
+	 * through the motor model's delay and lag: the torque it makes at the frame's end. A
+	 * function of the excitation alone, so independent of every noise; in phase with the
+	 * torque, so its correlation with the regressor does not cancel across the multisine's
+	 * band on slow or late motors (where the excitation itself lags the torque by up to
+	 * half a period) */
+	scalar_t zi = SC_ZERO;
+	for (int i = 0; i < (n > 1 ? n : 1); i++)
+		zi = filt_lag_update(&e->inr_lag, filt_delay_update(&e->inr_delay, e->inr_u_prev));
+	ident_inertia_instrument(&e->inr, zi);
 	int m = n + e->inr_skip; /* frames since the filters' last */
 	if (n >= 1 && m <= GAP_INTERP_MAX && inr_gyro_outlier(e, in->rate_b_rps[ax], tau[ax], m)) {
 		/* never into the filters: interpolated through at the next frame, as a lost
@@ -1540,8 +1553,18 @@ static void inertia_step(struct experiment *e, const struct exp_input *in, struc
 		}
 		ident_inertia_update(&e->inr, tau, in->rate_b_rps, use && m == 1 && e->gap_hold == 0);
 	}
-	out->tau_delta[ax] = running ? sc_mul(e->exc_gain, excite_update(&e->exc)) : SC_ZERO;
-	e->inr_u_prev = out->tau_delta[ax];
+	scalar_t u = SC_ZERO;
+	if (running) {
+		/* faded in over INR_RAMP_S: the multisine's abrupt start kicks a weakly damped
+		 * attitude loop past the tilt's budget, and the back-off then halves the whole
+		 * phase's excitation for a transient */
+		float r = (e->t_phase - e->t_settle) * (1.0f / INR_RAMP_S);
+		u = sc_mul(e->exc_gain, excite_update(&e->exc));
+		if (r < 1.0f)
+			u = sc_mul(sc_from_float(r > 0.0f ? r : 0.0f), u);
+	}
+	out->tau_delta[ax] = u;
+	e->inr_u_prev = u;
 }
 
 static void phase_step(struct experiment *e, const struct exp_input *in, struct exp_output *out)
@@ -1640,11 +1663,38 @@ static void read_estimates(struct experiment *e)
 #define EXT_AIM 0.8f      /* an extension aims the sd at this share of ID_RSD_MAX */
 #define EXT_GAIN_MAX 2.5f /* and raises an inertia phase's amplitude at most so much */
 
+/* An inertia phase's relative sd that no more data reduce, as inertia_end and izz_imu_end
+ * add it to the data's: the gyro scale's calibration (ID_GYR_SCL_SD) and, under the IMU,
+ * the modelled torque's (the thrust's or the reaction torque's slope, the scales' share; for
+ * the yaw ratio the curve's slope and the scales'; the lag's) */
+static float inertia_rsd_fixed(struct experiment *e, const struct app_params *p, unsigned ax)
+{
+	float g = cfg_f(p->id_gyr_scl_sd, 0.0f), v = g * g;
+	if (imu_src(&e->cfg)) {
+		float a, b;
+		if (ax != 2u) {
+			a = e->cfg.slope_rsd;
+			b = e->cfg.sc_rsd[ax];
+		} else if (e->cfg.kt_id) {
+			a = e->cfg.kt_rsd;
+			b = e->cfg.sc_rsd[3];
+		} else {
+			a = e->cfg.gp_rsd;
+			b = e->cfg.sc_rsd[2];
+		}
+		float l = ident_inertia_sens_rel(&e->inr) * e->cfg.tau_rsd; /* the modelled lag's */
+		v += a * a + b * b + l * l;
+	}
+	return sqrtf(v);
+}
+
 /* The largest relative sd among what the phase would publish, from its data as they stand
- * (NAN where its model is rejected for another cause, or for phases that are not extended) */
-static float phase_rsd(struct experiment *e)
+ * (NAN where its model is rejected for another cause, or for phases that are not extended);
+ * *fixed: the part of it more data do not reduce (inertia_rsd_fixed; 0 for the rotor phase) */
+static float phase_rsd(struct experiment *e, const struct app_params *p, float *fixed)
 {
 	int k = e->phase_kind[e->phase];
+	*fixed = 0.0f;
 	if (k == PK_ROTOR && imu_src(&e->cfg)) {
 		struct imu_id_result r;
 		imu_id_process(&e->imid);
@@ -1660,8 +1710,12 @@ static float phase_rsd(struct experiment *e)
 		return fmaxf(mr.kf_sd / mr.kf, mr.ktau_sd / mr.ktau);
 	}
 	if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
-		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr);
-		return est > 0.0f ? sd / est : NAN;
+		if (imu_src(&e->cfg) && !e->cfg.model_ok) /* rejected whatever its sd */
+			return NAN;
+		float est = ident_inertia_est(&e->inr), sd = ident_inertia_sd(&e->inr), rd = sd / est;
+		float fx = inertia_rsd_fixed(e, p, (unsigned)(k - PK_INR_X));
+		*fixed = fx;
+		return est > 0.0f ? sqrtf(rd * rd + fx * fx) : NAN;
 	}
 	return NAN;
 }
@@ -1677,11 +1731,14 @@ static bool phase_extend(struct experiment *e, const struct app_params *p)
 {
 	if (e->ext_done)
 		return false;
-	float rsd = phase_rsd(e), lim = e->cfg.rsd_max;
+	float fx, rsd = phase_rsd(e, p, &fx), lim = e->cfg.rsd_max;
 	if (!(rsd > lim) || !isfinite(rsd) || !(lim > 0.0f))
 		return false;
-	float need = rsd / (EXT_AIM * lim);
-	need *= need;
+	/* the data's part of the sd to the room the fixed part leaves of the aim */
+	float aim = EXT_AIM * lim, room = aim * aim - fx * fx;
+	if (!(room > 0.0f))
+		return false;
+	float need = (rsd * rsd - fx * fx) / room;
 	int k = e->phase_kind[e->phase];
 	float a = 1.0f, a_max = 1.0f;
 	if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {

@@ -173,7 +173,7 @@ struct experiment {
 	float w2_gain;                 /* IMU with rotor speeds: the speed^2 to "thrust" gain the motor model reads */
 	uint32_t rot_k;                /* rotor experiment: excited frames so far */
 	uint32_t est_wait;             /* steps until est[] / est_sd[] are read again */
-	scalar_t inr_u_prev;           /* inertia: the excitation of the previous step (the instrument) */
+	scalar_t inr_u_prev;           /* inertia: the excitation of the previous step (the instrument's input) */
 	scalar_t exc_gain;   /* the phase's excitation scale: 1, halved beyond EXP_TILT_SOFT_DEG or EXP_HEIGHT_SOFT_M */
 	scalar_t exc_cap;    /* rotor phase: the dithers' scale against the hover throttle (1 elsewhere) */
 	float exc_cut_t;     /* t_phase of the last halving */
@@ -196,8 +196,12 @@ struct experiment {
 			scalar_t pat[2][HAL_ROTORS]; /* the two null-space patterns (excite_null_pattern) */
 			scalar_t ofs;                /* ID_EXC_OFS: the offset's amplitude */
 		};
-		struct ident_inertia inr; /* inertia Ixx, Iyy or Izz */
-		struct {                  /* validation */
+		struct { /* inertia Ixx, Iyy or Izz */
+			struct ident_inertia inr;
+			struct filt_delay inr_delay; /* the instrument through the motor model */
+			struct filt_lag inr_lag;
+		};
+		struct { /* validation */
 			struct ident_fit fit;
 			struct filt_delay val_delay;
 			struct filt_lag val_lag;

@@ -101,8 +101,8 @@ def test_inertia_error_over_sd_is_a_unit_normal(tmp_path):
             print(f"{name}: {len(v)} accepted, z rms {math.sqrt(sum(x * x for x in v) / len(v)):.3f}, "
                   f"beyond 2 sd {sum(abs(x) > 2 for x in v)}, beyond 3 sd {sum(abs(x) > 3 for x in v)}")
     m = len(zs)
-    # most axes accepted: the slow, late vehicles (lag beyond 60 ms, 2-3 frames late) lose
-    # roll and pitch to ID_RSD_MAX (the multisine's torque there is weak), 15-25 % of them
+    # most axes accepted: ID_RSD_MAX may still refuse an axis on the slowest, latest vehicles
+    # (2 of 1,200 on seeds 82000-82399)
     assert m >= 0.7 * 3 * n, [(s, sorted(z)) for s, z, _ in runs if len(z) < 3]
     ss = sum(x * x for x in zs)
     lo, hi = chi2_quantile(m, -Q_Z), chi2_quantile(m, Q_Z)
