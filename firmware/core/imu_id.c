@@ -41,58 +41,86 @@ static void set_grid(struct imu_id *m)
 
 static float smooth(const float *r) { return 0.25f * (r[0] + 2.0f * r[1] + r[2]); }
 
-static void push3(float r[3], float v)
+/* the [1 2 1] / 4 smoother of a series: r holds its last input and the last two's sum; v in,
+ * the smoothed value out */
+static float smooth_in(float r[2], float v)
 {
-	r[2] = r[1];
-	r[1] = r[0];
+	float p = v + r[0], o = 0.25f * (p + r[1]);
 	r[0] = v;
+	r[1] = p;
+	return o;
 }
 
-/* the throttles into the queue and the lag filters on the ones AGE frames before, their
- * sums x1, x2 and the patterns' responses into the smoother's rings */
-static void advance(struct imu_id *m, const float u_new[IMU_ID_ROTORS])
+/* the throttles into the queue and the lag filters on the ones AGE frames before (each rotor's
+ * scaled by the square root of its scale: x2 is the sum of the outputs' squares; x1 from the
+ * scaled throttles' sum, the filters being linear); x1 and x2 smoothed into s, and
+ * the patterns' responses into qs */
+static void advance(struct imu_id *m, const float u_new[IMU_ID_ROTORS], float s[2][IMU_ID_LAGS])
 {
 	const struct imu_id_cfg *c = &m->cfg;
-	float u[IMU_ID_ROTORS];
+	float u[IMU_ID_ROTORS], us = 0.0f;
 	float *uq = m->uq[m->uqh];
 	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
-		u[j] = uq[j];
+		u[j] = m->rs[j] * uq[j];
+		us += c->scale[j] * uq[j];
 		uq[j] = u_new[j];
 	}
 	m->uqh = (uint8_t)(m->uqh + 1u < AGE ? m->uqh + 1u : 0u);
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-		float a = m->a[l], s1 = 0.0f, s2 = 0.0f, *y = m->y[l];
+		float a = m->a[l], b = 1.0f - a, q = 0.0f, *y = m->y[l];
+#pragma GCC unroll 8
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
-			float v = u[j] + a * (y[j] - u[j]); /* a y + (1 - a) u */
-			float sv = c->scale[j] * v;
+			float v = a * y[j] + b * u[j];
 			y[j] = v;
-			s1 += sv;
-			s2 += sv * v;
+			q += v * v;
 		}
-		push3(m->x1[l], s1);
-		push3(m->x2[l], s2);
+		float yc = a * m->yc[l] + b * us;
+		m->yc[l] = yc;
+		s[0][l] = smooth_in(m->x1[l], yc);
+		s[1][l] = smooth_in(m->x2[l], q);
 	}
 	float p1 = 0.0f, p2 = 0.0f;
 	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
-		float sy = c->scale[j] * m->y[CL_LAG][j];
+		float sy = m->rs[j] * m->y[CL_LAG][j];
 		p1 += c->pat[0][j] * sy;
 		p2 += c->pat[1][j] * sy;
 	}
-	push3(m->q1, p1);
-	push3(m->q2, p2);
+	m->qs[0] = smooth_in(m->q1, p1);
+	m->qs[1] = smooth_in(m->q2, p2);
 }
 
 /* the frame's smoothed force and torque (less the reference at hover) into the rings by age;
  * ok: the frame is taken (excited, the smoother full) */
 static void push_meas(struct imu_id *m, float f, float t, bool ok)
 {
-	for (unsigned k = IMU_ID_DELAYS - 1u; k > 0u; k--) {
-		m->fz[k] = m->fz[k - 1u];
-		m->tz[k] = m->tz[k - 1u];
-	}
-	m->fz[0] = f;
-	m->tz[0] = t;
+	m->fh = (uint8_t)(m->fh ? m->fh - 1u : IMU_ID_DELAYS - 1u);
+	m->fz[m->fh] = f;
+	m->tz[m->fh] = t;
 	m->fok = (uint8_t)(((unsigned)m->fok << 1 | (ok ? 1u : 0u)) & ((1u << IMU_ID_DELAYS) - 1u));
+}
+
+/* the rings' slot of the frame of age k */
+static unsigned meas_slot(const struct imu_id *m, unsigned k)
+{
+	unsigned i = m->fh + k;
+	return i < IMU_ID_DELAYS ? i : i - IMU_ID_DELAYS;
+}
+
+/* the square roots of the scales, which the filters' outputs carry */
+static void set_rs(struct imu_id *m)
+{
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		m->rs[j] = sqrtf(m->cfg.scale[j]);
+}
+
+/* lag l's filters at the outputs v (unscaled) */
+static void set_lag(struct imu_id *m, unsigned l, const float v[IMU_ID_ROTORS])
+{
+	m->yc[l] = 0.0f;
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
+		m->y[l][j] = m->rs[j] * v[j];
+		m->yc[l] += m->cfg.scale[j] * v[j];
+	}
 }
 
 void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t thr0[IMU_ID_ROTORS])
@@ -108,9 +136,9 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 	m->ln0 = logf(IMU_ID_TAU_MIN);
 	m->lstep = logf(IMU_ID_TAU_MAX / IMU_ID_TAU_MIN) / (float)(IMU_ID_LAGS - 1);
 	set_grid(m);
+	set_rs(m);
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
-		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-			m->y[l][j] = u[j];
+		set_lag(m, l, u);
 	/* the centring point: the start's mean throttle and the scales' sum; and the reference
 	 * model made to carry the weight there (k_f from the prior's curve and the mass), so that
 	 * the responses relative to it stay small: both keep the float sums' precision */
@@ -125,8 +153,10 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 	for (unsigned k = 0; k < AGE; k++)
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
 			m->uq[k][j] = u[j];
-	for (unsigned k = 0; k < 3u; k++)
-		advance(m, u); /* the steady state in the smoother's rings */
+	for (unsigned k = 0; k < 3u; k++) {
+		float s[2][IMU_ID_LAGS];
+		advance(m, u, s); /* the steady state in the smoother's rings */
+	}
 	float kr = gs > 0.0f ? m->cfg.mass_kg * m->cfg.g / gs : 0.0f;
 	if (isfinite(kr) && kr > 0.0f && m->cfg.kf0 > 0.0f) {
 		m->cfg.kt0 *= kr / m->cfg.kf0;
@@ -165,9 +195,10 @@ static void holds_take(struct imu_id *m)
 {
 	for (; m->n_hold > 0u; m->n_hold--) {
 		float u[IMU_ID_ROTORS];
+		float s[2][IMU_ID_LAGS];
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
 			u[j] = sc_to_float(m->h_thr[j]);
-		advance(m, u);
+		advance(m, u, s);
 		push_meas(m, 0.0f, 0.0f, false);
 		if (m->n_cal > 0u) {
 			m->fw_sum += m->fw_last;
@@ -440,61 +471,73 @@ static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl, float j
 		}
 }
 
-/* the smoothed regressors of the frame AGE old, of every lag, centred at the start's hover
- * (basis): with the curve estimated (x1 - y_h S, sum s (y - y_h)^2, x3, x4 - 2 y_h x3, 1),
- * else (the reference's less its value at y_h, 0, its sensitivity, 0, 1); x3 and x4 the
- * central differences of x1 and x2 across the grid (second order at its ends) */
-static void regs(const struct imu_id *m, float x[IMU_ID_LAGS][NP - 1u])
+/* The centred regressors (basis) as a linear map of the smoothed sums (x1, x2) and of their
+ * sensitivities (x3, x4): x0 = k0 x1 + k1 x2 + k2, x1 = k3 x1 + k4 x2 + k5, x2 = k0 x3 + k1 x4,
+ * x3 = k3 x3 + k4 x4. With the curve estimated (x1 - y_h S, sum s (y - y_h)^2, x3,
+ * x4 - 2 y_h x3), else (the reference's less its value at y_h, 0, its sensitivity, 0). */
+static void xmap(const struct imu_id *m, float k[6])
 {
 	const struct imu_id_cfg *c = &m->cfg;
-	float s1[IMU_ID_LAGS], s2[IMU_ID_LAGS], yh = m->yh, s = m->ssum, ih = 0.5f / m->lstep;
-	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-		s1[l] = smooth(m->x1[l]);
-		s2[l] = smooth(m->x2[l]);
-	}
-	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-		unsigned lo = l ? l - 1u : 0u, hi = l + 1u < IMU_ID_LAGS ? l + 1u : l;
-		float d1 = s1[hi] - s1[lo], d2 = s2[hi] - s2[lo];
-		if (l == 0u || l + 1u == IMU_ID_LAGS) { /* 3 x(l) - 4 x(l -+ 1) + x(l -+ 2), signed */
-			unsigned l2 = l ? l - 2u : 2u;
-			float sg = l ? 1.0f : -1.0f;
-			d1 = 2.0f * d1 + sg * (s1[l] - 2.0f * s1[l ? l - 1u : 1u] + s1[l2]);
-			d2 = 2.0f * d2 + sg * (s2[l] - 2.0f * s2[l ? l - 1u : 1u] + s2[l2]);
-		}
-		d1 *= ih;
-		d2 *= ih;
-		if (c->est_curve) {
-			x[l][0] = s1[l] - yh * s;
-			x[l][P_B] = s2[l] - 2.0f * yh * s1[l] + yh * yh * s;
-			x[l][P_LA] = d1;
-			x[l][P_LB] = d2 - 2.0f * yh * d1;
-		} else {
-			x[l][0] = ref_x(c, s1[l], s2[l]) - ref_x(c, yh * s, yh * yh * s);
-			x[l][P_B] = 0.0f;
-			x[l][P_LA] = ref_x(c, d1, d2); /* (1 - c) x3 + c x4: g' known */
-			x[l][P_LB] = 0.0f;
-		}
+	float yh = m->yh, s = m->ssum;
+	if (c->est_curve) {
+		k[0] = 1.0f;
+		k[1] = 0.0f;
+		k[2] = -yh * s;
+		k[3] = -2.0f * yh;
+		k[4] = 1.0f;
+		k[5] = yh * yh * s;
+	} else {
+		k[0] = 1.0f - c->curve0;
+		k[1] = c->curve0;
+		k[2] = -ref_x(c, yh * s, yh * yh * s);
+		k[3] = k[4] = k[5] = 0.0f;
 	}
 }
 
-/* the regressors x of the frame AGE old (the offset's 1 implied) into every hypothesis: the
- * products x x' into their lag's sums, the products with the force of each delay (less the
- * reference model's prediction from x) into the hypothesis' own */
-static void bank_take(struct imu_id *m, const float x[IMU_ID_LAGS][NP - 1u])
+/* the sensitivities of the smoothed sums s (x1 or x2) to ln tau: central differences across
+ * the grid, second order at its ends */
+static void sens(const struct imu_id *m, const float s[IMU_ID_LAGS], float d[IMU_ID_LAGS])
+{
+	_Static_assert(IMU_ID_LAGS >= 3, "the differences need three lags");
+	float ih = 0.5f / m->lstep;
+	for (unsigned l = 1; l + 1u < IMU_ID_LAGS; l++)
+		d[l] = ih * (s[l + 1u] - s[l - 1u]);
+	const unsigned e = IMU_ID_LAGS - 1u;
+	d[0] = ih * (4.0f * s[1] - 3.0f * s[0] - s[2]);
+	d[e] = ih * (3.0f * s[e] - 4.0f * s[e - 1u] + s[e - 2u]);
+}
+
+/* lag l's centred regressors (xmap k; the offset's 1 implied) of the frame AGE old */
+static void lag_x(const float k[6], const float s[2][IMU_ID_LAGS], const float d[2][IMU_ID_LAGS], unsigned l,
+		  float x[NP - 1u])
+{
+	x[0] = k[0] * s[0][l] + k[1] * s[1][l] + k[2];
+	x[P_B] = k[3] * s[0][l] + k[4] * s[1][l] + k[5];
+	x[P_LA] = k[0] * d[0][l] + k[1] * d[1][l];
+	x[P_LB] = k[3] * d[0][l] + k[4] * d[1][l];
+}
+
+/* the regressors of the frame AGE old (from its smoothed sums s and their sensitivities d)
+ * into every hypothesis: the products x x' into their lag's sums, the products with the
+ * force of each delay (less the reference model's prediction from x) into the hypothesis' own */
+static void bank_take(struct imu_id *m, const float k[6], const float s[2][IMU_ID_LAGS], const float d[2][IMU_ID_LAGS])
 {
 	const struct imu_id_cfg *c = &m->cfg;
 	float r0, r1, fd[IMU_ID_DELAYS], td[IMU_ID_DELAYS];
 	ref_coef(m, &r0, &r1);
-	for (unsigned d = 0; d < IMU_ID_DELAYS; d++) {
-		fd[d] = m->fz[AGE - d];
-		td[d] = m->tz[AGE - d];
-		m->fs[d] += fd[d];
-		m->ts[d] += td[d];
+	for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
+		fd[q] = m->fz[meas_slot(m, AGE - q)];
+		td[q] = m->tz[meas_slot(m, AGE - q)];
+		m->fs[q] += fd[q];
+		m->ts[q] += td[q];
 	}
 	m->n_st++;
 	_Static_assert(NP == 5 && NT == 15, "bank_take is written out for five parameters");
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-		const float x0 = x[l][0], x1 = x[l][1], x2 = x[l][2], x3 = x[l][3], xr = r0 * x0 + r1 * x1;
+		/* lag_x, written out */
+		const float x0 = k[0] * s[0][l] + k[1] * s[1][l] + k[2], x1 = k[3] * s[0][l] + k[4] * s[1][l] + k[5];
+		const float x2 = k[0] * d[0][l] + k[1] * d[1][l], x3 = k[3] * d[0][l] + k[4] * d[1][l];
+		const float xr = r0 * x0 + r1 * x1;
 		float *g = m->gx[l];
 		g[0] += x0 * x0;
 		g[1] += x0 * x1;
@@ -511,9 +554,10 @@ static void bank_take(struct imu_id *m, const float x[IMU_ID_LAGS][NP - 1u])
 		g[12] += x3 * x3;
 		g[13] += x3;
 		float kx = c->kf0 * xr;
-		for (unsigned d = 0; d < IMU_ID_DELAYS; d++) {
-			struct imu_id_hyp *h = &m->hs[l][d];
-			float z = fd[d] - kx;
+#pragma GCC unroll 5
+		for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
+			struct imu_id_hyp *h = &m->hs[l][q];
+			float z = fd[q] - kx;
 			h->b[0] += x0 * z;
 			h->b[1] += x1 * z;
 			h->b[2] += x2 * z;
@@ -523,9 +567,10 @@ static void bank_take(struct imu_id *m, const float x[IMU_ID_LAGS][NP - 1u])
 		if (!c->torque)
 			continue;
 		kx = c->kt0 * xr;
-		for (unsigned d = 0; d < IMU_ID_DELAYS; d++) {
-			struct imu_id_hyp *h = &m->hs[l][d];
-			float z = td[d] - kx;
+#pragma GCC unroll 5
+		for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
+			struct imu_id_hyp *h = &m->hs[l][q];
+			float z = td[q] - kx;
 			h->bt[0] += x0 * z;
 			h->bt[1] += x1 * z;
 			h->bt[2] += x2 * z;
@@ -535,26 +580,27 @@ static void bank_take(struct imu_id *m, const float x[IMU_ID_LAGS][NP - 1u])
 	}
 }
 
-/* the frozen hypothesis' frame into its block; a full set of blocks merges in pairs; and
- * into the scales' check (the two patterns' responses beside the parameters) */
-static void cl_add(struct imu_id *m, const float x[IMU_ID_LAGS][NP - 1u])
+/* the frozen hypothesis' frame into its block (a full set of blocks merges in pairs), and its
+ * products with the two patterns' responses into the scales' check (whose other sums are the
+ * blocks') */
+static void cl_add(struct imu_id *m, const float xk[6], const float s[2][IMU_ID_LAGS], const float d[2][IMU_ID_LAGS])
 {
-	float r0, r1, xh = ref_coef(m, &r0, &r1);
-	const float *xl = x[m->cl_l];
-	float xx[IMU_ID_NX], xr = xh + r0 * xl[0] + r1 * xl[1];
-	for (unsigned i = 0; i < P_OFS; i++)
-		xx[i] = xl[i];
+	float r0, r1, xx[IMU_ID_NX];
+	ref_coef(m, &r0, &r1);
+	lag_x(xk, s, d, m->cl_l, xx);
 	xx[P_OFS] = 1.0f;
-	xx[NP] = smooth(m->q1);
-	xx[NP + 1u] = smooth(m->q2);
+	xx[NP] = m->qs[0];
+	xx[NP + 1u] = m->qs[1];
 	/* the rings hold f less k_f0 x_r(y_h): z = f - k_f0 x_r */
-	float z = m->fz[AGE - m->cl_d] - m->cfg.kf0 * (xr - xh), zt = m->tz[AGE - m->cl_d] - m->cfg.kt0 * (xr - xh);
+	float xr = r0 * xx[0] + r1 * xx[P_B];
+	unsigned a = meas_slot(m, AGE - m->cl_d);
+	float z = m->fz[a] - m->cfg.kf0 * xr, zt = m->tz[a] - m->cfg.kt0 * xr;
 	for (unsigned i = 0; i < IMU_ID_NX; i++) {
-		for (unsigned k = i; k < IMU_ID_NX; k++)
-			m->xg[i][k] += xx[i] * xx[k];
-		m->xb[i] += xx[i] * z;
+		m->xq[i][0] += xx[i] * xx[NP];
+		m->xq[i][1] += xx[i] * xx[NP + 1u];
 	}
-	m->xrr += z * z;
+	m->xbq[0] += xx[NP] * z;
+	m->xbq[1] += xx[NP + 1u] * z;
 	m->xn++;
 	stat_add(&m->blk[m->nb], xx, z, zt, m->cfg.torque);
 	if (++m->cl_k < m->cl_len)
@@ -628,8 +674,10 @@ static void refine(struct imu_id *m)
 	float lo = logf(IMU_ID_TAU_MIN), hi = logf(IMU_ID_TAU_MAX), half = IMU_ID_FINE_HALF * h0;
 	float c = m->ln0 + h0 * (float)bl + dl;
 	c = c - half < lo ? lo + half : c + half > hi ? hi - half : c;
-	float y[IMU_ID_LAGS][IMU_ID_ROTORS], ln_old0 = m->ln0;
-	memcpy(y, m->y, sizeof y);
+	float y[IMU_ID_LAGS][IMU_ID_ROTORS], v[IMU_ID_LAGS][IMU_ID_ROTORS], ln_old0 = m->ln0;
+	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
+		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+			y[l][j] = m->y[l][j] / m->rs[j];
 	m->ln0 = c - half;
 	m->lstep = 2.0f * half / (float)(IMU_ID_LAGS - 1);
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
@@ -639,10 +687,13 @@ static void refine(struct imu_id *m)
 		i = i >= IMU_ID_LAGS - 1u ? IMU_ID_LAGS - 2u : i;
 		float fq = q - (float)i;
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-			m->y[l][j] = y[i][j] + fq * (y[i + 1u][j] - y[i][j]);
+			v[l][j] = y[i][j] + fq * (y[i + 1u][j] - y[i][j]);
 	}
 	set_grid(m);
 	scales_take(m);
+	set_rs(m);
+	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
+		set_lag(m, l, v[l]);
 	memset(m->gx, 0, sizeof m->gx);
 	memset(m->hs, 0, sizeof m->hs);
 	memset(m->fs, 0, sizeof m->fs);
@@ -671,7 +722,8 @@ void imu_id_process(struct imu_id *m)
 		m->tq_lost = true;
 		qtq = 0.0f;
 	}
-	advance(m, thr);
+	float s[2][IMU_ID_LAGS];
+	advance(m, thr, s);
 	if (m->q_excited) { /* the calibration's sums: from the velocity before the first */
 		if (m->n_cal == 0u)
 			m->v0 = m->vz_prev;
@@ -710,15 +762,17 @@ void imu_id_process(struct imu_id *m)
 	push_meas(m, f - c->kf0 * xh, t - c->kt0 * xh, true);
 	if (m->fok != (1u << IMU_ID_DELAYS) - 1u)
 		return; /* a delay's force is not all taken frames' */
-	float x[IMU_ID_LAGS][NP - 1u];
-	regs(m, x);
-	bank_take(m, x);
+	float k[6], d[2][IMU_ID_LAGS];
+	xmap(m, k);
+	sens(m, s[0], d[0]);
+	sens(m, s[1], d[1]);
+	bank_take(m, k, s, d);
 	if (!m->refined && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_st >= 30u) {
 		refine(m);
 		return;
 	}
 	if (m->cl_on)
-		cl_add(m, x);
+		cl_add(m, k, s, d);
 }
 
 /* The clusters' variance factor for the projection j of the parameters: the cluster-robust
@@ -794,10 +848,21 @@ static void scales_check(const struct imu_id *m, float t[2])
 	t[0] = t[1] = 0.0f;
 	if (m->xn <= 2u * N)
 		return;
+	/* the parameters' sums are the blocks' (merging keeps them), the patterns' cl_add's */
+	double rr = 0.0;
 	for (unsigned i = 0; i < N; i++) {
-		b[i] = m->xb[i];
+		b[i] = i < NP ? 0.0 : (double)m->xbq[i - NP];
 		for (unsigned k = 0; k < N; k++)
-			a[i][k] = m->xg[i < k ? i : k][i < k ? k : i]; /* cl_add fills the upper triangle */
+			a[i][k] = k >= NP ? (double)m->xq[i][k - NP] : i >= NP ? (double)m->xq[k][i - NP] : 0.0;
+	}
+	for (unsigned q = 0; q <= m->nb && q <= IMU_ID_BLOCKS; q++) {
+		const struct imu_id_stat *s = &m->blk[q];
+		for (unsigned i = 0; i < NP; i++) {
+			b[i] += (double)s->b[i];
+			for (unsigned k = 0; k < NP; k++)
+				a[i][k] += (double)s->g[ut(i, k)];
+		}
+		rr += (double)s->rr;
 	}
 	if (!m->cfg.est_curve) {
 		for (unsigned q = 0; q < 2; q++) {
@@ -853,7 +918,7 @@ static void scales_check(const struct imu_id *m, float t[2])
 				col[s - 1][i] = u[i] * d[i]; /* column of A^-1 */
 		}
 	}
-	double ee = m->xrr;
+	double ee = rr;
 	for (unsigned i = 0; i < N; i++)
 		ee -= th[i] * b[i];
 	double s2 = ee / (double)(m->xn - N);

@@ -115,28 +115,32 @@ struct imu_id {
 	/* the regressors are centred at the start's hover (y_h, the scales' sum S): x1 - y_h S,
 	 * sum s (y - y_h)^2, x3, x4 - 2 y_h x3 (imu_id.c: basis) */
 	float yh, ssum;
-	float ln0, lstep;                           /* the lag grid: ln tau_l = ln0 + l lstep */
-	bool refined;                               /* the grid was refined (the sums restarted) */
-	uint32_t n_st;                              /* excited frames in the bank's sums */
-	float a[IMU_ID_LAGS];                       /* the lags' poles exp(-dt / tau) */
-	float y[IMU_ID_LAGS][IMU_ID_ROTORS];        /* the filters' outputs, IMU_ID_DELAYS - 1 frames old */
+	float ln0, lstep;     /* the lag grid: ln tau_l = ln0 + l lstep */
+	bool refined;         /* the grid was refined (the sums restarted) */
+	uint32_t n_st;        /* excited frames in the bank's sums */
+	float a[IMU_ID_LAGS]; /* the lags' poles exp(-dt / tau) */
+	/* the filters, on the throttles IMU_ID_DELAYS - 1 frames old: each rotor's output times
+	 * the square root of its scale (rs), and the scaled outputs' sum x1 */
+	float y[IMU_ID_LAGS][IMU_ID_ROTORS], yc[IMU_ID_LAGS], rs[IMU_ID_ROTORS];
 	float uq[IMU_ID_DELAYS - 1][IMU_ID_ROTORS]; /* the throttles waiting for the filters (uqh: the oldest's) */
 	uint8_t uqh;
-	/* the filters' last three frames' x1, x2 and the patterns' responses (sum p_kj s_j y_j,
-	 * at the clusters' lag: imu_id.c), newest first: the [1 2 1] / 4 smoother's input */
-	float x1[IMU_ID_LAGS][3], x2[IMU_ID_LAGS][3];
-	float q1[3], q2[3];
-	/* the scales' check on the frozen hypothesis: G (upper triangle used), b, z'z over its frames */
-	float xg[IMU_ID_NX][IMU_ID_NX], xb[IMU_ID_NX], xrr;
+	/* the [1 2 1] / 4 smoother's state (the last input, the last two's sum) of x1, x2 and the
+	 * patterns' responses (sum p_kj s_j y_j, at the clusters' lag: imu_id.c); qs: the latter smoothed */
+	float x1[IMU_ID_LAGS][2], x2[IMU_ID_LAGS][2];
+	float q1[2], q2[2], qs[2];
+	/* the scales' check on the frozen hypothesis: the products of its regressors and the
+	 * two patterns' responses with the latter (xq) and with the force (xbq), over its xn
+	 * frames (the other sums are the blocks') */
+	float xq[IMU_ID_NX][2], xbq[2];
 	uint32_t xn;
 	float fr[3];   /* the force's last three frames, newest first */
 	float tr[3];   /* the torques' sum, the same */
 	uint32_t n_fr; /* consecutive frames in fr (a gap restarts it) */
-	/* by age, newest first: the smoothed force and torque less the reference at hover, and
+	/* rings by age: the smoothed force and torque less the reference at hover, and
 	 * (bit k) whether the frame of age k is taken; the bank takes the regressors of age
 	 * IMU_ID_DELAYS - 1 when all are, delay D with the force of age IMU_ID_DELAYS - 1 - D */
-	float fz[IMU_ID_DELAYS], tz[IMU_ID_DELAYS];
-	uint8_t fok;
+	float fz[IMU_ID_DELAYS], tz[IMU_ID_DELAYS]; /* the frame of age k in slot (fh + k) % IMU_ID_DELAYS */
+	uint8_t fh, fok;
 	float gx[IMU_ID_LAGS][IMU_ID_NT - 1]; /* each lag's G but its last (the count, n_st) */
 	struct imu_id_hyp hs[IMU_ID_LAGS][IMU_ID_DELAYS];
 	float fs[IMU_ID_DELAYS], ts[IMU_ID_DELAYS]; /* each delay's force and torque sums (fz, tz) */
