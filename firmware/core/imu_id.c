@@ -34,7 +34,7 @@ static void set_grid(struct imu_id *m)
 		m->a[l] = expf(-m->cfg.dt_s / lag_tau(m, l));
 }
 
-/* the lag whose patterns' responses the rings keep: the clusters' hypothesis after the
+/* the lag whose patterns' responses advance computes: the clusters' hypothesis after the
  * refinement (refine), the grid's centre */
 #define CL_LAG (IMU_ID_LAGS / 2u)
 #define AGE (IMU_ID_DELAYS - 1u) /* the bank's regressors' age: the filters' input is this old */
@@ -282,7 +282,7 @@ static void pinned(const struct imu_id *m, const float gs[NT], const float *bs, 
 	}
 }
 
-/* The centred basis (regs) to the parameters': theta = T theta'. With the curve estimated,
+/* The centred basis (xmap) to the parameters': theta = T theta'. With the curve estimated,
  * A = a' - 2 y_h B, A d = g' - 2 y_h B d, D = delta' - y_h S a' + y_h^2 S B; else
  * k_f = a', D = delta' - x_r(y_h) a'. */
 static void basis(const struct imu_id *m, float t[NP][NP])
@@ -359,7 +359,7 @@ static float fit(const struct imu_id *m, const float gs[NT], const float bs[NP],
 }
 
 /* the coefficients (r0, r1) of the reference model's regressor on the centred x0 and x1
- * (regs): x_r = x_r(y_h) + r0 x0 + r1 x1, and x_r(y_h) */
+ * (xmap): x_r = x_r(y_h) + r0 x0 + r1 x1, and x_r(y_h) */
 static float ref_coef(const struct imu_id *m, float *r0, float *r1)
 {
 	const struct imu_id_cfg *c = &m->cfg;

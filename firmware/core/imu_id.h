@@ -7,28 +7,28 @@
  * Model: rotor j's throttle acts after D whole frames through a first-order lag tau (y_j);
  * the rotors together push F = m a_z = k_f sum_j s_j g(y_j), with g(y) = (1 - c) y + c y^2
  * and s_j the per-rotor effectiveness taken as known (MOT_SCALE, or from the refinement on the
- * scales imu_id_set_scales gave). Linear in (A, B) =
- * (k_f (1 - c), k_f c) with the regressors x1 = sum s_j y_j, x2 = sum s_j y_j^2; the lag
- * filters are linear and time-invariant, so a delayed hypothesis is the undelayed filter's
- * output read D frames late. The filters run on the throttles of IMU_ID_DELAYS - 1 frames
- * before (one filter per rotor and grid point), and the bank pairs those regressors with the
- * force D frames after them: every delay then uses the same regressors, whose products
- * x x' one set of sums per lag holds, and only the products with the force are kept per
- * hypothesis. Each (D, tau) hypothesis keeps them relative to a reference model (the prior
- * k_f and curve), which keeps them well conditioned in float.
+ * scales imu_id_set_scales gave). Linear in (A, B) = (k_f (1 - c), k_f c) with the
+ * regressors x1 = sum s_j y_j, x2 = sum s_j y_j^2; the lag filters are linear and
+ * time-invariant, so a delayed hypothesis is the undelayed filter's output read D frames
+ * late. The filters run on the throttles of IMU_ID_DELAYS - 1 frames before (one filter per
+ * rotor and grid point), and the bank pairs those regressors with the force D frames after
+ * them: every delay regresses on the same regressors, so their products x x' are one set of
+ * sums per lag, and each hypothesis keeps only its products with its own force and its
+ * residual's square, relative to a reference model (the prior k_f and curve), which keeps
+ * them well conditioned in float.
  *
  * Refinement: at IMU_ID_FREEZE of the planned frames the lag grid narrows to
  * +/- IMU_ID_FINE_HALF of its steps about the lag found so far (the Gauss-Newton step below
- * is first order: between the first grid's points it leaves an error of up to half a
- * percent in k_f); the filters start from the old grid's states interpolated, and the sums
- * restart once the regressors are the new grid's.
+ * is first order: between the first grid's points it leaves an error of several tenths of
+ * a percent in k_f); the filters start from the old grid's states interpolated, and the sums
+ * restart with the first frame whose regressors and forces all come after it.
  *
  * Choice: the hypothesis of least residual. Each hypothesis also carries the lag's
  * sensitivities x3 = d x1 / d ln tau and x4 = d x2 / d ln tau (central differences across
- * the grid, second order at its ends): d F / d ln tau = A x3 + B x4 for any curve, so the least squares
- * over (x1, x2, x3, x4, 1) is a Gauss-Newton step in ln tau from the grid point (A d ln tau
- * and B d ln tau are linear parameters), and tau, k_f and c come with their joint
- * covariance.
+ * the grid, second order at its ends): d F / d ln tau = A x3 + B x4 for any curve, so the
+ * least squares over (x1, x2, x3, x4, 1) is a Gauss-Newton step in ln tau from the grid
+ * point (A d ln tau and B d ln tau are linear parameters), and tau, k_f and c come with their
+ * joint covariance.
  *
  * Both sides pass through the same [1 2 1] / 4 smoother first: its zero at half the frame
  * rate removes the vibration of rotors turning near half the frame rate (a hover), and a
@@ -66,14 +66,14 @@
 
 #define IMU_ID_ROTORS 8
 #define IMU_ID_DELAYS 5 /* 0..4 frames beyond the loop's one */
-#define IMU_ID_LAGS 20  /* log grid IMU_ID_TAU_MIN .. IMU_ID_TAU_MAX, refined at IMU_ID_FREEZE */
+#define IMU_ID_LAGS 16  /* log grid IMU_ID_TAU_MIN .. IMU_ID_TAU_MAX, refined at IMU_ID_FREEZE */
 #define IMU_ID_TAU_MIN 0.005f
 #define IMU_ID_TAU_MAX 0.25f
 #define IMU_ID_BLOCKS 32    /* clusters of the variance (merged in pairs when full) */
 #define IMU_ID_VEL_SD 0.05f /* the velocity's error at either end of the calibration, m/s */
 #define IMU_ID_FREEZE \
 	0.2f /* share of the planned frames after which the grid refines and the clusters' hypothesis freezes */
-#define IMU_ID_FINE_HALF 2.5f /* the refined grid's half-width, in steps of the first grid */
+#define IMU_ID_FINE_HALF 2.0f /* the refined grid's half-width, in steps of the first grid */
 
 /* parameters: A (or k_f), B, A d ln tau, B d ln tau, the accelerometer's offset */
 #define IMU_ID_NP 5
