@@ -369,16 +369,26 @@ static float ref_coef(const struct imu_id *m, float *r0, float *r1)
 	return ref_x(c, yh * s, yh * yh * s);
 }
 
-/* hypothesis (d, l)'s sums: its lag's G, the count n_st, its own b and z'z; the offset's b
- * is the delay's force sum less the reference's over the lag's frames (the force rings hold
- * f less k_f0 x_r(y_h); the lag's G holds the sums of x0 and x1) */
+static float sens(const float s[IMU_ID_LAGS], unsigned l, float ih);
+
+/* hypothesis (d, l)'s sums: its lag's G (the sums of x2 and x3 are the sensitivities of the
+ * sums of x0 and x1 across the grid, as x2 and x3 are of x0 and x1: bank_take), the count
+ * n_st, its own b and z'z; the offset's b is the delay's force sum less the reference's over
+ * the lag's frames (the force rings hold f less k_f0 x_r(y_h); G holds the sums of x0, x1) */
 static void hyp_stat(const struct imu_id *m, unsigned d, unsigned l, struct imu_id_stat *s)
 {
 	const struct imu_id_hyp *h = &m->hs[l][d];
-	float r0, r1;
+	float r0, r1, s0[IMU_ID_LAGS], s1[IMU_ID_LAGS], ih = 0.5f / m->lstep;
 	ref_coef(m, &r0, &r1);
-	memcpy(s->g, m->gx[l], sizeof m->gx[l]);
-	s->g[NT - 1u] = (float)m->n_st;
+	for (unsigned k = 0; k < IMU_ID_LAGS; k++) {
+		s0[k] = m->gx[k][ut(0, P_OFS)];
+		s1[k] = m->gx[k][ut(P_B, P_OFS)];
+	}
+	memcpy(s->g, m->gx[l], ut(P_LA, P_OFS) * sizeof s->g[0]); /* up to (2, 3) */
+	s->g[ut(P_LA, P_OFS)] = sens(s0, l, ih);
+	s->g[ut(P_LB, P_LB)] = m->gx[l][ut(P_LA, P_OFS)];
+	s->g[ut(P_LB, P_OFS)] = sens(s1, l, ih);
+	s->g[ut(P_OFS, P_OFS)] = (float)m->n_st;
 	float sx = r0 * s->g[ut(0, P_OFS)] + r1 * s->g[ut(P_B, P_OFS)];
 	for (unsigned i = 0; i < P_OFS; i++) {
 		s->b[i] = h->b[i];
@@ -474,11 +484,17 @@ static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl, float j
 /* The centred regressors (basis) as a linear map of the smoothed sums (x1, x2) and of their
  * sensitivities (x3, x4): x0 = k0 x1 + k1 x2 + k2, x1 = k3 x1 + k4 x2 + k5, x2 = k0 x3 + k1 x4,
  * x3 = k3 x3 + k4 x4. With the curve estimated (x1 - y_h S, sum s (y - y_h)^2, x3,
- * x4 - 2 y_h x3), else (the reference's less its value at y_h, 0, its sensitivity, 0). */
-static void xmap(const struct imu_id *m, float k[6])
+ * x4 - 2 y_h x3), else (the reference's less its value at y_h, 0, its sensitivity, 0). With
+ * it the reference model's regressor (ref_coef: r0, r1, x_r(y_h) in xh) and 1 / (2 h), h the
+ * grid's step, for the sensitivities. */
+struct xmap {
+	float k[6], r0, r1, xh, ih;
+};
+
+static void xmap(const struct imu_id *m, struct xmap *x)
 {
 	const struct imu_id_cfg *c = &m->cfg;
-	float yh = m->yh, s = m->ssum;
+	float yh = m->yh, s = m->ssum, *k = x->k;
 	if (c->est_curve) {
 		k[0] = 1.0f;
 		k[1] = 0.0f;
@@ -492,39 +508,41 @@ static void xmap(const struct imu_id *m, float k[6])
 		k[2] = -ref_x(c, yh * s, yh * yh * s);
 		k[3] = k[4] = k[5] = 0.0f;
 	}
+	x->xh = ref_coef(m, &x->r0, &x->r1);
+	x->ih = 0.5f / m->lstep;
 }
 
-/* the sensitivities of the smoothed sums s (x1 or x2) to ln tau: central differences across
- * the grid, second order at its ends */
-static void sens(const struct imu_id *m, const float s[IMU_ID_LAGS], float d[IMU_ID_LAGS])
+/* the sensitivity of the smoothed sums s (x1 or x2) to ln tau at lag l: a central difference
+ * across the grid, second order at its ends */
+static float sens(const float s[IMU_ID_LAGS], unsigned l, float ih)
 {
 	_Static_assert(IMU_ID_LAGS >= 3, "the differences need three lags");
-	float ih = 0.5f / m->lstep;
-	for (unsigned l = 1; l + 1u < IMU_ID_LAGS; l++)
-		d[l] = ih * (s[l + 1u] - s[l - 1u]);
 	const unsigned e = IMU_ID_LAGS - 1u;
-	d[0] = ih * (4.0f * s[1] - 3.0f * s[0] - s[2]);
-	d[e] = ih * (3.0f * s[e] - 4.0f * s[e - 1u] + s[e - 2u]);
+	if (l == 0u)
+		return ih * (4.0f * s[1] - 3.0f * s[0] - s[2]);
+	if (l == e)
+		return ih * (3.0f * s[e] - 4.0f * s[e - 1u] + s[e - 2u]);
+	return ih * (s[l + 1u] - s[l - 1u]);
 }
 
-/* lag l's centred regressors (xmap k; the offset's 1 implied) of the frame AGE old */
-static void lag_x(const float k[6], const float s[2][IMU_ID_LAGS], const float d[2][IMU_ID_LAGS], unsigned l,
-		  float x[NP - 1u])
+/* lag l's centred regressors (the offset's 1 implied) of the frame AGE old */
+static void lag_x(const struct xmap *xm, const float s[2][IMU_ID_LAGS], unsigned l, float x[NP - 1u])
 {
+	const float *k = xm->k, d0 = sens(s[0], l, xm->ih), d1 = sens(s[1], l, xm->ih);
 	x[0] = k[0] * s[0][l] + k[1] * s[1][l] + k[2];
 	x[P_B] = k[3] * s[0][l] + k[4] * s[1][l] + k[5];
-	x[P_LA] = k[0] * d[0][l] + k[1] * d[1][l];
-	x[P_LB] = k[3] * d[0][l] + k[4] * d[1][l];
+	x[P_LA] = k[0] * d0 + k[1] * d1;
+	x[P_LB] = k[3] * d0 + k[4] * d1;
 }
 
-/* the regressors of the frame AGE old (from its smoothed sums s and their sensitivities d)
- * into every hypothesis: the products x x' into their lag's sums, the products with the
- * force of each delay (less the reference model's prediction from x) into the hypothesis' own */
-static void bank_take(struct imu_id *m, const float k[6], const float s[2][IMU_ID_LAGS], const float d[2][IMU_ID_LAGS])
+/* the regressors of the frame AGE old (from its smoothed sums s) into every hypothesis: the
+ * products x x' into their lag's sums, the products with the force of each delay (less the
+ * reference model's prediction from x) into the hypothesis' own */
+static void bank_take(struct imu_id *m, const struct xmap *xm, const float s[2][IMU_ID_LAGS])
 {
 	const struct imu_id_cfg *c = &m->cfg;
-	float r0, r1, fd[IMU_ID_DELAYS], td[IMU_ID_DELAYS];
-	ref_coef(m, &r0, &r1);
+	const float *k = xm->k, r0 = xm->r0, r1 = xm->r1, ih = xm->ih;
+	float fd[IMU_ID_DELAYS], td[IMU_ID_DELAYS];
 	for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
 		fd[q] = m->fz[meas_slot(m, AGE - q)];
 		td[q] = m->tz[meas_slot(m, AGE - q)];
@@ -534,9 +552,17 @@ static void bank_take(struct imu_id *m, const float k[6], const float s[2][IMU_I
 	m->n_st++;
 	_Static_assert(NP == 5 && NT == 15, "bank_take is written out for five parameters");
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-		/* lag_x, written out */
+		/* lag_x, written out (the grid's ends by sens) */
+		float d0, d1;
+		if (l - 1u < IMU_ID_LAGS - 2u) {
+			d0 = ih * (s[0][l + 1u] - s[0][l - 1u]);
+			d1 = ih * (s[1][l + 1u] - s[1][l - 1u]);
+		} else {
+			d0 = sens(s[0], l, ih);
+			d1 = sens(s[1], l, ih);
+		}
 		const float x0 = k[0] * s[0][l] + k[1] * s[1][l] + k[2], x1 = k[3] * s[0][l] + k[4] * s[1][l] + k[5];
-		const float x2 = k[0] * d[0][l] + k[1] * d[1][l], x3 = k[3] * d[0][l] + k[4] * d[1][l];
+		const float x2 = k[0] * d0 + k[1] * d1, x3 = k[3] * d0 + k[4] * d1;
 		const float xr = r0 * x0 + r1 * x1;
 		float *g = m->gx[l];
 		g[0] += x0 * x0;
@@ -550,9 +576,7 @@ static void bank_take(struct imu_id *m, const float k[6], const float s[2][IMU_I
 		g[8] += x1;
 		g[9] += x2 * x2;
 		g[10] += x2 * x3;
-		g[11] += x2;
-		g[12] += x3 * x3;
-		g[13] += x3;
+		g[11] += x3 * x3;
 		float kx = c->kf0 * xr;
 #pragma GCC unroll 5
 		for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
@@ -583,16 +607,15 @@ static void bank_take(struct imu_id *m, const float k[6], const float s[2][IMU_I
 /* the frozen hypothesis' frame into its block (a full set of blocks merges in pairs), and its
  * products with the two patterns' responses into the scales' check (whose other sums are the
  * blocks') */
-static void cl_add(struct imu_id *m, const float xk[6], const float s[2][IMU_ID_LAGS], const float d[2][IMU_ID_LAGS])
+static void cl_add(struct imu_id *m, const struct xmap *xm, const float s[2][IMU_ID_LAGS])
 {
-	float r0, r1, xx[IMU_ID_NX];
-	ref_coef(m, &r0, &r1);
-	lag_x(xk, s, d, m->cl_l, xx);
+	float xx[IMU_ID_NX];
+	lag_x(xm, s, m->cl_l, xx);
 	xx[P_OFS] = 1.0f;
 	xx[NP] = m->qs[0];
 	xx[NP + 1u] = m->qs[1];
 	/* the rings hold f less k_f0 x_r(y_h): z = f - k_f0 x_r */
-	float xr = r0 * xx[0] + r1 * xx[P_B];
+	float xr = xm->r0 * xx[0] + xm->r1 * xx[P_B];
 	unsigned a = meas_slot(m, AGE - m->cl_d);
 	float z = m->fz[a] - m->cfg.kf0 * xr, zt = m->tz[a] - m->cfg.kt0 * xr;
 	for (unsigned i = 0; i < IMU_ID_NX; i++) {
@@ -758,21 +781,18 @@ void imu_id_process(struct imu_id *m)
 	m->n_exc++;
 	m->ff += f * f;
 	const struct imu_id_cfg *c = &m->cfg;
-	float r0, r1, xh = ref_coef(m, &r0, &r1);
-	push_meas(m, f - c->kf0 * xh, t - c->kt0 * xh, true);
+	struct xmap xm;
+	xmap(m, &xm);
+	push_meas(m, f - c->kf0 * xm.xh, t - c->kt0 * xm.xh, true);
 	if (m->fok != (1u << IMU_ID_DELAYS) - 1u)
 		return; /* a delay's force is not all taken frames' */
-	float k[6], d[2][IMU_ID_LAGS];
-	xmap(m, k);
-	sens(m, s[0], d[0]);
-	sens(m, s[1], d[1]);
-	bank_take(m, k, s, d);
+	bank_take(m, &xm, s);
 	if (!m->refined && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_st >= 30u) {
 		refine(m);
 		return;
 	}
 	if (m->cl_on)
-		cl_add(m, k, s, d);
+		cl_add(m, &xm, s);
 }
 
 /* The clusters' variance factor for the projection j of the parameters: the cluster-robust

@@ -141,7 +141,9 @@ struct imu_id {
 	 * IMU_ID_DELAYS - 1 when all are, delay D with the force of age IMU_ID_DELAYS - 1 - D */
 	float fz[IMU_ID_DELAYS], tz[IMU_ID_DELAYS]; /* the frame of age k in slot (fh + k) % IMU_ID_DELAYS */
 	uint8_t fh, fok;
-	float gx[IMU_ID_LAGS][IMU_ID_NT - 1]; /* each lag's G but its last (the count, n_st) */
+	/* each lag's G up to (2, 3), then (3, 3): the sums of x2 and x3 follow from those of x0
+	 * and x1 (imu_id.c: hyp_stat), the count is n_st */
+	float gx[IMU_ID_LAGS][IMU_ID_NT - 3];
 	struct imu_id_hyp hs[IMU_ID_LAGS][IMU_ID_DELAYS];
 	float fs[IMU_ID_DELAYS], ts[IMU_ID_DELAYS]; /* each delay's force and torque sums (fz, tz) */
 	/* the still frames' force: its count, mean and spread (the noise, about the mean) */
