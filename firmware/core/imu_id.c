@@ -536,8 +536,9 @@ static void lag_x(const struct xmap *xm, const float s[2][IMU_ID_LAGS], unsigned
 }
 
 /* the regressors of the frame AGE old (from its smoothed sums s) into every hypothesis: the
- * products x x' into their lag's sums, the products with the force of each delay (less the
- * reference model's prediction from x) into the hypothesis' own */
+ * products x x' and the sums of x0 and x1 into their lag's sums (hyp_stat derives those of
+ * x2 and x3), the products with the force of each delay (less the reference model's
+ * prediction from x) into the hypothesis' own */
 static void bank_take(struct imu_id *m, const struct xmap *xm, const float s[2][IMU_ID_LAGS])
 {
 	const struct imu_id_cfg *c = &m->cfg;
