@@ -30,75 +30,97 @@ static float lag_tau(const struct imu_id *m, unsigned l) { return expf(m->ln0 + 
 /* the lags' poles for the grid (ln0, lstep) */
 static void set_grid(struct imu_id *m)
 {
-	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-		float r = m->cfg.dt_s / lag_tau(m, l);
-		m->a[l] = expf(-r);
-		m->da[l] = m->a[l] * r; /* a = exp(-dt e^-ln tau) */
-	}
+	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
+		m->a[l] = expf(-m->cfg.dt_s / lag_tau(m, l));
 }
 
-/* the lag whose patterns' responses the rings keep: the clusters' hypothesis after the
+/* the lag whose patterns' responses advance computes: the clusters' hypothesis after the
  * refinement (refine), the grid's centre */
 #define CL_LAG (IMU_ID_LAGS / 2u)
+#define AGE (IMU_ID_DELAYS - 1u) /* the bank's regressors' age: the filters' input is this old */
 
 static float smooth(const float *r) { return 0.25f * (r[0] + 2.0f * r[1] + r[2]); }
 
-static void push3(float r[3], float v)
+/* the [1 2 1] / 4 smoother of a series: r holds its last input and the last two's sum; v in,
+ * the smoothed value out */
+static float smooth_in(float r[2], float v)
 {
-	r[2] = r[1];
-	r[1] = r[0];
+	float p = v + r[0], o = 0.25f * (p + r[1]);
 	r[0] = v;
+	r[1] = p;
+	return o;
 }
 
-static void regs(const struct imu_id *m, unsigned l, float x[NP], float *xr);
-
-/* the lag filters and their sensitivities, their sums, and the newest frame's smoothed
- * regressors into the slot of age 0 (the oldest's, which the delays drop): a delay d reads
- * the regressors computed d frames before, the same numbers as from the sums d frames old */
-static void advance(struct imu_id *m, const float u[IMU_ID_ROTORS])
+/* the throttles into the queue and the lag filters on the ones AGE frames before (each rotor's
+ * scaled by the square root of its scale: x2 is the sum of the outputs' squares; x1 from the
+ * scaled throttles' sum, the filters being linear); x1 and x2 smoothed into s, and
+ * the patterns' responses into qs */
+static void advance(struct imu_id *m, const float u_new[IMU_ID_ROTORS], float s[2][IMU_ID_LAGS])
 {
 	const struct imu_id_cfg *c = &m->cfg;
-	unsigned h = m->xh ? m->xh - 1u : IMU_ID_DELAYS - 1u;
-	m->xh = (uint8_t)h;
+	float u[IMU_ID_ROTORS], us = 0.0f;
+	float *uq = m->uq[m->uqh];
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
+		u[j] = m->rs[j] * uq[j];
+		us += c->scale[j] * uq[j];
+		uq[j] = u_new[j];
+	}
+	m->uqh = (uint8_t)(m->uqh + 1u < AGE ? m->uqh + 1u : 0u);
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-		float a = m->a[l], da = m->da[l], s1 = 0.0f, s2 = 0.0f, s3 = 0.0f, s4 = 0.0f;
+		float a = m->a[l], b = 1.0f - a, q = 0.0f, *y = m->y[l];
+#pragma GCC unroll 8
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
-			float y0 = m->y[l][j];
-			/* y = a y0 + (1 - a) u: d y / d ln tau = a w0 + (d a / d ln tau) (y0 - u) */
-			float w = a * m->w[l][j] + da * (y0 - u[j]);
-			float y = a * y0 + (1.0f - a) * u[j];
-			m->y[l][j] = y;
-			m->w[l][j] = w;
-			float sj = c->scale[j];
-			s1 += sj * y;
-			s2 += sj * y * y;
-			s3 += sj * w;
-			s4 += 2.0f * sj * y * w;
+			float v = a * y[j] + b * u[j];
+			y[j] = v;
+			q += v * v;
 		}
-		push3(m->x1[l], s1);
-		push3(m->x2[l], s2);
-		push3(m->x3[l], s3);
-		push3(m->x4[l], s4);
-		float *xc = m->xc[l][h];
-		regs(m, l, xc, &xc[NP]);
+		float yc = a * m->yc[l] + b * us;
+		m->yc[l] = yc;
+		s[0][l] = smooth_in(m->x1[l], yc);
+		s[1][l] = smooth_in(m->x2[l], q);
 	}
 	float p1 = 0.0f, p2 = 0.0f;
 	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
-		float sj = c->scale[j], y = m->y[CL_LAG][j];
-		p1 += c->pat[0][j] * sj * y;
-		p2 += c->pat[1][j] * sj * y;
+		float sy = m->rs[j] * m->y[CL_LAG][j];
+		p1 += c->pat[0][j] * sy;
+		p2 += c->pat[1][j] * sy;
 	}
-	push3(m->q1, p1);
-	push3(m->q2, p2);
-	m->qc[0][h] = smooth(m->q1);
-	m->qc[1][h] = smooth(m->q2);
+	m->qs[0] = smooth_in(m->q1, p1);
+	m->qs[1] = smooth_in(m->q2, p2);
 }
 
-/* the slots of the frames of age 0 .. IMU_ID_DELAYS - 1 */
-static void age_slots(const struct imu_id *m, unsigned ix[IMU_ID_DELAYS])
+/* the frame's smoothed force and torque (less the reference at hover) into the rings by age;
+ * ok: the frame is taken (excited, the smoother full) */
+static void push_meas(struct imu_id *m, float f, float t, bool ok)
 {
-	for (unsigned k = 0, i = m->xh; k < IMU_ID_DELAYS; k++, i = i + 1u < IMU_ID_DELAYS ? i + 1u : 0u)
-		ix[k] = i;
+	m->fh = (uint8_t)(m->fh ? m->fh - 1u : IMU_ID_DELAYS - 1u);
+	m->fz[m->fh] = f;
+	m->tz[m->fh] = t;
+	m->fok = (uint8_t)(((unsigned)m->fok << 1 | (ok ? 1u : 0u)) & ((1u << IMU_ID_DELAYS) - 1u));
+}
+
+/* the rings' slot of the frame of age k */
+static unsigned meas_slot(const struct imu_id *m, unsigned k)
+{
+	unsigned i = m->fh + k;
+	return i < IMU_ID_DELAYS ? i : i - IMU_ID_DELAYS;
+}
+
+/* the square roots of the scales, which the filters' outputs carry */
+static void set_rs(struct imu_id *m)
+{
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		m->rs[j] = sqrtf(m->cfg.scale[j]);
+}
+
+/* lag l's filters at the outputs v (unscaled) */
+static void set_lag(struct imu_id *m, unsigned l, const float v[IMU_ID_ROTORS])
+{
+	m->yc[l] = 0.0f;
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
+		m->y[l][j] = m->rs[j] * v[j];
+		m->yc[l] += m->cfg.scale[j] * v[j];
+	}
 }
 
 void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t thr0[IMU_ID_ROTORS])
@@ -114,9 +136,9 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 	m->ln0 = logf(IMU_ID_TAU_MIN);
 	m->lstep = logf(IMU_ID_TAU_MAX / IMU_ID_TAU_MIN) / (float)(IMU_ID_LAGS - 1);
 	set_grid(m);
+	set_rs(m);
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
-		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-			m->y[l][j] = u[j];
+		set_lag(m, l, u);
 	/* the centring point: the start's mean throttle and the scales' sum; and the reference
 	 * model made to carry the weight there (k_f from the prior's curve and the mass), so that
 	 * the responses relative to it stay small: both keep the float sums' precision */
@@ -128,8 +150,13 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 	}
 	m->yh = yh;
 	m->ssum = ss;
-	for (unsigned d = 0; d < IMU_ID_RING; d++)
-		advance(m, u); /* the steady state, each delay's regressors from three frames */
+	for (unsigned k = 0; k < AGE; k++)
+		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+			m->uq[k][j] = u[j];
+	for (unsigned k = 0; k < 3u; k++) {
+		float s[2][IMU_ID_LAGS];
+		advance(m, u, s); /* the steady state in the smoother's rings */
+	}
 	float kr = gs > 0.0f ? m->cfg.mass_kg * m->cfg.g / gs : 0.0f;
 	if (isfinite(kr) && kr > 0.0f && m->cfg.kf0 > 0.0f) {
 		m->cfg.kt0 *= kr / m->cfg.kf0;
@@ -162,14 +189,17 @@ void imu_id_hold(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS])
 }
 
 /* the lost frames counted by imu_id_hold: the filters run on what the plant held, the
- * calibration takes the last frame's force for each, and the smoother restarts */
+ * calibration takes the last frame's force for each, the smoother restarts and the bank
+ * takes no regressors the lost frames' force would pair with */
 static void holds_take(struct imu_id *m)
 {
 	for (; m->n_hold > 0u; m->n_hold--) {
 		float u[IMU_ID_ROTORS];
+		float s[2][IMU_ID_LAGS];
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
 			u[j] = sc_to_float(m->h_thr[j]);
-		advance(m, u);
+		advance(m, u, s);
+		push_meas(m, 0.0f, 0.0f, false);
 		if (m->n_cal > 0u) {
 			m->fw_sum += m->fw_last;
 			m->n_cal++;
@@ -252,7 +282,7 @@ static void pinned(const struct imu_id *m, const float gs[NT], const float *bs, 
 	}
 }
 
-/* The centred basis (regs) to the parameters': theta = T theta'. With the curve estimated,
+/* The centred basis (xmap) to the parameters': theta = T theta'. With the curve estimated,
  * A = a' - 2 y_h B, A d = g' - 2 y_h B d, D = delta' - y_h S a' + y_h^2 S B; else
  * k_f = a', D = delta' - x_r(y_h) a'. */
 static void basis(const struct imu_id *m, float t[NP][NP])
@@ -328,18 +358,64 @@ static float fit(const struct imu_id *m, const float gs[NT], const float bs[NP],
 	return j;
 }
 
-/* a hypothesis' force fit (fit), as the parameters */
-static float hyp_solve(const struct imu_id *m, const struct imu_id_stat *s, float th[NP], float h[NP][NP])
+/* the coefficients (r0, r1) of the reference model's regressor on the centred x0 and x1
+ * (xmap): x_r = x_r(y_h) + r0 x0 + r1 x1, and x_r(y_h) */
+static float ref_coef(const struct imu_id *m, float *r0, float *r1)
 {
-	float j = fit(m, s->g, s->b, s->rr, th, h);
+	const struct imu_id_cfg *c = &m->cfg;
+	float yh = m->yh, s = m->ssum;
+	*r0 = c->est_curve ? 1.0f - c->curve0 + 2.0f * c->curve0 * yh : 1.0f;
+	*r1 = c->est_curve ? c->curve0 : 0.0f;
+	return ref_x(c, yh * s, yh * yh * s);
+}
+
+static float sens(const float s[IMU_ID_LAGS], unsigned l, float ih);
+
+/* hypothesis (d, l)'s sums: its lag's G (the sums of x2 and x3 are the sensitivities of the
+ * sums of x0 and x1 across the grid, as x2 and x3 are of x0 and x1: bank_take), the count
+ * n_st, its own b and z'z; the offset's b is the delay's force sum less the reference's over
+ * the lag's frames (the force rings hold f less k_f0 x_r(y_h); G holds the sums of x0, x1) */
+static void hyp_stat(const struct imu_id *m, unsigned d, unsigned l, struct imu_id_stat *s)
+{
+	const struct imu_id_hyp *h = &m->hs[l][d];
+	float r0, r1, s0[IMU_ID_LAGS], s1[IMU_ID_LAGS], ih = 0.5f / m->lstep;
+	ref_coef(m, &r0, &r1);
+	for (unsigned k = 0; k < IMU_ID_LAGS; k++) {
+		s0[k] = m->gx[k][ut(0, P_OFS)];
+		s1[k] = m->gx[k][ut(P_B, P_OFS)];
+	}
+	memcpy(s->g, m->gx[l], ut(P_LA, P_OFS) * sizeof s->g[0]); /* up to (2, 3) */
+	s->g[ut(P_LA, P_OFS)] = sens(s0, l, ih);
+	s->g[ut(P_LB, P_LB)] = m->gx[l][ut(P_LA, P_OFS)];
+	s->g[ut(P_LB, P_OFS)] = sens(s1, l, ih);
+	s->g[ut(P_OFS, P_OFS)] = (float)m->n_st;
+	float sx = r0 * s->g[ut(0, P_OFS)] + r1 * s->g[ut(P_B, P_OFS)];
+	for (unsigned i = 0; i < P_OFS; i++) {
+		s->b[i] = h->b[i];
+		s->bt[i] = h->bt[i];
+	}
+	s->b[P_OFS] = m->fs[d] - m->cfg.kf0 * sx;
+	s->bt[P_OFS] = m->ts[d] - m->cfg.kt0 * sx;
+	s->rr = h->rr;
+	s->rrt = h->rrt;
+}
+
+/* hypothesis (d, l)'s force fit (fit), as the parameters */
+static float hyp_solve(const struct imu_id *m, unsigned d, unsigned l, float th[NP], float h[NP][NP])
+{
+	struct imu_id_stat s;
+	hyp_stat(m, d, l, &s);
+	float j = fit(m, s.g, s.b, s.rr, th, h);
 	to_params(m, th, h);
 	return j;
 }
 
 /* the same hypothesis' torque fit */
-static float hyp_solve_tq(const struct imu_id *m, const struct imu_id_stat *s, float th[NP], float h[NP][NP])
+static float hyp_solve_tq(const struct imu_id *m, unsigned d, unsigned l, float th[NP], float h[NP][NP])
 {
-	float j = fit(m, s->g, s->bt, s->rrt, th, h);
+	struct imu_id_stat s;
+	hyp_stat(m, d, l, &s);
+	float j = fit(m, s.g, s.bt, s.rrt, th, h);
 	to_params(m, th, h);
 	return j;
 }
@@ -393,8 +469,9 @@ static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl, float j
 	*bl = 0;
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
 		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-			const struct imu_id_stat *st = &m->st[d][l];
-			float th[NP], h[NP][NP], j = fit(m, st->g, st->b, st->rr, th, h); /* hyp_solve's residual */
+			struct imu_id_stat st;
+			hyp_stat(m, d, l, &st);
+			float th[NP], h[NP][NP], j = fit(m, st.g, st.b, st.rr, th, h); /* hyp_solve's residual */
 			jr[d][l] = j;
 			if (j < best) {
 				best = j;
@@ -404,50 +481,152 @@ static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl, float j
 		}
 }
 
-/* the newest frame's smoothed regressors of lag l, centred at the start's hover (basis):
- * with the curve estimated (x1 - y_h S, sum s (y - y_h)^2, x3, sum 2 s (y - y_h) w, 1), else
- * (the reference's less its value at y_h, 0, its sensitivity, 0, 1); xr: the reference
- * model's regressor */
-static void regs(const struct imu_id *m, unsigned l, float x[NP], float *xr)
+/* The centred regressors (basis) as a linear map of the smoothed sums (x1, x2) and of their
+ * sensitivities (x3, x4): x0 = k0 x1 + k1 x2 + k2, x1 = k3 x1 + k4 x2 + k5, x2 = k0 x3 + k1 x4,
+ * x3 = k3 x3 + k4 x4. With the curve estimated (x1 - y_h S, sum s (y - y_h)^2, x3,
+ * x4 - 2 y_h x3), else (the reference's less its value at y_h, 0, its sensitivity, 0). With
+ * it the reference model's regressor (ref_coef: r0, r1, x_r(y_h) in xh) and 1 / (2 h), h the
+ * grid's step, for the sensitivities. */
+struct xmap {
+	float k[6], r0, r1, xh, ih;
+};
+
+static void xmap(const struct imu_id *m, struct xmap *x)
 {
-	float s1 = smooth(m->x1[l]), s2 = smooth(m->x2[l]), yh = m->yh, s = m->ssum;
-	*xr = ref_x(&m->cfg, s1, s2);
-	float s3 = smooth(m->x3[l]), s4 = smooth(m->x4[l]);
-	if (m->cfg.est_curve) {
-		x[0] = s1 - yh * s;
-		x[P_B] = s2 - 2.0f * yh * s1 + yh * yh * s;
-		x[P_LA] = s3;
-		x[P_LB] = s4 - 2.0f * yh * s3;
+	const struct imu_id_cfg *c = &m->cfg;
+	float yh = m->yh, s = m->ssum, *k = x->k;
+	if (c->est_curve) {
+		k[0] = 1.0f;
+		k[1] = 0.0f;
+		k[2] = -yh * s;
+		k[3] = -2.0f * yh;
+		k[4] = 1.0f;
+		k[5] = yh * yh * s;
 	} else {
-		x[0] = *xr - ref_x(&m->cfg, yh * s, yh * yh * s);
-		x[P_B] = 0.0f;
-		x[P_LA] = ref_x(&m->cfg, s3, s4); /* (1 - c) x3 + c x4: g' known */
-		x[P_LB] = 0.0f;
+		k[0] = 1.0f - c->curve0;
+		k[1] = c->curve0;
+		k[2] = -ref_x(c, yh * s, yh * yh * s);
+		k[3] = k[4] = k[5] = 0.0f;
 	}
-	x[P_OFS] = 1.0f;
+	x->xh = ref_coef(m, &x->r0, &x->r1);
+	x->ih = 0.5f / m->lstep;
 }
 
-/* the frozen hypothesis' frame into its block; a full set of blocks merges in pairs; and
- * into the scales' check (the two patterns' responses beside the parameters) */
-static void cl_add(struct imu_id *m, float f, float tq)
+/* the sensitivity of the smoothed sums s (x1 or x2) to ln tau at lag l: a central difference
+ * across the grid, second order at its ends */
+static float sens(const float s[IMU_ID_LAGS], unsigned l, float ih)
 {
-	unsigned ix[IMU_ID_DELAYS];
-	age_slots(m, ix);
-	const float *x = m->xc[m->cl_l][ix[m->cl_d]];
-	float z = f - m->cfg.kf0 * x[NP], zt = tq - m->cfg.kt0 * x[NP];
-	float xx[IMU_ID_NX];
-	for (unsigned i = 0; i < NP; i++)
-		xx[i] = x[i];
-	xx[NP] = m->qc[0][ix[m->cl_d]];
-	xx[NP + 1u] = m->qc[1][ix[m->cl_d]];
-	for (unsigned i = 0; i < IMU_ID_NX; i++) {
-		for (unsigned k = 0; k < IMU_ID_NX; k++)
-			m->xg[i][k] += xx[i] * xx[k];
-		m->xb[i] += xx[i] * z;
+	_Static_assert(IMU_ID_LAGS >= 3, "the differences need three lags");
+	const unsigned e = IMU_ID_LAGS - 1u;
+	if (l == 0u)
+		return ih * (4.0f * s[1] - 3.0f * s[0] - s[2]);
+	if (l == e)
+		return ih * (3.0f * s[e] - 4.0f * s[e - 1u] + s[e - 2u]);
+	return ih * (s[l + 1u] - s[l - 1u]);
+}
+
+/* lag l's centred regressors (the offset's 1 implied) of the frame AGE old */
+static void lag_x(const struct xmap *xm, const float s[2][IMU_ID_LAGS], unsigned l, float x[NP - 1u])
+{
+	const float *k = xm->k, d0 = sens(s[0], l, xm->ih), d1 = sens(s[1], l, xm->ih);
+	x[0] = k[0] * s[0][l] + k[1] * s[1][l] + k[2];
+	x[P_B] = k[3] * s[0][l] + k[4] * s[1][l] + k[5];
+	x[P_LA] = k[0] * d0 + k[1] * d1;
+	x[P_LB] = k[3] * d0 + k[4] * d1;
+}
+
+/* the regressors of the frame AGE old (from its smoothed sums s) into every hypothesis: the
+ * products x x' and the sums of x0 and x1 into their lag's sums (hyp_stat derives those of
+ * x2 and x3), the products with the force of each delay (less the reference model's
+ * prediction from x) into the hypothesis' own */
+static void bank_take(struct imu_id *m, const struct xmap *xm, const float s[2][IMU_ID_LAGS])
+{
+	const struct imu_id_cfg *c = &m->cfg;
+	const float *k = xm->k, r0 = xm->r0, r1 = xm->r1, ih = xm->ih;
+	float fd[IMU_ID_DELAYS], td[IMU_ID_DELAYS];
+	for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
+		fd[q] = m->fz[meas_slot(m, AGE - q)];
+		td[q] = m->tz[meas_slot(m, AGE - q)];
+		m->fs[q] += fd[q];
+		m->ts[q] += td[q];
 	}
-	m->xrr += z * z;
+	m->n_st++;
+	_Static_assert(NP == 5 && NT == 15, "bank_take is written out for five parameters");
+	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
+		/* lag_x, written out (the grid's ends by sens) */
+		float d0, d1;
+		if (l - 1u < IMU_ID_LAGS - 2u) {
+			d0 = ih * (s[0][l + 1u] - s[0][l - 1u]);
+			d1 = ih * (s[1][l + 1u] - s[1][l - 1u]);
+		} else {
+			d0 = sens(s[0], l, ih);
+			d1 = sens(s[1], l, ih);
+		}
+		const float x0 = k[0] * s[0][l] + k[1] * s[1][l] + k[2], x1 = k[3] * s[0][l] + k[4] * s[1][l] + k[5];
+		const float x2 = k[0] * d0 + k[1] * d1, x3 = k[3] * d0 + k[4] * d1;
+		const float xr = r0 * x0 + r1 * x1;
+		float *g = m->gx[l];
+		g[0] += x0 * x0;
+		g[1] += x0 * x1;
+		g[2] += x0 * x2;
+		g[3] += x0 * x3;
+		g[4] += x0;
+		g[5] += x1 * x1;
+		g[6] += x1 * x2;
+		g[7] += x1 * x3;
+		g[8] += x1;
+		g[9] += x2 * x2;
+		g[10] += x2 * x3;
+		g[11] += x3 * x3;
+		float kx = c->kf0 * xr;
+#pragma GCC unroll 5
+		for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
+			struct imu_id_hyp *h = &m->hs[l][q];
+			float z = fd[q] - kx;
+			h->b[0] += x0 * z;
+			h->b[1] += x1 * z;
+			h->b[2] += x2 * z;
+			h->b[3] += x3 * z;
+			h->rr += z * z;
+		}
+		if (!c->torque)
+			continue;
+		kx = c->kt0 * xr;
+#pragma GCC unroll 5
+		for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
+			struct imu_id_hyp *h = &m->hs[l][q];
+			float z = td[q] - kx;
+			h->bt[0] += x0 * z;
+			h->bt[1] += x1 * z;
+			h->bt[2] += x2 * z;
+			h->bt[3] += x3 * z;
+			h->rrt += z * z;
+		}
+	}
+}
+
+/* the frozen hypothesis' frame into its block (a full set of blocks merges in pairs), and its
+ * products with the two patterns' responses into the scales' check (whose other sums are the
+ * blocks') */
+static void cl_add(struct imu_id *m, const struct xmap *xm, const float s[2][IMU_ID_LAGS])
+{
+	float xx[IMU_ID_NX];
+	lag_x(xm, s, m->cl_l, xx);
+	xx[P_OFS] = 1.0f;
+	xx[NP] = m->qs[0];
+	xx[NP + 1u] = m->qs[1];
+	/* the rings hold f less k_f0 x_r(y_h): z = f - k_f0 x_r */
+	float xr = xm->r0 * xx[0] + xm->r1 * xx[P_B];
+	unsigned a = meas_slot(m, AGE - m->cl_d);
+	float z = m->fz[a] - m->cfg.kf0 * xr, zt = m->tz[a] - m->cfg.kt0 * xr;
+	for (unsigned i = 0; i < IMU_ID_NX; i++) {
+		m->xq[i][0] += xx[i] * xx[NP];
+		m->xq[i][1] += xx[i] * xx[NP + 1u];
+	}
+	m->xbq[0] += xx[NP] * z;
+	m->xbq[1] += xx[NP + 1u] * z;
 	m->xn++;
-	stat_add(&m->blk[m->nb], x, z, zt, m->cfg.torque);
+	stat_add(&m->blk[m->nb], xx, z, zt, m->cfg.torque);
 	if (++m->cl_k < m->cl_len)
 		return;
 	m->cl_k = 0;
@@ -504,23 +683,25 @@ static void scales_take(struct imu_id *m)
 
 /* The grid's refinement: about the best hypothesis' lag (its Gauss-Newton step taken),
  * +/- IMU_ID_FINE_HALF of the first grid's steps, kept inside IMU_ID_TAU_MIN..MAX; each new
- * lag's filter state interpolated (in ln tau) between the old grid's; the sums restarted,
- * the clusters' hypothesis the best delay at the centre. */
+ * lag's filter state interpolated (in ln tau) between the old grid's; the sums restarted
+ * (from the frames whose force and regressors all come after it), the clusters' hypothesis
+ * the best delay at the centre. */
 static void refine(struct imu_id *m)
 {
 	unsigned bd, bl;
 	float jr[IMU_ID_DELAYS][IMU_ID_LAGS];
 	best_hyp(m, &bd, &bl, jr);
 	float th[NP], h[NP][NP], h0 = m->lstep;
-	hyp_solve(m, &m->st[bd][bl], th, h);
+	hyp_solve(m, bd, bl, th, h);
 	float dl = step_of(m, th);
 	dl = dl > h0 ? h0 : dl < -h0 ? -h0 : dl;
 	float lo = logf(IMU_ID_TAU_MIN), hi = logf(IMU_ID_TAU_MAX), half = IMU_ID_FINE_HALF * h0;
 	float c = m->ln0 + h0 * (float)bl + dl;
 	c = c - half < lo ? lo + half : c + half > hi ? hi - half : c;
-	float y[IMU_ID_LAGS][IMU_ID_ROTORS], w[IMU_ID_LAGS][IMU_ID_ROTORS], ln_old0 = m->ln0;
-	memcpy(y, m->y, sizeof y);
-	memcpy(w, m->w, sizeof w);
+	float y[IMU_ID_LAGS][IMU_ID_ROTORS], v[IMU_ID_LAGS][IMU_ID_ROTORS], ln_old0 = m->ln0;
+	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
+		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+			y[l][j] = m->y[l][j] / m->rs[j];
 	m->ln0 = c - half;
 	m->lstep = 2.0f * half / (float)(IMU_ID_LAGS - 1);
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
@@ -529,16 +710,20 @@ static void refine(struct imu_id *m)
 		unsigned i = (unsigned)q;
 		i = i >= IMU_ID_LAGS - 1u ? IMU_ID_LAGS - 2u : i;
 		float fq = q - (float)i;
-		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
-			m->y[l][j] = y[i][j] + fq * (y[i + 1u][j] - y[i][j]);
-			m->w[l][j] = w[i][j] + fq * (w[i + 1u][j] - w[i][j]);
-		}
+		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+			v[l][j] = y[i][j] + fq * (y[i + 1u][j] - y[i][j]);
 	}
 	set_grid(m);
 	scales_take(m);
-	memset(m->st, 0, sizeof m->st);
+	set_rs(m);
+	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
+		set_lag(m, l, v[l]);
+	memset(m->gx, 0, sizeof m->gx);
+	memset(m->hs, 0, sizeof m->hs);
+	memset(m->fs, 0, sizeof m->fs);
+	memset(m->ts, 0, sizeof m->ts);
 	m->n_st = 0;
-	m->skip = IMU_ID_SKIP;
+	m->fok = 0; /* the bank waits for the new grid's regressors and the new reference's force */
 	m->refined = true;
 	m->cl_d = (uint8_t)bd;
 	m->cl_l = (uint8_t)CL_LAG;
@@ -561,7 +746,8 @@ void imu_id_process(struct imu_id *m)
 		m->tq_lost = true;
 		qtq = 0.0f;
 	}
-	advance(m, thr);
+	float s[2][IMU_ID_LAGS];
+	advance(m, thr, s);
 	if (m->q_excited) { /* the calibration's sums: from the velocity before the first */
 		if (m->n_cal == 0u)
 			m->v0 = m->vz_prev;
@@ -577,10 +763,13 @@ void imu_id_process(struct imu_id *m)
 	m->tr[2] = m->tr[1];
 	m->tr[1] = m->tr[0];
 	m->tr[0] = qtq;
-	if (++m->n_fr < 3u)
-		return; /* the smoother fills */
+	if (++m->n_fr < 3u) {
+		push_meas(m, 0.0f, 0.0f, false); /* the smoother fills */
+		return;
+	}
 	float f = smooth(m->fr), t = smooth(m->tr);
 	if (!m->q_excited) {
+		push_meas(m, 0.0f, 0.0f, false);
 		float u = 0.0f;
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
 			u += thr[j];
@@ -592,25 +781,19 @@ void imu_id_process(struct imu_id *m)
 	}
 	m->n_exc++;
 	m->ff += f * f;
-	if (m->skip > 0u) {
-		m->skip--;
-		return;
-	}
-	m->n_st++;
 	const struct imu_id_cfg *c = &m->cfg;
-	unsigned ix[IMU_ID_DELAYS];
-	age_slots(m, ix);
-	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
-		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-			const float *x = m->xc[l][ix[d]];
-			stat_add(&m->st[d][l], x, f - c->kf0 * x[NP], t - c->kt0 * x[NP], c->torque);
-		}
+	struct xmap xm;
+	xmap(m, &xm);
+	push_meas(m, f - c->kf0 * xm.xh, t - c->kt0 * xm.xh, true);
+	if (m->fok != (1u << IMU_ID_DELAYS) - 1u)
+		return; /* a delay's force is not all taken frames' */
+	bank_take(m, &xm, s);
 	if (!m->refined && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_st >= 30u) {
 		refine(m);
 		return;
 	}
 	if (m->cl_on)
-		cl_add(m, f, t);
+		cl_add(m, &xm, s);
 }
 
 /* The clusters' variance factor for the projection j of the parameters: the cluster-robust
@@ -686,10 +869,21 @@ static void scales_check(const struct imu_id *m, float t[2])
 	t[0] = t[1] = 0.0f;
 	if (m->xn <= 2u * N)
 		return;
+	/* the parameters' sums are the blocks' (merging keeps them), the patterns' cl_add's */
+	double rr = 0.0;
 	for (unsigned i = 0; i < N; i++) {
-		b[i] = m->xb[i];
+		b[i] = i < NP ? 0.0 : (double)m->xbq[i - NP];
 		for (unsigned k = 0; k < N; k++)
-			a[i][k] = m->xg[i][k];
+			a[i][k] = k >= NP ? (double)m->xq[i][k - NP] : i >= NP ? (double)m->xq[k][i - NP] : 0.0;
+	}
+	for (unsigned q = 0; q <= m->nb && q <= IMU_ID_BLOCKS; q++) {
+		const struct imu_id_stat *s = &m->blk[q];
+		for (unsigned i = 0; i < NP; i++) {
+			b[i] += (double)s->b[i];
+			for (unsigned k = 0; k < NP; k++)
+				a[i][k] += (double)s->g[ut(i, k)];
+		}
+		rr += (double)s->rr;
 	}
 	if (!m->cfg.est_curve) {
 		for (unsigned q = 0; q < 2; q++) {
@@ -745,7 +939,7 @@ static void scales_check(const struct imu_id *m, float t[2])
 				col[s - 1][i] = u[i] * d[i]; /* column of A^-1 */
 		}
 	}
-	double ee = m->xrr;
+	double ee = rr;
 	for (unsigned i = 0; i < N; i++)
 		ee -= th[i] * b[i];
 	double s2 = ee / (double)(m->xn - N);
@@ -796,9 +990,10 @@ static void cov_frozen(const struct imu_id *m, float s2, const float h[NP][NP], 
 			v[i][k] = s2 * h[i][k];
 	memset(thc, 0, NP * sizeof thc[0]);
 	if (m->cl_on) {
-		const struct imu_id_stat *s = &m->st[m->cl_d][m->cl_l];
+		struct imu_id_stat s;
 		float hc[NP][NP];
-		fit(m, s->g, tq ? s->bt : s->b, tq ? s->rrt : s->rr, thc, hc);
+		hyp_stat(m, m->cl_d, m->cl_l, &s);
+		fit(m, s.g, tq ? s.bt : s.b, tq ? s.rrt : s.rr, thc, hc);
 	}
 }
 
@@ -812,11 +1007,11 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 		return;
 	unsigned np = c->est_curve ? NP : NP - 2u;
 	float th[NP], h[NP][NP], v[NP][NP], thc[NP];
-	float j = hyp_solve_tq(m, &m->st[bd][bl], th, h);
+	float j = hyp_solve_tq(m, bd, bl, th, h);
 	if (bl > 0u && bl + 1u < IMU_ID_LAGS) {
 		float tm[NP], tp[NP], hh[NP][NP], k = dl / (4.0f * grid_step(m));
-		hyp_solve_tq(m, &m->st[bd][bl - 1u], tm, hh);
-		hyp_solve_tq(m, &m->st[bd][bl + 1u], tp, hh);
+		hyp_solve_tq(m, bd, bl - 1u, tm, hh);
+		hyp_solve_tq(m, bd, bl + 1u, tp, hh);
 		for (unsigned i = 0; i < NP; i++)
 			th[i] += k * (tp[i] - tm[i]);
 	}
@@ -891,7 +1086,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	best_hyp(m, &bd, &bl, jr);
 	float j0 = delay_margin(m, bd, jr, r);
 	float th[NP], h[NP][NP], v[NP][NP], thc[NP];
-	hyp_solve(m, &m->st[bd][bl], th, h);
+	hyp_solve(m, bd, bl, th, h);
 	float hstep = grid_step(m), dl = step_of(m, th), lcorr = 0.0f;
 	/* the grid point nearest the lag found (the least residual's may lie a few of the
 	 * refined grid's steps off where the lag is weakly seen): the expansion below is about it */
@@ -901,7 +1096,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 		if (to == bl)
 			break;
 		bl = to;
-		j0 = hyp_solve(m, &m->st[bd][bl], th, h);
+		j0 = hyp_solve(m, bd, bl, th, h);
 		dl = step_of(m, th);
 	}
 	float s2 = j0 / (float)(n - np);
@@ -918,8 +1113,8 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	 * for ln tau (their own steps from their own points) */
 	if (bl > 0u && bl + 1u < IMU_ID_LAGS) {
 		float tm[NP], tp[NP], hh[NP][NP];
-		hyp_solve(m, &m->st[bd][bl - 1u], tm, hh);
-		hyp_solve(m, &m->st[bd][bl + 1u], tp, hh);
+		hyp_solve(m, bd, bl - 1u, tm, hh);
+		hyp_solve(m, bd, bl + 1u, tp, hh);
 		float k = dl / (4.0f * hstep);
 		for (unsigned i = 0; i < NP; i++)
 			th[i] += k * (tp[i] - tm[i]);

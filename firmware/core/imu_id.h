@@ -7,25 +7,28 @@
  * Model: rotor j's throttle acts after D whole frames through a first-order lag tau (y_j);
  * the rotors together push F = m a_z = k_f sum_j s_j g(y_j), with g(y) = (1 - c) y + c y^2
  * and s_j the per-rotor effectiveness taken as known (MOT_SCALE, or from the refinement on the
- * scales imu_id_set_scales gave). Linear in (A, B) =
- * (k_f (1 - c), k_f c) with the regressors x1 = sum s_j y_j, x2 = sum s_j y_j^2; the lag
- * filters are linear and time-invariant, so a delayed hypothesis is the undelayed filter's
- * output read D frames late: one lag filter per rotor and grid point, a ring of the
- * regressors per delay. Each (D, tau) hypothesis keeps its least-squares sums relative to a
- * reference model (the prior k_f and curve), which keeps them well conditioned in float.
+ * scales imu_id_set_scales gave). Linear in (A, B) = (k_f (1 - c), k_f c) with the
+ * regressors x1 = sum s_j y_j, x2 = sum s_j y_j^2; the lag filters are linear and
+ * time-invariant, so a delayed hypothesis is the undelayed filter's output read D frames
+ * late. The filters run on the throttles of IMU_ID_DELAYS - 1 frames before (one filter per
+ * rotor and grid point), and the bank pairs those regressors with the force D frames after
+ * them: every delay regresses on the same regressors, so their products x x' are one set of
+ * sums per lag, and each hypothesis keeps only its products with its own force and its
+ * residual's square, relative to a reference model (the prior k_f and curve), which keeps
+ * them well conditioned in float.
  *
  * Refinement: at IMU_ID_FREEZE of the planned frames the lag grid narrows to
  * +/- IMU_ID_FINE_HALF of its steps about the lag found so far (the Gauss-Newton step below
- * is first order: between the first grid's points it leaves an error of up to half a
- * percent in k_f); the filters start from the old grid's states interpolated, and the sums
- * restart after IMU_ID_SKIP frames.
+ * is first order: between the first grid's points it leaves an error of several tenths of
+ * a percent in k_f); the filters start from the old grid's states interpolated, and the sums
+ * restart with the first frame whose regressors and forces all come after it.
  *
  * Choice: the hypothesis of least residual. Each hypothesis also carries the lag's
- * sensitivities x3 = sum s_j w_j and x4 = sum s_j 2 y_j w_j, w_j = dy_j / d ln tau (a filter
- * beside each lag filter): d F / d ln tau = A x3 + B x4 for any curve, so the least squares
- * over (x1, x2, x3, x4, 1) is a Gauss-Newton step in ln tau from the grid point (A d ln tau
- * and B d ln tau are linear parameters), and tau, k_f and c come with their joint
- * covariance.
+ * sensitivities x3 = d x1 / d ln tau and x4 = d x2 / d ln tau (central differences across
+ * the grid, second order at its ends): d F / d ln tau = A x3 + B x4 for any curve, so the
+ * least squares over (x1, x2, x3, x4, 1) is a Gauss-Newton step in ln tau from the grid
+ * point (A d ln tau and B d ln tau are linear parameters), and tau, k_f and c come with their
+ * joint covariance.
  *
  * Both sides pass through the same [1 2 1] / 4 smoother first: its zero at half the frame
  * rate removes the vibration of rotors turning near half the frame rate (a hover), and a
@@ -63,16 +66,14 @@
 
 #define IMU_ID_ROTORS 8
 #define IMU_ID_DELAYS 5 /* 0..4 frames beyond the loop's one */
-#define IMU_ID_LAGS 20  /* log grid IMU_ID_TAU_MIN .. IMU_ID_TAU_MAX, refined at IMU_ID_FREEZE */
+#define IMU_ID_LAGS 16  /* log grid IMU_ID_TAU_MIN .. IMU_ID_TAU_MAX, refined at IMU_ID_FREEZE */
 #define IMU_ID_TAU_MIN 0.005f
 #define IMU_ID_TAU_MAX 0.25f
-#define IMU_ID_RING (IMU_ID_DELAYS + 2) /* frames behind the delays' regressors (the [1 2 1] / 4 smoother's too) */
-#define IMU_ID_BLOCKS 32                /* clusters of the variance (merged in pairs when full) */
-#define IMU_ID_VEL_SD 0.05f             /* the velocity's error at either end of the calibration, m/s */
+#define IMU_ID_BLOCKS 32    /* clusters of the variance (merged in pairs when full) */
+#define IMU_ID_VEL_SD 0.05f /* the velocity's error at either end of the calibration, m/s */
 #define IMU_ID_FREEZE \
 	0.2f /* share of the planned frames after which the grid refines and the clusters' hypothesis freezes */
-#define IMU_ID_FINE_HALF 2.5f /* the refined grid's half-width, in steps of the first grid */
-#define IMU_ID_SKIP 9u        /* frames not taken after the refinement (the rings refill) */
+#define IMU_ID_FINE_HALF 2.0f /* the refined grid's half-width, in steps of the first grid */
 
 /* parameters: A (or k_f), B, A d ln tau, B d ln tau, the accelerometer's offset */
 #define IMU_ID_NP 5
@@ -102,36 +103,49 @@ struct imu_id_stat {
 	float bt[IMU_ID_NP], rrt;
 };
 
+/* a hypothesis' own sums: b but its offset's, z'z; the torque's the same (its G is its lag's,
+ * the offset's b its delay's force sum less the lag's reference: imu_id.c, hyp_stat) */
+struct imu_id_hyp {
+	float b[IMU_ID_NP - 1], rr;
+	float bt[IMU_ID_NP - 1], rrt;
+};
+
 struct imu_id {
 	struct imu_id_cfg cfg;
 	/* the regressors are centred at the start's hover (y_h, the scales' sum S): x1 - y_h S,
-	 * sum s (y - y_h)^2, x3, sum 2 s (y - y_h) w (imu_id.c: basis) */
+	 * sum s (y - y_h)^2, x3, x4 - 2 y_h x3 (imu_id.c: basis) */
 	float yh, ssum;
-	float ln0, lstep;      /* the lag grid: ln tau_l = ln0 + l lstep */
-	bool refined;          /* the grid was refined (the sums restarted) */
-	uint8_t skip;          /* frames still not taken since the refinement */
-	uint32_t n_st;         /* excited frames in the bank's sums */
-	float a[IMU_ID_LAGS];  /* the lags' poles exp(-dt / tau) */
-	float da[IMU_ID_LAGS]; /* d a / d ln tau */
-	float y[IMU_ID_LAGS][IMU_ID_ROTORS], w[IMU_ID_LAGS][IMU_ID_ROTORS]; /* outputs, d y / d ln tau */
-	/* the last three frames' x1, x2, x3, x4 and the patterns' responses (sum p_kj s_j y_j, at
-	 * the clusters' lag: imu_id.c), newest first: the [1 2 1] / 4 smoother's input */
-	float x1[IMU_ID_LAGS][3], x2[IMU_ID_LAGS][3];
-	float x3[IMU_ID_LAGS][3], x4[IMU_ID_LAGS][3]; /* sum s w, sum 2 s y w */
-	float q1[3], q2[3];
-	/* by frame age, the age k in slot (xh + k) % IMU_ID_DELAYS: each lag's smoothed regressors
-	 * (centred) and the reference model's regressor after them, what a delay reads; the
-	 * patterns' smoothed responses */
-	uint8_t xh;
-	float xc[IMU_ID_LAGS][IMU_ID_DELAYS][IMU_ID_NP + 1];
-	float qc[2][IMU_ID_DELAYS];
-	/* the scales' check on the frozen hypothesis: G (full), b, z'z over its frames */
-	float xg[IMU_ID_NX][IMU_ID_NX], xb[IMU_ID_NX], xrr;
+	float ln0, lstep;     /* the lag grid: ln tau_l = ln0 + l lstep */
+	bool refined;         /* the grid was refined (the sums restarted) */
+	uint32_t n_st;        /* excited frames in the bank's sums */
+	float a[IMU_ID_LAGS]; /* the lags' poles exp(-dt / tau) */
+	/* the filters, on the throttles IMU_ID_DELAYS - 1 frames old: each rotor's output times
+	 * the square root of its scale (rs), and the scaled outputs' sum x1 */
+	float y[IMU_ID_LAGS][IMU_ID_ROTORS], yc[IMU_ID_LAGS], rs[IMU_ID_ROTORS];
+	float uq[IMU_ID_DELAYS - 1][IMU_ID_ROTORS]; /* the throttles waiting for the filters (uqh: the oldest's) */
+	uint8_t uqh;
+	/* the [1 2 1] / 4 smoother's state (the last input, the last two's sum) of x1, x2 and the
+	 * patterns' responses (sum p_kj s_j y_j, at the clusters' lag: imu_id.c); qs: the latter smoothed */
+	float x1[IMU_ID_LAGS][2], x2[IMU_ID_LAGS][2];
+	float q1[2], q2[2], qs[2];
+	/* the scales' check on the frozen hypothesis: the products of its regressors and the
+	 * two patterns' responses with the latter (xq) and with the force (xbq), over its xn
+	 * frames (the other sums are the blocks') */
+	float xq[IMU_ID_NX][2], xbq[2];
 	uint32_t xn;
 	float fr[3];   /* the force's last three frames, newest first */
 	float tr[3];   /* the torques' sum, the same */
 	uint32_t n_fr; /* consecutive frames in fr (a gap restarts it) */
-	struct imu_id_stat st[IMU_ID_DELAYS][IMU_ID_LAGS];
+	/* rings by age: the smoothed force and torque less the reference at hover, and
+	 * (bit k) whether the frame of age k is taken; the bank takes the regressors of age
+	 * IMU_ID_DELAYS - 1 when all are, delay D with the force of age IMU_ID_DELAYS - 1 - D */
+	float fz[IMU_ID_DELAYS], tz[IMU_ID_DELAYS]; /* the frame of age k in slot (fh + k) % IMU_ID_DELAYS */
+	uint8_t fh, fok;
+	/* each lag's G up to (2, 3), then (3, 3): the sums of x2 and x3 follow from those of x0
+	 * and x1 (imu_id.c: hyp_stat), the count is n_st */
+	float gx[IMU_ID_LAGS][IMU_ID_NT - 3];
+	struct imu_id_hyp hs[IMU_ID_LAGS][IMU_ID_DELAYS];
+	float fs[IMU_ID_DELAYS], ts[IMU_ID_DELAYS]; /* each delay's force and torque sums (fz, tz) */
 	/* the still frames' force: its count, mean and spread (the noise, about the mean) */
 	uint32_t nz_n;
 	float nz_s, nz_ss, nz_thr; /* nz_thr: the still frames' summed mean throttle */

@@ -1,0 +1,195 @@
+/* test_imu_id.c - the collective rotor model from the accelerometer (firmware/core/imu_id.h)
+ * on a simulated octocopter: random truth (delay 0-3 frames beyond the loop's, lag 10-100 ms,
+ * thrust curve 0-0.5, k_f +/-30 %, one rotor at 0.8-1.0 known to the estimator), the
+ * throttles a collective square wave on a slow sweep with the two null-space dithers and a
+ * closed loop's small corrections; the force along body z with white noise, the ESCs' summed
+ * torque with white noise and an offset. Each trial's delay must be right and its lag, k_f,
+ * curve (and k_tau) within their reported sds.
+ * Build with -DTEST_VERBOSE to print the figures. */
+#include "excite.h"
+#include "imu_id.h"
+#include "unit.h"
+
+#include <math.h>
+#include <string.h>
+#ifdef TEST_VERBOSE
+#include <stdio.h>
+#endif
+
+#define DT (1.0 / 90.0)
+#define NR IMU_ID_ROTORS
+#define G0 9.81
+
+/* The estimator's state (struct imu_id) is most of the Cortex-M0 image's 16 KB of RAM: its
+ * flights run on the host and in the M4F image, and the M0 images leave them out. */
+#if defined(__ARM_ARCH_6M__)
+#define FLIGHTS 0
+#else
+#define FLIGHTS 1
+#endif
+
+struct truth {
+	double kf, ktau, curve, tau, scale[NR];
+	int delay;
+};
+
+static void random_truth(struct unit_rng *g, struct truth *t)
+{
+	t->kf = 28.0 * unit_rand_uniform(g, 0.7, 1.3);
+	t->ktau = 0.39 * unit_rand_uniform(g, 0.7, 1.3);
+	t->curve = unit_rand_uniform(g, 0.0, 0.5);
+	t->tau = unit_rand_uniform(g, 0.010, 0.100);
+	t->delay = (int)unit_rand_uniform(g, 0.0, 3.999);
+	for (int j = 0; j < NR; j++)
+		t->scale[j] = 1.0;
+	t->scale[(int)unit_rand_uniform(g, 0.0, 7.999)] = unit_rand_uniform(g, 0.8, 1.0);
+}
+
+static double thrust(const struct truth *t, double y) { return (1.0 - t->curve) * y + t->curve * y * y; }
+
+/* One flight: 1 s still, then n excited frames; lose: every 97th excited frame is lost
+ * (imu_id_hold); torque: the ESCs' torques are read. The estimator is static: its state is
+ * larger than a test's stack should carry. */
+static void fly(struct unit_rng *g, const struct truth *t, unsigned n, bool lose, bool torque, struct imu_id_result *r)
+{
+	static struct imu_id m;
+	scalar_t pat[2][EXCITE_ROTORS];
+	excite_null_pattern(0, pat[0]);
+	excite_null_pattern(1, pat[1]);
+	struct imu_id_cfg c = {.dt_s = (float)DT,
+			       .g = (float)G0,
+			       .kf0 = 25.0f,
+			       .curve0 = 0.2f,
+			       .est_curve = true,
+			       .n_frames = n,
+			       .block_frames = 90,
+			       .torque = torque,
+			       .kt0 = 0.35f};
+	double hover = 0.45, f_h = 0.0, a = exp(-DT / t->tau), y[NR], cmd[NR], q[8][NR];
+	scalar_t thr0[NR];
+	for (int j = 0; j < NR; j++) {
+		c.scale[j] = (float)t->scale[j];
+		c.pat[0][j] = sc_to_float(pat[0][j]);
+		c.pat[1][j] = sc_to_float(pat[1][j]);
+		thr0[j] = sc_from_float((float)hover);
+		y[j] = cmd[j] = hover;
+		for (int k = 0; k < 8; k++)
+			q[k][j] = hover;
+		f_h += t->kf * t->scale[j] * thrust(t, hover);
+	}
+	c.mass_kg = (float)(f_h / G0);
+	imu_id_init(&m, &c, thr0);
+	double d1 = 0.0, d2 = 0.0, dc = 0.0;
+	unsigned qh = 0;
+	for (unsigned k = 0; k < 90u + n; k++) {
+		bool exc = k >= 90u;
+		if (exc && k % 9u == 0u) {
+			d1 = unit_rand_uniform(g, -1.0, 1.0) < 0.0 ? -0.04 : 0.04;
+			d2 = unit_rand_uniform(g, -1.0, 1.0) < 0.0 ? -0.04 : 0.04;
+		}
+		if (exc && k % 45u == 0u)
+			dc = dc > 0.0 ? -0.05 : 0.05;
+		double sw = exc ? 0.1 * sin(6.283185307 * (double)(k - 90u) / 900.0) : 0.0, f = 0.0, tq = 0.0;
+		scalar_t tp[NR];
+		for (int j = 0; j < NR; j++) {
+			tp[j] = sc_from_float((float)cmd[j]);
+			q[qh][j] = cmd[j];
+		}
+		/* the plant: the throttle sent on the previous frame acts t->delay frames later */
+		unsigned qd = (qh + 8u - (unsigned)t->delay) % 8u;
+		for (int j = 0; j < NR; j++) {
+			y[j] = a * y[j] + (1.0 - a) * q[qd][j];
+			f += t->kf * t->scale[j] * thrust(t, y[j]);
+			tq += t->ktau * t->scale[j] * thrust(t, y[j]);
+		}
+		qh = (qh + 1u) % 8u;
+		for (int j = 0; j < NR; j++)
+			cmd[j] = hover + (exc ? sw + dc + d1 * c.pat[0][j] + d2 * c.pat[1][j] : 0.0) +
+				 0.005 * unit_rand_normal(g);
+		if (lose && exc && k % 97u == 13u) {
+			imu_id_hold(&m, tp);
+			continue;
+		}
+		double fm = f + 0.3 * unit_rand_normal(g), tm = tq + 0.01 * unit_rand_normal(g) + 0.05;
+		/* the vertical component averages the weight (a hover) */
+		imu_id_step(&m, tp, sc_from_float((float)fm), sc_from_float((float)f_h), 0, sc_from_float((float)tm),
+			    exc);
+		imu_id_process(&m);
+	}
+	imu_id_solve(&m, 100.0f, r); /* the firmware's largest cluster factor */
+}
+
+/* Random vehicles: the delay right, the lag, k_f and the curve within 4.5 of their sds and
+ * their errors over sd of rms below 2 (with white noise the sds are honest: a coloured-noise
+ * factor above 1 only widens them). */
+UNIT_TEST(imu_id_random_vehicles)
+{
+	if (!FLIGHTS)
+		return;
+	struct unit_rng g = {0x5eed0031ULL};
+	double zz[3] = {0.0, 0.0, 0.0};
+	int n = TRIALS(12);
+	for (int i = 0; i < n; i++) {
+		struct truth t;
+		struct imu_id_result r;
+		random_truth(&g, &t);
+		t.delay = i % 4; /* every delay the vehicles have */
+		fly(&g, &t, 2400u, false, false, &r);
+		double z[3] = {(r.tau - t.tau) / r.tau_sd, (r.kf - t.kf) / r.kf_sd, (r.curve - t.curve) / r.curve_sd};
+#ifdef TEST_VERBOSE
+		printf("tau %.4f/%.4f kf %.3f/%.3f c %.3f/%.3f delay %u/%d margin %.0f hac %.2f z %.2f %.2f %.2f cause %d\n",
+		       (double)r.tau, t.tau, (double)r.kf, t.kf, (double)r.curve, t.curve, r.delay, t.delay,
+		       (double)r.delay_margin, (double)r.hac, z[0], z[1], z[2], (int)r.cause);
+#endif
+		CHECK(r.cause == IMU_ID_OK);
+		CHECK(r.delay == (uint32_t)t.delay);
+		for (int k = 0; k < 3; k++) {
+			CHECK(fabs(z[k]) < 4.5);
+			zz[k] += z[k] * z[k];
+		}
+		CHECK_REL(r.tau, t.tau, 0.03);
+		CHECK_REL(r.kf, t.kf, 0.01);
+	}
+	for (int k = 0; k < 3; k++)
+		CHECK(sqrt(zz[k] / n) < 2.0);
+}
+
+/* Lost frames (every 97th) and the ESCs' torques: the same, and k_tau within its sd. */
+UNIT_TEST(imu_id_lost_frames_and_torque)
+{
+	if (!FLIGHTS)
+		return;
+	struct unit_rng g = {0x5eed0032ULL};
+	int n = TRIALS(6);
+	for (int i = 0; i < n; i++) {
+		struct truth t;
+		struct imu_id_result r;
+		random_truth(&g, &t);
+		t.delay = i % 4;
+		fly(&g, &t, 2400u, true, true, &r);
+#ifdef TEST_VERBOSE
+		printf("tau %.4f/%.4f kf %.3f/%.3f ktau %.4f/%.4f +/- %.4f delay %u/%d cause %d\n", (double)r.tau,
+		       t.tau, (double)r.kf, t.kf, (double)r.ktau, t.ktau, (double)r.ktau_sd, r.delay, t.delay,
+		       (int)r.cause);
+#endif
+		CHECK(r.cause == IMU_ID_OK);
+		CHECK(r.delay == (uint32_t)t.delay);
+		CHECK(fabs(r.kf - t.kf) < 4.5 * r.kf_sd);
+		CHECK(r.tq_ok);
+		CHECK(fabs(r.ktau - t.ktau) < 4.5 * r.ktau_sd);
+	}
+}
+
+/* Too few frames: named. */
+UNIT_TEST(imu_id_too_few_frames)
+{
+	if (!FLIGHTS)
+		return;
+	struct unit_rng g = {0x5eed0033ULL};
+	struct truth t;
+	struct imu_id_result r;
+	random_truth(&g, &t);
+	fly(&g, &t, 40u, false, false, &r);
+	CHECK(r.cause == IMU_ID_NO_DATA);
+	CHECK(r.n < 60u);
+}
