@@ -29,7 +29,8 @@ FUZZ_SAN      := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recove
 # Every automatic variable starts from one fixed pattern, its padding included: a struct built
 # on the stack and copied into the state (a configuration, a status line's unused arguments)
 # then carries the same bytes whatever ran before, so the MAVLink harnesses' state hashes
-# (reset_check.sh, OCTO_FUZZ_VERIFY) compare what the firmware did, not stack garbage.
+# (reset_check.sh, OCTO_FUZZ_VERIFY) compare what the firmware did, not stack garbage
+# (the MAVLink harnesses leave out FUZZ_MAV_NO_FILL, below).
 FUZZ_SAN      += -ftrivial-auto-var-init=pattern
 FUZZ_CFLAGS   := -std=c11 $(FUZZ_SAN) -Wall -Wextra -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE \
                  '-D_Static_assert(c,m)=struct fuzz_static_assert_dropped'
