@@ -716,9 +716,10 @@ def estim_per_build(rep, args, res):
                              capture_output=True, text=True, timeout=600, cwd=REPO)
         counts = [int(x) for x in re.findall(r"octo-count: region \d+: (\d+) instructions", out.stdout)]
         kv = {m.group(1): m.group(2) for m in re.finditer(r"estim: (\S+) (\S+)", out.stdout)}
-        n1, n2, n3, n4, n5, n6, n7, n8 = (int(kv.get(k, 0)) for k in (
-            "rls_1x2", "rls_2x1", "ident_rotor", "ident_inertia", "motor_id", "motor_id_solve", "imu_id", "imu_id_solve"))
-        if len(counts) != n1 + n2 + n3 + n4 + n5 + n6 + n7 + n8 or not n1 or not n4:
+        n1, n2, n3, n4, n5, n6, n7, n8, n9 = (int(kv.get(k, 0)) for k in (
+            "rls_1x2", "rls_2x1", "ident_rotor", "ident_inertia", "motor_id", "motor_id_solve", "imu_id", "imu_id_solve",
+            "imu_id_tq"))
+        if len(counts) != n1 + n2 + n3 + n4 + n5 + n6 + n7 + n8 + n9 or not n1 or not n4:
             per[v] = {"error": f"{len(counts)} counts", "exit": out.returncode}
             continue
         n123 = n1 + n2 + n3
@@ -735,6 +736,8 @@ def estim_per_build(rep, args, res):
             per[v]["imu_id"] = mmm(counts[n6_:n6_ + n7])
         if n8:
             per[v]["imu_id_solve"] = mmm(counts[n6_ + n7:n6_ + n7 + n8])
+        if n9:
+            per[v]["imu_id_tq"] = mmm(counts[n6_ + n7 + n8:n6_ + n7 + n8 + n9])
         cmd = cmdline(["tests/arm/insn-count.sh", mach, elf, ARM / "insn-count.so"])
         p = per[v]
         rep.row(2, f"  estimators alone, {v}: rls_update 1 param x 2 outputs / 2 x 1 / ident_rotor_update"
@@ -757,6 +760,11 @@ def estim_per_build(rep, args, res):
                        if fixed else ""),
                     "<= 5,000 (IMU estimator per frame, M4F)" if v == "m4f" else "(reported)",
                     p["imu_id"]["median"] <= 5000 if v == "m4f" else None, cmd)
+        if p.get("imu_id_tq"):
+            rep.row(2, f"  imu_id per frame with the ESCs' torques (imu_rpm_torque), {v}",
+                    fmt(p["imu_id_tq"]["median"]), "", f"max {fmt(p['imu_id_tq']['max'])} (the grid's refinement, once)",
+                    "<= 5,000 (IMU estimator per frame, M4F)" if v == "m4f" else "(reported)",
+                    p["imu_id_tq"]["median"] <= 5000 if v == "m4f" else None, cmd)
     for cpu, fl, fx in (("M0", "m0", "m0-fixed"), ("M4F", "m4f", "m4f-fixed")):
         a, b = per.get(fl, {}), per.get(fx, {})
         if a.get("rls_1x2") and b.get("rls_1x2"):

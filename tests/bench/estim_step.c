@@ -15,7 +15,8 @@
  *           step stores the frame, the bank of delay and lag hypotheses takes it between
  *           frames; the grid's refinement, once, at IMU_ID_FREEZE of the planned frames, then
  *           the clusters' sums each frame),
- *   1 x imu_id_solve (between frames, at the end).
+ *   1 x imu_id_solve (between frames, at the end),
+ *   N_IMU x the same frames with the ESCs' torques read (imu_id_cfg.torque).
  * The inputs are a PRBS throttle through a 40 ms lag with 1 % noise (the values do not
  * change the count much: no data-dependent loops but the fixed build's normalisation).
  * Prints "estim: KEY VALUE" lines.
@@ -52,6 +53,45 @@ struct motor_id_result MRES;
 struct ident_inertia INR;
 struct imu_id IMU;
 struct imu_id_result IRES;
+
+/* N_IMU counted frames of imu_id (after 90 still ones) on the 8 rotors' collective model:
+ * hovering at 0.45 through a 40 ms lag and one frame's delay, the force m a_z with 1 % noise
+ * (and with tq the reaction torques' sum, k_tau / k_f = 0.014 of it), a collective square
+ * wave of 1 s and the two null-space dithers */
+static void imu_run(const struct imu_id_cfg *ic, const scalar_t thr0[IMU_ID_ROTORS], float cmd[IMU_ID_ROTORS],
+		    float sj[IMU_ID_ROTORS], bool tq)
+{
+	float sd[IMU_ID_ROTORS], dc = 0.0f, d1 = 0.0f, d2 = 0.0f;
+	for (int j = 0; j < IMU_ID_ROTORS; j++)
+		sd[j] = 0.45f;
+	imu_id_init(&IMU, ic, thr0);
+	for (int k = 0; k < 90 + N_IMU; k++) {
+		bool exc = k >= 90;
+		if (exc && k % 9 == 0) {
+			d1 = urand() < 0.0f ? -0.04f : 0.04f;
+			d2 = urand() < 0.0f ? -0.04f : 0.04f;
+		}
+		if (exc && k % 45 == 0)
+			dc = dc > 0.0f ? -0.05f : 0.05f;
+		scalar_t tp[IMU_ID_ROTORS];
+		float fz = 0.0f;
+		for (int j = 0; j < IMU_ID_ROTORS; j++) {
+			tp[j] = sc_from_float(cmd[j]);
+			fz += 28.0f * sj[j];
+			sj[j] += 0.24f * (sd[j] - sj[j]);
+			sd[j] = cmd[j]; /* one frame's delay */
+			cmd[j] = exc ? 0.45f + dc + d1 * ic->pat[0][j] + d2 * ic->pat[1][j] : 0.45f;
+		}
+		fz *= 1.0f + 0.01f * urand();
+		float t = tq ? 0.014f * fz * (1.0f + 0.01f * urand()) : 0.0f;
+		if (exc)
+			bench_mark_begin();
+		imu_id_step(&IMU, tp, sc_from_float(fz), sc_from_float(fz), 0, sc_from_float(t), exc);
+		imu_id_process(&IMU);
+		if (exc)
+			bench_mark_end();
+	}
+}
 
 int main(void)
 {
@@ -190,38 +230,15 @@ int main(void)
 		thr0[j] = SC(0.45);
 		sj[j] = cmd[j] = 0.45f;
 	}
-	float sd[IMU_ID_ROTORS], dc = 0.0f;
-	for (int j = 0; j < IMU_ID_ROTORS; j++)
-		sd[j] = 0.45f;
-	imu_id_init(&IMU, &ic, thr0);
-	for (int k = 0; k < 90 + N_IMU; k++) {
-		bool exc = k >= 90;
-		if (exc && k % 9 == 0) {
-			d1 = urand() < 0.0f ? -0.04f : 0.04f;
-			d2 = urand() < 0.0f ? -0.04f : 0.04f;
-		}
-		if (exc && k % 45 == 0)
-			dc = dc > 0.0f ? -0.05f : 0.05f;
-		scalar_t tp[IMU_ID_ROTORS];
-		float fz = 0.0f;
-		for (int j = 0; j < IMU_ID_ROTORS; j++) {
-			tp[j] = sc_from_float(cmd[j]);
-			fz += 28.0f * sj[j];
-			sj[j] += 0.24f * (sd[j] - sj[j]);
-			sd[j] = cmd[j]; /* one frame's delay */
-			cmd[j] = exc ? 0.45f + dc + d1 * ic.pat[0][j] + d2 * ic.pat[1][j] : 0.45f;
-		}
-		fz *= 1.0f + 0.01f * urand();
-		if (exc)
-			bench_mark_begin();
-		imu_id_step(&IMU, tp, sc_from_float(fz), sc_from_float(fz), 0, 0, exc);
-		imu_id_process(&IMU);
-		if (exc)
-			bench_mark_end();
-	}
+	imu_run(&ic, thr0, cmd, sj, false);
 	bench_mark_begin();
 	imu_id_solve(&IMU, 3.0f, &IRES);
 	bench_mark_end();
+	/* the same with the ESCs' torques read (k_tau beside k_f: the torque's sums too) */
+	ic.torque = true;
+	for (int j = 0; j < IMU_ID_ROTORS; j++)
+		sj[j] = cmd[j] = 0.45f;
+	imu_run(&ic, thr0, cmd, sj, true);
 	printf("estim: rls_1x2 %d\n", N_RLS);
 	printf("estim: rls_2x1 %d\n", N_RLS);
 	printf("estim: ident_rotor %d\n", N_ROT);
@@ -232,6 +249,7 @@ int main(void)
 	printf("estim: imu_id %d\n", N_IMU);
 	printf("estim: imu_id_solve 1\n");
 	printf("estim: imu_id_kf %.4f cause %d\n", (double)IRES.kf, (int)IRES.cause);
+	printf("estim: imu_id_tq %d\n", N_IMU);
 	printf("estim: kf %.4f\n", (double)rls_estimate_f(&R1, 0, 0));
 	printf("estim: done\n");
 	return 0;
