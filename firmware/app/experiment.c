@@ -956,6 +956,12 @@ static void imu_ktau_end(struct experiment *e, const struct app_params *p, const
 		id_out(e, APP_ID_KTAU, 0, NAN, NAN, false, APP_ID_NOT_IDENTIFIABLE);
 		return;
 	}
+	if (r->tq_moved) {
+		id_out(e, APP_ID_KTAU, 0, NAN, NAN, false, APP_ID_DELAY_AMBIGUOUS);
+		/* the torque's sums were kept for the delay frozen at the refinement alone */
+		say(e, APP_SEV_WARNING, "ID ktau rejected: delay moved %d -> %d fr", (int)r->cl_delay, (int)r->delay);
+		return;
+	}
 	if (!r->tq_ok) {
 		id_out(e, APP_ID_KTAU, 0, NAN, NAN, false, APP_ID_NOT_FINITE);
 		say(e, APP_SEV_WARNING, "ID ktau rejected: ESC torque readings lost");

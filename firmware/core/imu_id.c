@@ -551,6 +551,9 @@ static void bank_take(struct imu_id *m, const struct xmap *xm, const float s[2][
 		m->ts[q] += td[q];
 	}
 	m->n_st++;
+	const bool tq_one = c->torque && m->cl_on, tq_all = c->torque && !m->cl_on;
+	const unsigned qf = m->cl_d < IMU_ID_DELAYS ? m->cl_d : 0u;
+	const float tdf = td[qf];
 	_Static_assert(NP == 5 && NT == 15, "bank_take is written out for five parameters");
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
 		/* lag_x, written out (the grid's ends by sens) */
@@ -589,18 +592,28 @@ static void bank_take(struct imu_id *m, const struct xmap *xm, const float s[2][
 			h->b[3] += x3 * z;
 			h->rr += z * z;
 		}
-		if (!c->torque)
-			continue;
-		kx = c->kt0 * xr;
-#pragma GCC unroll 5
-		for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
-			struct imu_id_hyp *h = &m->hs[l][q];
-			float z = td[q] - kx;
+		/* the torque's sums: after the refinement only the delay frozen there (the
+		 * clusters' own), whose lags k_tau is solved on; before it every delay's, which
+		 * the refinement clears */
+		if (tq_one) {
+			struct imu_id_hyp *h = &m->hs[l][qf];
+			float z = tdf - c->kt0 * xr;
 			h->bt[0] += x0 * z;
 			h->bt[1] += x1 * z;
 			h->bt[2] += x2 * z;
 			h->bt[3] += x3 * z;
 			h->rrt += z * z;
+		} else if (tq_all) {
+			kx = c->kt0 * xr;
+			for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
+				struct imu_id_hyp *h = &m->hs[l][q];
+				float z = td[q] - kx;
+				h->bt[0] += x0 * z;
+				h->bt[1] += x1 * z;
+				h->bt[2] += x2 * z;
+				h->bt[3] += x3 * z;
+				h->rrt += z * z;
+			}
 		}
 	}
 }
@@ -1005,6 +1018,10 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 	const struct imu_id_cfg *c = &m->cfg;
 	if (!c->torque || m->tq_lost)
 		return;
+	if (m->cl_on && bd != m->cl_d) { /* the torque's sums were kept for the frozen delay alone */
+		r->tq_moved = true;
+		return;
+	}
 	unsigned np = c->est_curve ? NP : NP - 2u;
 	float th[NP], h[NP][NP], v[NP][NP], thc[NP];
 	float j = hyp_solve_tq(m, bd, bl, th, h);
@@ -1066,6 +1083,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	const struct imu_id_cfg *c = &m->cfg;
 	uint32_t n = m->n_st;
 	r->n = n;
+	r->cl_delay = m->cl_d;
 	r->curve = c->curve0;
 	r->kf = c->kf0;
 	unsigned np = c->est_curve ? NP : NP - 2u;

@@ -203,6 +203,9 @@ struct imu_id_result {
 	 * the residual's sd (N m); tq_ok: estimated (readings finite throughout, the fit regular);
 	 * the torque's slope at y_h, relative sd (what scales the yaw phase's modelled torque) */
 	bool tq_ok;
+	bool tq_moved; /* not estimated: the best delay is not the one frozen at the refinement,
+			* the only one whose torque sums are kept (cl_delay) */
+	uint8_t cl_delay;
 	float ktau, ktau_sd, tq_hac, tq_noise, tq_slope, tq_slope_rsd;
 	uint32_t n;
 	enum imu_id_cause cause;

@@ -31,6 +31,7 @@
 struct truth {
 	double kf, ktau, curve, tau, scale[NR];
 	int delay;
+	int delay_late; /* from a third of the excited frames on (-1: none) */
 };
 
 static void random_truth(struct unit_rng *g, struct truth *t)
@@ -40,6 +41,7 @@ static void random_truth(struct unit_rng *g, struct truth *t)
 	t->curve = unit_rand_uniform(g, 0.0, 0.5);
 	t->tau = unit_rand_uniform(g, 0.010, 0.100);
 	t->delay = (int)unit_rand_uniform(g, 0.0, 3.999);
+	t->delay_late = -1;
 	for (int j = 0; j < NR; j++)
 		t->scale[j] = 1.0;
 	t->scale[(int)unit_rand_uniform(g, 0.0, 7.999)] = unit_rand_uniform(g, 0.8, 1.0);
@@ -96,7 +98,8 @@ static void fly(struct unit_rng *g, const struct truth *t, unsigned n, bool lose
 			q[qh][j] = cmd[j];
 		}
 		/* the plant: the throttle sent on the previous frame acts t->delay frames later */
-		unsigned qd = (qh + 8u - (unsigned)t->delay) % 8u;
+		int dl = t->delay_late >= 0 && k >= 90u + n / 3u ? t->delay_late : t->delay;
+		unsigned qd = (qh + 8u - (unsigned)dl) % 8u;
 		for (int j = 0; j < NR; j++) {
 			y[j] = a * y[j] + (1.0 - a) * q[qd][j];
 			f += t->kf * t->scale[j] * thrust(t, y[j]);
@@ -178,6 +181,26 @@ UNIT_TEST(imu_id_lost_frames_and_torque)
 		CHECK(r.tq_ok);
 		CHECK(fabs(r.ktau - t.ktau) < 4.5 * r.ktau_sd);
 	}
+}
+
+/* A delay that moves after the refinement (which froze the delay the torque's sums are
+ * kept for): k_tau not estimated, and said as such rather than as lost readings. */
+UNIT_TEST(imu_id_torque_delay_moved)
+{
+	if (!FLIGHTS)
+		return;
+	struct unit_rng g = {0x5eed0034ULL};
+	struct truth t;
+	struct imu_id_result r;
+	random_truth(&g, &t);
+	t.delay = 1;
+	t.delay_late = 2;
+	fly(&g, &t, 2400u, false, true, &r);
+	CHECK(r.cause == IMU_ID_OK);
+	CHECK(r.delay == 2u);
+	CHECK(r.cl_delay == 1u);
+	CHECK(r.tq_moved);
+	CHECK(!r.tq_ok);
 }
 
 /* Too few frames: named. */
