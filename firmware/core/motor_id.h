@@ -30,7 +30,7 @@
 #define MOTOR_ID_ROTORS 8
 #define MOTOR_ID_DELAYS 5
 #define MOTOR_ID_LAGS 3
-#define MOTOR_ID_STAGES 4 /* the third only when a grid stays wide (motor_id_refine) */
+#define MOTOR_ID_STAGES 4
 #define MOTOR_ID_TAU_MIN 0.0005f
 #define MOTOR_ID_TAU_MAX 0.5f
 #define MOTOR_ID_WLAGS 3 /* autocorrelation lags of the whiteness test */
@@ -43,7 +43,7 @@ struct motor_id_cfg {
 	float kf0;         /* prior k_f (reference model), N */
 	float curve0;      /* prior curve c (the model when est_curve is false) */
 	bool est_curve;    /* estimate c (else c = curve0) */
-	uint32_t n_frames; /* excited frames planned: refinements at 30 % and 55 % */
+	uint32_t n_frames; /* excited frames planned: refinements at 30, 45 and 55 % */
 	bool fix_delay;    /* take delay_fr as known (else the bank chooses) */
 	uint32_t delay_fr; /* the given delay, frames (< MOTOR_ID_DELAYS) */
 };
@@ -90,7 +90,6 @@ struct motor_id {
 	uint8_t skip;              /* frames not accumulated after a refinement (lag transients) */
 	uint16_t white_pause;      /* excited frames left out of the whiteness sums (motor_id_white_pause) */
 	uint8_t stage;
-	bool interim; /* the wide interim stage ran (the last stage starts later) */
 	bool nz_have; /* the last frame taken was not excited (and none was lost since) */
 	bool refine_due;
 	bool white_due;             /* the whiteness model is to be frozen (between frames) */

@@ -69,11 +69,21 @@ static float ref_kf(const struct motor_id *m)
 }
 static float ref_c(const struct motor_id *m) { return mid_u_to_float(m->c0); }
 
-/* grid ratio of each stage and where (% of the planned frames) a stage ends; stage
- * STAGE_INTERIM runs only when a minimum lies beyond the second grid (motor_id_refine) */
+/* grid ratio of each stage and where (% of the planned frames) a stage ends. The third
+ * (55 %: 1.08) places the last, whose grid narrows to what that placement allows
+ * (motor_id_refine): the statistics are interpolated between the grid's lags, quadratically
+ * in log lag, which moves the criterion's minimum by a share of the grid's width. On a 1.08
+ * grid, with large throttle steps (a sweep) and little noise, that moved the lag by up to
+ * 0.5 % and k_f with it (a step's transient ties k_f to the lag), several of k_f's sds; the
+ * shift shrinks about as the square of the grid's width. */
 static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f, 1.08f};
-static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 55u, 65u};
-#define STAGE_INTERIM 2u
+static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 45u, 55u};
+/* The last grid's half-width (log): LAST_SDS of the third stage's lag sds plus LAST_BIAS (that
+ * stage's own interpolation shift, up to half a percent, and its lag states' settling), within
+ * [log LAST_RATIO_MIN, log 1.08]; a third stage that walked (a wider grid) leaves it at 1.08 */
+#define LAST_SDS 4.0f
+#define LAST_BIAS 0.01f
+#define LAST_RATIO_MIN 1.02f
 #define X_MAX 1.5f /* how far beyond the grid the parabola may place the minimum */
 #define CURVE_CHI2_SIGMAS 5.0f
 #define NE_SIGMAS 5.0f
@@ -101,7 +111,7 @@ static uint32_t next_due(const struct motor_id *m)
 {
 	if (m->stage < MOTOR_ID_STAGES - 1)
 		return frames_at(m, stage_end_pct[m->stage]);
-	return frames_at(m, stage_end_pct[m->interim ? STAGE_INTERIM : STAGE_INTERIM - 1u] + WHITE_AFTER_PCT);
+	return frames_at(m, stage_end_pct[MOTOR_ID_STAGES - 2] + WHITE_AFTER_PCT);
 }
 
 /* a lag within the grids' range */
@@ -541,6 +551,8 @@ static void white_begin(struct motor_id *m)
 	w->on = true;
 }
 
+static void lag_newton(const struct motor_id *m, unsigned d, float *x, float *k);
+
 void motor_id_refine(struct motor_id *m)
 {
 	motor_id_process(m);
@@ -569,17 +581,15 @@ void motor_id_refine(struct motor_id *m)
 	bool have_ref = reference_fit(m, &kf_ref, &c_ref);
 	float xs[ND], ks[ND], smin[ND]; /* each delay's criterion's minimum */
 	unsigned bd = chosen_delay(m, delay_scan(m, xs, ks, smin));
-	/* the interim stage only if the best delay's minimum lies beyond its grid (its next grid
-	 * would stay wide: about 13 % of fresh vehicles, every stale prior); else straight to
-	 * the last. The other delays' grids only rank them, far apart. */
-	if (next == STAGE_INTERIM) {
-		m->interim = m->n_stat > 0u && fabsf(xs[bd]) > 1.0f;
-		if (!m->interim)
-			next++;
-	}
+	const bool last = next == MOTOR_ID_STAGES - 1u;
 	for (unsigned d = 0; d < ND; d++) {
-		float x = m->n_stat > 0u ? xs[d] : 0.0f;
 		float r = m->lag_r[d];
+		/* a grid whose every lag is none has three equal filters: nothing to walk by */
+		float x = m->n_stat > 0u && m->lag_c[d] * r > NO_LAG_FRAC * dt ? xs[d] : 0.0f;
+		/* the last grid's centre: the chosen delay's lag refined as the solve refines it */
+		float kx = ks[d];
+		if (last && d == bd && m->n_stat > 0u)
+			lag_newton(m, d, &x, &kx);
 		/* a minimum below the first grid walks twice as far (towards no lag at all); later
 		 * grids walk to the edge's extrapolation only: their minimum is near (the first
 		 * stage's coarse parabola overshoots a long lag by up to a step, and a second double
@@ -588,6 +598,10 @@ void motor_id_refine(struct motor_id *m)
 		/* the lag states at the new taus: quadratic interpolation in log tau of the old.
 		 * A minimum outside the grid narrows it less (the grid walks towards it) */
 		float nr = stage_ratio[next];
+		if (last && d == bd && r <= nr * 1.001f && fabsf(x) <= 1.0f && fb_pos(kx) && m->n_stat > 0u) {
+			float sd_ln = logf(r) * sqrtf(1.0f / ((float)m->n_stat * kx));
+			nr = expf(clampf(LAST_BIAS + LAST_SDS * sd_ln, logf(LAST_RATIO_MIN), logf(nr)));
+		}
 		if (fabsf(x) > 1.0f)
 			nr = fmaxf(nr, sqrtf(r));
 		motor_id_u_t old[NL][NR];
