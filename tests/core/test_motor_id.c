@@ -207,7 +207,7 @@ UNIT_TEST(motor_id_long_lag_keeps_its_delay)
 }
 
 /* Another vehicle's lag as the prior (85 ms on 10-20 ms motors, a kept parameter file): the
- * second grid's minimum lies beyond it, and the interim stage brings the last grid to 1.08
+ * second grid's minimum lies beyond it, and the third stage brings the last grid to 1.08
  * (at most 1.12 if that minimum is beyond its grid too). Without it the last grid stayed at
  * 1.26, whose interpolation put the lag 2-3 % off and k_f several of its sds. Whatever is
  * accepted is within the tolerances, k_f within 4 reported sds (seeded: the same draws each

@@ -207,7 +207,7 @@ def test_a_stale_lag_prior_is_named_and_its_remedy_works(tmp_path):
     rejection names that ("motor lag past the prior's reach", not the lag's 0.5-500 ms range,
     as before) and the remedy gives the lag found: flown again from it, B is identified, within
     the tolerances. Whatever B accepts at once is within them too, k_f included: from a prior
-    6x off the second grid's minimum lies beyond it, and the interim stage narrows the last
+    6x off the second grid's minimum lies beyond it, and the third stage narrows the last
     grid to 1.08 (without it the last grid stayed at 1.26, whose interpolation put k_f up to
     2.5 % off with a sd of 0.4 %; bench item 5's stale-prior row)."""
     seed0 = int(os.environ.get("OCTO_MANY_SEED", random.SystemRandom().randrange(1, 10**6)))
