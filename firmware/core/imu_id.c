@@ -535,6 +535,17 @@ static void lag_x(const struct xmap *xm, const float s[2][IMU_ID_LAGS], unsigned
 	x[P_LB] = k[3] * d0 + k[4] * d1;
 }
 
+/* a hypothesis' products of the regressors with its measurement z (relative to the
+ * reference model) and z's square */
+static inline void hyp_add(float b[IMU_ID_NP - 1], float *rr, float x0, float x1, float x2, float x3, float z)
+{
+	b[0] += x0 * z;
+	b[1] += x1 * z;
+	b[2] += x2 * z;
+	b[3] += x3 * z;
+	*rr += z * z;
+}
+
 /* the regressors of the frame AGE old (from its smoothed sums s) into every hypothesis: the
  * products x x' and the sums of x0 and x1 into their lag's sums (hyp_stat derives those of
  * x2 and x3), the products with the force of each delay (less the reference model's
@@ -584,35 +595,17 @@ static void bank_take(struct imu_id *m, const struct xmap *xm, const float s[2][
 		float kx = c->kf0 * xr;
 #pragma GCC unroll 5
 		for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
-			struct imu_id_hyp *h = &m->hs[l][q];
-			float z = fd[q] - kx;
-			h->b[0] += x0 * z;
-			h->b[1] += x1 * z;
-			h->b[2] += x2 * z;
-			h->b[3] += x3 * z;
-			h->rr += z * z;
+			hyp_add(m->hs[l][q].b, &m->hs[l][q].rr, x0, x1, x2, x3, fd[q] - kx);
 		}
 		/* the torque's sums: after the refinement only the delay frozen there (the
 		 * clusters' own), whose lags k_tau is solved on; before it every delay's, which
 		 * the refinement clears */
 		if (tq_one) {
-			struct imu_id_hyp *h = &m->hs[l][qf];
-			float z = tdf - c->kt0 * xr;
-			h->bt[0] += x0 * z;
-			h->bt[1] += x1 * z;
-			h->bt[2] += x2 * z;
-			h->bt[3] += x3 * z;
-			h->rrt += z * z;
+			hyp_add(m->hs[l][qf].bt, &m->hs[l][qf].rrt, x0, x1, x2, x3, tdf - c->kt0 * xr);
 		} else if (tq_all) {
 			kx = c->kt0 * xr;
 			for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
-				struct imu_id_hyp *h = &m->hs[l][q];
-				float z = td[q] - kx;
-				h->bt[0] += x0 * z;
-				h->bt[1] += x1 * z;
-				h->bt[2] += x2 * z;
-				h->bt[3] += x3 * z;
-				h->rrt += z * z;
+				hyp_add(m->hs[l][q].bt, &m->hs[l][q].rrt, x0, x1, x2, x3, td[q] - kx);
 			}
 		}
 	}
