@@ -377,10 +377,7 @@ __attribute__((noinline)) static void run_records(const uint8_t *data, size_t si
  * a use after free) holds only libFuzzer's own allocations of each input: kept small, they
  * are reused, instead of each input's landing in memory not touched yet. */
 const char *__asan_default_options(void);
-const char *__asan_default_options(void)
-{
-	return "quarantine_size_mb=16";
-}
+const char *__asan_default_options(void) { return "quarantine_size_mb=16"; }
 
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
