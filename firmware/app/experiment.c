@@ -729,11 +729,11 @@ static void inertia_torque(struct experiment *e, const scalar_t *fm, const scala
 			   const scalar_t thr[HAL_ROTORS], int n, scalar_t tau[3])
 {
 	if (imu_src(&e->cfg)) {
-		scalar_t dtq[HAL_ROTORS], dtau[3];
-		rmodel_step(&e->rm, thr, n, e->f_model, e->tq_model, e->df_model);
+		scalar_t df[HAL_ROTORS], dtq[HAL_ROTORS], dtau[3];
+		rmodel_step(&e->rm, thr, n, e->f_model, e->tq_model, df);
 		for (int j = 0; j < HAL_ROTORS; j++)
-			dtq[j] = sc_mul(e->rm.kt, e->df_model[j]);
-		body_torque(e, e->df_model, dtq, arm_l, dtau);
+			dtq[j] = sc_mul(e->rm.kt, df[j]);
+		body_torque(e, df, dtq, arm_l, dtau);
 		ident_inertia_sensitivity(&e->inr, dtau[(e->phase_kind[e->phase] - PK_INR_X) % 3]);
 		fm = e->f_model;
 		tm = e->tq_model;

@@ -169,11 +169,10 @@ struct experiment {
 	float swp_end;        /* phase time after which no step starts */
 	struct exp_rmodel rm; /* IMU source: the modelled thrusts (inertia, validation) */
 	scalar_t f_model[HAL_ROTORS], tq_model[HAL_ROTORS];
-	scalar_t df_model[HAL_ROTORS]; /* d f_model / d ln tau (the inertia phases) */
-	float w2_gain;                 /* IMU with rotor speeds: the speed^2 to "thrust" gain the motor model reads */
-	uint32_t rot_k;                /* rotor experiment: excited frames so far */
-	uint32_t est_wait;             /* steps until est[] / est_sd[] are read again */
-	scalar_t inr_u_prev;           /* inertia: the excitation of the previous step (the instrument's input) */
+	float w2_gain;       /* IMU with rotor speeds: the speed^2 to "thrust" gain the motor model reads */
+	uint32_t rot_k;      /* rotor experiment: excited frames so far */
+	uint32_t est_wait;   /* steps until est[] / est_sd[] are read again */
+	scalar_t inr_u_prev; /* inertia: the excitation of the previous step (the instrument's input) */
 	scalar_t exc_gain;   /* the phase's excitation scale: 1, halved beyond EXP_TILT_SOFT_DEG or EXP_HEIGHT_SOFT_M */
 	scalar_t exc_cap;    /* rotor phase: the dithers' scale against the hover throttle (1 elsewhere) */
 	float exc_cut_t;     /* t_phase of the last halving */
