@@ -277,6 +277,14 @@ def test_plausibility_and_truth_checks():
     tr = checks.against_truth(params_after(), [1, 3], TRUTH, 0.3, 2.0)
     assert [c.name for c in tr] == ["k_f vs truth", "k_tau vs truth", "I_x vs truth"]
     assert all(c.ok for c in tr)
+    # an inertia is judged against max(tolerance, 4 of its reported sds): +2.02 % with an sd of
+    # 0.56 % (3.6 sd) passes, +2.5 % (4.5 sd) and +2.02 % with an sd of 0.3 % do not
+    iy = {"ID_IYY_EST": 0.0762 * 1.0202, "ID_IYY_SD": 0.0762 * 0.0056}
+    by = {c.name: c for c in checks.against_truth(params_after(**iy), [4], TRUTH, 0.3, 2.0)}
+    assert by["I_y vs truth"].ok and "4 sd" in by["I_y vs truth"].detail
+    for est, sd in ((1.025, 0.0056), (1.0202, 0.003)):
+        bad = checks.against_truth(params_after(ID_IYY_EST=0.0762 * est, ID_IYY_SD=0.0762 * sd), [4], TRUTH, 0.3, 2.0)
+        assert not {c.name: c for c in bad}["I_y vs truth"].ok
     assert experiments.parse_experiments("1,3 4") == [1, 3, 4]
     with pytest.raises(GcsError):
         experiments.parse_experiments("7")
