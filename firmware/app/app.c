@@ -843,14 +843,29 @@ enum app_result app_cmd_experiment(struct app *a, float id_f, app_origin origin,
 	return exp_begin(a, id, origin, why, cap);
 }
 
-/* Experiment `id` on a hovering vehicle: refused while the attitude oscillates or when the
- * source is not delivered; else started, its final answer owed to `origin`. */
+/* An experiment starts only after this long without a gap longer than FS_LINK_TO: the plant
+ * holds the last throttles through a gap, and a sweep step (ID_SWP_THR: up to 3 g above the
+ * weight for a few frames) held for half a second climbs metres. The first gap aborts an
+ * experiment anyway; on a link that loses frames it would abort soon after the start. */
+#define EXP_LINK_QUIET_S 10.0f
+
+/* Experiment `id` on a hovering vehicle: refused while the attitude oscillates, while the
+ * link has lost frames within EXP_LINK_QUIET_S, or when the source is not delivered; else
+ * started, its final answer owed to `origin`. */
 static enum app_result exp_begin(struct app *a, int id, app_origin origin, char *why, size_t cap)
 {
 	if (env_osc_oscillating(&a->env_osc)) { /* its excitation would take the tilt past the limit */
 		snprintf(why, cap, "Experiment %d refused: attitude oscillating (%.0f deg/s rms)", id,
 			 (double)env_osc_rms_dps(&a->env_osc));
 		return APP_BUSY;
+	}
+	if (a->gap_n != 0u && a->n_prev >= a->gap_n) {
+		float ago = (float)(a->n_prev - a->gap_n) * (a->dt_frame > 0.0f ? a->dt_frame : 1.0f / 90.0f);
+		if (ago < EXP_LINK_QUIET_S) {
+			/* within STATUSTEXT's 50 characters: the wait is docs/reliability.md's */
+			snprintf(why, cap, "Experiment %d refused: frames lost %.1f s ago", id, (double)ago);
+			return APP_BUSY;
+		}
 	}
 	enum exp_source src;
 	if (!exp_source_pick(a, id, &src, why, cap))
@@ -1122,6 +1137,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 			if (missing) {
 				/* frames missing in plant time (lockstep bursts, reload) */
 				say_gap(a, gap, now);
+				a->gap_n = f->frame_n;
 				abort_experiment(a, "X-Plane frames missing");
 				if (gap > a->p.fs_land_after && app_flying(a) && a->mode != APP_LAND) {
 					char why[8];
@@ -1206,8 +1222,10 @@ static void exp_wait_tick(struct app *a)
 			post_done(a, APP_CMD_EXPERIMENT, APP_FAILED, 0, a->exp_wait.origin);
 			return;
 		}
-		a->exp_wait.id = id; /* oscillating: the guard lowers the gain; wait on */
-		snprintf(nh, sizeof nh, "attitude oscillating");
+		/* oscillating (the guard lowers the gain) or frames lost lately: wait on, saying why */
+		a->exp_wait.id = id;
+		const char *cause = strstr(why, "refused: ");
+		snprintf(nh, sizeof nh, "%s", cause ? cause + strlen("refused: ") : why);
 	}
 	bool late = a->fr.t_s - a->exp_wait.t0_s > EXP_WAIT_S;
 	if (flying && !late)

@@ -118,6 +118,7 @@ struct app {
 	uint64_t gap_said_us;
 	uint32_t gaps_unsaid; /* gaps since the last line */
 	float gap_max_unsaid_s;
+	uint64_t gap_n; /* frame_n that ended the last gap longer than FS_LINK_TO (0: none) */
 	bool actuating; /* throttles are ours (from the first arming) */
 	bool have_actuated;
 	uint64_t n_actuated; /* frame_n of the last frame answered */

@@ -861,8 +861,12 @@ UNIT_TEST(app_step_lines_said_between_frames_in_order)
 	CHECK(s.n == 1 && !strncmp(s.line[0], "X-Plane link back after 0.5", 27));
 	CHECK(r->a.mode == APP_HOLD);
 	fly(r, 2 * 90);
-	/* an experiment aborted in the step: its reason, the command's FAILED, the mode */
+	/* an experiment aborted in the step: its reason, the command's FAILED, the mode; refused
+	 * within 10 s of the last gap (4 s ago here), saying so */
 	if (exp_available(1)) {
+		CHECK(app_cmd_experiment(&r->a, 1.0f, 0x0A0B, why, sizeof why) == APP_BUSY);
+		CHECK(!strncmp(why, "Experiment 1 refused: frames lost 4.0 s ago", 43));
+		fly(r, 8 * 90);
 		CHECK(app_cmd_experiment(&r->a, 1.0f, 0x0A0B, why, sizeof why) == APP_IN_PROGRESS);
 		fly(r, 10);
 		step_said(u, r, 0.5, &s);
