@@ -1225,7 +1225,7 @@ static void exp_wait_tick(struct app *a)
 		/* oscillating (the guard lowers the gain) or frames lost lately: wait on, saying why */
 		a->exp_wait.id = id;
 		const char *cause = strstr(why, "refused: ");
-		snprintf(nh, sizeof nh, "%s", cause ? cause + strlen("refused: ") : why);
+		snprintf(nh, sizeof nh, "%.40s", cause ? cause + strlen("refused: ") : why);
 	}
 	bool late = a->fr.t_s - a->exp_wait.t0_s > EXP_WAIT_S;
 	if (flying && !late)

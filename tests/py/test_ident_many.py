@@ -166,7 +166,8 @@ def test_an_oscillating_attitude_loop_is_detuned_and_identified(tmp_path):
         assert steps and all(steps), (seed0 + i, said[-8:])
         wn = 12.0
         for m in steps:   # each step 15 % down from the one before
-            assert float(m.group(1)) > 12.0 and float(m.group(2)) == pytest.approx(wn, abs=0.006)
+            # the rms is above 12 deg/s; the line rounds it to whole degrees (12.3 says 12)
+            assert float(m.group(1)) >= 12.0 and float(m.group(2)) == pytest.approx(wn, abs=0.006)
             wn = float(m.group(3))
             assert wn == pytest.approx(0.85 * float(m.group(2)), abs=0.006)
         assert p["ATT_WN_RP"] == pytest.approx(wn, abs=0.006)   # the line gives 2 decimals
