@@ -207,7 +207,7 @@ def wide_vehicle(rng):
 def hover_line(events):
     """(plant time, k_f, sd) of the first "Hover throttle ..." status line (HOLD's entry)."""
     for e in events:
-        m = re.match(r"Hover throttle [0-9.]+\+/-[0-9.]+, k_f ([0-9.]+)\+/-([0-9.]+) N", e.text)
+        m = re.match(r"Hover throttle \S+\+/-\S+, k_f (\S+)\+/-(\S+) N", e.text)
         if m:
             return e.utime * 1e-6, float(m.group(1)), float(m.group(2))
     return None
