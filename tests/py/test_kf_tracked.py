@@ -242,13 +242,16 @@ def test_tracked_kf_against_truth_and_its_sd_after_identification(tmp_path):
             return None  # not identified (this envelope's flights that fail are another test's)
         p, frames, _, truth = got
         t_exp = max(f.t for f in frames if f.mode == 4)
+        t_exp0 = min(f.t for f in frames if f.mode == 4)
+        # the identified k_f is the experiment's: its data's, about the truth's mean over it
+        k_exp = [k for t, k in truth if t_exp0 <= t <= t_exp]
         s_ = samples(frames, truth, t_exp + WARM_S)
         assert len(s_) >= 8, f"seed {seed}: {len(s_)} samples"
         z = [(k - tk) / sd for _, k, sd, tk in s_]
         print(f"seed {seed}: curve {veh['thrust_curve']:.2f}, {sum(x < 1 for x in veh['rotor_scale'])} weak, "
               f"drift {100 * veh['kf_drift_per_min']:+.2f} %/min, identified k_f "
-              f"{100 * (p['ID_KF_EST'] / truth_at(truth, t_exp) - 1):+.2f} % +/- "
-              f"{100 * p['ID_KF_SD'] / p['ID_KF_EST']:.2f} % (truth at its end); tracked "
+              f"{100 * (p['ID_KF_EST'] / (sum(k_exp) / len(k_exp)) - 1):+.2f} % +/- "
+              f"{100 * p['ID_KF_SD'] / p['ID_KF_EST']:.2f} % (the truth's mean over the experiment); tracked "
               f"{100 * (s_[-1][1] / s_[-1][3] - 1):+.2f} % +/- {100 * s_[-1][2] / s_[-1][1]:.2f} %, "
               f"rms z {math.sqrt(sum(x * x for x in z) / len(z)):.2f}, worst {max(z, key=abs):+.2f}")
         return z
@@ -269,9 +272,9 @@ def test_imu_only_hover_and_tracker_follow_a_drift(tmp_path):
       within 0.3 % or the union bound over 100 (4.9) of the two ends' sds combined (which
       overstates the drift's sd: the ends share the calibration's error);
     - hover learning's k_f at HOLD's entry within 1 % of the truth, its z (one per vehicle)
-      below the band's upper bound and the union bound. Its sd is pessimistic (a random walk
-      of 0.3 %/sqrt(s) in the filter sets it, the drift is slower): error / sd rms 0.31 over
-      197 vehicles, so the band's lower bound is not asked of it.
+      below the band's upper bound and the union bound. Its sd is still pessimistic (error /
+      sd rms 0.55 over 197 vehicles; 0.31 with the filter's own sd, which its random walk
+      sets), so the band's lower bound is not asked of it.
     False failure < 1e-3 per run (3e-4 per bound of a band, 1e-4 per union bound). An sd 1.5
     times too small fails the tracked k_f's band with probability >= 0.99.
     Measured over 197 vehicles (seeds 500000-500199): tracked k_f per-vehicle rms of z 1.02
