@@ -364,7 +364,7 @@ static void env_publish(struct app *a)
 		set_param(a, PX_HOV_THR_SD, hp.sd, true);
 		set_param(a, PX_HOV_KF, hp.kf, true);
 		set_param(a, PX_HOV_KF_SD, hp.kf_sd, true);
-		app_status(a, APP_SEV_INFO, "Hover throttle %.4f+/-%.4f, k_f %.2f+/-%.2f N", (double)hp.u,
+		app_status(a, APP_SEV_INFO, "Hover throttle %.4f+/-%.2g, k_f %.5g+/-%.2g N", (double)hp.u,
 			   (double)hp.sd, (double)hp.kf, (double)hp.kf_sd);
 	}
 	struct env_kf_pub kp;

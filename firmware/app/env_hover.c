@@ -110,7 +110,7 @@ bool env_hover_ready(const struct env_hover *h) { return hover_est_converged(&h-
 void env_hover_on_hold(struct env_hover *h)
 {
 	h->pub_u = hover_est_u(&h->hov);
-	h->pub_sd = hover_est_sd(&h->hov);
+	h->pub_sd = hover_est_sd_err(&h->hov);
 	h->pub_due = true;
 }
 

@@ -62,7 +62,7 @@ struct env_hover {
 	struct hover_est hov;
 	struct env_acc_cal cal;
 	bool pub_due;           /* a HOLD entry's HOV_* wait for env_hover_publish */
-	scalar_t pub_u, pub_sd; /* the hover throttle and its sd at that entry */
+	scalar_t pub_u, pub_sd; /* the hover throttle and its sd at that entry (hover_est_sd_err) */
 	scalar_t kf8;           /* 8 VEH_KF (N at full throttle, all rotors) */
 	struct sc_recip kf8_r;  /* its reciprocal, for the step's division by it */
 	/* the hover thrust kf8 / theta of the last step and its operands: the division is redone

@@ -61,6 +61,9 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 	s->gated_sign = 0;
 	s->updates = 0;
 	s->rejected = 0;
+	s->v_pct2 = s->p_pct2;
+	s->r_eff = s->e_mean = s->b_sum = s->b_prev = SC_ZERO;
+	s->b_n = s->b_count = 0;
 }
 
 static bool inputs_ok(scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
@@ -112,6 +115,37 @@ void hover_est_track_acc(struct hover_est *s, scalar_t a_mps2, scalar_t u, scala
 	(void)filters(s, a_mps2, u, SC(1.0), dt_s, true);
 }
 
+/* The error's variance as the data show it (hover_est.h), for an innovation e_pct taken
+ * with gain k: the block of innovations, and V through the gain, with the filter's own
+ * posterior until two blocks have given the noise. */
+static void err_var(struct hover_est *s, scalar_t e_pct, scalar_t k)
+{
+	scalar_t omk = sc_sub(SC(1.0), k);
+	if (s->b_count >= 2u) /* k r_eff first: k^2 alone has few bits in the fixed build */
+		s->v_pct2 = sc_add(est_mul_unit(est_mul_unit(s->v_pct2, omk), omk),
+				   est_mul_unit(est_mul_unit(s->r_eff, k), k));
+	else
+		s->v_pct2 = est_mul_unit(s->p_pct2, omk); /* the filter's P r / (P + r) */
+	s->b_sum = sc_add(s->b_sum, sc_clamp(e_pct, SC(-100.0), SC(100.0)));
+	if (++s->b_n < HOVER_EST_BLK)
+		return;
+	scalar_t m = est_div_int(s->b_sum, HOVER_EST_BLK);
+	if (s->b_count > 0u) {
+		/* B times half the squared change of the block means; the mean of the first
+		 * HOVER_EST_BLK_AVG, then an average over about as many */
+		scalar_t r =
+			sc_mul(sc_from_int((int32_t)HOVER_EST_BLK), est_mul_unit(sc_sq(sc_sub(m, s->b_prev)), SC(0.5)));
+		uint32_t n = s->b_count < HOVER_EST_BLK_AVG ? s->b_count : HOVER_EST_BLK_AVG;
+		s->r_eff = sc_add(s->r_eff, est_div_int(sc_sub(r, s->r_eff), n));
+	}
+	uint32_t n = s->b_count + 1u < HOVER_EST_BLK_AVG ? s->b_count + 1u : HOVER_EST_BLK_AVG;
+	s->e_mean = sc_add(s->e_mean, est_div_int(sc_sub(m, s->e_mean), n));
+	s->b_prev = m;
+	s->b_count++;
+	s->b_sum = SC_ZERO;
+	s->b_n = 0;
+}
+
 /* The measurement y against the prediction y^ (m/s^2) with the noise level r_sd0 (percent
  * of 1 m/s^2): the gate, the relative innovation of theta and its variance. */
 static bool innovate(struct hover_est *s, scalar_t y, scalar_t y_hat, scalar_t r_sd0, scalar_t dt_s)
@@ -131,6 +165,7 @@ static bool innovate(struct hover_est *s, scalar_t y, scalar_t y_hat, scalar_t r
 			return false;
 		/* persistently contradicted: let the innovation in */
 		s->p_pct2 = sc_min(sc_max(s->p_pct2, sc_sq(e_pct)), P_MAX_PCT2);
+		s->v_pct2 = sc_max(s->v_pct2, s->p_pct2);
 		s->gated_s = SC_ZERO;
 		pr = sc_add(s->p_pct2, r);
 	} else {
@@ -139,6 +174,7 @@ static bool innovate(struct hover_est *s, scalar_t y, scalar_t y_hat, scalar_t r
 	/* two quotients by P + r: its reciprocal prepared once */
 	struct sc_gain inv_pr = sc_gain_recip2(pr, SC(1.0));
 	scalar_t k = sc_mul_gain(s->p_pct2, &inv_pr);
+	err_var(s, e_pct, k);
 	/* k = P / (P + r) in [0, 1] */
 	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), est_mul_unit(est_div_int(e_pct, 100u), k)));
 	s->theta = clamp_theta(s, th);
@@ -187,6 +223,7 @@ void hover_est_spool(struct hover_est *s, scalar_t dt_s)
 	scalar_t f = sc_add(SC(1.0), sc_mul(s->p.spool_rate, sc_min(dt_s, SC(1.0))));
 	s->theta = clamp_theta(s, sc_div(s->theta, f));
 	s->p_pct2 = sc_max(s->p_pct2, p0_pct2(&s->p));
+	s->v_pct2 = sc_max(s->v_pct2, s->p_pct2);
 }
 
 scalar_t hover_est_u(const struct hover_est *s) { return sc_div(SC(1.0), s->theta); }
@@ -195,6 +232,12 @@ scalar_t hover_est_sd(const struct hover_est *s)
 {
 	/* relative sd of theta = relative sd of u_h (first order) */
 	return sc_mul(hover_est_u(s), est_div_int(sc_sqrt(s->p_pct2), 100u));
+}
+
+scalar_t hover_est_sd_err(const struct hover_est *s)
+{
+	scalar_t v = s->b_count >= 2u ? sc_add(s->v_pct2, sc_sq(s->e_mean)) : s->p_pct2;
+	return sc_mul(hover_est_u(s), est_div_int(sc_sqrt(v), 100u));
 }
 
 bool hover_est_converged(const struct hover_est *s, scalar_t rel_sd)

@@ -41,6 +41,17 @@
  * Results: u_h and its standard deviation, and the thrust coefficient it implies,
  * k_f = m g / (n u_h) with sd(k_f) = k_f sd(u_h) / u_h (first order).
  *
+ * The filter's variance P is that of its model, a random walk of q_rel: it lets the filter
+ * follow a change of the hover throttle, and it is much larger than what a battery's drift
+ * does, so sqrt(P) overstates the error (by about three on a hover). The error itself is
+ * e' = (1 - k) e + k nu per update (nu the measurement's relative noise), so its variance
+ * from the noise is V' = (1 - k)^2 V + k^2 R, with R the noise's variance per update
+ * including its correlation (the filtered reading's, the vibration's): B times the
+ * variance of a mean of B innovations, measured as half the squared change between
+ * consecutive block means (HOVER_EST_BLK), averaged over HOVER_EST_BLK_AVG blocks. A lag
+ * behind a drift shows as the innovations' mean, which is the estimate's bias: its square
+ * is added. hover_est_sd_err is that sd.
+ *
  * Units: m/s, m/s^2, s, throttle (0..1). No heap, no globals.
  */
 #ifndef OCTO_HOVER_EST_H
@@ -52,6 +63,8 @@
 #include <stdint.h>
 
 #define HOVER_EST_GATED_S 1.0f
+#define HOVER_EST_BLK 45u    /* innovations per block of the error's measured variance (0.5 s at 90 Hz) */
+#define HOVER_EST_BLK_AVG 8u /* blocks averaged */
 
 struct hover_est_params {
 	scalar_t u_min; /* accepted hover throttle range, e.g. [0.02, 0.95] */
@@ -78,6 +91,14 @@ struct hover_est {
 	uint32_t updates;  /* accepted measurements */
 	uint32_t rejected; /* gated measurements */
 	scalar_t gated_s;  /* time of the current run of gated innovations of one sign, s */
+	/* the error's variance as the data show it (hover_est_sd_err) */
+	scalar_t v_pct2;  /* of theta's relative error from the noise, percent^2 */
+	scalar_t r_eff;   /* the innovations' noise, percent^2 per update, correlation included */
+	scalar_t e_mean;  /* the innovations' mean, percent (the lag behind a drift) */
+	scalar_t b_sum;   /* the block under way: its innovations' sum, percent */
+	scalar_t b_prev;  /* the last block's mean */
+	uint32_t b_n;     /* innovations in the block under way */
+	uint32_t b_count; /* blocks ended */
 	/* what depends on the parameters and the frame period only, computed at init and when
 	 * the period changes: the update's divisions by them become products, with the same
 	 * quotients */
@@ -115,9 +136,14 @@ void hover_est_track_acc(struct hover_est *s, scalar_t a_mps2, scalar_t u, scala
  * the variance is kept at least at the initial one. */
 void hover_est_spool(struct hover_est *s, scalar_t dt_s);
 
-/* Hover throttle and its standard deviation. */
+/* Hover throttle and its standard deviation (the filter's: its random walk q_rel sets it). */
 scalar_t hover_est_u(const struct hover_est *s);
 scalar_t hover_est_sd(const struct hover_est *s);
+
+/* The standard deviation of u_h's error as the data show it: the filter's own gains applied
+ * to the innovations' measured noise (header comment), and their mean (a lag behind a
+ * drift); the filter's before two blocks of innovations have been seen. */
+scalar_t hover_est_sd_err(const struct hover_est *s);
 
 /* True once the relative standard deviation of u_h is below rel_sd. */
 bool hover_est_converged(const struct hover_est *s, scalar_t rel_sd);

@@ -30,7 +30,8 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 		s->p.t_max_s = s->p.t_min_s;
 	if (s->p.avg_n < 1u)
 		s->p.avg_n = 1u;
-	s->k = k0 > SC_ZERO ? k0 : SC(1.0);
+	s->kr = s->k = k0 > SC_ZERO ? k0 : SC(1.0);
+	s->l_slope_pct = SC_ZERO;
 	s->P = SC_ZERO;
 	s->s2_pct2 = sc_sq(s->p.s0_pct);
 	s->s_pct = sc_sqrt(s->s2_pct2);
@@ -103,8 +104,8 @@ static scalar_t regressor(const struct kf_track *s, const scalar_t *thr, int n)
 /* A long window starts at the current estimate. */
 static void long_start(struct kf_track *s)
 {
-	s->l_kref = s->k;
-	s->l_inv = sc_div(SC(100.0), s->k);
+	s->l_kref = s->kr;
+	s->l_inv = sc_div(SC(100.0), s->kr);
 	s->l_t = s->l_tn = SC_ZERO;
 	s->l_su = s->l_suu = s->l_sc = s->l_scc = s->l_suc = SC_ZERO;
 	s->l_n = 0;
@@ -116,7 +117,7 @@ static void long_start(struct kf_track *s)
  * memory (the lag of k behind the drift the line follows). */
 static void long_add(struct kf_track *s, scalar_t ds)
 {
-	scalar_t c = sc_clamp(sc_mul(sc_sub(s->k, s->l_kref), s->l_inv), SC(-KF_TRACK_W_CLIP), SC(KF_TRACK_W_CLIP));
+	scalar_t c = sc_clamp(sc_mul(sc_sub(s->kr, s->l_kref), s->l_inv), SC(-KF_TRACK_W_CLIP), SC(KF_TRACK_W_CLIP));
 	scalar_t u = sc_min(s->l_tn, SC(KF_TRACK_L_MEM));
 	s->l_su = sc_add(s->l_su, u);
 	s->l_suu = sc_add(s->l_suu, sc_sq(u));
@@ -141,8 +142,19 @@ static void long_add(struct kf_track *s, scalar_t ds)
 			slope = sc_div(vuc, vuu); /* percent per memory */
 			v = sc_sub(vcc, sc_mul(slope, vuc));
 		}
-		/* and the lag behind that drift: an exponential memory T* lags it by one T* */
-		v = sc_add(sc_max(v, SC_ZERO), sc_sq(slope));
+		/* The lag behind that drift: kr lags it by about one memory, and k is kr moved
+		 * ahead along this slope (lag_correct). A step in k (a rotor's loss, a window over
+		 * the tracker's first transient) is no drift: the correction follows at most the
+		 * drift bound, drift_per_min T* (percent per memory). What it leaves is lag: of a
+		 * faster drift, the excess whole; and the slope's own error and change, half the
+		 * squared change from the last window's slope (none to compare after the first). */
+		scalar_t bound = est_div_int(sc_mul(SC(100.0), sc_mul(s->p.drift_per_min, s->mem_s)), 60u);
+		scalar_t cl = sc_clamp(slope, sc_neg(bound), bound);
+		scalar_t lag2 = sc_sq(sc_sub(slope, cl));
+		if (s->l_count)
+			lag2 = sc_add(lag2, est_mul_unit(sc_sq(sc_sub(cl, s->l_slope_pct)), SC(0.5)));
+		v = sc_add(sc_max(v, SC_ZERO), lag2);
+		s->l_slope_pct = cl;
 		s->l_count++;
 		uint32_t m = s->l_count < KF_TRACK_W_AVG ? s->l_count : KF_TRACK_W_AVG;
 		s->l_var_pct2 = sc_add(s->l_var_pct2, est_div_int(sc_sub(v, s->l_var_pct2), m));
@@ -150,11 +162,28 @@ static void long_add(struct kf_track *s, scalar_t ds)
 	long_start(s);
 }
 
+/* k from kr: an exponential memory's estimate is the weighted mean of its samples, which
+ * lags a drift by their mean age, lambda / (1 - lambda) samples, less half a sample for a
+ * block mean of avg_n frames (its time is its middle): in memories T*,
+ * 1 - (1 - lambda) (avg_n + 1) / (2 avg_n). k is kr moved ahead by that many memories
+ * along the last long window's slope (none before the first). */
+static void lag_correct(struct kf_track *s)
+{
+	if (!s->l_count) {
+		s->k = s->kr;
+		return;
+	}
+	uint32_t n = s->p.avg_n;
+	scalar_t lag = sc_sub(SC(1.0),
+			      est_div_int(sc_mul(sc_sub(SC(1.0), s->lambda), sc_from_int((int32_t)(n + 1u))), 2u * n));
+	s->k = sc_add(s->kr, est_div_int(sc_mul(s->kr, sc_mul(s->l_slope_pct, lag)), 100u));
+}
+
 /* A window starts at the current estimate. */
 static void window_start(struct kf_track *s)
 {
-	s->w_kref = s->k;
-	s->w_inv = sc_div(SC(100.0), s->k);
+	s->w_kref = s->kr;
+	s->w_inv = sc_div(SC(100.0), s->kr);
 	s->w_sum = s->w_t = SC_ZERO;
 	s->w_n = 0;
 }
@@ -226,7 +255,7 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	dt_s = s->c_ds;
 	s->phi_s = phi;
 	if (!s->started) {
-		s->k = sc_div(y_n, phi);
+		s->k = s->kr = sc_div(y_n, phi);
 		s->e_prev_pct = SC_ZERO;
 		s->P = sc_div(s->dt_tmin, sc_sq(phi));
 		set_p_rt(s);
@@ -236,13 +265,13 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 		long_start(s);
 		return true;
 	}
-	scalar_t e = sc_sub(y_n, sc_mul(s->k, phi));
+	scalar_t e = sc_sub(y_n, sc_mul(s->kr, phi));
 	/* relative noise, percent^2, averaged over s_tau_s, from the change of the residual
 	 * between samples (var = 2 s^2 for white noise): a slow tracking error or a step does
 	 * not pass for noise, which would lengthen the memory and slow the tracking further */
 	scalar_t e_pct = sc_div(sc_mul(SC(100.0), e), y_n);
 	/* y / phi from the window's reference, percent: the residual and where k stands */
-	window_add(s, sc_add(e_pct, sc_mul(sc_sub(s->k, s->w_kref), s->w_inv)), dt_s);
+	window_add(s, sc_add(e_pct, sc_mul(sc_sub(s->kr, s->w_kref), s->w_inv)), dt_s);
 	scalar_t de = sc_sub(e_pct, s->e_prev_pct);
 	s->e_prev_pct = e_pct;
 	/* half the square: x 0.5 is x / 2 exactly in both builds (factors in [0, 1]: est_mul_unit) */
@@ -268,8 +297,9 @@ bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_
 	scalar_t den = sc_add(s->lambda, sc_mul(phi2, s->P));
 	s->P = est_div_near(s->P, den, s->P); /* den is about 1 once P has settled */
 	scalar_t K = sc_mul(s->P, phi);
-	s->k = sc_add(s->k, sc_mul(K, e));
+	s->kr = sc_add(s->kr, sc_mul(K, e));
 	long_add(s, dt_s);
+	lag_correct(s);
 	/* no wind-up: P at most its steady state for the shortest memory and this regressor,
 	 * dt_tmin / phi^2 (its quotient only when the bound is reached) */
 	if (sc_mul(s->P, phi2) > s->dt_tmin)

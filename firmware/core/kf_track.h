@@ -20,8 +20,16 @@
  * on phi >= phi_min (rotors turning, vehicle flying: the caller's gate), and P is bounded
  * by its steady state at the shortest memory, so it never winds up.
  *
- * Estimate and sd: k = sum lambda^i phi y / sum lambda^i phi^2; with P = 1 / sum lambda^i phi^2,
- * var(k) = sigma^2 P / (1 + lambda) (sigma = s y). Q16.16: the noise is kept in percent.
+ * Estimate and sd: kr = sum lambda^i phi y / sum lambda^i phi^2; with P = 1 / sum lambda^i phi^2,
+ * var(kr) = sigma^2 P / (1 + lambda) (sigma = s y). Q16.16: the noise is kept in percent.
+ *
+ * Lag: kr is a weighted mean of the samples' y / phi, so it lags a drift by their mean age,
+ * about one memory T*: at the best memory that lag is comparable to kr's sd, an error of
+ * the drift's sign on every sample. The published k is kr moved ahead by that age along
+ * the drift measured by the long windows (below: the slope of kr's line over KF_TRACK_L_MEM
+ * T*), the slope bounded by drift_per_min (a step is no drift). The correction's own error
+ * (the change of the slope from window to window) and the lag it leaves (a drift beyond the
+ * bound) are in the long windows' part of the sd.
  *
  * Samples: with avg_n > 1 the tracker updates once per avg_n frames, on the means of y and
  * of the lag-filtered regressor over them (the lag filter still runs every frame). That is
@@ -40,10 +48,10 @@
  * window part of the sd; kf_track_sd is the larger of the two. A window of T* rather than
  * 2 T* keeps a fold whose period is near 2 T* from passing unseen; it errs on the safe side
  * for white noise (the two parts then agree within sqrt 2). Noise much slower than T* is
- * followed like a drift: so k's own spread about a straight line fitted over a long window
- * (KF_TRACK_L_MEM T*, the line taking the drift out), with the square of the line's slope
- * per T* (k lags a drift by one memory), is a third part, averaged over windows alike: a fold of a period up to a few T* moves k by about its amplitude, and this spread
- * is its rms. What varies slower than the long window (a rotor turning at the frame rate
+ * followed like a drift: so kr's own spread about a straight line fitted over a long window
+ * (KF_TRACK_L_MEM T*, the line taking the drift out), with the error of the lag's correction
+ * along its slope (above), is a third part, averaged over windows alike: a fold of a period
+ * up to a few T* moves k by about its amplitude, and this spread is its rms. What varies slower than the long window (a rotor turning at the frame rate
  * exactly folds its vibration to 0 Hz) is a bias no part sees. The window parts need a few
  * windows (some 10 T* after a start).
  *
@@ -80,7 +88,8 @@ struct kf_track_params {
 
 struct kf_track {
 	struct kf_track_params p;
-	scalar_t k;       /* estimate, N per unit throttle */
+	scalar_t k;       /* estimate, N per unit throttle: kr with its lag behind a drift taken out */
+	scalar_t kr;      /* the recursive estimate (the weighted mean of the samples' y / phi) */
 	scalar_t P;       /* 1 / sum lambda^i phi^2 */
 	scalar_t s2_pct2; /* relative noise variance, percent^2 */
 	scalar_t s_pct;   /* its square root, set with it (the update and kf_track_sd read it) */
@@ -114,11 +123,12 @@ struct kf_track {
 	uint32_t l_n;           /* its samples */
 	scalar_t l_kref, l_inv; /* k at its start, 100 / l_kref */
 	scalar_t l_su, l_suu, l_sc, l_scc,
-		l_suc;       /* sums of u, u^2, c, c^2, u c (u: time in T*; c: k, percent from l_kref) */
-	scalar_t l_var_pct2; /* the spread's variance, percent^2 (average over windows) */
-	uint32_t l_count;    /* windows ended */
-	bool started;        /* an estimate exists */
-	bool primed;         /* the lag filter holds a value */
+		l_suc;        /* sums of u, u^2, c, c^2, u c (u: time in T*; c: k, percent from l_kref) */
+	scalar_t l_var_pct2;  /* the spread's variance, percent^2 (average over windows) */
+	scalar_t l_slope_pct; /* the last long window's slope of kr, percent per memory */
+	uint32_t l_count;     /* windows ended */
+	bool started;         /* an estimate exists */
+	bool primed;          /* the lag filter holds a value */
 	uint32_t updates;
 };
 
