@@ -123,7 +123,8 @@ static void fly_as(struct unit_rng *g, const struct truth *t, unsigned n, bool l
 			imu_id_hold(&m, tp);
 			continue;
 		}
-		double fm = f + 0.3 * unit_rand_normal(g) + (sw > 0.2 ? swing : 0.0), tm = tq + 0.01 * unit_rand_normal(g) + 0.05;
+		double fm = f + 0.3 * unit_rand_normal(g) + (sw > 0.2 ? swing : 0.0),
+		       tm = tq + 0.01 * unit_rand_normal(g) + 0.05;
 		/* the vertical component averages the weight (a hover) */
 		imu_id_step(&m, tp, sc_from_float((float)fm), sc_from_float((float)f_h), 0, sc_from_float((float)tm),
 			    exc);
@@ -239,8 +240,8 @@ UNIT_TEST(imu_id_few_clusters_carry_the_curve)
 		printf("spread: dof %.1f curve dof %.1f of %u; focused: dof %.1f curve dof %.1f hac %.2f kf %.3f/%.3f "
 		       "+/- %.3f c %.3f/%.3f +/- %.3f cause %d\n",
 		       (double)rs.dof, (double)rs.curve_dof, rs.blocks, (double)r.dof, (double)r.curve_dof,
-		       (double)r.hac, (double)r.kf, t.kf, (double)r.kf_sd, (double)r.curve, t.curve,
-		       (double)r.curve_sd, (int)r.cause);
+		       (double)r.hac, (double)r.kf, t.kf, (double)r.kf_sd, (double)r.curve, t.curve, (double)r.curve_sd,
+		       (int)r.cause);
 #endif
 		CHECK(rs.cause == IMU_ID_OK);
 		CHECK(rs.blocks >= 20u);
