@@ -894,11 +894,14 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 			v[i] += h[i][k] * (double)j[k];
 		vw += (double)j[i] * v[i];
 	}
-	double cz[IMU_ID_BLOCKS + 1][NP], sz[IMU_ID_BLOCKS + 1];
+	/* the degrees of freedom from running sums, with c_g = W_g z_g, s_g = z_g' c_g and
+	 * q_g = c_g' H c_g: tr C = sum (s_g - q_g), tr C^2 = sum s_g^2 - 2 sum s_g q_g + tr((H S)^2),
+	 * S = sum c_g c_g' */
+	double sc[NP][NP] = {{0}}, tr = 0.0, tr2 = 0.0;
 	for (unsigned k = 0; k < nb; k++) {
 		const struct imu_id_stat *b = &m->blk[k];
 		const float *bb = tq ? b->bt : b->b;
-		double w[NP][NP], r[NP], z[NP];
+		double w[NP][NP], r[NP], z[NP], cz[NP];
 		for (unsigned i = 0; i < NP; i++) {
 			r[i] = (double)bb[i];
 			for (unsigned q = 0; q < NP; q++) {
@@ -910,37 +913,34 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 		}
 		if (!solve_lev(h, w, v, z))
 			return INFINITY; /* a cluster alone determines the projection */
-		double zr = 0.0;
-		sz[k] = 0.0;
+		double zr = 0.0, sz = 0.0, qz = 0.0;
 		for (unsigned i = 0; i < NP; i++) {
 			zr += z[i] * r[i];
-			cz[k][i] = 0.0;
+			cz[i] = 0.0;
 			for (unsigned q = 0; q < NP; q++)
-				cz[k][i] += w[i][q] * z[q];
-			sz[k] += z[i] * cz[k][i];
+				cz[i] += w[i][q] * z[q];
+			sz += z[i] * cz[i];
+		}
+		for (unsigned i = 0; i < NP; i++) {
+			for (unsigned q = 0; q < NP; q++) {
+				qz += cz[i] * h[i][q] * cz[q];
+				sc[i][q] += cz[i] * cz[q];
+			}
 		}
 		vc += zr * zr;
+		tr += sz - qz;
+		tr2 += sz * sz - 2.0 * sz * qz;
 	}
-	/* the degrees of freedom: tr C and tr C^2, C symmetric */
-	double tr = 0.0, tr2 = 0.0;
-	for (unsigned k = 0; k < nb; k++) {
-		double hc[NP];
-		for (unsigned i = 0; i < NP; i++) {
-			hc[i] = 0.0;
+	double hs[NP][NP];
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++) {
+			hs[i][k] = 0.0;
 			for (unsigned q = 0; q < NP; q++)
-				hc[i] += h[i][q] * cz[k][q];
+				hs[i][k] += h[i][q] * sc[q][k];
 		}
-		for (unsigned l = 0; l < nb; l++) {
-			double c = 0.0;
-			for (unsigned i = 0; i < NP; i++)
-				c -= hc[i] * cz[l][i];
-			if (l == k) {
-				c += sz[k];
-				tr += c;
-			}
-			tr2 += c * c;
-		}
-	}
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++)
+			tr2 += hs[i][k] * hs[k][i];
 	double nu = tr2 > 0.0 ? tr * tr / tr2 : 0.0;
 	*nu_out = (float)nu;
 	vw *= (double)ee / (double)(n - NP);
