@@ -112,6 +112,13 @@ def test_imu_only_identifies_and_says_so(tmp_path):
     assert all(res[k][2] for k in ("kf", "ixx", "iyy", "ratio")), res
     zs, wrong = judge(res, PAPER)
     assert not wrong, wrong
+    # k_f's sd: its cluster factor and the degrees of freedom its clusters give it, fewer than
+    # the clusters (the sweep's upper steps carry the curve) and enough for a t's variance
+    dof = [re.match(r"^ID sd x ([0-9.]+) \(vibration\), ([0-9.]+) dof of (\d+) clusters$", ln) for ln in said]
+    dof = [m for m in dof if m]
+    assert len(dof) == 1, said
+    f, nu, g = float(dof[0][1]), float(dof[0][2]), int(dof[0][3])
+    assert f >= 1.0 and 2.0 < nu < g and g >= 20, dof[0][0]
     # k_tau and I_z alone: the ratio only, said as such (no VEH_KTAU / VEH_IZZ result)
     assert "ID ktau, Izz: the ratio only (ID_IZZ_PRI_SD: a prior)" in said
     assert not any(ln.startswith("ID Izz ") or ln.startswith("ID ktau 0") for ln in said), said
