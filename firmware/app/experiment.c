@@ -1181,7 +1181,8 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
 	if (e->cfg.crv_est)
 		say(e, sev, "ID curve %.3f +/- %.3f", (double)r.curve, (double)r.curve_sd);
 	say(e, APP_SEV_INFO, "ID collective NE %.3f noise %.4f N", (double)r.ne, (double)r.noise_sd);
-	say(e, APP_SEV_INFO, "ID %d clusters: sd x %.2f (vibration)", (int)r.blocks, (double)sqrtf(r.hac));
+	say(e, APP_SEV_INFO, "ID sd x %.2f (vibration), %.1f dof of %d clusters", (double)sqrtf(r.hac), (double)r.dof,
+	    (int)r.blocks);
 	say(e, APP_SEV_INFO, "ID accelerometer scale %.4f +/- %.4f (in flight)", (double)r.kappa, (double)r.kappa_sd);
 	if (e->cfg.src != EXP_SRC_IMU_RPM_TQ)
 		say(e, APP_SEV_INFO, "ID ktau: not seen by the IMU (the ratio: Izz phase)");

@@ -258,13 +258,6 @@ static bool inv_sym(const float g[NT], float h[NP][NP])
 	return true;
 }
 
-static void add_outer(float g[NT], const float x[NP], const float y[NP])
-{
-	for (unsigned i = 0; i < NP; i++)
-		for (unsigned k = i; k < NP; k++)
-			g[ut(i, k)] += 0.5f * (x[i] * y[k] + x[k] * y[i]);
-}
-
 /* sums with the unused parameter pinned (curve not estimated: B = 0) */
 static void pinned(const struct imu_id *m, const float gs[NT], const float *bs, float g[NT], float b[NP])
 {
@@ -802,59 +795,159 @@ void imu_id_process(struct imu_id *m)
 		cl_add(m, &xm, s);
 }
 
+/* z solving (I - H W) z = v by Gaussian elimination with partial pivoting; false if singular */
+static bool solve_lev(const double h[NP][NP], const double w[NP][NP], const double v[NP], double z[NP])
+{
+	double a[NP][NP + 1];
+	for (unsigned i = 0; i < NP; i++) {
+		for (unsigned k = 0; k < NP; k++) {
+			double hw = 0.0;
+			for (unsigned q = 0; q < NP; q++)
+				hw += h[i][q] * w[q][k];
+			a[i][k] = (i == k ? 1.0 : 0.0) - hw;
+		}
+		a[i][NP] = v[i];
+	}
+	for (unsigned k = 0; k < NP; k++) {
+		unsigned p = k;
+		for (unsigned i = k + 1; i < NP; i++)
+			if (fabs(a[i][k]) > fabs(a[p][k]))
+				p = i;
+		if (!(fabs(a[p][k]) > 1e-9))
+			return false;
+		for (unsigned q = 0; q <= NP; q++) {
+			double t = a[k][q];
+			a[k][q] = a[p][q];
+			a[p][q] = t;
+		}
+		for (unsigned i = k + 1; i < NP; i++) {
+			double f = a[i][k] / a[k][k];
+			for (unsigned q = k; q <= NP; q++)
+				a[i][q] -= f * a[k][q];
+		}
+	}
+	for (unsigned i = NP; i-- > 0;) {
+		double t = a[i][NP];
+		for (unsigned q = i + 1; q < NP; q++)
+			t -= a[i][q] * z[q];
+		z[i] = t / a[i][i];
+	}
+	return true;
+}
+
+/* a parameter pinned at 0 (the curve and its lag term when the curve is not estimated) */
+static bool is_pinned(const struct imu_id *m, unsigned i) { return !m->cfg.est_curve && (i == P_B || i == P_LB); }
+
 /* The clusters' variance factor for the projection j of the parameters: the cluster-robust
  * variance of j' theta over its white-noise variance, both on the frozen hypothesis' frames
- * (its residuals from theta, the whole flight's estimate), with the small-sample factors;
- * 1 with fewer than 4 clusters (*g_out: the clusters used). */
-static float cl_factor(const struct imu_id *m, const float th[NP], const float jo[NP], bool tq, unsigned *g_out)
+ * (its residuals from theta, the whole flight's estimate). The cluster-robust variance is the
+ * leverage-corrected one (CR3, the clusters' jackknife): with H = G^-1 of all the clusters, W_g
+ * a cluster's Gram matrix and r_g its score (b_g - W_g theta),
+ *     V = sum_g (z_g' r_g)^2,   (I - H W_g) z_g = H j,
+ * which is the sum of the squared changes of j' theta when cluster g is left out. The plain
+ * sandwich sum_g (j' H r_g)^2 is optimistic where a few clusters carry the information (the
+ * sweep's top steps): a cluster of high leverage pulls the fit towards itself, so its own
+ * residuals understate what it carries. Its degrees of freedom (Bell and McCaffrey's, for
+ * white residuals): V is a weighted sum of chi^2_1 whose weights are the eigenvalues of the
+ * clusters' matrix C_gh = delta_gh z_g' W_g z_g - (W_g z_g)' H (W_h z_h), so
+ * nu = (tr C)^2 / tr(C^2); the estimate then follows a t with nu degrees of freedom, whose
+ * variance nu / (nu - 2) the factor carries (*nu_out; 0 when there are not enough clusters).
+ * Never below 1; 1 with fewer than 4 clusters (*g_out: the clusters used). */
+static float cl_factor(const struct imu_id *m, const float th[NP], const float jo[NP], bool tq, unsigned *g_out,
+		       float *nu_out)
 {
 	unsigned nb =
 		m->nb + (m->cl_k * 2u >= m->cl_len && m->cl_len > 0u ? 1u : 0u); /* a half-full last block counts */
 	*g_out = nb;
+	*nu_out = 0.0f;
 	if (!m->cl_on || nb < 4u)
 		return 1.0f;
-	float gs[NT] = {0}, ss[NT] = {0}, ee = 0.0f;
+	float gs[NT] = {0}, ee = 0.0f;
 	uint32_t n = 0;
 	for (unsigned k = 0; k < nb; k++) {
 		const struct imu_id_stat *b = &m->blk[k];
 		const float *bb = tq ? b->bt : b->b;
-		/* the block's score r = b - G theta; its e'e = rr - 2 theta' b + theta' G theta */
-		float r[NP], gth[NP];
+		/* the block's e'e = rr - 2 theta' b + theta' G theta */
 		for (unsigned i = 0; i < NP; i++) {
-			gth[i] = 0.0f;
+			float gth = 0.0f;
 			for (unsigned q = 0; q < NP; q++)
-				gth[i] += b->g[ut(i, q)] * th[q];
-			r[i] = bb[i] - gth[i];
-			ee += th[i] * (gth[i] - 2.0f * bb[i]);
+				gth += b->g[ut(i, q)] * th[q];
+			ee += th[i] * (gth - 2.0f * bb[i]);
 		}
 		ee += tq ? b->rrt : b->rr;
-		add_outer(ss, r, r);
 		for (unsigned i = 0; i < NT; i++)
 			gs[i] += b->g[i];
 		n += k < m->nb ? m->cl_len : m->cl_k;
 	}
-	float g[NT], h[NP][NP], sp[NT], bb[NP], j[NP];
+	float g[NT], hf[NP][NP], bb0[NP], j[NP];
 	proj_centred(m, jo, j);
-	pinned(m, gs, NULL, g, bb);
-	if (!inv_sym(g, h) || !(ee > 0.0f) || n <= NP)
+	pinned(m, gs, NULL, g, bb0);
+	if (!inv_sym(g, hf) || !(ee > 0.0f) || n <= NP)
 		return 1.0f;
-	pinned(m, ss, NULL, sp, bb);
-	float hj[NP], vc = 0.0f, vw = 0.0f;
+	double h[NP][NP], v[NP], vw = 0.0, vc = 0.0;
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++)
+			h[i][k] = is_pinned(m, i) || is_pinned(m, k) ? 0.0 : (double)hf[i][k];
 	for (unsigned i = 0; i < NP; i++) {
-		hj[i] = 0.0f;
-		for (unsigned q = 0; q < NP; q++)
-			hj[i] += h[i][q] * j[q];
+		v[i] = 0.0;
+		for (unsigned k = 0; k < NP; k++)
+			v[i] += h[i][k] * (double)j[k];
+		vw += (double)j[i] * v[i];
 	}
-	for (unsigned i = 0; i < NP; i++) {
-		vw += j[i] * hj[i];
-		for (unsigned q = 0; q < NP; q++)
-			vc += hj[i] * sp[ut(i, q)] * hj[q];
+	/* the degrees of freedom from running sums, with c_g = W_g z_g, s_g = z_g' c_g and
+	 * q_g = c_g' H c_g: tr C = sum (s_g - q_g), tr C^2 = sum s_g^2 - 2 sum s_g q_g + tr((H S)^2),
+	 * S = sum c_g c_g' */
+	double sc[NP][NP] = {{0}}, tr = 0.0, tr2 = 0.0;
+	for (unsigned k = 0; k < nb; k++) {
+		const struct imu_id_stat *b = &m->blk[k];
+		const float *bb = tq ? b->bt : b->b;
+		double w[NP][NP], r[NP], z[NP], cz[NP];
+		for (unsigned i = 0; i < NP; i++) {
+			r[i] = (double)bb[i];
+			for (unsigned q = 0; q < NP; q++) {
+				w[i][q] = is_pinned(m, i) || is_pinned(m, q) ? 0.0 : (double)b->g[ut(i, q)];
+				r[i] -= w[i][q] * (double)th[q];
+			}
+			if (is_pinned(m, i))
+				r[i] = 0.0;
+		}
+		if (!solve_lev(h, w, v, z))
+			return INFINITY; /* a cluster alone determines the projection */
+		double zr = 0.0, sz = 0.0, qz = 0.0;
+		for (unsigned i = 0; i < NP; i++) {
+			zr += z[i] * r[i];
+			cz[i] = 0.0;
+			for (unsigned q = 0; q < NP; q++)
+				cz[i] += w[i][q] * z[q];
+			sz += z[i] * cz[i];
+		}
+		for (unsigned i = 0; i < NP; i++) {
+			for (unsigned q = 0; q < NP; q++) {
+				qz += cz[i] * h[i][q] * cz[q];
+				sc[i][q] += cz[i] * cz[q];
+			}
+		}
+		vc += zr * zr;
+		tr += sz - qz;
+		tr2 += sz * sz - 2.0 * sz * qz;
 	}
-	vw *= ee / (float)(n - NP);
-	float gf = (float)nb;
-	vc *= gf / (gf - 1.0f) * (gf - 1.0f) / (gf - 3.0f);
-	float q = vw > 0.0f ? vc / vw : 1.0f;
-	return q > 1.0f && isfinite(q) ? q : 1.0f;
+	double hs[NP][NP];
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++) {
+			hs[i][k] = 0.0;
+			for (unsigned q = 0; q < NP; q++)
+				hs[i][k] += h[i][q] * sc[q][k];
+		}
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++)
+			tr2 += hs[i][k] * hs[k][i];
+	double nu = tr2 > 0.0 ? tr * tr / tr2 : 0.0;
+	*nu_out = (float)nu;
+	vw *= (double)ee / (double)(n - NP);
+	if (!(vw > 0.0))
+		return 1.0f;
+	double q = nu > 2.0 ? vc / vw * nu / (nu - 2.0) : (double)INFINITY;
+	return q > 1.0 ? (float)q : 1.0f;
 }
 
 /* a hypothesis' Gauss-Newton step from its grid point, d ln tau = (A d + B d) / (A + B) */
@@ -1016,7 +1109,7 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 		return;
 	}
 	unsigned np = c->est_curve ? NP : NP - 2u;
-	float th[NP], h[NP][NP], v[NP][NP], thc[NP];
+	float th[NP], h[NP][NP], v[NP][NP], thc[NP], nu = 0.0f;
 	float j = hyp_solve_tq(m, bd, bl, th, h);
 	if (bl > 0u && bl + 1u < IMU_ID_LAGS) {
 		float tm[NP], tp[NP], hh[NP][NP], k = dl / (4.0f * grid_step(m));
@@ -1033,14 +1126,14 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 	float B = c->est_curve ? c->kt0 * c->curve0 + th[P_B] : 0.0f;
 	const float jk[NP] = {1.0f, c->est_curve ? 1.0f : 0.0f, 0.0f, 0.0f, 0.0f};
 	unsigned ncl = 0;
-	r->tq_hac = cl_factor(m, thc, jk, true, &ncl);
+	r->tq_hac = cl_factor(m, thc, jk, true, &ncl, &r->tq_dof);
 	r->ktau = A + B;
 	r->ktau_sd = sqrtf(quad(v, jk) * r->tq_hac);
 	r->tq_noise = sqrtf(s2);
 	float yh = m->nz_n ? m->nz_thr / (float)m->nz_n : 0.0f, sl = A + 2.0f * B * yh;
 	const float js[NP] = {1.0f, c->est_curve ? 2.0f * yh : 0.0f, 0.0f, 0.0f, 0.0f};
 	r->tq_slope = sl;
-	r->tq_slope_rsd = sl > 0.0f ? sqrtf(quad(v, js) * cl_factor(m, thc, js, true, &ncl)) / sl : INFINITY;
+	r->tq_slope_rsd = sl > 0.0f ? sqrtf(quad(v, js) * cl_factor(m, thc, js, true, &ncl, &nu)) / sl : INFINITY;
 	r->tq_ok = isfinite(r->ktau) && isfinite(r->ktau_sd) && r->ktau > 0.0f;
 }
 
@@ -1135,6 +1228,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	 * clusters' factor for its projection (the frozen hypothesis' estimate theta) */
 	cov_frozen(m, s2, h, false, v, thc);
 	unsigned ncl = 0;
+	float nu = 0.0f;
 	/* the raw (uncalibrated) k_f = A + B, the curve c = B / (A + B) */
 	float A = c->est_curve ? c->kf0 * (1.0f - c->curve0) + th[0] : c->kf0 + th[0];
 	float B = c->est_curve ? c->kf0 * c->curve0 + th[P_B] : 0.0f;
@@ -1142,7 +1236,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->curve = c->est_curve ? (kf_raw != 0.0f ? B / kf_raw : 0.0f) : c->curve0;
 	if (c->est_curve) { /* dc/dA = -B / K^2, dc/dB = A / K^2 */
 		float k2 = kf_raw * kf_raw, jc[NP] = {-B / k2, A / k2, 0.0f, 0.0f, 0.0f};
-		r->curve_sd = sqrtf(quad(v, jc) * cl_factor(m, thc, jc, false, &ncl));
+		r->curve_sd = sqrtf(quad(v, jc) * cl_factor(m, thc, jc, false, &ncl, &r->curve_dof));
 	}
 	/* the calibration: kappa = m (g T + v_last - v0) / (sum (F_w - D) dt), D the offset;
 	 * k_f = kappa (A + B), its sd from the parameters' covariance through the Jacobian
@@ -1158,12 +1252,12 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->kf = kap * kf_raw;
 	float jac[NP] = {kap, c->est_curve ? kap : 0.0f, 0.0f, 0.0f, fm > 0.0f ? r->kf / fm : 0.0f};
 	float var = quad(v, jac);
-	r->hac = cl_factor(m, thc, jac, false, &ncl);
+	r->hac = cl_factor(m, thc, jac, false, &ncl, &r->dof);
 	r->blocks = ncl;
 	var *= r->hac;
 	const float jo[NP] = {0.0f, 0.0f, 0.0f, 0.0f, 1.0f};
 	float jl[NP] = {0.0f, 0.0f, 1.0f, c->est_curve ? 1.0f : 0.0f, 0.0f};
-	float vo = v[P_OFS][P_OFS] * cl_factor(m, thc, jo, false, &ncl);
+	float vo = v[P_OFS][P_OFS] * cl_factor(m, thc, jo, false, &ncl, &nu);
 	r->kappa_sd = fm > 0.0f ? sqrtf(kap_sd * kap_sd + kap * kap * vo / (fm * fm)) : 0.0f;
 	r->kf_sd = sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
 	/* the slope at hover: kappa (A + 2 B y_h) */
@@ -1171,10 +1265,10 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->thr_hover = yh;
 	r->slope = kap * sl_raw;
 	float js[NP] = {kap, c->est_curve ? 2.0f * kap * yh : 0.0f, 0.0f, 0.0f, fm > 0.0f ? r->slope / fm : 0.0f};
-	float vs = quad(v, js) * cl_factor(m, thc, js, false, &ncl) + kap_sd * kap_sd * sl_raw * sl_raw;
+	float vs = quad(v, js) * cl_factor(m, thc, js, false, &ncl, &nu) + kap_sd * kap_sd * sl_raw * sl_raw;
 	r->slope_rsd = r->slope > 0.0f ? sqrtf(vs) / r->slope : INFINITY;
 	/* the lag: the grid point moved by the Gauss-Newton step, its second-order term removed */
-	float vl = quad(v, jl) * cl_factor(m, thc, jl, false, &ncl);
+	float vl = quad(v, jl) * cl_factor(m, thc, jl, false, &ncl, &nu);
 	float dl_sd = kf_raw > 0.0f ? sqrtf(fmaxf(vl, 0.0f)) / kf_raw : INFINITY;
 	r->tau = lag_tau(m, bl) * expf(dl + lcorr);
 	scales_check(m, r->t_pattern);

@@ -36,8 +36,11 @@
  * and grows with the rotor speed (near the frame rate a rotor's tone aliases to almost a
  * constant over a sweep step), so each sd is the white-noise one scaled by a cluster-robust
  * factor measured on the hypothesis frozen at IMU_ID_FREEZE of the planned frames, its
- * clusters blocks of the sweep's period, with the small-sample factors of G clusters
- * (G / (G - 1), and (G - 1) / (G - 3) for the t-distribution the estimate then follows).
+ * clusters blocks of the sweep's period. The cluster-robust variance is leverage-corrected
+ * (the clusters' jackknife: the sweep's few high steps carry the curve, and a plain sandwich
+ * reads their residuals after the fit has bent towards them), and its degrees of freedom
+ * nu are those its clusters give the projection (Bell and McCaffrey): the error then follows
+ * a t with nu degrees of freedom, whose variance nu / (nu - 2) the factor carries.
  *
  * With the ESCs' shaft torques (their sum Q, from the motor currents) the same regressors
  * explain Q = k_tau sum_j s_j g(y_j) plus the current sensors' summed offset: a second
@@ -191,6 +194,7 @@ struct imu_id_result {
 	float ne;              /* residual variance / the still noise's, grown with the thrust */
 	float noise_sd;        /* the still frames' force spread, N */
 	float hac;             /* k_f's cluster-robust variance over its white-noise one */
+	float dof, curve_dof;  /* their degrees of freedom (the t k_f's and the curve's errors follow) */
 	uint32_t blocks;       /* clusters behind it */
 	float t_pattern[2];    /* the null-space patterns' responses over their sds */
 	float kappa, kappa_sd; /* the accelerometer's calibration factor found in flight */
@@ -199,14 +203,14 @@ struct imu_id_result {
 	 * rotor), and its relative sd: what scales the inertia experiments' modelled torque
 	 * (the weight pins k_f g(y_h), the collective dither the slope) */
 	float slope, slope_rsd, thr_hover;
-	/* with the ESCs' torques (cfg.torque): k_tau, its sd, the cluster factor behind it and
-	 * the residual's sd (N m); tq_ok: estimated (readings finite throughout, the fit regular);
+	/* with the ESCs' torques (cfg.torque): k_tau, its sd, the cluster factor and its degrees
+	 * of freedom behind it and the residual's sd (N m); tq_ok: estimated (readings finite throughout, the fit regular);
 	 * the torque's slope at y_h, relative sd (what scales the yaw phase's modelled torque) */
 	bool tq_ok;
 	bool tq_moved; /* not estimated: the best delay is not the one frozen at the refinement,
 			* the only one whose torque sums are kept (cl_delay) */
 	uint8_t cl_delay;
-	float ktau, ktau_sd, tq_hac, tq_noise, tq_slope, tq_slope_rsd;
+	float ktau, ktau_sd, tq_hac, tq_dof, tq_noise, tq_slope, tq_slope_rsd;
 	uint32_t n;
 	enum imu_id_cause cause;
 };

@@ -11,10 +11,11 @@ the gyro, the throttles sent and the weighed mass, with the IMU octo-sim serves 
   k_f, k_tau and inertia +/-30 %, the rotors' scales known): the errors over the reported sds
   have an rms (of those within 4) below 1.6 (a unit normal's 20-sample rms passes 1.6 with
   probability below 1e-5; sds 1.25 x optimistic, about 1 %), and at most one of 20 accepted
-  values lies beyond max(3 sd, tolerance) of the truth: with about 24 clusters behind each sd
-  the ratio follows a t with about 23 degrees of freedom, beyond 3 in 0.5 % of runs (`make
-  bench` item 9: 1 of 200 IMU k_f beyond max(3 sd, 1 %), error / sd rms 0.98), so two or more
-  in 20 (probability below 0.5 %) mean it got worse.
+  values lies beyond max(3 sd, tolerance) of the truth: k_f's sd rests on the 8-20 degrees of
+  freedom its clusters give it (the sweep's top steps carry the curve), and its ratio follows
+  a t with those, beyond 3 in under 1 % of runs (tests/bench/imu_tails.py: 1-2 of 1,500 k_f
+  beyond max(3 sd, 1 %), error / sd rms 0.92-0.93), so two or more in 20 (probability below
+  0.5 %) mean it got worse.
 - From the IMU alone (no rotor speeds), a rotor whose effectiveness is not MOT_SCALE's is
   named as the cause of a rejection: the accelerometer cannot tell which rotor, and k_f would
   otherwise carry it. With the speeds each rotor's effectiveness is identified
@@ -111,6 +112,13 @@ def test_imu_only_identifies_and_says_so(tmp_path):
     assert all(res[k][2] for k in ("kf", "ixx", "iyy", "ratio")), res
     zs, wrong = judge(res, PAPER)
     assert not wrong, wrong
+    # k_f's sd: its cluster factor and the degrees of freedom its clusters give it, fewer than
+    # the clusters (the sweep's upper steps carry the curve) and enough for a t's variance
+    dof = [re.match(r"^ID sd x ([0-9.]+) \(vibration\), ([0-9.]+) dof of (\d+) clusters$", ln) for ln in said]
+    dof = [m for m in dof if m]
+    assert len(dof) == 1, said
+    f, nu, g = float(dof[0][1]), float(dof[0][2]), int(dof[0][3])
+    assert f >= 1.0 and 2.0 < nu < g and g >= 20, dof[0][0]
     # k_tau and I_z alone: the ratio only, said as such (no VEH_KTAU / VEH_IZZ result)
     assert "ID ktau, Izz: the ratio only (ID_IZZ_PRI_SD: a prior)" in said
     assert not any(ln.startswith("ID Izz ") or ln.startswith("ID ktau 0") for ln in said), said

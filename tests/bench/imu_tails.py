@@ -1,0 +1,115 @@
+#!/usr/bin/env python3
+"""The tails of the IMU's k_f and thrust curve over their reported sds, on random vehicles.
+
+    .venv/bin/python tests/bench/imu_tails.py [--runs N] [--seed S] [--sensors imu|imu,rpm]
+        [--jobs J] [--no-vibration] [--seeds S1,S2,...] [--sil PATH]
+
+Each run flies the full sequence (experiment 6) in octo-sil on a vehicle of test_ident_imu.py's
+draw (imu_vehicle: k_f, k_tau and inertia +/-30 %, motor lag 10-100 ms, delay 0-3 frames,
+thrust curve 0-0.5) with the default realistic sensor noise, seed S + i for run i, from a fresh
+parameter file. --sensors imu gives ID_SOURCE auto the IMU alone, imu,rpm the IMU with the
+ESCs' rotor speeds (imu_rpm). --no-vibration sets the vehicle's `vibration` levels to 0 (what
+the rotors' vibration contributes: rerun the outliers with it). --sil flies another build's
+octo-sil (a before / after on the same seeds).
+
+Prints one JSON object: over the accepted k_f, the error's rms and max (%), the error / sd rms,
+the counts beyond 3 and 4 sds and beyond max(3 sd, 1 %) (with their seeds, errors and z), the
+curve's error / sd rms and count beyond 3 sds, the quantiles of k_f's degrees of freedom (the
+status line "ID sd x F (vibration), NU dof of G clusters"), and the runs not accepted with
+their first cause.
+"""
+
+import argparse
+import concurrent.futures as cf
+import json
+import math
+import os
+import random
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tests" / "py"))
+from test_ident_imu import imu_vehicle  # noqa: E402 (the tests' own draw)
+
+KF = re.compile(r"^ID kf ([-0-9.]+) \+/- ([-0-9.]+) (N accepted|rejected: .*)$")
+CURVE = re.compile(r"^ID curve ([-0-9.]+) \+/- ([-0-9.]+)")
+DOF = re.compile(r"^ID sd x ([0-9.]+) \(vibration\), ([0-9.]+) dof of (\d+) clusters$")
+CAUSE = re.compile(r"^ID (rejected|aborted): (.*)$")
+SCRIPT = "arm; takeoff 5; wait hold; experiment 6; wait experiment"
+
+
+def fly(sil, seed, sensors, no_vib):
+    veh = imu_vehicle(random.Random(seed))
+    if no_vib:
+        veh["vibration"] = {"accel": 0.0, "gyro": 0.0}
+    with tempfile.TemporaryDirectory() as d:
+        vf, pf = Path(d) / "v.json", Path(d) / "p.parm"
+        vf.write_text(json.dumps(veh))
+        r = subprocess.run([str(sil), "--seed", str(seed), "--vehicle", str(vf), "--sensors", sensors, "--params",
+                            str(pf), "--duration", "900", "--script", f"param ID_SEED {seed}; {SCRIPT}"],
+                           capture_output=True, text=True, timeout=600)
+    row = {"seed": seed, "kf_true": veh["kf"], "c_true": veh["thrust_curve"]}
+    for ln in (x.split("octo-fw: ", 1)[1] for x in r.stderr.splitlines() if "octo-fw: " in x):
+        if (m := KF.match(ln)):
+            row.update(kf=float(m[1]), kf_sd=float(m[2]), ok="accepted" in m[3], why=m[3])
+        elif (m := CURVE.match(ln)) and "c" not in row:
+            row.update(c=float(m[1]), c_sd=float(m[2]))
+        elif (m := DOF.match(ln)):
+            row["dof"] = float(m[2])
+        elif (m := CAUSE.match(ln)) and "cause" not in row:
+            row["cause"] = m[2]
+    return row
+
+
+def summary(rows):
+    acc = [r for r in rows if r.get("ok")]
+    rms = lambda v: math.sqrt(sum(x * x for x in v) / len(v)) if v else None  # noqa: E731
+    z = [(r["kf"] - r["kf_true"]) / r["kf_sd"] for r in acc]
+    err = [100.0 * (r["kf"] / r["kf_true"] - 1.0) for r in acc]
+    zc = [(r["c"] - r["c_true"]) / r["c_sd"] for r in acc if r.get("c_sd")]
+    out = lambda k: [(r["seed"], round(e, 2), round(q, 2)) for r, e, q in zip(acc, err, z) if k(r, e, q)]  # noqa: E731
+    dof = sorted(r["dof"] for r in acc if "dof" in r)
+    causes = {}
+    for r in rows:
+        if not r.get("ok"):
+            k = r.get("cause") or r.get("why") or "no k_f line"
+            causes[k] = causes.get(k, 0) + 1
+    return {
+        "runs": len(rows), "accepted": len(acc),
+        "kf_err_rms_pct": rms(err), "kf_err_max_pct": max(map(abs, err)) if err else None, "kf_z_rms": rms(z),
+        "kf_beyond_3sd": out(lambda r, e, q: abs(q) > 3.0), "kf_beyond_4sd": out(lambda r, e, q: abs(q) > 4.0),
+        "kf_beyond_max_3sd_1pct": out(lambda r, e, q: abs(e) > max(3.0 * abs(e / q) if q else 0.0, 1.0)),
+        "curve_z_rms": rms(zc), "curve_beyond_3sd": sum(abs(q) > 3.0 for q in zc),
+        "kf_dof_quantiles_0_5_50_95_100": [dof[int(p * (len(dof) - 1))] for p in (0, 0.05, 0.5, 0.95, 1)] if dof else None,
+        "not_accepted": causes,
+    }
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--runs", type=int, default=300)
+    ap.add_argument("--seed", type=int, default=600000)
+    ap.add_argument("--seeds", help="comma-separated seeds (instead of --runs / --seed)")
+    ap.add_argument("--sensors", default="imu,rpm")
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--no-vibration", action="store_true")
+    ap.add_argument("--sil", default=str(ROOT / "build" / "octo-sil"))
+    a = ap.parse_args()
+    seeds = [int(s) for s in a.seeds.split(",")] if a.seeds else list(range(a.seed, a.seed + a.runs))
+    with cf.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
+        rows = list(ex.map(lambda s: fly(a.sil, s, a.sensors, a.no_vibration), seeds))
+    res = summary(rows)
+    res.update(sensors=a.sensors, seeds=[seeds[0], seeds[-1]], vibration=not a.no_vibration)
+    if a.seeds:
+        res["rows"] = [{k: r.get(k) for k in ("seed", "kf", "kf_sd", "kf_true", "c", "c_sd", "c_true", "dof")}
+                       for r in rows]
+    print(json.dumps(res, indent=1))
+
+
+if __name__ == "__main__":
+    os.chdir(ROOT)
+    main()
