@@ -11,7 +11,7 @@
 #define KF_SEED_REL 0.10f     /* NAV_KF_SEED: VEH_KF replaced when this far off */
 #define CAL_BLOCK 900u        /* ground frames per calibration block (10 s at 90 Hz) */
 #define TAU_K_FAR 2.0f        /* the torque gain raised only beyond this (env_hover.h) */
-#define TAU_K_MIN 0.1f        /* the torque gain's range */
+#define TAU_K_MIN 0.1f        /* the torque gain's range: 0.1-10 */
 #define TAU_K_MAX 10.0f
 
 static float nominal_u(const struct app_params *p) { return p->veh_mass * p->veh_grav / (8.0f * p->veh_kf); }
