@@ -366,6 +366,9 @@ static void env_publish(struct app *a)
 		set_param(a, PX_HOV_KF_SD, hp.kf_sd, true);
 		app_status(a, APP_SEV_INFO, "Hover throttle %.4f+/-%.2g, k_f %.5g+/-%.2g N", (double)hp.u,
 			   (double)hp.sd, (double)hp.kf, (double)hp.kf_sd);
+		if (hp.alloc) /* the torque gain: env_hover_torque_scale */
+			app_status(a, APP_SEV_INFO, "Hover k_f %.3g N is %.2g of VEH_KF %.3g: allocating with it",
+				   (double)hp.kf, (double)(hp.kf / a->p.veh_kf), (double)a->p.veh_kf);
 	}
 	struct env_kf_pub kp;
 	if (env_kf_due(&a->env_kf) &&

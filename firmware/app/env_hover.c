@@ -10,6 +10,9 @@
 #define AIRBORNE_M 0.1f       /* above the take-off ground: the acceleration is free */
 #define KF_SEED_REL 0.10f     /* NAV_KF_SEED: VEH_KF replaced when this far off */
 #define CAL_BLOCK 900u        /* ground frames per calibration block (10 s at 90 Hz) */
+#define TAU_K_FAR 2.0f        /* the torque gain raised only beyond this (env_hover.h) */
+#define TAU_K_MIN 0.1f        /* the torque gain's range: 0.1-10 */
+#define TAU_K_MAX 10.0f
 
 static float nominal_u(const struct app_params *p) { return p->veh_mass * p->veh_grav / (8.0f * p->veh_kf); }
 
@@ -124,6 +127,7 @@ bool env_hover_publish(struct env_hover *h, const struct app_params *p, struct e
 	out->sd = sd;
 	out->kf = p->veh_mass * p->veh_grav / (8.0f * u);
 	out->kf_sd = out->kf * sd / u;
+	out->alloc = env_hover_alloc_learned(h);
 	return true;
 }
 
@@ -132,12 +136,21 @@ void env_hover_torque_scale(struct env_hover *h, const struct app_params *p)
 	float k = 1.0f;
 	if (h->hf_ok && env_hover_ready(h)) {
 		float mg = p->veh_mass * p->veh_grav, hf = sc_to_float(h->hf);
-		if (mg > 0.0f && hf > 0.0f) { /* fminf(fmaxf(r, 0.5), 1) by compares (NaN: 0.5 too) */
+		if (mg > 0.0f && hf > 0.0f) { /* by compares: a NaN ratio leaves 1 */
 			float r = hf / mg;
-			k = r > 0.5f ? (r < 1.0f ? r : 1.0f) : 0.5f;
+			if (r > TAU_K_FAR)
+				k = r < TAU_K_MAX ? r : TAU_K_MAX; /* VEH_KF too high: the learned k_f */
+			else if (r < 1.0f)
+				k = r > TAU_K_MIN ? r : TAU_K_MIN; /* too low: lowered */
 		}
 	}
 	h->tau_k_target = sc_from_float(k);
+}
+
+bool env_hover_alloc_learned(const struct env_hover *h)
+{
+	float k = sc_to_float(h->tau_k_target);
+	return k > TAU_K_FAR || k < 1.0f / TAU_K_FAR;
 }
 
 struct vec3 env_hover_torque(struct env_hover *h, struct vec3 tau)

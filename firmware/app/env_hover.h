@@ -87,9 +87,11 @@ struct env_hover_input {
 	bool takeoff_climb; /* TAKEOFF with a set point above the vehicle (spool up) */
 };
 
-/* A HOLD entry's publication: HOV_THR, HOV_THR_SD, HOV_KF, HOV_KF_SD and a status line. */
+/* A HOLD entry's publication: HOV_THR, HOV_THR_SD, HOV_KF, HOV_KF_SD and a status line;
+ * alloc: the torques are allocated with the learned k_f (env_hover_alloc_learned), a second line. */
 struct env_hover_pub {
 	float u, sd, kf, kf_sd;
+	bool alloc;
 };
 
 /* Every stepped frame, before the flying steps: notes thrust rows (valid: HAL_FRAME_* bits)
@@ -127,9 +129,17 @@ void env_hover_on_hold(struct env_hover *h);
 /* Between frames: true (and *out) once after a HOLD entry. */
 bool env_hover_publish(struct env_hover *h, const struct app_params *p, struct env_hover_pub *out);
 
-/* Between frames: the torque demands' gain, from the hover throttle learned so far: the
- * map's thrust at hover against m g, within 0.5-1 (1 until the hover is known). */
+/* Between frames: the torque demands' gain, from the hover throttle learned so far (1 until
+ * it is known): r = 8 VEH_KF u_h / (m g), the map's thrust at hover over the thrust that holds
+ * the vehicle, i.e. VEH_KF over the k_f learned at hover. Below 1 it is r (down to 0.1): the
+ * map overrates the rotors' effectiveness. Above 1 it stays 1 up to 2, where a thrust curve's
+ * secant alone can put r (its slope, what the loop feels, is steeper), and beyond 2 it is r
+ * (up to 10): VEH_KF is that far off, and allocating with it would leave every torque r times
+ * too weak; the attitude loop, its integral and the position loop around it then oscillate. */
 void env_hover_torque_scale(struct env_hover *h, const struct app_params *p);
+/* The gain's target is r beyond a factor 2 either side: the torques are allocated with the
+ * learned k_f rather than VEH_KF (VEH_KF itself stays). */
+bool env_hover_alloc_learned(const struct env_hover *h);
 /* In the step: the torque demand with that gain (moving 2 % of the way to its target per step). */
 struct vec3 env_hover_torque(struct env_hover *h, struct vec3 tau);
 

@@ -1199,3 +1199,43 @@ UNIT_TEST(app_t_gap_is_the_float_of_the_difference)
 	}
 	CHECK(bad == 0);
 }
+
+/* The torque gain against the k_f hover learning finds (env_hover_torque_scale): r = VEH_KF /
+ * k_f, within 0.1-10, except that it is held at 1 for r in 1-2 (a thrust curve's secant); the
+ * allocation is said beyond a factor 2 either side; 1 before the hover is known. */
+UNIT_TEST(env_hover_torque_gain_follows_the_learned_kf)
+{
+	struct app_params p;
+	params_defaults(&p);
+	p.veh_mass = 1.2f;
+	p.veh_kf = 20.0f;
+	struct env_hover h;
+	memset(&h, 0, sizeof h);
+	env_hover_init(&h, &p);
+	env_hover_model_sync(&h, &p);
+	float mg = p.veh_mass * p.veh_grav;
+	h.hf = sc_from_float(2.0f * mg);
+	h.hf_ok = true;
+	env_hover_torque_scale(&h, &p); /* nothing learned: 1 */
+	CHECK(sc_to_float(h.tau_k_target) == 1.0f && !env_hover_alloc_learned(&h));
+	h.hov.p_pct2 = SC(1.0); /* u_h known to 1 % */
+	static const struct {
+		float kf, k;
+		bool alloc;
+	} c[] = {{3.87f, 20.0f / 3.87f, true},
+		 {8.0f, 2.5f, true},
+		 {12.0f, 1.0f, false},
+		 {20.0f, 1.0f, false},
+		 {28.0f, 20.0f / 28.0f, false},
+		 {50.0f, 0.4f, true},
+		 {80.0f, 0.25f, true},
+		 {400.0f, 0.1f, true},
+		 {1.0f, 10.0f, true}};
+	for (size_t i = 0; i < sizeof c / sizeof c[0]; i++) {
+		float u_h = mg / (8.0f * c[i].kf); /* the hover throttle of a vehicle of that k_f */
+		h.hf = sc_from_float(8.0f * p.veh_kf * u_h);
+		env_hover_torque_scale(&h, &p);
+		CHECK_REL(sc_to_float(h.tau_k_target), c[i].k, 2e-3);
+		CHECK(env_hover_alloc_learned(&h) == c[i].alloc);
+	}
+}
