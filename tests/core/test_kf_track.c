@@ -17,6 +17,24 @@
 
 static scalar_t s(double x) { return sc_from_float((float)x); }
 
+/* One frame of the test plant: eight rotors through a first-order lag (coefficient al) at
+ * thrust coefficient kf, white thrust noise of noise kf0 u_h per rotor; the tracker takes the
+ * frame, and the next commands are drawn 3 % about the hover throttle u_h. */
+static void plant_frame(struct kf_track *kt, struct unit_rng *r, double lag[NR], double thr[NR], double al, double kf,
+			double kf0, double u_h, double noise, double dt)
+{
+	double y = 0;
+	scalar_t th[NR];
+	for (int j = 0; j < NR; j++) {
+		lag[j] += al * (thr[j] - lag[j]);
+		y += kf * lag[j] + noise * kf0 * u_h * unit_rand_normal(r);
+		th[j] = s(thr[j]);
+	}
+	kf_track_update(kt, th, NR, s(y), s(dt), true);
+	for (int j = 0; j < NR; j++)
+		thr[j] = u_h * (1 + 0.03 * unit_rand_normal(r));
+}
+
 /* After 5 s, outside the 3 T* that follow the step: within 0.3 % of the truth at the same
  * time; the error within 5 reported sd most of the time; the memory near the formula's. */
 UNIT_TEST(kf_track_follows_drift_and_step)
@@ -41,16 +59,7 @@ UNIT_TEST(kf_track_follows_drift_and_step)
 			double t = k * dt;
 			double kf = kf0 * (1 + rate * t / 60.0) * (t >= t_step ? 0.97 : 1.0);
 			/* this frame's thrust answers the command sent last frame, through the lag */
-			double y = 0;
-			scalar_t th[NR];
-			for (int j = 0; j < NR; j++) {
-				lag[j] += al * (thr[j] - lag[j]);
-				y += kf * lag[j] + noise * kf0 * u_h * unit_rand_normal(&r);
-				th[j] = s(thr[j]);
-			}
-			kf_track_update(&kt, th, NR, s(y), s(dt), true);
-			for (int j = 0; j < NR; j++)
-				thr[j] = u_h * (1 + 0.03 * unit_rand_normal(&r)); /* the next command */
+			plant_frame(&kt, &r, lag, thr, al, kf, kf0, u_h, noise, dt);
 			double est = d(kt.k), err = est / kf - 1;
 			if (t > 5.0 && !(t >= t_step && t < t_step + 3 * d(kt.mem_s) + 0.5)) {
 				if (fabs(err) > worst)
@@ -104,16 +113,8 @@ UNIT_TEST(kf_track_no_lag_behind_a_drift)
 		for (int j = 0; j < NR; j++)
 			lag[j] = thr[j] = u_h;
 		for (int k = 0; k < (int)(120.0 * FS); k++) {
-			double t = k * dt, kf = kf0 * (1 + rate * t / 60.0), y = 0;
-			scalar_t th[NR];
-			for (int j = 0; j < NR; j++) {
-				lag[j] += al * (thr[j] - lag[j]);
-				y += kf * lag[j] + noise * kf0 * u_h * unit_rand_normal(&r);
-				th[j] = s(thr[j]);
-			}
-			kf_track_update(&kt, th, NR, s(y), s(dt), true);
-			for (int j = 0; j < NR; j++)
-				thr[j] = u_h * (1 + 0.03 * unit_rand_normal(&r));
+			double t = k * dt, kf = kf0 * (1 + rate * t / 60.0);
+			plant_frame(&kt, &r, lag, thr, al, kf, kf0, u_h, noise, dt);
 			if (t > 30.0 && k % 9 == 0) {
 				esum += d(kt.k) / kf - 1;
 				ersum += d(kt.kr) / kf - 1;
