@@ -367,8 +367,8 @@ static void env_publish(struct app *a)
 		app_status(a, APP_SEV_INFO, "Hover throttle %.4f+/-%.2g, k_f %.5g+/-%.2g N", (double)hp.u,
 			   (double)hp.sd, (double)hp.kf, (double)hp.kf_sd);
 		if (hp.alloc) /* the torque gain: env_hover_torque_scale */
-			app_status(a, APP_SEV_INFO, "Hover k_f %.3g N is %.2g of VEH_KF %.3g: allocating with it",
-				   (double)hp.kf, (double)(hp.kf / a->p.veh_kf), (double)a->p.veh_kf);
+			app_status(a, APP_SEV_INFO, "Hover k_f %.3g N is %.2g of VEH_KF %.3g: torques x%.2g",
+				   (double)hp.kf, (double)(hp.kf / a->p.veh_kf), (double)a->p.veh_kf, (double)hp.tau_k);
 	}
 	struct env_kf_pub kp;
 	if (env_kf_due(&a->env_kf) &&

@@ -10,7 +10,7 @@
 #define AIRBORNE_M 0.1f       /* above the take-off ground: the acceleration is free */
 #define KF_SEED_REL 0.10f     /* NAV_KF_SEED: VEH_KF replaced when this far off */
 #define CAL_BLOCK 900u        /* ground frames per calibration block (10 s at 90 Hz) */
-#define TAU_K_FAR 2.0f        /* the torque gain raised only beyond this (env_hover.h) */
+#define TAU_K_FAR 2.0f        /* r's largest overstatement of the slope by a curve's secant (env_hover.h) */
 #define TAU_K_MIN 0.1f        /* the torque gain's range: 0.1-10 */
 #define TAU_K_MAX 10.0f
 
@@ -128,6 +128,7 @@ bool env_hover_publish(struct env_hover *h, const struct app_params *p, struct e
 	out->kf = p->veh_mass * p->veh_grav / (8.0f * u);
 	out->kf_sd = out->kf * sd / u;
 	out->alloc = env_hover_alloc_learned(h);
+	out->tau_k = sc_to_float(h->tau_k_target);
 	return true;
 }
 
@@ -138,8 +139,8 @@ void env_hover_torque_scale(struct env_hover *h, const struct app_params *p)
 		float mg = p->veh_mass * p->veh_grav, hf = sc_to_float(h->hf);
 		if (mg > 0.0f && hf > 0.0f) { /* by compares: a NaN ratio leaves 1 */
 			float r = hf / mg;
-			if (r > TAU_K_FAR)
-				k = r < TAU_K_MAX ? r : TAU_K_MAX; /* VEH_KF too high: the learned k_f */
+			if (r > TAU_K_FAR) /* VEH_KF too high: what no curve explains */
+				k = r < TAU_K_FAR * TAU_K_MAX ? r / TAU_K_FAR : TAU_K_MAX;
 			else if (r < 1.0f)
 				k = r > TAU_K_MIN ? r : TAU_K_MIN; /* too low: lowered */
 		}
@@ -150,7 +151,7 @@ void env_hover_torque_scale(struct env_hover *h, const struct app_params *p)
 bool env_hover_alloc_learned(const struct env_hover *h)
 {
 	float k = sc_to_float(h->tau_k_target);
-	return k > TAU_K_FAR || k < 1.0f / TAU_K_FAR;
+	return k > 1.0f || k < 1.0f / TAU_K_FAR;
 }
 
 struct vec3 env_hover_torque(struct env_hover *h, struct vec3 tau)

@@ -92,6 +92,7 @@ struct env_hover_input {
 struct env_hover_pub {
 	float u, sd, kf, kf_sd;
 	bool alloc;
+	float tau_k; /* the torque gain it aims at (env_hover_torque_scale) */
 };
 
 /* Every stepped frame, before the flying steps: notes thrust rows (valid: HAL_FRAME_* bits)
@@ -132,13 +133,15 @@ bool env_hover_publish(struct env_hover *h, const struct app_params *p, struct e
 /* Between frames: the torque demands' gain, from the hover throttle learned so far (1 until
  * it is known): r = 8 VEH_KF u_h / (m g), the map's thrust at hover over the thrust that holds
  * the vehicle, i.e. VEH_KF over the k_f learned at hover. Below 1 it is r (down to 0.1): the
- * map overrates the rotors' effectiveness. Above 1 it stays 1 up to 2, where a thrust curve's
- * secant alone can put r (its slope, what the loop feels, is steeper), and beyond 2 it is r
- * (up to 10): VEH_KF is that far off, and allocating with it would leave every torque r times
- * too weak; the attitude loop, its integral and the position loop around it then oscillate. */
+ * map overrates the rotors' effectiveness. Above 1 it is r / 2, at least 1 (up to 10): r is a
+ * secant, and the slope the loop feels is steeper by up to about half again with a thrust curve
+ * (a curve of 0.54 at a hover throttle of 0.52 puts r at 2.1 where the slope's ratio is 1.5),
+ * so only what no curve explains is corrected; a torque left up to twice too weak flies,
+ * five times too weak does not (the attitude loop, its integral and the position loop
+ * around it then oscillate), and one too strong oscillates too. */
 void env_hover_torque_scale(struct env_hover *h, const struct app_params *p);
-/* The gain's target is r beyond a factor 2 either side: the torques are allocated with the
- * learned k_f rather than VEH_KF (VEH_KF itself stays). */
+/* The gain's target is above 1, or below 1/2 (beyond what an earlier build allowed): said at
+ * the HOLD entry. VEH_KF itself stays. */
 bool env_hover_alloc_learned(const struct env_hover *h);
 /* In the step: the torque demand with that gain (moving 2 % of the way to its target per step). */
 struct vec3 env_hover_torque(struct env_hover *h, struct vec3 tau);

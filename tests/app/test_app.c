@@ -1201,8 +1201,8 @@ UNIT_TEST(app_t_gap_is_the_float_of_the_difference)
 }
 
 /* The torque gain against the k_f hover learning finds (env_hover_torque_scale): r = VEH_KF /
- * k_f, within 0.1-10, except that it is held at 1 for r in 1-2 (a thrust curve's secant); the
- * allocation is said beyond a factor 2 either side; 1 before the hover is known. */
+ * k_f below 1 (down to 0.1), r / 2 above 2 (up to 10), 1 between (a thrust curve's secant
+ * overstates the slope); said when above 1 or below 1/2; 1 before the hover is known. */
 UNIT_TEST(env_hover_torque_gain_follows_the_learned_kf)
 {
 	struct app_params p;
@@ -1222,15 +1222,9 @@ UNIT_TEST(env_hover_torque_gain_follows_the_learned_kf)
 	static const struct {
 		float kf, k;
 		bool alloc;
-	} c[] = {{3.87f, 20.0f / 3.87f, true},
-		 {8.0f, 2.5f, true},
-		 {12.0f, 1.0f, false},
-		 {20.0f, 1.0f, false},
-		 {28.0f, 20.0f / 28.0f, false},
-		 {50.0f, 0.4f, true},
-		 {80.0f, 0.25f, true},
-		 {400.0f, 0.1f, true},
-		 {1.0f, 10.0f, true}};
+	} c[] = {{3.87f, 10.0f / 3.87f, true}, {8.0f, 1.25f, true},           {12.0f, 1.0f, false},
+		 {20.0f, 1.0f, false},         {28.0f, 20.0f / 28.0f, false}, {50.0f, 0.4f, true},
+		 {80.0f, 0.25f, true},         {400.0f, 0.1f, true},          {1.0f, 10.0f, true}};
 	for (size_t i = 0; i < sizeof c / sizeof c[0]; i++) {
 		float u_h = mg / (8.0f * c[i].kf); /* the hover throttle of a vehicle of that k_f */
 		h.hf = sc_from_float(8.0f * p.veh_kf * u_h);
