@@ -1053,6 +1053,10 @@ static void say_gap(struct app *a, float gap_s, uint64_t now_us)
  * and then every PERIOD_FRAMES frames (a difference of integers first), and moves half way
  * to a measurement that differs from it by more than the microseconds can tell (a quarter
  * off: all the way); so it stays the same from step to step while the clock keeps time. */
+/* (float)x, the same value: a count that fits in 32 bits goes through the 32-bit conversion
+ * (one instruction with an FPU; the 64-bit one is a library call) */
+static inline float u64_float(uint64_t x) { return x <= UINT32_MAX ? (float)(uint32_t)x : (float)x; }
+
 static float step_gap(struct app *a, const struct hal_sensor_frame *f, uint64_t k)
 {
 	if (!a->have_step) {
@@ -1062,15 +1066,16 @@ static float step_gap(struct app *a, const struct hal_sensor_frame *f, uint64_t 
 	}
 	uint64_t span = f->frame_n - a->per_n;
 	if (!(a->dt_frame > 0.0f) || span >= PERIOD_FRAMES) {
-		float p = (float)(f->t_us - a->per_us) * 1e-6f / (float)span, d = p - a->dt_frame;
+		float fspan = u64_float(span);
+		float p = u64_float(f->t_us - a->per_us) * 1e-6f / fspan, d = p - a->dt_frame;
 		if (!(a->dt_frame > 0.0f) || fabsf(d) > 0.25f * a->dt_frame)
 			a->dt_frame = p;
-		else if (fabsf(d) * (float)span > 2e-6f)
+		else if (fabsf(d) * fspan > 2e-6f)
 			a->dt_frame += 0.5f * d;
 		a->per_n = f->frame_n;
 		a->per_us = f->t_us;
 	}
-	return (float)k * a->dt_frame;
+	return u64_float(k) * a->dt_frame;
 }
 
 /* *d = *s field by field: the library's memcpy of the whole frame costs more on a core that
@@ -1124,7 +1129,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 					 a->orig.last_step[2] * a->orig.last_step[2]));
 	a->have_frame = true;
 	if (!a->link_ok)
-		link_back(a, a->link_ever ? (float)(now - a->link_lost_at_us) * 1e-6f : 0.0f);
+		link_back(a, a->link_ever ? u64_float(now - a->link_lost_at_us) * 1e-6f : 0.0f);
 	a->wall_last_frame_us = now;
 
 	bool complete = (f->valid & HAL_FRAME_NEEDED) == HAL_FRAME_NEEDED;
