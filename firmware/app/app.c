@@ -946,6 +946,20 @@ static void after_frame(struct app *a)
 	}
 }
 
+/* False only when app_settle would find nothing to do: every part of it is conditional, and
+ * these are their conditions (said_out, after_frame, env_publish, the torque gain, exp_turn,
+ * the results, the parameters). The bytes are or'ed without branches: the all-clear case is
+ * the common one (app_tick settles every step before the next frame). */
+static bool settle_due(const struct app *a)
+{
+	const struct app_said *s = &a->said;
+	const struct experiment *e = &a->exp;
+	bool flags = a->after.kf_due | a->after.log_due | a->after.judge_due | a->env_hover.pub_due |
+		     env_kf_due(&a->env_kf) | a->env_osc.due | a->torque_gain_due | e->begin_pending | e->turn_pending |
+		     a->params_dirty;
+	return flags || s->n > 0u || s->overflows != s->overflows_said || e->n_ids > 0 || e->n_results > 0;
+}
+
 void app_settle(struct app *a)
 {
 	said_out(a); /* what the last step said, in its order, before anything newer */
@@ -1118,7 +1132,8 @@ static void frame_copy(struct hal_sensor_frame *restrict d, const struct hal_sen
 
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
-	app_settle(a);          /* normally done by app_tick already (nothing left here) */
+	if (settle_due(a)) /* normally done by app_tick already (nothing left here) */
+		app_settle(a);
 	a->said.in_step = true; /* what the step says is said between frames (struct app_said) */
 	uint64_t now = hal_wall_us(a->hal);
 	frame_copy(&a->fr, f);
