@@ -946,6 +946,20 @@ static void after_frame(struct app *a)
 	}
 }
 
+/* False only when app_settle would find nothing to do: every part of it is conditional, and
+ * these are their conditions (said_out, after_frame, env_publish, the torque gain, exp_turn,
+ * the results, the parameters). The bytes are or'ed without branches: the all-clear case is
+ * the common one (app_tick settles every step before the next frame). */
+static bool settle_due(const struct app *a)
+{
+	const struct app_said *s = &a->said;
+	const struct experiment *e = &a->exp;
+	bool flags = a->after.kf_due | a->after.log_due | a->after.judge_due | a->env_hover.pub_due |
+		     env_kf_due(&a->env_kf) | a->env_osc.due | a->torque_gain_due | e->begin_pending | e->turn_pending |
+		     a->params_dirty;
+	return flags || s->n > 0u || s->overflows != s->overflows_said || e->n_ids > 0 || e->n_results > 0;
+}
+
 void app_settle(struct app *a)
 {
 	said_out(a); /* what the last step said, in its order, before anything newer */
@@ -1053,6 +1067,10 @@ static void say_gap(struct app *a, float gap_s, uint64_t now_us)
  * and then every PERIOD_FRAMES frames (a difference of integers first), and moves half way
  * to a measurement that differs from it by more than the microseconds can tell (a quarter
  * off: all the way); so it stays the same from step to step while the clock keeps time. */
+/* (float)x, the same value: a count that fits in 32 bits goes through the 32-bit conversion
+ * (one instruction with an FPU; the 64-bit one is a library call) */
+static inline float u64_float(uint64_t x) { return x <= UINT32_MAX ? (float)(uint32_t)x : (float)x; }
+
 static float step_gap(struct app *a, const struct hal_sensor_frame *f, uint64_t k)
 {
 	if (!a->have_step) {
@@ -1062,15 +1080,16 @@ static float step_gap(struct app *a, const struct hal_sensor_frame *f, uint64_t 
 	}
 	uint64_t span = f->frame_n - a->per_n;
 	if (!(a->dt_frame > 0.0f) || span >= PERIOD_FRAMES) {
-		float p = (float)(f->t_us - a->per_us) * 1e-6f / (float)span, d = p - a->dt_frame;
+		float fspan = u64_float(span);
+		float p = u64_float(f->t_us - a->per_us) * 1e-6f / fspan, d = p - a->dt_frame;
 		if (!(a->dt_frame > 0.0f) || fabsf(d) > 0.25f * a->dt_frame)
 			a->dt_frame = p;
-		else if (fabsf(d) * (float)span > 2e-6f)
+		else if (fabsf(d) * fspan > 2e-6f)
 			a->dt_frame += 0.5f * d;
 		a->per_n = f->frame_n;
 		a->per_us = f->t_us;
 	}
-	return (float)k * a->dt_frame;
+	return u64_float(k) * a->dt_frame;
 }
 
 /* *d = *s field by field: the library's memcpy of the whole frame costs more on a core that
@@ -1113,7 +1132,8 @@ static void frame_copy(struct hal_sensor_frame *restrict d, const struct hal_sen
 
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
-	app_settle(a);          /* normally done by app_tick already (nothing left here) */
+	if (settle_due(a)) /* normally done by app_tick already (nothing left here) */
+		app_settle(a);
 	a->said.in_step = true; /* what the step says is said between frames (struct app_said) */
 	uint64_t now = hal_wall_us(a->hal);
 	frame_copy(&a->fr, f);
@@ -1124,7 +1144,7 @@ void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 					 a->orig.last_step[2] * a->orig.last_step[2]));
 	a->have_frame = true;
 	if (!a->link_ok)
-		link_back(a, a->link_ever ? (float)(now - a->link_lost_at_us) * 1e-6f : 0.0f);
+		link_back(a, a->link_ever ? u64_float(now - a->link_lost_at_us) * 1e-6f : 0.0f);
 	a->wall_last_frame_us = now;
 
 	bool complete = (f->valid & HAL_FRAME_NEEDED) == HAL_FRAME_NEEDED;

@@ -66,14 +66,17 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 	s->b_n = s->b_count = 0;
 }
 
-static bool inputs_ok(scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
+/* inline in each caller (the per-frame track and update paths): no call around a few tests */
+static inline SC_ALWAYS_INLINE bool inputs_ok(scalar_t vz, scalar_t u, scalar_t c, scalar_t dt)
 {
 	return sc_isfinite(vz) && sc_isfinite(u) && sc_isfinite(c) && sc_isfinite(dt) && dt > SC_ZERO && dt < SC(1.0);
 }
 
 /* Advances the state-variable filter; returns the filtered acceleration. acc: vz is the
- * accelerometer's specific force and c is 1 (then the filtered input is returned). */
-static scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c, scalar_t dt, bool acc)
+ * accelerometer's specific force and c is 1 (then the filtered input is returned). Inline in
+ * each caller: a track discards the result, and its quotient is then not computed. */
+static inline SC_ALWAYS_INLINE scalar_t filters(struct hover_est *s, scalar_t vz, scalar_t u, scalar_t c, scalar_t dt,
+						bool acc)
 {
 	scalar_t uc = acc ? u : est_mul_unit(u, c); /* c = cos(tilt) in [0, 1] (est_mul_unit: exact for any) */
 	if (acc != s->acc) {                        /* another kind of input: the filters start again */
