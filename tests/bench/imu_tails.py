@@ -64,7 +64,7 @@ def fly(sil, seed, sensors, no_vib):
         elif (m := LAG.match(ln)) and "lag" not in row:
             row.update(lag=float(m[1]), lag_sd=float(m[2]), delay=int(m[3]))
         elif (m := DOF.match(ln)):
-            row["dof"] = float(m[2])
+            row.update(dof=float(m[2]), vib=float(m[1]))
         elif (m := CAUSE.match(ln)) and "cause" not in row:
             row["cause"] = m[2]
     return row
@@ -122,7 +122,7 @@ def main():
     res = summary(rows)
     res.update(sensors=a.sensors, seeds=[seeds[0], seeds[-1]], vibration=not a.no_vibration)
     if a.seeds:
-        res["rows"] = [{k: r.get(k) for k in ("seed", "kf", "kf_sd", "kf_true", "c", "c_sd", "c_true", "dof")}
+        res["rows"] = [{k: r.get(k) for k in ("seed", "kf", "kf_sd", "kf_true", "c", "c_sd", "c_true", "dof", "vib")}
                        for r in rows]
     if a.rows:
         Path(a.rows).write_text(json.dumps(rows))
