@@ -382,11 +382,12 @@ static scalar_t hover_cap(float thr_h, float peak)
 #define SWP_WHITE_TAUS 4.0f  /* lags a step's transient lasts (thrust rows: whiteness) */
 #define SWP_WHITE_MIN_S 0.4f /* ... and at least this, s */
 static const float SWP_SHARE_ROWS[EXP_SWP_LEVELS] = {1.0f, 0.55f, 0.8f, 0.35f};
-/* Under the IMU the steps stay lower: a step near 3 g turns the rotors near the frame rate,
- * their first harmonic aliases close to 0 Hz and each top is one random offset; lower steps
- * turn them slower (their alias lies higher and swings within the step, which lasts longer
- * for the same climb), so the curve comes out closer although its leverage is less
- * (docs/identification.md, "The sweep's levels") */
+/* Under the IMU without the ESCs' torques the steps stay lower: a step near 3 g turns the
+ * rotors near the frame rate, their first harmonic aliases close to 0 Hz and each top is one
+ * random offset; lower steps turn them slower (their alias lies higher and swings within the
+ * step, which lasts longer for the same climb), so the curve comes out closer although its
+ * leverage is less. With the torques the rows' levels: k_tau's sd needs the higher steps'
+ * leverage (docs/identification.md, "The sweep's levels") */
 static const float SWP_SHARE_IMU[EXP_SWP_LEVELS] = {0.6f, 0.4f, 0.6f, 0.25f};
 static void sweep_plan(struct experiment *e, const struct app_params *p, float thr_h, float dz,
 		       const float share[EXP_SWP_LEVELS])
@@ -658,7 +659,7 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	e->ofs = sc_from_float(cf->exc_ofs);
 	e->exc_cap = hover_cap(thr_h, fmaxf(cf->exc_amp + cf->exc_ofs, cf->col_amp));
 	cap_say(e, thr_h);
-	sweep_plan(e, p, thr_h, cf->swp_dz, SWP_SHARE_IMU);
+	sweep_plan(e, p, thr_h, cf->swp_dz, cf->src == EXP_SRC_IMU_RPM_TQ ? SWP_SHARE_ROWS : SWP_SHARE_IMU);
 	if (rpm_src(cf)) {
 		speed_model_begin(e, p, in);
 		scales_begin(e);
