@@ -361,7 +361,7 @@ static scalar_t hover_cap(float thr_h, float peak)
 }
 
 /* The rotor experiment's throttle sweep: collective steps above the hover throttle thr_h,
- * at the shares SWP_SHARE of ID_SWP_THR in turn (the rotors' speeds, and so the frequencies
+ * at the shares SWP_SHARE_* of ID_SWP_THR in turn (the rotors' speeds, and so the frequencies
  * their vibration aliases to, differ from step to step), each held for the frames whose
  * climb (the step's acceleration a, then coasting up against gravity) stays within
  * ID_SWP_DZ: dz = a T^2 (1 + a / g) / 2. The curve's prior gives a; one step every
@@ -381,8 +381,16 @@ static scalar_t hover_cap(float thr_h, float peak)
 #define SWP_TAIL_S 1.5f
 #define SWP_WHITE_TAUS 4.0f  /* lags a step's transient lasts (thrust rows: whiteness) */
 #define SWP_WHITE_MIN_S 0.4f /* ... and at least this, s */
-static const float SWP_SHARE[EXP_SWP_LEVELS] = {1.0f, 0.55f, 0.8f, 0.35f};
-static void sweep_plan(struct experiment *e, const struct app_params *p, float thr_h, float dz)
+static const float SWP_SHARE_ROWS[EXP_SWP_LEVELS] = {1.0f, 0.55f, 0.8f, 0.35f};
+/* Under the IMU without the ESCs' torques the steps stay lower: a step near 3 g turns the
+ * rotors near the frame rate, their first harmonic aliases close to 0 Hz and each top is one
+ * random offset; lower steps turn them slower (their alias lies higher and swings within the
+ * step, which lasts longer for the same climb), so the curve comes out closer although its
+ * leverage is less. With the torques the rows' levels: k_tau's sd needs the higher steps'
+ * leverage (docs/identification.md, "The sweep's levels") */
+static const float SWP_SHARE_IMU[EXP_SWP_LEVELS] = {0.6f, 0.4f, 0.6f, 0.25f};
+static void sweep_plan(struct experiment *e, const struct app_params *p, float thr_h, float dz,
+		       const float share[EXP_SWP_LEVELS])
 {
 	const struct exp_cfg *cf = &e->cfg;
 	float c = p->mot_curve, thr_max = isfinite(p->mot_thr_max) ? p->mot_thr_max : 1.0f, g = p->veh_grav;
@@ -392,7 +400,7 @@ static void sweep_plan(struct experiment *e, const struct app_params *p, float t
 	float gm = (1.0f + SWP_A_MAX_G) * gh, b = 1.0f - c;
 	float top_max = c > 1e-4f ? (sqrtf(b * b + 4.0f * c * gm) - b) / (2.0f * c) : gm / fmaxf(b, 1e-4f);
 	for (int k = 0; k < EXP_SWP_LEVELS; k++) {
-		float top = fminf(fminf(thr_h + SWP_SHARE[k] * cf->swp_thr, thr_max), top_max);
+		float top = fminf(fminf(thr_h + share[k] * cf->swp_thr, thr_max), top_max);
 		float gt = (1.0f - c) * top + c * top * top, a = gh > 0.0f ? g * (gt / gh - 1.0f) : 0.0f;
 		e->swp_len[k] = 0u;
 		e->swp_thr[k] = SC_ZERO;
@@ -651,7 +659,7 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	e->ofs = sc_from_float(cf->exc_ofs);
 	e->exc_cap = hover_cap(thr_h, fmaxf(cf->exc_amp + cf->exc_ofs, cf->col_amp));
 	cap_say(e, thr_h);
-	sweep_plan(e, p, thr_h, cf->swp_dz);
+	sweep_plan(e, p, thr_h, cf->swp_dz, cf->src == EXP_SRC_IMU_RPM_TQ ? SWP_SHARE_ROWS : SWP_SHARE_IMU);
 	if (rpm_src(cf)) {
 		speed_model_begin(e, p, in);
 		scales_begin(e);
@@ -702,7 +710,7 @@ static void thrust_rotor_begin(struct experiment *e, const struct app_params *p,
 	if (cf->exc_null) /* rotor 1's excitation alone (the paper's) keeps its amplitude */
 		e->exc_cap = hover_cap(thr_h, cf->exc_amp + cf->exc_ofs);
 	cap_say(e, thr_h);
-	sweep_plan(e, p, thr_h, SWP_DZ_ROWS * cf->swp_dz);
+	sweep_plan(e, p, thr_h, SWP_DZ_ROWS * cf->swp_dz, SWP_SHARE_ROWS);
 	/* a step and the motor's settling after it (the lags of the test's range, up to a
 	 * slow prior's, and the longest delay) stay out of the whiteness test */
 	float settle = fmaxf(SWP_WHITE_TAUS * cf->mot_tau, SWP_WHITE_MIN_S);
