@@ -373,6 +373,7 @@ static scalar_t hover_cap(float thr_h, float peak)
  * the phase ends, and the last stage of the motor model, which alone makes the estimates
  * (motor_id.h), keeps every step. */
 #define SWP_PERIOD_S 1.0f
+#define EXP_SPAN_MAX 1000.0f /* frames: a gap longer than this ends the experiment anyway */
 #define SWP_A_MAX_G 3.0f
 /* With the thrust rows a step climbs this share of ID_SWP_DZ: the rows see each step at their
  * own noise (the accelerometer's vibration needs the IMU's whole climb), and the experiment
@@ -656,6 +657,7 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	xp3.amplitude = sc_from_float(cf->col_amp);
 	excite_init(&e->exc3, &xp3);
 	e->rot_k = 0;
+	e->swp_k = 0;
 	e->ofs = sc_from_float(cf->exc_ofs);
 	e->exc_cap = hover_cap(thr_h, fmaxf(cf->exc_amp + cf->exc_ofs, cf->col_amp));
 	cap_say(e, thr_h);
@@ -701,6 +703,7 @@ static void thrust_rotor_begin(struct experiment *e, const struct app_params *p,
 	xp2.seed = xp.seed * 2654435761u + 12345u;
 	excite_init(&e->exc2, &xp2);
 	e->rot_k = 0;
+	e->swp_k = 0;
 	excite_null_pattern(0, e->pat[0]);
 	excite_null_pattern(1, e->pat[1]);
 	e->ofs = sc_from_float(cf->exc_ofs);
@@ -1484,11 +1487,20 @@ static void null_dither(struct experiment *e, bool running, scalar_t d, struct e
  * between steps), the steps half a period into the excitation, at the levels in turn. Before
  * the null dither (which counts the excited frames in rot_k). The caller scales it by the
  * tilt's back-off: a collective step is a torque step on a rotor weaker than its MOT_SCALEj. */
-static scalar_t sweep_step(const struct experiment *e, bool running)
+static scalar_t sweep_step(struct experiment *e, bool running)
 {
-	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = e->rot_k + per / 2u;
+	if (!running)
+		return SC_ZERO;
+	/* the sweep's clock counts the plant's frames: through the lost frames the plant held
+	 * the last throttles, a step's among them, so a step lasts its planned time, not its
+	 * planned count of delivered frames (under 20 % loss that is a quarter longer, and a
+	 * step's climb grows as its time squared) */
+	if (e->rot_k > 0u)
+		e->swp_k += e->fr_span - 1u;
+	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = e->swp_k + per / 2u;
 	uint32_t ph = kk % per, lv = (kk / per) % EXP_SWP_LEVELS;
-	return running && ph < e->swp_len[lv] && app_f_lt(e->t_phase, e->swp_end) ? e->swp_thr[lv] : SC_ZERO;
+	e->swp_k++;
+	return ph < e->swp_len[lv] && app_f_lt(e->t_phase, e->swp_end) ? e->swp_thr[lv] : SC_ZERO;
 }
 
 /* The inertia axis' gyro reading w an outlier (INR_GATE_W): its change since the filters'
@@ -1594,6 +1606,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 	if (!app_f_eq(in->dt_s, e->fr_dt)) { /* the same period as the last step: the same count */
 		float fr = in->dt_s * e->inv_dt_nom;
 		e->fr_n = fr > 0.5f && fr < (float)FILT_DELAY_MAX + 0.5f ? (int)(fr + 0.5f) : 0;
+		e->fr_span = fr > 0.5f && fr < EXP_SPAN_MAX ? (uint32_t)(fr + 0.5f) : 1u;
 		e->fr_dt = in->dt_s;
 	}
 	int n = e->fr_n;

@@ -156,6 +156,7 @@ struct experiment {
 	float t_total, t_limit;     /* the phase's planned time and time limit (phase_limit) */
 	float fr_dt;                /* the last step's dt_s ... */
 	int fr_n;                   /* ... and the frames it spans (phase_step) */
+	uint32_t fr_span;           /* ... the same, however long (1 after a gap beyond EXP_SPAN_MAX) */
 	int gap_hold;               /* frames left without inertia updates after a gap */
 	struct exp_cfg cfg;
 	struct excite exc;
@@ -171,6 +172,7 @@ struct experiment {
 	scalar_t f_model[HAL_ROTORS], tq_model[HAL_ROTORS];
 	float w2_gain;       /* IMU with rotor speeds: the speed^2 to "thrust" gain the motor model reads */
 	uint32_t rot_k;      /* rotor experiment: excited frames so far */
+	uint32_t swp_k;      /* ... its throttle sweep's clock: the plant's frames, lost ones included */
 	uint32_t est_wait;   /* steps until est[] / est_sd[] are read again */
 	scalar_t inr_u_prev; /* inertia: the excitation of the previous step (the instrument's input) */
 	scalar_t exc_gain;   /* the phase's excitation scale: 1, halved beyond EXP_TILT_SOFT_DEG or EXP_HEIGHT_SOFT_M */

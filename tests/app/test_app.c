@@ -1233,3 +1233,51 @@ UNIT_TEST(env_hover_torque_gain_follows_the_learned_kf)
 		CHECK(env_hover_alloc_learned(&h) == c[i].alloc);
 	}
 }
+
+/* The rotor experiment's throttle sweep on a link that loses every third frame: the plant
+ * holds the last throttles through a lost frame, a step's among them, so each step must end
+ * after its planned plant time (swp_len frames), not after that many delivered frames. */
+UNIT_TEST(app_sweep_steps_last_their_plant_time_through_lost_frames)
+{
+	if (!exp_available(1))
+		return;
+	struct rig *r = rig_hovering(u);
+	char why[64] = "";
+	CHECK(app_cmd_experiment(&r->a, 1.0f, 7, why, sizeof why) == APP_IN_PROGRESS);
+	const struct experiment *e = &r->a.exp;
+	uint32_t len_max = 0;
+	long first = -1, last = -1, frame = 0;
+	int steps = 0, lost_in_step = 0, lost_since = 0, over = 0;
+	for (int i = 0; i < 90 * 40 && r->a.mode == APP_EXPERIMENT; i++) {
+		r->t += 1.0 / 90.0;
+		r->h.now_us += FRAME_US;
+		frame++;
+		if (i % 3 == 2) { /* lost: the plant holds the last throttles */
+			lost_since++;
+			continue;
+		}
+		frame_at(r, r->t);
+		tick(r);
+		for (int k = 0; k < EXP_SWP_LEVELS; k++)
+			len_max = e->swp_len[k] > len_max ? e->swp_len[k] : len_max;
+		float mean = 0.0f;
+		for (int j = 0; j < HAL_ROTORS; j++)
+			mean += sc_to_float(r->a.exp_out.thr_delta[j]) / (float)HAL_ROTORS;
+		bool in_step = mean > 0.02f; /* the dithers sum to 0 over the rotors; a step does not */
+		if (in_step) {
+			if (first < 0) {
+				first = frame;
+				lost_since = 0;
+			}
+			last = frame;
+		} else if (first >= 0) { /* the step's plant frames: to the last delivered at its top */
+			steps++;
+			lost_in_step += lost_since > 0;
+			over += (uint32_t)(last - first + 1) > len_max;
+			first = -1;
+		}
+		lost_since = first >= 0 ? lost_since : 0;
+	}
+	CHECK(steps >= 4 && lost_in_step >= 2 && len_max >= 3u);
+	CHECK(over == 0);
+}
