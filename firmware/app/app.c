@@ -946,39 +946,39 @@ static void after_frame(struct app *a)
 	}
 }
 
-/* False only when app_settle would find nothing to do: every part of it is conditional, and
- * these are their conditions (said_out, after_frame, env_publish, the torque gain, exp_turn,
- * the results, the parameters). The bytes are or'ed without branches: the all-clear case is
- * the common one (app_tick settles every step before the next frame). */
-static bool settle_due(const struct app *a)
+/* The work between frames: its parts in their order, each run when its condition says it is
+ * due. With run false, only whether any part is due: the step asks that before it settles,
+ * since the all-clear case is the common one (app_tick settles every step before the next
+ * frame). One list serves both, so a part cannot be due without the step seeing it. */
+static bool settle_parts(struct app *a, bool run)
 {
+#define PART(due, work)                      \
+	do {                                 \
+		if (due) {                   \
+			if (!run)            \
+				return true; \
+			work;                \
+		}                            \
+	} while (0)
 	const struct app_said *s = &a->said;
-	const struct experiment *e = &a->exp;
-	bool flags = a->after.kf_due | a->after.log_due | a->after.judge_due | a->env_hover.pub_due |
-		     env_kf_due(&a->env_kf) | a->env_osc.due | a->torque_gain_due | e->begin_pending | e->turn_pending |
-		     a->params_dirty;
-	return flags || s->n > 0u || s->overflows != s->overflows_said || e->n_ids > 0 || e->n_results > 0;
+	struct experiment *e = &a->exp;
+	/* what the last step said, in its order, before anything newer */
+	PART(s->n > 0u || s->overflows != s->overflows_said, said_out(a));
+	PART(a->after.kf_due | a->after.log_due | a->after.judge_due, after_frame(a));
+	/* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh, a detune */
+	PART(a->env_hover.pub_due | env_kf_due(&a->env_kf) | a->env_osc.due, env_publish(a));
+	/* the torque demands' gain, from the hover learned so far */
+	PART(a->torque_gain_due, (a->torque_gain_due = false, env_hover_torque_scale(&a->env_hover, &a->p)));
+	/* a phase that ended in the last step: close it, start the next */
+	PART(e->begin_pending | e->turn_pending, exp_turn(e, &a->p));
+	PART(e->n_ids > 0, publish_ids(a));
+	PART(e->n_results > 0, apply_results(a));
+	PART(a->params_dirty, (a->params_dirty = false, sync_params(a)));
+#undef PART
+	return false;
 }
 
-void app_settle(struct app *a)
-{
-	said_out(a); /* what the last step said, in its order, before anything newer */
-	after_frame(a);
-	env_publish(a); /* what the last step noted: HOV_* of a HOLD entry, KFT_*, a VEH_KF refresh, a detune */
-	if (a->torque_gain_due) { /* the torque demands' gain, from the hover learned so far */
-		a->torque_gain_due = false;
-		env_hover_torque_scale(&a->env_hover, &a->p);
-	}
-	exp_turn(&a->exp, &a->p); /* a phase that ended in the last step: close it, start the next */
-	if (a->exp.n_ids > 0)
-		publish_ids(a);
-	if (a->exp.n_results > 0)
-		apply_results(a);
-	if (a->params_dirty) {
-		a->params_dirty = false;
-		sync_params(a);
-	}
-}
+void app_settle(struct app *a) { settle_parts(a, true); }
 
 /* ---------------------------------------------------------------- per frame */
 
@@ -1132,7 +1132,7 @@ static void frame_copy(struct hal_sensor_frame *restrict d, const struct hal_sen
 
 void app_on_frame(struct app *a, const struct hal_sensor_frame *f)
 {
-	if (settle_due(a)) /* normally done by app_tick already (nothing left here) */
+	if (settle_parts(a, false)) /* normally done by app_tick already (nothing left here) */
 		app_settle(a);
 	a->said.in_step = true; /* what the step says is said between frames (struct app_said) */
 	uint64_t now = hal_wall_us(a->hal);
