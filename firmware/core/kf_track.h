@@ -72,6 +72,7 @@
 #define KF_TRACK_W_AVG 8u    /* window comparisons averaged */
 #define KF_TRACK_L_MEM 8     /* a long window: this many memories T* */
 #define KF_TRACK_L_MAX 1024u /* samples in a long window at most (its sums stay in range) */
+#define KF_TRACK_H_MEM 32    /* the slow part's horizon: a line over some this many windows */
 
 struct kf_track_params {
 	scalar_t drift_per_min; /* largest drift to follow, fraction per minute (e.g. 0.02) */
@@ -127,6 +128,13 @@ struct kf_track {
 	scalar_t l_var_pct2;  /* the spread's variance, percent^2 (average over windows) */
 	scalar_t l_slope_pct; /* the last long window's slope of kr, percent per memory */
 	uint32_t l_count;     /* windows ended */
+	/* the slow part: kr at each window's end about its line over the last some KF_TRACK_H_MEM
+	 * windows (weights decaying by 1 - 1 / KF_TRACK_H_MEM a window) */
+	scalar_t h_ref, h_inv; /* kr the values are taken from, and 100 / h_ref */
+	scalar_t h_s0, h_s00, h_su, h_suu, h_sc, h_scc,
+		h_suc;        /* weighted sums of 1, (the weights squared), u, u^2, c, c^2, u c
+			       * (u: a value's age in KF_TRACK_H_MEM windows, <= 0; c: kr, percent from h_ref) */
+	scalar_t h_var_pct2; /* the residual variance about the line, percent^2 (0: too few windows yet) */
 	bool started;         /* an estimate exists */
 	bool primed;          /* the lag filter holds a value */
 	uint32_t updates;
