@@ -185,8 +185,8 @@ static void lag_correct(struct kf_track *s)
  * older (u down by 1 / KF_TRACK_H_MEM) and weighed by lambda_h = 1 - 1 / KF_TRACK_H_MEM, the
  * new one at u = 0. Then the weighted residual variance about the weighted line, with n_eff =
  * S0^2 / S00 values of which the line takes two: times n_eff / (n_eff - 2), once n_eff > 4.
- * The values are percent from h_ref, moved to kr when one is beyond 1 % (the sums shifted
- * by it: the residuals are the same), so that they stay small whatever the drift. */
+ * The values are percent of h_ref, moved to kr when one is beyond 1 % (the sums shifted and
+ * scaled to it: the residuals are the same), so that they stay small whatever the drift. */
 static void slow_add(struct kf_track *s)
 {
 	const scalar_t lam = SC(1.0 - 1.0 / KF_TRACK_H_MEM), du = SC(1.0 / KF_TRACK_H_MEM);
@@ -195,13 +195,22 @@ static void slow_add(struct kf_track *s)
 		s->h_inv = sc_div(SC(100.0), s->kr);
 	}
 	scalar_t c = sc_mul(sc_sub(s->kr, s->h_ref), s->h_inv);
-	if (sc_abs(c) > SC(1.0)) { /* c_i - c for every earlier value */
-		s->h_scc = sc_add(sc_sub(s->h_scc, sc_mul(sc_add(c, c), s->h_sc)), sc_mul(sc_sq(c), s->h_s0));
-		s->h_suc = sc_sub(s->h_suc, sc_mul(c, s->h_su));
-		s->h_sc = sc_sub(s->h_sc, sc_mul(c, s->h_s0));
+	if (sc_abs(c) > SC(1.0)) {
+		/* every earlier value from the new reference, in its percent: (c_i - c) rho with
+		 * rho = h_ref / kr = 100 / (100 + c) */
+		scalar_t rho = sc_div(SC(100.0), sc_add(SC(100.0), c));
+		s->h_scc = sc_mul(sc_sq(rho),
+				  sc_add(sc_sub(s->h_scc, sc_mul(sc_add(c, c), s->h_sc)), sc_mul(sc_sq(c), s->h_s0)));
+		s->h_suc = sc_mul(rho, sc_sub(s->h_suc, sc_mul(c, s->h_su)));
+		s->h_sc = sc_mul(rho, sc_sub(s->h_sc, sc_mul(c, s->h_s0)));
 		s->h_ref = s->kr;
-		s->h_inv = sc_div(SC(100.0), s->kr);
+		s->h_inv = sc_mul(s->h_inv, rho);
 		c = SC_ZERO;
+		/* a drift of percents per window (k_f drifting many times faster than T* was
+		 * sized for) would take the sum of squares out of the fixed build's range: the
+		 * sums start again, the line then over the windows since */
+		if (s->h_scc > SC(8192.0))
+			s->h_s0 = s->h_s00 = s->h_su = s->h_suu = s->h_sc = s->h_scc = s->h_suc = SC_ZERO;
 	}
 	scalar_t s0 = s->h_s0, su = s->h_su;
 	s->h_suu = est_mul_unit(sc_add(sc_sub(s->h_suu, est_mul_unit(su, sc_add(du, du))), est_mul_unit(s0, sc_sq(du))),

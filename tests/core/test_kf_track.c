@@ -340,3 +340,39 @@ UNIT_TEST(kf_track_slow_fold_sd)
 	CHECK(sqrt(z2 / n) > 0.4 && sqrt(z2 / n) < 1.2);
 	CHECK(sd_over_a < 1.2);
 }
+
+/* A drift far beyond the one T* was sized for (k_f falling 20 %/min with the memory held at
+ * 10 s: 3 % per window) keeps the slow part's sums in the fixed build's range (they start
+ * again rather than saturate): its sum of squares stays below a quarter of the range; after
+ * the first minute its sd is below 1 % (the drift is a line, which it takes out) and the
+ * published sd covers the error (mostly the lag a 10 s memory leaves, which the long
+ * windows carry). */
+UNIT_TEST(kf_track_slow_part_under_a_fast_drift)
+{
+	struct kf_track_params p = kf_track_params_default();
+	p.t_min_s = SC(10.0);
+	struct kf_track kt;
+	kf_track_init(&kt, &p, SC(20.0));
+	struct unit_rng r = {0xfa57ULL};
+	double dt = 1.0 / FS, u_h = 0.2, scc = 0, h_sd = 0;
+	scalar_t th[NR];
+	for (int j = 0; j < NR; j++)
+		th[j] = s(u_h);
+	int covered = 1;
+	for (int k = 0; k < (int)(180.0 * FS); k++) {
+		double t = k * dt, kf = 20.0 * (1 - 0.2 * t / 60.0);
+		double y = 8 * kf * u_h * (1 + 0.002 * unit_rand_normal(&r));
+		kf_track_update(&kt, th, NR, s(y), s(dt), true);
+		scc = fmax(scc, d(kt.h_scc));
+		if (t > 60.0 && k % 90 == 0) {
+			h_sd = fmax(h_sd, sqrt(d(kt.h_var_pct2)));
+			covered &= fabs(d(kt.k) - kf) < 3 * d(kf_track_sd(&kt));
+		}
+	}
+#ifdef TEST_VERBOSE
+	printf("fast drift: slow part's sum of squares at most %.0f, its sd at most %.3f %%\n", scc, h_sd);
+#endif
+	CHECK(scc < 8192.0);
+	CHECK(h_sd < 1.0);
+	CHECK(covered);
+}
