@@ -48,6 +48,8 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
 	s->l_t = s->l_tn = s->l_kref = s->l_inv = SC_ZERO;
 	s->l_su = s->l_suu = s->l_sc = s->l_scc = s->l_suc = s->l_var_pct2 = SC_ZERO;
 	s->l_n = s->l_count = 0;
+	s->h_ref = s->h_inv = SC_ZERO;
+	s->h_s0 = s->h_s00 = s->h_su = s->h_suu = s->h_sc = s->h_scc = s->h_suc = s->h_var_pct2 = SC_ZERO;
 	s->e_prev_pct = SC_ZERO;
 	s->lag_al = SC(1.0);
 	s->c_dt = SC_ZERO;
@@ -179,6 +181,60 @@ static void lag_correct(struct kf_track *s)
 	s->k = sc_add(s->kr, est_div_int(sc_mul(s->kr, sc_mul(s->l_slope_pct, lag)), 100u));
 }
 
+/* kr at a window's end into the slow part's sums (kf_track.h): every earlier value one window
+ * older (u down by 1 / KF_TRACK_H_MEM) and weighed by lambda_h = 1 - 1 / KF_TRACK_H_MEM, the
+ * new one at u = 0. Then the weighted residual variance about the weighted line, with n_eff =
+ * S0^2 / S00 values of which the line takes two: times n_eff / (n_eff - 2), once n_eff > 4.
+ * The values are percent of h_ref, moved to kr when one is beyond 1 % (the sums shifted and
+ * scaled to it: the residuals are the same), so that they stay small whatever the drift. */
+static void slow_add(struct kf_track *s)
+{
+	const scalar_t lam = SC(1.0 - 1.0 / KF_TRACK_H_MEM), du = SC(1.0 / KF_TRACK_H_MEM);
+	if (!(s->h_s0 > SC_ZERO)) {
+		s->h_ref = s->kr;
+		s->h_inv = sc_div(SC(100.0), s->kr);
+	}
+	scalar_t c = sc_mul(sc_sub(s->kr, s->h_ref), s->h_inv);
+	if (sc_abs(c) > SC(1.0)) {
+		/* every earlier value from the new reference, in its percent: (c_i - c) rho with
+		 * rho = h_ref / kr = 100 / (100 + c) */
+		scalar_t rho = sc_div(SC(100.0), sc_add(SC(100.0), c));
+		s->h_scc = sc_mul(sc_sq(rho),
+				  sc_add(sc_sub(s->h_scc, sc_mul(sc_add(c, c), s->h_sc)), sc_mul(sc_sq(c), s->h_s0)));
+		s->h_suc = sc_mul(rho, sc_sub(s->h_suc, sc_mul(c, s->h_su)));
+		s->h_sc = sc_mul(rho, sc_sub(s->h_sc, sc_mul(c, s->h_s0)));
+		s->h_ref = s->kr;
+		s->h_inv = sc_mul(s->h_inv, rho);
+		c = SC_ZERO;
+		/* a drift of percents per window (k_f drifting many times faster than T* was
+		 * sized for) would take the sum of squares out of the fixed build's range: the
+		 * sums start again, the line then over the windows since */
+		if (s->h_scc > SC(8192.0))
+			s->h_s0 = s->h_s00 = s->h_su = s->h_suu = s->h_sc = s->h_scc = s->h_suc = SC_ZERO;
+	}
+	scalar_t s0 = s->h_s0, su = s->h_su;
+	s->h_suu = est_mul_unit(sc_add(sc_sub(s->h_suu, est_mul_unit(su, sc_add(du, du))), est_mul_unit(s0, sc_sq(du))),
+				lam);
+	s->h_su = est_mul_unit(sc_sub(su, est_mul_unit(s0, du)), lam);
+	s->h_suc = est_mul_unit(sc_sub(s->h_suc, est_mul_unit(s->h_sc, du)), lam);
+	s->h_s0 = sc_add(est_mul_unit(s0, lam), SC(1.0));
+	s->h_s00 = sc_add(est_mul_unit(s->h_s00, sc_sq(lam)), SC(1.0));
+	s->h_sc = sc_add(est_mul_unit(s->h_sc, lam), c);
+	s->h_scc = sc_add(est_mul_unit(s->h_scc, lam), sc_sq(c));
+	s0 = s->h_s0;
+	scalar_t n2 = sc_sq(s0), dof = sc_sub(n2, sc_add(s->h_s00, s->h_s00)); /* S0^2 - 2 S00 */
+	if (!(dof > sc_add(s->h_s00, s->h_s00)))                               /* n_eff <= 4 */
+		return;
+	scalar_t r0 = sc_div(SC(1.0), s0);
+	scalar_t mu = sc_mul(s->h_su, r0), mc = sc_mul(s->h_sc, r0);
+	scalar_t vuu = sc_sub(sc_mul(s->h_suu, r0), sc_sq(mu));
+	scalar_t vuc = sc_sub(sc_mul(s->h_suc, r0), sc_mul(mu, mc));
+	scalar_t v = sc_sub(sc_mul(s->h_scc, r0), sc_sq(mc));
+	if (vuu > SC_ZERO)
+		v = sc_sub(v, sc_div(sc_sq(vuc), vuu));
+	s->h_var_pct2 = sc_div(sc_mul(sc_max(v, SC_ZERO), n2), dof);
+}
+
 /* A window starts at the current estimate. */
 static void window_start(struct kf_track *s)
 {
@@ -208,6 +264,7 @@ static void window_add(struct kf_track *s, scalar_t m_pct, scalar_t ds)
 		s->w_var_pct2 = sc_add(s->w_var_pct2, est_div_int(sc_sub(v, s->w_var_pct2), n));
 	}
 	s->w_prev = mean;
+	slow_add(s);
 	window_start(s);
 }
 
@@ -318,6 +375,7 @@ scalar_t kf_track_sd(const struct kf_track *s)
 	scalar_t sigma = sc_mul(est_div_int(s->s_pct, 100u), sc_mul(s->k, s->phi_s));
 	scalar_t sd = sc_mul(sigma, s->p_rt);
 	scalar_t v = sc_max(s->w_count ? s->w_var_pct2 : SC_ZERO, s->l_count ? s->l_var_pct2 : SC_ZERO);
+	v = sc_max(v, s->h_var_pct2);
 	if (!(v > SC_ZERO))
 		return sd;
 	return sc_max(sd, sc_mul(s->k, est_div_int(sc_sqrt(v), 100u)));

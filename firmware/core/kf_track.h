@@ -41,19 +41,27 @@
  * Coloured noise: var(k) above holds for white noise. Noise slower than the sample rate (an
  * accelerometer's vibration folded close to 0 Hz) moves k by more, and the differences that
  * measure s do not see it. So the measurement y / phi is also averaged over windows of T*:
- * half the squared change between consecutive window means is the variance of a T* mean
- * as observed (noise at every frequency the estimate passes, and the drift over a window),
- * and half that again the variance of a 2 T* mean, the span an exponential memory T* weighs
- * like a plain mean. Averaged over the last KF_TRACK_W_AVG or so comparisons, it is the
- * window part of the sd; kf_track_sd is the larger of the two. A window of T* rather than
- * 2 T* keeps a fold whose period is near 2 T* from passing unseen; it errs on the safe side
- * for white noise (the two parts then agree within sqrt 2). Noise much slower than T* is
- * followed like a drift: so kr's own spread about a straight line fitted over a long window
- * (KF_TRACK_L_MEM T*, the line taking the drift out), with the error of the lag's correction
- * along its slope (above), is a third part, averaged over windows alike: a fold of a period
- * up to a few T* moves k by about its amplitude, and this spread is its rms. What varies slower than the long window (a rotor turning at the frame rate
- * exactly folds its vibration to 0 Hz) is a bias no part sees. The window parts need a few
- * windows (some 10 T* after a start).
+ * half the squared change between consecutive window means is the variance of a T* mean as
+ * observed (noise at every frequency the estimate passes, and the drift over a window), and
+ * half that again the variance of a 2 T* mean, the span an exponential memory T* weighs like a
+ * plain mean. Averaged over the last KF_TRACK_W_AVG or so comparisons, it is the window part
+ * of the sd. A window of T* rather than 2 T* keeps a fold whose period is near 2 T* from
+ * passing unseen; it errs on the safe side for white noise (the two parts then agree within
+ * sqrt 2). Noise much slower than T* is followed like a drift: so kr's own spread about a
+ * straight line fitted over a long window (KF_TRACK_L_MEM T*, the line taking the drift out),
+ * with the error of the lag's correction along its slope (above), is a third part, averaged
+ * over windows alike: a fold of a period up to a few T* moves k by about its amplitude, and
+ * this spread is its rms. A fold slower than the long window (a rotor's harmonic within a few
+ * hundredths of a hertz of a multiple of the frame rate: a period of tens of T*) swings k by
+ * its amplitude too, and the long window's line follows it: the slow part, the fourth, is kr
+ * at each window's end about its line over the last some KF_TRACK_H_MEM windows (weights
+ * decaying by 1 - 1 / KF_TRACK_H_MEM a window, the residual variance scaled by
+ * n_eff / (n_eff - 2) for the line's two parameters; n_eff > 4). It sees a fold of a period up
+ * to about KF_TRACK_H_MEM T* whole (0.8 of its variance at twice that), once it has seen about
+ * a period of it; on white noise it is kr's own variance, the formula's. What varies slower
+ * than that horizon, or has not yet shown a period since a start, is a bias no part sees. The
+ * window parts need a few windows (some 10 T* after a start). kf_track_sd is the largest of
+ * the four.
  *
  * The sd is the tracking's alone: relative to the rotor model (curve, scales, lag) the
  * regressor is built from. The model's own uncertainty is the caller's to add (env_kf.h).
@@ -72,6 +80,7 @@
 #define KF_TRACK_W_AVG 8u    /* window comparisons averaged */
 #define KF_TRACK_L_MEM 8     /* a long window: this many memories T* */
 #define KF_TRACK_L_MAX 1024u /* samples in a long window at most (its sums stay in range) */
+#define KF_TRACK_H_MEM 32    /* the slow part's horizon: a line over some this many windows */
 
 struct kf_track_params {
 	scalar_t drift_per_min; /* largest drift to follow, fraction per minute (e.g. 0.02) */
@@ -127,6 +136,13 @@ struct kf_track {
 	scalar_t l_var_pct2;  /* the spread's variance, percent^2 (average over windows) */
 	scalar_t l_slope_pct; /* the last long window's slope of kr, percent per memory */
 	uint32_t l_count;     /* windows ended */
+	/* the slow part: kr at each window's end about its line over the last some KF_TRACK_H_MEM
+	 * windows (weights decaying by 1 - 1 / KF_TRACK_H_MEM a window) */
+	scalar_t h_ref, h_inv; /* kr the values are taken from, and 100 / h_ref */
+	scalar_t h_s0, h_s00, h_su, h_suu, h_sc, h_scc,
+		h_suc;        /* weighted sums of 1, (the weights squared), u, u^2, c, c^2, u c
+			       * (u: a value's age in KF_TRACK_H_MEM windows, <= 0; c: kr, percent from h_ref) */
+	scalar_t h_var_pct2; /* the residual variance about the line, percent^2 (0: too few windows yet) */
 	bool started;         /* an estimate exists */
 	bool primed;          /* the lag filter holds a value */
 	uint32_t updates;
@@ -145,7 +161,8 @@ void kf_track_init(struct kf_track *s, const struct kf_track_params *p, scalar_t
  * (and drops the block under way). Returns true when the estimate was updated. */
 bool kf_track_update(struct kf_track *s, const scalar_t *thr, int n, scalar_t y_n, scalar_t dt_s, bool gate);
 
-/* Standard deviation of k (N): the largest of the white-noise formula's and the windows'. */
+/* Standard deviation of k (N): the largest of the white-noise formula's and the three window
+ * parts' (header comment). */
 scalar_t kf_track_sd(const struct kf_track *s);
 
 #endif /* OCTO_KF_TRACK_H */
