@@ -13,9 +13,9 @@
 #define P_LB 3  /* B d ln tau: pinned with B */
 #define P_OFS 4 /* the accelerometer's offset, N */
 
-#define IMU_ID_CL_FLOOR 0.25   /* the clusters' factor's floor (the sd at least half the white-noise one) */
-#define IMU_ID_TOP_SHARE 0.5   /* the top blocks' check: the share of j' H j its top clusters carry */
-#define IMU_ID_TOP_T 2.5       /* |D| / sd beyond which its excess joins the variance */
+#define IMU_ID_CL_FLOOR 0.25 /* the clusters' factor's floor (the sd at least half the white-noise one) */
+#define IMU_ID_TOP_SHARE 0.5 /* the top blocks' check: the share of j' H j its top clusters carry */
+#define IMU_ID_TOP_T 2.5     /* |D| / sd beyond which its excess joins the variance */
 
 /* index of (i, j) (either order) in the upper triangle stored row by row */
 static unsigned ut(unsigned i, unsigned j)
