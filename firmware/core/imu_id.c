@@ -13,6 +13,10 @@
 #define P_LB 3  /* B d ln tau: pinned with B */
 #define P_OFS 4 /* the accelerometer's offset, N */
 
+#define IMU_ID_CL_FLOOR 0.25 /* the clusters' factor's floor (the sd at least half the white-noise one) */
+#define IMU_ID_TOP_SHARE 0.5 /* the top blocks' check: the share of j' H j its top clusters carry */
+#define IMU_ID_TOP_T 2.5     /* |D| / sd beyond which its excess joins the variance */
+
 /* index of (i, j) (either order) in the upper triangle stored row by row */
 static unsigned ut(unsigned i, unsigned j)
 {
@@ -838,6 +842,86 @@ static bool solve_lev(const double h[NP][NP], const double w[NP][NP], const doub
 /* a parameter pinned at 0 (the curve and its lag term when the curve is not estimated) */
 static bool is_pinned(const struct imu_id *m, unsigned i) { return !m->cfg.est_curve && (i == P_B || i == P_LB); }
 
+/* The top blocks' check, for the projection j (v = H j, vw = j' H j, gs the clusters' summed
+ * Gram matrix, th the fit): the clusters that carry most of j' theta (largest v' W_g v, until
+ * IMU_ID_TOP_SHARE of j' H j) are left out, and j' theta from the rest compared with it:
+ *     D = j' H_r sum_{g in top} r_g,   H_r = (G - W_top)^-1,
+ * the fit's change (the scores r_g sum to 0 over all clusters). Its variance from the clusters
+ * (as scores: D = sum_top (H j)' s_g - sum_rest ((H_r - H) j)' s_g to first order)
+ *     V_D = sum_top (v' r_g)^2 + sum_rest ((H_r j - v)' r_g)^2.
+ * The clusters' variance assumes the top steps' errors independent; the rotors' vibration at
+ * the top steps' speed can alias to nearly a constant whose phase repeats from step to step
+ * (the sweep is periodic), a common offset of every top step that the curve absorbs and no
+ * cluster's spread shows. The rest then disagree: beyond IMU_ID_TOP_T of V_D's sds the
+ * excess D^2 - V_D is returned (0 otherwise), a variance the factor adds. *t_out (if given):
+ * D / sqrt(V_D). */
+static double top_check(const struct imu_id *m, const float th[NP], const float jo[NP], bool tq, unsigned nb,
+			const float gs[NT], const double v[NP], double vw, float *t_out)
+{
+	bool top[IMU_ID_BLOCKS + 1] = {false};
+	double lev[IMU_ID_BLOCKS + 1], got = 0.0;
+	float gr[NT];
+	memcpy(gr, gs, sizeof gr);
+	for (unsigned k = 0; k < nb; k++) {
+		const struct imu_id_stat *b = &m->blk[k];
+		lev[k] = 0.0;
+		for (unsigned i = 0; i < NP; i++)
+			for (unsigned q = 0; q < NP; q++)
+				lev[k] += v[i] * (double)b->g[ut(i, q)] * v[q];
+	}
+	while (got < IMU_ID_TOP_SHARE * vw) {
+		unsigned kb = nb;
+		for (unsigned k = 0; k < nb; k++)
+			if (!top[k] && (kb == nb || lev[k] > lev[kb]))
+				kb = k;
+		if (kb == nb)
+			return 0.0;
+		top[kb] = true;
+		got += lev[kb];
+		for (unsigned i = 0; i < NT; i++)
+			gr[i] -= m->blk[kb].g[i];
+	}
+	float g[NT], hf[NP][NP], bb0[NP], j[NP];
+	proj_centred(m, jo, j);
+	pinned(m, gr, NULL, g, bb0);
+	if (!inv_sym(g, hf))
+		return 0.0; /* the rest cannot tell j' theta: no check */
+	double vr[NP];
+	for (unsigned i = 0; i < NP; i++) {
+		vr[i] = 0.0;
+		for (unsigned k = 0; k < NP; k++)
+			if (!is_pinned(m, i) && !is_pinned(m, k))
+				vr[i] += (double)hf[i][k] * (double)j[k];
+	}
+	double d = 0.0, vd = 0.0;
+	for (unsigned k = 0; k < nb; k++) {
+		const struct imu_id_stat *b = &m->blk[k];
+		const float *bb = tq ? b->bt : b->b;
+		double pv = 0.0, pr = 0.0;
+		for (unsigned i = 0; i < NP; i++) {
+			if (is_pinned(m, i))
+				continue;
+			double r = (double)bb[i];
+			for (unsigned q = 0; q < NP; q++)
+				if (!is_pinned(m, q))
+					r -= (double)b->g[ut(i, q)] * (double)th[q];
+			pv += v[i] * r;
+			pr += vr[i] * r;
+		}
+		if (top[k]) {
+			d += pr;
+			vd += pv * pv;
+		} else {
+			vd += (pr - pv) * (pr - pv);
+		}
+	}
+	if (!(vd > 0.0))
+		return 0.0;
+	if (t_out)
+		*t_out = (float)(d / sqrt(vd));
+	return d * d > IMU_ID_TOP_T * IMU_ID_TOP_T * vd ? d * d - vd : 0.0;
+}
+
 /* The clusters' variance factor for the projection j of the parameters: the cluster-robust
  * variance of j' theta over its white-noise variance, both on the frozen hypothesis' frames
  * (its residuals from theta, the whole flight's estimate). The cluster-robust variance is the
@@ -852,10 +936,16 @@ static bool is_pinned(const struct imu_id *m, unsigned i) { return !m->cfg.est_c
  * clusters' matrix C_gh = delta_gh z_g' W_g z_g - (W_g z_g)' H (W_h z_h), so
  * nu = (tr C)^2 / tr(C^2); the estimate then follows a t with nu degrees of freedom, whose
  * variance nu / (nu - 2) the factor carries (*nu_out; 0 when there are not enough clusters).
- * Never below 1; 1 with fewer than 4 clusters (*g_out: the clusters used). */
+ * The factor may lie below 1: the residuals' power is mostly the vibration's aliases near half
+ * the frame rate, which the sweep's slow regressors average out, so the white-noise variance
+ * overstates; it is floored at IMU_ID_CL_FLOOR (the clusters' variance on a dozen degrees of
+ * freedom is itself uncertain). top_check's excess (the top blocks' disagreement) is added.
+ * 1 with fewer than 4 clusters (*g_out: the clusters used). */
 static float cl_factor(const struct imu_id *m, const float th[NP], const float jo[NP], bool tq, unsigned *g_out,
-		       float *nu_out)
+		       float *nu_out, float *t_out)
 {
+	if (t_out)
+		*t_out = 0.0f;
 	unsigned nb =
 		m->nb + (m->cl_k * 2u >= m->cl_len && m->cl_len > 0u ? 1u : 0u); /* a half-full last block counts */
 	*g_out = nb;
@@ -943,11 +1033,12 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 			tr2 += hs[i][k] * hs[k][i];
 	double nu = tr2 > 0.0 ? tr * tr / tr2 : 0.0;
 	*nu_out = (float)nu;
+	double top = top_check(m, th, jo, tq, nb, gs, v, vw, t_out);
 	vw *= (double)ee / (double)(n - NP);
 	if (!(vw > 0.0))
 		return 1.0f;
 	double q = nu > 2.0 ? vc / vw * nu / (nu - 2.0) : (double)INFINITY;
-	return q > 1.0 ? (float)q : 1.0f;
+	return (float)((q > IMU_ID_CL_FLOOR ? q : IMU_ID_CL_FLOOR) + top / vw);
 }
 
 /* a hypothesis' Gauss-Newton step from its grid point, d ln tau = (A d + B d) / (A + B) */
@@ -1126,14 +1217,14 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 	float B = c->est_curve ? c->kt0 * c->curve0 + th[P_B] : 0.0f;
 	const float jk[NP] = {1.0f, c->est_curve ? 1.0f : 0.0f, 0.0f, 0.0f, 0.0f};
 	unsigned ncl = 0;
-	r->tq_hac = cl_factor(m, thc, jk, true, &ncl, &r->tq_dof);
+	r->tq_hac = cl_factor(m, thc, jk, true, &ncl, &r->tq_dof, NULL);
 	r->ktau = A + B;
 	r->ktau_sd = sqrtf(quad(v, jk) * r->tq_hac);
 	r->tq_noise = sqrtf(s2);
 	float yh = m->nz_n ? m->nz_thr / (float)m->nz_n : 0.0f, sl = A + 2.0f * B * yh;
 	const float js[NP] = {1.0f, c->est_curve ? 2.0f * yh : 0.0f, 0.0f, 0.0f, 0.0f};
 	r->tq_slope = sl;
-	r->tq_slope_rsd = sl > 0.0f ? sqrtf(quad(v, js) * cl_factor(m, thc, js, true, &ncl, &nu)) / sl : INFINITY;
+	r->tq_slope_rsd = sl > 0.0f ? sqrtf(quad(v, js) * cl_factor(m, thc, js, true, &ncl, &nu, NULL)) / sl : INFINITY;
 	r->tq_ok = isfinite(r->ktau) && isfinite(r->ktau_sd) && r->ktau > 0.0f;
 }
 
@@ -1236,7 +1327,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->curve = c->est_curve ? (kf_raw != 0.0f ? B / kf_raw : 0.0f) : c->curve0;
 	if (c->est_curve) { /* dc/dA = -B / K^2, dc/dB = A / K^2 */
 		float k2 = kf_raw * kf_raw, jc[NP] = {-B / k2, A / k2, 0.0f, 0.0f, 0.0f};
-		r->curve_sd = sqrtf(quad(v, jc) * cl_factor(m, thc, jc, false, &ncl, &r->curve_dof));
+		r->curve_sd = sqrtf(quad(v, jc) * cl_factor(m, thc, jc, false, &ncl, &r->curve_dof, NULL));
 	}
 	/* the calibration: kappa = m (g T + v_last - v0) / (sum (F_w - D) dt), D the offset;
 	 * k_f = kappa (A + B), its sd from the parameters' covariance through the Jacobian
@@ -1252,12 +1343,12 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->kf = kap * kf_raw;
 	float jac[NP] = {kap, c->est_curve ? kap : 0.0f, 0.0f, 0.0f, fm > 0.0f ? r->kf / fm : 0.0f};
 	float var = quad(v, jac);
-	r->hac = cl_factor(m, thc, jac, false, &ncl, &r->dof);
+	r->hac = cl_factor(m, thc, jac, false, &ncl, &r->dof, &r->top_t);
 	r->blocks = ncl;
 	var *= r->hac;
 	const float jo[NP] = {0.0f, 0.0f, 0.0f, 0.0f, 1.0f};
 	float jl[NP] = {0.0f, 0.0f, 1.0f, c->est_curve ? 1.0f : 0.0f, 0.0f};
-	float vo = v[P_OFS][P_OFS] * cl_factor(m, thc, jo, false, &ncl, &nu);
+	float vo = v[P_OFS][P_OFS] * cl_factor(m, thc, jo, false, &ncl, &nu, NULL);
 	r->kappa_sd = fm > 0.0f ? sqrtf(kap_sd * kap_sd + kap * kap * vo / (fm * fm)) : 0.0f;
 	r->kf_sd = sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
 	/* the slope at hover: kappa (A + 2 B y_h) */
@@ -1265,10 +1356,10 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->thr_hover = yh;
 	r->slope = kap * sl_raw;
 	float js[NP] = {kap, c->est_curve ? 2.0f * kap * yh : 0.0f, 0.0f, 0.0f, fm > 0.0f ? r->slope / fm : 0.0f};
-	float vs = quad(v, js) * cl_factor(m, thc, js, false, &ncl, &nu) + kap_sd * kap_sd * sl_raw * sl_raw;
+	float vs = quad(v, js) * cl_factor(m, thc, js, false, &ncl, &nu, NULL) + kap_sd * kap_sd * sl_raw * sl_raw;
 	r->slope_rsd = r->slope > 0.0f ? sqrtf(vs) / r->slope : INFINITY;
 	/* the lag: the grid point moved by the Gauss-Newton step, its second-order term removed */
-	float vl = quad(v, jl) * cl_factor(m, thc, jl, false, &ncl, &nu);
+	float vl = quad(v, jl) * cl_factor(m, thc, jl, false, &ncl, &nu, NULL);
 	float dl_sd = kf_raw > 0.0f ? sqrtf(fmaxf(vl, 0.0f)) / kf_raw : INFINITY;
 	r->tau = lag_tau(m, bl) * expf(dl + lcorr);
 	scales_check(m, r->t_pattern);

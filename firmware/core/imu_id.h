@@ -40,7 +40,15 @@
  * (the clusters' jackknife: the sweep's few high steps carry the curve, and a plain sandwich
  * reads their residuals after the fit has bent towards them), and its degrees of freedom
  * nu are those its clusters give the projection (Bell and McCaffrey): the error then follows
- * a t with nu degrees of freedom, whose variance nu / (nu - 2) the factor carries.
+ * a t with nu degrees of freedom, whose variance nu / (nu - 2) the factor carries. The factor
+ * is the clusters' alone, below 1 where the residuals' power lies at frequencies the sweep's
+ * slow regressors average out (the white-noise sd then overstates), floored at a quarter (the
+ * sd at least half the white-noise one: the clusters' variance rests on a dozen degrees of
+ * freedom). The clusters take the top steps' errors as independent; a rotor's tone aliased
+ * near 0 Hz in the same phase at every top step is one offset the curve absorbs. So the
+ * clusters that carry most of each projection are left out and the fit of the rest compared
+ * with the whole: a difference beyond 2.5 of its sds adds its excess to the variance
+ * (top_t: k_f's difference in its sds).
  *
  * With the ESCs' shaft torques (their sum Q, from the motor currents) the same regressors
  * explain Q = k_tau sum_j s_j g(y_j) plus the current sensors' summed offset: a second
@@ -180,7 +188,8 @@ enum imu_id_cause {
 	IMU_ID_LAG_RANGE,     /* the best lag at the grid's edge */
 	IMU_ID_DELAY_RANGE,   /* the best delay is the largest hypothesis */
 	IMU_ID_DELAY_AMBIGUOUS,
-	IMU_ID_MODEL,      /* residuals coloured far beyond the vibration's (the cluster factor) */
+	IMU_ID_MODEL,      /* residuals coloured far beyond the vibration's (the cluster factor, the
+			    * top steps' disagreement included) */
 	IMU_ID_CURVE_WEAK, /* the data cannot tell the curve (no throttle spread) */
 	IMU_ID_SCALES,     /* the force answers a null-space dither: a rotor's effectiveness is
 			    * not MOT_SCALE's (the accelerometer cannot tell which rotor) */
@@ -193,7 +202,8 @@ struct imu_id_result {
 	float kf, kf_sd, curve, curve_sd;
 	float ne;              /* residual variance / the still noise's, grown with the thrust */
 	float noise_sd;        /* the still frames' force spread, N */
-	float hac;             /* k_f's cluster-robust variance over its white-noise one */
+	float hac;             /* k_f's variance over its white-noise one (the clusters', the top check's excess) */
+	float top_t;           /* k_f's top blocks' check: the fit without them against it, in its sds */
 	float dof, curve_dof;  /* their degrees of freedom (the t k_f's and the curve's errors follow) */
 	uint32_t blocks;       /* clusters behind it */
 	float t_pattern[2];    /* the null-space patterns' responses over their sds */

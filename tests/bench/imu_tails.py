@@ -15,7 +15,9 @@ octo-sil (a before / after on the same seeds).
 Prints one JSON object: over the accepted k_f, the error's rms and max (%), the error / sd rms,
 the counts beyond 3 and 4 sds and beyond max(3 sd, 1 %) (with their seeds, errors and z), the
 count within 1 %, k_f's relative sd (median and 95th percentile, %), the first motor lag line's
-error rms (%) and count beyond 10 %, the delay found less the true one (counts), the curve's error / sd rms and count beyond 3 sds, the quantiles of k_f's degrees of freedom (the
+error rms (%) and count beyond 10 %, the delay found less the true one (counts), the curve's error / sd rms and count beyond 3 sds, k_f's and the curve's var / sd^2 (error / sd's mean
+square), for I_x, I_y (accepted) and the ratio k_tau / I_z the error / sd rms, the counts beyond 3 sd
+and (seeds) beyond max(3 sd, 2 %), and how many, the quantiles of k_f's degrees of freedom (the
 status line "ID sd x F (vibration), NU dof of G clusters"), and the runs not accepted with
 their first cause.
 """
@@ -41,6 +43,8 @@ CURVE = re.compile(r"^ID curve ([-0-9.]+) \+/- ([-0-9.]+)")
 DOF = re.compile(r"^ID sd x ([0-9.]+) \(vibration\), ([0-9.]+) dof of (\d+) clusters$")
 LAG = re.compile(r"^ID motor lag ([-0-9.]+) \+/- ([-0-9.]+) s delay (-?\d+) fr")
 CAUSE = re.compile(r"^ID (rejected|aborted): (.*)$")
+INR = re.compile(r"^ID (Ixx|Iyy) ([-0-9.]+) \+/- ([-0-9.]+) (kg m\^2 accepted|rejected: .*)$")
+RATIO = re.compile(r"^ID ktau/Izz ([-0-9.]+) \+/- ([-0-9.]+) 1/s\^2 \(gyro")
 SCRIPT = "arm; takeoff 5; wait hold; experiment 6; wait experiment"
 
 
@@ -55,7 +59,8 @@ def fly(sil, seed, sensors, no_vib):
                             str(pf), "--duration", "900", "--script", f"param ID_SEED {seed}; {SCRIPT}"],
                            capture_output=True, text=True, timeout=600)
     row = {"seed": seed, "kf_true": veh["kf"], "c_true": veh["thrust_curve"], "lag_true": veh["motor_tau"],
-           "delay_true": round(veh["delay"] * 90.0)}
+           "delay_true": round(veh["delay"] * 90.0),
+           "ix_true": veh["inertia"][0], "iy_true": veh["inertia"][1], "kz_true": veh["ktau"] / veh["inertia"][2]}
     for ln in (x.split("octo-fw: ", 1)[1] for x in r.stderr.splitlines() if "octo-fw: " in x):
         if (m := KF.match(ln)):
             row.update(kf=float(m[1]), kf_sd=float(m[2]), ok="accepted" in m[3], why=m[3])
@@ -65,9 +70,24 @@ def fly(sil, seed, sensors, no_vib):
             row.update(lag=float(m[1]), lag_sd=float(m[2]), delay=int(m[3]))
         elif (m := DOF.match(ln)):
             row.update(dof=float(m[2]), vib=float(m[1]))
+        elif (m := INR.match(ln)) and "accepted" in m[4]:
+            ax = "ix" if m[1] == "Ixx" else "iy"
+            row.update({ax: float(m[2]), ax + "_sd": float(m[3])})
+        elif (m := RATIO.match(ln)):
+            row.update(kz=float(m[1]), kz_sd=float(m[2]))
         elif (m := CAUSE.match(ln)) and "cause" not in row:
             row["cause"] = m[2]
     return row
+
+
+def tail(rows, k):
+    """a published quantity's error / sd rms, count beyond 3 sd, beyond max(3 sd, 2 %) (seeds) and count"""
+    v = [(r["seed"], r[k] - r[k + "_true"], r[k + "_sd"], r[k + "_true"]) for r in rows if r.get(k + "_sd")]
+    if not v:
+        return None
+    z = [e / s for _, e, s, _ in v]
+    return [round(math.sqrt(sum(q * q for q in z) / len(z)), 3), sum(abs(q) > 3.0 for q in z),
+            [s for s, e, sd, t in v if abs(e) > max(3.0 * sd, 0.02 * t)], len(v)]
 
 
 def summary(rows):
@@ -100,6 +120,9 @@ def summary(rows):
         "lag_err_rms_pct": rms(lag), "lag_beyond_10pct": sum(abs(e) > 10.0 for e in lag),
         "delay_found_less_true": dly,
         "curve_z_rms": rms(zc), "curve_beyond_3sd": sum(abs(q) > 3.0 for q in zc),
+        "kf_var_over_sd2": rms(z) ** 2 if z else None,
+        "curve_var_over_sd2": rms(zc) ** 2 if zc else None,
+        **{f"{k}_z_rms_beyond_3sd_beyond_max_3sd_2pct": tail(rows, k) for k in ("ix", "iy", "kz")},
         "kf_dof_quantiles_0_5_50_95_100": [dof[int(p * (len(dof) - 1))] for p in (0, 0.05, 0.5, 0.95, 1)] if dof else None,
         "not_accepted": causes,
     }
@@ -122,7 +145,8 @@ def main():
     res = summary(rows)
     res.update(sensors=a.sensors, seeds=[seeds[0], seeds[-1]], vibration=not a.no_vibration)
     if a.seeds:
-        res["rows"] = [{k: r.get(k) for k in ("seed", "kf", "kf_sd", "kf_true", "c", "c_sd", "c_true", "dof", "vib")}
+        res["rows"] = [{k: r.get(k) for k in ("seed", "kf", "kf_sd", "kf_true", "c", "c_sd", "c_true", "dof", "vib",
+                                                   "ix", "ix_sd", "ix_true", "iy", "iy_sd", "iy_true", "kz", "kz_sd", "kz_true")}
                        for r in rows]
     if a.rows:
         Path(a.rows).write_text(json.dumps(rows))
