@@ -94,11 +94,12 @@ struct hover_est {
 	/* the error's variance as the data show it (hover_est_sd_err) */
 	scalar_t v_pct2;  /* of theta's relative error from the noise, percent^2 */
 	scalar_t r_eff;   /* the innovations' noise, percent^2 per update, correlation included */
-	scalar_t e_mean;  /* the innovations' mean, percent (the lag behind a drift) */
+	scalar_t e_mean;  /* the last block's innovations' mean, percent (the error now) */
 	scalar_t b_sum;   /* the block under way: its innovations' sum, percent */
 	scalar_t b_prev;  /* the last block's mean */
 	uint32_t b_n;     /* innovations in the block under way */
-	uint32_t b_count; /* blocks ended */
+	uint32_t b_count; /* blocks ended since the filter settled */
+	bool b_settled;   /* the filter had settled at the last block's end */
 	/* what depends on the parameters and the frame period only, computed at init and when
 	 * the period changes: the update's divisions by them become products, with the same
 	 * quotients */
