@@ -276,9 +276,9 @@ UNIT_TEST(hover_est_sd_err_against_the_error)
 }
 
 /* hover_est_sd_err at a hold's entry some 6 s after lift-off, as the firmware publishes it:
- * the take-off's throttle (a ramp to 1.3 u_h in 1 s, held 1 s, 0.85 u_h for 1 s, then
- * hover, dithered 1 %) through a motor lag of 20-80 ms the model leaves out, so that the
- * innovations' first blocks are the filter's convergence; the hover throttle drifting up
+ * the filter started 0.5x-2x off, the take-off's throttle (a swell to 1.25 u_h and back
+ * over 3 s, then hover, dithered 1 %) through a motor lag of 20-80 ms the model leaves out,
+ * so that the innovations' first blocks are the filter's convergence; the hover throttle drifting up
  * by 1.5-3 %/min (a battery); the accelerometer's white noise 0.02-0.1 m/s^2 and a fold of
  * the rotors' vibration near 0 Hz (0.2-1 Hz, up to 0.05 m/s^2). Over 200 trials the error
  * over the sd has an rms within [0.68, 1.3] (0.76), at most 1 % of them beyond 3 (none).
