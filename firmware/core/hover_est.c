@@ -64,7 +64,6 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 	s->v_pct2 = s->p_pct2;
 	s->r_eff = s->e_mean = s->b_sum = s->b_prev = SC_ZERO;
 	s->b_n = s->b_count = 0;
-	s->b_settled = false;
 }
 
 /* inline in each caller (the per-frame track and update paths): no call around a few tests */
@@ -120,9 +119,9 @@ void hover_est_track_acc(struct hover_est *s, scalar_t a_mps2, scalar_t u, scala
 }
 
 /* The error's variance as the data show it (hover_est.h), for an innovation e_pct taken
- * with gain k at period dt: the block of innovations, and V through the gain, with the
- * filter's own posterior until two blocks have given the noise. */
-static void err_var(struct hover_est *s, scalar_t e_pct, scalar_t k, scalar_t dt_s)
+ * with gain k: the block of innovations, and V through the gain, with the filter's own
+ * posterior until two blocks have given the noise. */
+static void err_var(struct hover_est *s, scalar_t e_pct, scalar_t k)
 {
 	scalar_t omk = sc_sub(SC(1.0), k);
 	if (s->b_count >= 2u) /* k r_eff first: k^2 alone has few bits in the fixed build */
@@ -134,30 +133,18 @@ static void err_var(struct hover_est *s, scalar_t e_pct, scalar_t k, scalar_t dt
 	if (++s->b_n < HOVER_EST_BLK)
 		return;
 	scalar_t m = est_div_int(s->b_sum, HOVER_EST_BLK);
-	if (s->b_settled) {
-		if (s->b_count > 0u) {
-			/* B times half the squared change of the block means; the mean of the
-			 * first HOVER_EST_BLK_AVG, then an average over about as many */
-			scalar_t r = sc_mul(sc_from_int((int32_t)HOVER_EST_BLK),
-					    est_mul_unit(sc_sq(sc_sub(m, s->b_prev)), SC(0.5)));
-			uint32_t n = s->b_count < HOVER_EST_BLK_AVG ? s->b_count : HOVER_EST_BLK_AVG;
-			s->r_eff = sc_add(s->r_eff, est_div_int(sc_sub(r, s->r_eff), n));
-		}
-		/* the error now as the innovations show it: their block means averaged with
-		 * weight 1/2 a block, about the filter's own memory (1 / k updates, about two
-		 * blocks), so that a convergence under way shows as it is now */
-		s->e_mean = s->b_count > 0u ? est_mul_unit(sc_add(s->e_mean, m), SC(0.5)) : m;
-		s->b_count++;
-	} else {
-		/* the block began while the filter converged: its innovations are that
-		 * convergence, not the noise; the statistics start with the next one */
-		s->b_count = 0;
-		s->r_eff = s->e_mean = SC_ZERO;
+	if (s->b_count > 0u) {
+		/* B times half the squared change of the block means; the mean of the first
+		 * HOVER_EST_BLK_AVG, then an average over about as many */
+		scalar_t r =
+			sc_mul(sc_from_int((int32_t)HOVER_EST_BLK), est_mul_unit(sc_sq(sc_sub(m, s->b_prev)), SC(0.5)));
+		uint32_t n = s->b_count < HOVER_EST_BLK_AVG ? s->b_count : HOVER_EST_BLK_AVG;
+		s->r_eff = sc_add(s->r_eff, est_div_int(sc_sub(r, s->r_eff), n));
 	}
+	uint32_t n = s->b_count + 1u < HOVER_EST_BLK_AVG ? s->b_count + 1u : HOVER_EST_BLK_AVG;
+	s->e_mean = sc_add(s->e_mean, est_div_int(sc_sub(m, s->e_mean), n));
 	s->b_prev = m;
-	/* settled once P's decrease per update, k P, is within twice the process noise's
-	 * increase (the two are equal in the steady state) */
-	s->b_settled = est_mul_unit(s->p_pct2, k) < sc_mul(SC(2.0), est_mul_unit(s->q2, dt_s));
+	s->b_count++;
 	s->b_sum = SC_ZERO;
 	s->b_n = 0;
 }
@@ -190,7 +177,7 @@ static bool innovate(struct hover_est *s, scalar_t y, scalar_t y_hat, scalar_t r
 	/* two quotients by P + r: its reciprocal prepared once */
 	struct sc_gain inv_pr = sc_gain_recip2(pr, SC(1.0));
 	scalar_t k = sc_mul_gain(s->p_pct2, &inv_pr);
-	err_var(s, e_pct, k, dt_s);
+	err_var(s, e_pct, k);
 	/* k = P / (P + r) in [0, 1] */
 	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), est_mul_unit(est_div_int(e_pct, 100u), k)));
 	s->theta = clamp_theta(s, th);
@@ -252,14 +239,7 @@ scalar_t hover_est_sd(const struct hover_est *s)
 
 scalar_t hover_est_sd_err(const struct hover_est *s)
 {
-	scalar_t v = s->p_pct2;
-	if (s->b_count >= 2u) {
-		/* the mean's square counted beyond twice its own noise's variance, that of the
-		 * average of white block means of variance r_eff / B with weight 1/2:
-		 * (r_eff / B) / 3 (a mean within its noise is no evidence of a bias) */
-		scalar_t e2 = sc_sub(sc_sq(s->e_mean), sc_mul(SC(2.0), est_div_int(s->r_eff, 3u * HOVER_EST_BLK)));
-		v = sc_add(s->v_pct2, sc_max(e2, SC_ZERO));
-	}
+	scalar_t v = s->b_count >= 2u ? sc_add(s->v_pct2, sc_sq(s->e_mean)) : s->p_pct2;
 	return sc_mul(hover_est_u(s), est_div_int(sc_sqrt(v), 100u));
 }
 

@@ -48,21 +48,9 @@
  * from the noise is V' = (1 - k)^2 V + k^2 R, with R the noise's variance per update
  * including its correlation (the filtered reading's, the vibration's): B times the
  * variance of a mean of B innovations, measured as half the squared change between
- * consecutive block means (HOVER_EST_BLK), averaged over HOVER_EST_BLK_AVG blocks. What the
- * innovations still show on average is the estimate's error now (a lag behind a drift, a
- * convergence under way): their block means averaged with weight 1/2 a block (about the
- * filter's memory, 1 / k updates), squared, less twice that average's own noise variance
- * (R / B / 3), when positive. hover_est_sd_err is sqrt(V + that).
- * Only blocks that began with the filter settled are measured: while P still falls (its
- * decrease per update, k P, above twice the process noise's increase), at the start and
- * after a gated run or a spool-up raised it, the innovations are the convergence, which
- * neither is noise nor the error now; counted, they make the sd twice the error.
- * Measured (the IMU, `--sensors imu,rpm`, at HOLD's entry, k_f drifting -1.5 to -3 %/min;
- * tests/py/test_kf_tracked.py's imu_only draw, OCTO_KFT_SEED 971040, 123457, 555001, 300
- * vehicles): error / sd rms 1.05, 2 beyond 3 (both at a hover throttle of 0.38, errors of
- * 0.4-0.9 % that the innovations do not show), against 0.59 with every block counted. With
- * the thrust rows (the speed's derivative, the same draws, 200 vehicles): rms 0.81, none
- * beyond 1.3 (0.53 with every block): the errors share a sign (the lag), which the sd covers.
+ * consecutive block means (HOVER_EST_BLK), averaged over HOVER_EST_BLK_AVG blocks. A lag
+ * behind a drift shows as the innovations' mean, which is the estimate's bias: its square
+ * is added. hover_est_sd_err is that sd.
  *
  * Units: m/s, m/s^2, s, throttle (0..1). No heap, no globals.
  */
@@ -106,12 +94,11 @@ struct hover_est {
 	/* the error's variance as the data show it (hover_est_sd_err) */
 	scalar_t v_pct2;  /* of theta's relative error from the noise, percent^2 */
 	scalar_t r_eff;   /* the innovations' noise, percent^2 per update, correlation included */
-	scalar_t e_mean;  /* the last block's innovations' mean, percent (the error now) */
+	scalar_t e_mean;  /* the innovations' mean, percent (the lag behind a drift) */
 	scalar_t b_sum;   /* the block under way: its innovations' sum, percent */
 	scalar_t b_prev;  /* the last block's mean */
 	uint32_t b_n;     /* innovations in the block under way */
-	uint32_t b_count; /* blocks ended since the filter settled */
-	bool b_settled;   /* the filter had settled at the last block's end */
+	uint32_t b_count; /* blocks ended */
 	/* what depends on the parameters and the frame period only, computed at init and when
 	 * the period changes: the update's divisions by them become products, with the same
 	 * quotients */
@@ -154,8 +141,8 @@ scalar_t hover_est_u(const struct hover_est *s);
 scalar_t hover_est_sd(const struct hover_est *s);
 
 /* The standard deviation of u_h's error as the data show it: the filter's own gains applied
- * to the innovations' measured noise, and their mean, the error now (header comment); the
- * filter's own before two blocks of innovations with the filter settled have been seen. */
+ * to the innovations' measured noise (header comment), and their mean (a lag behind a
+ * drift); the filter's before two blocks of innovations have been seen. */
 scalar_t hover_est_sd_err(const struct hover_est *s);
 
 /* True once the relative standard deviation of u_h is below rel_sd. */
