@@ -373,18 +373,25 @@ static void env_publish(struct app *a)
 	struct env_kf_pub kp;
 	if (env_kf_due(&a->env_kf) &&
 	    env_kf_publish(&a->env_kf, &a->p, hal_wall_us(a->hal), a->fr.t_s, a->dt_frame, &kp)) {
-		set_param(a, PX_KFT_EST, kp.k, kp.announce);
-		set_param(a, PX_KFT_SD, kp.sd, kp.announce);
-		set_param(a, PX_KFT_T, kp.t, kp.announce);
-		set_param(a, PX_KFT_MEM, kp.mem, kp.announce);
-		if (kp.announce) {
-			post_value(a, "KFT", kp.k);
-			post_value(a, "KFT_SD", kp.sd);
+		if (kp.fold > 0) /* env_kf.h: a fold too slow for the tracker's sd */
+			app_status(a, APP_SEV_WARNING, "KFT paused: vibration folds to %.2f Hz (HOV_KF too)",
+				   (double)kp.fold_hz);
+		else if (kp.fold < 0)
+			app_status(a, APP_SEV_INFO, "KFT resumed: the vibration folds to %.2f Hz", (double)kp.fold_hz);
+		if (!kp.paused) {
+			set_param(a, PX_KFT_EST, kp.k, kp.announce);
+			set_param(a, PX_KFT_SD, kp.sd, kp.announce);
+			set_param(a, PX_KFT_T, kp.t, kp.announce);
+			set_param(a, PX_KFT_MEM, kp.mem, kp.announce);
+			if (kp.announce) {
+				post_value(a, "KFT", kp.k);
+				post_value(a, "KFT_SD", kp.sd);
+			}
+			if (kp.clear_apply)
+				set_param(a, PX_KFT_APPLY, 0.0f, true);
+			if (kp.refresh)
+				set_veh_kf(a, kp.kf, kp.why);
 		}
-		if (kp.clear_apply)
-			set_param(a, PX_KFT_APPLY, 0.0f, true);
-		if (kp.refresh)
-			set_veh_kf(a, kp.kf, kp.why);
 	}
 	struct env_osc_req oq;
 	if (env_osc_judge(&a->env_osc, &a->p, &oq)) {

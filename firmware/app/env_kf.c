@@ -9,6 +9,14 @@
 #define KFT_VOTES 3u     /* publications in a row that must call for the refresh */
 #define IMU_AVG_N 9u     /* frames per sample with the accelerometer (0.1 s at 90 Hz) */
 #define IMU_T_MIN_S 1.0f /* the shortest memory then: ten samples */
+/* A fold of the rotors' vibration slower than this pauses the publications (env_kf.h); it
+ * resumes above FOLD_OFF_HZ. The tracker's sd follows a swing of 0.1 Hz or faster within
+ * the test's warm-up (its long windows' and slow parts: kf_track.h); the mean of 8 rotors'
+ * reports over 2 s resolves the speed to a few hundredths of a hertz. */
+#define KFT_FOLD_HZ 0.1f
+#define FOLD_OFF_HZ 0.15f
+#define FOLD_AVG_S 2.0f /* s: the rotors' mean speed smoothed over this, while the tracker updates */
+#define FOLD_VOTES 5u   /* publications (1 s apart) in a row below KFT_FOLD_HZ: a steady fold, not a passage */
 
 /* The tracker's model of the rotors: the vehicle's motor lag, thrust curve and per-rotor
  * effectiveness, as identified (or given); with the accelerometer, samples of IMU_AVG_N
@@ -96,6 +104,15 @@ void env_kf_step(struct env_kf *k, const struct env_kf_input *in, const struct a
 		for (int j = 0; j < HAL_ROTORS; j++)
 			y = sc_add(y, in->thrust_n[j]);
 	kf_track_update(t, in->thr, HAL_ROTORS, y, in->dt_s, in->gate && in->src != ENV_SRC_NONE);
+	if (k->src == ENV_SRC_IMU && in->speed_rps && in->gate) {
+		float w = 0.0f, dt = sc_to_float(in->dt_s);
+		for (int j = 0; j < HAL_ROTORS; j++)
+			w += in->speed_rps[j];
+		float f = w / (6.2831853f * (float)HAL_ROTORS), a = fminf(dt / FOLD_AVG_S, 1.0f);
+		k->spd_hz = k->spd_hz > 0.0f && isfinite(f) ? k->spd_hz + a * (f - k->spd_hz) : f;
+	} else if (k->src != ENV_SRC_IMU || !in->speed_rps) {
+		k->spd_hz = 0.0f;
+	}
 	/* the publication once a second of plant time, between frames: the step only notes
 	 * that this frame is due and whether it flew in HOLD */
 	if (!t->started || app_t_before(in->t_s, k->pub_next_t))
@@ -112,6 +129,26 @@ bool env_kf_publish(struct env_kf *k, const struct app_params *p, uint64_t now_u
 	if (!k->pub_due)
 		return false;
 	k->pub_due = false;
+	/* the fold: the nearest multiple of the frame rate to the first and second harmonics */
+	bool was = k->folded;
+	k->fold_hz = INFINITY;
+	if (k->spd_hz > 0.0f && isfinite(k->spd_hz) && dt_frame > 0.0f) {
+		float fs = 1.0f / dt_frame;
+		for (int h = 1; h <= 2; h++) {
+			float x = (float)h * k->spd_hz;
+			k->fold_hz = fminf(k->fold_hz, fabsf(x - fs * roundf(x / fs)));
+		}
+	}
+	k->fold_votes = k->fold_hz < KFT_FOLD_HZ ? k->fold_votes + 1u : 0u;
+	k->folded = was ? k->fold_hz < FOLD_OFF_HZ : k->fold_votes >= FOLD_VOTES;
+	out->fold = (int8_t)(k->folded == was ? 0 : k->folded ? 1 : -1);
+	out->fold_hz = k->fold_hz;
+	out->paused = k->folded;
+	if (k->folded) {
+		k->votes = 0;
+		out->clear_apply = out->refresh = out->announce = false;
+		return true;
+	}
 	/* announced to the ground station at most once a second of wall time, whose rates are
 	 * wall-clock: a fast lockstep run must not flood the link */
 	out->announce = now_us - k->pub_wall_us >= 1000000u;

@@ -23,6 +23,13 @@
  * publications still carry the identification's share. Without an accepted identification
  * the model is the one given (MOT_CURVE, MOT_SCALE*, ID_MOT_TAU) and KFT_SD carries no share
  * of it. docs/identification.md, "k_f tracked in flight".
+ *
+ * A fold the tracker cannot see: with the accelerometer, a rotor speed whose first or second
+ * harmonic lies within KFT_FOLD_HZ of a multiple of the frame rate shakes the reading at
+ * nearly 0 Hz after the 90 Hz read, a swing slower than the tracker's windows whose first
+ * turn looks like a drift. With the ESCs' speeds the fold's frequency is known: the
+ * publications pause while it is that slow, and say so ("KFT paused: ..."), rather than
+ * publish an sd that cannot carry it.
  */
 #ifndef OCTO_ENV_KF_H
 #define OCTO_ENV_KF_H
@@ -47,6 +54,10 @@ struct env_kf {
 	uint32_t votes;       /* consecutive publications that called for a VEH_KF refresh */
 	bool pub_due;         /* the last step reached pub_next_t: env_kf_publish's turn */
 	bool pub_hold;        /* and flew in HOLD (where VEH_KF may be refreshed) */
+	float spd_hz;         /* the rotors' mean speed, Hz, smoothed (src IMU with the ESCs' speeds; 0: none) */
+	float fold_hz;        /* how close to 0 Hz its first two harmonics fold at the frame rate */
+	uint32_t fold_votes;  /* publications in a row with fold_hz below KFT_FOLD_HZ */
+	bool folded;          /* a steady fold that slow: the estimate is not published */
 };
 
 /* One step's inputs. */
@@ -57,15 +68,19 @@ struct env_kf_input {
 	double t_cal_s;           /* plant time of the accelerometer's calibration (src IMU) */
 	const scalar_t *thr;      /* HAL_ROTORS throttles of the last step (what acts now) */
 	scalar_t dt_s;
-	double t_s; /* this frame's plant time */
-	bool gate;  /* HOLD or an experiment, airborne, the source's measurement in this frame */
-	bool hold;  /* in HOLD */
+	double t_s;             /* this frame's plant time */
+	const float *speed_rps; /* HAL_ROTORS rotor speeds, rad/s (NULL: not delivered) */
+	bool gate;              /* HOLD or an experiment, airborne, the source's measurement in this frame */
+	bool hold;              /* in HOLD */
 };
 
 /* What a publication asks of the app, in this order: KFT_EST, KFT_SD (absolute), KFT_T, KFT_MEM set
  * (announced as PARAM_VALUE and the values "KFT", "KFT_SD" when `announce`); KFT_APPLY set
  * back to 0 (clear_apply); VEH_KF := kf (refresh, with `why` for its status line). */
 struct env_kf_pub {
+	bool paused;   /* a fold near 0 Hz: nothing set, nothing refreshed (KFT_* keep their last values) */
+	int8_t fold;   /* +1: paused now, -1: resumed now (a status line each), 0: as before */
+	float fold_hz; /* the fold's frequency, Hz */
 	float k, sd, t, mem;
 	bool announce;
 	bool clear_apply;
@@ -94,10 +109,11 @@ bool env_kf_publish(struct env_kf *k, const struct app_params *p, uint64_t now_u
 /* The absolute sd of the estimate at plant time t_s (header comment). */
 float env_kf_sd_abs(const struct env_kf *k, double t_s);
 
-/* The estimate and its absolute sd for the log (false before the first estimate). */
+/* The estimate and its absolute sd for the log (false before the first estimate, and while
+ * paused by a fold). */
 static inline bool env_kf_estimate(const struct env_kf *k, double t_s, float *kf, float *sd)
 {
-	if (!k->kft.started)
+	if (!k->kft.started || k->folded)
 		return false;
 	*kf = sc_to_float(k->kft.k);
 	*sd = env_kf_sd_abs(k, t_s);

@@ -180,6 +180,7 @@ static inline void step_height(struct app *a, struct step *s)
 	ki->thr = a->after.thr_prev;
 	ki->dt_s = s->gi.dt_s;
 	ki->t_s = a->fr.t_s;
+	ki->speed_rps = (a->fr.valid & HAL_FRAME_RPM) ? a->fr.rotor_speed_rps : NULL;
 	ki->gate = (a->mode == APP_HOLD || a->mode == APP_EXPERIMENT) && up && have;
 	ki->hold = a->mode == APP_HOLD;
 	a->after.kf_due = true;

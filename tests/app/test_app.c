@@ -1281,3 +1281,65 @@ UNIT_TEST(app_sweep_steps_last_their_plant_time_through_lost_frames)
 	CHECK(steps >= 4 && lost_in_step >= 2 && len_max >= 3u);
 	CHECK(over == 0);
 }
+
+/* k_f tracked from the accelerometer: the rotors' speeds at a harmonic of the frame rate fold
+ * their vibration to nearly 0 Hz; a steady fold below 0.1 Hz pauses the publications (said
+ * once, resumed when the speed moves away), a passage through it does not. */
+static int kf_fold_run(struct env_kf *k, const struct app_params *p, double *t, double secs, float hz0, float hz1,
+		       struct env_kf_pub *last, int *paused_pubs)
+{
+	scalar_t thr[HAL_ROTORS];
+	float spd[HAL_ROTORS];
+	int said = 0;
+	for (int j = 0; j < HAL_ROTORS; j++)
+		thr[j] = SC(0.36);
+	int n = (int)(secs * 90.0);
+	for (int i = 0; i < n; i++) {
+		*t += 1.0 / 90.0;
+		float hz = hz0 + (hz1 - hz0) * (float)i / (float)n;
+		for (int j = 0; j < HAL_ROTORS; j++)
+			spd[j] = 6.2831853f * hz;
+		struct env_kf_input in = {.thrust_n = NULL,
+					  .acc_z_g = SC(1),
+					  .src = ENV_SRC_IMU,
+					  .t_cal_s = 0.0,
+					  .thr = thr,
+					  .dt_s = sc_from_float(1.0f / 90.0f),
+					  .t_s = *t,
+					  .speed_rps = spd,
+					  .gate = true,
+					  .hold = true};
+		env_kf_step(k, &in, p);
+		if (env_kf_due(k) && env_kf_publish(k, p, (uint64_t)(*t * 1e6), *t, 1.0f / 90.0f, last)) {
+			said += last->fold != 0 ? last->fold : 0;
+			*paused_pubs += last->paused ? 1 : 0;
+		}
+	}
+	return said;
+}
+
+UNIT_TEST(env_kf_pauses_on_a_steady_fold_near_0_hz)
+{
+	struct app_params p;
+	params_defaults(&p);
+	struct env_kf k;
+	memset(&k, 0, sizeof k);
+	k.src = ENV_SRC_IMU;
+	env_kf_init(&k, &p);
+	struct env_kf_pub last;
+	double t = 0.0;
+	int paused = 0;
+	/* a passage through 90 Hz in 2 s: no pause */
+	CHECK(kf_fold_run(&k, &p, &t, 2.0, 88.0f, 92.0f, &last, &paused) == 0 && paused == 0);
+	/* steady at 90.03 Hz (a fold at 0.03 Hz): paused after a few publications, said once */
+	CHECK(kf_fold_run(&k, &p, &t, 20.0, 90.03f, 90.03f, &last, &paused) == 1);
+	CHECK(last.paused && last.fold_hz < 0.1f && paused >= 10);
+	float kf, sd;
+	CHECK(!env_kf_estimate(&k, t, &kf, &sd)); /* the log shows none */
+	/* the second harmonic of 45.01 Hz folds too */
+	paused = 0;
+	CHECK(kf_fold_run(&k, &p, &t, 25.0, 45.01f, 45.01f, &last, &paused) == 0 && last.paused);
+	/* away from it (92 Hz: a fold at 2 Hz): resumed, said once */
+	CHECK(kf_fold_run(&k, &p, &t, 10.0, 92.0f, 92.0f, &last, &paused) == -1 && !last.paused);
+	CHECK(env_kf_estimate(&k, t, &kf, &sd));
+}

@@ -219,6 +219,7 @@ def hover_line(events):
 
 N_ID = 90  # wide vehicles flown with identification
 N_IMU = 100  # vehicles flown from the IMU
+MAX_PAUSED = 5  # of them whose tracking may pause on a fold (about 1 % hover where it folds)
 
 
 def test_tracked_kf_against_truth_and_its_sd_after_identification(tmp_path):
@@ -273,10 +274,16 @@ def test_imu_only_hover_and_tracker_follow_a_drift(tmp_path):
     - the drift it saw over the hold against the truth's (which changed by more than 1.5 %),
       within 0.3 % or the union bound over 100 (4.9) of the two ends' sds combined (which
       overstates the drift's sd: the ends share the calibration's error);
-    - hover learning's k_f at HOLD's entry within 1 % of the truth, its z (one per vehicle)
-      below an upper chi-square bound and the union bound (5e-5 each). Its sd is pessimistic
-      (error / sd rms 0.55 over 197 vehicles; 0.31 with the filter's own sd, which its random
-      walk sets), so the band's lower bound is not asked of it.
+    - hover learning's k_f at HOLD's entry within 1 % of the truth or its z bound, its z (one
+      per vehicle) below an upper chi-square bound and the union bound (5e-5 each); the
+      band's lower bound is not asked of it;
+    - a vehicle whose rotors turn where their vibration folds steadily below 0.1 Hz at the
+      90 Hz read (about 1 in 100 here: hover throttle 0.36 puts them at 90 Hz): the firmware
+      pauses the tracker's publications and says so, naming hover learning too ("KFT paused:
+      vibration folds to 0.02 Hz (HOV_KF too)"); such a swing's first turn looks like a drift,
+      and no sd made from the data so far carries it. Its claim is checked against the
+      rotor speeds it read, at most MAX_PAUSED vehicles pause, and its hover k_f must be
+      within 1 %.
     False failure < 1e-3 per run (3e-4 per side of the tracked k_f's band, 1e-4 for each of
     its union bounds, 5e-5 for each of hover learning's two bounds: 9e-4). An sd 1.5
     times too small fails the tracked k_f's band with probability >= 0.99.
@@ -304,6 +311,18 @@ def test_imu_only_hover_and_tracker_follow_a_drift(tmp_path):
         t_h, hk, hsd = h
         tk = truth_at(truth, t_h)
         s_ = samples(frames, truth, t_h + WARM_S)
+        paused = [e.text for e in events if e.text.startswith("KFT paused")]
+        if paused and len(s_) < 12:
+            # the firmware's claim, from the ESCs' speeds it read: a harmonic near the frame rate
+            hold = [f for f in frames if f.mode == 3]
+            spd = sum(sum(f.rotor_speed) for f in hold) / (8 * len(hold)) / (2 * math.pi)
+            fold = min(abs(h * spd - 90.0 * round(h * spd / 90.0)) for h in (1, 2))
+            print(f"seed {seed}: hover throttle {u_h:.3f}, rotors {spd:.2f} Hz (fold {fold:.2f} Hz): {paused[0]}")
+            assert fold < 0.5, f"seed {seed}: {paused[0]}, but the rotors turn at {spd:.2f} Hz"
+            # the fold is slow for hover learning too, which the line says (HOV_KF too): its
+            # k_f within 1 %, not judged against an sd that cannot carry the fold
+            assert abs(hk / tk - 1) < 0.01, f"seed {seed}: hover k_f {hk} against {tk}"
+            return None, None, None
         assert len(s_) >= 12, f"seed {seed}: {len(s_)} samples"
         z = [(k - t) / sd for _, k, sd, t in s_]
         drift, true_drift = s_[-1][1] / s_[0][1] - 1, s_[-1][3] / s_[0][3] - 1
@@ -313,18 +332,22 @@ def test_imu_only_hover_and_tracker_follow_a_drift(tmp_path):
               f"{tk:.3f}; tracked over {s_[-1][0] - s_[0][0]:.0f} s: rms z "
               f"{math.sqrt(sum(x * x for x in z) / len(z)):.2f}, worst {max(z, key=abs):+.2f}, "
               f"sd {100 * s_[-1][2] / s_[-1][1]:.3f} %, drift {100 * drift:+.2f} % (truth {100 * true_drift:+.2f} %)")
-        assert abs(hk / tk - 1) < 0.01, f"seed {seed}: hover k_f {hk} against {tk}"
+        assert abs(hk / tk - 1) < max(0.01, zh * hsd / hk), f"seed {seed}: hover k_f {hk} against {tk}"
         assert true_drift < -0.015
         return z, (hk - tk) / hsd, (drift - true_drift, drift_sd)
 
-    runs = flights(one, range(base, base + N_IMU))
-    judge([z for z, _, _ in runs], "tracked k_f from the IMU")
-    zd = z_max(N_IMU)
-    for i, (_, _, (err, sd)) in enumerate(runs):
-        assert abs(err) < max(0.003, zd * sd), f"seed {base + i}: drift off by {100 * err:+.3f} % (sd {100 * sd:.3f} %)"
-    hz = [h for _, h, _ in runs]
-    s = sum(h * h for h in hz)
     hi, zh = chi2_band(N_IMU, 0.5 * Z_MAX_P)[1], z_max(N_IMU, 0.5 * Z_MAX_P)
+    runs = flights(one, range(base, base + N_IMU))
+    tracked = [r for r in runs if r[0] is not None]
+    assert len(tracked) >= N_IMU - MAX_PAUSED, f"{N_IMU - len(tracked)} of {N_IMU} paused"
+    judge([z for z, _, _ in tracked], "tracked k_f from the IMU")
+    zd = z_max(N_IMU)
+    for i, (_, _, d) in enumerate(runs):
+        if d is not None:
+            err, sd = d
+            assert abs(err) < max(0.003, zd * sd), f"seed {base + i}: drift off by {100 * err:+.3f} % (sd {100 * sd:.3f} %)"
+    hz = [h for _, h, _ in runs if h is not None]
+    s = sum(h * h for h in hz)
     print(f"hover k_f: rms of z {math.sqrt(s / N_IMU):.3f} (at most {math.sqrt(hi / N_IMU):.3f}), "
           f"largest |z| {max(map(abs, hz)):.2f} (bound {zh:.2f})")
     assert s <= hi and max(map(abs, hz)) < zh
