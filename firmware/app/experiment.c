@@ -161,6 +161,7 @@ static void say(struct experiment *e, int sev, const char *fmt, ...)
 
 static void read_estimates(struct experiment *e);
 static void scales_early(struct experiment *e);
+static void sweep_rotors(struct experiment *e);
 
 /* one queued line into the app's pending slot when it is free and a step ran since the last
  * one (one line per frame, as before: the app sends it on its tick) */
@@ -188,6 +189,7 @@ void exp_pump(struct experiment *e)
 				if (e->cfg.exc_null) {
 					motor_id_refine(&e->mid); /* processes the waiting frame first */
 					excite_prepare(&e->exc2);
+					sweep_rotors(e);
 				}
 				ident_rotor_process(&e->rot);
 			}
@@ -411,6 +413,38 @@ static void sweep_plan(struct experiment *e, const struct app_params *p, float t
 		e->swp_len[k] = n < 1u ? 1u : (n > e->swp_per / 2u ? e->swp_per / 2u : n);
 		e->swp_thr[k] = sc_from_float(top - thr_h);
 	}
+}
+
+/* With the thrust rows each rotor's step multiplies its own hover thrust by its level's ratio
+ * (swp_ratio): a rotor weaker than its MOT_SCALEj hovers at a higher throttle (the attitude
+ * integral's torque makes up for it), and a step of the same throttle on every rotor would
+ * lift it less than the others, a torque step as large as the step's thrust times the
+ * rotor's shortfall. Scaled alike, the thrusts keep the hover's balance of torques through
+ * the step, the ratio held to what the rotor of the highest hover throttle can reach below
+ * MOT_THR_MAX. Each rotor's hover throttle is its mean over the settle (no excitation), the
+ * curve MOT_CURVE's. Once, between frames, when the settle ended; until then the step takes
+ * the common steps (swp_thr). */
+static void sweep_rotors(struct experiment *e)
+{
+	if (e->swp_rotors || e->thr_n == 0u || !app_f_le(e->t_settle, e->t_phase))
+		return;
+	float c = e->swp_curve, b = 1.0f - c, tm = e->swp_thr_max, y[HAL_ROTORS], ym = 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		y[j] = sc_to_float(e->thr_sum[j]) / (float)e->thr_n;
+		ym = fmaxf(ym, y[j]);
+	}
+	/* the ratio the rotor of the highest hover throttle can still reach */
+	float gm = b * ym + c * ym * ym, rmax = gm > 0.0f ? (b * tm + c * tm * tm) / gm : 1.0f;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		float gy = b * y[j] + c * y[j] * y[j];
+		for (int k = 0; k < EXP_SWP_LEVELS; k++) {
+			float r = fminf(e->swp_ratio[k], rmax), gt = r * gy;
+			float top = c > 1e-4f ? (sqrtf(b * b + 4.0f * c * gt) - b) / (2.0f * c) : gt / fmaxf(b, 1e-4f);
+			top = fminf(top, tm);
+			e->swp_thr_r[k][j] = r > 1.0f && top > y[j] ? sc_from_float(top - y[j]) : SC_ZERO;
+		}
+	}
+	e->swp_rotors = true;
 }
 
 /* ---------------------------------------------------------------- contract */
@@ -711,6 +745,19 @@ static void thrust_rotor_begin(struct experiment *e, const struct app_params *p,
 		e->exc_cap = hover_cap(thr_h, cf->exc_amp + cf->exc_ofs);
 	cap_say(e, thr_h);
 	sweep_plan(e, p, thr_h, SWP_DZ_ROWS * cf->swp_dz, SWP_SHARE_ROWS);
+	/* each level's thrust ratio over the hover's, for each rotor's steps (sweep_rotors) */
+	float cv = p->mot_curve, gh = (1.0f - cv) * thr_h + cv * thr_h * thr_h;
+	for (int k = 0; k < EXP_SWP_LEVELS; k++) {
+		float top = thr_h + sc_to_float(e->swp_thr[k]);
+		float r = (1.0f - cv) * top + cv * top * top;
+		e->swp_ratio[k] = gh > 0.0f && r > gh ? r / gh : 1.0f;
+	}
+	e->swp_curve = cv;
+	e->swp_thr_max = isfinite(p->mot_thr_max) ? p->mot_thr_max : 1.0f;
+	for (int j = 0; j < HAL_ROTORS; j++)
+		e->thr_sum[j] = SC_ZERO;
+	e->thr_n = 0u;
+	e->swp_rotors = false; /* the union's memory held an earlier phase's estimator */
 	/* a step and the motor's settling after it (the lags of the test's range, up to a
 	 * slow prior's, and the longest delay) stay out of the whiteness test */
 	float settle = fmaxf(SWP_WHITE_TAUS * cf->mot_tau, SWP_WHITE_MIN_S);
@@ -1484,11 +1531,17 @@ static void null_dither(struct experiment *e, bool running, scalar_t d, struct e
  * between steps), the steps half a period into the excitation, at the levels in turn. Before
  * the null dither (which counts the excited frames in rot_k). The caller scales it by the
  * tilt's back-off: a collective step is a torque step on a rotor weaker than its MOT_SCALEj. */
-static scalar_t sweep_step(const struct experiment *e, bool running)
+static int sweep_level(const struct experiment *e, bool running)
 {
 	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = e->rot_k + per / 2u;
 	uint32_t ph = kk % per, lv = (kk / per) % EXP_SWP_LEVELS;
-	return running && ph < e->swp_len[lv] && app_f_lt(e->t_phase, e->swp_end) ? e->swp_thr[lv] : SC_ZERO;
+	return running && ph < e->swp_len[lv] && app_f_lt(e->t_phase, e->swp_end) ? (int)lv : -1;
+}
+
+static scalar_t sweep_step(const struct experiment *e, bool running)
+{
+	int lv = sweep_level(e, running);
+	return lv >= 0 ? e->swp_thr[lv] : SC_ZERO;
 }
 
 /* The inertia axis' gyro reading w an outlier (INR_GATE_W): its change since the filters'
@@ -1616,14 +1669,22 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		if (e->cfg.exc_null && n >= 1)
 			motor_id_step(&e->mid, tp, fm, tm, use);
 		scalar_t d = running ? excite_update(&e->exc) : SC_ZERO;
-		scalar_t d0 = e->cfg.exc_null ? sc_mul(e->exc_gain, sweep_step(e, running)) : SC_ZERO;
-		if (d0 != SC_ZERO)
+		int lv = e->cfg.exc_null ? sweep_level(e, running) : -1;
+		if (lv >= 0 && e->swp_thr[lv] != SC_ZERO)
 			motor_id_white_pause(&e->mid, e->swp_white);
+		if (!running && n >= 1) { /* each rotor's hover throttle (sweep_rotors) */
+			for (int j = 0; j < HAL_ROTORS; j++)
+				e->thr_sum[j] = sc_add(e->thr_sum[j], tp[j]);
+			e->thr_n++;
+		}
 		out->thr_delta[0] = sc_mul(sc_mul(e->exc_gain, e->exc_cap), d);
 		if (e->cfg.exc_null) {
 			null_dither(e, running, d, out);
-			for (int j = 0; j < HAL_ROTORS; j++)
-				out->thr_delta[j] = sc_add(out->thr_delta[j], d0);
+			/* each rotor's step once planned, the common step before */
+			const scalar_t *st = e->swp_rotors ? e->swp_thr_r[lv >= 0 ? lv : 0] : NULL;
+			scalar_t d0 = lv >= 0 ? sc_mul(e->exc_gain, e->swp_thr[lv]) : SC_ZERO;
+			for (int j = 0; lv >= 0 && j < HAL_ROTORS; j++)
+				out->thr_delta[j] = sc_add(out->thr_delta[j], st ? sc_mul(e->exc_gain, st[j]) : d0);
 		}
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		inertia_step(e, in, out, (unsigned)(k - PK_INR_X), n, running, use);
