@@ -376,21 +376,25 @@ static scalar_t hover_cap(float thr_h, float peak)
  * (motor_id.h), keeps every step. */
 #define SWP_PERIOD_S 1.0f
 #define SWP_A_MAX_G 3.0f
-/* With the thrust rows a step climbs this share of ID_SWP_DZ: the rows see each step at their
- * own noise (the accelerometer's vibration needs the IMU's whole climb), and the experiment
- * stays within the hover's height budget under a lossy link */
+/* With the thrust rows a step's excursion (rows_plan) is this share of ID_SWP_DZ: the rows
+ * see each step at their own noise (the accelerometer's vibration needs the IMU's whole
+ * climb), and the experiment stays within the hover's height budget under a lossy link */
 #define SWP_DZ_ROWS 0.667f
 #define SWP_TAIL_S 1.5f
 #define SWP_WHITE_TAUS 4.0f  /* lags a step's transient lasts (thrust rows: whiteness) */
 #define SWP_WHITE_MIN_S 0.4f /* ... and at least this, s */
+/* imu_rpm_torque's levels */
 static const float SWP_SHARE_ROWS[EXP_SWP_LEVELS] = {1.0f, 0.55f, 0.8f, 0.35f};
 /* Under the IMU without the ESCs' torques the steps stay lower: a step near 3 g turns the
  * rotors near the frame rate, their first harmonic aliases close to 0 Hz and each top is one
  * random offset; lower steps turn them slower (their alias lies higher and swings within the
  * step, which lasts longer for the same climb), so the curve comes out closer although its
- * leverage is less. With the torques the rows' levels: k_tau's sd needs the higher steps'
+ * leverage is less. With the torques SWP_SHARE_ROWS: k_tau's sd needs the higher steps'
  * leverage (docs/identification.md, "The sweep's levels") */
 static const float SWP_SHARE_IMU[EXP_SWP_LEVELS] = {0.6f, 0.4f, 0.6f, 0.25f};
+/* The thrust rows see no vibration: every step at ID_SWP_THR. Within a given excursion what a
+ * step tells of the curve grows about with the cube of its height (a lower step is held
+ * longer, but not long enough to make up for its leverage). */
 static const float SWP_SHARE_THRUST[EXP_SWP_LEVELS] = {1.0f, 1.0f, 1.0f, 1.0f};
 static void sweep_plan(struct experiment *e, const struct app_params *p, float thr_h, float dz,
 		       const float share[EXP_SWP_LEVELS])
@@ -430,15 +434,20 @@ static float curve_inv(float c, float gt)
  * itself rather than the altitude loop, whose collective goes through the mixer's MOT_SCALEj
  * and so leaves a torque on a weaker rotor; and the excursion, v0^2 (1 / a_d + 1 / a_u) / 2
  * below the start, is a quarter of a rise of the same frames braked at a_d, so each rise is
- * held longer within the height budget dz. A dip's thrust is SWP_DN of the hover's; the
- * dithers pause through it (their trough, up to 0.6 of the hover throttle, would clip at 0 and
- * leave the attitude loop no room). The pattern takes at most half a period, rise and dips
- * shortened alike; the dips' depth then balances the rise's impulse over the frames as
- * rounded. */
-#define SWP_DN 0.5f
+ * held longer within the height budget dz. A dip's thrust is SWP_DN of the hover's: deeper
+ * dips would let the rise be held longer, but with the altitude loop's own answer to the
+ * step they take a slow, late attitude loop's authority (dips to half the hover thrust
+ * stopped several times as many such vehicles at the tilt limit as steps braked by the
+ * altitude loop alone; dips to SWP_DN, as many).
+ * The dithers pause through a dip (their trough, up to 0.6 of the hover throttle, would clip
+ * at 0 and leave the attitude loop no room). The pattern takes at most SWP_PATTERN of a period, rise
+ * and dips shortened alike; the dips' depth then balances the rise's impulse over the frames
+ * as rounded. The whiteness test leaves out the rise with the motor's settling after it
+ * (swp_white) and each dip's first transient (swp_white_dn). */
+#define SWP_DN 0.7f
 #define SWP_DN_FLOOR 0.3f /* a dip never deeper than this share of the hover's thrust */
 #define SWP_PATTERN 0.8f  /* a pattern's frames at most this share of the period */
-#define SWP_HEADROOM 0.5f /* a rise takes at most this share of the way to MOT_THR_MAX */
+#define SWP_HEADROOM 0.5f /* sweep_rotors */
 static void rows_plan(struct experiment *e, const struct app_params *p, float thr_h, float dz)
 {
 	const struct exp_cfg *cf = &e->cfg;
@@ -474,8 +483,11 @@ static void rows_plan(struct experiment *e, const struct app_params *p, float th
  * higher throttle (the attitude integral's torque makes up for it), and a step of the same
  * throttle on every rotor would move its thrust less than the others', a torque step as
  * large as the step's thrust times the rotor's shortfall. Scaled alike, the thrusts keep the
- * hover's balance of torques through the step, the rise held to what the rotor of the
- * highest hover throttle can reach below MOT_THR_MAX (the dips with it). Each rotor's hover
+ * hover's balance of torques through the step. The rise takes the rotor of the highest hover
+ * throttle at most SWP_HEADROOM of its way to MOT_THR_MAX (the dips shallower with it): the
+ * attitude loop, the dithers and the altitude loop's answer to the step need the rest; a
+ * vehicle of low thrust-to-weight otherwise holds the rise at MOT_THR_MAX on every rotor,
+ * without authority over its attitude. Each rotor's hover
  * throttle is its mean over the settle (no excitation), the curve MOT_CURVE's. Once,
  * between frames, when the settle ended; until then the step takes the common steps. */
 static void sweep_rotors(struct experiment *e)
