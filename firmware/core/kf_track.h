@@ -140,11 +140,11 @@ struct kf_track {
 	 * windows (weights decaying by 1 - 1 / KF_TRACK_H_MEM a window) */
 	scalar_t h_ref, h_inv; /* kr the values are taken from, and 100 / h_ref */
 	scalar_t h_s0, h_s00, h_su, h_suu, h_sc, h_scc,
-		h_suc;        /* weighted sums of 1, (the weights squared), u, u^2, c, c^2, u c
+		h_suc;       /* weighted sums of 1, (the weights squared), u, u^2, c, c^2, u c
 			       * (u: a value's age in KF_TRACK_H_MEM windows, <= 0; c: kr, percent from h_ref) */
 	scalar_t h_var_pct2; /* the residual variance about the line, percent^2 (0: too few windows yet) */
-	bool started;         /* an estimate exists */
-	bool primed;          /* the lag filter holds a value */
+	bool started;        /* an estimate exists */
+	bool primed;         /* the lag filter holds a value */
 	uint32_t updates;
 };
 
