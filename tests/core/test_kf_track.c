@@ -219,6 +219,42 @@ UNIT_TEST(kf_track_uses_curve_and_rotor_scales)
 	}
 }
 
+/* The accelerometer's rig: the tracker on 9-frame means (its memory at least 1 s), the rotors
+ * following throttles jittered by 1 % about u_h through a 30 ms lag. */
+struct imu_rig {
+	struct kf_track kt;
+	double dt, al, u_h, lag[NR], thr[NR];
+};
+
+static void imu_rig_init(struct imu_rig *g, double kf0, double u_h)
+{
+	struct kf_track_params p = kf_track_params_default();
+	p.avg_n = 9;
+	p.t_min_s = SC(1.0);
+	kf_track_init(&g->kt, &p, s(kf0));
+	g->dt = 1.0 / FS;
+	g->al = 1 - exp(-g->dt / 0.03);
+	g->u_h = u_h;
+	for (int j = 0; j < NR; j++)
+		g->lag[j] = g->thr[j] = u_h;
+}
+
+/* One frame at k_f kf: the thrust measured times 1 + mod, with 0.2 % of white noise. */
+static void imu_rig_frame(struct imu_rig *g, struct unit_rng *r, double kf, double mod)
+{
+	double y = 0;
+	scalar_t th[NR];
+	for (int j = 0; j < NR; j++) {
+		g->lag[j] += g->al * (g->thr[j] - g->lag[j]);
+		y += kf * g->lag[j];
+		th[j] = s(g->thr[j]);
+	}
+	y *= 1 + mod + 0.002 * unit_rand_normal(r);
+	kf_track_update(&g->kt, th, NR, s(y), s(g->dt), true);
+	for (int j = 0; j < NR; j++)
+		g->thr[j] = g->u_h * (1 + 0.01 * unit_rand_normal(r));
+}
+
 /* An accelerometer's total thrust m a_z: per-frame noise mostly near half the frame rate (a
  * rotor's vibration folded to 40-45 Hz, 2-3 % of y) plus a slow fold (a rotor turning near
  * the frame rate: 0.1-0.5 Hz, 0-0.7 % of y), k_f drifting 0 ... -3 %/min. The tracker on 9-frame
@@ -235,30 +271,17 @@ UNIT_TEST(kf_track_coloured_noise_sd)
 		double rate = unit_rand_uniform(&r, -0.03, 0.0), fast = unit_rand_uniform(&r, 0.02, 0.03);
 		double f_fast = unit_rand_uniform(&r, 40.0, 45.0), f_slow = unit_rand_uniform(&r, 0.1, 0.5);
 		double a_slow = unit_rand_uniform(&r, 0.0, 0.007), ph = unit_rand_uniform(&r, 0.0, 6.283);
-		struct kf_track_params p = kf_track_params_default();
-		p.avg_n = 9;
-		p.t_min_s = SC(1.0);
-		struct kf_track kt;
-		kf_track_init(&kt, &p, s(kf0));
-		double dt = 1.0 / FS, al = 1 - exp(-dt / 0.03), lag[NR], thr[NR];
-		for (int j = 0; j < NR; j++)
-			lag[j] = thr[j] = u_h;
+		struct imu_rig g;
+		struct kf_track *const kt = &g.kt;
+		imu_rig_init(&g, kf0, u_h);
 		double sd_min = 1.0;
 		for (int k = 0; k < (int)(90.0 * FS); k++) {
-			double t = k * dt, kf = kf0 * (1 + rate * t / 60.0), y = 0;
-			scalar_t th[NR];
-			for (int j = 0; j < NR; j++) {
-				lag[j] += al * (thr[j] - lag[j]);
-				y += kf * lag[j];
-				th[j] = s(thr[j]);
-			}
-			y *= 1 + fast * sin(6.283185 * f_fast * t + ph) + a_slow * sin(6.283185 * f_slow * t + 2 * ph) +
-			     0.002 * unit_rand_normal(&r);
-			kf_track_update(&kt, th, NR, s(y), s(dt), true);
-			for (int j = 0; j < NR; j++)
-				thr[j] = u_h * (1 + 0.01 * unit_rand_normal(&r));
+			double t = k * g.dt, kf = kf0 * (1 + rate * t / 60.0);
+			imu_rig_frame(&g, &r, kf,
+				      fast * sin(6.283185 * f_fast * t + ph) +
+					      a_slow * sin(6.283185 * f_slow * t + 2 * ph));
 			if (t > 30.0 && k % 45 == 0) {
-				double sd = d(kf_track_sd(&kt)), z = (d(kt.k) - kf) / sd;
+				double sd = d(kf_track_sd(kt)), z = (d(kt->k) - kf) / sd;
 				z2 += z * z;
 				n++;
 				outside += fabs(z) > 4.0;
@@ -266,8 +289,8 @@ UNIT_TEST(kf_track_coloured_noise_sd)
 #ifdef TEST_VERBOSE
 				if (fabs(z) > 3.0 || sd / kf < 0.2 * a_slow)
 					printf("  trial %d t %.1f z %+.2f err %+.3f %% sd %.3f %% mem %.2f w_count %u\n",
-					       trial, t, z, 100 * (d(kt.k) / kf - 1), 100 * sd / kf, d(kt.mem_s),
-					       (unsigned)kt.w_count);
+					       trial, t, z, 100 * (d(kt->k) / kf - 1), 100 * sd / kf, d(kt->mem_s),
+					       (unsigned)kt->w_count);
 #endif
 			}
 		}
@@ -303,28 +326,14 @@ UNIT_TEST(kf_track_slow_fold_sd)
 		double kf0 = unit_rand_uniform(&r, 5.0, 60.0), u_h = unit_rand_uniform(&r, 0.06, 0.4);
 		double rate = unit_rand_uniform(&r, -0.02, 0.0), a = unit_rand_uniform(&r, 0.005, 0.015);
 		double period = unit_rand_uniform(&r, 20.0, 40.0), ph = unit_rand_uniform(&r, 0.0, 6.283);
-		struct kf_track_params p = kf_track_params_default();
-		p.avg_n = 9;
-		p.t_min_s = SC(1.0);
-		struct kf_track kt;
-		kf_track_init(&kt, &p, s(kf0));
-		double dt = 1.0 / FS, al = 1 - exp(-dt / 0.03), lag[NR], thr[NR];
-		for (int j = 0; j < NR; j++)
-			lag[j] = thr[j] = u_h;
+		struct imu_rig g;
+		struct kf_track *const kt = &g.kt;
+		imu_rig_init(&g, kf0, u_h);
 		for (int k = 0; k < (int)(120.0 * FS); k++) {
-			double t = k * dt, kf = kf0 * (1 + rate * t / 60.0), y = 0;
-			scalar_t th[NR];
-			for (int j = 0; j < NR; j++) {
-				lag[j] += al * (thr[j] - lag[j]);
-				y += kf * lag[j];
-				th[j] = s(thr[j]);
-			}
-			y *= 1 + a * sin(6.283185 * t / period + ph) + 0.002 * unit_rand_normal(&r);
-			kf_track_update(&kt, th, NR, s(y), s(dt), true);
-			for (int j = 0; j < NR; j++)
-				thr[j] = u_h * (1 + 0.01 * unit_rand_normal(&r));
+			double t = k * g.dt, kf = kf0 * (1 + rate * t / 60.0);
+			imu_rig_frame(&g, &r, kf, a * sin(6.283185 * t / period + ph));
 			if (t > 50.0 && k % 45 == 0) {
-				double sd = d(kf_track_sd(&kt)), z = (d(kt.k) - kf) / sd;
+				double sd = d(kf_track_sd(kt)), z = (d(kt->k) - kf) / sd;
 				z2 += z * z;
 				n++;
 				worst = fmax(worst, fabs(z));
