@@ -1483,7 +1483,7 @@ static void null_dither(struct experiment *e, bool running, scalar_t d, struct e
 #endif
 }
 
-/* The IMU rotor experiment's throttle sweep: this frame's collective step (sweep_plan; 0
+/* The rotor experiment's throttle sweep: this frame's collective step (sweep_plan; 0
  * between steps), the steps half a period into the excitation, at the levels in turn. Before
  * the null dither (which counts the excited frames in rot_k). The caller scales it by the
  * tilt's back-off: a collective step is a torque step on a rotor weaker than its MOT_SCALEj. */
