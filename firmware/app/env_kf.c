@@ -131,18 +131,18 @@ bool env_kf_publish(struct env_kf *k, const struct app_params *p, uint64_t now_u
 	k->pub_due = false;
 	/* the fold: the nearest multiple of the frame rate to the first and second harmonics */
 	bool was = k->folded;
-	k->fold_hz = INFINITY;
+	float fold = INFINITY;
 	if (k->spd_hz > 0.0f && isfinite(k->spd_hz) && dt_frame > 0.0f) {
 		float fs = 1.0f / dt_frame;
 		for (int h = 1; h <= 2; h++) {
 			float x = (float)h * k->spd_hz;
-			k->fold_hz = fminf(k->fold_hz, fabsf(x - fs * roundf(x / fs)));
+			fold = fminf(fold, fabsf(x - fs * roundf(x / fs)));
 		}
 	}
-	k->fold_votes = k->fold_hz < KFT_FOLD_HZ ? k->fold_votes + 1u : 0u;
-	k->folded = was ? k->fold_hz < FOLD_OFF_HZ : k->fold_votes >= FOLD_VOTES;
+	k->fold_votes = fold < KFT_FOLD_HZ ? k->fold_votes + 1u : 0u;
+	k->folded = was ? fold < FOLD_OFF_HZ : k->fold_votes >= FOLD_VOTES;
 	out->fold = (int8_t)(k->folded == was ? 0 : k->folded ? 1 : -1);
-	out->fold_hz = k->fold_hz;
+	out->fold_hz = fold;
 	out->paused = k->folded;
 	if (k->folded) {
 		k->votes = 0;

@@ -55,8 +55,8 @@ struct env_kf {
 	bool pub_due;         /* the last step reached pub_next_t: env_kf_publish's turn */
 	bool pub_hold;        /* and flew in HOLD (where VEH_KF may be refreshed) */
 	float spd_hz;         /* the rotors' mean speed, Hz, smoothed (src IMU with the ESCs' speeds; 0: none) */
-	float fold_hz;        /* how close to 0 Hz its first two harmonics fold at the frame rate */
-	uint32_t fold_votes;  /* publications in a row with fold_hz below KFT_FOLD_HZ */
+	uint32_t fold_votes;  /* publications in a row whose fold (its first two harmonics' nearest
+			       * to 0 Hz at the frame rate) lay below KFT_FOLD_HZ */
 	bool folded;          /* a steady fold that slow: the estimate is not published */
 };
 
