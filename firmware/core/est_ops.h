@@ -87,6 +87,33 @@ EST_INLINE int64_t est_mul64_32c(int64_t a, int32_t b, unsigned s)
 	return s >= 32u ? est_shr64c(sum, s - 32u) : est_shl64c(sum, 32u - s);
 }
 
+/* q_shr64(q_smul32(a, b), s) for |a|, |b| < 2^31 and s in [1, 62]: a b / 2^s rounded to
+ * nearest (ties away from zero). On Cortex-M0 (no long multiply, no 64-bit shift) in 32-bit
+ * words, elsewhere one 64-bit product (imu_id.c's per-frame products) */
+EST_INLINE int64_t est_mul_rnd(int32_t a, int32_t b, unsigned s)
+{
+	bool neg = (a < 0) != (b < 0);
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint64_t r;
+#if defined(__ARM_ARCH_6M__)
+	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
+	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl, hh = ah * bh;
+	uint32_t mid = (ll >> 16) + (lh & 0xffffu) + (hl & 0xffffu);
+	uint32_t hi = hh + (lh >> 16) + (hl >> 16) + (mid >> 16), lo = (mid << 16) | (ll & 0xffffu);
+	if (s >= 32u) { /* |a b| < 2^62: hi < 2^30, the sum below 2^31 */
+		hi += s > 32u ? 1u << (s - 33u) : (lo >> 31);
+		r = hi >> (s - 32u);
+	} else {
+		uint32_t l2 = lo + (1u << (s - 1u));
+		hi += l2 < lo;
+		r = ((uint64_t)(hi >> s) << 32) | (uint32_t)((hi << (32u - s)) | (l2 >> s));
+	}
+#else
+	r = ((uint64_t)ua * ub + ((uint64_t)1 << (s - 1u))) >> s; /* |a b| < 2^62 */
+#endif
+	return neg ? -(int64_t)r : (int64_t)r;
+}
+
 /* v 2^s for s in [0, 30], saturating to +/-INT32_MAX (est_scale32's left shifts), always
  * inlined: for a constant s, a comparison and a shift (the per-frame conversions of
  * throttles into motor_id's Q1.30) */

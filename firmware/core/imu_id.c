@@ -2,6 +2,7 @@
  * imu_id.c - the collective rotor model from the accelerometer (imu_id.h).
  */
 #include "imu_id.h"
+#include "est_ops.h"
 
 #include <math.h>
 #include <string.h>
@@ -16,6 +17,281 @@
 #define IMU_ID_CL_FLOOR 0.25 /* the clusters' factor's floor (the sd at least half the white-noise one) */
 #define IMU_ID_TOP_SHARE 0.5 /* the top blocks' check: the share of j' H j its top clusters carry */
 #define IMU_ID_TOP_T 2.5     /* |D| / sd beyond which its excess joins the variance */
+
+#if defined(__GNUC__)
+#define IID_INLINE static inline __attribute__((always_inline))
+#else
+#define IID_INLINE static inline
+#endif
+
+/* the sums' sets: the records whose members are the kinds of one exponent each (imu_id_q.h) */
+enum { S_GX, S_HS, S_BLK, S_XQ };
+#define HS_N (sizeof(struct imu_id_hyp) / sizeof(imu_id_sum_t))   /* b, rr, bt, rrt */
+#define BLK_N (sizeof(struct imu_id_stat) / sizeof(imu_id_sum_t)) /* g, b, rr, bt, rrt */
+_Static_assert(HS_N == 2u * NP && BLK_N == 2u * NP + NT + 2u, "the records hold their sums alone");
+#define K_RR (NP - 1u)     /* a hypothesis' rr; its torque's from HS_T */
+#define HS_T NP            /* a hypothesis' bt[0] */
+#define B_B NT             /* a block's b[0]; rr, bt[0] and rrt follow */
+#define B_RR (NT + NP)     /* a block's rr */
+#define B_T (NT + NP + 1u) /* a block's bt[0] */
+
+/* ---------------------------------------------------------------- number operations
+ * The per-frame part below is written once against these: u Q1.30, x Q6.25, c Q4.27, sums in
+ * block floating point, acc int64 (imu_id_q.h) in the fixed build; all float otherwise. */
+#if OCTO_FIXED
+#define SH_XX (2 * QF_IMUX_FRAC - QF_MSUM_FRAC) /* a product of two x values into a sum at exponent 0 */
+#define SUM_LIM ((int64_t)1 << 29)              /* a term or sum this large shifts its kind first */
+#define E_MAX 100                               /* exponent ceiling (2^70 frames away): beyond it terms are dropped */
+#define X_ZERO 0
+#define X_ONE ((imu_id_x_t)1 << QF_IMUX_FRAC)
+#define E_OF(m, arr, k) ((int)(m)->arr[k])
+typedef int64_t term_t;
+static inline int32_t sub32(int32_t a, int32_t b) { return q_sat32((int64_t)a - b); }
+static inline int32_t add32(int32_t a, int32_t b) { return q_sat32((int64_t)a + b); }
+/* a scalar_t (Q16.16) as a throttle, as an x in units of 2^sh */
+static inline imu_id_u_t u_of_sc(scalar_t v) { return est_shl32c(v, QF_UNIT_FRAC - QF_SC_FRAC); }
+static inline imu_id_x_t x_of_sc(scalar_t v, int sh) { return est_scale32(v, QF_IMUX_FRAC - QF_SC_FRAC - sh); }
+/* products: u u to u, u u to x, c u to x, c x to x; c0 x0 + c1 x1 */
+IID_INLINE imu_id_u_t mul_uu(imu_id_u_t a, imu_id_u_t b) { return q_sat32(est_mul_rnd(a, b, QF_UNIT_FRAC)); }
+IID_INLINE imu_id_x_t mul_uux(imu_id_u_t a, imu_id_u_t b)
+{
+	return q_sat32(est_mul_rnd(a, b, 2 * QF_UNIT_FRAC - QF_IMUX_FRAC));
+}
+IID_INLINE imu_id_x_t mul_cu(imu_id_c_t c, imu_id_u_t u)
+{
+	return q_sat32(est_mul_rnd(c, u, QF_IMUC_FRAC + QF_UNIT_FRAC - QF_IMUX_FRAC));
+}
+IID_INLINE imu_id_x_t mul_cx(imu_id_c_t c, imu_id_x_t x) { return q_sat32(est_mul_rnd(c, x, QF_IMUC_FRAC)); }
+IID_INLINE imu_id_x_t lin2(imu_id_c_t c0, imu_id_x_t x0, imu_id_c_t c1, imu_id_x_t x1)
+{
+	return q_sat32(est_mul_rnd(c0, x0, QF_IMUC_FRAC) + est_mul_rnd(c1, x1, QF_IMUC_FRAC));
+}
+/* a lag filter's step y + (1 - a) (u - y), k = 1 - a: of a throttle, of an x */
+IID_INLINE imu_id_u_t filt_u(imu_id_u_t y, imu_id_u_t k, imu_id_u_t u)
+{
+	return q_sat32((int64_t)y + est_mul_rnd(k, sub32(u, y), QF_UNIT_FRAC));
+}
+IID_INLINE imu_id_x_t filt_x(imu_id_x_t y, imu_id_u_t k, imu_id_x_t u)
+{
+	return q_sat32((int64_t)y + est_mul_rnd(k, sub32(u, y), QF_UNIT_FRAC));
+}
+/* the pole's coefficient stored: 1 - a = -expm1(-dt / tau) (its precision where a is near 1) */
+static imu_id_u_t lag_coef(float x) { return iid_u_of_float(-expm1f(-x)); }
+/* the [1 2 1] / 4 smoother: of a ring of three, of a series (r: its last input and the last
+ * two's sum) */
+static imu_id_x_t smooth(const imu_id_x_t *r)
+{
+	return q_sat32(est_shr64c((int64_t)r[0] + 2 * (int64_t)r[1] + r[2], 2u));
+}
+static imu_id_x_t smooth_in(imu_id_x_t r[2], imu_id_x_t v)
+{
+	imu_id_x_t p = add32(v, r[0]), o = q_sat32(est_shr64c((int64_t)p + r[1], 2u));
+	r[0] = v;
+	r[1] = p;
+	return o;
+}
+/* the grid's end differences: 4 s1 - 3 s0 - s2 (its first lags), 3 s0 - 4 s1 + s2 (its last) */
+static imu_id_x_t end_diff(imu_id_x_t s0, imu_id_x_t s1, imu_id_x_t s2)
+{
+	return q_sat32(4 * (int64_t)s1 - 3 * (int64_t)s0 - s2);
+}
+static imu_id_x_t end_diff_hi(imu_id_x_t s0, imu_id_x_t s1, imu_id_x_t s2)
+{
+	return q_sat32(3 * (int64_t)s0 - 4 * (int64_t)s1 + s2);
+}
+/* the mean of the rotors' throttles */
+static imu_id_u_t u_mean(const imu_id_u_t u[IMU_ID_ROTORS])
+{
+	int64_t s = 0;
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		s += u[j];
+	return (imu_id_u_t)est_shr64c(s, 3u);
+}
+_Static_assert(IMU_ID_ROTORS == 8, "u_mean divides by 8");
+/* acc + f^2 (Q12.25) */
+static inline imu_id_acc_t acc_sq(imu_id_acc_t acc, imu_id_x_t f)
+{
+	return q_add64(acc, est_mul_rnd(f, f, QF_IMUX_FRAC));
+}
+/* a product of two x values, a value, rounded to a sum's mantissa at exponent e */
+IID_INLINE term_t term(imu_id_x_t a, imu_id_x_t b, int e)
+{
+	int s = SH_XX + e;
+	if (s >= 1 && s <= 62)
+		return est_mul_rnd(a, b, (unsigned)s);
+	return est_scale64(q_smul32(a, b), -s); /* beyond: left shifts (saturating) or 0 */
+}
+IID_INLINE term_t term1(imu_id_x_t a, int e) { return est_scale64(a, QF_MSUM_FRAC - QF_IMUX_FRAC - e); }
+static inline bool sum_big(int64_t v) { return v >= SUM_LIM || v <= -SUM_LIM; }
+
+/* set's sums (nrec records of n members), its exponents */
+static imu_id_sum_t *set_of(struct imu_id *m, unsigned set, int8_t **e, unsigned *n, unsigned *nrec)
+{
+	switch (set) {
+	case S_GX: *e = m->e_gx, *n = NT - 3u, *nrec = IMU_ID_LAGS; return &m->gx[0][0];
+	case S_HS: *e = m->e_hs, *n = HS_N, *nrec = IMU_ID_LAGS * IMU_ID_DELAYS; return &m->hs[0][0].b[0];
+	case S_BLK: *e = m->e_blk, *n = BLK_N, *nrec = IMU_ID_BLOCKS + 1u; return &m->blk[0].g[0];
+	default: *e = m->e_xq, *n = 2u * (IMU_ID_NX + 1u), *nrec = 1u; return &m->xq[0][0];
+	}
+}
+/* every exponent of set at IMU_ID_E0 (its sums zero) */
+static void set_restart(struct imu_id *m, unsigned set)
+{
+	int8_t *e;
+	unsigned n, nrec;
+	set_of(m, set, &e, &n, &nrec);
+	for (unsigned k = 0; k < n; k++)
+		e[k] = IMU_ID_E0;
+}
+/* a term or a sum of 2^29 or more: kind k of set shifted right (rounded, its exponent
+ * raised) until both are below 2^28 */
+static void sum_fit(struct imu_id *m, unsigned set, unsigned k, term_t *t)
+{
+	int8_t *e;
+	unsigned n, nrec;
+	imu_id_sum_t *v = set_of(m, set, &e, &n, &nrec);
+	uint64_t a = (uint64_t)(*t < 0 ? -*t : *t);
+	for (unsigned r = 0; r < nrec; r++) {
+		imu_id_sum_t s = v[r * n + k];
+		a |= (uint64_t)(s < 0 ? -(int64_t)s : s);
+	}
+	int sh = 64 - est_clz64(a) - 28;
+	if (sh <= 0)
+		return;
+	if ((int)e[k] + sh > E_MAX) { /* unreachable: 2^70 frames of the largest terms */
+		*t = 0;
+		return;
+	}
+	for (unsigned r = 0; r < nrec; r++)
+		v[r * n + k] = est_scale32(v[r * n + k], -sh);
+	e[k] = (int8_t)(e[k] + sh);
+	*t = est_scale64(*t, -sh);
+}
+/* *s + t, s of kind k of set: a sum and a term below 2^29 in magnitude cannot wrap */
+IID_INLINE void sadd(struct imu_id *m, unsigned set, unsigned k, imu_id_sum_t *s, term_t t)
+{
+	if (sum_big(t) || sum_big(*s))
+		sum_fit(m, set, k, &t);
+	*s += (imu_id_sum_t)t;
+}
+static int kexp_of(const struct imu_id *m) { return m->kexp; }
+static int texp_of(const struct imu_id *m) { return m->texp; }
+#else
+#define X_ZERO 0.0f
+#define X_ONE 1.0f
+#define E_OF(m, arr, k) 0
+typedef float term_t;
+static inline float sub32(float a, float b) { return a - b; }
+static inline float add32(float a, float b) { return a + b; }
+static inline imu_id_u_t u_of_sc(scalar_t v) { return sc_to_float(v); }
+static inline imu_id_x_t x_of_sc(scalar_t v, int sh)
+{
+	(void)sh;
+	return sc_to_float(v);
+}
+static inline imu_id_u_t mul_uu(imu_id_u_t a, imu_id_u_t b) { return a * b; }
+static inline imu_id_x_t mul_uux(imu_id_u_t a, imu_id_u_t b) { return a * b; }
+static inline imu_id_x_t mul_cu(imu_id_c_t c, imu_id_u_t u) { return c * u; }
+static inline imu_id_x_t mul_cx(imu_id_c_t c, imu_id_x_t x) { return c * x; }
+static inline imu_id_x_t lin2(imu_id_c_t c0, imu_id_x_t x0, imu_id_c_t c1, imu_id_x_t x1) { return c0 * x0 + c1 * x1; }
+/* a y + (1 - a) u: the float build keeps the pole a */
+static inline imu_id_u_t filt_u(imu_id_u_t y, imu_id_u_t a, imu_id_u_t u) { return a * y + (1.0f - a) * u; }
+static inline imu_id_x_t filt_x(imu_id_x_t y, imu_id_u_t a, imu_id_x_t u) { return a * y + (1.0f - a) * u; }
+static imu_id_u_t lag_coef(float x) { return expf(-x); }
+static float smooth(const float *r) { return 0.25f * (r[0] + 2.0f * r[1] + r[2]); }
+static float smooth_in(float r[2], float v)
+{
+	float p = v + r[0], o = 0.25f * (p + r[1]);
+	r[0] = v;
+	r[1] = p;
+	return o;
+}
+static inline float end_diff(float s0, float s1, float s2) { return 4.0f * s1 - 3.0f * s0 - s2; }
+static inline float end_diff_hi(float s0, float s1, float s2) { return 3.0f * s0 - 4.0f * s1 + s2; }
+static float u_mean(const float u[IMU_ID_ROTORS])
+{
+	float s = 0.0f;
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+		s += u[j];
+	return s / (float)IMU_ID_ROTORS;
+}
+static inline float acc_sq(float acc, float f) { return acc + f * f; }
+static inline term_t term(float a, float b, int e)
+{
+	(void)e;
+	return a * b;
+}
+static inline term_t term1(float a, int e)
+{
+	(void)e;
+	return a;
+}
+static void set_restart(struct imu_id *m, unsigned set)
+{
+	(void)m;
+	(void)set;
+}
+static inline void sadd(struct imu_id *m, unsigned set, unsigned k, float *s, float t)
+{
+	(void)m;
+	(void)set;
+	(void)k;
+	*s += t;
+}
+static int kexp_of(const struct imu_id *m)
+{
+	(void)m;
+	return 0;
+}
+static int texp_of(const struct imu_id *m)
+{
+	(void)m;
+	return 0;
+}
+#endif
+static inline imu_id_x_t x_add(imu_id_x_t a, imu_id_x_t b) { return add32(a, b); }
+static inline imu_id_x_t x_sub(imu_id_x_t a, imu_id_x_t b) { return sub32(a, b); }
+
+/* sums read by the solve, as float: kind k of a record of gx, hs, blk; xq's */
+static float gx_f(const struct imu_id *m, unsigned l, unsigned k)
+{
+	return iid_sum_to_float(m->gx[l][k], E_OF(m, e_gx, k), 0);
+}
+/* the unit of a hypothesis' (or a block's, from its b) member k relative to b: b, rr, bt, rrt */
+static int hs_sh(const struct imu_id *m, unsigned k)
+{
+	int ke = kexp_of(m), te = texp_of(m);
+	return k < K_RR ? ke : k == K_RR ? 2 * ke : k < HS_N - 1u ? te : 2 * te;
+}
+static float hs_f(const struct imu_id *m, const struct imu_id_hyp *h, unsigned k)
+{
+	const imu_id_sum_t *v = &h->b[0];
+	return iid_sum_to_float(v[k], E_OF(m, e_hs, k), hs_sh(m, k));
+}
+static float xq_f(const struct imu_id *m, unsigned i, unsigned k)
+{
+	return iid_sum_to_float(m->xq[i][k], E_OF(m, e_xq, 2u * i + k), i == IMU_ID_NX ? kexp_of(m) : 0);
+}
+static float acc_f(imu_id_acc_t v, int frac, int sh) { return iid_acc_to_float(v, frac, sh); }
+
+/* a block's or a hypothesis' sums in float (the solve's) */
+struct stat_f {
+	float g[NT], b[NP], rr;
+	float bt[NP], rrt;
+};
+static void blk_get(const struct imu_id *m, unsigned q, struct stat_f *s)
+{
+	const struct imu_id_stat *b = &m->blk[q];
+	int ke = kexp_of(m), te = texp_of(m);
+	for (unsigned i = 0; i < NT; i++)
+		s->g[i] = iid_sum_to_float(b->g[i], E_OF(m, e_blk, i), 0);
+	for (unsigned i = 0; i < NP; i++) {
+		s->b[i] = iid_sum_to_float(b->b[i], E_OF(m, e_blk, B_B + i), ke);
+		s->bt[i] = iid_sum_to_float(b->bt[i], E_OF(m, e_blk, B_T + i), te);
+	}
+	s->rr = iid_sum_to_float(b->rr, E_OF(m, e_blk, B_RR), 2 * ke);
+	s->rrt = iid_sum_to_float(b->rrt, E_OF(m, e_blk, B_T + NP), 2 * te);
+}
 
 /* index of (i, j) (either order) in the upper triangle stored row by row */
 static unsigned ut(unsigned i, unsigned j)
@@ -35,7 +311,7 @@ static float lag_tau(const struct imu_id *m, unsigned l) { return expf(m->ln0 + 
 static void set_grid(struct imu_id *m)
 {
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
-		m->a[l] = expf(-m->cfg.dt_s / lag_tau(m, l));
+		m->lk[l] = lag_coef(m->cfg.dt_s / lag_tau(m, l));
 }
 
 /* the lag whose patterns' responses advance computes: the clusters' hypothesis after the
@@ -43,51 +319,40 @@ static void set_grid(struct imu_id *m)
 #define CL_LAG (IMU_ID_LAGS / 2u)
 #define AGE (IMU_ID_DELAYS - 1u) /* the bank's regressors' age: the filters' input is this old */
 
-static float smooth(const float *r) { return 0.25f * (r[0] + 2.0f * r[1] + r[2]); }
-
-/* the [1 2 1] / 4 smoother of a series: r holds its last input and the last two's sum; v in,
- * the smoothed value out */
-static float smooth_in(float r[2], float v)
-{
-	float p = v + r[0], o = 0.25f * (p + r[1]);
-	r[0] = v;
-	r[1] = p;
-	return o;
-}
-
 /* the throttles into the queue and the lag filters on the ones AGE frames before (each rotor's
  * scaled by the square root of its scale: x2 is the sum of the outputs' squares; x1 from the
  * scaled throttles' sum, the filters being linear); x1 and x2 smoothed into s, and
  * the patterns' responses into qs */
-static void advance(struct imu_id *m, const float u_new[IMU_ID_ROTORS], float s[2][IMU_ID_LAGS])
+static void advance(struct imu_id *m, const imu_id_u_t u_new[IMU_ID_ROTORS], imu_id_x_t s[2][IMU_ID_LAGS])
 {
-	const struct imu_id_cfg *c = &m->cfg;
-	float u[IMU_ID_ROTORS], us = 0.0f;
-	float *uq = m->uq[m->uqh];
+	imu_id_u_t u[IMU_ID_ROTORS];
+	imu_id_x_t us = X_ZERO;
+	imu_id_u_t *uq = m->uq[m->uqh];
 	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
-		u[j] = m->rs[j] * uq[j];
-		us += c->scale[j] * uq[j];
+		u[j] = mul_uu(m->rs[j], uq[j]);
+		us = x_add(us, mul_cu(m->sc[j], uq[j]));
 		uq[j] = u_new[j];
 	}
 	m->uqh = (uint8_t)(m->uqh + 1u < AGE ? m->uqh + 1u : 0u);
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-		float a = m->a[l], b = 1.0f - a, q = 0.0f, *y = m->y[l];
+		imu_id_u_t k = m->lk[l], *y = m->y[l];
+		imu_id_x_t q = X_ZERO; /* at most 8 terms below 4: no overflow */
 #pragma GCC unroll 8
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
-			float v = a * y[j] + b * u[j];
+			imu_id_u_t v = filt_u(y[j], k, u[j]);
 			y[j] = v;
-			q += v * v;
+			q += mul_uux(v, v);
 		}
-		float yc = a * m->yc[l] + b * us;
+		imu_id_x_t yc = filt_x(m->yc[l], k, us);
 		m->yc[l] = yc;
 		s[0][l] = smooth_in(m->x1[l], yc);
 		s[1][l] = smooth_in(m->x2[l], q);
 	}
-	float p1 = 0.0f, p2 = 0.0f;
+	imu_id_x_t p1 = X_ZERO, p2 = X_ZERO;
 	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
-		float sy = m->rs[j] * m->y[CL_LAG][j];
-		p1 += c->pat[0][j] * sy;
-		p2 += c->pat[1][j] * sy;
+		imu_id_x_t sy = mul_uux(m->rs[j], m->y[CL_LAG][j]);
+		p1 = x_add(p1, mul_cx(m->pc[0][j], sy));
+		p2 = x_add(p2, mul_cx(m->pc[1][j], sy));
 	}
 	m->qs[0] = smooth_in(m->q1, p1);
 	m->qs[1] = smooth_in(m->q2, p2);
@@ -95,7 +360,7 @@ static void advance(struct imu_id *m, const float u_new[IMU_ID_ROTORS], float s[
 
 /* the frame's smoothed force and torque (less the reference at hover) into the rings by age;
  * ok: the frame is taken (excited, the smoother full) */
-static void push_meas(struct imu_id *m, float f, float t, bool ok)
+static void push_meas(struct imu_id *m, imu_id_x_t f, imu_id_x_t t, bool ok)
 {
 	m->fh = (uint8_t)(m->fh ? m->fh - 1u : IMU_ID_DELAYS - 1u);
 	m->fz[m->fh] = f;
@@ -110,21 +375,77 @@ static unsigned meas_slot(const struct imu_id *m, unsigned k)
 	return i < IMU_ID_DELAYS ? i : i - IMU_ID_DELAYS;
 }
 
-/* the square roots of the scales, which the filters' outputs carry */
+/* the square roots of the scales, which the filters' outputs carry, and the scales */
 static void set_rs(struct imu_id *m)
 {
-	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-		m->rs[j] = sqrtf(m->cfg.scale[j]);
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
+		m->rs[j] = iid_u_of_float(sqrtf(m->cfg.scale[j]));
+		m->sc[j] = iid_c_of_float(m->cfg.scale[j]);
+	}
 }
 
 /* lag l's filters at the outputs v (unscaled) */
 static void set_lag(struct imu_id *m, unsigned l, const float v[IMU_ID_ROTORS])
 {
-	m->yc[l] = 0.0f;
+	float yc = 0.0f;
 	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
-		m->y[l][j] = m->rs[j] * v[j];
-		m->yc[l] += m->cfg.scale[j] * v[j];
+		m->y[l][j] = iid_u_of_float(iid_u_to_float(m->rs[j]) * v[j]);
+		yc += m->cfg.scale[j] * v[j];
 	}
+	m->yc[l] = iid_x_of_float(yc, 0);
+}
+
+static float ref_coef(const struct imu_id *m, float *r0, float *r1);
+
+/* The per-frame coefficients (struct imu_id_xmap) of the centred regressors (basis) as a
+ * linear map of the smoothed sums (x1, x2) and of their sensitivities (x3, x4): x0 = k0 x1 +
+ * k1 x2 + k2, x1 = k3 x1 + k4 x2 + k5, x2 = k0 x3 + k1 x4, x3 = k3 x3 + k4 x4. With the curve
+ * estimated (x1 - y_h S, sum s (y - y_h)^2, x3, x4 - 2 y_h x3), else (the reference's less its
+ * value at y_h, 0, its sensitivity, 0). With it the reference model's regressor (ref_coef: r0,
+ * r1, x_r(y_h) in xh), 1 / (2 h), h the grid's step, for the sensitivities, the reference's
+ * k_f and k_tau and its force and torque at x_r(y_h). At the start and the refinement. */
+static void xmap_set(struct imu_id *m)
+{
+	const struct imu_id_cfg *c = &m->cfg;
+	float yh = m->yh, s = m->ssum, k[6], r0, r1;
+	if (c->est_curve) {
+		k[0] = 1.0f;
+		k[1] = 0.0f;
+		k[2] = -yh * s;
+		k[3] = -2.0f * yh;
+		k[4] = 1.0f;
+		k[5] = yh * yh * s;
+	} else {
+		k[0] = 1.0f - c->curve0;
+		k[1] = c->curve0;
+		k[2] = -ref_x(c, yh * s, yh * yh * s);
+		k[3] = k[4] = k[5] = 0.0f;
+	}
+	float xh = ref_coef(m, &r0, &r1);
+	int ke = kexp_of(m), te = texp_of(m);
+	struct imu_id_xmap *x = &m->xm;
+	x->k[0] = iid_c_of_float(k[0]);
+	x->k[1] = iid_c_of_float(k[1]);
+	x->k[2] = iid_c_of_float(k[3]);
+	x->k[3] = iid_c_of_float(k[4]);
+	x->o[0] = iid_x_of_float(k[2], 0);
+	x->o[1] = iid_x_of_float(k[5], 0);
+	x->r0 = iid_c_of_float(r0);
+	x->r1 = iid_c_of_float(r1);
+	x->ih = iid_c_of_float(0.5f / m->lstep);
+	x->kf = iid_c_of_float(c->kf0 * sc_pow2f(-ke));
+	x->kt = iid_c_of_float(c->kt0 * sc_pow2f(-te));
+	x->fref = iid_x_of_float(c->kf0 * xh, ke);
+	x->tref = iid_x_of_float(c->kt0 * xh, te);
+}
+
+/* the power of two that brings v > 0 into [0.5, 1) (0 otherwise) */
+static int8_t exp_of(float v)
+{
+	int e = 0;
+	if (v > 0.0f && isfinite(v))
+		(void)frexpf(v, &e);
+	return (int8_t)(e < -60 ? -60 : e > 60 ? 60 : e);
 }
 
 void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t thr0[IMU_ID_ROTORS])
@@ -135,8 +456,13 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 		if (!(m->cfg.scale[j] > 0.0f))
 			m->cfg.scale[j] = 1.0f;
 	float u[IMU_ID_ROTORS];
-	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
+	imu_id_u_t uq[IMU_ID_ROTORS];
+	for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
 		u[j] = sc_to_float(thr0[j]);
+		uq[j] = u_of_sc(thr0[j]);
+		m->pc[0][j] = iid_c_of_float(m->cfg.pat[0][j]);
+		m->pc[1][j] = iid_c_of_float(m->cfg.pat[1][j]);
+	}
 	m->ln0 = logf(IMU_ID_TAU_MIN);
 	m->lstep = logf(IMU_ID_TAU_MAX / IMU_ID_TAU_MIN) / (float)(IMU_ID_LAGS - 1);
 	set_grid(m);
@@ -156,16 +482,25 @@ void imu_id_init(struct imu_id *m, const struct imu_id_cfg *cfg, const scalar_t 
 	m->ssum = ss;
 	for (unsigned k = 0; k < AGE; k++)
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-			m->uq[k][j] = u[j];
+			m->uq[k][j] = uq[j];
 	for (unsigned k = 0; k < 3u; k++) {
-		float s[2][IMU_ID_LAGS];
-		advance(m, u, s); /* the steady state in the smoother's rings */
+		imu_id_x_t s[2][IMU_ID_LAGS];
+		advance(m, uq, s); /* the steady state in the smoother's rings */
 	}
 	float kr = gs > 0.0f ? m->cfg.mass_kg * m->cfg.g / gs : 0.0f;
 	if (isfinite(kr) && kr > 0.0f && m->cfg.kf0 > 0.0f) {
 		m->cfg.kt0 *= kr / m->cfg.kf0;
 		m->cfg.kf0 = kr;
 	}
+#if OCTO_FIXED
+	m->kexp = exp_of(m->cfg.kf0);
+	m->texp = exp_of(m->cfg.kt0);
+	for (unsigned k = S_GX; k <= S_XQ; k++)
+		set_restart(m, k);
+#else
+	(void)exp_of;
+#endif
+	xmap_set(m);
 }
 
 void imu_id_step(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS], scalar_t f_n, scalar_t fw_n, scalar_t vz,
@@ -198,12 +533,12 @@ void imu_id_hold(struct imu_id *m, const scalar_t thr_prev[IMU_ID_ROTORS])
 static void holds_take(struct imu_id *m)
 {
 	for (; m->n_hold > 0u; m->n_hold--) {
-		float u[IMU_ID_ROTORS];
-		float s[2][IMU_ID_LAGS];
+		imu_id_u_t u[IMU_ID_ROTORS];
+		imu_id_x_t s[2][IMU_ID_LAGS];
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-			u[j] = sc_to_float(m->h_thr[j]);
+			u[j] = u_of_sc(m->h_thr[j]);
 		advance(m, u, s);
-		push_meas(m, 0.0f, 0.0f, false);
+		push_meas(m, X_ZERO, X_ZERO, false);
 		if (m->n_cal > 0u) {
 			m->fw_sum += m->fw_last;
 			m->n_cal++;
@@ -372,35 +707,36 @@ static float sens(const float s[IMU_ID_LAGS], unsigned l, float ih);
  * sums of x0 and x1 across the grid, as x2 and x3 are of x0 and x1: bank_take), the count
  * n_st, its own b and z'z; the offset's b is the delay's force sum less the reference's over
  * the lag's frames (the force rings hold f less k_f0 x_r(y_h); G holds the sums of x0, x1) */
-static void hyp_stat(const struct imu_id *m, unsigned d, unsigned l, struct imu_id_stat *s)
+static void hyp_stat(const struct imu_id *m, unsigned d, unsigned l, struct stat_f *s)
 {
 	const struct imu_id_hyp *h = &m->hs[l][d];
 	float r0, r1, s0[IMU_ID_LAGS], s1[IMU_ID_LAGS], ih = 0.5f / m->lstep;
 	ref_coef(m, &r0, &r1);
 	for (unsigned k = 0; k < IMU_ID_LAGS; k++) {
-		s0[k] = m->gx[k][ut(0, P_OFS)];
-		s1[k] = m->gx[k][ut(P_B, P_OFS)];
+		s0[k] = gx_f(m, k, ut(0, P_OFS));
+		s1[k] = gx_f(m, k, ut(P_B, P_OFS));
 	}
-	memcpy(s->g, m->gx[l], ut(P_LA, P_OFS) * sizeof s->g[0]); /* up to (2, 3) */
+	for (unsigned i = 0; i < ut(P_LA, P_OFS); i++) /* up to (2, 3) */
+		s->g[i] = gx_f(m, l, i);
 	s->g[ut(P_LA, P_OFS)] = sens(s0, l, ih);
-	s->g[ut(P_LB, P_LB)] = m->gx[l][ut(P_LA, P_OFS)];
+	s->g[ut(P_LB, P_LB)] = gx_f(m, l, ut(P_LA, P_OFS));
 	s->g[ut(P_LB, P_OFS)] = sens(s1, l, ih);
 	s->g[ut(P_OFS, P_OFS)] = (float)m->n_st;
 	float sx = r0 * s->g[ut(0, P_OFS)] + r1 * s->g[ut(P_B, P_OFS)];
 	for (unsigned i = 0; i < P_OFS; i++) {
-		s->b[i] = h->b[i];
-		s->bt[i] = h->bt[i];
+		s->b[i] = hs_f(m, h, i);
+		s->bt[i] = hs_f(m, h, HS_T + i);
 	}
-	s->b[P_OFS] = m->fs[d] - m->cfg.kf0 * sx;
-	s->bt[P_OFS] = m->ts[d] - m->cfg.kt0 * sx;
-	s->rr = h->rr;
-	s->rrt = h->rrt;
+	s->b[P_OFS] = acc_f(m->fs[d], QF_IMUX_FRAC, kexp_of(m)) - m->cfg.kf0 * sx;
+	s->bt[P_OFS] = acc_f(m->ts[d], QF_IMUX_FRAC, texp_of(m)) - m->cfg.kt0 * sx;
+	s->rr = hs_f(m, h, K_RR);
+	s->rrt = hs_f(m, h, HS_N - 1u);
 }
 
 /* hypothesis (d, l)'s force fit (fit), as the parameters */
 static float hyp_solve(const struct imu_id *m, unsigned d, unsigned l, float th[NP], float h[NP][NP])
 {
-	struct imu_id_stat s;
+	struct stat_f s;
 	hyp_stat(m, d, l, &s);
 	float j = fit(m, s.g, s.b, s.rr, th, h);
 	to_params(m, th, h);
@@ -410,7 +746,7 @@ static float hyp_solve(const struct imu_id *m, unsigned d, unsigned l, float th[
 /* the same hypothesis' torque fit */
 static float hyp_solve_tq(const struct imu_id *m, unsigned d, unsigned l, float th[NP], float h[NP][NP])
 {
-	struct imu_id_stat s;
+	struct stat_f s;
 	hyp_stat(m, d, l, &s);
 	float j = fit(m, s.g, s.bt, s.rrt, th, h);
 	to_params(m, th, h);
@@ -418,44 +754,23 @@ static float hyp_solve_tq(const struct imu_id *m, unsigned d, unsigned l, float 
 }
 
 /* a frame's regressors x and responses (force z, torque zt, both relative to the
- * references) into a hypothesis' or a block's sums */
-static void stat_add(struct imu_id_stat *s, const float x[NP], float z, float zt, bool tq)
+ * references) into a block's sums */
+static void stat_add(struct imu_id *m, struct imu_id_stat *s, const imu_id_x_t x[NP], imu_id_x_t z, imu_id_x_t zt,
+		     bool tq)
 {
-	/* G += x x' (add_outer(g, x, x), its upper triangle in storage order) and b += x z,
-	 * written out for the five parameters: the bank's inner loop, run for every hypothesis */
-	_Static_assert(NP == 5 && NT == 15, "stat_add is written out for five parameters");
-	const float x0 = x[0], x1 = x[1], x2 = x[2], x3 = x[3], x4 = x[4];
-	float *g = s->g, *b = s->b;
-	g[0] += x0 * x0;
-	g[1] += x0 * x1;
-	g[2] += x0 * x2;
-	g[3] += x0 * x3;
-	g[4] += x0 * x4;
-	g[5] += x1 * x1;
-	g[6] += x1 * x2;
-	g[7] += x1 * x3;
-	g[8] += x1 * x4;
-	g[9] += x2 * x2;
-	g[10] += x2 * x3;
-	g[11] += x2 * x4;
-	g[12] += x3 * x3;
-	g[13] += x3 * x4;
-	g[14] += x4 * x4;
-	b[0] += x0 * z;
-	b[1] += x1 * z;
-	b[2] += x2 * z;
-	b[3] += x3 * z;
-	b[4] += x4 * z;
-	s->rr += z * z;
+	/* G += x x' (its upper triangle in storage order) and b += x z: kinds 0..NT - 1, then
+	 * b, rr, bt, rrt (B_B...) */
+	for (unsigned i = 0, n = 0; i < NP; i++)
+		for (unsigned k = i; k < NP; k++, n++)
+			sadd(m, S_BLK, n, &s->g[n], term(x[i], x[k], E_OF(m, e_blk, n)));
+	for (unsigned i = 0; i < NP; i++)
+		sadd(m, S_BLK, B_B + i, &s->b[i], term(x[i], z, E_OF(m, e_blk, B_B + i)));
+	sadd(m, S_BLK, B_RR, &s->rr, term(z, z, E_OF(m, e_blk, B_RR)));
 	if (!tq)
 		return;
-	b = s->bt;
-	b[0] += x0 * zt;
-	b[1] += x1 * zt;
-	b[2] += x2 * zt;
-	b[3] += x3 * zt;
-	b[4] += x4 * zt;
-	s->rrt += zt * zt;
+	for (unsigned i = 0; i < NP; i++)
+		sadd(m, S_BLK, B_T + i, &s->bt[i], term(x[i], zt, E_OF(m, e_blk, B_T + i)));
+	sadd(m, S_BLK, B_T + NP, &s->rrt, term(zt, zt, E_OF(m, e_blk, B_T + NP)));
 }
 
 /* every hypothesis' least residual (its force fit) into jr; the least one's (bd, bl) */
@@ -466,7 +781,7 @@ static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl, float j
 	*bl = 0;
 	for (unsigned d = 0; d < IMU_ID_DELAYS; d++)
 		for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-			struct imu_id_stat st;
+			struct stat_f st;
 			hyp_stat(m, d, l, &st);
 			float th[NP], h[NP][NP], j = fit(m, st.g, st.b, st.rr, th, h); /* hyp_solve's residual */
 			jr[d][l] = j;
@@ -478,39 +793,9 @@ static void best_hyp(const struct imu_id *m, unsigned *bd, unsigned *bl, float j
 		}
 }
 
-/* The centred regressors (basis) as a linear map of the smoothed sums (x1, x2) and of their
- * sensitivities (x3, x4): x0 = k0 x1 + k1 x2 + k2, x1 = k3 x1 + k4 x2 + k5, x2 = k0 x3 + k1 x4,
- * x3 = k3 x3 + k4 x4. With the curve estimated (x1 - y_h S, sum s (y - y_h)^2, x3,
- * x4 - 2 y_h x3), else (the reference's less its value at y_h, 0, its sensitivity, 0). With
- * it the reference model's regressor (ref_coef: r0, r1, x_r(y_h) in xh) and 1 / (2 h), h the
- * grid's step, for the sensitivities. */
-struct xmap {
-	float k[6], r0, r1, xh, ih;
-};
-
-static void xmap(const struct imu_id *m, struct xmap *x)
-{
-	const struct imu_id_cfg *c = &m->cfg;
-	float yh = m->yh, s = m->ssum, *k = x->k;
-	if (c->est_curve) {
-		k[0] = 1.0f;
-		k[1] = 0.0f;
-		k[2] = -yh * s;
-		k[3] = -2.0f * yh;
-		k[4] = 1.0f;
-		k[5] = yh * yh * s;
-	} else {
-		k[0] = 1.0f - c->curve0;
-		k[1] = c->curve0;
-		k[2] = -ref_x(c, yh * s, yh * yh * s);
-		k[3] = k[4] = k[5] = 0.0f;
-	}
-	x->xh = ref_coef(m, &x->r0, &x->r1);
-	x->ih = 0.5f / m->lstep;
-}
-
 /* the sensitivity of the smoothed sums s (x1 or x2) to ln tau at lag l: a central difference
- * across the grid, second order at its ends */
+ * across the grid, second order at its ends (ih: 1 / (2 h), h the grid's step); in float (the
+ * solve's, on the sums) and per frame */
 static float sens(const float s[IMU_ID_LAGS], unsigned l, float ih)
 {
 	_Static_assert(IMU_ID_LAGS >= 3, "the differences need three lags");
@@ -522,36 +807,50 @@ static float sens(const float s[IMU_ID_LAGS], unsigned l, float ih)
 	return ih * (s[l + 1u] - s[l - 1u]);
 }
 
-/* lag l's centred regressors (the offset's 1 implied) of the frame AGE old */
-static void lag_x(const struct xmap *xm, const float s[2][IMU_ID_LAGS], unsigned l, float x[NP - 1u])
+static imu_id_x_t sens_x(const imu_id_x_t s[IMU_ID_LAGS], unsigned l, imu_id_c_t ih)
 {
-	const float *k = xm->k, d0 = sens(s[0], l, xm->ih), d1 = sens(s[1], l, xm->ih);
-	x[0] = k[0] * s[0][l] + k[1] * s[1][l] + k[2];
-	x[P_B] = k[3] * s[0][l] + k[4] * s[1][l] + k[5];
-	x[P_LA] = k[0] * d0 + k[1] * d1;
-	x[P_LB] = k[3] * d0 + k[4] * d1;
+	const unsigned e = IMU_ID_LAGS - 1u;
+	if (l == 0u)
+		return mul_cx(ih, end_diff(s[0], s[1], s[2]));
+	if (l == e)
+		return mul_cx(ih, end_diff_hi(s[e], s[e - 1u], s[e - 2u]));
+	return mul_cx(ih, x_sub(s[l + 1u], s[l - 1u]));
+}
+
+/* lag l's centred regressors (the offset's 1 implied) of the frame AGE old */
+static void lag_x(const struct imu_id_xmap *xm, const imu_id_x_t s[2][IMU_ID_LAGS], unsigned l, imu_id_x_t x[NP - 1u])
+{
+	const imu_id_c_t *k = xm->k;
+	const imu_id_x_t d0 = sens_x(s[0], l, xm->ih), d1 = sens_x(s[1], l, xm->ih);
+	x[0] = x_add(lin2(k[0], s[0][l], k[1], s[1][l]), xm->o[0]);
+	x[P_B] = x_add(lin2(k[2], s[0][l], k[3], s[1][l]), xm->o[1]);
+	x[P_LA] = lin2(k[0], d0, k[1], d1);
+	x[P_LB] = lin2(k[2], d0, k[3], d1);
 }
 
 /* a hypothesis' products of the regressors with its measurement z (relative to the
- * reference model) and z's square */
-static inline void hyp_add(float b[IMU_ID_NP - 1], float *rr, float x0, float x1, float x2, float x3, float z)
+ * reference model) and z's square: the members k0..k0 + 4 of its record b (the force's from 0,
+ * the torque's from HS_T) */
+IID_INLINE void hyp_add(struct imu_id *m, imu_id_sum_t *b, unsigned k0, imu_id_x_t x0, imu_id_x_t x1, imu_id_x_t x2,
+			imu_id_x_t x3, imu_id_x_t z)
 {
-	b[0] += x0 * z;
-	b[1] += x1 * z;
-	b[2] += x2 * z;
-	b[3] += x3 * z;
-	*rr += z * z;
+	sadd(m, S_HS, k0, &b[k0], term(x0, z, E_OF(m, e_hs, k0)));
+	sadd(m, S_HS, k0 + 1u, &b[k0 + 1u], term(x1, z, E_OF(m, e_hs, k0 + 1u)));
+	sadd(m, S_HS, k0 + 2u, &b[k0 + 2u], term(x2, z, E_OF(m, e_hs, k0 + 2u)));
+	sadd(m, S_HS, k0 + 3u, &b[k0 + 3u], term(x3, z, E_OF(m, e_hs, k0 + 3u)));
+	sadd(m, S_HS, k0 + 4u, &b[k0 + 4u], term(z, z, E_OF(m, e_hs, k0 + 4u)));
 }
 
 /* the regressors of the frame AGE old (from its smoothed sums s) into every hypothesis: the
  * products x x' and the sums of x0 and x1 into their lag's sums (hyp_stat derives those of
  * x2 and x3), the products with the force of each delay (less the reference model's
  * prediction from x) into the hypothesis' own */
-static void bank_take(struct imu_id *m, const struct xmap *xm, const float s[2][IMU_ID_LAGS])
+static void bank_take(struct imu_id *m, const imu_id_x_t s[2][IMU_ID_LAGS])
 {
 	const struct imu_id_cfg *c = &m->cfg;
-	const float *k = xm->k, r0 = xm->r0, r1 = xm->r1, ih = xm->ih;
-	float fd[IMU_ID_DELAYS], td[IMU_ID_DELAYS];
+	const struct imu_id_xmap *xm = &m->xm;
+	const imu_id_c_t *k = xm->k, r0 = xm->r0, r1 = xm->r1, ih = xm->ih;
+	imu_id_x_t fd[IMU_ID_DELAYS], td[IMU_ID_DELAYS];
 	for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
 		fd[q] = m->fz[meas_slot(m, AGE - q)];
 		td[q] = m->tz[meas_slot(m, AGE - q)];
@@ -561,48 +860,50 @@ static void bank_take(struct imu_id *m, const struct xmap *xm, const float s[2][
 	m->n_st++;
 	const bool tq_one = c->torque && m->cl_on, tq_all = c->torque && !m->cl_on;
 	const unsigned qf = m->cl_d < IMU_ID_DELAYS ? m->cl_d : 0u;
-	const float tdf = td[qf];
+	const imu_id_x_t tdf = td[qf];
 	_Static_assert(NP == 5 && NT == 15, "bank_take is written out for five parameters");
+	_Static_assert(sizeof(struct imu_id_hyp) == 2u * NP * sizeof(imu_id_sum_t), "b, rr, bt, rrt in a row");
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
-		/* lag_x, written out (the grid's ends by sens) */
-		float d0, d1;
+		/* lag_x, written out (the grid's ends by sens_x) */
+		imu_id_x_t d0, d1;
 		if (l - 1u < IMU_ID_LAGS - 2u) {
-			d0 = ih * (s[0][l + 1u] - s[0][l - 1u]);
-			d1 = ih * (s[1][l + 1u] - s[1][l - 1u]);
+			d0 = mul_cx(ih, x_sub(s[0][l + 1u], s[0][l - 1u]));
+			d1 = mul_cx(ih, x_sub(s[1][l + 1u], s[1][l - 1u]));
 		} else {
-			d0 = sens(s[0], l, ih);
-			d1 = sens(s[1], l, ih);
+			d0 = sens_x(s[0], l, ih);
+			d1 = sens_x(s[1], l, ih);
 		}
-		const float x0 = k[0] * s[0][l] + k[1] * s[1][l] + k[2], x1 = k[3] * s[0][l] + k[4] * s[1][l] + k[5];
-		const float x2 = k[0] * d0 + k[1] * d1, x3 = k[3] * d0 + k[4] * d1;
-		const float xr = r0 * x0 + r1 * x1;
-		float *g = m->gx[l];
-		g[0] += x0 * x0;
-		g[1] += x0 * x1;
-		g[2] += x0 * x2;
-		g[3] += x0 * x3;
-		g[4] += x0;
-		g[5] += x1 * x1;
-		g[6] += x1 * x2;
-		g[7] += x1 * x3;
-		g[8] += x1;
-		g[9] += x2 * x2;
-		g[10] += x2 * x3;
-		g[11] += x3 * x3;
-		float kx = c->kf0 * xr;
+		const imu_id_x_t x0 = x_add(lin2(k[0], s[0][l], k[1], s[1][l]), xm->o[0]);
+		const imu_id_x_t x1 = x_add(lin2(k[2], s[0][l], k[3], s[1][l]), xm->o[1]);
+		const imu_id_x_t x2 = lin2(k[0], d0, k[1], d1), x3 = lin2(k[2], d0, k[3], d1);
+		const imu_id_x_t xr = lin2(r0, x0, r1, x1);
+		imu_id_sum_t *g = m->gx[l];
+		sadd(m, S_GX, 0, &g[0], term(x0, x0, E_OF(m, e_gx, 0)));
+		sadd(m, S_GX, 1, &g[1], term(x0, x1, E_OF(m, e_gx, 1)));
+		sadd(m, S_GX, 2, &g[2], term(x0, x2, E_OF(m, e_gx, 2)));
+		sadd(m, S_GX, 3, &g[3], term(x0, x3, E_OF(m, e_gx, 3)));
+		sadd(m, S_GX, 4, &g[4], term1(x0, E_OF(m, e_gx, 4)));
+		sadd(m, S_GX, 5, &g[5], term(x1, x1, E_OF(m, e_gx, 5)));
+		sadd(m, S_GX, 6, &g[6], term(x1, x2, E_OF(m, e_gx, 6)));
+		sadd(m, S_GX, 7, &g[7], term(x1, x3, E_OF(m, e_gx, 7)));
+		sadd(m, S_GX, 8, &g[8], term1(x1, E_OF(m, e_gx, 8)));
+		sadd(m, S_GX, 9, &g[9], term(x2, x2, E_OF(m, e_gx, 9)));
+		sadd(m, S_GX, 10, &g[10], term(x2, x3, E_OF(m, e_gx, 10)));
+		sadd(m, S_GX, 11, &g[11], term(x3, x3, E_OF(m, e_gx, 11)));
+		imu_id_x_t kx = mul_cx(xm->kf, xr);
 #pragma GCC unroll 5
 		for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
-			hyp_add(m->hs[l][q].b, &m->hs[l][q].rr, x0, x1, x2, x3, fd[q] - kx);
+			hyp_add(m, &m->hs[l][q].b[0], 0u, x0, x1, x2, x3, x_sub(fd[q], kx));
 		}
 		/* the torque's sums: after the refinement only the delay frozen there (the
 		 * clusters' own), whose lags k_tau is solved on; before it every delay's, which
 		 * the refinement clears */
 		if (tq_one) {
-			hyp_add(m->hs[l][qf].bt, &m->hs[l][qf].rrt, x0, x1, x2, x3, tdf - c->kt0 * xr);
+			hyp_add(m, &m->hs[l][qf].b[0], HS_T, x0, x1, x2, x3, x_sub(tdf, mul_cx(xm->kt, xr)));
 		} else if (tq_all) {
-			kx = c->kt0 * xr;
+			kx = mul_cx(xm->kt, xr);
 			for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
-				hyp_add(m->hs[l][q].bt, &m->hs[l][q].rrt, x0, x1, x2, x3, td[q] - kx);
+				hyp_add(m, &m->hs[l][q].b[0], HS_T, x0, x1, x2, x3, x_sub(td[q], kx));
 			}
 		}
 	}
@@ -611,42 +912,41 @@ static void bank_take(struct imu_id *m, const struct xmap *xm, const float s[2][
 /* the frozen hypothesis' frame into its block (a full set of blocks merges in pairs), and its
  * products with the two patterns' responses into the scales' check (whose other sums are the
  * blocks') */
-static void cl_add(struct imu_id *m, const struct xmap *xm, const float s[2][IMU_ID_LAGS])
+static void cl_add(struct imu_id *m, const imu_id_x_t s[2][IMU_ID_LAGS])
 {
-	float xx[IMU_ID_NX];
+	const struct imu_id_xmap *xm = &m->xm;
+	imu_id_x_t xx[IMU_ID_NX];
 	lag_x(xm, s, m->cl_l, xx);
-	xx[P_OFS] = 1.0f;
+	xx[P_OFS] = X_ONE;
 	xx[NP] = m->qs[0];
 	xx[NP + 1u] = m->qs[1];
 	/* the rings hold f less k_f0 x_r(y_h): z = f - k_f0 x_r */
-	float xr = xm->r0 * xx[0] + xm->r1 * xx[P_B];
+	imu_id_x_t xr = lin2(xm->r0, xx[0], xm->r1, xx[P_B]);
 	unsigned a = meas_slot(m, AGE - m->cl_d);
-	float z = m->fz[a] - m->cfg.kf0 * xr, zt = m->tz[a] - m->cfg.kt0 * xr;
+	imu_id_x_t z = x_sub(m->fz[a], mul_cx(xm->kf, xr)), zt = x_sub(m->tz[a], mul_cx(xm->kt, xr));
 	for (unsigned i = 0; i < IMU_ID_NX; i++) {
-		m->xq[i][0] += xx[i] * xx[NP];
-		m->xq[i][1] += xx[i] * xx[NP + 1u];
+		sadd(m, S_XQ, 2u * i, &m->xq[i][0], term(xx[i], xx[NP], E_OF(m, e_xq, 2u * i)));
+		sadd(m, S_XQ, 2u * i + 1u, &m->xq[i][1], term(xx[i], xx[NP + 1u], E_OF(m, e_xq, 2u * i + 1u)));
 	}
-	m->xbq[0] += xx[NP] * z;
-	m->xbq[1] += xx[NP + 1u] * z;
+	sadd(m, S_XQ, 2u * IMU_ID_NX, &m->xq[IMU_ID_NX][0], term(xx[NP], z, E_OF(m, e_xq, 2u * IMU_ID_NX)));
+	sadd(m, S_XQ, 2u * IMU_ID_NX + 1u, &m->xq[IMU_ID_NX][1],
+	     term(xx[NP + 1u], z, E_OF(m, e_xq, 2u * IMU_ID_NX + 1u)));
 	m->xn++;
-	stat_add(&m->blk[m->nb], xx, z, zt, m->cfg.torque);
+	stat_add(m, &m->blk[m->nb], xx, z, zt, m->cfg.torque);
 	if (++m->cl_k < m->cl_len)
 		return;
 	m->cl_k = 0;
 	if (++m->nb < IMU_ID_BLOCKS)
 		return;
+	/* block k the sum of blocks 2 k and 2 k + 1 (in place: block k is read before it is
+	 * written, the pair's sums share their exponents) */
 	for (unsigned k = 0; k < IMU_ID_BLOCKS / 2u; k++) {
-		struct imu_id_stat t = m->blk[2u * k];
-		const struct imu_id_stat *p1 = &m->blk[2u * k + 1u];
-		for (unsigned i = 0; i < NT; i++)
-			t.g[i] += p1->g[i];
-		for (unsigned i = 0; i < NP; i++) {
-			t.b[i] += p1->b[i];
-			t.bt[i] += p1->bt[i];
+		imu_id_sum_t *t = &m->blk[k].g[0];
+		const imu_id_sum_t *p0 = &m->blk[2u * k].g[0], *p1 = &m->blk[2u * k + 1u].g[0];
+		for (unsigned i = 0; i < BLK_N; i++) {
+			t[i] = p0[i];
+			sadd(m, S_BLK, i, &t[i], (term_t)p1[i]);
 		}
-		t.rr += p1->rr;
-		t.rrt += p1->rrt;
-		m->blk[k] = t;
 	}
 	memset(&m->blk[IMU_ID_BLOCKS / 2u], 0, (IMU_ID_BLOCKS / 2u + 1u) * sizeof m->blk[0]);
 	m->nb = IMU_ID_BLOCKS / 2u;
@@ -704,7 +1004,7 @@ static void refine(struct imu_id *m)
 	float y[IMU_ID_LAGS][IMU_ID_ROTORS], v[IMU_ID_LAGS][IMU_ID_ROTORS], ln_old0 = m->ln0;
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++)
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-			y[l][j] = m->y[l][j] / m->rs[j];
+			y[l][j] = iid_u_to_float(m->y[l][j]) / iid_u_to_float(m->rs[j]);
 	m->ln0 = c - half;
 	m->lstep = 2.0f * half / (float)(IMU_ID_LAGS - 1);
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
@@ -725,6 +1025,8 @@ static void refine(struct imu_id *m)
 	memset(m->hs, 0, sizeof m->hs);
 	memset(m->fs, 0, sizeof m->fs);
 	memset(m->ts, 0, sizeof m->ts);
+	set_restart(m, S_GX);
+	set_restart(m, S_HS);
 	m->n_st = 0;
 	m->fok = 0; /* the bank waits for the new grid's regressors and the new reference's force */
 	m->refined = true;
@@ -732,6 +1034,7 @@ static void refine(struct imu_id *m)
 	m->cl_l = (uint8_t)CL_LAG;
 	m->cl_len = m->cfg.block_frames ? m->cfg.block_frames : 90u;
 	m->cl_on = true;
+	xmap_set(m); /* the new grid's step, the references the scales moved */
 }
 
 void imu_id_process(struct imu_id *m)
@@ -740,16 +1043,15 @@ void imu_id_process(struct imu_id *m)
 	if (!m->q_pending)
 		return;
 	m->q_pending = false;
-	float thr[IMU_ID_ROTORS];
+	imu_id_u_t thr[IMU_ID_ROTORS];
 	for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-		thr[j] = sc_to_float(m->q_thr[j]);
-	float qfw = sc_to_float(m->q_fw), qvz = sc_to_float(m->q_vz);
-	float qtq = m->cfg.torque ? sc_to_float(m->q_tq) : 0.0f;
-	if (!isfinite(qtq)) {
+		thr[j] = u_of_sc(m->q_thr[j]);
+	scalar_t qfw = m->q_fw, qvz = m->q_vz, qtq = m->cfg.torque ? m->q_tq : SC_ZERO;
+	if (!sc_isfinite(qtq)) {
 		m->tq_lost = true;
-		qtq = 0.0f;
+		qtq = SC_ZERO;
 	}
-	float s[2][IMU_ID_LAGS];
+	imu_id_x_t s[2][IMU_ID_LAGS];
 	advance(m, thr, s);
 	if (m->q_excited) { /* the calibration's sums: from the velocity before the first */
 		if (m->n_cal == 0u)
@@ -762,41 +1064,36 @@ void imu_id_process(struct imu_id *m)
 	m->vz_prev = qvz;
 	m->fr[2] = m->fr[1];
 	m->fr[1] = m->fr[0];
-	m->fr[0] = sc_to_float(m->q_f);
+	m->fr[0] = x_of_sc(m->q_f, kexp_of(m));
 	m->tr[2] = m->tr[1];
 	m->tr[1] = m->tr[0];
-	m->tr[0] = qtq;
+	m->tr[0] = x_of_sc(qtq, texp_of(m));
 	if (++m->n_fr < 3u) {
-		push_meas(m, 0.0f, 0.0f, false); /* the smoother fills */
+		push_meas(m, X_ZERO, X_ZERO, false); /* the smoother fills */
 		return;
 	}
-	float f = smooth(m->fr), t = smooth(m->tr);
+	imu_id_x_t f = smooth(m->fr), t = smooth(m->tr);
 	if (!m->q_excited) {
-		push_meas(m, 0.0f, 0.0f, false);
-		float u = 0.0f;
-		for (unsigned j = 0; j < IMU_ID_ROTORS; j++)
-			u += thr[j];
+		push_meas(m, X_ZERO, X_ZERO, false);
 		m->nz_n++;
 		m->nz_s += f;
-		m->nz_ss += f * f;
-		m->nz_thr += u / (float)IMU_ID_ROTORS;
+		m->nz_ss = acc_sq(m->nz_ss, f);
+		m->nz_thr += u_mean(thr);
 		return;
 	}
 	m->n_exc++;
-	m->ff += f * f;
+	m->ff = acc_sq(m->ff, f);
 	const struct imu_id_cfg *c = &m->cfg;
-	struct xmap xm;
-	xmap(m, &xm);
-	push_meas(m, f - c->kf0 * xm.xh, t - c->kt0 * xm.xh, true);
+	push_meas(m, x_sub(f, m->xm.fref), x_sub(t, m->xm.tref), true);
 	if (m->fok != (1u << IMU_ID_DELAYS) - 1u)
 		return; /* a delay's force is not all taken frames' */
-	bank_take(m, &xm, s);
+	bank_take(m, s);
 	if (!m->refined && (float)m->n_exc >= IMU_ID_FREEZE * (float)c->n_frames && m->n_st >= 30u) {
 		refine(m);
 		return;
 	}
 	if (m->cl_on)
-		cl_add(m, &xm, s);
+		cl_add(m, s);
 }
 
 /* z solving (I - H W) z = v by Gaussian elimination with partial pivoting; false if singular */
@@ -863,7 +1160,9 @@ static double top_check(const struct imu_id *m, const float th[NP], const float 
 	float gr[NT];
 	memcpy(gr, gs, sizeof gr);
 	for (unsigned k = 0; k < nb; k++) {
-		const struct imu_id_stat *b = &m->blk[k];
+		struct stat_f bf;
+		blk_get(m, k, &bf);
+		const struct stat_f *b = &bf;
 		lev[k] = 0.0;
 		for (unsigned i = 0; i < NP; i++)
 			for (unsigned q = 0; q < NP; q++)
@@ -878,8 +1177,10 @@ static double top_check(const struct imu_id *m, const float th[NP], const float 
 			return 0.0;
 		top[kb] = true;
 		got += lev[kb];
+		struct stat_f bf;
+		blk_get(m, kb, &bf);
 		for (unsigned i = 0; i < NT; i++)
-			gr[i] -= m->blk[kb].g[i];
+			gr[i] -= bf.g[i];
 	}
 	float g[NT], hf[NP][NP], bb0[NP], j[NP];
 	proj_centred(m, jo, j);
@@ -895,7 +1196,9 @@ static double top_check(const struct imu_id *m, const float th[NP], const float 
 	}
 	double d = 0.0, vd = 0.0;
 	for (unsigned k = 0; k < nb; k++) {
-		const struct imu_id_stat *b = &m->blk[k];
+		struct stat_f bf;
+		blk_get(m, k, &bf);
+		const struct stat_f *b = &bf;
 		const float *bb = tq ? b->bt : b->b;
 		double pv = 0.0, pr = 0.0;
 		for (unsigned i = 0; i < NP; i++) {
@@ -955,7 +1258,9 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 	float gs[NT] = {0}, ee = 0.0f;
 	uint32_t n = 0;
 	for (unsigned k = 0; k < nb; k++) {
-		const struct imu_id_stat *b = &m->blk[k];
+		struct stat_f bf;
+		blk_get(m, k, &bf);
+		const struct stat_f *b = &bf;
 		const float *bb = tq ? b->bt : b->b;
 		/* the block's e'e = rr - 2 theta' b + theta' G theta */
 		for (unsigned i = 0; i < NP; i++) {
@@ -989,7 +1294,9 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 	 * S = sum c_g c_g' */
 	double sc[NP][NP] = {{0}}, tr = 0.0, tr2 = 0.0;
 	for (unsigned k = 0; k < nb; k++) {
-		const struct imu_id_stat *b = &m->blk[k];
+		struct stat_f bf;
+		blk_get(m, k, &bf);
+		const struct stat_f *b = &bf;
 		const float *bb = tq ? b->bt : b->b;
 		double w[NP][NP], r[NP], z[NP], cz[NP];
 		for (unsigned i = 0; i < NP; i++) {
@@ -1062,12 +1369,14 @@ static void scales_check(const struct imu_id *m, float t[2])
 	/* the parameters' sums are the blocks' (merging keeps them), the patterns' cl_add's */
 	double rr = 0.0;
 	for (unsigned i = 0; i < N; i++) {
-		b[i] = i < NP ? 0.0 : (double)m->xbq[i - NP];
+		b[i] = i < NP ? 0.0 : (double)xq_f(m, IMU_ID_NX, i - NP);
 		for (unsigned k = 0; k < N; k++)
-			a[i][k] = k >= NP ? (double)m->xq[i][k - NP] : i >= NP ? (double)m->xq[k][i - NP] : 0.0;
+			a[i][k] = k >= NP ? (double)xq_f(m, i, k - NP) : i >= NP ? (double)xq_f(m, k, i - NP) : 0.0;
 	}
 	for (unsigned q = 0; q <= m->nb && q <= IMU_ID_BLOCKS; q++) {
-		const struct imu_id_stat *s = &m->blk[q];
+		struct stat_f sf;
+		blk_get(m, q, &sf);
+		const struct stat_f *s = &sf;
 		for (unsigned i = 0; i < NP; i++) {
 			b[i] += (double)s->b[i];
 			for (unsigned k = 0; k < NP; k++)
@@ -1180,7 +1489,7 @@ static void cov_frozen(const struct imu_id *m, float s2, const float h[NP][NP], 
 			v[i][k] = s2 * h[i][k];
 	memset(thc, 0, NP * sizeof thc[0]);
 	if (m->cl_on) {
-		struct imu_id_stat s;
+		struct stat_f s;
 		float hc[NP][NP];
 		hyp_stat(m, m->cl_d, m->cl_l, &s);
 		fit(m, s.g, tq ? s.bt : s.b, tq ? s.rrt : s.rr, thc, hc);
@@ -1221,7 +1530,7 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 	r->ktau = A + B;
 	r->ktau_sd = sqrtf(quad(v, jk) * r->tq_hac);
 	r->tq_noise = sqrtf(s2);
-	float yh = m->nz_n ? m->nz_thr / (float)m->nz_n : 0.0f, sl = A + 2.0f * B * yh;
+	float yh = m->nz_n ? acc_f(m->nz_thr, QF_UNIT_FRAC, 0) / (float)m->nz_n : 0.0f, sl = A + 2.0f * B * yh;
 	const float js[NP] = {1.0f, c->est_curve ? 2.0f * yh : 0.0f, 0.0f, 0.0f, 0.0f};
 	r->tq_slope = sl;
 	r->tq_slope_rsd = sl > 0.0f ? sqrtf(quad(v, js) * cl_factor(m, thc, js, true, &ncl, &nu, NULL)) / sl : INFINITY;
@@ -1270,8 +1579,8 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	}
 	float nz_var = 0.0f;
 	if (m->nz_n >= 20u) {
-		float mu = m->nz_s / (float)m->nz_n;
-		nz_var = m->nz_ss / (float)m->nz_n - mu * mu;
+		float mu = acc_f(m->nz_s, QF_IMUX_FRAC, kexp_of(m)) / (float)m->nz_n;
+		nz_var = acc_f(m->nz_ss, QF_IMUX_FRAC, 2 * kexp_of(m)) / (float)m->nz_n - mu * mu;
 		if (nz_var < 0.0f)
 			nz_var = 0.0f;
 	}
@@ -1298,8 +1607,9 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	/* the residual variance over the noise the still frames measured, scaled to each frame's
 	 * thrust: the vibration's amplitude goes with the rotor speed squared, as the thrust
 	 * does, so a frame at force f has the still variance times (f / f_still)^2 */
-	float mu = m->nz_n ? m->nz_s / (float)m->nz_n : 0.0f;
-	float grow = mu > 0.0f && m->n_exc > 0u ? m->ff / (float)m->n_exc / (mu * mu) : 1.0f;
+	float mu = m->nz_n ? acc_f(m->nz_s, QF_IMUX_FRAC, kexp_of(m)) / (float)m->nz_n : 0.0f;
+	float ff = acc_f(m->ff, QF_IMUX_FRAC, 2 * kexp_of(m));
+	float grow = mu > 0.0f && m->n_exc > 0u ? ff / (float)m->n_exc / (mu * mu) : 1.0f;
 	r->ne = nz_var > 0.0f ? s2 / (nz_var * (grow > 1.0f ? grow : 1.0f)) : INFINITY;
 
 	/* the Gauss-Newton step is first order: each grid point's estimate at the lag found is
@@ -1333,9 +1643,9 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	 * k_f = kappa (A + B), its sd from the parameters' covariance through the Jacobian
 	 * (kappa, kappa, 0, k_f / (F_w mean - D)) and the velocity's share of kappa's */
 	float tc = (float)m->n_cal * c->dt_s, kap = 1.0f, kap_sd = 0.0f, ofs = th[P_OFS];
-	float fm = m->n_cal > 0u ? m->fw_sum / (float)m->n_cal - ofs : 0.0f;
+	float fm = m->n_cal > 0u ? acc_f(m->fw_sum, QF_SC_FRAC, 0) / (float)m->n_cal - ofs : 0.0f;
 	if (fm > 0.0f) {
-		kap = c->mass_kg * (c->g + (m->v_last - m->v0) / tc) / fm;
+		kap = c->mass_kg * (c->g + (sc_to_float(m->v_last) - sc_to_float(m->v0)) / tc) / fm;
 		kap_sd = kap * 1.41421356f * IMU_ID_VEL_SD / (c->g * tc);
 	}
 	r->kappa = kap;
@@ -1352,7 +1662,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	r->kappa_sd = fm > 0.0f ? sqrtf(kap_sd * kap_sd + kap * kap * vo / (fm * fm)) : 0.0f;
 	r->kf_sd = sqrtf(var + kap_sd * kap_sd * kf_raw * kf_raw);
 	/* the slope at hover: kappa (A + 2 B y_h) */
-	float yh = m->nz_n ? m->nz_thr / (float)m->nz_n : 0.0f, sl_raw = A + 2.0f * B * yh;
+	float yh = m->nz_n ? acc_f(m->nz_thr, QF_UNIT_FRAC, 0) / (float)m->nz_n : 0.0f, sl_raw = A + 2.0f * B * yh;
 	r->thr_hover = yh;
 	r->slope = kap * sl_raw;
 	float js[NP] = {kap, c->est_curve ? 2.0f * kap * yh : 0.0f, 0.0f, 0.0f, fm > 0.0f ? r->slope / fm : 0.0f};

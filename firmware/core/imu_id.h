@@ -64,12 +64,15 @@
  * The derivation: docs/identification.md, "From the IMU".
  *
  * Core rules: no heap, globals or I/O. imu_id_step and imu_id_hold store the frame (scalars,
- * no conversion); the bank update (imu_id_process) and the solve run between frames, in float
- * in both builds.
+ * no conversion); the bank update (imu_id_process) and the solve run between frames. The
+ * bank update is integer in the fixed build (imu_id_q.h: the lag filters, smoothers,
+ * regressors and sums); the solve and the grid's refinement (once) are float in both builds,
+ * reading the sums converted.
  */
 #ifndef OCTO_IMU_ID_H
 #define OCTO_IMU_ID_H
 
+#include "imu_id_q.h"
 #include "scalar.h"
 
 #include <stdbool.h>
@@ -110,15 +113,24 @@ struct imu_id_cfg {
 /* least-squares sums of one hypothesis: G (upper triangle, row by row), b, z'z; and the
  * torque's b and z'z over the same G (cfg.torque) */
 struct imu_id_stat {
-	float g[IMU_ID_NT], b[IMU_ID_NP], rr;
-	float bt[IMU_ID_NP], rrt;
+	imu_id_sum_t g[IMU_ID_NT], b[IMU_ID_NP], rr;
+	imu_id_sum_t bt[IMU_ID_NP], rrt;
 };
 
 /* a hypothesis' own sums: b but its offset's, z'z; the torque's the same (its G is its lag's,
  * the offset's b its delay's force sum less the lag's reference: imu_id.c, hyp_stat) */
 struct imu_id_hyp {
-	float b[IMU_ID_NP - 1], rr;
-	float bt[IMU_ID_NP - 1], rrt;
+	imu_id_sum_t b[IMU_ID_NP - 1], rr;
+	imu_id_sum_t bt[IMU_ID_NP - 1], rrt;
+};
+
+/* The per-frame coefficients of the centred regressors (imu_id.c: xmap), set at the start
+ * and at the refinement: x0 = k0 x1 + k1 x2 + o0, x1' = k3 x1 + k4 x2 + o1 (k: k0, k1, k3,
+ * k4), the reference's regressor r0 x0 + r1 x1', 1 / (2 h) of the grid's step, the reference's
+ * k_f and k_tau (normalised) and its force and torque at the start's hover (fref, tref) */
+struct imu_id_xmap {
+	imu_id_c_t k[4], r0, r1, ih, kf, kt;
+	imu_id_x_t o[2], fref, tref;
 };
 
 struct imu_id {
@@ -126,59 +138,71 @@ struct imu_id {
 	/* the regressors are centred at the start's hover (y_h, the scales' sum S): x1 - y_h S,
 	 * sum s (y - y_h)^2, x3, x4 - 2 y_h x3 (imu_id.c: basis) */
 	float yh, ssum;
-	float ln0, lstep;     /* the lag grid: ln tau_l = ln0 + l lstep */
-	bool refined;         /* the grid was refined (the sums restarted) */
-	uint32_t n_st;        /* excited frames in the bank's sums */
-	float a[IMU_ID_LAGS]; /* the lags' poles exp(-dt / tau) */
+	float ln0, lstep; /* the lag grid: ln tau_l = ln0 + l lstep */
+	bool refined;     /* the grid was refined (the sums restarted) */
+	uint32_t n_st;    /* excited frames in the bank's sums */
+	/* the lags' poles exp(-dt / tau): a in the float build, 1 - a in the fixed (its precision) */
+	imu_id_u_t lk[IMU_ID_LAGS];
 	/* the filters, on the throttles IMU_ID_DELAYS - 1 frames old: each rotor's output times
 	 * the square root of its scale (rs), and the scaled outputs' sum x1 */
-	float y[IMU_ID_LAGS][IMU_ID_ROTORS], yc[IMU_ID_LAGS], rs[IMU_ID_ROTORS];
-	float uq[IMU_ID_DELAYS - 1][IMU_ID_ROTORS]; /* the throttles waiting for the filters (uqh: the oldest's) */
+	imu_id_u_t y[IMU_ID_LAGS][IMU_ID_ROTORS], rs[IMU_ID_ROTORS];
+	imu_id_x_t yc[IMU_ID_LAGS];
+	imu_id_c_t sc[IMU_ID_ROTORS], pc[2][IMU_ID_ROTORS]; /* cfg's scales and patterns */
+	imu_id_u_t uq[IMU_ID_DELAYS - 1][IMU_ID_ROTORS]; /* the throttles waiting for the filters (uqh: the oldest's) */
 	uint8_t uqh;
 	/* the [1 2 1] / 4 smoother's state (the last input, the last two's sum) of x1, x2 and the
 	 * patterns' responses (sum p_kj s_j y_j, at the clusters' lag: imu_id.c); qs: the latter smoothed */
-	float x1[IMU_ID_LAGS][2], x2[IMU_ID_LAGS][2];
-	float q1[2], q2[2], qs[2];
+	imu_id_x_t x1[IMU_ID_LAGS][2], x2[IMU_ID_LAGS][2];
+	imu_id_x_t q1[2], q2[2], qs[2];
+	struct imu_id_xmap xm;
 	/* the scales' check on the frozen hypothesis: the products of its regressors and the
-	 * two patterns' responses with the latter (xq) and with the force (xbq), over its xn
-	 * frames (the other sums are the blocks') */
-	float xq[IMU_ID_NX][2], xbq[2];
+	 * two patterns' responses with the latter (rows 0..IMU_ID_NX - 1) and with the force
+	 * (row IMU_ID_NX), over its xn frames (the other sums are the blocks') */
+	imu_id_sum_t xq[IMU_ID_NX + 1][2];
 	uint32_t xn;
-	float fr[3];   /* the force's last three frames, newest first */
-	float tr[3];   /* the torques' sum, the same */
-	uint32_t n_fr; /* consecutive frames in fr (a gap restarts it) */
+	imu_id_x_t fr[3]; /* the force's last three frames, newest first */
+	imu_id_x_t tr[3]; /* the torques' sum, the same */
+	uint32_t n_fr;    /* consecutive frames in fr (a gap restarts it) */
 	/* rings by age: the smoothed force and torque less the reference at hover, and
 	 * (bit k) whether the frame of age k is taken; the bank takes the regressors of age
 	 * IMU_ID_DELAYS - 1 when all are, delay D with the force of age IMU_ID_DELAYS - 1 - D */
-	float fz[IMU_ID_DELAYS], tz[IMU_ID_DELAYS]; /* the frame of age k in slot (fh + k) % IMU_ID_DELAYS */
+	imu_id_x_t fz[IMU_ID_DELAYS], tz[IMU_ID_DELAYS]; /* the frame of age k in slot (fh + k) % IMU_ID_DELAYS */
 	uint8_t fh, fok;
 	/* each lag's G up to (2, 3), then (3, 3): the sums of x2 and x3 follow from those of x0
 	 * and x1 (imu_id.c: hyp_stat), the count is n_st */
-	float gx[IMU_ID_LAGS][IMU_ID_NT - 3];
+	imu_id_sum_t gx[IMU_ID_LAGS][IMU_ID_NT - 3];
 	struct imu_id_hyp hs[IMU_ID_LAGS][IMU_ID_DELAYS];
-	float fs[IMU_ID_DELAYS], ts[IMU_ID_DELAYS]; /* each delay's force and torque sums (fz, tz) */
+	imu_id_acc_t fs[IMU_ID_DELAYS], ts[IMU_ID_DELAYS]; /* each delay's force and torque sums (fz, tz) */
 	/* the still frames' force: its count, mean and spread (the noise, about the mean) */
 	uint32_t nz_n;
-	float nz_s, nz_ss, nz_thr; /* nz_thr: the still frames' summed mean throttle */
+	imu_id_acc_t nz_s, nz_ss, nz_thr; /* nz_thr: the still frames' summed mean throttle */
 	/* the clusters: the frozen hypothesis and its blocks' sums (the last one being filled) */
 	bool cl_on;
 	uint8_t cl_d, cl_l, nb; /* hypothesis, complete blocks */
 	uint32_t cl_len, cl_k;  /* frames per block, frames in the block being filled */
 	struct imu_id_stat blk[IMU_ID_BLOCKS + 1];
-	uint32_t n_exc; /* excited frames so far */
-	float ff;       /* their force's sum of squares (the noise's growth with thrust) */
+	uint32_t n_exc;  /* excited frames so far */
+	imu_id_acc_t ff; /* their force's sum of squares (the noise's growth with thrust) */
 	/* the accelerometer's calibration in flight: over the excited frames the mean vertical
 	 * specific force is g plus the velocity's change over their time */
-	float fw_sum, vz_prev, v0, v_last;
+	imu_id_acc_t fw_sum;
+	scalar_t vz_prev, v0, v_last;
 	uint32_t n_cal;
 	bool q_pending, q_excited;
 	bool tq_lost; /* a torque reading was not finite: k_tau is not estimated */
 	scalar_t q_thr[IMU_ID_ROTORS], q_f, q_fw, q_vz, q_tq; /* the frame stored, as given */
 	scalar_t h_thr[IMU_ID_ROTORS];                        /* the throttles of the frames lost before it, */
 	uint32_t n_hold;                                      /* and their count (imu_id_hold; taken between frames) */
-	float fw_last;                                        /* the last frame taken's vertical force (a lost one's) */
+	scalar_t fw_last;                                     /* the last frame taken's vertical force (a lost one's) */
 	float scale_next[IMU_ID_ROTORS];                      /* imu_id_set_scales: the scales the refinement takes */
 	bool scale_new;
+#if OCTO_FIXED
+	/* forces and torques are taken as value 2^-kexp, 2^-texp; the sums' exponents, one per
+	 * member of the records of gx, hs, blk and xq */
+	int8_t kexp, texp;
+	int8_t e_gx[IMU_ID_NT - 3], e_hs[2 * IMU_ID_NP], e_blk[2 * IMU_ID_NP + IMU_ID_NT + 2],
+		e_xq[2 * (IMU_ID_NX + 1)];
+#endif
 };
 
 enum imu_id_cause {

@@ -385,6 +385,15 @@ static inline int64_t q_muldiv(int32_t a, int32_t b, int64_t c, unsigned s)
 #define QF_MOTN_FRAC 29 /* Q2.29: motor_id's normalised thrusts, torques and residuals */
 #define QF_MSUM_FRAC 25 /* block floating point sums: fractional bits at exponent 0 */
 
+/* ---------------------------------------------------------------- imu_id (imu_id_q.h)
+ * Formats of the accelerometer's rotor-model estimator's per-frame part:
+ *   Q6.25        QF_IMUX_FRAC 25   int32    [-64, 64)           3.0e-8   regressors, forces
+ *                and torques normalised by a power of two near the reference's k_f, k_tau
+ *   Q4.27        QF_IMUC_FRAC 27   int32    [-16, 16)           7.5e-9   coefficients
+ *   block float  QF_MSUM_FRAC (above): its least-squares sums */
+#define QF_IMUX_FRAC 25 /* Q6.25: imu_id's regressors and normalised forces */
+#define QF_IMUC_FRAC 27 /* Q4.27: imu_id's coefficients */
+
 /* ---------------------------------------------------------------- sums of products
  * The identification's running sums (ident.c) keep products of two Q16.16 values exactly:
  * Q31.32 in int64 (range +/-2.1e9, resolution 2.3e-10), and the squares of such sums

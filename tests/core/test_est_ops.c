@@ -104,6 +104,10 @@ UNIT_TEST(est_shifts_and_products_equal_qfmt)
 				bad++;
 			if (s >= 1u && est_mul64_32(v, b, s) != q_mul64_32(v, b, s))
 				bad++;
+			int32_t a = (int32_t)(v >> 32), c = b == INT32_MIN ? -INT32_MAX : b;
+			a = a == INT32_MIN ? -INT32_MAX : a;
+			if (s >= 1u && est_mul_rnd(a, c, s) != q_shr64(q_smul32(a, c), s))
+				bad++;
 		}
 		for (int s = -70; s <= 70; s++)
 			if (est_scale64(v, s) != q_scale64(v, s))
