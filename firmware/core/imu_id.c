@@ -46,8 +46,8 @@ _Static_assert(HS_N == 2u * NP && BLK_N == 2u * NP + NT + 2u, "the records hold 
 #define X_ONE ((imu_id_x_t)1 << QF_IMUX_FRAC)
 #define E_OF(m, arr, k) ((int)(m)->arr[k])
 typedef int64_t term_t;
-static inline int32_t sub32(int32_t a, int32_t b) { return q_sat32((int64_t)a - b); }
-static inline int32_t add32(int32_t a, int32_t b) { return q_sat32((int64_t)a + b); }
+IID_INLINE int32_t sub32(int32_t a, int32_t b) { return q_sat32((int64_t)a - b); }
+IID_INLINE int32_t add32(int32_t a, int32_t b) { return q_sat32((int64_t)a + b); }
 /* a scalar_t (Q16.16) as a throttle, as an x in units of 2^sh */
 static inline imu_id_u_t u_of_sc(scalar_t v) { return est_shl32c(v, QF_UNIT_FRAC - QF_SC_FRAC); }
 static inline imu_id_x_t x_of_sc(scalar_t v, int sh) { return est_scale32(v, QF_IMUX_FRAC - QF_SC_FRAC - sh); }
@@ -174,6 +174,38 @@ IID_INLINE void sadd(struct imu_id *m, unsigned set, unsigned k, imu_id_sum_t *s
 		sum_fit(m, set, k, &t);
 	*s += (imu_id_sum_t)t;
 }
+/* sadd of term(a, b, e) when either is large (sadd_xx's rare case) */
+static void sadd_slow(struct imu_id *m, unsigned set, unsigned k, imu_id_sum_t *s, imu_id_x_t a, imu_id_x_t b, int e)
+{
+	sadd(m, set, k, s, term(a, b, e));
+}
+/* sadd(m, set, k, s, term(a, b, e)) with e the kind's exponent, in 32-bit words: the
+ * magnitudes' product from four 16 x 16 ones (Cortex-M0 has no long multiply), shifted by
+ * s = SH_XX + e and rounded as est_mul_rnd; a term or a sum of 2^29 or more, or s outside
+ * [1, 62], takes sadd_slow */
+IID_INLINE void sadd_xx(struct imu_id *m, unsigned set, unsigned k, imu_id_sum_t *sum, imu_id_x_t a, imu_id_x_t b,
+			int e)
+{
+	int s = SH_XX + e;
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
+	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl, hh = ah * bh;
+	uint32_t mid = (ll >> 16) + (lh & 0xffffu) + (hl & 0xffffu);
+	uint32_t hi = hh + (lh >> 16) + (hl >> 16) + (mid >> 16), lo = (mid << 16) | (ll & 0xffffu), r;
+	if (s >= 32 && s <= 62) { /* hi < 2^30 */
+		unsigned sh = (unsigned)s - 32u;
+		r = sh ? (hi >> sh) + ((hi >> (sh - 1u)) & 1u) : hi + (lo >> 31);
+	} else if (s >= 1 && s < 32 && (hi >> (s - 1)) == 0u) { /* the quotient below 2^31 */
+		r = (hi << (32 - s)) + (lo >> s) + ((lo >> (s - 1)) & 1u);
+	} else {
+		r = 1u << 29; /* the slow case */
+	}
+	if (r >= (1u << 29) || (uint32_t)*sum + (1u << 29) >= (1u << 30)) {
+		sadd_slow(m, set, k, sum, a, b, e);
+		return;
+	}
+	*sum += (a < 0) != (b < 0) ? -(int32_t)r : (int32_t)r;
+}
 static int kexp_of(const struct imu_id *m) { return m->kexp; }
 static int texp_of(const struct imu_id *m) { return m->texp; }
 #else
@@ -237,6 +269,14 @@ static inline void sadd(struct imu_id *m, unsigned set, unsigned k, float *s, fl
 	(void)set;
 	(void)k;
 	*s += t;
+}
+static inline void sadd_xx(struct imu_id *m, unsigned set, unsigned k, float *s, float a, float b, int e)
+{
+	(void)m;
+	(void)set;
+	(void)k;
+	(void)e;
+	*s += a * b;
 }
 static int kexp_of(const struct imu_id *m)
 {
@@ -758,19 +798,32 @@ static float hyp_solve_tq(const struct imu_id *m, unsigned d, unsigned l, float 
 static void stat_add(struct imu_id *m, struct imu_id_stat *s, const imu_id_x_t x[NP], imu_id_x_t z, imu_id_x_t zt,
 		     bool tq)
 {
-	/* G += x x' (its upper triangle in storage order) and b += x z: kinds 0..NT - 1, then
-	 * b, rr, bt, rrt (B_B...) */
-	for (unsigned i = 0, n = 0; i < NP; i++)
-		for (unsigned k = i; k < NP; k++, n++)
-			sadd(m, S_BLK, n, &s->g[n], term(x[i], x[k], E_OF(m, e_blk, n)));
+	/* G += x x' (its upper triangle in storage order) and b += x z, written out for the five
+	 * parameters: kinds 0..NT - 1, then b, rr, bt, rrt (B_B...) */
+	_Static_assert(NP == 5 && NT == 15, "stat_add is written out for five parameters");
+	sadd_xx(m, S_BLK, 0, &s->g[0], x[0], x[0], E_OF(m, e_blk, 0));
+	sadd_xx(m, S_BLK, 1, &s->g[1], x[0], x[1], E_OF(m, e_blk, 1));
+	sadd_xx(m, S_BLK, 2, &s->g[2], x[0], x[2], E_OF(m, e_blk, 2));
+	sadd_xx(m, S_BLK, 3, &s->g[3], x[0], x[3], E_OF(m, e_blk, 3));
+	sadd_xx(m, S_BLK, 4, &s->g[4], x[0], x[4], E_OF(m, e_blk, 4));
+	sadd_xx(m, S_BLK, 5, &s->g[5], x[1], x[1], E_OF(m, e_blk, 5));
+	sadd_xx(m, S_BLK, 6, &s->g[6], x[1], x[2], E_OF(m, e_blk, 6));
+	sadd_xx(m, S_BLK, 7, &s->g[7], x[1], x[3], E_OF(m, e_blk, 7));
+	sadd_xx(m, S_BLK, 8, &s->g[8], x[1], x[4], E_OF(m, e_blk, 8));
+	sadd_xx(m, S_BLK, 9, &s->g[9], x[2], x[2], E_OF(m, e_blk, 9));
+	sadd_xx(m, S_BLK, 10, &s->g[10], x[2], x[3], E_OF(m, e_blk, 10));
+	sadd_xx(m, S_BLK, 11, &s->g[11], x[2], x[4], E_OF(m, e_blk, 11));
+	sadd_xx(m, S_BLK, 12, &s->g[12], x[3], x[3], E_OF(m, e_blk, 12));
+	sadd_xx(m, S_BLK, 13, &s->g[13], x[3], x[4], E_OF(m, e_blk, 13));
+	sadd_xx(m, S_BLK, 14, &s->g[14], x[4], x[4], E_OF(m, e_blk, 14));
 	for (unsigned i = 0; i < NP; i++)
-		sadd(m, S_BLK, B_B + i, &s->b[i], term(x[i], z, E_OF(m, e_blk, B_B + i)));
-	sadd(m, S_BLK, B_RR, &s->rr, term(z, z, E_OF(m, e_blk, B_RR)));
+		sadd_xx(m, S_BLK, B_B + i, &s->b[i], x[i], z, E_OF(m, e_blk, B_B + i));
+	sadd_xx(m, S_BLK, B_RR, &s->rr, z, z, E_OF(m, e_blk, B_RR));
 	if (!tq)
 		return;
 	for (unsigned i = 0; i < NP; i++)
-		sadd(m, S_BLK, B_T + i, &s->bt[i], term(x[i], zt, E_OF(m, e_blk, B_T + i)));
-	sadd(m, S_BLK, B_T + NP, &s->rrt, term(zt, zt, E_OF(m, e_blk, B_T + NP)));
+		sadd_xx(m, S_BLK, B_T + i, &s->bt[i], x[i], zt, E_OF(m, e_blk, B_T + i));
+	sadd_xx(m, S_BLK, B_T + NP, &s->rrt, zt, zt, E_OF(m, e_blk, B_T + NP));
 }
 
 /* every hypothesis' least residual (its force fit) into jr; the least one's (bd, bl) */
@@ -834,11 +887,11 @@ static void lag_x(const struct imu_id_xmap *xm, const imu_id_x_t s[2][IMU_ID_LAG
 IID_INLINE void hyp_add(struct imu_id *m, imu_id_sum_t *b, unsigned k0, imu_id_x_t x0, imu_id_x_t x1, imu_id_x_t x2,
 			imu_id_x_t x3, imu_id_x_t z)
 {
-	sadd(m, S_HS, k0, &b[k0], term(x0, z, E_OF(m, e_hs, k0)));
-	sadd(m, S_HS, k0 + 1u, &b[k0 + 1u], term(x1, z, E_OF(m, e_hs, k0 + 1u)));
-	sadd(m, S_HS, k0 + 2u, &b[k0 + 2u], term(x2, z, E_OF(m, e_hs, k0 + 2u)));
-	sadd(m, S_HS, k0 + 3u, &b[k0 + 3u], term(x3, z, E_OF(m, e_hs, k0 + 3u)));
-	sadd(m, S_HS, k0 + 4u, &b[k0 + 4u], term(z, z, E_OF(m, e_hs, k0 + 4u)));
+	sadd_xx(m, S_HS, k0, &b[k0], x0, z, E_OF(m, e_hs, k0));
+	sadd_xx(m, S_HS, k0 + 1u, &b[k0 + 1u], x1, z, E_OF(m, e_hs, k0 + 1u));
+	sadd_xx(m, S_HS, k0 + 2u, &b[k0 + 2u], x2, z, E_OF(m, e_hs, k0 + 2u));
+	sadd_xx(m, S_HS, k0 + 3u, &b[k0 + 3u], x3, z, E_OF(m, e_hs, k0 + 3u));
+	sadd_xx(m, S_HS, k0 + 4u, &b[k0 + 4u], z, z, E_OF(m, e_hs, k0 + 4u));
 }
 
 /* the regressors of the frame AGE old (from its smoothed sums s) into every hypothesis: the
@@ -848,7 +901,7 @@ IID_INLINE void hyp_add(struct imu_id *m, imu_id_sum_t *b, unsigned k0, imu_id_x
 static void bank_take(struct imu_id *m, const imu_id_x_t s[2][IMU_ID_LAGS])
 {
 	const struct imu_id_cfg *c = &m->cfg;
-	const struct imu_id_xmap *xm = &m->xm;
+	const struct imu_id_xmap xl = m->xm, *xm = &xl; /* a copy: the sums' stores cannot alias it */
 	const imu_id_c_t *k = xm->k, r0 = xm->r0, r1 = xm->r1, ih = xm->ih;
 	imu_id_x_t fd[IMU_ID_DELAYS], td[IMU_ID_DELAYS];
 	for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
@@ -878,18 +931,18 @@ static void bank_take(struct imu_id *m, const imu_id_x_t s[2][IMU_ID_LAGS])
 		const imu_id_x_t x2 = lin2(k[0], d0, k[1], d1), x3 = lin2(k[2], d0, k[3], d1);
 		const imu_id_x_t xr = lin2(r0, x0, r1, x1);
 		imu_id_sum_t *g = m->gx[l];
-		sadd(m, S_GX, 0, &g[0], term(x0, x0, E_OF(m, e_gx, 0)));
-		sadd(m, S_GX, 1, &g[1], term(x0, x1, E_OF(m, e_gx, 1)));
-		sadd(m, S_GX, 2, &g[2], term(x0, x2, E_OF(m, e_gx, 2)));
-		sadd(m, S_GX, 3, &g[3], term(x0, x3, E_OF(m, e_gx, 3)));
+		sadd_xx(m, S_GX, 0, &g[0], x0, x0, E_OF(m, e_gx, 0));
+		sadd_xx(m, S_GX, 1, &g[1], x0, x1, E_OF(m, e_gx, 1));
+		sadd_xx(m, S_GX, 2, &g[2], x0, x2, E_OF(m, e_gx, 2));
+		sadd_xx(m, S_GX, 3, &g[3], x0, x3, E_OF(m, e_gx, 3));
 		sadd(m, S_GX, 4, &g[4], term1(x0, E_OF(m, e_gx, 4)));
-		sadd(m, S_GX, 5, &g[5], term(x1, x1, E_OF(m, e_gx, 5)));
-		sadd(m, S_GX, 6, &g[6], term(x1, x2, E_OF(m, e_gx, 6)));
-		sadd(m, S_GX, 7, &g[7], term(x1, x3, E_OF(m, e_gx, 7)));
+		sadd_xx(m, S_GX, 5, &g[5], x1, x1, E_OF(m, e_gx, 5));
+		sadd_xx(m, S_GX, 6, &g[6], x1, x2, E_OF(m, e_gx, 6));
+		sadd_xx(m, S_GX, 7, &g[7], x1, x3, E_OF(m, e_gx, 7));
 		sadd(m, S_GX, 8, &g[8], term1(x1, E_OF(m, e_gx, 8)));
-		sadd(m, S_GX, 9, &g[9], term(x2, x2, E_OF(m, e_gx, 9)));
-		sadd(m, S_GX, 10, &g[10], term(x2, x3, E_OF(m, e_gx, 10)));
-		sadd(m, S_GX, 11, &g[11], term(x3, x3, E_OF(m, e_gx, 11)));
+		sadd_xx(m, S_GX, 9, &g[9], x2, x2, E_OF(m, e_gx, 9));
+		sadd_xx(m, S_GX, 10, &g[10], x2, x3, E_OF(m, e_gx, 10));
+		sadd_xx(m, S_GX, 11, &g[11], x3, x3, E_OF(m, e_gx, 11));
 		imu_id_x_t kx = mul_cx(xm->kf, xr);
 #pragma GCC unroll 5
 		for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
@@ -914,7 +967,7 @@ static void bank_take(struct imu_id *m, const imu_id_x_t s[2][IMU_ID_LAGS])
  * blocks') */
 static void cl_add(struct imu_id *m, const imu_id_x_t s[2][IMU_ID_LAGS])
 {
-	const struct imu_id_xmap *xm = &m->xm;
+	const struct imu_id_xmap xl = m->xm, *xm = &xl;
 	imu_id_x_t xx[IMU_ID_NX];
 	lag_x(xm, s, m->cl_l, xx);
 	xx[P_OFS] = X_ONE;
@@ -925,12 +978,11 @@ static void cl_add(struct imu_id *m, const imu_id_x_t s[2][IMU_ID_LAGS])
 	unsigned a = meas_slot(m, AGE - m->cl_d);
 	imu_id_x_t z = x_sub(m->fz[a], mul_cx(xm->kf, xr)), zt = x_sub(m->tz[a], mul_cx(xm->kt, xr));
 	for (unsigned i = 0; i < IMU_ID_NX; i++) {
-		sadd(m, S_XQ, 2u * i, &m->xq[i][0], term(xx[i], xx[NP], E_OF(m, e_xq, 2u * i)));
-		sadd(m, S_XQ, 2u * i + 1u, &m->xq[i][1], term(xx[i], xx[NP + 1u], E_OF(m, e_xq, 2u * i + 1u)));
+		sadd_xx(m, S_XQ, 2u * i, &m->xq[i][0], xx[i], xx[NP], E_OF(m, e_xq, 2u * i));
+		sadd_xx(m, S_XQ, 2u * i + 1u, &m->xq[i][1], xx[i], xx[NP + 1u], E_OF(m, e_xq, 2u * i + 1u));
 	}
-	sadd(m, S_XQ, 2u * IMU_ID_NX, &m->xq[IMU_ID_NX][0], term(xx[NP], z, E_OF(m, e_xq, 2u * IMU_ID_NX)));
-	sadd(m, S_XQ, 2u * IMU_ID_NX + 1u, &m->xq[IMU_ID_NX][1],
-	     term(xx[NP + 1u], z, E_OF(m, e_xq, 2u * IMU_ID_NX + 1u)));
+	sadd_xx(m, S_XQ, 2u * IMU_ID_NX, &m->xq[IMU_ID_NX][0], xx[NP], z, E_OF(m, e_xq, 2u * IMU_ID_NX));
+	sadd_xx(m, S_XQ, 2u * IMU_ID_NX + 1u, &m->xq[IMU_ID_NX][1], xx[NP + 1u], z, E_OF(m, e_xq, 2u * IMU_ID_NX + 1u));
 	m->xn++;
 	stat_add(m, &m->blk[m->nb], xx, z, zt, m->cfg.torque);
 	if (++m->cl_k < m->cl_len)
