@@ -181,8 +181,9 @@ struct imu_id {
 	uint8_t cl_d, cl_l, nb; /* hypothesis, complete blocks */
 	uint32_t cl_len, cl_k;  /* frames per block, frames in the block being filled */
 	struct imu_id_stat blk[IMU_ID_BLOCKS + 1];
-	uint32_t n_exc;  /* excited frames so far */
-	imu_id_acc_t ff; /* their force's sum of squares (the noise's growth with thrust) */
+	uint32_t n_exc;    /* excited frames so far */
+	uint32_t n_freeze; /* the excited frames after which the grid refines (IMU_ID_FREEZE of the planned) */
+	imu_id_acc_t ff;   /* their force's sum of squares (the noise's growth with thrust) */
 	/* the accelerometer's calibration in flight: over the excited frames the mean vertical
 	 * specific force is g plus the velocity's change over their time */
 	imu_id_acc_t fw_sum;

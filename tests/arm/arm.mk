@@ -348,7 +348,7 @@ arm_report = echo "== $(if $(filter app-tests,$(2)),app tests,core $(2)): $(1) o
 arm_run_word = $(call $(1),$(word 1,$(subst :, ,$(2))),$(word 2,$(subst :, ,$(2))))
 
 # The fixed build's objects on the 90 Hz path: no float arithmetic (soft float on M0)
-ARM_FIXED_90HZ := alt_ctrl att_ctrl excite filt guidance hover_est ident kf_track mixer motor_id pos_ctrl quat rls scalar thrmap
+ARM_FIXED_90HZ := alt_ctrl att_ctrl excite filt guidance hover_est ident imu_id kf_track mixer motor_id pos_ctrl quat rls scalar thrmap
 # __aeabi_f*/d* (float and double arithmetic, compare, convert), *2f/*2d (int to float),
 # libgcc's __*sf*/__*df* names, and libm's functions
 ARM_FLOAT_SYMS := ^(__aeabi_[fd]|__aeabi_[a-z0-9]*2[fd]$$|__[a-z]+[sd]f[0-9]?$$|(sqrt|exp|log|pow|sin|cos|tan|asin|acos|atan|atan2|fmax|fmin|fabs|floor|ceil|round|ldexp|frexp|fmod|cbrt|hypot)f?$$)
