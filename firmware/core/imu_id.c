@@ -157,18 +157,23 @@ static void sadd_slow(struct imu_id *m, unsigned set, unsigned k, imu_id_sum_t *
 	sadd(m, set, k, s, term(a, b, e));
 }
 /* sadd(m, set, k, s, term(a, b, e)) with e the kind's exponent, in 32-bit words: the
- * magnitudes' product from four 16 x 16 ones (Cortex-M0 has no long multiply), shifted by
+ * magnitudes' product (four 16 x 16 ones on Cortex-M0, which has no long multiply), shifted by
  * s = SH_XX + e and rounded as est_mul_rnd; a term or a sum of 2^29 or more, or s outside
  * [1, 62], takes sadd_slow */
 IID_INLINE void sadd_xx(struct imu_id *m, unsigned set, unsigned k, imu_id_sum_t *sum, imu_id_x_t a, imu_id_x_t b,
 			int e)
 {
 	int s = SH_XX + e;
-	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b, r;
+#if defined(__ARM_ARCH_6M__)
 	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
 	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl, hh = ah * bh;
 	uint32_t mid = (ll >> 16) + (lh & 0xffffu) + (hl & 0xffffu);
-	uint32_t hi = hh + (lh >> 16) + (hl >> 16) + (mid >> 16), lo = (mid << 16) | (ll & 0xffffu), r;
+	uint32_t hi = hh + (lh >> 16) + (hl >> 16) + (mid >> 16), lo = (mid << 16) | (ll & 0xffffu);
+#else
+	uint64_t p = (uint64_t)ua * ub;
+	uint32_t hi = (uint32_t)(p >> 32), lo = (uint32_t)p;
+#endif
 	if (s >= 32 && s <= 62) { /* hi < 2^30 */
 		unsigned sh = (unsigned)s - 32u;
 		r = sh ? (hi >> sh) + ((hi >> (sh - 1u)) & 1u) : hi + (lo >> 31);

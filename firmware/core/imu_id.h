@@ -64,10 +64,10 @@
  * The derivation: docs/identification.md, "From the IMU".
  *
  * Core rules: no heap, globals or I/O. imu_id_step and imu_id_hold store the frame (scalars,
- * no conversion); the bank update (imu_id_process) and the solve run between frames. The
- * bank update is integer in the fixed build (imu_id_q.h: the lag filters, smoothers,
- * regressors and sums); the solve and the grid's refinement (once) are float in both builds,
- * reading the sums converted.
+ * no conversion); the bank update (imu_id_process, imu_id.c) and the solve run between
+ * frames. The bank update is integer in the fixed build (imu_id_q.h: the lag filters,
+ * smoothers, regressors and sums); the set-up, the grid's refinement (once) and the solve
+ * (imu_id_solve.c) are float in both builds, reading the sums converted.
  */
 #ifndef OCTO_IMU_ID_H
 #define OCTO_IMU_ID_H

@@ -756,7 +756,8 @@ def estim_per_build(rep, args, res):
             rep.row(2, f"  imu_id per frame (step + process), {v}", fmt(p["imu_id"]["median"]), "",
                     f"max {fmt(p['imu_id']['max'])} (the grid's refinement, once); imu_id_solve (between frames) "
                     f"{fmt(p.get('imu_id_solve', {}).get('median'))}"
-                    + ("; the step stores the frame's scalars (integer), the process runs in float between frames"
+                    + ("; the step stores the frame's scalars, the process between frames is integer too (imu_id.c), "
+                       "the grid's refinement and the solve float (imu_id_solve.c)"
                        if fixed else ""),
                     "<= 5,000 (IMU estimator per frame, M4F)" if v == "m4f" else "(reported)",
                     p["imu_id"]["median"] <= 5000 if v == "m4f" else None, cmd)
