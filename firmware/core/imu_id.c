@@ -40,8 +40,9 @@ IID_INLINE imu_id_x_t mul_cu(imu_id_c_t c, imu_id_u_t u)
 {
 	return q_sat32(est_mul_rnd(c, u, QF_IMUC_FRAC + QF_UNIT_FRAC - QF_IMUX_FRAC));
 }
-IID_INLINE imu_id_x_t mul_cx(imu_id_c_t c, imu_id_x_t x) { return q_sat32(est_mul_rnd(c, x, QF_IMUC_FRAC)); }
-IID_INLINE imu_id_x_t lin2(imu_id_c_t c0, imu_id_x_t x0, imu_id_c_t c1, imu_id_x_t x1)
+/* (called: flash; the regressors' few products a frame) */
+static imu_id_x_t mul_cx(imu_id_c_t c, imu_id_x_t x) { return q_sat32(est_mul_rnd(c, x, QF_IMUC_FRAC)); }
+static imu_id_x_t lin2(imu_id_c_t c0, imu_id_x_t x0, imu_id_c_t c1, imu_id_x_t x1)
 {
 	return q_sat32(est_mul_rnd(c0, x0, QF_IMUC_FRAC) + est_mul_rnd(c1, x1, QF_IMUC_FRAC));
 }
@@ -160,8 +161,8 @@ static void sadd_slow(struct imu_id *m, unsigned set, unsigned k, imu_id_sum_t *
  * magnitudes' product (four 16 x 16 ones on Cortex-M0, which has no long multiply), shifted by
  * s = SH_XX + e and rounded as est_mul_rnd; a term or a sum of 2^29 or more, or s outside
  * [1, 62], takes sadd_slow */
-IID_INLINE void sadd_xx(struct imu_id *m, unsigned set, unsigned k, imu_id_sum_t *sum, imu_id_x_t a, imu_id_x_t b,
-			int e)
+IID_INLINE void sadd_xx_in(struct imu_id *m, unsigned set, unsigned k, imu_id_sum_t *sum, imu_id_x_t a, imu_id_x_t b,
+			   int e)
 {
 	int s = SH_XX + e;
 	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b, r;
@@ -188,6 +189,17 @@ IID_INLINE void sadd_xx(struct imu_id *m, unsigned set, unsigned k, imu_id_sum_t
 	}
 	*sum += (a < 0) != (b < 0) ? -(int32_t)r : (int32_t)r;
 }
+/* the same, one copy called (flash: inlined only in the hypotheses' sums, the hottest) */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static void
+sadd_xx(struct imu_id *m, unsigned set, unsigned k, imu_id_sum_t *sum, imu_id_x_t a, imu_id_x_t b, int e)
+{
+	sadd_xx_in(m, set, k, sum, a, b, e);
+}
+#define IID_UNROLL_DELAYS /* flash: Cortex-M0 */
+#define IID_UNROLL_ROTORS
 #else
 #define X_ZERO 0.0f
 #define X_ONE 1.0f
@@ -256,6 +268,14 @@ static inline void sadd_xx(struct imu_id *m, unsigned set, unsigned k, float *s,
 	(void)e;
 	*s += a * b;
 }
+#define sadd_xx_in sadd_xx
+#if defined(__GNUC__) && !defined(__clang__)
+#define IID_UNROLL_DELAYS _Pragma("GCC unroll 5")
+#define IID_UNROLL_ROTORS _Pragma("GCC unroll 8")
+#else
+#define IID_UNROLL_DELAYS
+#define IID_UNROLL_ROTORS
+#endif
 #endif
 static inline imu_id_x_t x_add(imu_id_x_t a, imu_id_x_t b) { return add32(a, b); }
 static inline imu_id_x_t x_sub(imu_id_x_t a, imu_id_x_t b) { return sub32(a, b); }
@@ -278,7 +298,7 @@ static void advance(struct imu_id *m, const imu_id_u_t u_new[IMU_ID_ROTORS], imu
 	for (unsigned l = 0; l < IMU_ID_LAGS; l++) {
 		imu_id_u_t k = m->lk[l], *y = m->y[l];
 		imu_id_x_t q = X_ZERO; /* at most 8 terms below 4: no overflow */
-#pragma GCC unroll 8
+		IID_UNROLL_ROTORS
 		for (unsigned j = 0; j < IMU_ID_ROTORS; j++) {
 			imu_id_u_t v = filt_u(y[j], k, u[j]);
 			y[j] = v;
@@ -426,11 +446,11 @@ static void lag_x(const struct imu_id_xmap *xm, const imu_id_x_t s[2][IMU_ID_LAG
 IID_INLINE void hyp_add(struct imu_id *m, imu_id_sum_t *b, unsigned k0, imu_id_x_t x0, imu_id_x_t x1, imu_id_x_t x2,
 			imu_id_x_t x3, imu_id_x_t z)
 {
-	sadd_xx(m, S_HS, k0, &b[k0], x0, z, E_OF(m, e_hs, k0));
-	sadd_xx(m, S_HS, k0 + 1u, &b[k0 + 1u], x1, z, E_OF(m, e_hs, k0 + 1u));
-	sadd_xx(m, S_HS, k0 + 2u, &b[k0 + 2u], x2, z, E_OF(m, e_hs, k0 + 2u));
-	sadd_xx(m, S_HS, k0 + 3u, &b[k0 + 3u], x3, z, E_OF(m, e_hs, k0 + 3u));
-	sadd_xx(m, S_HS, k0 + 4u, &b[k0 + 4u], z, z, E_OF(m, e_hs, k0 + 4u));
+	sadd_xx_in(m, S_HS, k0, &b[k0], x0, z, E_OF(m, e_hs, k0));
+	sadd_xx_in(m, S_HS, k0 + 1u, &b[k0 + 1u], x1, z, E_OF(m, e_hs, k0 + 1u));
+	sadd_xx_in(m, S_HS, k0 + 2u, &b[k0 + 2u], x2, z, E_OF(m, e_hs, k0 + 2u));
+	sadd_xx_in(m, S_HS, k0 + 3u, &b[k0 + 3u], x3, z, E_OF(m, e_hs, k0 + 3u));
+	sadd_xx_in(m, S_HS, k0 + 4u, &b[k0 + 4u], z, z, E_OF(m, e_hs, k0 + 4u));
 }
 
 /* the regressors of the frame AGE old (from its smoothed sums s) into every hypothesis: the
@@ -483,7 +503,7 @@ static void bank_take(struct imu_id *m, const imu_id_x_t s[2][IMU_ID_LAGS])
 		sadd_xx(m, S_GX, 10, &g[10], x2, x3, E_OF(m, e_gx, 10));
 		sadd_xx(m, S_GX, 11, &g[11], x3, x3, E_OF(m, e_gx, 11));
 		imu_id_x_t kx = mul_cx(xm->kf, xr);
-#pragma GCC unroll 5
+		IID_UNROLL_DELAYS
 		for (unsigned q = 0; q < IMU_ID_DELAYS; q++) {
 			hyp_add(m, &m->hs[l][q].b[0], 0u, x0, x1, x2, x3, x_sub(fd[q], kx));
 		}
