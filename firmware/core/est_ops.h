@@ -89,7 +89,7 @@ EST_INLINE int64_t est_mul64_32c(int64_t a, int32_t b, unsigned s)
 
 /* q_shr64(q_smul32(a, b), s) for |a|, |b| < 2^31 and s in [1, 62]: a b / 2^s rounded to
  * nearest (ties away from zero). On Cortex-M0 (no long multiply, no 64-bit shift) in 32-bit
- * words, elsewhere one 64-bit product (imu_id.c's per-frame products) */
+ * words, elsewhere one 64-bit product (motor_id's and imu_id's per-frame products) */
 EST_INLINE int64_t est_mul_rnd(int32_t a, int32_t b, unsigned s)
 {
 	bool neg = (a < 0) != (b < 0);

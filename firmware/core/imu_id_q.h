@@ -61,22 +61,12 @@ typedef float imu_id_acc_t;
 #define IMU_ID_E0 (-16)
 
 #if OCTO_FIXED
-/* float to int32 v 2^frac, rounded, saturating (no libm) */
-static inline int32_t iid_q_of_float(float x, int frac)
-{
-	float v = x * sc_pow2f(frac);
-	if (!(v < 2147483520.0f)) /* the largest float below 2^31; NaN too */
-		return v < 0.0f ? -INT32_MAX : INT32_MAX;
-	if (v <= -2147483520.0f)
-		return -INT32_MAX;
-	return (int32_t)(v >= 0.0f ? v + 0.5f : v - 0.5f);
-}
 static inline float iid_u_to_float(imu_id_u_t v) { return (float)v * sc_pow2f(-QF_UNIT_FRAC); }
-static inline imu_id_u_t iid_u_of_float(float x) { return iid_q_of_float(x, QF_UNIT_FRAC); }
+static inline imu_id_u_t iid_u_of_float(float x) { return sc_q_of_float(x, QF_UNIT_FRAC); }
 /* an x value (sh: its unit's power of two, kexp for a force) to and from float */
 static inline float iid_x_to_float(imu_id_x_t v, int sh) { return (float)v * sc_pow2f(sh - QF_IMUX_FRAC); }
-static inline imu_id_x_t iid_x_of_float(float x, int sh) { return iid_q_of_float(x, QF_IMUX_FRAC - sh); }
-static inline imu_id_c_t iid_c_of_float(float x) { return iid_q_of_float(x, QF_IMUC_FRAC); }
+static inline imu_id_x_t iid_x_of_float(float x, int sh) { return sc_q_of_float(x, QF_IMUX_FRAC - sh); }
+static inline imu_id_c_t iid_c_of_float(float x) { return sc_q_of_float(x, QF_IMUC_FRAC); }
 /* a sum of exponent e to float; sh: its unit's power of two (kexp, 2 kexp, ...) */
 static inline float iid_sum_to_float(imu_id_sum_t v, int e, int sh)
 {

@@ -27,30 +27,9 @@
 #define E_MAX 100     /* exponent ceiling (2^70 frames away): beyond it terms are dropped */
 #define WBIN_U ((motor_id_u_t)(0.025 * (1 << QF_UNIT_FRAC) + 0.5))
 typedef uint32_t big_t;
-/* a b / 2^s rounded to nearest (ties away from zero), s in [1, 62]: qfmt.h's
- * q_shr64(q_smul32(a, b), s) for |a|, |b| < 2^31, in 32-bit operations (Cortex-M0 has
- * neither a long multiply nor 64-bit shifts: those are library calls) */
-MID_INLINE int64_t mid_mul_rnd_in(int32_t a, int32_t b, unsigned s)
-{
-	bool neg = (a < 0) != (b < 0);
-	uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a, ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
-	uint32_t al = ua & 0xffffu, ah = ua >> 16, bl = ub & 0xffffu, bh = ub >> 16;
-	uint32_t ll = al * bl, lh = al * bh, hl = ah * bl, hh = ah * bh;
-	uint32_t mid = (ll >> 16) + (lh & 0xffffu) + (hl & 0xffffu);
-	uint32_t hi = hh + (lh >> 16) + (hl >> 16) + (mid >> 16), lo = (mid << 16) | (ll & 0xffffu);
-	uint64_t r;
-	if (s >= 32u) { /* |a b| < 2^62: hi < 2^30, the sum below 2^31 */
-		hi += s > 32u ? 1u << (s - 33u) : (lo >> 31);
-		r = hi >> (s - 32u);
-	} else {
-		uint32_t l2 = lo + (1u << (s - 1u));
-		hi += l2 < lo;
-		r = ((uint64_t)(hi >> s) << 32) | (uint32_t)((hi << (32u - s)) | (l2 >> s));
-	}
-	return neg ? -(int64_t)r : (int64_t)r;
-}
-/* the same, called (flash: inlined only in the sums' terms, the hottest) */
-static int64_t mid_mul_rnd(int32_t a, int32_t b, unsigned s) { return mid_mul_rnd_in(a, b, s); }
+/* a b / 2^s rounded (est_mul_rnd), called: flash, where only the sums' terms (the hottest)
+ * inline it */
+static int64_t mid_mul_rnd(int32_t a, int32_t b, unsigned s) { return est_mul_rnd(a, b, s); }
 static inline motor_id_u_t u_of_sc(scalar_t v) { return est_shl32c(v, QF_UNIT_FRAC - QF_SC_FRAC); }
 static inline motor_id_f_t f_of_sc(scalar_t v, int kexp) { return est_scale32(v, QF_MOTN_FRAC - QF_SC_FRAC - kexp); }
 static inline int32_t sub32(int32_t a, int32_t b) { return q_sat32((int64_t)a - b); }
@@ -80,7 +59,7 @@ MID_INLINE term_t term(int32_t a, int32_t b, int sh, motor_id_e_t e)
 {
 	int s = sh + (int)e;
 	if (s >= 1 && s <= 62)
-		return mid_mul_rnd_in(a, b, (unsigned)s);
+		return est_mul_rnd(a, b, (unsigned)s);
 	return q_scale64(q_smul32(a, b), -s); /* beyond: left shifts (saturating) or 0 */
 }
 static inline motor_id_sum_t sum_half(motor_id_sum_t v) { return (motor_id_sum_t)q_shr64(v, 1); }

@@ -517,6 +517,19 @@ static inline float sc_pow2f(int s)
 	return v.f;
 }
 
+/* float to int32 x 2^frac, rounded to nearest (ties away from zero), saturating to
+ * +/-INT32_MAX, NaN to INT32_MAX (no libm): the between-frames work's values into the
+ * estimators' Q formats (motor_id_q.h, imu_id_q.h) */
+static inline int32_t sc_q_of_float(float x, int frac)
+{
+	float v = x * sc_pow2f(frac);
+	if (!(v < 2147483520.0f)) /* the largest float below 2^31; NaN too */
+		return v < 0.0f ? -INT32_MAX : INT32_MAX;
+	if (v <= -2147483520.0f)
+		return -INT32_MAX;
+	return (int32_t)(v >= 0.0f ? v + 0.5f : v - 0.5f);
+}
+
 /* Out of line where float is soft (scalar.c): each comparison is a library call, and the
  * call of these costs less flash than their copies and little time beside the comparisons */
 #if SC_SOFT_FLOAT
