@@ -194,6 +194,19 @@ struct experiment {
 			struct imu_scale isc;        /* with the speeds: each rotor's effectiveness (imu_scale.h) */
 			float thr_h[HAL_ROTORS];     /* the throttles at the IMU rotor phase's start */
 			bool isc_early;              /* the early scales were solved (scales_early) */
+			/* thrust rows: each step a dip of swp_dn_len frames, the rise (swp_len
+			 * frames), a dip again (rows_plan); the dips' throttle below hover
+			 * (swp_dn, negative) and each rotor's rise and dips (sweep_rotors), from
+			 * its throttle summed over the settle (thr_n frames) and each level's
+			 * thrust ratios over the hover's */
+			uint32_t swp_dn_len[EXP_SWP_LEVELS], swp_kmax;
+			scalar_t swp_dn[EXP_SWP_LEVELS];
+			scalar_t swp_thr_r[EXP_SWP_LEVELS][HAL_ROTORS], swp_dn_r[EXP_SWP_LEVELS][HAL_ROTORS];
+			scalar_t thr_sum[HAL_ROTORS];
+			uint32_t thr_n;
+			float swp_ratio[EXP_SWP_LEVELS], swp_dn_ratio[EXP_SWP_LEVELS], swp_curve, swp_thr_max;
+			bool swp_rotors; /* swp_thr_r, swp_dn_r are planned */
+			uint16_t swp_white_dn; /* the frames a dip keeps out of the whiteness test */
 			scalar_t pat[2][HAL_ROTORS]; /* the two null-space patterns (excite_null_pattern) */
 			scalar_t ofs;                /* ID_EXC_OFS: the offset's amplitude */
 		};
