@@ -1596,31 +1596,35 @@ static void null_dither(struct experiment *e, bool running, scalar_t d, struct e
  * between steps), the steps half a period into the excitation, at the levels in turn. Before
  * the null dither (which counts the excited frames in rot_k). The caller scales it by the
  * tilt's back-off: a collective step is a torque step on a rotor weaker than its MOT_SCALEj. */
+/* The sweep's clock, once per running frame: the plant's frames since the excitation began,
+ * lost ones included. Through lost frames the plant held the last throttles, a step's among
+ * them, so a step lasts its planned time, not its planned count of delivered frames (under
+ * 20 % loss that is a quarter longer, and a step's climb grows as its time squared). */
+static uint32_t sweep_clock(struct experiment *e)
+{
+	if (e->rot_k > 0u)
+		e->swp_k += e->fr_span - 1u;
+	return e->swp_k++;
+}
+
 static scalar_t sweep_step(struct experiment *e, bool running)
 {
 	if (!running)
 		return SC_ZERO;
-	/* the sweep's clock counts the plant's frames: through the lost frames the plant held
-	 * the last throttles, a step's among them, so a step lasts its planned time, not its
-	 * planned count of delivered frames (under 20 % loss that is a quarter longer, and a
-	 * step's climb grows as its time squared) */
-	if (e->rot_k > 0u)
-		e->swp_k += e->fr_span - 1u;
-	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = e->swp_k + per / 2u;
+	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = sweep_clock(e) + per / 2u;
 	uint32_t ph = kk % per, lv = (kk / per) % EXP_SWP_LEVELS;
-	e->swp_k++;
 	return ph < e->swp_len[lv] && app_f_lt(e->t_phase, e->swp_end) ? e->swp_thr[lv] : SC_ZERO;
 }
 
 /* The thrust rows' sweep (rows_plan): this frame's level (-1: none) and whether it is the
- * rise (else a dip). The first pattern starts half a period into the excitation, and a
- * pattern only if it ends by swp_kmax. */
-static int rows_level(const struct experiment *e, bool running, bool *up)
+ * rise (else a dip), at the sweep's clock k (sweep_clock). The first pattern starts half a
+ * period into the excitation, and a pattern only if it ends by swp_kmax. */
+static int rows_level(const struct experiment *e, bool running, uint32_t k, bool *up)
 {
-	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = e->rot_k + per / 2u;
+	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = k + per / 2u;
 	uint32_t ph = kk % per, lv = (kk / per) % EXP_SWP_LEVELS;
 	uint32_t n = e->swp_len[lv], m = e->swp_dn_len[lv], len = 2u * m + n;
-	if (!running || n == 0u || kk < per || ph >= len || e->rot_k + (len - ph) > e->swp_kmax)
+	if (!running || n == 0u || kk < per || ph >= len || k + (len - ph) > e->swp_kmax)
 		return -1;
 	*up = ph >= m && ph < m + n;
 	return (int)lv;
@@ -1753,7 +1757,7 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			motor_id_step(&e->mid, tp, fm, tm, use);
 		scalar_t d = running ? excite_update(&e->exc) : SC_ZERO;
 		bool up = false;
-		int lv = e->cfg.exc_null ? rows_level(e, running, &up) : -1;
+		int lv = e->cfg.exc_null && running ? rows_level(e, running, sweep_clock(e), &up) : -1;
 		if (lv >= 0)
 			motor_id_white_pause(&e->mid, up ? e->swp_white : e->swp_white_dn);
 		if (!running && n >= 1) { /* each rotor's hover throttle (sweep_rotors) */
