@@ -449,13 +449,28 @@ static float curve_inv(float c, float gt)
 #define SWP_DN_FLOOR 0.3f /* a dip never deeper than this share of the hover's thrust */
 #define SWP_PATTERN 0.8f  /* a pattern's frames at most this share of the period */
 #define SWP_HEADROOM 0.5f /* sweep_rotors */
+/* On a lossy link a pattern's rise is cut to SWP_A_LOSSY_G g above the weight (plan
+ * EXP_SWP_LEVELS, the dips balancing it as for a full rise) when a frame was lost within
+ * SWP_LOSS_S before the pattern (rows_level). The plant holds the last throttles through lost
+ * frames: each one lost at a rise's end holds the rise instead of the dip, (r_u - r_d) g dt of
+ * vertical speed the altitude loop must brake; at a full rise of 2.5-3 g that is 0.3 m/s a frame
+ * on a 90 Hz link, and a run of lost frames there took the vehicle 0.4-0.55 m past its height
+ * under 20 % loss. */
+#define SWP_A_LOSSY_G 1.0f
+#define SWP_LOSS_S 2.0f
 static void rows_plan(struct experiment *e, const struct app_params *p, float thr_h, float dz)
 {
 	const struct exp_cfg *cf = &e->cfg;
 	float c = p->mot_curve, g = p->veh_grav, gh = curve_g(c, thr_h);
 	float ad = g * (1.0f - SWP_DN), cap = SWP_PATTERN * (float)e->swp_per;
-	for (int k = 0; k < EXP_SWP_LEVELS; k++) {
-		float top = thr_h + sc_to_float(e->swp_thr[k]), ru = gh > 0.0f ? curve_g(c, top) / gh : 1.0f;
+	for (int k = 0; k < EXP_SWP_PLANS; k++) {
+		bool lossy = k == EXP_SWP_LEVELS; /* the lossy link's rise: the first level's, cut */
+		float top = thr_h + sc_to_float(e->swp_thr[lossy ? 0 : k]),
+		      ru = gh > 0.0f ? curve_g(c, top) / gh : 1.0f;
+		if (lossy) {
+			ru = fminf(ru, 1.0f + SWP_A_LOSSY_G);
+			e->swp_thr[k] = ru > 1.0f ? sc_from_float(curve_inv(c, ru * gh) - thr_h) : SC_ZERO;
+		}
 		float au = g * (ru - 1.0f);
 		e->swp_len[k] = e->swp_dn_len[k] = 0u;
 		e->swp_ratio[k] = e->swp_dn_ratio[k] = 1.0f;
@@ -501,7 +516,7 @@ static void sweep_rotors(struct experiment *e)
 		ym = fmaxf(ym, y[j]);
 	}
 	float gm = curve_g(c, ym), rmax = gm > 0.0f ? curve_g(c, ym + SWP_HEADROOM * (tm - ym)) / gm : 1.0f;
-	for (int k = 0; k < EXP_SWP_LEVELS; k++) {
+	for (int k = 0; k < EXP_SWP_PLANS; k++) {
 		float ru = e->swp_ratio[k], r = fminf(ru, rmax), rd = e->swp_dn_ratio[k];
 		if (r < ru && ru > 1.0f) /* the dips balance the lower rise */
 			rd = 1.0f - (1.0f - rd) * (r - 1.0f) / (ru - 1.0f);
@@ -822,6 +837,8 @@ static void thrust_rotor_begin(struct experiment *e, const struct app_params *p,
 		e->thr_sum[j] = SC_ZERO;
 	e->thr_n = 0u;
 	e->swp_rotors = false; /* the union's memory held an earlier phase's estimator */
+	e->swp_lost = e->swp_cut = false;
+	e->swp_lost_k = e->swp_pat = e->swp_pat_n = e->swp_n_pat = e->swp_n_cut = 0u;
 	/* a step and the motor's settling after it (the lags of the test's range, up to a
 	 * slow prior's, and the longest delay) stay out of the whiteness test */
 	float settle = fmaxf(SWP_WHITE_TAUS * cf->mot_tau, SWP_WHITE_MIN_S);
@@ -1006,6 +1023,9 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 			    : why[0]             ? why
 						 : "kf rejected";
 	int sev = ok ? APP_SEV_INFO : APP_SEV_WARNING;
+	if (e->swp_n_cut > 0u) /* the lossy link's rule (rows_plan) */
+		say(e, APP_SEV_INFO, "ID sweep: %d of %d rises cut to %.1f g, frames lost", (int)e->swp_n_cut,
+		    (int)e->swp_n_pat, (double)(e->swp_ratio[EXP_SWP_LEVELS] - 1.0f));
 	say(e, sev, "ID kf %.3f +/- %.3f %s%s", (double)mr.kf, (double)mr.kf_sd, ok ? "N " : "rejected: ", why_f);
 	say(e, sev, "ID ktau %.4f +/- %.4f %s%s", (double)mr.ktau, (double)mr.ktau_sd,
 	    ok ? "N m " : "rejected: ", why_t);
@@ -1616,16 +1636,32 @@ static scalar_t sweep_step(struct experiment *e, bool running)
 	return ph < e->swp_len[lv] && app_f_lt(e->t_phase, e->swp_end) ? e->swp_thr[lv] : SC_ZERO;
 }
 
-/* The thrust rows' sweep (rows_plan): this frame's level (-1: none) and whether it is the
+/* The thrust rows' sweep (rows_plan): this frame's plan (-1: none) and whether it is the
  * rise (else a dip), at the sweep's clock k (sweep_clock). The first pattern starts half a
- * period into the excitation, and a pattern only if it ends by swp_kmax. */
-static int rows_level(const struct experiment *e, bool running, uint32_t k, bool *up)
+ * period into the excitation, and a pattern only if it ends by swp_kmax. At a pattern's first
+ * frame its plan is chosen: its level's, or the lossy link's cut rise (EXP_SWP_LEVELS) when
+ * a frame was lost within SWP_LOSS_S before it. */
+static int rows_level(struct experiment *e, bool running, uint32_t k, bool *up)
 {
 	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = k + per / 2u;
-	uint32_t ph = kk % per, lv = (kk / per) % EXP_SWP_LEVELS;
-	uint32_t n = e->swp_len[lv], m = e->swp_dn_len[lv], len = 2u * m + n;
-	if (!running || n == 0u || kk < per || ph >= len || k + (len - ph) > e->swp_kmax)
+	uint32_t ph = kk % per, pat = kk / per, lv = pat % EXP_SWP_LEVELS;
+	if (!running || kk < per)
 		return -1;
+	if (pat != e->swp_pat) {
+		e->swp_pat = pat;
+		uint32_t k0 = k - ph; /* the pattern's first frame; a frame lost since counts too */
+		e->swp_cut = e->swp_lost &&
+			     (e->swp_lost_k >= k0 || (float)(k0 - e->swp_lost_k) < SWP_LOSS_S * e->inv_dt_nom);
+	}
+	lv = e->swp_cut ? EXP_SWP_LEVELS : lv;
+	uint32_t n = e->swp_len[lv], m = e->swp_dn_len[lv], len = 2u * m + n;
+	if (n == 0u || ph >= len || k + (len - ph) > e->swp_kmax)
+		return -1;
+	if (pat != e->swp_pat_n) { /* flown: counted once */
+		e->swp_pat_n = pat;
+		e->swp_n_pat++;
+		e->swp_n_cut += e->swp_cut ? 1u : 0u;
+	}
 	*up = ph >= m && ph < m + n;
 	return (int)lv;
 }
@@ -1757,6 +1793,10 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 			motor_id_step(&e->mid, tp, fm, tm, use);
 		scalar_t d = running ? excite_update(&e->exc) : SC_ZERO;
 		bool up = false;
+		if (e->fr_span > 1u) { /* frames lost before this one (the lossy link's rule) */
+			e->swp_lost = true;
+			e->swp_lost_k = e->swp_k;
+		}
 		int lv = e->cfg.exc_null && running ? rows_level(e, running, sweep_clock(e), &up) : -1;
 		if (lv >= 0)
 			motor_id_white_pause(&e->mid, up ? e->swp_white : e->swp_white_dn);
