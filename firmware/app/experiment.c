@@ -1024,7 +1024,7 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 						 : "kf rejected";
 	int sev = ok ? APP_SEV_INFO : APP_SEV_WARNING;
 	if (e->swp_n_cut > 0u) /* the lossy link's rule (rows_plan) */
-		say(e, APP_SEV_INFO, "ID sweep: %d of %d rises cut to %.1f g, frames lost", (int)e->swp_n_cut,
+		say(e, APP_SEV_INFO, "ID sweep: %d/%d rises cut to %.1f g, frames lost", (int)e->swp_n_cut,
 		    (int)e->swp_n_pat, (double)(e->swp_ratio[EXP_SWP_LEVELS] - 1.0f));
 	say(e, sev, "ID kf %.3f +/- %.3f %s%s", (double)mr.kf, (double)mr.kf_sd, ok ? "N " : "rejected: ", why_f);
 	say(e, sev, "ID ktau %.4f +/- %.4f %s%s", (double)mr.ktau, (double)mr.ktau_sd,
