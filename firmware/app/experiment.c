@@ -534,6 +534,15 @@ static void sweep_rotors(struct experiment *e)
 
 bool exp_available(int id) { return id >= 1 && id <= 6; }
 
+float exp_rotor_span_s(const struct app_params *p)
+{
+	struct exp_cfg c;
+	cfg_resolve(&c, p);
+	if (!c.exc_null || !(c.swp_thr > 0.0f))
+		return 0.0f;
+	return c.exc_time * (1.0f - 0.01f * (float)MOTOR_ID_LAST_PCT) + SWP_TAIL_S;
+}
+
 int exp_start(struct experiment *e, int id, const struct app_params *p, enum exp_source src, char *why, size_t cap)
 {
 	const struct mixer *mix = e->mix; /* set once by the app, kept across experiments */

@@ -236,6 +236,13 @@ struct experiment {
 	bool pump_ready; /* a step ran since the last line was handed out */
 };
 
+/* The span (s) of the rotor experiment's data behind the motor model's estimates with the
+ * thrust rows and the throttle sweep: its last stage, MOTOR_ID_LAST_PCT of ID_EXC_TIME to the
+ * phase's end (the sweep's tail included); 0 without the sweep. Under a drift of k_f the
+ * identified curve, and so the model's hover thrust, is off by up to the drift over this span
+ * (env_kf.h). */
+float exp_rotor_span_s(const struct app_params *p);
+
 /* Is experiment `id` (1..6) built into this firmware? */
 bool exp_available(int id);
 
