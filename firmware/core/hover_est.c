@@ -169,7 +169,7 @@ static void err_var(struct hover_est *s, scalar_t e_pct, scalar_t k, scalar_t dt
 		if (s->b_count == 0u)
 			s->th_ref = s->theta;
 		s->w_x[s->b_count % HOVER_EST_BLK_AVG] =
-			sc_mul(SC(100.0), sc_sub(sc_div(s->theta, s->th_ref), SC(1.0)));
+			sc_clamp(sc_mul(SC(100.0), sc_sub(sc_div(s->theta, s->th_ref), SC(1.0))), SC(-50.0), SC(50.0));
 		s->b_count++;
 	} else {
 		/* the block began while the filter converged: its innovations are that
@@ -274,9 +274,10 @@ scalar_t hover_est_sd(const struct hover_est *s)
 	return sc_mul(hover_est_u(s), est_div_int(sc_sqrt(s->p_pct2), 100u));
 }
 
-/* The variance of the estimate's wander about a straight line through its last (up to
- * HOVER_EST_BLK_AVG) values at the settled blocks' ends, percent^2: the residuals' sum of
- * squares over n - 2 (zero before four). */
+/* The estimate's wander, percent^2: the variance of its last (up to HOVER_EST_BLK_AVG)
+ * values at the settled blocks' ends about their straight line (the residuals' sum of
+ * squares over n - 2), plus the square of the line's change beyond a drift's (zero before
+ * four blocks; at most P_MAX_PCT2). */
 static scalar_t wander(const struct hover_est *s)
 {
 	uint32_t n = s->b_count < HOVER_EST_BLK_AVG ? s->b_count : HOVER_EST_BLK_AVG;
@@ -301,17 +302,17 @@ static scalar_t wander(const struct hover_est *s)
 	for (uint32_t i = 0; i < n; i++) {
 		scalar_t r =
 			sc_sub(s->w_x[(first + i) % HOVER_EST_BLK_AVG], sc_add(a, sc_mul(b, sc_from_int((int32_t)i))));
-		rss = sc_add(rss, sc_sq(r));
+		rss = sc_min(sc_add(rss, sc_sq(sc_clamp(r, SC(-100.0), SC(100.0)))), P_MAX_PCT2);
 	}
 	scalar_t var = est_div_int(rss, n - 2u);
 	/* the line's change over the window beyond what a drift of drift_per_s makes: no
 	 * battery moves k_f so fast, so it is an error (a vibration folding slower than the
-	 * window, which the innovations do not show), counted whole */
+	 * window, which the innovations do not show): its change over half the window */
 	scalar_t blk_s = sc_mul(s->al_dt, sc_from_int((int32_t)HOVER_EST_BLK));
 	scalar_t lim = sc_mul(sc_mul(SC(100.0), s->p.drift_per_s), blk_s);
 	scalar_t ex =
 		est_mul_unit(sc_mul(sc_max(sc_sub(sc_abs(b), lim), SC_ZERO), sc_from_int((int32_t)(n - 1u))), SC(0.5));
-	return sc_add(var, sc_sq(sc_min(ex, SC(100.0))));
+	return sc_min(sc_add(var, sc_sq(sc_min(ex, SC(100.0)))), P_MAX_PCT2);
 }
 
 scalar_t hover_est_sd_err(const struct hover_est *s)
@@ -325,9 +326,11 @@ scalar_t hover_est_sd_err(const struct hover_est *s)
 		v = sc_add(sc_max(s->v_pct2, wander(s)), sc_max(e2, SC_ZERO));
 		/* a drift of drift_per_s: the estimate, a mean of the innovations of mean age
 		 * (1 - k) / k updates, lags it by that age and the filters' tau_s */
-		if (s->p.drift_per_s > SC_ZERO && s->k_last > SC_ZERO) {
-			scalar_t age =
-				sc_add(sc_div(sc_mul(s->al_dt, sc_sub(SC(1.0), s->k_last)), s->k_last), s->p.tau_s);
+		if (s->p.drift_per_s > SC_ZERO) {
+			scalar_t age = SC(100.0); /* at most (a gain below dt / 100 s) */
+			if (s->k_last > sc_mul(s->al_dt, SC(0.01)))
+				age = sc_add(sc_div(sc_mul(s->al_dt, sc_sub(SC(1.0), s->k_last)), s->k_last),
+					     s->p.tau_s);
 			v = sc_add(v, sc_sq(sc_mul(sc_mul(SC(100.0), s->p.drift_per_s), sc_min(age, SC(100.0)))));
 		}
 	}
