@@ -31,6 +31,8 @@ void env_hover_init(struct env_hover *h, const struct app_params *p)
 {
 	struct hover_est_params hp = hover_est_params_default();
 	hp.g_mps2 = sc_from_float(p->veh_grav);
+	hp.tau_m_s = sc_from_float(p->id_mot_tau > 0.0f ? p->id_mot_tau : 0.0f);
+	hp.drift_per_s = sc_from_float(p->kft_drift > 0.0f ? p->kft_drift / 60.0f : 0.0f);
 	hover_est_init(&h->hov, &hp, sc_from_float(nominal_u(p)));
 	h->tau_k = h->tau_k_target = SC(1.0);
 }
@@ -110,10 +112,19 @@ scalar_t env_hover_step(struct env_hover *h, const struct env_hover_input *in, b
 
 bool env_hover_ready(const struct env_hover *h) { return hover_est_converged(&h->hov, sc_from_float(HOVER_READY_RSD)); }
 
-void env_hover_on_hold(struct env_hover *h)
+void env_hover_on_hold(struct env_hover *h, const struct app_params *p, double t_s)
 {
 	h->pub_u = hover_est_u(&h->hov);
 	h->pub_sd = hover_est_sd_err(&h->hov);
+	h->pub_cal_rel2 = 0.0f;
+	const struct env_acc_cal *c = &h->cal;
+	if (h->hov.acc && c->have && c->n_cal > 0u && p->veh_grav > 0.0f) {
+		/* what the innovations cannot see: the calibration's mean of n_cal noisy frames, and
+		 * the bias's walk since (relative to the 1 g a hover reads) */
+		float n = p->kft_acc_noise / p->veh_grav, w = p->kft_acc_walk / p->veh_grav;
+		double age = t_s > c->t_s ? t_s - c->t_s : 0.0;
+		h->pub_cal_rel2 = n * n / (float)c->n_cal + w * w * (float)age;
+	}
 	h->pub_due = true;
 }
 
@@ -123,6 +134,7 @@ bool env_hover_publish(struct env_hover *h, const struct app_params *p, struct e
 		return false;
 	h->pub_due = false;
 	float u = sc_to_float(h->pub_u), sd = sc_to_float(h->pub_sd);
+	sd = sqrtf(sd * sd + u * u * h->pub_cal_rel2);
 	out->u = u;
 	out->sd = sd;
 	out->kf = p->veh_mass * p->veh_grav / (8.0f * u);

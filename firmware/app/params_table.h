@@ -114,6 +114,8 @@ PARAM(ID_SOURCE, id_source, 0.0f, 0.0f, 4.0f, "",
 #define PARAM_FLAGS 0
 PARAM(KFT_ACC_WALK, kft_acc_walk, 0.001f, 0.0f, 1.0f, "m/s^2/sqrt(s)",
       "k_f tracking from the IMU: accelerometer bias random walk, carried into KFT_SD from the ground calibration")
+PARAM(KFT_ACC_NOISE, kft_acc_noise, 0.004f, 0.0f, 1.0f, "m/s^2",
+      "Accelerometer white noise per frame on the ground: the ground calibration's error (its mean over the ground frames), carried into HOV_KF_SD")
 #undef PARAM_FLAGS
 /* the IMU rotor experiment's settings (docs/identification.md, "From the IMU") */
 #undef PARAM_FLAGS

@@ -16,6 +16,8 @@ struct hover_est_params hover_est_params_default(void)
 	p.sigma_imu = SC(0.3);
 	p.q_rel = SC(0.003);
 	p.tau_s = SC(0.1);
+	p.tau_m_s = SC_ZERO;
+	p.drift_per_s = SC_ZERO;
 	p.gate_sigma = SC(4.0);
 	p.spool_rate = SC(0.6);
 	p.g_mps2 = SC(9.796);
@@ -43,6 +45,8 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 	s->theta_lo = sc_div(SC(1.0), s->p.u_max);
 	s->theta_hi = sc_div(SC(1.0), s->p.u_min);
 	s->r_tau = sc_recip_of(s->p.tau_s);
+	if (!(s->p.tau_m_s > SC_ZERO))
+		s->p.tau_m_s = SC_ZERO;
 	s->q2 = sc_sq(sc_mul(SC(100.0), s->p.q_rel));
 	s->y_min = sc_mul(SC(0.05), s->p.g_mps2);
 	s->r_sd0 = sc_mul(SC(100.0), s->p.sigma_acc);
@@ -50,6 +54,12 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 	s->gate2 = sc_sq(s->p.gate_sigma);
 	s->al_dt = SC_ZERO;
 	s->al = SC_ZERO;
+	s->am = SC_ZERO;
+	s->k_last = SC_ZERO;
+	s->th_ref = SC(1.0);
+	for (uint32_t i = 0; i < HOVER_EST_BLK_AVG; i++)
+		s->w_x[i] = SC_ZERO;
+	s->u_m = SC_ZERO;
 	u0 = sc_isfinite(u0) ? sc_clamp(u0, s->p.u_min, s->p.u_max) : s->p.u_min;
 	s->theta = clamp_theta(s, sc_div(SC(1.0), u0));
 	s->p_pct2 = p0_pct2(&s->p);
@@ -64,6 +74,7 @@ void hover_est_init(struct hover_est *s, const struct hover_est_params *p, scala
 	s->v_pct2 = s->p_pct2;
 	s->r_eff = s->e_mean = s->b_sum = s->b_prev = SC_ZERO;
 	s->b_n = s->b_count = 0;
+	s->b_settled = false;
 }
 
 /* inline in each caller (the per-frame track and update paths): no call around a few tests */
@@ -85,7 +96,7 @@ static inline SC_ALWAYS_INLINE scalar_t filters(struct hover_est *s, scalar_t vz
 	}
 	if (!s->primed) {
 		s->v_f = vz;
-		s->uc_f = uc;
+		s->uc_f = s->u_m = uc;
 		s->primed = true;
 		return SC_ZERO;
 	}
@@ -93,6 +104,14 @@ static inline SC_ALWAYS_INLINE scalar_t filters(struct hover_est *s, scalar_t vz
 	if (dt != s->al_dt) {
 		s->al_dt = dt;
 		s->al = sc_div(dt, sc_add(s->p.tau_s, dt));
+		/* the lag over a frame of held throttle, 1 - exp(-dt / tau_m), to second order:
+		 * dt / (tau_m + dt / 2) */
+		s->am = s->p.tau_m_s > SC_ZERO ? sc_min(sc_div(dt, sc_add(s->p.tau_m_s, sc_mul(dt, SC(0.5)))), SC(1.0))
+					       : SC(1.0);
+	}
+	if (acc) { /* the accelerometer reads the thrust the motors' lag lets through */
+		s->u_m = sc_add(s->u_m, est_mul_unit(sc_sub(uc, s->u_m), s->am));
+		uc = s->u_m;
 	}
 	scalar_t al = s->al;
 	s->v_f = sc_add(s->v_f, est_mul_unit(sc_sub(vz, s->v_f), al)); /* al in [0, 1] */
@@ -119,9 +138,9 @@ void hover_est_track_acc(struct hover_est *s, scalar_t a_mps2, scalar_t u, scala
 }
 
 /* The error's variance as the data show it (hover_est.h), for an innovation e_pct taken
- * with gain k: the block of innovations, and V through the gain, with the filter's own
- * posterior until two blocks have given the noise. */
-static void err_var(struct hover_est *s, scalar_t e_pct, scalar_t k)
+ * with gain k at period dt: the block of innovations, and V through the gain, with the
+ * filter's own posterior until two blocks have given the noise. */
+static void err_var(struct hover_est *s, scalar_t e_pct, scalar_t k, scalar_t dt_s)
 {
 	scalar_t omk = sc_sub(SC(1.0), k);
 	if (s->b_count >= 2u) /* k r_eff first: k^2 alone has few bits in the fixed build */
@@ -133,18 +152,35 @@ static void err_var(struct hover_est *s, scalar_t e_pct, scalar_t k)
 	if (++s->b_n < HOVER_EST_BLK)
 		return;
 	scalar_t m = est_div_int(s->b_sum, HOVER_EST_BLK);
-	if (s->b_count > 0u) {
-		/* B times half the squared change of the block means; the mean of the first
-		 * HOVER_EST_BLK_AVG, then an average over about as many */
-		scalar_t r =
-			sc_mul(sc_from_int((int32_t)HOVER_EST_BLK), est_mul_unit(sc_sq(sc_sub(m, s->b_prev)), SC(0.5)));
-		uint32_t n = s->b_count < HOVER_EST_BLK_AVG ? s->b_count : HOVER_EST_BLK_AVG;
-		s->r_eff = sc_add(s->r_eff, est_div_int(sc_sub(r, s->r_eff), n));
+	if (s->b_settled) {
+		if (s->b_count > 0u) {
+			/* B times half the squared change of the block means; the mean of the
+			 * first HOVER_EST_BLK_AVG, then an average over about as many */
+			scalar_t r = sc_mul(sc_from_int((int32_t)HOVER_EST_BLK),
+					    est_mul_unit(sc_sq(sc_sub(m, s->b_prev)), SC(0.5)));
+			uint32_t n = s->b_count < HOVER_EST_BLK_AVG ? s->b_count : HOVER_EST_BLK_AVG;
+			s->r_eff = sc_add(s->r_eff, est_div_int(sc_sub(r, s->r_eff), n));
+		}
+		/* the error now as the innovations show it: their block means averaged with
+		 * weight 1/2 a block, about the filter's own memory (1 / k updates, about two
+		 * blocks), so that a convergence under way shows as it is now */
+		s->e_mean = s->b_count > 0u ? est_mul_unit(sc_add(s->e_mean, m), SC(0.5)) : m;
+		/* the estimate at the blocks' ends, percent of the first settled one (its wander) */
+		if (s->b_count == 0u)
+			s->th_ref = s->theta;
+		s->w_x[s->b_count % HOVER_EST_BLK_AVG] =
+			sc_clamp(sc_mul(SC(100.0), sc_sub(sc_div(s->theta, s->th_ref), SC(1.0))), SC(-50.0), SC(50.0));
+		s->b_count++;
+	} else {
+		/* the block began while the filter converged: its innovations are that
+		 * convergence, not the noise; the statistics start with the next one */
+		s->b_count = 0;
+		s->r_eff = s->e_mean = SC_ZERO;
 	}
-	uint32_t n = s->b_count + 1u < HOVER_EST_BLK_AVG ? s->b_count + 1u : HOVER_EST_BLK_AVG;
-	s->e_mean = sc_add(s->e_mean, est_div_int(sc_sub(m, s->e_mean), n));
 	s->b_prev = m;
-	s->b_count++;
+	/* settled once P's decrease per update, k P, is within twice the process noise's
+	 * increase (the two are equal in the steady state) */
+	s->b_settled = est_mul_unit(s->p_pct2, k) < sc_mul(SC(2.0), est_mul_unit(s->q2, dt_s));
 	s->b_sum = SC_ZERO;
 	s->b_n = 0;
 }
@@ -177,7 +213,8 @@ static bool innovate(struct hover_est *s, scalar_t y, scalar_t y_hat, scalar_t r
 	/* two quotients by P + r: its reciprocal prepared once */
 	struct sc_gain inv_pr = sc_gain_recip2(pr, SC(1.0));
 	scalar_t k = sc_mul_gain(s->p_pct2, &inv_pr);
-	err_var(s, e_pct, k);
+	s->k_last = k;
+	err_var(s, e_pct, k, dt_s);
 	/* k = P / (P + r) in [0, 1] */
 	scalar_t th = sc_mul(s->theta, sc_add(SC(1.0), est_mul_unit(est_div_int(e_pct, 100u), k)));
 	s->theta = clamp_theta(s, th);
@@ -237,9 +274,66 @@ scalar_t hover_est_sd(const struct hover_est *s)
 	return sc_mul(hover_est_u(s), est_div_int(sc_sqrt(s->p_pct2), 100u));
 }
 
+/* The estimate's wander, percent^2: the variance of its last (up to HOVER_EST_BLK_AVG)
+ * values at the settled blocks' ends about their straight line (the residuals' sum of
+ * squares over n - 2), plus the square of the line's change beyond a drift's (zero before
+ * four blocks; at most P_MAX_PCT2). */
+static scalar_t wander(const struct hover_est *s)
+{
+	uint32_t n = s->b_count < HOVER_EST_BLK_AVG ? s->b_count : HOVER_EST_BLK_AVG;
+	if (n < 4u)
+		return SC_ZERO;
+	uint32_t first = s->b_count - n;
+	scalar_t sx = SC_ZERO, sxt = SC_ZERO;
+	int32_t st = 0, stt = 0;
+	for (uint32_t i = 0; i < n; i++) {
+		scalar_t x = s->w_x[(first + i) % HOVER_EST_BLK_AVG];
+		sx = sc_add(sx, x);
+		sxt = sc_add(sxt, sc_mul(x, sc_from_int((int32_t)i)));
+		st += (int32_t)i;
+		stt += (int32_t)(i * i);
+	}
+	/* x = a + b t: b = (n sxt - st sx) / (n stt - st^2), a = (sx - b st) / n */
+	int32_t den = (int32_t)n * stt - st * st;
+	scalar_t b =
+		est_div_int(sc_sub(sc_mul(sc_from_int((int32_t)n), sxt), sc_mul(sc_from_int(st), sx)), (uint32_t)den);
+	scalar_t a = est_div_int(sc_sub(sx, sc_mul(b, sc_from_int(st))), n);
+	scalar_t rss = SC_ZERO;
+	for (uint32_t i = 0; i < n; i++) {
+		scalar_t r =
+			sc_sub(s->w_x[(first + i) % HOVER_EST_BLK_AVG], sc_add(a, sc_mul(b, sc_from_int((int32_t)i))));
+		rss = sc_min(sc_add(rss, sc_sq(sc_clamp(r, SC(-100.0), SC(100.0)))), P_MAX_PCT2);
+	}
+	scalar_t var = est_div_int(rss, n - 2u);
+	/* the line's change over the window beyond what a drift of drift_per_s makes: no
+	 * battery moves k_f so fast, so it is an error (a vibration folding slower than the
+	 * window, which the innovations do not show): its change over half the window */
+	scalar_t blk_s = sc_mul(s->al_dt, sc_from_int((int32_t)HOVER_EST_BLK));
+	scalar_t lim = sc_mul(sc_mul(SC(100.0), s->p.drift_per_s), blk_s);
+	scalar_t ex =
+		est_mul_unit(sc_mul(sc_max(sc_sub(sc_abs(b), lim), SC_ZERO), sc_from_int((int32_t)(n - 1u))), SC(0.5));
+	return sc_min(sc_add(var, sc_sq(sc_min(ex, SC(100.0)))), P_MAX_PCT2);
+}
+
 scalar_t hover_est_sd_err(const struct hover_est *s)
 {
-	scalar_t v = s->b_count >= 2u ? sc_add(s->v_pct2, sc_sq(s->e_mean)) : s->p_pct2;
+	scalar_t v = s->p_pct2;
+	if (s->b_count >= 2u) {
+		/* the mean's square counted beyond twice its own noise's variance, that of the
+		 * average of white block means of variance r_eff / B with weight 1/2:
+		 * (r_eff / B) / 3 (a mean within its noise is no evidence of a bias) */
+		scalar_t e2 = sc_sub(sc_sq(s->e_mean), sc_mul(SC(2.0), est_div_int(s->r_eff, 3u * HOVER_EST_BLK)));
+		v = sc_add(sc_max(s->v_pct2, wander(s)), sc_max(e2, SC_ZERO));
+		/* a drift of drift_per_s: the estimate, a mean of the innovations of mean age
+		 * (1 - k) / k updates, lags it by that age and the filters' tau_s */
+		if (s->p.drift_per_s > SC_ZERO) {
+			scalar_t age = SC(100.0); /* at most (a gain below dt / 100 s) */
+			if (s->k_last > sc_mul(s->al_dt, SC(0.01)))
+				age = sc_add(sc_div(sc_mul(s->al_dt, sc_sub(SC(1.0), s->k_last)), s->k_last),
+					     s->p.tau_s);
+			v = sc_add(v, sc_sq(sc_mul(sc_mul(SC(100.0), s->p.drift_per_s), sc_min(age, SC(100.0)))));
+		}
+	}
 	return sc_mul(hover_est_u(s), est_div_int(sc_sqrt(v), 100u));
 }
 

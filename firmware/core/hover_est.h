@@ -48,9 +48,25 @@
  * from the noise is V' = (1 - k)^2 V + k^2 R, with R the noise's variance per update
  * including its correlation (the filtered reading's, the vibration's): B times the
  * variance of a mean of B innovations, measured as half the squared change between
- * consecutive block means (HOVER_EST_BLK), averaged over HOVER_EST_BLK_AVG blocks. A lag
- * behind a drift shows as the innovations' mean, which is the estimate's bias: its square
- * is added. hover_est_sd_err is that sd.
+ * consecutive block means (HOVER_EST_BLK), averaged over HOVER_EST_BLK_AVG blocks. Only
+ * blocks that begin once the filter has settled count (P's decrease per update within
+ * twice the process noise's increase): before, the innovations are its convergence, not
+ * the noise. hover_est_sd_err's variance is the sum of
+ *  - the larger of V and the estimate's own wander: the variance of its values at the last
+ *    HOVER_EST_BLK_AVG blocks' ends about their straight line, plus the line's change over
+ *    half the window beyond what a drift of drift_per_s makes, squared (a vibration that
+ *    folds slower than the blocks moves the estimate but not the block means' changes, and
+ *    no battery moves k_f so fast);
+ *  - the innovations' mean over about the filter's memory (the error now: a lag behind a
+ *    drift), squared, counted beyond twice its own noise's variance;
+ *  - the lag behind a drift of drift_per_s, which the innovations show only within their
+ *    noise: the estimate is a mean of innovations of mean age (1 - k) / k updates, and the
+ *    filters add tau_s.
+ * With the accelerometer, u goes through the motors' lag tau_m_s (dt / (tau_m + dt / 2) per
+ * frame: 1 - exp(-dt / tau_m) to second order) before the filter: the thrust the
+ * accelerometer reads lags the throttle by it, and an unmodelled lag makes every throttle
+ * change an innovation (the attitude and height loops' activity), which the block means'
+ * changes overstate at the filter's slower memory.
  *
  * Units: m/s, m/s^2, s, throttle (0..1). No heap, no globals.
  */
@@ -69,13 +85,15 @@
 struct hover_est_params {
 	scalar_t u_min; /* accepted hover throttle range, e.g. [0.02, 0.95] */
 	scalar_t u_max;
-	scalar_t sigma_u0;   /* initial standard deviation of u_h as a fraction of u_h (e.g. 1.0) */
-	scalar_t sigma_acc;  /* measurement noise of the filtered acceleration, m/s^2 */
-	scalar_t sigma_imu;  /* the same of the filtered accelerometer reading, m/s^2 */
-	scalar_t q_rel;      /* process noise: relative drift of u_h per sqrt(s) */
-	scalar_t tau_s;      /* state-variable filter time constant, s */
-	scalar_t gate_sigma; /* innovation gate, standard deviations */
-	scalar_t spool_rate; /* ground spool-up: fraction of u_h per second */
+	scalar_t sigma_u0;    /* initial standard deviation of u_h as a fraction of u_h (e.g. 1.0) */
+	scalar_t sigma_acc;   /* measurement noise of the filtered acceleration, m/s^2 */
+	scalar_t sigma_imu;   /* the same of the filtered accelerometer reading, m/s^2 */
+	scalar_t q_rel;       /* process noise: relative drift of u_h per sqrt(s) */
+	scalar_t tau_s;       /* state-variable filter time constant, s */
+	scalar_t tau_m_s;     /* the motors' first-order lag (the accelerometer's thrust behind u), s; 0: none */
+	scalar_t drift_per_s; /* the relative drift of u_h per s the published sd allows for (its lag); 0: none */
+	scalar_t gate_sigma;  /* innovation gate, standard deviations */
+	scalar_t spool_rate;  /* ground spool-up: fraction of u_h per second */
 	scalar_t g_mps2;
 };
 
@@ -85,6 +103,7 @@ struct hover_est {
 	scalar_t p_pct2;   /* variance of theta's relative error, percent^2 */
 	scalar_t v_f;      /* filtered vertical speed (or specific force, acc) */
 	scalar_t uc_f;     /* filtered u cos_tilt */
+	scalar_t u_m;      /* u through the motors' lag (the accelerometer's kind of input) */
 	bool primed;       /* filters initialised */
 	bool acc;          /* the filters hold the accelerometer's kind of input */
 	int8_t gated_sign; /* sign of the current run of gated innovations */
@@ -94,17 +113,22 @@ struct hover_est {
 	/* the error's variance as the data show it (hover_est_sd_err) */
 	scalar_t v_pct2;  /* of theta's relative error from the noise, percent^2 */
 	scalar_t r_eff;   /* the innovations' noise, percent^2 per update, correlation included */
-	scalar_t e_mean;  /* the innovations' mean, percent (the lag behind a drift) */
+	scalar_t e_mean;  /* the innovations' mean over about the filter's memory, percent (the error now) */
 	scalar_t b_sum;   /* the block under way: its innovations' sum, percent */
 	scalar_t b_prev;  /* the last block's mean */
 	uint32_t b_n;     /* innovations in the block under way */
-	uint32_t b_count; /* blocks ended */
+	uint32_t b_count; /* blocks ended since the filter settled */
+	bool b_settled;   /* the filter had settled at the last block's end */
+	scalar_t k_last;  /* the last update's gain */
+	scalar_t th_ref;  /* theta at the first settled block's end */
+	scalar_t w_x[HOVER_EST_BLK_AVG]; /* theta at the last settled blocks' ends, percent of th_ref (a ring) */
 	/* what depends on the parameters and the frame period only, computed at init and when
 	 * the period changes: the update's divisions by them become products, with the same
 	 * quotients */
 	scalar_t theta_lo, theta_hi; /* 1 / u_max, 1 / u_min */
 	struct sc_recip r_tau;       /* 1 / tau_s */
 	scalar_t al_dt, al;          /* the filters' coefficient dt / (tau + dt) and its dt (0: none) */
+	scalar_t am;                 /* the motor lag's coefficient dt / (tau_m + dt / 2) (1: none) */
 	scalar_t q2;                 /* (100 q_rel)^2, percent^2 per s */
 	scalar_t y_min;              /* 0.05 g: the least predicted acceleration that is learnt from */
 	scalar_t r_sd0;              /* 100 sigma_acc */
@@ -113,7 +137,8 @@ struct hover_est {
 };
 
 /* Defaults: u_h in [0.02, 0.95], sigma_u0 1.0, sigma_acc 0.5 m/s^2, sigma_imu 0.3 m/s^2,
- * q_rel 0.003 /sqrt(s), tau 0.1 s, gate 4 sigma, spool 0.6 /s, g 9.796. */
+ * q_rel 0.003 /sqrt(s), tau 0.1 s, no motor lag, no drift allowed for, gate 4 sigma, spool
+ * 0.6 /s, g 9.796. */
 struct hover_est_params hover_est_params_default(void);
 
 /* Starts from the nominal hover throttle u0 (clamped to the range), relative sd sigma_u0. */
@@ -141,8 +166,9 @@ scalar_t hover_est_u(const struct hover_est *s);
 scalar_t hover_est_sd(const struct hover_est *s);
 
 /* The standard deviation of u_h's error as the data show it: the filter's own gains applied
- * to the innovations' measured noise (header comment), and their mean (a lag behind a
- * drift); the filter's before two blocks of innovations have been seen. */
+ * to the innovations' measured noise or the estimate's own wander, their mean, and the lag
+ * behind a drift of drift_per_s (header comment); the filter's before two settled blocks of
+ * innovations have been seen. */
 scalar_t hover_est_sd_err(const struct hover_est *s);
 
 /* True once the relative standard deviation of u_h is below rel_sd. */

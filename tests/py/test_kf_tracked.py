@@ -348,6 +348,7 @@ def test_imu_only_hover_and_tracker_follow_a_drift(tmp_path):
             assert abs(err) < max(0.003, zd * sd), f"seed {base + i}: drift off by {100 * err:+.3f} % (sd {100 * sd:.3f} %)"
     hz = [h for _, h, _ in runs if h is not None]
     s = sum(h * h for h in hz)
-    print(f"hover k_f: rms of z {math.sqrt(s / N_IMU):.3f} (at most {math.sqrt(hi / N_IMU):.3f}), "
-          f"largest |z| {max(map(abs, hz)):.2f} (bound {zh:.2f})")
+    print(f"hover k_f: rms of z {math.sqrt(s / N_IMU):.3f} (at most {math.sqrt(hi / N_IMU):.3f}), mean "
+          f"{sum(hz) / len(hz):+.3f}, {sum(abs(h) > 3 for h in hz)} of {len(hz)} beyond 3, largest |z| "
+          f"{max(map(abs, hz)):.2f} (bound {zh:.2f})")
     assert s <= hi and max(map(abs, hz)) < zh
