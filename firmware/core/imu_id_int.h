@@ -2,12 +2,15 @@
  * imu_id_int.h - what imu_id.c (the per-frame part, integer in the fixed build) and
  * imu_id_solve.c (the set-up, the grid's refinement and the solve, float) share: the
  * parameters' indices, the sums' sets and kinds, and the functions each calls of the other.
- * For imu_id*.c only.
+ * For imu_id*.c only, after imu_id.h (not included here: imu_id.c includes this header, and
+ * a module's header including back would make the two one cycle).
  */
 #ifndef OCTO_IMU_ID_INT_H
 #define OCTO_IMU_ID_INT_H
 
-#include "imu_id.h"
+#ifndef OCTO_IMU_ID_H
+#error "include imu_id.h before imu_id_int.h"
+#endif
 
 #define NP IMU_ID_NP
 #define NT IMU_ID_NT
