@@ -403,22 +403,12 @@ static void hyp_stat(const struct imu_id *m, unsigned d, unsigned l, struct stat
 	s->rrt = hs_f(m, h, HS_N - 1u);
 }
 
-/* hypothesis (d, l)'s force fit (fit), as the parameters */
-static float hyp_solve(const struct imu_id *m, unsigned d, unsigned l, float th[NP], float h[NP][NP])
+/* hypothesis (d, l)'s force fit (fit), or its torque fit (tq), as the parameters */
+static float hyp_solve(const struct imu_id *m, unsigned d, unsigned l, bool tq, float th[NP], float h[NP][NP])
 {
 	struct stat_f s;
 	hyp_stat(m, d, l, &s);
-	float j = fit(m, s.g, s.b, s.rr, th, h);
-	to_params(m, th, h);
-	return j;
-}
-
-/* the same hypothesis' torque fit */
-static float hyp_solve_tq(const struct imu_id *m, unsigned d, unsigned l, float th[NP], float h[NP][NP])
-{
-	struct stat_f s;
-	hyp_stat(m, d, l, &s);
-	float j = fit(m, s.g, s.bt, s.rrt, th, h);
+	float j = fit(m, s.g, tq ? s.bt : s.b, tq ? s.rrt : s.rr, th, h);
 	to_params(m, th, h);
 	return j;
 }
@@ -499,7 +489,7 @@ void imu_id_refine(struct imu_id *m)
 	float jr[IMU_ID_DELAYS][IMU_ID_LAGS];
 	best_hyp(m, &bd, &bl, jr);
 	float th[NP], h[NP][NP], h0 = m->lstep;
-	hyp_solve(m, bd, bl, th, h);
+	hyp_solve(m, bd, bl, false, th, h);
 	float dl = step_of(m, th);
 	dl = dl > h0 ? h0 : dl < -h0 ? -h0 : dl;
 	float lo = logf(IMU_ID_TAU_MIN), hi = logf(IMU_ID_TAU_MAX), half = IMU_ID_FINE_HALF * h0;
@@ -955,11 +945,11 @@ static void torque_solve(const struct imu_id *m, unsigned bd, unsigned bl, float
 	}
 	unsigned np = c->est_curve ? NP : NP - 2u;
 	float th[NP], h[NP][NP], v[NP][NP], thc[NP], nu = 0.0f;
-	float j = hyp_solve_tq(m, bd, bl, th, h);
+	float j = hyp_solve(m, bd, bl, true, th, h);
 	if (bl > 0u && bl + 1u < IMU_ID_LAGS) {
 		float tm[NP], tp[NP], hh[NP][NP], k = dl / (4.0f * grid_step(m));
-		hyp_solve_tq(m, bd, bl - 1u, tm, hh);
-		hyp_solve_tq(m, bd, bl + 1u, tp, hh);
+		hyp_solve(m, bd, bl - 1u, true, tm, hh);
+		hyp_solve(m, bd, bl + 1u, true, tp, hh);
 		for (unsigned i = 0; i < NP; i++)
 			th[i] += k * (tp[i] - tm[i]);
 	}
@@ -1035,7 +1025,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	best_hyp(m, &bd, &bl, jr);
 	float j0 = delay_margin(m, bd, jr, r);
 	float th[NP], h[NP][NP], v[NP][NP], thc[NP];
-	hyp_solve(m, bd, bl, th, h);
+	hyp_solve(m, bd, bl, false, th, h);
 	float hstep = grid_step(m), dl = step_of(m, th), lcorr = 0.0f;
 	/* the grid point nearest the lag found (the least residual's may lie a few of the
 	 * refined grid's steps off where the lag is weakly seen): the expansion below is about it */
@@ -1045,7 +1035,7 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 		if (to == bl)
 			break;
 		bl = to;
-		j0 = hyp_solve(m, bd, bl, th, h);
+		j0 = hyp_solve(m, bd, bl, false, th, h);
 		dl = step_of(m, th);
 	}
 	float s2 = j0 / (float)(n - np);
@@ -1063,8 +1053,8 @@ void imu_id_solve(const struct imu_id *m, float ne_max, struct imu_id_result *r)
 	 * for ln tau (their own steps from their own points) */
 	if (bl > 0u && bl + 1u < IMU_ID_LAGS) {
 		float tm[NP], tp[NP], hh[NP][NP];
-		hyp_solve(m, bd, bl - 1u, tm, hh);
-		hyp_solve(m, bd, bl + 1u, tp, hh);
+		hyp_solve(m, bd, bl - 1u, false, tm, hh);
+		hyp_solve(m, bd, bl + 1u, false, tp, hh);
 		float k = dl / (4.0f * hstep);
 		for (unsigned i = 0; i < NP; i++)
 			th[i] += k * (tp[i] - tm[i]);
