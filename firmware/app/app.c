@@ -586,7 +586,7 @@ static void sync_params(struct app *a)
 	lp.g_mps2 = sc_from_float(p->veh_grav);
 	lp.vz_max_up_mps = sc_from_float(fmaxf(sc_to_float(lp.vz_max_up_mps), p->nav_tko_vel));
 	lp.vz_max_down_mps = sc_from_float(fmaxf(sc_to_float(lp.vz_max_down_mps), p->nav_land_vel));
-	lp.f_max_n = sc_from_float(8.0f * p->veh_kf * p->mot_thr_max);
+	lp.f_max_n = sc_from_float((float)HAL_ROTORS * p->veh_kf * p->mot_thr_max);
 	alt_ctrl_set_params(&a->alt, &lp); /* keeps the integral */
 
 	a->ps.inertia_kgm2 = vec3_make(sc_from_float(p->veh_ixx), sc_from_float(p->veh_iyy), sc_from_float(p->veh_izz));

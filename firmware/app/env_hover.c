@@ -14,7 +14,10 @@
 #define TAU_K_MIN 0.1f        /* the torque gain's range: 0.1-10 */
 #define TAU_K_MAX 10.0f
 
-static float nominal_u(const struct app_params *p) { return p->veh_mass * p->veh_grav / (8.0f * p->veh_kf); }
+static float nominal_u(const struct app_params *p)
+{
+	return p->veh_mass * p->veh_grav / ((float)HAL_ROTORS * p->veh_kf);
+}
 
 /* the same scalar, by its bits (an integer comparison in both builds: no soft-float call) */
 static bool same_bits(scalar_t a, scalar_t b)
@@ -137,7 +140,7 @@ bool env_hover_publish(struct env_hover *h, const struct app_params *p, struct e
 	sd = sqrtf(sd * sd + u * u * h->pub_cal_rel2);
 	out->u = u;
 	out->sd = sd;
-	out->kf = p->veh_mass * p->veh_grav / (8.0f * u);
+	out->kf = p->veh_mass * p->veh_grav / ((float)HAL_ROTORS * u);
 	out->kf_sd = out->kf * sd / u;
 	out->alloc = env_hover_alloc_learned(h);
 	out->tau_k = sc_to_float(h->tau_k_target);
@@ -178,6 +181,6 @@ bool env_hover_seed_kf(const struct env_hover *h, const struct app_params *p, in
 	if (p->nav_kf_seed < 0.5f || (id != 1 && id != 6) || !env_hover_ready(h))
 		return false;
 	float u = sc_to_float(hover_est_u(&h->hov));
-	*kf = p->veh_mass * p->veh_grav / (8.0f * u);
+	*kf = p->veh_mass * p->veh_grav / ((float)HAL_ROTORS * u);
 	return fabsf(*kf / p->veh_kf - 1.0f) > KF_SEED_REL;
 }

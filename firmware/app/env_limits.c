@@ -36,13 +36,13 @@ static bool too_heavy(const struct env_limits *l, const struct env_limits_input 
 	if (!(p->nav_tw_min > 0.0f) || !env_hover_ready(in->hover))
 		return false;
 	float u_h = sc_to_float(hover_est_u(&in->hover->hov)), s = l->scale_sum;
-	float tw = u_h > 0.0f ? s / (8.0f * u_h) : 0.0f;
+	float tw = u_h > 0.0f ? s / ((float)HAL_ROTORS * u_h) : 0.0f;
 	if (!(tw < p->nav_tw_min))
 		return false;
 	line_set(&r->why, APP_SEV_ERROR, "Take-off failed: thrust-to-weight %.2f < %.2f", (double)tw,
 		 (double)p->nav_tw_min);
 	line_set(&r->more, APP_SEV_ERROR, "Hover at %.0f %% of full thrust: lighten it",
-		 (double)(100.0f * u_h * 8.0f / s));
+		 (double)(100.0f * u_h * (float)HAL_ROTORS / s));
 	return true;
 }
 

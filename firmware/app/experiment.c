@@ -1353,9 +1353,9 @@ static void imu_rotor_end(struct experiment *e, const struct app_params *p)
  * ID_INR_AMP / 10): tau / (8 k), k = k_tau / k_f. Bounded by the parameter's own maximum. */
 static float inr_amp_limit(const struct app_params *p, unsigned ax)
 {
-	float fh = p->veh_mass * p->veh_grav / 8.0f, lim;
+	float fh = p->veh_mass * p->veh_grav / (float)HAL_ROTORS, lim;
 	if (ax == 2u)
-		lim = INR_YAW_DIV * 0.5f * fh * 8.0f * (p->veh_kf > 0.0f ? p->veh_ktau / p->veh_kf : 0.0f);
+		lim = INR_YAW_DIV * 0.5f * fh * (float)HAL_ROTORS * (p->veh_kf > 0.0f ? p->veh_ktau / p->veh_kf : 0.0f);
 	else
 		lim = 0.5f * fh * 4.0f * p->veh_arm_l;
 	int i = PX_ID_INR_AMP;
