@@ -238,11 +238,6 @@ static float u_mean(const float u[IMU_ID_ROTORS])
 	return s / (float)IMU_ID_ROTORS;
 }
 static inline float acc_sq(float acc, float f) { return acc + f * f; }
-static inline term_t term(float a, float b, int e)
-{
-	(void)e;
-	return a * b;
-}
 static inline term_t term1(float a, int e)
 {
 	(void)e;
