@@ -3,6 +3,7 @@
 
 #include <math.h>
 
+#include "experiment.h"
 #include "fcmp.h"
 
 #define KFT_WARM_S 10.0f /* s of tracker updates before it may refresh VEH_KF */
@@ -43,6 +44,8 @@ static void model_sd(struct env_kf *k, const struct app_params *p)
 {
 	bool kf_ok = ((unsigned)p->id_result & 1u) != 0 && p->id_kf_est > 0.0f && p->id_kf_sd > 0.0f;
 	k->model_rsd = kf_ok ? p->id_kf_sd / p->id_kf_est : 0.0f;
+	/* with the thrust rows (ID_SRC_USED 1) the identified model's drift share (env_kf_sd_abs) */
+	k->drift_span_s = kf_ok && p->id_src_used == 1.0f ? exp_rotor_span_s(p) : 0.0f;
 	float w = p->veh_grav > 0.0f ? p->kft_acc_walk / p->veh_grav : 0.0f;
 	k->walk_rel2 = w * w;
 }
@@ -84,6 +87,20 @@ float env_kf_sd_abs(const struct env_kf *k, double t_s)
 {
 	float kf = sc_to_float(k->kft.k), sd = sc_to_float(kf_track_sd(&k->kft));
 	float rel2 = k->model_rsd * k->model_rsd;
+	if (k->drift_span_s > 0.0f) {
+		/* the identified model's share of a drift: k_f drifting over the motor model's last
+		 * stage biases the curve, and so the model's hover thrust the tracker divides by, by up
+		 * to the drift over that span (the sweep's rises lie in the stage's first part, its
+		 * dithers on through the tail: docs/identification.md, "KFT_SD is absolute"). The
+		 * drift is the tracker's own (its long windows' slope, bounded by KFT_DRIFT), the bound
+		 * until it has measured one. */
+		const struct kf_track *t = &k->kft;
+		float mem = sc_to_float(t->mem_s);
+		float r = t->l_count && mem > 0.0f ? fabsf(sc_to_float(t->l_slope_pct)) / (100.0f * mem)
+						   : sc_to_float(t->p.drift_per_min) / 60.0f;
+		float d = r * k->drift_span_s;
+		rel2 += d * d;
+	}
 	if (k->src == ENV_SRC_IMU && t_s > k->t_cal)
 		rel2 += k->walk_rel2 * (float)(t_s - k->t_cal);
 	return sqrtf(sd * sd + kf * kf * rel2);

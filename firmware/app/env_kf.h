@@ -16,9 +16,12 @@
  * The sd published (KFT_SD, and the log's) is absolute: the tracking's sd (kf_track_sd,
  * relative to the rotor model it regresses on) combined in quadrature with the model's own
  * relative sd, that of k_f in the last accepted identification (ID_KF_SD / ID_KF_EST,
- * which carries the thrust curve's and the motor lag's shares: motor_id.h), and with the
- * accelerometer, its bias walk since the ground calibration (KFT_ACC_WALK). The model's
- * error is common to the tracked and the identified k_f, so a VEH_KF refresh keeps it:
+ * which carries the thrust curve's and the motor lag's shares: motor_id.h), after an
+ * identification from the thrust rows the tracker's drift over the span of its data
+ * (exp_rotor_span_s: a drift biases the identified curve, and so the model's hover thrust,
+ * beyond ID_KF_SD), and with the accelerometer, its bias walk since the ground calibration
+ * (KFT_ACC_WALK). The model's error is common to the tracked and the identified k_f, so a
+ * VEH_KF refresh keeps it:
  * the refresh compares the tracked drift with the tracking sd alone, and the later
  * publications still carry the identification's share. Without an accepted identification
  * the model is the one given (MOT_CURVE, MOT_SCALE*, ID_MOT_TAU) and KFT_SD carries no share
@@ -47,6 +50,7 @@ struct env_kf {
 	enum env_src src;     /* what the running tracker's y is */
 	scalar_t mg;          /* VEH_MASS VEH_GRAV, N: the thrust of 1 g of specific force */
 	float model_rsd;      /* the rotor model's relative sd (an accepted identification's k_f) */
+	float drift_span_s;   /* s: a drift biases the identified model over this (exp_rotor_span_s; 0: none) */
 	float walk_rel2;      /* (KFT_ACC_WALK / VEH_GRAV)^2: relative variance per second of the calibration's age */
 	double t_cal;         /* plant time of the accelerometer's calibration (src IMU) */
 	double pub_next_t;    /* plant time of the next publication (1 s after the last) */

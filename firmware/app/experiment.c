@@ -161,6 +161,7 @@ static void say(struct experiment *e, int sev, const char *fmt, ...)
 
 static void read_estimates(struct experiment *e);
 static void scales_early(struct experiment *e);
+static void sweep_rotors(struct experiment *e);
 
 /* one queued line into the app's pending slot when it is free and a step ran since the last
  * one (one line per frame, as before: the app sends it on its tick) */
@@ -188,6 +189,7 @@ void exp_pump(struct experiment *e)
 				if (e->cfg.exc_null) {
 					motor_id_refine(&e->mid); /* processes the waiting frame first */
 					excite_prepare(&e->exc2);
+					sweep_rotors(e);
 				}
 				ident_rotor_process(&e->rot);
 			}
@@ -375,21 +377,26 @@ static scalar_t hover_cap(float thr_h, float peak)
 #define SWP_PERIOD_S 1.0f
 #define EXP_SPAN_MAX 1000.0f /* frames: a gap longer than this ends the experiment anyway */
 #define SWP_A_MAX_G 3.0f
-/* With the thrust rows a step climbs this share of ID_SWP_DZ: the rows see each step at their
- * own noise (the accelerometer's vibration needs the IMU's whole climb), and the experiment
- * stays within the hover's height budget under a lossy link */
-#define SWP_DZ_ROWS 0.5f
+/* With the thrust rows a step's excursion (rows_plan) is this share of ID_SWP_DZ: the rows
+ * see each step at their own noise (the accelerometer's vibration needs the IMU's whole
+ * climb), and the experiment stays within the hover's height budget under a lossy link */
+#define SWP_DZ_ROWS 0.667f
 #define SWP_TAIL_S 1.5f
 #define SWP_WHITE_TAUS 4.0f  /* lags a step's transient lasts (thrust rows: whiteness) */
 #define SWP_WHITE_MIN_S 0.4f /* ... and at least this, s */
+/* imu_rpm_torque's levels */
 static const float SWP_SHARE_ROWS[EXP_SWP_LEVELS] = {1.0f, 0.55f, 0.8f, 0.35f};
 /* Under the IMU without the ESCs' torques the steps stay lower: a step near 3 g turns the
  * rotors near the frame rate, their first harmonic aliases close to 0 Hz and each top is one
  * random offset; lower steps turn them slower (their alias lies higher and swings within the
  * step, which lasts longer for the same climb), so the curve comes out closer although its
- * leverage is less. With the torques the rows' levels: k_tau's sd needs the higher steps'
+ * leverage is less. With the torques SWP_SHARE_ROWS: k_tau's sd needs the higher steps'
  * leverage (docs/identification.md, "The sweep's levels") */
 static const float SWP_SHARE_IMU[EXP_SWP_LEVELS] = {0.6f, 0.4f, 0.6f, 0.25f};
+/* The thrust rows see no vibration: every step at ID_SWP_THR. Within a given excursion what a
+ * step tells of the curve grows about with the cube of its height (a lower step is held
+ * longer, but not long enough to make up for its leverage). */
+static const float SWP_SHARE_THRUST[EXP_SWP_LEVELS] = {1.0f, 1.0f, 1.0f, 1.0f};
 static void sweep_plan(struct experiment *e, const struct app_params *p, float thr_h, float dz,
 		       const float share[EXP_SWP_LEVELS])
 {
@@ -414,9 +421,127 @@ static void sweep_plan(struct experiment *e, const struct app_params *p, float t
 	}
 }
 
+/* the thrust curve g(s) = (1 - c) s + c s^2 and its inverse */
+static float curve_g(float c, float s) { return (1.0f - c) * s + c * s * s; }
+static float curve_inv(float c, float gt)
+{
+	float b = 1.0f - c;
+	return c > 1e-4f ? (sqrtf(b * b + 4.0f * c * gt) - b) / (2.0f * c) : gt / fmaxf(b, 1e-4f);
+}
+
+/* With the thrust rows each step of the sweep is a dip, the rise to its level and a dip
+ * again: the first dip sinks the vehicle to -v0, the rise (a_u) carries it through to +v0 and
+ * the second dip (a_d) brings it to rest at its start height. The experiment brakes the climb
+ * itself rather than the altitude loop, whose collective goes through the mixer's MOT_SCALEj
+ * and so leaves a torque on a weaker rotor; and the excursion, v0^2 (1 / a_d + 1 / a_u) / 2
+ * below the start, is a quarter of a rise of the same frames braked at a_d, so each rise is
+ * held longer within the height budget dz. A dip's thrust is SWP_DN of the hover's: deeper
+ * dips would let the rise be held longer, but with the altitude loop's own answer to the
+ * step they take a slow, late attitude loop's authority (dips to half the hover thrust
+ * stopped several times as many such vehicles at the tilt limit as steps braked by the
+ * altitude loop alone; dips to SWP_DN, as many).
+ * The dithers pause through a dip (their trough, up to 0.6 of the hover throttle, would clip
+ * at 0 and leave the attitude loop no room). The pattern takes at most SWP_PATTERN of a period, rise
+ * and dips shortened alike; the dips' depth then balances the rise's impulse over the frames
+ * as rounded. The whiteness test leaves out the rise with the motor's settling after it
+ * (swp_white) and each dip's first transient (swp_white_dn). */
+#define SWP_DN 0.7f
+#define SWP_DN_FLOOR 0.3f /* a dip never deeper than this share of the hover's thrust */
+#define SWP_PATTERN 0.8f  /* a pattern's frames at most this share of the period */
+#define SWP_HEADROOM 0.5f /* sweep_rotors */
+/* On a lossy link a pattern's rise is cut to SWP_A_LOSSY_G g above the weight (plan
+ * EXP_SWP_LEVELS, the dips balancing it as for a full rise) when a frame was lost within
+ * SWP_LOSS_S before the pattern (rows_level). The plant holds the last throttles through lost
+ * frames: each one lost at a rise's end holds the rise instead of the dip, (r_u - r_d) g dt of
+ * vertical speed the altitude loop must brake; at a full rise of 2.5-3 g that is 0.3 m/s a frame
+ * on a 90 Hz link, and a run of lost frames there took the vehicle 0.4-0.55 m past its height
+ * under 20 % loss. */
+#define SWP_A_LOSSY_G 1.0f
+#define SWP_LOSS_S 2.0f
+static void rows_plan(struct experiment *e, const struct app_params *p, float thr_h, float dz)
+{
+	const struct exp_cfg *cf = &e->cfg;
+	float c = p->mot_curve, g = p->veh_grav, gh = curve_g(c, thr_h);
+	float ad = g * (1.0f - SWP_DN), cap = SWP_PATTERN * (float)e->swp_per;
+	for (int k = 0; k < EXP_SWP_PLANS; k++) {
+		bool lossy = k == EXP_SWP_LEVELS; /* the lossy link's rise: the first level's, cut */
+		float top = thr_h + sc_to_float(e->swp_thr[lossy ? 0 : k]),
+		      ru = gh > 0.0f ? curve_g(c, top) / gh : 1.0f;
+		if (lossy) {
+			ru = fminf(ru, 1.0f + SWP_A_LOSSY_G);
+			e->swp_thr[k] = ru > 1.0f ? sc_from_float(curve_inv(c, ru * gh) - thr_h) : SC_ZERO;
+		}
+		float au = g * (ru - 1.0f);
+		e->swp_len[k] = e->swp_dn_len[k] = 0u;
+		e->swp_ratio[k] = e->swp_dn_ratio[k] = 1.0f;
+		e->swp_dn[k] = SC_ZERO;
+		if (!(au > 0.0f) || !(cf->swp_thr > 0.0f))
+			continue;
+		float v0 = sqrtf(2.0f * dz / (1.0f / ad + 1.0f / au));
+		float n = 2.0f * v0 / au * e->inv_dt_nom, m = v0 / ad * e->inv_dt_nom;
+		float sh = 2.0f * m + n > cap ? cap / (2.0f * m + n) : 1.0f;
+		uint32_t nn = (uint32_t)(n * sh), mm = (uint32_t)ceilf(m * sh);
+		nn = nn < 1u ? 1u : nn;
+		mm = mm < 1u ? 1u : mm;
+		float rdk = fmaxf(1.0f - (ru - 1.0f) * (float)nn / (2.0f * (float)mm), SWP_DN_FLOOR);
+		e->swp_len[k] = nn;
+		e->swp_dn_len[k] = mm;
+		e->swp_ratio[k] = ru;
+		e->swp_dn_ratio[k] = rdk;
+		e->swp_dn[k] = sc_from_float(curve_inv(c, rdk * gh) - thr_h);
+	}
+	/* the excited frames by the end of the steps (swp_end): a pattern ends before it */
+	e->swp_kmax = (uint32_t)(cf->exc_time * e->inv_dt_nom + 0.5f);
+}
+
+/* With the thrust rows each rotor's rise and dips multiply its own hover thrust by the
+ * level's ratios (swp_ratio, swp_dn_ratio): a rotor weaker than its MOT_SCALEj hovers at a
+ * higher throttle (the attitude integral's torque makes up for it), and a step of the same
+ * throttle on every rotor would move its thrust less than the others', a torque step as
+ * large as the step's thrust times the rotor's shortfall. Scaled alike, the thrusts keep the
+ * hover's balance of torques through the step. The rise takes the rotor of the highest hover
+ * throttle at most SWP_HEADROOM of its way to MOT_THR_MAX (the dips shallower with it): the
+ * attitude loop, the dithers and the altitude loop's answer to the step need the rest; a
+ * vehicle of low thrust-to-weight otherwise holds the rise at MOT_THR_MAX on every rotor,
+ * without authority over its attitude. Each rotor's hover
+ * throttle is its mean over the settle (no excitation), the curve MOT_CURVE's. Once,
+ * between frames, when the settle ended; until then the step takes the common steps. */
+static void sweep_rotors(struct experiment *e)
+{
+	if (e->swp_rotors || e->thr_n == 0u || !app_f_le(e->t_settle, e->t_phase))
+		return;
+	float c = e->swp_curve, tm = e->swp_thr_max, y[HAL_ROTORS], ym = 0.0f;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		y[j] = sc_to_float(e->thr_sum[j]) / (float)e->thr_n;
+		ym = fmaxf(ym, y[j]);
+	}
+	float gm = curve_g(c, ym), rmax = gm > 0.0f ? curve_g(c, ym + SWP_HEADROOM * (tm - ym)) / gm : 1.0f;
+	for (int k = 0; k < EXP_SWP_PLANS; k++) {
+		float ru = e->swp_ratio[k], r = fminf(ru, rmax), rd = e->swp_dn_ratio[k];
+		if (r < ru && ru > 1.0f) /* the dips balance the lower rise */
+			rd = 1.0f - (1.0f - rd) * (r - 1.0f) / (ru - 1.0f);
+		for (int j = 0; j < HAL_ROTORS; j++) {
+			float gy = curve_g(c, y[j]);
+			float top = fminf(curve_inv(c, r * gy), tm), dn = fmaxf(curve_inv(c, rd * gy), 0.0f);
+			e->swp_thr_r[k][j] = r > 1.0f && top > y[j] ? sc_from_float(top - y[j]) : SC_ZERO;
+			e->swp_dn_r[k][j] = rd < 1.0f && dn < y[j] ? sc_from_float(dn - y[j]) : SC_ZERO;
+		}
+	}
+	e->swp_rotors = true;
+}
+
 /* ---------------------------------------------------------------- contract */
 
 bool exp_available(int id) { return id >= 1 && id <= 6; }
+
+float exp_rotor_span_s(const struct app_params *p)
+{
+	struct exp_cfg c;
+	cfg_resolve(&c, p);
+	if (!c.exc_null || !(c.swp_thr > 0.0f))
+		return 0.0f;
+	return c.exc_time * (1.0f - 0.01f * (float)MOTOR_ID_LAST_PCT) + SWP_TAIL_S;
+}
 
 int exp_start(struct experiment *e, int id, const struct app_params *p, enum exp_source src, char *why, size_t cap)
 {
@@ -713,11 +838,21 @@ static void thrust_rotor_begin(struct experiment *e, const struct app_params *p,
 	if (cf->exc_null) /* rotor 1's excitation alone (the paper's) keeps its amplitude */
 		e->exc_cap = hover_cap(thr_h, cf->exc_amp + cf->exc_ofs);
 	cap_say(e, thr_h);
-	sweep_plan(e, p, thr_h, SWP_DZ_ROWS * cf->swp_dz, SWP_SHARE_ROWS);
+	sweep_plan(e, p, thr_h, SWP_DZ_ROWS * cf->swp_dz, SWP_SHARE_THRUST);
+	rows_plan(e, p, thr_h, SWP_DZ_ROWS * cf->swp_dz);
+	e->swp_curve = p->mot_curve;
+	e->swp_thr_max = isfinite(p->mot_thr_max) ? p->mot_thr_max : 1.0f;
+	for (int j = 0; j < HAL_ROTORS; j++)
+		e->thr_sum[j] = SC_ZERO;
+	e->thr_n = 0u;
+	e->swp_rotors = false; /* the union's memory held an earlier phase's estimator */
+	e->swp_lost = e->swp_cut = false;
+	e->swp_lost_k = e->swp_pat = e->swp_pat_n = e->swp_n_pat = e->swp_n_cut = 0u;
 	/* a step and the motor's settling after it (the lags of the test's range, up to a
 	 * slow prior's, and the longest delay) stay out of the whiteness test */
 	float settle = fmaxf(SWP_WHITE_TAUS * cf->mot_tau, SWP_WHITE_MIN_S);
 	e->swp_white = (uint16_t)((float)MOTOR_ID_DELAYS + settle * e->inv_dt_nom + 0.5f);
+	e->swp_white_dn = (uint16_t)((float)MOTOR_ID_DELAYS + SWP_WHITE_TAUS * cf->mot_tau * e->inv_dt_nom + 0.5f);
 	e->est_live = 0x0Fu;
 	*xpp = xp;
 }
@@ -897,6 +1032,9 @@ static void rotor_end(struct experiment *e, const struct app_params *p)
 			    : why[0]             ? why
 						 : "kf rejected";
 	int sev = ok ? APP_SEV_INFO : APP_SEV_WARNING;
+	if (e->swp_n_cut > 0u) /* the lossy link's rule (rows_plan) */
+		say(e, APP_SEV_INFO, "ID sweep: %d/%d rises cut to %.1f g, frames lost", (int)e->swp_n_cut,
+		    (int)e->swp_n_pat, (double)(e->swp_ratio[EXP_SWP_LEVELS] - 1.0f));
 	say(e, sev, "ID kf %.3f +/- %.3f %s%s", (double)mr.kf, (double)mr.kf_sd, ok ? "N " : "rejected: ", why_f);
 	say(e, sev, "ID ktau %.4f +/- %.4f %s%s", (double)mr.ktau, (double)mr.ktau_sd,
 	    ok ? "N m " : "rejected: ", why_t);
@@ -1487,20 +1625,54 @@ static void null_dither(struct experiment *e, bool running, scalar_t d, struct e
  * between steps), the steps half a period into the excitation, at the levels in turn. Before
  * the null dither (which counts the excited frames in rot_k). The caller scales it by the
  * tilt's back-off: a collective step is a torque step on a rotor weaker than its MOT_SCALEj. */
+/* The sweep's clock, once per running frame: the plant's frames since the excitation began,
+ * lost ones included. Through lost frames the plant held the last throttles, a step's among
+ * them, so a step lasts its planned time, not its planned count of delivered frames (under
+ * 20 % loss that is a quarter longer, and a step's climb grows as its time squared). */
+static uint32_t sweep_clock(struct experiment *e)
+{
+	if (e->rot_k > 0u)
+		e->swp_k += e->fr_span - 1u;
+	return e->swp_k++;
+}
+
 static scalar_t sweep_step(struct experiment *e, bool running)
 {
 	if (!running)
 		return SC_ZERO;
-	/* the sweep's clock counts the plant's frames: through the lost frames the plant held
-	 * the last throttles, a step's among them, so a step lasts its planned time, not its
-	 * planned count of delivered frames (under 20 % loss that is a quarter longer, and a
-	 * step's climb grows as its time squared) */
-	if (e->rot_k > 0u)
-		e->swp_k += e->fr_span - 1u;
-	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = e->swp_k + per / 2u;
+	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = sweep_clock(e) + per / 2u;
 	uint32_t ph = kk % per, lv = (kk / per) % EXP_SWP_LEVELS;
-	e->swp_k++;
 	return ph < e->swp_len[lv] && app_f_lt(e->t_phase, e->swp_end) ? e->swp_thr[lv] : SC_ZERO;
+}
+
+/* The thrust rows' sweep (rows_plan): this frame's plan (-1: none) and whether it is the
+ * rise (else a dip), at the sweep's clock k (sweep_clock). The first pattern starts half a
+ * period into the excitation, and a pattern only if it ends by swp_kmax. At a pattern's first
+ * frame its plan is chosen: its level's, or the lossy link's cut rise (EXP_SWP_LEVELS) when
+ * a frame was lost within SWP_LOSS_S before it. */
+static int rows_level(struct experiment *e, bool running, uint32_t k, bool *up)
+{
+	uint32_t per = e->swp_per ? e->swp_per : 1u, kk = k + per / 2u;
+	uint32_t ph = kk % per, pat = kk / per, lv = pat % EXP_SWP_LEVELS;
+	if (!running || kk < per)
+		return -1;
+	if (pat != e->swp_pat) {
+		e->swp_pat = pat;
+		uint32_t k0 = k - ph; /* the pattern's first frame; a frame lost since counts too */
+		e->swp_cut = e->swp_lost &&
+			     (e->swp_lost_k >= k0 || (float)(k0 - e->swp_lost_k) < SWP_LOSS_S * e->inv_dt_nom);
+	}
+	lv = e->swp_cut ? EXP_SWP_LEVELS : lv;
+	uint32_t n = e->swp_len[lv], m = e->swp_dn_len[lv], len = 2u * m + n;
+	if (n == 0u || ph >= len || k + (len - ph) > e->swp_kmax)
+		return -1;
+	if (pat != e->swp_pat_n) { /* flown: counted once */
+		e->swp_pat_n = pat;
+		e->swp_n_pat++;
+		e->swp_n_cut += e->swp_cut ? 1u : 0u;
+	}
+	*up = ph >= m && ph < m + n;
+	return (int)lv;
 }
 
 /* The inertia axis' gyro reading w an outlier (INR_GATE_W): its change since the filters'
@@ -1629,14 +1801,30 @@ static void phase_step(struct experiment *e, const struct exp_input *in, struct 
 		if (e->cfg.exc_null && n >= 1)
 			motor_id_step(&e->mid, tp, fm, tm, use);
 		scalar_t d = running ? excite_update(&e->exc) : SC_ZERO;
-		scalar_t d0 = e->cfg.exc_null ? sc_mul(e->exc_gain, sweep_step(e, running)) : SC_ZERO;
-		if (d0 != SC_ZERO)
-			motor_id_white_pause(&e->mid, e->swp_white);
+		bool up = false;
+		if (e->fr_span > 1u) { /* frames lost before this one (the lossy link's rule) */
+			e->swp_lost = true;
+			e->swp_lost_k = e->swp_k;
+		}
+		int lv = e->cfg.exc_null && running ? rows_level(e, running, sweep_clock(e), &up) : -1;
+		if (lv >= 0)
+			motor_id_white_pause(&e->mid, up ? e->swp_white : e->swp_white_dn);
+		if (!running && n >= 1) { /* each rotor's hover throttle (sweep_rotors) */
+			for (int j = 0; j < HAL_ROTORS; j++)
+				e->thr_sum[j] = sc_add(e->thr_sum[j], tp[j]);
+			e->thr_n++;
+		}
 		out->thr_delta[0] = sc_mul(sc_mul(e->exc_gain, e->exc_cap), d);
 		if (e->cfg.exc_null) {
 			null_dither(e, running, d, out);
-			for (int j = 0; j < HAL_ROTORS; j++)
-				out->thr_delta[j] = sc_add(out->thr_delta[j], d0);
+			for (int j = 0; lv >= 0 && !up && j < HAL_ROTORS; j++) /* a dip: the dithers pause */
+				out->thr_delta[j] = SC_ZERO;
+			/* each rotor's rise or dip once planned, the common one before */
+			int l = lv >= 0 ? lv : 0;
+			const scalar_t *st = !e->swp_rotors ? NULL : (up ? e->swp_thr_r[l] : e->swp_dn_r[l]);
+			scalar_t d0 = lv >= 0 ? sc_mul(e->exc_gain, up ? e->swp_thr[l] : e->swp_dn[l]) : SC_ZERO;
+			for (int j = 0; lv >= 0 && j < HAL_ROTORS; j++)
+				out->thr_delta[j] = sc_add(out->thr_delta[j], st ? sc_mul(e->exc_gain, st[j]) : d0);
 		}
 	} else if (k == PK_INR_X || k == PK_INR_Y || k == PK_INR_Z) {
 		inertia_step(e, in, out, (unsigned)(k - PK_INR_X), n, running, use);

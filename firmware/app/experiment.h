@@ -42,6 +42,8 @@
 #define EXP_TILT_SP_DEG 5.0f
 #define EXP_HEIGHT_SOFT_M 0.75f /* beyond this climb or sink since the start the excitation halves too */
 #define EXP_SWP_LEVELS 4        /* the IMU rotor experiment's sweep levels */
+/* ... and with the thrust rows the lossy link's cut rise after them (rows_plan) */
+#define EXP_SWP_PLANS (EXP_SWP_LEVELS + 1)
 
 enum exp_state { EXP_IDLE = 0, EXP_RUNNING, EXP_FINISHED, EXP_ABORTED };
 
@@ -164,8 +166,8 @@ struct experiment {
 	struct excite exc3; /* IMU rotor experiment: the collective dither */
 	/* rotor experiment: the sweep's steps (throttle above hover) and their frames, cycled,
 	 * one per period; with the thrust rows, the frames a step keeps out of the whiteness test */
-	uint32_t swp_len[EXP_SWP_LEVELS], swp_per;
-	scalar_t swp_thr[EXP_SWP_LEVELS];
+	uint32_t swp_len[EXP_SWP_PLANS], swp_per;
+	scalar_t swp_thr[EXP_SWP_PLANS];
 	uint16_t swp_white;
 	float swp_end;        /* phase time after which no step starts */
 	struct exp_rmodel rm; /* IMU source: the modelled thrusts (inertia, validation) */
@@ -187,13 +189,31 @@ struct experiment {
 	/* the estimator of the current phase: phases never overlap, so they share the memory
 	 * (each phase_begin initialises its own; phase_end reads it before the next begins) */
 	union {
-		struct {                             /* rotor coefficients */
-			struct ident_rotor rot;      /* rotor 1, model given (and the paper's plain) */
-			struct motor_id mid;         /* every rotor, the motor model found (motor_id.h) */
-			struct imu_id imid;          /* the IMU source's collective model (imu_id.h) */
-			struct imu_scale isc;        /* with the speeds: each rotor's effectiveness (imu_scale.h) */
-			float thr_h[HAL_ROTORS];     /* the throttles at the IMU rotor phase's start */
-			bool isc_early;              /* the early scales were solved (scales_early) */
+		struct {                         /* rotor coefficients */
+			struct ident_rotor rot;  /* rotor 1, model given (and the paper's plain) */
+			struct motor_id mid;     /* every rotor, the motor model found (motor_id.h) */
+			struct imu_id imid;      /* the IMU source's collective model (imu_id.h) */
+			struct imu_scale isc;    /* with the speeds: each rotor's effectiveness (imu_scale.h) */
+			float thr_h[HAL_ROTORS]; /* the throttles at the IMU rotor phase's start */
+			bool isc_early;          /* the early scales were solved (scales_early) */
+			/* thrust rows: each step a dip of swp_dn_len frames, the rise (swp_len
+			 * frames), a dip again (rows_plan); the dips' throttle below hover
+			 * (swp_dn, negative) and each rotor's rise and dips (sweep_rotors), from
+			 * its throttle summed over the settle (thr_n frames) and each level's
+			 * thrust ratios over the hover's */
+			uint32_t swp_dn_len[EXP_SWP_PLANS], swp_kmax;
+			scalar_t swp_dn[EXP_SWP_PLANS];
+			scalar_t swp_thr_r[EXP_SWP_PLANS][HAL_ROTORS], swp_dn_r[EXP_SWP_PLANS][HAL_ROTORS];
+			scalar_t thr_sum[HAL_ROTORS];
+			uint32_t thr_n;
+			float swp_ratio[EXP_SWP_PLANS], swp_dn_ratio[EXP_SWP_PLANS], swp_curve, swp_thr_max;
+			/* the lossy link's rule (rows_level): the sweep's clock at the last lost
+			 * frame (swp_lost: one was lost in the phase), the pattern last chosen
+			 * (swp_cut: its rise cut) and the one last counted; patterns flown, cut */
+			uint32_t swp_lost_k, swp_pat, swp_pat_n, swp_n_pat, swp_n_cut;
+			bool swp_lost, swp_cut;
+			bool swp_rotors;             /* swp_thr_r, swp_dn_r are planned */
+			uint16_t swp_white_dn;       /* the frames a dip keeps out of the whiteness test */
 			scalar_t pat[2][HAL_ROTORS]; /* the two null-space patterns (excite_null_pattern) */
 			scalar_t ofs;                /* ID_EXC_OFS: the offset's amplitude */
 		};
@@ -215,6 +235,13 @@ struct experiment {
 	int q_head, q_n;
 	bool pump_ready; /* a step ran since the last line was handed out */
 };
+
+/* The span (s) of the rotor experiment's data behind the motor model's estimates with the
+ * thrust rows and the throttle sweep: its last stage, MOTOR_ID_LAST_PCT of ID_EXC_TIME to the
+ * phase's end (the sweep's tail included); 0 without the sweep. Under a drift of k_f the
+ * identified curve, and so the model's hover thrust, is off by up to the drift over this span
+ * (env_kf.h). */
+float exp_rotor_span_s(const struct app_params *p);
 
 /* Is experiment `id` (1..6) built into this firmware? */
 bool exp_available(int id);

@@ -83,6 +83,8 @@ void line_format(const struct line *l, char *out, size_t cap)
 		snprintf(out, cap, l->fmt, ARG_S(0), ARG_S(1));
 	else if (!strcmp(k, "df"))
 		snprintf(out, cap, l->fmt, ARG_D(0), ARG_F(1));
+	else if (!strcmp(k, "ddf"))
+		snprintf(out, cap, l->fmt, ARG_D(0), ARG_D(1), ARG_F(2));
 	else if (!strcmp(k, "ssf"))
 		snprintf(out, cap, l->fmt, ARG_S(0), ARG_S(1), ARG_F(2));
 	else if (!strcmp(k, "sfff"))

@@ -124,7 +124,8 @@ PARAM(ID_COL_AMP, id_col_amp, 0.03f, 0.0f, 0.2f, "",
       "IMU rotor experiment: amplitude of the collective dither (throttle, on every rotor)")
 PARAM(ID_SWP_THR, id_swp_thr, 0.25f, 0.0f, 0.8f, "",
       "Rotor experiment: the throttle sweep's step above hover (0: no sweep), within ID_SWP_DZ")
-PARAM(ID_SWP_DZ, id_swp_dz, 0.3f, 0.05f, 1.2f, "m", "Rotor experiment: climb each throttle sweep step may cost")
+PARAM(ID_SWP_DZ, id_swp_dz, 0.3f, 0.05f, 1.2f, "m",
+      "Rotor experiment: climb each throttle sweep step may cost (thrust rows: 2/3 of it, sinking and back)")
 PARAM(ID_IMU_TIME, id_imu_time, 30.0f, 5.0f, 300.0f, "s",
       "IMU rotor experiment: duration of the excitation (the accelerometer's vibration needs more sweeps than thrust rows need)")
 PARAM(ID_IZZ_PRI_SD, id_izz_pri_sd, 0.0f, 0.0f, 1.0f, "",

@@ -31,6 +31,8 @@
 #define MOTOR_ID_DELAYS 5
 #define MOTOR_ID_LAGS 3
 #define MOTOR_ID_STAGES 4
+#define MOTOR_ID_LAST_PCT \
+	55u /* the last stage, whose data alone make the estimates, starts here (% of the planned frames) */
 #define MOTOR_ID_TAU_MIN 0.0005f
 #define MOTOR_ID_TAU_MAX 0.5f
 #define MOTOR_ID_WLAGS 3 /* autocorrelation lags of the whiteness test */

@@ -77,7 +77,7 @@ static float ref_c(const struct motor_id *m) { return mid_u_to_float(m->c0); }
  * 0.5 % and k_f with it (a step's transient ties k_f to the lag), several of k_f's sds; the
  * shift shrinks about as the square of the grid's width. */
 static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f, 1.08f};
-static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 45u, 55u};
+static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 45u, MOTOR_ID_LAST_PCT};
 /* The last grid's half-width (log): LAST_SDS of the third stage's lag sds plus LAST_BIAS (that
  * stage's own interpolation shift, up to half a percent, and its lag states' settling), within
  * [log LAST_RATIO_MIN, log 1.08]; a third stage that walked (a wider grid) leaves it at 1.08 */

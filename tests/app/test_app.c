@@ -1234,52 +1234,76 @@ UNIT_TEST(env_hover_torque_gain_follows_the_learned_kf)
 	}
 }
 
-/* The rotor experiment's throttle sweep on a link that loses every third frame: the plant
- * holds the last throttles through a lost frame, a step's among them, so each step must end
- * after its planned plant time (swp_len frames), not after that many delivered frames. */
-UNIT_TEST(app_sweep_steps_last_their_plant_time_through_lost_frames)
+/* The rotor experiment's throttle sweep, losing every `lose`-th frame (0: none): the rises
+ * seen (steps), those that lost frames, those that lasted more plant frames than their plan,
+ * and the rotor phase's count of patterns flown and cut (rows_level). */
+struct sweep_seen {
+	int steps, lost_in_step, over;
+	uint32_t n_pat, n_cut;
+};
+static struct sweep_seen sweep_fly(struct unit_ctx *u, int lose)
 {
-	if (!exp_available(1))
-		return;
+	struct sweep_seen s = {0, 0, 0, 0u, 0u};
 	struct rig *r = rig_hovering(u);
 	char why[64] = "";
 	CHECK(app_cmd_experiment(&r->a, 1.0f, 7, why, sizeof why) == APP_IN_PROGRESS);
 	const struct experiment *e = &r->a.exp;
-	uint32_t len_max = 0;
 	long first = -1, last = -1, frame = 0;
-	int steps = 0, lost_in_step = 0, lost_since = 0, over = 0;
+	int lost_since = 0;
 	for (int i = 0; i < 90 * 40 && r->a.mode == APP_EXPERIMENT; i++) {
 		r->t += 1.0 / 90.0;
 		r->h.now_us += FRAME_US;
 		frame++;
-		if (i % 3 == 2) { /* lost: the plant holds the last throttles */
+		if (lose > 0 && i % lose == lose - 1) { /* lost: the plant holds the last throttles */
 			lost_since++;
 			continue;
 		}
 		frame_at(r, r->t);
 		tick(r);
-		for (int k = 0; k < EXP_SWP_LEVELS; k++)
-			len_max = e->swp_len[k] > len_max ? e->swp_len[k] : len_max;
+		if (r->a.mode != APP_EXPERIMENT)
+			break;
+		s.n_pat = e->swp_n_pat;
+		s.n_cut = e->swp_n_cut;
+		/* a rise's plan: the cut one once a frame was lost, else the levels' longest */
+		uint32_t len = lose > 0 ? e->swp_len[EXP_SWP_LEVELS] : 0u;
+		for (int k = 0; lose == 0 && k < EXP_SWP_LEVELS; k++)
+			len = e->swp_len[k] > len ? e->swp_len[k] : len;
 		float mean = 0.0f;
 		for (int j = 0; j < HAL_ROTORS; j++)
 			mean += sc_to_float(r->a.exp_out.thr_delta[j]) / (float)HAL_ROTORS;
-		bool in_step = mean > 0.02f; /* the dithers sum to 0 over the rotors; a step does not */
+		bool in_step = mean > 0.02f; /* the dithers sum to 0 over the rotors; a rise does not */
 		if (in_step) {
 			if (first < 0) {
 				first = frame;
 				lost_since = 0;
 			}
 			last = frame;
-		} else if (first >= 0) { /* the step's plant frames: to the last delivered at its top */
-			steps++;
-			lost_in_step += lost_since > 0;
-			over += (uint32_t)(last - first + 1) > len_max;
+		} else if (first >= 0) { /* the rise's plant frames: to the last delivered at its top */
+			s.steps++;
+			s.lost_in_step += lost_since > 0;
+			s.over += len < 3u || (uint32_t)(last - first + 1) > len;
 			first = -1;
 		}
 		lost_since = first >= 0 ? lost_since : 0;
 	}
-	CHECK(steps >= 4 && lost_in_step >= 2 && len_max >= 3u);
-	CHECK(over == 0);
+	return s;
+}
+
+/* On a link that loses every third frame: the plant holds the last throttles through a lost
+ * frame, a rise's among them, so each rise must end after its planned plant time (swp_len
+ * frames), not after that many delivered frames; and every rise is cut (a frame lost within
+ * SWP_LOSS_S before its pattern). On a clean link none is. */
+UNIT_TEST(app_sweep_steps_last_their_plant_time_through_lost_frames)
+{
+	if (!exp_available(1))
+		return;
+	struct sweep_seen s = sweep_fly(u, 3);
+	CHECK(s.steps >= 4 && s.lost_in_step >= 2);
+	CHECK(s.over == 0);
+	CHECK(s.n_pat >= 4u && s.n_cut == s.n_pat);
+	s = sweep_fly(u, 0);
+	CHECK(s.steps >= 4 && s.lost_in_step == 0 && s.over == 0);
+	CHECK(s.n_pat >= 4u && s.n_cut == 0u);
 }
 
 /* k_f tracked from the accelerometer: the rotors' speeds at a harmonic of the frame rate fold

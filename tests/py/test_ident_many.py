@@ -81,14 +81,15 @@ def wrong(p, veh):
 
 
 def kf_summary(kf):
-    """k_f's relative errors and sds (pairs) in one line: rms error, median and largest sd,
-    rms of error / sd and how many lie beyond 3 sds."""
+    """k_f's relative errors and sds (pairs) in one line: rms error, median, 95th percentile and
+    largest sd, rms of error / sd and how many lie beyond 3 sds."""
     if not kf:
         return "k_f: none accepted"
     z = [e / sd for e, sd in kf]
     sds = sorted(sd for _, sd in kf)
     return (f"k_f of {len(kf)} accepted: error {100 * math.sqrt(sum(e * e for e, _ in kf) / len(kf)):.3f} % rms, "
-            f"sd {100 * sds[len(sds) // 2]:.3f} % median ({100 * sds[-1]:.3f} % at most), error / sd "
+            f"sd {100 * sds[len(sds) // 2]:.3f} % median, {100 * sds[(95 * len(sds)) // 100]:.3f} % 95th pct "
+            f"({100 * sds[-1]:.3f} % at most), error / sd "
             f"{math.sqrt(sum(x * x for x in z) / len(z)):.3f} rms, {sum(abs(x) > 3 for x in z)} beyond 3")
 
 
