@@ -80,7 +80,11 @@ static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f, 1.08f};
 static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 45u, MOTOR_ID_LAST_PCT};
 /* The last grid's half-width (log): LAST_SDS of the third stage's lag sds plus LAST_BIAS (that
  * stage's own interpolation shift, up to half a percent, and its lag states' settling), within
- * [log LAST_RATIO_MIN, log 1.08]; a third stage that walked (a wider grid) leaves it at 1.08 */
+ * [log LAST_RATIO_MIN, log 1.08]; a minimum beyond the third grid leaves it at 1.08. A
+ * third grid widened by the second stage's walk (to the root of its ratio, 1.26) narrows it
+ * too: its minimum, refined on the criterion (lag_newton), lies as close to the truth as a
+ * 1.08 grid's, and a last grid kept at 1.08 biased k_f by up to about one of its sds on every
+ * flight (docs/identification.md, "Selection by prediction error") */
 #define LAST_SDS 4.0f
 #define LAST_BIAS 0.01f
 #define LAST_RATIO_MIN 1.02f
@@ -598,7 +602,7 @@ void motor_id_refine(struct motor_id *m)
 		/* the lag states at the new taus: quadratic interpolation in log tau of the old.
 		 * A minimum outside the grid narrows it less (the grid walks towards it) */
 		float nr = stage_ratio[next];
-		if (last && d == bd && r <= nr * 1.001f && fabsf(x) <= 1.0f && fb_pos(kx) && m->n_stat > 0u) {
+		if (last && d == bd && fabsf(x) <= 1.0f && fb_pos(kx) && m->n_stat > 0u) {
 			float sd_ln = logf(r) * sqrtf(1.0f / ((float)m->n_stat * kx));
 			nr = expf(clampf(LAST_BIAS + LAST_SDS * sd_ln, logf(LAST_RATIO_MIN), logf(nr)));
 		}
