@@ -176,7 +176,7 @@ def test_light_vehicles_kf_sd_is_honest_over_seeds(tmp_path):
     """k_f's sd per vehicle, judged over seeds, on light, strong vehicles (hover throttle at
     most 0.10): four random ones, each flown on LIGHT_SEEDS seeds, error / sd a unit normal
     over them: its rms within rms_bounds (4.5 sds of chi-square's own spread: 1e-5 apart for a
-    calibrated sd, a few in 10,000 at the 1.06 measured over 480 such flights) for each vehicle and
+    calibrated sd, a few in 10,000 at the 1.06 measured over 670 such flights) for each vehicle and
     pooled. The first one's motor is 73-79 ms slow, 2.4-2.6 times the default prior (ID_MOT_TAU
     0.03), and on time: its second lag grid walks (motor_id_refine), the last grid narrows
     after it. A flight the whiteness test rejects (its designed false alarm, about 1 %) is left
