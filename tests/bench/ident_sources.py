@@ -69,7 +69,6 @@ def vehicle(rng):
 
 def fly(veh, seed, how, tmp):
     d = Path(tmp)
-    (d / f"v{seed}{how}.json").write_text(json.dumps(veh))
     prm = d / f"p{seed}{how}.parm"
     steps = [f"param ID_SEED {seed}"]
     sensors = "imu,rpm,thrust,torque"
@@ -84,6 +83,7 @@ def fly(veh, seed, how, tmp):
         if how in ("imu_only", "imu", "imu_tq"):
             steps += [f"param MOT_SCALE{j + 1} {s!r}" for j, s in enumerate(veh["rotor_scale"])]
     steps += ["arm", "takeoff 5", "wait hold", "experiment 6", "wait experiment"]
+    (d / f"v{seed}{how}.json").write_text(json.dumps(veh))  # with the ESCs' offset, noise and KV
     r = subprocess.run([str(SIL), "--seed", str(seed), "--vehicle", str(d / f"v{seed}{how}.json"), "--sensors", sensors,
                         "--params", str(prm), "--duration", "900", "--script", "; ".join(steps)],
                        capture_output=True, text=True, timeout=300, check=False)
