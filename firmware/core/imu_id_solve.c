@@ -531,42 +531,88 @@ void imu_id_refine(struct imu_id *m)
 	xmap_set(m); /* the new grid's step, the references the scales moved */
 }
 
-/* z solving (I - H W) z = v by Gaussian elimination with partial pivoting; false if singular */
-static bool solve_lev(const double h[NP][NP], const double w[NP][NP], const double v[NP], double z[NP])
+/* The eigen-decomposition a = v diag(d) v' of a symmetric matrix (cyclic Jacobi; a is
+ * overwritten). */
+static void eig_sym(double a[NP][NP], double v[NP][NP], double d[NP])
 {
-	double a[NP][NP + 1];
-	for (unsigned i = 0; i < NP; i++) {
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++)
+			v[i][k] = i == k ? 1.0 : 0.0;
+	for (unsigned sweep = 0; sweep < 30u; sweep++) {
+		double off = 0.0, dia = 0.0;
+		for (unsigned p = 0; p < NP; p++) {
+			dia += a[p][p] * a[p][p];
+			for (unsigned q = p + 1; q < NP; q++)
+				off += a[p][q] * a[p][q];
+		}
+		if (!(off > 1e-30 * dia))
+			break;
+		for (unsigned p = 0; p < NP; p++)
+			for (unsigned q = p + 1; q < NP; q++) {
+				if (a[p][q] == 0.0)
+					continue;
+				double th = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+				double t = (th >= 0.0 ? 1.0 : -1.0) / (fabs(th) + sqrt(th * th + 1.0));
+				double c = 1.0 / sqrt(t * t + 1.0), s = t * c;
+				for (unsigned k = 0; k < NP; k++) {
+					double x = a[k][p], y = a[k][q];
+					a[k][p] = c * x - s * y;
+					a[k][q] = s * x + c * y;
+				}
+				for (unsigned k = 0; k < NP; k++) {
+					double x = a[p][k], y = a[q][k];
+					a[p][k] = c * x - s * y;
+					a[q][k] = s * x + c * y;
+				}
+				for (unsigned k = 0; k < NP; k++) {
+					double x = v[k][p], y = v[k][q];
+					v[k][p] = c * x - s * y;
+					v[k][q] = s * x + c * y;
+				}
+			}
+	}
+	for (unsigned i = 0; i < NP; i++)
+		d[i] = a[i][i];
+}
+
+/* A cluster's weight vector z = (I - H W)^-1/2 H j (CR2) for the projection j, given S = H^1/2
+ * (symmetric) and u = S j: with M = S W S (symmetric, its eigenvalues the cluster's leverages
+ * in [0, 1)), (I - H W)^-1/2 = S (I - M)^-1/2 S^-1, so z = S (I - M)^-1/2 u. False where a
+ * leverage reaches 1 (the cluster alone determines a direction). */
+static bool lev_half(const double s[NP][NP], const double w[NP][NP], const double u[NP], double z[NP])
+{
+	double sw[NP][NP], mm[NP][NP], p[NP][NP], mu[NP], y[NP];
+	for (unsigned i = 0; i < NP; i++)
 		for (unsigned k = 0; k < NP; k++) {
-			double hw = 0.0;
+			sw[i][k] = 0.0;
 			for (unsigned q = 0; q < NP; q++)
-				hw += h[i][q] * w[q][k];
-			a[i][k] = (i == k ? 1.0 : 0.0) - hw;
+				sw[i][k] += s[i][q] * w[q][k];
 		}
-		a[i][NP] = v[i];
-	}
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++) {
+			mm[i][k] = 0.0;
+			for (unsigned q = 0; q < NP; q++)
+				mm[i][k] += sw[i][q] * s[q][k];
+		}
+	eig_sym(mm, p, mu);
 	for (unsigned k = 0; k < NP; k++) {
-		unsigned p = k;
-		for (unsigned i = k + 1; i < NP; i++)
-			if (fabs(a[i][k]) > fabs(a[p][k]))
-				p = i;
-		if (!(fabs(a[p][k]) > 1e-9))
+		if (!(mu[k] < 1.0 - 1e-9))
 			return false;
-		for (unsigned q = 0; q <= NP; q++) {
-			double t = a[k][q];
-			a[k][q] = a[p][q];
-			a[p][q] = t;
-		}
-		for (unsigned i = k + 1; i < NP; i++) {
-			double f = a[i][k] / a[k][k];
-			for (unsigned q = k; q <= NP; q++)
-				a[i][q] -= f * a[k][q];
-		}
+		double pu = 0.0;
+		for (unsigned i = 0; i < NP; i++)
+			pu += p[i][k] * u[i];
+		y[k] = pu / sqrt(1.0 - (mu[k] > 0.0 ? mu[k] : 0.0));
 	}
-	for (unsigned i = NP; i-- > 0;) {
-		double t = a[i][NP];
-		for (unsigned q = i + 1; q < NP; q++)
-			t -= a[i][q] * z[q];
-		z[i] = t / a[i][i];
+	double t[NP];
+	for (unsigned i = 0; i < NP; i++) {
+		t[i] = 0.0;
+		for (unsigned k = 0; k < NP; k++)
+			t[i] += p[i][k] * y[k];
+	}
+	for (unsigned i = 0; i < NP; i++) {
+		z[i] = 0.0;
+		for (unsigned k = 0; k < NP; k++)
+			z[i] += s[i][k] * t[k];
 	}
 	return true;
 }
@@ -663,14 +709,17 @@ static double top_check(const struct imu_id *m, const float th[NP], const float 
 /* The clusters' variance factor for the projection j of the parameters: the cluster-robust
  * variance of j' theta over its white-noise variance, both on the frozen hypothesis' frames
  * (its residuals from theta, the whole flight's estimate). The cluster-robust variance is the
- * leverage-corrected one (CR3, the clusters' jackknife): with H = G^-1 of all the clusters, W_g
- * a cluster's Gram matrix and r_g its score (b_g - W_g theta),
- *     V = sum_g (z_g' r_g)^2,   (I - H W_g) z_g = H j,
- * which is the sum of the squared changes of j' theta when cluster g is left out. The plain
- * sandwich sum_g (j' H r_g)^2 is optimistic where a few clusters carry the information (the
- * sweep's top steps): a cluster of high leverage pulls the fit towards itself, so its own
- * residuals understate what it carries. Its degrees of freedom (Bell and McCaffrey's, for
- * white residuals): V is a weighted sum of chi^2_1 whose weights are the eigenvalues of the
+ * bias-reduced one (CR2, Bell and McCaffrey's): with H = G^-1 of all the clusters, W_g a
+ * cluster's Gram matrix and r_g its score (b_g - W_g theta),
+ *     V = sum_g (z_g' r_g)^2,   z_g = (I - H W_g)^-1/2 H j,
+ * unbiased for white residuals whatever each cluster's leverage. The plain sandwich
+ * sum_g (j' H r_g)^2 is optimistic where a few clusters carry the information (the sweep's
+ * top steps): a cluster of high leverage pulls the fit towards itself, so its own
+ * residuals understate what it carries. The jackknife (CR3, (I - H W_g)^-1 in place of the
+ * root) corrects that twice over: with the t's nu / (nu - 2) on top it overstated the
+ * variance by a fifth (test_imu_id.c, imu_id_leverage_var_over_sd2). The root comes from the
+ * symmetric form (lev_half). Its degrees of freedom (Bell and McCaffrey's, for white
+ * residuals): V is a weighted sum of chi^2_1 whose weights are the eigenvalues of the
  * clusters' matrix C_gh = delta_gh z_g' W_g z_g - (W_g z_g)' H (W_h z_h), so
  * nu = (tr C)^2 / tr(C^2); the estimate then follows a t with nu degrees of freedom, whose
  * variance nu / (nu - 2) the factor carries (*nu_out; 0 when there are not enough clusters).
@@ -724,6 +773,24 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 			v[i] += h[i][k] * (double)j[k];
 		vw += (double)j[i] * v[i];
 	}
+	/* H^1/2 (H is positive semi-definite: zero on the pinned parameters) and H^1/2 j */
+	double sh[NP][NP], u[NP];
+	{
+		double a[NP][NP], e[NP][NP], d[NP];
+		memcpy(a, h, sizeof a);
+		eig_sym(a, e, d);
+		for (unsigned i = 0; i < NP; i++)
+			for (unsigned k = 0; k < NP; k++) {
+				sh[i][k] = 0.0;
+				for (unsigned q = 0; q < NP; q++)
+					sh[i][k] += e[i][q] * sqrt(d[q] > 0.0 ? d[q] : 0.0) * e[k][q];
+			}
+		for (unsigned i = 0; i < NP; i++) {
+			u[i] = 0.0;
+			for (unsigned k = 0; k < NP; k++)
+				u[i] += sh[i][k] * (double)j[k];
+		}
+	}
 	/* the degrees of freedom from running sums, with c_g = W_g z_g, s_g = z_g' c_g and
 	 * q_g = c_g' H c_g: tr C = sum (s_g - q_g), tr C^2 = sum s_g^2 - 2 sum s_g q_g + tr((H S)^2),
 	 * S = sum c_g c_g' */
@@ -743,7 +810,7 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 			if (is_pinned(m, i))
 				r[i] = 0.0;
 		}
-		if (!solve_lev(h, w, v, z))
+		if (!lev_half(sh, w, u, z))
 			return INFINITY; /* a cluster alone determines the projection */
 		double zr = 0.0, sz = 0.0, qz = 0.0;
 		for (unsigned i = 0; i < NP; i++) {
