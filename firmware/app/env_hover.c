@@ -117,7 +117,7 @@ bool env_hover_ready(const struct env_hover *h) { return hover_est_converged(&h-
 
 void env_hover_on_hold(struct env_hover *h, const struct app_params *p, double t_s)
 {
-	h->pub_u = hover_est_u(&h->hov);
+	h->pub_u = hover_est_u_ahead(&h->hov);
 	h->pub_sd = hover_est_sd_err(&h->hov);
 	h->pub_cal_rel2 = 0.0f;
 	const struct env_acc_cal *c = &h->cal;

@@ -62,7 +62,7 @@ struct env_hover {
 	struct hover_est hov;
 	struct env_acc_cal cal;
 	bool pub_due;           /* a HOLD entry's HOV_* wait for env_hover_publish */
-	scalar_t pub_u, pub_sd; /* the hover throttle and its sd at that entry (hover_est_sd_err) */
+	scalar_t pub_u, pub_sd; /* the hover throttle at that entry, moved ahead by its lag, and its sd (hover_est.h) */
 	float pub_cal_rel2;     /* the accelerometer calibration's relative variance then (env_hover_on_hold) */
 	scalar_t kf8;           /* 8 VEH_KF (N at full throttle, all rotors) */
 	struct sc_recip kf8_r;  /* its reciprocal, for the step's division by it */

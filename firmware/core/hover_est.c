@@ -315,26 +315,49 @@ static scalar_t wander(const struct hover_est *s)
 	return sc_min(sc_add(var, sc_sq(sc_min(ex, SC(100.0)))), P_MAX_PCT2);
 }
 
+/* The factor from the innovations' mean to the estimate's lag (hover_est.h): the mean shows
+ * the lag of (1 - k) / k updates, the filters add tau_s, so 1 + tau_s k / (dt (1 - k)). */
+static scalar_t ahead_gain(const struct hover_est *s)
+{
+	scalar_t k = s->k_last;
+	if (!(k < SC(0.5)) || !(s->al_dt > SC_ZERO))
+		return SC(1.0);
+	return sc_add(SC(1.0), sc_div(sc_mul(k, sc_div(s->p.tau_s, s->al_dt)), sc_sub(SC(1.0), k)));
+}
+
+/* The move ahead, percent of theta: the innovations' mean times ahead_gain; none before two
+ * settled blocks, or with drift_per_s 0. */
+static scalar_t ahead_pct(const struct hover_est *s)
+{
+	if (s->b_count < 2u || !(s->p.drift_per_s > SC_ZERO))
+		return SC_ZERO;
+	return sc_clamp(sc_mul(s->e_mean, ahead_gain(s)), SC(-50.0), SC(50.0));
+}
+
+scalar_t hover_est_u_ahead(const struct hover_est *s)
+{
+	return sc_div(SC(1.0), sc_mul(s->theta, sc_add(SC(1.0), est_div_int(ahead_pct(s), 100u))));
+}
+
 scalar_t hover_est_sd_err(const struct hover_est *s)
 {
 	scalar_t v = s->p_pct2;
 	if (s->b_count >= 2u) {
-		/* the mean's square counted beyond twice its own noise's variance, that of the
-		 * average of white block means of variance r_eff / B with weight 1/2:
-		 * (r_eff / B) / 3 (a mean within its noise is no evidence of a bias) */
-		scalar_t e2 = sc_sub(sc_sq(s->e_mean), sc_mul(SC(2.0), est_div_int(s->r_eff, 3u * HOVER_EST_BLK)));
-		v = sc_add(sc_max(s->v_pct2, wander(s)), sc_max(e2, SC_ZERO));
-		/* a drift of drift_per_s: the estimate, a mean of the innovations of mean age
-		 * (1 - k) / k updates, lags it by that age and the filters' tau_s */
+		/* the innovations' mean's own noise: the average of white block means of variance
+		 * r_eff / B with weight 1/2, (r_eff / B) / 3 */
+		scalar_t vm = est_div_int(s->r_eff, 3u * HOVER_EST_BLK);
+		v = sc_max(s->v_pct2, wander(s));
 		if (s->p.drift_per_s > SC_ZERO) {
-			scalar_t age = SC(100.0); /* at most (a gain below dt / 100 s) */
-			if (s->k_last > sc_mul(s->al_dt, SC(0.01)))
-				age = sc_add(sc_div(sc_mul(s->al_dt, sc_sub(SC(1.0), s->k_last)), s->k_last),
-					     s->p.tau_s);
-			v = sc_add(v, sc_sq(sc_mul(sc_mul(SC(100.0), s->p.drift_per_s), sc_min(age, SC(100.0)))));
+			/* moved ahead by the mean (ahead_pct): the move's noise */
+			scalar_t g = ahead_gain(s);
+			v = sc_add(v, sc_mul(vm, sc_sq(g)));
+		} else {
+			/* not moved: the mean's square counted beyond twice its noise's variance (a
+			 * mean within its noise is no evidence of a bias) */
+			v = sc_add(v, sc_max(sc_sub(sc_sq(s->e_mean), sc_mul(SC(2.0), vm)), SC_ZERO));
 		}
 	}
-	return sc_mul(hover_est_u(s), est_div_int(sc_sqrt(v), 100u));
+	return sc_mul(hover_est_u_ahead(s), est_div_int(sc_sqrt(v), 100u));
 }
 
 bool hover_est_converged(const struct hover_est *s, scalar_t rel_sd)

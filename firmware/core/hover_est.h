@@ -51,17 +51,29 @@
  * consecutive block means (HOVER_EST_BLK), averaged over HOVER_EST_BLK_AVG blocks. Only
  * blocks that begin once the filter has settled count (P's decrease per update within
  * twice the process noise's increase): before, the innovations are its convergence, not
- * the noise. hover_est_sd_err's variance is the sum of
+ * the noise.
+ *
+ * Lag: the estimate is a mean of innovations of mean age (1 - k) / k updates, and the
+ * filters add tau_s: it lags a drift by that age, an error of the drift's sign on every
+ * vehicle (about 1.2 s, 0.05 % at 2.5 %/min: about half the error's sd in a hover). The
+ * innovations' mean over about the filter's memory (the average of the block means with
+ * weight 1/2 a block) is the error now, the lag of (1 - k) / k updates (in a drift the
+ * error is the same from update to update); times 1 + tau_s k / (dt (1 - k)) it is the whole
+ * lag, and hover_est_u_ahead is u_h moved ahead by it (with drift_per_s > 0). That holds at
+ * any drift rate: the sd carries the move's own noise, not a drift's bound. (The estimate's
+ * own slope over the settled blocks, some 4 s at a HOLD entry, shows the drift no better:
+ * its error is about the drift itself.) A convergence still under way (an error decaying
+ * through the filter's memory) shows a larger mean than the error now and is overtaken.
+ * hover_est_sd_err's variance is the sum of
  *  - the larger of V and the estimate's own wander: the variance of its values at the last
  *    HOVER_EST_BLK_AVG blocks' ends about their straight line, plus the line's change over
  *    half the window beyond what a drift of drift_per_s makes, squared (a vibration that
  *    folds slower than the blocks moves the estimate but not the block means' changes, and
  *    no battery moves k_f so fast);
- *  - the innovations' mean over about the filter's memory (the error now: a lag behind a
- *    drift), squared, counted beyond twice its own noise's variance;
- *  - the lag behind a drift of drift_per_s, which the innovations show only within their
- *    noise: the estimate is a mean of innovations of mean age (1 - k) / k updates, and the
- *    filters add tau_s.
+ *  - moved ahead: the move's noise, that of the innovations' mean, (r_eff / B) / 3 (the
+ *    average of white block means with weight 1/2), times the factor's square;
+ *  - with drift_per_s 0 (not moved): the innovations' mean, squared, counted beyond twice
+ *    its own noise's variance.
  * With the accelerometer, u goes through the motors' lag tau_m_s (dt / (tau_m + dt / 2) per
  * frame: 1 - exp(-dt / tau_m) to second order) before the filter: the thrust the
  * accelerometer reads lags the throttle by it, and an unmodelled lag makes every throttle
@@ -91,7 +103,7 @@ struct hover_est_params {
 	scalar_t q_rel;       /* process noise: relative drift of u_h per sqrt(s) */
 	scalar_t tau_s;       /* state-variable filter time constant, s */
 	scalar_t tau_m_s;     /* the motors' first-order lag (the accelerometer's thrust behind u), s; 0: none */
-	scalar_t drift_per_s; /* the relative drift of u_h per s the published sd allows for (its lag); 0: none */
+	scalar_t drift_per_s; /* a battery's drift of u_h, relative per s (the wander's bound); > 0: moved ahead */
 	scalar_t gate_sigma;  /* innovation gate, standard deviations */
 	scalar_t spool_rate;  /* ground spool-up: fraction of u_h per second */
 	scalar_t g_mps2;
@@ -165,10 +177,15 @@ void hover_est_spool(struct hover_est *s, scalar_t dt_s);
 scalar_t hover_est_u(const struct hover_est *s);
 scalar_t hover_est_sd(const struct hover_est *s);
 
-/* The standard deviation of u_h's error as the data show it: the filter's own gains applied
- * to the innovations' measured noise or the estimate's own wander, their mean, and the lag
- * behind a drift of drift_per_s (header comment); the filter's before two settled blocks of
- * innovations have been seen. */
+/* u_h moved ahead by its lag behind a drift, as the innovations' mean shows it (header
+ * comment, "Lag"): what hover_est_sd_err is the sd of. hover_est_u itself before two settled
+ * blocks, or with drift_per_s 0. */
+scalar_t hover_est_u_ahead(const struct hover_est *s);
+
+/* The standard deviation of hover_est_u_ahead's error as the data show it: the filter's own
+ * gains applied to the innovations' measured noise or the estimate's own wander, and the
+ * move's noise (header comment); the filter's before two settled blocks of innovations
+ * have been seen. */
 scalar_t hover_est_sd_err(const struct hover_est *s);
 
 /* True once the relative standard deviation of u_h is below rel_sd. */

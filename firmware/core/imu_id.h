@@ -37,8 +37,8 @@
  * constant over a sweep step), so each sd is the white-noise one scaled by a cluster-robust
  * factor measured on the hypothesis frozen at IMU_ID_FREEZE of the planned frames, its
  * clusters blocks of the sweep's period. The cluster-robust variance is leverage-corrected
- * (the clusters' jackknife: the sweep's few high steps carry the curve, and a plain sandwich
- * reads their residuals after the fit has bent towards them), and its degrees of freedom
+ * (bias-reduced, CR2: the sweep's few high steps carry the curve, and a plain sandwich reads
+ * their residuals after the fit has bent towards them), and its degrees of freedom
  * nu are those its clusters give the projection (Bell and McCaffrey): the error then follows
  * a t with nu degrees of freedom, whose variance nu / (nu - 2) the factor carries. The factor
  * is the clusters' alone, below 1 where the residuals' power lies at frequencies the sweep's

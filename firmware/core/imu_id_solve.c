@@ -531,42 +531,111 @@ void imu_id_refine(struct imu_id *m)
 	xmap_set(m); /* the new grid's step, the references the scales moved */
 }
 
-/* z solving (I - H W) z = v by Gaussian elimination with partial pivoting; false if singular */
-static bool solve_lev(const double h[NP][NP], const double w[NP][NP], const double v[NP], double z[NP])
+/* The eigen-decomposition a = v diag(d) v' of a symmetric matrix (cyclic Jacobi; a is
+ * overwritten). Single precision: it serves well-scaled matrices (a cluster's leverages, in
+ * [0, 1)), and the M4F's FPU is single. */
+static void eig_sym(float a[NP][NP], float v[NP][NP], float d[NP])
 {
-	double a[NP][NP + 1];
-	for (unsigned i = 0; i < NP; i++) {
-		for (unsigned k = 0; k < NP; k++) {
-			double hw = 0.0;
-			for (unsigned q = 0; q < NP; q++)
-				hw += h[i][q] * w[q][k];
-			a[i][k] = (i == k ? 1.0 : 0.0) - hw;
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++)
+			v[i][k] = i == k ? 1.0f : 0.0f;
+	for (unsigned sweep = 0; sweep < 12u; sweep++) {
+		float off = 0.0f, dia = 0.0f;
+		for (unsigned p = 0; p < NP; p++) {
+			dia += a[p][p] * a[p][p];
+			for (unsigned q = p + 1; q < NP; q++)
+				off += a[p][q] * a[p][q];
 		}
-		a[i][NP] = v[i];
+		if (!(off > 1e-14f * dia))
+			break;
+		for (unsigned p = 0; p < NP; p++)
+			for (unsigned q = p + 1; q < NP; q++) {
+				if (a[p][q] == 0.0f)
+					continue;
+				float th = (a[q][q] - a[p][p]) / (2.0f * a[p][q]);
+				float t = (th >= 0.0f ? 1.0f : -1.0f) / (fabsf(th) + sqrtf(th * th + 1.0f));
+				float c = 1.0f / sqrtf(t * t + 1.0f), sn = t * c;
+				for (unsigned k = 0; k < NP; k++) {
+					float x = a[k][p], y = a[k][q];
+					a[k][p] = c * x - sn * y;
+					a[k][q] = sn * x + c * y;
+				}
+				for (unsigned k = 0; k < NP; k++) {
+					float x = a[p][k], y = a[q][k];
+					a[p][k] = c * x - sn * y;
+					a[q][k] = sn * x + c * y;
+				}
+				for (unsigned k = 0; k < NP; k++) {
+					float x = v[k][p], y = v[k][q];
+					v[k][p] = c * x - sn * y;
+					v[k][q] = sn * x + c * y;
+				}
+			}
 	}
+	for (unsigned i = 0; i < NP; i++)
+		d[i] = a[i][i];
+}
+
+/* The Cholesky factor L (lower) of the positive semi-definite h, h = L L'; a zero pivot (a
+ * pinned parameter's row) leaves its column zero. */
+static void chol_psd(const double h[NP][NP], double l[NP][NP])
+{
+	memset(l, 0, sizeof(double) * NP * NP);
 	for (unsigned k = 0; k < NP; k++) {
-		unsigned p = k;
-		for (unsigned i = k + 1; i < NP; i++)
-			if (fabs(a[i][k]) > fabs(a[p][k]))
-				p = i;
-		if (!(fabs(a[p][k]) > 1e-9))
-			return false;
-		for (unsigned q = 0; q <= NP; q++) {
-			double t = a[k][q];
-			a[k][q] = a[p][q];
-			a[p][q] = t;
-		}
+		double d = h[k][k];
+		for (unsigned q = 0; q < k; q++)
+			d -= l[k][q] * l[k][q];
+		if (!(d > 0.0))
+			continue;
+		l[k][k] = sqrt(d);
 		for (unsigned i = k + 1; i < NP; i++) {
-			double f = a[i][k] / a[k][k];
-			for (unsigned q = k; q <= NP; q++)
-				a[i][q] -= f * a[k][q];
+			double w = h[i][k];
+			for (unsigned q = 0; q < k; q++)
+				w -= l[i][q] * l[k][q];
+			l[i][k] = w / l[k][k];
 		}
 	}
-	for (unsigned i = NP; i-- > 0;) {
-		double t = a[i][NP];
-		for (unsigned q = i + 1; q < NP; q++)
-			t -= a[i][q] * z[q];
-		z[i] = t / a[i][i];
+}
+
+/* A cluster's weight vector z = (I - H W)^-1/2 H j (CR2) for the projection j, given H = L L'
+ * and u = L' j: with M = L' W L (symmetric, its eigenvalues the cluster's leverages, in
+ * [0, 1)), (I - H W)^-1/2 = L (I - M)^-1/2 L^-1, so z = L (I - M)^-1/2 u. False where a
+ * leverage reaches 1 (the cluster alone determines a direction). */
+static bool lev_half(const double l[NP][NP], const double w[NP][NP], const double u[NP], double z[NP])
+{
+	double wl[NP][NP], y[NP], t[NP];
+	float mm[NP][NP], p[NP][NP], mu[NP];
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k < NP; k++) {
+			wl[i][k] = 0.0;
+			for (unsigned q = k; q < NP; q++)
+				wl[i][k] += w[i][q] * l[q][k];
+		}
+	for (unsigned i = 0; i < NP; i++)
+		for (unsigned k = 0; k <= i; k++) {
+			double m = 0.0;
+			for (unsigned q = i; q < NP; q++)
+				m += l[q][i] * wl[q][k];
+			mm[i][k] = mm[k][i] = (float)m;
+		}
+	eig_sym(mm, p, mu);
+	for (unsigned k = 0; k < NP; k++) {
+		if (!(mu[k] < 1.0f - 1e-5f))
+			return false;
+		double pu = 0.0;
+		for (unsigned i = 0; i < NP; i++)
+			pu += (double)p[i][k] * u[i];
+		y[k] = pu / sqrt(1.0 - (double)(mu[k] > 0.0f ? mu[k] : 0.0f));
+	}
+	for (unsigned i = 0; i < NP; i++) {
+		t[i] = 0.0;
+		for (unsigned k = 0; k < NP; k++)
+			t[i] += (double)p[i][k] * y[k];
+	}
+	for (unsigned i = 0; i < NP; i++) {
+		z[i] = 0.0;
+		for (unsigned k = 0; k <= i; k++)
+			z[i] += l[i][k] * t[k];
 	}
 	return true;
 }
@@ -663,14 +732,17 @@ static double top_check(const struct imu_id *m, const float th[NP], const float 
 /* The clusters' variance factor for the projection j of the parameters: the cluster-robust
  * variance of j' theta over its white-noise variance, both on the frozen hypothesis' frames
  * (its residuals from theta, the whole flight's estimate). The cluster-robust variance is the
- * leverage-corrected one (CR3, the clusters' jackknife): with H = G^-1 of all the clusters, W_g
- * a cluster's Gram matrix and r_g its score (b_g - W_g theta),
- *     V = sum_g (z_g' r_g)^2,   (I - H W_g) z_g = H j,
- * which is the sum of the squared changes of j' theta when cluster g is left out. The plain
- * sandwich sum_g (j' H r_g)^2 is optimistic where a few clusters carry the information (the
- * sweep's top steps): a cluster of high leverage pulls the fit towards itself, so its own
- * residuals understate what it carries. Its degrees of freedom (Bell and McCaffrey's, for
- * white residuals): V is a weighted sum of chi^2_1 whose weights are the eigenvalues of the
+ * bias-reduced one (CR2, Bell and McCaffrey's): with H = G^-1 of all the clusters, W_g a
+ * cluster's Gram matrix and r_g its score (b_g - W_g theta),
+ *     V = sum_g (z_g' r_g)^2,   z_g = (I - H W_g)^-1/2 H j,
+ * unbiased for white residuals whatever each cluster's leverage. The plain sandwich
+ * sum_g (j' H r_g)^2 is optimistic where a few clusters carry the information (the sweep's
+ * top steps): a cluster of high leverage pulls the fit towards itself, so its own
+ * residuals understate what it carries. The jackknife (CR3, (I - H W_g)^-1 in place of the
+ * root) corrects that twice over: with the t's nu / (nu - 2) on top it overstated the
+ * variance by a fifth (test_imu_id.c, imu_id_leverage_var_over_sd2). The root comes from a
+ * symmetric form (lev_half). Its degrees of freedom (Bell and McCaffrey's, for white
+ * residuals): V is a weighted sum of chi^2_1 whose weights are the eigenvalues of the
  * clusters' matrix C_gh = delta_gh z_g' W_g z_g - (W_g z_g)' H (W_h z_h), so
  * nu = (tr C)^2 / tr(C^2); the estimate then follows a t with nu degrees of freedom, whose
  * variance nu / (nu - 2) the factor carries (*nu_out; 0 when there are not enough clusters).
@@ -724,6 +796,14 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 			v[i] += h[i][k] * (double)j[k];
 		vw += (double)j[i] * v[i];
 	}
+	/* H = L L' (positive semi-definite: zero on the pinned parameters) and u = L' j */
+	double lh[NP][NP], u[NP];
+	chol_psd(h, lh);
+	for (unsigned i = 0; i < NP; i++) {
+		u[i] = 0.0;
+		for (unsigned k = i; k < NP; k++)
+			u[i] += lh[k][i] * (double)j[k];
+	}
 	/* the degrees of freedom from running sums, with c_g = W_g z_g, s_g = z_g' c_g and
 	 * q_g = c_g' H c_g: tr C = sum (s_g - q_g), tr C^2 = sum s_g^2 - 2 sum s_g q_g + tr((H S)^2),
 	 * S = sum c_g c_g' */
@@ -743,7 +823,7 @@ static float cl_factor(const struct imu_id *m, const float th[NP], const float j
 			if (is_pinned(m, i))
 				r[i] = 0.0;
 		}
-		if (!solve_lev(h, w, v, z))
+		if (!lev_half(lh, w, u, z))
 			return INFINITY; /* a cluster alone determines the projection */
 		double zr = 0.0, sz = 0.0, qz = 0.0;
 		for (unsigned i = 0; i < NP; i++) {

@@ -738,7 +738,8 @@ UNIT_TEST(app_hold_entry_published_between_frames)
 		CHECK(mode_hold == 1);
 		CHECK(params_get(&r->a.p, (size_t)i_thr) == thr0);
 		/* as of the entry (set_mode within the step, before this step's hover update) */
-		float at_entry = sc_to_float(r->a.env_hover.pub_u), now = sc_to_float(hover_est_u(&r->a.env_hover.hov));
+		float at_entry = sc_to_float(r->a.env_hover.pub_u),
+		      now = sc_to_float(hover_est_u_ahead(&r->a.env_hover.hov));
 		tick(r);
 		CHECK(params_get(&r->a.p, (size_t)i_thr) == at_entry);
 		CHECK(at_entry > 0.0f && fabsf(at_entry - now) < 1e-3f * now);

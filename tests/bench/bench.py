@@ -1268,11 +1268,13 @@ def item_sources(rep, args):
                 continue
             tol = {"kf": 1.0, "ktau": 1.0, "ratio": 2.0, "ixx": 2.0, "iyy": 2.0}.get(k) if how != "thrust" else None
             within = q["within_1pct"] if tol == 1.0 else q["within_2pct"]
-            rep.row(9, f"    {k}: error rms / max (%), var / sd^2 (error / sd's mean square), beyond max(3 sd, 1 %)",
-                    f"{q['err_rms_pct']:.2f} / {q['err_max_pct']:.2f}, {q['z_rms'] ** 2:.2f}, {q['beyond_3sd_and_1pct']}",
+            # beyond max(3 sd, the quantity's tolerance: 1 % for k_f and k_tau, 2 % for the rest)
+            n_beyond = len(q["beyond_3sd_and_tol"])
+            rep.row(9, f"    {k}: error rms / max (%), var / sd^2 (error / sd's mean square), beyond max(3 sd, tolerance)",
+                    f"{q['err_rms_pct']:.2f} / {q['err_max_pct']:.2f}, {q['var_over_sd2']:.2f}, {n_beyond}",
                     "", f"{q['accepted']} accepted" + (f"; {100 * within:.1f} % within {tol:g} %" if tol else ""),
                     "var / sd^2 in [0.8, 1.25], 0 beyond",
-                    0.8 <= q["z_rms"] ** 2 <= 1.25 and q["beyond_3sd_and_1pct"] == 0, c)
+                    0.8 <= q["var_over_sd2"] <= 1.25 and n_beyond == 0, c)
         if t.get("lag_within_10pct") is not None:
             lag = how == "imu_only"   # the IMU alone: the lag's target too (the others read it from speeds or rows)
             rep.row(9, "    lag within 10 %, delay right", f"{100 * t['lag_within_10pct']:.1f} %, "

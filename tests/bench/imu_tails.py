@@ -2,14 +2,16 @@
 """The tails of the IMU's k_f and thrust curve over their reported sds, on random vehicles.
 
     .venv/bin/python tests/bench/imu_tails.py [--runs N] [--seed S] [--sensors imu|imu,rpm]
-        [--jobs J] [--no-vibration] [--seeds S1,S2,...] [--sil PATH] [--rows FILE]
+        [--jobs J] [--no-vibration] [--no-imu-scale] [--seeds S1,S2,...] [--sil PATH] [--rows FILE]
 
 Each run flies the full sequence (experiment 6) in octo-sil on a vehicle of test_ident_imu.py's
 draw (imu_vehicle: k_f, k_tau and inertia +/-30 %, motor lag 10-100 ms, delay 0-3 frames,
 thrust curve 0-0.5) with the default realistic sensor noise, seed S + i for run i, from a fresh
 parameter file. --sensors imu gives ID_SOURCE auto the IMU alone, imu,rpm the IMU with the
 ESCs' rotor speeds (imu_rpm). --no-vibration sets the vehicle's `vibration` levels to 0 (what
-the rotors' vibration contributes: rerun the outliers with it). --sil flies another build's
+the rotors' vibration contributes: rerun the outliers with it). --no-imu-scale sets the IMU's
+scale errors to 0 (the vehicle's `imu_scale`) and ID_GYR_SCL_SD to 0: the inertias' and the
+ratio's sds are then the data's alone, judged without the gyro scale's share. --sil flies another build's
 octo-sil (a before / after on the same seeds).
 
 Prints one JSON object: over the accepted k_f, the error's rms and max (%), the error / sd rms,
@@ -48,15 +50,19 @@ RATIO = re.compile(r"^ID ktau/Izz ([-0-9.]+) \+/- ([-0-9.]+) 1/s\^2 \(gyro")
 SCRIPT = "arm; takeoff 5; wait hold; experiment 6; wait experiment"
 
 
-def fly(sil, seed, sensors, no_vib):
+def fly(sil, seed, sensors, no_vib, no_scale=False):
     veh = imu_vehicle(random.Random(seed))
     if no_vib:
         veh["vibration"] = {"accel": 0.0, "gyro": 0.0}
+    pre = ""
+    if no_scale:
+        veh["imu_scale"] = 0.0
+        pre = "param ID_GYR_SCL_SD 0; "
     with tempfile.TemporaryDirectory() as d:
         vf, pf = Path(d) / "v.json", Path(d) / "p.parm"
         vf.write_text(json.dumps(veh))
         r = subprocess.run([str(sil), "--seed", str(seed), "--vehicle", str(vf), "--sensors", sensors, "--params",
-                            str(pf), "--duration", "900", "--script", f"param ID_SEED {seed}; {SCRIPT}"],
+                            str(pf), "--duration", "900", "--script", f"{pre}param ID_SEED {seed}; {SCRIPT}"],
                            capture_output=True, text=True, timeout=600)
     row = {"seed": seed, "kf_true": veh["kf"], "c_true": veh["thrust_curve"], "lag_true": veh["motor_tau"],
            "delay_true": round(veh["delay"] * 90.0),
@@ -136,14 +142,16 @@ def main():
     ap.add_argument("--sensors", default="imu,rpm")
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--no-vibration", action="store_true")
+    ap.add_argument("--no-imu-scale", action="store_true")
     ap.add_argument("--sil", default=str(ROOT / "build" / "octo-sil"))
     ap.add_argument("--rows", help="write every run's row (JSON) to this file, for a paired before / after")
     a = ap.parse_args()
     seeds = [int(s) for s in a.seeds.split(",")] if a.seeds else list(range(a.seed, a.seed + a.runs))
     with cf.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
-        rows = list(ex.map(lambda s: fly(a.sil, s, a.sensors, a.no_vibration), seeds))
+        rows = list(ex.map(lambda s: fly(a.sil, s, a.sensors, a.no_vibration, a.no_imu_scale), seeds))
     res = summary(rows)
-    res.update(sensors=a.sensors, seeds=[seeds[0], seeds[-1]], vibration=not a.no_vibration)
+    res.update(sensors=a.sensors, seeds=[seeds[0], seeds[-1]], vibration=not a.no_vibration,
+               imu_scale=not a.no_imu_scale)
     if a.seeds:
         res["rows"] = [{k: r.get(k) for k in ("seed", "kf", "kf_sd", "kf_true", "c", "c_sd", "c_true", "dof", "vib",
                                                    "ix", "ix_sd", "ix_true", "iy", "iy_sd", "iy_true", "kz", "kz_sd", "kz_true")}

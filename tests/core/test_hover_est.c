@@ -275,16 +275,18 @@ UNIT_TEST(hover_est_sd_err_against_the_error)
 	CHECK(worst < 4.0);
 }
 
-/* hover_est_sd_err at a hold's entry some 6 s after lift-off, as the firmware publishes it:
+/* hover_est_u_ahead and hover_est_sd_err at a hold's entry some 6 s after lift-off, as the
+ * firmware publishes them:
  * the take-off's throttle (a ramp to 1.3 u_h in 1 s, held 1 s, 0.85 u_h for 1 s, then
  * hover, dithered 1 %) through a motor lag of 20-80 ms the model leaves out, so that the
  * innovations' first blocks are the filter's convergence; the hover throttle drifting up
  * by 1.5-3 %/min (a battery; drift_per_s at 3 %/min); the accelerometer's white noise
  * 0.02-0.1 m/s^2 and a fold of the rotors' vibration near 0 Hz (0.2-1 Hz, up to
  * 0.05 m/s^2). Over 200 trials the error over the sd has an rms below 1.3 and at most 1 %
- * of them beyond 3 (rms 0.44, none). The sd is pessimistic here (the estimate's wander
- * after so large a swing of the unmodelled lag counts whole): the rms is held within
- * [0.3, 1.3]. */
+ * of them beyond 3 (rms 0.51, none; mean +0.25: the move ahead by the innovations' mean
+ * overtakes the convergence still under way, where hover_est_u's lag made it -0.32). The sd
+ * is pessimistic here (the estimate's wander after so large a swing of the unmodelled lag
+ * counts whole): the rms is held within [0.3, 1.3]. */
 UNIT_TEST(hover_est_sd_err_at_hold_entry)
 {
 	struct unit_rng r = {0x40e8ULL};
@@ -311,7 +313,7 @@ UNIT_TEST(hover_est_sd_err_at_hold_entry)
 			double a = G * u_lag / uh + fold * sin(6.283185 * f_fold * t + ph) + wn * unit_rand_normal(&r);
 			hover_est_update_acc(&he, s(a), s(thr), s(FRAME_S));
 		}
-		double est = d(hover_est_u(&he)), z = (est - uh) / d(hover_est_sd_err(&he));
+		double est = d(hover_est_u_ahead(&he)), z = (est - uh) / d(hover_est_sd_err(&he));
 #ifdef TEST_VERBOSE
 		printf("u_h %.3f start %.2fx lag %.0f ms: error %+.4f %%, sd %.4f %%, z %+.2f\n", uh0, off, 1e3 * lag,
 		       100 * (est / uh - 1), 100 * d(hover_est_sd_err(&he)) / est, z);
@@ -327,5 +329,59 @@ UNIT_TEST(hover_est_sd_err_at_hold_entry)
 	if (n >= 100) { /* a statistic of the host's sweep (two trials on the Cortex-M) */
 		CHECK(sqrt(z2 / n) > 0.3 && sqrt(z2 / n) < 1.3);
 		CHECK(beyond <= n / 100);
+	}
+}
+
+/* hover_est_u_ahead and its sd against a drift faster than the one allowed for (drift_per_s
+ * 2 %/min, the app's KFT_DRIFT; the hover throttle rising or falling by 3-4 %/min, a battery
+ * sagging fast): the estimate lags the drift by some 1.2 s, 0.07 %, and the innovations' mean
+ * shows it. The accelerometer's white noise 0.02-0.1 m/s^2, a modelled motor lag of 20-80 ms,
+ * the throttle dithered 1 % around hover, the estimate starting within 10 %; judged after 12 s.
+ * Over 100 trials the error over the sd, signed along the drift, has a mean within +/- 0.3
+ * (0.1 its sd: 3 of them) and an rms within [0.7, 1.3] (an sd made 1.5 times too large to hide
+ * the lag fails it), none beyond 4. Measured: mean +0.01, rms 0.93, largest 2.6 (Q16.16: +0.02,
+ * 0.92, 2.6); hover_est_u with the sd of its lag behind a drift of drift_per_s: mean -0.86. */
+UNIT_TEST(hover_est_ahead_of_a_fast_drift)
+{
+	struct unit_rng r = {0x40e9ULL};
+	double zs = 0, z2 = 0, worst = 0;
+	int n = 0;
+	for (int trial = 0; trial < TRIALS(100); trial++) {
+		double uh0 = unit_rand_uniform(&r, 0.06, 0.4),
+		       sign = unit_rand_uniform(&r, 0.0, 1.0) < 0.5 ? -1.0 : 1.0;
+		double drift = sign * unit_rand_uniform(&r, 0.03, 0.04) / 60.0; /* of u_h per s */
+		double lag = unit_rand_uniform(&r, 0.02, 0.08), al = 1 - exp(-FRAME_S / lag);
+		double wn = unit_rand_uniform(&r, 0.02, 0.1);
+		struct hover_est_params hp = hover_est_params_default();
+		hp.drift_per_s = s(0.02 / 60.0);
+		hp.tau_m_s = s(lag);
+		struct hover_est he;
+		hover_est_init(&he, &hp, s(uh0 * unit_rand_uniform(&r, 0.9, 1.1)));
+		double u_prev = uh0, u_lag = uh0, uh = uh0;
+		for (int k = 0; k < (int)(12.0 / FRAME_S); k++) {
+			uh = uh0 * (1 + drift * k * FRAME_S);
+			double thr = uh * (1 + 0.01 * unit_rand_normal(&r));
+			u_lag += al * (u_prev - u_lag);
+			u_prev = thr;
+			hover_est_update_acc(&he, s(G * u_lag / uh + wn * unit_rand_normal(&r)), s(thr), s(FRAME_S));
+		}
+		double est = d(hover_est_u_ahead(&he)), z = (est - uh) / d(hover_est_sd_err(&he));
+#ifdef TEST_VERBOSE
+		printf("u_h %.3f drift %+.1f %%/min: error %+.4f %% (hover_est_u %+.4f %%), sd %.4f %%, z %+.2f\n", uh0,
+		       6000 * drift, 100 * (est / uh - 1), 100 * (d(hover_est_u(&he)) / uh - 1),
+		       100 * d(hover_est_sd_err(&he)) / est, z);
+#endif
+		zs += sign * z;
+		z2 += z * z;
+		worst = fmax(worst, fabs(z));
+		n++;
+	}
+#ifdef TEST_VERBOSE
+	printf("mean z along the drift %+.3f, rms %.3f, worst %.2f\n", zs / n, sqrt(z2 / n), worst);
+#endif
+	CHECK(z2 == z2 && worst < 4.0);
+	if (n >= 50) { /* a statistic of the host's sweep */
+		CHECK(fabs(zs / n) < 0.3);
+		CHECK(sqrt(z2 / n) > 0.7 && sqrt(z2 / n) < 1.3);
 	}
 }

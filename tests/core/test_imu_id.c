@@ -53,11 +53,12 @@ static double thrust(const struct truth *t, double y) { return (1.0 - t->curve) 
  * (imu_id_hold); torque: the ESCs' torques are read; steps: FOCUS, the slow sweep and the
  * collective square wave replaced by a high step in one cluster of six, whose noise then
  * carries a slow swing (one random value per step, as a rotor's tone aliased near 0 Hz), so
- * that a few clusters carry the curve; THREE, steps of 0.3, 0.2 and 0.25 in turn, one a
+ * that a few clusters carry the curve; FOCUS_WHITE, the same steps with white noise alone;
+ * THREE, steps of 0.3, 0.2 and 0.25 in turn, one a
  * cluster, each with its swing, the highest with the offset common besides (the tone's phase
  * the same at every top step). The estimator is static: its state is larger than a test's
  * stack should carry. */
-enum steps { SPREAD, FOCUS, THREE };
+enum steps { SPREAD, FOCUS, FOCUS_WHITE, THREE };
 
 static void fly_as(struct unit_rng *g, const struct truth *t, unsigned n, bool lose, bool torque, enum steps steps,
 		   double common, struct imu_id_result *r)
@@ -101,9 +102,9 @@ static void fly_as(struct unit_rng *g, const struct truth *t, unsigned n, bool l
 			dc = dc > 0.0 ? -0.05 : 0.05;
 		double sw = exc ? 0.1 * sin(6.283185307 * (double)(k - 90u) / 900.0) : 0.0, f = 0.0, tq = 0.0;
 		double top = 0.0;
-		if (steps == FOCUS) {
+		if (steps == FOCUS || steps == FOCUS_WHITE) {
 			unsigned kb = exc ? (k - 90u) % 540u : 540u; /* a cluster of six has the step */
-			if (kb == 0u)
+			if (kb == 0u && steps == FOCUS)
 				swing = 0.6 * unit_rand_normal(g);
 			sw = kb >= 20u && kb < 50u ? 0.3 : 0.0;
 			dc = 0.0;
@@ -266,6 +267,43 @@ UNIT_TEST(imu_id_few_clusters_carry_the_curve)
 			CHECK(fabs(r.kf - t.kf) < 4.5 * r.kf_sd);
 		}
 	}
+}
+
+/* The clusters' variance where a few clusters carry the curve (a high step in one cluster of
+ * six), the noise white: those clusters' leverage is large, and a variance that corrects
+ * their residuals for it twice over (the clusters' jackknife, CR3, and then the t's
+ * nu / (nu - 2)) overstates. Over 300 flights the mean of (error / sd)^2 of k_f, the curve
+ * and k_tau (the variance over the reported one) must lie in [0.8, 1.25]. On this draw the
+ * bias-reduced variance (CR2) gives 0.95, 0.95 and 1.14 (both builds); CR3 gave 0.78, 0.78
+ * and 0.94 (0.69-0.89 for k_f on three other draws, CR2 0.84-1.08). */
+UNIT_TEST(imu_id_leverage_var_over_sd2)
+{
+	if (!FLIGHTS)
+		return;
+	struct unit_rng g = {0x5eed0037ULL};
+	int n = TRIALS(300), m = 0;
+	double zz[3] = {0.0, 0.0, 0.0};
+	for (int i = 0; i < n; i++) {
+		struct truth t;
+		struct imu_id_result r;
+		random_truth(&g, &t);
+		t.delay = i % 4;
+		fly_as(&g, &t, 2400u, false, true, FOCUS_WHITE, 0.0, &r);
+		if (r.cause != IMU_ID_OK || !r.tq_ok)
+			continue;
+		double z[3] = {(r.kf - t.kf) / r.kf_sd, (r.curve - t.curve) / r.curve_sd,
+			       (r.ktau - t.ktau) / r.ktau_sd};
+		for (int k = 0; k < 3; k++)
+			zz[k] += z[k] * z[k];
+		m++;
+	}
+#ifdef TEST_VERBOSE
+	printf("leverage: %d of %d, var / sd^2 kf %.3f curve %.3f ktau %.3f\n", m, n, zz[0] / m, zz[1] / m, zz[2] / m);
+#endif
+	CHECK(m >= n - 1 - n / 20);
+	if (n >= 100)
+		for (int k = 0; k < 3; k++)
+			CHECK(zz[k] / m >= 0.8 && zz[k] / m <= 1.25);
 }
 
 /* The top steps' common offset (a rotor's tone aliased near 0 Hz in phase at every top step):
