@@ -423,7 +423,7 @@ static void env_on_mode(struct app *a)
 		env_hover_init(&a->env_hover, &a->p);
 	}
 	if (a->mode == APP_HOLD)
-		env_hover_on_hold(&a->env_hover, &a->p, a->fr.t_s); /* published between frames */
+		env_hover_on_hold(&a->env_hover, a->fr.t_s); /* published between frames */
 }
 
 /* Before experiment `id`: VEH_KF from the hover throttle (NAV_KF_SEED, env_hover.h). */

@@ -115,19 +115,9 @@ scalar_t env_hover_step(struct env_hover *h, const struct env_hover_input *in, b
 
 bool env_hover_ready(const struct env_hover *h) { return hover_est_converged(&h->hov, sc_from_float(HOVER_READY_RSD)); }
 
-void env_hover_on_hold(struct env_hover *h, const struct app_params *p, double t_s)
+void env_hover_on_hold(struct env_hover *h, double t_s)
 {
-	h->pub_u = hover_est_u_ahead(&h->hov);
-	h->pub_sd = hover_est_sd_err(&h->hov);
-	h->pub_cal_rel2 = 0.0f;
-	const struct env_acc_cal *c = &h->cal;
-	if (h->hov.acc && c->have && c->n_cal > 0u && p->veh_grav > 0.0f) {
-		/* what the innovations cannot see: the calibration's mean of n_cal noisy frames, and
-		 * the bias's walk since (relative to the 1 g a hover reads) */
-		float n = p->kft_acc_noise / p->veh_grav, w = p->kft_acc_walk / p->veh_grav;
-		double age = t_s > c->t_s ? t_s - c->t_s : 0.0;
-		h->pub_cal_rel2 = n * n / (float)c->n_cal + w * w * (float)age;
-	}
+	h->pub_t_s = t_s;
 	h->pub_due = true;
 }
 
@@ -136,8 +126,15 @@ bool env_hover_publish(struct env_hover *h, const struct app_params *p, struct e
 	if (!h->pub_due)
 		return false;
 	h->pub_due = false;
-	float u = sc_to_float(h->pub_u), sd = sc_to_float(h->pub_sd);
-	sd = sqrtf(sd * sd + u * u * h->pub_cal_rel2);
+	float u = sc_to_float(hover_est_u_ahead(&h->hov)), sd = sc_to_float(hover_est_sd_err(&h->hov));
+	float cal_rel2 = 0.0f;
+	const struct env_acc_cal *c = &h->cal;
+	if (h->hov.acc && c->have && c->n_cal > 0u && p->veh_grav > 0.0f) {
+		float n = p->kft_acc_noise / p->veh_grav, w = p->kft_acc_walk / p->veh_grav;
+		double age = h->pub_t_s > c->t_s ? h->pub_t_s - c->t_s : 0.0;
+		cal_rel2 = n * n / (float)c->n_cal + w * w * (float)age;
+	}
+	sd = sqrtf(sd * sd + u * u * cal_rel2);
 	out->u = u;
 	out->sd = sd;
 	out->kf = p->veh_mass * p->veh_grav / ((float)HAL_ROTORS * u);

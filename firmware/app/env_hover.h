@@ -61,11 +61,10 @@ struct env_acc_cal {
 struct env_hover {
 	struct hover_est hov;
 	struct env_acc_cal cal;
-	bool pub_due;           /* a HOLD entry's HOV_* wait for env_hover_publish */
-	scalar_t pub_u, pub_sd; /* the hover throttle at that entry, moved ahead by its lag, and its sd (hover_est.h) */
-	float pub_cal_rel2;     /* the accelerometer calibration's relative variance then (env_hover_on_hold) */
-	scalar_t kf8;           /* 8 VEH_KF (N at full throttle, all rotors) */
-	struct sc_recip kf8_r;  /* its reciprocal, for the step's division by it */
+	bool pub_due;          /* a HOLD entry's HOV_* wait for env_hover_publish */
+	double pub_t_s;        /* plant time of that entry (the calibration's age) */
+	scalar_t kf8;          /* 8 VEH_KF (N at full throttle, all rotors) */
+	struct sc_recip kf8_r; /* its reciprocal, for the step's division by it */
 	/* the hover thrust kf8 / theta of the last step and its operands: the division is redone
 	 * only when one changed (theta stays while the estimator only tracks) */
 	scalar_t hf_kf8, hf_theta, hf;
@@ -126,13 +125,14 @@ static inline bool env_hover_untaught(const struct env_hover *h) { return h->hov
 /* Take-off may end (HOLD) once the hover throttle is known to 3 % (relative sd). */
 bool env_hover_ready(const struct env_hover *h);
 
-/* On entering HOLD at plant time t_s: what the hover taught is noted for env_hover_publish,
- * with, when it learnt from the calibrated accelerometer, what its innovations cannot see:
- * the calibration's error, (KFT_ACC_NOISE / VEH_GRAV)^2 / n_cal (the mean of n_cal ground
+/* On entering HOLD at plant time t_s: what the hover taught is due for env_hover_publish. */
+void env_hover_on_hold(struct env_hover *h, double t_s);
+/* Between frames: true (and *out) once after a HOLD entry: the hover throttle moved ahead by
+ * its lag and its sd (hover_est.h), computed here rather than in the entry's step, with, when
+ * it learnt from the calibrated accelerometer, what its innovations cannot see: the
+ * calibration's error, (KFT_ACC_NOISE / VEH_GRAV)^2 / n_cal (the mean of n_cal ground
  * frames), and the bias's walk since, (KFT_ACC_WALK / VEH_GRAV)^2 (t_s - t_cal), both
  * relative to the 1 g a hover reads; added to hover_est_sd_err's variance. */
-void env_hover_on_hold(struct env_hover *h, const struct app_params *p, double t_s);
-/* Between frames: true (and *out) once after a HOLD entry. */
 bool env_hover_publish(struct env_hover *h, const struct app_params *p, struct env_hover_pub *out);
 
 /* Between frames: the torque demands' gain, from the hover throttle learned so far (1 until
