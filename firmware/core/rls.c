@@ -29,14 +29,8 @@
 #define UNIT_ONE ((rls_unit_t)(1 << QF_UNIT_FRAC))
 #define WIDE_HALF ((rls_wide_t)1 << (QF_WIDE_FRAC - 1))
 #define WIDE_ONE ((rls_wide_t)1 << QF_WIDE_FRAC)
-static inline rls_sig_t sig_add(rls_sig_t a, rls_sig_t b) { return q_sat32((int64_t)a + b); }
-static inline rls_sig_t sig_sub(rls_sig_t a, rls_sig_t b) { return q_sat32((int64_t)a - b); }
 /* Q7.24 * Q7.24 -> Q7.24 */
 static inline rls_sig_t sig_mul(rls_sig_t a, rls_sig_t b) { return q_mul32(a, b, QF_SIG_FRAC); }
-/* Q7.24 * Q7.24 -> Q23.40 */
-static inline rls_acc_t acc_of_prod(rls_sig_t a, rls_sig_t b) { return q_mul64(a, b, 2 * QF_SIG_FRAC - QF_ACC_FRAC); }
-/* Q23.40 * Q7.24 -> Q23.40 */
-static inline rls_acc_t acc_mul_sig(rls_acc_t a, rls_sig_t b) { return q_mul64_32(a, b, QF_SIG_FRAC); }
 /* Q1.62 * Q7.24 -> Q23.40 */
 static inline rls_acc_t acc_of_wide_sig(rls_wide_t d, rls_sig_t b)
 {
@@ -44,8 +38,6 @@ static inline rls_acc_t acc_of_wide_sig(rls_wide_t d, rls_sig_t b)
 }
 static inline rls_acc_t acc_add(rls_acc_t a, rls_acc_t b) { return q_add64(a, b); }
 static inline rls_acc_t acc_sub(rls_acc_t a, rls_acc_t b) { return q_add64(a, -b); }
-/* Q23.40 * Q1.30 -> Q23.40 */
-static inline rls_acc_t acc_mul_unit(rls_acc_t a, rls_unit_t m) { return q_mul64_q30(a, m); }
 /* a 2^e (left shifts saturate) */
 static inline rls_acc_t acc_ldexp(rls_acc_t a, int32_t e) { return est_scale64(a, (int)e); }
 /* a 2^(2 s): a covariance bound of a parameter with phi_shift s */
@@ -191,7 +183,6 @@ static inline rls_sig_t sig_of_sc(scalar_t x, int shift)
 	int s = QF_SIG_FRAC - QF_SC_FRAC - shift;
 	return s >= 0 && s <= 30 ? est_shl32c(x, (unsigned)s) : est_scale32(x, s);
 }
-static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return q_scale32(x, QF_SC_FRAC - QF_SIG_FRAC + shift); }
 static inline rls_acc_t phi2_of_sc(scalar_t x) { return q_smul32(x, x); } /* Q32 */
 /* |phi|^2 is needed for the gate only (|phi|^2 >= 0 passes a zero phi_min) */
 static inline bool phi2_needed(const struct rls *r) { return r->phi_min2 > 0; }
@@ -202,15 +193,10 @@ static inline bool phi2_needed(const struct rls *r) { return r->phi_min2 > 0; }
 #define INN_ZERO 0.0f
 #define UNIT_SIG 1.0f
 #define UNIT_ONE 1.0f
-static inline rls_sig_t sig_add(rls_sig_t a, rls_sig_t b) { return a + b; }
-static inline rls_sig_t sig_sub(rls_sig_t a, rls_sig_t b) { return a - b; }
 static inline rls_sig_t sig_mul(rls_sig_t a, rls_sig_t b) { return a * b; }
-static inline rls_acc_t acc_of_prod(rls_sig_t a, rls_sig_t b) { return a * b; }
-static inline rls_acc_t acc_mul_sig(rls_acc_t a, rls_sig_t b) { return a * b; }
 static inline rls_acc_t acc_of_wide_sig(rls_wide_t d, rls_sig_t b) { return d * b; }
 static inline rls_acc_t acc_add(rls_acc_t a, rls_acc_t b) { return a + b; }
 static inline rls_acc_t acc_sub(rls_acc_t a, rls_acc_t b) { return a - b; }
-static inline rls_acc_t acc_mul_unit(rls_acc_t a, rls_unit_t m) { return a * m; }
 static inline rls_acc_t acc_ldexp(rls_acc_t a, int32_t e)
 {
 	(void)e;
@@ -277,7 +263,6 @@ static inline bool wide_ok(rls_wide_t d) { return d > 0.0f && isfinite(d); }
 static inline bool sig_ok(rls_sig_t x) { return isfinite(x); }
 static inline bool acc_ok(rls_acc_t x) { return isfinite(x); }
 static inline rls_sig_t sig_of_sc(scalar_t x, int shift) { return shift ? x * sc_pow2f(-shift) : x; }
-static inline scalar_t sc_of_sig(rls_sig_t x, int shift) { return shift ? x * sc_pow2f(shift) : x; }
 static inline rls_acc_t phi2_of_sc(scalar_t x) { return x * x; }
 /* also for the overflow check below */
 static inline bool phi2_needed(const struct rls *r)
