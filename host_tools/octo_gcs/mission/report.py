@@ -646,7 +646,8 @@ def _kf_tracked_md(kft):
             f"max |error| {s_['max_abs_error_pct']:.3f} %, rms {s_['rms_error_pct']:.3f} % over "
             f"{s_['samples']} frames (limit {s_['limit_pct']:.3g} %: the tracker regresses on the "
             "identified rotor model, so its k_f at full throttle carries the thrust curve's "
-            "error as the identified k_f does); drift over that window "
+            f"error as the identified k_f does; {s_['beyond_limit']} frames beyond it and 4 of the tracked "
+            "sd); drift over that window "
             f"{s_.get('drift_tracked_pct', float('nan')):+.3f} % tracked, "
             f"{s_.get('drift_truth_pct', float('nan')):+.3f} % true; the truth changed "
             f"{s_['truth_change_pct']:+.3f} % over the whole tracking.",
