@@ -45,7 +45,7 @@ struct motor_id_cfg {
 	float kf0;         /* prior k_f (reference model), N */
 	float curve0;      /* prior curve c (the model when est_curve is false) */
 	bool est_curve;    /* estimate c (else c = curve0) */
-	uint32_t n_frames; /* excited frames planned: refinements at 30, 45 and 55 % */
+	uint32_t n_frames; /* excited frames planned: refinements at 30, 45 and 55 % (65 %: REPEAT_PCT) */
 	bool fix_delay;    /* take delay_fr as known (else the bank chooses) */
 	uint32_t delay_fr; /* the given delay, frames (< MOTOR_ID_DELAYS) */
 };
@@ -92,7 +92,8 @@ struct motor_id {
 	uint8_t skip;              /* frames not accumulated after a refinement (lag transients) */
 	uint16_t white_pause;      /* excited frames left out of the whiteness sums (motor_id_white_pause) */
 	uint8_t stage;
-	bool nz_have; /* the last frame taken was not excited (and none was lost since) */
+	bool repeated; /* the third stage ran twice: its minimum lay beyond its grid (motor_id_refine) */
+	bool nz_have;  /* the last frame taken was not excited (and none was lost since) */
 	bool refine_due;
 	bool white_due;             /* the whiteness model is to be frozen (between frames) */
 	bool reref_due, reref_done; /* the first stage's early re-referencing (after MOTOR_ID_NREF frames) */

@@ -80,7 +80,8 @@ static const float stage_ratio[MOTOR_ID_STAGES] = {2.5f, 1.3f, 1.08f, 1.08f};
 static const uint32_t stage_end_pct[MOTOR_ID_STAGES - 1] = {30u, 45u, MOTOR_ID_LAST_PCT};
 /* The last grid's half-width (log): LAST_SDS of the third stage's lag sds plus LAST_BIAS (that
  * stage's own interpolation shift, up to half a percent, and its lag states' settling), within
- * [log LAST_RATIO_MIN, log 1.08]; a minimum beyond the third grid leaves it at 1.08. A
+ * [log LAST_RATIO_MIN, log 1.08]; a minimum beyond the third grid repeats that stage
+ * (REPEAT_PCT), and beyond it again leaves the last at 1.08 or the root of its ratio. A
  * third grid widened by the second stage's walk (to the root of its ratio, 1.26) narrows it
  * too: its minimum, refined on the criterion (lag_newton), lies as close to the truth as a
  * 1.08 grid's, and a last grid kept at 1.08 biased k_f by up to about one of its sds on every
@@ -101,6 +102,12 @@ static float lag_k1(float tau, float dt) { return tau > NO_LAG_FRAC * dt ? 1.0f 
 
 /* the whiteness model is frozen this share of the planned frames into the last stage */
 #define WHITE_AFTER_PCT 20u
+/* A third stage whose minimum lies beyond its grid (a stale lag prior: the grids walked at
+ * every stage) runs once more, re-centred, for this share of the planned frames, and the last
+ * stage starts that much later. Its grid would otherwise be left wide (the root of the third's
+ * ratio, up to 1.12), and the statistics' interpolation across it moved k_f by two of its sds;
+ * the shorter last stage widens the sds instead (by about a tenth) */
+#define REPEAT_PCT 10u
 
 /* the least n >= pct % of the planned frames, pct <= 100 (integers: the same in every
  * precision; N = 100 q + r gives q pct + ceil(r pct / 100), in 32 bits) */
@@ -113,9 +120,12 @@ static uint32_t frames_at(const struct motor_id *m, uint32_t pct)
 /* n_exc at which the current stage ends, or (last stage) the whiteness model freezes */
 static uint32_t next_due(const struct motor_id *m)
 {
-	if (m->stage < MOTOR_ID_STAGES - 1)
+	const uint32_t later = m->repeated ? REPEAT_PCT : 0u;
+	if (m->stage < MOTOR_ID_STAGES - 2)
 		return frames_at(m, stage_end_pct[m->stage]);
-	return frames_at(m, stage_end_pct[MOTOR_ID_STAGES - 2] + WHITE_AFTER_PCT);
+	if (m->stage == MOTOR_ID_STAGES - 2)
+		return frames_at(m, stage_end_pct[m->stage] + later);
+	return frames_at(m, stage_end_pct[MOTOR_ID_STAGES - 2] + later + WHITE_AFTER_PCT);
 }
 
 /* a lag within the grids' range */
@@ -585,6 +595,11 @@ void motor_id_refine(struct motor_id *m)
 	bool have_ref = reference_fit(m, &kf_ref, &c_ref);
 	float xs[ND], ks[ND], smin[ND]; /* each delay's criterion's minimum */
 	unsigned bd = chosen_delay(m, delay_scan(m, xs, ks, smin));
+	if (next == MOTOR_ID_STAGES - 1u && !m->repeated && m->n_stat > 0u && fabsf(xs[bd]) > 1.0f &&
+	    m->lag_c[bd] * m->lag_r[bd] > NO_LAG_FRAC * dt) {
+		m->repeated = true; /* the third stage once more (REPEAT_PCT) */
+		next = m->stage;
+	}
 	const bool last = next == MOTOR_ID_STAGES - 1u;
 	for (unsigned d = 0; d < ND; d++) {
 		float r = m->lag_r[d];
