@@ -974,6 +974,14 @@ def chi2_interval(n):
     return q(-1.959964), q(1.959964)
 
 
+def sd2_bounds(n):
+    """Where var / sd^2 (the mean of n squared errors over their sds) must lie: [0.8, 1.25], or a
+    unit normal's 95 % interval of a chi-square's n dof over n where that is wider (a few accepted
+    values cannot tell an sd 10 % off)."""
+    lo, hi = chi2_interval(n + 1) if n > 1 else (0.0, math.inf)
+    return min(0.8, lo), max(1.25, hi)
+
+
 def fw_excitation():
     """octo-fw's experiment 1 excitation defaults (ID_EXC_KIND/AMP/DIV), from --dump-params."""
     d = {"ID_EXC_KIND": 1.0, "ID_EXC_AMP": 0.04, "ID_EXC_DIV": 9.0}
@@ -1270,11 +1278,12 @@ def item_sources(rep, args):
             within = q["within_1pct"] if tol == 1.0 else q["within_2pct"]
             # beyond max(3 sd, the quantity's tolerance: 1 % for k_f and k_tau, 2 % for the rest)
             n_beyond = len(q["beyond_3sd_and_tol"])
+            lo, hi = sd2_bounds(q["accepted"])
             rep.row(9, f"    {k}: error rms / max (%), var / sd^2 (error / sd's mean square), beyond max(3 sd, tolerance)",
                     f"{q['err_rms_pct']:.2f} / {q['err_max_pct']:.2f}, {q['var_over_sd2']:.2f}, {n_beyond}",
                     "", f"{q['accepted']} accepted" + (f"; {100 * within:.1f} % within {tol:g} %" if tol else ""),
-                    "var / sd^2 in [0.8, 1.25], 0 beyond",
-                    0.8 <= q["var_over_sd2"] <= 1.25 and n_beyond == 0, c)
+                    f"var / sd^2 in [{lo:.2f}, {hi:.2f}], 0 beyond",
+                    lo <= q["var_over_sd2"] <= hi and n_beyond == 0, c)
         if t.get("lag_within_10pct") is not None:
             lag = how == "imu_only"   # the IMU alone: the lag's target too (the others read it from speeds or rows)
             rep.row(9, "    lag within 10 %, delay right", f"{100 * t['lag_within_10pct']:.1f} %, "
