@@ -224,3 +224,66 @@ def test_vehicle_file_errors_name_the_key(bad, names):
     with pytest.raises(vehiclefile.VehicleFileError) as e:
         vehiclefile.parse(json.dumps(bad), "v.json")
     assert names in str(e.value) and "v.json" in str(e.value)
+
+
+# ------------------------------------------------------------ waiting for a mode
+class _FakeVehicle:
+    """A link.Vehicle stand-in whose mode becomes `mode_at` when its clock reaches `t_at`."""
+
+    def __init__(self, clock, t_at, mode_at):
+        self.mode, self.clock, self.t_at, self.mode_at = 3, clock, t_at, mode_at
+
+    def recv(self, types=(), timeout=0.05):
+        if self.clock() is not None and self.clock() >= self.t_at:
+            self.mode = self.mode_at
+
+    def _last_text(self, since=None):
+        return "Mode LAND"
+
+
+def test_wait_mode_in_lockstep_counts_the_simulated_time_and_names_a_stall(monkeypatch):
+    """Lockstep on a slow host (an emulated processor on a busy machine): the landing takes
+    20 s of simulated time at a fifth of real time, 100 s of wall time; the wait bounded by
+    30 s counts the vehicle's time and succeeds. A landing that needs 40 s of simulated time
+    fails naming the simulated bound; a clock standing still fails as a stall."""
+    from octo_gcs import flight as flight_mod
+    from octo_gcs.flight import Flight
+    from octo_gcs.link import GcsError
+
+    wall = [0.0]
+    monkeypatch.setattr(flight_mod.time, "monotonic", lambda: wall[0])
+
+    def slow_clock():  # each poll advances 0.05 s of wall time, 0.01 s simulated
+        wall[0] += 0.05
+        return 100.0 + wall[0] / 5.0
+
+    for need, ok in ((20.0, True), (40.0, False)):
+        wall[0] = 0.0
+        v = _FakeVehicle(slow_clock, 100.0 + need, 0)
+        fl = Flight(v)
+        if ok:
+            fl.wait_mode({"DISARMED"}, 30.0, "landing", clock=slow_clock)
+            assert wall[0] > 30.0 * 3, "the wait was not bounded by the wall clock"
+        else:
+            with pytest.raises(
+                GcsError,
+                match=r"landing: vehicle still in mode HOLD after 30 s simulated",
+            ):
+                fl.wait_mode({"DISARMED"}, 30.0, "landing", clock=slow_clock)
+    # without a clock the bound is the wall's
+    wall[0] = 0.0
+    v = _FakeVehicle(slow_clock, 120.0, 0)
+    with pytest.raises(GcsError, match=r"after 30 s \("):
+        Flight(v).wait_mode({"DISARMED"}, 30.0, "landing")
+
+    def stuck():
+        wall[0] += 0.05
+        return 7.5
+
+    wall[0] = 0.0
+    with pytest.raises(
+        GcsError, match=r"simulated time stood still for 30 s of wall time at t=7.50 s"
+    ):
+        Flight(_FakeVehicle(stuck, 1e9, 0)).wait_mode(
+            {"DISARMED"}, 30.0, "landing", clock=stuck
+        )

@@ -237,11 +237,13 @@ class UdpFlight:
         fl = Flight(self.vehicle, alive=self._alive)
         nominal = self.set_bench(veh)
         tail = LogTail(str(stage / "fw.lcm"))
-        tlimit = 30.0 if not self.opts.realtime else 120.0
+        # in lockstep take-off and landing are bounded in the vehicle's (simulated) time: the
+        # plant runs as fast as the firmware's host allows, below real time on an emulated one
+        tlimit, clock = (120.0, None) if self.opts.realtime else (30.0, tail.time)
         self.set_phase("arming")
         fl.arm()
         self.set_phase("take-off")
-        fl.takeoff(TAKEOFF_M, timeout=tlimit)
+        fl.takeoff(TAKEOFF_M, timeout=tlimit, clock=clock)
         say(
             f"take-off: holding at {TAKEOFF_M:g} m (t={tail.time() or 0:.1f} s simulated, "
             f"{time.monotonic() - t0:.1f} s wall)"
@@ -267,7 +269,7 @@ class UdpFlight:
         after = self.vehicle.fetch_params()
         say(f"collected {len(after)} parameters")
         self.set_phase("landing")
-        fl.land(timeout=tlimit)
+        fl.land(timeout=tlimit, clock=clock)
         say(
             f"landed and disarmed at t={tail.time() or 0:.1f} s simulated ({time.monotonic() - t0:.1f} s wall)"
         )
