@@ -98,9 +98,40 @@ def _start(v, experiment, start_timeout):
         )
 
 
-def _wait_end(v, live, state, t_wall0, timeout, show, experiment):
+class _Bound:
+    """An experiment's time limit: `timeout` s of wall time, or with `sim_time` (a callable: the
+    simulated time, or None while unknown) `timeout` s of simulated time, the simulated time
+    standing still for STALL_S of wall time being an error of its own (lockstep: the plant runs
+    at the rate the firmware's host allows)."""
+
+    STALL_S = 30.0
+
+    def __init__(self, timeout, sim_time=None):
+        self.timeout, self.sim_time = timeout, sim_time
+        self.t0 = time.monotonic()
+        self.s0 = self.s_last = sim_time() if sim_time else None
+        self.moved = self.t0
+
+    def exceeded(self):
+        """None, or why the limit is passed."""
+        now = time.monotonic()
+        if self.sim_time is None:
+            return f"still running after {self.timeout:g} s" if now - self.t0 > self.timeout else None
+        t = self.sim_time()
+        if t is not None and t != self.s_last:
+            self.s_last, self.moved = t, now
+            self.s0 = t if self.s0 is None else self.s0
+        if now - self.moved > self.STALL_S:
+            at = f" at t={self.s_last:.2f} s" if self.s_last is not None else ""
+            return f"stopped: the simulated time stood still for {self.STALL_S:g} s of wall time{at}"
+        if self.s0 is not None and self.s_last - self.s0 > self.timeout:
+            return f"still running after {self.timeout:g} s simulated"
+        return None
+
+
+def _wait_end(v, live, state, t_wall0, bound, show, experiment):
     """Until the experiment ends: its final ACK, or its closing texts and the vehicle back in
-    HOLD, or the vehicle leaving the experiment mode. Raises GcsError past `timeout`."""
+    HOLD, or the vehicle leaving the experiment mode. Raises GcsError past `bound` (_Bound)."""
     from .link import mavlink, result_name
 
     t_text_done = None
@@ -141,10 +172,9 @@ def _wait_end(v, live, state, t_wall0, timeout, show, experiment):
                     "done" if v.mode == MODE_NUMBERS["HOLD"] else f"ended in mode {MODES.get(v.mode, v.mode)}"
                 )
             continue
-        if time.monotonic() - t_wall0 > timeout:
-            raise GcsError(
-                f"experiment {experiment} ({EXPERIMENTS[experiment]}) still running after {timeout:g} s"
-            )
+        why = bound.exceeded()
+        if why:
+            raise GcsError(f"experiment {experiment} ({EXPERIMENTS[experiment]}) {why}")
         v.recv(types=(), timeout=0.05 if live.done else 0.1)
         show()
 
@@ -171,12 +201,16 @@ def request_missing_results(v, live, wait=1.0):
         v.recv(types=(), timeout=0.05)
 
 
-def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_timeout=10.0, results=None):
+def run_experiment(
+    v, experiment, progress, sim_time=None, timeout=120.0, start_timeout=10.0, results=None, sim_timeout=None
+):
     """Runs one experiment on a hovering vehicle (link.Vehicle `v`); returns Live.
 
     progress: a progress.Progress (one line per phase when not a terminal).
     sim_time(): the vehicle's simulated time if the caller knows it (e.g. from the log
     it asked for); otherwise the wall time since the start is shown.
+    timeout: the limit in s of wall time; sim_timeout (with sim_time): in s of simulated time
+    instead (lockstep), with a simulation standing still for 30 s of wall time an error.
     results: an id_results.Collector that gathers the OCTO_ID_RESULT records (a new one by default).
     Raises GcsError if the vehicle refuses, aborts, fails or goes silent."""
     from .link import mavlink
@@ -235,7 +269,8 @@ def run_experiment(v, experiment, progress, sim_time=None, timeout=120.0, start_
         state["started"] = True
         t_wall0[0] = time.monotonic()
         show()
-        _wait_end(v, live, state, t_wall0[0], timeout, show, experiment)
+        bound = _Bound(sim_timeout, sim_time) if sim_timeout and sim_time else _Bound(timeout)
+        _wait_end(v, live, state, t_wall0[0], bound, show, experiment)
         v.recv(types=(), timeout=0.05)  # trailing results and texts
         if live.done == "done":
             request_missing_results(v, live)

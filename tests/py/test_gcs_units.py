@@ -287,3 +287,30 @@ def test_wait_mode_in_lockstep_counts_the_simulated_time_and_names_a_stall(monke
         Flight(_FakeVehicle(stuck, 1e9, 0)).wait_mode(
             {"DISARMED"}, 30.0, "landing", clock=stuck
         )
+
+
+def test_experiment_bound_in_lockstep_counts_the_simulated_time_and_names_a_stall(monkeypatch):
+    """The experiment's limit (identify._Bound): with the simulated time, `timeout` s of it
+    however slowly it runs, and a stall of 30 s of wall time named; without it, the wall's."""
+    from octo_gcs import identify
+
+    wall = [0.0]
+    monkeypatch.setattr(identify.time, "monotonic", lambda: wall[0])
+    sim = [50.0]
+    b = identify._Bound(100.0, lambda: sim[0])
+    for _ in range(1000):  # 1,000 s of wall time, 99 s simulated: within
+        wall[0] += 1.0
+        sim[0] += 0.099
+        assert b.exceeded() is None
+    sim[0] += 2.0
+    assert b.exceeded() == "still running after 100 s simulated"
+    b = identify._Bound(100.0, lambda: sim[0])
+    wall[0] += 29.0
+    assert b.exceeded() is None
+    wall[0] += 2.0
+    assert b.exceeded() == f"stopped: the simulated time stood still for 30 s of wall time at t={sim[0]:.2f} s"
+    b = identify._Bound(100.0)
+    wall[0] += 99.0
+    assert b.exceeded() is None
+    wall[0] += 2.0
+    assert b.exceeded() == "still running after 100 s"

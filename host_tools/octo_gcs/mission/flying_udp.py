@@ -259,7 +259,8 @@ class UdpFlight:
                 self.prog,
                 sim_time=tail.time,
                 results=self.results,
-                timeout=planned * (1.5 if self.opts.realtime else 0.5) + 60.0,
+                timeout=planned * 1.5 + 60.0,
+                sim_timeout=None if self.opts.realtime else planned * 1.5 + 60.0,
             )
             say(
                 f"experiment {e} done at t={tail.time() or 0:.1f} s simulated "
