@@ -185,6 +185,7 @@ void exp_pump(struct experiment *e)
 				}
 				excite_prepare(&e->exc2);
 				excite_prepare(&e->exc3);
+				excite_prepare(&e->exc4);
 			} else {
 				if (e->cfg.exc_null) {
 					motor_id_refine(&e->mid); /* processes the waiting frame first */
@@ -781,6 +782,9 @@ static void imu_rotor_begin(struct experiment *e, const struct app_params *p, co
 	xp3.kind = EXCITE_PRBS;
 	xp3.amplitude = sc_from_float(cf->col_amp);
 	excite_init(&e->exc3, &xp3);
+	struct excite_params xp4 = xp3;
+	xp4.seed = xp.seed * 3266489917u + 4099u;
+	excite_init(&e->exc4, &xp4);
 	e->rot_k = 0;
 	e->swp_k = 0;
 	e->ofs = sc_from_float(cf->exc_ofs);
@@ -1684,6 +1688,25 @@ static bool inr_gyro_outlier(const struct experiment *e, scalar_t w, scalar_t ta
 	return dw > sc_mul(lim, sc_from_int((int32_t)m));
 }
 
+/* With the rotor speeds, a yaw dither (ID_COL_AMP, the collective dither's amplitude and cap;
+ * its own PRBS): every rotor of one spin direction up, the other's down, by the sign of the
+ * mixer's yaw column. The null-space dithers and the sweep leave the spin directions' contrast
+ * to the yaw loop's corrections, which answer the gyro's own noise: the yaw axis then reads a
+ * gain too high and the scales' contrast too small (docs/identification.md, "Each rotor's
+ * effectiveness, with the rotor speeds"). This dither moves that contrast independently of the
+ * noise, and the force sees it as well as the gyro. */
+static void yaw_dither(struct experiment *e, bool running, struct exp_output *out)
+{
+	scalar_t dy = running ? sc_mul(sc_mul(e->exc_gain, e->exc_cap), excite_update(&e->exc4)) : SC_ZERO;
+	for (int j = 0; j < HAL_ROTORS; j++) {
+		float gy = e->isc.cfg.geo[2][j];
+		if (gy > 0.0f)
+			out->thr_delta[j] = sc_add(out->thr_delta[j], dy);
+		else if (gy < 0.0f)
+			out->thr_delta[j] = sc_sub(out->thr_delta[j], dy);
+	}
+}
+
 /* The IMU rotor phase's frame: the collective model (imu_id), with the rotor speeds the
  * motor's speed model and each rotor's effectiveness (imu_scale); the null-space dithers, the
  * throttle sweep and the collective dither out. */
@@ -1714,6 +1737,8 @@ static void imu_rotor_step(struct experiment *e, const struct exp_input *in, str
 	d0 = sc_mul(e->exc_gain, sc_add(d0, dc));
 	for (int j = 0; j < HAL_ROTORS; j++)
 		out->thr_delta[j] = sc_add(out->thr_delta[j], d0);
+	if (rpm_src(&e->cfg))
+		yaw_dither(e, running, out);
 }
 
 /* An inertia phase's frame about axis ax: the body torque (measured, or the rotor model's

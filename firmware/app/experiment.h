@@ -164,6 +164,7 @@ struct experiment {
 	struct excite exc;
 	struct excite exc2; /* rotor experiment: the second pattern's dither */
 	struct excite exc3; /* IMU rotor experiment: the collective dither */
+	struct excite exc4; /* IMU rotor experiment with the rotor speeds: the yaw dither */
 	/* rotor experiment: the sweep's steps (throttle above hover) and their frames, cycled,
 	 * one per period; with the thrust rows, the frames a step keeps out of the whiteness test */
 	uint32_t swp_len[EXP_SWP_PLANS], swp_per;
