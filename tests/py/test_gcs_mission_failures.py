@@ -1,6 +1,9 @@
 """`octo-gcs mission` when a phase reaches its limit: it stops, keeps what it has in
 DIR/failed-run/ (the logs and a report naming the phase and the reason) and exits
-non-zero with the vehicle's reason, never just "octo-sim exited"."""
+non-zero with the vehicle's reason, never just "octo-sim exited".
+
+The seeds, limits and vehicles are drawn anew each run from a printed seed; OCTO_FAIL_SEED=N
+repeats a draw (each test draws from N and its own name)."""
 
 import json
 import os
@@ -13,6 +16,14 @@ import pytest
 from conftest import BUILD, REPO
 
 GCS = REPO / ".venv" / "bin" / "octo-gcs"
+
+
+@pytest.fixture
+def rng(request):
+    """This test's draw: from OCTO_FAIL_SEED (printed) and the test's name."""
+    seed = int(os.environ.get("OCTO_FAIL_SEED", random.SystemRandom().randrange(1, 10**6)))
+    print(f"OCTO_FAIL_SEED={seed}")
+    return random.Random(f"{seed}:{request.node.name}")
 
 
 def gcs(*args, timeout=120):
@@ -35,9 +46,9 @@ def failed_report(out):
     ("NAV_TKO_TO=1", "take-off", "Take-off failed: NAV_TKO_TO 1 s"),
     ("NAV_LAND_TO=1", "landing", "Landing failed: NAV_LAND_TO 1 s"),
 ])
-def test_phase_limit_stops_the_mission_with_its_reason(tmp_path, param, phase, reason):
+def test_phase_limit_stops_the_mission_with_its_reason(tmp_path, param, phase, reason, rng):
     out = tmp_path / "out"
-    r = gcs("mission", "--experiments", "none", "--param", param, "--seed", random.randint(1, 999), "--out", out)
+    r = gcs("mission", "--experiments", "none", "--param", param, "--seed", rng.randint(1, 999), "--out", out)
     assert r.returncode != 0, r.stdout
     last = r.stderr.strip().splitlines()
     assert any(f"{phase} failed: {reason}" in line for line in last), r.stderr
@@ -74,10 +85,9 @@ def underpowered_vehicle(tmp_path, rng):
     return vf, u_h * rng.uniform(1.01, 1.02)
 
 
-def test_hold_entry_limit_stops_the_mission_with_its_reason(tmp_path):
+def test_hold_entry_limit_stops_the_mission_with_its_reason(tmp_path, rng):
     """The take-off's set point at 10 m, the underpowered vehicle still climbing: NAV_HOLD_TO
     runs out; the exit message names the hold entry, the limit and how far off the vehicle is."""
-    rng = random.Random()
     vf, thr_max = underpowered_vehicle(tmp_path, rng)
     out = tmp_path / "out"
     r = gcs("mission", "--vehicle", vf, "--experiments", "none", "--param", "NAV_HOLD_TO=1",
@@ -90,10 +100,9 @@ def test_hold_entry_limit_stops_the_mission_with_its_reason(tmp_path):
     assert "phase: hold entry" in md
 
 
-def test_hold_entry_within_its_default_limit(tmp_path):
+def test_hold_entry_within_its_default_limit(tmp_path, rng):
     """The same kind of vehicle with the default NAV_HOLD_TO reaches HOLD: the limit above
     failed on time, not on a vehicle that cannot hold."""
-    rng = random.Random()
     vf, thr_max = underpowered_vehicle(tmp_path, rng)
     out = tmp_path / "out"
     r = gcs("mission", "--vehicle", vf, "--experiments", "none",
@@ -107,14 +116,14 @@ def test_hold_entry_within_its_default_limit(tmp_path):
     ("5", "ID_INR_TO", "inertia Izz"),
     ("6", "ID_INR_TO", "inertia Ixx"),   # the sequence: its first inertia phase
 ])
-def test_experiment_limit_stops_the_mission_with_its_reason(tmp_path, experiment, param, phase):
+def test_experiment_limit_stops_the_mission_with_its_reason(tmp_path, experiment, param, phase, rng):
     """A phase limit shorter than the phase (1 s of settling + 5 or 10 s, + 1.5 s in the rotor
     phase): the experiment fails
     with the limit and the phase's planned time; the mission stops and names them."""
-    limit = round(random.uniform(1.5, 4.5), 1)
+    limit = round(rng.uniform(1.5, 4.5), 1)
     out = tmp_path / "out"
     r = gcs("mission", "--experiments", experiment, "--param", f"{param}={limit}",
-            "--seed", random.randint(1, 999), "--out", out)
+            "--seed", rng.randint(1, 999), "--out", out)
     assert r.returncode != 0, r.stdout
     # settling 1 s + excitation 5 s (validation) or 10 s, and the rotor phase's 1.5 s after its
     # last sweep step
@@ -132,12 +141,12 @@ def test_experiment_limit_stops_the_mission_with_its_reason(tmp_path, experiment
     ("NAV_LAND_TO=1", "wait disarmed", "Landing failed: NAV_LAND_TO 1 s"),
     ("ID_ROT_TO=2", "wait experiment", r"experiment ended FAILED \(ID rotor coefficients failed: ID_ROT_TO 2\.0 s"),
 ])
-def test_phase_limit_stops_the_in_process_mission_with_its_reason(tmp_path, param, step, reason):
+def test_phase_limit_stops_the_in_process_mission_with_its_reason(tmp_path, param, step, reason, rng):
     """octo-sil: the firmware's final FAILED ends the waiting step at once; octo-sil exits
     non-zero naming the step and the firmware's reason, and the logs are kept."""
     out = tmp_path / "out"
     r = gcs("mission", "--in-process", "--experiments", "1" if param.startswith("ID_") else "none", "--param", param,
-            "--seed", random.randint(1, 999), "--out", out)
+            "--seed", rng.randint(1, 999), "--out", out)
     assert r.returncode != 0, r.stdout
     assert re.search(rf"step \d+ '{step}' failed at t=[0-9.]+ s: {reason}", r.stderr), r.stderr
     assert "still in mode" not in r.stderr   # not the step's own time limit
@@ -145,10 +154,9 @@ def test_phase_limit_stops_the_in_process_mission_with_its_reason(tmp_path, para
     assert not (out / "report.json").exists()
 
 
-def test_in_process_mission_without_experiments(tmp_path):
+def test_in_process_mission_without_experiments(tmp_path, rng):
     """Take-off, hold entry and landing alone in octo-sil, with the underpowered vehicle: the
     firmware stores no result (no experiment), the mission still reports and passes."""
-    rng = random.Random()
     vf, thr_max = underpowered_vehicle(tmp_path, rng)
     out = tmp_path / "out"
     r = gcs("mission", "--in-process", "--vehicle", vf, "--experiments", "none",
@@ -158,7 +166,7 @@ def test_in_process_mission_without_experiments(tmp_path):
     assert rep["pass"] and (out / "params.parm").exists() and not (out / "failed-run").exists()
 
 
-def test_a_port_taken_at_start_is_retried_on_fresh_ports(tmp_path, monkeypatch, capsys):
+def test_a_port_taken_at_start_is_retried_on_fresh_ports(tmp_path, monkeypatch, capsys, rng):
     """A port chosen free can be bound by another program before octo-sim or octo-fw binds it
     (two missions starting together): the mission says so and starts again on fresh ports.
     The first port handed out here is held by the test, so the first start must fail."""
@@ -179,7 +187,7 @@ def test_a_port_taken_at_start_is_retried_on_fresh_ports(tmp_path, monkeypatch, 
     monkeypatch.setattr(procs, "free_udp_port", first_taken)
     out = tmp_path / "out"
     try:
-        rc = cli.main(["mission", "--experiments", "none", "--seed", str(random.randint(1, 999)),
+        rc = cli.main(["mission", "--experiments", "none", "--seed", str(rng.randint(1, 999)),
                        "--no-plots", "--out", str(out)])
     finally:
         held.close()
