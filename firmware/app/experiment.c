@@ -716,6 +716,8 @@ static void scales_begin(struct experiment *e)
 			float v = rd > 0.0f && s > 0.0f ? sc_to_float(mx->gn[i + 1][j]) / (rd * s) : 0.0f;
 			sc.geo[i][j] = isfinite(v) ? v : 0.0f;
 		}
+	for (int j = 0; j < HAL_ROTORS; j++)
+		e->yaw_sign[j] = (int8_t)(sc.geo[2][j] > 0.0f ? 1 : (sc.geo[2][j] < 0.0f ? -1 : 0));
 	imu_scale_init(&e->isc, &sc);
 }
 
@@ -1690,19 +1692,18 @@ static bool inr_gyro_outlier(const struct experiment *e, scalar_t w, scalar_t ta
 
 /* With the rotor speeds, a yaw dither (ID_COL_AMP, the collective dither's amplitude and cap;
  * its own PRBS): every rotor of one spin direction up, the other's down, by the sign of the
- * mixer's yaw column. The null-space dithers and the sweep leave the spin directions' contrast
- * to the yaw loop's corrections, which answer the gyro's own noise: the yaw axis then reads a
- * gain too high and the scales' contrast too small (docs/identification.md, "Each rotor's
+ * mixer's yaw column (yaw_sign, set by scales_begin). The null-space dithers and the sweep
+ * leave the spin directions' contrast to the yaw loop's corrections, which answer the gyro's
+ * own noise: the yaw axis then reads a gain too high and the scales' contrast too small (docs/identification.md, "Each rotor's
  * effectiveness, with the rotor speeds"). This dither moves that contrast independently of the
  * noise, and the force sees it as well as the gyro. */
 static void yaw_dither(struct experiment *e, bool running, struct exp_output *out)
 {
 	scalar_t dy = running ? sc_mul(sc_mul(e->exc_gain, e->exc_cap), excite_update(&e->exc4)) : SC_ZERO;
 	for (int j = 0; j < HAL_ROTORS; j++) {
-		float gy = e->isc.cfg.geo[2][j];
-		if (gy > 0.0f)
+		if (e->yaw_sign[j] > 0)
 			out->thr_delta[j] = sc_add(out->thr_delta[j], dy);
-		else if (gy < 0.0f)
+		else if (e->yaw_sign[j] < 0)
 			out->thr_delta[j] = sc_sub(out->thr_delta[j], dy);
 	}
 }

@@ -162,9 +162,10 @@ struct experiment {
 	int gap_hold;               /* frames left without inertia updates after a gap */
 	struct exp_cfg cfg;
 	struct excite exc;
-	struct excite exc2; /* rotor experiment: the second pattern's dither */
-	struct excite exc3; /* IMU rotor experiment: the collective dither */
-	struct excite exc4; /* IMU rotor experiment with the rotor speeds: the yaw dither */
+	struct excite exc2;          /* rotor experiment: the second pattern's dither */
+	struct excite exc3;          /* IMU rotor experiment: the collective dither */
+	struct excite exc4;          /* IMU rotor experiment with the rotor speeds: the yaw dither, */
+	int8_t yaw_sign[HAL_ROTORS]; /* its sign on each rotor (the mixer's yaw column's; 0: none) */
 	/* rotor experiment: the sweep's steps (throttle above hover) and their frames, cycled,
 	 * one per period; with the thrust rows, the frames a step keeps out of the whiteness test */
 	uint32_t swp_len[EXP_SWP_PLANS], swp_per;
